@@ -1,0 +1,23 @@
+# Two commands: `make run` and `make test`. Both install whatever is missing first.
+.PHONY: install run test bench doctor clean
+
+ECOSTUDY := .venv/bin/ecostudy
+
+install:
+	@bash scripts/install.sh
+
+run: install
+	$(ECOSTUDY) solve studies/default.yaml
+	@echo "outputs: out/default/ (profile.csv, summary.json, speed.png)"
+
+test: install
+	.venv/bin/python -m pytest -q
+
+doctor: install
+	$(ECOSTUDY) doctor
+
+bench: install
+	.venv/bin/python bench/bench_solve.py
+
+clean:
+	rm -rf out .pytest_cache

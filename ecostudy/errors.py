@@ -1,0 +1,39 @@
+"""Domain errors: each carries the one-line message a user sees (exit status 2 for input)."""
+
+
+class EcostudyError(Exception):
+    """Base class; ``exit_code`` is what the CLI returns."""
+
+    exit_code = 3
+
+
+class InputError(EcostudyError):
+    """Bad input: one or more problems, each naming the file, the field and what is wrong."""
+
+    exit_code = 2
+
+    def __init__(self, problems):
+        if isinstance(problems, str):
+            problems = [problems]
+        self.problems = list(problems)
+        super().__init__("\n".join(self.problems))
+
+
+class InfeasibleError(InputError):
+    """The request cannot be met by any driving (e.g. a running time below the all-out time)."""
+
+
+class SolverError(EcostudyError):
+    """Ipopt did not return a usable point."""
+
+    exit_code = 3
+
+
+class EcostudyWarning(UserWarning):
+    """Suspicious but usable input (e.g. Davis coefficients of an implausible size)."""
+
+
+def problem(file, field, message):
+    """Format one problem line: ``file: field: message``."""
+    where = f"{file}: {field}" if field else f"{file}"
+    return f"{where}: {message}"

@@ -1,0 +1,73 @@
+"""Cheap speed profiles on the grid: the envelope of fastest driving and capped-speed guesses.
+
+Used as Ipopt's starting point and to estimate the all-out time before any NLP is solved.
+"""
+import numpy as np
+
+from .errors import InfeasibleError
+from .physics import running_resistance
+
+
+def interval_resistance(segment, train, nodes):
+    """Speed-independent resistance per interval (gradient and curve) [N]."""
+    mid = 0.5 * (nodes[:-1] + nodes[1:])
+    return running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, segment.gradient(mid),
+                              train.curve_coefficient, segment.curvature(mid))
+
+
+def envelope_speeds(segment, train, nodes, limits):
+    """Fastest speeds: max traction forward from the start, max braking back from the stop.
+
+    Raises :class:`InfeasibleError` when maximum traction cannot keep the train moving.
+    """
+    ds = np.diff(nodes)
+    fixed = interval_resistance(segment, train, nodes)
+    a, b, c = train.davis
+    fwd = np.zeros_like(nodes)
+    for k in range(len(ds)):
+        v = fwd[k]
+        acc = (train.traction.force(v) - (a + b * v + c * v * v) - fixed[k]) / train.mass
+        v2 = v * v + 2 * ds[k] * acc
+        if v2 <= 0 and k < len(ds) - 1:
+            raise InfeasibleError(f"infeasible: even at full traction the train stalls at "
+                                  f"{nodes[k + 1]:.0f} m from {segment.from_stop or 'the start'}")
+        fwd[k + 1] = min(np.sqrt(max(v2, 0.0)), limits[k + 1])
+    bwd = np.zeros_like(nodes)
+    for k in range(len(ds) - 1, -1, -1):
+        v = bwd[k + 1]
+        dec = (train.braking.force(v) + (a + b * v + c * v * v) + fixed[k]) / train.mass
+        bwd[k] = min(np.sqrt(v * v + 2 * ds[k] * max(dec, 1e-3)), limits[k])
+    out = np.minimum(fwd, bwd)
+    out[0] = out[-1] = 0.0
+    return out
+
+
+def running_time(speeds, nodes):
+    """Trapezoidal running time sum 2 ds / (v_k + v_k+1) [s]."""
+    return float(np.sum(2 * np.diff(nodes) / np.maximum(speeds[:-1] + speeds[1:], 1e-9)))
+
+
+def capped_speeds(envelope, nodes, target):
+    """Envelope capped at one cruise speed, the cap chosen so the running time is ``target``."""
+    if target <= running_time(envelope, nodes):
+        return envelope.copy()
+    lo, hi = 1e-3, float(envelope.max())
+    for _ in range(60):
+        cap = 0.5 * (lo + hi)
+        if running_time(np.minimum(envelope, cap), nodes) > target:
+            lo = cap
+        else:
+            hi = cap
+    return np.minimum(envelope, hi)
+
+
+def forces_for(speeds, segment, train, nodes):
+    """Traction and braking forces per interval [N] that realise ``speeds`` (clipped to the envelopes)."""
+    ds = np.diff(nodes)
+    v0, v1 = speeds[:-1], speeds[1:]
+    a, b, c = train.davis
+    resist = a + b * 0.5 * (v0 + v1) + c * 0.5 * (v0**2 + v1**2) + interval_resistance(segment, train, nodes)
+    need = train.mass * (v1**2 - v0**2) / (2 * ds) + resist
+    ft = np.clip(need, 0.0, np.minimum(train.traction.force(v0), train.traction.force(v1)))
+    fb = np.clip(-need, 0.0, np.minimum(train.braking.force(v0), train.braking.force(v1)))
+    return ft, fb

@@ -1,0 +1,275 @@
+"""Load train, track, timetable and study files into SI objects. All unit conversion is here.
+
+Every problem becomes one line ``file: field: what is wrong``; all problems of a file are
+reported together (:class:`ecostudy.errors.InputError`).
+"""
+import json
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+from pydantic import ValidationError
+
+from . import schemas, units
+from .errors import EcostudyWarning, InputError, problem
+from .physics import GRAVITY, Envelope, table_width
+
+
+@dataclass(frozen=True)
+class Train:
+    """A train in SI units."""
+
+    name: str
+    mass: float                 # effective (inertial) mass M [kg]
+    static_mass: float          # Ms [kg]
+    length: float               # [m]
+    davis: tuple                # (A [N], B [N s/m], C [N s^2/m^2])
+    traction: Envelope
+    braking: Envelope
+    regeneration: Envelope | None = None
+    traction_efficiency: float = 1.0
+    regeneration_efficiency: float = 0.0
+    curve_coefficient: float = 0.0    # lambda_t [m^2/s^2]
+    das_levels: tuple = (-1.0, 0.0, 0.5, 0.75, 1.0)
+
+
+@dataclass(frozen=True)
+class Track:
+    """A track in SI units; piecewise-constant profiles start at their positions."""
+
+    name: str
+    length: float
+    stops: dict                      # name -> position [m]
+    gradient_positions: np.ndarray   # [m]
+    gradients: np.ndarray            # tan(alpha) [-], positive uphill
+    curve_positions: np.ndarray      # [m]
+    curvatures: np.ndarray           # 1/radius [1/m], 0 for straight
+    limit_positions: np.ndarray      # [m]
+    limits: np.ndarray               # [m/s]
+
+
+@dataclass(frozen=True)
+class Timing:
+    """What the run must achieve in time: exactly one of the fields is set (or none: all-out)."""
+
+    running_time: float | None = None       # [s]
+    supplement: float | None = None         # fraction of the all-out time [-]
+    window: tuple | None = None             # (earliest, latest) [s]
+
+
+@dataclass(frozen=True)
+class Study:
+    name: str
+    track: Track
+    train: Train
+    from_stop: str
+    to_stop: str
+    timing: Timing
+    objective: str = "energy"
+    weights: tuple = (1.0, 1.0)
+    points: int = 1000
+    output: Path = field(default_factory=lambda: Path("out"))
+
+
+# --------------------------------------------------------------------------- reading files
+def read_document(path):
+    """Parse a YAML or JSON file into Python data; malformed files raise one-line errors."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(problem(path, "", "file not found"))
+    text = path.read_text()
+    try:
+        if path.suffix.lower() == ".json":
+            data = json.loads(text)
+        else:
+            data = yaml.safe_load(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(problem(path, "", f"malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"))
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1} column {mark.column + 1}" if mark else ""
+        raise InputError(problem(path, "", f"malformed YAML{where}: {getattr(exc, 'problem', exc)}"))
+    if not isinstance(data, dict):
+        raise InputError(problem(path, "", "expected a mapping of fields at the top level"))
+    return data
+
+
+def _field_path(loc):
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        else:
+            out += ("." if out else "") + str(part)
+    return out
+
+
+def validate(schema, data, path):
+    """Validate ``data`` against a schema; every pydantic error becomes one problem line."""
+    try:
+        return schema.model_validate(data)
+    except ValidationError as exc:
+        lines = []
+        for err in exc.errors():
+            loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]
+            msg = err["msg"].removeprefix("Value error, ")
+            if err["type"] == "extra_forbidden":
+                msg = "unknown field"
+            elif err["type"] == "missing":
+                msg = "missing field"
+            lines.append(problem(path, _field_path(loc) or "(top level)", msg))
+        raise InputError(lines)
+
+
+# --------------------------------------------------------------------------- conversions
+def _envelope(spec, mass):
+    """Traction or braking schema -> :class:`Envelope` in N, W, m/s."""
+    if spec.table is not None:
+        speeds = np.asarray(spec.table.speed_kmh) * units.KMH
+        forces = np.asarray(spec.table.force_kN) * units.KN
+        return Envelope("table", speeds=tuple(speeds), forces=tuple(forces),
+                        width=table_width(speeds, forces))
+    if getattr(spec, "max_deceleration_mps2", None) is not None:
+        return Envelope("force_power", max_force=mass * spec.max_deceleration_mps2)
+    power = spec.max_power_kW * units.KW if spec.max_power_kW is not None else float("inf")
+    return Envelope("force_power", max_force=spec.max_force_kN * units.KN, max_power=power)
+
+
+def _davis(d, static_mass):
+    """Davis triple in N, N s/m, N s^2/m^2 from whichever unit system the file used."""
+    if d.a_N is not None:
+        return (d.a_N, d.b_N_per_mps, d.c_N_per_mps2), "a_N"
+    if d.a_kN is not None:
+        return (d.a_kN * units.KN, d.b_kN_per_kmh * units.KN / units.KMH,
+                d.c_kN_per_kmh2 * units.KN / units.KMH**2), "a_kN"
+    return (d.a_N_per_kg * static_mass, d.b_N_per_kg_per_mps * static_mass,
+            d.c_N_per_kg_per_mps2 * static_mass), "a_N_per_kg"
+
+
+def check_davis_plausible(davis, static_mass, path):
+    """Warn when Davis coefficients are of an implausible size for the mass (mixed-up units)."""
+    a, b, c = (x / static_mass for x in davis)
+    ranges = {"a": (a, 2e-4, 0.15), "b": (b, 0.0, 5e-3), "c": (c, 1e-7, 2e-3)}
+    for name, (value, low, high) in ranges.items():
+        if value and not low <= value <= high:
+            warnings.warn(problem(path, f"davis.{name}",
+                                  f"{value:.3g} N/kg per unit of speed power is implausible for a "
+                                  f"{static_mass / units.TONNE:.0f} t train (expected {low:g}..{high:g}); "
+                                  "check the units"), EcostudyWarning, stacklevel=2)
+
+
+def train_from_schema(t, path):
+    static = t.mass_t * units.TONNE
+    mass = (t.effective_mass_t * units.TONNE if t.effective_mass_t is not None
+            else static * (1 + t.rotating_mass_factor))
+    davis, _ = _davis(t.davis, static)
+    check_davis_plausible(davis, static, path)
+    regen, eta_r = None, 0.0
+    if t.regenerative_braking is not None:
+        r = t.regenerative_braking
+        regen = Envelope("force_power",
+                         max_force=r.max_force_kN * units.KN if r.max_force_kN else float("inf"),
+                         max_power=r.max_power_kW * units.KW if r.max_power_kW else float("inf"))
+        eta_r = r.efficiency
+    return Train(name=t.name, mass=mass, static_mass=static, length=t.length_m, davis=davis,
+                 traction=_envelope(t.traction, mass), braking=_envelope(t.braking, mass),
+                 regeneration=regen, traction_efficiency=t.traction_efficiency,
+                 regeneration_efficiency=eta_r, curve_coefficient=t.curve_coefficient_m2ps2,
+                 das_levels=tuple(t.das_handle_levels))
+
+
+def track_from_schema(t):
+    curves = t.curves or [schemas.Curve(position_m=0, radius_m=None)]
+    return Track(
+        name=t.name, length=t.length_m, stops={s.name: s.position_m for s in t.stops},
+        gradient_positions=np.array([g.position_m for g in t.gradients], float),
+        gradients=np.array([g.gradient_permille for g in t.gradients], float) * units.PERMILLE,
+        curve_positions=np.array([c.position_m for c in curves], float),
+        curvatures=np.array([0.0 if c.radius_m is None else 1.0 / c.radius_m for c in curves]),
+        limit_positions=np.array([s.position_m for s in t.speed_limits], float),
+        limits=np.array([s.speed_kmh for s in t.speed_limits], float) * units.KMH)
+
+
+def load_train(path):
+    """Read a train file (YAML, or TTOBench/OSRD JSON) into a :class:`Train`."""
+    data = read_document(path)
+    if Path(path).suffix.lower() == ".json":
+        from .imports import train_document_to_schema
+        data = train_document_to_schema(data, path)
+    return train_from_schema(validate(schemas.TrainFile, data, path), path)
+
+
+def load_track(path):
+    """Read a track file (YAML, or TTOBench JSON) into a :class:`Track`."""
+    data = read_document(path)
+    if Path(path).suffix.lower() == ".json":
+        from .imports import track_document_to_schema
+        data = track_document_to_schema(data, path)
+    return track_from_schema(validate(schemas.TrackFile, data, path))
+
+
+def load_timetable(path):
+    return validate(schemas.TimetableFile, read_document(path), path)
+
+
+# --------------------------------------------------------------------------- cross-file checks
+def check_stops(track, from_stop, to_stop, where):
+    """Both stops must be on the track and distinct."""
+    lines = []
+    for field_name, stop in (("from", from_stop), ("to", to_stop)):
+        if stop not in track.stops:
+            lines.append(problem(where, field_name, f"unknown stop '{stop}' (track '{track.name}' has: "
+                                 + ", ".join(track.stops) + ")"))
+    if not lines and track.stops[from_stop] == track.stops[to_stop]:
+        lines.append(problem(where, "to", "must differ from 'from'"))
+    if lines:
+        raise InputError(lines)
+
+
+def timing_from_timetable(tt, from_stop, to_stop, path):
+    """Running time between two stops of a timetable: arrival at ``to`` minus departure at ``from``."""
+    if tt.supplement_percent is not None:
+        return Timing(supplement=tt.supplement_percent * units.PERCENT)
+    rows = {r.stop: r for r in tt.stops}
+    lines = [problem(path, "stops", f"stop '{s}' is not in the timetable") for s in (from_stop, to_stop)
+             if s not in rows]
+    if lines:
+        raise InputError(lines)
+    dep = rows[from_stop].departure_s
+    if dep is None and rows[from_stop].arrival_s is not None:
+        dep = rows[from_stop].arrival_s + (rows[from_stop].dwell_s or 0.0)
+    arr = rows[to_stop].arrival_s
+    if dep is None or arr is None:
+        raise InputError(problem(path, "stops", f"need a departure at '{from_stop}' and an arrival at '{to_stop}'"))
+    if arr <= dep:
+        raise InputError(problem(path, "stops", f"arrival at '{to_stop}' ({arr} s) is not after departure ({dep} s)"))
+    return Timing(running_time=arr - dep)
+
+
+def load_study(path):
+    """Read a study file and the files it names (relative to the study file)."""
+    path = Path(path)
+    s = validate(schemas.StudyFile, read_document(path), path)
+    base = path.parent
+    track = load_track(base / s.track)
+    train = load_train(base / s.train)
+    stops = list(track.stops)
+    from_stop = s.from_stop or stops[0]
+    to_stop = s.to_stop or stops[-1]
+    check_stops(track, from_stop, to_stop, path)
+    if s.timetable is not None:
+        timing = timing_from_timetable(load_timetable(base / s.timetable), from_stop, to_stop, base / s.timetable)
+    else:
+        timing = Timing(running_time=s.running_time_s,
+                        supplement=None if s.supplement_percent is None else s.supplement_percent * units.PERCENT,
+                        window=s.window_s)
+    output = Path(s.output) if s.output else Path("out") / s.name
+    return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop,
+                 timing=timing, objective=s.objective, weights=(s.weights.time, s.weights.energy),
+                 points=s.points, output=output)
+
+
+__all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study",
+           "load_timetable", "check_stops", "GRAVITY"]

@@ -1,0 +1,151 @@
+"""Space-domain direct transcription of the train OCP in Pyomo (thesis 000 eq. 2.16, thesis 001 eq. 4.1).
+
+On nodes x_0 = 0 < ... < x_N = D with steps ds_k, states are the speed v_k [m/s] and the
+interval times dt_k [s]; controls are traction and braking forces per interval, in kN
+(scaling: forces in kN, dynamics per unit mass; see docs/benchmarks.md).
+
+Dynamics, exact for constant acceleration over an interval, and free of the standstill
+singularity of dv/ds = a/v (thesis 001 §3.2.1) because they never divide by v:
+
+    (v_{k+1}^2 - v_k^2) / (2 ds_k) = (F_T,k - F_B,k - R_k) / M          (energy form of eq. 2.7)
+    dt_k (v_k + v_{k+1}) = 2 ds_k                                          (time, eq. 2.16)
+
+with R_k the trapezoidal mean of the Davis resistance at both nodes plus the gradient and curve
+forces of the interval (eq. 2.2). Envelopes hold at both ends of each interval.
+"""
+import numpy as np
+import pyomo.environ as pyo
+
+from .initial import interval_resistance
+from .physics import table_force
+
+KN = 1000.0
+# weight of traction + braking work in the all-out objective: removes the flat direction of
+# simultaneous traction and braking; its effect on the minimum time is measured in the tests
+TIME_REGULARISATION = 1e-4
+
+
+def _bounded(envelope):
+    """Upper bound of a force variable [kN]."""
+    return envelope.peak / KN
+
+
+def define_variables(m, nodes, limits, train, guess, with_regeneration):
+    n = len(nodes) - 1
+    m.K = pyo.RangeSet(0, n)
+    m.I = pyo.RangeSet(0, n - 1)
+    v0, dt0, ft0, fb0 = guess
+    m.v = pyo.Var(m.K, bounds=lambda m, k: (0.0, float(limits[k])), initialize=lambda m, k: float(v0[k]))
+    m.v[0].fix(0.0)
+    m.v[n].fix(0.0)
+    m.dt = pyo.Var(m.I, bounds=(0.0, None), initialize=lambda m, k: float(dt0[k]))
+    m.ft = pyo.Var(m.I, bounds=(0.0, _bounded(train.traction)), initialize=lambda m, k: float(ft0[k]) / KN)
+    m.fb = pyo.Var(m.I, bounds=(0.0, _bounded(train.braking)), initialize=lambda m, k: float(fb0[k]) / KN)
+    if with_regeneration:
+        top = min(train.regeneration.max_force, train.braking.peak) / KN
+        m.fr = pyo.Var(m.I, bounds=(0.0, top), initialize=lambda m, k: min(float(fb0[k]) / KN, top))
+
+
+def define_dynamics(m, nodes, segment, train):
+    """Speed (energy form) and time recursions, scaled to O(1) residuals."""
+    ds = np.diff(nodes)
+    a, b, c = train.davis
+    fixed = (interval_resistance(segment, train, nodes) + a) / train.mass
+    bm, cm, km = b / train.mass, c / train.mass, KN / train.mass
+
+    def speed(m, k):
+        v0, v1 = m.v[k], m.v[k + 1]
+        return ((v1**2 - v0**2) / (2 * ds[k])
+                == km * (m.ft[k] - m.fb[k]) - fixed[k] - bm * 0.5 * (v0 + v1) - cm * 0.5 * (v0**2 + v1**2))
+
+    def time(m, k):
+        return m.dt[k] * (m.v[k] + m.v[k + 1]) / (2 * ds[k]) == 1.0
+
+    m.speed = pyo.Constraint(m.I, rule=speed)
+    m.time = pyo.Constraint(m.I, rule=time)
+    m.running_time = pyo.Expression(expr=sum(m.dt[k] for k in m.I))
+
+
+def _envelope_constraints(m, name, force, envelope):
+    """force_k <= envelope(v) at both ends of interval k."""
+    if envelope.kind == "table":
+        speeds, forces = np.asarray(envelope.speeds), np.asarray(envelope.forces) / KN
+        m.add_component(name + "_env", pyo.Expression(
+            m.K, rule=lambda m, k: table_force(m.v[k], speeds, forces, envelope.width)))
+        env = getattr(m, name + "_env")
+        m.add_component(name + "_lo", pyo.Constraint(m.I, rule=lambda m, k: force[k] <= env[k]))
+        m.add_component(name + "_hi", pyo.Constraint(m.I, rule=lambda m, k: force[k] <= env[k + 1]))
+    elif np.isfinite(envelope.max_power):
+        pk = envelope.max_power / KN  # [kW]; force [kN] * speed [m/s] is in kW
+        m.add_component(name + "_lo", pyo.Constraint(m.I, rule=lambda m, k: force[k] * m.v[k] / pk <= 1.0))
+        m.add_component(name + "_hi", pyo.Constraint(m.I, rule=lambda m, k: force[k] * m.v[k + 1] / pk <= 1.0))
+
+
+def define_envelopes(m, train, with_regeneration):
+    """Traction, braking and regenerative limits F <= F_max(v) (thesis 000 eqs. 2.3-2.4)."""
+    _envelope_constraints(m, "traction", m.ft, train.traction)
+    _envelope_constraints(m, "braking", m.fb, train.braking)
+    if with_regeneration:
+        m.regen_share = pyo.Constraint(m.I, rule=lambda m, k: m.fr[k] <= m.fb[k])
+        _envelope_constraints(m, "regen", m.fr, train.regeneration)
+
+
+def define_timing(m, running_time=None, window=None):
+    """Arrival time: fixed (eq. 2.6 as equality), a window [Tmin, Tmax] (thesis 001 eq. 4.1g), or free."""
+    if running_time is not None:
+        m.arrival = pyo.Constraint(expr=m.running_time / running_time == 1.0)
+    elif window is not None:
+        lo, hi = window
+        m.arrival = pyo.Constraint(expr=pyo.inequality(lo / hi, m.running_time / hi, 1.0))
+
+
+def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
+    """Objectives, each divided by a reference so that it is O(1).
+
+    energy      traction work sum F_T,k ds_k (thesis 000 eq. 2.16)
+    net_energy  traction work / eta_T - eta_R * regenerated work (thesis 000 eq. 7.3)
+    time        running time, plus a small multiple of traction + braking work ("all-out")
+    mixed       w_t T + w_e E / Ms (thesis 001 eq. 4.1a, energy per unit mass [J/kg])
+    """
+    ds = np.diff(nodes)
+    m.traction_work = pyo.Expression(expr=KN * sum(ds[k] * m.ft[k] for k in m.I))
+    braking = KN * sum(ds[k] * m.fb[k] for k in m.I) / energy_ref
+    energy = m.traction_work / energy_ref
+    if objective == "energy":
+        expr = energy
+    elif objective == "net_energy":
+        regen = KN * sum(ds[k] * m.fr[k] for k in m.I)
+        expr = (m.traction_work / train.traction_efficiency - train.regeneration_efficiency * regen) / energy_ref
+    elif objective == "time":
+        expr = m.running_time / time_ref + TIME_REGULARISATION * (energy + braking)
+    elif objective == "mixed":
+        wt, we = weights
+        expr = (wt * m.running_time + we * m.traction_work / train.static_mass) / time_ref
+    else:
+        raise ValueError(f"unknown objective {objective!r}")
+    m.objective = pyo.Objective(expr=expr, sense=pyo.minimize)
+
+
+def build_model(segment, train, nodes, limits, guess, objective="energy", running_time=None,
+                window=None, weights=(1.0, 1.0), time_ref=100.0):
+    """Assemble the NLP in named steps; ``guess`` = (v, dt, F_T [N], F_B [N]) on the grid."""
+    with_regeneration = objective == "net_energy" and train.regeneration is not None
+    m = pyo.ConcreteModel(name="ecostudy")
+    define_variables(m, nodes, limits, train, guess, with_regeneration)
+    define_dynamics(m, nodes, segment, train)
+    define_envelopes(m, train, with_regeneration)
+    define_timing(m, running_time, window)
+    energy_ref = max(train.traction.peak * segment.distance * 0.1, 1.0)
+    define_objective(m, nodes, train, objective, weights, time_ref, energy_ref)
+    m.dual = pyo.Suffix(direction=pyo.Suffix.IMPORT)
+    return m
+
+
+def solution_arrays(m):
+    """(v, dt, F_T [N], F_B [N], F_regen [N] or None) from a solved model."""
+    v = np.array([pyo.value(m.v[k]) for k in m.K])
+    dt = np.array([pyo.value(m.dt[k]) for k in m.I])
+    ft = np.array([pyo.value(m.ft[k]) for k in m.I]) * KN
+    fb = np.array([pyo.value(m.fb[k]) for k in m.I]) * KN
+    fr = np.array([pyo.value(m.fr[k]) for k in m.I]) * KN if hasattr(m, "fr") else None
+    return v, dt, ft, fb, fr

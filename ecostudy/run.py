@@ -1,0 +1,194 @@
+"""One run between two stops: build, solve, verify, tabulate. Stage times are recorded.
+
+``solve_run`` is the library entry point behind ``ecostudy solve``.
+"""
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from . import initial, model as formulation, solver
+from .errors import InfeasibleError, SolverError
+from .grid import make_grid, make_segment, node_limits
+from .inputs import Timing
+from .simulate import verify
+from .units import KWH, to_kmh
+
+
+@dataclass
+class RunResult:
+    profile: pd.DataFrame
+    summary: dict
+    segment: object
+    train: object
+    nodes: np.ndarray
+    handle: np.ndarray
+    trace: object = None
+    stages: dict = field(default_factory=dict)
+
+    @property
+    def ok(self):
+        return self.summary["solver"]["status"] == "optimal" and self.summary["verification"]["passed"]
+
+
+@contextmanager
+def _stage(stages, name):
+    t0 = time.perf_counter()
+    yield
+    stages[name] = stages.get(name, 0.0) + time.perf_counter() - t0
+
+
+def handles(train, v, ft, fb):
+    """Handle u in [-1, 1] per interval: net force over the envelope at the interval's mean speed."""
+    vm = 0.5 * (v[:-1] + v[1:])
+    net = ft - fb
+    u = np.where(net >= 0, net / np.maximum(train.traction.force(vm), 1e-9),
+                 net / np.maximum(train.braking.force(vm), 1e-9))
+    return np.clip(u, -1.0, 1.0)
+
+
+def regenerated_force(train, v, fb):
+    """Part of the braking force the electric brake can take at the interval's mean speed [N]."""
+    if train.regeneration is None:
+        return np.zeros_like(fb)
+    vm = 0.5 * (v[:-1] + v[1:])
+    return np.minimum(fb, train.regeneration.force(vm))
+
+
+def _solve_once(segment, train, nodes, limits, guess, objective, stages, options, **timing):
+    with _stage(stages, "build"):
+        time_ref = max(initial.running_time(guess[0], nodes), 1.0)
+        m = formulation.build_model(segment, train, nodes, limits, guess, objective=objective,
+                                    time_ref=time_ref, **timing)
+    outcome = solver.solve(m, options)
+    stages["nl_write"] = stages.get("nl_write", 0.0) + outcome.nl_seconds
+    stages["solve"] = stages.get("solve", 0.0) + outcome.seconds
+    stages.setdefault("iterations", 0)
+    stages["iterations"] += outcome.iterations
+    return m, outcome
+
+
+def _guess(segment, train, nodes, speeds):
+    ds = np.diff(nodes)
+    dt = 2 * ds / np.maximum(speeds[:-1] + speeds[1:], 1e-3)
+    ft, fb = initial.forces_for(speeds, segment, train, nodes)
+    return speeds, dt, ft, fb
+
+
+def warm_guess(previous, segment, train, nodes, limits):
+    """Starting point interpolated from a previous result's profile (speed vs position)."""
+    prof = previous.profile
+    speeds = np.minimum(np.interp(nodes, prof["position_m"], prof["speed_kmh"] / 3.6), limits)
+    speeds[0] = speeds[-1] = 0.0
+    return _guess(segment, train, nodes, speeds)
+
+
+def all_out(segment, train, nodes, limits, envelope, stages, options=None):
+    """Minimum running time on this grid [s], and the solved model."""
+    m, outcome = _solve_once(segment, train, nodes, limits, _guess(segment, train, nodes, envelope),
+                             "time", stages, options)
+    if not outcome.usable:
+        raise SolverError(f"Ipopt could not find the all-out run ({outcome.status})")
+    return float(np.sum(formulation.solution_arrays(m)[1])), m, outcome
+
+
+def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="energy", points=1000,
+              weights=(1.0, 1.0), warm_start=None, options=None, verify_result=True):
+    """Energy-optimal (or all-out, or mixed) run between two stops, verified by simulation.
+
+    Parameters
+    ----------
+    timing : Timing  running time [s], supplement over the all-out time [-], or window [s].
+    objective : str  ``energy``, ``net_energy``, ``time`` (all-out) or ``mixed``.
+    points : int  Grid nodes K.
+    warm_start : RunResult, optional  Start Ipopt from this earlier result.
+    """
+    stages = {}
+    with _stage(stages, "grid"):
+        segment = make_segment(track, train, from_stop, to_stop)
+        nodes = make_grid(segment, points)
+        limits = node_limits(segment, nodes)
+        envelope = initial.envelope_speeds(segment, train, nodes, limits)
+        estimate = initial.running_time(envelope, nodes)
+
+    target, window, t_allout = timing.running_time, timing.window, None
+    latest = target if target is not None else (window[1] if window else None)
+    if objective == "time" or timing.supplement is not None or (latest is not None and latest < 0.97 * estimate):
+        t_allout, m, outcome = all_out(segment, train, nodes, limits, envelope, stages, options)
+        if timing.supplement is not None:
+            target = t_allout * (1 + timing.supplement)
+        _check_feasible(latest, t_allout)
+
+    if objective != "time":
+        if warm_start is not None:
+            guess = warm_guess(warm_start, segment, train, nodes, limits)
+        else:
+            goal = target or (window[1] if window else estimate * 1.1)
+            guess = _guess(segment, train, nodes, initial.capped_speeds(envelope, nodes, goal))
+        kw = {"running_time": target} if target is not None else {"window": window} if window else {}
+        m, outcome = _solve_once(segment, train, nodes, limits, guess, objective, stages, options,
+                                 weights=weights, **kw)
+        if not outcome.usable:
+            if latest is not None and t_allout is None:
+                t_allout, _, _ = all_out(segment, train, nodes, limits, envelope, stages, options)
+                _check_feasible(latest, t_allout)
+            raise SolverError(f"Ipopt failed ({outcome.status}) after {outcome.iterations} iterations; "
+                              "try more --points or a longer running time")
+
+    with _stage(stages, "tables"):
+        v, dt, ft, fb, _ = formulation.solution_arrays(m)
+        u = handles(train, v, ft, fb)
+        profile, totals = tabulate(train, nodes, v, dt, ft, fb)
+    verification, trace = None, None
+    if verify_result:
+        with _stage(stages, "verify"):
+            verification, trace = verify(segment, train, nodes, u, totals["running_time_s"],
+                                         totals["traction_energy_kWh"] * KWH)
+    summary = {
+        "track": track.name, "train": train.name, "from": from_stop, "to": to_stop,
+        "distance_m": segment.distance, **totals, "points": len(nodes), "objective": objective,
+        "all_out_time_s": t_allout,
+        "solver": {"status": outcome.status, "iterations": outcome.iterations,
+                   "seconds": stages.get("solve", 0.0), "max_constraint_violation": outcome.max_violation},
+        "verification": verification,
+        "stages_s": {k: round(v_, 4) for k, v_ in stages.items() if k != "iterations"},
+    }
+    return RunResult(profile, summary, segment, train, nodes, u, trace, stages)
+
+
+def _check_feasible(latest, t_allout):
+    if latest is not None and latest < t_allout - 1e-6 * t_allout:
+        raise InfeasibleError(f"infeasible: the fastest possible run takes {t_allout:.1f} s "
+                              f"(asked for {latest:.1f} s)")
+
+
+def tabulate(train, nodes, v, dt, ft, fb):
+    """Profile table (one row per node; interval quantities on the row of the interval start) and totals."""
+    ds = np.diff(nodes)
+    fr = regenerated_force(train, v, fb)
+    work_t, work_b, work_r = ft * ds, fb * ds, fr * ds
+    u = handles(train, v, ft, fb)
+    pad = lambda a: np.append(a, np.nan)  # noqa: E731  the last node starts no interval
+    profile = pd.DataFrame({
+        "position_m": nodes,
+        "time_s": np.concatenate([[0.0], np.cumsum(dt)]),
+        "speed_kmh": to_kmh(v),
+        "handle": pad(u),
+        "traction_force_kN": pad(ft / 1000),
+        "braking_force_kN": pad(fb / 1000),
+        "power_kW": pad(ft * 0.5 * (v[:-1] + v[1:]) / 1000),
+        "cumulative_energy_kWh": np.concatenate([[0.0], np.cumsum(work_t)]) / KWH,
+    })
+    regen = train.regeneration_efficiency * work_r.sum()
+    totals = {
+        "running_time_s": float(dt.sum()),
+        "traction_energy_kWh": float(work_t.sum() / KWH),
+        "braking_energy_kWh": float(work_b.sum() / KWH),
+        "regenerated_energy_kWh": float(regen / KWH),
+        "net_energy_kWh": float((work_t.sum() / train.traction_efficiency - regen) / KWH),
+        "traction_energy_J_per_kg": float(work_t.sum() / train.static_mass),
+        "top_speed_kmh": float(to_kmh(v.max())),
+    }
+    return profile, totals

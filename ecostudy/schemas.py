@@ -1,0 +1,238 @@
+"""File schemas: frozen pydantic models that refuse unknown keys. Units are in the field names.
+
+Cross-field rules that concern one file live here as validators; rules that need two files
+(a stop missing from the track, a running time below the all-out time) are ``check_*``
+functions in :mod:`ecostudy.inputs`.
+"""
+from typing import ClassVar, Literal, Optional
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+
+
+def _increasing(values, what):
+    if any(b <= a for a, b in zip(values, values[1:])):
+        raise ValueError(f"{what} must be strictly increasing")
+    return values
+
+
+class ForceTable(Strict):
+    """Speed-force table: linear between points, constant beyond the ends."""
+
+    speed_kmh: list[float] = Field(min_length=2, description="Speeds [km/h], strictly increasing.")
+    force_kN: list[float] = Field(min_length=2, description="Maximum force at each speed [kN].")
+
+    @field_validator("speed_kmh")
+    @classmethod
+    def _speeds(cls, v):
+        if v[0] < 0:
+            raise ValueError("speeds must be >= 0")
+        return _increasing(v, "speeds")
+
+    @field_validator("force_kN")
+    @classmethod
+    def _forces(cls, v):
+        if min(v) < 0:
+            raise ValueError("forces must be >= 0")
+        return v
+
+    @model_validator(mode="after")
+    def _lengths(self):
+        if len(self.speed_kmh) != len(self.force_kN):
+            raise ValueError("speed_kmh and force_kN must have the same length")
+        return self
+
+
+class Traction(Strict):
+    """Traction envelope: a table, or a maximum force with an optional maximum power."""
+
+    table: Optional[ForceTable] = None
+    max_force_kN: Optional[float] = Field(None, gt=0)
+    max_power_kW: Optional[float] = Field(None, gt=0)
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        if (self.table is None) == (self.max_force_kN is None):
+            raise ValueError("give either 'table' or 'max_force_kN' (with optional 'max_power_kW')")
+        if self.table is not None and self.max_power_kW is not None:
+            raise ValueError("'max_power_kW' goes with 'max_force_kN', not with 'table'")
+        return self
+
+
+class Braking(Traction):
+    """Service braking: a table, a maximum force (and power), or a maximum deceleration."""
+
+    max_deceleration_mps2: Optional[float] = Field(None, gt=0)
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        forms = [self.table is not None, self.max_force_kN is not None,
+                 self.max_deceleration_mps2 is not None]
+        if sum(forms) != 1:
+            raise ValueError("give one of 'table', 'max_force_kN' or 'max_deceleration_mps2'")
+        return self
+
+
+class Regeneration(Strict):
+    """Regenerative (electric) braking limits; braking beyond them goes to friction brakes."""
+
+    max_force_kN: Optional[float] = Field(None, gt=0)
+    max_power_kW: Optional[float] = Field(None, gt=0)
+    efficiency: float = Field(0.8, gt=0, le=1, description="Wheel to line [-].")
+
+
+class Davis(Strict):
+    """Davis coefficients A + B v + C v^2: exactly one complete triple of one unit system."""
+
+    a_N: Optional[float] = None
+    b_N_per_mps: Optional[float] = None
+    c_N_per_mps2: Optional[float] = None
+    a_kN: Optional[float] = None
+    b_kN_per_kmh: Optional[float] = None
+    c_kN_per_kmh2: Optional[float] = None
+    a_N_per_kg: Optional[float] = None
+    b_N_per_kg_per_mps: Optional[float] = None
+    c_N_per_kg_per_mps2: Optional[float] = None
+
+    TRIPLES: ClassVar[tuple] = (("a_N", "b_N_per_mps", "c_N_per_mps2"),
+               ("a_kN", "b_kN_per_kmh", "c_kN_per_kmh2"),
+               ("a_N_per_kg", "b_N_per_kg_per_mps", "c_N_per_kg_per_mps2"))
+
+    @model_validator(mode="after")
+    def _one_triple(self):
+        given = [t for t in self.TRIPLES if any(getattr(self, f) is not None for f in t)]
+        if len(given) != 1 or any(getattr(self, f) is None for f in given[0]):
+            raise ValueError("give one complete triple: " + " | ".join("/".join(t) for t in self.TRIPLES))
+        for f in given[0]:
+            if getattr(self, f) < 0:
+                raise ValueError(f"{f} must be >= 0")
+        return self
+
+
+class TrainFile(Strict):
+    name: str
+    source: str = Field(description="Where the numbers come from.")
+    mass_t: float = Field(gt=0, description="Static mass Ms [t].")
+    rotating_mass_factor: Optional[float] = Field(None, ge=0, description="M = Ms (1 + factor).")
+    effective_mass_t: Optional[float] = Field(None, gt=0, description="Effective mass M [t].")
+    length_m: float = Field(ge=0, description="Train length [m]; 0 for a point mass.")
+    davis: Davis
+    traction: Traction
+    braking: Braking
+    traction_efficiency: float = Field(1.0, gt=0, le=1, description="Wheel work per line energy [-].")
+    regenerative_braking: Optional[Regeneration] = None
+    curve_coefficient_m2ps2: float = Field(0.0, ge=0, description="lambda_t of thesis 000 eq. 2.2.")
+    das_handle_levels: list[float] = Field(default_factory=lambda: [-1.0, 0.0, 0.5, 0.75, 1.0])
+
+    @model_validator(mode="after")
+    def _mass(self):
+        if (self.rotating_mass_factor is None) == (self.effective_mass_t is None):
+            raise ValueError("give either 'rotating_mass_factor' or 'effective_mass_t'")
+        if self.effective_mass_t is not None and self.effective_mass_t < self.mass_t:
+            raise ValueError("effective_mass_t must be >= mass_t (static mass)")
+        return self
+
+    @field_validator("das_handle_levels")
+    @classmethod
+    def _levels(cls, v):
+        if any(x < -1 or x > 1 for x in v):
+            raise ValueError("handle levels must lie in [-1, 1]")
+        return sorted(v)
+
+
+class Stop(Strict):
+    name: str
+    position_m: float = Field(ge=0)
+
+
+class Gradient(Strict):
+    position_m: float = Field(ge=0, description="Start of the gradient section [m].")
+    gradient_permille: float = Field(ge=-100, le=100, description="Positive uphill [per mille].")
+
+
+class Curve(Strict):
+    position_m: float = Field(ge=0)
+    radius_m: Optional[float] = Field(None, gt=0, description="Radius [m]; null for straight track.")
+
+
+class SpeedLimit(Strict):
+    position_m: float = Field(ge=0)
+    speed_kmh: float = Field(gt=0)
+
+
+class TrackFile(Strict):
+    name: str
+    source: str
+    length_m: float = Field(gt=0)
+    stops: list[Stop] = Field(min_length=2)
+    gradients: list[Gradient] = Field(default_factory=lambda: [Gradient(position_m=0, gradient_permille=0)])
+    curves: list[Curve] = Field(default_factory=list)
+    speed_limits: list[SpeedLimit] = Field(min_length=1)
+
+    @model_validator(mode="after")
+    def _positions(self):
+        for name in ("stops", "gradients", "curves", "speed_limits"):
+            items = getattr(self, name)
+            _increasing([x.position_m for x in items], f"{name} positions")
+            if items and items[-1].position_m > self.length_m:
+                raise ValueError(f"{name}: position {items[-1].position_m} m is beyond length_m")
+        for name in ("gradients", "speed_limits"):
+            if getattr(self, name)[0].position_m != 0:
+                raise ValueError(f"{name}: the first entry must start at position_m 0")
+        names = [s.name for s in self.stops]
+        if len(set(names)) != len(names):
+            raise ValueError("stop names must be unique")
+        return self
+
+
+class TimetableStop(Strict):
+    stop: str
+    arrival_s: Optional[float] = Field(None, ge=0)
+    departure_s: Optional[float] = Field(None, ge=0)
+    dwell_s: Optional[float] = Field(None, ge=0)
+
+
+class TimetableFile(Strict):
+    name: str
+    source: str = ""
+    stops: list[TimetableStop] = Field(default_factory=list)
+    supplement_percent: Optional[float] = Field(None, ge=0)
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        if bool(self.stops) == (self.supplement_percent is not None):
+            raise ValueError("give either 'stops' with times or 'supplement_percent'")
+        return self
+
+
+class Weights(Strict):
+    time: float = Field(1.0, ge=0, description="w_t [1/s] (thesis 001 eq. 4.1a).")
+    energy: float = Field(1.0, ge=0, description="w_e [kg/J], on traction energy per unit mass.")
+
+
+class StudyFile(Strict):
+    name: str
+    track: str
+    train: str
+    timetable: Optional[str] = None
+    from_stop: Optional[str] = Field(None, alias="from")
+    to_stop: Optional[str] = Field(None, alias="to")
+    running_time_s: Optional[float] = Field(None, gt=0)
+    supplement_percent: Optional[float] = Field(None, ge=0)
+    window_s: Optional[tuple[float, float]] = None
+    objective: Literal["energy", "net_energy", "time", "mixed"] = "energy"
+    weights: Weights = Weights()
+    points: int = Field(1000, ge=10, le=100000)
+    output: Optional[str] = None
+
+    @model_validator(mode="after")
+    def _timing(self):
+        given = [self.running_time_s is not None, self.supplement_percent is not None,
+                 self.window_s is not None, self.timetable is not None]
+        if sum(given) > 1:
+            raise ValueError("give at most one of running_time_s, supplement_percent, window_s, timetable")
+        if self.window_s is not None and not 0 <= self.window_s[0] <= self.window_s[1]:
+            raise ValueError("window_s must be [earliest, latest] with 0 <= earliest <= latest")
+        return self

@@ -1,0 +1,103 @@
+"""Ipopt through Pyomo's cyipopt interface, with every exit mapped to an outcome.
+
+The glue is ours rather than ``SolverFactory('cyipopt')`` so that the NL write (``PyomoNLP``,
+which writes and loads an AMPL NL file through PyNumero's ASL) and the solve are timed apart,
+iterations are counted, and the NLP object can be reused.
+"""
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import SolverError
+
+DEFAULT_OPTIONS = {
+    "tol": 1e-8,
+    "acceptable_tol": 1e-6,
+    "max_iter": 3000,
+    "print_level": 0,
+    "mu_strategy": "adaptive",
+    "sb": "yes",
+}
+
+# Ipopt ApplicationReturnStatus -> our status word
+STATUS = {0: "optimal", 1: "acceptable", 2: "infeasible", 3: "search_direction_too_small",
+          4: "diverging", 5: "user_stop", 6: "feasible_point_found", -1: "max_iterations",
+          -2: "restoration_failed", -3: "step_computation_error", -4: "max_cpu_time",
+          -10: "not_enough_degrees_of_freedom", -11: "invalid_problem", -12: "invalid_option",
+          -13: "invalid_number"}
+
+
+@dataclass
+class Outcome:
+    status: str            # see STATUS
+    iterations: int
+    seconds: float         # Ipopt wall time
+    nl_seconds: float      # NL write and ASL load
+    max_violation: float   # largest constraint violation at the returned point
+
+    @property
+    def optimal(self):
+        return self.status == "optimal"
+
+    @property
+    def usable(self):
+        """A point that satisfies the constraints, even if not proven optimal (then flagged)."""
+        return self.status in ("optimal", "acceptable") or self.max_violation < 1e-6
+
+
+def _imports():
+    from pyomo.contrib.pynumero.interfaces.cyipopt_interface import CyIpoptNLP
+    from pyomo.contrib.pynumero.interfaces.pyomo_nlp import PyomoNLP
+    return CyIpoptNLP, PyomoNLP
+
+
+def solve(model, options=None):
+    """Solve ``model`` in place with Ipopt; returns an :class:`Outcome` (never raises on non-optimal)."""
+    CyIpoptNLP, PyomoNLP = _imports()
+    iterations = [0]
+
+    class Counting(CyIpoptNLP):
+        def intermediate(self, alg_mod, iter_count, *args):
+            iterations[0] = iter_count
+            return True
+
+    t0 = time.perf_counter()
+    nlp = PyomoNLP(model)
+    problem = Counting(nlp)
+    nl_seconds = time.perf_counter() - t0
+    for key, value in {**DEFAULT_OPTIONS, **(options or {})}.items():
+        problem.add_option(key, value)
+    t1 = time.perf_counter()
+    try:
+        x, info = problem.solve(problem.x_init())
+    except Exception as exc:  # cyipopt raises on evaluation errors it cannot recover from
+        raise SolverError(f"Ipopt stopped with an error: {exc}") from exc
+    seconds = time.perf_counter() - t1
+    nlp.set_primals(x)
+    nlp.set_duals(info["mult_g"])
+    nlp.load_state_into_pyomo(bound_multipliers=(info["mult_x_L"], info["mult_x_U"]))
+    g = np.asarray(info["g"])
+    viol = np.maximum(nlp.constraints_lb() - g, g - nlp.constraints_ub())
+    max_violation = float(np.max(viol, initial=0.0))
+    problem.close()
+    return Outcome(STATUS.get(int(info["status"]), f"ipopt_{info['status']}"), int(iterations[0]),
+                   seconds, nl_seconds, max_violation)
+
+
+def versions():
+    """Versions of the solver chain: Pyomo, cyipopt, Ipopt, MUMPS (as Ipopt's package reports them)."""
+    import subprocess
+
+    import cyipopt
+    import pyomo
+
+    def pkg(name, query):
+        try:
+            return subprocess.run(["dpkg-query", "-W", "-f=${Version}", name], capture_output=True,
+                                  text=True, timeout=5).stdout.strip() or "unknown"
+        except (OSError, subprocess.SubprocessError):
+            return "unknown"
+
+    return {"pyomo": pyomo.__version__, "cyipopt": cyipopt.__version__,
+            "ipopt": pkg("coinor-libipopt-dev", None), "mumps": pkg("libmumps-seq-dev", None)}
