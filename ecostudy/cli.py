@@ -1,0 +1,175 @@
+"""Command line: parses options and calls the library. Errors are one line; --debug shows tracebacks.
+
+Exit status: 0 verified optimal result, 1 result written but flagged (not optimal or failed
+verification), 2 bad input or infeasible request, 3 solver failure or internal error.
+"""
+import sys
+import warnings
+from enum import Enum
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from .errors import EcostudyError, InputError, problem
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="Energy-efficient train control studies (Pyomo + Ipopt).")
+
+
+class Objective(str, Enum):
+    energy = "energy"
+    net_energy = "net_energy"
+    time = "time"
+    mixed = "mixed"
+
+
+def _fail(lines, code):
+    for line in str(lines).splitlines():
+        typer.secho(f"error: {line}", fg=typer.colors.RED, err=True)
+    raise typer.Exit(code)
+
+
+def guarded(debug, fn, *args, **kwargs):
+    """Run ``fn``; turn ecostudy errors into one-line messages and exit codes."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            return fn(*args, **kwargs)
+        except EcostudyError as exc:
+            if debug:
+                raise
+            _fail(exc, exc.exit_code)
+        except (KeyboardInterrupt, typer.Exit):
+            raise
+        except Exception as exc:  # an unexpected failure still gets one line by default
+            if debug:
+                raise
+            _fail(f"internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", 3)
+        finally:
+            for w in caught:
+                typer.secho(f"warning: {w.message}", fg=typer.colors.YELLOW, err=True)
+
+
+def _report(result, out_dir):
+    s = result.summary
+    ver = s["verification"]
+    typer.echo(f"{s['train']}: {s['from']} -> {s['to']} ({s['distance_m']:.0f} m), objective {s['objective']}, "
+               f"K = {s['points']}")
+    typer.echo(f"  running time      {s['running_time_s']:9.2f} s")
+    typer.echo(f"  traction energy   {s['traction_energy_kWh']:9.3f} kWh  ({s['traction_energy_J_per_kg']:.2f} J/kg)")
+    typer.echo(f"  net energy        {s['net_energy_kWh']:9.3f} kWh  (regenerated {s['regenerated_energy_kWh']:.3f} kWh)")
+    typer.echo(f"  solver            {s['solver']['status']}, {s['solver']['iterations']} iterations, "
+               f"{s['solver']['seconds']:.2f} s")
+    if ver is not None:
+        flag = "passed" if ver["passed"] else "FAILED"
+        typer.echo(f"  verification      {flag}: arrival {ver['arrival_time_error_s']:+.3f} s, stop "
+                   f"{ver['stop_error_m']:+.3f} m, energy {ver['energy_error_pct']:+.3f} %, overspeed "
+                   f"{ver['max_overspeed_kmh']:.3f} km/h")
+    typer.echo(f"  outputs           {out_dir}/ (profile.csv, summary.json, speed.png)")
+
+
+def _parse_pair(text, option):
+    try:
+        a, b = (float(x) for x in text.split(","))
+        return a, b
+    except ValueError:
+        raise InputError(problem("command line", option, f"expected two numbers 'a,b', got '{text}'"))
+
+
+def _solve(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights,
+           points, out, no_plot):
+    from .inputs import Timing, check_stops, load_study, load_track, load_train
+    from .results import write_run
+    from .run import solve_run
+
+    if study is not None:
+        if track or train:
+            raise InputError(problem("command line", "--track/--train", "give a study file or --track and --train, not both"))
+        st = load_study(study)
+        trk, trn, f, t = st.track, st.train, st.from_stop, st.to_stop
+        timing, obj, w, k = st.timing, st.objective, st.weights, st.points
+        out_dir = Path(out) if out else st.output
+        if time is not None or supplement is not None:
+            timing = Timing(running_time=time, supplement=None if supplement is None else supplement / 100)
+        if points is not None:
+            k = points
+        if objective is not None:
+            obj = objective.value
+    else:
+        if not (track and train):
+            raise InputError(problem("command line", "--track/--train", "give a study file, or both --track and --train"))
+        trk, trn = load_track(track), load_train(train)
+        names = list(trk.stops)
+        f, t = from_stop or names[0], to_stop or names[-1]
+        check_stops(trk, f, t, "command line")
+        given = sum(x is not None for x in (time, supplement, window))
+        obj = objective.value if objective is not None else "energy"
+        if given > 1:
+            raise InputError(problem("command line", "--time/--supplement/--window", "give only one"))
+        if given == 0 and obj != "time" and obj != "mixed":
+            raise InputError(problem("command line", "--time", "give --time, --supplement or --window "
+                                     "(or --objective time for the all-out run)"))
+        timing = Timing(running_time=time, supplement=None if supplement is None else supplement / 100,
+                        window=_parse_pair(window, "--window") if window else None)
+        w = _parse_pair(weights, "--weights") if weights else (1.0, 1.0)
+        k = points or 1000
+        out_dir = Path(out) if out else Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_")
+    result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w)
+    write_run(result, out_dir, plot=not no_plot)
+    _report(result, out_dir)
+    return result
+
+
+@app.command()
+def solve(
+    study: Optional[Path] = typer.Argument(None, help="Study file (YAML)."),
+    track: Optional[Path] = typer.Option(None, help="Track file (YAML, or TTOBench JSON)."),
+    train: Optional[Path] = typer.Option(None, help="Train file (YAML, or TTOBench/OSRD JSON)."),
+    time: Optional[float] = typer.Option(None, "--time", help="Running time [s]."),
+    supplement: Optional[float] = typer.Option(None, help="Running-time supplement over all-out [%]."),
+    window: Optional[str] = typer.Option(None, help="Arrival window 'earliest,latest' [s]."),
+    from_stop: Optional[str] = typer.Option(None, "--from", help="Departure stop (default: first)."),
+    to_stop: Optional[str] = typer.Option(None, "--to", help="Arrival stop (default: last)."),
+    objective: Optional[Objective] = typer.Option(None, help="energy | net_energy | time | mixed."),
+    weights: Optional[str] = typer.Option(None, help="Mixed objective weights 'w_t,w_e' (thesis 001 eq. 4.1)."),
+    points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 1000)."),
+    out: Optional[Path] = typer.Option(None, help="Output folder."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip speed.png."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Energy-optimal (or all-out) run between two stops, verified by re-simulation."""
+    result = guarded(debug, _solve, study, track, train, time, supplement, window, from_stop, to_stop,
+                     objective, weights, points, out, no_plot)
+    if not result.ok:
+        typer.secho("flagged: the result is not verified optimal (see summary.json)", fg=typer.colors.YELLOW, err=True)
+        raise typer.Exit(1)
+
+
+def _doctor():
+    import pyomo.environ as pyo
+
+    from . import __version__, solver
+    for name, version in {"ecostudy": __version__, **solver.versions()}.items():
+        typer.echo(f"{name:10s} {version}")
+    m = pyo.ConcreteModel()
+    m.x = pyo.Var(initialize=1.0)
+    m.y = pyo.Var(initialize=1.0)
+    m.c = pyo.Constraint(expr=m.x**2 + m.y**2 == 1)
+    m.o = pyo.Objective(expr=m.x + 2 * m.y)
+    out = solver.solve(m)
+    ok = out.optimal and abs(pyo.value(m.o) + 5**0.5) < 1e-6
+    typer.echo(f"toy NLP    {out.status} in {out.iterations} iterations, objective {pyo.value(m.o):.6f} "
+               f"(expected {-(5**0.5):.6f}): {'ok' if ok else 'WRONG'}")
+    return ok
+
+
+@app.command()
+def doctor(debug: bool = typer.Option(False, help="Show tracebacks.")):
+    """Check the install: versions of the solver chain and a toy NLP solved with Ipopt."""
+    if not guarded(debug, _doctor):
+        raise typer.Exit(3)
+
+
+def main():  # pragma: no cover
+    sys.exit(app())
