@@ -138,34 +138,41 @@ def _envelope(spec, mass):
 
 
 def _davis(d, static_mass):
-    """Davis triple in N, N s/m, N s^2/m^2 from whichever unit system the file used."""
+    """Davis triple in N, N s/m, N s^2/m^2 from whichever unit system the file used, and its fields."""
     if d.a_N is not None:
-        return (d.a_N, d.b_N_per_mps, d.c_N_per_mps2), "a_N"
+        return (d.a_N, d.b_N_per_mps, d.c_N_per_mps2), d.TRIPLES[0]
     if d.a_kN is not None:
         return (d.a_kN * units.KN, d.b_kN_per_kmh * units.KN / units.KMH,
-                d.c_kN_per_kmh2 * units.KN / units.KMH**2), "a_kN"
+                d.c_kN_per_kmh2 * units.KN / units.KMH**2), d.TRIPLES[1]
     return (d.a_N_per_kg * static_mass, d.b_N_per_kg_per_mps * static_mass,
-            d.c_N_per_kg_per_mps2 * static_mass), "a_N_per_kg"
+            d.c_N_per_kg_per_mps2 * static_mass), d.TRIPLES[2]
 
 
-def check_davis_plausible(davis, static_mass, path):
-    """Warn when Davis coefficients are of an implausible size for the mass (mixed-up units)."""
-    a, b, c = (x / static_mass for x in davis)
-    ranges = {"a": (a, 2e-4, 0.15), "b": (b, 0.0, 5e-3), "c": (c, 1e-7, 2e-3)}
-    for name, (value, low, high) in ranges.items():
-        if value and not low <= value <= high:
-            warnings.warn(problem(path, f"davis.{name}",
-                                  f"{value:.3g} N/kg per unit of speed power is implausible for a "
-                                  f"{static_mass / units.TONNE:.0f} t train (expected {low:g}..{high:g}); "
-                                  "check the units"), EcostudyWarning, stacklevel=2)
+# plausible Davis coefficients per unit static mass: A [N/kg], B [N s/(m kg)], C [N s^2/(m^2 kg)]
+DAVIS_PER_KG = {"a": (2e-4, 0.15), "b": (0.0, 5e-3), "c": (1e-7, 2e-3)}
 
 
-def train_from_schema(t, path):
+def check_davis_plausible(davis, static_mass, fields, path):
+    """Warn when a Davis coefficient is of an implausible size for the mass (mixed-up units).
+
+    ``fields`` names the file's fields for (A, B, C), so the warning points at what to fix.
+    """
+    for (key, (low, high)), value, name in zip(DAVIS_PER_KG.items(), davis, fields):
+        per_kg = value / static_mass
+        if per_kg and not low <= per_kg <= high:
+            warnings.warn(problem(path, name,
+                                  f"Davis {key.upper()} = {per_kg:.3g} per kg is implausible for a "
+                                  f"{static_mass / units.TONNE:.0f} t train (expected {low:g} to {high:g} "
+                                  "in N, m/s units per kg); check the units"), EcostudyWarning, stacklevel=2)
+
+
+def train_from_schema(t, path, aliases=None):
     static = t.mass_t * units.TONNE
     mass = (t.effective_mass_t * units.TONNE if t.effective_mass_t is not None
             else static * (1 + t.rotating_mass_factor))
-    davis, _ = _davis(t.davis, static)
-    check_davis_plausible(davis, static, path)
+    davis, fields = _davis(t.davis, static)
+    aliases = aliases or {}
+    check_davis_plausible(davis, static, [aliases.get(f"davis.{f}", f"davis.{f}") for f in fields], path)
     regen, eta_r = None, 0.0
     if t.regenerative_braking is not None:
         r = t.regenerative_braking
@@ -194,11 +201,11 @@ def track_from_schema(t):
 
 def load_train(path):
     """Read a train file (YAML, or TTOBench/OSRD JSON) into a :class:`Train`."""
-    data = read_document(path)
+    data, aliases = read_document(path), None
     if Path(path).suffix.lower() == ".json":
         from .imports import train_document_to_schema
-        data = train_document_to_schema(data, path)
-    return train_from_schema(validate(schemas.TrainFile, data, path), path)
+        data, aliases = train_document_to_schema(data, path)
+    return train_from_schema(validate(schemas.TrainFile, data, path), path, aliases)
 
 
 def load_track(path):
