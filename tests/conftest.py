@@ -1,0 +1,41 @@
+"""Shared fixtures: each expensive solve runs once per session and many tests read it."""
+from pathlib import Path
+
+import pytest
+import yaml
+
+from ecostudy.inputs import Timing, load_track, load_train
+from ecostudy.run import solve_run
+
+ROOT = Path(__file__).resolve().parent.parent
+TRAINS, TRACKS, STUDIES, DATA = ROOT / "trains", ROOT / "tracks", ROOT / "studies", ROOT / "tests" / "data"
+
+
+@pytest.fixture(scope="session")
+def metro():
+    return load_train(TRAINS / "amsterdam_metro.yaml")
+
+
+@pytest.fixture(scope="session")
+def amsterdam():
+    return load_track(TRACKS / "amsterdam_rokin_centraal.yaml")
+
+
+@pytest.fixture(scope="session")
+def amsterdam_76s(metro, amsterdam):
+    """Energy-optimal Rokin -> Centraal in 76 s (thesis 000 §4.4), K = 1000."""
+    return solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=1000)
+
+
+@pytest.fixture(scope="session")
+def amsterdam_allout(metro, amsterdam):
+    return solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(), objective="time", points=1000)
+
+
+def write_yaml(path, data):
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def load_yaml(path):
+    return yaml.safe_load(Path(path).read_text())

@@ -1,0 +1,147 @@
+"""The command line: outputs, exit codes, and one clear line per bad input (exit 2, no traceback)."""
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+
+from .conftest import DATA, STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
+
+runner = CliRunner()
+METRO, AMS = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml"
+
+
+def run(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def error_lines(result):
+    return [line for line in result.output.splitlines() if line.startswith("error:")]
+
+
+def assert_one_line_error(result, *fragments):
+    assert result.exit_code == 2, result.output
+    lines = error_lines(result)
+    assert len(lines) == 1, result.output
+    assert "Traceback" not in result.output
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+
+
+def test_solve_study_writes_outputs(tmp_path):
+    out = tmp_path / "run"
+    r = run("solve", STUDIES / "thesis001_advanced.yaml", "--out", out)
+    assert r.exit_code == 0, r.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["verification"]["passed"]
+    assert summary["running_time_s"] == pytest.approx(84.92, abs=1e-4)
+    assert (out / "speed.png").stat().st_size > 10_000
+    header = (out / "profile.csv").read_text().splitlines()[0]
+    assert header.startswith("position_m,time_s,speed_kmh,handle")
+    assert not list(out.glob("*.tmp"))
+
+
+def test_solve_with_options_and_supplement(tmp_path):
+    r = run("solve", "--track", AMS, "--train", METRO, "--supplement", 5, "--points", 300,
+            "--out", tmp_path, "--no-plot")
+    assert r.exit_code == 0, r.output
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["running_time_s"] == pytest.approx(1.05 * s["all_out_time_s"], rel=1e-6)
+
+
+def test_doctor():
+    r = run("doctor")
+    assert r.exit_code == 0, r.output
+    assert "toy NLP" in r.output and "ok" in r.output and "ipopt" in r.output
+
+
+@pytest.fixture
+def train_data():
+    return load_yaml(METRO)
+
+
+@pytest.fixture
+def track_data():
+    return load_yaml(AMS)
+
+
+def solve_files(tmp_path, train=None, track=None, *extra):
+    train_path = write_yaml(tmp_path / "train.yaml", train) if train is not None else METRO
+    track_path = write_yaml(tmp_path / "track.yaml", track) if track is not None else AMS
+    return run("solve", "--track", track_path, "--train", train_path, "--time", 76, "--points", 200,
+               "--out", tmp_path / "out", "--no-plot", *extra)
+
+
+def test_unknown_key(tmp_path, train_data):
+    train_data["colour"] = "red"
+    assert_one_line_error(solve_files(tmp_path, train=train_data), "train.yaml", "colour", "unknown field")
+
+
+def test_missing_field(tmp_path, track_data):
+    del track_data["length_m"]
+    assert_one_line_error(solve_files(tmp_path, track=track_data), "track.yaml", "length_m", "missing field")
+
+
+def test_negative_mass(tmp_path, train_data):
+    train_data["mass_t"] = -131.4
+    assert_one_line_error(solve_files(tmp_path, train=train_data), "train.yaml", "mass_t", "greater than 0")
+
+
+def test_non_increasing_positions(tmp_path, track_data):
+    track_data["gradients"][2]["position_m"] = 50
+    assert_one_line_error(solve_files(tmp_path, track=track_data), "track.yaml", "gradients positions",
+                          "strictly increasing")
+
+
+def test_non_monotone_speed_table(tmp_path, train_data):
+    train_data["traction"]["table"]["speed_kmh"][3] = 40
+    assert_one_line_error(solve_files(tmp_path, train=train_data), "train.yaml",
+                          "traction.table.speed_kmh", "strictly increasing")
+
+
+def test_running_time_below_all_out(tmp_path):
+    r = run("solve", "--track", AMS, "--train", METRO, "--time", 60, "--points", 300, "--out", tmp_path)
+    assert_one_line_error(r, "infeasible: the fastest possible run takes", "asked for 60.0 s")
+
+
+def test_unknown_stop(tmp_path):
+    r = run("solve", "--track", AMS, "--train", METRO, "--time", 76, "--from", "Nowhere", "--out", tmp_path)
+    assert_one_line_error(r, "from", "unknown stop 'Nowhere'", "Rokin")
+
+
+def test_malformed_yaml(tmp_path):
+    bad = tmp_path / "train.yaml"
+    bad.write_text("name: x\nmass_t: [1, 2\n")
+    r = run("solve", "--track", AMS, "--train", bad, "--time", 76, "--out", tmp_path)
+    assert_one_line_error(r, "train.yaml", "malformed YAML at line")
+
+
+def test_malformed_json(tmp_path):
+    bad = tmp_path / "train.json"
+    bad.write_text('{"mass": {"value": 1000,}')
+    r = run("solve", "--track", AMS, "--train", bad, "--time", 76, "--out", tmp_path)
+    assert_one_line_error(r, "train.json", "malformed JSON at line")
+
+
+def test_all_problems_of_a_file_are_reported(tmp_path, train_data):
+    train_data["colour"] = "red"
+    train_data["length_m"] = -1
+    r = solve_files(tmp_path, train=train_data)
+    assert r.exit_code == 2
+    assert len(error_lines(r)) == 2
+
+
+def test_debug_shows_the_exception(tmp_path, train_data):
+    train_data["colour"] = "red"
+    r = solve_files(tmp_path, train_data, None, "--debug")
+    assert r.exit_code != 0
+    assert r.exception is not None
+
+
+def test_davis_in_wrong_units_warns_with_the_field(tmp_path, train_data):
+    train_data["davis"]["a_N"] = 3.9759  # kN typed as N
+    r = solve_files(tmp_path, train=train_data)
+    assert r.exit_code == 0, r.output
+    warn = [line for line in r.output.splitlines() if line.startswith("warning:")]
+    assert len(warn) == 1 and "davis.a_N" in warn[0] and "check the units" in warn[0]
