@@ -14,7 +14,7 @@ from pydantic import ValidationError
 
 from . import schemas, units
 from .errors import EcostudyWarning, InputError, problem
-from .physics import GRAVITY, Envelope, table_width
+from .physics import GRAVITY, Envelope, force_power_fit, table_width
 
 
 @dataclass(frozen=True)
@@ -129,7 +129,10 @@ def _envelope(spec, mass):
     if spec.table is not None:
         speeds = np.asarray(spec.table.speed_kmh) * units.KMH
         forces = np.asarray(spec.table.force_kN) * units.KN
-        return Envelope("table", speeds=tuple(speeds), forces=tuple(forces),
+        fit = force_power_fit(speeds, forces)
+        if fit is not None:  # the table is a force and a power limit: model it exactly as such
+            return Envelope("force_power", max_force=fit[0], max_power=fit[1])
+        return Envelope("table", speeds=tuple(speeds.tolist()), forces=tuple(forces.tolist()),
                         width=table_width(speeds, forces))
     if getattr(spec, "max_deceleration_mps2", None) is not None:
         return Envelope("force_power", max_force=mass * spec.max_deceleration_mps2)

@@ -17,7 +17,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from .initial import interval_resistance
-from .physics import table_force
+from .physics import smooth_table
 
 KN = 1000.0
 # weight of traction + braking work in the all-out objective: removes the flat direction of
@@ -48,15 +48,17 @@ def define_variables(m, nodes, limits, train, guess, with_regeneration):
 
 def define_dynamics(m, nodes, segment, train):
     """Speed (energy form) and time recursions, scaled to O(1) residuals."""
-    ds = np.diff(nodes)
+    ds = np.diff(nodes).tolist()  # Python floats: numpy scalars make Pyomo expressions slow
     a, b, c = train.davis
-    fixed = (interval_resistance(segment, train, nodes) + a) / train.mass
-    bm, cm, km = b / train.mass, c / train.mass, KN / train.mass
+    fixed = ((interval_resistance(segment, train, nodes) + a) / train.mass).tolist()
+    bm, cm, km = float(b / train.mass), float(c / train.mass), float(KN / train.mass)
 
     def speed(m, k):
-        v0, v1 = m.v[k], m.v[k + 1]
-        return ((v1**2 - v0**2) / (2 * ds[k])
-                == km * (m.ft[k] - m.fb[k]) - fixed[k] - bm * 0.5 * (v0 + v1) - cm * 0.5 * (v0**2 + v1**2))
+        # (v1^2 - v0^2)/(2 ds) + C/M (v0^2 + v1^2)/2 + B/M (v0 + v1)/2 = (F_T - F_B)/M - fixed,
+        # with the squares collected so each appears once in the expression
+        q = 0.5 / ds[k]
+        return ((q + 0.5 * cm) * m.v[k + 1] ** 2 + (0.5 * cm - q) * m.v[k] ** 2
+                + 0.5 * bm * (m.v[k] + m.v[k + 1]) - km * (m.ft[k] - m.fb[k]) + fixed[k] == 0.0)
 
     def time(m, k):
         return m.dt[k] * (m.v[k] + m.v[k + 1]) / (2 * ds[k]) == 1.0
@@ -69,9 +71,10 @@ def define_dynamics(m, nodes, segment, train):
 def _envelope_constraints(m, name, force, envelope):
     """force_k <= envelope(v) at both ends of interval k."""
     if envelope.kind == "table":
-        speeds, forces = np.asarray(envelope.speeds), np.asarray(envelope.forces) / KN
+        c0, c1, terms = envelope.coefficients  # in N; the force variables are in kN
+        scaled = (c0 / KN, c1 / KN, [(a / KN, v) for a, v in terms])
         m.add_component(name + "_env", pyo.Expression(
-            m.K, rule=lambda m, k: table_force(m.v[k], speeds, forces, envelope.width)))
+            m.K, rule=lambda m, k: smooth_table(m.v[k], scaled, envelope.width)))
         env = getattr(m, name + "_env")
         m.add_component(name + "_lo", pyo.Constraint(m.I, rule=lambda m, k: force[k] <= env[k]))
         m.add_component(name + "_hi", pyo.Constraint(m.I, rule=lambda m, k: force[k] <= env[k + 1]))
@@ -107,7 +110,7 @@ def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
     time        running time, plus a small multiple of traction + braking work ("all-out")
     mixed       w_t T + w_e E / Ms (thesis 001 eq. 4.1a, energy per unit mass [J/kg])
     """
-    ds = np.diff(nodes)
+    ds = np.diff(nodes).tolist()
     m.traction_work = pyo.Expression(expr=KN * sum(ds[k] * m.ft[k] for k in m.I))
     braking = KN * sum(ds[k] * m.fb[k] for k in m.I) / energy_ref
     energy = m.traction_work / energy_ref

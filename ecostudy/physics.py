@@ -11,7 +11,7 @@ M      effective (inertial) mass, static mass plus rotating-mass allowance [kg]
 Ms     static mass, the mass gravity acts on [kg]
 A,B,C  Davis coefficients [N], [N s/m], [N s^2/m^2]
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -57,11 +57,39 @@ def hinge(x, width):
     return 0.5 * (x + (x * x + width * width) ** 0.5)
 
 
+def table_coefficients(speeds, forces, width):
+    """(c0, c1, [(a_j, v_j)]) with table_force = c0 + c1 v + sum a_j sqrt((v - v_j)^2 + w^2).
+
+    The linear interpolant of the table is f0 + sum_j (s_j - s_j-1) max(v - v_j, 0) with zero
+    slope outside the table; each max is replaced by the hinge (x + sqrt(x^2 + w^2)) / 2 and the
+    linear halves of all hinges are gathered into c0 + c1 v, so an expression has one sqrt per kink.
+    """
+    speeds = [float(x) for x in speeds]
+    forces = [float(x) for x in forces]
+    slopes = [(f1 - f0) / (v1 - v0) for v0, v1, f0, f1 in zip(speeds, speeds[1:], forces, forces[1:])]
+    jumps = [b - a for a, b in zip([0.0] + slopes, slopes + [0.0])]  # slope change at each table speed
+    terms = [(0.5 * d, v) for d, v in zip(jumps, speeds) if d != 0.0]
+    c1 = sum(a for a, _ in terms)
+    c0 = -sum(a * v for a, v in terms)
+    # shift so that the smooth curve passes through the first table point
+    c0 += forces[0] - (c0 + c1 * speeds[0] + sum(a * ((speeds[0] - v) ** 2 + width**2) ** 0.5 for a, v in terms))
+    return c0, c1, terms
+
+
+def smooth_table(speed, coefficients, width):
+    """Evaluate c0 + c1 v + sum a_j sqrt((v - v_j)^2 + w^2) (see :func:`table_coefficients`)."""
+    c0, c1, terms = coefficients
+    value = c0 + c1 * speed
+    for a, v in terms:
+        value = value + a * ((speed - v) ** 2 + width * width) ** 0.5
+    return value
+
+
 def table_force(speed, speeds, forces, width):
     """Speed-force table as a smooth piecewise-linear interpolant [N].
 
-    The linear interpolant is written as a sum of hinges, each kink rounded over ``width``;
-    constant below the first and beyond the last table speed.
+    Linear between table points, constant below the first and beyond the last; each kink is
+    rounded over ``width`` (see :func:`table_coefficients`).
 
     Parameters
     ----------
@@ -69,13 +97,7 @@ def table_force(speed, speeds, forces, width):
     speeds, forces : sequences  Table, speeds strictly increasing [m/s], forces [N].
     width : float  Rounding width of each kink [m/s].
     """
-    slopes = np.diff(forces) / np.diff(speeds)
-    value = forces[0] + 0.0 * speed
-    prev = 0.0
-    for vj, sj in zip(speeds[:-1], slopes):
-        value = value + (sj - prev) * (hinge(speed - vj, width) - hinge(speeds[0] - vj, width))
-        prev = sj
-    return value + (0.0 - prev) * (hinge(speed - speeds[-1], width) - hinge(speeds[0] - speeds[-1], width))
+    return smooth_table(speed, table_coefficients(speeds, forces, width), width)
 
 
 @dataclass(frozen=True)
@@ -92,11 +114,16 @@ class Envelope:
     speeds: tuple = ()
     forces: tuple = ()
     width: float = 0.0
+    coefficients: tuple = field(default=(), compare=False, repr=False)
+
+    def __post_init__(self):
+        if self.kind == "table" and not self.coefficients:
+            object.__setattr__(self, "coefficients", table_coefficients(self.speeds, self.forces, self.width))
 
     def force(self, speed):
         """Maximum force at ``speed`` [N] for floats and numpy arrays (tables: Pyomo too)."""
         if self.kind == "table":
-            return table_force(speed, np.asarray(self.speeds), np.asarray(self.forces), self.width)
+            return smooth_table(speed, self.coefficients, self.width)
         speed = np.maximum(speed, 1e-9)
         return np.minimum(self.max_force, self.max_power / speed)
 
@@ -104,6 +131,23 @@ class Envelope:
     def peak(self):
         """Largest force the envelope ever allows [N]."""
         return max(self.forces) if self.kind == "table" else self.max_force
+
+
+def force_power_fit(speeds, forces, tolerance=0.005):
+    """(F_max, P_max) if every table point lies on min(F_max, P_max / v) within ``tolerance``.
+
+    Such a table is then modelled exactly by F <= F_max and F v <= P_max: cheaper than the
+    smoothed interpolant, and never above the table's linear interpolation (the hyperbola lies
+    below its chords). Returns None for any other shape.
+    """
+    speeds, forces = np.asarray(speeds, float), np.asarray(forces, float)
+    f_max = float(forces[0])
+    if f_max <= 0 or np.any(forces > f_max * (1 + tolerance)):
+        return None
+    weak = (speeds > 0) & (forces < f_max * (1 - tolerance))
+    power = float(np.median(forces[weak] * speeds[weak])) if np.any(weak) else float("inf")
+    model = np.minimum(f_max, power / np.maximum(speeds, 1e-9))
+    return (f_max, power) if np.all(np.abs(model - forces) <= tolerance * forces) else None
 
 
 def table_width(speeds, forces, tolerance=0.002):

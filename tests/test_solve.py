@@ -6,7 +6,7 @@ from ecostudy.inputs import Timing, load_track, load_train
 from ecostudy.run import solve_run
 from ecostudy.simulate import TOLERANCES
 
-from .conftest import TRACKS, TRAINS
+from .conftest import TRACKS, TRAINS, load_yaml
 
 SUMMARY_KEYS = {"running_time_s", "traction_energy_kWh", "braking_energy_kWh", "regenerated_energy_kWh",
                 "net_energy_kWh", "points", "objective", "solver", "verification"}
@@ -38,17 +38,29 @@ def test_all_out_is_faster_and_costs_more(amsterdam_allout, amsterdam_76s):
     assert amsterdam_allout.summary["traction_energy_kWh"] > 1.3 * amsterdam_76s.summary["traction_energy_kWh"]
 
 
-def test_envelopes_and_limits_honoured(amsterdam_76s, metro):
+@pytest.mark.parametrize("train_file, track_file, stops, time", [
+    ("amsterdam_metro.yaml", "amsterdam_rokin_centraal.yaml", ("Rokin", "Centraal"), 73.0),
+    ("thesis001_commuter.yaml", "thesis001_advanced_1km.yaml", ("A", "B"), 79.31)])
+def test_speed_force_tables_honoured_within_one_percent(train_file, track_file, stops, time):
+    """The solution against the tables as written in the train file (km/h, kN), at both ends of
+    every interval, whatever the internal representation (smoothed table or force + power)."""
+    raw = load_yaml(TRAINS / train_file)
+    r = solve_run(load_track(TRACKS / track_file), load_train(TRAINS / train_file), *stops,
+                  Timing(running_time=time), points=500)
+    p = r.profile
+    v = p["speed_kmh"].to_numpy()
+    for column, spec in (("traction_force_kN", raw["traction"]), ("braking_force_kN", raw["braking"])):
+        if "table" not in spec:
+            continue
+        force = p[column].to_numpy()[:-1]
+        for vv in (v[:-1], v[1:]):
+            table = np.interp(vv, spec["table"]["speed_kmh"], spec["table"]["force_kN"])
+            assert np.all(force <= 1.01 * table + 1e-6)
+
+
+def test_speed_limits_honoured(amsterdam_76s):
     p = amsterdam_76s.profile
     v = p["speed_kmh"].to_numpy() / 3.6
-    ft = p["traction_force_kN"].to_numpy()[:-1] * 1000
-    fb = p["braking_force_kN"].to_numpy()[:-1] * 1000
-    # a speed-force table must be honoured within 1 % at both ends of every interval
-    for vv in (v[:-1], v[1:]):
-        table = np.interp(vv, metro.traction.speeds, metro.traction.forces)
-        assert np.all(ft <= 1.01 * table)
-        table_b = np.interp(vv, metro.braking.speeds, metro.braking.forces)
-        assert np.all(fb <= 1.01 * table_b)
     lim = amsterdam_76s.segment.limit(p["position_m"].to_numpy())
     assert np.all(v <= lim + 1e-6)
 
