@@ -124,6 +124,8 @@ class Envelope:
         """Maximum force at ``speed`` [N] for floats and numpy arrays (tables: Pyomo too)."""
         if self.kind == "table":
             return smooth_table(speed, self.coefficients, self.width)
+        if isinstance(speed, float):  # the simulator's hot path
+            return min(self.max_force, self.max_power / max(speed, 1e-9))
         speed = np.maximum(speed, 1e-9)
         return np.minimum(self.max_force, self.max_power / speed)
 

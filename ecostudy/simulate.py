@@ -6,6 +6,7 @@ scipy's adaptive Runge-Kutta (DOP853) over time instead of the NLP's trapezoidal
 distance, restarted wherever the control or the track jumps (an adaptive stepper can otherwise
 step clean over a short interval of different control). Dense output is sampled to find the worst overspeed against the train-length limit.
 """
+from bisect import bisect_right
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,18 +45,20 @@ def pieces(nodes, handle, segment, jump=1e-3):
 
 def simulate(segment, train, nodes, handle, max_time=None):
     """Drive ``handle`` (one value per interval of ``nodes``) from standstill until the train stops."""
-    a, b, c = train.davis
+    a, b, c = (float(x) for x in train.davis)
+    handle = [float(u) for u in handle]
     last = len(handle) - 1
     max_time = max_time or 20 * segment.distance + 600
 
+    node_list = nodes.tolist()
+    fixed = [0.0]  # gradient + curve force of the current piece [N]: constant within a piece
+
     def forces(x, v):
-        k = min(max(int(np.searchsorted(nodes, x, side="right")) - 1, 0), last)
+        k = min(max(bisect_right(node_list, x) - 1, 0), last)
         u = handle[k]
         ft = u * train.traction.force(v) if u > 0 else 0.0
         fb = -u * train.braking.force(v) if u < 0 else 0.0
-        resist = running_resistance(v, (a, b, c), train.static_mass, segment.gradient(x),
-                                    train.curve_coefficient, segment.curvature(x))
-        return ft, fb, resist
+        return ft, fb, a + b * v + c * v * v + fixed[0]
 
     def rhs(t, y):
         x, v = y[0], y[1]
@@ -71,7 +74,11 @@ def simulate(segment, train, nodes, handle, max_time=None):
     starts = pieces(nodes, handle, segment)
     bounds = list(nodes[starts[1:]]) + [segment.distance + 100.0]  # past the stop: runaway guard
     y, t_start, solutions = [0.0, 1e-9, 0.0, 0.0], 0.0, []
-    for x_end in bounds:
+    for first, x_end in zip(starts, bounds):
+        x_mid = 0.5 * (nodes[first] + nodes[first + 1])
+        fixed[0] = float(running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, segment.gradient(x_mid),
+                                            train.curve_coefficient, segment.curvature(x_mid)))
+
         def reached(t, y, x_end=x_end):
             return y[0] - x_end
         reached.terminal, reached.direction = True, 1
