@@ -19,7 +19,9 @@ import pyomo.environ as pyo
 from .initial import interval_resistance
 from .physics import smooth_table
 
-KN = 1000.0
+KN = 1000.0  # force unit of the NLP variables [N]: kN (bench/bench_variants.py measures N)
+# multiplier on the speed recursion: 1 = dynamics per unit mass (bench_variants.py measures M)
+DYNAMICS_SCALE = 1.0
 # weight of traction + braking work in the all-out objective: removes the flat direction of
 # simultaneous traction and braking; its effect on the minimum time is measured in the tests
 TIME_REGULARISATION = 1e-4
@@ -56,9 +58,9 @@ def define_dynamics(m, nodes, segment, train):
     def speed(m, k):
         # (v1^2 - v0^2)/(2 ds) + C/M (v0^2 + v1^2)/2 + B/M (v0 + v1)/2 = (F_T - F_B)/M - fixed,
         # with the squares collected so each appears once in the expression
-        q = 0.5 / ds[k]
-        return ((q + 0.5 * cm) * m.v[k + 1] ** 2 + (0.5 * cm - q) * m.v[k] ** 2
-                + 0.5 * bm * (m.v[k] + m.v[k + 1]) - km * (m.ft[k] - m.fb[k]) + fixed[k] == 0.0)
+        q, s = 0.5 / ds[k], DYNAMICS_SCALE
+        return (s * (q + 0.5 * cm) * m.v[k + 1] ** 2 + s * (0.5 * cm - q) * m.v[k] ** 2
+                + s * 0.5 * bm * (m.v[k] + m.v[k + 1]) - s * km * (m.ft[k] - m.fb[k]) + s * fixed[k] == 0.0)
 
     def time(m, k):
         return m.dt[k] * (m.v[k] + m.v[k + 1]) / (2 * ds[k]) == 1.0

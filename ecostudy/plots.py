@@ -18,7 +18,8 @@ def _steps(profile, distance):
 def speed_plot(result, path):
     seg, prof, s = result.segment, result.profile, result.summary
     fig, (ax, axg, axu) = plt.subplots(3, 1, figsize=(9, 7), sharex=True,
-                                       gridspec_kw={"height_ratios": [3, 1, 1]})
+                                       gridspec_kw={"height_ratios": [3, 1, 1], "hspace": 0.12})
+    fig.subplots_adjust(left=0.08, right=0.98, top=0.95, bottom=0.07)  # tight_layout costs 40 % of the plot
     x, y = _steps(seg.limit, seg.distance)
     ax.step(x, to_kmh(y), where="post", color="tab:red", lw=1.2, label="speed limit (train length)")
     ax.plot(prof["position_m"], prof["speed_kmh"], color="tab:blue", lw=1.6, label="optimal speed")
@@ -39,6 +40,5 @@ def speed_plot(result, path):
     axu.set_xlabel("distance from departure [m]")
     for a in (ax, axg, axu):
         a.grid(alpha=0.3)
-    fig.tight_layout()
     fig.savefig(path, dpi=110, format="png")
     plt.close(fig)

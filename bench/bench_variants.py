@@ -1,0 +1,108 @@
+"""What scaling and grid placement buy: solve time, iterations and accuracy of formulation variants.
+
+    .venv/bin/python bench/bench_variants.py [--points 500 1000 2000] [--reference 5000]
+        [--timeout 120] [--out bench/results]
+
+Variants of the shipped formulation (nodes on every profile change, forces in kN, speed
+recursion per unit mass) on the Amsterdam case at 76 s:
+
+- ``uniform grid``: equally spaced nodes that ignore gradient and speed-limit changes;
+- ``trapezoidal grid``: thesis 001 §3.2.2, spacing growing over the first and shrinking over the
+  last 15 % of the run, also ignoring profile changes;
+- ``forces in N``: force variables in newtons;
+- ``dynamics x M``: speed recursion multiplied by the mass (force balance in newtons);
+- ``N and x M``: both, i.e. no scaling at all.
+
+Energy errors are against the shipped formulation at ``--reference`` nodes.
+"""
+import argparse
+import shlex
+import statistics
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import ecostudy.model as model  # noqa: E402
+import ecostudy.run as run  # noqa: E402
+from ecostudy.grid import make_grid  # noqa: E402
+from ecostudy.inputs import Timing, load_track, load_train  # noqa: E402
+
+
+def uniform(segment, points):
+    return np.linspace(0.0, segment.distance, points)
+
+
+def trapezoidal(segment, points, ramp=0.15, ratio=5.0):
+    """Node density low-to-high over the first ``ramp`` share of the run, mirrored at the end."""
+    u = np.linspace(0.0, 1.0, 20001)
+    density = np.clip(np.minimum(u, 1 - u) / ramp, 0, 1) * (ratio - 1) + 1  # spacing grows ratio-fold
+    spacing = density / density.sum()
+    s = np.concatenate([[0.0], np.cumsum(spacing[:-1])])
+    s /= s[-1]
+    return np.interp(np.linspace(0, 1, points), s, u) * segment.distance
+
+
+VARIANTS = {
+    "shipped": {},
+    "uniform grid": {"grid": uniform},
+    "trapezoidal grid": {"grid": trapezoidal},
+    "forces in N": {"KN": 1.0},
+    "dynamics x M": {"scale_mass": True},
+    "N and x M": {"KN": 1.0, "scale_mass": True},
+}
+
+
+def solve(track, train, points, variant, timeout):
+    model.KN = variant.get("KN", 1000.0)
+    model.DYNAMICS_SCALE = train.mass if variant.get("scale_mass") else 1.0
+    run.make_grid = variant.get("grid", make_grid)
+    try:
+        return run.solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=points,
+                             options={"max_cpu_time": float(timeout)})
+    except Exception as exc:  # a variant that fails is a result too
+        return exc
+    finally:
+        model.KN, model.DYNAMICS_SCALE, run.make_grid = 1000.0, 1.0, make_grid
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--points", type=int, nargs="+", default=[500, 1000, 2000])
+    p.add_argument("--reference", type=int, default=5000)
+    p.add_argument("--repeat", type=int, default=1)
+    p.add_argument("--timeout", type=float, default=120.0)
+    p.add_argument("--out", default=str(ROOT / "bench/results"))
+    args = p.parse_args()
+    command = "python bench/bench_variants.py " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    track = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
+    train = load_train(ROOT / "trains/amsterdam_metro.yaml")
+    ref = solve(track, train, args.reference, {}, args.timeout).summary["traction_energy_kWh"]
+    lines = [f"`{command}`", "", f"reference: shipped formulation, K = {args.reference}: {ref:.6f} kWh", "",
+             "| variant | K | solve s | iterations | status | energy error % | verified | stop error m | overspeed km/h |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for name, variant in VARIANTS.items():
+        for k in args.points:
+            results = [solve(track, train, k, variant, args.timeout) for _ in range(args.repeat)]
+            r = results[-1]
+            if isinstance(r, Exception):
+                lines.append(f"| {name} | {k} | - | - | {type(r).__name__}: {str(r)[:60]} | - | - | - | - |")
+            else:
+                s, v = r.summary, r.summary["verification"]
+                t = statistics.median(x.stages["solve"] for x in results)
+                lines.append(f"| {name} | {k} | {t:.3f} | {s['solver']['iterations']} | {s['solver']['status']} | "
+                             f"{100 * (s['traction_energy_kWh'] / ref - 1):+.4f} | {v['passed']} | "
+                             f"{v['stop_error_m']:+.3f} | {v['max_overspeed_kmh']:.3f} |")
+            print(lines[-1], flush=True)
+    text = "\n".join(lines) + "\n"
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "bench_variants.md").write_text(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
