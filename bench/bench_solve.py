@@ -12,6 +12,7 @@ loaded through ASL), solve (Ipopt), verify (re-simulation), write (CSV, JSON, PN
 import argparse
 import shlex
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -54,6 +55,8 @@ def main():
     p.add_argument("--to-stop", default="Centraal")
     p.add_argument("--time", type=float, default=76.0)
     p.add_argument("--out", default=str(ROOT / "bench/results"))
+    p.add_argument("--cli-points", type=int, nargs="*", default=[1000],
+                   help="also time the whole `ecostudy solve` command (new process) at these K")
     args = p.parse_args()
     command = "python bench/bench_solve.py " + " ".join(shlex.quote(a) for a in sys.argv[1:])
 
@@ -80,6 +83,21 @@ def main():
         e = 100 * (energies[("energy", k)][0] / energies[("energy", kmax)][0] - 1)
         t = 100 * (energies[("time", k)][1] / energies[("time", kmax)][1] - 1)
         lines.append(f"| {k} | {e:+.4f} | {t:+.4f} |")
+    if args.cli_points:
+        lines += ["", "### whole command: `ecostudy solve --track T --train R --time S --points K --out DIR` "
+                  "(new Python process: imports, solve, verification, CSV/JSON/PNG)", "",
+                  "| K | wall s (median) | runs |", "|---|---|---|"]
+        exe = str(Path(sys.executable).parent / "ecostudy")
+        for k in args.cli_points:
+            walls = []
+            for _ in range(args.repeat):
+                with tempfile.TemporaryDirectory() as d:
+                    t0 = time.perf_counter()
+                    subprocess.run([exe, "solve", "--track", args.track, "--train", args.train, "--from",
+                                    args.from_stop, "--to", args.to_stop, "--time", str(args.time),
+                                    "--points", str(k), "--out", d], check=True, capture_output=True)
+                    walls.append(time.perf_counter() - t0)
+            lines.append(f"| {k} | {statistics.median(walls):.2f} | {len(walls)} |")
     text = "\n".join(lines) + "\n"
     print(text)
     out = Path(args.out)

@@ -4,11 +4,35 @@ from pathlib import Path
 import pytest
 import yaml
 
+import ecostudy.run as _run
 from ecostudy.inputs import Timing, load_track, load_train
 from ecostudy.run import solve_run
 
 ROOT = Path(__file__).resolve().parent.parent
 TRAINS, TRACKS, STUDIES, DATA = ROOT / "trains", ROOT / "tracks", ROOT / "studies", ROOT / "tests" / "data"
+
+
+# Every solve in the suite must pass verification: record each verification block and check
+# them after every test (session fixtures are counted in the test that first needs them).
+_VERIFICATIONS = []
+_verify = _run.verify
+
+
+def _recording_verify(*args, **kwargs):
+    out, trace = _verify(*args, **kwargs)
+    _VERIFICATIONS.append(out)
+    return out, trace
+
+
+_run.verify = _recording_verify
+
+
+@pytest.fixture(autouse=True)
+def every_solve_passes_verification():
+    start = len(_VERIFICATIONS)
+    yield
+    failed = [v for v in _VERIFICATIONS[start:] if not v["passed"]]
+    assert not failed, f"a solve in this test failed verification: {failed}"
 
 
 @pytest.fixture(scope="session")

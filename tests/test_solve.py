@@ -137,3 +137,16 @@ def test_short_control_pulses_are_not_stepped_over(amsterdam, metro):
     assert_verified(r)
     starts = pieces(r.nodes, r.handle, r.segment)
     assert len(starts) < len(r.handle) / 2  # coasting and full-effort runs are integrated as one piece
+
+
+def test_non_optimal_ipopt_exit_is_never_silent(amsterdam, metro):
+    """Three iterations cannot converge: the run is either refused or flagged, never reported as optimal."""
+    from ecostudy.errors import SolverError
+    try:
+        r = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=300,
+                      options={"max_iter": 3}, verify_result=False)
+    except SolverError as exc:
+        assert "max_iterations" in str(exc)
+    else:
+        assert r.summary["solver"]["status"] == "max_iterations"
+        assert not r.ok
