@@ -8,7 +8,6 @@ install:
 
 run: install
 	$(ECOSTUDY) solve studies/default.yaml
-	@echo "outputs: out/default/ (profile.csv, summary.json, speed.png)"
 
 test: install
 	.venv/bin/python -m pytest -q

@@ -11,6 +11,7 @@ from typing import Optional
 
 import typer
 
+from . import units
 from .errors import EcostudyError, InputError, problem
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
@@ -57,8 +58,10 @@ def _report(result, out_dir):
     typer.echo(f"{s['train']}: {s['from']} -> {s['to']} ({s['distance_m']:.0f} m), objective {s['objective']}, "
                f"K = {s['points']}")
     typer.echo(f"  running time      {s['running_time_s']:9.2f} s")
-    typer.echo(f"  traction energy   {s['traction_energy_kWh']:9.3f} kWh  ({s['traction_energy_J_per_kg']:.2f} J/kg)")
-    typer.echo(f"  net energy        {s['net_energy_kWh']:9.3f} kWh  (regenerated {s['regenerated_energy_kWh']:.3f} kWh)")
+    typer.echo(f"  traction energy   {s['traction_energy_kWh']:9.3f} kWh  "
+               f"({s['traction_energy_J_per_kg']:.2f} J/kg)")
+    typer.echo(f"  net energy        {s['net_energy_kWh']:9.3f} kWh  "
+               f"(regenerated {s['regenerated_energy_kWh']:.3f} kWh)")
     typer.echo(f"  solver            {s['solver']['status']}, {s['solver']['iterations']} iterations, "
                f"{s['solver']['seconds']:.2f} s")
     if ver is not None:
@@ -85,20 +88,22 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
 
     if study is not None:
         if track or train:
-            raise InputError(problem("command line", "--track/--train", "give a study file or --track and --train, not both"))
+            raise InputError(problem("command line", "--track/--train",
+                                     "give a study file or --track and --train, not both"))
         st = load_study(study)
         trk, trn, f, t = st.track, st.train, st.from_stop, st.to_stop
         timing, obj, w, k = st.timing, st.objective, st.weights, st.points
         out_dir = Path(out) if out else st.output
         if time is not None or supplement is not None:
-            timing = Timing(running_time=time, supplement=None if supplement is None else supplement / 100)
+            timing = Timing(running_time=time, supplement=None if supplement is None else supplement * units.PERCENT)
         if points is not None:
             k = points
         if objective is not None:
             obj = objective.value
     else:
         if not (track and train):
-            raise InputError(problem("command line", "--track/--train", "give a study file, or both --track and --train"))
+            raise InputError(problem("command line", "--track/--train",
+                                     "give a study file, or both --track and --train"))
         trk, trn = load_track(track), load_train(train)
         names = list(trk.stops)
         f, t = from_stop or names[0], to_stop or names[-1]
@@ -110,7 +115,7 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
         if given == 0 and obj != "time" and obj != "mixed":
             raise InputError(problem("command line", "--time", "give --time, --supplement or --window "
                                      "(or --objective time for the all-out run)"))
-        timing = Timing(running_time=time, supplement=None if supplement is None else supplement / 100,
+        timing = Timing(running_time=time, supplement=None if supplement is None else supplement * units.PERCENT,
                         window=_parse_pair(window, "--window") if window else None)
         w = _parse_pair(weights, "--weights") if weights else (1.0, 1.0)
         k = points or 1000

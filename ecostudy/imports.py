@@ -97,7 +97,7 @@ def ttobench_train(doc, path):
         braking = {"table": {"speed_kmh": speeds.round(3).tolist(), "force_kN": force.round(4).tolist()}}
     regen = None
     if f_reg > 0:
-        regen = {"max_force_kN": f_reg, "efficiency": _scalar(doc, "efficiency reg brake", path, 100.0) / 100}
+        regen = {"max_force_kN": f_reg, "efficiency": _scalar(doc, "efficiency reg brake", path, 100.0) * units.PERCENT}
         if math.isfinite(p_reg):
             regen["max_power_kW"] = p_reg
     return {
@@ -105,14 +105,14 @@ def ttobench_train(doc, path):
         "source": f"TTOBench train {name} ({meta.get('library version', 'version not stated')}); "
                   "point mass (TTOBench gives no length)",
         "mass_t": mass / units.TONNE,
-        "rotating_mass_factor": _scalar(doc, "rho", path, 0.0) / 100,
+        "rotating_mass_factor": _scalar(doc, "rho", path, 0.0) * units.PERCENT,
         "length_m": 0.0,
         "davis": {"a_kN": _scalar(doc, "rolling resistance r0", path),
                   "b_kN_per_kmh": _scalar(doc, "rolling resistance r1", path, 0.0),
                   "c_kN_per_kmh2": _scalar(doc, "rolling resistance r2", path, 0.0)},
         "traction": {"max_force_kN": f_t, "max_power_kW": p_t},
         "braking": braking,
-        "traction_efficiency": _scalar(doc, "efficiency traction", path, 100.0) / 100,
+        "traction_efficiency": _scalar(doc, "efficiency traction", path, 100.0) * units.PERCENT,
         "regenerative_braking": regen,
     }, {"davis.a_kN": "rolling resistance r0", "davis.b_kN_per_kmh": "rolling resistance r1",
         "davis.c_kN_per_kmh2": "rolling resistance r2"}

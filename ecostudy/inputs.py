@@ -14,7 +14,7 @@ from pydantic import ValidationError
 
 from . import schemas, units
 from .errors import EcostudyWarning, InputError, problem
-from .physics import GRAVITY, Envelope, force_power_fit, table_width
+from .physics import Envelope, force_power_fit, table_width
 
 
 @dataclass(frozen=True)
@@ -282,4 +282,4 @@ def load_study(path):
 
 
 __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study",
-           "load_timetable", "check_stops", "GRAVITY"]
+           "load_timetable", "check_stops"]

@@ -5,7 +5,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .units import to_kmh  # noqa: E402
+from .units import PERMILLE, to_kmh  # noqa: E402
 
 
 def _steps(profile, distance):
@@ -31,7 +31,7 @@ def speed_plot(result, path):
     ax.set_title(f"{s['train']} - {s['from']} to {s['to']}: {s['running_time_s']:.1f} s, "
                  f"{s['traction_energy_kWh']:.2f} kWh traction ({s['objective']})", fontsize=10)
     x, y = _steps(seg.gradient, seg.distance)
-    axg.step(x, y * 1000, where="post", color="tab:brown")
+    axg.step(x, y / PERMILLE, where="post", color="tab:brown")
     axg.axhline(0, color="grey", lw=0.5)
     axg.set_ylabel("gradient [‰]")
     axu.step(prof["position_m"], prof["handle"], where="post", color="tab:green")

@@ -14,7 +14,7 @@ from .errors import InfeasibleError, SolverError
 from .grid import make_grid, make_segment, node_limits
 from .inputs import Timing
 from .simulate import verify
-from .units import KWH, to_kmh
+from .units import KMH, KN, KW, KWH, to_kmh
 
 
 @dataclass
@@ -80,7 +80,7 @@ def _guess(segment, train, nodes, speeds):
 def warm_guess(previous, segment, train, nodes, limits):
     """Starting point interpolated from a previous result's profile (speed vs position)."""
     prof = previous.profile
-    speeds = np.minimum(np.interp(nodes, prof["position_m"], prof["speed_kmh"] / 3.6), limits)
+    speeds = np.minimum(np.interp(nodes, prof["position_m"], prof["speed_kmh"] * KMH), limits)
     speeds[0] = speeds[-1] = 0.0
     return _guess(segment, train, nodes, speeds)
 
@@ -176,9 +176,9 @@ def tabulate(train, nodes, v, dt, ft, fb):
         "time_s": np.concatenate([[0.0], np.cumsum(dt)]),
         "speed_kmh": to_kmh(v),
         "handle": pad(u),
-        "traction_force_kN": pad(ft / 1000),
-        "braking_force_kN": pad(fb / 1000),
-        "power_kW": pad(ft * 0.5 * (v[:-1] + v[1:]) / 1000),
+        "traction_force_kN": pad(ft / KN),
+        "braking_force_kN": pad(fb / KN),
+        "power_kW": pad(ft * 0.5 * (v[:-1] + v[1:]) / KW),
         "cumulative_energy_kWh": np.concatenate([[0.0], np.cumsum(work_t)]) / KWH,
     })
     regen = train.regeneration_efficiency * work_r.sum()

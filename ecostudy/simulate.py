@@ -4,7 +4,8 @@ The control is the handle u(x) per grid interval (u > 0: that share of the tract
 u < 0: of the braking envelope), applied to the same physics functions as the NLP but with
 scipy's adaptive Runge-Kutta (DOP853) over time instead of the NLP's trapezoidal steps in
 distance, restarted wherever the control or the track jumps (an adaptive stepper can otherwise
-step clean over a short interval of different control). Dense output is sampled to find the worst overspeed against the train-length limit.
+step clean over a short interval of different control). Dense output is sampled to find
+the worst overspeed against the train-length limit.
 """
 from bisect import bisect_right
 from dataclasses import dataclass

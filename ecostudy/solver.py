@@ -92,7 +92,7 @@ def versions():
     import cyipopt
     import pyomo
 
-    def pkg(name, query):
+    def pkg(name):
         try:
             return subprocess.run(["dpkg-query", "-W", "-f=${Version}", name], capture_output=True,
                                   text=True, timeout=5).stdout.strip() or "unknown"
@@ -100,4 +100,4 @@ def versions():
             return "unknown"
 
     return {"pyomo": pyomo.__version__, "cyipopt": cyipopt.__version__,
-            "ipopt": pkg("coinor-libipopt-dev", None), "mumps": pkg("libmumps-seq-dev", None)}
+            "ipopt": pkg("coinor-libipopt-dev"), "mumps": pkg("libmumps-seq-dev")}

@@ -6,7 +6,7 @@ from typer.testing import CliRunner
 
 from ecostudy.cli import app
 
-from .conftest import DATA, STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
+from .conftest import STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
 
 runner = CliRunner()
 METRO, AMS = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml"
