@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from pyomo.common.gc_manager import PauseGC
 
 from . import initial, model as formulation, solver
 from .errors import InfeasibleError, SolverError
@@ -58,7 +59,8 @@ def regenerated_force(train, v, fb):
 
 
 def _solve_once(segment, train, nodes, limits, guess, objective, stages, options, **timing):
-    with _stage(stages, "build"):
+    # Pyomo allocates many small objects; cyclic GC passes during the build cost 70 % of it
+    with _stage(stages, "build"), PauseGC():
         time_ref = max(initial.running_time(guess[0], nodes), 1.0)
         m = formulation.build_model(segment, train, nodes, limits, guess, objective=objective,
                                     time_ref=time_ref, **timing)

@@ -6,6 +6,7 @@ iterations are counted, and the NLP object can be reused.
 """
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -46,9 +47,24 @@ class Outcome:
         return self.status in ("optimal", "acceptable") or self.max_violation < 1e-6
 
 
+REPO_ASL = Path(__file__).resolve().parent.parent / ".pyomo" / "lib" / "libpynumero_ASL.so"
+
+
 def _imports():
+    """PyNumero classes, with the ASL library found even when Pyomo was imported before ecostudy.
+
+    ``ecostudy/__init__.py`` points PYOMO_CONFIG_DIR at the repository's ``.pyomo`` folder, but
+    Pyomo reads that variable once, when it is first imported; a notebook that imported Pyomo
+    first would not find the library built by ``scripts/install.sh``.
+    """
+    from pyomo.contrib.pynumero.asl import AmplInterface
     from pyomo.contrib.pynumero.interfaces.cyipopt_interface import CyIpoptNLP
     from pyomo.contrib.pynumero.interfaces.pyomo_nlp import PyomoNLP
+    if not AmplInterface.available() and REPO_ASL.is_file():
+        AmplInterface.libname = str(REPO_ASL)
+    if not AmplInterface.available():
+        raise SolverError("PyNumero's ASL library (libpynumero_ASL.so) is missing: run `make install` "
+                          "(scripts/install.sh builds it into .pyomo/)")
     return CyIpoptNLP, PyomoNLP
 
 

@@ -145,3 +145,19 @@ def test_davis_in_wrong_units_warns_with_the_field(tmp_path, train_data):
     assert r.exit_code == 0, r.output
     warn = [line for line in r.output.splitlines() if line.startswith("warning:")]
     assert len(warn) == 1 and "davis.a_N" in warn[0] and "check the units" in warn[0]
+
+
+def test_asl_library_found_when_pyomo_is_imported_first(tmp_path):
+    """A notebook may import Pyomo before ecostudy; the ASL library must still be found."""
+    import os
+    import subprocess
+    import sys
+    code = ("import pyomo.environ, pyomo.contrib.pynumero.asl\n"
+            "from ecostudy.cli import app\n"
+            "from typer.testing import CliRunner\n"
+            "r = CliRunner().invoke(app, ['doctor'])\n"
+            "print(r.output); raise SystemExit(r.exit_code)\n")
+    env = {k: v for k, v in os.environ.items() if k != "PYOMO_CONFIG_DIR"}
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "ok" in r.stdout
