@@ -95,13 +95,26 @@ def define_envelopes(m, train, with_regeneration):
         _envelope_constraints(m, "regen", m.fr, train.regeneration)
 
 
-def define_timing(m, running_time=None, window=None):
-    """Arrival time: fixed (eq. 2.6 as equality), a window [Tmin, Tmax] (thesis 001 eq. 4.1g), or free."""
+def define_timing(m, time_ref, running_time=None, window=None):
+    """Running time T as a variable tied to the interval times; the timing request is its bounds.
+
+    A fixed running time (eq. 2.6 as equality) is T in [t, t], an arrival window (thesis 001
+    eq. 4.1g) is T in [Tmin, Tmax], all-out leaves T free. Keeping the request in bounds lets a
+    sweep change it without writing the NL file again (:class:`ecostudy.solver.Session`).
+    """
+    lo, hi = timing_bounds(running_time, window)
+    start = min(max(pyo.value(m.running_time), lo), hi if hi is not None else float("inf"))
+    m.T = pyo.Var(bounds=(lo, hi), initialize=start)
+    m.arrival = pyo.Constraint(expr=(m.running_time - m.T) / time_ref == 0.0)
+
+
+def timing_bounds(running_time=None, window=None):
+    """(lower, upper) bounds of T [s] for a fixed running time, a window, or neither."""
     if running_time is not None:
-        m.arrival = pyo.Constraint(expr=m.running_time / running_time == 1.0)
-    elif window is not None:
-        lo, hi = window
-        m.arrival = pyo.Constraint(expr=pyo.inequality(lo / hi, m.running_time / hi, 1.0))
+        return (float(running_time), float(running_time))
+    if window is not None:
+        return (float(window[0]), float(window[1]))
+    return (0.0, None)
 
 
 def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
@@ -122,10 +135,10 @@ def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
         regen = KN * sum(ds[k] * m.fr[k] for k in m.I)
         expr = (m.traction_work / train.traction_efficiency - train.regeneration_efficiency * regen) / energy_ref
     elif objective == "time":
-        expr = m.running_time / time_ref + TIME_REGULARISATION * (energy + braking)
+        expr = m.T / time_ref + TIME_REGULARISATION * (energy + braking)
     elif objective == "mixed":
         wt, we = weights
-        expr = (wt * m.running_time + we * m.traction_work / train.static_mass) / time_ref
+        expr = (wt * m.T + we * m.traction_work / train.static_mass) / time_ref
     else:
         raise ValueError(f"unknown objective {objective!r}")
     m.objective = pyo.Objective(expr=expr, sense=pyo.minimize)
@@ -139,7 +152,7 @@ def build_model(segment, train, nodes, limits, guess, objective="energy", runnin
     define_variables(m, nodes, limits, train, guess, with_regeneration)
     define_dynamics(m, nodes, segment, train)
     define_envelopes(m, train, with_regeneration)
-    define_timing(m, running_time, window)
+    define_timing(m, time_ref, running_time, window)
     energy_ref = max(train.traction.peak * segment.distance * 0.1, 1.0)
     define_objective(m, nodes, train, objective, weights, time_ref, energy_ref)
     m.dual = pyo.Suffix(direction=pyo.Suffix.IMPORT)

@@ -68,37 +68,70 @@ def _imports():
     return CyIpoptNLP, PyomoNLP
 
 
+class Session:
+    """The NLP of one model, written once, solved as often as needed with changed variable bounds.
+
+    ``PyomoNLP`` writes the NL file and loads it through ASL (the "NL write" stage); each solve
+    wraps it in a fresh ``CyIpoptNLP``, which reads the current bounds, so a sweep over running
+    times changes one bound instead of writing the model again.
+    """
+
+    def __init__(self, model):
+        CyIpoptNLP, PyomoNLP = _imports()
+        self.model = model
+        t0 = time.perf_counter()
+        self.nlp = PyomoNLP(model)
+        self.nl_seconds = time.perf_counter() - t0
+        self.x = np.array(self.nlp.init_primals(), dtype=float)
+        self._problem_class = CyIpoptNLP
+
+    def set_bounds(self, var, lower, upper):
+        """Change the bounds of one model variable (``None`` for none) before the next solve."""
+        i = int(self.nlp.get_primal_indices([var])[0])
+        for name, value, default in (("_primals_lb", lower, -np.inf), ("_primals_ub", upper, np.inf)):
+            arr = np.array(getattr(self.nlp, name), dtype=float)  # PyNumero keeps them read-only
+            arr[i] = default if value is None else value
+            arr.flags.writeable = False
+            setattr(self.nlp, name, arr)
+        self.x[i] = min(max(self.x[i], self.nlp.primals_lb()[i]), self.nlp.primals_ub()[i])
+
+    def solve(self, options=None, x0=None):
+        """Solve from ``x0`` (default: the last solution); loads the point into the model."""
+        iterations = [0]
+
+        class Counting(self._problem_class):
+            def intermediate(self, alg_mod, iter_count, *args):
+                iterations[0] = iter_count
+                return True
+
+        problem = Counting(self.nlp)
+        for key, value in {**DEFAULT_OPTIONS, **(options or {})}.items():
+            problem.add_option(key, value)
+        start = self.x if x0 is None else np.asarray(x0, dtype=float)
+        t1 = time.perf_counter()
+        try:
+            x, info = problem.solve(start)
+        except Exception as exc:  # cyipopt raises on evaluation errors it cannot recover from
+            raise SolverError(f"Ipopt stopped with an error: {exc}") from exc
+        seconds = time.perf_counter() - t1
+        # Ipopt relaxes bounds by ~1e-8 (bound_relax_factor); clip so Pyomo gets in-bounds values
+        self.x = np.clip(np.array(x, dtype=float), self.nlp.primals_lb(), self.nlp.primals_ub())
+        self.nlp.set_primals(self.x)
+        self.nlp.set_duals(info["mult_g"])
+        self.nlp.load_state_into_pyomo(bound_multipliers=(info["mult_x_L"], info["mult_x_U"]))
+        g = np.asarray(info["g"])
+        viol = np.maximum(self.nlp.constraints_lb() - g, g - self.nlp.constraints_ub())
+        problem.close()
+        return Outcome(STATUS.get(int(info["status"]), f"ipopt_{info['status']}"), int(iterations[0]),
+                       seconds, 0.0, float(np.max(viol, initial=0.0)))
+
+
 def solve(model, options=None):
-    """Solve ``model`` in place with Ipopt; returns an :class:`Outcome` (never raises on non-optimal)."""
-    CyIpoptNLP, PyomoNLP = _imports()
-    iterations = [0]
-
-    class Counting(CyIpoptNLP):
-        def intermediate(self, alg_mod, iter_count, *args):
-            iterations[0] = iter_count
-            return True
-
-    t0 = time.perf_counter()
-    nlp = PyomoNLP(model)
-    problem = Counting(nlp)
-    nl_seconds = time.perf_counter() - t0
-    for key, value in {**DEFAULT_OPTIONS, **(options or {})}.items():
-        problem.add_option(key, value)
-    t1 = time.perf_counter()
-    try:
-        x, info = problem.solve(problem.x_init())
-    except Exception as exc:  # cyipopt raises on evaluation errors it cannot recover from
-        raise SolverError(f"Ipopt stopped with an error: {exc}") from exc
-    seconds = time.perf_counter() - t1
-    nlp.set_primals(x)
-    nlp.set_duals(info["mult_g"])
-    nlp.load_state_into_pyomo(bound_multipliers=(info["mult_x_L"], info["mult_x_U"]))
-    g = np.asarray(info["g"])
-    viol = np.maximum(nlp.constraints_lb() - g, g - nlp.constraints_ub())
-    max_violation = float(np.max(viol, initial=0.0))
-    problem.close()
-    return Outcome(STATUS.get(int(info["status"]), f"ipopt_{info['status']}"), int(iterations[0]),
-                   seconds, nl_seconds, max_violation)
+    """Solve ``model`` once, in place; returns an :class:`Outcome` (never raises on non-optimal)."""
+    session = Session(model)
+    outcome = session.solve(options)
+    outcome.nl_seconds = session.nl_seconds
+    return outcome
 
 
 def versions():
