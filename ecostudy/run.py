@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 from pyomo.common.gc_manager import PauseGC
 
-from . import initial, model as formulation, solver
+from . import initial, model as formulation, regimes, solver
 from .errors import InfeasibleError, SolverError
 from .grid import make_grid, make_segment, node_limits
 from .inputs import Timing
@@ -58,39 +58,75 @@ def regenerated_force(train, v, fb):
     return np.minimum(fb, train.regeneration.force(vm))
 
 
-def _solve_once(segment, train, nodes, limits, guess, objective, stages, options, **timing):
-    # Pyomo allocates many small objects; cyclic GC passes during the build cost 70 % of it
+@dataclass
+class Case:
+    """One segment prepared for solving: profiles, grid, node limits and the fastest envelope."""
+
+    track: object
+    train: object
+    segment: object
+    nodes: np.ndarray
+    limits: np.ndarray
+    envelope: np.ndarray   # fastest speeds on the grid [m/s] (initial.envelope_speeds)
+    estimate: float        # running time of that envelope [s], close to the all-out time
+
+
+def prepare(track, train, from_stop, to_stop, points, stages=None):
+    """Segment between two stops, grid of ``points`` nodes, limits and the fastest envelope."""
+    with _stage(stages if stages is not None else {}, "grid"):
+        segment = make_segment(track, train, from_stop, to_stop)
+        nodes = make_grid(segment, points)
+        limits = node_limits(segment, nodes)
+        envelope = initial.envelope_speeds(segment, train, nodes, limits)
+    return Case(track, train, segment, nodes, limits, envelope, initial.running_time(envelope, nodes))
+
+
+def build(case, guess, objective, stages, weights=(1.0, 1.0), **timing):
+    """The Pyomo model of ``case``; the cyclic GC is paused (it cost 70 % of the build)."""
     with _stage(stages, "build"), PauseGC():
-        time_ref = max(initial.running_time(guess[0], nodes), 1.0)
-        m = formulation.build_model(segment, train, nodes, limits, guess, objective=objective,
-                                    time_ref=time_ref, **timing)
-    outcome = solver.solve(m, options)
-    stages["nl_write"] = stages.get("nl_write", 0.0) + outcome.nl_seconds
+        time_ref = max(initial.running_time(guess[0], case.nodes), 1.0)
+        return formulation.build_model(case.segment, case.train, case.nodes, case.limits, guess,
+                                       objective=objective, time_ref=time_ref, weights=weights, **timing)
+
+
+def record(stages, outcome, nl_seconds=0.0):
+    """Add one solve's NL-write and Ipopt times and iterations to ``stages``."""
+    stages["nl_write"] = stages.get("nl_write", 0.0) + nl_seconds
     stages["solve"] = stages.get("solve", 0.0) + outcome.seconds
-    stages.setdefault("iterations", 0)
-    stages["iterations"] += outcome.iterations
+    stages["iterations"] = stages.get("iterations", 0) + outcome.iterations
+
+
+def _solve_once(case, guess, objective, stages, options, **timing):
+    m = build(case, guess, objective, stages, **timing)
+    outcome = solver.solve(m, options)
+    record(stages, outcome, outcome.nl_seconds)
     return m, outcome
 
 
-def _guess(segment, train, nodes, speeds):
-    ds = np.diff(nodes)
+def guess_from_speeds(case, speeds):
+    """(v, dt, F_T, F_B) on the grid realising ``speeds``: Ipopt's starting point."""
+    ds = np.diff(case.nodes)
     dt = 2 * ds / np.maximum(speeds[:-1] + speeds[1:], 1e-3)
-    ft, fb = initial.forces_for(speeds, segment, train, nodes)
+    ft, fb = initial.forces_for(speeds, case.segment, case.train, case.nodes)
     return speeds, dt, ft, fb
 
 
-def warm_guess(previous, segment, train, nodes, limits):
+def capped_guess(case, running_time):
+    """Fastest envelope capped at one cruise speed so that it takes ``running_time``."""
+    return guess_from_speeds(case, initial.capped_speeds(case.envelope, case.nodes, running_time))
+
+
+def warm_guess(previous, case):
     """Starting point interpolated from a previous result's profile (speed vs position)."""
     prof = previous.profile
-    speeds = np.minimum(np.interp(nodes, prof["position_m"], prof["speed_kmh"] * KMH), limits)
+    speeds = np.minimum(np.interp(case.nodes, prof["position_m"], prof["speed_kmh"] * KMH), case.limits)
     speeds[0] = speeds[-1] = 0.0
-    return _guess(segment, train, nodes, speeds)
+    return guess_from_speeds(case, speeds)
 
 
-def all_out(segment, train, nodes, limits, envelope, stages, options=None):
-    """Minimum running time on this grid [s], and the solved model."""
-    m, outcome = _solve_once(segment, train, nodes, limits, _guess(segment, train, nodes, envelope),
-                             "time", stages, options)
+def all_out(case, stages, options=None):
+    """Minimum running time on this grid [s], the solved model and Ipopt's outcome."""
+    m, outcome = _solve_once(case, guess_from_speeds(case, case.envelope), "time", stages, options)
     if not outcome.usable:
         raise SolverError(f"Ipopt could not find the all-out run ({outcome.status})")
     return float(np.sum(formulation.solution_arrays(m)[1])), m, outcome
@@ -108,50 +144,52 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     warm_start : RunResult, optional  Start Ipopt from this earlier result.
     """
     stages = {}
-    with _stage(stages, "grid"):
-        segment = make_segment(track, train, from_stop, to_stop)
-        nodes = make_grid(segment, points)
-        limits = node_limits(segment, nodes)
-        envelope = initial.envelope_speeds(segment, train, nodes, limits)
-        estimate = initial.running_time(envelope, nodes)
-
+    case = prepare(track, train, from_stop, to_stop, points, stages)
     target, window, t_allout = timing.running_time, timing.window, None
     latest = target if target is not None else (window[1] if window else None)
-    if objective == "time" or timing.supplement is not None or (latest is not None and latest < 0.97 * estimate):
-        t_allout, m, outcome = all_out(segment, train, nodes, limits, envelope, stages, options)
+    if objective == "time" or timing.supplement is not None or (latest is not None and latest < 0.97 * case.estimate):
+        t_allout, m, outcome = all_out(case, stages, options)
         if timing.supplement is not None:
             target = t_allout * (1 + timing.supplement)
         _check_feasible(latest, t_allout)
 
     if objective != "time":
         if warm_start is not None:
-            guess = warm_guess(warm_start, segment, train, nodes, limits)
+            guess = warm_guess(warm_start, case)
         else:
-            goal = target or (window[1] if window else estimate * 1.1)
-            guess = _guess(segment, train, nodes, initial.capped_speeds(envelope, nodes, goal))
+            guess = capped_guess(case, target or (window[1] if window else case.estimate * 1.1))
         kw = {"running_time": target} if target is not None else {"window": window} if window else {}
-        m, outcome = _solve_once(segment, train, nodes, limits, guess, objective, stages, options,
-                                 weights=weights, **kw)
+        m, outcome = _solve_once(case, guess, objective, stages, options, weights=weights, **kw)
         if not outcome.usable:
             if latest is not None and t_allout is None:
-                t_allout, _, _ = all_out(segment, train, nodes, limits, envelope, stages, options)
+                t_allout, _, _ = all_out(case, stages, options)
                 _check_feasible(latest, t_allout)
             raise SolverError(f"Ipopt failed ({outcome.status}) after {outcome.iterations} iterations; "
                               "try more --points or a longer running time")
+    return finish(case, m, outcome, stages, objective, t_allout, verify_result)
 
+
+def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=True):
+    """Tables, regimes and verification of a solved model: the :class:`RunResult`."""
+    train, segment, nodes = case.train, case.segment, case.nodes
     with _stage(stages, "tables"):
         v, dt, ft, fb, _ = formulation.solution_arrays(m)
         u = handles(train, v, ft, fb)
         profile, totals = tabulate(train, nodes, v, dt, ft, fb)
+        labels = regimes.classify(train, v, ft, fb)
+        regime_runs = regimes.runs(labels, nodes)
     verification, trace = None, None
     if verify_result:
         with _stage(stages, "verify"):
             verification, trace = verify(segment, train, nodes, u, totals["running_time_s"],
                                          totals["traction_energy_kWh"] * KWH)
     summary = {
-        "track": track.name, "train": train.name, "from": from_stop, "to": to_stop,
+        "track": case.track.name, "train": train.name, "from": segment.from_stop, "to": segment.to_stop,
         "distance_m": segment.distance, **totals, "points": len(nodes), "objective": objective,
         "all_out_time_s": t_allout,
+        "regimes": {"sequence": regimes.sequence_text(regime_runs),
+                    "distance_shares": regimes.distance_shares(labels, nodes),
+                    "runs": [{"regime": r, "start_m": a, "end_m": b} for r, a, b in regime_runs]},
         "solver": {"status": outcome.status, "iterations": outcome.iterations,
                    "seconds": stages.get("solve", 0.0), "max_constraint_violation": outcome.max_violation},
         "verification": verification,

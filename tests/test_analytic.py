@@ -73,3 +73,23 @@ def test_nlp_matches_semi_analytic_optimum(flat, T):
     # the structure: full traction first, cruise at about V
     assert r.profile["handle"].iloc[0] == pytest.approx(1.0, abs=1e-3)
     assert r.summary["top_speed_kmh"] / 3.6 == pytest.approx(V, rel=0.01)
+
+
+def test_constant_resistance_optimum_has_no_cruise(flat):
+    """With r'(v) = 0 the cruise/braking-speed relation of the classical theory degenerates: the
+    semi-analytic family optimum has zero cruise length (checked in analytic_energy), and the
+    NLP finds the same structure."""
+    track, train = flat
+    r = solve_run(track, train, "A", "B", Timing(running_time=105.0), points=500)
+    assert r.summary["regimes"]["sequence"] == "MA-CO-MB"
+
+
+@pytest.mark.parametrize("T", [77.99, 95.0, 110.0])
+def test_flat_track_with_davis_resistance_is_ma_cr_co_mb(T):
+    """Thesis 001 §9.1 flat trip, one speed limit, quadratic resistance (thesis 001 Fig. 9.1)."""
+    from .conftest import TRACKS, TRAINS
+    r = solve_run(load_track(TRACKS / "thesis001_flat_1km.yaml"), load_train(TRAINS / "thesis001_commuter.yaml"),
+                  "A", "B", Timing(running_time=T), points=500)
+    assert r.summary["regimes"]["sequence"] == "MA-CR-CO-MB"
+    shares = r.summary["regimes"]["distance_shares"]
+    assert shares["CO"] > 0.3 and shares["CR"] > 0.005

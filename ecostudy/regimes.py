@@ -1,0 +1,62 @@
+"""Driving regimes of a profile, read off the control (thesis 000 eqs. 2.15, 2.17).
+
+Each interval is classified by where its forces sit against the envelopes that bind them in
+the NLP (the lower of the envelope at the interval's two ends):
+
+MA   maximum acceleration: traction on its envelope
+CR   partial traction (cruising, or holding a limit uphill)
+CO   coasting: no traction, no braking
+CR2  partial braking (holding a limit downhill)
+MB   maximum braking: braking on its envelope
+
+A switch that falls inside an interval shows as one interval of partial force between two
+other regimes; such single transitional intervals are merged into the run before them.
+"""
+import numpy as np
+
+REGIMES = ("MA", "CR", "CO", "CR2", "MB")
+
+
+def classify(train, v, ft, fb, tolerance=0.01):
+    """Regime label per interval from speeds at the nodes and forces per interval [N]."""
+    v0, v1 = v[:-1], v[1:]
+    t_max = np.maximum(np.minimum(train.traction.force(v0), train.traction.force(v1)), 1e-9)
+    b_max = np.maximum(np.minimum(train.braking.force(v0), train.braking.force(v1)), 1e-9)
+    t_share, b_share = (ft - fb).clip(0) / t_max, (fb - ft).clip(0) / b_max
+    labels = np.full(len(ft), "CO", dtype=object)
+    labels[t_share > tolerance] = "CR"
+    labels[t_share >= 1 - tolerance] = "MA"
+    labels[b_share > tolerance] = "CR2"
+    labels[b_share >= 1 - tolerance] = "MB"
+    return labels
+
+
+def runs(labels, nodes):
+    """[(regime, start_m, end_m)] with transitional single intervals merged into the run before."""
+    out = []
+    for i, label in enumerate(labels):
+        if out and out[-1][0] == label:
+            out[-1][2] = i + 1
+        else:
+            out.append([label, i, i + 1])
+    merged = []
+    for j, (label, i0, i1) in enumerate(out):
+        transitional = (i1 - i0 == 1 and 0 < j < len(out) - 1 and label in ("CR", "CR2")
+                        and out[j - 1][0] != out[j + 1][0])
+        if merged and (transitional or merged[-1][0] == label):
+            merged[-1][2] = i1
+        else:
+            merged.append([label, i0, i1])
+    return [(label, float(nodes[i0]), float(nodes[i1])) for label, i0, i1 in merged]
+
+
+def sequence_text(run_list):
+    """'MA-CR-CO-MB' from :func:`runs`."""
+    return "-".join(label for label, _, _ in run_list)
+
+
+def distance_shares(labels, nodes):
+    """Share of the distance spent in each regime [-]."""
+    ds = np.diff(nodes)
+    total = ds.sum()
+    return {r: float(ds[labels == r].sum() / total) for r in REGIMES}
