@@ -151,6 +151,77 @@ def solve(
         raise typer.Exit(1)
 
 
+def _case_from(study, track, train, from_stop, to_stop, points):
+    """(track, train, from, to, K, study or None) from a study file or from options."""
+    from .inputs import check_stops, load_study, load_track, load_train
+    if study is not None:
+        st = load_study(study)
+        return st.track, st.train, st.from_stop, st.to_stop, points or st.points, st
+    if not (track and train):
+        raise InputError(problem("command line", "--track/--train", "give a study file, or both --track and --train"))
+    trk, trn = load_track(track), load_train(train)
+    names = list(trk.stops)
+    f, t = from_stop or names[0], to_stop or names[-1]
+    check_stops(trk, f, t, "command line")
+    return trk, trn, f, t, points, None
+
+
+def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, points, workers, cold, out, no_plot):
+    from .pareto import is_monotone, saving_at, sweep
+    from .results import write_front
+    trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
+    k = k or 500
+    if count < 2:
+        raise InputError(problem("command line", "--count", "need at least 2 points"))
+    if supplement_max <= 0:
+        raise InputError(problem("command line", "--supplement-max", "must be > 0 (per cent)"))
+    out_dir = Path(out) if out else (st.output.parent / (st.output.name + "_pareto") if st else Path("out") / "pareto")
+    table, results = sweep(trk, trn, f, t, count=count, supplement_max=supplement_max * units.PERCENT,
+                           points=k, workers=workers, warm=not cold)
+    meta = {"track": trk.name, "train": trn.name, "from": f, "to": t, "points": k, "count": count,
+            "all_out_time_s": float(table["running_time_s"].iloc[0]),
+            "saving_at_5_pct_supplement_pct": saving_at(table, 5.0),
+            "saving_at_10_pct_supplement_pct": saving_at(table, 10.0),
+            "monotone": is_monotone(table), "all_verified": bool(table["verified"].all()),
+            "all_optimal": bool((table["solver_status"] == "optimal").all()),
+            "workers": workers, "warm_start": not cold, "wall_s": table.attrs["wall_s"]}
+    write_front(table, results, out_dir, meta, plot=not no_plot)
+    cols = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
+            "marginal_saving_kWh_per_s", "coasting_share_pct", "regime_sequence"]
+    typer.echo(table[cols].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+    typer.echo(f"all-out {meta['all_out_time_s']:.2f} s; +5 % saves {meta['saving_at_5_pct_supplement_pct']:.1f} %, "
+               f"+10 % saves {meta['saving_at_10_pct_supplement_pct']:.1f} % of the all-out traction energy")
+    typer.echo(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
+               f"{meta['all_verified']}; {meta['wall_s']:.1f} s; outputs {out_dir}/ (pareto.csv, pareto.json, "
+               "pareto.png, pareto_profiles.png)")
+    return meta
+
+
+@app.command()
+def pareto(
+    study: Optional[Path] = typer.Argument(None, help="Study file (YAML)."),
+    track: Optional[Path] = typer.Option(None, help="Track file."),
+    train: Optional[Path] = typer.Option(None, help="Train file."),
+    from_stop: Optional[str] = typer.Option(None, "--from", help="Departure stop (default: first)."),
+    to_stop: Optional[str] = typer.Option(None, "--to", help="Arrival stop (default: last)."),
+    count: int = typer.Option(20, help="Points on the front, the all-out run included."),
+    supplement_max: float = typer.Option(40.0, help="Largest running-time supplement over all-out [%]."),
+    points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 500)."),
+    workers: int = typer.Option(1, help="Processes; each solves a contiguous warm-started chain."),
+    cold: bool = typer.Option(False, help="Solve every point on its own (no shared model, no warm start)."),
+    out: Optional[Path] = typer.Option(None, help="Output folder."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip the PNG files."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Energy against running time (epsilon-constraint sweep from the all-out time)."""
+    meta = guarded(debug, _pareto, study, track, train, from_stop, to_stop, count, supplement_max, points,
+                   workers, cold, out, no_plot)
+    if not (meta["monotone"] and meta["all_verified"] and meta["all_optimal"]):
+        typer.secho("flagged: a point is not optimal or not verified, or the front is not monotone",
+                    fg=typer.colors.YELLOW, err=True)
+        raise typer.Exit(1)
+
+
 def _doctor():
     import pyomo.environ as pyo
 

@@ -42,3 +42,46 @@ def speed_plot(result, path):
         a.grid(alpha=0.3)
     fig.savefig(path, dpi=110, format="png")
     plt.close(fig)
+
+
+def pareto_plot(table, path, title=""):
+    """Traction and net energy against running time, with the marginal saving beneath."""
+    fig, (ax, axm) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
+    fig.subplots_adjust(left=0.1, right=0.97, top=0.85, bottom=0.09, hspace=0.1)
+    fig.suptitle(title, fontsize=10)
+    t = table["running_time_s"]
+    ax.plot(t, table["traction_energy_kWh"], "o-", color="tab:blue", label="traction (at the wheel)")
+    ax.plot(t, table["net_energy_kWh"], "s--", color="tab:green", label="net electrical (regeneration credited)")
+    ax.set_ylabel("energy [kWh]")
+    ax.set_ylim(bottom=0)
+    ax.legend(fontsize=8)
+    top = ax.secondary_xaxis("top", functions=(lambda x: 100 * (x / t.iloc[0] - 1), lambda p: t.iloc[0] * (1 + p / 100)))
+    top.set_xlabel("supplement over all-out [%]", fontsize=8)
+    axm.plot(t, table["marginal_saving_kWh_per_s"], ".-", color="tab:red")
+    axm.set_ylabel("saving per\nextra second\n[kWh/s]", fontsize=8)
+    axm.set_xlabel("running time [s]")
+    for a in (ax, axm):
+        a.grid(alpha=0.3)
+    fig.savefig(path, dpi=110, format="png")
+    plt.close(fig)
+
+
+def profiles_plot(results, path, title=""):
+    """Speed against distance for a few points of a front, with the speed limit."""
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
+    seg = results[0].segment
+    x, y = _steps(seg.limit, seg.distance)
+    ax.step(x, to_kmh(y), where="post", color="tab:red", lw=1.2, label="speed limit (train length)")
+    for r, colour in zip(results, plt.cm.viridis(np.linspace(0, 0.9, len(results)))):
+        p = r.profile
+        ax.plot(p["position_m"], p["speed_kmh"], color=colour, lw=1.3,
+                label=f"{r.summary['running_time_s']:.1f} s, {r.summary['traction_energy_kWh']:.2f} kWh")
+    ax.set_xlabel("distance from departure [m]")
+    ax.set_ylabel("speed [km/h]")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower center", ncol=2)
+    ax.set_title(title, fontsize=10)
+    fig.savefig(path, dpi=110, format="png")
+    plt.close(fig)

@@ -86,7 +86,12 @@ class Session:
         self._problem_class = CyIpoptNLP
 
     def set_bounds(self, var, lower, upper):
-        """Change the bounds of one model variable (``None`` for none) before the next solve."""
+        """Change the bounds of one model variable (``None`` for none) before the next solve.
+
+        Both the NLP's bound arrays and the Pyomo variable change, so the model stays consistent.
+        """
+        var.setlb(lower)
+        var.setub(upper)
         i = int(self.nlp.get_primal_indices([var])[0])
         for name, value, default in (("_primals_lb", lower, -np.inf), ("_primals_ub", upper, np.inf)):
             arr = np.array(getattr(self.nlp, name), dtype=float)  # PyNumero keeps them read-only

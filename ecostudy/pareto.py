@@ -1,0 +1,118 @@
+"""Energy against running time: the epsilon-constraint Pareto front (thesis 000 §7.1.1, Table 7.1).
+
+The running time is swept from the all-out time T0 to T0 (1 + supplement_max). Every point is
+energy-optimal for its running time. A chain of points shares one Pyomo model and one NL file
+(:class:`ecostudy.solver.Session`): only the bounds of the running-time variable change, and
+Ipopt starts from the previous point's primal solution. ``workers`` > 1 splits the sweep into
+contiguous chains solved in forked processes.
+"""
+import multiprocessing
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pandas as pd
+
+from . import solver
+from .errors import SolverError
+from .run import all_out, build, capped_guess, finish, prepare, record, solve_run
+from .inputs import Timing
+
+
+def _chain(case, times, objective, options, verify_result, warm):
+    """Energy-optimal results at ``times`` [s], one model and NL file for the whole chain."""
+    if not warm:  # every point on its own, exactly as `ecostudy solve --time T` would
+        return [solve_run(case.track, case.train, case.segment.from_stop, case.segment.to_stop,
+                          Timing(running_time=t), objective=objective, points=len(case.nodes),
+                          options=options, verify_result=verify_result) for t in times]
+    stages = {}
+    m = build(case, capped_guess(case, times[0]), objective, stages, running_time=times[0])
+    session = solver.Session(m)
+    results = []
+    for i, t in enumerate(times):
+        point_stages = {"build": stages["build"] if i == 0 else 0.0}
+        session.set_bounds(m.T, t, t)
+        outcome = session.solve(options)
+        record(point_stages, outcome, session.nl_seconds if i == 0 else 0.0)
+        if not outcome.usable:
+            raise SolverError(f"Ipopt failed at running time {t:.2f} s ({outcome.status})")
+        results.append(finish(case, m, outcome, point_stages, objective, None, verify_result))
+    return results
+
+
+def _split(items, parts):
+    """Contiguous chunks of ``items`` (warm-start chains need neighbours together)."""
+    return [list(chunk) for chunk in np.array_split(np.asarray(items, dtype=float), parts) if len(chunk)]
+
+
+def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, points=500,
+          objective="energy", workers=1, warm=True, options=None, verify_result=True):
+    """The front as (table, results); results[0] is the all-out run itself.
+
+    Parameters
+    ----------
+    count : int  Points including the all-out run.
+    supplement_max : float  Largest supplement over the all-out time [-], e.g. 0.40.
+    workers : int  Processes (contiguous warm-start chains); 1 solves in this process.
+    warm : bool  Reuse one model per chain and start from the neighbour (False: cold, independent).
+    """
+    stages = {}
+    t0 = time.perf_counter()
+    case = prepare(track, train, from_stop, to_stop, points, stages)
+    t_allout, m, outcome = all_out(case, stages, options)
+    allout = finish(case, m, outcome, stages, "time", t_allout, verify_result)
+    supplements = np.linspace(0.0, supplement_max, count)[1:]
+    times = t_allout * (1 + supplements)
+    chunks = _split(times, max(1, min(workers, len(times))))
+    if len(chunks) > 1:
+        ctx = multiprocessing.get_context("fork")  # the workers inherit the loaded modules
+        with ProcessPoolExecutor(max_workers=len(chunks), mp_context=ctx) as pool:
+            parts = list(pool.map(_chain, [case] * len(chunks), chunks, [objective] * len(chunks),
+                                  [options] * len(chunks), [verify_result] * len(chunks), [warm] * len(chunks)))
+    else:
+        parts = [_chain(case, chunks[0], objective, options, verify_result, warm)] if chunks else []
+    results = [allout] + [r for part in parts for r in part]
+    table = front_table(results, t_allout)
+    table.attrs["wall_s"] = time.perf_counter() - t0
+    return table, results
+
+
+def front_table(results, t_allout):
+    """One row per point, columns named with their units."""
+    rows = []
+    for r in results:
+        s = r.summary
+        ver = s["verification"] or {}
+        rows.append({
+            "running_time_s": s["running_time_s"],
+            "supplement_pct": 100 * (s["running_time_s"] / t_allout - 1),
+            "traction_energy_kWh": s["traction_energy_kWh"],
+            "net_energy_kWh": s["net_energy_kWh"],
+            "top_speed_kmh": s["top_speed_kmh"],
+            "coasting_share_pct": 100 * s["regimes"]["distance_shares"]["CO"],
+            "regime_sequence": s["regimes"]["sequence"],
+            "solver_status": s["solver"]["status"],
+            "iterations": s["solver"]["iterations"],
+            "verified": ver.get("passed"),
+        })
+    table = pd.DataFrame(rows)
+    e0 = table["traction_energy_kWh"].iloc[0]
+    table.insert(4, "saving_vs_all_out_pct", 100 * (1 - table["traction_energy_kWh"] / e0))
+    # what one more second buys: -dE/dT by central differences (one-sided at the ends) [kWh/s]
+    table.insert(5, "marginal_saving_kWh_per_s",
+                 -np.gradient(table["traction_energy_kWh"].to_numpy(), table["running_time_s"].to_numpy()))
+    return table
+
+
+def saving_at(table, supplement_pct):
+    """Traction-energy saving against all-out at a supplement, by linear interpolation [%]."""
+    return float(np.interp(supplement_pct, table["supplement_pct"], table["saving_vs_all_out_pct"]))
+
+
+def is_monotone(table, tolerance=1e-6):
+    """Energy non-increasing as running time grows (to a relative ``tolerance``)."""
+    e = table["traction_energy_kWh"].to_numpy()
+    return bool(np.all(np.diff(e) <= tolerance * e[:-1]))
+
+
+__all__ = ["sweep", "front_table", "saving_at", "is_monotone"]

@@ -1,0 +1,66 @@
+"""Pareto fronts: monotone, verified, equal to individual solves, the same serial and in parallel."""
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+from ecostudy.inputs import Timing, load_track, load_train
+from ecostudy.pareto import is_monotone, saving_at, sweep
+from ecostudy.run import solve_run
+
+from .conftest import TRACKS, TRAINS
+
+
+@pytest.fixture(scope="module")
+def regional():
+    return load_track(TRACKS / "regional_808m.yaml"), load_train(TRAINS / "regional_alstom.yaml")
+
+
+@pytest.fixture(scope="module")
+def front(regional):
+    track, train = regional
+    return sweep(track, train, "Origin", "Destination", count=5, supplement_max=0.4, points=300)
+
+
+def test_front_is_monotone_optimal_and_verified(front):
+    table, results = front
+    assert len(table) == 5
+    assert is_monotone(table)
+    assert (table["solver_status"] == "optimal").all()
+    assert table["verified"].all()
+    assert table["supplement_pct"].iloc[-1] == pytest.approx(40.0)
+    assert (table["marginal_saving_kWh_per_s"] > 0).all()
+    assert 0 < saving_at(table, 10.0) < 100
+
+
+def test_points_match_individual_solves(front, regional):
+    table, _ = front
+    track, train = regional
+    for i in (1, 3):
+        single = solve_run(track, train, "Origin", "Destination", Timing(running_time=table["running_time_s"][i]),
+                           points=300)
+        assert single.summary["traction_energy_kWh"] == pytest.approx(table["traction_energy_kWh"][i], rel=1e-3)
+
+
+def test_two_workers_and_cold_give_the_same_front(front, regional):
+    table, _ = front
+    track, train = regional
+    par, _ = sweep(track, train, "Origin", "Destination", count=5, supplement_max=0.4, points=300, workers=2)
+    cold, _ = sweep(track, train, "Origin", "Destination", count=5, supplement_max=0.4, points=300, warm=False)
+    for other in (par, cold):
+        assert other["running_time_s"].tolist() == pytest.approx(table["running_time_s"].tolist(), rel=1e-9)
+        assert other["traction_energy_kWh"].tolist() == pytest.approx(table["traction_energy_kWh"].tolist(), rel=1e-6)
+
+
+def test_pareto_command(tmp_path):
+    r = CliRunner().invoke(app, ["pareto", "--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train",
+                                 str(TRAINS / "amsterdam_metro.yaml"), "--count", "4", "--supplement-max", "20",
+                                 "--points", "200", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    meta = json.loads((tmp_path / "pareto.json").read_text())
+    assert meta["monotone"] and meta["all_verified"]
+    for name in ("pareto.csv", "pareto.png", "pareto_profiles.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    header = (tmp_path / "pareto.csv").read_text().splitlines()[0]
+    assert header.startswith("running_time_s,supplement_pct,traction_energy_kWh,net_energy_kWh")
