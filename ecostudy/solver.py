@@ -83,6 +83,7 @@ class Session:
         self.nlp = PyomoNLP(model)
         self.nl_seconds = time.perf_counter() - t0
         self.x = np.array(self.nlp.init_primals(), dtype=float)
+        self.multipliers = None   # (constraints, lower bounds, upper bounds) of the last solve
         self._problem_class = CyIpoptNLP
 
     def set_bounds(self, var, lower, upper):
@@ -113,9 +114,12 @@ class Session:
         for key, value in {**DEFAULT_OPTIONS, **(options or {})}.items():
             problem.add_option(key, value)
         start = self.x if x0 is None else np.asarray(x0, dtype=float)
+        duals = {}
+        if (options or {}).get("warm_start_init_point") == "yes" and self.multipliers is not None:
+            duals = dict(zip(("lagrange", "zl", "zu"), self.multipliers))
         t1 = time.perf_counter()
         try:
-            x, info = problem.solve(start)
+            x, info = problem.solve(start, **duals)
         except Exception as exc:  # cyipopt raises on evaluation errors it cannot recover from
             raise SolverError(f"Ipopt stopped with an error: {exc}") from exc
         seconds = time.perf_counter() - t1
@@ -124,6 +128,7 @@ class Session:
         self.nlp.set_primals(self.x)
         self.nlp.set_duals(info["mult_g"])
         self.nlp.load_state_into_pyomo(bound_multipliers=(info["mult_x_L"], info["mult_x_U"]))
+        self.multipliers = (info["mult_g"], info["mult_x_L"], info["mult_x_U"])
         g = np.asarray(info["g"])
         viol = np.maximum(self.nlp.constraints_lb() - g, g - self.nlp.constraints_ub())
         problem.close()
