@@ -3,7 +3,6 @@
 Exit status: 0 verified optimal result, 1 result written but flagged (not optimal or failed
 verification), 2 bad input or infeasible request, 3 solver failure or internal error.
 """
-import sys
 import warnings
 from enum import Enum
 from pathlib import Path
@@ -222,6 +221,42 @@ def pareto(
         raise typer.Exit(1)
 
 
+def _run(study, workers, dask, retry_failed, out, no_progress):
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from .batch import run_study
+    columns = [TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("failed {task.fields[failed]}, remaining {task.fields[remaining]}"), TimeRemainingColumn()]
+    with Progress(*columns, disable=no_progress, transient=False) as bar:
+        task = bar.add_task("cases", total=None, failed=0, remaining="?")
+
+        def progress(done, failed, remaining, total):
+            bar.update(task, completed=done, total=total, failed=failed, remaining=remaining)
+
+        table, counts, output = run_study(study, workers=workers, dask=dask, retry_failed=retry_failed,
+                                          out=Path(out) if out else None, progress=progress)
+    typer.echo(f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} computed "
+               f"now ({counts['failed']} of them failed or infeasible); not ok in the table: {counts['not_ok']}")
+    typer.echo(f"outputs {output}/ (results.csv, results.sqlite)")
+    return counts
+
+
+@app.command()
+def run(
+    study: Path = typer.Argument(..., help="Study file (YAML) with optional scenarios and sweep."),
+    workers: int = typer.Option(1, help="Local worker processes."),
+    dask: Optional[str] = typer.Option(None, help="Address of a running Dask scheduler (tcp://host:port)."),
+    retry_failed: bool = typer.Option(False, help="Compute failed cases again (infeasible ones stay)."),
+    out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's 'output')."),
+    no_progress: bool = typer.Option(False, "--no-progress", help="No progress bar."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Run every case of a study; finished cases are stored and never computed twice."""
+    counts = guarded(debug, _run, study, workers, dask, retry_failed, out, no_progress)
+    if counts["not_ok"]:
+        raise typer.Exit(1)
+
+
 def _doctor():
     import pyomo.environ as pyo
 
@@ -247,5 +282,5 @@ def doctor(debug: bool = typer.Option(False, help="Show tracebacks.")):
         raise typer.Exit(3)
 
 
-def main():  # pragma: no cover
-    sys.exit(app())
+if __name__ == "__main__":
+    app()

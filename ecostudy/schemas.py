@@ -212,6 +212,35 @@ class Weights(Strict):
     energy: float = Field(1.0, ge=0, description="w_e [kg/J], on traction energy per unit mass.")
 
 
+class Scenario(Strict):
+    """A named variant of the base case: other files, train fields overridden, other timing."""
+
+    name: str
+    train: Optional[str] = None
+    track: Optional[str] = None
+    train_overrides: dict[str, object] = Field(default_factory=dict,
+                                               description="Top-level train fields, e.g. mass_t.")
+    running_time_s: Optional[float] = Field(None, gt=0)
+    supplement_percent: Optional[float] = Field(None, ge=0)
+    objective: Optional[Literal["energy", "net_energy", "time", "mixed"]] = None
+    points: Optional[int] = Field(None, ge=10, le=100000)
+
+
+class Sweep(Strict):
+    """Values to combine (cartesian product) with every scenario."""
+
+    running_time_s: Optional[list[float]] = None
+    supplement_percent: Optional[list[float]] = None
+    points: Optional[list[int]] = None
+    objective: Optional[list[Literal["energy", "net_energy", "time", "mixed"]]] = None
+
+    @model_validator(mode="after")
+    def _timing(self):
+        if self.running_time_s is not None and self.supplement_percent is not None:
+            raise ValueError("sweep either running_time_s or supplement_percent, not both")
+        return self
+
+
 class StudyFile(Strict):
     name: str
     track: str
@@ -226,9 +255,14 @@ class StudyFile(Strict):
     weights: Weights = Weights()
     points: int = Field(1000, ge=10, le=100000)
     output: Optional[str] = None
+    scenarios: list[Scenario] = Field(default_factory=list, description="Variants run by `ecostudy run`.")
+    sweep: Optional[Sweep] = None
 
     @model_validator(mode="after")
     def _timing(self):
+        names = [sc.name for sc in self.scenarios]
+        if len(set(names)) != len(names):
+            raise ValueError("scenario names must be unique")
         given = [self.running_time_s is not None, self.supplement_percent is not None,
                  self.window_s is not None, self.timetable is not None]
         if sum(given) > 1:

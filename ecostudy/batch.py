@@ -1,0 +1,128 @@
+"""Running a study's cases: serially, in local processes, or on a Dask cluster; resumable.
+
+Cases already in the store are skipped; the others run as pure tasks (:func:`run_case`) and
+their results are stored by this process as they arrive. Failures are results too: an
+infeasible or failed case is stored with its reason and the study goes on.
+"""
+import multiprocessing
+import time
+import warnings
+from concurrent.futures import ProcessPoolExecutor, as_completed
+
+import pandas as pd
+
+from .errors import EcostudyError, EcostudyWarning, InfeasibleError
+from .inputs import Timing, track_from_schema, train_from_schema
+from .results import write_csv
+from .run import solve_run
+from .schemas import TrackFile, TrainFile
+from .store import Store
+from .study import expand
+
+
+def run_case(case):
+    """Solve one case (a dict from :func:`ecostudy.study.expand`); never raises."""
+    t0 = time.perf_counter()
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", EcostudyWarning)  # shown once when the study was expanded
+            train = train_from_schema(TrainFile.model_validate(case["train"]), case["scenario"])
+        track = track_from_schema(TrackFile.model_validate(case["track"]))
+        supplement = case["supplement_percent"]
+        timing = Timing(running_time=case["running_time_s"],
+                        supplement=None if supplement is None else supplement / 100,
+                        window=tuple(case["window_s"]) if case["window_s"] else None)
+        r = solve_run(track, train, case["from"], case["to"], timing, objective=case["objective"],
+                      points=case["points"], weights=tuple(case["weights"]))
+        status, error, summary = ("ok" if r.ok else "flagged"), None, r.summary
+    except InfeasibleError as exc:
+        status, error, summary = "infeasible", str(exc), None
+    except EcostudyError as exc:
+        status, error, summary = "failed", str(exc), None
+    except Exception as exc:  # a bug in one case must not stop the study
+        status, error, summary = "failed", f"{type(exc).__name__}: {exc}", None
+    return {"key": case["key"], "status": status, "error": error, "summary": summary,
+            "seconds": time.perf_counter() - t0}
+
+
+def _serial(todo):
+    for case in todo:
+        yield case, run_case(case)
+
+
+def _processes(todo, workers):
+    ctx = multiprocessing.get_context("fork")  # workers inherit the loaded modules
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        futures = {pool.submit(run_case, case): case for case in todo}
+        try:
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+        except BaseException:
+            for future in futures:
+                future.cancel()
+            raise
+
+
+def _dask(todo, address):
+    try:
+        from distributed import Client, as_completed as dask_completed
+    except ImportError:
+        raise EcostudyError("--dask needs Dask: pip install 'ecostudy[dask]'") from None
+    with Client(address) as client:
+        futures = {client.submit(run_case, case, key=f"ecostudy-{case['key']}", pure=False): case
+                   for case in todo}
+        try:
+            for future in dask_completed(futures):
+                yield futures[future], future.result()
+        except BaseException:
+            client.cancel(list(futures))
+            raise
+
+
+def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
+    """Run the cases of a study file that are not stored yet; returns (table, counts, output folder).
+
+    ``progress(done, failed, remaining, total)`` is called after each case.
+    """
+    study, output, cases = expand(path)
+    output = out or output
+    store = Store(output / "results.sqlite")
+    try:
+        finished = store.finished_keys(retry_failed=retry_failed)
+        todo = [c for c in cases if c["key"] not in finished]
+        counts = {"total": len(cases), "stored_before": len(cases) - len(todo), "computed": 0, "failed": 0}
+        if workers < 1:
+            raise EcostudyError("--workers must be at least 1")
+        source = (_dask(todo, dask) if dask else _processes(todo, workers) if workers > 1 and len(todo) > 1
+                  else _serial(todo))
+        for case, result in source:
+            store.put(case, result)
+            counts["computed"] += 1
+            counts["failed"] += result["status"] in ("failed", "infeasible")
+            if progress:
+                progress(counts["computed"], counts["failed"], len(todo) - counts["computed"], len(todo))
+        table = study_table(cases, store)
+    finally:
+        store.close()
+    write_csv(output / "results.csv", table)
+    counts["not_ok"] = int((table["status"] != "ok").sum())
+    return table, counts, output
+
+
+def study_table(cases, store):
+    """One row per case of the study, in study order: labels, status, reason and key results."""
+    rows = store.get([c["key"] for c in cases])
+    out = []
+    for case in cases:
+        row = rows.get(case["key"])
+        s = (row or {}).get("summary") or {}
+        ver = s.get("verification") or {}
+        out.append({**case["labels"], "key": case["key"], "status": row["status"] if row else "missing",
+                    "reason": (row or {}).get("error"),
+                    "running_time_s": s.get("running_time_s"), "all_out_time_s": s.get("all_out_time_s"),
+                    "traction_energy_kWh": s.get("traction_energy_kWh"), "net_energy_kWh": s.get("net_energy_kWh"),
+                    "regenerated_energy_kWh": s.get("regenerated_energy_kWh"), "top_speed_kmh": s.get("top_speed_kmh"),
+                    "regime_sequence": (s.get("regimes") or {}).get("sequence"), "points": s.get("points"),
+                    "solver_status": (s.get("solver") or {}).get("status"), "verified": ver.get("passed"),
+                    "stop_error_m": ver.get("stop_error_m"), "seconds": (row or {}).get("seconds")})
+    return pd.DataFrame(out)

@@ -1,0 +1,91 @@
+"""Study files expanded into cases: self-contained tasks keyed by a hash of their inputs.
+
+A case carries the train and track documents themselves (not paths), the stops, the timing,
+objective and grid, and the ecostudy version. Its key is a hash of all of that, so a result
+stored under a key is valid for exactly those inputs, on any worker, and a rerun after a change
+of any input (or of ecostudy) recomputes only the cases it affects.
+"""
+import hashlib
+import itertools
+import json
+import warnings
+from pathlib import Path
+
+from . import __version__, schemas
+from .errors import InputError, problem
+from .inputs import check_stops, load_timetable, read_document, timing_from_timetable, track_from_schema, \
+    train_from_schema, validate
+
+
+def _train_document(path):
+    data = read_document(path)
+    if Path(path).suffix.lower() == ".json":
+        from .imports import train_document_to_schema
+        data = train_document_to_schema(data, path)[0]
+    return data
+
+
+def _track_document(path):
+    data = read_document(path)
+    if Path(path).suffix.lower() == ".json":
+        from .imports import track_document_to_schema
+        data = track_document_to_schema(data, path)
+    return data
+
+
+def case_key(case):
+    """16 hex digits of the SHA-256 of the case's inputs (everything but its key and labels)."""
+    payload = {k: v for k, v in case.items() if k not in ("key", "labels")}
+    return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+def expand(path):
+    """(study schema, output folder, cases) for a study file; inputs are validated here, once."""
+    path = Path(path)
+    s = validate(schemas.StudyFile, read_document(path), path)
+    base = path.parent
+    scenarios = [schemas.Scenario(name="base")] + list(s.scenarios)
+    sweep = s.sweep.model_dump(exclude_none=True) if s.sweep else {}
+    cases = []
+    for i, sc in enumerate(scenarios):
+        where = f"{path}: scenarios[{i - 1}] ({sc.name})" if i else str(path)
+        train_doc = {**_train_document(base / (sc.train or s.train)), **sc.train_overrides}
+        track_doc = _track_document(base / (sc.track or s.track))
+        with warnings.catch_warnings():
+            if i:
+                warnings.simplefilter("ignore")  # the base train already warned
+            train_from_schema(validate(schemas.TrainFile, train_doc, f"{where} train"), where)
+        track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{where} track"))
+        stops = list(track.stops)
+        from_stop, to_stop = s.from_stop or stops[0], s.to_stop or stops[-1]
+        check_stops(track, from_stop, to_stop, path)
+        timing = {"running_time_s": s.running_time_s, "supplement_percent": s.supplement_percent,
+                  "window_s": list(s.window_s) if s.window_s else None}
+        if s.timetable is not None:
+            t = timing_from_timetable(load_timetable(base / s.timetable), from_stop, to_stop, base / s.timetable)
+            timing = {"running_time_s": t.running_time,
+                      "supplement_percent": None if t.supplement is None else 100 * t.supplement, "window_s": None}
+        for name in ("running_time_s", "supplement_percent"):
+            if getattr(sc, name) is not None:
+                timing = {"running_time_s": None, "supplement_percent": None, "window_s": None,
+                          name: getattr(sc, name)}
+        common = {"study": s.name, "scenario": sc.name, "train": train_doc, "track": track_doc,
+                  "from": from_stop, "to": to_stop, **timing, "objective": sc.objective or s.objective,
+                  "weights": [s.weights.time, s.weights.energy], "points": sc.points or s.points,
+                  "version": __version__}
+        names = list(sweep)
+        for values in itertools.product(*(sweep[n] for n in names)) if names else [()]:
+            case = dict(common)
+            for n, v in zip(names, values):
+                if n in ("running_time_s", "supplement_percent"):
+                    case.update(running_time_s=None, supplement_percent=None, window_s=None)
+                case[n] = v
+            if case["objective"] not in ("time", "mixed") and not any(
+                    case[k] is not None for k in ("running_time_s", "supplement_percent", "window_s")):
+                raise InputError(problem(path, "running_time_s", f"scenario '{sc.name}' has no running time, "
+                                         "supplement, window or timetable"))
+            case["labels"] = {"scenario": sc.name, **dict(zip(names, values))}
+            case["key"] = case_key(case)
+            cases.append(case)
+    output = Path(s.output) if s.output else Path("out") / s.name
+    return s, output, cases

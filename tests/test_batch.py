@@ -1,0 +1,108 @@
+"""Batch studies: identical results serial / processes / Dask, resumable after kill -9, failures kept."""
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+
+import pytest
+
+from ecostudy.batch import run_study
+from ecostudy.study import expand
+
+from .conftest import ROOT, TRACKS, TRAINS, write_yaml
+
+NUMERIC = ["running_time_s", "traction_energy_kWh", "net_energy_kWh", "top_speed_kmh"]
+
+
+def study_file(folder, output, extra_scenarios=()):
+    return write_yaml(folder / "study.yaml", {
+        "name": "batch_test", "track": str(TRACKS / "amsterdam_rokin_centraal.yaml"),
+        "train": str(TRAINS / "amsterdam_metro.yaml"), "from": "Rokin", "to": "Centraal",
+        "supplement_percent": 10, "points": 200,
+        "scenarios": [{"name": "loaded", "train_overrides": {"mass_t": 156.4, "effective_mass_t": 167.4}},
+                      *extra_scenarios],
+        "sweep": {"supplement_percent": [2, 6, 12]}, "output": str(output)})
+
+
+def comparable(table):
+    return table[["scenario", "supplement_percent", "key", "status"] + NUMERIC].reset_index(drop=True)
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    d = tmp_path_factory.mktemp("serial")
+    table, counts, _ = run_study(study_file(d, d / "out"))
+    return table, counts, d
+
+
+def test_cases_are_keyed_by_their_inputs(tmp_path):
+    _, _, cases = expand(study_file(tmp_path, tmp_path / "out"))
+    assert len(cases) == 6 and len({c["key"] for c in cases}) == 6
+    _, _, again = expand(study_file(tmp_path, tmp_path / "out"))
+    assert [c["key"] for c in again] == [c["key"] for c in cases]
+
+
+def test_serial_run_completes_and_rerun_computes_nothing(reference):
+    table, counts, folder = reference
+    assert counts["computed"] == 6 and counts["failed"] == 0
+    assert (table["status"] == "ok").all() and table["verified"].all()
+    again, counts, _ = run_study(folder / "study.yaml")
+    assert counts["stored_before"] == 6 and counts["computed"] == 0
+    assert comparable(again).equals(comparable(table))
+
+
+def test_two_workers_give_identical_table(reference, tmp_path):
+    table, counts, _ = run_study(study_file(tmp_path, tmp_path / "out"), workers=2)
+    assert counts["computed"] == 6
+    assert comparable(table).equals(comparable(reference[0]))
+
+
+def test_dask_local_cluster_gives_identical_table(reference, tmp_path):
+    distributed = pytest.importorskip("distributed", reason="Dask is in the test extra; installed by make test")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        table, counts, _ = run_study(study_file(tmp_path, tmp_path / "out"), dask=cluster.scheduler_address)
+    assert counts["computed"] == 6
+    assert comparable(table).equals(comparable(reference[0]))
+
+
+def test_killed_study_resumes_with_the_remaining_cases(reference, tmp_path):
+    path = study_file(tmp_path, tmp_path / "out")
+    db = tmp_path / "out" / "results.sqlite"
+    proc = subprocess.Popen([sys.executable, "-m", "ecostudy.cli", "run", str(path), "--no-progress"],
+                            cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    stored = 0
+    while time.time() < deadline and proc.poll() is None:
+        if db.exists():
+            try:
+                with sqlite3.connect(db) as conn:
+                    stored = conn.execute("SELECT count(*) FROM cases").fetchone()[0]
+            except sqlite3.OperationalError:  # file created, table not yet
+                stored = 0
+            if stored >= 2:
+                break
+        time.sleep(0.05)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert 2 <= stored < 6, "the study should have been killed part-way"
+    table, counts, _ = run_study(path)
+    assert counts["stored_before"] >= 2
+    assert counts["computed"] == 6 - counts["stored_before"]
+    assert comparable(table).equals(comparable(reference[0]))
+
+
+def test_failures_are_recorded_and_do_not_stop_the_study(tmp_path):
+    path = study_file(tmp_path, tmp_path / "out", [{"name": "too_fast", "running_time_s": 50.0}])
+    # the sweep overrides the scenario's timing; keep this scenario's 50 s by sweeping points instead
+    data = __import__("yaml").safe_load(path.read_text())
+    data["sweep"] = {"points": [200]}
+    write_yaml(path, data)
+    table, counts, _ = run_study(path)
+    bad = table[table["scenario"] == "too_fast"]
+    assert list(bad["status"]) == ["infeasible"]
+    assert "fastest possible run takes" in bad["reason"].iloc[0]
+    assert (table[table["scenario"] != "too_fast"]["status"] == "ok").all()
+    assert counts["not_ok"] == 1
