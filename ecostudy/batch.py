@@ -17,7 +17,20 @@ from .results import write_csv
 from .run import solve_run
 from .schemas import TrackFile, TrainFile
 from .store import Store
-from .study import expand
+from .study import case_key, expand
+
+
+_ALL_OUT = {}  # all-out time per (train, track, stops, grid), per process: shared by a scenario's cases
+
+
+def _all_out_time(case, track, train):
+    """The all-out time of the case's scenario, solved once per process (a supplement's base)."""
+    key = case_key({k: case[k] for k in ("train", "track", "from", "to", "points", "version")})
+    if key not in _ALL_OUT:
+        r = solve_run(track, train, case["from"], case["to"], Timing(), objective="time",
+                      points=case["points"], verify_result=False)
+        _ALL_OUT[key] = r.summary["running_time_s"]
+    return _ALL_OUT[key]
 
 
 def run_case(case):
@@ -28,13 +41,16 @@ def run_case(case):
             warnings.simplefilter("ignore", EcostudyWarning)  # shown once when the study was expanded
             train = train_from_schema(TrainFile.model_validate(case["train"]), case["scenario"])
         track = track_from_schema(TrackFile.model_validate(case["track"]))
-        supplement = case["supplement_percent"]
-        timing = Timing(running_time=case["running_time_s"],
-                        supplement=None if supplement is None else supplement / 100,
-                        window=tuple(case["window_s"]) if case["window_s"] else None)
+        running_time, t_allout = case["running_time_s"], None
+        if case["supplement_percent"] is not None and case["objective"] != "time":
+            t_allout = _all_out_time(case, track, train)
+            running_time = t_allout * (1 + case["supplement_percent"] / 100)
+        timing = Timing(running_time=running_time, window=tuple(case["window_s"]) if case["window_s"] else None)
         r = solve_run(track, train, case["from"], case["to"], timing, objective=case["objective"],
                       points=case["points"], weights=tuple(case["weights"]))
         status, error, summary = ("ok" if r.ok else "flagged"), None, r.summary
+        if t_allout is not None:
+            summary["all_out_time_s"] = t_allout
     except InfeasibleError as exc:
         status, error, summary = "infeasible", str(exc), None
     except EcostudyError as exc:

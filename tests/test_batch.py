@@ -106,3 +106,15 @@ def test_failures_are_recorded_and_do_not_stop_the_study(tmp_path):
     assert "fastest possible run takes" in bad["reason"].iloc[0]
     assert (table[table["scenario"] != "too_fast"]["status"] == "ok").all()
     assert counts["not_ok"] == 1
+
+
+def test_case_equals_a_direct_solve(reference):
+    """The all-out time is memoised per scenario; the case must still equal `ecostudy solve --supplement`."""
+    from ecostudy.inputs import Timing, load_track, load_train
+    from ecostudy.run import solve_run
+    table = reference[0]
+    row = table[(table["scenario"] == "base") & (table["supplement_percent"] == 6)].iloc[0]
+    direct = solve_run(load_track(TRACKS / "amsterdam_rokin_centraal.yaml"), load_train(TRAINS / "amsterdam_metro.yaml"),
+                       "Rokin", "Centraal", Timing(supplement=0.06), points=200)
+    assert row["traction_energy_kWh"] == pytest.approx(direct.summary["traction_energy_kWh"], rel=1e-9)
+    assert row["all_out_time_s"] == pytest.approx(direct.summary["all_out_time_s"], rel=1e-12)
