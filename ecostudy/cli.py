@@ -221,6 +221,49 @@ def pareto(
         raise typer.Exit(1)
 
 
+def _compare(study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot):
+    from .compare import compare
+    from .inputs import Timing
+    from .results import atomic_write, write_csv
+    trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
+    if time is not None or supplement is not None:
+        timing = Timing(running_time=time, supplement=None if supplement is None else supplement * units.PERCENT)
+    elif st is not None:
+        timing = st.timing
+    else:
+        raise InputError(problem("command line", "--time", "give --time or --supplement"))
+    out_dir = Path(out) if out else (st.output.parent / (st.output.name + "_compare") if st else Path("out") / "compare")
+    table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000)
+    write_csv(out_dir / "compare.csv", table)
+    if not no_plot:
+        from .plots import compare_plot
+        atomic_write(out_dir / "compare.png", lambda tmp: compare_plot(
+            outcomes, case.segment, tmp, f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s"))
+    typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+    typer.echo(f"outputs {out_dir}/ (compare.csv, compare.png)")
+    return table
+
+
+@app.command(name="compare")
+def compare_command(
+    study: Optional[Path] = typer.Argument(None, help="Study file (YAML)."),
+    track: Optional[Path] = typer.Option(None, help="Track file."),
+    train: Optional[Path] = typer.Option(None, help="Train file."),
+    from_stop: Optional[str] = typer.Option(None, "--from", help="Departure stop (default: first)."),
+    to_stop: Optional[str] = typer.Option(None, "--to", help="Arrival stop (default: last)."),
+    time: Optional[float] = typer.Option(None, "--time", help="Running time [s]."),
+    supplement: Optional[float] = typer.Option(None, help="Running-time supplement over all-out [%]."),
+    points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 1000)."),
+    out: Optional[Path] = typer.Option(None, help="Output folder."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip compare.png."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Strategies side by side: all-out, ATO optimum, eco-drive coasting, DAS round (simulated)."""
+    table = guarded(debug, _compare, study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot)
+    if not table.attrs["verified"]:
+        raise typer.Exit(1)
+
+
 def _run(study, workers, dask, retry_failed, out, no_progress):
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 

@@ -15,6 +15,36 @@ def interval_resistance(segment, train, nodes):
                               train.curve_coefficient, segment.curvature(mid))
 
 
+def braking_curve(segment, train, nodes, limits):
+    """Highest speeds from which full service braking still meets every limit and the stop [m/s]."""
+    ds = np.diff(nodes)
+    fixed = interval_resistance(segment, train, nodes)
+    a, b, c = train.davis
+    bwd = np.zeros_like(nodes)
+    for k in range(len(ds) - 1, -1, -1):
+        v = bwd[k + 1]
+        dec = (train.braking.force(v) + (a + b * v + c * v * v) + fixed[k]) / train.mass
+        bwd[k] = min(np.sqrt(v * v + 2 * ds[k] * max(dec, 1e-3)), limits[k])
+    return bwd
+
+
+def coast_speeds(segment, train, nodes, limits, start, v_start):
+    """Speeds when coasting from node ``start`` at ``v_start``; held at limits by braking [m/s].
+
+    Nodes before ``start`` are NaN; a train that stops while coasting stays at 0.
+    """
+    ds = np.diff(nodes)
+    fixed = interval_resistance(segment, train, nodes)
+    a, b, c = train.davis
+    out = np.full_like(nodes, np.nan)
+    out[start] = v_start
+    for k in range(start, len(ds)):
+        v = out[k]
+        dec = ((a + b * v + c * v * v) + fixed[k]) / train.mass
+        out[k + 1] = min(np.sqrt(max(v * v - 2 * ds[k] * dec, 0.0)), limits[k + 1])
+    return out
+
+
 def envelope_speeds(segment, train, nodes, limits):
     """Fastest speeds: max traction forward from the start, max braking back from the stop.
 
@@ -32,12 +62,7 @@ def envelope_speeds(segment, train, nodes, limits):
             raise InfeasibleError(f"infeasible: even at full traction the train stalls at "
                                   f"{nodes[k + 1]:.0f} m from {segment.from_stop or 'the start'}")
         fwd[k + 1] = min(np.sqrt(max(v2, 0.0)), limits[k + 1])
-    bwd = np.zeros_like(nodes)
-    for k in range(len(ds) - 1, -1, -1):
-        v = bwd[k + 1]
-        dec = (train.braking.force(v) + (a + b * v + c * v * v) + fixed[k]) / train.mass
-        bwd[k] = min(np.sqrt(v * v + 2 * ds[k] * max(dec, 1e-3)), limits[k])
-    out = np.minimum(fwd, bwd)
+    out = np.minimum(fwd, braking_curve(segment, train, nodes, limits))
     out[0] = out[-1] = 0.0
     return out
 

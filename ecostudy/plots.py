@@ -85,3 +85,22 @@ def profiles_plot(results, path, title=""):
     ax.set_title(title, fontsize=10)
     fig.savefig(path, dpi=110, format="png")
     plt.close(fig)
+
+
+def compare_plot(outcomes, segment, path, title=""):
+    """Simulated speed against distance of each strategy, with the speed limit."""
+    fig, ax = plt.subplots(figsize=(9, 4.5))
+    fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
+    x, y = _steps(segment.limit, segment.distance)
+    ax.step(x, to_kmh(y), where="post", color="tab:red", lw=1.2, label="speed limit (train length)")
+    for o in outcomes:
+        ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.3,
+                label=f"{o.name}: {o.trace.arrival_time:.1f} s, {o.trace.traction_energy / 3.6e6:.2f} kWh")
+    ax.set_xlabel("distance from departure [m]")
+    ax.set_ylabel("speed [km/h]")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower center")
+    ax.set_title(title, fontsize=10)
+    fig.savefig(path, dpi=110, format="png")
+    plt.close(fig)

@@ -27,6 +27,7 @@ class Trace:
     v: np.ndarray
     traction_energy: float   # mechanical work of traction [J]
     braking_energy: float    # [J]
+    regenerated_energy: float  # mechanical work taken by the electric brake [J] (before efficiency)
     stop_position: float     # [m]
     arrival_time: float      # [s]
 
@@ -53,9 +54,11 @@ def simulate(segment, train, nodes, handle, max_time=None):
 
     node_list = nodes.tolist()
     fixed = [0.0]  # gradient + curve force of the current piece [N]: constant within a piece
+    span = [0, last]  # intervals of the current piece: a step that overshoots the piece's end must
+    # not sample the next piece's control, or the end event is located on a polluted dense output
 
     def forces(x, v):
-        k = min(max(bisect_right(node_list, x) - 1, 0), last)
+        k = min(max(bisect_right(node_list, x) - 1, span[0]), span[1])
         u = handle[k]
         ft = u * train.traction.force(v) if u > 0 else 0.0
         fb = -u * train.braking.force(v) if u < 0 else 0.0
@@ -65,8 +68,9 @@ def simulate(segment, train, nodes, handle, max_time=None):
         x, v = y[0], y[1]
         ft, fb, resist = forces(x, v)
         if v <= 0.0 and ft <= resist:  # standing: resistance cannot push the train backwards
-            return [0.0, 0.0, 0.0, 0.0]
-        return [v, acceleration(ft, fb, resist, train.mass), ft * v, fb * v]
+            return [0.0, 0.0, 0.0, 0.0, 0.0]
+        fr = min(fb, train.regeneration.force(v)) if train.regeneration is not None and fb > 0 else 0.0
+        return [v, acceleration(ft, fb, resist, train.mass), ft * v, fb * v, fr * v]
 
     def stopped(t, y):
         return y[1] if t > t_start else 1.0
@@ -74,8 +78,9 @@ def simulate(segment, train, nodes, handle, max_time=None):
 
     starts = pieces(nodes, handle, segment)
     bounds = list(nodes[starts[1:]]) + [segment.distance + 100.0]  # past the stop: runaway guard
-    y, t_start, solutions = [0.0, 1e-9, 0.0, 0.0], 0.0, []
-    for first, x_end in zip(starts, bounds):
+    y, t_start, solutions = [0.0, 1e-9, 0.0, 0.0, 0.0], 0.0, []
+    for first, following, x_end in zip(starts, list(starts[1:]) + [last + 1], bounds):
+        span[0], span[1] = first, following - 1
         x_mid = 0.5 * (nodes[first] + nodes[first + 1])
         fixed[0] = float(running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, segment.gradient(x_mid),
                                             train.curve_coefficient, segment.curvature(x_mid)))
@@ -84,14 +89,14 @@ def simulate(segment, train, nodes, handle, max_time=None):
             return y[0] - x_end
         reached.terminal, reached.direction = True, 1
         sol = solve_ivp(rhs, (t_start, max_time), y, method="DOP853", rtol=1e-8,
-                        atol=[1e-6, 1e-8, 1.0, 1.0], events=(stopped, reached), dense_output=True)
+                        atol=[1e-6, 1e-8, 1.0, 1.0, 1.0], events=(stopped, reached), dense_output=True)
         solutions.append(sol)
         y, t_start = sol.y[:, -1].copy(), sol.t[-1]
         if sol.status != 1 or sol.t_events[0].size:  # stopped, or ran out of time
             break
         y[0] = x_end  # land exactly on the boundary (event location is accurate to rounding)
     t, x, v = dense_samples(solutions)
-    return Trace(t, x, v, float(y[2]), float(y[3]), float(y[0]), float(t_start)), solutions
+    return Trace(t, x, v, float(y[2]), float(y[3]), float(y[4]), float(y[0]), float(t_start)), solutions
 
 
 def dense_samples(solutions, samples=4000):

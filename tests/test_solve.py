@@ -150,3 +150,17 @@ def test_non_optimal_ipopt_exit_is_never_silent(amsterdam, metro):
     else:
         assert r.summary["solver"]["status"] == "max_iterations"
         assert not r.ok
+
+
+def test_simulator_agrees_with_a_fine_step_reference(amsterdam, metro, monkeypatch):
+    """Regression: a step overshooting a piece's end sampled the next piece's braking and moved
+    the stop by 2 m at K = 500. The adaptive run must equal one with steps capped at 0.02 s."""
+    import ecostudy.simulate as sim
+    r = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=500)
+    adaptive, _ = sim.simulate(r.segment, metro, r.nodes, r.handle)
+    original = sim.solve_ivp
+    monkeypatch.setattr(sim, "solve_ivp", lambda *a, **k: original(*a, max_step=0.02, **k))
+    fine, _ = sim.simulate(r.segment, metro, r.nodes, r.handle)
+    assert adaptive.stop_position == pytest.approx(fine.stop_position, abs=2e-3)
+    assert adaptive.arrival_time == pytest.approx(fine.arrival_time, abs=2e-3)
+    assert adaptive.traction_energy == pytest.approx(fine.traction_energy, rel=1e-5)

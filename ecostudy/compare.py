@@ -1,0 +1,37 @@
+"""Strategies side by side on one scenario (thesis 000 Tables 4.2, 6.1): one table, one plot.
+
+Every row is scored by the independent simulator (times, energies and stop errors are the
+simulated ones), so optimised and heuristic strategies are measured alike.
+"""
+import pandas as pd
+
+from . import strategies
+from .errors import InfeasibleError
+from .inputs import Timing
+from .run import prepare, solve_run
+
+
+def compare(track, train, from_stop, to_stop, timing, points=1000):
+    """(table, outcomes): all-out, ATO optimum, eco-drive coasting, DAS round."""
+    allout = solve_run(track, train, from_stop, to_stop, Timing(), objective="time", points=points)
+    ato = solve_run(track, train, from_stop, to_stop, timing, points=points)
+    case = prepare(track, train, from_stop, to_stop, points)
+    outcomes = [strategies.Outcome("all-out", allout.handle, allout.trace),
+                strategies.Outcome("ATO optimum", ato.handle, ato.trace)]
+    target = ato.summary["running_time_s"]
+    rows_extra = []
+    try:
+        outcomes.append(strategies.eco_coasting(case, target))
+    except InfeasibleError as exc:
+        rows_extra.append({"strategy": "eco-drive coasting", "note": str(exc)})
+    outcomes.append(strategies.das_round(case, ato.handle))
+    rows = [o.row(train, case.segment.distance) for o in outcomes] + rows_extra
+    table = pd.DataFrame(rows)
+    e_allout = table["traction_energy_kWh"].iloc[0]
+    e_opt = table["traction_energy_kWh"].iloc[1]
+    table.insert(4, "saving_vs_all_out_pct", 100 * (1 - table["traction_energy_kWh"] / e_allout))
+    table.insert(5, "gap_to_optimum_pct", 100 * (table["traction_energy_kWh"] / e_opt - 1))
+    table.insert(2, "arrival_error_s", table["running_time_s"] - target)
+    table.attrs.update(target_s=target, verified=bool(ato.summary["verification"]["passed"]
+                                                     and allout.summary["verification"]["passed"]))
+    return table, outcomes, case

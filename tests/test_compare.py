@@ -1,0 +1,37 @@
+"""Strategies side by side, each scored by the simulator."""
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+from ecostudy.compare import compare
+from ecostudy.inputs import Timing, load_track, load_train
+
+from .conftest import TRACKS, TRAINS
+
+
+@pytest.fixture(scope="module")
+def regional_compare():
+    return compare(load_track(TRACKS / "regional_808m.yaml"), load_train(TRAINS / "regional_alstom.yaml"),
+                   "Origin", "Destination", Timing(running_time=80.0), points=500)
+
+
+def test_optimum_beats_every_strategy_at_the_same_time(regional_compare):
+    table, outcomes, _ = regional_compare
+    rows = table.set_index("strategy")
+    assert list(rows.index) == ["all-out", "ATO optimum", "eco-drive coasting", "DAS round (nearest level)"]
+    assert rows.loc["ATO optimum", "arrival_error_s"] == pytest.approx(0.0, abs=0.5)
+    assert abs(rows.loc["ATO optimum", "stop_error_m"]) < 1.0
+    # eco-drive coasting meets the time (not later) and costs more than the optimum
+    assert rows.loc["eco-drive coasting", "arrival_error_s"] <= 0.05
+    assert rows.loc["eco-drive coasting", "gap_to_optimum_pct"] > 0
+    assert rows.loc["all-out", "running_time_s"] < rows.loc["ATO optimum", "running_time_s"]
+    assert rows.loc["all-out", "saving_vs_all_out_pct"] == 0
+
+
+def test_compare_command(tmp_path):
+    r = CliRunner().invoke(app, ["compare", "--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train",
+                                 str(TRAINS / "amsterdam_metro.yaml"), "--time", "78", "--points", "300",
+                                 "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "compare.csv").read_text().startswith("strategy,running_time_s,arrival_error_s")
+    assert (tmp_path / "compare.png").stat().st_size > 10_000
