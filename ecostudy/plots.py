@@ -93,8 +93,9 @@ def compare_plot(outcomes, segment, path, title=""):
     fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
     x, y = _steps(segment.limit, segment.distance)
     ax.step(x, to_kmh(y), where="post", color="tab:red", lw=1.2, label="speed limit (train length)")
-    for o in outcomes:
-        ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.3,
+    styles = [("tab:blue", "-"), ("black", "-"), ("tab:green", "--"), ("tab:orange", ":"), ("tab:purple", "-.")]
+    for o, (colour, dash) in zip(outcomes, styles * 2):
+        ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.4, color=colour, ls=dash,
                 label=f"{o.name}: {o.trace.arrival_time:.1f} s, {o.trace.traction_energy / 3.6e6:.2f} kWh")
     ax.set_xlabel("distance from departure [m]")
     ax.set_ylabel("speed [km/h]")
