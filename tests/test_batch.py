@@ -59,15 +59,6 @@ def test_two_workers_give_identical_table(reference, tmp_path):
     assert comparable(table).equals(comparable(reference[0]))
 
 
-def test_dask_local_cluster_gives_identical_table(reference, tmp_path):
-    distributed = pytest.importorskip("distributed", reason="Dask is in the test extra; installed by make test")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
-        table, counts, _ = run_study(study_file(tmp_path, tmp_path / "out"), dask=cluster.scheduler_address)
-    assert counts["computed"] == 6
-    assert comparable(table).equals(comparable(reference[0]))
-
-
 def test_killed_study_resumes_with_the_remaining_cases(reference, tmp_path):
     path = study_file(tmp_path, tmp_path / "out")
     db = tmp_path / "out" / "results.sqlite"
