@@ -63,6 +63,12 @@ def _report(result, out_dir):
                f"(regenerated {s['regenerated_energy_kWh']:.3f} kWh)")
     typer.echo(f"  solver            {s['solver']['status']}, {s['solver']['iterations']} iterations, "
                f"{s['solver']['seconds']:.2f} s")
+    typer.echo(f"  regimes           {s['regimes']['sequence']}")
+    if s.get("pontryagin"):
+        pm = s["pontryagin"]
+        typer.echo(f"  Pontryagin check  {pm['agreement_pct']:.1f} % of the distance obeys eq. 2.17"
+                   + "".join(f"; {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m disagrees"
+                             for d in pm["disagreements"][:3]))
     if ver is not None:
         flag = "passed" if ver["passed"] else "FAILED"
         typer.echo(f"  verification      {flag}: arrival {ver['arrival_time_error_s']:+.3f} s, stop "

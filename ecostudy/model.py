@@ -153,8 +153,8 @@ def build_model(segment, train, nodes, limits, guess, objective="energy", runnin
     define_dynamics(m, nodes, segment, train)
     define_envelopes(m, train, with_regeneration)
     define_timing(m, time_ref, running_time, window)
-    energy_ref = max(train.traction.peak * segment.distance * 0.1, 1.0)
-    define_objective(m, nodes, train, objective, weights, time_ref, energy_ref)
+    m.energy_ref = max(train.traction.peak * segment.distance * 0.1, 1.0)  # [J], objective scale
+    define_objective(m, nodes, train, objective, weights, time_ref, m.energy_ref)
     m.dual = pyo.Suffix(direction=pyo.Suffix.IMPORT)
     return m
 

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 from pyomo.common.gc_manager import PauseGC
 
-from . import initial, model as formulation, regimes, solver
+from . import initial, model as formulation, pontryagin, regimes, solver
 from .errors import InfeasibleError, SolverError
 from .grid import make_grid, make_segment, node_limits
 from .inputs import Timing
@@ -178,6 +178,11 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
         profile, totals = tabulate(train, nodes, v, dt, ft, fb)
         labels = regimes.classify(train, v, ft, fb)
         regime_runs = regimes.runs(labels, nodes)
+        costate = None
+        if objective == "energy":  # psi = lambda / v of eq. 2.17 from Ipopt's multipliers
+            psi = pontryagin.ipopt_psi(m, nodes, train)
+            costate = {"method": "Ipopt multipliers of the speed recursion", **pontryagin.check(nodes, labels, psi)}
+            profile["costate_ratio"] = np.append(psi, np.nan)
     verification, trace = None, None
     if verify_result:
         with _stage(stages, "verify"):
@@ -190,6 +195,7 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
         "regimes": {"sequence": regimes.sequence_text(regime_runs),
                     "distance_shares": regimes.distance_shares(labels, nodes),
                     "runs": [{"regime": r, "start_m": a, "end_m": b} for r, a, b in regime_runs]},
+        "pontryagin": costate,
         "solver": {"status": outcome.status, "iterations": outcome.iterations,
                    "seconds": stages.get("solve", 0.0), "max_constraint_violation": outcome.max_violation},
         "verification": verification,

@@ -68,7 +68,7 @@ def test_speed_limits_honoured(amsterdam_76s):
 def test_profile_columns_and_cumulative_energy(amsterdam_76s):
     p = amsterdam_76s.profile
     assert list(p.columns) == ["position_m", "time_s", "speed_kmh", "handle", "traction_force_kN",
-                               "braking_force_kN", "power_kW", "cumulative_energy_kWh"]
+                               "braking_force_kN", "power_kW", "cumulative_energy_kWh", "costate_ratio"]
     assert p["cumulative_energy_kWh"].iloc[-1] == pytest.approx(amsterdam_76s.summary["traction_energy_kWh"])
     assert p["handle"].dropna().between(-1, 1).all()
     assert np.all(np.diff(p["time_s"]) > 0)
