@@ -88,7 +88,7 @@ def _parse_pair(text, option):
 def _solve(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights,
            points, out, no_plot):
     from .inputs import Timing, check_stops, load_study, load_track, load_train
-    from .results import write_run
+    from .results import write_json, write_run
     from .run import solve_run
 
     if study is not None:
@@ -96,6 +96,7 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
             raise InputError(problem("command line", "--track/--train",
                                      "give a study file or --track and --train, not both"))
         st = load_study(study)
+        st_paths = (st.track_path, st.train_path)
         trk, trn, f, t = st.track, st.train, st.from_stop, st.to_stop
         timing, obj, w, k = st.timing, st.objective, st.weights, st.points
         out_dir = Path(out) if out else st.output
@@ -127,6 +128,9 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
         out_dir = Path(out) if out else Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_")
     result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w)
     write_run(result, out_dir, plot=not no_plot)
+    paths = (st_paths if study is not None else (Path(track), Path(train)))
+    write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
+                                         "from": f, "to": t, "points": k})
     _report(result, out_dir)
     return result
 
@@ -303,6 +307,45 @@ def run(
     """Run every case of a study; finished cases are stored and never computed twice."""
     counts = guarded(debug, _run, study, workers, dask, retry_failed, out, no_progress)
     if counts["not_ok"]:
+        raise typer.Exit(1)
+
+
+def _check(result_dir, time):
+    import json
+
+    import pandas as pd
+
+    from .inputs import load_track, load_train
+    from .pontryagin import check_profile
+    from .results import write_json
+    result_dir = Path(result_dir)
+    try:
+        inputs = json.loads((result_dir / "inputs.json").read_text())
+        profile = pd.read_csv(result_dir / "profile.csv")
+    except (OSError, ValueError) as exc:
+        raise InputError(problem(result_dir, "", f"not a result folder of `ecostudy solve` ({exc})"))
+    report, _ = check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, profile, time)
+    write_json(result_dir / "check.json", report)
+    typer.echo(f"checked as the {report['checked_as']}")
+    typer.echo("regimes: " + ", ".join(f"{r['regime']} {r['start_m']:.0f}-{r['end_m']:.0f} m" for r in report["sequence"]))
+    typer.echo(f"Pontryagin (eq. 2.17): {report['agreement_pct']:.1f} % of the distance agrees; stationarity "
+               f"residual {report['stationarity_residual']:.1e}")
+    for d in report["disagreements"]:
+        typer.echo(f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m "
+                   f"(lambda/v from {d['psi_min']:.2f} to {d['psi_max']:.2f})")
+    typer.echo(f"written {result_dir}/check.json")
+    return report
+
+
+@app.command()
+def check(
+    result_dir: Path = typer.Argument(..., help="Output folder of `ecostudy solve`."),
+    time: Optional[float] = typer.Option(None, "--time", help="Test as the energy-optimal run arriving by this time [s]."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Pontryagin regime check of a solved profile (thesis 000 eq. 2.17); exit 1 below 95 % agreement."""
+    report = guarded(debug, _check, result_dir, time)
+    if report["agreement_pct"] < 95.0:
         raise typer.Exit(1)
 
 

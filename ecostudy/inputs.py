@@ -71,6 +71,8 @@ class Study:
     weights: tuple = (1.0, 1.0)
     points: int = 1000
     output: Path = field(default_factory=lambda: Path("out"))
+    track_path: Path | None = None
+    train_path: Path | None = None
 
 
 # --------------------------------------------------------------------------- reading files
@@ -278,7 +280,7 @@ def load_study(path):
     output = Path(s.output) if s.output else Path("out") / s.name
     return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop,
                  timing=timing, objective=s.objective, weights=(s.weights.time, s.weights.energy),
-                 points=s.points, output=output)
+                 points=s.points, output=output, track_path=base / s.track, train_path=base / s.train)
 
 
 __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study",

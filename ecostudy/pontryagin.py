@@ -53,3 +53,82 @@ def check(nodes, labels, psi, tolerance=0.02):
             "intervals_agreeing_pct": float(100 * agree.mean()),
             "sequence": [{"regime": r, "start_m": a, "end_m": b} for r, a, b in regimes.runs(labels, nodes)],
             "disagreements": bad, "tolerance": tolerance}
+
+
+def estimated_psi(m, nodes, train, tolerance=1e-2):
+    """psi at the point loaded in ``m`` (any profile): multipliers from a sign-constrained fit.
+
+    The first-order conditions grad f + J^T y - z_L + z_U = 0 are fitted in the least-squares
+    sense over the equality constraints, the active inequalities (y >= 0 at an active upper
+    bound, <= 0 at a lower one) and the active variable bounds (z >= 0); the signs pin the
+    costate, which the state rows alone leave free. The fit is a convex QP, solved by Ipopt.
+    Returns (psi, relative stationarity residual, residual per speed node).
+    """
+    import pyomo.environ as pyo
+    from scipy.sparse import hstack, identity
+
+    from .solver import Session, solve
+    nlp = Session(m).nlp
+    grad = nlp.evaluate_grad_objective()
+    jac = nlp.evaluate_jacobian().tocsr()
+    c, lb, ub = nlp.evaluate_constraints(), nlp.constraints_lb(), nlp.constraints_ub()
+    scale = np.maximum(1.0, np.abs(c))
+    equal = lb == ub
+    at_ub = ~equal & (np.abs(c - ub) <= tolerance * scale)
+    at_lb = ~equal & (np.abs(c - lb) <= tolerance * scale)
+    rows = np.nonzero(equal | at_ub | at_lb)[0]
+    x, xl, xu = nlp.get_primals(), nlp.primals_lb(), nlp.primals_ub()
+    near = tolerance * np.maximum(1.0, np.abs(x))
+    fixed = xl == xu
+    lower = np.nonzero(~fixed & (np.abs(x - xl) <= near))[0]
+    upper = np.nonzero(~fixed & (np.abs(x - xu) <= near))[0]
+    free = np.nonzero(fixed)[0]
+    eye = identity(len(x), format="csc")
+    a = hstack([jac[rows].T, -eye[:, lower], eye[:, upper], eye[:, free]]).tocsr()
+    lo = np.concatenate([np.where(equal[rows] | at_lb[rows], None, 0.0), [0.0] * (len(lower) + len(upper)),
+                         [None] * len(free)])
+    hi = np.concatenate([np.where(equal[rows] | at_ub[rows], None, 0.0), [None] * (len(lower) + len(upper) + len(free))])
+    norm = max(float(np.linalg.norm(grad)), 1e-12)
+    qp = pyo.ConcreteModel()
+    qp.y = pyo.Var(range(a.shape[1]), bounds=lambda q, i: (lo[i], hi[i]), initialize=0.0)
+    qp.fit = pyo.Objective(expr=sum(
+        ((grad[j] + sum(a.data[p] * qp.y[a.indices[p]] for p in range(a.indptr[j], a.indptr[j + 1]))) / norm) ** 2
+        for j in range(a.shape[0])))
+    solve(qp)
+    y = np.array([pyo.value(qp.y[i]) for i in range(a.shape[1])])
+    residual = a @ y + grad
+    multipliers = np.zeros(len(c))
+    multipliers[rows] = y[:len(rows)]
+    speed_rows = nlp.get_constraint_indices([m.speed[k] for k in m.I])
+    v_cols = nlp.get_primal_indices([m.v[k] for k in m.K if not m.v[k].fixed])
+    return (psi_from_multipliers(multipliers[speed_rows], nodes, train, m.energy_ref),
+            float(np.linalg.norm(residual) / norm), np.abs(residual[v_cols]) / norm)
+
+
+def check_profile(track, train, inputs, profile, running_time=None, tolerance=1e-2):
+    """Regime check of a result's profile as the energy-optimal run for ``running_time``.
+
+    ``running_time`` None: the profile's own time, fixed. Given: arrive by then (a window), so a
+    profile that arrives earlier than it needs to is tested as what it is offered as.
+    """
+    from .run import build, guess_from_speeds, prepare
+    from .units import KMH, KN
+    case = prepare(track, train, inputs["from"], inputs["to"], inputs["points"])
+    x = profile["position_m"].to_numpy()
+    if len(x) != len(case.nodes) or not np.allclose(x, case.nodes, atol=1e-3):
+        raise ValueError("the profile's positions differ from the grid rebuilt from inputs.json")
+    v = profile["speed_kmh"].to_numpy() * KMH
+    dt = np.diff(profile["time_s"].to_numpy())
+    ft = profile["traction_force_kN"].to_numpy()[:-1] * KN
+    fb = profile["braking_force_kN"].to_numpy()[:-1] * KN
+    own = float(dt.sum())
+    timing = {"running_time": own} if running_time is None else {"window": (0.0, float(running_time))}
+    m = build(case, (v, dt, ft, fb), "energy", {}, **timing)
+    psi, residual, _ = estimated_psi(m, case.nodes, train, tolerance)
+    labels = regimes.classify(train, v, ft, fb)
+    out = check(case.nodes, labels, psi, tolerance=0.02)
+    out.update(method="multipliers fitted at the profile (sign-constrained least squares)",
+               stationarity_residual=residual, profile_running_time_s=own,
+               checked_as="energy-optimal run for " + (f"{own:.2f} s (its own time)" if running_time is None
+                                                       else f"arrival by {running_time:.2f} s"))
+    return out, psi

@@ -45,3 +45,29 @@ def test_all_out_and_net_energy_runs_carry_no_energy_costate():
     r = solve_run(load_track(TRACKS / "regional_808m.yaml"), load_train(TRAINS / "regional_alstom.yaml"),
                   "Origin", "Destination", Timing(), objective="time", points=200)
     assert r.summary["pontryagin"] is None
+
+
+def test_check_command_passes_an_optimum_and_rejects_a_poor_profile(tmp_path):
+    """`ecostudy check`: the optimum agrees; the all-out run offered as the energy-optimal run for
+    a slack running time is reported inconsistent, with positions (exit 1)."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from ecostudy.cli import app
+    runner = CliRunner()
+    args = ["--track", str(TRACKS / "regional_808m.yaml"), "--train", str(TRAINS / "regional_alstom.yaml"),
+            "--points", "300", "--no-plot"]
+    assert runner.invoke(app, ["solve", *args, "--time", "75", "--out", str(tmp_path / "opt")]).exit_code == 0
+    ok = runner.invoke(app, ["check", str(tmp_path / "opt")])
+    assert ok.exit_code == 0, ok.output
+    assert json.loads((tmp_path / "opt" / "check.json").read_text())["agreement_pct"] >= 95
+    assert runner.invoke(app, ["solve", *args, "--objective", "time", "--out", str(tmp_path / "ao")]).exit_code == 0
+    own = runner.invoke(app, ["check", str(tmp_path / "ao")])  # the all-out run IS optimal for its own time
+    assert own.exit_code == 0, own.output
+    t_ao = json.loads((tmp_path / "ao" / "summary.json").read_text())["running_time_s"]
+    poor = runner.invoke(app, ["check", str(tmp_path / "ao"), "--time", f"{1.1 * t_ao:.2f}"])
+    assert poor.exit_code == 1, poor.output
+    report = json.loads((tmp_path / "ao" / "check.json").read_text())
+    assert report["agreement_pct"] < 50
+    assert report["disagreements"] and "inconsistent: MA at 0-" in poor.output
