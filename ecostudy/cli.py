@@ -176,7 +176,7 @@ def _case_from(study, track, train, from_stop, to_stop, points):
 
 
 def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, points, workers, cold, out, no_plot):
-    from .pareto import is_monotone, saving_at, sweep
+    from .pareto import front_meta, sweep
     from .results import write_front
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
     k = k or 500
@@ -187,13 +187,7 @@ def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, poin
     out_dir = Path(out) if out else (st.output.parent / (st.output.name + "_pareto") if st else Path("out") / "pareto")
     table, results = sweep(trk, trn, f, t, count=count, supplement_max=supplement_max * units.PERCENT,
                            points=k, workers=workers, warm=not cold)
-    meta = {"track": trk.name, "train": trn.name, "from": f, "to": t, "points": k, "count": count,
-            "all_out_time_s": float(table["running_time_s"].iloc[0]),
-            "saving_at_5_pct_supplement_pct": saving_at(table, 5.0),
-            "saving_at_10_pct_supplement_pct": saving_at(table, 10.0),
-            "monotone": is_monotone(table), "all_verified": bool(table["verified"].all()),
-            "all_optimal": bool((table["solver_status"] == "optimal").all()),
-            "workers": workers, "warm_start": not cold, "wall_s": table.attrs["wall_s"]}
+    meta = front_meta(table, {"track": trk.name, "train": trn.name, "from": f, "to": t}, k, count, workers, not cold)
     write_front(table, results, out_dir, meta, plot=not no_plot)
     cols = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
             "marginal_saving_kWh_per_s", "coasting_share_pct", "regime_sequence"]
@@ -311,20 +305,10 @@ def run(
 
 
 def _check(result_dir, time):
-    import json
-
-    import pandas as pd
-
-    from .inputs import load_track, load_train
-    from .pontryagin import check_profile
+    from .pontryagin import check_result
     from .results import write_json
     result_dir = Path(result_dir)
-    try:
-        inputs = json.loads((result_dir / "inputs.json").read_text())
-        profile = pd.read_csv(result_dir / "profile.csv")
-    except (OSError, ValueError) as exc:
-        raise InputError(problem(result_dir, "", f"not a result folder of `ecostudy solve` ({exc})"))
-    report, _ = check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, profile, time)
+    report = check_result(result_dir, time)
     write_json(result_dir / "check.json", report)
     typer.echo(f"checked as the {report['checked_as']}")
     typer.echo("regimes: " + ", ".join(f"{r['regime']} {r['start_m']:.0f}-{r['end_m']:.0f} m" for r in report["sequence"]))

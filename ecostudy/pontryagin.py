@@ -132,3 +132,21 @@ def check_profile(track, train, inputs, profile, running_time=None, tolerance=1e
                checked_as="energy-optimal run for " + (f"{own:.2f} s (its own time)" if running_time is None
                                                        else f"arrival by {running_time:.2f} s"))
     return out, psi
+
+
+def check_result(result_dir, running_time=None):
+    """:func:`check_profile` of an `ecostudy solve` output folder (inputs.json and profile.csv)."""
+    import json
+    from pathlib import Path
+
+    import pandas as pd
+
+    from .errors import InputError, problem
+    from .inputs import load_track, load_train
+    result_dir = Path(result_dir)
+    try:
+        inputs = json.loads((result_dir / "inputs.json").read_text())
+        profile = pd.read_csv(result_dir / "profile.csv")
+    except (OSError, ValueError) as exc:
+        raise InputError(problem(result_dir, "", f"not a result folder of `ecostudy solve` ({exc})"))
+    return check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, profile, running_time)[0]

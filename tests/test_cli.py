@@ -161,3 +161,7 @@ def test_asl_library_found_when_pyomo_is_imported_first(tmp_path):
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "ok" in r.stdout
+
+
+def test_check_on_a_folder_that_is_not_a_result(tmp_path):
+    assert_one_line_error(run("check", tmp_path), str(tmp_path), "not a result folder")
