@@ -131,8 +131,8 @@ def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
     energy = m.traction_work / energy_ref
     if objective == "energy":
         expr = energy
-    elif objective == "net_energy":
-        regen = KN * sum(ds[k] * m.fr[k] for k in m.I)
+    elif objective == "net_energy":  # a train without an electric brake regenerates nothing
+        regen = KN * sum(ds[k] * m.fr[k] for k in m.I) if hasattr(m, "fr") else 0.0
         expr = (m.traction_work / train.traction_efficiency - train.regeneration_efficiency * regen) / energy_ref
     elif objective == "time":
         expr = m.T / time_ref + TIME_REGULARISATION * (energy + braking)

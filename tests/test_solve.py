@@ -164,3 +164,14 @@ def test_simulator_agrees_with_a_fine_step_reference(amsterdam, metro, monkeypat
     assert adaptive.stop_position == pytest.approx(fine.stop_position, abs=2e-3)
     assert adaptive.arrival_time == pytest.approx(fine.arrival_time, abs=2e-3)
     assert adaptive.traction_energy == pytest.approx(fine.traction_energy, rel=1e-5)
+
+
+def test_net_energy_without_regenerative_braking():
+    """Regression: the net objective referred to regenerative forces a train without them lacks."""
+    train = load_train(TRAINS / "thesis001_commuter.yaml")
+    track = load_track(TRACKS / "thesis001_flat_1km.yaml")
+    net = solve_run(track, train, "A", "B", Timing(running_time=90.0), objective="net_energy", points=300)
+    mech = solve_run(track, train, "A", "B", Timing(running_time=90.0), objective="energy", points=300)
+    assert_verified(net)
+    assert net.summary["regenerated_energy_kWh"] == 0
+    assert net.summary["net_energy_kWh"] == pytest.approx(mech.summary["net_energy_kWh"], rel=1e-5)
