@@ -5,7 +5,7 @@ Used as Ipopt's starting point and to estimate the all-out time before any NLP i
 import numpy as np
 
 from .errors import InfeasibleError
-from .physics import running_resistance
+from .physics import davis_resistance, running_resistance
 
 
 def interval_resistance(segment, train, nodes):
@@ -23,7 +23,7 @@ def braking_curve(segment, train, nodes, limits):
     bwd = np.zeros_like(nodes)
     for k in range(len(ds) - 1, -1, -1):
         v = bwd[k + 1]
-        dec = (train.braking.force(v) + (a + b * v + c * v * v) + fixed[k]) / train.mass
+        dec = (train.braking.force(v) + davis_resistance(v, a, b, c) + fixed[k]) / train.mass
         bwd[k] = min(np.sqrt(v * v + 2 * ds[k] * max(dec, 1e-3)), limits[k])
     return bwd
 
@@ -40,7 +40,7 @@ def coast_speeds(segment, train, nodes, limits, start, v_start):
     out[start] = v_start
     for k in range(start, len(ds)):
         v = out[k]
-        dec = ((a + b * v + c * v * v) + fixed[k]) / train.mass
+        dec = (davis_resistance(v, a, b, c) + fixed[k]) / train.mass
         out[k + 1] = min(np.sqrt(max(v * v - 2 * ds[k] * dec, 0.0)), limits[k + 1])
     return out
 
@@ -56,7 +56,7 @@ def envelope_speeds(segment, train, nodes, limits):
     fwd = np.zeros_like(nodes)
     for k in range(len(ds)):
         v = fwd[k]
-        acc = (train.traction.force(v) - (a + b * v + c * v * v) - fixed[k]) / train.mass
+        acc = (train.traction.force(v) - davis_resistance(v, a, b, c) - fixed[k]) / train.mass
         v2 = v * v + 2 * ds[k] * acc
         if v2 <= 0 and k < len(ds) - 1:
             raise InfeasibleError(f"infeasible: even at full traction the train stalls at "
@@ -67,9 +67,14 @@ def envelope_speeds(segment, train, nodes, limits):
     return out
 
 
+def interval_times(speeds, nodes):
+    """Time per interval 2 ds / (v_k + v_k+1) [s], exact for constant acceleration (model.py)."""
+    return 2 * np.diff(nodes) / np.maximum(speeds[:-1] + speeds[1:], 1e-9)
+
+
 def running_time(speeds, nodes):
-    """Trapezoidal running time sum 2 ds / (v_k + v_k+1) [s]."""
-    return float(np.sum(2 * np.diff(nodes) / np.maximum(speeds[:-1] + speeds[1:], 1e-9)))
+    """Running time of a speed profile on the grid [s]."""
+    return float(np.sum(interval_times(speeds, nodes)))
 
 
 def capped_speeds(envelope, nodes, target):

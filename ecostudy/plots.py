@@ -5,7 +5,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .units import PERMILLE, to_kmh  # noqa: E402
+from .units import PERMILLE, to_kmh, to_kwh  # noqa: E402
 
 
 def _steps(profile, distance):
@@ -96,7 +96,7 @@ def compare_plot(outcomes, segment, path, title=""):
     styles = [("tab:blue", "-"), ("black", "-"), ("tab:green", "--"), ("tab:orange", ":"), ("tab:purple", "-.")]
     for o, (colour, dash) in zip(outcomes, styles * 2):
         ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.4, color=colour, ls=dash,
-                label=f"{o.name}: {o.trace.arrival_time:.1f} s, {o.trace.traction_energy / 3.6e6:.2f} kWh")
+                label=f"{o.name}: {o.trace.arrival_time:.1f} s, {to_kwh(o.trace.traction_energy):.2f} kWh")
     ax.set_xlabel("distance from departure [m]")
     ax.set_ylabel("speed [km/h]")
     ax.set_ylim(bottom=0)

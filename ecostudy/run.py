@@ -105,8 +105,7 @@ def _solve_once(case, guess, objective, stages, options, **timing):
 
 def guess_from_speeds(case, speeds):
     """(v, dt, F_T, F_B) on the grid realising ``speeds``: Ipopt's starting point."""
-    ds = np.diff(case.nodes)
-    dt = 2 * ds / np.maximum(speeds[:-1] + speeds[1:], 1e-3)
+    dt = initial.interval_times(np.maximum(speeds, 5e-4), case.nodes)  # no infinite first/last step
     ft, fb = initial.forces_for(speeds, case.segment, case.train, case.nodes)
     return speeds, dt, ft, fb
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .physics import acceleration, running_resistance
+from .physics import acceleration, davis_resistance, running_resistance
 from .units import to_kmh, to_kwh
 
 TOLERANCES = {"arrival_time_error_s": 0.5, "stop_error_m": 1.0, "energy_error_pct": 1.0,
@@ -62,7 +62,7 @@ def simulate(segment, train, nodes, handle, max_time=None):
         u = handle[k]
         ft = u * train.traction.force(v) if u > 0 else 0.0
         fb = -u * train.braking.force(v) if u < 0 else 0.0
-        return ft, fb, a + b * v + c * v * v + fixed[0]
+        return ft, fb, davis_resistance(v, a, b, c) + fixed[0]
 
     def rhs(t, y):
         x, v = y[0], y[1]

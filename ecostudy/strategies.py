@@ -18,6 +18,7 @@ from . import initial
 from .errors import InfeasibleError
 from .run import handles
 from .simulate import simulate
+from .units import to_kwh
 
 
 @dataclass
@@ -31,8 +32,8 @@ class Outcome:
         regen = train.regeneration_efficiency * t.regenerated_energy
         changes = int(np.count_nonzero(np.abs(np.diff(self.handle)) > 1e-3))
         return {"strategy": self.name, "running_time_s": t.arrival_time,
-                "traction_energy_kWh": t.traction_energy / 3.6e6,
-                "net_energy_kWh": (t.traction_energy / train.traction_efficiency - regen) / 3.6e6,
+                "traction_energy_kWh": to_kwh(t.traction_energy),
+                "net_energy_kWh": to_kwh(t.traction_energy / train.traction_efficiency - regen),
                 "stop_error_m": t.stop_position - distance, "handle_changes": changes}
 
 
