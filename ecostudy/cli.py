@@ -17,6 +17,10 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Energy-efficient train control studies (Pyomo + Ipopt).")
 
 
+class DasMethod(str, Enum):
+    round = "round"
+
+
 class Objective(str, Enum):
     energy = "energy"
     net_energy = "net_energy"
@@ -74,6 +78,11 @@ def _report(result, out_dir):
         typer.echo(f"  verification      {flag}: arrival {ver['arrival_time_error_s']:+.3f} s, stop "
                    f"{ver['stop_error_m']:+.3f} m, energy {ver['energy_error_pct']:+.3f} %, overspeed "
                    f"{ver['max_overspeed_kmh']:.3f} km/h")
+    if s.get("das"):
+        d = s["das"]
+        typer.echo(f"  driver advice     {d['method']}: {d['traction_energy_kWh']:.3f} kWh ({d['gap_to_ato_pct']:+.2f} % "
+                   f"against ATO), {d['mode_changes']} mode changes, arrival {d['arrival_error_s']:+.2f} s, "
+                   f"stop {d['stop_error_m']:+.2f} m (advice.csv)")
     typer.echo(f"  outputs           {out_dir}/ (profile.csv, summary.json, speed.png)")
 
 
@@ -86,7 +95,7 @@ def _parse_pair(text, option):
 
 
 def _solve(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights,
-           points, out, no_plot):
+           points, out, no_plot, das=None):
     from .inputs import Timing, check_stops, load_study, load_track, load_train
     from .results import write_json, write_run
     from .run import solve_run
@@ -127,6 +136,11 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
         k = points or 1000
         out_dir = Path(out) if out else Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_")
     result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w)
+    if das is not None:
+        from .das import das_run
+        block, advice, outcome = das_run(result, das.value)
+        result.summary["das"] = block
+        result.das = (advice, outcome)
     write_run(result, out_dir, plot=not no_plot)
     paths = (st_paths if study is not None else (Path(track), Path(train)))
     write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
@@ -150,11 +164,12 @@ def solve(
     points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 1000)."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip speed.png."),
+    das: Optional[DasMethod] = typer.Option(None, help="Also driver advice: round (nearest handle level)."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Energy-optimal (or all-out) run between two stops, verified by re-simulation."""
     result = guarded(debug, _solve, study, track, train, time, supplement, window, from_stop, to_stop,
-                     objective, weights, points, out, no_plot)
+                     objective, weights, points, out, no_plot, das)
     if not result.ok:
         typer.secho("flagged: the result is not verified optimal (see summary.json)", fg=typer.colors.YELLOW, err=True)
         raise typer.Exit(1)

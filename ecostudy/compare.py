@@ -24,7 +24,7 @@ def compare(track, train, from_stop, to_stop, timing, points=1000):
         outcomes.append(strategies.eco_coasting(case, target))
     except InfeasibleError as exc:
         rows_extra.append({"strategy": "eco-drive coasting", "note": str(exc)})
-    outcomes.append(strategies.das_round(case, ato.handle))
+    outcomes.append(strategies.das_round(case.segment, train, case.nodes, ato.handle))
     rows = [o.row(train, case.segment.distance) for o in outcomes] + rows_extra
     table = pd.DataFrame(rows)
     e_allout = table["traction_energy_kWh"].iloc[0]

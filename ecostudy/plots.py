@@ -25,6 +25,14 @@ def speed_plot(result, path):
     ax.plot(prof["position_m"], prof["speed_kmh"], color="tab:blue", lw=1.6, label="optimal speed")
     if result.trace is not None:
         ax.plot(result.trace.x, to_kmh(result.trace.v), color="k", lw=0.8, ls="--", label="re-simulated")
+    if result.das is not None:
+        advice, outcome = result.das
+        ax.plot(outcome.trace.x, to_kmh(outcome.trace.v), color="tab:orange", lw=1.1,
+                label=f"driver advice ({s['das']['method']}), simulated")
+        colours = {"coast": "tab:gray", "full service braking": "tab:red"}
+        for row in advice.itertuples():
+            colour = colours.get(row.mode, "tab:green" if row.handle > 0 else "tab:pink")
+            axu.axvspan(row.start_position_m, row.end_position_m, color=colour, alpha=0.15 + 0.25 * abs(row.handle))
     ax.set_ylabel("speed [km/h]")
     ax.set_ylim(bottom=0)
     ax.legend(loc="lower center", fontsize=8)

@@ -46,10 +46,12 @@ def write_csv(path, frame):
 
 
 def write_run(result, out_dir, plot=True):
-    """``profile.csv``, ``summary.json`` and ``speed.png`` of one run into ``out_dir``."""
+    """``profile.csv``, ``summary.json``, ``speed.png`` (and ``advice.csv``) of one run into ``out_dir``."""
     out_dir = Path(out_dir)
     write_csv(out_dir / "profile.csv", result.profile)
     write_json(out_dir / "summary.json", result.summary)
+    if result.das is not None:
+        write_csv(out_dir / "advice.csv", result.das[0])
     if plot:
         from .plots import speed_plot
         atomic_write(out_dir / "speed.png", lambda tmp: speed_plot(result, tmp))

@@ -28,6 +28,7 @@ class RunResult:
     handle: np.ndarray
     trace: object = None
     stages: dict = field(default_factory=dict)
+    das: tuple = None  # (advice table, simulated outcome) when a DAS method was asked for
 
     @property
     def ok(self):

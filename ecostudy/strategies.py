@@ -73,9 +73,9 @@ def eco_coasting(case, running_time):
     return Outcome("eco-drive coasting", u, trace)
 
 
-def das_round(case, optimal_handle):
+def das_round(segment, train, nodes, optimal_handle):
     """Nearest DAS handle level to the optimal handle, interval by interval, re-simulated."""
-    levels = np.asarray(case.train.das_levels)
+    levels = np.asarray(train.das_levels)
     u = levels[np.abs(optimal_handle[:, None] - levels[None, :]).argmin(axis=1)]
-    trace = simulate(case.segment, case.train, case.nodes, u)[0]
+    trace = simulate(segment, train, nodes, u)[0]
     return Outcome("DAS round (nearest level)", u, trace)

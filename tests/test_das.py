@@ -1,0 +1,39 @@
+"""Driver advice: `ecostudy solve --das round` (nearest handle level, re-simulated)."""
+import json
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+from ecostudy.das import mode_name
+
+from .conftest import TRACKS, TRAINS
+
+
+def test_mode_names():
+    assert [mode_name(x) for x in (1.0, 0.75, 0.0, -1.0, -0.5)] == [
+        "full traction", "traction 75 %", "coast", "full service braking", "braking 50 %"]
+
+
+@pytest.mark.parametrize("train, track, time", [("amsterdam_metro", "amsterdam_rokin_centraal", 76),
+                                                ("regional_alstom", "regional_808m", 80)])
+def test_round_advice_is_written_and_consistent(tmp_path, train, track, time):
+    r = CliRunner().invoke(app, ["solve", "--track", str(TRACKS / f"{track}.yaml"), "--train",
+                                 str(TRAINS / f"{train}.yaml"), "--time", str(time), "--points", "500",
+                                 "--das", "round", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    das = json.loads((tmp_path / "summary.json").read_text())["das"]
+    assert set(das) >= {"method", "traction_energy_kWh", "net_energy_kWh", "gap_to_ato_pct", "mode_changes",
+                        "bound_kWh", "status"}
+    advice = pd.read_csv(tmp_path / "advice.csv")
+    assert das["mode_changes"] == len(advice) - 1
+    assert advice["start_position_m"].iloc[0] == 0
+    assert advice["end_position_m"].iloc[-1] == pytest.approx(json.loads(
+        (tmp_path / "summary.json").read_text())["distance_m"])
+    assert (advice["start_position_m"].iloc[1:].to_numpy() == advice["end_position_m"].iloc[:-1].to_numpy()).all()
+    assert advice["handle"].isin([-1, 0, 0.5, 0.75, 1]).all()
+    assert advice["start_time_s"].is_monotonic_increasing
+    # rounding a nearly bang-bang optimum costs little and keeps the run close to the timetable
+    assert abs(das["gap_to_ato_pct"]) < 3
+    assert abs(das["arrival_error_s"]) < 2
