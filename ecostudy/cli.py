@@ -283,6 +283,52 @@ def compare_command(
         raise typer.Exit(1)
 
 
+def _journey(track, train, stops, time, supplement, points, workers, out, no_plot):
+    from .inputs import load_track, load_train
+    from .journey import journey
+    from .results import atomic_write, write_csv
+    trk, trn = load_track(track), load_train(train)
+    names = stops.split(",") if stops else list(trk.stops)
+    unknown = [n for n in names if n not in trk.stops]
+    if unknown or len(names) < 2:
+        raise InputError(problem("command line", "--stops", f"need two or more stops of the track (unknown: "
+                                 f"{', '.join(unknown) or 'none'}; the track has {', '.join(trk.stops)})"))
+    if (time is None) == (supplement is None):
+        raise InputError(problem("command line", "--time/--supplement", "give one total running time or supplement"))
+    table, totals, results, _ = journey(trk, trn, names, total_time=time,
+                                        supplement=None if supplement is None else supplement * units.PERCENT,
+                                        points=points, workers=workers)
+    out_dir = Path(out) if out else Path("out") / "journey"
+    write_csv(out_dir / "journey.csv", table)
+    write_csv(out_dir / "journey_totals.csv", totals)
+    if not no_plot:
+        from .plots import journey_plot
+        atomic_write(out_dir / "journey.png", lambda tmp: journey_plot(results, tmp, f"{trn.name}: {' - '.join(names)}"))
+    typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+    typer.echo(totals.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+    typer.echo(f"outputs {out_dir}/ (journey.csv, journey_totals.csv, journey.png)")
+    return table
+
+
+@app.command(name="journey")
+def journey_command(
+    track: Path = typer.Option(..., help="Track file with the stops."),
+    train: Path = typer.Option(..., help="Train file."),
+    stops: Optional[str] = typer.Option(None, help="Stops served, comma-separated (default: all, in order)."),
+    time: Optional[float] = typer.Option(None, "--time", help="Total running time, dwell excluded [s]."),
+    supplement: Optional[float] = typer.Option(None, help="Total supplement over the sum of all-out times [%]."),
+    points: int = typer.Option(500, "--points", "-K", help="Grid nodes per segment."),
+    workers: int = typer.Option(1, help="Processes for the segments' fronts."),
+    out: Optional[Path] = typer.Option(None, help="Output folder."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip journey.png."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Spread a journey's running time over its segments: equal marginal saving vs same percentage."""
+    table = guarded(debug, _journey, track, train, stops, time, supplement, points, workers, out, no_plot)
+    if not table["verified"].all():
+        raise typer.Exit(1)
+
+
 def _run(study, workers, dask, retry_failed, out, no_progress):
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 

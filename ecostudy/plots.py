@@ -113,3 +113,25 @@ def compare_plot(outcomes, segment, path, title=""):
     ax.set_title(title, fontsize=10)
     fig.savefig(path, dpi=110, format="png")
     plt.close(fig)
+
+
+def journey_plot(results, path, title=""):
+    """Speed against distance along the line for each distribution of the running time."""
+    fig, ax = plt.subplots(figsize=(10, 4.5))
+    fig.subplots_adjust(left=0.07, right=0.98, top=0.92, bottom=0.12)
+    for (name, runs), colour in zip(results.items(), ("tab:blue", "tab:orange", "tab:green")):
+        offset = 0.0
+        for i, r in enumerate(runs):
+            p = r.profile
+            label = f"{name}: {sum(x.summary['traction_energy_kWh'] for x in runs):.2f} kWh" if i == 0 else None
+            ax.plot(offset + p["position_m"], p["speed_kmh"], color=colour, lw=1.2, label=label)
+            offset += r.summary["distance_m"]
+            ax.axvline(offset, color="grey", lw=0.5)
+    ax.set_xlabel("distance along the journey [m]")
+    ax.set_ylabel("speed [km/h]")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower center")
+    ax.set_title(title, fontsize=10)
+    fig.savefig(path, dpi=110, format="png")
+    plt.close(fig)

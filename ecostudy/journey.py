@@ -1,0 +1,78 @@
+"""Multi-stop journeys: how to spread a total running-time supplement over the segments.
+
+Each segment's energy-optimal front E_i(T_i) is convex and decreasing (ecostudy.pareto). For a
+total running time the least total energy has equal marginal saving -dE_i/dT_i on every segment
+that gets a supplement (Lagrange; thesis 000 §7.1.1 fronts). The allocation is made on the
+fronts, linearly interpolated, by handing out small time steps to the segment whose next step
+saves most; every segment is then solved exactly at its allocated time and verified.
+The baseline gives every segment the same percentage over its all-out time.
+"""
+import heapq
+
+import numpy as np
+import pandas as pd
+
+from .inputs import Timing
+from .pareto import sweep
+from .run import solve_run
+
+
+def equal_marginal(fronts, total_time, step=0.05):
+    """Running time per segment [s] minimising total energy on the interpolated fronts."""
+    times = [float(f["running_time_s"].iloc[0]) for f in fronts]
+    spare = total_time - sum(times)
+    if spare < -1e-9:
+        raise ValueError(f"total time {total_time:.1f} s is below the sum of all-out times {sum(times):.1f} s")
+
+    def energy(i, t):
+        f = fronts[i]
+        return float(np.interp(t, f["running_time_s"], f["traction_energy_kWh"]))
+
+    def saving(i):  # energy saved by the next step on segment i (fronts end flat)
+        return energy(i, times[i]) - energy(i, times[i] + step)
+
+    heap = [(-saving(i), i) for i in range(len(fronts))]
+    heapq.heapify(heap)
+    while spare > 1e-9:
+        _, i = heapq.heappop(heap)
+        dt = min(step, spare)
+        times[i] += dt
+        spare -= dt
+        heapq.heappush(heap, (-saving(i), i))
+    return times
+
+
+def uniform(fronts, total_time):
+    """Running time per segment [s] with the same supplement over every all-out time."""
+    base = np.array([float(f["running_time_s"].iloc[0]) for f in fronts])
+    return list(base * total_time / base.sum())
+
+
+def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=15, workers=1):
+    """Per-segment table for both distributions of one total running time, and the totals.
+
+    Give ``total_time`` [s], or ``supplement`` [-] over the sum of the segments' all-out times.
+    """
+    pairs = list(zip(stops[:-1], stops[1:]))
+    reach = max(0.6, 2.5 * (supplement or 0.0))
+    fronts = [sweep(track, train, a, b, count=front_count, supplement_max=reach, points=points,
+                    workers=workers, verify_result=False)[0] for a, b in pairs]
+    all_out = sum(float(f["running_time_s"].iloc[0]) for f in fronts)
+    if total_time is None:
+        total_time = all_out * (1 + supplement)
+    plans = {"equal marginal saving": equal_marginal(fronts, total_time), "same percentage": uniform(fronts, total_time)}
+    rows, results = [], {}
+    for name, times in plans.items():
+        results[name] = []
+        for (a, b), t, f in zip(pairs, times, fronts):
+            r = solve_run(track, train, a, b, Timing(running_time=t), points=points)
+            results[name].append(r)
+            t0 = float(f["running_time_s"].iloc[0])
+            rows.append({"distribution": name, "from": a, "to": b, "distance_m": r.summary["distance_m"],
+                         "all_out_time_s": t0, "running_time_s": r.summary["running_time_s"],
+                         "supplement_pct": 100 * (t / t0 - 1), "traction_energy_kWh": r.summary["traction_energy_kWh"],
+                         "net_energy_kWh": r.summary["net_energy_kWh"],
+                         "verified": r.summary["verification"]["passed"]})
+    table = pd.DataFrame(rows)
+    totals = table.groupby("distribution", sort=False)[["running_time_s", "traction_energy_kWh", "net_energy_kWh"]].sum()
+    return table, totals.reset_index(), results, fronts
