@@ -15,6 +15,18 @@ def _steps(profile, distance):
     return x, y
 
 
+def _finish_speed_axes(fig, ax, path, title, xlabel="distance from departure [m]", legend_size=7):
+    """Labels, grid, legend and title of a speed-against-distance axis; save and close."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("speed [km/h]")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=legend_size, loc="lower center", ncol=2 if len(ax.get_lines()) > 5 else 1)
+    ax.set_title(title, fontsize=10)
+    fig.savefig(path, dpi=110, format="png")
+    plt.close(fig)
+
+
 def speed_plot(result, path):
     seg, prof, s = result.segment, result.profile, result.summary
     fig, (ax, axg, axu) = plt.subplots(3, 1, figsize=(9, 7), sharex=True,
@@ -85,14 +97,7 @@ def profiles_plot(results, path, title=""):
         p = r.profile
         ax.plot(p["position_m"], p["speed_kmh"], color=colour, lw=1.3,
                 label=f"{r.summary['running_time_s']:.1f} s, {r.summary['traction_energy_kWh']:.2f} kWh")
-    ax.set_xlabel("distance from departure [m]")
-    ax.set_ylabel("speed [km/h]")
-    ax.set_ylim(bottom=0)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower center", ncol=2)
-    ax.set_title(title, fontsize=10)
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    _finish_speed_axes(fig, ax, path, title)
 
 
 def compare_plot(outcomes, segment, path, title=""):
@@ -105,14 +110,7 @@ def compare_plot(outcomes, segment, path, title=""):
     for o, (colour, dash) in zip(outcomes, styles * 2):
         ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.4, color=colour, ls=dash,
                 label=f"{o.name}: {o.trace.arrival_time:.1f} s, {to_kwh(o.trace.traction_energy):.2f} kWh")
-    ax.set_xlabel("distance from departure [m]")
-    ax.set_ylabel("speed [km/h]")
-    ax.set_ylim(bottom=0)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower center")
-    ax.set_title(title, fontsize=10)
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    _finish_speed_axes(fig, ax, path, title)
 
 
 def journey_plot(results, path, title=""):
@@ -127,11 +125,4 @@ def journey_plot(results, path, title=""):
             ax.plot(offset + p["position_m"], p["speed_kmh"], color=colour, lw=1.2, label=label)
             offset += r.summary["distance_m"]
             ax.axvline(offset, color="grey", lw=0.5)
-    ax.set_xlabel("distance along the journey [m]")
-    ax.set_ylabel("speed [km/h]")
-    ax.set_ylim(bottom=0)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="lower center")
-    ax.set_title(title, fontsize=10)
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    _finish_speed_axes(fig, ax, path, title, xlabel="distance along the journey [m]", legend_size=8)
