@@ -175,3 +175,22 @@ def test_net_energy_without_regenerative_braking():
     assert_verified(net)
     assert net.summary["regenerated_energy_kWh"] == 0
     assert net.summary["net_energy_kWh"] == pytest.approx(mech.summary["net_energy_kWh"], rel=1e-5)
+
+
+def test_rotating_mass_slows_acceleration_but_not_gravity(tmp_path):
+    """Inertia uses the effective mass M, gravity and the grade the static mass Ms (thesis 000 eq. 2.1-2.2):
+    with a 10 % rotating-mass allowance the first interval of the all-out run accelerates at (F - A) / M."""
+    from .conftest import write_yaml
+    base = {"name": "t", "source": "test", "mass_t": 100.0, "length_m": 0.0,
+            "davis": {"a_N": 2000.0, "b_N_per_mps": 0.0, "c_N_per_mps2": 0.0},
+            "traction": {"max_force_kN": 150.0}, "braking": {"max_force_kN": 120.0}}
+    track = write_yaml(tmp_path / "track.yaml", {
+        "name": "flat", "source": "test", "length_m": 1000.0,
+        "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 1000}],
+        "speed_limits": [{"position_m": 0, "speed_kmh": 200}]})
+    for factor in (0.0, 0.1):
+        train = load_train(write_yaml(tmp_path / f"t{factor}.yaml", {**base, "rotating_mass_factor": factor}))
+        r = solve_run(load_track(track), train, "A", "B", Timing(), objective="time", points=400)
+        p = r.profile
+        v1, ds = p["speed_kmh"].iloc[1] / 3.6, p["position_m"].iloc[1]
+        assert v1**2 / (2 * ds) == pytest.approx((150e3 - 2000.0) / (100e3 * (1 + factor)), rel=1e-4)
