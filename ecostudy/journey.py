@@ -48,19 +48,28 @@ def uniform(fronts, total_time):
     return list(base * total_time / base.sum())
 
 
-def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=15, workers=1):
-    """Per-segment table for both distributions of one total running time, and the totals.
+def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=15, workers=1,
+            scheduled=None):
+    """Per-segment table for each distribution of one total running time, and the totals.
 
-    Give ``total_time`` [s], or ``supplement`` [-] over the sum of the segments' all-out times.
+    Give ``total_time`` [s], ``supplement`` [-] over the sum of the segments' all-out times, or
+    ``scheduled`` running times per segment [s] (a timetable), which are then a distribution of
+    their own, compared with the same total spread the two other ways.
     """
+    if scheduled is not None:
+        total_time = float(sum(scheduled))
     pairs = list(zip(stops[:-1], stops[1:]))
     reach = max(0.6, 2.5 * (supplement or 0.0))
+    if scheduled is not None or total_time is not None:  # fronts must reach the longest segment time
+        reach = max(reach, 1.5)
     fronts = [sweep(track, train, a, b, count=front_count, supplement_max=reach, points=points,
                     workers=workers, verify_result=False)[0] for a, b in pairs]
     all_out = sum(float(f["running_time_s"].iloc[0]) for f in fronts)
     if total_time is None:
         total_time = all_out * (1 + supplement)
     plans = {"equal marginal saving": equal_marginal(fronts, total_time), "same percentage": uniform(fronts, total_time)}
+    if scheduled is not None:
+        plans["as timetabled"] = list(scheduled)
     rows, results = [], {}
     for name, times in plans.items():
         results[name] = []

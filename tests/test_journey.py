@@ -30,3 +30,19 @@ def test_journey_command_saves_against_the_same_percentage(tmp_path):
     assert best["running_time_s"] == pytest.approx(same["running_time_s"], rel=1e-6)
     assert best["traction_energy_kWh"] <= same["traction_energy_kWh"] * (1 + 1e-6)
     assert (tmp_path / "journey.png").stat().st_size > 10_000
+
+
+def test_timetable_running_times_and_their_redistribution(tmp_path):
+    from .conftest import STUDIES
+    r = CliRunner().invoke(app, ["journey", "--track", str(TRACKS / "metro_line_4stops.yaml"), "--train",
+                                 str(TRAINS / "amsterdam_metro.yaml"), "--timetable",
+                                 str(STUDIES / "timetables" / "metro_line.yaml"), "--points", "300",
+                                 "--workers", "2", "--no-plot", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    import pandas as pd
+    table = pd.read_csv(tmp_path / "journey.csv")
+    tt = table[table["distribution"] == "as timetabled"]
+    assert tt["running_time_s"].round(3).tolist() == [58.0, 98.0, 65.0]  # arrival - (arrival + dwell) before
+    totals = pd.read_csv(tmp_path / "journey_totals.csv").set_index("distribution")
+    assert totals.loc["equal marginal saving", "traction_energy_kWh"] <= totals.loc["as timetabled",
+                                                                                   "traction_energy_kWh"]
