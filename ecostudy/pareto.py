@@ -3,9 +3,9 @@
 The running time is swept from the all-out time T0 to T0 (1 + supplement_max). Every point is
 energy-optimal for its running time. A chain of points shares one Pyomo model and one NL file
 (:class:`ecostudy.solver.Session`): only the bounds of the running-time variable change, and
-Ipopt starts from the previous point's primal solution. ``workers`` > 1 splits the sweep into
-contiguous chains solved in forked processes. After a chain's first point Ipopt is warm-started
-with the previous primal and dual solution (:data:`WARM_START`).
+after the chain's first point Ipopt starts from the previous point's primal and dual solution
+(:data:`WARM_START`); a point whose warm start fails is retried as the cold start of a new
+chain. ``workers`` > 1 splits the sweep into contiguous chains solved in forked processes.
 """
 import multiprocessing
 import time
@@ -43,7 +43,10 @@ def _chain(case, times, objective, options, verify_result, warm):
         outcome = session.solve({**WARM_START, **(options or {})} if i else options)
         record(point_stages, outcome, session.nl_seconds if i == 0 else 0.0)
         if not outcome.usable:
-            raise SolverError(f"Ipopt failed at running time {t:.2f} s ({outcome.status})")
+            if i == 0:  # a cold start failed: nothing better to try
+                raise SolverError(f"Ipopt failed at running time {t:.2f} s ({outcome.status})")
+            # a warm start that fails is retried cold: a fresh chain from this point on
+            return results + _chain(case, times[i:], objective, options, verify_result, warm)
         results.append(finish(case, m, outcome, point_stages, objective, None, verify_result))
     return results
 

@@ -64,3 +64,15 @@ def test_pareto_command(tmp_path):
         assert (tmp_path / name).stat().st_size > 0
     header = (tmp_path / "pareto.csv").read_text().splitlines()[0]
     assert header.startswith("running_time_s,supplement_pct,traction_energy_kWh,net_energy_kWh")
+
+
+def test_failed_warm_start_is_retried_cold(regional, monkeypatch):
+    """A warm-started point that Ipopt cannot solve restarts a fresh (cold) chain from that point."""
+    import ecostudy.pareto as pareto
+    track, train = regional
+    reference, _ = sweep(track, train, "Origin", "Destination", count=4, supplement_max=0.3, points=200)
+    broken = {**pareto.WARM_START, "max_iter": 1}  # every warm start stops at once, unusable
+    monkeypatch.setattr(pareto, "WARM_START", broken)
+    table, _ = sweep(track, train, "Origin", "Destination", count=4, supplement_max=0.3, points=200)
+    assert (table["solver_status"] == "optimal").all()
+    assert table["traction_energy_kWh"].tolist() == pytest.approx(reference["traction_energy_kWh"].tolist(), rel=1e-5)
