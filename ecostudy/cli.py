@@ -356,8 +356,13 @@ def _run(study, workers, dask, retry_failed, out, no_progress):
         def progress(done, failed, remaining, total):
             bar.update(task, completed=done, total=total, failed=failed, remaining=remaining)
 
-        table, counts, output = run_study(study, workers=workers, dask=dask, retry_failed=retry_failed,
-                                          out=Path(out) if out else None, progress=progress)
+        try:
+            table, counts, output = run_study(study, workers=workers, dask=dask, retry_failed=retry_failed,
+                                              out=Path(out) if out else None, progress=progress)
+        except KeyboardInterrupt:
+            typer.secho("interrupted: every finished case is stored; run the same command again to continue",
+                        fg=typer.colors.YELLOW, err=True)
+            raise typer.Exit(130)
     typer.echo(f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} computed "
                f"now ({counts['failed']} of them failed or infeasible); not ok in the table: {counts['not_ok']}")
     typer.echo(f"outputs {output}/ (results.csv, results.sqlite)")

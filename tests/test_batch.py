@@ -109,3 +109,27 @@ def test_case_equals_a_direct_solve(reference):
                        "Rokin", "Centraal", Timing(supplement=0.06), points=200)
     assert row["traction_energy_kWh"] == pytest.approx(direct.summary["traction_energy_kWh"], rel=1e-9)
     assert row["all_out_time_s"] == pytest.approx(direct.summary["all_out_time_s"], rel=1e-12)
+
+
+def test_ctrl_c_says_how_to_continue(tmp_path):
+    path = study_file(tmp_path, tmp_path / "out")
+    db = tmp_path / "out" / "results.sqlite"
+    proc = subprocess.Popen([sys.executable, "-m", "ecostudy.cli", "run", str(path), "--no-progress"], cwd=ROOT,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None:
+        try:
+            with sqlite3.connect(db) as conn:
+                if conn.execute("SELECT count(*) FROM cases").fetchone()[0] >= 1:
+                    break
+        except sqlite3.OperationalError:  # not created yet
+            pass
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    if proc.returncode == 0:
+        pytest.fail("the study finished before it could be interrupted")
+    assert proc.returncode == 130
+    assert "run the same command again to continue" in err
+    _, counts, _ = run_study(path)
+    assert counts["stored_before"] >= 1 and counts["computed"] == 6 - counts["stored_before"]
