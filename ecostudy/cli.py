@@ -135,7 +135,8 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
         w = _parse_pair(weights, "--weights") if weights else (1.0, 1.0)
         k = points or 1000
         out_dir = Path(out) if out else Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_")
-    result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w)
+    windows = st.windows if study is not None else ()
+    result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
     if das is not None:
         from .das import das_run
         block, advice, outcome = das_run(result, das.value)

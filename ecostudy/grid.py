@@ -76,6 +76,12 @@ class Segment:
         return np.unique(pts[(pts > 0) & (pts < self.distance)])
 
 
+def travel_distance(track, from_stop, to_stop, position):
+    """Distance from ``from_stop`` of a track position, in the direction of travel [m]."""
+    start, end = track.stops[from_stop], track.stops[to_stop]
+    return position - start if end >= start else start - position
+
+
 def make_segment(track, train, from_stop, to_stop):
     """Cut the track between two stops into travel-direction profiles."""
     start, end = track.stops[from_stop], track.stops[to_stop]
@@ -87,13 +93,15 @@ def make_segment(track, train, from_stop, to_stop):
     return Segment(abs(end - start), gradient, curvature, limit, from_stop, to_stop)
 
 
-def make_grid(segment, points):
-    """``points`` node positions on [0, D], including every profile change.
+def make_grid(segment, points, extra=()):
+    """``points`` node positions on [0, D], including every profile change and ``extra`` positions.
 
     The intervals between changes get a share of the nodes proportional to their length
     (at least one interval each) and are divided uniformly.
     """
-    breaks = np.concatenate([[0.0], segment.breakpoints(), [segment.distance]])
+    inner = np.unique(np.concatenate([segment.breakpoints(), np.asarray(extra, dtype=float)]))
+    inner = inner[(inner > 0) & (inner < segment.distance)]
+    breaks = np.concatenate([[0.0], inner, [segment.distance]])
     lengths = np.diff(breaks)
     intervals = max(points - 1, len(lengths))
     share = np.maximum(1, np.floor(lengths / segment.distance * intervals).astype(int))

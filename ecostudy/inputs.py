@@ -60,6 +60,36 @@ class Timing:
 
 
 @dataclass(frozen=True)
+class Window:
+    """A timing point between the stops, in travel distance from the departure stop (SI)."""
+
+    distance: float                 # [m] from the departure stop
+    earliest: float | None = None   # [s] since departure
+    latest: float | None = None
+    min_speed: float | None = None  # [m/s]
+    max_speed: float | None = None
+
+
+def windows_from_schema(windows, track, from_stop, to_stop, where):
+    """Windows in SI and travel distance; each must lie strictly between the two stops."""
+    from .grid import travel_distance
+    out, lines = [], []
+    length = abs(track.stops[to_stop] - track.stops[from_stop])
+    for i, w in enumerate(windows):
+        d = travel_distance(track, from_stop, to_stop, w.position_m)
+        if not 0 < d < length:
+            lines.append(problem(where, f"windows[{i}].position_m", f"{w.position_m} m is not between "
+                                 f"'{from_stop}' and '{to_stop}'"))
+            continue
+        out.append(Window(d, w.earliest_s, w.latest_s,
+                          None if w.min_speed_kmh is None else w.min_speed_kmh * units.KMH,
+                          None if w.max_speed_kmh is None else w.max_speed_kmh * units.KMH))
+    if lines:
+        raise InputError(lines)
+    return tuple(out)
+
+
+@dataclass(frozen=True)
 class Study:
     name: str
     track: Track
@@ -73,6 +103,7 @@ class Study:
     output: Path = field(default_factory=lambda: Path("out"))
     track_path: Path | None = None
     train_path: Path | None = None
+    windows: tuple = ()
 
 
 # --------------------------------------------------------------------------- reading files
@@ -280,7 +311,8 @@ def load_study(path):
     output = Path(s.output) if s.output else Path("out") / s.name
     return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop,
                  timing=timing, objective=s.objective, weights=(s.weights.time, s.weights.energy),
-                 points=s.points, output=output, track_path=base / s.track, train_path=base / s.train)
+                 points=s.points, output=output, track_path=base / s.track, train_path=base / s.train,
+                 windows=windows_from_schema(s.windows, track, from_stop, to_stop, path))
 
 
 __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study",

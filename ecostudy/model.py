@@ -108,6 +108,25 @@ def define_timing(m, time_ref, running_time=None, window=None):
     m.arrival = pyo.Constraint(expr=(m.running_time - m.T) / time_ref == 0.0)
 
 
+def define_windows(m, nodes, windows, time_ref):
+    """Timing points on the way: earliest/latest passing time and speed bounds at a node.
+
+    The time at node k is the sum of the interval times before it; each window has its own node
+    (grid.make_grid places one there).
+    """
+    m.windows = pyo.ConstraintList()
+    for w in windows:
+        k = int(np.argmin(np.abs(nodes - w.distance)))
+        passing = sum(m.dt[j] for j in range(k)) / time_ref
+        if w.earliest is not None:
+            m.windows.add(passing >= w.earliest / time_ref)
+        if w.latest is not None:
+            m.windows.add(passing <= w.latest / time_ref)
+        lo, hi = m.v[k].bounds
+        m.v[k].setlb(max(lo, w.min_speed or 0.0))
+        m.v[k].setub(min(hi, w.max_speed) if w.max_speed is not None else hi)
+
+
 def timing_bounds(running_time=None, window=None):
     """(lower, upper) bounds of T [s] for a fixed running time, a window, or neither."""
     if running_time is not None:
@@ -145,7 +164,7 @@ def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
 
 
 def build_model(segment, train, nodes, limits, guess, objective="energy", running_time=None,
-                window=None, weights=(1.0, 1.0), time_ref=100.0):
+                window=None, weights=(1.0, 1.0), time_ref=100.0, windows=()):
     """Assemble the NLP in named steps; ``guess`` = (v, dt, F_T [N], F_B [N]) on the grid."""
     with_regeneration = objective == "net_energy" and train.regeneration is not None
     m = pyo.ConcreteModel(name="ecostudy")
@@ -153,6 +172,7 @@ def build_model(segment, train, nodes, limits, guess, objective="energy", runnin
     define_dynamics(m, nodes, segment, train)
     define_envelopes(m, train, with_regeneration)
     define_timing(m, time_ref, running_time, window)
+    define_windows(m, nodes, windows, time_ref)
     m.energy_ref = max(train.traction.peak * segment.distance * 0.1, 1.0)  # [J], objective scale
     define_objective(m, nodes, train, objective, weights, time_ref, m.energy_ref)
     m.dual = pyo.Suffix(direction=pyo.Suffix.IMPORT)

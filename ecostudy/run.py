@@ -70,16 +70,18 @@ class Case:
     limits: np.ndarray
     envelope: np.ndarray   # fastest speeds on the grid [m/s] (initial.envelope_speeds)
     estimate: float        # running time of that envelope [s], close to the all-out time
+    windows: tuple = ()    # inputs.Window timing points, each on a node
 
 
-def prepare(track, train, from_stop, to_stop, points, stages=None):
+def prepare(track, train, from_stop, to_stop, points, stages=None, windows=()):
     """Segment between two stops, grid of ``points`` nodes, limits and the fastest envelope."""
     with _stage(stages if stages is not None else {}, "grid"):
         segment = make_segment(track, train, from_stop, to_stop)
-        nodes = make_grid(segment, points)
+        nodes = make_grid(segment, points, extra=[w.distance for w in windows])
         limits = node_limits(segment, nodes)
         envelope = initial.envelope_speeds(segment, train, nodes, limits)
-    return Case(track, train, segment, nodes, limits, envelope, initial.running_time(envelope, nodes))
+    return Case(track, train, segment, nodes, limits, envelope, initial.running_time(envelope, nodes),
+                tuple(windows))
 
 
 def build(case, guess, objective, stages, weights=(1.0, 1.0), **timing):
@@ -87,7 +89,8 @@ def build(case, guess, objective, stages, weights=(1.0, 1.0), **timing):
     with _stage(stages, "build"), PauseGC():
         time_ref = max(initial.running_time(guess[0], case.nodes), 1.0)
         return formulation.build_model(case.segment, case.train, case.nodes, case.limits, guess,
-                                       objective=objective, time_ref=time_ref, weights=weights, **timing)
+                                       objective=objective, time_ref=time_ref, weights=weights,
+                                       windows=case.windows, **timing)
 
 
 def record(stages, outcome, nl_seconds=0.0):
@@ -127,13 +130,17 @@ def warm_guess(previous, case):
 def all_out(case, stages, options=None):
     """Minimum running time on this grid [s], the solved model and Ipopt's outcome."""
     m, outcome = _solve_once(case, guess_from_speeds(case, case.envelope), "time", stages, options)
+    if not outcome.usable and case.windows and outcome.status in ("infeasible", "restoration_failed"):
+        points = ", ".join(f"{w.distance:.0f} m" for w in case.windows)
+        raise InfeasibleError(f"infeasible: no run keeps the timing windows at {points} from "
+                              f"{case.segment.from_stop} ({outcome.status})")
     if not outcome.usable:
         raise SolverError(f"Ipopt could not find the all-out run ({outcome.status})")
     return float(np.sum(formulation.solution_arrays(m)[1])), m, outcome
 
 
 def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="energy", points=1000,
-              weights=(1.0, 1.0), warm_start=None, options=None, verify_result=True):
+              weights=(1.0, 1.0), warm_start=None, options=None, verify_result=True, windows=()):
     """Energy-optimal (or all-out, or mixed) run between two stops, verified by simulation.
 
     Parameters
@@ -142,9 +149,10 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     objective : str  ``energy``, ``net_energy``, ``time`` (all-out) or ``mixed``.
     points : int  Grid nodes K.
     warm_start : RunResult, optional  Start Ipopt from this earlier result.
+    windows : sequence of inputs.Window  Timing points on the way (earliest/latest, speed bounds).
     """
     stages = {}
-    case = prepare(track, train, from_stop, to_stop, points, stages)
+    case = prepare(track, train, from_stop, to_stop, points, stages, windows)
     target, window, t_allout = timing.running_time, timing.window, None
     latest = target if target is not None else (window[1] if window else None)
     if objective == "time" or timing.supplement is not None or (latest is not None and latest < 0.97 * case.estimate):
@@ -187,7 +195,7 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
     if verify_result:
         with _stage(stages, "verify"):
             verification, trace = verify(segment, train, nodes, u, totals["running_time_s"],
-                                         totals["traction_energy_kWh"] * KWH)
+                                         totals["traction_energy_kWh"] * KWH, case.windows)
     summary = {
         "track": case.track.name, "train": train.name, "from": segment.from_stop, "to": segment.to_stop,
         "distance_m": segment.distance, **totals, "points": len(nodes), "objective": objective,

@@ -207,6 +207,24 @@ class TimetableFile(Strict):
         return self
 
 
+class Window(Strict):
+    """A timing point on the way: pass ``position_m`` (track position) within the bounds given."""
+
+    position_m: float = Field(ge=0)
+    earliest_s: Optional[float] = Field(None, ge=0, description="Since departure [s].")
+    latest_s: Optional[float] = Field(None, ge=0)
+    min_speed_kmh: Optional[float] = Field(None, ge=0)
+    max_speed_kmh: Optional[float] = Field(None, gt=0)
+
+    @model_validator(mode="after")
+    def _order(self):
+        if self.earliest_s is not None and self.latest_s is not None and self.earliest_s > self.latest_s:
+            raise ValueError("earliest_s must not exceed latest_s")
+        if all(x is None for x in (self.earliest_s, self.latest_s, self.min_speed_kmh, self.max_speed_kmh)):
+            raise ValueError("give at least one of earliest_s, latest_s, min_speed_kmh, max_speed_kmh")
+        return self
+
+
 class Weights(Strict):
     time: float = Field(1.0, ge=0, description="w_t [1/s] (thesis 001 eq. 4.1a).")
     energy: float = Field(1.0, ge=0, description="w_e [kg/J], on traction energy per unit mass.")
@@ -255,6 +273,7 @@ class StudyFile(Strict):
     weights: Weights = Weights()
     points: int = Field(1000, ge=10, le=100000)
     output: Optional[str] = None
+    windows: list[Window] = Field(default_factory=list, description="Timing points between the stops.")
     scenarios: list[Scenario] = Field(default_factory=list, description="Variants run by `ecostudy run`.")
     sweep: Optional[Sweep] = None
 

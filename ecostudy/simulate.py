@@ -119,7 +119,22 @@ def worst_overspeed(segment, trace):
     return float(np.max(over, initial=0.0))
 
 
-def verify(segment, train, nodes, handle, running_time, traction_energy):
+def window_checks(trace, windows, time_tolerance=0.5, speed_tolerance=0.5 / 3.6):
+    """Simulated passing time and speed at each timing point, and whether they keep its bounds."""
+    x = np.maximum.accumulate(trace.x)
+    out = []
+    for w in windows:
+        t = float(np.interp(w.distance, x, trace.t))
+        v = float(np.interp(w.distance, x, trace.v))
+        ok = ((w.earliest is None or t >= w.earliest - time_tolerance)
+              and (w.latest is None or t <= w.latest + time_tolerance)
+              and (w.min_speed is None or v >= w.min_speed - speed_tolerance)
+              and (w.max_speed is None or v <= w.max_speed + speed_tolerance))
+        out.append({"distance_m": w.distance, "simulated_time_s": t, "simulated_speed_kmh": to_kmh(v), "kept": ok})
+    return out
+
+
+def verify(segment, train, nodes, handle, running_time, traction_energy, windows=()):
     """Compare an optimised run with its re-simulation; returns the ``verification`` block."""
     trace, _ = simulate(segment, train, nodes, handle)
     overspeed = worst_overspeed(segment, trace)
@@ -132,6 +147,8 @@ def verify(segment, train, nodes, handle, running_time, traction_energy):
         "simulated_running_time_s": trace.arrival_time,
         "simulated_traction_energy_kWh": to_kwh(trace.traction_energy),
     }
-    out["passed"] = bool(all(abs(out[k]) <= tol for k, tol in TOLERANCES.items()))
+    out["windows"] = window_checks(trace, windows)
+    out["passed"] = bool(all(abs(out[k]) <= tol for k, tol in TOLERANCES.items())
+                         and all(w["kept"] for w in out["windows"]))
     out["tolerances"] = dict(TOLERANCES)
     return out, trace

@@ -165,3 +165,32 @@ def test_asl_library_found_when_pyomo_is_imported_first(tmp_path):
 
 def test_check_on_a_folder_that_is_not_a_result(tmp_path):
     assert_one_line_error(run("check", tmp_path), str(tmp_path), "not a result folder")
+
+
+def window_study(tmp_path, window):
+    return write_yaml(tmp_path / "study.yaml", {
+        "name": "window", "track": str(AMS), "train": str(METRO), "running_time_s": 80, "points": 400,
+        "windows": [window]})
+
+
+def test_timing_window_is_kept_and_verified(tmp_path):
+    r = run("solve", window_study(tmp_path, {"position_m": 600, "latest_s": 42, "max_speed_kmh": 72}),
+            "--out", tmp_path / "o", "--no-plot")
+    assert r.exit_code == 0, r.output
+    s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    (w,) = s["verification"]["windows"]
+    assert w["kept"] and w["simulated_time_s"] <= 42.5 and w["simulated_speed_kmh"] <= 72.5
+    free = run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--points", 400, "--out", tmp_path / "f",
+               "--no-plot")
+    assert free.exit_code == 0
+    assert s["traction_energy_kWh"] > json.loads((tmp_path / "f" / "summary.json").read_text())["traction_energy_kWh"]
+
+
+def test_impossible_timing_window(tmp_path):
+    r = run("solve", window_study(tmp_path, {"position_m": 600, "latest_s": 36}), "--out", tmp_path / "o")
+    assert_one_line_error(r, "infeasible: no run keeps the timing windows at 600 m")
+
+
+def test_window_outside_the_segment(tmp_path):
+    r = run("solve", window_study(tmp_path, {"position_m": 2000, "latest_s": 36}), "--out", tmp_path / "o")
+    assert_one_line_error(r, "study.yaml", "windows[0].position_m", "is not between 'Rokin' and 'Centraal'")
