@@ -153,6 +153,7 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     """
     stages = {}
     case = prepare(track, train, from_stop, to_stop, points, stages, windows)
+    check_windows(case)
     target, window, t_allout = timing.running_time, timing.window, None
     latest = target if target is not None else (window[1] if window else None)
     if objective == "time" or timing.supplement is not None or (latest is not None and latest < 0.97 * case.estimate):
@@ -210,6 +211,29 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
         "stages_s": {k: round(v_, 4) for k, v_ in stages.items() if k != "iterations"},
     }
     return RunResult(profile, summary, segment, train, nodes, u, trace, stages)
+
+
+def check_windows(case, margin=0.02):
+    """Refuse at once a timing window no run can keep: passing later than ``latest`` even on the
+    fastest envelope (with every window's speed cap), or a minimum speed above that envelope.
+    Within ``margin`` of these bounds the NLP decides (the envelope is an explicit estimate)."""
+    if not case.windows:
+        return
+    limits = case.limits.copy()
+    index = [int(np.argmin(np.abs(case.nodes - w.distance))) for w in case.windows]
+    for k, w in zip(index, case.windows):
+        if w.max_speed is not None:
+            limits[k] = min(limits[k], w.max_speed)
+    fastest = initial.envelope_speeds(case.segment, case.train, case.nodes, limits)
+    passing = np.concatenate([[0.0], np.cumsum(initial.interval_times(fastest, case.nodes))])
+    for k, w in zip(index, case.windows):
+        if w.latest is not None and w.latest < (1 - margin) * passing[k]:
+            raise InfeasibleError(f"infeasible: the fastest run passes {w.distance:.0f} m from "
+                                  f"{case.segment.from_stop} at {passing[k]:.1f} s (window: by {w.latest:.1f} s)")
+        if w.min_speed is not None and w.min_speed > (1 + margin) * fastest[k]:
+            raise InfeasibleError(f"infeasible: at {w.distance:.0f} m from {case.segment.from_stop} the train "
+                                  f"reaches at most {to_kmh(fastest[k]):.1f} km/h (window: at least "
+                                  f"{to_kmh(w.min_speed):.1f} km/h)")
 
 
 def _check_feasible(latest, t_allout):

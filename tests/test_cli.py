@@ -188,7 +188,7 @@ def test_timing_window_is_kept_and_verified(tmp_path):
 
 def test_impossible_timing_window(tmp_path):
     r = run("solve", window_study(tmp_path, {"position_m": 600, "latest_s": 36}), "--out", tmp_path / "o")
-    assert_one_line_error(r, "infeasible: no run keeps the timing windows at 600 m")
+    assert_one_line_error(r, "infeasible: the fastest run passes 600 m from Rokin at", "(window: by 36.0 s)")
 
 
 def test_window_outside_the_segment(tmp_path):
