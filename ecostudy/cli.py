@@ -191,8 +191,9 @@ def _case_from(study, track, train, from_stop, to_stop, points):
     return trk, trn, f, t, points, None
 
 
-def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, points, workers, cold, out, no_plot):
-    from .pareto import front_meta, sweep
+def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, points, workers, cold, out, no_plot,
+            weighted=0):
+    from .pareto import front_meta, sweep, weighted_points
     from .results import write_front
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
     k = k or 500
@@ -204,7 +205,8 @@ def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, poin
     table, results = sweep(trk, trn, f, t, count=count, supplement_max=supplement_max * units.PERCENT,
                            points=k, workers=workers, warm=not cold)
     meta = front_meta(table, {"track": trk.name, "train": trn.name, "from": f, "to": t}, k, count, workers, not cold)
-    write_front(table, results, out_dir, meta, plot=not no_plot)
+    extra = weighted_points(trk, trn, f, t, count=weighted, points=k) if weighted else None
+    write_front(table, results, out_dir, meta, plot=not no_plot, weighted=extra)
     cols = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
             "marginal_saving_kWh_per_s", "coasting_share_pct", "regime_sequence"]
     typer.echo(table[cols].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
@@ -228,13 +230,14 @@ def pareto(
     points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 500)."),
     workers: int = typer.Option(1, help="Processes; each solves a contiguous warm-started chain."),
     cold: bool = typer.Option(False, help="Solve every point on its own (no shared model, no warm start)."),
+    weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T + w_e E/m, thesis 001 eq. 4.1a)."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the PNG files."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Energy against running time (epsilon-constraint sweep from the all-out time)."""
     meta = guarded(debug, _pareto, study, track, train, from_stop, to_stop, count, supplement_max, points,
-                   workers, cold, out, no_plot)
+                   workers, cold, out, no_plot, weighted)
     if not (meta["monotone"] and meta["all_verified"] and meta["all_optimal"]):
         typer.secho("flagged: a point is not optimal or not verified, or the front is not monotone",
                     fg=typer.colors.YELLOW, err=True)

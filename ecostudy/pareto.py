@@ -51,6 +51,22 @@ def _chain(case, times, objective, options, verify_result, warm):
     return results
 
 
+def weighted_points(track, train, from_stop, to_stop, count=8, points=500, energy_weights=None):
+    """Weighted-sum points: minima of w_t T + w_e E / Ms (thesis 001 eq. 4.1a) for w_t = 1 and
+    ``count`` energy weights w_e [s kg/J] from 0.03 to 30. On a convex front each lies on the
+    epsilon-constraint front; the weighted sum cannot reach points where the front is not convex."""
+    weights = energy_weights if energy_weights is not None else np.geomspace(0.03, 30.0, count)
+    rows = []
+    for we in weights:
+        r = solve_run(track, train, from_stop, to_stop, Timing(), objective="mixed", weights=(1.0, float(we)),
+                      points=points)
+        s = r.summary
+        rows.append({"energy_weight_s_kg_per_J": float(we), "running_time_s": s["running_time_s"],
+                     "traction_energy_kWh": s["traction_energy_kWh"], "net_energy_kWh": s["net_energy_kWh"],
+                     "solver_status": s["solver"]["status"], "verified": s["verification"]["passed"]})
+    return pd.DataFrame(rows)
+
+
 def _split(items, parts):
     """Contiguous chunks of ``items`` (warm-start chains need neighbours together)."""
     return [list(chunk) for chunk in np.array_split(np.asarray(items, dtype=float), parts) if len(chunk)]
@@ -151,4 +167,4 @@ def is_monotone(table, tolerance=1e-6):
     return bool(np.all(np.diff(e) <= tolerance * e[:-1]))
 
 
-__all__ = ["sweep", "front_table", "front_meta", "saving_at", "is_monotone"]
+__all__ = ["sweep", "weighted_points", "front_table", "front_meta", "saving_at", "is_monotone"]

@@ -76,3 +76,22 @@ def test_failed_warm_start_is_retried_cold(regional, monkeypatch):
     table, _ = sweep(track, train, "Origin", "Destination", count=4, supplement_max=0.3, points=200)
     assert (table["solver_status"] == "optimal").all()
     assert table["traction_energy_kWh"].tolist() == pytest.approx(reference["traction_energy_kWh"].tolist(), rel=1e-5)
+
+
+def test_weighted_sum_points_lie_on_the_front(regional):
+    """The front is convex, so every minimum of w_t T + w_e E/m lies on the epsilon-constraint front:
+    never above the chords of the linearly interpolated front, and within 1 % of it."""
+    import numpy as np
+
+    from ecostudy.pareto import weighted_points
+    track, train = regional
+    front, _ = sweep(track, train, "Origin", "Destination", count=25, supplement_max=0.6, points=300)
+    weighted = weighted_points(track, train, "Origin", "Destination", points=300,
+                               energy_weights=[0.05, 0.15, 0.5])
+    assert (weighted["solver_status"] == "optimal").all() and weighted["verified"].all()
+    inside = weighted["running_time_s"] <= front["running_time_s"].max()
+    assert inside.all()
+    chord = np.interp(weighted["running_time_s"], front["running_time_s"], front["traction_energy_kWh"])
+    ratio = weighted["traction_energy_kWh"] / chord
+    assert (ratio <= 1 + 1e-4).all() and (ratio >= 0.99).all()
+    assert weighted["running_time_s"].is_monotonic_increasing  # more weight on energy: slower
