@@ -1,0 +1,225 @@
+"""Study commands of the command line: pareto, compare, journey, run (registered on ``cli.app``).
+
+Like ``cli.py`` they only parse options, call the library and print; errors become one line.
+"""
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from . import units
+from .cli import app, guarded
+from .errors import InputError, problem
+
+
+def _case_from(study, track, train, from_stop, to_stop, points):
+    """(track, train, from, to, K, study or None) from a study file or from options."""
+    from .inputs import check_stops, load_study, load_track, load_train
+    if study is not None:
+        st = load_study(study)
+        return st.track, st.train, st.from_stop, st.to_stop, points or st.points, st
+    if not (track and train):
+        raise InputError(problem("command line", "--track/--train", "give a study file, or both --track and --train"))
+    trk, trn = load_track(track), load_train(train)
+    names = list(trk.stops)
+    f, t = from_stop or names[0], to_stop or names[-1]
+    check_stops(trk, f, t, "command line")
+    return trk, trn, f, t, points, None
+
+
+def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, points, workers, cold, out, no_plot,
+            weighted=0):
+    from .pareto import front_meta, sweep, weighted_points
+    from .results import write_front
+    trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
+    k = k or 500
+    if count < 2:
+        raise InputError(problem("command line", "--count", "need at least 2 points"))
+    if supplement_max <= 0:
+        raise InputError(problem("command line", "--supplement-max", "must be > 0 (per cent)"))
+    out_dir = Path(out) if out else (st.output.parent / (st.output.name + "_pareto") if st else Path("out") / "pareto")
+    table, results = sweep(trk, trn, f, t, count=count, supplement_max=supplement_max * units.PERCENT,
+                           points=k, workers=workers, warm=not cold)
+    meta = front_meta(table, {"track": trk.name, "train": trn.name, "from": f, "to": t}, k, count, workers, not cold)
+    extra = weighted_points(trk, trn, f, t, count=weighted, points=k) if weighted else None
+    write_front(table, results, out_dir, meta, plot=not no_plot, weighted=extra)
+    cols = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
+            "marginal_saving_kWh_per_s", "coasting_share_pct", "regime_sequence"]
+    typer.echo(table[cols].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+    typer.echo(f"all-out {meta['all_out_time_s']:.2f} s; +5 % saves {meta['saving_at_5_pct_supplement_pct']:.1f} %, "
+               f"+10 % saves {meta['saving_at_10_pct_supplement_pct']:.1f} % of the all-out traction energy")
+    typer.echo(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
+               f"{meta['all_verified']}; {meta['wall_s']:.1f} s; outputs {out_dir}/ (pareto.csv, pareto.json, "
+               "pareto.png, pareto_profiles.png)")
+    return meta
+
+
+@app.command()
+def pareto(
+    study: Optional[Path] = typer.Argument(None, help="Study file (YAML)."),
+    track: Optional[Path] = typer.Option(None, help="Track file."),
+    train: Optional[Path] = typer.Option(None, help="Train file."),
+    from_stop: Optional[str] = typer.Option(None, "--from", help="Departure stop (default: first)."),
+    to_stop: Optional[str] = typer.Option(None, "--to", help="Arrival stop (default: last)."),
+    count: int = typer.Option(20, help="Points on the front, the all-out run included."),
+    supplement_max: float = typer.Option(40.0, help="Largest running-time supplement over all-out [%]."),
+    points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 500)."),
+    workers: int = typer.Option(1, help="Processes; each solves a contiguous warm-started chain."),
+    cold: bool = typer.Option(False, help="Solve every point on its own (no shared model, no warm start)."),
+    weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T + w_e E/m, thesis 001 eq. 4.1a)."),
+    out: Optional[Path] = typer.Option(None, help="Output folder."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip the PNG files."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Energy against running time (epsilon-constraint sweep from the all-out time)."""
+    meta = guarded(debug, _pareto, study, track, train, from_stop, to_stop, count, supplement_max, points,
+                   workers, cold, out, no_plot, weighted)
+    if not (meta["monotone"] and meta["all_verified"] and meta["all_optimal"]):
+        typer.secho("flagged: a point is not optimal or not verified, or the front is not monotone",
+                    fg=typer.colors.YELLOW, err=True)
+        raise typer.Exit(1)
+
+
+def _compare(study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot):
+    from .compare import compare
+    from .inputs import Timing
+    from .results import atomic_write, write_csv
+    trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
+    if time is not None or supplement is not None:
+        timing = Timing(running_time=time, supplement=None if supplement is None else supplement * units.PERCENT)
+    elif st is not None:
+        timing = st.timing
+    else:
+        raise InputError(problem("command line", "--time", "give --time or --supplement"))
+    out_dir = Path(out) if out else (st.output.parent / (st.output.name + "_compare") if st else Path("out") / "compare")
+    table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000)
+    write_csv(out_dir / "compare.csv", table)
+    if not no_plot:
+        from .plots import compare_plot
+        atomic_write(out_dir / "compare.png", lambda tmp: compare_plot(
+            outcomes, case.segment, tmp, f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s"))
+    typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+    typer.echo(f"outputs {out_dir}/ (compare.csv, compare.png)")
+    return table
+
+
+@app.command(name="compare")
+def compare_command(
+    study: Optional[Path] = typer.Argument(None, help="Study file (YAML)."),
+    track: Optional[Path] = typer.Option(None, help="Track file."),
+    train: Optional[Path] = typer.Option(None, help="Train file."),
+    from_stop: Optional[str] = typer.Option(None, "--from", help="Departure stop (default: first)."),
+    to_stop: Optional[str] = typer.Option(None, "--to", help="Arrival stop (default: last)."),
+    time: Optional[float] = typer.Option(None, "--time", help="Running time [s]."),
+    supplement: Optional[float] = typer.Option(None, help="Running-time supplement over all-out [%]."),
+    points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 1000)."),
+    out: Optional[Path] = typer.Option(None, help="Output folder."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip compare.png."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Strategies side by side: all-out, ATO optimum, eco-drive coasting, DAS round (simulated)."""
+    table = guarded(debug, _compare, study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot)
+    if not table.attrs["verified"]:
+        raise typer.Exit(1)
+
+
+def _journey(track, train, stops, time, supplement, timetable, points, workers, out, no_plot):
+    from .inputs import load_timetable, load_track, load_train, timing_from_timetable
+    from .journey import journey
+    from .results import atomic_write, write_csv
+    trk, trn = load_track(track), load_train(train)
+    scheduled = None
+    if timetable is not None:
+        tt = load_timetable(timetable)
+        if stops or time is not None or supplement is not None or not tt.stops:
+            raise InputError(problem("command line", "--timetable", "a timetable with stop times replaces --stops, "
+                                     "--time and --supplement"))
+        names = [row.stop for row in tt.stops]
+        for n in names:
+            if n not in trk.stops:
+                raise InputError(problem(timetable, "stops", f"stop '{n}' is not on track '{trk.name}'"))
+        scheduled = [timing_from_timetable(tt, a, b, timetable).running_time for a, b in zip(names, names[1:])]
+        time, supplement = None, None
+    else:
+        names = stops.split(",") if stops else list(trk.stops)
+    unknown = [n for n in names if n not in trk.stops]
+    if unknown or len(names) < 2:
+        raise InputError(problem("command line", "--stops", f"need two or more stops of the track (unknown: "
+                                 f"{', '.join(unknown) or 'none'}; the track has {', '.join(trk.stops)})"))
+    if scheduled is None and (time is None) == (supplement is None):
+        raise InputError(problem("command line", "--time/--supplement",
+                                 "give one total running time or supplement, or --timetable"))
+    table, totals, results, _ = journey(trk, trn, names, total_time=time,
+                                        supplement=None if supplement is None else supplement * units.PERCENT,
+                                        points=points, workers=workers, scheduled=scheduled)
+    out_dir = Path(out) if out else Path("out") / "journey"
+    write_csv(out_dir / "journey.csv", table)
+    write_csv(out_dir / "journey_totals.csv", totals)
+    if not no_plot:
+        from .plots import journey_plot
+        atomic_write(out_dir / "journey.png", lambda tmp: journey_plot(results, tmp, f"{trn.name}: {' - '.join(names)}"))
+    typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+    typer.echo(totals.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+    typer.echo(f"outputs {out_dir}/ (journey.csv, journey_totals.csv, journey.png)")
+    return table
+
+
+@app.command(name="journey")
+def journey_command(
+    track: Path = typer.Option(..., help="Track file with the stops."),
+    train: Path = typer.Option(..., help="Train file."),
+    stops: Optional[str] = typer.Option(None, help="Stops served, comma-separated (default: all, in order)."),
+    time: Optional[float] = typer.Option(None, "--time", help="Total running time, dwell excluded [s]."),
+    supplement: Optional[float] = typer.Option(None, help="Total supplement over the sum of all-out times [%]."),
+    timetable: Optional[Path] = typer.Option(None, help="Timetable (stops with times): its running times, redistributed."),
+    points: int = typer.Option(500, "--points", "-K", help="Grid nodes per segment."),
+    workers: int = typer.Option(1, help="Processes for the segments' fronts."),
+    out: Optional[Path] = typer.Option(None, help="Output folder."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip journey.png."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Spread a journey's running time over its segments: equal marginal saving vs same percentage."""
+    table = guarded(debug, _journey, track, train, stops, time, supplement, timetable, points, workers, out, no_plot)
+    if not table["verified"].all():
+        raise typer.Exit(1)
+
+
+def _run(study, workers, dask, retry_failed, out, no_progress):
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from .batch import run_study
+    columns = [TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("failed {task.fields[failed]}, remaining {task.fields[remaining]}"), TimeRemainingColumn()]
+    with Progress(*columns, disable=no_progress, transient=False) as bar:
+        task = bar.add_task("cases", total=None, failed=0, remaining="?")
+
+        def progress(done, failed, remaining, total):
+            bar.update(task, completed=done, total=total, failed=failed, remaining=remaining)
+
+        try:
+            table, counts, output = run_study(study, workers=workers, dask=dask, retry_failed=retry_failed,
+                                              out=Path(out) if out else None, progress=progress)
+        except KeyboardInterrupt:
+            typer.secho("interrupted: every finished case is stored; run the same command again to continue",
+                        fg=typer.colors.YELLOW, err=True)
+            raise typer.Exit(130)
+    typer.echo(f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} computed "
+               f"now ({counts['failed']} of them failed or infeasible); not ok in the table: {counts['not_ok']}")
+    typer.echo(f"outputs {output}/ (results.csv, results.sqlite)")
+    return counts
+
+
+@app.command()
+def run(
+    study: Path = typer.Argument(..., help="Study file (YAML) with optional scenarios and sweep."),
+    workers: int = typer.Option(1, help="Local worker processes."),
+    dask: Optional[str] = typer.Option(None, help="Address of a running Dask scheduler (tcp://host:port)."),
+    retry_failed: bool = typer.Option(False, help="Compute failed cases again (infeasible ones stay)."),
+    out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's 'output')."),
+    no_progress: bool = typer.Option(False, "--no-progress", help="No progress bar."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Run every case of a study; finished cases are stored and never computed twice."""
+    counts = guarded(debug, _run, study, workers, dask, retry_failed, out, no_progress)
+    if counts["not_ok"]:
+        raise typer.Exit(1)
