@@ -231,6 +231,3 @@ def doctor(debug: bool = typer.Option(False, help="Show tracebacks.")):
 
 
 from . import cli_studies  # noqa: E402,F401  (registers pareto, compare, journey and run on `app`)
-
-if __name__ == "__main__":
-    app()

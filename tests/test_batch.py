@@ -62,7 +62,7 @@ def test_two_workers_give_identical_table(reference, tmp_path):
 def test_killed_study_resumes_with_the_remaining_cases(reference, tmp_path):
     path = study_file(tmp_path, tmp_path / "out")
     db = tmp_path / "out" / "results.sqlite"
-    proc = subprocess.Popen([sys.executable, "-m", "ecostudy.cli", "run", str(path), "--no-progress"],
+    proc = subprocess.Popen([sys.executable, "-m", "ecostudy", "run", str(path), "--no-progress"],
                             cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 120
     stored = 0
@@ -114,7 +114,7 @@ def test_case_equals_a_direct_solve(reference):
 def test_ctrl_c_says_how_to_continue(tmp_path):
     path = study_file(tmp_path, tmp_path / "out")
     db = tmp_path / "out" / "results.sqlite"
-    proc = subprocess.Popen([sys.executable, "-m", "ecostudy.cli", "run", str(path), "--no-progress"], cwd=ROOT,
+    proc = subprocess.Popen([sys.executable, "-m", "ecostudy", "run", str(path), "--no-progress"], cwd=ROOT,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 120
     while time.time() < deadline and proc.poll() is None:
