@@ -235,22 +235,33 @@ def track_from_schema(t):
         limits=np.array([s.speed_kmh for s in t.speed_limits], float) * units.KMH)
 
 
-def load_train(path):
-    """Read a train file (YAML, or TTOBench/OSRD JSON) into a :class:`Train`."""
-    data, aliases = read_document(path), None
+def train_document(path):
+    """(schema-shaped data, field aliases for messages) of a train file: YAML, or TTOBench/OSRD JSON."""
+    data = read_document(path)
     if Path(path).suffix.lower() == ".json":
         from .imports import train_document_to_schema
-        data, aliases = train_document_to_schema(data, path)
+        return train_document_to_schema(data, path)
+    return data, None
+
+
+def track_document(path):
+    """Schema-shaped data of a track file: YAML, or TTOBench JSON."""
+    data = read_document(path)
+    if Path(path).suffix.lower() == ".json":
+        from .imports import track_document_to_schema
+        return track_document_to_schema(data, path)
+    return data
+
+
+def load_train(path):
+    """Read a train file (YAML, or TTOBench/OSRD JSON) into a :class:`Train`."""
+    data, aliases = train_document(path)
     return train_from_schema(validate(schemas.TrainFile, data, path), path, aliases)
 
 
 def load_track(path):
     """Read a track file (YAML, or TTOBench JSON) into a :class:`Track`."""
-    data = read_document(path)
-    if Path(path).suffix.lower() == ".json":
-        from .imports import track_document_to_schema
-        data = track_document_to_schema(data, path)
-    return track_from_schema(validate(schemas.TrackFile, data, path))
+    return track_from_schema(validate(schemas.TrackFile, track_document(path), path))
 
 
 def load_timetable(path):

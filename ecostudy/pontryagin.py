@@ -111,7 +111,7 @@ def check_profile(track, train, inputs, profile, running_time=None, tolerance=1e
     ``running_time`` None: the profile's own time, fixed. Given: arrive by then (a window), so a
     profile that arrives earlier than it needs to is tested as what it is offered as.
     """
-    from .run import build, guess_from_speeds, prepare
+    from .run import build, prepare
     from .units import KMH, KN
     case = prepare(track, train, inputs["from"], inputs["to"], inputs["points"])
     x = profile["position_m"].to_numpy()

@@ -13,24 +13,8 @@ from pathlib import Path
 
 from . import __version__, schemas
 from .errors import InputError, problem
-from .inputs import check_stops, load_timetable, read_document, timing_from_timetable, track_from_schema, \
-    train_from_schema, validate
-
-
-def _train_document(path):
-    data = read_document(path)
-    if Path(path).suffix.lower() == ".json":
-        from .imports import train_document_to_schema
-        data = train_document_to_schema(data, path)[0]
-    return data
-
-
-def _track_document(path):
-    data = read_document(path)
-    if Path(path).suffix.lower() == ".json":
-        from .imports import track_document_to_schema
-        data = track_document_to_schema(data, path)
-    return data
+from .inputs import check_stops, load_timetable, read_document, timing_from_timetable, track_document, \
+    track_from_schema, train_document, train_from_schema, validate
 
 
 def case_key(case):
@@ -49,8 +33,8 @@ def expand(path):
     cases = []
     for i, sc in enumerate(scenarios):
         where = f"{path}: scenarios[{i - 1}] ({sc.name})" if i else str(path)
-        train_doc = {**_train_document(base / (sc.train or s.train)), **sc.train_overrides}
-        track_doc = _track_document(base / (sc.track or s.track))
+        train_doc = {**train_document(base / (sc.train or s.train))[0], **sc.train_overrides}
+        track_doc = track_document(base / (sc.track or s.track))
         with warnings.catch_warnings():
             if i:
                 warnings.simplefilter("ignore")  # the base train already warned

@@ -7,7 +7,7 @@ import pytest
 
 from ecostudy.batch import run_study
 
-from .test_batch import comparable, reference, study_file  # noqa: F401  (reference is a fixture)
+from .test_batch import comparable, reference, study_file  # noqa: F401,F811  (reference is a fixture)
 
 
 def test_dask_local_cluster_gives_identical_table(reference, tmp_path):
