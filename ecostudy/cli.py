@@ -19,6 +19,8 @@ app = typer.Typer(add_completion=False, no_args_is_help=True,
 
 class DasMethod(str, Enum):
     round = "round"
+    phases = "phases"
+    minlp = "minlp"
 
 
 class Objective(str, Enum):
@@ -83,6 +85,13 @@ def _report(result, out_dir):
         typer.echo(f"  driver advice     {d['method']}: {d['traction_energy_kWh']:.3f} kWh ({d['gap_to_ato_pct']:+.2f} % "
                    f"against ATO), {d['mode_changes']} mode changes, arrival {d['arrival_error_s']:+.2f} s, "
                    f"stop {d['stop_error_m']:+.2f} m (advice.csv)")
+        if d.get("gap_to_ato_on_time_pct") is not None:
+            typer.echo(f"                    {d['gap_to_ato_on_time_pct']:+.3f} % against ATO with lateness charged at "
+                       f"{abs(s['marginal_energy_kWh_per_s']):.4f} kWh/s; {d['status']}")
+        if d["method"] == "minlp":
+            bound = "none" if d["bound_kWh"] is None else f"{d['bound_kWh']:.3f} kWh (gap {d['gap_pct']:.2f} %)"
+            typer.echo(f"                    MINLP search {d['search_s']:.1f} s, {d['oa_iterations']} OA iterations, "
+                       f"bound {bound}")
     typer.echo(f"  outputs           {out_dir}/ (profile.csv, summary.json, speed.png)")
 
 
@@ -95,7 +104,7 @@ def _parse_pair(text, option):
 
 
 def _solve(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights,
-           points, out, no_plot, das=None):
+           points, out, no_plot, das=None, das_time_limit=60.0):
     from .inputs import Timing, check_stops, load_study, load_track, load_train
     from .results import write_json, write_run
     from .run import solve_run
@@ -139,7 +148,10 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
     result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
     if das is not None:
         from .das import das_run
-        block, advice, outcome = das_run(result, das.value)
+        if windows and das.value != "round":
+            raise InputError(problem(str(study), "windows", f"--das {das.value} does not handle timing "
+                                     "windows on the way yet; use --das round"))
+        block, advice, outcome = das_run(result, das.value, time_limit=das_time_limit)
         result.summary["das"] = block
         result.das = (advice, outcome)
     write_run(result, out_dir, plot=not no_plot)
@@ -165,12 +177,15 @@ def solve(
     points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 1000)."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip speed.png."),
-    das: Optional[DasMethod] = typer.Option(None, help="Also driver advice: round (nearest handle level)."),
+    das: Optional[DasMethod] = typer.Option(
+        None, help="Also driver advice: round (nearest handle level), phases (optimal phase lengths, "
+                   "thesis 000 Ch. 5) or minlp (mode per phase chosen by binaries)."),
+    das_time_limit: float = typer.Option(60.0, help="Time limit of the minlp search [s]."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Energy-optimal (or all-out) run between two stops, verified by re-simulation."""
     result = guarded(debug, _solve, study, track, train, time, supplement, window, from_stop, to_stop,
-                     objective, weights, points, out, no_plot, das)
+                     objective, weights, points, out, no_plot, das, das_time_limit)
     if not result.ok:
         typer.secho("flagged: the result is not verified optimal (see summary.json)", fg=typer.colors.YELLOW, err=True)
         raise typer.Exit(1)

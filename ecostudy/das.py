@@ -1,19 +1,34 @@
-"""Driver advice (thesis 000 §3.1.2): a few handle positions instead of a continuous handle.
+"""Driver advice (thesis 000 §3.1.2): a few modes instead of a continuous handle.
 
-A DAS run is a handle per interval restricted to the train's ``das_handle_levels`` (traction
-levels, coast 0, brake -1). The advice a driver reads is the sequence of modes with where and
-when each starts. Methods so far: ``round``, the nearest level to the ATO optimum's handle in
-every interval (thesis 000 §4.4), re-simulated: the baseline better DAS methods must beat.
+A driver can be told a handle level of the train's ``das_handle_levels`` (traction levels,
+coast 0, full service braking -1) or "hold this speed" (cruise). The advice is the sequence of
+modes with where and when each starts. Methods:
+
+``round``   nearest level to the ATO optimum's handle in every interval (thesis 000 §4.4),
+            re-simulated: the baseline better DAS methods must beat.
+``phases``  phase lengths of a fixed mode sequence per sector optimised over the whole journey
+            (thesis 000 Ch. 5; ``phases.py``).
+``minlp``   the mode of every phase chosen by binaries, started from ``phases`` (``minlp.py``).
+
+Every advice is re-simulated as a driver would follow it: mode by mode from the advised
+positions, cruise with a speed-holding controller (``simulate.simulate`` with targets). The
+reported energies, arrival and stop are those of that simulation.
 """
+import time
+
 import numpy as np
 import pandas as pd
 
-from . import strategies
-from .units import to_kmh
+from . import phases, solver, strategies
+from .errors import SolverError
+from .simulate import simulate
+from .units import KMH, to_kmh, to_kwh
 
 
-def mode_name(level):
-    """Driver-readable mode of a handle level."""
+def mode_name(level, target=None):
+    """Driver-readable mode of a handle level (or of a cruise target speed [m/s])."""
+    if target is not None and np.isfinite(target):
+        return f"cruise at {to_kmh(target):.1f} km/h"
     if level >= 1 - 1e-9:
         return "full traction"
     if level > 1e-9:
@@ -25,35 +40,172 @@ def mode_name(level):
     return "coast"
 
 
-def advice_table(nodes, handle, trace):
-    """One row per mode change: start position and (simulated) time, mode, handle, end position."""
-    change = np.concatenate([[0], np.nonzero(np.diff(handle))[0] + 1])
+def advice_table(nodes, handle, trace, targets=None):
+    """One row per mode change: start position and (simulated) time, mode, handle, target, end."""
+    targets = np.full(len(handle), np.nan) if targets is None else np.asarray(targets, float)
+    key = np.where(np.isfinite(targets), 10.0 + targets, handle)  # cruise rows differ from handles
+    change = np.concatenate([[0], np.nonzero(np.abs(np.diff(key)) > 1e-9)[0] + 1])
     ends = np.append(change[1:], len(handle))
     x_sim, t_sim = np.maximum.accumulate(trace.x), trace.t
     rows = []
     for i0, i1 in zip(change, ends):
+        cruise = np.isfinite(targets[i0])
         rows.append({"start_position_m": float(nodes[i0]),
                      "start_time_s": float(np.interp(nodes[i0], x_sim, t_sim)),
-                     "mode": mode_name(handle[i0]), "handle": float(handle[i0]),
-                     "target_speed_kmh": np.nan,  # cruise modes (not in `round`) hold a speed
+                     "mode": mode_name(handle[i0], targets[i0]),
+                     "handle": np.nan if cruise else float(handle[i0]),
+                     "target_speed_kmh": float(to_kmh(targets[i0])) if cruise else np.nan,
                      "end_position_m": float(nodes[i1])})
     return pd.DataFrame(rows)
 
 
-def das_run(result, method="round"):
-    """(summary block, advice table, outcome) of a DAS run derived from an ATO ``result``."""
-    if method != "round":
-        raise ValueError(f"unknown DAS method {method!r}")
-    outcome = strategies.das_round(result.segment, result.train, result.nodes, result.handle)
-    row = outcome.row(result.train, result.segment.distance)
-    ato = result.summary["traction_energy_kWh"]
-    advice = advice_table(result.nodes, outcome.handle, outcome.trace)
-    summary = {"method": method, "traction_energy_kWh": row["traction_energy_kWh"],
-               "net_energy_kWh": row["net_energy_kWh"],
-               "gap_to_ato_pct": 100 * (row["traction_energy_kWh"] / ato - 1) if ato > 0 else None,
-               "mode_changes": len(advice) - 1, "bound_kWh": None, "status": "re-simulated",
-               "arrival_error_s": row["running_time_s"] - result.summary["running_time_s"],
-               "stop_error_m": row["stop_error_m"],
-               "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v)))}
-    return summary, advice, outcome
+def follow(segment, train, starts, levels, targets):
+    """Re-simulate advice given as start positions, handle levels and cruise targets (nan: none).
 
+    The simulation grid joins the advice positions and the track's profile changes, so every
+    piece has one mode and one gradient.
+    """
+    starts = np.asarray(starts, float)
+    nodes = np.unique(np.concatenate([[0.0, segment.distance], starts, segment.breakpoints()]))
+    mid = 0.5 * (nodes[:-1] + nodes[1:])
+    row = np.searchsorted(starts, mid, side="right") - 1
+    handle = np.asarray(levels, float)[row]
+    target = np.asarray(targets, float)[row]
+    handle = np.where(np.isfinite(target), 0.0, handle)
+    trace = simulate(segment, train, nodes, handle, targets=target)[0]
+    return nodes, handle, target, trace
+
+
+def phase_advice(layout, lengths, v):
+    """(starts, levels, targets) of the phases longer than ``phases.MIN_PHASE``, merged by mode."""
+    n = layout.substeps
+    x = phases.node_positions(layout, lengths)
+    starts, levels, targets = [], [], []
+    for q, (_, mode) in enumerate(layout.phases):
+        target = float(v[q * n]) if mode.kind == "cruise" else np.nan
+        if lengths[q] < phases.MIN_PHASE:
+            continue
+        same = levels and ((mode.kind == "cruise" and abs(targets[-1] - target) < 0.05 * KMH)
+                           or (mode.kind != "cruise" and np.isnan(targets[-1]) and levels[-1] == mode.level))
+        if not same:
+            starts.append(float(x[q * n]))
+            levels.append(0.0 if mode.kind == "cruise" else mode.level)
+            targets.append(target)
+    return starts, levels, targets
+
+
+def _gap(energies, result):
+    """Gap [%] on the quantity the ATO run minimised (traction or net energy)."""
+    key = "net_energy_kWh" if result.summary["objective"] == "net_energy" else "traction_energy_kWh"
+    ato = result.summary[key]
+    return 100 * (energies[key] / ato - 1) if ato > 0 else None
+
+
+def _gap_on_time(energies, result, arrival):
+    """Gap [%] with a late arrival charged at the ATO run's marginal energy |dE/dT| (a late train
+    must make the time up elsewhere); an early arrival earns nothing (the timetable asks for the
+    time, not less). This compares DAS methods that miss the timetable by different amounts."""
+    key = "net_energy_kWh" if result.summary["objective"] == "net_energy" else "traction_energy_kWh"
+    marginal = result.summary.get("marginal_energy_kWh_per_s")
+    ato = result.summary[key]
+    if marginal is None or ato <= 0:
+        return None
+    late = max(arrival - result.summary["running_time_s"], 0.0)
+    return 100 * ((energies[key] + abs(marginal) * late) / ato - 1)
+
+
+def _block(method, result, outcome, advice, status, **extra):
+    row = outcome.row(result.train, result.segment.distance)
+    energies = {k: row[k] for k in ("traction_energy_kWh", "net_energy_kWh")}
+    return {"method": method, **energies, "gap_to_ato_pct": _gap(energies, result),
+            "gap_to_ato_on_time_pct": _gap_on_time(energies, result, row["running_time_s"]),
+            "mode_changes": len(advice) - 1, "bound_kWh": None, "status": status,
+            "arrival_error_s": row["running_time_s"] - result.summary["running_time_s"],
+            "stop_error_m": row["stop_error_m"],
+            "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v))), **extra}
+
+
+def das_round(result):
+    outcome = strategies.das_round(result.segment, result.train, result.nodes, result.handle)
+    advice = advice_table(result.nodes, outcome.handle, outcome.trace)
+    return _block("round", result, outcome, advice, "re-simulated"), advice, outcome
+
+
+def _objective_of(result):
+    return "net_energy" if result.summary["objective"] == "net_energy" else "energy"
+
+
+def solve_layout(result, layout, guess, options=None):
+    """Build and solve the fixed-mode phases NLP of ``layout`` for the ATO run's segment and time."""
+    t0 = time.perf_counter()
+    m = phases.build(result.segment, result.train, layout, guess,
+                     running_time=result.summary["running_time_s"], objective=_objective_of(result))
+    build_s = time.perf_counter() - t0
+    outcome = solver.solve(m, options)
+    outcome.build_seconds = build_s
+    return m, outcome
+
+
+def refine(result, m, layout, modes, points, options=None):
+    """Solve again on the phases driven in ``m`` (with ``modes``), the whole sub-grid on them."""
+    lengths, x, v, *_ = phases.solution(m, layout)
+    fine, kept = phases.active(layout, lengths, modes, points)
+    guess_v = np.interp(phases.node_positions(fine, kept), x, v)
+    guess_v[0] = guess_v[-1] = 0.0
+    m_fine, outcome = solve_layout(result, fine, (kept, guess_v), options)
+    return m_fine, fine, outcome
+
+
+def solve_phases(result, points=None, options=None, stages=2):
+    """The phases NLP for the ATO ``result``: (model, layout, outcome).
+
+    Stage 1 solves the full sequence of every sector, started from the ATO run's regimes;
+    stage 2 solves again with only the phases stage 1 drives, on a sub-grid of ``points``.
+    """
+    seg, train = result.segment, result.train
+    points = points or len(result.nodes)
+    layout = phases.Layout.make(phases.sectors(seg, train), phases.sequence(train), 1)
+    layout.substeps = phases.substeps_for(points, len(layout.phases))
+    m, outcome = solve_layout(result, layout, phases.guess_from_result(result, layout), options)
+    if not outcome.usable:
+        raise SolverError(f"the DAS phases NLP failed ({outcome.status}, {outcome.iterations} iterations)")
+    if stages == 1:
+        return m, layout, outcome
+    m2, layout2, again = refine(result, m, layout, [md for _, md in layout.phases], points, options)
+    if again.usable:
+        for k in ("seconds", "nl_seconds", "iterations", "build_seconds"):
+            setattr(again, k, getattr(again, k) + getattr(outcome, k))
+        return m2, layout2, again
+    return m, layout, outcome
+
+
+def advice_outcome(name, result, layout, m):
+    """Driver advice of a solved phases (or MINLP) model, re-simulated as a driver follows it."""
+    lengths, _, v, _, ft, _ = phases.solution(m, layout)
+    starts, levels, targets = phase_advice(layout, lengths, v)
+    nodes, handle, target, trace = follow(result.segment, result.train, starts, levels, targets)
+    advice = advice_table(nodes, handle, trace, target)
+    plan_kwh = to_kwh(float(np.sum(ft * np.diff(phases.node_positions(layout, lengths)))))
+    return advice, strategies.Outcome(name, handle, trace), plan_kwh
+
+
+def das_phases(result, points=None):
+    m, layout, outcome = solve_phases(result, points)
+    advice, sim, plan_kwh = advice_outcome("DAS phases", result, layout, m)
+    block = _block("phases", result, sim, advice, f"{outcome.status}, re-simulated",
+                   planned_traction_energy_kWh=plan_kwh, phases=len(layout.phases),
+                   intervals=layout.intervals, solve_s=outcome.seconds + outcome.nl_seconds,
+                   build_s=outcome.build_seconds)
+    return block, advice, sim
+
+
+def das_run(result, method="round", points=None, time_limit=60.0):
+    """(summary block, advice table, simulated outcome) of a DAS run for an ATO ``result``."""
+    if method == "round":
+        return das_round(result)
+    if method == "phases":
+        return das_phases(result, points)
+    if method == "minlp":
+        from .minlp import das_minlp
+        return das_minlp(result, points, time_limit)
+    raise ValueError(f"unknown DAS method {method!r}")

@@ -105,6 +105,7 @@ def define_timing(m, time_ref, running_time=None, window=None):
     lo, hi = timing_bounds(running_time, window)
     start = min(max(pyo.value(m.running_time), lo), hi if hi is not None else float("inf"))
     m.T = pyo.Var(bounds=(lo, hi), initialize=start)
+    m.time_ref = time_ref
     m.arrival = pyo.Constraint(expr=(m.running_time - m.T) / time_ref == 0.0)
 
 
@@ -177,6 +178,18 @@ def build_model(segment, train, nodes, limits, guess, objective="energy", runnin
     define_objective(m, nodes, train, objective, weights, time_ref, m.energy_ref)
     m.dual = pyo.Suffix(direction=pyo.Suffix.IMPORT)
     return m
+
+
+def marginal_energy(m):
+    """dE/dT [J/s] of a solved fixed-time model: the arrival constraint's multiplier, unscaled.
+
+    Ipopt's y of (sum dt - T) / t_ref = 0 with T fixed gives d(objective)/dT = -y / t_ref; the
+    objective is energy / E_ref. Negative: one more second saves energy. None if T is not fixed.
+    """
+    lo, hi = m.T.bounds
+    if lo is None or hi is None or hi - lo > 1e-9 * max(abs(hi), 1.0) or m.arrival not in m.dual:
+        return None
+    return -float(m.dual[m.arrival]) * m.energy_ref / m.time_ref
 
 
 def solution_arrays(m):

@@ -57,6 +57,16 @@ def hinge(x, width):
     return 0.5 * (x + (x * x + width * width) ** 0.5)
 
 
+def smooth_max(a, b, width):
+    """max(a, b) rounded over ``width``: (a + b + sqrt((a - b)^2 + w^2)) / 2 (at most w/2 too high)."""
+    return 0.5 * (a + b + ((a - b) ** 2 + width * width) ** 0.5)
+
+
+def smooth_min(a, b, width):
+    """min(a, b) rounded over ``width`` (at most w/2 too low)."""
+    return 0.5 * (a + b - ((a - b) ** 2 + width * width) ** 0.5)
+
+
 def table_coefficients(speeds, forces, width):
     """(c0, c1, [(a_j, v_j)]) with table_force = c0 + c1 v + sum a_j sqrt((v - v_j)^2 + w^2).
 
@@ -128,6 +138,20 @@ class Envelope:
             return min(self.max_force, self.max_power / max(speed, 1e-9))
         speed = np.maximum(speed, 1e-9)
         return np.minimum(self.max_force, self.max_power / speed)
+
+    def smooth_force(self, speed, corner_share=0.0005):
+        """Maximum force as one smooth expression [N], usable in equality constraints.
+
+        Tables are smooth already. min(F_max, P_max / v) = P_max / max(v, v_c) with the corner
+        speed v_c = P_max / F_max; the max is rounded over ``corner_share`` * v_c, so the force is
+        at most 0.03 % low right at the corner and exact away from it.
+        """
+        if self.kind == "table":
+            return smooth_table(speed, self.coefficients, self.width)
+        if not np.isfinite(self.max_power):
+            return self.max_force + 0.0 * speed
+        corner = self.max_power / self.max_force
+        return self.max_power / smooth_max(speed, corner, corner_share * corner)
 
     @property
     def peak(self):

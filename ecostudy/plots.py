@@ -43,8 +43,10 @@ def speed_plot(result, path):
                 label=f"driver advice ({s['das']['method']}), simulated")
         colours = {"coast": "tab:gray", "full service braking": "tab:red"}
         for row in advice.itertuples():
-            colour = colours.get(row.mode, "tab:green" if row.handle > 0 else "tab:pink")
-            axu.axvspan(row.start_position_m, row.end_position_m, color=colour, alpha=0.15 + 0.25 * abs(row.handle))
+            cruise = not np.isfinite(row.handle)
+            colour = "tab:blue" if cruise else colours.get(row.mode, "tab:green" if row.handle > 0 else "tab:pink")
+            alpha = 0.3 if cruise else 0.15 + 0.25 * abs(row.handle)
+            axu.axvspan(row.start_position_m, row.end_position_m, color=colour, alpha=alpha)
     ax.set_ylabel("speed [km/h]")
     ax.set_ylim(bottom=0)
     ax.legend(loc="lower center", fontsize=8)

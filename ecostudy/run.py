@@ -192,6 +192,7 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
             psi = pontryagin.ipopt_psi(m, nodes, train)
             costate = {"method": "Ipopt multipliers of the speed recursion", **pontryagin.check(nodes, labels, psi)}
             profile["costate_ratio"] = np.append(psi, np.nan)
+        marginal = formulation.marginal_energy(m) if objective in ("energy", "net_energy") else None
     verification, trace = None, None
     if verify_result:
         with _stage(stages, "verify"):
@@ -201,6 +202,7 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
         "track": case.track.name, "train": train.name, "from": segment.from_stop, "to": segment.to_stop,
         "distance_m": segment.distance, **totals, "points": len(nodes), "objective": objective,
         "all_out_time_s": t_allout,
+        "marginal_energy_kWh_per_s": None if marginal is None else marginal / KWH,
         "regimes": {"sequence": regimes.sequence_text(regime_runs),
                     "distance_shares": regimes.distance_shares(labels, nodes),
                     "runs": [{"regime": r, "start_m": a, "end_m": b} for r, a, b in regime_runs]},

@@ -32,23 +32,33 @@ class Trace:
     arrival_time: float      # [s]
 
 
-def pieces(nodes, handle, segment, jump=1e-3):
+def pieces(nodes, handle, segment, jump=1e-3, targets=None):
     """Start indices of runs of intervals with (nearly) the same handle, gradient and curvature.
 
     An adaptive stepper can step straight over a short interval of different control without
-    sampling it, so the integration restarts at every such discontinuity.
+    sampling it, so the integration restarts at every such discontinuity (and wherever a cruise
+    target speed starts, ends or changes).
     """
     mid = 0.5 * (nodes[:-1] + nodes[1:])
     grade, curve = segment.gradient(mid), segment.curvature(mid)
     change = ((np.abs(np.diff(handle)) > jump) | (np.diff(grade) != 0) | (np.diff(curve) != 0)
               | (np.sign(handle[1:]) != np.sign(handle[:-1])))
+    if targets is not None:
+        tgt = np.nan_to_num(np.asarray(targets, float), nan=-1.0)
+        change |= np.diff(tgt) != 0
     return np.concatenate([[0], np.nonzero(change)[0] + 1])
 
 
-def simulate(segment, train, nodes, handle, max_time=None):
-    """Drive ``handle`` (one value per interval of ``nodes``) from standstill until the train stops."""
+def simulate(segment, train, nodes, handle, max_time=None, targets=None, gain=1.0):
+    """Drive ``handle`` (one value per interval of ``nodes``) from standstill until the train stops.
+
+    ``targets`` (optional, one per interval, nan elsewhere) asks for cruise control there: a
+    speed-holding controller F = F_R(x, v) + M * gain * (v_target - v), the resistance fed
+    forward, clipped to the traction and braking envelopes (a driver or DAS holding a speed).
+    """
     a, b, c = (float(x) for x in train.davis)
     handle = [float(u) for u in handle]
+    target = [float(x) for x in targets] if targets is not None else [float("nan")] * len(handle)
     last = len(handle) - 1
     max_time = max_time or 20 * segment.distance + 600
 
@@ -59,10 +69,15 @@ def simulate(segment, train, nodes, handle, max_time=None):
 
     def forces(x, v):
         k = min(max(bisect_right(node_list, x) - 1, span[0]), span[1])
+        resist = davis_resistance(v, a, b, c) + fixed[0]
+        if target[k] == target[k]:  # cruise control (not nan)
+            net = resist + train.mass * gain * (target[k] - v)
+            return ((min(net, train.traction.force(v)), 0.0, resist) if net >= 0
+                    else (0.0, min(-net, train.braking.force(v)), resist))
         u = handle[k]
         ft = u * train.traction.force(v) if u > 0 else 0.0
         fb = -u * train.braking.force(v) if u < 0 else 0.0
-        return ft, fb, davis_resistance(v, a, b, c) + fixed[0]
+        return ft, fb, resist
 
     def rhs(t, y):
         x, v = y[0], y[1]
@@ -76,7 +91,7 @@ def simulate(segment, train, nodes, handle, max_time=None):
         return y[1] if t > t_start else 1.0
     stopped.terminal, stopped.direction = True, -1
 
-    starts = pieces(nodes, handle, segment)
+    starts = pieces(nodes, handle, segment, targets=targets)
     bounds = list(nodes[starts[1:]]) + [segment.distance + 100.0]  # past the stop: runaway guard
     y, t_start, solutions = [0.0, 1e-9, 0.0, 0.0, 0.0], 0.0, []
     for first, following, x_end in zip(starts, list(starts[1:]) + [last + 1], bounds):

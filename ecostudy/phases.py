@@ -1,0 +1,299 @@
+"""Driver-advisory runs as phases of variable length (thesis 000 Ch. 5, eqs. 5.7-5.12, Fig. 5.1).
+
+The segment is cut into sectors at every gradient, curve and (train-length) speed-limit change,
+so that the track is constant inside a sector. Every sector gets the same fixed sequence of
+phases, each with one DAS mode (thesis 000 §3.1.2):
+
+    coast, traction at each DAS level (1, 0.75, 0.5), cruise, coast, full service braking
+
+The leading coast lets a sector begin by coasting and then accelerate (or cruise once gravity
+has brought the train to speed). The phase lengths L_{s,p} >= 0 are the decision variables
+(eq. 5.8, solved once over the whole horizon instead of inside an MPC loop); they sum to the
+sector length, and a phase of zero length is skipped. Each phase has its own sub-grid of n equal
+steps ds = L_{s,p} / n, so its mode is exact everywhere inside it:
+
+    traction at level l   F_T = l * F_T,max(v), F_B = 0        (smooth envelope, eq. 5.9)
+    coast                 F_T = F_B = 0
+    full braking          F_T = 0, F_B = F_B,max(v)
+    cruise                v constant; F_T - F_B = resistance, inside both envelopes
+
+The dynamics are the energy-form recursion of ``model.py`` multiplied through by ds, so that a
+zero-length phase is not singular (it forces v_{k+1} = v_k and dt_k = 0):
+
+    v_{k+1}^2 - v_k^2 = 2 ds ((F_T - F_B - R_k) / M),     dt_k (v_k + v_{k+1}) = 2 ds
+
+With ``choose_modes`` the mode of every phase becomes a choice among all DAS modes by binary
+variables (``minlp.py``); the fixed sequence above is then one of its binary patterns.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+import pyomo.environ as pyo
+
+from . import regimes
+from .physics import running_resistance, smooth_min
+from .units import KMH
+
+KN = 1000.0  # force unit of the NLP [N], as in model.py
+MIN_PHASE = 1.0  # [m]: shorter phases are dropped from the driver's advice
+
+
+@dataclass(frozen=True)
+class Mode:
+    kind: str      # "traction", "coast", "cruise" or "brake"
+    level: float   # handle: traction share, 0 coasting, -1 braking; nan for cruise
+
+
+def sequence(train):
+    """The phase sequence of every sector (module docstring)."""
+    levels = sorted((lv for lv in train.das_levels if lv > 0), reverse=True)
+    return ([Mode("coast", 0.0)] + [Mode("traction", lv) for lv in levels]
+            + [Mode("cruise", float("nan")), Mode("coast", 0.0), Mode("brake", -1.0)])
+
+
+def all_modes(train):
+    """Every distinct DAS mode: the choices of one phase in the MINLP."""
+    levels = sorted((lv for lv in train.das_levels if lv > 0), reverse=True)
+    return [Mode("traction", lv) for lv in levels] + [Mode("cruise", float("nan")),
+                                                        Mode("coast", 0.0), Mode("brake", -1.0)]
+
+
+@dataclass(frozen=True)
+class Sector:
+    start: float   # [m]
+    end: float     # [m]
+    force: float   # gradient + curve force, constant over the sector [N]
+    limit: float   # speed limit of the head [m/s]
+
+    @property
+    def length(self):
+        return self.end - self.start
+
+
+def sectors(segment, train):
+    """Sectors between consecutive profile changes (constant gradient, curvature and limit)."""
+    edges = np.concatenate([[0.0], segment.breakpoints(), [segment.distance]])
+    out = []
+    for a, b in zip(edges[:-1], edges[1:]):
+        mid = 0.5 * (a + b)
+        force = running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, segment.gradient(mid),
+                                   train.curve_coefficient, segment.curvature(mid))
+        out.append(Sector(float(a), float(b), float(force), float(segment.limit(mid))))
+    return out
+
+
+@dataclass
+class Layout:
+    """The phases in travel order: ``phases[q]`` = (sector index, mode); interval i is sub-step
+    i % n of phase i // n. The first sector has no leading coast: at standstill it would leave
+    only degenerate constraints (v = 0 on both sides of every step)."""
+
+    sectors: list
+    phases: list
+    substeps: int
+
+    @classmethod
+    def make(cls, sectors, modes, substeps):
+        phases = [(s, mode) for s in range(len(sectors)) for p, mode in enumerate(modes) if s > 0 or p > 0]
+        return cls(sectors, phases, substeps)
+
+    @property
+    def intervals(self):
+        return len(self.phases) * self.substeps
+
+    def owner(self, i):
+        """(phase index q, sector index, mode) of interval i."""
+        q = i // self.substeps
+        return (q, *self.phases[q])
+
+    def node_limits(self):
+        """Limit of each node: the lower one of the sectors of the intervals on its two sides."""
+        lim = np.array([self.sectors[self.owner(i)[1]].limit for i in range(self.intervals)])
+        return np.minimum(np.append(lim, lim[-1]), np.insert(lim, 0, lim[0]))
+
+
+def substeps_for(points, n_phases, least=4):
+    """Sub-steps per phase so that the whole run has about ``points`` intervals."""
+    return max(least, int(round(points / n_phases)))
+
+
+def build(segment, train, layout, guess, running_time=None, window=None, objective="energy",
+          choose_modes=False):
+    """The phases NLP (or, with ``choose_modes``, the mode-choice MINLP) of ``layout``.
+
+    ``guess`` = (phase lengths [m], node speeds [m/s]); times follow from them.
+    """
+    secs, n, N = layout.sectors, layout.substeps, layout.intervals
+    lengths, v0 = guess
+    a, b, c = train.davis
+    M = train.mass
+    bm, cm, km = float(b / M), float(c / M), float(KN / M)
+    m = pyo.ConcreteModel(name="ecostudy_das_phases")
+    m.Q, m.S = pyo.RangeSet(0, len(layout.phases) - 1), pyo.RangeSet(0, len(secs) - 1)
+    m.I, m.K = pyo.RangeSet(0, N - 1), pyo.RangeSet(0, N)
+    m.L = pyo.Var(m.Q, bounds=lambda m, q: (0.0, secs[layout.phases[q][0]].length),
+                  initialize=lambda m, q: float(np.clip(lengths[q], 0.0, secs[layout.phases[q][0]].length)))
+    m.sector_length = pyo.Constraint(m.S, rule=lambda m, s: sum(
+        m.L[q] for q in m.Q if layout.phases[q][0] == s) / secs[s].length == 1.0)
+    limits = layout.node_limits()
+    m.v = pyo.Var(m.K, bounds=lambda m, k: (0.0, float(limits[k])), initialize=lambda m, k: float(np.clip(v0[k], 0.0, limits[k])))
+    m.v[0].fix(0.0)
+    m.v[N].fix(0.0)
+    ds = {i: m.L[i // n] / n for i in range(N)}
+    h = {s: sec.length / n for s, sec in enumerate(secs)}  # reference step [m]
+    dt0 = [2 * float(lengths[i // n]) / n / max(v0[i] + v0[i + 1], 0.5) for i in range(N)]
+    m.dt = pyo.Var(m.I, bounds=(0.0, None), initialize=lambda m, i: dt0[i])
+    m.ft = pyo.Var(m.I, bounds=(0.0, train.traction.peak / KN), initialize=0.0)
+    m.fb = pyo.Var(m.I, bounds=(0.0, train.braking.peak / KN), initialize=0.0)
+
+    def accel(i, v_a, v_b):
+        """Mean acceleration over an interval [m/s^2] (trapezoidal Davis term, as model.py)."""
+        fixed = (secs[layout.owner(i)[1]].force + a) / M
+        return (km * (m.ft[i] - m.fb[i]) - fixed - 0.5 * bm * (v_a + v_b) - 0.5 * cm * (v_a ** 2 + v_b ** 2))
+
+    m.accel = accel
+    m.speed = pyo.Constraint(m.I, rule=lambda m, i: (
+        m.v[i + 1] ** 2 - m.v[i] ** 2 - 2 * ds[i] * accel(i, m.v[i], m.v[i + 1])) / (2 * h[layout.owner(i)[1]]) == 0.0)
+    m.time = pyo.Constraint(m.I, rule=lambda m, i: (
+        m.dt[i] * (m.v[i] + m.v[i + 1]) - 2 * ds[i]) / (2 * h[layout.owner(i)[1]]) == 0.0)
+    m.mean_t = {i: 0.5 * (train.traction.smooth_force(m.v[i]) + train.traction.smooth_force(m.v[i + 1])) / KN
+                for i in range(N)}
+    m.mean_b = {i: 0.5 * (train.braking.smooth_force(m.v[i]) + train.braking.smooth_force(m.v[i + 1])) / KN
+                for i in range(N)}
+    if choose_modes:
+        from .minlp import define_mode_choice
+        define_mode_choice(m, layout, train)
+    else:
+        _fixed_modes(m, layout)
+    bounds = (running_time, running_time) if running_time is not None else window
+    m.T = pyo.Var(bounds=bounds, initialize=float(np.clip(np.sum(dt0), *bounds)))
+    t_ref = max(running_time or window[1], 1.0)
+    m.arrival = pyo.Constraint(expr=(sum(m.dt[i] for i in m.I) - m.T) / t_ref == 0.0)
+    _objective(m, train, segment, layout, ds, objective)
+    return m
+
+
+def _fixed_modes(m, layout):
+    """Each phase's own mode, exact inside it (module docstring).
+
+    Cruise replaces the speed recursion's content by its meaning: v_{k+1} = v_k and the force
+    balances the resistance, so the force is defined even for a phase of zero length.
+    """
+    m.mode = pyo.ConstraintList()
+    for i in range(layout.intervals):
+        mode = layout.owner(i)[2]
+        if mode.kind == "traction":
+            m.fb[i].fix(0.0)
+            m.mode.add(m.ft[i] == mode.level * m.mean_t[i])
+        elif mode.kind == "coast":
+            m.ft[i].fix(0.0)
+            m.fb[i].fix(0.0)
+        elif mode.kind == "brake":
+            m.ft[i].fix(0.0)
+            m.mode.add(m.fb[i] == m.mean_b[i])
+        else:
+            m.speed[i].deactivate()
+            m.mode.add(m.v[i + 1] == m.v[i])
+            m.mode.add(m.accel(i, m.v[i], m.v[i]) == 0.0)
+            m.mode.add(m.ft[i] <= m.mean_t[i])
+            m.mode.add(m.fb[i] <= m.mean_b[i])
+
+
+def _objective(m, train, segment, layout, ds, objective):
+    """Traction work (thesis 000 eq. 2.16) or net energy (eq. 7.3) over an O(1) reference."""
+    e_ref = max(train.traction.peak * segment.distance * 0.1, 1.0)
+    N = layout.intervals
+    work = KN * sum(m.ft[i] * ds[i] for i in range(N))
+    m.traction_work = pyo.Expression(expr=work)
+    if objective == "energy":
+        expr = work / e_ref
+    elif objective == "net_energy":
+        regen = 0.0
+        if train.regeneration is not None:
+            cap = {i: 0.5 * (train.regeneration.smooth_force(m.v[i])
+                             + train.regeneration.smooth_force(m.v[i + 1])) / KN for i in range(N)}
+            regen = KN * sum(smooth_min(m.fb[i], cap[i], 0.01 * train.braking.peak / KN) * ds[i] for i in range(N))
+        expr = (work / train.traction_efficiency - train.regeneration_efficiency * regen) / e_ref
+    else:
+        raise ValueError(f"DAS runs minimise energy or net_energy, not {objective!r}")
+    m.objective = pyo.Objective(expr=expr, sense=pyo.minimize)
+
+
+def guess_from_result(result, layout):
+    """Phase lengths and node speeds from an ATO ``result`` (its regimes, sector by sector).
+
+    MA intervals go to full traction, CR/CR2 to cruise, MB to braking, coasting to the leading
+    coast before the sector's first traction and to the trailing coast after it.
+    """
+    prof = result.profile
+    x, v = prof["position_m"].to_numpy(), prof["speed_kmh"].to_numpy() * KMH
+    ft = prof["traction_force_kN"].to_numpy()[:-1] * KN
+    fb = prof["braking_force_kN"].to_numpy()[:-1] * KN
+    labels = regimes.classify(result.train, v, ft, fb)
+    mid = 0.5 * (x[:-1] + x[1:])
+    lengths = np.zeros(len(layout.phases))
+    for s, sec in enumerate(layout.sectors):
+        mine = [q for q, (owner, _) in enumerate(layout.phases) if owner == s]
+        kinds = [layout.phases[q][1] for q in mine]
+        slot = {"MA": next(q for q, md in zip(mine, kinds) if md.kind == "traction"),
+                "CR": next(q for q, md in zip(mine, kinds) if md.kind == "cruise"),
+                "MB": mine[-1]}
+        slot["CR2"] = slot["CR"]
+        coasts = [q for q, md in zip(mine, kinds) if md.kind == "coast"]
+        driven = False
+        for i in np.nonzero((mid >= sec.start) & (mid < sec.end))[0]:
+            q = slot.get(labels[i], coasts[-1] if driven or len(coasts) == 1 else coasts[0])
+            driven = driven or labels[i] in ("MA", "CR")
+            lengths[q] += x[i + 1] - x[i]
+        lengths[mine] *= sec.length / max(lengths[mine].sum(), 1e-9)
+    return lengths, speeds_at(layout, lengths, x, v)
+
+
+def node_positions(layout, lengths):
+    """Positions of every node of the layout for given phase lengths [m]."""
+    n = layout.substeps
+    pos, start = [0.0], 0.0
+    for q, (s, _) in enumerate(layout.phases):
+        if q == 0 or layout.phases[q - 1][0] != s:
+            start = layout.sectors[s].start
+        step = lengths[q] / n
+        pos.extend(start + step * (j + 1) for j in range(n))
+        start += lengths[q]
+    return np.array(pos)
+
+
+def speeds_at(layout, lengths, x, v):
+    """ATO speeds interpolated at the layout's nodes; zero at both ends."""
+    out = np.interp(node_positions(layout, lengths), x, v)
+    out = np.minimum(out, layout.node_limits())
+    out[0] = out[-1] = 0.0
+    return out
+
+
+def active(layout, lengths, modes, points):
+    """Layout of the phases at least ``MIN_PHASE`` long (each sector keeps its longest one), with
+    ``modes[q]`` as the mode of phase q, on a sub-grid of about ``points`` intervals in all; and
+    the kept lengths, scaled to fill their sectors. Refining on the phases actually driven puts
+    the whole grid where the modes are (and no driver is told to change mode for centimetres)."""
+    keep = []
+    for s in range(len(layout.sectors)):
+        mine = [q for q, (owner, _) in enumerate(layout.phases) if owner == s]
+        long_ = [q for q in mine if lengths[q] >= MIN_PHASE]
+        keep.extend(long_ or [max(mine, key=lambda q: lengths[q])])
+    out = Layout(layout.sectors, [(layout.phases[q][0], modes[q]) for q in keep],
+                 substeps_for(points, len(keep), least=8))
+    kept = np.asarray(lengths, float)[keep]
+    for s, sec in enumerate(layout.sectors):
+        mine = [k for k, (owner, _) in enumerate(out.phases) if owner == s]
+        kept[mine] *= sec.length / max(kept[mine].sum(), 1e-9)
+    return out, kept
+
+
+def solution(m, layout):
+    """(phase lengths [m], node positions, speeds, interval times, F_T [N], F_B [N])."""
+    lengths = np.array([pyo.value(m.L[q]) for q in m.Q])
+    v = np.array([pyo.value(m.v[k]) for k in m.K])
+    dt = np.array([pyo.value(m.dt[i]) for i in m.I])
+    ft = np.array([pyo.value(m.ft[i]) for i in m.I]) * KN
+    fb = np.array([pyo.value(m.fb[i]) for i in m.I]) * KN
+    return lengths, node_positions(layout, lengths), v, dt, ft, fb

@@ -1,0 +1,94 @@
+"""DAS `phases` and `minlp` (thesis 000 Ch. 5, §4.2) against ATO and `round`; the driver re-simulation.
+
+Acceptance of the DAS issue, measured on the shipped metro and regional cases at their published
+running times (76 s, 80 s): DAS energy >= ATO energy; `phases` within 3 % of ATO; `phases` and
+`minlp` beat `round` at the same arrival time; the advice, followed mode by mode with a
+speed-holding cruise controller, arrives within 1 s and stops within 2 m.
+"""
+import numpy as np
+import pytest
+
+from ecostudy.das import das_run, follow
+from ecostudy.inputs import Timing, load_track, load_train
+from ecostudy.run import solve_run
+from ecostudy.units import KMH
+
+from .conftest import TRACKS, TRAINS
+
+CASES = [("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal", 76.0),
+         ("regional_alstom", "regional_808m", "Origin", "Destination", 80.0)]
+
+
+@pytest.fixture(scope="module", params=CASES, ids=["metro", "regional"])
+def case(request):
+    train, track, a, b, t = request.param
+    trn, trk = load_train(TRAINS / f"{train}.yaml"), load_track(TRACKS / f"{track}.yaml")
+    ato = solve_run(trk, trn, a, b, Timing(running_time=t), points=1000)
+    fine = solve_run(trk, trn, a, b, Timing(running_time=t), points=4000)
+    return ato, fine, {m: das_run(ato, m)[0] for m in ("round", "phases")}
+
+
+def test_phases_meets_the_das_acceptance(case):
+    ato, fine, das = case
+    ph = das["phases"]
+    assert ph["status"].startswith("optimal")
+    assert abs(ph["arrival_error_s"]) < 1.0 and abs(ph["stop_error_m"]) < 2.0
+    assert ph["gap_to_ato_pct"] < 3.0
+    # DAS >= ATO: against the K = 4000 ATO run, whose grid error is below 0.02 % (the phases run
+    # has exact modes inside each phase, so it can undercut a coarser ATO grid; docs/benchmarks.md)
+    assert ph["traction_energy_kWh"] >= fine.summary["traction_energy_kWh"] * (1 - 2e-4)
+    # beats rounding once lateness is charged at the marginal energy (late must not count as a saving)
+    assert ph["gap_to_ato_on_time_pct"] < das["round"]["gap_to_ato_on_time_pct"]
+
+
+def test_marginal_energy_matches_a_finite_difference(case):
+    ato, _, _ = case
+    s = ato.summary
+    later = solve_run(ato.segment and load_track(TRACKS / ("amsterdam_rokin_centraal.yaml" if s["from"] == "Rokin"
+                                                           else "regional_808m.yaml")), ato.train, s["from"], s["to"],
+                      Timing(running_time=s["running_time_s"] + 0.5), points=1000)
+    fd = (later.summary["traction_energy_kWh"] - s["traction_energy_kWh"]) / 0.5
+    assert s["marginal_energy_kWh_per_s"] == pytest.approx(fd, rel=0.05)
+
+
+def test_cruise_advice_is_held_by_the_driver_controller(metro, amsterdam):
+    """A cruise row is followed by the speed-holding controller, downhill (partial braking) too."""
+    from ecostudy.grid import make_segment
+    seg = make_segment(amsterdam, metro, "Rokin", "Centraal")
+    first = follow(seg, metro, [0.0, 60.0], [1.0, -1.0], [np.nan, np.nan])[3]
+    v60 = float(np.interp(60.0, first.x, first.v))  # speed reached by full traction at 60 m
+    # cruise from 60 m (the -25 per mille descent starts at 80 m) to 700 m, coast, brake
+    nodes, handle, target, trace = follow(seg, metro, [0.0, 60.0, 700.0, 1000.0], [1.0, 0.0, 0.0, -1.0],
+                                          [np.nan, v60, np.nan, np.nan])
+    inside = (trace.x > 61.0) & (trace.x < 699.0)
+    assert np.max(np.abs(trace.v[inside] - v60)) < 0.1 * KMH
+    assert trace.braking_energy > 0  # held downhill by braking
+
+
+def test_follow_replays_modes_in_order():
+    trk = load_track(TRACKS / "thesis001_flat_1km.yaml")
+    trn = load_train(TRAINS / "thesis001_commuter.yaml")
+    from ecostudy.grid import make_segment
+    names = list(trk.stops)
+    seg = make_segment(trk, trn, names[0], names[-1])
+    # full traction, coast, then brake late enough to stop near the end
+    nodes, handle, target, trace = follow(seg, trn, [0.0, 300.0, 900.0], [1.0, 0.0, -1.0], [np.nan] * 3)
+    assert handle[0] == 1.0 and handle[-1] == -1.0
+    assert np.all(np.diff(trace.x) >= -1e-9)
+    assert trace.v[-1] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_minlp_reports_status_bound_and_beats_round(tmp_path):
+    trn = load_train(TRAINS / "amsterdam_metro.yaml")
+    trk = load_track(TRACKS / "amsterdam_rokin_centraal.yaml")
+    ato = solve_run(trk, trn, "Rokin", "Centraal", Timing(running_time=76.0), points=400)
+    mi, advice, sim = das_run(ato, "minlp", time_limit=20)
+    ph = das_run(ato, "phases")[0]
+    rnd = das_run(ato, "round")[0]
+    assert mi["method"] == "minlp" and "MindtPy" in mi["status"]
+    assert mi["bound_kWh"] is None or mi["bound_kWh"] <= mi["traction_energy_kWh"] * (1 + 1e-6)
+    assert mi["bound_note"]
+    # the phases solution is its starting pattern, so it never does worse
+    assert mi["traction_energy_kWh"] <= ph["traction_energy_kWh"] * (1 + 1e-9)
+    assert mi["gap_to_ato_on_time_pct"] < rnd["gap_to_ato_on_time_pct"]
+    assert abs(mi["arrival_error_s"]) < 1.0 and abs(mi["stop_error_m"]) < 2.0
