@@ -12,7 +12,10 @@ from .run import prepare, solve_run
 
 
 def compare(track, train, from_stop, to_stop, timing, points=1000):
-    """(table, outcomes): all-out, ATO optimum, eco-drive coasting, DAS round."""
+    """(table, outcomes): all-out, ATO optimum, eco-drive coasting, DAS round and DAS phases.
+
+    ``mode_changes`` counts the handle changes of each run (DAS runs: the advice rows minus one).
+    """
     allout = solve_run(track, train, from_stop, to_stop, Timing(), objective="time", points=points)
     ato = solve_run(track, train, from_stop, to_stop, timing, points=points)
     case = prepare(track, train, from_stop, to_stop, points)
@@ -25,7 +28,11 @@ def compare(track, train, from_stop, to_stop, timing, points=1000):
     except InfeasibleError as exc:
         rows_extra.append({"strategy": "eco-drive coasting", "note": str(exc)})
     outcomes.append(strategies.das_round(case.segment, train, case.nodes, ato.handle))
+    from .das import das_phases
+    block, advice, phased = das_phases(ato, points)
+    outcomes.append(phased)
     rows = [o.row(train, case.segment.distance) for o in outcomes] + rows_extra
+    rows[len(outcomes) - 1]["handle_changes"] = block["mode_changes"]
     table = pd.DataFrame(rows)
     e_allout = table["traction_energy_kWh"].iloc[0]
     e_opt = table["traction_energy_kWh"].iloc[1]

@@ -18,7 +18,11 @@ def regional_compare():
 def test_optimum_beats_every_strategy_at_the_same_time(regional_compare):
     table, outcomes, _ = regional_compare
     rows = table.set_index("strategy")
-    assert list(rows.index) == ["all-out", "ATO optimum", "eco-drive coasting", "DAS round (nearest level)"]
+    assert list(rows.index) == ["all-out", "ATO optimum", "eco-drive coasting", "DAS round (nearest level)",
+                                "DAS phases"]
+    # the phases advice keeps the timetable and lands within 0.5 % of the optimum
+    assert abs(rows.loc["DAS phases", "arrival_error_s"]) < 1.0
+    assert abs(rows.loc["DAS phases", "gap_to_optimum_pct"]) < 0.5
     assert rows.loc["ATO optimum", "arrival_error_s"] == pytest.approx(0.0, abs=0.5)
     assert abs(rows.loc["ATO optimum", "stop_error_m"]) < 1.0
     # eco-drive coasting meets the time (not later) and costs more than the optimum
