@@ -25,9 +25,8 @@ import numpy as np
 import pyomo.environ as pyo
 
 from . import phases
+from .model import KN
 from .units import to_kwh
-
-KN = phases.KN
 
 
 def define_mode_choice(m, layout, train):

@@ -31,10 +31,10 @@ import numpy as np
 import pyomo.environ as pyo
 
 from . import regimes
+from .model import KN  # force unit of the NLP variables [N]
 from .physics import running_resistance, smooth_min
 from .units import KMH
 
-KN = 1000.0  # force unit of the NLP [N], as in model.py
 MIN_PHASE = 1.0  # [m]: shorter phases are dropped from the driver's advice
 
 
