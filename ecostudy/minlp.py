@@ -100,13 +100,13 @@ def das_minlp(result, points=None, time_limit=60.0):
     scored = []
     for name, mod, lay in candidates:
         advice, sim, plan = das.advice_outcome("DAS minlp", result, lay, mod)
-        key = das._block("minlp", result, sim, advice, "")
-        scored.append((key["net_energy_kWh" if objective == "net_energy" else "traction_energy_kWh"],
+        row = sim.row(result.train, result.segment.distance)
+        scored.append((row["net_energy_kWh" if objective == "net_energy" else "traction_energy_kWh"],
                        name, advice, sim, plan))
     best = min(scored, key=lambda r: r[0])
     _, name, advice, sim, plan = best
     upper, lower = res.problem.upper_bound, res.problem.lower_bound
-    e_ref = max(result.train.traction.peak * result.segment.distance * 0.1, 1.0)
+    e_ref = m_mi.energy_ref
     best_kwh = best[0]
     oa_bound = to_kwh(lower * e_ref) if np.isfinite(lower) else None
     # a nonconvex OA master can cut off the incumbent itself; such a "bound" is no bound at all

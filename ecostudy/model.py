@@ -32,6 +32,11 @@ def _bounded(envelope):
     return envelope.peak / KN
 
 
+def energy_reference(train, segment):
+    """Scale of the energy objectives [J]: a tenth of peak traction over the whole distance."""
+    return max(train.traction.peak * segment.distance * 0.1, 1.0)
+
+
 def define_variables(m, nodes, limits, train, guess, with_regeneration):
     n = len(nodes) - 1
     m.K = pyo.RangeSet(0, n)
@@ -174,7 +179,7 @@ def build_model(segment, train, nodes, limits, guess, objective="energy", runnin
     define_envelopes(m, train, with_regeneration)
     define_timing(m, time_ref, running_time, window)
     define_windows(m, nodes, windows, time_ref)
-    m.energy_ref = max(train.traction.peak * segment.distance * 0.1, 1.0)  # [J], objective scale
+    m.energy_ref = energy_reference(train, segment)  # [J], objective scale
     define_objective(m, nodes, train, objective, weights, time_ref, m.energy_ref)
     m.dual = pyo.Suffix(direction=pyo.Suffix.IMPORT)
     return m

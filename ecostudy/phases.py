@@ -31,7 +31,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from . import regimes
-from .model import KN  # force unit of the NLP variables [N]
+from .model import KN, energy_reference  # KN: force unit of the NLP variables [N]
 from .physics import running_resistance, smooth_min
 from .units import KMH
 
@@ -44,18 +44,16 @@ class Mode:
     level: float   # handle: traction share, 0 coasting, -1 braking; nan for cruise
 
 
-def sequence(train):
-    """The phase sequence of every sector (module docstring)."""
-    levels = sorted((lv for lv in train.das_levels if lv > 0), reverse=True)
-    return ([Mode("coast", 0.0)] + [Mode("traction", lv) for lv in levels]
-            + [Mode("cruise", float("nan")), Mode("coast", 0.0), Mode("brake", -1.0)])
-
-
 def all_modes(train):
-    """Every distinct DAS mode: the choices of one phase in the MINLP."""
+    """Every distinct DAS mode, traction levels highest first: the choices of one MINLP phase."""
     levels = sorted((lv for lv in train.das_levels if lv > 0), reverse=True)
     return [Mode("traction", lv) for lv in levels] + [Mode("cruise", float("nan")),
                                                         Mode("coast", 0.0), Mode("brake", -1.0)]
+
+
+def sequence(train):
+    """The phase sequence of every sector (module docstring): a leading coast, then all modes."""
+    return [Mode("coast", 0.0)] + all_modes(train)
 
 
 @dataclass(frozen=True)
@@ -201,7 +199,7 @@ def _fixed_modes(m, layout):
 
 def _objective(m, train, segment, layout, ds, objective):
     """Traction work (thesis 000 eq. 2.16) or net energy (eq. 7.3) over an O(1) reference."""
-    e_ref = max(train.traction.peak * segment.distance * 0.1, 1.0)
+    e_ref = m.energy_ref = energy_reference(train, segment)
     N = layout.intervals
     work = KN * sum(m.ft[i] * ds[i] for i in range(N))
     m.traction_work = pyo.Expression(expr=work)
