@@ -1,47 +1,91 @@
-"""Pontryagin regime check: does a profile obey the switching conditions of thesis 000 eq. 2.17?
+"""Pontryagin regime check: does a profile obey the switching conditions of thesis 000 eq. 2.17
+(eq. 7.4 when regenerated energy is credited)?
 
 The costate of the speed dynamics is estimated from the multipliers mu_k of the discretised
 speed recursion (model.speed). Stationarity of the Lagrangian in the traction force of
-interval k reads  ds_k / E_ref - mu_k (kN / M) + (bound and envelope multipliers) = 0,  so
+interval k reads  ds_k / (eta_T E_ref) - mu_k (kN / M) + (bound and envelope multipliers) = 0,
+so
 
-    psi_k = mu_k (kN / M) E_ref / (ds_k kN)
+    psi_k = mu_k (kN / M) eta_T E_ref / (ds_k kN)
 
-is the discrete lambda / v of eq. 2.17 (traction energy objective): maximum acceleration where
-psi > 1 (MA), partial traction only where psi = 1 (CR), coasting where 0 < psi < 1 (CO),
-partial braking where psi = 0 (CR2), maximum braking where psi < 0 (MB).
+is the discrete lambda / v of eq. 2.17 (lambda / K of eq. 7.4), normalised so that partial
+traction sits at psi = 1 (eta_T = 1 for the traction-energy objective).
 
-The multipliers are Ipopt's (Pyomo's dual suffix equals Ipopt's y: grad f + J^T y - z_L + z_U = 0).
-Checking a profile that is not an NLP optimum needs multipliers estimated at that point; that
-estimate is not built yet (see the closing note of issue 3).
+Traction energy (eq. 2.17): MA where psi > 1, CR where psi = 1, CO where 0 < psi < 1, CR2
+(partial braking) where psi = 0, MB where psi < 0.
+
+Net energy (eq. 7.4, objective W_T / eta_T - eta_R W_R): one newton of electric braking earns
+eta_R per unit of work, eta = eta_T eta_R in psi units, so CO needs eta < psi < 1 and RB, braking
+the electric brake takes whole, needs psi = eta. The thesis' electric brake takes any braking;
+ecostudy's has its own envelope with friction on top, which adds two cases: electric braking
+at its own limit without friction needs 0 <= psi <= eta, and friction (CR2, or MB beyond the
+electric limit) needs psi = 0 (psi <= 0 at MB). Maximum braking taken whole by the electric
+brake is eq. 7.4's MB: psi <= eta.
+
+The multipliers are Ipopt's (Pyomo's dual suffix equals Ipopt's y: grad f + J^T y - z_L + z_U = 0),
+or fitted at any profile by :func:`estimated_psi`.
 """
 import numpy as np
 
 from . import model as formulation
 from . import regimes
 
-RULES = {  # regime -> test on psi (tolerance t)
-    "MA": lambda p, t: p >= 1 - t,
-    "CR": lambda p, t: abs(p - 1) <= t,
-    "CO": lambda p, t: -t <= p <= 1 + t,
-    "CR2": lambda p, t: abs(p) <= t,
-    "MB": lambda p, t: p <= t,
-}
+INF = np.inf
 
 
-def psi_from_multipliers(mu, nodes, train, energy_ref):
+def psi_bounds(labels, eta=0.0, capped=None, friction=None):
+    """[lower, upper] of psi that each interval's regime requires (eqs. 2.17 and 7.4).
+
+    eta       eta_T eta_R, the worth of regenerated work in psi units (0: none credited)
+    capped    per interval: the electric brake is at its own limit
+    friction  per interval: friction brakes carry part of the braking force
+    """
+    n = len(labels)
+    capped = np.zeros(n, bool) if capped is None else np.asarray(capped)
+    friction = np.ones(n, bool) if friction is None else np.asarray(friction)
+    table = {"MA": (1.0, INF), "CR": (1.0, 1.0), "CO": (eta, 1.0), "CR2": (0.0, 0.0)}
+    lo, hi = np.empty(n), np.empty(n)
+    for i, label in enumerate(labels):
+        if label == "RB":
+            lo[i], hi[i] = (0.0 if capped[i] else eta), eta
+        elif label == "MB":
+            lo[i], hi[i] = -INF, (0.0 if friction[i] else eta)
+        else:
+            lo[i], hi[i] = table[label]
+    return lo, hi
+
+
+def psi_from_multipliers(mu, nodes, train, energy_ref, traction_efficiency=1.0):
     """psi_k = lambda / v per interval from the speed-recursion multipliers (Ipopt's y, = Pyomo's dual)."""
     ds = np.diff(nodes)
-    return np.asarray(mu) * (formulation.KN / train.mass) * energy_ref / (ds * formulation.KN)
+    return (np.asarray(mu) * (formulation.KN / train.mass) * energy_ref * traction_efficiency
+            / (ds * formulation.KN))
 
 
-def ipopt_psi(m, nodes, train):
-    """psi from the multipliers Ipopt returned for a solved model (traction-energy objective)."""
-    return psi_from_multipliers([m.dual[m.speed[k]] for k in m.I], nodes, train, m.energy_ref)
+def ipopt_psi(m, nodes, train, objective="energy"):
+    """psi from the multipliers Ipopt returned for a solved model (energy or net-energy objective)."""
+    eta_t = train.traction_efficiency if objective == "net_energy" else 1.0
+    return psi_from_multipliers([m.dual[m.speed[k]] for k in m.I], nodes, train, m.energy_ref, eta_t)
 
 
-def check(nodes, labels, psi, tolerance=0.02):
-    """Agreement of each interval's regime with psi, the regime runs, and the disagreements."""
-    agree = np.array([RULES[label](p, tolerance) for label, p in zip(labels, psi)])
+def regime_bounds(train, v, ft, fb, labels, objective="energy"):
+    """:func:`psi_bounds` for a profile: eta and the electric brake's state read off the forces."""
+    if objective != "net_energy" or train.regeneration is None:
+        return psi_bounds(labels)
+    limit = regimes.regenerative_limit(train, v)
+    electric = np.minimum(fb, limit)
+    scale = np.maximum(train.braking.peak, 1.0)
+    return psi_bounds(labels, train.traction_efficiency * train.regeneration_efficiency,
+                      capped=electric >= limit - 0.01 * scale, friction=fb - electric > 0.01 * scale)
+
+
+def check(nodes, labels, psi, tolerance=0.02, bounds=None):
+    """Agreement of each interval's regime with psi, the regime runs, and the disagreements.
+
+    ``bounds``: (lower, upper) psi per interval, default :func:`psi_bounds` of the labels (eq. 2.17).
+    """
+    lo, hi = psi_bounds(labels) if bounds is None else bounds
+    agree = (psi >= lo - tolerance) & (psi <= hi + tolerance)
     ds = np.diff(nodes)
     bad = []
     for label, start, end in regimes.runs(np.where(agree, "ok", labels), nodes):
@@ -105,11 +149,12 @@ def estimated_psi(m, nodes, train, tolerance=1e-2):
             float(np.linalg.norm(residual) / norm), np.abs(residual[v_cols]) / norm)
 
 
-def check_profile(track, train, inputs, profile, running_time=None, tolerance=1e-2):
+def check_profile(track, train, inputs, profile, running_time=None, tolerance=1e-2, objective="energy"):
     """Regime check of a result's profile as the energy-optimal run for ``running_time``.
 
     ``running_time`` None: the profile's own time, fixed. Given: arrive by then (a window), so a
     profile that arrives earlier than it needs to is tested as what it is offered as.
+    ``objective``: ``energy`` (eq. 2.17) or ``net_energy`` (eq. 7.4, regeneration credited).
     """
     from .run import build, prepare
     from .units import KMH, KN
@@ -123,19 +168,29 @@ def check_profile(track, train, inputs, profile, running_time=None, tolerance=1e
     fb = profile["braking_force_kN"].to_numpy()[:-1] * KN
     own = float(dt.sum())
     timing = {"running_time": own} if running_time is None else {"window": (0.0, float(running_time))}
-    m = build(case, (v, dt, ft, fb), "energy", {}, **timing)
+    m = build(case, (v, dt, ft, fb), objective, {}, **timing)
+    if hasattr(m, "fr"):  # the electric brake takes what it can of the profile's braking
+        for k, f in enumerate(np.minimum(fb, regimes.regenerative_limit(train, v))):
+            m.fr[k].set_value(float(f) / formulation.KN)
     psi, residual, _ = estimated_psi(m, case.nodes, train, tolerance)
-    labels = regimes.classify(train, v, ft, fb)
-    out = check(case.nodes, labels, psi, tolerance=0.02)
+    psi = psi * (train.traction_efficiency if objective == "net_energy" else 1.0)
+    net = objective == "net_energy" and train.regeneration is not None
+    labels = regimes.classify(train, v, ft, fb, regeneration=net)
+    out = check(case.nodes, labels, psi, tolerance=0.02,
+                bounds=regime_bounds(train, v, ft, fb, labels, objective))
+    kind = "net-energy-optimal (eq. 7.4)" if objective == "net_energy" else "energy-optimal (eq. 2.17)"
     out.update(method="multipliers fitted at the profile (sign-constrained least squares)",
                stationarity_residual=residual, profile_running_time_s=own,
-               checked_as="energy-optimal run for " + (f"{own:.2f} s (its own time)" if running_time is None
-                                                       else f"arrival by {running_time:.2f} s"))
+               checked_as=f"{kind} run for " + (f"{own:.2f} s (its own time)" if running_time is None
+                                                 else f"arrival by {running_time:.2f} s"))
     return out, psi
 
 
 def check_result(result_dir, running_time=None):
-    """:func:`check_profile` of an `ecostudy solve` output folder (inputs.json and profile.csv)."""
+    """:func:`check_profile` of an `ecostudy solve` output folder (inputs.json, summary.json, profile.csv).
+
+    A net-energy run is checked against eq. 7.4; energy and all-out runs against eq. 2.17.
+    """
     import json
     from pathlib import Path
 
@@ -147,6 +202,9 @@ def check_result(result_dir, running_time=None):
     try:
         inputs = json.loads((result_dir / "inputs.json").read_text())
         profile = pd.read_csv(result_dir / "profile.csv")
+        summary = json.loads((result_dir / "summary.json").read_text())
     except (OSError, ValueError) as exc:
         raise InputError(problem(result_dir, "", f"not a result folder of `ecostudy solve` ({exc})"))
-    return check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, profile, running_time)[0]
+    objective = "net_energy" if summary.get("objective") == "net_energy" else "energy"
+    return check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, profile, running_time,
+                         objective=objective)[0]

@@ -1,4 +1,4 @@
-"""Driving regimes of a profile, read off the control (thesis 000 eqs. 2.15, 2.17).
+"""Driving regimes of a profile, read off the control (thesis 000 eqs. 2.15, 2.17, 7.2, 7.4).
 
 Each interval is classified by where its forces sit against the envelopes that bind them in
 the NLP (the lower of the envelope at the interval's two ends):
@@ -8,25 +8,46 @@ CR   partial traction (cruising, or holding a limit uphill)
 CO   coasting: no traction, no braking
 CR2  partial braking (holding a limit downhill)
 MB   maximum braking: braking on its envelope
+RB   regenerative braking (only when regeneration is credited): braking below the envelope and
+     all of it taken by the electric brake, no friction (eq. 7.4)
 
 A switch that falls inside an interval shows as one interval of partial force between two
-other regimes; such single transitional intervals are merged into the run before them.
+other regimes, or, where maximum traction meets cruising, as one interval of coasting; such
+single transitional intervals are merged into the run before them.
 """
 import numpy as np
 
-REGIMES = ("MA", "CR", "CO", "CR2", "MB")
+REGIMES = ("MA", "CR", "CO", "RB", "CR2", "MB")
 
 
-def classify(train, v, ft, fb, tolerance=0.01):
-    """Regime label per interval from speeds at the nodes and forces per interval [N]."""
+def _lower_end(envelope, v0, v1):
+    """The envelope at the interval's lower end, as the NLP binds it [N]."""
+    return np.maximum(np.minimum(envelope.force(v0), envelope.force(v1)), 1e-9)
+
+
+def regenerative_limit(train, v):
+    """Electric-brake limit per interval [N] (zero without an electric brake)."""
+    if train.regeneration is None:
+        return np.zeros(len(v) - 1)
+    return _lower_end(train.regeneration, v[:-1], v[1:])
+
+
+def classify(train, v, ft, fb, tolerance=0.01, regeneration=False):
+    """Regime label per interval from speeds at the nodes and forces per interval [N].
+
+    ``regeneration``: the run credits regenerated energy, so braking that the electric brake
+    takes whole (friction share below ``tolerance``) is RB unless it is maximum braking.
+    """
     v0, v1 = v[:-1], v[1:]
-    t_max = np.maximum(np.minimum(train.traction.force(v0), train.traction.force(v1)), 1e-9)
-    b_max = np.maximum(np.minimum(train.braking.force(v0), train.braking.force(v1)), 1e-9)
+    t_max, b_max = _lower_end(train.traction, v0, v1), _lower_end(train.braking, v0, v1)
     t_share, b_share = (ft - fb).clip(0) / t_max, (fb - ft).clip(0) / b_max
     labels = np.full(len(ft), "CO", dtype=object)
     labels[t_share > tolerance] = "CR"
     labels[t_share >= 1 - tolerance] = "MA"
     labels[b_share > tolerance] = "CR2"
+    if regeneration:
+        friction = (fb - np.minimum(fb, regenerative_limit(train, v))) / b_max
+        labels[(b_share > tolerance) & (friction <= tolerance)] = "RB"
     labels[b_share >= 1 - tolerance] = "MB"
     return labels
 
@@ -41,8 +62,10 @@ def runs(labels, nodes):
             out.append([label, i, i + 1])
     merged = []
     for j, (label, i0, i1) in enumerate(out):
-        transitional = (i1 - i0 == 1 and 0 < j < len(out) - 1 and label in ("CR", "CR2")
-                        and out[j - 1][0] != out[j + 1][0])
+        single = i1 - i0 == 1 and 0 < j < len(out) - 1
+        transitional = single and (
+            (label in ("CR", "CR2", "RB") and merged[-1][0] != out[j + 1][0])
+            or (label == "CO" and {merged[-1][0], out[j + 1][0]} == {"MA", "CR"}))
         if merged and (transitional or merged[-1][0] == label):
             merged[-1][2] = i1
         else:

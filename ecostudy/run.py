@@ -185,12 +185,16 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
         v, dt, ft, fb, _ = formulation.solution_arrays(m)
         u = handles(train, v, ft, fb)
         profile, totals = tabulate(train, nodes, v, dt, ft, fb)
-        labels = regimes.classify(train, v, ft, fb)
+        net = objective == "net_energy"
+        labels = regimes.classify(train, v, ft, fb, regeneration=net and train.regeneration is not None)
         regime_runs = regimes.runs(labels, nodes)
         costate = None
-        if objective == "energy":  # psi = lambda / v of eq. 2.17 from Ipopt's multipliers
-            psi = pontryagin.ipopt_psi(m, nodes, train)
-            costate = {"method": "Ipopt multipliers of the speed recursion", **pontryagin.check(nodes, labels, psi)}
+        if objective in ("energy", "net_energy"):  # psi = lambda / v of eq. 2.17 (7.4) from Ipopt's multipliers
+            psi = pontryagin.ipopt_psi(m, nodes, train, objective)
+            bounds = pontryagin.regime_bounds(train, v, ft, fb, labels, objective)
+            costate = {"method": "Ipopt multipliers of the speed recursion",
+                       "conditions": "eq. 7.4 (regeneration credited)" if net else "eq. 2.17",
+                       **pontryagin.check(nodes, labels, psi, bounds=bounds)}
             profile["costate_ratio"] = np.append(psi, np.nan)
         marginal = formulation.marginal_energy(m) if objective in ("energy", "net_energy") else None
     verification, trace = None, None

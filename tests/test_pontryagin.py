@@ -13,10 +13,12 @@ CASES = [("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal", 76
          ("thesis001_commuter", "thesis001_advanced_1km", "A", "B", 84.92)]
 
 
+@pytest.mark.parametrize("objective", ["energy", "net_energy"])
 @pytest.mark.parametrize("train, track, a, b, time", CASES, ids=[c[1] for c in CASES])
-def test_optimal_runs_obey_the_switching_conditions(train, track, a, b, time):
+def test_optimal_runs_obey_the_switching_conditions(train, track, a, b, time, objective):
+    """eq. 2.17 on energy optima, eq. 7.4 on net-energy optima (RB where the train regenerates)."""
     r = solve_run(load_track(TRACKS / f"{track}.yaml"), load_train(TRAINS / f"{train}.yaml"), a, b,
-                  Timing(running_time=time), points=500)
+                  Timing(running_time=time), objective=objective, points=500)
     check = r.summary["pontryagin"]
     assert check["agreement_pct"] >= 95.0, check["disagreements"]
 
@@ -25,6 +27,7 @@ def test_costate_ratio_per_regime_on_the_flat_trip():
     """MA where psi > 1, CR where psi = 1, CO in (0, 1), MB where psi < 0 (lambda / v of eq. 2.17)."""
     r = solve_run(load_track(TRACKS / "thesis001_flat_1km.yaml"), load_train(TRAINS / "thesis001_commuter.yaml"),
                   "A", "B", Timing(running_time=95.0), points=300)
+    assert r.summary["regimes"]["sequence"] == "MA-CR-CO-MB"
     psi = r.profile["costate_ratio"].to_numpy()[:-1]
     for run in r.summary["regimes"]["runs"]:
         sel = (r.nodes[:-1] >= run["start_m"]) & (r.nodes[:-1] < run["end_m"])
@@ -41,7 +44,7 @@ def test_costate_ratio_per_regime_on_the_flat_trip():
             assert np.all(inner <= 1e-6)
 
 
-def test_all_out_and_net_energy_runs_carry_no_energy_costate():
+def test_all_out_runs_carry_no_energy_costate():
     r = solve_run(load_track(TRACKS / "regional_808m.yaml"), load_train(TRAINS / "regional_alstom.yaml"),
                   "Origin", "Destination", Timing(), objective="time", points=200)
     assert r.summary["pontryagin"] is None
@@ -71,3 +74,57 @@ def test_check_command_passes_an_optimum_and_rejects_a_poor_profile(tmp_path):
     report = json.loads((tmp_path / "ao" / "check.json").read_text())
     assert report["agreement_pct"] < 50
     assert report["disagreements"] and "inconsistent: MA at 0-" in poor.output
+
+
+def _regenerative(train, eta_t=0.9, eta_r=0.8, force_kN=400):
+    """The thesis 001 commuter with an electric brake of ``force_kN`` (the shipped file has none)."""
+    import dataclasses
+
+    from ecostudy.physics import Envelope
+    return dataclasses.replace(train, traction_efficiency=eta_t, regeneration_efficiency=eta_r,
+                               regeneration=Envelope("force_power", max_force=force_kN * 1e3))
+
+
+def test_net_energy_runs_obey_eq_7_4_with_regenerative_braking():
+    """Flat track, one limit, regeneration credited: MA-CR-CO-RB(-MB); CO where eta < psi < 1 and
+    RB where psi = eta = eta_T eta_R (thesis 000 eq. 7.4); >= 95 % agreement."""
+    train = _regenerative(load_train(TRAINS / "thesis001_commuter.yaml"))
+    r = solve_run(load_track(TRACKS / "thesis001_flat_1km.yaml"), train, "A", "B", Timing(running_time=95.0),
+                  objective="net_energy", points=300)
+    check = r.summary["pontryagin"]
+    assert check["conditions"].startswith("eq. 7.4")
+    assert check["agreement_pct"] >= 95.0, check["disagreements"]
+    assert r.summary["regimes"]["sequence"].startswith("MA-CR-CO-RB"), r.summary["regimes"]["sequence"]
+    eta = 0.9 * 0.8
+    psi = r.profile["costate_ratio"].to_numpy()[:-1]
+    for run in r.summary["regimes"]["runs"]:
+        sel = (r.nodes[:-1] >= run["start_m"]) & (r.nodes[:-1] < run["end_m"])
+        inner = psi[sel][1:-1]
+        if run["regime"] == "CO" and inner.size:
+            assert np.all((inner > eta - 1e-3) & (inner < 1 + 1e-3))
+        if run["regime"] == "RB" and inner.size:
+            assert np.all(inner <= eta + 1e-3) and np.all(inner >= -1e-3)
+    assert r.summary["net_energy_kWh"] < r.summary["traction_energy_kWh"] / 0.9
+
+
+def test_shipped_net_energy_run_and_its_check(tmp_path):
+    """The metro's net-energy optimum brakes regeneratively (RB) and passes `ecostudy check` under
+    eq. 7.4; the all-out run offered for a slack time fails it."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from ecostudy.cli import app
+    runner = CliRunner()
+    args = ["--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train", str(TRAINS / "amsterdam_metro.yaml"),
+            "--points", "300", "--no-plot"]
+    res = runner.invoke(app, ["solve", *args, "--time", "76", "--objective", "net_energy", "--out", str(tmp_path / "n")])
+    assert res.exit_code == 0, res.output
+    summary = json.loads((tmp_path / "n" / "summary.json").read_text())
+    assert "RB" in summary["regimes"]["sequence"] and summary["pontryagin"]["agreement_pct"] >= 95
+    ok = runner.invoke(app, ["check", str(tmp_path / "n")])
+    assert ok.exit_code == 0, ok.output
+    report = json.loads((tmp_path / "n" / "check.json").read_text())
+    assert report["checked_as"].startswith("net-energy-optimal") and report["agreement_pct"] >= 95
+    poor = runner.invoke(app, ["check", str(tmp_path / "n"), "--time", "90"])
+    assert poor.exit_code == 1, poor.output
