@@ -12,7 +12,7 @@ from .run import prepare, solve_run
 
 
 def compare(track, train, from_stop, to_stop, timing, points=1000):
-    """(table, outcomes): all-out, ATO optimum, eco-drive coasting, DAS round and DAS phases.
+    """(table, outcomes): all-out, ATO optimum, eco-drive coasting, MARECO-style, DAS round and DAS phases.
 
     ``mode_changes`` counts the handle changes of each run (DAS runs: the advice rows minus one).
     """
@@ -23,10 +23,11 @@ def compare(track, train, from_stop, to_stop, timing, points=1000):
                 strategies.Outcome("ATO optimum", ato.handle, ato.trace)]
     target = ato.summary["running_time_s"]
     rows_extra = []
-    try:
-        outcomes.append(strategies.eco_coasting(case, target))
-    except InfeasibleError as exc:
-        rows_extra.append({"strategy": "eco-drive coasting", "note": str(exc)})
+    for name, heuristic in (("eco-drive coasting", strategies.eco_coasting), ("MARECO-style", strategies.mareco)):
+        try:
+            outcomes.append(heuristic(case, target))
+        except InfeasibleError as exc:
+            rows_extra.append({"strategy": name, "note": str(exc)})
     outcomes.append(strategies.das_round(case.segment, train, case.nodes, ato.handle))
     from .das import das_phases
     block, advice, phased = das_phases(ato, points)

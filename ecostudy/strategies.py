@@ -3,6 +3,9 @@
 - ``eco_coasting``: the industrial baseline of thesis 000 Table 6.1: full traction up to the
   limits, hold the limits, and from a coasting point on coast (braking only to respect a limit
   and to stop); the coasting point is the earliest one whose simulated arrival meets the time.
+- ``mareco``: a margin-distribution heuristic in the style of OSRD's MARECO (ecostudy/mareco.py):
+  cap the top speed, coast before braking and before steep descents, the cap searched so that
+  the simulated running time meets the timetable.
 - ``das_round``: the nearest driver-advisory handle level (train's ``das_handle_levels``) to the
   optimal handle of each interval (thesis 000 §4.4), without a cruise mode; it keeps no
   timetable of its own, so its arrival and stop errors are part of the comparison.
@@ -71,6 +74,13 @@ def eco_coasting(case, running_time):
             lo = mid
     u, trace = drive(case, profile(hi))
     return Outcome("eco-drive coasting", u, trace)
+
+
+def mareco(case, running_time):
+    """MARECO-style run meeting ``running_time`` (see :mod:`ecostudy.mareco`)."""
+    from .mareco import mareco as heuristic
+    v1, u, trace = heuristic(case, running_time, drive)
+    return Outcome("MARECO-style", u, trace)
 
 
 def das_round(segment, train, nodes, optimal_handle):

@@ -18,8 +18,8 @@ def regional_compare():
 def test_optimum_beats_every_strategy_at_the_same_time(regional_compare):
     table, outcomes, _ = regional_compare
     rows = table.set_index("strategy")
-    assert list(rows.index) == ["all-out", "ATO optimum", "eco-drive coasting", "DAS round (nearest level)",
-                                "DAS phases"]
+    assert list(rows.index) == ["all-out", "ATO optimum", "eco-drive coasting", "MARECO-style",
+                                "DAS round (nearest level)", "DAS phases"]
     # the phases advice keeps the timetable and lands within 0.5 % of the optimum
     assert abs(rows.loc["DAS phases", "arrival_error_s"]) < 1.0
     assert abs(rows.loc["DAS phases", "gap_to_optimum_pct"]) < 0.5
@@ -28,6 +28,10 @@ def test_optimum_beats_every_strategy_at_the_same_time(regional_compare):
     # eco-drive coasting meets the time (not later) and costs more than the optimum
     assert rows.loc["eco-drive coasting", "arrival_error_s"] <= 0.05
     assert rows.loc["eco-drive coasting", "gap_to_optimum_pct"] > 0
+    # MARECO-style meets the time within 0.05 s; no better than the optimum beyond its grid error
+    assert abs(rows.loc["MARECO-style", "arrival_error_s"]) <= 0.05
+    assert rows.loc["MARECO-style", "gap_to_optimum_pct"] > -0.1
+    assert rows.loc["MARECO-style", "saving_vs_all_out_pct"] > 0
     assert rows.loc["all-out", "running_time_s"] < rows.loc["ATO optimum", "running_time_s"]
     assert rows.loc["all-out", "saving_vs_all_out_pct"] == 0
 
@@ -39,3 +43,23 @@ def test_compare_command(tmp_path):
     assert r.exit_code == 0, r.output
     assert (tmp_path / "compare.csv").read_text().startswith("strategy,running_time_s,arrival_error_s")
     assert (tmp_path / "compare.png").stat().st_size > 10_000
+
+
+def test_mareco_profile_coasts_before_braking_and_downhill():
+    """MARECO-style profile: capped at v1, coasting (zero force on the grid) before the final
+    braking; on the metro at 85 s it coasts down the descent before 220 m (vf < 50 km/h plateau)."""
+    import numpy as np
+
+    from ecostudy import initial, mareco
+    from ecostudy.run import prepare
+    case = prepare(load_track(TRACKS / "amsterdam_rokin_centraal.yaml"), load_train(TRAINS / "amsterdam_metro.yaml"),
+                   "Rokin", "Centraal", 500)
+    v1 = mareco.cap_for(case, 85.0)
+    v = mareco.profile(case, v1)
+    assert v.max() <= min(v1, case.limits.max()) + 1e-6
+    assert initial.running_time(v, case.nodes) == pytest.approx(85.0, abs=1e-3)
+    ft, fb = initial.forces_for(v, case.segment, case.train, case.nodes)
+    coasting = (ft < 1.0) & (fb < 1.0)
+    descent = (case.nodes[:-1] > 100) & (case.nodes[:-1] < 200)
+    assert coasting[descent].all()  # no holding of the 50 km/h limit by braking on the descent
+    assert coasting[(case.nodes[:-1] > 400) & (case.nodes[:-1] < 800)].mean() > 0.95
