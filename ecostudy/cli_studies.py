@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 
 from . import units
-from .cli import app, guarded
+from .cli import DasMethod, app, guarded
 from .errors import InputError, problem
 
 
@@ -28,8 +28,8 @@ def _case_from(study, track, train, from_stop, to_stop, points):
 
 
 def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, points, workers, cold, out, no_plot,
-            weighted=0):
-    from .pareto import front_meta, sweep, weighted_points
+            weighted=0, das=None, das_time_limit=60.0):
+    from .pareto import das_front, das_meta, front_meta, sweep, weighted_points
     from .results import write_front
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
     k = k or 500
@@ -41,11 +41,20 @@ def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, poin
     table, results = sweep(trk, trn, f, t, count=count, supplement_max=supplement_max * units.PERCENT,
                            points=k, workers=workers, warm=not cold)
     meta = front_meta(table, {"track": trk.name, "train": trn.name, "from": f, "to": t}, k, count, workers, not cold)
+    if das is not None:
+        table = das_front(table, results, das.value, k, workers, das_time_limit)
+        meta["das"] = das_meta(table)
     extra = weighted_points(trk, trn, f, t, count=weighted, points=k) if weighted else None
     write_front(table, results, out_dir, meta, plot=not no_plot, weighted=extra)
     cols = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
             "marginal_saving_kWh_per_s", "coasting_share_pct", "regime_sequence"]
-    typer.echo(table[cols].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+    if das is not None:
+        cols += ["das_traction_energy_kWh", "das_gap_to_ato_on_time_pct", "das_mode_changes"]
+    typer.echo(table[[c for c in cols if c in table]].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+    if das is not None:
+        d = meta["das"]
+        typer.echo(f"DAS {d['method']}: {d['solved']} of {d['points']} points; gap to ATO on time "
+                   f"{d['min_gap_on_time_pct']:.2f} to {d['max_gap_on_time_pct']:.2f} %; monotone: {d['monotone']}")
     typer.echo(f"all-out {meta['all_out_time_s']:.2f} s; +5 % saves {meta['saving_at_5_pct_supplement_pct']:.1f} %, "
                f"+10 % saves {meta['saving_at_10_pct_supplement_pct']:.1f} % of the all-out traction energy")
     typer.echo(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
@@ -67,13 +76,15 @@ def pareto(
     workers: int = typer.Option(1, help="Processes; each solves a contiguous warm-started chain."),
     cold: bool = typer.Option(False, help="Solve every point on its own (no shared model, no warm start)."),
     weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T + w_e E/m, thesis 001 eq. 4.1a)."),
+    das: Optional[DasMethod] = typer.Option(None, help="Also the DAS front: round | phases | minlp at every point."),
+    das_time_limit: float = typer.Option(60.0, help="Time limit of each MINLP search [s] (--das minlp)."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the PNG files."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
-    """Energy against running time (epsilon-constraint sweep from the all-out time)."""
+    """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS."""
     meta = guarded(debug, _pareto, study, track, train, from_stop, to_stop, count, supplement_max, points,
-                   workers, cold, out, no_plot, weighted)
+                   workers, cold, out, no_plot, weighted, das, das_time_limit)
     if not (meta["monotone"] and meta["all_verified"] and meta["all_optimal"]):
         typer.secho("flagged: a point is not optimal or not verified, or the front is not monotone",
                     fg=typer.colors.YELLOW, err=True)

@@ -167,4 +167,50 @@ def is_monotone(table, tolerance=1e-6):
     return bool(np.all(np.diff(e) <= tolerance * e[:-1]))
 
 
-__all__ = ["sweep", "weighted_points", "front_table", "front_meta", "saving_at", "is_monotone"]
+def _das_point(result, method, points, time_limit):
+    """One DAS run for a front point: a row of ``das_`` columns (a failure is recorded, not raised)."""
+    from .das import das_run
+    from .errors import EcostudyError
+    try:
+        block, _, _ = das_run(result, method, points, time_limit)
+    except EcostudyError as exc:
+        return {"das_status": f"failed: {exc}"}
+    return {"das_running_time_s": result.summary["running_time_s"] + block["arrival_error_s"],
+            "das_traction_energy_kWh": block["traction_energy_kWh"], "das_net_energy_kWh": block["net_energy_kWh"],
+            "das_gap_to_ato_pct": block["gap_to_ato_pct"], "das_gap_to_ato_on_time_pct": block["gap_to_ato_on_time_pct"],
+            "das_mode_changes": block["mode_changes"], "das_stop_error_m": block["stop_error_m"],
+            "das_status": block["status"]}
+
+
+def das_front(table, results, method="phases", points=None, workers=1, time_limit=60.0):
+    """The front's table with the DAS run of every point beside the ATO optimum (``das_`` columns).
+
+    Each point's advice is computed for the ATO run's running time (:func:`ecostudy.das.das_run`)
+    and re-simulated as a driver follows it; the all-out point has no slack for a DAS plan and is
+    tried like the others (a failure is recorded in ``das_status``).
+    """
+    args = [(r, method, points, time_limit) for r in results]
+    if workers > 1 and len(results) > 1:
+        ctx = multiprocessing.get_context("fork")
+        with ProcessPoolExecutor(max_workers=min(workers, len(results)), mp_context=ctx) as pool:
+            rows = list(pool.map(_das_point, *zip(*args)))
+    else:
+        rows = [_das_point(*a) for a in args]
+    das = pd.DataFrame(rows, index=table.index)
+    out = pd.concat([table, das], axis=1)
+    out.attrs.update(table.attrs, das_method=method)
+    return out
+
+
+def das_meta(table):
+    """What a reader asks of a DAS front: how many points solved, the gap range, monotonicity."""
+    ok = table["das_traction_energy_kWh"].notna() if "das_traction_energy_kWh" in table else table.index < 0
+    gaps = table.loc[ok, "das_gap_to_ato_on_time_pct"] if ok.any() else pd.Series(dtype=float)
+    energy = table.loc[ok, "das_traction_energy_kWh"].to_numpy() if ok.any() else np.zeros(0)
+    return {"method": table.attrs.get("das_method"), "points": int(len(table)), "solved": int(ok.sum()),
+            "min_gap_on_time_pct": float(gaps.min()) if len(gaps) else None,
+            "max_gap_on_time_pct": float(gaps.max()) if len(gaps) else None,
+            "monotone": bool(np.all(np.diff(energy) <= 1e-6 * energy[:-1])) if len(energy) > 1 else None}
+
+
+__all__ = ["sweep", "das_front", "das_meta", "weighted_points", "front_table", "front_meta", "saving_at", "is_monotone"]

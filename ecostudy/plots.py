@@ -70,11 +70,14 @@ def pareto_plot(table, path, title="", weighted=None):
     """Traction and net energy against running time, with the marginal saving beneath;
     ``weighted`` (optional table) adds the weighted-sum points."""
     fig, (ax, axm) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
-    fig.subplots_adjust(left=0.1, right=0.97, top=0.85, bottom=0.09, hspace=0.1)
+    fig.subplots_adjust(left=0.13, right=0.97, top=0.85, bottom=0.09, hspace=0.1)
     fig.suptitle(title, fontsize=10)
     t = table["running_time_s"]
     ax.plot(t, table["traction_energy_kWh"], "o-", color="tab:blue", label="traction (at the wheel)")
     ax.plot(t, table["net_energy_kWh"], "s--", color="tab:green", label="net electrical (regeneration credited)")
+    if "das_traction_energy_kWh" in table and table["das_traction_energy_kWh"].notna().any():
+        ax.plot(table["das_running_time_s"], table["das_traction_energy_kWh"], "^:", color="tab:orange",
+                label=f"DAS {table.attrs.get('das_method', '')} (advice re-simulated, traction)")
     if weighted is not None and len(weighted):
         ax.plot(weighted["running_time_s"], weighted["traction_energy_kWh"], "x", color="tab:red", ms=8, mew=2,
                 label="weighted sum w_t T + w_e E/m (traction)")

@@ -242,6 +242,8 @@ class Scenario(Strict):
     supplement_percent: Optional[float] = Field(None, ge=0)
     objective: Optional[Literal["energy", "net_energy", "time", "mixed"]] = None
     points: Optional[int] = Field(None, ge=10, le=100000)
+    das: Optional[Literal["round", "phases", "minlp"]] = Field(
+        None, description="Also a DAS run of every case of this scenario (thesis 000 §3.1.2, Ch. 5).")
 
 
 class Sweep(Strict):
@@ -272,6 +274,9 @@ class StudyFile(Strict):
     objective: Literal["energy", "net_energy", "time", "mixed"] = "energy"
     weights: Weights = Weights()
     points: int = Field(1000, ge=10, le=100000)
+    das: Optional[Literal["round", "phases", "minlp"]] = Field(
+        None, description="Also a DAS run of every energy-optimal case: das_ columns in results.csv.")
+    das_time_limit_s: float = Field(60.0, gt=0, description="Time limit of each MINLP search (das: minlp).")
     output: Optional[str] = None
     windows: list[Window] = Field(default_factory=list, description="Timing points between the stops.")
     scenarios: list[Scenario] = Field(default_factory=list, description="Variants run by `ecostudy run`.")

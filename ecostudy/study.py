@@ -68,6 +68,9 @@ def expand(path):
                     case[k] is not None for k in ("running_time_s", "supplement_percent", "window_s")):
                 raise InputError(problem(path, "running_time_s", f"scenario '{sc.name}' has no running time, "
                                          "supplement, window or timetable"))
+            das = sc.das or s.das
+            if das is not None and case["objective"] in ("energy", "net_energy"):
+                case.update(das=das, das_time_limit_s=s.das_time_limit_s)  # only then: other keys unchanged
             case["labels"] = {"scenario": sc.name, **dict(zip(names, values))}
             case["key"] = case_key(case)
             cases.append(case)

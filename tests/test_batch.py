@@ -133,3 +133,23 @@ def test_ctrl_c_says_how_to_continue(tmp_path):
     assert "run the same command again to continue" in err
     _, counts, _ = run_study(path)
     assert counts["stored_before"] >= 1 and counts["computed"] == 6 - counts["stored_before"]
+
+
+def test_das_columns_in_a_study(tmp_path):
+    """`das: phases` in a study adds das_ columns; a scenario may choose another method; a case
+    without das keeps the key it had before the field existed."""
+    path = write_yaml(tmp_path / "study.yaml", {
+        "name": "das_study", "track": str(TRACKS / "regional_808m.yaml"), "train": str(TRAINS / "regional_alstom.yaml"),
+        "supplement_percent": 10, "points": 200, "das": "phases",
+        "scenarios": [{"name": "rounded", "das": "round"}], "output": str(tmp_path / "out")})
+    table, counts, _ = run_study(path)
+    assert counts["failed"] == 0
+    rows = table.set_index("scenario")
+    assert rows.loc["base", "das_method"] == "phases" and rows.loc["rounded", "das_method"] == "round"
+    assert rows.loc["base", "das_status"].startswith("optimal")
+    assert abs(rows.loc["base", "das_gap_to_ato_on_time_pct"]) < 0.5
+    plain = write_yaml(tmp_path / "plain.yaml", {
+        "name": "das_study", "track": str(TRACKS / "regional_808m.yaml"), "train": str(TRAINS / "regional_alstom.yaml"),
+        "supplement_percent": 10, "points": 200, "output": str(tmp_path / "out")})
+    key = expand(plain)[2][0]["key"]
+    assert key != rows.loc["base", "key"] and "das" not in expand(plain)[2][0]

@@ -95,3 +95,26 @@ def test_weighted_sum_points_lie_on_the_front(regional):
     ratio = weighted["traction_energy_kWh"] / chord
     assert (ratio <= 1 + 1e-4).all() and (ratio >= 0.99).all()
     assert weighted["running_time_s"].is_monotonic_increasing  # more weight on energy: slower
+
+
+def test_das_front_beside_the_ato_front(front):
+    """`pareto --das phases`: every point's advice, re-simulated, keeps the time and lies within
+    0.5 % of the ATO optimum (at or above it up to the grid error); the DAS front is monotone."""
+    from ecostudy.pareto import das_front, das_meta
+    table, results = front
+    both = das_front(table.iloc[1:4].reset_index(drop=True), results[1:4], "phases", 300)
+    assert both["das_status"].str.startswith("optimal").all()
+    assert (both["das_running_time_s"] - both["running_time_s"]).abs().max() < 0.1
+    assert both["das_gap_to_ato_on_time_pct"].between(-0.1, 0.5).all()
+    meta = das_meta(both)
+    assert meta["solved"] == 3 and meta["monotone"] and meta["method"] == "phases"
+
+
+def test_pareto_command_with_das(tmp_path):
+    r = CliRunner().invoke(app, ["pareto", "--track", str(TRACKS / "regional_808m.yaml"), "--train",
+                                 str(TRAINS / "regional_alstom.yaml"), "--count", "3", "--supplement-max", "20",
+                                 "--points", "200", "--das", "round", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    header = (tmp_path / "pareto.csv").read_text().splitlines()[0]
+    assert "das_traction_energy_kWh" in header and "das_gap_to_ato_on_time_pct" in header
+    assert json.loads((tmp_path / "pareto.json").read_text())["das"]["solved"] == 4
