@@ -5,7 +5,10 @@ total running time the least total energy has equal marginal saving -dE_i/dT_i o
 that gets a supplement (Lagrange; thesis 000 §7.1.1 fronts). The allocation is made on the
 fronts, linearly interpolated, by handing out small time steps to the segment whose next step
 saves most; every segment is then solved exactly at its allocated time and verified.
-The baseline gives every segment the same percentage over its all-out time.
+Two baselines: every segment the same percentage over its all-out time, and a MARECO-style
+split (the time each segment takes under one common MARECO speed cap v1, ecostudy/mareco.py: the
+way OSRD's MARECO allowance spreads a margin over a whole path). Every distribution is then
+driven energy-optimally, so the comparison is about the split alone.
 """
 import heapq
 
@@ -48,6 +51,28 @@ def uniform(fronts, total_time):
     return list(base * total_time / base.sum())
 
 
+def mareco_split(track, train, pairs, total_time, points):
+    """Running time per segment [s]: each segment's MARECO-style time for the one cap v1 that
+    makes the total ``total_time`` (bisection; the total falls as v1 rises)."""
+    from . import mareco
+    from .initial import running_time
+    from .run import prepare
+    cases = [prepare(track, train, a, b, points) for a, b in pairs]
+
+    def times(v1):
+        return [running_time(mareco.profile(c, v1), c.nodes) for c in cases]
+
+    lo, hi = 0.5, max(mareco.cap_ceiling(c) for c in cases)
+    if sum(times(hi)) > total_time:
+        raise ValueError(f"total time {total_time:.1f} s is below the MARECO-style minimum {sum(times(hi)):.1f} s")
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if sum(times(mid)) > total_time else (lo, mid)
+    split = times(hi)
+    scale = total_time / sum(split)  # the bisection's last 1e-12 relative
+    return [t * scale for t in split]
+
+
 def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=15, workers=1,
             scheduled=None):
     """Per-segment table for each distribution of one total running time, and the totals.
@@ -67,7 +92,8 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
     all_out = sum(float(f["running_time_s"].iloc[0]) for f in fronts)
     if total_time is None:
         total_time = all_out * (1 + supplement)
-    plans = {"equal marginal saving": equal_marginal(fronts, total_time), "same percentage": uniform(fronts, total_time)}
+    plans = {"equal marginal saving": equal_marginal(fronts, total_time), "same percentage": uniform(fronts, total_time),
+             "MARECO-style": mareco_split(track, train, pairs, total_time, points)}
     if scheduled is not None:
         plans["as timetabled"] = list(scheduled)
     rows, results = [], {}

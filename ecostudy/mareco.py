@@ -44,7 +44,7 @@ def _step(v, ds, resist_fixed, davis, mass, sign):
 
 
 def coast_back(case, base, end, floor, fixed, start_speed=None):
-    """A coast ending at node ``end``: (start node, speeds at nodes start+1..end) or None.
+    """A coast ending at node ``end``: (start node, speeds at nodes start+1, ...) or None.
 
     Traced backwards from ``end`` at ``base[end]`` (or ``start_speed``) until it meets ``base``.
     Where the backward trace would fall below ``floor`` (a descent before the end) the train
@@ -159,18 +159,25 @@ def profile(case, v1):
         if found is None:
             continue
         start, speeds = found
-        out[start + 1:end + 1] = np.minimum(out[start + 1:end + 1], speeds)
+        stop = start + 1 + len(speeds)  # a forward coast may rejoin the profile before ``end``
+        out[start + 1:stop] = np.minimum(out[start + 1:stop], speeds)
         first = start
     return out
+
+
+def cap_ceiling(case):
+    """A cap above which nothing changes: above the limits v1 only raises vf, and once vf reaches
+    every limit nothing coasts (OSRD's computeInitialHighBound)."""
+    hi = top = float(np.max(case.limits))
+    while coasting_floor(case.train, hi) < top and hi < 1e3 * top:
+        hi *= 2
+    return hi
 
 
 def cap_for(case, target, lo=None, hi=None, iterations=50):
     """The cap v1 whose grid running time is ``target`` (bisection; the time falls as v1 rises)."""
     lo = lo if lo is not None else 0.5
-    if hi is None:  # above the limits v1 only raises vf; at vf >= every limit nothing coasts (OSRD)
-        hi, top = float(np.max(case.limits)), float(np.max(case.limits))
-        while coasting_floor(case.train, hi) < top and hi < 1e3 * top:
-            hi *= 2
+    hi = hi if hi is not None else cap_ceiling(case)
     if running_time(profile(case, hi), case.nodes) > target:
         return None
     for _ in range(iterations):
