@@ -1,0 +1,304 @@
+"""Several trains on one line and one substation: timetables, strategies, the joint optimum.
+
+Every train runs the same stops with the same running times and dwells, offset by its departure
+time, on one clock of step dt (``timedomain``). Strategies (thesis 000 Ch. 7-8, thesis 001 §6.2.3):
+
+independent  each train minimises its own pantograph net energy, regeneration credited as if
+             the line always took it (a): no collaboration
+triggering   supervisor rule 7.7: while another train brakes, a train's traction is weighted
+             (1 - gamma2) / (1 - gamma1) with the thesis' gamma1 = 0.71, gamma2 = 0.9 (b)
+voltage      rule 7.11 as the thesis' text applies it: while another train's pantograph voltage
+             is above a train's own (it regenerates), that train's traction weighs 0 (c)
+joint        one NLP over all trains and the network of eq. 7.8 minimising substation energy:
+             the bound no rule can beat (e)
+following    the independent runs, each train kept ``buffer`` metres behind the one ahead on
+             the common clock (thesis 001 eq. 6.9), the leader's time-position profile fixed (f)
+
+The rules (b), (c) re-optimise each train alone against the others' previous runs, a few
+supervisor rounds, keeping the timetable; every strategy is scored by the same network solve
+(``network.solve_step``). The dissension strategy (thesis 000 eqs. 8.14-8.20, (d)) is not built.
+"""
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pyomo.environ as pyo
+
+from . import network, solver, timedomain
+from .physics import hinge
+from .errors import SolverError
+from .inputs import Timing
+from .run import prepare, solve_run
+
+KWH = 3.6e6
+GAMMA = (0.71, 0.9)  # thesis 000 Fig. 7.3: time weights without / with a braking neighbour
+
+
+@dataclass
+class Fleet:
+    """The timetable of every train on the clock: legs[train][segment]."""
+
+    names: list
+    legs: list
+    dt: float
+    steps: int
+    supply: network.Supply
+    buffer: float = None
+    results: dict = field(default_factory=dict)  # space-domain net-energy runs per segment (guesses)
+
+
+def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=500, buffer=None):
+    """A :class:`Fleet`: running times and dwells rounded up to whole steps, departures offset."""
+    cases = [prepare(track, train, a, b, points) for a, b in zip(stops[:-1], stops[1:])]
+    steps = [int(np.ceil(t / dt - 1e-9)) for t in running_times]
+    pause = int(np.ceil(dwell / dt - 1e-9))
+    legs = []
+    for offset in offsets:
+        start, mine = int(round(offset / dt)), []
+        for case, n, a in zip(cases, steps, stops[:-1]):
+            b = stops[stops.index(a) + 1]
+            direction = 1.0 if track.stops[b] >= track.stops[a] else -1.0
+            mine.append(timedomain.Leg(case, start, n, dt, track.stops[a], direction))
+            start += n + pause
+        legs.append(mine)
+    total = max(leg.start + leg.steps for mine in legs for leg in mine)
+    results = {}
+    for case, n in zip(cases, steps):
+        seg = case.segment
+        results[(seg.from_stop, seg.to_stop)] = solve_run(track, train, seg.from_stop, seg.to_stop,
+                                                          Timing(running_time=n * dt), objective="net_energy",
+                                                          points=points, verify_result=False)
+    return Fleet(list(names), legs, dt, total, supply, buffer, results)
+
+
+def _guess(fleet, leg):
+    seg = leg.case.segment
+    return timedomain.guess_from_space(fleet.results[(seg.from_stop, seg.to_stop)], leg)
+
+
+# the joint NLP starts from a feasible point (the independent runs on the solved network): keep
+# Ipopt near it instead of pushing every variable at a bound 1 % inside
+NEAR_START = {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_init": 1e-4}
+
+
+def _solve(m, what, options=None):
+    out = solver.solve(m, options)
+    if not out.usable:
+        raise SolverError(f"{what}: Ipopt {out.status} after {out.iterations} iterations")
+    return out
+
+
+def _energy_ref(fleet):
+    train = fleet.legs[0][0].case.train
+    return max(train.traction.peak * sum(leg.case.segment.distance for leg in fleet.legs[0]) * 0.1, 1.0) / 1e3
+
+
+def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None):
+    """Train ``i`` alone: minimise sum (w_t traction - regeneration) dt over its legs.
+
+    ``weights``: traction weight per clock step (default 1). ``allowance``: power [kW] per clock
+    step that the weight applies to; traction above it costs in full:
+    w min(P, a) + max(P - a, 0) = w P + (1 - w) max(P - a, 0). ``ahead``: the line position of the
+    train ahead per clock step (NaN where it is not on the line) to stay ``fleet.buffer`` behind.
+    Returns ([(s, v, ft, fb, fr, p) per leg], solver outcome).
+    """
+    m = pyo.ConcreteModel()
+    blocks = []
+    for k, leg in enumerate(fleet.legs[i]):
+        guess = guesses[k][:5] if guesses is not None else _guess(fleet, leg)
+        blocks.append(timedomain.add_leg(m, f"leg{k}", leg, guess))
+    w = np.ones(fleet.steps) if weights is None else weights
+
+    def traction_cost(leg, b, j):
+        wt = float(w[leg.start + j])
+        if allowance is None or wt >= 1.0:
+            return wt * b.traction_kw[j]
+        return wt * b.traction_kw[j] + (1 - wt) * hinge(b.traction_kw[j] - float(allowance[leg.start + j]), 10.0)
+
+    cost = sum(traction_cost(leg, b, j) - b.regen_kw[j] for leg, b in zip(fleet.legs[i], blocks) for j in b.I)
+    m.objective = pyo.Objective(expr=cost * fleet.dt / _energy_ref(fleet))
+    if ahead is not None and fleet.buffer is not None:
+        m.separation = pyo.ConstraintList()
+        for leg, b in zip(fleet.legs[i], blocks):
+            for j in b.K:
+                x_ahead = ahead[leg.start + j]
+                if np.isfinite(x_ahead):
+                    m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j] >= fleet.buffer)
+    outcome = _solve(m, f"train {fleet.names[i]}")
+    return [timedomain.leg_arrays(b) for b in blocks], outcome
+
+
+def line_positions(fleet, i, runs):
+    """Line position of train ``i`` per clock step (NaN before departure and after arrival)."""
+    x = np.full(fleet.steps + 1, np.nan)
+    for k, (leg, run) in enumerate(zip(fleet.legs[i], runs)):
+        x[leg.start:leg.start + leg.steps + 1] = leg.line_start + leg.direction * run[0]
+        nxt = fleet.legs[i][k + 1].start if k + 1 < len(fleet.legs[i]) else leg.start + leg.steps + 1
+        x[leg.start + leg.steps:nxt] = leg.line_start + leg.direction * run[0][-1]  # dwelling
+    return x
+
+
+def step_powers(fleet, runs_by_train):
+    """Per clock step: [(train, line position [m], power [W], local step, leg)] of the running trains."""
+    out = [[] for _ in range(fleet.steps)]
+    for i, runs in enumerate(runs_by_train):
+        for k, (leg, run) in enumerate(zip(fleet.legs[i], runs)):
+            s, p = run[0], run[5]
+            for j in range(leg.steps):
+                out[leg.start + j].append((i, leg.line_start + leg.direction * 0.5 * (s[j] + s[j + 1]), p[j], j, k))
+    return out
+
+
+def evaluate(fleet, runs_by_train):
+    """Score runs on the network: per-step flows, per-train and substation totals [kWh]."""
+    rows, per_train = [], {n: {"traction_kWh": 0.0, "braking_regen_offered_kWh": 0.0, "regen_used_kWh": 0.0,
+                               "regen_lost_kWh": 0.0, "line_input_kWh": 0.0} for n in fleet.names}
+    dt = fleet.dt
+    for t, running in enumerate(step_powers(fleet, runs_by_train)):
+        flows = network.solve_step(fleet.supply, [r[1] for r in running], [r[2] for r in running])
+        for q, (i, _, p, j, k) in enumerate(running):
+            name, run = fleet.names[i], runs_by_train[i][k]
+            vbar = 0.5 * (run[1][j] + run[1][j + 1])
+            rec = per_train[name]
+            rec["traction_kWh"] += run[2][j] * vbar * dt / KWH
+            rec["braking_regen_offered_kWh"] += max(-p, 0.0) * dt / KWH
+            rec["regen_used_kWh"] += flows["fed_W"][q] * dt / KWH
+            rec["regen_lost_kWh"] += (max(-p, 0.0) - flows["fed_W"][q]) * dt / KWH
+            rec["line_input_kWh"] += max(flows["voltage_V"][q] * flows["current_A"][q], 0.0) * dt / KWH
+        rows.append({"time_s": t * dt, "substation_kW": flows["substation_W"] / 1e3,
+                     "traction_input_kW": flows["traction_input_W"] / 1e3, "regen_used_kW": flows["regen_used_W"] / 1e3,
+                     "regen_lost_kW": flows["regen_lost_W"] / 1e3, "line_loss_kW": flows["line_loss_W"] / 1e3,
+                     "unserved_kW": flows["unserved_W"] / 1e3,
+                     "min_voltage_V": float(flows["voltage_V"].min()) if len(running) else np.nan,
+                     "max_voltage_V": float(flows["voltage_V"].max()) if len(running) else np.nan,
+                     **{f"voltage_{fleet.names[i]}_V": float(flows["voltage_V"][q]) for q, (i, *_) in enumerate(running)}})
+    import pandas as pd
+    steps = pd.DataFrame(rows)
+    e = {k: float(steps[k].sum() * dt / 3600) for k in ("substation_kW", "traction_input_kW", "regen_used_kW",
+                                                          "regen_lost_kW", "line_loss_kW", "unserved_kW")}
+    lhs, rhs = e["substation_kW"] + e["regen_used_kW"], e["traction_input_kW"] + e["line_loss_kW"]
+    totals = {"substation_kWh": e["substation_kW"], "traction_input_kWh": e["traction_input_kW"],
+              "regen_used_kWh": e["regen_used_kW"], "regen_lost_kWh": e["regen_lost_kW"],
+              "line_losses_kWh": e["line_loss_kW"], "unserved_kWh": e["unserved_kW"],
+              "balance_error_pct": 100 * (lhs - rhs) / max(rhs, 1e-9),
+              "min_voltage_V": float(steps["min_voltage_V"].min()), "max_voltage_V": float(steps["max_voltage_V"].max())}
+    return steps, per_train, totals
+
+
+def _braking_steps(fleet, runs_by_train, share=0.1):
+    """Per train, the clock steps in which it regenerates more than ``share`` of its peak power."""
+    out = []
+    for i, runs in enumerate(runs_by_train):
+        flag = np.zeros(fleet.steps, bool)
+        for leg, run in zip(fleet.legs[i], runs):
+            peak = max(float(np.max(-run[5])), 1.0)
+            flag[leg.start:leg.start + leg.steps] = -run[5] > share * peak
+        out.append(flag)
+    return out
+
+
+def _others(flags, i):
+    return np.any([f for j, f in enumerate(flags) if j != i], axis=0) if len(flags) > 1 else np.zeros_like(flags[0])
+
+
+def independent(fleet):
+    return [solve_train(fleet, i)[0] for i in range(len(fleet.names))]
+
+
+def offered(fleet, runs_by_train):
+    """Regenerated power each train offers per clock step [kW] (what its electric brake feeds)."""
+    out = np.zeros((len(runs_by_train), fleet.steps))
+    for i, runs in enumerate(runs_by_train):
+        for leg, run in zip(fleet.legs[i], runs):
+            out[i, leg.start:leg.start + leg.steps] = np.maximum(-run[5], 0.0) / 1e3
+    return out
+
+
+def supervised(fleet, rule, start, rounds=3):
+    """Rules (b) and (c): each round re-optimises every train against the others' previous runs.
+
+    The rule says when a train's traction is discounted (7.7: another train brakes; 7.11, as the
+    thesis' text applies it: another train's pantograph voltage is above one's own); the discount
+    applies to traction up to the power the others offer then (a zero weight on unlimited
+    traction only moves consumption to the substation). Returns (runs, rounds' substation kWh);
+    the runs are those of the round with the least substation energy, the start included.
+    """
+    runs, low = start, (1 - GAMMA[1]) / (1 - GAMMA[0])
+    best = (evaluate(fleet, runs)[2]["substation_kWh"], runs)
+    history = [best[0]]
+    for _ in range(rounds):
+        power = offered(fleet, runs)
+        if rule == "triggering":
+            flags = _braking_steps(fleet, runs)
+            weights = [np.where(_others(flags, i), low, 1.0) for i in range(len(runs))]
+        else:
+            steps, _, _ = evaluate(fleet, runs)
+            volts = {n: steps[f"voltage_{n}_V"].to_numpy() if f"voltage_{n}_V" in steps else
+                     np.full(len(steps), np.nan) for n in fleet.names}
+            weights = []
+            for name in fleet.names:
+                higher = np.zeros(len(steps), bool)
+                for other in fleet.names:
+                    if other != name:
+                        higher |= volts[other] > volts[name] + 1.0  # NaN (not running) compares False
+                weights.append(np.where(higher, 0.0, 1.0))
+        runs = [solve_train(fleet, i, weights[i], guesses=runs[i],
+                            allowance=power.sum(axis=0) - power[i])[0] for i in range(len(runs))]
+        energy = evaluate(fleet, runs)[2]["substation_kWh"]
+        history.append(energy)
+        if energy < best[0]:
+            best = (energy, runs)
+    return best[1], history
+
+
+def following(fleet, start):
+    """(f): trains in departure order, each kept ``fleet.buffer`` behind the one ahead."""
+    order = np.argsort([legs[0].start for legs in fleet.legs])
+    runs = list(start)
+    for rank, i in enumerate(order):
+        if rank == 0:
+            continue
+        ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]])
+        runs[i] = solve_train(fleet, i, guesses=runs[i], ahead=ahead)[0]
+    return runs
+
+
+def joint(fleet, start):
+    """(e): all trains and the network in one NLP, substation energy minimised; from ``start``."""
+    t0 = time.perf_counter()
+    m = pyo.ConcreteModel()
+    blocks = []
+    for i, legs in enumerate(fleet.legs):
+        blocks.append([timedomain.add_leg(m, f"t{i}_leg{k}", leg, start[i][k][:5]) for k, leg in enumerate(legs)])
+    steps = [[] for _ in range(fleet.steps)]
+    for i, legs in enumerate(fleet.legs):
+        for leg, b in zip(legs, blocks[i]):
+            for j in range(leg.steps):
+                steps[leg.start + j].append((b, j, leg.line_start, leg.direction))
+    steps = [s for s in steps]
+    if not all(steps):  # steps where no train runs carry no network variables
+        keep = [t for t, s in enumerate(steps) if s]
+        steps = [steps[t] for t in keep]
+    network.add_network(m, fleet.supply, steps)
+    _initialise_network(m, fleet, steps)
+    m.objective = pyo.Objective(expr=sum(m.substation_mw[t] for t in m.T_net) * 1e3 * fleet.dt / _energy_ref(fleet))
+    build_s = time.perf_counter() - t0
+    outcome = _solve(m, "joint optimum", NEAR_START)
+    runs = [[timedomain.leg_arrays(b) for b in bl] for bl in blocks]
+    return runs, {"build_s": build_s, "solve_s": outcome.seconds + outcome.nl_seconds,
+                  "iterations": outcome.iterations, "status": outcome.status,
+                  "variables": sum(1 for _ in m.component_data_objects(pyo.Var, active=True))}
+
+
+def _initialise_network(m, fleet, steps):
+    """Network variables from the numeric solve of the start point (Ipopt starts near physics)."""
+    for t, running in enumerate(steps):
+        xs = [start + d * 0.5 * pyo.value(b.s[j] + b.s[j + 1]) for b, j, start, d in running]
+        ps = [pyo.value(b.p[j]) * 1e3 for b, j, *_ in running]
+        flows = network.solve_step(fleet.supply, xs, ps)
+        vmin, vmax = fleet.supply.min_voltage / 1e3, fleet.supply.max_voltage / 1e3
+        m.V0[t].set_value(float(np.clip(flows["bus_voltage_V"] / 1e3, vmin, vmax)))
+        for q, p in enumerate(ps):
+            m.rheostat[t, q].set_value(max(-p - flows["fed_W"][q], 0.0) / 1e6)
+            m.Ipan[t, q].set_value(float(flows["current_A"][q] / 1e3))
+            m.Vpan[t, q].set_value(float(np.clip(flows["voltage_V"][q] / 1e3, vmin, vmax)))

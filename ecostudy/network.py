@@ -1,0 +1,143 @@
+"""The DC supply of trains on one substation (thesis 000 §7.2.1, eq. 7.8).
+
+Every running train i is a node at pantograph voltage V_i, joined to the substation bus by the
+line resistance R(x_i) = r |x_i - x_sub| (r per km, thesis: 25 mOhm/km); the bus is fed by the
+source V_s through the internal resistance R_s (eq. 7.8 written for the bus voltage V_0):
+
+    V_i = V_0 - R(x_i) I_i,      V_0 = V_s - R_s I_s,      I_s = sum_i I_i
+
+A train draws the power p_i = V_i I_i (traction, I_i > 0) or feeds it (regeneration, I_i < 0).
+The substation is a diode rectifier: I_s >= 0. When the trains feed more than the others draw,
+the bus floats above V_s with I_s = 0, and a feeding train may not raise its voltage above
+V_max (thesis: 685 V on a 600 V supply): what it cannot feed goes to its rheostat (lost).
+
+Units inside the electrical model: kV, kA, MW, Ohm (kV = Ohm kA, MW = kV kA).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Supply:
+    """One substation and its line [SI: V, Ohm, Ohm/m, m]."""
+
+    position: float               # x_sub on the line [m]
+    voltage: float = 750.0        # V_s [V]
+    resistance: float = 0.01      # R_s [Ohm]
+    line_resistance: float = 25e-6  # r [Ohm/m] (thesis 000 §7.2.1: 25 mOhm/km)
+    max_voltage: float = 856.0    # V_max, regeneration cut-off [V] (685/600 of 750 V)
+    min_voltage: float = 500.0    # lowest pantograph voltage [V]
+
+    def feeder(self, x):
+        """R(x) [Ohm] between the bus and a train at line position ``x`` [m]."""
+        return self.line_resistance * np.abs(np.asarray(x, float) - self.position)
+
+
+def _current(v0, r, p):
+    """Current [kA] drawn (p > 0) or fed (p < 0) at power p [MW] through r [Ohm] from bus v0 [kV]."""
+    if r < 1e-12:
+        return p / v0
+    disc = v0 * v0 - 4.0 * r * p
+    if disc < 0:  # beyond the largest power the line can carry: the train takes what it can
+        return v0 / (2.0 * r)
+    return 2.0 * p / (v0 + np.sqrt(disc))  # the small root, stable for r -> 0
+
+
+def _currents(v0, r, p, vmax):
+    """Currents [kA] at bus voltage v0; a feeding train is held at vmax (the rest is lost)."""
+    out = np.empty(len(p))
+    for i, (ri, pi) in enumerate(zip(r, p)):
+        ii = _current(v0, ri, pi)
+        if pi < 0 and v0 - ri * ii > vmax:
+            ii = (v0 - vmax) / max(ri, 1e-12)
+        out[i] = ii
+    return out
+
+
+def solve_step(supply, positions, powers):
+    """Currents, voltages and flows of one instant.
+
+    positions: line positions of the running trains [m]; powers: their pantograph powers [W]
+    (negative: regeneration offered). Returns a dict of arrays and floats in SI units (A, V, W).
+    """
+    p = np.asarray(powers, float) / 1e6
+    r = supply.feeder(positions)
+    vs, rs, vmax = supply.voltage / 1e3, supply.resistance, supply.max_voltage / 1e3
+    if len(p) == 0:
+        return {**_flows(supply, r, np.zeros(0), np.zeros(0), p, vs, 0.0), "bus_voltage_V": supply.voltage}
+
+    def net(v0):  # current drawn from the bus at bus voltage v0
+        return float(np.sum(_currents(v0, r, p, vmax)))
+
+    if net(vs) <= 0.0:  # the trains feed at least what they draw: the diode blocks, the bus floats
+        lo, hi = vs, vmax
+        if net(hi) < 0:
+            hi = vmax  # every feeder is at vmax already: the surplus is lost
+        else:
+            for _ in range(80):
+                mid = 0.5 * (lo + hi)
+                lo, hi = (mid, hi) if net(mid) < 0 else (lo, mid)
+        v0, i_s = hi, 0.0
+    else:  # V_0 = V_s - R_s I_s(V_0): bisection between a collapsed bus and V_s
+        lo, hi = 0.05 * vs, vs
+        for _ in range(80):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if mid < vs - rs * max(net(mid), 0.0) else (lo, mid)
+        v0 = 0.5 * (lo + hi)
+        i_s = max(net(v0), 0.0)
+    currents = _currents(v0, r, p, vmax)
+    out = _flows(supply, r, currents, v0 - r * currents, p, vs, i_s)
+    out["bus_voltage_V"] = v0 * 1e3
+    return out
+
+
+def _flows(supply, r, currents, volts, p, vs, i_s):
+    """Energy flows of one instant [W] from the solved circuit."""
+    drawn = volts * currents  # MW at each pantograph
+    offered = np.where(p < 0, -p, 0.0)
+    fed = np.where(p < 0, -drawn, 0.0)
+    return {
+        "current_A": currents * 1e3, "voltage_V": volts * 1e3,
+        "substation_W": vs * i_s * 1e6, "substation_current_A": i_s * 1e3,
+        "traction_input_W": float(np.sum(np.where(p > 0, drawn, 0.0))) * 1e6,
+        "regen_used_W": float(np.sum(fed)) * 1e6,
+        "regen_lost_W": float(np.sum(offered - fed)) * 1e6,
+        "line_loss_W": float(np.sum(r * currents ** 2) + supply.resistance * i_s ** 2) * 1e6,
+        "unserved_W": float(np.sum(np.where(p > 0, p - drawn, 0.0))) * 1e6,
+        "fed_W": fed * 1e6,
+    }
+
+
+def add_network(m, supply, steps, width=1e-3):
+    """Pyomo constraints of eq. 7.8 on the joint model ``m`` (kV, kA, MW).
+
+    ``steps``: for every clock step t, the list of (leg block, local step j, line start, direction)
+    of the trains running then. Adds V0[t], I[t, q], V[t, q], the rheostat power [MW] and the
+    expression m.substation_mw[t]
+    = V_s I_s(V_0), with the diode I_s = max((V_s - V_0) / R_s, 0) rounded over ``width`` kA.
+    """
+    import pyomo.environ as pyo
+    from .physics import smooth_max
+    vs, rs = supply.voltage / 1e3, supply.resistance
+    index = [(t, q) for t, running in enumerate(steps) for q in range(len(running))]
+    m.T_net = pyo.RangeSet(0, len(steps) - 1)
+    m.V0 = pyo.Var(m.T_net, bounds=(supply.min_voltage / 1e3, supply.max_voltage / 1e3), initialize=vs)
+    m.Ipan = pyo.Var(index, initialize=0.0)
+    m.Vpan = pyo.Var(index, bounds=(supply.min_voltage / 1e3, supply.max_voltage / 1e3), initialize=vs)
+    m.Is = pyo.Expression(m.T_net, rule=lambda m, t: smooth_max((vs - m.V0[t]) / rs, 0.0, width))
+
+    def feeder(b, j, start, direction):
+        x = start + direction * 0.5 * (b.s[j] + b.s[j + 1])
+        return supply.line_resistance * ((x - supply.position) ** 2 + 1.0) ** 0.5
+
+    m.kvl = pyo.Constraint(index, rule=lambda m, t, q: m.Vpan[t, q] == m.V0[t] - feeder(*steps[t][q]) * m.Ipan[t, q])
+    # a feeding train burns in its rheostat what the line cannot take (>= 0; burning power while
+    # motoring only costs substation energy, so the optimum never does it: no constraint needed)
+    m.rheostat = pyo.Var(index, bounds=(0.0, None), initialize=0.0)
+    m.power = pyo.Constraint(index, rule=lambda m, t, q: m.Vpan[t, q] * m.Ipan[t, q]
+                             == steps[t][q][0].p[steps[t][q][1]] / 1e3 + m.rheostat[t, q])
+
+    m.kcl = pyo.Constraint(m.T_net, rule=lambda m, t: sum(m.Ipan[t, q] for q in range(len(steps[t]))) == m.Is[t])
+    m.substation_mw = pyo.Expression(m.T_net, rule=lambda m, t: vs * m.Is[t])
+    return index

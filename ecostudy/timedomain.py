@@ -1,0 +1,190 @@
+"""One train's run between two stops on a common clock: the time-domain model (thesis 000 eq. 8.1).
+
+Several trains meet only in time (a shared substation, a leader ahead), so their runs are
+written on one clock with a fixed step dt. On steps j = 0..n of one segment (n dt = the
+segment's running time, departure and arrival fixed by the timetable):
+
+    s_{j+1} - s_j = dt (v_j + v_{j+1}) / 2                                  (position, trapezoid)
+    (v_{j+1} - v_j) / dt = (F_T,j - F_B,j - R_D(v_j, v_{j+1}) - G(s_mid)) / M  (speed, eq. 8.1)
+
+with R_D the trapezoidal mean of the Davis resistance and G(s) the gradient and curve force of
+the segment, smoothed over ``width`` metres at each change (the only way a position-dependent
+force enters a smooth NLP). Speed limits become a continuous piecewise-linear bound L(s) that is
+never above the train-length limit of the space grid: it ramps down over ``ramp`` metres before a
+restriction and up over ``ramp`` metres after it ends. Envelopes hold at both step ends, forces
+are in kN and the regenerative part F_R <= F_B obeys its own envelope, as in ``model.py``.
+
+The electrical power at the pantograph in step j [kW] is
+p_j = F_T,j vbar_j / eta_T - eta_R F_R,j vbar_j, vbar_j = (v_j + v_{j+1}) / 2 (thesis 000 eq. 7.3).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+import pyomo.environ as pyo
+
+from . import model as formulation
+from .physics import table_coefficients, smooth_table
+
+KN = formulation.KN
+
+
+@dataclass
+class Leg:
+    """One train's run between two stops: departure step, steps and the space-grid case."""
+
+    case: object          # run.Case of the segment (grid, limits, envelope)
+    start: int            # departure step on the common clock
+    steps: int            # running time / dt
+    dt: float
+    line_start: float     # line position of the departure stop [m]
+    direction: float      # +1 or -1 along the line
+
+    @property
+    def running_time(self):
+        return self.steps * self.dt
+
+
+def force_profile(case, width):
+    """(positions, values) of the gradient + curve force [N] as a smooth step function of s."""
+    seg = case.segment
+    cuts = np.unique(np.concatenate([[0.0], seg.breakpoints(), [seg.distance]]))
+    mids = 0.5 * (cuts[:-1] + cuts[1:])
+    force = _point_force(case, mids)
+    # a step at each cut is the limit of a ramp of width -> 0; use ramps of ``width`` centred on it
+    xs, fs = [0.0], [force[0]]
+    for c, f0, f1 in zip(cuts[1:-1], force[:-1], force[1:]):
+        if f0 != f1:
+            xs += [c - 0.5 * width, c + 0.5 * width]
+            fs += [f0, f1]
+    xs.append(seg.distance)
+    fs.append(force[-1])
+    return np.array(xs), np.array(fs)
+
+
+def _point_force(case, positions):
+    """Gradient and curve force at positions [N] (same physics as model.py's interval term)."""
+    from .physics import running_resistance
+    seg, train = case.segment, case.train
+    return running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, seg.gradient(positions),
+                              train.curve_coefficient, seg.curvature(positions))
+
+
+def limit_profile(case, ramp, dt=0.0):
+    """(positions, speeds) of a continuous piecewise-linear bound never above the node limits.
+
+    The bound holds at the time steps only, and near a change a train covers at most
+    lead = (higher limit) dt metres in one step, so the bound is down ``lead`` before a
+    restriction and rises ``lead`` after its end: the straight line between two steps then
+    never crosses the true limit.
+    """
+    x, lim = case.nodes, case.limits
+    xs, vs = [0.0], [lim[0]]
+    for k in range(1, len(x)):
+        if lim[k] == lim[k - 1]:
+            continue
+        lead = max(lim[k], lim[k - 1]) * dt
+        if lim[k] < lim[k - 1]:  # a restriction starts at x[k]
+            b = max(x[k] - lead, xs[-1])
+            a = max(b - ramp, xs[-1])
+            xs += [a, b]
+            vs += [vs[-1], lim[k]]
+        else:  # a restriction ends at x[k-1]
+            a = min(x[k - 1] + lead, case.segment.distance)
+            xs += [a, min(a + ramp, case.segment.distance)]
+            vs += [lim[k - 1], lim[k]]
+    xs.append(case.segment.distance)
+    vs.append(lim[-1])
+    xs, vs = np.array(xs), np.array(vs)
+    keep = np.concatenate([[True], np.diff(xs) > 1e-9])
+    return xs[keep], vs[keep]
+
+
+def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1):
+    """Add one leg as a block ``m.<name>`` with variables s, v, ft, fb, fr and expression p [kW].
+
+    ``guess``: (s, v) arrays on the leg's steps, optionally followed by (F_T, F_B, F_R) per step
+    [N]; else a trapezoidal speed profile.
+    """
+    case, train, n, dt = leg.case, leg.case.train, leg.steps, leg.dt
+    b = pyo.Block()
+    m.add_component(name, b)
+    b.K = pyo.RangeSet(0, n)
+    b.I = pyo.RangeSet(0, n - 1)
+    s0, v0 = guess[:2] if guess is not None else _trapezoid(case, n, dt)
+    top = float(np.max(case.limits))
+    b.s = pyo.Var(b.K, bounds=(0.0, case.segment.distance), initialize=lambda b, j: float(s0[j]))
+    b.v = pyo.Var(b.K, bounds=(0.0, top), initialize=lambda b, j: float(v0[j]))
+    for var, value in ((b.s[0], 0.0), (b.v[0], 0.0), (b.s[n], case.segment.distance), (b.v[n], 0.0)):
+        var.fix(value)
+    forces = [np.asarray(f) / KN for f in guess[2:5]] if guess is not None and len(guess) >= 5 else [np.zeros(n)] * 3
+    regen_top = min(train.regeneration.max_force, train.braking.peak) / KN if train.regeneration else 0.0
+    tops = (train.traction.peak / KN, train.braking.peak / KN, regen_top)
+    b.ft, b.fb, b.fr = (pyo.Var(b.I, bounds=(0.0, top), initialize=lambda b, j, f=f, top=top: min(float(f[j]), top))
+                        for f, top in zip(forces, tops))
+    a, bb, c = train.davis
+    mass = train.mass
+    gx, gf = force_profile(case, width)
+    g_coef = table_coefficients(gx, gf / KN, 0.25 * width)
+    lx, lv = limit_profile(case, ramp, dt)
+    l_coef = table_coefficients(lx, lv, 0.25 * width)
+
+    def kinematics(b, j):
+        return b.s[j + 1] - b.s[j] == 0.5 * dt * (b.v[j] + b.v[j + 1])
+
+    def dynamics(b, j):
+        davis = (a + 0.5 * bb * (b.v[j] + b.v[j + 1]) + 0.5 * c * (b.v[j] ** 2 + b.v[j + 1] ** 2)) / KN
+        grade = smooth_table(0.5 * (b.s[j] + b.s[j + 1]), g_coef, 0.25 * width)
+        return (b.v[j + 1] - b.v[j]) * (mass / KN) / dt == b.ft[j] - b.fb[j] - davis - grade
+
+    def limit(b, j):
+        return b.v[j] <= smooth_table(b.s[j], l_coef, 0.25 * width) - limit_margin
+
+    b.kinematics = pyo.Constraint(b.I, rule=kinematics)
+    b.dynamics = pyo.Constraint(b.I, rule=dynamics)
+    b.limit = pyo.Constraint(pyo.RangeSet(1, n - 1), rule=limit)
+    formulation._envelope_constraints(b, "traction", b.ft, train.traction)
+    formulation._envelope_constraints(b, "braking", b.fb, train.braking)
+    if train.regeneration is not None:
+        b.regen_share = pyo.Constraint(b.I, rule=lambda b, j: b.fr[j] <= b.fb[j])
+        formulation._envelope_constraints(b, "regen", b.fr, train.regeneration)
+    else:
+        b.fr.fix(0.0)
+    eta_t, eta_r = train.traction_efficiency, train.regeneration_efficiency
+    b.vbar = pyo.Expression(b.I, rule=lambda b, j: 0.5 * (b.v[j] + b.v[j + 1]))
+    b.traction_kw = pyo.Expression(b.I, rule=lambda b, j: b.ft[j] * b.vbar[j] / eta_t)
+    b.regen_kw = pyo.Expression(b.I, rule=lambda b, j: eta_r * b.fr[j] * b.vbar[j])
+    b.p = pyo.Expression(b.I, rule=lambda b, j: b.traction_kw[j] - b.regen_kw[j])
+    return b
+
+
+def _trapezoid(case, n, dt):
+    """A feasible-looking start: accelerate, hold, brake, with the area equal to the distance."""
+    t = np.arange(n + 1) * dt
+    total = n * dt
+    ramp = 0.25 * total
+    v_top = case.segment.distance / (total - ramp)
+    v = np.minimum(np.minimum(t, total - t) / ramp, 1.0) * v_top
+    s = np.concatenate([[0.0], np.cumsum(0.5 * dt * (v[:-1] + v[1:]))])
+    s *= case.segment.distance / s[-1]
+    return s, v
+
+
+def leg_arrays(b):
+    """(s, v, ft [N], fb [N], fr [N], p [W]) of a solved leg block."""
+    s = np.array([pyo.value(b.s[j]) for j in b.K])
+    v = np.array([pyo.value(b.v[j]) for j in b.K])
+    ft, fb, fr = (np.array([pyo.value(x[j]) for j in b.I]) * KN for x in (b.ft, b.fb, b.fr))
+    p = np.array([pyo.value(b.p[j]) for j in b.I]) * 1e3
+    return s, v, ft, fb, fr, p
+
+
+def guess_from_space(result, leg):
+    """(s, v) on the leg's steps from a space-domain run of the same segment (its time profile)."""
+    t = result.profile["time_s"].to_numpy()
+    x = result.profile["position_m"].to_numpy()
+    scale = leg.running_time / t[-1]
+    tj = np.arange(leg.steps + 1) * leg.dt / scale
+    s = np.interp(tj, t, x)
+    v = np.gradient(s, leg.dt)
+    v[0] = v[-1] = 0.0
+    return s, np.clip(v, 0.0, None)
