@@ -245,4 +245,4 @@ def doctor(debug: bool = typer.Option(False, help="Show tracebacks.")):
         raise typer.Exit(3)
 
 
-from . import cli_studies  # noqa: E402,F401  (registers pareto, compare, journey and run on `app`)
+from . import cli_network, cli_studies  # noqa: E402,F401  (register network, pareto, compare, journey, run)

@@ -11,8 +11,9 @@ voltage      rule 7.11 as the thesis' text applies it: while another train's pan
              is above a train's own (it regenerates), that train's traction weighs 0 (c)
 joint        one NLP over all trains and the network of eq. 7.8 minimising substation energy:
              the bound no rule can beat (e)
-following    the independent runs, each train kept ``buffer`` metres behind the one ahead on
-             the common clock (thesis 001 eq. 6.9), the leader's time-position profile fixed (f)
+following    the independent runs, each train's head kept ``buffer`` metres behind the tail of
+             the one ahead on the common clock (thesis 001 eq. 6.9), the leader's time-position
+             profile fixed (f)
 
 The rules (b), (c) re-optimise each train alone against the others' previous runs, a few
 supervisor rounds, keeping the timetable; every strategy is scored by the same network solve
@@ -45,6 +46,7 @@ class Fleet:
     supply: network.Supply
     buffer: float = None
     results: dict = field(default_factory=dict)  # space-domain net-energy runs per segment (guesses)
+    dwell_steps: int = 0
 
 
 def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=500, buffer=None):
@@ -68,7 +70,7 @@ def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, 
         results[(seg.from_stop, seg.to_stop)] = solve_run(track, train, seg.from_stop, seg.to_stop,
                                                           Timing(running_time=n * dt), objective="net_energy",
                                                           points=points, verify_result=False)
-    return Fleet(list(names), legs, dt, total, supply, buffer, results)
+    return Fleet(list(names), legs, dt, total, supply, buffer, results, pause)
 
 
 def _guess(fleet, leg):
@@ -78,7 +80,12 @@ def _guess(fleet, leg):
 
 # the joint NLP starts from a feasible point (the independent runs on the solved network): keep
 # Ipopt near it instead of pushing every variable at a bound 1 % inside
-NEAR_START = {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_init": 1e-4}
+# (measured on the 2-train study: the adaptive barrier update left the start and took 3000
+# iterations; a monotone one from mu 1e-3 converged in 730)
+NEAR_START = {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_strategy": "monotone", "mu_init": 1e-3}
+
+
+REGULARISATION = 1e-3  # [-] weight of rheostat power and bus-voltage offset in the joint objective
 
 
 def _solve(m, what, options=None):
@@ -106,7 +113,7 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
     blocks = []
     for k, leg in enumerate(fleet.legs[i]):
         guess = guesses[k][:5] if guesses is not None else _guess(fleet, leg)
-        blocks.append(timedomain.add_leg(m, f"leg{k}", leg, guess))
+        blocks.append(timedomain.add_leg(m, f"leg{k}", leg, guess, one_handle=weights is not None))
     w = np.ones(fleet.steps) if weights is None else weights
 
     def traction_cost(leg, b, j):
@@ -122,19 +129,21 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
         for leg, b in zip(fleet.legs[i], blocks):
             for j in b.K:
                 x_ahead = ahead[leg.start + j]
-                if np.isfinite(x_ahead):
-                    m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j] >= fleet.buffer)
+                if np.isfinite(x_ahead):  # head-to-tail: the train ahead is train.length long
+                    m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j]
+                                     >= fleet.buffer + leg.case.train.length)
     outcome = _solve(m, f"train {fleet.names[i]}")
     return [timedomain.leg_arrays(b) for b in blocks], outcome
 
 
 def line_positions(fleet, i, runs):
     """Line position of train ``i`` per clock step (NaN before departure and after arrival)."""
-    x = np.full(fleet.steps + 1, np.nan)
+    x = np.full(fleet.steps + fleet.dwell_steps + 1, np.nan)
     for k, (leg, run) in enumerate(zip(fleet.legs[i], runs)):
         x[leg.start:leg.start + leg.steps + 1] = leg.line_start + leg.direction * run[0]
-        nxt = fleet.legs[i][k + 1].start if k + 1 < len(fleet.legs[i]) else leg.start + leg.steps + 1
-        x[leg.start + leg.steps:nxt] = leg.line_start + leg.direction * run[0][-1]  # dwelling
+        end = leg.start + leg.steps
+        nxt = fleet.legs[i][k + 1].start if k + 1 < len(fleet.legs[i]) else end + fleet.dwell_steps + 1
+        x[end:nxt] = leg.line_start + leg.direction * run[0][-1]  # dwelling (at the terminus too)
     return x
 
 
@@ -281,7 +290,12 @@ def joint(fleet, start):
         steps = [steps[t] for t in keep]
     network.add_network(m, fleet.supply, steps)
     _initialise_network(m, fleet, steps)
-    m.objective = pyo.Objective(expr=sum(m.substation_mw[t] for t in m.T_net) * 1e3 * fleet.dt / _energy_ref(fleet))
+    # the rheostat and friction brakes are interchangeable, and with no current the bus voltage is
+    # free: tiny costs on both remove these flat directions (Ipopt ran out of iterations on them)
+    vs = fleet.supply.voltage / 1e3
+    regular = REGULARISATION * (sum(m.rheostat[k] for k in m.rheostat) + sum((m.V0[t] - vs) ** 2 for t in m.T_net))
+    m.objective = pyo.Objective(expr=(sum(m.substation_mw[t] for t in m.T_net) + regular) * 1e3 * fleet.dt
+                                / _energy_ref(fleet))
     build_s = time.perf_counter() - t0
     outcome = _solve(m, "joint optimum", NEAR_START)
     runs = [[timedomain.leg_arrays(b) for b in bl] for bl in blocks]
@@ -302,3 +316,85 @@ def _initialise_network(m, fleet, steps):
             m.rheostat[t, q].set_value(max(-p - flows["fed_W"][q], 0.0) / 1e6)
             m.Ipan[t, q].set_value(float(flows["current_A"][q] / 1e3))
             m.Vpan[t, q].set_value(float(np.clip(flows["voltage_V"][q] / 1e3, vmin, vmax)))
+
+
+def verify_leg(leg, run):
+    """Re-simulate a leg's controls with the independent simulator (``simulate.verify``).
+
+    The step forces become handles on the space intervals the steps cover (steps at standstill
+    cover none), so the simulator drives them by position as it drives every other run.
+    """
+    from .run import handles
+    from .simulate import verify
+    s, v, ft, fb = run[:4]
+    moving = np.diff(s) > 1e-6
+    nodes = np.concatenate([[s[0]], s[1:][moving]])
+    speeds = np.concatenate([[v[0]], v[1:][moving]])
+    u = handles(leg.case.train, speeds, ft[moving], fb[moving])
+    energy = float(np.sum(ft * np.diff(s)))
+    return verify(leg.case.segment, leg.case.train, nodes, u, leg.running_time, energy)[0]
+
+
+def separations(fleet, runs_by_train):
+    """Smallest gap [m] from each train's head to the tail of the train ahead while both are on
+    the line (None for the first train); negative: the trains would overlap."""
+    order = list(np.argsort([legs[0].start for legs in fleet.legs]))
+    out = {fleet.names[order[0]]: None}
+    length = fleet.legs[0][0].case.train.length
+    for ahead, me in zip(order[:-1], order[1:]):
+        gap = fleet.legs[me][0].direction * (line_positions(fleet, ahead, runs_by_train[ahead])
+                                             - line_positions(fleet, me, runs_by_train[me])) - length
+        both = np.isfinite(gap)
+        out[fleet.names[me]] = float(gap[both].min()) if both.any() else None
+    return out
+
+
+def run_strategies(fleet, strategies, progress=print):
+    """Every strategy on ``fleet``: {name: {"runs", "steps", "trains", "totals", "info"}}.
+
+    The independent runs are solved first: they are strategy (a) and the start of the others.
+    """
+    out = {}
+    t0 = time.perf_counter()
+    ind = independent(fleet)
+    base_s = time.perf_counter() - t0
+    for name in strategies:
+        t0 = time.perf_counter()
+        info = {}
+        try:
+            if name == "independent":
+                runs = ind
+            elif name in ("triggering", "voltage"):
+                runs, history = supervised(fleet, name, ind)
+                info["rounds_substation_kWh"] = history
+            elif name == "joint":
+                runs, info = joint(fleet, ind)
+            elif name == "following":
+                runs = following(fleet, ind)
+            else:
+                raise ValueError(f"unknown strategy {name!r}")
+        except SolverError as exc:  # one strategy failing does not stop the study
+            out[name] = {"failed": str(exc), "wall_s": time.perf_counter() - t0}
+            if progress:
+                progress(f"{name:12s} FAILED: {exc}")
+            continue
+        wall = time.perf_counter() - t0 + (base_s if name == "independent" else 0.0)
+        steps, trains, totals = evaluate(fleet, runs)
+        checks = [[verify_leg(leg, run) for leg, run in zip(fleet.legs[i], runs[i])] for i in range(len(runs))]
+        gaps = separations(fleet, runs)
+        for i, n in enumerate(fleet.names):
+            ver = checks[i]
+            last = fleet.legs[i][-1]
+            trains[n].update(arrival_s=(last.start + last.steps) * fleet.dt,
+                             worst_arrival_error_s=max(abs(v["arrival_time_error_s"]) for v in ver),
+                             worst_stop_error_m=max(abs(v["stop_error_m"]) for v in ver),
+                             worst_energy_error_pct=max(abs(v["energy_error_pct"]) for v in ver),
+                             worst_overspeed_kmh=max(v["max_overspeed_kmh"] for v in ver),
+                             verified=all(v["passed"] for v in ver), min_separation_m=gaps[n])
+        totals.update(wall_s=wall, all_verified=all(t["verified"] for t in trains.values()),
+                      min_separation_m=min([g for g in gaps.values() if g is not None], default=None))
+        totals["status"] = "ok"
+        out[name] = {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
+        if progress:
+            progress(f"{name:12s} substation {totals['substation_kWh']:.3f} kWh, {wall:.1f} s")
+    return out

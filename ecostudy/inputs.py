@@ -326,5 +326,52 @@ def load_study(path):
                  windows=windows_from_schema(s.windows, track, from_stop, to_stop, path))
 
 
+@dataclass
+class NetworkStudy:
+    """A network study in SI units (`ecostudy network`)."""
+
+    name: str
+    track: Track
+    train: Train
+    stops: list
+    running_times: list | None      # [s] per segment, or None with ``supplement``
+    supplement: float | None        # [-] per segment over its all-out time
+    dwell: float                    # [s]
+    dt: float                       # [s]
+    names: list
+    offsets: list                   # [s]
+    supply: object                  # network.Supply
+    strategies: list
+    buffer: float | None            # [m]
+    points: int
+    output: Path
+
+
+def load_network_study(path):
+    """Read a network study file and the files it names; units converted here."""
+    from .network import Supply
+    path = Path(path)
+    s = validate(schemas.NetworkStudyFile, read_document(path), path)
+    track, train = load_track(path.parent / s.track), load_train(path.parent / s.train)
+    stops = s.stops or list(track.stops)
+    for name in stops:
+        if name not in track.stops:
+            raise InputError(problem(path, "stops", f"'{name}' is not a stop of {s.track} ({', '.join(track.stops)})"))
+    if len(stops) < 2:
+        raise InputError(problem(path, "stops", "need at least two stops"))
+    if s.running_times_s is not None and len(s.running_times_s) != len(stops) - 1:
+        raise InputError(problem(path, "running_times_s", f"need {len(stops) - 1} values, one per segment"))
+    sub = s.substation
+    supply = Supply(position=sub.position_m, voltage=sub.voltage_V, resistance=sub.internal_resistance_ohm,
+                    line_resistance=sub.line_resistance_ohm_per_km / 1000.0,
+                    max_voltage=sub.max_voltage_V or sub.voltage_V * 685 / 600,
+                    min_voltage=sub.min_voltage_V or sub.voltage_V * 2 / 3)
+    return NetworkStudy(s.name, track, train, stops, s.running_times_s,
+                        None if s.supplement_percent is None else s.supplement_percent * units.PERCENT,
+                        s.dwell_s, s.time_step_s, [t.name for t in s.trains], [t.offset_s for t in s.trains],
+                        supply, list(s.strategies), s.buffer_m, s.points,
+                        Path(s.output) if s.output else Path("out") / s.name)
+
+
 __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study",
            "load_timetable", "check_stops"]

@@ -135,3 +135,32 @@ def journey_plot(results, path, title=""):
             offset += r.summary["distance_m"]
             ax.axvline(offset, color="grey", lw=0.5)
     _finish_speed_axes(fig, ax, path, title, xlabel="distance along the journey [m]", legend_size=8)
+
+
+def network_plot(fleet, outcome, path, title=""):
+    """Speeds against time of every train (independent and joint, if run), and the substation
+    power of every strategy."""
+    import numpy as np
+    shown = [n for n in ("independent", "joint") if n in outcome] or list(outcome)[:1]
+    fig, axes = plt.subplots(len(shown) + 1, 1, figsize=(10, 3 * (len(shown) + 1)), sharex=True)
+    fig.subplots_adjust(left=0.08, right=0.98, top=0.94, bottom=0.07, hspace=0.25)
+    fig.suptitle(title, fontsize=10)
+    for ax, name in zip(axes, shown):
+        for i, (legs, runs) in enumerate(zip(fleet.legs, outcome[name]["runs"])):
+            for k, (leg, run) in enumerate(zip(legs, runs)):
+                t = (leg.start + np.arange(leg.steps + 1)) * fleet.dt
+                ax.plot(t, run[1] * 3.6, color=f"C{i}", lw=1, label=fleet.names[i] if k == 0 else None)
+        ax.set_ylabel(f"{name}\nspeed [km/h]", fontsize=8)
+        ax.legend(fontsize=7, loc="upper right")
+        ax.grid(alpha=0.3)
+    ax = axes[-1]
+    for j, (name, res) in enumerate(outcome.items()):
+        steps = res["steps"]
+        ax.plot(steps["time_s"], steps["substation_kW"] / 1e3, lw=0.8, color=f"C{j}",
+                label=f"{name} ({res['totals']['substation_kWh']:.2f} kWh)")
+    ax.set_ylabel("substation\npower [MW]", fontsize=8)
+    ax.set_xlabel("time [s]")
+    ax.legend(fontsize=7, loc="upper right")
+    ax.grid(alpha=0.3)
+    fig.savefig(path, dpi=100, format="png")
+    plt.close(fig)

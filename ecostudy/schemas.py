@@ -294,3 +294,60 @@ class StudyFile(Strict):
         if self.window_s is not None and not 0 <= self.window_s[0] <= self.window_s[1]:
             raise ValueError("window_s must be [earliest, latest] with 0 <= earliest <= latest")
         return self
+
+
+class Substation(Strict):
+    """One DC substation and its line (thesis 000 §7.2.1, eq. 7.8)."""
+
+    position_m: float = Field(description="Line position of the substation [m].")
+    voltage_V: float = Field(750.0, gt=0, description="Source voltage V_s.")
+    internal_resistance_ohm: float = Field(0.01, gt=0, description="R_s.")
+    line_resistance_ohm_per_km: float = Field(0.025, ge=0, description="Thesis 000: 25 mOhm/km.")
+    max_voltage_V: Optional[float] = Field(None, gt=0, description="Regeneration cut-off; default V_s 685/600.")
+    min_voltage_V: Optional[float] = Field(None, gt=0, description="Lowest pantograph voltage; default 2/3 V_s.")
+
+    @model_validator(mode="after")
+    def _voltages(self):
+        hi = self.max_voltage_V if self.max_voltage_V is not None else self.voltage_V * 685 / 600
+        lo = self.min_voltage_V if self.min_voltage_V is not None else self.voltage_V * 2 / 3
+        if not lo < self.voltage_V < hi:
+            raise ValueError("need min_voltage_V < voltage_V < max_voltage_V")
+        return self
+
+
+class FleetTrain(Strict):
+    name: str
+    offset_s: float = Field(ge=0, description="Departure from the first stop after the first train [s].")
+
+
+STRATEGIES = ("independent", "triggering", "voltage", "joint", "following")
+
+
+class NetworkStudyFile(Strict):
+    """Several trains on one line and one substation: `ecostudy network STUDY.yaml`."""
+
+    name: str
+    track: str
+    train: str
+    stops: Optional[list[str]] = Field(None, description="Stops served, in order (default: all).")
+    running_times_s: Optional[list[float]] = Field(None, description="Per segment [s].")
+    supplement_percent: Optional[float] = Field(None, ge=0, description="Per segment, over its all-out time.")
+    dwell_s: float = Field(20.0, ge=0)
+    time_step_s: float = Field(0.5, gt=0, le=5)
+    trains: list[FleetTrain] = Field(min_length=1)
+    substation: Substation
+    strategies: list[Literal[STRATEGIES]] = Field(default_factory=lambda: list(STRATEGIES))
+    buffer_m: Optional[float] = Field(None, gt=0, description="Separation kept by `following` (thesis 001 eq. 6.9).")
+    points: int = Field(500, ge=10, le=100000, description="Space grid of the per-segment starting runs.")
+    output: Optional[str] = None
+
+    @model_validator(mode="after")
+    def _choices(self):
+        if (self.running_times_s is None) == (self.supplement_percent is None):
+            raise ValueError("give exactly one of running_times_s, supplement_percent")
+        if "following" in self.strategies and self.buffer_m is None:
+            raise ValueError("the following strategy needs buffer_m")
+        names = [t.name for t in self.trains]
+        if len(set(names)) != len(names):
+            raise ValueError("train names must be unique")
+        return self

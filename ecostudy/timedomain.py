@@ -99,11 +99,11 @@ def limit_profile(case, ramp, dt=0.0):
     return xs[keep], vs[keep]
 
 
-def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1):
+def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, one_handle=True):
     """Add one leg as a block ``m.<name>`` with variables s, v, ft, fb, fr and expression p [kW].
 
     ``guess``: (s, v) arrays on the leg's steps, optionally followed by (F_T, F_B, F_R) per step
-    [N]; else a trapezoidal speed profile.
+    [N]; else a trapezoidal speed profile. ``one_handle``: forbid traction and braking together.
     """
     case, train, n, dt = leg.case, leg.case.train, leg.steps, leg.dt
     b = pyo.Block()
@@ -139,6 +139,11 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1):
     def limit(b, j):
         return b.v[j] <= smooth_table(b.s[j], l_coef, 0.25 * width) - limit_margin
 
+    # one handle: traction and braking never together. A discounted traction cost (rules 7.7 and
+    # 7.11) would otherwise buy "free" traction and sell it back as regenerated braking; with the
+    # plain energy cost doing both never pays, and the constraint (a complementarity) is left out
+    if one_handle:
+        b.one_handle = pyo.Constraint(b.I, rule=lambda b, j: b.ft[j] * b.fb[j] <= 1e-3)
     b.kinematics = pyo.Constraint(b.I, rule=kinematics)
     b.dynamics = pyo.Constraint(b.I, rule=dynamics)
     b.limit = pyo.Constraint(pyo.RangeSet(1, n - 1), rule=limit)

@@ -1,0 +1,51 @@
+"""Wall time of the joint optimum (all trains and the circuit of eq. 7.8 in one NLP) against the
+number of trains, on the shipped 4-stop metro line.
+
+    .venv/bin/python bench/bench_network.py [--trains 1 2 3] [--dt 0.5] [--offset 48]
+
+Trains depart ``offset`` seconds apart, +10 % running time per segment, 20 s dwells, the
+substation at 1500 m. Per count: clock steps, NLP variables, build and solve seconds, Ipopt
+iterations, substation energy of the independent runs and of the joint optimum.
+"""
+import argparse
+import shlex
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from ecostudy import fleet, network  # noqa: E402
+from ecostudy.inputs import Timing, load_track, load_train  # noqa: E402
+from ecostudy.run import solve_run  # noqa: E402
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--trains", type=int, nargs="+", default=[1, 2, 3])
+    p.add_argument("--dt", type=float, default=0.5)
+    p.add_argument("--offset", type=float, default=48.0)
+    args = p.parse_args()
+    print(f"`python bench/bench_network.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
+    track, train = load_track(ROOT / "tracks/metro_line_4stops.yaml"), load_train(ROOT / "trains/amsterdam_metro.yaml")
+    stops = list(track.stops)
+    times = [1.1 * solve_run(track, train, a, b, Timing(), objective="time", points=500).summary["running_time_s"]
+             for a, b in zip(stops[:-1], stops[1:])]
+    print("| trains | steps | variables | independent kWh | joint kWh | saving % | build s | solve s | iterations |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for n in args.trains:
+        f = fleet.plan(track, train, stops, times, 20.0, [args.offset * i for i in range(n)],
+                       [f"T{i + 1}" for i in range(n)], args.dt, network.Supply(position=1500.0))
+        ind = fleet.independent(f)
+        e_ind = fleet.evaluate(f, ind)[2]["substation_kWh"]
+        t0 = time.perf_counter()
+        runs, info = fleet.joint(f, ind)
+        e_joint = fleet.evaluate(f, runs)[2]["substation_kWh"]
+        print(f"| {n} | {f.steps} | {info['variables']} | {e_ind:.3f} | {e_joint:.3f} | "
+              f"{100 * (1 - e_joint / e_ind):.2f} | {info['build_s']:.1f} | {info['solve_s']:.1f} | "
+              f"{info['iterations']} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,75 @@
+"""`ecostudy network STUDY.yaml`: trains on one line and one DC substation (registered on ``cli.app``).
+
+Like ``cli.py`` it only parses options, calls the library and prints; errors become one line.
+"""
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from .cli import app, guarded
+
+
+def _network(study_path, out, no_plot):
+    import pandas as pd
+
+    from . import fleet
+    from .inputs import Timing, load_network_study
+    from .results import atomic_write, write_csv, write_json
+    from .run import solve_run
+    st = load_network_study(study_path)
+    pairs = list(zip(st.stops[:-1], st.stops[1:]))
+    times = st.running_times
+    if times is None:  # per segment: all-out time plus the supplement
+        times = [solve_run(st.track, st.train, a, b, Timing(), objective="time", points=st.points,
+                           verify_result=False).summary["running_time_s"] * (1 + st.supplement) for a, b in pairs]
+    fl = fleet.plan(st.track, st.train, st.stops, times, st.dwell, st.offsets, st.names, st.dt, st.supply,
+                    st.points, st.buffer)
+    typer.echo(f"{len(st.names)} trains, {len(pairs)} segments ({', '.join(f'{t:.1f}' for t in times)} s "
+               f"before rounding to {st.dt} s steps), {fl.steps} steps")
+    outcome = fleet.run_strategies(fl, st.strategies, progress=typer.echo)
+    out_dir = Path(out) if out else st.output
+    base = outcome.get("independent", {}).get("totals", {}).get("substation_kWh")
+    subs, trains = [], []
+    failed = {n: r for n, r in outcome.items() if "failed" in r}
+    outcome = {n: r for n, r in outcome.items() if "failed" not in r}
+    for name, res in failed.items():
+        subs.append({"strategy": name, "status": f"failed: {res['failed']}", "wall_s": res["wall_s"],
+                     "all_verified": False})
+    for name, res in outcome.items():
+        tot = res["totals"]
+        subs.append({"strategy": name, **{k: v for k, v in tot.items()},
+                     "saving_vs_independent_pct": None if base is None else 100 * (1 - tot["substation_kWh"] / base)})
+        for train, rec in res["trains"].items():
+            trains.append({"strategy": name, "train": train, **rec})
+        write_csv(out_dir / f"network_steps_{name}.csv", res["steps"])
+    table = pd.DataFrame(subs)
+    write_csv(out_dir / "network_substation.csv", table)
+    write_csv(out_dir / "network_trains.csv", pd.DataFrame(trains))
+    write_json(out_dir / "network.json", {"study": st.name, "segment_times_s": [leg.running_time for leg in fl.legs[0]],
+                                          "steps": fl.steps, "dt_s": st.dt,
+                                          "strategies": {**{n: {**r["totals"], **r["info"]} for n, r in outcome.items()},
+                                                         **{n: {"status": f"failed: {r['failed']}"} for n, r in failed.items()}}})
+    if not no_plot:
+        from .plots import network_plot
+        atomic_write(out_dir / "network.png", lambda tmp: network_plot(fl, outcome, tmp, st.name))
+    cols = ["strategy", "status", "substation_kWh", "saving_vs_independent_pct", "traction_input_kWh", "regen_used_kWh",
+            "regen_lost_kWh", "line_losses_kWh", "balance_error_pct", "min_separation_m", "all_verified"]
+    typer.echo(table[[c for c in cols if c in table]].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
+    typer.echo(f"outputs {out_dir}/ (network_substation.csv, network_trains.csv, network_steps_*.csv, network.json"
+               + ("" if no_plot else ", network.png") + ")")
+    return table
+
+
+@app.command()
+def network(
+    study: Path = typer.Argument(..., help="Network study file (YAML)."),
+    out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's output)."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip network.png."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Trains sharing one DC substation: independent, rules 7.7 / 7.11, joint optimum, following."""
+    table = guarded(debug, _network, study, out, no_plot)
+    if not bool(table["all_verified"].all()):
+        typer.secho("flagged: a strategy failed, or its runs failed re-simulation", fg=typer.colors.YELLOW, err=True)
+        raise typer.Exit(1)

@@ -1,0 +1,110 @@
+"""Trains on one DC substation: the circuit of eq. 7.8, the time-domain model, the strategies."""
+import numpy as np
+import pytest
+import pyomo.environ as pyo
+
+from ecostudy import fleet, network, solver, timedomain
+from ecostudy.inputs import Timing, load_track, load_train
+from ecostudy.run import prepare, solve_run
+
+from .conftest import TRACKS, TRAINS, write_yaml
+
+SUPPLY = network.Supply(position=1500.0)
+
+
+def test_one_train_obeys_eq_7_8_and_the_energy_balance():
+    flows = network.solve_step(SUPPLY, [2500.0], [1.5e6])
+    i, v = flows["current_A"][0], flows["voltage_V"][0]
+    i_s = flows["substation_current_A"]
+    assert v * i == pytest.approx(1.5e6, rel=1e-9)
+    assert v == pytest.approx(SUPPLY.voltage - SUPPLY.resistance * i_s - SUPPLY.feeder(2500.0) * i, rel=1e-9)
+    assert i_s == pytest.approx(i)
+    lhs = flows["substation_W"] + flows["regen_used_W"]
+    assert lhs == pytest.approx(flows["traction_input_W"] + flows["line_loss_W"], rel=1e-9)
+
+
+def test_regeneration_is_used_by_a_neighbour_or_lost_behind_the_diode():
+    alone = network.solve_step(SUPPLY, [1000.0], [-1.0e6])  # nobody draws: the diode blocks
+    assert alone["substation_W"] == 0.0 and alone["regen_used_W"] == pytest.approx(0.0, abs=1.0)
+    assert alone["regen_lost_W"] == pytest.approx(1.0e6, rel=1e-6)
+    shared = network.solve_step(SUPPLY, [1000.0, 2000.0], [-1.0e6, 1.5e6])
+    assert 0 < shared["regen_used_W"] <= 1.0e6
+    assert shared["voltage_V"][0] <= SUPPLY.max_voltage + 1e-6
+    assert shared["substation_W"] < network.solve_step(SUPPLY, [2000.0], [1.5e6])["substation_W"]
+    lhs = shared["substation_W"] + shared["regen_used_W"]
+    assert lhs == pytest.approx(shared["traction_input_W"] + shared["line_loss_W"], rel=1e-9)
+
+
+def test_time_domain_leg_matches_the_space_domain_optimum_on_flat_track():
+    """Same physics on a common clock: the thesis 001 flat trip within 0.05 % at dt = 0.25 s."""
+    track, train = load_track(TRACKS / "thesis001_flat_1km.yaml"), load_train(TRAINS / "thesis001_commuter.yaml")
+    space = solve_run(track, train, "A", "B", Timing(running_time=95.0), points=1000)
+    case = prepare(track, train, "A", "B", 1000)
+    leg = timedomain.Leg(case, 0, 380, 0.25, 0.0, 1.0)
+    m = pyo.ConcreteModel()
+    b = timedomain.add_leg(m, "leg", leg, timedomain.guess_from_space(space, leg), one_handle=False)
+    m.objective = pyo.Objective(expr=sum(b.traction_kw[j] for j in b.I) * 0.25 / 3600 / 10)
+    assert solver.solve(m).optimal
+    s, v, ft, *_ = timedomain.leg_arrays(b)
+    energy = float(np.sum(ft * np.diff(s))) / 3.6e6
+    assert energy == pytest.approx(space.summary["traction_energy_kWh"], rel=5e-4)
+    assert fleet.verify_leg(leg, timedomain.leg_arrays(b))["passed"]
+
+
+@pytest.fixture(scope="module")
+def two_trains():
+    """Two metro trains on the first segment of the 4-stop line, the second departing as the
+    first brakes (45 s), dt = 1 s: every strategy."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 45.0], ["T1", "T2"], 1.0,
+                   network.Supply(position=300.0), points=300, buffer=360.0)
+    return f, fleet.run_strategies(f, ["independent", "triggering", "voltage", "joint", "following"], progress=None)
+
+
+def test_every_strategy_balances_keeps_time_and_is_verified(two_trains):
+    f, out = two_trains
+    for name, res in out.items():
+        tot = res["totals"]
+        assert abs(tot["balance_error_pct"]) < 0.1, name
+        assert tot["all_verified"], (name, res["trains"])
+        for rec in res["trains"].values():
+            assert rec["worst_arrival_error_s"] < 0.5 and rec["worst_stop_error_m"] < 1.0
+
+
+def test_joint_optimum_bounds_every_rule(two_trains):
+    f, out = two_trains
+    joint = out["joint"]["totals"]["substation_kWh"]
+    for name in ("independent", "triggering", "voltage", "following"):
+        assert joint <= out[name]["totals"]["substation_kWh"] * (1 + 1e-4), name
+    assert joint < 0.99 * out["independent"]["totals"]["substation_kWh"]
+    for rule in ("triggering", "voltage"):  # the supervisor keeps its best round, the start included
+        history = out[rule]["info"]["rounds_substation_kWh"]
+        assert out[rule]["totals"]["substation_kWh"] == pytest.approx(min(history), rel=1e-6)
+
+
+def test_following_train_keeps_its_buffer(two_trains):
+    f, out = two_trains
+    assert out["following"]["totals"]["min_separation_m"] >= 360.0 - 0.5
+    assert out["independent"]["totals"]["min_separation_m"] < 360.0  # the buffer binds here
+
+
+def test_network_command_and_a_bad_study(tmp_path):
+    from typer.testing import CliRunner
+
+    from ecostudy.cli import app
+    study = write_yaml(tmp_path / "net.yaml", {
+        "name": "tiny", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
+        "stops": ["Noord", "Station"], "running_times_s": [56.0], "time_step_s": 1.0,
+        "trains": [{"name": "A", "offset_s": 0}, {"name": "B", "offset_s": 45}],
+        "substation": {"position_m": 300}, "strategies": ["independent", "joint"], "points": 300,
+        "output": str(tmp_path / "out")})
+    r = CliRunner().invoke(app, ["network", str(study)])
+    assert r.exit_code == 0, r.output
+    for name in ("network_substation.csv", "network_trains.csv", "network_steps_joint.csv", "network.png"):
+        assert (tmp_path / "out" / name).stat().st_size > 0
+    bad = write_yaml(tmp_path / "bad.yaml", {
+        "name": "bad", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
+        "supplement_percent": 10, "trains": [{"name": "A", "offset_s": 0}],
+        "substation": {"position_m": 300}, "strategies": ["following"]})
+    r = CliRunner().invoke(app, ["network", str(bad)])
+    assert r.exit_code != 0 and "buffer_m" in r.output and "Traceback" not in r.output
