@@ -8,7 +8,9 @@ saves most; every segment is then solved exactly at its allocated time and verif
 Two baselines: every segment the same percentage over its all-out time, and a MARECO-style
 split (the time each segment takes under one common MARECO speed cap v1, ecostudy/mareco.py: the
 way OSRD's MARECO allowance spreads a margin over a whole path). Every distribution is then
-driven energy-optimally, so the comparison is about the split alone.
+driven energy-optimally, so the comparison is about the split alone. The whole-journey NLP
+(:func:`whole_journey`) solves all segments at once with free running times summing to the total:
+the exact split the fronts approximate.
 """
 import heapq
 
@@ -73,6 +75,35 @@ def mareco_split(track, train, pairs, total_time, points):
     return [t * scale for t in split]
 
 
+def whole_journey(track, train, pairs, total_time, start_times, points):
+    """Running times [s] from one NLP over all segments: each segment's model as a block, the
+    running times free but summing to ``total_time``, total traction work minimised. The exact
+    optimum the equal-marginal split approximates on interpolated fronts. Started from
+    ``start_times`` (e.g. that split)."""
+    import pyomo.environ as pyo
+
+    from . import solver
+    from .errors import SolverError
+    from .run import build, capped_guess, prepare
+    m = pyo.ConcreteModel()
+    parts = []
+    for n, ((a, b), t) in enumerate(zip(pairs, start_times)):
+        case = prepare(track, train, a, b, points)
+        part = build(case, capped_guess(case, t), "energy", {}, running_time=t)
+        part.objective.deactivate()
+        part.T.setlb(0.0)
+        part.T.setub(None)
+        m.add_component(f"segment{n}", part)
+        parts.append(part)
+    scale = max(p.energy_ref for p in parts)
+    m.total = pyo.Constraint(expr=sum(p.T for p in parts) / total_time == 1.0)
+    m.objective = pyo.Objective(expr=sum(p.traction_work for p in parts) / scale)
+    outcome = solver.solve(m)
+    if not outcome.usable:
+        raise SolverError(f"the whole-journey NLP failed ({outcome.status}, {outcome.iterations} iterations)")
+    return [float(pyo.value(p.T)) for p in parts]
+
+
 def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=15, workers=1,
             scheduled=None):
     """Per-segment table for each distribution of one total running time, and the totals.
@@ -92,7 +123,9 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
     all_out = sum(float(f["running_time_s"].iloc[0]) for f in fronts)
     if total_time is None:
         total_time = all_out * (1 + supplement)
-    plans = {"equal marginal saving": equal_marginal(fronts, total_time), "same percentage": uniform(fronts, total_time),
+    marginal = equal_marginal(fronts, total_time)
+    plans = {"whole-journey NLP": whole_journey(track, train, pairs, total_time, marginal, points),
+             "equal marginal saving": marginal, "same percentage": uniform(fronts, total_time),
              "MARECO-style": mareco_split(track, train, pairs, total_time, points)}
     if scheduled is not None:
         plans["as timetabled"] = list(scheduled)

@@ -27,7 +27,9 @@ def test_journey_command_saves_against_the_same_percentage(tmp_path):
     import pandas as pd
     totals = pd.read_csv(tmp_path / "journey_totals.csv").set_index("distribution")
     best, same = totals.loc["equal marginal saving"], totals.loc["same percentage"]
-    mareco = totals.loc["MARECO-style"]
+    mareco, whole = totals.loc["MARECO-style"], totals.loc["whole-journey NLP"]
+    assert whole["traction_energy_kWh"] <= best["traction_energy_kWh"] * (1 + 1e-6)  # the exact split
+    assert whole["running_time_s"] == pytest.approx(best["running_time_s"], rel=1e-6)
     for other in (same, mareco):
         assert best["running_time_s"] == pytest.approx(other["running_time_s"], rel=1e-6)
         assert best["traction_energy_kWh"] <= other["traction_energy_kWh"] * (1 + 1e-6)
