@@ -10,7 +10,6 @@ iterations, substation energy of the independent runs and of the joint optimum.
 import argparse
 import shlex
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -39,7 +38,6 @@ def main():
                        [f"T{i + 1}" for i in range(n)], args.dt, network.Supply(position=1500.0))
         ind = fleet.independent(f)
         e_ind = fleet.evaluate(f, ind)[2]["substation_kWh"]
-        t0 = time.perf_counter()
         runs, info = fleet.joint(f, ind)
         e_joint = fleet.evaluate(f, runs)[2]["substation_kWh"]
         print(f"| {n} | {f.steps} | {info['variables']} | {e_ind:.3f} | {e_joint:.3f} | "

@@ -48,8 +48,6 @@ def test_compare_command(tmp_path):
 def test_mareco_profile_coasts_before_braking_and_downhill():
     """MARECO-style profile: capped at v1, coasting (zero force on the grid) before the final
     braking; on the metro at 85 s it coasts down the descent before 220 m (vf < 50 km/h plateau)."""
-    import numpy as np
-
     from ecostudy import initial, mareco
     from ecostudy.run import prepare
     case = prepare(load_track(TRACKS / "amsterdam_rokin_centraal.yaml"), load_train(TRAINS / "amsterdam_metro.yaml"),
