@@ -68,7 +68,7 @@ def network(
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip network.png."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
-    """Trains sharing one DC substation: independent, rules 7.7 / 7.11, joint optimum, following."""
+    """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""
     table = guarded(debug, _network, study, out, no_plot)
     if not bool(table["all_verified"].all()):
         typer.secho("flagged: a strategy failed, or its runs failed re-simulation", fg=typer.colors.YELLOW, err=True)

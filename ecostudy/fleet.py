@@ -17,7 +17,10 @@ following    the independent runs, each train's head kept ``buffer`` metres behi
 
 The rules (b), (c) re-optimise each train alone against the others' previous runs, a few
 supervisor rounds, keeping the timetable; every strategy is scored by the same network solve
-(``network.solve_step``). The dissension strategy (thesis 000 eqs. 8.14-8.20, (d)) is not built.
+(``network.solve_step``).
+dissension   thesis 000 eqs. 8.14-8.17: each train's weight gamma_i follows a two-state Markov
+             law whose rate away from "braking" grows with the number of braking neighbours;
+             traction weighs gamma_i / gamma0 (d)
 """
 import time
 from dataclasses import dataclass, field
@@ -217,6 +220,38 @@ def independent(fleet):
     return [solve_train(fleet, i)[0] for i in range(len(fleet.names))]
 
 
+DISSENSION = {"gamma0": 0.5, "rate": 0.05, "influence": 0.15}  # [-], [1/s], [1/s]
+
+
+def dissension_weights(fleet, flags):
+    """Traction weights gamma_i(t) / gamma0 of the dissension strategy (thesis 000 eqs. 8.14-8.17).
+
+    Each train's q_i = [gamma_i, 1 - gamma_i] follows q' = (Q^T + A_i^T) q with the two-state
+    generator Q = [[-r, r], [r, -r]] (rest value gamma0 = 0.5) and the interaction rate
+    a_12 = lambda_1 / (M - 1) * (number of other trains braking), lambda_2 = 0 (eq. 8.15-8.17):
+    while others brake, gamma_i falls (to 0.29 with one of two neighbours braking, the thesis'
+    0.5 -> 0.3), and it is reset to gamma0 at every departure. Integrated exactly per clock step.
+    """
+    g0, r, lam = DISSENSION["gamma0"], DISSENSION["rate"], DISSENSION["influence"]
+    count = np.sum(flags, axis=0)
+    out = []
+    for i, legs in enumerate(fleet.legs):
+        braking_others = count - flags[i]
+        a12 = lam * braking_others / max(len(fleet.legs) - 1, 1)
+        gamma = np.full(fleet.steps, g0)
+        departures = {leg.start for leg in legs}
+        g = g0
+        for t in range(fleet.steps):
+            if t in departures:
+                g = g0
+            total = 2 * r + a12[t]  # gamma' = -(r + a12) gamma + r (1 - gamma)
+            target = r / total
+            g = target + (g - target) * np.exp(-total * fleet.dt)
+            gamma[t] = g
+        out.append(gamma / g0)
+    return out
+
+
 def offered(fleet, runs_by_train):
     """Regenerated power each train offers per clock step [kW] (what its electric brake feeds)."""
     out = np.zeros((len(runs_by_train), fleet.steps))
@@ -227,10 +262,11 @@ def offered(fleet, runs_by_train):
 
 
 def supervised(fleet, rule, start, rounds=3):
-    """Rules (b) and (c): each round re-optimises every train against the others' previous runs.
+    """Rules (b), (c) and (d): each round re-optimises every train against the others' previous runs.
 
     The rule says when a train's traction is discounted (7.7: another train brakes; 7.11, as the
-    thesis' text applies it: another train's pantograph voltage is above one's own); the discount
+    thesis' text applies it: another train's pantograph voltage is above one's own; dissension:
+    by gamma_i(t) / gamma0 from eqs. 8.14-8.17, :func:`dissension_weights`); the discount
     applies to traction up to the power the others offer then (a zero weight on unlimited
     traction only moves consumption to the substation). Returns (runs, rounds' substation kWh);
     the runs are those of the round with the least substation energy, the start included.
@@ -243,6 +279,8 @@ def supervised(fleet, rule, start, rounds=3):
         if rule == "triggering":
             flags = _braking_steps(fleet, runs)
             weights = [np.where(_others(flags, i), low, 1.0) for i in range(len(runs))]
+        elif rule == "dissension":
+            weights = dissension_weights(fleet, _braking_steps(fleet, runs))
         else:
             steps, _, _ = evaluate(fleet, runs)
             volts = {n: steps[f"voltage_{n}_V"].to_numpy() if f"voltage_{n}_V" in steps else
@@ -371,7 +409,7 @@ def run_strategies(fleet, strategies, progress=print):
         try:
             if name == "independent":
                 runs = ind
-            elif name in ("triggering", "voltage"):
+            elif name in ("triggering", "voltage", "dissension"):
                 runs, history = supervised(fleet, name, ind)
                 info["rounds_substation_kWh"] = history
             elif name == "joint":

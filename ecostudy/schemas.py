@@ -320,7 +320,7 @@ class FleetTrain(Strict):
     offset_s: float = Field(ge=0, description="Departure from the first stop after the first train [s].")
 
 
-STRATEGIES = ("independent", "triggering", "voltage", "joint", "following")
+STRATEGIES = ("independent", "triggering", "voltage", "dissension", "joint", "following")
 
 
 class NetworkStudyFile(Strict):

@@ -58,7 +58,7 @@ def two_trains():
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
     f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 45.0], ["T1", "T2"], 1.0,
                    network.Supply(position=300.0), points=300, buffer=360.0)
-    return f, fleet.run_strategies(f, ["independent", "triggering", "voltage", "joint", "following"], progress=None)
+    return f, fleet.run_strategies(f, ["independent", "triggering", "voltage", "dissension", "joint", "following"], progress=None)
 
 
 def test_every_strategy_balances_keeps_time_and_is_verified(two_trains):
@@ -74,10 +74,10 @@ def test_every_strategy_balances_keeps_time_and_is_verified(two_trains):
 def test_joint_optimum_bounds_every_rule(two_trains):
     f, out = two_trains
     joint = out["joint"]["totals"]["substation_kWh"]
-    for name in ("independent", "triggering", "voltage", "following"):
+    for name in ("independent", "triggering", "voltage", "dissension", "following"):
         assert joint <= out[name]["totals"]["substation_kWh"] * (1 + 1e-4), name
     assert joint < 0.99 * out["independent"]["totals"]["substation_kWh"]
-    for rule in ("triggering", "voltage"):  # the supervisor keeps its best round, the start included
+    for rule in ("triggering", "voltage", "dissension"):  # the supervisor keeps its best round, the start included
         history = out[rule]["info"]["rounds_substation_kWh"]
         assert out[rule]["totals"]["substation_kWh"] == pytest.approx(min(history), rel=1e-6)
 
@@ -108,3 +108,16 @@ def test_network_command_and_a_bad_study(tmp_path):
         "substation": {"position_m": 300}, "strategies": ["following"]})
     r = CliRunner().invoke(app, ["network", str(bad)])
     assert r.exit_code != 0 and "buffer_m" in r.output and "Traceback" not in r.output
+
+
+def test_dissension_weight_falls_while_neighbours_brake_and_resets_at_departure():
+    """eqs. 8.14-8.17: gamma 0.5 -> r / (2 r + a12) = 0.286 with one of two neighbours braking."""
+    from types import SimpleNamespace
+    legs = [[SimpleNamespace(start=0)], [SimpleNamespace(start=0)], [SimpleNamespace(start=0), SimpleNamespace(start=600)]]
+    f = SimpleNamespace(legs=legs, steps=1200, dt=0.5)
+    flags = np.zeros((3, 1200), bool)
+    flags[0, :] = True  # train 0 brakes all the time
+    w = fleet.dissension_weights(f, flags)
+    assert w[0][-1] == pytest.approx(1.0)  # nobody else brakes
+    assert w[1][599] * 0.5 == pytest.approx(0.05 / 0.175, rel=1e-3)
+    assert w[2][600] > 0.95 and w[2][1199] * 0.5 == pytest.approx(0.05 / 0.175, rel=1e-3)
