@@ -7,8 +7,9 @@ independent  each train minimises its own pantograph net energy, regeneration cr
              the line always took it (a): no collaboration
 triggering   supervisor rule 7.7: while another train brakes, a train's traction is weighted
              (1 - gamma2) / (1 - gamma1) with the thesis' gamma1 = 0.71, gamma2 = 0.9 (b)
-voltage      rule 7.11 as the thesis' text applies it: while another train's pantograph voltage
-             is above a train's own (it regenerates), that train's traction weighs 0 (c)
+voltage      rule 7.11 as the thesis' text applies it, between consecutive trains: while the
+             pantograph voltage of the train ahead is above a train's own (it regenerates),
+             that train's traction weighs 0 (c)
 joint        one NLP over all trains and the network of eq. 7.8 minimising substation energy:
              the bound no rule can beat (e)
 following    the independent runs, each train's head kept ``buffer`` metres behind the tail of
@@ -265,9 +266,9 @@ def supervised(fleet, rule, start, rounds=3):
     """Rules (b), (c) and (d): each round re-optimises every train against the others' previous runs.
 
     The rule says when a train's traction is discounted (7.7: another train brakes; 7.11, as the
-    thesis' text applies it: another train's pantograph voltage is above one's own; dissension:
+    thesis' text applies it: the voltage of the train ahead is above one's own; dissension:
     by gamma_i(t) / gamma0 from eqs. 8.14-8.17, :func:`dissension_weights`); the discount
-    applies to traction up to the power the others offer then (a zero weight on unlimited
+    applies to traction up to the power the others (7.11: the train ahead) offer then (a zero weight on unlimited
     traction only moves consumption to the substation). Returns (runs, rounds' substation kWh);
     the runs are those of the round with the least substation energy, the start included.
     """
@@ -281,19 +282,19 @@ def supervised(fleet, rule, start, rounds=3):
             weights = [np.where(_others(flags, i), low, 1.0) for i in range(len(runs))]
         elif rule == "dissension":
             weights = dissension_weights(fleet, _braking_steps(fleet, runs))
-        else:
+        else:  # rule 7.11 between consecutive trains: train i against train i - 1 ahead of it
             steps, _, _ = evaluate(fleet, runs)
             volts = {n: steps[f"voltage_{n}_V"].to_numpy() if f"voltage_{n}_V" in steps else
                      np.full(len(steps), np.nan) for n in fleet.names}
-            weights = []
-            for name in fleet.names:
-                higher = np.zeros(len(steps), bool)
-                for other in fleet.names:
-                    if other != name:
-                        higher |= volts[other] > volts[name] + 1.0  # NaN (not running) compares False
-                weights.append(np.where(higher, 0.0, 1.0))
-        runs = [solve_train(fleet, i, weights[i], guesses=runs[i],
-                            allowance=power.sum(axis=0) - power[i])[0] for i in range(len(runs))]
+            order = list(np.argsort([legs[0].start for legs in fleet.legs]))
+            weights, sources = [np.ones(fleet.steps) for _ in runs], [np.zeros(fleet.steps) for _ in runs]
+            for ahead, me in zip(order[:-1], order[1:]):
+                higher = volts[fleet.names[ahead]] > volts[fleet.names[me]] + 1.0  # NaN compares False
+                weights[me] = np.where(higher, 0.0, 1.0)
+                sources[me] = power[ahead]
+        allowances = sources if rule == "voltage" else [power.sum(axis=0) - power[i] for i in range(len(runs))]
+        runs = [solve_train(fleet, i, weights[i], guesses=runs[i], allowance=allowances[i])[0]
+                for i in range(len(runs))]
         energy = evaluate(fleet, runs)[2]["substation_kWh"]
         history.append(energy)
         if energy < best[0]:
