@@ -268,8 +268,8 @@ def supervised(fleet, rule, start, rounds=3):
     The rule says when a train's traction is discounted (7.7: another train brakes; 7.11, as the
     thesis' text applies it: the voltage of the train ahead is above one's own; dissension:
     by gamma_i(t) / gamma0 from eqs. 8.14-8.17, :func:`dissension_weights`); the discount
-    applies to traction up to the power the others (7.11: the train ahead) offer then (a zero weight on unlimited
-    traction only moves consumption to the substation). Returns (runs, rounds' substation kWh);
+    applies to traction up to the power the others (7.11: the train ahead) offer then (a zero
+    weight on unlimited traction only moves consumption to the substation). Returns (runs, rounds' substation kWh);
     the runs are those of the round with the least substation energy, the start included.
     """
     runs, low = start, (1 - GAMMA[1]) / (1 - GAMMA[0])
