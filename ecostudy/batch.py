@@ -50,7 +50,8 @@ def run_case(case):
                       points=case["points"], weights=tuple(case["weights"]))
         status, error, summary = ("ok" if r.ok else "flagged"), None, r.summary
         if case.get("das"):
-            summary["das"] = _das(r, case)
+            from .das import das_columns
+            summary["das"] = das_columns(r, case["das"], case["points"], case.get("das_time_limit_s", 60.0))
         if t_allout is not None:
             summary["all_out_time_s"] = t_allout
     except InfeasibleError as exc:
@@ -61,19 +62,6 @@ def run_case(case):
         status, error, summary = "failed", f"{type(exc).__name__}: {exc}", None
     return {"key": case["key"], "status": status, "error": error, "summary": summary,
             "seconds": time.perf_counter() - t0}
-
-
-def _das(result, case):
-    """The case's DAS block (:func:`ecostudy.das.das_run`); a failed DAS run is recorded, not raised."""
-    from .das import das_run
-    try:
-        return das_run(result, case["das"], case["points"], case.get("das_time_limit_s", 60.0))[0]
-    except EcostudyError as exc:
-        return {"method": case["das"], "status": f"failed: {exc}"}
-
-
-DAS_COLUMNS = ("method", "traction_energy_kWh", "net_energy_kWh", "gap_to_ato_on_time_pct", "mode_changes",
-               "arrival_error_s", "stop_error_m", "status")
 
 
 def _serial(todo):
@@ -157,6 +145,5 @@ def study_table(cases, store):
                     "solver_status": (s.get("solver") or {}).get("status"), "verified": ver.get("passed"),
                     "stop_error_m": ver.get("stop_error_m"), "seconds": (row or {}).get("seconds")})
         if any(c.get("das") for c in cases):
-            das = s.get("das") or {}
-            out[-1].update({f"das_{k}": das.get(k) for k in DAS_COLUMNS})
+            out[-1].update(s.get("das") or {})
     return pd.DataFrame(out)

@@ -29,13 +29,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pyomo.environ as pyo
 
-from . import network, solver, timedomain
+from . import model as formulation, network, solver, timedomain
 from .physics import hinge
 from .errors import SolverError
 from .inputs import Timing
 from .run import prepare, solve_run
+from .units import KWH
 
-KWH = 3.6e6
 GAMMA = (0.71, 0.9)  # thesis 000 Fig. 7.3: time weights without / with a braking neighbour
 
 
@@ -89,9 +89,6 @@ def _guess(fleet, leg):
 NEAR_START = {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_strategy": "monotone", "mu_init": 1e-3}
 
 
-# the diode as a relaxed complementarity: 294 Ipopt iterations (11.7 s) against 1307 (50 s) for
-# the smooth max on one train, the same energy within 0.02 % (bench/bench_network.py)
-DIODE = "complementarity"
 REGULARISATION = 1e-3  # [-] weight of rheostat power and bus-voltage offset in the joint objective
 
 
@@ -103,8 +100,8 @@ def _solve(m, what, options=None):
 
 
 def _energy_ref(fleet):
-    train = fleet.legs[0][0].case.train
-    return max(train.traction.peak * sum(leg.case.segment.distance for leg in fleet.legs[0]) * 0.1, 1.0) / 1e3
+    """Objective scale [kWh s / h = kJ]: model.energy_reference summed over one train's legs."""
+    return sum(formulation.energy_reference(leg.case.train, leg.case.segment) for leg in fleet.legs[0]) / 1e3
 
 
 def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None):
@@ -273,7 +270,8 @@ def supervised(fleet, rule, start, rounds=3):
     the runs are those of the round with the least substation energy, the start included.
     """
     runs, low = start, (1 - GAMMA[1]) / (1 - GAMMA[0])
-    best = (evaluate(fleet, runs)[2]["substation_kWh"], runs)
+    steps, _, totals = evaluate(fleet, runs)
+    best = (totals["substation_kWh"], runs)
     history = [best[0]]
     for _ in range(rounds):
         power = offered(fleet, runs)
@@ -283,7 +281,6 @@ def supervised(fleet, rule, start, rounds=3):
         elif rule == "dissension":
             weights = dissension_weights(fleet, _braking_steps(fleet, runs))
         else:  # rule 7.11 between consecutive trains: train i against train i - 1 ahead of it
-            steps, _, _ = evaluate(fleet, runs)
             volts = {n: steps[f"voltage_{n}_V"].to_numpy() if f"voltage_{n}_V" in steps else
                      np.full(len(steps), np.nan) for n in fleet.names}
             order = list(np.argsort([legs[0].start for legs in fleet.legs]))
@@ -295,7 +292,8 @@ def supervised(fleet, rule, start, rounds=3):
         allowances = sources if rule == "voltage" else [power.sum(axis=0) - power[i] for i in range(len(runs))]
         runs = [solve_train(fleet, i, weights[i], guesses=runs[i], allowance=allowances[i])[0]
                 for i in range(len(runs))]
-        energy = evaluate(fleet, runs)[2]["substation_kWh"]
+        steps, _, totals = evaluate(fleet, runs)
+        energy = totals["substation_kWh"]
         history.append(energy)
         if energy < best[0]:
             best = (energy, runs)
@@ -326,11 +324,10 @@ def joint(fleet, start):
         for leg, b in zip(legs, blocks[i]):
             for j in range(leg.steps):
                 steps[leg.start + j].append((b, j, leg.line_start, leg.direction))
-    steps = [s for s in steps]
     if not all(steps):  # steps where no train runs carry no network variables
         keep = [t for t, s in enumerate(steps) if s]
         steps = [steps[t] for t in keep]
-    network.add_network(m, fleet.supply, steps, diode=DIODE)
+    network.add_network(m, fleet.supply, steps)
     _initialise_network(m, fleet, steps)
     # the rheostat and friction brakes are interchangeable, and with no current the bus voltage is
     # free: tiny costs on both remove these flat directions (Ipopt ran out of iterations on them)
@@ -354,10 +351,9 @@ def _initialise_network(m, fleet, steps):
         flows = network.solve_step(fleet.supply, xs, ps)
         vmin, vmax = fleet.supply.min_voltage / 1e3, fleet.supply.max_voltage / 1e3
         m.V0[t].set_value(float(np.clip(flows["bus_voltage_V"] / 1e3, vmin, vmax)))
-        if hasattr(m, "float_up"):
-            m.Is[t].set_value(flows["substation_current_A"] / 1e3)
-            m.float_up[t].set_value(max(flows["bus_voltage_V"] / 1e3 - fleet.supply.voltage / 1e3
-                                        + fleet.supply.resistance * flows["substation_current_A"] / 1e3, 0.0))
+        m.Is[t].set_value(flows["substation_current_A"] / 1e3)
+        m.float_up[t].set_value(max(flows["bus_voltage_V"] / 1e3 - fleet.supply.voltage / 1e3
+                                    + fleet.supply.resistance * flows["substation_current_A"] / 1e3, 0.0))
         for q, p in enumerate(ps):
             m.rheostat[t, q].set_value(max(-p - flows["fed_W"][q], 0.0) / 1e6)
             m.Ipan[t, q].set_value(float(flows["current_A"][q] / 1e3))

@@ -8,11 +8,15 @@ from .errors import InfeasibleError
 from .physics import davis_resistance, running_resistance
 
 
+def point_resistance(segment, train, positions):
+    """Speed-independent resistance (gradient and curve) at travel positions [N]."""
+    return running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, segment.gradient(positions),
+                              train.curve_coefficient, segment.curvature(positions))
+
+
 def interval_resistance(segment, train, nodes):
-    """Speed-independent resistance per interval (gradient and curve) [N]."""
-    mid = 0.5 * (nodes[:-1] + nodes[1:])
-    return running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, segment.gradient(mid),
-                              train.curve_coefficient, segment.curvature(mid))
+    """Speed-independent resistance per interval (gradient and curve) at its middle [N]."""
+    return point_resistance(segment, train, 0.5 * (nodes[:-1] + nodes[1:]))
 
 
 def braking_curve(segment, train, nodes, limits):

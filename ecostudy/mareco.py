@@ -26,9 +26,9 @@ TOL = 1e-6  # [m/s]
 
 def coasting_floor(train, v1):
     """vf [m/s] for the cap v1 (MARECO): below it coasting saves less than it costs in time."""
-    a, b, c = train.davis
+    _, b, c = train.davis
     slope = b + 2 * c * v1  # R'(v1)
-    resistance = a + b * v1 + c * v1 * v1
+    resistance = davis_resistance(v1, *train.davis)
     return v1 * v1 * slope / max(v1 * slope + resistance, 1e-12)
 
 

@@ -168,18 +168,8 @@ def is_monotone(table, tolerance=1e-6):
 
 
 def _das_point(result, method, points, time_limit):
-    """One DAS run for a front point: a row of ``das_`` columns (a failure is recorded, not raised)."""
-    from .das import das_run
-    from .errors import EcostudyError
-    try:
-        block, _, _ = das_run(result, method, points, time_limit)
-    except EcostudyError as exc:
-        return {"das_status": f"failed: {exc}"}
-    return {"das_running_time_s": result.summary["running_time_s"] + block["arrival_error_s"],
-            "das_traction_energy_kWh": block["traction_energy_kWh"], "das_net_energy_kWh": block["net_energy_kWh"],
-            "das_gap_to_ato_pct": block["gap_to_ato_pct"], "das_gap_to_ato_on_time_pct": block["gap_to_ato_on_time_pct"],
-            "das_mode_changes": block["mode_changes"], "das_stop_error_m": block["stop_error_m"],
-            "das_status": block["status"]}
+    from .das import das_columns
+    return das_columns(result, method, points, time_limit)
 
 
 def das_front(table, results, method="phases", points=None, workers=1, time_limit=60.0):

@@ -23,6 +23,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from . import model as formulation
+from .initial import point_resistance
 from .physics import table_coefficients, smooth_table
 
 KN = formulation.KN
@@ -49,7 +50,7 @@ def force_profile(case, width):
     seg = case.segment
     cuts = np.unique(np.concatenate([[0.0], seg.breakpoints(), [seg.distance]]))
     mids = 0.5 * (cuts[:-1] + cuts[1:])
-    force = _point_force(case, mids)
+    force = point_resistance(seg, case.train, mids)
     # a step at each cut is the limit of a ramp of width -> 0; use ramps of ``width`` centred on it
     xs, fs = [0.0], [force[0]]
     for c, f0, f1 in zip(cuts[1:-1], force[:-1], force[1:]):
@@ -59,14 +60,6 @@ def force_profile(case, width):
     xs.append(seg.distance)
     fs.append(force[-1])
     return np.array(xs), np.array(fs)
-
-
-def _point_force(case, positions):
-    """Gradient and curve force at positions [N] (same physics as model.py's interval term)."""
-    from .physics import running_resistance
-    seg, train = case.segment, case.train
-    return running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, seg.gradient(positions),
-                              train.curve_coefficient, seg.curvature(positions))
 
 
 def limit_profile(case, ramp, dt=0.0):
