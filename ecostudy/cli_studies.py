@@ -134,22 +134,24 @@ def compare_command(
         raise typer.Exit(1)
 
 
-def _journey(track, train, stops, time, supplement, timetable, points, workers, out, no_plot):
+def _journey(track, train, stops, time, supplement, timetable, dwell, points, workers, out, no_plot):
     from .inputs import load_timetable, load_track, load_train, timing_from_timetable
     from .journey import journey
     from .results import atomic_write, write_csv
+    from .timetable import journey_plan, name_stops
     trk, trn = load_track(track), load_train(train)
-    scheduled = None
+    scheduled, plan = None, None
     if timetable is not None:
         tt = load_timetable(timetable)
         if stops or time is not None or supplement is not None or not tt.stops:
             raise InputError(problem("command line", "--timetable", "a timetable with stop times replaces --stops, "
                                      "--time and --supplement"))
+        tt = name_stops(tt, trk, timetable)
         names = [row.stop for row in tt.stops]
-        for n in names:
-            if n not in trk.stops:
-                raise InputError(problem(timetable, "stops", f"stop '{n}' is not on track '{trk.name}'"))
-        scheduled = [timing_from_timetable(tt, a, b, timetable).running_time for a, b in zip(names, names[1:])]
+        if tt.windowed:
+            plan = journey_plan(tt, trk, timetable, dwell)
+        else:
+            scheduled = [timing_from_timetable(tt, a, b, timetable).running_time for a, b in zip(names, names[1:])]
         time, supplement = None, None
     else:
         names = stops.split(",") if stops else list(trk.stops)
@@ -157,12 +159,12 @@ def _journey(track, train, stops, time, supplement, timetable, points, workers, 
     if unknown or len(names) < 2:
         raise InputError(problem("command line", "--stops", f"need two or more stops of the track (unknown: "
                                  f"{', '.join(unknown) or 'none'}; the track has {', '.join(trk.stops)})"))
-    if scheduled is None and (time is None) == (supplement is None):
+    if scheduled is None and plan is None and (time is None) == (supplement is None):
         raise InputError(problem("command line", "--time/--supplement",
                                  "give one total running time or supplement, or --timetable"))
     table, totals, results, _ = journey(trk, trn, names, total_time=time,
                                         supplement=None if supplement is None else supplement * units.PERCENT,
-                                        points=points, workers=workers, scheduled=scheduled)
+                                        points=points, workers=workers, scheduled=scheduled, plan=plan)
     out_dir = Path(out) if out else Path("out") / "journey"
     write_csv(out_dir / "journey.csv", table)
     write_csv(out_dir / "journey_totals.csv", totals)
@@ -182,7 +184,9 @@ def journey_command(
     stops: Optional[str] = typer.Option(None, help="Stops served, comma-separated (default: all, in order)."),
     time: Optional[float] = typer.Option(None, "--time", help="Total running time, dwell excluded [s]."),
     supplement: Optional[float] = typer.Option(None, help="Total supplement over the sum of all-out times [%]."),
-    timetable: Optional[Path] = typer.Option(None, help="Timetable (stops with times): its running times, redistributed."),
+    timetable: Optional[Path] = typer.Option(None, help="Timetable: stops with times (its running times, "
+                                             "redistributed) or with windows, or a TTOBench journey JSON."),
+    dwell: float = typer.Option(0.0, help="Dwell at intermediate stops whose timetable gives none [s]."),
     points: int = typer.Option(500, "--points", "-K", help="Grid nodes per segment."),
     workers: int = typer.Option(1, help="Processes for the segments' fronts."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
@@ -190,7 +194,8 @@ def journey_command(
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Spread a journey's running time over its segments: equal marginal saving vs same percentage."""
-    table = guarded(debug, _journey, track, train, stops, time, supplement, timetable, points, workers, out, no_plot)
+    table = guarded(debug, _journey, track, train, stops, time, supplement, timetable, dwell, points, workers, out,
+                    no_plot)
     if not table["verified"].all():
         raise typer.Exit(1)
 

@@ -8,6 +8,11 @@
   ``max pn braking force`` kN, ``max traction power``/``max reg braking power`` kW,
   ``max deceleration`` m/s^2, ``rolling resistance r0`` kN, ``r1`` kN/(km/h), ``r2`` kN/(km/h)^2,
   ``efficiency traction``/``efficiency reg brake`` %.
+- TTOBench journeys (``nuorail/ttobench`` journeys/README.md): ``timing points`` ``values`` =
+  [position, lower time, upper time, lower speed, upper speed] with ``units`` (position m or km,
+  times s, speeds km/h or m/s), null = no constraint, times since the journey's start. Points
+  with both speed bounds 0 are stops (the first is the departure, the last the arrival); the
+  others are passing points. TTOBench has no dwell times: ecostudy's ``--dwell`` supplies them.
 - OSRD rolling stock: ``effort_curves`` (default mode's ``speeds`` [m/s], ``max_efforts`` [N]),
   ``mass`` kg, ``length`` m, ``inertia_coefficient``, ``rolling_resistance`` A/B/C [N, N/(m/s),
   N/(m/s)^2], ``gamma``/``const_gamma`` [m/s^2].
@@ -153,6 +158,65 @@ def track_document_to_schema(doc, path):
     if "speed limits" in doc:
         return ttobench_track(doc, path)
     raise InputError(problem(path, "", "not a TTOBench track (no 'speed limits' field)"))
+
+
+_POSITION = {"m": 1.0, "km": 1000.0}          # [m] per unit
+_SPEED_KMH = {"km/h": 1.0, "m/s": 1.0 / units.KMH}  # [km/h] per unit
+
+
+def ttobench_journey(doc, path):
+    """A TTOBench journey as a timetable dict (stops by position, arrival windows, windows)."""
+    points = doc.get("timing points")
+    if not isinstance(points, dict) or "values" not in points:
+        raise InputError(problem(path, "timing points", "expected {'units': ..., 'values': [...]}"))
+    given = points.get("units", {})
+    pos_unit, speed_unit = given.get("position", "m"), given.get("lower speed constraint", "km/h")
+    if pos_unit not in _POSITION:
+        raise InputError(problem(path, "timing points.units.position", f"expected m or km, got {pos_unit!r}"))
+    if speed_unit not in _SPEED_KMH or given.get("upper speed constraint", speed_unit) != speed_unit:
+        raise InputError(problem(path, "timing points.units", "speed constraints need one unit, km/h or m/s"))
+    rows = points["values"]
+    if not isinstance(rows, list) or len(rows) < 2:
+        raise InputError(problem(path, "timing points.values", "need at least two timing points"))
+    stops, windows, lines = [], [], []
+
+    def scaled(x, factor):
+        return None if x is None else float(x) * factor
+
+    for i, row in enumerate(rows):
+        where = f"timing points.values[{i}]"
+        if not isinstance(row, list) or len(row) != 5:
+            lines.append(problem(path, where, "expected [position, lower time, upper time, lower speed, upper speed]"))
+            continue
+        if any(x is not None and not isinstance(x, (int, float)) for x in row) or row[0] is None:
+            lines.append(problem(path, where, f"expected numbers or null, got {row!r}"))
+            continue
+        pos = float(row[0]) * _POSITION[pos_unit]
+        lo, hi = scaled(row[1], 1.0), scaled(row[2], 1.0)
+        vlo, vhi = scaled(row[3], _SPEED_KMH[speed_unit]), scaled(row[4], _SPEED_KMH[speed_unit])
+        if i == 0 or i == len(rows) - 1 or (vlo == 0 and vhi == 0):
+            if vlo != 0 or vhi != 0:
+                lines.append(problem(path, where, "the departure and the arrival need both speed bounds 0"))
+            if i == 0:
+                stops.append({"position_m": pos, "departure_s": lo or 0.0})
+            else:
+                stops.append({"position_m": pos, "earliest_s": lo, "latest_s": hi})
+        else:
+            windows.append({"position_m": pos, "earliest_s": lo, "latest_s": hi,
+                            "min_speed_kmh": vlo or None, "max_speed_kmh": vhi})
+    if lines:
+        raise InputError(lines)
+    meta = doc.get("metadata", {})
+    return {"name": meta.get("id", str(path)),
+            "source": f"TTOBench journey {meta.get('id', path)} on track {meta.get('associated track', '?')} "
+                      f"({meta.get('library version', 'version not stated')})",
+            "stops": stops, "windows": windows}
+
+
+def timetable_document_to_schema(doc, path):
+    if "timing points" in doc:
+        return ttobench_journey(doc, path)
+    raise InputError(problem(path, "", "not a TTOBench journey (no 'timing points' field)"))
 
 
 def train_document_to_schema(doc, path):

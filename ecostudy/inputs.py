@@ -265,7 +265,12 @@ def load_track(path):
 
 
 def load_timetable(path):
-    return validate(schemas.TimetableFile, read_document(path), path)
+    """Read a timetable file (YAML, or a TTOBench journey JSON)."""
+    data = read_document(path)
+    if Path(path).suffix.lower() == ".json":
+        from .imports import timetable_document_to_schema
+        data = timetable_document_to_schema(data, path)
+    return validate(schemas.TimetableFile, data, path)
 
 
 # --------------------------------------------------------------------------- cross-file checks
@@ -314,7 +319,9 @@ def load_study(path):
     to_stop = s.to_stop or stops[-1]
     check_stops(track, from_stop, to_stop, path)
     if s.timetable is not None:
-        timing = timing_from_timetable(load_timetable(base / s.timetable), from_stop, to_stop, base / s.timetable)
+        from .timetable import name_stops
+        tt = name_stops(load_timetable(base / s.timetable), track, base / s.timetable)
+        timing = timing_from_timetable(tt, from_stop, to_stop, base / s.timetable)
     else:
         timing = Timing(running_time=s.running_time_s,
                         supplement=None if s.supplement_percent is None else s.supplement_percent * units.PERCENT,

@@ -20,6 +20,7 @@ import pandas as pd
 from .inputs import Timing
 from .pareto import sweep
 from .run import solve_run
+from .timetable import schedule
 
 
 def equal_marginal(fronts, total_time, step=0.05):
@@ -104,14 +105,98 @@ def whole_journey(track, train, pairs, total_time, start_times, points):
     return [float(pyo.value(p.T)) for p in parts]
 
 
+def windowed_journey(track, train, plan, points, start_times=None):
+    """Running times [s] from one NLP over all segments that keeps a timetable's windows.
+
+    As :func:`whole_journey`, each segment's model is a block with a free running time T_n, total
+    traction work minimised; the journey clock ties them: segment n departs at its fixed time or
+    at the previous arrival plus the dwell (never before: a fixed departure needs the arrival and
+    dwell to fit before it), its arrival keeps the stop's (earliest, latest) window and every
+    passing point's node time keeps its window (speed bounds sit on the node, model.define_windows;
+    thesis 001 eq. 4.1g on a whole journey, the TTOBench journey format).
+    """
+    import pyomo.environ as pyo
+
+    from . import solver
+    from .errors import InfeasibleError, SolverError
+    from .inputs import Window
+    from .run import build, capped_guess, prepare
+    pairs = list(zip(plan.stops, plan.stops[1:]))
+    cases = [prepare(track, train, a, b, points, windows=[Window(w.distance, None, None, w.min_speed, w.max_speed)
+                                                          for w in ws]) for (a, b), ws in zip(pairs, plan.windows)]
+    if start_times is None:
+        start_times = [1.1 * c.estimate for c in cases]
+    m = pyo.ConcreteModel()
+    m.clock = pyo.ConstraintList()
+    ref = sum(start_times)
+    parts, offset = [], None
+    for n, (case, t) in enumerate(zip(cases, start_times)):
+        part = build(case, capped_guess(case, t), "energy", {}, running_time=t)
+        part.objective.deactivate()
+        part.T.setlb(0.0)
+        part.T.setub(None)
+        m.add_component(f"segment{n}", part)
+        if n == 0:
+            offset = plan.departure[0]
+        elif plan.departure[n] is None:
+            offset = offset + parts[-1].T + plan.dwell[n]
+        else:
+            m.clock.add((offset + parts[-1].T + plan.dwell[n]) / ref <= plan.departure[n] / ref)
+            offset = plan.departure[n]
+        parts.append(part)
+        lo, hi = plan.arrival[n]
+        bounds = [(offset + part.T, lo, hi)]
+        for w in plan.windows[n]:
+            k = int(np.argmin(np.abs(case.nodes - w.distance)))
+            bounds.append((offset + sum(part.dt[j] for j in range(k)), w.earliest, w.latest))
+        for when, lo, hi in bounds:
+            if lo is not None:
+                m.clock.add(when / ref >= lo / ref)
+            if hi is not None:
+                m.clock.add(when / ref <= hi / ref)
+    m.objective = pyo.Objective(expr=sum(p.traction_work for p in parts) / max(p.energy_ref for p in parts))
+    outcome = solver.solve(m)
+    if outcome.status in ("infeasible", "restoration_failed"):
+        raise InfeasibleError(f"infeasible: no run of the journey keeps its timing windows ({outcome.status})")
+    if not outcome.usable:
+        raise SolverError(f"the journey NLP with timing windows failed ({outcome.status}, {outcome.iterations} iterations)")
+    return [float(pyo.value(p.T)) for p in parts]
+
+
+def _segment_windows(plan, n, departure):
+    """Segment n's passing points with times since its own departure (the segment solve's clock)."""
+    from .inputs import Window
+
+    def rel(t):
+        return None if t is None or t - departure <= 0 else t - departure
+    return tuple(Window(w.distance, rel(w.earliest), rel(w.latest), w.min_speed, w.max_speed) for w in plan.windows[n])
+
+
+def timing_columns(plan, n, departure, arrival, run, tolerance=0.5):
+    """Journey-clock columns of segment n and whether the run keeps its windows (simulated)."""
+    from .simulate import window_checks
+    lo, hi = plan.arrival[n]
+    ok = (lo is None or arrival >= lo - tolerance) and (hi is None or arrival <= hi + tolerance)
+    passing = window_checks(run.trace, _segment_windows(plan, n, departure)) if run.trace is not None else []
+    return {"departure_s": departure, "arrival_s": arrival,
+            "arrival_window_s": f"[{'' if lo is None else f'{lo:g}'}, {'' if hi is None else f'{hi:g}'}]",
+            "windows_kept": bool(ok and all(w["kept"] for w in passing))}
+
+
 def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=15, workers=1,
-            scheduled=None):
+            scheduled=None, plan=None):
     """Per-segment table for each distribution of one total running time, and the totals.
 
-    Give ``total_time`` [s], ``supplement`` [-] over the sum of the segments' all-out times, or
+    Give ``total_time`` [s], ``supplement`` [-] over the sum of the segments' all-out times,
     ``scheduled`` running times per segment [s] (a timetable), which are then a distribution of
-    their own, compared with the same total spread the two other ways.
+    their own, compared with the same total spread the other ways, or a ``plan``
+    (timetable.JourneyPlan) with windows: the windowed journey NLP decides the running times and
+    the other distributions spread its total; every row says whether it keeps the windows.
     """
+    windowed = None
+    if plan is not None:
+        windowed = windowed_journey(track, train, plan, points)
+        total_time = float(sum(windowed))
     if scheduled is not None:
         total_time = float(sum(scheduled))
     pairs = list(zip(stops[:-1], stops[1:]))
@@ -129,18 +214,25 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
              "MARECO-style": mareco_split(track, train, pairs, total_time, points)}
     if scheduled is not None:
         plans["as timetabled"] = list(scheduled)
+    if windowed is not None:
+        plans = {"timing windows NLP": windowed, **plans}
     rows, results = [], {}
     for name, times in plans.items():
         results[name] = []
-        for (a, b), t, f in zip(pairs, times, fronts):
-            r = solve_run(track, train, a, b, Timing(running_time=t), points=points)
+        departures, arrivals = schedule(plan, times) if plan is not None else (None, None)
+        for n, ((a, b), t, f) in enumerate(zip(pairs, times, fronts)):
+            keep = _segment_windows(plan, n, departures[n]) if name == "timing windows NLP" else ()
+            r = solve_run(track, train, a, b, Timing(running_time=t), points=points, windows=keep)
             results[name].append(r)
             t0 = float(f["running_time_s"].iloc[0])
             rows.append({"distribution": name, "from": a, "to": b, "distance_m": r.summary["distance_m"],
                          "all_out_time_s": t0, "running_time_s": r.summary["running_time_s"],
                          "supplement_pct": 100 * (t / t0 - 1), "traction_energy_kWh": r.summary["traction_energy_kWh"],
                          "net_energy_kWh": r.summary["net_energy_kWh"],
+                         **(timing_columns(plan, n, departures[n], arrivals[n], r) if plan is not None else {}),
                          "verified": r.summary["verification"]["passed"]})
     table = pd.DataFrame(rows)
     totals = table.groupby("distribution", sort=False)[["running_time_s", "traction_energy_kWh", "net_energy_kWh"]].sum()
+    if plan is not None:
+        totals["windows_kept"] = table.groupby("distribution", sort=False)["windows_kept"].all().to_numpy()
     return table, totals.reset_index(), results, fronts

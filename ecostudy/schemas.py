@@ -187,26 +187,6 @@ class TrackFile(Strict):
         return self
 
 
-class TimetableStop(Strict):
-    stop: str
-    arrival_s: Optional[float] = Field(None, ge=0)
-    departure_s: Optional[float] = Field(None, ge=0)
-    dwell_s: Optional[float] = Field(None, ge=0)
-
-
-class TimetableFile(Strict):
-    name: str
-    source: str = ""
-    stops: list[TimetableStop] = Field(default_factory=list)
-    supplement_percent: Optional[float] = Field(None, ge=0)
-
-    @model_validator(mode="after")
-    def _one_form(self):
-        if bool(self.stops) == (self.supplement_percent is not None):
-            raise ValueError("give either 'stops' with times or 'supplement_percent'")
-        return self
-
-
 class Window(Strict):
     """A timing point on the way: pass ``position_m`` (track position) within the bounds given."""
 
@@ -223,6 +203,54 @@ class Window(Strict):
         if all(x is None for x in (self.earliest_s, self.latest_s, self.min_speed_kmh, self.max_speed_kmh)):
             raise ValueError("give at least one of earliest_s, latest_s, min_speed_kmh, max_speed_kmh")
         return self
+
+
+class TimetableStop(Strict):
+    """A stop of the timetable, by name or by track position; times since the journey's start."""
+
+    stop: Optional[str] = None
+    position_m: Optional[float] = Field(None, ge=0, description="Instead of 'stop': the stop at this position.")
+    arrival_s: Optional[float] = Field(None, ge=0)
+    departure_s: Optional[float] = Field(None, ge=0)
+    dwell_s: Optional[float] = Field(None, ge=0)
+    earliest_s: Optional[float] = Field(None, ge=0, description="Arrival window: not before [s].")
+    latest_s: Optional[float] = Field(None, ge=0, description="Arrival window: not after [s].")
+
+    @model_validator(mode="after")
+    def _named(self):
+        if (self.stop is None) == (self.position_m is None):
+            raise ValueError("give either 'stop' (a name) or 'position_m'")
+        if self.earliest_s is not None and self.latest_s is not None and self.earliest_s > self.latest_s:
+            raise ValueError("earliest_s must not exceed latest_s")
+        if self.arrival_s is not None and (self.earliest_s is not None or self.latest_s is not None):
+            raise ValueError("give either 'arrival_s' or an arrival window (earliest_s/latest_s)")
+        return self
+
+
+class TimetableFile(Strict):
+    """Stop times (fixed, or arrival windows) and timing points on the way, or one supplement.
+
+    Windows here are passing points between the stops with times since the journey's start
+    (the TTOBench journey format, imported by ``ecostudy.imports``)."""
+
+    name: str
+    source: str = ""
+    stops: list[TimetableStop] = Field(default_factory=list)
+    supplement_percent: Optional[float] = Field(None, ge=0)
+    windows: list[Window] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        if bool(self.stops) == (self.supplement_percent is not None):
+            raise ValueError("give either 'stops' with times or 'supplement_percent'")
+        if self.windows and not self.stops:
+            raise ValueError("windows need 'stops'")
+        return self
+
+    @property
+    def windowed(self):
+        """Whether any time is a window rather than a fixed time (solved as one journey NLP)."""
+        return bool(self.windows) or any(s.earliest_s is not None or s.latest_s is not None for s in self.stops)
 
 
 class Weights(Strict):

@@ -50,3 +50,66 @@ def test_timetable_running_times_and_their_redistribution(tmp_path):
     totals = pd.read_csv(tmp_path / "journey_totals.csv").set_index("distribution")
     assert totals.loc["equal marginal saving", "traction_energy_kWh"] <= totals.loc["as timetabled",
                                                                                    "traction_energy_kWh"]
+
+
+JOURNEY = "metro_line_4stops_Journey_01.json"  # TTOBench journey format, shipped
+
+
+def test_ttobench_journey_becomes_a_plan_in_si(tmp_path):
+    import json
+
+    from ecostudy.errors import InputError
+    from ecostudy.inputs import load_timetable, load_track
+    from ecostudy.timetable import journey_plan, name_stops
+
+    from .conftest import STUDIES
+    track = load_track(TRACKS / "metro_line_4stops.yaml")
+    path = STUDIES / "timetables" / JOURNEY
+    plan = journey_plan(name_stops(load_timetable(path), track, path), track, path, dwell=20.0)
+    assert plan.stops == ("Noord", "Station", "Centrum", "Zuid")
+    assert plan.arrival == ((None, 56.0), (175.0, 185.0), (None, 270.0))
+    assert plan.dwell == (0.0, 20.0, 20.0) and plan.departure == (0.0, None, None)
+    (w,) = plan.windows[1]  # 1400 m is 750 m past Station
+    assert (w.distance, w.earliest, w.latest, w.min_speed) == (750.0, 120.0, 135.0, None)
+    assert w.max_speed == pytest.approx(40 / 3.6)
+    # other units: km and m/s are converted at the boundary
+    doc = json.loads(path.read_text())
+    doc["timing points"]["units"].update({"position": "km", "lower speed constraint": "m/s",
+                                          "upper speed constraint": "m/s"})
+    doc["timing points"]["values"] = [[p / 1000 if p is not None else None, a, b, c, d]
+                                      for p, a, b, c, d in doc["timing points"]["values"]]
+    doc["timing points"]["values"][2][4] = 10.0  # m/s
+    other = tmp_path / "journey_km.json"
+    other.write_text(json.dumps(doc))
+    plan = journey_plan(name_stops(load_timetable(other), track, other), track, other)
+    assert plan.windows[1][0].distance == pytest.approx(750.0) and plan.windows[1][0].max_speed == pytest.approx(10.0)
+    # a stop that the track does not have, and a departure that is not at standstill
+    doc["timing points"]["values"][1][0] = 0.7
+    other.write_text(json.dumps(doc))
+    with pytest.raises(InputError, match=r"stops\[1\]\.position_m: 700 m is not a stop"):
+        name_stops(load_timetable(other), track, other)
+    doc["timing points"]["values"][0][4] = 5
+    other.write_text(json.dumps(doc))
+    with pytest.raises(InputError, match=r"timing points\.values\[0\]: the departure and the arrival need"):
+        load_timetable(other)
+
+
+def test_journey_with_timing_windows_keeps_them_where_the_splits_do_not(tmp_path):
+    from .conftest import STUDIES
+    r = CliRunner().invoke(app, ["journey", "--track", str(TRACKS / "metro_line_4stops.yaml"), "--train",
+                                 str(TRAINS / "amsterdam_metro.yaml"), "--timetable",
+                                 str(STUDIES / "timetables" / JOURNEY), "--dwell", "20", "--points", "200",
+                                 "--workers", "2", "--no-plot", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    import pandas as pd
+    table = pd.read_csv(tmp_path / "journey.csv")
+    nlp = table[table["distribution"] == "timing windows NLP"]
+    assert nlp["verified"].all() and nlp["windows_kept"].all()  # simulated passing times and speeds
+    assert nlp["arrival_s"].iloc[0] <= 56.0 + 1e-6 and 175 - 1e-6 <= nlp["arrival_s"].iloc[1] <= 185 + 1e-6
+    assert nlp["departure_s"].iloc[1] == pytest.approx(nlp["arrival_s"].iloc[0] + 20.0)
+    totals = pd.read_csv(tmp_path / "journey_totals.csv").set_index("distribution")
+    assert totals.loc["timing windows NLP", "windows_kept"]
+    assert not totals.loc["same percentage", "windows_kept"]  # Station reached after 56 s
+    # without the windows the same total time needs no more energy: the windows' price
+    assert (totals.loc["whole-journey NLP", "traction_energy_kWh"]
+            <= totals.loc["timing windows NLP", "traction_energy_kWh"] * (1 + 1e-6))

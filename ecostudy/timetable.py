@@ -1,0 +1,105 @@
+"""A journey's timing requirements on one clock: stops, dwells, arrival windows, passing points.
+
+A timetable names its stops or gives their positions (the TTOBench journey format does the
+latter); :func:`name_stops` puts the track's names on them. :func:`journey_plan` turns a timetable
+with windows into a :class:`JourneyPlan` in SI, the passing points assigned to the segment they
+lie on. Times are on the journey clock (0 at the first departure), as TTOBench counts them.
+"""
+from dataclasses import dataclass
+
+from . import units
+from .errors import InputError, problem
+from .grid import travel_distance
+from .inputs import Window
+
+POSITION_TOLERANCE = 1.0  # [m] a timetable position within this of a track stop is that stop
+
+
+def name_stops(tt, track, path):
+    """``tt`` with every stop given by position named after the track's stop there."""
+    rows, lines = [], []
+    for i, row in enumerate(tt.stops):
+        if row.stop is not None:
+            if row.stop not in track.stops:
+                lines.append(problem(path, f"stops[{i}].stop", f"'{row.stop}' is not a stop of track '{track.name}' "
+                                     f"({', '.join(track.stops)})"))
+            rows.append(row)
+            continue
+        near = [n for n, x in track.stops.items() if abs(x - row.position_m) <= POSITION_TOLERANCE]
+        if not near:
+            lines.append(problem(path, f"stops[{i}].position_m", f"{row.position_m:g} m is not a stop of track "
+                                 f"'{track.name}' (stops at " + ", ".join(f"{x:g} m" for x in track.stops.values()) + ")"))
+            continue
+        rows.append(row.model_copy(update={"stop": near[0], "position_m": None}))
+    if lines:
+        raise InputError(lines)
+    return tt.model_copy(update={"stops": rows})
+
+
+@dataclass(frozen=True)
+class JourneyPlan:
+    """Stops served and what the clock requires of them; windows per segment (SI, journey clock).
+
+    ``arrival[n]``: (earliest, latest) arrival at the end of segment n, None where open.
+    ``departure[n]``: fixed departure from the start of segment n, or None: arrival + dwell.
+    ``dwell[n]``: dwell before segment n departs (0 for the first).
+    ``windows[n]``: inputs.Window passing points of segment n, distance from its departure stop.
+    """
+
+    stops: tuple
+    departure: tuple
+    dwell: tuple
+    arrival: tuple
+    windows: tuple
+
+
+def journey_plan(tt, track, path, dwell=0.0):
+    """The :class:`JourneyPlan` of a named timetable ``tt``; ``dwell`` [s] where a stop gives none."""
+    names = [row.stop for row in tt.stops]
+    lines = []
+    if len(names) < 2:
+        lines.append(problem(path, "stops", "need at least two stops"))
+    for i, (a, b) in enumerate(zip(names, names[1:])):
+        if track.stops[a] == track.stops[b]:
+            lines.append(problem(path, f"stops[{i + 1}]", f"'{b}' is where the journey already is"))
+    if lines:
+        raise InputError(lines)
+    first = tt.stops[0]
+    departure = [first.departure_s if first.departure_s is not None else (first.arrival_s or 0.0)]
+    dwells, arrival = [0.0], []
+    for row in tt.stops[1:]:
+        if row.arrival_s is not None:
+            arrival.append((row.arrival_s, row.arrival_s))
+        else:
+            arrival.append((row.earliest_s, row.latest_s))
+    for row in tt.stops[1:-1]:
+        departure.append(row.departure_s)
+        dwells.append(row.dwell_s if row.dwell_s is not None else dwell)
+    windows = [[] for _ in names[1:]]
+    for i, w in enumerate(tt.windows):
+        for n, (a, b) in enumerate(zip(names, names[1:])):
+            d = travel_distance(track, a, b, w.position_m)
+            if 0 < d < abs(track.stops[b] - track.stops[a]):
+                windows[n].append(Window(d, w.earliest_s, w.latest_s,
+                                         None if w.min_speed_kmh is None else w.min_speed_kmh * units.KMH,
+                                         None if w.max_speed_kmh is None else w.max_speed_kmh * units.KMH))
+                break
+        else:
+            lines.append(problem(path, f"windows[{i}].position_m", f"{w.position_m:g} m is not strictly between "
+                                 "two consecutive stops of the journey"))
+    if lines:
+        raise InputError(lines)
+    return JourneyPlan(tuple(names), tuple(departure), tuple(dwells), tuple(arrival),
+                       tuple(tuple(sorted(w, key=lambda x: x.distance)) for w in windows))
+
+
+def schedule(plan, running_times):
+    """Departure and arrival times [s] per segment on the journey clock for ``running_times``."""
+    dep, arr, clock = [], [], 0.0
+    for n, t in enumerate(running_times):
+        fixed = plan.departure[n]
+        clock = fixed if fixed is not None else clock + plan.dwell[n]
+        dep.append(clock)
+        clock += t
+        arr.append(clock)
+    return dep, arr
