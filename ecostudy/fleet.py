@@ -9,7 +9,9 @@ triggering   supervisor rule 7.7: while another train brakes, a train's traction
              (1 - gamma2) / (1 - gamma1) with the thesis' gamma1 = 0.71, gamma2 = 0.9 (b)
 voltage      rule 7.11 as the thesis' text applies it, between consecutive trains: while the
              pantograph voltage of the train ahead is above a train's own (it regenerates),
-             that train's traction weighs 0 (c)
+             that train's traction weighs 0 (c); the voltages are those of eq. 7.8 as written
+             (a receptive source, :func:`sensed`): on the line with the diode a surplus nobody
+             draws carries no current and the comparison would see nothing
 joint        one NLP over all trains and the network of eq. 7.8 minimising substation energy:
              the bound no rule can beat (e)
 following    the independent runs, each train's head kept ``buffer`` metres behind the tail of
@@ -122,6 +124,8 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
 
     def traction_cost(leg, b, j):
         wt = float(w[leg.start + j])
+        if allowance is not None and allowance[leg.start + j] <= 0.0:
+            return b.traction_kw[j]  # nothing offered: w min(P, 0) + max(P, 0) = P, no smoothing
         if allowance is None or wt >= 1.0:
             return wt * b.traction_kw[j]
         return wt * b.traction_kw[j] + (1 - wt) * hinge(b.traction_kw[j] - float(allowance[leg.start + j]), 10.0)
@@ -259,6 +263,17 @@ def offered(fleet, runs_by_train):
     return out
 
 
+def sensed(fleet, runs_by_train):
+    """Pantograph voltages [V] per train and clock step as rule 7.11's supervisor sees them
+    (``network.sensed_voltages``: eq. 7.8 with a receptive source); NaN where a train is not running."""
+    out = np.full((len(runs_by_train), fleet.steps), np.nan)
+    for t, running in enumerate(step_powers(fleet, runs_by_train)):
+        if running:
+            volts = network.sensed_voltages(fleet.supply, [r[1] for r in running], [r[2] for r in running])
+            out[[r[0] for r in running], t] = volts
+    return out
+
+
 def supervised(fleet, rule, start, rounds=3):
     """Rules (b), (c) and (d): each round re-optimises every train against the others' previous runs.
 
@@ -270,7 +285,7 @@ def supervised(fleet, rule, start, rounds=3):
     the runs are those of the round with the least substation energy, the start included.
     """
     runs, low = start, (1 - GAMMA[1]) / (1 - GAMMA[0])
-    steps, _, totals = evaluate(fleet, runs)
+    _, _, totals = evaluate(fleet, runs)
     best = (totals["substation_kWh"], runs)
     history = [best[0]]
     for _ in range(rounds):
@@ -281,18 +296,17 @@ def supervised(fleet, rule, start, rounds=3):
         elif rule == "dissension":
             weights = dissension_weights(fleet, _braking_steps(fleet, runs))
         else:  # rule 7.11 between consecutive trains: train i against train i - 1 ahead of it
-            volts = {n: steps[f"voltage_{n}_V"].to_numpy() if f"voltage_{n}_V" in steps else
-                     np.full(len(steps), np.nan) for n in fleet.names}
+            volts = sensed(fleet, runs)
             order = list(np.argsort([legs[0].start for legs in fleet.legs]))
             weights, sources = [np.ones(fleet.steps) for _ in runs], [np.zeros(fleet.steps) for _ in runs]
             for ahead, me in zip(order[:-1], order[1:]):
-                higher = volts[fleet.names[ahead]] > volts[fleet.names[me]] + 1.0  # NaN compares False
+                higher = (volts[ahead] > volts[me] + 1.0) & (power[ahead] > 0)  # NaN compares False
                 weights[me] = np.where(higher, 0.0, 1.0)
                 sources[me] = power[ahead]
         allowances = sources if rule == "voltage" else [power.sum(axis=0) - power[i] for i in range(len(runs))]
         runs = [solve_train(fleet, i, weights[i], guesses=runs[i], allowance=allowances[i])[0]
                 for i in range(len(runs))]
-        steps, _, totals = evaluate(fleet, runs)
+        _, _, totals = evaluate(fleet, runs)
         energy = totals["substation_kWh"]
         history.append(energy)
         if energy < best[0]:

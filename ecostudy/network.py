@@ -92,6 +92,30 @@ def solve_step(supply, positions, powers):
     return out
 
 
+def sensed_voltages(supply, positions, powers):
+    """Pantograph voltages [V] of eq. 7.8 exactly as the thesis writes it: a receptive source
+    (no diode, no V_max), V_0 = V_s - R_s sum I_i solved by bisection.
+
+    This is the supervisor's view for rule 7.11 (thesis 000 §7.2.1: regeneration is detected
+    by the voltage change at the train nodes). On the real line (:func:`solve_step`) a surplus that
+    nobody draws carries no current, every node sits at the same voltage and the comparison
+    V_i < V_(i-1) sees nothing, just when the energy is lost; here the feeding train is always
+    above the others."""
+    p = np.asarray(powers, float) / 1e6
+    r = supply.feeder(positions)
+    vs, rs = supply.voltage / 1e3, supply.resistance
+
+    def excess(v0):  # increasing in v0 wherever the line can carry the powers
+        return v0 - vs + rs * sum(_current(v0, ri, pi) for ri, pi in zip(r, p))
+
+    lo, hi = 0.3 * vs, 2.0 * vs
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if excess(mid) < 0 else (lo, mid)
+    v0 = 0.5 * (lo + hi)
+    return np.array([v0 - ri * _current(v0, ri, pi) for ri, pi in zip(r, p)]) * 1e3
+
+
 def _flows(supply, r, currents, volts, p, vs, i_s):
     """Energy flows of one instant [W] from the solved circuit."""
     drawn = volts * currents  # MW at each pantograph

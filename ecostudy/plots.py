@@ -138,21 +138,26 @@ def journey_plot(results, path, title=""):
 
 
 def network_plot(fleet, outcome, path, title=""):
-    """Speeds against time of every train (independent and joint, if run), and the substation
-    power of every strategy."""
+    """Speeds and pantograph powers against time of every train (independent and joint, if
+    run), and the substation power of every strategy."""
     import numpy as np
     shown = [n for n in ("independent", "joint") if n in outcome] or list(outcome)[:1]
-    fig, axes = plt.subplots(len(shown) + 1, 1, figsize=(10, 3 * (len(shown) + 1)), sharex=True)
-    fig.subplots_adjust(left=0.08, right=0.98, top=0.94, bottom=0.07, hspace=0.25)
+    rows = 2 * len(shown) + 1
+    fig, axes = plt.subplots(rows, 1, figsize=(10, 2.4 * rows), sharex=True)
+    fig.subplots_adjust(left=0.08, right=0.98, top=0.95, bottom=0.06, hspace=0.25)
     fig.suptitle(title, fontsize=10)
-    for ax, name in zip(axes, shown):
+    for n, name in enumerate(shown):
+        speed, power = axes[2 * n], axes[2 * n + 1]
         for i, (legs, runs) in enumerate(zip(fleet.legs, outcome[name]["runs"])):
             for k, (leg, run) in enumerate(zip(legs, runs)):
                 t = (leg.start + np.arange(leg.steps + 1)) * fleet.dt
-                ax.plot(t, run[1] * 3.6, color=f"C{i}", lw=1, label=fleet.names[i] if k == 0 else None)
-        ax.set_ylabel(f"{name}\nspeed [km/h]", fontsize=8)
-        ax.legend(fontsize=7, loc="upper right")
-        ax.grid(alpha=0.3)
+                speed.plot(t, run[1] * 3.6, color=f"C{i}", lw=1, label=fleet.names[i] if k == 0 else None)
+                power.step(t[:-1], run[5] / 1e6, where="post", color=f"C{i}", lw=0.8)
+        speed.set_ylabel(f"{name}\nspeed [km/h]", fontsize=8)
+        power.set_ylabel(f"{name}\npantograph [MW]", fontsize=8)
+        speed.legend(fontsize=7, loc="upper right")
+        for ax in (speed, power):
+            ax.grid(alpha=0.3)
     ax = axes[-1]
     for j, (name, res) in enumerate(outcome.items()):
         steps = res["steps"]
