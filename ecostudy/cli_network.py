@@ -54,7 +54,8 @@ def _network(study_path, out, no_plot):
         from .plots import network_plot
         atomic_write(out_dir / "network.png", lambda tmp: network_plot(fl, outcome, tmp, st.name))
     cols = ["strategy", "status", "substation_kWh", "saving_vs_independent_pct", "traction_input_kWh", "regen_used_kWh",
-            "regen_lost_kWh", "line_losses_kWh", "balance_error_pct", "min_separation_m", "all_verified"]
+            "regen_lost_kWh", "line_losses_kWh", "unserved_kWh", "balance_error_pct", "min_separation_m",
+            "all_verified"]
     typer.echo(table[[c for c in cols if c in table]].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
     typer.echo(f"outputs {out_dir}/ (network_substation.csv, network_trains.csv, network_steps_*.csv, network.json"
                + ("" if no_plot else ", network.png") + ")")
@@ -70,6 +71,7 @@ def network(
 ):
     """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""
     table = guarded(debug, _network, study, out, no_plot)
-    if not bool(table["all_verified"].all()):
-        typer.secho("flagged: a strategy failed, or its runs failed re-simulation", fg=typer.colors.YELLOW, err=True)
+    if not bool(table["all_verified"].all()) or not bool((table["status"] == "ok").all()):
+        typer.secho("flagged: a strategy failed, its runs failed re-simulation, or traction was not served",
+                    fg=typer.colors.YELLOW, err=True)
         raise typer.Exit(1)

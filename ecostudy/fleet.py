@@ -449,7 +449,10 @@ def run_strategies(fleet, strategies, progress=print):
                              verified=all(v["passed"] for v in ver), min_separation_m=gaps[n])
         totals.update(wall_s=wall, all_verified=all(t["verified"] for t in trains.values()),
                       min_separation_m=min([g for g in gaps.values() if g is not None], default=None))
-        totals["status"] = "ok"
+        # only the joint optimum sees the circuit: another strategy's runs may ask for traction the
+        # line cannot carry or a current limit forbids; it is not served and the result is flagged
+        totals["status"] = "ok" if totals["unserved_kWh"] <= 1e-3 else (
+            f"flagged: {totals['unserved_kWh']:.3f} kWh of traction not served (current limit or line)")
         out[name] = {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
         if progress:
             progress(f"{name:12s} substation {totals['substation_kWh']:.3f} kWh, {wall:.1f} s")

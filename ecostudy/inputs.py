@@ -372,7 +372,9 @@ def load_network_study(path):
     supply = Supply(position=sub.position_m, voltage=sub.voltage_V, resistance=sub.internal_resistance_ohm,
                     line_resistance=sub.line_resistance_ohm_per_km / 1000.0,
                     max_voltage=sub.max_voltage_V or sub.voltage_V * 685 / 600,
-                    min_voltage=sub.min_voltage_V or sub.voltage_V * 2 / 3)
+                    min_voltage=sub.min_voltage_V or sub.voltage_V * 2 / 3,
+                    max_current=sub.max_train_current_A or float("inf"),
+                    max_regen_current=sub.max_regen_current_A or float("inf"))
     return NetworkStudy(s.name, track, train, stops, s.running_times_s,
                         None if s.supplement_percent is None else s.supplement_percent * units.PERCENT,
                         s.dwell_s, s.time_step_s, [t.name for t in s.trains], [t.offset_s for t in s.trains],

@@ -10,6 +10,8 @@ A train draws the power p_i = V_i I_i (traction, I_i > 0) or feeds it (regenerat
 The substation is a diode rectifier: I_s >= 0. When the trains feed more than the others draw,
 the bus floats above V_s with I_s = 0, and a feeding train may not raise its voltage above
 V_max (thesis: 685 V on a 600 V supply): what it cannot feed goes to its rheostat (lost).
+Optional current limits per train (thesis Fig. 7.7: the largest traction and braking currents
+at 600 / 685 V): traction beyond V_i I_max is not served, regeneration beyond V_i I_regen is lost.
 
 Units inside the electrical model: kV, kA, MW, Ohm (kV = Ohm kA, MW = kV kA).
 """
@@ -28,6 +30,8 @@ class Supply:
     line_resistance: float = 25e-6  # r [Ohm/m] (thesis 000 §7.2.1: 25 mOhm/km)
     max_voltage: float = 856.0    # V_max, regeneration cut-off [V] (685/600 of 750 V)
     min_voltage: float = 500.0    # lowest pantograph voltage [V]
+    max_current: float = float("inf")        # largest current a train draws [A] (thesis Fig. 7.7)
+    max_regen_current: float = float("inf")  # largest current a train feeds [A] (thesis Fig. 7.7)
 
     def feeder(self, x):
         """R(x) [Ohm] between the bus and a train at line position ``x`` [m]."""
@@ -44,14 +48,16 @@ def _current(v0, r, p):
     return 2.0 * p / (v0 + np.sqrt(disc))  # the small root, stable for r -> 0
 
 
-def _currents(v0, r, p, vmax):
-    """Currents [kA] at bus voltage v0; a feeding train is held at vmax (the rest is lost)."""
+def _currents(v0, r, p, vmax, imax=np.inf, iregen=np.inf):
+    """Currents [kA] at bus voltage v0; a feeding train is held at vmax (the rest is lost), and
+    no train draws more than imax or feeds more than iregen [kA] (what is cut off is unserved
+    traction or lost regeneration)."""
     out = np.empty(len(p))
     for i, (ri, pi) in enumerate(zip(r, p)):
         ii = _current(v0, ri, pi)
         if pi < 0 and v0 - ri * ii > vmax:
             ii = (v0 - vmax) / max(ri, 1e-12)
-        out[i] = ii
+        out[i] = min(max(ii, -iregen), imax)
     return out
 
 
@@ -64,11 +70,12 @@ def solve_step(supply, positions, powers):
     p = np.asarray(powers, float) / 1e6
     r = supply.feeder(positions)
     vs, rs, vmax = supply.voltage / 1e3, supply.resistance, supply.max_voltage / 1e3
+    limits = supply.max_current / 1e3, supply.max_regen_current / 1e3
     if len(p) == 0:
         return {**_flows(supply, r, np.zeros(0), np.zeros(0), p, vs, 0.0), "bus_voltage_V": supply.voltage}
 
     def net(v0):  # current drawn from the bus at bus voltage v0
-        return float(np.sum(_currents(v0, r, p, vmax)))
+        return float(np.sum(_currents(v0, r, p, vmax, *limits)))
 
     if net(vs) <= 0.0:  # the trains feed at least what they draw: the diode blocks, the bus floats
         lo, hi = vs, vmax
@@ -86,7 +93,7 @@ def solve_step(supply, positions, powers):
             lo, hi = (mid, hi) if mid < vs - rs * max(net(mid), 0.0) else (lo, mid)
         v0 = 0.5 * (lo + hi)
         i_s = max(net(v0), 0.0)
-    currents = _currents(v0, r, p, vmax)
+    currents = _currents(v0, r, p, vmax, *limits)
     out = _flows(supply, r, currents, v0 - r * currents, p, vs, i_s)
     out["bus_voltage_V"] = v0 * 1e3
     return out
@@ -146,7 +153,9 @@ def add_network(m, supply, steps, eps=1e-5):
     index = [(t, q) for t, running in enumerate(steps) for q in range(len(running))]
     m.T_net = pyo.RangeSet(0, len(steps) - 1)
     m.V0 = pyo.Var(m.T_net, bounds=(supply.min_voltage / 1e3, supply.max_voltage / 1e3), initialize=vs)
-    m.Ipan = pyo.Var(index, initialize=0.0)
+    fed, drawn = (supply.max_regen_current / 1e3, supply.max_current / 1e3)  # [kA], inf: no limit
+    m.Ipan = pyo.Var(index, bounds=(-fed if np.isfinite(fed) else None, drawn if np.isfinite(drawn) else None),
+                     initialize=0.0)
     m.Vpan = pyo.Var(index, bounds=(supply.min_voltage / 1e3, supply.max_voltage / 1e3), initialize=vs)
     # the diode: V_0 = V_s - R_s I_s + u with I_s, u >= 0 and I_s u <= eps (relaxed complementarity:
     # the bus floats above V_s only while I_s = 0). Measured in session 3 before the smooth variant

@@ -333,6 +333,10 @@ class Substation(Strict):
     line_resistance_ohm_per_km: float = Field(0.025, ge=0, description="Thesis 000: 25 mOhm/km.")
     max_voltage_V: Optional[float] = Field(None, gt=0, description="Regeneration cut-off; default V_s 685/600.")
     min_voltage_V: Optional[float] = Field(None, gt=0, description="Lowest pantograph voltage; default 2/3 V_s.")
+    max_train_current_A: Optional[float] = Field(None, gt=0, description="Largest current a train draws "
+                                                 "(thesis 000 Fig. 7.7); default none.")
+    max_regen_current_A: Optional[float] = Field(None, gt=0, description="Largest current a train feeds "
+                                                 "back (thesis 000 Fig. 7.7); default none.")
 
     @model_validator(mode="after")
     def _voltages(self):

@@ -35,6 +35,25 @@ def test_regeneration_is_used_by_a_neighbour_or_lost_behind_the_diode():
     assert lhs == pytest.approx(shared["traction_input_W"] + shared["line_loss_W"], rel=1e-9)
 
 
+def test_current_limits_cut_traction_and_regeneration():
+    """thesis 000 Fig. 7.7: a train draws at most max_current and feeds at most max_regen_current;
+    traction beyond is not served, regeneration beyond goes to the rheostat; the balance holds."""
+    from dataclasses import replace
+    limited = replace(SUPPLY, max_current=1500.0, max_regen_current=400.0)
+    free = network.solve_step(SUPPLY, [2500.0], [1.5e6])
+    cut = network.solve_step(limited, [2500.0], [1.5e6])
+    assert free["unserved_W"] == pytest.approx(0.0, abs=1e-6) and free["current_A"][0] > 1500.0
+    assert cut["current_A"][0] == pytest.approx(1500.0)
+    assert cut["unserved_W"] == pytest.approx(1.5e6 - cut["voltage_V"][0] * 1500.0, rel=1e-9)
+    shared = network.solve_step(limited, [1000.0, 2000.0], [-1.0e6, 0.8e6])
+    assert shared["current_A"][0] == pytest.approx(-400.0)
+    assert shared["regen_lost_W"] == pytest.approx(1.0e6 - shared["regen_used_W"], rel=1e-9)
+    assert shared["regen_used_W"] == pytest.approx(400.0 * shared["voltage_V"][0], rel=1e-9)
+    for flows in (cut, shared):
+        lhs = flows["substation_W"] + flows["regen_used_W"]
+        assert lhs == pytest.approx(flows["traction_input_W"] + flows["line_loss_W"], rel=1e-9)
+
+
 def test_rule_7_11_sees_regeneration_on_eq_7_8_as_written():
     """Behind the diode a surplus nobody draws carries no current: both pantographs sit at one
     voltage and V_i < V_(i-1) sees nothing; on eq. 7.8 as the thesis writes it (a receptive source)
@@ -152,3 +171,16 @@ def test_voltage_rule_lowers_substation_energy_with_three_trains():
     assert rule["substation_kWh"] < 0.99 * alone["substation_kWh"]
     assert rule["all_verified"] and abs(rule["balance_error_pct"]) < 0.1
     assert rule["regen_used_kWh"] > alone["regen_used_kWh"]
+
+
+def test_joint_optimum_keeps_the_current_limits_that_independent_runs_break():
+    """With a 2500 A traction and 1500 A regeneration limit per train (thesis 000 Fig. 7.7),
+    independent runs ask for traction the line cannot serve (flagged); the joint NLP bounds the
+    pantograph currents and serves all of it."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    supply = network.Supply(position=300.0, max_current=2500.0, max_regen_current=1500.0)
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 45.0], ["T1", "T2"], 1.0, supply, points=300)
+    out = fleet.run_strategies(f, ["independent", "joint"], progress=None)
+    alone, joint = out["independent"]["totals"], out["joint"]["totals"]
+    assert alone["unserved_kWh"] > 0.1 and alone["status"].startswith("flagged")
+    assert joint["unserved_kWh"] < 1e-3 and joint["status"] == "ok" and joint["all_verified"]
