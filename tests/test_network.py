@@ -161,14 +161,15 @@ def test_dissension_weight_falls_while_neighbours_brake_and_resets_at_departure(
 
 def test_voltage_rule_lowers_substation_energy_with_three_trains():
     """Rule 7.11 between consecutive trains on eq. 7.8's voltages: 3 metro trains 48 s and 80 s
-    apart over two segments (dt 1 s). Measured 36.80 -> 35.84 kWh (-2.6 %); with the real
-    line's voltages (the diode) the rule saw no regeneration and no round beat the start."""
+    apart over two segments (dt 1 s). Measured 36.80 -> 32.93 kWh (-10.5 %); with the real
+    line's voltages (the diode) the rule saw no regeneration and no round beat the start, and
+    with every train updated at once and all regeneration credited it saved 2.6 %."""
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
     f = fleet.plan(track, train, ["Noord", "Station", "Centrum"], [55.5, 99.0], 10.0, [0.0, 48.0, 80.0],
                    ["T1", "T2", "T3"], 1.0, SUPPLY, points=200)
     out = fleet.run_strategies(f, ["independent", "voltage"], progress=None)
     alone, rule = out["independent"]["totals"], out["voltage"]["totals"]
-    assert rule["substation_kWh"] < 0.99 * alone["substation_kWh"]
+    assert rule["substation_kWh"] < 0.95 * alone["substation_kWh"]
     assert rule["all_verified"] and abs(rule["balance_error_pct"]) < 0.1
     assert rule["regen_used_kWh"] > alone["regen_used_kWh"]
 
