@@ -30,9 +30,17 @@ def equal_marginal(fronts, total_time, step=0.05):
     if spare < -1e-9:
         raise ValueError(f"total time {total_time:.1f} s is below the sum of all-out times {sum(times):.1f} s")
 
-    def energy(i, t):
-        f = fronts[i]
-        return float(np.interp(t, f["running_time_s"], f["traction_energy_kWh"]))
+    # monotone cubic (PCHIP) through each front: the fronts are convex, and straight chords
+    # between 15 points put the split 0.6 % above the whole-journey NLP where PCHIP is within 0.1 %
+    from scipy.interpolate import PchipInterpolator
+    curves = []
+    for f in fronts:
+        t, keep = np.unique(f["running_time_s"].to_numpy(), return_index=True)
+        curves.append(PchipInterpolator(t, f["traction_energy_kWh"].to_numpy()[keep]))
+    ends = [float(f["running_time_s"].iloc[-1]) for f in fronts]
+
+    def energy(i, t):  # flat beyond the front's last point
+        return float(curves[i](min(t, ends[i])))
 
     def saving(i):  # energy saved by the next step on segment i (fronts end flat)
         return energy(i, times[i]) - energy(i, times[i] + step)
@@ -200,9 +208,15 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
     if scheduled is not None:
         total_time = float(sum(scheduled))
     pairs = list(zip(stops[:-1], stops[1:]))
-    reach = max(0.6, 2.5 * (supplement or 0.0))
-    if scheduled is not None or total_time is not None:  # fronts must reach the longest segment time
-        reach = max(reach, 1.5)
+    # the fronts reach 2.5 times the mean supplement (at least 60 %): a segment can take more than
+    # the mean, and 15 points over a longer reach interpolate too coarsely (measured: a fixed
+    # 150 % reach put the equal-marginal split 4.6 % above the whole-journey NLP at +15 %)
+    mean = supplement or 0.0
+    if total_time is not None:
+        from .run import prepare
+        fastest = sum(prepare(track, train, a, b, points).estimate for a, b in pairs)
+        mean = max(total_time / fastest - 1.0, 0.0)
+    reach = max(0.6, 2.5 * mean)
     fronts = [sweep(track, train, a, b, count=front_count, supplement_max=reach, points=points,
                     workers=workers, verify_result=False)[0] for a, b in pairs]
     all_out = sum(float(f["running_time_s"].iloc[0]) for f in fronts)
