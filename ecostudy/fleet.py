@@ -5,6 +5,9 @@ time, on one clock of step dt (``timedomain``). Strategies (thesis 000 Ch. 7-8, 
 
 independent  each train minimises its own pantograph net energy, regeneration credited as if
              the line always took it (a): no collaboration
+receptivity  the supervisor rounds below with no rule: each train's regeneration credited only
+             up to what the line could take from it, given the others' runs (a baseline that
+             shows what the rules add)
 triggering   supervisor rule 7.7: while another train brakes, a train's traction is weighted
              (1 - gamma2) / (1 - gamma1) with the thesis' gamma1 = 0.71, gamma2 = 0.9 (b)
 voltage      rule 7.11 as the thesis' text applies it, between consecutive trains: while the
@@ -322,6 +325,8 @@ def rule_terms(fleet, rule, runs_by_train, i):
     offer; 7.11 (between consecutive trains, as the thesis' text applies it) weighs 0 while the
     voltage of the train ahead is above one's own (:func:`sensed`), up to what the line can
     deliver of that train's offer (:func:`deliverable`)."""
+    if rule == "receptivity":  # no rule: the rounds' receptivity credit alone
+        return np.ones(fleet.steps), np.zeros(fleet.steps)
     power = offered(fleet, runs_by_train)
     others = power.sum(axis=0) - power[i]
     if rule == "triggering":
@@ -474,7 +479,7 @@ def run_strategies(fleet, strategies, progress=print):
         try:
             if name == "independent":
                 runs = ind
-            elif name in ("triggering", "voltage", "dissension"):
+            elif name in ("receptivity", "triggering", "voltage", "dissension"):
                 runs, history = supervised(fleet, name, ind)
                 info["rounds_substation_kWh"] = history
             elif name == "joint":

@@ -352,7 +352,7 @@ class FleetTrain(Strict):
     offset_s: float = Field(ge=0, description="Departure from the first stop after the first train [s].")
 
 
-STRATEGIES = ("independent", "triggering", "voltage", "dissension", "joint", "following")
+STRATEGIES = ("independent", "receptivity", "triggering", "voltage", "dissension", "joint", "following")
 
 
 class NetworkStudyFile(Strict):
