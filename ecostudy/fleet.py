@@ -178,8 +178,9 @@ def step_powers(fleet, runs_by_train):
 
 def evaluate(fleet, runs_by_train):
     """Score runs on the network: per-step flows, per-train and substation totals [kWh]."""
-    rows, per_train = [], {n: {"traction_kWh": 0.0, "braking_regen_offered_kWh": 0.0, "regen_used_kWh": 0.0,
-                               "regen_lost_kWh": 0.0, "line_input_kWh": 0.0} for n in fleet.names}
+    rows, per_train = [], {n: {"traction_kWh": 0.0, "braking_kWh": 0.0, "braking_regen_offered_kWh": 0.0,
+                               "regen_used_kWh": 0.0, "regen_lost_kWh": 0.0, "line_input_kWh": 0.0}
+                           for n in fleet.names}
     dt = fleet.dt
     for t, running in enumerate(step_powers(fleet, runs_by_train)):
         flows = network.solve_step(fleet.supply, [r[1] for r in running], [r[2] for r in running])
@@ -188,6 +189,7 @@ def evaluate(fleet, runs_by_train):
             vbar = 0.5 * (run[1][j] + run[1][j + 1])
             rec = per_train[name]
             rec["traction_kWh"] += run[2][j] * vbar * dt / KWH
+            rec["braking_kWh"] += run[3][j] * vbar * dt / KWH  # at the wheel, friction and electric
             rec["braking_regen_offered_kWh"] += max(-p, 0.0) * dt / KWH
             rec["regen_used_kWh"] += flows["fed_W"][q] * dt / KWH
             rec["regen_lost_kWh"] += (max(-p, 0.0) - flows["fed_W"][q]) * dt / KWH

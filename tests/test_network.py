@@ -105,6 +105,8 @@ def test_every_strategy_balances_keeps_time_and_is_verified(two_trains):
         assert tot["all_verified"], (name, res["trains"])
         for rec in res["trains"].values():
             assert rec["worst_arrival_error_s"] < 0.5 and rec["worst_stop_error_m"] < 1.0
+            # the electric brake feeds at most eta_R of the braking work at the wheel
+            assert 0 < rec["braking_regen_offered_kWh"] <= rec["braking_kWh"]
 
 
 def test_joint_optimum_bounds_every_rule(two_trains):
