@@ -170,7 +170,15 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
     write_csv(out_dir / "journey_totals.csv", totals)
     if not no_plot:
         from .plots import journey_plot
-        atomic_write(out_dir / "journey.png", lambda tmp: journey_plot(results, tmp, f"{trn.name}: {' - '.join(names)}"))
+        passing = []
+        if plan is not None:  # timing points along the journey (segment lengths from the first split)
+            start = 0.0
+            for windows, run in zip(plan.windows, next(iter(results.values()))):
+                passing += [(start + w.distance, None if w.max_speed is None else units.to_kmh(w.max_speed))
+                            for w in windows]
+                start += run.summary["distance_m"]
+        atomic_write(out_dir / "journey.png", lambda tmp: journey_plot(results, tmp, f"{trn.name}: {' - '.join(names)}",
+                                                                       passing))
     typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
     typer.echo(totals.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
     typer.echo(f"outputs {out_dir}/ (journey.csv, journey_totals.csv, journey.png)")

@@ -122,10 +122,15 @@ def compare_plot(outcomes, segment, path, title=""):
     _finish_speed_axes(fig, ax, path, title)
 
 
-def journey_plot(results, path, title=""):
-    """Speed against distance along the line for each distribution of the running time."""
+def journey_plot(results, path, title="", passing=()):
+    """Speed against distance along the line for each distribution of the running time;
+    ``passing``: (journey distance [m], highest speed [km/h] or None) of timing points, marked."""
     fig, ax = plt.subplots(figsize=(10, 4.5))
     fig.subplots_adjust(left=0.07, right=0.98, top=0.92, bottom=0.12)
+    for x, cap in passing:
+        ax.axvline(x, color="tab:red", lw=0.8, ls=":")
+        if cap is not None:
+            ax.plot([x - 30, x + 30], [cap, cap], color="tab:red", lw=2)
     for (name, runs), colour in zip(results.items(), ("tab:blue", "tab:orange", "tab:green")):
         offset = 0.0
         for i, r in enumerate(runs):
