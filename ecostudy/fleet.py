@@ -351,6 +351,8 @@ def supervised(fleet, rule, start, rounds=3):
     re-optimised one by one against the others' latest runs (Gauss-Seidel: a train never plans
     against a run that has already been replaced).
 
+    With a ``fleet.buffer``, each train stays that far behind the tail of the one ahead, as that
+    one now runs (thesis 001 eq. 6.9, as in :func:`following`).
     Each train minimises w traction (discounted up to an allowance, :func:`rule_terms`; a zero
     weight on unlimited traction only moves consumption to the substation) minus its regeneration
     credited up to what the line could take from it then (:func:`receptivity`; crediting all of it,
@@ -364,10 +366,11 @@ def supervised(fleet, rule, start, rounds=3):
     history = [best[0]]
     order = list(np.argsort([legs[0].start for legs in fleet.legs]))
     for _ in range(rounds):
-        for i in order:
+        for rank, i in enumerate(order):
             weights, allowance = rule_terms(fleet, rule, runs, i)
+            ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]]) if rank and fleet.buffer else None
             runs[i] = solve_train(fleet, i, weights, guesses=runs[i], allowance=allowance,
-                                  credit=receptivity(fleet, runs, i))[0]
+                                  credit=receptivity(fleet, runs, i), ahead=ahead)[0]
         _, _, totals = evaluate(fleet, runs)
         history.append(totals["substation_kWh"])
         if history[-1] < best[0]:

@@ -122,7 +122,8 @@ def test_joint_optimum_bounds_every_rule(two_trains):
 
 def test_following_train_keeps_its_buffer(two_trains):
     f, out = two_trains
-    assert out["following"]["totals"]["min_separation_m"] >= 360.0 - 0.5
+    for name in ("following", "triggering", "voltage", "dissension"):  # the rules keep it too
+        assert out[name]["totals"]["min_separation_m"] >= 360.0 - 0.5, name
     assert out["independent"]["totals"]["min_separation_m"] < 360.0  # the buffer binds here
 
 
