@@ -275,21 +275,30 @@ def offered(fleet, runs_by_train):
     return out
 
 
+def _probe(fleet, runs_by_train, i, power_w):
+    """For each clock step where train ``i`` runs beside another and ``power_w(t)`` is not None:
+    (t, its index q, the circuit solved with train i at that power [W], the others as they run)."""
+    for t, running in enumerate(step_powers(fleet, runs_by_train)):
+        mine = [q for q, r in enumerate(running) if r[0] == i]
+        power = power_w(t) if mine and len(running) > 1 else None
+        if power is not None:
+            ps = [r[2] for r in running]
+            ps[mine[0]] = power
+            yield t, mine[0], network.solve_step(fleet.supply, [r[1] for r in running], ps)
+
+
 def deliverable(fleet, runs_by_train, i, offer_kw):
     """Per clock step, the part [kW] of ``offer_kw`` that train ``i`` could take over the line:
     the regeneration used with train i drawing the offer, less that with train i at rest, the
     others as they run (the circuit of ``network.solve_step``: line losses, V_max, the diode)."""
+    def used(demand_w):  # regeneration used per step with train i drawing demand_w(t)
+        return {t: flows["regen_used_W"] for t, _, flows in _probe(fleet, runs_by_train, i, demand_w)}
+
+    drawing = used(lambda t: offer_kw[t] * 1e3 if offer_kw[t] > 0 else None)
+    idle = used(lambda t: 0.0 if offer_kw[t] > 0 else None)
     out = np.zeros(fleet.steps)
-    for t, running in enumerate(step_powers(fleet, runs_by_train)):
-        mine = [q for q, r in enumerate(running) if r[0] == i]
-        if offer_kw[t] <= 0 or not mine:
-            continue
-        xs, ps = [r[1] for r in running], [r[2] for r in running]
-        used = []
-        for demand in (offer_kw[t] * 1e3, 0.0):
-            ps[mine[0]] = demand
-            used.append(network.solve_step(fleet.supply, xs, ps)["regen_used_W"])
-        out[t] = max(used[0] - used[1], 0.0) / 1e3
+    for t, watts in drawing.items():
+        out[t] = max(watts - idle[t], 0.0) / 1e3
     return out
 
 
@@ -300,12 +309,8 @@ def receptivity(fleet, runs_by_train, i):
     """Per clock step, the regenerated power [kW] the line could take from train ``i`` while the
     others run as in ``runs_by_train`` (train i offering ``RECEPTIVITY_PROBE``; ``network.solve_step``)."""
     out = np.zeros(fleet.steps)
-    for t, running in enumerate(step_powers(fleet, runs_by_train)):
-        mine = [q for q, r in enumerate(running) if r[0] == i]
-        if mine and len(running) > 1:
-            ps = [r[2] for r in running]
-            ps[mine[0]] = -RECEPTIVITY_PROBE
-            out[t] = network.solve_step(fleet.supply, [r[1] for r in running], ps)["fed_W"][mine[0]] / 1e3
+    for t, q, flows in _probe(fleet, runs_by_train, i, lambda t: -RECEPTIVITY_PROBE):
+        out[t] = flows["fed_W"][q] / 1e3
     return out
 
 
