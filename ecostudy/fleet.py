@@ -226,6 +226,11 @@ def _braking_steps(fleet, runs_by_train, share=0.1):
     return out
 
 
+def departure_order(fleet):
+    """Train indices in order of first departure: each one's train ahead is the one before it."""
+    return [int(i) for i in np.argsort([legs[0].start for legs in fleet.legs], kind="stable")]
+
+
 def _others(flags, i):
     return np.any([f for j, f in enumerate(flags) if j != i], axis=0) if len(flags) > 1 else np.zeros_like(flags[0])
 
@@ -341,7 +346,7 @@ def rule_terms(fleet, rule, runs_by_train, i):
         return np.where(_others(flags, i), (1 - GAMMA[1]) / (1 - GAMMA[0]), 1.0), others
     if rule == "dissension":
         return dissension_weights(fleet, _braking_steps(fleet, runs_by_train))[i], others
-    order = list(np.argsort([legs[0].start for legs in fleet.legs]))
+    order = departure_order(fleet)
     rank = order.index(i)
     if rank == 0:
         return np.ones(fleet.steps), np.zeros(fleet.steps)
@@ -369,7 +374,7 @@ def supervised(fleet, rule, start, rounds=3):
     _, _, totals = evaluate(fleet, runs)
     best = (totals["substation_kWh"], list(runs))
     history = [best[0]]
-    order = list(np.argsort([legs[0].start for legs in fleet.legs]))
+    order = departure_order(fleet)
     for _ in range(rounds):
         for rank, i in enumerate(order):
             weights, allowance = rule_terms(fleet, rule, runs, i)
@@ -385,7 +390,7 @@ def supervised(fleet, rule, start, rounds=3):
 
 def following(fleet, start):
     """(f): trains in departure order, each kept ``fleet.buffer`` behind the one ahead."""
-    order = np.argsort([legs[0].start for legs in fleet.legs])
+    order = departure_order(fleet)
     runs = list(start)
     for rank, i in enumerate(order):
         if rank == 0:
@@ -463,7 +468,7 @@ def verify_leg(leg, run):
 def separations(fleet, runs_by_train):
     """Smallest gap [m] from each train's head to the tail of the train ahead while both are on
     the line (None for the first train); negative: the trains would overlap."""
-    order = list(np.argsort([legs[0].start for legs in fleet.legs]))
+    order = departure_order(fleet)
     out = {fleet.names[order[0]]: None}
     length = fleet.legs[0][0].case.train.length
     for ahead, me in zip(order[:-1], order[1:]):

@@ -70,6 +70,13 @@ class Window:
     max_speed: float | None = None
 
 
+def window_si(w, distance):
+    """A schema window as an SI :class:`Window` at ``distance`` [m] from its departure stop."""
+    return Window(distance, w.earliest_s, w.latest_s,
+                  None if w.min_speed_kmh is None else w.min_speed_kmh * units.KMH,
+                  None if w.max_speed_kmh is None else w.max_speed_kmh * units.KMH)
+
+
 def windows_from_schema(windows, track, from_stop, to_stop, where):
     """Windows in SI and travel distance; each must lie strictly between the two stops."""
     from .grid import travel_distance
@@ -81,9 +88,7 @@ def windows_from_schema(windows, track, from_stop, to_stop, where):
             lines.append(problem(where, f"windows[{i}].position_m", f"{w.position_m} m is not between "
                                  f"'{from_stop}' and '{to_stop}'"))
             continue
-        out.append(Window(d, w.earliest_s, w.latest_s,
-                          None if w.min_speed_kmh is None else w.min_speed_kmh * units.KMH,
-                          None if w.max_speed_kmh is None else w.max_speed_kmh * units.KMH))
+        out.append(window_si(w, d))
     if lines:
         raise InputError(lines)
     return tuple(out)

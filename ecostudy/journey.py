@@ -84,111 +84,113 @@ def mareco_split(track, train, pairs, total_time, points):
     return [t * scale for t in split]
 
 
-def whole_journey(track, train, pairs, total_time, start_times, points):
-    """Running times [s] from one NLP over all segments: each segment's model as a block, the
-    running times free but summing to ``total_time``, total traction work minimised. The exact
-    optimum the equal-marginal split approximates on interpolated fronts. Started from
-    ``start_times`` (e.g. that split)."""
+def _segments_model(cases, start_times):
+    """One Pyomo model with every segment's NLP as a block (``run.build``), each running time T_n
+    free, total traction work minimised; the caller ties the T_n together. Returns (model, blocks)."""
     import pyomo.environ as pyo
 
-    from . import solver
-    from .errors import SolverError
-    from .run import build, capped_guess, prepare
+    from .run import build, capped_guess
     m = pyo.ConcreteModel()
     parts = []
-    for n, ((a, b), t) in enumerate(zip(pairs, start_times)):
-        case = prepare(track, train, a, b, points)
-        part = build(case, capped_guess(case, t), "energy", {}, running_time=t)
-        part.objective.deactivate()
-        part.T.setlb(0.0)
-        part.T.setub(None)
-        m.add_component(f"segment{n}", part)
-        parts.append(part)
-    scale = max(p.energy_ref for p in parts)
-    m.total = pyo.Constraint(expr=sum(p.T for p in parts) / total_time == 1.0)
-    m.objective = pyo.Objective(expr=sum(p.traction_work for p in parts) / scale)
-    outcome = solver.solve(m)
-    if not outcome.usable:
-        raise SolverError(f"the whole-journey NLP failed ({outcome.status}, {outcome.iterations} iterations)")
-    return [float(pyo.value(p.T)) for p in parts]
-
-
-def windowed_journey(track, train, plan, points, start_times=None):
-    """Running times [s] from one NLP over all segments that keeps a timetable's windows.
-
-    As :func:`whole_journey`, each segment's model is a block with a free running time T_n, total
-    traction work minimised; the journey clock ties them: segment n departs at its fixed time or
-    at the previous arrival plus the dwell (never before: a fixed departure needs the arrival and
-    dwell to fit before it), its arrival keeps the stop's (earliest, latest) window and every
-    passing point's node time keeps its window (speed bounds sit on the node, model.define_windows;
-    thesis 001 eq. 4.1g on a whole journey, the TTOBench journey format).
-    """
-    import pyomo.environ as pyo
-
-    from . import solver
-    from .errors import InfeasibleError, SolverError
-    from .inputs import Window
-    from .run import build, capped_guess, prepare
-    pairs = list(zip(plan.stops, plan.stops[1:]))
-    cases = [prepare(track, train, a, b, points, windows=[Window(w.distance, None, None, w.min_speed, w.max_speed)
-                                                          for w in ws]) for (a, b), ws in zip(pairs, plan.windows)]
-    if start_times is None:
-        start_times = [1.1 * c.estimate for c in cases]
-    m = pyo.ConcreteModel()
-    m.clock = pyo.ConstraintList()
-    ref = sum(start_times)
-    parts, offset = [], None
     for n, (case, t) in enumerate(zip(cases, start_times)):
         part = build(case, capped_guess(case, t), "energy", {}, running_time=t)
         part.objective.deactivate()
         part.T.setlb(0.0)
         part.T.setub(None)
         m.add_component(f"segment{n}", part)
-        if n == 0:
-            offset = plan.departure[0]
-        elif plan.departure[n] is None:
-            offset = offset + parts[-1].T + plan.dwell[n]
-        else:
-            m.clock.add((offset + parts[-1].T + plan.dwell[n]) / ref <= plan.departure[n] / ref)
-            offset = plan.departure[n]
         parts.append(part)
-        lo, hi = plan.arrival[n]
-        bounds = [(offset + part.T, lo, hi)]
-        for w in plan.windows[n]:
-            k = int(np.argmin(np.abs(case.nodes - w.distance)))
-            bounds.append((offset + sum(part.dt[j] for j in range(k)), w.earliest, w.latest))
+    m.objective = pyo.Objective(expr=sum(p.traction_work for p in parts) / max(p.energy_ref for p in parts))
+    return m, parts
+
+
+def _solve_times(m, parts, what):
+    """Solve the journey model; its running times [s]."""
+    import pyomo.environ as pyo
+
+    from . import solver
+    from .errors import InfeasibleError, SolverError
+    outcome = solver.solve(m)
+    if outcome.status in ("infeasible", "restoration_failed"):
+        raise InfeasibleError(f"infeasible: no run of {what} ({outcome.status})")
+    if not outcome.usable:
+        raise SolverError(f"{what}: Ipopt {outcome.status} after {outcome.iterations} iterations")
+    return [float(pyo.value(p.T)) for p in parts]
+
+
+def whole_journey(track, train, pairs, total_time, start_times, points):
+    """Running times [s] from one NLP over all segments (:func:`_segments_model`), the running
+    times summing to ``total_time``. The exact optimum the equal-marginal split approximates on
+    interpolated fronts. Started from ``start_times`` (e.g. that split)."""
+    import pyomo.environ as pyo
+
+    from .run import prepare
+    m, parts = _segments_model([prepare(track, train, a, b, points) for a, b in pairs], start_times)
+    m.total = pyo.Constraint(expr=sum(p.T for p in parts) / total_time == 1.0)
+    return _solve_times(m, parts, "the whole-journey NLP")
+
+
+def windowed_journey(track, train, plan, points, start_times=None):
+    """Running times [s] from one NLP over all segments that keeps a timetable's windows.
+
+    The segments' blocks as in :func:`whole_journey`; the journey clock ties them: segment n
+    departs at its fixed time or at the previous arrival plus the dwell (never before: a fixed
+    departure needs the arrival and dwell to fit before it), its arrival keeps the stop's
+    (earliest, latest) window and every passing point's node time keeps its window (speed bounds
+    sit on the node, ``model.define_windows``; thesis 001 eq. 4.1g on a whole journey, the
+    TTOBench journey format).
+    """
+    import pyomo.environ as pyo
+
+    from .inputs import Window
+    from .model import passing_time
+    from .run import prepare
+    pairs = list(zip(plan.stops, plan.stops[1:]))
+    cases = [prepare(track, train, a, b, points, windows=[Window(w.distance, None, None, w.min_speed, w.max_speed)
+                                                          for w in ws]) for (a, b), ws in zip(pairs, plan.windows)]
+    if start_times is None:
+        start_times = [1.1 * c.estimate for c in cases]
+    m, parts = _segments_model(cases, start_times)
+    m.clock = pyo.ConstraintList()
+    ref = sum(start_times)
+    offset = plan.departure[0]
+    for n, (case, part) in enumerate(zip(cases, parts)):
+        if n and plan.departure[n] is None:
+            offset = offset + parts[n - 1].T + plan.dwell[n]
+        elif n:
+            m.clock.add((offset + parts[n - 1].T + plan.dwell[n]) / ref <= plan.departure[n] / ref)
+            offset = plan.departure[n]
+        bounds = [(offset + part.T, *plan.arrival[n])]
+        bounds += [(offset + passing_time(part, case.nodes, w.distance), w.earliest, w.latest) for w in plan.windows[n]]
         for when, lo, hi in bounds:
             if lo is not None:
                 m.clock.add(when / ref >= lo / ref)
             if hi is not None:
                 m.clock.add(when / ref <= hi / ref)
-    m.objective = pyo.Objective(expr=sum(p.traction_work for p in parts) / max(p.energy_ref for p in parts))
-    outcome = solver.solve(m)
-    if outcome.status in ("infeasible", "restoration_failed"):
-        raise InfeasibleError(f"infeasible: no run of the journey keeps its timing windows ({outcome.status})")
-    if not outcome.usable:
-        raise SolverError(f"the journey NLP with timing windows failed ({outcome.status}, {outcome.iterations} iterations)")
-    return [float(pyo.value(p.T)) for p in parts]
+    return _solve_times(m, parts, "the journey that keeps its timing windows")
+
+
+def _relative(t, departure):
+    return None if t is None or t - departure <= 0 else t - departure
 
 
 def _segment_windows(plan, n, departure):
     """Segment n's passing points with times since its own departure (the segment solve's clock)."""
     from .inputs import Window
-
-    def rel(t):
-        return None if t is None or t - departure <= 0 else t - departure
-    return tuple(Window(w.distance, rel(w.earliest), rel(w.latest), w.min_speed, w.max_speed) for w in plan.windows[n])
+    return tuple(Window(w.distance, _relative(w.earliest, departure), _relative(w.latest, departure),
+                        w.min_speed, w.max_speed) for w in plan.windows[n])
 
 
-def timing_columns(plan, n, departure, arrival, run, tolerance=0.5):
-    """Journey-clock columns of segment n and whether the run keeps its windows (simulated)."""
+def timing_columns(plan, n, departure, arrival, run):
+    """Journey-clock columns of segment n and whether the run keeps its windows: the passing
+    points and the arrival (a window at the stop) on the simulated trace (``simulate.window_checks``)."""
+    from .inputs import Window
     from .simulate import window_checks
     lo, hi = plan.arrival[n]
-    ok = (lo is None or arrival >= lo - tolerance) and (hi is None or arrival <= hi + tolerance)
-    passing = window_checks(run.trace, _segment_windows(plan, n, departure)) if run.trace is not None else []
+    stop = Window(run.summary["distance_m"], _relative(lo, departure), _relative(hi, departure))
+    checks = window_checks(run.trace, _segment_windows(plan, n, departure) + (stop,))
     return {"departure_s": departure, "arrival_s": arrival,
             "arrival_window_s": f"[{'' if lo is None else f'{lo:g}'}, {'' if hi is None else f'{hi:g}'}]",
-            "windows_kept": bool(ok and all(w["kept"] for w in passing))}
+            "windows_kept": all(w["kept"] for w in checks)}
 
 
 def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=15, workers=1,

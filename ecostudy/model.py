@@ -114,6 +114,16 @@ def define_timing(m, time_ref, running_time=None, window=None):
     m.arrival = pyo.Constraint(expr=(m.running_time - m.T) / time_ref == 0.0)
 
 
+def window_node(nodes, distance):
+    """The grid node of a timing point (``grid.make_grid`` places one there)."""
+    return int(np.argmin(np.abs(nodes - distance)))
+
+
+def passing_time(m, nodes, distance):
+    """Time [s] from departure to the node at ``distance``: the sum of the interval times before it."""
+    return sum(m.dt[j] for j in range(window_node(nodes, distance)))
+
+
 def define_windows(m, nodes, windows, time_ref):
     """Timing points on the way: earliest/latest passing time and speed bounds at a node.
 
@@ -122,8 +132,8 @@ def define_windows(m, nodes, windows, time_ref):
     """
     m.windows = pyo.ConstraintList()
     for w in windows:
-        k = int(np.argmin(np.abs(nodes - w.distance)))
-        passing = sum(m.dt[j] for j in range(k)) / time_ref
+        k = window_node(nodes, w.distance)
+        passing = passing_time(m, nodes, w.distance) / time_ref
         if w.earliest is not None:
             m.windows.add(passing >= w.earliest / time_ref)
         if w.latest is not None:

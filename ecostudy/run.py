@@ -226,7 +226,7 @@ def check_windows(case, margin=0.02):
     if not case.windows:
         return
     limits = case.limits.copy()
-    index = [int(np.argmin(np.abs(case.nodes - w.distance))) for w in case.windows]
+    index = [formulation.window_node(case.nodes, w.distance) for w in case.windows]
     for k, w in zip(index, case.windows):
         if w.max_speed is not None:
             limits[k] = min(limits[k], w.max_speed)

@@ -7,10 +7,9 @@ lie on. Times are on the journey clock (0 at the first departure), as TTOBench c
 """
 from dataclasses import dataclass
 
-from . import units
 from .errors import InputError, problem
 from .grid import travel_distance
-from .inputs import Window
+from .inputs import window_si
 
 POSITION_TOLERANCE = 1.0  # [m] a timetable position within this of a track stop is that stop
 
@@ -80,9 +79,7 @@ def journey_plan(tt, track, path, dwell=0.0):
         for n, (a, b) in enumerate(zip(names, names[1:])):
             d = travel_distance(track, a, b, w.position_m)
             if 0 < d < abs(track.stops[b] - track.stops[a]):
-                windows[n].append(Window(d, w.earliest_s, w.latest_s,
-                                         None if w.min_speed_kmh is None else w.min_speed_kmh * units.KMH,
-                                         None if w.max_speed_kmh is None else w.max_speed_kmh * units.KMH))
+                windows[n].append(window_si(w, d))
                 break
         else:
             lines.append(problem(path, f"windows[{i}].position_m", f"{w.position_m:g} m is not strictly between "
