@@ -15,9 +15,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ecostudy.das import das_run  # noqa: E402
-from ecostudy.inputs import Timing, load_track, load_train  # noqa: E402
-from ecostudy.run import solve_run  # noqa: E402
+from ecostudy.das.methods import das_run  # noqa: E402
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
+from ecostudy.ocp.problem import solve_run  # noqa: E402
 
 CASES = {"Amsterdam metro 76 s": ("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal", 76.0),
          "regional 80 s": ("regional_alstom", "regional_808m", "Origin", "Destination", 80.0)}

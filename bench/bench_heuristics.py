@@ -15,10 +15,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ecostudy import strategies  # noqa: E402
-from ecostudy.errors import InfeasibleError  # noqa: E402
-from ecostudy.inputs import Timing, load_track, load_train  # noqa: E402
-from ecostudy.run import prepare, solve_run  # noqa: E402
+from ecostudy.heuristics import ecodrive  # noqa: E402
+from ecostudy.core.errors import InfeasibleError  # noqa: E402
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
+from ecostudy.ocp.problem import prepare, solve_run  # noqa: E402
 
 CASES = [("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal", (76.0, 80.0, 85.0, 90.0)),
          ("regional_alstom", "regional_808m", "Origin", "Destination", (80.0, 90.0)),
@@ -39,7 +40,7 @@ def main():
         for t in times:
             opt = solve_run(track, train, a, b, Timing(running_time=t), points=args.points).summary
             e_opt = opt["traction_energy_kWh"]
-            for heuristic in (strategies.eco_coasting, strategies.mareco):
+            for heuristic in (ecodrive.eco_coasting, ecodrive.mareco):
                 t0 = time.perf_counter()
                 try:
                     row = heuristic(case, t).row(train, case.segment.distance)

@@ -15,9 +15,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ecostudy import fleet, network  # noqa: E402
-from ecostudy.inputs import Timing, load_track, load_train  # noqa: E402
-from ecostudy.run import solve_run  # noqa: E402
+from ecostudy.network import fleet
+from ecostudy.core.types import Supply
+from ecostudy.network import circuit  # noqa: E402
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
+from ecostudy.ocp.problem import solve_run  # noqa: E402
 
 
 def main():
@@ -35,7 +38,7 @@ def main():
     print("|---|---|---|---|---|---|---|---|---|")
     for n in args.trains:
         f = fleet.plan(track, train, stops, times, 20.0, [args.offset * i for i in range(n)],
-                       [f"T{i + 1}" for i in range(n)], args.dt, network.Supply(position=1500.0))
+                       [f"T{i + 1}" for i in range(n)], args.dt, Supply(position=1500.0))
         ind = fleet.independent(f)
         e_ind = fleet.evaluate(f, ind)[2]["substation_kWh"]
         runs, info = fleet.joint(f, ind)

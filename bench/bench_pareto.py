@@ -17,8 +17,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ecostudy.inputs import load_track, load_train  # noqa: E402
-from ecostudy.pareto import is_monotone, saving_at, sweep  # noqa: E402
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
+from ecostudy.studies.pareto import is_monotone, saving_at, sweep  # noqa: E402
 
 CASES = {"Amsterdam metro": ("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal"),
          "regional": ("regional_alstom", "regional_808m", "Origin", "Destination"),

@@ -21,9 +21,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ecostudy.inputs import Timing, load_track, load_train  # noqa: E402
-from ecostudy.results import write_run  # noqa: E402
-from ecostudy.run import solve_run  # noqa: E402
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
+from ecostudy.io.writers import write_run  # noqa: E402
+from ecostudy.ocp.problem import solve_run  # noqa: E402
 
 STAGES = ["load", "grid", "build", "nl_write", "solve", "verify", "write"]
 

@@ -19,7 +19,7 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ecostudy.batch import run_study  # noqa: E402
+from ecostudy.studies.batch import run_study  # noqa: E402
 
 
 def study(folder, points):

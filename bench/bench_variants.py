@@ -26,10 +26,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-import ecostudy.model as model  # noqa: E402
-import ecostudy.run as run  # noqa: E402
-from ecostudy.grid import make_grid  # noqa: E402
-from ecostudy.inputs import Timing, load_track, load_train  # noqa: E402
+import ecostudy.ocp.space as model  # noqa: E402
+import ecostudy.ocp.problem as run  # noqa: E402
+from ecostudy.core.grid import make_grid  # noqa: E402
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 
 
 def uniform(segment, points):

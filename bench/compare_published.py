@@ -14,8 +14,9 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ecostudy.inputs import Timing, load_track, load_train  # noqa: E402
-from ecostudy.run import solve_run  # noqa: E402
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
+from ecostudy.ocp.problem import solve_run  # noqa: E402
 
 
 def main():

@@ -1,4 +1,3 @@
-"""`python -m ecostudy ...`: the same command line as the `ecostudy` console script."""
-from .cli import app
+from ecostudy.cli import app
 
 app()

@@ -4,9 +4,10 @@ from pathlib import Path
 import pytest
 import yaml
 
-import ecostudy.run as _run
-from ecostudy.inputs import Timing, load_track, load_train
-from ecostudy.run import solve_run
+import ecostudy.analysis.single as _run
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.analysis.single import solve_run
 
 ROOT = Path(__file__).resolve().parent.parent
 TRAINS, TRACKS, STUDIES, DATA = ROOT / "trains", ROOT / "tracks", ROOT / "studies", ROOT / "tests" / "data"

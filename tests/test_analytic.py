@@ -8,8 +8,9 @@ found by a search over V, with W fixed by the time constraint.
 import pytest
 from scipy.optimize import brentq, minimize_scalar
 
-from ecostudy.inputs import Timing, load_track, load_train
-from ecostudy.run import solve_run
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.analysis.single import solve_run
 
 from .conftest import write_yaml
 

@@ -8,8 +8,8 @@ import time
 
 import pytest
 
-from ecostudy.batch import run_study
-from ecostudy.study import expand
+from ecostudy.studies.batch import run_study
+from ecostudy.studies.cases import expand
 
 from .conftest import ROOT, TRACKS, TRAINS, write_yaml
 
@@ -101,8 +101,9 @@ def test_failures_are_recorded_and_do_not_stop_the_study(tmp_path):
 
 def test_case_equals_a_direct_solve(reference):
     """The all-out time is memoised per scenario; the case must still equal `ecostudy solve --supplement`."""
-    from ecostudy.inputs import Timing, load_track, load_train
-    from ecostudy.run import solve_run
+    from ecostudy.core.types import Timing
+    from ecostudy.io.loaders import load_track, load_train
+    from ecostudy.analysis.single import solve_run
     table = reference[0]
     row = table[(table["scenario"] == "base") & (table["supplement_percent"] == 6)].iloc[0]
     direct = solve_run(load_track(TRACKS / "amsterdam_rokin_centraal.yaml"), load_train(TRAINS / "amsterdam_metro.yaml"),

@@ -3,8 +3,9 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
-from ecostudy.compare import compare
-from ecostudy.inputs import Timing, load_track, load_train
+from ecostudy.studies.compare import compare
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train
 
 from .conftest import TRACKS, TRAINS
 
@@ -48,15 +49,16 @@ def test_compare_command(tmp_path):
 def test_mareco_profile_coasts_before_braking_and_downhill():
     """MARECO-style profile: capped at v1, coasting (zero force on the grid) before the final
     braking; on the metro at 85 s it coasts down the descent before 220 m (vf < 50 km/h plateau)."""
-    from ecostudy import initial, mareco
-    from ecostudy.run import prepare
+    from ecostudy.core import kinematics
+    from ecostudy.heuristics import mareco
+    from ecostudy.ocp.problem import prepare
     case = prepare(load_track(TRACKS / "amsterdam_rokin_centraal.yaml"), load_train(TRAINS / "amsterdam_metro.yaml"),
                    "Rokin", "Centraal", 500)
     v1 = mareco.cap_for(case, 85.0)
     v = mareco.profile(case, v1)
     assert v.max() <= min(v1, case.limits.max()) + 1e-6
-    assert initial.running_time(v, case.nodes) == pytest.approx(85.0, abs=1e-3)
-    ft, fb = initial.forces_for(v, case.segment, case.train, case.nodes)
+    assert kinematics.running_time(v, case.nodes) == pytest.approx(85.0, abs=1e-3)
+    ft, fb = kinematics.forces_for(v, case.segment, case.train, case.nodes)
     coasting = (ft < 1.0) & (fb < 1.0)
     descent = (case.nodes[:-1] > 100) & (case.nodes[:-1] < 200)
     assert coasting[descent].all()  # no holding of the 50 km/h limit by braking on the descent

@@ -6,7 +6,7 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
-from ecostudy.das import mode_name
+from ecostudy.das.advice import mode_name
 
 from .conftest import TRACKS, TRAINS
 

@@ -8,10 +8,12 @@ speed-holding cruise controller, arrives within 1 s and stops within 2 m.
 import numpy as np
 import pytest
 
-from ecostudy.das import das_run, follow
-from ecostudy.inputs import Timing, load_track, load_train
-from ecostudy.run import solve_run
-from ecostudy.units import KMH
+from ecostudy.das.advice import follow
+from ecostudy.das.methods import das_run
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.analysis.single import solve_run
+from ecostudy.core.units import KMH
 
 from .conftest import TRACKS, TRAINS
 
@@ -51,7 +53,7 @@ def test_marginal_energy_matches_a_finite_difference(case):
 
 def test_cruise_advice_is_held_by_the_driver_controller(metro, amsterdam):
     """A cruise row is followed by the speed-holding controller, downhill (partial braking) too."""
-    from ecostudy.grid import make_segment
+    from ecostudy.core.grid import make_segment
     seg = make_segment(amsterdam, metro, "Rokin", "Centraal")
     first = follow(seg, metro, [0.0, 60.0], [1.0, -1.0], [np.nan, np.nan])[3]
     v60 = float(np.interp(60.0, first.x, first.v))  # speed reached by full traction at 60 m
@@ -66,7 +68,7 @@ def test_cruise_advice_is_held_by_the_driver_controller(metro, amsterdam):
 def test_follow_replays_modes_in_order():
     trk = load_track(TRACKS / "thesis001_flat_1km.yaml")
     trn = load_train(TRAINS / "thesis001_commuter.yaml")
-    from ecostudy.grid import make_segment
+    from ecostudy.core.grid import make_segment
     names = list(trk.stops)
     seg = make_segment(trk, trn, names[0], names[-1])
     # full traction, coast, then brake late enough to stop near the end

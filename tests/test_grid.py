@@ -2,7 +2,7 @@
 import numpy as np
 from numpy.testing import assert_allclose
 
-from ecostudy.grid import Profile, make_grid, make_segment, node_limits, train_length_limit
+from ecostudy.core.grid import Profile, make_grid, make_segment, node_limits, train_length_limit
 
 
 def test_train_length_limit_raises_only_when_tail_clears():

@@ -4,8 +4,9 @@ import json
 import numpy as np
 import pytest
 
-from ecostudy.inputs import Timing, load_track, load_train
-from ecostudy.run import solve_run
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.analysis.single import solve_run
 
 from .conftest import DATA
 
@@ -46,7 +47,7 @@ def test_imported_case_solves_and_verifies():
 
 
 def test_unrecognised_json_is_one_clear_error(tmp_path):
-    from ecostudy.errors import InputError
+    from ecostudy.core.errors import InputError
     p = tmp_path / "x.json"
     p.write_text(json.dumps({"hello": 1}))
     with pytest.raises(InputError, match="not a TTOBench or OSRD train"):

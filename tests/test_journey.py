@@ -4,7 +4,7 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
-from ecostudy.journey import equal_marginal, uniform
+from ecostudy.studies.journey import equal_marginal, uniform
 
 from .conftest import TRACKS, TRAINS
 
@@ -58,9 +58,9 @@ JOURNEY = "metro_line_4stops_Journey_01.json"  # TTOBench journey format, shippe
 def test_ttobench_journey_becomes_a_plan_in_si(tmp_path):
     import json
 
-    from ecostudy.errors import InputError
-    from ecostudy.inputs import load_timetable, load_track
-    from ecostudy.timetable import journey_plan, name_stops
+    from ecostudy.core.errors import InputError
+    from ecostudy.io.loaders import load_timetable, load_track
+    from ecostudy.io.timetable import journey_plan, name_stops
 
     from .conftest import STUDIES
     track = load_track(TRACKS / "metro_line_4stops.yaml")

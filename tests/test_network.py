@@ -3,17 +3,23 @@ import numpy as np
 import pytest
 import pyomo.environ as pyo
 
-from ecostudy import fleet, network, solver, timedomain
-from ecostudy.inputs import Timing, load_track, load_train
-from ecostudy.run import prepare, solve_run
+from ecostudy.network import fleet
+from ecostudy.core.types import Supply
+from ecostudy.network import circuit
+from ecostudy.ocp import session
+from ecostudy.ocp import timedomain
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.ocp.problem import prepare
+from ecostudy.analysis.single import solve_run
 
 from .conftest import TRACKS, TRAINS, write_yaml
 
-SUPPLY = network.Supply(position=1500.0)
+SUPPLY = Supply(position=1500.0)
 
 
 def test_one_train_obeys_eq_7_8_and_the_energy_balance():
-    flows = network.solve_step(SUPPLY, [2500.0], [1.5e6])
+    flows = circuit.solve_step(SUPPLY, [2500.0], [1.5e6])
     i, v = flows["current_A"][0], flows["voltage_V"][0]
     i_s = flows["substation_current_A"]
     assert v * i == pytest.approx(1.5e6, rel=1e-9)
@@ -24,13 +30,13 @@ def test_one_train_obeys_eq_7_8_and_the_energy_balance():
 
 
 def test_regeneration_is_used_by_a_neighbour_or_lost_behind_the_diode():
-    alone = network.solve_step(SUPPLY, [1000.0], [-1.0e6])  # nobody draws: the diode blocks
+    alone = circuit.solve_step(SUPPLY, [1000.0], [-1.0e6])  # nobody draws: the diode blocks
     assert alone["substation_W"] == 0.0 and alone["regen_used_W"] == pytest.approx(0.0, abs=1.0)
     assert alone["regen_lost_W"] == pytest.approx(1.0e6, rel=1e-6)
-    shared = network.solve_step(SUPPLY, [1000.0, 2000.0], [-1.0e6, 1.5e6])
+    shared = circuit.solve_step(SUPPLY, [1000.0, 2000.0], [-1.0e6, 1.5e6])
     assert 0 < shared["regen_used_W"] <= 1.0e6
     assert shared["voltage_V"][0] <= SUPPLY.max_voltage + 1e-6
-    assert shared["substation_W"] < network.solve_step(SUPPLY, [2000.0], [1.5e6])["substation_W"]
+    assert shared["substation_W"] < circuit.solve_step(SUPPLY, [2000.0], [1.5e6])["substation_W"]
     lhs = shared["substation_W"] + shared["regen_used_W"]
     assert lhs == pytest.approx(shared["traction_input_W"] + shared["line_loss_W"], rel=1e-9)
 
@@ -40,12 +46,12 @@ def test_current_limits_cut_traction_and_regeneration():
     traction beyond is not served, regeneration beyond goes to the rheostat; the balance holds."""
     from dataclasses import replace
     limited = replace(SUPPLY, max_current=1500.0, max_regen_current=400.0)
-    free = network.solve_step(SUPPLY, [2500.0], [1.5e6])
-    cut = network.solve_step(limited, [2500.0], [1.5e6])
+    free = circuit.solve_step(SUPPLY, [2500.0], [1.5e6])
+    cut = circuit.solve_step(limited, [2500.0], [1.5e6])
     assert free["unserved_W"] == pytest.approx(0.0, abs=1e-6) and free["current_A"][0] > 1500.0
     assert cut["current_A"][0] == pytest.approx(1500.0)
     assert cut["unserved_W"] == pytest.approx(1.5e6 - cut["voltage_V"][0] * 1500.0, rel=1e-9)
-    shared = network.solve_step(limited, [1000.0, 2000.0], [-1.0e6, 0.8e6])
+    shared = circuit.solve_step(limited, [1000.0, 2000.0], [-1.0e6, 0.8e6])
     assert shared["current_A"][0] == pytest.approx(-400.0)
     assert shared["regen_lost_W"] == pytest.approx(1.0e6 - shared["regen_used_W"], rel=1e-9)
     assert shared["regen_used_W"] == pytest.approx(400.0 * shared["voltage_V"][0], rel=1e-9)
@@ -59,16 +65,16 @@ def test_rule_7_11_sees_regeneration_on_eq_7_8_as_written():
     voltage and V_i < V_(i-1) sees nothing; on eq. 7.8 as the thesis writes it (a receptive source)
     the feeding train is above the coasting one, by its current times its feeder resistance."""
     xs, ps = [1000.0, 2000.0], [-1.0e6, 0.0]
-    real = network.solve_step(SUPPLY, xs, ps)["voltage_V"]
+    real = circuit.solve_step(SUPPLY, xs, ps)["voltage_V"]
     assert real[0] == pytest.approx(real[1], abs=1e-6)
-    sensed = network.sensed_voltages(SUPPLY, xs, ps)
+    sensed = circuit.sensed_voltages(SUPPLY, xs, ps)
     assert sensed[0] > sensed[1] > SUPPLY.voltage
     i_feed = (SUPPLY.voltage - sensed[1]) / SUPPLY.resistance  # [A] < 0: the source takes it
     assert sensed[0] == pytest.approx(sensed[1] - SUPPLY.feeder(1000.0) * i_feed, rel=1e-9)
     assert sensed[0] * i_feed == pytest.approx(-1.0e6, rel=1e-6)
     # while the substation supplies, the two circuits agree
-    drawing = network.solve_step(SUPPLY, [2500.0], [1.5e6])["voltage_V"]
-    assert network.sensed_voltages(SUPPLY, [2500.0], [1.5e6]) == pytest.approx(drawing, rel=1e-9)
+    drawing = circuit.solve_step(SUPPLY, [2500.0], [1.5e6])["voltage_V"]
+    assert circuit.sensed_voltages(SUPPLY, [2500.0], [1.5e6]) == pytest.approx(drawing, rel=1e-9)
 
 
 def test_time_domain_leg_matches_the_space_domain_optimum_on_flat_track():
@@ -80,7 +86,7 @@ def test_time_domain_leg_matches_the_space_domain_optimum_on_flat_track():
     m = pyo.ConcreteModel()
     b = timedomain.add_leg(m, "leg", leg, timedomain.guess_from_space(space, leg), one_handle=False)
     m.objective = pyo.Objective(expr=sum(b.traction_kw[j] for j in b.I) * 0.25 / 3600 / 10)
-    assert solver.solve(m).optimal
+    assert session.solve(m).optimal
     s, v, ft, *_ = timedomain.leg_arrays(b)
     energy = float(np.sum(ft * np.diff(s))) / 3.6e6
     assert energy == pytest.approx(space.summary["traction_energy_kWh"], rel=5e-4)
@@ -93,7 +99,7 @@ def two_trains():
     first brakes (45 s), dt = 1 s: every strategy."""
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
     f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 45.0], ["T1", "T2"], 1.0,
-                   network.Supply(position=300.0), points=300, buffer=360.0)
+                   Supply(position=300.0), points=300, buffer=360.0)
     return f, fleet.run_strategies(f, ["independent", "triggering", "voltage", "dissension", "joint", "following"], progress=None)
 
 
@@ -182,7 +188,7 @@ def test_joint_optimum_keeps_the_current_limits_that_independent_runs_break():
     independent runs ask for traction the line cannot serve (flagged); the joint NLP bounds the
     pantograph currents and serves all of it."""
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
-    supply = network.Supply(position=300.0, max_current=2500.0, max_regen_current=1500.0)
+    supply = Supply(position=300.0, max_current=2500.0, max_regen_current=1500.0)
     f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 45.0], ["T1", "T2"], 1.0, supply, points=300)
     out = fleet.run_strategies(f, ["independent", "joint"], progress=None)
     alone, joint = out["independent"]["totals"], out["joint"]["totals"]

@@ -5,9 +5,10 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
-from ecostudy.inputs import Timing, load_track, load_train
-from ecostudy.pareto import is_monotone, saving_at, sweep
-from ecostudy.run import solve_run
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.studies.pareto import is_monotone, saving_at, sweep
+from ecostudy.analysis.single import solve_run
 
 from .conftest import TRACKS, TRAINS
 
@@ -68,7 +69,7 @@ def test_pareto_command(tmp_path):
 
 def test_failed_warm_start_is_retried_cold(regional, monkeypatch):
     """A warm-started point that Ipopt cannot solve restarts a fresh (cold) chain from that point."""
-    import ecostudy.pareto as pareto
+    import ecostudy.studies.pareto as pareto
     track, train = regional
     reference, _ = sweep(track, train, "Origin", "Destination", count=4, supplement_max=0.3, points=200)
     broken = {**pareto.WARM_START, "max_iter": 1}  # every warm start stops at once, unusable
@@ -83,7 +84,7 @@ def test_weighted_sum_points_lie_on_the_front(regional):
     never above the chords of the linearly interpolated front, and within 1 % of it."""
     import numpy as np
 
-    from ecostudy.pareto import weighted_points
+    from ecostudy.studies.pareto import weighted_points
     track, train = regional
     front, _ = sweep(track, train, "Origin", "Destination", count=25, supplement_max=0.6, points=300)
     weighted = weighted_points(track, train, "Origin", "Destination", points=300,
@@ -100,7 +101,7 @@ def test_weighted_sum_points_lie_on_the_front(regional):
 def test_das_front_beside_the_ato_front(front):
     """`pareto --das phases`: every point's advice, re-simulated, keeps the time and lies within
     0.5 % of the ATO optimum (at or above it up to the grid error); the DAS front is monotone."""
-    from ecostudy.pareto import das_front, das_meta
+    from ecostudy.studies.pareto import das_front, das_meta
     table, results = front
     both = das_front(table.iloc[1:4].reset_index(drop=True), results[1:4], "phases", 300)
     assert both["das_status"].str.startswith("optimal").all()

@@ -3,7 +3,7 @@ import numpy as np
 import pyomo.environ as pyo
 from numpy.testing import assert_allclose
 
-from ecostudy import physics
+from ecostudy.core import physics
 
 
 def test_davis_resistance_scalar_and_array():

@@ -2,8 +2,9 @@
 import numpy as np
 import pytest
 
-from ecostudy.inputs import Timing, load_track, load_train
-from ecostudy.run import solve_run
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.analysis.single import solve_run
 
 from .conftest import TRACKS, TRAINS
 
@@ -80,7 +81,7 @@ def _regenerative(train, eta_t=0.9, eta_r=0.8, force_kN=400):
     """The thesis 001 commuter with an electric brake of ``force_kN`` (the shipped file has none)."""
     import dataclasses
 
-    from ecostudy.physics import Envelope
+    from ecostudy.core.physics import Envelope
     return dataclasses.replace(train, traction_efficiency=eta_t, regeneration_efficiency=eta_r,
                                regeneration=Envelope("force_power", max_force=force_kN * 1e3))
 

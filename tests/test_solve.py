@@ -2,9 +2,10 @@
 import numpy as np
 import pytest
 
-from ecostudy.inputs import Timing, load_track, load_train
-from ecostudy.run import solve_run
-from ecostudy.simulate import TOLERANCES
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.analysis.single import solve_run
+from ecostudy.core.simulate import TOLERANCES
 
 from .conftest import TRACKS, TRAINS, load_yaml
 
@@ -132,7 +133,7 @@ def test_short_control_pulses_are_not_stepped_over(amsterdam, metro):
     """Regression: at K = 200 one 5 m braking interval sits inside a long coast before the
     80 -> 60 km/h drop. An adaptive stepper run across the whole journey stepped over it and
     reported an 8.5 m stop error; the simulator now restarts at every control jump."""
-    from ecostudy.simulate import pieces
+    from ecostudy.core.simulate import pieces
     r = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=200)
     assert_verified(r)
     starts = pieces(r.nodes, r.handle, r.segment)
@@ -141,7 +142,7 @@ def test_short_control_pulses_are_not_stepped_over(amsterdam, metro):
 
 def test_non_optimal_ipopt_exit_is_never_silent(amsterdam, metro):
     """Three iterations cannot converge: the run is either refused or flagged, never reported as optimal."""
-    from ecostudy.errors import SolverError
+    from ecostudy.core.errors import SolverError
     try:
         r = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=300,
                       options={"max_iter": 3}, verify_result=False)
@@ -155,7 +156,7 @@ def test_non_optimal_ipopt_exit_is_never_silent(amsterdam, metro):
 def test_simulator_agrees_with_a_fine_step_reference(amsterdam, metro, monkeypatch):
     """Regression: a step overshooting a piece's end sampled the next piece's braking and moved
     the stop by 2 m at K = 500. The adaptive run must equal one with steps capped at 0.02 s."""
-    import ecostudy.simulate as sim
+    import ecostudy.core.simulate as sim
     r = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=500)
     adaptive, _ = sim.simulate(r.segment, metro, r.nodes, r.handle)
     original = sim.solve_ivp

@@ -7,9 +7,10 @@ Published numbers: tests/data/thesis001_published.csv (thesis 001 Figs. 9.1-9.4)
 import pandas as pd
 import pytest
 
-from ecostudy.inputs import Timing, load_track, load_train
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_track, load_train
 
-from ecostudy.run import solve_run
+from ecostudy.analysis.single import solve_run
 
 from .conftest import DATA, TRACKS, TRAINS
 

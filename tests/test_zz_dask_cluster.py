@@ -5,7 +5,7 @@ other tests fork worker processes, which must not inherit threads that may hold 
 """
 import pytest
 
-from ecostudy.batch import run_study
+from ecostudy.studies.batch import run_study
 
 from .test_batch import comparable, reference, study_file  # noqa: F401,F811  (reference is a fixture)
 

@@ -25,10 +25,21 @@ brake is eq. 7.4's MB: psi <= eta.
 The multipliers are Ipopt's (Pyomo's dual suffix equals Ipopt's y: grad f + J^T y - z_L + z_U = 0),
 or fitted at any profile by :func:`estimated_psi`.
 """
-import numpy as np
+import json
+from pathlib import Path
 
-from . import model as formulation
-from . import regimes
+import numpy as np
+import pandas as pd
+import pyomo.environ as pyo
+from scipy.sparse import hstack, identity
+
+from ecostudy.analysis import regimes
+from ecostudy.core.errors import InputError, problem
+from ecostudy.core.units import KMH, KN
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.ocp import space as formulation
+from ecostudy.ocp.problem import build, prepare
+from ecostudy.ocp.session import Session, solve
 
 INF = np.inf
 
@@ -108,10 +119,7 @@ def estimated_psi(m, nodes, train, tolerance=1e-2):
     costate, which the state rows alone leave free. The fit is a convex QP, solved by Ipopt.
     Returns (psi, relative stationarity residual, residual per speed node).
     """
-    import pyomo.environ as pyo
-    from scipy.sparse import hstack, identity
 
-    from .solver import Session, solve
     nlp = Session(m).nlp
     grad = nlp.evaluate_grad_objective()
     jac = nlp.evaluate_jacobian().tocsr()
@@ -156,8 +164,6 @@ def check_profile(track, train, inputs, profile, running_time=None, tolerance=1e
     profile that arrives earlier than it needs to is tested as what it is offered as.
     ``objective``: ``energy`` (eq. 2.17) or ``net_energy`` (eq. 7.4, regeneration credited).
     """
-    from .run import build, prepare
-    from .units import KMH, KN
     case = prepare(track, train, inputs["from"], inputs["to"], inputs["points"])
     x = profile["position_m"].to_numpy()
     if len(x) != len(case.nodes) or not np.allclose(x, case.nodes, atol=1e-3):
@@ -191,13 +197,8 @@ def check_result(result_dir, running_time=None):
 
     A net-energy run is checked against eq. 7.4; energy and all-out runs against eq. 2.17.
     """
-    import json
-    from pathlib import Path
 
-    import pandas as pd
 
-    from .errors import InputError, problem
-    from .inputs import load_track, load_train
     result_dir = Path(result_dir)
     try:
         inputs = json.loads((result_dir / "inputs.json").read_text())

@@ -5,18 +5,19 @@ Like ``cli.py`` it only parses options, calls the library and prints; errors bec
 from pathlib import Path
 from typing import Optional
 
+import pandas as pd
 import typer
 
-from .cli import app, guarded
+from ecostudy.analysis.single import solve_run
+from ecostudy.cli.app import app, guarded
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import load_network_study
+from ecostudy.io.writers import atomic_write, write_csv, write_json
+from ecostudy.network import fleet
 
 
 def _network(study_path, out, no_plot):
-    import pandas as pd
 
-    from . import fleet
-    from .inputs import Timing, load_network_study
-    from .results import atomic_write, write_csv, write_json
-    from .run import solve_run
     st = load_network_study(study_path)
     pairs = list(zip(st.stops[:-1], st.stops[1:]))
     times = st.running_times
@@ -51,7 +52,7 @@ def _network(study_path, out, no_plot):
                                           "strategies": {**{n: {**r["totals"], **r["info"]} for n, r in outcome.items()},
                                                          **{n: {"status": f"failed: {r['failed']}"} for n, r in failed.items()}}})
     if not no_plot:
-        from .plots import network_plot
+        from ecostudy.report.plots import network_plot
         atomic_write(out_dir / "network.png", lambda tmp: network_plot(fl, outcome, tmp, st.name))
     cols = ["strategy", "status", "substation_kWh", "saving_vs_independent_pct", "traction_input_kWh", "regen_used_kWh",
             "regen_lost_kWh", "line_losses_kWh", "unserved_kWh", "balance_error_pct", "min_separation_m",

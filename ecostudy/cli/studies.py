@@ -7,14 +7,29 @@ from typing import Optional
 
 import typer
 
-from . import units
-from .cli import DasMethod, app, guarded
-from .errors import InputError, problem
+from ecostudy.cli.app import DasMethod, app, guarded
+from ecostudy.core import units
+from ecostudy.core.errors import InputError, problem
+from ecostudy.core.types import Timing
+from ecostudy.io.loaders import (
+    check_stops,
+    load_study,
+    load_timetable,
+    load_track,
+    load_train,
+    timing_from_timetable,
+)
+from ecostudy.io.timetable import journey_plan, name_stops
+from ecostudy.io.writers import atomic_write, write_csv
+from ecostudy.report.files import write_front
+from ecostudy.studies.batch import run_study
+from ecostudy.studies.compare import compare
+from ecostudy.studies.journey import journey
+from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
 
 
 def _case_from(study, track, train, from_stop, to_stop, points):
     """(track, train, from, to, K, study or None) from a study file or from options."""
-    from .inputs import check_stops, load_study, load_track, load_train
     if study is not None:
         st = load_study(study)
         return st.track, st.train, st.from_stop, st.to_stop, points or st.points, st
@@ -29,8 +44,6 @@ def _case_from(study, track, train, from_stop, to_stop, points):
 
 def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, points, workers, cold, out, no_plot,
             weighted=0, das=None, das_time_limit=60.0):
-    from .pareto import das_front, das_meta, front_meta, sweep, weighted_points
-    from .results import write_front
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
     k = k or 500
     if count < 2:
@@ -92,9 +105,6 @@ def pareto(
 
 
 def _compare(study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot):
-    from .compare import compare
-    from .inputs import Timing
-    from .results import atomic_write, write_csv
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
     if time is not None or supplement is not None:
         timing = Timing(running_time=time, supplement=None if supplement is None else supplement * units.PERCENT)
@@ -106,7 +116,7 @@ def _compare(study, track, train, from_stop, to_stop, time, supplement, points, 
     table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000)
     write_csv(out_dir / "compare.csv", table)
     if not no_plot:
-        from .plots import compare_plot
+        from ecostudy.report.plots import compare_plot
         atomic_write(out_dir / "compare.png", lambda tmp: compare_plot(
             outcomes, case.segment, tmp, f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s"))
     typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
@@ -135,10 +145,6 @@ def compare_command(
 
 
 def _journey(track, train, stops, time, supplement, timetable, dwell, points, workers, out, no_plot):
-    from .inputs import load_timetable, load_track, load_train, timing_from_timetable
-    from .journey import journey
-    from .results import atomic_write, write_csv
-    from .timetable import journey_plan, name_stops
     trk, trn = load_track(track), load_train(train)
     scheduled, plan = None, None
     if timetable is not None:
@@ -169,7 +175,7 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
     write_csv(out_dir / "journey.csv", table)
     write_csv(out_dir / "journey_totals.csv", totals)
     if not no_plot:
-        from .plots import journey_plot
+        from ecostudy.report.plots import journey_plot
         passing = []
         if plan is not None:  # timing points along the journey (segment lengths from the first split)
             start = 0.0
@@ -211,7 +217,6 @@ def journey_command(
 def _run(study, workers, dask, retry_failed, out, no_progress):
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from .batch import run_study
     columns = [TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("failed {task.fields[failed]}, remaining {task.fields[remaining]}"), TimeRemainingColumn()]
     with Progress(*columns, disable=no_progress, transient=False) as bar:

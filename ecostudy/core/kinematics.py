@@ -4,8 +4,8 @@ Used as Ipopt's starting point and to estimate the all-out time before any NLP i
 """
 import numpy as np
 
-from .errors import InfeasibleError
-from .physics import davis_resistance, running_resistance
+from ecostudy.core.errors import InfeasibleError
+from ecostudy.core.physics import davis_resistance, running_resistance
 
 
 def point_resistance(segment, train, positions):

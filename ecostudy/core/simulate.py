@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .physics import acceleration, davis_resistance, running_resistance
-from .units import to_kmh, to_kwh
+from ecostudy.core.physics import acceleration, davis_resistance, running_resistance
+from ecostudy.core.units import to_kmh, to_kwh
 
 TOLERANCES = {"arrival_time_error_s": 0.5, "stop_error_m": 1.0, "energy_error_pct": 1.0,
               "max_overspeed_kmh": 0.5}
@@ -167,3 +167,21 @@ def verify(segment, train, nodes, handle, running_time, traction_energy, windows
                          and all(w["kept"] for w in out["windows"]))
     out["tolerances"] = dict(TOLERANCES)
     return out, trace
+
+
+@dataclass
+class Driven:
+    """A handle sequence driven by the simulator: a strategy's or an advice's named result."""
+
+    name: str
+    handle: np.ndarray
+    trace: object
+
+    def row(self, train, distance):
+        t = self.trace
+        regen = train.regeneration_efficiency * t.regenerated_energy
+        changes = int(np.count_nonzero(np.abs(np.diff(self.handle)) > 1e-3))
+        return {"strategy": self.name, "running_time_s": t.arrival_time,
+                "traction_energy_kWh": to_kwh(t.traction_energy),
+                "net_energy_kWh": to_kwh(t.traction_energy / train.traction_efficiency - regen),
+                "stop_error_m": t.stop_position - distance, "handle_changes": changes}

@@ -19,10 +19,11 @@ import time
 import numpy as np
 import pandas as pd
 
-from . import phases, solver, strategies
-from .errors import SolverError
-from .simulate import simulate
-from .units import KMH, to_kmh, to_kwh
+from ecostudy.analysis import regimes
+from ecostudy.core.errors import SolverError
+from ecostudy.core.simulate import Driven, simulate
+from ecostudy.core.units import KMH, to_kmh, to_kwh
+from ecostudy.ocp import phases, session
 
 
 def mode_name(level, target=None):
@@ -114,7 +115,7 @@ def _gap_on_time(energies, result, arrival):
     return 100 * ((energies[key] + abs(marginal) * late) / ato - 1)
 
 
-def _block(method, result, outcome, advice, status, **extra):
+def summary_block(method, result, outcome, advice, status, **extra):
     row = outcome.row(result.train, result.segment.distance)
     energies = {k: row[k] for k in ("traction_energy_kWh", "net_energy_kWh")}
     return {"method": method, **energies, "gap_to_ato_pct": _gap(energies, result),
@@ -126,12 +127,12 @@ def _block(method, result, outcome, advice, status, **extra):
 
 
 def das_round(result):
-    outcome = strategies.das_round(result.segment, result.train, result.nodes, result.handle)
+    outcome = nearest_levels(result.segment, result.train, result.nodes, result.handle)
     advice = advice_table(result.nodes, outcome.handle, outcome.trace)
-    return _block("round", result, outcome, advice, "re-simulated"), advice, outcome
+    return summary_block("round", result, outcome, advice, "re-simulated"), advice, outcome
 
 
-def _objective_of(result):
+def objective_of(result):
     return "net_energy" if result.summary["objective"] == "net_energy" else "energy"
 
 
@@ -139,9 +140,9 @@ def solve_layout(result, layout, guess, options=None):
     """Build and solve the fixed-mode phases NLP of ``layout`` for the ATO run's segment and time."""
     t0 = time.perf_counter()
     m = phases.build(result.segment, result.train, layout, guess,
-                     running_time=result.summary["running_time_s"], objective=_objective_of(result))
+                     running_time=result.summary["running_time_s"], objective=objective_of(result))
     build_s = time.perf_counter() - t0
-    outcome = solver.solve(m, options)
+    outcome = session.solve(m, options)
     outcome.build_seconds = build_s
     return m, outcome
 
@@ -166,7 +167,7 @@ def solve_phases(result, points=None, options=None, stages=2):
     points = points or len(result.nodes)
     layout = phases.Layout.make(phases.sectors(seg, train), phases.sequence(train), 1)
     layout.substeps = phases.substeps_for(points, len(layout.phases))
-    m, outcome = solve_layout(result, layout, phases.guess_from_result(result, layout), options)
+    m, outcome = solve_layout(result, layout, guess_from_result(result, layout), options)
     if not outcome.usable:
         raise SolverError(f"the DAS phases NLP failed ({outcome.status}, {outcome.iterations} iterations)")
     if stages == 1:
@@ -186,43 +187,51 @@ def advice_outcome(name, result, layout, m):
     nodes, handle, target, trace = follow(result.segment, result.train, starts, levels, targets)
     advice = advice_table(nodes, handle, trace, target)
     plan_kwh = to_kwh(float(np.sum(ft * np.diff(phases.node_positions(layout, lengths)))))
-    return advice, strategies.Outcome(name, handle, trace), plan_kwh
+    return advice, Driven(name, handle, trace), plan_kwh
 
 
 def das_phases(result, points=None):
     m, layout, outcome = solve_phases(result, points)
     advice, sim, plan_kwh = advice_outcome("DAS phases", result, layout, m)
-    block = _block("phases", result, sim, advice, f"{outcome.status}, re-simulated",
+    block = summary_block("phases", result, sim, advice, f"{outcome.status}, re-simulated",
                    planned_traction_energy_kWh=plan_kwh, phases=len(layout.phases),
                    intervals=layout.intervals, solve_s=outcome.seconds + outcome.nl_seconds,
                    build_s=outcome.build_seconds)
     return block, advice, sim
 
 
-DAS_COLUMNS = ("method", "traction_energy_kWh", "net_energy_kWh", "gap_to_ato_pct", "gap_to_ato_on_time_pct",
-               "mode_changes", "arrival_error_s", "stop_error_m", "status")
+def nearest_levels(segment, train, nodes, optimal_handle):
+    """Nearest DAS handle level (train's ``das_handle_levels``) to the optimal handle of every
+    interval (thesis 000 §4.4), without a cruise mode, re-simulated; it keeps no timetable of its
+    own, so its arrival and stop errors are part of a comparison."""
+    levels = np.asarray(train.das_levels)
+    u = levels[np.abs(optimal_handle[:, None] - levels[None, :]).argmin(axis=1)]
+    trace = simulate(segment, train, nodes, u)[0]
+    return Driven("DAS round (nearest level)", u, trace)
 
 
-def das_columns(result, method, points=None, time_limit=60.0):
-    """``das_`` columns of a table row for a DAS run of ``result``; a failed run is recorded, not raised."""
-    from .errors import EcostudyError
-    try:
-        block = das_run(result, method, points, time_limit)[0]
-    except EcostudyError as exc:
-        block = {"method": method, "status": f"failed: {exc}"}
-    row = {f"das_{k}": block.get(k) for k in DAS_COLUMNS}
-    arrival = block.get("arrival_error_s")
-    row["das_running_time_s"] = None if arrival is None else result.summary["running_time_s"] + arrival
-    return row
+def guess_from_result(result, layout):
+    """Phase lengths and node speeds from an ATO ``result`` (its regimes, sector by sector).
 
-
-def das_run(result, method="round", points=None, time_limit=60.0):
-    """(summary block, advice table, simulated outcome) of a DAS run for an ATO ``result``."""
-    if method == "round":
-        return das_round(result)
-    if method == "phases":
-        return das_phases(result, points)
-    if method == "minlp":
-        from .minlp import das_minlp
-        return das_minlp(result, points, time_limit)
-    raise ValueError(f"unknown DAS method {method!r}")
+    MA intervals go to full traction, CR/CR2 to cruise, MB to braking, coasting to the leading
+    coast before the sector's first traction and to the trailing coast after it.
+    """
+    x, v, ft, fb = result.nodes, result.trajectory.v, result.trajectory.ft, result.trajectory.fb
+    labels = regimes.classify(result.train, v, ft, fb)
+    mid = 0.5 * (x[:-1] + x[1:])
+    lengths = np.zeros(len(layout.phases))
+    for s, sec in enumerate(layout.sectors):
+        mine = [q for q, (owner, _) in enumerate(layout.phases) if owner == s]
+        kinds = [layout.phases[q][1] for q in mine]
+        slot = {"MA": next(q for q, md in zip(mine, kinds) if md.kind == "traction"),
+                "CR": next(q for q, md in zip(mine, kinds) if md.kind == "cruise"),
+                "MB": mine[-1]}
+        slot["CR2"] = slot["CR"]
+        coasts = [q for q, md in zip(mine, kinds) if md.kind == "coast"]
+        driven = False
+        for i in np.nonzero((mid >= sec.start) & (mid < sec.end))[0]:
+            q = slot.get(labels[i], coasts[-1] if driven or len(coasts) == 1 else coasts[0])
+            driven = driven or labels[i] in ("MA", "CR")
+            lengths[q] += x[i + 1] - x[i]
+        lengths[mine] *= sec.length / max(lengths[mine].sum(), 1e-9)
+    return lengths, phases.speeds_at(layout, lengths, x, v)

@@ -6,43 +6,23 @@
 - ``mareco``: a margin-distribution heuristic in the style of OSRD's MARECO (ecostudy/mareco.py):
   cap the top speed, coast before braking and before steep descents, the cap searched so that
   the simulated running time meets the timetable.
-- ``das_round``: the nearest driver-advisory handle level (train's ``das_handle_levels``) to the
-  optimal handle of each interval (thesis 000 §4.4), without a cruise mode; it keeps no
-  timetable of its own, so its arrival and stop errors are part of the comparison.
 
 A strategy's profile becomes forces per interval (clipped to the envelopes), then handles, and
 is re-simulated over time; reported times and energies are the simulated ones.
 """
-from dataclasses import dataclass
 
 import numpy as np
 
-from . import initial
-from .errors import InfeasibleError
-from .run import handles
-from .simulate import simulate
-from .units import to_kwh
-
-
-@dataclass
-class Outcome:
-    name: str
-    handle: np.ndarray
-    trace: object
-
-    def row(self, train, distance):
-        t = self.trace
-        regen = train.regeneration_efficiency * t.regenerated_energy
-        changes = int(np.count_nonzero(np.abs(np.diff(self.handle)) > 1e-3))
-        return {"strategy": self.name, "running_time_s": t.arrival_time,
-                "traction_energy_kWh": to_kwh(t.traction_energy),
-                "net_energy_kWh": to_kwh(t.traction_energy / train.traction_efficiency - regen),
-                "stop_error_m": t.stop_position - distance, "handle_changes": changes}
+from ecostudy.analysis.tables import handles
+from ecostudy.core import kinematics
+from ecostudy.core.errors import InfeasibleError
+from ecostudy.core.simulate import Driven, simulate
+from ecostudy.heuristics.mareco import mareco as heuristic
 
 
 def drive(case, speeds):
     """Handles realising a speed profile on the grid, and their simulation."""
-    ft, fb = initial.forces_for(speeds, case.segment, case.train, case.nodes)
+    ft, fb = kinematics.forces_for(speeds, case.segment, case.train, case.nodes)
     u = handles(case.train, speeds, ft, fb)
     return u, simulate(case.segment, case.train, case.nodes, u)[0]
 
@@ -50,10 +30,10 @@ def drive(case, speeds):
 def eco_coasting(case, running_time):
     """Cruise at the limits, coast from the earliest point whose simulated arrival meets the time."""
     full = case.envelope
-    bwd = initial.braking_curve(case.segment, case.train, case.nodes, case.limits)
+    bwd = kinematics.braking_curve(case.segment, case.train, case.nodes, case.limits)
 
     def profile(c):
-        coast = initial.coast_speeds(case.segment, case.train, case.nodes, case.limits, c, full[c])
+        coast = kinematics.coast_speeds(case.segment, case.train, case.nodes, case.limits, c, full[c])
         v = full.copy()
         v[c:] = np.minimum(coast[c:], bwd[c:])
         v[-1] = 0.0
@@ -73,19 +53,12 @@ def eco_coasting(case, running_time):
         else:
             lo = mid
     u, trace = drive(case, profile(hi))
-    return Outcome("eco-drive coasting", u, trace)
+    return Driven("eco-drive coasting", u, trace)
 
 
 def mareco(case, running_time):
     """MARECO-style run meeting ``running_time`` (see :mod:`ecostudy.mareco`)."""
-    from .mareco import mareco as heuristic
     v1, u, trace = heuristic(case, running_time, drive)
-    return Outcome("MARECO-style", u, trace)
+    return Driven("MARECO-style", u, trace)
 
 
-def das_round(segment, train, nodes, optimal_handle):
-    """Nearest DAS handle level to the optimal handle, interval by interval, re-simulated."""
-    levels = np.asarray(train.das_levels)
-    u = levels[np.abs(optimal_handle[:, None] - levels[None, :]).argmin(axis=1)]
-    trace = simulate(segment, train, nodes, u)[0]
-    return Outcome("DAS round (nearest level)", u, trace)

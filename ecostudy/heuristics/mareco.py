@@ -17,9 +17,9 @@ The cap v1 is searched so that the simulated running time meets the timetable.
 """
 import numpy as np
 
-from .errors import InfeasibleError
-from .initial import braking_curve, envelope_speeds, interval_resistance, running_time
-from .physics import davis_resistance
+from ecostudy.core.errors import InfeasibleError
+from ecostudy.core.kinematics import braking_curve, envelope_speeds, interval_resistance, running_time
+from ecostudy.core.physics import davis_resistance
 
 TOL = 1e-6  # [m/s]
 

@@ -23,8 +23,8 @@ import math
 
 import numpy as np
 
-from . import units
-from .errors import InputError, problem
+from ecostudy.core import units
+from ecostudy.core.errors import InputError, problem
 
 
 def _values(doc, key, path):

@@ -12,74 +12,22 @@ import numpy as np
 import yaml
 from pydantic import ValidationError
 
-from . import schemas, units
-from .errors import EcostudyWarning, InputError, problem
-from .physics import Envelope, force_power_fit, table_width
-
-
-@dataclass(frozen=True)
-class Train:
-    """A train in SI units."""
-
-    name: str
-    mass: float                 # effective (inertial) mass M [kg]
-    static_mass: float          # Ms [kg]
-    length: float               # [m]
-    davis: tuple                # (A [N], B [N s/m], C [N s^2/m^2])
-    traction: Envelope
-    braking: Envelope
-    regeneration: Envelope | None = None
-    traction_efficiency: float = 1.0
-    regeneration_efficiency: float = 0.0
-    curve_coefficient: float = 0.0    # lambda_t [m^2/s^2]
-    das_levels: tuple = (-1.0, 0.0, 0.5, 0.75, 1.0)
-
-
-@dataclass(frozen=True)
-class Track:
-    """A track in SI units; piecewise-constant profiles start at their positions."""
-
-    name: str
-    length: float
-    stops: dict                      # name -> position [m]
-    gradient_positions: np.ndarray   # [m]
-    gradients: np.ndarray            # tan(alpha) [-], positive uphill
-    curve_positions: np.ndarray      # [m]
-    curvatures: np.ndarray           # 1/radius [1/m], 0 for straight
-    limit_positions: np.ndarray      # [m]
-    limits: np.ndarray               # [m/s]
-
-
-@dataclass(frozen=True)
-class Timing:
-    """What the run must achieve in time: exactly one of the fields is set (or none: all-out)."""
-
-    running_time: float | None = None       # [s]
-    supplement: float | None = None         # fraction of the all-out time [-]
-    window: tuple | None = None             # (earliest, latest) [s]
-
-
-@dataclass(frozen=True)
-class Window:
-    """A timing point between the stops, in travel distance from the departure stop (SI)."""
-
-    distance: float                 # [m] from the departure stop
-    earliest: float | None = None   # [s] since departure
-    latest: float | None = None
-    min_speed: float | None = None  # [m/s]
-    max_speed: float | None = None
-
-
-def window_si(w, distance):
-    """A schema window as an SI :class:`Window` at ``distance`` [m] from its departure stop."""
-    return Window(distance, w.earliest_s, w.latest_s,
-                  None if w.min_speed_kmh is None else w.min_speed_kmh * units.KMH,
-                  None if w.max_speed_kmh is None else w.max_speed_kmh * units.KMH)
+from ecostudy.core import units
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.grid import travel_distance
+from ecostudy.core.physics import Envelope, force_power_fit, table_width
+from ecostudy.core.types import Supply, Timing, Track, Train
+from ecostudy.io import schemas
+from ecostudy.io.formats import (
+    timetable_document_to_schema,
+    track_document_to_schema,
+    train_document_to_schema,
+)
+from ecostudy.io.timetable import name_stops, window_si
 
 
 def windows_from_schema(windows, track, from_stop, to_stop, where):
     """Windows in SI and travel distance; each must lie strictly between the two stops."""
-    from .grid import travel_distance
     out, lines = [], []
     length = abs(track.stops[to_stop] - track.stops[from_stop])
     for i, w in enumerate(windows):
@@ -244,7 +192,6 @@ def train_document(path):
     """(schema-shaped data, field aliases for messages) of a train file: YAML, or TTOBench/OSRD JSON."""
     data = read_document(path)
     if Path(path).suffix.lower() == ".json":
-        from .imports import train_document_to_schema
         return train_document_to_schema(data, path)
     return data, None
 
@@ -253,7 +200,6 @@ def track_document(path):
     """Schema-shaped data of a track file: YAML, or TTOBench JSON."""
     data = read_document(path)
     if Path(path).suffix.lower() == ".json":
-        from .imports import track_document_to_schema
         return track_document_to_schema(data, path)
     return data
 
@@ -273,7 +219,6 @@ def load_timetable(path):
     """Read a timetable file (YAML, or a TTOBench journey JSON)."""
     data = read_document(path)
     if Path(path).suffix.lower() == ".json":
-        from .imports import timetable_document_to_schema
         data = timetable_document_to_schema(data, path)
     return validate(schemas.TimetableFile, data, path)
 
@@ -324,7 +269,6 @@ def load_study(path):
     to_stop = s.to_stop or stops[-1]
     check_stops(track, from_stop, to_stop, path)
     if s.timetable is not None:
-        from .timetable import name_stops
         tt = name_stops(load_timetable(base / s.timetable), track, base / s.timetable)
         timing = timing_from_timetable(tt, from_stop, to_stop, base / s.timetable)
     else:
@@ -352,7 +296,7 @@ class NetworkStudy:
     dt: float                       # [s]
     names: list
     offsets: list                   # [s]
-    supply: object                  # network.Supply
+    supply: object                  # core.types.Supply
     strategies: list
     buffer: float | None            # [m]
     points: int
@@ -361,7 +305,6 @@ class NetworkStudy:
 
 def load_network_study(path):
     """Read a network study file and the files it names; units converted here."""
-    from .network import Supply
     path = Path(path)
     s = validate(schemas.NetworkStudyFile, read_document(path), path)
     track, train = load_track(path.parent / s.track), load_train(path.parent / s.train)

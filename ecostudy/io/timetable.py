@@ -7,9 +7,10 @@ lie on. Times are on the journey clock (0 at the first departure), as TTOBench c
 """
 from dataclasses import dataclass
 
-from .errors import InputError, problem
-from .grid import travel_distance
-from .inputs import window_si
+from ecostudy.core import units
+from ecostudy.core.errors import InputError, problem
+from ecostudy.core.grid import travel_distance
+from ecostudy.core.types import Window
 
 POSITION_TOLERANCE = 1.0  # [m] a timetable position within this of a track stop is that stop
 
@@ -100,3 +101,10 @@ def schedule(plan, running_times):
         clock += t
         arr.append(clock)
     return dep, arr
+
+
+def window_si(w, distance):
+    """A schema window as an SI :class:`Window` at ``distance`` [m] from its departure stop."""
+    return Window(distance, w.earliest_s, w.latest_s,
+                  None if w.min_speed_kmh is None else w.min_speed_kmh * units.KMH,
+                  None if w.max_speed_kmh is None else w.max_speed_kmh * units.KMH)

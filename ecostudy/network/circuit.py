@@ -15,27 +15,9 @@ at 600 / 685 V): traction beyond V_i I_max is not served, regeneration beyond V_
 
 Units inside the electrical model: kV, kA, MW, Ohm (kV = Ohm kA, MW = kV kA).
 """
-from dataclasses import dataclass
 
 import numpy as np
-
-
-@dataclass(frozen=True)
-class Supply:
-    """One substation and its line [SI: V, Ohm, Ohm/m, m]."""
-
-    position: float               # x_sub on the line [m]
-    voltage: float = 750.0        # V_s [V]
-    resistance: float = 0.01      # R_s [Ohm]
-    line_resistance: float = 25e-6  # r [Ohm/m] (thesis 000 §7.2.1: 25 mOhm/km)
-    max_voltage: float = 856.0    # V_max, regeneration cut-off [V] (685/600 of 750 V)
-    min_voltage: float = 500.0    # lowest pantograph voltage [V]
-    max_current: float = float("inf")        # largest current a train draws [A] (thesis Fig. 7.7)
-    max_regen_current: float = float("inf")  # largest current a train feeds [A] (thesis Fig. 7.7)
-
-    def feeder(self, x):
-        """R(x) [Ohm] between the bus and a train at line position ``x`` [m]."""
-        return self.line_resistance * np.abs(np.asarray(x, float) - self.position)
+import pyomo.environ as pyo
 
 
 def _current(v0, r, p):
@@ -148,7 +130,6 @@ def add_network(m, supply, steps, eps=1e-5):
     expression m.substation_mw[t] = V_s I_s, with the diode as V_0 = V_s - R_s I_s + u,
     I_s, u >= 0, I_s u <= ``eps`` [MW].
     """
-    import pyomo.environ as pyo
     vs, rs = supply.voltage / 1e3, supply.resistance
     index = [(t, q) for t, running in enumerate(steps) for q in range(len(running))]
     m.T_net = pyo.RangeSet(0, len(steps) - 1)

@@ -27,20 +27,28 @@ following    the independent runs, each train's head kept ``buffer`` metres behi
 The rules (b), (c), (d) re-optimise one train at a time against the others' latest runs, for a
 few supervisor rounds, keeping the timetable; their regeneration is credited only up to what the
 line could take then (:func:`supervised`). Every strategy is scored by the same network solve
-(``network.solve_step``).
+(``circuit.solve_step``).
 """
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import pandas as pd
 import pyomo.environ as pyo
 
-from . import model as formulation, network, solver, timedomain
-from .physics import hinge
-from .errors import SolverError
-from .inputs import Timing
-from .run import prepare, solve_run
-from .units import KWH
+from ecostudy.analysis.single import solve_run
+from ecostudy.analysis.tables import handles
+from ecostudy.core.errors import SolverError
+from ecostudy.core.physics import hinge
+from ecostudy.core.simulate import verify
+from ecostudy.core.types import Timing
+from ecostudy.core.units import KWH
+from ecostudy.core.types import Supply
+from ecostudy.network import circuit
+from ecostudy.ocp import session
+from ecostudy.ocp import space as formulation
+from ecostudy.ocp import timedomain
+from ecostudy.ocp.problem import prepare
 
 GAMMA = (0.71, 0.9)  # thesis 000 Fig. 7.3: time weights without / with a braking neighbour
 
@@ -53,7 +61,7 @@ class Fleet:
     legs: list
     dt: float
     steps: int
-    supply: network.Supply
+    supply: Supply
     buffer: float = None
     results: dict = field(default_factory=dict)  # space-domain net-energy runs per segment (guesses)
     dwell_steps: int = 0
@@ -99,7 +107,7 @@ REGULARISATION = 1e-3  # [-] weight of rheostat power and bus-voltage offset in 
 
 
 def _solve(m, what, options=None):
-    out = solver.solve(m, options)
+    out = session.solve(m, options)
     if not out.usable:
         raise SolverError(f"{what}: Ipopt {out.status} after {out.iterations} iterations")
     return out
@@ -183,7 +191,7 @@ def evaluate(fleet, runs_by_train):
                            for n in fleet.names}
     dt = fleet.dt
     for t, running in enumerate(step_powers(fleet, runs_by_train)):
-        flows = network.solve_step(fleet.supply, [r[1] for r in running], [r[2] for r in running])
+        flows = circuit.solve_step(fleet.supply, [r[1] for r in running], [r[2] for r in running])
         for q, (i, _, p, j, k) in enumerate(running):
             name, run = fleet.names[i], runs_by_train[i][k]
             vbar = 0.5 * (run[1][j] + run[1][j + 1])
@@ -201,7 +209,6 @@ def evaluate(fleet, runs_by_train):
                      "min_voltage_V": float(flows["voltage_V"].min()) if len(running) else np.nan,
                      "max_voltage_V": float(flows["voltage_V"].max()) if len(running) else np.nan,
                      **{f"voltage_{fleet.names[i]}_V": float(flows["voltage_V"][q]) for q, (i, *_) in enumerate(running)}})
-    import pandas as pd
     steps = pd.DataFrame(rows)
     e = {k: float(steps[k].sum() * dt / 3600) for k in ("substation_kW", "traction_input_kW", "regen_used_kW",
                                                           "regen_lost_kW", "line_loss_kW", "unserved_kW")}
@@ -289,13 +296,13 @@ def _probe(fleet, runs_by_train, i, power_w):
         if power is not None:
             ps = [r[2] for r in running]
             ps[mine[0]] = power
-            yield t, mine[0], network.solve_step(fleet.supply, [r[1] for r in running], ps)
+            yield t, mine[0], circuit.solve_step(fleet.supply, [r[1] for r in running], ps)
 
 
 def deliverable(fleet, runs_by_train, i, offer_kw):
     """Per clock step, the part [kW] of ``offer_kw`` that train ``i`` could take over the line:
     the regeneration used with train i drawing the offer, less that with train i at rest, the
-    others as they run (the circuit of ``network.solve_step``: line losses, V_max, the diode)."""
+    others as they run (the circuit of ``circuit.solve_step``: line losses, V_max, the diode)."""
     def used(demand_w):  # regeneration used per step with train i drawing demand_w(t)
         return {t: flows["regen_used_W"] for t, _, flows in _probe(fleet, runs_by_train, i, demand_w)}
 
@@ -312,7 +319,7 @@ RECEPTIVITY_PROBE = 5e6  # [W] a regeneration no train offers: what the line tak
 
 def receptivity(fleet, runs_by_train, i):
     """Per clock step, the regenerated power [kW] the line could take from train ``i`` while the
-    others run as in ``runs_by_train`` (train i offering ``RECEPTIVITY_PROBE``; ``network.solve_step``)."""
+    others run as in ``runs_by_train`` (train i offering ``RECEPTIVITY_PROBE``; ``circuit.solve_step``)."""
     out = np.zeros(fleet.steps)
     for t, q, flows in _probe(fleet, runs_by_train, i, lambda t: -RECEPTIVITY_PROBE):
         out[t] = flows["fed_W"][q] / 1e3
@@ -321,11 +328,11 @@ def receptivity(fleet, runs_by_train, i):
 
 def sensed(fleet, runs_by_train):
     """Pantograph voltages [V] per train and clock step as rule 7.11's supervisor sees them
-    (``network.sensed_voltages``: eq. 7.8 with a receptive source); NaN where a train is not running."""
+    (``circuit.sensed_voltages``: eq. 7.8 with a receptive source); NaN where a train is not running."""
     out = np.full((len(runs_by_train), fleet.steps), np.nan)
     for t, running in enumerate(step_powers(fleet, runs_by_train)):
         if running:
-            volts = network.sensed_voltages(fleet.supply, [r[1] for r in running], [r[2] for r in running])
+            volts = circuit.sensed_voltages(fleet.supply, [r[1] for r in running], [r[2] for r in running])
             out[[r[0] for r in running], t] = volts
     return out
 
@@ -415,7 +422,7 @@ def joint(fleet, start):
     if not all(steps):  # steps where no train runs carry no network variables
         keep = [t for t, s in enumerate(steps) if s]
         steps = [steps[t] for t in keep]
-    network.add_network(m, fleet.supply, steps)
+    circuit.add_network(m, fleet.supply, steps)
     _initialise_network(m, fleet, steps)
     # the rheostat and friction brakes are interchangeable, and with no current the bus voltage is
     # free: tiny costs on both remove these flat directions (Ipopt ran out of iterations on them)
@@ -436,7 +443,7 @@ def _initialise_network(m, fleet, steps):
     for t, running in enumerate(steps):
         xs = [start + d * 0.5 * pyo.value(b.s[j] + b.s[j + 1]) for b, j, start, d in running]
         ps = [pyo.value(b.p[j]) * 1e3 for b, j, *_ in running]
-        flows = network.solve_step(fleet.supply, xs, ps)
+        flows = circuit.solve_step(fleet.supply, xs, ps)
         vmin, vmax = fleet.supply.min_voltage / 1e3, fleet.supply.max_voltage / 1e3
         m.V0[t].set_value(float(np.clip(flows["bus_voltage_V"] / 1e3, vmin, vmax)))
         m.Is[t].set_value(flows["substation_current_A"] / 1e3)
@@ -454,8 +461,6 @@ def verify_leg(leg, run):
     The step forces become handles on the space intervals the steps cover (steps at standstill
     cover none), so the simulator drives them by position as it drives every other run.
     """
-    from .run import handles
-    from .simulate import verify
     s, v, ft, fb = run[:4]
     moving = np.diff(s) > 1e-6
     nodes = np.concatenate([[s[0]], s[1:][moving]])

@@ -24,9 +24,8 @@ import time
 import numpy as np
 import pyomo.environ as pyo
 
-from . import phases
-from .model import KN
-from .units import to_kwh
+from ecostudy.ocp import phases
+from ecostudy.ocp.space import KN
 
 
 def define_mode_choice(m, layout, train):
@@ -69,7 +68,7 @@ def search(result, start_model, start_layout, objective, time_limit, points):
     lengths, x, v, *_ = phases.solution(start_model, start_layout)
     coarse_v = np.interp(phases.node_positions(layout, lengths), x, v)
     m = phases.build(seg, train, layout, (lengths, coarse_v), running_time=result.summary["running_time_s"],
-                     objective=objective, choose_modes=True)
+                     objective=objective, extend=define_mode_choice)
     t0 = time.perf_counter()
     logging.getLogger("pyomo.contrib.mindtpy").setLevel(logging.ERROR)
     res = pyo.SolverFactory("mindtpy").solve(
@@ -80,46 +79,3 @@ def search(result, start_model, start_layout, objective, time_limit, points):
     return m, layout, res, time.perf_counter() - t0
 
 
-def das_minlp(result, points=None, time_limit=60.0):
-    """(summary block, advice, simulated outcome): the best of ``phases`` and the MINLP's pattern."""
-    from . import das
-
-    points = points or len(result.nodes)
-    objective = das._objective_of(result)
-    # stage 1 of `phases` (the full sequence of every sector) is the MINLP's starting pattern
-    m_ph, lay_ph, _ = das.solve_phases(result, points, stages=1)
-    m_mi, lay_mi, res, seconds = search(result, m_ph, lay_ph, objective, time_limit, max(points // 4, 150))
-    m_ph, lay_ph, _ = das.refine(result, m_ph, lay_ph, [md for _, md in lay_ph.phases], points)
-    # the pattern found, solved again at the full resolution on the phases it drives
-    modes = phases.all_modes(result.train)
-    chosen = [modes[max(m_mi.J, key=lambda j: pyo.value(m_mi.z[q, j]))] for q in m_mi.Q]
-    m_fine, fine, out_fine = das.refine(result, m_mi, lay_mi, chosen, points)
-    candidates = [("phases start", m_ph, lay_ph)]
-    if out_fine.usable:
-        candidates.append(("MINLP pattern", m_fine, fine))
-    scored = []
-    for name, mod, lay in candidates:
-        advice, sim, plan = das.advice_outcome("DAS minlp", result, lay, mod)
-        row = sim.row(result.train, result.segment.distance)
-        scored.append((row["net_energy_kWh" if objective == "net_energy" else "traction_energy_kWh"],
-                       name, advice, sim, plan))
-    best = min(scored, key=lambda r: r[0])
-    _, name, advice, sim, plan = best
-    upper, lower = res.problem.upper_bound, res.problem.lower_bound
-    e_ref = m_mi.energy_ref
-    best_kwh = best[0]
-    oa_bound = to_kwh(lower * e_ref) if np.isfinite(lower) else None
-    # a nonconvex OA master can cut off the incumbent itself; such a "bound" is no bound at all
-    valid = oa_bound is not None and oa_bound <= best_kwh * (1 + 1e-6)
-    block = das._block("minlp", result, sim, advice,
-                       f"MindtPy {res.solver.termination_condition}; {name} re-simulated",
-                       planned_traction_energy_kWh=plan, search_s=seconds,
-                       search_objective_kWh=to_kwh(upper * e_ref) if np.isfinite(upper) else None,
-                       oa_master_bound_kWh=oa_bound, oa_iterations=int(res.solver.iterations or 0),
-                       bound_note=("MindtPy OA master bound on the coarse model (nonconvex: not a proven "
-                                   "global bound)" if valid else
-                                   "no valid bound: the nonconvex OA master cut off the incumbent "
-                                   "(its bound exceeds the best solution); the ATO optimum is the relaxation"))
-    block["bound_kWh"] = oa_bound if valid else None
-    block["gap_pct"] = 100 * (best_kwh - oa_bound) / best_kwh if valid else None
-    return block, advice, sim

@@ -22,18 +22,16 @@ zero-length phase is not singular (it forces v_{k+1} = v_k and dt_k = 0):
 
     v_{k+1}^2 - v_k^2 = 2 ds ((F_T - F_B - R_k) / M),     dt_k (v_k + v_{k+1}) = 2 ds
 
-With ``choose_modes`` the mode of every phase becomes a choice among all DAS modes by binary
-variables (``minlp.py``); the fixed sequence above is then one of its binary patterns.
+With ``extend=modechoice.define_mode_choice`` the mode of every phase becomes a choice among all DAS modes by binary
+variables (``ocp/modechoice.py``); the fixed sequence above is then one of its binary patterns.
 """
 from dataclasses import dataclass
 
 import numpy as np
 import pyomo.environ as pyo
 
-from . import regimes
-from .model import KN, energy_reference  # KN: force unit of the NLP variables [N]
-from .physics import running_resistance, smooth_min
-from .units import KMH
+from ecostudy.core.physics import running_resistance, smooth_min
+from ecostudy.ocp.space import KN, energy_reference  # KN: force unit of the NLP variables [N]
 
 MIN_PHASE = 1.0  # [m]: shorter phases are dropped from the driver's advice
 
@@ -116,8 +114,8 @@ def substeps_for(points, n_phases, least=4):
 
 
 def build(segment, train, layout, guess, running_time=None, window=None, objective="energy",
-          choose_modes=False):
-    """The phases NLP (or, with ``choose_modes``, the mode-choice MINLP) of ``layout``.
+          extend=None):
+    """The phases NLP of ``layout`` (or, with ``extend``, e.g. the mode-choice MINLP of ``ocp/modechoice.py``).
 
     ``guess`` = (phase lengths [m], node speeds [m/s]); times follow from them.
     """
@@ -158,9 +156,8 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
                 for i in range(N)}
     m.mean_b = {i: 0.5 * (train.braking.smooth_force(m.v[i]) + train.braking.smooth_force(m.v[i + 1])) / KN
                 for i in range(N)}
-    if choose_modes:
-        from .minlp import define_mode_choice
-        define_mode_choice(m, layout, train)
+    if extend is not None:  # a variant passed in: the mode-choice MINLP (ocp.modechoice)
+        extend(m, layout, train)
     else:
         _fixed_modes(m, layout)
     bounds = (running_time, running_time) if running_time is not None else window
@@ -215,36 +212,6 @@ def _objective(m, train, segment, layout, ds, objective):
     else:
         raise ValueError(f"DAS runs minimise energy or net_energy, not {objective!r}")
     m.objective = pyo.Objective(expr=expr, sense=pyo.minimize)
-
-
-def guess_from_result(result, layout):
-    """Phase lengths and node speeds from an ATO ``result`` (its regimes, sector by sector).
-
-    MA intervals go to full traction, CR/CR2 to cruise, MB to braking, coasting to the leading
-    coast before the sector's first traction and to the trailing coast after it.
-    """
-    prof = result.profile
-    x, v = prof["position_m"].to_numpy(), prof["speed_kmh"].to_numpy() * KMH
-    ft = prof["traction_force_kN"].to_numpy()[:-1] * KN
-    fb = prof["braking_force_kN"].to_numpy()[:-1] * KN
-    labels = regimes.classify(result.train, v, ft, fb)
-    mid = 0.5 * (x[:-1] + x[1:])
-    lengths = np.zeros(len(layout.phases))
-    for s, sec in enumerate(layout.sectors):
-        mine = [q for q, (owner, _) in enumerate(layout.phases) if owner == s]
-        kinds = [layout.phases[q][1] for q in mine]
-        slot = {"MA": next(q for q, md in zip(mine, kinds) if md.kind == "traction"),
-                "CR": next(q for q, md in zip(mine, kinds) if md.kind == "cruise"),
-                "MB": mine[-1]}
-        slot["CR2"] = slot["CR"]
-        coasts = [q for q, md in zip(mine, kinds) if md.kind == "coast"]
-        driven = False
-        for i in np.nonzero((mid >= sec.start) & (mid < sec.end))[0]:
-            q = slot.get(labels[i], coasts[-1] if driven or len(coasts) == 1 else coasts[0])
-            driven = driven or labels[i] in ("MA", "CR")
-            lengths[q] += x[i + 1] - x[i]
-        lengths[mine] *= sec.length / max(lengths[mine].sum(), 1e-9)
-    return lengths, speeds_at(layout, lengths, x, v)
 
 
 def node_positions(layout, lengths):

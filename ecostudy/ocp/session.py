@@ -4,13 +4,19 @@ The glue is ours rather than ``SolverFactory('cyipopt')`` so that the NL write (
 which writes and loads an AMPL NL file through PyNumero's ASL) and the solve are timed apart,
 iterations are counted, and the NLP object can be reused.
 """
+import subprocess
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import cyipopt
 import numpy as np
+import pyomo
+from pyomo.contrib.pynumero.asl import AmplInterface
+from pyomo.contrib.pynumero.interfaces.cyipopt_interface import CyIpoptNLP
+from pyomo.contrib.pynumero.interfaces.pyomo_nlp import PyomoNLP
 
-from .errors import SolverError
+from ecostudy.core.errors import SolverError
 
 DEFAULT_OPTIONS = {
     "tol": 1e-8,
@@ -47,7 +53,7 @@ class Outcome:
         return self.status in ("optimal", "acceptable") or self.max_violation < 1e-6
 
 
-REPO_ASL = Path(__file__).resolve().parent.parent / ".pyomo" / "lib" / "libpynumero_ASL.so"
+REPO_ASL = Path(__file__).resolve().parents[2] / ".pyomo" / "lib" / "libpynumero_ASL.so"
 
 
 def _imports():
@@ -57,9 +63,6 @@ def _imports():
     Pyomo reads that variable once, when it is first imported; a notebook that imported Pyomo
     first would not find the library built by ``scripts/install.sh``.
     """
-    from pyomo.contrib.pynumero.asl import AmplInterface
-    from pyomo.contrib.pynumero.interfaces.cyipopt_interface import CyIpoptNLP
-    from pyomo.contrib.pynumero.interfaces.pyomo_nlp import PyomoNLP
     if not AmplInterface.available() and REPO_ASL.is_file():
         AmplInterface.libname = str(REPO_ASL)
     if not AmplInterface.available():
@@ -146,10 +149,7 @@ def solve(model, options=None):
 
 def versions():
     """Versions of the solver chain: Pyomo, cyipopt, Ipopt, MUMPS (as Ipopt's package reports them)."""
-    import subprocess
 
-    import cyipopt
-    import pyomo
 
     def pkg(name):
         try:

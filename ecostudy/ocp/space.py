@@ -16,8 +16,8 @@ forces of the interval (eq. 2.2). Envelopes hold at both ends of each interval.
 import numpy as np
 import pyomo.environ as pyo
 
-from .initial import interval_resistance
-from .physics import smooth_table
+from ecostudy.core.kinematics import interval_resistance
+from ecostudy.core.physics import smooth_table
 
 KN = 1000.0  # force unit of the NLP variables [N]: kN (bench/bench_variants.py measures N)
 # multiplier on the speed recursion: 1 = dynamics per unit mass (bench_variants.py measures M)

@@ -22,9 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 import pyomo.environ as pyo
 
-from . import model as formulation
-from .initial import point_resistance
-from .physics import table_coefficients, smooth_table
+from ecostudy.core.kinematics import point_resistance
+from ecostudy.core.physics import smooth_table, table_coefficients
+from ecostudy.ocp import space as formulation
 
 KN = formulation.KN
 

@@ -5,7 +5,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .units import PERMILLE, to_kmh, to_kwh  # noqa: E402
+from ecostudy.core.units import PERMILLE, to_kmh, to_kwh  # noqa: E402
 
 
 def _steps(profile, distance):
@@ -145,7 +145,6 @@ def journey_plot(results, path, title="", passing=()):
 def network_plot(fleet, outcome, path, title=""):
     """Speeds and pantograph powers against time of every train (independent and joint, if
     run), and the substation power of every strategy."""
-    import numpy as np
     shown = [n for n in ("independent", "joint") if n in outcome] or list(outcome)[:1]
     rows = 2 * len(shown) + 1
     fig, axes = plt.subplots(rows, 1, figsize=(10, 2.4 * rows), sharex=True)

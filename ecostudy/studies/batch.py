@@ -11,14 +11,15 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 
 import pandas as pd
 
-from .errors import EcostudyError, EcostudyWarning, InfeasibleError
-from .inputs import Timing, track_from_schema, train_from_schema
-from .results import write_csv
-from .run import solve_run
-from .schemas import TrackFile, TrainFile
-from .store import Store
-from .study import case_key, expand
-
+from ecostudy.analysis.single import solve_run
+from ecostudy.core.errors import EcostudyError, EcostudyWarning, InfeasibleError
+from ecostudy.core.types import Timing
+from ecostudy.das.methods import das_columns
+from ecostudy.io.loaders import track_from_schema, train_from_schema
+from ecostudy.io.schemas import TrackFile, TrainFile
+from ecostudy.io.store import Store
+from ecostudy.io.writers import write_csv
+from ecostudy.studies.cases import case_key, expand
 
 _ALL_OUT = {}  # all-out time per (train, track, stops, grid), per process: shared by a scenario's cases
 
@@ -50,7 +51,6 @@ def run_case(case):
                       points=case["points"], weights=tuple(case["weights"]))
         status, error, summary = ("ok" if r.ok else "flagged"), None, r.summary
         if case.get("das"):
-            from .das import das_columns
             summary["das"] = das_columns(r, case["das"], case["points"], case.get("das_time_limit_s", 60.0))
         if t_allout is not None:
             summary["all_out_time_s"] = t_allout
@@ -84,7 +84,8 @@ def _processes(todo, workers):
 
 def _dask(todo, address):
     try:
-        from distributed import Client, as_completed as dask_completed
+        from distributed import Client
+        from distributed import as_completed as dask_completed
     except ImportError:
         raise EcostudyError("--dask needs Dask: pip install 'ecostudy[dask]'") from None
     with Client(address) as client:

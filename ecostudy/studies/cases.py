@@ -11,10 +11,20 @@ import json
 import warnings
 from pathlib import Path
 
-from . import __version__, schemas
-from .errors import InputError, problem
-from .inputs import check_stops, load_timetable, read_document, timing_from_timetable, track_document, \
-    track_from_schema, train_document, train_from_schema, validate
+from ecostudy import __version__
+from ecostudy.core.errors import InputError, problem
+from ecostudy.io import schemas
+from ecostudy.io.loaders import (
+    check_stops,
+    load_timetable,
+    read_document,
+    timing_from_timetable,
+    track_document,
+    track_from_schema,
+    train_document,
+    train_from_schema,
+    validate,
+)
 
 
 def case_key(case):

@@ -5,10 +5,13 @@ simulated ones), so optimised and heuristic strategies are measured alike.
 """
 import pandas as pd
 
-from . import strategies
-from .errors import InfeasibleError
-from .inputs import Timing
-from .run import prepare, solve_run
+from ecostudy.analysis.single import solve_run
+from ecostudy.core.errors import InfeasibleError
+from ecostudy.core.types import Timing
+from ecostudy.core.simulate import Driven
+from ecostudy.das.advice import das_phases, nearest_levels
+from ecostudy.heuristics import ecodrive
+from ecostudy.ocp.problem import prepare
 
 
 def compare(track, train, from_stop, to_stop, timing, points=1000):
@@ -19,17 +22,16 @@ def compare(track, train, from_stop, to_stop, timing, points=1000):
     allout = solve_run(track, train, from_stop, to_stop, Timing(), objective="time", points=points)
     ato = solve_run(track, train, from_stop, to_stop, timing, points=points)
     case = prepare(track, train, from_stop, to_stop, points)
-    outcomes = [strategies.Outcome("all-out", allout.handle, allout.trace),
-                strategies.Outcome("ATO optimum", ato.handle, ato.trace)]
+    outcomes = [Driven("all-out", allout.handle, allout.trace),
+                Driven("ATO optimum", ato.handle, ato.trace)]
     target = ato.summary["running_time_s"]
     rows_extra = []
-    for name, heuristic in (("eco-drive coasting", strategies.eco_coasting), ("MARECO-style", strategies.mareco)):
+    for name, heuristic in (("eco-drive coasting", ecodrive.eco_coasting), ("MARECO-style", ecodrive.mareco)):
         try:
             outcomes.append(heuristic(case, target))
         except InfeasibleError as exc:
             rows_extra.append({"strategy": name, "note": str(exc)})
-    outcomes.append(strategies.das_round(case.segment, train, case.nodes, ato.handle))
-    from .das import das_phases
+    outcomes.append(nearest_levels(case.segment, train, case.nodes, ato.handle))
     block, advice, phased = das_phases(ato, points)
     outcomes.append(phased)
     rows = [o.row(train, case.segment.distance) for o in outcomes] + rows_extra

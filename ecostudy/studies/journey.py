@@ -16,11 +16,20 @@ import heapq
 
 import numpy as np
 import pandas as pd
+import pyomo.environ as pyo
+from scipy.interpolate import PchipInterpolator
 
-from .inputs import Timing
-from .pareto import sweep
-from .run import solve_run
-from .timetable import schedule
+from ecostudy.analysis.single import solve_run
+from ecostudy.core.errors import InfeasibleError, SolverError
+from ecostudy.core.kinematics import running_time
+from ecostudy.core.simulate import window_checks
+from ecostudy.core.types import Timing, Window
+from ecostudy.heuristics import mareco
+from ecostudy.io.timetable import schedule
+from ecostudy.ocp import session
+from ecostudy.ocp.problem import build, capped_guess, prepare
+from ecostudy.ocp.space import passing_time
+from ecostudy.studies.pareto import sweep
 
 
 def equal_marginal(fronts, total_time, step=0.05):
@@ -32,7 +41,6 @@ def equal_marginal(fronts, total_time, step=0.05):
 
     # monotone cubic (PCHIP) through each front: the fronts are convex, and straight chords
     # between 15 points put the split 0.6 % above the whole-journey NLP where PCHIP is within 0.1 %
-    from scipy.interpolate import PchipInterpolator
     curves = []
     for f in fronts:
         t, keep = np.unique(f["running_time_s"].to_numpy(), return_index=True)
@@ -65,9 +73,6 @@ def uniform(fronts, total_time):
 def mareco_split(track, train, pairs, total_time, points):
     """Running time per segment [s]: each segment's MARECO-style time for the one cap v1 that
     makes the total ``total_time`` (bisection; the total falls as v1 rises)."""
-    from . import mareco
-    from .initial import running_time
-    from .run import prepare
     cases = [prepare(track, train, a, b, points) for a, b in pairs]
 
     def times(v1):
@@ -87,9 +92,7 @@ def mareco_split(track, train, pairs, total_time, points):
 def _segments_model(cases, start_times):
     """One Pyomo model with every segment's NLP as a block (``run.build``), each running time T_n
     free, total traction work minimised; the caller ties the T_n together. Returns (model, blocks)."""
-    import pyomo.environ as pyo
 
-    from .run import build, capped_guess
     m = pyo.ConcreteModel()
     parts = []
     for n, (case, t) in enumerate(zip(cases, start_times)):
@@ -105,11 +108,8 @@ def _segments_model(cases, start_times):
 
 def _solve_times(m, parts, what):
     """Solve the journey model; its running times [s]."""
-    import pyomo.environ as pyo
 
-    from . import solver
-    from .errors import InfeasibleError, SolverError
-    outcome = solver.solve(m)
+    outcome = session.solve(m)
     if outcome.status in ("infeasible", "restoration_failed"):
         raise InfeasibleError(f"infeasible: no run of {what} ({outcome.status})")
     if not outcome.usable:
@@ -121,9 +121,7 @@ def whole_journey(track, train, pairs, total_time, start_times, points):
     """Running times [s] from one NLP over all segments (:func:`_segments_model`), the running
     times summing to ``total_time``. The exact optimum the equal-marginal split approximates on
     interpolated fronts. Started from ``start_times`` (e.g. that split)."""
-    import pyomo.environ as pyo
 
-    from .run import prepare
     m, parts = _segments_model([prepare(track, train, a, b, points) for a, b in pairs], start_times)
     m.total = pyo.Constraint(expr=sum(p.T for p in parts) / total_time == 1.0)
     return _solve_times(m, parts, "the whole-journey NLP")
@@ -139,11 +137,7 @@ def windowed_journey(track, train, plan, points, start_times=None):
     sit on the node, ``model.define_windows``; thesis 001 eq. 4.1g on a whole journey, the
     TTOBench journey format).
     """
-    import pyomo.environ as pyo
 
-    from .inputs import Window
-    from .model import passing_time
-    from .run import prepare
     pairs = list(zip(plan.stops, plan.stops[1:]))
     cases = [prepare(track, train, a, b, points, windows=[Window(w.distance, None, None, w.min_speed, w.max_speed)
                                                           for w in ws]) for (a, b), ws in zip(pairs, plan.windows)]
@@ -175,7 +169,6 @@ def _relative(t, departure):
 
 def _segment_windows(plan, n, departure):
     """Segment n's passing points with times since its own departure (the segment solve's clock)."""
-    from .inputs import Window
     return tuple(Window(w.distance, _relative(w.earliest, departure), _relative(w.latest, departure),
                         w.min_speed, w.max_speed) for w in plan.windows[n])
 
@@ -183,8 +176,6 @@ def _segment_windows(plan, n, departure):
 def timing_columns(plan, n, departure, arrival, run):
     """Journey-clock columns of segment n and whether the run keeps its windows: the passing
     points and the arrival (a window at the stop) on the simulated trace (``simulate.window_checks``)."""
-    from .inputs import Window
-    from .simulate import window_checks
     lo, hi = plan.arrival[n]
     stop = Window(run.summary["distance_m"], _relative(lo, departure), _relative(hi, departure))
     checks = window_checks(run.trace, _segment_windows(plan, n, departure) + (stop,))
@@ -215,7 +206,6 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
     # 150 % reach put the equal-marginal split 4.6 % above the whole-journey NLP at +15 %)
     mean = supplement or 0.0
     if total_time is not None:
-        from .run import prepare
         fastest = sum(prepare(track, train, a, b, points).estimate for a, b in pairs)
         mean = max(total_time / fastest - 1.0, 0.0)
     reach = max(0.6, 2.5 * mean)

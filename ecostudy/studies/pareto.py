@@ -14,10 +14,12 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 import pandas as pd
 
-from . import solver
-from .errors import SolverError
-from .run import all_out, build, capped_guess, finish, prepare, record, solve_run
-from .inputs import Timing
+from ecostudy.analysis.single import finish, solve_run
+from ecostudy.core.errors import SolverError
+from ecostudy.core.types import Timing
+from ecostudy.das.methods import das_columns
+from ecostudy.ocp import session
+from ecostudy.ocp.problem import all_out, build, capped_guess, prepare, record
 
 # After the first point of a chain, Ipopt starts from the previous point's primal AND dual
 # solution with a small barrier parameter. Measured (bench/bench_pareto.py, docs/benchmarks.md):
@@ -35,13 +37,13 @@ def _chain(case, times, objective, options, verify_result, warm):
                           options=options, verify_result=verify_result) for t in times]
     stages = {}
     m = build(case, capped_guess(case, times[0]), objective, stages, running_time=times[0])
-    session = solver.Session(m)
+    nlp = session.Session(m)
     results = []
     for i, t in enumerate(times):
         point_stages = {"build": stages["build"] if i == 0 else 0.0}
-        session.set_bounds(m.T, t, t)
-        outcome = session.solve({**WARM_START, **(options or {})} if i else options)
-        record(point_stages, outcome, session.nl_seconds if i == 0 else 0.0)
+        nlp.set_bounds(m.T, t, t)
+        outcome = nlp.solve({**WARM_START, **(options or {})} if i else options)
+        record(point_stages, outcome, nlp.nl_seconds if i == 0 else 0.0)
         if not outcome.usable:
             if i == 0:  # a cold start failed: nothing better to try
                 raise SolverError(f"Ipopt failed at running time {t:.2f} s ({outcome.status})")
@@ -168,7 +170,6 @@ def is_monotone(table, tolerance=1e-6):
 
 
 def _das_point(result, method, points, time_limit):
-    from .das import das_columns
     return das_columns(result, method, points, time_limit)
 
 

@@ -1,60 +1,25 @@
-"""Command line: parses options and calls the library. Errors are one line; --debug shows tracebacks.
+"""Single-run commands: solve, check, doctor (registered on :data:`ecostudy.cli.app.app`).
 
-Exit status: 0 verified optimal result, 1 result written but flagged (not optimal or failed
-verification), 2 bad input or infeasible request, 3 solver failure or internal error.
+They parse options, call the library and print; errors become one line (:func:`guarded`).
 """
-import warnings
-from enum import Enum
 from pathlib import Path
 from typing import Optional
 
+import pyomo.environ as pyo
 import typer
 
-from . import units
-from .errors import EcostudyError, InputError, problem
-
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="Energy-efficient train control studies (Pyomo + Ipopt).")
-
-
-class DasMethod(str, Enum):
-    round = "round"
-    phases = "phases"
-    minlp = "minlp"
-
-
-class Objective(str, Enum):
-    energy = "energy"
-    net_energy = "net_energy"
-    time = "time"
-    mixed = "mixed"
-
-
-def _fail(lines, code):
-    for line in str(lines).splitlines():
-        typer.secho(f"error: {line}", fg=typer.colors.RED, err=True)
-    raise typer.Exit(code)
-
-
-def guarded(debug, fn, *args, **kwargs):
-    """Run ``fn``; turn ecostudy errors into one-line messages and exit codes."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            return fn(*args, **kwargs)
-        except EcostudyError as exc:
-            if debug:
-                raise
-            _fail(exc, exc.exit_code)
-        except (KeyboardInterrupt, typer.Exit):
-            raise
-        except Exception as exc:  # an unexpected failure still gets one line by default
-            if debug:
-                raise
-            _fail(f"internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", 3)
-        finally:
-            for w in caught:
-                typer.secho(f"warning: {w.message}", fg=typer.colors.YELLOW, err=True)
+from ecostudy import __version__
+from ecostudy.analysis.pontryagin import check_result
+from ecostudy.analysis.single import solve_run
+from ecostudy.cli.app import DasMethod, Objective, app, guarded, parse_pair
+from ecostudy.core import units
+from ecostudy.core.errors import InputError, problem
+from ecostudy.core.types import Timing
+from ecostudy.das.methods import das_run
+from ecostudy.io.loaders import check_stops, load_study, load_track, load_train
+from ecostudy.io.writers import write_json
+from ecostudy.ocp import session
+from ecostudy.report.files import write_run
 
 
 def _report(result, out_dir):
@@ -95,19 +60,8 @@ def _report(result, out_dir):
     typer.echo(f"  outputs           {out_dir}/ (profile.csv, summary.json, speed.png)")
 
 
-def _parse_pair(text, option):
-    try:
-        a, b = (float(x) for x in text.split(","))
-        return a, b
-    except ValueError:
-        raise InputError(problem("command line", option, f"expected two numbers 'a,b', got '{text}'"))
-
-
 def _solve(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights,
            points, out, no_plot, das=None, das_time_limit=60.0):
-    from .inputs import Timing, check_stops, load_study, load_track, load_train
-    from .results import write_json, write_run
-    from .run import solve_run
 
     if study is not None:
         if track or train:
@@ -140,14 +94,13 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
             raise InputError(problem("command line", "--time", "give --time, --supplement or --window "
                                      "(or --objective time for the all-out run)"))
         timing = Timing(running_time=time, supplement=None if supplement is None else supplement * units.PERCENT,
-                        window=_parse_pair(window, "--window") if window else None)
-        w = _parse_pair(weights, "--weights") if weights else (1.0, 1.0)
+                        window=parse_pair(window, "--window") if window else None)
+        w = parse_pair(weights, "--weights") if weights else (1.0, 1.0)
         k = points or 1000
         out_dir = Path(out) if out else Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_")
     windows = st.windows if study is not None else ()
     result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
     if das is not None:
-        from .das import das_run
         if windows and das.value != "round":
             raise InputError(problem(str(study), "windows", f"--das {das.value} does not handle timing "
                                      "windows on the way yet; use --das round"))
@@ -192,8 +145,6 @@ def solve(
 
 
 def _check(result_dir, time):
-    from .pontryagin import check_result
-    from .results import write_json
     result_dir = Path(result_dir)
     report = check_result(result_dir, time)
     write_json(result_dir / "check.json", report)
@@ -221,17 +172,15 @@ def check(
 
 
 def _doctor():
-    import pyomo.environ as pyo
 
-    from . import __version__, solver
-    for name, version in {"ecostudy": __version__, **solver.versions()}.items():
+    for name, version in {"ecostudy": __version__, **session.versions()}.items():
         typer.echo(f"{name:10s} {version}")
     m = pyo.ConcreteModel()
     m.x = pyo.Var(initialize=1.0)
     m.y = pyo.Var(initialize=1.0)
     m.c = pyo.Constraint(expr=m.x**2 + m.y**2 == 1)
     m.o = pyo.Objective(expr=m.x + 2 * m.y)
-    out = solver.solve(m)
+    out = session.solve(m)
     ok = out.optimal and abs(pyo.value(m.o) + 5**0.5) < 1e-6
     typer.echo(f"toy NLP    {out.status} in {out.iterations} iterations, objective {pyo.value(m.o):.6f} "
                f"(expected {-(5**0.5):.6f}): {'ok' if ok else 'WRONG'}")
@@ -245,4 +194,3 @@ def doctor(debug: bool = typer.Option(False, help="Show tracebacks.")):
         raise typer.Exit(3)
 
 
-from . import cli_network, cli_studies  # noqa: E402,F401  (register network, pareto, compare, journey, run)

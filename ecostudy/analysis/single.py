@@ -1,0 +1,117 @@
+"""One verified run between two stops: prepare, solve, then tables, regimes, the Pontryagin check
+and the re-simulation. ``solve_run`` is the library entry point behind ``ecostudy solve``.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ecostudy.analysis import pontryagin, regimes
+from ecostudy.analysis.summary import run_summary
+from ecostudy.analysis.tables import Trajectory, handles, tabulate
+from ecostudy.core.errors import SolverError
+from ecostudy.core.simulate import verify
+from ecostudy.core.types import Timing
+from ecostudy.core.units import KWH
+from ecostudy.ocp import space
+from ecostudy.ocp.problem import (
+    all_out,
+    capped_guess,
+    check_feasible,
+    check_windows,
+    prepare,
+    solve_once,
+    stage,
+    warm_guess,
+)
+
+
+@dataclass
+class RunResult:
+    """A solved, analysed and verified run: the profile table (display units), the summary
+    (``summary.json``), the grid, the handle per interval, the re-simulated trace and the SI
+    :class:`Trajectory`."""
+
+    profile: pd.DataFrame
+    summary: dict
+    segment: object
+    train: object
+    nodes: np.ndarray
+    handle: np.ndarray
+    trace: object = None
+    stages: dict = field(default_factory=dict)
+    das: tuple = None  # (advice table, simulated outcome) when a DAS method was asked for
+    trajectory: Trajectory = None  # the run in SI arrays: read these, not the display table
+
+    @property
+    def ok(self):
+        return self.summary["solver"]["status"] == "optimal" and self.summary["verification"]["passed"]
+
+
+def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="energy", points=1000,
+              weights=(1.0, 1.0), warm_start=None, options=None, verify_result=True, windows=()):
+    """Energy-optimal (or all-out, or mixed) run between two stops, verified by simulation.
+
+    Parameters
+    ----------
+    timing : Timing  running time [s], supplement over the all-out time [-], or window [s].
+    objective : str  ``energy``, ``net_energy``, ``time`` (all-out) or ``mixed``.
+    points : int  Grid nodes K.
+    warm_start : RunResult, optional  Start Ipopt from this earlier result.
+    windows : sequence of inputs.Window  Timing points on the way (earliest/latest, speed bounds).
+    """
+    stages = {}
+    case = prepare(track, train, from_stop, to_stop, points, stages, windows)
+    check_windows(case)
+    target, window, t_allout = timing.running_time, timing.window, None
+    latest = target if target is not None else (window[1] if window else None)
+    if objective == "time" or timing.supplement is not None or (latest is not None and latest < 0.97 * case.estimate):
+        t_allout, m, outcome = all_out(case, stages, options)
+        if timing.supplement is not None:
+            target = t_allout * (1 + timing.supplement)
+        check_feasible(latest, t_allout)
+
+    if objective != "time":
+        if warm_start is not None:
+            guess = warm_guess(warm_start, case)
+        else:
+            guess = capped_guess(case, target or (window[1] if window else case.estimate * 1.1))
+        kw = {"running_time": target} if target is not None else {"window": window} if window else {}
+        m, outcome = solve_once(case, guess, objective, stages, options, weights=weights, **kw)
+        if not outcome.usable:
+            if latest is not None and t_allout is None:
+                t_allout, _, _ = all_out(case, stages, options)
+                check_feasible(latest, t_allout)
+            raise SolverError(f"Ipopt failed ({outcome.status}) after {outcome.iterations} iterations; "
+                              "try more --points or a longer running time")
+    return finish(case, m, outcome, stages, objective, t_allout, verify_result)
+
+
+def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=True):
+    """Tables, regimes and verification of a solved model: the :class:`RunResult`."""
+    train, segment, nodes = case.train, case.segment, case.nodes
+    with stage(stages, "tables"):
+        v, dt, ft, fb, _ = space.solution_arrays(m)
+        u = handles(train, v, ft, fb)
+        profile, totals = tabulate(train, nodes, v, dt, ft, fb)
+        net = objective == "net_energy"
+        labels = regimes.classify(train, v, ft, fb, regeneration=net and train.regeneration is not None)
+        regime_runs = regimes.runs(labels, nodes)
+        costate = None
+        if objective in ("energy", "net_energy"):  # psi = lambda / v of eq. 2.17 (7.4) from Ipopt's multipliers
+            psi = pontryagin.ipopt_psi(m, nodes, train, objective)
+            bounds = pontryagin.regime_bounds(train, v, ft, fb, labels, objective)
+            costate = {"method": "Ipopt multipliers of the speed recursion",
+                       "conditions": "eq. 7.4 (regeneration credited)" if net else "eq. 2.17",
+                       **pontryagin.check(nodes, labels, psi, bounds=bounds)}
+            profile["costate_ratio"] = np.append(psi, np.nan)
+        marginal = space.marginal_energy(m) if objective in ("energy", "net_energy") else None
+    verification, trace = None, None
+    if verify_result:
+        with stage(stages, "verify"):
+            verification, trace = verify(segment, train, nodes, u, totals["running_time_s"],
+                                         totals["traction_energy_kWh"] * KWH, case.windows)
+    summary = run_summary(case, totals, objective, t_allout, marginal, labels, regime_runs, costate,
+                          outcome, verification, stages)
+    return RunResult(profile, summary, segment, train, nodes, u, trace, stages,
+                     trajectory=Trajectory(nodes, v, dt, ft, fb))

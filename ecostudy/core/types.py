@@ -1,0 +1,80 @@
+"""SI objects shared by every layer: a train, a track, a timing request, a timing point, a supply.
+
+Built by the loaders (:mod:`ecostudy.io.loaders`) or in code; everything here is SI.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ecostudy.core.physics import Envelope
+
+
+@dataclass(frozen=True)
+class Train:
+    """A train in SI units."""
+
+    name: str
+    mass: float                 # effective (inertial) mass M [kg]
+    static_mass: float          # Ms [kg]
+    length: float               # [m]
+    davis: tuple                # (A [N], B [N s/m], C [N s^2/m^2])
+    traction: Envelope
+    braking: Envelope
+    regeneration: Envelope | None = None
+    traction_efficiency: float = 1.0
+    regeneration_efficiency: float = 0.0
+    curve_coefficient: float = 0.0    # lambda_t [m^2/s^2]
+    das_levels: tuple = (-1.0, 0.0, 0.5, 0.75, 1.0)
+
+
+@dataclass(frozen=True)
+class Track:
+    """A track in SI units; piecewise-constant profiles start at their positions."""
+
+    name: str
+    length: float
+    stops: dict                      # name -> position [m]
+    gradient_positions: np.ndarray   # [m]
+    gradients: np.ndarray            # tan(alpha) [-], positive uphill
+    curve_positions: np.ndarray      # [m]
+    curvatures: np.ndarray           # 1/radius [1/m], 0 for straight
+    limit_positions: np.ndarray      # [m]
+    limits: np.ndarray               # [m/s]
+
+
+@dataclass(frozen=True)
+class Timing:
+    """What the run must achieve in time: exactly one of the fields is set (or none: all-out)."""
+
+    running_time: float | None = None       # [s]
+    supplement: float | None = None         # fraction of the all-out time [-]
+    window: tuple | None = None             # (earliest, latest) [s]
+
+
+@dataclass(frozen=True)
+class Window:
+    """A timing point between the stops, in travel distance from the departure stop (SI)."""
+
+    distance: float                 # [m] from the departure stop
+    earliest: float | None = None   # [s] since departure
+    latest: float | None = None
+    min_speed: float | None = None  # [m/s]
+    max_speed: float | None = None
+
+
+@dataclass(frozen=True)
+class Supply:
+    """One substation and its line [SI: V, Ohm, Ohm/m, m]."""
+
+    position: float               # x_sub on the line [m]
+    voltage: float = 750.0        # V_s [V]
+    resistance: float = 0.01      # R_s [Ohm]
+    line_resistance: float = 25e-6  # r [Ohm/m] (thesis 000 §7.2.1: 25 mOhm/km)
+    max_voltage: float = 856.0    # V_max, regeneration cut-off [V] (685/600 of 750 V)
+    min_voltage: float = 500.0    # lowest pantograph voltage [V]
+    max_current: float = float("inf")        # largest current a train draws [A] (thesis Fig. 7.7)
+    max_regen_current: float = float("inf")  # largest current a train feeds [A] (thesis Fig. 7.7)
+
+    def feeder(self, x):
+        """R(x) [Ohm] between the bus and a train at line position ``x`` [m]."""
+        return self.line_resistance * np.abs(np.asarray(x, float) - self.position)

@@ -1,0 +1,1 @@
+"""Feature: driver advice (DAS): rounding, phases, mode choice by MINLP. Uses layers 0-3 only."""
