@@ -15,9 +15,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ecostudy.network import fleet
+from ecostudy.network import fleet, scoring, rules, joint
 from ecostudy.core.types import Supply
-from ecostudy.network import circuit  # noqa: E402
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp.problem import solve_run  # noqa: E402
@@ -39,10 +38,10 @@ def main():
     for n in args.trains:
         f = fleet.plan(track, train, stops, times, 20.0, [args.offset * i for i in range(n)],
                        [f"T{i + 1}" for i in range(n)], args.dt, Supply(position=1500.0))
-        ind = fleet.independent(f)
-        e_ind = fleet.evaluate(f, ind)[2]["substation_kWh"]
-        runs, info = fleet.joint(f, ind)
-        e_joint = fleet.evaluate(f, runs)[2]["substation_kWh"]
+        ind = rules.independent(f)
+        e_ind = scoring.evaluate(f, ind)[2]["substation_kWh"]
+        runs, info = joint.joint(f, ind)
+        e_joint = scoring.evaluate(f, runs)[2]["substation_kWh"]
         print(f"| {n} | {f.steps} | {info['variables']} | {e_ind:.3f} | {e_joint:.3f} | "
               f"{100 * (1 - e_joint / e_ind):.2f} | {info['build_s']:.1f} | {info['solve_s']:.1f} | "
               f"{info['iterations']} |", flush=True)

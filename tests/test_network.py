@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 import pyomo.environ as pyo
 
-from ecostudy.network import fleet
+from ecostudy.network import fleet, scoring, strategies, rules
 from ecostudy.core.types import Supply
 from ecostudy.network import circuit
 from ecostudy.ocp import session
@@ -90,7 +90,7 @@ def test_time_domain_leg_matches_the_space_domain_optimum_on_flat_track():
     s, v, ft, *_ = timedomain.leg_arrays(b)
     energy = float(np.sum(ft * np.diff(s))) / 3.6e6
     assert energy == pytest.approx(space.summary["traction_energy_kWh"], rel=5e-4)
-    assert fleet.verify_leg(leg, timedomain.leg_arrays(b))["passed"]
+    assert scoring.verify_leg(leg, timedomain.leg_arrays(b))["passed"]
 
 
 @pytest.fixture(scope="module")
@@ -100,7 +100,7 @@ def two_trains():
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
     f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 45.0], ["T1", "T2"], 1.0,
                    Supply(position=300.0), points=300, buffer=360.0)
-    return f, fleet.run_strategies(f, ["independent", "triggering", "voltage", "dissension", "joint", "following"], progress=None)
+    return f, strategies.run_strategies(f, ["independent", "triggering", "voltage", "dissension", "joint", "following"], progress=None)
 
 
 def test_every_strategy_balances_keeps_time_and_is_verified(two_trains):
@@ -162,7 +162,7 @@ def test_dissension_weight_falls_while_neighbours_brake_and_resets_at_departure(
     f = SimpleNamespace(legs=legs, steps=1200, dt=0.5)
     flags = np.zeros((3, 1200), bool)
     flags[0, :] = True  # train 0 brakes all the time
-    w = fleet.dissension_weights(f, flags)
+    w = rules.dissension_weights(f, flags)
     assert w[0][-1] == pytest.approx(1.0)  # nobody else brakes
     assert w[1][599] * 0.5 == pytest.approx(0.05 / 0.175, rel=1e-3)
     assert w[2][600] > 0.95 and w[2][1199] * 0.5 == pytest.approx(0.05 / 0.175, rel=1e-3)
@@ -176,7 +176,7 @@ def test_voltage_rule_lowers_substation_energy_with_three_trains():
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
     f = fleet.plan(track, train, ["Noord", "Station", "Centrum"], [55.5, 99.0], 10.0, [0.0, 48.0, 80.0],
                    ["T1", "T2", "T3"], 1.0, SUPPLY, points=200)
-    out = fleet.run_strategies(f, ["independent", "voltage"], progress=None)
+    out = strategies.run_strategies(f, ["independent", "voltage"], progress=None)
     alone, rule = out["independent"]["totals"], out["voltage"]["totals"]
     assert rule["substation_kWh"] < 0.95 * alone["substation_kWh"]
     assert rule["all_verified"] and abs(rule["balance_error_pct"]) < 0.1
@@ -190,7 +190,7 @@ def test_joint_optimum_keeps_the_current_limits_that_independent_runs_break():
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
     supply = Supply(position=300.0, max_current=2500.0, max_regen_current=1500.0)
     f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 45.0], ["T1", "T2"], 1.0, supply, points=300)
-    out = fleet.run_strategies(f, ["independent", "joint"], progress=None)
+    out = strategies.run_strategies(f, ["independent", "joint"], progress=None)
     alone, joint = out["independent"]["totals"], out["joint"]["totals"]
     assert alone["unserved_kWh"] > 0.1 and alone["status"].startswith("flagged")
     assert joint["unserved_kWh"] < 1e-3 and joint["status"] == "ok" and joint["all_verified"]

@@ -1,23 +1,23 @@
 """`ecostudy network STUDY.yaml`: trains on one line and one DC substation (registered on ``cli.app``).
 
-Like ``cli.py`` it only parses options, calls the library and prints; errors become one line.
+Like ``cli/solve.py`` it only parses options, calls the library and prints; errors become one line.
 """
 from pathlib import Path
 from typing import Optional
 
-import pandas as pd
 import typer
 
-from ecostudy.analysis.single import solve_run
 from ecostudy.cli.app import app, guarded
-from ecostudy.core.types import Timing
-from ecostudy.io.loaders import load_network_study
-from ecostudy.io.writers import atomic_write, write_csv, write_json
-from ecostudy.network import fleet
 
 
 def _network(study_path, out, no_plot):
 
+    from ecostudy.analysis.single import solve_run
+    from ecostudy.core.types import Timing
+    from ecostudy.io.loaders import load_network_study
+    from ecostudy.io.writers import atomic_write, write_csv, write_json
+    from ecostudy.network import fleet, strategies
+    import pandas as pd
     st = load_network_study(study_path)
     pairs = list(zip(st.stops[:-1], st.stops[1:]))
     times = st.running_times
@@ -28,7 +28,7 @@ def _network(study_path, out, no_plot):
                     st.points, st.buffer)
     typer.echo(f"{len(st.names)} trains, {len(pairs)} segments ({', '.join(f'{t:.1f}' for t in times)} s "
                f"before rounding to {st.dt} s steps), {fl.steps} steps")
-    outcome = fleet.run_strategies(fl, st.strategies, progress=typer.echo)
+    outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo)
     out_dir = Path(out) if out else st.output
     base = outcome.get("independent", {}).get("totals", {}).get("substation_kWh")
     subs, trains = [], []

@@ -5,21 +5,10 @@ They parse options, call the library and print; errors become one line (:func:`g
 from pathlib import Path
 from typing import Optional
 
-import pyomo.environ as pyo
 import typer
 
-from ecostudy import __version__
-from ecostudy.analysis.pontryagin import check_result
-from ecostudy.analysis.single import solve_run
 from ecostudy.cli.app import DasMethod, Objective, app, guarded, parse_pair
-from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
-from ecostudy.core.types import Timing
-from ecostudy.das.methods import das_run
-from ecostudy.io.loaders import check_stops, load_study, load_track, load_train
-from ecostudy.io.writers import write_json
-from ecostudy.ocp import session
-from ecostudy.report.files import write_run
 
 
 def _report(result, out_dir):
@@ -63,6 +52,13 @@ def _report(result, out_dir):
 def _solve(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights,
            points, out, no_plot, das=None, das_time_limit=60.0):
 
+    from ecostudy.analysis.single import solve_run
+    from ecostudy.core import units
+    from ecostudy.core.types import Timing
+    from ecostudy.das.methods import das_run
+    from ecostudy.io.loaders import check_stops, load_study, load_track, load_train
+    from ecostudy.io.writers import write_json
+    from ecostudy.report.files import write_run
     if study is not None:
         if track or train:
             raise InputError(problem("command line", "--track/--train",
@@ -145,6 +141,8 @@ def solve(
 
 
 def _check(result_dir, time):
+    from ecostudy.analysis.pontryagin import check_result
+    from ecostudy.io.writers import write_json
     result_dir = Path(result_dir)
     report = check_result(result_dir, time)
     write_json(result_dir / "check.json", report)
@@ -173,6 +171,9 @@ def check(
 
 def _doctor():
 
+    from ecostudy import __version__
+    from ecostudy.ocp import session
+    import pyomo.environ as pyo
     for name, version in {"ecostudy": __version__, **session.versions()}.items():
         typer.echo(f"{name:10s} {version}")
     m = pyo.ConcreteModel()

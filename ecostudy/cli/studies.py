@@ -1,6 +1,6 @@
 """Study commands of the command line: pareto, compare, journey, run (registered on ``cli.app``).
 
-Like ``cli.py`` they only parse options, call the library and print; errors become one line.
+Like ``cli/solve.py`` they only parse options, call the library and print; errors become one line.
 """
 from pathlib import Path
 from typing import Optional
@@ -8,28 +8,12 @@ from typing import Optional
 import typer
 
 from ecostudy.cli.app import DasMethod, app, guarded
-from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
-from ecostudy.core.types import Timing
-from ecostudy.io.loaders import (
-    check_stops,
-    load_study,
-    load_timetable,
-    load_track,
-    load_train,
-    timing_from_timetable,
-)
-from ecostudy.io.timetable import journey_plan, name_stops
-from ecostudy.io.writers import atomic_write, write_csv
-from ecostudy.report.files import write_front
-from ecostudy.studies.batch import run_study
-from ecostudy.studies.compare import compare
-from ecostudy.studies.journey import journey
-from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
 
 
 def _case_from(study, track, train, from_stop, to_stop, points):
     """(track, train, from, to, K, study or None) from a study file or from options."""
+    from ecostudy.io.loaders import check_stops, load_study, load_track, load_train
     if study is not None:
         st = load_study(study)
         return st.track, st.train, st.from_stop, st.to_stop, points or st.points, st
@@ -44,6 +28,9 @@ def _case_from(study, track, train, from_stop, to_stop, points):
 
 def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, points, workers, cold, out, no_plot,
             weighted=0, das=None, das_time_limit=60.0):
+    from ecostudy.core import units
+    from ecostudy.report.files import write_front
+    from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
     k = k or 500
     if count < 2:
@@ -105,6 +92,10 @@ def pareto(
 
 
 def _compare(study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot):
+    from ecostudy.core import units
+    from ecostudy.core.types import Timing
+    from ecostudy.io.writers import atomic_write, write_csv
+    from ecostudy.studies.compare import compare
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
     if time is not None or supplement is not None:
         timing = Timing(running_time=time, supplement=None if supplement is None else supplement * units.PERCENT)
@@ -145,6 +136,11 @@ def compare_command(
 
 
 def _journey(track, train, stops, time, supplement, timetable, dwell, points, workers, out, no_plot):
+    from ecostudy.core import units
+    from ecostudy.io.loaders import load_timetable, load_track, load_train, timing_from_timetable
+    from ecostudy.io.timetable import journey_plan, name_stops
+    from ecostudy.io.writers import atomic_write, write_csv
+    from ecostudy.studies.journey import journey
     trk, trn = load_track(track), load_train(train)
     scheduled, plan = None, None
     if timetable is not None:
@@ -215,6 +211,7 @@ def journey_command(
 
 
 def _run(study, workers, dask, retry_failed, out, no_progress):
+    from ecostudy.studies.batch import run_study
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     columns = [TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),

@@ -18,6 +18,7 @@ The electrical power at the pantograph in step j [kW] is
 p_j = F_T,j vbar_j / eta_T - eta_R F_R,j vbar_j, vbar_j = (v_j + v_{j+1}) / 2 (thesis 000 eq. 7.3).
 """
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import pyomo.environ as pyo
@@ -167,13 +168,25 @@ def _trapezoid(case, n, dt):
     return s, v
 
 
+class LegRun(NamedTuple):
+    """A solved leg on its clock steps: distance and speed per step boundary, forces and the
+    electrical power per step [m, m/s, N, N, N, W] (p < 0: regenerating)."""
+
+    s: np.ndarray
+    v: np.ndarray
+    ft: np.ndarray
+    fb: np.ndarray
+    fr: np.ndarray
+    p: np.ndarray
+
+
 def leg_arrays(b):
-    """(s, v, ft [N], fb [N], fr [N], p [W]) of a solved leg block."""
+    """The :class:`LegRun` of a solved leg block."""
     s = np.array([pyo.value(b.s[j]) for j in b.K])
     v = np.array([pyo.value(b.v[j]) for j in b.K])
     ft, fb, fr = (np.array([pyo.value(x[j]) for j in b.I]) * KN for x in (b.ft, b.fb, b.fr))
     p = np.array([pyo.value(b.p[j]) for j in b.I]) * 1e3
-    return s, v, ft, fb, fr, p
+    return LegRun(s, v, ft, fb, fr, p)
 
 
 def guess_from_space(result, leg):

@@ -155,8 +155,8 @@ def network_plot(fleet, outcome, path, title=""):
         for i, (legs, runs) in enumerate(zip(fleet.legs, outcome[name]["runs"])):
             for k, (leg, run) in enumerate(zip(legs, runs)):
                 t = (leg.start + np.arange(leg.steps + 1)) * fleet.dt
-                speed.plot(t, run[1] * 3.6, color=f"C{i}", lw=1, label=fleet.names[i] if k == 0 else None)
-                power.step(t[:-1], run[5] / 1e6, where="post", color=f"C{i}", lw=0.8)
+                speed.plot(t, to_kmh(run.v), color=f"C{i}", lw=1, label=fleet.names[i] if k == 0 else None)
+                power.step(t[:-1], run.p / 1e6, where="post", color=f"C{i}", lw=0.8)
         speed.set_ylabel(f"{name}\nspeed [km/h]", fontsize=8)
         power.set_ylabel(f"{name}\npantograph [MW]", fontsize=8)
         speed.legend(fontsize=7, loc="upper right")

@@ -1,0 +1,58 @@
+"""Strategy (e): every train and the circuit of eq. 7.8 in one NLP minimising substation energy,
+the bound no supervisor rule can beat."""
+import time
+
+import numpy as np
+import pyomo.environ as pyo
+
+from ecostudy.network import circuit
+from ecostudy.network.fleet import NEAR_START, REGULARISATION, energy_ref, solve_model
+from ecostudy.ocp import timedomain
+
+
+def joint(fleet, start):
+    """(e): all trains and the network in one NLP, substation energy minimised; from ``start``."""
+    t0 = time.perf_counter()
+    m = pyo.ConcreteModel()
+    blocks = []
+    for i, legs in enumerate(fleet.legs):
+        blocks.append([timedomain.add_leg(m, f"t{i}_leg{k}", leg, start[i][k][:5]) for k, leg in enumerate(legs)])
+    steps = [[] for _ in range(fleet.steps)]
+    for i, legs in enumerate(fleet.legs):
+        for leg, b in zip(legs, blocks[i]):
+            for j in range(leg.steps):
+                steps[leg.start + j].append((b, j, leg.line_start, leg.direction))
+    if not all(steps):  # steps where no train runs carry no network variables
+        keep = [t for t, s in enumerate(steps) if s]
+        steps = [steps[t] for t in keep]
+    circuit.add_network(m, fleet.supply, steps)
+    _initialise_network(m, fleet, steps)
+    # the rheostat and friction brakes are interchangeable, and with no current the bus voltage is
+    # free: tiny costs on both remove these flat directions (Ipopt ran out of iterations on them)
+    vs = fleet.supply.voltage / 1e3
+    regular = REGULARISATION * (sum(m.rheostat[k] for k in m.rheostat) + sum((m.V0[t] - vs) ** 2 for t in m.T_net))
+    m.objective = pyo.Objective(expr=(sum(m.substation_mw[t] for t in m.T_net) + regular) * 1e3 * fleet.dt
+                                / energy_ref(fleet))
+    build_s = time.perf_counter() - t0
+    outcome = solve_model(m, "joint optimum", NEAR_START)
+    runs = [[timedomain.leg_arrays(b) for b in bl] for bl in blocks]
+    return runs, {"build_s": build_s, "solve_s": outcome.seconds + outcome.nl_seconds,
+                  "iterations": outcome.iterations, "status": outcome.status,
+                  "variables": sum(1 for _ in m.component_data_objects(pyo.Var, active=True))}
+
+
+def _initialise_network(m, fleet, steps):
+    """Network variables from the numeric solve of the start point (Ipopt starts near physics)."""
+    for t, running in enumerate(steps):
+        xs = [start + d * 0.5 * pyo.value(b.s[j] + b.s[j + 1]) for b, j, start, d in running]
+        ps = [pyo.value(b.p[j]) * 1e3 for b, j, *_ in running]
+        flows = circuit.solve_step(fleet.supply, xs, ps)
+        vmin, vmax = fleet.supply.min_voltage / 1e3, fleet.supply.max_voltage / 1e3
+        m.V0[t].set_value(float(np.clip(flows["bus_voltage_V"] / 1e3, vmin, vmax)))
+        m.Is[t].set_value(flows["substation_current_A"] / 1e3)
+        m.float_up[t].set_value(max(flows["bus_voltage_V"] / 1e3 - fleet.supply.voltage / 1e3
+                                    + fleet.supply.resistance * flows["substation_current_A"] / 1e3, 0.0))
+        for q, p in enumerate(ps):
+            m.rheostat[t, q].set_value(max(-p - flows["fed_W"][q], 0.0) / 1e6)
+            m.Ipan[t, q].set_value(float(flows["current_A"][q] / 1e3))
+            m.Vpan[t, q].set_value(float(np.clip(flows["voltage_V"][q] / 1e3, vmin, vmax)))

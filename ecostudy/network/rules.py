@@ -1,0 +1,191 @@
+"""Supervisor rules (thesis 000 Ch. 7-8): triggering 7.7, voltage 7.11, dissension 8.14-8.17, the
+receptivity credit, and following a train ahead (thesis 001 eq. 6.9). See :mod:`.strategies`."""
+import numpy as np
+
+from ecostudy.network import circuit
+from ecostudy.network.fleet import departure_order, line_positions, solve_train, step_powers
+from ecostudy.network.scoring import evaluate
+
+
+GAMMA = (0.71, 0.9)  # thesis 000 Fig. 7.3: time weights without / with a braking neighbour
+
+
+def _braking_steps(fleet, runs_by_train, share=0.1):
+    """Per train, the clock steps in which it regenerates more than ``share`` of its peak power."""
+    out = []
+    for i, runs in enumerate(runs_by_train):
+        flag = np.zeros(fleet.steps, bool)
+        for leg, run in zip(fleet.legs[i], runs):
+            peak = max(float(np.max(-run.p)), 1.0)
+            flag[leg.start:leg.start + leg.steps] = -run.p > share * peak
+        out.append(flag)
+    return out
+
+
+def _others(flags, i):
+    return np.any([f for j, f in enumerate(flags) if j != i], axis=0) if len(flags) > 1 else np.zeros_like(flags[0])
+
+
+def independent(fleet):
+    return [solve_train(fleet, i)[0] for i in range(len(fleet.names))]
+
+
+DISSENSION = {"gamma0": 0.5, "rate": 0.05, "influence": 0.15}  # [-], [1/s], [1/s]
+
+
+def dissension_weights(fleet, flags):
+    """Traction weights gamma_i(t) / gamma0 of the dissension strategy (thesis 000 eqs. 8.14-8.17).
+
+    Each train's q_i = [gamma_i, 1 - gamma_i] follows q' = (Q^T + A_i^T) q with the two-state
+    generator Q = [[-r, r], [r, -r]] (rest value gamma0 = 0.5) and the interaction rate
+    a_12 = lambda_1 / (M - 1) * (number of other trains braking), lambda_2 = 0 (eq. 8.15-8.17):
+    while others brake, gamma_i falls (to 0.29 with one of two neighbours braking, the thesis'
+    0.5 -> 0.3), and it is reset to gamma0 at every departure. Integrated exactly per clock step.
+    """
+    g0, r, lam = DISSENSION["gamma0"], DISSENSION["rate"], DISSENSION["influence"]
+    count = np.sum(flags, axis=0)
+    out = []
+    for i, legs in enumerate(fleet.legs):
+        braking_others = count - flags[i]
+        a12 = lam * braking_others / max(len(fleet.legs) - 1, 1)
+        gamma = np.full(fleet.steps, g0)
+        departures = {leg.start for leg in legs}
+        g = g0
+        for t in range(fleet.steps):
+            if t in departures:
+                g = g0
+            total = 2 * r + a12[t]  # gamma' = -(r + a12) gamma + r (1 - gamma)
+            target = r / total
+            g = target + (g - target) * np.exp(-total * fleet.dt)
+            gamma[t] = g
+        out.append(gamma / g0)
+    return out
+
+
+def offered(fleet, runs_by_train):
+    """Regenerated power each train offers per clock step [kW] (what its electric brake feeds)."""
+    out = np.zeros((len(runs_by_train), fleet.steps))
+    for i, runs in enumerate(runs_by_train):
+        for leg, run in zip(fleet.legs[i], runs):
+            out[i, leg.start:leg.start + leg.steps] = np.maximum(-run.p, 0.0) / 1e3
+    return out
+
+
+def _probe(fleet, runs_by_train, i, power_w):
+    """For each clock step where train ``i`` runs beside another and ``power_w(t)`` is not None:
+    (t, its index q, the circuit solved with train i at that power [W], the others as they run)."""
+    for t, running in enumerate(step_powers(fleet, runs_by_train)):
+        mine = [q for q, r in enumerate(running) if r[0] == i]
+        power = power_w(t) if mine and len(running) > 1 else None
+        if power is not None:
+            ps = [r[2] for r in running]
+            ps[mine[0]] = power
+            yield t, mine[0], circuit.solve_step(fleet.supply, [r[1] for r in running], ps)
+
+
+def deliverable(fleet, runs_by_train, i, offer_kw):
+    """Per clock step, the part [kW] of ``offer_kw`` that train ``i`` could take over the line:
+    the regeneration used with train i drawing the offer, less that with train i at rest, the
+    others as they run (the circuit of ``circuit.solve_step``: line losses, V_max, the diode)."""
+    def used(demand_w):  # regeneration used per step with train i drawing demand_w(t)
+        return {t: flows["regen_used_W"] for t, _, flows in _probe(fleet, runs_by_train, i, demand_w)}
+
+    drawing = used(lambda t: offer_kw[t] * 1e3 if offer_kw[t] > 0 else None)
+    idle = used(lambda t: 0.0 if offer_kw[t] > 0 else None)
+    out = np.zeros(fleet.steps)
+    for t, watts in drawing.items():
+        out[t] = max(watts - idle[t], 0.0) / 1e3
+    return out
+
+
+RECEPTIVITY_PROBE = 5e6  # [W] a regeneration no train offers: what the line takes of it is its limit
+
+
+def receptivity(fleet, runs_by_train, i):
+    """Per clock step, the regenerated power [kW] the line could take from train ``i`` while the
+    others run as in ``runs_by_train`` (train i offering ``RECEPTIVITY_PROBE``; ``circuit.solve_step``)."""
+    out = np.zeros(fleet.steps)
+    for t, q, flows in _probe(fleet, runs_by_train, i, lambda t: -RECEPTIVITY_PROBE):
+        out[t] = flows["fed_W"][q] / 1e3
+    return out
+
+
+def sensed(fleet, runs_by_train):
+    """Pantograph voltages [V] per train and clock step as rule 7.11's supervisor sees them
+    (``circuit.sensed_voltages``: eq. 7.8 with a receptive source); NaN where a train is not running."""
+    out = np.full((len(runs_by_train), fleet.steps), np.nan)
+    for t, running in enumerate(step_powers(fleet, runs_by_train)):
+        if running:
+            volts = circuit.sensed_voltages(fleet.supply, [r[1] for r in running], [r[2] for r in running])
+            out[[r[0] for r in running], t] = volts
+    return out
+
+
+def rule_terms(fleet, rule, runs_by_train, i):
+    """(traction weight, allowance [kW]) per clock step of train ``i`` under ``rule``, from the
+    runs as they are now: 7.7 discounts by (1 - gamma2) / (1 - gamma1) while another train brakes,
+    dissension by gamma_i / gamma0 (:func:`dissension_weights`), both up to the power the others
+    offer; 7.11 (between consecutive trains, as the thesis' text applies it) weighs 0 while the
+    voltage of the train ahead is above one's own (:func:`sensed`), up to what the line can
+    deliver of that train's offer (:func:`deliverable`)."""
+    if rule == "receptivity":  # no rule: the rounds' receptivity credit alone
+        return np.ones(fleet.steps), np.zeros(fleet.steps)
+    power = offered(fleet, runs_by_train)
+    others = power.sum(axis=0) - power[i]
+    if rule == "triggering":
+        flags = _braking_steps(fleet, runs_by_train)
+        return np.where(_others(flags, i), (1 - GAMMA[1]) / (1 - GAMMA[0]), 1.0), others
+    if rule == "dissension":
+        return dissension_weights(fleet, _braking_steps(fleet, runs_by_train))[i], others
+    order = departure_order(fleet)
+    rank = order.index(i)
+    if rank == 0:
+        return np.ones(fleet.steps), np.zeros(fleet.steps)
+    ahead = order[rank - 1]
+    volts = sensed(fleet, runs_by_train)
+    higher = (volts[ahead] > volts[i] + 1.0) & (power[ahead] > 0)  # NaN (not running) compares False
+    return np.where(higher, 0.0, 1.0), deliverable(fleet, runs_by_train, i, np.where(higher, power[ahead], 0.0))
+
+
+def supervised(fleet, rule, start, rounds=3):
+    """Rules (b), (c) and (d): supervisor rounds; in each, the trains in departure order are
+    re-optimised one by one against the others' latest runs (Gauss-Seidel: a train never plans
+    against a run that has already been replaced).
+
+    With a ``fleet.buffer``, each train stays that far behind the tail of the one ahead, as that
+    one now runs (thesis 001 eq. 6.9, as in :func:`following`).
+    Each train minimises w traction (discounted up to an allowance, :func:`rule_terms`; a zero
+    weight on unlimited traction only moves consumption to the substation) minus its regeneration
+    credited up to what the line could take from it then (:func:`receptivity`; crediting all of it,
+    as independent driving does, let a discounted train accelerate and brake harder and lose the
+    extra braking: measured +1 % substation energy for rule 7.11 on the 2-train study). Returns
+    (runs, rounds' substation kWh); the runs are those of the best round, the start included.
+    """
+    runs = list(start)
+    _, _, totals = evaluate(fleet, runs)
+    best = (totals["substation_kWh"], list(runs))
+    history = [best[0]]
+    order = departure_order(fleet)
+    for _ in range(rounds):
+        for rank, i in enumerate(order):
+            weights, allowance = rule_terms(fleet, rule, runs, i)
+            ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]]) if rank and fleet.buffer else None
+            runs[i] = solve_train(fleet, i, weights, guesses=runs[i], allowance=allowance,
+                                  credit=receptivity(fleet, runs, i), ahead=ahead)[0]
+        _, _, totals = evaluate(fleet, runs)
+        history.append(totals["substation_kWh"])
+        if history[-1] < best[0]:
+            best = (history[-1], list(runs))
+    return best[1], history
+
+
+def following(fleet, start):
+    """(f): trains in departure order, each kept ``fleet.buffer`` behind the one ahead."""
+    order = departure_order(fleet)
+    runs = list(start)
+    for rank, i in enumerate(order):
+        if rank == 0:
+            continue
+        ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]])
+        runs[i] = solve_train(fleet, i, guesses=runs[i], ahead=ahead)[0]
+    return runs

@@ -1,0 +1,91 @@
+"""Several trains on one line and one substation: timetables, strategies, the joint optimum.
+
+Every train runs the same stops with the same running times and dwells, offset by its departure
+time, on one clock of step dt (``timedomain``). Strategies (thesis 000 Ch. 7-8, thesis 001 §6.2.3):
+
+independent  each train minimises its own pantograph net energy, regeneration credited as if
+             the line always took it (a): no collaboration
+receptivity  the supervisor rounds below with no rule: each train's regeneration credited only
+             up to what the line could take from it, given the others' runs (a baseline that
+             shows what the rules add)
+triggering   supervisor rule 7.7: while another train brakes, a train's traction is weighted
+             (1 - gamma2) / (1 - gamma1) with the thesis' gamma1 = 0.71, gamma2 = 0.9 (b)
+voltage      rule 7.11 as the thesis' text applies it, between consecutive trains: while the
+             pantograph voltage of the train ahead is above a train's own (it regenerates),
+             that train's traction weighs 0 (c); the voltages are those of eq. 7.8 as written
+             (a receptive source, :func:`sensed`): on the line with the diode a surplus nobody
+             draws carries no current and the comparison would see nothing
+dissension   thesis 000 eqs. 8.14-8.17: each train's weight gamma_i follows a two-state Markov
+             law whose rate away from "braking" grows with the number of braking neighbours;
+             traction weighs gamma_i / gamma0 (d)
+joint        one NLP over all trains and the network of eq. 7.8 minimising substation energy:
+             the bound no rule can beat (e)
+following    the independent runs, each train's head kept ``buffer`` metres behind the tail of
+             the one ahead on the common clock (thesis 001 eq. 6.9), the leader's time-position
+             profile fixed (f)
+
+The rules (b), (c), (d) re-optimise one train at a time against the others' latest runs, for a
+few supervisor rounds, keeping the timetable; their regeneration is credited only up to what the
+line could take then (:func:`supervised`). Every strategy is scored by the same network solve
+(``circuit.solve_step``).
+"""
+import time
+
+from ecostudy.core.errors import SolverError
+from ecostudy.network.joint import joint
+from ecostudy.network.rules import following, independent, supervised
+from ecostudy.network.scoring import evaluate, separations, verify_leg
+
+
+def run_strategies(fleet, strategies, progress=print):
+    """Every strategy on ``fleet``: {name: {"runs", "steps", "trains", "totals", "info"}}.
+
+    The independent runs are solved first: they are strategy (a) and the start of the others.
+    """
+    out = {}
+    t0 = time.perf_counter()
+    ind = independent(fleet)
+    base_s = time.perf_counter() - t0
+    for name in strategies:
+        t0 = time.perf_counter()
+        info = {}
+        try:
+            if name == "independent":
+                runs = ind
+            elif name in ("receptivity", "triggering", "voltage", "dissension"):
+                runs, history = supervised(fleet, name, ind)
+                info["rounds_substation_kWh"] = history
+            elif name == "joint":
+                runs, info = joint(fleet, ind)
+            elif name == "following":
+                runs = following(fleet, ind)
+            else:
+                raise ValueError(f"unknown strategy {name!r}")
+        except SolverError as exc:  # one strategy failing does not stop the study
+            out[name] = {"failed": str(exc), "wall_s": time.perf_counter() - t0}
+            if progress:
+                progress(f"{name:12s} FAILED: {exc}")
+            continue
+        wall = time.perf_counter() - t0 + (base_s if name == "independent" else 0.0)
+        steps, trains, totals = evaluate(fleet, runs)
+        checks = [[verify_leg(leg, run) for leg, run in zip(fleet.legs[i], runs[i])] for i in range(len(runs))]
+        gaps = separations(fleet, runs)
+        for i, n in enumerate(fleet.names):
+            ver = checks[i]
+            last = fleet.legs[i][-1]
+            trains[n].update(arrival_s=(last.start + last.steps) * fleet.dt,
+                             worst_arrival_error_s=max(abs(v["arrival_time_error_s"]) for v in ver),
+                             worst_stop_error_m=max(abs(v["stop_error_m"]) for v in ver),
+                             worst_energy_error_pct=max(abs(v["energy_error_pct"]) for v in ver),
+                             worst_overspeed_kmh=max(v["max_overspeed_kmh"] for v in ver),
+                             verified=all(v["passed"] for v in ver), min_separation_m=gaps[n])
+        totals.update(wall_s=wall, all_verified=all(t["verified"] for t in trains.values()),
+                      min_separation_m=min([g for g in gaps.values() if g is not None], default=None))
+        # only the joint optimum sees the circuit: another strategy's runs may ask for traction the
+        # line cannot carry or a current limit forbids; it is not served and the result is flagged
+        totals["status"] = "ok" if totals["unserved_kWh"] <= 1e-3 else (
+            f"flagged: {totals['unserved_kWh']:.3f} kWh of traction not served (current limit or line)")
+        out[name] = {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
+        if progress:
+            progress(f"{name:12s} substation {totals['substation_kWh']:.3f} kWh, {wall:.1f} s")
+    return out
