@@ -5,7 +5,7 @@ Used as Ipopt's starting point and to estimate the all-out time before any NLP i
 import numpy as np
 
 from ecostudy.core.errors import InfeasibleError
-from ecostudy.core.physics import davis_resistance, running_resistance
+from ecostudy.core.physics import davis_resistance, interval_resistance, running_resistance
 
 
 def point_resistance(segment, train, positions):
@@ -14,7 +14,7 @@ def point_resistance(segment, train, positions):
                               train.curve_coefficient, segment.curvature(positions))
 
 
-def interval_resistance(segment, train, nodes):
+def interval_grade_force(segment, train, nodes):
     """Speed-independent resistance per interval (gradient and curve) at its middle [N]."""
     return point_resistance(segment, train, 0.5 * (nodes[:-1] + nodes[1:]))
 
@@ -22,7 +22,7 @@ def interval_resistance(segment, train, nodes):
 def braking_curve(segment, train, nodes, limits):
     """Highest speeds from which full service braking still meets every limit and the stop [m/s]."""
     ds = np.diff(nodes)
-    fixed = interval_resistance(segment, train, nodes)
+    fixed = interval_grade_force(segment, train, nodes)
     a, b, c = train.davis
     bwd = np.zeros_like(nodes)
     for k in range(len(ds) - 1, -1, -1):
@@ -38,7 +38,7 @@ def coast_speeds(segment, train, nodes, limits, start, v_start):
     Nodes before ``start`` are NaN; a train that stops while coasting stays at 0.
     """
     ds = np.diff(nodes)
-    fixed = interval_resistance(segment, train, nodes)
+    fixed = interval_grade_force(segment, train, nodes)
     a, b, c = train.davis
     out = np.full_like(nodes, np.nan)
     out[start] = v_start
@@ -55,7 +55,7 @@ def envelope_speeds(segment, train, nodes, limits):
     Raises :class:`InfeasibleError` when maximum traction cannot keep the train moving.
     """
     ds = np.diff(nodes)
-    fixed = interval_resistance(segment, train, nodes)
+    fixed = interval_grade_force(segment, train, nodes)
     a, b, c = train.davis
     fwd = np.zeros_like(nodes)
     for k in range(len(ds)):
@@ -100,7 +100,7 @@ def forces_for(speeds, segment, train, nodes):
     ds = np.diff(nodes)
     v0, v1 = speeds[:-1], speeds[1:]
     a, b, c = train.davis
-    resist = a + b * 0.5 * (v0 + v1) + c * 0.5 * (v0**2 + v1**2) + interval_resistance(segment, train, nodes)
+    resist = interval_resistance(v0, v1, train.davis, interval_grade_force(segment, train, nodes))
     need = train.mass * (v1**2 - v0**2) / (2 * ds) + resist
     ft = np.clip(need, 0.0, np.minimum(train.traction.force(v0), train.traction.force(v1)))
     fb = np.clip(-need, 0.0, np.minimum(train.braking.force(v0), train.braking.force(v1)))

@@ -198,6 +198,16 @@ def running_resistance(speed, davis, static_mass, gradient, curve_coefficient, c
             + curve_force(static_mass, curve_coefficient, curvature))
 
 
+def interval_resistance(v0, v1, davis, fixed):
+    """Mean resistance over an interval between speeds v0 and v1 [N]: the trapezoidal mean of the
+    Davis resistance at both ends plus the speed-independent gradient and curve force ``fixed``
+    of the interval (thesis 000 eq. 2.2). The one formula of the NLP, the phases NLP, the
+    time-domain legs and the kinematic profiles; per unit mass when ``davis`` and ``fixed`` are.
+    """
+    a, b, c = davis
+    return a + 0.5 * b * (v0 + v1) + 0.5 * c * (v0 * v0 + v1 * v1) + fixed
+
+
 def acceleration(traction, braking, resistance, mass):
     """dv/dt = (F_T - F_B - F_R) / M [m/s^2] (thesis 000 eq. 2.1)."""
     return (traction - braking - resistance) / mass

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ecostudy.core.physics import acceleration, davis_resistance, running_resistance
+from ecostudy.core.kinematics import point_resistance
+from ecostudy.core.physics import acceleration, davis_resistance
 from ecostudy.core.units import to_kmh, to_kwh
 
 TOLERANCES = {"arrival_time_error_s": 0.5, "stop_error_m": 1.0, "energy_error_pct": 1.0,
@@ -97,8 +98,7 @@ def simulate(segment, train, nodes, handle, max_time=None, targets=None, gain=1.
     for first, following, x_end in zip(starts, list(starts[1:]) + [last + 1], bounds):
         span[0], span[1] = first, following - 1
         x_mid = 0.5 * (nodes[first] + nodes[first + 1])
-        fixed[0] = float(running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, segment.gradient(x_mid),
-                                            train.curve_coefficient, segment.curvature(x_mid)))
+        fixed[0] = float(point_resistance(segment, train, x_mid))
 
         def reached(t, y, x_end=x_end):
             return y[0] - x_end

@@ -18,7 +18,7 @@ The cap v1 is searched so that the simulated running time meets the timetable.
 import numpy as np
 
 from ecostudy.core.errors import InfeasibleError
-from ecostudy.core.kinematics import braking_curve, envelope_speeds, interval_resistance, running_time
+from ecostudy.core.kinematics import braking_curve, envelope_speeds, interval_grade_force, running_time
 from ecostudy.core.physics import davis_resistance
 
 TOL = 1e-6  # [m/s]
@@ -149,7 +149,7 @@ def profile(case, v1):
     capped = np.minimum(case.limits, v1)
     base = envelope_speeds(case.segment, case.train, case.nodes, capped)
     vf = coasting_floor(case.train, v1)
-    fixed = interval_resistance(case.segment, case.train, case.nodes)
+    fixed = interval_grade_force(case.segment, case.train, case.nodes)
     out = base.copy()
     first = np.inf  # coasts are laid from the end; one that overlaps a later coast is skipped
     for end, start_speed, floor in opportunities(case, base, capped, v1, vf, fixed):

@@ -30,7 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 import pyomo.environ as pyo
 
-from ecostudy.core.physics import running_resistance, smooth_min
+from ecostudy.core.kinematics import point_resistance
+from ecostudy.core.physics import interval_resistance, smooth_min
 from ecostudy.ocp.space import KN, energy_reference  # KN: force unit of the NLP variables [N]
 
 MIN_PHASE = 1.0  # [m]: shorter phases are dropped from the driver's advice
@@ -72,8 +73,7 @@ def sectors(segment, train):
     out = []
     for a, b in zip(edges[:-1], edges[1:]):
         mid = 0.5 * (a + b)
-        force = running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, segment.gradient(mid),
-                                   train.curve_coefficient, segment.curvature(mid))
+        force = point_resistance(segment, train, mid)
         out.append(Sector(float(a), float(b), float(force), float(segment.limit(mid))))
     return out
 
@@ -121,9 +121,8 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
     """
     secs, n, N = layout.sectors, layout.substeps, layout.intervals
     lengths, v0 = guess
-    a, b, c = train.davis
     M = train.mass
-    bm, cm, km = float(b / M), float(c / M), float(KN / M)
+    per_kg, km = tuple(float(x / M) for x in train.davis), float(KN / M)
     m = pyo.ConcreteModel(name="ecostudy_das_phases")
     m.Q, m.S = pyo.RangeSet(0, len(layout.phases) - 1), pyo.RangeSet(0, len(secs) - 1)
     m.I, m.K = pyo.RangeSet(0, N - 1), pyo.RangeSet(0, N)
@@ -143,9 +142,8 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
     m.fb = pyo.Var(m.I, bounds=(0.0, train.braking.peak / KN), initialize=0.0)
 
     def accel(i, v_a, v_b):
-        """Mean acceleration over an interval [m/s^2] (trapezoidal Davis term, as model.py)."""
-        fixed = (secs[layout.owner(i)[1]].force + a) / M
-        return (km * (m.ft[i] - m.fb[i]) - fixed - 0.5 * bm * (v_a + v_b) - 0.5 * cm * (v_a ** 2 + v_b ** 2))
+        """Mean acceleration over an interval [m/s^2] (physics.interval_resistance, as ocp.space)."""
+        return km * (m.ft[i] - m.fb[i]) - interval_resistance(v_a, v_b, per_kg, secs[layout.owner(i)[1]].force / M)
 
     m.accel = accel
     m.speed = pyo.Constraint(m.I, rule=lambda m, i: (

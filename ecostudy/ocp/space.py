@@ -16,7 +16,8 @@ forces of the interval (eq. 2.2). Envelopes hold at both ends of each interval.
 import numpy as np
 import pyomo.environ as pyo
 
-from ecostudy.core.kinematics import interval_resistance
+from ecostudy.core.kinematics import interval_grade_force
+from ecostudy.core.physics import interval_resistance
 from ecostudy.core.physics import smooth_table
 
 KN = 1000.0  # force unit of the NLP variables [N]: kN (bench/bench_variants.py measures N)
@@ -56,16 +57,14 @@ def define_variables(m, nodes, limits, train, guess, with_regeneration):
 def define_dynamics(m, nodes, segment, train):
     """Speed (energy form) and time recursions, scaled to O(1) residuals."""
     ds = np.diff(nodes).tolist()  # Python floats: numpy scalars make Pyomo expressions slow
-    a, b, c = train.davis
-    fixed = ((interval_resistance(segment, train, nodes) + a) / train.mass).tolist()
-    bm, cm, km = float(b / train.mass), float(c / train.mass), float(KN / train.mass)
+    per_kg = tuple(float(x / train.mass) for x in train.davis)
+    fixed = (interval_grade_force(segment, train, nodes) / train.mass).tolist()
+    km, s = float(KN / train.mass), DYNAMICS_SCALE
 
     def speed(m, k):
-        # (v1^2 - v0^2)/(2 ds) + C/M (v0^2 + v1^2)/2 + B/M (v0 + v1)/2 = (F_T - F_B)/M - fixed,
-        # with the squares collected so each appears once in the expression
-        q, s = 0.5 / ds[k], DYNAMICS_SCALE
-        return (s * (q + 0.5 * cm) * m.v[k + 1] ** 2 + s * (0.5 * cm - q) * m.v[k] ** 2
-                + s * 0.5 * bm * (m.v[k] + m.v[k + 1]) - s * km * (m.ft[k] - m.fb[k]) + s * fixed[k] == 0.0)
+        # (v1^2 - v0^2) / (2 ds) = (F_T - F_B) / M - R(v0, v1) / M  (physics.interval_resistance)
+        return s * ((m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k]) - km * (m.ft[k] - m.fb[k])
+                    + interval_resistance(m.v[k], m.v[k + 1], per_kg, fixed[k])) == 0.0
 
     def time(m, k):
         return m.dt[k] * (m.v[k] + m.v[k + 1]) / (2 * ds[k]) == 1.0

@@ -24,7 +24,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.kinematics import point_resistance
-from ecostudy.core.physics import smooth_table, table_coefficients
+from ecostudy.core.physics import interval_resistance, smooth_table, table_coefficients
 from ecostudy.ocp import space as formulation
 
 KN = formulation.KN
@@ -115,7 +115,6 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
     tops = (train.traction.peak / KN, train.braking.peak / KN, regen_top)
     b.ft, b.fb, b.fr = (pyo.Var(b.I, bounds=(0.0, top), initialize=lambda b, j, f=f, top=top: min(float(f[j]), top))
                         for f, top in zip(forces, tops))
-    a, bb, c = train.davis
     mass = train.mass
     gx, gf = force_profile(case, width)
     g_coef = table_coefficients(gx, gf / KN, 0.25 * width)
@@ -126,7 +125,7 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
         return b.s[j + 1] - b.s[j] == 0.5 * dt * (b.v[j] + b.v[j + 1])
 
     def dynamics(b, j):
-        davis = (a + 0.5 * bb * (b.v[j] + b.v[j + 1]) + 0.5 * c * (b.v[j] ** 2 + b.v[j + 1] ** 2)) / KN
+        davis = interval_resistance(b.v[j], b.v[j + 1], train.davis, 0.0) / KN
         grade = smooth_table(0.5 * (b.s[j] + b.s[j + 1]), g_coef, 0.25 * width)
         return (b.v[j + 1] - b.v[j]) * (mass / KN) / dt == b.ft[j] - b.fb[j] - davis - grade
 
