@@ -18,7 +18,7 @@ sys.path.insert(0, str(ROOT))
 from ecostudy.das.methods import das_run  # noqa: E402
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
-from ecostudy.ocp.problem import solve_run  # noqa: E402
+from ecostudy.analysis.single import solve_run  # noqa: E402
 
 CASES = {"Amsterdam metro 76 s": ("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal", 76.0),
          "regional 80 s": ("regional_alstom", "regional_808m", "Origin", "Destination", 80.0)}

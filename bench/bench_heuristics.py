@@ -19,7 +19,8 @@ from ecostudy.heuristics import ecodrive  # noqa: E402
 from ecostudy.core.errors import InfeasibleError  # noqa: E402
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
-from ecostudy.ocp.problem import prepare, solve_run  # noqa: E402
+from ecostudy.analysis.single import solve_run  # noqa: E402
+from ecostudy.ocp.problem import prepare  # noqa: E402
 
 CASES = [("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal", (76.0, 80.0, 85.0, 90.0)),
          ("regional_alstom", "regional_808m", "Origin", "Destination", (80.0, 90.0)),

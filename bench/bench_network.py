@@ -19,7 +19,7 @@ from ecostudy.network import fleet, scoring, rules, joint
 from ecostudy.core.types import Supply
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
-from ecostudy.ocp.problem import solve_run  # noqa: E402
+from ecostudy.analysis.single import solve_run  # noqa: E402
 
 
 def main():

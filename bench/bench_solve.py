@@ -23,8 +23,8 @@ sys.path.insert(0, str(ROOT))
 
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
-from ecostudy.io.writers import write_run  # noqa: E402
-from ecostudy.ocp.problem import solve_run  # noqa: E402
+from ecostudy.report.files import write_run  # noqa: E402
+from ecostudy.analysis.single import solve_run  # noqa: E402
 
 STAGES = ["load", "grid", "build", "nl_write", "solve", "verify", "write"]
 

@@ -27,6 +27,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import ecostudy.ocp.space as model  # noqa: E402
+import ecostudy.analysis.single as single  # noqa: E402
 import ecostudy.ocp.problem as run  # noqa: E402
 from ecostudy.core.grid import make_grid  # noqa: E402
 from ecostudy.core.types import Timing
@@ -62,7 +63,7 @@ def solve(track, train, points, variant, timeout):
     model.DYNAMICS_SCALE = train.mass if variant.get("scale_mass") else 1.0
     run.make_grid = variant.get("grid", make_grid)
     try:
-        return run.solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=points,
+        return single.solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=points,
                              options={"max_cpu_time": float(timeout)})
     except Exception as exc:  # a variant that fails is a result too
         return exc

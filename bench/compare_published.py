@@ -16,7 +16,7 @@ sys.path.insert(0, str(ROOT))
 
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
-from ecostudy.ocp.problem import solve_run  # noqa: E402
+from ecostudy.analysis.single import solve_run  # noqa: E402
 
 
 def main():

@@ -37,7 +37,7 @@ from ecostudy.analysis import regimes
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.units import KMH, KN
 from ecostudy.io.loaders import load_track, load_train
-from ecostudy.ocp import space as formulation
+from ecostudy.ocp import space
 from ecostudy.ocp.problem import build, prepare
 from ecostudy.ocp.session import Session, solve
 
@@ -69,8 +69,8 @@ def psi_bounds(labels, eta=0.0, capped=None, friction=None):
 def psi_from_multipliers(mu, nodes, train, energy_ref, traction_efficiency=1.0):
     """psi_k = lambda / v per interval from the speed-recursion multipliers (Ipopt's y, = Pyomo's dual)."""
     ds = np.diff(nodes)
-    return (np.asarray(mu) * (formulation.KN / train.mass) * energy_ref * traction_efficiency
-            / (ds * formulation.KN))
+    return (np.asarray(mu) * (space.KN / train.mass) * energy_ref * traction_efficiency
+            / (ds * space.KN))
 
 
 def ipopt_psi(m, nodes, train, objective="energy"):
@@ -177,7 +177,7 @@ def check_profile(track, train, inputs, profile, running_time=None, tolerance=1e
     m = build(case, (v, dt, ft, fb), objective, {}, **timing)
     if hasattr(m, "fr"):  # the electric brake takes what it can of the profile's braking
         for k, f in enumerate(np.minimum(fb, regimes.regenerative_limit(train, v))):
-            m.fr[k].set_value(float(f) / formulation.KN)
+            m.fr[k].set_value(float(f) / space.KN)
     psi, residual, _ = estimated_psi(m, case.nodes, train, tolerance)
     psi = psi * (train.traction_efficiency if objective == "net_energy" else 1.0)
     net = objective == "net_energy" and train.regeneration is not None

@@ -78,3 +78,12 @@ class Supply:
     def feeder(self, x):
         """R(x) [Ohm] between the bus and a train at line position ``x`` [m]."""
         return self.line_resistance * np.abs(np.asarray(x, float) - self.position)
+
+
+@dataclass(frozen=True)
+class State:
+    """Where a train is: travel distance from its departure stop [m], speed [m/s], clock [s]."""
+
+    position: float = 0.0
+    speed: float = 0.0
+    time: float = 0.0

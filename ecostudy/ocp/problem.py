@@ -14,7 +14,7 @@ from ecostudy.core.errors import InfeasibleError, SolverError
 from ecostudy.core.grid import make_grid, make_segment, node_limits
 from ecostudy.core.units import KMH, to_kmh
 from ecostudy.ocp import session
-from ecostudy.ocp import space as formulation
+from ecostudy.ocp import space
 
 
 @contextmanager
@@ -53,7 +53,7 @@ def build(case, guess, objective, stages, weights=(1.0, 1.0), **timing):
     """The Pyomo model of ``case``; the cyclic GC is paused (it cost 70 % of the build)."""
     with stage(stages, "build"), PauseGC():
         time_ref = max(kinematics.running_time(guess[0], case.nodes), 1.0)
-        return formulation.build_model(case.segment, case.train, case.nodes, case.limits, guess,
+        return space.build_model(case.segment, case.train, case.nodes, case.limits, guess,
                                        objective=objective, time_ref=time_ref, weights=weights,
                                        windows=case.windows, **timing)
 
@@ -101,7 +101,7 @@ def all_out(case, stages, options=None):
                               f"{case.segment.from_stop} ({outcome.status})")
     if not outcome.usable:
         raise SolverError(f"Ipopt could not find the all-out run ({outcome.status})")
-    return float(np.sum(formulation.solution_arrays(m)[1])), m, outcome
+    return float(np.sum(space.solution_arrays(m)[1])), m, outcome
 
 
 def check_windows(case, margin=0.02):
@@ -111,7 +111,7 @@ def check_windows(case, margin=0.02):
     if not case.windows:
         return
     limits = case.limits.copy()
-    index = [formulation.window_node(case.nodes, w.distance) for w in case.windows]
+    index = [space.window_node(case.nodes, w.distance) for w in case.windows]
     for k, w in zip(index, case.windows):
         if w.max_speed is not None:
             limits[k] = min(limits[k], w.max_speed)

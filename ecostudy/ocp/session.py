@@ -94,15 +94,28 @@ class Session:
 
         Both the NLP's bound arrays and the Pyomo variable change, so the model stays consistent.
         """
-        var.setlb(lower)
-        var.setub(upper)
-        i = int(self.nlp.get_primal_indices([var])[0])
-        for name, value, default in (("_primals_lb", lower, -np.inf), ("_primals_ub", upper, np.inf)):
+        self.set_many_bounds([var], [lower], [upper])
+
+    def set_many_bounds(self, variables, lowers, uppers):
+        """:meth:`set_bounds` for many variables at once (one copy of the bound arrays)."""
+        index = np.asarray(self.nlp.get_primal_indices(list(variables)), dtype=int)
+        arrays = {}
+        for name, values, default in (("_primals_lb", lowers, -np.inf), ("_primals_ub", uppers, np.inf)):
             arr = np.array(getattr(self.nlp, name), dtype=float)  # PyNumero keeps them read-only
-            arr[i] = default if value is None else value
+            arr[index] = [default if v is None else float(v) for v in values]
             arr.flags.writeable = False
             setattr(self.nlp, name, arr)
-        self.x[i] = min(max(self.x[i], self.nlp.primals_lb()[i]), self.nlp.primals_ub()[i])
+            arrays[name] = arr
+        for var, lo, hi in zip(variables, lowers, uppers):
+            var.setlb(None if lo is None else float(lo))
+            var.setub(None if hi is None else float(hi))
+        self.x[index] = np.minimum(np.maximum(self.x[index], arrays["_primals_lb"][index]), arrays["_primals_ub"][index])
+
+    def set_start_values(self, variables, values):
+        """Set the starting point of some variables for the next solve (clipped to their bounds)."""
+        index = np.asarray(self.nlp.get_primal_indices(list(variables)), dtype=int)
+        self.x[index] = np.clip(np.asarray(values, dtype=float), self.nlp.primals_lb()[index],
+                                self.nlp.primals_ub()[index])
 
     def solve(self, options=None, x0=None):
         """Solve from ``x0`` (default: the last solution); loads the point into the model."""

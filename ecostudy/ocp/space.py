@@ -38,14 +38,25 @@ def energy_reference(train, segment):
     return max(train.traction.peak * segment.distance * 0.1, 1.0)
 
 
-def define_variables(m, nodes, limits, train, guess, with_regeneration):
+def define_variables(m, nodes, limits, train, guess, with_regeneration, movable=False):
+    """Speeds per node, interval times and forces [kN] per interval. Standstill at both ends is
+    fixed, or, for a ``movable`` model, held by bounds that :func:`set_start` and :func:`set_end`
+    change; a movable model also has the share w_k of each interval still to run (bounds 1) and
+    the clock t0 at the start (bounds 0)."""
     n = len(nodes) - 1
     m.K = pyo.RangeSet(0, n)
     m.I = pyo.RangeSet(0, n - 1)
     v0, dt0, ft0, fb0 = guess
     m.v = pyo.Var(m.K, bounds=lambda m, k: (0.0, float(limits[k])), initialize=lambda m, k: float(v0[k]))
-    m.v[0].fix(0.0)
-    m.v[n].fix(0.0)
+    if movable:
+        for k in (0, n):
+            m.v[k].setlb(0.0)
+            m.v[k].setub(0.0)
+        m.w = pyo.Var(m.I, bounds=(1.0, 1.0), initialize=1.0)
+        m.t0 = pyo.Var(bounds=(0.0, 0.0), initialize=0.0)
+    else:
+        m.v[0].fix(0.0)
+        m.v[n].fix(0.0)
     m.dt = pyo.Var(m.I, bounds=(0.0, None), initialize=lambda m, k: float(dt0[k]))
     m.ft = pyo.Var(m.I, bounds=(0.0, _bounded(train.traction)), initialize=lambda m, k: float(ft0[k]) / KN)
     m.fb = pyo.Var(m.I, bounds=(0.0, _bounded(train.braking)), initialize=lambda m, k: float(fb0[k]) / KN)
@@ -62,12 +73,13 @@ def define_dynamics(m, nodes, segment, train):
     km, s = float(KN / train.mass), DYNAMICS_SCALE
 
     def speed(m, k):
-        # (v1^2 - v0^2) / (2 ds) = (F_T - F_B) / M - R(v0, v1) / M  (physics.interval_resistance)
-        return s * ((m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k]) - km * (m.ft[k] - m.fb[k])
-                    + interval_resistance(m.v[k], m.v[k + 1], per_kg, fixed[k])) == 0.0
+        # (v1^2 - v0^2) / (2 ds) = w ((F_T - F_B) / M - R(v0, v1) / M)  (physics.interval_resistance);
+        # w = 1, or the share of the interval still to run in a movable model (0: already run)
+        net = interval_resistance(m.v[k], m.v[k + 1], per_kg, fixed[k]) - km * (m.ft[k] - m.fb[k])
+        return s * ((m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k]) + share(m, k, net)) == 0.0
 
     def time(m, k):
-        return m.dt[k] * (m.v[k] + m.v[k + 1]) / (2 * ds[k]) == 1.0
+        return m.dt[k] * (m.v[k] + m.v[k + 1]) / (2 * ds[k]) == share(m, k, 1.0)
 
     m.speed = pyo.Constraint(m.I, rule=speed)
     m.time = pyo.Constraint(m.I, rule=time)
@@ -99,6 +111,11 @@ def define_envelopes(m, train, with_regeneration):
         _envelope_constraints(m, "regen", m.fr, train.regeneration)
 
 
+def share(m, k, expr):
+    """``expr`` times the share of interval k still to run (movable models), else ``expr``."""
+    return m.w[k] * expr if hasattr(m, "w") else expr
+
+
 def define_timing(m, time_ref, running_time=None, window=None):
     """Running time T as a variable tied to the interval times; the timing request is its bounds.
 
@@ -110,7 +127,8 @@ def define_timing(m, time_ref, running_time=None, window=None):
     start = min(max(pyo.value(m.running_time), lo), hi if hi is not None else float("inf"))
     m.T = pyo.Var(bounds=(lo, hi), initialize=start)
     m.time_ref = time_ref
-    m.arrival = pyo.Constraint(expr=(m.running_time - m.T) / time_ref == 0.0)
+    clock = m.t0 if hasattr(m, "t0") else 0.0  # a movable model starts at the clock t0
+    m.arrival = pyo.Constraint(expr=(m.running_time + clock - m.T) / time_ref == 0.0)
 
 
 def window_node(nodes, distance):
@@ -119,8 +137,9 @@ def window_node(nodes, distance):
 
 
 def passing_time(m, nodes, distance):
-    """Time [s] from departure to the node at ``distance``: the sum of the interval times before it."""
-    return sum(m.dt[j] for j in range(window_node(nodes, distance)))
+    """Time [s] from departure to the node at ``distance``: the sum of the interval times before it
+    (plus the start clock t0 of a movable model)."""
+    return sum(m.dt[j] for j in range(window_node(nodes, distance))) + (m.t0 if hasattr(m, "t0") else 0.0)
 
 
 def define_windows(m, nodes, windows, time_ref):
@@ -130,6 +149,7 @@ def define_windows(m, nodes, windows, time_ref):
     (grid.make_grid places one there).
     """
     m.windows = pyo.ConstraintList()
+    m.window_nodes = [window_node(nodes, w.distance) for w in windows]
     for w in windows:
         k = window_node(nodes, w.distance)
         passing = passing_time(m, nodes, w.distance) / time_ref
@@ -160,13 +180,13 @@ def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
     mixed       w_t T + w_e E / Ms (thesis 001 eq. 4.1a, energy per unit mass [J/kg])
     """
     ds = np.diff(nodes).tolist()
-    m.traction_work = pyo.Expression(expr=KN * sum(ds[k] * m.ft[k] for k in m.I))
-    braking = KN * sum(ds[k] * m.fb[k] for k in m.I) / energy_ref
+    m.traction_work = pyo.Expression(expr=KN * sum(share(m, k, ds[k] * m.ft[k]) for k in m.I))
+    braking = KN * sum(share(m, k, ds[k] * m.fb[k]) for k in m.I) / energy_ref
     energy = m.traction_work / energy_ref
     if objective == "energy":
         expr = energy
     elif objective == "net_energy":  # a train without an electric brake regenerates nothing
-        regen = KN * sum(ds[k] * m.fr[k] for k in m.I) if hasattr(m, "fr") else 0.0
+        regen = KN * sum(share(m, k, ds[k] * m.fr[k]) for k in m.I) if hasattr(m, "fr") else 0.0
         expr = (m.traction_work / train.traction_efficiency - train.regeneration_efficiency * regen) / energy_ref
     elif objective == "time":
         expr = m.T / time_ref + TIME_REGULARISATION * (energy + braking)
@@ -179,11 +199,14 @@ def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
 
 
 def build_model(segment, train, nodes, limits, guess, objective="energy", running_time=None,
-                window=None, weights=(1.0, 1.0), time_ref=100.0, windows=()):
-    """Assemble the NLP in named steps; ``guess`` = (v, dt, F_T [N], F_B [N]) on the grid."""
+                window=None, weights=(1.0, 1.0), time_ref=100.0, windows=(), movable=False):
+    """Assemble the NLP in named steps; ``guess`` = (v, dt, F_T [N], F_B [N]) on the grid.
+
+    A ``movable`` model can be re-solved from any state and towards any terminal speed and
+    arrival window by changing bounds only (:mod:`ecostudy.ocp.restart`)."""
     with_regeneration = objective == "net_energy" and train.regeneration is not None
     m = pyo.ConcreteModel(name="ecostudy")
-    define_variables(m, nodes, limits, train, guess, with_regeneration)
+    define_variables(m, nodes, limits, train, guess, with_regeneration, movable)
     define_dynamics(m, nodes, segment, train)
     define_envelopes(m, train, with_regeneration)
     define_timing(m, time_ref, running_time, window)
@@ -191,6 +214,11 @@ def build_model(segment, train, nodes, limits, guess, objective="energy", runnin
     m.energy_ref = energy_reference(train, segment)  # [J], objective scale
     define_objective(m, nodes, train, objective, weights, time_ref, m.energy_ref)
     m.dual = pyo.Suffix(direction=pyo.Suffix.IMPORT)
+    if movable:  # the bounds a re-solve restores (restart.set_start): limits, windows, envelopes
+        m.base_bounds = {name: [getattr(m, name)[k].bounds for k in getattr(m, name)]
+                         for name in ("v", "ft", "fb", "fr") if hasattr(m, name)}
+        m.base_bounds["v"][0] = (0.0, float(limits[0]))
+        m.base_bounds["v"][-1] = (0.0, float(limits[-1]))
     return m
 
 

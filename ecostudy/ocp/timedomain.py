@@ -25,9 +25,9 @@ import pyomo.environ as pyo
 
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import interval_resistance, smooth_table, table_coefficients
-from ecostudy.ocp import space as formulation
+from ecostudy.ocp import space
 
-KN = formulation.KN
+KN = space.KN
 
 
 @dataclass
@@ -140,11 +140,11 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
     b.kinematics = pyo.Constraint(b.I, rule=kinematics)
     b.dynamics = pyo.Constraint(b.I, rule=dynamics)
     b.limit = pyo.Constraint(pyo.RangeSet(1, n - 1), rule=limit)
-    formulation._envelope_constraints(b, "traction", b.ft, train.traction)
-    formulation._envelope_constraints(b, "braking", b.fb, train.braking)
+    space._envelope_constraints(b, "traction", b.ft, train.traction)
+    space._envelope_constraints(b, "braking", b.fb, train.braking)
     if train.regeneration is not None:
         b.regen_share = pyo.Constraint(b.I, rule=lambda b, j: b.fr[j] <= b.fb[j])
-        formulation._envelope_constraints(b, "regen", b.fr, train.regeneration)
+        space._envelope_constraints(b, "regen", b.fr, train.regeneration)
     else:
         b.fr.fix(0.0)
     eta_t, eta_r = train.traction_efficiency, train.regeneration_efficiency

@@ -1,0 +1,125 @@
+"""Re-solving one built space-domain model from any state, towards any terminal condition.
+
+A controller on board re-plans many times per trip from wherever the train is. Writing the NL
+file is the dearest stage of a solve (docs/benchmarks.md), so a movable model
+(:func:`ecostudy.ocp.space.build_model` with ``movable=True``) is written once on the whole grid
+and every re-plan changes bounds only:
+
+- the start (x0, v0, t0): intervals already run get the share w_k = 0 (then the speed and time
+  recursions give v_k+1 = v_k and dt_k = 0, their forces are held at 0), the interval holding x0
+  the share of it still to run, the others 1; the speed at node 0 is v0 and the clock t0;
+- the terminal condition at the end of the grid: a speed range (a stop is [0, 0]) and the
+  arrival time, fixed or a window.
+
+The multiplied-through recursions (``space.define_dynamics``) are what make a zero share regular.
+"""
+from typing import NamedTuple
+
+import numpy as np
+
+from ecostudy.core.errors import InputError
+from ecostudy.core.types import State
+from ecostudy.ocp import space
+from ecostudy.ocp.problem import build, capped_guess
+from ecostudy.ocp.session import Session
+
+
+def start_interval(nodes, position):
+    """(k, share): the interval holding ``position`` [m] and the share of it still to run."""
+    if not 0.0 <= position < nodes[-1]:
+        raise InputError(f"start position {position:.1f} m is not on the segment [0, {nodes[-1]:.1f}) m")
+    k = min(int(np.searchsorted(nodes, position, side="right")) - 1, len(nodes) - 2)
+    return k, float((nodes[k + 1] - position) / (nodes[k + 1] - nodes[k]))
+
+
+def set_start(session, m, nodes, state):
+    """Bounds of a movable model for a run starting at ``state`` (:class:`State`, SI)."""
+    k, rest = start_interval(nodes, state.position)
+    behind = [j for j in getattr(m, "window_nodes", []) if j <= k]
+    if behind:
+        raise InputError(f"a timing window at {nodes[behind[0]]:.0f} m lies behind the start at "
+                         f"{state.position:.1f} m: drop the windows already passed")
+    n = len(nodes) - 1
+    shares = np.ones(n)
+    shares[:k], shares[k] = 0.0, rest
+    variables, lows, highs = [m.t0], [state.time], [state.time]
+    for j in range(n):  # node n is the terminal condition's (set_end)
+        lo, hi = m.base_bounds["v"][j]
+        if j <= k:  # run already, or the start itself: the measured speed, even above the limit behind
+            lo, hi = (state.speed, state.speed) if j == 0 else (0.0, max(hi, state.speed))
+        variables.append(m.v[j])
+        lows.append(lo)
+        highs.append(hi)
+    for name in ("ft", "fb", "fr"):
+        if name in m.base_bounds:
+            var = getattr(m, name)
+            for j in range(n):
+                variables.append(var[j])
+                lows.append(0.0)
+                highs.append(m.base_bounds[name][j][1] if j >= k else 0.0)
+    variables += [m.w[j] for j in range(n)]
+    lows += shares.tolist()
+    highs += shares.tolist()
+    session.set_many_bounds(variables, lows, highs)
+    session.set_start_values([m.v[j] for j in range(k + 1)] + [m.dt[j] for j in range(k)],
+                             [state.speed] * (k + 1) + [0.0] * k)
+
+
+def set_end(session, m, speed=(0.0, 0.0), arrival=None):
+    """Terminal speed range [m/s] at the end of the grid, and the arrival time [s] on the clock of
+    the start: a number (exact) or (earliest, latest); None leaves the arrival as it is."""
+    variables, lows, highs = [m.v[len(m.K) - 1]], [speed[0]], [speed[1]]
+    if arrival is not None:
+        lo, hi = (arrival, arrival) if np.isscalar(arrival) else arrival
+        variables.append(m.T)
+        lows.append(lo)
+        highs.append(hi)
+    session.set_many_bounds(variables, lows, highs)
+
+
+class Plan(NamedTuple):
+    """A re-plan on the whole grid: node speeds, interval times, forces [N] and shares still to run."""
+
+    nodes: np.ndarray
+    v: np.ndarray
+    dt: np.ndarray
+    ft: np.ndarray
+    fb: np.ndarray
+    shares: np.ndarray
+    start_time: float
+    outcome: object
+
+    @property
+    def time(self):
+        """Clock at every node [s] (nodes already run sit at the start time)."""
+        return self.start_time + np.concatenate([[0.0], np.cumsum(self.dt)])
+
+    @property
+    def traction_energy(self):
+        """Traction work still to do [J]: sum F_T w ds over the intervals ahead."""
+        return float(np.sum(self.ft * self.shares * np.diff(self.nodes)))
+
+
+class Replanner:
+    """One prepared case (``ocp.problem.prepare``) as a movable model, written once.
+
+    ``solve(state, end_speed, arrival)`` re-plans from ``state`` (default: standstill at the
+    departure, clock 0) by bounds alone, warm-started from the previous plan.
+    """
+
+    def __init__(self, case, running_time=None, window=None, objective="energy", options=None, stages=None):
+        self.case, self.options, self.stages = case, options, stages if stages is not None else {}
+        timing = {"running_time": running_time} if running_time is not None else {"window": window}
+        guess = capped_guess(case, running_time if running_time is not None else window[1])
+        self.model = build(case, guess, objective, self.stages, movable=True, **timing)
+        self.session = Session(self.model)
+        self.stages["nl_write"] = self.stages.get("nl_write", 0.0) + self.session.nl_seconds
+
+    def solve(self, state=State(), end_speed=(0.0, 0.0), arrival=None, options=None):
+        m, nodes = self.model, self.case.nodes
+        set_start(self.session, m, nodes, state)
+        set_end(self.session, m, end_speed, arrival)
+        outcome = self.session.solve({**(self.options or {}), **(options or {})})
+        v, dt, ft, fb, _ = space.solution_arrays(m)
+        shares = np.array([m.w[k].value for k in m.I])
+        return Plan(nodes, v, dt, ft, fb, shares, float(m.t0.value), outcome)

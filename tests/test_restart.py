@@ -1,0 +1,75 @@
+"""Formulations from any state: one movable model re-solved from mid-run states and towards other
+terminal conditions by bounds alone (ocp/restart.py), against the run's own optimum (Bellman:
+the tail of an optimal run is optimal for the rest of the trip)."""
+import numpy as np
+import pytest
+
+from ecostudy.analysis.single import solve_run
+from ecostudy.core.errors import InputError
+from ecostudy.core.types import State, Timing, Window
+from ecostudy.ocp.problem import prepare
+from ecostudy.ocp.restart import Replanner, start_interval
+
+K = 500
+
+
+@pytest.fixture(scope="module")
+def planned(metro, amsterdam):
+    """The Amsterdam case (76 s) as a movable model, and its plan from standstill."""
+    replanner = Replanner(prepare(amsterdam, metro, "Rokin", "Centraal", K), running_time=76.0)
+    return replanner, replanner.solve()
+
+
+def test_movable_model_from_standstill_is_the_ordinary_optimum(planned, metro, amsterdam):
+    _, full = planned
+    ordinary = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=K)
+    assert full.outcome.optimal
+    assert full.traction_energy / 3.6e6 == pytest.approx(ordinary.summary["traction_energy_kWh"], rel=1e-7)
+    assert full.time[-1] == pytest.approx(76.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("position, between", [(50.0, 0.0), (130.0, 0.37), (220.0, 0.81)])
+def test_resolve_from_a_mid_run_state_gives_the_tail_without_a_rebuild(planned, position, between):
+    replanner, full = planned
+    nlp, model, build_s = replanner.session.nlp, replanner.model, replanner.stages["build"]
+    ds = np.diff(full.nodes)
+    k = int(np.searchsorted(full.nodes, position))
+    # the state on the optimum a share ``between`` into interval k (constant acceleration: v^2 linear in x)
+    x = full.nodes[k] + between * ds[k]
+    v = np.sqrt(full.v[k] ** 2 + between * (full.v[k + 1] ** 2 - full.v[k] ** 2))
+    t = full.time[k] + 2 * (x - full.nodes[k]) / (full.v[k] + v)
+    tail = float(np.sum(full.ft[k + 1:] * ds[k + 1:]) + full.ft[k] * (full.nodes[k + 1] - x))
+    assert tail > 0.1 * full.traction_energy  # a state with work still to do
+
+    plan = replanner.solve(State(x, v, t))
+    assert plan.outcome.optimal
+    assert plan.traction_energy == pytest.approx(tail, rel=1e-3)
+    assert plan.time[-1] == pytest.approx(76.0, abs=1e-6)
+    assert np.max(np.abs(plan.v[k + 1:] - full.v[k + 1:])) < 0.01  # [m/s]: the same profile ahead
+    assert np.allclose(plan.shares[:k], 0.0) and plan.shares[k] == pytest.approx(1 - between)
+    # re-used: the same model and NL file, no build since
+    assert replanner.session.nlp is nlp and replanner.model is model and replanner.stages["build"] == build_s
+
+
+def test_other_terminal_conditions_and_a_standing_start(planned):
+    replanner, full = planned
+    passing = replanner.solve(State(), end_speed=(5.0, 10.0), arrival=(60.0, 70.0))
+    assert passing.outcome.optimal
+    assert 5.0 - 1e-6 <= passing.v[-1] <= 10.0 + 1e-6 and 60.0 - 1e-6 <= passing.time[-1] <= 70.0 + 1e-6
+    assert passing.traction_energy > full.traction_energy  # arriving sooner and faster costs more
+    standing = replanner.solve(State(400.0, 0.0, 30.0), arrival=110.0)  # held at a signal mid-way
+    assert standing.outcome.optimal and standing.time[-1] == pytest.approx(110.0, abs=1e-6)
+    k, _ = start_interval(full.nodes, 400.0)
+    assert np.all(standing.v[:k + 1] < 1e-6)
+    back = replanner.solve(State(), end_speed=(0.0, 0.0), arrival=76.0)
+    assert back.traction_energy == pytest.approx(full.traction_energy, rel=1e-7)
+
+
+def test_a_window_behind_the_start_or_a_start_off_the_segment_is_refused(metro, amsterdam):
+    case = prepare(amsterdam, metro, "Rokin", "Centraal", 200, windows=[Window(300.0, latest=40.0)])
+    replanner = Replanner(case, running_time=80.0)
+    assert replanner.solve().outcome.optimal
+    with pytest.raises(InputError, match="behind the start"):
+        replanner.solve(State(500.0, 15.0, 40.0))
+    with pytest.raises(InputError, match="not on the segment"):
+        replanner.solve(State(case.segment.distance + 5.0, 0.0, 0.0))
