@@ -133,7 +133,7 @@ def test_short_control_pulses_are_not_stepped_over(amsterdam, metro):
     """Regression: at K = 200 one 5 m braking interval sits inside a long coast before the
     80 -> 60 km/h drop. An adaptive stepper run across the whole journey stepped over it and
     reported an 8.5 m stop error; the simulator now restarts at every control jump."""
-    from ecostudy.core.simulate import pieces
+    from ecostudy.core.plant import pieces
     r = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=200)
     assert_verified(r)
     starts = pieces(r.nodes, r.handle, r.segment)
@@ -156,11 +156,12 @@ def test_non_optimal_ipopt_exit_is_never_silent(amsterdam, metro):
 def test_simulator_agrees_with_a_fine_step_reference(amsterdam, metro, monkeypatch):
     """Regression: a step overshooting a piece's end sampled the next piece's braking and moved
     the stop by 2 m at K = 500. The adaptive run must equal one with steps capped at 0.02 s."""
+    import ecostudy.core.plant as plant
     import ecostudy.core.simulate as sim
     r = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=500)
     adaptive, _ = sim.simulate(r.segment, metro, r.nodes, r.handle)
-    original = sim.solve_ivp
-    monkeypatch.setattr(sim, "solve_ivp", lambda *a, **k: original(*a, max_step=0.02, **k))
+    original = plant.solve_ivp
+    monkeypatch.setattr(plant, "solve_ivp", lambda *a, **k: original(*a, max_step=0.02, **k))
     fine, _ = sim.simulate(r.segment, metro, r.nodes, r.handle)
     assert adaptive.stop_position == pytest.approx(fine.stop_position, abs=2e-3)
     assert adaptive.arrival_time == pytest.approx(fine.arrival_time, abs=2e-3)

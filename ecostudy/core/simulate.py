@@ -1,20 +1,17 @@
 """Independent verification: re-simulate a driving profile over time with an adaptive integrator.
 
 The control is the handle u(x) per grid interval (u > 0: that share of the traction envelope,
-u < 0: of the braking envelope), applied to the same physics functions as the NLP but with
-scipy's adaptive Runge-Kutta (DOP853) over time instead of the NLP's trapezoidal steps in
-distance, restarted wherever the control or the track jumps (an adaptive stepper can otherwise
-step clean over a short interval of different control). Dense output is sampled to find
-the worst overspeed against the train-length limit.
+u < 0: of the braking envelope), applied by the plant (:mod:`ecostudy.core.plant`: the same
+physics functions as the NLP, scipy's adaptive Runge-Kutta DOP853 over time instead of the NLP's
+trapezoidal steps in distance, restarted wherever the control or the track jumps: an adaptive
+stepper can otherwise step clean over a short interval of different control). Dense output is
+sampled to find the worst overspeed against the train-length limit.
 """
-from bisect import bisect_right
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
-from ecostudy.core.kinematics import point_resistance
-from ecostudy.core.physics import acceleration, davis_resistance
+from ecostudy.core.plant import Plant, Truth
 from ecostudy.core.units import to_kmh, to_kwh
 
 TOLERANCES = {"arrival_time_error_s": 0.5, "stop_error_m": 1.0, "energy_error_pct": 1.0,
@@ -33,85 +30,15 @@ class Trace:
     arrival_time: float      # [s]
 
 
-def pieces(nodes, handle, segment, jump=1e-3, targets=None):
-    """Start indices of runs of intervals with (nearly) the same handle, gradient and curvature.
-
-    An adaptive stepper can step straight over a short interval of different control without
-    sampling it, so the integration restarts at every such discontinuity (and wherever a cruise
-    target speed starts, ends or changes).
-    """
-    mid = 0.5 * (nodes[:-1] + nodes[1:])
-    grade, curve = segment.gradient(mid), segment.curvature(mid)
-    change = ((np.abs(np.diff(handle)) > jump) | (np.diff(grade) != 0) | (np.diff(curve) != 0)
-              | (np.sign(handle[1:]) != np.sign(handle[:-1])))
-    if targets is not None:
-        tgt = np.nan_to_num(np.asarray(targets, float), nan=-1.0)
-        change |= np.diff(tgt) != 0
-    return np.concatenate([[0], np.nonzero(change)[0] + 1])
-
-
-def simulate(segment, train, nodes, handle, max_time=None, targets=None, gain=1.0):
-    """Drive ``handle`` (one value per interval of ``nodes``) from standstill until the train stops.
-
-    ``targets`` (optional, one per interval, nan elsewhere) asks for cruise control there: a
-    speed-holding controller F = F_R(x, v) + M * gain * (v_target - v), the resistance fed
-    forward, clipped to the traction and braking envelopes (a driver or DAS holding a speed).
-    """
-    a, b, c = (float(x) for x in train.davis)
-    handle = [float(u) for u in handle]
-    target = [float(x) for x in targets] if targets is not None else [float("nan")] * len(handle)
-    last = len(handle) - 1
-    max_time = max_time or 20 * segment.distance + 600
-
-    node_list = nodes.tolist()
-    fixed = [0.0]  # gradient + curve force of the current piece [N]: constant within a piece
-    span = [0, last]  # intervals of the current piece: a step that overshoots the piece's end must
-    # not sample the next piece's control, or the end event is located on a polluted dense output
-
-    def forces(x, v):
-        k = min(max(bisect_right(node_list, x) - 1, span[0]), span[1])
-        resist = davis_resistance(v, a, b, c) + fixed[0]
-        if target[k] == target[k]:  # cruise control (not nan)
-            net = resist + train.mass * gain * (target[k] - v)
-            return ((min(net, train.traction.force(v)), 0.0, resist) if net >= 0
-                    else (0.0, min(-net, train.braking.force(v)), resist))
-        u = handle[k]
-        ft = u * train.traction.force(v) if u > 0 else 0.0
-        fb = -u * train.braking.force(v) if u < 0 else 0.0
-        return ft, fb, resist
-
-    def rhs(t, y):
-        x, v = y[0], y[1]
-        ft, fb, resist = forces(x, v)
-        if v <= 0.0 and ft <= resist:  # standing: resistance cannot push the train backwards
-            return [0.0, 0.0, 0.0, 0.0, 0.0]
-        fr = min(fb, train.regeneration.force(v)) if train.regeneration is not None and fb > 0 else 0.0
-        return [v, acceleration(ft, fb, resist, train.mass), ft * v, fb * v, fr * v]
-
-    def stopped(t, y):
-        return y[1] if t > t_start else 1.0
-    stopped.terminal, stopped.direction = True, -1
-
-    starts = pieces(nodes, handle, segment, targets=targets)
-    bounds = list(nodes[starts[1:]]) + [segment.distance + 100.0]  # past the stop: runaway guard
-    y, t_start, solutions = [0.0, 1e-9, 0.0, 0.0, 0.0], 0.0, []
-    for first, following, x_end in zip(starts, list(starts[1:]) + [last + 1], bounds):
-        span[0], span[1] = first, following - 1
-        x_mid = 0.5 * (nodes[first] + nodes[first + 1])
-        fixed[0] = float(point_resistance(segment, train, x_mid))
-
-        def reached(t, y, x_end=x_end):
-            return y[0] - x_end
-        reached.terminal, reached.direction = True, 1
-        sol = solve_ivp(rhs, (t_start, max_time), y, method="DOP853", rtol=1e-8,
-                        atol=[1e-6, 1e-8, 1.0, 1.0, 1.0], events=(stopped, reached), dense_output=True)
-        solutions.append(sol)
-        y, t_start = sol.y[:, -1].copy(), sol.t[-1]
-        if sol.status != 1 or sol.t_events[0].size:  # stopped, or ran out of time
-            break
-        y[0] = x_end  # land exactly on the boundary (event location is accurate to rounding)
+def simulate(segment, train, nodes, handle, max_time=None, targets=None, gain=1.0, truth=Truth()):
+    """Drive ``handle`` (one value per interval of ``nodes``) from standstill until the train stops:
+    :meth:`Plant.drive` of the nominal train (or of ``truth``). ``targets`` (optional, one per
+    interval, nan elsewhere) asks for cruise control there: a speed-holding controller
+    F = F_R(x, v) + M * gain * (v_target - v), the resistance fed forward, clipped to the traction
+    and braking envelopes (a driver or DAS holding a speed). Returns (:class:`Trace`, pieces)."""
+    y, t_stop, solutions = Plant(segment, train, truth).drive(nodes, handle, targets, gain, max_time)
     t, x, v = dense_samples(solutions)
-    return Trace(t, x, v, float(y[2]), float(y[3]), float(y[4]), float(y[0]), float(t_start)), solutions
+    return Trace(t, x, v, float(y[2]), float(y[3]), float(y[4]), float(y[0]), t_stop), solutions
 
 
 def dense_samples(solutions, samples=4000):

@@ -1,0 +1,214 @@
+"""The train as a plant: the same physics functions as the NLP, integrated over time.
+
+A :class:`Plant` is one train on one segment with its *true* parameters (:class:`Truth`, as
+multiples of the model's: mass, running resistance, traction and braking envelopes), so a
+controller planning with the nominal train can be run against a train that is not its model.
+
+- :meth:`Plant.step` advances a :class:`~ecostudy.core.types.State` by ``dt`` under one control
+  (a handle u in [-1, 1], or :class:`Cruise`) and an additive acceleration disturbance [m/s^2];
+  the step integrates piecewise (DOP853), restarting at every gradient or curve change and where
+  the train comes to a stand.
+- :meth:`Plant.drive` drives a whole trip under a handle per grid interval (switching by
+  position): the independent verification of every optimum (:mod:`ecostudy.core.simulate`).
+- :class:`Noise` draws acceleration noise and measurement noise from one seeded generator.
+
+Standing trains are not pushed backwards by resistance; work is accumulated at the wheel.
+"""
+from bisect import bisect_right
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from ecostudy.core.kinematics import point_resistance
+from ecostudy.core.physics import acceleration, davis_resistance
+from ecostudy.core.types import State
+
+RTOL, ATOL = 1e-8, [1e-6, 1e-8, 1.0, 1.0, 1.0]  # state: position, speed, three works [J]
+
+
+@dataclass(frozen=True)
+class Truth:
+    """The plant's true parameters as multiples of the model's (1: the model itself).
+
+    ``mass`` scales the inertial and the static mass (grade and curve forces with it),
+    ``resistance`` the Davis terms, ``traction`` and ``braking`` the envelopes.
+    """
+
+    mass: float = 1.0
+    resistance: float = 1.0
+    traction: float = 1.0
+    braking: float = 1.0
+
+
+@dataclass(frozen=True)
+class Cruise:
+    """Hold ``target`` [m/s]: F = F_R(x, v) + M gain (target - v), clipped to the envelopes."""
+
+    target: float
+    gain: float = 1.0
+
+
+class Step(NamedTuple):
+    """A plant step: the new state and the work done over it at the wheel [J]."""
+
+    state: State
+    traction_work: float
+    braking_work: float
+    regenerated_work: float   # taken by the electric brake, before its efficiency
+
+
+@dataclass(frozen=True)
+class Noise:
+    """Disturbances of a closed loop: acceleration noise [m/s^2] and measurement noise on position
+    [m] and speed [m/s] (standard deviations of zero-mean normal draws), from a seeded generator."""
+
+    acceleration: float = 0.0
+    position: float = 0.0
+    speed: float = 0.0
+    seed: int = 0
+
+    def generator(self):
+        return np.random.default_rng(self.seed)
+
+    def disturbance(self, rng):
+        return float(rng.normal(0.0, self.acceleration)) if self.acceleration else 0.0
+
+    def measure(self, state, rng):
+        """``state`` as a sensor reports it."""
+        dx = float(rng.normal(0.0, self.position)) if self.position else 0.0
+        dv = float(rng.normal(0.0, self.speed)) if self.speed else 0.0
+        return State(state.position + dx, state.speed + dv, state.time)
+
+
+def pieces(nodes, handle, segment, jump=1e-3, targets=None):
+    """Start indices of runs of intervals with (nearly) the same handle, gradient and curvature.
+
+    An adaptive stepper can step straight over a short interval of different control without
+    sampling it, so the integration restarts at every such discontinuity (and wherever a cruise
+    target speed starts, ends or changes).
+    """
+    mid = 0.5 * (nodes[:-1] + nodes[1:])
+    grade, curve = segment.gradient(mid), segment.curvature(mid)
+    change = ((np.abs(np.diff(handle)) > jump) | (np.diff(grade) != 0) | (np.diff(curve) != 0)
+              | (np.sign(handle[1:]) != np.sign(handle[:-1])))
+    if targets is not None:
+        tgt = np.nan_to_num(np.asarray(targets, float), nan=-1.0)
+        change |= np.diff(tgt) != 0
+    return np.concatenate([[0], np.nonzero(change)[0] + 1])
+
+
+class Plant:
+    """One train on one segment, with true parameters (:class:`Truth`)."""
+
+    def __init__(self, segment, train, truth=Truth()):
+        self.segment, self.train, self.truth = segment, train, truth
+        self.mass = train.mass * truth.mass
+        self.davis = tuple(float(c) * truth.resistance for c in train.davis)
+        self.edges = segment.breakpoints()
+
+    # ------------------------------------------------------------------ forces
+    def grade_force(self, x):
+        """Gradient and curve force at travel position ``x`` [N] (true static mass)."""
+        return float(point_resistance(self.segment, self.train, x)) * self.truth.mass
+
+    def forces(self, v, control, resist):
+        """(F_T, F_B) [N] of a handle u or a :class:`Cruise` at speed ``v`` with resistance ``resist``."""
+        train = self.train
+        if isinstance(control, Cruise):
+            net = resist + self.mass * control.gain * (control.target - v)
+            return ((min(net, self.truth.traction * train.traction.force(v)), 0.0) if net >= 0
+                    else (0.0, min(-net, self.truth.braking * train.braking.force(v))))
+        ft = control * (self.truth.traction * train.traction.force(v)) if control > 0 else 0.0
+        fb = -control * (self.truth.braking * train.braking.force(v)) if control < 0 else 0.0
+        return ft, fb
+
+    def derivatives(self, v, ft, fb, resist, disturbance=0.0):
+        """d/dt of (position, speed, traction work, braking work, regenerated work)."""
+        if v <= 0.0 and ft - resist + self.mass * disturbance <= 0.0:  # standing stays standing
+            return [0.0, 0.0, 0.0, 0.0, 0.0]
+        regen = self.train.regeneration
+        fr = min(fb, regen.force(v)) if regen is not None and fb > 0 else 0.0
+        return [v, acceleration(ft, fb, resist, self.mass) + disturbance, ft * v, fb * v, fr * v]
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, state, control, dt, disturbance=0.0):
+        """Advance ``state`` by ``dt`` [s] under ``control`` held constant (a :class:`Step`)."""
+        a, b, c = self.davis
+        y = [float(state.position), max(float(state.speed), 0.0), 0.0, 0.0, 0.0]
+        t, t_end = float(state.time), float(state.time) + dt
+        while t < t_end - 1e-12:
+            i = bisect_right(self.edges, y[0] + 1e-9)
+            edge = self.edges[i] if i < len(self.edges) else np.inf
+            fixed = self.grade_force(y[0] + 1e-9)
+
+            def rhs(_, z):
+                resist = davis_resistance(z[1], a, b, c) + fixed
+                ft, fb = self.forces(z[1], control, resist)
+                return self.derivatives(z[1], ft, fb, resist, disturbance)
+
+            t_start = t
+
+            def stopped(tt, z):
+                return z[1] if tt > t_start else 1.0
+            stopped.terminal, stopped.direction = True, -1
+
+            def reached(_, z):
+                return z[0] - edge
+            reached.terminal, reached.direction = True, 1
+            sol = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=RTOL, atol=ATOL, events=(stopped, reached))
+            y, t = sol.y[:, -1].tolist(), float(sol.t[-1])
+            if sol.t_events[1].size:
+                y[0] = edge  # on the boundary exactly; the next piece has its own grade
+            elif sol.t_events[0].size:
+                y[1] = 0.0
+                if rhs(t, y)[1] <= 0.0:  # at a stand and nothing moves it: it stands out the step
+                    t = t_end
+        return Step(State(y[0], max(y[1], 0.0), t_end), y[2], y[3], y[4])
+
+    # ------------------------------------------------------------------ a whole trip
+    def drive(self, nodes, handle, targets=None, gain=1.0, max_time=None):
+        """Drive ``handle`` (one value per interval of ``nodes``, switching by position) from
+        standstill until the train stops; ``targets`` (one per interval, nan elsewhere) asks for
+        cruise control at that speed there. Returns (position, speed, three works, stop time)
+        and the integrator's pieces, restarted at every control, gradient or curve change."""
+        segment = self.segment
+        a, b, c = self.davis
+        handle = [float(u) for u in handle]
+        target = [float(x) for x in targets] if targets is not None else [float("nan")] * len(handle)
+        last = len(handle) - 1
+        max_time = max_time or 20 * segment.distance + 600
+        node_list = nodes.tolist()
+        fixed = [0.0]  # gradient + curve force of the current piece [N]: constant within a piece
+        span = [0, last]  # a step that overshoots the piece's end must not sample the next piece's control
+
+        def rhs(t, y):
+            k = min(max(bisect_right(node_list, y[0]) - 1, span[0]), span[1])
+            resist = davis_resistance(y[1], a, b, c) + fixed[0]
+            control = Cruise(target[k], gain) if target[k] == target[k] else handle[k]
+            ft, fb = self.forces(y[1], control, resist)
+            return self.derivatives(y[1], ft, fb, resist)
+
+        def stopped(t, y):
+            return y[1] if t > t_start else 1.0
+        stopped.terminal, stopped.direction = True, -1
+
+        starts = pieces(nodes, handle, segment, targets=targets)
+        bounds = list(nodes[starts[1:]]) + [segment.distance + 100.0]  # past the stop: runaway guard
+        y, t_start, solutions = [0.0, 1e-9, 0.0, 0.0, 0.0], 0.0, []
+        for first, following, x_end in zip(starts, list(starts[1:]) + [last + 1], bounds):
+            span[0], span[1] = first, following - 1
+            fixed[0] = self.grade_force(0.5 * (nodes[first] + nodes[first + 1]))
+
+            def reached(t, y, x_end=x_end):
+                return y[0] - x_end
+            reached.terminal, reached.direction = True, 1
+            sol = solve_ivp(rhs, (t_start, max_time), y, method="DOP853", rtol=RTOL, atol=ATOL,
+                            events=(stopped, reached), dense_output=True)
+            solutions.append(sol)
+            y, t_start = sol.y[:, -1].copy(), sol.t[-1]
+            if sol.status != 1 or sol.t_events[0].size:  # stopped, or ran out of time
+                break
+            y[0] = x_end  # land exactly on the boundary (event location is accurate to rounding)
+        return y, float(t_start), solutions
