@@ -25,18 +25,12 @@ brake is eq. 7.4's MB: psi <= eta.
 The multipliers are Ipopt's (Pyomo's dual suffix equals Ipopt's y: grad f + J^T y - z_L + z_U = 0),
 or fitted at any profile by :func:`estimated_psi`.
 """
-import json
-from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pyomo.environ as pyo
 from scipy.sparse import hstack, identity
 
 from ecostudy.analysis import regimes
-from ecostudy.core.errors import InputError, problem
-from ecostudy.core.units import KMH, KN
-from ecostudy.io.loaders import load_track, load_train
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import build, prepare
 from ecostudy.ocp.session import Session, solve
@@ -157,21 +151,18 @@ def estimated_psi(m, nodes, train, tolerance=1e-2):
             float(np.linalg.norm(residual) / norm), np.abs(residual[v_cols]) / norm)
 
 
-def check_profile(track, train, inputs, profile, running_time=None, tolerance=1e-2, objective="energy"):
-    """Regime check of a result's profile as the energy-optimal run for ``running_time``.
+def check_profile(track, train, inputs, trajectory, running_time=None, tolerance=1e-2, objective="energy"):
+    """Regime check of a result's :class:`~ecostudy.core.types.Trajectory` as the energy-optimal run
+    for ``running_time``; ``inputs`` names the stops and the grid size (``inputs.json``).
 
     ``running_time`` None: the profile's own time, fixed. Given: arrive by then (a window), so a
     profile that arrives earlier than it needs to is tested as what it is offered as.
     ``objective``: ``energy`` (eq. 2.17) or ``net_energy`` (eq. 7.4, regeneration credited).
     """
     case = prepare(track, train, inputs["from"], inputs["to"], inputs["points"])
-    x = profile["position_m"].to_numpy()
+    x, v, dt, ft, fb = trajectory
     if len(x) != len(case.nodes) or not np.allclose(x, case.nodes, atol=1e-3):
         raise ValueError("the profile's positions differ from the grid rebuilt from inputs.json")
-    v = profile["speed_kmh"].to_numpy() * KMH
-    dt = np.diff(profile["time_s"].to_numpy())
-    ft = profile["traction_force_kN"].to_numpy()[:-1] * KN
-    fb = profile["braking_force_kN"].to_numpy()[:-1] * KN
     own = float(dt.sum())
     timing = {"running_time": own} if running_time is None else {"window": (0.0, float(running_time))}
     m = build(case, (v, dt, ft, fb), objective, {}, **timing)
@@ -192,20 +183,3 @@ def check_profile(track, train, inputs, profile, running_time=None, tolerance=1e
     return out, psi
 
 
-def check_result(result_dir, running_time=None):
-    """:func:`check_profile` of an `ecostudy solve` output folder (inputs.json, summary.json, profile.csv).
-
-    A net-energy run is checked against eq. 7.4; energy and all-out runs against eq. 2.17.
-    """
-
-
-    result_dir = Path(result_dir)
-    try:
-        inputs = json.loads((result_dir / "inputs.json").read_text())
-        profile = pd.read_csv(result_dir / "profile.csv")
-        summary = json.loads((result_dir / "summary.json").read_text())
-    except (OSError, ValueError) as exc:
-        raise InputError(problem(result_dir, "", f"not a result folder of `ecostudy solve` ({exc})"))
-    objective = "net_energy" if summary.get("objective") == "net_energy" else "energy"
-    return check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, profile, running_time,
-                         objective=objective)[0]

@@ -8,10 +8,10 @@ import pandas as pd
 
 from ecostudy.analysis import pontryagin, regimes
 from ecostudy.analysis.summary import run_summary
-from ecostudy.analysis.tables import Trajectory, handles, tabulate
+from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import verify
-from ecostudy.core.types import Timing
+from ecostudy.core.types import Timing, Trajectory
 from ecostudy.core.units import KWH
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import (
@@ -40,7 +40,7 @@ class RunResult:
     handle: np.ndarray
     trace: object = None
     stages: dict = field(default_factory=dict)
-    das: tuple = None  # (advice table, simulated outcome) when a DAS method was asked for
+    das: object = None  # das.advice.DasRun when a DAS method was asked for
     trajectory: Trajectory = None  # the run in SI arrays: read these, not the display table
 
     @property

@@ -1,26 +1,9 @@
 """A solved run as numbers a reader uses: handles, the regenerated share of braking, the profile
-table with its totals, and :class:`Trajectory`, the SI arrays of a run."""
-from typing import NamedTuple
-
+table with its totals."""
 import numpy as np
 import pandas as pd
 
 from ecostudy.core.units import KN, KW, KWH, to_kmh
-
-
-class Trajectory(NamedTuple):
-    """A run on its grid in SI: node positions and speeds, interval times and forces [m, m/s, s, N]."""
-
-    nodes: np.ndarray
-    v: np.ndarray
-    dt: np.ndarray
-    ft: np.ndarray
-    fb: np.ndarray
-
-    @property
-    def time(self):
-        """Clock at every node [s], 0 at the start of the run."""
-        return np.concatenate([[0.0], np.cumsum(self.dt)])
 
 
 def handles(train, v, ft, fb):

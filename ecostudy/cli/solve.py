@@ -100,9 +100,8 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
         if windows and das.value != "round":
             raise InputError(problem(str(study), "windows", f"--das {das.value} does not handle timing "
                                      "windows on the way yet; use --das round"))
-        block, advice, outcome = das_run(result, das.value, time_limit=das_time_limit)
-        result.summary["das"] = block
-        result.das = (advice, outcome)
+        result.das = das_run(result, das.value, time_limit=das_time_limit)
+        result.summary["das"] = result.das.summary
     write_run(result, out_dir, plot=not no_plot)
     paths = (st_paths if study is not None else (Path(track), Path(train)))
     write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
@@ -141,7 +140,7 @@ def solve(
 
 
 def _check(result_dir, time):
-    from ecostudy.analysis.pontryagin import check_result
+    from ecostudy.studies.check import check_result
     from ecostudy.io.writers import write_json
     result_dir = Path(result_dir)
     report = check_result(result_dir, time)

@@ -1,8 +1,10 @@
-"""SI objects shared by every layer: a train, a track, a timing request, a timing point, a supply.
+"""SI objects shared by every layer: a train, a track, a timing request, a timing point, a supply,
+a state and a run's trajectory.
 
 Built by the loaders (:mod:`ecostudy.io.loaders`) or in code; everything here is SI.
 """
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -87,3 +89,18 @@ class State:
     position: float = 0.0
     speed: float = 0.0
     time: float = 0.0
+
+
+class Trajectory(NamedTuple):
+    """A run on its grid in SI: node positions and speeds, interval times and forces [m, m/s, s, N]."""
+
+    nodes: np.ndarray
+    v: np.ndarray
+    dt: np.ndarray
+    ft: np.ndarray
+    fb: np.ndarray
+
+    @property
+    def time(self):
+        """Clock at every node [s], 0 at the start of the run."""
+        return np.concatenate([[0.0], np.cumsum(self.dt)])

@@ -15,6 +15,7 @@ positions, cruise with a speed-holding controller (``simulate.simulate`` with ta
 reported energies, arrival and stop are those of that simulation.
 """
 import time
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -24,6 +25,15 @@ from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import Driven, simulate
 from ecostudy.core.units import KMH, to_kmh, to_kwh
 from ecostudy.ocp import phases, session
+
+
+class DasRun(NamedTuple):
+    """A DAS method's result: its ``das`` summary block, the advice table and the advice as a driver
+    follows it (re-simulated)."""
+
+    summary: dict
+    advice: pd.DataFrame
+    driven: Driven
 
 
 def mode_name(level, target=None):
@@ -129,7 +139,7 @@ def summary_block(method, result, outcome, advice, status, **extra):
 def das_round(result):
     outcome = nearest_levels(result.segment, result.train, result.nodes, result.handle)
     advice = advice_table(result.nodes, outcome.handle, outcome.trace)
-    return summary_block("round", result, outcome, advice, "re-simulated"), advice, outcome
+    return DasRun(summary_block("round", result, outcome, advice, "re-simulated"), advice, outcome)
 
 
 def objective_of(result):
@@ -197,7 +207,7 @@ def das_phases(result, points=None):
                    planned_traction_energy_kWh=plan_kwh, phases=len(layout.phases),
                    intervals=layout.intervals, solve_s=outcome.seconds + outcome.nl_seconds,
                    build_s=outcome.build_seconds)
-    return block, advice, sim
+    return DasRun(block, advice, sim)
 
 
 def nearest_levels(segment, train, nodes, optimal_handle):

@@ -10,7 +10,7 @@ DAS_COLUMNS = ("method", "traction_energy_kWh", "net_energy_kWh", "gap_to_ato_pc
 def das_columns(result, method, points=None, time_limit=60.0):
     """``das_`` columns of a table row for a DAS run of ``result``; a failed run is recorded, not raised."""
     try:
-        block = das_run(result, method, points, time_limit)[0]
+        block = das_run(result, method, points, time_limit).summary
     except EcostudyError as exc:
         block = {"method": method, "status": f"failed: {exc}"}
     row = {f"das_{k}": block.get(k) for k in DAS_COLUMNS}
@@ -20,7 +20,7 @@ def das_columns(result, method, points=None, time_limit=60.0):
 
 
 def das_run(result, method="round", points=None, time_limit=60.0):
-    """(summary block, advice table, simulated outcome) of a DAS run for an ATO ``result``."""
+    """The :class:`~ecostudy.das.advice.DasRun` of method ``round``, ``phases`` or ``minlp`` for an ATO ``result``."""
     if method == "round":
         return das_round(result)
     if method == "phases":

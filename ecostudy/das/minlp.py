@@ -5,13 +5,13 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.units import to_kwh
-from ecostudy.das.advice import advice_outcome, objective_of, refine, solve_phases, summary_block
+from ecostudy.das.advice import DasRun, advice_outcome, objective_of, refine, solve_phases, summary_block
 from ecostudy.ocp import phases
 from ecostudy.ocp.modechoice import search
 
 
 def das_minlp(result, points=None, time_limit=60.0):
-    """(summary block, advice, simulated outcome): the best of ``phases`` and the MINLP's pattern."""
+    """The :class:`DasRun` of the better of ``phases`` and the MINLP's pattern."""
     points = points or len(result.nodes)
     objective = objective_of(result)
     # stage 1 of `phases` (the full sequence of every sector) is the MINLP's starting pattern
@@ -50,4 +50,4 @@ def das_minlp(result, points=None, time_limit=60.0):
                                    "(its bound exceeds the best solution); the ATO optimum is the relaxation"))
     block["bound_kWh"] = oa_bound if valid else None
     block["gap_pct"] = 100 * (best_kwh - oa_bound) / best_kwh if valid else None
-    return block, advice, sim
+    return DasRun(block, advice, sim)

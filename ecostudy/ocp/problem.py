@@ -12,7 +12,7 @@ from pyomo.common.gc_manager import PauseGC
 from ecostudy.core import kinematics
 from ecostudy.core.errors import InfeasibleError, SolverError
 from ecostudy.core.grid import make_grid, make_segment, node_limits
-from ecostudy.core.units import KMH, to_kmh
+from ecostudy.core.units import to_kmh
 from ecostudy.ocp import session
 from ecostudy.ocp import space
 
@@ -85,9 +85,9 @@ def capped_guess(case, running_time):
 
 
 def warm_guess(previous, case):
-    """Starting point interpolated from a previous result's profile (speed vs position)."""
-    prof = previous.profile
-    speeds = np.minimum(np.interp(case.nodes, prof["position_m"], prof["speed_kmh"] * KMH), case.limits)
+    """Starting point interpolated from a previous result's trajectory (speed vs position)."""
+    run = previous.trajectory
+    speeds = np.minimum(np.interp(case.nodes, run.nodes, run.v), case.limits)
     speeds[0] = speeds[-1] = 0.0
     return guess_from_speeds(case, speeds)
 

@@ -190,8 +190,7 @@ def leg_arrays(b):
 
 def guess_from_space(result, leg):
     """(s, v) on the leg's steps from a space-domain run of the same segment (its time profile)."""
-    t = result.profile["time_s"].to_numpy()
-    x = result.profile["position_m"].to_numpy()
+    t, x = result.trajectory.time, result.trajectory.nodes
     scale = leg.running_time / t[-1]
     tj = np.arange(leg.steps + 1) * leg.dt / scale
     s = np.interp(tj, t, x)

@@ -13,7 +13,7 @@ def write_run(result, out_dir, plot=True):
     write_csv(out_dir / "profile.csv", result.profile)
     write_json(out_dir / "summary.json", result.summary)
     if result.das is not None:
-        write_csv(out_dir / "advice.csv", result.das[0])
+        write_csv(out_dir / "advice.csv", result.das.advice)
     if plot:
         from ecostudy.report.plots import speed_plot
         atomic_write(out_dir / "speed.png", lambda tmp: speed_plot(result, tmp))

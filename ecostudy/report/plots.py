@@ -38,7 +38,7 @@ def speed_plot(result, path):
     if result.trace is not None:
         ax.plot(result.trace.x, to_kmh(result.trace.v), color="k", lw=0.8, ls="--", label="re-simulated")
     if result.das is not None:
-        advice, outcome = result.das
+        advice, outcome = result.das.advice, result.das.driven
         ax.plot(outcome.trace.x, to_kmh(outcome.trace.v), color="tab:orange", lw=1.1,
                 label=f"driver advice ({s['das']['method']}), simulated")
         colours = {"coast": "tab:gray", "full service braking": "tab:red"}

@@ -32,7 +32,7 @@ def compare(track, train, from_stop, to_stop, timing, points=1000):
         except InfeasibleError as exc:
             rows_extra.append({"strategy": name, "note": str(exc)})
     outcomes.append(nearest_levels(case.segment, train, case.nodes, ato.handle))
-    block, advice, phased = das_phases(ato, points)
+    block, _, phased = das_phases(ato, points)
     outcomes.append(phased)
     rows = [o.row(train, case.segment.distance) for o in outcomes] + rows_extra
     rows[len(outcomes) - 1]["handle_changes"] = block["mode_changes"]
