@@ -63,8 +63,8 @@ def psi_bounds(labels, eta=0.0, capped=None, friction=None):
 def psi_from_multipliers(mu, nodes, train, energy_ref, traction_efficiency=1.0):
     """psi_k = lambda / v per interval from the speed-recursion multipliers (Ipopt's y, = Pyomo's dual)."""
     ds = np.diff(nodes)
-    return (np.asarray(mu) * (space.KN / train.mass) * energy_ref * traction_efficiency
-            / (ds * space.KN))
+    return (np.asarray(mu) * (space.FORCE_SCALE / train.mass) * energy_ref * traction_efficiency
+            / (ds * space.FORCE_SCALE))
 
 
 def ipopt_psi(m, nodes, train, objective="energy"):
@@ -168,7 +168,7 @@ def check_profile(track, train, inputs, trajectory, running_time=None, tolerance
     m = build(case, (v, dt, ft, fb), objective, {}, **timing)
     if hasattr(m, "fr"):  # the electric brake takes what it can of the profile's braking
         for k, f in enumerate(np.minimum(fb, regimes.regenerative_limit(train, v))):
-            m.fr[k].set_value(float(f) / space.KN)
+            m.fr[k].set_value(float(f) / space.FORCE_SCALE)
     psi, residual, _ = estimated_psi(m, case.nodes, train, tolerance)
     psi = psi * (train.traction_efficiency if objective == "net_energy" else 1.0)
     net = objective == "net_energy" and train.regeneration is not None

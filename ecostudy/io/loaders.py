@@ -215,6 +215,17 @@ def load_track(path):
     return track_from_schema(validate(schemas.TrackFile, track_document(path), path))
 
 
+def train_from_dict(data, where="train (in code)"):
+    """A :class:`Train` from the fields of a train file (units in the field names), validated and
+    converted exactly as a file is; ``where`` names it in error messages."""
+    return train_from_schema(validate(schemas.TrainFile, data, where), where)
+
+
+def track_from_dict(data, where="track (in code)"):
+    """A :class:`Track` from the fields of a track file, validated and converted as a file is."""
+    return track_from_schema(validate(schemas.TrackFile, data, where))
+
+
 def load_timetable(path):
     """Read a timetable file (YAML, or a TTOBench journey JSON)."""
     data = read_document(path)

@@ -25,7 +25,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.ocp import phases
-from ecostudy.ocp.space import KN
+from ecostudy.ocp.space import FORCE_SCALE
 
 
 def define_mode_choice(m, layout, train):
@@ -39,7 +39,7 @@ def define_mode_choice(m, layout, train):
 
     m.z = pyo.Var(m.Q, m.J, domain=pyo.Binary, initialize=start)
     m.one_mode = pyo.Constraint(m.Q, rule=lambda m, q: sum(m.z[q, j] for j in m.J) == 1)
-    t_max, b_max = train.traction.peak / KN, train.braking.peak / KN
+    t_max, b_max = train.traction.peak / FORCE_SCALE, train.braking.peak / FORCE_SCALE
     v_max = float(max(s.limit for s in layout.sectors))
     trac = [j for j, md in enumerate(modes) if md.kind == "traction"]
     cruise = next(j for j, md in enumerate(modes) if md.kind == "cruise")

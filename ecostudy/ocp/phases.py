@@ -32,7 +32,7 @@ import pyomo.environ as pyo
 
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import interval_resistance, smooth_min
-from ecostudy.ocp.space import KN, energy_reference  # KN: force unit of the NLP variables [N]
+from ecostudy.ocp.space import FORCE_SCALE, energy_reference
 
 MIN_PHASE = 1.0  # [m]: shorter phases are dropped from the driver's advice
 
@@ -122,7 +122,7 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
     secs, n, N = layout.sectors, layout.substeps, layout.intervals
     lengths, v0 = guess
     M = train.mass
-    per_kg, km = tuple(float(x / M) for x in train.davis), float(KN / M)
+    per_kg, km = tuple(float(x / M) for x in train.davis), float(FORCE_SCALE / M)
     m = pyo.ConcreteModel(name="ecostudy_das_phases")
     m.Q, m.S = pyo.RangeSet(0, len(layout.phases) - 1), pyo.RangeSet(0, len(secs) - 1)
     m.I, m.K = pyo.RangeSet(0, N - 1), pyo.RangeSet(0, N)
@@ -138,8 +138,8 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
     h = {s: sec.length / n for s, sec in enumerate(secs)}  # reference step [m]
     dt0 = [2 * float(lengths[i // n]) / n / max(v0[i] + v0[i + 1], 0.5) for i in range(N)]
     m.dt = pyo.Var(m.I, bounds=(0.0, None), initialize=lambda m, i: dt0[i])
-    m.ft = pyo.Var(m.I, bounds=(0.0, train.traction.peak / KN), initialize=0.0)
-    m.fb = pyo.Var(m.I, bounds=(0.0, train.braking.peak / KN), initialize=0.0)
+    m.ft = pyo.Var(m.I, bounds=(0.0, train.traction.peak / FORCE_SCALE), initialize=0.0)
+    m.fb = pyo.Var(m.I, bounds=(0.0, train.braking.peak / FORCE_SCALE), initialize=0.0)
 
     def accel(i, v_a, v_b):
         """Mean acceleration over an interval [m/s^2] (physics.interval_resistance, as ocp.space)."""
@@ -150,9 +150,9 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
         m.v[i + 1] ** 2 - m.v[i] ** 2 - 2 * ds[i] * accel(i, m.v[i], m.v[i + 1])) / (2 * h[layout.owner(i)[1]]) == 0.0)
     m.time = pyo.Constraint(m.I, rule=lambda m, i: (
         m.dt[i] * (m.v[i] + m.v[i + 1]) - 2 * ds[i]) / (2 * h[layout.owner(i)[1]]) == 0.0)
-    m.mean_t = {i: 0.5 * (train.traction.smooth_force(m.v[i]) + train.traction.smooth_force(m.v[i + 1])) / KN
+    m.mean_t = {i: 0.5 * (train.traction.smooth_force(m.v[i]) + train.traction.smooth_force(m.v[i + 1])) / FORCE_SCALE
                 for i in range(N)}
-    m.mean_b = {i: 0.5 * (train.braking.smooth_force(m.v[i]) + train.braking.smooth_force(m.v[i + 1])) / KN
+    m.mean_b = {i: 0.5 * (train.braking.smooth_force(m.v[i]) + train.braking.smooth_force(m.v[i + 1])) / FORCE_SCALE
                 for i in range(N)}
     if extend is not None:  # a variant passed in: the mode-choice MINLP (ocp.modechoice)
         extend(m, layout, train)
@@ -196,7 +196,7 @@ def _objective(m, train, segment, layout, ds, objective):
     """Traction work (thesis 000 eq. 2.16) or net energy (eq. 7.3) over an O(1) reference."""
     e_ref = m.energy_ref = energy_reference(train, segment)
     N = layout.intervals
-    work = KN * sum(m.ft[i] * ds[i] for i in range(N))
+    work = FORCE_SCALE * sum(m.ft[i] * ds[i] for i in range(N))
     m.traction_work = pyo.Expression(expr=work)
     if objective == "energy":
         expr = work / e_ref
@@ -204,8 +204,8 @@ def _objective(m, train, segment, layout, ds, objective):
         regen = 0.0
         if train.regeneration is not None:
             cap = {i: 0.5 * (train.regeneration.smooth_force(m.v[i])
-                             + train.regeneration.smooth_force(m.v[i + 1])) / KN for i in range(N)}
-            regen = KN * sum(smooth_min(m.fb[i], cap[i], 0.01 * train.braking.peak / KN) * ds[i] for i in range(N))
+                             + train.regeneration.smooth_force(m.v[i + 1])) / FORCE_SCALE for i in range(N)}
+            regen = FORCE_SCALE * sum(smooth_min(m.fb[i], cap[i], 0.01 * train.braking.peak / FORCE_SCALE) * ds[i] for i in range(N))
         expr = (work / train.traction_efficiency - train.regeneration_efficiency * regen) / e_ref
     else:
         raise ValueError(f"DAS runs minimise energy or net_energy, not {objective!r}")
@@ -257,6 +257,6 @@ def solution(m, layout):
     lengths = np.array([pyo.value(m.L[q]) for q in m.Q])
     v = np.array([pyo.value(m.v[k]) for k in m.K])
     dt = np.array([pyo.value(m.dt[i]) for i in m.I])
-    ft = np.array([pyo.value(m.ft[i]) for i in m.I]) * KN
-    fb = np.array([pyo.value(m.fb[i]) for i in m.I]) * KN
+    ft = np.array([pyo.value(m.ft[i]) for i in m.I]) * FORCE_SCALE
+    fb = np.array([pyo.value(m.fb[i]) for i in m.I]) * FORCE_SCALE
     return lengths, node_positions(layout, lengths), v, dt, ft, fb

@@ -20,7 +20,7 @@ from ecostudy.core.kinematics import interval_grade_force
 from ecostudy.core.physics import interval_resistance
 from ecostudy.core.physics import smooth_table
 
-KN = 1000.0  # force unit of the NLP variables [N]: kN (bench/bench_variants.py measures N)
+FORCE_SCALE = 1000.0  # [N] per NLP force unit: forces in kN (bench/bench_variants.py measures N)
 # multiplier on the speed recursion: 1 = dynamics per unit mass (bench_variants.py measures M)
 DYNAMICS_SCALE = 1.0
 # weight of traction + braking work in the all-out objective: removes the flat direction of
@@ -30,7 +30,7 @@ TIME_REGULARISATION = 1e-4
 
 def _bounded(envelope):
     """Upper bound of a force variable [kN]."""
-    return envelope.peak / KN
+    return envelope.peak / FORCE_SCALE
 
 
 def energy_reference(train, segment):
@@ -58,11 +58,11 @@ def define_variables(m, nodes, limits, train, guess, with_regeneration, movable=
         m.v[0].fix(0.0)
         m.v[n].fix(0.0)
     m.dt = pyo.Var(m.I, bounds=(0.0, None), initialize=lambda m, k: float(dt0[k]))
-    m.ft = pyo.Var(m.I, bounds=(0.0, _bounded(train.traction)), initialize=lambda m, k: float(ft0[k]) / KN)
-    m.fb = pyo.Var(m.I, bounds=(0.0, _bounded(train.braking)), initialize=lambda m, k: float(fb0[k]) / KN)
+    m.ft = pyo.Var(m.I, bounds=(0.0, _bounded(train.traction)), initialize=lambda m, k: float(ft0[k]) / FORCE_SCALE)
+    m.fb = pyo.Var(m.I, bounds=(0.0, _bounded(train.braking)), initialize=lambda m, k: float(fb0[k]) / FORCE_SCALE)
     if with_regeneration:
-        top = min(train.regeneration.max_force, train.braking.peak) / KN
-        m.fr = pyo.Var(m.I, bounds=(0.0, top), initialize=lambda m, k: min(float(fb0[k]) / KN, top))
+        top = min(train.regeneration.max_force, train.braking.peak) / FORCE_SCALE
+        m.fr = pyo.Var(m.I, bounds=(0.0, top), initialize=lambda m, k: min(float(fb0[k]) / FORCE_SCALE, top))
 
 
 def define_dynamics(m, nodes, segment, train):
@@ -70,7 +70,7 @@ def define_dynamics(m, nodes, segment, train):
     ds = np.diff(nodes).tolist()  # Python floats: numpy scalars make Pyomo expressions slow
     per_kg = tuple(float(x / train.mass) for x in train.davis)
     fixed = (interval_grade_force(segment, train, nodes) / train.mass).tolist()
-    km, s = float(KN / train.mass), DYNAMICS_SCALE
+    km, s = float(FORCE_SCALE / train.mass), DYNAMICS_SCALE
 
     def speed(m, k):
         # (v1^2 - v0^2) / (2 ds) = w ((F_T - F_B) / M - R(v0, v1) / M)  (physics.interval_resistance);
@@ -90,14 +90,14 @@ def _envelope_constraints(m, name, force, envelope):
     """force_k <= envelope(v) at both ends of interval k."""
     if envelope.kind == "table":
         c0, c1, terms = envelope.coefficients  # in N; the force variables are in kN
-        scaled = (c0 / KN, c1 / KN, [(a / KN, v) for a, v in terms])
+        scaled = (c0 / FORCE_SCALE, c1 / FORCE_SCALE, [(a / FORCE_SCALE, v) for a, v in terms])
         m.add_component(name + "_env", pyo.Expression(
             m.K, rule=lambda m, k: smooth_table(m.v[k], scaled, envelope.width)))
         env = getattr(m, name + "_env")
         m.add_component(name + "_lo", pyo.Constraint(m.I, rule=lambda m, k: force[k] <= env[k]))
         m.add_component(name + "_hi", pyo.Constraint(m.I, rule=lambda m, k: force[k] <= env[k + 1]))
     elif np.isfinite(envelope.max_power):
-        pk = envelope.max_power / KN  # [kW]; force [kN] * speed [m/s] is in kW
+        pk = envelope.max_power / FORCE_SCALE  # [kW]; force [kN] * speed [m/s] is in kW
         m.add_component(name + "_lo", pyo.Constraint(m.I, rule=lambda m, k: force[k] * m.v[k] / pk <= 1.0))
         m.add_component(name + "_hi", pyo.Constraint(m.I, rule=lambda m, k: force[k] * m.v[k + 1] / pk <= 1.0))
 
@@ -180,13 +180,13 @@ def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
     mixed       w_t T + w_e E / Ms (thesis 001 eq. 4.1a, energy per unit mass [J/kg])
     """
     ds = np.diff(nodes).tolist()
-    m.traction_work = pyo.Expression(expr=KN * sum(share(m, k, ds[k] * m.ft[k]) for k in m.I))
-    braking = KN * sum(share(m, k, ds[k] * m.fb[k]) for k in m.I) / energy_ref
+    m.traction_work = pyo.Expression(expr=FORCE_SCALE * sum(share(m, k, ds[k] * m.ft[k]) for k in m.I))
+    braking = FORCE_SCALE * sum(share(m, k, ds[k] * m.fb[k]) for k in m.I) / energy_ref
     energy = m.traction_work / energy_ref
     if objective == "energy":
         expr = energy
     elif objective == "net_energy":  # a train without an electric brake regenerates nothing
-        regen = KN * sum(share(m, k, ds[k] * m.fr[k]) for k in m.I) if hasattr(m, "fr") else 0.0
+        regen = FORCE_SCALE * sum(share(m, k, ds[k] * m.fr[k]) for k in m.I) if hasattr(m, "fr") else 0.0
         expr = (m.traction_work / train.traction_efficiency - train.regeneration_efficiency * regen) / energy_ref
     elif objective == "time":
         expr = m.T / time_ref + TIME_REGULARISATION * (energy + braking)
@@ -238,7 +238,7 @@ def solution_arrays(m):
     """(v, dt, F_T [N], F_B [N], F_regen [N] or None) from a solved model."""
     v = np.array([pyo.value(m.v[k]) for k in m.K])
     dt = np.array([pyo.value(m.dt[k]) for k in m.I])
-    ft = np.array([pyo.value(m.ft[k]) for k in m.I]) * KN
-    fb = np.array([pyo.value(m.fb[k]) for k in m.I]) * KN
-    fr = np.array([pyo.value(m.fr[k]) for k in m.I]) * KN if hasattr(m, "fr") else None
+    ft = np.array([pyo.value(m.ft[k]) for k in m.I]) * FORCE_SCALE
+    fb = np.array([pyo.value(m.fb[k]) for k in m.I]) * FORCE_SCALE
+    fr = np.array([pyo.value(m.fr[k]) for k in m.I]) * FORCE_SCALE if hasattr(m, "fr") else None
     return v, dt, ft, fb, fr

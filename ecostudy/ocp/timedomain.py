@@ -27,7 +27,7 @@ from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import interval_resistance, smooth_table, table_coefficients
 from ecostudy.ocp import space
 
-KN = space.KN
+FORCE_SCALE = space.FORCE_SCALE
 
 
 @dataclass
@@ -110,14 +110,14 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
     b.v = pyo.Var(b.K, bounds=(0.0, top), initialize=lambda b, j: float(v0[j]))
     for var, value in ((b.s[0], 0.0), (b.v[0], 0.0), (b.s[n], case.segment.distance), (b.v[n], 0.0)):
         var.fix(value)
-    forces = [np.asarray(f) / KN for f in guess[2:5]] if guess is not None and len(guess) >= 5 else [np.zeros(n)] * 3
-    regen_top = min(train.regeneration.max_force, train.braking.peak) / KN if train.regeneration else 0.0
-    tops = (train.traction.peak / KN, train.braking.peak / KN, regen_top)
+    forces = [np.asarray(f) / FORCE_SCALE for f in guess[2:5]] if guess is not None and len(guess) >= 5 else [np.zeros(n)] * 3
+    regen_top = min(train.regeneration.max_force, train.braking.peak) / FORCE_SCALE if train.regeneration else 0.0
+    tops = (train.traction.peak / FORCE_SCALE, train.braking.peak / FORCE_SCALE, regen_top)
     b.ft, b.fb, b.fr = (pyo.Var(b.I, bounds=(0.0, top), initialize=lambda b, j, f=f, top=top: min(float(f[j]), top))
                         for f, top in zip(forces, tops))
     mass = train.mass
     gx, gf = force_profile(case, width)
-    g_coef = table_coefficients(gx, gf / KN, 0.25 * width)
+    g_coef = table_coefficients(gx, gf / FORCE_SCALE, 0.25 * width)
     lx, lv = limit_profile(case, ramp, dt)
     l_coef = table_coefficients(lx, lv, 0.25 * width)
 
@@ -125,9 +125,9 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
         return b.s[j + 1] - b.s[j] == 0.5 * dt * (b.v[j] + b.v[j + 1])
 
     def dynamics(b, j):
-        davis = interval_resistance(b.v[j], b.v[j + 1], train.davis, 0.0) / KN
+        davis = interval_resistance(b.v[j], b.v[j + 1], train.davis, 0.0) / FORCE_SCALE
         grade = smooth_table(0.5 * (b.s[j] + b.s[j + 1]), g_coef, 0.25 * width)
-        return (b.v[j + 1] - b.v[j]) * (mass / KN) / dt == b.ft[j] - b.fb[j] - davis - grade
+        return (b.v[j + 1] - b.v[j]) * (mass / FORCE_SCALE) / dt == b.ft[j] - b.fb[j] - davis - grade
 
     def limit(b, j):
         return b.v[j] <= smooth_table(b.s[j], l_coef, 0.25 * width) - limit_margin
@@ -183,7 +183,7 @@ def leg_arrays(b):
     """The :class:`LegRun` of a solved leg block."""
     s = np.array([pyo.value(b.s[j]) for j in b.K])
     v = np.array([pyo.value(b.v[j]) for j in b.K])
-    ft, fb, fr = (np.array([pyo.value(x[j]) for j in b.I]) * KN for x in (b.ft, b.fb, b.fr))
+    ft, fb, fr = (np.array([pyo.value(x[j]) for j in b.I]) * FORCE_SCALE for x in (b.ft, b.fb, b.fr))
     p = np.array([pyo.value(b.p[j]) for j in b.I]) * 1e3
     return LegRun(s, v, ft, fb, fr, p)
 

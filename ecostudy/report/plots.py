@@ -15,16 +15,24 @@ def _steps(profile, distance):
     return x, y
 
 
+def _save(fig, path):
+    """Write ``fig`` as PNG to ``path`` and close it; with no path, return it (a notebook shows it)."""
+    if path is None:
+        return fig
+    fig.savefig(path, dpi=110, format="png")
+    plt.close(fig)
+    return None
+
+
 def _finish_speed_axes(fig, ax, path, title, xlabel="distance from departure [m]", legend_size=7):
-    """Labels, grid, legend and title of a speed-against-distance axis; save and close."""
+    """Labels, grid, legend and title of a speed-against-distance axis; save and close (or return)."""
     ax.set_xlabel(xlabel)
     ax.set_ylabel("speed [km/h]")
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=legend_size, loc="lower center", ncol=2 if len(ax.get_lines()) > 5 else 1)
     ax.set_title(title, fontsize=10)
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    return _save(fig, path)
 
 
 def speed_plot(result, path):
@@ -62,8 +70,7 @@ def speed_plot(result, path):
     axu.set_xlabel("distance from departure [m]")
     for a in (ax, axg, axu):
         a.grid(alpha=0.3)
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    return _save(fig, path)
 
 
 def pareto_plot(table, path, title="", weighted=None):
@@ -91,8 +98,7 @@ def pareto_plot(table, path, title="", weighted=None):
     axm.set_xlabel("running time [s]")
     for a in (ax, axm):
         a.grid(alpha=0.3)
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    return _save(fig, path)
 
 
 def profiles_plot(results, path, title=""):
@@ -106,7 +112,7 @@ def profiles_plot(results, path, title=""):
         p = r.profile
         ax.plot(p["position_m"], p["speed_kmh"], color=colour, lw=1.3,
                 label=f"{r.summary['running_time_s']:.1f} s, {r.summary['traction_energy_kWh']:.2f} kWh")
-    _finish_speed_axes(fig, ax, path, title)
+    return _finish_speed_axes(fig, ax, path, title)
 
 
 def compare_plot(outcomes, segment, path, title=""):
@@ -119,7 +125,7 @@ def compare_plot(outcomes, segment, path, title=""):
     for o, (colour, dash) in zip(outcomes, styles * 2):
         ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.4, color=colour, ls=dash,
                 label=f"{o.name}: {o.trace.arrival_time:.1f} s, {to_kwh(o.trace.traction_energy):.2f} kWh")
-    _finish_speed_axes(fig, ax, path, title)
+    return _finish_speed_axes(fig, ax, path, title)
 
 
 def journey_plot(results, path, title="", passing=()):
@@ -139,7 +145,7 @@ def journey_plot(results, path, title="", passing=()):
             ax.plot(offset + p["position_m"], p["speed_kmh"], color=colour, lw=1.2, label=label)
             offset += r.summary["distance_m"]
             ax.axvline(offset, color="grey", lw=0.5)
-    _finish_speed_axes(fig, ax, path, title, xlabel="distance along the journey [m]", legend_size=8)
+    return _finish_speed_axes(fig, ax, path, title, xlabel="distance along the journey [m]", legend_size=8)
 
 
 def network_plot(fleet, outcome, path, title=""):
