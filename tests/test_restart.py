@@ -7,8 +7,11 @@ import pytest
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.errors import InputError
 from ecostudy.core.types import State, Timing, Window
+from ecostudy.io.loaders import load_track, load_train
 from ecostudy.ocp.problem import prepare
 from ecostudy.ocp.restart import Replanner, start_interval
+
+from .conftest import TRACKS, TRAINS
 
 K = 500
 
@@ -18,6 +21,13 @@ def planned(metro, amsterdam):
     """The Amsterdam case (76 s) as a movable model, and its plan from standstill."""
     replanner = Replanner(prepare(amsterdam, metro, "Rokin", "Centraal", K), running_time=76.0)
     return replanner, replanner.solve()
+
+
+@pytest.fixture(scope="module")
+def regional_ato():
+    train = load_train(TRAINS / "regional_alstom.yaml")
+    track = load_track(TRACKS / "regional_808m.yaml")
+    return solve_run(track, train, "Origin", "Destination", Timing(running_time=80.0), points=500), train
 
 
 def test_movable_model_from_standstill_is_the_ordinary_optimum(planned, metro, amsterdam):
@@ -73,3 +83,29 @@ def test_a_window_behind_the_start_or_a_start_off_the_segment_is_refused(metro, 
         replanner.solve(State(500.0, 15.0, 40.0))
     with pytest.raises(InputError, match="not on the segment"):
         replanner.solve(State(case.segment.distance + 5.0, 0.0, 0.0))
+
+
+def test_the_das_phases_nlp_replans_from_a_mid_run_state(regional_ato):
+    """The phases NLP (thesis 000 Ch. 5) as a movable model: from states on its own optimum in the
+    first sector (where traction is still to come) the tail's traction work is the same."""
+    from ecostudy.das.advice import guess_from_result
+    from ecostudy.ocp import phases
+    from ecostudy.ocp.restart import set_end, set_phases_start
+    from ecostudy.ocp.session import Session
+    ato, train = regional_ato
+    layout = phases.Layout.make(phases.sectors(ato.segment, train), phases.sequence(train), 1)
+    layout.substeps = phases.substeps_for(500, len(layout.phases))
+    m = phases.build(ato.segment, train, layout, guess_from_result(ato, layout), running_time=80.0, movable=True)
+    session = Session(m)
+    assert session.solve().optimal
+    _, x, v, dt, ft, _ = phases.solution(m, layout)
+    t = np.concatenate([[0.0], np.cumsum(dt)])
+    for k in (3, 5):
+        tail = float(np.sum(ft[k:] * np.diff(x)[k:]))
+        set_phases_start(session, m, layout, State(x[k], v[k], t[k]))
+        set_end(session, m, (0.0, 0.0), 80.0)
+        assert session.solve().optimal
+        lengths, _, v2, dt2, ft2, _ = phases.solution(m, layout)
+        x2 = phases.node_positions(layout, lengths, origin=x[k])
+        assert float(np.sum(ft2 * np.diff(x2))) == pytest.approx(tail, rel=1e-3)
+        assert t[k] + dt2.sum() == pytest.approx(80.0, abs=1e-6) and x2[-1] == pytest.approx(x[-1], abs=1e-6)

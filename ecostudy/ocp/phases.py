@@ -114,10 +114,13 @@ def substeps_for(points, n_phases, least=4):
 
 
 def build(segment, train, layout, guess, running_time=None, window=None, objective="energy",
-          extend=None):
+          extend=None, movable=False):
     """The phases NLP of ``layout`` (or, with ``extend``, e.g. the mode-choice MINLP of ``ocp/modechoice.py``).
 
-    ``guess`` = (phase lengths [m], node speeds [m/s]); times follow from them.
+    ``guess`` = (phase lengths [m], node speeds [m/s]); times follow from them. A ``movable``
+    model holds the standstill at both ends by bounds and fills each sector to a share of its
+    length (bounds 1) from a start clock t0 (bounds 0), so ``ocp.restart.set_phases_start`` can
+    re-plan from any state: the sectors behind the start get share 0 (their phases length 0).
     """
     secs, n, N = layout.sectors, layout.substeps, layout.intervals
     lengths, v0 = guess
@@ -128,12 +131,18 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
     m.I, m.K = pyo.RangeSet(0, N - 1), pyo.RangeSet(0, N)
     m.L = pyo.Var(m.Q, bounds=lambda m, q: (0.0, secs[layout.phases[q][0]].length),
                   initialize=lambda m, q: float(np.clip(lengths[q], 0.0, secs[layout.phases[q][0]].length)))
+    if movable:
+        m.share = pyo.Var(m.S, bounds=(1.0, 1.0), initialize=1.0)
+        m.t0 = pyo.Var(bounds=(0.0, 0.0), initialize=0.0)
     m.sector_length = pyo.Constraint(m.S, rule=lambda m, s: sum(
-        m.L[q] for q in m.Q if layout.phases[q][0] == s) / secs[s].length == 1.0)
+        m.L[q] for q in m.Q if layout.phases[q][0] == s) / secs[s].length == (m.share[s] if movable else 1.0))
     limits = layout.node_limits()
     m.v = pyo.Var(m.K, bounds=lambda m, k: (0.0, float(limits[k])), initialize=lambda m, k: float(np.clip(v0[k], 0.0, limits[k])))
-    m.v[0].fix(0.0)
-    m.v[N].fix(0.0)
+    for k in (0, N):
+        if movable:
+            m.v[k].setub(0.0)
+        else:
+            m.v[k].fix(0.0)
     ds = {i: m.L[i // n] / n for i in range(N)}
     h = {s: sec.length / n for s, sec in enumerate(secs)}  # reference step [m]
     dt0 = [2 * float(lengths[i // n]) / n / max(v0[i] + v0[i + 1], 0.5) for i in range(N)]
@@ -161,8 +170,11 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
     bounds = (running_time, running_time) if running_time is not None else window
     m.T = pyo.Var(bounds=bounds, initialize=float(np.clip(np.sum(dt0), *bounds)))
     t_ref = max(running_time or window[1], 1.0)
-    m.arrival = pyo.Constraint(expr=(sum(m.dt[i] for i in m.I) - m.T) / t_ref == 0.0)
+    clock = m.t0 if movable else 0.0
+    m.arrival = pyo.Constraint(expr=(sum(m.dt[i] for i in m.I) + clock - m.T) / t_ref == 0.0)
     _objective(m, train, segment, layout, ds, objective)
+    if movable:  # what a re-plan restores (ocp.restart.set_phases_start)
+        m.base_v = [(0.0, float(limits[k])) for k in m.K]
     return m
 
 
@@ -212,13 +224,14 @@ def _objective(m, train, segment, layout, ds, objective):
     m.objective = pyo.Objective(expr=expr, sense=pyo.minimize)
 
 
-def node_positions(layout, lengths):
-    """Positions of every node of the layout for given phase lengths [m]."""
+def node_positions(layout, lengths, origin=0.0):
+    """Positions of every node of the layout for given phase lengths [m]; ``origin``: where a
+    re-plan starts (the sectors behind it have phases of length 0, their nodes sit there)."""
     n = layout.substeps
-    pos, start = [0.0], 0.0
+    pos, start = [float(origin)], float(origin)
     for q, (s, _) in enumerate(layout.phases):
         if q == 0 or layout.phases[q - 1][0] != s:
-            start = layout.sectors[s].start
+            start = max(layout.sectors[s].start, origin)
         step = lengths[q] / n
         pos.extend(start + step * (j + 1) for j in range(n))
         start += lengths[q]

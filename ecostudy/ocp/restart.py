@@ -12,6 +12,8 @@ and every re-plan changes bounds only:
   arrival time, fixed or a window.
 
 The multiplied-through recursions (``space.define_dynamics``) are what make a zero share regular.
+The DAS phases NLP (``ocp.phases.build(movable=True)``) re-plans the same way by sector shares
+(:func:`set_phases_start`).
 """
 from typing import NamedTuple
 
@@ -65,9 +67,34 @@ def set_start(session, m, nodes, state):
                              [state.speed] * (k + 1) + [0.0] * k)
 
 
+def set_phases_start(session, m, layout, state):
+    """Bounds of a movable phases NLP (``ocp.phases.build(movable=True)``) for a run from ``state``:
+    the sectors behind it filled to share 0 (their phases length 0, the speed carried through
+    unchanged), the sector holding it to the share still to run."""
+    secs = layout.sectors
+    if not 0.0 <= state.position < secs[-1].end:
+        raise InputError(f"start position {state.position:.1f} m is not on the segment [0, {secs[-1].end:.1f}) m")
+    s0 = next(s for s, sec in enumerate(secs) if state.position < sec.end)
+    shares = [0.0] * s0 + [(secs[s0].end - state.position) / secs[s0].length] + [1.0] * (len(secs) - s0 - 1)
+    first = next(q for q, (s, _) in enumerate(layout.phases) if s >= s0) * layout.substeps  # first node of s0
+    variables, lows, highs = [m.t0] + [m.share[s] for s in m.S], [state.time] + shares, [state.time] + shares
+    for k in range(len(m.K) - 1):  # the last node is the terminal condition's (set_end)
+        lo, hi = m.base_v[k]
+        if k <= first:
+            lo, hi = (state.speed, state.speed) if k == 0 else (0.0, max(hi, state.speed))
+        variables.append(m.v[k])
+        lows.append(lo)
+        highs.append(hi)
+    session.set_many_bounds(variables, lows, highs)
+    behind = [q for q, (s, _) in enumerate(layout.phases) if s < s0]
+    session.set_start_values([m.L[q] for q in behind] + [m.v[k] for k in range(first + 1)],
+                             [0.0] * len(behind) + [state.speed] * (first + 1))
+
+
 def set_end(session, m, speed=(0.0, 0.0), arrival=None):
     """Terminal speed range [m/s] at the end of the grid, and the arrival time [s] on the clock of
-    the start: a number (exact) or (earliest, latest); None leaves the arrival as it is."""
+    the start: a number (exact) or (earliest, latest); None leaves the arrival as it is. For the
+    space-domain and the phases NLP alike."""
     variables, lows, highs = [m.v[len(m.K) - 1]], [speed[0]], [speed[1]]
     if arrival is not None:
         lo, hi = (arrival, arrival) if np.isscalar(arrival) else arrival
