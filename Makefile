@@ -1,5 +1,5 @@
 # Two commands: `make run` and `make test`. Both install whatever is missing first.
-.PHONY: install run test bench doctor clean
+.PHONY: install run test test-slow test-all bench doctor clean
 
 ECOSTUDY := .venv/bin/ecostudy
 
@@ -10,6 +10,12 @@ run: install
 	$(ECOSTUDY) solve studies/default.yaml
 
 test: install
+	.venv/bin/python -m pytest -q -m "not slow"
+
+test-slow: install
+	.venv/bin/python -m pytest -q -m slow
+
+test-all: install
 	.venv/bin/python -m pytest -q
 
 doctor: install

@@ -59,7 +59,7 @@ VARIANTS = {
 
 
 def solve(track, train, points, variant, timeout):
-    model.KN = variant.get("KN", 1000.0)
+    model.FORCE_SCALE = variant.get("KN", 1000.0)
     model.DYNAMICS_SCALE = train.mass if variant.get("scale_mass") else 1.0
     run.make_grid = variant.get("grid", make_grid)
     try:
@@ -68,7 +68,7 @@ def solve(track, train, points, variant, timeout):
     except Exception as exc:  # a variant that fails is a result too
         return exc
     finally:
-        model.KN, model.DYNAMICS_SCALE, run.make_grid = 1000.0, 1.0, make_grid
+        model.FORCE_SCALE, model.DYNAMICS_SCALE, run.make_grid = 1000.0, 1.0, make_grid
 
 
 def main():

@@ -59,6 +59,7 @@ def test_two_workers_give_identical_table(reference, tmp_path):
     assert comparable(table).equals(comparable(reference[0]))
 
 
+@pytest.mark.slow
 def test_killed_study_resumes_with_the_remaining_cases(reference, tmp_path):
     path = study_file(tmp_path, tmp_path / "out")
     db = tmp_path / "out" / "results.sqlite"
@@ -112,6 +113,7 @@ def test_case_equals_a_direct_solve(reference):
     assert row["all_out_time_s"] == pytest.approx(direct.summary["all_out_time_s"], rel=1e-12)
 
 
+@pytest.mark.slow
 def test_ctrl_c_says_how_to_continue(tmp_path):
     path = study_file(tmp_path, tmp_path / "out")
     db = tmp_path / "out" / "results.sqlite"

@@ -16,6 +16,7 @@ def regional_compare():
                    "Origin", "Destination", Timing(running_time=80.0), points=500)
 
 
+@pytest.mark.slow
 def test_optimum_beats_every_strategy_at_the_same_time(regional_compare):
     table, outcomes, _ = regional_compare
     rows = table.set_index("strategy")
@@ -37,6 +38,7 @@ def test_optimum_beats_every_strategy_at_the_same_time(regional_compare):
     assert rows.loc["all-out", "saving_vs_all_out_pct"] == 0
 
 
+@pytest.mark.slow
 def test_compare_command(tmp_path):
     r = CliRunner().invoke(app, ["compare", "--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train",
                                  str(TRAINS / "amsterdam_metro.yaml"), "--time", "78", "--points", "300",

@@ -30,6 +30,7 @@ def case(request):
     return ato, fine, {m: das_run(ato, m)[0] for m in ("round", "phases")}, trk
 
 
+@pytest.mark.slow
 def test_phases_meets_the_das_acceptance(case):
     ato, fine, das, _ = case
     ph = das["phases"]
@@ -43,6 +44,7 @@ def test_phases_meets_the_das_acceptance(case):
     assert ph["gap_to_ato_on_time_pct"] < das["round"]["gap_to_ato_on_time_pct"]
 
 
+@pytest.mark.slow
 def test_marginal_energy_matches_a_finite_difference(case):
     ato, _, _, track = case
     s = ato.summary
@@ -78,6 +80,7 @@ def test_follow_replays_modes_in_order():
     assert trace.v[-1] == pytest.approx(0.0, abs=1e-6)
 
 
+@pytest.mark.slow
 def test_minlp_reports_status_bound_and_beats_round(tmp_path):
     trn = load_train(TRAINS / "amsterdam_metro.yaml")
     trk = load_track(TRACKS / "amsterdam_rokin_centraal.yaml")

@@ -19,6 +19,7 @@ def test_equal_marginal_allocation_on_synthetic_fronts():
     assert uniform([steep, flat], 22.0) == pytest.approx([11.0, 11.0])
 
 
+@pytest.mark.slow
 def test_journey_command_saves_against_the_same_percentage(tmp_path):
     r = CliRunner().invoke(app, ["journey", "--track", str(TRACKS / "metro_line_4stops.yaml"), "--train",
                                  str(TRAINS / "amsterdam_metro.yaml"), "--supplement", "10", "--points", "300",
@@ -36,6 +37,7 @@ def test_journey_command_saves_against_the_same_percentage(tmp_path):
     assert (tmp_path / "journey.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_timetable_running_times_and_their_redistribution(tmp_path):
     from .conftest import STUDIES
     r = CliRunner().invoke(app, ["journey", "--track", str(TRACKS / "metro_line_4stops.yaml"), "--train",
@@ -94,6 +96,7 @@ def test_ttobench_journey_becomes_a_plan_in_si(tmp_path):
         load_timetable(other)
 
 
+@pytest.mark.slow
 def test_journey_with_timing_windows_keeps_them_where_the_splits_do_not(tmp_path):
     from .conftest import STUDIES
     r = CliRunner().invoke(app, ["journey", "--track", str(TRACKS / "metro_line_4stops.yaml"), "--train",

@@ -77,6 +77,7 @@ def test_rule_7_11_sees_regeneration_on_eq_7_8_as_written():
     assert circuit.sensed_voltages(SUPPLY, [2500.0], [1.5e6]) == pytest.approx(drawing, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_time_domain_leg_matches_the_space_domain_optimum_on_flat_track():
     """Same physics on a common clock: the thesis 001 flat trip within 0.05 % at dt = 0.25 s."""
     track, train = load_track(TRACKS / "thesis001_flat_1km.yaml"), load_train(TRAINS / "thesis001_commuter.yaml")
@@ -103,6 +104,7 @@ def two_trains():
     return f, strategies.run_strategies(f, ["independent", "triggering", "voltage", "dissension", "joint", "following"], progress=None)
 
 
+@pytest.mark.slow
 def test_every_strategy_balances_keeps_time_and_is_verified(two_trains):
     f, out = two_trains
     for name, res in out.items():
@@ -115,6 +117,7 @@ def test_every_strategy_balances_keeps_time_and_is_verified(two_trains):
             assert 0 < rec["braking_regen_offered_kWh"] <= rec["braking_kWh"]
 
 
+@pytest.mark.slow
 def test_joint_optimum_bounds_every_rule(two_trains):
     f, out = two_trains
     joint = out["joint"]["totals"]["substation_kWh"]
@@ -126,6 +129,7 @@ def test_joint_optimum_bounds_every_rule(two_trains):
         assert out[rule]["totals"]["substation_kWh"] == pytest.approx(min(history), rel=1e-6)
 
 
+@pytest.mark.slow
 def test_following_train_keeps_its_buffer(two_trains):
     f, out = two_trains
     for name in ("following", "triggering", "voltage", "dissension"):  # the rules keep it too
@@ -133,6 +137,7 @@ def test_following_train_keeps_its_buffer(two_trains):
     assert out["independent"]["totals"]["min_separation_m"] < 360.0  # the buffer binds here
 
 
+@pytest.mark.slow
 def test_network_command_and_a_bad_study(tmp_path):
     from typer.testing import CliRunner
 
@@ -168,6 +173,7 @@ def test_dissension_weight_falls_while_neighbours_brake_and_resets_at_departure(
     assert w[2][600] > 0.95 and w[2][1199] * 0.5 == pytest.approx(0.05 / 0.175, rel=1e-3)
 
 
+@pytest.mark.slow
 def test_voltage_rule_lowers_substation_energy_with_three_trains():
     """Rule 7.11 between consecutive trains on eq. 7.8's voltages: 3 metro trains 48 s and 80 s
     apart over two segments (dt 1 s). Measured 36.80 -> 32.93 kWh (-10.5 %); with the real
@@ -183,6 +189,7 @@ def test_voltage_rule_lowers_substation_energy_with_three_trains():
     assert rule["regen_used_kWh"] > alone["regen_used_kWh"]
 
 
+@pytest.mark.slow
 def test_joint_optimum_keeps_the_current_limits_that_independent_runs_break():
     """With a 2500 A traction and 1500 A regeneration limit per train (thesis 000 Fig. 7.7),
     independent runs ask for traction the line cannot serve (flagged); the joint NLP bounds the

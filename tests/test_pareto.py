@@ -44,6 +44,7 @@ def test_points_match_individual_solves(front, regional):
         assert single.summary["traction_energy_kWh"] == pytest.approx(table["traction_energy_kWh"][i], rel=1e-3)
 
 
+@pytest.mark.slow
 def test_two_workers_and_cold_give_the_same_front(front, regional):
     table, _ = front
     track, train = regional
@@ -79,6 +80,7 @@ def test_failed_warm_start_is_retried_cold(regional, monkeypatch):
     assert table["traction_energy_kWh"].tolist() == pytest.approx(reference["traction_energy_kWh"].tolist(), rel=1e-5)
 
 
+@pytest.mark.slow
 def test_weighted_sum_points_lie_on_the_front(regional):
     """The front is convex, so every minimum of w_t T + w_e E/m lies on the epsilon-constraint front:
     never above the chords of the linearly interpolated front, and within 1 % of it."""
@@ -98,6 +100,7 @@ def test_weighted_sum_points_lie_on_the_front(regional):
     assert weighted["running_time_s"].is_monotonic_increasing  # more weight on energy: slower
 
 
+@pytest.mark.slow
 def test_das_front_beside_the_ato_front(front):
     """`pareto --das phases`: every point's advice, re-simulated, keeps the time and lies within
     0.5 % of the ATO optimum (at or above it up to the grid error); the DAS front is monotone."""

@@ -10,6 +10,7 @@ from ecostudy.studies.batch import run_study
 from .test_batch import comparable, reference, study_file  # noqa: F401,F811  (reference is a fixture)
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_gives_identical_table(reference, tmp_path):
     distributed = pytest.importorskip("distributed", reason="Dask is in the test extra; installed by make test")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
