@@ -1,8 +1,8 @@
 """ecostudy: batch studies of energy-efficient train control (EETC).
 
-Pipeline: files -> validated inputs in SI units (:mod:`ecostudy.inputs`) -> discretised segment
-(:mod:`ecostudy.grid`) -> Pyomo model (:mod:`ecostudy.model`) -> Ipopt (:mod:`ecostudy.solver`)
--> verification by simulation (:mod:`ecostudy.simulate`) -> tables and plots.
+Layers (docs/architecture.md): files -> SI objects (``io``, ``core``) -> Pyomo models and Ipopt
+(``ocp``) -> analysed, re-simulated runs (``analysis``) -> features (``das``, ``heuristics``,
+``network``) -> studies -> report -> the command line (``cli``) and the Python API (``api``).
 """
 import os
 from pathlib import Path

@@ -58,7 +58,7 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     objective : str  ``energy``, ``net_energy``, ``time`` (all-out) or ``mixed``.
     points : int  Grid nodes K.
     warm_start : RunResult, optional  Start Ipopt from this earlier result.
-    windows : sequence of inputs.Window  Timing points on the way (earliest/latest, speed bounds).
+    windows : sequence of core.types.Window  Timing points on the way (earliest/latest, speed bounds).
     """
     stages = {}
     case = prepare(track, train, from_stop, to_stop, points, stages, windows)

@@ -72,7 +72,7 @@ def envelope_speeds(segment, train, nodes, limits):
 
 
 def interval_times(speeds, nodes):
-    """Time per interval 2 ds / (v_k + v_k+1) [s], exact for constant acceleration (model.py)."""
+    """Time per interval 2 ds / (v_k + v_k+1) [s], exact for constant acceleration (ocp/space.py)."""
     return 2 * np.diff(nodes) / np.maximum(speeds[:-1] + speeds[1:], 1e-9)
 
 

@@ -7,11 +7,11 @@ modes with where and when each starts. Methods:
 ``round``   nearest level to the ATO optimum's handle in every interval (thesis 000 §4.4),
             re-simulated: the baseline better DAS methods must beat.
 ``phases``  phase lengths of a fixed mode sequence per sector optimised over the whole journey
-            (thesis 000 Ch. 5; ``phases.py``).
-``minlp``   the mode of every phase chosen by binaries, started from ``phases`` (``minlp.py``).
+            (thesis 000 Ch. 5; ``ocp/phases.py``).
+``minlp``   the mode of every phase chosen by binaries, started from ``phases`` (``das/minlp.py``).
 
 Every advice is re-simulated as a driver would follow it: mode by mode from the advised
-positions, cruise with a speed-holding controller (``simulate.simulate`` with targets). The
+positions, cruise with a speed-holding controller (``core.simulate.simulate`` with targets). The
 reported energies, arrival and stop are those of that simulation.
 """
 import time

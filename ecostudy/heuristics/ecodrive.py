@@ -3,7 +3,7 @@
 - ``eco_coasting``: the industrial baseline of thesis 000 Table 6.1: full traction up to the
   limits, hold the limits, and from a coasting point on coast (braking only to respect a limit
   and to stop); the coasting point is the earliest one whose simulated arrival meets the time.
-- ``mareco``: a margin-distribution heuristic in the style of OSRD's MARECO (ecostudy/mareco.py):
+- ``mareco``: a margin-distribution heuristic in the style of OSRD's MARECO (ecostudy/heuristics/mareco.py):
   cap the top speed, coast before braking and before steep descents, the cap searched so that
   the simulated running time meets the timetable.
 

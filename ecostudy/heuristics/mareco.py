@@ -33,8 +33,8 @@ def coasting_floor(train, v1):
 
 
 def _step(v, ds, resist_fixed, davis, mass, sign):
-    """Coasting over one interval on the grid's trapezoidal recursion (model.py), so that the forces
-    realising it (initial.forces_for) are zero: v_out^2 = v^2 + sign 2 ds R(mean) / M, fixed point."""
+    """Coasting over one interval on the grid's trapezoidal recursion (ocp/space.py), so that the forces
+    realising it (kinematics.forces_for) are zero: v_out^2 = v^2 + sign 2 ds R(mean) / M, fixed point."""
     a, b, c = davis
     out = v
     for _ in range(4):

@@ -2,7 +2,7 @@
 
 Cross-field rules that concern one file live here as validators; rules that need two files
 (a stop missing from the track, a running time below the all-out time) are ``check_*``
-functions in :mod:`ecostudy.inputs`.
+functions in :mod:`ecostudy.io.loaders`.
 """
 from typing import ClassVar, Literal, Optional
 

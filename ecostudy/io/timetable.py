@@ -43,7 +43,7 @@ class JourneyPlan:
     ``arrival[n]``: (earliest, latest) arrival at the end of segment n, None where open.
     ``departure[n]``: fixed departure from the start of segment n, or None: arrival + dwell.
     ``dwell[n]``: dwell before segment n departs (0 for the first).
-    ``windows[n]``: inputs.Window passing points of segment n, distance from its departure stop.
+    ``windows[n]``: core.types.Window passing points of segment n, distance from its departure stop.
     """
 
     stops: tuple

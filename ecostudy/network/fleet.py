@@ -81,7 +81,7 @@ def solve_model(m, what, options=None):
 
 
 def energy_ref(fleet):
-    """Objective scale [kWh s / h = kJ]: model.energy_reference summed over one train's legs."""
+    """Objective scale [kWh s / h = kJ]: space.energy_reference summed over one train's legs."""
     return sum(space.energy_reference(leg.case.train, leg.case.segment) for leg in fleet.legs[0]) / 1e3
 
 

@@ -1,6 +1,6 @@
 """DAS run as a MINLP: binaries choose the mode of every phase (move blocking, thesis 000 §4.2).
 
-The phases of ``phases.py`` are blocks of variable length; here the mode of each block is a
+The phases of ``ocp/phases.py`` are blocks of variable length; here the mode of each block is a
 choice among all DAS modes (traction levels, cruise, coast, full braking) by binaries z[q, j]
 with sum_j z[q, j] = 1, enforced by big-M constraints on the forces of the block's intervals:
 
@@ -10,7 +10,7 @@ with sum_j z[q, j] = 1, enforced by big-M constraints on the forces of the block
     |v_{k+1} - v_k| <= v_max (1 - z cruise)                       (cruise: speed held)
 
 Feasible by construction: block lengths stay continuous (a block may shrink to zero), so the
-fixed sequence of ``phases.py`` is one binary pattern with a feasible NLP, and it is the starting
+fixed sequence of ``ocp/phases.py`` is one binary pattern with a feasible NLP, and it is the starting
 point (MindtPy ``init_strategy='initial_binary'``). MindtPy's outer approximation alternates NLP
 subproblems (cyipopt) with a MILP master (HiGHS). The model is nonconvex, so the master's bound
 is the outer approximation's, not a proven global bound; it is reported as such.

@@ -17,7 +17,7 @@ steps ds = L_{s,p} / n, so its mode is exact everywhere inside it:
     full braking          F_T = 0, F_B = F_B,max(v)
     cruise                v constant; F_T - F_B = resistance, inside both envelopes
 
-The dynamics are the energy-form recursion of ``model.py`` multiplied through by ds, so that a
+The dynamics are the energy-form recursion of ``ocp/space.py`` multiplied through by ds, so that a
 zero-length phase is not singular (it forces v_{k+1} = v_k and dt_k = 0):
 
     v_{k+1}^2 - v_k^2 = 2 ds ((F_T - F_B - R_k) / M),     dt_k (v_k + v_{k+1}) = 2 ds

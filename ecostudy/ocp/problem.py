@@ -35,7 +35,7 @@ class Case:
     limits: np.ndarray
     envelope: np.ndarray   # fastest speeds on the grid [m/s] (kinematics.envelope_speeds)
     estimate: float        # running time of that envelope [s], close to the all-out time
-    windows: tuple = ()    # inputs.Window timing points, each on a node
+    windows: tuple = ()    # core.types.Window timing points, each on a node
 
 
 def prepare(track, train, from_stop, to_stop, points, stages=None, windows=()):

@@ -121,7 +121,7 @@ def define_timing(m, time_ref, running_time=None, window=None):
 
     A fixed running time (eq. 2.6 as equality) is T in [t, t], an arrival window (thesis 001
     eq. 4.1g) is T in [Tmin, Tmax], all-out leaves T free. Keeping the request in bounds lets a
-    sweep change it without writing the NL file again (:class:`ecostudy.solver.Session`).
+    sweep change it without writing the NL file again (:class:`ecostudy.ocp.session.Session`).
     """
     lo, hi = timing_bounds(running_time, window)
     start = min(max(pyo.value(m.running_time), lo), hi if hi is not None else float("inf"))
@@ -132,7 +132,7 @@ def define_timing(m, time_ref, running_time=None, window=None):
 
 
 def window_node(nodes, distance):
-    """The grid node of a timing point (``grid.make_grid`` places one there)."""
+    """The grid node of a timing point (``core.grid.make_grid`` places one there)."""
     return int(np.argmin(np.abs(nodes - distance)))
 
 
@@ -146,7 +146,7 @@ def define_windows(m, nodes, windows, time_ref):
     """Timing points on the way: earliest/latest passing time and speed bounds at a node.
 
     The time at node k is the sum of the interval times before it; each window has its own node
-    (grid.make_grid places one there).
+    (core.grid.make_grid places one there).
     """
     m.windows = pyo.ConstraintList()
     m.window_nodes = [window_node(nodes, w.distance) for w in windows]

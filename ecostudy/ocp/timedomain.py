@@ -12,7 +12,7 @@ the segment, smoothed over ``width`` metres at each change (the only way a posit
 force enters a smooth NLP). Speed limits become a continuous piecewise-linear bound L(s) that is
 never above the train-length limit of the space grid: it ramps down over ``ramp`` metres before a
 restriction and up over ``ramp`` metres after it ends. Envelopes hold at both step ends, forces
-are in kN and the regenerative part F_R <= F_B obeys its own envelope, as in ``model.py``.
+are in kN and the regenerative part F_R <= F_B obeys its own envelope, as in ``ocp/space.py``.
 
 The electrical power at the pantograph in step j [kW] is
 p_j = F_T,j vbar_j / eta_T - eta_R F_R,j vbar_j, vbar_j = (v_j + v_{j+1}) / 2 (thesis 000 eq. 7.3).

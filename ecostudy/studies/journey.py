@@ -6,7 +6,7 @@ that gets a supplement (Lagrange; thesis 000 §7.1.1 fronts). The allocation is 
 fronts, linearly interpolated, by handing out small time steps to the segment whose next step
 saves most; every segment is then solved exactly at its allocated time and verified.
 Two baselines: every segment the same percentage over its all-out time, and a MARECO-style
-split (the time each segment takes under one common MARECO speed cap v1, ecostudy/mareco.py: the
+split (the time each segment takes under one common MARECO speed cap v1, ecostudy/heuristics/mareco.py: the
 way OSRD's MARECO allowance spreads a margin over a whole path). Every distribution is then
 driven energy-optimally, so the comparison is about the split alone. The whole-journey NLP
 (:func:`whole_journey`) solves all segments at once with free running times summing to the total:

@@ -2,7 +2,7 @@
 
 The running time is swept from the all-out time T0 to T0 (1 + supplement_max). Every point is
 energy-optimal for its running time. A chain of points shares one Pyomo model and one NL file
-(:class:`ecostudy.solver.Session`): only the bounds of the running-time variable change, and
+(:class:`ecostudy.ocp.session.Session`): only the bounds of the running-time variable change, and
 after the chain's first point Ipopt starts from the previous point's primal and dual solution
 (:data:`WARM_START`); a point whose warm start fails is retried as the cold start of a new
 chain. ``workers`` > 1 splits the sweep into contiguous chains solved in forked processes.
