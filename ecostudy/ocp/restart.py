@@ -34,8 +34,10 @@ def start_interval(nodes, position):
     return k, float((nodes[k + 1] - position) / (nodes[k + 1] - nodes[k]))
 
 
-def set_start(session, m, nodes, state):
-    """Bounds of a movable model for a run starting at ``state`` (:class:`State`, SI)."""
+def set_start(session, m, nodes, state, train=None):
+    """Bounds of a movable model for a run starting at ``state`` (:class:`State`, SI). With the
+    ``train`` given, speed limits ahead that the measured speed cannot meet even under full
+    braking are lifted to the speed braking reaches there."""
     k, rest = start_interval(nodes, state.position)
     behind = [j for j in getattr(m, "window_nodes", []) if j <= k]
     if behind:
@@ -45,10 +47,16 @@ def set_start(session, m, nodes, state):
     shares = np.ones(n)
     shares[:k], shares[k] = 0.0, rest
     variables, lows, highs = [m.t0], [state.time], [state.time]
+    # a measured speed above a limit ahead that even full braking cannot meet in time: the limit
+    # there is lifted to what braking reaches (as a soft overspeed would be), so a plan exists
+    braking = 0.9 * train.braking.force(max(state.speed, 0.0)) / (train.mass * m.mass_scale.ub) if train else 0.0
+    reach = np.sqrt(np.maximum(state.speed ** 2 - 2 * braking * np.maximum(nodes - state.position, 0.0), 0.0))
     for j in range(n):  # node n is the terminal condition's (set_end)
         lo, hi = m.base_bounds["v"][j]
         if j <= k:  # run already, or the start itself: the measured speed, even above the limit behind
             lo, hi = (state.speed, state.speed) if j == 0 else (0.0, max(hi, state.speed))
+        elif train is not None:
+            hi = max(hi, float(reach[j]))
         variables.append(m.v[j])
         lows.append(lo)
         highs.append(hi)
@@ -104,6 +112,11 @@ def set_end(session, m, speed=(0.0, 0.0), arrival=None):
     session.set_many_bounds(variables, lows, highs)
 
 
+def set_mass(session, m, scale):
+    """The train's mass (inertial and static) as ``scale`` times the model's, e.g. from an estimator."""
+    session.set_bounds(m.mass_scale, scale, scale)
+
+
 class Plan(NamedTuple):
     """A re-plan on the whole grid: node speeds, interval times, forces [N] and shares still to run."""
 
@@ -142,9 +155,11 @@ class Replanner:
         self.session = Session(self.model)
         self.stages["nl_write"] = self.stages.get("nl_write", 0.0) + self.session.nl_seconds
 
-    def solve(self, state=State(), end_speed=(0.0, 0.0), arrival=None, options=None):
+    def solve(self, state=State(), end_speed=(0.0, 0.0), arrival=None, options=None, mass_scale=None):
         m, nodes = self.model, self.case.nodes
-        set_start(self.session, m, nodes, state)
+        if mass_scale is not None:
+            set_mass(self.session, m, mass_scale)
+        set_start(self.session, m, nodes, state, self.case.train)
         set_end(self.session, m, end_speed, arrival)
         outcome = self.session.solve({**(self.options or {}), **(options or {})})
         v, dt, ft, fb, _ = space.solution_arrays(m)

@@ -54,6 +54,7 @@ def define_variables(m, nodes, limits, train, guess, with_regeneration, movable=
             m.v[k].setub(0.0)
         m.w = pyo.Var(m.I, bounds=(1.0, 1.0), initialize=1.0)
         m.t0 = pyo.Var(bounds=(0.0, 0.0), initialize=0.0)
+        m.mass_scale = pyo.Var(bounds=(1.0, 1.0), initialize=1.0)  # the train's mass over the model's
     else:
         m.v[0].fix(0.0)
         m.v[n].fix(0.0)
@@ -75,6 +76,10 @@ def define_dynamics(m, nodes, segment, train):
     def speed(m, k):
         # (v1^2 - v0^2) / (2 ds) = w ((F_T - F_B) / M - R(v0, v1) / M)  (physics.interval_resistance);
         # w = 1, or the share of the interval still to run in a movable model (0: already run)
+        if hasattr(m, "mass_scale"):  # an estimated mass: inertia and the grade and curve force scale with it
+            inertia = m.mass_scale * (m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k])
+            net = interval_resistance(m.v[k], m.v[k + 1], per_kg, m.mass_scale * fixed[k]) - km * (m.ft[k] - m.fb[k])
+            return s * (inertia + share(m, k, net)) == 0.0
         net = interval_resistance(m.v[k], m.v[k + 1], per_kg, fixed[k]) - km * (m.ft[k] - m.fb[k])
         return s * ((m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k]) + share(m, k, net)) == 0.0
 

@@ -1,0 +1,69 @@
+"""The closed loop: a controller sampled every ``sample_time`` drives a plant stepped finely.
+
+Each cycle the sensors read the plant's state (with measurement noise, ``core.plant.Noise``), a
+mass estimator (optional) takes the last cycle's measured acceleration, the controller plans a
+handle, and the plant runs that handle for ``sample_time`` in steps of ``plant_step`` with the
+acceleration disturbance drawn per step. The trip ends when the train has moved and stands.
+"""
+from typing import NamedTuple
+
+import numpy as np
+
+from ecostudy.core.physics import davis_resistance
+from ecostudy.core.plant import Noise
+from ecostudy.core.types import State
+from ecostudy.core.units import to_kmh
+
+
+class LoopResult(NamedTuple):
+    """A closed-loop trip: the true states at every sample, the handles applied, the work at the
+    wheel [J], the solve time of every cycle [s], and the summary numbers."""
+
+    states: list
+    handles: list
+    traction_work: float
+    braking_work: float
+    solve_seconds: list
+    stop_error_m: float
+    arrival_time_s: float
+    max_overspeed_kmh: float
+    mass_estimates: list
+
+
+def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max_time=None, estimator=None):
+    """Drive ``plant`` with ``controller`` (``plan(measured state) -> handle``) to a stand."""
+    segment, model = plant.segment, plant.train
+    rng = noise.generator()
+    state, states, handles = State(), [State()], []
+    work_t = work_b = 0.0
+    max_time = max_time or 20 * segment.distance + 600
+    moved, last, over = False, None, 0.0
+    substeps = max(int(round(sample_time / plant_step)), 1)
+    while state.time < max_time:
+        measured = noise.measure(state, rng)
+        if estimator is not None and last is not None:
+            u, v0, measured0 = last
+            accel = (measured.speed - measured0.speed) / sample_time
+            env = model.traction.force(v0) if u >= 0 else model.braking.force(v0)
+            net = (u * env - davis_resistance(v0, *model.davis)) / model.mass
+            grade = plant.grade_force(measured0.position) / plant.truth.mass / model.mass
+            estimator.update(accel, grade, net, measured0.position)
+        u = float(controller.plan(measured))
+        handles.append(u)
+        last = (u, max(measured.speed, 0.0), measured)
+        for _ in range(substeps):
+            step = plant.step(state, u, plant_step, noise.disturbance(rng))
+            state = step.state
+            work_t += step.traction_work
+            work_b += step.braking_work
+            limit = float(segment.limit(np.clip(state.position, 0.0, segment.distance)))
+            over = max(over, state.speed - limit)
+            moved = moved or state.speed > 0.5
+            if moved and state.speed <= 0.0:
+                break
+        states.append(state)
+        if moved and state.speed <= 0.0:
+            break
+    estimates = list(estimator.history) if estimator is not None else []
+    return LoopResult(states, handles, work_t, work_b, list(controller.solve_seconds),
+                      state.position - segment.distance, state.time, to_kmh(max(over, 0.0)), estimates)
