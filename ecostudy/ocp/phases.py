@@ -159,10 +159,11 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
         m.v[i + 1] ** 2 - m.v[i] ** 2 - 2 * ds[i] * accel(i, m.v[i], m.v[i + 1])) / (2 * h[layout.owner(i)[1]]) == 0.0)
     m.time = pyo.Constraint(m.I, rule=lambda m, i: (
         m.dt[i] * (m.v[i] + m.v[i + 1]) - 2 * ds[i]) / (2 * h[layout.owner(i)[1]]) == 0.0)
-    m.mean_t = {i: 0.5 * (train.traction.smooth_force(m.v[i]) + train.traction.smooth_force(m.v[i + 1])) / FORCE_SCALE
-                for i in range(N)}
-    m.mean_b = {i: 0.5 * (train.braking.smooth_force(m.v[i]) + train.braking.smooth_force(m.v[i + 1])) / FORCE_SCALE
-                for i in range(N)}
+    def mean(envelope, i):
+        return 0.5 * (envelope.smooth_force(m.v[i]) + envelope.smooth_force(m.v[i + 1])) / FORCE_SCALE
+
+    m.mean_t = {i: mean(train.traction, i) for i in range(N)}
+    m.mean_b = {i: mean(train.braking, i) for i in range(N)}
     if extend is not None:  # a variant passed in: the mode-choice MINLP (ocp.modechoice)
         extend(m, layout, train)
     else:
@@ -217,7 +218,8 @@ def _objective(m, train, segment, layout, ds, objective):
         if train.regeneration is not None:
             cap = {i: 0.5 * (train.regeneration.smooth_force(m.v[i])
                              + train.regeneration.smooth_force(m.v[i + 1])) / FORCE_SCALE for i in range(N)}
-            regen = FORCE_SCALE * sum(smooth_min(m.fb[i], cap[i], 0.01 * train.braking.peak / FORCE_SCALE) * ds[i] for i in range(N))
+            width = 0.01 * train.braking.peak / FORCE_SCALE
+            regen = FORCE_SCALE * sum(smooth_min(m.fb[i], cap[i], width) * ds[i] for i in range(N))
         expr = (work / train.traction_efficiency - train.regeneration_efficiency * regen) / e_ref
     else:
         raise ValueError(f"DAS runs minimise energy or net_energy, not {objective!r}")

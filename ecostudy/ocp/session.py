@@ -109,7 +109,7 @@ class Session:
         for var, lo, hi in zip(variables, lowers, uppers):
             var.setlb(None if lo is None else float(lo))
             var.setub(None if hi is None else float(hi))
-        self.x[index] = np.minimum(np.maximum(self.x[index], arrays["_primals_lb"][index]), arrays["_primals_ub"][index])
+        self.x[index] = np.clip(self.x[index], arrays["_primals_lb"][index], arrays["_primals_ub"][index])
 
     def set_start_values(self, variables, values):
         """Set the starting point of some variables for the next solve (clipped to their bounds)."""

@@ -110,7 +110,8 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
     b.v = pyo.Var(b.K, bounds=(0.0, top), initialize=lambda b, j: float(v0[j]))
     for var, value in ((b.s[0], 0.0), (b.v[0], 0.0), (b.s[n], case.segment.distance), (b.v[n], 0.0)):
         var.fix(value)
-    forces = [np.asarray(f) / FORCE_SCALE for f in guess[2:5]] if guess is not None and len(guess) >= 5 else [np.zeros(n)] * 3
+    given = guess is not None and len(guess) >= 5
+    forces = [np.asarray(f) / FORCE_SCALE for f in guess[2:5]] if given else [np.zeros(n)] * 3
     regen_top = min(train.regeneration.max_force, train.braking.peak) / FORCE_SCALE if train.regeneration else 0.0
     tops = (train.traction.peak / FORCE_SCALE, train.braking.peak / FORCE_SCALE, regen_top)
     b.ft, b.fb, b.fr = (pyo.Var(b.I, bounds=(0.0, top), initialize=lambda b, j, f=f, top=top: min(float(f[j]), top))
