@@ -57,3 +57,20 @@ def test_replanning_with_the_estimator_stops_a_heavier_train_where_open_loop_can
     assert closed.arrival_time_s == pytest.approx(76.0, abs=1.5)
     assert estimator.estimate == pytest.approx(1.1, rel=0.02)
     assert len(closed.solve_seconds) == len(closed.handles)
+
+
+def test_move_blocking_counts_agree_with_fig_4_2_and_with_eq_4_8():
+    from ecostudy.control.blocking import blocks, free_moves
+    # thesis 000 Fig. 4.2: L = 20, kf = 60
+    assert free_moves(0, 60, 20) == 3 and free_moves(10, 60, 20) == 3 and free_moves(20, 60, 20) == 2
+    assert free_moves(59, 60, 20) == 1
+    assert blocks(10, 60, 20)[:12] == [1] * 10 + [2] * 2  # the first block shrinks as k advances
+    # eq. 4.8's blocks are the absolute blocks of L samples, and their number is N(k), for any L, kf
+    for kf in (1, 7, 50, 60, 200):
+        for block in (1, 3, 20, 45):
+            for k in range(kf):
+                b = blocks(k, kf, block)
+                assert max(b) == free_moves(k, kf, block) and b[0] == 1
+                assert all(b[j] - b[0] == (k + j) // block - k // block for j in range(kf - k))
+    # where eq. 4.7 as printed, ceil((kf - k) / L), disagrees with eq. 4.8
+    assert free_moves(15, 50, 20) == 3 and -(-(50 - 15) // 20) == 2
