@@ -52,3 +52,35 @@ def test_unrecognised_json_is_one_clear_error(tmp_path):
     p.write_text(json.dumps({"hello": 1}))
     with pytest.raises(InputError, match="not a TTOBench or OSRD train"):
         load_train(p)
+
+
+def test_a_train_never_runs_faster_than_its_top_speed(tmp_path):
+    """TTOBench `max speed` (and OSRD `max_speed`) cap every limit: the Beijing subway train (80 km/h)
+    on a 120 km/h line with 3 km between stops stays at 80 km/h, in the optimum and its re-simulation.
+    Before, `max speed` was read and ignored, and the train ran at up to 120 km/h."""
+    import json
+
+    from ecostudy.analysis.single import solve_run
+    from ecostudy.core.types import Timing
+    from ecostudy.core.errors import InputError
+    from ecostudy.io.loaders import load_train, track_from_dict
+    train = load_train(DATA / "ttobench_subway_train.json")
+    assert train.max_speed == pytest.approx(80 / 3.6)
+    line = track_from_dict({"name": "fast line", "source": "test", "length_m": 3000,
+                            "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 3000}],
+                            "gradients": [{"position_m": 0, "gradient_permille": 0}],
+                            "speed_limits": [{"position_m": 0, "speed_kmh": 120}]})
+    allout = solve_run(line, train, "A", "B", Timing(), objective="time", points=300)
+    assert allout.summary["top_speed_kmh"] <= 80.0 + 1e-6
+    assert max(allout.trace.v) * 3.6 <= 80.5
+    # the same speed given in m/s is converted; an unknown unit is refused by name
+    doc = json.loads((DATA / "ttobench_subway_train.json").read_text())
+    doc["max speed"] = {"unit": "m/s", "value": 20.0}
+    (tmp_path / "t.json").write_text(json.dumps(doc))
+    assert load_train(tmp_path / "t.json").max_speed == pytest.approx(20.0)
+    doc["max speed"] = {"unit": "mph", "value": 50.0}
+    (tmp_path / "t.json").write_text(json.dumps(doc))
+    with pytest.raises(InputError, match="max speed.unit"):
+        load_train(tmp_path / "t.json")
+    osrd = load_train(DATA / "osrd_rolling_stock.json")
+    assert osrd.max_speed == pytest.approx(38.88)

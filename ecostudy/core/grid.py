@@ -89,7 +89,9 @@ def make_segment(track, train, from_stop, to_stop):
     gradient = _directed(track.gradient_positions, track.gradients, start, end)
     gradient = Profile(gradient.starts, sign * gradient.values)
     curvature = _directed(track.curve_positions, track.curvatures, start, end)
-    limit = train_length_limit(_directed(track.limit_positions, track.limits, start, end), train.length)
+    line = _directed(track.limit_positions, track.limits, start, end)
+    line = Profile(line.starts, np.minimum(line.values, train.max_speed))  # the train's top speed caps the line's
+    limit = train_length_limit(line, train.length)
     return Segment(abs(end - start), gradient, curvature, limit, from_stop, to_stop)
 
 

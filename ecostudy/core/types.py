@@ -27,6 +27,7 @@ class Train:
     regeneration_efficiency: float = 0.0
     curve_coefficient: float = 0.0    # lambda_t [m^2/s^2]
     das_levels: tuple = (-1.0, 0.0, 0.5, 0.75, 1.0)
+    max_speed: float = float("inf")   # the train's top speed [m/s]: caps every speed limit
 
 
 @dataclass(frozen=True)

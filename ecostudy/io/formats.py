@@ -51,6 +51,15 @@ def _scalar(doc, key, path, default=None):
         raise InputError(problem(path, key, f"expected a number, got {value!r}"))
 
 
+def _speed_kmh(doc, key, path, default):
+    """A TTOBench speed in km/h, converted from its ``unit`` (km/h or m/s; another unit is refused)."""
+    value = _scalar(doc, key, path, default)
+    unit = doc[key].get("unit", "km/h") if isinstance(doc.get(key), dict) else "km/h"
+    if unit not in _SPEED_KMH:
+        raise InputError(problem(path, f"{key}.unit", f"unknown speed unit {unit!r} (km/h or m/s)"))
+    return value * _SPEED_KMH[unit]
+
+
 def _radius(r):
     if isinstance(r, str):
         if r.strip().lower() in ("infinity", "inf"):
@@ -91,7 +100,7 @@ def ttobench_train(doc, path):
     f_reg = _scalar(doc, "max reg braking force", path, 0.0)
     p_reg = _scalar(doc, "max reg braking power", path, math.inf)
     f_pn = _scalar(doc, "max pn braking force", path, 0.0)
-    top = _scalar(doc, "max speed", path, 200.0)
+    top = _speed_kmh(doc, "max speed", path, 200.0)
     if "max deceleration" in doc:
         braking = {"max_deceleration_mps2": _scalar(doc, "max deceleration", path)}
     else:  # electric brake (force and power limited) plus pneumatic brake, tabulated
@@ -119,6 +128,7 @@ def ttobench_train(doc, path):
         "braking": braking,
         "traction_efficiency": _scalar(doc, "efficiency traction", path, 100.0) * units.PERCENT,
         "regenerative_braking": regen,
+        **({"max_speed_kmh": top} if "max speed" in doc else {}),
     }, {"davis.a_kN": "rolling resistance r0", "davis.b_kN_per_kmh": "rolling resistance r1",
         "davis.c_kN_per_kmh2": "rolling resistance r2"}
 
@@ -150,6 +160,7 @@ def osrd_train(doc, path):
         "traction": {"table": {"speed_kmh": (speeds[keep] / units.KMH).tolist(),
                                "force_kN": (efforts[keep] / units.KN).tolist()}},
         "braking": {"max_deceleration_mps2": float(gamma)},
+        **({"max_speed_kmh": float(doc["max_speed"]) / units.KMH} if doc.get("max_speed") else {}),  # OSRD: m/s
     }, {"davis.a_N": "rolling_resistance.A", "davis.b_N_per_mps": "rolling_resistance.B",
         "davis.c_N_per_mps2": "rolling_resistance.C"}
 

@@ -173,7 +173,8 @@ def train_from_schema(t, path, aliases=None):
                  traction=_envelope(t.traction, mass), braking=_envelope(t.braking, mass),
                  regeneration=regen, traction_efficiency=t.traction_efficiency,
                  regeneration_efficiency=eta_r, curve_coefficient=t.curve_coefficient_m2ps2,
-                 das_levels=tuple(t.das_handle_levels))
+                 das_levels=tuple(t.das_handle_levels),
+                 max_speed=float("inf") if t.max_speed_kmh is None else t.max_speed_kmh * units.KMH)
 
 
 def track_from_schema(t):

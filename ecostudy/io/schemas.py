@@ -125,6 +125,7 @@ class TrainFile(Strict):
     traction_efficiency: float = Field(1.0, gt=0, le=1, description="Wheel work per line energy [-].")
     regenerative_braking: Optional[Regeneration] = None
     curve_coefficient_m2ps2: float = Field(0.0, ge=0, description="lambda_t of thesis 000 eq. 2.2.")
+    max_speed_kmh: Optional[float] = Field(None, gt=0, description="The train's top speed: caps every limit.")
     das_handle_levels: list[float] = Field(default_factory=lambda: [-1.0, 0.0, 0.5, 0.75, 1.0])
 
     @model_validator(mode="after")
