@@ -84,3 +84,29 @@ def test_a_train_never_runs_faster_than_its_top_speed(tmp_path):
         load_train(tmp_path / "t.json")
     osrd = load_train(DATA / "osrd_rolling_stock.json")
     assert osrd.max_speed == pytest.approx(38.88)
+
+
+def test_ttobench_acceleration_bounds_sit_on_top_of_the_brake_forces(tmp_path):
+    """ms-eetc's semantics (mseetc/train.py, ocp.py): `max acceleration` and `max deceleration`
+    bound the net acceleration; the brakes are the regenerative and pneumatic forces. Before, a
+    train with `max deceleration` lost its brake forces (the deceleration became the brake) and
+    `max acceleration` was ignored."""
+    doc = json.loads((DATA / "ttobench_subway_train.json").read_text())
+    doc["max acceleration"] = {"unit": "m/s^2", "value": 0.5}
+    doc["max deceleration"] = {"unit": "m/s^2", "value": 1.0}
+    doc["max reg braking force"] = {"unit": "kN", "value": 100.0}  # weaker than 1.0 m/s^2 on 278 t
+    (tmp_path / "t.json").write_text(json.dumps(doc))
+    train = load_train(tmp_path / "t.json")
+    assert train.max_acceleration == 0.5 and train.max_deceleration == 1.0
+    assert train.braking.peak == pytest.approx(100e3, rel=1e-3)  # the brake forces, not m * 1.0
+    track = load_track(DATA / "ttobench_track.json")
+    stops = list(track.stops)
+    r = solve_run(track, train, stops[0], stops[1], Timing(), objective="time", points=400)
+    v, x = r.trajectory.v, r.nodes
+    mean_acc = (v[1:] ** 2 - v[:-1] ** 2) / (2 * np.diff(x))
+    assert mean_acc.max() <= 0.5 + 1e-5  # the full traction envelope gives 1.1 m/s^2 at start
+    assert r.trajectory.fb.max() <= 100e3 * 1.001 < train.mass * 1.0  # braked with its brake, 0.36 m/s^2
+    assert -mean_acc.min() < 1.0
+    dt = np.diff(r.trace.t)
+    accel = np.diff(r.trace.v)[dt > 1e-6] / dt[dt > 1e-6]  # re-simulated (the plant keeps the bound too)
+    assert accel.max() <= 0.5 + 0.02

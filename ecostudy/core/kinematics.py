@@ -27,7 +27,8 @@ def braking_curve(segment, train, nodes, limits):
     bwd = np.zeros_like(nodes)
     for k in range(len(ds) - 1, -1, -1):
         v = bwd[k + 1]
-        dec = (train.braking.force(v) + davis_resistance(v, a, b, c) + fixed[k]) / train.mass
+        dec = min((train.braking.force(v) + davis_resistance(v, a, b, c) + fixed[k]) / train.mass,
+                  train.max_deceleration)
         bwd[k] = min(np.sqrt(v * v + 2 * ds[k] * max(dec, 1e-3)), limits[k])
     return bwd
 
@@ -60,7 +61,8 @@ def envelope_speeds(segment, train, nodes, limits):
     fwd = np.zeros_like(nodes)
     for k in range(len(ds)):
         v = fwd[k]
-        acc = (train.traction.force(v) - davis_resistance(v, a, b, c) - fixed[k]) / train.mass
+        acc = min((train.traction.force(v) - davis_resistance(v, a, b, c) - fixed[k]) / train.mass,
+                  train.max_acceleration)
         v2 = v * v + 2 * ds[k] * acc
         if v2 <= 0 and k < len(ds) - 1:
             raise InfeasibleError(f"infeasible: even at full traction the train stalls at "

@@ -122,6 +122,10 @@ class Plant:
                     else (0.0, min(-net, self.truth.braking * train.braking.force(v))))
         ft = control * (self.truth.traction * train.traction.force(v)) if control > 0 else 0.0
         fb = -control * (self.truth.braking * train.braking.force(v)) if control < 0 else 0.0
+        if ft > 0.0 and ft - resist > self.mass * train.max_acceleration:  # the traction control's limit
+            ft = max(self.mass * train.max_acceleration + resist, 0.0)
+        if fb > 0.0 and fb + resist > self.mass * train.max_deceleration:  # the brake control's limit
+            fb = max(self.mass * train.max_deceleration - resist, 0.0)
         return ft, fb
 
     def derivatives(self, v, ft, fb, resist, disturbance=0.0):

@@ -28,6 +28,8 @@ class Train:
     curve_coefficient: float = 0.0    # lambda_t [m^2/s^2]
     das_levels: tuple = (-1.0, 0.0, 0.5, 0.75, 1.0)
     max_speed: float = float("inf")   # the train's top speed [m/s]: caps every speed limit
+    max_acceleration: float = float("inf")  # bound on the net acceleration [m/s^2] (comfort, adhesion)
+    max_deceleration: float = float("inf")  # bound on the net deceleration [m/s^2], on top of the brakes
 
 
 @dataclass(frozen=True)

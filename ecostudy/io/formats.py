@@ -101,8 +101,13 @@ def ttobench_train(doc, path):
     p_reg = _scalar(doc, "max reg braking power", path, math.inf)
     f_pn = _scalar(doc, "max pn braking force", path, 0.0)
     top = _speed_kmh(doc, "max speed", path, 200.0)
+    bounds = {}  # net acceleration bounds on top of the forces (ms-eetc's semantics of both fields)
+    if "max acceleration" in doc:
+        bounds["max_acceleration_mps2"] = _scalar(doc, "max acceleration", path)
     if "max deceleration" in doc:
-        braking = {"max_deceleration_mps2": _scalar(doc, "max deceleration", path)}
+        bounds["max_deceleration_mps2"] = _scalar(doc, "max deceleration", path)
+    if f_reg <= 0 and f_pn <= 0 and "max deceleration" in doc:  # no brake forces given: the deceleration is the brake
+        braking = {"max_deceleration_mps2": bounds["max_deceleration_mps2"]}
     else:  # electric brake (force and power limited) plus pneumatic brake, tabulated
         speeds = np.linspace(0.0, top, 41)
         force = np.minimum(f_reg, p_reg / np.maximum(speeds * units.KMH, 1e-9)) + f_pn
@@ -129,6 +134,7 @@ def ttobench_train(doc, path):
         "traction_efficiency": _scalar(doc, "efficiency traction", path, 100.0) * units.PERCENT,
         "regenerative_braking": regen,
         **({"max_speed_kmh": top} if "max speed" in doc else {}),
+        **bounds,
     }, {"davis.a_kN": "rolling resistance r0", "davis.b_kN_per_kmh": "rolling resistance r1",
         "davis.c_kN_per_kmh2": "rolling resistance r2"}
 

@@ -174,7 +174,9 @@ def train_from_schema(t, path, aliases=None):
                  regeneration=regen, traction_efficiency=t.traction_efficiency,
                  regeneration_efficiency=eta_r, curve_coefficient=t.curve_coefficient_m2ps2,
                  das_levels=tuple(t.das_handle_levels),
-                 max_speed=float("inf") if t.max_speed_kmh is None else t.max_speed_kmh * units.KMH)
+                 max_speed=float("inf") if t.max_speed_kmh is None else t.max_speed_kmh * units.KMH,
+                 max_acceleration=t.max_acceleration_mps2 or float("inf"),
+                 max_deceleration=t.max_deceleration_mps2 or float("inf"))
 
 
 def track_from_schema(t):

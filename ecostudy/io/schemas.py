@@ -126,6 +126,9 @@ class TrainFile(Strict):
     regenerative_braking: Optional[Regeneration] = None
     curve_coefficient_m2ps2: float = Field(0.0, ge=0, description="lambda_t of thesis 000 eq. 2.2.")
     max_speed_kmh: Optional[float] = Field(None, gt=0, description="The train's top speed: caps every limit.")
+    max_acceleration_mps2: Optional[float] = Field(None, gt=0, description="Bound on the net acceleration.")
+    max_deceleration_mps2: Optional[float] = Field(None, gt=0, description="Bound on the net deceleration "
+                                                   "(on top of the braking forces; not the brake itself).")
     das_handle_levels: list[float] = Field(default_factory=lambda: [-1.0, 0.0, 0.5, 0.75, 1.0])
 
     @model_validator(mode="after")

@@ -107,6 +107,20 @@ def _envelope_constraints(m, name, force, envelope):
         m.add_component(name + "_hi", pyo.Constraint(m.I, rule=lambda m, k: force[k] * m.v[k + 1] / pk <= 1.0))
 
 
+def define_acceleration_bounds(m, nodes, train):
+    """Net acceleration and deceleration bounds of the train (TTOBench ``max acceleration`` and
+    ``max deceleration``, OSRD comfort acceleration), per interval on the recursion's mean
+    acceleration: (v_k+1^2 - v_k^2) / (2 ds_k) in [-d_max, a_max] (times the share still to run)."""
+    ds = np.diff(nodes).tolist()
+    mean = lambda m, k: (m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k])  # noqa: E731
+    if np.isfinite(train.max_acceleration):
+        a = float(train.max_acceleration)
+        m.max_acceleration = pyo.Constraint(m.I, rule=lambda m, k: mean(m, k) <= share(m, k, a))
+    if np.isfinite(train.max_deceleration):
+        d = float(train.max_deceleration)
+        m.max_deceleration = pyo.Constraint(m.I, rule=lambda m, k: -mean(m, k) <= share(m, k, d))
+
+
 def define_envelopes(m, train, with_regeneration):
     """Traction, braking and regenerative limits F <= F_max(v) (thesis 000 eqs. 2.3-2.4)."""
     _envelope_constraints(m, "traction", m.ft, train.traction)
@@ -214,6 +228,7 @@ def build_model(segment, train, nodes, limits, guess, objective="energy", runnin
     define_variables(m, nodes, limits, train, guess, with_regeneration, movable)
     define_dynamics(m, nodes, segment, train)
     define_envelopes(m, train, with_regeneration)
+    define_acceleration_bounds(m, nodes, train)
     define_timing(m, time_ref, running_time, window)
     define_windows(m, nodes, windows, time_ref)
     m.energy_ref = energy_reference(train, segment)  # [J], objective scale
