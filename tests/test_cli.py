@@ -194,3 +194,22 @@ def test_impossible_timing_window(tmp_path):
 def test_window_outside_the_segment(tmp_path):
     r = run("solve", window_study(tmp_path, {"position_m": 2000, "latest_s": 36}), "--out", tmp_path / "o")
     assert_one_line_error(r, "study.yaml", "windows[0].position_m", "is not between 'Rokin' and 'Centraal'")
+
+
+@pytest.mark.parametrize("args, option, fragment", [
+    (("solve", "--track", AMS, "--train", METRO, "--time", "nan"), "--time", "finite"),
+    (("solve", "--track", AMS, "--train", METRO, "--supplement", "inf"), "--supplement", "finite"),
+    (("solve", "--track", AMS, "--train", METRO, "--supplement", "-5"), "--supplement", "at least 0"),
+    (("solve", "--track", AMS, "--train", METRO, "--time", "80", "--points", "0"), "--points", "at least 10"),
+    (("solve", "--track", AMS, "--train", METRO, "--time", "80", "--points", "2"), "--points", "at least 10"),
+    (("compare", "--track", AMS, "--train", METRO, "--time", "-80"), "--time", "more than 0"),
+    (("pareto", "--track", AMS, "--train", METRO, "--workers", "0"), "--workers", "at least 1"),
+    (("pareto", "--track", AMS, "--train", METRO, "--count", "1"), "--count", "at least 2"),
+    (("journey", "--track", AMS, "--train", METRO, "--supplement", "10", "--dwell", "-20"), "--dwell", "at least 0"),
+    (("run", STUDIES / "metro_supplements.yaml", "--workers", "0"), "--workers", "at least 1"),
+    (("check", "out", "--time", "nan"), "--time", "finite"),
+])
+def test_numeric_options_out_of_range_are_refused_before_any_work(args, option, fragment):
+    """Issue 16 in part: before, --points 0 became 1000, --workers 0 and NaN or negative times
+    reached the solver or ended in an internal error (exit 3)."""
+    assert_one_line_error(run(*args), f"command line: {option}", fragment)

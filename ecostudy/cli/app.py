@@ -4,6 +4,7 @@ Exit status: 0 verified optimal result, 1 result written but flagged (not optima
 verification), 2 bad input or infeasible request, 3 solver failure or internal error, 130
 interrupted. ``--debug`` shows tracebacks.
 """
+import math
 import warnings
 from enum import Enum
 
@@ -53,6 +54,34 @@ def guarded(debug, fn, *args, **kwargs):
         finally:
             for w in caught:
                 typer.secho(f"warning: {w.message}", fg=typer.colors.YELLOW, err=True)
+
+
+# the ranges of numeric options: the same as the study schema's where a field exists (io/schemas.py);
+# (lowest, highest, lowest allowed itself)
+OPTION_RANGES = {
+    "points": (10, 100000, True), "workers": (1, 256, True), "count": (2, 10000, True),
+    "weighted": (0, 1000, True), "time": (0.0, None, False), "supplement": (0.0, None, True),
+    "supplement_max": (0.0, None, False), "dwell": (0.0, None, True), "das_time_limit": (0.0, None, False),
+}
+
+
+def check_options(**values):
+    """Refuse numeric options that are not finite or out of their range (:data:`OPTION_RANGES`):
+    one line each, naming the option, before anything is computed (exit status 2)."""
+    lines = []
+    for name, value in values.items():
+        if value is None:
+            continue
+        option = "--" + name.replace("_", "-")
+        low, high, closed = OPTION_RANGES[name]
+        if isinstance(value, float) and not math.isfinite(value):
+            lines.append(problem("command line", option, f"must be a finite number, not {value}"))
+        elif value < low or (value == low and not closed) or (high is not None and value > high):
+            bound = f"at least {low}" if closed else f"more than {low}"
+            lines.append(problem("command line", option, f"must be {bound}" + (f" and at most {high}" if high else "")
+                                 + f", not {value}"))
+    if lines:
+        raise InputError(lines)
 
 
 def parse_pair(text, option):

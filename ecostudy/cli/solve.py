@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, Objective, app, guarded, parse_pair
+from ecostudy.cli.app import DasMethod, Objective, app, check_options, guarded, parse_pair
 from ecostudy.core.errors import InputError, problem
 
 
@@ -51,7 +51,7 @@ def _report(result, out_dir):
 
 def _solve(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights,
            points, out, no_plot, das=None, das_time_limit=60.0):
-
+    check_options(time=time, supplement=supplement, points=points, das_time_limit=das_time_limit)
     from ecostudy.analysis.single import solve_run
     from ecostudy.core import units
     from ecostudy.core.types import Timing
@@ -140,6 +140,7 @@ def solve(
 
 
 def _check(result_dir, time):
+    check_options(time=time)
     from ecostudy.studies.check import check_result
     from ecostudy.io.writers import write_json
     result_dir = Path(result_dir)

@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, app, guarded
+from ecostudy.cli.app import DasMethod, app, check_options, guarded
 from ecostudy.core.errors import InputError, problem
 
 
@@ -28,6 +28,8 @@ def _case_from(study, track, train, from_stop, to_stop, points):
 
 def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, points, workers, cold, out, no_plot,
             weighted=0, das=None, das_time_limit=60.0):
+    check_options(count=count, supplement_max=supplement_max, points=points, workers=workers, weighted=weighted,
+                  das_time_limit=das_time_limit)
     from ecostudy.core import units
     from ecostudy.report.files import write_front
     from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
@@ -92,6 +94,7 @@ def pareto(
 
 
 def _compare(study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot):
+    check_options(time=time, supplement=supplement, points=points)
     from ecostudy.core import units
     from ecostudy.core.types import Timing
     from ecostudy.io.writers import atomic_write, write_csv
@@ -136,6 +139,7 @@ def compare_command(
 
 
 def _journey(track, train, stops, time, supplement, timetable, dwell, points, workers, out, no_plot):
+    check_options(time=time, supplement=supplement, dwell=dwell, points=points, workers=workers)
     from ecostudy.core import units
     from ecostudy.io.loaders import load_timetable, load_track, load_train, timing_from_timetable
     from ecostudy.io.timetable import journey_plan, name_stops
@@ -211,6 +215,7 @@ def journey_command(
 
 
 def _run(study, workers, dask, retry_failed, out, no_progress):
+    check_options(workers=workers)
     from ecostudy.studies.batch import run_study
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
