@@ -15,7 +15,7 @@ from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.core.errors import InputError
 from ecostudy.core.types import State, Timing, Track, Train, Window
 from ecostudy.core.units import PERCENT
-from ecostudy.io.loaders import check_stops, load_track, load_train, track_from_dict, train_from_dict
+from ecostudy.io.loaders import chosen_stops, load_track, load_train, track_from_dict, train_from_dict
 from ecostudy.ocp.problem import prepare
 from ecostudy.ocp.restart import Replanner
 from ecostudy.report.files import write_run
@@ -78,13 +78,6 @@ class Front:
         return pareto_plot(self.table, path, f"{self.runs[0].summary['train']}")
 
 
-def _stops(track, from_stop, to_stop):
-    names = list(track.stops)
-    from_stop, to_stop = from_stop or names[0], to_stop or names[-1]
-    check_stops(track, from_stop, to_stop, "arguments")
-    return from_stop, to_stop
-
-
 def _timing(running_time, supplement_percent, window):
     given = [x is not None for x in (running_time, supplement_percent, window)]
     if sum(given) > 1:
@@ -98,7 +91,7 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
     """The energy-optimal run (``objective`` ``energy``, ``net_energy``, ``time`` or ``mixed``)
     between two stops (default: the first and the last), for a running time [s], a supplement
     over the all-out time [%] or an arrival window (earliest, latest) [s]; verified by simulation."""
-    from_stop, to_stop = _stops(track, from_stop, to_stop)
+    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
     return Solution(solve_run(track, train, from_stop, to_stop, _timing(running_time, supplement_percent, window),
                               objective=objective, points=points, windows=windows))
 
@@ -106,7 +99,7 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
 def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_percent=40.0, points=500,
            objective="energy", workers=1):
     """Energy against running time from the all-out run to ``supplement_max_percent`` over it."""
-    from_stop, to_stop = _stops(track, from_stop, to_stop)
+    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
     table, runs = sweep(track, train, from_stop, to_stop, count=count, supplement_max=supplement_max_percent * PERCENT,
                         points=points, objective=objective, workers=workers)
     return Front(table, runs)
@@ -115,6 +108,6 @@ def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_
 def replanner(track, train, from_stop=None, to_stop=None, running_time=None, window=None, points=500,
               objective="energy"):
     """A :class:`~ecostudy.ocp.restart.Replanner`: one model re-solved from any :class:`State`."""
-    from_stop, to_stop = _stops(track, from_stop, to_stop)
+    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
     return Replanner(prepare(track, train, from_stop, to_stop, points), running_time=running_time, window=window,
                      objective=objective)

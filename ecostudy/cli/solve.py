@@ -56,7 +56,7 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
     from ecostudy.core import units
     from ecostudy.core.types import Timing
     from ecostudy.das.methods import das_run
-    from ecostudy.io.loaders import check_stops, load_study, load_track, load_train
+    from ecostudy.io.loaders import chosen_stops, load_study, load_track, load_train
     from ecostudy.io.writers import write_json
     from ecostudy.report.files import write_run
     if study is not None:
@@ -79,9 +79,7 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
             raise InputError(problem("command line", "--track/--train",
                                      "give a study file, or both --track and --train"))
         trk, trn = load_track(track), load_train(train)
-        names = list(trk.stops)
-        f, t = from_stop or names[0], to_stop or names[-1]
-        check_stops(trk, f, t, "command line")
+        f, t = chosen_stops(trk, from_stop, to_stop, "command line")
         given = sum(x is not None for x in (time, supplement, window))
         obj = objective.value if objective is not None else "energy"
         if given > 1:

@@ -13,16 +13,14 @@ from ecostudy.core.errors import InputError, problem
 
 def _case_from(study, track, train, from_stop, to_stop, points):
     """(track, train, from, to, K, study or None) from a study file or from options."""
-    from ecostudy.io.loaders import check_stops, load_study, load_track, load_train
+    from ecostudy.io.loaders import chosen_stops, load_study, load_track, load_train
     if study is not None:
         st = load_study(study)
         return st.track, st.train, st.from_stop, st.to_stop, points or st.points, st
     if not (track and train):
         raise InputError(problem("command line", "--track/--train", "give a study file, or both --track and --train"))
     trk, trn = load_track(track), load_train(train)
-    names = list(trk.stops)
-    f, t = from_stop or names[0], to_stop or names[-1]
-    check_stops(trk, f, t, "command line")
+    f, t = chosen_stops(trk, from_stop, to_stop, "command line")
     return trk, trn, f, t, points, None
 
 

@@ -13,25 +13,16 @@ import time
 
 import numpy as np
 
-from ecostudy.core.physics import Envelope
+from ecostudy.analysis.tables import handles
+from ecostudy.core.grid import interval_of
 from ecostudy.ocp.restart import Replanner
 
 REPLAN_OPTIONS = {"max_iter": 300}  # a re-plan that needs more has no plan worth waiting for
 
 
-def derated(envelope, share):
-    """``envelope`` with every force (and power) times ``share``."""
-    if envelope.kind == "table":
-        return Envelope("table", speeds=envelope.speeds, forces=tuple(f * share for f in envelope.forces),
-                        width=envelope.width)
-    return Envelope("force_power", max_force=envelope.max_force * share, max_power=envelope.max_power * share)
-
-
 def handle_of(train, speed, traction, braking):
-    """Handle in [-1, 1] of a planned traction and braking force [N] at ``speed`` (model envelopes)."""
-    net = traction - braking
-    env = train.traction.force(speed) if net >= 0 else train.braking.force(speed)
-    return float(np.clip(net / max(env, 1e-9), -1.0, 1.0))
+    """Handle in [-1, 1] of a planned traction and braking force [N] at ``speed`` (analysis.tables.handles)."""
+    return float(handles(train, np.array([speed, speed]), np.array([traction]), np.array([braking]))[0])
 
 
 class OpenLoop:
@@ -45,9 +36,8 @@ class OpenLoop:
 
     def plan(self, measured):
         x = measured.position if self.by == "position" else measured.time
-        k = int(np.clip(np.searchsorted(self.key, x, side="right") - 1, 0, len(self.result.handle) - 1))
         self.solve_seconds.append(0.0)
-        return float(self.result.handle[k])
+        return float(self.result.handle[interval_of(self.key, x)])
 
 
 class Replanning:
@@ -64,7 +54,7 @@ class Replanning:
         self.case, self.arrival, self.estimator, self.final_m = case, float(arrival), estimator, final_m
         # plan with a share of the service brake held back (thesis 001 eq. 6.8's braking reserve):
         # between samples the handle is held, and a plan that brakes at the limit is then late
-        model = dataclasses.replace(case.train, braking=derated(case.train.braking, 1.0 - brake_reserve))
+        model = dataclasses.replace(case.train, braking=case.train.braking.scaled(1.0 - brake_reserve))
         self.replanner = Replanner(dataclasses.replace(case, train=model), window=(0.0, self.arrival),
                                    options={**REPLAN_OPTIONS, **(options or {})})
         self.last, self.failures, self.late, self.solve_seconds, self.iterations = 0.0, 0, 0, [], []
@@ -89,6 +79,6 @@ class Replanning:
             self.failures += 1
             self.last = -1.0
             return self.last
-        k = int(np.clip(np.searchsorted(self.case.nodes, measured.position, side="right") - 1, 0, len(plan.ft) - 1))
+        k = interval_of(self.case.nodes, measured.position)
         self.last = handle_of(self.case.train, max(measured.speed, 0.0), plan.ft[k], plan.fb[k])
         return self.last

@@ -10,7 +10,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core.physics import davis_resistance
-from ecostudy.core.plant import Noise
+from ecostudy.core.plant import Noise, Plant
 from ecostudy.core.types import State
 from ecostudy.core.units import to_kmh
 
@@ -33,6 +33,7 @@ class LoopResult(NamedTuple):
 def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max_time=None, estimator=None):
     """Drive ``plant`` with ``controller`` (``plan(measured state) -> handle``) to a stand."""
     segment, model = plant.segment, plant.train
+    nominal = Plant(segment, model)  # the controller's model of the train, for the estimator
     rng = noise.generator()
     state, states, handles = State(), [State()], []
     work_t = work_b = 0.0
@@ -41,13 +42,13 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
     substeps = max(int(round(sample_time / plant_step)), 1)
     while state.time < max_time:
         measured = noise.measure(state, rng)
-        if estimator is not None and last is not None:
+        if estimator is not None and last is not None:  # what the model says the handle did
             u, v0, measured0 = last
-            accel = (measured.speed - measured0.speed) / sample_time
-            env = model.traction.force(v0) if u >= 0 else model.braking.force(v0)
-            net = (u * env - davis_resistance(v0, *model.davis)) / model.mass
-            grade = plant.grade_force(measured0.position) / plant.truth.mass / model.mass
-            estimator.update(accel, grade, net, measured0.position)
+            davis = davis_resistance(v0, *model.davis)
+            ft, fb = nominal.forces(v0, u, davis)
+            grade = nominal.grade_force(measured0.position) / model.mass
+            estimator.update((measured.speed - measured0.speed) / sample_time, grade,
+                             (ft - fb - davis) / model.mass, measured0.position)
         u = float(controller.plan(measured))
         handles.append(u)
         last = (u, max(measured.speed, 0.0), measured)

@@ -113,6 +113,11 @@ def make_grid(segment, points, extra=()):
     return np.append(np.concatenate(nodes), segment.distance)
 
 
+def interval_of(nodes, x):
+    """Index of the grid interval holding position ``x`` (the first or last one beyond the ends)."""
+    return int(np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, len(nodes) - 2))
+
+
 def node_limits(segment, nodes):
     """Speed limit at each node: the lower of the limits on its two sides [m/s]."""
     left = segment.limit(np.maximum(nodes - 1e-9, 0.0))

@@ -153,6 +153,12 @@ class Envelope:
         corner = self.max_power / self.max_force
         return self.max_power / smooth_max(speed, corner, corner_share * corner)
 
+    def scaled(self, share):
+        """This envelope with every force (and the power) times ``share``."""
+        if self.kind == "table":
+            return Envelope("table", speeds=self.speeds, forces=tuple(f * share for f in self.forces), width=self.width)
+        return Envelope("force_power", max_force=self.max_force * share, max_power=self.max_power * share)
+
     @property
     def peak(self):
         """Largest force the envelope ever allows [N]."""

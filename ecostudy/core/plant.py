@@ -181,6 +181,7 @@ class Plant:
         a, b, c = self.davis
         handle = [float(u) for u in handle]
         target = [float(x) for x in targets] if targets is not None else [float("nan")] * len(handle)
+        controls = [Cruise(x, gain) if x == x else u for u, x in zip(handle, target)]  # nan: the handle
         last = len(handle) - 1
         max_time = max_time or 20 * segment.distance + 600
         node_list = nodes.tolist()
@@ -190,8 +191,7 @@ class Plant:
         def rhs(t, y):
             k = min(max(bisect_right(node_list, y[0]) - 1, span[0]), span[1])
             resist = davis_resistance(y[1], a, b, c) + fixed[0]
-            control = Cruise(target[k], gain) if target[k] == target[k] else handle[k]
-            ft, fb = self.forces(y[1], control, resist)
+            ft, fb = self.forces(y[1], controls[k], resist)
             return self.derivatives(y[1], ft, fb, resist)
 
         def stopped(t, y):

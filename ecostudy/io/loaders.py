@@ -251,6 +251,14 @@ def check_stops(track, from_stop, to_stop, where):
         raise InputError(lines)
 
 
+def chosen_stops(track, from_stop, to_stop, where):
+    """(from, to): the stops asked for, the track's first and last where not, checked (:func:`check_stops`)."""
+    names = list(track.stops)
+    from_stop, to_stop = from_stop or names[0], to_stop or names[-1]
+    check_stops(track, from_stop, to_stop, where)
+    return from_stop, to_stop
+
+
 def timing_from_timetable(tt, from_stop, to_stop, path):
     """Running time between two stops of a timetable: arrival at ``to`` minus departure at ``from``."""
     if tt.supplement_percent is not None:
@@ -278,10 +286,7 @@ def load_study(path):
     base = path.parent
     track = load_track(base / s.track)
     train = load_train(base / s.train)
-    stops = list(track.stops)
-    from_stop = s.from_stop or stops[0]
-    to_stop = s.to_stop or stops[-1]
-    check_stops(track, from_stop, to_stop, path)
+    from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     if s.timetable is not None:
         tt = name_stops(load_timetable(base / s.timetable), track, base / s.timetable)
         timing = timing_from_timetable(tt, from_stop, to_stop, base / s.timetable)

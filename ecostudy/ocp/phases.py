@@ -175,7 +175,7 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
     m.arrival = pyo.Constraint(expr=(sum(m.dt[i] for i in m.I) + clock - m.T) / t_ref == 0.0)
     _objective(m, train, segment, layout, ds, objective)
     if movable:  # what a re-plan restores (ocp.restart.set_phases_start)
-        m.base_v = [(0.0, float(limits[k])) for k in m.K]
+        m.base_bounds = {"v": [(0.0, float(limits[k])) for k in m.K]}
     return m
 
 

@@ -20,18 +20,41 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core.errors import InputError
+from ecostudy.core.grid import interval_of
 from ecostudy.core.types import State
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import build, capped_guess
 from ecostudy.ocp.session import Session
 
 
+def _on_segment(position, end):
+    if not 0.0 <= position < end:
+        raise InputError(f"start position {position:.1f} m is not on the segment [0, {end:.1f}) m")
+
+
 def start_interval(nodes, position):
     """(k, share): the interval holding ``position`` [m] and the share of it still to run."""
-    if not 0.0 <= position < nodes[-1]:
-        raise InputError(f"start position {position:.1f} m is not on the segment [0, {nodes[-1]:.1f}) m")
-    k = min(int(np.searchsorted(nodes, position, side="right")) - 1, len(nodes) - 2)
+    _on_segment(position, nodes[-1])
+    k = interval_of(nodes, position)
     return k, float((nodes[k + 1] - position) / (nodes[k + 1] - nodes[k]))
+
+
+def _start_speeds(m, first, speed, ceiling=None):
+    """(variables, lows, highs) of the node speeds but the last (the terminal condition's):
+    node 0 is the measured ``speed``; nodes up to ``first`` (already run, or the start itself)
+    may carry it even above the limit behind; the others keep their limits, lifted to
+    ``ceiling[k]`` where given."""
+    variables, lows, highs = [], [], []
+    for k in range(len(m.K) - 1):
+        lo, hi = m.base_bounds["v"][k]
+        if k <= first:
+            lo, hi = (speed, speed) if k == 0 else (0.0, max(hi, speed))
+        elif ceiling is not None:
+            hi = max(hi, float(ceiling[k]))
+        variables.append(m.v[k])
+        lows.append(lo)
+        highs.append(hi)
+    return variables, lows, highs
 
 
 def set_start(session, m, nodes, state, train=None):
@@ -46,20 +69,14 @@ def set_start(session, m, nodes, state, train=None):
     n = len(nodes) - 1
     shares = np.ones(n)
     shares[:k], shares[k] = 0.0, rest
-    variables, lows, highs = [m.t0], [state.time], [state.time]
     # a measured speed above a limit ahead that even full braking cannot meet in time: the limit
     # there is lifted to what braking reaches (as a soft overspeed would be), so a plan exists
-    braking = 0.9 * train.braking.force(max(state.speed, 0.0)) / (train.mass * m.mass_scale.ub) if train else 0.0
-    reach = np.sqrt(np.maximum(state.speed ** 2 - 2 * braking * np.maximum(nodes - state.position, 0.0), 0.0))
-    for j in range(n):  # node n is the terminal condition's (set_end)
-        lo, hi = m.base_bounds["v"][j]
-        if j <= k:  # run already, or the start itself: the measured speed, even above the limit behind
-            lo, hi = (state.speed, state.speed) if j == 0 else (0.0, max(hi, state.speed))
-        elif train is not None:
-            hi = max(hi, float(reach[j]))
-        variables.append(m.v[j])
-        lows.append(lo)
-        highs.append(hi)
+    reach = None
+    if train is not None:
+        braking = 0.9 * train.braking.force(max(state.speed, 0.0)) / (train.mass * m.mass_scale.ub)
+        reach = np.sqrt(np.maximum(state.speed ** 2 - 2 * braking * np.maximum(nodes - state.position, 0.0), 0.0))
+    variables, lows, highs = _start_speeds(m, k, state.speed, reach)
+    variables, lows, highs = [m.t0] + variables, [state.time] + lows, [state.time] + highs
     for name in ("ft", "fb", "fr"):
         if name in m.base_bounds:
             var = getattr(m, name)
@@ -80,20 +97,13 @@ def set_phases_start(session, m, layout, state):
     the sectors behind it filled to share 0 (their phases length 0, the speed carried through
     unchanged), the sector holding it to the share still to run."""
     secs = layout.sectors
-    if not 0.0 <= state.position < secs[-1].end:
-        raise InputError(f"start position {state.position:.1f} m is not on the segment [0, {secs[-1].end:.1f}) m")
+    _on_segment(state.position, secs[-1].end)
     s0 = next(s for s, sec in enumerate(secs) if state.position < sec.end)
     shares = [0.0] * s0 + [(secs[s0].end - state.position) / secs[s0].length] + [1.0] * (len(secs) - s0 - 1)
     first = next(q for q, (s, _) in enumerate(layout.phases) if s >= s0) * layout.substeps  # first node of s0
-    variables, lows, highs = [m.t0] + [m.share[s] for s in m.S], [state.time] + shares, [state.time] + shares
-    for k in range(len(m.K) - 1):  # the last node is the terminal condition's (set_end)
-        lo, hi = m.base_v[k]
-        if k <= first:
-            lo, hi = (state.speed, state.speed) if k == 0 else (0.0, max(hi, state.speed))
-        variables.append(m.v[k])
-        lows.append(lo)
-        highs.append(hi)
-    session.set_many_bounds(variables, lows, highs)
+    variables, lows, highs = _start_speeds(m, first, state.speed)
+    session.set_many_bounds([m.t0] + [m.share[s] for s in m.S] + variables,
+                            [state.time] + shares + lows, [state.time] + shares + highs)
     behind = [q for q, (s, _) in enumerate(layout.phases) if s < s0]
     session.set_start_values([m.L[q] for q in behind] + [m.v[k] for k in range(first + 1)],
                              [0.0] * len(behind) + [state.speed] * (first + 1))

@@ -15,7 +15,7 @@ from ecostudy import __version__
 from ecostudy.core.errors import InputError, problem
 from ecostudy.io import schemas
 from ecostudy.io.loaders import (
-    check_stops,
+    chosen_stops,
     load_timetable,
     read_document,
     timing_from_timetable,
@@ -50,9 +50,7 @@ def expand(path):
                 warnings.simplefilter("ignore")  # the base train already warned
             train_from_schema(validate(schemas.TrainFile, train_doc, f"{where} train"), where)
         track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{where} track"))
-        stops = list(track.stops)
-        from_stop, to_stop = s.from_stop or stops[0], s.to_stop or stops[-1]
-        check_stops(track, from_stop, to_stop, path)
+        from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
         timing = {"running_time_s": s.running_time_s, "supplement_percent": s.supplement_percent,
                   "window_s": list(s.window_s) if s.window_s else None}
         if s.timetable is not None:
