@@ -6,6 +6,7 @@ interrupted. ``--debug`` shows tracebacks.
 """
 import math
 import warnings
+from contextlib import contextmanager
 from enum import Enum
 
 import typer
@@ -90,3 +91,25 @@ def parse_pair(text, option):
         return a, b
     except ValueError:
         raise InputError(problem("command line", option, f"expected two numbers 'a,b', got '{text}'"))
+
+
+@contextmanager
+def case_progress(label, disabled):
+    """A progress bar over a study's cases: yields ``progress(done, failed, remaining, total)``.
+    Ctrl-C inside ends with exit status 130 and says that the finished cases are kept."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    columns = [TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+               TextColumn("failed {task.fields[failed]}, remaining {task.fields[remaining]}"), TimeRemainingColumn()]
+    with Progress(*columns, disable=disabled, transient=False) as bar:
+        task = bar.add_task(label, total=None, failed=0, remaining="?")
+
+        def progress(done, failed, remaining, total):
+            bar.update(task, completed=done, total=total, failed=failed, remaining=remaining)
+
+        try:
+            yield progress
+        except KeyboardInterrupt:
+            typer.secho(f"interrupted: every finished {label[:-1]} is stored; run the same command again to continue",
+                        fg=typer.colors.YELLOW, err=True)
+            raise typer.Exit(130)

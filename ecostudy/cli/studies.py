@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, app, check_options, guarded
+from ecostudy.cli.app import DasMethod, app, case_progress, check_options, guarded
 from ecostudy.core.errors import InputError, problem
 
 
@@ -215,23 +215,9 @@ def journey_command(
 def _run(study, workers, dask, retry_failed, out, no_progress):
     check_options(workers=workers)
     from ecostudy.studies.batch import run_study
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-
-    columns = [TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-               TextColumn("failed {task.fields[failed]}, remaining {task.fields[remaining]}"), TimeRemainingColumn()]
-    with Progress(*columns, disable=no_progress, transient=False) as bar:
-        task = bar.add_task("cases", total=None, failed=0, remaining="?")
-
-        def progress(done, failed, remaining, total):
-            bar.update(task, completed=done, total=total, failed=failed, remaining=remaining)
-
-        try:
-            table, counts, output = run_study(study, workers=workers, dask=dask, retry_failed=retry_failed,
-                                              out=Path(out) if out else None, progress=progress)
-        except KeyboardInterrupt:
-            typer.secho("interrupted: every finished case is stored; run the same command again to continue",
-                        fg=typer.colors.YELLOW, err=True)
-            raise typer.Exit(130)
+    with case_progress("cases", no_progress) as progress:
+        table, counts, output = run_study(study, workers=workers, dask=dask, retry_failed=retry_failed,
+                                          out=Path(out) if out else None, progress=progress)
     typer.echo(f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} computed "
                f"now ({counts['failed']} of them failed or infeasible); not ok in the table: {counts['not_ok']}")
     typer.echo(f"outputs {output}/ (results.csv, results.sqlite)")

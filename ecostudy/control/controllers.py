@@ -7,6 +7,9 @@
   movable NLP of ``ocp.restart`` instead of the SOCP of Ch. 6), its first control applied. One
   model and NL file for the whole trip, warm from the previous plan; a mass estimate, when one is
   given, changes the model's mass by a bound.
+- :class:`Convex`: thesis 001's real-time controller (Alg. 1): the SOCP 6.10 of
+  ``ocp.convex`` solved from every measured state on the grid ahead, its first force applied;
+  optionally following a leading train's clock (eq. 6.9) and fed by a mass estimator.
 """
 import dataclasses
 import time
@@ -15,6 +18,7 @@ import numpy as np
 
 from ecostudy.analysis.tables import handles
 from ecostudy.core.grid import interval_of
+from ecostudy.core.types import State
 from ecostudy.ocp.restart import Replanner
 
 REPLAN_OPTIONS = {"max_iter": 300}  # a re-plan that needs more has no plan worth waiting for
@@ -38,6 +42,21 @@ class OpenLoop:
         x = measured.position if self.by == "position" else measured.time
         self.solve_seconds.append(0.0)
         return float(self.result.handle[interval_of(self.key, x)])
+
+
+class ForceReplay:
+    """Replay a plan's force per interval of ``nodes`` [N] (traction > 0, braking < 0) by position,
+    as the handle that asks for it at the measured speed: a full-horizon plan without feedback."""
+
+    def __init__(self, train, nodes, force):
+        self.train, self.nodes, self.force = train, np.asarray(nodes, float), np.asarray(force, float)
+        self.solve_seconds = []
+
+    def plan(self, measured):
+        self.solve_seconds.append(0.0)
+        if measured.position >= self.nodes[-1]:
+            return -1.0
+        return force_handle(self.train, max(measured.speed, 0.0), self.force[interval_of(self.nodes, measured.position)])
 
 
 class Replanning:
@@ -82,3 +101,55 @@ class Replanning:
         k = interval_of(self.case.nodes, measured.position)
         self.last = handle_of(self.case.train, max(measured.speed, 0.0), plan.ft[k], plan.fb[k])
         return self.last
+
+
+def force_handle(train, speed, force):
+    """Handle in [-1, 1] that asks for ``force`` [N] (traction > 0, braking < 0) at ``speed``."""
+    top = train.traction.force(speed) if force >= 0 else train.braking.force(speed)
+    return float(np.clip(force / max(top, 1e-9), -1.0, 1.0))
+
+
+class Convex:
+    """Thesis 001 Alg. 1: every sample, solve ``program`` (``ocp.convex.ConvexProgram``) from the
+    measured state and apply the first interval's force as a handle held to the next sample.
+
+    ``arrival``: (T_min, T_max) [s] on the trip's clock; ``lead``: a leading train's clock as a
+    function of position (eq. 6.9, already shifted by the separation); a train at a stand waits
+    while the leader is still within that separation of it. Within ``final_m`` of the stop, or
+    without any plan, the controller brakes in full. Per solve it records the time, the
+    relaxation's gap max |rho s - 1| and whether the arrival window had to be dropped.
+    """
+
+    def __init__(self, program, arrival=(0.0, np.inf), estimator=None, lead=None, final_m=0.05, hold=0.1):
+        self.program, self.arrival, self.estimator, self.lead, self.final_m = program, arrival, estimator, lead, final_m
+        self.hold = hold
+        self.solve_seconds, self.gaps, self.softened, self.failures = [], [], 0, 0
+
+    def plan(self, measured):
+        distance = self.program.segment.distance
+        waiting = (self.lead is not None and measured.speed < 0.01
+                   and float(self.lead(np.array([measured.position + 1.0]))[0]) > measured.time)
+        if waiting or measured.position >= distance - self.final_m:
+            self.solve_seconds.append(0.0)
+            return -1.0
+        if measured.position < 0.0:  # a noisy reading behind the departure point: read as at it
+            measured = State(0.0, measured.speed, measured.time)
+        scale = self.estimator.estimate if self.estimator is not None else 1.0
+        plan = self.program.solve(measured, self.arrival, mass_scale=scale, lead=self.lead, hold=self.hold)
+        self.solve_seconds.append(plan.seconds)
+        if not plan.usable:
+            self.failures += 1
+            return -1.0
+        self.gaps.append(plan.gap)
+        self.softened += int(plan.softened)
+        return force_handle(self.program.train, max(measured.speed, 0.0), plan.force[0])
+
+
+def leader_clock(states, separation):
+    """Eq. 6.9's T_buff as a function of position: the clock at which a leading train (its
+    closed-loop ``states``) passed ``x + separation``; beyond its stop, the clock it stopped."""
+    x = np.maximum.accumulate(np.array([s.position for s in states]))
+    t = np.array([s.time for s in states])
+    keep = np.concatenate([[True], np.diff(x) > 0])
+    x, t = x[keep], t[keep]
+    return lambda positions: np.interp(np.asarray(positions, float) + separation, x, t, left=t[0], right=t[-1])

@@ -1,9 +1,9 @@
 """The closed loop: a controller sampled every ``sample_time`` drives a plant stepped finely.
 
 Each cycle the sensors read the plant's state (with measurement noise, ``core.plant.Noise``), a
-mass estimator (optional) takes the last cycle's measured acceleration, the controller plans a
+mass estimator (optional) takes the accelerometer's reading of the last cycle's mean acceleration, the controller plans a
 handle, and the plant runs that handle for ``sample_time`` in steps of ``plant_step`` with the
-acceleration disturbance drawn per step. The trip ends when the train has moved and stands.
+acceleration disturbance drawn per step (or held for ``noise.period``). The trip ends when the train has moved and stands.
 """
 from typing import NamedTuple
 
@@ -38,22 +38,29 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
     state, states, handles = State(), [State()], []
     work_t = work_b = 0.0
     max_time = max_time or 20 * segment.distance + 600
-    moved, last, over = False, None, 0.0
+    moved, last, over, drawn = False, None, 0.0, (None, 0.0)
     substeps = max(int(round(sample_time / plant_step)), 1)
     while state.time < max_time:
         measured = noise.measure(state, rng)
-        if estimator is not None and last is not None:  # what the model says the handle did
-            u, v0, measured0 = last
-            davis = davis_resistance(v0, *model.davis)
-            ft, fb = nominal.forces(v0, u, davis)
+        if estimator is not None and last is not None and max(last[3].speed, state.speed) > 0.0:
+            # what the model says the handle did (a train that stood throughout tells nothing)
+            u, v0, measured0, before = last
+            net = 0.0
+            for v in (v0, max(measured.speed, 0.0)):  # the cycle's mean: trapezoid over its ends
+                davis = davis_resistance(v, *model.davis)
+                ft, fb = nominal.forces(v, u, davis)
+                net += 0.5 * (ft - fb - davis) / model.mass
             grade = nominal.grade_force(measured0.position) / model.mass
-            estimator.update((measured.speed - measured0.speed) / sample_time, grade,
-                             (ft - fb - davis) / model.mass, measured0.position)
+            reading = noise.read_acceleration((state.speed - before.speed) / (state.time - before.time), rng)
+            estimator.update(reading, grade, net, measured0.position)
         u = float(controller.plan(measured))
         handles.append(u)
-        last = (u, max(measured.speed, 0.0), measured)
+        last = (u, max(measured.speed, 0.0), measured, state)
         for _ in range(substeps):
-            step = plant.step(state, u, plant_step, noise.disturbance(rng))
+            slot = int(state.time // noise.period) if noise.period else None
+            if slot is None or slot != drawn[0]:  # a new draw each step, or each noise period
+                drawn = (slot, noise.disturbance(rng))
+            step = plant.step(state, u, plant_step, drawn[1])
             state = step.state
             work_t += step.traction_work
             work_b += step.braking_work

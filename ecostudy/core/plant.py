@@ -68,6 +68,12 @@ class Noise:
     position: float = 0.0
     speed: float = 0.0
     seed: int = 0
+    period: float = 0.0  # the acceleration noise is held this long [s] (thesis 001 §10.1: 1 s); 0: per step
+    accelerometer: float = 0.0  # noise of the acceleration reading [m/s^2] (thesis 001 §10.3.5, sigma_A)
+
+    def read_acceleration(self, mean, rng):
+        """The accelerometer's reading of the mean acceleration ``mean`` over the last sample."""
+        return mean + (float(rng.normal(0.0, self.accelerometer)) if self.accelerometer else 0.0)
 
     def generator(self):
         return np.random.default_rng(self.seed)

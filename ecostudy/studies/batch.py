@@ -64,15 +64,15 @@ def run_case(case):
             "seconds": time.perf_counter() - t0}
 
 
-def _serial(todo):
+def _serial(todo, task):
     for case in todo:
-        yield case, run_case(case)
+        yield case, task(case)
 
 
-def _processes(todo, workers):
+def _processes(todo, workers, task):
     ctx = multiprocessing.get_context("fork")  # workers inherit the loaded modules
     with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-        futures = {pool.submit(run_case, case): case for case in todo}
+        futures = {pool.submit(task, case): case for case in todo}
         try:
             for future in as_completed(futures):
                 yield futures[future], future.result()
@@ -82,14 +82,14 @@ def _processes(todo, workers):
             raise
 
 
-def _dask(todo, address):
+def _dask(todo, address, task):
     try:
         from distributed import Client
         from distributed import as_completed as dask_completed
     except ImportError:
         raise EcostudyError("--dask needs Dask: pip install 'ecostudy[dask]'") from None
     with Client(address) as client:
-        futures = {client.submit(run_case, case, key=f"ecostudy-{case['key']}", pure=False): case
+        futures = {client.submit(task, case, key=f"ecostudy-{case['key']}", pure=False): case
                    for case in todo}
         try:
             for future in dask_completed(futures):
@@ -97,6 +97,26 @@ def _dask(todo, address):
         except BaseException:
             client.cancel(list(futures))
             raise
+
+
+def execute(cases, store, task=run_case, workers=1, dask=None, retry_failed=False, progress=None):
+    """Run ``task`` (a pure function of a case dict returning a result dict, never raising) on every
+    case not in ``store`` yet, serially, in ``workers`` processes or on a Dask scheduler, storing
+    each result as it arrives; returns the counts. ``progress(done, failed, remaining, total)``."""
+    finished = store.finished_keys(retry_failed=retry_failed)
+    todo = [c for c in cases if c["key"] not in finished]
+    counts = {"total": len(cases), "stored_before": len(cases) - len(todo), "computed": 0, "failed": 0}
+    if workers < 1:
+        raise EcostudyError("--workers must be at least 1")
+    source = (_dask(todo, dask, task) if dask else _processes(todo, workers, task) if workers > 1 and len(todo) > 1
+              else _serial(todo, task))
+    for case, result in source:
+        store.put(case, result)
+        counts["computed"] += 1
+        counts["failed"] += result["status"] in ("failed", "infeasible")
+        if progress:
+            progress(counts["computed"], counts["failed"], len(todo) - counts["computed"], len(todo))
+    return counts
 
 
 def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
@@ -108,19 +128,7 @@ def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress
     output = out or output
     store = Store(output / "results.sqlite")
     try:
-        finished = store.finished_keys(retry_failed=retry_failed)
-        todo = [c for c in cases if c["key"] not in finished]
-        counts = {"total": len(cases), "stored_before": len(cases) - len(todo), "computed": 0, "failed": 0}
-        if workers < 1:
-            raise EcostudyError("--workers must be at least 1")
-        source = (_dask(todo, dask) if dask else _processes(todo, workers) if workers > 1 and len(todo) > 1
-                  else _serial(todo))
-        for case, result in source:
-            store.put(case, result)
-            counts["computed"] += 1
-            counts["failed"] += result["status"] in ("failed", "infeasible")
-            if progress:
-                progress(counts["computed"], counts["failed"], len(todo) - counts["computed"], len(todo))
+        counts = execute(cases, store, run_case, workers, dask, retry_failed, progress)
         table = study_table(cases, store)
     finally:
         store.close()

@@ -1,0 +1,46 @@
+"""The closed-loop command of the command line: ``ecostudy simulate`` (registered on ``cli.app``)."""
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ecostudy.cli.app import app, case_progress, check_options, guarded
+
+SHOWN = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_per_kg_std", "arrival_s_mean",
+         "arrival_s_max", "stop_error_m_min", "stop_error_m_max", "max_overspeed_kmh_max", "solve_mean_ms_mean",
+         "solve_p95_ms_max", "over_budget_sum", "softened_sum"]
+
+
+def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot):
+    check_options(workers=workers)
+    from ecostudy.studies.closedloop import simulate_study
+    with case_progress("runs", no_progress) as progress:
+        outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress)
+    runs, summary, counts, output = outcome.runs, outcome.aggregate, outcome.counts, outcome.output
+    if not no_plot:
+        from ecostudy.report import loopplots
+        loopplots.draw(outcome)
+    typer.echo(summary[[c for c in SHOWN if c in summary]].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    typer.echo(f"{counts['total']} runs: {counts['stored_before']} already stored, {counts['computed']} computed now "
+               f"({counts['failed']} failed); not ok: {counts['not_ok']}")
+    typer.echo(f"outputs {output}/ (runs.csv, aggregate.csv, results.sqlite{'' if no_plot else ', bands.png, solve_times.png'})")
+    for _, row in runs[runs["status"] != "ok"].iterrows():
+        typer.echo(f"  {row['controller']} draw {row['draw']}: {row['status']}: {row['reason']}")
+    return counts
+
+
+@app.command()
+def simulate(
+    study: Path = typer.Argument(..., help="Closed-loop study file (YAML): controllers, deviations, draws."),
+    workers: int = typer.Option(1, help="Local worker processes."),
+    dask: Optional[str] = typer.Option(None, help="Address of a running Dask scheduler (tcp://host:port)."),
+    retry_failed: bool = typer.Option(False, help="Compute failed runs again."),
+    out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's 'output')."),
+    no_progress: bool = typer.Option(False, "--no-progress", help="No progress bar."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip the plots."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Closed loop: every controller drives every draw of the plant's deviations and noise (resumable)."""
+    counts = guarded(debug, _simulate, study, workers, dask, retry_failed, out, no_progress, no_plot)
+    if counts["not_ok"]:
+        raise typer.Exit(1)

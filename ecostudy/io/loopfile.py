@@ -1,0 +1,97 @@
+"""The schema of a closed-loop study file (``ecostudy simulate``): controllers x deviation draws.
+
+Units are in the field names, as in :mod:`ecostudy.io.schemas`. Defaults are thesis 001's Ch.9
+(controller) and Ch.10 (noise) values.
+"""
+from typing import Literal, Optional
+
+from pydantic import Field, model_validator
+
+from ecostudy.io.schemas import Strict
+
+
+class ConvexSettings(Strict):
+    """Weights and buffers of thesis 001 eq. 6.10 (Ch.9 values)."""
+
+    time: float = Field(1.0, ge=0, description="w_t [1/s].")
+    energy: float = Field(1.0, ge=0, description="w_e, on the force per speed and unit mass.")
+    overspeed: float = Field(0.02, ge=0, description="w_os, on the speed inside the buffer.")
+    braking: float = Field(1.0, ge=0, description="w_br, on braking beyond brake_level_mps2.")
+    buffer_mps: float = Field(1.0, ge=0, description="B_os: the soft buffer below the speed limit [m/s].")
+    brake_level_mps2: float = Field(0.8, gt=0, description="B_brk: planned braking above it is penalised [m/s^2].")
+
+
+class Controller(Strict):
+    """One controller of the study.
+
+    ``convex``: thesis 001's SOCP 6.10 re-solved every sample; ``open_loop``: the same SOCP's plan
+    from the stand, replayed by position without feedback; ``ato``: the full-horizon
+    energy-optimal ATO run (Ipopt NLP) at the latest arrival, replayed open loop by position.
+    """
+
+    name: str
+    kind: Literal["convex", "open_loop", "ato"]
+    settings: ConvexSettings = ConvexSettings()
+    estimator: bool = Field(False, description="Feed the controller a Kalman mass estimate (thesis 001 §10.3).")
+    scheme: Literal["midpoint", "left"] = "midpoint"
+
+
+class Range(Strict):
+    """True parameter as a multiple of the model's, drawn uniformly from [low, high] per run."""
+
+    low: float = Field(gt=0)
+    high: float = Field(gt=0)
+
+    @model_validator(mode="after")
+    def _ordered(self):
+        if self.high < self.low:
+            raise ValueError("high must be at least low")
+        return self
+
+
+class Deviations(Strict):
+    """The plant's true parameters per run (default: the model itself)."""
+
+    mass: Range = Range(low=1.0, high=1.0)
+    resistance: Range = Range(low=1.0, high=1.0)
+    traction: Range = Range(low=1.0, high=1.0)
+    braking: Range = Range(low=1.0, high=1.0)
+
+
+class NoiseSettings(Strict):
+    """Standard deviations of thesis 001 eqs. 10.2-10.4 (zero: none)."""
+
+    acceleration_mps2: float = Field(0.0, ge=0, le=5, description="sigma_a of the process noise.")
+    period_s: float = Field(1.0, gt=0, description="The process noise is redrawn every period (thesis: 1 Hz).")
+    position_m: float = Field(0.0, ge=0, le=100, description="sigma_X of the position reading.")
+    speed_mps: float = Field(0.0, ge=0, le=10, description="sigma_V of the speed reading.")
+    accelerometer_mps2: float = Field(0.0, ge=0, le=10, description="sigma_A of the acceleration reading "
+                                      "(the mass estimator's input, thesis 001 §10.3.5).")
+
+
+class SimulateFile(Strict):
+    name: str
+    track: str
+    train: str
+    from_stop: Optional[str] = Field(None, alias="from")
+    to_stop: Optional[str] = Field(None, alias="to")
+    window_s: tuple[float, float] = Field(description="Arrival window [T_min, T_max] on the trip's clock [s].")
+    points: int = Field(500, ge=10, le=20000, description="K, the controller's grid nodes.")
+    sample_time_s: float = Field(0.1, gt=0, le=60, description="Controller period; also its real-time budget.")
+    controllers: list[Controller] = Field(min_length=1)
+    deviations: Deviations = Deviations()
+    noise: NoiseSettings = NoiseSettings()
+    draws: int = Field(1, ge=1, le=100000, description="Monte Carlo draws of deviations and noise seeds.")
+    seed: int = Field(0, ge=0)
+    output: Optional[str] = None
+
+    @model_validator(mode="after")
+    def _checks(self):
+        names = [c.name for c in self.controllers]
+        if len(set(names)) != len(names):
+            raise ValueError("controller names must be unique")
+        if not 0 <= self.window_s[0] <= self.window_s[1]:
+            raise ValueError("window_s must be [earliest, latest] with 0 <= earliest <= latest")
+        if self.sample_time_s >= self.window_s[1]:
+            raise ValueError("sample_time_s must be shorter than the latest arrival window_s[1]")
+        return self

@@ -1,0 +1,243 @@
+"""Closed-loop studies (``ecostudy simulate``): every controller x every Monte Carlo draw.
+
+A study file (:mod:`ecostudy.io.loopfile`) names a track, a train, an arrival window, the
+controllers and the deviations. Each draw fixes the plant's true parameters (uniform in the given
+ranges) and a noise seed; every controller drives the same draws (paired comparison). Cases are
+self-contained and keyed by a hash of their inputs, so a study runs resumably on the batch
+machinery (:func:`ecostudy.studies.batch.execute`): serially, in processes or on Dask.
+"""
+import time
+import warnings
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+import pandas as pd
+
+from ecostudy import __version__
+from ecostudy.analysis.single import solve_run
+from ecostudy.control.controllers import Convex, ForceReplay, OpenLoop
+from ecostudy.control.estimator import MassEstimator
+from ecostudy.control.loop import run_loop
+from ecostudy.core.errors import EcostudyError, EcostudyWarning, InputError, problem
+from ecostudy.core.grid import make_segment
+from ecostudy.core.plant import Noise, Plant, Truth
+from ecostudy.core.types import State, Timing
+from ecostudy.io import schemas
+from ecostudy.io.loaders import (chosen_stops, read_document, track_document, track_from_schema,
+                                 train_document, train_from_schema, validate)
+from ecostudy.io.loopfile import SimulateFile
+from ecostudy.ocp.convex import ConvexProgram, ConvexWeights, trapezoid_grid
+from ecostudy.io.store import Store
+from ecostudy.io.writers import write_csv
+from ecostudy.studies.batch import execute
+from ecostudy.studies.cases import case_key
+
+PARAMETERS = ("mass", "resistance", "traction", "braking")
+
+
+def _inputs(case):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EcostudyWarning)  # shown once when the study was expanded
+        train = train_from_schema(schemas.TrainFile.model_validate(case["train"]), case["study"])
+    track = track_from_schema(schemas.TrackFile.model_validate(case["track"]))
+    return track, train, make_segment(track, train, case["from"], case["to"])
+
+
+def convex_program(segment, train, points, spec):
+    """The thesis 001 SOCP of a controller spec (a ``loopfile.Controller`` as a dict)."""
+    s = spec["settings"]
+    weights = ConvexWeights(s["time"], s["energy"], s["overspeed"], s["braking"], s["buffer_mps"],
+                            s["brake_level_mps2"])
+    return ConvexProgram(segment, train, trapezoid_grid(segment, points), weights, scheme=spec["scheme"])
+
+
+def all_out_time(segment, train, points):
+    """The nominal train's all-out time from a stand [s] by the SOCP (None: no run at all)."""
+    spec = {"settings": {"time": 1.0, "energy": 0.0, "overspeed": 0.0, "braking": 0.0, "buffer_mps": 0.0,
+                         "brake_level_mps2": 1.0}, "scheme": "midpoint"}
+    fastest = convex_program(segment, train, points, spec).solve(State(), (0.0, np.inf))
+    return float(fastest.t[-1]) if fastest.usable else None
+
+
+def expand(path):
+    """(study, output folder, cases); the inputs are validated here, once."""
+    path = Path(path)
+    s = validate(SimulateFile, read_document(path), path)
+    train_doc = train_document(path.parent / s.train)[0]
+    track_doc = track_document(path.parent / s.track)
+    train = train_from_schema(validate(schemas.TrainFile, train_doc, f"{path} train"), path)
+    track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{path} track"))
+    from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
+    segment = make_segment(track, train, from_stop, to_stop)
+    fastest = all_out_time(segment, train, s.points)
+    if fastest is None or s.window_s[1] < fastest:
+        raise InputError(problem(path, "window_s", f"the latest arrival {s.window_s[1]:g} s is below the all-out "
+                                 f"time {fastest or float('nan'):.2f} s of the nominal train"))
+    rng = np.random.default_rng(s.seed)
+    draws = []
+    for _ in range(s.draws):
+        ranges = s.deviations.model_dump()
+        truth = {name: float(rng.uniform(ranges[name]["low"], ranges[name]["high"])) for name in PARAMETERS}
+        draws.append((truth, int(rng.integers(2 ** 31))))
+    noise = s.noise.model_dump()
+    cases = []
+    for spec in s.controllers:
+        for i, (truth, seed) in enumerate(draws):
+            case = {"study": s.name, "scenario": spec.name, "labels": {"controller": spec.name, "draw": i},
+                    "train": train_doc, "track": track_doc, "from": from_stop, "to": to_stop,
+                    "window": list(s.window_s), "points": s.points, "sample_time": s.sample_time_s,
+                    "controller": spec.model_dump(), "truth": truth,
+                    "noise": {**noise, "seed": seed}, "version": __version__}
+            case["key"] = case_key(case)
+            cases.append(case)
+    output = path.parent / s.output if s.output else Path("out") / s.name
+    return s, output, cases
+
+
+def build_controller(case, track, segment, train, estimator):
+    spec, window = case["controller"], tuple(case["window"])
+    if spec["kind"] == "convex":
+        return Convex(convex_program(segment, train, case["points"], spec), window, estimator,
+                      hold=case["sample_time"])
+    if spec["kind"] == "open_loop":  # the convex controller's own plan from the stand, replayed
+        plan = convex_program(segment, train, case["points"], spec).solve(State(), window)
+        if not plan.usable:
+            raise InputError(f"no open-loop plan in the window {window}")
+        return ForceReplay(train, plan.nodes, plan.force)
+    result = solve_run(track, train, case["from"], case["to"], Timing(running_time=window[1]),
+                       points=case["points"], verify_result=False)
+    return OpenLoop(result)
+
+
+def _mode_changes(handles):
+    modes = np.sign(np.where(np.abs(handles) < 1e-6, 0.0, handles))
+    return int(np.sum(modes[1:] != modes[:-1]))
+
+
+def summarise(case, result, controller, train, estimator):
+    """The per-run numbers of a closed-loop trip (SI in, the units in the names out)."""
+    sample, (t_min, t_max) = case["sample_time"], case["window"]
+    seconds = np.array(controller.solve_seconds)
+    solved = seconds[seconds > 0] if np.any(seconds > 0) else np.zeros(1)
+    mass = train.mass * case["truth"]["mass"]
+    x = [round(s.position, 3) for s in result.states]
+    v = [round(s.speed, 4) for s in result.states]
+    gaps = getattr(controller, "gaps", [])
+    return {
+        "energy_J_per_kg": result.traction_work / mass, "traction_energy_kWh": result.traction_work / 3.6e6,
+        "braking_energy_kWh": result.braking_work / 3.6e6, "arrival_s": result.arrival_time_s,
+        "late_s": max(result.arrival_time_s - t_max, 0.0), "early_s": max(t_min - result.arrival_time_s, 0.0),
+        "stop_error_m": result.stop_error_m, "max_overspeed_kmh": result.max_overspeed_kmh,
+        "solve_mean_ms": 1e3 * float(solved.mean()), "solve_p95_ms": 1e3 * float(np.percentile(solved, 95)),
+        "solve_max_ms": 1e3 * float(solved.max()), "over_budget": int(np.sum(seconds > sample)),
+        "samples": len(seconds), "softened": getattr(controller, "softened", 0),
+        "failures": getattr(controller, "failures", 0), "max_gap": max(gaps) if gaps else None,
+        "mode_changes": _mode_changes(np.array(result.handles)),
+        "mass_estimate": estimator.estimate if estimator is not None else None,
+        **{f"true_{name}": case["truth"][name] for name in PARAMETERS},
+        "profile": {"x": x, "v": v}, "solve_ms": [round(1e3 * s, 2) for s in seconds],
+        "estimates": [(round(p, 2), round(e, 5)) for p, e in result.mass_estimates[::10] if p is not None],
+    }
+
+
+def run_loop_case(case):
+    """One closed-loop trip (a case of :func:`expand`); never raises: failures are results."""
+    t0 = time.perf_counter()
+    try:
+        track, train, segment = _inputs(case)
+        estimator = MassEstimator() if case["controller"]["estimator"] else None
+        controller = build_controller(case, track, segment, train, estimator)
+        n = case["noise"]
+        noise = Noise(n["acceleration_mps2"], n["position_m"], n["speed_mps"], n["seed"], n["period_s"],
+                      n["accelerometer_mps2"])
+        plant = Plant(segment, train, Truth(**case["truth"]))
+        result = run_loop(plant, controller, case["sample_time"], noise, plant_step=case["sample_time"],
+                          estimator=estimator)
+        summary = summarise(case, result, controller, train, estimator)
+        reasons = []
+        if abs(summary["stop_error_m"]) > 1.0:
+            reasons.append(f"stopped {summary['stop_error_m']:+.2f} m from the stop")
+        if summary["late_s"] > 1.0:
+            reasons.append(f"arrived {summary['late_s']:.2f} s after the window")
+        if summary["max_overspeed_kmh"] > 0.5:
+            reasons.append(f"overspeed {summary['max_overspeed_kmh']:.2f} km/h")
+        status, error = ("flagged", "; ".join(reasons)) if reasons else ("ok", None)
+    except EcostudyError as exc:
+        status, error, summary = "failed", str(exc), None
+    except Exception as exc:  # one failing run never stops the study
+        status, error, summary = "failed", f"{type(exc).__name__}: {exc}", None
+    return {"key": case["key"], "status": status, "error": error, "summary": summary,
+            "seconds": time.perf_counter() - t0}
+
+
+COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "stop_error_m", "max_overspeed_kmh",
+           "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget", "softened", "failures", "max_gap",
+           "mode_changes", "mass_estimate", *(f"true_{name}" for name in PARAMETERS))
+
+
+def runs_table(cases, rows):
+    """One row per run: labels, status, reason and the numbers of :func:`summarise`."""
+    out = []
+    for case in cases:
+        row = rows.get(case["key"]) or {}
+        s = row.get("summary") or {}
+        out.append({**case["labels"], "key": case["key"], "status": row.get("status", "missing"),
+                    "reason": row.get("error"), **{c: s.get(c) for c in COLUMNS}, "seconds": row.get("seconds")})
+    return pd.DataFrame(out)
+
+
+def aggregate(runs):
+    """Per controller: the number of runs and of runs ok, and mean, spread and worst case of the
+    energy, arrival, stop error, overspeed and solve times."""
+    rows = []
+    for name, group in runs.groupby("controller", sort=False):
+        row = {"controller": name, "runs": len(group), "ok": int((group["status"] == "ok").sum())}
+        for column in ("energy_J_per_kg", "arrival_s", "stop_error_m"):
+            values = pd.to_numeric(group[column], errors="coerce")
+            row.update({f"{column}_mean": values.mean(), f"{column}_std": values.std(ddof=0),
+                        f"{column}_min": values.min(), f"{column}_max": values.max()})
+        for column, how in (("max_overspeed_kmh", "max"), ("late_s", "max"), ("solve_mean_ms", "mean"),
+                            ("solve_p95_ms", "max"), ("solve_max_ms", "max"), ("over_budget", "sum"),
+                            ("softened", "sum"), ("max_gap", "max")):
+            row[f"{column}_{how}"] = getattr(pd.to_numeric(group[column], errors="coerce"), how)()
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
+    """Run the runs of a closed-loop study not stored yet and write runs.csv and aggregate.csv.
+
+    Returns a :class:`LoopStudy` (the plots are drawn from it by ``report.loopplots``)."""
+    study, output, cases = expand(path)
+    output = Path(out) if out else output
+    store = Store(output / "results.sqlite")
+    try:
+        counts = execute(cases, store, run_loop_case, workers, dask, retry_failed, progress)
+        rows = store.get([c["key"] for c in cases])
+    finally:
+        store.close()
+    runs = runs_table(cases, rows)
+    summary = aggregate(runs)
+    write_csv(output / "runs.csv", runs)
+    write_csv(output / "aggregate.csv", summary)
+    by_controller = {}
+    for case in cases:
+        s = (rows.get(case["key"]) or {}).get("summary")
+        if s:
+            by_controller.setdefault(case["labels"]["controller"], []).append(s)
+    counts["not_ok"] = int((runs["status"] != "ok").sum())
+    return LoopStudy(study, runs, summary, counts, output, by_controller, _inputs(cases[0])[2])
+
+
+class LoopStudy(NamedTuple):
+    """A closed-loop study's outcome: the study file, the runs and aggregate tables, the counts,
+    the output folder, every stored run's summary per controller, and the segment."""
+
+    study: object
+    runs: pd.DataFrame
+    aggregate: pd.DataFrame
+    counts: dict
+    output: Path
+    by_controller: dict
+    segment: object

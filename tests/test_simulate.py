@@ -1,0 +1,56 @@
+"""`ecostudy simulate`: controllers x Monte Carlo draws of the plant's deviations, resumable, one
+table per run and one per controller, plots; bad study input in one line."""
+import pandas as pd
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+
+from .conftest import STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
+
+runner = CliRunner()
+
+
+def study(tmp_path, **changes):
+    doc = {"name": "mc", "track": str(TRACKS / "thesis001_advanced_1km.yaml"),
+           "train": str(TRAINS / "thesis001_commuter.yaml"), "window_s": [0, 200], "points": 80,
+           "sample_time_s": 0.5, "draws": 2, "seed": 7,
+           "controllers": [{"name": "convex", "kind": "convex", "estimator": True},
+                           {"name": "replayed", "kind": "open_loop"}],
+           "deviations": {"mass": {"low": 1.05, "high": 1.15}},
+           "noise": {"acceleration_mps2": 0.05, "speed_mps": 0.01, "position_m": 0.01}, **changes}
+    path = tmp_path / "mc.yaml"
+    write_yaml(path, doc)
+    return path
+
+
+def test_a_monte_carlo_study_runs_resumes_and_says_what_feedback_buys(tmp_path):
+    out = tmp_path / "out"
+    first = runner.invoke(app, ["simulate", str(study(tmp_path)), "--out", str(out), "--no-progress"])
+    runs = pd.read_csv(out / "runs.csv")
+    assert len(runs) == 4 and set(runs["controller"]) == {"convex", "replayed"}
+    convex, replayed = runs[runs.controller == "convex"], runs[runs.controller == "replayed"]
+    # heavier trains: the replayed plan overruns the stop, the closed loop with the estimator stops
+    assert (convex["stop_error_m"].abs() < 1.0).all() and (convex["status"] == "ok").all()  # K = 80, 2 Hz
+    assert (replayed["stop_error_m"] > 1.0).all() and (replayed["status"] == "flagged").all()
+    assert first.exit_code == 1 and "stopped +" in first.output  # flagged runs are named, exit 1
+    assert convex["mass_estimate"].sub(convex["true_mass"]).abs().max() < 0.02
+    aggregate = pd.read_csv(out / "aggregate.csv")
+    assert list(aggregate["controller"]) == ["convex", "replayed"] and list(aggregate["runs"]) == [2, 2]
+    assert (out / "bands.png").stat().st_size > 0 and (out / "mass_estimates.png").exists()
+    again = runner.invoke(app, ["simulate", str(study(tmp_path, draws=3)), "--out", str(out), "--no-progress",
+                                "--no-plot"])
+    assert "4 already stored, 2 computed now" in again.output, again.output
+    assert len(pd.read_csv(out / "runs.csv")) == 6
+
+
+def test_bad_closed_loop_studies_get_one_line(tmp_path):
+    late = runner.invoke(app, ["simulate", str(study(tmp_path, window_s=[0, 30])), "--no-progress"])
+    assert late.exit_code == 2 and "window_s" in late.output and "all-out time" in late.output
+    long = runner.invoke(app, ["simulate", str(study(tmp_path, sample_time_s=250)), "--no-progress"])
+    assert long.exit_code == 2 and "sample_time_s" in long.output
+    zero = runner.invoke(app, ["simulate", str(study(tmp_path, points=0)), "--no-progress"])
+    assert zero.exit_code == 2 and "points" in zero.output
+
+
+def test_the_shipped_closed_loop_study_is_valid():
+    assert load_yaml(STUDIES / "thesis001_closed_loop.yaml")["controllers"]
