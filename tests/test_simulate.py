@@ -1,6 +1,7 @@
 """`ecostudy simulate`: controllers x Monte Carlo draws of the plant's deviations, resumable, one
 table per run and one per controller, plots; bad study input in one line."""
 import pandas as pd
+import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
@@ -54,3 +55,15 @@ def test_bad_closed_loop_studies_get_one_line(tmp_path):
 
 def test_the_shipped_closed_loop_study_is_valid():
     assert load_yaml(STUDIES / "thesis001_closed_loop.yaml")["controllers"]
+
+
+@pytest.mark.slow
+def test_sbpc_with_a_driver_on_das_levels_runs_in_a_study(tmp_path):
+    path = study(tmp_path, track=str(TRACKS / "amsterdam_rokin_centraal.yaml"), train=str(TRAINS / "amsterdam_metro.yaml"),
+                 window_s=[0, 76], points=200, sample_time_s=1.52, draws=1, deviations={}, noise={},
+                 controllers=[{"name": "sbpc", "kind": "sbpc", "block": 4, "variant": "two_step", "das_levels": True,
+                               "delay_samples": 1}])
+    result = runner.invoke(app, ["simulate", str(path), "--out", str(tmp_path / "o"), "--no-progress", "--no-plot"])
+    runs = pd.read_csv(tmp_path / "o" / "runs.csv")
+    assert runs.loc[0, "status"] in ("ok", "flagged"), result.output
+    assert runs.loc[0, "terminal_gamma_m"] >= 0 and abs(runs.loc[0, "stop_error_m"]) < 30.0

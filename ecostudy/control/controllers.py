@@ -153,3 +153,22 @@ def leader_clock(states, separation):
     keep = np.concatenate([[True], np.diff(x) > 0])
     x, t = x[keep], t[keep]
     return lambda positions: np.interp(np.asarray(positions, float) + separation, x, t, left=t[0], right=t[-1])
+
+
+class Quantised:
+    """A driver-advisory loop: the ``controller``'s handle applied as the nearest of the train's
+    DAS ``levels`` (thesis 000 §3.1.2 and §4.4: {-1, 0, 0.5, 0.75, 1}), optionally ``delay``
+    samples late (the driver's reaction time)."""
+
+    def __init__(self, controller, levels, delay=0):
+        self.controller, self.levels, self.delay = controller, np.asarray(sorted(levels), float), int(delay)
+        self.pending = []
+
+    @property
+    def solve_seconds(self):
+        return self.controller.solve_seconds
+
+    def plan(self, measured):
+        u = float(self.controller.plan(measured))
+        self.pending.append(float(self.levels[np.argmin(np.abs(self.levels - u))]))
+        return self.pending[-1 - self.delay] if len(self.pending) > self.delay else 0.0

@@ -26,14 +26,22 @@ class Controller(Strict):
 
     ``convex``: thesis 001's SOCP 6.10 re-solved every sample; ``open_loop``: the same SOCP's plan
     from the stand, replayed by position without feedback; ``ato``: the full-horizon
-    energy-optimal ATO run (Ipopt NLP) at the latest arrival, replayed open loop by position.
+    energy-optimal ATO run (Ipopt NLP) at the latest arrival, replayed open loop by position;
+    ``sbpc``: thesis 000's shrinking-horizon move-blocking controller arriving at the latest
+    arrival (blocks of ``block`` samples, ``variant``). ``das_levels`` applies any controller's
+    handle as the nearest of the train's DAS levels, ``delay_samples`` later (a driver).
     """
 
     name: str
-    kind: Literal["convex", "open_loop", "ato"]
+    kind: Literal["convex", "open_loop", "ato", "sbpc"]
     settings: ConvexSettings = ConvexSettings()
     estimator: bool = Field(False, description="Feed the controller a Kalman mass estimate (thesis 001 §10.3).")
     scheme: Literal["midpoint", "left"] = "midpoint"
+    block: int = Field(20, ge=1, description="SBPC: L, samples per blocked move (thesis 000 eq. 4.8).")
+    variant: Literal["nominal", "two_step", "multi"] = "nominal"
+    omega: float = Field(3505.0, gt=0, description="SBPC multi-objective weight on the terminal distance (4.31).")
+    das_levels: bool = Field(False, description="Apply the handle as the nearest DAS level of the train.")
+    delay_samples: int = Field(0, ge=0, le=100, description="Driver reaction delay with das_levels [samples].")
 
 
 class Range(Strict):

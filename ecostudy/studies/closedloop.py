@@ -16,7 +16,8 @@ import pandas as pd
 
 from ecostudy import __version__
 from ecostudy.analysis.single import solve_run
-from ecostudy.control.controllers import Convex, ForceReplay, OpenLoop
+from ecostudy.control.controllers import Convex, ForceReplay, OpenLoop, Quantised
+from ecostudy.control.sbpc import Sbpc
 from ecostudy.control.estimator import MassEstimator
 from ecostudy.control.loop import run_loop
 from ecostudy.core.errors import EcostudyError, EcostudyWarning, InputError, problem
@@ -28,6 +29,7 @@ from ecostudy.io.loaders import (chosen_stops, read_document, track_document, tr
                                  train_document, train_from_schema, validate)
 from ecostudy.io.loopfile import SimulateFile
 from ecostudy.ocp.convex import ConvexProgram, ConvexWeights, trapezoid_grid
+from ecostudy.ocp.problem import prepare
 from ecostudy.io.store import Store
 from ecostudy.io.writers import write_csv
 from ecostudy.studies.batch import execute
@@ -96,18 +98,27 @@ def expand(path):
 
 
 def build_controller(case, track, segment, train, estimator):
-    spec, window = case["controller"], tuple(case["window"])
+    """(the controller the loop drives, the planning controller inside it) of a case."""
+    spec, window, points = case["controller"], tuple(case["window"]), case["points"]
     if spec["kind"] == "convex":
-        return Convex(convex_program(segment, train, case["points"], spec), window, estimator,
-                      hold=case["sample_time"])
-    if spec["kind"] == "open_loop":  # the convex controller's own plan from the stand, replayed
-        plan = convex_program(segment, train, case["points"], spec).solve(State(), window)
+        inner = Convex(convex_program(segment, train, points, spec), window, estimator, hold=case["sample_time"])
+    elif spec["kind"] == "open_loop":  # the convex controller's own plan from the stand, replayed
+        plan = convex_program(segment, train, points, spec).solve(State(), window)
         if not plan.usable:
             raise InputError(f"no open-loop plan in the window {window}")
-        return ForceReplay(train, plan.nodes, plan.force)
-    result = solve_run(track, train, case["from"], case["to"], Timing(running_time=window[1]),
-                       points=case["points"], verify_result=False)
-    return OpenLoop(result)
+        inner = ForceReplay(train, plan.nodes, plan.force)
+    else:
+        ato = solve_run(track, train, case["from"], case["to"], Timing(running_time=window[1]), points=points,
+                        verify_result=False)
+        if spec["kind"] == "ato":
+            inner = OpenLoop(ato)
+        else:
+            prepared = prepare(track, train, case["from"], case["to"], points)
+            speeds = np.interp(prepared.nodes, ato.trajectory.nodes, ato.trajectory.v)
+            inner = Sbpc(prepared, window[1], case["sample_time"], spec["block"], speeds, spec["variant"], spec["omega"])
+    if spec["das_levels"]:
+        return Quantised(inner, train.das_levels, spec["delay_samples"]), inner
+    return inner, inner
 
 
 def _mode_changes(handles):
@@ -133,6 +144,7 @@ def summarise(case, result, controller, train, estimator):
         "solve_max_ms": 1e3 * float(solved.max()), "over_budget": int(np.sum(seconds > sample)),
         "samples": len(seconds), "softened": getattr(controller, "softened", 0),
         "failures": getattr(controller, "failures", 0), "max_gap": max(gaps) if gaps else None,
+        "terminal_gamma_m": controller.gammas[-1] if getattr(controller, "gammas", None) else None,
         "mode_changes": _mode_changes(np.array(result.handles)),
         "mass_estimate": estimator.estimate if estimator is not None else None,
         **{f"true_{name}": case["truth"][name] for name in PARAMETERS},
@@ -147,14 +159,14 @@ def run_loop_case(case):
     try:
         track, train, segment = _inputs(case)
         estimator = MassEstimator() if case["controller"]["estimator"] else None
-        controller = build_controller(case, track, segment, train, estimator)
+        controller, planner = build_controller(case, track, segment, train, estimator)
         n = case["noise"]
         noise = Noise(n["acceleration_mps2"], n["position_m"], n["speed_mps"], n["seed"], n["period_s"],
                       n["accelerometer_mps2"])
         plant = Plant(segment, train, Truth(**case["truth"]))
         result = run_loop(plant, controller, case["sample_time"], noise, plant_step=case["sample_time"],
                           estimator=estimator)
-        summary = summarise(case, result, controller, train, estimator)
+        summary = summarise(case, result, planner, train, estimator)
         reasons = []
         if abs(summary["stop_error_m"]) > 1.0:
             reasons.append(f"stopped {summary['stop_error_m']:+.2f} m from the stop")
@@ -173,7 +185,7 @@ def run_loop_case(case):
 
 COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "stop_error_m", "max_overspeed_kmh",
            "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget", "softened", "failures", "max_gap",
-           "mode_changes", "mass_estimate", *(f"true_{name}" for name in PARAMETERS))
+           "terminal_gamma_m", "mode_changes", "mass_estimate", *(f"true_{name}" for name in PARAMETERS))
 
 
 def runs_table(cases, rows):

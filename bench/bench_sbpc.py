@@ -1,0 +1,68 @@
+"""SBPC (thesis 000 Ch. 4) on the Amsterdam case: T_s = 0.38 s, k_f = 200 (76 s).
+
+    .venv/bin/python bench/bench_sbpc.py [--sample 0.38] [--blocks 45 20 1] [--disturbances 0.1 0.05 0.02]
+
+Table 1 (Table 4.1's trend): the nominal SBPC for each L on the model train: energy at the wheel,
+arrival, stop error, solve time per step (mean, max), Ipopt iterations per step, samples where
+the nominal problem had no solution and the two-step relaxation stood in. Table 2 (§4.4, Theorem
+4.3.1 in practice): the two-step and multi-objective variants (L = 20) driving a train whose
+mass is d heavier and whose resistance, traction and braking are d weaker, with the handle
+quantised to the DAS levels {-1, 0, 0.5, 0.75, 1}: the terminal error against d.
+"""
+import argparse
+import shlex
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from ecostudy.analysis.single import solve_run  # noqa: E402
+from ecostudy.control.controllers import Quantised  # noqa: E402
+from ecostudy.control.loop import run_loop  # noqa: E402
+from ecostudy.control.sbpc import Sbpc  # noqa: E402
+from ecostudy.core.plant import Plant, Truth  # noqa: E402
+from ecostudy.core.types import Timing  # noqa: E402
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
+from ecostudy.ocp.problem import prepare  # noqa: E402
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--sample", type=float, default=0.38)
+    p.add_argument("--blocks", type=int, nargs="*", default=[45, 20, 1])
+    p.add_argument("--disturbances", type=float, nargs="*", default=[0.1, 0.05, 0.02])
+    args = p.parse_args()
+    print(f"`python bench/bench_sbpc.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
+    track = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
+    train = load_train(ROOT / "trains/amsterdam_metro.yaml")
+    ato = solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=200)
+    case = prepare(track, train, "Rokin", "Centraal", 200)
+    speeds = np.interp(case.nodes, ato.trajectory.nodes, ato.trajectory.v)
+    print(f"ATO optimum (space-domain NLP, K = 200, 76 s): {ato.summary['traction_energy_kWh']:.3f} kWh\n")
+    head = ("| variant | L | plant | energy [kWh] | arrival [s] | stop error [m] | overspeed [km/h] | solve mean / max "
+            "[s] | iterations per step | nominal infeasible | run wall [s] |")
+    print(head + "\n|" + "---|" * 11, flush=True)
+
+    def run(variant, block, truth, quantised, label):
+        controller = Sbpc(case, 76.0, args.sample, block, speeds, variant)
+        driven = Quantised(controller, train.das_levels) if quantised else controller
+        t0 = time.perf_counter()
+        result = run_loop(Plant(case.segment, train, truth), driven, args.sample, plant_step=args.sample)
+        s = np.array([x for x in controller.solve_seconds if x > 0])
+        print(f"| {variant} | {block} | {label} | {result.traction_work / 3.6e6:.3f} | {result.arrival_time_s:.2f} | "
+              f"{result.stop_error_m:+.3f} | {result.max_overspeed_kmh:.2f} | {s.mean():.2f} / {s.max():.2f} | "
+              f"{np.mean(controller.iterations):.1f} | {controller.softened} | {time.perf_counter() - t0:.0f} |", flush=True)
+
+    for d in args.disturbances:
+        for variant in ("two_step", "multi"):
+            run(variant, 20, Truth(1 + d, 1 - d, 1 - d, 1 - d), True, f"d = {d:g}, DAS levels")
+    for block in args.blocks:
+        run("nominal", block, Truth(), False, "model")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,86 @@
+"""SBPC: shrinking-horizon move-blocking predictive control (thesis 000 Ch. 4, note 003).
+
+Every sample k (T_s) the controller solves the FHOCP of ``ocp.blocked`` from the measured state
+to the terminal sample k_f and applies the first predicted input (Alg. 1). One model and NL file
+serve the whole trip; each solve starts from the previous solution, which with blocks aligned to
+absolute multiples of L is exactly the shifted tail of thesis 000 Prop. 4.2.1.
+
+Variants:
+- ``nominal`` (Alg. 1): the terminal set as a hard constraint (gamma = 0). When the plant has
+  drifted so far that no input reaches it, the solve falls back to the two-step relaxation for
+  that sample and counts it (``softened``);
+- ``two_step`` (Alg. 2): first the smallest reachable terminal distance gamma (4.18), then the
+  least energy within it (4.19);
+- ``multi`` (4.31): least energy plus omega gamma in one solve.
+After k_f, or at the stop, the controller brakes in full.
+"""
+import time
+
+from ecostudy.ocp.blocked import (build_blocked, handle_at, samples, set_blocked_start, set_objective, time_guess,
+                                  update_profile)
+from ecostudy.core.types import State
+from ecostudy.ocp.session import Session
+
+VARIANTS = ("nominal", "two_step", "multi")
+OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5}
+
+
+class Sbpc:
+    """``case``: a prepared case (``ocp.problem.prepare``); ``guess_speeds``: a speed profile on its
+    grid (e.g. the ATO optimum's) for the first solve; ``omega``: the weight of eq. 4.31 on the
+    terminal distance [per metre], with J in kJ (thesis 000 §4.4 uses 3505)."""
+
+    def __init__(self, case, running_time, sample_time, block, guess_speeds, variant="nominal", omega=3505.0,
+                 tolerance=1e-3, options=None):
+        if variant not in VARIANTS:
+            raise ValueError(f"variant must be one of {VARIANTS}, not {variant!r}")
+        self.case, self.ts, self.variant, self.omega, self.tolerance = case, sample_time, variant, omega, tolerance
+        self.kf = samples(running_time, sample_time)
+        self.options = {**OPTIONS, **(options or {})}
+        t0 = time.perf_counter()
+        self.model = build_blocked(case, sample_time, self.kf, block, time_guess(case, guess_speeds, self.kf, sample_time))
+        self.session = Session(self.model)
+        for _ in range(2):  # settle the grade and bounds on the first plan's own positions
+            set_blocked_start(self.session, self.model, 0, State())
+            set_objective(self.session, self.model, 0.0, 1.0, None)
+            if self.session.solve(self.options).usable:
+                update_profile(self.model)
+        self.setup_seconds = time.perf_counter() - t0
+        self.solve_seconds, self.gammas, self.iterations, self.softened, self.failures = [], [], [], 0, 0
+
+    def _solve(self, alpha, omega, gamma_max):
+        set_objective(self.session, self.model, alpha, omega, gamma_max)
+        outcome = self.session.solve(self.options)
+        self.iterations.append(outcome.iterations)
+        return outcome
+
+    def _smallest_gamma(self):
+        outcome = self._solve(0.0, 1.0, None)  # 4.18: the closest the terminal state can come
+        gamma = float(self.model.gamma.value) if outcome.usable else None
+        if gamma is None:
+            return None
+        return self._solve(1.0, 0.0, gamma + self.tolerance)  # 4.19: least energy within it
+
+    def plan(self, measured):
+        k = int(round(measured.time / self.ts))
+        if k >= self.kf or measured.position >= self.case.segment.distance - 0.05:
+            self.solve_seconds.append(0.0)
+            return -1.0
+        t0 = time.perf_counter()
+        set_blocked_start(self.session, self.model, k, measured)
+        if self.variant == "nominal":
+            outcome = self._solve(1.0, 0.0, 0.0)
+            if not outcome.usable:
+                self.softened += 1
+                outcome = self._smallest_gamma()
+        elif self.variant == "two_step":
+            outcome = self._smallest_gamma()
+        else:
+            outcome = self._solve(1.0, self.omega, None)
+        self.solve_seconds.append(time.perf_counter() - t0)
+        if outcome is None or not outcome.usable:
+            self.failures += 1
+            return -1.0
+        self.gammas.append(float(self.model.gamma.value))
+        update_profile(self.model)  # the next sample's grade and bounds follow this prediction
+        return handle_at(self.model, k)

@@ -1,0 +1,163 @@
+"""Thesis 000's shrinking-horizon move-blocking FHOCP (eqs. 4.9, 4.18, 4.19, 4.31) as one movable
+time-domain NLP, written once and re-solved from every sample by bounds alone.
+
+On absolute samples i = 0 .. k_f (sample time T_s) the states are the position s_i and speed v_i;
+the handle is held over blocks of L samples aligned to absolute multiples of L (eq. 4.8, see
+``control/blocking.py``): u_i = u+_b - u-_b with b = floor(i / L), u+ and u- in [0, 1].
+
+    s_i+1 - s_i = w_i T_s (v_i + v_i+1) / 2
+    (v_i+1 - v_i) M / T_s = w_i (F_T,max u+_b - F_B,max u-_b - R_D(v_i, v_i+1) - G(s_mid))
+
+with the envelopes and the Davis term R_D as trapezoidal means over the step. The grade and curve
+force G of each step and the speed bound of each node are those along the positions the last
+solve predicted (held by bounds, :func:`update_profile`), not functions of s inside the NLP: a
+position-dependent step function made every solve 1-10 s (measured; docs/closed_loop.md). This is eq. 4.1 with the
+trapezoid instead of forward Euler: at T_s = 0.38 s forward Euler's position error alone is
+v dv / 2, decimetres per step while accelerating, which the plant would report as a disturbance.
+
+Moving the start to sample k and state (s, v) changes bounds only: the steps already run get the
+share w_i = 0 (their states equal the measured one) and the blocks already run are held at 0. The
+terminal set X_f = {(x_f, 0)} is kept through Delta(x, X_f) = max(|s_kf - x_f|, 1 s * v_kf) <= gamma
+(metres; the speed scaled by one second, the distance it would run on in a second). The objective
+is (alpha J + omega gamma) / J_ref with J = sum w_i T_s F_T,i vbar_i in kJ (eq. 4.4 with forces in
+kN) and alpha, omega variables fixed by bounds, so the nominal (gamma = 0), the two steps of the
+relaxed strategy (alpha = 0, omega = 1; then alpha = 1, gamma <= its minimum) and the
+multi-objective one (alpha = 1, omega) are the same NL file.
+"""
+import numpy as np
+import pyomo.environ as pyo
+
+from ecostudy.core.kinematics import point_resistance
+from ecostudy.core.physics import davis_resistance, interval_resistance
+from ecostudy.ocp.timedomain import FORCE_SCALE
+
+
+def samples(running_time, sample_time):
+    """k_f = floor(t_f / T_s) (thesis 000 §4.1)."""
+    return int(np.floor(running_time / sample_time + 1e-9))
+
+
+def time_guess(case, speeds_on_nodes, kf, ts):
+    """(s, v) on the samples from a speed profile on the space grid, stretched to k_f T_s."""
+    v = np.maximum(speeds_on_nodes, 1e-3)
+    t = np.concatenate([[0.0], np.cumsum(2 * np.diff(case.nodes) / (v[:-1] + v[1:]))])
+    t *= kf * ts / t[-1]
+    ti = np.arange(kf + 1) * ts
+    s = np.interp(ti, t, case.nodes)
+    vi = np.interp(ti, t, speeds_on_nodes)
+    vi[0] = vi[-1] = 0.0
+    return s, vi
+
+
+def handle_guess(case, s, v, ts, block):
+    """The handle per block that the speed profile (s, v) on the samples needs (mean over the block)."""
+    train = case.train
+    vm = 0.5 * (v[:-1] + v[1:])
+    need = train.mass * np.diff(v) / ts + davis_resistance(vm, *train.davis) + point_resistance(
+        case.segment, train, np.clip(0.5 * (s[:-1] + s[1:]), 0.0, case.segment.distance))
+    u = np.where(need >= 0, need / train.traction.force(vm), need / train.braking.force(vm))
+    blocks = np.arange(len(u)) // block
+    return np.clip(np.bincount(blocks, u) / np.bincount(blocks), -1.0, 1.0)
+
+
+def build_blocked(case, ts, kf, block, guess, margin=0.1):
+    """The FHOCP on samples 0..k_f with blocks of ``block`` samples; ``guess`` = (s, v) on them."""
+    train, seg = case.train, case.segment
+    n, nb = kf, (kf - 1) // block + 1
+    m = pyo.ConcreteModel(name="sbpc")
+    m.K, m.I, m.B = pyo.RangeSet(0, n), pyo.RangeSet(0, n - 1), pyo.RangeSet(0, nb - 1)
+    s0, v0 = guess
+    m.block, m.margin, m.s_top, m.ts = block, margin, seg.distance + 200.0, ts
+    m.s = pyo.Var(m.K, bounds=(0.0, m.s_top), initialize=lambda m, i: float(s0[i]))
+    m.v = pyo.Var(m.K, bounds=(0.0, float(np.max(case.limits))), initialize=lambda m, i: float(v0[i]))
+    u0 = handle_guess(case, s0, v0, ts, block)
+    m.up = pyo.Var(m.B, bounds=(0.0, 1.0), initialize=lambda m, b: float(max(u0[b], 0.0)))
+    m.um = pyo.Var(m.B, bounds=(0.0, 1.0), initialize=lambda m, b: float(max(-u0[b], 0.0)))
+    m.w = pyo.Var(m.I, bounds=(1.0, 1.0), initialize=1.0)
+    m.grade = pyo.Var(m.I, initialize=0.0)  # G per step [kN], held by bounds (update_profile)
+    m.gamma = pyo.Var(bounds=(0.0, 0.0), initialize=0.0)
+    m.alpha = pyo.Var(bounds=(1.0, 1.0), initialize=1.0)
+    m.omega = pyo.Var(bounds=(0.0, 0.0), initialize=0.0)
+    mass = train.mass / FORCE_SCALE
+    davis = tuple(c / FORCE_SCALE for c in train.davis)
+
+    def mean(envelope, i):
+        return 0.5 * (envelope.smooth_force(m.v[i]) + envelope.smooth_force(m.v[i + 1])) / FORCE_SCALE
+
+    m.ft = pyo.Expression(m.I, rule=lambda m, i: mean(train.traction, i) * m.up[i // block])
+    m.fb = pyo.Expression(m.I, rule=lambda m, i: mean(train.braking, i) * m.um[i // block])
+    m.kinematics = pyo.Constraint(m.I, rule=lambda m, i: m.s[i + 1] - m.s[i] == m.w[i] * 0.5 * ts * (m.v[i] + m.v[i + 1]))
+
+    def dynamics(m, i):
+        resist = interval_resistance(m.v[i], m.v[i + 1], davis, m.grade[i])
+        return (m.v[i + 1] - m.v[i]) * mass / ts == m.w[i] * (m.ft[i] - m.fb[i] - resist)
+
+    m.dynamics = pyo.Constraint(m.I, rule=dynamics)
+    m.reach_hi = pyo.Constraint(expr=m.s[n] - seg.distance <= m.gamma)
+    m.reach_lo = pyo.Constraint(expr=seg.distance - m.s[n] <= m.gamma)
+    m.stand = pyo.Constraint(expr=m.v[n] * 1.0 <= m.gamma)  # 1 s: speed as the distance run on in a second
+    m.work = pyo.Expression(expr=sum(m.w[i] * ts * m.ft[i] * 0.5 * (m.v[i] + m.v[i + 1]) for i in m.I))  # kJ
+    m.work_ref = max(train.traction.peak * seg.distance * 0.1 / 1e3, 1.0)  # kJ, the scale of J
+    m.objective = pyo.Objective(expr=(m.alpha * m.work + m.omega * m.gamma) / m.work_ref)
+    m.case = case
+    m.profile = profile_along(case, np.asarray(s0, float), np.asarray(v0, float), ts, margin)
+    return m
+
+
+def profile_along(case, s, v, ts, margin):
+    """(grade force per step [kN], speed bound per node [m/s]) along predicted positions ``s``:
+    the grade and curve force averaged over each step's span, and at each node the lowest limit
+    within the distance run in a step either side (a restriction is met before it is reached)."""
+    seg, train = case.segment, case.train
+    s = np.clip(s, 0.0, seg.distance)
+    frac = np.linspace(0.0, 1.0, 5)
+    spans = s[:-1, None] + (s[1:] - s[:-1])[:, None] * frac
+    grade = point_resistance(seg, train, spans.ravel()).reshape(spans.shape).mean(axis=1) / FORCE_SCALE
+    reach = np.maximum(v, 1.0) * ts
+    around = np.clip(s[:, None] + reach[:, None] * np.linspace(-1.0, 1.0, 5), 0.0, seg.distance)
+    bound = seg.limit(around.ravel()).reshape(around.shape).min(axis=1) - margin
+    return grade, np.maximum(bound, 0.5)
+
+
+def update_profile(m):
+    """Move the grade and the speed bounds to the positions the last solve predicts."""
+    s = np.array([pyo.value(m.s[i]) for i in m.K])
+    v = np.array([pyo.value(m.v[i]) for i in m.K])
+    m.profile = profile_along(m.case, s, v, m.ts, m.margin)
+
+
+def set_blocked_start(session, m, k, state):
+    """Bounds for a solve from sample ``k`` at ``state`` (position, speed), with the grade and the
+    speed bounds of the last predicted positions (:func:`update_profile`)."""
+    n = len(m.I)
+    grade, bound = m.profile
+    s = float(np.clip(state.position, 0.0, m.s_top))
+    v = max(float(state.speed), 0.0)
+    variables, lows, highs = [], [], []
+    for i in range(n):
+        variables += [m.w[i], m.grade[i]]
+        lows += [0.0 if i < k else 1.0, float(grade[i])]
+        highs += [0.0 if i < k else 1.0, float(grade[i])]
+    for i in range(n + 1):
+        past = i <= k
+        variables += [m.s[i], m.v[i]]
+        lows += [s if past else 0.0, v if past else 0.0]
+        highs += [s if past else m.s_top, v if past else float(bound[i])]
+    for b in m.B:
+        gone = (b + 1) * m.block <= k
+        variables += [m.up[b], m.um[b]]
+        lows += [0.0, 0.0]
+        highs += [0.0 if gone else 1.0, 0.0 if gone else 1.0]
+    session.set_many_bounds(variables, lows, highs)
+    session.set_start_values([m.s[i] for i in range(k + 1)] + [m.v[i] for i in range(k + 1)], [s] * (k + 1) + [v] * (k + 1))
+
+
+def set_objective(session, m, alpha, omega, gamma_max):
+    """The objective's weights and the terminal distance allowed (``gamma_max`` None: any)."""
+    session.set_many_bounds([m.alpha, m.omega, m.gamma], [alpha, omega, 0.0], [alpha, omega, gamma_max])
+
+
+def handle_at(m, k):
+    """The handle the solved model applies at sample ``k``."""
+    b = min(k // m.block, len(m.B) - 1)
+    return float(pyo.value(m.up[b]) - pyo.value(m.um[b]))
