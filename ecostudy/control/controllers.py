@@ -22,6 +22,7 @@ from ecostudy.core.types import State
 from ecostudy.ocp.restart import Replanner
 
 REPLAN_OPTIONS = {"max_iter": 300}  # a re-plan that needs more has no plan worth waiting for
+RELAXED = 1e-3  # a convex plan with max |rho s - 1| above this uses the relaxation materially
 
 
 def handle_of(train, speed, traction, braking):
@@ -116,14 +117,18 @@ class Convex:
     ``arrival``: (T_min, T_max) [s] on the trip's clock; ``lead``: a leading train's clock as a
     function of position (eq. 6.9, already shifted by the separation); a train at a stand waits
     while the leader is still within that separation of it. Within ``final_m`` of the stop, or
-    without any plan, the controller brakes in full. Per solve it records the time, the
-    relaxation's gap max |rho s - 1| and whether the arrival window had to be dropped.
+    without any plan, the controller brakes in full; so it does when the plan brakes and leans on
+    the relaxation (max |rho s - 1| > 1e-3: no service brake stops the train as planned), which
+    is the emergency the brake reserve of eq. 6.8 is kept for (``reserve`` counts these samples;
+    ``full_reserve=False`` is thesis 001's controller, which leans on the relaxation instead).
+    Per solve it records the time, the gap and whether the arrival window had to be dropped.
     """
 
-    def __init__(self, program, arrival=(0.0, np.inf), estimator=None, lead=None, final_m=0.05, hold=0.1):
+    def __init__(self, program, arrival=(0.0, np.inf), estimator=None, lead=None, final_m=0.05, hold=0.1,
+                 full_reserve=True):
         self.program, self.arrival, self.estimator, self.lead, self.final_m = program, arrival, estimator, lead, final_m
-        self.hold = hold
-        self.solve_seconds, self.gaps, self.softened, self.failures = [], [], 0, 0
+        self.hold, self.full_reserve = hold, full_reserve
+        self.solve_seconds, self.gaps, self.softened, self.failures, self.reserve = [], [], 0, 0, 0
 
     def plan(self, measured):
         distance = self.program.segment.distance
@@ -142,6 +147,11 @@ class Convex:
             return -1.0
         self.gaps.append(plan.gap)
         self.softened += int(plan.softened)
+        if self.full_reserve and plan.force[0] < 0.0 and plan.gap > RELAXED:
+            # the plan brakes and needs the relaxation (rho s > 1: braking impulse no train has):
+            # it cannot stop in time with the service brake it assumed; use the reserve in full
+            self.reserve += 1
+            return -1.0
         return force_handle(self.program.train, max(measured.speed, 0.0), plan.force[0])
 
 
