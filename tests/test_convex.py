@@ -14,12 +14,11 @@ from ecostudy.core.plant import Plant
 from ecostudy.core.types import State, Timing
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.ocp.problem import prepare
-from ecostudy.ocp.convex import ConvexProgram, ConvexWeights, envelope_pieces, trapezoid_grid
+from ecostudy.ocp.convex import FASTEST, ConvexProgram, ConvexWeights, envelope_pieces, trapezoid_grid
 from ecostudy.studies.closedloop import expand
 
 from .conftest import TRACKS, TRAINS
 
-FASTEST = ConvexWeights(time=1.0, energy=0.0, overspeed=0.0, braking=0.0, buffer=0.0, brake_level=1.0)
 
 
 @pytest.fixture(scope="module")

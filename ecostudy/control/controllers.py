@@ -106,8 +106,7 @@ class Replanning:
 
 def force_handle(train, speed, force):
     """Handle in [-1, 1] that asks for ``force`` [N] (traction > 0, braking < 0) at ``speed``."""
-    top = train.traction.force(speed) if force >= 0 else train.braking.force(speed)
-    return float(np.clip(force / max(top, 1e-9), -1.0, 1.0))
+    return handle_of(train, speed, max(force, 0.0), max(-force, 0.0))
 
 
 class Convex:

@@ -58,6 +58,9 @@ class ConvexWeights:
     brake_level: float = 0.8   # B_brk [m/s^2]
 
 
+FASTEST = ConvexWeights(time=1.0, energy=0.0, overspeed=0.0, braking=0.0, buffer=0.0, brake_level=1.0)  # all-out
+
+
 def envelope_pieces(envelope, tolerance=0.002):
     """A function of the intervals' reference speeds [m/s] giving pieces (a [N], b [N s/m],
     c [N s^2/m^2]) with envelope(v) <= min a + b v + c v^2 (scalars, or arrays per interval).
@@ -144,7 +147,6 @@ class ConvexProgram:
             raise ValueError(f"scheme must be 'left' or 'midpoint', not {scheme!r}")
         self.segment, self.train, self.nodes = segment, train, np.asarray(nodes, float)
         self.weights, self.scheme, self.epsilon, self.margin = weights, scheme, epsilon, margin
-        self.limits = node_limits(segment, self.nodes)
         self.traction = envelope_pieces(train.traction)
         self.brake = envelope_pieces(train.braking)
         self.previous = None  # (nodes, speeds) of the last plan: where the power tangents touch

@@ -28,7 +28,7 @@ from ecostudy.io import schemas
 from ecostudy.io.loaders import (chosen_stops, read_document, track_document, track_from_schema,
                                  train_document, train_from_schema, validate)
 from ecostudy.io.loopfile import SimulateFile
-from ecostudy.ocp.convex import ConvexProgram, ConvexWeights, trapezoid_grid
+from ecostudy.ocp.convex import FASTEST, ConvexProgram, ConvexWeights, trapezoid_grid
 from ecostudy.ocp.problem import prepare
 from ecostudy.io.store import Store
 from ecostudy.io.writers import write_csv
@@ -56,9 +56,7 @@ def convex_program(segment, train, points, spec):
 
 def all_out_time(segment, train, points):
     """The nominal train's all-out time from a stand [s] by the SOCP (None: no run at all)."""
-    spec = {"settings": {"time": 1.0, "energy": 0.0, "overspeed": 0.0, "braking": 0.0, "buffer_mps": 0.0,
-                         "brake_level_mps2": 1.0}, "scheme": "midpoint"}
-    fastest = convex_program(segment, train, points, spec).solve(State(), (0.0, np.inf))
+    fastest = ConvexProgram(segment, train, trapezoid_grid(segment, points), FASTEST).solve(State(), (0.0, np.inf))
     return float(fastest.t[-1]) if fastest.usable else None
 
 
