@@ -26,10 +26,62 @@ def test_ttobench_track_profiles():
     tk = load_track(DATA / "ttobench_track.json")
     assert list(tk.stops.values()) == [0.0, 1500.0, 2600.0]
     assert tk.gradients[1] == pytest.approx(0.012)
-    # transition 'infinity' -> -800 m: mean curvature of the section, sign (direction) ignored
-    assert tk.curvatures[1] == pytest.approx(0.5 / 800)
-    assert tk.curvatures[2] == pytest.approx(1 / 800)
+    # transition 'infinity' -> -800 m over [500, 560]: a clothoid, curvature linear in distance
+    # (signed: negative is a left-hand curve); its mean over any interval is the middle's value
+    assert tk.curvatures[1] == 0.0 and tk.curvature_slopes[1] == pytest.approx(-1 / 800 / 60)
+    assert tk.curvatures[2] == pytest.approx(-1 / 800) and tk.curvature_slopes[2] == 0.0
     assert tk.limits[1] == pytest.approx(80 / 3.6)
+    from ecostudy.core.grid import make_segment
+    train = load_train(DATA / "ttobench_subway_train.json")
+    seg = make_segment(tk, train, "S0", "S1")
+    assert seg.curvature(530.0) == pytest.approx(-0.5 / 800)
+    back = make_segment(tk, train, "S1", "S0")  # the same clothoid met from the other end
+    assert back.curvature(1500.0 - 545.0) == pytest.approx(seg.curvature(545.0))
+
+
+def test_roeckl_curve_resistance_against_a_hand_calculation(tmp_path):
+    """ms-eetc's curve resistance (Roeckl): 0.5 / (r - 30) of the weight for r >= 300 m,
+    0.65 / (r - 55) below. By hand, 278 t on a 400 m curve: 278000 * 9.80665 * 0.5 / 370 = 3684 N;
+    on a 250 m curve: 278000 * 9.80665 * 0.65 / 195 = 9087 N. The import makes TTOBench trains pay
+    it; before, curves were read and cost nothing (the curve coefficient defaulted to 0)."""
+    from ecostudy.core.grid import make_segment
+    from ecostudy.core.kinematics import interval_grade_force
+    from ecostudy.core.physics import roeckl_force
+    assert float(roeckl_force(278000.0, 1 / 400)) == pytest.approx(278000 * 9.80665 * 0.5 / 370)
+    assert float(roeckl_force(278000.0, -1 / 250)) == pytest.approx(278000 * 9.80665 * 0.65 / 195)
+    doc = json.loads((DATA / "ttobench_track.json").read_text())
+    doc["gradients"]["values"] = [[0.0, 0.0]]
+    doc["curvatures"]["values"] = [[0.0, "infinity", "infinity"], [500.0, 400, 400], [900.0, "infinity", "infinity"]]
+    (tmp_path / "curvy.json").write_text(json.dumps(doc))
+    train = load_train(DATA / "ttobench_subway_train.json")
+    assert train.curve_resistance == "roeckl"
+    seg = make_segment(load_track(tmp_path / "curvy.json"), train, "S0", "S1")
+    nodes = np.array([0.0, 500.0, 900.0, 1500.0])
+    assert interval_grade_force(seg, train, nodes) == pytest.approx([0.0, 3684.3, 0.0], abs=0.5)
+
+
+def test_tunnels_cost_the_trains_tunnel_coefficient(tmp_path):
+    """TTOBench `tunnels` [position, length, cross section] and a train's `tunnel resistance`
+    [cross section, coefficient kN/(km/h)^2]: inside the tunnel the quadratic resistance grows by
+    the coefficient of that section; the optimum pays it and its re-simulation agrees."""
+    from ecostudy.core.grid import make_segment
+    doc = json.loads((DATA / "ttobench_track.json").read_text())
+    doc["tunnels"] = {"units": {"position": "m", "length": "m", "cross section": "m^2"},
+                      "values": [[600.0, 500.0, 24.0]]}
+    (tmp_path / "tunnel.json").write_text(json.dumps(doc))
+    tdoc = json.loads((DATA / "ttobench_subway_train.json").read_text())
+    tdoc["tunnel resistance"] = {"units": {"cross section": "m^2", "coefficient": "kN/(km/h)^2"},
+                                 "values": [[24, 0.0011698], [40, 0.0005579]]}
+    (tmp_path / "t.json").write_text(json.dumps(tdoc))
+    train, track = load_train(tmp_path / "t.json"), load_track(tmp_path / "tunnel.json")
+    seg = make_segment(track, train, "S0", "S1")
+    assert seg.tunnel(700.0) == pytest.approx(0.0011698 * 1000 * 3.6**2)
+    assert seg.tunnel(500.0) == 0.0 and seg.tunnel(1200.0) == 0.0
+    assert train.tunnel_coefficient(32.0) == pytest.approx(0.5 * (0.0011698 + 0.0005579) * 1000 * 3.6**2)
+    plain = solve_run(load_track(DATA / "ttobench_track.json"), train, "S0", "S1", Timing(running_time=110.0), points=300)
+    tunnel = solve_run(track, train, "S0", "S1", Timing(running_time=110.0), points=300)
+    assert tunnel.summary["verification"]["passed"]
+    assert tunnel.summary["traction_energy_kWh"] > plain.summary["traction_energy_kWh"] * 1.01
 
 
 def test_osrd_rolling_stock():
@@ -80,7 +132,7 @@ def test_a_train_never_runs_faster_than_its_top_speed(tmp_path):
     assert load_train(tmp_path / "t.json").max_speed == pytest.approx(20.0)
     doc["max speed"] = {"unit": "mph", "value": 50.0}
     (tmp_path / "t.json").write_text(json.dumps(doc))
-    with pytest.raises(InputError, match="max speed.unit"):
+    with pytest.raises(InputError, match="max speed: unknown unit .mph."):
         load_train(tmp_path / "t.json")
     osrd = load_train(DATA / "osrd_rolling_stock.json")
     assert osrd.max_speed == pytest.approx(38.88)

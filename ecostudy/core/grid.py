@@ -5,24 +5,32 @@ Grid nodes sit on every gradient, curve and (train-length) speed-limit change, b
 change that falls between nodes costs accuracy; the remaining nodes fill the pieces in
 proportion to their length.
 """
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
+from ecostudy.core.errors import EcostudyWarning
+
 
 @dataclass(frozen=True)
 class Profile:
-    """Piecewise-constant function of travel distance: ``values[i]`` on ``[starts[i], starts[i+1])``."""
+    """Piecewise function of travel distance: ``values[i] + slopes[i] (x - starts[i])`` on
+    ``[starts[i], starts[i+1])``; piecewise constant when ``slopes`` is None (clothoids are the
+    linear pieces: curvature varying linearly with distance)."""
 
     starts: np.ndarray
     values: np.ndarray
+    slopes: np.ndarray | None = None
 
     def __call__(self, x):
-        i = np.searchsorted(self.starts, x, side="right") - 1
-        return self.values[np.clip(i, 0, len(self.values) - 1)]
+        i = np.clip(np.searchsorted(self.starts, x, side="right") - 1, 0, len(self.values) - 1)
+        if self.slopes is None:
+            return self.values[i]
+        return self.values[i] + self.slopes[i] * (np.asarray(x, float) - self.starts[i])
 
 
-def _directed(positions, values, start, end):
+def _directed(positions, values, start, end, slopes=None):
     """Profile of a track quantity as seen by a train running from ``start`` to ``end``.
 
     Returns travel-distance starts and values; for a train running towards decreasing
@@ -34,12 +42,27 @@ def _directed(positions, values, start, end):
     idx = np.searchsorted(positions, lo, side="right") - 1
     keep = [max(idx, 0)] + [i for i in range(len(positions)) if lo < positions[i] < hi]
     pos = np.array([lo] + [positions[i] for i in keep[1:]])
-    val = values[keep]
+    slope = None if slopes is None else np.asarray(slopes, float)[keep]
+    val = values[keep] if slope is None else values[keep] + slope * (pos - positions[keep])
     if end >= start:
-        return Profile(pos - lo, val)
+        return Profile(pos - lo, val, slope)
     # running backwards: piece [p_i, p_{i+1}) is met at distance hi - p_{i+1}
     ends = np.append(pos[1:], hi)
-    return Profile((hi - ends)[::-1], val[::-1])
+    if slope is None:
+        return Profile((hi - ends)[::-1], val[::-1])
+    return Profile((hi - ends)[::-1], (val + slope * (ends - pos))[::-1], -slope[::-1])
+
+
+def tunnel_profile(track, train, start, end):
+    """Extra quadratic resistance C [N s^2/m^2] along the run: the train's coefficient for each
+    tunnel's cross section inside the tunnel, 0 outside (TTOBench ``tunnels``, ``tunnel resistance``)."""
+    edges, extra = [0.0], [0.0]
+    for pos, length, area in sorted(track.tunnels):
+        if edges[-1] == pos:  # starts where the last one ends (or at 0): no straight piece between
+            edges.pop(), extra.pop()
+        edges += [pos, pos + length]
+        extra += [train.tunnel_coefficient(area), 0.0]
+    return _directed(np.array(edges), np.array(extra), start, end)
 
 
 def train_length_limit(limit, length):
@@ -70,10 +93,19 @@ class Segment:
     limit: Profile        # train-length speed limit for the head [m/s]
     from_stop: str = ""
     to_stop: str = ""
+    tunnel: Profile = Profile(np.zeros(1), np.zeros(1))  # extra quadratic resistance C [N s^2/m^2]
 
     def breakpoints(self):
-        pts = np.concatenate([self.gradient.starts, self.curvature.starts, self.limit.starts])
+        pts = np.concatenate([self.gradient.starts, self.curvature.starts, self.limit.starts, self.tunnel.starts])
         return np.unique(pts[(pts > 0) & (pts < self.distance)])
+
+
+def warn_unmodelled_tunnels(segment, formulation):
+    """One warning when ``formulation`` leaves out the tunnel resistance of ``segment``."""
+    if np.any(segment.tunnel.values != 0):
+        warnings.warn(f"{formulation} does not model the tunnel resistance ('tunnel resistance' on "
+                      f"'{segment.from_stop}'-'{segment.to_stop}'): tunnels cost nothing there",
+                      EcostudyWarning, stacklevel=3)
 
 
 def travel_distance(track, from_stop, to_stop, position):
@@ -82,17 +114,36 @@ def travel_distance(track, from_stop, to_stop, position):
     return position - start if end >= start else start - position
 
 
+_WARNED = set()
+
+
+def warn_unpaired(track, train):
+    """Once per track and train: curves or tunnels on the track that the train gives no resistance for."""
+    lines = []
+    if np.any(track.curvatures != 0) and train.curve_resistance == "coefficient" and train.curve_coefficient == 0:
+        lines.append("curves cost nothing: the train's curve_coefficient_m2ps2 is 0 (set it, or "
+                     "curve_resistance: roeckl)")
+    if track.tunnels and not train.tunnel_resistance:
+        lines.append("tunnels cost nothing: the train gives no tunnel_resistance")
+    for line in lines:
+        if (track.name, train.name, line) not in _WARNED:
+            _WARNED.add((track.name, train.name, line))
+            warnings.warn(f"track '{track.name}' with train '{train.name}': {line}", EcostudyWarning, stacklevel=3)
+
+
 def make_segment(track, train, from_stop, to_stop):
     """Cut the track between two stops into travel-direction profiles."""
+    warn_unpaired(track, train)
     start, end = track.stops[from_stop], track.stops[to_stop]
     sign = 1.0 if end >= start else -1.0
     gradient = _directed(track.gradient_positions, track.gradients, start, end)
     gradient = Profile(gradient.starts, sign * gradient.values)
-    curvature = _directed(track.curve_positions, track.curvatures, start, end)
+    curvature = _directed(track.curve_positions, track.curvatures, start, end, track.curvature_slopes)
     line = _directed(track.limit_positions, track.limits, start, end)
     line = Profile(line.starts, np.minimum(line.values, train.max_speed))  # the train's top speed caps the line's
     limit = train_length_limit(line, train.length)
-    return Segment(abs(end - start), gradient, curvature, limit, from_stop, to_stop)
+    return Segment(abs(end - start), gradient, curvature, limit, from_stop, to_stop,
+                   tunnel_profile(track, train, start, end))
 
 
 def make_grid(segment, points, extra=()):

@@ -11,23 +11,34 @@ from ecostudy.core.physics import davis_resistance, interval_resistance, running
 def point_resistance(segment, train, positions):
     """Speed-independent resistance (gradient and curve) at travel positions [N]."""
     return running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, segment.gradient(positions),
-                              train.curve_coefficient, segment.curvature(positions))
+                              train.curve_coefficient, segment.curvature(positions),
+                              roeckl=train.curve_resistance == "roeckl")
 
 
 def interval_grade_force(segment, train, nodes):
-    """Speed-independent resistance per interval (gradient and curve) at its middle [N]."""
+    """Speed-independent resistance per interval (gradient and curve) at its middle [N]; on a
+    clothoid the middle's curvature is the interval's mean curvature."""
     return point_resistance(segment, train, 0.5 * (nodes[:-1] + nodes[1:]))
+
+
+def interval_davis(segment, train, nodes):
+    """Davis coefficients per interval (A, B, C_k) [N, N s/m, N s^2/m^2]: the train's C plus the
+    tunnel coefficient where the interval's middle is in a tunnel (arrays of one per interval)."""
+    a, b, c = train.davis
+    n = len(nodes) - 1
+    c_k = c + segment.tunnel(0.5 * (nodes[:-1] + nodes[1:]))
+    return np.full(n, float(a)), np.full(n, float(b)), np.asarray(c_k, float)
 
 
 def braking_curve(segment, train, nodes, limits):
     """Highest speeds from which full service braking still meets every limit and the stop [m/s]."""
     ds = np.diff(nodes)
     fixed = interval_grade_force(segment, train, nodes)
-    a, b, c = train.davis
+    a, b, c = interval_davis(segment, train, nodes)
     bwd = np.zeros_like(nodes)
     for k in range(len(ds) - 1, -1, -1):
         v = bwd[k + 1]
-        dec = min((train.braking.force(v) + davis_resistance(v, a, b, c) + fixed[k]) / train.mass,
+        dec = min((train.braking.force(v) + davis_resistance(v, a[k], b[k], c[k]) + fixed[k]) / train.mass,
                   train.max_deceleration)
         bwd[k] = min(np.sqrt(v * v + 2 * ds[k] * max(dec, 1e-3)), limits[k])
     return bwd
@@ -40,12 +51,12 @@ def coast_speeds(segment, train, nodes, limits, start, v_start):
     """
     ds = np.diff(nodes)
     fixed = interval_grade_force(segment, train, nodes)
-    a, b, c = train.davis
+    a, b, c = interval_davis(segment, train, nodes)
     out = np.full_like(nodes, np.nan)
     out[start] = v_start
     for k in range(start, len(ds)):
         v = out[k]
-        dec = (davis_resistance(v, a, b, c) + fixed[k]) / train.mass
+        dec = (davis_resistance(v, a[k], b[k], c[k]) + fixed[k]) / train.mass
         out[k + 1] = min(np.sqrt(max(v * v - 2 * ds[k] * dec, 0.0)), limits[k + 1])
     return out
 
@@ -57,11 +68,11 @@ def envelope_speeds(segment, train, nodes, limits):
     """
     ds = np.diff(nodes)
     fixed = interval_grade_force(segment, train, nodes)
-    a, b, c = train.davis
+    a, b, c = interval_davis(segment, train, nodes)
     fwd = np.zeros_like(nodes)
     for k in range(len(ds)):
         v = fwd[k]
-        acc = min((train.traction.force(v) - davis_resistance(v, a, b, c) - fixed[k]) / train.mass,
+        acc = min((train.traction.force(v) - davis_resistance(v, a[k], b[k], c[k]) - fixed[k]) / train.mass,
                   train.max_acceleration)
         v2 = v * v + 2 * ds[k] * acc
         if v2 <= 0 and k < len(ds) - 1:
@@ -101,8 +112,7 @@ def forces_for(speeds, segment, train, nodes):
     """Traction and braking forces per interval [N] that realise ``speeds`` (clipped to the envelopes)."""
     ds = np.diff(nodes)
     v0, v1 = speeds[:-1], speeds[1:]
-    a, b, c = train.davis
-    resist = interval_resistance(v0, v1, train.davis, interval_grade_force(segment, train, nodes))
+    resist = interval_resistance(v0, v1, interval_davis(segment, train, nodes), interval_grade_force(segment, train, nodes))
     need = train.mass * (v1**2 - v0**2) / (2 * ds) + resist
     ft = np.clip(need, 0.0, np.minimum(train.traction.force(v0), train.traction.force(v1)))
     fb = np.clip(-need, 0.0, np.minimum(train.braking.force(v0), train.braking.force(v1)))

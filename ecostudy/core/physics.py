@@ -47,9 +47,24 @@ def curve_force(static_mass, coefficient, curvature):
     ----------
     static_mass : float  Ms [kg].
     coefficient : float  lambda_t, train-dependent curve coefficient [m^2/s^2].
-    curvature : numeric  1 / radius [1/m]; 0 on straight track.
+    curvature : numeric  1 / radius [1/m], signed by direction; 0 on straight track.
     """
-    return static_mass * coefficient * curvature
+    return static_mass * coefficient * abs(curvature)
+
+
+def roeckl_force(static_mass, curvature):
+    """Curve resistance by Roeckl's formula, as ms-eetc uses it (``mseetc/train.py``) [N]:
+    Ms g 0.5 / (r - 30) for radii r >= 300 m, Ms g 0.65 / (r - 55) below, written in curvature
+    k = 1 / r so that straight track (k = 0) costs nothing. numpy only (curvature is data).
+
+    Parameters
+    ----------
+    static_mass : float  Ms [kg].
+    curvature : numeric  1 / radius [1/m], signed by direction.
+    """
+    k = np.abs(np.asarray(curvature, float))
+    share = np.where(k <= 1 / 300, 0.5 * k / (1 - 30 * k), 0.65 * k / (1 - 55 * np.minimum(k, 1 / 60)))
+    return static_mass * GRAVITY * share
 
 
 def hinge(x, width):
@@ -197,11 +212,12 @@ def table_width(speeds, forces, tolerance=0.002):
     return width
 
 
-def running_resistance(speed, davis, static_mass, gradient, curve_coefficient, curvature):
-    """Total resistance F_R = R_v(v) + R_g(s) [N] (thesis 000 eq. 2.2)."""
+def running_resistance(speed, davis, static_mass, gradient, curve_coefficient, curvature, roeckl=False):
+    """Total resistance F_R = R_v(v) + R_g(s) [N] (thesis 000 eq. 2.2); the curve term by
+    Roeckl's formula instead of lambda_t / r when ``roeckl``."""
     a, b, c = davis
-    return (davis_resistance(speed, a, b, c) + gradient_force(static_mass, gradient)
-            + curve_force(static_mass, curve_coefficient, curvature))
+    curve = roeckl_force(static_mass, curvature) if roeckl else curve_force(static_mass, curve_coefficient, curvature)
+    return davis_resistance(speed, a, b, c) + gradient_force(static_mass, gradient) + curve
 
 
 def interval_resistance(v0, v1, davis, fixed):

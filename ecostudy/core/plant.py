@@ -21,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from ecostudy.core.grid import Profile
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import acceleration, davis_resistance
 from ecostudy.core.types import State
@@ -96,8 +97,9 @@ def pieces(nodes, handle, segment, jump=1e-3, targets=None):
     target speed starts, ends or changes).
     """
     mid = 0.5 * (nodes[:-1] + nodes[1:])
-    grade, curve = segment.gradient(mid), segment.curvature(mid)
+    grade, curve, tunnel = segment.gradient(mid), segment.curvature(mid), segment.tunnel(mid)
     change = ((np.abs(np.diff(handle)) > jump) | (np.diff(grade) != 0) | (np.diff(curve) != 0)
+              | (np.diff(tunnel) != 0)
               | (np.sign(handle[1:]) != np.sign(handle[:-1])))
     if targets is not None:
         tgt = np.nan_to_num(np.asarray(targets, float), nan=-1.0)
@@ -118,6 +120,15 @@ class Plant:
     def grade_force(self, x):
         """Gradient and curve force at travel position ``x`` [N] (true static mass)."""
         return float(point_resistance(self.segment, self.train, x)) * self.truth.mass
+
+    def varying(self, x):
+        """Whether the curvature changes along the piece at travel position ``x`` (a clothoid)."""
+        curve = self.segment.curvature
+        return curve.slopes is not None and bool(Profile(curve.starts, curve.slopes)(x) != 0)
+
+    def tunnel(self, x):
+        """Extra quadratic resistance of a tunnel at travel position ``x`` [N s^2/m^2] (true resistance)."""
+        return float(self.segment.tunnel(x)) * self.truth.resistance
 
     def forces(self, v, control, resist):
         """(F_T, F_B) [N] of a handle u or a :class:`Cruise` at speed ``v`` with resistance ``resist``."""
@@ -152,9 +163,11 @@ class Plant:
             i = bisect_right(self.edges, y[0] + 1e-9)
             edge = self.edges[i] if i < len(self.edges) else np.inf
             fixed = self.grade_force(y[0] + 1e-9)
+            c_x = c + self.tunnel(y[0] + 1e-9)
+            varying = self.varying(y[0] + 1e-9)  # on a clothoid the curve force follows the position
 
             def rhs(_, z):
-                resist = davis_resistance(z[1], a, b, c) + fixed
+                resist = davis_resistance(z[1], a, b, c_x) + (self.grade_force(z[0]) if varying else fixed)
                 ft, fb = self.forces(z[1], control, resist)
                 return self.derivatives(z[1], ft, fb, resist, disturbance)
 
@@ -191,12 +204,12 @@ class Plant:
         last = len(handle) - 1
         max_time = max_time or 20 * segment.distance + 600
         node_list = nodes.tolist()
-        fixed = [0.0]  # gradient + curve force of the current piece [N]: constant within a piece
+        fixed = [0.0, c]  # gradient + curve force [N] and C with the tunnel's: constant within a piece
         span = [0, last]  # a step that overshoots the piece's end must not sample the next piece's control
 
         def rhs(t, y):
             k = min(max(bisect_right(node_list, y[0]) - 1, span[0]), span[1])
-            resist = davis_resistance(y[1], a, b, c) + fixed[0]
+            resist = davis_resistance(y[1], a, b, fixed[1]) + fixed[0]
             ft, fb = self.forces(y[1], controls[k], resist)
             return self.derivatives(y[1], ft, fb, resist)
 
@@ -210,6 +223,7 @@ class Plant:
         for first, following, x_end in zip(starts, list(starts[1:]) + [last + 1], bounds):
             span[0], span[1] = first, following - 1
             fixed[0] = self.grade_force(0.5 * (nodes[first] + nodes[first + 1]))
+            fixed[1] = c + self.tunnel(0.5 * (nodes[first] + nodes[first + 1]))
 
             def reached(t, y, x_end=x_end):
                 return y[0] - x_end

@@ -30,6 +30,16 @@ class Train:
     max_speed: float = float("inf")   # the train's top speed [m/s]: caps every speed limit
     max_acceleration: float = float("inf")  # bound on the net acceleration [m/s^2] (comfort, adhesion)
     max_deceleration: float = float("inf")  # bound on the net deceleration [m/s^2], on top of the brakes
+    curve_resistance: str = "coefficient"   # "coefficient": Ms lambda_t / r; "roeckl": Roeckl's formula
+    tunnel_resistance: tuple = ()           # ((cross section [m^2], extra C [N s^2/m^2]), ...) ascending
+
+    def tunnel_coefficient(self, cross_section):
+        """Extra quadratic resistance C [N s^2/m^2] in a tunnel of ``cross_section`` [m^2]: the
+        train's table, interpolated linearly between its sections, held beyond its ends."""
+        if not self.tunnel_resistance:
+            return 0.0
+        areas, coefficients = zip(*self.tunnel_resistance)
+        return float(np.interp(cross_section, areas, coefficients))
 
 
 @dataclass(frozen=True)
@@ -42,9 +52,11 @@ class Track:
     gradient_positions: np.ndarray   # [m]
     gradients: np.ndarray            # tan(alpha) [-], positive uphill
     curve_positions: np.ndarray      # [m]
-    curvatures: np.ndarray           # 1/radius [1/m], 0 for straight
+    curvatures: np.ndarray           # 1/radius [1/m] at the section's start, signed by direction, 0 straight
     limit_positions: np.ndarray      # [m]
     limits: np.ndarray               # [m/s]
+    curvature_slopes: np.ndarray | None = None  # d(1/radius)/dx [1/m^2]: clothoids; None: all constant
+    tunnels: tuple = ()              # ((start [m], length [m], cross section [m^2]), ...)
 
 
 @dataclass(frozen=True)

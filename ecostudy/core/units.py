@@ -21,3 +21,26 @@ def to_kmh(speed):
 def to_kwh(energy):
     """Energy [J] -> [kWh]."""
     return energy / KWH
+
+
+# Units as the published formats spell them (TTOBench, OSRD), by dimension: [SI] per [unit].
+BY_DIMENSION = {
+    "mass": {"kg": 1.0, "t": TONNE},
+    "length": {"m": 1.0, "km": 1000.0},
+    "time": {"s": 1.0},
+    "speed": {"m/s": 1.0, "km/h": KMH},
+    "acceleration": {"m/s^2": 1.0},
+    "force": {"N": 1.0, "kN": KN},
+    "power": {"W": 1.0, "kW": KW, "MW": 1e6},
+    "share": {"%": PERCENT, "-": 1.0},
+    "slope": {"permil": PERMILLE},
+    "area": {"m^2": 1.0},
+    "force per speed": {"N/(m/s)": 1.0, "kN/(m/s)": KN, "N/(km/h)": 1.0 / KMH, "kN/(km/h)": KN / KMH},
+    "force per speed^2": {"N/(m/s)^2": 1.0, "kN/(m/s)^2": KN, "N/(km/h)^2": 1.0 / KMH**2,
+                          "kN/(km/h)^2": KN / KMH**2},
+}
+
+
+def si_factor(unit, dimension):
+    """[SI] per [unit] for a unit of ``dimension``; None for a unit ecostudy does not know."""
+    return BY_DIMENSION[dimension].get(unit)

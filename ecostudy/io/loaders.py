@@ -176,19 +176,29 @@ def train_from_schema(t, path, aliases=None):
                  das_levels=tuple(t.das_handle_levels),
                  max_speed=float("inf") if t.max_speed_kmh is None else t.max_speed_kmh * units.KMH,
                  max_acceleration=t.max_acceleration_mps2 or float("inf"),
-                 max_deceleration=t.max_deceleration_mps2 or float("inf"))
+                 max_deceleration=t.max_deceleration_mps2 or float("inf"),
+                 curve_resistance=t.curve_resistance,
+                 tunnel_resistance=tuple((x.cross_section_m2, x.c_kN_per_kmh2 * units.KN / units.KMH**2)
+                                         for x in t.tunnel_resistance))
 
 
 def track_from_schema(t):
     curves = t.curves or [schemas.Curve(position_m=0, radius_m=None)]
+    if curves[0].position_m > 0:  # straight before the first curve entry
+        curves = [schemas.Curve(position_m=0, radius_m=None)] + list(curves)
+    positions = np.array([c.position_m for c in curves], float)
+    ends = np.append(positions[1:], t.length_m)
+    start, end = np.array([c.curvatures() for c in curves], float).T
+    slopes = (end - start) / np.maximum(ends - positions, 1e-9)  # clothoids: curvature linear in distance
     return Track(
         name=t.name, length=t.length_m, stops={s.name: s.position_m for s in t.stops},
         gradient_positions=np.array([g.position_m for g in t.gradients], float),
         gradients=np.array([g.gradient_permille for g in t.gradients], float) * units.PERMILLE,
-        curve_positions=np.array([c.position_m for c in curves], float),
-        curvatures=np.array([0.0 if c.radius_m is None else 1.0 / c.radius_m for c in curves]),
+        curve_positions=positions, curvatures=start,
         limit_positions=np.array([s.position_m for s in t.speed_limits], float),
-        limits=np.array([s.speed_kmh for s in t.speed_limits], float) * units.KMH)
+        limits=np.array([s.speed_kmh for s in t.speed_limits], float) * units.KMH,
+        curvature_slopes=slopes if np.any(slopes != 0) else None,
+        tunnels=tuple((x.position_m, x.length_m, x.cross_section_m2) for x in t.tunnels))
 
 
 def train_document(path):
@@ -283,12 +293,14 @@ def load_study(path):
     """Read a study file and the files it names (relative to the study file)."""
     path = Path(path)
     s = validate(schemas.StudyFile, read_document(path), path)
+    if s.library is not None:
+        raise InputError(problem(path, "library", "a library study runs with `ecostudy run`"))
     base = path.parent
     track = load_track(base / s.track)
     train = load_train(base / s.train)
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     if s.timetable is not None:
-        tt = name_stops(load_timetable(base / s.timetable), track, base / s.timetable)
+        tt, _ = name_stops(load_timetable(base / s.timetable), track, base / s.timetable)
         timing = timing_from_timetable(tt, from_stop, to_stop, base / s.timetable)
     else:
         timing = Timing(running_time=s.running_time_s,

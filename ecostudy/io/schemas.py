@@ -4,147 +4,15 @@ Cross-field rules that concern one file live here as validators; rules that need
 (a stop missing from the track, a running time below the all-out time) are ``check_*``
 functions in :mod:`ecostudy.io.loaders`.
 """
-from typing import ClassVar, Literal, Optional
+import math
+from typing import Literal, Optional
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, model_validator
 
+from ecostudy.io.schemabase import Strict, increasing as _increasing
+from ecostudy.io.trainschema import (  # noqa: F401  (re-exported: schemas is the one place to look)
+    Braking, Davis, ForceTable, Regeneration, Traction, TrainFile, TunnelResistance)
 
-class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
-
-
-def _increasing(values, what):
-    if any(b <= a for a, b in zip(values, values[1:])):
-        raise ValueError(f"{what} must be strictly increasing")
-    return values
-
-
-class ForceTable(Strict):
-    """Speed-force table: linear between points, constant beyond the ends."""
-
-    speed_kmh: list[float] = Field(min_length=2, description="Speeds [km/h], strictly increasing.")
-    force_kN: list[float] = Field(min_length=2, description="Maximum force at each speed [kN].")
-
-    @field_validator("speed_kmh")
-    @classmethod
-    def _speeds(cls, v):
-        if v[0] < 0:
-            raise ValueError("speeds must be >= 0")
-        return _increasing(v, "speeds")
-
-    @field_validator("force_kN")
-    @classmethod
-    def _forces(cls, v):
-        if min(v) < 0:
-            raise ValueError("forces must be >= 0")
-        return v
-
-    @model_validator(mode="after")
-    def _lengths(self):
-        if len(self.speed_kmh) != len(self.force_kN):
-            raise ValueError("speed_kmh and force_kN must have the same length")
-        return self
-
-
-class Traction(Strict):
-    """Traction envelope: a table, or a maximum force with an optional maximum power."""
-
-    table: Optional[ForceTable] = None
-    max_force_kN: Optional[float] = Field(None, gt=0)
-    max_power_kW: Optional[float] = Field(None, gt=0)
-
-    @model_validator(mode="after")
-    def _one_form(self):
-        if (self.table is None) == (self.max_force_kN is None):
-            raise ValueError("give either 'table' or 'max_force_kN' (with optional 'max_power_kW')")
-        if self.table is not None and self.max_power_kW is not None:
-            raise ValueError("'max_power_kW' goes with 'max_force_kN', not with 'table'")
-        return self
-
-
-class Braking(Traction):
-    """Service braking: a table, a maximum force (and power), or a maximum deceleration."""
-
-    max_deceleration_mps2: Optional[float] = Field(None, gt=0)
-
-    @model_validator(mode="after")
-    def _one_form(self):
-        forms = [self.table is not None, self.max_force_kN is not None,
-                 self.max_deceleration_mps2 is not None]
-        if sum(forms) != 1:
-            raise ValueError("give one of 'table', 'max_force_kN' or 'max_deceleration_mps2'")
-        return self
-
-
-class Regeneration(Strict):
-    """Regenerative (electric) braking limits; braking beyond them goes to friction brakes."""
-
-    max_force_kN: Optional[float] = Field(None, gt=0)
-    max_power_kW: Optional[float] = Field(None, gt=0)
-    efficiency: float = Field(0.8, gt=0, le=1, description="Wheel to line [-].")
-
-
-class Davis(Strict):
-    """Davis coefficients A + B v + C v^2: exactly one complete triple of one unit system."""
-
-    a_N: Optional[float] = None
-    b_N_per_mps: Optional[float] = None
-    c_N_per_mps2: Optional[float] = None
-    a_kN: Optional[float] = None
-    b_kN_per_kmh: Optional[float] = None
-    c_kN_per_kmh2: Optional[float] = None
-    a_N_per_kg: Optional[float] = None
-    b_N_per_kg_per_mps: Optional[float] = None
-    c_N_per_kg_per_mps2: Optional[float] = None
-
-    TRIPLES: ClassVar[tuple] = (("a_N", "b_N_per_mps", "c_N_per_mps2"),
-               ("a_kN", "b_kN_per_kmh", "c_kN_per_kmh2"),
-               ("a_N_per_kg", "b_N_per_kg_per_mps", "c_N_per_kg_per_mps2"))
-
-    @model_validator(mode="after")
-    def _one_triple(self):
-        given = [t for t in self.TRIPLES if any(getattr(self, f) is not None for f in t)]
-        if len(given) != 1 or any(getattr(self, f) is None for f in given[0]):
-            raise ValueError("give one complete triple: " + " | ".join("/".join(t) for t in self.TRIPLES))
-        for f in given[0]:
-            if getattr(self, f) < 0:
-                raise ValueError(f"{f} must be >= 0")
-        return self
-
-
-class TrainFile(Strict):
-    name: str
-    source: str = Field(description="Where the numbers come from.")
-    mass_t: float = Field(gt=0, description="Static mass Ms [t].")
-    rotating_mass_factor: Optional[float] = Field(None, ge=0, description="M = Ms (1 + factor).")
-    effective_mass_t: Optional[float] = Field(None, gt=0, description="Effective mass M [t].")
-    length_m: float = Field(ge=0, description="Train length [m]; 0 for a point mass.")
-    davis: Davis
-    traction: Traction
-    braking: Braking
-    traction_efficiency: float = Field(1.0, gt=0, le=1, description="Wheel work per line energy [-].")
-    regenerative_braking: Optional[Regeneration] = None
-    curve_coefficient_m2ps2: float = Field(0.0, ge=0, description="lambda_t of thesis 000 eq. 2.2.")
-    max_speed_kmh: Optional[float] = Field(None, gt=0, description="The train's top speed: caps every limit.")
-    max_acceleration_mps2: Optional[float] = Field(None, gt=0, description="Bound on the net acceleration.")
-    max_deceleration_mps2: Optional[float] = Field(None, gt=0, description="Bound on the net deceleration "
-                                                   "(on top of the braking forces; not the brake itself).")
-    das_handle_levels: list[float] = Field(default_factory=lambda: [-1.0, 0.0, 0.5, 0.75, 1.0])
-
-    @model_validator(mode="after")
-    def _mass(self):
-        if (self.rotating_mass_factor is None) == (self.effective_mass_t is None):
-            raise ValueError("give either 'rotating_mass_factor' or 'effective_mass_t'")
-        if self.effective_mass_t is not None and self.effective_mass_t < self.mass_t:
-            raise ValueError("effective_mass_t must be >= mass_t (static mass)")
-        return self
-
-    @field_validator("das_handle_levels")
-    @classmethod
-    def _levels(cls, v):
-        if any(x < -1 or x > 1 for x in v):
-            raise ValueError("handle levels must lie in [-1, 1]")
-        return sorted(v)
 
 
 class Stop(Strict):
@@ -158,8 +26,33 @@ class Gradient(Strict):
 
 
 class Curve(Strict):
+    """A curve section from ``position_m`` to the next; a clothoid when ``end_radius_m`` differs."""
+
     position_m: float = Field(ge=0)
-    radius_m: Optional[float] = Field(None, gt=0, description="Radius [m]; null for straight track.")
+    radius_m: Optional[float] = Field(None, description="Radius [m] at the start, signed by direction "
+                                      "(TTOBench: positive right, negative left); null for straight track.")
+    end_radius_m: Optional[float] = Field(None, description="Radius [m] at the end of a clothoid (curvature "
+                                          "linear in distance between the two; .inf: ends straight); "
+                                          "omitted: constant radius.")
+
+    @model_validator(mode="after")
+    def _radii(self):
+        for name in ("radius_m", "end_radius_m"):
+            r = getattr(self, name)
+            if r is not None and (r == 0 or math.isnan(r)):
+                raise ValueError(f"{name} must be a nonzero number (null or .inf for straight track)")
+        return self
+
+    def curvatures(self):
+        """(curvature at the start, at the end) [1/m], signed."""
+        start = 0.0 if self.radius_m is None else 1.0 / self.radius_m
+        return start, start if self.end_radius_m is None else 1.0 / self.end_radius_m
+
+
+class Tunnel(Strict):
+    position_m: float = Field(ge=0, description="Start of the tunnel [m].")
+    length_m: float = Field(gt=0)
+    cross_section_m2: float = Field(gt=0)
 
 
 class SpeedLimit(Strict):
@@ -175,6 +68,7 @@ class TrackFile(Strict):
     gradients: list[Gradient] = Field(default_factory=lambda: [Gradient(position_m=0, gradient_permille=0)])
     curves: list[Curve] = Field(default_factory=list)
     speed_limits: list[SpeedLimit] = Field(min_length=1)
+    tunnels: list[Tunnel] = Field(default_factory=list)
 
     @model_validator(mode="after")
     def _positions(self):
@@ -186,6 +80,11 @@ class TrackFile(Strict):
         for name in ("gradients", "speed_limits"):
             if getattr(self, name)[0].position_m != 0:
                 raise ValueError(f"{name}: the first entry must start at position_m 0")
+        for i, (a, b) in enumerate(zip(self.tunnels, self.tunnels[1:])):
+            if b.position_m < a.position_m + a.length_m - 1e-9:
+                raise ValueError(f"tunnels[{i + 1}] starts inside tunnels[{i}]")
+        if self.tunnels and self.tunnels[-1].position_m + self.tunnels[-1].length_m > self.length_m + 1e-6:
+            raise ValueError("tunnels: the last tunnel ends beyond length_m")
         names = [s.name for s in self.stops]
         if len(set(names)) != len(names):
             raise ValueError("stop names must be unique")
@@ -220,11 +119,18 @@ class TimetableStop(Strict):
     dwell_s: Optional[float] = Field(None, ge=0)
     earliest_s: Optional[float] = Field(None, ge=0, description="Arrival window: not before [s].")
     latest_s: Optional[float] = Field(None, ge=0, description="Arrival window: not after [s].")
+    departure_earliest_s: Optional[float] = Field(None, ge=0, description="Departure window: not before [s].")
+    departure_latest_s: Optional[float] = Field(None, ge=0, description="Departure window: not after [s].")
 
     @model_validator(mode="after")
     def _named(self):
         if (self.stop is None) == (self.position_m is None):
             raise ValueError("give either 'stop' (a name) or 'position_m'")
+        lo, hi = self.departure_earliest_s, self.departure_latest_s
+        if self.departure_s is not None and (lo is not None or hi is not None):
+            raise ValueError("give either 'departure_s' or a departure window (departure_earliest_s/_latest_s)")
+        if lo is not None and hi is not None and lo > hi:
+            raise ValueError("departure_earliest_s must not exceed departure_latest_s")
         if self.earliest_s is not None and self.latest_s is not None and self.earliest_s > self.latest_s:
             raise ValueError("earliest_s must not exceed latest_s")
         if self.arrival_s is not None and (self.earliest_s is not None or self.latest_s is not None):
@@ -243,6 +149,8 @@ class TimetableFile(Strict):
     stops: list[TimetableStop] = Field(default_factory=list)
     supplement_percent: Optional[float] = Field(None, ge=0)
     windows: list[Window] = Field(default_factory=list)
+    track: Optional[str] = Field(None, description="Id of the track the timetable belongs to (TTOBench "
+                                 "'associated track'): found beside the timetable when no track is given.")
 
     @model_validator(mode="after")
     def _one_form(self):
@@ -255,7 +163,9 @@ class TimetableFile(Strict):
     @property
     def windowed(self):
         """Whether any time is a window rather than a fixed time (solved as one journey NLP)."""
-        return bool(self.windows) or any(s.earliest_s is not None or s.latest_s is not None for s in self.stops)
+        return bool(self.windows) or any(
+            x is not None for s in self.stops
+            for x in (s.earliest_s, s.latest_s, s.departure_earliest_s, s.departure_latest_s))
 
 
 class Weights(Strict):
@@ -294,10 +204,22 @@ class Sweep(Strict):
         return self
 
 
+class Library(Strict):
+    """Every stop-to-stop segment of a TTOBench checkout's tracks, run by each of its trains."""
+
+    path: str = Field(description="A TTOBench checkout (its tracks/ and trains/ folders), relative to the study.")
+    tracks: Optional[list[str]] = Field(None, description="Track ids (default: every track).")
+    trains: Optional[list[str]] = Field(None, description="Train ids (default: every train).")
+    min_speed_share: float = Field(0.6, ge=0, le=1, description="Pair a train with a track only when its top "
+                                   "speed reaches this share of the line's highest limit (a metro train on an "
+                                   "intercity line is another service); 0 pairs all.")
+
+
 class StudyFile(Strict):
     name: str
-    track: str
-    train: str
+    track: Optional[str] = None
+    train: Optional[str] = None
+    library: Optional[Library] = Field(None, description="Instead of track/train/from/to: a TTOBench library sweep.")
     timetable: Optional[str] = None
     from_stop: Optional[str] = Field(None, alias="from")
     to_stop: Optional[str] = Field(None, alias="to")
@@ -320,6 +242,11 @@ class StudyFile(Strict):
         names = [sc.name for sc in self.scenarios]
         if len(set(names)) != len(names):
             raise ValueError("scenario names must be unique")
+        if self.library is None and (self.track is None or self.train is None):
+            raise ValueError("give 'track' and 'train', or a 'library'")
+        if self.library is not None and (self.track or self.train or self.from_stop or self.to_stop
+                                         or self.scenarios or self.timetable or self.windows):
+            raise ValueError("a 'library' study names no track, train, from, to, scenarios, timetable or windows")
         given = [self.running_time_s is not None, self.supplement_percent is not None,
                  self.window_s is not None, self.timetable is not None]
         if sum(given) > 1:

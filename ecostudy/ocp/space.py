@@ -16,7 +16,7 @@ forces of the interval (eq. 2.2). Envelopes hold at both ends of each interval.
 import numpy as np
 import pyomo.environ as pyo
 
-from ecostudy.core.kinematics import interval_grade_force
+from ecostudy.core.kinematics import interval_davis, interval_grade_force
 from ecostudy.core.physics import interval_resistance
 from ecostudy.core.physics import smooth_table
 
@@ -69,7 +69,7 @@ def define_variables(m, nodes, limits, train, guess, with_regeneration, movable=
 def define_dynamics(m, nodes, segment, train):
     """Speed (energy form) and time recursions, scaled to O(1) residuals."""
     ds = np.diff(nodes).tolist()  # Python floats: numpy scalars make Pyomo expressions slow
-    per_kg = tuple(float(x / train.mass) for x in train.davis)
+    per_kg = [tuple(float(x) / train.mass for x in abc) for abc in zip(*interval_davis(segment, train, nodes))]
     fixed = (interval_grade_force(segment, train, nodes) / train.mass).tolist()
     km, s = float(FORCE_SCALE / train.mass), DYNAMICS_SCALE
 
@@ -78,9 +78,9 @@ def define_dynamics(m, nodes, segment, train):
         # w = 1, or the share of the interval still to run in a movable model (0: already run)
         if hasattr(m, "mass_scale"):  # an estimated mass: inertia and the grade and curve force scale with it
             inertia = m.mass_scale * (m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k])
-            net = interval_resistance(m.v[k], m.v[k + 1], per_kg, m.mass_scale * fixed[k]) - km * (m.ft[k] - m.fb[k])
+            net = interval_resistance(m.v[k], m.v[k + 1], per_kg[k], m.mass_scale * fixed[k]) - km * (m.ft[k] - m.fb[k])
             return s * (inertia + share(m, k, net)) == 0.0
-        net = interval_resistance(m.v[k], m.v[k + 1], per_kg, fixed[k]) - km * (m.ft[k] - m.fb[k])
+        net = interval_resistance(m.v[k], m.v[k + 1], per_kg[k], fixed[k]) - km * (m.ft[k] - m.fb[k])
         return s * ((m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k]) + share(m, k, net)) == 0.0
 
     def time(m, k):

@@ -1,0 +1,152 @@
+"""The train file's schema (units in the field names); see :mod:`ecostudy.io.schemas`."""
+from typing import ClassVar, Literal, Optional
+
+from pydantic import Field, field_validator, model_validator
+
+from ecostudy.io.schemabase import Strict, increasing as _increasing
+
+
+class ForceTable(Strict):
+    """Speed-force table: linear between points, constant beyond the ends."""
+
+    speed_kmh: list[float] = Field(min_length=2, description="Speeds [km/h], strictly increasing.")
+    force_kN: list[float] = Field(min_length=2, description="Maximum force at each speed [kN].")
+
+    @field_validator("speed_kmh")
+    @classmethod
+    def _speeds(cls, v):
+        if v[0] < 0:
+            raise ValueError("speeds must be >= 0")
+        return _increasing(v, "speeds")
+
+    @field_validator("force_kN")
+    @classmethod
+    def _forces(cls, v):
+        if min(v) < 0:
+            raise ValueError("forces must be >= 0")
+        return v
+
+    @model_validator(mode="after")
+    def _lengths(self):
+        if len(self.speed_kmh) != len(self.force_kN):
+            raise ValueError("speed_kmh and force_kN must have the same length")
+        return self
+
+
+class Traction(Strict):
+    """Traction envelope: a table, or a maximum force with an optional maximum power."""
+
+    table: Optional[ForceTable] = None
+    max_force_kN: Optional[float] = Field(None, gt=0)
+    max_power_kW: Optional[float] = Field(None, gt=0)
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        if (self.table is None) == (self.max_force_kN is None):
+            raise ValueError("give either 'table' or 'max_force_kN' (with optional 'max_power_kW')")
+        if self.table is not None and self.max_power_kW is not None:
+            raise ValueError("'max_power_kW' goes with 'max_force_kN', not with 'table'")
+        return self
+
+
+class Braking(Traction):
+    """Service braking: a table, a maximum force (and power), or a maximum deceleration."""
+
+    max_deceleration_mps2: Optional[float] = Field(None, gt=0)
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        forms = [self.table is not None, self.max_force_kN is not None,
+                 self.max_deceleration_mps2 is not None]
+        if sum(forms) != 1:
+            raise ValueError("give one of 'table', 'max_force_kN' or 'max_deceleration_mps2'")
+        return self
+
+
+class Regeneration(Strict):
+    """Regenerative (electric) braking limits; braking beyond them goes to friction brakes."""
+
+    max_force_kN: Optional[float] = Field(None, gt=0)
+    max_power_kW: Optional[float] = Field(None, gt=0)
+    efficiency: float = Field(0.8, gt=0, le=1, description="Wheel to line [-].")
+
+
+class Davis(Strict):
+    """Davis coefficients A + B v + C v^2: exactly one complete triple of one unit system."""
+
+    a_N: Optional[float] = None
+    b_N_per_mps: Optional[float] = None
+    c_N_per_mps2: Optional[float] = None
+    a_kN: Optional[float] = None
+    b_kN_per_kmh: Optional[float] = None
+    c_kN_per_kmh2: Optional[float] = None
+    a_N_per_kg: Optional[float] = None
+    b_N_per_kg_per_mps: Optional[float] = None
+    c_N_per_kg_per_mps2: Optional[float] = None
+
+    TRIPLES: ClassVar[tuple] = (("a_N", "b_N_per_mps", "c_N_per_mps2"),
+               ("a_kN", "b_kN_per_kmh", "c_kN_per_kmh2"),
+               ("a_N_per_kg", "b_N_per_kg_per_mps", "c_N_per_kg_per_mps2"))
+
+    @model_validator(mode="after")
+    def _one_triple(self):
+        given = [t for t in self.TRIPLES if any(getattr(self, f) is not None for f in t)]
+        if len(given) != 1 or any(getattr(self, f) is None for f in given[0]):
+            raise ValueError("give one complete triple: " + " | ".join("/".join(t) for t in self.TRIPLES))
+        for f in given[0]:
+            if getattr(self, f) < 0:
+                raise ValueError(f"{f} must be >= 0")
+        return self
+
+
+class TunnelResistance(Strict):
+    """Extra quadratic resistance in a tunnel of the given cross section (TTOBench ``tunnel resistance``)."""
+
+    cross_section_m2: float = Field(gt=0)
+    c_kN_per_kmh2: float = Field(ge=0)
+
+
+class TrainFile(Strict):
+    name: str
+    source: str = Field(description="Where the numbers come from.")
+    mass_t: float = Field(gt=0, description="Static mass Ms [t].")
+    rotating_mass_factor: Optional[float] = Field(None, ge=0, description="M = Ms (1 + factor).")
+    effective_mass_t: Optional[float] = Field(None, gt=0, description="Effective mass M [t].")
+    length_m: float = Field(ge=0, description="Train length [m]; 0 for a point mass.")
+    davis: Davis
+    traction: Traction
+    braking: Braking
+    traction_efficiency: float = Field(1.0, gt=0, le=1, description="Wheel work per line energy [-].")
+    regenerative_braking: Optional[Regeneration] = None
+    curve_coefficient_m2ps2: float = Field(0.0, ge=0, description="lambda_t of thesis 000 eq. 2.2.")
+    curve_resistance: Literal["coefficient", "roeckl"] = Field(
+        "coefficient", description="'coefficient': Ms lambda_t / r (thesis 000 eq. 2.2); 'roeckl': Roeckl's "
+        "formula, as ms-eetc (TTOBench's reference implementation) uses it.")
+    tunnel_resistance: list[TunnelResistance] = Field(default_factory=list)
+    max_speed_kmh: Optional[float] = Field(None, gt=0, description="The train's top speed: caps every limit.")
+    max_acceleration_mps2: Optional[float] = Field(None, gt=0, description="Bound on the net acceleration.")
+    max_deceleration_mps2: Optional[float] = Field(None, gt=0, description="Bound on the net deceleration "
+                                                   "(on top of the braking forces; not the brake itself).")
+    das_handle_levels: list[float] = Field(default_factory=lambda: [-1.0, 0.0, 0.5, 0.75, 1.0])
+
+    @model_validator(mode="after")
+    def _curves_and_tunnels(self):
+        if self.curve_resistance == "roeckl" and self.curve_coefficient_m2ps2:
+            raise ValueError("curve_coefficient_m2ps2 goes with curve_resistance 'coefficient', not 'roeckl'")
+        _increasing([t.cross_section_m2 for t in self.tunnel_resistance], "tunnel_resistance cross sections")
+        return self
+
+    @model_validator(mode="after")
+    def _mass(self):
+        if (self.rotating_mass_factor is None) == (self.effective_mass_t is None):
+            raise ValueError("give either 'rotating_mass_factor' or 'effective_mass_t'")
+        if self.effective_mass_t is not None and self.effective_mass_t < self.mass_t:
+            raise ValueError("effective_mass_t must be >= mass_t (static mass)")
+        return self
+
+    @field_validator("das_handle_levels")
+    @classmethod
+    def _levels(cls, v):
+        if any(x < -1 or x > 1 for x in v):
+            raise ValueError("handle levels must lie in [-1, 1]")
+        return sorted(v)

@@ -1,0 +1,214 @@
+"""TTOBench tracks and trains (Kouzoupis, Pendharkar, Corman; BSD-2; ``nuorail/ttobench`` v1.5),
+read with the semantics of the library's reference implementation, ms-eetc (``dkouzoup/ms-eetc``:
+``mseetc/train.py``, ``track.py``, ``ocp.py``).
+
+Every field carries its unit (``{"unit", "value"}`` or ``{"units", "values"}``); units are
+converted by :mod:`ecostudy.core.units` and an unknown unit is refused by name. What each field
+means (docs/formats.md has the table):
+
+- ``max speed`` caps every speed limit; ``max acceleration`` / ``max deceleration`` bound the net
+  acceleration on top of the force and power limits (ms-eetc ``ocp.py``: accMin <= a <= accMax);
+- braking = regenerative (force and power limited) + pneumatic force; both absent is refused;
+- ``rho`` is the rotating-mass allowance (ms-eetc: a value below 1 is a share, 6 % -> 1.06);
+- curves cost Roeckl's resistance (ms-eetc ``TrainModel``); a curvature entry whose radii differ
+  is a clothoid, curvature linear in distance (ms-eetc ``sampleClothoid``), resolved on the grid;
+- ``tunnels`` [position, length, cross section] add the train's ``tunnel resistance`` coefficient
+  for that cross section to the quadratic resistance inside the tunnel;
+- ``length`` makes speed limits hold until the train's tail has passed them;
+- ``ETCS braking data`` is checked complete and in known units, then reported as not modelled.
+
+Fields ecostudy does not model are named in a warning; ``metadata``, ``num seats``, ``num
+coaches`` and ``altitude`` are descriptive and read silently.
+"""
+import math
+import warnings
+
+import numpy as np
+
+from ecostudy.core import units
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
+
+DESCRIPTIVE = {"metadata", "num seats", "num coaches", "altitude"}
+TRAIN_FIELDS = {"mass", "rho", "length", "max traction power", "max reg braking power", "max traction force",
+                "max reg braking force", "max pn braking force", "max acceleration", "max deceleration",
+                "max speed", "rolling resistance r0", "rolling resistance r1", "rolling resistance r2",
+                "efficiency traction", "efficiency reg brake", "tunnel resistance", "ETCS braking data"}
+TRACK_FIELDS = {"stops", "speed limits", "gradients", "curvatures", "tunnels", "ETCS braking data"}
+ETCS_TRAIN = {"A_brake_emergency": None, "A_brake_service": None, "K_dry_rst": "share", "K_wet_rst": "share",
+              "T_traction": "time", "T_be": "time", "T_bs": "time", "v_uncertainty": "share"}
+ETCS_TRACK = {"M_NVAVADH": "share", "Kt_int": "share"}
+
+
+def _convert(value, unit, dimension, path, key):
+    factor = units.si_factor(unit, dimension)
+    if factor is None:
+        known = ", ".join(units.BY_DIMENSION[dimension])
+        raise InputError(problem(path, key, f"unknown unit {unit!r} for a {dimension} (known: {known})"))
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise InputError(problem(path, key, f"expected a finite number, got {value!r}"))
+    return float(value) * factor
+
+
+def quantity(doc, key, path, dimension, default=None):
+    """A ``{"unit": u, "value": x}`` field in SI; ``default`` (SI) when absent, else refused."""
+    if key not in doc:
+        if default is None:
+            raise InputError(problem(path, key, "missing field"))
+        return default
+    item = doc[key]
+    if not isinstance(item, dict) or "value" not in item or "unit" not in item:
+        raise InputError(problem(path, key, "expected {\"unit\": ..., \"value\": ...}"))
+    return _convert(item["value"], item["unit"], dimension, path, key)
+
+
+def table(doc, key, path, columns):
+    """A ``{"units": {...}, "values": [[...], ...]}`` field as rows in SI; ``columns`` is a list of
+    (unit name, dimension or None for a radius that may be "infinity")."""
+    item = doc.get(key)
+    if not isinstance(item, dict) or not isinstance(item.get("values"), list) or not isinstance(item.get("units"), dict):
+        raise InputError(problem(path, key, "expected {\"units\": {...}, \"values\": [[...], ...]}"))
+    given = item["units"]
+    rows = []
+    for i, row in enumerate(item["values"]):
+        where = f"{key}.values[{i}]"
+        if not isinstance(row, list) or len(row) != len(columns):
+            raise InputError(problem(path, where, f"expected [{', '.join(c for c, _ in columns)}]"))
+        out = []
+        for (name, dimension), value in zip(columns, row):
+            unit = given.get(name)
+            if unit is None:
+                raise InputError(problem(path, f"{key}.units", f"missing the unit of {name!r}"))
+            if isinstance(value, str) and value.strip().lower() in ("infinity", "inf"):
+                out.append(math.inf)
+                continue
+            out.append(_convert(value, unit, dimension, path, where))
+        rows.append(out)
+    return rows
+
+
+def _unmodelled(doc, known, path, what):
+    for key in doc:
+        if key not in known and key not in DESCRIPTIVE:
+            warnings.warn(problem(path, key, f"a {what} field ecostudy does not model: ignored"),
+                          EcostudyWarning, stacklevel=3)
+
+
+def _etcs(doc, path, fields, what):
+    """Check ``ETCS braking data`` complete and in known units; warn that it is not modelled."""
+    data = doc["ETCS braking data"]
+    if not isinstance(data, dict):
+        raise InputError(problem(path, "ETCS braking data", "expected a mapping of fields"))
+    missing = sorted(set(fields) - set(data))
+    if missing:
+        raise InputError(problem(path, "ETCS braking data", "missing " + ", ".join(missing)))
+    for name, dimension in fields.items():
+        if dimension is None:  # a deceleration curve: [velocity, deceleration], both > = 0
+            rows = table(data, name, path, [("velocity", "speed"), ("deceleration", "acceleration")])
+            if any(a < 0 or v < 0 for v, a in rows) or any(b[0] <= a[0] for a, b in zip(rows, rows[1:])):
+                raise InputError(problem(path, f"ETCS braking data.{name}", "velocities must increase from 0 "
+                                         "and decelerations be >= 0"))
+        else:
+            quantity(data, name, path, dimension)
+    warnings.warn(problem(path, "ETCS braking data", f"{what} ETCS braking data read and checked, not modelled "
+                          "(ecostudy brakes on the train's brake forces and deceleration bound)"),
+                  EcostudyWarning, stacklevel=3)
+
+
+def ttobench_track(doc, path):
+    """A TTOBench track as a track-schema dict (SI converted to the schema's field units)."""
+    meta = doc.get("metadata", {})
+    name = meta.get("id") or str(path)
+    _unmodelled(doc, TRACK_FIELDS, path, "track")
+    stops = doc.get("stops")
+    if not isinstance(stops, dict) or "unit" not in stops or not isinstance(stops.get("values"), list):
+        raise InputError(problem(path, "stops", "expected {\"unit\": ..., \"values\": [...]}"))
+    positions = [_convert(p, stops["unit"], "length", path, "stops") for p in stops["values"]]
+    limits = table(doc, "speed limits", path, [("position", "length"), ("velocity", "speed")])
+    grades = (table(doc, "gradients", path, [("position", "length"), ("slope", "slope")])
+              if "gradients" in doc else [[0.0, 0.0]])
+    curves = []
+    if "curvatures" in doc:
+        for pos, r0, r1 in table(doc, "curvatures", path, [("position", "length"), ("radius at start", "length"),
+                                                          ("radius at end", "length")]):
+            start = None if math.isinf(r0) else r0
+            curves.append({"position_m": pos, "radius_m": start, **({} if r1 == r0 else {"end_radius_m": r1})})
+    tunnels = []
+    if "tunnels" in doc:
+        tunnels = [{"position_m": p, "length_m": n, "cross_section_m2": a} for p, n, a in table(
+            doc, "tunnels", path, [("position", "length"), ("length", "length"), ("cross section", "area")])]
+    if "ETCS braking data" in doc:
+        _etcs(doc, path, ETCS_TRACK, "track")
+    return {
+        "name": name,
+        "source": f"TTOBench track {name} ({meta.get('library version', 'version not stated')}, "
+                  f"{meta.get('license', 'BSD-2-Clause')})",
+        "length_m": positions[-1],
+        "stops": [{"name": f"S{i}", "position_m": p} for i, p in enumerate(positions)],
+        "gradients": [{"position_m": p, "gradient_permille": g / units.PERMILLE} for p, g in grades],
+        "curves": curves,
+        "tunnels": tunnels,
+        "speed_limits": [{"position_m": p, "speed_kmh": v / units.KMH} for p, v in limits],
+    }
+
+
+def _braking(doc, path, top, f_reg, p_reg, f_pn):
+    """Regenerative (force and power limited) plus pneumatic braking as a force table [kN] over
+    [0, top], with the regenerative corner speed P/F as a table point."""
+    if f_reg <= 0 and f_pn <= 0:
+        raise InputError(problem(path, "max reg braking force", "no brake at all (regenerative and pneumatic "
+                                 "forces are both 0)"))
+    speeds = np.linspace(0.0, top, 81)
+    if f_reg > 0 and math.isfinite(p_reg) and p_reg / f_reg < top:
+        speeds = np.unique(np.append(speeds, p_reg / f_reg))
+    force = np.minimum(f_reg, p_reg / np.maximum(speeds, 1e-9)) + f_pn
+    return {"table": {"speed_kmh": (speeds / units.KMH).tolist(), "force_kN": (force / units.KN).tolist()}}
+
+
+def ttobench_train(doc, path):
+    """A TTOBench train as a train-schema dict, and the field names for messages."""
+    meta = doc.get("metadata", {})
+    name = meta.get("id") or str(path)
+    _unmodelled(doc, TRAIN_FIELDS, path, "train")
+    top = quantity(doc, "max speed", path, "speed")
+    f_t, p_t = quantity(doc, "max traction force", path, "force"), quantity(doc, "max traction power", path, "power")
+    f_reg = quantity(doc, "max reg braking force", path, "force", 0.0)
+    p_reg = quantity(doc, "max reg braking power", path, "power", math.inf) if f_reg > 0 else math.inf
+    f_pn = quantity(doc, "max pn braking force", path, "force", 0.0)
+    rho = quantity(doc, "rho", path, "share", 0.0)
+    bounds = {}
+    for key, field in (("max acceleration", "max_acceleration_mps2"), ("max deceleration", "max_deceleration_mps2")):
+        if key in doc:
+            bounds[field] = abs(quantity(doc, key, path, "acceleration"))
+    regen = None
+    if f_reg > 0:
+        regen = {"max_force_kN": f_reg / units.KN,
+                 "efficiency": quantity(doc, "efficiency reg brake", path, "share", 1.0)}
+        if math.isfinite(p_reg):
+            regen["max_power_kW"] = p_reg / units.KW
+    tunnels = []
+    if "tunnel resistance" in doc:
+        rows = table(doc, "tunnel resistance", path, [("cross section", "area"), ("coefficient", "force per speed^2")])
+        tunnels = [{"cross_section_m2": a, "c_kN_per_kmh2": c * units.KMH**2 / units.KN} for a, c in rows]
+    if "ETCS braking data" in doc:
+        _etcs(doc, path, ETCS_TRAIN, "train")
+    length = quantity(doc, "length", path, "length", 0.0)
+    return {
+        "name": name,
+        "source": f"TTOBench train {name} ({meta.get('library version', 'version not stated')}); "
+                  + (f"{length:g} m long" if length else "point mass (no length given)"),
+        "mass_t": quantity(doc, "mass", path, "mass") / units.TONNE,
+        "rotating_mass_factor": rho if rho < 1 else rho - 1,  # ms-eetc: 6 % -> 1.06, a factor 1.06 kept
+        "length_m": length,
+        "davis": {"a_N": quantity(doc, "rolling resistance r0", path, "force"),
+                  "b_N_per_mps": quantity(doc, "rolling resistance r1", path, "force per speed", 0.0),
+                  "c_N_per_mps2": quantity(doc, "rolling resistance r2", path, "force per speed^2", 0.0)},
+        "traction": {"max_force_kN": f_t / units.KN, "max_power_kW": p_t / units.KW},
+        "braking": _braking(doc, path, top, f_reg, p_reg, f_pn),
+        "traction_efficiency": quantity(doc, "efficiency traction", path, "share", 1.0),
+        "regenerative_braking": regen,
+        "curve_resistance": "roeckl",
+        "tunnel_resistance": tunnels,
+        "max_speed_kmh": top / units.KMH,
+        **bounds,
+    }, {"davis.a_N": "rolling resistance r0", "davis.b_N_per_mps": "rolling resistance r1",
+        "davis.c_N_per_mps2": "rolling resistance r2"}
