@@ -67,10 +67,10 @@ def test_ttobench_journey_becomes_a_plan_in_si(tmp_path):
     from .conftest import STUDIES
     track = load_track(TRACKS / "metro_line_4stops.yaml")
     path = STUDIES / "timetables" / JOURNEY
-    plan = journey_plan(name_stops(load_timetable(path), track, path), track, path, dwell=20.0)
+    plan = journey_plan(*name_stops(load_timetable(path), track, path), path, dwell=20.0)
     assert plan.stops == ("Noord", "Station", "Centrum", "Zuid")
     assert plan.arrival == ((None, 56.0), (175.0, 185.0), (None, 270.0))
-    assert plan.dwell == (0.0, 20.0, 20.0) and plan.departure == (0.0, None, None)
+    assert plan.dwell == (0.0, 20.0, 20.0) and plan.departure == ((0.0, 0.0), None, None)
     (w,) = plan.windows[1]  # 1400 m is 750 m past Station
     assert (w.distance, w.earliest, w.latest, w.min_speed) == (750.0, 120.0, 135.0, None)
     assert w.max_speed == pytest.approx(40 / 3.6)
@@ -83,12 +83,27 @@ def test_ttobench_journey_becomes_a_plan_in_si(tmp_path):
     doc["timing points"]["values"][2][4] = 10.0  # m/s
     other = tmp_path / "journey_km.json"
     other.write_text(json.dumps(doc))
-    plan = journey_plan(name_stops(load_timetable(other), track, other), track, other)
+    plan = journey_plan(*name_stops(load_timetable(other), track, other), other)
     assert plan.windows[1][0].distance == pytest.approx(750.0) and plan.windows[1][0].max_speed == pytest.approx(10.0)
-    # a stop that the track does not have, and a departure that is not at standstill
+    # a stop anywhere on the track (TTOBench journeys stop where they like): the track gets that stop
     doc["timing points"]["values"][1][0] = 0.7
     other.write_text(json.dumps(doc))
-    with pytest.raises(InputError, match=r"stops\[1\]\.position_m: 700 m is not a stop"):
+    tt, extended = name_stops(load_timetable(other), track, other)
+    assert extended.stops["at_700m"] == 700.0 and tt.stops[1].stop == "at_700m" and "at_700m" not in track.stops
+    assert list(extended.stops) == ["Noord", "Station", "at_700m", "Centrum", "Zuid"]
+    # a station as TTOBench writes it: two stopping points at one position, arrival then departure
+    # window; the dwell follows from them
+    station = json.loads(path.read_text())
+    rows = station["timing points"]["values"]
+    at = next(i for i, r in enumerate(rows) if i and r[3] == 0 and r[4] == 0)
+    rows.insert(at + 1, [rows[at][0], 90.0, 100.0, 0, 0])
+    other.write_text(json.dumps(station))
+    plan = journey_plan(*name_stops(load_timetable(other), track, other), other)
+    assert plan.departure[1] == (90.0, 100.0) and len(plan.stops) == 4
+    # not on the track at all; a departure that is not at standstill
+    doc["timing points"]["values"][1][0] = 9.0
+    other.write_text(json.dumps(doc))
+    with pytest.raises(InputError, match=r"stops\[1\]\.position_m: 9000 m is not on track"):
         name_stops(load_timetable(other), track, other)
     doc["timing points"]["values"][0][4] = 5
     other.write_text(json.dumps(doc))

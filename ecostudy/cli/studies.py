@@ -136,6 +136,20 @@ def compare_command(
         raise typer.Exit(1)
 
 
+def associated_track(tt, path):
+    """The track file a timetable names (TTOBench 'associated track'), looked for beside it and in a
+    sibling ``tracks/`` folder (the library's layout)."""
+    if tt is None or tt.track is None:
+        raise InputError(problem("command line", "--track", "missing (the timetable names no track)"))
+    here = Path(path).resolve().parent
+    for candidate in (here / f"{tt.track}.json", here.parent / "tracks" / f"{tt.track}.json",
+                      here / f"{tt.track}.yaml"):
+        if candidate.is_file():
+            return candidate
+    raise InputError(problem(path, "metadata.associated track", f"track '{tt.track}' not found beside the "
+                             "timetable or in ../tracks/; give --track"))
+
+
 def _journey(track, train, stops, time, supplement, timetable, dwell, points, workers, out, no_plot):
     check_options(time=time, supplement=supplement, dwell=dwell, points=points, workers=workers)
     from ecostudy.core import units
@@ -143,14 +157,14 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
     from ecostudy.io.timetable import journey_plan, name_stops
     from ecostudy.io.writers import atomic_write, write_csv
     from ecostudy.studies.journey import journey
-    trk, trn = load_track(track), load_train(train)
+    tt = load_timetable(timetable) if timetable is not None else None
+    trk, trn = load_track(track if track is not None else associated_track(tt, timetable)), load_train(train)
     scheduled, plan = None, None
-    if timetable is not None:
-        tt = load_timetable(timetable)
+    if tt is not None:
         if stops or time is not None or supplement is not None or not tt.stops:
             raise InputError(problem("command line", "--timetable", "a timetable with stop times replaces --stops, "
                                      "--time and --supplement"))
-        tt = name_stops(tt, trk, timetable)
+        tt, trk = name_stops(tt, trk, timetable)
         names = [row.stop for row in tt.stops]
         if tt.windowed:
             plan = journey_plan(tt, trk, timetable, dwell)
@@ -191,14 +205,16 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
 
 @app.command(name="journey")
 def journey_command(
-    track: Path = typer.Option(..., help="Track file with the stops."),
+    track: Optional[Path] = typer.Option(None, help="Track file with the stops (default: the track a "
+                                         "TTOBench journey names, from ../tracks/)."),
     train: Path = typer.Option(..., help="Train file."),
     stops: Optional[str] = typer.Option(None, help="Stops served, comma-separated (default: all, in order)."),
     time: Optional[float] = typer.Option(None, "--time", help="Total running time, dwell excluded [s]."),
     supplement: Optional[float] = typer.Option(None, help="Total supplement over the sum of all-out times [%]."),
     timetable: Optional[Path] = typer.Option(None, help="Timetable: stops with times (its running times, "
                                              "redistributed) or with windows, or a TTOBench journey JSON."),
-    dwell: float = typer.Option(0.0, help="Dwell at intermediate stops whose timetable gives none [s]."),
+    dwell: float = typer.Option(0.0, help="Dwell at intermediate stops whose timetable gives none; with "
+                                "departure windows, the least dwell [s]."),
     points: int = typer.Option(500, "--points", "-K", help="Grid nodes per segment."),
     workers: int = typer.Option(1, help="Processes for the segments' fronts."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),

@@ -5,7 +5,7 @@ latter); :func:`name_stops` puts the track's names on them. :func:`journey_plan`
 with windows into a :class:`JourneyPlan` in SI, the passing points assigned to the segment they
 lie on. Times are on the journey clock (0 at the first departure), as TTOBench counts them.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
@@ -16,8 +16,12 @@ POSITION_TOLERANCE = 1.0  # [m] a timetable position within this of a track stop
 
 
 def name_stops(tt, track, path):
-    """``tt`` with every stop given by position named after the track's stop there."""
-    rows, lines = [], []
+    """(``tt`` with every stop given by position named after the track's stop there, the track).
+
+    A position that is no stop of the track becomes one (named ``at_<position>m``), so a journey
+    may stop anywhere (TTOBench journeys do): the returned track has it among its stops.
+    """
+    rows, lines, added = [], [], {}
     for i, row in enumerate(tt.stops):
         if row.stop is not None:
             if row.stop not in track.stops:
@@ -25,15 +29,20 @@ def name_stops(tt, track, path):
                                      f"({', '.join(track.stops)})"))
             rows.append(row)
             continue
-        near = [n for n, x in track.stops.items() if abs(x - row.position_m) <= POSITION_TOLERANCE]
-        if not near:
-            lines.append(problem(path, f"stops[{i}].position_m", f"{row.position_m:g} m is not a stop of track "
-                                 f"'{track.name}' (stops at " + ", ".join(f"{x:g} m" for x in track.stops.values()) + ")"))
+        if not 0 <= row.position_m <= track.length:
+            lines.append(problem(path, f"stops[{i}].position_m", f"{row.position_m:g} m is not on track "
+                                 f"'{track.name}' (0 to {track.length:g} m)"))
             continue
-        rows.append(row.model_copy(update={"stop": near[0], "position_m": None}))
+        near = [n for n, x in {**track.stops, **added}.items() if abs(x - row.position_m) <= POSITION_TOLERANCE]
+        name = near[0] if near else f"at_{row.position_m:g}m"
+        added.setdefault(name, row.position_m) if not near else None
+        rows.append(row.model_copy(update={"stop": name, "position_m": None}))
     if lines:
         raise InputError(lines)
-    return tt.model_copy(update={"stops": rows})
+    if added:
+        stops = dict(sorted({**track.stops, **added}.items(), key=lambda kv: kv[1]))
+        track = replace(track, stops=stops)
+    return tt.model_copy(update={"stops": rows}), track
 
 
 @dataclass(frozen=True)
@@ -41,8 +50,9 @@ class JourneyPlan:
     """Stops served and what the clock requires of them; windows per segment (SI, journey clock).
 
     ``arrival[n]``: (earliest, latest) arrival at the end of segment n, None where open.
-    ``departure[n]``: fixed departure from the start of segment n, or None: arrival + dwell.
-    ``dwell[n]``: dwell before segment n departs (0 for the first).
+    ``departure[n]``: departure window (earliest, latest) from the start of segment n (equal for a
+    fixed time, either None where open), or None: arrival + dwell.
+    ``dwell[n]``: (least) dwell before segment n departs (0 for the first).
     ``windows[n]``: core.types.Window passing points of segment n, distance from its departure stop.
     """
 
@@ -65,7 +75,7 @@ def journey_plan(tt, track, path, dwell=0.0):
     if lines:
         raise InputError(lines)
     first = tt.stops[0]
-    departure = [first.departure_s if first.departure_s is not None else (first.arrival_s or 0.0)]
+    departure = [_departure(first) or (first.arrival_s or 0.0,) * 2]
     dwells, arrival = [0.0], []
     for row in tt.stops[1:]:
         if row.arrival_s is not None:
@@ -73,7 +83,7 @@ def journey_plan(tt, track, path, dwell=0.0):
         else:
             arrival.append((row.earliest_s, row.latest_s))
     for row in tt.stops[1:-1]:
-        departure.append(row.departure_s)
+        departure.append(_departure(row))
         dwells.append(row.dwell_s if row.dwell_s is not None else dwell)
     windows = [[] for _ in names[1:]]
     for i, w in enumerate(tt.windows):
@@ -91,12 +101,23 @@ def journey_plan(tt, track, path, dwell=0.0):
                        tuple(tuple(sorted(w, key=lambda x: x.distance)) for w in windows))
 
 
+def _departure(row):
+    """A timetable stop's departure as (earliest, latest), or None when it gives none."""
+    if row.departure_s is not None:
+        return (row.departure_s, row.departure_s)
+    if row.departure_earliest_s is None and row.departure_latest_s is None:
+        return None
+    return (row.departure_earliest_s, row.departure_latest_s)
+
+
 def schedule(plan, running_times):
-    """Departure and arrival times [s] per segment on the journey clock for ``running_times``."""
+    """Departure and arrival times [s] per segment on the journey clock for ``running_times``:
+    each departure as early as its window and the previous arrival plus the dwell allow."""
     dep, arr, clock = [], [], 0.0
     for n, t in enumerate(running_times):
-        fixed = plan.departure[n]
-        clock = fixed if fixed is not None else clock + plan.dwell[n]
+        window = plan.departure[n]
+        ready = clock + plan.dwell[n] if n else 0.0
+        clock = ready if window is None else max(ready, window[0] or 0.0)
         dep.append(clock)
         clock += t
         arr.append(clock)

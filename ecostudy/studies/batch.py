@@ -124,8 +124,11 @@ def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress
 
     ``progress(done, failed, remaining, total)`` is called after each case.
     """
-    study, output, cases = expand(path)
+    skipped = []
+    study, output, cases = expand(path, skipped)
     output = out or output
+    if skipped:  # a library's train-track pairs left out, and why
+        write_csv(output / "skipped.csv", pd.DataFrame(skipped))
     store = Store(output / "results.sqlite")
     try:
         counts = execute(cases, store, run_case, workers, dask, retry_failed, progress)

@@ -25,6 +25,7 @@ from ecostudy.io.loaders import (
     train_from_schema,
     validate,
 )
+from ecostudy.studies.library import library_units
 
 
 def case_key(case):
@@ -33,15 +34,10 @@ def case_key(case):
     return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
-def expand(path):
-    """(study schema, output folder, cases) for a study file; inputs are validated here, once."""
-    path = Path(path)
-    s = validate(schemas.StudyFile, read_document(path), path)
+def _scenario_units(s, path):
+    """(name, labels, train document, track document, from, to, scenario) of each scenario."""
     base = path.parent
-    scenarios = [schemas.Scenario(name="base")] + list(s.scenarios)
-    sweep = s.sweep.model_dump(exclude_none=True) if s.sweep else {}
-    cases = []
-    for i, sc in enumerate(scenarios):
+    for i, sc in enumerate([schemas.Scenario(name="base")] + list(s.scenarios)):
         where = f"{path}: scenarios[{i - 1}] ({sc.name})" if i else str(path)
         train_doc = {**train_document(base / (sc.train or s.train))[0], **sc.train_overrides}
         track_doc = track_document(base / (sc.track or s.track))
@@ -51,17 +47,36 @@ def expand(path):
             train_from_schema(validate(schemas.TrainFile, train_doc, f"{where} train"), where)
         track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{where} track"))
         from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
+        yield sc.name, {"scenario": sc.name}, train_doc, track_doc, from_stop, to_stop, sc
+
+
+def expand(path, skipped=None):
+    """(study schema, output folder, cases) for a study file; inputs are validated here, once.
+    A library study's pairs left out are appended to ``skipped`` (track, train, reason)."""
+    path = Path(path)
+    s = validate(schemas.StudyFile, read_document(path), path)
+    base = path.parent
+    sweep = s.sweep.model_dump(exclude_none=True) if s.sweep else {}
+    if s.library is not None:
+        units, left_out = library_units(s.library, base, path)
+        units = [u + (schemas.Scenario(name=u[0]),) for u in units]
+        if skipped is not None:
+            skipped.extend(left_out)
+    else:
+        units = _scenario_units(s, path)
+    cases = []
+    for name, labels, train_doc, track_doc, from_stop, to_stop, sc in units:
         timing = {"running_time_s": s.running_time_s, "supplement_percent": s.supplement_percent,
                   "window_s": list(s.window_s) if s.window_s else None}
         if s.timetable is not None:
             t = timing_from_timetable(load_timetable(base / s.timetable), from_stop, to_stop, base / s.timetable)
             timing = {"running_time_s": t.running_time,
                       "supplement_percent": None if t.supplement is None else 100 * t.supplement, "window_s": None}
-        for name in ("running_time_s", "supplement_percent"):
-            if getattr(sc, name) is not None:
+        for field in ("running_time_s", "supplement_percent"):
+            if getattr(sc, field) is not None:
                 timing = {"running_time_s": None, "supplement_percent": None, "window_s": None,
-                          name: getattr(sc, name)}
-        common = {"study": s.name, "scenario": sc.name, "train": train_doc, "track": track_doc,
+                          field: getattr(sc, field)}
+        common = {"study": s.name, "scenario": name, "train": train_doc, "track": track_doc,
                   "from": from_stop, "to": to_stop, **timing, "objective": sc.objective or s.objective,
                   "weights": [s.weights.time, s.weights.energy], "points": sc.points or s.points,
                   "version": __version__}
@@ -74,12 +89,12 @@ def expand(path):
                 case[n] = v
             if case["objective"] not in ("time", "mixed") and not any(
                     case[k] is not None for k in ("running_time_s", "supplement_percent", "window_s")):
-                raise InputError(problem(path, "running_time_s", f"scenario '{sc.name}' has no running time, "
+                raise InputError(problem(path, "running_time_s", f"scenario '{name}' has no running time, "
                                          "supplement, window or timetable"))
             das = sc.das or s.das
             if das is not None and case["objective"] in ("energy", "net_energy"):
                 case.update(das=das, das_time_limit_s=s.das_time_limit_s)  # only then: other keys unchanged
-            case["labels"] = {"scenario": sc.name, **dict(zip(names, values))}
+            case["labels"] = {**labels, **dict(zip(names, values))}
             case["key"] = case_key(case)
             cases.append(case)
     output = Path(s.output) if s.output else Path("out") / s.name

@@ -21,6 +21,7 @@ from scipy.interpolate import PchipInterpolator
 
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.errors import InfeasibleError, SolverError
+from ecostudy.core import kinematics
 from ecostudy.core.kinematics import running_time
 from ecostudy.core.simulate import window_checks
 from ecostudy.core.types import Timing, Window
@@ -131,36 +132,75 @@ def windowed_journey(track, train, plan, points, start_times=None):
     """Running times [s] from one NLP over all segments that keeps a timetable's windows.
 
     The segments' blocks as in :func:`whole_journey`; the journey clock ties them: segment n
-    departs at its fixed time or at the previous arrival plus the dwell (never before: a fixed
-    departure needs the arrival and dwell to fit before it), its arrival keeps the stop's
+    departs within its departure window (a fixed time: equal bounds) or at the previous arrival
+    plus the dwell, never before that arrival plus the (least) dwell; its arrival keeps the stop's
     (earliest, latest) window and every passing point's node time keeps its window (speed bounds
     sit on the node, ``model.define_windows``; thesis 001 eq. 4.1g on a whole journey, the
-    TTOBench journey format).
+    TTOBench journey format). Returns the running times and the departures [s].
     """
 
     pairs = list(zip(plan.stops, plan.stops[1:]))
     cases = [prepare(track, train, a, b, points, windows=[Window(w.distance, None, None, w.min_speed, w.max_speed)
                                                           for w in ws]) for (a, b), ws in zip(pairs, plan.windows)]
+    check_reachable(plan, cases)
     if start_times is None:
         start_times = [1.1 * c.estimate for c in cases]
     m, parts = _segments_model(cases, start_times)
     m.clock = pyo.ConstraintList()
     ref = sum(start_times)
-    offset = plan.departure[0]
+    departures, guess = [], 0.0
     for n, (case, part) in enumerate(zip(cases, parts)):
-        if n and plan.departure[n] is None:
-            offset = offset + parts[n - 1].T + plan.dwell[n]
-        elif n:
-            m.clock.add((offset + parts[n - 1].T + plan.dwell[n]) / ref <= plan.departure[n] / ref)
-            offset = plan.departure[n]
-        bounds = [(offset + part.T, *plan.arrival[n])]
-        bounds += [(offset + passing_time(part, case.nodes, w.distance), w.earliest, w.latest) for w in plan.windows[n]]
+        ready = departures[-1] + parts[n - 1].T + plan.dwell[n] if n else None
+        guess += start_times[n - 1] + plan.dwell[n] if n else 0.0
+        if plan.departure[n] is None:
+            departures.append(ready)
+        else:  # a departure window (equal bounds: a fixed time), never before the train is ready
+            lo, hi = plan.departure[n]
+            guess = min(max(guess, lo if lo is not None else guess), hi if hi is not None else guess)
+            m.add_component(f"departure{n}", pyo.Var(bounds=(lo, hi), initialize=guess))
+            departures.append(m.component(f"departure{n}"))
+            if ready is not None:
+                m.clock.add(ready / ref <= departures[-1] / ref)
+        bounds = [(departures[n] + part.T, *plan.arrival[n])]
+        bounds += [(departures[n] + passing_time(part, case.nodes, w.distance), w.earliest, w.latest)
+                   for w in plan.windows[n]]
         for when, lo, hi in bounds:
             if lo is not None:
                 m.clock.add(when / ref >= lo / ref)
             if hi is not None:
                 m.clock.add(when / ref <= hi / ref)
-    return _solve_times(m, parts, "the journey that keeps its timing windows")
+    times = _solve_times(m, parts, "the journey that keeps its timing windows")
+    return times, [float(pyo.value(d)) for d in departures]
+
+
+def check_reachable(plan, cases):
+    """Refuse, in one line, timing points no run can keep: for two points, the latest time of the
+    later one minus the earliest of the earlier one must leave the fastest run between them (on
+    the fastest-speed envelope, which no run exceeds) plus the least dwells in between."""
+    events = []  # (where, earliest, latest, fastest clock since the start, dwells since the start)
+    fastest, dwells, start = 0.0, 0.0, 0.0
+    for n, case in enumerate(cases):
+        clock = np.concatenate([[0.0], np.cumsum(kinematics.interval_times(case.envelope, case.nodes))])
+        dwells += plan.dwell[n]
+        lo, hi = plan.departure[n] or (None, None)
+        events.append((f"the departure from {plan.stops[n]}", lo, hi, fastest, dwells))
+        for w in plan.windows[n]:
+            at = fastest + float(np.interp(w.distance, case.nodes, clock))
+            events.append((f"the timing point at {start + w.distance:g} m", w.earliest, w.latest, at, dwells))
+        fastest += float(clock[-1])
+        start += case.segment.distance
+        events.append((f"the arrival at {plan.stops[n + 1]}", *plan.arrival[n], fastest, dwells))
+    worst = None
+    for i, (a, lo, _, t_a, d_a) in enumerate(events):
+        for b, _, hi, t_b, d_b in events[i + 1:]:
+            if lo is not None and hi is not None:
+                short = (t_b - t_a) + (d_b - d_a) - (hi - lo)
+                if short > 1e-6 and (worst is None or short > worst[0]):
+                    worst = (short, a, lo, b, hi, t_b - t_a)
+    if worst is not None:
+        short, a, lo, b, hi, need = worst
+        raise InfeasibleError(f"infeasible: {a} (not before {lo:g} s) and {b} (not after {hi:g} s) leave "
+                              f"{hi - lo:g} s; the fastest run between them takes {need:.0f} s")
 
 
 def _relative(t, departure):
@@ -179,9 +219,11 @@ def timing_columns(plan, n, departure, arrival, run):
     lo, hi = plan.arrival[n]
     stop = Window(run.summary["distance_m"], _relative(lo, departure), _relative(hi, departure))
     checks = window_checks(run.trace, _segment_windows(plan, n, departure) + (stop,))
+    d_lo, d_hi = plan.departure[n] or (None, None)
+    departed = (d_lo is None or departure >= d_lo - 1e-3) and (d_hi is None or departure <= d_hi + 1e-3)
     return {"departure_s": departure, "arrival_s": arrival,
             "arrival_window_s": f"[{'' if lo is None else f'{lo:g}'}, {'' if hi is None else f'{hi:g}'}]",
-            "windows_kept": all(w["kept"] for w in checks)}
+            "windows_kept": departed and all(w["kept"] for w in checks)}
 
 
 def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=15, workers=1,
@@ -196,7 +238,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
     """
     windowed = None
     if plan is not None:
-        windowed = windowed_journey(track, train, plan, points)
+        windowed, windowed_departures = windowed_journey(track, train, plan, points)
         total_time = float(sum(windowed))
     if scheduled is not None:
         total_time = float(sum(scheduled))
@@ -226,6 +268,9 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
     for name, times in plans.items():
         results[name] = []
         departures, arrivals = schedule(plan, times) if plan is not None else (None, None)
+        if name == "timing windows NLP":  # the NLP's own departures (a later one may serve a window)
+            departures = windowed_departures
+            arrivals = [d + t for d, t in zip(departures, times)]
         for n, ((a, b), t, f) in enumerate(zip(pairs, times, fronts)):
             keep = _segment_windows(plan, n, departures[n]) if name == "timing windows NLP" else ()
             r = solve_run(track, train, a, b, Timing(running_time=t), points=points, windows=keep)
