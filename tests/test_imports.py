@@ -162,3 +162,36 @@ def test_ttobench_acceleration_bounds_sit_on_top_of_the_brake_forces(tmp_path):
     dt = np.diff(r.trace.t)
     accel = np.diff(r.trace.v)[dt > 1e-6] / dt[dt > 1e-6]  # re-simulated (the plant keeps the bound too)
     assert accel.max() <= 0.5 + 0.02
+
+
+def test_osrd_modes_table_end_and_comfort_acceleration(tmp_path):
+    """OSRD semantics: a power mode chosen by `file.json#MODE` (the default mode otherwise), the
+    train never faster than its effort table's last speed, `comfort_acceleration` bounds the
+    acceleration, unmodelled fields named in a warning. Before, the default curve was extended
+    beyond its last speed (an OSRD 140 km/h train ran at 185 km/h) and comfort_acceleration and
+    startup_acceleration were ignored without a word."""
+    doc = json.loads((DATA / "osrd_rolling_stock.json").read_text())
+    slow = {"speeds": [0.0, 10.0, 20.0, 25.0], "max_efforts": [150000.0, 150000.0, 80000.0, 60000.0]}
+    doc["effort_curves"]["modes"]["thermal"] = {"is_electric": False, "curves": [], "default_curve": slow}
+    doc.update(comfort_acceleration=0.4, startup_acceleration=0.05, startup_time=20.0, loading_gauge="G1")
+    path = tmp_path / "osrd.json"
+    path.write_text(json.dumps(doc))
+    with pytest.warns(UserWarning, match="startup_acceleration, startup_time, loading_gauge: OSRD fields"):
+        electric = load_train(path)
+    assert electric.max_speed == pytest.approx(38.88) and electric.max_acceleration == 0.4
+    with pytest.warns(UserWarning) as caught:
+        thermal = load_train(f"{path}#thermal")
+    assert any("the curve ends at 90 km/h, below max_speed 140 km/h" in str(w.message) for w in caught)
+    assert thermal.max_speed == pytest.approx(25.0)  # the table's last speed, not max_speed
+    assert thermal.traction.force(np.array([5.0]))[0] == pytest.approx(150e3, rel=1e-3)
+    from ecostudy.core.errors import InputError
+    with pytest.raises(InputError, match=r"no mode 'diesel' \(modes: 1500V, thermal\)"), pytest.warns(UserWarning):
+        load_train(f"{path}#diesel")
+    from ecostudy.io.loaders import track_from_dict
+    line = track_from_dict({"name": "fast line", "source": "test", "length_m": 4000,
+                            "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 4000}],
+                            "speed_limits": [{"position_m": 0, "speed_kmh": 200}]})
+    r = solve_run(line, thermal, "A", "B", Timing(), objective="time", points=300)
+    assert r.summary["verification"]["passed"] and max(r.trace.v) <= 25.0 + 0.05
+    v, x = r.trajectory.v, r.nodes
+    assert ((v[1:] ** 2 - v[:-1] ** 2) / (2 * np.diff(x))).max() <= 0.4 + 1e-5  # 150 kN / 170 t = 0.88 m/s^2

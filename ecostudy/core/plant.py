@@ -191,9 +191,9 @@ class Plant:
         return Step(State(y[0], max(y[1], 0.0), t_end), y[2], y[3], y[4])
 
     # ------------------------------------------------------------------ a whole trip
-    def drive(self, nodes, handle, targets=None, gain=1.0, max_time=None):
+    def drive(self, nodes, handle, targets=None, gain=1.0, max_time=None, initial_speed=0.0):
         """Drive ``handle`` (one value per interval of ``nodes``, switching by position) from
-        standstill until the train stops; ``targets`` (one per interval, nan elsewhere) asks for
+        standstill (or ``initial_speed`` [m/s]) until the train stops; ``targets`` (one per interval, nan elsewhere) asks for
         cruise control at that speed there. Returns (position, speed, three works, stop time)
         and the integrator's pieces, restarted at every control, gradient or curve change."""
         segment = self.segment
@@ -219,7 +219,7 @@ class Plant:
 
         starts = pieces(nodes, handle, segment, targets=targets)
         bounds = list(nodes[starts[1:]]) + [segment.distance + 100.0]  # past the stop: runaway guard
-        y, t_start, solutions = [0.0, 1e-9, 0.0, 0.0, 0.0], 0.0, []
+        y, t_start, solutions = [0.0, max(initial_speed, 1e-9), 0.0, 0.0, 0.0], 0.0, []
         for first, following, x_end in zip(starts, list(starts[1:]) + [last + 1], bounds):
             span[0], span[1] = first, following - 1
             fixed[0] = self.grade_force(0.5 * (nodes[first] + nodes[first + 1]))

@@ -6,9 +6,7 @@
   times s, speeds km/h or m/s), null = no constraint, times since the journey's start. Points
   with both speed bounds 0 are stops (the first is the departure, the last the arrival); the
   others are passing points. TTOBench has no dwell times: ecostudy's ``--dwell`` supplies them.
-- OSRD rolling stock: ``effort_curves`` (default mode's ``speeds`` [m/s], ``max_efforts`` [N]),
-  ``mass`` kg, ``length`` m, ``inertia_coefficient``, ``rolling_resistance`` A/B/C [N, N/(m/s),
-  N/(m/s)^2], ``gamma``/``const_gamma`` [m/s^2].
+- OSRD rolling stock: :mod:`ecostudy.io.osrd` (OSRD semantics, power mode by ``file.json#MODE``).
 
 The result is a dict in the YAML schema, validated afterwards like any YAML file.
 """
@@ -18,39 +16,8 @@ import numpy as np
 
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
+from ecostudy.io.osrd import osrd_train
 from ecostudy.io.ttobench import ttobench_track, ttobench_train
-
-
-def osrd_train(doc, path):
-    curves = doc["effort_curves"]
-    try:
-        mode = curves["modes"][curves["default_mode"]]
-        curve = mode.get("default_curve") or mode["curves"][0]["curve"]
-        speeds, efforts = curve["speeds"], curve["max_efforts"]
-    except (KeyError, IndexError, TypeError):
-        raise InputError(problem(path, "effort_curves", "expected modes[default_mode].default_curve "
-                                 "with 'speeds' and 'max_efforts'"))
-    speeds, efforts = np.asarray(speeds, float), np.asarray(efforts, float)
-    keep = np.concatenate([[True], np.diff(speeds) > 0])  # OSRD curves may repeat a speed
-    rr = doc.get("rolling_resistance", {})
-    gamma = doc.get("const_gamma")
-    if gamma is None and isinstance(doc.get("gamma"), dict):
-        gamma = doc["gamma"].get("value")
-    if gamma is None:
-        raise InputError(problem(path, "const_gamma", "missing braking deceleration (const_gamma or gamma.value)"))
-    return {
-        "name": doc.get("name", str(path)),
-        "source": f"OSRD rolling stock {doc.get('name', path)} (railjson {doc.get('railjson_version', '?')})",
-        "mass_t": float(doc["mass"]) / units.TONNE,
-        "rotating_mass_factor": float(doc.get("inertia_coefficient", 1.0)) - 1.0,
-        "length_m": float(doc.get("length", 0.0)),
-        "davis": {"a_N": rr.get("A"), "b_N_per_mps": rr.get("B"), "c_N_per_mps2": rr.get("C")},
-        "traction": {"table": {"speed_kmh": (speeds[keep] / units.KMH).tolist(),
-                               "force_kN": (efforts[keep] / units.KN).tolist()}},
-        "braking": {"max_deceleration_mps2": float(gamma)},
-        **({"max_speed_kmh": float(doc["max_speed"]) / units.KMH} if doc.get("max_speed") else {}),  # OSRD: m/s
-    }, {"davis.a_N": "rolling_resistance.A", "davis.b_N_per_mps": "rolling_resistance.B",
-        "davis.c_N_per_mps2": "rolling_resistance.C"}
 
 
 def track_document_to_schema(doc, path):
@@ -129,11 +96,12 @@ def timetable_document_to_schema(doc, path):
     raise InputError(problem(path, "", "not a TTOBench journey (no 'timing points' field)"))
 
 
-def train_document_to_schema(doc, path):
-    """(schema dict, field-name aliases for messages) from a TTOBench or OSRD train document."""
+def train_document_to_schema(doc, path, selector=None):
+    """(schema dict, field-name aliases for messages) from a TTOBench or OSRD train document;
+    ``selector`` picks an OSRD power mode (and comfort): ``MODE`` or ``MODE/COMFORT``."""
     try:
         if "effort_curves" in doc:
-            return osrd_train(doc, path)
+            return osrd_train(doc, path, selector)
         if "max traction force" in doc or "rolling resistance r0" in doc:
             return ttobench_train(doc, path)
     except KeyError as exc:

@@ -146,6 +146,9 @@ def check_davis_plausible(davis, static_mass, fields, path):
 
     ``fields`` names the file's fields for (A, B, C), so the warning points at what to fix.
     """
+    if not any(davis):
+        warnings.warn(problem(path, "/".join(fields), "every Davis coefficient is 0: the train rolls without "
+                              "resistance"), EcostudyWarning, stacklevel=2)
     for (key, (low, high)), value, name in zip(DAVIS_PER_KG.items(), davis, fields):
         per_kg = value / static_mass
         if per_kg and not low <= per_kg <= high:
@@ -202,11 +205,24 @@ def track_from_schema(t):
 
 
 def train_document(path):
-    """(schema-shaped data, field aliases for messages) of a train file: YAML, or TTOBench/OSRD JSON."""
+    """(schema-shaped data, field aliases for messages) of a train file: YAML, or TTOBench/OSRD JSON.
+    ``file.json#MODE`` (or ``#MODE/COMFORT``) picks an OSRD rolling stock's power mode."""
+    path, selector = split_selector(path)
     data = read_document(path)
     if Path(path).suffix.lower() == ".json":
-        return train_document_to_schema(data, path)
+        return train_document_to_schema(data, path, selector)
+    if selector:
+        raise InputError(problem(path, "", f"'#{selector}' picks a power mode of an OSRD rolling stock (.json)"))
     return data, None
+
+
+def split_selector(path):
+    """(file path, selector or None) of ``file#selector``; a file whose name holds '#' stays whole."""
+    text = str(path)
+    if "#" in text and not Path(text).is_file():
+        text, selector = text.rsplit("#", 1)
+        return Path(text), selector
+    return Path(text), None
 
 
 def track_document(path):
@@ -220,7 +236,7 @@ def track_document(path):
 def load_train(path):
     """Read a train file (YAML, or TTOBench/OSRD JSON) into a :class:`Train`."""
     data, aliases = train_document(path)
-    return train_from_schema(validate(schemas.TrainFile, data, path), path, aliases)
+    return train_from_schema(validate(schemas.TrainFile, data, path), split_selector(path)[0], aliases)
 
 
 def load_track(path):

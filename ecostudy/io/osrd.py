@@ -1,0 +1,125 @@
+"""OSRD rolling stock (railjson, OpenRailAssociation/osrd; the realistic files of its
+``tests/data/rolling_stocks/realistic/``) read with OSRD's meaning of each field.
+
+- ``effort_curves.modes[mode]``: the default mode, or the one chosen by ``file.json#MODE`` (and
+  ``#MODE/COMFORT``, default comfort STANDARD); the curve whose condition is that comfort with no
+  electrical profile level and no power restriction, else the mode's ``default_curve``. Speeds
+  m/s, efforts N. The train never runs faster than its table's last speed (``max_speed`` is lowered
+  to it, with a warning when the table stops short of ``max_speed``).
+- ``max_speed`` m/s caps every limit; ``comfort_acceleration`` m/s^2 bounds the net acceleration.
+- ``mass`` kg, ``inertia_coefficient`` (M = mass x coefficient), ``length`` m.
+- ``rolling_resistance`` of type ``davis``: A N, B N/(m/s), C N/(m/s)^2.
+- braking: ``const_gamma`` or ``gamma`` {type, value} m/s^2: a brake force of M gamma; type CONST
+  (and const_gamma) also bounds the net deceleration to gamma, as OSRD decelerates at exactly gamma.
+- Not modelled, named in one warning when they carry a value: startup_time,
+  startup_acceleration, loading_gauge, etcs_brake_params, power_restrictions, energy_sources,
+  electrical_power_startup_time, raise_pantograph_time, base_power_class. Descriptive fields
+  (name, metadata, categories, signalling systems, liveries, version, locked) are read silently.
+"""
+import math
+import warnings
+
+import numpy as np
+
+from ecostudy.core import units
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
+
+MODELLED = {"effort_curves", "max_speed", "comfort_acceleration", "mass", "inertia_coefficient", "length",
+            "rolling_resistance", "const_gamma", "gamma"}
+DESCRIPTIVE = {"name", "railjson_version", "metadata", "version", "locked", "supported_signaling_systems",
+               "primary_category", "other_categories", "liveries", "id"}
+
+
+def _number(doc, key, path, positive=True):
+    value = doc.get(key)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or (
+            positive and value <= 0):
+        raise InputError(problem(path, key, f"expected a {'positive ' if positive else ''}number, got {value!r}"))
+    return float(value)
+
+
+def _curve(doc, path, selector):
+    """(mode, comfort, speeds [m/s], efforts [N]) of the chosen mode and comfort."""
+    curves = doc.get("effort_curves")
+    if not isinstance(curves, dict) or not isinstance(curves.get("modes"), dict) or not curves["modes"]:
+        raise InputError(problem(path, "effort_curves", "expected {'modes': {...}, 'default_mode': ...}"))
+    mode, _, comfort = (selector or "").partition("/")
+    mode, comfort = mode or curves.get("default_mode"), comfort or "STANDARD"
+    if mode not in curves["modes"]:
+        raise InputError(problem(path, "effort_curves.modes", f"no mode {mode!r} (modes: {', '.join(curves['modes'])})"))
+    entry = curves["modes"][mode]
+    chosen, others = None, 0
+    for item in entry.get("curves") or []:
+        cond = item.get("cond") or {}
+        plain = cond.get("electrical_profile_level") is None and cond.get("power_restriction_code") is None
+        if plain and cond.get("comfort") == comfort and chosen is None:
+            chosen = item.get("curve")
+        others += not plain
+    if chosen is None:
+        if selector and "/" in selector:
+            raise InputError(problem(path, f"effort_curves.modes.{mode}", f"no curve for comfort {comfort!r}"))
+        chosen = entry.get("default_curve")
+    try:
+        speeds, efforts = np.asarray(chosen["speeds"], float), np.asarray(chosen["max_efforts"], float)
+    except (KeyError, TypeError, ValueError):
+        raise InputError(problem(path, f"effort_curves.modes.{mode}", "expected a curve with 'speeds' and 'max_efforts'"))
+    if speeds.size < 2 or speeds.size != efforts.size or not np.all(np.isfinite(speeds) & np.isfinite(efforts)):
+        raise InputError(problem(path, f"effort_curves.modes.{mode}", "speeds and max_efforts need equal lengths >= 2"))
+    if others:
+        warnings.warn(problem(path, f"effort_curves.modes.{mode}", f"{others} curve(s) for electrical profile "
+                              "levels or power restrictions not modelled: the plain curve is used everywhere"),
+                      EcostudyWarning, stacklevel=3)
+    keep = np.concatenate([[True], np.diff(speeds) > 0])  # OSRD curves may repeat a speed
+    return mode, comfort, speeds[keep], efforts[keep]
+
+
+def _braking(doc, path, mass):
+    """(braking schema, net-deceleration bound or None) from const_gamma or gamma {type, value}."""
+    gamma = doc.get("gamma")
+    if isinstance(gamma, dict):
+        kind, value = str(gamma.get("type", "CONST")).upper(), _number(gamma, "value", f"{path}: gamma")
+        if kind not in ("CONST", "MAX"):
+            raise InputError(problem(path, "gamma.type", f"expected CONST or MAX, got {gamma.get('type')!r}"))
+    elif "const_gamma" in doc:
+        kind, value = "CONST", _number(doc, "const_gamma", path)
+    else:
+        raise InputError(problem(path, "const_gamma", "missing braking deceleration (const_gamma or gamma)"))
+    return {"max_force_kN": mass * value / units.KN}, (value if kind == "CONST" else None)
+
+
+def osrd_train(doc, path, selector=None):
+    """An OSRD rolling stock as a train-schema dict, and the field names for messages."""
+    ignored = [k for k in doc if k not in MODELLED | DESCRIPTIVE and doc[k] not in (None, {}, [], "")]
+    if ignored:
+        warnings.warn(problem(path, ", ".join(ignored), "OSRD fields ecostudy does not model: ignored"),
+                      EcostudyWarning, stacklevel=3)
+    mode, comfort, speeds, efforts = _curve(doc, path, selector)
+    mass = _number(doc, "mass", path)
+    inertia = _number(doc, "inertia_coefficient", path) if "inertia_coefficient" in doc else 1.0
+    top = min(_number(doc, "max_speed", path), float(speeds[-1])) if "max_speed" in doc else float(speeds[-1])
+    if "max_speed" in doc and speeds[-1] < doc["max_speed"] - 1e-6:
+        warnings.warn(problem(path, f"effort_curves.modes.{mode}", f"the curve ends at {speeds[-1] / units.KMH:.0f} "
+                              f"km/h, below max_speed {doc['max_speed'] / units.KMH:.0f} km/h: the train runs at most "
+                              f"{speeds[-1] / units.KMH:.0f} km/h in this mode"), EcostudyWarning, stacklevel=3)
+    rr = doc.get("rolling_resistance")
+    if not isinstance(rr, dict) or rr.get("type", "davis") != "davis":
+        raise InputError(problem(path, "rolling_resistance", "expected {'type': 'davis', 'A', 'B', 'C'}"))
+    braking, deceleration = _braking(doc, path, mass * inertia)
+    bounds = {"max_deceleration_mps2": deceleration} if deceleration else {}
+    if "comfort_acceleration" in doc:
+        bounds["max_acceleration_mps2"] = _number(doc, "comfort_acceleration", path)
+    return {
+        "name": str(doc.get("name", path)),
+        "source": f"OSRD rolling stock {doc.get('name', path)} (railjson {doc.get('railjson_version', '?')}), "
+                  f"mode {mode}, comfort {comfort}",
+        "mass_t": mass / units.TONNE,
+        "rotating_mass_factor": inertia - 1.0,
+        "length_m": _number(doc, "length", path, positive=False) if "length" in doc else 0.0,
+        "davis": {"a_N": _number(rr, "A", path, False), "b_N_per_mps": _number(rr, "B", path, False),
+                  "c_N_per_mps2": _number(rr, "C", path, False)},
+        "traction": {"table": {"speed_kmh": (speeds / units.KMH).tolist(), "force_kN": (efforts / units.KN).tolist()}},
+        "braking": braking,
+        "max_speed_kmh": top / units.KMH,
+        **bounds,
+    }, {"davis.a_N": "rolling_resistance.A", "davis.b_N_per_mps": "rolling_resistance.B",
+        "davis.c_N_per_mps2": "rolling_resistance.C"}
