@@ -195,3 +195,35 @@ def test_osrd_modes_table_end_and_comfort_acceleration(tmp_path):
     assert r.summary["verification"]["passed"] and max(r.trace.v) <= 25.0 + 0.05
     v, x = r.trajectory.v, r.nodes
     assert ((v[1:] ** 2 - v[:-1] ** 2) / (2 * np.diff(x))).max() <= 0.4 + 1e-5  # 150 kN / 170 t = 0.88 m/s^2
+
+
+@pytest.mark.slow
+def test_efficiency_maps_price_the_net_energy_and_its_check():
+    """Efficiency over speed and force (a table, ms-eetc's load-dependent efficiency) instead of
+    the constants: the net-energy objective and the re-simulation both use it. A map that is
+    constant at the train's efficiencies reproduces the constant case; a map that is poor at low
+    load costs more line energy, the same in the NLP and in the plant."""
+    import yaml
+
+    from ecostudy.core.physics import EfficiencyMap
+    from ecostudy.io.loaders import train_from_dict
+    from .conftest import TRAINS, TRACKS
+    base = yaml.safe_load((TRAINS / "amsterdam_metro.yaml").read_text())
+    track = load_track(TRACKS / "amsterdam_rokin_centraal.yaml")
+    a, b = list(track.stops)[:2]
+    eta_t, eta_r = base["traction_efficiency"], base["regenerative_braking"]["efficiency"]
+    flat = {"speed_kmh": [0, 40, 80], "force_kN": [0, 100, 300]}
+    same = {**base, "traction_efficiency_map": {**flat, "efficiency": [[eta_t] * 3] * 3},
+            "regenerative_braking": {**base["regenerative_braking"],
+                                     "efficiency_map": {**flat, "efficiency": [[eta_r] * 3] * 3}}}
+    poor = {**base, "traction_efficiency_map": {**flat, "efficiency": [[0.5, 0.8, 0.9]] * 3}}
+    runs = {}
+    for name, doc in (("constant", base), ("same", same), ("poor", poor)):
+        train = train_from_dict(doc)
+        runs[name] = solve_run(track, train, a, b, Timing(running_time=80.0), objective="net_energy", points=300)
+        s = runs[name].summary
+        assert s["verification"]["passed"]
+        assert s["verification"]["simulated_net_energy_kWh"] == pytest.approx(s["net_energy_kWh"], rel=0.01)
+    assert isinstance(train_from_dict(poor).traction_efficiency_map, EfficiencyMap)
+    assert runs["same"].summary["net_energy_kWh"] == pytest.approx(runs["constant"].summary["net_energy_kWh"], rel=2e-3)
+    assert runs["poor"].summary["net_energy_kWh"] > runs["constant"].summary["net_energy_kWh"] * 1.02

@@ -3,6 +3,7 @@ table with its totals."""
 import numpy as np
 import pandas as pd
 
+from ecostudy.core.physics import efficiency, line_energy
 from ecostudy.core.units import KN, KW, KWH, to_kmh
 
 
@@ -40,13 +41,15 @@ def tabulate(train, nodes, v, dt, ft, fb):
         "power_kW": pad(ft * 0.5 * (v[:-1] + v[1:]) / KW),
         "cumulative_energy_kWh": np.concatenate([[0.0], np.cumsum(work_t)]) / KWH,
     })
-    regen = train.regeneration_efficiency * work_r.sum()
+    vm = 0.5 * (v[:-1] + v[1:])
+    regen = float(np.sum(efficiency(train.eta_regeneration, vm, fr) * work_r))
+    net = float(np.sum(line_energy(ft, fr, vm, ds, train.eta_traction, train.eta_regeneration)))
     totals = {
         "running_time_s": float(dt.sum()),
         "traction_energy_kWh": float(work_t.sum() / KWH),
         "braking_energy_kWh": float(work_b.sum() / KWH),
         "regenerated_energy_kWh": float(regen / KWH),
-        "net_energy_kWh": float((work_t.sum() / train.traction_efficiency - regen) / KWH),
+        "net_energy_kWh": net / KWH,
         "traction_energy_J_per_kg": float(work_t.sum() / train.static_mass),
         "top_speed_kmh": float(to_kmh(v.max())),
     }

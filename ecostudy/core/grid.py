@@ -100,12 +100,17 @@ class Segment:
         return np.unique(pts[(pts > 0) & (pts < self.distance)])
 
 
-def warn_unmodelled_tunnels(segment, formulation):
-    """One warning when ``formulation`` leaves out the tunnel resistance of ``segment``."""
+def warn_unmodelled(segment, formulation, train=None):
+    """One warning when ``formulation`` leaves out the tunnel resistance of ``segment`` or the
+    ``train``'s efficiency maps (it then uses the constant efficiencies)."""
     if np.any(segment.tunnel.values != 0):
         warnings.warn(f"{formulation} does not model the tunnel resistance ('tunnel resistance' on "
                       f"'{segment.from_stop}'-'{segment.to_stop}'): tunnels cost nothing there",
                       EcostudyWarning, stacklevel=3)
+    if train is not None and (train.traction_efficiency_map or train.regeneration_efficiency_map):
+        warnings.warn(f"{formulation} does not model efficiency maps: it uses the constant efficiencies "
+                      f"({train.traction_efficiency:g}, {train.regeneration_efficiency:g})", EcostudyWarning,
+                      stacklevel=3)
 
 
 def travel_distance(track, from_stop, to_stop, position):

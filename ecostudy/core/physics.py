@@ -233,3 +233,49 @@ def interval_resistance(v0, v1, davis, fixed):
 def acceleration(traction, braking, resistance, mass):
     """dv/dt = (F_T - F_B - F_R) / M [m/s^2] (thesis 000 eq. 2.1)."""
     return (traction - braking - resistance) / mass
+
+
+@dataclass(frozen=True)
+class EfficiencyMap:
+    """Efficiency [-] as a function of speed and force (ms-eetc's load-dependent efficiency as a
+    table): ``values[i][j]`` at ``speeds[i]`` [m/s] and ``forces[j]`` [N], bilinear between the
+    table points and constant beyond them, every kink rounded (:func:`table_force`), so it
+    evaluates floats, numpy arrays and Pyomo expressions alike.
+
+    eta(v, F) = sum_j hat_j(F) row_j(v), hat_j the interpolant of the j-th unit vector over the
+    forces and row_j the interpolant of column j over the speeds.
+    """
+
+    speeds: tuple
+    forces: tuple
+    values: tuple
+    hats: tuple = field(default=(), compare=False, repr=False)
+    rows: tuple = field(default=(), compare=False, repr=False)
+
+    def __post_init__(self):
+        values = np.asarray(self.values, float)
+        wf = 0.002 * float(np.min(np.diff(self.forces)))  # rounding of the hats: 0.1 % at a table point
+        wv = min(table_width(self.speeds, values[:, j], 0.0005) for j in range(len(self.forces)))
+        unit = np.eye(len(self.forces))
+        object.__setattr__(self, "hats", tuple((table_coefficients(self.forces, unit[j], wf), wf)
+                                               for j in range(len(self.forces))))
+        object.__setattr__(self, "rows", tuple((table_coefficients(self.speeds, values[:, j], wv), wv)
+                                               for j in range(len(self.forces))))
+
+    def __call__(self, speed, force):
+        total = 0.0
+        for (hat, wf), (row, wv) in zip(self.hats, self.rows):
+            total = total + smooth_table(force, hat, wf) * smooth_table(speed, row, wv)
+        return total
+
+
+def efficiency(eta, speed, force):
+    """A constant efficiency, or an :class:`EfficiencyMap` at (speed, force)."""
+    return eta(speed, force) if isinstance(eta, EfficiencyMap) else eta
+
+
+def line_energy(ft, fr, speed, ds, eta_t, eta_r):
+    """Energy drawn from the line minus energy fed back [J] per interval: F_T ds / eta_T(v, F_T)
+    - eta_R(v, F_R) F_R ds (thesis 000 eq. 7.3 with efficiencies that may depend on speed and
+    force). ``speed`` is the interval's mean speed; floats, arrays or Pyomo expressions."""
+    return ft * ds / efficiency(eta_t, speed, ft) - efficiency(eta_r, speed, fr) * fr * ds

@@ -23,10 +23,10 @@ from scipy.integrate import solve_ivp
 
 from ecostudy.core.grid import Profile
 from ecostudy.core.kinematics import point_resistance
-from ecostudy.core.physics import acceleration, davis_resistance
+from ecostudy.core.physics import acceleration, davis_resistance, line_energy
 from ecostudy.core.types import State
 
-RTOL, ATOL = 1e-8, [1e-6, 1e-8, 1.0, 1.0, 1.0]  # state: position, speed, three works [J]
+RTOL, ATOL = 1e-8, [1e-6, 1e-8, 1.0, 1.0, 1.0, 1.0]  # state: position, speed, three works, net line energy [J]
 
 
 @dataclass(frozen=True)
@@ -146,18 +146,20 @@ class Plant:
         return ft, fb
 
     def derivatives(self, v, ft, fb, resist, disturbance=0.0):
-        """d/dt of (position, speed, traction work, braking work, regenerated work)."""
+        """d/dt of (position, speed, traction work, braking work, regenerated work, net line
+        energy); the last by :func:`physics.line_energy` per unit distance, times v."""
         if v <= 0.0 and ft - resist + self.mass * disturbance <= 0.0:  # standing stays standing
-            return [0.0, 0.0, 0.0, 0.0, 0.0]
-        regen = self.train.regeneration
-        fr = min(fb, regen.force(v)) if regen is not None and fb > 0 else 0.0
-        return [v, acceleration(ft, fb, resist, self.mass) + disturbance, ft * v, fb * v, fr * v]
+            return [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        train = self.train
+        fr = min(fb, train.regeneration.force(v)) if train.regeneration is not None and fb > 0 else 0.0
+        line = line_energy(ft, fr, v, v, train.eta_traction, train.eta_regeneration)
+        return [v, acceleration(ft, fb, resist, self.mass) + disturbance, ft * v, fb * v, fr * v, line]
 
     # ------------------------------------------------------------------ stepping
     def step(self, state, control, dt, disturbance=0.0):
         """Advance ``state`` by ``dt`` [s] under ``control`` held constant (a :class:`Step`)."""
         a, b, c = self.davis
-        y = [float(state.position), max(float(state.speed), 0.0), 0.0, 0.0, 0.0]
+        y = [float(state.position), max(float(state.speed), 0.0), 0.0, 0.0, 0.0, 0.0]
         t, t_end = float(state.time), float(state.time) + dt
         while t < t_end - 1e-12:
             i = bisect_right(self.edges, y[0] + 1e-9)
@@ -219,7 +221,7 @@ class Plant:
 
         starts = pieces(nodes, handle, segment, targets=targets)
         bounds = list(nodes[starts[1:]]) + [segment.distance + 100.0]  # past the stop: runaway guard
-        y, t_start, solutions = [0.0, max(initial_speed, 1e-9), 0.0, 0.0, 0.0], 0.0, []
+        y, t_start, solutions = [0.0, max(initial_speed, 1e-9), 0.0, 0.0, 0.0, 0.0], 0.0, []
         for first, following, x_end in zip(starts, list(starts[1:]) + [last + 1], bounds):
             span[0], span[1] = first, following - 1
             fixed[0] = self.grade_force(0.5 * (nodes[first] + nodes[first + 1]))

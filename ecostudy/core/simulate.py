@@ -28,6 +28,7 @@ class Trace:
     regenerated_energy: float  # mechanical work taken by the electric brake [J] (before efficiency)
     stop_position: float     # [m]
     arrival_time: float      # [s]
+    net_energy: float = 0.0  # drawn from the line minus fed back [J] (physics.line_energy)
 
 
 def simulate(segment, train, nodes, handle, max_time=None, targets=None, gain=1.0, truth=Truth()):
@@ -38,7 +39,7 @@ def simulate(segment, train, nodes, handle, max_time=None, targets=None, gain=1.
     and braking envelopes (a driver or DAS holding a speed). Returns (:class:`Trace`, pieces)."""
     y, t_stop, solutions = Plant(segment, train, truth).drive(nodes, handle, targets, gain, max_time)
     t, x, v = dense_samples(solutions)
-    return Trace(t, x, v, float(y[2]), float(y[3]), float(y[4]), float(y[0]), t_stop), solutions
+    return Trace(t, x, v, float(y[2]), float(y[3]), float(y[4]), float(y[0]), t_stop, float(y[5])), solutions
 
 
 def dense_samples(solutions, samples=4000):
@@ -88,6 +89,7 @@ def verify(segment, train, nodes, handle, running_time, traction_energy, windows
         "max_overspeed_kmh": to_kmh(max(overspeed, 0.0)),
         "simulated_running_time_s": trace.arrival_time,
         "simulated_traction_energy_kWh": to_kwh(trace.traction_energy),
+        "simulated_net_energy_kWh": to_kwh(trace.net_energy),
     }
     out["windows"] = window_checks(trace, windows)
     out["passed"] = bool(all(abs(out[k]) <= tol for k, tol in TOLERANCES.items())
@@ -106,9 +108,8 @@ class Driven:
 
     def row(self, train, distance):
         t = self.trace
-        regen = train.regeneration_efficiency * t.regenerated_energy
         changes = int(np.count_nonzero(np.abs(np.diff(self.handle)) > 1e-3))
         return {"strategy": self.name, "running_time_s": t.arrival_time,
                 "traction_energy_kWh": to_kwh(t.traction_energy),
-                "net_energy_kWh": to_kwh(t.traction_energy / train.traction_efficiency - regen),
+                "net_energy_kWh": to_kwh(t.net_energy),
                 "stop_error_m": t.stop_position - distance, "handle_changes": changes}

@@ -8,7 +8,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ecostudy.core.physics import Envelope
+from ecostudy.core.physics import EfficiencyMap, Envelope
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,18 @@ class Train:
     max_deceleration: float = float("inf")  # bound on the net deceleration [m/s^2], on top of the brakes
     curve_resistance: str = "coefficient"   # "coefficient": Ms lambda_t / r; "roeckl": Roeckl's formula
     tunnel_resistance: tuple = ()           # ((cross section [m^2], extra C [N s^2/m^2]), ...) ascending
+    traction_efficiency_map: EfficiencyMap | None = None      # eta_T(v, F) instead of the constant
+    regeneration_efficiency_map: EfficiencyMap | None = None  # eta_R(v, F) instead of the constant
+
+    @property
+    def eta_traction(self):
+        """The traction efficiency as the net energy uses it: the map, else the constant."""
+        return self.traction_efficiency_map or self.traction_efficiency
+
+    @property
+    def eta_regeneration(self):
+        """The regeneration efficiency: the map, else the constant."""
+        return self.regeneration_efficiency_map or self.regeneration_efficiency
 
     def tunnel_coefficient(self, cross_section):
         """Extra quadratic resistance C [N s^2/m^2] in a tunnel of ``cross_section`` [m^2]: the

@@ -15,7 +15,7 @@ from pydantic import ValidationError
 from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import travel_distance
-from ecostudy.core.physics import Envelope, force_power_fit, table_width
+from ecostudy.core.physics import EfficiencyMap, Envelope, force_power_fit, table_width
 from ecostudy.core.types import Supply, Timing, Track, Train
 from ecostudy.io import schemas
 from ecostudy.io.formats import (
@@ -126,6 +126,14 @@ def _envelope(spec, mass):
     return Envelope("force_power", max_force=spec.max_force_kN * units.KN, max_power=power)
 
 
+def _efficiency_map(table):
+    """An efficiency table of a train file as an :class:`EfficiencyMap` in m/s and N (or None)."""
+    if table is None:
+        return None
+    return EfficiencyMap(tuple(np.asarray(table.speed_kmh) * units.KMH), tuple(np.asarray(table.force_kN) * units.KN),
+                         tuple(tuple(row) for row in table.efficiency))
+
+
 def _davis(d, static_mass):
     """Davis triple in N, N s/m, N s^2/m^2 from whichever unit system the file used, and its fields."""
     if d.a_N is not None:
@@ -181,6 +189,9 @@ def train_from_schema(t, path, aliases=None):
                  max_acceleration=t.max_acceleration_mps2 or float("inf"),
                  max_deceleration=t.max_deceleration_mps2 or float("inf"),
                  curve_resistance=t.curve_resistance,
+                 traction_efficiency_map=_efficiency_map(t.traction_efficiency_map),
+                 regeneration_efficiency_map=_efficiency_map(t.regenerative_braking.efficiency_map
+                                                             if t.regenerative_braking else None),
                  tunnel_resistance=tuple((x.cross_section_m2, x.c_kN_per_kmh2 * units.KN / units.KMH**2)
                                          for x in t.tunnel_resistance))
 

@@ -11,7 +11,7 @@ from pydantic import Field, model_validator
 
 from ecostudy.io.schemabase import Strict, increasing as _increasing
 from ecostudy.io.trainschema import (  # noqa: F401  (re-exported: schemas is the one place to look)
-    Braking, Davis, ForceTable, Regeneration, Traction, TrainFile, TunnelResistance)
+    Braking, Davis, EfficiencyTable, ForceTable, Regeneration, Traction, TrainFile, TunnelResistance)
 
 
 

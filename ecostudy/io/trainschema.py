@@ -33,6 +33,27 @@ class ForceTable(Strict):
         return self
 
 
+class EfficiencyTable(Strict):
+    """Efficiency over speed and force (bilinear, constant beyond the table): one row per speed."""
+
+    speed_kmh: list[float] = Field(min_length=2, description="Speeds [km/h], strictly increasing.")
+    force_kN: list[float] = Field(min_length=2, description="Forces [kN] at the wheel, strictly increasing.")
+    efficiency: list[list[float]] = Field(description="Wheel to line (traction) or line to wheel share [-], "
+                                          "one row per speed, one value per force.")
+
+    @model_validator(mode="after")
+    def _shape(self):
+        _increasing(self.speed_kmh, "speed_kmh")
+        _increasing(self.force_kN, "force_kN")
+        if min(self.speed_kmh) < 0 or min(self.force_kN) < 0:
+            raise ValueError("speeds and forces must be >= 0")
+        if len(self.efficiency) != len(self.speed_kmh) or any(len(r) != len(self.force_kN) for r in self.efficiency):
+            raise ValueError("efficiency needs one row per speed with one value per force")
+        if any(not 0.05 <= x <= 1 for r in self.efficiency for x in r):
+            raise ValueError("efficiencies must lie in [0.05, 1] (a share, not per cent)")
+        return self
+
+
 class Traction(Strict):
     """Traction envelope: a table, or a maximum force with an optional maximum power."""
 
@@ -69,6 +90,8 @@ class Regeneration(Strict):
     max_force_kN: Optional[float] = Field(None, gt=0)
     max_power_kW: Optional[float] = Field(None, gt=0)
     efficiency: float = Field(0.8, gt=0, le=1, description="Wheel to line [-].")
+    efficiency_map: Optional[EfficiencyTable] = Field(None, description="Efficiency over speed and force "
+                                                      "instead of the constant (net energy and its check).")
 
 
 class Davis(Strict):
@@ -117,6 +140,9 @@ class TrainFile(Strict):
     traction: Traction
     braking: Braking
     traction_efficiency: float = Field(1.0, gt=0, le=1, description="Wheel work per line energy [-].")
+    traction_efficiency_map: Optional[EfficiencyTable] = Field(
+        None, description="Efficiency over speed and force instead of the constant (net energy and its check; "
+        "formulations that cannot use it keep traction_efficiency and say so).")
     regenerative_braking: Optional[Regeneration] = None
     curve_coefficient_m2ps2: float = Field(0.0, ge=0, description="lambda_t of thesis 000 eq. 2.2.")
     curve_resistance: Literal["coefficient", "roeckl"] = Field(

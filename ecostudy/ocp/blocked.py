@@ -27,7 +27,7 @@ multi-objective one (alpha = 1, omega) are the same NL file.
 import numpy as np
 import pyomo.environ as pyo
 
-from ecostudy.core.grid import warn_unmodelled_tunnels
+from ecostudy.core.grid import warn_unmodelled
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import davis_resistance, interval_resistance
 from ecostudy.ocp.timedomain import FORCE_SCALE
@@ -64,7 +64,7 @@ def handle_guess(case, s, v, ts, block):
 def build_blocked(case, ts, kf, block, guess, margin=0.1):
     """The FHOCP on samples 0..k_f with blocks of ``block`` samples; ``guess`` = (s, v) on them."""
     train, seg = case.train, case.segment
-    warn_unmodelled_tunnels(seg, "the SBPC time-domain NLP")
+    warn_unmodelled(seg, "the SBPC time-domain NLP")
     n, nb = kf, (kf - 1) // block + 1
     m = pyo.ConcreteModel(name="sbpc")
     m.K, m.I, m.B = pyo.RangeSet(0, n), pyo.RangeSet(0, n - 1), pyo.RangeSet(0, nb - 1)

@@ -40,7 +40,7 @@ import clarabel
 import numpy as np
 from scipy import sparse
 
-from ecostudy.core.grid import interval_of, node_limits, warn_unmodelled_tunnels
+from ecostudy.core.grid import node_limits, warn_unmodelled
 from ecostudy.core.kinematics import interval_grade_force
 
 NAMES = ("v", "t", "rho", "g", "gp", "b", "h")  # variable blocks, in this order
@@ -146,7 +146,7 @@ class ConvexProgram:
         if scheme not in ("left", "midpoint"):
             raise ValueError(f"scheme must be 'left' or 'midpoint', not {scheme!r}")
         self.segment, self.train, self.nodes = segment, train, np.asarray(nodes, float)
-        warn_unmodelled_tunnels(segment, "the convex SOCP")
+        warn_unmodelled(segment, "the convex SOCP")
         self.weights, self.scheme, self.epsilon, self.margin = weights, scheme, epsilon, margin
         self.traction = envelope_pieces(train.traction)
         self.brake = envelope_pieces(train.braking)

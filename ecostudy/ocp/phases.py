@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import pyomo.environ as pyo
 
-from ecostudy.core.grid import warn_unmodelled_tunnels
+from ecostudy.core.grid import warn_unmodelled
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import interval_resistance, smooth_min
 from ecostudy.ocp.space import FORCE_SCALE, energy_reference
@@ -70,7 +70,7 @@ class Sector:
 
 def sectors(segment, train):
     """Sectors between consecutive profile changes (constant gradient, curvature and limit)."""
-    warn_unmodelled_tunnels(segment, "the phases NLP")
+    warn_unmodelled(segment, "the phases NLP", train)
     edges = np.concatenate([[0.0], segment.breakpoints(), [segment.distance]])
     out = []
     for a, b in zip(edges[:-1], edges[1:]):

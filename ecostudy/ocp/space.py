@@ -17,7 +17,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.kinematics import interval_davis, interval_grade_force
-from ecostudy.core.physics import interval_resistance
+from ecostudy.core.physics import interval_resistance, line_energy
 from ecostudy.core.physics import smooth_table
 
 FORCE_SCALE = 1000.0  # [N] per NLP force unit: forces in kN (bench/bench_variants.py measures N)
@@ -205,8 +205,11 @@ def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
     if objective == "energy":
         expr = energy
     elif objective == "net_energy":  # a train without an electric brake regenerates nothing
-        regen = FORCE_SCALE * sum(share(m, k, ds[k] * m.fr[k]) for k in m.I) if hasattr(m, "fr") else 0.0
-        expr = (m.traction_work / train.traction_efficiency - train.regeneration_efficiency * regen) / energy_ref
+        def line(k):  # physics.line_energy: constant efficiencies or maps over (speed, force)
+            fr = FORCE_SCALE * m.fr[k] if hasattr(m, "fr") else 0.0
+            return line_energy(FORCE_SCALE * m.ft[k], fr, 0.5 * (m.v[k] + m.v[k + 1]), ds[k],
+                               train.eta_traction, train.eta_regeneration)
+        expr = sum(share(m, k, line(k)) for k in m.I) / energy_ref
     elif objective == "time":
         expr = m.T / time_ref + TIME_REGULARISATION * (energy + braking)
     elif objective == "mixed":

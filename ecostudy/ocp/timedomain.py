@@ -23,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 import pyomo.environ as pyo
 
-from ecostudy.core.grid import warn_unmodelled_tunnels
+from ecostudy.core.grid import warn_unmodelled
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import interval_resistance, smooth_table, table_coefficients
 from ecostudy.ocp import space
@@ -50,7 +50,7 @@ class Leg:
 def force_profile(case, width):
     """(positions, values) of the gradient + curve force [N] as a smooth step function of s."""
     seg = case.segment
-    warn_unmodelled_tunnels(seg, "the time-domain legs")
+    warn_unmodelled(seg, "the time-domain legs", case.train)
     cuts = np.unique(np.concatenate([[0.0], seg.breakpoints(), [seg.distance]]))
     mids = 0.5 * (cuts[:-1] + cuts[1:])
     force = point_resistance(seg, case.train, mids)
