@@ -1,0 +1,68 @@
+"""A long multi-stop journey by stage and grid size: the whole-journey NLP (all segments in one
+model, running times free, their sum fixed) and the verified per-segment solves at its times.
+
+    .venv/bin/python bench/bench_journey_real.py --track TRACK --train TRAIN [--supplement 10]
+        [--points 150 300 600 1200]
+
+Stages: grid (segments, grids, fastest envelopes), all-out (each segment's all-out NLP, for the
+total time), journey NLP (build, NL write and Ipopt of the one model), segments (each segment
+solved and re-simulated at its running time). The energy is the sum of the verified segments.
+"""
+import argparse
+import shlex
+import sys
+import time
+import warnings
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from ecostudy.analysis.single import solve_run  # noqa: E402
+from ecostudy.core.types import Timing  # noqa: E402
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
+from ecostudy.ocp.problem import prepare  # noqa: E402
+from ecostudy.studies.journey import whole_journey  # noqa: E402
+
+
+def run(track, train, supplement, points):
+    stops = list(track.stops)
+    pairs = list(zip(stops, stops[1:]))
+    t0 = time.perf_counter()
+    cases = [prepare(track, train, a, b, points) for a, b in pairs]
+    t1 = time.perf_counter()
+    all_out = [solve_run(track, train, a, b, Timing(), objective="time", points=points, verify_result=False)
+               .summary["running_time_s"] for a, b in pairs]
+    t2 = time.perf_counter()
+    total = sum(all_out) * (1 + supplement)
+    times = whole_journey(track, train, pairs, total, [t * (1 + supplement) for t in all_out], points)
+    t3 = time.perf_counter()
+    runs = [solve_run(track, train, a, b, Timing(running_time=t), points=points) for (a, b), t in zip(pairs, times)]
+    t4 = time.perf_counter()
+    return {"points": points, "segments": len(cases), "grid": t1 - t0, "all_out": t2 - t1, "journey_nlp": t3 - t2,
+            "segments_s": t4 - t3, "total": t4 - t0, "time": sum(times),
+            "energy": sum(r.summary["traction_energy_kWh"] for r in runs),
+            "verified": all(r.summary["verification"]["passed"] for r in runs)}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--track", required=True)
+    ap.add_argument("--train", required=True)
+    ap.add_argument("--supplement", type=float, default=10.0, help="[%] over the sum of all-out times")
+    ap.add_argument("--points", type=int, nargs="+", default=[150, 300, 600, 1200])
+    args = ap.parse_args()
+    warnings.simplefilter("ignore")
+    track, train = load_track(args.track), load_train(args.train)
+    print(f"`{shlex.join(['python', 'bench/bench_journey_real.py'] + sys.argv[1:])}`\n")
+    print("| K per segment | segments | grid s | all-out s | journey NLP s | segments solved + verified s "
+          "| total s | running time s | traction kWh | verified |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for k in args.points:
+        r = run(track, train, args.supplement / 100, k)
+        print(f"| {k} | {r['segments']} | {r['grid']:.2f} | {r['all_out']:.1f} | {r['journey_nlp']:.1f} | "
+              f"{r['segments_s']:.1f} | {r['total']:.1f} | {r['time']:.1f} | {r['energy']:.3f} | {r['verified']} |")
+
+
+if __name__ == "__main__":
+    main()
