@@ -156,3 +156,39 @@ def test_das_columns_in_a_study(tmp_path):
         "supplement_percent": 10, "points": 200, "output": str(tmp_path / "out")})
     key = expand(plain)[2][0]["key"]
     assert key != rows.loc["base", "key"] and "das" not in expand(plain)[2][0]
+
+
+def test_a_library_study_runs_every_segment_of_every_fitting_pair(tmp_path):
+    """A study naming a TTOBench checkout (`library:`): every consecutive pair of stops of every
+    track with every train that fits the line, one resumable batch; a pair left out is listed with
+    its reason in skipped.csv. The checkout here is built from the test data (two tracks, two
+    trains; the 80 km/h train does not fit a 200 km/h line at the default 60 % share)."""
+    import json
+    import shutil
+
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from ecostudy.cli import app
+    from .conftest import DATA
+    lib = tmp_path / "ttobench"
+    (lib / "tracks").mkdir(parents=True)
+    (lib / "trains").mkdir()
+    shutil.copy(DATA / "ttobench_track.json", lib / "tracks" / "T1.json")
+    fast = json.loads((DATA / "ttobench_track.json").read_text())
+    fast["speed limits"]["values"] = [[0.0, 200]]
+    (lib / "tracks" / "T2.json").write_text(json.dumps(fast))
+    shutil.copy(DATA / "ttobench_subway_train.json", lib / "trains" / "subway.json")
+    study = tmp_path / "lib.yaml"
+    study.write_text(f"name: lib\nlibrary: {{path: ttobench}}\nsupplement_percent: 10\npoints: 150\n"
+                     f"output: {tmp_path / 'out'}\n")
+    r = CliRunner().invoke(app, ["run", str(study), "--no-progress"])
+    assert r.exit_code == 0, r.output
+    table = pd.read_csv(tmp_path / "out" / "results.csv")
+    assert list(zip(table["track"], table["from"], table["to"])) == [("T1", "S0", "S1"), ("T1", "S1", "S2")]
+    assert (table["status"] == "ok").all() and table["verified"].all()
+    skipped = pd.read_csv(tmp_path / "out" / "skipped.csv")
+    assert skipped.to_dict("records") == [{"track": "T2", "train": "subway",
+                                          "reason": "top speed 80 km/h below 60% of the line's 200 km/h"}]
+    r = CliRunner().invoke(app, ["run", str(study), "--no-progress"])  # resumable: nothing computed again
+    assert "0 computed now" in r.output.replace("2 already stored, ", "")

@@ -131,3 +131,35 @@ def test_journey_with_timing_windows_keeps_them_where_the_splits_do_not(tmp_path
     # without the windows the same total time needs no more energy: the windows' price
     assert (totals.loc["whole-journey NLP", "traction_energy_kWh"]
             <= totals.loc["timing windows NLP", "traction_energy_kWh"] * (1 + 1e-6))
+
+
+def test_departure_windows_in_the_journey_nlp_and_unreachable_points_refused(tmp_path):
+    """A station as TTOBench writes it (arrival window, then departure window at one position):
+    the journey NLP departs inside the departure window, after the arrival; timing points no run
+    can keep are refused before any NLP, naming both points and the fastest time between them."""
+    import json
+
+    from ecostudy.core.errors import InfeasibleError
+    from ecostudy.io.loaders import load_timetable, load_track, load_train
+    from ecostudy.io.timetable import journey_plan, name_stops
+    from ecostudy.studies.journey import windowed_journey
+
+    from .conftest import STUDIES
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    doc = json.loads((STUDIES / "timetables" / JOURNEY).read_text())
+    rows = doc["timing points"]["values"]
+    rows[1:] = [[650, 50, 70, 0, 0], [650, 95, 100, 0, 0], [2100, 190, 215, 0, 0]]  # Station, then Centrum
+    path = tmp_path / "j.json"
+    path.write_text(json.dumps(doc))
+    tt, trk = name_stops(load_timetable(path), track, path)
+    plan = journey_plan(tt, trk, path)
+    times, departures = windowed_journey(trk, train, plan, 120)
+    tol = 1e-4  # Ipopt's tolerance on the scaled clock constraints
+    assert 95 - tol <= departures[1] <= 100 + tol and departures[1] >= times[0] - tol
+    assert 50 - tol <= times[0] <= 70 + tol and 190 - tol <= departures[1] + times[1] <= 215 + tol
+    rows[-1] = [2100, 100, 120, 0, 0]  # 1450 m in at most 25 s after leaving at 95 s: impossible
+    path.write_text(json.dumps(doc))
+    tt, trk = name_stops(load_timetable(path), track, path)
+    with pytest.raises(InfeasibleError, match=r"the departure from Station \(not before 95 s\) and the arrival at "
+                                              r"Centrum \(not after 120 s\) leave 25 s; the fastest run between them"):
+        windowed_journey(trk, train, journey_plan(tt, trk, path), 120)
