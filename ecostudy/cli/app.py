@@ -5,6 +5,7 @@ verification), 2 bad input or infeasible request, 3 solver failure or internal e
 interrupted. ``--debug`` shows tracebacks.
 """
 import math
+import traceback
 import warnings
 from contextlib import contextmanager
 from enum import Enum
@@ -44,14 +45,15 @@ def guarded(debug, fn, *args, **kwargs):
             return fn(*args, **kwargs)
         except EcostudyError as exc:
             if debug:
-                raise
+                traceback.print_exc()
             fail(exc, exc.exit_code)
         except (KeyboardInterrupt, typer.Exit):
             raise
         except Exception as exc:  # an unexpected failure still gets one line by default
             if debug:
-                raise
-            fail(f"internal error: {type(exc).__name__}: {exc} (rerun with --debug for the traceback)", 3)
+                traceback.print_exc()
+            fail(f"internal error: {type(exc).__name__}: {exc}" + ("" if debug else " (rerun with --debug for the "
+                                                                     "traceback)"), 3)
         finally:
             for w in caught:
                 typer.secho(f"warning: {w.message}", fg=typer.colors.YELLOW, err=True)
@@ -85,12 +87,27 @@ def check_options(**values):
         raise InputError(lines)
 
 
-def parse_pair(text, option):
+def parse_pair(text, option, ordered=False, nonnegative=False):
+    """Two finite numbers 'a,b'; ``ordered``: a <= b; ``nonnegative``: both >= 0, not both 0."""
     try:
         a, b = (float(x) for x in text.split(","))
-        return a, b
     except ValueError:
         raise InputError(problem("command line", option, f"expected two numbers 'a,b', got '{text}'"))
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise InputError(problem("command line", option, f"must be finite numbers, not '{text}'"))
+    if ordered and not 0 <= a <= b:
+        raise InputError(problem("command line", option, f"must be 'earliest,latest' with 0 <= earliest <= latest, "
+                                 f"not '{text}'"))
+    if nonnegative and (a < 0 or b < 0 or a == b == 0):
+        raise InputError(problem("command line", option, f"must be two weights >= 0, not both 0, not '{text}'"))
+    return a, b
+
+
+def only_one(**options):
+    """Refuse two options that each set the same thing (one would be ignored)."""
+    given = ["--" + name.replace("_", "-") for name, value in options.items() if value is not None]
+    if len(given) > 1:
+        raise InputError(problem("command line", "/".join(given), "give only one: each sets the running time"))
 
 
 @contextmanager

@@ -15,10 +15,11 @@ def _network(study_path, out, no_plot):
     from ecostudy.analysis.single import solve_run
     from ecostudy.core.types import Timing
     from ecostudy.io.loaders import load_network_study
-    from ecostudy.io.writers import atomic_write, write_csv, write_json
+    from ecostudy.io.writers import atomic_write, check_output_dir, write_csv, write_json
     from ecostudy.network import fleet, strategies
     import pandas as pd
     st = load_network_study(study_path)
+    out_dir = check_output_dir(Path(out) if out else st.output)
     pairs = list(zip(st.stops[:-1], st.stops[1:]))
     times = st.running_times
     if times is None:  # per segment: all-out time plus the supplement
@@ -29,7 +30,6 @@ def _network(study_path, out, no_plot):
     typer.echo(f"{len(st.names)} trains, {len(pairs)} segments ({', '.join(f'{t:.1f}' for t in times)} s "
                f"before rounding to {st.dt} s steps), {fl.steps} steps")
     outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo)
-    out_dir = Path(out) if out else st.output
     base = outcome.get("independent", {}).get("totals", {}).get("substation_kWh")
     subs, trains = [], []
     failed = {n: r for n, r in outcome.items() if "failed" in r}

@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, Objective, app, check_options, guarded, parse_pair
+from ecostudy.cli.app import DasMethod, Objective, app, check_options, guarded, only_one, parse_pair
 from ecostudy.core.errors import InputError, problem
 
 
@@ -52,12 +52,19 @@ def _report(result, out_dir):
 def _solve(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights,
            points, out, no_plot, das=None, das_time_limit=60.0):
     check_options(time=time, supplement=supplement, points=points, das_time_limit=das_time_limit)
+    only_one(time=time, supplement=supplement, window=window)
+    if objective is not None and objective.value == "time" and any(x is not None for x in (time, supplement, window)):
+        raise InputError(problem("command line", "--objective time", "finds the fastest run: it takes no --time, "
+                                 "--supplement or --window"))
+    if weights is not None and (objective is None or objective.value != "mixed"):
+        raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
     from ecostudy.analysis.single import solve_run
     from ecostudy.core import units
     from ecostudy.core.types import Timing
     from ecostudy.das.methods import das_run
     from ecostudy.io.loaders import chosen_stops, load_study, load_track, load_train
-    from ecostudy.io.writers import write_json
+    from ecostudy.io.results import file_digest
+    from ecostudy.io.writers import check_output_dir, write_json
     from ecostudy.report.files import write_run
     if study is not None:
         if track or train:
@@ -82,17 +89,16 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
         f, t = chosen_stops(trk, from_stop, to_stop, "command line")
         given = sum(x is not None for x in (time, supplement, window))
         obj = objective.value if objective is not None else "energy"
-        if given > 1:
-            raise InputError(problem("command line", "--time/--supplement/--window", "give only one"))
         if given == 0 and obj != "time" and obj != "mixed":
             raise InputError(problem("command line", "--time", "give --time, --supplement or --window "
                                      "(or --objective time for the all-out run)"))
         timing = Timing(running_time=time, supplement=None if supplement is None else supplement * units.PERCENT,
-                        window=parse_pair(window, "--window") if window else None)
-        w = parse_pair(weights, "--weights") if weights else (1.0, 1.0)
+                        window=parse_pair(window, "--window", ordered=True) if window else None)
+        w = parse_pair(weights, "--weights", nonnegative=True) if weights else (1.0, 1.0)
         k = points or 1000
         out_dir = Path(out) if out else Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_")
     windows = st.windows if study is not None else ()
+    check_output_dir(out_dir, ("profile.csv", "summary.json", "speed.png", "inputs.json"))
     result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
     if das is not None:
         if windows and das.value != "round":
@@ -103,6 +109,7 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
     write_run(result, out_dir, plot=not no_plot)
     paths = (st_paths if study is not None else (Path(track), Path(train)))
     write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
+                                         "track_sha256": file_digest(paths[0]), "train_sha256": file_digest(paths[1]),
                                          "from": f, "to": t, "points": k})
     _report(result, out_dir)
     return result

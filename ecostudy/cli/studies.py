@@ -7,8 +7,15 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, app, case_progress, check_options, guarded
+from ecostudy.cli.app import DasMethod, app, case_progress, check_options, guarded, only_one
 from ecostudy.core.errors import InputError, problem
+
+
+def no_windows(st, command):
+    """Refuse a study's timing windows where ``command`` would ignore them."""
+    if st is not None and (st.windows or st.timing.window is not None):
+        raise InputError(problem(str(st.name), "windows/window_s", f"{command} does not keep timing windows yet; "
+                                 "use `ecostudy solve` (or remove the windows)"))
 
 
 def _case_from(study, track, train, from_stop, to_stop, points):
@@ -29,15 +36,18 @@ def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, poin
     check_options(count=count, supplement_max=supplement_max, points=points, workers=workers, weighted=weighted,
                   das_time_limit=das_time_limit)
     from ecostudy.core import units
+    from ecostudy.io.writers import check_output_dir
     from ecostudy.report.files import write_front
     from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
+    no_windows(st, "pareto")
     k = k or 500
     if count < 2:
         raise InputError(problem("command line", "--count", "need at least 2 points"))
     if supplement_max <= 0:
         raise InputError(problem("command line", "--supplement-max", "must be > 0 (per cent)"))
     out_dir = Path(out) if out else (st.output.parent / (st.output.name + "_pareto") if st else Path("out") / "pareto")
+    check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png"))
     table, results = sweep(trk, trn, f, t, count=count, supplement_max=supplement_max * units.PERCENT,
                            points=k, workers=workers, warm=not cold)
     meta = front_meta(table, {"track": trk.name, "train": trn.name, "from": f, "to": t}, k, count, workers, not cold)
@@ -93,11 +103,13 @@ def pareto(
 
 def _compare(study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot):
     check_options(time=time, supplement=supplement, points=points)
+    only_one(time=time, supplement=supplement)
     from ecostudy.core import units
     from ecostudy.core.types import Timing
-    from ecostudy.io.writers import atomic_write, write_csv
+    from ecostudy.io.writers import atomic_write, check_output_dir, write_csv
     from ecostudy.studies.compare import compare
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
+    no_windows(st, "compare")
     if time is not None or supplement is not None:
         timing = Timing(running_time=time, supplement=None if supplement is None else supplement * units.PERCENT)
     elif st is not None:
@@ -105,6 +117,7 @@ def _compare(study, track, train, from_stop, to_stop, time, supplement, points, 
     else:
         raise InputError(problem("command line", "--time", "give --time or --supplement"))
     out_dir = Path(out) if out else (st.output.parent / (st.output.name + "_compare") if st else Path("out") / "compare")
+    check_output_dir(out_dir, ("compare.csv", "compare.png"))
     table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000)
     write_csv(out_dir / "compare.csv", table)
     if not no_plot:
@@ -133,6 +146,8 @@ def compare_command(
     """Strategies side by side: all-out, ATO optimum, eco-drive coasting, DAS round (simulated)."""
     table = guarded(debug, _compare, study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot)
     if not table.attrs["verified"]:
+        typer.secho("flagged: the ATO optimum is not verified optimal (its re-simulation or Ipopt's status; see "
+                    "compare.csv)", fg=typer.colors.YELLOW, err=True)
         raise typer.Exit(1)
 
 
@@ -155,7 +170,7 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
     from ecostudy.core import units
     from ecostudy.io.loaders import load_timetable, load_track, load_train, timing_from_timetable
     from ecostudy.io.timetable import journey_plan, name_stops
-    from ecostudy.io.writers import atomic_write, write_csv
+    from ecostudy.io.writers import atomic_write, check_output_dir, write_csv
     from ecostudy.studies.journey import journey
     tt = load_timetable(timetable) if timetable is not None else None
     trk, trn = load_track(track if track is not None else associated_track(tt, timetable)), load_train(train)
@@ -180,10 +195,11 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
     if scheduled is None and plan is None and (time is None) == (supplement is None):
         raise InputError(problem("command line", "--time/--supplement",
                                  "give one total running time or supplement, or --timetable"))
+    out_dir = check_output_dir(Path(out) if out else Path("out") / "journey",
+                               ("journey.csv", "journey_totals.csv", "journey.png"))
     table, totals, results, _ = journey(trk, trn, names, total_time=time,
                                         supplement=None if supplement is None else supplement * units.PERCENT,
                                         points=points, workers=workers, scheduled=scheduled, plan=plan)
-    out_dir = Path(out) if out else Path("out") / "journey"
     write_csv(out_dir / "journey.csv", table)
     write_csv(out_dir / "journey_totals.csv", totals)
     if not no_plot:
@@ -225,6 +241,10 @@ def journey_command(
     table = guarded(debug, _journey, track, train, stops, time, supplement, timetable, dwell, points, workers, out,
                     no_plot)
     if not table["verified"].all():
+        bad = table[~table["verified"]]
+        typer.secho("flagged: not verified by the re-simulation: " + ", ".join(
+            f"{r['distribution']} {r['from']}-{r['to']}" for _, r in bad.iterrows()) + " (journey.csv)",
+            fg=typer.colors.YELLOW, err=True)
         raise typer.Exit(1)
 
 

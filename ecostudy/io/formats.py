@@ -12,8 +12,6 @@ The result is a dict in the YAML schema, validated afterwards like any YAML file
 """
 import math
 
-import numpy as np
-
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
 from ecostudy.io.osrd import osrd_train

@@ -3,14 +3,11 @@
 Every problem becomes one line ``file: field: what is wrong``; all problems of a file are
 reported together (:class:`ecostudy.errors.InputError`).
 """
-import json
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import yaml
-from pydantic import ValidationError
 
 from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
@@ -24,6 +21,7 @@ from ecostudy.io.formats import (
     train_document_to_schema,
 )
 from ecostudy.io.timetable import name_stops, window_si
+from ecostudy.io.documents import read_document, validate  # noqa: F401  (read_document: re-exported)
 
 
 def windows_from_schema(windows, track, from_stop, to_stop, where):
@@ -57,56 +55,6 @@ class Study:
     track_path: Path | None = None
     train_path: Path | None = None
     windows: tuple = ()
-
-
-# --------------------------------------------------------------------------- reading files
-def read_document(path):
-    """Parse a YAML or JSON file into Python data; malformed files raise one-line errors."""
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(problem(path, "", "file not found"))
-    text = path.read_text()
-    try:
-        if path.suffix.lower() == ".json":
-            data = json.loads(text)
-        else:
-            data = yaml.safe_load(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(problem(path, "", f"malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"))
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1} column {mark.column + 1}" if mark else ""
-        raise InputError(problem(path, "", f"malformed YAML{where}: {getattr(exc, 'problem', exc)}"))
-    if not isinstance(data, dict):
-        raise InputError(problem(path, "", "expected a mapping of fields at the top level"))
-    return data
-
-
-def _field_path(loc):
-    out = ""
-    for part in loc:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        else:
-            out += ("." if out else "") + str(part)
-    return out
-
-
-def validate(schema, data, path):
-    """Validate ``data`` against a schema; every pydantic error becomes one problem line."""
-    try:
-        return schema.model_validate(data)
-    except ValidationError as exc:
-        lines = []
-        for err in exc.errors():
-            loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]
-            msg = err["msg"].removeprefix("Value error, ")
-            if err["type"] == "extra_forbidden":
-                msg = "unknown field"
-            elif err["type"] == "missing":
-                msg = "missing field"
-            lines.append(problem(path, _field_path(loc) or "(top level)", msg))
-        raise InputError(lines)
 
 
 # --------------------------------------------------------------------------- conversions

@@ -1,5 +1,6 @@
 """Reading back the output folder of `ecostudy solve`: its inputs, its summary and its profile as
 an SI :class:`~ecostudy.core.types.Trajectory` (the display units converted here)."""
+import hashlib
 import json
 from pathlib import Path
 from typing import NamedTuple
@@ -10,6 +11,30 @@ import pandas as pd
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.types import Trajectory
 from ecostudy.core.units import KMH, KN
+
+
+def file_digest(path):
+    """SHA-256 of a file's bytes (of ``file#selector``: of the file), to tell whether it changed."""
+    text = str(path)
+    path = Path(text.rsplit("#", 1)[0] if "#" in text and not Path(text).is_file() else text)
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def check_unchanged(inputs, result_dir):
+    """Refuse a saved run whose track or train file changed since it was solved (``inputs.json``
+    keeps their digests): checking it against the edited file would check another problem."""
+    for name in ("track", "train"):
+        digest = inputs.get(f"{name}_sha256")
+        if digest is None:
+            raise InputError(problem(Path(result_dir) / "inputs.json", f"{name}_sha256", "missing: solved by an older "
+                                     "ecostudy, whose inputs cannot be told unchanged; solve again"))
+        try:
+            now = file_digest(inputs[name])
+        except OSError:
+            raise InputError(problem(inputs[name], "", f"the {name} file of this result is gone"))
+        if now != digest:
+            raise InputError(problem(inputs[name], "", f"the {name} file changed since this result was solved; "
+                                     "solve again"))
 
 
 class SavedRun(NamedTuple):

@@ -1,9 +1,22 @@
-"""The base of every file schema: frozen pydantic models that refuse unknown keys."""
-from pydantic import BaseModel, ConfigDict
+"""The base of every file schema: frozen pydantic models that refuse unknown keys, NaN and
+infinity (unless a field says otherwise) and true/false where a number is meant."""
+import typing
+
+from pydantic import BaseModel, ConfigDict, field_validator
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True, allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_boolean_numbers(cls, value, info):
+        """YAML's ``true`` is 1 to pydantic: refuse it for any field that is not a boolean."""
+        if isinstance(value, bool) and info.field_name in cls.model_fields:
+            annotation = cls.model_fields[info.field_name].annotation
+            if annotation is not bool and bool not in typing.get_args(annotation):
+                raise ValueError("expected a number or text, not true/false")
+        return value
 
 
 def increasing(values, what):

@@ -5,7 +5,7 @@ Cross-field rules that concern one file live here as validators; rules that need
 functions in :mod:`ecostudy.io.loaders`.
 """
 import math
-from typing import Literal, Optional
+from typing import Annotated, Literal, Optional
 
 from pydantic import Field, model_validator
 
@@ -31,9 +31,9 @@ class Curve(Strict):
     position_m: float = Field(ge=0)
     radius_m: Optional[float] = Field(None, description="Radius [m] at the start, signed by direction "
                                       "(TTOBench: positive right, negative left); null for straight track.")
-    end_radius_m: Optional[float] = Field(None, description="Radius [m] at the end of a clothoid (curvature "
-                                          "linear in distance between the two; .inf: ends straight); "
-                                          "omitted: constant radius.")
+    end_radius_m: Optional[float] = Field(None, allow_inf_nan=True, description="Radius [m] at the end of a "
+                                          "clothoid (curvature linear in distance between the two; .inf: ends "
+                                          "straight); omitted: constant radius.")
 
     @model_validator(mode="after")
     def _radii(self):
@@ -192,15 +192,19 @@ class Scenario(Strict):
 class Sweep(Strict):
     """Values to combine (cartesian product) with every scenario."""
 
-    running_time_s: Optional[list[float]] = None
-    supplement_percent: Optional[list[float]] = None
-    points: Optional[list[int]] = None
-    objective: Optional[list[Literal["energy", "net_energy", "time", "mixed"]]] = None
+    running_time_s: Optional[list[Annotated[float, Field(gt=0)]]] = Field(None, min_length=1)
+    supplement_percent: Optional[list[Annotated[float, Field(ge=0)]]] = Field(None, min_length=1)
+    points: Optional[list[Annotated[int, Field(ge=10, le=100000)]]] = Field(None, min_length=1)
+    objective: Optional[list[Literal["energy", "net_energy", "time", "mixed"]]] = Field(None, min_length=1)
 
     @model_validator(mode="after")
     def _timing(self):
         if self.running_time_s is not None and self.supplement_percent is not None:
             raise ValueError("sweep either running_time_s or supplement_percent, not both")
+        for name in ("running_time_s", "supplement_percent", "points", "objective"):
+            values = getattr(self, name)
+            if values is not None and len(set(values)) != len(values):
+                raise ValueError(f"{name}: a value given twice would be the same case twice")
         return self
 
 
@@ -300,7 +304,7 @@ class NetworkStudyFile(Strict):
     time_step_s: float = Field(0.5, gt=0, le=5)
     trains: list[FleetTrain] = Field(min_length=1)
     substation: Substation
-    strategies: list[Literal[STRATEGIES]] = Field(default_factory=lambda: list(STRATEGIES))
+    strategies: list[Literal[STRATEGIES]] = Field(default_factory=lambda: list(STRATEGIES), min_length=1)
     buffer_m: Optional[float] = Field(None, gt=0, description="Separation kept by `following` (thesis 001 eq. 6.9).")
     points: int = Field(500, ge=10, le=100000, description="Space grid of the per-segment starting runs.")
     output: Optional[str] = None

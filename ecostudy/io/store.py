@@ -4,10 +4,14 @@ Each finished case is one row, written in its own transaction by the one process
 results, so an interrupted run (Ctrl-C, kill -9) keeps every case finished before it and never a
 half-written one. Rows are keyed by the case hash (:func:`ecostudy.study.case_key`).
 """
+import fcntl
 import json
 import sqlite3
 import time
+import warnings
 from pathlib import Path
+
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS cases (
@@ -19,19 +23,43 @@ CREATE TABLE IF NOT EXISTS cases (
 )"""
 
 
+COLUMNS = ["key", "study", "scenario", "labels", "status", "error", "summary", "seconds", "finished"]
+
+
 class Store:
+    """The store of one output folder, locked for the one process that writes it; a file that is
+    not such a store (corrupt, truncated, foreign) is refused by name with how to recover."""
+
     def __init__(self, path):
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.conn = sqlite3.connect(self.path)
-        self.conn.execute("PRAGMA journal_mode=WAL")
-        self.conn.execute(SCHEMA)
-        self.conn.commit()
+        self.lock = open(self.path.with_name(self.path.name + ".lock"), "w")
+        try:
+            fcntl.flock(self.lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            self.lock.close()
+            raise InputError(problem(self.path, "", "another ecostudy run is writing this store: wait for it to "
+                                     "finish, or give another --out"))
+        try:
+            self.conn = sqlite3.connect(self.path)
+            self.conn.execute("PRAGMA journal_mode=WAL")
+            self.conn.execute(SCHEMA)
+            self.conn.commit()
+            columns = [row[1] for row in self.conn.execute("PRAGMA table_info(cases)")]
+        except sqlite3.DatabaseError as exc:
+            self.lock.close()
+            raise InputError(problem(self.path, "", f"not a readable ecostudy store ({exc}): move it away to start "
+                                     "afresh (its finished cases are then computed again)"))
+        if columns != COLUMNS:
+            self.close()
+            raise InputError(problem(self.path, "cases", "a table of another program or version (columns "
+                                     f"{', '.join(columns)}): move the file away to start afresh"))
 
     def finished_keys(self, retry_failed=False):
         """Keys with a stored result (without failed ones when they are to be retried)."""
         query = "SELECT key FROM cases" + (" WHERE status != 'failed'" if retry_failed else "")
-        return {row[0] for row in self.conn.execute(query)}
+        keys = {row[0] for row in self.conn.execute(query)}
+        return set(self.get(keys))  # a damaged row is dropped there: its case is computed again
 
     def put(self, case, result):
         """Store one case's result atomically (replacing an earlier failure)."""
@@ -47,10 +75,18 @@ class Store:
         for key in keys:
             row = self.conn.execute("SELECT key, scenario, labels, status, error, summary, seconds FROM cases "
                                     "WHERE key = ?", (key,)).fetchone()
-            if row:
+            if not row:
+                continue
+            try:
                 out[key] = {"key": row[0], "scenario": row[1], "labels": json.loads(row[2]), "status": row[3],
                             "error": row[4], "summary": json.loads(row[5]) if row[5] else None, "seconds": row[6]}
+            except (TypeError, ValueError):  # one damaged row: that case is computed again, the others kept
+                warnings.warn(problem(self.path, f"case {key}", "damaged row: the case is computed again"),
+                              EcostudyWarning, stacklevel=2)
+                self.conn.execute("DELETE FROM cases WHERE key = ?", (key,))
+                self.conn.commit()
         return out
 
     def close(self):
         self.conn.close()
+        self.lock.close()

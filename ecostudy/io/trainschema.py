@@ -89,7 +89,7 @@ class Regeneration(Strict):
 
     max_force_kN: Optional[float] = Field(None, gt=0)
     max_power_kW: Optional[float] = Field(None, gt=0)
-    efficiency: float = Field(0.8, gt=0, le=1, description="Wheel to line [-].")
+    efficiency: float = Field(0.8, ge=0.05, le=1, description="Wheel to line [-], a share (0.8), not per cent.")
     efficiency_map: Optional[EfficiencyTable] = Field(None, description="Efficiency over speed and force "
                                                       "instead of the constant (net energy and its check).")
 
@@ -132,14 +132,15 @@ class TunnelResistance(Strict):
 class TrainFile(Strict):
     name: str
     source: str = Field(description="Where the numbers come from.")
-    mass_t: float = Field(gt=0, description="Static mass Ms [t].")
+    mass_t: float = Field(ge=1, le=100000, description="Static mass Ms [t] (1 t to 100 000 t).")
     rotating_mass_factor: Optional[float] = Field(None, ge=0, description="M = Ms (1 + factor).")
     effective_mass_t: Optional[float] = Field(None, gt=0, description="Effective mass M [t].")
     length_m: float = Field(ge=0, description="Train length [m]; 0 for a point mass.")
     davis: Davis
     traction: Traction
     braking: Braking
-    traction_efficiency: float = Field(1.0, gt=0, le=1, description="Wheel work per line energy [-].")
+    traction_efficiency: float = Field(1.0, ge=0.05, le=1, description="Wheel work per line energy [-], a share "
+                                       "(0.85), not per cent.")
     traction_efficiency_map: Optional[EfficiencyTable] = Field(
         None, description="Efficiency over speed and force instead of the constant (net energy and its check; "
         "formulations that cannot use it keep traction_efficiency and say so).")
@@ -175,4 +176,9 @@ class TrainFile(Strict):
     def _levels(cls, v):
         if any(x < -1 or x > 1 for x in v):
             raise ValueError("handle levels must lie in [-1, 1]")
+        if len(set(v)) != len(v):
+            raise ValueError("handle levels must differ")
+        if min(v) >= 0 or max(v) <= 0:
+            raise ValueError("need a braking level (< 0) and a traction level (> 0): advice cannot stop or start "
+                             "otherwise")
         return sorted(v)

@@ -5,6 +5,36 @@ import os
 import tempfile
 from pathlib import Path
 
+from ecostudy.core.errors import InputError, problem
+
+
+def _umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+FILE_MODE = 0o666 & ~_umask()  # what open() would give: the user's umask, not mkstemp's 0600
+
+
+def check_output_dir(path, files=()):
+    """Refuse, before any computation, an output folder that is a file, cannot be created or
+    written, or holds a folder where one of ``files`` goes: one line naming it (exit 2)."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise InputError(problem(path, "", "the output folder is a file"))
+    for name in files:
+        if (path / name).is_dir():
+            raise InputError(problem(path / name, "", "is a folder where an output file goes"))
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".write-test", dir=path)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise InputError(problem(path, "", f"cannot write the output folder ({exc.strerror})"))
+    return path
+
 
 def atomic_write(path, write):
     """Call ``write(tmp_path)`` then rename onto ``path``: readers never see half a file."""
@@ -14,6 +44,7 @@ def atomic_write(path, write):
     os.close(fd)
     try:
         write(tmp)
+        os.chmod(tmp, FILE_MODE)
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):

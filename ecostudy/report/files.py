@@ -17,7 +17,17 @@ def write_run(result, out_dir, plot=True):
     if plot:
         from ecostudy.report.plots import speed_plot
         atomic_write(out_dir / "speed.png", lambda tmp: speed_plot(result, tmp))
+    stale(out_dir, advice=result.das is None, plot=not plot, names={"advice": ["advice.csv"], "plot": ["speed.png"]})
     return out_dir
+
+
+def stale(out_dir, names, **drop):
+    """Remove files an earlier run left that this one does not write (``names[kind]`` where
+    ``drop[kind]``), so a folder never mixes the files of two runs."""
+    for kind, files in names.items():
+        if drop.get(kind):
+            for name in files:
+                (Path(out_dir) / name).unlink(missing_ok=True)
 
 
 def write_front(table, results, out_dir, meta, plot=True, weighted=None):
@@ -35,4 +45,6 @@ def write_front(table, results, out_dir, meta, plot=True, weighted=None):
         picks = sorted(set(np.linspace(0, len(results) - 1, min(5, len(results))).round().astype(int)))
         atomic_write(out_dir / "pareto_profiles.png",
                      lambda tmp: profiles_plot([results[i] for i in picks], tmp, title))
+    stale(out_dir, weighted=weighted is None, plot=not plot,
+          names={"weighted": ["pareto_weighted.csv"], "plot": ["pareto.png", "pareto_profiles.png"]})
     return out_dir

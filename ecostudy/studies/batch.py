@@ -4,10 +4,9 @@ Cases already in the store are skipped; the others run as pure tasks (:func:`run
 their results are stored by this process as they arrive. Failures are results too: an
 infeasible or failed case is stored with its reason and the study goes on.
 """
-import multiprocessing
 import time
 import warnings
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 
 import pandas as pd
 
@@ -18,8 +17,9 @@ from ecostudy.das.methods import das_columns
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.io.store import Store
-from ecostudy.io.writers import write_csv
+from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.studies.cases import case_key, expand
+from ecostudy.studies.workers import worker_pool
 
 _ALL_OUT = {}  # all-out time per (train, track, stops, grid), per process: shared by a scenario's cases
 
@@ -70,8 +70,7 @@ def _serial(todo, task):
 
 
 def _processes(todo, workers, task):
-    ctx = multiprocessing.get_context("fork")  # workers inherit the loaded modules
-    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+    with worker_pool(workers) as pool:
         futures = {pool.submit(task, case): case for case in todo}
         try:
             for future in as_completed(futures):
@@ -126,7 +125,7 @@ def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress
     """
     skipped = []
     study, output, cases = expand(path, skipped)
-    output = out or output
+    output = check_output_dir(out or output, ("results.csv", "results.sqlite", "skipped.csv"))
     if skipped:  # a library's train-track pairs left out, and why
         write_csv(output / "skipped.csv", pd.DataFrame(skipped))
     store = Store(output / "results.sqlite")
@@ -140,6 +139,9 @@ def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress
     return table, counts, output
 
 
+RESULT_COLUMNS = {"running_time_s", "points", "status", "key", "reason", "seconds", "verified"}  # never labels
+
+
 def study_table(cases, store):
     """One row per case of the study, in study order: labels, status, reason and key results."""
     rows = store.get([c["key"] for c in cases])
@@ -148,7 +150,8 @@ def study_table(cases, store):
         row = rows.get(case["key"])
         s = (row or {}).get("summary") or {}
         ver = s.get("verification") or {}
-        out.append({**case["labels"], "key": case["key"], "status": row["status"] if row else "missing",
+        labels = {f"swept_{k}" if k in RESULT_COLUMNS else k: v for k, v in case["labels"].items()}
+        out.append({**labels, "key": case["key"], "status": row["status"] if row else "missing",
                     "reason": (row or {}).get("error"),
                     "running_time_s": s.get("running_time_s"), "all_out_time_s": s.get("all_out_time_s"),
                     "traction_energy_kWh": s.get("traction_energy_kWh"), "net_energy_kWh": s.get("net_energy_kWh"),

@@ -1,7 +1,8 @@
 """`ecostudy check`: the Pontryagin check of a saved result, as its own optimum or for another time."""
 from ecostudy.analysis.pontryagin import check_profile
 from ecostudy.io.loaders import load_track, load_train
-from ecostudy.io.results import load_result
+from ecostudy.core.errors import InputError, problem
+from ecostudy.io.results import check_unchanged, load_result
 
 
 def check_result(result_dir, running_time=None):
@@ -11,6 +12,11 @@ def check_result(result_dir, running_time=None):
     """
     saved = load_result(result_dir)
     inputs = saved.inputs
+    check_unchanged(inputs, result_dir)
+    took = float(saved.trajectory.dt.sum())
+    if running_time is not None and running_time < took - 1e-6:
+        raise InputError(problem("command line", "--time", f"the saved run takes {took:.2f} s: it cannot be the "
+                                 f"optimum for arriving by {running_time:g} s"))
     objective = "net_energy" if saved.summary.get("objective") == "net_energy" else "energy"
     return check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, saved.trajectory,
                          running_time, objective=objective)[0]

@@ -31,7 +31,7 @@ from ecostudy.io.loopfile import SimulateFile
 from ecostudy.ocp.convex import FASTEST, ConvexProgram, ConvexWeights, trapezoid_grid
 from ecostudy.ocp.problem import prepare
 from ecostudy.io.store import Store
-from ecostudy.io.writers import write_csv
+from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.studies.batch import execute
 from ecostudy.studies.cases import case_key
 
@@ -220,7 +220,7 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
 
     Returns a :class:`LoopStudy` (the plots are drawn from it by ``report.loopplots``)."""
     study, output, cases = expand(path)
-    output = Path(out) if out else output
+    output = check_output_dir(Path(out) if out else output, ("runs.csv", "aggregate.csv", "results.sqlite"))
     store = Store(output / "results.sqlite")
     try:
         counts = execute(cases, store, run_loop_case, workers, dask, retry_failed, progress)

@@ -7,9 +7,7 @@ after the chain's first point Ipopt starts from the previous point's primal and 
 (:data:`WARM_START`); a point whose warm start fails is retried as the cold start of a new
 chain. ``workers`` > 1 splits the sweep into contiguous chains solved in forked processes.
 """
-import multiprocessing
 import time
-from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 import pandas as pd
@@ -20,6 +18,7 @@ from ecostudy.core.types import Timing
 from ecostudy.das.methods import das_columns
 from ecostudy.ocp import session
 from ecostudy.ocp.problem import all_out, build, capped_guess, prepare, record
+from ecostudy.studies.workers import worker_pool
 
 # After the first point of a chain, Ipopt starts from the previous point's primal AND dual
 # solution with a small barrier parameter. Measured (bench/bench_pareto.py, docs/benchmarks.md):
@@ -94,8 +93,7 @@ def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, point
     times = t_allout * (1 + supplements)
     chunks = _split(times, max(1, min(workers, len(times))))
     if len(chunks) > 1:
-        ctx = multiprocessing.get_context("fork")  # the workers inherit the loaded modules
-        with ProcessPoolExecutor(max_workers=len(chunks), mp_context=ctx) as pool:
+        with worker_pool(len(chunks)) as pool:
             parts = list(pool.map(_chain, [case] * len(chunks), chunks, [objective] * len(chunks),
                                   [options] * len(chunks), [verify_result] * len(chunks), [warm] * len(chunks)))
     else:
@@ -182,8 +180,7 @@ def das_front(table, results, method="phases", points=None, workers=1, time_limi
     """
     args = [(r, method, points, time_limit) for r in results]
     if workers > 1 and len(results) > 1:
-        ctx = multiprocessing.get_context("fork")
-        with ProcessPoolExecutor(max_workers=min(workers, len(results)), mp_context=ctx) as pool:
+        with worker_pool(min(workers, len(results))) as pool:
             rows = list(pool.map(_das_point, *zip(*args)))
     else:
         rows = [_das_point(*a) for a in args]

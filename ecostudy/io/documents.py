@@ -1,0 +1,73 @@
+"""Reading a file into Python data and validating it against a schema: every problem one line
+``file: field: what is wrong`` (:class:`ecostudy.core.errors.InputError`)."""
+import json
+from pathlib import Path
+
+import yaml
+from pydantic import ValidationError
+
+from ecostudy.core.errors import InputError, problem
+from ecostudy.io.yamlsafe import MAX_DEPTH, MAX_FILE_BYTES, DocumentError, check_depth, load_yaml, unique_keys
+
+
+def read_document(path):
+    """Parse a YAML or JSON file into Python data; malformed files raise one-line errors.
+
+    Refused by name: files that are not UTF-8, too large or nested too deeply, duplicate keys,
+    and YAML 1.1 readings that surprise (``0100`` as octal 64, ``yes``/``on`` as true): see
+    :mod:`ecostudy.io.yamlsafe`."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(problem(path, "", "file not found"))
+    if path.stat().st_size > MAX_FILE_BYTES:
+        raise InputError(problem(path, "", f"file of {path.stat().st_size / 1e6:.0f} MB is larger than the "
+                                 f"{MAX_FILE_BYTES / 1e6:.0f} MB ecostudy reads"))
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(problem(path, "", f"not UTF-8 text (byte {exc.start}: {exc.reason})"))
+    try:
+        if path.suffix.lower() == ".json":
+            data = json.loads(text, object_pairs_hook=unique_keys)
+        else:
+            data = load_yaml(text)
+        check_depth(data)
+    except (DocumentError, RecursionError) as exc:
+        message = str(exc) if isinstance(exc, DocumentError) else f"nested more than {MAX_DEPTH} levels deep"
+        raise InputError(problem(path, getattr(exc, "field", ""), message))
+    except json.JSONDecodeError as exc:
+        raise InputError(problem(path, "", f"malformed JSON at line {exc.lineno} column {exc.colno}: {exc.msg}"))
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1} column {mark.column + 1}" if mark else ""
+        raise InputError(problem(path, "", f"malformed YAML{where}: {getattr(exc, 'problem', exc)}"))
+    if not isinstance(data, dict):
+        raise InputError(problem(path, "", "expected a mapping of fields at the top level"))
+    return data
+
+
+def _field_path(loc):
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        else:
+            out += ("." if out else "") + str(part)
+    return out
+
+
+def validate(schema, data, path):
+    """Validate ``data`` against a schema; every pydantic error becomes one problem line."""
+    try:
+        return schema.model_validate(data)
+    except ValidationError as exc:
+        lines = []
+        for err in exc.errors():
+            loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]
+            msg = err["msg"].removeprefix("Value error, ")
+            if err["type"] == "extra_forbidden":
+                msg = "unknown field"
+            elif err["type"] == "missing":
+                msg = "missing field"
+            lines.append(problem(path, _field_path(loc) or "(top level)", msg))
+        raise InputError(lines)

@@ -1,0 +1,86 @@
+"""YAML and JSON read without surprises: duplicate keys, YAML 1.1's implicit octal, sexagesimal
+and yes/no/on/off booleans, and over-deep nesting are refused by name instead of read quietly.
+
+``0100`` is 64 in YAML 1.1 (PyYAML) and 100 to a reader; ``on: 3`` has the key True; a key given
+twice keeps the last value. Each of these once turned a mistyped file into a wrong number.
+"""
+import re
+
+import yaml
+
+MAX_DEPTH = 64              # nesting levels of a document
+MAX_FILE_BYTES = 50_000_000
+
+
+class DocumentError(ValueError):
+    """A document ecostudy refuses to read; ``field`` names where."""
+
+    def __init__(self, message, field=""):
+        super().__init__(message)
+        self.field = field
+
+
+_SURPRISING = [
+    (re.compile(r"^[-+]?0[0-7_]+$"), "a number with a leading zero (YAML 1.1 reads it as octal)"),
+    (re.compile(r"^[-+]?0o[0-7_]+$"), "an octal number"),
+    (re.compile(r"^[-+]?[0-9][0-9_]*(:[0-5]?[0-9])+(\.[0-9_]*)?$"), "a sexagesimal number (YAML 1.1 reads 1:30 as 90)"),
+    (re.compile(r"^(?:yes|Yes|YES|no|No|NO|on|On|ON|off|Off|OFF)$"), "a YAML 1.1 boolean word"),
+]
+
+
+class _Loader(yaml.SafeLoader):
+    """SafeLoader that refuses duplicate keys and YAML 1.1 implicit types that surprise."""
+
+
+def _construct_mapping(loader, node, deep=False):
+    loader.flatten_mapping(node)
+    seen, out = set(), {}
+    for key_node, value_node in node.value:
+        key = loader.construct_object(key_node, deep=True)
+        if key in seen:
+            raise DocumentError(f"duplicate key at line {key_node.start_mark.line + 1} (the earlier value would "
+                                "be dropped)", str(key))
+        seen.add(key)
+        out[key] = loader.construct_object(value_node, deep=deep)
+    return out
+
+
+_Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+for _tag in ("tag:yaml.org,2002:int", "tag:yaml.org,2002:bool"):
+    _Loader.add_constructor(_tag, lambda loader, node, _tag=_tag: _checked(loader, node, _tag))
+
+
+def _checked(loader, node, tag):
+    if node.style is None:
+        for pattern, what in _SURPRISING:
+            if pattern.match(node.value):
+                raise DocumentError(f"'{node.value}' at line {node.start_mark.line + 1} is {what}: write it "
+                                    "unambiguously (quote text, drop leading zeros, true/false for booleans)")
+    return yaml.SafeLoader.yaml_constructors[tag](loader, node)
+
+
+def load_yaml(text):
+    """Parse YAML text with :class:`_Loader`."""
+    return yaml.load(text, Loader=_Loader)  # noqa: S506  (a SafeLoader subclass)
+
+
+def unique_keys(pairs):
+    """``object_pairs_hook`` for :func:`json.loads` refusing a key given twice."""
+    out = {}
+    for key, value in pairs:
+        if key in out:
+            raise DocumentError("duplicate key (the earlier value would be dropped)", key)
+        out[key] = value
+    return out
+
+
+def check_depth(data, depth=0):
+    """Refuse documents nested more than :data:`MAX_DEPTH` levels deep."""
+    if depth > MAX_DEPTH:
+        raise DocumentError(f"nested more than {MAX_DEPTH} levels deep")
+    if isinstance(data, dict):
+        for value in data.values():
+            check_depth(value, depth + 1)
+    elif isinstance(data, list):
+        for value in data:
+            check_depth(value, depth + 1)

@@ -1,0 +1,175 @@
+"""Bad input never becomes an internal error or a silent wrong answer (issue 16): one line naming
+the file (or option) and the field, exit status 2, no traceback, nothing computed."""
+import json
+import os
+import sqlite3
+
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+
+from .conftest import TRACKS, TRAINS, load_yaml, write_yaml
+
+METRO, AMS = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml"
+
+
+def run(*args):
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def one_line(result, *fragments, code=2):
+    assert result.exit_code == code, result.output
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert len(lines) == 1 and "Traceback" not in result.output, result.output
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+
+
+def solve_train(tmp_path, text, name="t.yaml"):
+    path = tmp_path / name
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    return run("solve", "--track", AMS, "--train", path, "--time", 80, "--points", 50, "--out", tmp_path / "o",
+               "--no-plot")
+
+
+# ----------------------------------------------------------------------------------- files
+@pytest.mark.parametrize("edit, fragments", [
+    (lambda t: t.encode().replace(b"name:", b"name: \xff", 1), ["t.yaml", "not UTF-8 text"]),
+    (lambda t: t + "\nx: " + "[" * 200 + "]" * 200 + "\n", ["t.yaml", "nested more than 64 levels"]),
+    (lambda t: t + "\nmass_t: 999\n", ["t.yaml: mass_t: duplicate key"]),
+    (lambda t: t.replace("length_m: 90", "length_m: 0100"), ["'0100'", "octal"]),
+    (lambda t: t.replace("length_m: 90", "length_m: 1:30"), ["'1:30'", "sexagesimal"]),
+    (lambda t: t + "\nmax_speed_kmh: yes\n", ["'yes'", "YAML 1.1 boolean"]),
+    (lambda t: t.replace("mass_t: 131.403", "mass_t: true"), ["mass_t", "not true/false"]),
+    (lambda t: t.replace("mass_t: 131.403", "mass_t: .nan"), ["mass_t", "finite number"]),
+    (lambda t: t.replace("mass_t: 131.403", "mass_t: .inf"), ["mass_t", "finite number"]),
+    (lambda t: t.replace("mass_t: 131.403", "mass_t: 0.000001"), ["mass_t", "greater than or equal to 1"]),
+    (lambda t: t.replace("traction_efficiency: 0.85", "traction_efficiency: 0.007"), ["traction_efficiency"]),
+    (lambda t: t + "\ndas_handle_levels: [0.5]\n", ["das_handle_levels", "braking level"]),
+    (lambda t: t + "\ndas_handle_levels: [-1, .nan, 1]\n", ["das_handle_levels[1]", "finite number"]),
+])
+def test_bad_train_files_are_one_line(tmp_path, edit, fragments):
+    one_line(solve_train(tmp_path, edit(METRO.read_text())), *fragments)
+    assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def test_duplicate_json_keys_are_refused(tmp_path):
+    from .conftest import DATA
+    text = (DATA / "ttobench_subway_train.json").read_text()
+    path = tmp_path / "t.json"
+    path.write_text(text.replace('"mass":', '"max speed": {"unit": "km/h", "value": 120}, "mass":'))
+    one_line(run("solve", "--track", AMS, "--train", path, "--time", 80, "--out", tmp_path / "o"),
+             "t.json: max speed: duplicate key")
+
+
+# ----------------------------------------------------------------------------------- options
+@pytest.mark.parametrize("options, fragments", [
+    (["--window", "90,80"], ["--window", "earliest <= latest"]),
+    (["--window", "nan,80"], ["--window", "finite"]),
+    (["--objective", "mixed", "--weights", "-1,1"], ["--weights", ">= 0"]),
+    (["--time", "100", "--weights", "1,2"], ["--weights", "--objective mixed only"]),
+    (["--objective", "time", "--time", "100"], ["--objective time", "takes no --time"]),
+    (["--time", "80", "--supplement", "5"], ["--time/--supplement", "give only one"]),
+    (["--time", "nan"], ["--time", "finite"]),
+    (["--supplement", "-5"], ["--supplement"]),
+    (["--time", "80", "--points", "2"], ["--points", "at least 10"]),
+])
+def test_bad_options_are_refused_before_anything_is_computed(tmp_path, options, fragments):
+    one_line(run("solve", "--track", AMS, "--train", METRO, *options, "--out", tmp_path / "o", "--no-plot"),
+             *fragments)
+    assert not (tmp_path / "o").exists()
+
+
+def test_compare_refuses_two_running_times(tmp_path):
+    one_line(run("compare", "--track", AMS, "--train", METRO, "--time", 80, "--supplement", 5, "--out", tmp_path),
+             "--time/--supplement")
+
+
+# ----------------------------------------------------------------------------------- outputs
+def test_output_folders_are_checked_first_and_files_get_the_umask(tmp_path):
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    one_line(run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--out", afile), "afile",
+             "the output folder is a file")
+    (tmp_path / "o" / "profile.csv").mkdir(parents=True)
+    one_line(run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--out", tmp_path / "o"),
+             "profile.csv", "folder where an output file goes")
+    r = run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--points", 60, "--out", tmp_path / "p",
+            "--das", "round", "--no-plot")
+    assert r.exit_code in (0, 1), r.output
+    mask = os.umask(0)
+    os.umask(mask)
+    assert (os.stat(tmp_path / "p" / "summary.json").st_mode & 0o777) == 0o666 & ~mask
+    assert (tmp_path / "p" / "advice.csv").exists()
+    r = run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--points", 60, "--out", tmp_path / "p",
+            "--no-plot")
+    assert r.exit_code == 0 and not (tmp_path / "p" / "advice.csv").exists()  # no stale advice beside it
+
+
+def test_check_refuses_a_time_below_the_run_and_an_edited_input(tmp_path):
+    train = tmp_path / "t.yaml"
+    train.write_text(METRO.read_text())
+    assert run("solve", "--track", AMS, "--train", train, "--time", 80, "--points", 100, "--out", tmp_path / "o",
+               "--no-plot").exit_code == 0
+    one_line(run("check", tmp_path / "o", "--time", 50), "--time", "takes 80.00 s")
+    assert run("check", tmp_path / "o").exit_code == 0
+    train.write_text(METRO.read_text().replace("mass_t: 131.403", "mass_t: 150"))
+    one_line(run("check", tmp_path / "o"), "t.yaml", "changed since this result was solved")
+
+
+# ----------------------------------------------------------------------------------- studies and stores
+def study(tmp_path, **extra):
+    data = {"name": "s", "track": str(AMS), "train": str(METRO), "running_time_s": 80, "points": 50,
+            "output": str(tmp_path / "out"), **extra}
+    return write_yaml(tmp_path / "s.yaml", data)
+
+
+def test_sweeps_refuse_repeated_values_and_keep_labels_apart(tmp_path):
+    one_line(run("run", study(tmp_path, sweep={"running_time_s": [80, 80]}), "--no-progress"),
+             "running_time_s: a value given twice")
+    one_line(run("run", study(tmp_path, sweep={"running_time_s": []}), "--no-progress"), "running_time_s")
+    r = run("run", study(tmp_path, sweep={"running_time_s": [80, 85.5]}), "--no-progress")
+    assert r.exit_code == 0, r.output
+    import pandas as pd
+    table = pd.read_csv(tmp_path / "out" / "results.csv")
+    assert list(table["swept_running_time_s"]) == [80, 85.5] and "running_time_s" in table
+
+
+def test_a_damaged_store_keeps_its_readable_cases_and_a_foreign_one_is_named(tmp_path):
+    path = study(tmp_path, sweep={"running_time_s": [80, 85]})
+    assert run("run", path, "--no-progress").exit_code == 0
+    db = sqlite3.connect(tmp_path / "out" / "results.sqlite")
+    db.execute("UPDATE cases SET summary = '{broken' WHERE rowid = 1")
+    db.commit()
+    db.close()
+    r = run("run", path, "--no-progress")
+    assert r.exit_code == 0 and "1 already stored, 1 computed now" in r.output and "damaged row" in r.output
+    for name in ("results.sqlite-wal", "results.sqlite-shm"):
+        (tmp_path / "out" / name).unlink(missing_ok=True)
+    (tmp_path / "out" / "results.sqlite").write_text("not a database")
+    one_line(run("run", path, "--no-progress"), "results.sqlite", "not a readable ecostudy store", "move it away")
+    (tmp_path / "out" / "results.sqlite").unlink()
+    db = sqlite3.connect(tmp_path / "out" / "results.sqlite")
+    db.execute("CREATE TABLE cases (id INTEGER, payload TEXT)")
+    db.commit()
+    db.close()
+    one_line(run("run", path, "--no-progress"), "results.sqlite: cases", "another program")
+
+
+def test_a_store_is_locked_while_a_run_writes_it(tmp_path):
+    from ecostudy.core.errors import InputError
+    from ecostudy.io.store import Store
+    store = Store(tmp_path / "results.sqlite")
+    with pytest.raises(InputError, match="another ecostudy run is writing this store"):
+        Store(tmp_path / "results.sqlite")
+    store.close()
+    Store(tmp_path / "results.sqlite").close()
+
+
+def test_network_without_strategies_is_refused(tmp_path):
+    from .conftest import STUDIES
+    data = load_yaml(STUDIES / "network_metro_2trains.yaml")
+    data.update(strategies=[], track=str((STUDIES / data["track"]).resolve()),
+                train=str((STUDIES / data["train"]).resolve()), output=str(tmp_path / "n"))
+    one_line(run("network", write_yaml(tmp_path / "n.yaml", data)), "strategies")
