@@ -173,3 +173,30 @@ def test_network_without_strategies_is_refused(tmp_path):
     data.update(strategies=[], track=str((STUDIES / data["track"]).resolve()),
                 train=str((STUDIES / data["train"]).resolve()), output=str(tmp_path / "n"))
     one_line(run("network", write_yaml(tmp_path / "n.yaml", data)), "strategies")
+
+
+def test_runaway_sizes_and_impossible_layouts_are_refused(tmp_path):
+    from .conftest import STUDIES
+    track = load_yaml(AMS)
+    track["gradients"] = [{"position_m": i * 0.05, "gradient_permille": (i % 3) - 1} for i in range(20001)]
+    one_line(run("solve", "--track", write_yaml(tmp_path / "k.yaml", track), "--train", METRO, "--time", 80,
+                 "--out", tmp_path / "o"), "k.yaml: gradients", "at most 20000")
+    train = load_yaml(METRO)
+    train["length_m"] = 5000
+    one_line(run("solve", "--track", AMS, "--train", write_yaml(tmp_path / "t.yaml", train), "--time", 80,
+                 "--out", tmp_path / "o"), "length_m: 5000 m is longer than track")
+    net = load_yaml(STUDIES / "network_metro_2trains.yaml")
+    net.update(track=str((STUDIES / net["track"]).resolve()), train=str((STUDIES / net["train"]).resolve()))
+    for change, fragment in (({"time_step_s": 1e-6}, "time_step_s"),
+                             ({"trains": [{"name": "a", "offset_s": 0}, {"name": "b", "offset_s": 0}]},
+                              "depart at the same time"),
+                             ({"trains": [{"name": "a", "offset_s": 0}, {"name": "b", "offset_s": 1e7}]}, "offset_s")):
+        one_line(run("network", write_yaml(tmp_path / "n.yaml", {**net, **change})), fragment)
+
+
+def test_journey_and_dask_mistakes_are_input_errors(tmp_path):
+    one_line(run("journey", "--track", TRACKS / "metro_line_4stops.yaml", "--train", METRO, "--time", 100,
+                 "--no-plot", "--out", tmp_path / "j"), "infeasible: the total time 100.0 s is below")
+    path = write_yaml(tmp_path / "s.yaml", {"name": "s", "track": str(AMS), "train": str(METRO),
+                                            "running_time_s": 80, "points": 50, "output": str(tmp_path / "out")})
+    one_line(run("run", path, "--dask", "not-an-address", "--no-progress"), "--dask", "tcp://host:port")

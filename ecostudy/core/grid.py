@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ecostudy.core.errors import EcostudyWarning
+from ecostudy.core.errors import EcostudyWarning, InputError
 
 
 @dataclass(frozen=True)
@@ -140,6 +140,9 @@ def make_segment(track, train, from_stop, to_stop):
     """Cut the track between two stops into travel-direction profiles."""
     warn_unpaired(track, train)
     start, end = track.stops[from_stop], track.stops[to_stop]
+    if train.length > track.length:
+        raise InputError(f"train '{train.name}': length_m: {train.length:g} m is longer than track "
+                         f"'{track.name}' ({track.length:g} m)")
     sign = 1.0 if end >= start else -1.0
     gradient = _directed(track.gradient_positions, track.gradients, start, end)
     gradient = Profile(gradient.starts, sign * gradient.values)

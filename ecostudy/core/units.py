@@ -43,4 +43,4 @@ BY_DIMENSION = {
 
 def si_factor(unit, dimension):
     """[SI] per [unit] for a unit of ``dimension``; None for a unit ecostudy does not know."""
-    return BY_DIMENSION[dimension].get(unit)
+    return BY_DIMENSION[dimension].get(unit) if isinstance(unit, str) else None

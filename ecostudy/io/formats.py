@@ -15,7 +15,7 @@ import math
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
 from ecostudy.io.osrd import osrd_train
-from ecostudy.io.ttobench import ttobench_track, ttobench_train
+from ecostudy.io.ttobench import metadata, ttobench_track, ttobench_train
 
 
 def track_document_to_schema(doc, path):
@@ -34,6 +34,8 @@ def ttobench_journey(doc, path):
     if not isinstance(points, dict) or "values" not in points:
         raise InputError(problem(path, "timing points", "expected {'units': ..., 'values': [...]}"))
     given = points.get("units", {})
+    if not isinstance(given, dict) or not all(isinstance(u, str) for u in given.values()):
+        raise InputError(problem(path, "timing points.units", "expected a mapping of unit names"))
     pos_unit, speed_unit = given.get("position", "m"), given.get("lower speed constraint", "km/h")
     if pos_unit not in _POSITION:
         raise InputError(problem(path, "timing points.units.position", f"expected m or km, got {pos_unit!r}"))
@@ -73,7 +75,7 @@ def ttobench_journey(doc, path):
                             "min_speed_kmh": vlo or None, "max_speed_kmh": vhi})
     if lines:
         raise InputError(lines)
-    meta = doc.get("metadata", {})
+    meta = metadata(doc)
     return {"name": meta.get("id", str(path)),
             "source": f"TTOBench journey {meta.get('id', path)} on track {meta.get('associated track', '?')} "
                       f"({meta.get('library version', 'version not stated')})",

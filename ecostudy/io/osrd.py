@@ -45,11 +45,17 @@ def _curve(doc, path, selector):
         raise InputError(problem(path, "effort_curves", "expected {'modes': {...}, 'default_mode': ...}"))
     mode, _, comfort = (selector or "").partition("/")
     mode, comfort = mode or curves.get("default_mode"), comfort or "STANDARD"
-    if mode not in curves["modes"]:
+    if not isinstance(mode, str) or mode not in curves["modes"]:
         raise InputError(problem(path, "effort_curves.modes", f"no mode {mode!r} (modes: {', '.join(curves['modes'])})"))
     entry = curves["modes"][mode]
+    if not isinstance(entry, dict):
+        raise InputError(problem(path, f"effort_curves.modes.{mode}", "expected a mode with 'curves' and 'default_curve'"))
     chosen, others = None, 0
-    for item in entry.get("curves") or []:
+    listed = entry.get("curves") or []
+    if not isinstance(listed, list) or not all(isinstance(x, dict) and isinstance(x.get("cond") or {}, dict)
+                                               for x in listed):
+        raise InputError(problem(path, f"effort_curves.modes.{mode}.curves", "expected a list of {'cond', 'curve'}"))
+    for item in listed:
         cond = item.get("cond") or {}
         plain = cond.get("electrical_profile_level") is None and cond.get("power_restriction_code") is None
         if plain and cond.get("comfort") == comfort and chosen is None:

@@ -39,8 +39,8 @@ class Curve(Strict):
     def _radii(self):
         for name in ("radius_m", "end_radius_m"):
             r = getattr(self, name)
-            if r is not None and (r == 0 or math.isnan(r)):
-                raise ValueError(f"{name} must be a nonzero number (null or .inf for straight track)")
+            if r is not None and (math.isnan(r) or abs(r) < 10):
+                raise ValueError(f"{name} must be at least 10 m in size (null or .inf for straight track)")
         return self
 
     def curvatures(self):
@@ -57,18 +57,22 @@ class Tunnel(Strict):
 
 class SpeedLimit(Strict):
     position_m: float = Field(ge=0)
-    speed_kmh: float = Field(gt=0)
+    speed_kmh: float = Field(gt=0, le=1000, description="Speed limit [km/h], at most 1000.")
+
+
+MAX_ROWS = 20_000  # sections of one profile: a 2000 km line at 100 m; more is a runaway, not a track
 
 
 class TrackFile(Strict):
     name: str
     source: str
-    length_m: float = Field(gt=0)
-    stops: list[Stop] = Field(min_length=2)
-    gradients: list[Gradient] = Field(default_factory=lambda: [Gradient(position_m=0, gradient_permille=0)])
-    curves: list[Curve] = Field(default_factory=list)
-    speed_limits: list[SpeedLimit] = Field(min_length=1)
-    tunnels: list[Tunnel] = Field(default_factory=list)
+    length_m: float = Field(gt=0, le=2_000_000, description="Track length [m], at most 2000 km.")
+    stops: list[Stop] = Field(min_length=2, max_length=MAX_ROWS)
+    gradients: list[Gradient] = Field(default_factory=lambda: [Gradient(position_m=0, gradient_permille=0)],
+                                      min_length=1, max_length=MAX_ROWS)
+    curves: list[Curve] = Field(default_factory=list, max_length=MAX_ROWS)
+    speed_limits: list[SpeedLimit] = Field(min_length=1, max_length=MAX_ROWS)
+    tunnels: list[Tunnel] = Field(default_factory=list, max_length=MAX_ROWS)
 
     @model_validator(mode="after")
     def _positions(self):
@@ -285,7 +289,8 @@ class Substation(Strict):
 
 class FleetTrain(Strict):
     name: str
-    offset_s: float = Field(ge=0, description="Departure from the first stop after the first train [s].")
+    offset_s: float = Field(ge=0, le=86400, description="Departure from the first stop after the first train [s], "
+                            "within a day.")
 
 
 STRATEGIES = ("independent", "receptivity", "triggering", "voltage", "dissension", "joint", "following")
@@ -301,7 +306,7 @@ class NetworkStudyFile(Strict):
     running_times_s: Optional[list[float]] = Field(None, description="Per segment [s].")
     supplement_percent: Optional[float] = Field(None, ge=0, description="Per segment, over its all-out time.")
     dwell_s: float = Field(20.0, ge=0)
-    time_step_s: float = Field(0.5, gt=0, le=5)
+    time_step_s: float = Field(0.5, ge=0.05, le=5, description="Simulation step [s], 0.05 to 5.")
     trains: list[FleetTrain] = Field(min_length=1)
     substation: Substation
     strategies: list[Literal[STRATEGIES]] = Field(default_factory=lambda: list(STRATEGIES), min_length=1)
@@ -318,4 +323,7 @@ class NetworkStudyFile(Strict):
         names = [t.name for t in self.trains]
         if len(set(names)) != len(names):
             raise ValueError("train names must be unique")
+        offsets = sorted(t.offset_s for t in self.trains)
+        if any(b - a < self.time_step_s for a, b in zip(offsets, offsets[1:])):
+            raise ValueError("two trains depart at the same time (offset_s): they would stand on each other")
         return self

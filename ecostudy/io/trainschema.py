@@ -15,15 +15,15 @@ class ForceTable(Strict):
     @field_validator("speed_kmh")
     @classmethod
     def _speeds(cls, v):
-        if v[0] < 0:
-            raise ValueError("speeds must be >= 0")
+        if v[0] < 0 or v[-1] > 1000:
+            raise ValueError("speeds must lie in [0, 1000] km/h")
         return _increasing(v, "speeds")
 
     @field_validator("force_kN")
     @classmethod
     def _forces(cls, v):
-        if min(v) < 0:
-            raise ValueError("forces must be >= 0")
+        if min(v) < 0 or max(v) > 100000:
+            raise ValueError("forces must lie in [0, 100000] kN")
         return v
 
     @model_validator(mode="after")
@@ -58,8 +58,8 @@ class Traction(Strict):
     """Traction envelope: a table, or a maximum force with an optional maximum power."""
 
     table: Optional[ForceTable] = None
-    max_force_kN: Optional[float] = Field(None, gt=0)
-    max_power_kW: Optional[float] = Field(None, gt=0)
+    max_force_kN: Optional[float] = Field(None, gt=0, le=100000)
+    max_power_kW: Optional[float] = Field(None, gt=0, le=1000000)
 
     @model_validator(mode="after")
     def _one_form(self):
@@ -87,8 +87,8 @@ class Braking(Traction):
 class Regeneration(Strict):
     """Regenerative (electric) braking limits; braking beyond them goes to friction brakes."""
 
-    max_force_kN: Optional[float] = Field(None, gt=0)
-    max_power_kW: Optional[float] = Field(None, gt=0)
+    max_force_kN: Optional[float] = Field(None, gt=0, le=100000)
+    max_power_kW: Optional[float] = Field(None, gt=0, le=1000000)
     efficiency: float = Field(0.8, ge=0.05, le=1, description="Wheel to line [-], a share (0.8), not per cent.")
     efficiency_map: Optional[EfficiencyTable] = Field(None, description="Efficiency over speed and force "
                                                       "instead of the constant (net energy and its check).")
@@ -150,7 +150,7 @@ class TrainFile(Strict):
         "coefficient", description="'coefficient': Ms lambda_t / r (thesis 000 eq. 2.2); 'roeckl': Roeckl's "
         "formula, as ms-eetc (TTOBench's reference implementation) uses it.")
     tunnel_resistance: list[TunnelResistance] = Field(default_factory=list)
-    max_speed_kmh: Optional[float] = Field(None, gt=0, description="The train's top speed: caps every limit.")
+    max_speed_kmh: Optional[float] = Field(None, gt=0, le=1000, description="The train's top speed: caps every limit.")
     max_acceleration_mps2: Optional[float] = Field(None, gt=0, description="Bound on the net acceleration.")
     max_deceleration_mps2: Optional[float] = Field(None, gt=0, description="Bound on the net deceleration "
                                                    "(on top of the braking forces; not the brake itself).")

@@ -39,6 +39,12 @@ ETCS_TRAIN = {"A_brake_emergency": None, "A_brake_service": None, "K_dry_rst": "
 ETCS_TRACK = {"M_NVAVADH": "share", "Kt_int": "share"}
 
 
+def metadata(doc):
+    """The ``metadata`` mapping of a document (an empty one when it is missing or not a mapping)."""
+    meta = doc.get("metadata")
+    return {k: str(v) for k, v in meta.items()} if isinstance(meta, dict) else {}
+
+
 def _convert(value, unit, dimension, path, key):
     factor = units.si_factor(unit, dimension)
     if factor is None:
@@ -116,13 +122,15 @@ def _etcs(doc, path, fields, what):
 
 def ttobench_track(doc, path):
     """A TTOBench track as a track-schema dict (SI converted to the schema's field units)."""
-    meta = doc.get("metadata", {})
+    meta = metadata(doc)
     name = meta.get("id") or str(path)
     _unmodelled(doc, TRACK_FIELDS, path, "track")
     stops = doc.get("stops")
     if not isinstance(stops, dict) or "unit" not in stops or not isinstance(stops.get("values"), list):
         raise InputError(problem(path, "stops", "expected {\"unit\": ..., \"values\": [...]}"))
     positions = [_convert(p, stops["unit"], "length", path, "stops") for p in stops["values"]]
+    if len(positions) < 2:
+        raise InputError(problem(path, "stops", "need at least two stops"))
     limits = table(doc, "speed limits", path, [("position", "length"), ("velocity", "speed")])
     grades = (table(doc, "gradients", path, [("position", "length"), ("slope", "slope")])
               if "gradients" in doc else [[0.0, 0.0]])
@@ -166,7 +174,7 @@ def _braking(doc, path, top, f_reg, p_reg, f_pn):
 
 def ttobench_train(doc, path):
     """A TTOBench train as a train-schema dict, and the field names for messages."""
-    meta = doc.get("metadata", {})
+    meta = metadata(doc)
     name = meta.get("id") or str(path)
     _unmodelled(doc, TRAIN_FIELDS, path, "train")
     top = quantity(doc, "max speed", path, "speed")

@@ -4,6 +4,7 @@ Cases already in the store are skipped; the others run as pure tasks (:func:`run
 their results are stored by this process as they arrive. Failures are results too: an
 infeasible or failed case is stored with its reason and the study goes on.
 """
+import re
 import time
 import warnings
 from concurrent.futures import as_completed
@@ -11,7 +12,7 @@ from concurrent.futures import as_completed
 import pandas as pd
 
 from ecostudy.analysis.single import solve_run
-from ecostudy.core.errors import EcostudyError, EcostudyWarning, InfeasibleError
+from ecostudy.core.errors import EcostudyError, EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.types import Timing
 from ecostudy.das.methods import das_columns
 from ecostudy.io.loaders import track_from_schema, train_from_schema
@@ -87,7 +88,14 @@ def _dask(todo, address, task):
         from distributed import as_completed as dask_completed
     except ImportError:
         raise EcostudyError("--dask needs Dask: pip install 'ecostudy[dask]'") from None
-    with Client(address) as client:
+    if not re.fullmatch(r"(tcp|tls|ucx)://[^\s:/]+:\d{1,5}", address or ""):
+        raise InputError(problem("command line", "--dask", f"expected a scheduler address tcp://host:port, got "
+                                 f"'{address}'"))
+    try:
+        client = Client(address, timeout=15)
+    except (OSError, TimeoutError) as exc:
+        raise InputError(problem("command line", "--dask", f"cannot reach the Dask scheduler at {address} ({exc})"))
+    with client:
         futures = {client.submit(task, case, key=f"ecostudy-{case['key']}", pure=False): case
                    for case in todo}
         try:

@@ -38,7 +38,8 @@ def equal_marginal(fronts, total_time, step=0.05):
     times = [float(f["running_time_s"].iloc[0]) for f in fronts]
     spare = total_time - sum(times)
     if spare < -1e-9:
-        raise ValueError(f"total time {total_time:.1f} s is below the sum of all-out times {sum(times):.1f} s")
+        raise InfeasibleError(f"infeasible: the total time {total_time:.1f} s is below the sum of the all-out "
+                              f"times {sum(times):.1f} s")
 
     # monotone cubic (PCHIP) through each front: the fronts are convex, and straight chords
     # between 15 points put the split 0.6 % above the whole-journey NLP where PCHIP is within 0.1 %
