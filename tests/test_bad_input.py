@@ -200,3 +200,12 @@ def test_journey_and_dask_mistakes_are_input_errors(tmp_path):
     path = write_yaml(tmp_path / "s.yaml", {"name": "s", "track": str(AMS), "train": str(METRO),
                                             "running_time_s": 80, "points": 50, "output": str(tmp_path / "out")})
     one_line(run("run", path, "--dask", "not-an-address", "--no-progress"), "--dask", "tcp://host:port")
+
+
+def test_speed_limits_that_look_like_metres_per_second_are_warned(tmp_path):
+    track = load_yaml(TRACKS / "thesis001_5km_representative.yaml")
+    track["speed_limits"] = [{"position_m": 0, "speed_kmh": 16.0}]  # 16 m/s written as km/h
+    path = write_yaml(tmp_path / "k.yaml", track)
+    from ecostudy.io.loaders import load_track
+    with pytest.warns(UserWarning, match="speed_limits: every limit is below 25 km/h on a 5.0 km line"):
+        load_track(path)

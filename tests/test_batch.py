@@ -192,3 +192,29 @@ def test_a_library_study_runs_every_segment_of_every_fitting_pair(tmp_path):
                                           "reason": "top speed 80 km/h below 60% of the line's 200 km/h"}]
     r = CliRunner().invoke(app, ["run", str(study), "--no-progress"])  # resumable: nothing computed again
     assert "0 computed now" in r.output.replace("2 already stored, ", "")
+
+
+def test_workers_die_with_their_parent(tmp_path):
+    """`run --workers 2` killed with -9: its worker processes end too (prctl PR_SET_PDEATHSIG)
+    instead of computing on, orphaned."""
+    path = study_file(tmp_path, tmp_path / "out")
+    proc = subprocess.Popen([sys.executable, "-m", "ecostudy", "run", str(path), "--workers", "2", "--no-progress"],
+                            cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+    def children():
+        out = subprocess.run(["ps", "-o", "pid=", "--ppid", str(proc.pid)], capture_output=True, text=True).stdout
+        return [int(p) for p in out.split()]
+
+    deadline, workers = time.time() + 60, []
+    while time.time() < deadline and len(workers) < 2:
+        workers = children()
+        time.sleep(0.1)
+    assert len(workers) >= 2, "the workers never started"
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    deadline = time.time() + 20
+    while time.time() < deadline and any(os.path.exists(f"/proc/{p}") and
+                                         "Z" not in open(f"/proc/{p}/stat").read().split()[2] for p in workers):
+        time.sleep(0.1)
+    alive = [p for p in workers if os.path.exists(f"/proc/{p}") and "Z" not in open(f"/proc/{p}/stat").read().split()[2]]
+    assert not alive, f"workers {alive} outlived their parent"

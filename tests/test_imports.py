@@ -227,3 +227,26 @@ def test_efficiency_maps_price_the_net_energy_and_its_check():
     assert isinstance(train_from_dict(poor).traction_efficiency_map, EfficiencyMap)
     assert runs["same"].summary["net_energy_kWh"] == pytest.approx(runs["constant"].summary["net_energy_kWh"], rel=2e-3)
     assert runs["poor"].summary["net_energy_kWh"] > runs["constant"].summary["net_energy_kWh"] * 1.02
+
+
+def test_ttobench_units_are_read_not_assumed(tmp_path):
+    """A TTOBench track whose speed limits are in m/s is converted (before: read as km/h), a unit
+    ecostudy does not know is refused by name, and every train field's unit is honoured."""
+    from ecostudy.core.errors import InputError
+    doc = json.loads((DATA / "ttobench_track.json").read_text())
+    doc["speed limits"] = {"units": {"position": "km", "velocity": "m/s"}, "values": [[0.0, 20.0], [1.0, 25.0]]}
+    (tmp_path / "k.json").write_text(json.dumps(doc))
+    track = load_track(tmp_path / "k.json")
+    assert list(track.limits) == pytest.approx([20.0, 25.0]) and list(track.limit_positions) == [0.0, 1000.0]
+    doc["speed limits"]["units"]["velocity"] = "mph"
+    (tmp_path / "k.json").write_text(json.dumps(doc))
+    with pytest.raises(InputError, match=r"speed limits.values\[0\]: unknown unit 'mph' for a speed"):
+        load_track(tmp_path / "k.json")
+    train = json.loads((DATA / "ttobench_subway_train.json").read_text())
+    train["mass"] = {"unit": "t", "value": 278}
+    train["max traction force"] = {"unit": "N", "value": 310000}
+    train["rolling resistance r2"] = {"unit": "N/(m/s)^2", "value": 28.89}
+    (tmp_path / "t.json").write_text(json.dumps(train))
+    t = load_train(tmp_path / "t.json")
+    assert t.static_mass == pytest.approx(278000) and t.traction.peak == pytest.approx(310000)
+    assert t.davis[2] == pytest.approx(28.89)

@@ -199,8 +199,13 @@ def load_train(path):
 
 
 def load_track(path):
-    """Read a track file (YAML, or TTOBench JSON) into a :class:`Track`."""
-    return track_from_schema(validate(schemas.TrackFile, track_document(path), path))
+    """Read a track file (YAML, or TTOBench JSON) into a :class:`Track`; a line whose every limit is
+    below 25 km/h is warned about (m/s given as km/h?)."""
+    track = track_from_schema(validate(schemas.TrackFile, track_document(path), path))
+    if track.limits.max() < 25 * units.KMH and track.length > 2000:
+        warnings.warn(problem(path, "speed_limits", f"every limit is below 25 km/h on a {track.length / 1000:.1f} km "
+                              "line: check the unit (m/s given as km/h?)"), EcostudyWarning, stacklevel=2)
+    return track
 
 
 def train_from_dict(data, where="train (in code)"):
