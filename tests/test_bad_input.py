@@ -209,3 +209,8 @@ def test_speed_limits_that_look_like_metres_per_second_are_warned(tmp_path):
     from ecostudy.io.loaders import load_track
     with pytest.warns(UserWarning, match="speed_limits: every limit is below 25 km/h on a 5.0 km line"):
         load_track(path)
+
+
+def test_an_output_folder_that_cannot_be_created_is_named_first(tmp_path):
+    one_line(run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--out", "/proc/ecostudy-out"),
+             "/proc/ecostudy-out", "cannot write the output folder")

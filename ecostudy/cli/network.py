@@ -51,6 +51,7 @@ def _network(study_path, out, no_plot):
                                           "steps": fl.steps, "dt_s": st.dt,
                                           "strategies": {**{n: {**r["totals"], **r["info"]} for n, r in outcome.items()},
                                                          **{n: {"status": f"failed: {r['failed']}"} for n, r in failed.items()}}})
+    (out_dir / "network.png").unlink(missing_ok=True)  # never a plot of an earlier run beside these tables
     if not no_plot:
         from ecostudy.report.plots import network_plot
         atomic_write(out_dir / "network.png", lambda tmp: network_plot(fl, outcome, tmp, st.name))

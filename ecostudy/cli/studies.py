@@ -120,6 +120,7 @@ def _compare(study, track, train, from_stop, to_stop, time, supplement, points, 
     check_output_dir(out_dir, ("compare.csv", "compare.png"))
     table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000)
     write_csv(out_dir / "compare.csv", table)
+    (out_dir / "compare.png").unlink(missing_ok=True)  # never a plot of an earlier run beside this table
     if not no_plot:
         from ecostudy.report.plots import compare_plot
         atomic_write(out_dir / "compare.png", lambda tmp: compare_plot(
@@ -202,6 +203,7 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
                                         points=points, workers=workers, scheduled=scheduled, plan=plan)
     write_csv(out_dir / "journey.csv", table)
     write_csv(out_dir / "journey_totals.csv", totals)
+    (out_dir / "journey.png").unlink(missing_ok=True)  # never a plot of an earlier run beside these tables
     if not no_plot:
         from ecostudy.report.plots import journey_plot
         passing = []
