@@ -250,3 +250,31 @@ def test_ttobench_units_are_read_not_assumed(tmp_path):
     t = load_train(tmp_path / "t.json")
     assert t.static_mass == pytest.approx(278000) and t.traction.peak == pytest.approx(310000)
     assert t.davis[2] == pytest.approx(28.89)
+
+
+def test_etcs_service_brake_curve_as_the_braking_envelope(tmp_path):
+    """`train.json#etcs`: a TTOBench train brakes on the service-brake deceleration curve of its
+    `ETCS braking data` (times the effective mass) instead of its brake forces; without the
+    selector the data is checked and reported as not modelled; incomplete data is refused."""
+    from ecostudy.core.errors import InputError
+    doc = json.loads((DATA / "ttobench_subway_train.json").read_text())
+    curve = {"units": {"velocity": "m/s", "deceleration": "m/s^2"}, "values": [[0, 0.55], [20, 0.5], [40, 0.45]]}
+    doc["ETCS braking data"] = {"A_brake_emergency": curve, "A_brake_service": curve,
+                                **{k: {"unit": "-", "value": 0.9} for k in ("K_dry_rst", "K_wet_rst")},
+                                **{k: {"unit": "s", "value": 3} for k in ("T_traction", "T_be", "T_bs")},
+                                "v_uncertainty": {"unit": "%", "value": 2.98}}
+    path = tmp_path / "t.json"
+    path.write_text(json.dumps(doc))
+    with pytest.warns(UserWarning, match="ETCS braking data read and checked, not modelled"):
+        plain = load_train(path)
+    with pytest.warns(UserWarning, match="service-brake deceleration curve .A_brake_service. is the braking envelope"):
+        etcs = load_train(f"{path}#etcs")
+    assert plain.braking.force(10.0) == pytest.approx(260e3, rel=1e-3)  # the regenerative brake
+    assert etcs.braking.force(10.0) == pytest.approx(etcs.mass * 0.525, rel=2e-3)
+    r = solve_run(load_track(DATA / "ttobench_track.json"), etcs, "S0", "S1", Timing(), objective="time", points=300)
+    vm = 0.5 * (r.trajectory.v[1:] + r.trajectory.v[:-1])
+    assert np.all(r.trajectory.fb <= etcs.mass * np.interp(vm, [0, 20, 40], [0.55, 0.5, 0.45]) * 1.003)
+    del doc["ETCS braking data"]["T_bs"]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(InputError, match="ETCS braking data: missing T_bs"):
+        load_train(path)

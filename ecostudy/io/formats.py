@@ -103,7 +103,7 @@ def train_document_to_schema(doc, path, selector=None):
         if "effort_curves" in doc:
             return osrd_train(doc, path, selector)
         if "max traction force" in doc or "rolling resistance r0" in doc:
-            return ttobench_train(doc, path)
+            return ttobench_train(doc, path, selector)
     except KeyError as exc:
         raise InputError(problem(path, str(exc.args[0]), "missing field"))
     raise InputError(problem(path, "", "not a TTOBench or OSRD train (no 'max traction force' or 'effort_curves')"))

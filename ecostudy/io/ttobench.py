@@ -99,25 +99,35 @@ def _unmodelled(doc, known, path, what):
                           EcostudyWarning, stacklevel=3)
 
 
-def _etcs(doc, path, fields, what):
-    """Check ``ETCS braking data`` complete and in known units; warn that it is not modelled."""
+def _etcs(doc, path, fields, what, used=False):
+    """Check ``ETCS braking data`` complete and in known units; warn that it is not modelled
+    (``used``: only the service-brake curve is, as the braking envelope). Returns the service
+    curve [(speed m/s, deceleration m/s^2)] of a train's data."""
     data = doc["ETCS braking data"]
     if not isinstance(data, dict):
         raise InputError(problem(path, "ETCS braking data", "expected a mapping of fields"))
     missing = sorted(set(fields) - set(data))
     if missing:
         raise InputError(problem(path, "ETCS braking data", "missing " + ", ".join(missing)))
+    service = None
     for name, dimension in fields.items():
         if dimension is None:  # a deceleration curve: [velocity, deceleration], both > = 0
             rows = table(data, name, path, [("velocity", "speed"), ("deceleration", "acceleration")])
-            if any(a < 0 or v < 0 for v, a in rows) or any(b[0] <= a[0] for a, b in zip(rows, rows[1:])):
-                raise InputError(problem(path, f"ETCS braking data.{name}", "velocities must increase from 0 "
-                                         "and decelerations be >= 0"))
+            if len(rows) < 2 or any(a < 0 or v < 0 for v, a in rows) or any(b[0] <= a[0] for a, b in zip(rows, rows[1:])):
+                raise InputError(problem(path, f"ETCS braking data.{name}", "need two or more rows, velocities "
+                                         "increasing from 0 and decelerations >= 0"))
+            service = rows if name == "A_brake_service" else service
         else:
             quantity(data, name, path, dimension)
-    warnings.warn(problem(path, "ETCS braking data", f"{what} ETCS braking data read and checked, not modelled "
-                          "(ecostudy brakes on the train's brake forces and deceleration bound)"),
-                  EcostudyWarning, stacklevel=3)
+    if used:
+        warnings.warn(problem(path, "ETCS braking data", "the service-brake deceleration curve (A_brake_service) is "
+                              "the braking envelope; the emergency curve, correction factors, delays and speed "
+                              "uncertainty are read and checked, not modelled"), EcostudyWarning, stacklevel=3)
+    else:
+        warnings.warn(problem(path, "ETCS braking data", f"{what} ETCS braking data read and checked, not modelled "
+                              "(ecostudy brakes on the train's brake forces and deceleration bound; "
+                              "train.json#etcs brakes on its service-brake curve)"), EcostudyWarning, stacklevel=3)
+    return service
 
 
 def ttobench_track(doc, path):
@@ -172,8 +182,15 @@ def _braking(doc, path, top, f_reg, p_reg, f_pn):
     return {"table": {"speed_kmh": (speeds / units.KMH).tolist(), "force_kN": (force / units.KN).tolist()}}
 
 
-def ttobench_train(doc, path):
-    """A TTOBench train as a train-schema dict, and the field names for messages."""
+def ttobench_train(doc, path, selector=None):
+    """A TTOBench train as a train-schema dict, and the field names for messages. ``selector``
+    ``etcs``: brake on the service-brake deceleration curve of ``ETCS braking data`` (times the
+    effective mass) instead of the brake forces."""
+    if selector not in (None, "etcs"):
+        raise InputError(problem(path, f"#{selector}", "a TTOBench train takes '#etcs' (brake on the ETCS "
+                                 "service-brake curve) or nothing"))
+    if selector == "etcs" and "ETCS braking data" not in doc:
+        raise InputError(problem(path, "ETCS braking data", "missing: '#etcs' brakes on its service-brake curve"))
     meta = metadata(doc)
     name = meta.get("id") or str(path)
     _unmodelled(doc, TRAIN_FIELDS, path, "train")
@@ -197,21 +214,26 @@ def ttobench_train(doc, path):
     if "tunnel resistance" in doc:
         rows = table(doc, "tunnel resistance", path, [("cross section", "area"), ("coefficient", "force per speed^2")])
         tunnels = [{"cross_section_m2": a, "c_kN_per_kmh2": c * units.KMH**2 / units.KN} for a, c in rows]
-    if "ETCS braking data" in doc:
-        _etcs(doc, path, ETCS_TRAIN, "train")
+    service = _etcs(doc, path, ETCS_TRAIN, "train", used=selector == "etcs") if "ETCS braking data" in doc else None
     length = quantity(doc, "length", path, "length", 0.0)
+    mass = quantity(doc, "mass", path, "mass")
+    braking = _braking(doc, path, top, f_reg, p_reg, f_pn)
+    if selector == "etcs":  # the deceleration curve of the whole train: force = M a, M with the rotating allowance
+        effective = mass * (1 + (rho if rho < 1 else rho - 1))
+        braking = {"table": {"speed_kmh": [v / units.KMH for v, _ in service],
+                             "force_kN": [effective * a / units.KN for _, a in service]}}
     return {
         "name": name,
         "source": f"TTOBench train {name} ({meta.get('library version', 'version not stated')}); "
                   + (f"{length:g} m long" if length else "point mass (no length given)"),
-        "mass_t": quantity(doc, "mass", path, "mass") / units.TONNE,
+        "mass_t": mass / units.TONNE,
         "rotating_mass_factor": rho if rho < 1 else rho - 1,  # ms-eetc: 6 % -> 1.06, a factor 1.06 kept
         "length_m": length,
         "davis": {"a_N": quantity(doc, "rolling resistance r0", path, "force"),
                   "b_N_per_mps": quantity(doc, "rolling resistance r1", path, "force per speed", 0.0),
                   "c_N_per_mps2": quantity(doc, "rolling resistance r2", path, "force per speed^2", 0.0)},
         "traction": {"max_force_kN": f_t / units.KN, "max_power_kW": p_t / units.KW},
-        "braking": _braking(doc, path, top, f_reg, p_reg, f_pn),
+        "braking": braking,
         "traction_efficiency": quantity(doc, "efficiency traction", path, "share", 1.0),
         "regenerative_braking": regen,
         "curve_resistance": "roeckl",
