@@ -214,3 +214,14 @@ def test_speed_limits_that_look_like_metres_per_second_are_warned(tmp_path):
 def test_an_output_folder_that_cannot_be_created_is_named_first(tmp_path):
     one_line(run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--out", "/proc/ecostudy-out"),
              "/proc/ecostudy-out", "cannot write the output folder")
+
+
+def test_more_options_and_ignored_study_fields(tmp_path):
+    path = study(tmp_path, windows=[{"position_m": 500, "latest_s": 40}])
+    one_line(run("compare", path, "--out", tmp_path / "c"), "windows/window_s", "compare does not keep timing windows")
+    one_line(run("pareto", path, "--out", tmp_path / "p"), "windows/window_s", "pareto does not keep timing windows")
+    one_line(run("run", study(tmp_path), "--workers", 0, "--no-progress"), "--workers", "at least 1")
+    one_line(run("journey", "--track", TRACKS / "metro_line_4stops.yaml", "--train", METRO, "--supplement", 10,
+                 "--dwell", -20, "--out", tmp_path / "j"), "--dwell", "at least 0")
+    one_line(run("pareto", "--track", AMS, "--train", METRO, "--points", 1000000, "--out", tmp_path / "q"),
+             "--points", "at most 100000")
