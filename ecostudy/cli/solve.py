@@ -58,14 +58,11 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
                                  "--supplement or --window"))
     if weights is not None and (objective is None or objective.value != "mixed"):
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
-    from ecostudy.analysis.single import solve_run
     from ecostudy.core import units
     from ecostudy.core.types import Timing
-    from ecostudy.das.methods import das_run
     from ecostudy.io.loaders import chosen_stops, load_study, load_track, load_train
     from ecostudy.io.results import file_digest
     from ecostudy.io.writers import check_output_dir, write_json
-    from ecostudy.report.files import write_run
     if study is not None:
         if track or train:
             raise InputError(problem("command line", "--track/--train",
@@ -99,6 +96,9 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
         out_dir = Path(out) if out else Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_")
     windows = st.windows if study is not None else ()
     check_output_dir(out_dir, ("profile.csv", "summary.json", "speed.png", "inputs.json"))
+    from ecostudy.analysis.single import solve_run  # the optimiser only once the inputs are known good
+    from ecostudy.das.methods import das_run
+    from ecostudy.report.files import write_run
     result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
     if das is not None:
         if windows and das.value != "round":

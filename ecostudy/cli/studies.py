@@ -37,10 +37,10 @@ def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, poin
                   das_time_limit=das_time_limit)
     from ecostudy.core import units
     from ecostudy.io.writers import check_output_dir
-    from ecostudy.report.files import write_front
-    from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
     no_windows(st, "pareto")
+    from ecostudy.report.files import write_front  # the optimiser only once the inputs are known good
+    from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
     k = k or 500
     if count < 2:
         raise InputError(problem("command line", "--count", "need at least 2 points"))
@@ -107,9 +107,9 @@ def _compare(study, track, train, from_stop, to_stop, time, supplement, points, 
     from ecostudy.core import units
     from ecostudy.core.types import Timing
     from ecostudy.io.writers import atomic_write, check_output_dir, write_csv
-    from ecostudy.studies.compare import compare
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
     no_windows(st, "compare")
+    from ecostudy.studies.compare import compare  # the optimiser only once the inputs are known good
     if time is not None or supplement is not None:
         timing = Timing(running_time=time, supplement=None if supplement is None else supplement * units.PERCENT)
     elif st is not None:
@@ -172,7 +172,6 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
     from ecostudy.io.loaders import load_timetable, load_track, load_train, timing_from_timetable
     from ecostudy.io.timetable import journey_plan, name_stops
     from ecostudy.io.writers import atomic_write, check_output_dir, write_csv
-    from ecostudy.studies.journey import journey
     tt = load_timetable(timetable) if timetable is not None else None
     trk, trn = load_track(track if track is not None else associated_track(tt, timetable)), load_train(train)
     scheduled, plan = None, None
@@ -198,6 +197,7 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
                                  "give one total running time or supplement, or --timetable"))
     out_dir = check_output_dir(Path(out) if out else Path("out") / "journey",
                                ("journey.csv", "journey_totals.csv", "journey.png"))
+    from ecostudy.studies.journey import journey  # the optimiser only once the inputs are known good
     table, totals, results, _ = journey(trk, trn, names, total_time=time,
                                         supplement=None if supplement is None else supplement * units.PERCENT,
                                         points=points, workers=workers, scheduled=scheduled, plan=plan)
