@@ -131,3 +131,29 @@ class Trajectory(NamedTuple):
     def time(self):
         """Clock at every node [s], 0 at the start of the run."""
         return np.concatenate([[0.0], np.cumsum(self.dt)])
+
+
+@dataclass(frozen=True)
+class Consist:
+    """A long train as cars in train order (the head first) joined by couplers, SI (paper 002 eq. 1)."""
+
+    name: str
+    kinds: tuple                 # "locomotive" | "wagon" per car
+    mass: np.ndarray             # [kg] per car
+    length: np.ndarray           # [m] per car
+    resistance: np.ndarray       # (n, 3): c0 [m/s^2], c1 [1/s], c2 [1/m] per car, per unit mass
+    traction: tuple              # Envelope per car, None for wagons
+    dynamic_brake: tuple         # Envelope per car, None where there is none
+    pneumatic_brake: np.ndarray  # [N] per car, largest pneumatic brake force
+    stiffness: float             # k [N/m] of every coupler
+    damping: float               # d [N s/m]
+    force_limit: float           # |f_in| allowed [N]
+
+    @property
+    def cars(self):
+        return len(self.kinds)
+
+    @property
+    def locomotives(self):
+        """Indices of the locomotives."""
+        return [i for i, k in enumerate(self.kinds) if k == "locomotive"]

@@ -13,8 +13,9 @@ from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import travel_distance
 from ecostudy.core.physics import EfficiencyMap, Envelope, force_power_fit, table_width
-from ecostudy.core.types import Supply, Timing, Track, Train
+from ecostudy.core.types import Consist, Supply, Timing, Track, Train
 from ecostudy.io import schemas
+from ecostudy.io.consistschema import ConsistFile
 from ecostudy.io.formats import (
     timetable_document_to_schema,
     track_document_to_schema,
@@ -343,3 +344,25 @@ def load_network_study(path):
 
 __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study",
            "load_timetable", "check_stops"]
+
+
+def load_consist(path):
+    """Read a consist file (YAML: vehicle types, groups in train order, couplers) into a :class:`Consist`."""
+    c = validate(ConsistFile, read_document(path), path)
+    cars = [c.types[g.type] for g in c.vehicles for _ in range(g.count)]
+
+    def envelope(spec):
+        if spec is None:
+            return None
+        power = spec.max_power_kW * units.KW if spec.max_power_kW else float("inf")
+        return Envelope("force_power", max_force=spec.max_force_kN * units.KN, max_power=power)
+
+    return Consist(name=c.name, kinds=tuple(v.kind for v in cars),
+                   mass=np.array([v.mass_t * units.TONNE for v in cars]), length=np.array([v.length_m for v in cars]),
+                   resistance=np.array([[v.resistance.c0_mps2, v.resistance.c1_per_s, v.resistance.c2_per_m]
+                                        for v in cars]),
+                   traction=tuple(envelope(v.traction) for v in cars),
+                   dynamic_brake=tuple(envelope(v.dynamic_brake) for v in cars),
+                   pneumatic_brake=np.array([v.pneumatic_brake_kN * units.KN for v in cars]),
+                   stiffness=c.couplers.stiffness_kN_per_m * units.KN, damping=c.couplers.damping_kNs_per_m * units.KN,
+                   force_limit=c.couplers.force_limit_kN * units.KN)

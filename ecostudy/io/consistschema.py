@@ -1,0 +1,70 @@
+"""The consist file's schema: a long train as an ordered list of vehicles joined by couplers
+(paper 002 eq. 1, Tables I-II); units in the field names."""
+from typing import Literal, Optional
+
+from pydantic import Field, model_validator
+
+from ecostudy.io.schemabase import Strict
+
+
+class CarResistance(Strict):
+    """f_r = m (c0 + c1 v + c2 v^2), per unit mass (paper 002 eq. 1; its Table I misprints c2 as c0)."""
+
+    c0_mps2: float = Field(ge=0, le=1)
+    c1_per_s: float = Field(ge=0, le=1)
+    c2_per_m: float = Field(ge=0, le=1)
+
+
+class ForcePower(Strict):
+    max_force_kN: float = Field(gt=0, le=10000)
+    max_power_kW: Optional[float] = Field(None, gt=0, le=100000)
+
+
+class VehicleType(Strict):
+    kind: Literal["locomotive", "wagon"]
+    mass_t: float = Field(ge=1, le=1000)
+    length_m: float = Field(gt=0, le=100)
+    resistance: CarResistance
+    traction: Optional[ForcePower] = Field(None, description="Locomotives: traction envelope.")
+    dynamic_brake: Optional[ForcePower] = Field(None, description="Locomotives: electric (dynamic) brake.")
+    pneumatic_brake_kN: float = Field(0.0, ge=0, le=2000, description="Wagons: largest pneumatic brake force.")
+
+    @model_validator(mode="after")
+    def _kind(self):
+        if self.kind == "locomotive" and self.traction is None:
+            raise ValueError("a locomotive needs 'traction'")
+        if self.kind == "wagon" and (self.traction is not None or self.dynamic_brake is not None):
+            raise ValueError("a wagon has no traction or dynamic brake: give pneumatic_brake_kN")
+        return self
+
+
+class Group(Strict):
+    """``count`` vehicles of one type, in train order."""
+
+    type: str
+    count: int = Field(1, ge=1, le=1000)
+
+
+class Couplers(Strict):
+    stiffness_kN_per_m: float = Field(gt=0, le=1e6)
+    damping_kNs_per_m: float = Field(ge=0, le=1e5)
+    force_limit_kN: float = Field(gt=0, le=1e5, description="Largest allowed |in-train force|.")
+
+
+class ConsistFile(Strict):
+    name: str
+    source: str
+    types: dict[str, VehicleType] = Field(min_length=1)
+    vehicles: list[Group] = Field(min_length=1, max_length=1000)
+    couplers: Couplers
+
+    @model_validator(mode="after")
+    def _known(self):
+        unknown = sorted({g.type for g in self.vehicles} - set(self.types))
+        if unknown:
+            raise ValueError(f"vehicles name unknown types: {', '.join(unknown)} (types: {', '.join(self.types)})")
+        if sum(g.count for g in self.vehicles) < 2:
+            raise ValueError("a consist needs at least two vehicles (one coupler)")
+        if not any(self.types[g.type].kind == "locomotive" for g in self.vehicles):
+            raise ValueError("a consist needs a locomotive")
+        return self

@@ -1,0 +1,99 @@
+"""The cascade plant of paper 002 eq. 1 (issue 13, first part): hand calculations on a two-car
+train and on the paper's 204-car ore train."""
+import numpy as np
+import pytest
+
+from ecostudy.core.grid import Profile, Segment
+from ecostudy.core.physics import GRAVITY, Envelope
+from ecostudy.core.types import Consist
+from ecostudy.heavyhaul.plant import CascadePlant
+from ecostudy.io.loaders import load_consist
+
+from .conftest import TRAINS
+
+
+def flat(distance=50000.0, grade=None):
+    starts, values = (np.array([0.0]), np.array([0.0])) if grade is None else grade
+    return Segment(distance, Profile(starts, values), Profile(np.zeros(1), np.zeros(1)),
+                   Profile(np.zeros(1), np.array([30.0])))
+
+
+def two_cars(resistance=0.0, damping=150e3):
+    big = Envelope("force_power", max_force=1e6)
+    return Consist("two", ("locomotive", "wagon"), np.array([100e3, 60e3]), np.array([20.0, 12.0]),
+                   np.array([[resistance, 0.0, 0.0]] * 2), (big, None), (big, None), np.array([0.0, 100e3]),
+                   stiffness=5e6, damping=damping, force_limit=1e6)
+
+
+def test_two_cars_momentum_is_exact_and_the_coupler_carries_the_wagons_share():
+    """A locomotive pulling a wagon with F = 80 kN on flat track: the centre of mass accelerates at
+    F / (m1 + m2) = 0.5 m/s^2 whatever the couplers do; once the coupler's oscillation has died out
+    it carries F m2 / (m1 + m2) = 30 kN and both cars have the same speed."""
+    plant = CascadePlant(two_cars(), flat())
+    state = plant.initial(head=100.0, speed=10.0)
+    for _ in range(6):
+        step = plant.step(state, [80e3, 0.0], 10.0)
+        state = step.state
+    mean = float(np.dot(plant.consist.mass, state.speeds) / plant.consist.mass.sum())
+    assert mean == pytest.approx(10.0 + 0.5 * 60.0, rel=1e-7)
+    assert step.coupler_forces[0] == pytest.approx(30e3, rel=1e-4)
+    assert state.speeds[0] == pytest.approx(state.speeds[1], abs=1e-6)
+    assert step.traction_work > 0 and step.dynamic_brake_work == 0 and step.wagon_brake_work == 0
+
+
+def test_efforts_are_clipped_to_each_cars_envelope():
+    plant = CascadePlant(two_cars(), flat())
+    u = plant.efforts(np.array([5e6, -5e6]), np.array([10.0, 10.0]))
+    assert list(u) == [1e6, -100e3]  # traction envelope; a wagon brakes, never pulls
+    assert plant.efforts(np.array([-5e6, 5e6]), np.array([10.0, 10.0]))[1] == 0.0
+
+
+def test_every_car_feels_its_own_grade():
+    """A 10 per-mille climb starting between the two cars: only the head car is on it; the
+    accelerations at that instant follow by hand (coupler at its free length, equal speeds)."""
+    seg = flat(grade=(np.array([0.0, 90.0]), np.array([0.0, 0.010])))
+    plant = CascadePlant(two_cars(), seg)
+    state = plant.initial(head=100.0, speed=10.0)  # head at 100 m (on the climb), wagon at 84 m
+    d = plant.derivatives(np.concatenate([state.positions, state.speeds, [0, 0, 0]]), np.array([0.0, 0.0]))
+    assert d[2] == pytest.approx(-GRAVITY * 0.010) and d[3] == pytest.approx(0.0)
+
+
+def test_the_ore_train_in_steady_pull_keeps_the_static_in_train_forces():
+    """Paper 002's train (2 + 200 + 2, 13 704 t) at 15 m/s on flat track, the four locomotives
+    each pulling a quarter of the whole train's running resistance, started in the quasi-static
+    state: it holds its speed for a minute and every coupler keeps carrying the sum of (effort -
+    resistance) of the cars ahead (within 1 N): tension behind the head locomotives, compression
+    ahead of the tail ones, none in the middle; far below the 2000 kN limit."""
+    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    assert consist.cars == 204 and consist.mass.sum() == pytest.approx(13_704e3)
+    plant = CascadePlant(consist, flat())
+    resist = plant.resistance(plant.initial(3000.0, 15.0).positions, np.full(consist.cars, 15.0))
+    u = np.zeros(consist.cars)
+    u[consist.locomotives] = resist.sum() / 4
+    state = plant.quasi_static(3000.0, 15.0, u)
+    expected = np.cumsum(u - resist)[:-1]
+    for _ in range(3):
+        step = plant.step(state, u, 20.0)
+        state = step.state
+    assert np.max(np.abs(step.coupler_forces - expected)) < 1.0
+    assert np.all(np.abs(state.speeds - 15.0) < 1e-6)
+    assert step.coupler_forces[1] == pytest.approx(2 * u[0] - resist[:2].sum()) and abs(step.coupler_forces[101]) < 1.0
+    assert step.largest_coupler_force < consist.force_limit
+
+
+def test_a_train_started_unstretched_swings_slowly_about_the_static_forces():
+    """Started with every coupler at its free length, the same train does not settle within a
+    minute: the slowest longitudinal mode of a 2.5 km chain (about 33 s for a wave there and back
+    at sqrt(k/m) 12 m = 151 m/s) is barely damped by the couplers; the centre of mass still keeps
+    its speed exactly (the efforts equal the resistance)."""
+    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    plant = CascadePlant(consist, flat())
+    state = plant.initial(3000.0, 15.0)
+    u = np.zeros(consist.cars)
+    u[consist.locomotives] = plant.resistance(state.positions, state.speeds).sum() / 4
+    swings = []
+    for _ in range(6):
+        state = plant.step(state, u, 10.0).state
+        swings.append(state.speeds[0] - state.speeds[101])
+        assert np.dot(consist.mass, state.speeds) / consist.mass.sum() == pytest.approx(15.0, abs=1e-5)
+    assert max(swings) > 0.02 and min(swings) < -0.02  # the head and the middle swap leads
