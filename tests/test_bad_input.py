@@ -225,3 +225,17 @@ def test_more_options_and_ignored_study_fields(tmp_path):
                  "--dwell", -20, "--out", tmp_path / "j"), "--dwell", "at least 0")
     one_line(run("pareto", "--track", AMS, "--train", METRO, "--points", 1000000, "--out", tmp_path / "q"),
              "--points", "at most 100000")
+
+
+def test_a_flagged_result_says_why_it_exits_1(tmp_path):
+    """On a 12-node grid the ATO optimum misses the re-simulation's tolerance: exit 1, and a line
+    saying so (before, compare and journey exited 1 without a word)."""
+    r = run("compare", "--track", AMS, "--train", METRO, "--time", 80, "--points", 12, "--no-plot", "--out", tmp_path)
+    assert r.exit_code == 1 and "flagged: the ATO optimum is not verified optimal" in r.output, r.output
+
+
+@pytest.mark.slow
+def test_an_unreachable_dask_scheduler_is_named(tmp_path):
+    path = study(tmp_path)
+    one_line(run("run", path, "--dask", "tcp://127.0.0.1:1", "--no-progress"), "--dask",
+             "cannot reach the Dask scheduler at tcp://127.0.0.1:1")
