@@ -29,9 +29,11 @@ _run.verify = _recording_verify
 
 
 @pytest.fixture(autouse=True)
-def every_solve_passes_verification():
+def every_solve_passes_verification(request):
     start = len(_VERIFICATIONS)
     yield
+    if request.node.get_closest_marker("flagged_on_purpose"):
+        return  # a test of how a flagged result is reported
     failed = [v for v in _VERIFICATIONS[start:] if not v["passed"]]
     assert not failed, f"a solve in this test failed verification: {failed}"
 
