@@ -1,5 +1,7 @@
 """The cascade plant of paper 002 eq. 1 (issue 13, first part): hand calculations on a two-car
 train and on the paper's 204-car ore train."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -97,3 +99,62 @@ def test_a_train_started_unstretched_swings_slowly_about_the_static_forces():
         swings.append(state.speeds[0] - state.speeds[101])
         assert np.dot(consist.mass, state.speeds) / consist.mass.sum() == pytest.approx(15.0, abs=1e-5)
     assert max(swings) > 0.02 and min(swings) < -0.02  # the head and the middle swap leads
+
+
+def test_the_design_model_predicts_the_plant_over_one_sample():
+    """Paper 002 eq. 2 (linearised, damping left out, ZOH at Ts = 20 s) against the nonlinear
+    cascade plant: +50 kN on each locomotive from the quasi-static state at 15 m/s moves the mean
+    speed by 0.2916 m/s in the model and 0.2902 m/s in the plant (0.5 %); the head and middle cars
+    within 3 %; the coupler-force changes behind the head within 6 %. With c1 = 0 the model keeps
+    momentum exactly: sum m dv = Ts sum du."""
+    from ecostudy.heavyhaul.linear import design_model
+    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    plant = CascadePlant(consist, flat())
+    n = consist.cars
+    resist = plant.resistance(plant.initial(3000.0, 15.0).positions, np.full(n, 15.0))
+    u = np.zeros(n)
+    u[consist.locomotives] = resist.sum() / 4
+    du = np.zeros(n)
+    du[consist.locomotives] = 50e3
+    state = plant.quasi_static(3000.0, 15.0, u)
+    step = plant.step(state, u + du, 20.0)
+    model = design_model(consist.mass, consist.resistance[:, 1], np.full(n - 1, consist.stiffness), 20.0)
+    predicted = model.B @ du  # from the operating point (deviation 0)
+    dv_plant = step.state.speeds - state.speeds
+    mean = lambda dv: np.dot(consist.mass, dv) / consist.mass.sum()  # noqa: E731
+    assert mean(predicted[:n]) == pytest.approx(mean(dv_plant), rel=0.01)
+    assert predicted[[0, 101]] == pytest.approx(dv_plant[[0, 101]], rel=0.03)
+    dfin = step.coupler_forces - plant.coupler_forces(state.positions, state.speeds)
+    assert consist.stiffness * predicted[n:n + 3] == pytest.approx(dfin[:3], rel=0.06)
+    lossless = design_model(consist.mass, np.zeros(n), np.full(n - 1, consist.stiffness), 20.0)
+    assert np.dot(consist.mass, (lossless.B @ du)[:n]) == pytest.approx(20.0 * du.sum(), rel=1e-9)
+
+
+def test_the_fence_method_keeps_the_slow_mode_and_the_momentum():
+    """Virtual cars of f = 10 never mixing locomotives and wagons: n_f = 1 + 20 + 1 = 22 (paper
+    002 §III-C). With couplers in series between virtual-car centres the slowest longitudinal mode
+    keeps its period (32.94 s full, 32.97 s reduced) and a step of efforts moves the mean speed
+    alike; efforts shared back to the cars in proportion to mass sum to the virtual car's."""
+    from ecostudy.heavyhaul.linear import design_model, fence, virtual_car_count
+    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    n = consist.cars
+    reduced = fence(consist, 10, 20.0)
+    assert len(reduced.members) == virtual_car_count([2, 200, 2], 10) == 22
+    assert all(len({consist.kinds[i] for i in cars}) == 1 for cars in reduced.members)
+
+    def slowest_period(model):
+        w = np.sort(np.abs(np.linalg.eigvals(model.Ac).imag))
+        return 2 * np.pi / w[w > 1e-6][0]
+
+    full = design_model(consist.mass, np.zeros(n), np.full(n - 1, consist.stiffness), 20.0)
+    lossless = fence(dataclasses.replace(consist, resistance=consist.resistance * 0), 10, 20.0)
+    assert slowest_period(full) == pytest.approx(32.94, abs=0.01)
+    assert slowest_period(lossless.model) == pytest.approx(slowest_period(full), rel=0.002)
+    du = np.zeros(n)
+    du[consist.locomotives] = 50e3
+    virtual = reduced.reduce(du)
+    assert virtual.sum() == pytest.approx(du.sum()) and reduced.share(virtual, consist.mass).sum() == pytest.approx(du.sum())
+    full_c1 = design_model(consist.mass, consist.resistance[:, 1], np.full(n - 1, consist.stiffness), 20.0)
+    mean_full = np.dot(consist.mass, (full_c1.B @ du)[:n]) / consist.mass.sum()
+    vm = (reduced.model.B @ virtual)[:22]
+    assert np.dot(reduced.model.mass, vm) / reduced.model.mass.sum() == pytest.approx(mean_full, rel=1e-3)

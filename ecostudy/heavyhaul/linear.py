@@ -1,0 +1,110 @@
+"""Paper 002's design model: the cascade train linearised (eq. 2) and discretised by zero-order
+hold at Ts, and the fence method's reduced train of virtual cars.
+
+Linearisation (paper 002 §II-A step 1): the effort is shifted by the speed-independent and
+quadratic parts of the resistance at the operating point, u'_i = u_i - m_i (c0_i + c2_i v_i^2) -
+f_p,i, so the origin is an equilibrium, and coupler damping is left out:
+
+    m_i dv_i/dt = u'_i - m_i c1_i v_i + k x_i-1 - k x_i        dx_i/dt = v_i - v_i+1
+
+with the state x = [v_1..v_n, x_1..x_n-1] (speeds, coupler extensions beyond the free length).
+
+Fence method (paper 002 §III-C): f consecutive cars of one kind form a virtual car, never mixing
+locomotives and wagons, so n_f = sum over the consist's runs of ceil(run / f). The paper does not
+say how cars merge; ecostudy's choice (docs/heavyhaul.md): a virtual car's mass is the sum of its
+cars', its resistance coefficients are their mass-weighted means, the coupler between two virtual
+cars is the chain of real couplers between their centres in series (stiffness k / (number of
+couplers spanned)), which keeps the train's total compliance, and a virtual car's effort is shared
+among its cars in proportion to their mass (every car then accelerates alike inside it).
+"""
+import math
+from typing import NamedTuple
+
+import numpy as np
+from scipy.linalg import expm
+
+
+class DesignModel(NamedTuple):
+    """x(k+1) = A x(k) + B u'(k) at sample time ``ts`` (paper 002 eq. 2), and the continuous pair."""
+
+    A: np.ndarray
+    B: np.ndarray
+    Ac: np.ndarray
+    Bc: np.ndarray
+    ts: float
+    mass: np.ndarray
+    stiffness: np.ndarray   # of each coupler of the model [N/m]
+
+
+def continuous(mass, c1, stiffness):
+    """(A_c, B_c) of the linearised cascade: masses [kg], c1 [1/s] and coupler stiffnesses [N/m]."""
+    n = len(mass)
+    A = np.zeros((2 * n - 1, 2 * n - 1))
+    B = np.zeros((2 * n - 1, n))
+    for i in range(n):
+        A[i, i] = -c1[i]
+        B[i, i] = 1.0 / mass[i]
+        if i > 0:
+            A[i, n + i - 1] = stiffness[i - 1] / mass[i]
+        if i < n - 1:
+            A[i, n + i] = -stiffness[i] / mass[i]
+            A[n + i, i], A[n + i, i + 1] = 1.0, -1.0
+    return A, B
+
+
+def discretise(Ac, Bc, ts):
+    """Zero-order hold: expm of [[A_c, B_c], [0, 0]] ts gives (A, B)."""
+    n, m = Bc.shape
+    big = np.zeros((n + m, n + m))
+    big[:n, :n], big[:n, n:] = Ac, Bc
+    e = expm(big * ts)
+    return e[:n, :n], e[:n, n:]
+
+
+def design_model(mass, c1, stiffness, ts):
+    Ac, Bc = continuous(mass, c1, stiffness)
+    A, B = discretise(Ac, Bc, ts)
+    return DesignModel(A, B, Ac, Bc, ts, np.asarray(mass, float), np.asarray(stiffness, float))
+
+
+class Fence(NamedTuple):
+    """Virtual cars of a consist: ``members[j]`` the car indices of virtual car j."""
+
+    members: list
+    model: DesignModel
+
+    def share(self, virtual_efforts, mass):
+        """Per-car efforts [N] from the virtual cars' efforts, shared in proportion to mass."""
+        out = np.zeros(len(mass))
+        for cars, u in zip(self.members, virtual_efforts):
+            out[cars] = u * mass[cars] / mass[cars].sum()
+        return out
+
+    def reduce(self, values, mass=None):
+        """Per-car speeds (mass-weighted means, with ``mass``) or efforts (sums) of each virtual car."""
+        if mass is None:
+            return np.array([np.sum(values[cars]) for cars in self.members])
+        return np.array([np.dot(values[cars], mass[cars]) / mass[cars].sum() for cars in self.members])
+
+
+def fence(consist, factor, ts):
+    """The fence method's reduced design model: virtual cars of ``factor`` cars of one kind."""
+    members, start = [], 0
+    kinds = list(consist.kinds)
+    while start < len(kinds):  # runs of one kind, cut into pieces of at most ``factor`` cars
+        end = start
+        while end < len(kinds) and kinds[end] == kinds[start]:
+            end += 1
+        for a in range(start, end, factor):
+            members.append(np.arange(a, min(a + factor, end)))
+        start = end
+    mass = np.array([consist.mass[c].sum() for c in members])
+    c1 = np.array([np.dot(consist.resistance[c, 1], consist.mass[c]) / consist.mass[c].sum() for c in members])
+    centre = [0.5 * (c[0] + c[-1]) for c in members]  # in car indices: couplers spanned between centres
+    stiffness = np.array([consist.stiffness / max(b - a, 1.0) for a, b in zip(centre, centre[1:])])
+    return Fence(members, design_model(mass, c1, stiffness, ts))
+
+
+def virtual_car_count(runs, factor):
+    """n_f = sum of ceil(run / f) over the consist's runs of one kind (paper 002 §III-C)."""
+    return sum(math.ceil(r / factor) for r in runs)
