@@ -158,3 +158,33 @@ def test_the_fence_method_keeps_the_slow_mode_and_the_momentum():
     mean_full = np.dot(consist.mass, (full_c1.B @ du)[:n]) / consist.mass.sum()
     vm = (reduced.model.B @ virtual)[:22]
     assert np.dot(reduced.model.mass, vm) / reduced.model.mass.sum() == pytest.approx(mean_full, rel=1e-3)
+
+
+def test_the_receding_horizon_controller_tracks_a_new_reference_within_the_limits():
+    """Paper 002's RHC (eqs. 4-8; Ts = 20 s, Np = 8, Nc = 4, K_f = 10, K_v = 60, K_e = 10,
+    K_b = 40) on the fence-reduced model (f = 10, 22 virtual cars) drives the full 204-car plant
+    on flat track from 15 m/s to a new reference of 20 m/s: the mean speed never exceeds the
+    reference (eq. 7), reaches it within 0.05 m/s in 8 samples, in-train forces stay far below
+    2000 kN, the locomotives' efforts move by at most the 200 kN rate limit per sample, and each
+    QP solves (Ipopt on one model written once, bounds changed) in well under Ts."""
+    from ecostudy.heavyhaul.linear import fence
+    from ecostudy.heavyhaul.loop import run
+    from ecostudy.heavyhaul.rhc import RecedingHorizon
+    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    plant = CascadePlant(consist, flat(60000.0))
+    reduction = fence(consist, 10, 20.0)
+    kinds = [consist.kinds[cars[0]] for cars in reduction.members]
+    controller = RecedingHorizon(reduction.model, kinds, np_=8, nc=4)
+    resist = plant.resistance(plant.initial(5000.0, 15.0).positions, np.full(consist.cars, 15.0))
+    u = np.zeros(consist.cars)
+    u[consist.locomotives] = resist.sum() / 4
+    state = plant.quasi_static(5000.0, 15.0, u)
+    controller.previous = reduction.reduce(u) / 1e3
+    state, rec = run(plant, reduction, controller, state, lambda t: 20.0, 10)
+    assert np.all(rec.mean_speed <= 20.0 + 0.01)
+    assert abs(rec.mean_speed[7] - 20.0) < 0.05 and abs(rec.mean_speed[-1] - 20.0) < 0.05
+    assert rec.largest_coupler.max() < 0.5 * consist.force_limit
+    locos = [j for j, kind in enumerate(kinds) if kind == "locomotive"]
+    steps = np.abs(np.diff(np.vstack([reduction.reduce(u)[None, :], rec.efforts])[:, locos], axis=0))
+    assert steps.max() <= 200e3 * 1.001
+    assert rec.traction_work > 0 and np.all(rec.solve_seconds < 5.0)

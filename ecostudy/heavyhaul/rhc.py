@@ -1,0 +1,94 @@
+"""Paper 002's braking-penalised receding-horizon controller (eqs. 4-9), first version: one convex
+QP over Np samples with Nc moves on the design model (full or fence-reduced), built once in Pyomo
+and re-solved every Ts with new parameters.
+
+    min sum_k [K_f sum f_in^2 + K_v sum (v - v_r)^2 + K_e (sum_loco u^2 + K_b sum_wagon u^2)] Ts   (eq. 4)
+    x(k+1) = A x(k) + B (u(k) - offset)                                                              (eq. 2)
+    u_low <= u <= u_high, |u_loco(k) - u_loco(k-1)| <= rate                                          (eq. 6)
+    mean v(k) <= v_r(k)                                                                              (eq. 7)
+    f_low <= k x_in(k) <= f_high                                                                     (eq. 8)
+
+Forces in kN, speeds in m/s (the paper's units are not stated; this scaling keeps the QP's terms
+of order one). ``offset`` is the operating point's speed-independent and quadratic resistance
+(eq. 2's input shift), re-evaluated at every sample from the measured state. Moves beyond Nc hold
+the last one. Not yet: the Kalman observer (eq. 10) -- the controller reads the plant's state.
+"""
+import numpy as np
+import pyomo.environ as pyo
+
+from ecostudy.core.errors import SolverError
+from ecostudy.core.physics import GRAVITY
+from ecostudy.core.units import KN
+from ecostudy.ocp.session import Session
+
+
+class RecedingHorizon:
+    """One QP for ``model`` (heavyhaul.linear.DesignModel) of cars ``kinds``, written once; every
+    ``solve`` changes bounds only (the measured state, the input shift, the envelopes, the previous
+    input and the reference are variables fixed by their bounds) and warm-starts Ipopt."""
+
+    def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
+                 force_limit_kN=2000.0):
+        self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
+        self.kf, self.kv, self.ke, self.kb = weights
+        n = len(self.kinds)
+        self.n = n
+        A, B = model.A, model.B * KN  # the input in kN
+        m = pyo.ConcreteModel()
+        m.K, m.U = pyo.RangeSet(0, np_), pyo.RangeSet(0, nc - 1)
+        m.S, m.C, m.X = pyo.RangeSet(0, 2 * n - 2), pyo.RangeSet(0, n - 1), pyo.RangeSet(0, n - 2)
+        m.offset = pyo.Var(m.C, initialize=0.0)     # [kN], fixed by bounds at every solve
+        m.previous = pyo.Var(m.C, initialize=0.0)   # [kN], likewise
+        m.vr = pyo.Var(m.K, initialize=0.0)         # [m/s], likewise
+        m.x = pyo.Var(m.K, m.S, initialize=0.0)     # x[0, :] fixed by bounds to the measured state
+        m.u = pyo.Var(m.U, m.C, initialize=0.0)     # [kN]
+
+        def move(k):
+            return min(k, nc - 1)
+
+        m.dynamics = pyo.Constraint(pyo.RangeSet(0, np_ - 1), m.S, rule=lambda m, k, s: m.x[k + 1, s] == sum(
+            A[s, j] * m.x[k, j] for j in range(2 * n - 1) if A[s, j] != 0.0) + sum(
+            B[s, i] * (m.u[move(k), i] - m.offset[i]) for i in range(n) if B[s, i] != 0.0))
+        locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
+        m.rate = pyo.Constraint(m.U, locos, rule=lambda m, k, i: pyo.inequality(
+            -rate_kN, m.u[k, i] - (m.previous[i] if k == 0 else m.u[k - 1, i]), rate_kN))
+        weight = model.mass / model.mass.sum()
+        m.mean_speed = pyo.Constraint(pyo.RangeSet(1, np_), rule=lambda m, k: sum(
+            weight[i] * m.x[k, i] for i in range(n)) - m.vr[k] <= 0.0)
+        stiff = model.stiffness / KN  # [kN/m]
+        m.couplers = pyo.Constraint(pyo.RangeSet(1, np_), m.X, rule=lambda m, k, j: pyo.inequality(
+            -force_limit_kN, stiff[j] * m.x[k, n + j], force_limit_kN))
+        penalty = [1.0 if kind == "locomotive" else self.kb for kind in self.kinds]
+        m.objective = pyo.Objective(expr=sum(
+            self.kf * sum((stiff[j] * m.x[k, n + j]) ** 2 for j in range(n - 1)) / 1e4
+            + self.kv * sum((m.x[k, i] - m.vr[k]) ** 2 for i in range(n))
+            + self.ke * sum(penalty[i] * m.u[move(k - 1), i] ** 2 for i in range(n)) / 1e4
+            for k in range(1, np_ + 1)) * model.ts / np_)
+        self.m, self.session = m, Session(m)
+        self.previous = np.zeros(n)
+        self.last = None  # the last solve's Outcome
+
+    def solve(self, state, offsets_kN, low_kN, high_kN, reference):
+        """The first move [kN per (virtual) car] from the measured ``state`` (speeds then coupler
+        extensions), the input offsets and bounds [kN] and the reference speeds over the horizon."""
+        m, n = self.m, self.n
+        previous = np.clip(self.previous, low_kN, high_kN)
+        locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
+        variables = ([m.x[0, s] for s in m.S] + [m.offset[i] for i in m.C] + [m.previous[i] for i in locos]
+                     + [m.vr[k] for k in range(1, self.np_ + 1)] + [m.u[k, i] for k in m.U for i in m.C])
+        fixed = (list(map(float, state)) + list(map(float, offsets_kN)) + [float(previous[i]) for i in locos]
+                 + [float(reference[min(k, len(reference) - 1)]) for k in range(1, self.np_ + 1)])
+        lows = fixed + [float(low_kN[i]) for _ in m.U for i in range(n)]
+        highs = fixed + [float(high_kN[i]) for _ in m.U for i in range(n)]
+        self.session.set_many_bounds(variables, lows, highs)
+        self.last = self.session.solve()
+        if not self.last.usable:
+            raise SolverError(f"heavy-haul QP: Ipopt {self.last.status} after {self.last.iterations} iterations")
+        self.previous = np.array([pyo.value(m.u[0, i]) for i in range(n)])
+        return self.previous.copy()
+
+
+def input_offsets(mass, resistance, speeds, grades):
+    """Eq. 2's input shift per (virtual) car [N]: m (c0 + c2 v^2) + m g grade at the measured speed."""
+    c0, _, c2 = np.asarray(resistance).T
+    return mass * (c0 + c2 * speeds ** 2) + mass * GRAVITY * grades
