@@ -188,3 +188,47 @@ def test_the_receding_horizon_controller_tracks_a_new_reference_within_the_limit
     steps = np.abs(np.diff(np.vstack([reduction.reduce(u)[None, :], rec.efforts])[:, locos], axis=0))
     assert steps.max() <= 200e3 * 1.001
     assert rec.traction_work > 0 and np.all(rec.solve_seconds < 5.0)
+
+
+def test_the_kalman_observer_recovers_speeds_and_extensions_from_the_locomotives():
+    """Eq. 10 on the fence-reduced model (22 virtual cars, the two locomotive groups measured),
+    fed the measured locomotive speeds of the full plant while the locomotives accelerate it: from
+    an estimate that starts with every wagon group 1 m/s off and no coupler extension, the
+    estimated wagon speeds come within 0.05 m/s of the plant's (mass-weighted) after 20 samples
+    (0.6 m/s off after 10), the extensions within 0.05 m; the observability matrix has full rank."""
+    from ecostudy.heavyhaul.linear import fence
+    from ecostudy.heavyhaul.loop import reduced_state
+    from ecostudy.heavyhaul.observer import KalmanObserver
+    from ecostudy.heavyhaul.rhc import input_offsets
+    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    plant = CascadePlant(consist, flat(60000.0))
+    reduction = fence(consist, 10, 20.0)
+    kinds = [consist.kinds[cars[0]] for cars in reduction.members]
+    nv = len(kinds)
+    resist = plant.resistance(plant.initial(5000.0, 15.0).positions, np.full(consist.cars, 15.0))
+    u = np.zeros(consist.cars)
+    u[consist.locomotives] = resist.sum() / 4 + 20e3
+    state = plant.quasi_static(5000.0, 15.0, u)
+    truth = reduced_state(plant, reduction, state)
+    guess = truth.copy()
+    guess[1:nv - 1] += 1.0
+    guess[nv:] = 0.0
+    observer = KalmanObserver(reduction.model, kinds, estimate=guess)
+    coefficients = np.array([np.dot(consist.resistance[c].T, consist.mass[c]) / consist.mass[c].sum()
+                             for c in reduction.members])
+    C, A = observer.C, reduction.model.A
+    powers = [np.eye(len(A))]
+    for _ in range(len(A) - 1):
+        powers.append(powers[-1] @ A)
+    assert np.linalg.matrix_rank(np.vstack([C @ p for p in powers]), tol=1e-9) == 2 * nv - 1
+    errors = []
+    for _ in range(20):
+        speeds = reduction.reduce(state.speeds, consist.mass)
+        shifted = reduction.reduce(u) - input_offsets(reduction.model.mass, coefficients, speeds, np.zeros(nv))
+        locos = [j for j, kind in enumerate(kinds) if kind == "locomotive"]
+        estimate = observer.update(speeds[locos], shifted)
+        state = plant.step(state, u, 20.0).state
+        truth = reduced_state(plant, reduction, state)
+        errors.append(np.max(np.abs(estimate[1:nv - 1] - truth[1:nv - 1])))
+    assert errors[0] > 0.1 and errors[-1] < 0.05
+    assert np.max(np.abs(estimate[nv:] - truth[nv:])) < 0.05  # m; "truth" for a virtual coupler: boundary force / k
