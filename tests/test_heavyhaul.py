@@ -232,3 +232,28 @@ def test_the_kalman_observer_recovers_speeds_and_extensions_from_the_locomotives
         errors.append(np.max(np.abs(estimate[1:nv - 1] - truth[1:nv - 1])))
     assert errors[0] > 0.1 and errors[-1] < 0.05
     assert np.max(np.abs(estimate[nv:] - truth[nv:])) < 0.05  # m; "truth" for a virtual coupler: boundary force / k
+
+
+def test_the_loop_with_the_observer_tracks_like_the_loop_with_the_true_state():
+    """The same 15 -> 20 m/s manoeuvre, the controller fed by the Kalman observer (eq. 10, from
+    the locomotives' speeds only, started from the quasi-static estimate): it stays within the
+    limits and ends within 0.1 m/s of the reference; no solve overran Ts."""
+    from ecostudy.heavyhaul.linear import fence
+    from ecostudy.heavyhaul.loop import reduced_state, run
+    from ecostudy.heavyhaul.observer import KalmanObserver
+    from ecostudy.heavyhaul.rhc import RecedingHorizon
+    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    plant = CascadePlant(consist, flat(60000.0))
+    reduction = fence(consist, 10, 20.0)
+    kinds = [consist.kinds[cars[0]] for cars in reduction.members]
+    resist = plant.resistance(plant.initial(5000.0, 15.0).positions, np.full(consist.cars, 15.0))
+    u = np.zeros(consist.cars)
+    u[consist.locomotives] = resist.sum() / 4
+    state = plant.quasi_static(5000.0, 15.0, u)
+    controller = RecedingHorizon(reduction.model, kinds)
+    controller.previous = reduction.reduce(u) / 1e3
+    observer = KalmanObserver(reduction.model, kinds, estimate=reduced_state(plant, reduction, state))
+    state, rec = run(plant, reduction, controller, state, lambda t: 20.0, 12, observer=observer,
+                     applied=reduction.reduce(u))
+    assert rec.overruns == 0 and rec.largest_coupler.max() < 0.5 * consist.force_limit
+    assert np.all(rec.mean_speed <= 20.0 + 0.1) and abs(rec.mean_speed[-1] - 20.0) < 0.1

@@ -1,10 +1,12 @@
 """The heavy-haul closed loop: the receding-horizon controller (heavyhaul.rhc) on the fence-reduced
 design model driving the full cascade plant (heavyhaul.plant), one sample Ts at a time.
 
-The controller reads the plant's state reduced to virtual cars (mass-weighted speeds; a virtual
-coupler's extension from the force of the real coupler at the boundary over the virtual stiffness);
-the Kalman observer of eq. 10 is not built yet. Efforts are per virtual car, shared back to its
-cars in proportion to mass, clipped by the plant to every car's envelope.
+The controller reads either the plant's state reduced to virtual cars (mass-weighted speeds; a
+virtual coupler's extension from the force of the real coupler at the boundary over the virtual
+stiffness) or, given an ``observer`` (heavyhaul.observer, eq. 10), its estimate from the
+locomotives' measured speeds. Efforts are per virtual car, shared back to its cars in proportion
+to mass, clipped by the plant to every car's envelope. A solve that takes longer than Ts is not
+applied: the previous input is held, as the paper does (counted in ``overruns``).
 """
 from typing import NamedTuple
 
@@ -23,6 +25,7 @@ class LoopRecord(NamedTuple):
     traction_work: float       # [J]
     dynamic_brake_work: float
     wagon_brake_work: float
+    overruns: int = 0          # solves slower than Ts: the previous input was held
 
 
 def reduced_state(plant, reduction, state):
@@ -46,23 +49,34 @@ def limits(plant, reduction, state):
     return np.array(low), np.array(high)
 
 
-def run(plant, reduction, controller, state, reference, samples):
-    """``samples`` steps of Ts from ``state``; ``reference(t)`` the reference speed [m/s] at time t."""
+def run(plant, reduction, controller, state, reference, samples, observer=None, applied=None):
+    """``samples`` steps of Ts from ``state``; ``reference(t)`` the reference speed [m/s] at time t;
+    ``applied`` the efforts per virtual car [N] before the first sample (default: none)."""
     c, ts = plant.consist, reduction.model.ts
+    nv = len(reduction.members)
     resistance = np.array([np.dot(c.resistance[cars].T, c.mass[cars]) / c.mass[cars].sum()
                            for cars in reduction.members])
-    rows, works = [], np.zeros(3)
+    locos = [j for j, cars in enumerate(reduction.members) if c.kinds[cars[0]] == "locomotive"]
+    u = np.zeros(nv) if applied is None else np.asarray(applied, float)
+    rows, works, overruns = [], np.zeros(3), 0
     for _ in range(samples):
-        x0 = reduced_state(plant, reduction, state)
+        measured = reduced_state(plant, reduction, state)
+        x0 = measured if observer is None else observer.x.copy()  # eq. 10's x^(k|k-1)
         grades = reduction.reduce(plant.segment.gradient(state.positions), c.mass)
-        offsets = input_offsets(reduction.model.mass, resistance, x0[:len(reduction.members)], grades)
+        offsets = input_offsets(reduction.model.mass, resistance, x0[:nv], grades)
         low, high = limits(plant, reduction, state)
         horizon = [reference(state.time + k * ts) for k in range(controller.np_ + 1)]
-        u = controller.solve(x0, offsets / KN, low / KN, high / KN, horizon) * KN
+        planned = controller.solve(x0, offsets / KN, low / KN, high / KN, horizon) * KN
+        if controller.last.seconds <= ts:
+            u = planned
+        else:
+            overruns += 1
+        if observer is not None:  # only the locomotives' speeds are measured (eq. 3)
+            observer.update(measured[locos], u - offsets)
         step = plant.step(state, reduction.share(u, c.mass), ts)
         state = step.state
         works += [step.traction_work, step.dynamic_brake_work, step.wagon_brake_work]
         rows.append((state.time, np.dot(c.mass, state.speeds) / c.mass.sum(), step.largest_coupler_force, u,
                      controller.last.seconds))
     times, mean, largest, efforts, seconds = (np.array(v) for v in zip(*rows))
-    return state, LoopRecord(times, mean, largest, efforts, seconds, *map(float, works))
+    return state, LoopRecord(times, mean, largest, efforts, seconds, *map(float, works), overruns)
