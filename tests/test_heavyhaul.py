@@ -257,3 +257,28 @@ def test_the_loop_with_the_observer_tracks_like_the_loop_with_the_true_state():
                      applied=reduction.reduce(u))
     assert rec.overruns == 0 and rec.largest_coupler.max() < 0.5 * consist.force_limit
     assert np.all(rec.mean_speed <= 20.0 + 0.1) and abs(rec.mean_speed[-1] - 20.0) < 0.1
+
+
+def test_cars_in_a_curve_pay_roeckls_resistance_and_the_route_loads():
+    """On the shipped representative heavy-haul line a car whose centre is in the 600 m curve
+    pays Roeckl's 0.5 / (600 - 30) of its weight; a car on straight track nothing."""
+    import warnings
+
+    from ecostudy.core.grid import make_segment
+    from ecostudy.io.loaders import load_track, train_from_dict
+    from .conftest import TRACKS
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        track = load_track(TRACKS / "heavyhaul_representative_45km.yaml")
+    point = train_from_dict({"name": "p", "source": "test", "mass_t": 100, "rotating_mass_factor": 0.0,
+                             "length_m": 0, "davis": {"a_N": 1000, "b_N_per_mps": 0, "c_N_per_mps2": 5},
+                             "traction": {"max_force_kN": 500}, "braking": {"max_force_kN": 500},
+                             "curve_resistance": "roeckl"})
+    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    plant = CascadePlant(consist, make_segment(track, point, "Loading", "Port"))
+    flat_plant = CascadePlant(consist, make_segment(track, point, "Loading", "Port"), curves=False)
+    positions = np.full(consist.cars, 20500.0)
+    positions[0] = 16000.0  # straight, on the 2 per-mille grade
+    speeds = np.zeros(consist.cars)
+    extra = plant.resistance(positions, speeds) - flat_plant.resistance(positions, speeds)
+    assert extra[0] == 0.0 and extra[5] == pytest.approx(consist.mass[5] * GRAVITY * 0.5 / 570)

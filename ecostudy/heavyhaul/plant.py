@@ -1,10 +1,12 @@
 """The cascade mass-point train of paper 002 eq. 1, stepped in time: every car at its own position
 (so each feels its own grade), joined by couplers with stiffness and damping.
 
-    m_i dv_i/dt = u_i + f_in,i-1 - f_in,i - f_a,i        f_a,i = m_i (c0 + c1 v_i + c2 v_i^2) + m_i g grade(p_i)
+    m_i dv_i/dt = u_i + f_in,i-1 - f_in,i - f_a,i        f_a,i = m_i (c0 + c1 v_i + c2 v_i^2) + f_p(p_i)
     f_in,i = k (p_i - p_i+1 - l_i) + d (v_i - v_i+1)      l_i = (L_i + L_i+1) / 2, the coupled spacing
 
-p_i is the travel position of car i's centre (the head car first), u_i its effort: traction or
+f_p is the grade force and the curve resistance (Roeckl's formula, as for TTOBench; ``curves=False``
+leaves curves out) where car i's centre is. p_i is the travel position of car i's centre (the
+head car first), u_i its effort: traction or
 dynamic braking for a locomotive, pneumatic braking (<= 0) for a wagon, clipped at every instant to
 the car's envelope at its own speed. The couplers make the system stiff (k/m about 160 1/s^2, d/m
 about 23 1/s for the ore train), so the step uses scipy's BDF with the banded Jacobian sparsity.
@@ -17,7 +19,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.sparse import lil_matrix
 
-from ecostudy.core.physics import GRAVITY
+from ecostudy.core.physics import GRAVITY, roeckl_force
 
 RTOL, ATOL_POSITION, ATOL_SPEED, ATOL_WORK = 1e-8, 1e-6, 1e-8, 1.0
 
@@ -40,8 +42,8 @@ class CascadeStep(NamedTuple):
 class CascadePlant:
     """One consist (:class:`ecostudy.core.types.Consist`) on one segment (its gradient profile)."""
 
-    def __init__(self, consist, segment):
-        self.consist, self.segment = consist, segment
+    def __init__(self, consist, segment, curves=True):
+        self.consist, self.segment, self.curves = consist, segment, curves
         self.n = consist.cars
         self.spacing = 0.5 * (consist.length[:-1] + consist.length[1:])
         self.loco = np.array([k == "locomotive" for k in consist.kinds])
@@ -76,7 +78,10 @@ class CascadePlant:
         c = self.consist
         c0, c1, c2 = c.resistance.T
         running = c.mass * (c0 * np.sign(speeds) + c1 * speeds + c2 * speeds * np.abs(speeds))
-        return running + c.mass * GRAVITY * self.segment.gradient(positions)
+        fixed = c.mass * GRAVITY * self.segment.gradient(positions)
+        if self.curves:
+            fixed = fixed + roeckl_force(c.mass, self.segment.curvature(positions))
+        return running + fixed
 
     def efforts(self, requested, speeds):
         """The requested efforts u_i [N] clipped to each car's envelope at its speed."""
