@@ -99,47 +99,50 @@ def test_track_files(doc):
     assert np.all(np.isfinite(track.gradients))
 
 
-def train_or_none(doc):
-    """The train of a published train document, or None when it is refused (InputError)."""
+def accepted(load, *args):
+    """``load(*args)``, or None when it refuses the input with an InputError (any other error fails)."""
     try:
-        data, aliases = train_document_to_schema(doc, "fuzz.json")
-        return loaders.train_from_schema(loaders.validate(schemas.TrainFile, data, "fuzz.json"), "fuzz.json", aliases)
+        return load(*args)
     except InputError:
         return None
+
+
+def published_train(doc):
+    data, aliases = train_document_to_schema(doc, "fuzz.json")
+    return loaders.train_from_schema(loaders.validate(schemas.TrainFile, data, "fuzz.json"), "fuzz.json", aliases)
+
+
+def published_track(doc):
+    return loaders.track_from_schema(loaders.validate(schemas.TrackFile, track_document_to_schema(doc, "f.json"),
+                                                      "f.json"))
 
 
 @FUZZ
 @given(mutations(TTO_TRAIN))
 def test_ttobench_trains(doc):
-    train = train_or_none(doc)
+    train = accepted(published_train, doc)
     assert train is None or (math.isfinite(train.max_speed) and train.braking.peak > 0)
 
 
 @FUZZ
 @given(mutations(TTO_TRACK))
 def test_ttobench_tracks(doc):
-    try:
-        track = loaders.track_from_schema(loaders.validate(schemas.TrackFile, track_document_to_schema(doc, "f.json"),
-                                                           "f.json"))
-    except InputError:
-        return
-    assert np.all(np.isfinite(track.limits)) and np.all(np.isfinite(track.curvatures))
+    track = accepted(published_track, doc)
+    assert track is None or (np.all(np.isfinite(track.limits)) and np.all(np.isfinite(track.curvatures)))
 
 
 @FUZZ
 @given(mutations(OSRD))
 def test_osrd_rolling_stock(doc):
-    train = train_or_none(doc)
+    train = accepted(published_train, doc)
     assert train is None or (math.isfinite(train.max_speed) and train.traction.peak > 0)
 
 
 @FUZZ
 @given(mutations(JOURNEY))
 def test_ttobench_journeys(doc):
-    try:
-        loaders.validate(schemas.TimetableFile, timetable_document_to_schema(doc, "j.json"), "j.json")
-    except InputError:
-        return
+    accepted(lambda d: loaders.validate(schemas.TimetableFile, timetable_document_to_schema(d, "j.json"), "j.json"),
+             doc)
 
 
 @FUZZ

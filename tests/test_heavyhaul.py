@@ -173,7 +173,7 @@ def test_the_receding_horizon_controller_tracks_a_new_reference_within_the_limit
     consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
     plant = CascadePlant(consist, flat(60000.0))
     reduction = fence(consist, 10, 20.0)
-    kinds = [consist.kinds[cars[0]] for cars in reduction.members]
+    kinds = reduction.kinds
     controller = RecedingHorizon(reduction.model, kinds, np_=8, nc=4)
     resist = plant.resistance(plant.initial(5000.0, 15.0).positions, np.full(consist.cars, 15.0))
     u = np.zeros(consist.cars)
@@ -184,7 +184,7 @@ def test_the_receding_horizon_controller_tracks_a_new_reference_within_the_limit
     assert np.all(rec.mean_speed <= 20.0 + 0.01)
     assert abs(rec.mean_speed[7] - 20.0) < 0.05 and abs(rec.mean_speed[-1] - 20.0) < 0.05
     assert rec.largest_coupler.max() < 0.5 * consist.force_limit
-    locos = [j for j, kind in enumerate(kinds) if kind == "locomotive"]
+    locos = reduction.locomotives
     steps = np.abs(np.diff(np.vstack([reduction.reduce(u)[None, :], rec.efforts])[:, locos], axis=0))
     assert steps.max() <= 200e3 * 1.001
     assert rec.traction_work > 0 and np.all(rec.solve_seconds < 5.0)
@@ -203,7 +203,7 @@ def test_the_kalman_observer_recovers_speeds_and_extensions_from_the_locomotives
     consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
     plant = CascadePlant(consist, flat(60000.0))
     reduction = fence(consist, 10, 20.0)
-    kinds = [consist.kinds[cars[0]] for cars in reduction.members]
+    kinds = reduction.kinds
     nv = len(kinds)
     resist = plant.resistance(plant.initial(5000.0, 15.0).positions, np.full(consist.cars, 15.0))
     u = np.zeros(consist.cars)
@@ -214,8 +214,6 @@ def test_the_kalman_observer_recovers_speeds_and_extensions_from_the_locomotives
     guess[1:nv - 1] += 1.0
     guess[nv:] = 0.0
     observer = KalmanObserver(reduction.model, kinds, estimate=guess)
-    coefficients = np.array([np.dot(consist.resistance[c].T, consist.mass[c]) / consist.mass[c].sum()
-                             for c in reduction.members])
     C, A = observer.C, reduction.model.A
     powers = [np.eye(len(A))]
     for _ in range(len(A) - 1):
@@ -224,9 +222,8 @@ def test_the_kalman_observer_recovers_speeds_and_extensions_from_the_locomotives
     errors = []
     for _ in range(20):
         speeds = reduction.reduce(state.speeds, consist.mass)
-        shifted = reduction.reduce(u) - input_offsets(reduction.model.mass, coefficients, speeds, np.zeros(nv))
-        locos = [j for j, kind in enumerate(kinds) if kind == "locomotive"]
-        estimate = observer.update(speeds[locos], shifted)
+        shifted = reduction.reduce(u) - input_offsets(reduction.model.mass, reduction.resistance, speeds, np.zeros(nv))
+        estimate = observer.update(speeds[reduction.locomotives], shifted)
         state = plant.step(state, u, 20.0).state
         truth = reduced_state(plant, reduction, state)
         errors.append(np.max(np.abs(estimate[1:nv - 1] - truth[1:nv - 1])))
@@ -245,7 +242,7 @@ def test_the_loop_with_the_observer_tracks_like_the_loop_with_the_true_state():
     consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
     plant = CascadePlant(consist, flat(60000.0))
     reduction = fence(consist, 10, 20.0)
-    kinds = [consist.kinds[cars[0]] for cars in reduction.members]
+    kinds = reduction.kinds
     resist = plant.resistance(plant.initial(5000.0, 15.0).positions, np.full(consist.cars, 15.0))
     u = np.zeros(consist.cars)
     u[consist.locomotives] = resist.sum() / 4

@@ -68,10 +68,18 @@ def design_model(mass, c1, stiffness, ts):
 
 
 class Fence(NamedTuple):
-    """Virtual cars of a consist: ``members[j]`` the car indices of virtual car j."""
+    """Virtual cars of a consist: ``members[j]`` the car indices of virtual car j, its kind and its
+    resistance coefficients (c0, c1, c2: the mass-weighted means of its cars')."""
 
     members: list
     model: DesignModel
+    kinds: tuple
+    resistance: np.ndarray
+
+    @property
+    def locomotives(self):
+        """Indices of the locomotive virtual cars."""
+        return [j for j, kind in enumerate(self.kinds) if kind == "locomotive"]
 
     def share(self, virtual_efforts, mass):
         """Per-car efforts [N] from the virtual cars' efforts, shared in proportion to mass."""
@@ -99,10 +107,11 @@ def fence(consist, factor, ts):
             members.append(np.arange(a, min(a + factor, end)))
         start = end
     mass = np.array([consist.mass[c].sum() for c in members])
-    c1 = np.array([np.dot(consist.resistance[c, 1], consist.mass[c]) / consist.mass[c].sum() for c in members])
+    resistance = np.array([consist.mass[c] @ consist.resistance[c] / consist.mass[c].sum() for c in members])
     centre = [0.5 * (c[0] + c[-1]) for c in members]  # in car indices: couplers spanned between centres
     stiffness = np.array([consist.stiffness / max(b - a, 1.0) for a, b in zip(centre, centre[1:])])
-    return Fence(members, design_model(mass, c1, stiffness, ts))
+    return Fence(members, design_model(mass, resistance[:, 1], stiffness, ts),
+                 tuple(consist.kinds[c[0]] for c in members), resistance)
 
 
 def virtual_car_count(runs, factor):

@@ -53,17 +53,14 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     """``samples`` steps of Ts from ``state``; ``reference(t)`` the reference speed [m/s] at time t;
     ``applied`` the efforts per virtual car [N] before the first sample (default: none)."""
     c, ts = plant.consist, reduction.model.ts
-    nv = len(reduction.members)
-    resistance = np.array([np.dot(c.resistance[cars].T, c.mass[cars]) / c.mass[cars].sum()
-                           for cars in reduction.members])
-    locos = [j for j, cars in enumerate(reduction.members) if c.kinds[cars[0]] == "locomotive"]
+    nv, locos = len(reduction.members), reduction.locomotives
     u = np.zeros(nv) if applied is None else np.asarray(applied, float)
     rows, works, overruns = [], np.zeros(3), 0
     for _ in range(samples):
         measured = reduced_state(plant, reduction, state)
         x0 = measured if observer is None else observer.x.copy()  # eq. 10's x^(k|k-1)
         grades = reduction.reduce(plant.segment.gradient(state.positions), c.mass)
-        offsets = input_offsets(reduction.model.mass, resistance, x0[:nv], grades)
+        offsets = input_offsets(reduction.model.mass, reduction.resistance, x0[:nv], grades)
         low, high = limits(plant, reduction, state)
         horizon = [reference(state.time + k * ts) for k in range(controller.np_ + 1)]
         planned = controller.solve(x0, offsets / KN, low / KN, high / KN, horizon) * KN

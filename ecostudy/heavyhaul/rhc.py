@@ -33,6 +33,7 @@ class RecedingHorizon:
         self.kf, self.kv, self.ke, self.kb = weights
         n = len(self.kinds)
         self.n = n
+        self.locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
         A, B = model.A, model.B * KN  # the input in kN
         m = pyo.ConcreteModel()
         m.K, m.U = pyo.RangeSet(0, np_), pyo.RangeSet(0, nc - 1)
@@ -49,8 +50,7 @@ class RecedingHorizon:
         m.dynamics = pyo.Constraint(pyo.RangeSet(0, np_ - 1), m.S, rule=lambda m, k, s: m.x[k + 1, s] == sum(
             A[s, j] * m.x[k, j] for j in range(2 * n - 1) if A[s, j] != 0.0) + sum(
             B[s, i] * (m.u[move(k), i] - m.offset[i]) for i in range(n) if B[s, i] != 0.0))
-        locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
-        m.rate = pyo.Constraint(m.U, locos, rule=lambda m, k, i: pyo.inequality(
+        m.rate = pyo.Constraint(m.U, self.locos, rule=lambda m, k, i: pyo.inequality(
             -rate_kN, m.u[k, i] - (m.previous[i] if k == 0 else m.u[k - 1, i]), rate_kN))
         weight = model.mass / model.mass.sum()
         m.mean_speed = pyo.Constraint(pyo.RangeSet(1, np_), rule=lambda m, k: sum(
@@ -73,7 +73,7 @@ class RecedingHorizon:
         extensions), the input offsets and bounds [kN] and the reference speeds over the horizon."""
         m, n = self.m, self.n
         previous = np.clip(self.previous, low_kN, high_kN)
-        locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
+        locos = self.locos
         variables = ([m.x[0, s] for s in m.S] + [m.offset[i] for i in m.C] + [m.previous[i] for i in locos]
                      + [m.vr[k] for k in range(1, self.np_ + 1)] + [m.u[k, i] for k in m.U for i in m.C])
         fixed = (list(map(float, state)) + list(map(float, offsets_kN)) + [float(previous[i]) for i in locos]

@@ -200,6 +200,7 @@ def ttobench_train(doc, path, selector=None):
     p_reg = quantity(doc, "max reg braking power", path, "power", math.inf) if f_reg > 0 else math.inf
     f_pn = quantity(doc, "max pn braking force", path, "force", 0.0)
     rho = quantity(doc, "rho", path, "share", 0.0)
+    factor = rho if rho < 1 else rho - 1  # ms-eetc: 6 % -> 1.06, a factor 1.06 kept
     bounds = {}
     for key, field in (("max acceleration", "max_acceleration_mps2"), ("max deceleration", "max_deceleration_mps2")):
         if key in doc:
@@ -219,7 +220,7 @@ def ttobench_train(doc, path, selector=None):
     mass = quantity(doc, "mass", path, "mass")
     braking = _braking(doc, path, top, f_reg, p_reg, f_pn)
     if selector == "etcs":  # the deceleration curve of the whole train: force = M a, M with the rotating allowance
-        effective = mass * (1 + (rho if rho < 1 else rho - 1))
+        effective = mass * (1 + factor)
         braking = {"table": {"speed_kmh": [v / units.KMH for v, _ in service],
                              "force_kN": [effective * a / units.KN for _, a in service]}}
     return {
@@ -227,7 +228,7 @@ def ttobench_train(doc, path, selector=None):
         "source": f"TTOBench train {name} ({meta.get('library version', 'version not stated')}); "
                   + (f"{length:g} m long" if length else "point mass (no length given)"),
         "mass_t": mass / units.TONNE,
-        "rotating_mass_factor": rho if rho < 1 else rho - 1,  # ms-eetc: 6 % -> 1.06, a factor 1.06 kept
+        "rotating_mass_factor": factor,
         "length_m": length,
         "davis": {"a_N": quantity(doc, "rolling resistance r0", path, "force"),
                   "b_N_per_mps": quantity(doc, "rolling resistance r1", path, "force per speed", 0.0),
