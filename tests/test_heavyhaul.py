@@ -9,6 +9,7 @@ from ecostudy.core.grid import Profile, Segment
 from ecostudy.core.physics import GRAVITY, Envelope
 from ecostudy.core.types import Consist
 from ecostudy.heavyhaul.plant import CascadePlant
+from ecostudy.heavyhaul.reference import table_reference
 from ecostudy.io.loaders import load_consist
 
 from .conftest import TRAINS
@@ -180,7 +181,7 @@ def test_the_receding_horizon_controller_tracks_a_new_reference_within_the_limit
     u[consist.locomotives] = resist.sum() / 4
     state = plant.quasi_static(5000.0, 15.0, u)
     controller.previous = reduction.reduce(u) / 1e3
-    state, rec = run(plant, reduction, controller, state, lambda t: 20.0, 10)
+    state, rec = run(plant, reduction, controller, state, table_reference([0.0, 1e6], [72.0, 72.0]), 10)
     assert np.all(rec.mean_speed <= 20.0 + 0.01)
     assert abs(rec.mean_speed[7] - 20.0) < 0.05 and abs(rec.mean_speed[-1] - 20.0) < 0.05
     assert rec.largest_coupler.max() < 0.5 * consist.force_limit
@@ -250,7 +251,7 @@ def test_the_loop_with_the_observer_tracks_like_the_loop_with_the_true_state():
     controller = RecedingHorizon(reduction.model, kinds)
     controller.previous = reduction.reduce(u) / 1e3
     observer = KalmanObserver(reduction.model, kinds, estimate=reduced_state(plant, reduction, state))
-    state, rec = run(plant, reduction, controller, state, lambda t: 20.0, 12, observer=observer,
+    state, rec = run(plant, reduction, controller, state, table_reference([0.0, 1e6], [72.0, 72.0]), 12, observer=observer,
                      applied=reduction.reduce(u))
     assert rec.overruns == 0 and rec.largest_coupler.max() < 0.5 * consist.force_limit
     assert np.all(rec.mean_speed <= 20.0 + 0.1) and abs(rec.mean_speed[-1] - 20.0) < 0.1

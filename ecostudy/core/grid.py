@@ -29,6 +29,22 @@ class Profile:
             return self.values[i]
         return self.values[i] + self.slopes[i] * (np.asarray(x, float) - self.starts[i])
 
+    def integral(self, x):
+        """The integral of the profile from ``starts[0]`` to ``x`` (the first piece extends below it,
+        the last beyond its start)."""
+        slopes = np.zeros(len(self.values)) if self.slopes is None else self.slopes
+        widths = np.diff(self.starts)
+        pieces = np.concatenate([[0.0], np.cumsum(self.values[:-1] * widths + 0.5 * slopes[:-1] * widths ** 2)])
+        i = np.clip(np.searchsorted(self.starts, x, side="right") - 1, 0, len(self.values) - 1)
+        h = np.asarray(x, float) - self.starts[i]
+        return pieces[i] + self.values[i] * h + 0.5 * slopes[i] * h * h
+
+    def mean_over(self, centre, length):
+        """The mean of the profile over ``[centre - length/2, centre + length/2]`` (a car's length):
+        continuous in ``centre`` where the profile jumps."""
+        half = 0.5 * np.asarray(length, float)
+        return (self.integral(centre + half) - self.integral(centre - half)) / (2.0 * half)
+
 
 def _directed(positions, values, start, end, slopes=None):
     """Profile of a track quantity as seen by a train running from ``start`` to ``end``.

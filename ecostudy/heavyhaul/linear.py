@@ -117,3 +117,8 @@ def fence(consist, factor, ts):
 def virtual_car_count(runs, factor):
     """n_f = sum of ceil(run / f) over the consist's runs of one kind (paper 002 §III-C)."""
     return sum(math.ceil(r / factor) for r in runs)
+
+
+def paper_counts(cars, nc):
+    """Paper 002's QP size (§III-B): n Nc control variables and (6 n - 2) Nc constraints."""
+    return cars * nc, (6 * cars - 2) * nc

@@ -18,8 +18,11 @@ from ecostudy.heavyhaul.rhc import input_offsets
 
 class LoopRecord(NamedTuple):
     times: np.ndarray          # [s] at the end of each sample
+    head: np.ndarray           # head position [m] at the end of each sample
     mean_speed: np.ndarray     # [m/s]
+    reference: np.ndarray      # v_r at the head's position [m/s], at the end of each sample
     largest_coupler: np.ndarray  # largest |f_in| within each sample [N]
+    couplers: np.ndarray       # (samples, couplers) f_in at the end of each sample [N]
     efforts: np.ndarray        # (samples, virtual cars) [N]
     solve_seconds: np.ndarray
     traction_work: float       # [J]
@@ -49,9 +52,38 @@ def limits(plant, reduction, state):
     return np.array(low), np.array(high)
 
 
+def head_position(plant, state):
+    """The head's front [m] along the segment (the reference's distance)."""
+    return float(state.positions[0] + 0.5 * plant.consist.length[0])
+
+
+def horizon(plant, reduction, reference, state, speeds, np_):
+    """(input offsets per sample [N], v_r(k) for k = 0..Np [m/s]) along the predicted positions
+    (eq. 9's F1, F2): the head advances as the reference does from the reference's clock at the
+    head's position; each sample's offsets are the grade and curve forces at its middle and the
+    resistance at the (virtual) cars' ``speeds``."""
+    ts, head = reduction.model.ts, head_position(plant, state)
+    heads = reference.position_at(reference.time_at(head) + ts * np.arange(np_ + 1))
+    middles = 0.5 * (heads[:-1] + heads[1:]) - head
+    offsets = np.array([input_offsets(reduction.model.mass, reduction.resistance, speeds,
+                                      reduction.reduce(plant.fixed_forces(state.positions + d))) for d in middles])
+    return offsets, reference.speed(heads)
+
+
+STOPPED = 0.3  # [m/s]: a train crawling slower on its final approach has stopped (1 km/h)
+
+
+def finished(plant, reference, state):
+    """Stopped (mean speed below :data:`STOPPED`) on the reference's final approach: a speed-tracking
+    controller stops where its speed runs out, not at a point (the stop error is reported)."""
+    mean = np.dot(plant.consist.mass, state.speeds) / plant.consist.mass.sum()
+    return mean < STOPPED and head_position(plant, state) > reference.final_approach
+
+
 def run(plant, reduction, controller, state, reference, samples, observer=None, applied=None):
-    """``samples`` steps of Ts from ``state``; ``reference(t)`` the reference speed [m/s] at time t;
-    ``applied`` the efforts per virtual car [N] before the first sample (default: none)."""
+    """At most ``samples`` steps of Ts from ``state`` (fewer when the train stops at the end of the
+    ``reference``, a :class:`~ecostudy.heavyhaul.reference.Reference`); ``applied`` the efforts per
+    virtual car [N] before the first sample (default: none)."""
     c, ts = plant.consist, reduction.model.ts
     nv, locos = len(reduction.members), reduction.locomotives
     u = np.zeros(nv) if applied is None else np.asarray(applied, float)
@@ -59,21 +91,22 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     for _ in range(samples):
         measured = reduced_state(plant, reduction, state)
         x0 = measured if observer is None else observer.x.copy()  # eq. 10's x^(k|k-1)
-        grades = reduction.reduce(plant.segment.gradient(state.positions), c.mass)
-        offsets = input_offsets(reduction.model.mass, reduction.resistance, x0[:nv], grades)
+        offsets, vr = horizon(plant, reduction, reference, state, x0[:nv], controller.np_)
         low, high = limits(plant, reduction, state)
-        horizon = [reference(state.time + k * ts) for k in range(controller.np_ + 1)]
-        planned = controller.solve(x0, offsets / KN, low / KN, high / KN, horizon) * KN
+        planned = controller.solve(x0, offsets / KN, low / KN, high / KN, vr) * KN
         if controller.last.seconds <= ts:
             u = planned
         else:
             overruns += 1
         if observer is not None:  # only the locomotives' speeds are measured (eq. 3)
-            observer.update(measured[locos], u - offsets)
+            observer.update(measured[locos], u - offsets[0])
         step = plant.step(state, reduction.share(u, c.mass), ts)
         state = step.state
         works += [step.traction_work, step.dynamic_brake_work, step.wagon_brake_work]
-        rows.append((state.time, np.dot(c.mass, state.speeds) / c.mass.sum(), step.largest_coupler_force, u,
-                     controller.last.seconds))
-    times, mean, largest, efforts, seconds = (np.array(v) for v in zip(*rows))
-    return state, LoopRecord(times, mean, largest, efforts, seconds, *map(float, works), overruns)
+        head = head_position(plant, state)
+        rows.append((state.time, head, np.dot(c.mass, state.speeds) / c.mass.sum(), reference.speed(head),
+                     step.largest_coupler_force, step.coupler_forces, u, controller.last.seconds))
+        if finished(plant, reference, state):
+            break
+    columns = (np.array(v) for v in zip(*rows))
+    return state, LoopRecord(*columns, *map(float, works), overruns)

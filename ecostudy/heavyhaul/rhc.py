@@ -11,13 +11,13 @@ and re-solved every Ts with new parameters.
 Forces in kN, speeds in m/s (the paper's units are not stated; this scaling keeps the QP's terms
 of order one). ``offset`` is the operating point's speed-independent and quadratic resistance
 (eq. 2's input shift), re-evaluated at every sample from the measured state. Moves beyond Nc hold
-the last one. Not yet: the Kalman observer (eq. 10) -- the controller reads the plant's state.
+the last one. The offsets and the reference are given per sample of the horizon (eq. 9's F1, F2:
+the caller reads them along the predicted positions, :mod:`ecostudy.heavyhaul.loop`).
 """
 import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.errors import SolverError
-from ecostudy.core.physics import GRAVITY
 from ecostudy.core.units import KN
 from ecostudy.ocp.session import Session
 
@@ -38,7 +38,7 @@ class RecedingHorizon:
         m = pyo.ConcreteModel()
         m.K, m.U = pyo.RangeSet(0, np_), pyo.RangeSet(0, nc - 1)
         m.S, m.C, m.X = pyo.RangeSet(0, 2 * n - 2), pyo.RangeSet(0, n - 1), pyo.RangeSet(0, n - 2)
-        m.offset = pyo.Var(m.C, initialize=0.0)     # [kN], fixed by bounds at every solve
+        m.offset = pyo.Var(pyo.RangeSet(0, np_ - 1), m.C, initialize=0.0)  # [kN] per sample, fixed by bounds
         m.previous = pyo.Var(m.C, initialize=0.0)   # [kN], likewise
         m.vr = pyo.Var(m.K, initialize=0.0)         # [m/s], likewise
         m.x = pyo.Var(m.K, m.S, initialize=0.0)     # x[0, :] fixed by bounds to the measured state
@@ -49,7 +49,7 @@ class RecedingHorizon:
 
         m.dynamics = pyo.Constraint(pyo.RangeSet(0, np_ - 1), m.S, rule=lambda m, k, s: m.x[k + 1, s] == sum(
             A[s, j] * m.x[k, j] for j in range(2 * n - 1) if A[s, j] != 0.0) + sum(
-            B[s, i] * (m.u[move(k), i] - m.offset[i]) for i in range(n) if B[s, i] != 0.0))
+            B[s, i] * (m.u[move(k), i] - m.offset[k, i]) for i in range(n) if B[s, i] != 0.0))
         m.rate = pyo.Constraint(m.U, self.locos, rule=lambda m, k, i: pyo.inequality(
             -rate_kN, m.u[k, i] - (m.previous[i] if k == 0 else m.u[k - 1, i]), rate_kN))
         weight = model.mass / model.mass.sum()
@@ -68,15 +68,26 @@ class RecedingHorizon:
         self.previous = np.zeros(n)
         self.last = None  # the last solve's Outcome
 
+    @property
+    def size(self):
+        """The QP's decision variables and constraints (input bounds are variable bounds): the
+        paper condenses the states away (n Nc variables, (6n - 2) Nc constraints: linear.paper_counts);
+        this formulation keeps them, so its constraint matrix stays banded and sparse."""
+        n, np_, nc = self.n, self.np_, self.nc
+        return {"inputs": nc * n, "states": np_ * (2 * n - 1),
+                "constraints": np_ * (2 * n - 1) + nc * len(self.locos) + np_ + np_ * (n - 1)}
+
     def solve(self, state, offsets_kN, low_kN, high_kN, reference):
         """The first move [kN per (virtual) car] from the measured ``state`` (speeds then coupler
-        extensions), the input offsets and bounds [kN] and the reference speeds over the horizon."""
+        extensions), the input offsets [kN] per sample of the horizon (rows; one row: held), the
+        bounds [kN] and the reference speeds v_r(k), k = 0..Np (eq. 9: along the predicted positions)."""
         m, n = self.m, self.n
+        offsets_kN = np.broadcast_to(np.atleast_2d(offsets_kN), (self.np_, n))
         previous = np.clip(self.previous, low_kN, high_kN)
         locos = self.locos
-        variables = ([m.x[0, s] for s in m.S] + [m.offset[i] for i in m.C] + [m.previous[i] for i in locos]
+        variables = ([m.x[0, s] for s in m.S] + [m.offset[k, i] for k in range(self.np_) for i in m.C] + [m.previous[i] for i in locos]
                      + [m.vr[k] for k in range(1, self.np_ + 1)] + [m.u[k, i] for k in m.U for i in m.C])
-        fixed = (list(map(float, state)) + list(map(float, offsets_kN)) + [float(previous[i]) for i in locos]
+        fixed = (list(map(float, state)) + list(map(float, offsets_kN.ravel())) + [float(previous[i]) for i in locos]
                  + [float(reference[min(k, len(reference) - 1)]) for k in range(1, self.np_ + 1)])
         lows = fixed + [float(low_kN[i]) for _ in m.U for i in range(n)]
         highs = fixed + [float(high_kN[i]) for _ in m.U for i in range(n)]
@@ -88,7 +99,8 @@ class RecedingHorizon:
         return self.previous.copy()
 
 
-def input_offsets(mass, resistance, speeds, grades):
-    """Eq. 2's input shift per (virtual) car [N]: m (c0 + c2 v^2) + m g grade at the measured speed."""
+def input_offsets(mass, resistance, speeds, fixed):
+    """Eq. 2's input shift per (virtual) car [N]: m (c0 + c2 v^2) at the speeds plus the grade and
+    curve forces ``fixed`` [N] (the plant's :meth:`~ecostudy.heavyhaul.plant.CascadePlant.fixed_forces`)."""
     c0, _, c2 = np.asarray(resistance).T
-    return mass * (c0 + c2 * speeds ** 2) + mass * GRAVITY * grades
+    return mass * (c0 + c2 * speeds ** 2) + fixed

@@ -348,7 +348,12 @@ __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "loa
 
 def load_consist(path):
     """Read a consist file (YAML: vehicle types, groups in train order, couplers) into a :class:`Consist`."""
-    c = validate(ConsistFile, read_document(path), path)
+    return consist_from_document(read_document(path), path)
+
+
+def consist_from_document(document, where):
+    """A :class:`Consist` (SI) from a consist file's document, validated; ``where`` names it in errors."""
+    c = validate(ConsistFile, document, where)
     cars = [c.types[g.type] for g in c.vehicles for _ in range(g.count)]
 
     def envelope(spec):

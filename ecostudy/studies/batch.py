@@ -35,26 +35,12 @@ def _all_out_time(case, track, train):
     return _ALL_OUT[key]
 
 
-def run_case(case):
-    """Solve one case (a dict from :func:`ecostudy.study.expand`); never raises."""
+def outcome(case, compute):
+    """The stored result of one case: ``compute()`` returns (status, error, summary); an infeasible
+    or failed case becomes a result with its reason (one failing case never stops a study)."""
     t0 = time.perf_counter()
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", EcostudyWarning)  # shown once when the study was expanded
-            train = train_from_schema(TrainFile.model_validate(case["train"]), case["scenario"])
-        track = track_from_schema(TrackFile.model_validate(case["track"]))
-        running_time, t_allout = case["running_time_s"], None
-        if case["supplement_percent"] is not None and case["objective"] != "time":
-            t_allout = _all_out_time(case, track, train)
-            running_time = t_allout * (1 + case["supplement_percent"] / 100)
-        timing = Timing(running_time=running_time, window=tuple(case["window_s"]) if case["window_s"] else None)
-        r = solve_run(track, train, case["from"], case["to"], timing, objective=case["objective"],
-                      points=case["points"], weights=tuple(case["weights"]))
-        status, error, summary = ("ok" if r.ok else "flagged"), None, r.summary
-        if case.get("das"):
-            summary["das"] = das_columns(r, case["das"], case["points"], case.get("das_time_limit_s", 60.0))
-        if t_allout is not None:
-            summary["all_out_time_s"] = t_allout
+        status, error, summary = compute()
     except InfeasibleError as exc:
         status, error, summary = "infeasible", str(exc), None
     except EcostudyError as exc:
@@ -63,6 +49,31 @@ def run_case(case):
         status, error, summary = "failed", f"{type(exc).__name__}: {exc}", None
     return {"key": case["key"], "status": status, "error": error, "summary": summary,
             "seconds": time.perf_counter() - t0}
+
+
+def run_case(case):
+    """Solve one case (a dict from :func:`ecostudy.study.expand`); never raises."""
+    return outcome(case, lambda: _solve_case(case))
+
+
+def _solve_case(case):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EcostudyWarning)  # shown once when the study was expanded
+        train = train_from_schema(TrainFile.model_validate(case["train"]), case["scenario"])
+    track = track_from_schema(TrackFile.model_validate(case["track"]))
+    running_time, t_allout = case["running_time_s"], None
+    if case["supplement_percent"] is not None and case["objective"] != "time":
+        t_allout = _all_out_time(case, track, train)
+        running_time = t_allout * (1 + case["supplement_percent"] / 100)
+    timing = Timing(running_time=running_time, window=tuple(case["window_s"]) if case["window_s"] else None)
+    r = solve_run(track, train, case["from"], case["to"], timing, objective=case["objective"],
+                  points=case["points"], weights=tuple(case["weights"]))
+    summary = r.summary
+    if case.get("das"):
+        summary["das"] = das_columns(r, case["das"], case["points"], case.get("das_time_limit_s", 60.0))
+    if t_allout is not None:
+        summary["all_out_time_s"] = t_allout
+    return ("ok" if r.ok else "flagged"), None, summary
 
 
 def _serial(todo, task):

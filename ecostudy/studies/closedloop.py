@@ -6,7 +6,6 @@ ranges) and a noise seed; every controller drives the same draws (paired compari
 self-contained and keyed by a hash of their inputs, so a study runs resumably on the batch
 machinery (:func:`ecostudy.studies.batch.execute`): serially, in processes or on Dask.
 """
-import time
 import warnings
 from pathlib import Path
 from typing import NamedTuple
@@ -20,7 +19,7 @@ from ecostudy.control.controllers import Convex, ForceReplay, OpenLoop, Quantise
 from ecostudy.control.sbpc import Sbpc
 from ecostudy.control.estimator import MassEstimator
 from ecostudy.control.loop import run_loop
-from ecostudy.core.errors import EcostudyError, EcostudyWarning, InputError, problem
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
 from ecostudy.core.types import State, Timing
@@ -32,7 +31,7 @@ from ecostudy.ocp.convex import FASTEST, ConvexProgram, ConvexWeights, trapezoid
 from ecostudy.ocp.problem import prepare
 from ecostudy.io.store import Store
 from ecostudy.io.writers import check_output_dir, write_csv
-from ecostudy.studies.batch import execute
+from ecostudy.studies.batch import execute, outcome
 from ecostudy.studies.cases import case_key
 
 PARAMETERS = ("mass", "resistance", "traction", "braking")
@@ -153,32 +152,29 @@ def summarise(case, result, controller, train, estimator):
 
 def run_loop_case(case):
     """One closed-loop trip (a case of :func:`expand`); never raises: failures are results."""
-    t0 = time.perf_counter()
-    try:
-        track, train, segment = _inputs(case)
-        estimator = MassEstimator() if case["controller"]["estimator"] else None
-        controller, planner = build_controller(case, track, segment, train, estimator)
-        n = case["noise"]
-        noise = Noise(n["acceleration_mps2"], n["position_m"], n["speed_mps"], n["seed"], n["period_s"],
-                      n["accelerometer_mps2"])
-        plant = Plant(segment, train, Truth(**case["truth"]))
-        result = run_loop(plant, controller, case["sample_time"], noise, plant_step=case["sample_time"],
-                          estimator=estimator)
-        summary = summarise(case, result, planner, train, estimator)
-        reasons = []
-        if abs(summary["stop_error_m"]) > 1.0:
-            reasons.append(f"stopped {summary['stop_error_m']:+.2f} m from the stop")
-        if summary["late_s"] > 1.0:
-            reasons.append(f"arrived {summary['late_s']:.2f} s after the window")
-        if summary["max_overspeed_kmh"] > 0.5:
-            reasons.append(f"overspeed {summary['max_overspeed_kmh']:.2f} km/h")
-        status, error = ("flagged", "; ".join(reasons)) if reasons else ("ok", None)
-    except EcostudyError as exc:
-        status, error, summary = "failed", str(exc), None
-    except Exception as exc:  # one failing run never stops the study
-        status, error, summary = "failed", f"{type(exc).__name__}: {exc}", None
-    return {"key": case["key"], "status": status, "error": error, "summary": summary,
-            "seconds": time.perf_counter() - t0}
+    return outcome(case, lambda: _trip(case))
+
+
+def _trip(case):
+    track, train, segment = _inputs(case)
+    estimator = MassEstimator() if case["controller"]["estimator"] else None
+    controller, planner = build_controller(case, track, segment, train, estimator)
+    n = case["noise"]
+    noise = Noise(n["acceleration_mps2"], n["position_m"], n["speed_mps"], n["seed"], n["period_s"],
+                  n["accelerometer_mps2"])
+    plant = Plant(segment, train, Truth(**case["truth"]))
+    result = run_loop(plant, controller, case["sample_time"], noise, plant_step=case["sample_time"],
+                      estimator=estimator)
+    summary = summarise(case, result, planner, train, estimator)
+    reasons = []
+    if abs(summary["stop_error_m"]) > 1.0:
+        reasons.append(f"stopped {summary['stop_error_m']:+.2f} m from the stop")
+    if summary["late_s"] > 1.0:
+        reasons.append(f"arrived {summary['late_s']:.2f} s after the window")
+    if summary["max_overspeed_kmh"] > 0.5:
+        reasons.append(f"overspeed {summary['max_overspeed_kmh']:.2f} km/h")
+    status, error = ("flagged", "; ".join(reasons)) if reasons else ("ok", None)
+    return status, error, summary
 
 
 COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "stop_error_m", "max_overspeed_kmh",

@@ -1,0 +1,94 @@
+"""Heavy haul (issue 13): paper 002's Tables III-IV and Fig. 6 on the shipped representative line,
+and the QP's solve time per step and memory for f = 1 and f = 10.
+
+    python bench/bench_heavyhaul.py                  # the three studies (about 20 min on 2 cores)
+    python bench/bench_heavyhaul.py --qp 1           # one QP size: build + 10 solves, time and memory
+
+The studies run through ``ecostudy.studies.heavyhaul.heavyhaul_study`` (resumable: outputs in
+out/bench_heavyhaul_*); the tables are printed as markdown for docs/benchmarks.md.
+"""
+import argparse
+import resource
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from ecostudy.core.errors import EcostudyWarning  # noqa: E402
+from ecostudy.heavyhaul.linear import fence  # noqa: E402
+from ecostudy.heavyhaul.loop import horizon, limits, reduced_state  # noqa: E402
+from ecostudy.heavyhaul.plant import CascadePlant  # noqa: E402
+from ecostudy.heavyhaul.reference import table_reference  # noqa: E402
+from ecostudy.heavyhaul.rhc import RecedingHorizon  # noqa: E402
+from ecostudy.io.loaders import load_consist  # noqa: E402
+
+COLUMNS = ["K_b", "f", "Np", "Nc", "tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN",
+           "force_mean_kN", "force_std_kN", "energy_wagons_MJ", "energy_total_MJ", "stop_error_m", "qp_inputs",
+           "qp_constraints", "solve_mean_s", "solve_max_s", "over_ts", "seconds"]
+
+
+def rss_mb():
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def qp(factor, np_=8, nc=6, solves=10):
+    """Build the controller for fence ``factor`` and solve ``solves`` samples of a 15 -> 20 m/s
+    manoeuvre on a 10 per-mille climb (the plant stepping the full train between them)."""
+    from ecostudy.core.grid import Profile, Segment
+    consist = load_consist(ROOT / "trains/heavyhaul_paper002.yaml")
+    segment = Segment(60000.0, Profile(np.zeros(1), np.array([0.010])), Profile(np.zeros(1), np.zeros(1)),
+                      Profile(np.zeros(1), np.array([30.0])))
+    plant = CascadePlant(consist, segment)
+    reduction = fence(consist, factor, 20.0)
+    before = rss_mb()
+    t0 = time.perf_counter()
+    controller = RecedingHorizon(reduction.model, reduction.kinds, np_=np_, nc=nc)
+    build = time.perf_counter() - t0
+    u = np.zeros(consist.cars)
+    u[consist.locomotives] = plant.resistance(plant.initial(5000.0, 15.0).positions, np.full(consist.cars, 15.0)).sum() / 4
+    state = plant.quasi_static(5000.0, 15.0, u)
+    controller.previous = reduction.reduce(u) / 1e3
+    reference = table_reference([0.0, 1e6], [72.0, 72.0])
+    seconds = []
+    for _ in range(solves):
+        x0 = reduced_state(plant, reduction, state)
+        offsets, vr = horizon(plant, reduction, reference, state, x0[:len(reduction.kinds)], np_)
+        low, high = limits(plant, reduction, state)
+        planned = controller.solve(x0, offsets / 1e3, low / 1e3, high / 1e3, vr) * 1e3
+        seconds.append(controller.last.seconds)
+        state = plant.step(state, reduction.share(planned, consist.mass), 20.0).state
+    seconds = np.array(seconds)
+    print(f"| {factor} | {len(reduction.kinds)} | {np_}/{nc} | {controller.size['inputs']} | {controller.size['states']} | "
+          f"{controller.size['constraints']} | {build:.2f} | {seconds[0]:.3f} | {np.median(seconds[1:]):.3f} | "
+          f"{seconds.max():.3f} | {rss_mb() - before:.0f} |")
+
+
+def studies():
+    from ecostudy.studies.heavyhaul import heavyhaul_study
+    for name in ("heavyhaul_brake_penalty", "heavyhaul_horizons", "heavyhaul_fence"):
+        t0 = time.perf_counter()
+        outcome = heavyhaul_study(ROOT / "studies" / f"{name}.yaml", workers=2, out=ROOT / "out" / f"bench_{name}")
+        print(f"\n`{name}` ({time.perf_counter() - t0:.0f} s wall; reference {outcome.reference.running_time:.0f} s, "
+              f"{outcome.reference.energy / 3.6e6:.0f} kWh single mass)\n")
+        runs = outcome.runs[COLUMNS]
+        print("| " + " | ".join(COLUMNS) + " |")
+        print("|" + "---|" * len(COLUMNS))
+        for _, row in runs.iterrows():
+            print("| " + " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in row) + " |")
+
+
+if __name__ == "__main__":
+    warnings.simplefilter("ignore", EcostudyWarning)
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--qp", type=int, help="fence factor: time and memory of the QP only")
+    args = parser.parse_args()
+    if args.qp:
+        print("| f | virtual cars | Np/Nc | inputs | states | constraints | build s | first solve s | median s | max s | RSS growth MB |")
+        qp(args.qp)
+    else:
+        studies()

@@ -1,0 +1,47 @@
+"""The heavy-haul command of the command line: ``ecostudy heavyhaul`` (registered on ``cli.app``)."""
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ecostudy.cli.app import app, case_progress, check_options, guarded
+
+SHOWN = ["K_b", "f", "Np", "Nc", "status", "tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_mean_kN",
+         "force_std_kN", "energy_wagons_MJ", "energy_total_MJ", "qp_inputs", "solve_mean_s", "solve_max_s", "over_ts"]
+
+
+def _heavyhaul(study, workers, dask, retry_failed, out, no_progress, no_plot):
+    check_options(workers=workers)
+    from ecostudy.studies.heavyhaul import heavyhaul_study
+    with case_progress("runs", no_progress) as progress:
+        outcome = heavyhaul_study(study, workers, dask, retry_failed, Path(out) if out else None, progress)
+    plots = []
+    if not no_plot:
+        from ecostudy.report import heavyplots
+        plots = heavyplots.draw(outcome)
+    runs, counts = outcome.runs, outcome.counts
+    typer.echo(runs[[c for c in SHOWN if c in runs]].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    typer.echo(f"{counts['total']} runs: {counts['stored_before']} already stored, {counts['computed']} computed now "
+               f"({counts['failed']} failed); not ok: {counts['not_ok']}")
+    typer.echo(f"outputs {outcome.output}/ ({', '.join(['runs.csv', 'results.sqlite'] + plots[:3])}"
+               f"{', ...' if len(plots) > 3 else ''})")
+    for _, row in runs[runs["status"] != "ok"].iterrows():
+        typer.echo(f"  K_b={row['K_b']:g} f={row['f']} Np={row['Np']} Nc={row['Nc']}: {row['status']}: {row['reason']}")
+    return counts
+
+
+@app.command()
+def heavyhaul(
+    study: Path = typer.Argument(..., help="Heavy-haul study file (YAML): consist, track, reference, K_b/f/horizons."),
+    workers: int = typer.Option(1, help="Local worker processes."),
+    dask: Optional[str] = typer.Option(None, help="Address of a running Dask scheduler (tcp://host:port)."),
+    retry_failed: bool = typer.Option(False, help="Compute failed runs again."),
+    out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's 'output')."),
+    no_progress: bool = typer.Option(False, "--no-progress", help="No progress bar."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip the plots."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """Heavy haul: paper 002's braking-penalised receding-horizon controller on the coupled-mass train (resumable)."""
+    counts = guarded(debug, _heavyhaul, study, workers, dask, retry_failed, out, no_progress, no_plot)
+    if counts["not_ok"]:
+        raise typer.Exit(1)

@@ -1,0 +1,24 @@
+"""What a heavy-haul study checks before it runs: can the consist start on the route's ruling grade
+without breaking a coupler, and does the horizon fit the trip."""
+import numpy as np
+
+from ecostudy.core.physics import GRAVITY
+
+
+def ruling_grade(segment, train_length, step=50.0):
+    """The steepest uphill gradient [-] averaged over the train's length anywhere on the segment."""
+    heads = np.arange(0.0, segment.distance + step, step)
+    return float(np.max(segment.gradient.mean_over(heads - 0.5 * train_length, train_length)))
+
+
+def starting_coupler_force(consist, grade):
+    """(largest |in-train force| [N], traction needed [N]) when the consist starts from rest on
+    ``grade``: the locomotives together just overcome the train's weight component and its
+    speed-independent resistance, each in proportion to its largest traction; every coupler then
+    carries the net force of the cars ahead of it (no acceleration yet)."""
+    held = consist.mass * (GRAVITY * grade + consist.resistance[:, 0])
+    strength = np.array([e.max_force if e is not None else 0.0 for e in consist.traction])
+    needed = float(held.sum())
+    efforts = strength / strength.sum() * needed
+    forces = np.cumsum(efforts - held)[:-1]
+    return float(np.max(np.abs(forces))), needed

@@ -1,0 +1,98 @@
+"""The reference speed of paper 002's controller (v_r of eqs. 4 and 7), from ecostudy itself: the
+energy-optimal run of the whole consist as one mass (the space-domain NLP, verified by simulation)
+between two stops for a running time, or a user's speed-distance table.
+
+The single mass (paper 002 eq. 1 summed over the cars, couplers cancelling): the consist's mass
+(no rotating-mass share: eq. 1 has none), its length (the speed limits hold for the whole train),
+Davis terms sum_i m_i (c0_i, c1_i, c2_i), Roeckl's curve resistance (as the cascade plant),
+traction the locomotives' envelopes summed, braking their dynamic brakes plus the wagons'
+pneumatic brakes, bounded by a service deceleration (a heavy train does not brake at its brakes'
+full force in normal running: a setting). Energy: traction only (no regeneration), as paper 002
+counts it.
+"""
+from typing import NamedTuple
+
+import numpy as np
+
+from ecostudy.analysis.single import solve_run
+from ecostudy.core.errors import InputError
+from ecostudy.core.physics import Envelope
+from ecostudy.core.types import Timing, Train
+from ecostudy.core.units import KMH
+
+
+class Reference(NamedTuple):
+    """A speed-distance reference: ``speed(distance)`` [m/s] at a head position [m] from the start,
+    and its clock, with which the controller predicts the positions of its horizon (eq. 9)."""
+
+    distance: np.ndarray   # [m] from the start stop, increasing
+    speeds: np.ndarray     # [m/s]
+    times: np.ndarray      # [s] at each distance, 0 at the start
+    energy: float          # traction energy of the single mass [J] (nan for a user's table)
+
+    @property
+    def running_time(self):
+        return float(self.times[-1])
+
+    @property
+    def final_approach(self):
+        """Where the final deceleration to the end begins [m] (the speeds fall from there on)."""
+        i = len(self.speeds) - 1
+        while i > 0 and self.speeds[i - 1] > self.speeds[i]:
+            i -= 1
+        return float(self.distance[i])
+
+    def speed(self, distance):
+        return np.interp(distance, self.distance, self.speeds)
+
+    def time_at(self, distance):
+        return np.interp(distance, self.distance, self.times)
+
+    def position_at(self, time):
+        return np.interp(time, self.times, self.distance)
+
+
+def clock(distance, speeds, where="reference"):
+    """Times [s] along a speed-distance profile (the mean speed over each piece)."""
+    mean = 0.5 * (speeds[1:] + speeds[:-1])
+    if np.any(np.diff(distance) <= 0) or np.any(mean <= 0) or np.any(speeds < 0):
+        raise InputError(f"{where}: distances must increase and the speed may be 0 only at single points "
+                         "(a train that stands never arrives)")
+    return np.concatenate([[0.0], np.cumsum(np.diff(distance) / mean)])
+
+
+def _summed(envelopes):
+    """The force-power envelopes of several locomotives as one (forces and powers add)."""
+    envelopes = [e for e in envelopes if e is not None]
+    return Envelope("force_power", max_force=sum(e.max_force for e in envelopes),
+                    max_power=sum(e.max_power for e in envelopes))
+
+
+def single_mass(consist, service_deceleration):
+    """The consist as one :class:`Train` (SI), braking bounded by ``service_deceleration`` [m/s^2]."""
+    if not consist.locomotives:
+        raise InputError(f"consist '{consist.name}': no locomotive (nothing can pull the train)")
+    mass = float(consist.mass.sum())
+    davis = tuple(float(v) for v in consist.mass @ consist.resistance)
+    dynamic = _summed(consist.dynamic_brake)
+    braking = Envelope("force_power", max_force=dynamic.max_force + float(consist.pneumatic_brake.sum()))
+    return Train(name=f"{consist.name} (one mass)", mass=mass, static_mass=mass, length=float(consist.length.sum()),
+                 davis=davis, traction=_summed(consist.traction), braking=braking,
+                 max_deceleration=service_deceleration, curve_resistance="roeckl")
+
+
+def optimal_reference(consist, track, from_stop, to_stop, running_time=None, supplement=None, points=500,
+                      service_deceleration=0.3):
+    """The energy-optimal single-mass run for ``running_time`` [s] (or a ``supplement`` [-] over the
+    all-out time), verified by simulation; returns a :class:`Reference` and the :class:`RunResult`."""
+    train = single_mass(consist, service_deceleration)
+    timing = Timing(running_time=running_time) if running_time is not None else Timing(supplement=supplement)
+    run = solve_run(track, train, from_stop, to_stop, timing, points=points)
+    t = run.trajectory
+    return Reference(t.nodes, t.v, t.time, float(np.sum(t.ft * np.diff(t.nodes)))), run
+
+
+def table_reference(distance_m, speed_kmh, where="reference table"):
+    """A user's speed-distance table (distance from the start [m], speed [km/h])."""
+    distance, speeds = np.asarray(distance_m, float), np.asarray(speed_kmh, float) * KMH
+    return Reference(distance, speeds, clock(distance, speeds, where), float("nan"))

@@ -1,0 +1,74 @@
+"""The schema of a heavy-haul study file (``ecostudy heavyhaul``): paper 002's receding-horizon
+controller on a consist's cascade plant, swept over the brake penalty K_b, the fence factor f and
+the horizons (Np, Nc). Units are in the field names; defaults are paper 002's (Ts = 20 s, K_f = 10,
+K_v = 60, K_e = 10)."""
+from typing import Optional
+
+from pydantic import Field, model_validator
+
+from ecostudy.io.schemabase import Strict
+
+
+class ReferenceSpec(Strict):
+    """The reference speed v_r: ecostudy's energy-optimal single-mass run for ``running_time_s`` or
+    ``supplement_percent`` over the all-out time, or a user's ``table`` (CSV: distance_m, speed_kmh)."""
+
+    running_time_s: Optional[float] = Field(None, gt=0, le=1e6)
+    supplement_percent: Optional[float] = Field(None, ge=0, le=200)
+    table: Optional[str] = Field(None, description="CSV with columns distance_m, speed_kmh (relative to the study).")
+    points: int = Field(500, ge=50, le=20000, description="K of the single-mass NLP.")
+    service_deceleration_mps2: float = Field(0.3, gt=0, le=3, description="The single mass brakes at most this "
+                                             "hard (a heavy train's service braking, not its brakes' full force).")
+
+    @model_validator(mode="after")
+    def _one(self):
+        given = [x is not None for x in (self.running_time_s, self.supplement_percent, self.table)]
+        if sum(given) != 1:
+            raise ValueError("give exactly one of running_time_s, supplement_percent or table")
+        return self
+
+
+class Horizon(Strict):
+    np: int = Field(ge=1, le=100, description="Np, the prediction horizon [samples].")
+    nc: int = Field(ge=1, le=100, description="Nc, the control moves (the last is held to Np).")
+
+    @model_validator(mode="after")
+    def _order(self):
+        if self.nc > self.np:
+            raise ValueError(f"nc ({self.nc}) must not exceed np ({self.np})")
+        return self
+
+
+class Weights(Strict):
+    """K_f, K_v, K_e of paper 002 eq. 4 (K_b is swept: ``brake_penalty``)."""
+
+    force: float = Field(10.0, ge=0, description="K_f, on in-train forces [per kN^2 / 1e4].")
+    speed: float = Field(60.0, ge=0, description="K_v, on speed tracking [per (m/s)^2].")
+    energy: float = Field(10.0, ge=0, description="K_e, on efforts [per kN^2 / 1e4].")
+
+
+class HeavyhaulFile(Strict):
+    name: str
+    consist: str
+    track: str
+    from_stop: Optional[str] = Field(None, alias="from")
+    to_stop: Optional[str] = Field(None, alias="to")
+    reference: ReferenceSpec = ReferenceSpec(supplement_percent=10.0)
+    sample_time_s: float = Field(20.0, gt=0, le=600, description="Ts, also the real-time budget of a solve.")
+    brake_penalty: list[float] = Field([40.0], min_length=1, description="K_b values swept.")
+    fence: list[int] = Field([10], min_length=1, description="Fence factors f swept (1: every car).")
+    horizons: list[Horizon] = Field([Horizon(np=4, nc=2)], min_length=1, description="(Np, Nc) pairs swept.")
+    weights: Weights = Weights()
+    rate_kN_per_sample: float = Field(200.0, gt=0, description="Largest change of a locomotive group's effort "
+                                      "per sample (paper 002 gives none).")
+    observer: bool = Field(False, description="Feed the controller the Kalman observer's estimate (eq. 10).")
+    max_samples: int = Field(1000, ge=1, le=100000, description="Stop a run after this many samples.")
+    output: Optional[str] = None
+
+    @model_validator(mode="after")
+    def _values(self):
+        if any(k < 0 for k in self.brake_penalty):
+            raise ValueError("brake_penalty values must be >= 0")
+        if any(f < 1 for f in self.fence):
+            raise ValueError("fence factors must be >= 1")
+        return self

@@ -1,0 +1,87 @@
+"""Plots of a heavy-haul study: speed tracking against the reference, the in-train forces along the
+train over distance (a heat map per run), and the K_b trade-off (largest in-train force and energy)."""
+import matplotlib.pyplot as plt
+import numpy as np
+
+from ecostudy.core.units import to_kmh
+from ecostudy.report.plots import _save
+
+
+def _label(case):
+    return case["scenario"]
+
+
+def tracking(outcome, path):
+    """Mean speed of every run and the reference speed against the head's position."""
+    fig, ax = plt.subplots(figsize=(10, 4.5))
+    ref = outcome.reference
+    ax.plot(ref.distance, to_kmh(ref.speeds), color="k", lw=1.2, label="reference (single-mass optimum)")
+    for i, case in enumerate(outcome.cases):
+        p = outcome.summaries[case["key"]].get("profile")
+        if p:
+            ax.plot(p["head_m"], to_kmh(np.asarray(p["speed_mps"])), lw=0.8, color=f"C{i % 10}", label=_label(case))
+    ax.set_xlabel("head position from departure [m]")
+    ax.set_ylabel("mean speed of the cars [km/h]")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title(f"{outcome.study.name}: speed tracking", fontsize=10)
+    return _save(fig, path)
+
+
+def forces(case, summary, path):
+    """In-train force of the couplers (rows: along the train) at every sample (columns: the head's
+    position), tension positive."""
+    f = np.asarray(summary["forces_kN"], float).T
+    head = np.asarray(summary["profile"]["head_m"])
+    limit = max(np.abs(f).max(), 1.0)
+    fig, ax = plt.subplots(figsize=(10, 4))
+    mesh = ax.pcolormesh(head, np.arange(f.shape[0]) * summary["coupler_step"] + 1, f, cmap="RdBu_r",
+                         vmin=-limit, vmax=limit, shading="nearest")
+    fig.colorbar(mesh, ax=ax, label="in-train force [kN] (tension +)")
+    ax.set_xlabel("head position from departure [m]")
+    ax.set_ylabel("coupler (1: behind the head car)")
+    ax.invert_yaxis()
+    ax.set_title(f"{_label(case)}: largest |f_in| {summary['force_max_kN']:.0f} kN", fontsize=10)
+    return _save(fig, path)
+
+
+def trade_off(runs, path, title=""):
+    """Largest in-train force and total energy against K_b, one line per (f, Np, Nc)."""
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
+    ok = runs[runs["status"].isin(["ok", "flagged"])]
+    for i, ((f, n_p, n_c), group) in enumerate(ok.groupby(["f", "Np", "Nc"])):
+        group = group.sort_values("K_b")
+        label = f"f={f} Np={n_p} Nc={n_c}"
+        a.plot(group["K_b"], group["force_max_kN"], "o-", color=f"C{i}", label=label)
+        b.plot(group["K_b"], group["energy_total_MJ"], "o-", color=f"C{i}", label=label + " total")
+        b.plot(group["K_b"], group["energy_wagons_MJ"], "s--", color=f"C{i}", label=label + " wagons")
+    a.set_ylabel("largest |in-train force| [kN]")
+    b.set_ylabel("energy int |u v| dt [MJ]")
+    for ax in (a, b):
+        ax.set_xlabel("brake penalty K_b")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def draw(outcome):
+    """The plots of a heavy-haul study (``studies.heavyhaul.HeavyhaulStudy``) into its output folder;
+    returns the file names written."""
+    written = []
+    if not any(outcome.summaries.values()):
+        return written
+    tracking(outcome, outcome.output / "tracking.png")
+    written.append("tracking.png")
+    for case in outcome.cases:
+        summary = outcome.summaries[case["key"]]
+        if summary:
+            name = "forces_" + "_".join(f"{k}{v:g}" for k, v in case["labels"].items()).replace(".", "p") + ".png"
+            forces(case, summary, outcome.output / name)
+            written.append(name)
+    if outcome.runs["K_b"].nunique() > 1:
+        trade_off(outcome.runs, outcome.output / "brake_penalty.png", outcome.study.name)
+        written.append("brake_penalty.png")
+    return written

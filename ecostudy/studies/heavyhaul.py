@@ -1,0 +1,193 @@
+"""Heavy-haul studies (``ecostudy heavyhaul``): paper 002's braking-penalised receding-horizon
+controller on the full cascade plant, one case per (K_b, f, Np, Nc), on the batch machinery
+(resumable, processes or Dask). The reference speed is solved once, when the study is expanded, and
+travels in every case (cases are self-contained and keyed by a hash of their inputs).
+
+Per run, the columns of paper 002's Tables III-IV: the tracking error |mean speed - v_r| (mean,
+std), the in-train forces (max over the integrator's points, also over the samples in which any car
+brakes, mean and std of |f_in| over couplers and samples), the energies int |u v| dt of the wagons and in total; and the QP's size, its solve
+time per step (mean, max), the steps over Ts and the process's peak memory.
+"""
+import resource
+import warnings
+from itertools import product
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+import pandas as pd
+
+from ecostudy import __version__
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.grid import make_segment
+from ecostudy.core.units import KN, KWH
+from ecostudy.heavyhaul.checks import ruling_grade, starting_coupler_force
+from ecostudy.heavyhaul.linear import fence
+from ecostudy.heavyhaul.loop import reduced_state, run
+from ecostudy.heavyhaul.observer import KalmanObserver
+from ecostudy.heavyhaul.plant import CascadePlant
+from ecostudy.heavyhaul.reference import Reference, optimal_reference, single_mass, table_reference
+from ecostudy.heavyhaul.rhc import RecedingHorizon
+from ecostudy.io import schemas
+from ecostudy.io.heavyhaulfile import HeavyhaulFile
+from ecostudy.io.loaders import (chosen_stops, consist_from_document, read_document, track_document,
+                                 track_from_schema, validate)
+from ecostudy.io.store import Store
+from ecostudy.io.writers import check_output_dir, write_csv
+from ecostudy.studies.batch import execute, outcome
+from ecostudy.studies.cases import case_key
+
+
+def _reference(s, path, consist, track, from_stop, to_stop):
+    r = s.reference
+    if r.table is not None:
+        where = path.parent / r.table
+        try:
+            table = pd.read_csv(where)
+        except (OSError, ValueError) as exc:
+            raise InputError(problem(path, "reference.table", f"cannot read {where} ({exc})"))
+        if not {"distance_m", "speed_kmh"} <= set(table.columns):
+            raise InputError(problem(where, "columns", f"expected distance_m and speed_kmh, got {list(table.columns)}"))
+        return table_reference(table["distance_m"], table["speed_kmh"], str(where))
+    supplement = None if r.supplement_percent is None else r.supplement_percent / 100
+    return optimal_reference(consist, track, from_stop, to_stop, r.running_time_s, supplement, r.points,
+                             r.service_deceleration_mps2)[0]
+
+
+def expand(path):
+    """(study, output folder, reference, cases); inputs and the bad-input checks run here, once."""
+    path = Path(path)
+    s = validate(HeavyhaulFile, read_document(path), path)
+    consist_doc = read_document(path.parent / s.consist)
+    consist = consist_from_document(consist_doc, path.parent / s.consist)
+    track_doc = track_document(path.parent / s.track)
+    track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{path} track"))
+    from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
+    segment = make_segment(track, single_mass(consist, 1.0), from_stop, to_stop)
+    grade = ruling_grade(segment, float(consist.length.sum()))
+    force, needed = starting_coupler_force(consist, grade)
+    if force > consist.force_limit:
+        raise InputError(problem(path.parent / s.consist, "couplers.force_limit_kN", f"{consist.force_limit / KN:g} kN "
+                                 f"is below the {force / KN:.0f} kN a coupler carries when the train starts on the "
+                                 f"ruling grade ({1e3 * grade:.1f} per mille) of '{track.name}'"))
+    reference = _reference(s, path, consist, track, from_stop, to_stop)
+    longest = max(h.np for h in s.horizons) * s.sample_time_s
+    if longest > reference.running_time:
+        raise InputError(problem(path, "horizons", f"a horizon of {longest:g} s (np x sample_time_s) is longer than "
+                                 f"the trip ({reference.running_time:.0f} s)"))
+    shared = {"study": s.name, "consist": consist_doc, "track": track_doc, "from": from_stop, "to": to_stop,
+              "reference": {"distance": reference.distance.tolist(), "speeds": reference.speeds.tolist(),
+                            "times": reference.times.tolist(), "energy": reference.energy},
+              "sample_time": s.sample_time_s, "weights": s.weights.model_dump(), "rate_kN": s.rate_kN_per_sample,
+              "observer": s.observer, "max_samples": s.max_samples, "version": __version__}
+    cases = []
+    for kb, f, h in product(s.brake_penalty, s.fence, s.horizons):
+        case = {**shared, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",
+                "labels": {"K_b": kb, "f": f, "Np": h.np, "Nc": h.nc}}
+        case["key"] = case_key(case)
+        cases.append(case)
+    output = path.parent / s.output if s.output else Path("out") / s.name
+    return s, output, reference, cases
+
+
+def drive(case):
+    """One closed-loop run of a case: (consist, controller, record, reference)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EcostudyWarning)  # shown once when the study was expanded
+        consist = consist_from_document(case["consist"], "consist")
+        track = track_from_schema(schemas.TrackFile.model_validate(case["track"]))
+    r = case["reference"]
+    reference = Reference(*(np.array(r[k]) for k in ("distance", "speeds", "times")), r["energy"])
+    plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]))
+    labels, w, ts = case["labels"], case["weights"], case["sample_time"]
+    reduction = fence(consist, labels["f"], ts)
+    controller = RecedingHorizon(reduction.model, reduction.kinds, np_=labels["Np"], nc=labels["Nc"],
+                                 weights=(w["force"], w["speed"], w["energy"], labels["K_b"]),
+                                 rate_kN=case["rate_kN"], force_limit_kN=consist.force_limit / KN)
+    state = plant.initial(head=-0.5 * consist.length[0], speed=0.0)
+    observer = (KalmanObserver(reduction.model, reduction.kinds, estimate=reduced_state(plant, reduction, state))
+                if case["observer"] else None)
+    state, record = run(plant, reduction, controller, state, reference, case["max_samples"], observer=observer)
+    return consist, controller, record, reference
+
+
+def summarise(consist, controller, record, reference):
+    """The per-run numbers (SI in, the units in the names out)."""
+    error = record.mean_speed - record.reference
+    forces = np.abs(record.couplers) / KN
+    wagons, total = record.wagon_brake_work, record.traction_work + record.dynamic_brake_work + record.wagon_brake_work
+    size = controller.size
+    braking = record.efforts.min(axis=1) < 0  # samples in which some (virtual) car brakes
+    step = max(1, consist.cars // 100)  # the heat map keeps at most about 100 couplers
+    return {
+        "tracking_mean_mps": float(np.mean(np.abs(error))), "tracking_std_mps": float(np.std(error)),
+        "force_max_kN": float(record.largest_coupler.max() / KN),
+        "force_max_braking_kN": float(record.largest_coupler[braking].max() / KN) if braking.any() else 0.0,
+        "force_mean_kN": float(forces.mean()),
+        "force_std_kN": float(forces.std()), "energy_wagons_MJ": wagons / 1e6, "energy_total_MJ": total / 1e6,
+        "traction_kWh": record.traction_work / KWH, "dynamic_brake_kWh": record.dynamic_brake_work / KWH,
+        "wagon_brake_kWh": wagons / KWH, "reference_kWh": reference.energy / KWH,
+        "arrival_s": float(record.times[-1]), "reference_time_s": reference.running_time,
+        "stop_error_m": float(record.head[-1] - reference.distance[-1]), "samples": len(record.times),
+        "virtual_cars": controller.n, "qp_inputs": size["inputs"], "qp_states": size["states"],
+        "qp_constraints": size["constraints"], "solve_mean_s": float(record.solve_seconds.mean()),
+        "solve_max_s": float(record.solve_seconds.max()), "over_ts": record.overruns,
+        "peak_memory_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        "profile": {"head_m": np.round(record.head, 1).tolist(), "speed_mps": np.round(record.mean_speed, 3).tolist(),
+                    "reference_mps": np.round(record.reference, 3).tolist()},
+        "forces_kN": np.round(record.couplers[:, ::step] / KN).astype(int).tolist(), "coupler_step": step,
+    }
+
+
+def run_heavyhaul_case(case):
+    """One run of :func:`expand`'s cases; never raises: failures are results."""
+    return outcome(case, lambda: _run(case))
+
+
+def _run(case):
+    summary = summarise(*drive(case))
+    if summary["over_ts"]:
+        return "flagged", f"{summary['over_ts']} solves over Ts (the previous input was held)", summary
+    return "ok", None, summary
+
+
+COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN", "force_mean_kN", "force_std_kN",
+           "energy_wagons_MJ", "energy_total_MJ", "traction_kWh", "dynamic_brake_kWh", "wagon_brake_kWh",
+           "arrival_s", "reference_time_s", "stop_error_m", "samples", "virtual_cars", "qp_inputs", "qp_states",
+           "qp_constraints", "solve_mean_s", "solve_max_s", "over_ts", "peak_memory_MB")
+
+
+def heavyhaul_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
+    """Run the cases not stored yet and write runs.csv; returns a :class:`HeavyhaulStudy`."""
+    study, output, reference, cases = expand(path)
+    output = check_output_dir(Path(out) if out else output, ("runs.csv", "results.sqlite"))
+    store = Store(output / "results.sqlite")
+    try:
+        counts = execute(cases, store, run_heavyhaul_case, workers, dask, retry_failed, progress)
+        rows = store.get([c["key"] for c in cases])
+    finally:
+        store.close()
+    table, summaries = [], {}
+    for case in cases:
+        row = rows.get(case["key"]) or {}
+        s = row.get("summary") or {}
+        summaries[case["key"]] = s
+        table.append({**case["labels"], "status": row.get("status", "missing"), "reason": row.get("error"),
+                      **{c: s.get(c) for c in COLUMNS}, "seconds": row.get("seconds")})
+    runs = pd.DataFrame(table)
+    write_csv(output / "runs.csv", runs)
+    counts["not_ok"] = int((runs["status"] != "ok").sum())
+    return HeavyhaulStudy(study, runs, counts, output, reference, cases, summaries)
+
+
+class HeavyhaulStudy(NamedTuple):
+    """A heavy-haul study's outcome: the study file, the runs table, the counts, the output folder,
+    the reference, the cases and every stored run's summary by case key."""
+
+    study: object
+    runs: pd.DataFrame
+    counts: dict
+    output: Path
+    reference: Reference
+    cases: list
+    summaries: dict
