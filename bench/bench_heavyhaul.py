@@ -1,8 +1,8 @@
 """Heavy haul (issue 13): paper 002's Tables III-IV and Fig. 6 on the shipped representative line,
 and the QP's solve time per step and memory for f = 1 and f = 10.
 
-    python bench/bench_heavyhaul.py                  # the three studies (about 20 min on 2 cores)
-    python bench/bench_heavyhaul.py --qp 1           # one QP size: build + 10 solves, time and memory
+    python bench/bench_heavyhaul.py                  # the three studies (about 30 min on 2 cores)
+    python bench/bench_heavyhaul.py --qp 1 [--solver ipopt]   # one QP size: build + 10 solves, time, memory
 
 The studies run through ``ecostudy.studies.heavyhaul.heavyhaul_study`` (resumable: outputs in
 out/bench_heavyhaul_*); the tables are printed as markdown for docs/benchmarks.md.
@@ -24,6 +24,7 @@ from ecostudy.heavyhaul.linear import fence  # noqa: E402
 from ecostudy.heavyhaul.loop import horizon, limits, reduced_state  # noqa: E402
 from ecostudy.heavyhaul.plant import CascadePlant  # noqa: E402
 from ecostudy.heavyhaul.reference import table_reference  # noqa: E402
+from ecostudy.heavyhaul.qp import ConicHorizon  # noqa: E402
 from ecostudy.heavyhaul.rhc import RecedingHorizon  # noqa: E402
 from ecostudy.io.loaders import load_consist  # noqa: E402
 
@@ -36,7 +37,7 @@ def rss_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def qp(factor, np_=8, nc=6, solves=10):
+def qp(factor, solver, np_=8, nc=6, solves=10):
     """Build the controller for fence ``factor`` and solve ``solves`` samples of a 15 -> 20 m/s
     manoeuvre on a 10 per-mille climb (the plant stepping the full train between them)."""
     from ecostudy.core.grid import Profile, Segment
@@ -47,7 +48,8 @@ def qp(factor, np_=8, nc=6, solves=10):
     reduction = fence(consist, factor, 20.0)
     before = rss_mb()
     t0 = time.perf_counter()
-    controller = RecedingHorizon(reduction.model, reduction.kinds, np_=np_, nc=nc)
+    controller = (ConicHorizon if solver == "clarabel" else RecedingHorizon)(reduction.model, reduction.kinds,
+                                                                             np_=np_, nc=nc)
     build = time.perf_counter() - t0
     u = np.zeros(consist.cars)
     u[consist.locomotives] = plant.resistance(plant.initial(5000.0, 15.0).positions, np.full(consist.cars, 15.0)).sum() / 4
@@ -63,14 +65,15 @@ def qp(factor, np_=8, nc=6, solves=10):
         seconds.append(controller.last.seconds)
         state = plant.step(state, reduction.share(planned, consist.mass), 20.0).state
     seconds = np.array(seconds)
-    print(f"| {factor} | {len(reduction.kinds)} | {np_}/{nc} | {controller.size['inputs']} | {controller.size['states']} | "
+    print(f"| {solver} | {factor} | {len(reduction.kinds)} | {np_}/{nc} | {controller.size['inputs']} | {controller.size['states']} | "
           f"{controller.size['constraints']} | {build:.2f} | {seconds[0]:.3f} | {np.median(seconds[1:]):.3f} | "
           f"{seconds.max():.3f} | {rss_mb() - before:.0f} |")
 
 
-def studies():
+def studies(names):
     from ecostudy.studies.heavyhaul import heavyhaul_study
-    for name in ("heavyhaul_brake_penalty", "heavyhaul_horizons", "heavyhaul_fence"):
+    for name in names or ("heavyhaul_brake_penalty", "heavyhaul_brake_penalty_limits", "heavyhaul_horizons",
+                                 "heavyhaul_fence"):
         t0 = time.perf_counter()
         outcome = heavyhaul_study(ROOT / "studies" / f"{name}.yaml", workers=2, out=ROOT / "out" / f"bench_{name}")
         print(f"\n`{name}` ({time.perf_counter() - t0:.0f} s wall; reference {outcome.reference.running_time:.0f} s, "
@@ -86,9 +89,11 @@ if __name__ == "__main__":
     warnings.simplefilter("ignore", EcostudyWarning)
     parser = argparse.ArgumentParser()
     parser.add_argument("--qp", type=int, help="fence factor: time and memory of the QP only")
+    parser.add_argument("--solver", default="clarabel", choices=["clarabel", "ipopt"])
+    parser.add_argument("studies", nargs="*", help="study names (default: all four)")
     args = parser.parse_args()
     if args.qp:
-        print("| f | virtual cars | Np/Nc | inputs | states | constraints | build s | first solve s | median s | max s | RSS growth MB |")
-        qp(args.qp)
+        print("| solver | f | virtual cars | Np/Nc | inputs | states | constraints | build s | first solve s | median s | max s | RSS growth MB |")
+        qp(args.qp, args.solver)
     else:
-        studies()
+        studies(args.studies)

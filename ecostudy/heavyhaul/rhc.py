@@ -14,12 +14,31 @@ of order one). ``offset`` is the operating point's speed-independent and quadrat
 the last one. The offsets and the reference are given per sample of the horizon (eq. 9's F1, F2:
 the caller reads them along the predicted positions, :mod:`ecostudy.heavyhaul.loop`).
 """
+from typing import NamedTuple
+
 import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.errors import SolverError
 from ecostudy.core.units import KN
 from ecostudy.ocp.session import Session
+
+
+class Terms(NamedTuple):
+    """The objective's weights and the constant vectors both QP forms share."""
+
+    kf: float
+    kv: float
+    ke: float
+    penalty: np.ndarray   # 1 for locomotives, K_b for wagons (eq. 5's R)
+    weight: np.ndarray    # mass shares (eq. 7's mean speed)
+    stiff: np.ndarray     # coupler stiffness [kN/m] (f_in = k x_in, eq. 8)
+
+
+def objective_terms(model, kinds, weights):
+    kf, kv, ke, kb = weights
+    return Terms(kf, kv, ke, np.array([1.0 if kind == "locomotive" else kb for kind in kinds]),
+                 model.mass / model.mass.sum(), model.stiffness / KN)
 
 
 class RecedingHorizon:
@@ -30,7 +49,7 @@ class RecedingHorizon:
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
                  force_limit_kN=2000.0):
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
-        self.kf, self.kv, self.ke, self.kb = weights
+        terms = objective_terms(model, self.kinds, weights)
         n = len(self.kinds)
         self.n = n
         self.locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
@@ -52,17 +71,15 @@ class RecedingHorizon:
             B[s, i] * (m.u[move(k), i] - m.offset[k, i]) for i in range(n) if B[s, i] != 0.0))
         m.rate = pyo.Constraint(m.U, self.locos, rule=lambda m, k, i: pyo.inequality(
             -rate_kN, m.u[k, i] - (m.previous[i] if k == 0 else m.u[k - 1, i]), rate_kN))
-        weight = model.mass / model.mass.sum()
+        weight, stiff, penalty = terms.weight, terms.stiff, terms.penalty
         m.mean_speed = pyo.Constraint(pyo.RangeSet(1, np_), rule=lambda m, k: sum(
             weight[i] * m.x[k, i] for i in range(n)) - m.vr[k] <= 0.0)
-        stiff = model.stiffness / KN  # [kN/m]
         m.couplers = pyo.Constraint(pyo.RangeSet(1, np_), m.X, rule=lambda m, k, j: pyo.inequality(
             -force_limit_kN, stiff[j] * m.x[k, n + j], force_limit_kN))
-        penalty = [1.0 if kind == "locomotive" else self.kb for kind in self.kinds]
         m.objective = pyo.Objective(expr=sum(
-            self.kf * sum((stiff[j] * m.x[k, n + j]) ** 2 for j in range(n - 1)) / 1e4
-            + self.kv * sum((m.x[k, i] - m.vr[k]) ** 2 for i in range(n))
-            + self.ke * sum(penalty[i] * m.u[move(k - 1), i] ** 2 for i in range(n)) / 1e4
+            terms.kf * sum((stiff[j] * m.x[k, n + j]) ** 2 for j in range(n - 1)) / 1e4
+            + terms.kv * sum((m.x[k, i] - m.vr[k]) ** 2 for i in range(n))
+            + terms.ke * sum(penalty[i] * m.u[move(k - 1), i] ** 2 for i in range(n)) / 1e4
             for k in range(1, np_ + 1)) * model.ts / np_)
         self.m, self.session = m, Session(m)
         self.previous = np.zeros(n)

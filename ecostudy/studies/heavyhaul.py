@@ -27,6 +27,7 @@ from ecostudy.heavyhaul.loop import reduced_state, run
 from ecostudy.heavyhaul.observer import KalmanObserver
 from ecostudy.heavyhaul.plant import CascadePlant
 from ecostudy.heavyhaul.reference import Reference, optimal_reference, single_mass, table_reference
+from ecostudy.heavyhaul.qp import ConicHorizon
 from ecostudy.heavyhaul.rhc import RecedingHorizon
 from ecostudy.io import schemas
 from ecostudy.io.heavyhaulfile import HeavyhaulFile
@@ -79,7 +80,7 @@ def expand(path):
               "reference": {"distance": reference.distance.tolist(), "speeds": reference.speeds.tolist(),
                             "times": reference.times.tolist(), "energy": reference.energy},
               "sample_time": s.sample_time_s, "weights": s.weights.model_dump(), "rate_kN": s.rate_kN_per_sample,
-              "observer": s.observer, "max_samples": s.max_samples, "version": __version__}
+              "observer": s.observer, "qp_solver": s.qp_solver, "max_samples": s.max_samples, "version": __version__}
     cases = []
     for kb, f, h in product(s.brake_penalty, s.fence, s.horizons):
         case = {**shared, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",
@@ -101,9 +102,10 @@ def drive(case):
     plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]))
     labels, w, ts = case["labels"], case["weights"], case["sample_time"]
     reduction = fence(consist, labels["f"], ts)
-    controller = RecedingHorizon(reduction.model, reduction.kinds, np_=labels["Np"], nc=labels["Nc"],
-                                 weights=(w["force"], w["speed"], w["energy"], labels["K_b"]),
-                                 rate_kN=case["rate_kN"], force_limit_kN=consist.force_limit / KN)
+    kind = ConicHorizon if case["qp_solver"] == "clarabel" else RecedingHorizon
+    controller = kind(reduction.model, reduction.kinds, np_=labels["Np"], nc=labels["Nc"],
+                      weights=(w["force"], w["speed"], w["energy"], labels["K_b"]), rate_kN=case["rate_kN"],
+                      force_limit_kN=consist.force_limit / KN)
     state = plant.initial(head=-0.5 * consist.length[0], speed=0.0)
     observer = (KalmanObserver(reduction.model, reduction.kinds, estimate=reduced_state(plant, reduction, state))
                 if case["observer"] else None)
