@@ -119,7 +119,7 @@ def summarise(consist, controller, record, reference):
     forces = np.abs(record.couplers) / KN
     wagons, total = record.wagon_brake_work, record.traction_work + record.dynamic_brake_work + record.wagon_brake_work
     size = controller.size
-    braking = record.efforts.min(axis=1) < 0  # samples in which some (virtual) car brakes
+    braking = record.efforts.min(axis=1) < -KN  # samples in which some (virtual) car brakes (by 1 kN or more)
     step = max(1, consist.cars // 100)  # the heat map keeps at most about 100 couplers
     return {
         "tracking_mean_mps": float(np.mean(np.abs(error))), "tracking_std_mps": float(np.std(error)),
