@@ -144,6 +144,30 @@ def test_the_reference_train_is_the_consist_as_one_mass():
     assert train.traction.max_force == pytest.approx(4 * 560e3) and train.traction.max_power == pytest.approx(4 * 4.8e6)
 
 
+def test_the_reference_feels_the_grade_spread_over_the_train():
+    """A 10 per-mille climb from 1000 m under a 200 m train: the single mass at the head feels the
+    share of the train on it (0.55 x 10 per mille with 110 m of it on the climb), the whole climb once
+    the tail is on it, and none before the head reaches it; backwards the train trails the other way."""
+    import warnings
+
+    from ecostudy.heavyhaul.reference import spread_grades
+    from ecostudy.io.loaders import track_from_dict
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        track = track_from_dict({"name": "climb", "source": "test", "length_m": 3000,
+                                 "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 3000}],
+                                 "gradients": [{"position_m": 0, "gradient_permille": 0},
+                                               {"position_m": 1000, "gradient_permille": 10}],
+                                 "speed_limits": [{"position_m": 0, "speed_kmh": 60}]})
+    spread = spread_grades(track, 200.0, step=20.0)
+    grade = Profile(spread.gradient_positions, spread.gradients)
+    # each 20 m piece takes the mean over the 200 m behind its middle: [1100, 1120) -> [910, 1110]
+    assert grade(990.0) == 0.0 and grade(1100.0) == pytest.approx(0.0055, abs=1e-12)
+    assert grade(1250.0) == pytest.approx(0.010) and grade(1040.0) == pytest.approx(0.0025)
+    back = Profile(*(lambda t: (t.gradient_positions, t.gradients))(spread_grades(track, 200.0, False, 20.0)))
+    assert back(900.0) == pytest.approx(0.0055) and back(1100.0) == pytest.approx(0.010)
+
+
 def short_line(tmp_path):
     track = {"name": "short heavy-haul line", "source": "test", "length_m": 6000,
              "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 5000}],

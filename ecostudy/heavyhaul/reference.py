@@ -3,19 +3,22 @@ energy-optimal run of the whole consist as one mass (the space-domain NLP, verif
 between two stops for a running time, or a user's speed-distance table.
 
 The single mass (paper 002 eq. 1 summed over the cars, couplers cancelling): the consist's mass
-(no rotating-mass share: eq. 1 has none), its length (the speed limits hold for the whole train),
+(no rotating-mass share: eq. 1 has none), its length (the speed limits hold for the whole train;
+the grades are averaged over it, :func:`spread_grades`),
 Davis terms sum_i m_i (c0_i, c1_i, c2_i), Roeckl's curve resistance (as the cascade plant),
 traction the locomotives' envelopes summed, braking their dynamic brakes plus the wagons'
 pneumatic brakes, bounded by a service deceleration (a heavy train does not brake at its brakes'
 full force in normal running: a setting). Energy: traction only (no regeneration), as paper 002
 counts it.
 """
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
 
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.errors import InputError
+from ecostudy.core.grid import Profile
 from ecostudy.core.physics import Envelope
 from ecostudy.core.types import Timing, Train
 from ecostudy.core.units import KMH
@@ -81,11 +84,27 @@ def single_mass(consist, service_deceleration):
                  max_deceleration=service_deceleration, curve_resistance="roeckl")
 
 
+def spread_grades(track, length, forward=True, step=None):
+    """The track with every gradient replaced by its mean over the train behind the head (``length``
+    [m], behind = towards lower positions when running ``forward``), in pieces of ``step`` [m]
+    (default a tenth of the train): the grade force of a long train whose mass is spread along it,
+    as a single mass at the head feels it. (A 2.5 km train cresting a hill does not speed up when its
+    head does.)"""
+    step = step or max(length / 10, 10.0)
+    starts = np.arange(0.0, track.length, step)
+    middles = np.minimum(starts + 0.5 * step, track.length)
+    profile = Profile(np.asarray(track.gradient_positions, float), np.asarray(track.gradients, float))
+    centres = middles - 0.5 * length if forward else middles + 0.5 * length
+    return replace(track, gradient_positions=starts, gradients=profile.mean_over(centres, length))
+
+
 def optimal_reference(consist, track, from_stop, to_stop, running_time=None, supplement=None, points=500,
                       service_deceleration=0.3):
     """The energy-optimal single-mass run for ``running_time`` [s] (or a ``supplement`` [-] over the
-    all-out time), verified by simulation; returns a :class:`Reference` and the :class:`RunResult`."""
+    all-out time), on the grades spread over the train (:func:`spread_grades`), verified by
+    simulation; returns a :class:`Reference` and the :class:`RunResult`."""
     train = single_mass(consist, service_deceleration)
+    track = spread_grades(track, train.length, track.stops[to_stop] >= track.stops[from_stop])
     timing = Timing(running_time=running_time) if running_time is not None else Timing(supplement=supplement)
     run = solve_run(track, train, from_stop, to_stop, timing, points=points)
     t = run.trajectory

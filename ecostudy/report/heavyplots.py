@@ -47,18 +47,22 @@ def forces(case, summary, path):
 
 
 def trade_off(runs, path, title=""):
-    """Largest in-train force and total energy against K_b, one line per (f, Np, Nc)."""
+    """Largest in-train force (whole run, and while a car brakes) and energy (total, wagons) against
+    K_b, one line per (f, Np, Nc)."""
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
     ok = runs[runs["status"].isin(["ok", "flagged"])]
     for i, ((f, n_p, n_c), group) in enumerate(ok.groupby(["f", "Np", "Nc"])):
         group = group.sort_values("K_b")
         label = f"f={f} Np={n_p} Nc={n_c}"
-        a.plot(group["K_b"], group["force_max_kN"], "o-", color=f"C{i}", label=label)
+        a.plot(group["K_b"], group["force_max_kN"], "o-", color=f"C{i}", label=label + " whole run")
+        a.plot(group["K_b"], group["force_max_braking_kN"], "s--", color=f"C{i}", label=label + " while braking")
         b.plot(group["K_b"], group["energy_total_MJ"], "o-", color=f"C{i}", label=label + " total")
         b.plot(group["K_b"], group["energy_wagons_MJ"], "s--", color=f"C{i}", label=label + " wagons")
     a.set_ylabel("largest |in-train force| [kN]")
     b.set_ylabel("energy int |u v| dt [MJ]")
     for ax in (a, b):
+        ax.set_ylim(bottom=0)
+        ax.ticklabel_format(axis="y", useOffset=False)
         ax.set_xlabel("brake penalty K_b")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
