@@ -159,6 +159,12 @@ def test_the_fence_method_keeps_the_slow_mode_and_the_momentum():
     mean_full = np.dot(consist.mass, (full_c1.B @ du)[:n]) / consist.mass.sum()
     vm = (reduced.model.B @ virtual)[:22]
     assert np.dot(reduced.model.mass, vm) / reduced.model.mass.sum() == pytest.approx(mean_full, rel=1e-3)
+    # the other settings: one real coupler per virtual coupler makes the reduced train stiffer (its
+    # slow mode about sqrt(10) times quicker); equal sharing gives every car of a virtual car the same
+    single = fence(dataclasses.replace(consist, resistance=consist.resistance * 0), 10, 20.0, coupling="single")
+    assert slowest_period(single.model) < 0.5 * slowest_period(full)
+    equal = fence(consist, 10, 20.0, sharing="equal").share(np.full(22, 100e3), consist.mass)
+    assert equal[0] == pytest.approx(50e3) and equal[2] == pytest.approx(10e3) and equal.sum() == pytest.approx(2.2e6)
 
 
 def test_the_receding_horizon_controller_tracks_a_new_reference_within_the_limits():

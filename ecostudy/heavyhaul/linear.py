@@ -75,6 +75,7 @@ class Fence(NamedTuple):
     model: DesignModel
     kinds: tuple
     resistance: np.ndarray
+    sharing: str = "mass"   # how a virtual car's effort is shared among its cars: "mass" or "equal"
 
     @property
     def locomotives(self):
@@ -82,10 +83,11 @@ class Fence(NamedTuple):
         return [j for j, kind in enumerate(self.kinds) if kind == "locomotive"]
 
     def share(self, virtual_efforts, mass):
-        """Per-car efforts [N] from the virtual cars' efforts, shared in proportion to mass."""
+        """Per-car efforts [N] from the virtual cars' efforts, shared in proportion to mass (every car
+        of a virtual car then accelerates alike) or equally (``sharing``)."""
         out = np.zeros(len(mass))
         for cars, u in zip(self.members, virtual_efforts):
-            out[cars] = u * mass[cars] / mass[cars].sum()
+            out[cars] = u * mass[cars] / mass[cars].sum() if self.sharing == "mass" else u / len(cars)
         return out
 
     def reduce(self, values, mass=None):
@@ -95,8 +97,14 @@ class Fence(NamedTuple):
         return np.array([np.dot(values[cars], mass[cars]) / mass[cars].sum() for cars in self.members])
 
 
-def fence(consist, factor, ts):
-    """The fence method's reduced design model: virtual cars of ``factor`` cars of one kind."""
+def fence(consist, factor, ts, coupling="series", sharing="mass"):
+    """The fence method's reduced design model: virtual cars of ``factor`` cars of one kind.
+
+    ``coupling``: "series" (the real couplers between two virtual cars' centres in series, k /
+    couplers spanned: keeps the train's compliance and its slow mode) or "single" (one real coupler,
+    k: the reduced train is about f times stiffer). ``sharing``: "mass" or "equal" (:meth:`Fence.share`)."""
+    if coupling not in ("series", "single") or sharing not in ("mass", "equal"):
+        raise ValueError(f"fence: coupling 'series' or 'single', sharing 'mass' or 'equal' (got {coupling}, {sharing})")
     members, start = [], 0
     kinds = list(consist.kinds)
     while start < len(kinds):  # runs of one kind, cut into pieces of at most ``factor`` cars
@@ -109,9 +117,10 @@ def fence(consist, factor, ts):
     mass = np.array([consist.mass[c].sum() for c in members])
     resistance = np.array([consist.mass[c] @ consist.resistance[c] / consist.mass[c].sum() for c in members])
     centre = [0.5 * (c[0] + c[-1]) for c in members]  # in car indices: couplers spanned between centres
-    stiffness = np.array([consist.stiffness / max(b - a, 1.0) for a, b in zip(centre, centre[1:])])
+    spans = [max(b - a, 1.0) if coupling == "series" else 1.0 for a, b in zip(centre, centre[1:])]
+    stiffness = consist.stiffness / np.array(spans)
     return Fence(members, design_model(mass, resistance[:, 1], stiffness, ts),
-                 tuple(consist.kinds[c[0]] for c in members), resistance)
+                 tuple(consist.kinds[c[0]] for c in members), resistance, sharing)
 
 
 def virtual_car_count(runs, factor):

@@ -58,6 +58,11 @@ class HeavyhaulFile(Strict):
     brake_penalty: list[float] = Field([40.0], min_length=1, description="K_b values swept.")
     fence: list[int] = Field([10], min_length=1, description="Fence factors f swept (1: every car).")
     horizons: list[Horizon] = Field([Horizon(np=4, nc=2)], min_length=1, description="(Np, Nc) pairs swept.")
+    fence_coupling: Literal["series", "single"] = Field("series", description="A virtual coupler: the real couplers "
+                                                        "between the virtual cars' centres in series (k / spanned) "
+                                                        "or one real coupler (k).")
+    fence_sharing: Literal["mass", "equal"] = Field("mass", description="A virtual car's effort shared among its "
+                                                    "cars in proportion to mass, or equally.")
     weights: Weights = Weights()
     rate_kN_per_sample: float = Field(200.0, gt=0, description="Largest change of a locomotive group's effort "
                                       "per sample (paper 002 gives none).")

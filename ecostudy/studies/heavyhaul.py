@@ -80,7 +80,8 @@ def expand(path):
               "reference": {"distance": reference.distance.tolist(), "speeds": reference.speeds.tolist(),
                             "times": reference.times.tolist(), "energy": reference.energy},
               "sample_time": s.sample_time_s, "weights": s.weights.model_dump(), "rate_kN": s.rate_kN_per_sample,
-              "observer": s.observer, "qp_solver": s.qp_solver, "max_samples": s.max_samples, "version": __version__}
+              "observer": s.observer, "qp_solver": s.qp_solver,
+              "fence_coupling": s.fence_coupling, "fence_sharing": s.fence_sharing, "max_samples": s.max_samples, "version": __version__}
     cases = []
     for kb, f, h in product(s.brake_penalty, s.fence, s.horizons):
         case = {**shared, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",
@@ -101,7 +102,7 @@ def drive(case):
     reference = Reference(*(np.array(r[k]) for k in ("distance", "speeds", "times")), r["energy"])
     plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]))
     labels, w, ts = case["labels"], case["weights"], case["sample_time"]
-    reduction = fence(consist, labels["f"], ts)
+    reduction = fence(consist, labels["f"], ts, case["fence_coupling"], case["fence_sharing"])
     kind = ConicHorizon if case["qp_solver"] == "clarabel" else RecedingHorizon
     controller = kind(reduction.model, reduction.kinds, np_=labels["Np"], nc=labels["Nc"],
                       weights=(w["force"], w["speed"], w["energy"], labels["K_b"]), rate_kN=case["rate_kN"],
