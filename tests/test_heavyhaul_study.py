@@ -42,33 +42,41 @@ def test_the_fence_arithmetic_of_the_paper():
     assert size == {"inputs": 132, "states": 8 * 43, "constraints": 8 * 43 + 6 * 2 + 8 + 8 * 21}
 
 
-def test_clarabel_and_ipopt_solve_the_same_qp():
-    """The QP in matrix form (Clarabel) and as a Pyomo model (Ipopt) give the same moves on the
-    ore train climbing 5 per mille from 15 m/s towards 20 m/s (f = 10, Np = 8, Nc = 6), three
-    samples with the plant between them, to 0.05 kN."""
+@pytest.mark.parametrize("tight", [False, True])
+def test_three_forms_of_the_qp_give_the_same_moves(tight):
+    """The QP as a Pyomo model (Ipopt), in matrix form with the states (Clarabel) and condensed to
+    the inputs with the force rows added as they bind (Clarabel) give the same moves on the ore
+    train climbing 5 per mille from 15 m/s towards 20 m/s (f = 10, Np = 8, Nc = 6), three samples
+    with the plant between them, to 0.05 kN; with the force limit 10 % above the starting state's
+    largest virtual-coupler force, rows bind and the condensed form finds them."""
+    from ecostudy.heavyhaul.condensed import CondensedHorizon
     from ecostudy.heavyhaul.loop import horizon, limits, reduced_state
     from ecostudy.heavyhaul.qp import ConicHorizon
     from ecostudy.heavyhaul.reference import table_reference
     consist = load_consist(PAPER)
     plant = CascadePlant(consist, level(0.005))
     reduction = fence(consist, 10, 20.0)
-    pyomo_qp = RecedingHorizon(reduction.model, reduction.kinds, np_=8, nc=6)
-    conic_qp = ConicHorizon(reduction.model, reduction.kinds, np_=8, nc=6)
-    assert conic_qp.size == pyomo_qp.size
     u = np.zeros(consist.cars)
     u[consist.locomotives] = plant.resistance(plant.initial(5000.0, 15.0).positions, np.full(consist.cars, 15.0)).sum() / 4
     state = plant.quasi_static(5000.0, 15.0, u)
-    pyomo_qp.previous = conic_qp.previous = reduction.reduce(u) / 1e3
+    largest = np.max(np.abs(reduced_state(plant, reduction, state)[22:] * reduction.model.stiffness)) / 1e3
+    limit = 1.1 * largest if tight else 2000.0
+    forms = [kind(reduction.model, reduction.kinds, np_=8, nc=6, force_limit_kN=limit)
+             for kind in (RecedingHorizon, ConicHorizon, CondensedHorizon)]
+    pyomo_qp, conic_qp, condensed_qp = forms
+    assert conic_qp.size == pyomo_qp.size == condensed_qp.size
+    for form in forms:
+        form.previous = reduction.reduce(u) / 1e3
     reference = table_reference([0.0, 1e6], [72.0, 72.0])
     for _ in range(3):
         x0 = reduced_state(plant, reduction, state)
         offsets, vr = horizon(plant, reduction, reference, state, x0[:len(reduction.kinds)], 8)
         low, high = limits(plant, reduction, state)
-        a = pyomo_qp.solve(x0, offsets / 1e3, low / 1e3, high / 1e3, vr)
-        b = conic_qp.solve(x0, offsets / 1e3, low / 1e3, high / 1e3, vr)
-        assert np.max(np.abs(a - b)) < 0.05
+        a, b, c = (form.solve(x0, offsets / 1e3, low / 1e3, high / 1e3, vr) for form in forms)
+        assert np.max(np.abs(a - b)) < 0.05 and np.max(np.abs(c - b)) < 0.05
         state = plant.step(state, reduction.share(b * 1e3, consist.mass), 20.0).state
     assert a[reduction.locomotives].min() > 0 and conic_qp.last.usable
+    assert bool(condensed_qp.binding) == tight
 
 
 def test_observability_from_the_locomotives():

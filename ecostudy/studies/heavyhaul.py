@@ -22,6 +22,7 @@ from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KN, KWH
 from ecostudy.heavyhaul.checks import ruling_grade, starting_coupler_force
+from ecostudy.heavyhaul.condensed import CondensedHorizon
 from ecostudy.heavyhaul.linear import fence
 from ecostudy.heavyhaul.loop import reduced_state, run
 from ecostudy.heavyhaul.observer import KalmanObserver
@@ -103,7 +104,7 @@ def drive(case):
     plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]))
     labels, w, ts = case["labels"], case["weights"], case["sample_time"]
     reduction = fence(consist, labels["f"], ts, case["fence_coupling"], case["fence_sharing"])
-    kind = ConicHorizon if case["qp_solver"] == "clarabel" else RecedingHorizon
+    kind = {"condensed": CondensedHorizon, "clarabel": ConicHorizon, "ipopt": RecedingHorizon}[case["qp_solver"]]
     controller = kind(reduction.model, reduction.kinds, np_=labels["Np"], nc=labels["Nc"],
                       weights=(w["force"], w["speed"], w["energy"], labels["K_b"]), rate_kN=case["rate_kN"],
                       force_limit_kN=consist.force_limit / KN)
