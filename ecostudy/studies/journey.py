@@ -33,13 +33,18 @@ from ecostudy.ocp.space import passing_time
 from ecostudy.studies.pareto import sweep
 
 
+def too_short(total_time, fastest, basis=""):
+    """Refuse a journey whose total time is below the sum of the segments' all-out times."""
+    raise InfeasibleError(f"infeasible: the total time {total_time:.1f} s is below the sum of the all-out "
+                          f"times {fastest:.1f} s{basis}")
+
+
 def equal_marginal(fronts, total_time, step=0.05):
     """Running time per segment [s] minimising total energy on the interpolated fronts."""
     times = [float(f["running_time_s"].iloc[0]) for f in fronts]
     spare = total_time - sum(times)
     if spare < -1e-9:
-        raise InfeasibleError(f"infeasible: the total time {total_time:.1f} s is below the sum of the all-out "
-                              f"times {sum(times):.1f} s")
+        too_short(total_time, sum(times))
 
     # monotone cubic (PCHIP) through each front: the fronts are convex, and straight chords
     # between 15 points put the split 0.6 % above the whole-journey NLP where PCHIP is within 0.1 %
@@ -250,6 +255,8 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
     mean = supplement or 0.0
     if total_time is not None:
         fastest = sum(prepare(track, train, a, b, points).estimate for a, b in pairs)
+        if total_time < 0.99 * fastest:  # the kinematic all-out times: refused before any front is solved
+            too_short(total_time, fastest, " (kinematic envelope)")
         mean = max(total_time / fastest - 1.0, 0.0)
     reach = max(0.6, 2.5 * mean)
     fronts = [sweep(track, train, a, b, count=front_count, supplement_max=reach, points=points,
