@@ -110,6 +110,12 @@ def only_one(**options):
         raise InputError(problem("command line", "/".join(given), "give only one: each sets the running time"))
 
 
+def counts_line(counts, noun):
+    """The one-line summary of a resumable study's counts (``studies.batch.execute``)."""
+    return (f"{counts['total']} {noun}: {counts['stored_before']} already stored, {counts['computed']} computed now "
+            f"({counts['failed']} failed); not ok: {counts['not_ok']}")
+
+
 @contextmanager
 def case_progress(label, disabled):
     """A progress bar over a study's cases: yields ``progress(done, failed, remaining, total)``.

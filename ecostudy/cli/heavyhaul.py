@@ -4,7 +4,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import app, case_progress, check_options, guarded
+from ecostudy.cli.app import app, case_progress, check_options, counts_line, guarded
 
 SHOWN = ["K_b", "f", "Np", "Nc", "status", "tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_mean_kN",
          "force_std_kN", "energy_wagons_MJ", "energy_total_MJ", "qp_inputs", "solve_mean_s", "solve_max_s", "over_ts"]
@@ -21,8 +21,7 @@ def _heavyhaul(study, workers, dask, retry_failed, out, no_progress, no_plot):
         plots = heavyplots.draw(outcome)
     runs, counts = outcome.runs, outcome.counts
     typer.echo(runs[[c for c in SHOWN if c in runs]].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
-    typer.echo(f"{counts['total']} runs: {counts['stored_before']} already stored, {counts['computed']} computed now "
-               f"({counts['failed']} failed); not ok: {counts['not_ok']}")
+    typer.echo(counts_line(counts, "runs"))
     typer.echo(f"outputs {outcome.output}/ ({', '.join(['runs.csv', 'results.sqlite'] + plots[:3])}"
                f"{', ...' if len(plots) > 3 else ''})")
     for _, row in runs[runs["status"] != "ok"].iterrows():

@@ -4,7 +4,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import app, case_progress, check_options, guarded
+from ecostudy.cli.app import app, case_progress, check_options, counts_line, guarded
 
 SHOWN = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_per_kg_std", "arrival_s_mean",
          "arrival_s_max", "stop_error_m_min", "stop_error_m_max", "max_overspeed_kmh_max", "solve_mean_ms_mean",
@@ -21,8 +21,7 @@ def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot):
         from ecostudy.report import loopplots
         loopplots.draw(outcome)
     typer.echo(summary[[c for c in SHOWN if c in summary]].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
-    typer.echo(f"{counts['total']} runs: {counts['stored_before']} already stored, {counts['computed']} computed now "
-               f"({counts['failed']} failed); not ok: {counts['not_ok']}")
+    typer.echo(counts_line(counts, "runs"))
     typer.echo(f"outputs {output}/ (runs.csv, aggregate.csv, results.sqlite{'' if no_plot else ', bands.png, solve_times.png'})")
     for _, row in runs[runs["status"] != "ok"].iterrows():
         typer.echo(f"  {row['controller']} draw {row['draw']}: {row['status']}: {row['reason']}")

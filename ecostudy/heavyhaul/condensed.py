@@ -17,8 +17,8 @@ from scipy import sparse
 
 from ecostudy.core.errors import SolverError
 from ecostudy.core.units import KN
-from ecostudy.heavyhaul.qp import QpOutcome
-from ecostudy.heavyhaul.rhc import objective_terms
+from ecostudy.heavyhaul.qp import QpOutcome, clarabel_settings
+from ecostudy.heavyhaul.rhc import objective_terms, qp_size, sample_inputs
 
 ROUNDS = 6  # re-solves with newly binding force rows, per sample
 
@@ -67,34 +67,26 @@ class CondensedHorizon:
         self.fixed_rows = sparse.vstack([eye, -eye, sparse.csr_matrix(rate), sparse.csr_matrix(-rate),
                                          sparse.csr_matrix(self.mean_rows)]).tocsc()
         self.binding = set()  # (sample, coupler) force rows found binding so far
-        self.settings = clarabel.DefaultSettings()
-        self.settings.verbose = False
-        self.settings.direct_solve_method = "faer"
-        self.settings.presolve_enable = False
-        self.settings.iterative_refinement_enable = False
+        self.settings = clarabel_settings(direct_solve_method="faer")
         self.previous = np.zeros(n)
         self.last = None
 
     @property
     def size(self):
-        """The uncondensed program's size (the same program): see ``RecedingHorizon.size``."""
-        n, np_, nc = self.n, self.np_, self.nc
-        return {"inputs": nc * n, "states": np_ * (2 * n - 1),
-                "constraints": np_ * (2 * n - 1) + nc * len(self.locos) + np_ + np_ * (n - 1)}
+        """The uncondensed program's size (the same program)."""
+        return qp_size(self.n, self.np_, self.nc, self.locos)
 
     def solve(self, state, offsets_kN, low_kN, high_kN, reference):
         """As :meth:`RecedingHorizon.solve`: the first move [kN per (virtual) car]."""
         t0 = time.perf_counter()
         n, np_, nc = self.n, self.np_, self.nc
-        offsets_kN = np.broadcast_to(np.atleast_2d(offsets_kN), (np_, n))
-        vr = np.array([float(reference[min(k, len(reference) - 1)]) for k in range(np_ + 1)])
+        offsets_kN, vr, previous = sample_inputs(self, offsets_kN, low_kN, high_kN, reference)
         shifts = [self.AB[0] @ offsets_kN[j] for j in range(np_)]  # B o(j)
         d = np.array([self.powers[k] @ np.asarray(state, float)
                       - sum(self.powers[k - 1 - j] @ shifts[j] for j in range(k)) for k in range(1, np_ + 1)])
         target = np.zeros_like(d)
         target[:, :n] = vr[1:, None]
         g = 2 * self.scale * sum(self.G[k].T @ (self.q * (d[k] - target[k])) for k in range(np_))
-        previous = np.clip(self.previous, low_kN, high_kN)
         rate = []
         for k in range(nc):
             rate += [self.rate + (previous[i] if k == 0 else 0.0) for i in self.locos]

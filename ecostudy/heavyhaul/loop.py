@@ -42,14 +42,8 @@ def reduced_state(plant, reduction, state):
 
 def limits(plant, reduction, state):
     """(low, high) efforts of every virtual car [N]: the sum of its cars' envelopes at their speeds."""
-    c, low, high = plant.consist, [], []
-    for cars in reduction.members:
-        up = sum(c.traction[i].force(max(float(state.speeds[i]), 0.1)) if c.traction[i] else 0.0 for i in cars)
-        dyn = sum(c.dynamic_brake[i].force(max(float(state.speeds[i]), 0.1)) if c.dynamic_brake[i] else 0.0
-                  for i in cars)
-        low.append(-(dyn + c.pneumatic_brake[cars].sum()))
-        high.append(up)
-    return np.array(low), np.array(high)
+    low, high = plant.envelopes(state.speeds)
+    return reduction.reduce(low), reduction.reduce(high)
 
 
 def head_position(plant, state):

@@ -109,13 +109,16 @@ class CascadePlant:
             fixed = fixed + roeckl_force(c.mass, self.segment.curvature.mean_over(positions, c.length))
         return fixed
 
-    def efforts(self, requested, speeds):
-        """The requested efforts u_i [N] clipped to each car's envelope at its speed."""
+    def envelopes(self, speeds):
+        """(lowest, highest) effort of every car at its speed [N]: traction; dynamic plus pneumatic brake."""
         speeds = np.maximum(speeds, 1e-9)
         upper = np.minimum(self.traction_limits[0], self.traction_limits[1] / speeds)
         dynamic = np.minimum(self.dynamic_limits[0], self.dynamic_limits[1] / speeds)
-        lower = -(dynamic + self.consist.pneumatic_brake)
-        return np.clip(requested, lower, upper)
+        return -(dynamic + self.consist.pneumatic_brake), upper
+
+    def efforts(self, requested, speeds):
+        """The requested efforts u_i [N] clipped to each car's envelope at its speed."""
+        return np.clip(requested, *self.envelopes(speeds))
 
     def derivatives(self, y, requested):
         n, c = self.n, self.consist

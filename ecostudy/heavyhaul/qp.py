@@ -17,7 +17,20 @@ from scipy import sparse
 
 from ecostudy.core.errors import SolverError
 from ecostudy.core.units import KN
-from ecostudy.heavyhaul.rhc import objective_terms
+from ecostudy.heavyhaul.rhc import objective_terms, qp_size, sample_inputs
+
+
+def clarabel_settings(**chosen):
+    """Clarabel's settings for the heavy-haul QPs: quiet; presolve off (every row stays a row, so a
+    sample's update of b applies row for row); no iterative refinement (50 -> 37 ms at f = 10, the
+    same moves to 1e-4 kN); ``chosen`` on top (e.g. direct_solve_method)."""
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    settings.presolve_enable = False
+    settings.iterative_refinement_enable = False
+    for name, value in chosen.items():
+        setattr(settings, name, value)
+    return settings
 
 
 class QpOutcome(NamedTuple):
@@ -100,27 +113,20 @@ class ConicHorizon:
                 ri.append(r), ci.append(c), data.append(v)
         self.A = sparse.csc_matrix((data, (ri, ci)), shape=(len(rows), nz))
         self.cones = [clarabel.ZeroConeT(self.equalities), clarabel.NonnegativeConeT(len(rows) - self.equalities)]
-        self.settings = clarabel.DefaultSettings()
-        self.settings.verbose = False
-        self.settings.presolve_enable = False  # keeps every row, so updates of b apply row for row
-        self.settings.iterative_refinement_enable = False  # 50 -> 37 ms at f = 10; the same moves to 1e-4 kN
+        self.settings = clarabel_settings()
         self.solver = None
         self.previous = np.zeros(n)
         self.last = None
 
     @property
     def size(self):
-        n, np_, nc = self.n, self.np_, self.nc
-        return {"inputs": nc * n, "states": np_ * (2 * n - 1),
-                "constraints": np_ * (2 * n - 1) + nc * len(self.locos) + np_ + np_ * (n - 1)}
+        return qp_size(self.n, self.np_, self.nc, self.locos)
 
     def solve(self, state, offsets_kN, low_kN, high_kN, reference):
         """As :meth:`RecedingHorizon.solve`: the first move [kN per (virtual) car]."""
         t0 = time.perf_counter()
         n, np_, nc = self.n, self.np_, self.nc
-        offsets_kN = np.broadcast_to(np.atleast_2d(offsets_kN), (np_, n))
-        vr = np.array([float(reference[min(k, len(reference) - 1)]) for k in range(np_ + 1)])
-        previous = np.clip(self.previous, low_kN, high_kN)
+        offsets_kN, vr, previous = sample_inputs(self, offsets_kN, low_kN, high_kN, reference)
         b = [(self.A_model @ np.asarray(state, float) if k == 0 else np.zeros(self.ns)) - self.B_kN @ offsets_kN[k]
              for k in range(np_)]
         for _ in range(nc):

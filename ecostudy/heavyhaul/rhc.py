@@ -41,6 +41,23 @@ def objective_terms(model, kinds, weights):
                  model.mass / model.mass.sum(), model.stiffness / KN)
 
 
+def qp_size(n, np_, nc, locomotives):
+    """The QP's decision variables and constraints (input bounds are variable bounds), with the
+    states kept: the paper condenses them away (n Nc variables, (6n - 2) Nc constraints:
+    linear.paper_counts); the three forms here solve this same program."""
+    return {"inputs": nc * n, "states": np_ * (2 * n - 1),
+            "constraints": np_ * (2 * n - 1) + nc * len(locomotives) + np_ + np_ * (n - 1)}
+
+
+def sample_inputs(controller, offsets_kN, low_kN, high_kN, reference):
+    """(offsets per sample of the horizon, v_r(0..Np), the previous move clipped into this sample's
+    bounds) as every form of the QP reads them: one row of offsets is held over the horizon, and
+    v_r beyond the reference's end repeats its last value."""
+    offsets = np.broadcast_to(np.atleast_2d(offsets_kN), (controller.np_, controller.n))
+    vr = np.array([float(reference[min(k, len(reference) - 1)]) for k in range(controller.np_ + 1)])
+    return offsets, vr, np.clip(controller.previous, low_kN, high_kN)
+
+
 class RecedingHorizon:
     """One QP for ``model`` (heavyhaul.linear.DesignModel) of cars ``kinds``, written once; every
     ``solve`` changes bounds only (the measured state, the input shift, the envelopes, the previous
@@ -87,25 +104,19 @@ class RecedingHorizon:
 
     @property
     def size(self):
-        """The QP's decision variables and constraints (input bounds are variable bounds): the
-        paper condenses the states away (n Nc variables, (6n - 2) Nc constraints: linear.paper_counts);
-        this formulation keeps them, so its constraint matrix stays banded and sparse."""
-        n, np_, nc = self.n, self.np_, self.nc
-        return {"inputs": nc * n, "states": np_ * (2 * n - 1),
-                "constraints": np_ * (2 * n - 1) + nc * len(self.locos) + np_ + np_ * (n - 1)}
+        return qp_size(self.n, self.np_, self.nc, self.locos)
 
     def solve(self, state, offsets_kN, low_kN, high_kN, reference):
         """The first move [kN per (virtual) car] from the measured ``state`` (speeds then coupler
         extensions), the input offsets [kN] per sample of the horizon (rows; one row: held), the
         bounds [kN] and the reference speeds v_r(k), k = 0..Np (eq. 9: along the predicted positions)."""
         m, n = self.m, self.n
-        offsets_kN = np.broadcast_to(np.atleast_2d(offsets_kN), (self.np_, n))
-        previous = np.clip(self.previous, low_kN, high_kN)
+        offsets_kN, vr, previous = sample_inputs(self, offsets_kN, low_kN, high_kN, reference)
         locos = self.locos
         variables = ([m.x[0, s] for s in m.S] + [m.offset[k, i] for k in range(self.np_) for i in m.C] + [m.previous[i] for i in locos]
                      + [m.vr[k] for k in range(1, self.np_ + 1)] + [m.u[k, i] for k in m.U for i in m.C])
         fixed = (list(map(float, state)) + list(map(float, offsets_kN.ravel())) + [float(previous[i]) for i in locos]
-                 + [float(reference[min(k, len(reference) - 1)]) for k in range(1, self.np_ + 1)])
+                 + list(map(float, vr[1:])))
         lows = fixed + [float(low_kN[i]) for _ in m.U for i in range(n)]
         highs = fixed + [float(high_kN[i]) for _ in m.U for i in range(n)]
         self.session.set_many_bounds(variables, lows, highs)

@@ -137,6 +137,17 @@ def execute(cases, store, task=run_case, workers=1, dask=None, retry_failed=Fals
     return counts
 
 
+def stored_rows(cases, path, task, workers=1, dask=None, retry_failed=False, progress=None):
+    """Run ``task`` on the cases not in the store at ``path`` yet (:func:`execute`); returns (counts,
+    the stored row of every case by key)."""
+    store = Store(path)
+    try:
+        counts = execute(cases, store, task, workers, dask, retry_failed, progress)
+        return counts, store.get([c["key"] for c in cases])
+    finally:
+        store.close()
+
+
 def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
     """Run the cases of a study file that are not stored yet; returns (table, counts, output folder).
 

@@ -29,9 +29,8 @@ from ecostudy.io.loaders import (chosen_stops, read_document, track_document, tr
 from ecostudy.io.loopfile import SimulateFile
 from ecostudy.ocp.convex import FASTEST, ConvexProgram, ConvexWeights, trapezoid_grid
 from ecostudy.ocp.problem import prepare
-from ecostudy.io.store import Store
 from ecostudy.io.writers import check_output_dir, write_csv
-from ecostudy.studies.batch import execute, outcome
+from ecostudy.studies.batch import outcome, stored_rows
 from ecostudy.studies.cases import case_key
 
 PARAMETERS = ("mass", "resistance", "traction", "braking")
@@ -217,12 +216,7 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
     Returns a :class:`LoopStudy` (the plots are drawn from it by ``report.loopplots``)."""
     study, output, cases = expand(path)
     output = check_output_dir(Path(out) if out else output, ("runs.csv", "aggregate.csv", "results.sqlite"))
-    store = Store(output / "results.sqlite")
-    try:
-        counts = execute(cases, store, run_loop_case, workers, dask, retry_failed, progress)
-        rows = store.get([c["key"] for c in cases])
-    finally:
-        store.close()
+    counts, rows = stored_rows(cases, output / "results.sqlite", run_loop_case, workers, dask, retry_failed, progress)
     runs = runs_table(cases, rows)
     summary = aggregate(runs)
     write_csv(output / "runs.csv", runs)

@@ -34,9 +34,8 @@ from ecostudy.io import schemas
 from ecostudy.io.heavyhaulfile import HeavyhaulFile
 from ecostudy.io.loaders import (chosen_stops, consist_from_document, read_document, track_document,
                                  track_from_schema, validate)
-from ecostudy.io.store import Store
 from ecostudy.io.writers import check_output_dir, write_csv
-from ecostudy.studies.batch import execute, outcome
+from ecostudy.studies.batch import outcome, stored_rows
 from ecostudy.studies.cases import case_key
 
 
@@ -165,12 +164,8 @@ def heavyhaul_study(path, workers=1, dask=None, retry_failed=False, out=None, pr
     """Run the cases not stored yet and write runs.csv; returns a :class:`HeavyhaulStudy`."""
     study, output, reference, cases = expand(path)
     output = check_output_dir(Path(out) if out else output, ("runs.csv", "results.sqlite"))
-    store = Store(output / "results.sqlite")
-    try:
-        counts = execute(cases, store, run_heavyhaul_case, workers, dask, retry_failed, progress)
-        rows = store.get([c["key"] for c in cases])
-    finally:
-        store.close()
+    counts, rows = stored_rows(cases, output / "results.sqlite", run_heavyhaul_case, workers, dask, retry_failed,
+                               progress)
     table, summaries = [], {}
     for case in cases:
         row = rows.get(case["key"]) or {}
