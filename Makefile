@@ -2,6 +2,9 @@
 .PHONY: install run test test-slow test-all bench doctor clean
 
 ECOSTUDY := .venv/bin/ecostudy
+# pytest-xdist processes: the suite runs in two on this machine kind's two cores (issue 15)
+TEST_WORKERS ?= 2
+PYTEST := .venv/bin/python -m pytest -q -n $(TEST_WORKERS)
 
 install:
 	@bash scripts/install.sh
@@ -10,13 +13,13 @@ run: install
 	$(ECOSTUDY) solve studies/default.yaml
 
 test: install
-	.venv/bin/python -m pytest -q -m "not slow"
+	$(PYTEST) -m "not slow"
 
 test-slow: install
-	.venv/bin/python -m pytest -q -m slow
+	$(PYTEST) -m slow
 
 test-all: install
-	.venv/bin/python -m pytest -q
+	$(PYTEST)
 
 doctor: install
 	$(ECOSTUDY) doctor

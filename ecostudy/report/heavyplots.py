@@ -1,10 +1,9 @@
 """Plots of a heavy-haul study: speed tracking against the reference, the in-train forces along the
 train over distance (a heat map per run), and the K_b trade-off (largest in-train force and energy)."""
-import matplotlib.pyplot as plt
 import numpy as np
 
 from ecostudy.core.units import to_kmh
-from ecostudy.report.plots import _save
+from ecostudy.report.plots import _save, figure
 
 
 def _label(case):
@@ -13,7 +12,7 @@ def _label(case):
 
 def tracking(outcome, path):
     """Mean speed of every run and the reference speed against the head's position."""
-    fig, ax = plt.subplots(figsize=(10, 4.5))
+    fig, ax = figure(figsize=(10, 4.5))
     ref = outcome.reference
     ax.plot(ref.distance, to_kmh(ref.speeds), color="k", lw=1.2, label="reference (single-mass optimum)")
     for i, case in enumerate(outcome.cases):
@@ -35,7 +34,7 @@ def forces(case, summary, path):
     f = np.asarray(summary["forces_kN"], float).T
     head = np.asarray(summary["profile"]["head_m"])
     limit = max(np.abs(f).max(), 1.0)
-    fig, ax = plt.subplots(figsize=(10, 4))
+    fig, ax = figure(figsize=(10, 4))
     mesh = ax.pcolormesh(head, np.arange(f.shape[0]) * summary["coupler_step"] + 1, f, cmap="RdBu_r",
                          vmin=-limit, vmax=limit, shading="nearest")
     fig.colorbar(mesh, ax=ax, label="in-train force [kN] (tension +)")
@@ -49,7 +48,7 @@ def forces(case, summary, path):
 def trade_off(runs, path, title=""):
     """Largest in-train force (whole run, and while a car brakes) and energy (total, wagons) against
     K_b, one line per (f, Np, Nc)."""
-    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
+    fig, (a, b) = figure(1, 2, figsize=(10, 4))
     ok = runs[runs["status"].isin(["ok", "flagged"])]
     for i, ((f, n_p, n_c), group) in enumerate(ok.groupby(["f", "Np", "Nc"])):
         group = group.sort_values("K_b")

@@ -1,15 +1,14 @@
 """Plots of a closed-loop study: the speed band of all runs per controller, the solve time of every
 step against the real-time budget, and the mass estimates over distance."""
-import matplotlib.pyplot as plt
 import numpy as np
 
 from ecostudy.core.units import to_kmh
-from ecostudy.report.plots import _save, _steps
+from ecostudy.report.plots import _save, figure, _steps
 
 
 def bands(runs, segment, path, title=""):
     """Speed against distance of every run, one panel per controller, with the speed limit."""
-    fig, axes = plt.subplots(len(runs), 1, figsize=(9, 2.6 * len(runs) + 0.6), sharex=True, squeeze=False)
+    fig, axes = figure(len(runs), 1, figsize=(9, 2.6 * len(runs) + 0.6), sharex=True, squeeze=False)
     x_lim, v_lim = _steps(segment.limit, segment.distance)
     for ax, (name, group) in zip(axes[:, 0], runs.items()):
         ax.step(x_lim, to_kmh(v_lim), where="post", color="0.4", lw=1, label="speed limit")
@@ -29,7 +28,7 @@ def bands(runs, segment, path, title=""):
 
 def solve_times(runs, budget, path, title=""):
     """Solve time of every control step [ms] of every run, per controller, against the budget."""
-    fig, ax = plt.subplots(figsize=(9, 4))
+    fig, ax = figure(figsize=(9, 4))
     for c, (name, group) in enumerate(runs.items()):
         for i, s in enumerate(group):
             ms = np.asarray(s["solve_ms"])
@@ -45,7 +44,7 @@ def solve_times(runs, budget, path, title=""):
 
 def mass_estimates(runs, path, title=""):
     """The Kalman mass estimate over distance of every run with an estimator, and its true mass."""
-    fig, ax = plt.subplots(figsize=(9, 4))
+    fig, ax = figure(figsize=(9, 4))
     for c, (name, group) in enumerate(runs.items()):
         for i, s in enumerate(group):
             if not s.get("estimates"):

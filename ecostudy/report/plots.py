@@ -1,11 +1,16 @@
 """Plots: speed against distance with limits, the gradient profile and the handle beneath."""
 import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from ecostudy.core.units import PERMILLE, to_kmh, to_kwh
 
-from ecostudy.core.units import PERMILLE, to_kmh, to_kwh  # noqa: E402
+
+def figure(nrows=1, ncols=1, figsize=None, **kwargs):
+    """A figure and its axes, as ``pyplot.subplots`` gives them, without pyplot: no backend and no
+    global figure registry (pyplot and pylab cost about a second of start-up; issue 15)."""
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(nrows, ncols, **kwargs)
 
 
 def _steps(profile, distance):
@@ -20,7 +25,6 @@ def _save(fig, path):
     if path is None:
         return fig
     fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
     return None
 
 
@@ -37,7 +41,7 @@ def _finish_speed_axes(fig, ax, path, title, xlabel="distance from departure [m]
 
 def speed_plot(result, path):
     seg, prof, s = result.segment, result.profile, result.summary
-    fig, (ax, axg, axu) = plt.subplots(3, 1, figsize=(9, 7), sharex=True,
+    fig, (ax, axg, axu) = figure(3, 1, figsize=(9, 7), sharex=True,
                                        gridspec_kw={"height_ratios": [3, 1, 1], "hspace": 0.12})
     fig.subplots_adjust(left=0.08, right=0.98, top=0.95, bottom=0.07)  # tight_layout costs 40 % of the plot
     x, y = _steps(seg.limit, seg.distance)
@@ -76,7 +80,7 @@ def speed_plot(result, path):
 def pareto_plot(table, path, title="", weighted=None):
     """Traction and net energy against running time, with the marginal saving beneath;
     ``weighted`` (optional table) adds the weighted-sum points."""
-    fig, (ax, axm) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
+    fig, (ax, axm) = figure(2, 1, figsize=(8, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
     fig.subplots_adjust(left=0.13, right=0.97, top=0.85, bottom=0.09, hspace=0.1)
     fig.suptitle(title, fontsize=10)
     t = table["running_time_s"]
@@ -103,12 +107,12 @@ def pareto_plot(table, path, title="", weighted=None):
 
 def profiles_plot(results, path, title=""):
     """Speed against distance for a few points of a front, with the speed limit."""
-    fig, ax = plt.subplots(figsize=(9, 4.5))
+    fig, ax = figure(figsize=(9, 4.5))
     fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
     seg = results[0].segment
     x, y = _steps(seg.limit, seg.distance)
     ax.step(x, to_kmh(y), where="post", color="tab:red", lw=1.2, label="speed limit (train length)")
-    for r, colour in zip(results, plt.cm.viridis(np.linspace(0, 0.9, len(results)))):
+    for r, colour in zip(results, matplotlib.colormaps["viridis"](np.linspace(0, 0.9, len(results)))):
         p = r.profile
         ax.plot(p["position_m"], p["speed_kmh"], color=colour, lw=1.3,
                 label=f"{r.summary['running_time_s']:.1f} s, {r.summary['traction_energy_kWh']:.2f} kWh")
@@ -117,7 +121,7 @@ def profiles_plot(results, path, title=""):
 
 def compare_plot(outcomes, segment, path, title=""):
     """Simulated speed against distance of each strategy, with the speed limit."""
-    fig, ax = plt.subplots(figsize=(9, 4.5))
+    fig, ax = figure(figsize=(9, 4.5))
     fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
     x, y = _steps(segment.limit, segment.distance)
     ax.step(x, to_kmh(y), where="post", color="tab:red", lw=1.2, label="speed limit (train length)")
@@ -131,7 +135,7 @@ def compare_plot(outcomes, segment, path, title=""):
 def journey_plot(results, path, title="", passing=()):
     """Speed against distance along the line for each distribution of the running time;
     ``passing``: (journey distance [m], highest speed [km/h] or None) of timing points, marked."""
-    fig, ax = plt.subplots(figsize=(10, 4.5))
+    fig, ax = figure(figsize=(10, 4.5))
     fig.subplots_adjust(left=0.07, right=0.98, top=0.92, bottom=0.12)
     for x, cap in passing:
         ax.axvline(x, color="tab:red", lw=0.8, ls=":")
@@ -153,7 +157,7 @@ def network_plot(fleet, outcome, path, title=""):
     run), and the substation power of every strategy."""
     shown = [n for n in ("independent", "joint") if n in outcome] or list(outcome)[:1]
     rows = 2 * len(shown) + 1
-    fig, axes = plt.subplots(rows, 1, figsize=(10, 2.4 * rows), sharex=True)
+    fig, axes = figure(rows, 1, figsize=(10, 2.4 * rows), sharex=True)
     fig.subplots_adjust(left=0.08, right=0.98, top=0.95, bottom=0.06, hspace=0.25)
     fig.suptitle(title, fontsize=10)
     for n, name in enumerate(shown):
@@ -178,4 +182,3 @@ def network_plot(fleet, outcome, path, title=""):
     ax.legend(fontsize=7, loc="upper right")
     ax.grid(alpha=0.3)
     fig.savefig(path, dpi=100, format="png")
-    plt.close(fig)

@@ -1,0 +1,172 @@
+"""ecostudy's space NLP against an independent CasADi transcription of the same NLP (issue 15).
+
+    .venv/bin/python bench/bench_casadi.py [--ttobench /work/data/ttobench] [--points 1000 5000]
+        [--repeat 3] [--case amsterdam intercity]
+
+Cases: ``amsterdam`` (tracks/amsterdam_rokin_centraal.yaml, trains/amsterdam_metro.yaml, Rokin to
+Centraal in 76 s, traction energy minimised: ``studies/default.yaml``) and ``intercity`` (TTOBench
+track ``00_var_speed_limit_100``, 48 531 m, with TTOBench's ``NL_Intercity_VIRM6`` as the library
+gives it, standstill to standstill in 1541 s, net energy minimised).
+
+Both sides start from the same grid, node limits and initial point (``ocp.problem.prepare`` and
+``capped_guess``) and use the same physics functions (``core.physics``) on the same per-interval
+coefficients, so the NLPs have the same variables, constraints and scaling (checked: the counts
+are printed). ecostudy's time is its in-process build + NL write + Ipopt (Debian's Ipopt 3.11.9
+through PyNumero/cyipopt); CasADi's is building the expression graph and ``nlpsol`` + solving with
+CasADi's bundled Ipopt (3.14, MUMPS), timed in the same process. Medians of ``--repeat`` runs.
+CasADi comes from PyPI (``pip install casadi``); it is a benchmark reference, not a dependency.
+"""
+import argparse
+import shlex
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from ecostudy.core.kinematics import interval_davis, interval_grade_force  # noqa: E402
+from ecostudy.core.physics import interval_resistance, line_energy, smooth_table  # noqa: E402
+from ecostudy.core.units import to_kwh  # noqa: E402
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
+from ecostudy.ocp import problem, session, space  # noqa: E402
+
+
+def cases(ttobench):
+    out = {"amsterdam": (load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml"),
+                         load_train(ROOT / "trains/amsterdam_metro.yaml"), "Rokin", "Centraal", 76.0, "energy")}
+    if ttobench:
+        lib = Path(ttobench)
+        track = load_track(lib / "tracks" / "00_var_speed_limit_100.json")
+        out["intercity"] = (track, load_train(lib / "trains" / "NL_Intercity_VIRM6.json"),
+                            *list(track.stops)[::len(track.stops) - 1], 1541.0, "net_energy")
+    return out
+
+
+def ecostudy_run(case, running_time, objective):
+    """(seconds build + NL write + Ipopt, Outcome, objective value [J], variables, constraints)."""
+    stages = {}
+    guess = problem.capped_guess(case, running_time)
+    t0 = time.perf_counter()
+    m = problem.build(case, guess, objective, stages, running_time=running_time)
+    s = session.Session(m)
+    outcome = s.solve()
+    seconds = time.perf_counter() - t0
+    value = float(m.objective.expr()) * m.energy_ref
+    return seconds, outcome, value, s.nlp.n_primals(), s.nlp.n_constraints(), outcome.seconds
+
+
+def casadi_run(case, running_time, objective):
+    """The same NLP written with CasADi SX vectors: (seconds, status, iterations, objective [J], n, m)."""
+    t0 = time.perf_counter()
+    train, segment, nodes, limits = case.train, case.segment, case.nodes, case.limits
+    n = len(nodes) - 1
+    fs = space.FORCE_SCALE
+    ds = np.diff(nodes)
+    v0, dt0, ft0, fb0 = problem.capped_guess(case, running_time)
+    regen = objective == "net_energy" and train.regeneration is not None
+    v, dt, ft, fb = ca.SX.sym("v", n + 1), ca.SX.sym("dt", n), ca.SX.sym("ft", n), ca.SX.sym("fb", n)
+    fr = ca.SX.sym("fr", n) if regen else ca.SX.zeros(n)
+    T = ca.SX.sym("T")
+    va, vb = v[:-1], v[1:]
+    per_kg = [ca.DM(np.asarray(x, float) / train.mass) for x in interval_davis(segment, train, nodes)]
+    fixed = ca.DM(interval_grade_force(segment, train, nodes) / train.mass)
+    dsd = ca.DM(ds)
+    net = interval_resistance(va, vb, per_kg, fixed) - (fs / train.mass) * (ft - fb)
+    g, lbg, ubg = [], [], []
+
+    def add(expr, lo, hi):
+        g.append(expr)
+        lbg.append(np.full(expr.shape[0], lo))
+        ubg.append(np.full(expr.shape[0], hi))
+
+    add((vb ** 2 - va ** 2) * (0.5 / dsd) + net, 0.0, 0.0)      # speed recursion (energy form)
+    add(dt * (va + vb) / (2 * dsd), 1.0, 1.0)                     # interval times
+    for force, env in ((ft, train.traction), (fb, train.braking)) + (((fr, train.regeneration),) if regen else ()):
+        if env.kind == "table":
+            c0, c1, terms = env.coefficients
+            scaled = (c0 / fs, c1 / fs, [(a / fs, s) for a, s in terms])
+            top = smooth_table(v, scaled, env.width)
+            add(force - top[:-1], -np.inf, 0.0)
+            add(force - top[1:], -np.inf, 0.0)
+        elif np.isfinite(env.max_power):
+            pk = env.max_power / fs
+            add(force * va / pk, -np.inf, 1.0)
+            add(force * vb / pk, -np.inf, 1.0)
+    if regen:
+        add(fr - fb, -np.inf, 0.0)
+    mean = (vb ** 2 - va ** 2) * (0.5 / dsd)
+    if np.isfinite(train.max_acceleration):
+        add(mean, -np.inf, float(train.max_acceleration))
+    if np.isfinite(train.max_deceleration):
+        add(-mean, -np.inf, float(train.max_deceleration))
+    time_ref = max(float(np.sum(dt0)), 1.0)
+    add(ca.sum1(dt) / time_ref - T / time_ref, 0.0, 0.0)
+    energy_ref = space.energy_reference(train, segment)
+    if objective == "energy":
+        f = fs * ca.dot(dsd, ft) / energy_ref
+    else:
+        f = ca.sum1(line_energy(fs * ft, fs * fr, 0.5 * (va + vb), dsd, train.eta_traction,
+                                train.eta_regeneration)) / energy_ref
+    x = ca.vertcat(v, dt, ft, fb, *([fr] if regen else []), T)
+    top_r = min(train.regeneration.max_force, train.braking.peak) / fs if regen else 0.0
+    lbx = np.concatenate([np.zeros(n + 1), np.zeros(n), np.zeros(n), np.zeros(n)] + ([np.zeros(n)] if regen else [])
+                         + [[running_time]])
+    ubx = np.concatenate([limits, np.full(n, np.inf), np.full(n, train.traction.peak / fs),
+                          np.full(n, train.braking.peak / fs)] + ([np.full(n, top_r)] if regen else [])
+                         + [[running_time]])
+    ubx[0] = ubx[n] = 0.0
+    x0 = np.concatenate([v0, dt0, ft0 / fs, fb0 / fs] + ([np.minimum(fb0 / fs, top_r)] if regen else [])
+                        + [[running_time]])
+    x0 = np.clip(x0, lbx, ubx)
+    opts = {"ipopt": {k: val for k, val in session.DEFAULT_OPTIONS.items() if k != "sb"},
+            "print_time": False}
+    opts["ipopt"]["sb"] = "yes"
+    solver = ca.nlpsol("eetc", "ipopt", {"x": x, "f": f, "g": ca.vertcat(*g)}, opts)
+    built = time.perf_counter() - t0
+    sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
+    seconds = time.perf_counter() - t0
+    stats = solver.stats()
+    return (seconds, stats["return_status"], stats["iter_count"], float(sol["f"]) * energy_ref,
+            x.shape[0], sum(e.shape[0] for e in g), seconds - built)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--ttobench", default="/work/data/ttobench", help="TTOBench checkout ('' to skip)")
+    ap.add_argument("--points", type=int, nargs="+", default=[1000, 5000])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--case", nargs="+", default=["amsterdam", "intercity"])
+    args = ap.parse_args()
+    print(f"`{shlex.join(['python', 'bench/bench_casadi.py'] + sys.argv[1:])}`\n")
+    print("| case | K | variables | constraints | ecostudy s | iterations | CasADi s | iterations | ratio "
+          "| Ipopt alone s (ecostudy / CasADi) | ecostudy kWh | CasADi kWh | difference % |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    all_cases = cases(args.ttobench)
+    base = {}
+    for name in args.case:
+        track, train, a, b, running_time, objective = all_cases[name]
+        for points in args.points:
+            case = problem.prepare(track, train, a, b, points)
+            eco, cas = [], []
+            for _ in range(args.repeat):
+                eco.append(ecostudy_run(case, running_time, objective))
+                cas.append(casadi_run(case, running_time, objective))
+            te, tc = statistics.median(r[0] for r in eco), statistics.median(r[0] for r in cas)
+            e, c = eco[-1], cas[-1]
+            base.setdefault(name, []).append((points, te, tc))
+            print(f"| {name} | {points} | {e[3]} / {c[4]} | {e[4]} / {c[5]} | {te:.2f} | {e[1].iterations} ({e[1].status}) | "
+                  f"{tc:.2f} | {c[2]} ({c[1]}) | {te / tc:.2f} | {statistics.median(r[5] for r in eco):.2f} / {statistics.median(r[6] for r in cas):.2f} | {to_kwh(e[2]):.4f} | {to_kwh(c[3]):.4f} | "
+                  f"{100 * (e[2] - c[3]) / abs(c[3]):+.4f} |", flush=True)
+    print("\n| case | K | ecostudy growth | CasADi growth |\n|---|---|---|---|")
+    for name, rows in base.items():
+        k0, e0, c0 = rows[0]
+        for k, e, c in rows[1:]:
+            print(f"| {name} | {k0} -> {k} | {e / e0:.2f}x | {c / c0:.2f}x |")
+
+if __name__ == "__main__":
+    main()
