@@ -98,9 +98,12 @@ def build_blocked(case, ts, kf, block, guess, margin=0.1):
     m.reach_hi = pyo.Constraint(expr=m.s[n] - seg.distance <= m.gamma)
     m.reach_lo = pyo.Constraint(expr=seg.distance - m.s[n] <= m.gamma)
     m.stand = pyo.Constraint(expr=m.v[n] * 1.0 <= m.gamma)  # 1 s: speed as the distance run on in a second
-    m.work = pyo.Expression(expr=sum(m.w[i] * ts * m.ft[i] * 0.5 * (m.v[i] + m.v[i + 1]) for i in m.I))  # kJ
+    m.step_work = pyo.Expression(m.I, rule=lambda m, i: m.w[i] * ts * m.ft[i] * 0.5 * (m.v[i] + m.v[i + 1]))  # kJ
+    m.work = pyo.Expression(expr=sum(m.step_work[i] for i in m.I))
     m.work_ref = max(train.traction.peak * seg.distance * 0.1 / 1e3, 1.0)  # kJ, the scale of J
-    m.objective = pyo.Objective(expr=(m.alpha * m.work + m.omega * m.gamma) / m.work_ref)
+    # alpha multiplies each step's work, not their sum: ASL sizes the Hessian by the product terms of
+    # the objective, and alpha times the whole sum made it dense (172 595 entries for 825 variables)
+    m.objective = pyo.Objective(expr=(sum(m.alpha * m.step_work[i] for i in m.I) + m.omega * m.gamma) / m.work_ref)
     m.case = case
     m.profile = profile_along(case, np.asarray(s0, float), np.asarray(v0, float), ts, margin)
     return m
