@@ -6,6 +6,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 
 from ecostudy.studies.batch import run_study
@@ -28,6 +29,16 @@ def study_file(folder, output, extra_scenarios=()):
 
 def comparable(table):
     return table[["scenario", "supplement_percent", "key", "status"] + NUMERIC].reset_index(drop=True)
+
+
+def same_results(table, other):
+    """The same cases, statuses and numbers. Numbers to 1e-9, not bit for bit: a worker re-solves
+    the NLP written for an earlier case of the same scenario (``ocp.problem.Written``), whose time
+    scale came from that case's start, and which cases share a worker depends on the pool."""
+    a, b = comparable(table), comparable(other)
+    keys = ["scenario", "supplement_percent", "key", "status"]
+    return a[keys].equals(b[keys]) and np.allclose(a[NUMERIC].to_numpy(float), b[NUMERIC].to_numpy(float),
+                                                   rtol=1e-9, atol=0.0)
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +67,7 @@ def test_serial_run_completes_and_rerun_computes_nothing(reference):
 def test_two_workers_give_identical_table(reference, tmp_path):
     table, counts, _ = run_study(study_file(tmp_path, tmp_path / "out"), workers=2)
     assert counts["computed"] == 6
-    assert comparable(table).equals(comparable(reference[0]))
+    assert same_results(table, reference[0])
 
 
 @pytest.mark.slow
@@ -83,7 +94,7 @@ def test_killed_study_resumes_with_the_remaining_cases(reference, tmp_path):
     table, counts, _ = run_study(path)
     assert counts["stored_before"] >= 2
     assert counts["computed"] == 6 - counts["stored_before"]
-    assert comparable(table).equals(comparable(reference[0]))
+    assert same_results(table, reference[0])
 
 
 def test_failures_are_recorded_and_do_not_stop_the_study(tmp_path):

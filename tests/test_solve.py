@@ -6,6 +6,7 @@ from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.simulate import TOLERANCES
+from ecostudy.ocp.problem import Written
 
 from .conftest import TRACKS, TRAINS, load_yaml
 
@@ -96,6 +97,24 @@ def test_warm_start_reaches_the_same_optimum(amsterdam, metro, amsterdam_76s):
                      warm_start=amsterdam_76s)
     assert warm.summary["traction_energy_kWh"] == pytest.approx(cold.summary["traction_energy_kWh"], rel=1e-5)
     assert cold.summary["traction_energy_kWh"] < amsterdam_76s.summary["traction_energy_kWh"]
+
+
+def test_a_written_model_is_re_solved_for_other_timings_with_the_same_optimum(amsterdam, metro):
+    """Issue 15: the NL file once per structure. A second and third run of the same structure
+    (another running time, then a window) change bounds and the start point of the written model;
+    each matches a fresh build and write to 1e-6, and writes nothing."""
+    written = Written()
+    for timing in (Timing(running_time=76.0), Timing(running_time=82.0), Timing(window=(78.0, 80.0))):
+        fresh = solve_run(amsterdam, metro, "Rokin", "Centraal", timing, points=300)
+        again = solve_run(amsterdam, metro, "Rokin", "Centraal", timing, points=300, written=written,
+                          structure="amsterdam")
+        assert_verified(again)
+        for key in ("traction_energy_kWh", "running_time_s"):
+            assert again.summary[key] == pytest.approx(fresh.summary[key], rel=1e-6)
+        m0, m1 = (r.summary["marginal_energy_kWh_per_s"] for r in (fresh, again))  # None in a window
+        assert (m0 is None and m1 is None) or m1 == pytest.approx(m0, rel=1e-4)
+        assert (again.stages["nl_write"] == 0.0) == (timing.running_time != 76.0)
+    assert len(written.models) == 1
 
 
 def test_window_arrives_at_the_latest_time(amsterdam, metro):

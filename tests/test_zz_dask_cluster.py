@@ -7,7 +7,7 @@ import pytest
 
 from ecostudy.studies.batch import run_study
 
-from .test_batch import comparable, reference, study_file  # noqa: F401,F811  (reference is a fixture)
+from .test_batch import reference, same_results, study_file  # noqa: F401,F811  (reference is a fixture)
 
 
 @pytest.mark.slow
@@ -17,4 +17,4 @@ def test_dask_local_cluster_gives_identical_table(reference, tmp_path):
                                   dashboard_address=None) as cluster:
         table, counts, _ = run_study(study_file(tmp_path, tmp_path / "out"), dask=cluster.scheduler_address)
     assert counts["computed"] == 6
-    assert comparable(table).equals(comparable(reference[0]))
+    assert same_results(table, reference[0])

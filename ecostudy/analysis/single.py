@@ -49,7 +49,8 @@ class RunResult:
 
 
 def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="energy", points=1000,
-              weights=(1.0, 1.0), warm_start=None, options=None, verify_result=True, windows=()):
+              weights=(1.0, 1.0), warm_start=None, options=None, verify_result=True, windows=(),
+              written=None, structure=None):
     """Energy-optimal (or all-out, or mixed) run between two stops, verified by simulation.
 
     Parameters
@@ -59,6 +60,8 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     points : int  Grid nodes K.
     warm_start : RunResult, optional  Start Ipopt from this earlier result.
     windows : sequence of core.types.Window  Timing points on the way (earliest/latest, speed bounds).
+    written, structure : ocp.problem.Written and the key naming this run's model but its timing
+        (track, train, stops, grid, weights): re-solve a model written for an earlier run.
     """
     stages = {}
     case = prepare(track, train, from_stop, to_stop, points, stages, windows)
@@ -77,7 +80,7 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
         else:
             guess = capped_guess(case, target or (window[1] if window else case.estimate * 1.1))
         kw = {"running_time": target} if target is not None else {"window": window} if window else {}
-        m, outcome = solve_once(case, guess, objective, stages, options, weights=weights, **kw)
+        m, outcome = solve_once(case, guess, objective, stages, options, written, structure, weights=weights, **kw)
         if not outcome.usable:
             if latest is not None and t_allout is None:
                 t_allout, _, _ = all_out(case, stages, options)

@@ -3,6 +3,7 @@
 ``solve_run`` is the library entry point behind ``ecostudy solve``.
 """
 import time
+from collections import OrderedDict
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -65,10 +66,46 @@ def record(stages, outcome, nl_seconds=0.0):
     stages["iterations"] = stages.get("iterations", 0) + outcome.iterations
 
 
-def solve_once(case, guess, objective, stages, options, **timing):
-    m = build(case, guess, objective, stages, **timing)
-    outcome = session.solve(m, options)
-    record(stages, outcome, outcome.nl_seconds)
+class Written:
+    """Written NLPs kept by structure for re-use: a solve that differs from an earlier one only in
+    its running time (or window) and starting point changes the bounds of T and the start of the
+    written model instead of building and writing it again (issue 15: the NL write once per model
+    structure). The caller names the structure (``key``): everything that changes the model but
+    the timing (track, train, stops, grid, objective, weights). The ``size`` latest are kept."""
+
+    def __init__(self, size=4):
+        self.size, self.models = size, OrderedDict()
+
+    def get(self, key):
+        if key in self.models:
+            self.models.move_to_end(key)
+        return self.models.get(key)
+
+    def put(self, key, model, nlp):
+        self.models[key] = (model, nlp)
+        while len(self.models) > self.size:
+            self.models.popitem(last=False)
+
+
+def solve_once(case, guess, objective, stages, options, written=None, key=None, **timing):
+    """Build, write and solve; or, with ``written`` holding ``key``, re-solve its written model
+    from ``guess`` with this timing (no build, no NL write)."""
+    kept = written.get((key, objective)) if written is not None and key is not None else None
+    if kept is None:
+        m = build(case, guess, objective, stages, **timing)
+        nlp = session.Session(m)
+        outcome = nlp.solve(options)
+        record(stages, outcome, nlp.nl_seconds)
+        if written is not None and key is not None:
+            written.put((key, objective), m, nlp)
+        return m, outcome
+    m, nlp = kept
+    with stage(stages, "build"):
+        lo, hi = space.timing_bounds(timing.get("running_time"), timing.get("window"))
+        nlp.set_bounds(m.T, lo, hi)
+        nlp.set_start_values(*space.start_point(m, guess), clip=False)  # as a new model starts
+    outcome = nlp.solve(options)
+    record(stages, outcome)
     return m, outcome
 
 

@@ -111,11 +111,12 @@ class Session:
             var.setub(None if hi is None else float(hi))
         self.x[index] = np.clip(self.x[index], arrays["_primals_lb"][index], arrays["_primals_ub"][index])
 
-    def set_start_values(self, variables, values):
-        """Set the starting point of some variables for the next solve (clipped to their bounds)."""
+    def set_start_values(self, variables, values, clip=True):
+        """Set the starting point of some variables for the next solve, clipped to their bounds
+        unless ``clip`` is False (then Ipopt moves them inside, as it does a new model's start)."""
         index = np.asarray(self.nlp.get_primal_indices(list(variables)), dtype=int)
-        self.x[index] = np.clip(np.asarray(values, dtype=float), self.nlp.primals_lb()[index],
-                                self.nlp.primals_ub()[index])
+        values = np.asarray(values, dtype=float)
+        self.x[index] = np.clip(values, self.nlp.primals_lb()[index], self.nlp.primals_ub()[index]) if clip else values
 
     def solve(self, options=None, x0=None):
         """Solve from ``x0`` (default: the last solution); loads the point into the model."""

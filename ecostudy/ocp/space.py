@@ -66,6 +66,24 @@ def define_variables(m, nodes, limits, train, guess, with_regeneration, movable=
         m.fr = pyo.Var(m.I, bounds=(0.0, top), initialize=lambda m, k: min(float(fb0[k]) / FORCE_SCALE, top))
 
 
+def start_point(m, guess):
+    """(variables, values) that start a re-solve of a written model ``m`` from ``guess`` = (v, dt,
+    F_T [N], F_B [N]) exactly as :func:`define_variables` and :func:`define_timing` would have
+    started a new one (T within its current bounds); fixed variables (the end speeds) are left
+    out, as the NLP has none of them."""
+    v0, dt0, ft0, fb0 = guess
+    pairs = [(m.v[k], float(v0[k])) for k in m.K if not m.v[k].fixed]
+    pairs += [(m.dt[k], float(dt0[k])) for k in m.I]
+    pairs += [(m.ft[k], float(ft0[k]) / FORCE_SCALE) for k in m.I]
+    pairs += [(m.fb[k], float(fb0[k]) / FORCE_SCALE) for k in m.I]
+    if hasattr(m, "fr"):
+        top = m.fr[0].ub
+        pairs += [(m.fr[k], min(float(fb0[k]) / FORCE_SCALE, top)) for k in m.I]
+    lo, hi = m.T.bounds
+    pairs.append((m.T, min(max(float(sum(float(x) for x in dt0)), lo), hi if hi is not None else float("inf"))))
+    return [p[0] for p in pairs], [p[1] for p in pairs]
+
+
 def define_dynamics(m, nodes, segment, train):
     """Speed (energy form) and time recursions, scaled to O(1) residuals."""
     ds = np.diff(nodes).tolist()  # Python floats: numpy scalars make Pyomo expressions slow

@@ -19,15 +19,18 @@ from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.io.store import Store
 from ecostudy.io.writers import check_output_dir, write_csv
+from ecostudy.ocp.problem import Written
 from ecostudy.studies.cases import case_key, expand
 from ecostudy.studies.workers import worker_pool
 
 _ALL_OUT = {}  # all-out time per (train, track, stops, grid), per process: shared by a scenario's cases
+_WRITTEN = Written()  # written NLPs per process: cases that differ only in timing re-use one NL file
+_SCENARIO = ("train", "track", "from", "to", "points", "version")
 
 
 def _all_out_time(case, track, train):
     """The all-out time of the case's scenario, solved once per process (a supplement's base)."""
-    key = case_key({k: case[k] for k in ("train", "track", "from", "to", "points", "version")})
+    key = case_key({k: case[k] for k in _SCENARIO})
     if key not in _ALL_OUT:
         r = solve_run(track, train, case["from"], case["to"], Timing(), objective="time",
                       points=case["points"], verify_result=False)
@@ -66,8 +69,9 @@ def _solve_case(case):
         t_allout = _all_out_time(case, track, train)
         running_time = t_allout * (1 + case["supplement_percent"] / 100)
     timing = Timing(running_time=running_time, window=tuple(case["window_s"]) if case["window_s"] else None)
+    structure = case_key({**{k: case[k] for k in _SCENARIO}, "weights": case["weights"]})
     r = solve_run(track, train, case["from"], case["to"], timing, objective=case["objective"],
-                  points=case["points"], weights=tuple(case["weights"]))
+                  points=case["points"], weights=tuple(case["weights"]), written=_WRITTEN, structure=structure)
     summary = r.summary
     if case.get("das"):
         summary["das"] = das_columns(r, case["das"], case["points"], case.get("das_time_limit_s", 60.0))

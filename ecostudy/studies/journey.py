@@ -28,7 +28,7 @@ from ecostudy.core.types import Timing, Window
 from ecostudy.heuristics import mareco
 from ecostudy.io.timetable import schedule
 from ecostudy.ocp import session
-from ecostudy.ocp.problem import build, capped_guess, prepare
+from ecostudy.ocp.problem import Written, build, capped_guess, prepare
 from ecostudy.ocp.space import passing_time
 from ecostudy.studies.pareto import sweep
 
@@ -273,6 +273,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
     if windowed is not None:
         plans = {"timing windows NLP": windowed, **plans}
     rows, results = [], {}
+    written = Written(size=len(pairs))  # each segment's NLP written once for every distribution's time
     for name, times in plans.items():
         results[name] = []
         departures, arrivals = schedule(plan, times) if plan is not None else (None, None)
@@ -281,7 +282,8 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
             arrivals = [d + t for d, t in zip(departures, times)]
         for n, ((a, b), t, f) in enumerate(zip(pairs, times, fronts)):
             keep = _segment_windows(plan, n, departures[n]) if name == "timing windows NLP" else ()
-            r = solve_run(track, train, a, b, Timing(running_time=t), points=points, windows=keep)
+            r = solve_run(track, train, a, b, Timing(running_time=t), points=points, windows=keep,
+                          written=written, structure=None if keep else (n, a, b))
             results[name].append(r)
             t0 = float(f["running_time_s"].iloc[0])
             rows.append({"distribution": name, "from": a, "to": b, "distance_m": r.summary["distance_m"],
