@@ -88,7 +88,7 @@ def test_a_window_behind_the_start_or_a_start_off_the_segment_is_refused(metro, 
 def test_the_das_phases_nlp_replans_from_a_mid_run_state(regional_ato):
     """The phases NLP (thesis 000 Ch. 5) as a movable model: from states on its own optimum in the
     first sector (where traction is still to come) the tail's traction work is the same."""
-    from ecostudy.das.advice import guess_from_result
+    from ecostudy.analysis.regimes import guess_from_result
     from ecostudy.ocp import phases
     from ecostudy.ocp.restart import set_end, set_phases_start
     from ecostudy.ocp.session import Session

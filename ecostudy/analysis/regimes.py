@@ -17,6 +17,8 @@ single transitional intervals are merged into the run before them.
 """
 import numpy as np
 
+from ecostudy.ocp import phases
+
 REGIMES = ("MA", "CR", "CO", "RB", "CR2", "MB")
 
 
@@ -83,3 +85,31 @@ def distance_shares(labels, nodes):
     ds = np.diff(nodes)
     total = ds.sum()
     return {r: float(ds[labels == r].sum() / total) for r in REGIMES}
+
+
+def guess_from_result(result, layout):
+    """Phase lengths and node speeds of an ``ocp.phases`` layout from an ATO ``result`` (its regimes,
+    sector by sector): the start of the DAS phases NLP and of SPPC.
+
+    MA intervals go to full traction, CR/CR2 to cruise, MB to braking, coasting to the leading
+    coast before the sector's first traction and to the trailing coast after it.
+    """
+    x, v, ft, fb = result.nodes, result.trajectory.v, result.trajectory.ft, result.trajectory.fb
+    labels = classify(result.train, v, ft, fb)
+    mid = 0.5 * (x[:-1] + x[1:])
+    lengths = np.zeros(len(layout.phases))
+    for s, sec in enumerate(layout.sectors):
+        mine = [q for q, (owner, _) in enumerate(layout.phases) if owner == s]
+        kinds = [layout.phases[q][1] for q in mine]
+        slot = {"MA": next(q for q, md in zip(mine, kinds) if md.kind == "traction"),
+                "CR": next(q for q, md in zip(mine, kinds) if md.kind == "cruise"),
+                "MB": mine[-1]}
+        slot["CR2"] = slot["CR"]
+        coasts = [q for q, md in zip(mine, kinds) if md.kind == "coast"]
+        driven = False
+        for i in np.nonzero((mid >= sec.start) & (mid < sec.end))[0]:
+            q = slot.get(labels[i], coasts[-1] if driven or len(coasts) == 1 else coasts[0])
+            driven = driven or labels[i] in ("MA", "CR")
+            lengths[q] += x[i + 1] - x[i]
+        lengths[mine] *= sec.length / max(lengths[mine].sum(), 1e-9)
+    return lengths, phases.speeds_at(layout, lengths, x, v)

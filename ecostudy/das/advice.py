@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from ecostudy.analysis import regimes
+from ecostudy.analysis.regimes import guess_from_result
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import Driven, simulate
 from ecostudy.core.units import KMH, to_kmh, to_kwh
@@ -218,30 +218,3 @@ def nearest_levels(segment, train, nodes, optimal_handle):
     u = levels[np.abs(optimal_handle[:, None] - levels[None, :]).argmin(axis=1)]
     trace = simulate(segment, train, nodes, u)[0]
     return Driven("DAS round (nearest level)", u, trace)
-
-
-def guess_from_result(result, layout):
-    """Phase lengths and node speeds from an ATO ``result`` (its regimes, sector by sector).
-
-    MA intervals go to full traction, CR/CR2 to cruise, MB to braking, coasting to the leading
-    coast before the sector's first traction and to the trailing coast after it.
-    """
-    x, v, ft, fb = result.nodes, result.trajectory.v, result.trajectory.ft, result.trajectory.fb
-    labels = regimes.classify(result.train, v, ft, fb)
-    mid = 0.5 * (x[:-1] + x[1:])
-    lengths = np.zeros(len(layout.phases))
-    for s, sec in enumerate(layout.sectors):
-        mine = [q for q, (owner, _) in enumerate(layout.phases) if owner == s]
-        kinds = [layout.phases[q][1] for q in mine]
-        slot = {"MA": next(q for q, md in zip(mine, kinds) if md.kind == "traction"),
-                "CR": next(q for q, md in zip(mine, kinds) if md.kind == "cruise"),
-                "MB": mine[-1]}
-        slot["CR2"] = slot["CR"]
-        coasts = [q for q, md in zip(mine, kinds) if md.kind == "coast"]
-        driven = False
-        for i in np.nonzero((mid >= sec.start) & (mid < sec.end))[0]:
-            q = slot.get(labels[i], coasts[-1] if driven or len(coasts) == 1 else coasts[0])
-            driven = driven or labels[i] in ("MA", "CR")
-            lengths[q] += x[i + 1] - x[i]
-        lengths[mine] *= sec.length / max(lengths[mine].sum(), 1e-9)
-    return lengths, phases.speeds_at(layout, lengths, x, v)

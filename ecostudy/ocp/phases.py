@@ -33,6 +33,7 @@ import pyomo.environ as pyo
 from ecostudy.core.grid import warn_unmodelled
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import interval_resistance, smooth_min
+from ecostudy.ocp import space
 from ecostudy.ocp.space import FORCE_SCALE, energy_reference
 
 MIN_PHASE = 1.0  # [m]: shorter phases are dropped from the driver's advice
@@ -172,7 +173,7 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
         _fixed_modes(m, layout)
     bounds = (running_time, running_time) if running_time is not None else window
     m.T = pyo.Var(bounds=bounds, initialize=float(np.clip(np.sum(dt0), *bounds)))
-    t_ref = max(running_time or window[1], 1.0)
+    t_ref = m.time_ref = max(running_time or window[1], 1.0)
     clock = m.t0 if movable else 0.0
     m.arrival = pyo.Constraint(expr=(sum(m.dt[i] for i in m.I) + clock - m.T) / t_ref == 0.0)
     _objective(m, train, segment, layout, ds, objective)
@@ -208,7 +209,9 @@ def _fixed_modes(m, layout):
 
 
 def _objective(m, train, segment, layout, ds, objective):
-    """Traction work (thesis 000 eq. 2.16) or net energy (eq. 7.3) over an O(1) reference."""
+    """Traction work (thesis 000 eq. 2.16) or net energy (eq. 7.3) over an O(1) reference, or the
+    arrival time or the speed at the end (with the work as a tie-break, as ``space.define_objective``
+    does)."""
     e_ref = m.energy_ref = energy_reference(train, segment)
     N = layout.intervals
     work = FORCE_SCALE * sum(m.ft[i] * ds[i] for i in range(N))
@@ -223,8 +226,12 @@ def _objective(m, train, segment, layout, ds, objective):
             width = 0.01 * train.braking.peak / FORCE_SCALE
             regen = FORCE_SCALE * sum(smooth_min(m.fb[i], cap[i], width) * ds[i] for i in range(N))
         expr = (work / train.traction_efficiency - train.regeneration_efficiency * regen) / e_ref
+    elif objective == "time":  # the earliest arrival; work breaks ties
+        expr = m.T / m.time_ref + space.TIME_REGULARISATION * work / e_ref
+    elif objective == "end_speed":  # the slowest arrival at the end (SPPC's relaxed step one, [m/s]); work breaks ties
+        expr = m.v[N] + space.TIME_REGULARISATION * work / e_ref
     else:
-        raise ValueError(f"DAS runs minimise energy or net_energy, not {objective!r}")
+        raise ValueError(f"DAS runs minimise energy, net_energy, time or end_speed, not {objective!r}")
     m.objective = pyo.Objective(expr=expr, sense=pyo.minimize)
 
 

@@ -1,0 +1,127 @@
+"""SPPC: shrinking-horizon parametrised predictive control (thesis 000 Ch. 5, Alg. 3 and Alg. 4).
+
+Every sample the controller re-solves the phases NLP of ``ocp/phases.py`` (eqs. 5.7-5.13: the
+track cut into sectors of constant gradient, curve and limit, each with a fixed sequence of DAS
+modes whose lengths are the decision variables) from the measured state to the end of the
+segment, and applies the mode of the phase it is in (eq. 5.15: u(k) = g(v*, 0, k)). One movable
+model and NL file serve the whole trip: the sectors behind the train get share 0 and the sector
+it is in the share still to run (``ocp.restart.set_phases_start``); each solve starts from the
+previous plan, which is the shifted solution of Prop. 5.2.1's recursive-feasibility argument.
+
+The terminal set X_f is the stop at the end of the segment, at a standstill, by the timetabled
+arrival (arriving early is allowed; least energy then uses the time). Variants:
+- ``nominal`` (Alg. 3): that terminal set as a hard constraint; a sample where no plan reaches it
+  falls back to the two-step relaxation and is counted (``softened``);
+- ``two_step`` (Alg. 4, eqs. 5.22-5.23): first the smallest distance gamma from X_f that the
+  measured state can still reach: in this space-domain model the end position is reached by
+  construction, so gamma is the speed at the end of the segment (a second phases model minimising
+  it, arrival free, written once too); then least energy with the end speed within gamma +
+  ``tolerance`` and the arrival by the timetable or, if that plan was later, by its arrival.
+  A train past the last point from which full service braking stops it (the handle is held for a
+  sample, so the plant brakes later than the plan) gets the plan that overruns least.
+
+Modes (thesis 000 §3.1.2): traction at a DAS level, coasting and full service braking are applied
+as their handle; cruise as the handle that holds the planned force at the measured speed.
+"""
+import time
+
+import numpy as np
+
+from ecostudy.analysis.regimes import guess_from_result
+from ecostudy.control.controllers import force_handle
+from ecostudy.ocp import phases
+from ecostudy.ocp.restart import set_end, set_phases_start
+from ecostudy.ocp.session import Session
+
+VARIANTS = ("nominal", "two_step")
+OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5}
+
+
+class Sppc:
+    """``ato``: the energy-optimal run of the segment (``analysis.single.solve_run``), whose regimes
+    start the first plan; ``arrival``: the timetabled arrival [s] on the trip's clock; ``points``:
+    about how many intervals the phases share (``phases.substeps_for``); ``lookahead`` [s]: the
+    run ahead whose mode is applied (about half a sample)."""
+
+    def __init__(self, ato, arrival, points=300, variant="nominal", tolerance=0.05, lookahead=0.2, options=None):
+        if variant not in VARIANTS:
+            raise ValueError(f"variant must be one of {VARIANTS}, not {variant!r}")
+        self.train, self.segment, self.arrival = ato.train, ato.segment, float(arrival)
+        self.variant, self.tolerance, self.lookahead = variant, tolerance, lookahead
+        self.options = {**OPTIONS, **(options or {})}
+        t0 = time.perf_counter()
+        layout = phases.Layout.make(phases.sectors(self.segment, self.train), phases.sequence(self.train), 1)
+        layout.substeps = phases.substeps_for(points, len(layout.phases))
+        self.layout, self.guess = layout, guess_from_result(ato, layout)
+        self.model = phases.build(self.segment, self.train, layout, self.guess, running_time=self.arrival,
+                                  movable=True)
+        self.session = Session(self.model)
+        self.closest = None  # the end-speed model of the two-step relaxation, written when first needed
+        self.setup_seconds = time.perf_counter() - t0
+        self.solve_seconds, self.iterations, self.modes, self.softened, self.failures = [], [], [], 0, 0
+        self.trouble = []
+
+    def _solve(self, session, measured, arrival, end_speed=(0.0, 0.0)):
+        set_phases_start(session, session.model, self.layout, measured)
+        set_end(session, session.model, end_speed, arrival)
+        outcome = session.solve(self.options)
+        self.iterations.append(outcome.iterations)
+        if not outcome.usable:
+            self.trouble.append((round(measured.position, 1), round(measured.speed, 2), round(measured.time, 2), outcome.status))
+        return outcome
+
+    def _closest(self, measured):
+        """Step one of Alg. 4 (5.22): (the smallest end speed gamma [m/s], that plan's arrival [s])."""
+        if self.closest is None:
+            model = phases.build(self.segment, self.train, self.layout, self.guess, running_time=self.arrival,
+                                 objective="end_speed", movable=True)
+            self.closest = Session(model)
+        m = self.closest.model
+        set_phases_start(self.closest, m, self.layout, measured)
+        set_end(self.closest, m, m.base_bounds["v"][-1], (measured.time, measured.time + 3600.0))
+        outcome = self.closest.solve(self.options)
+        self.iterations.append(outcome.iterations)
+        return (float(m.v[len(m.K) - 1].value), float(m.T.value)) if outcome.usable else None
+
+    def _relaxed(self, measured):
+        closest = self._closest(measured)
+        if closest is None:
+            return None
+        gamma, arrival = closest
+        return self._solve(self.session, measured, (measured.time, max(self.arrival, arrival + self.tolerance)),
+                           (0.0, gamma + self.tolerance))
+
+    def plan(self, measured):
+        if measured.position >= self.segment.distance - 0.05:
+            self.solve_seconds.append(0.0)
+            return -1.0
+        t0 = time.perf_counter()
+        if self.variant == "nominal":
+            outcome = self._solve(self.session, measured, (measured.time, self.arrival))
+            if not outcome.usable:
+                self.softened += 1
+                outcome = self._relaxed(measured)
+        else:
+            outcome = self._relaxed(measured)
+        self.solve_seconds.append(time.perf_counter() - t0)
+        if outcome is None or not outcome.usable:
+            self.failures += 1
+            return -1.0
+        return self._first_mode(measured)
+
+    def _first_mode(self, measured):
+        """The handle of the phase the train is in: the phase covering most of the next
+        ``lookahead`` seconds' run (an interior-point solution leaves skipped phases a few
+        micrometres long, so "the first phase of positive length" would often be a skipped one)."""
+        lengths, x, v, dt, ft, fb = phases.solution(self.model, self.layout)
+        x = phases.node_positions(self.layout, lengths, origin=measured.position)
+        n = self.layout.substeps
+        ahead = measured.position + max(measured.speed * self.lookahead, 0.05)
+        starts, ends = x[:-1:n], x[n::n]
+        cover = np.minimum(ends, ahead) - np.maximum(starts, measured.position)
+        q = int(np.argmax(cover))
+        mode = self.layout.phases[q][1]
+        self.modes.append(mode.kind if mode.kind != "traction" else f"traction {mode.level:g}")
+        if mode.kind == "cruise":
+            return force_handle(self.train, max(measured.speed, 0.0), ft[q * n] - fb[q * n])
+        return float(mode.level)
