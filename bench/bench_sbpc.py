@@ -1,13 +1,16 @@
 """SBPC (thesis 000 Ch. 4) on the Amsterdam case: T_s = 0.38 s, k_f = 200 (76 s).
 
     .venv/bin/python bench/bench_sbpc.py [--sample 0.38] [--blocks 45 20 1] [--disturbances 0.1 0.05 0.02]
+        [--sppc]
 
 Table 1 (Table 4.1's trend): the nominal SBPC for each L on the model train: energy at the wheel,
 arrival, stop error, solve time per step (mean, max), Ipopt iterations per step, samples where
 the nominal problem had no solution and the two-step relaxation stood in. Table 2 (§4.4, Theorem
 4.3.1 in practice): the two-step and multi-objective variants (L = 20) driving a train whose
 mass is d heavier and whose resistance, traction and braking are d weaker, with the handle
-quantised to the DAS levels {-1, 0, 0.5, 0.75, 1}: the terminal error against d.
+quantised to the DAS levels {-1, 0, 0.5, 0.75, 1}: the terminal error against d. With ``--sppc``
+only SPPC (thesis 000 Ch. 5, ``control/sppc.py``; DAS modes by construction): nominal on the model
+train, then the two-step variant on the d-disturbed trains.
 """
 import argparse
 import shlex
@@ -24,6 +27,7 @@ from ecostudy.analysis.single import solve_run  # noqa: E402
 from ecostudy.control.controllers import Quantised  # noqa: E402
 from ecostudy.control.loop import run_loop  # noqa: E402
 from ecostudy.control.sbpc import Sbpc  # noqa: E402
+from ecostudy.control.sppc import Sppc  # noqa: E402
 from ecostudy.core.plant import Plant, Truth  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
@@ -35,6 +39,7 @@ def main():
     p.add_argument("--sample", type=float, default=0.38)
     p.add_argument("--blocks", type=int, nargs="*", default=[45, 20, 1])
     p.add_argument("--disturbances", type=float, nargs="*", default=[0.1, 0.05, 0.02])
+    p.add_argument("--sppc", action="store_true", help="SPPC rows instead of SBPC's")
     args = p.parse_args()
     print(f"`python bench/bench_sbpc.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
     track = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
@@ -57,6 +62,21 @@ def main():
               f"{result.stop_error_m:+.3f} | {result.max_overspeed_kmh:.2f} | {s.mean():.2f} / {s.max():.2f} | "
               f"{np.mean(controller.iterations):.1f} | {controller.softened} | {time.perf_counter() - t0:.0f} |", flush=True)
 
+    def run_sppc(variant, truth, label):
+        controller = Sppc(solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=300), 76.0,
+                          variant=variant)
+        t0 = time.perf_counter()
+        result = run_loop(Plant(case.segment, train, truth), controller, args.sample, plant_step=args.sample)
+        s = np.array([x for x in controller.solve_seconds if x > 0])
+        print(f"| SPPC {variant} | - | {label} | {result.traction_work / 3.6e6:.3f} | {result.arrival_time_s:.2f} | "
+              f"{result.stop_error_m:+.3f} | {result.max_overspeed_kmh:.2f} | {s.mean():.2f} / {s.max():.2f} | "
+              f"{np.mean(controller.iterations):.1f} | {controller.softened} | {time.perf_counter() - t0:.0f} |", flush=True)
+
+    if args.sppc:
+        run_sppc("nominal", Truth(), "model")
+        for d in args.disturbances:
+            run_sppc("two_step", Truth(1 + d, 1 - d, 1 - d, 1 - d), f"d = {d:g}")
+        return
     for d in args.disturbances:
         for variant in ("two_step", "multi"):
             run(variant, 20, Truth(1 + d, 1 - d, 1 - d, 1 - d), True, f"d = {d:g}, DAS levels")

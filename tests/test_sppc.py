@@ -1,0 +1,52 @@
+"""SPPC (thesis 000 Ch. 5): the movable phases NLP re-solved from every sample, applying DAS modes."""
+import numpy as np
+import pytest
+
+from ecostudy.analysis.single import solve_run
+from ecostudy.control.loop import run_loop
+from ecostudy.control.sbpc import Sbpc
+from ecostudy.control.sppc import Sppc
+from ecostudy.core.plant import Plant
+from ecostudy.core.types import State, Timing
+from ecostudy.ocp.problem import prepare
+
+TS = 0.38  # thesis 000 §4.4's sample
+MODES = {"traction 1", "traction 0.75", "traction 0.5", "cruise", "coast", "brake"}
+
+
+@pytest.fixture(scope="module")
+def ato(metro, amsterdam):
+    return solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=300)
+
+
+def test_the_first_plan_starts_in_full_traction_and_re_plans_from_a_later_state(ato, metro):
+    controller = Sppc(ato, 76.0)
+    assert controller.plan(State()) == 1.0  # the metro's first mode from the stand
+    assert controller.modes == ["traction 1"]
+    u = controller.plan(State(600.0, 16.0, 40.0))  # mid-run, on the way
+    assert controller.failures == 0 and controller.softened == 0
+    assert controller.modes[-1] in MODES
+    if controller.modes[-1] != "cruise":
+        assert u in (*metro.das_levels, 0.0, -1.0)
+
+
+def test_a_train_that_cannot_stop_in_time_gets_the_plan_that_overruns_least(ato):
+    """Past the last point from which the planned braking stops it, the nominal problem has no
+    solution; the two-step relaxation (Alg. 4) plans the least overrun: full braking now."""
+    controller = Sppc(ato, 76.0)
+    u = controller.plan(State(1080.0, 14.0, 70.0))
+    assert controller.softened == 1 and controller.failures == 0
+    assert u == -1.0
+
+
+@pytest.mark.slow
+def test_the_nominal_loop_stops_on_the_mark_with_das_modes_and_costs_at_least_sbpc(ato, metro, amsterdam):
+    controller = Sppc(ato, 76.0)
+    result = run_loop(Plant(ato.segment, metro), controller, TS, plant_step=TS)
+    assert abs(result.stop_error_m) < 0.5 and result.arrival_time_s <= 76.0 + TS + 1e-6
+    assert result.max_overspeed_kmh < 0.5
+    assert set(controller.modes) <= MODES
+    case = prepare(amsterdam, metro, "Rokin", "Centraal", 200)
+    sbpc = Sbpc(case, 76.0, TS, 20, np.interp(case.nodes, ato.trajectory.nodes, ato.trajectory.v))
+    blocked = run_loop(Plant(ato.segment, metro), sbpc, TS, plant_step=TS)
+    assert result.traction_work >= blocked.traction_work  # DAS modes cost at least SBPC's free handle
