@@ -15,8 +15,9 @@ arrival (arriving early is allowed; least energy then uses the time). Variants:
 - ``two_step`` (Alg. 4, eqs. 5.22-5.23): first the smallest distance gamma from X_f that the
   measured state can still reach: in this space-domain model the end position is reached by
   construction, so gamma is the speed at the end of the segment (a second phases model minimising
-  it, arrival free, written once too); then least energy with the end speed within gamma +
-  ``tolerance`` and the arrival by the timetable or, if that plan was later, by its arrival.
+  it and then the arrival time, the clock free, written once too); then least energy with the end
+  speed within gamma + ``tolerance`` and the arrival by the timetable or, if that plan was later,
+  by its arrival.
   A train past the last point from which full service braking stops it (the handle is held for a
   sample, so the plant brakes later than the plan) gets the plan that overruns least.
 
