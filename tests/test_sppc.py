@@ -50,3 +50,12 @@ def test_the_nominal_loop_stops_on_the_mark_with_das_modes_and_costs_at_least_sb
     sbpc = Sbpc(case, 76.0, TS, 20, np.interp(case.nodes, ato.trajectory.nodes, ato.trajectory.v))
     blocked = run_loop(Plant(ato.segment, metro), sbpc, TS, plant_step=TS)
     assert result.traction_work >= blocked.traction_work  # DAS modes cost at least SBPC's free handle
+
+
+def test_a_study_asking_for_a_multi_objective_sppc_is_refused():
+    from pydantic import ValidationError
+
+    from ecostudy.io.loopfile import Controller
+    assert Controller.model_validate({"name": "s", "kind": "sppc", "variant": "two_step"}).kind == "sppc"
+    with pytest.raises(ValidationError, match="nominal and two_step"):
+        Controller.model_validate({"name": "s", "kind": "sppc", "variant": "multi"})

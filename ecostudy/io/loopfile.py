@@ -28,12 +28,13 @@ class Controller(Strict):
     from the stand, replayed by position without feedback; ``ato``: the full-horizon
     energy-optimal ATO run (Ipopt NLP) at the latest arrival, replayed open loop by position;
     ``sbpc``: thesis 000's shrinking-horizon move-blocking controller arriving at the latest
-    arrival (blocks of ``block`` samples, ``variant``). ``das_levels`` applies any controller's
+    arrival (blocks of ``block`` samples, ``variant``); ``sppc``: thesis 000's shrinking-horizon
+    parametrised controller (DAS modes, ``variant`` nominal or two_step). ``das_levels`` applies any controller's
     handle as the nearest of the train's DAS levels, ``delay_samples`` later (a driver).
     """
 
     name: str
-    kind: Literal["convex", "open_loop", "ato", "sbpc"]
+    kind: Literal["convex", "open_loop", "ato", "sbpc", "sppc"]
     settings: ConvexSettings = ConvexSettings()
     estimator: bool = Field(False, description="Feed the controller a Kalman mass estimate (thesis 001 §10.3).")
     scheme: Literal["midpoint", "left"] = "midpoint"
@@ -42,6 +43,12 @@ class Controller(Strict):
     omega: float = Field(3505.0, gt=0, description="SBPC multi-objective weight on the terminal distance (4.31).")
     das_levels: bool = Field(False, description="Apply the handle as the nearest DAS level of the train.")
     delay_samples: int = Field(0, ge=0, le=100, description="Driver reaction delay with das_levels [samples].")
+
+    @model_validator(mode="after")
+    def _sppc_variant(self):
+        if self.kind == "sppc" and self.variant == "multi":
+            raise ValueError("sppc has the variants nominal and two_step (no multi-objective one is built)")
+        return self
 
 
 class Range(Strict):

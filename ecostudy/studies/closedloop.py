@@ -17,6 +17,7 @@ from ecostudy import __version__
 from ecostudy.analysis.single import solve_run
 from ecostudy.control.controllers import Convex, ForceReplay, OpenLoop, Quantised
 from ecostudy.control.sbpc import Sbpc
+from ecostudy.control.sppc import Sppc
 from ecostudy.control.estimator import MassEstimator
 from ecostudy.control.loop import run_loop
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
@@ -108,6 +109,8 @@ def build_controller(case, track, segment, train, estimator):
                         verify_result=False)
         if spec["kind"] == "ato":
             inner = OpenLoop(ato)
+        elif spec["kind"] == "sppc":
+            inner = Sppc(ato, window[1], points, spec["variant"])
         else:
             prepared = prepare(track, train, case["from"], case["to"], points)
             speeds = np.interp(prepared.nodes, ato.trajectory.nodes, ato.trajectory.v)
