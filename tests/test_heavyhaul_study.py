@@ -193,6 +193,7 @@ def study(tmp_path, **changes):
     return tmp_path / "hh.yaml"
 
 
+@pytest.mark.slow  # 20 s: the longest of the fast suite (make test < 3 min, issue 15); CI runs it
 def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path):
     """Two K_b on a 5 km line with a hump: every run stops near the end on the reference's final
     approach, tracks within 2 m/s on average (it stops about 100 m short, where the

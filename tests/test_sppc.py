@@ -20,7 +20,7 @@ def ato(metro, amsterdam):
 
 
 def test_the_first_plan_starts_in_full_traction_and_re_plans_from_a_later_state(ato, metro):
-    controller = Sppc(ato, 76.0)
+    controller = Sppc(ato, 76.0, points=150)
     assert controller.plan(State()) == 1.0  # the metro's first mode from the stand
     assert controller.modes == ["traction 1"]
     u = controller.plan(State(600.0, 16.0, 40.0))  # mid-run, on the way
@@ -33,7 +33,7 @@ def test_the_first_plan_starts_in_full_traction_and_re_plans_from_a_later_state(
 def test_a_train_that_cannot_stop_in_time_gets_the_plan_that_overruns_least(ato):
     """Past the last point from which the planned braking stops it, the nominal problem has no
     solution; the two-step relaxation (Alg. 4) plans the least overrun: full braking now."""
-    controller = Sppc(ato, 76.0)
+    controller = Sppc(ato, 76.0, points=150)
     u = controller.plan(State(1080.0, 14.0, 70.0))
     assert controller.softened == 1 and controller.failures == 0
     assert u == -1.0
