@@ -12,7 +12,7 @@ import pytest
 from ecostudy.studies.batch import run_study
 from ecostudy.studies.cases import expand
 
-from .conftest import ROOT, TRACKS, TRAINS, write_yaml
+from .conftest import ROOT, TRACKS, TRAINS, load_yaml, write_yaml
 
 NUMERIC = ["running_time_s", "traction_energy_kWh", "net_energy_kWh", "top_speed_kmh"]
 
@@ -126,7 +126,10 @@ def test_case_equals_a_direct_solve(reference):
 
 @pytest.mark.slow
 def test_ctrl_c_says_how_to_continue(tmp_path):
+    # K = 1000: the cases after the first re-use its written NLP (ocp.problem.Written) and at
+    # K = 200 the rest of the study finished before the signal arrived
     path = study_file(tmp_path, tmp_path / "out")
+    write_yaml(path, {**load_yaml(path), "points": 1000})
     db = tmp_path / "out" / "results.sqlite"
     proc = subprocess.Popen([sys.executable, "-m", "ecostudy", "run", str(path), "--no-progress"], cwd=ROOT,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
