@@ -52,25 +52,23 @@ def main():
             "[s] | iterations per step | nominal infeasible | run wall [s] |")
     print(head + "\n|" + "---|" * 11, flush=True)
 
-    def run(variant, block, truth, quantised, label):
-        controller = Sbpc(case, 76.0, args.sample, block, speeds, variant)
-        driven = Quantised(controller, train.das_levels) if quantised else controller
+    def drive(name, block, label, controller, driven, truth):
+        """Run the loop and print one table row."""
         t0 = time.perf_counter()
         result = run_loop(Plant(case.segment, train, truth), driven, args.sample, plant_step=args.sample)
         s = np.array([x for x in controller.solve_seconds if x > 0])
-        print(f"| {variant} | {block} | {label} | {result.traction_work / 3.6e6:.3f} | {result.arrival_time_s:.2f} | "
+        print(f"| {name} | {block} | {label} | {result.traction_work / 3.6e6:.3f} | {result.arrival_time_s:.2f} | "
               f"{result.stop_error_m:+.3f} | {result.max_overspeed_kmh:.2f} | {s.mean():.2f} / {s.max():.2f} | "
               f"{np.mean(controller.iterations):.1f} | {controller.softened} | {time.perf_counter() - t0:.0f} |", flush=True)
+
+    def run(variant, block, truth, quantised, label):
+        controller = Sbpc(case, 76.0, args.sample, block, speeds, variant)
+        drive(variant, block, label, controller, Quantised(controller, train.das_levels) if quantised else controller, truth)
 
     def run_sppc(variant, truth, label):
         controller = Sppc(solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=300), 76.0,
                           variant=variant)
-        t0 = time.perf_counter()
-        result = run_loop(Plant(case.segment, train, truth), controller, args.sample, plant_step=args.sample)
-        s = np.array([x for x in controller.solve_seconds if x > 0])
-        print(f"| SPPC {variant} | - | {label} | {result.traction_work / 3.6e6:.3f} | {result.arrival_time_s:.2f} | "
-              f"{result.stop_error_m:+.3f} | {result.max_overspeed_kmh:.2f} | {s.mean():.2f} / {s.max():.2f} | "
-              f"{np.mean(controller.iterations):.1f} | {controller.softened} | {time.perf_counter() - t0:.0f} |", flush=True)
+        drive(f"SPPC {variant}", "-", label, controller, controller, truth)
 
     if args.sppc:
         run_sppc("nominal", Truth(), "model")

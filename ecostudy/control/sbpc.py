@@ -19,13 +19,11 @@ import time
 from ecostudy.ocp.blocked import (build_blocked, handle_at, samples, set_blocked_start, set_objective, time_guess,
                                   update_profile)
 from ecostudy.core.types import State
-from ecostudy.ocp.session import Session
+from ecostudy.ocp.session import WARM_START, Session
 
 VARIANTS = ("nominal", "two_step", "multi")
-# Each solve starts from the previous one's primal and dual point (the shifted tail) with a small
-# barrier parameter: 14.1 -> 4.9 Ipopt iterations per sample at L = 20 (docs/closed_loop.md)
-OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, "warm_start_init_point": "yes", "mu_init": 1e-5,
-           "warm_start_bound_push": 1e-6, "warm_start_mult_bound_push": 1e-6}
+# each solve starts from the previous one (the shifted tail), primal and dual (docs/closed_loop.md)
+OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}
 
 
 class Sbpc:

@@ -33,12 +33,10 @@ from ecostudy.analysis.regimes import guess_from_result
 from ecostudy.control.controllers import force_handle
 from ecostudy.ocp import phases
 from ecostudy.ocp.restart import set_end, set_phases_start
-from ecostudy.ocp.session import Session
+from ecostudy.ocp.session import WARM_START, Session
 
 VARIANTS = ("nominal", "two_step")
-# each solve starts from the previous plan's primal and dual point (as control/sbpc.py's)
-OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, "warm_start_init_point": "yes", "mu_init": 1e-5,
-           "warm_start_bound_push": 1e-6, "warm_start_mult_bound_push": 1e-6}
+OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}  # from the previous plan
 
 
 class Sppc:
@@ -87,10 +85,7 @@ class Sppc:
                                  objective="end_speed", movable=True)
             self.closest = Session(model)
         m = self.closest.model
-        set_phases_start(self.closest, m, self.layout, measured)
-        set_end(self.closest, m, m.base_bounds["v"][-1], (measured.time, measured.time + 3600.0))
-        outcome = self.closest.solve(self.options)
-        self.iterations.append(outcome.iterations)
+        outcome = self._solve(self.closest, measured, (measured.time, measured.time + 3600.0), m.base_bounds["v"][-1])
         return (float(m.v[len(m.K) - 1].value), float(m.T.value)) if outcome.usable else None
 
     def _relaxed(self, measured):
