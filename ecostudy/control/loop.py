@@ -38,7 +38,7 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
     state, states, handles = State(), [State()], []
     work_t = work_b = 0.0
     max_time = max_time or 20 * segment.distance + 600
-    moved, last, over, drawn = False, None, 0.0, (None, 0.0)
+    moved, last, over, drawn, arrival = False, None, 0.0, (None, 0.0), None
     substeps = max(int(round(sample_time / plant_step)), 1)
     while state.time < max_time:
         measured = noise.measure(state, rng)
@@ -68,10 +68,12 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
             over = max(over, state.speed - limit)
             moved = moved or state.speed > 0.5
             if moved and state.speed <= 0.0:
+                arrival = step.stood if step.stood is not None else state.time  # not the step's end
                 break
         states.append(state)
         if moved and state.speed <= 0.0:
             break
     estimates = list(estimator.history) if estimator is not None else []
     return LoopResult(states, handles, work_t, work_b, list(controller.solve_seconds),
-                      state.position - segment.distance, state.time, to_kmh(max(over, 0.0)), estimates)
+                      state.position - segment.distance,
+                      arrival if arrival is not None else state.time, to_kmh(max(over, 0.0)), estimates)

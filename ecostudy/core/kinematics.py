@@ -30,12 +30,14 @@ def interval_davis(segment, train, nodes):
     return np.full(n, float(a)), np.full(n, float(b)), np.asarray(c_k, float)
 
 
-def braking_curve(segment, train, nodes, limits):
-    """Highest speeds from which full service braking still meets every limit and the stop [m/s]."""
+def braking_curve(segment, train, nodes, limits, end_speed=0.0):
+    """Highest speeds from which full service braking still meets every limit and the stop [m/s]
+    (``end_speed``: the speed allowed at the last node instead of the stop; inf: its limit)."""
     ds = np.diff(nodes)
     fixed = interval_grade_force(segment, train, nodes)
     a, b, c = interval_davis(segment, train, nodes)
     bwd = np.zeros_like(nodes)
+    bwd[-1] = min(end_speed, limits[-1])
     for k in range(len(ds) - 1, -1, -1):
         v = bwd[k + 1]
         dec = min((train.braking.force(v) + davis_resistance(v, a[k], b[k], c[k]) + fixed[k]) / train.mass,

@@ -58,6 +58,7 @@ class Step(NamedTuple):
     traction_work: float
     braking_work: float
     regenerated_work: float   # taken by the electric brake, before its efficiency
+    stood: float | None = None  # the clock at which the train came to a stand within the step [s]
 
 
 @dataclass(frozen=True)
@@ -161,6 +162,7 @@ class Plant:
         a, b, c = self.davis
         y = [float(state.position), max(float(state.speed), 0.0), 0.0, 0.0, 0.0, 0.0]
         t, t_end = float(state.time), float(state.time) + dt
+        stood = None
         while t < t_end - 1e-12:
             i = bisect_right(self.edges, y[0] + 1e-9)
             edge = self.edges[i] if i < len(self.edges) else np.inf
@@ -189,8 +191,8 @@ class Plant:
             elif sol.t_events[0].size:
                 y[1] = 0.0
                 if rhs(t, y)[1] <= 0.0:  # at a stand and nothing moves it: it stands out the step
-                    t = t_end
-        return Step(State(y[0], max(y[1], 0.0), t_end), y[2], y[3], y[4])
+                    stood, t = t, t_end
+        return Step(State(y[0], max(y[1], 0.0), t_end), y[2], y[3], y[4], stood)
 
     # ------------------------------------------------------------------ a whole trip
     def drive(self, nodes, handle, targets=None, gain=1.0, max_time=None, initial_speed=0.0):

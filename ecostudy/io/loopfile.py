@@ -21,6 +21,17 @@ class ConvexSettings(Strict):
     brake_level_mps2: float = Field(0.8, gt=0, description="B_brk: planned braking above it is penalised [m/s^2].")
 
 
+class RspcSettings(Strict):
+    """Thesis 000 Ch. 6's receding-horizon switched controller (``control/rspc.py``)."""
+
+    horizon: int = Field(3, ge=1, le=6, description="N, prediction steps (6^N mode sequences per sample).")
+    distance_m: float = Field(25.0, gt=0, description="D, the nominal prediction step [m] (Alg. 6).")
+    gamma: float = Field(0.995, ge=0, le=1, description="gamma_S of eq. 6.7: the weight of the horizon time.")
+    margin_s: float = Field(1.5, ge=0, description="Aim this much before the latest arrival [s].")
+    brake_reserve: float = Field(0.2, ge=0, lt=1, description="Share of the braking envelope the stopping "
+                                 "curve leaves unused (0.2 covers a train 10 % heavier with 10 % weaker brakes).")
+
+
 class Controller(Strict):
     """One controller of the study.
 
@@ -29,13 +40,15 @@ class Controller(Strict):
     energy-optimal ATO run (Ipopt NLP) at the latest arrival, replayed open loop by position;
     ``sbpc``: thesis 000's shrinking-horizon move-blocking controller arriving at the latest
     arrival (blocks of ``block`` samples, ``variant``); ``sppc``: thesis 000's shrinking-horizon
-    parametrised controller (DAS modes, ``variant`` nominal or two_step). ``das_levels`` applies any controller's
+    parametrised controller (DAS modes, ``variant`` nominal or two_step); ``rspc``: thesis 000's
+    receding-horizon switched controller (DAS modes, ``rspc`` settings). ``das_levels`` applies any controller's
     handle as the nearest of the train's DAS levels, ``delay_samples`` later (a driver).
     """
 
     name: str
-    kind: Literal["convex", "open_loop", "ato", "sbpc", "sppc"]
+    kind: Literal["convex", "open_loop", "ato", "sbpc", "sppc", "rspc"]
     settings: ConvexSettings = ConvexSettings()
+    rspc: RspcSettings = RspcSettings()
     estimator: bool = Field(False, description="Feed the controller a Kalman mass estimate (thesis 001 §10.3).")
     scheme: Literal["midpoint", "left"] = "midpoint"
     block: int = Field(20, ge=1, description="SBPC: L, samples per blocked move (thesis 000 eq. 4.8).")

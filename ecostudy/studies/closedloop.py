@@ -16,6 +16,7 @@ import pandas as pd
 from ecostudy import __version__
 from ecostudy.analysis.single import solve_run
 from ecostudy.control.controllers import Convex, ForceReplay, OpenLoop, Quantised
+from ecostudy.control.rspc import Rspc
 from ecostudy.control.sbpc import Sbpc
 from ecostudy.control.sppc import Sppc
 from ecostudy.control.estimator import MassEstimator
@@ -99,6 +100,10 @@ def build_controller(case, track, segment, train, estimator):
     spec, window, points = case["controller"], tuple(case["window"]), case["points"]
     if spec["kind"] == "convex":
         inner = Convex(convex_program(segment, train, points, spec), window, estimator, hold=case["sample_time"])
+    elif spec["kind"] == "rspc":
+        r = spec["rspc"]
+        inner = Rspc(prepare(track, train, case["from"], case["to"], points), window[1], case["sample_time"],
+                     r["horizon"], r["distance_m"], r["gamma"], r["margin_s"], r["brake_reserve"])
     elif spec["kind"] == "open_loop":  # the convex controller's own plan from the stand, replayed
         plan = convex_program(segment, train, points, spec).solve(State(), window)
         if not plan.usable:

@@ -1,0 +1,176 @@
+"""RSPC: receding-horizon switched predictive control (thesis 000 Ch. 6, Alg. 5 and the adaptive Alg. 6).
+
+Every sample the controller enumerates the switching sequences chi = [sigma(0|k), ..., sigma(N-1|k)]
+over the six DAS modes of Remark 6.1.1 (traction at each DAS level, cruise, coast, full service
+braking), predicts each with the space-domain model (6.2)-(6.3), drops those that leave the
+admissible set X (6.4: below the limits, here below the limits' braking curve so that a limit drop
+beyond the horizon can still be met; the train may not stop short) and applies the first mode of
+the cheapest (6.11-6.12). No solver: 6^N predictions per sample, pruned as they become
+infeasible, which is why the thesis keeps N short. Cost (6.7)-(6.8):
+
+    J = sum_j (D_j / D) (1 - gamma_S) ((F_T - F_R) / F_Tmax)^2
+        + gamma_S ((x1(0|k) + T_horizon - x1(N|k)) / T_horizon)^2
+
+(the stage weight D_j / D is 1 for steps of the nominal length D and keeps a short step from
+counting as a whole one). T_horizon (Remark 6.2.1, "a heuristic"): the time a reference run takes
+over the horizon's distance, scaled by the time left over the reference's time to the stop; the
+reference is the fastest run capped at the one cruise speed that meets the timetable
+(``kinematics.capped_speeds``), so a late train gets a shorter T_horizon and speeds up.
+
+Adaptive sampling (Alg. 6): prediction steps are D metres long but never cross a sector boundary
+(a change of gradient, curve or limit; a step ends at the boundary, so the remaining sector
+length D_Gamma(k) < D sets that step, rows 1-2); the first step is the distance the train runs
+in one loop sample (v T_s), because the loop holds the applied mode for T_s. Braking (row 3,
+eqs. 6.15-6.16): when coasting one more sample would leave the train above the stopping curve
+(the braking distance D_b reaches the remaining distance D_p: delta D <= 0), the controller
+brakes in full; from then on it brakes while that holds and coasts otherwise, so the stop is
+re-checked every sample against the measured state. The stopping curve is integrated with the
+model's braking envelope less ``brake_reserve`` (not eq. 6.15's one-step estimate at the current
+speed), so a train whose brakes are weaker than the model's still stops at the mark.
+
+The prediction integrates (6.2) in kinetic energy: v(j+1)^2 = v(j)^2 + 2 D_j a(j), time
+2 D_j / (v(j) + v(j+1)); this is (6.2) to first order and has no singularity at a stand.
+"""
+import dataclasses
+import time
+
+import numpy as np
+
+from ecostudy.control.controllers import handle_of
+from ecostudy.core import kinematics
+from ecostudy.core.physics import acceleration, davis_resistance
+from ecostudy.core.plant import Cruise, Plant
+from ecostudy.ocp.phases import all_modes
+
+
+class Rspc:
+    """``case``: a prepared case (``ocp.problem.prepare``: segment, nominal train, grid, limits);
+    ``arrival``: the timetabled arrival [s] on the trip's clock; ``sample_time``: the loop's T_s
+    [s]; ``horizon``: N; ``distance``: D [m]; ``gamma``: gamma_S of (6.7)."""
+
+    def __init__(self, case, arrival, sample_time, horizon=3, distance=25.0, gamma=0.995, margin=1.5,
+                 brake_reserve=0.2, final_m=0.3):
+        if horizon < 1:
+            raise ValueError(f"horizon must be at least 1, not {horizon}")
+        if distance <= 0:
+            raise ValueError(f"distance must be positive, not {distance}")
+        self.case, self.arrival, self.ts, self.n, self.d = case, float(arrival), float(sample_time), int(horizon), float(distance)
+        self.gamma, self.margin, self.final_m = float(gamma), float(margin), float(final_m)
+        train, segment, nodes = case.train, case.segment, case.nodes
+        self.model = Plant(segment, train)
+        self.modes = all_modes(train)
+        self.coast, self.brake = (next(m for m in self.modes if m.kind == kind) for kind in ("coast", "brake"))
+        self.f_max = train.traction.peak
+        self.edges = np.concatenate([segment.breakpoints(), [segment.distance]])
+        reserved = dataclasses.replace(train, braking=train.braking.scaled(1.0 - brake_reserve))
+        # the admissible speeds: below every limit's braking curve (not the stop's: row 3 handles it)
+        self.cap_sq = kinematics.braking_curve(segment, reserved, nodes, case.limits, end_speed=np.inf) ** 2
+        self.stop_sq = kinematics.braking_curve(segment, reserved, nodes, np.full_like(nodes, np.inf)) ** 2
+        fastest = np.minimum(case.envelope, np.sqrt(np.minimum(self.cap_sq, self.stop_sq)))  # with the reserve
+        reference = kinematics.capped_speeds(fastest, nodes, self.arrival - margin)
+        self.t_ref = self._clock(reference)
+        # T_horizon runs at the reference's cruise speed under the limits' braking curves: the stop
+        # is row 3's, and a horizon reaching into the reference's braking would ask the train to slow early
+        self.t_run = self._clock(np.minimum(np.sqrt(self.cap_sq), reference.max()))
+        self.braking, self.solve_seconds, self.chosen, self.failures = False, [], [], 0
+
+    # ------------------------------------------------------------------ the model
+    def _accel(self, x_mid, v, mode):
+        """(dv/dt [m/s^2], F_T [N], F_R [N]) of ``mode`` at speed ``v`` in the sector around ``x_mid``."""
+        m = self.model
+        a, b, c = m.davis
+        resist = davis_resistance(v, a, b, c + m.tunnel(x_mid)) + m.grade_force(x_mid)
+        control = Cruise(v) if mode.kind == "cruise" else mode.level
+        ft, fb = m.forces(v, control, resist)
+        return acceleration(ft, fb, resist, m.mass), ft, resist
+
+    def _clock(self, speeds):
+        """Clock of a speed profile on the case's grid from its start [s]."""
+        return np.concatenate([[0.0], np.cumsum(kinematics.interval_times(speeds, self.case.nodes))])
+
+    def steps(self, position, speed):
+        """Start positions and lengths of the N prediction steps (Alg. 6's adaptive sampling)."""
+        starts, lengths, x = [], [], position
+        for j in range(self.n):
+            want = max(speed * self.ts, 0.5) if j == 0 else self.d
+            edge = self.edges[np.searchsorted(self.edges, x + 1e-9)] if x + 1e-9 < self.edges[-1] else self.edges[-1]
+            step = min(want, edge - x)
+            if step <= 1e-6:
+                break
+            starts.append(x)
+            lengths.append(step)
+            x += step
+        return starts, lengths
+
+    def horizon_time(self, position, clock, end):
+        """T_horizon (Remark 6.2.1; module docstring) for the run from ``position`` to ``end`` [s]."""
+        t_x, t_stop = np.interp([position, self.case.nodes[-1]], self.case.nodes, self.t_ref)
+        run_x, run_end = np.interp([position, end], self.case.nodes, self.t_run)
+        ahead = t_stop - t_x
+        scale = (self.arrival - self.margin - clock) / ahead if ahead > 1e-9 else 1.0
+        return max((run_end - run_x) * max(scale, 0.05), 1e-3)
+
+    def best(self, position, speed, clock):
+        """(cost, first mode) of the cheapest admissible sequence of (6.9), or None."""
+        starts, lengths = self.steps(position, speed)
+        if not starts:
+            return None
+        end = starts[-1] + lengths[-1]
+        t_h = self.horizon_time(position, clock, end)
+        cap = np.interp(np.array(starts[1:] + [end]), self.case.nodes, self.cap_sq)
+        found = [np.inf, None]
+
+        def expand(j, v, t, cost, first):
+            if j == len(starts):
+                total = cost + self.gamma * ((clock + t_h - t) / t_h) ** 2
+                if total < found[0]:
+                    found[0], found[1] = total, first
+                return
+            x_mid = starts[j] + 0.5 * lengths[j]
+            for mode in self.modes:
+                acc, ft, resist = self._accel(x_mid, v, mode)
+                v2 = v * v + 2.0 * lengths[j] * acc
+                if v2 <= 0.0 or v2 > cap[j]:  # stops short, or above a limit's braking curve
+                    continue
+                w = np.sqrt(v2)
+                stage = (1.0 - self.gamma) * (lengths[j] / self.d) * ((ft - resist) / self.f_max) ** 2
+                expand(j + 1, w, t + 2.0 * lengths[j] / (v + w), cost + stage, mode if first is None else first)
+
+        expand(0, max(speed, 0.0), clock, 0.0, None)
+        return None if found[1] is None else found
+
+    def must_brake(self, position, speed):
+        """Alg. 6 row 3: coasting one more sample would leave the train above the stopping curve."""
+        x_mid = position + 0.5 * max(speed * self.ts, 0.0)
+        acc = self._accel(x_mid, speed, self.coast)[0]
+        run = speed * self.ts
+        v2 = speed * speed + 2.0 * run * acc
+        return v2 >= float(np.interp(position + run, self.case.nodes, self.stop_sq))
+
+    # ------------------------------------------------------------------ the controller
+    def plan(self, measured):
+        distance = self.case.segment.distance
+        x, v = min(max(measured.position, 0.0), distance), max(measured.speed, 0.0)
+        if x >= distance - self.final_m:
+            self.solve_seconds.append(0.0)
+            return -1.0
+        t0 = time.perf_counter()
+        if self.must_brake(x, v):
+            self.braking = True
+            mode = self.brake
+        elif self.braking:
+            mode = self.coast  # between the stopping curve's samples: coast
+        else:
+            found = self.best(x, v, measured.time)
+            if found is None:  # no admissible sequence: brake (the safe mode)
+                self.failures += 1
+                mode = self.brake
+            else:
+                mode = found[1]
+        self.solve_seconds.append(time.perf_counter() - t0)
+        self.chosen.append(mode.kind if mode.kind != "traction" else f"traction {mode.level:g}")
+        if mode.kind == "cruise":
+            resist = self._accel(x, v, mode)[2]
+            ft, fb = self.model.forces(v, Cruise(v), resist)
+            return handle_of(self.case.train, v, ft, fb)
+        return float(mode.level)
