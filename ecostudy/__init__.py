@@ -7,7 +7,7 @@ Layers (docs/architecture.md): files -> SI objects (``io``, ``core``) -> Pyomo m
 import os
 from pathlib import Path
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 # PyNumero's ASL library is built into <repo>/.pyomo by scripts/install.sh; Pyomo reads
 # PYOMO_CONFIG_DIR when it is first imported, so this must run before any pyomo import.

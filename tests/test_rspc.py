@@ -26,12 +26,14 @@ def test_prediction_steps_end_at_sector_boundaries_and_the_first_is_one_sample(c
     first is the distance run in one loop sample."""
     c = Rspc(case, 76.0, TS, horizon=4, distance=25.0)
     edge = float(case.segment.breakpoints()[0])
-    starts, lengths = c.steps(edge - 30.0, 10.0)
-    assert lengths[0] == pytest.approx(10.0 * TS)
+    starts, lengths, held = c.steps(edge - 30.0, 10.0)
+    assert lengths[0] == pytest.approx(10.0 * TS) and held == 1
     ends = np.add(starts, lengths)
     assert edge in ends  # one step ends exactly on the boundary
     assert all(not (s < edge < e) for s, e in zip(starts, ends))  # none straddles it
     assert max(lengths) <= 25.0 + 1e-9
+    starts, lengths, held = c.steps(edge - 2.0, 10.0)  # the sample's run crosses the boundary
+    assert held == 2 and lengths[:2] == pytest.approx([2.0, 10.0 * TS - 2.0]) and starts[1] == pytest.approx(edge)
     last = c.steps(case.segment.distance - 10.0, 5.0)
     assert last[0][-1] + last[1][-1] == pytest.approx(case.segment.distance)  # the horizon ends at the stop
 

@@ -5,6 +5,7 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
+from ecostudy.studies.closedloop import expand
 
 from .conftest import STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
 
@@ -67,3 +68,33 @@ def test_sbpc_with_a_driver_on_das_levels_runs_in_a_study(tmp_path):
     runs = pd.read_csv(tmp_path / "o" / "runs.csv")
     assert runs.loc[0, "status"] in ("ok", "flagged"), result.output
     assert runs.loc[0, "terminal_gamma_m"] >= 0 and abs(runs.loc[0, "stop_error_m"]) < 30.0
+
+
+def test_rspc_runs_at_its_own_sample_time_and_only_runs_what_it_is_asked(tmp_path):
+    """A controller's sample_time_s overrides the study's (thesis 000's controllers at 0.38 s beside
+    a 10 Hz one in one study); --only computes one controller's runs and the rest stay 'missing'
+    without failing the command; the next run without --only computes them."""
+    path = study(tmp_path, track=str(TRACKS / "amsterdam_rokin_centraal.yaml"), train=str(TRAINS / "amsterdam_metro.yaml"),
+                 window_s=[0, 76], points=200, sample_time_s=0.2, draws=2,
+                 deviations={"mass": {"low": 0.95, "high": 1.05}, "braking": {"low": 0.95, "high": 1.05}},
+                 controllers=[{"name": "rspc", "kind": "rspc", "sample_time_s": 0.38},
+                              {"name": "replayed", "kind": "ato"}])
+    out = tmp_path / "o"
+    first = runner.invoke(app, ["simulate", str(path), "--out", str(out), "--no-progress", "--only", "rspc"])
+    assert first.exit_code == 0, first.output
+    assert "not run yet: 2 runs of replayed" in first.output
+    runs = pd.read_csv(out / "runs.csv")
+    rspc = runs[runs.controller == "rspc"]
+    assert list(runs[runs.controller == "replayed"]["status"]) == ["missing", "missing"]
+    assert (rspc["status"] == "ok").all(), rspc[["status", "reason"]]
+    cases = expand(path)[2]
+    assert {c["labels"]["controller"]: c["sample_time"] for c in cases} == {"rspc": 0.38, "replayed": 0.2}
+    assert (rspc["arrival_s"] <= 76.0).all() and (rspc["stop_error_m"].abs() < 0.5).all()
+    assert (rspc["solve_max_ms"] < 380.0).all()  # the enumeration is cheap; generous on a shared machine
+    second = runner.invoke(app, ["simulate", str(path), "--out", str(out), "--no-progress", "--no-plot"])
+    assert "2 already stored, 2 computed now" in second.output, second.output
+    unknown = runner.invoke(app, ["simulate", str(path), "--out", str(out), "--no-progress", "--only", "sppc"])
+    assert unknown.exit_code == 2 and "--only" in unknown.output and "sppc" in unknown.output
+    zero = runner.invoke(app, ["simulate", str(study(tmp_path, controllers=[
+        {"name": "r", "kind": "rspc", "rspc": {"horizon": 0}}])), "--no-progress"])
+    assert zero.exit_code == 2 and "horizon" in zero.output

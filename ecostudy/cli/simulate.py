@@ -11,11 +11,12 @@ SHOWN = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_per_kg_st
          "solve_p95_ms_max", "over_budget_sum", "softened_sum"]
 
 
-def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot):
+def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot, only):
     check_options(workers=workers)
     from ecostudy.studies.closedloop import simulate_study
     with case_progress("runs", no_progress) as progress:
-        outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress)
+        outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress,
+                                 only)
     runs, summary, counts, output = outcome.runs, outcome.aggregate, outcome.counts, outcome.output
     if not no_plot:
         from ecostudy.report import loopplots
@@ -23,8 +24,11 @@ def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot):
     typer.echo(summary[[c for c in SHOWN if c in summary]].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     typer.echo(counts_line(counts, "runs"))
     typer.echo(f"outputs {output}/ (runs.csv, aggregate.csv, results.sqlite{'' if no_plot else ', bands.png, solve_times.png'})")
-    for _, row in runs[runs["status"] != "ok"].iterrows():
+    for _, row in runs[~runs["status"].isin(["ok", "missing"])].iterrows():
         typer.echo(f"  {row['controller']} draw {row['draw']}: {row['status']}: {row['reason']}")
+    if counts["missing"]:
+        left = runs.loc[runs["status"] == "missing", "controller"].unique()
+        typer.echo(f"not run yet: {counts['missing']} runs of {', '.join(left)} (run without --only to compute them)")
     return counts
 
 
@@ -37,9 +41,11 @@ def simulate(
     out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's 'output')."),
     no_progress: bool = typer.Option(False, "--no-progress", help="No progress bar."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the plots."),
+    only: Optional[list[str]] = typer.Option(None, "--only", help="Run only this controller's runs (repeatable); "
+                                             "the tables show every stored run."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Closed loop: every controller drives every draw of the plant's deviations and noise (resumable)."""
-    counts = guarded(debug, _simulate, study, workers, dask, retry_failed, out, no_progress, no_plot)
+    counts = guarded(debug, _simulate, study, workers, dask, retry_failed, out, no_progress, no_plot, only)
     if counts["not_ok"]:
         raise typer.Exit(1)

@@ -75,32 +75,45 @@ class Rspc:
         self.braking, self.solve_seconds, self.chosen, self.failures = False, [], [], 0
 
     # ------------------------------------------------------------------ the model
-    def _accel(self, x_mid, v, mode):
-        """(dv/dt [m/s^2], F_T [N], F_R [N]) of ``mode`` at speed ``v`` in the sector around ``x_mid``."""
+    def _accel(self, x_mid, v, control):
+        """(dv/dt [m/s^2], F_T [N], F_R [N]) of ``control`` (a handle, or a mode: cruise holds the
+        speed it is at) at speed ``v`` in the sector around ``x_mid``."""
         m = self.model
         a, b, c = m.davis
         resist = davis_resistance(v, a, b, c + m.tunnel(x_mid)) + m.grade_force(x_mid)
-        control = Cruise(v) if mode.kind == "cruise" else mode.level
+        if not isinstance(control, float):
+            control = Cruise(v) if control.kind == "cruise" else control.level
         ft, fb = m.forces(v, control, resist)
         return acceleration(ft, fb, resist, m.mass), ft, resist
+
+    def handle(self, position, speed, mode):
+        """The handle ``mode`` applies from the measured state, held for the sample: its DAS level;
+        cruise: the handle whose force holds the measured speed there."""
+        if mode.kind != "cruise":
+            return float(mode.level)
+        resist = self._accel(position, speed, mode)[2]
+        return handle_of(self.case.train, speed, *self.model.forces(speed, Cruise(speed), resist))
 
     def _clock(self, speeds):
         """Clock of a speed profile on the case's grid from its start [s]."""
         return np.concatenate([[0.0], np.cumsum(kinematics.interval_times(speeds, self.case.nodes))])
 
     def steps(self, position, speed):
-        """Start positions and lengths of the N prediction steps (Alg. 6's adaptive sampling)."""
-        starts, lengths, x = [], [], position
-        for j in range(self.n):
-            want = max(speed * self.ts, 0.5) if j == 0 else self.d
-            edge = self.edges[np.searchsorted(self.edges, x + 1e-9)] if x + 1e-9 < self.edges[-1] else self.edges[-1]
-            step = min(want, edge - x)
-            if step <= 1e-6:
-                break
-            starts.append(x)
-            lengths.append(step)
-            x += step
-        return starts, lengths
+        """(start positions, lengths, how many of them the first sample covers) of the prediction
+        (Alg. 6's adaptive sampling): the sample's run v T_s, cut where sectors end (its handle is
+        held across), then N - 1 steps of D, each ending at a sector end it would cross."""
+        starts, lengths, x, held = [], [], position, 0
+        wants = [max(speed * self.ts, 0.5)] + [self.d] * (self.n - 1)
+        for j, want in enumerate(wants):
+            while want > 1e-6 and x < self.edges[-1] - 1e-6:
+                edge = self.edges[np.searchsorted(self.edges, x + 1e-6)]
+                step = min(want, edge - x)
+                starts.append(x)
+                lengths.append(step)
+                x, want = x + step, (want - step if j == 0 else 0.0)  # the sample's run goes on
+            if j == 0:
+                held = len(starts)
+        return starts, lengths, held
 
     def horizon_time(self, position, clock, end):
         """T_horizon (Remark 6.2.1; module docstring) for the run from ``position`` to ``end`` [s]."""
@@ -112,29 +125,32 @@ class Rspc:
 
     def best(self, position, speed, clock):
         """(cost, first mode) of the cheapest admissible sequence of (6.9), or None."""
-        starts, lengths = self.steps(position, speed)
+        starts, lengths, held = self.steps(position, speed)
         if not starts:
             return None
         end = starts[-1] + lengths[-1]
         t_h = self.horizon_time(position, clock, end)
         cap = np.interp(np.array(starts[1:] + [end]), self.case.nodes, self.cap_sq)
         found = [np.inf, None]
+        first_handles = [(mode, self.handle(position, speed, mode)) for mode in self.modes]
 
         def expand(j, v, t, cost, first):
             if j == len(starts):
                 total = cost + self.gamma * ((clock + t_h - t) / t_h) ** 2
                 if total < found[0]:
-                    found[0], found[1] = total, first
+                    found[0], found[1] = total, first[0]
                 return
             x_mid = starts[j] + 0.5 * lengths[j]
-            for mode in self.modes:
-                acc, ft, resist = self._accel(x_mid, v, mode)
+            # within the first sample the plant holds one handle; after it, one mode per step
+            choices = first_handles if j == 0 else [first] if j < held else [(m, m) for m in self.modes]
+            for mode, control in choices:
+                acc, ft, resist = self._accel(x_mid, v, control)
                 v2 = v * v + 2.0 * lengths[j] * acc
                 if v2 <= 0.0 or v2 > cap[j]:  # stops short, or above a limit's braking curve
                     continue
                 w = np.sqrt(v2)
                 stage = (1.0 - self.gamma) * (lengths[j] / self.d) * ((ft - resist) / self.f_max) ** 2
-                expand(j + 1, w, t + 2.0 * lengths[j] / (v + w), cost + stage, mode if first is None else first)
+                expand(j + 1, w, t + 2.0 * lengths[j] / (v + w), cost + stage, (mode, control) if j == 0 else first)
 
         expand(0, max(speed, 0.0), clock, 0.0, None)
         return None if found[1] is None else found
@@ -169,8 +185,4 @@ class Rspc:
                 mode = found[1]
         self.solve_seconds.append(time.perf_counter() - t0)
         self.chosen.append(mode.kind if mode.kind != "traction" else f"traction {mode.level:g}")
-        if mode.kind == "cruise":
-            resist = self._accel(x, v, mode)[2]
-            ft, fb = self.model.forces(v, Cruise(v), resist)
-            return handle_of(self.case.train, v, ft, fb)
-        return float(mode.level)
+        return self.handle(x, v, mode)

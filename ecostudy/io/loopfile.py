@@ -54,6 +54,8 @@ class Controller(Strict):
     block: int = Field(20, ge=1, description="SBPC: L, samples per blocked move (thesis 000 eq. 4.8).")
     variant: Literal["nominal", "two_step", "multi"] = "nominal"
     omega: float = Field(3505.0, gt=0, description="SBPC multi-objective weight on the terminal distance (4.31).")
+    sample_time_s: Optional[float] = Field(None, gt=0, le=60, description="This controller's period and "
+                                           "real-time budget [s] (default: the study's sample_time_s).")
     das_levels: bool = Field(False, description="Apply the handle as the nearest DAS level of the train.")
     delay_samples: int = Field(0, ge=0, le=100, description="Driver reaction delay with das_levels [samples].")
 
@@ -120,6 +122,8 @@ class SimulateFile(Strict):
             raise ValueError("controller names must be unique")
         if not 0 <= self.window_s[0] <= self.window_s[1]:
             raise ValueError("window_s must be [earliest, latest] with 0 <= earliest <= latest")
-        if self.sample_time_s >= self.window_s[1]:
-            raise ValueError("sample_time_s must be shorter than the latest arrival window_s[1]")
+        for c in self.controllers:
+            if (c.sample_time_s or self.sample_time_s) >= self.window_s[1]:
+                raise ValueError(f"sample_time_s{'' if c.sample_time_s is None else ' of ' + c.name} must be "
+                                 "shorter than the latest arrival window_s[1]")
         return self

@@ -26,14 +26,17 @@ def bands(runs, segment, path, title=""):
     return _save(fig, path)
 
 
-def solve_times(runs, budget, path, title=""):
-    """Solve time of every control step [ms] of every run, per controller, against the budget."""
+def solve_times(runs, budgets, path, title=""):
+    """Solve time of every control step [ms] of every run, per controller, against its budget
+    (``budgets``: controller name -> sample time [s])."""
     fig, ax = figure(figsize=(9, 4))
     for c, (name, group) in enumerate(runs.items()):
         for i, s in enumerate(group):
             ms = np.asarray(s["solve_ms"])
             ax.plot(np.arange(ms.size), ms, ".", ms=1.5, color=f"C{c}", alpha=0.5, label=name if i == 0 else None)
-    ax.axhline(1e3 * budget, color="r", lw=1, label=f"budget {1e3 * budget:g} ms")
+    for budget in sorted(set(budgets.values())):
+        ax.axhline(1e3 * budget, color="r", lw=1, ls="-" if budget == max(budgets.values()) else "--",
+                   label=f"budget {1e3 * budget:g} ms ({', '.join(n for n, b in budgets.items() if b == budget)})")
     ax.set_xlabel("control step")
     ax.set_ylabel("solve time [ms]")
     ax.grid(alpha=0.3)
@@ -66,6 +69,6 @@ def draw(outcome):
     if not runs:
         return
     bands(runs, outcome.segment, out / "bands.png", title=name)
-    solve_times(runs, outcome.study.sample_time_s, out / "solve_times.png", title=name)
+    solve_times(runs, outcome.budgets, out / "solve_times.png", title=name)
     if any(s.get("estimates") for group in runs.values() for s in group):
         mass_estimates(runs, out / "mass_estimates.png", title=name)

@@ -141,12 +141,12 @@ def execute(cases, store, task=run_case, workers=1, dask=None, retry_failed=Fals
     return counts
 
 
-def stored_rows(cases, path, task, workers=1, dask=None, retry_failed=False, progress=None):
-    """Run ``task`` on the cases not in the store at ``path`` yet (:func:`execute`); returns (counts,
-    the stored row of every case by key)."""
+def stored_rows(cases, path, task, workers=1, dask=None, retry_failed=False, progress=None, compute=None):
+    """Run ``task`` on the cases not in the store at ``path`` yet (:func:`execute`; only those of
+    ``compute`` when given); returns (counts, the stored row of every case by key)."""
     store = Store(path)
     try:
-        counts = execute(cases, store, task, workers, dask, retry_failed, progress)
+        counts = execute(cases if compute is None else compute, store, task, workers, dask, retry_failed, progress)
         return counts, store.get([c["key"] for c in cases])
     finally:
         store.close()

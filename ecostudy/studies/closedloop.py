@@ -86,7 +86,8 @@ def expand(path):
         for i, (truth, seed) in enumerate(draws):
             case = {"study": s.name, "scenario": spec.name, "labels": {"controller": spec.name, "draw": i},
                     "train": train_doc, "track": track_doc, "from": from_stop, "to": to_stop,
-                    "window": list(s.window_s), "points": s.points, "sample_time": s.sample_time_s,
+                    "window": list(s.window_s), "points": s.points,
+                    "sample_time": spec.sample_time_s or s.sample_time_s,
                     "controller": spec.model_dump(), "truth": truth,
                     "noise": {**noise, "seed": seed}, "version": __version__}
             case["key"] = case_key(case)
@@ -218,24 +219,33 @@ def aggregate(runs):
     return pd.DataFrame(rows)
 
 
-def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
-    """Run the runs of a closed-loop study not stored yet and write runs.csv and aggregate.csv.
+def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None, only=None):
+    """Run the runs of a closed-loop study not stored yet (``only``: of these controllers) and write
+    runs.csv and aggregate.csv of every stored run (a controller not run yet counts as missing).
 
     Returns a :class:`LoopStudy` (the plots are drawn from it by ``report.loopplots``)."""
     study, output, cases = expand(path)
+    names = [c.name for c in study.controllers]
+    unknown = sorted(set(only or ()) - set(names))
+    if unknown:
+        raise InputError(problem(path, "controllers", f"--only names {', '.join(unknown)}, not among {', '.join(names)}"))
     output = check_output_dir(Path(out) if out else output, ("runs.csv", "aggregate.csv", "results.sqlite"))
-    counts, rows = stored_rows(cases, output / "results.sqlite", run_loop_case, workers, dask, retry_failed, progress)
+    compute = [c for c in cases if c["labels"]["controller"] in only] if only else None
+    counts, rows = stored_rows(cases, output / "results.sqlite", run_loop_case, workers, dask, retry_failed, progress,
+                               compute)
     runs = runs_table(cases, rows)
     summary = aggregate(runs)
     write_csv(output / "runs.csv", runs)
     write_csv(output / "aggregate.csv", summary)
-    by_controller = {}
+    by_controller, budgets = {}, {}
     for case in cases:
         s = (rows.get(case["key"]) or {}).get("summary")
         if s:
             by_controller.setdefault(case["labels"]["controller"], []).append(s)
-    counts["not_ok"] = int((runs["status"] != "ok").sum())
-    return LoopStudy(study, runs, summary, counts, output, by_controller, _inputs(cases[0])[2])
+            budgets[case["labels"]["controller"]] = case["sample_time"]
+    counts["missing"] = int((runs["status"] == "missing").sum())  # controllers left out by ``only``
+    counts["not_ok"] = int((~runs["status"].isin(["ok", "missing"])).sum())
+    return LoopStudy(study, runs, summary, counts, output, by_controller, _inputs(cases[0])[2], budgets)
 
 
 class LoopStudy(NamedTuple):
@@ -249,3 +259,4 @@ class LoopStudy(NamedTuple):
     output: Path
     by_controller: dict
     segment: object
+    budgets: dict  # each controller's sample time, its real-time budget [s]
