@@ -14,8 +14,9 @@ infeasible, which is why the thesis keeps N short. Cost (6.7)-(6.8):
 (the stage weight D_j / D is 1 for steps of the nominal length D and keeps a short step from
 counting as a whole one). T_horizon (Remark 6.2.1, "a heuristic"): the time a reference run takes
 over the horizon's distance, scaled by the time left over the reference's time to the stop; the
-reference is the fastest run capped at the one cruise speed that meets the timetable
-(``kinematics.capped_speeds``), so a late train gets a shorter T_horizon and speeds up.
+reference is the industrial eco-drive coasting run of Table 6.1 (full traction under the limits,
+coasting from the latest point that meets the timetable less ``margin``), so the short horizon
+follows a run that coasts where coasting pays, and a late train gets a shorter T_horizon.
 
 Adaptive sampling (Alg. 6): prediction steps are D metres long but never cross a sector boundary
 (a change of gradient, curve or limit; a step ends at the boundary, so the remaining sector
@@ -66,12 +67,8 @@ class Rspc:
         # the admissible speeds: below every limit's braking curve (not the stop's: row 3 handles it)
         self.cap_sq = kinematics.braking_curve(segment, reserved, nodes, case.limits, end_speed=np.inf) ** 2
         self.stop_sq = kinematics.braking_curve(segment, reserved, nodes, np.full_like(nodes, np.inf)) ** 2
-        fastest = np.minimum(case.envelope, np.sqrt(np.minimum(self.cap_sq, self.stop_sq)))  # with the reserve
-        reference = kinematics.capped_speeds(fastest, nodes, self.arrival - margin)
-        self.t_ref = self._clock(reference)
-        # T_horizon runs at the reference's cruise speed under the limits' braking curves: the stop
-        # is row 3's, and a horizon reaching into the reference's braking would ask the train to slow early
-        self.t_run = self._clock(np.minimum(np.sqrt(self.cap_sq), reference.max()))
+        reference, run = self._reference(self.arrival - margin)
+        self.t_ref, self.t_run = self._clock(reference), self._clock(run)
         self.braking, self.solve_seconds, self.chosen, self.failures = False, [], [], 0
 
     # ------------------------------------------------------------------ the model
@@ -93,6 +90,29 @@ class Rspc:
             return float(mode.level)
         resist = self._accel(position, speed, mode)[2]
         return handle_of(self.case.train, speed, *self.model.forces(speed, Cruise(speed), resist))
+
+    def _reference(self, target):
+        """(the reference run, the run T_horizon is taken from) [m/s] on the case's grid: the
+        eco-drive coasting profile (full traction, coasting from the latest point that still
+        arrives by ``target``, the stopping curve) with the braking reserve; the second without the
+        stop's braking (row 3 brakes for the stop: a horizon reaching into the reference's braking
+        would ask the train to slow early), floored at 1 m/s where coasting would end at a stand."""
+        c, train, nodes = self.case, self.case.train, self.case.nodes
+        fastest = np.minimum(c.envelope, np.sqrt(np.minimum(self.cap_sq, self.stop_sq)))
+
+        def profile(k):
+            return kinematics.coasting_profile(c.segment, train, nodes, c.limits, fastest, k)
+
+        lo, hi = 0, len(nodes) - 1  # the running time falls as the coasting point k moves on
+        if kinematics.running_time(profile(hi), nodes) <= target:
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                lo, hi = (lo, mid) if kinematics.running_time(profile(mid), nodes) <= target else (mid, hi)
+        reference = profile(hi)
+        coast = kinematics.coast_speeds(c.segment, train, nodes, c.limits, hi, fastest[hi])
+        run = reference.copy()
+        run[hi:] = np.maximum(np.maximum(reference[hi:], np.minimum(coast[hi:], np.sqrt(self.cap_sq[hi:]))), 1.0)
+        return reference, run
 
     def _clock(self, speeds):
         """Clock of a speed profile on the case's grid from its start [s]."""

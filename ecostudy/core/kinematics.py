@@ -63,6 +63,16 @@ def coast_speeds(segment, train, nodes, limits, start, v_start):
     return out
 
 
+def coasting_profile(segment, train, nodes, limits, fastest, start):
+    """``fastest`` (a profile ending at the stop) up to node ``start``, coasting from there, never
+    above ``fastest``: the eco-drive coasting strategy's profile (thesis 000 Table 6.1) [m/s]."""
+    coast = coast_speeds(segment, train, nodes, limits, start, fastest[start])
+    v = fastest.copy()
+    v[start:] = np.minimum(coast[start:], fastest[start:])
+    v[-1] = 0.0
+    return v
+
+
 def envelope_speeds(segment, train, nodes, limits):
     """Fastest speeds: max traction forward from the start, max braking back from the stop.
 

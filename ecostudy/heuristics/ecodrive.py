@@ -11,8 +11,6 @@ A strategy's profile becomes forces per interval (clipped to the envelopes), the
 is re-simulated over time; reported times and energies are the simulated ones.
 """
 
-import numpy as np
-
 from ecostudy.analysis.tables import handles
 from ecostudy.core import kinematics
 from ecostudy.core.errors import InfeasibleError
@@ -29,15 +27,8 @@ def drive(case, speeds):
 
 def eco_coasting(case, running_time):
     """Cruise at the limits, coast from the earliest point whose simulated arrival meets the time."""
-    full = case.envelope
-    bwd = kinematics.braking_curve(case.segment, case.train, case.nodes, case.limits)
-
     def profile(c):
-        coast = kinematics.coast_speeds(case.segment, case.train, case.nodes, case.limits, c, full[c])
-        v = full.copy()
-        v[c:] = np.minimum(coast[c:], bwd[c:])
-        v[-1] = 0.0
-        return v
+        return kinematics.coasting_profile(case.segment, case.train, case.nodes, case.limits, case.envelope, c)
 
     def arrival(c):
         return drive(case, profile(c))[1].arrival_time
