@@ -40,6 +40,8 @@ def main():
     p.add_argument("--blocks", type=int, nargs="*", default=[45, 20, 1])
     p.add_argument("--disturbances", type=float, nargs="*", default=[0.1, 0.05, 0.02])
     p.add_argument("--sppc", action="store_true", help="SPPC rows instead of SBPC's")
+    p.add_argument("--brake-reserve", type=float, default=0.0, help="SBPC: share of the brake its plans hold back")
+    p.add_argument("--variants", nargs="*", default=["two_step", "multi"], help="SBPC's relaxed variants to run")
     args = p.parse_args()
     print(f"`python bench/bench_sbpc.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
     track = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
@@ -62,7 +64,7 @@ def main():
               f"{np.mean(controller.iterations):.1f} | {controller.softened} | {time.perf_counter() - t0:.0f} |", flush=True)
 
     def run(variant, block, truth, quantised, label):
-        controller = Sbpc(case, 76.0, args.sample, block, speeds, variant)
+        controller = Sbpc(case, 76.0, args.sample, block, speeds, variant, brake_reserve=args.brake_reserve)
         drive(variant, block, label, controller, Quantised(controller, train.das_levels) if quantised else controller, truth)
 
     def run_sppc(variant, truth, label):
@@ -76,7 +78,7 @@ def main():
             run_sppc("two_step", Truth(1 + d, 1 - d, 1 - d, 1 - d), f"d = {d:g}")
         return
     for d in args.disturbances:
-        for variant in ("two_step", "multi"):
+        for variant in args.variants:
             run(variant, 20, Truth(1 + d, 1 - d, 1 - d, 1 - d), True, f"d = {d:g}, DAS levels")
     for block in args.blocks:
         run("nominal", block, Truth(), False, "model")

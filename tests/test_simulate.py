@@ -98,3 +98,17 @@ def test_rspc_runs_at_its_own_sample_time_and_only_runs_what_it_is_asked(tmp_pat
     zero = runner.invoke(app, ["simulate", str(study(tmp_path, controllers=[
         {"name": "r", "kind": "rspc", "rspc": {"horizon": 0}}])), "--no-progress"])
     assert zero.exit_code == 2 and "horizon" in zero.output
+
+
+def test_a_case_key_does_not_change_when_a_default_is_written_out_and_reserves_are_checked(tmp_path):
+    """Cases store the controller as written, so writing a default out (or a field added to the
+    schema later with its default) keeps every stored run; brake_reserve is refused where the
+    controller has none."""
+    plain = expand(study(tmp_path))[2]
+    spelled = expand(study(tmp_path, controllers=[
+        {"name": "convex", "kind": "convex", "estimator": True, "scheme": "midpoint", "das_levels": False},
+        {"name": "replayed", "kind": "open_loop", "settings": {"time": 1.0}}]))[2]
+    assert [c["key"] for c in plain] == [c["key"] for c in spelled]
+    bad = runner.invoke(app, ["simulate", str(study(tmp_path, controllers=[
+        {"name": "c", "kind": "convex", "brake_reserve": 0.2}])), "--no-progress"])
+    assert bad.exit_code == 2 and "brake_reserve" in bad.output and "brake_level_mps2" in bad.output

@@ -14,6 +14,7 @@ Variants:
 - ``multi`` (4.31): least energy plus omega gamma in one solve.
 After k_f, or at the stop, the controller brakes in full.
 """
+import dataclasses
 import time
 
 from ecostudy.ocp.blocked import (build_blocked, handle_at, samples, set_blocked_start, set_objective, time_guess,
@@ -32,12 +33,16 @@ class Sbpc:
     terminal distance [per metre], with J in kJ (thesis 000 §4.4 uses 3505)."""
 
     def __init__(self, case, running_time, sample_time, block, guess_speeds, variant="nominal", omega=3505.0,
-                 tolerance=1e-3, options=None):
+                 tolerance=1e-3, options=None, brake_reserve=0.0):
         if variant not in VARIANTS:
             raise ValueError(f"variant must be one of {VARIANTS}, not {variant!r}")
         self.case, self.ts, self.variant, self.omega, self.tolerance = case, sample_time, variant, omega, tolerance
         self.kf = samples(running_time, sample_time)
         self.options = {**OPTIONS, **(options or {})}
+        if brake_reserve:  # plan with that share of the brake held back; the handle is applied as planned,
+            # so a train braking weaker than the model's still has the rest (the reserve of SPPC and RSPC)
+            case = dataclasses.replace(case, train=dataclasses.replace(case.train, braking=case.train.braking.scaled(1 - brake_reserve)))
+            self.case = case
         t0 = time.perf_counter()
         self.model = build_blocked(case, sample_time, self.kf, block, time_guess(case, guess_speeds, self.kf, sample_time))
         self.session = Session(self.model)

@@ -21,6 +21,9 @@ class ConvexSettings(Strict):
     brake_level_mps2: float = Field(0.8, gt=0, description="B_brk: planned braking above it is penalised [m/s^2].")
 
 
+RESERVES = {"sbpc": 0.0, "sppc": 0.1, "rspc": 0.2}  # each planning controller's default brake reserve
+
+
 class RspcSettings(Strict):
     """Thesis 000 Ch. 6's receding-horizon switched controller (``control/rspc.py``)."""
 
@@ -28,8 +31,6 @@ class RspcSettings(Strict):
     distance_m: float = Field(25.0, gt=0, description="D, the nominal prediction step [m] (Alg. 6).")
     gamma: float = Field(0.995, ge=0, le=1, description="gamma_S of eq. 6.7: the weight of the horizon time.")
     margin_s: float = Field(1.5, ge=0, description="Aim this much before the latest arrival [s].")
-    brake_reserve: float = Field(0.2, ge=0, lt=1, description="Share of the braking envelope the stopping "
-                                 "curve leaves unused (0.2 covers a train 10 % heavier with 10 % weaker brakes).")
 
 
 class Controller(Strict):
@@ -56,6 +57,9 @@ class Controller(Strict):
     omega: float = Field(3505.0, gt=0, description="SBPC multi-objective weight on the terminal distance (4.31).")
     sample_time_s: Optional[float] = Field(None, gt=0, le=60, description="This controller's period and "
                                            "real-time budget [s] (default: the study's sample_time_s).")
+    brake_reserve: Optional[float] = Field(None, ge=0, lt=1, description="sbpc, sppc, rspc: the share of the "
+                                           "braking envelope their plans hold back (default 0, 0.1, 0.2; 0.2 covers "
+                                           "a train 10 % heavier with 10 % weaker brakes).")
     das_levels: bool = Field(False, description="Apply the handle as the nearest DAS level of the train.")
     delay_samples: int = Field(0, ge=0, le=100, description="Driver reaction delay with das_levels [samples].")
 
@@ -63,6 +67,9 @@ class Controller(Strict):
     def _sppc_variant(self):
         if self.kind == "sppc" and self.variant == "multi":
             raise ValueError("sppc has the variants nominal and two_step (no multi-objective one is built)")
+        if self.brake_reserve is not None and self.kind not in RESERVES:
+            raise ValueError(f"brake_reserve is for {', '.join(RESERVES)} (the convex controller's is "
+                             "settings.brake_level_mps2)")
         return self
 
 

@@ -28,7 +28,7 @@ from ecostudy.core.types import State, Timing
 from ecostudy.io import schemas
 from ecostudy.io.loaders import (chosen_stops, read_document, track_document, track_from_schema,
                                  train_document, train_from_schema, validate)
-from ecostudy.io.loopfile import SimulateFile
+from ecostudy.io.loopfile import RESERVES, Controller, SimulateFile
 from ecostudy.ocp.convex import FASTEST, ConvexProgram, ConvexWeights, trapezoid_grid
 from ecostudy.ocp.problem import prepare
 from ecostudy.io.writers import check_output_dir, write_csv
@@ -88,7 +88,8 @@ def expand(path):
                     "train": train_doc, "track": track_doc, "from": from_stop, "to": to_stop,
                     "window": list(s.window_s), "points": s.points,
                     "sample_time": spec.sample_time_s or s.sample_time_s,
-                    "controller": spec.model_dump(), "truth": truth,
+                    # the spec as written (defaults left out): a field added later keeps the keys
+                    "controller": spec.model_dump(exclude_defaults=True), "truth": truth,
                     "noise": {**noise, "seed": seed}, "version": __version__}
             case["key"] = case_key(case)
             cases.append(case)
@@ -96,15 +97,21 @@ def expand(path):
     return s, output, cases
 
 
+def controller_spec(case):
+    """A case's controller spec with every default filled in (the case stores it as written)."""
+    return Controller.model_validate(case["controller"]).model_dump()
+
+
 def build_controller(case, track, segment, train, estimator):
     """(the controller the loop drives, the planning controller inside it) of a case."""
-    spec, window, points = case["controller"], tuple(case["window"]), case["points"]
+    spec, window, points = controller_spec(case), tuple(case["window"]), case["points"]
+    reserve = RESERVES.get(spec["kind"]) if spec["brake_reserve"] is None else spec["brake_reserve"]
     if spec["kind"] == "convex":
         inner = Convex(convex_program(segment, train, points, spec), window, estimator, hold=case["sample_time"])
     elif spec["kind"] == "rspc":
         r = spec["rspc"]
         inner = Rspc(prepare(track, train, case["from"], case["to"], points), window[1], case["sample_time"],
-                     r["horizon"], r["distance_m"], r["gamma"], r["margin_s"], r["brake_reserve"])
+                     r["horizon"], r["distance_m"], r["gamma"], r["margin_s"], reserve)
     elif spec["kind"] == "open_loop":  # the convex controller's own plan from the stand, replayed
         plan = convex_program(segment, train, points, spec).solve(State(), window)
         if not plan.usable:
@@ -116,11 +123,12 @@ def build_controller(case, track, segment, train, estimator):
         if spec["kind"] == "ato":
             inner = OpenLoop(ato)
         elif spec["kind"] == "sppc":
-            inner = Sppc(ato, window[1], points, spec["variant"])
+            inner = Sppc(ato, window[1], points, spec["variant"], brake_reserve=reserve)
         else:
             prepared = prepare(track, train, case["from"], case["to"], points)
             speeds = np.interp(prepared.nodes, ato.trajectory.nodes, ato.trajectory.v)
-            inner = Sbpc(prepared, window[1], case["sample_time"], spec["block"], speeds, spec["variant"], spec["omega"])
+            inner = Sbpc(prepared, window[1], case["sample_time"], spec["block"], speeds, spec["variant"], spec["omega"],
+                         brake_reserve=reserve)
     if spec["das_levels"]:
         return Quantised(inner, train.das_levels, spec["delay_samples"]), inner
     return inner, inner
@@ -165,7 +173,7 @@ def run_loop_case(case):
 
 def _trip(case):
     track, train, segment = _inputs(case)
-    estimator = MassEstimator() if case["controller"]["estimator"] else None
+    estimator = MassEstimator() if controller_spec(case)["estimator"] else None
     controller, planner = build_controller(case, track, segment, train, estimator)
     n = case["noise"]
     noise = Noise(n["acceleration_mps2"], n["position_m"], n["speed_mps"], n["seed"], n["period_s"],
