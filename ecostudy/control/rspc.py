@@ -21,7 +21,8 @@ follows a run that coasts where coasting pays, and a late train gets a shorter T
 Adaptive sampling (Alg. 6): prediction steps are D metres long but never cross a sector boundary
 (a change of gradient, curve or limit; a step ends at the boundary, so the remaining sector
 length D_Gamma(k) < D sets that step, rows 1-2); the first step is the distance the train runs
-in one loop sample (v T_s), because the loop holds the applied mode for T_s. Braking (row 3,
+in one loop sample (v T_s), because the loop holds the applied handle for T_s: where that run
+crosses a sector end it is predicted in pieces under the same handle. Braking (row 3,
 eqs. 6.15-6.16): when coasting one more sample would leave the train above the stopping curve
 (the braking distance D_b reaches the remaining distance D_p: delta D <= 0), the controller
 brakes in full; from then on it brakes while that holds and coasts otherwise, so the stop is
