@@ -25,6 +25,11 @@ REPLAN_OPTIONS = {"max_iter": 300}  # a re-plan that needs more has no plan wort
 RELAXED = 1e-3  # a convex plan with max |rho s - 1| above this uses the relaxation materially
 
 
+def from_departure(measured):
+    """``measured`` with a noisy position reading behind the departure point read as at it."""
+    return measured if measured.position >= 0.0 else State(0.0, measured.speed, measured.time)
+
+
 def handle_of(train, speed, traction, braking):
     """Handle in [-1, 1] of a planned traction and braking force [N] at ``speed`` (analysis.tables.handles)."""
     return float(handles(train, np.array([speed, speed]), np.array([traction]), np.array([braking]))[0])
@@ -80,8 +85,8 @@ class Replanning:
         self.last, self.failures, self.late, self.solve_seconds, self.iterations = 0.0, 0, 0, [], []
 
     def plan(self, measured):
-        distance = self.case.segment.distance
-        if measured.position >= distance - self.final_m or measured.position < 0.0:
+        distance, measured = self.case.segment.distance, from_departure(measured)
+        if measured.position >= distance - self.final_m:
             self.solve_seconds.append(0.0)
             return -1.0
         scale = self.estimator.estimate if self.estimator is not None else None
@@ -136,8 +141,7 @@ class Convex:
         if waiting or measured.position >= distance - self.final_m:
             self.solve_seconds.append(0.0)
             return -1.0
-        if measured.position < 0.0:  # a noisy reading behind the departure point: read as at it
-            measured = State(0.0, measured.speed, measured.time)
+        measured = from_departure(measured)
         scale = self.estimator.estimate if self.estimator is not None else 1.0
         plan = self.program.solve(measured, self.arrival, mass_scale=scale, lead=self.lead, hold=self.hold)
         self.solve_seconds.append(plan.seconds)

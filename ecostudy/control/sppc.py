@@ -30,7 +30,7 @@ import time
 import numpy as np
 
 from ecostudy.analysis.regimes import guess_from_result
-from ecostudy.control.controllers import force_handle
+from ecostudy.control.controllers import force_handle, from_departure
 from ecostudy.ocp import phases
 from ecostudy.ocp.restart import set_end, set_phases_start
 from ecostudy.ocp.session import WARM_START, Session
@@ -97,6 +97,7 @@ class Sppc:
                            (0.0, gamma + self.tolerance))
 
     def plan(self, measured):
+        measured = from_departure(measured)  # a noisy reading at the stand may be behind the start
         if measured.position >= self.segment.distance - 0.05:
             self.solve_seconds.append(0.0)
             return -1.0
