@@ -60,7 +60,7 @@ def test_no_admissible_sequence_brakes(case):
     assert c.plan(State(x, v, 50.0)) == -1.0 and c.failures == 1 and not c.braking
 
 
-@pytest.mark.parametrize("where", ["amsterdam", "regional"])
+@pytest.mark.parametrize("where", ["amsterdam", pytest.param("regional", marks=pytest.mark.slow)])
 def test_the_loop_applies_only_das_modes_arrives_on_time_and_costs_between_coasting_and_all_out(where, metro,
                                                                                                  amsterdam):
     """Issue 12: only allowed modes are applied; arrival on time or early; energy between the
