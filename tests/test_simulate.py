@@ -112,3 +112,13 @@ def test_a_case_key_does_not_change_when_a_default_is_written_out_and_reserves_a
     bad = runner.invoke(app, ["simulate", str(study(tmp_path, controllers=[
         {"name": "c", "kind": "convex", "brake_reserve": 0.2}])), "--no-progress"])
     assert bad.exit_code == 2 and "brake_reserve" in bad.output and "brake_level_mps2" in bad.output
+
+
+def test_the_metro_monte_carlo_study_has_every_controller_at_its_own_sample_time():
+    study, _, cases = expand(STUDIES / "metro_monte_carlo.yaml")
+    kinds = {c.kind for c in study.controllers}
+    assert kinds == {"convex", "open_loop", "ato", "sbpc", "sppc", "rspc"} and len(cases) == 100 * len(study.controllers)
+    times = {c["labels"]["controller"]: c["sample_time"] for c in cases}
+    assert times["convex"] == 0.1 and times["sbpc_multi"] == times["sppc"] == times["rspc"] == 0.38
+    draw = [c["truth"] for c in cases if c["labels"]["draw"] == 7]
+    assert all(t == draw[0] for t in draw)  # every controller meets the same plant
