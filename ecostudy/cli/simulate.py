@@ -13,7 +13,7 @@ SHOWN = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_per_kg_st
 
 def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot, only):
     check_options(workers=workers)
-    from ecostudy.studies.closedloop import simulate_study
+    from ecostudy.studies.closedloop import not_ok, simulate_study
     with case_progress("runs", no_progress) as progress:
         outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress,
                                  only)
@@ -24,7 +24,7 @@ def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot, onl
     typer.echo(summary[[c for c in SHOWN if c in summary]].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     typer.echo(counts_line(counts, "runs"))
     typer.echo(f"outputs {output}/ (runs.csv, aggregate.csv, results.sqlite{'' if no_plot else ', bands.png, solve_times.png'})")
-    for _, row in runs[~runs["status"].isin(["ok", "missing"])].iterrows():
+    for _, row in runs[not_ok(runs)].iterrows():
         typer.echo(f"  {row['controller']} draw {row['draw']}: {row['status']}: {row['reason']}")
     if counts["missing"]:
         left = runs.loc[runs["status"] == "missing", "controller"].unique()

@@ -79,7 +79,7 @@ class Replanning:
         self.case, self.arrival, self.estimator, self.final_m = case, float(arrival), estimator, final_m
         # plan with a share of the service brake held back (thesis 001 eq. 6.8's braking reserve):
         # between samples the handle is held, and a plan that brakes at the limit is then late
-        model = dataclasses.replace(case.train, braking=case.train.braking.scaled(1.0 - brake_reserve))
+        model = case.train.with_brake_reserve(brake_reserve)
         self.replanner = Replanner(dataclasses.replace(case, train=model), window=(0.0, self.arrival),
                                    options={**REPLAN_OPTIONS, **(options or {})})
         self.last, self.failures, self.late, self.solve_seconds, self.iterations = 0.0, 0, 0, [], []

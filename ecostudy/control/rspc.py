@@ -15,7 +15,7 @@ infeasible, which is why the thesis keeps N short. Cost (6.7)-(6.8):
 counting as a whole one). T_horizon (Remark 6.2.1, "a heuristic"): the time a reference run takes
 over the horizon's distance, scaled by the time left over the reference's time to the stop; the
 reference is the industrial eco-drive coasting run of Table 6.1 (full traction under the limits,
-coasting from the latest point that meets the timetable less ``margin``), so the short horizon
+coasting from the earliest point that meets the timetable less ``margin``), so the short horizon
 follows a run that coasts where coasting pays, and a late train gets a shorter T_horizon.
 
 Adaptive sampling (Alg. 6): prediction steps are D metres long but never cross a sector boundary
@@ -33,7 +33,6 @@ speed), so a train whose brakes are weaker than the model's still stops at the m
 The prediction integrates (6.2) in kinetic energy: v(j+1)^2 = v(j)^2 + 2 D_j a(j), time
 2 D_j / (v(j) + v(j+1)); this is (6.2) to first order and has no singularity at a stand.
 """
-import dataclasses
 import time
 
 import numpy as np
@@ -64,12 +63,12 @@ class Rspc:
         self.coast, self.brake = (next(m for m in self.modes if m.kind == kind) for kind in ("coast", "brake"))
         self.f_max = train.traction.peak
         self.edges = np.concatenate([segment.breakpoints(), [segment.distance]])
-        reserved = dataclasses.replace(train, braking=train.braking.scaled(1.0 - brake_reserve))
+        reserved = train.with_brake_reserve(brake_reserve)
         # the admissible speeds: below every limit's braking curve (not the stop's: row 3 handles it)
         self.cap_sq = kinematics.braking_curve(segment, reserved, nodes, case.limits, end_speed=np.inf) ** 2
         self.stop_sq = kinematics.braking_curve(segment, reserved, nodes, np.full_like(nodes, np.inf)) ** 2
         reference, run = self._reference(self.arrival - margin)
-        self.t_ref, self.t_run = self._clock(reference), self._clock(run)
+        self.t_ref, self.t_run = kinematics.clock(reference, nodes), kinematics.clock(run, nodes)
         self.braking, self.solve_seconds, self.chosen, self.failures = False, [], [], 0
 
     # ------------------------------------------------------------------ the model
@@ -94,7 +93,7 @@ class Rspc:
 
     def _reference(self, target):
         """(the reference run, the run T_horizon is taken from) [m/s] on the case's grid: the
-        eco-drive coasting profile (full traction, coasting from the latest point that still
+        eco-drive coasting profile (full traction, coasting from the earliest point that still
         arrives by ``target``, the stopping curve) with the braking reserve; the second without the
         stop's braking (row 3 brakes for the stop: a horizon reaching into the reference's braking
         would ask the train to slow early), floored at 1 m/s where coasting would end at a stand."""
@@ -104,20 +103,16 @@ class Rspc:
         def profile(k):
             return kinematics.coasting_profile(c.segment, train, nodes, c.limits, fastest, k)
 
-        lo, hi = 0, len(nodes) - 1  # the running time falls as the coasting point k moves on
-        if kinematics.running_time(profile(hi), nodes) <= target:
-            while hi - lo > 1:
-                mid = (lo + hi) // 2
-                lo, hi = (lo, mid) if kinematics.running_time(profile(mid), nodes) <= target else (mid, hi)
+        def meets(k):
+            return kinematics.running_time(profile(k), nodes) <= target
+
+        last = len(nodes) - 1  # if not even the latest coasting point meets the target: no coasting
+        hi = kinematics.earliest_coasting_point(meets, last, first=0) if meets(last) else last
         reference = profile(hi)
         coast = kinematics.coast_speeds(c.segment, train, nodes, c.limits, hi, fastest[hi])
         run = reference.copy()
         run[hi:] = np.maximum(np.maximum(reference[hi:], np.minimum(coast[hi:], np.sqrt(self.cap_sq[hi:]))), 1.0)
         return reference, run
-
-    def _clock(self, speeds):
-        """Clock of a speed profile on the case's grid from its start [s]."""
-        return np.concatenate([[0.0], np.cumsum(kinematics.interval_times(speeds, self.case.nodes))])
 
     def steps(self, position, speed):
         """(start positions, lengths, how many of them the first sample covers) of the prediction

@@ -39,10 +39,9 @@ class Sbpc:
         self.case, self.ts, self.variant, self.omega, self.tolerance = case, sample_time, variant, omega, tolerance
         self.kf = samples(running_time, sample_time)
         self.options = {**OPTIONS, **(options or {})}
-        if brake_reserve:  # plan with that share of the brake held back; the handle is applied as planned,
-            # so a train braking weaker than the model's still has the rest (the reserve of SPPC and RSPC)
-            case = dataclasses.replace(case, train=dataclasses.replace(case.train, braking=case.train.braking.scaled(1 - brake_reserve)))
-            self.case = case
+        # plan with ``brake_reserve`` of the brake held back; the handle is applied as planned, so a
+        # train braking weaker than the model's still has the rest (the reserve of SPPC and RSPC)
+        case = self.case = dataclasses.replace(case, train=case.train.with_brake_reserve(brake_reserve))
         t0 = time.perf_counter()
         self.model = build_blocked(case, sample_time, self.kf, block, time_guess(case, guess_speeds, self.kf, sample_time))
         self.session = Session(self.model)

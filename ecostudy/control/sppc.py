@@ -24,7 +24,6 @@ arrival (arriving early is allowed; least energy then uses the time). Variants:
 Modes (thesis 000 §3.1.2): traction at a DAS level, coasting and full service braking are applied
 as their handle; cruise as the handle that holds the planned force at the measured speed.
 """
-import dataclasses
 import time
 
 import numpy as np
@@ -54,7 +53,7 @@ class Sppc:
         self.segment, self.arrival = ato.segment, float(arrival)
         # plans brake at (1 - brake_reserve) of the envelope: the handle is held for a sample, so the
         # plant starts braking up to a sample later than planned and needs the rest to stop on the mark
-        self.train = dataclasses.replace(ato.train, braking=ato.train.braking.scaled(1.0 - brake_reserve))
+        self.train = ato.train.with_brake_reserve(brake_reserve)
         self.variant, self.tolerance, self.lookahead = variant, tolerance, lookahead
         self.options = {**OPTIONS, **(options or {})}
         t0 = time.perf_counter()

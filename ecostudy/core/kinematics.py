@@ -73,6 +73,16 @@ def coasting_profile(segment, train, nodes, limits, fastest, start):
     return v
 
 
+def earliest_coasting_point(meets, last, first=1):
+    """The smallest node k in [first + 1, last] at which coasting from k still ``meets(k)`` the
+    time (``meets`` true at ``last``; coasting later only arrives earlier), by bisection."""
+    lo, hi = first, last
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (lo, mid) if meets(mid) else (mid, hi)
+    return hi
+
+
 def envelope_speeds(segment, train, nodes, limits):
     """Fastest speeds: max traction forward from the start, max braking back from the stop.
 
@@ -99,6 +109,11 @@ def envelope_speeds(segment, train, nodes, limits):
 def interval_times(speeds, nodes):
     """Time per interval 2 ds / (v_k + v_k+1) [s], exact for constant acceleration (ocp/space.py)."""
     return 2 * np.diff(nodes) / np.maximum(speeds[:-1] + speeds[1:], 1e-9)
+
+
+def clock(speeds, nodes):
+    """Clock at every node of a speed profile from its first node [s]."""
+    return np.concatenate([[0.0], np.cumsum(interval_times(speeds, nodes))])
 
 
 def running_time(speeds, nodes):

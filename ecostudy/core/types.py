@@ -3,7 +3,7 @@ a state and a run's trajectory.
 
 Built by the loaders (:mod:`ecostudy.io.loaders`) or in code; everything here is SI.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -44,6 +44,11 @@ class Train:
     def eta_regeneration(self):
         """The regeneration efficiency: the map, else the constant."""
         return self.regeneration_efficiency_map or self.regeneration_efficiency
+
+    def with_brake_reserve(self, share):
+        """This train as a controller plans with it: ``share`` of the service brake held back (the
+        braking envelope times 1 - share), for the deviations a plan cannot see."""
+        return replace(self, braking=self.braking.scaled(1.0 - share)) if share else self
 
     def tunnel_coefficient(self, cross_section):
         """Extra quadratic resistance C [N s^2/m^2] in a tunnel of ``cross_section`` [m^2]: the

@@ -36,14 +36,8 @@ def eco_coasting(case, running_time):
     last = len(case.nodes) - 1
     if arrival(last) > running_time:
         raise InfeasibleError(f"eco-drive coasting cannot meet {running_time:.1f} s")
-    lo, hi = 1, last  # arrival(hi) <= running_time; find the smallest such coasting point
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if arrival(mid) <= running_time:
-            hi = mid
-        else:
-            lo = mid
-    u, trace = drive(case, profile(hi))
+    c = kinematics.earliest_coasting_point(lambda k: arrival(k) <= running_time, last)
+    u, trace = drive(case, profile(c))
     return Driven("eco-drive coasting", u, trace)
 
 

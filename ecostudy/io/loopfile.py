@@ -21,7 +21,7 @@ class ConvexSettings(Strict):
     brake_level_mps2: float = Field(0.8, gt=0, description="B_brk: planned braking above it is penalised [m/s^2].")
 
 
-RESERVES = {"sbpc": 0.0, "sppc": 0.1, "rspc": 0.2}  # each planning controller's default brake reserve
+RESERVE_KINDS = ("sbpc", "sppc", "rspc")  # the controllers that plan with a brake reserve
 
 
 class RspcSettings(Strict):
@@ -67,8 +67,8 @@ class Controller(Strict):
     def _sppc_variant(self):
         if self.kind == "sppc" and self.variant == "multi":
             raise ValueError("sppc has the variants nominal and two_step (no multi-objective one is built)")
-        if self.brake_reserve is not None and self.kind not in RESERVES:
-            raise ValueError(f"brake_reserve is for {', '.join(RESERVES)} (the convex controller's is "
+        if self.brake_reserve is not None and self.kind not in RESERVE_KINDS:
+            raise ValueError(f"brake_reserve is for {', '.join(RESERVE_KINDS)} (the convex controller's is "
                              "settings.brake_level_mps2)")
         return self
 

@@ -28,7 +28,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.grid import warn_unmodelled
-from ecostudy.core.kinematics import point_resistance
+from ecostudy.core.kinematics import clock, point_resistance
 from ecostudy.core.physics import davis_resistance, interval_resistance
 from ecostudy.ocp.timedomain import FORCE_SCALE
 
@@ -41,7 +41,7 @@ def samples(running_time, sample_time):
 def time_guess(case, speeds_on_nodes, kf, ts):
     """(s, v) on the samples from a speed profile on the space grid, stretched to k_f T_s."""
     v = np.maximum(speeds_on_nodes, 1e-3)
-    t = np.concatenate([[0.0], np.cumsum(2 * np.diff(case.nodes) / (v[:-1] + v[1:]))])
+    t = clock(v, case.nodes)
     t *= kf * ts / t[-1]
     ti = np.arange(kf + 1) * ts
     s = np.interp(ti, t, case.nodes)

@@ -153,7 +153,7 @@ def check_windows(case, margin=0.02):
         if w.max_speed is not None:
             limits[k] = min(limits[k], w.max_speed)
     fastest = kinematics.envelope_speeds(case.segment, case.train, case.nodes, limits)
-    passing = np.concatenate([[0.0], np.cumsum(kinematics.interval_times(fastest, case.nodes))])
+    passing = kinematics.clock(fastest, case.nodes)
     for k, w in zip(index, case.windows):
         if w.latest is not None and w.latest < (1 - margin) * passing[k]:
             raise InfeasibleError(f"infeasible: the fastest run passes {w.distance:.0f} m from "

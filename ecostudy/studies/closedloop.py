@@ -28,7 +28,7 @@ from ecostudy.core.types import State, Timing
 from ecostudy.io import schemas
 from ecostudy.io.loaders import (chosen_stops, read_document, track_document, track_from_schema,
                                  train_document, train_from_schema, validate)
-from ecostudy.io.loopfile import RESERVES, Controller, SimulateFile
+from ecostudy.io.loopfile import Controller, SimulateFile
 from ecostudy.ocp.convex import FASTEST, ConvexProgram, ConvexWeights, trapezoid_grid
 from ecostudy.ocp.problem import prepare
 from ecostudy.io.writers import check_output_dir, write_csv
@@ -105,13 +105,14 @@ def controller_spec(case):
 def build_controller(case, track, segment, train, estimator):
     """(the controller the loop drives, the planning controller inside it) of a case."""
     spec, window, points = controller_spec(case), tuple(case["window"]), case["points"]
-    reserve = RESERVES.get(spec["kind"]) if spec["brake_reserve"] is None else spec["brake_reserve"]
+    # the study's brake reserve if it gives one, else the controller's own default
+    reserve = {} if spec["brake_reserve"] is None else {"brake_reserve": spec["brake_reserve"]}
     if spec["kind"] == "convex":
         inner = Convex(convex_program(segment, train, points, spec), window, estimator, hold=case["sample_time"])
     elif spec["kind"] == "rspc":
         r = spec["rspc"]
         inner = Rspc(prepare(track, train, case["from"], case["to"], points), window[1], case["sample_time"],
-                     r["horizon"], r["distance_m"], r["gamma"], r["margin_s"], reserve)
+                     r["horizon"], r["distance_m"], r["gamma"], r["margin_s"], **reserve)
     elif spec["kind"] == "open_loop":  # the convex controller's own plan from the stand, replayed
         plan = convex_program(segment, train, points, spec).solve(State(), window)
         if not plan.usable:
@@ -123,12 +124,12 @@ def build_controller(case, track, segment, train, estimator):
         if spec["kind"] == "ato":
             inner = OpenLoop(ato)
         elif spec["kind"] == "sppc":
-            inner = Sppc(ato, window[1], points, spec["variant"], brake_reserve=reserve)
+            inner = Sppc(ato, window[1], points, spec["variant"], **reserve)
         else:
             prepared = prepare(track, train, case["from"], case["to"], points)
             speeds = np.interp(prepared.nodes, ato.trajectory.nodes, ato.trajectory.v)
             inner = Sbpc(prepared, window[1], case["sample_time"], spec["block"], speeds, spec["variant"], spec["omega"],
-                         brake_reserve=reserve)
+                         **reserve)
     if spec["das_levels"]:
         return Quantised(inner, train.das_levels, spec["delay_samples"]), inner
     return inner, inner
@@ -209,6 +210,11 @@ def runs_table(cases, rows):
     return pd.DataFrame(out)
 
 
+def not_ok(runs):
+    """The rows of runs that ran and are not ok (flagged or failed; a run not computed is not one)."""
+    return ~runs["status"].isin(["ok", "missing"])
+
+
 def aggregate(runs):
     """Per controller: the number of runs and of runs ok, and mean, spread and worst case of the
     energy, arrival, stop error, overspeed and solve times."""
@@ -252,7 +258,7 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
             by_controller.setdefault(case["labels"]["controller"], []).append(s)
             budgets[case["labels"]["controller"]] = case["sample_time"]
     counts["missing"] = int((runs["status"] == "missing").sum())  # controllers left out by ``only``
-    counts["not_ok"] = int((~runs["status"].isin(["ok", "missing"])).sum())
+    counts["not_ok"] = int(not_ok(runs).sum())
     return LoopStudy(study, runs, summary, counts, output, by_controller, _inputs(cases[0])[2], budgets)
 
 

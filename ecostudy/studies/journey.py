@@ -186,7 +186,7 @@ def check_reachable(plan, cases):
     events = []  # (where, earliest, latest, fastest clock since the start, dwells since the start)
     fastest, dwells, start = 0.0, 0.0, 0.0
     for n, case in enumerate(cases):
-        clock = np.concatenate([[0.0], np.cumsum(kinematics.interval_times(case.envelope, case.nodes))])
+        clock = kinematics.clock(case.envelope, case.nodes)
         dwells += plan.dwell[n]
         lo, hi = plan.departure[n] or (None, None)
         events.append((f"the departure from {plan.stops[n]}", lo, hi, fastest, dwells))
