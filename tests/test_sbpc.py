@@ -6,9 +6,10 @@ from ecostudy.analysis.single import solve_run
 from ecostudy.control.controllers import Quantised
 from ecostudy.control.loop import run_loop
 from ecostudy.control.sbpc import Sbpc
+from ecostudy.core.physics import moving_share
 from ecostudy.core.plant import Plant
 from ecostudy.core.types import State, Timing
-from ecostudy.ocp.blocked import handle_at, samples
+from ecostudy.ocp.blocked import handle_at, samples, set_blocked_start, set_objective
 from ecostudy.ocp.problem import prepare
 
 TS = 1.52  # four of the thesis's samples: k_f = 50 keeps the loop short
@@ -45,6 +46,25 @@ def test_a_plan_from_a_later_sample_keeps_the_past_and_the_blocks(amsterdam_case
     # work sum made it dense (825 variables: 172 595 entries at k_f = 200, 17 s a sample more)
     nlp = controller.session.nlp
     assert nlp.nnz_hessian_lag() < 12 * nlp.n_primals()
+
+
+def test_a_train_standing_at_the_stop_before_kf_may_wait_there(amsterdam_case):
+    """The standstill of ``physics.moving_share``: from sample 40 of k_f = 50, standing at the stop,
+    the nominal problem (gamma = 0) is solved by waiting with the handle off; without it the
+    Davis term at v = 0 would drive the speed below zero and no plan would exist."""
+    case, speeds = amsterdam_case
+    controller = Sbpc(case, 76.0, TS, 5, speeds)
+    m = controller.model
+    set_blocked_start(controller.session, m, 40, State(case.segment.distance, 0.0, 40 * TS))
+    set_objective(controller.session, m, 1.0, 0.0, 0.0)
+    assert controller.session.solve(controller.options).usable
+    assert max(m.v[i].value for i in range(40, 51)) < 1e-4
+    assert m.s[50].value == pytest.approx(case.segment.distance, abs=1e-3)
+    assert m.up[8].value < 1e-4 and m.up[9].value < 1e-4
+
+
+def test_moving_share_is_zero_at_a_stand_and_one_when_moving():
+    assert moving_share(0.0) == 0.0 and moving_share(0.1) > 0.99 and moving_share(20.0) == pytest.approx(1.0)
 
 
 @pytest.mark.slow

@@ -230,6 +230,15 @@ def interval_resistance(v0, v1, davis, fixed):
     return a + 0.5 * b * (v0 + v1) + 0.5 * c * (v0 * v0 + v1 * v1) + fixed
 
 
+def moving_share(speed_sum, width=0.01):
+    """Share of the braking, resisting and grade forces that act over a time step whose end speeds
+    add up to ``speed_sum`` [m/s]: s^2 / (s^2 + width^2), 0 for a step that starts and ends at a
+    stand, above 0.99 once the ends add up to 0.1 m/s. A smooth standstill for time-domain NLPs: a
+    stopped train stays stopped (the brakes hold it on any grade) until traction moves it, where
+    without it a braking or resisting force at v = 0 would drive the speed below zero."""
+    return speed_sum * speed_sum / (speed_sum * speed_sum + width * width)
+
+
 def acceleration(traction, braking, resistance, mass):
     """dv/dt = (F_T - F_B - F_R) / M [m/s^2] (thesis 000 eq. 2.1)."""
     return (traction - braking - resistance) / mass

@@ -8,7 +8,10 @@ the handle is held over blocks of L samples aligned to absolute multiples of L (
     s_i+1 - s_i = w_i T_s (v_i + v_i+1) / 2
     (v_i+1 - v_i) M / T_s = w_i (F_T,max u+_b - F_B,max u-_b - R_D(v_i, v_i+1) - G(s_mid))
 
-with the envelopes and the Davis term R_D as trapezoidal means over the step. The grade and curve
+with the envelopes and the Davis term R_D as trapezoidal means over the step; the braking, resisting
+and grade forces are multiplied by ``physics.moving_share(v_i + v_i+1)``, which is 0 for a step
+that starts and ends at a stand: a train that stops before k_f waits there (the brakes hold it)
+instead of being driven below v = 0, so a last block longer than the final braking can still stop. The grade and curve
 force G of each step and the speed bound of each node are those along the positions the last
 solve predicted (held by bounds, :func:`update_profile`), not functions of s inside the NLP: a
 position-dependent step function made every solve 1-10 s (measured; docs/closed_loop.md). This is eq. 4.1 with the
@@ -29,7 +32,7 @@ import pyomo.environ as pyo
 
 from ecostudy.core.grid import warn_unmodelled
 from ecostudy.core.kinematics import clock, point_resistance
-from ecostudy.core.physics import davis_resistance, interval_resistance
+from ecostudy.core.physics import davis_resistance, interval_resistance, moving_share
 from ecostudy.ocp.timedomain import FORCE_SCALE
 
 
@@ -92,7 +95,8 @@ def build_blocked(case, ts, kf, block, guess, margin=0.1):
 
     def dynamics(m, i):
         resist = interval_resistance(m.v[i], m.v[i + 1], davis, m.grade[i])
-        return (m.v[i + 1] - m.v[i]) * mass / ts == m.w[i] * (m.ft[i] - m.fb[i] - resist)
+        held = moving_share(m.v[i] + m.v[i + 1])  # a standstill: the train may wait at the stop
+        return (m.v[i + 1] - m.v[i]) * mass / ts == m.w[i] * (m.ft[i] - held * (m.fb[i] + resist))
 
     m.dynamics = pyo.Constraint(m.I, rule=dynamics)
     m.reach_hi = pyo.Constraint(expr=m.s[n] - seg.distance <= m.gamma)
