@@ -1,5 +1,7 @@
 """Supervisor rules (thesis 000 Ch. 7-8): triggering 7.7, voltage 7.11, dissension 8.14-8.17, the
 receptivity credit, and following a train ahead (thesis 001 eq. 6.9). See :mod:`.strategies`."""
+import copy
+
 import numpy as np
 
 from ecostudy.network import circuit
@@ -27,7 +29,15 @@ def _others(flags, i):
 
 
 def independent(fleet):
-    return [solve_train(fleet, i)[0] for i in range(len(fleet.names))]
+    """Every train for itself; a train whose legs are those of one already solved (the same
+    segments and running times, another departure) drives as that one did."""
+    runs, solved = [], {}
+    for i, legs in enumerate(fleet.legs):
+        key = tuple((id(leg.case), leg.steps) for leg in legs)
+        if key not in solved:
+            solved[key] = solve_train(fleet, i)[0]
+        runs.append(copy.deepcopy(solved[key]))
+    return runs
 
 
 DISSENSION = {"gamma0": 0.5, "rate": 0.05, "influence": 0.15}  # [-], [1/s], [1/s]
