@@ -12,6 +12,7 @@ from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.ocp.problem import prepare
 from ecostudy.analysis.single import solve_run
+from ecostudy.studies.workers import worker_pool
 
 from .conftest import TRACKS, TRAINS, write_yaml
 
@@ -114,6 +115,11 @@ def test_legs_solved_one_by_one_reach_one_nlps_optimum_and_identical_trains_shar
     by_leg = sum(float(np.sum(run.p)) for run in runs[0]) * f.dt / 1e3
     assert by_leg <= whole * (1 + 1e-6)
     assert all(scoring.verify_leg(leg, run)["passed"] for leg, run in zip(f.legs[0], runs[0]))
+    with worker_pool(2) as pool:  # the legs in two processes (`ecostudy network --workers 2`)
+        pooled, outcomes = fleet.solve_train(f, 0, mapper=pool.map)
+    assert len(outcomes) == 2 and all(o.usable for o in outcomes)
+    for a, b in zip(pooled, runs[0]):
+        assert np.allclose(a.v, b.v, atol=1e-6) and np.allclose(a.p, b.p, atol=1e-3)
 
 
 @pytest.fixture(scope="module")

@@ -10,13 +10,14 @@ import typer
 from ecostudy.cli.app import app, guarded
 
 
-def _network(study_path, out, no_plot):
+def _network(study_path, out, no_plot, workers=1):
 
     from ecostudy.analysis.single import solve_run
     from ecostudy.core.types import Timing
     from ecostudy.io.loaders import load_network_study
     from ecostudy.io.writers import atomic_write, check_output_dir, write_csv, write_json
     from ecostudy.network import fleet, strategies
+    from ecostudy.studies.workers import worker_pool
     import pandas as pd
     st = load_network_study(study_path)
     out_dir = check_output_dir(Path(out) if out else st.output)
@@ -29,7 +30,11 @@ def _network(study_path, out, no_plot):
                     st.points, st.buffer)
     typer.echo(f"{len(st.names)} trains, {len(pairs)} segments ({', '.join(f'{t:.1f}' for t in times)} s "
                f"before rounding to {st.dt} s steps), {fl.steps} steps")
-    outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo)
+    if workers > 1:  # one train's legs in parallel
+        with worker_pool(workers) as pool:
+            outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo, mapper=pool.map)
+    else:
+        outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo)
     base = outcome.get("independent", {}).get("totals", {}).get("substation_kWh")
     subs, trains = [], []
     failed = {n: r for n, r in outcome.items() if "failed" in r}
@@ -69,10 +74,11 @@ def network(
     study: Path = typer.Argument(..., help="Network study file (YAML)."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's output)."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip network.png."),
+    workers: int = typer.Option(1, min=1, help="Processes solving one train's legs in parallel."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""
-    table = guarded(debug, _network, study, out, no_plot)
+    table = guarded(debug, _network, study, out, no_plot, workers)
     if not bool(table["all_verified"].all()) or not bool((table["status"] == "ok").all()):
         typer.secho("flagged: a strategy failed, its runs failed re-simulation, or traction was not served",
                     fg=typer.colors.YELLOW, err=True)

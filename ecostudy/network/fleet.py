@@ -85,7 +85,7 @@ def energy_ref(fleet):
     return sum(space.energy_reference(leg.case.train, leg.case.segment) for leg in fleet.legs[0]) / 1e3
 
 
-def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None, credit=None):
+def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None, credit=None, mapper=map):
     """Train ``i`` alone: minimise sum (w_t traction - regeneration) dt over its legs.
 
     ``weights``: traction weight per clock step (default 1). ``allowance``: power [kW] per clock
@@ -96,28 +96,34 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
     each leg's ends), so the legs are solved one by one, each at its own objective scale: the same
     problem as one NLP of all legs, 2.3x cheaper on the 19-leg regional study and no worse (the
     leg NLP is flat: one NLP of the whole train stopped up to 2.7 % above the legs' own optima;
-    docs/benchmarks.md).
+    docs/benchmarks.md). ``mapper``: how the legs are mapped over (``map``, or a process pool's).
     Returns ([(s, v, ft, fb, fr, p) per leg], [solver outcome per leg]).
     """
-    runs, outcomes = [], []
-    for k, leg in enumerate(fleet.legs[i]):
-        m = pyo.ConcreteModel()
-        guess = guesses[k][:5] if guesses is not None else _guess(fleet, leg)
-        b = timedomain.add_leg(m, "leg", leg, guess, one_handle=weights is not None)
-        scale = space.energy_reference(leg.case.train, leg.case.segment) / 1e3  # kJ, as energy_ref per leg
-        m.objective = pyo.Objective(expr=_leg_cost(leg, b, weights, allowance, credit) * fleet.dt / scale)
-        if ahead is not None and fleet.buffer is not None:
-            m.separation = pyo.ConstraintList()
-            for j in b.K:
-                x_ahead = ahead[leg.start + j]
-                if np.isfinite(x_ahead):  # head-to-tail: the train ahead is train.length long
-                    m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j]
-                                     >= fleet.buffer + leg.case.train.length)
-        # from a previous run (the rounds), stay near it: measured 2-3x fewer iterations on the
-        # regional study's hardest legs (1130 -> 333, 823 -> 441), and lower costs
-        outcomes.append(solve_model(m, f"train {fleet.names[i]}, leg {k + 1}", NEAR_START if guesses is not None else None))
-        runs.append(timedomain.leg_arrays(b))
-    return runs, outcomes
+    tasks = [(leg, f"train {fleet.names[i]}, leg {k + 1}", fleet.dt, fleet.buffer,
+              guesses[k][:5] if guesses is not None else _guess(fleet, leg), guesses is not None,
+              weights, allowance, credit, ahead) for k, leg in enumerate(fleet.legs[i])]
+    solved = list(mapper(solve_leg, tasks))
+    return [run for run, _ in solved], [outcome for _, outcome in solved]
+
+
+def solve_leg(task):
+    """One leg of :func:`solve_train`: (leg, label, dt, buffer, guess, warm, weights, allowance,
+    credit, ahead) -> (LegRun, solver outcome); a top-level function so a process pool can run it."""
+    leg, label, dt, buffer, guess, warm, weights, allowance, credit, ahead = task
+    m = pyo.ConcreteModel()
+    b = timedomain.add_leg(m, "leg", leg, guess, one_handle=weights is not None)
+    scale = space.energy_reference(leg.case.train, leg.case.segment) / 1e3  # kJ, as energy_ref per leg
+    m.objective = pyo.Objective(expr=_leg_cost(leg, b, weights, allowance, credit) * dt / scale)
+    if ahead is not None and buffer is not None:
+        m.separation = pyo.ConstraintList()
+        for j in b.K:
+            x_ahead = ahead[leg.start + j]
+            if np.isfinite(x_ahead):  # head-to-tail: the train ahead is train.length long
+                m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j] >= buffer + leg.case.train.length)
+    # from a previous run (the rounds), stay near it: measured 2-3x fewer iterations on the
+    # regional study's hardest legs (1130 -> 333, 823 -> 441), and lower costs
+    outcome = solve_model(m, label, NEAR_START if warm else None)
+    return timedomain.leg_arrays(b), outcome
 
 
 def _leg_cost(leg, b, weights, allowance, credit):

@@ -28,14 +28,14 @@ def _others(flags, i):
     return np.any([f for j, f in enumerate(flags) if j != i], axis=0) if len(flags) > 1 else np.zeros_like(flags[0])
 
 
-def independent(fleet):
+def independent(fleet, mapper=map):
     """Every train for itself; a train whose legs are those of one already solved (the same
     segments and running times, another departure) drives as that one did."""
     runs, solved = [], {}
     for i, legs in enumerate(fleet.legs):
         key = tuple((id(leg.case), leg.steps) for leg in legs)
         if key not in solved:
-            solved[key] = solve_train(fleet, i)[0]
+            solved[key] = solve_train(fleet, i, mapper=mapper)[0]
         runs.append(copy.deepcopy(solved[key]))
     return runs
 
@@ -157,7 +157,7 @@ def rule_terms(fleet, rule, runs_by_train, i):
     return np.where(higher, 0.0, 1.0), deliverable(fleet, runs_by_train, i, np.where(higher, power[ahead], 0.0))
 
 
-def supervised(fleet, rule, start, rounds=3):
+def supervised(fleet, rule, start, rounds=3, mapper=map):
     """Rules (b), (c) and (d): supervisor rounds; in each, the trains in departure order are
     re-optimised one by one against the others' latest runs (Gauss-Seidel: a train never plans
     against a run that has already been replaced).
@@ -181,7 +181,7 @@ def supervised(fleet, rule, start, rounds=3):
             weights, allowance = rule_terms(fleet, rule, runs, i)
             ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]]) if rank and fleet.buffer else None
             runs[i] = solve_train(fleet, i, weights, guesses=runs[i], allowance=allowance,
-                                  credit=receptivity(fleet, runs, i), ahead=ahead)[0]
+                                  credit=receptivity(fleet, runs, i), ahead=ahead, mapper=mapper)[0]
         _, _, totals = evaluate(fleet, runs)
         history.append(totals["substation_kWh"])
         if history[-1] < best[0]:
@@ -189,7 +189,7 @@ def supervised(fleet, rule, start, rounds=3):
     return best[1], history
 
 
-def following(fleet, start):
+def following(fleet, start, mapper=map):
     """(f): trains in departure order, each kept ``fleet.buffer`` behind the one ahead."""
     order = departure_order(fleet)
     runs = list(start)
@@ -197,5 +197,5 @@ def following(fleet, start):
         if rank == 0:
             continue
         ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]])
-        runs[i] = solve_train(fleet, i, guesses=runs[i], ahead=ahead)[0]
+        runs[i] = solve_train(fleet, i, guesses=runs[i], ahead=ahead, mapper=mapper)[0]
     return runs

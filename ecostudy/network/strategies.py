@@ -37,14 +37,15 @@ from ecostudy.network.rules import following, independent, supervised
 from ecostudy.network.scoring import evaluate, separations, verify_leg
 
 
-def run_strategies(fleet, strategies, progress=print):
+def run_strategies(fleet, strategies, progress=print, mapper=map):
     """Every strategy on ``fleet``: {name: {"runs", "steps", "trains", "totals", "info"}}.
+    ``mapper`` maps one train's leg solves (``map``, or a process pool's: ``--workers``).
 
     The independent runs are solved first: they are strategy (a) and the start of the others.
     """
     out = {}
     t0 = time.perf_counter()
-    ind = independent(fleet)
+    ind = independent(fleet, mapper)
     base_s = time.perf_counter() - t0
     for name in strategies:
         t0 = time.perf_counter()
@@ -53,12 +54,12 @@ def run_strategies(fleet, strategies, progress=print):
             if name == "independent":
                 runs = ind
             elif name in ("receptivity", "triggering", "voltage", "dissension"):
-                runs, history = supervised(fleet, name, ind)
+                runs, history = supervised(fleet, name, ind, mapper=mapper)
                 info["rounds_substation_kWh"] = history
             elif name == "joint":
                 runs, info = joint(fleet, ind)
             elif name == "following":
-                runs = following(fleet, ind)
+                runs = following(fleet, ind, mapper)
             else:
                 raise ValueError(f"unknown strategy {name!r}")
         except SolverError as exc:  # one strategy failing does not stop the study
