@@ -176,7 +176,7 @@ def test_network_command_and_a_bad_study(tmp_path):
         "trains": [{"name": "A", "offset_s": 0}, {"name": "B", "offset_s": 45}],
         "substation": {"position_m": 300}, "strategies": ["independent", "joint"], "points": 300,
         "output": str(tmp_path / "out")})
-    r = CliRunner().invoke(app, ["network", str(study)])
+    r = CliRunner().invoke(app, ["network", str(study), "--workers", "2"])
     assert r.exit_code == 0, r.output
     for name in ("network_substation.csv", "network_trains.csv", "network_steps_joint.csv", "network.png"):
         assert (tmp_path / "out" / name).stat().st_size > 0
