@@ -122,6 +122,14 @@ def test_legs_solved_one_by_one_reach_one_nlps_optimum_and_identical_trains_shar
         assert np.allclose(a.v, b.v, atol=1e-6) and np.allclose(a.p, b.p, atol=1e-3)
 
 
+def test_trains_that_overlap_on_the_line_are_flagged():
+    """A timetable that puts one train's head past the tail of the one ahead is never "ok"."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 4.0], ["T1", "T2"], 1.0, SUPPLY, points=300)
+    totals = strategies.run_strategies(f, ["independent"], progress=None)["independent"]["totals"]
+    assert totals["min_separation_m"] < 0 and "trains overlap" in totals["status"]
+
+
 @pytest.fixture(scope="module")
 def two_trains():
     """Two metro trains on the first segment of the 4-stop line, the second departing as the

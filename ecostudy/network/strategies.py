@@ -84,8 +84,11 @@ def run_strategies(fleet, strategies, progress=print, mapper=map):
                       min_separation_m=min([g for g in gaps.values() if g is not None], default=None))
         # only the joint optimum sees the circuit: another strategy's runs may ask for traction the
         # line cannot carry or a current limit forbids; it is not served and the result is flagged
-        totals["status"] = "ok" if totals["unserved_kWh"] <= 1e-3 else (
-            f"flagged: {totals['unserved_kWh']:.3f} kWh of traction not served (current limit or line)")
+        flags = [f"{totals['unserved_kWh']:.3f} kWh of traction not served (current limit or line)"] \
+            if totals["unserved_kWh"] > 1e-3 else []
+        if totals["min_separation_m"] is not None and totals["min_separation_m"] < 0.0:  # head past the tail ahead
+            flags.append(f"trains overlap on the line by up to {-totals['min_separation_m']:.1f} m (timetable)")
+        totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
         out[name] = {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
         if progress:
             progress(f"{name:12s} substation {totals['substation_kWh']:.3f} kWh, {wall:.1f} s")
