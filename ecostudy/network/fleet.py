@@ -108,22 +108,31 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
 
 def solve_leg(task):
     """One leg of :func:`solve_train`: (leg, label, dt, buffer, guess, warm, weights, allowance,
-    credit, ahead) -> (LegRun, solver outcome); a top-level function so a process pool can run it."""
+    credit, ahead) -> (LegRun, solver outcome); a top-level function so a process pool can run it.
+    A warm solve (from a previous run, the rounds) stays near its start (``NEAR_START``: measured
+    2-3x fewer iterations on the regional study's hardest legs, 1130 -> 333 and 823 -> 441, and
+    lower costs); where that fails (one leg of the 20-stop study reached 3000 iterations) the leg
+    is solved again with Ipopt's defaults before the failure is raised."""
     leg, label, dt, buffer, guess, warm, weights, allowance, credit, ahead = task
-    m = pyo.ConcreteModel()
-    b = timedomain.add_leg(m, "leg", leg, guess, one_handle=weights is not None)
-    scale = space.energy_reference(leg.case.train, leg.case.segment) / 1e3  # kJ, as energy_ref per leg
-    m.objective = pyo.Objective(expr=_leg_cost(leg, b, weights, allowance, credit) * dt / scale)
-    if ahead is not None and buffer is not None:
-        m.separation = pyo.ConstraintList()
-        for j in b.K:
-            x_ahead = ahead[leg.start + j]
-            if np.isfinite(x_ahead):  # head-to-tail: the train ahead is train.length long
-                m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j] >= buffer + leg.case.train.length)
-    # from a previous run (the rounds), stay near it: measured 2-3x fewer iterations on the
-    # regional study's hardest legs (1130 -> 333, 823 -> 441), and lower costs
-    outcome = solve_model(m, label, NEAR_START if warm else None)
-    return timedomain.leg_arrays(b), outcome
+    tries = (NEAR_START, None) if warm else (None,)
+    for n, options in enumerate(tries, 1):
+        m = pyo.ConcreteModel()
+        b = timedomain.add_leg(m, "leg", leg, guess, one_handle=weights is not None)
+        scale = space.energy_reference(leg.case.train, leg.case.segment) / 1e3  # kJ, as energy_ref per leg
+        m.objective = pyo.Objective(expr=_leg_cost(leg, b, weights, allowance, credit) * dt / scale)
+        if ahead is not None and buffer is not None:
+            m.separation = pyo.ConstraintList()
+            for j in b.K:
+                x_ahead = ahead[leg.start + j]
+                if np.isfinite(x_ahead):  # head-to-tail: the train ahead is train.length long
+                    m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j] >= buffer + leg.case.train.length)
+        try:
+            outcome = solve_model(m, label, options)
+        except SolverError:
+            if n == len(tries):
+                raise
+            continue
+        return timedomain.leg_arrays(b), outcome
 
 
 def _leg_cost(leg, b, weights, allowance, credit):
