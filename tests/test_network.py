@@ -97,7 +97,7 @@ def test_time_domain_leg_matches_the_space_domain_optimum_on_flat_track():
 
 def test_legs_solved_one_by_one_reach_one_nlps_optimum_and_identical_trains_share_it():
     """solve_train solves leg by leg (the objective is a sum over legs, every constraint within
-    one): verified runs whose cost is no worse than one NLP of both legs (measured 2.7 % lower on
+    one): verified runs whose cost is no worse than one NLP of both legs (measured 2.7 % lower than it on
     the second leg: the flat leg NLP stops earlier at the whole train's objective scale);
     independent() solves a train whose legs are another's once (equal runs, separate arrays)."""
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")

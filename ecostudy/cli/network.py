@@ -80,6 +80,7 @@ def network(
     """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""
     table = guarded(debug, _network, study, out, no_plot, workers)
     if not bool(table["all_verified"].all()) or not bool((table["status"] == "ok").all()):
-        typer.secho("flagged: a strategy failed, its runs failed re-simulation, or traction was not served",
+        typer.secho("flagged: a strategy failed, its runs failed re-simulation, or its status says why (traction not "
+                    "served, trains overlapping)",
                     fg=typer.colors.YELLOW, err=True)
         raise typer.Exit(1)

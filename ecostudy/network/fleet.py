@@ -80,9 +80,14 @@ def solve_model(m, what, options=None):
     return out
 
 
+def leg_energy_ref(leg):
+    """Objective scale of one leg [kWh s / h = kJ]: ``space.energy_reference`` of its segment."""
+    return space.energy_reference(leg.case.train, leg.case.segment) / 1e3
+
+
 def energy_ref(fleet):
-    """Objective scale [kWh s / h = kJ]: space.energy_reference summed over one train's legs."""
-    return sum(space.energy_reference(leg.case.train, leg.case.segment) for leg in fleet.legs[0]) / 1e3
+    """Objective scale [kJ]: :func:`leg_energy_ref` summed over one train's legs."""
+    return sum(leg_energy_ref(leg) for leg in fleet.legs[0])
 
 
 def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None, credit=None, mapper=map):
@@ -95,7 +100,7 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
     The objective is a sum over the legs and every constraint lies within one leg (the dwell fixes
     each leg's ends), so the legs are solved one by one, each at its own objective scale: the same
     problem as one NLP of all legs, 2.3x cheaper on the 19-leg regional study and no worse (the
-    leg NLP is flat: one NLP of the whole train stopped up to 2.7 % above the legs' own optima;
+    leg NLP is flat: one NLP of the whole train stopped up to 2.8 % above the legs' own optima;
     docs/benchmarks.md). ``mapper``: how the legs are mapped over (``map``, or a process pool's).
     Returns ([(s, v, ft, fb, fr, p) per leg], [solver outcome per leg]).
     """
@@ -118,8 +123,7 @@ def solve_leg(task):
     for n, options in enumerate(tries, 1):
         m = pyo.ConcreteModel()
         b = timedomain.add_leg(m, "leg", leg, guess, one_handle=weights is not None)
-        scale = space.energy_reference(leg.case.train, leg.case.segment) / 1e3  # kJ, as energy_ref per leg
-        m.objective = pyo.Objective(expr=_leg_cost(leg, b, weights, allowance, credit) * dt / scale)
+        m.objective = pyo.Objective(expr=_leg_cost(leg, b, weights, allowance, credit) * dt / leg_energy_ref(leg))
         if ahead is not None and buffer is not None:
             m.separation = pyo.ConstraintList()
             for j in b.K:
@@ -150,7 +154,7 @@ def _leg_cost(leg, b, weights, allowance, credit):
     def regen_credit(j):  # min(regenerated, what the line takes) [kW], smooth over 10 kW
         if credit is None:
             return b.regen_kw[j]
-        cap = float(credit[leg.start + j])
+        cap = float(credit[leg.start + j])  # the clock step, as ``t`` above
         return 0.0 if cap < 10.0 else b.regen_kw[j] - hinge(b.regen_kw[j] - cap, 10.0)
 
     return sum(traction_cost(j) - regen_credit(j) for j in b.I)

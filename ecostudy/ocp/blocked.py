@@ -11,8 +11,7 @@ the handle is held over blocks of L samples aligned to absolute multiples of L (
 with the envelopes and the Davis term R_D as trapezoidal means over the step; the braking, resisting
 and grade forces are multiplied by ``physics.moving_share(v_i + v_i+1)``, which is 0 for a step
 that starts and ends at a stand: a train that stops before k_f waits there (the brakes hold it)
-instead of being driven below v = 0, so a last block longer than the final braking can still stop. The grade and curve
-force G of each step and the speed bound of each node are those along the positions the last
+instead of being driven below v = 0. The grade and curve force G of each step and the speed bound of each node are those along the positions the last
 solve predicted (held by bounds, :func:`update_profile`), not functions of s inside the NLP: a
 position-dependent step function made every solve 1-10 s (measured; docs/closed_loop.md). This is eq. 4.1 with the
 trapezoid instead of forward Euler: at T_s = 0.38 s forward Euler's position error alone is
