@@ -2,7 +2,7 @@
 and the QP's solve time per step and memory for f = 1 and f = 10.
 
     python bench/bench_heavyhaul.py                  # the three studies (about 30 min on 2 cores)
-    python bench/bench_heavyhaul.py --qp 1 [--solver clarabel|ipopt]   # one QP size: build + 10 solves, time, memory
+    python bench/bench_heavyhaul.py --qp 1 [--solver daqp|condensed|clarabel|ipopt]   # one QP size: build + 10 solves, time, memory
 
 The studies run through ``ecostudy.studies.heavyhaul.heavyhaul_study`` (resumable: outputs in
 out/bench_heavyhaul_*); the tables are printed as markdown for docs/benchmarks.md.
@@ -24,9 +24,7 @@ from ecostudy.heavyhaul.linear import fence  # noqa: E402
 from ecostudy.heavyhaul.loop import horizon, limits, reduced_state  # noqa: E402
 from ecostudy.heavyhaul.plant import CascadePlant  # noqa: E402
 from ecostudy.heavyhaul.reference import table_reference  # noqa: E402
-from ecostudy.heavyhaul.condensed import CondensedHorizon  # noqa: E402
-from ecostudy.heavyhaul.qp import ConicHorizon  # noqa: E402
-from ecostudy.heavyhaul.rhc import RecedingHorizon  # noqa: E402
+from ecostudy.studies.heavyhaul import QP_FORMS  # noqa: E402
 from ecostudy.io.loaders import load_consist  # noqa: E402
 
 COLUMNS = ["K_b", "f", "Np", "Nc", "tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN",
@@ -49,8 +47,7 @@ def qp(factor, solver, np_=8, nc=6, solves=10):
     reduction = fence(consist, factor, 20.0)
     before = rss_mb()
     t0 = time.perf_counter()
-    kind = {"condensed": CondensedHorizon, "clarabel": ConicHorizon, "ipopt": RecedingHorizon}[solver]
-    controller = kind(reduction.model, reduction.kinds, np_=np_, nc=nc)
+    controller = QP_FORMS[solver](reduction.model, reduction.kinds, np_=np_, nc=nc)
     build = time.perf_counter() - t0
     u = np.zeros(consist.cars)
     u[consist.locomotives] = plant.resistance(plant.initial(5000.0, 15.0).positions, np.full(consist.cars, 15.0)).sum() / 4
@@ -90,7 +87,7 @@ if __name__ == "__main__":
     warnings.simplefilter("ignore", EcostudyWarning)
     parser = argparse.ArgumentParser()
     parser.add_argument("--qp", type=int, help="fence factor: time and memory of the QP only")
-    parser.add_argument("--solver", default="condensed", choices=["condensed", "clarabel", "ipopt"])
+    parser.add_argument("--solver", default="daqp", choices=sorted(QP_FORMS))
     parser.add_argument("studies", nargs="*", help="study names (default: all four)")
     args = parser.parse_args()
     if args.qp:

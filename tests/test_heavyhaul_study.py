@@ -43,16 +43,15 @@ def test_the_fence_arithmetic_of_the_paper():
 
 
 @pytest.mark.parametrize("tight", [False, True])
-def test_three_forms_of_the_qp_give_the_same_moves(tight):
+def test_four_forms_of_the_qp_give_the_same_moves(tight):
     """The QP as a Pyomo model (Ipopt), in matrix form with the states (Clarabel) and condensed to
-    the inputs with the force rows added as they bind (Clarabel) give the same moves on the ore
-    train climbing 5 per mille from 15 m/s towards 20 m/s (f = 10, Np = 8, Nc = 6), three samples
-    with the plant between them, to 0.05 kN; with the force limit 10 % above the starting state's
-    largest virtual-coupler force, rows bind and the condensed form finds them."""
-    from ecostudy.heavyhaul.condensed import CondensedHorizon
+    the inputs with the force rows added as they bind (by DAQP, warm-started, and by Clarabel) give
+    the same moves on the ore train climbing 5 per mille from 15 m/s towards 20 m/s (f = 10, Np = 8,
+    Nc = 6), three samples with the plant between them, to 0.05 kN; with the force limit 10 % above
+    the starting state's largest virtual-coupler force, rows bind and the condensed forms find them."""
     from ecostudy.heavyhaul.loop import horizon, limits, reduced_state
-    from ecostudy.heavyhaul.qp import ConicHorizon
     from ecostudy.heavyhaul.reference import table_reference
+    from ecostudy.studies.heavyhaul import QP_FORMS
     consist = load_consist(PAPER)
     plant = CascadePlant(consist, level(0.005))
     reduction = fence(consist, 10, 20.0)
@@ -61,10 +60,9 @@ def test_three_forms_of_the_qp_give_the_same_moves(tight):
     state = plant.quasi_static(5000.0, 15.0, u)
     largest = np.max(np.abs(reduced_state(plant, reduction, state)[22:] * reduction.model.stiffness)) / 1e3
     limit = 1.1 * largest if tight else 2000.0
-    forms = [kind(reduction.model, reduction.kinds, np_=8, nc=6, force_limit_kN=limit)
-             for kind in (RecedingHorizon, ConicHorizon, CondensedHorizon)]
-    pyomo_qp, conic_qp, condensed_qp = forms
-    assert conic_qp.size == pyomo_qp.size == condensed_qp.size
+    names = ["ipopt", "clarabel", "condensed", "daqp"]
+    forms = [QP_FORMS[name](reduction.model, reduction.kinds, np_=8, nc=6, force_limit_kN=limit) for name in names]
+    assert all(form.size == forms[0].size for form in forms)
     for form in forms:
         form.previous = reduction.reduce(u) / 1e3
     reference = table_reference([0.0, 1e6], [72.0, 72.0])
@@ -72,11 +70,12 @@ def test_three_forms_of_the_qp_give_the_same_moves(tight):
         x0 = reduced_state(plant, reduction, state)
         offsets, vr = horizon(plant, reduction, reference, state, x0[:len(reduction.kinds)], 8)
         low, high = limits(plant, reduction, state)
-        a, b, c = (form.solve(x0, offsets / 1e3, low / 1e3, high / 1e3, vr) for form in forms)
-        assert np.max(np.abs(a - b)) < 0.05 and np.max(np.abs(c - b)) < 0.05
-        state = plant.step(state, reduction.share(b * 1e3, consist.mass), 20.0).state
-    assert a[reduction.locomotives].min() > 0 and conic_qp.last.usable
-    assert bool(condensed_qp.binding) == tight
+        moves = {name: form.solve(x0, offsets / 1e3, low / 1e3, high / 1e3, vr) for name, form in zip(names, forms)}
+        for name in names:
+            assert np.max(np.abs(moves[name] - moves["clarabel"])) < 0.05, name
+        state = plant.step(state, reduction.share(moves["clarabel"] * 1e3, consist.mass), 20.0).state
+    assert moves["ipopt"][reduction.locomotives].min() > 0 and all(form.last.usable for form in forms)
+    assert bool(forms[2].binding) == bool(forms[3].binding) == tight
 
 
 def test_observability_from_the_locomotives():

@@ -66,9 +66,10 @@ class HeavyhaulFile(Strict):
     weights: Weights = Weights()
     rate_kN_per_sample: float = Field(200.0, gt=0, description="Largest change of a locomotive group's effort "
                                       "per sample (paper 002 gives none).")
-    qp_solver: Literal["condensed", "clarabel", "ipopt"] = Field(
-        "condensed", description="The same QP three ways: condensed to the inputs (Clarabel, force rows as they "
-        "bind; fastest), with the states kept (Clarabel), or Ipopt on its Pyomo model.")
+    qp_solver: Literal["daqp", "condensed", "clarabel", "ipopt"] = Field(
+        "daqp", description="The same QP four ways: condensed to the inputs (force rows as they bind) and solved "
+        "by DAQP warm-started from the last sample (fastest) or by Clarabel, with the states kept (Clarabel), "
+        "or Ipopt on its Pyomo model.")
     observer: bool = Field(False, description="Feed the controller the Kalman observer's estimate (eq. 10).")
     max_samples: int = Field(1000, ge=1, le=100000, description="Stop a run after this many samples.")
     output: Optional[str] = None

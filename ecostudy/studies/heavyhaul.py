@@ -10,6 +10,7 @@ time per step (mean, max), the steps over Ts and the process's peak memory.
 """
 import resource
 import warnings
+from functools import partial
 from itertools import product
 from pathlib import Path
 from typing import NamedTuple
@@ -22,7 +23,7 @@ from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KN, KWH
 from ecostudy.heavyhaul.checks import ruling_grade, starting_coupler_force
-from ecostudy.heavyhaul.condensed import CondensedHorizon
+from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
 from ecostudy.heavyhaul.linear import fence
 from ecostudy.heavyhaul.loop import reduced_state, run
 from ecostudy.heavyhaul.observer import KalmanObserver
@@ -92,6 +93,14 @@ def expand(path):
     return s, output, reference, cases
 
 
+QP_FORMS = {  # a study's qp_solver: the same QP four ways (docs/heavyhaul.md)
+    "daqp": CondensedHorizon,  # condensed to the inputs, DAQP warm-started from the last working set
+    "condensed": partial(CondensedHorizon, solver=ClarabelSolver),
+    "clarabel": ConicHorizon,  # the states kept
+    "ipopt": RecedingHorizon,  # the Pyomo model
+}
+
+
 def drive(case):
     """One closed-loop run of a case: (consist, controller, record, reference)."""
     with warnings.catch_warnings():
@@ -103,8 +112,7 @@ def drive(case):
     plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]))
     labels, w, ts = case["labels"], case["weights"], case["sample_time"]
     reduction = fence(consist, labels["f"], ts, case["fence_coupling"], case["fence_sharing"])
-    kind = {"condensed": CondensedHorizon, "clarabel": ConicHorizon, "ipopt": RecedingHorizon}[case["qp_solver"]]
-    controller = kind(reduction.model, reduction.kinds, np_=labels["Np"], nc=labels["Nc"],
+    controller = QP_FORMS[case["qp_solver"]](reduction.model, reduction.kinds, np_=labels["Np"], nc=labels["Nc"],
                       weights=(w["force"], w["speed"], w["energy"], labels["K_b"]), rate_kN=case["rate_kN"],
                       force_limit_kN=consist.force_limit / KN)
     state = plant.initial(head=-0.5 * consist.length[0], speed=0.0)
