@@ -286,3 +286,22 @@ def test_cars_in_a_curve_pay_roeckls_resistance_and_the_route_loads():
     speeds = np.zeros(consist.cars)
     extra = plant.resistance(positions, speeds) - flat_plant.resistance(positions, speeds)
     assert extra[0] == 0.0 and extra[5] == pytest.approx(consist.mass[5] * GRAVITY * 0.5 / 570)
+
+
+def test_the_fenced_objective_weighs_what_each_virtual_car_stands_for():
+    """per_car: a virtual car's speed counts for its cars, its effort's square for the sum of its
+    cars' squared shares, a virtual coupler for the real couplers between the centres; f = 1 and
+    'virtual' weigh every term as one."""
+    from ecostudy.heavyhaul.linear import Represented, fence
+    from ecostudy.heavyhaul.rhc import objective_terms
+    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    full = fence(consist, 1, 20.0)
+    assert all(np.allclose(a, b) for a, b in zip(full.represented(consist.mass), Represented.each(204)))
+    reduced = fence(consist, 10, 20.0)
+    r = reduced.represented(consist.mass)
+    assert r.cars.sum() == 204 and list(r.cars[:3]) == [2, 10, 10]
+    assert np.allclose(r.effort[:2], [0.5, 0.1])  # equal masses: 1 / cars
+    assert r.couplers.sum() == 202 and r.couplers[0] == 6  # centres 0.5 and 6.5 (of 203: half an end group inside it)
+    assert all(np.allclose(a, 1) for a in reduced.represented(consist.mass, "virtual"))
+    terms = objective_terms(reduced.model, reduced.kinds, (10.0, 60.0, 10.0, 40.0), r)
+    assert terms.kv[1] == 600.0 and terms.penalty[1] == pytest.approx(4.0) and terms.penalty[0] == 0.5

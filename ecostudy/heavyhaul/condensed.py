@@ -95,13 +95,13 @@ class CondensedHorizon:
     """The receding-horizon QP over the inputs only; same interface as ``RecedingHorizon``."""
 
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
-                 force_limit_kN=2000.0, solver=DaqpSolver):
+                 force_limit_kN=2000.0, represented=None, solver=DaqpSolver):
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
         n = self.n = len(self.kinds)
         ns, nu = 2 * n - 1, nc * n
         self.locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
         self.rate, self.force_limit = rate_kN, force_limit_kN
-        self.terms = terms = objective_terms(model, self.kinds, weights)
+        self.terms = terms = objective_terms(model, self.kinds, weights, represented)
         A, B = model.A, model.B * KN
         self.powers = [np.eye(ns)]
         for _ in range(np_):
@@ -112,7 +112,7 @@ class CondensedHorizon:
             for j in range(k):
                 move = min(j, nc - 1)
                 self.G[k - 1][:, move * n:(move + 1) * n] += self.AB[k - 1 - j]
-        self.q = np.concatenate([np.full(n, terms.kv), terms.kf * terms.stiff ** 2 / 1e4])
+        self.q = np.concatenate([terms.kv, terms.kf * terms.stiff ** 2 / 1e4])
         self.scale = model.ts / np_
         effort = np.zeros(nu)
         for k in range(1, np_ + 1):

@@ -67,6 +67,20 @@ def design_model(mass, c1, stiffness, ts):
     return DesignModel(A, B, Ac, Bc, ts, np.asarray(mass, float), np.asarray(stiffness, float))
 
 
+class Represented(NamedTuple):
+    """What each term of a (virtual) model's objective stands for in the real train: per (virtual)
+    car the cars whose speed it carries and the weight of its effort's square (the sum of its cars'
+    squared shares), per (virtual) coupler the real couplers it spans. Ones: every car its own."""
+
+    cars: np.ndarray
+    effort: np.ndarray
+    couplers: np.ndarray
+
+    @classmethod
+    def each(cls, n):
+        return cls(np.ones(n), np.ones(n), np.ones(n - 1))
+
+
 class Fence(NamedTuple):
     """Virtual cars of a consist: ``members[j]`` the car indices of virtual car j, its kind and its
     resistance coefficients (c0, c1, c2: the mass-weighted means of its cars')."""
@@ -76,6 +90,7 @@ class Fence(NamedTuple):
     kinds: tuple
     resistance: np.ndarray
     sharing: str = "mass"   # how a virtual car's effort is shared among its cars: "mass" or "equal"
+    spanned: np.ndarray = None  # real couplers between the centres of neighbouring virtual cars
 
     @property
     def locomotives(self):
@@ -89,6 +104,22 @@ class Fence(NamedTuple):
         for cars, u in zip(self.members, virtual_efforts):
             out[cars] = u * mass[cars] / mass[cars].sum() if self.sharing == "mass" else u / len(cars)
         return out
+
+    def represented(self, mass, weighting="per_car"):
+        """The objective's weights of the virtual cars (:class:`Represented`): ``per_car`` makes the
+        reduced objective the full train's sum over its cars and couplers, as nearly as the virtual
+        cars allow (a virtual car's speed counts for its cars, its effort's square for the sum of its
+        cars' squares, a virtual coupler's force for the real couplers it spans); ``virtual`` weighs
+        every virtual car and coupler as one (paper 002's eq. 11 read literally: a group of f wagons
+        braking is then penalised about f times more per newton than f wagons of the full model)."""
+        if weighting == "virtual":
+            return Represented.each(len(self.members))
+        if weighting != "per_car":
+            raise ValueError(f"fence weighting 'per_car' or 'virtual' (got {weighting})")
+        shares = [mass[cars] / mass[cars].sum() if self.sharing == "mass" else np.full(len(cars), 1 / len(cars))
+                  for cars in self.members]
+        return Represented(np.array([len(cars) for cars in self.members], float),
+                           np.array([np.sum(s ** 2) for s in shares]), np.asarray(self.spanned, float))
 
     def reduce(self, values, mass=None):
         """Per-car speeds (mass-weighted means, with ``mass``) or efforts (sums) of each virtual car."""
@@ -117,10 +148,10 @@ def fence(consist, factor, ts, coupling="series", sharing="mass"):
     mass = np.array([consist.mass[c].sum() for c in members])
     resistance = np.array([consist.mass[c] @ consist.resistance[c] / consist.mass[c].sum() for c in members])
     centre = [0.5 * (c[0] + c[-1]) for c in members]  # in car indices: couplers spanned between centres
-    spans = [max(b - a, 1.0) if coupling == "series" else 1.0 for a, b in zip(centre, centre[1:])]
-    stiffness = consist.stiffness / np.array(spans)
+    spanned = np.array([max(b - a, 1.0) for a, b in zip(centre, centre[1:])])
+    stiffness = consist.stiffness / (spanned if coupling == "series" else np.ones_like(spanned))
     return Fence(members, design_model(mass, resistance[:, 1], stiffness, ts),
-                 tuple(consist.kinds[c[0]] for c in members), resistance, sharing)
+                 tuple(consist.kinds[c[0]] for c in members), resistance, sharing, spanned)
 
 
 def virtual_car_count(runs, factor):

@@ -52,12 +52,12 @@ class ConicHorizon:
     mispredict the undamped coupler modes by as much as the forces themselves)."""
 
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
-                 force_limit_kN=2000.0):
+                 force_limit_kN=2000.0, represented=None):
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
         n = self.n = len(self.kinds)
         self.locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
         self.rate, self.force_limit = rate_kN, force_limit_kN
-        terms = objective_terms(model, self.kinds, weights)
+        terms = objective_terms(model, self.kinds, weights, represented)
         ns = 2 * n - 1
         self.nu, self.ns = nc * n, ns
         nz = self.nu + np_ * ns

@@ -21,24 +21,29 @@ import pyomo.environ as pyo
 
 from ecostudy.core.errors import SolverError
 from ecostudy.core.units import KN
+from ecostudy.heavyhaul.linear import Represented
 from ecostudy.ocp.session import Session
 
 
 class Terms(NamedTuple):
-    """The objective's weights and the constant vectors both QP forms share."""
+    """The objective's weights and the constant vectors every QP form shares."""
 
-    kf: float
-    kv: float
+    kf: np.ndarray        # K_f per coupler (times the real couplers it spans)
+    kv: np.ndarray        # K_v per car (times the cars whose speed it carries)
     ke: float
-    penalty: np.ndarray   # 1 for locomotives, K_b for wagons (eq. 5's R)
+    penalty: np.ndarray   # 1 for locomotives, K_b for wagons (eq. 5's R), times the effort's weight
     weight: np.ndarray    # mass shares (eq. 7's mean speed)
     stiff: np.ndarray     # coupler stiffness [kN/m] (f_in = k x_in, eq. 8)
 
 
-def objective_terms(model, kinds, weights):
+def objective_terms(model, kinds, weights, represented=None):
+    """Eq. 4's weights (K_f, K_v, K_e, K_b) on a model of ``kinds``; ``represented``
+    (:class:`~ecostudy.heavyhaul.linear.Represented`) what each (virtual) car and coupler stands for."""
     kf, kv, ke, kb = weights
-    return Terms(kf, kv, ke, np.array([1.0 if kind == "locomotive" else kb for kind in kinds]),
-                 model.mass / model.mass.sum(), model.stiffness / KN)
+    r = represented or Represented.each(len(kinds))
+    penalty = np.array([1.0 if kind == "locomotive" else kb for kind in kinds])
+    return Terms(kf * r.couplers, kv * r.cars, ke, penalty * r.effort, model.mass / model.mass.sum(),
+                 model.stiffness / KN)
 
 
 def qp_size(n, np_, nc, locomotives):
@@ -64,9 +69,9 @@ class RecedingHorizon:
     input and the reference are variables fixed by their bounds) and warm-starts Ipopt."""
 
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
-                 force_limit_kN=2000.0):
+                 force_limit_kN=2000.0, represented=None):
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
-        terms = objective_terms(model, self.kinds, weights)
+        terms = objective_terms(model, self.kinds, weights, represented)
         n = len(self.kinds)
         self.n = n
         self.locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
@@ -94,8 +99,8 @@ class RecedingHorizon:
         m.couplers = pyo.Constraint(pyo.RangeSet(1, np_), m.X, rule=lambda m, k, j: pyo.inequality(
             -force_limit_kN, stiff[j] * m.x[k, n + j], force_limit_kN))
         m.objective = pyo.Objective(expr=sum(
-            terms.kf * sum((stiff[j] * m.x[k, n + j]) ** 2 for j in range(n - 1)) / 1e4
-            + terms.kv * sum((m.x[k, i] - m.vr[k]) ** 2 for i in range(n))
+            sum(terms.kf[j] * (stiff[j] * m.x[k, n + j]) ** 2 for j in range(n - 1)) / 1e4
+            + sum(terms.kv[i] * (m.x[k, i] - m.vr[k]) ** 2 for i in range(n))
             + terms.ke * sum(penalty[i] * m.u[move(k - 1), i] ** 2 for i in range(n)) / 1e4
             for k in range(1, np_ + 1)) * model.ts / np_)
         self.m, self.session = m, Session(m)

@@ -63,6 +63,10 @@ class HeavyhaulFile(Strict):
                                                         "or one real coupler (k).")
     fence_sharing: Literal["mass", "equal"] = Field("mass", description="A virtual car's effort shared among its "
                                                     "cars in proportion to mass, or equally.")
+    fence_weights: Literal["per_car", "virtual"] = Field(
+        "per_car", description="A virtual car's terms in the objective: weighted by the cars and couplers it "
+        "stands for (the full train's objective, as nearly as virtual cars allow), or each as one car (eq. 11 "
+        "read literally: grouped wagons' braking then costs about f times more).")
     weights: Weights = Weights()
     rate_kN_per_sample: float = Field(200.0, gt=0, description="Largest change of a locomotive group's effort "
                                       "per sample (paper 002 gives none).")
