@@ -40,7 +40,8 @@ def main():
     p.add_argument("--blocks", type=int, nargs="*", default=[45, 20, 1])
     p.add_argument("--disturbances", type=float, nargs="*", default=[0.1, 0.05, 0.02])
     p.add_argument("--sppc", action="store_true", help="SPPC rows instead of SBPC's")
-    p.add_argument("--brake-reserve", type=float, default=0.0, help="SBPC: share of the brake its plans hold back")
+    p.add_argument("--brake-reserve", type=float, help="share of the brake the plans hold back (default: SBPC 0, "
+                   "SPPC 0.1, the controllers' defaults)")
     p.add_argument("--variants", nargs="*", default=["two_step", "multi"], help="SBPC's relaxed variants to run")
     args = p.parse_args()
     print(f"`python bench/bench_sbpc.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
@@ -64,12 +65,12 @@ def main():
               f"{np.mean(controller.iterations):.1f} | {controller.softened} | {time.perf_counter() - t0:.0f} |", flush=True)
 
     def run(variant, block, truth, quantised, label):
-        controller = Sbpc(case, 76.0, args.sample, block, speeds, variant, brake_reserve=args.brake_reserve)
+        controller = Sbpc(case, 76.0, args.sample, block, speeds, variant, brake_reserve=args.brake_reserve or 0.0)
         drive(variant, block, label, controller, Quantised(controller, train.das_levels) if quantised else controller, truth)
 
     def run_sppc(variant, truth, label):
         controller = Sppc(solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=300), 76.0,
-                          variant=variant)
+                          variant=variant, **({} if args.brake_reserve is None else {"brake_reserve": args.brake_reserve}))
         drive(f"SPPC {variant}", "-", label, controller, controller, truth)
 
     if args.sppc:

@@ -21,103 +21,118 @@ import pyomo.environ as pyo
 
 
 def _current(v0, r, p):
-    """Current [kA] drawn (p > 0) or fed (p < 0) at power p [MW] through r [Ohm] from bus v0 [kV]."""
-    if r < 1e-12:
-        return p / v0
+    """Current [kA] drawn (p > 0) or fed (p < 0) at power p [MW] through r [Ohm] from bus v0 [kV]
+    (arrays broadcast)."""
+    r = np.maximum(r, 1e-12)
     disc = v0 * v0 - 4.0 * r * p
-    if disc < 0:  # beyond the largest power the line can carry: the train takes what it can
-        return v0 / (2.0 * r)
-    return 2.0 * p / (v0 + np.sqrt(disc))  # the small root, stable for r -> 0
+    beyond = disc < 0  # beyond the largest power the line can carry: the train takes what it can
+    return np.where(beyond, v0 / (2.0 * r), 2.0 * p / (v0 + np.sqrt(np.where(beyond, 0.0, disc))))  # the small root
 
 
 def _currents(v0, r, p, vmax, imax=np.inf, iregen=np.inf):
-    """Currents [kA] at bus voltage v0; a feeding train is held at vmax (the rest is lost), and
-    no train draws more than imax or feeds more than iregen [kA] (what is cut off is unserved
-    traction or lost regeneration)."""
-    out = np.empty(len(p))
-    for i, (ri, pi) in enumerate(zip(r, p)):
-        ii = _current(v0, ri, pi)
-        if pi < 0 and v0 - ri * ii > vmax:
-            ii = (v0 - vmax) / max(ri, 1e-12)
-        out[i] = min(max(ii, -iregen), imax)
-    return out
+    """Currents [kA] at bus voltage v0 (one per instant, shape (T, 1)) of the trains (T, n): a feeding
+    train is held at vmax (the rest is lost), and no train draws more than imax or feeds more than
+    iregen [kA] (what is cut off is unserved traction or lost regeneration)."""
+    ii = _current(v0, r, p)
+    held = (p < 0) & (v0 - r * ii > vmax)
+    ii = np.where(held, (v0 - vmax) / np.maximum(r, 1e-12), ii)
+    return np.minimum(np.maximum(ii, -iregen), imax)
 
 
-def solve_step(supply, positions, powers):
-    """Currents, voltages and flows of one instant.
+def _bisect(inside, lo, hi, iterations):
+    """Per instant, the boundary between ``inside(v)`` True (below) and False (above) in [lo, hi]."""
+    lo, hi = np.array(lo, float), np.array(hi, float)
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        below = inside(mid)
+        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+    return lo, hi
 
-    positions: line positions of the running trains [m]; powers: their pantograph powers [W]
-    (negative: regeneration offered). Returns a dict of arrays and floats in SI units (A, V, W).
-    """
-    p = np.asarray(powers, float) / 1e6
-    r = supply.feeder(positions)
+
+def _arrays(supply, positions, powers):
+    """(running mask, R(x) [Ohm], p [MW]) of trains (T, n); a NaN position is a train not running."""
+    x = np.atleast_2d(np.asarray(positions, float))
+    mask = np.isfinite(x)
+    p = np.where(mask, np.atleast_2d(np.asarray(powers, float)), 0.0) / 1e6
+    r = np.where(mask, supply.feeder(np.where(mask, x, supply.position)), 1.0)
+    return mask, r, p
+
+
+def solve_steps(supply, positions, powers):
+    """Currents, voltages and flows of many instants at once.
+
+    positions: line positions [m] of the trains, shape (T instants, n trains), NaN where a train is
+    not running; powers: their pantograph powers [W] (negative: regeneration offered), same shape.
+    Returns a dict of arrays in SI units (A, V, W): per train (T, n), NaN voltages where not
+    running; per instant (T,)."""
+    mask, r, p = _arrays(supply, positions, powers)
     vs, rs, vmax = supply.voltage / 1e3, supply.resistance, supply.max_voltage / 1e3
     limits = supply.max_current / 1e3, supply.max_regen_current / 1e3
-    if len(p) == 0:
-        return {**_flows(supply, r, np.zeros(0), np.zeros(0), p, vs, 0.0), "bus_voltage_V": supply.voltage}
+    count = len(p)
 
-    def net(v0):  # current drawn from the bus at bus voltage v0
-        return float(np.sum(_currents(v0, r, p, vmax, *limits)))
+    def net(v0):  # current drawn from the bus at bus voltage v0 (T,)
+        return np.sum(_currents(v0[:, None], r, p, vmax, *limits), axis=1)
 
-    if net(vs) <= 0.0:  # the trains feed at least what they draw: the diode blocks, the bus floats
-        lo, hi = vs, vmax
-        if net(hi) < 0:
-            hi = vmax  # every feeder is at vmax already: the surplus is lost
-        else:
-            for _ in range(80):
-                mid = 0.5 * (lo + hi)
-                lo, hi = (mid, hi) if net(mid) < 0 else (lo, mid)
-        v0, i_s = hi, 0.0
-    else:  # V_0 = V_s - R_s I_s(V_0): bisection between a collapsed bus and V_s
-        lo, hi = 0.05 * vs, vs
-        for _ in range(80):
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if mid < vs - rs * max(net(mid), 0.0) else (lo, mid)
-        v0 = 0.5 * (lo + hi)
-        i_s = max(net(v0), 0.0)
-    currents = _currents(v0, r, p, vmax, *limits)
-    out = _flows(supply, r, currents, v0 - r * currents, p, vs, i_s)
+    # the trains feed at least what they draw: the diode blocks, the bus floats up to where the
+    # trains' net current is zero (at most vmax: every feeder held there, the surplus lost)
+    floating = net(np.full(count, vs)) <= 0.0
+    _, floated = _bisect(lambda v: net(v) < 0, np.full(count, vs), np.full(count, vmax), 80)
+    # otherwise V_0 = V_s - R_s I_s(V_0): bisection between a collapsed bus and V_s
+    lo, hi = _bisect(lambda v: v < vs - rs * np.maximum(net(v), 0.0), np.full(count, 0.05 * vs), np.full(count, vs), 80)
+    drawn_bus = 0.5 * (lo + hi)
+    v0 = np.where(floating, floated, drawn_bus)
+    v0 = np.where(mask.any(axis=1), v0, vs)  # nobody on the line
+    i_s = np.where(floating, 0.0, np.maximum(net(v0), 0.0))
+    currents = np.where(mask, _currents(v0[:, None], r, p, vmax, *limits), 0.0)
+    out = _flows(supply, r, currents, np.where(mask, v0[:, None] - r * currents, np.nan), p, vs, i_s)
     out["bus_voltage_V"] = v0 * 1e3
     return out
 
 
+def solve_step(supply, positions, powers):
+    """:func:`solve_steps` for one instant: the running trains' positions [m] and powers [W]."""
+    out = solve_steps(supply, np.reshape(np.asarray(positions, float), (1, -1)),
+                      np.reshape(np.asarray(powers, float), (1, -1)))
+    return {k: (float(v[0]) if np.ndim(v) == 1 else v[0]) for k, v in out.items()}
+
+
 def sensed_voltages(supply, positions, powers):
     """Pantograph voltages [V] of eq. 7.8 exactly as the thesis writes it: a receptive source
-    (no diode, no V_max), V_0 = V_s - R_s sum I_i solved by bisection.
+    (no diode, no V_max), V_0 = V_s - R_s sum I_i solved by bisection; trains (T, n) as in
+    :func:`solve_steps` (NaN where not running), or the running trains of one instant (n,).
 
     This is the supervisor's view for rule 7.11 (thesis 000 §7.2.1: regeneration is detected
-    by the voltage change at the train nodes). On the real line (:func:`solve_step`) a surplus that
+    by the voltage change at the train nodes). On the real line (:func:`solve_steps`) a surplus that
     nobody draws carries no current, every node sits at the same voltage and the comparison
     V_i < V_(i-1) sees nothing, just when the energy is lost; here the feeding train is always
     above the others."""
-    p = np.asarray(powers, float) / 1e6
-    r = supply.feeder(positions)
+    mask, r, p = _arrays(supply, positions, powers)
     vs, rs = supply.voltage / 1e3, supply.resistance
+    count = len(p)
 
-    def excess(v0):  # increasing in v0 wherever the line can carry the powers
-        return v0 - vs + rs * sum(_current(v0, ri, pi) for ri, pi in zip(r, p))
+    def below(v0):  # excess(v0) < 0; excess is increasing in v0 wherever the line can carry the powers
+        return v0 - vs + rs * np.sum(_current(v0[:, None], r, p), axis=1) < 0
 
-    lo, hi = 0.3 * vs, 2.0 * vs
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if excess(mid) < 0 else (lo, mid)
+    lo, hi = _bisect(below, np.full(count, 0.3 * vs), np.full(count, 2.0 * vs), 60)
     v0 = 0.5 * (lo + hi)
-    return np.array([v0 - ri * _current(v0, ri, pi) for ri, pi in zip(r, p)]) * 1e3
+    volts = np.where(mask, v0[:, None] - r * _current(v0[:, None], r, p), np.nan) * 1e3
+    return volts[0] if np.ndim(positions) == 1 else volts
 
 
 def _flows(supply, r, currents, volts, p, vs, i_s):
-    """Energy flows of one instant [W] from the solved circuit."""
-    drawn = volts * currents  # MW at each pantograph
+    """Energy flows [W] per train (T, n) and per instant (T,) from the solved circuit (currents 0
+    and voltages NaN where a train is not running)."""
+    drawn = np.nan_to_num(volts) * currents  # MW at each pantograph
     offered = np.where(p < 0, -p, 0.0)
     fed = np.where(p < 0, -drawn, 0.0)
     return {
         "current_A": currents * 1e3, "voltage_V": volts * 1e3,
         "substation_W": vs * i_s * 1e6, "substation_current_A": i_s * 1e3,
-        "traction_input_W": float(np.sum(np.where(p > 0, drawn, 0.0))) * 1e6,
-        "regen_used_W": float(np.sum(fed)) * 1e6,
-        "regen_lost_W": float(np.sum(offered - fed)) * 1e6,
-        "line_loss_W": float(np.sum(r * currents ** 2) + supply.resistance * i_s ** 2) * 1e6,
-        "unserved_W": float(np.sum(np.where(p > 0, p - drawn, 0.0))) * 1e6,
+        "traction_input_W": np.sum(np.where(p > 0, drawn, 0.0), axis=1) * 1e6,
+        "regen_used_W": np.sum(fed, axis=1) * 1e6,
+        "regen_lost_W": np.sum(offered - fed, axis=1) * 1e6,
+        "line_loss_W": (np.sum(r * currents ** 2, axis=1) + supply.resistance * i_s ** 2) * 1e6,
+        "unserved_W": np.sum(np.where(p > 0, p - drawn, 0.0), axis=1) * 1e6,
         "fed_W": fed * 1e6,
     }
 

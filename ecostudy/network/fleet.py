@@ -171,15 +171,17 @@ def line_positions(fleet, i, runs):
     return x
 
 
-def step_powers(fleet, runs_by_train):
-    """Per clock step: [(train, line position [m], power [W], local step, leg)] of the running trains."""
-    out = [[] for _ in range(fleet.steps)]
+def step_arrays(fleet, runs_by_train):
+    """(line positions [m], pantograph powers [W]) per clock step and train, shape (steps, trains):
+    the middle of each step a train runs, NaN (power 0) while it waits or dwells."""
+    x = np.full((fleet.steps, len(runs_by_train)), np.nan)
+    p = np.zeros((fleet.steps, len(runs_by_train)))
     for i, runs in enumerate(runs_by_train):
-        for k, (leg, run) in enumerate(zip(fleet.legs[i], runs)):
-            s, p = run.s, run.p
-            for j in range(leg.steps):
-                out[leg.start + j].append((i, leg.line_start + leg.direction * 0.5 * (s[j] + s[j + 1]), p[j], j, k))
-    return out
+        for leg, run in zip(fleet.legs[i], runs):
+            span = slice(leg.start, leg.start + leg.steps)
+            x[span, i] = leg.line_start + leg.direction * 0.5 * (run.s[:-1] + run.s[1:])
+            p[span, i] = run.p
+    return x, p
 
 
 def departure_order(fleet):

@@ -5,7 +5,7 @@ import copy
 import numpy as np
 
 from ecostudy.network import circuit
-from ecostudy.network.fleet import departure_order, line_positions, solve_train, step_powers
+from ecostudy.network.fleet import departure_order, line_positions, solve_train, step_arrays
 from ecostudy.network.scoring import evaluate
 
 
@@ -82,29 +82,24 @@ def offered(fleet, runs_by_train):
 
 
 def _probe(fleet, runs_by_train, i, power_w):
-    """For each clock step where train ``i`` runs beside another and ``power_w(t)`` is not None:
-    (t, its index q, the circuit solved with train i at that power [W], the others as they run)."""
-    for t, running in enumerate(step_powers(fleet, runs_by_train)):
-        mine = [q for q, r in enumerate(running) if r[0] == i]
-        power = power_w(t) if mine and len(running) > 1 else None
-        if power is not None:
-            ps = [r[2] for r in running]
-            ps[mine[0]] = power
-            yield t, mine[0], circuit.solve_step(fleet.supply, [r[1] for r in running], ps)
+    """The clock steps where train ``i`` runs beside another and ``power_w`` [W per step, NaN: no
+    probe] is set, and the circuit solved there with train i at that power, the others as they run."""
+    x, p = step_arrays(fleet, runs_by_train)
+    shared = np.isfinite(x[:, i]) & (np.isfinite(x).sum(axis=1) > 1) & np.isfinite(power_w)
+    p = p[shared]
+    p[:, i] = power_w[shared]
+    return shared, circuit.solve_steps(fleet.supply, x[shared], p)
 
 
 def deliverable(fleet, runs_by_train, i, offer_kw):
     """Per clock step, the part [kW] of ``offer_kw`` that train ``i`` could take over the line:
     the regeneration used with train i drawing the offer, less that with train i at rest, the
-    others as they run (the circuit of ``circuit.solve_step``: line losses, V_max, the diode)."""
-    def used(demand_w):  # regeneration used per step with train i drawing demand_w(t)
-        return {t: flows["regen_used_W"] for t, _, flows in _probe(fleet, runs_by_train, i, demand_w)}
-
-    drawing = used(lambda t: offer_kw[t] * 1e3 if offer_kw[t] > 0 else None)
-    idle = used(lambda t: 0.0 if offer_kw[t] > 0 else None)
+    others as they run (the circuit of ``circuit.solve_steps``: line losses, V_max, the diode)."""
+    offer = np.where(offer_kw > 0, offer_kw * 1e3, np.nan)
+    at, drawing = _probe(fleet, runs_by_train, i, offer)
+    _, idle = _probe(fleet, runs_by_train, i, np.where(offer_kw > 0, 0.0, np.nan))
     out = np.zeros(fleet.steps)
-    for t, watts in drawing.items():
-        out[t] = max(watts - idle[t], 0.0) / 1e3
+    out[at] = np.maximum(drawing["regen_used_W"] - idle["regen_used_W"], 0.0) / 1e3
     return out
 
 
@@ -113,22 +108,18 @@ RECEPTIVITY_PROBE = 5e6  # [W] a regeneration no train offers: what the line tak
 
 def receptivity(fleet, runs_by_train, i):
     """Per clock step, the regenerated power [kW] the line could take from train ``i`` while the
-    others run as in ``runs_by_train`` (train i offering ``RECEPTIVITY_PROBE``; ``circuit.solve_step``)."""
+    others run as in ``runs_by_train`` (train i offering ``RECEPTIVITY_PROBE``; ``circuit.solve_steps``)."""
+    at, flows = _probe(fleet, runs_by_train, i, np.full(fleet.steps, -RECEPTIVITY_PROBE))
     out = np.zeros(fleet.steps)
-    for t, q, flows in _probe(fleet, runs_by_train, i, lambda t: -RECEPTIVITY_PROBE):
-        out[t] = flows["fed_W"][q] / 1e3
+    out[at] = flows["fed_W"][:, i] / 1e3
     return out
 
 
 def sensed(fleet, runs_by_train):
     """Pantograph voltages [V] per train and clock step as rule 7.11's supervisor sees them
     (``circuit.sensed_voltages``: eq. 7.8 with a receptive source); NaN where a train is not running."""
-    out = np.full((len(runs_by_train), fleet.steps), np.nan)
-    for t, running in enumerate(step_powers(fleet, runs_by_train)):
-        if running:
-            volts = circuit.sensed_voltages(fleet.supply, [r[1] for r in running], [r[2] for r in running])
-            out[[r[0] for r in running], t] = volts
-    return out
+    x, p = step_arrays(fleet, runs_by_train)
+    return circuit.sensed_voltages(fleet.supply, x, p).T
 
 
 def rule_terms(fleet, rule, runs_by_train, i):

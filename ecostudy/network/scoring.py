@@ -7,35 +7,35 @@ from ecostudy.analysis.tables import handles
 from ecostudy.core.simulate import verify
 from ecostudy.core.units import KWH
 from ecostudy.network import circuit
-from ecostudy.network.fleet import departure_order, line_positions, step_powers
+from ecostudy.network.fleet import departure_order, line_positions, step_arrays
 
 
 def evaluate(fleet, runs_by_train):
     """Score runs on the network: per-step flows, per-train and substation totals [kWh]."""
-    rows, per_train = [], {n: {"traction_kWh": 0.0, "braking_kWh": 0.0, "braking_regen_offered_kWh": 0.0,
-                               "regen_used_kWh": 0.0, "regen_lost_kWh": 0.0, "line_input_kWh": 0.0}
-                           for n in fleet.names}
     dt = fleet.dt
-    for t, running in enumerate(step_powers(fleet, runs_by_train)):
-        flows = circuit.solve_step(fleet.supply, [r[1] for r in running], [r[2] for r in running])
-        for q, (i, _, p, j, k) in enumerate(running):
-            name, run = fleet.names[i], runs_by_train[i][k]
-            vbar = 0.5 * (run.v[j] + run.v[j + 1])
-            rec = per_train[name]
-            rec["traction_kWh"] += run.ft[j] * vbar * dt / KWH
-            rec["braking_kWh"] += run.fb[j] * vbar * dt / KWH  # at the wheel, friction and electric
-            rec["braking_regen_offered_kWh"] += max(-p, 0.0) * dt / KWH
-            rec["regen_used_kWh"] += flows["fed_W"][q] * dt / KWH
-            rec["regen_lost_kWh"] += (max(-p, 0.0) - flows["fed_W"][q]) * dt / KWH
-            rec["line_input_kWh"] += max(flows["voltage_V"][q] * flows["current_A"][q], 0.0) * dt / KWH
-        rows.append({"time_s": t * dt, "substation_kW": flows["substation_W"] / 1e3,
-                     "traction_input_kW": flows["traction_input_W"] / 1e3, "regen_used_kW": flows["regen_used_W"] / 1e3,
-                     "regen_lost_kW": flows["regen_lost_W"] / 1e3, "line_loss_kW": flows["line_loss_W"] / 1e3,
-                     "unserved_kW": flows["unserved_W"] / 1e3,
-                     "min_voltage_V": float(flows["voltage_V"].min()) if len(running) else np.nan,
-                     "max_voltage_V": float(flows["voltage_V"].max()) if len(running) else np.nan,
-                     **{f"voltage_{fleet.names[i]}_V": float(flows["voltage_V"][q]) for q, (i, *_) in enumerate(running)}})
-    steps = pd.DataFrame(rows)
+    x, p = step_arrays(fleet, runs_by_train)
+    flows = circuit.solve_steps(fleet.supply, x, p)
+    offered = np.maximum(-p, 0.0) * dt / KWH
+    used = flows["fed_W"] * dt / KWH
+    line_input = np.maximum(np.nan_to_num(flows["voltage_V"]) * flows["current_A"], 0.0) * dt / KWH
+    per_train = {}
+    for i, name in enumerate(fleet.names):
+        work = [(run.ft * 0.5 * (run.v[:-1] + run.v[1:]), run.fb * 0.5 * (run.v[:-1] + run.v[1:])) for run in runs_by_train[i]]
+        per_train[name] = {"traction_kWh": float(sum(np.sum(ft) for ft, _ in work)) * dt / KWH,
+                           "braking_kWh": float(sum(np.sum(fb) for _, fb in work)) * dt / KWH,  # at the wheel, friction and electric
+                           "braking_regen_offered_kWh": float(offered[:, i].sum()),
+                           "regen_used_kWh": float(used[:, i].sum()), "regen_lost_kWh": float((offered[:, i] - used[:, i]).sum()),
+                           "line_input_kWh": float(line_input[:, i].sum())}
+    running = np.isfinite(x).any(axis=1)
+    volts = np.where(np.isfinite(x), flows["voltage_V"], np.nan)
+    with np.errstate(all="ignore"):
+        low, high = np.nanmin(np.where(running[:, None], volts, 0.0), axis=1), np.nanmax(np.where(running[:, None], volts, 0.0), axis=1)
+    steps = pd.DataFrame({"time_s": np.arange(fleet.steps) * dt, "substation_kW": flows["substation_W"] / 1e3,
+                          "traction_input_kW": flows["traction_input_W"] / 1e3, "regen_used_kW": flows["regen_used_W"] / 1e3,
+                          "regen_lost_kW": flows["regen_lost_W"] / 1e3, "line_loss_kW": flows["line_loss_W"] / 1e3,
+                          "unserved_kW": flows["unserved_W"] / 1e3,
+                          "min_voltage_V": np.where(running, low, np.nan), "max_voltage_V": np.where(running, high, np.nan),
+                          **{f"voltage_{name}_V": volts[:, i] for i, name in enumerate(fleet.names)}})
     e = {k: float(steps[k].sum() * dt / 3600) for k in ("substation_kW", "traction_input_kW", "regen_used_kW",
                                                           "regen_lost_kW", "line_loss_kW", "unserved_kW")}
     lhs, rhs = e["substation_kW"] + e["regen_used_kW"], e["traction_input_kW"] + e["line_loss_kW"]
