@@ -27,7 +27,7 @@ following    the independent runs, each train's head kept ``buffer`` metres behi
 The rules (b), (c), (d) re-optimise one train at a time against the others' latest runs, for a
 few supervisor rounds, keeping the timetable; their regeneration is credited only up to what the
 line could take then (:func:`supervised`). Every strategy is scored by the same network solve
-(``circuit.solve_step``).
+(``circuit.solve_steps``).
 """
 import time
 
