@@ -5,6 +5,7 @@ import sqlite3
 import subprocess
 import sys
 import time
+from contextlib import closing
 
 import numpy as np
 import pytest
@@ -136,13 +137,17 @@ def test_ctrl_c_says_how_to_continue(tmp_path):
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 120
     while time.time() < deadline and proc.poll() is None:
-        try:
-            with sqlite3.connect(db) as conn:
-                if conn.execute("SELECT count(*) FROM cases").fetchone()[0] >= 1:
-                    break
-        except sqlite3.OperationalError:  # not created yet
-            pass
+        # read-only, and only once the store is in WAL mode: a read-write connect here created the
+        # file before the study did, and could hold the lock the study needs to switch it to WAL
+        if db.with_name(db.name + "-wal").exists():
+            try:
+                with closing(sqlite3.connect(f"file:{db}?mode=ro", uri=True)) as conn:
+                    if conn.execute("SELECT count(*) FROM cases").fetchone()[0] >= 1:
+                        break
+            except sqlite3.OperationalError:  # busy
+                pass
         time.sleep(0.05)
+    assert proc.poll() is None, proc.communicate()
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     if proc.returncode == 0:
