@@ -4,8 +4,11 @@ The glue is ours rather than ``SolverFactory('cyipopt')`` so that the NL write (
 which writes and loads an AMPL NL file through PyNumero's ASL) and the solve are timed apart,
 iterations are counted, and the NLP object can be reused.
 """
+import signal
 import subprocess
+import threading
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -127,10 +130,12 @@ class Session:
         """Solve from ``x0`` (default: the last solution); loads the point into the model."""
         iterations = [0]
 
+        held = []  # a Ctrl-C that arrived during the solve (ctrl_c_after): Ipopt stops at its next iteration
+
         class Counting(self._problem_class):
             def intermediate(self, alg_mod, iter_count, *args):
                 iterations[0] = iter_count
-                return True
+                return not held
 
         problem = Counting(self.nlp)
         for key, value in {**DEFAULT_OPTIONS, **(options or {})}.items():
@@ -141,7 +146,8 @@ class Session:
             duals = dict(zip(("lagrange", "zl", "zu"), self.multipliers))
         t1 = time.perf_counter()
         try:
-            x, info = problem.solve(start, **duals)
+            with ctrl_c_after(held):
+                x, info = problem.solve(start, **duals)
         except Exception as exc:  # cyipopt raises on evaluation errors it cannot recover from
             raise SolverError(f"Ipopt stopped with an error: {exc}") from exc
         seconds = time.perf_counter() - t1
@@ -179,3 +185,23 @@ def versions():
 
     return {"pyomo": pyomo.__version__, "cyipopt": cyipopt.__version__,
             "ipopt": pkg("coinor-libipopt-dev"), "mumps": pkg("libmumps-seq-dev")}
+
+
+@contextmanager
+def ctrl_c_after(held):
+    """Hold a Ctrl-C (SIGINT) that arrives inside Ipopt (noted in the list ``held``, which the
+    intermediate callback reads to stop Ipopt at its next iteration) and raise it when Ipopt
+    returns: raised inside one of cyipopt's callbacks it was swallowed there and the solve went on
+    (measured: a study interrupted mid-solve finished and exited 0). Only in the main thread, and
+    only where Ctrl-C raises KeyboardInterrupt (a worker that ignores it keeps ignoring it)."""
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+    signal.signal(signal.SIGINT, lambda *_: held.append(True))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    if held:
+        raise KeyboardInterrupt
