@@ -133,8 +133,11 @@ def test_ctrl_c_says_how_to_continue(tmp_path):
     path = study_file(tmp_path, tmp_path / "out")
     write_yaml(path, {**load_yaml(path), "points": 1000, "sweep": {"supplement_percent": [2, 4, 6, 8, 10, 12, 14, 16]}})
     db = tmp_path / "out" / "results.sqlite"
+    # SIGINT as a terminal gives it: a runner started in the background ignores SIGINT, and so did
+    # the study it started (every CI run of this test in a background clone failed so)
     proc = subprocess.Popen([sys.executable, "-m", "ecostudy", "run", str(path), "--no-progress"], cwd=ROOT,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 120
     while time.time() < deadline and proc.poll() is None:
         # read-only, and only once the store is in WAL mode: a read-write connect here created the
