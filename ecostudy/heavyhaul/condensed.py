@@ -83,7 +83,8 @@ class DaqpSolver:
             sense[:len(self.working)] = self.working
             self._setup(g, lo, hi, rows, c_lo, c_hi, sense)
         else:
-            self.model.update(f=g, bupper=(bounds := self._bounds(lo, hi, c_lo, c_hi))[0], blower=bounds[1])
+            upper, lower = self._bounds(lo, hi, c_lo, c_hi)
+            self.model.update(f=g, bupper=upper, blower=lower)
         x, _, flag, info = self.model.solve()
         lam = np.asarray(info["lam"])
         self.working = np.where(lam > 0, ACTIVE, np.where(lam < 0, ACTIVE | LOWER, 0)).astype(np.int32)

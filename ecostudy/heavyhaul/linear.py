@@ -102,8 +102,12 @@ class Fence(NamedTuple):
         of a virtual car then accelerates alike) or equally (``sharing``)."""
         out = np.zeros(len(mass))
         for cars, u in zip(self.members, virtual_efforts):
-            out[cars] = u * mass[cars] / mass[cars].sum() if self.sharing == "mass" else u / len(cars)
+            out[cars] = u * self.shares(cars, mass)
         return out
+
+    def shares(self, cars, mass):
+        """Each car's share of its virtual car's effort (``sharing``)."""
+        return mass[cars] / mass[cars].sum() if self.sharing == "mass" else np.full(len(cars), 1.0 / len(cars))
 
     def represented(self, mass, weighting="per_car"):
         """The objective's weights of the virtual cars (:class:`Represented`): ``per_car`` makes the
@@ -116,10 +120,9 @@ class Fence(NamedTuple):
             return Represented.each(len(self.members))
         if weighting != "per_car":
             raise ValueError(f"fence weighting 'per_car' or 'virtual' (got {weighting})")
-        shares = [mass[cars] / mass[cars].sum() if self.sharing == "mass" else np.full(len(cars), 1 / len(cars))
-                  for cars in self.members]
         return Represented(np.array([len(cars) for cars in self.members], float),
-                           np.array([np.sum(s ** 2) for s in shares]), np.asarray(self.spanned, float))
+                           np.array([np.sum(self.shares(cars, mass) ** 2) for cars in self.members]),
+                           np.asarray(self.spanned, float))
 
     def reduce(self, values, mass=None):
         """Per-car speeds (mass-weighted means, with ``mass``) or efforts (sums) of each virtual car."""

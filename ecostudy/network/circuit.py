@@ -68,21 +68,22 @@ def solve_steps(supply, positions, powers):
     mask, r, p = _arrays(supply, positions, powers)
     vs, rs, vmax = supply.voltage / 1e3, supply.resistance, supply.max_voltage / 1e3
     limits = supply.max_current / 1e3, supply.max_regen_current / 1e3
-    count = len(p)
 
-    def net(v0):  # current drawn from the bus at bus voltage v0 (T,)
-        return np.sum(_currents(v0[:, None], r, p, vmax, *limits), axis=1)
+    def net(v0, at=slice(None)):  # current drawn from the bus at bus voltage v0, instants ``at``
+        return np.sum(_currents(v0[:, None], r[at], p[at], vmax, *limits), axis=1)
 
+    v0 = np.full(len(p), vs)  # also where nobody is on the line
     # the trains feed at least what they draw: the diode blocks, the bus floats up to where the
     # trains' net current is zero (at most vmax: every feeder held there, the surplus lost)
-    floating = net(np.full(count, vs)) <= 0.0
-    _, floated = _bisect(lambda v: net(v) < 0, np.full(count, vs), np.full(count, vmax), 80)
+    floating = (net(v0) <= 0.0) & mask.any(axis=1)
+    drawing = ~floating & mask.any(axis=1)
+    k = np.count_nonzero(floating)
+    v0[floating] = _bisect(lambda v: net(v, floating) < 0, np.full(k, vs), np.full(k, vmax), 80)[1]
     # otherwise V_0 = V_s - R_s I_s(V_0): bisection between a collapsed bus and V_s
-    lo, hi = _bisect(lambda v: v < vs - rs * np.maximum(net(v), 0.0), np.full(count, 0.05 * vs), np.full(count, vs), 80)
-    drawn_bus = 0.5 * (lo + hi)
-    v0 = np.where(floating, floated, drawn_bus)
-    v0 = np.where(mask.any(axis=1), v0, vs)  # nobody on the line
-    i_s = np.where(floating, 0.0, np.maximum(net(v0), 0.0))
+    k = np.count_nonzero(drawing)
+    lo, hi = _bisect(lambda v: v < vs - rs * np.maximum(net(v, drawing), 0.0), np.full(k, 0.05 * vs), np.full(k, vs), 80)
+    v0[drawing] = 0.5 * (lo + hi)
+    i_s = np.where(drawing, np.maximum(net(v0), 0.0), 0.0)
     currents = np.where(mask, _currents(v0[:, None], r, p, vmax, *limits), 0.0)
     out = _flows(supply, r, currents, np.where(mask, v0[:, None] - r * currents, np.nan), p, vs, i_s)
     out["bus_voltage_V"] = v0 * 1e3

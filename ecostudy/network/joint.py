@@ -43,16 +43,20 @@ def joint(fleet, start):
 
 def _initialise_network(m, fleet, steps):
     """Network variables from the numeric solve of the start point (Ipopt starts near physics)."""
+    width = max((len(running) for running in steps), default=0)
+    xs, ps = np.full((len(steps), width), np.nan), np.zeros((len(steps), width))
     for t, running in enumerate(steps):
-        xs = [start + d * 0.5 * pyo.value(b.s[j] + b.s[j + 1]) for b, j, start, d in running]
-        ps = [pyo.value(b.p[j]) * 1e3 for b, j, *_ in running]
-        flows = circuit.solve_step(fleet.supply, xs, ps)
-        vmin, vmax = fleet.supply.min_voltage / 1e3, fleet.supply.max_voltage / 1e3
-        m.V0[t].set_value(float(np.clip(flows["bus_voltage_V"] / 1e3, vmin, vmax)))
-        m.Is[t].set_value(flows["substation_current_A"] / 1e3)
-        m.float_up[t].set_value(max(flows["bus_voltage_V"] / 1e3 - fleet.supply.voltage / 1e3
-                                    + fleet.supply.resistance * flows["substation_current_A"] / 1e3, 0.0))
-        for q, p in enumerate(ps):
-            m.rheostat[t, q].set_value(max(-p - flows["fed_W"][q], 0.0) / 1e6)
-            m.Ipan[t, q].set_value(float(flows["current_A"][q] / 1e3))
-            m.Vpan[t, q].set_value(float(np.clip(flows["voltage_V"][q] / 1e3, vmin, vmax)))
+        for q, (b, j, start, d) in enumerate(running):
+            xs[t, q] = start + d * 0.5 * pyo.value(b.s[j] + b.s[j + 1])
+            ps[t, q] = pyo.value(b.p[j]) * 1e3
+    flows = circuit.solve_steps(fleet.supply, xs, ps)
+    vmin, vmax = fleet.supply.min_voltage / 1e3, fleet.supply.max_voltage / 1e3
+    bus, i_s = flows["bus_voltage_V"] / 1e3, flows["substation_current_A"] / 1e3
+    for t, running in enumerate(steps):
+        m.V0[t].set_value(float(np.clip(bus[t], vmin, vmax)))
+        m.Is[t].set_value(float(i_s[t]))
+        m.float_up[t].set_value(max(float(bus[t] - fleet.supply.voltage / 1e3 + fleet.supply.resistance * i_s[t]), 0.0))
+        for q in range(len(running)):
+            m.rheostat[t, q].set_value(max(-ps[t, q] - flows["fed_W"][t, q], 0.0) / 1e6)
+            m.Ipan[t, q].set_value(float(flows["current_A"][t, q] / 1e3))
+            m.Vpan[t, q].set_value(float(np.clip(flows["voltage_V"][t, q] / 1e3, vmin, vmax)))

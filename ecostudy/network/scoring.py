@@ -20,16 +20,17 @@ def evaluate(fleet, runs_by_train):
     line_input = np.maximum(np.nan_to_num(flows["voltage_V"]) * flows["current_A"], 0.0) * dt / KWH
     per_train = {}
     for i, name in enumerate(fleet.names):
-        work = [(run.ft * 0.5 * (run.v[:-1] + run.v[1:]), run.fb * 0.5 * (run.v[:-1] + run.v[1:])) for run in runs_by_train[i]]
-        per_train[name] = {"traction_kWh": float(sum(np.sum(ft) for ft, _ in work)) * dt / KWH,
-                           "braking_kWh": float(sum(np.sum(fb) for _, fb in work)) * dt / KWH,  # at the wheel, friction and electric
+        vbar = [0.5 * (run.v[:-1] + run.v[1:]) for run in runs_by_train[i]]
+        per_train[name] = {"traction_kWh": sum(float(run.ft @ v) for run, v in zip(runs_by_train[i], vbar)) * dt / KWH,
+                           # at the wheel, friction and electric
+                           "braking_kWh": sum(float(run.fb @ v) for run, v in zip(runs_by_train[i], vbar)) * dt / KWH,
                            "braking_regen_offered_kWh": float(offered[:, i].sum()),
                            "regen_used_kWh": float(used[:, i].sum()), "regen_lost_kWh": float((offered[:, i] - used[:, i]).sum()),
                            "line_input_kWh": float(line_input[:, i].sum())}
     running = np.isfinite(x).any(axis=1)
-    volts = np.where(np.isfinite(x), flows["voltage_V"], np.nan)
-    with np.errstate(all="ignore"):
-        low, high = np.nanmin(np.where(running[:, None], volts, 0.0), axis=1), np.nanmax(np.where(running[:, None], volts, 0.0), axis=1)
+    volts = flows["voltage_V"]  # NaN where a train is not running
+    on_line = np.where(running[:, None], volts, 0.0)  # no all-NaN row for nanmin / nanmax
+    low, high = np.nanmin(on_line, axis=1), np.nanmax(on_line, axis=1)
     steps = pd.DataFrame({"time_s": np.arange(fleet.steps) * dt, "substation_kW": flows["substation_W"] / 1e3,
                           "traction_input_kW": flows["traction_input_W"] / 1e3, "regen_used_kW": flows["regen_used_W"] / 1e3,
                           "regen_lost_kW": flows["regen_lost_W"] / 1e3, "line_loss_kW": flows["line_loss_W"] / 1e3,

@@ -192,8 +192,9 @@ def ctrl_c_after(held):
     """Hold a Ctrl-C (SIGINT) that arrives inside Ipopt (noted in the list ``held``, which the
     intermediate callback reads to stop Ipopt at its next iteration) and raise it when Ipopt
     returns: raised inside one of cyipopt's callbacks it was swallowed there and the solve went on
-    (measured: a study interrupted mid-solve finished and exited 0). Only in the main thread, and
-    only where Ctrl-C raises KeyboardInterrupt (a worker that ignores it keeps ignoring it)."""
+    (measured: a K = 1000 Amsterdam solve sent SIGINT 1.5 s in returned its optimum). Only in the
+    main thread, and only where Ctrl-C raises KeyboardInterrupt (a process that ignores SIGINT,
+    as a background job does, keeps ignoring it)."""
     if threading.current_thread() is not threading.main_thread() or \
             signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
         yield
