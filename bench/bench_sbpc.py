@@ -1,7 +1,7 @@
 """SBPC (thesis 000 Ch. 4) on the Amsterdam case: T_s = 0.38 s, k_f = 200 (76 s).
 
     .venv/bin/python bench/bench_sbpc.py [--sample 0.38] [--blocks 45 20 1] [--disturbances 0.1 0.05 0.02]
-        [--sppc]
+        [--sppc] [--transcription condensed]
 
 Table 1 (Table 4.1's trend): the nominal SBPC for each L on the model train: energy at the wheel,
 arrival, stop error, solve time per step (mean, max), Ipopt iterations per step, samples where
@@ -43,6 +43,10 @@ def main():
     p.add_argument("--brake-reserve", type=float, help="share of the brake the plans hold back (default: SBPC 0, "
                    "SPPC 0.1, the controllers' defaults)")
     p.add_argument("--variants", nargs="*", default=["two_step", "multi"], help="SBPC's relaxed variants to run")
+    p.add_argument("--block-variant", default="nominal", choices=["nominal", "two_step", "multi"],
+                   help="the variant of the rows for each L on the model train")
+    p.add_argument("--transcription", default="simultaneous", choices=["simultaneous", "condensed"],
+                   help="SBPC's FHOCP with the states as variables (Ipopt) or condensed to the block handles (SLSQP)")
     args = p.parse_args()
     print(f"`python bench/bench_sbpc.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
     track = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
@@ -65,7 +69,8 @@ def main():
               f"{np.mean(controller.iterations):.1f} | {controller.softened} | {time.perf_counter() - t0:.0f} |", flush=True)
 
     def run(variant, block, truth, quantised, label):
-        controller = Sbpc(case, 76.0, args.sample, block, speeds, variant, brake_reserve=args.brake_reserve or 0.0)
+        controller = Sbpc(case, 76.0, args.sample, block, speeds, variant, brake_reserve=args.brake_reserve or 0.0,
+                          transcription=args.transcription)
         drive(variant, block, label, controller, Quantised(controller, train.das_levels) if quantised else controller, truth)
 
     def run_sppc(variant, truth, label):
@@ -82,7 +87,7 @@ def main():
         for variant in args.variants:
             run(variant, 20, Truth(1 + d, 1 - d, 1 - d, 1 - d), True, f"d = {d:g}, DAS levels")
     for block in args.blocks:
-        run("nominal", block, Truth(), False, "model")
+        run(args.block_variant, block, Truth(), False, "model")
 
 
 if __name__ == "__main__":

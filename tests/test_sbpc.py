@@ -33,7 +33,7 @@ def test_a_plan_from_a_later_sample_keeps_the_past_and_the_blocks(amsterdam_case
     case, speeds = amsterdam_case
     controller = Sbpc(case, 76.0, TS, 5, speeds)
     controller.plan(State())
-    m = controller.model
+    m = controller.program.model
     x, v = m.s[7].value, m.v[7].value
     u = controller.plan(State(x, v, 7 * TS))
     assert -1.0 <= u <= 1.0 and controller.failures == 0
@@ -44,7 +44,7 @@ def test_a_plan_from_a_later_sample_keeps_the_past_and_the_blocks(amsterdam_case
     assert handle_at(m, 7) == handle_at(m, 9)  # samples 5-9 share block 1
     # each variable meets a handful of others in the Lagrangian's Hessian: alpha times the whole
     # work sum made it dense (825 variables: 172 595 entries at k_f = 200, 17 s a sample more)
-    nlp = controller.session.nlp
+    nlp = controller.program.session.nlp
     assert nlp.nnz_hessian_lag() < 12 * nlp.n_primals()
 
 
@@ -54,10 +54,10 @@ def test_a_train_standing_at_the_stop_before_kf_may_wait_there(amsterdam_case):
     Davis term at v = 0 would drive the speed below zero and no plan would exist."""
     case, speeds = amsterdam_case
     controller = Sbpc(case, 76.0, TS, 5, speeds)
-    m = controller.model
-    set_blocked_start(controller.session, m, 40, State(case.segment.distance, 0.0, 40 * TS))
-    set_objective(controller.session, m, 1.0, 0.0, 0.0)
-    assert controller.session.solve(controller.options).usable
+    m = controller.program.model
+    set_blocked_start(controller.program.session, m, 40, State(case.segment.distance, 0.0, 40 * TS))
+    set_objective(controller.program.session, m, 1.0, 0.0, 0.0)
+    assert controller.program.session.solve(controller.options).usable
     assert max(m.v[i].value for i in range(40, 51)) < 1e-4
     assert m.s[50].value == pytest.approx(case.segment.distance, abs=1e-3)
     assert m.up[8].value < 1e-4 and m.up[9].value < 1e-4
@@ -88,3 +88,54 @@ def test_absolute_blocks_are_eq_4_8s_blocks():
             absolute = [(k + j) // block for j in range(kf - k)]
             assert [b - 1 + k // block for b in blocks(k, kf, block)] == absolute
             assert len(set(absolute)) == free_moves(k, kf, block)
+
+
+def test_condensed_sensitivities_are_the_simulations_derivatives(amsterdam_case):
+    """The condensed FHOCP's forward sensitivities (implicit differentiation of each trapezoid
+    step) against central differences of its own simulation, from a moving mid-trip state."""
+    from ecostudy.ocp.blocked import time_guess
+    from ecostudy.ocp.condensed import Condensed
+    case, speeds = amsterdam_case
+    kf = samples(76.0, TS)
+    program = Condensed(case, TS, kf, 5, time_guess(case, speeds, kf, TS))
+    program.start(12, State(300.0, 14.0, 12 * TS))
+    free = program.nb - 12 // 5
+    z = np.concatenate([program.u[12 // 5:program.nb], program.u[program.nb + 12 // 5:]])
+    z = np.clip(z + 0.05, 0.0, 0.95)  # traction and braking partly on, away from the bounds
+    s, v, ds, dv, work, dwork = program.simulate(z)
+    assert len(z) == 2 * free and ds.shape == (kf - 12 + 1, 2 * free)
+    for col in (0, 3, free, free + 4):
+        step = np.zeros_like(z)
+        step[col] = 1e-6
+        hi, lo = program.simulate(z + step), program.simulate(z - step)
+        assert np.allclose((hi[1] - lo[1]) / 2e-6, dv[:, col], rtol=1e-4, atol=1e-5)
+        assert np.allclose((hi[0] - lo[0]) / 2e-6, ds[:, col], rtol=1e-4, atol=1e-4)
+        assert (hi[4] - lo[4]) / 2e-6 == pytest.approx(dwork[col], rel=1e-4, abs=1e-3)
+
+
+def test_condensed_and_simultaneous_plans_agree_and_the_plant_follows(amsterdam_case, metro):
+    """One nominal plan from the stand (L = 5, k_f = 50) by each transcription, on the same grade
+    and speed bounds (the simultaneous program's settled profile): both stop at the platform on
+    time with the same energy (0.1 %: two solvers, the envelopes interpolated); the condensed
+    plan's handles driven open loop through the plant (an independent integrator on the same
+    physics) end within a metre of its prediction."""
+    case, speeds = amsterdam_case
+    simultaneous = Sbpc(case, 76.0, TS, 5, speeds)
+    condensed = Sbpc(case, 76.0, TS, 5, speeds, transcription="condensed")
+    condensed.program.profile = simultaneous.program.model.profile
+    for controller in (simultaneous, condensed):
+        controller.program.start(0, State())
+        assert controller._solve(1.0, 0.0, 0.0).usable
+    program = condensed.program
+    s, v, _, _, work, _ = program.simulate(program.u)
+    assert s[-1] == pytest.approx(case.segment.distance, abs=1e-3) and v[-1] == pytest.approx(0.0, abs=1e-3)
+    import pyomo.environ as pyo
+    assert work == pytest.approx(pyo.value(simultaneous.program.model.work), rel=1e-3)
+
+    class Replay:
+        solve_seconds = []
+
+        def plan(self, measured):
+            return program.handle(int(round(measured.time / TS)))
+    result = run_loop(Plant(case.segment, metro), Replay(), TS, plant_step=TS / 20)
+    assert abs(result.stop_error_m) < 1.0

@@ -112,6 +112,9 @@ def test_a_case_key_does_not_change_when_a_default_is_written_out_and_reserves_a
     bad = runner.invoke(app, ["simulate", str(study(tmp_path, controllers=[
         {"name": "c", "kind": "convex", "brake_reserve": 0.2}])), "--no-progress"])
     assert bad.exit_code == 2 and "brake_reserve" in bad.output and "brake_level_mps2" in bad.output
+    bad = runner.invoke(app, ["simulate", str(study(tmp_path, controllers=[
+        {"name": "c", "kind": "rspc", "transcription": "condensed"}])), "--no-progress"])
+    assert bad.exit_code == 2 and "transcription is an SBPC setting" in bad.output
 
 
 def test_the_metro_monte_carlo_study_has_every_controller_at_its_own_sample_time():

@@ -17,12 +17,15 @@ After k_f, or at the stop, the controller brakes in full.
 import dataclasses
 import time
 
-from ecostudy.ocp.blocked import (build_blocked, handle_at, samples, set_blocked_start, set_objective, time_guess,
-                                  update_profile)
 from ecostudy.core.types import State
-from ecostudy.ocp.session import WARM_START, Session
+from ecostudy.ocp.blocked import Blocked, samples, time_guess
+from ecostudy.ocp.condensed import Condensed
+from ecostudy.ocp.session import WARM_START
 
 VARIANTS = ("nominal", "two_step", "multi")
+# the FHOCP with the states as variables (Ipopt on ``ocp.blocked``), or condensed to the block
+# handles (SLSQP on ``ocp.condensed``, as thesis 000's fmincon: the time of a solve falls with L)
+TRANSCRIPTIONS = {"simultaneous": Blocked, "condensed": Condensed}
 # each solve starts from the previous one (the shifted tail), primal and dual (docs/closed_loop.md)
 OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}
 
@@ -30,12 +33,15 @@ OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}
 class Sbpc:
     """``case``: a prepared case (``ocp.problem.prepare``); ``guess_speeds``: a speed profile on its
     grid (e.g. the ATO optimum's) for the first solve; ``omega``: the weight of eq. 4.31 on the
-    terminal distance [per metre], with J in kJ (thesis 000 §4.4 uses 3505)."""
+    terminal distance [per metre], with J in kJ (thesis 000 §4.4 uses 3505); ``transcription``: a
+    key of ``TRANSCRIPTIONS``."""
 
     def __init__(self, case, running_time, sample_time, block, guess_speeds, variant="nominal", omega=3505.0,
-                 tolerance=1e-3, options=None, brake_reserve=0.0):
+                 tolerance=1e-3, options=None, brake_reserve=0.0, transcription="simultaneous"):
         if variant not in VARIANTS:
             raise ValueError(f"variant must be one of {VARIANTS}, not {variant!r}")
+        if transcription not in TRANSCRIPTIONS:
+            raise ValueError(f"transcription must be one of {tuple(TRANSCRIPTIONS)}, not {transcription!r}")
         self.case, self.ts, self.variant, self.omega, self.tolerance = case, sample_time, variant, omega, tolerance
         self.kf = samples(running_time, sample_time)
         self.options = {**OPTIONS, **(options or {})}
@@ -43,27 +49,28 @@ class Sbpc:
         # train braking weaker than the model's still has the rest (the reserve of SPPC and RSPC)
         case = self.case = dataclasses.replace(case, train=case.train.with_brake_reserve(brake_reserve))
         t0 = time.perf_counter()
-        self.model = build_blocked(case, sample_time, self.kf, block, time_guess(case, guess_speeds, self.kf, sample_time))
-        self.session = Session(self.model)
+        guess = time_guess(case, guess_speeds, self.kf, sample_time)
+        if transcription == "simultaneous":
+            self.program = Blocked(case, sample_time, self.kf, block, guess, self.options)
+        else:
+            self.program = Condensed(case, sample_time, self.kf, block, guess)
         for _ in range(2):  # settle the grade and bounds on the first plan's own positions
-            set_blocked_start(self.session, self.model, 0, State())
-            set_objective(self.session, self.model, 0.0, 1.0, None)
-            if self.session.solve(self.options).usable:
-                update_profile(self.model)
+            self.program.start(0, State())
+            if self.program.solve(0.0, 1.0, None).usable:
+                self.program.follow()
         self.setup_seconds = time.perf_counter() - t0
         self.solve_seconds, self.gammas, self.iterations, self.softened, self.failures = [], [], [], 0, 0
 
     def _solve(self, alpha, omega, gamma_max):
-        set_objective(self.session, self.model, alpha, omega, gamma_max)
-        outcome = self.session.solve(self.options)
+        outcome = self.program.solve(alpha, omega, gamma_max)
         self.iterations.append(outcome.iterations)
         return outcome
 
     def _smallest_gamma(self):
         outcome = self._solve(0.0, 1.0, None)  # 4.18: the closest the terminal state can come
-        gamma = float(self.model.gamma.value) if outcome.usable else None
-        if gamma is None:
+        if not outcome.usable:
             return None
+        gamma = self.program.gamma
         return self._solve(1.0, 0.0, gamma + self.tolerance)  # 4.19: least energy within it
 
     def plan(self, measured):
@@ -72,7 +79,7 @@ class Sbpc:
             self.solve_seconds.append(0.0)
             return -1.0
         t0 = time.perf_counter()
-        set_blocked_start(self.session, self.model, k, measured)
+        self.program.start(k, measured)
         if self.variant == "nominal":
             outcome = self._solve(1.0, 0.0, 0.0)
             if not outcome.usable:
@@ -86,6 +93,6 @@ class Sbpc:
         if outcome is None or not outcome.usable:
             self.failures += 1
             return -1.0
-        self.gammas.append(float(self.model.gamma.value))
-        update_profile(self.model)  # the next sample's grade and bounds follow this prediction
-        return handle_at(self.model, k)
+        self.gammas.append(self.program.gamma)
+        self.program.follow()  # the next sample's grade and bounds follow this prediction
+        return self.program.handle(k)

@@ -161,12 +161,18 @@ class Envelope:
         speed v_c = P_max / F_max; the max is rounded over ``corner_share`` * v_c, so the force is
         at most 0.03 % low right at the corner and exact away from it.
         """
+        return self.smooth_function(corner_share)(speed)
+
+    def smooth_function(self, corner_share=0.0005):
+        """:meth:`smooth_force` as a function of the speed alone (a scalar loop calls it cheaply)."""
         if self.kind == "table":
-            return smooth_table(speed, self.coefficients, self.width)
-        if not np.isfinite(self.max_power):
-            return self.max_force + 0.0 * speed
-        corner = self.max_power / self.max_force
-        return self.max_power / smooth_max(speed, corner, corner_share * corner)
+            coefficients, width = self.coefficients, self.width
+            return lambda speed: smooth_table(speed, coefficients, width)
+        force, power = self.max_force, self.max_power
+        if not np.isfinite(power):
+            return lambda speed: force + 0.0 * speed
+        corner = power / force
+        return lambda speed: power / smooth_max(speed, corner, corner_share * corner)
 
     def scaled(self, share):
         """This envelope with every force (and the power) times ``share``."""

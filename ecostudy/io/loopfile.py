@@ -55,6 +55,9 @@ class Controller(Strict):
     block: int = Field(20, ge=1, description="SBPC: L, samples per blocked move (thesis 000 eq. 4.8).")
     variant: Literal["nominal", "two_step", "multi"] = "nominal"
     omega: float = Field(3505.0, gt=0, description="SBPC multi-objective weight on the terminal distance (4.31).")
+    transcription: Literal["simultaneous", "condensed"] = Field(
+        "simultaneous", description="SBPC: the FHOCP with the states as variables (Ipopt) or condensed to the "
+        "block handles (SLSQP; faster per sample for long blocks, slower for L = 1; docs/closed_loop.md).")
     sample_time_s: Optional[float] = Field(None, gt=0, le=60, description="This controller's period and "
                                            "real-time budget [s] (default: the study's sample_time_s).")
     brake_reserve: Optional[float] = Field(None, ge=0, lt=1, description="sbpc, sppc, rspc: the share of the "
@@ -67,6 +70,8 @@ class Controller(Strict):
     def _sppc_variant(self):
         if self.kind == "sppc" and self.variant == "multi":
             raise ValueError("sppc has the variants nominal and two_step (no multi-objective one is built)")
+        if self.transcription != "simultaneous" and self.kind != "sbpc":
+            raise ValueError("transcription is an SBPC setting")
         if self.brake_reserve is not None and self.kind not in RESERVE_KINDS:
             raise ValueError(f"brake_reserve is for {', '.join(RESERVE_KINDS)} (the convex controller's is "
                              "settings.brake_level_mps2)")

@@ -32,6 +32,7 @@ import pyomo.environ as pyo
 from ecostudy.core.grid import warn_unmodelled
 from ecostudy.core.kinematics import clock, point_resistance
 from ecostudy.core.physics import davis_resistance, interval_resistance, moving_share
+from ecostudy.ocp.session import Session
 from ecostudy.ocp.timedomain import FORCE_SCALE
 
 
@@ -169,3 +170,30 @@ def handle_at(m, k):
     """The handle the solved model applies at sample ``k``."""
     b = min(k // m.block, len(m.B) - 1)
     return float(pyo.value(m.up[b]) - pyo.value(m.um[b]))
+
+
+class Blocked:
+    """The simultaneous program above behind the interface SBPC drives (``ocp.condensed.Condensed``
+    is the other): ``start(k, state)``, ``solve(alpha, omega, gamma_max)``, ``gamma``, ``follow()``,
+    ``handle(k)``; one model and NL file for the whole trip, each solve warm from the last."""
+
+    def __init__(self, case, ts, kf, block, guess, options):
+        self.model = build_blocked(case, ts, kf, block, guess)
+        self.session, self.options = Session(self.model), options
+
+    def start(self, k, state):
+        set_blocked_start(self.session, self.model, k, state)
+
+    def solve(self, alpha, omega, gamma_max):
+        set_objective(self.session, self.model, alpha, omega, gamma_max)
+        return self.session.solve(self.options)
+
+    @property
+    def gamma(self):
+        return float(self.model.gamma.value)
+
+    def follow(self):
+        update_profile(self.model)
+
+    def handle(self, k):
+        return handle_at(self.model, k)

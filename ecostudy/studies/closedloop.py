@@ -129,7 +129,7 @@ def build_controller(case, track, segment, train, estimator):
             prepared = prepare(track, train, case["from"], case["to"], points)
             speeds = np.interp(prepared.nodes, ato.trajectory.nodes, ato.trajectory.v)
             inner = Sbpc(prepared, window[1], case["sample_time"], spec["block"], speeds, spec["variant"], spec["omega"],
-                         **reserve)
+                         transcription=spec["transcription"], **reserve)
     if spec["das_levels"]:
         return Quantised(inner, train.das_levels, spec["delay_samples"]), inner
     return inner, inner
