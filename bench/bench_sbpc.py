@@ -26,7 +26,7 @@ sys.path.insert(0, str(ROOT))
 from ecostudy.analysis.single import solve_run  # noqa: E402
 from ecostudy.control.controllers import Quantised  # noqa: E402
 from ecostudy.control.loop import run_loop  # noqa: E402
-from ecostudy.control.sbpc import Sbpc  # noqa: E402
+from ecostudy.control.sbpc import TRANSCRIPTIONS, VARIANTS, Sbpc  # noqa: E402
 from ecostudy.control.sppc import Sppc  # noqa: E402
 from ecostudy.core.plant import Plant, Truth  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
@@ -43,9 +43,9 @@ def main():
     p.add_argument("--brake-reserve", type=float, help="share of the brake the plans hold back (default: SBPC 0, "
                    "SPPC 0.1, the controllers' defaults)")
     p.add_argument("--variants", nargs="*", default=["two_step", "multi"], help="SBPC's relaxed variants to run")
-    p.add_argument("--block-variant", default="nominal", choices=["nominal", "two_step", "multi"],
+    p.add_argument("--block-variant", default="nominal", choices=VARIANTS,
                    help="the variant of the rows for each L on the model train")
-    p.add_argument("--transcription", default="simultaneous", choices=["simultaneous", "condensed"],
+    p.add_argument("--transcription", default="simultaneous", choices=TRANSCRIPTIONS,
                    help="SBPC's FHOCP with the states as variables (Ipopt) or condensed to the block handles (SLSQP)")
     args = p.parse_args()
     print(f"`python bench/bench_sbpc.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")

@@ -25,7 +25,7 @@ from ecostudy.ocp.session import WARM_START
 VARIANTS = ("nominal", "two_step", "multi")
 # the FHOCP with the states as variables (Ipopt on ``ocp.blocked``), or condensed to the block
 # handles (SLSQP on ``ocp.condensed``, as thesis 000's fmincon: the time of a solve falls with L)
-TRANSCRIPTIONS = {"simultaneous": Blocked, "condensed": Condensed}
+TRANSCRIPTIONS = ("simultaneous", "condensed")
 # each solve starts from the previous one (the shifted tail), primal and dual (docs/closed_loop.md)
 OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}
 
@@ -33,15 +33,15 @@ OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}
 class Sbpc:
     """``case``: a prepared case (``ocp.problem.prepare``); ``guess_speeds``: a speed profile on its
     grid (e.g. the ATO optimum's) for the first solve; ``omega``: the weight of eq. 4.31 on the
-    terminal distance [per metre], with J in kJ (thesis 000 §4.4 uses 3505); ``transcription``: a
-    key of ``TRANSCRIPTIONS``."""
+    terminal distance [per metre], with J in kJ (thesis 000 §4.4 uses 3505); ``transcription``: one
+    of ``TRANSCRIPTIONS``."""
 
     def __init__(self, case, running_time, sample_time, block, guess_speeds, variant="nominal", omega=3505.0,
                  tolerance=1e-3, options=None, brake_reserve=0.0, transcription="simultaneous"):
         if variant not in VARIANTS:
             raise ValueError(f"variant must be one of {VARIANTS}, not {variant!r}")
         if transcription not in TRANSCRIPTIONS:
-            raise ValueError(f"transcription must be one of {tuple(TRANSCRIPTIONS)}, not {transcription!r}")
+            raise ValueError(f"transcription must be one of {TRANSCRIPTIONS}, not {transcription!r}")
         self.case, self.ts, self.variant, self.omega, self.tolerance = case, sample_time, variant, omega, tolerance
         self.kf = samples(running_time, sample_time)
         self.options = {**OPTIONS, **(options or {})}

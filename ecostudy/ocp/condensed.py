@@ -84,7 +84,7 @@ class Condensed:
             held = moving_share(total)
             dheld = (moving_share(total + DIFF) - moving_share(total - DIFF)) / (2 * DIFF)
             resist = interval_resistance(v0, v1, davis, grade)
-            r1 = (interval_resistance(v0, v1 + DIFF, davis, grade) - resist) / DIFF  # quadratic in v1: exact to rounding
+            r1 = (interval_resistance(v0, v1 + DIFF, davis, grade) - resist) / DIFF  # quadratic in v1: off by C DIFF / 2
             load = fbm * um + resist
             g = (v1 - v0) * mass / ts - (ftm * up - held * load)
             g1 = mass / ts - (0.5 * dft1 * up - dheld * load - held * (0.5 * dfb1 * um + r1))
@@ -204,7 +204,9 @@ class Condensed:
         res = minimize(objective, x0, jac=objective_grad, bounds=bounds, constraints=constraints, method="SLSQP",
                        options={"maxiter": self.max_iter, "ftol": 1e-10})
         x = np.clip(res.x, [b[0] for b in bounds], [b[1] for b in bounds])
-        worst = min(float(np.min(path(x))), float(np.min(terminal(x))) if gamma_max != 0.0 else -float(np.max(np.abs(terminal(x)[1:]))))
+        ends = terminal(x)
+        ends = -np.abs(ends[1:]) if gamma_max == 0.0 else ends  # equalities, or gamma - Delta >= 0
+        worst = min(float(np.min(path(x))), float(np.min(ends)))
         # status 8 (no descent along the search direction) at a point within the constraints is the
         # optimum to the accuracy of the simulation's derivatives (measured: 1e-7 to 4e-6 m off the
         # terminal set); 9 (iteration limit) there is a plan that keeps every constraint

@@ -44,6 +44,7 @@ from ecostudy.core.grid import node_limits, warn_unmodelled
 from ecostudy.core.kinematics import interval_grade_force
 
 NAMES = ("v", "t", "rho", "g", "gp", "b", "h")  # variable blocks, in this order
+USABLE = ("Solved", "AlmostSolved")  # Clarabel's statuses whose plan is driven
 TIGHT = 5e-7  # rho s - 1 above which an interval's relaxation is tightened by another solve
 POLISH = 3    # tightening rounds at most
 
@@ -137,7 +138,7 @@ class ConvexPlan(NamedTuple):
 
     @property
     def usable(self):
-        return self.status in ("Solved", "AlmostSolved")
+        return self.status in USABLE
 
 
 class ConvexProgram:
@@ -156,6 +157,8 @@ class ConvexProgram:
         self.settings = clarabel.DefaultSettings()
         self.settings.verbose = False
         self.settings.iterative_refinement_enable = False  # halves the solve; the gap stays below 1e-7 (tests)
+        self.refined = clarabel.DefaultSettings()  # for a solve that ended inaccurate
+        self.refined.verbose = False
 
     def grid_from(self, position, reach=0.0):
         """Nodes of the grid ahead of ``position`` (eq. 4.2d). With ``reach`` > 0 the first
@@ -181,17 +184,17 @@ class ConvexProgram:
         edge = plan.status == "AlmostSolved" and plan.gap > 10 * TIGHT
         if (not plan.usable or edge) and np.isfinite(arrival[1]):
             dropped = self._solve(x, state, (arrival[0], np.inf), end_speed, mass_scale, lead)._replace(softened=True)
-            plan = dropped if dropped.usable or not plan.usable else plan
+            if dropped.usable or not plan.usable:
+                plan = dropped
         return plan._replace(seconds=time.perf_counter() - t0)
 
     def _solve(self, x, state, arrival, end_speed, mass_scale, lead):
-        v, t, rho, g, status = self._conic(x, state, arrival, end_speed, mass_scale, lead)
+        problem = (x, state, arrival, end_speed, mass_scale, lead)
+        v, t, rho, g, status = self._conic(problem)
         s = self._speed(v)
         if status != "Solved" and (status != "AlmostSolved" or np.max(np.abs(rho * s - 1.0)) > TIGHT):
             # reduced accuracy or no progress: again with iterative refinement (off for speed)
-            self.settings.iterative_refinement_enable = True
-            again = self._conic(x, state, arrival, end_speed, mass_scale, lead)
-            self.settings.iterative_refinement_enable = False
+            again = self._conic(problem, refined=True)
             if again[4] == "Solved":
                 v, t, rho, g, status = again
                 s = self._speed(v)
@@ -200,26 +203,27 @@ class ConvexProgram:
         # below the tangent of 1/s at their speed (a sequential convex step; only rho = 1/s meets
         # it); the slack may move to other intervals of the face, so up to POLISH rounds
         tight, speeds = np.zeros(len(rho), bool), np.zeros(len(rho))
-        for _ in range(POLISH):
+        for _ in range(POLISH if status in USABLE else 0):
             loose = (rho * s - 1.0 > TIGHT) & ~tight
-            if status not in ("Solved", "AlmostSolved") or not loose.any():
+            if not loose.any():
                 break
             tight, speeds[loose] = tight | loose, s[loose]
-            again = self._conic(x, state, arrival, end_speed, mass_scale, lead, (tight, speeds[tight]))
-            if again[4] not in ("Solved", "AlmostSolved"):
+            again = self._conic(problem, tight=(tight, speeds[tight]))
+            if again[4] not in USABLE:
                 break
             v, t, rho, g, status = again
             s = self._speed(v)
         gap = float(np.max(np.abs(rho * s - 1.0))) if rho.size else 0.0
         force = g * self.train.mass * mass_scale / np.maximum(rho, 1e-12)
-        if status in ("Solved", "AlmostSolved"):
-            self.previous = (0.5 * (x[:-1] + x[1:]), self._speed(v))
+        if status in USABLE:
+            self.previous = (0.5 * (x[:-1] + x[1:]), s)
         return ConvexPlan(x, v, t, rho, force, gap, status, 0.0, False)
 
-    def _conic(self, x, state, arrival, end_speed, mass_scale, lead, tight=None):
-        A, b, q, cones, index = self.assemble(x, state, arrival, end_speed, mass_scale, lead, tight)
+    def _conic(self, problem, tight=None, refined=False):
+        """(v, t, rho, g, Clarabel's status) of one solve of the program ``problem`` (assemble's arguments)."""
+        A, b, q, cones, index = self.assemble(*problem, tight)
         P = sparse.csc_matrix((A.shape[1], A.shape[1]))
-        solution = clarabel.DefaultSolver(P, q, A, b, cones, self.settings).solve()
+        solution = clarabel.DefaultSolver(P, q, A, b, cones, self.refined if refined else self.settings).solve()
         z = np.asarray(solution.x)
         return *(z[index[name]] for name in ("v", "t", "rho", "g")), str(solution.status)
 
