@@ -4,6 +4,7 @@ import pytest
 import pyomo.environ as pyo
 
 from ecostudy.network import fleet, scoring, strategies, rules
+from ecostudy.network.joint import joint as joint_optimum
 from ecostudy.core.types import Supply
 from ecostudy.network import circuit
 from ecostudy.ocp import session
@@ -122,6 +123,33 @@ def test_legs_solved_one_by_one_reach_one_nlps_optimum_and_identical_trains_shar
         assert np.allclose(a.v, b.v, atol=1e-6) and np.allclose(a.p, b.p, atol=1e-3)
 
 
+def test_traction_and_braking_are_held_apart_only_where_doing_both_could_pay():
+    """A traction weight below eta_T eta_R (0.68 here) with traction discounted and regeneration
+    credited buys "free" traction and sells it back as braking (pumping): the one-handle
+    constraint holds there (``pumping_pays``) and nowhere else; the solved leg is netted."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    assert train.traction_efficiency * train.regeneration_efficiency == pytest.approx(0.68)
+    pays = timedomain.pumping_pays(train, np.array([1.0, 0.7, 0.6, 0.0, 0.0, 0.0]),
+                                   np.array([0.0, 50.0, 50.0, 0.0, 50.0, 50.0]), np.array([50.0] * 5 + [5.0]))
+    assert pays.tolist() == [False, False, True, False, True, False]
+    assert timedomain.pumping_pays(train) is False
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 2.0, SUPPLY, points=300)
+    leg = f.legs[0][0]
+    free = np.zeros(f.steps)  # traction weighs nothing up to 1 MW, regeneration credited up to 1 MW
+    terms = (free, np.full(f.steps, 1e3), np.full(f.steps, 1e3))
+    overlap = {}
+    for held in (False, timedomain.pumping_pays(train, *terms)):
+        m = pyo.ConcreteModel()
+        b = timedomain.add_leg(m, "leg", leg, fleet._guess(f, leg), one_handle=held)
+        m.objective = pyo.Objective(expr=fleet._leg_cost(leg, b, *terms) * f.dt / fleet.leg_energy_ref(leg))
+        assert session.solve(m).usable
+        overlap[held is False] = max(pyo.value(b.ft[j] * b.fb[j]) for j in b.I)  # kN^2
+        run = timedomain.leg_arrays(b)
+        assert float(np.max(np.minimum(run.ft, run.fb))) == 0.0 and np.all(run.fr <= run.fb)
+        assert scoring.verify_leg(leg, run)["passed"]
+    assert overlap[True] > 1e3 and overlap[False] <= 1e-3 * (1 + 1e-6)
+
+
 def test_trains_that_overlap_on_the_line_are_flagged():
     """A timetable that puts one train's head past the tail of the one ahead is never "ok"."""
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
@@ -163,6 +191,21 @@ def test_joint_optimum_bounds_every_rule(two_trains):
     for rule in ("triggering", "voltage", "dissension"):  # the supervisor keeps its best round, the start included
         history = out[rule]["info"]["rounds_substation_kWh"]
         assert out[rule]["totals"]["substation_kWh"] == pytest.approx(min(history), rel=1e-6)
+
+
+@pytest.mark.slow
+def test_the_pinned_bus_costs_what_the_circuit_says_and_no_more_than_the_floating_one(two_trains):
+    """The joint NLP writes the bus as V_0 = V_s - R_s I_s (no diode complementarity): its own
+    substation energy is the circuit's score of its runs (scored with the diode, the bus floating
+    where regeneration is lost: such steps exist here), and it is no worse than the NLP with the
+    floating bus and the complementarity (``floating=True``)."""
+    f, out = two_trains
+    steps = out["joint"]["steps"]
+    assert ((steps["substation_kW"] == 0.0) & (steps["regen_lost_kW"] > 1.0)).any()
+    scored = out["joint"]["totals"]["substation_kWh"]
+    assert out["joint"]["info"]["nlp_substation_kWh"] == pytest.approx(scored, rel=1e-4)
+    runs, info = joint_optimum(f, out["independent"]["runs"], floating=True)
+    assert scored <= scoring.evaluate(f, runs)[2]["substation_kWh"] * (1 + 1e-4)
 
 
 @pytest.mark.slow

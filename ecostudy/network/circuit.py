@@ -138,29 +138,45 @@ def _flows(supply, r, currents, volts, p, vs, i_s):
     }
 
 
-def add_network(m, supply, steps, eps=1e-5):
+def add_network(m, supply, steps, eps=1e-5, floating=False):
     """Pyomo constraints of eq. 7.8 on the joint model ``m`` (kV, kA, MW).
 
     ``steps``: for every clock step t, the list of (leg block, local step j, line start, direction)
-    of the trains running then. Adds V0[t], I[t, q], V[t, q], the rheostat power [MW] and the
-    expression m.substation_mw[t] = V_s I_s, with the diode as V_0 = V_s - R_s I_s + u,
-    I_s, u >= 0, I_s u <= ``eps`` [MW].
+    of the trains running then. Adds I_s[t], the bus voltage V0[t], I[t, q], V[t, q], the rheostat
+    power [MW] and the expression m.substation_mw[t] = V_s I_s.
+
+    The bus is written V_0 = V_s - R_s I_s with I_s >= 0 (default): where the trains feed more
+    than the others draw, the feeders burn the surplus in their rheostats at V_0 = V_s instead of
+    the bus floating above V_s. For given train powers this reaches the same substation energy as
+    the real circuit (``solve_steps``): where the real substation supplies, its bus is on that line
+    (the same state); where the real bus floats, I_s = 0 there and here alike, and a feeder at
+    V_0 = V_s can deliver at least what it could from the higher floating bus (its voltage stays
+    below V_max more easily). The NLP's rheostats and bus voltages at floating steps are then not
+    the physical ones; every strategy is scored by ``solve_steps``. ``floating=True``: the bus as
+    the diode makes it, V_0 = V_s - R_s I_s + u, u >= 0, I_s u <= ``eps`` [MW]: a complementarity
+    at every step, which the joint optimum paid for with 148 / 775 Ipopt iterations on 1 / 2 trains
+    against 53 / 74 pinned (session 14, docs/benchmarks.md).
     """
     vs, rs = supply.voltage / 1e3, supply.resistance
+    vmin, vmax = supply.min_voltage / 1e3, supply.max_voltage / 1e3
     index = [(t, q) for t, running in enumerate(steps) for q in range(len(running))]
     m.T_net = pyo.RangeSet(0, len(steps) - 1)
-    m.V0 = pyo.Var(m.T_net, bounds=(supply.min_voltage / 1e3, supply.max_voltage / 1e3), initialize=vs)
     fed, drawn = (supply.max_regen_current / 1e3, supply.max_current / 1e3)  # [kA], inf: no limit
     m.Ipan = pyo.Var(index, bounds=(-fed if np.isfinite(fed) else None, drawn if np.isfinite(drawn) else None),
                      initialize=0.0)
-    m.Vpan = pyo.Var(index, bounds=(supply.min_voltage / 1e3, supply.max_voltage / 1e3), initialize=vs)
-    # the diode: V_0 = V_s - R_s I_s + u with I_s, u >= 0 and I_s u <= eps (relaxed complementarity:
-    # the bus floats above V_s only while I_s = 0). Measured in session 3 before the smooth variant
-    # was removed: 294 Ipopt iterations on one train where the smooth max((V_s - V_0) / R_s, 0) over 1 A took 1307, same energy.
-    m.Is = pyo.Var(m.T_net, bounds=(0.0, None), initialize=0.0)
-    m.float_up = pyo.Var(m.T_net, bounds=(0.0, None), initialize=0.0)
-    m.bus = pyo.Constraint(m.T_net, rule=lambda m, t: m.V0[t] == vs - rs * m.Is[t] + m.float_up[t])
-    m.diode = pyo.Constraint(m.T_net, rule=lambda m, t: m.Is[t] * m.float_up[t] <= eps)
+    m.Vpan = pyo.Var(index, bounds=(vmin, vmax), initialize=vs)
+    if floating:
+        # the diode: V_0 = V_s - R_s I_s + u with I_s, u >= 0 and I_s u <= eps (relaxed
+        # complementarity: the bus floats above V_s only while I_s = 0). Measured in session 3: 294
+        # Ipopt iterations on one train where the smooth max((V_s - V_0) / R_s, 0) over 1 A took 1307.
+        m.V0 = pyo.Var(m.T_net, bounds=(vmin, vmax), initialize=vs)
+        m.Is = pyo.Var(m.T_net, bounds=(0.0, None), initialize=0.0)
+        m.float_up = pyo.Var(m.T_net, bounds=(0.0, None), initialize=0.0)
+        m.bus = pyo.Constraint(m.T_net, rule=lambda m, t: m.V0[t] == vs - rs * m.Is[t] + m.float_up[t])
+        m.diode = pyo.Constraint(m.T_net, rule=lambda m, t: m.Is[t] * m.float_up[t] <= eps)
+    else:  # V_0 >= V_min bounds the substation current
+        m.Is = pyo.Var(m.T_net, bounds=(0.0, (vs - vmin) / max(rs, 1e-12)), initialize=0.0)
+        m.V0 = pyo.Expression(m.T_net, rule=lambda m, t: vs - rs * m.Is[t])
 
     def feeder(b, j, start, direction):
         x = start + direction * 0.5 * (b.s[j] + b.s[j + 1])

@@ -122,7 +122,9 @@ def solve_leg(task):
     tries = (NEAR_START, None) if warm else (None,)
     for n, options in enumerate(tries, 1):
         m = pyo.ConcreteModel()
-        b = timedomain.add_leg(m, "leg", leg, guess, one_handle=weights is not None)
+        span = slice(leg.start, leg.start + leg.steps)
+        b = timedomain.add_leg(m, "leg", leg, guess, one_handle=timedomain.pumping_pays(
+            leg.case.train, *(None if a is None else a[span] for a in (weights, allowance, credit))))
         m.objective = pyo.Objective(expr=_leg_cost(leg, b, weights, allowance, credit) * dt / leg_energy_ref(leg))
         if ahead is not None and buffer is not None:
             m.separation = pyo.ConstraintList()

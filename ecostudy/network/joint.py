@@ -10,13 +10,28 @@ from ecostudy.network.fleet import NEAR_START, REGULARISATION, energy_ref, solve
 from ecostudy.ocp import timedomain
 
 
-def joint(fleet, start):
-    """(e): all trains and the network in one NLP, substation energy minimised; from ``start``."""
+# MUMPS's METIS ordering instead of its automatic choice (session 14, 3 trains: 35 -> 26 s for
+# the same 105 iterations; SCOTCH was as fast but not deterministic: runs differed by 38 kW in a
+# step's power along a flat direction; on the legs and on one run's space NLP neither bought
+# anything measurable)
+ORDERING = {"mumps_pivot_order": 5}
+
+
+def joint(fleet, start, one_handle=False, floating=False):
+    """(e): all trains and the network in one NLP, substation energy minimised; from ``start``.
+
+    ``one_handle``: hold traction and braking apart in the NLP (a complementarity per train and
+    step). Off by default: doing both never lowers the substation energy (it raises the train's
+    draw), the solved legs are netted (``timedomain.leg_arrays``) and scored by the circuit.
+    ``floating``: the bus with the diode's complementarity instead of pinned at V_s - R_s I_s
+    (``circuit.add_network``: the same substation energy for given powers).
+    """
     t0 = time.perf_counter()
     m = pyo.ConcreteModel()
     blocks = []
     for i, legs in enumerate(fleet.legs):
-        blocks.append([timedomain.add_leg(m, f"t{i}_leg{k}", leg, start[i][k][:5]) for k, leg in enumerate(legs)])
+        blocks.append([timedomain.add_leg(m, f"t{i}_leg{k}", leg, start[i][k][:5], one_handle=one_handle)
+                       for k, leg in enumerate(legs)])
     steps = [[] for _ in range(fleet.steps)]
     for i, legs in enumerate(fleet.legs):
         for leg, b in zip(legs, blocks[i]):
@@ -25,24 +40,27 @@ def joint(fleet, start):
     if not all(steps):  # steps where no train runs carry no network variables
         keep = [t for t, s in enumerate(steps) if s]
         steps = [steps[t] for t in keep]
-    circuit.add_network(m, fleet.supply, steps)
-    _initialise_network(m, fleet, steps)
-    # the rheostat and friction brakes are interchangeable, and with no current the bus voltage is
+    circuit.add_network(m, fleet.supply, steps, floating=floating)
+    _initialise_network(m, fleet, steps, floating)
+    # the rheostat and friction brakes are interchangeable, and a floating bus with no current is
     # free: tiny costs on both remove these flat directions (Ipopt ran out of iterations on them)
     vs = fleet.supply.voltage / 1e3
-    regular = REGULARISATION * (sum(m.rheostat[k] for k in m.rheostat) + sum((m.V0[t] - vs) ** 2 for t in m.T_net))
+    regular = REGULARISATION * (sum(m.rheostat[k] for k in m.rheostat) +
+                                (sum((m.V0[t] - vs) ** 2 for t in m.T_net) if floating else 0.0))
     m.objective = pyo.Objective(expr=(sum(m.substation_mw[t] for t in m.T_net) + regular) * 1e3 * fleet.dt
                                 / energy_ref(fleet))
     build_s = time.perf_counter() - t0
-    outcome = solve_model(m, "joint optimum", NEAR_START)
+    outcome = solve_model(m, "joint optimum", {**NEAR_START, **ORDERING})
     runs = [[timedomain.leg_arrays(b) for b in bl] for bl in blocks]
-    return runs, {"build_s": build_s, "solve_s": outcome.seconds + outcome.nl_seconds,
+    own = sum(pyo.value(m.substation_mw[t]) for t in m.T_net) * fleet.dt / 3.6  # MW s -> kWh
+    return runs, {"build_s": build_s, "solve_s": outcome.seconds + outcome.nl_seconds, "nlp_substation_kWh": own,
                   "iterations": outcome.iterations, "status": outcome.status,
                   "variables": sum(1 for _ in m.component_data_objects(pyo.Var, active=True))}
 
 
-def _initialise_network(m, fleet, steps):
-    """Network variables from the numeric solve of the start point (Ipopt starts near physics)."""
+def _initialise_network(m, fleet, steps, floating):
+    """Network variables from the numeric solve of the start point (Ipopt starts near physics;
+    with the bus pinned, where the real bus floats the start is off by the float in eq. 7.8)."""
     width = max((len(running) for running in steps), default=0)
     xs, ps = np.full((len(steps), width), np.nan), np.zeros((len(steps), width))
     for t, running in enumerate(steps):
@@ -53,9 +71,10 @@ def _initialise_network(m, fleet, steps):
     vmin, vmax = fleet.supply.min_voltage / 1e3, fleet.supply.max_voltage / 1e3
     bus, i_s = flows["bus_voltage_V"] / 1e3, flows["substation_current_A"] / 1e3
     for t, running in enumerate(steps):
-        m.V0[t].set_value(float(np.clip(bus[t], vmin, vmax)))
         m.Is[t].set_value(float(i_s[t]))
-        m.float_up[t].set_value(max(float(bus[t] - fleet.supply.voltage / 1e3 + fleet.supply.resistance * i_s[t]), 0.0))
+        if floating:
+            m.V0[t].set_value(float(np.clip(bus[t], vmin, vmax)))
+            m.float_up[t].set_value(max(float(bus[t] - fleet.supply.voltage / 1e3 + fleet.supply.resistance * i_s[t]), 0.0))
         for q in range(len(running)):
             m.rheostat[t, q].set_value(max(-ps[t, q] - flows["fed_W"][t, q], 0.0) / 1e6)
             m.Ipan[t, q].set_value(float(flows["current_A"][t, q] / 1e3))

@@ -99,7 +99,8 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
     """Add one leg as a block ``m.<name>`` with variables s, v, ft, fb, fr and expression p [kW].
 
     ``guess``: (s, v) arrays on the leg's steps, optionally followed by (F_T, F_B, F_R) per step
-    [N]; else a trapezoidal speed profile. ``one_handle``: forbid traction and braking together.
+    [N]; else a trapezoidal speed profile. ``one_handle``: forbid traction and braking together,
+    at every step (True), none (False) or the steps where a boolean array per step is True.
     """
     case, train, n, dt = leg.case, leg.case.train, leg.steps, leg.dt
     b = pyo.Block()
@@ -136,10 +137,11 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
         return b.v[j] <= smooth_table(b.s[j], l_coef, 0.25 * width) - limit_margin
 
     # one handle: traction and braking never together. A discounted traction cost (rules 7.7 and
-    # 7.11) would otherwise buy "free" traction and sell it back as regenerated braking; with the
-    # plain energy cost doing both never pays, and the constraint (a complementarity) is left out
-    if one_handle:
-        b.one_handle = pyo.Constraint(b.I, rule=lambda b, j: b.ft[j] * b.fb[j] <= 1e-3)
+    # 7.11) would otherwise buy "free" traction and sell it back as regenerated braking; where doing
+    # both cannot pay (``pumping_pays``) the constraint, a complementarity, is left out
+    held = np.broadcast_to(np.asarray(one_handle, bool), (n,))
+    if held.any():
+        b.one_handle = pyo.Constraint([j for j in range(n) if held[j]], rule=lambda b, j: b.ft[j] * b.fb[j] <= 1e-3)
     b.kinematics = pyo.Constraint(b.I, rule=kinematics)
     b.dynamics = pyo.Constraint(b.I, rule=dynamics)
     b.limit = pyo.Constraint(pyo.RangeSet(1, n - 1), rule=limit)
@@ -182,8 +184,39 @@ class LegRun(NamedTuple):
     p: np.ndarray
 
 
+def pumping_pays(train, weights=None, allowance=None, credit=None):
+    """Per step, whether traction and braking together can lower a cost of w traction (traction
+    above ``allowance`` [kW] in full) less regeneration credited up to ``credit`` [kW] (no credit
+    below 10 kW, the credit hinge's width): adding dF to both forces costs at least
+    w dF v / eta_T and earns at most eta_R dF v, so only where w < eta_T eta_R, some traction is
+    discounted and some regeneration credited. Arrays per step (None: w = 1, no cap)."""
+    if weights is None:
+        return False
+    pays = np.asarray(weights, float) < train.traction_efficiency * train.regeneration_efficiency
+    if allowance is not None:
+        pays &= np.asarray(allowance, float) > 0.0
+    if credit is not None:
+        pays &= np.asarray(credit, float) >= 10.0
+    return pays
+
+
+def net_forces(b):
+    """Take the common part out of traction and braking at every step of a solved leg block
+    (where no one-handle constraint held them apart, the optimum may keep a little of both where
+    it costs nothing): the same net force, the regenerated share at most the braking force (also
+    where Ipopt left it above by its tolerance)."""
+    for j in b.I:
+        ft, fb = pyo.value(b.ft[j]), pyo.value(b.fb[j])
+        common = min(ft, fb)
+        b.ft[j].set_value(ft - common)
+        b.fb[j].set_value(fb - common)
+        if not b.fr[j].fixed:  # also within the solver's tolerance on F_R <= F_B
+            b.fr[j].set_value(min(pyo.value(b.fr[j]), fb - common))
+
+
 def leg_arrays(b):
-    """The :class:`LegRun` of a solved leg block."""
+    """The :class:`LegRun` of a solved leg block, traction and braking netted (:func:`net_forces`)."""
+    net_forces(b)
     s = np.array([pyo.value(b.s[j]) for j in b.K])
     v = np.array([pyo.value(b.v[j]) for j in b.K])
     ft, fb, fr = (np.array([pyo.value(x[j]) for j in b.I]) * FORCE_SCALE for x in (b.ft, b.fb, b.fr))

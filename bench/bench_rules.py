@@ -1,0 +1,73 @@
+"""Supervisor rules of a network study, each leg's one-handle constraint where doing both could pay
+(``timedomain.pumping_pays``, since session 14) against at every step (before), in one process.
+
+    .venv/bin/python bench/bench_rules.py studies/network_metro_2trains.yaml
+        [--rules receptivity triggering voltage dissension] [--variants everywhere pays]
+
+Per rule and variant: wall seconds of the supervisor rounds (``rules.supervised``, three rounds,
+legs serially), Ipopt iterations summed over the leg solves, the number of solves and the
+substation energy of each round (the start first).
+"""
+import argparse
+import shlex
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from ecostudy.analysis.single import solve_run  # noqa: E402
+from ecostudy.core.types import Timing  # noqa: E402
+from ecostudy.io.loaders import load_network_study  # noqa: E402
+from ecostudy.network import fleet, rules  # noqa: E402
+from ecostudy.ocp import timedomain  # noqa: E402
+
+PAYS = timedomain.pumping_pays
+
+
+def everywhere(train, weights=None, allowance=None, credit=None):
+    """Before session 14: the constraint at every step of a leg with weights (the rules' legs)."""
+    return weights is not None
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("study")
+    p.add_argument("--rules", nargs="+", default=["receptivity", "triggering", "voltage", "dissension"])
+    p.add_argument("--variants", nargs="+", default=["everywhere", "pays"], choices=["everywhere", "pays"])
+    args = p.parse_args()
+    print(f"`python bench/bench_rules.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
+    st = load_network_study(Path(args.study))
+    pairs = list(zip(st.stops[:-1], st.stops[1:]))
+    times = st.running_times or [solve_run(st.track, st.train, a, b, Timing(), objective="time", points=st.points,
+                                           verify_result=False).summary["running_time_s"] * (1 + st.supplement)
+                                 for a, b in pairs]
+    fl = fleet.plan(st.track, st.train, st.stops, times, st.dwell, st.offsets, st.names, st.dt, st.supply,
+                    st.points, st.buffer)
+    counts = []
+    solve_model = fleet.solve_model
+
+    def counted(m, what, options=None):
+        out = solve_model(m, what, options)
+        counts.append(out.iterations)
+        return out
+
+    fleet.solve_model = counted
+    start = rules.independent(fl)
+    print("| rule | one-handle | wall s | Ipopt iterations | leg solves | rounds (substation kWh) |")
+    print("|---|---|---|---|---|---|")
+    for rule in args.rules:
+        for variant in args.variants:
+            timedomain.pumping_pays = PAYS if variant == "pays" else everywhere
+            counts.clear()
+            t0 = time.perf_counter()
+            _, history = rules.supervised(fl, rule, start)
+            wall = time.perf_counter() - t0
+            print(f"| {rule} | {variant} | {wall:.1f} | {sum(counts)} | {len(counts)} | "
+                  f"{', '.join(f'{h:.3f}' for h in history)} |", flush=True)
+    timedomain.pumping_pays = PAYS
+
+
+if __name__ == "__main__":
+    main()
