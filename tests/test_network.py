@@ -150,6 +150,26 @@ def test_traction_and_braking_are_held_apart_only_where_doing_both_could_pay():
     assert overlap[True] > 1e3 and overlap[False] <= 1e-3 * (1 + 1e-6)
 
 
+def test_a_rounds_leg_whose_terms_did_not_change_is_not_solved_again():
+    """solve_train's memo (the supervisor rounds): the same weights, allowance, credit and train
+    ahead over a leg's steps, from its last run, return that run; a change on one leg's steps
+    re-solves that leg only."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station", "Centrum"], [56.0, 110.0], 10.0, [0.0], ["T1"], 2.0,
+                   SUPPLY, points=300)
+    weights, allowance, credit = np.ones(f.steps), np.zeros(f.steps), np.full(f.steps, 50.0)
+    memo = {}
+    first, _ = fleet.solve_train(f, 0, weights, guesses=rules.independent(f)[0], allowance=allowance,
+                                 credit=credit, memo=memo)
+    again, _ = fleet.solve_train(f, 0, weights, guesses=first, allowance=allowance, credit=credit, memo=memo)
+    assert all(a is b for a, b in zip(again, first))
+    second = f.legs[0][1]
+    credit = credit.copy()
+    credit[second.start + 3] = 80.0
+    third, outcomes = fleet.solve_train(f, 0, weights, guesses=again, allowance=allowance, credit=credit, memo=memo)
+    assert third[0] is first[0] and third[1] is not first[1] and outcomes[1].usable
+
+
 def test_trains_that_overlap_on_the_line_are_flagged():
     """A timetable that puts one train's head past the tail of the one ahead is never "ok"."""
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")

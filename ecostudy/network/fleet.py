@@ -90,7 +90,8 @@ def energy_ref(fleet):
     return sum(leg_energy_ref(leg) for leg in fleet.legs[0])
 
 
-def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None, credit=None, mapper=map):
+def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None, credit=None, mapper=map,
+                memo=None):
     """Train ``i`` alone: minimise sum (w_t traction - regeneration) dt over its legs.
 
     ``weights``: traction weight per clock step (default 1). ``allowance``: power [kW] per clock
@@ -102,13 +103,35 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
     problem as one NLP of all legs, 2.3x cheaper on the 19-leg regional study and no worse (the
     leg NLP is flat: one NLP of the whole train stopped up to 2.8 % above the legs' own optima;
     docs/benchmarks.md). ``mapper``: how the legs are mapped over (``map``, or a process pool's).
+    ``memo``: a dict kept across calls (the supervisor rounds); a leg whose weights, allowance,
+    credit and train ahead over its own steps are those of its last solve, started from that
+    solve's run, is that run again and is not solved (the same problem from its own optimum).
     Returns ([(s, v, ft, fb, fr, p) per leg], [solver outcome per leg]).
     """
     tasks = [(leg, f"train {fleet.names[i]}, leg {k + 1}", fleet.dt, fleet.buffer,
               guesses[k][:5] if guesses is not None else _guess(fleet, leg), guesses is not None,
               weights, allowance, credit, ahead) for k, leg in enumerate(fleet.legs[i])]
-    solved = list(mapper(solve_leg, tasks))
-    return [run for run, _ in solved], [outcome for _, outcome in solved]
+    terms = [_own_terms(leg, weights, allowance, credit, ahead) for leg in fleet.legs[i]]
+    memo = {} if memo is None else memo
+    known = [memo.get((i, k)) for k in range(len(tasks))]
+    again = [k for k, old in enumerate(known) if old is None or guesses is None or old[1] is not guesses[k]
+             or not _same(old[0], terms[k])]
+    solved = dict(zip(again, mapper(solve_leg, [tasks[k] for k in again])))
+    for k, (run, outcome) in solved.items():
+        memo[(i, k)] = (terms[k], run, outcome)
+    out = [solved[k] if k in solved else known[k][1:] for k in range(len(tasks))]
+    return [run for run, _ in out], [outcome for _, outcome in out]
+
+
+def _own_terms(leg, *arrays):
+    """The parts of per-clock-step arrays (None: none) on a leg's step boundaries."""
+    span = slice(leg.start, leg.start + leg.steps + 1)
+    return tuple(None if a is None else np.asarray(a, float)[span] for a in arrays)
+
+
+def _same(a, b):
+    return all((x is None and y is None) or (x is not None and y is not None and np.array_equal(x, y, equal_nan=True))
+               for x, y in zip(a, b))
 
 
 def solve_leg(task):

@@ -167,12 +167,13 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     best = (totals["substation_kWh"], list(runs))
     history = [best[0]]
     order = departure_order(fleet)
+    memo = {}  # legs whose terms did not change since their last solve are not solved again
     for _ in range(rounds):
         for rank, i in enumerate(order):
             weights, allowance = rule_terms(fleet, rule, runs, i)
             ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]]) if rank and fleet.buffer else None
             runs[i] = solve_train(fleet, i, weights, guesses=runs[i], allowance=allowance,
-                                  credit=receptivity(fleet, runs, i), ahead=ahead, mapper=mapper)[0]
+                                  credit=receptivity(fleet, runs, i), ahead=ahead, mapper=mapper, memo=memo)[0]
         _, _, totals = evaluate(fleet, runs)
         history.append(totals["substation_kWh"])
         if history[-1] < best[0]:
