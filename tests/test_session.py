@@ -23,12 +23,14 @@ def _shared_expressions_with_a_fixed_variable():
     return m
 
 
-@pytest.mark.parametrize("options, agrees", [(session.NL_OPTIONS, True), (None, False)])
+@pytest.mark.parametrize("options, agrees", [(session.NL_OPTIONS, True), (None, True),
+                                             ({"export_defined_variables": True}, False)])
 def test_the_written_nlp_evaluates_as_the_pyomo_model(options, agrees):
-    """Pyomo 6.10's NL writer with named expressions as AMPL defined variables (its default,
-    ``options=None``) hands Ipopt another constraint and objective on this model; ecostudy writes
-    them inline (``session.NL_OPTIONS``) and the values agree. The default's disagreement is
-    asserted too, so this test notices when a Pyomo release fixes it."""
+    """Pyomo 6.10's NL writer with named expressions as AMPL defined variables (Pyomo's default)
+    hands Ipopt another constraint and objective on this model; ecostudy writes them inline
+    (``session.NL_OPTIONS``, and the writer's default once ``ocp.session`` is imported: ``None``,
+    as Pyomo's own cyipopt interface under MindtPy writes) and the values agree. The disagreement
+    is asserted too, so this test notices when a Pyomo release fixes it."""
     m = _shared_expressions_with_a_fixed_variable()
     CyIpoptNLP, PyomoNLP = session._imports()
     nlp = PyomoNLP(m, nl_file_options=options)

@@ -15,6 +15,7 @@ from pathlib import Path
 import cyipopt
 import numpy as np
 import pyomo
+from pyomo.repn.plugins.nl_writer import NLWriter
 from pyomo.contrib.pynumero.asl import AmplInterface
 from pyomo.contrib.pynumero.interfaces.cyipopt_interface import CyIpoptNLP
 from pyomo.contrib.pynumero.interfaces.pyomo_nlp import PyomoNLP
@@ -69,6 +70,9 @@ class Outcome:
 # times measured on the default study (NL write 0.74-0.83 s against 0.78-0.97 s, Ipopt 1.60-1.64
 # against 1.47-1.58 s, energy equal to 4e-9).
 NL_OPTIONS = {"export_defined_variables": False}
+# ... and the same default for every NL file written in this process (MindtPy's NLP subproblems
+# in ``ocp/modechoice.py`` go through Pyomo's own cyipopt interface, which passes no options)
+NLWriter.CONFIG.export_defined_variables = False
 
 REPO_ASL = Path(__file__).resolve().parents[2] / ".pyomo" / "lib" / "libpynumero_ASL.so"
 
