@@ -154,8 +154,8 @@ def add_network(m, supply, steps, eps=1e-5, floating=False):
     below V_max more easily). The NLP's rheostats and bus voltages at floating steps are then not
     the physical ones; every strategy is scored by ``solve_steps``. ``floating=True``: the bus as
     the diode makes it, V_0 = V_s - R_s I_s + u, u >= 0, I_s u <= ``eps`` [MW]: a complementarity
-    at every step, which the joint optimum paid for with 148 / 775 Ipopt iterations on 1 / 2 trains
-    against 53 / 74 pinned (session 14, docs/benchmarks.md).
+    at every step, which the joint optimum paid for with 125 / 1100 Ipopt iterations on 1 / 2 trains
+    against 53 / 79 pinned (session 14, docs/benchmarks.md).
     """
     vs, rs = supply.voltage / 1e3, supply.resistance
     vmin, vmax = supply.min_voltage / 1e3, supply.max_voltage / 1e3

@@ -130,6 +130,7 @@ def _own_terms(leg, *arrays):
 
 
 def _same(a, b):
+    """Whether two tuples of :func:`_own_terms` hold the same arrays (NaN equal to NaN)."""
     return all((x is None and y is None) or (x is not None and y is not None and np.array_equal(x, y, equal_nan=True))
                for x, y in zip(a, b))
 
