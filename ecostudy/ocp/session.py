@@ -66,9 +66,9 @@ class Outcome:
 # inside one that several named Expressions share (a leg's mean speed at its fixed end speed, used
 # by its traction and regeneration power), the constraint that uses their sum reached Ipopt with a
 # different value than Pyomo's (found in session 14: the joint optimum's power balance at the last
-# step of each leg, 74 kW apart; tests/test_session.py). Written inline instead: the same sizes and
-# times measured on the default study (NL write 0.74-0.83 s against 0.78-0.97 s, Ipopt 1.60-1.64
-# against 1.47-1.58 s, energy equal to 4e-9).
+# step of each leg, 74 kW apart; tests/test_session.py). Written inline instead, at a cost on the
+# default study's space NLP (which the bug did not hit): NL write unchanged, Ipopt about 12 % longer
+# (quiet machine, alternating: 1.40-1.58 s against 1.22-1.36 s; energy equal to 4e-9).
 NL_OPTIONS = {"export_defined_variables": False}
 # ... and the same default for every NL file written in this process (MindtPy's NLP subproblems
 # in ``ocp/modechoice.py`` go through Pyomo's own cyipopt interface, which passes no options)
