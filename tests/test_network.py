@@ -129,16 +129,16 @@ def test_traction_and_braking_are_held_apart_only_where_doing_both_could_pay():
     constraint holds there (``pumping_pays``) and nowhere else; the solved leg is netted."""
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
     assert train.traction_efficiency * train.regeneration_efficiency == pytest.approx(0.68)
-    pays = timedomain.pumping_pays(train, np.array([1.0, 0.7, 0.6, 0.0, 0.0, 0.0]),
+    pays = fleet.pumping_pays(train, np.array([1.0, 0.7, 0.6, 0.0, 0.0, 0.0]),
                                    np.array([0.0, 50.0, 50.0, 0.0, 50.0, 50.0]), np.array([50.0] * 5 + [5.0]))
     assert pays.tolist() == [False, False, True, False, True, False]
-    assert timedomain.pumping_pays(train) is False
+    assert fleet.pumping_pays(train) is False
     f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 2.0, SUPPLY, points=300)
     leg = f.legs[0][0]
     free = np.zeros(f.steps)  # traction weighs nothing up to 1 MW, regeneration credited up to 1 MW
     terms = (free, np.full(f.steps, 1e3), np.full(f.steps, 1e3))
     overlap = {}
-    for held in (False, timedomain.pumping_pays(train, *terms)):
+    for held in (False, fleet.pumping_pays(train, *terms)):
         m = pyo.ConcreteModel()
         b = timedomain.add_leg(m, "leg", leg, fleet._guess(f, leg), one_handle=held)
         m.objective = pyo.Objective(expr=fleet._leg_cost(leg, b, *terms) * f.dt / fleet.leg_energy_ref(leg))

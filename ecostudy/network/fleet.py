@@ -147,7 +147,7 @@ def solve_leg(task):
     for n, options in enumerate(tries, 1):
         m = pyo.ConcreteModel()
         span = slice(leg.start, leg.start + leg.steps)
-        b = timedomain.add_leg(m, "leg", leg, guess, one_handle=timedomain.pumping_pays(
+        b = timedomain.add_leg(m, "leg", leg, guess, one_handle=pumping_pays(
             leg.case.train, *(None if a is None else a[span] for a in (weights, allowance, credit))))
         m.objective = pyo.Objective(expr=_leg_cost(leg, b, weights, allowance, credit) * dt / leg_energy_ref(leg))
         if ahead is not None and buffer is not None:
@@ -165,6 +165,27 @@ def solve_leg(task):
         return timedomain.leg_arrays(b), outcome
 
 
+HINGE_KW = 10.0  # [kW] width of the smooth min/max in a leg's cost (allowance, credit)
+
+
+def pumping_pays(train, weights=None, allowance=None, credit=None):
+    """Per step, whether traction and braking together can lower a cost of w traction (traction
+    above ``allowance`` [kW] in full) less regeneration credited up to ``credit`` [kW] (no credit
+    below ``HINGE_KW``, the credit hinge's width): adding dF to both forces costs at least
+    w dF v / eta_T and earns at most eta_R dF v, so only where w < eta_T eta_R, some traction is
+    discounted and some regeneration credited (the cost of :func:`_leg_cost`). Arrays per step
+    (None: w = 1, no cap)."""
+    if weights is None:
+        return False
+    pays = np.asarray(weights, float) < train.traction_efficiency * train.regeneration_efficiency
+    if allowance is not None:
+        pays &= np.asarray(allowance, float) > 0.0
+    if credit is not None:
+        pays &= np.asarray(credit, float) >= HINGE_KW
+    return pays
+
+
+
 def _leg_cost(leg, b, weights, allowance, credit):
     """sum over the leg's steps of w traction - credited regeneration [kW] (:func:`solve_train`)."""
 
@@ -175,13 +196,13 @@ def _leg_cost(leg, b, weights, allowance, credit):
             return b.traction_kw[j]  # nothing offered: w min(P, 0) + max(P, 0) = P, no smoothing
         if allowance is None or wt >= 1.0:
             return wt * b.traction_kw[j]
-        return wt * b.traction_kw[j] + (1 - wt) * hinge(b.traction_kw[j] - float(allowance[t]), 10.0)
+        return wt * b.traction_kw[j] + (1 - wt) * hinge(b.traction_kw[j] - float(allowance[t]), HINGE_KW)
 
-    def regen_credit(j):  # min(regenerated, what the line takes) [kW], smooth over 10 kW
+    def regen_credit(j):  # min(regenerated, what the line takes) [kW], smooth over HINGE_KW
         if credit is None:
             return b.regen_kw[j]
         cap = float(credit[leg.start + j])  # the clock step, as ``t`` above
-        return 0.0 if cap < 10.0 else b.regen_kw[j] - hinge(b.regen_kw[j] - cap, 10.0)
+        return 0.0 if cap < HINGE_KW else b.regen_kw[j] - hinge(b.regen_kw[j] - cap, HINGE_KW)
 
     return sum(traction_cost(j) - regen_credit(j) for j in b.I)
 

@@ -64,15 +64,16 @@ class Outcome:
 
 # Pyomo 6.10's NL writer exports named Expressions as AMPL defined variables; with a fixed variable
 # inside one that several named Expressions share (a leg's mean speed at its fixed end speed, used
-# by its traction and regeneration power), the constraint that uses their sum reached Ipopt with a
-# different value than Pyomo's (found in session 14: the joint optimum's power balance at the last
+# by its traction and regeneration power), the constraint that uses their sum reached Ipopt with
+# other values and derivatives than Pyomo's (found in session 14: the joint optimum's power balance at the last
 # step of each leg, 74 kW apart; tests/test_session.py). Written inline instead, at a cost on the
 # default study's space NLP (which the bug did not hit): NL write unchanged, Ipopt about 12 % longer
 # (quiet machine, alternating: 1.40-1.58 s against 1.22-1.36 s; energy equal to 4e-9).
 NL_OPTIONS = {"export_defined_variables": False}
 # ... and the same default for every NL file written in this process (MindtPy's NLP subproblems
 # in ``ocp/modechoice.py`` go through Pyomo's own cyipopt interface, which passes no options)
-NLWriter.CONFIG.export_defined_variables = False
+for _key, _value in NL_OPTIONS.items():
+    setattr(NLWriter.CONFIG, _key, _value)
 
 REPO_ASL = Path(__file__).resolve().parents[2] / ".pyomo" / "lib" / "libpynumero_ASL.so"
 

@@ -138,7 +138,7 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
 
     # one handle: traction and braking never together. A discounted traction cost (rules 7.7 and
     # 7.11) would otherwise buy "free" traction and sell it back as regenerated braking; where doing
-    # both cannot pay (``pumping_pays``) the constraint, a complementarity, is left out
+    # both cannot pay (the caller's ``one_handle`` mask) the constraint, a complementarity, is left out
     held = np.broadcast_to(np.asarray(one_handle, bool), (n,))
     if held.any():
         b.one_handle = pyo.Constraint([j for j in range(n) if held[j]], rule=lambda b, j: b.ft[j] * b.fb[j] <= 1e-3)
@@ -182,22 +182,6 @@ class LegRun(NamedTuple):
     fb: np.ndarray
     fr: np.ndarray
     p: np.ndarray
-
-
-def pumping_pays(train, weights=None, allowance=None, credit=None):
-    """Per step, whether traction and braking together can lower a cost of w traction (traction
-    above ``allowance`` [kW] in full) less regeneration credited up to ``credit`` [kW] (no credit
-    below 10 kW, the credit hinge's width): adding dF to both forces costs at least
-    w dF v / eta_T and earns at most eta_R dF v, so only where w < eta_T eta_R, some traction is
-    discounted and some regeneration credited. Arrays per step (None: w = 1, no cap)."""
-    if weights is None:
-        return False
-    pays = np.asarray(weights, float) < train.traction_efficiency * train.regeneration_efficiency
-    if allowance is not None:
-        pays &= np.asarray(allowance, float) > 0.0
-    if credit is not None:
-        pays &= np.asarray(credit, float) >= 10.0
-    return pays
 
 
 def net_forces(b):
