@@ -21,6 +21,7 @@ from ecostudy.analysis.single import solve_run  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_network_study  # noqa: E402
 from ecostudy.network import fleet, rules  # noqa: E402
+from ecostudy.ocp import session  # noqa: E402
 
 PAYS = fleet.pumping_pays
 
@@ -45,14 +46,14 @@ def main():
     fl = fleet.plan(st.track, st.train, st.stops, times, st.dwell, st.offsets, st.names, st.dt, st.supply,
                     st.points, st.buffer)
     counts = []
-    solve_model = fleet.solve_model
+    solve = session.Session.solve
 
-    def counted(m, what, options=None):
-        out = solve_model(m, what, options)
+    def counted(self, options=None, x0=None):
+        out = solve(self, options, x0)
         counts.append(out.iterations)
         return out
 
-    fleet.solve_model = counted
+    session.Session.solve = counted
     start = rules.independent(fl)
     print("| rule | one-handle | wall s | Ipopt iterations | leg solves | rounds (substation kWh) |")
     print("|---|---|---|---|---|---|")

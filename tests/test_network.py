@@ -150,7 +150,7 @@ def test_traction_and_braking_are_held_apart_only_where_doing_both_could_pay():
     assert overlap[True] > 1e3 and overlap[False] <= 1e-3 * (1 + 1e-6)
 
 
-def test_a_rounds_leg_whose_terms_did_not_change_is_not_solved_again():
+def test_a_rounds_leg_whose_terms_did_not_change_is_not_solved_again_and_a_changed_one_starts_warm():
     """solve_train's memo (the supervisor rounds): the same weights, allowance, credit and train
     ahead over a leg's steps, from its last run, return that run; a change on one leg's steps
     re-solves that leg only."""
@@ -166,8 +166,27 @@ def test_a_rounds_leg_whose_terms_did_not_change_is_not_solved_again():
     second = f.legs[0][1]
     credit = credit.copy()
     credit[second.start + 3] = 80.0
+    rounds = dict(memo)
     third, outcomes = fleet.solve_train(f, 0, weights, guesses=again, allowance=allowance, credit=credit, memo=memo)
     assert third[0] is first[0] and third[1] is not first[1] and outcomes[1].usable
+    # the re-solved leg started from its last solve's primal and dual point: where a solve from
+    # the run alone lands, in fewer iterations
+    fresh, fresh_outcomes = fleet.solve_train(f, 0, weights, guesses=again, allowance=allowance, credit=credit)
+    assert np.allclose(third[1].v, fresh[1].v, atol=1e-5)
+    assert outcomes[1].iterations < fresh_outcomes[1].iterations
+    # a larger change (traction at half weight up to 300 kW on ten steps, where pumping pays: the
+    # one-handle constraint on steps it was not before) is no worse than a solve from the run alone
+    weights, allowance = weights.copy(), np.full(f.steps, 300.0)
+    weights[second.start + 10:second.start + 20] = 0.5
+    assert fleet.pumping_pays(train, weights, allowance, credit).sum() == 10
+    costs = []
+    for kept in (rounds, None):
+        runs, outs = fleet.solve_train(f, 0, weights, guesses=again, allowance=allowance, credit=credit, memo=kept)
+        m = pyo.ConcreteModel()
+        b = timedomain.add_leg(m, "leg", second, runs[1][:5])
+        costs.append(pyo.value(fleet._leg_cost(second, b, weights, allowance, credit)))
+        assert outs[1].usable and scoring.verify_leg(second, runs[1])["passed"]
+    assert costs[0] <= costs[1] + 1e-4 * abs(costs[1])
 
 
 def test_trains_that_overlap_on_the_line_are_flagged():

@@ -70,6 +70,10 @@ def _guess(fleet, leg):
 NEAR_START = {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_strategy": "monotone", "mu_init": 1e-3}
 
 
+# a re-solve of a leg from its last solve's primal and dual point (``solve_leg``)
+WARM_DUALS = {**session.WARM_START, "mu_init": 1e-6, "mu_strategy": "monotone"}
+
+
 REGULARISATION = 1e-3  # [-] weight of rheostat power and bus-voltage offset in the joint objective
 
 
@@ -108,12 +112,12 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
     solve's run, is that run again and is not solved (the same problem from its own optimum).
     Returns ([(s, v, ft, fb, fr, p) per leg], [solver outcome per leg]).
     """
-    tasks = [(leg, f"train {fleet.names[i]}, leg {k + 1}", fleet.dt, fleet.buffer,
-              guesses[k][:5] if guesses is not None else _guess(fleet, leg), guesses is not None,
-              weights, allowance, credit, ahead) for k, leg in enumerate(fleet.legs[i])]
-    terms = [_own_terms(leg, weights, allowance, credit, ahead) for leg in fleet.legs[i]]
     memo = {} if memo is None else memo
-    known = [memo.get((i, k)) for k in range(len(tasks))]
+    known = [memo.get((i, k)) for k in range(len(fleet.legs[i]))]
+    tasks = [(leg, f"train {fleet.names[i]}, leg {k + 1}", fleet.dt, fleet.buffer,
+              guesses[k][:5] if guesses is not None else _guess(fleet, leg),
+              _warm(guesses, k, known[k]), weights, allowance, credit, ahead) for k, leg in enumerate(fleet.legs[i])]
+    terms = [_own_terms(leg, weights, allowance, credit, ahead) for leg in fleet.legs[i]]
     again = [k for k, old in enumerate(known) if old is None or guesses is None or old[1] is not guesses[k]
              or not _same(old[0], terms[k])]
     solved = dict(zip(again, mapper(solve_leg, [tasks[k] for k in again])))
@@ -121,6 +125,17 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
         memo[(i, k)] = (terms[k], run, outcome)
     out = [solved[k] if k in solved else known[k][1:] for k in range(len(tasks))]
     return [run for run, _ in out], [outcome for _, outcome in out]
+
+
+def _warm(guesses, k, known):
+    """How leg ``k`` starts (``solve_leg``'s ``warm``): cold without guesses; from the primal and
+    dual point of its last solve in these rounds (``known``: its memo entry); else near the guess.
+    (A point from a solve of another cost, the independent run's for the first round, started
+    the 2-train study's legs worse than the guess alone: 48-75 against 30-46 iterations.)"""
+    if guesses is None:
+        return False
+    point = getattr(guesses[k], "point", None)
+    return point if known is not None and point is not None else True
 
 
 def _own_terms(leg, *arrays):
@@ -138,12 +153,16 @@ def _same(a, b):
 def solve_leg(task):
     """One leg of :func:`solve_train`: (leg, label, dt, buffer, guess, warm, weights, allowance,
     credit, ahead) -> (LegRun, solver outcome); a top-level function so a process pool can run it.
-    A warm solve (from a previous run, the rounds) stays near its start (``NEAR_START``: measured
-    2-3x fewer iterations on the regional study's hardest legs, 1130 -> 333 and 823 -> 441, and
-    lower costs); where that fails (one leg of the 20-stop study reached 3000 iterations) the leg
-    is solved again with Ipopt's defaults before the failure is raised."""
+    ``warm``: False (a first solve), True (from a previous run) or that run's ``point`` (its primal
+    and dual point, :func:`_warm`). From a point, Ipopt starts from its multipliers too with a small barrier
+    (``WARM_DUALS``: measured on the 2-train study's rounds, 523 -> 312 iterations for the
+    receptivity rule); from a run alone it stays near its start (``NEAR_START``: measured 2-3x
+    fewer iterations on the regional study's hardest legs, 1130 -> 333 and 823 -> 441, and lower
+    costs). Where a warm solve fails (one leg of the 20-stop study reached 3000 iterations) the
+    leg is solved again the next way down, Ipopt's defaults last, before the failure is raised."""
     leg, label, dt, buffer, guess, warm, weights, allowance, credit, ahead = task
-    tries = (NEAR_START, None) if warm else (None,)
+    point = warm if isinstance(warm, session.NamedPoint) else None
+    tries = ((WARM_DUALS,) if point else ()) + ((NEAR_START, None) if warm else (None,))
     for n, options in enumerate(tries, 1):
         m = pyo.ConcreteModel()
         span = slice(leg.start, leg.start + leg.steps)
@@ -156,13 +175,16 @@ def solve_leg(task):
                 x_ahead = ahead[leg.start + j]
                 if np.isfinite(x_ahead):  # head-to-tail: the train ahead is train.length long
                     m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j] >= buffer + leg.case.train.length)
-        try:
-            outcome = solve_model(m, label, options)
-        except SolverError:
+        nlp = session.Session(m)
+        if options is WARM_DUALS:
+            nlp.start_from(point)
+        outcome = nlp.solve(options)
+        outcome.nl_seconds = nlp.nl_seconds
+        if not outcome.usable:
             if n == len(tries):
-                raise
+                raise SolverError(f"{label}: Ipopt {outcome.status} after {outcome.iterations} iterations")
             continue
-        return timedomain.leg_arrays(b), outcome
+        return timedomain.leg_arrays(b)._replace(point=nlp.named_point()), outcome
 
 
 HINGE_KW = 10.0  # [kW] width of the smooth min/max in a leg's cost (allowance, credit)

@@ -62,6 +62,14 @@ class Outcome:
         return self.status in ("optimal", "acceptable") or self.max_violation < 1e-6
 
 
+@dataclass
+class NamedPoint:
+    """A solved point by Pyomo component name: primal[var] = (value, lower bound multiplier, upper
+    bound multiplier), dual[constraint] = multiplier (:meth:`Session.named_point`)."""
+    primal: dict
+    dual: dict
+
+
 # Pyomo 6.10's NL writer exports named Expressions as AMPL defined variables; with a fixed variable
 # inside one that several named Expressions share (a leg's mean speed at its fixed end speed, used
 # by its traction and regeneration power), the constraint that uses their sum reached Ipopt with
@@ -139,6 +147,27 @@ class Session:
         index = np.asarray(self.nlp.get_primal_indices(list(variables)), dtype=int)
         values = np.asarray(values, dtype=float)
         self.x[index] = np.clip(values, self.nlp.primals_lb()[index], self.nlp.primals_ub()[index]) if clip else values
+
+    def named_point(self):
+        """The last solve's primal and dual point by component name (a :class:`NamedPoint`), the start
+        of :meth:`start_from` for another model of the same names (another structure allowed)."""
+        constraints, lower, upper = self.multipliers
+        names = self.nlp.primals_names()
+        return NamedPoint({n: (x, zl, zu) for n, x, zl, zu in zip(names, self.x, lower, upper)},
+                          dict(zip(self.nlp.constraint_names(), constraints)))
+
+    def start_from(self, point):
+        """Start the next warm solve (``WARM_START`` options) from a :class:`NamedPoint`: variables and
+        constraints by name; a constraint the point lacks starts with multiplier 0, a variable with
+        its own start and bound multipliers 0 (Ipopt pushes them inside)."""
+        n = self.nlp.n_primals()
+        lower, upper = np.zeros(n), np.zeros(n)
+        for k, name in enumerate(self.nlp.primals_names()):
+            if name in point.primal:
+                self.x[k], lower[k], upper[k] = point.primal[name]
+        self.x = np.clip(self.x, self.nlp.primals_lb(), self.nlp.primals_ub())
+        duals = np.array([point.dual.get(name, 0.0) for name in self.nlp.constraint_names()], dtype=float)
+        self.multipliers = (duals, lower, upper)
 
     def solve(self, options=None, x0=None):
         """Solve from ``x0`` (default: the last solution); loads the point into the model."""
