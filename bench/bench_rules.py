@@ -1,5 +1,5 @@
 """Supervisor rules of a network study, each leg's one-handle constraint where doing both could pay
-(``fleet.pumping_pays``, since session 14) against at every step (before), in one process.
+(``legs.pumping_pays``, since session 14) against at every step (before), in one process.
 
     .venv/bin/python bench/bench_rules.py studies/network_metro_2trains.yaml
         [--rules receptivity triggering voltage dissension] [--variants everywhere pays]
@@ -20,10 +20,10 @@ sys.path.insert(0, str(ROOT))
 from ecostudy.analysis.single import solve_run  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_network_study  # noqa: E402
-from ecostudy.network import fleet, rules  # noqa: E402
+from ecostudy.network import fleet, legs, rules  # noqa: E402
 from ecostudy.ocp import session  # noqa: E402
 
-PAYS = fleet.pumping_pays
+PAYS = legs.pumping_pays
 
 
 def everywhere(train, weights=None, allowance=None, credit=None):
@@ -59,14 +59,14 @@ def main():
     print("|---|---|---|---|---|---|")
     for rule in args.rules:
         for variant in args.variants:
-            fleet.pumping_pays = PAYS if variant == "pays" else everywhere
+            legs.pumping_pays = PAYS if variant == "pays" else everywhere
             counts.clear()
             t0 = time.perf_counter()
             _, history = rules.supervised(fl, rule, start)
             wall = time.perf_counter() - t0
             print(f"| {rule} | {variant} | {wall:.1f} | {sum(counts)} | {len(counts)} | "
                   f"{', '.join(f'{h:.3f}' for h in history)} |", flush=True)
-    fleet.pumping_pays = PAYS
+    legs.pumping_pays = PAYS
 
 
 if __name__ == "__main__":

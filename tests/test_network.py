@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 import pyomo.environ as pyo
 
-from ecostudy.network import fleet, scoring, strategies, rules
+from ecostudy.network import fleet, legs, scoring, strategies, rules
 from ecostudy.network.joint import joint as joint_optimum
 from ecostudy.core.types import Supply
 from ecostudy.network import circuit
@@ -129,19 +129,19 @@ def test_traction_and_braking_are_held_apart_only_where_doing_both_could_pay():
     constraint holds there (``pumping_pays``) and nowhere else; the solved leg is netted."""
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
     assert train.traction_efficiency * train.regeneration_efficiency == pytest.approx(0.68)
-    pays = fleet.pumping_pays(train, np.array([1.0, 0.7, 0.6, 0.0, 0.0, 0.0]),
+    pays = legs.pumping_pays(train, np.array([1.0, 0.7, 0.6, 0.0, 0.0, 0.0]),
                                    np.array([0.0, 50.0, 50.0, 0.0, 50.0, 50.0]), np.array([50.0] * 5 + [5.0]))
     assert pays.tolist() == [False, False, True, False, True, False]
-    assert fleet.pumping_pays(train) is False
+    assert legs.pumping_pays(train) is False
     f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 2.0, SUPPLY, points=300)
     leg = f.legs[0][0]
     free = np.zeros(f.steps)  # traction weighs nothing up to 1 MW, regeneration credited up to 1 MW
     terms = (free, np.full(f.steps, 1e3), np.full(f.steps, 1e3))
     overlap = {}
-    for held in (False, fleet.pumping_pays(train, *terms)):
+    for held in (False, legs.pumping_pays(train, *terms)):
         m = pyo.ConcreteModel()
         b = timedomain.add_leg(m, "leg", leg, fleet._guess(f, leg), one_handle=held)
-        m.objective = pyo.Objective(expr=fleet._leg_cost(leg, b, *terms) * f.dt / fleet.leg_energy_ref(leg))
+        m.objective = pyo.Objective(expr=legs.leg_cost(b, legs.cost_coefficients(leg, *terms)) * f.dt / legs.leg_energy_ref(leg))
         assert session.solve(m).usable
         overlap[held is False] = max(pyo.value(b.ft[j] * b.fb[j]) for j in b.I)  # kN^2
         run = timedomain.leg_arrays(b)
@@ -178,13 +178,13 @@ def test_a_rounds_leg_whose_terms_did_not_change_is_not_solved_again_and_a_chang
     # one-handle constraint on steps it was not before) is no worse than a solve from the run alone
     weights, allowance = weights.copy(), np.full(f.steps, 300.0)
     weights[second.start + 10:second.start + 20] = 0.5
-    assert fleet.pumping_pays(train, weights, allowance, credit).sum() == 10
+    assert legs.pumping_pays(train, weights, allowance, credit).sum() == 10
     costs = []
     for kept in (rounds, None):
         runs, outs = fleet.solve_train(f, 0, weights, guesses=again, allowance=allowance, credit=credit, memo=kept)
         m = pyo.ConcreteModel()
         b = timedomain.add_leg(m, "leg", second, runs[1][:5])
-        costs.append(pyo.value(fleet._leg_cost(second, b, weights, allowance, credit)))
+        costs.append(pyo.value(legs.leg_cost(b, legs.cost_coefficients(second, weights, allowance, credit))))
         assert outs[1].usable and scoring.verify_leg(second, runs[1])["passed"]
     assert costs[0] <= costs[1] + 1e-4 * abs(costs[1])
 
@@ -319,3 +319,35 @@ def test_joint_optimum_keeps_the_current_limits_that_independent_runs_break():
     alone, joint = out["independent"]["totals"], out["joint"]["totals"]
     assert alone["unserved_kWh"] > 0.1 and alone["status"].startswith("flagged")
     assert joint["unserved_kWh"] < 1e-3 and joint["status"] == "ok" and joint["all_verified"]
+
+
+def test_a_leg_program_written_once_solves_each_cost_as_its_own_nlp_does():
+    """legs.LegProgram: the cost's coefficients as variables held by bounds, the one-handle
+    constraint at every step with its bound lifted where doing both cannot pay, and the train
+    ahead as a bound on the distance: two costs solved in turn by one written program land where
+    a one-off NLP of each cost's own numbers does (the same cost to 1e-5, verified runs), the
+    held steps kept apart and the distance bound kept."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 2.0, SUPPLY, points=300)
+    leg = f.legs[0][0]
+    guess = rules.independent(f)[0][0][:5]
+    half = np.ones(f.steps)
+    half[5:15] = 0.5
+    top = np.full(leg.steps + 1, leg.case.segment.distance)
+    top[10] = 0.9 * guess[0][10]  # a train ahead, somewhere
+    program = legs.LegProgram(leg)
+    for weights, allowance, credit in ((half, np.full(f.steps, 300.0), np.full(f.steps, 50.0)),
+                                       (None, None, np.full(f.steps, 20.0))):
+        coefficients = legs.cost_coefficients(leg, weights, allowance, credit)
+        held = legs.pumping_pays(train, weights, allowance, credit)
+        costs = []
+        for solver in (program, legs.LegProgram(leg, coefficients, held, guess)):
+            assert solver.solve(coefficients, held, top, guess, legs.NEAR_START).optimal
+            b = solver.b
+            assert pyo.value(b.s[10]) <= top[10] + 1e-6
+            if np.any(held):
+                assert max(pyo.value(b.ft[j] * b.fb[j]) for j in b.I if held[j]) <= 1e-3 * (1 + 1e-6)
+            run = solver.run()
+            assert scoring.verify_leg(leg, run)["passed"]
+            costs.append(pyo.value(legs.leg_cost(b, coefficients)))
+        assert costs[0] == pytest.approx(costs[1], rel=1e-5)

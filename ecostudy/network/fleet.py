@@ -7,15 +7,13 @@ time, on one clock of step dt (``ocp.timedomain``). The strategies are in :mod:`
 from dataclasses import dataclass, field
 
 import numpy as np
-import pyomo.environ as pyo
 
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.errors import SolverError
-from ecostudy.core.physics import hinge
 from ecostudy.core.types import Timing
 from ecostudy.core.types import Supply
+from ecostudy.network.legs import NEAR_START, leg_energy_ref, solve_leg
 from ecostudy.ocp import session
-from ecostudy.ocp import space
 from ecostudy.ocp import timedomain
 from ecostudy.ocp.problem import prepare
 
@@ -63,17 +61,6 @@ def _guess(fleet, leg):
     return timedomain.guess_from_space(fleet.results[(seg.from_stop, seg.to_stop)], leg)
 
 
-# the joint NLP starts from a feasible point (the independent runs on the solved network): keep
-# Ipopt near it instead of pushing every variable at a bound 1 % inside
-# (measured on the 2-train study: the adaptive barrier update left the start and took 3000
-# iterations; a monotone one from mu 1e-3 converged in 730)
-NEAR_START = {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_strategy": "monotone", "mu_init": 1e-3}
-
-
-# a re-solve of a leg from its last solve's primal and dual point (``solve_leg``)
-WARM_DUALS = {**session.WARM_START, "mu_init": 1e-6, "mu_strategy": "monotone"}
-
-
 REGULARISATION = 1e-3  # [-] weight of rheostat power and bus-voltage offset in the joint objective
 
 
@@ -82,11 +69,6 @@ def solve_model(m, what, options=None):
     if not out.usable:
         raise SolverError(f"{what}: Ipopt {out.status} after {out.iterations} iterations")
     return out
-
-
-def leg_energy_ref(leg):
-    """Objective scale of one leg [kWh s / h = kJ]: ``space.energy_reference`` of its segment."""
-    return space.energy_reference(leg.case.train, leg.case.segment) / 1e3
 
 
 def energy_ref(fleet):
@@ -148,85 +130,6 @@ def _same(a, b):
     """Whether two tuples of :func:`_own_terms` hold the same arrays (NaN equal to NaN)."""
     return all((x is None and y is None) or (x is not None and y is not None and np.array_equal(x, y, equal_nan=True))
                for x, y in zip(a, b))
-
-
-def solve_leg(task):
-    """One leg of :func:`solve_train`: (leg, label, dt, buffer, guess, warm, weights, allowance,
-    credit, ahead) -> (LegRun, solver outcome); a top-level function so a process pool can run it.
-    ``warm``: False (a first solve), True (from a previous run) or that run's ``point`` (its primal
-    and dual point, :func:`_warm`). From a point, Ipopt starts from its multipliers too with a small barrier
-    (``WARM_DUALS``: measured on the 2-train study's rounds, 523 -> 312 iterations for the
-    receptivity rule); from a run alone it stays near its start (``NEAR_START``: measured 2-3x
-    fewer iterations on the regional study's hardest legs, 1130 -> 333 and 823 -> 441, and lower
-    costs). Where a warm solve fails (one leg of the 20-stop study reached 3000 iterations) the
-    leg is solved again the next way down, Ipopt's defaults last, before the failure is raised."""
-    leg, label, dt, buffer, guess, warm, weights, allowance, credit, ahead = task
-    point = warm if isinstance(warm, session.NamedPoint) else None
-    tries = ((WARM_DUALS,) if point else ()) + ((NEAR_START, None) if warm else (None,))
-    for n, options in enumerate(tries, 1):
-        m = pyo.ConcreteModel()
-        span = slice(leg.start, leg.start + leg.steps)
-        b = timedomain.add_leg(m, "leg", leg, guess, one_handle=pumping_pays(
-            leg.case.train, *(None if a is None else a[span] for a in (weights, allowance, credit))))
-        m.objective = pyo.Objective(expr=_leg_cost(leg, b, weights, allowance, credit) * dt / leg_energy_ref(leg))
-        if ahead is not None and buffer is not None:
-            m.separation = pyo.ConstraintList()
-            for j in b.K:
-                x_ahead = ahead[leg.start + j]
-                if np.isfinite(x_ahead):  # head-to-tail: the train ahead is train.length long
-                    m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j] >= buffer + leg.case.train.length)
-        nlp = session.Session(m)
-        if options is WARM_DUALS:
-            nlp.start_from(point)
-        outcome = nlp.solve(options)
-        outcome.nl_seconds = nlp.nl_seconds
-        if not outcome.usable:
-            if n == len(tries):
-                raise SolverError(f"{label}: Ipopt {outcome.status} after {outcome.iterations} iterations")
-            continue
-        return timedomain.leg_arrays(b)._replace(point=nlp.named_point()), outcome
-
-
-HINGE_KW = 10.0  # [kW] width of the smooth min/max in a leg's cost (allowance, credit)
-
-
-def pumping_pays(train, weights=None, allowance=None, credit=None):
-    """Per step, whether traction and braking together can lower a cost of w traction (traction
-    above ``allowance`` [kW] in full) less regeneration credited up to ``credit`` [kW] (no credit
-    below ``HINGE_KW``, the credit hinge's width): adding dF to both forces costs at least
-    w dF v / eta_T and earns at most eta_R dF v, so only where w < eta_T eta_R, some traction is
-    discounted and some regeneration credited (the cost of :func:`_leg_cost`). Arrays per step
-    (None: w = 1, no cap)."""
-    if weights is None:
-        return False
-    pays = np.asarray(weights, float) < train.traction_efficiency * train.regeneration_efficiency
-    if allowance is not None:
-        pays &= np.asarray(allowance, float) > 0.0
-    if credit is not None:
-        pays &= np.asarray(credit, float) >= HINGE_KW
-    return pays
-
-
-
-def _leg_cost(leg, b, weights, allowance, credit):
-    """sum over the leg's steps of w traction - credited regeneration [kW] (:func:`solve_train`)."""
-
-    def traction_cost(j):
-        t = leg.start + j
-        wt = 1.0 if weights is None else float(weights[t])
-        if allowance is not None and allowance[t] <= 0.0:
-            return b.traction_kw[j]  # nothing offered: w min(P, 0) + max(P, 0) = P, no smoothing
-        if allowance is None or wt >= 1.0:
-            return wt * b.traction_kw[j]
-        return wt * b.traction_kw[j] + (1 - wt) * hinge(b.traction_kw[j] - float(allowance[t]), HINGE_KW)
-
-    def regen_credit(j):  # min(regenerated, what the line takes) [kW], smooth over HINGE_KW
-        if credit is None:
-            return b.regen_kw[j]
-        cap = float(credit[leg.start + j])  # the clock step, as ``t`` above
-        return 0.0 if cap < HINGE_KW else b.regen_kw[j] - hinge(b.regen_kw[j] - cap, HINGE_KW)
-
-    return sum(traction_cost(j) - regen_credit(j) for j in b.I)
 
 
 def line_positions(fleet, i, runs):

@@ -6,7 +6,8 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.network import circuit
-from ecostudy.network.fleet import NEAR_START, REGULARISATION, energy_ref, solve_model
+from ecostudy.network.fleet import REGULARISATION, energy_ref, solve_model
+from ecostudy.network.legs import NEAR_START
 from ecostudy.ocp import timedomain
 
 

@@ -168,7 +168,7 @@ def _trapezoid(case, n, dt):
     v_top = case.segment.distance / (total - ramp)
     v = np.minimum(np.minimum(t, total - t) / ramp, 1.0) * v_top
     s = np.concatenate([[0.0], np.cumsum(0.5 * dt * (v[:-1] + v[1:]))])
-    s *= case.segment.distance / s[-1]
+    s = np.minimum(s * (case.segment.distance / s[-1]), case.segment.distance)  # not past it by rounding
     return s, v
 
 
