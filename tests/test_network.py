@@ -150,7 +150,41 @@ def test_traction_and_braking_are_held_apart_only_where_doing_both_could_pay():
     assert overlap[True] > 1e3 and overlap[False] <= 1e-3 * (1 + 1e-6)
 
 
-def test_a_rounds_leg_whose_terms_did_not_change_is_not_solved_again_and_a_changed_one_starts_warm():
+def test_a_legs_cost_is_weighted_traction_up_to_the_allowance_less_credited_regeneration():
+    """legs.cost_coefficients + legs.leg_cost against the cost written out per step: w P, traction
+    above the allowance a in full (w P + (1 - w) max(P - a, 0)), all of it where nothing is offered
+    (a <= 0), less the regeneration credited up to c (none below the hinge width), each max smooth."""
+    from ecostudy.core.physics import hinge
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 2.0, SUPPLY, points=300)
+    leg = f.legs[0][0]
+    rng = np.random.default_rng(15)
+    s, v = fleet._guess(f, leg)
+    forces = [rng.uniform(0, 150e3, leg.steps) for _ in range(3)]
+    m = pyo.ConcreteModel()
+    b = timedomain.add_leg(m, "leg", leg, (s, v, *forces), one_handle=False)
+    w = rng.choice([0.0, 0.5, 1.0, 1.2], f.steps)
+    a = rng.choice([0.0, -5.0, 300.0, 2000.0], f.steps)
+    c = rng.choice([0.0, 5.0, 50.0, 800.0], f.steps)
+    P = np.array([pyo.value(b.traction_kw[j]) for j in b.I])
+    R = np.array([pyo.value(b.regen_kw[j]) for j in b.I])
+    for weights, allowance, credit in ((None, None, None), (w, None, None), (w, a, c), (None, a, c)):
+        wt = np.ones(leg.steps) if weights is None else weights[:leg.steps]
+        expected = 0.0
+        for j in range(leg.steps):
+            if allowance is not None and allowance[j] <= 0:
+                traction = P[j]
+            elif allowance is None or wt[j] >= 1:
+                traction = wt[j] * P[j]
+            else:
+                traction = wt[j] * P[j] + (1 - wt[j]) * hinge(P[j] - allowance[j], legs.HINGE_KW)
+            credited = R[j] if credit is None else 0.0 if credit[j] < legs.HINGE_KW else R[j] - hinge(R[j] - credit[j], legs.HINGE_KW)
+            expected += traction - credited
+        got = pyo.value(legs.leg_cost(b, legs.cost_coefficients(leg, weights, allowance, credit)))
+        assert got == pytest.approx(expected, rel=1e-12)
+
+
+def test_a_rounds_leg_whose_terms_did_not_change_is_not_solved_again():
     """solve_train's memo (the supervisor rounds): the same weights, allowance, credit and train
     ahead over a leg's steps, from its last run, return that run; a change on one leg's steps
     re-solves that leg only."""
@@ -166,27 +200,8 @@ def test_a_rounds_leg_whose_terms_did_not_change_is_not_solved_again_and_a_chang
     second = f.legs[0][1]
     credit = credit.copy()
     credit[second.start + 3] = 80.0
-    rounds = dict(memo)
     third, outcomes = fleet.solve_train(f, 0, weights, guesses=again, allowance=allowance, credit=credit, memo=memo)
     assert third[0] is first[0] and third[1] is not first[1] and outcomes[1].usable
-    # the re-solved leg started from its last solve's primal and dual point: where a solve from
-    # the run alone lands, in fewer iterations
-    fresh, fresh_outcomes = fleet.solve_train(f, 0, weights, guesses=again, allowance=allowance, credit=credit)
-    assert np.allclose(third[1].v, fresh[1].v, atol=1e-5)
-    assert outcomes[1].iterations < fresh_outcomes[1].iterations
-    # a larger change (traction at half weight up to 300 kW on ten steps, where pumping pays: the
-    # one-handle constraint on steps it was not before) is no worse than a solve from the run alone
-    weights, allowance = weights.copy(), np.full(f.steps, 300.0)
-    weights[second.start + 10:second.start + 20] = 0.5
-    assert legs.pumping_pays(train, weights, allowance, credit).sum() == 10
-    costs = []
-    for kept in (rounds, None):
-        runs, outs = fleet.solve_train(f, 0, weights, guesses=again, allowance=allowance, credit=credit, memo=kept)
-        m = pyo.ConcreteModel()
-        b = timedomain.add_leg(m, "leg", second, runs[1][:5])
-        costs.append(pyo.value(legs.leg_cost(b, legs.cost_coefficients(second, weights, allowance, credit))))
-        assert outs[1].usable and scoring.verify_leg(second, runs[1])["passed"]
-    assert costs[0] <= costs[1] + 1e-4 * abs(costs[1])
 
 
 def test_trains_that_overlap_on_the_line_are_flagged():
@@ -256,6 +271,20 @@ def test_following_train_keeps_its_buffer(two_trains):
 
 
 @pytest.mark.slow
+def test_strategies_solved_in_parallel_are_those_solved_one_after_another(two_trains):
+    """run_strategies with a pool of two and five strategies after independent driving: one
+    strategy per worker (their own leg programs), the same runs as one process solved them."""
+    f, out = two_trains
+    with worker_pool(2) as pool:
+        pooled = strategies.run_strategies(f, list(out), progress=None, pool=pool)
+    assert list(pooled) == list(out)
+    for name, res in out.items():
+        assert pooled[name]["totals"]["substation_kWh"] == pytest.approx(res["totals"]["substation_kWh"], rel=1e-6), name
+        for mine, theirs in zip(pooled[name]["runs"], res["runs"]):
+            assert all(np.allclose(a.v, b.v, atol=1e-6) for a, b in zip(mine, theirs)), name
+
+
+@pytest.mark.slow
 def test_network_command_and_a_bad_study(tmp_path):
     from typer.testing import CliRunner
 
@@ -320,34 +349,3 @@ def test_joint_optimum_keeps_the_current_limits_that_independent_runs_break():
     assert alone["unserved_kWh"] > 0.1 and alone["status"].startswith("flagged")
     assert joint["unserved_kWh"] < 1e-3 and joint["status"] == "ok" and joint["all_verified"]
 
-
-def test_a_leg_program_written_once_solves_each_cost_as_its_own_nlp_does():
-    """legs.LegProgram: the cost's coefficients as variables held by bounds, the one-handle
-    constraint at every step with its bound lifted where doing both cannot pay, and the train
-    ahead as a bound on the distance: two costs solved in turn by one written program land where
-    a one-off NLP of each cost's own numbers does (the same cost to 1e-5, verified runs), the
-    held steps kept apart and the distance bound kept."""
-    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
-    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 2.0, SUPPLY, points=300)
-    leg = f.legs[0][0]
-    guess = rules.independent(f)[0][0][:5]
-    half = np.ones(f.steps)
-    half[5:15] = 0.5
-    top = np.full(leg.steps + 1, leg.case.segment.distance)
-    top[10] = 0.9 * guess[0][10]  # a train ahead, somewhere
-    program = legs.LegProgram(leg)
-    for weights, allowance, credit in ((half, np.full(f.steps, 300.0), np.full(f.steps, 50.0)),
-                                       (None, None, np.full(f.steps, 20.0))):
-        coefficients = legs.cost_coefficients(leg, weights, allowance, credit)
-        held = legs.pumping_pays(train, weights, allowance, credit)
-        costs = []
-        for solver in (program, legs.LegProgram(leg, coefficients, held, guess)):
-            assert solver.solve(coefficients, held, top, guess, legs.NEAR_START).optimal
-            b = solver.b
-            assert pyo.value(b.s[10]) <= top[10] + 1e-6
-            if np.any(held):
-                assert max(pyo.value(b.ft[j] * b.fb[j]) for j in b.I if held[j]) <= 1e-3 * (1 + 1e-6)
-            run = solver.run()
-            assert scoring.verify_leg(leg, run)["passed"]
-            costs.append(pyo.value(legs.leg_cost(b, coefficients)))
-        assert costs[0] == pytest.approx(costs[1], rel=1e-5)

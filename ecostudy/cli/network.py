@@ -11,9 +11,8 @@ from ecostudy.cli.app import app, guarded
 
 
 def _network(study_path, out, no_plot, workers=1):
+    from contextlib import nullcontext
 
-    from ecostudy.analysis.single import solve_run
-    from ecostudy.core.types import Timing
     from ecostudy.io.loaders import load_network_study
     from ecostudy.io.writers import atomic_write, check_output_dir, write_csv, write_json
     from ecostudy.network import fleet, strategies
@@ -22,19 +21,16 @@ def _network(study_path, out, no_plot, workers=1):
     st = load_network_study(study_path)
     out_dir = check_output_dir(Path(out) if out else st.output)
     pairs = list(zip(st.stops[:-1], st.stops[1:]))
-    times = st.running_times
-    if times is None:  # per segment: all-out time plus the supplement
-        times = [solve_run(st.track, st.train, a, b, Timing(), objective="time", points=st.points,
-                           verify_result=False).summary["running_time_s"] * (1 + st.supplement) for a, b in pairs]
-    fl = fleet.plan(st.track, st.train, st.stops, times, st.dwell, st.offsets, st.names, st.dt, st.supply,
-                    st.points, st.buffer)
-    typer.echo(f"{len(st.names)} trains, {len(pairs)} segments ({', '.join(f'{t:.1f}' for t in times)} s "
-               f"before rounding to {st.dt} s steps), {fl.steps} steps")
-    if workers > 1:  # one train's legs in parallel
-        with worker_pool(workers) as pool:
-            outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo, mapper=pool.map)
-    else:
-        outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo)
+    with worker_pool(workers) if workers > 1 else nullcontext() as pool:
+        mapper = pool.map if pool is not None else map
+        times = st.running_times
+        if times is None:  # per segment: all-out time plus the supplement
+            times = [t * (1 + st.supplement) for t in fleet.all_out_times(st.track, st.train, st.stops, st.points, mapper)]
+        fl = fleet.plan(st.track, st.train, st.stops, times, st.dwell, st.offsets, st.names, st.dt, st.supply,
+                        st.points, st.buffer, mapper)
+        typer.echo(f"{len(st.names)} trains, {len(pairs)} segments ({', '.join(f'{t:.1f}' for t in times)} s "
+                   f"before rounding to {st.dt} s steps), {fl.steps} steps")
+        outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo, pool=pool)
     base = outcome.get("independent", {}).get("totals", {}).get("substation_kWh")
     subs, trains = [], []
     failed = {n: r for n, r in outcome.items() if "failed" in r}
@@ -74,7 +70,8 @@ def network(
     study: Path = typer.Argument(..., help="Network study file (YAML)."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's output)."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip network.png."),
-    workers: int = typer.Option(1, min=1, help="Processes solving one train's legs in parallel."),
+    workers: int = typer.Option(1, min=1, help="Processes: the segments' first runs, then the strategies in "
+                                "parallel (at least twice as many as workers), else one train's legs."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""

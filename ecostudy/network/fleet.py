@@ -32,8 +32,10 @@ class Fleet:
     dwell_steps: int = 0
 
 
-def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=500, buffer=None):
-    """A :class:`Fleet`: running times and dwells rounded up to whole steps, departures offset."""
+def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=500, buffer=None,
+         mapper=map):
+    """A :class:`Fleet`: running times and dwells rounded up to whole steps, departures offset;
+    each segment's space-domain net-energy run (the legs' first guess) solved over ``mapper``."""
     cases = [prepare(track, train, a, b, points) for a, b in zip(stops[:-1], stops[1:])]
     steps = [int(np.ceil(t / dt - 1e-9)) for t in running_times]
     pause = int(np.ceil(dwell / dt - 1e-9))
@@ -47,13 +49,28 @@ def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, 
             start += n + pause
         legs.append(mine)
     total = max(leg.start + leg.steps for mine in legs for leg in mine)
-    results = {}
-    for case, n in zip(cases, steps):
-        seg = case.segment
-        results[(seg.from_stop, seg.to_stop)] = solve_run(track, train, seg.from_stop, seg.to_stop,
-                                                          Timing(running_time=n * dt), objective="net_energy",
-                                                          points=points, verify_result=False)
+    tasks = [(track, train, c.segment.from_stop, c.segment.to_stop, n * dt, points) for c, n in zip(cases, steps)]
+    results = {(c.segment.from_stop, c.segment.to_stop): r for c, r in zip(cases, mapper(_net_energy_run, tasks))}
     return Fleet(list(names), legs, dt, total, supply, buffer, results, pause)
+
+
+def _net_energy_run(task):
+    """(track, train, from, to, running time [s], K) -> the space-domain net-energy run (a guess)."""
+    track, train, a, b, running_time, points = task
+    return solve_run(track, train, a, b, Timing(running_time=running_time), objective="net_energy",
+                     points=points, verify_result=False)
+
+
+def all_out_times(track, train, stops, points, mapper=map):
+    """Minimum running time [s] of each segment between consecutive ``stops`` (``mapper``: how
+    the segments are mapped over, ``map`` or a process pool's)."""
+    return list(mapper(_all_out_time, [(track, train, a, b, points) for a, b in zip(stops[:-1], stops[1:])]))
+
+
+def _all_out_time(task):
+    track, train, a, b, points = task
+    return solve_run(track, train, a, b, Timing(), objective="time", points=points,
+                     verify_result=False).summary["running_time_s"]
 
 
 def _guess(fleet, leg):
@@ -98,7 +115,7 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
     known = [memo.get((i, k)) for k in range(len(fleet.legs[i]))]
     tasks = [(leg, f"train {fleet.names[i]}, leg {k + 1}", fleet.dt, fleet.buffer,
               guesses[k][:5] if guesses is not None else _guess(fleet, leg),
-              _warm(guesses, k, known[k]), weights, allowance, credit, ahead) for k, leg in enumerate(fleet.legs[i])]
+              guesses is not None, weights, allowance, credit, ahead) for k, leg in enumerate(fleet.legs[i])]
     terms = [_own_terms(leg, weights, allowance, credit, ahead) for leg in fleet.legs[i]]
     again = [k for k, old in enumerate(known) if old is None or guesses is None or old[1] is not guesses[k]
              or not _same(old[0], terms[k])]
@@ -107,17 +124,6 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
         memo[(i, k)] = (terms[k], run, outcome)
     out = [solved[k] if k in solved else known[k][1:] for k in range(len(tasks))]
     return [run for run, _ in out], [outcome for _, outcome in out]
-
-
-def _warm(guesses, k, known):
-    """How leg ``k`` starts (``solve_leg``'s ``warm``): cold without guesses; from the primal and
-    dual point of its last solve in these rounds (``known``: its memo entry); else near the guess.
-    (A point from a solve of another cost, the independent run's for the first round, started
-    the 2-train study's legs worse than the guess alone: 48-75 against 30-46 iterations.)"""
-    if guesses is None:
-        return False
-    point = getattr(guesses[k], "point", None)
-    return point if known is not None and point is not None else True
 
 
 def _own_terms(leg, *arrays):

@@ -30,6 +30,7 @@ line could take then (:func:`supervised`). Every strategy is scored by the same 
 (``circuit.solve_steps``).
 """
 import time
+from concurrent.futures import as_completed
 
 from ecostudy.core.errors import SolverError
 from ecostudy.network.joint import joint
@@ -37,59 +38,94 @@ from ecostudy.network.rules import following, independent, supervised
 from ecostudy.network.scoring import evaluate, separations, verify_leg
 
 
-def run_strategies(fleet, strategies, progress=print, mapper=map):
-    """Every strategy on ``fleet``: {name: {"runs", "steps", "trains", "totals", "info"}}.
-    ``mapper`` maps one train's leg solves (``map``, or a process pool's: ``--workers``).
+def run_strategies(fleet, strategies, progress=print, pool=None):
+    """Every strategy on ``fleet``: {name: {"runs", "steps", "trains", "totals", "info"}}, in the
+    order asked; one that fails is {"failed": why, "wall_s"} and the others go on.
 
     The independent runs are solved first: they are strategy (a) and the start of the others.
+    ``pool``: a process pool (``--workers``) or None. With one, the strategies after the
+    independent runs are solved in parallel, one per worker, when there are at least twice as
+    many as workers (they are unequal: two per worker balance them); else each train's legs are
+    (a strategy's rounds are sequential: train after train).
     """
-    out = {}
+    workers = pool._max_workers if pool is not None else 1
+    rest = [name for name in strategies if name != "independent"]
+    by_strategy = pool is not None and len(rest) >= 2 * workers
+    mapper = pool.map if pool is not None and not by_strategy else map
     t0 = time.perf_counter()
-    ind = independent(fleet, mapper)
-    base_s = time.perf_counter() - t0
-    for name in strategies:
-        t0 = time.perf_counter()
-        info = {}
-        try:
-            if name == "independent":
-                runs = ind
-            elif name in ("receptivity", "triggering", "voltage", "dissension"):
-                runs, history = supervised(fleet, name, ind, mapper=mapper)
-                info["rounds_substation_kWh"] = history
-            elif name == "joint":
-                runs, info = joint(fleet, ind)
-            elif name == "following":
-                runs = following(fleet, ind, mapper)
-            else:
-                raise ValueError(f"unknown strategy {name!r}")
-        except SolverError as exc:  # one strategy failing does not stop the study
-            out[name] = {"failed": str(exc), "wall_s": time.perf_counter() - t0}
+    ind = independent(fleet, pool.map if pool is not None else map)
+    done = {"independent": (ind, {}, time.perf_counter() - t0, None)}
+    out = {}
+
+    def report(name):
+        runs, info, wall, failure = done[name]
+        if failure is not None:
+            out[name] = {"failed": failure, "wall_s": wall}
             if progress:
-                progress(f"{name:12s} FAILED: {exc}")
-            continue
-        wall = time.perf_counter() - t0 + (base_s if name == "independent" else 0.0)
-        steps, trains, totals = evaluate(fleet, runs)
-        checks = [[verify_leg(leg, run) for leg, run in zip(fleet.legs[i], runs[i])] for i in range(len(runs))]
-        gaps = separations(fleet, runs)
-        for i, n in enumerate(fleet.names):
-            ver = checks[i]
-            last = fleet.legs[i][-1]
-            trains[n].update(arrival_s=(last.start + last.steps) * fleet.dt,
-                             worst_arrival_error_s=max(abs(v["arrival_time_error_s"]) for v in ver),
-                             worst_stop_error_m=max(abs(v["stop_error_m"]) for v in ver),
-                             worst_energy_error_pct=max(abs(v["energy_error_pct"]) for v in ver),
-                             worst_overspeed_kmh=max(v["max_overspeed_kmh"] for v in ver),
-                             verified=all(v["passed"] for v in ver), min_separation_m=gaps[n])
-        totals.update(wall_s=wall, all_verified=all(t["verified"] for t in trains.values()),
-                      min_separation_m=min([g for g in gaps.values() if g is not None], default=None))
-        # only the joint optimum sees the circuit: another strategy's runs may ask for traction the
-        # line cannot carry or a current limit forbids; it is not served and the result is flagged
-        flags = [f"{totals['unserved_kWh']:.3f} kWh of traction not served (current limit or line)"] \
-            if totals["unserved_kWh"] > 1e-3 else []
-        if totals["min_separation_m"] is not None and totals["min_separation_m"] < 0.0:  # head past the tail ahead
-            flags.append(f"trains overlap on the line by up to {-totals['min_separation_m']:.1f} m (timetable)")
-        totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
-        out[name] = {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
+                progress(f"{name:12s} FAILED: {failure}")
+            return
+        out[name] = _scored(fleet, runs, info, wall)
         if progress:
-            progress(f"{name:12s} substation {totals['substation_kWh']:.3f} kWh, {wall:.1f} s")
-    return out
+            progress(f"{name:12s} substation {out[name]['totals']['substation_kWh']:.3f} kWh, {wall:.1f} s")
+
+    if "independent" in strategies:
+        report("independent")
+    if by_strategy:
+        futures = {pool.submit(_strategy, fleet, name, ind): name for name in rest}
+        for future in as_completed(futures):
+            done[futures[future]] = future.result()
+            report(futures[future])
+    for name in strategies:
+        if name not in done:
+            done[name] = _strategy(fleet, name, ind, mapper)
+        if name not in out:
+            report(name)
+    return {name: out[name] for name in strategies}
+
+
+def _strategy(fleet, name, ind, mapper=map):
+    """One strategy from the independent runs ``ind``: (runs, info, wall s, None) or, when a
+    solve fails, (None, None, wall s, why); a top-level function so a process pool can run it."""
+    t0 = time.perf_counter()
+    info = {}
+    try:
+        if name == "independent":
+            runs = ind
+        elif name in ("receptivity", "triggering", "voltage", "dissension"):
+            runs, history = supervised(fleet, name, ind, mapper=mapper)
+            info["rounds_substation_kWh"] = history
+        elif name == "joint":
+            runs, info = joint(fleet, ind)
+        elif name == "following":
+            runs = following(fleet, ind, mapper)
+        else:
+            raise ValueError(f"unknown strategy {name!r}")
+    except SolverError as exc:  # one strategy failing does not stop the study
+        return None, None, time.perf_counter() - t0, str(exc)
+    return runs, info, time.perf_counter() - t0, None
+
+
+def _scored(fleet, runs, info, wall):
+    """A strategy's runs scored by the circuit, re-simulated and flagged."""
+    steps, trains, totals = evaluate(fleet, runs)
+    checks = [[verify_leg(leg, run) for leg, run in zip(fleet.legs[i], runs[i])] for i in range(len(runs))]
+    gaps = separations(fleet, runs)
+    for i, n in enumerate(fleet.names):
+        ver = checks[i]
+        last = fleet.legs[i][-1]
+        trains[n].update(arrival_s=(last.start + last.steps) * fleet.dt,
+                         worst_arrival_error_s=max(abs(v["arrival_time_error_s"]) for v in ver),
+                         worst_stop_error_m=max(abs(v["stop_error_m"]) for v in ver),
+                         worst_energy_error_pct=max(abs(v["energy_error_pct"]) for v in ver),
+                         worst_overspeed_kmh=max(v["max_overspeed_kmh"] for v in ver),
+                         verified=all(v["passed"] for v in ver), min_separation_m=gaps[n])
+    totals.update(wall_s=wall, all_verified=all(t["verified"] for t in trains.values()),
+                  min_separation_m=min([g for g in gaps.values() if g is not None], default=None))
+    # only the joint optimum sees the circuit: another strategy's runs may ask for traction the
+    # line cannot carry or a current limit forbids; it is not served and the result is flagged
+    flags = [f"{totals['unserved_kWh']:.3f} kWh of traction not served (current limit or line)"] \
+        if totals["unserved_kWh"] > 1e-3 else []
+    if totals["min_separation_m"] is not None and totals["min_separation_m"] < 0.0:  # head past the tail ahead
+        flags.append(f"trains overlap on the line by up to {-totals['min_separation_m']:.1f} m (timetable)")
+    totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
+    return {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}

@@ -62,14 +62,6 @@ class Outcome:
         return self.status in ("optimal", "acceptable") or self.max_violation < 1e-6
 
 
-@dataclass
-class NamedPoint:
-    """A solved point by Pyomo component name: primal[var] = (value, lower bound multiplier, upper
-    bound multiplier), dual[constraint] = multiplier (:meth:`Session.named_point`)."""
-    primal: dict
-    dual: dict
-
-
 # Pyomo 6.10's NL writer exports named Expressions as AMPL defined variables; with a fixed variable
 # inside one that several named Expressions share (a leg's mean speed at its fixed end speed, used
 # by its traction and regeneration power), the constraint that uses their sum reached Ipopt with
@@ -117,7 +109,6 @@ class Session:
         self.nl_seconds = time.perf_counter() - t0
         self.x = np.array(self.nlp.init_primals(), dtype=float)
         self.multipliers = None   # (constraints, lower bounds, upper bounds) of the last solve
-        self._names = None
         self._problem_class = CyIpoptNLP
 
     def set_bounds(self, var, lower, upper):
@@ -142,57 +133,12 @@ class Session:
             var.setub(None if hi is None else float(hi))
         self.x[index] = np.clip(self.x[index], arrays["_primals_lb"][index], arrays["_primals_ub"][index])
 
-    def set_constraint_bounds(self, constraints, lowers, uppers):
-        """Change the bounds of some inequality constraints (``inf``: none) before the next solve;
-        an equality stays one (PyNumero sorted them when the NL file was loaded)."""
-        index = np.asarray(self.nlp.get_constraint_indices(list(constraints)), dtype=int)
-        if np.any(self.nlp._con_full_eq_mask[index]):
-            raise ValueError("set_constraint_bounds changes inequality constraints only")
-        for name, values in (("_con_full_lb", lowers), ("_con_full_ub", uppers)):
-            arr = np.array(getattr(self.nlp, name), dtype=float)  # PyNumero keeps them read-only
-            arr[index] = values
-            arr.flags.writeable = False
-            setattr(self.nlp, name, arr)
-        mask = self.nlp._con_full_ineq_mask
-        for name, full in (("_con_ineq_lb", "_con_full_lb"), ("_con_ineq_ub", "_con_full_ub")):
-            arr = np.compress(mask, getattr(self.nlp, full))
-            arr.flags.writeable = False
-            setattr(self.nlp, name, arr)
-
     def set_start_values(self, variables, values, clip=True):
         """Set the starting point of some variables for the next solve, clipped to their bounds
         unless ``clip`` is False (then Ipopt moves them inside, as it does a new model's start)."""
         index = np.asarray(self.nlp.get_primal_indices(list(variables)), dtype=int)
         values = np.asarray(values, dtype=float)
         self.x[index] = np.clip(values, self.nlp.primals_lb()[index], self.nlp.primals_ub()[index]) if clip else values
-
-    def named_point(self):
-        """The last solve's primal and dual point by component name (a :class:`NamedPoint`), the start
-        of :meth:`start_from` for another model of the same names (another structure allowed)."""
-        constraints, lower, upper = self.multipliers
-        primals, rows = self.names()
-        return NamedPoint({n: (x, zl, zu) for n, x, zl, zu in zip(primals, self.x, lower, upper)},
-                          dict(zip(rows, constraints)))
-
-    def names(self):
-        """(variable names, constraint names) in the NLP's order (kept: Pyomo's names are slow)."""
-        if self._names is None:
-            self._names = (self.nlp.primals_names(), self.nlp.constraint_names())
-        return self._names
-
-    def start_from(self, point):
-        """Start the next warm solve (``WARM_START`` options) from a :class:`NamedPoint`: variables and
-        constraints by name; a constraint the point lacks starts with multiplier 0, a variable with
-        its own start and bound multipliers 0 (Ipopt pushes them inside)."""
-        n = self.nlp.n_primals()
-        lower, upper = np.zeros(n), np.zeros(n)
-        primals, rows = self.names()
-        for k, name in enumerate(primals):
-            if name in point.primal:
-                self.x[k], lower[k], upper[k] = point.primal[name]
-        self.x = np.clip(self.x, self.nlp.primals_lb(), self.nlp.primals_ub())
-        duals = np.array([point.dual.get(name, 0.0) for name in rows], dtype=float)
-        self.multipliers = (duals, lower, upper)
 
     def solve(self, options=None, x0=None):
         """Solve from ``x0`` (default: the last solution); loads the point into the model."""

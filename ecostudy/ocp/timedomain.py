@@ -174,8 +174,7 @@ def _trapezoid(case, n, dt):
 
 class LegRun(NamedTuple):
     """A solved leg on its clock steps: distance and speed per step boundary, forces and the
-    electrical power per step [m, m/s, N, N, N, W] (p < 0: regenerating); ``point``: the solver's
-    primal and dual point (``session.NamedPoint``), a warm start for the next solve of the leg."""
+    electrical power per step [m, m/s, N, N, N, W] (p < 0: regenerating)."""
 
     s: np.ndarray
     v: np.ndarray
@@ -183,7 +182,6 @@ class LegRun(NamedTuple):
     fb: np.ndarray
     fr: np.ndarray
     p: np.ndarray
-    point: object = None
 
 
 def net_forces(b):
