@@ -62,7 +62,7 @@ def main():
             legs.pumping_pays = PAYS if variant == "pays" else everywhere
             counts.clear()
             t0 = time.perf_counter()
-            _, history = rules.supervised(fl, rule, start)
+            _, history, _ = rules.supervised(fl, rule, start)
             wall = time.perf_counter() - t0
             print(f"| {rule} | {variant} | {wall:.1f} | {sum(counts)} | {len(counts)} | "
                   f"{', '.join(f'{h:.3f}' for h in history)} |", flush=True)

@@ -276,7 +276,7 @@ def test_strategies_solved_in_parallel_are_those_solved_one_after_another(two_tr
     strategy per worker (their own leg programs), the same runs as one process solved them."""
     f, out = two_trains
     with worker_pool(2) as pool:
-        pooled = strategies.run_strategies(f, list(out), progress=None, pool=pool)
+        pooled = strategies.run_strategies(f, list(out), progress=None, pool=pool, workers=2)
     assert list(pooled) == list(out)
     for name, res in out.items():
         assert pooled[name]["totals"]["substation_kWh"] == pytest.approx(res["totals"]["substation_kWh"], rel=1e-6), name

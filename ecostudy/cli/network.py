@@ -30,7 +30,7 @@ def _network(study_path, out, no_plot, workers=1):
                         st.points, st.buffer, mapper)
         typer.echo(f"{len(st.names)} trains, {len(pairs)} segments ({', '.join(f'{t:.1f}' for t in times)} s "
                    f"before rounding to {st.dt} s steps), {fl.steps} steps")
-        outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo, pool=pool)
+        outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo, pool=pool, workers=workers)
     base = outcome.get("independent", {}).get("totals", {}).get("substation_kWh")
     subs, trains = [], []
     failed = {n: r for n, r in outcome.items() if "failed" in r}

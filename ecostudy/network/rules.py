@@ -4,6 +4,7 @@ import copy
 
 import numpy as np
 
+from ecostudy.core.errors import SolverError
 from ecostudy.network import circuit
 from ecostudy.network.fleet import departure_order, line_positions, solve_train, step_arrays
 from ecostudy.network.scoring import evaluate
@@ -160,7 +161,11 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     credited up to what the line could take from it then (:func:`receptivity`; crediting all of it,
     as independent driving does, let a discounted train accelerate and brake harder and lose the
     extra braking: measured +1 % substation energy for rule 7.11 on the 2-train study). Returns
-    (runs, rounds' substation kWh); the runs are those of the best round, the start included.
+    (runs, rounds' substation kWh, None or why a round stopped); the runs are those of the best
+    round, the start included. A round after the first that cannot be completed (a train that
+    cannot keep its buffer behind the new run ahead: the 3-train metro study's rule 7.7 once, its
+    path moved by last-bit differences of the start) ends the rounds; every complete round is
+    consistent (each train planned behind the run ahead as it stayed).
     """
     runs = list(start)
     _, _, totals = evaluate(fleet, runs)
@@ -168,17 +173,22 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     history = [best[0]]
     order = departure_order(fleet)
     memo = {}  # legs whose terms did not change since their last solve are not solved again
-    for _ in range(rounds):
-        for rank, i in enumerate(order):
-            weights, allowance = rule_terms(fleet, rule, runs, i)
-            ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]]) if rank and fleet.buffer else None
-            runs[i] = solve_train(fleet, i, weights, guesses=runs[i], allowance=allowance,
-                                  credit=receptivity(fleet, runs, i), ahead=ahead, mapper=mapper, memo=memo)[0]
+    for number in range(1, rounds + 1):
+        try:
+            for rank, i in enumerate(order):
+                weights, allowance = rule_terms(fleet, rule, runs, i)
+                ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]]) if rank and fleet.buffer else None
+                runs[i] = solve_train(fleet, i, weights, guesses=runs[i], allowance=allowance,
+                                      credit=receptivity(fleet, runs, i), ahead=ahead, mapper=mapper, memo=memo)[0]
+        except SolverError as exc:
+            if number == 1:
+                raise
+            return best[1], history, f"round {number} stopped: {exc}"
         _, _, totals = evaluate(fleet, runs)
         history.append(totals["substation_kWh"])
         if history[-1] < best[0]:
             best = (history[-1], list(runs))
-    return best[1], history
+    return best[1], history, None
 
 
 def following(fleet, start, mapper=map):

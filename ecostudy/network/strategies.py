@@ -38,20 +38,20 @@ from ecostudy.network.rules import following, independent, supervised
 from ecostudy.network.scoring import evaluate, separations, verify_leg
 
 
-def run_strategies(fleet, strategies, progress=print, pool=None):
+def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
     """Every strategy on ``fleet``: {name: {"runs", "steps", "trains", "totals", "info"}}, in the
     order asked; one that fails is {"failed": why, "wall_s"} and the others go on.
 
     The independent runs are solved first: they are strategy (a) and the start of the others.
-    ``pool``: a process pool (``--workers``) or None. With one, the strategies after the
-    independent runs are solved in parallel, one per worker, when there are at least twice as
-    many as workers (they are unequal: two per worker balance them); else each train's legs are
-    (a strategy's rounds are sequential: train after train).
+    ``pool``: a process pool of ``workers`` processes (``--workers``) or None. With one, the
+    strategies after the independent runs are solved in parallel, one per worker, when there are
+    at least twice as many as workers (they are unequal: two per worker balance them); else each
+    train's legs are (a strategy's rounds are sequential: train after train).
     """
-    workers = pool._max_workers if pool is not None else 1
     rest = [name for name in strategies if name != "independent"]
     by_strategy = pool is not None and len(rest) >= 2 * workers
     mapper = pool.map if pool is not None and not by_strategy else map
+    verifier = mapper  # the re-simulations too (in the main process while workers solve strategies)
     t0 = time.perf_counter()
     ind = independent(fleet, pool.map if pool is not None else map)
     done = {"independent": (ind, {}, time.perf_counter() - t0, None)}
@@ -64,9 +64,10 @@ def run_strategies(fleet, strategies, progress=print, pool=None):
             if progress:
                 progress(f"{name:12s} FAILED: {failure}")
             return
-        out[name] = _scored(fleet, runs, info, wall)
+        out[name] = _scored(fleet, runs, info, wall, verifier)
         if progress:
-            progress(f"{name:12s} substation {out[name]['totals']['substation_kWh']:.3f} kWh, {wall:.1f} s")
+            progress(f"{name:12s} substation {out[name]['totals']['substation_kWh']:.3f} kWh, {wall:.1f} s"
+                     + (f" ({info['rounds_stopped']})" if info.get("rounds_stopped") else ""))
 
     if "independent" in strategies:
         report("independent")
@@ -92,8 +93,10 @@ def _strategy(fleet, name, ind, mapper=map):
         if name == "independent":
             runs = ind
         elif name in ("receptivity", "triggering", "voltage", "dissension"):
-            runs, history = supervised(fleet, name, ind, mapper=mapper)
+            runs, history, stopped = supervised(fleet, name, ind, mapper=mapper)
             info["rounds_substation_kWh"] = history
+            if stopped:
+                info["rounds_stopped"] = stopped
         elif name == "joint":
             runs, info = joint(fleet, ind)
         elif name == "following":
@@ -105,10 +108,15 @@ def _strategy(fleet, name, ind, mapper=map):
     return runs, info, time.perf_counter() - t0, None
 
 
-def _scored(fleet, runs, info, wall):
-    """A strategy's runs scored by the circuit, re-simulated and flagged."""
+def _scored(fleet, runs, info, wall, mapper=map):
+    """A strategy's runs scored by the circuit, re-simulated (over ``mapper``) and flagged."""
     steps, trains, totals = evaluate(fleet, runs)
-    checks = [[verify_leg(leg, run) for leg, run in zip(fleet.legs[i], runs[i])] for i in range(len(runs))]
+    pairs = [[(leg, run) for leg, run in zip(fleet.legs[i], runs[i])] for i in range(len(runs))]
+    flat = list(mapper(_verified, [p for mine in pairs for p in mine]))
+    checks, at = [], 0
+    for mine in pairs:
+        checks.append(flat[at:at + len(mine)])
+        at += len(mine)
     gaps = separations(fleet, runs)
     for i, n in enumerate(fleet.names):
         ver = checks[i]
@@ -129,3 +137,8 @@ def _scored(fleet, runs, info, wall):
         flags.append(f"trains overlap on the line by up to {-totals['min_separation_m']:.1f} m (timetable)")
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
     return {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
+
+
+def _verified(pair):
+    """``verify_leg`` of one (leg, run): a top-level function so a process pool can run it."""
+    return verify_leg(*pair)
