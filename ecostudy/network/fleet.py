@@ -12,7 +12,7 @@ from ecostudy.analysis.single import solve_run
 from ecostudy.core.errors import SolverError
 from ecostudy.core.types import Timing
 from ecostudy.core.types import Supply
-from ecostudy.network.legs import NEAR_START, leg_energy_ref, solve_leg
+from ecostudy.network.legs import leg_energy_ref, solve_leg
 from ecostudy.ocp import session
 from ecostudy.ocp import timedomain
 from ecostudy.ocp.problem import prepare

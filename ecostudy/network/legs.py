@@ -22,7 +22,6 @@ HINGE_KW = 10.0  # [kW] width of the smooth min/max in a leg's cost (allowance, 
 NEAR_START = {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_strategy": "monotone", "mu_init": 1e-3}
 
 
-
 def leg_energy_ref(leg):
     """Objective scale of one leg [kWh s / h = kJ]: ``space.energy_reference`` of its segment."""
     return space.energy_reference(leg.case.train, leg.case.segment) / 1e3
@@ -72,20 +71,17 @@ def cost_coefficients(leg, weights=None, allowance=None, credit=None):
 
 
 def leg_cost(b, coefficients):
-    """Sum over a leg block's steps of the cost of :func:`cost_coefficients` [kW]: its rows as
-    numbers (a hinge with coefficient 0 left out) or as per-step Pyomo variables."""
-    omega, alpha, a, rho, eta, c = coefficients
-
-    def term(x):  # numbers as Python floats (not numpy's) in Pyomo expressions
-        return float(x) if isinstance(x, (float, np.floating)) else x
+    """Sum over a leg block's steps of the cost of :func:`cost_coefficients` [kW] (a hinge with
+    coefficient 0 left out)."""
+    omega, alpha, a, rho, eta, c = np.asarray(coefficients, float).tolist()  # Python floats for Pyomo
 
     def step(j):
         traction, regen = b.traction_kw[j], b.regen_kw[j]
-        out = term(omega[j]) * traction - term(rho[j]) * regen
-        if not (isinstance(alpha[j], float) and alpha[j] == 0.0):
-            out = out + term(alpha[j]) * hinge(traction - term(a[j]), HINGE_KW)
-        if not (isinstance(eta[j], float) and eta[j] == 0.0):
-            out = out + term(eta[j]) * hinge(regen - term(c[j]), HINGE_KW)
+        out = omega[j] * traction - rho[j] * regen
+        if alpha[j] != 0.0:
+            out = out + alpha[j] * hinge(traction - a[j], HINGE_KW)
+        if eta[j] != 0.0:
+            out = out + eta[j] * hinge(regen - c[j], HINGE_KW)
         return out
 
     return sum(step(j) for j in b.I)
