@@ -17,8 +17,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ecostudy.analysis.single import solve_run  # noqa: E402
-from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_network_study  # noqa: E402
 from ecostudy.network import fleet, legs, rules  # noqa: E402
 from ecostudy.ocp import session  # noqa: E402
@@ -39,10 +37,8 @@ def main():
     args = p.parse_args()
     print(f"`python bench/bench_rules.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
     st = load_network_study(Path(args.study))
-    pairs = list(zip(st.stops[:-1], st.stops[1:]))
-    times = st.running_times or [solve_run(st.track, st.train, a, b, Timing(), objective="time", points=st.points,
-                                           verify_result=False).summary["running_time_s"] * (1 + st.supplement)
-                                 for a, b in pairs]
+    times = st.running_times or [t * (1 + st.supplement) for t in fleet.all_out_times(st.track, st.train, st.stops,
+                                                                                      st.points)]
     fl = fleet.plan(st.track, st.train, st.stops, times, st.dwell, st.offsets, st.names, st.dt, st.supply,
                     st.points, st.buffer)
     counts = []

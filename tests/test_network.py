@@ -273,7 +273,7 @@ def test_following_train_keeps_its_buffer(two_trains):
 @pytest.mark.slow
 def test_strategies_solved_in_parallel_are_those_solved_one_after_another(two_trains):
     """run_strategies with a pool of two and five strategies after independent driving: one
-    strategy per worker (their own leg programs), the same runs as one process solved them."""
+    strategy per worker, the same runs as one process solved them."""
     f, out = two_trains
     with worker_pool(2) as pool:
         pooled = strategies.run_strategies(f, list(out), progress=None, pool=pool, workers=2)
@@ -348,4 +348,3 @@ def test_joint_optimum_keeps_the_current_limits_that_independent_runs_break():
     alone, joint = out["independent"]["totals"], out["joint"]["totals"]
     assert alone["unserved_kWh"] > 0.1 and alone["status"].startswith("flagged")
     assert joint["unserved_kWh"] < 1e-3 and joint["status"] == "ok" and joint["all_verified"]
-

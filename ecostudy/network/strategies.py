@@ -50,8 +50,7 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
     """
     rest = [name for name in strategies if name != "independent"]
     by_strategy = pool is not None and len(rest) >= 2 * workers
-    mapper = pool.map if pool is not None and not by_strategy else map
-    verifier = mapper  # the re-simulations too (in the main process while workers solve strategies)
+    mapper = pool.map if pool is not None and not by_strategy else map  # legs and re-simulations
     t0 = time.perf_counter()
     ind = independent(fleet, pool.map if pool is not None else map)
     done = {"independent": (ind, {}, time.perf_counter() - t0, None)}
@@ -64,7 +63,7 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
             if progress:
                 progress(f"{name:12s} FAILED: {failure}")
             return
-        out[name] = _scored(fleet, runs, info, wall, verifier)
+        out[name] = _scored(fleet, runs, info, wall, mapper)
         if progress:
             progress(f"{name:12s} substation {out[name]['totals']['substation_kWh']:.3f} kWh, {wall:.1f} s"
                      + (f" ({info['rounds_stopped']})" if info.get("rounds_stopped") else ""))
@@ -85,14 +84,12 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
 
 
 def _strategy(fleet, name, ind, mapper=map):
-    """One strategy from the independent runs ``ind``: (runs, info, wall s, None) or, when a
-    solve fails, (None, None, wall s, why); a top-level function so a process pool can run it."""
+    """One strategy after independent driving, from its runs ``ind``: (runs, info, wall s, None) or,
+    when a solve fails, (None, None, wall s, why); a top-level function so a process pool can run it."""
     t0 = time.perf_counter()
     info = {}
     try:
-        if name == "independent":
-            runs = ind
-        elif name in ("receptivity", "triggering", "voltage", "dissension"):
+        if name in ("receptivity", "triggering", "voltage", "dissension"):
             runs, history, stopped = supervised(fleet, name, ind, mapper=mapper)
             info["rounds_substation_kWh"] = history
             if stopped:
@@ -111,12 +108,8 @@ def _strategy(fleet, name, ind, mapper=map):
 def _scored(fleet, runs, info, wall, mapper=map):
     """A strategy's runs scored by the circuit, re-simulated (over ``mapper``) and flagged."""
     steps, trains, totals = evaluate(fleet, runs)
-    pairs = [[(leg, run) for leg, run in zip(fleet.legs[i], runs[i])] for i in range(len(runs))]
-    flat = list(mapper(_verified, [p for mine in pairs for p in mine]))
-    checks, at = [], 0
-    for mine in pairs:
-        checks.append(flat[at:at + len(mine)])
-        at += len(mine)
+    flat = iter(mapper(_verified, [(leg, run) for i in range(len(runs)) for leg, run in zip(fleet.legs[i], runs[i])]))
+    checks = [[next(flat) for _ in runs[i]] for i in range(len(runs))]
     gaps = separations(fleet, runs)
     for i, n in enumerate(fleet.names):
         ver = checks[i]
