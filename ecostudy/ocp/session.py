@@ -4,6 +4,8 @@ The glue is ours rather than ``SolverFactory('cyipopt')`` so that the NL write (
 which writes and loads an AMPL NL file through PyNumero's ASL) and the solve are timed apart,
 iterations are counted, and the NLP object can be reused.
 """
+import ctypes
+import os
 import signal
 import subprocess
 import threading
@@ -74,6 +76,27 @@ NL_OPTIONS = {"export_defined_variables": False}
 # in ``ocp/modechoice.py`` go through Pyomo's own cyipopt interface, which passes no options)
 for _key, _value in NL_OPTIONS.items():
     setattr(NLWriter.CONFIG, _key, _value)
+
+# MUMPS' automatic ordering here is Scotch's (Debian's MUMPS has no METIS of its own), and Scotch 7
+# orders with threads and a random generator whose state runs on from call to call: the same NLP
+# solved twice, in one process or two, ended 1e-15 apart (found in session 16; session 15 saw the
+# rounds of a network study amplify it to 1 % and a lost strategy). One thread (read at each call)
+# and the generator reset before each solve make every solve repeat bit for bit.
+os.environ.setdefault("SCOTCH_PTHREAD_NUMBER", "1")
+
+
+def _scotch():
+    """The Scotch library loaded in this process (through Ipopt's MUMPS), or None."""
+    try:
+        with open("/proc/self/maps") as maps:
+            paths = sorted({line.split()[-1] for line in maps if "/libscotch-" in line})
+    except OSError:
+        return None
+    return ctypes.CDLL(paths[0]) if paths else None
+
+
+SCOTCH = _scotch()
+
 
 REPO_ASL = Path(__file__).resolve().parents[2] / ".pyomo" / "lib" / "libpynumero_ASL.so"
 
@@ -158,6 +181,8 @@ class Session:
         duals = {}
         if (options or {}).get("warm_start_init_point") == "yes" and self.multipliers is not None:
             duals = dict(zip(("lagrange", "zl", "zu"), self.multipliers))
+        if SCOTCH is not None:
+            SCOTCH.SCOTCH_randomReset()  # the same ordering for the same matrix, every solve
         t1 = time.perf_counter()
         try:
             with ctrl_c_after(held):
