@@ -37,10 +37,8 @@ def main():
     args = p.parse_args()
     print(f"`python bench/bench_rules.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
     st = load_network_study(Path(args.study))
-    times = st.running_times or [t * (1 + st.supplement) for t in fleet.all_out_times(st.track, st.train, st.stops,
-                                                                                      st.points)]
-    fl = fleet.plan(st.track, st.train, st.stops, times, st.dwell, st.offsets, st.names, st.dt, st.supply,
-                    st.points, st.buffer)
+    fl = fleet.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
+                    st.supply, st.points, st.buffer, supplement=st.supplement)
     counts = []
     solve = session.Session.solve
 

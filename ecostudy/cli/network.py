@@ -22,13 +22,9 @@ def _network(study_path, out, no_plot, workers=1):
     out_dir = check_output_dir(Path(out) if out else st.output)
     pairs = list(zip(st.stops[:-1], st.stops[1:]))
     with worker_pool(workers) if workers > 1 else nullcontext() as pool:
-        mapper = pool.map if pool is not None else map
-        times = st.running_times
-        if times is None:  # per segment: all-out time plus the supplement
-            times = [t * (1 + st.supplement) for t in fleet.all_out_times(st.track, st.train, st.stops, st.points, mapper)]
-        fl = fleet.plan(st.track, st.train, st.stops, times, st.dwell, st.offsets, st.names, st.dt, st.supply,
-                        st.points, st.buffer, mapper)
-        typer.echo(f"{len(st.names)} trains, {len(pairs)} segments ({', '.join(f'{t:.1f}' for t in times)} s "
+        fl = fleet.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
+                        st.supply, st.points, st.buffer, pool, st.supplement)
+        typer.echo(f"{len(st.names)} trains, {len(pairs)} segments ({', '.join(f'{t:.1f}' for t in fl.asked_times)} s "
                    f"before rounding to {st.dt} s steps), {fl.steps} steps")
         outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo, pool=pool, workers=workers)
     base = outcome.get("independent", {}).get("totals", {}).get("substation_kWh")

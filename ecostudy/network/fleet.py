@@ -4,6 +4,7 @@ and one train's legs solved against weights, credits and a train ahead (:func:`s
 Every train runs the same stops with the same running times and dwells, offset by its departure
 time, on one clock of step dt (``ocp.timedomain``). The strategies are in :mod:`.strategies`.
 """
+from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -30,15 +31,21 @@ class Fleet:
     buffer: float = None
     results: dict = field(default_factory=dict)  # space-domain net-energy runs per segment (guesses)
     dwell_steps: int = 0
+    asked_times: list = None  # running time per segment before rounding to whole steps [s]
 
 
 def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=500, buffer=None,
-         mapper=map):
+         pool=None, supplement=0.0):
     """A :class:`Fleet`: running times and dwells rounded up to whole steps, departures offset;
-    each segment's space-domain net-energy run (the legs' first guess) solved over ``mapper``."""
+    each segment's space-domain net-energy run (the legs' first guess) solved.
+
+    ``running_times`` [s] per segment, or None: each segment's all-out time plus ``supplement``
+    (a fraction). ``pool``: a process pool (else this process); a segment's first run is submitted
+    as soon as its running time is known, so all-out and first runs of different segments overlap."""
     cases = [prepare(track, train, a, b, points) for a, b in zip(stops[:-1], stops[1:])]
-    steps = [int(np.ceil(t / dt - 1e-9)) for t in running_times]
-    pause = int(np.ceil(dwell / dt - 1e-9))
+    asked, firsts = _first_runs(track, train, cases, running_times, supplement, dt, points, pool)
+    steps = [_steps(t, dt) for t in asked]
+    pause = _steps(dwell, dt)
     legs = []
     for offset in offsets:
         start, mine = int(round(offset / dt)), []
@@ -49,9 +56,48 @@ def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, 
             start += n + pause
         legs.append(mine)
     total = max(leg.start + leg.steps for mine in legs for leg in mine)
-    tasks = [(track, train, c.segment.from_stop, c.segment.to_stop, n * dt, points) for c, n in zip(cases, steps)]
-    results = {(c.segment.from_stop, c.segment.to_stop): r for c, r in zip(cases, mapper(_net_energy_run, tasks))}
-    return Fleet(list(names), legs, dt, total, supply, buffer, results, pause)
+    results = {(c.segment.from_stop, c.segment.to_stop): r for c, r in zip(cases, firsts)}
+    return Fleet(list(names), legs, dt, total, supply, buffer, results, pause, list(asked))
+
+
+def _steps(seconds, dt):
+    """Whole clock steps covering ``seconds``."""
+    return int(np.ceil(seconds / dt - 1e-9))
+
+
+def _first_runs(track, train, cases, running_times, supplement, dt, points, pool):
+    """(running time asked [s], net-energy run at it rounded up to whole steps) per segment."""
+    pairs = [(c.segment.from_stop, c.segment.to_stop) for c in cases]
+
+    def first(k, seconds):
+        return (track, train, *pairs[k], _steps(seconds, dt) * dt, points)
+
+    def all_out(k):
+        return (track, train, *pairs[k], points)
+
+    asked = list(running_times) if running_times is not None else [None] * len(pairs)
+    runs = [None] * len(pairs)
+    if pool is None:
+        for k in range(len(pairs)):
+            if asked[k] is None:
+                asked[k] = _all_out_time(all_out(k)) * (1 + supplement)
+            runs[k] = _net_energy_run(first(k, asked[k]))
+        return asked, runs
+    jobs = {(pool.submit(_all_out_time, all_out(k)) if t is None else pool.submit(_net_energy_run, first(k, t))):
+            (t is None, k) for k, t in enumerate(asked)}
+    pending = set(jobs)
+    while pending:
+        done, pending = wait(pending, return_when=FIRST_COMPLETED)
+        for job in done:
+            timing, k = jobs[job]
+            if timing:
+                asked[k] = job.result() * (1 + supplement)
+                follow = pool.submit(_net_energy_run, first(k, asked[k]))
+                jobs[follow] = (False, k)
+                pending.add(follow)
+            else:
+                runs[k] = job.result()
+    return asked, runs
 
 
 def _net_energy_run(task):
