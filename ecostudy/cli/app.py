@@ -14,7 +14,7 @@ import typer
 
 from ecostudy.core.errors import EcostudyError, InputError, problem
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
+app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,  # "[s]" is a unit, not markup
                   help="Energy-efficient train control studies (Pyomo + Ipopt).")
 
 
