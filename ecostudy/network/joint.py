@@ -4,6 +4,7 @@ import time
 
 import numpy as np
 import pyomo.environ as pyo
+from pyomo.common.gc_manager import PauseGC
 
 from ecostudy.network import circuit
 from ecostudy.network.fleet import REGULARISATION, energy_ref, solve_model
@@ -14,7 +15,8 @@ from ecostudy.ocp import timedomain
 # MUMPS's METIS ordering instead of its automatic choice (session 14, 3 trains: 35 -> 26 s for
 # the same 105 iterations; SCOTCH was as fast but not deterministic: runs differed by 38 kW in a
 # step's power along a flat direction; on the legs and on one run's space NLP neither bought
-# anything measurable)
+# anything measurable). Both go through Scotch here, which ``ocp.session`` makes repeat exactly
+# since session 16.
 ORDERING = {"mumps_pivot_order": 5}
 
 
@@ -28,6 +30,19 @@ def joint(fleet, start, one_handle=False, floating=False):
     (``circuit.add_network``: the same substation energy for given powers).
     """
     t0 = time.perf_counter()
+    with PauseGC():  # as in legs.solve_leg
+        m, blocks = _model(fleet, start, one_handle, floating)
+    build_s = time.perf_counter() - t0
+    outcome = solve_model(m, "joint optimum", {**NEAR_START, **ORDERING})
+    runs = [[timedomain.leg_arrays(b) for b in bl] for bl in blocks]
+    own = sum(pyo.value(m.substation_mw[t]) for t in m.T_net) * fleet.dt / 3.6  # MW s -> kWh
+    return runs, {"build_s": build_s, "solve_s": outcome.seconds + outcome.nl_seconds, "nlp_substation_kWh": own,
+                  "iterations": outcome.iterations, "status": outcome.status,
+                  "variables": sum(1 for _ in m.component_data_objects(pyo.Var, active=True))}
+
+
+def _model(fleet, start, one_handle, floating):
+    """The joint NLP (every train's legs, the network, the objective) and its leg blocks [train][leg]."""
     m = pyo.ConcreteModel()
     blocks = []
     for i, legs in enumerate(fleet.legs):
@@ -50,13 +65,7 @@ def joint(fleet, start, one_handle=False, floating=False):
                                 (sum((m.V0[t] - vs) ** 2 for t in m.T_net) if floating else 0.0))
     m.objective = pyo.Objective(expr=(sum(m.substation_mw[t] for t in m.T_net) + regular) * 1e3 * fleet.dt
                                 / energy_ref(fleet))
-    build_s = time.perf_counter() - t0
-    outcome = solve_model(m, "joint optimum", {**NEAR_START, **ORDERING})
-    runs = [[timedomain.leg_arrays(b) for b in bl] for bl in blocks]
-    own = sum(pyo.value(m.substation_mw[t]) for t in m.T_net) * fleet.dt / 3.6  # MW s -> kWh
-    return runs, {"build_s": build_s, "solve_s": outcome.seconds + outcome.nl_seconds, "nlp_substation_kWh": own,
-                  "iterations": outcome.iterations, "status": outcome.status,
-                  "variables": sum(1 for _ in m.component_data_objects(pyo.Var, active=True))}
+    return m, blocks
 
 
 def _initialise_network(m, fleet, steps, floating):

@@ -39,8 +39,9 @@ from ecostudy.network.scoring import evaluate, separations, verify_leg
 
 
 # the strategies after independent driving, dearest first, so that a pool's workers end together
-# (measured on the 2-train study: 24, 21-24, 19-23, 19, 11 and 5 s)
-DEAREST_FIRST = ("voltage", "dissension", "triggering", "receptivity", "joint", "following")
+# (session 16, each in its worker: 2-train study 22.1, 20.8, 21.1, 15.8, 8.5, 4.0 s; 3-train study
+# in session 15: 92.7, 70.8, 65.3, 41.9, 27.8, 10.1 s)
+DEAREST_FIRST = ("triggering", "dissension", "voltage", "receptivity", "joint", "following")
 
 
 def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
