@@ -4,12 +4,11 @@ import time
 
 import numpy as np
 import pyomo.environ as pyo
-from pyomo.common.gc_manager import PauseGC
 
 from ecostudy.network import circuit
 from ecostudy.network.fleet import REGULARISATION, energy_ref, solve_model
 from ecostudy.network.legs import NEAR_START
-from ecostudy.ocp import timedomain
+from ecostudy.ocp import space, timedomain
 
 
 # MUMPS's METIS ordering instead of its automatic choice (session 14, 3 trains: 35 -> 26 s for
@@ -30,8 +29,7 @@ def joint(fleet, start, one_handle=False, floating=False):
     (``circuit.add_network``: the same substation energy for given powers).
     """
     t0 = time.perf_counter()
-    with PauseGC():  # as in legs.solve_leg
-        m, blocks = _model(fleet, start, one_handle, floating)
+    m, blocks = _model(fleet, start, one_handle, floating)
     build_s = time.perf_counter() - t0
     outcome = solve_model(m, "joint optimum", {**NEAR_START, **ORDERING})
     runs = [[timedomain.leg_arrays(b) for b in bl] for bl in blocks]
@@ -41,6 +39,7 @@ def joint(fleet, start, one_handle=False, floating=False):
                   "variables": sum(1 for _ in m.component_data_objects(pyo.Var, active=True))}
 
 
+@space.gc_paused
 def _model(fleet, start, one_handle, floating):
     """The joint NLP (every train's legs, the network, the objective) and its leg blocks [train][leg]."""
     m = pyo.ConcreteModel()

@@ -9,7 +9,6 @@ per rule on the 2-train study, with no energy gained.)
 """
 import numpy as np
 import pyomo.environ as pyo
-from pyomo.common.gc_manager import PauseGC
 
 from ecostudy.core.errors import SolverError
 from ecostudy.core.physics import hinge
@@ -88,6 +87,22 @@ def leg_cost(b, coefficients):
     return sum(step(j) for j in b.I)
 
 
+@space.gc_paused
+def _leg_model(leg, guess, held, coefficients, dt, ahead, buffer):
+    """One leg's NLP (model, leg block): the cost of ``coefficients``, the one-handle constraint
+    where ``held``, and ``buffer`` metres behind the tail of the train ``ahead``."""
+    m = pyo.ConcreteModel()
+    b = timedomain.add_leg(m, "leg", leg, guess, one_handle=held)
+    m.objective = pyo.Objective(expr=leg_cost(b, coefficients) * dt / leg_energy_ref(leg))
+    if ahead is not None and buffer is not None:
+        m.separation = pyo.ConstraintList()
+        for j in b.K:
+            x_ahead = ahead[leg.start + j]
+            if np.isfinite(x_ahead):  # head-to-tail: the train ahead is train.length long
+                m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j] >= buffer + leg.case.train.length)
+    return m, b
+
+
 def solve_leg(task):
     """(leg, label, dt, buffer, guess, warm, weights, allowance, credit, ahead) -> (LegRun, solver
     outcome); a top-level function so a process pool can run it.
@@ -106,17 +121,7 @@ def solve_leg(task):
     coefficients = cost_coefficients(leg, weights, allowance, credit)
     tries = (NEAR_START, None) if warm else (None,)
     for n, options in enumerate(tries, 1):
-        with PauseGC():  # the cyclic GC walking the model as it grows: 0.20 -> 0.045 s per metro leg
-            m = pyo.ConcreteModel()
-            b = timedomain.add_leg(m, "leg", leg, guess, one_handle=held)
-            m.objective = pyo.Objective(expr=leg_cost(b, coefficients) * dt / leg_energy_ref(leg))
-            if ahead is not None and buffer is not None:
-                m.separation = pyo.ConstraintList()
-                for j in b.K:
-                    x_ahead = ahead[leg.start + j]
-                    if np.isfinite(x_ahead):  # head-to-tail: the train ahead is train.length long
-                        m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j]
-                                         >= buffer + leg.case.train.length)
+        m, b = _leg_model(leg, guess, held, coefficients, dt, ahead, buffer)
         outcome = session.solve(m, options)
         if outcome.usable:
             return timedomain.leg_arrays(b), outcome

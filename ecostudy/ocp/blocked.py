@@ -33,6 +33,7 @@ from ecostudy.core.grid import warn_unmodelled
 from ecostudy.core.kinematics import clock, point_resistance
 from ecostudy.core.physics import davis_resistance, interval_resistance, moving_share
 from ecostudy.ocp.session import Session
+from ecostudy.ocp.space import gc_paused
 from ecostudy.ocp.timedomain import FORCE_SCALE
 
 
@@ -64,6 +65,7 @@ def handle_guess(case, s, v, ts, block):
     return np.clip(np.bincount(blocks, u) / np.bincount(blocks), -1.0, 1.0)
 
 
+@gc_paused
 def build_blocked(case, ts, kf, block, guess, margin=0.1):
     """The FHOCP on samples 0..k_f with blocks of ``block`` samples; ``guess`` = (s, v) on them."""
     train, seg = case.train, case.segment

@@ -116,6 +116,7 @@ def substeps_for(points, n_phases, least=4):
     return max(least, int(round(points / n_phases)))
 
 
+@space.gc_paused
 def build(segment, train, layout, guess, running_time=None, window=None, objective="energy",
           extend=None, movable=False):
     """The phases NLP of ``layout`` (or, with ``extend``, e.g. the mode-choice MINLP of ``ocp/modechoice.py``).

@@ -8,7 +8,6 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
-from pyomo.common.gc_manager import PauseGC
 
 from ecostudy.core import kinematics
 from ecostudy.core.errors import InfeasibleError, SolverError
@@ -51,8 +50,8 @@ def prepare(track, train, from_stop, to_stop, points, stages=None, windows=()):
 
 
 def build(case, guess, objective, stages, weights=(1.0, 1.0), **timing):
-    """The Pyomo model of ``case``; the cyclic GC is paused (it cost 70 % of the build)."""
-    with stage(stages, "build"), PauseGC():
+    """The Pyomo model of ``case`` (``space.build_model``, built with the cyclic GC paused)."""
+    with stage(stages, "build"):
         time_ref = max(kinematics.running_time(guess[0], case.nodes), 1.0)
         return space.build_model(case.segment, case.train, case.nodes, case.limits, guess,
                                        objective=objective, time_ref=time_ref, weights=weights,

@@ -95,6 +95,7 @@ def limit_profile(case, ramp, dt=0.0):
     return xs[keep], vs[keep]
 
 
+@space.gc_paused
 def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, one_handle=True):
     """Add one leg as a block ``m.<name>`` with variables s, v, ft, fb, fr and expression p [kW].
 
