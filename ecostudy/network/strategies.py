@@ -55,8 +55,7 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
     unequal: two per worker balance them); else each train's legs are (a strategy's rounds are
     sequential: train after train).
     """
-    rest = sorted((name for name in strategies if name != "independent"),
-                  key=lambda name: DEAREST_FIRST.index(name) if name in DEAREST_FIRST else -1)
+    rest = [name for name in strategies if name != "independent"]
     by_strategy = pool is not None and len(rest) >= 2 * workers
     mapper = pool.map if pool is not None and not by_strategy else map  # legs and re-simulations
     t0 = time.perf_counter()
@@ -75,7 +74,8 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
     if "independent" in strategies:
         report("independent", _scored(fleet, ind, {}, time.perf_counter() - t0, pool.map if pool is not None else map))
     if by_strategy:
-        futures = {pool.submit(_strategy, fleet, name, ind): name for name in rest}
+        futures = {pool.submit(_strategy, fleet, name, ind): name for name in
+                   sorted(rest, key=lambda name: DEAREST_FIRST.index(name) if name in DEAREST_FIRST else -1)}
         for future in as_completed(futures):
             report(futures[future], future.result())
     for name in rest:
