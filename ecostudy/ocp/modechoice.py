@@ -24,7 +24,7 @@ import time
 import numpy as np
 import pyomo.environ as pyo
 
-from ecostudy.ocp import phases
+from ecostudy.ocp import phases, session
 from ecostudy.ocp.space import FORCE_SCALE
 
 
@@ -71,6 +71,7 @@ def search(result, start_model, start_layout, objective, time_limit, points):
                      objective=objective, extend=define_mode_choice)
     t0 = time.perf_counter()
     logging.getLogger("pyomo.contrib.mindtpy").setLevel(logging.ERROR)
+    session.repeatable()  # its NLP subproblems in the same order of solves repeat (unless the time limit cuts in)
     res = pyo.SolverFactory("mindtpy").solve(
         m, strategy="OA", init_strategy="initial_binary", mip_solver="appsi_highs", nlp_solver="cyipopt",
         nlp_solver_args={"options": {"print_level": 0, "max_iter": 1500, "tol": 1e-7}},

@@ -98,6 +98,13 @@ def _scotch():
 SCOTCH = _scotch()
 
 
+def repeatable():
+    """Reset Scotch's generator: the solves that follow order their matrices as they did the
+    first time (``Session.solve`` calls it; so does a MINLP search whose NLPs Pyomo solves)."""
+    if SCOTCH is not None:
+        SCOTCH.SCOTCH_randomReset()
+
+
 REPO_ASL = Path(__file__).resolve().parents[2] / ".pyomo" / "lib" / "libpynumero_ASL.so"
 
 
@@ -181,8 +188,7 @@ class Session:
         duals = {}
         if (options or {}).get("warm_start_init_point") == "yes" and self.multipliers is not None:
             duals = dict(zip(("lagrange", "zl", "zu"), self.multipliers))
-        if SCOTCH is not None:
-            SCOTCH.SCOTCH_randomReset()  # the same ordering for the same matrix, every solve
+        repeatable()  # the same ordering for the same matrix, every solve
         t1 = time.perf_counter()
         try:
             with ctrl_c_after(held):
