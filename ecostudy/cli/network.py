@@ -20,11 +20,10 @@ def _network(study_path, out, no_plot, workers=1):
     import pandas as pd
     st = load_network_study(study_path)
     out_dir = check_output_dir(Path(out) if out else st.output)
-    pairs = list(zip(st.stops[:-1], st.stops[1:]))
     with worker_pool(workers) if workers > 1 else nullcontext() as pool:
         fl = fleet.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
                         st.supply, st.points, st.buffer, pool, st.supplement)
-        typer.echo(f"{len(st.names)} trains, {len(pairs)} segments ({', '.join(f'{t:.1f}' for t in fl.asked_times)} s "
+        typer.echo(f"{len(st.names)} trains, {len(st.stops) - 1} segments ({', '.join(f'{t:.1f}' for t in fl.asked_times)} s "
                    f"before rounding to {st.dt} s steps), {fl.steps} steps")
         outcome = strategies.run_strategies(fl, st.strategies, progress=typer.echo, pool=pool, workers=workers)
     base = outcome.get("independent", {}).get("totals", {}).get("substation_kWh")

@@ -4,7 +4,7 @@ and one train's legs solved against weights, credits and a train ahead (:func:`s
 Every train runs the same stops with the same running times and dwells, offset by its departure
 time, on one clock of step dt (``ocp.timedomain``). The strategies are in :mod:`.strategies`.
 """
-from concurrent.futures import FIRST_COMPLETED, wait
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -75,15 +75,10 @@ def _first_runs(track, train, cases, running_times, supplement, dt, points, pool
     def all_out(k):
         return (track, train, *pairs[k], points)
 
+    submit = pool.submit if pool is not None else _done
     asked = list(running_times) if running_times is not None else [None] * len(pairs)
     runs = [None] * len(pairs)
-    if pool is None:
-        for k in range(len(pairs)):
-            if asked[k] is None:
-                asked[k] = _all_out_time(all_out(k)) * (1 + supplement)
-            runs[k] = _net_energy_run(first(k, asked[k]))
-        return asked, runs
-    jobs = {(pool.submit(_all_out_time, all_out(k)) if t is None else pool.submit(_net_energy_run, first(k, t))):
+    jobs = {(submit(_all_out_time, all_out(k)) if t is None else submit(_net_energy_run, first(k, t))):
             (t is None, k) for k, t in enumerate(asked)}
     pending = set(jobs)
     while pending:
@@ -92,12 +87,19 @@ def _first_runs(track, train, cases, running_times, supplement, dt, points, pool
             timing, k = jobs[job]
             if timing:
                 asked[k] = job.result() * (1 + supplement)
-                follow = pool.submit(_net_energy_run, first(k, asked[k]))
+                follow = submit(_net_energy_run, first(k, asked[k]))
                 jobs[follow] = (False, k)
                 pending.add(follow)
             else:
                 runs[k] = job.result()
     return asked, runs
+
+
+def _done(fn, *args):
+    """``fn(*args)`` run now, as a finished future (the one-process stand-in for ``pool.submit``)."""
+    job = Future()
+    job.set_result(fn(*args))
+    return job
 
 
 def _net_energy_run(task):

@@ -56,10 +56,11 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
     sequential: train after train).
     """
     rest = [name for name in strategies if name != "independent"]
+    pooled = pool.map if pool is not None else map
     by_strategy = pool is not None and len(rest) >= 2 * workers
-    mapper = pool.map if pool is not None and not by_strategy else map  # legs and re-simulations
+    mapper = map if by_strategy else pooled  # the legs and re-simulations of the strategies after independent
     t0 = time.perf_counter()
-    ind = independent(fleet, pool.map if pool is not None else map)
+    ind = independent(fleet, pooled)
     out = {}
 
     def report(name, result):
@@ -72,7 +73,7 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
                      + (f" ({info['rounds_stopped']})" if info.get("rounds_stopped") else ""))
 
     if "independent" in strategies:
-        report("independent", _scored(fleet, ind, {}, time.perf_counter() - t0, pool.map if pool is not None else map))
+        report("independent", _scored(fleet, ind, {}, time.perf_counter() - t0, pooled))
     if by_strategy:
         futures = {pool.submit(_strategy, fleet, name, ind): name for name in
                    sorted(rest, key=lambda name: DEAREST_FIRST.index(name) if name in DEAREST_FIRST else -1)}
