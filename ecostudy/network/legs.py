@@ -21,6 +21,13 @@ HINGE_KW = 10.0  # [kW] width of the smooth min/max in a leg's cost (allowance, 
 # start and took 3000 iterations; a monotone one from mu 1e-3 converged in 730)
 NEAR_START = {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_strategy": "monotone", "mu_init": 1e-3}
 
+# MUMPS without its own row and column scaling (Ipopt's default 77 computes one at every
+# factorisation): a leg's KKT matrix is small and banded, and the scaling took about a quarter of
+# Ipopt's time (session 17: six legs of the 3-train study's first receptivity round, 3.63 -> 2.64 s,
+# the same iterations and costs to 9 digits; the supervisor rules 10-30 % faster, their rounds at
+# the same or lower energies; docs/benchmarks.md). Not for the joint NLP: slower there (19 vs 16 s).
+KKT = {"mumps_scaling": 0}
+
 
 def leg_energy_ref(leg):
     """Objective scale of one leg [kWh s / h = kJ]: ``space.energy_reference`` of its segment."""
@@ -119,7 +126,7 @@ def solve_leg(task):
     held = pumping_pays(leg.case.train, *(None if a is None else np.asarray(a, float)[span]
                                           for a in (weights, allowance, credit)))
     coefficients = cost_coefficients(leg, weights, allowance, credit)
-    tries = (NEAR_START, None) if warm else (None,)
+    tries = ({**NEAR_START, **KKT}, KKT) if warm else (KKT,)
     for n, options in enumerate(tries, 1):
         m, b = _leg_model(leg, guess, held, coefficients, dt, ahead, buffer)
         outcome = session.solve(m, options)
