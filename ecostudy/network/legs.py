@@ -22,10 +22,11 @@ HINGE_KW = 10.0  # [kW] width of the smooth min/max in a leg's cost (allowance, 
 NEAR_START = {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_strategy": "monotone", "mu_init": 1e-3}
 
 # MUMPS without its own row and column scaling (Ipopt's default 77 computes one at every
-# factorisation): a leg's KKT matrix is small and banded, and the scaling took about a quarter of
-# Ipopt's time (session 17: six legs of the 3-train study's first receptivity round, 3.63 -> 2.64 s,
-# the same iterations and costs to 9 digits; the supervisor rules 10-30 % faster, their rounds at
-# the same or lower energies; docs/benchmarks.md). Not for the joint NLP: slower there (19 vs 16 s).
+# factorisation): a leg's KKT matrix is small and banded, and the scaling took about a fifth of
+# Ipopt's time (session 17, `python bench/bench_leg_options.py studies/network_metro_3trains.yaml`:
+# six legs 4.85 -> 3.82 s, the same iterations, costs equal to 1e-14; the supervisor rules 3-34 %
+# faster, their rounds at the same or lower energies; docs/benchmarks.md). Not for the joint NLP:
+# slower there (18.9 / 19.2 against 16.9 / 15.8 s).
 KKT = {"mumps_scaling": 0}
 
 
@@ -95,11 +96,17 @@ def leg_cost(b, coefficients):
 
 
 @space.gc_paused
-def _leg_model(leg, guess, held, coefficients, dt, ahead, buffer):
-    """One leg's NLP (model, leg block): the cost of ``coefficients``, the one-handle constraint
-    where ``held``, and ``buffer`` metres behind the tail of the train ``ahead``."""
+def leg_model(task):
+    """One leg's NLP from a :func:`solve_leg` task: (model, leg block) with the cost of
+    :func:`cost_coefficients`, the one-handle constraint where :func:`pumping_pays`, and ``buffer``
+    metres behind the tail of the train ``ahead``."""
+    leg, _, dt, buffer, guess, _, weights, allowance, credit, ahead = task
+    span = slice(leg.start, leg.start + leg.steps)
+    held = pumping_pays(leg.case.train, *(None if a is None else np.asarray(a, float)[span]
+                                          for a in (weights, allowance, credit)))
     m = pyo.ConcreteModel()
     b = timedomain.add_leg(m, "leg", leg, guess, one_handle=held)
+    coefficients = cost_coefficients(leg, weights, allowance, credit)
     m.objective = pyo.Objective(expr=leg_cost(b, coefficients) * dt / leg_energy_ref(leg))
     if ahead is not None and buffer is not None:
         m.separation = pyo.ConstraintList()
@@ -121,14 +128,10 @@ def solve_leg(task):
     solve's multipliers too, with a small barrier, took a third of the iterations on the 2-train
     study's rounds but stopped the 3-train study's rounds at worse local optima: receptivity
     52.123 against 51.789 kWh, rule 7.11 50.497 against 49.764.)"""
-    leg, label, dt, buffer, guess, warm, weights, allowance, credit, ahead = task
-    span = slice(leg.start, leg.start + leg.steps)
-    held = pumping_pays(leg.case.train, *(None if a is None else np.asarray(a, float)[span]
-                                          for a in (weights, allowance, credit)))
-    coefficients = cost_coefficients(leg, weights, allowance, credit)
+    label, warm = task[1], task[5]
     tries = ({**NEAR_START, **KKT}, KKT) if warm else (KKT,)
     for n, options in enumerate(tries, 1):
-        m, b = _leg_model(leg, guess, held, coefficients, dt, ahead, buffer)
+        m, b = leg_model(task)
         outcome = session.solve(m, options)
         if outcome.usable:
             return timedomain.leg_arrays(b), outcome

@@ -39,8 +39,8 @@ from ecostudy.network.scoring import evaluate, separations, verify_leg
 
 
 # the strategies after independent driving, dearest first, so that a pool's workers end together
-# (session 16, each in its worker: 2-train study 22.1, 20.8, 21.1, 15.8, 8.5, 4.0 s; 3-train study
-# in session 15: 92.7, 70.8, 65.3, 41.9, 27.8, 10.1 s)
+# (session 17, `ecostudy network <study> --no-plot --workers 2`, each in its worker: 3-train study
+# 45.2, 38.3, 32.1, 24.6, 19.1, 5.1 s; 2-train study 9.8, 10.4, 10.8, 9.0, 5.6, 2.0 s)
 DEAREST_FIRST = ("triggering", "dissension", "voltage", "receptivity", "joint", "following")
 
 
