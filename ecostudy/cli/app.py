@@ -18,6 +18,19 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=N
                   help="Energy-efficient train control studies (Pyomo + Ipopt).")
 
 
+def _print_version(value: bool) -> None:
+    if value:
+        from ecostudy import __version__
+        typer.echo(f"ecostudy {__version__}")
+        raise typer.Exit(0)
+
+
+@app.callback()
+def _main(version: bool = typer.Option(False, "--version", callback=_print_version, is_eager=True,
+                                       help="Print the version and exit.")) -> None:
+    """Energy-efficient train control studies (Pyomo + Ipopt)."""
+
+
 class DasMethod(str, Enum):
     round = "round"
     phases = "phases"
@@ -120,11 +133,16 @@ def counts_line(counts, noun):
 def case_progress(label, disabled):
     """A progress bar over a study's cases: yields ``progress(done, failed, remaining, total)``.
     Ctrl-C inside ends with exit status 130 and says that the finished cases are kept."""
+    import sys
+
+    from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
+    # progress goes to stderr, and only to a terminal: piped results on stdout stay clean
+    disabled = disabled or not sys.stderr.isatty()
     columns = [TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                TextColumn("failed {task.fields[failed]}, remaining {task.fields[remaining]}"), TimeRemainingColumn()]
-    with Progress(*columns, disable=disabled, transient=False) as bar:
+    with Progress(*columns, console=Console(stderr=True), disable=disabled, transient=False) as bar:
         task = bar.add_task(label, total=None, failed=0, remaining="?")
 
         def progress(done, failed, remaining, total):

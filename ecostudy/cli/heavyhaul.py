@@ -29,7 +29,7 @@ def _heavyhaul(study, workers, dask, retry_failed, out, no_progress, no_plot):
     return counts
 
 
-@app.command()
+@app.command(short_help="Heavy-haul train as coupled masses under braking-penalised RHC (Zhang & Zhuan).")
 def heavyhaul(
     study: Path = typer.Argument(..., help="Heavy-haul study file (YAML): consist, track, reference, K_b/f/horizons."),
     workers: int = typer.Option(1, help="Local worker processes."),
@@ -40,7 +40,7 @@ def heavyhaul(
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the plots."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
-    """Heavy haul: paper 002's braking-penalised receding-horizon controller on the coupled-mass train (resumable)."""
+    """Heavy haul: Zhang & Zhuan's braking-penalised receding-horizon controller on the coupled-mass train (resumable)."""
     counts = guarded(debug, _heavyhaul, study, workers, dask, retry_failed, out, no_progress, no_plot)
     if counts["not_ok"]:
         raise typer.Exit(1)

@@ -60,7 +60,7 @@ def _network(study_path, out, no_plot, workers=1):
     return table
 
 
-@app.command()
+@app.command(short_help="Trains sharing a DC substation: independent, supervisor rules, joint optimum.")
 def network(
     study: Path = typer.Argument(..., help="Network study file (YAML)."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's output)."),

@@ -32,7 +32,7 @@ def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot, onl
     return counts
 
 
-@app.command()
+@app.command(short_help="Closed loop: controllers drive a perturbed plant, Monte Carlo, resumable.")
 def simulate(
     study: Path = typer.Argument(..., help="Closed-loop study file (YAML): controllers, deviations, draws."),
     workers: int = typer.Option(1, help="Local worker processes."),

@@ -115,7 +115,7 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
     return result
 
 
-@app.command()
+@app.command(short_help="Energy-optimal (or all-out) run between two stops, verified.")
 def solve(
     study: Optional[Path] = typer.Argument(None, help="Study file (YAML)."),
     track: Optional[Path] = typer.Option(None, help="Track file (YAML, or TTOBench JSON)."),
@@ -126,13 +126,13 @@ def solve(
     from_stop: Optional[str] = typer.Option(None, "--from", help="Departure stop (default: first)."),
     to_stop: Optional[str] = typer.Option(None, "--to", help="Arrival stop (default: last)."),
     objective: Optional[Objective] = typer.Option(None, help="energy | net_energy | time | mixed."),
-    weights: Optional[str] = typer.Option(None, help="Mixed objective weights 'w_t,w_e' (thesis 001 eq. 4.1)."),
+    weights: Optional[str] = typer.Option(None, help="Mixed objective weights 'w_t,w_e' (Yazhemsky 2017, eq. 4.1)."),
     points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 1000)."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip speed.png."),
     das: Optional[DasMethod] = typer.Option(
         None, help="Also driver advice: round (nearest handle level), phases (optimal phase lengths, "
-                   "thesis 000 Ch. 5) or minlp (mode per phase chosen by binaries)."),
+                   "Farooqi 2018, Ch. 5) or minlp (mode per phase chosen by binaries)."),
     das_time_limit: float = typer.Option(60.0, help="Time limit of the minlp search [s]."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
@@ -162,13 +162,13 @@ def _check(result_dir, time):
     return report
 
 
-@app.command()
+@app.command(short_help="Pontryagin regime check of a solved profile.")
 def check(
     result_dir: Path = typer.Argument(..., help="Output folder of `ecostudy solve`."),
     time: Optional[float] = typer.Option(None, "--time", help="Test as the energy-optimal run arriving by this time [s]."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
-    """Pontryagin regime check of a solved profile (thesis 000 eq. 2.17, eq. 7.4 for net-energy runs); exit 1 below 95 % agreement."""
+    """Pontryagin regime check of a solved profile (Farooqi 2018, eq. 2.17; eq. 7.4 for net-energy runs); exit 1 below 95 % agreement."""
     report = guarded(debug, _check, result_dir, time)
     if report["agreement_pct"] < 95.0:
         raise typer.Exit(1)
@@ -193,7 +193,7 @@ def _doctor():
     return ok
 
 
-@app.command()
+@app.command(short_help="Check the install: solver chain versions and a toy solve.")
 def doctor(debug: bool = typer.Option(False, help="Show tracebacks.")):
     """Check the install: versions of the solver chain and a toy NLP solved with Ipopt."""
     if not guarded(debug, _doctor):

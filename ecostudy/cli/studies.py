@@ -73,7 +73,7 @@ def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, poin
     return meta
 
 
-@app.command()
+@app.command(short_help="Energy against running time: the Pareto front.")
 def pareto(
     study: Optional[Path] = typer.Argument(None, help="Study file (YAML)."),
     track: Optional[Path] = typer.Option(None, help="Track file."),
@@ -85,7 +85,7 @@ def pareto(
     points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 500)."),
     workers: int = typer.Option(1, help="Processes; each solves a contiguous warm-started chain."),
     cold: bool = typer.Option(False, help="Solve every point on its own (no shared model, no warm start)."),
-    weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T + w_e E/m, thesis 001 eq. 4.1a)."),
+    weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T + w_e E/m, Yazhemsky 2017, eq. 4.1a)."),
     das: Optional[DasMethod] = typer.Option(None, help="Also the DAS front: round | phases | minlp at every point."),
     das_time_limit: float = typer.Option(60.0, help="Time limit of each MINLP search [s] (--das minlp)."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
@@ -130,7 +130,7 @@ def _compare(study, track, train, from_stop, to_stop, time, supplement, points, 
     return table
 
 
-@app.command(name="compare")
+@app.command(name="compare", short_help="Strategies side by side, each re-simulated by one simulator.")
 def compare_command(
     study: Optional[Path] = typer.Argument(None, help="Study file (YAML)."),
     track: Optional[Path] = typer.Option(None, help="Track file."),
@@ -144,7 +144,11 @@ def compare_command(
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip compare.png."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
-    """Strategies side by side: all-out, ATO optimum, eco-drive coasting, DAS round (simulated)."""
+    """Strategies side by side, every one scored by the same independent simulator: all-out, ATO optimum,
+    eco-drive coasting, MARECO-style (after OSRD's MARECO), DAS round and DAS phases.
+
+    Example: ecostudy compare studies/default.yaml --out out/compare
+    """
     table = guarded(debug, _compare, study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot)
     if not table.attrs["verified"]:
         typer.secho("flagged: the ATO optimum is not verified optimal (its re-simulation or Ipopt's status; see "
@@ -221,7 +225,7 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
     return table
 
 
-@app.command(name="journey")
+@app.command(name="journey", short_help="Spread a journey's running time over its segments.")
 def journey_command(
     track: Optional[Path] = typer.Option(None, help="Track file with the stops (default: the track a "
                                          "TTOBench journey names, from ../tracks/)."),
@@ -262,7 +266,7 @@ def _run(study, workers, dask, retry_failed, out, no_progress):
     return counts
 
 
-@app.command()
+@app.command(short_help="Every case of a study file; resumable, in parallel.")
 def run(
     study: Path = typer.Argument(..., help="Study file (YAML) with optional scenarios and sweep."),
     workers: int = typer.Option(1, help="Local worker processes."),
