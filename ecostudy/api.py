@@ -9,17 +9,21 @@ Everything is SI inside; the arguments here say their unit in their name where i
 """
 from dataclasses import dataclass
 
-import pandas as pd
+from ecostudy.ocp.solver import configure
 
-from ecostudy.analysis.single import RunResult, solve_run
-from ecostudy.core.errors import InputError
-from ecostudy.core.types import State, Timing, Track, Train, Window
-from ecostudy.core.units import PERCENT
-from ecostudy.io.loaders import chosen_stops, load_track, load_train, track_from_dict, train_from_dict
-from ecostudy.ocp.problem import prepare
-from ecostudy.ocp.restart import Replanner
-from ecostudy.report.files import write_run
-from ecostudy.studies.pareto import sweep
+configure()  # the API is an entry point: set the process up once, before pandas, scipy and Pyomo load
+
+import pandas as pd  # noqa: E402
+
+from ecostudy.analysis.single import RunResult, solve_run  # noqa: E402
+from ecostudy.core.errors import InputError  # noqa: E402
+from ecostudy.core.types import State, Timing, Track, Train, Window  # noqa: E402
+from ecostudy.core.units import PERCENT  # noqa: E402
+from ecostudy.io.loaders import chosen_stops, load_track, load_train, track_from_dict, train_from_dict  # noqa: E402
+from ecostudy.ocp.problem import prepare  # noqa: E402
+from ecostudy.ocp.restart import Replanner  # noqa: E402
+from ecostudy.report.files import write_run  # noqa: E402
+from ecostudy.studies.pareto import sweep  # noqa: E402
 
 __all__ = ["load_train", "load_track", "train_from_dict", "track_from_dict", "solve", "pareto", "replanner",
            "Solution", "Front", "Train", "Track", "State", "Window"]

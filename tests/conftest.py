@@ -1,7 +1,11 @@
 """Shared fixtures: each expensive solve runs once per session and many tests read it."""
 from pathlib import Path
 
-import pytest
+from ecostudy.ocp.solver import configure
+
+configure()  # the suite is an entry point, as the command line and the API are
+
+import pytest  # noqa: E402
 import yaml
 
 import ecostudy.analysis.single as _run

@@ -29,6 +29,9 @@ def _print_version(value: bool) -> None:
 def _main(version: bool = typer.Option(False, "--version", callback=_print_version, is_eager=True,
                                        help="Print the version and exit.")) -> None:
     """Energy-efficient train control studies (Pyomo + Ipopt)."""
+    from ecostudy.ocp.solver import configure
+
+    configure()  # once, before any command imports the solver chain
 
 
 class DasMethod(str, Enum):

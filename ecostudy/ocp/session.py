@@ -4,15 +4,12 @@ The glue is ours rather than ``SolverFactory('cyipopt')`` so that the NL write (
 which writes and loads an AMPL NL file through PyNumero's ASL) and the solve are timed apart,
 iterations are counted, and the NLP object can be reused.
 """
-import ctypes
-import os
 import signal
 import subprocess
 import threading
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass
-from pathlib import Path
 
 import cyipopt
 import numpy as np
@@ -23,6 +20,8 @@ from pyomo.contrib.pynumero.interfaces.cyipopt_interface import CyIpoptNLP
 from pyomo.contrib.pynumero.interfaces.pyomo_nlp import PyomoNLP
 
 from ecostudy.core.errors import SolverError
+from ecostudy.ocp import solver
+from ecostudy.ocp.solver import NL_OPTIONS
 
 DEFAULT_OPTIONS = {
     "tol": 1e-8,
@@ -64,60 +63,18 @@ class Outcome:
         return self.status in ("optimal", "acceptable") or self.max_violation < 1e-6
 
 
-# Pyomo 6.10's NL writer exports named Expressions as AMPL defined variables; with a fixed variable
-# inside one that several named Expressions share (a leg's mean speed at its fixed end speed, used
-# by its traction and regeneration power), the constraint that uses their sum reached Ipopt with
-# other values and derivatives than Pyomo's (found in session 14: the joint optimum's power balance at the last
-# step of each leg, 74 kW apart; tests/test_session.py). Written inline instead, at a cost on the
-# default study's space NLP (which the bug did not hit): NL write unchanged, Ipopt about 12 % longer
-# (quiet machine, alternating: 1.40-1.58 s against 1.22-1.36 s; energy equal to 4e-9).
-NL_OPTIONS = {"export_defined_variables": False}
-# ... and the same default for every NL file written in this process (MindtPy's NLP subproblems
-# in ``ocp/modechoice.py`` go through Pyomo's own cyipopt interface, which passes no options)
-for _key, _value in NL_OPTIONS.items():
-    setattr(NLWriter.CONFIG, _key, _value)
-
-# MUMPS' automatic ordering here is Scotch's (Debian's MUMPS has no METIS of its own), and Scotch 7
-# orders with threads and a random generator whose state runs on from call to call: the same NLP
-# solved twice, in one process or two, ended 1e-15 apart (found in session 16; session 15 saw the
-# rounds of a network study amplify it to 1 % and a lost strategy). One thread (read at each call)
-# and the generator reset before each solve make every solve repeat bit for bit.
-os.environ.setdefault("SCOTCH_PTHREAD_NUMBER", "1")
-
-
-def _scotch():
-    """The Scotch library loaded in this process (through Ipopt's MUMPS), or None."""
-    try:
-        with open("/proc/self/maps") as maps:
-            paths = sorted({line.split()[-1] for line in maps if "/libscotch-" in line})
-    except OSError:
-        return None
-    return ctypes.CDLL(paths[0]) if paths else None
-
-
-SCOTCH = _scotch()
-
-
 def repeatable():
-    """Reset Scotch's generator: the solves that follow order their matrices as they did the
-    first time (``Session.solve`` calls it; so does a MINLP search whose NLPs Pyomo solves)."""
-    if SCOTCH is not None:
-        SCOTCH.SCOTCH_randomReset()
-
-
-REPO_ASL = Path(__file__).resolve().parents[2] / ".pyomo" / "lib" / "libpynumero_ASL.so"
+    """Every solve repeats bit for bit: the solver chain set up (``ocp.solver.prepare``) and
+    Scotch's generator reset, so the solves that follow order their matrices as they did the first
+    time (``Session.solve`` calls it; so does a MINLP search whose NLPs Pyomo solves)."""
+    solver.prepare(NLWriter.CONFIG, AmplInterface)
+    solver.repeatable()
 
 
 def _imports():
-    """PyNumero classes, with the ASL library found even when Pyomo was imported before ecostudy.
-
-    ``ecostudy/__init__.py`` points PYOMO_CONFIG_DIR at the repository's ``.pyomo`` folder, but
-    Pyomo reads that variable once, when it is first imported; a notebook that imported Pyomo
-    first would not find the library built by ``scripts/install.sh``.
-    """
-    if not AmplInterface.available() and REPO_ASL.is_file():
-        AmplInterface.libname = str(REPO_ASL)
-    if not AmplInterface.available():
+    """PyNumero classes, with the solver chain prepared (``ocp.solver.prepare``) and the ASL library
+    found even when Pyomo was imported before ecostudy."""
+    if not solver.prepare(NLWriter.CONFIG, AmplInterface):
         raise SolverError("PyNumero's ASL library (libpynumero_ASL.so) is missing: run `make install` "
                           "(scripts/install.sh builds it into .pyomo/)")
     return CyIpoptNLP, PyomoNLP

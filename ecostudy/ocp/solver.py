@@ -1,0 +1,93 @@
+"""Process-wide setup of the solver chain, done explicitly: nothing here runs at import.
+
+Two steps, both idempotent:
+
+- :func:`configure`, called once by every entry point (the command line before any command, the
+  Python API ``ecostudy.api``, the test suite) before the heavy libraries are imported: it keeps
+  Pyomo from importing what ecostudy never uses and pins MUMPS's ordering to one thread.
+- :func:`prepare`, called by the solver glue (``ocp.session``) before the first NL file is written
+  or the first solve, in any process (worker processes and Dask workers included): the NL writer's
+  defaults, the ASL library, the Scotch handle that makes every solve repeat bit for bit.
+
+What each setting is for is said where it is set.
+"""
+import ctypes
+import os
+from pathlib import Path
+
+from pyomo.common.dependencies import DeferredImportCallbackFinder
+
+# PyNumero's ASL library as scripts/install.sh builds it (used when Pyomo's own search finds none)
+REPO_ASL = Path(__file__).resolve().parents[2] / ".pyomo" / "lib" / "libpynumero_ASL.so"
+
+# Pyomo 6.10's NL writer exports named Expressions as AMPL defined variables; with a fixed variable
+# inside one that several named Expressions share (a leg's mean speed at its fixed end speed, used
+# by its traction and regeneration power), the constraint that uses their sum reached Ipopt with
+# other values and derivatives than Pyomo's (the joint network optimum's power balance at the last
+# step of each leg, 74 kW apart; tests/test_session.py). Written inline instead, at a cost on the
+# default study's space NLP (which the bug did not hit): NL write unchanged, Ipopt about 12 % longer
+# (quiet machine, alternating: 1.40-1.58 s against 1.22-1.36 s; energy equal to 4e-9).
+NL_OPTIONS = {"export_defined_variables": False}
+
+_state = {"configured": False, "prepared": False, "scotch": None}
+
+
+def configure():
+    """Set up this process for ecostudy; call it once, first thing, from an entry point.
+
+    - Pyomo hooks the import of scipy to import ``scipy.stats`` (about 1.2 s here) and of
+      matplotlib to import ``pyplot`` and ``pylab`` (about 0.9 s). ecostudy needs only
+      ``scipy.sparse``/``scipy.integrate`` and draws on ``matplotlib.figure``; the hooks fire
+      whether scipy comes before or after Pyomo, so they are switched off here.
+    - MUMPS's automatic ordering here is Scotch's (Debian's MUMPS has no METIS of its own), and
+      Scotch 7 orders with threads and a random generator whose state runs on from call to call:
+      the same NLP solved twice, in one process or two, ended 1e-15 apart, and the rounds of a
+      network study amplified that to 1 %. One thread (read at each call) here, and the generator
+      reset before each solve (:func:`repeatable`), make every solve repeat bit for bit.
+    """
+    if _state["configured"]:
+        return
+    for name in ("scipy", "matplotlib"):
+        for indicator in DeferredImportCallbackFinder._callbacks.get(name, ()):
+            indicator._callback = None
+    os.environ.setdefault("SCOTCH_PTHREAD_NUMBER", "1")
+    _state["configured"] = True
+
+
+def prepare(nl_writer_config, ampl_interface):
+    """Make the solver chain ready in this process (idempotent; ``ocp.session`` calls it with
+    Pyomo's ``NLWriter.CONFIG`` and PyNumero's ``AmplInterface``). Returns whether PyNumero's ASL
+    library is available.
+
+    - the NL writer's defaults (:data:`NL_OPTIONS`) for every NL file written in this process,
+      also by Pyomo's own cyipopt interface (MindtPy's NLP subproblems of the DAS mode choice);
+    - the ASL library built into the repository's ``.pyomo`` when Pyomo's search finds none
+      (Pyomo reads PYOMO_CONFIG_DIR once, when it is first imported);
+    - the Scotch library that Ipopt's MUMPS loaded, for :func:`repeatable`.
+    """
+    configure()
+    if not _state["prepared"]:
+        for key, value in NL_OPTIONS.items():
+            setattr(nl_writer_config, key, value)
+        if REPO_ASL.is_file() and ("PYOMO_CONFIG_DIR" not in os.environ or not ampl_interface.available()):
+            ampl_interface.libname = str(REPO_ASL)  # also spares Pyomo's library search (a compiler probe)
+        _state["scotch"] = _scotch()
+        _state["prepared"] = True
+    return ampl_interface.available()
+
+
+def _scotch():
+    """The Scotch library loaded in this process (through Ipopt's MUMPS), or None."""
+    try:
+        with open("/proc/self/maps") as maps:
+            paths = sorted({line.split()[-1] for line in maps if "/libscotch-" in line})
+    except OSError:
+        return None
+    return ctypes.CDLL(paths[0]) if paths else None
+
+
+def repeatable():
+    """Reset Scotch's generator: the solves that follow order their matrices as they did the
+    first time (``Session.solve`` calls it; so does a MINLP search whose NLPs Pyomo solves)."""
+    if _state["scotch"] is not None:
+        _state["scotch"].SCOTCH_randomReset()
