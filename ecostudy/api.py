@@ -19,13 +19,14 @@ from ecostudy.analysis.single import RunResult, solve_run  # noqa: E402
 from ecostudy.core.errors import InputError  # noqa: E402
 from ecostudy.core.types import State, Timing, Track, Train, Window  # noqa: E402
 from ecostudy.core.units import PERCENT  # noqa: E402
+from ecostudy.io.folder import StudyResult, load  # noqa: E402,F401  (api.load: any output folder)
 from ecostudy.io.loaders import chosen_stops, load_track, load_train, track_from_dict, train_from_dict  # noqa: E402
 from ecostudy.ocp.problem import prepare  # noqa: E402
 from ecostudy.ocp.restart import Replanner  # noqa: E402
 from ecostudy.report.files import write_run  # noqa: E402
 from ecostudy.studies.pareto import sweep  # noqa: E402
 
-__all__ = ["load_train", "load_track", "train_from_dict", "track_from_dict", "solve", "pareto", "replanner",
+__all__ = ["load", "StudyResult", "load_train", "load_track", "train_from_dict", "track_from_dict", "solve", "pareto", "replanner",
            "Solution", "Front", "Train", "Track", "State", "Window"]
 
 

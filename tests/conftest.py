@@ -70,3 +70,21 @@ def write_yaml(path, data):
 
 def load_yaml(path):
     return yaml.safe_load(Path(path).read_text())
+
+
+def assert_folder(out, kind, tables, rows=None, status="ok"):
+    """An output folder as ``ecostudy.api.load`` reads it back: the command that wrote it, its
+    status, its tables equal to the CSV files they name (``rows``: the main table's length)."""
+    import pandas as pd
+    from ecostudy import api
+    folder = api.load(out)
+    assert folder.kind == kind
+    assert folder.status.kind == status, str(folder.status)
+    assert list(folder.tables) == list(tables)
+    for name, table in folder.tables.items():
+        pd.testing.assert_frame_equal(table, pd.read_csv(Path(out) / folder.summary["tables"][name]))
+    assert folder.cases["total"] == sum(folder.cases[k] for k in ("ok", "flagged", "failed")) >= 1
+    assert all((Path(out) / f).is_file() for f in folder.files), folder.files
+    if rows is not None:
+        assert len(folder.table) == rows
+    return folder

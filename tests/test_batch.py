@@ -13,7 +13,7 @@ import pytest
 from ecostudy.studies.batch import run_study
 from ecostudy.studies.cases import expand
 
-from .conftest import ROOT, TRACKS, TRAINS, load_yaml, write_yaml
+from .conftest import assert_folder, ROOT, TRACKS, TRAINS, load_yaml, write_yaml
 
 NUMERIC = ["running_time_s", "traction_energy_kWh", "net_energy_kWh", "top_speed_kmh"]
 
@@ -209,6 +209,7 @@ def test_a_library_study_runs_every_segment_of_every_fitting_pair(tmp_path):
     table = pd.read_csv(tmp_path / "out" / "results.csv")
     assert list(zip(table["track"], table["from"], table["to"])) == [("T1", "S0", "S1"), ("T1", "S1", "S2")]
     assert (table["status"] == "ok").all() and table["verified"].all()
+    assert_folder(tmp_path / "out", "run", ["results", "skipped"], rows=2)
     skipped = pd.read_csv(tmp_path / "out" / "skipped.csv")
     assert skipped.to_dict("records") == [{"track": "T2", "train": "subway",
                                           "reason": "top speed 80 km/h below 60% of the line's 200 km/h"}]

@@ -6,7 +6,7 @@ from typer.testing import CliRunner
 
 from ecostudy.cli import app
 
-from .conftest import STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
+from .conftest import assert_folder, STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
 
 runner = CliRunner()
 METRO, AMS = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml"
@@ -40,6 +40,8 @@ def test_solve_study_writes_outputs(tmp_path):
     header = (out / "profile.csv").read_text().splitlines()[0]
     assert header.startswith("position_m,time_s,speed_kmh,handle")
     assert not list(out.glob("*.tmp"))
+    folder = assert_folder(out, "solve", ["profile"])
+    assert folder.summary["running_time_s"] == summary["running_time_s"] and folder.cases["total"] == 1
 
 
 def test_solve_with_options_and_supplement(tmp_path):

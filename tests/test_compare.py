@@ -7,7 +7,7 @@ from ecostudy.studies.compare import compare
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train
 
-from .conftest import TRACKS, TRAINS
+from .conftest import assert_folder, TRACKS, TRAINS
 
 
 @pytest.fixture(scope="module")
@@ -43,9 +43,17 @@ def test_compare_command(tmp_path):
     r = CliRunner().invoke(app, ["compare", "--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train",
                                  str(TRAINS / "amsterdam_metro.yaml"), "--time", "78", "--points", "300",
                                  "--out", str(tmp_path)])
-    assert r.exit_code == 0, r.output
+    # on this coarse grid (300 nodes) the two heuristics' simulated runs stop 1.3 m short of the
+    # stop: flagged (more than 1 m off), named on stderr, exit status 1; the optimum and DAS are ok
+    assert r.exit_code == 1, r.output
     assert (tmp_path / "compare.csv").read_text().startswith("strategy,running_time_s,arrival_error_s")
     assert (tmp_path / "compare.png").stat().st_size > 10_000
+    folder = assert_folder(tmp_path, "compare", ["compare"], rows=6, status="flagged")
+    status = folder.table.set_index("strategy")["status"]
+    assert status["ATO optimum"] == status["all-out"] == status["DAS phases"] == "ok"
+    for name in ("eco-drive coasting", "MARECO-style"):
+        assert status[name].startswith("flagged: stopped -1.")
+        assert f"flagged: {name}: stopped" in r.output
 
 
 def test_mareco_profile_coasts_before_braking_and_downhill():

@@ -6,7 +6,7 @@ from typer.testing import CliRunner
 from ecostudy.cli import app
 from ecostudy.studies.journey import equal_marginal, uniform
 
-from .conftest import TRACKS, TRAINS
+from .conftest import assert_folder, TRACKS, TRAINS
 
 
 def test_equal_marginal_allocation_on_synthetic_fronts():
@@ -35,6 +35,8 @@ def test_journey_command_saves_against_the_same_percentage(tmp_path):
         assert best["running_time_s"] == pytest.approx(other["running_time_s"], rel=1e-6)
         assert best["traction_energy_kWh"] <= other["traction_energy_kWh"] * (1 + 1e-6)
     assert (tmp_path / "journey.png").stat().st_size > 10_000
+    folder = assert_folder(tmp_path, "journey", ["segments", "totals"])
+    assert folder.cases["total"] == len(folder.table)
 
 
 @pytest.mark.slow

@@ -320,6 +320,8 @@ def test_network_command_and_a_bad_study(tmp_path):
     assert r.exit_code == 0, r.output
     for name in ("network_substation.csv", "network_trains.csv", "network_steps_joint.csv", "network.png"):
         assert (tmp_path / "out" / name).stat().st_size > 0
+    from .conftest import assert_folder
+    assert_folder(tmp_path / "out", "network", ["substation", "trains"], rows=2)
     bad = write_yaml(tmp_path / "bad.yaml", {
         "name": "bad", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
         "supplement_percent": 10, "trains": [{"name": "A", "offset_s": 0}],

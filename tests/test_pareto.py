@@ -10,7 +10,7 @@ from ecostudy.io.loaders import load_track, load_train
 from ecostudy.studies.pareto import is_monotone, saving_at, sweep
 from ecostudy.analysis.single import solve_run
 
-from .conftest import TRACKS, TRAINS
+from .conftest import assert_folder, TRACKS, TRAINS
 
 
 @pytest.fixture(scope="module")
@@ -66,6 +66,8 @@ def test_pareto_command(tmp_path):
         assert (tmp_path / name).stat().st_size > 0
     header = (tmp_path / "pareto.csv").read_text().splitlines()[0]
     assert header.startswith("running_time_s,supplement_pct,traction_energy_kWh,net_energy_kWh")
+    folder = assert_folder(tmp_path, "pareto", ["pareto"])
+    assert folder.summary["all_out_time_s"] == meta["all_out_time_s"] and (folder.table["status"] == "ok").all()
 
 
 def test_failed_warm_start_is_retried_cold(regional, monkeypatch):

@@ -11,6 +11,7 @@ from ecostudy.analysis.summary import run_summary
 from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import verify
+from ecostudy.core.status import Status, from_checks
 from ecostudy.core.types import Timing, Trajectory
 from ecostudy.core.units import KWH
 from ecostudy.ocp import space
@@ -44,8 +45,22 @@ class RunResult:
     trajectory: Trajectory = None  # the run in SI arrays: read these, not the display table
 
     @property
-    def ok(self):
-        return self.summary["solver"]["status"] == "optimal" and self.summary["verification"]["passed"]
+    def status(self) -> Status:
+        """``ok`` when Ipopt proved optimality and the independent re-simulation agrees; else
+        ``flagged`` with what did not pass."""
+        solver, ver = self.summary["solver"]["status"], self.summary["verification"]
+        checks = {f"Ipopt ended {solver}, not optimal": solver == "optimal"}
+        if ver is None:
+            checks["not re-simulated"] = False
+        else:
+            checks[f"re-simulation outside tolerance (arrival {ver['arrival_time_error_s']:+.3f} s, stop "
+                   f"{ver['stop_error_m']:+.3f} m, energy {ver['energy_error_pct']:+.3f} %, overspeed "
+                   f"{ver['max_overspeed_kmh']:.3f} km/h)"] = bool(ver["passed"])
+        return from_checks(checks)
+
+    @property
+    def ok(self) -> bool:
+        return self.status.ok
 
 
 def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="energy", points=1000,

@@ -157,3 +157,13 @@ def case_progress(label, disabled):
             typer.secho(f"interrupted: every finished {label[:-1]} is stored; run the same command again to continue",
                         fg=typer.colors.YELLOW, err=True)
             raise typer.Exit(130)
+
+
+def flag_rows(table, name_column, where):
+    """Exit status 1, naming every row whose ``status`` is not ok (one line on stderr each)."""
+    bad = table[table["status"].astype(str) != "ok"]
+    for _, row in bad.iterrows():
+        typer.secho(f"{row['status'].split(':')[0]}: {row[name_column]}: {row['status'].partition(':')[2].strip()} "
+                    f"({where})", fg=typer.colors.YELLOW, err=True)
+    if len(bad):
+        raise typer.Exit(1)

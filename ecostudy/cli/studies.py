@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, app, case_progress, check_options, guarded, only_one
+from ecostudy.cli.app import DasMethod, app, case_progress, check_options, flag_rows, guarded, only_one
 from ecostudy.core.errors import InputError, problem
 
 
@@ -106,9 +106,10 @@ def _compare(study, track, train, from_stop, to_stop, time, supplement, points, 
     only_one(time=time, supplement=supplement)
     from ecostudy.core import units
     from ecostudy.core.types import Timing
-    from ecostudy.io.writers import atomic_write, check_output_dir, write_csv
+    from ecostudy.io.writers import check_output_dir
     trk, trn, f, t, k, st = _case_from(study, track, train, from_stop, to_stop, points)
     no_windows(st, "compare")
+    from ecostudy.report.files import write_compare
     from ecostudy.studies.compare import compare  # the optimiser only once the inputs are known good
     if time is not None or supplement is not None:
         timing = Timing(running_time=time, supplement=None if supplement is None else supplement * units.PERCENT)
@@ -119,14 +120,10 @@ def _compare(study, track, train, from_stop, to_stop, time, supplement, points, 
     out_dir = Path(out) if out else (st.output.parent / (st.output.name + "_compare") if st else Path("out") / "compare")
     check_output_dir(out_dir, ("compare.csv", "compare.png"))
     table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000)
-    write_csv(out_dir / "compare.csv", table)
-    (out_dir / "compare.png").unlink(missing_ok=True)  # never a plot of an earlier run beside this table
-    if not no_plot:
-        from ecostudy.report.plots import compare_plot
-        atomic_write(out_dir / "compare.png", lambda tmp: compare_plot(
-            outcomes, case.segment, tmp, f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s"))
+    write_compare(table, outcomes, case.segment, out_dir,
+                  f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s", plot=not no_plot)
     typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
-    typer.echo(f"outputs {out_dir}/ (compare.csv, compare.png)")
+    typer.echo(f"outputs {out_dir}/ (compare.csv, summary.json" + ("" if no_plot else ", compare.png") + ")")
     return table
 
 
@@ -150,10 +147,7 @@ def compare_command(
     Example: ecostudy compare studies/default.yaml --out out/compare
     """
     table = guarded(debug, _compare, study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot)
-    if not table.attrs["verified"]:
-        typer.secho("flagged: the ATO optimum is not verified optimal (its re-simulation or Ipopt's status; see "
-                    "compare.csv)", fg=typer.colors.YELLOW, err=True)
-        raise typer.Exit(1)
+    flag_rows(table, "strategy", "compare.csv")
 
 
 def associated_track(tt, path):
@@ -175,7 +169,7 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
     from ecostudy.core import units
     from ecostudy.io.loaders import load_timetable, load_track, load_train, timing_from_timetable
     from ecostudy.io.timetable import journey_plan, name_stops
-    from ecostudy.io.writers import atomic_write, check_output_dir, write_csv
+    from ecostudy.io.writers import check_output_dir
     tt = load_timetable(timetable) if timetable is not None else None
     trk, trn = load_track(track if track is not None else associated_track(tt, timetable)), load_train(train)
     scheduled, plan = None, None
@@ -201,27 +195,23 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
                                  "give one total running time or supplement, or --timetable"))
     out_dir = check_output_dir(Path(out) if out else Path("out") / "journey",
                                ("journey.csv", "journey_totals.csv", "journey.png"))
+    from ecostudy.report.files import write_journey
     from ecostudy.studies.journey import journey  # the optimiser only once the inputs are known good
     table, totals, results, _ = journey(trk, trn, names, total_time=time,
                                         supplement=None if supplement is None else supplement * units.PERCENT,
                                         points=points, workers=workers, scheduled=scheduled, plan=plan)
-    write_csv(out_dir / "journey.csv", table)
-    write_csv(out_dir / "journey_totals.csv", totals)
-    (out_dir / "journey.png").unlink(missing_ok=True)  # never a plot of an earlier run beside these tables
-    if not no_plot:
-        from ecostudy.report.plots import journey_plot
-        passing = []
-        if plan is not None:  # timing points along the journey (segment lengths from the first split)
-            start = 0.0
-            for windows, run in zip(plan.windows, next(iter(results.values()))):
-                passing += [(start + w.distance, None if w.max_speed is None else units.to_kmh(w.max_speed))
-                            for w in windows]
-                start += run.summary["distance_m"]
-        atomic_write(out_dir / "journey.png", lambda tmp: journey_plot(results, tmp, f"{trn.name}: {' - '.join(names)}",
-                                                                       passing))
+    passing = []
+    if plan is not None:  # timing points along the journey (segment lengths from the first split)
+        start = 0.0
+        for windows, run in zip(plan.windows, next(iter(results.values()))):
+            passing += [(start + w.distance, None if w.max_speed is None else units.to_kmh(w.max_speed))
+                        for w in windows]
+            start += run.summary["distance_m"]
+    write_journey(table, totals, results, out_dir, f"{trn.name}: {' - '.join(names)}", passing, plot=not no_plot)
     typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
     typer.echo(totals.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
-    typer.echo(f"outputs {out_dir}/ (journey.csv, journey_totals.csv, journey.png)")
+    typer.echo(f"outputs {out_dir}/ (journey.csv, journey_totals.csv, summary.json" + ("" if no_plot else ", journey.png")
+               + ")")
     return table
 
 

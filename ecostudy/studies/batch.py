@@ -18,6 +18,8 @@ from ecostudy.das.methods import das_columns
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.io.store import Store
+from ecostudy.core.status import Status
+from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.ocp.problem import Written
 from ecostudy.studies.cases import case_key, expand
@@ -169,8 +171,20 @@ def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress
     finally:
         store.close()
     write_csv(output / "results.csv", table)
+    write_summary(output, "run", case_statuses(cases, table), {"results": "results.csv",
+                  **({"skipped": "skipped.csv"} if skipped else {})}, ["results.sqlite"], study=str(path),
+                  computed_now=counts["computed"], stored_before=counts["stored_before"])
     counts["not_ok"] = int((table["status"] != "ok").sum())
     return table, counts, output
+
+
+def case_statuses(cases, table):
+    """Every case's :class:`~ecostudy.core.status.Status`, named by its labels, from a study table's
+    ``status`` and ``reason`` columns."""
+    names = [", ".join(f"{k}={v}" for k, v in c["labels"].items()) or c["key"] for c in cases]
+    reasons = table["reason"] if "reason" in table else [None] * len(table)
+    return {name: Status.parse(word, reason if isinstance(reason, str) else "")
+            for name, word, reason in zip(names, table["status"], reasons)}
 
 
 RESULT_COLUMNS = {"running_time_s", "points", "status", "key", "reason", "seconds", "verified"}  # never labels

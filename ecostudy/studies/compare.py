@@ -9,6 +9,7 @@ from ecostudy.analysis.single import solve_run
 from ecostudy.core.errors import InfeasibleError
 from ecostudy.core.types import Timing
 from ecostudy.core.simulate import Driven
+from ecostudy.core.status import driven_run, failed
 from ecostudy.das.advice import das_phases, nearest_levels
 from ecostudy.heuristics import ecodrive
 from ecostudy.ocp.problem import prepare
@@ -42,6 +43,10 @@ def compare(track, train, from_stop, to_stop, timing, points=1000):
     table.insert(4, "saving_vs_all_out_pct", 100 * (1 - table["traction_energy_kWh"] / e_allout))
     table.insert(5, "gap_to_optimum_pct", 100 * (table["traction_energy_kWh"] / e_opt - 1))
     table.insert(2, "arrival_error_s", table["running_time_s"] - target)
+    statuses = [allout.status, ato.status] + [driven_run(r["stop_error_m"], r["running_time_s"] - target)
+                                              for r in rows[2:len(outcomes)]]
+    statuses += [failed(r["note"]) for r in rows_extra]
+    table["status"] = [str(st) for st in statuses]
     table.attrs.update(target_s=target, verified=bool(ato.summary["verification"]["passed"]
                                                      and allout.summary["verification"]["passed"]))
     return table, outcomes, case

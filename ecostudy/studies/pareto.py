@@ -146,6 +146,7 @@ def front_table(results, t_allout):
             "solver_status": s["solver"]["status"],
             "iterations": s["solver"]["iterations"],
             "verified": ver.get("passed"),
+            "status": str(r.status),
         })
     table = pd.DataFrame(rows)
     e0 = table["traction_energy_kWh"].iloc[0]

@@ -1,0 +1,101 @@
+"""The one status vocabulary of every result of every command: ``ok``, ``flagged: <reason>``,
+``failed: <reason>``.
+
+``ok`` means computed, and every check passed (solver converged, the independent re-simulation
+agrees, stop, time, speed, force and adhesion limits kept). ``flagged`` means computed and
+written, but a check did not pass: the reason says which. ``failed`` means no usable result: the
+reason says why. A command exits with status 1 when any of its results is not ok.
+"""
+from dataclasses import dataclass
+from typing import Iterable, Literal
+
+Kind = Literal["ok", "flagged", "failed"]
+ORDER = {"ok": 0, "flagged": 1, "failed": 2}
+
+# words that per-case tables use, read into the vocabulary ("infeasible": the request cannot be met;
+# "missing": a case not computed yet, e.g. left out by ``--only``)
+_WORDS = {"ok": "ok", "flagged": "flagged", "failed": "failed", "infeasible": "failed", "missing": "failed"}
+
+
+@dataclass(frozen=True)
+class Status:
+    """A result's status: ``kind`` is ok, flagged or failed; ``reason`` says why it is not ok."""
+
+    kind: Kind
+    reason: str = ""
+
+    def __post_init__(self) -> None:
+        if self.kind not in ORDER:
+            raise ValueError(f"status kind must be one of {', '.join(ORDER)}, not {self.kind!r}")
+        if self.kind != "ok" and not self.reason:
+            raise ValueError(f"a {self.kind} status needs its reason")
+
+    @property
+    def ok(self) -> bool:
+        return self.kind == "ok"
+
+    def __str__(self) -> str:
+        return self.kind if self.ok else f"{self.kind}: {self.reason}"
+
+    @classmethod
+    def parse(cls, text: str, reason: str = "") -> "Status":
+        """A status from its text (``"flagged: late"``) or from a table's word and reason column
+        (``"infeasible"``, ``"below the all-out time"``)."""
+        word, _, rest = str(text).partition(":")
+        word = word.strip()
+        if word not in _WORDS:
+            raise ValueError(f"not a status: {text!r}")
+        kind = _WORDS[word]
+        detail = rest.strip() or (reason or "").strip()
+        if word in ("infeasible", "missing"):
+            detail = f"{word}: {detail}" if detail else word
+        return cls(kind, "" if kind == "ok" else detail or "no reason recorded")
+
+
+OK = Status("ok")
+
+# What a driven run may miss and still be ok (a simulated or closed-loop run, a strategy's run):
+STOP_TOLERANCE_M = 1.0        # |stopping position - stop| [m]
+LATE_TOLERANCE_S = 1.0        # arrival after the asked time or window [s]
+OVERSPEED_TOLERANCE_KMH = 0.5  # largest excess over the speed limit [km/h]
+
+
+def flagged(reason: str) -> Status:
+    return Status("flagged", reason)
+
+
+def failed(reason: str) -> Status:
+    return Status("failed", reason)
+
+
+def from_checks(checks: dict[str, bool]) -> Status:
+    """``ok`` when every named check passed, else ``flagged`` naming the ones that did not."""
+    missed = [name for name, passed in checks.items() if not passed]
+    return OK if not missed else flagged("; ".join(missed))
+
+
+def worst(statuses: Iterable[Status]) -> Status:
+    """The status of a whole: the worst kind, with the reasons of every result of that kind."""
+    statuses = list(statuses)
+    if not statuses:
+        return failed("no results")
+    kind = max((s.kind for s in statuses), key=ORDER.__getitem__)
+    if kind == "ok":
+        return OK
+    reasons = list(dict.fromkeys(s.reason for s in statuses if s.kind == kind))
+    return Status(kind, "; ".join(reasons))
+
+
+def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
+               overspeed_kmh: float | None = None) -> Status:
+    """The status of a driven run from what it missed (``None``: not measured): ``flagged`` when
+    it stops more than :data:`STOP_TOLERANCE_M` off, arrives more than :data:`LATE_TOLERANCE_S`
+    late or overspeeds by more than :data:`OVERSPEED_TOLERANCE_KMH`."""
+    reasons = []
+    if stop_error_m is not None and not abs(stop_error_m) <= STOP_TOLERANCE_M:
+        reasons.append(f"stopped {stop_error_m:+.2f} m from the stop")
+    if late_s is not None and not late_s <= LATE_TOLERANCE_S:
+        reasons.append(f"arrived {late_s:.2f} s late")
+    if overspeed_kmh is not None and not overspeed_kmh <= OVERSPEED_TOLERANCE_KMH:
+        reasons.append(f"overspeed {overspeed_kmh:.2f} km/h")
+    return OK if not reasons else flagged("; ".join(reasons))

@@ -1,0 +1,107 @@
+"""Every output folder's ``summary.json``, and any output folder read back as a typed result.
+
+Every command that writes an output folder writes ``summary.json`` there through
+:func:`write_summary`: which command wrote it (``kind``), with which ecostudy, the folder's status
+in the one vocabulary (:mod:`ecostudy.core.status`: the worst of its cases, with their reasons),
+the count of cases by status, the tables it wrote (name -> CSV file) and the other files, beside
+the command's own fields. :func:`load` reads any such folder back as a :class:`StudyResult`.
+"""
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+import pandas as pd
+
+from ecostudy import __version__
+from ecostudy.core.errors import InputError, problem
+from ecostudy.core.status import Status, worst
+from ecostudy.io.writers import write_json
+
+SUMMARY = "summary.json"
+LAYOUT = 1  # the version of summary.json's common fields; a reader refuses a newer one
+
+# the fields write_summary owns; a command's own fields may not reuse them
+COMMON = ("kind", "ecostudy_version", "summary_layout", "status", "cases", "not_ok", "tables", "files")
+
+
+@dataclass
+class StudyResult:
+    """An output folder of any command, read back by :func:`load`.
+
+    ``kind`` is the command that wrote it (``solve``, ``pareto``, ``compare``, ``journey``,
+    ``run``, ``network``, ``simulate``, ``heavyhaul``, ...); ``status`` the folder's status (the
+    worst of its cases); ``cases`` the count of cases by status (``total``, ``ok``, ``flagged``,
+    ``failed``); ``tables`` every table the folder lists, as DataFrames with the CSV's columns
+    (units in the column names); ``summary`` the whole ``summary.json``.
+    """
+
+    kind: str
+    status: Status
+    cases: dict[str, int]
+    tables: dict[str, pd.DataFrame]
+    summary: dict[str, Any]
+    folder: Path
+    files: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return self.status.ok
+
+    @property
+    def table(self) -> pd.DataFrame:
+        """The folder's main table (the first it lists)."""
+        if not self.tables:
+            raise KeyError(f"{self.folder}: the {self.kind} folder lists no table")
+        return next(iter(self.tables.values()))
+
+
+def write_summary(out_dir: Path | str, kind: str, statuses: Mapping[str, Status] | Iterable[Status],
+                  tables: Mapping[str, str] | None = None, files: Iterable[str] = (),
+                  **fields: Any) -> Path:
+    """Write ``summary.json`` into ``out_dir`` (atomically): the common fields, then ``fields``.
+
+    ``statuses``: every case's status, by case name where there are names (the ones not ok are
+    listed with their reasons); ``tables``: table name -> CSV file in the folder.
+    """
+    clash = sorted(set(fields) & set(COMMON))
+    if clash:
+        raise ValueError(f"summary.json fields {clash} are common fields of write_summary")
+    named = dict(statuses) if isinstance(statuses, Mapping) else {str(i): s for i, s in enumerate(statuses)}
+    counts = {"total": len(named), "ok": 0, "flagged": 0, "failed": 0}
+    for s in named.values():
+        counts[s.kind] += 1
+    data = {"kind": kind, "ecostudy_version": __version__, "summary_layout": LAYOUT,
+            "status": str(worst(named.values())), "cases": counts,
+            "not_ok": [{"case": name, "status": str(s)} for name, s in named.items() if not s.ok],
+            "tables": dict(tables or {}), "files": sorted(set(files) | {SUMMARY} | set((tables or {}).values())),
+            **fields}
+    path = Path(out_dir) / SUMMARY
+    write_json(path, data)
+    return path
+
+
+def load(folder: Path | str) -> StudyResult:
+    """Any output folder of ecostudy as a :class:`StudyResult`; a folder that is not one is one
+    clear line naming it (exit status 2)."""
+    folder = Path(folder)
+    path = folder / SUMMARY
+    try:
+        data = json.loads(path.read_text())
+    except OSError as exc:
+        raise InputError(problem(path, "", f"not an ecostudy output folder ({exc.strerror})"))
+    except ValueError as exc:
+        raise InputError(problem(path, "", f"not readable JSON ({exc})"))
+    if not isinstance(data, dict) or "kind" not in data or "status" not in data:
+        raise InputError(problem(path, "kind", "missing: written by an older ecostudy or another program"))
+    if int(data.get("summary_layout", 0)) > LAYOUT:
+        raise InputError(problem(path, "summary_layout", f"{data['summary_layout']} is newer than this ecostudy "
+                                 f"reads ({LAYOUT}); update ecostudy"))
+    tables = {}
+    for name, file in (data.get("tables") or {}).items():
+        try:
+            tables[name] = pd.read_csv(folder / file)
+        except (OSError, ValueError) as exc:
+            raise InputError(problem(folder / file, "", f"the {name} table of this folder cannot be read ({exc})"))
+    return StudyResult(kind=str(data["kind"]), status=Status.parse(data["status"]), cases=dict(data.get("cases", {})),
+                       tables=tables, summary=data, folder=folder, files=list(data.get("files", [])))
