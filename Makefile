@@ -2,7 +2,7 @@
 .PHONY: install run test test-slow test-all docs bench doctor clean
 
 ECOSTUDY := .venv/bin/ecostudy
-# pytest-xdist processes: the suite runs in two on this machine kind's two cores (issue 15)
+# pytest-xdist processes: the suite runs in two on this machine kind's two cores
 TEST_WORKERS ?= 2
 PYTEST := .venv/bin/python -m pytest -q -n $(TEST_WORKERS)
 
