@@ -1,8 +1,8 @@
 # Two commands: `make run` and `make test`. Both install whatever is missing first.
-.PHONY: install run test test-slow test-all bench doctor clean
+.PHONY: install run test test-slow test-all docs bench doctor clean
 
 ECOSTUDY := .venv/bin/ecostudy
-# pytest-xdist processes: the suite runs in two on this machine kind's two cores (issue 15)
+# pytest-xdist processes: the suite runs in two on this machine kind's two cores
 TEST_WORKERS ?= 2
 PYTEST := .venv/bin/python -m pytest -q -n $(TEST_WORKERS)
 
@@ -21,6 +21,10 @@ test-slow: install
 test-all: install
 	$(PYTEST)
 
+# the guide (docs/, mkdocs.yml) as a site in site/; --strict: a broken link or reference fails the build
+docs: install
+	NO_MKDOCS_2_WARNING=1 .venv/bin/mkdocs build --strict --site-dir site
+
 doctor: install
 	$(ECOSTUDY) doctor
 
@@ -28,4 +32,4 @@ bench: install
 	.venv/bin/python bench/bench_solve.py
 
 clean:
-	rm -rf out .pytest_cache
+	rm -rf out site .pytest_cache

@@ -1,4 +1,5 @@
-"""ecostudy's space NLP against an independent CasADi transcription of the same NLP (issue 15).
+"""ecostudy's space NLP against an independent CasADi transcription of the same NLP (the
+stack's overhead: Pyomo's NL writer and PyNumero against CasADi's graph and its own Ipopt).
 
     .venv/bin/python bench/bench_casadi.py [--ttobench /work/data/ttobench] [--points 1000 5000]
         [--repeat 3] [--case amsterdam intercity]

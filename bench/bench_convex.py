@@ -1,4 +1,4 @@
-"""Thesis 001's convex controller: one SOCP solve by Clarabel, ECOS and Ipopt (same program), and
+"""Yazhemsky 2017's convex controller: one SOCP solve by Clarabel, ECOS and Ipopt (same program), and
 the solve time per control step in closed loop at several K.
 
     .venv/bin/python bench/bench_convex.py [--repeat 5] [--loop-points 250 500 1000]

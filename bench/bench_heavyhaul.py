@@ -1,4 +1,4 @@
-"""Heavy haul (issue 13): paper 002's Tables III-IV and Fig. 6 on the shipped representative line,
+"""Heavy haul: Zhang & Zhuan's Tables III-IV and Fig. 6 on the shipped representative line,
 and the QP's solve time per step and memory for f = 1 and f = 10.
 
     python bench/bench_heavyhaul.py                  # the four studies (about 4 min on 2 cores)

@@ -22,7 +22,7 @@ from ecostudy.studies.pareto import is_monotone, saving_at, sweep  # noqa: E402
 
 CASES = {"Amsterdam metro": ("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal"),
          "regional": ("regional_alstom", "regional_808m", "Origin", "Destination"),
-         "thesis 001 advanced": ("thesis001_commuter", "thesis001_advanced_1km", "A", "B")}
+         "Yazhemsky 2017 advanced": ("thesis001_commuter", "thesis001_advanced_1km", "A", "B")}
 
 
 def main():

@@ -1,5 +1,5 @@
-"""RSPC (thesis 000 Ch. 6, ``control/rspc.py``) on the Amsterdam metro case (76 s) and the regional
-case of thesis 000 §6.3 (808 m, 80 s), at T_s = 0.38 s, plant stepped at the sample.
+"""RSPC (Farooqi 2018 Ch. 6, ``control/rspc.py``) on the Amsterdam metro case (76 s) and the regional
+case of Farooqi 2018 §6.3 (808 m, 80 s), at T_s = 0.38 s, plant stepped at the sample.
 
     .venv/bin/python bench/bench_rspc.py [--horizons 1 2 3 4] [--disturbances 0.1 0.05]
 
@@ -22,7 +22,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from bench_das import CASES  # noqa: E402  (the two cases of thesis 000 Tables 4.1 and 6.1)
+from bench_das import CASES  # noqa: E402  (the two cases of Farooqi 2018 Tables 4.1 and 6.1)
 from ecostudy.control.loop import run_loop  # noqa: E402
 from ecostudy.control.rspc import Rspc  # noqa: E402
 from ecostudy.core.plant import Plant, Truth  # noqa: E402

@@ -1,5 +1,5 @@
 """Supervisor rules of a network study, each leg's one-handle constraint where doing both could pay
-(``legs.pumping_pays``, since session 14) against at every step (before), in one process.
+(``legs.pumping_pays``, what the legs do) against at every step (what they did before), in one process.
 
     .venv/bin/python bench/bench_rules.py studies/network_metro_2trains.yaml
         [--rules receptivity triggering voltage dissension] [--variants everywhere pays]
@@ -25,7 +25,7 @@ PAYS = legs.pumping_pays
 
 
 def everywhere(train, weights=None, allowance=None, credit=None):
-    """Before session 14: the constraint at every step of a leg with weights (the rules' legs)."""
+    """The earlier rule: the constraint at every step of a leg with weights (the rules' legs)."""
     return weights is not None
 
 

@@ -1,4 +1,4 @@
-"""SBPC (thesis 000 Ch. 4) on the Amsterdam case: T_s = 0.38 s, k_f = 200 (76 s).
+"""SBPC (Farooqi 2018 Ch. 4) on the Amsterdam case: T_s = 0.38 s, k_f = 200 (76 s).
 
     .venv/bin/python bench/bench_sbpc.py [--sample 0.38] [--blocks 45 20 1] [--disturbances 0.1 0.05 0.02]
         [--sppc] [--transcription condensed]
@@ -9,7 +9,7 @@ the nominal problem had no solution and the two-step relaxation stood in. Table 
 4.3.1 in practice): the two-step and multi-objective variants (L = 20) driving a train whose
 mass is d heavier and whose resistance, traction and braking are d weaker, with the handle
 quantised to the DAS levels {-1, 0, 0.5, 0.75, 1}: the terminal error against d. With ``--sppc``
-only SPPC (thesis 000 Ch. 5, ``control/sppc.py``; DAS modes by construction): nominal on the model
+only SPPC (Farooqi 2018 Ch. 5, ``control/sppc.py``; DAS modes by construction): nominal on the model
 train, then the two-step variant on the d-disturbed trains.
 """
 import argparse

@@ -1,4 +1,4 @@
-"""Thesis 001 Chs. 9-10 in closed loop, side by side with the published numbers.
+"""Yazhemsky 2017 Chs. 9-10 in closed loop, side by side with the published numbers.
 
     .venv/bin/python bench/bench_thesis001_loop.py [--points 500]
 

@@ -7,7 +7,7 @@ Variants of the shipped formulation (nodes on every profile change, forces in kN
 recursion per unit mass) on the Amsterdam case at 76 s:
 
 - ``uniform grid``: equally spaced nodes that ignore gradient and speed-limit changes;
-- ``trapezoidal grid``: thesis 001 §3.2.2, spacing growing over the first and shrinking over the
+- ``trapezoidal grid``: Yazhemsky 2017 §3.2.2, spacing growing over the first and shrinking over the
   last 15 % of the run, also ignoring profile changes;
 - ``forces in N``: force variables in newtons;
 - ``dynamics x M``: speed recursion multiplied by the mass (force balance in newtons);

@@ -1,5 +1,5 @@
 """A sweep of running times with the NL file written once per structure against a fresh build and
-write per case (issue 15, item 3), in one process.
+write per case, in one process.
 
     .venv/bin/python bench/bench_written.py [--points 1000] [--times 76 78 80 82 84 86 88 90 92 94]
         [--repeat 3]

@@ -1,4 +1,4 @@
-"""ecostudy against published results: thesis 001 Ch.9 trips (energy per unit mass).
+"""ecostudy against published results: Yazhemsky 2017 Ch.9 trips (energy per unit mass).
 
     .venv/bin/python bench/compare_published.py [--points 1000]
 

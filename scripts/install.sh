@@ -32,7 +32,7 @@ fi
 stamp=.venv/.ecostudy-installed
 if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ]; then
   echo "install: ecostudy and its Python dependencies (editable)"
-  .venv/bin/python -m pip install -q -e ".[test]"
+  .venv/bin/python -m pip install -q -e ".[test,docs]"
   touch "$stamp"
 fi
 
