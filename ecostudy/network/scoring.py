@@ -8,6 +8,7 @@ from ecostudy.core.simulate import verify
 from ecostudy.core.units import KWH
 from ecostudy.network import circuit
 from ecostudy.network.fleet import departure_order, line_positions, step_arrays
+from ecostudy.network.legs import STAND_TIME_S, standing_s
 
 
 def evaluate(fleet, runs_by_train):
@@ -63,7 +64,11 @@ def verify_leg(leg, run):
     speeds = np.concatenate([[v[0]], v[1:][moving]])
     u = handles(leg.case.train, speeds, ft[moving], fb[moving])
     energy = float(np.sum(ft * np.diff(s)))
-    return verify(leg.case.segment, leg.case.train, nodes, u, leg.running_time, energy)[0]
+    out = verify(leg.case.segment, leg.case.train, nodes, u, leg.running_time, energy)[0]
+    # a run that arrives early and stands passes the re-simulation, but is not a run to drive
+    out["stood_before_stop_s"] = standing_s(run, leg)
+    out["passed"] = bool(out["passed"] and out["stood_before_stop_s"] <= STAND_TIME_S)
+    return out
 
 
 def separations(fleet, runs_by_train):

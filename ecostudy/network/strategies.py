@@ -124,7 +124,8 @@ def _scored(fleet, runs, info, wall, mapper=map):
                          worst_overspeed_kmh=max(v["max_overspeed_kmh"] for v in ver),
                          verified=all(v["passed"] for v in ver), min_separation_m=gaps[n])
     totals.update(wall_s=wall, all_verified=all(t["verified"] for t in trains.values()),
-                  min_separation_m=min([g for g in gaps.values() if g is not None], default=None))
+                  min_separation_m=min([g for g in gaps.values() if g is not None], default=None),
+                  **guard_counts(runs))
     # only the joint optimum sees the circuit: another strategy's runs may ask for traction the
     # line cannot carry or a current limit forbids; it is not served and the result is flagged
     flags = [f"{totals['unserved_kWh']:.3f} kWh of traction not served (current limit or line)"] \
@@ -133,6 +134,17 @@ def _scored(fleet, runs, info, wall, mapper=map):
         flags.append(f"trains overlap on the line by up to {-totals['min_separation_m']:.1f} m (timetable)")
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
     return {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
+
+
+def guard_counts(runs):
+    """What the local-optimum guards of ``legs.solve_leg`` did on a strategy's final runs: warm legs
+    also solved cold, the largest warm-over-cold cost difference among them [%], warm legs
+    replaced by their cold solve, and runs that stood before their stop and were solved again."""
+    notes = [run.notes for train in runs for run in train if run.notes]
+    spread = [n["warm_vs_cold_pct"] for n in notes if "warm_vs_cold_pct" in n]
+    return {"legs_checked_cold": len(spread), "worst_warm_vs_cold_pct": max(spread, default=None),
+            "legs_replaced_by_cold": sum(bool(n.get("replaced_by_cold")) for n in notes),
+            "legs_restarted_standing": sum(bool(n.get("restarted")) for n in notes)}
 
 
 def _verified(pair):

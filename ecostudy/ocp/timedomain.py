@@ -18,7 +18,7 @@ The electrical power at the pantograph in step j [kW] is
 p_j = F_T,j vbar_j / eta_T - eta_R F_R,j vbar_j, vbar_j = (v_j + v_{j+1}) / 2 (thesis 000 eq. 7.3).
 """
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import NamedTuple, Optional
 
 import numpy as np
 import pyomo.environ as pyo
@@ -183,6 +183,7 @@ class LegRun(NamedTuple):
     fb: np.ndarray
     fr: np.ndarray
     p: np.ndarray
+    notes: Optional[dict] = None  # what the local-optimum guards did (``network.legs.solve_leg``)
 
 
 def net_forces(b):

@@ -1,0 +1,62 @@
+"""Local-optimum guards of the network legs: a warm leg in the sample is solved cold too and
+replaced where it is dearer; a run that stands before its stop is solved again or fails its
+verification."""
+import numpy as np
+import pytest
+
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.network import fleet, legs, scoring
+from ecostudy.network.strategies import guard_counts
+
+from .test_network import SUPPLY, TRACKS, TRAINS
+
+
+@pytest.fixture(scope="module")
+def one_leg():
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 1.0, SUPPLY, points=300)
+    leg = f.legs[0][0]
+    cold, _ = legs.solve_leg((leg, "cold", f.dt, None, fleet._guess(f, leg), False, None, None, None, None))
+    return f, leg, cold
+
+
+def early_start(leg, run, early):
+    """The run ``early`` steps faster, then standing at the stop: a start that arrives early."""
+    n = leg.steps
+    t = np.arange(n + 1.0)
+    s = np.interp(np.minimum(t * n / (n - early), n), t, run.s)
+    v = np.clip(np.gradient(s, leg.dt), 0.0, None)
+    v[0] = 0.0
+    v[-early - 1:] = 0.0
+    return s, v
+
+
+def test_a_warm_leg_dearer_than_its_cold_solve_is_replaced(one_leg):
+    f, leg, cold = one_leg
+    guess = early_start(leg, cold, 8)
+    sampled = next(label for label in (f"train T{k}, leg 1" for k in range(50)) if legs.checked(label))
+    unsampled = next(label for label in (f"train T{k}, leg 1" for k in range(50)) if not legs.checked(label))
+    # outside the sample the warm solve stays where its start led it: 11 % dearer, yet verified
+    warm, _ = legs.solve_leg((leg, unsampled, f.dt, None, guess, True, None, None, None, None))
+    assert warm.notes is None
+    assert warm.p.sum() > 1.05 * cold.p.sum() and scoring.verify_leg(leg, warm)["passed"]
+    # in the sample the cold solve replaces it, and says so
+    run, outcome = legs.solve_leg((leg, sampled, f.dt, None, guess, True, None, None, None, None))
+    assert outcome.usable and run.notes["replaced_by_cold"] and run.notes["warm_vs_cold_pct"] > 5.0
+    assert run.p.sum() == pytest.approx(cold.p.sum(), rel=1e-6)
+    counts = guard_counts([[run, warm]])
+    assert counts["legs_checked_cold"] == 1 and counts["legs_replaced_by_cold"] == 1
+    assert counts["worst_warm_vs_cold_pct"] == pytest.approx(run.notes["warm_vs_cold_pct"])
+
+
+def test_a_run_that_stands_before_its_stop_fails_verification(one_leg):
+    f, leg, cold = one_leg
+    assert legs.standing_s(cold, leg) == 0.0  # standing at the stop itself is not standing before it
+    half = np.searchsorted(cold.s, leg.case.segment.distance / 2)
+    s = np.concatenate([cold.s[:half], np.full(4, cold.s[half - 1]), cold.s[half:-4]])
+    v = np.concatenate([cold.v[:half - 1], np.zeros(5), cold.v[half:-4]])
+    stands = cold._replace(s=s, v=v)
+    assert legs.standing_s(stands, leg) == pytest.approx(4 * leg.dt)
+    out = scoring.verify_leg(leg, stands)
+    assert out["stood_before_stop_s"] == pytest.approx(4 * leg.dt) and not out["passed"]
+    assert scoring.verify_leg(leg, cold)["stood_before_stop_s"] == 0.0
