@@ -60,3 +60,11 @@ def test_a_run_that_stands_before_its_stop_fails_verification(one_leg):
     out = scoring.verify_leg(leg, stands)
     assert out["stood_before_stop_s"] == pytest.approx(4 * leg.dt) and not out["passed"]
     assert scoring.verify_leg(leg, cold)["stood_before_stop_s"] == 0.0
+
+
+def test_every_strategy_a_study_file_may_name_is_registered():
+    from ecostudy.io.schemas import STRATEGIES as IN_FILES
+    from ecostudy.network.strategies import STRATEGIES
+    assert ["independent", *STRATEGIES.names()] == list(IN_FILES)
+    with pytest.raises(KeyError, match="unknown network strategy 'nope'; known: receptivity, triggering"):
+        STRATEGIES.get("nope")

@@ -1,5 +1,6 @@
 """The DAS methods by name (``round``, ``phases``, ``minlp``) and their table columns."""
 from ecostudy.core.errors import EcostudyError
+from ecostudy.core.registry import Registry
 from ecostudy.das.advice import das_phases, das_round
 from ecostudy.das.minlp import das_minlp
 
@@ -19,12 +20,19 @@ def das_columns(result, method, points=None, time_limit=60.0):
     return row
 
 
+DAS_METHODS: Registry = Registry("DAS method")
+DAS_METHODS.register("round", lambda result, points, time_limit: das_round(result),
+                     doc="nearest handle level of the ATO optimum (Farooqi 2018, section 4.4)")
+DAS_METHODS.register("phases", lambda result, points, time_limit: das_phases(result, points),
+                     doc="a fixed mode sequence per sector, phase lengths optimised (Farooqi 2018, Ch. 5)")
+DAS_METHODS.register("minlp", das_minlp, doc="the mode of every phase chosen by binaries (outer approximation)")
+
+
 def das_run(result, method="round", points=None, time_limit=60.0):
-    """The :class:`~ecostudy.das.advice.DasRun` of method ``round``, ``phases`` or ``minlp`` for an ATO ``result``."""
-    if method == "round":
-        return das_round(result)
-    if method == "phases":
-        return das_phases(result, points)
-    if method == "minlp":
-        return das_minlp(result, points, time_limit)
-    raise ValueError(f"unknown DAS method {method!r}")
+    """The :class:`~ecostudy.das.advice.DasRun` of a registered method (:data:`DAS_METHODS`:
+    ``round``, ``phases``, ``minlp``) for an ATO ``result``."""
+    try:
+        build = DAS_METHODS.get(method)
+    except KeyError as exc:
+        raise ValueError(str(exc.args[0])) from None
+    return build(result, points, time_limit)

@@ -33,6 +33,7 @@ import time
 from concurrent.futures import as_completed
 
 from ecostudy.core.errors import SolverError
+from ecostudy.core.registry import Registry
 from ecostudy.network.joint import joint
 from ecostudy.network.rules import following, independent, supervised
 from ecostudy.network.scoring import evaluate, separations, verify_leg
@@ -85,24 +86,35 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
     return {name: out[name] for name in strategies}
 
 
+def _supervised(rule):
+    def run(fleet, ind, mapper):
+        runs, history, stopped = supervised(fleet, rule, ind, mapper=mapper)
+        return runs, {"rounds_substation_kWh": history, **({"rounds_stopped": stopped} if stopped else {})}
+    return run
+
+
+# the strategies after independent driving (which every study solves first), by name: each entry
+# takes (fleet, independent runs, mapper) and returns (runs, info)
+STRATEGIES: Registry = Registry("network strategy")
+for _rule, _doc in (("receptivity", "supervisor rounds, regeneration credited up to what the line takes"),
+                    ("triggering", "rule 7.7: traction discounted while another train brakes"),
+                    ("voltage", "rule 7.11: traction free while the train ahead's voltage is above one's own"),
+                    ("dissension", "eqs. 8.14-8.17: weights that fall with the number of braking neighbours")):
+    STRATEGIES.register(_rule, _supervised(_rule), doc=_doc)
+STRATEGIES.register("joint", lambda fleet, ind, mapper: joint(fleet, ind),
+                    doc="one NLP over all trains and the circuit: the bound no rule beats")
+STRATEGIES.register("following", lambda fleet, ind, mapper: (following(fleet, ind, mapper), {}),
+                    doc="each train buffer_m behind the tail of the one ahead (Yazhemsky 2017, eq. 6.9)")
+
+
 def _strategy(fleet, name, ind, mapper=map):
     """One strategy after independent driving, from its runs ``ind``, solved and scored (the
     re-simulations over ``mapper``); when a solve fails {"failed": why, "wall_s"}. A top-level
     function so a process pool can run it."""
     t0 = time.perf_counter()
-    info = {}
+    run = STRATEGIES.get(name)
     try:
-        if name in ("receptivity", "triggering", "voltage", "dissension"):
-            runs, history, stopped = supervised(fleet, name, ind, mapper=mapper)
-            info["rounds_substation_kWh"] = history
-            if stopped:
-                info["rounds_stopped"] = stopped
-        elif name == "joint":
-            runs, info = joint(fleet, ind)
-        elif name == "following":
-            runs = following(fleet, ind, mapper)
-        else:
-            raise ValueError(f"unknown strategy {name!r}")
+        runs, info = run(fleet, ind, mapper)
     except SolverError as exc:  # one strategy failing does not stop the study
         return {"failed": str(exc), "wall_s": time.perf_counter() - t0}
     return _scored(fleet, runs, info, time.perf_counter() - t0, mapper)
