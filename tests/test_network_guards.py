@@ -34,14 +34,14 @@ def early_start(leg, run, early):
 def test_a_warm_leg_dearer_than_its_cold_solve_is_replaced(one_leg):
     f, leg, cold = one_leg
     guess = early_start(leg, cold, 8)
-    sampled = next(label for label in (f"train T{k}, leg 1" for k in range(50)) if legs.checked(label))
-    unsampled = next(label for label in (f"train T{k}, leg 1" for k in range(50)) if not legs.checked(label))
+    assert [legs.warmth(0, k) for k in range(4)] == [legs.CHECKED, True, True, legs.CHECKED]
+    assert [legs.warmth(1, k) for k in range(3)] == [True, True, legs.CHECKED]
     # outside the sample the warm solve stays where its start led it: 11 % dearer, yet verified
-    warm, _ = legs.solve_leg((leg, unsampled, f.dt, None, guess, True, None, None, None, None))
+    warm, _ = legs.solve_leg((leg, "T1 leg 1", f.dt, None, guess, True, None, None, None, None))
     assert warm.notes is None
     assert warm.p.sum() > 1.05 * cold.p.sum() and scoring.verify_leg(leg, warm)["passed"]
     # in the sample the cold solve replaces it, and says so
-    run, outcome = legs.solve_leg((leg, sampled, f.dt, None, guess, True, None, None, None, None))
+    run, outcome = legs.solve_leg((leg, "T1 leg 1", f.dt, None, guess, legs.CHECKED, None, None, None, None))
     assert outcome.usable and run.notes["replaced_by_cold"] and run.notes["warm_vs_cold_pct"] > 5.0
     assert run.p.sum() == pytest.approx(cold.p.sum(), rel=1e-6)
     counts = guard_counts([[run, warm]])

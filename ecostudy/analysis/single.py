@@ -2,6 +2,7 @@
 and the re-simulation. ``solve_run`` is the library entry point behind ``ecostudy solve``.
 """
 from dataclasses import dataclass, field
+from typing import Optional
 
 import numpy as np
 import pandas as pd
@@ -42,7 +43,7 @@ class RunResult:
     trace: object = None
     stages: dict = field(default_factory=dict)
     das: object = None  # das.advice.DasRun when a DAS method was asked for
-    trajectory: Trajectory = None  # the run in SI arrays: read these, not the display table
+    trajectory: Optional[Trajectory] = None  # the run in SI arrays: read these, not the display table
 
     @property
     def status(self) -> Status:

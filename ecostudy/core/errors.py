@@ -1,4 +1,6 @@
 """Domain errors: each carries the one-line message a user sees (exit status 2 for input)."""
+from os import PathLike
+from typing import Iterable, Union
 
 
 class EcostudyError(Exception):
@@ -12,7 +14,7 @@ class InputError(EcostudyError):
 
     exit_code = 2
 
-    def __init__(self, problems):
+    def __init__(self, problems: Union[str, Iterable[str]]) -> None:
         if isinstance(problems, str):
             problems = [problems]
         self.problems = list(problems)
@@ -33,7 +35,7 @@ class EcostudyWarning(UserWarning):
     """Suspicious but usable input (e.g. Davis coefficients of an implausible size)."""
 
 
-def problem(file, field, message):
+def problem(file: Union[str, PathLike[str]], field: str, message: str) -> str:
     """Format one problem line: ``file: field: message``."""
     where = f"{file}: {field}" if field else f"{file}"
     return f"{where}: {message}"

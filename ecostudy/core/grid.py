@@ -135,7 +135,7 @@ def travel_distance(track, from_stop, to_stop, position):
     return position - start if end >= start else start - position
 
 
-_WARNED = set()
+_WARNED: set = set()
 
 
 def warn_unpaired(track, train):

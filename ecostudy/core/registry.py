@@ -52,7 +52,7 @@ class Registry(Generic[T]):
     def get(self, name: str) -> T:
         return self.spec(name).entry
 
-    def options(self, name: str, values: Optional[dict] = None) -> Any:
+    def options(self, name: str, values: Optional[dict[str, Any]] = None) -> Any:
         """``values`` validated by the schema of kind ``name`` (pydantic raises on a foreign key)."""
         schema = self.spec(name).schema
         if schema is None:

@@ -14,7 +14,7 @@ ORDER = {"ok": 0, "flagged": 1, "failed": 2}
 
 # words that per-case tables use, read into the vocabulary ("infeasible": the request cannot be met;
 # "missing": a case not computed yet, e.g. left out by ``--only``)
-_WORDS = {"ok": "ok", "flagged": "flagged", "failed": "failed", "infeasible": "failed", "missing": "failed"}
+_WORDS: dict[str, Kind] = {"ok": "ok", "flagged": "flagged", "failed": "failed", "infeasible": "failed", "missing": "failed"}
 
 
 @dataclass(frozen=True)

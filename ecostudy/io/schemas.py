@@ -5,7 +5,7 @@ Cross-field rules that concern one file live here as validators; rules that need
 functions in :mod:`ecostudy.io.loaders`.
 """
 import math
-from typing import Annotated, Literal, Optional
+from typing import Annotated, Literal, Optional, get_args
 
 from pydantic import Field, model_validator
 
@@ -293,7 +293,8 @@ class FleetTrain(Strict):
                             "within a day.")
 
 
-STRATEGIES = ("independent", "receptivity", "triggering", "voltage", "dissension", "joint", "following")
+Strategy = Literal["independent", "receptivity", "triggering", "voltage", "dissension", "joint", "following"]
+STRATEGIES = get_args(Strategy)
 
 
 class NetworkStudyFile(Strict):
@@ -309,7 +310,7 @@ class NetworkStudyFile(Strict):
     time_step_s: float = Field(0.5, ge=0.05, le=5, description="Simulation step [s], 0.05 to 5.")
     trains: list[FleetTrain] = Field(min_length=1)
     substation: Substation
-    strategies: list[Literal[STRATEGIES]] = Field(default_factory=lambda: list(STRATEGIES), min_length=1)
+    strategies: list[Strategy] = Field(default_factory=lambda: list(STRATEGIES), min_length=1)
     buffer_m: Optional[float] = Field(None, gt=0, description="Separation kept by `following` (thesis 001 eq. 6.9).")
     points: int = Field(500, ge=10, le=100000, description="Space grid of the per-segment starting runs.")
     output: Optional[str] = None

@@ -4,11 +4,14 @@ import math
 import os
 import tempfile
 from pathlib import Path
+from typing import Any, Callable, Iterable, Union
+
+import pandas as pd
 
 from ecostudy.core.errors import InputError, problem
 
 
-def _umask():
+def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
@@ -17,7 +20,7 @@ def _umask():
 FILE_MODE = 0o666 & ~_umask()  # what open() would give: the user's umask, not mkstemp's 0600
 
 
-def check_output_dir(path, files=()):
+def check_output_dir(path: Union[str, Path], files: Iterable[str] = ()) -> Path:
     """Refuse, before any computation, an output folder that is a file, cannot be created or
     written, or holds a folder where one of ``files`` goes: one line naming it (exit 2)."""
     path = Path(path)
@@ -36,7 +39,7 @@ def check_output_dir(path, files=()):
     return path
 
 
-def atomic_write(path, write):
+def atomic_write(path: Union[str, Path], write: Callable[[str], Any]) -> None:
     """Call ``write(tmp_path)`` then rename onto ``path``: readers never see half a file."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -51,7 +54,7 @@ def atomic_write(path, write):
             os.unlink(tmp)
 
 
-def _clean(obj):
+def _clean(obj: Any) -> Any:
     """JSON-safe copy: NaN/inf -> None, numpy scalars -> Python numbers."""
     if isinstance(obj, dict):
         return {k: _clean(v) for k, v in obj.items()}
@@ -64,15 +67,15 @@ def _clean(obj):
     return obj
 
 
-def write_json(path, data):
-    def write(tmp):
+def write_json(path: Union[str, Path], data: Any) -> None:
+    def write(tmp: str) -> None:
         with open(tmp, "w") as fh:
             json.dump(_clean(data), fh, indent=2)
             fh.write("\n")
     atomic_write(path, write)
 
 
-def write_csv(path, frame):
+def write_csv(path: Union[str, Path], frame: pd.DataFrame) -> None:
     atomic_write(path, lambda tmp: frame.to_csv(tmp, index=False, float_format="%.6g"))
 
 

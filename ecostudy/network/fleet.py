@@ -6,6 +6,7 @@ time, on one clock of step dt (``ocp.timedomain``). The strategies are in :mod:`
 """
 from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import dataclass, field
+from typing import Optional
 
 import numpy as np
 
@@ -13,7 +14,7 @@ from ecostudy.analysis.single import solve_run
 from ecostudy.core.errors import SolverError
 from ecostudy.core.types import Timing
 from ecostudy.core.types import Supply
-from ecostudy.network.legs import leg_energy_ref, solve_leg
+from ecostudy.network.legs import leg_energy_ref, solve_leg, warmth
 from ecostudy.ocp import session
 from ecostudy.ocp import timedomain
 from ecostudy.ocp.problem import prepare
@@ -28,10 +29,10 @@ class Fleet:
     dt: float
     steps: int
     supply: Supply
-    buffer: float = None
+    buffer: Optional[float] = None
     results: dict = field(default_factory=dict)  # space-domain net-energy runs per segment (guesses)
     dwell_steps: int = 0
-    asked_times: list = None  # running time per segment before rounding to whole steps [s]
+    asked_times: Optional[list] = None  # running time per segment before rounding to whole steps [s]
 
 
 def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=500, buffer=None,
@@ -163,7 +164,8 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
     known = [memo.get((i, k)) for k in range(len(fleet.legs[i]))]
     tasks = [(leg, f"train {fleet.names[i]}, leg {k + 1}", fleet.dt, fleet.buffer,
               guesses[k][:5] if guesses is not None else _guess(fleet, leg),
-              guesses is not None, weights, allowance, credit, ahead) for k, leg in enumerate(fleet.legs[i])]
+              warmth(i, k) if guesses is not None else False, weights, allowance, credit, ahead)
+             for k, leg in enumerate(fleet.legs[i])]
     terms = [_own_terms(leg, weights, allowance, credit, ahead) for leg in fleet.legs[i]]
     again = [k for k, old in enumerate(known) if old is None or guesses is None or old[1] is not guesses[k]
              or not _same(old[0], terms[k])]

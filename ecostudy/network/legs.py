@@ -7,8 +7,6 @@ constraint at every step with its bound lifted where it cannot pay: no build or 
 the first, but the always-present terms and rows made each solve dearer, 24-31 against 18-24 s
 per rule on the 2-train study, with no energy gained.)
 """
-import zlib
-
 import numpy as np
 import pyomo.environ as pyo
 
@@ -121,7 +119,8 @@ def leg_model(task):
 
 def solve_leg(task):
     """(leg, label, dt, buffer, guess, warm, weights, allowance, credit, ahead) -> (LegRun, solver
-    outcome); a top-level function so a process pool can run it.
+    outcome); a top-level function so a process pool can run it. ``warm``: False (cold, from
+    ``guess``), True (warm from ``guess``, a previous run) or :data:`CHECKED`.
 
     A warm solve (from a previous run, the rounds) stays near its start (``NEAR_START``: measured
     2-3x fewer iterations on the regional study's hardest legs, 1130 -> 333 and 823 -> 441, and
@@ -134,7 +133,7 @@ def solve_leg(task):
     Two guards against local optima that pass the re-simulation but are not what the user wants
     (the run's ``notes`` say what they did):
 
-    - a warm leg in the sample (:func:`checked`) is solved cold too, from the trapezoidal start;
+    - a warm leg in the sample (``warm`` is :data:`CHECKED`, :func:`warmth`) is solved cold too, from the trapezoidal start;
       where the warm run costs more than :data:`DEARER` more, the cold run replaces it (a warm
       start that arrived early and stood ended 10 % dearer than the cold optimum);
     - a run that stands (below :data:`STAND_SPEED_MPS` for more than :data:`STAND_TIME_S`) before
@@ -143,7 +142,7 @@ def solve_leg(task):
     """
     run, outcome, cost = _solve(task)
     notes = {}
-    if task[5] and checked(task[1]):
+    if task[5] == CHECKED:
         cold, cold_outcome, cold_cost = _solve(_restart(task))
         notes["warm_vs_cold_pct"] = 100 * (cost - cold_cost) / max(abs(cold_cost), 1e-9)
         if cost - cold_cost > DEARER * abs(cold_cost):
@@ -162,12 +161,14 @@ def solve_leg(task):
 STAND_SPEED_MPS = 0.1  # [m/s] below this a train stands
 STAND_TIME_S = 1.0     # [s] standing longer than this before the last metre: arrived early and waits
 DEARER = 0.01          # [-] a warm leg dearer than its cold solve by more than this is replaced
-CHECK_EVERY = 3        # one warm leg in this many (by a stable hash of its label) is also solved cold
+CHECK_EVERY = 3        # one warm leg in this many is also solved cold (:func:`warmth`)
+CHECKED = "checked"    # a task's ``warm``: warm, and in the sample solved cold too
 
 
-def checked(label):
-    """Whether a warm leg is in the sample solved cold too: the same legs in every round and run."""
-    return zlib.crc32(label.encode()) % CHECK_EVERY == 0
+def warmth(train, leg):
+    """A warm task's ``warm`` for leg ``leg`` of train ``train`` (indices): :data:`CHECKED` for one
+    leg in :data:`CHECK_EVERY`, spread over the trains (the same legs in every round), else True."""
+    return CHECKED if (train + leg) % CHECK_EVERY == 0 else True
 
 
 def standing_s(run, leg):

@@ -14,6 +14,7 @@ What each setting is for is said where it is set.
 import ctypes
 import os
 from pathlib import Path
+from typing import Any, Optional
 
 from pyomo.common.dependencies import DeferredImportCallbackFinder
 
@@ -29,10 +30,10 @@ REPO_ASL = Path(__file__).resolve().parents[2] / ".pyomo" / "lib" / "libpynumero
 # (quiet machine, alternating: 1.40-1.58 s against 1.22-1.36 s; energy equal to 4e-9).
 NL_OPTIONS = {"export_defined_variables": False}
 
-_state = {"configured": False, "prepared": False, "scotch": None}
+_state: dict[str, Any] = {"configured": False, "prepared": False, "scotch": None}
 
 
-def configure():
+def configure() -> None:
     """Set up this process for ecostudy; call it once, first thing, from an entry point.
 
     - Pyomo hooks the import of scipy to import ``scipy.stats`` (about 1.2 s here) and of
@@ -54,7 +55,7 @@ def configure():
     _state["configured"] = True
 
 
-def prepare(nl_writer_config, ampl_interface):
+def prepare(nl_writer_config: Any, ampl_interface: Any) -> bool:
     """Make the solver chain ready in this process (idempotent; ``ocp.session`` calls it with
     Pyomo's ``NLWriter.CONFIG`` and PyNumero's ``AmplInterface``). Returns whether PyNumero's ASL
     library is available.
@@ -73,10 +74,10 @@ def prepare(nl_writer_config, ampl_interface):
             ampl_interface.libname = str(REPO_ASL)  # also spares Pyomo's library search (a compiler probe)
         _state["scotch"] = _scotch()
         _state["prepared"] = True
-    return ampl_interface.available()
+    return bool(ampl_interface.available())
 
 
-def _scotch():
+def _scotch() -> Optional[ctypes.CDLL]:
     """The Scotch library loaded in this process (through Ipopt's MUMPS), or None."""
     try:
         with open("/proc/self/maps") as maps:
@@ -86,7 +87,7 @@ def _scotch():
     return ctypes.CDLL(paths[0]) if paths else None
 
 
-def repeatable():
+def repeatable() -> None:
     """Reset Scotch's generator: the solves that follow order their matrices as they did the
     first time (``Session.solve`` calls it; so does a MINLP search whose NLPs Pyomo solves)."""
     if _state["scotch"] is not None:

@@ -25,7 +25,7 @@ from ecostudy.ocp.problem import Written
 from ecostudy.studies.cases import case_key, expand
 from ecostudy.studies.workers import worker_pool
 
-_ALL_OUT = {}  # all-out time per (train, track, stops, grid), per process: shared by a scenario's cases
+_ALL_OUT: dict = {}  # all-out time per (train, track, stops, grid), per process: shared by a scenario's cases
 _WRITTEN = Written()  # written NLPs per process: cases that differ only in timing re-use one NL file
 _SCENARIO = ("train", "track", "from", "to", "points", "version")
 
