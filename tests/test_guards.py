@@ -1,0 +1,95 @@
+"""Hostile input is refused in one line (exit 2) before anything is computed, valid data is not
+refused, and nothing ends in an internal error, a hang or a silent wrong answer."""
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+from ecostudy.core.errors import InputError
+from ecostudy.io.documents import read_document
+from ecostudy.io.yamlsafe import MAX_NODES, check_nodes, load_yaml
+
+from .conftest import STUDIES, TRACKS, TRAINS
+
+METRO, AMS = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml"
+
+
+def run(*args):
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def one_line(result, *fragments, code=2):
+    assert result.exit_code == code, result.output
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert len(lines) == 1 and "Traceback" not in result.output, result.output
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+
+
+# ----------------------------------------------------------------------------------- alias bombs
+def laughs(levels, width):
+    """The 'billion laughs': each level a list of ``width`` aliases of the level below."""
+    lines = [f"a0: &a0 [{', '.join(['lol'] * width)}]"]
+    lines += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * width)}]" for i in range(1, levels + 1)]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize("levels, width", [(9, 9), (8, 10), (30, 2), (2, 3000)])
+def test_alias_bombs_are_refused_by_a_node_budget(tmp_path, levels, width):
+    path = tmp_path / "bomb.yaml"
+    path.write_text(laughs(levels, width))
+    with pytest.raises(InputError, match="aliases expand to more than"):
+        read_document(path)
+
+
+def test_alias_bomb_is_refused_by_every_command(tmp_path):
+    path = tmp_path / "bomb.yaml"
+    path.write_text(laughs(9, 9))
+    one_line(run("run", path), "bomb.yaml", "alias bomb")
+    one_line(run("solve", "--track", AMS, "--train", path, "--time", 80, "--out", tmp_path / "o"), "bomb.yaml",
+             "alias bomb")
+    one_line(run("solve", "--track", path, "--train", METRO, "--time", 80, "--out", tmp_path / "o"), "bomb.yaml")
+
+
+def test_aliases_within_the_budget_are_read_as_before():
+    assert load_yaml("a: &a [1, 2]\nb: *a\nc: {<<: {x: 1}, y: 2}\n") == {"a": [1, 2], "b": [1, 2], "c": {"x": 1, "y": 2}}
+    small = load_yaml(laughs(3, 9))  # 9^3 values: fine
+    assert len(small["a3"]) == 9 and small["a3"][0][0][0][0] == "lol"
+    assert len(load_yaml(laughs(4, 9))["a4"]) == 9  # 9^4 ≈ 6 600 values, far below the budget
+
+
+def expanded(data):
+    """Values in ``data`` once expanded, keys counted: what :func:`check_nodes` counts on the nodes."""
+    if isinstance(data, dict):
+        return 1 + sum(1 + expanded(v) for v in data.values())
+    if isinstance(data, list):
+        return 1 + sum(expanded(v) for v in data)
+    return 1
+
+
+@pytest.mark.parametrize("levels, width", [(3, 9), (5, 4), (1, 2)])
+def test_the_budget_counts_expanded_values_exactly(levels, width):
+    import yaml
+    text = laughs(levels, width)
+    size = expanded(load_yaml(text))
+    node = yaml.compose(text, Loader=yaml.SafeLoader)
+    check_nodes(node, budget=size)
+    with pytest.raises(ValueError, match=f"expand to more than {size - 1:,} values"):
+        check_nodes(node, budget=size - 1)
+    assert MAX_NODES >= 1_000_000
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ("a: &a [1, *a]\n", "refers to the value that contains it"),
+    ("a: &a {b: *a}\n", "refers to the value that contains it"),
+    ("a: &a [[[[1]]]]\nb: " + "[" * 62 + "*a" + "]" * 62 + "\n", "nested more than 64 levels"),
+])
+def test_recursive_and_deep_aliases_are_refused(tmp_path, text, fragment):
+    path = tmp_path / "r.yaml"
+    path.write_text(text)
+    with pytest.raises(InputError, match=fragment):
+        read_document(path)
+
+
+def test_every_shipped_yaml_file_reads():
+    for path in [*STUDIES.glob("*.yaml"), *TRAINS.glob("*.yaml"), *TRACKS.glob("*.yaml")]:
+        assert isinstance(read_document(path), dict), path
