@@ -1,28 +1,21 @@
 """Hostile input is refused in one line (exit 2) before anything is computed, valid data is not
 refused, and nothing ends in an internal error, a hang or a silent wrong answer."""
+import json
+import re
+
 import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
 from ecostudy.core.errors import InputError
 from ecostudy.io.documents import read_document
+from ecostudy.io.loaders import load_track, load_train
 from ecostudy.io.yamlsafe import MAX_NODES, check_nodes, load_yaml
 
-from .conftest import STUDIES, TRACKS, TRAINS
+from .conftest import DATA, STUDIES, TRACKS, TRAINS
+from .test_bad_input import one_line, run
 
 METRO, AMS = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml"
-
-
-def run(*args):
-    return CliRunner().invoke(app, [str(a) for a in args])
-
-
-def one_line(result, *fragments, code=2):
-    assert result.exit_code == code, result.output
-    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
-    assert len(lines) == 1 and "Traceback" not in result.output, result.output
-    for fragment in fragments:
-        assert fragment in lines[0], lines[0]
 
 
 # ----------------------------------------------------------------------------------- alias bombs
@@ -93,3 +86,59 @@ def test_recursive_and_deep_aliases_are_refused(tmp_path, text, fragment):
 def test_every_shipped_yaml_file_reads():
     for path in [*STUDIES.glob("*.yaml"), *TRAINS.glob("*.yaml"), *TRACKS.glob("*.yaml")]:
         assert isinstance(read_document(path), dict), path
+
+
+# ----------------------------------------------------------------------------------- valid data refused
+def ttobench_train(tmp_path, power_kW, name="t.json"):
+    doc = json.loads((DATA / "ttobench_subway_train.json").read_text())
+    doc["max traction power"]["value"] = power_kW
+    path = tmp_path / name
+    path.write_text(json.dumps(doc))
+    return path
+
+
+@pytest.fixture(scope="module")
+def no_limit_pair(tmp_path_factory):
+    """The TTOBench subway train with 'max traction power' 1e6 kW and 1e7 kW ("no limit")."""
+    from ecostudy.api import solve
+    tmp = tmp_path_factory.mktemp("power")
+    track = load_track(DATA / "ttobench_track.json")
+    return [solve(track, load_train(ttobench_train(tmp, p, f"t{p:g}.json")), supplement_percent=10, points=300)
+            for p in (1e6, 1e7)]
+
+
+def test_a_no_limit_power_of_1e7_kW_solves_like_1e6_kW(no_limit_pair):
+    e6, e7 = (s.summary["traction_energy_kWh"] for s in no_limit_pair)
+    assert all(s.summary["solver"]["status"] == "optimal" and s.verification["passed"] for s in no_limit_pair)
+    assert e7 == pytest.approx(e6, rel=1e-4)
+
+
+@pytest.mark.parametrize("power", [1e7, 1e9, 3100.0])
+def test_any_positive_finite_power_limit_is_read(tmp_path, power):
+    assert load_train(ttobench_train(tmp_path, power)).traction.max_power == pytest.approx(power * 1e3)
+
+
+@pytest.mark.parametrize("edit, fragment", [
+    (lambda t: t.replace('"value": 3100.0', '"value": 0'), "max traction power"),
+    (lambda t: t.replace('"value": 3100.0', '"value": -5'), "max traction power"),
+    (lambda t: t.replace('"value": 3100.0', '"value": NaN'), "max traction power"),
+    (lambda t: t.replace('"value": 3100.0', '"value": Infinity'), "max traction power"),
+])
+def test_non_positive_or_non_finite_power_limits_are_refused(tmp_path, edit, fragment):
+    path = tmp_path / "t.json"
+    path.write_text(edit((DATA / "ttobench_subway_train.json").read_text()))
+    one_line(run("solve", "--track", DATA / "ttobench_track.json", "--train", path, "--supplement", 10,
+                 "--out", tmp_path / "o", "--no-plot"), "t.json", fragment)
+
+
+@pytest.mark.parametrize("value, ok", [("1.0e+7", True), ("0", False), (".nan", False), (".inf", False), ("-1", False)])
+def test_yaml_train_power_limits(tmp_path, value, ok):
+    text = METRO.read_text()
+    assert "max_power_kW" in text
+    path = tmp_path / "t.yaml"
+    path.write_text(re.sub(r"max_power_kW: [0-9.e+]+", f"max_power_kW: {value}", text, count=1))
+    if ok:
+        assert load_train(path).regeneration.max_power == pytest.approx(1e10)
+    else:
+        with pytest.raises(InputError, match="max_power_kW"):
+            load_train(path)

@@ -196,7 +196,7 @@ def track_document(path):
 def load_train(path):
     """Read a train file (YAML, or TTOBench/OSRD JSON) into a :class:`Train`."""
     data, aliases = train_document(path)
-    return train_from_schema(validate(schemas.TrainFile, data, path), split_selector(path)[0], aliases)
+    return train_from_schema(validate(schemas.TrainFile, data, path, aliases), split_selector(path)[0], aliases)
 
 
 def load_track(path):

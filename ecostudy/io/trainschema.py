@@ -59,7 +59,7 @@ class Traction(Strict):
 
     table: Optional[ForceTable] = None
     max_force_kN: Optional[float] = Field(None, gt=0, le=100000)
-    max_power_kW: Optional[float] = Field(None, gt=0, le=1000000)
+    max_power_kW: Optional[float] = Field(None, gt=0)
 
     @model_validator(mode="after")
     def _one_form(self):
@@ -88,7 +88,7 @@ class Regeneration(Strict):
     """Regenerative (electric) braking limits; braking beyond them goes to friction brakes."""
 
     max_force_kN: Optional[float] = Field(None, gt=0, le=100000)
-    max_power_kW: Optional[float] = Field(None, gt=0, le=1000000)
+    max_power_kW: Optional[float] = Field(None, gt=0)
     efficiency: float = Field(0.8, ge=0.05, le=1, description="Wheel to line [-], a share (0.8), not per cent.")
     efficiency_map: Optional[EfficiencyTable] = Field(None, description="Efficiency over speed and force "
                                                       "instead of the constant (net energy and its check).")
