@@ -12,7 +12,7 @@ from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.io.yamlsafe import MAX_NODES, check_nodes, load_yaml
 
-from .conftest import DATA, STUDIES, TRACKS, TRAINS
+from .conftest import DATA, STUDIES, TRACKS, TRAINS, write_yaml
 from .test_bad_input import one_line, run
 
 METRO, AMS = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml"
@@ -142,3 +142,120 @@ def test_yaml_train_power_limits(tmp_path, value, ok):
     else:
         with pytest.raises(InputError, match="max_power_kW"):
             load_train(path)
+
+
+# ----------------------------------------------------------------------------------- silent wrong answers
+LINE4 = TRACKS / "metro_line_4stops.yaml"
+
+
+@pytest.mark.parametrize("stops, fragment", [
+    ("", "--stops[0]: an empty stop name"),
+    ("Noord,", "--stops[1]: an empty stop name"),
+    (" ,Zuid", "--stops[0]: an empty stop name"),
+    ("Noord,Station,Station,Zuid", "--stops[2]: 'Station' straight after 'Station'"),
+    ("Noord,Nowhere", "--stops[1]: unknown stop 'Nowhere'"),
+    ("Noord", "--stops: need two or more stops"),
+])
+def test_journey_stops_are_names_never_all_stops(tmp_path, stops, fragment):
+    one_line(run("journey", "--track", LINE4, "--train", METRO, "--stops", stops, "--supplement", 10,
+                 "--out", tmp_path / "o", "--no-plot"), fragment)
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("options, fragment", [
+    (["--from", ""], "from: unknown stop ''"),
+    (["--to", ""], "to: unknown stop ''"),
+])
+def test_an_empty_stop_option_is_not_the_default_stop(tmp_path, options, fragment):
+    one_line(run("solve", "--track", AMS, "--train", METRO, *options, "--time", 80, "--out", tmp_path / "o"), fragment)
+
+
+@pytest.mark.parametrize("edit, fragment", [
+    (lambda t: t.replace("{name: Station,", "{name: '',"), "stops[1].name: an empty name"),
+    (lambda t: t.replace("{name: Station,", "{name: '   ',"), "stops[1].name: an empty name"),
+    (lambda t: t.replace("name: Representative metro line, 4 stops", "name: ''"), "name: an empty name"),
+])
+def test_empty_names_in_files_are_refused(tmp_path, edit, fragment):
+    path = tmp_path / "line.yaml"
+    path.write_text(edit(LINE4.read_text()))
+    one_line(run("journey", "--track", path, "--train", METRO, "--supplement", 10, "--out", tmp_path / "o"), fragment)
+
+
+@pytest.mark.parametrize("stops, fragment", [
+    (["Noord", ""], "stops[1]: an empty name"),
+    (["Noord", "Noord", "Zuid"], "stops[1]: 'Noord' straight after 'Noord'"),
+    (["Zuid"], "stops: need two or more stops"),
+])
+def test_network_study_stops(tmp_path, stops, fragment):
+    from ecostudy.io.loaders import load_network_study
+    doc = load_yaml((STUDIES / "network_metro_2trains.yaml").read_text())
+    doc.update(track=str(LINE4), train=str(METRO), stops=stops)
+    path = write_yaml(tmp_path / "net.yaml", doc)
+    with pytest.raises(InputError, match=re.escape(fragment)):
+        load_network_study(path)
+
+
+def study_with(tmp_path, scenario):
+    doc = load_yaml((STUDIES / "metro_supplements.yaml").read_text())
+    doc.update(track=str(AMS), train=str(METRO), output=str(tmp_path / "out"), scenarios=[{"name": "bad", **scenario}])
+    return write_yaml(tmp_path / "study.yaml", doc)
+
+
+@pytest.mark.parametrize("scenario, fragment", [
+    ({"train_overrides": {"mass_t": 1.0e9}}, "scenarios[0] (bad) train: mass_t"),
+    ({"train_overrides": {"mas_t": 100}}, "mas_t: unknown field"),
+    ({"train_overrides": {"mass_t": float("nan")}}, "mass_t: Input should be a finite number"),
+    ({"train": "nowhere.yaml"}, "nowhere.yaml: file not found"),
+    ({"points": 5}, "scenarios[0].points"),
+    ({"name": ""}, "scenarios[0].name: an empty name"),
+])
+@pytest.mark.parametrize("command", ["solve", "pareto", "compare"])
+def test_commands_on_a_study_check_every_scenario_first(tmp_path, scenario, fragment, command):
+    one_line(run(command, study_with(tmp_path, scenario), "--out", tmp_path / "o", "--no-plot"), fragment)
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("count, top", [(2, 0.4), (3, 0.2), (4, 0.3), (5, 0.4), (20, 0.4), (20, 0.04), (37, 0.6),
+                                        (100, 1.0)])
+def test_a_front_has_exactly_count_points(count, top):
+    from ecostudy.studies.pareto import REPORTED_SUPPLEMENTS, front_supplements
+    points = front_supplements(count, top)
+    assert len(points) == count and points[0] == 0 and points[-1] == pytest.approx(top)
+    assert all(b > a for a, b in zip(points, points[1:]))
+    if count >= 4:
+        assert all(x in points.round(12) for x in REPORTED_SUPPLEMENTS if x <= top)
+
+
+def test_no_plot_lists_no_plot(tmp_path):
+    (tmp_path / "o").mkdir()
+    (tmp_path / "o" / "speed.png").write_bytes(b"an earlier run's plot")
+    r = run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--points", 100, "--out", tmp_path / "o",
+            "--no-plot")
+    assert r.exit_code == 0, r.output
+    assert "speed.png" not in r.output and "(profile.csv, summary.json)" in r.output
+    assert not (tmp_path / "o" / "speed.png").exists()
+
+
+def test_the_store_lock_is_removed_on_a_clean_exit_and_still_excludes_a_second_writer(tmp_path):
+    from ecostudy.io.store import Store
+    path = tmp_path / "results.sqlite"
+    first = Store(path)
+    assert (tmp_path / "results.sqlite.lock").exists()
+    with pytest.raises(InputError, match="another ecostudy run is writing this store"):
+        Store(path)
+    first.close()
+    assert not (tmp_path / "results.sqlite.lock").exists()
+    second = Store(path)  # the next run takes it as before
+    with pytest.raises(InputError, match="another ecostudy run"):
+        Store(path)
+    second.close()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results.sqlite"]
+
+
+def test_a_study_run_leaves_no_lock(tmp_path):
+    doc = load_yaml((STUDIES / "metro_supplements.yaml").read_text())
+    doc.update(track=str(AMS), train=str(METRO), points=60, scenarios=[], sweep={"supplement_percent": [10]})
+    path = write_yaml(tmp_path / "study.yaml", doc)
+    r = run("run", path, "--out", tmp_path / "o", "--no-progress")
+    assert r.exit_code == 0, r.output
+    assert (tmp_path / "o" / "results.sqlite").exists() and not (tmp_path / "o" / "results.sqlite.lock").exists()

@@ -3,7 +3,7 @@ from typing import ClassVar, Literal, Optional
 
 from pydantic import Field, field_validator, model_validator
 
-from ecostudy.io.schemabase import Strict, increasing as _increasing
+from ecostudy.io.schemabase import Name, Strict, increasing as _increasing
 
 
 class ForceTable(Strict):
@@ -130,7 +130,7 @@ class TunnelResistance(Strict):
 
 
 class TrainFile(Strict):
-    name: str
+    name: Name
     source: str = Field(description="Where the numbers come from.")
     mass_t: float = Field(ge=1, le=100000, description="Static mass Ms [t] (1 t to 100 000 t).")
     rotating_mass_factor: Optional[float] = Field(None, ge=0, description="M = Ms (1 + factor).")

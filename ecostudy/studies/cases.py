@@ -17,6 +17,7 @@ from ecostudy.io import schemas
 from ecostudy.io.loaders import (
     chosen_stops,
     load_timetable,
+    load_study,
     read_document,
     timing_from_timetable,
     track_document,
@@ -99,3 +100,12 @@ def expand(path, skipped=None):
             cases.append(case)
     output = Path(s.output) if s.output else Path("out") / s.name
     return s, output, cases
+
+
+def load_checked_study(path):
+    """:func:`~ecostudy.io.loaders.load_study` (the base case), after every scenario and sweep value of
+    the file is checked as ``ecostudy run`` checks them (:func:`expand`): a command that runs only the
+    base case never leaves a bad scenario unnoticed."""
+    study = load_study(path)
+    expand(path)
+    return study
