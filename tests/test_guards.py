@@ -259,3 +259,92 @@ def test_a_study_run_leaves_no_lock(tmp_path):
     r = run("run", path, "--out", tmp_path / "o", "--no-progress")
     assert r.exit_code == 0, r.output
     assert (tmp_path / "o" / "results.sqlite").exists() and not (tmp_path / "o" / "results.sqlite.lock").exists()
+
+
+# ----------------------------------------------------------------------------------- internal errors
+@pytest.fixture(scope="module")
+def saved_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("saved") / "run"
+    r = run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--points", 100, "--out", out, "--no-plot")
+    assert r.exit_code == 0, r.output
+    return out
+
+
+def edited_copy(saved_run, tmp_path, edit):
+    import shutil
+    folder = tmp_path / "copy"
+    shutil.copytree(saved_run, folder)
+    lines = (folder / "profile.csv").read_text().splitlines()
+    (folder / "profile.csv").write_text("\n".join(edit(lines)) + "\n")
+    return folder
+
+
+def cell(lines, row, column, value):
+    header = lines[0].split(",")
+    cells = lines[row].split(",")
+    cells[header.index(column)] = value
+    return lines[:row] + [",".join(cells)] + lines[row + 1:]
+
+
+@pytest.mark.parametrize("edit, fragments", [
+    (lambda ls: ls[:40], ["profile.csv", "39 rows where the run has 100"]),
+    (lambda ls: ls[:40] + [ls[40][:7]], ["profile.csv", "row 41", "is not a finite number"]),
+    (lambda ls: cell(ls, 5, "speed_kmh", "nan"), ["speed_kmh, row 6: 'nan' is not a finite number"]),
+    (lambda ls: cell(ls, 9, "time_s", "abc"), ["time_s, row 10: 'abc' is not a finite number"]),
+    (lambda ls: cell(ls, 3, "traction_force_kN", "inf"), ["traction_force_kN, row 4: 'inf'"]),
+    (lambda ls: cell(ls, 3, "position_m", "7.5"), ["position_m", "differ from the grid", "an edited profile"]),
+    (lambda ls: [ls[0].replace("speed_kmh", "v")] + ls[1:], ["speed_kmh: missing column"]),
+    (lambda ls: [], ["profile.csv: not a readable CSV table"]),
+])
+def test_check_refuses_a_damaged_profile_in_one_line(saved_run, tmp_path, edit, fragments):
+    one_line(run("check", edited_copy(saved_run, tmp_path, edit)), *fragments)
+
+
+def test_check_reads_an_intact_profile(saved_run):
+    assert run("check", saved_run).exit_code == 0
+
+
+def library_study(tmp_path, tracks):
+    lib = tmp_path / "ttobench"
+    (lib / "tracks").mkdir(parents=True)
+    (lib / "trains").mkdir()
+    (lib / "trains" / "subway.json").write_text((DATA / "ttobench_subway_train.json").read_text())
+    for name, limit in tracks.items():
+        doc = json.loads((DATA / "ttobench_track.json").read_text())
+        doc["speed limits"]["values"] = [[0.0, limit]]
+        (lib / "tracks" / f"{name}.json").write_text(json.dumps(doc))
+    study = tmp_path / "lib.yaml"
+    study.write_text(f"name: lib\nlibrary: {{path: ttobench}}\nsupplement_percent: 10\noutput: {tmp_path / 'out'}\n")
+    return study
+
+
+@pytest.mark.parametrize("tracks, fragment", [
+    ({"T2": 200}, "no case to run: every track and train pair is left out (T2/subway: top speed 80 km/h"),
+    ({"T2": 200, "T3": 300}, "T3/subway"),
+    ({}, "no case to run: its tracks/ or trains/ folder holds no .json file"),
+])
+def test_a_library_study_with_no_cases_is_refused(tmp_path, tracks, fragment):
+    one_line(run("run", library_study(tmp_path, tracks), "--no-progress"), "lib.yaml: library", fragment)
+
+
+def test_an_empty_library_selection_is_refused(tmp_path):
+    study = library_study(tmp_path, {"T1": 80})
+    study.write_text(study.read_text().replace("{path: ttobench}", "{path: ttobench, tracks: []}"))
+    one_line(run("run", study, "--no-progress"), "library.tracks")
+
+
+@pytest.mark.parametrize("edit, fragment", [
+    (lambda ls: cell(ls, 4, "speed_kmh", "fast"), "speed_kmh, row 5: 'fast' is not a finite number"),
+    (lambda ls: cell(ls, 2, "distance_m", "nan"), "distance_m, row 3: 'nan'"),
+    (lambda ls: cell(ls, 6, "distance_m", ""), "distance_m, row 7: '' is not a finite number"),
+    (lambda ls: [ls[0].replace("distance_m", "x_m")] + ls[1:], "distance_m: missing column"),
+])
+def test_text_in_a_reference_table_is_one_line(tmp_path, edit, fragment):
+    from ecostudy.studies.heavyhaul import expand
+    doc = load_yaml((STUDIES / "heavyhaul_brake_penalty_limits.yaml").read_text())
+    for key in ("consist", "track"):
+        doc[key] = str((STUDIES / doc[key]).resolve())
+    lines = (STUDIES / "heavyhaul_limit_reference.csv").read_text().splitlines()
+    (tmp_path / "heavyhaul_limit_reference.csv").write_text("\n".join(edit(lines)) + "\n")
+    with pytest.raises(InputError, match=re.escape(fragment)):
+        expand(write_yaml(tmp_path / "study.yaml", doc))

@@ -216,8 +216,8 @@ class Library(Strict):
     """Every stop-to-stop segment of a TTOBench checkout's tracks, run by each of its trains."""
 
     path: str = Field(description="A TTOBench checkout (its tracks/ and trains/ folders), relative to the study.")
-    tracks: Optional[list[str]] = Field(None, description="Track ids (default: every track).")
-    trains: Optional[list[str]] = Field(None, description="Train ids (default: every train).")
+    tracks: Optional[list[Name]] = Field(None, min_length=1, description="Track ids (default: every track).")
+    trains: Optional[list[Name]] = Field(None, min_length=1, description="Train ids (default: every train).")
     min_speed_share: float = Field(0.6, ge=0, le=1, description="Pair a train with a track only when its top "
                                    "speed reaches this share of the line's highest limit (a metro train on an "
                                    "intercity line is another service); 0 pairs all.")

@@ -61,6 +61,13 @@ def expand(path, skipped=None):
     if s.library is not None:
         units, left_out = library_units(s.library, base, path)
         units = [u + (schemas.Scenario(name=u[0]),) for u in units]
+        if not units:
+            why = ("every track and train pair is left out (" + "; ".join(
+                f"{x['track']}/{x['train']}: {x['reason']}" for x in left_out[:3])
+                + (f"; and {len(left_out) - 3} more" if len(left_out) > 3 else "")
+                + "): choose other tracks or trains, or lower min_speed_share") if left_out else \
+                "its tracks/ or trains/ folder holds no .json file"
+            raise InputError(problem(path, "library", f"no case to run: {why}"))
         if skipped is not None:
             skipped.extend(left_out)
     else:
