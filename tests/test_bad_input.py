@@ -233,7 +233,7 @@ def test_a_flagged_result_says_why_it_exits_1(tmp_path):
     """On a 12-node grid the ATO optimum misses the re-simulation's tolerance: exit 1, and a line
     saying so (before, compare and journey exited 1 without a word)."""
     r = run("compare", "--track", AMS, "--train", METRO, "--time", 80, "--points", 12, "--no-plot", "--out", tmp_path)
-    assert r.exit_code == 1 and "flagged: the ATO optimum is not verified optimal" in r.output, r.output
+    assert r.exit_code == 1 and "flagged: ATO optimum: re-simulation outside tolerance" in r.output, r.output
 
 
 @pytest.mark.slow

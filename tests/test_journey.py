@@ -127,6 +127,7 @@ def test_journey_with_timing_windows_keeps_them_where_the_splits_do_not(tmp_path
     assert nlp["verified"].all() and nlp["windows_kept"].all()  # simulated passing times and speeds
     assert nlp["arrival_s"].iloc[0] <= 56.0 + 1e-6 and 175 - 1e-6 <= nlp["arrival_s"].iloc[1] <= 185 + 1e-6
     assert nlp["departure_s"].iloc[1] == pytest.approx(nlp["arrival_s"].iloc[0] + 20.0)
+    assert nlp["arrival_latest_s"].iloc[0] == 56.0 and table["arrival_earliest_s"].dtype == float  # numbers, not text
     totals = pd.read_csv(tmp_path / "journey_totals.csv").set_index("distribution")
     assert totals.loc["timing windows NLP", "windows_kept"]
     assert not totals.loc["same percentage", "windows_kept"]  # Station reached after 56 s

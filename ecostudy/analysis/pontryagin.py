@@ -31,6 +31,7 @@ import pyomo.environ as pyo
 from scipy.sparse import hstack, identity
 
 from ecostudy.analysis import regimes
+from ecostudy.core.errors import InputError, problem
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import build, prepare
 from ecostudy.ocp.session import Session, solve
@@ -151,18 +152,22 @@ def estimated_psi(m, nodes, train, tolerance=1e-2):
             float(np.linalg.norm(residual) / norm), np.abs(residual[v_cols]) / norm)
 
 
-def check_profile(track, train, inputs, trajectory, running_time=None, tolerance=1e-2, objective="energy"):
+def check_profile(track, train, inputs, trajectory, running_time=None, tolerance=1e-2, objective="energy",
+                  where="profile.csv"):
     """Regime check of a result's :class:`~ecostudy.core.types.Trajectory` as the energy-optimal run
     for ``running_time``; ``inputs`` names the stops and the grid size (``inputs.json``).
 
     ``running_time`` None: the profile's own time, fixed. Given: arrive by then (a window), so a
     profile that arrives earlier than it needs to is tested as what it is offered as.
     ``objective``: ``energy`` (eq. 2.17) or ``net_energy`` (eq. 7.4, regeneration credited).
+    ``where`` names the profile in the refusal of positions off the grid.
     """
     case = prepare(track, train, inputs["from"], inputs["to"], inputs["points"])
     x, v, dt, ft, fb = trajectory
     if len(x) != len(case.nodes) or not np.allclose(x, case.nodes, atol=1e-3):
-        raise ValueError("the profile's positions differ from the grid rebuilt from inputs.json")
+        raise InputError(problem(where, "position_m", f"{len(x)} positions that differ from the grid of "
+                                 f"inputs.json ({len(case.nodes)} nodes from '{inputs['from']}' to '{inputs['to']}'): "
+                                 "an edited profile"))
     own = float(dt.sum())
     timing = {"running_time": own} if running_time is None else {"window": (0.0, float(running_time))}
     m = build(case, (v, dt, ft, fb), objective, {}, **timing)

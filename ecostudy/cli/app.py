@@ -9,6 +9,7 @@ import traceback
 import warnings
 from contextlib import contextmanager
 from enum import Enum
+from pathlib import Path
 
 import typer
 
@@ -124,6 +125,12 @@ def only_one(**options):
     given = ["--" + name.replace("_", "-") for name, value in options.items() if value is not None]
     if len(given) > 1:
         raise InputError(problem("command line", "/".join(given), "give only one: each sets the running time"))
+
+
+def listed(out_dir, names):
+    """``DIR/ (a, b)``: the files of ``names`` that this run left in ``out_dir`` (a plot skipped
+    with ``--no-plot`` is not listed)."""
+    return f"{out_dir}/ ({', '.join(n for n in names if (Path(out_dir) / n).is_file())})"
 
 
 def counts_line(counts, noun):

@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, Objective, app, check_options, guarded, only_one, parse_pair
+from ecostudy.cli.app import DasMethod, Objective, app, check_options, guarded, listed, only_one, parse_pair
 from ecostudy.core.errors import InputError, problem
 
 
@@ -46,7 +46,7 @@ def _report(result, out_dir):
             bound = "none" if d["bound_kWh"] is None else f"{d['bound_kWh']:.3f} kWh (gap {d['gap_pct']:.2f} %)"
             typer.echo(f"                    MINLP search {d['search_s']:.1f} s, {d['oa_iterations']} OA iterations, "
                        f"bound {bound}")
-    typer.echo(f"  outputs           {out_dir}/ (profile.csv, summary.json, speed.png)")
+    typer.echo(f"  outputs           {listed(out_dir, ('profile.csv', 'summary.json', 'advice.csv', 'speed.png'))}")
 
 
 def _solve(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights,
@@ -60,14 +60,15 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
     from ecostudy.core import units
     from ecostudy.core.types import Timing
-    from ecostudy.io.loaders import chosen_stops, load_study, load_track, load_train
+    from ecostudy.io.loaders import chosen_stops, load_track, load_train
     from ecostudy.io.results import file_digest
+    from ecostudy.studies.cases import load_checked_study
     from ecostudy.io.writers import check_output_dir, write_json
     if study is not None:
         if track or train:
             raise InputError(problem("command line", "--track/--train",
                                      "give a study file or --track and --train, not both"))
-        st = load_study(study)
+        st = load_checked_study(study)
         st_paths = (st.track_path, st.train_path)
         trk, trn, f, t = st.track, st.train, st.from_stop, st.to_stop
         timing, obj, w, k = st.timing, st.objective, st.weights, st.points

@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, app, case_progress, check_options, flag_rows, guarded, only_one
+from ecostudy.cli.app import DasMethod, app, case_progress, check_options, flag_rows, guarded, listed, only_one
 from ecostudy.core.errors import InputError, problem
 
 
@@ -20,9 +20,10 @@ def no_windows(st, command):
 
 def _case_from(study, track, train, from_stop, to_stop, points):
     """(track, train, from, to, K, study or None) from a study file or from options."""
-    from ecostudy.io.loaders import chosen_stops, load_study, load_track, load_train
+    from ecostudy.io.loaders import chosen_stops, load_track, load_train
+    from ecostudy.studies.cases import load_checked_study
     if study is not None:
-        st = load_study(study)
+        st = load_checked_study(study)
         return st.track, st.train, st.from_stop, st.to_stop, points or st.points, st
     if not (track and train):
         raise InputError(problem("command line", "--track/--train", "give a study file, or both --track and --train"))
@@ -68,8 +69,9 @@ def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, poin
     typer.echo(f"all-out {meta['all_out_time_s']:.2f} s; +5 % saves {meta['saving_at_5_pct_supplement_pct']:.1f} %, "
                f"+10 % saves {meta['saving_at_10_pct_supplement_pct']:.1f} % of the all-out traction energy")
     typer.echo(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
-               f"{meta['all_verified']}; {meta['wall_s']:.1f} s; outputs {out_dir}/ (pareto.csv, pareto.json, "
-               "pareto.png, pareto_profiles.png)")
+               f"{meta['all_verified']}; {meta['wall_s']:.1f} s; outputs "
+               + listed(out_dir, ("pareto.csv", "pareto_weighted.csv", "pareto.json", "summary.json", "pareto.png",
+                                   "pareto_profiles.png")))
     return meta
 
 
@@ -123,7 +125,7 @@ def _compare(study, track, train, from_stop, to_stop, time, supplement, points, 
     write_compare(table, outcomes, case.segment, out_dir,
                   f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s", plot=not no_plot)
     typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
-    typer.echo(f"outputs {out_dir}/ (compare.csv, summary.json" + ("" if no_plot else ", compare.png") + ")")
+    typer.echo("outputs " + listed(out_dir, ("compare.csv", "summary.json", "compare.png")))
     return table
 
 
@@ -167,7 +169,7 @@ def associated_track(tt, path):
 def _journey(track, train, stops, time, supplement, timetable, dwell, points, workers, out, no_plot):
     check_options(time=time, supplement=supplement, dwell=dwell, points=points, workers=workers)
     from ecostudy.core import units
-    from ecostudy.io.loaders import load_timetable, load_track, load_train, timing_from_timetable
+    from ecostudy.io.loaders import check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
     from ecostudy.io.timetable import journey_plan, name_stops
     from ecostudy.io.writers import check_output_dir
     tt = load_timetable(timetable) if timetable is not None else None
@@ -185,11 +187,8 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
             scheduled = [timing_from_timetable(tt, a, b, timetable).running_time for a, b in zip(names, names[1:])]
         time, supplement = None, None
     else:
-        names = stops.split(",") if stops else list(trk.stops)
-    unknown = [n for n in names if n not in trk.stops]
-    if unknown or len(names) < 2:
-        raise InputError(problem("command line", "--stops", f"need two or more stops of the track (unknown: "
-                                 f"{', '.join(unknown) or 'none'}; the track has {', '.join(trk.stops)})"))
+        names = list(trk.stops) if stops is None else [n.strip() for n in stops.split(",")]
+    check_stop_list(trk, names, "command line", "--stops")
     if scheduled is None and plan is None and (time is None) == (supplement is None):
         raise InputError(problem("command line", "--time/--supplement",
                                  "give one total running time or supplement, or --timetable"))
@@ -210,8 +209,7 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
     write_journey(table, totals, results, out_dir, f"{trn.name}: {' - '.join(names)}", passing, plot=not no_plot)
     typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
     typer.echo(totals.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
-    typer.echo(f"outputs {out_dir}/ (journey.csv, journey_totals.csv, summary.json" + ("" if no_plot else ", journey.png")
-               + ")")
+    typer.echo("outputs " + listed(out_dir, ("journey.csv", "journey_totals.csv", "summary.json", "journey.png")))
     return table
 
 

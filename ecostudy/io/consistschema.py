@@ -17,7 +17,7 @@ class CarResistance(Strict):
 
 class ForcePower(Strict):
     max_force_kN: float = Field(gt=0, le=10000)
-    max_power_kW: Optional[float] = Field(None, gt=0, le=100000)
+    max_power_kW: Optional[float] = Field(None, gt=0)
 
 
 class VehicleType(Strict):

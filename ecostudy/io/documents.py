@@ -56,8 +56,9 @@ def _field_path(loc):
     return out
 
 
-def validate(schema, data, path):
-    """Validate ``data`` against a schema; every pydantic error becomes one problem line."""
+def validate(schema, data, path, aliases=None):
+    """Validate ``data`` against a schema; every pydantic error becomes one problem line.
+    ``aliases`` maps a schema field path to the name the file gives it (a TTOBench key)."""
     try:
         return schema.model_validate(data)
     except ValidationError as exc:
@@ -69,5 +70,6 @@ def validate(schema, data, path):
                 msg = "unknown field"
             elif err["type"] == "missing":
                 msg = "missing field"
-            lines.append(problem(path, _field_path(loc) or "(top level)", msg))
+            field = _field_path(loc) or "(top level)"
+            lines.append(problem(path, (aliases or {}).get(field, field), msg))
         raise InputError(lines)

@@ -196,7 +196,7 @@ def track_document(path):
 def load_train(path):
     """Read a train file (YAML, or TTOBench/OSRD JSON) into a :class:`Train`."""
     data, aliases = train_document(path)
-    return train_from_schema(validate(schemas.TrainFile, data, path), split_selector(path)[0], aliases)
+    return train_from_schema(validate(schemas.TrainFile, data, path, aliases), split_selector(path)[0], aliases)
 
 
 def load_track(path):
@@ -242,10 +242,31 @@ def check_stops(track, from_stop, to_stop, where):
         raise InputError(lines)
 
 
+def check_stop_list(track, names, where, field):
+    """A journey's stops in order: two or more, each a stop of the track by its exact name (an
+    empty name is refused, never read as "all stops"), no stop straight after itself."""
+    lines = []
+    for i, name in enumerate(names):
+        if not name.strip():
+            lines.append(problem(where, f"{field}[{i}]", "an empty stop name"))
+        elif name not in track.stops:
+            lines.append(problem(where, f"{field}[{i}]", f"unknown stop '{name}' (track '{track.name}' has: "
+                                 + ", ".join(track.stops) + ")"))
+        elif i and names[i - 1] in track.stops and track.stops[names[i - 1]] == track.stops[name]:
+            lines.append(problem(where, f"{field}[{i}]", f"'{name}' straight after '{names[i - 1]}' (the same place): "
+                                 "a segment needs two different stops"))
+    if not lines and len(names) < 2:
+        lines.append(problem(where, field, f"need two or more stops (track '{track.name}' has: "
+                             + ", ".join(track.stops) + ")"))
+    if lines:
+        raise InputError(lines)
+
+
 def chosen_stops(track, from_stop, to_stop, where):
     """(from, to): the stops asked for, the track's first and last where not, checked (:func:`check_stops`)."""
     names = list(track.stops)
-    from_stop, to_stop = from_stop or names[0], to_stop or names[-1]
+    from_stop = names[0] if from_stop is None else from_stop  # '' is a name given (and refused), not "default"
+    to_stop = names[-1] if to_stop is None else to_stop
     check_stops(track, from_stop, to_stop, where)
     return from_stop, to_stop
 
@@ -320,12 +341,8 @@ def load_network_study(path):
     path = Path(path)
     s = validate(schemas.NetworkStudyFile, read_document(path), path)
     track, train = load_track(path.parent / s.track), load_train(path.parent / s.train)
-    stops = s.stops or list(track.stops)
-    for name in stops:
-        if name not in track.stops:
-            raise InputError(problem(path, "stops", f"'{name}' is not a stop of {s.track} ({', '.join(track.stops)})"))
-    if len(stops) < 2:
-        raise InputError(problem(path, "stops", "need at least two stops"))
+    stops = list(track.stops) if s.stops is None else s.stops
+    check_stop_list(track, stops, path, "stops")
     if s.running_times_s is not None and len(s.running_times_s) != len(stops) - 1:
         raise InputError(problem(path, "running_times_s", f"need {len(stops) - 1} values, one per segment"))
     sub = s.substation
@@ -343,7 +360,7 @@ def load_network_study(path):
 
 
 __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study",
-           "load_timetable", "check_stops"]
+           "load_timetable", "check_stops", "check_stop_list"]
 
 
 def load_consist(path):

@@ -6,11 +6,11 @@ from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
-import pandas as pd
 
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.types import Trajectory
 from ecostudy.core.units import KMH, KN
+from ecostudy.io.tables import number_columns
 
 
 def file_digest(path):
@@ -44,16 +44,23 @@ class SavedRun(NamedTuple):
 
 
 def load_result(result_dir):
-    """The :class:`SavedRun` of a result folder; a folder that is not one is one clear line."""
+    """The :class:`SavedRun` of a result folder; a folder that is not one, or whose profile is cut
+    short or holds anything but finite numbers, is one clear line."""
     result_dir = Path(result_dir)
     try:
         inputs = json.loads((result_dir / "inputs.json").read_text())
         summary = json.loads((result_dir / "summary.json").read_text())
-        profile = pd.read_csv(result_dir / "profile.csv")
-        trajectory = Trajectory(profile["position_m"].to_numpy(), profile["speed_kmh"].to_numpy() * KMH,
-                                np.diff(profile["time_s"].to_numpy()),
-                                profile["traction_force_kN"].to_numpy()[:-1] * KN,
-                                profile["braking_force_kN"].to_numpy()[:-1] * KN)
-    except (OSError, ValueError, KeyError) as exc:
+    except (OSError, ValueError) as exc:
         raise InputError(problem(result_dir, "", f"not a result folder of `ecostudy solve` ({exc})"))
+    points = inputs.get("points") if isinstance(inputs, dict) else None
+    if not isinstance(points, int) or isinstance(points, bool) or not isinstance(summary, dict):
+        raise InputError(problem(result_dir / "inputs.json", "points", "not a result folder of `ecostudy solve` "
+                                 "(no grid size)"))
+    p = number_columns(result_dir / "profile.csv", PROFILE_COLUMNS, rows=points,
+                       open_last=("traction_force_kN", "braking_force_kN"))
+    trajectory = Trajectory(p["position_m"], p["speed_kmh"] * KMH, np.diff(p["time_s"]),
+                            p["traction_force_kN"][:-1] * KN, p["braking_force_kN"][:-1] * KN)
     return SavedRun(inputs, summary, trajectory)
+
+
+PROFILE_COLUMNS = ("position_m", "time_s", "speed_kmh", "traction_force_kN", "braking_force_kN")

@@ -2,7 +2,7 @@
 infinity (unless a field says otherwise) and true/false where a number is meant."""
 import typing
 
-from pydantic import BaseModel, ConfigDict, field_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, field_validator
 
 
 class Strict(BaseModel):
@@ -23,3 +23,13 @@ def increasing(values, what):
     if any(b <= a for a, b in zip(values, values[1:])):
         raise ValueError(f"{what} must be strictly increasing")
     return values
+
+
+def _not_blank(value):
+    if not value.strip():
+        raise ValueError("an empty name")
+    return value
+
+
+Name = typing.Annotated[str, AfterValidator(_not_blank)]
+"""A name (of a stop, a scenario, a train of a fleet, a file's subject): text that is not empty."""

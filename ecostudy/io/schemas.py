@@ -9,14 +9,14 @@ from typing import Annotated, Literal, Optional, get_args
 
 from pydantic import Field, model_validator
 
-from ecostudy.io.schemabase import Strict, increasing as _increasing
+from ecostudy.io.schemabase import Name, Strict, increasing as _increasing
 from ecostudy.io.trainschema import (  # noqa: F401  (re-exported: schemas is the one place to look)
     Braking, Davis, EfficiencyTable, ForceTable, Regeneration, Traction, TrainFile, TunnelResistance)
 
 
 
 class Stop(Strict):
-    name: str
+    name: Name
     position_m: float = Field(ge=0)
 
 
@@ -64,7 +64,7 @@ MAX_ROWS = 20_000  # sections of one profile: a 2000 km line at 100 m; more is a
 
 
 class TrackFile(Strict):
-    name: str
+    name: Name
     source: str
     length_m: float = Field(gt=0, le=2_000_000, description="Track length [m], at most 2000 km.")
     stops: list[Stop] = Field(min_length=2, max_length=MAX_ROWS)
@@ -116,7 +116,7 @@ class Window(Strict):
 class TimetableStop(Strict):
     """A stop of the timetable, by name or by track position; times since the journey's start."""
 
-    stop: Optional[str] = None
+    stop: Optional[Name] = None
     position_m: Optional[float] = Field(None, ge=0, description="Instead of 'stop': the stop at this position.")
     arrival_s: Optional[float] = Field(None, ge=0)
     departure_s: Optional[float] = Field(None, ge=0)
@@ -148,7 +148,7 @@ class TimetableFile(Strict):
     Windows here are passing points between the stops with times since the journey's start
     (the TTOBench journey format, imported by ``ecostudy.imports``)."""
 
-    name: str
+    name: Name
     source: str = ""
     stops: list[TimetableStop] = Field(default_factory=list)
     supplement_percent: Optional[float] = Field(None, ge=0)
@@ -180,7 +180,7 @@ class Weights(Strict):
 class Scenario(Strict):
     """A named variant of the base case: other files, train fields overridden, other timing."""
 
-    name: str
+    name: Name
     train: Optional[str] = None
     track: Optional[str] = None
     train_overrides: dict[str, object] = Field(default_factory=dict,
@@ -216,21 +216,21 @@ class Library(Strict):
     """Every stop-to-stop segment of a TTOBench checkout's tracks, run by each of its trains."""
 
     path: str = Field(description="A TTOBench checkout (its tracks/ and trains/ folders), relative to the study.")
-    tracks: Optional[list[str]] = Field(None, description="Track ids (default: every track).")
-    trains: Optional[list[str]] = Field(None, description="Train ids (default: every train).")
+    tracks: Optional[list[Name]] = Field(None, min_length=1, description="Track ids (default: every track).")
+    trains: Optional[list[Name]] = Field(None, min_length=1, description="Train ids (default: every train).")
     min_speed_share: float = Field(0.6, ge=0, le=1, description="Pair a train with a track only when its top "
                                    "speed reaches this share of the line's highest limit (a metro train on an "
                                    "intercity line is another service); 0 pairs all.")
 
 
 class StudyFile(Strict):
-    name: str
+    name: Name
     track: Optional[str] = None
     train: Optional[str] = None
     library: Optional[Library] = Field(None, description="Instead of track/train/from/to: a TTOBench library sweep.")
     timetable: Optional[str] = None
-    from_stop: Optional[str] = Field(None, alias="from")
-    to_stop: Optional[str] = Field(None, alias="to")
+    from_stop: Optional[Name] = Field(None, alias="from")
+    to_stop: Optional[Name] = Field(None, alias="to")
     running_time_s: Optional[float] = Field(None, gt=0)
     supplement_percent: Optional[float] = Field(None, ge=0)
     window_s: Optional[tuple[float, float]] = None
@@ -288,7 +288,7 @@ class Substation(Strict):
 
 
 class FleetTrain(Strict):
-    name: str
+    name: Name
     offset_s: float = Field(ge=0, le=86400, description="Departure from the first stop after the first train [s], "
                             "within a day.")
 
@@ -300,10 +300,10 @@ STRATEGIES = get_args(Strategy)
 class NetworkStudyFile(Strict):
     """Several trains on one line and one substation: `ecostudy network STUDY.yaml`."""
 
-    name: str
+    name: Name
     track: str
     train: str
-    stops: Optional[list[str]] = Field(None, description="Stops served, in order (default: all).")
+    stops: Optional[list[Name]] = Field(None, description="Stops served, in order (default: all).")
     running_times_s: Optional[list[float]] = Field(None, description="Per segment [s].")
     supplement_percent: Optional[float] = Field(None, ge=0, description="Per segment, over its all-out time.")
     dwell_s: float = Field(20.0, ge=0)

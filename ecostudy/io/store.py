@@ -6,6 +6,7 @@ half-written one. Rows are keyed by the case hash (:func:`ecostudy.study.case_ke
 """
 import fcntl
 import json
+import os
 import sqlite3
 import time
 import warnings
@@ -33,13 +34,8 @@ class Store:
     def __init__(self, path):
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.lock = open(self.path.with_name(self.path.name + ".lock"), "w")
-        try:
-            fcntl.flock(self.lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            self.lock.close()
-            raise InputError(problem(self.path, "", "another ecostudy run is writing this store: wait for it to "
-                                     "finish, or give another --out"))
+        self.lock_path = self.path.with_name(self.path.name + ".lock")
+        self.lock = _locked(self.lock_path, self.path)
         try:
             self.conn = sqlite3.connect(self.path)
             self.conn.execute("PRAGMA journal_mode=WAL")
@@ -47,7 +43,7 @@ class Store:
             self.conn.commit()
             columns = [row[1] for row in self.conn.execute("PRAGMA table_info(cases)")]
         except sqlite3.DatabaseError as exc:
-            self.lock.close()
+            self._unlock()
             raise InputError(problem(self.path, "", f"not a readable ecostudy store ({exc}): move it away to start "
                                      "afresh (its finished cases are then computed again)"))
         if columns != COLUMNS:
@@ -88,5 +84,36 @@ class Store:
         return out
 
     def close(self):
+        """Close the database and remove the lock file (while still holding it: a run that opened the
+        old file before the removal sees it gone and takes the new one, :func:`_locked`)."""
         self.conn.close()
+        self._unlock()
+
+    def _unlock(self):
+        try:
+            if os.stat(self.lock_path).st_ino == os.fstat(self.lock.fileno()).st_ino:
+                self.lock_path.unlink()
+        except FileNotFoundError:
+            pass
         self.lock.close()
+
+
+def _locked(lock_path, store_path, attempts=5):
+    """The lock file opened and locked for this process alone; refused when another run holds it.
+    A lock taken on a file that a finishing run removed meanwhile is let go and taken again."""
+    for _ in range(attempts):
+        lock = open(lock_path, "a")
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            lock.close()
+            raise InputError(problem(store_path, "", "another ecostudy run is writing this store: wait for it to "
+                                     "finish, or give another --out"))
+        try:
+            if os.stat(lock_path).st_ino == os.fstat(lock.fileno()).st_ino:
+                return lock
+        except FileNotFoundError:
+            pass
+        lock.close()  # the file was removed by a run that just finished: take the new one
+    raise InputError(problem(store_path, "", "its lock file keeps changing: another ecostudy run is starting or "
+                             "finishing on this folder; try again"))

@@ -3,7 +3,7 @@ from typing import ClassVar, Literal, Optional
 
 from pydantic import Field, field_validator, model_validator
 
-from ecostudy.io.schemabase import Strict, increasing as _increasing
+from ecostudy.io.schemabase import Name, Strict, increasing as _increasing
 
 
 class ForceTable(Strict):
@@ -59,7 +59,7 @@ class Traction(Strict):
 
     table: Optional[ForceTable] = None
     max_force_kN: Optional[float] = Field(None, gt=0, le=100000)
-    max_power_kW: Optional[float] = Field(None, gt=0, le=1000000)
+    max_power_kW: Optional[float] = Field(None, gt=0)
 
     @model_validator(mode="after")
     def _one_form(self):
@@ -88,7 +88,7 @@ class Regeneration(Strict):
     """Regenerative (electric) braking limits; braking beyond them goes to friction brakes."""
 
     max_force_kN: Optional[float] = Field(None, gt=0, le=100000)
-    max_power_kW: Optional[float] = Field(None, gt=0, le=1000000)
+    max_power_kW: Optional[float] = Field(None, gt=0)
     efficiency: float = Field(0.8, ge=0.05, le=1, description="Wheel to line [-], a share (0.8), not per cent.")
     efficiency_map: Optional[EfficiencyTable] = Field(None, description="Efficiency over speed and force "
                                                       "instead of the constant (net energy and its check).")
@@ -130,7 +130,7 @@ class TunnelResistance(Strict):
 
 
 class TrainFile(Strict):
-    name: str
+    name: Name
     source: str = Field(description="Where the numbers come from.")
     mass_t: float = Field(ge=1, le=100000, description="Static mass Ms [t] (1 t to 100 000 t).")
     rotating_mass_factor: Optional[float] = Field(None, ge=0, description="M = Ms (1 + factor).")

@@ -242,4 +242,8 @@ def ttobench_train(doc, path, selector=None):
         "max_speed_kmh": top / units.KMH,
         **bounds,
     }, {"davis.a_N": "rolling resistance r0", "davis.b_N_per_mps": "rolling resistance r1",
-        "davis.c_N_per_mps2": "rolling resistance r2"}
+        "davis.c_N_per_mps2": "rolling resistance r2", "traction.max_force_kN": "max traction force",
+        "traction.max_power_kW": "max traction power", "regenerative_braking.max_force_kN": "max reg braking force",
+        "regenerative_braking.max_power_kW": "max reg braking power", "mass_t": "mass", "length_m": "length",
+        "max_speed_kmh": "max speed", "traction_efficiency": "efficiency traction",
+        "regenerative_braking.efficiency": "efficiency reg brake"}

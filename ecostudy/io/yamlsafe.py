@@ -10,6 +10,7 @@ import yaml
 
 MAX_DEPTH = 64              # nesting levels of a document
 MAX_FILE_BYTES = 50_000_000
+MAX_NODES = 5_000_000       # values of a YAML document once its aliases are expanded
 
 
 class DocumentError(ValueError):
@@ -60,8 +61,58 @@ def _checked(loader, node, tag):
 
 
 def load_yaml(text):
-    """Parse YAML text with :class:`_Loader`."""
-    return yaml.load(text, Loader=_Loader)  # noqa: S506  (a SafeLoader subclass)
+    """Parse YAML text with :class:`_Loader`: the node graph is checked (:func:`check_nodes`)
+    before any Python object is built from it."""
+    loader = _Loader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        check_nodes(node)
+        return loader.construct_document(node)
+    finally:
+        loader.dispose()
+
+
+def check_nodes(root, budget=MAX_NODES, max_depth=MAX_DEPTH):
+    """Refuse a YAML node graph whose aliases expand beyond ``budget`` values, that nests deeper
+    than ``max_depth`` or that refers to itself, without expanding anything.
+
+    An alias is a reference: ``&a [x, x]`` used nine times by ``&b [*a, ...]``, and so on nine
+    levels deep (the "billion laughs"), is a file of 600 bytes holding 9^9 values. Each node is
+    visited once; its expanded size and depth are memoised by identity, so the cost is the number
+    of distinct nodes, not the expanded size."""
+    sizes, depths, open_ = {}, {}, set()
+
+    def visit(node, level):
+        key = id(node)
+        if key in sizes:
+            if level + depths[key] > max_depth:
+                raise DocumentError(f"nested more than {max_depth} levels deep")
+            return sizes[key]
+        if key in open_:
+            raise DocumentError(f"an alias at line {node.start_mark.line + 1} refers to the value that contains "
+                                "it (a recursive document)")
+        if level > max_depth:
+            raise DocumentError(f"nested more than {max_depth} levels deep")
+        children = []
+        if isinstance(node, yaml.MappingNode):
+            children = [part for pair in node.value for part in pair]
+        elif isinstance(node, yaml.SequenceNode):
+            children = node.value
+        open_.add(key)
+        size, depth = 1, 0
+        for child in children:
+            size += visit(child, level + 1)
+            depth = max(depth, depths[id(child)] + 1)
+            if size > budget:
+                raise DocumentError(f"its aliases expand to more than {budget:,} values (an alias bomb?); "
+                                    "write the data out or use fewer nested aliases")
+        open_.discard(key)
+        sizes[key], depths[key] = size, depth
+        return size
+
+    visit(root, 0)
 
 
 def unique_keys(pairs):

@@ -17,6 +17,7 @@ from ecostudy.io import schemas
 from ecostudy.io.loaders import (
     chosen_stops,
     load_timetable,
+    load_study,
     read_document,
     timing_from_timetable,
     track_document,
@@ -60,6 +61,13 @@ def expand(path, skipped=None):
     if s.library is not None:
         units, left_out = library_units(s.library, base, path)
         units = [u + (schemas.Scenario(name=u[0]),) for u in units]
+        if not units:
+            why = ("every track and train pair is left out (" + "; ".join(
+                f"{x['track']}/{x['train']}: {x['reason']}" for x in left_out[:3])
+                + (f"; and {len(left_out) - 3} more" if len(left_out) > 3 else "")
+                + "): choose other tracks or trains, or lower min_speed_share") if left_out else \
+                "its tracks/ or trains/ folder holds no .json file"
+            raise InputError(problem(path, "library", f"no case to run: {why}"))
         if skipped is not None:
             skipped.extend(left_out)
     else:
@@ -99,3 +107,12 @@ def expand(path, skipped=None):
             cases.append(case)
     output = Path(s.output) if s.output else Path("out") / s.name
     return s, output, cases
+
+
+def load_checked_study(path):
+    """:func:`~ecostudy.io.loaders.load_study` (the base case), after every scenario and sweep value of
+    the file is checked as ``ecostudy run`` checks them (:func:`expand`): a command that runs only the
+    base case never leaves a bad scenario unnoticed."""
+    study = load_study(path)
+    expand(path)
+    return study

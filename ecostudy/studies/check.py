@@ -1,4 +1,6 @@
 """`ecostudy check`: the Pontryagin check of a saved result, as its own optimum or for another time."""
+from pathlib import Path
+
 from ecostudy.analysis.pontryagin import check_profile
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.core.errors import InputError, problem
@@ -19,4 +21,4 @@ def check_result(result_dir, running_time=None):
                                  f"optimum for arriving by {running_time:g} s"))
     objective = "net_energy" if saved.summary.get("objective") == "net_energy" else "energy"
     return check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, saved.trajectory,
-                         running_time, objective=objective)[0]
+                         running_time, objective=objective, where=Path(result_dir) / "profile.csv")[0]

@@ -35,6 +35,7 @@ from ecostudy.io import schemas
 from ecostudy.io.heavyhaulfile import HeavyhaulFile
 from ecostudy.io.loaders import (chosen_stops, consist_from_document, read_document, track_document,
                                  track_from_schema, validate)
+from ecostudy.io.tables import number_columns
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.studies.batch import outcome, stored_rows
 from ecostudy.studies.cases import case_key
@@ -44,12 +45,7 @@ def _reference(s, path, consist, track, from_stop, to_stop):
     r = s.reference
     if r.table is not None:
         where = path.parent / r.table
-        try:
-            table = pd.read_csv(where)
-        except (OSError, ValueError) as exc:
-            raise InputError(problem(path, "reference.table", f"cannot read {where} ({exc})"))
-        if not {"distance_m", "speed_kmh"} <= set(table.columns):
-            raise InputError(problem(where, "columns", f"expected distance_m and speed_kmh, got {list(table.columns)}"))
+        table = number_columns(where, ("distance_m", "speed_kmh"))  # text, NaN, a missing column: one line
         return table_reference(table["distance_m"], table["speed_kmh"], str(where))
     supplement = None if r.supplement_percent is None else r.supplement_percent / 100
     return optimal_reference(consist, track, from_stop, to_stop, r.running_time_s, supplement, r.points,

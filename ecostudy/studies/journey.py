@@ -13,6 +13,7 @@ driven energy-optimally, so the comparison is about the split alone. The whole-j
 the exact split the fronts approximate.
 """
 import heapq
+import math
 
 import numpy as np
 import pandas as pd
@@ -228,7 +229,7 @@ def timing_columns(plan, n, departure, arrival, run):
     d_lo, d_hi = plan.departure[n] or (None, None)
     departed = (d_lo is None or departure >= d_lo - 1e-3) and (d_hi is None or departure <= d_hi + 1e-3)
     return {"departure_s": departure, "arrival_s": arrival,
-            "arrival_window_s": f"[{'' if lo is None else f'{lo:g}'}, {'' if hi is None else f'{hi:g}'}]",
+            "arrival_earliest_s": math.nan if lo is None else lo, "arrival_latest_s": math.nan if hi is None else hi,
             "windows_kept": departed and all(w["kept"] for w in checks)}
 
 

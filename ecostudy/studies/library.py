@@ -31,7 +31,7 @@ def library_units(lib, base, path):
     trains = []
     for train_id, train_path in _files(root / "trains", lib.trains, path, "trains"):
         doc, aliases = train_document(train_path)
-        trains.append((train_id, doc, train_from_schema(validate(schemas.TrainFile, doc, train_path), train_path, aliases)))
+        trains.append((train_id, doc, train_from_schema(validate(schemas.TrainFile, doc, train_path, aliases), train_path, aliases)))
     units, skipped = [], []
     for track_id, track_path in tracks:
         doc = track_document(track_path)

@@ -79,7 +79,7 @@ def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, point
 
     Parameters
     ----------
-    count : int  Evenly spaced points including the all-out run (+5 % and +10 % are added).
+    count : int  Points of the front, the all-out run, +5 % and +10 % among them (:func:`front_supplements`).
     supplement_max : float  Largest supplement over the all-out time [-], e.g. 0.40.
     workers : int  Processes (contiguous warm-start chains); 1 solves in this process.
     warm : bool  Reuse one model per chain and start from the neighbour (False: cold, independent).
@@ -108,14 +108,22 @@ REPORTED_SUPPLEMENTS = (0.05, 0.10)  # operators ask what +5 % and +10 % buy: al
 
 
 def front_supplements(count, supplement_max):
-    """``count`` equally spaced supplements from 0 to ``supplement_max``, plus +5 % and +10 %.
+    """Exactly ``count`` supplements from 0 to ``supplement_max``, +5 % and +10 % among them.
 
     The front is strongly convex near the all-out time, so the reported savings are solved
-    points, never interpolated between distant ones.
+    points, never interpolated between distant ones: the evenly spaced points are thinned until
+    +5 % and +10 % fit in ``count`` (the largest gaps split if a point is still missing). With
+    fewer than four points only the reported supplements that fit are kept.
     """
-    even = np.linspace(0.0, supplement_max, count)
-    extra = [x for x in REPORTED_SUPPLEMENTS if x <= supplement_max + 1e-12]
-    return np.unique(np.round(np.concatenate([even, extra]), 12))
+    extra = [x for x in REPORTED_SUPPLEMENTS if x <= supplement_max + 1e-12][:max(0, count - 2)]
+    for n in range(count, 1, -1):
+        points = np.unique(np.round(np.concatenate([np.linspace(0.0, supplement_max, n), extra]), 12))
+        if len(points) <= count:
+            break
+    while len(points) < count:
+        gap = int(np.argmax(np.diff(points)))
+        points = np.insert(points, gap + 1, round((points[gap] + points[gap + 1]) / 2, 12))
+    return points
 
 
 def front_meta(table, case_names, points, count, workers, warm):
