@@ -2,6 +2,7 @@
 same in every plot), one line per split, axis limits from the data plotted, the energy flow of a
 run adding up, and figures written as PNG, SVG or PDF at a chosen resolution."""
 import re
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -118,6 +119,9 @@ def test_figures_written_in_each_format_at_the_resolution_asked(rokin, tmp_path)
     assert plots.energy_plot(rokin, tmp_path / "c.svg") is None  # the suffix gives the format
     assert (tmp_path / "c.svg").read_bytes().startswith(b"<?xml")
     assert style.output("SVG", 300).filename("speed") == "speed.svg"
+    (tmp_path / "energy.png").write_bytes(b"an earlier run's")
+    assert style.write(tmp_path, "energy", partial(plots.energy_plot, rokin), style.output("pdf", 72)) == "energy.pdf"
+    assert (tmp_path / "energy.pdf").read_bytes().startswith(b"%PDF") and not (tmp_path / "energy.png").exists()
     with pytest.raises(InputError, match="--format: 'jpeg'"):
         style.output("jpeg")
     with pytest.raises(InputError, match="--dpi"):

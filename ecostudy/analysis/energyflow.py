@@ -78,5 +78,9 @@ def energy_flow(segment, train, trajectory):
 
 
 def run_energy_flow(result):
-    """:func:`energy_flow` of an ``analysis.single.RunResult``."""
+    """:func:`energy_flow` of an ``analysis.single.RunResult`` (one solved here: it carries the SI
+    :class:`~ecostudy.core.types.Trajectory` the flow is computed from)."""
+    if result.trajectory is None:
+        raise ValueError("this run carries no SI trajectory (a run read back from its files): solve it again "
+                         "to see its energy flow")
     return energy_flow(result.segment, result.train, result.trajectory)

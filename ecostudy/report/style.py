@@ -8,12 +8,14 @@ within one figure: a named series keeps its colour, every other series gets one 
 of that figure has yet.
 """
 import colorsys
+from pathlib import Path
 from typing import NamedTuple
 
 from matplotlib import colormaps
 from matplotlib.colors import to_hex
 
 from ecostudy.core.errors import InputError
+from ecostudy.io.writers import atomic_write
 
 # Limits and references drawn behind the series.
 LIMIT = {
@@ -224,3 +226,22 @@ def save(fig, path, fmt=None, dpi=None):
     metadata = {"png": {"Software": None}, "svg": {"Date": None}, "pdf": {"CreationDate": None}}[out.fmt]
     fig.savefig(path, dpi=out.dpi, format=out.fmt, metadata=metadata)
     return None
+
+
+def names(stem):
+    """The file names a figure ``stem`` may have in any format (to remove an earlier run's)."""
+    return [f"{stem}.{fmt}" for fmt in FORMATS]
+
+
+def write(out_dir, stem, draw, out=Output()):
+    """Write the figure that ``draw(path, fmt=..., dpi=...)`` saves (any plot function with its
+    data bound, e.g. ``functools.partial(plots.speed_plot, result)``) as ``stem.<fmt>`` in
+    ``out_dir``, atomically, and remove the same figure in the other formats; returns the file
+    name written."""
+    out_dir = Path(out_dir)
+    name = out.filename(stem)
+    atomic_write(out_dir / name, lambda tmp: draw(tmp, fmt=out.fmt, dpi=out.dpi))
+    for other in names(stem):
+        if other != name:
+            (out_dir / other).unlink(missing_ok=True)
+    return name
