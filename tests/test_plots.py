@@ -145,12 +145,14 @@ def test_compare_draws_each_strategy_in_its_own_colour(regional_compare):
 
 def test_journey_draws_every_distribution_once_per_split(splits):
     ax = plots.journey_plot(splits, None, "journey").axes[0]
-    runs = [line for line in ax.get_lines() if len(line.get_xdata()) > 2]
-    assert len(runs) == 5 * 2  # one line per distribution and segment
-    legend = [line.get_label() for line in labelled(ax)]
-    assert len(legend) == 5 and all(label.split(":")[0] in splits for label in legend)
-    colours = hexes(labelled(ax))
-    assert len(set(colours)) == 5
+    lines = [line for line in ax.get_lines() if len(line.get_xdata()) > 2]
+    limits = [line for line in lines if line.get_color() == SPEED_LIMIT]
+    assert len(limits) == 2 and len(limit_lines(ax)) == 1  # each segment's limit, one legend entry
+    assert len(lines) - len(limits) == 5 * 2  # one line per distribution and segment
+    legend = [line for line in labelled(ax) if line.get_label() != plots.SPEED_LIMIT]
+    assert len(legend) == 5 and all(line.get_label().split(":")[0] in splits for line in legend)
+    colours = hexes(legend)
+    assert len(set(colours)) == 5 and SPEED_LIMIT not in colours
     stops = [line for line in ax.get_lines() if line.get_color() == style.LIMIT["stop"]]
     assert len(stops) == 2  # each segment's end drawn once, not once per distribution
     ends = sorted(float(line.get_xdata()[0]) for line in stops)
@@ -188,7 +190,7 @@ def test_network_substation_curves_and_trains_in_distinct_colours(network):
 def test_the_speed_limit_has_one_colour_in_every_plot(rokin, regional_compare, splits):
     _, outcomes, case = regional_compare
     figures = [plots.speed_plot(rokin, None), plots.profiles_plot([rokin], None),
-               plots.compare_plot(outcomes, case.segment, None)]
+               plots.compare_plot(outcomes, case.segment, None), plots.journey_plot(splits, None)]
     for fig in figures:
         lines = limit_lines(fig.axes[0])
         assert len(lines) == 1 and to_hex(lines[0].get_color()) == SPEED_LIMIT

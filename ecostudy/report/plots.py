@@ -169,7 +169,7 @@ def compare_plot(outcomes, segment, path, title="", fmt=None, dpi=None):
 
 def journey_plot(results, path, title="", passing=(), fmt=None, dpi=None):
     """Speed against distance along the line for each distribution of the running time, every
-    distribution in its own colour; ``passing``: (journey distance [m], highest speed [km/h] or
+    distribution in its own colour, with each segment's speed limit; ``passing``: (journey distance [m], highest speed [km/h] or
     None) of timing points, marked."""
     fig, ax = figure(figsize=(10, 4.5))
     fig.subplots_adjust(left=0.07, right=0.98, top=0.92, bottom=0.12)
@@ -186,9 +186,13 @@ def journey_plot(results, path, title="", passing=(), fmt=None, dpi=None):
             ax.plot(offset + p["position_m"], p["speed_kmh"], color=colour, lw=1.2,
                     ls=style.DASHES[n % len(style.DASHES)], label=label if i == 0 else None)
             offset += r.summary["distance_m"]
-    first = next(iter(results.values()), [])
-    for end in np.cumsum([r.summary["distance_m"] for r in first]):  # the stops: once, not per distribution
-        ax.axvline(end, color=style.LIMIT["stop"], lw=0.5)
+    start = 0.0
+    for i, r in enumerate(next(iter(results.values()), [])):  # limits and stops: once, not per distribution
+        x, y = _steps(r.segment.limit, r.segment.distance)
+        ax.step(start + x, to_kmh(y), where="post", color=style.LIMIT["speed limit"], lw=1.0,
+                label=SPEED_LIMIT if i == 0 else None)
+        start += r.summary["distance_m"]
+        ax.axvline(start, color=style.LIMIT["stop"], lw=0.5)
     _finish_speed_axes(ax, title, xlabel="distance along the journey [m]", legend_size=8)
     return _save(fig, path, fmt, dpi)
 
