@@ -11,9 +11,6 @@ import colorsys
 from pathlib import Path
 from typing import NamedTuple
 
-from matplotlib import colormaps
-from matplotlib.colors import to_hex
-
 from ecostudy.core.errors import InputError
 from ecostudy.io.writers import atomic_write
 
@@ -124,13 +121,19 @@ def colour(name):
 def sequence(count):
     """``count`` colours along a sequential map (viridis, its bright end left out): series in an
     order, e.g. the points of a front from fastest to slowest."""
+    from matplotlib import colormaps  # style.output and the colour tables need no matplotlib
     cmap = colormaps["viridis"]
-    return [to_hex(cmap(0.9 * i / max(count - 1, 1))) for i in range(count)]
+    return [_hex(cmap(0.9 * i / max(count - 1, 1))[:3]) for i in range(count)]
 
 
 def named(name):
     """True when ``name`` has a colour of its own (:func:`colour`)."""
     return any(name in table for table in _ORDER)
+
+
+def _hex(rgb):
+    """#rrggbb of an (r, g, b) triple in [0, 1]."""
+    return "#" + "".join(f"{round(255 * x):02x}" for x in rgb)
 
 
 def _generated():
@@ -139,7 +142,7 @@ def _generated():
     while True:
         hue = (0.13 + 0.618034 * n) % 1.0
         light = 0.42 if n % 2 == 0 else 0.62
-        yield to_hex(colorsys.hls_to_rgb(hue, light, 0.7))
+        yield _hex(colorsys.hls_to_rgb(hue, light, 0.7))
         n += 1
 
 
