@@ -1,14 +1,21 @@
-"""Plots: speed against distance with limits, the gradient profile and the handle beneath."""
-import matplotlib
+"""Plots: speed against distance with limits, the gradient profile and the handle beneath; fronts,
+comparisons, journeys, networks and a run's energy flow. Every colour comes from
+:mod:`ecostudy.report.style`; every plot takes ``fmt`` (png, svg, pdf) and ``dpi``."""
 import numpy as np
 from matplotlib.figure import Figure
 
+from ecostudy.analysis.energyflow import run_energy_flow
 from ecostudy.core.units import PERMILLE, to_kmh, to_kwh
+from ecostudy.network import circuit
+from ecostudy.network.fleet import step_arrays
+from ecostudy.report import style
+
+SPEED_LIMIT = "speed limit (train length)"
 
 
 def figure(nrows=1, ncols=1, figsize=None, **kwargs):
     """A figure and its axes, as ``pyplot.subplots`` gives them, without pyplot: no backend and no
-    global figure registry (pyplot and pylab cost about a second of start-up; issue 15)."""
+    global figure registry (pyplot and pylab cost about a second of start-up)."""
     fig = Figure(figsize=figsize)
     return fig, fig.subplots(nrows, ncols, **kwargs)
 
@@ -20,153 +27,194 @@ def _steps(profile, distance):
     return x, y
 
 
-def _save(fig, path):
-    """Write ``fig`` as PNG to ``path`` and close it; with no path, return it (a notebook shows it)."""
-    if path is None:
-        return fig
-    fig.savefig(path, dpi=110, format="png")
-    return None
+def _save(fig, path, fmt=None, dpi=None):
+    """Write ``fig`` to ``path`` (``style.save``: png unless ``fmt`` or the path's suffix says
+    otherwise); with no path, return it (a notebook shows it)."""
+    return style.save(fig, path, fmt, dpi)
 
 
-def _finish_speed_axes(fig, ax, path, title, xlabel="distance from departure [m]", legend_size=7):
-    """Labels, grid, legend and title of a speed-against-distance axis; save and close (or return)."""
+def _speed_limit(ax, segment):
+    """The speed limit of ``segment`` as steps, in the limit colour of every plot."""
+    x, y = _steps(segment.limit, segment.distance)
+    ax.step(x, to_kmh(y), where="post", color=style.LIMIT["speed limit"], lw=1.2, label=SPEED_LIMIT)
+
+
+def _finish_speed_axes(ax, title, xlabel="distance from departure [m]", legend_size=7):
+    """Labels, grid, legend and title of a speed-against-distance axis."""
     ax.set_xlabel(xlabel)
     ax.set_ylabel("speed [km/h]")
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=legend_size, loc="lower center", ncol=2 if len(ax.get_lines()) > 5 else 1)
+    ax.legend(fontsize=legend_size, loc="lower center", ncol=2 if len(ax.get_legend_handles_labels()[1]) > 5 else 1)
     ax.set_title(title, fontsize=10)
-    return _save(fig, path)
 
 
-def speed_plot(result, path):
+def _advice_regime(row):
+    """The regime name of a DAS advice row (its shading beneath the run)."""
+    if not np.isfinite(row.handle):
+        return "cruise"
+    if row.mode in ("coast", "full service braking"):
+        return row.mode
+    return "traction" if row.handle > 0 else "braking"
+
+
+def speed_plot(result, path, fmt=None, dpi=None):
+    """Speed against distance of a run with its speed limit, the gradient and the handle beneath
+    (and the driver advice, re-simulated, when the run has one)."""
     seg, prof, s = result.segment, result.profile, result.summary
     fig, (ax, axg, axu) = figure(3, 1, figsize=(9, 7), sharex=True,
                                        gridspec_kw={"height_ratios": [3, 1, 1], "hspace": 0.12})
     fig.subplots_adjust(left=0.08, right=0.98, top=0.95, bottom=0.07)  # tight_layout costs 40 % of the plot
-    x, y = _steps(seg.limit, seg.distance)
-    ax.step(x, to_kmh(y), where="post", color="tab:red", lw=1.2, label="speed limit (train length)")
-    ax.plot(prof["position_m"], prof["speed_kmh"], color="tab:blue", lw=1.6, label="optimal speed")
+    _speed_limit(ax, seg)
+    ax.plot(prof["position_m"], prof["speed_kmh"], color=style.colour("traction"), lw=1.6, label="optimal speed")
     if result.trace is not None:
-        ax.plot(result.trace.x, to_kmh(result.trace.v), color="k", lw=0.8, ls="--", label="re-simulated")
+        ax.plot(result.trace.x, to_kmh(result.trace.v), color=style.colour("re-simulated"), lw=0.8, ls="--",
+                label="re-simulated")
     if result.das is not None:
         advice, outcome = result.das.advice, result.das.driven
-        ax.plot(outcome.trace.x, to_kmh(outcome.trace.v), color="tab:orange", lw=1.1,
+        ax.plot(outcome.trace.x, to_kmh(outcome.trace.v), color=style.colour("DAS advice"), lw=1.1,
                 label=f"driver advice ({s['das']['method']}), simulated")
-        colours = {"coast": "tab:gray", "full service braking": "tab:red"}
         for row in advice.itertuples():
-            cruise = not np.isfinite(row.handle)
-            colour = "tab:blue" if cruise else colours.get(row.mode, "tab:green" if row.handle > 0 else "tab:pink")
-            alpha = 0.3 if cruise else 0.15 + 0.25 * abs(row.handle)
-            axu.axvspan(row.start_position_m, row.end_position_m, color=colour, alpha=alpha)
+            regime = _advice_regime(row)
+            alpha = 0.3 if regime == "cruise" else 0.15 + 0.25 * abs(row.handle)
+            axu.axvspan(row.start_position_m, row.end_position_m, color=style.REGIME[regime], alpha=alpha)
     ax.set_ylabel("speed [km/h]")
     ax.set_ylim(bottom=0)
     ax.legend(loc="lower center", fontsize=8)
     ax.set_title(f"{s['train']} - {s['from']} to {s['to']}: {s['running_time_s']:.1f} s, "
                  f"{s['traction_energy_kWh']:.2f} kWh traction ({s['objective']})", fontsize=10)
     x, y = _steps(seg.gradient, seg.distance)
-    axg.step(x, y / PERMILLE, where="post", color="tab:brown")
-    axg.axhline(0, color="grey", lw=0.5)
+    axg.step(x, y / PERMILLE, where="post", color=style.LIMIT["gradient"])
+    axg.axhline(0, color=style.LIMIT["stop"], lw=0.5)
     axg.set_ylabel("gradient [‰]")
-    axu.step(prof["position_m"], prof["handle"], where="post", color="tab:green")
+    axu.step(prof["position_m"], prof["handle"], where="post", color=style.colour("handle"))
     axu.set_ylim(-1.1, 1.1)
     axu.set_ylabel("handle u")
     axu.set_xlabel("distance from departure [m]")
     for a in (ax, axg, axu):
         a.grid(alpha=0.3)
-    return _save(fig, path)
+    return _save(fig, path, fmt, dpi)
 
 
-def pareto_plot(table, path, title="", weighted=None):
+def front_limits(times, margin=0.03):
+    """x-axis limits [s] that show a front's running times with a margin on each side."""
+    lo, hi = float(np.min(times)), float(np.max(times))
+    pad = margin * max(hi - lo, 1e-3 * max(abs(hi), 1.0))
+    return lo - pad, hi + pad
+
+
+def pareto_plot(table, path, title="", weighted=None, fmt=None, dpi=None):
     """Traction and net energy against running time, with the marginal saving beneath;
-    ``weighted`` (optional table) adds the weighted-sum points."""
+    ``weighted`` (optional table) adds the weighted-sum points. The time axis spans the front's
+    running times: weighted points beyond them are counted in the legend, not drawn."""
     fig, (ax, axm) = figure(2, 1, figsize=(8, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
     fig.subplots_adjust(left=0.13, right=0.97, top=0.85, bottom=0.09, hspace=0.1)
     fig.suptitle(title, fontsize=10)
     t = table["running_time_s"]
-    ax.plot(t, table["traction_energy_kWh"], "o-", color="tab:blue", label="traction (at the wheel)")
-    ax.plot(t, table["net_energy_kWh"], "s--", color="tab:green", label="net electrical (regeneration credited)")
+    ax.plot(t, table["traction_energy_kWh"], "o-", color=style.colour("traction"), label="traction (at the wheel)")
+    ax.plot(t, table["net_energy_kWh"], "s--", color=style.colour("net energy"),
+            label="net electrical (regeneration credited)")
+    lo, hi = front_limits(t)
     if "das_traction_energy_kWh" in table and table["das_traction_energy_kWh"].notna().any():
-        ax.plot(table["das_running_time_s"], table["das_traction_energy_kWh"], "^:", color="tab:orange",
+        ax.plot(table["das_running_time_s"], table["das_traction_energy_kWh"], "^:", color=style.colour("DAS advice"),
                 label=f"DAS {table.attrs.get('das_method', '')} (advice re-simulated, traction)")
+        lo, hi = front_limits(np.concatenate([t, table["das_running_time_s"].dropna()]))
     if weighted is not None and len(weighted):
-        ax.plot(weighted["running_time_s"], weighted["traction_energy_kWh"], "x", color="tab:red", ms=8, mew=2,
-                label="weighted sum w_t T + w_e E/m (traction)")
+        wt = weighted["running_time_s"]
+        inside = (wt >= lo) & (wt <= hi)
+        beyond = int((~inside).sum())
+        ax.plot(wt[inside], weighted["traction_energy_kWh"][inside], "x", color=style.colour("weighted sum"),
+                ms=8, mew=2, label="weighted sum w_t T + w_e E/m (traction)"
+                + (f"; {beyond} point{'s' * (beyond > 1)} beyond the front's times not shown" if beyond else ""))
+    ax.set_xlim(lo, hi)
     ax.set_ylabel("energy [kWh]")
     ax.set_ylim(bottom=0)
     ax.legend(fontsize=8)
     top = ax.secondary_xaxis("top", functions=(lambda x: 100 * (x / t.iloc[0] - 1), lambda p: t.iloc[0] * (1 + p / 100)))
     top.set_xlabel("supplement over all-out [%]", fontsize=8)
-    axm.plot(t, table["marginal_saving_kWh_per_s"], ".-", color="tab:red")
+    axm.plot(t, table["marginal_saving_kWh_per_s"], ".-", color=style.colour("marginal saving"))
     axm.set_ylabel("saving per\nextra second\n[kWh/s]", fontsize=8)
     axm.set_xlabel("running time [s]")
     for a in (ax, axm):
         a.grid(alpha=0.3)
-    return _save(fig, path)
+    return _save(fig, path, fmt, dpi)
 
 
-def profiles_plot(results, path, title=""):
+def profiles_plot(results, path, title="", fmt=None, dpi=None):
     """Speed against distance for a few points of a front, with the speed limit."""
     fig, ax = figure(figsize=(9, 4.5))
     fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
-    seg = results[0].segment
-    x, y = _steps(seg.limit, seg.distance)
-    ax.step(x, to_kmh(y), where="post", color="tab:red", lw=1.2, label="speed limit (train length)")
-    for r, colour in zip(results, matplotlib.colormaps["viridis"](np.linspace(0, 0.9, len(results)))):
+    _speed_limit(ax, results[0].segment)
+    for r, colour in zip(results, style.sequence(len(results))):
         p = r.profile
         ax.plot(p["position_m"], p["speed_kmh"], color=colour, lw=1.3,
                 label=f"{r.summary['running_time_s']:.1f} s, {r.summary['traction_energy_kWh']:.2f} kWh")
-    return _finish_speed_axes(fig, ax, path, title)
+    _finish_speed_axes(ax, title)
+    return _save(fig, path, fmt, dpi)
 
 
-def compare_plot(outcomes, segment, path, title=""):
-    """Simulated speed against distance of each strategy, with the speed limit."""
+def compare_plot(outcomes, segment, path, title="", fmt=None, dpi=None):
+    """Simulated speed against distance of each strategy, with the speed limit; each strategy in
+    its own colour (``style.STRATEGY``) and the line styles cycled, so overlapping runs show."""
     fig, ax = figure(figsize=(9, 4.5))
     fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
-    x, y = _steps(segment.limit, segment.distance)
-    ax.step(x, to_kmh(y), where="post", color="tab:red", lw=1.2, label="speed limit (train length)")
-    styles = [("tab:blue", "-"), ("black", "-"), ("tab:green", "--"), ("tab:orange", ":"), ("tab:purple", "-.")]
-    for o, (colour, dash) in zip(outcomes, styles * 2):
-        ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.4, color=colour, ls=dash,
+    _speed_limit(ax, segment)
+    palette = style.Palette([o.name for o in outcomes])
+    for i, o in enumerate(outcomes):
+        ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.4, color=palette(o.name), ls=style.DASHES[i % len(style.DASHES)],
                 label=f"{o.name}: {o.trace.arrival_time:.1f} s, {to_kwh(o.trace.traction_energy):.2f} kWh")
-    return _finish_speed_axes(fig, ax, path, title)
+    _finish_speed_axes(ax, title)
+    return _save(fig, path, fmt, dpi)
 
 
-def journey_plot(results, path, title="", passing=()):
-    """Speed against distance along the line for each distribution of the running time;
-    ``passing``: (journey distance [m], highest speed [km/h] or None) of timing points, marked."""
+def journey_plot(results, path, title="", passing=(), fmt=None, dpi=None):
+    """Speed against distance along the line for each distribution of the running time, every
+    distribution in its own colour, with each segment's speed limit; ``passing``: (journey distance [m], highest speed [km/h] or
+    None) of timing points, marked."""
     fig, ax = figure(figsize=(10, 4.5))
     fig.subplots_adjust(left=0.07, right=0.98, top=0.92, bottom=0.12)
     for x, cap in passing:
-        ax.axvline(x, color="tab:red", lw=0.8, ls=":")
+        ax.axvline(x, color=style.LIMIT["timing point"], lw=0.8, ls=":")
         if cap is not None:
-            ax.plot([x - 30, x + 30], [cap, cap], color="tab:red", lw=2)
-    for (name, runs), colour in zip(results.items(), ("tab:blue", "tab:orange", "tab:green")):
-        offset = 0.0
+            ax.plot([x - 30, x + 30], [cap, cap], color=style.LIMIT["speed limit"], lw=2)
+    palette = style.Palette(list(results))
+    for n, (name, runs) in enumerate(results.items()):
+        offset, colour = 0.0, palette(name)
+        label = f"{name}: {sum(r.summary['traction_energy_kWh'] for r in runs):.2f} kWh"
         for i, r in enumerate(runs):
             p = r.profile
-            label = f"{name}: {sum(x.summary['traction_energy_kWh'] for x in runs):.2f} kWh" if i == 0 else None
-            ax.plot(offset + p["position_m"], p["speed_kmh"], color=colour, lw=1.2, label=label)
+            ax.plot(offset + p["position_m"], p["speed_kmh"], color=colour, lw=1.2,
+                    ls=style.DASHES[n % len(style.DASHES)], label=label if i == 0 else None)
             offset += r.summary["distance_m"]
-            ax.axvline(offset, color="grey", lw=0.5)
-    return _finish_speed_axes(fig, ax, path, title, xlabel="distance along the journey [m]", legend_size=8)
+    start = 0.0
+    for i, r in enumerate(next(iter(results.values()), [])):  # limits and stops: once, not per distribution
+        x, y = _steps(r.segment.limit, r.segment.distance)
+        ax.step(start + x, to_kmh(y), where="post", color=style.LIMIT["speed limit"], lw=1.0,
+                label=SPEED_LIMIT if i == 0 else None)
+        start += r.summary["distance_m"]
+        ax.axvline(start, color=style.LIMIT["stop"], lw=0.5)
+    _finish_speed_axes(ax, title, xlabel="distance along the journey [m]", legend_size=8)
+    return _save(fig, path, fmt, dpi)
 
 
-def network_plot(fleet, outcome, path, title=""):
+def network_plot(fleet, outcome, path, title="", fmt=None, dpi=None):
     """Speeds and pantograph powers against time of every train (independent and joint, if
-    run), and the substation power of every strategy."""
+    run), and the substation power of every strategy: trains and strategies each in a colour no
+    other curve of the figure has, the strategies' line styles cycled."""
     shown = [n for n in ("independent", "joint") if n in outcome] or list(outcome)[:1]
     rows = 2 * len(shown) + 1
     fig, axes = figure(rows, 1, figsize=(10, 2.4 * rows), sharex=True)
     fig.subplots_adjust(left=0.08, right=0.98, top=0.95, bottom=0.06, hspace=0.25)
     fig.suptitle(title, fontsize=10)
+    palette = style.Palette(list(outcome) + list(fleet.names))
     for n, name in enumerate(shown):
         speed, power = axes[2 * n], axes[2 * n + 1]
         for i, (legs, runs) in enumerate(zip(fleet.legs, outcome[name]["runs"])):
+            colour = palette(fleet.names[i])
             for k, (leg, run) in enumerate(zip(legs, runs)):
                 t = (leg.start + np.arange(leg.steps + 1)) * fleet.dt
-                speed.plot(t, to_kmh(run.v), color=f"C{i}", lw=1, label=fleet.names[i] if k == 0 else None)
-                power.step(t[:-1], run.p / 1e6, where="post", color=f"C{i}", lw=0.8)
+                speed.plot(t, to_kmh(run.v), color=colour, lw=1, label=fleet.names[i] if k == 0 else None)
+                power.step(t[:-1], run.p / 1e6, where="post", color=colour, lw=0.8)
         speed.set_ylabel(f"{name}\nspeed [km/h]", fontsize=8)
         power.set_ylabel(f"{name}\npantograph [MW]", fontsize=8)
         speed.legend(fontsize=7, loc="upper right")
@@ -175,10 +223,66 @@ def network_plot(fleet, outcome, path, title=""):
     ax = axes[-1]
     for j, (name, res) in enumerate(outcome.items()):
         steps = res["steps"]
-        ax.plot(steps["time_s"], steps["substation_kW"] / 1e3, lw=0.8, color=f"C{j}",
-                label=f"{name} ({res['totals']['substation_kWh']:.2f} kWh)")
+        ax.plot(steps["time_s"], steps["substation_kW"] / 1e3, lw=0.9, color=palette(name),
+                ls=style.DASHES[j % len(style.DASHES)], label=f"{name} ({res['totals']['substation_kWh']:.2f} kWh)")
     ax.set_ylabel("substation\npower [MW]", fontsize=8)
     ax.set_xlabel("time [s]")
-    ax.legend(fontsize=7, loc="upper right")
+    ax.legend(fontsize=7, loc="upper right", ncol=2 if len(outcome) > 4 else 1)
     ax.grid(alpha=0.3)
-    fig.savefig(path, dpi=100, format="png")
+    return _save(fig, path, fmt, dpi)
+
+
+def supply_plot(fleet, outcome, path, title="", fmt=None, dpi=None):
+    """Substation bus voltage [V] and current [A] against time of every strategy, from the
+    circuit of eq. 7.8 (``network.circuit.solve_steps``) on each strategy's runs, with the
+    nominal and highest voltage of the supply."""
+    fig, (axv, axi) = figure(2, 1, figsize=(10, 5.5), sharex=True)
+    fig.subplots_adjust(left=0.09, right=0.98, top=0.93, bottom=0.09, hspace=0.12)
+    fig.suptitle(title, fontsize=10)
+    palette, supply = style.Palette(list(outcome)), fleet.supply
+    for j, (name, res) in enumerate(outcome.items()):
+        flows = circuit.solve_steps(supply, *step_arrays(fleet, res["runs"]))
+        t = np.arange(fleet.steps) * fleet.dt
+        dash = style.DASHES[j % len(style.DASHES)]
+        axv.plot(t, flows["bus_voltage_V"], color=palette(name), lw=0.9, ls=dash, label=name)
+        axi.plot(t, flows["substation_current_A"], color=palette(name), lw=0.9, ls=dash, label=name)
+    for v, what in ((supply.voltage, "nominal"), (supply.max_voltage, "highest (regeneration cut-off)")):
+        axv.axhline(v, color=style.LIMIT["voltage limit"], lw=0.8, ls=":", label=f"{what} {v:g} V")
+    axv.set_ylabel("substation bus\nvoltage [V]", fontsize=8)
+    axi.set_ylabel("substation\ncurrent [A]", fontsize=8)
+    axi.set_xlabel("time [s]")
+    axi.set_ylim(bottom=0)
+    for ax in (axv, axi):
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right", ncol=2 if len(outcome) > 4 else 1)
+    return _save(fig, path, fmt, dpi)
+
+
+def energy_plot(result, path, fmt=None, dpi=None):
+    """A run's energy flow as a waterfall [kWh] (``analysis.energyflow``): drawn from the line,
+    the losses in traction, the traction at the wheel, then what it becomes (resistance,
+    potential and kinetic energy, regeneration returned, braking dissipated), and the net energy
+    from the line."""
+    flow, s = run_energy_flow(result), result.summary
+    bars = [("drawn from the line", 0.0, flow.drawn), ("losses in traction", flow.traction, flow.traction_losses),
+            ("traction at the wheel", 0.0, flow.traction)]
+    level = flow.traction
+    for name, value in flow.parts().items():
+        level -= value
+        bars.append((name, level, value))
+    bars.append(("net from the line", 0.0, flow.net))
+    fig, ax = figure(figsize=(9, 4.8))
+    fig.subplots_adjust(left=0.09, right=0.98, top=0.88, bottom=0.25)
+    for i, (name, bottom, value) in enumerate(bars):
+        kwh, base = to_kwh(value), to_kwh(bottom)
+        ax.bar(i, abs(kwh), bottom=min(base, base + kwh), color=style.ENERGY[name], width=0.7, label=name)
+        ax.annotate(f"{kwh:.2f}", (i, max(base, base + kwh)), ha="center", va="bottom", fontsize=7,
+                    xytext=(0, 2), textcoords="offset points")
+    ax.axhline(0, color=style.LIMIT["stop"], lw=0.5)
+    ax.set_xticks(range(len(bars)), [b[0] for b in bars], rotation=30, ha="right", fontsize=8)
+    ax.set_ylabel("energy [kWh]")
+    ax.grid(alpha=0.3, axis="y")
+    ax.set_title(f"{s['train']} - {s['from']} to {s['to']}: energy flow\nbalance residual "
+                 f"{to_kwh(flow.residual):+.4f} kWh ({100 * flow.residual / max(flow.traction, 1e-9):+.3f} % of "
+                 "the traction at the wheel)", fontsize=9)
+    return _save(fig, path, fmt, dpi)
