@@ -127,9 +127,16 @@ def only_one(**options):
         raise InputError(problem("command line", "/".join(given), "give only one: each sets the running time"))
 
 
-def listed(out_dir, names):
-    """``DIR/ (a, b)``: the files of ``names`` that this run left in ``out_dir`` (a plot skipped
-    with ``--no-plot`` is not listed)."""
+def listed(out_dir, names=()):
+    """``DIR/ (a, b)``: the files this run left in ``out_dir``: its tables and files as its
+    ``summary.json`` lists them, else those of ``names`` that exist (a figure skipped with
+    ``--no-plot`` is not listed)."""
+    import json
+    try:
+        summary = json.loads((Path(out_dir) / "summary.json").read_text())
+        names = list(dict.fromkeys([*summary["tables"].values(), *summary["files"]]))
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
     return f"{out_dir}/ ({', '.join(n for n in names if (Path(out_dir) / n).is_file())})"
 
 

@@ -7,23 +7,24 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import app, flag_rows, guarded
+from ecostudy.cli.app import app, flag_rows, guarded, listed
 
 
-def _network(study_path, out, no_plot, workers=1):
+def _network(study_path, out, no_plot, workers=1, figures=("png", None)):
+    from ecostudy.report.style import output
+    figures = output(*figures)
     from ecostudy.io.loaders import load_network_study
     from ecostudy.io.writers import check_output_dir
     from ecostudy.report.files import write_network
     from ecostudy.studies.network import run_network
     st = load_network_study(study_path)
     out_dir = check_output_dir(Path(out) if out else st.output)
-    table = write_network(run_network(st, workers, progress=typer.echo), st, out_dir, plot=not no_plot)
+    table = write_network(run_network(st, workers, progress=typer.echo), st, out_dir, plot=not no_plot, out=figures)
     cols = ["strategy", "status", "substation_kWh", "saving_vs_independent_pct", "traction_input_kWh", "regen_used_kWh",
             "regen_lost_kWh", "line_losses_kWh", "unserved_kWh", "balance_error_pct", "min_separation_m",
             "all_verified"]
     typer.echo(table[[c for c in cols if c in table]].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
-    typer.echo(f"outputs {out_dir}/ (network_substation.csv, network_trains.csv, network_steps_*.csv, network.json, "
-               "summary.json" + ("" if no_plot else ", network.png") + ")")
+    typer.echo("outputs " + listed(out_dir))
     return table
 
 
@@ -31,11 +32,13 @@ def _network(study_path, out, no_plot, workers=1):
 def network(
     study: Path = typer.Argument(..., help="Network study file (YAML)."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's output)."),
-    no_plot: bool = typer.Option(False, "--no-plot", help="Skip network.png."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip the figures."),
+    fig_format: str = typer.Option("png", "--format", help="Figure format: png, svg or pdf."),
+    dpi: float = typer.Option(110.0, help="Figure resolution [dots per inch] (raster images)."),
     workers: int = typer.Option(1, min=1, help="Processes: the segments' first runs, then the strategies in "
                                 "parallel (at least twice as many as workers), else one train's legs."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""
-    table = guarded(debug, _network, study, out, no_plot, workers)
+    table = guarded(debug, _network, study, out, no_plot, workers, (fig_format, dpi))
     flag_rows(table, "strategy", "network_substation.csv")

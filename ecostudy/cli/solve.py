@@ -46,11 +46,13 @@ def _report(result, out_dir):
             bound = "none" if d["bound_kWh"] is None else f"{d['bound_kWh']:.3f} kWh (gap {d['gap_pct']:.2f} %)"
             typer.echo(f"                    MINLP search {d['search_s']:.1f} s, {d['oa_iterations']} OA iterations, "
                        f"bound {bound}")
-    typer.echo(f"  outputs           {listed(out_dir, ('profile.csv', 'summary.json', 'advice.csv', 'speed.png'))}")
+    typer.echo(f"  outputs           {listed(out_dir)}")
 
 
 def _solve(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights,
-           points, out, no_plot, das=None, das_time_limit=60.0):
+           points, out, no_plot, das=None, das_time_limit=60.0, figures=("png", None)):
+    from ecostudy.report.style import output
+    figures = output(*figures)
     check_options(time=time, supplement=supplement, points=points, das_time_limit=das_time_limit)
     only_one(time=time, supplement=supplement, window=window)
     if objective is not None and objective.value == "time" and any(x is not None for x in (time, supplement, window)):
@@ -107,7 +109,7 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
                                      "windows on the way yet; use --das round"))
         result.das = das_run(result, das.value, time_limit=das_time_limit)
         result.summary["das"] = result.das.summary
-    write_run(result, out_dir, plot=not no_plot)
+    write_run(result, out_dir, plot=not no_plot, out=figures)
     paths = (st_paths if study is not None else (Path(track), Path(train)))
     write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
                                          "track_sha256": file_digest(paths[0]), "train_sha256": file_digest(paths[1]),
@@ -130,7 +132,9 @@ def solve(
     weights: Optional[str] = typer.Option(None, help="Mixed objective weights 'w_t,w_e' (Yazhemsky 2017, eq. 4.1)."),
     points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 1000)."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
-    no_plot: bool = typer.Option(False, "--no-plot", help="Skip speed.png."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip the figures (speed, energy flow)."),
+    fig_format: str = typer.Option("png", "--format", help="Figure format: png, svg or pdf."),
+    dpi: float = typer.Option(110.0, help="Figure resolution [dots per inch] (raster images)."),
     das: Optional[DasMethod] = typer.Option(
         None, help="Also driver advice: round (nearest handle level), phases (optimal phase lengths, "
                    "Farooqi 2018, Ch. 5) or minlp (mode per phase chosen by binaries)."),
@@ -139,7 +143,7 @@ def solve(
 ):
     """Energy-optimal (or all-out) run between two stops, verified by re-simulation."""
     result = guarded(debug, _solve, study, track, train, time, supplement, window, from_stop, to_stop,
-                     objective, weights, points, out, no_plot, das, das_time_limit)
+                     objective, weights, points, out, no_plot, das, das_time_limit, (fig_format, dpi))
     if not result.ok:
         typer.secho("flagged: the result is not verified optimal (see summary.json)", fg=typer.colors.YELLOW, err=True)
         raise typer.Exit(1)

@@ -33,7 +33,9 @@ def _case_from(study, track, train, from_stop, to_stop, points):
 
 
 def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, points, workers, cold, out, no_plot,
-            weighted=0, das=None, das_time_limit=60.0):
+            weighted=0, das=None, das_time_limit=60.0, figures=("png", None)):
+    from ecostudy.report.style import output
+    figures = output(*figures)
     check_options(count=count, supplement_max=supplement_max, points=points, workers=workers, weighted=weighted,
                   das_time_limit=das_time_limit)
     from ecostudy.core import units
@@ -56,7 +58,7 @@ def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, poin
         table = das_front(table, results, das.value, k, workers, das_time_limit)
         meta["das"] = das_meta(table)
     extra = weighted_points(trk, trn, f, t, count=weighted, points=k) if weighted else None
-    write_front(table, results, out_dir, meta, plot=not no_plot, weighted=extra)
+    write_front(table, results, out_dir, meta, plot=not no_plot, weighted=extra, out=figures)
     cols = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
             "marginal_saving_kWh_per_s", "coasting_share_pct", "regime_sequence"]
     if das is not None:
@@ -70,8 +72,7 @@ def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, poin
                f"+10 % saves {meta['saving_at_10_pct_supplement_pct']:.1f} % of the all-out traction energy")
     typer.echo(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
                f"{meta['all_verified']}; {meta['wall_s']:.1f} s; outputs "
-               + listed(out_dir, ("pareto.csv", "pareto_weighted.csv", "pareto.json", "summary.json", "pareto.png",
-                                   "pareto_profiles.png")))
+               + listed(out_dir))
     return meta
 
 
@@ -91,19 +92,23 @@ def pareto(
     das: Optional[DasMethod] = typer.Option(None, help="Also the DAS front: round | phases | minlp at every point."),
     das_time_limit: float = typer.Option(60.0, help="Time limit of each MINLP search [s] (--das minlp)."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
-    no_plot: bool = typer.Option(False, "--no-plot", help="Skip the PNG files."),
+    no_plot: bool = typer.Option(False, "--no-plot", help="Skip the figures."),
+    fig_format: str = typer.Option("png", "--format", help="Figure format: png, svg or pdf."),
+    dpi: float = typer.Option(110.0, help="Figure resolution [dots per inch] (raster images)."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS."""
     meta = guarded(debug, _pareto, study, track, train, from_stop, to_stop, count, supplement_max, points,
-                   workers, cold, out, no_plot, weighted, das, das_time_limit)
+                   workers, cold, out, no_plot, weighted, das, das_time_limit, (fig_format, dpi))
     if not (meta["monotone"] and meta["all_verified"] and meta["all_optimal"]):
         typer.secho("flagged: a point is not optimal or not verified, or the front is not monotone",
                     fg=typer.colors.YELLOW, err=True)
         raise typer.Exit(1)
 
 
-def _compare(study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot):
+def _compare(study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot, figures=("png", None)):
+    from ecostudy.report.style import output
+    figures = output(*figures)
     check_options(time=time, supplement=supplement, points=points)
     only_one(time=time, supplement=supplement)
     from ecostudy.core import units
@@ -123,9 +128,10 @@ def _compare(study, track, train, from_stop, to_stop, time, supplement, points, 
     check_output_dir(out_dir, ("compare.csv", "compare.png"))
     table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000)
     write_compare(table, outcomes, case.segment, out_dir,
-                  f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s", plot=not no_plot)
+                  f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s", plot=not no_plot,
+                  out=figures)
     typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
-    typer.echo("outputs " + listed(out_dir, ("compare.csv", "summary.json", "compare.png")))
+    typer.echo("outputs " + listed(out_dir))
     return table
 
 
@@ -141,6 +147,8 @@ def compare_command(
     points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 1000)."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip compare.png."),
+    fig_format: str = typer.Option("png", "--format", help="Figure format: png, svg or pdf."),
+    dpi: float = typer.Option(110.0, help="Figure resolution [dots per inch] (raster images)."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Strategies side by side, every one scored by the same independent simulator: all-out, ATO optimum,
@@ -148,7 +156,8 @@ def compare_command(
 
     Example: ecostudy compare studies/default.yaml --out out/compare
     """
-    table = guarded(debug, _compare, study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot)
+    table = guarded(debug, _compare, study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot,
+                    (fig_format, dpi))
     flag_rows(table, "strategy", "compare.csv")
 
 
@@ -166,7 +175,10 @@ def associated_track(tt, path):
                              "timetable or in ../tracks/; give --track"))
 
 
-def _journey(track, train, stops, time, supplement, timetable, dwell, points, workers, out, no_plot):
+def _journey(track, train, stops, time, supplement, timetable, dwell, points, workers, out, no_plot,
+             figures=("png", None)):
+    from ecostudy.report.style import output
+    figures = output(*figures)
     check_options(time=time, supplement=supplement, dwell=dwell, points=points, workers=workers)
     from ecostudy.core import units
     from ecostudy.io.loaders import check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
@@ -206,10 +218,11 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
             passing += [(start + w.distance, None if w.max_speed is None else units.to_kmh(w.max_speed))
                         for w in windows]
             start += run.summary["distance_m"]
-    write_journey(table, totals, results, out_dir, f"{trn.name}: {' - '.join(names)}", passing, plot=not no_plot)
+    write_journey(table, totals, results, out_dir, f"{trn.name}: {' - '.join(names)}", passing, plot=not no_plot,
+                  out=figures)
     typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
     typer.echo(totals.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
-    typer.echo("outputs " + listed(out_dir, ("journey.csv", "journey_totals.csv", "summary.json", "journey.png")))
+    typer.echo("outputs " + listed(out_dir))
     return table
 
 
@@ -229,11 +242,13 @@ def journey_command(
     workers: int = typer.Option(1, help="Processes for the segments' fronts."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip journey.png."),
+    fig_format: str = typer.Option("png", "--format", help="Figure format: png, svg or pdf."),
+    dpi: float = typer.Option(110.0, help="Figure resolution [dots per inch] (raster images)."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Spread a journey's running time over its segments: equal marginal saving vs same percentage."""
     table = guarded(debug, _journey, track, train, stops, time, supplement, timetable, dwell, points, workers, out,
-                    no_plot)
+                    no_plot, (fig_format, dpi))
     if not table["verified"].all():
         bad = table[~table["verified"]]
         typer.secho("flagged: not verified by the re-simulation: " + ", ".join(

@@ -1,5 +1,6 @@
 """The files of a run (``profile.csv``, ``summary.json``, ``speed.png``, ``advice.csv``) and of a
 front (``pareto.csv``, ``pareto.json``, the plots), each written atomically."""
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -7,24 +8,37 @@ import pandas as pd
 
 from ecostudy.core.status import OK, Status, flagged
 from ecostudy.io.folder import write_summary
-from ecostudy.io.writers import atomic_write, write_csv, write_json
+from ecostudy.io.writers import write_csv, write_json
+from ecostudy.report import style
 
 
-def write_run(result, out_dir, plot=True):
-    """``profile.csv``, ``summary.json``, ``speed.png`` (and ``advice.csv``) of one run into ``out_dir``."""
+def figures(out_dir, plot, drawings, out=style.Output()):
+    """Write every figure of ``drawings`` ({stem: draw(path, fmt=, dpi=)}) as ``stem.<fmt>``
+    (``style.write``) when ``plot``, else remove any earlier run's figures of those stems, so a
+    folder never mixes the files of two runs. Returns the file names written."""
+    if not plot:
+        for stem in drawings:
+            for name in style.names(stem):
+                (Path(out_dir) / name).unlink(missing_ok=True)
+        return []
+    return [style.write(out_dir, stem, draw, out) for stem, draw in drawings.items()]
+
+
+def write_run(result, out_dir, plot=True, out=style.Output()):
+    """``profile.csv``, ``summary.json``, ``speed.png``, ``energy.png`` (the energy flow; figures in
+    the format of ``out``) and ``advice.csv`` of one run into ``out_dir``."""
     out_dir = Path(out_dir)
     write_csv(out_dir / "profile.csv", result.profile)
     tables = {"profile": "profile.csv"}
     if result.das is not None:
         write_csv(out_dir / "advice.csv", result.das.advice)
         tables["advice"] = "advice.csv"
-    if plot:
-        from ecostudy.report.plots import speed_plot
-        atomic_write(out_dir / "speed.png", lambda tmp: speed_plot(result, tmp))
+    from ecostudy.report import plots
+    drawn = figures(out_dir, plot, {"speed": partial(plots.speed_plot, result),
+                                    "energy": partial(plots.energy_plot, result)}, out)
     s = result.summary
-    write_summary(out_dir, "solve", {f"{s['from']}-{s['to']}": result.status}, tables,
-                  ["speed.png"] if plot else [], **s)
-    stale(out_dir, advice=result.das is None, plot=not plot, names={"advice": ["advice.csv"], "plot": ["speed.png"]})
+    write_summary(out_dir, "solve", {f"{s['from']}-{s['to']}": result.status}, tables, drawn, **s)
+    stale(out_dir, advice=result.das is None, names={"advice": ["advice.csv"]})
     return out_dir
 
 
@@ -37,7 +51,7 @@ def stale(out_dir, names, **drop):
                 (Path(out_dir) / name).unlink(missing_ok=True)
 
 
-def write_front(table, results, out_dir, meta, plot=True, weighted=None):
+def write_front(table, results, out_dir, meta, plot=True, weighted=None, out=style.Output()):
     """``pareto.csv``, ``pareto.json`` and the two plots of a front (and ``pareto_weighted.csv``)."""
     out_dir = Path(out_dir)
     write_csv(out_dir / "pareto.csv", table)
@@ -48,54 +62,46 @@ def write_front(table, results, out_dir, meta, plot=True, weighted=None):
     statuses = {f"{t:.2f} s": Status.parse(st) for t, st in zip(table["running_time_s"], table["status"])}
     if not meta["monotone"]:
         statuses["front"] = flagged("energy does not fall as the running time grows")
-    files = ["pareto.json"] + (["pareto.png", "pareto_profiles.png"] if plot else [])
-    write_summary(out_dir, "pareto", statuses, tables, files, **meta)
-    if plot:
-
-        from ecostudy.report.plots import pareto_plot, profiles_plot
-        title = f"{meta['train']} - {meta['from']} to {meta['to']} (K = {meta['points']})"
-        atomic_write(out_dir / "pareto.png", lambda tmp: pareto_plot(table, tmp, title, weighted))
-        picks = sorted(set(np.linspace(0, len(results) - 1, min(5, len(results))).round().astype(int)))
-        atomic_write(out_dir / "pareto_profiles.png",
-                     lambda tmp: profiles_plot([results[i] for i in picks], tmp, title))
-    stale(out_dir, weighted=weighted is None, plot=not plot,
-          names={"weighted": ["pareto_weighted.csv"], "plot": ["pareto.png", "pareto_profiles.png"]})
+    from ecostudy.report import plots
+    title = f"{meta['train']} - {meta['from']} to {meta['to']} (K = {meta['points']})"
+    picks = sorted(set(np.linspace(0, len(results) - 1, min(5, len(results))).round().astype(int)))
+    drawn = figures(out_dir, plot, {
+        "pareto": partial(plots.pareto_plot, table, title=title, weighted=weighted),
+        "pareto_profiles": partial(plots.profiles_plot, [results[i] for i in picks], title=title)}, out)
+    write_summary(out_dir, "pareto", statuses, tables, ["pareto.json"] + drawn, **meta)
+    stale(out_dir, weighted=weighted is None, names={"weighted": ["pareto_weighted.csv"]})
     return out_dir
 
 
-def write_compare(table, outcomes, segment, out_dir, title, plot=True):
+def write_compare(table, outcomes, segment, out_dir, title, plot=True, out=style.Output()):
     """``compare.csv``, ``summary.json`` and ``compare.png`` of strategies side by side."""
     out_dir = Path(out_dir)
     write_csv(out_dir / "compare.csv", table)
-    (out_dir / "compare.png").unlink(missing_ok=True)  # never a plot of an earlier run beside this table
-    if plot:
-        from ecostudy.report.plots import compare_plot
-        atomic_write(out_dir / "compare.png", lambda tmp: compare_plot(outcomes, segment, tmp, title))
+    from ecostudy.report import plots
+    drawn = figures(out_dir, plot, {"compare": partial(plots.compare_plot, outcomes, segment, title=title)}, out)
     statuses = {name: Status.parse(st) for name, st in zip(table["strategy"], table["status"])}
-    write_summary(out_dir, "compare", statuses, {"compare": "compare.csv"}, ["compare.png"] if plot else [],
+    write_summary(out_dir, "compare", statuses, {"compare": "compare.csv"}, drawn,
                   title=title, target_running_time_s=table.attrs["target_s"],
                   ato_verified=table.attrs["verified"])
     return out_dir
 
 
-def write_journey(table, totals, results, out_dir, title, passing=(), plot=True):
+def write_journey(table, totals, results, out_dir, title, passing=(), plot=True, out=style.Output()):
     """``journey.csv``, ``journey_totals.csv``, ``summary.json`` and ``journey.png`` of a journey's
     distributions (every segment's run re-simulated: ``verified``)."""
     out_dir = Path(out_dir)
     write_csv(out_dir / "journey.csv", table)
     write_csv(out_dir / "journey_totals.csv", totals)
-    (out_dir / "journey.png").unlink(missing_ok=True)  # never a plot of an earlier run beside these tables
-    if plot:
-        from ecostudy.report.plots import journey_plot
-        atomic_write(out_dir / "journey.png", lambda tmp: journey_plot(results, tmp, title, passing))
+    from ecostudy.report import plots
+    drawn = figures(out_dir, plot, {"journey": partial(plots.journey_plot, results, title=title, passing=passing)}, out)
     statuses = {f"{r['distribution']} {r['from']}-{r['to']}":
                 OK if r["verified"] else flagged("not verified by the re-simulation") for _, r in table.iterrows()}
     write_summary(out_dir, "journey", statuses, {"segments": "journey.csv", "totals": "journey_totals.csv"},
-                  ["journey.png"] if plot else [], title=title)
+                  drawn, title=title)
     return out_dir
 
 
-def write_network(run, st, out_dir, plot=True):
+def write_network(run, st, out_dir, plot=True, out=style.Output()):
     """``network_substation.csv`` (per strategy, with its ``status``), ``network_trains.csv``,
     ``network_steps_<strategy>.csv``, ``network.json``, ``summary.json`` and ``network.png``.
     Returns the per-strategy table."""
@@ -130,12 +136,11 @@ def write_network(run, st, out_dir, plot=True):
                                           "strategies": {**{n: {**r["totals"], **r["info"]} for n, r in done.items()},
                                                          **{n: {"status": f"failed: {r['failed']}"}
                                                             for n, r in failed_.items()}}})
-    (out_dir / "network.png").unlink(missing_ok=True)  # never a plot of an earlier run beside these tables
-    if plot:
-        from ecostudy.report.plots import network_plot
-        atomic_write(out_dir / "network.png", lambda tmp: network_plot(fl, done, tmp, st.name))
+    from ecostudy.report import plots
+    drawn = figures(out_dir, plot, {"network": partial(plots.network_plot, fl, done, title=st.name),
+                                    "network_supply": partial(plots.supply_plot, fl, done, title=st.name)}, out)
     steps = [f"network_steps_{name}.csv" for name in done]
     write_summary(out_dir, "network", statuses, {"substation": "network_substation.csv", "trains": "network_trains.csv"},
-                  steps + ["network.json"] + (["network.png"] if plot else []), study=st.name, steps=fl.steps,
+                  steps + ["network.json"] + drawn, study=st.name, steps=fl.steps,
                   dt_s=st.dt)
     return table
