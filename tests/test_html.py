@@ -8,6 +8,8 @@ import struct
 import subprocess
 from html.parser import HTMLParser
 
+from matplotlib.figure import Figure
+
 import pandas as pd
 import pytest
 from typer.testing import CliRunner
@@ -161,11 +163,19 @@ def test_report_lists_cases_not_ok_and_escapes_text(tmp_path):
                                                     "energy_kWh": [1234.56, 0.5, None],
                                                     "status": ["flagged: <script>alert(1)</script>", "failed: x & y",
                                                                "ok"]}))
+    fig = Figure()
+    fig.add_subplot().plot([0, 1], [1, 0])
+    for form in ("svg", "pdf"):
+        fig.savefig(tmp_path / f"line.{form}")
     write_summary(tmp_path, "run", {"<b>a</b>": flagged("<script>alert(1)</script>"), "b": failed("x & y"), "c": OK},
-                  {"cases": "cases.csv"}, study="<img src=x onerror=alert(2)>.yaml")
+                  {"cases": "cases.csv"}, ["line.svg", "line.pdf"], study="<img src=x onerror=alert(2)>.yaml")
     path = write_html(tmp_path)
     page = Page(path.read_text())
-    assert len(page.scripts) == 1 and page.images == []  # the markup in names and reasons stayed text
+    assert len(page.scripts) == 1  # the markup in names and reasons stayed text
+    assert [i["alt"] for i in page.images] == ["line.svg"] and page.captions == ["line.svg"]  # a PDF is only listed
+    head, _, data = page.images[0]["src"].partition(",")
+    assert head == "data:image/svg+xml;base64" and base64.b64decode(data) == (tmp_path / "line.svg").read_bytes()
+    assert "./line.pdf" in page.links
     assert page.status.strip().startswith("failed") and "x & y" in page.status
     assert "<img src=x onerror=alert(2)>.yaml" in page.title
     not_ok = page.table(["case", "status"])
@@ -187,8 +197,8 @@ def test_a_folder_without_summary_is_refused(tmp_path):
 
 def chromium(url, tmp_path, *flags):
     """The DOM headless Chromium built from a page (its scripts run), as text."""
-    out = subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", f"--user-data-dir={tmp_path / 'profile'}",
-                          "--virtual-time-budget=5000", *flags, "--dump-dom", url],
+    out = subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--virtual-time-budget=5000",
+                          f"--user-data-dir={tmp_path / 'profile'}", *flags, "--dump-dom", url],
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 0 and "</html>" in out.stdout, out.stderr[-2000:]
     return out.stdout
@@ -211,16 +221,16 @@ def test_chromium_renders_tables_images_and_sorts(reports, kind, tmp_path):
 
     # the same page, clicked: the browser decodes each image to its file's size, and two clicks on a
     # numeric column's header sort the table by it, largest first
-    table, frame = next(iter(result.tables.items()))
+    frame = next(iter(result.tables.values()))
     column = next(c for c in frame.columns if pd.api.types.is_float_dtype(frame[c]))
     col = list(frame.columns).index(column)
-    probe = path.parent / "report_probe.html"
+    probe = tmp_path / "probe.html"  # the page is self-contained: it renders the same from anywhere
     probe.write_text(path.read_text().replace("</body>", f"""<script>window.addEventListener("load", function () {{
-      document.querySelectorAll("img").forEach(function (i) {{ i.setAttribute("data-size", i.naturalWidth + "x" + i.naturalHeight); }});
+      document.querySelectorAll("img").forEach(function (i) {{
+        i.setAttribute("data-size", i.naturalWidth + "x" + i.naturalHeight); }});
       var th = document.querySelector("div.scroll table.data").tHead.rows[0].cells[{col}];
       th.click(); th.click(); }});</script></body>"""))
     dom = Page(chromium(probe.as_uri(), tmp_path))
-    probe.unlink()
     for img, name in zip(dom.images, pictures):
         assert img["data-size"] == "{}x{}".format(*png_size((path.parent / name).read_bytes()))
     rows = dom.table(frame.columns)

@@ -28,15 +28,15 @@ MAX_ROWS = 5000  # rows of a table shown on the page; the CSV beside it holds th
 IMAGES = {".png": "image/png", ".svg": "image/svg+xml"}
 # summary fields that say what the command was asked (shown as inputs, in this order); the rest
 # are results. A field a command records that is not named here is shown with the results.
-INPUTS = ("study", "title", "track", "train", "from", "to", "stops", "points", "count", "objective",
+INPUTS = ("study", "track", "train", "from", "to", "stops", "points", "count", "objective",
           "target_running_time_s", "steps", "dt_s", "workers", "warm_start")
 # checks shown first among the nested fields
 FIRST = ("verification", "solver")
 MEANING = {"ok": "every case computed and every check passed",
            "flagged": "computed and written, but a check did not pass",
            "failed": "no usable result for at least one case"}
-# the common fields of summary.json, shown in the page's head rather than as results
-HEAD = ("kind", "ecostudy_version", "summary_layout", "status", "cases", "not_ok", "tables", "files")
+# the common fields of summary.json and a command's title, shown in the page's head
+HEAD = ("kind", "ecostudy_version", "summary_layout", "status", "cases", "not_ok", "tables", "files", "title")
 
 CSS = """
 :root{--ok:#1b7f3b;--ok-bg:#e7f5ec;--flagged:#9a6100;--flagged-bg:#fff4db;--failed:#b3261e;--failed-bg:#fde8e7;
@@ -65,6 +65,7 @@ h3{font-size:.98rem;margin:18px 0 6px;color:#323f4b}
 table{border-collapse:collapse;font-size:.86rem;width:100%;background:#fff}
 th,td{padding:4px 10px;border-bottom:1px solid #edf0f3;text-align:left;vertical-align:top}
 td.n{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
+table.data td{white-space:nowrap}table.data td.long{white-space:normal;min-width:18em}
 table.data th{position:sticky;top:0;background:var(--head);cursor:pointer;user-select:none;
 border-bottom:1px solid var(--line);font-weight:600;vertical-align:bottom}
 table.data th:hover{background:#e8ecf0}
@@ -74,7 +75,8 @@ table.data tbody tr:nth-child(even){background:#fafbfc}
 table.kv{border:1px solid var(--line);table-layout:fixed}
 table.kv th{width:46%;font-weight:500;color:#3e4c59;background:var(--head);overflow-wrap:anywhere}
 table.kv td{overflow-wrap:anywhere}
-td.s-ok{color:var(--ok)}td.s-flagged{color:var(--flagged);font-weight:600}td.s-failed{color:var(--failed);font-weight:600}
+td.s-ok{color:var(--ok)}td.s-flagged{color:var(--flagged);font-weight:600}
+td.s-failed{color:var(--failed);font-weight:600}
 .note{color:var(--muted);font-size:.85rem;margin:4px 0 0}
 figure{margin:0 0 22px;background:#fff;border:1px solid var(--line);border-radius:6px;padding:10px}
 figure img{display:block;max-width:100%;height:auto;margin:0 auto}
@@ -95,11 +97,15 @@ document.querySelectorAll("table.data").forEach(function (table) {
       Array.prototype.forEach.call(heads, function (h) { h.setAttribute("aria-sort", "none"); });
       th.setAttribute("aria-sort", down ? "descending" : "ascending");
       var body = table.tBodies[0], rows = Array.prototype.slice.call(body.rows);
-      function key(row) { var c = row.cells[col]; return c.hasAttribute("data-v") ? parseFloat(c.getAttribute("data-v")) : c.textContent; }
+      function key(row) {
+        var c = row.cells[col];
+        return c.hasAttribute("data-v") ? parseFloat(c.getAttribute("data-v")) : c.textContent;
+      }
       rows.sort(function (a, b) {
         var x = key(a), y = key(b), ex = x === "" || x !== x, ey = y === "" || y !== y;
         if (ex || ey) { return ex - ey; }
-        var r = (typeof x === "number" && typeof y === "number") ? x - y : String(x).localeCompare(String(y), undefined, {numeric: true});
+        var r = (typeof x === "number" && typeof y === "number") ? x - y
+          : String(x).localeCompare(String(y), undefined, {numeric: true});
         return down ? -r : r;
       });
       rows.forEach(function (r) { body.appendChild(r); });
@@ -238,8 +244,8 @@ def flatten(value: dict, prefix: str, flat: dict, lists: dict) -> None:
 def kv_table(values: dict) -> str:
     rows = []
     for k, v in values.items():
-        cls = status_class(k, v)
-        num = ' class="n"' if is_number(v) else cls
+        cls = "n" if is_number(v) else status_class(k, v)
+        num = f' class="{cls}"' if cls else ""
         rows.append(f"<tr><th>{wrap(k)}</th><td{num}>{esc(fmt_scalar(v))}</td></tr>")
     return '<table class="kv"><tbody>' + "".join(rows) + "</tbody></table>"
 
@@ -266,10 +272,12 @@ def data_table(frame: pd.DataFrame, scroll: bool = False) -> str:
 
 
 def cell(column: str, value: Any) -> str:
+    """A text cell: on one line unless long, coloured where it is a status."""
     if is_missing(value):
         return "<td></td>"
-    cls = status_class(column, value)
-    return f"<td{cls}>{esc(fmt_scalar(value))}</td>"
+    text = fmt_scalar(value)
+    classes = " ".join(c for c in (status_class(column, value), "long" if len(text) > 40 else "") if c)
+    return f'<td class="{classes}">{esc(text)}</td>' if classes else f"<td>{esc(text)}</td>"
 
 
 def numeric_cell(value: Any, places: int) -> str:
@@ -330,7 +338,7 @@ def status_class(column: str, value: Any) -> str:
         return ""
     word = value.partition(":")[0].strip()
     kind = {"infeasible": "failed", "missing": "failed"}.get(word, word)
-    return f' class="s-{kind}"' if kind in ("ok", "flagged", "failed") else ""
+    return f"s-{kind}" if kind in ("ok", "flagged", "failed") else ""
 
 
 def figure(folder: Path, name: str) -> str:
