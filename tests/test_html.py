@@ -18,7 +18,7 @@ from ecostudy import __version__
 from ecostudy.cli import app
 from ecostudy.core.status import OK, failed, flagged
 from ecostudy.io.folder import load, write_summary
-from ecostudy.io.writers import write_csv
+from ecostudy.io.writers import write_csv, write_json
 from ecostudy.report.html import write_html
 
 from .conftest import ROOT, TRACKS, TRAINS
@@ -167,8 +167,10 @@ def test_report_lists_cases_not_ok_and_escapes_text(tmp_path):
     fig.add_subplot().plot([0, 1], [1, 0])
     for form in ("svg", "pdf"):
         fig.savefig(tmp_path / f"line.{form}")
+    write_json(tmp_path / "inputs.json", {"track": "/tracks/<i>line</i>.yaml", "points": 200})
     write_summary(tmp_path, "run", {"<b>a</b>": flagged("<script>alert(1)</script>"), "b": failed("x & y"), "c": OK},
-                  {"cases": "cases.csv"}, ["line.svg", "line.pdf"], study="<img src=x onerror=alert(2)>.yaml")
+                  {"cases": "cases.csv"}, ["line.svg", "line.pdf", "inputs.json"],
+                  study="<img src=x onerror=alert(2)>.yaml")
     path = write_html(tmp_path)
     page = Page(path.read_text())
     assert len(page.scripts) == 1  # the markup in names and reasons stayed text
@@ -176,6 +178,9 @@ def test_report_lists_cases_not_ok_and_escapes_text(tmp_path):
     head, _, data = page.images[0]["src"].partition(",")
     assert head == "data:image/svg+xml;base64" and base64.b64decode(data) == (tmp_path / "line.svg").read_bytes()
     assert "./line.pdf" in page.links
+    fields = {r[0]["text"]: r[1]["text"] for t in page.tables if t["class"] == "kv" for r in t["rows"]}
+    assert fields == {"study": "<img src=x onerror=alert(2)>.yaml", "track": "/tracks/<i>line</i>.yaml",
+                      "points": "200"}  # the inputs, from the summary and the inputs.json it lists
     assert page.status.strip().startswith("failed") and "x & y" in page.status
     assert "<img src=x onerror=alert(2)>.yaml" in page.title
     not_ok = page.table(["case", "status"])

@@ -148,10 +148,12 @@ def render(result: StudyResult) -> str:
         parts.append(f"<h2>Cases not ok ({len(not_ok)})</h2>")
         parts.append(data_table(pd.DataFrame([{"case": r.get("case"), "status": r.get("status")} for r in not_ok])))
     inputs_json = read_inputs(result)
+    parts.append("<h2>Inputs</h2>")
     if inputs or inputs_json:
-        parts.append("<h2>Inputs</h2>")
-        parts.append('<div class="grid">' + kv_table(inputs)
+        parts.append('<div class="grid">' + (kv_table(inputs) if inputs else "")
                      + (f"<div><h3>inputs.json</h3>{kv_table(inputs_json)}</div>" if inputs_json else "") + "</div>")
+    else:
+        parts.append(f'<p class="note">The {esc(result.kind)} command records no inputs in {SUMMARY}.</p>')
     if scalars:
         parts += ["<h2>Results</h2>", '<div class="grid">' + "".join(map(kv_table, chunks(scalars))) + "</div>"]
     if nested:
@@ -203,8 +205,11 @@ def counts(cases: dict[str, int]) -> str:
 
 
 def read_inputs(result: StudyResult) -> dict:
-    """The ``inputs.json`` a solve folder keeps beside its summary (input files, their hashes), if any."""
+    """The ``inputs.json`` a solve folder keeps beside its summary (input files, their hashes), when
+    the summary lists it: a file the summary does not list may be left from another run."""
     path = result.folder / "inputs.json"
+    if path.name not in result.files:
+        return {}
     try:
         data = json.loads(path.read_text())
     except (OSError, ValueError):
