@@ -65,7 +65,7 @@ h3{font-size:.98rem;margin:18px 0 6px;color:#323f4b}
 table{border-collapse:collapse;font-size:.86rem;width:100%;background:#fff}
 th,td{padding:4px 10px;border-bottom:1px solid #edf0f3;text-align:left;vertical-align:top}
 td.n{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
-table.data td{white-space:nowrap}table.data td.long{white-space:normal;min-width:18em}
+table.data td{white-space:nowrap}table.data td.long{white-space:normal;min-width:15em}
 table.data th{position:sticky;top:0;background:var(--head);cursor:pointer;user-select:none;
 border-bottom:1px solid var(--line);font-weight:600;vertical-align:bottom}
 table.data th:hover{background:#e8ecf0}
@@ -281,7 +281,7 @@ def cell(column: str, value: Any) -> str:
     if is_missing(value):
         return "<td></td>"
     text = fmt_scalar(value)
-    classes = " ".join(c for c in (status_class(column, value), "long" if len(text) > 40 else "") if c)
+    classes = " ".join(c for c in (status_class(column, value), "long" if len(text) > 24 else "") if c)
     return f'<td class="{classes}">{esc(text)}</td>' if classes else f"<td>{esc(text)}</td>"
 
 
@@ -320,7 +320,10 @@ def fmt_scalar(v: Any) -> str:
         if abs(x) < 1e-3 or abs(x) >= 1e9:
             return f"{x:.3e}"
         places = min(6, max(0, 3 - math.floor(math.log10(abs(x)))))
-        return f"{x:,.{places}f}".replace(",", "\u2009")
+        text = f"{x:,.{places}f}"
+        if len(repr(x)) < len(text) and "e" not in repr(x):
+            text = f"{x:,}"  # a short exact value as given (a tolerance of 0.5, not 0.5000)
+        return text.replace(",", "\u2009")
     return str(v)
 
 
