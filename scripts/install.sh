@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Installs what is missing, quickly when nothing is: Debian packages (Ipopt, ASL, MUMPS, BLAS/LAPACK,
-# cmake, pkg-config, compiler), the virtual environment .venv with ecostudy editable, and PyNumero's
-# ASL library built against Debian's libamplsolver into .pyomo/ (PYOMO_CONFIG_DIR). See DEVELOPERS.md.
+# cmake, pkg-config, compiler, headless Chromium for the report test), the virtual environment .venv
+# with ecostudy editable, and PyNumero's ASL library built against Debian's libamplsolver into .pyomo/
+# (PYOMO_CONFIG_DIR). See DEVELOPERS.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-DEB_PKGS="coinor-libipopt-dev libamplsolver-dev liblapack-dev libblas-dev libmumps-seq-dev cmake pkg-config build-essential"
+DEB_PKGS="coinor-libipopt-dev libamplsolver-dev liblapack-dev libblas-dev libmumps-seq-dev cmake pkg-config build-essential chromium"
 SUDO=""
 [ "$(id -u)" -eq 0 ] || SUDO="sudo"
 
