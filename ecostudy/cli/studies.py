@@ -265,7 +265,9 @@ def _run(study, workers, dask, retry_failed, out, no_progress):
                                           out=Path(out) if out else None, progress=progress)
     typer.echo(f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} computed "
                f"now ({counts['failed']} of them failed or infeasible); not ok in the table: {counts['not_ok']}")
-    typer.echo(f"outputs {output}/ (results.csv, results.sqlite)")
+    from ecostudy.report.html import write_html
+    write_html(output)
+    typer.echo("outputs " + listed(output, ("results.csv", "results.sqlite", "report.html")))
     return counts
 
 

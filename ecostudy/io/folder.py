@@ -19,6 +19,7 @@ from ecostudy.core.status import Status, worst
 from ecostudy.io.writers import write_json
 
 SUMMARY = "summary.json"
+REPORT = "report.html"  # written beside it by ``report.html.write_html``
 LAYOUT = 1  # the version of summary.json's common fields; a reader refuses a newer one
 
 # the fields write_summary owns; a command's own fields may not reuse them
@@ -74,7 +75,7 @@ def write_summary(out_dir: Path | str, kind: str, statuses: Mapping[str, Status]
     data = {"kind": kind, "ecostudy_version": __version__, "summary_layout": LAYOUT,
             "status": str(worst(named.values())), "cases": counts,
             "not_ok": [{"case": name, "status": str(s)} for name, s in named.items() if not s.ok],
-            "tables": dict(tables or {}), "files": sorted(set(files) | {SUMMARY} | set((tables or {}).values())),
+            "tables": dict(tables or {}), "files": sorted(set(files) | {SUMMARY, REPORT} | set((tables or {}).values())),
             **fields}
     path = Path(out_dir) / SUMMARY
     write_json(path, data)

@@ -10,6 +10,7 @@ from ecostudy.core.status import OK, Status, flagged
 from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import write_csv, write_json
 from ecostudy.report import style
+from ecostudy.report.html import write_html
 
 
 def figures(out_dir, plot, drawings, out=style.Output()):
@@ -39,6 +40,7 @@ def write_run(result, out_dir, plot=True, out=style.Output()):
     s = result.summary
     write_summary(out_dir, "solve", {f"{s['from']}-{s['to']}": result.status}, tables, drawn, **s)
     stale(out_dir, advice=result.das is None, names={"advice": ["advice.csv"]})
+    write_html(out_dir)
     return out_dir
 
 
@@ -70,6 +72,7 @@ def write_front(table, results, out_dir, meta, plot=True, weighted=None, out=sty
         "pareto_profiles": partial(plots.profiles_plot, [results[i] for i in picks], title=title)}, out)
     write_summary(out_dir, "pareto", statuses, tables, ["pareto.json"] + drawn, **meta)
     stale(out_dir, weighted=weighted is None, names={"weighted": ["pareto_weighted.csv"]})
+    write_html(out_dir)
     return out_dir
 
 
@@ -83,6 +86,7 @@ def write_compare(table, outcomes, segment, out_dir, title, plot=True, out=style
     write_summary(out_dir, "compare", statuses, {"compare": "compare.csv"}, drawn,
                   title=title, target_running_time_s=table.attrs["target_s"],
                   ato_verified=table.attrs["verified"])
+    write_html(out_dir)
     return out_dir
 
 
@@ -98,6 +102,7 @@ def write_journey(table, totals, results, out_dir, title, passing=(), plot=True,
                 OK if r["verified"] else flagged("not verified by the re-simulation") for _, r in table.iterrows()}
     write_summary(out_dir, "journey", statuses, {"segments": "journey.csv", "totals": "journey_totals.csv"},
                   drawn, title=title)
+    write_html(out_dir)
     return out_dir
 
 
@@ -143,4 +148,5 @@ def write_network(run, st, out_dir, plot=True, out=style.Output()):
     write_summary(out_dir, "network", statuses, {"substation": "network_substation.csv", "trains": "network_trains.csv"},
                   steps + ["network.json"] + drawn, study=st.name, steps=fl.steps,
                   dt_s=st.dt)
+    write_html(out_dir)
     return table
