@@ -68,3 +68,22 @@ def test_every_strategy_a_study_file_may_name_is_registered():
     assert ["independent", *STRATEGIES.names()] == list(IN_FILES)
     with pytest.raises(KeyError, match="unknown network strategy 'nope'; known: receptivity, triggering"):
         STRATEGIES.get("nope")
+
+
+def test_the_guide_s_new_strategy_runs_with_one_registration_line(one_leg):
+    """docs/results.md, "Registered kinds": its example, run as written, adds a strategy that the
+    study machinery solves and scores like the others."""
+    import re
+    from pathlib import Path
+
+    from ecostudy.network import rules
+    from ecostudy.network.strategies import STRATEGIES, _strategy
+    page = (Path(__file__).resolve().parent.parent / "docs" / "results.md").read_text()
+    block = next(b for b in re.findall(r"```python\n(.*?)```", page, re.S) if "STRATEGIES.register" in b)
+    f, _, _ = one_leg
+    try:
+        exec(block, {})
+        result = _strategy(f, "lazy", rules.independent(f))
+        assert result["totals"]["status"] == "ok" and result["totals"]["all_verified"]
+    finally:
+        STRATEGIES._specs.pop("lazy", None)
