@@ -14,7 +14,7 @@ def readme_example():
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
-@pytest.mark.slow  # over 7 s: make test stays under 3 min (issue 15); CI runs it
+@pytest.mark.slow  # over 7 s: make test stays under 3 min; CI runs it
 def test_the_readme_example_runs(capsys):
     cwd = os.getcwd()
     os.chdir(ROOT)

@@ -1,4 +1,4 @@
-"""Bad input never becomes an internal error or a silent wrong answer (issue 16): one line naming
+"""Bad input never becomes an internal error or a silent wrong answer: one line naming
 the file (or option) and the field, exit status 2, no traceback, nothing computed."""
 import json
 import os
@@ -175,7 +175,7 @@ def test_network_without_strategies_is_refused(tmp_path):
     one_line(run("network", write_yaml(tmp_path / "n.yaml", data)), "strategies")
 
 
-@pytest.mark.slow  # over 7 s: make test stays under 3 min (issue 15); CI runs it
+@pytest.mark.slow  # over 7 s: make test stays under 3 min; CI runs it
 def test_runaway_sizes_and_impossible_layouts_are_refused(tmp_path):
     from .conftest import STUDIES
     track = load_yaml(AMS)

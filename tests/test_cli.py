@@ -213,6 +213,6 @@ def test_window_outside_the_segment(tmp_path):
     (("check", "out", "--time", "nan"), "--time", "finite"),
 ])
 def test_numeric_options_out_of_range_are_refused_before_any_work(args, option, fragment):
-    """Issue 16 in part: before, --points 0 became 1000, --workers 0 and NaN or negative times
+    """Before, --points 0 became 1000, --workers 0 and NaN or negative times
     reached the solver or ended in an internal error (exit 3)."""
     assert_one_line_error(run(*args), f"command line: {option}", fragment)

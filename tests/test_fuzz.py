@@ -1,4 +1,4 @@
-"""Property-based fuzzing of every loader and of the CLI option checks (issue 16): a valid document
+"""Property-based fuzzing of every loader and of the CLI option checks: a valid document
 with one field (or one nested field) replaced by an arbitrary value, and arbitrary text as a file.
 Whatever comes in, a loader returns a valid object or raises InputError: never another exception.
 What it accepts stays in its documented ranges. 2000 generated inputs per loader, derandomised

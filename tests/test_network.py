@@ -274,7 +274,7 @@ def test_following_train_keeps_its_buffer(two_trains):
 def test_strategies_solved_in_parallel_are_those_solved_one_after_another(two_trains):
     """run_strategies with a pool of two and five strategies after independent driving: one
     strategy per worker, the same runs as one process solved them, bit for bit (every Ipopt solve
-    repeats exactly since session 16: ``ocp.session``'s Scotch settings)."""
+    repeats exactly since Scotch's ordering was pinned: ``ocp.session``'s Scotch settings)."""
     f, out = two_trains
     with worker_pool(2) as pool:
         pooled = strategies.run_strategies(f, list(out), progress=None, pool=pool, workers=2)

@@ -45,7 +45,7 @@ def test_the_written_nlp_evaluates_as_the_pyomo_model(options, agrees):
 def test_the_same_nlp_solved_again_gives_the_same_bits(metro, amsterdam):
     """MUMPS orders the KKT matrix with Scotch here, which ran threads and a random generator that
     went on from call to call: four solves of one NLP from one start ended in four different
-    points 1e-15 apart (session 16; a network study's supervisor rounds amplified that to 1 %).
+    points 1e-15 apart (a network study's supervisor rounds amplified that to 1 %).
     ``ocp.session`` runs Scotch on one thread and resets its generator before each solve."""
     from ecostudy.ocp import problem
     case = problem.prepare(amsterdam, metro, "Rokin", "Centraal", 1000)

@@ -100,7 +100,7 @@ def test_warm_start_reaches_the_same_optimum(amsterdam, metro, amsterdam_76s):
 
 
 def test_a_written_model_is_re_solved_for_other_timings_with_the_same_optimum(amsterdam, metro):
-    """Issue 15: the NL file once per structure. A second and third run of the same structure
+    """The NL file once per structure. A second and third run of the same structure
     (another running time, then a window) change bounds and the start point of the written model;
     each matches a fresh build and write to 1e-6, and writes nothing."""
     written = Written()

@@ -1,3 +1,3 @@
 """Feature: closed-loop control. Controllers re-plan on board while the plant (``core.plant``) is
 not their model; a loop drives them at a sample time with noise and a mass estimator.
-Uses layers 0-3 only (issue 12 builds the seeds' predictive controllers here)."""
+Uses layers 0-3 only (the predictive controllers of the source documents)."""

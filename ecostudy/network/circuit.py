@@ -155,7 +155,7 @@ def add_network(m, supply, steps, eps=1e-5, floating=False):
     the physical ones; every strategy is scored by ``solve_steps``. ``floating=True``: the bus as
     the diode makes it, V_0 = V_s - R_s I_s + u, u >= 0, I_s u <= ``eps`` [MW]: a complementarity
     at every step, which the joint optimum paid for with 125 / 1100 Ipopt iterations on 1 / 2 trains
-    against 53 / 79 pinned (session 14, docs/benchmarks.md).
+    against 53 / 79 pinned (docs/benchmarks.md).
     """
     vs, rs = supply.voltage / 1e3, supply.resistance
     vmin, vmax = supply.min_voltage / 1e3, supply.max_voltage / 1e3
@@ -167,7 +167,7 @@ def add_network(m, supply, steps, eps=1e-5, floating=False):
     m.Vpan = pyo.Var(index, bounds=(vmin, vmax), initialize=vs)
     if floating:
         # the diode: V_0 = V_s - R_s I_s + u with I_s, u >= 0 and I_s u <= eps (relaxed
-        # complementarity: the bus floats above V_s only while I_s = 0). Measured in session 3: 294
+        # complementarity: the bus floats above V_s only while I_s = 0). Measured: 294
         # Ipopt iterations on one train where the smooth max((V_s - V_0) / R_s, 0) over 1 A took 1307.
         m.V0 = pyo.Var(m.T_net, bounds=(vmin, vmax), initialize=vs)
         m.Is = pyo.Var(m.T_net, bounds=(0.0, None), initialize=0.0)

@@ -11,11 +11,10 @@ from ecostudy.network.legs import NEAR_START
 from ecostudy.ocp import space, timedomain
 
 
-# MUMPS's METIS ordering instead of its automatic choice (session 14, 3 trains: 35 -> 26 s for
+# MUMPS's METIS ordering instead of its automatic choice (3 trains: 35 -> 26 s for
 # the same 105 iterations; SCOTCH was as fast but not deterministic: runs differed by 38 kW in a
 # step's power along a flat direction; on the legs and on one run's space NLP neither bought
-# anything measurable). Both go through Scotch here, which ``ocp.session`` makes repeat exactly
-# since session 16.
+# anything measurable). Both go through Scotch here, which ``ocp.solver`` makes repeat exactly.
 ORDERING = {"mumps_pivot_order": 5}
 
 

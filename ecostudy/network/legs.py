@@ -1,7 +1,7 @@
 """One train's leg between two stops, solved against a cost per clock step (the supervisor rules'
 traction weight and allowance, the regeneration credit) and a train ahead (:func:`solve_leg`).
 
-Each solve builds and writes its own NLP. (Tried in session 15 and not kept: one NLP written per
+Each solve builds and writes its own NLP. (Tried and not kept: one NLP written per
 leg and re-solved with the cost's coefficients as variables held by bounds and the one-handle
 constraint at every step with its bound lifted where it cannot pay: no build or NL write after
 the first, but the always-present terms and rows made each solve dearer, 24-31 against 18-24 s
@@ -23,7 +23,7 @@ NEAR_START = {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_strategy": "monotone",
 
 # MUMPS without its own row and column scaling (Ipopt's default 77 computes one at every
 # factorisation): a leg's KKT matrix is small and banded, and the scaling took about a fifth of
-# Ipopt's time (session 17, `python bench/bench_leg_options.py studies/network_metro_3trains.yaml`:
+# Ipopt's time (`python bench/bench_leg_options.py studies/network_metro_3trains.yaml`:
 # six legs 4.85 -> 3.82 s, the same iterations, costs equal to 1e-14; the supervisor rules 3-34 %
 # faster, their rounds at the same or lower energies; docs/benchmarks.md). Not for the joint NLP:
 # slower there (18.9 / 19.2 against 16.9 / 15.8 s).
