@@ -110,6 +110,16 @@ def test_failures_are_recorded_and_do_not_stop_the_study(tmp_path):
     assert "fastest possible run takes" in bad["reason"].iloc[0]
     assert (table[table["scenario"] != "too_fast"]["status"] == "ok").all()
     assert counts["not_ok"] == 1
+    # the command says which case is not ok, in the status vocabulary, and exits 1 (all stored now)
+    from typer.testing import CliRunner
+
+    from ecostudy.cli import app
+    r = CliRunner().invoke(app, ["run", str(path), "--no-progress"])
+    assert r.exit_code == 1, r.output
+    line = next(x for x in r.output.splitlines() if x.startswith("failed: "))
+    assert "scenario=too_fast" in line and "infeasible" in line and "fastest possible run takes" in line
+    folder = assert_folder(tmp_path / "out", "run", ["results"], status="failed")
+    assert folder.cases["failed"] == 1 and folder.cases["ok"] == len(table) - 1
 
 
 def test_case_equals_a_direct_solve(reference):

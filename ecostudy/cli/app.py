@@ -173,6 +173,22 @@ def case_progress(label, disabled):
             raise typer.Exit(130)
 
 
+def flag_folder(out_dir, shown=20):
+    """Exit status 1 when the folder's ``summary.json`` has cases that are not ok, naming each
+    (at most ``shown``, then how many more) with its status, one line on stderr each."""
+    import json
+    summary = json.loads((Path(out_dir) / "summary.json").read_text())
+    bad = summary.get("not_ok", [])
+    for case in bad[:shown]:
+        typer.secho(f"{case['status'].split(':')[0]}: {case['case']}: {case['status'].partition(':')[2].strip()}",
+                    fg=typer.colors.YELLOW, err=True)
+    if len(bad) > shown:
+        typer.secho(f"... and {len(bad) - shown} more cases not ok (summary.json, report.html)",
+                    fg=typer.colors.YELLOW, err=True)
+    if bad:
+        raise typer.Exit(1)
+
+
 def flag_rows(table, name_column, where):
     """Exit status 1, naming every row whose ``status`` is not ok (one line on stderr each)."""
     bad = table[table["status"].astype(str) != "ok"]

@@ -7,7 +7,8 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, app, case_progress, check_options, flag_rows, guarded, listed, only_one
+from ecostudy.cli.app import (DasMethod, app, case_progress, check_options, flag_folder, flag_rows, guarded, listed,
+                              only_one)
 from ecostudy.core.errors import InputError, problem
 
 
@@ -268,7 +269,7 @@ def _run(study, workers, dask, retry_failed, out, no_progress):
     from ecostudy.report.html import write_html
     write_html(output)
     typer.echo("outputs " + listed(output, ("results.csv", "results.sqlite", "report.html")))
-    return counts
+    return output
 
 
 @app.command(short_help="Every case of a study file; resumable, in parallel.")
@@ -282,6 +283,4 @@ def run(
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Run every case of a study; finished cases are stored and never computed twice."""
-    counts = guarded(debug, _run, study, workers, dask, retry_failed, out, no_progress)
-    if counts["not_ok"]:
-        raise typer.Exit(1)
+    flag_folder(guarded(debug, _run, study, workers, dask, retry_failed, out, no_progress))
