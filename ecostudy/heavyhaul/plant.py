@@ -47,6 +47,7 @@ class CascadeStep(NamedTuple):
     traction_work: float         # locomotives [J]
     dynamic_brake_work: float    # locomotives [J]
     wagon_brake_work: float      # pneumatic brakes of the wagons [J]
+    speed_excess: float = 0.0    # largest (fastest car's speed - the train's limit at the head) over the step [m/s]
 
 
 class CascadePlant:
@@ -161,4 +162,7 @@ class CascadePlant:
         p, v, works = sol.y[:n, -1], sol.y[n:2 * n, -1], sol.y[2 * n:, -1]
         largest = max(float(np.max(np.abs(self.coupler_forces(sol.y[:n, k], sol.y[n:2 * n, k]))))
                       for k in range(sol.y.shape[1]))
-        return CascadeStep(CascadeState(p, v, state.time + dt), self.coupler_forces(p, v), largest, *map(float, works))
+        heads = sol.y[0] + 0.5 * self.consist.length[0]
+        excess = float(np.max(np.max(sol.y[n:2 * n], axis=0) - self.segment.limit(heads)))
+        return CascadeStep(CascadeState(p, v, state.time + dt), self.coupler_forces(p, v), largest, *map(float, works),
+                           excess)
