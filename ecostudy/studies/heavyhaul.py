@@ -193,7 +193,7 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
            "force_mean_kN", "force_std_kN", "energy_wagons_MJ", "energy_total_MJ", "traction_kWh", "dynamic_brake_kWh",
            "wagon_brake_kWh", "J_force", "J_tracking", "J_energy", "J_braking", "dynamic_brake_use_max",
            "dynamic_brake_use_mean", "dynamic_brake_at_limit_samples", "braking_samples", "stretch_braking_samples",
-           "speed_excess_kmh", "arrived", "arrival_s", "reference_time_s", "stop_error_m", "samples", "virtual_cars",
+           "speed_excess_kmh", "arrived", "arrival_s", "reference_time_s", "reference_kWh", "stop_error_m", "samples", "virtual_cars",
            "qp_inputs", "qp_states", "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts",
            "peak_memory_MB")
 
