@@ -63,6 +63,8 @@ def test_each_missed_limit_is_a_reason():
     assert reasons({**good, "force_max_kN": 815.6, "force_limit_kN": 800.0}, 100, 0) == [
         "largest coupler force 815.6 kN above the consist's 800 kN limit"]
     assert reasons(good, 100, 2) == ["2 solves over Ts (the previous input was held)"]
+    assert reasons({**good, "arrived": False, "stop_error_m": 50.0}, 100, 0) == [
+        "the sample cap (100) came with the train 50 m beyond the stop, not stopped"]
     assert reasons({**good, "stop_error_m": 2.7}, 100, 0, Tolerances(5.0, 2 * KMH)) == []
 
 

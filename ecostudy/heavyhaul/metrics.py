@@ -66,7 +66,9 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     """Why a run is not ok (empty: ok); ``samples`` the cap it ran under."""
     out = []
     if not metrics["arrived"]:
-        out.append(f"the sample cap ({samples}) came {-metrics['stop_error_m']:.0f} m before the stop")
+        where = (f"{-metrics['stop_error_m']:.0f} m before the stop" if metrics["stop_error_m"] <= 0
+                 else f"with the train {metrics['stop_error_m']:.0f} m beyond the stop, not stopped")
+        out.append(f"the sample cap ({samples}) came {where}")
     elif abs(metrics["stop_error_m"]) > tolerances.stop_m:
         where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
         out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m)")

@@ -1,6 +1,6 @@
-"""The schema of a heavy-haul study file (``ecostudy heavyhaul``): paper 002's receding-horizon
+"""The schema of a heavy-haul study file (``ecostudy heavyhaul``): Zhang & Zhuan's receding-horizon
 controller on a consist's cascade plant, swept over the brake penalty K_b, the fence factor f and
-the horizons (Np, Nc). Units are in the field names; defaults are paper 002's (Ts = 20 s, K_f = 10,
+the horizons (Np, Nc). Units are in the field names; defaults are Zhang & Zhuan's (Ts = 20 s, K_f = 10,
 K_v = 60, K_e = 10)."""
 from typing import Literal, Optional
 
@@ -40,7 +40,7 @@ class Horizon(Strict):
 
 
 class Weights(Strict):
-    """K_f, K_v, K_e of paper 002 eq. 4 (K_b is swept: ``brake_penalty``)."""
+    """K_f, K_v, K_e of Zhang & Zhuan eq. 4 (K_b is swept: ``brake_penalty``)."""
 
     force: float = Field(10.0, ge=0, description="K_f, on in-train forces [per kN^2 / 1e4].")
     speed: float = Field(60.0, ge=0, description="K_v, on speed tracking [per (m/s)^2].")
@@ -73,7 +73,7 @@ class HeavyhaulFile(Strict):
         "speed errors by the route's highest speed).")
     weights: Weights = Weights()
     rate_kN_per_sample: float = Field(200.0, gt=0, description="Largest change of a locomotive group's effort "
-                                      "per sample (paper 002 gives none).")
+                                      "per sample (Zhang & Zhuan give none).")
     qp_solver: Literal["daqp", "condensed", "clarabel", "ipopt"] = Field(
         "daqp", description="The same QP four ways: condensed to the inputs (force rows as they bind) and solved "
         "by DAQP warm-started from the last sample (fastest) or by Clarabel, with the states kept (Clarabel), "
