@@ -13,6 +13,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core.units import KN
+from ecostudy.heavyhaul.plant import LOSSES
 from ecostudy.heavyhaul.rhc import TERMS, input_offsets
 
 
@@ -33,6 +34,8 @@ class LoopRecord(NamedTuple):
     wagon_brake_work: float
     overruns: int = 0          # solves slower than Ts: the previous input was held
     arrived: bool = True       # stopped on the reference's final approach (False: the sample cap came first)
+    losses: tuple = ()         # plant.LOSSES over the run [J]
+    stored_change: float = 0.0  # kinetic plus coupler elastic energy at the end minus at the start [J]
 
 
 def reduced_state(plant, reduction, state):
@@ -86,6 +89,7 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     nv, locos = len(reduction.members), reduction.locomotives
     u = np.zeros(nv) if applied is None else np.asarray(applied, float)
     rows, works, overruns, arrived = [], np.zeros(3), 0, False
+    losses, stored = np.zeros(len(LOSSES)), plant.stored_energy(state)
     for _ in range(samples):
         measured = reduced_state(plant, reduction, state)
         x0 = measured if observer is None else observer.x.copy()  # eq. 10's x^(k|k-1)
@@ -101,6 +105,7 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         step = plant.step(state, reduction.share(u, c.mass), ts)
         state = step.state
         works += [step.traction_work, step.dynamic_brake_work, step.wagon_brake_work]
+        losses += step.losses
         head = head_position(plant, state)
         values = getattr(controller, "values", None) or {}
         rows.append((state.time, head, np.dot(c.mass, state.speeds) / c.mass.sum(), reference.speed(head),
@@ -110,4 +115,5 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
             arrived = True
             break
     columns = (np.array(v) for v in zip(*rows))
-    return state, LoopRecord(*columns, *map(float, works), overruns, arrived)
+    return state, LoopRecord(*columns, *map(float, works), overruns, arrived, tuple(map(float, losses)),
+                             plant.stored_energy(state) - stored)

@@ -15,7 +15,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ecostudy.core.units import KMH, KN
+from ecostudy.core.units import KMH, KN, KWH
+from ecostudy.heavyhaul.plant import LOSSES
 from ecostudy.heavyhaul.rhc import TERMS
 
 PULLING = KN     # a (virtual) car's effort above this pulls, below minus this brakes [N]
@@ -59,7 +60,20 @@ def run_metrics(record, reference, locomotives, force_limit):
         "dynamic_brake_use_mean": float(dynamic[using].mean()) if using.any() else 0.0,
         "dynamic_brake_at_limit_samples": int((dynamic >= AT_LIMIT).sum()),
         **{f"J_{name}": float(value) for name, value in zip(TERMS, terms)},
+        **energy_balance(record),
     }
+
+
+def energy_balance(record):
+    """The plant's energy balance over the run [kWh]: what the efforts put in (traction minus the
+    dynamic and wagon brakes) against each named loss (running and curve resistance, the grades,
+    the couplers' damping) and the change of kinetic plus coupler elastic energy; the residual is
+    the integrator's error."""
+    put_in = record.traction_work - record.dynamic_brake_work - record.wagon_brake_work
+    out = {f"{name}_kWh": value / KWH for name, value in zip(LOSSES, record.losses)}
+    out["stored_change_kWh"] = record.stored_change / KWH
+    out["balance_residual_kWh"] = (put_in - sum(record.losses) - record.stored_change) / KWH
+    return out
 
 
 def reasons(metrics, samples, over_ts, tolerances=Tolerances()):

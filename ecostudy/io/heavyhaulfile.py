@@ -71,6 +71,9 @@ class HeavyhaulFile(Strict):
         "paper", description="The units of eq. 4's terms: the paper's (forces and efforts in 100 kN, speeds in m/s) "
         "or each by its physical limit (in-train forces by the coupler limit, each car's effort by its largest, "
         "speed errors by the route's highest speed).")
+    adhesion: bool = Field(False, description="Cap each locomotive's traction and dynamic braking at its adhesion, "
+                           "mu(v) m g with Curtius & Kniffler's dry-rail mu (the plant; the controller sees the "
+                           "capped envelopes).")
     weights: Weights = Weights()
     rate_kN_per_sample: float = Field(200.0, gt=0, description="Largest change of a locomotive group's effort "
                                       "per sample (Zhang & Zhuan give none).")

@@ -103,7 +103,7 @@ def expand(path):
               "sample_time": s.sample_time_s, "weights": s.weights.model_dump(), "rate_kN": s.rate_kN_per_sample,
               "observer": s.observer, "qp_solver": s.qp_solver,
               "fence_coupling": s.fence_coupling, "fence_sharing": s.fence_sharing, "fence_weights": s.fence_weights,
-              "objective_scale": s.objective_scale, "max_samples": s.max_samples,
+              "objective_scale": s.objective_scale, "adhesion": s.adhesion, "max_samples": s.max_samples,
               "stop_tolerance_m": s.stop_tolerance_m, "speed_tolerance_kmh": s.speed_tolerance_kmh, "version": __version__}
     cases = []
     for kb, f, h in product(s.brake_penalty, s.fence, s.horizons):
@@ -131,7 +131,8 @@ def drive(case):
         track = track_from_schema(schemas.TrackFile.model_validate(case["track"]))
     r = case["reference"]
     reference = Reference(*(np.array(r[k]) for k in ("distance", "speeds", "times")), r["energy"])
-    plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]))
+    plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]),
+                         adhesion=case["adhesion"])
     labels, w, ts = case["labels"], case["weights"], case["sample_time"]
     reduction = fence(consist, labels["f"], ts, case["fence_coupling"], case["fence_sharing"])
     scales = None
@@ -193,7 +194,8 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
            "force_mean_kN", "force_std_kN", "energy_wagons_MJ", "energy_total_MJ", "traction_kWh", "dynamic_brake_kWh",
            "wagon_brake_kWh", "J_force", "J_tracking", "J_energy", "J_braking", "dynamic_brake_use_max",
            "dynamic_brake_use_mean", "dynamic_brake_at_limit_samples", "braking_samples", "stretch_braking_samples",
-           "speed_excess_kmh", "arrived", "arrival_s", "reference_time_s", "reference_kWh", "stop_error_m", "samples", "virtual_cars",
+           "speed_excess_kmh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "coupler_damping_kWh", "stored_change_kWh",
+           "balance_residual_kWh", "arrived", "arrival_s", "reference_time_s", "reference_kWh", "stop_error_m", "samples", "virtual_cars",
            "qp_inputs", "qp_states", "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts",
            "peak_memory_MB")
 
