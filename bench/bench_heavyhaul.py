@@ -4,6 +4,7 @@ QP's solve time per step and memory for f = 1 and f = 10.
     python bench/bench_heavyhaul.py                  # the four studies (about 4 min on 2 cores)
     python bench/bench_heavyhaul.py --fence-weights virtual   # the same with eq. 11 read literally
     python bench/bench_heavyhaul.py --terms --scale limits heavyhaul_brake_penalty   # Table IV with eq. 4's terms
+    python bench/bench_heavyhaul.py --balance [--adhesion] heavyhaul_brake_penalty   # the energy balance, an effect on
     python bench/bench_heavyhaul.py --qp 1 [--solver daqp|condensed|clarabel|ipopt] [--blas-threads 2]   # one QP size: build + 20 solves
 
 The studies run through ``ecostudy.studies.heavyhaul.heavyhaul_study`` (resumable: outputs in
@@ -71,25 +72,28 @@ def qp(factor, solver, np_=8, nc=6, solves=20, threads=1):
           f"{np.median(seconds[1:]):.3f} | {np.percentile(seconds[1:], 95):.3f} | {seconds.max():.3f} | {rss_mb() - before:.0f} |")
 
 
+EFFECTS = ["K_b", "status", "tracking_mean_mps", "force_max_kN", "force_max_braking_kN", "force_mean_kN", "energy_total_MJ",
+           "traction_kWh", "dynamic_brake_kWh", "wagon_brake_kWh", "running_resistance_kWh", "curve_resistance_kWh",
+           "grade_kWh", "coupler_damping_kWh", "stored_change_kWh", "balance_residual_kWh"]
 TERMS = ["K_b", "status", "tracking_mean_mps", "force_max_kN", "force_max_braking_kN", "braking_samples",
          "stretch_braking_samples", "energy_wagons_MJ", "dynamic_brake_kWh", "energy_total_MJ", "J_force", "J_tracking",
          "J_energy", "J_braking", "dynamic_brake_use_max", "dynamic_brake_use_mean", "stop_error_m"]
 
 
-def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2):
-    """The shipped studies; ``weights`` and ``scale`` override their ``fence_weights`` and
-    ``objective_scale`` (a copy of the study file beside it, removed after the run)."""
+def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesion=False):
+    """The shipped studies; ``weights``, ``scale`` and ``adhesion`` override their ``fence_weights``,
+    ``objective_scale`` and ``adhesion`` (a copy of the study file beside it, removed after the run)."""
     import yaml
     from ecostudy.studies.heavyhaul import heavyhaul_study
     for name in names or ("heavyhaul_brake_penalty", "heavyhaul_brake_penalty_limits", "heavyhaul_horizons",
                           "heavyhaul_fence"):
         t0 = time.perf_counter()
         path, out = ROOT / "studies" / f"{name}.yaml", ROOT / "out" / f"bench_{name}"
-        changes = {k: v for k, v in (("fence_weights", weights), ("objective_scale", scale)) if v}
+        changes = {k: v for k, v in (("fence_weights", weights), ("objective_scale", scale), ("adhesion", adhesion)) if v}
         if changes:
             doc = yaml.safe_load(path.read_text())
             doc.update(changes)
-            tag = "_".join(changes.values())
+            tag = "_".join(k if v is True else str(v) for k, v in changes.items())
             path, out = path.with_name(f".{name}_{tag}.yaml"), out.with_name(f"{out.name}_{tag}")
             path.write_text(yaml.safe_dump(doc))
         try:
@@ -113,7 +117,9 @@ if __name__ == "__main__":
     parser.add_argument("--solver", default="daqp", choices=sorted(QP_FORMS))
     parser.add_argument("--fence-weights", choices=["per_car", "virtual"], help="override the studies' fence_weights")
     parser.add_argument("--scale", choices=["paper", "limits"], help="override the studies' objective_scale")
+    parser.add_argument("--adhesion", action="store_true", help="the plant's adhesion limit on (adhesion: true)")
     parser.add_argument("--terms", action="store_true", help="print the brake-penalty columns (eq. 4's terms at the optimum)")
+    parser.add_argument("--balance", action="store_true", help="print the energy balance columns")
     parser.add_argument("--blas-threads", type=int, default=1, help="OpenBLAS threads (the CLI's default: 1)")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("studies", nargs="*", help="study names (default: all four)")
@@ -123,4 +129,4 @@ if __name__ == "__main__":
         print("| solver | f | BLAS threads | virtual cars | Np/Nc | inputs | states | constraints | build s | first solve s | median s | p95 s | max s | RSS growth MB |")
         qp(args.qp, args.solver, threads=args.blas_threads)
     else:
-        studies(args.studies, args.fence_weights, args.scale, TERMS if args.terms else COLUMNS, args.workers)
+        studies(args.studies, args.fence_weights, args.scale, TERMS if args.terms else EFFECTS if args.balance else COLUMNS, args.workers, args.adhesion)
