@@ -264,7 +264,7 @@ def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     """Zhang & Zhuan's Table IV on the shipped 45 km line (Np = 4, Nc = 2, f = 10, the energy-optimal
     reference at +10 %, per-car weights, the paper's units): K_b 1 -> 60 lowers the wagons' braking
     energy and the total a little (-5 %, -1.2 %), the largest in-train force over the braking samples
-    (a brake acts, no locomotive pulls) more than 2x (537 -> 101 kN), the tracking error moves by
+    (a brake acts, no locomotive pulls) more than 2x (538 -> 101 kN), the tracking error moves by
     less than 0.25 m/s; the braking term stays under 2 % of the force term and the dynamic brakes
     under 30 % of their limit (docs/heavyhaul.md, "The braking penalty, measured")."""
     from .conftest import STUDIES, load_yaml
