@@ -3,10 +3,12 @@ controller on the full cascade plant, one case per (K_b, f, Np, Nc), on the batc
 (resumable, processes or Dask). The reference speed is solved once, when the study is expanded, and
 travels in every case (cases are self-contained and keyed by a hash of their inputs).
 
-Per run, the columns of paper 002's Tables III-IV: the tracking error |mean speed - v_r| (mean,
-std), the in-train forces (max over the integrator's points, also over the samples in which any car
-brakes, mean and std of |f_in| over couplers and samples), the energies int |u v| dt of the wagons and in total; and the QP's size, its solve
-time per step (mean, max), the steps over Ts and the process's peak memory.
+Per run, the columns of Zhang & Zhuan's Tables III-IV: the tracking error |mean speed - v_r| (mean,
+std), the in-train forces (max over the integrator's points, also over the braking samples, mean and
+std of |f_in| over couplers and samples), the energies int |u v| dt of the wagons and in total; what
+:mod:`ecostudy.heavyhaul.metrics` reads (arrival, stop error, limits, eq. 4's terms at the optimum,
+the energy balance); and the QP's size as solved, its solve time per step (mean, p95, max), the steps
+over Ts and the process's peak memory. A run that missed anything is ``flagged`` with every reason.
 """
 import resource
 import warnings
@@ -85,8 +87,8 @@ def expand(path):
     problems = [problem(path, field, p) for p in reference_problems(reference, segment, s.speed_tolerance_kmh * KMH)]
     problems += [problem(path, "fence", f"{f} is not within 1..{consist.cars} (the consist's cars)")
                  for f in s.fence if f > consist.cars]
-    groups = min(len(fence(consist, f, s.sample_time_s).locomotives) for f in s.fence if f <= consist.cars) if not problems else 1
-    ramp = samples_to_start(needed, s.rate_kN_per_sample * KN, groups)
+    fewest = min([len(fence(consist, f, s.sample_time_s).locomotives) for f in s.fence if f <= consist.cars] or [1])
+    ramp = samples_to_start(needed, s.rate_kN_per_sample * KN, fewest)  # the fewest locomotive groups ramp slowest
     if ramp * s.sample_time_s > reference.running_time:
         problems.append(problem(path, "rate_kN_per_sample", f"{s.rate_kN_per_sample:g} kN per sample takes {ramp:.3g} "
                                 f"samples to reach the {needed / KN:.0f} kN the train needs on the ruling grade; the "
