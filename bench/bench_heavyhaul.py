@@ -1,9 +1,11 @@
-"""Heavy haul: Zhang & Zhuan's Tables III-IV and Fig. 6 on the shipped representative line,
-and the QP's solve time per step and memory for f = 1 and f = 10.
+"""Heavy haul: Zhang & Zhuan's Tables III-IV and Fig. 6 on the shipped representative line, and the
+QP's solve time per step and memory for f = 1 and f = 10.
 
     python bench/bench_heavyhaul.py                  # the four studies (about 4 min on 2 cores)
     python bench/bench_heavyhaul.py --fence-weights virtual   # the same with eq. 11 read literally
-    python bench/bench_heavyhaul.py --qp 1 [--solver daqp|condensed|clarabel|ipopt]   # one QP size: build + 10 solves, time, memory
+    python bench/bench_heavyhaul.py --terms --scale limits heavyhaul_brake_penalty   # Table IV with eq. 4's terms
+    python bench/bench_heavyhaul.py --balance [--adhesion] heavyhaul_brake_penalty   # the energy balance, an effect on
+    python bench/bench_heavyhaul.py --qp 1 [--solver daqp|condensed|clarabel|ipopt] [--blas-threads 2]   # one QP size: build + 20 solves
 
 The studies run through ``ecostudy.studies.heavyhaul.heavyhaul_study`` (resumable: outputs in
 out/bench_heavyhaul_*); the tables are printed as markdown for docs/benchmarks.md.
@@ -20,6 +22,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from ecostudy.cli.blas import limit_blas_threads  # noqa: E402
 from ecostudy.core.errors import EcostudyWarning  # noqa: E402
 from ecostudy.heavyhaul.linear import fence  # noqa: E402
 from ecostudy.heavyhaul.loop import horizon, limits, reduced_state  # noqa: E402
@@ -37,7 +40,7 @@ def rss_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def qp(factor, solver, np_=8, nc=6, solves=10):
+def qp(factor, solver, np_=8, nc=6, solves=20, threads=1):
     """Build the controller for fence ``factor`` and solve ``solves`` samples of a 15 -> 20 m/s
     manoeuvre on a 10 per-mille climb (the plant stepping the full train between them)."""
     from ecostudy.core.grid import Profile, Segment
@@ -64,35 +67,45 @@ def qp(factor, solver, np_=8, nc=6, solves=10):
         seconds.append(controller.last.seconds)
         state = plant.step(state, reduction.share(planned, consist.mass), 20.0).state
     seconds = np.array(seconds)
-    print(f"| {solver} | {factor} | {len(reduction.kinds)} | {np_}/{nc} | {controller.size['inputs']} | {controller.size['states']} | "
-          f"{controller.size['constraints']} | {build:.2f} | {seconds[0]:.3f} | {np.median(seconds[1:]):.3f} | "
-          f"{seconds.max():.3f} | {rss_mb() - before:.0f} |")
+    print(f"| {solver} | {factor} | {threads} | {len(reduction.kinds)} | {np_}/{nc} | {controller.size['inputs']} | "
+          f"{controller.size['states']} | {controller.size['constraints']} | {build:.2f} | {seconds[0]:.3f} | "
+          f"{np.median(seconds[1:]):.3f} | {np.percentile(seconds[1:], 95):.3f} | {seconds.max():.3f} | {rss_mb() - before:.0f} |")
 
 
-def studies(names, weights=None):
-    """The shipped studies; ``weights`` overrides their ``fence_weights`` (a copy of the study file
-    beside it, removed after the run)."""
+EFFECTS = ["K_b", "status", "tracking_mean_mps", "force_max_kN", "force_max_braking_kN", "force_mean_kN", "energy_total_MJ",
+           "traction_kWh", "dynamic_brake_kWh", "wagon_brake_kWh", "running_resistance_kWh", "curve_resistance_kWh",
+           "grade_kWh", "coupler_damping_kWh", "stored_change_kWh", "balance_residual_kWh"]
+TERMS = ["K_b", "status", "tracking_mean_mps", "force_max_kN", "force_max_braking_kN", "braking_samples",
+         "stretch_braking_samples", "energy_wagons_MJ", "dynamic_brake_kWh", "energy_total_MJ", "J_force", "J_tracking",
+         "J_energy", "J_braking", "dynamic_brake_use_max", "dynamic_brake_use_mean", "stop_error_m"]
+
+
+def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesion=False):
+    """The shipped studies; ``weights``, ``scale`` and ``adhesion`` override their ``fence_weights``,
+    ``objective_scale`` and ``adhesion`` (a copy of the study file beside it, removed after the run)."""
     import yaml
     from ecostudy.studies.heavyhaul import heavyhaul_study
     for name in names or ("heavyhaul_brake_penalty", "heavyhaul_brake_penalty_limits", "heavyhaul_horizons",
-                                 "heavyhaul_fence"):
+                          "heavyhaul_fence"):
         t0 = time.perf_counter()
         path, out = ROOT / "studies" / f"{name}.yaml", ROOT / "out" / f"bench_{name}"
-        if weights:
+        changes = {k: v for k, v in (("fence_weights", weights), ("objective_scale", scale), ("adhesion", adhesion)) if v}
+        if changes:
             doc = yaml.safe_load(path.read_text())
-            doc["fence_weights"] = weights
-            path, out = path.with_name(f".{name}_{weights}.yaml"), out.with_name(f"{out.name}_{weights}")
+            doc.update(changes)
+            tag = "_".join(k if v is True else str(v) for k, v in changes.items())
+            path, out = path.with_name(f".{name}_{tag}.yaml"), out.with_name(f"{out.name}_{tag}")
             path.write_text(yaml.safe_dump(doc))
         try:
-            outcome = heavyhaul_study(path, workers=2, out=out)
+            outcome = heavyhaul_study(path, workers=workers, out=out)
         finally:
-            if weights:
+            if changes:
                 path.unlink()
-        print(f"\n`{name}`{f' (fence_weights: {weights})' if weights else ''} ({time.perf_counter() - t0:.0f} s wall; "
+        print(f"\n`{name}`{f' ({changes})' if changes else ''} ({time.perf_counter() - t0:.0f} s wall; "
               f"reference {outcome.reference.running_time:.0f} s, {outcome.reference.energy / 3.6e6:.0f} kWh single mass)\n")
-        runs = outcome.runs[COLUMNS]
-        print("| " + " | ".join(COLUMNS) + " |")
-        print("|" + "---|" * len(COLUMNS))
+        runs = outcome.runs[list(columns)]
+        print("| " + " | ".join(columns) + " |")
+        print("|" + "---|" * len(columns))
         for _, row in runs.iterrows():
             print("| " + " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in row) + " |")
 
@@ -103,10 +116,17 @@ if __name__ == "__main__":
     parser.add_argument("--qp", type=int, help="fence factor: time and memory of the QP only")
     parser.add_argument("--solver", default="daqp", choices=sorted(QP_FORMS))
     parser.add_argument("--fence-weights", choices=["per_car", "virtual"], help="override the studies' fence_weights")
+    parser.add_argument("--scale", choices=["paper", "limits"], help="override the studies' objective_scale")
+    parser.add_argument("--adhesion", action="store_true", help="the plant's adhesion limit on (adhesion: true)")
+    parser.add_argument("--terms", action="store_true", help="print the brake-penalty columns (eq. 4's terms at the optimum)")
+    parser.add_argument("--balance", action="store_true", help="print the energy balance columns")
+    parser.add_argument("--blas-threads", type=int, default=1, help="OpenBLAS threads (the CLI's default: 1)")
+    parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("studies", nargs="*", help="study names (default: all four)")
     args = parser.parse_args()
+    limit_blas_threads(args.blas_threads)
     if args.qp:
-        print("| solver | f | virtual cars | Np/Nc | inputs | states | constraints | build s | first solve s | median s | max s | RSS growth MB |")
-        qp(args.qp, args.solver)
+        print("| solver | f | BLAS threads | virtual cars | Np/Nc | inputs | states | constraints | build s | first solve s | median s | p95 s | max s | RSS growth MB |")
+        qp(args.qp, args.solver, threads=args.blas_threads)
     else:
-        studies(args.studies, args.fence_weights)
+        studies(args.studies, args.fence_weights, args.scale, TERMS if args.terms else EFFECTS if args.balance else COLUMNS, args.workers, args.adhesion)

@@ -1,4 +1,4 @@
-"""The cascade plant of paper 002 eq. 1 (issue 13, first part): hand calculations on a two-car
+"""The cascade plant of Zhang & Zhuan eq. 1: hand calculations on a two-car
 train and on the paper's 204-car ore train."""
 import dataclasses
 

@@ -1,4 +1,4 @@
-"""`ecostudy heavyhaul` (issue 13): paper 002's controller on the cascade plant over a route, swept,
+"""`ecostudy heavyhaul`: Zhang & Zhuan's controller on the cascade plant over a route, swept,
 resumable; the fence arithmetic, observability, the plant's energy and statics by hand; bad input
 in one line."""
 import dataclasses
@@ -62,7 +62,6 @@ def test_four_forms_of_the_qp_give_the_same_moves(tight):
     limit = 1.1 * largest if tight else 2000.0
     names = ["ipopt", "clarabel", "condensed", "daqp"]
     forms = [QP_FORMS[name](reduction.model, reduction.kinds, np_=8, nc=6, force_limit_kN=limit) for name in names]
-    assert all(form.size == forms[0].size for form in forms)
     for form in forms:
         form.previous = reduction.reduce(u) / 1e3
     reference = table_reference([0.0, 1e6], [72.0, 72.0])
@@ -76,6 +75,18 @@ def test_four_forms_of_the_qp_give_the_same_moves(tight):
         state = plant.step(state, reduction.share(moves["clarabel"] * 1e3, consist.mass), 20.0).state
     assert moves["ipopt"][reduction.locomotives].min() > 0 and all(form.last.usable for form in forms)
     assert bool(forms[2].binding) == bool(forms[3].binding) == tight
+    # eq. 4's terms at the optimum agree between the forms (same program)
+    for name, form in zip(names, forms):
+        for term, value in form.values.items():
+            assert value == pytest.approx(forms[1].values[term], rel=1e-3, abs=1e-3), (name, term)
+    # each form counts the rows it solves: Pyomo (states kept, two-sided rows), Clarabel (one-sided
+    # rows, the input bounds as rows), condensed (rate and mean-speed rows and the force rows found)
+    n, ns, rate = 22, 43, 6 * 2
+    assert forms[0].size == {"inputs": 132, "states": 8 * ns, "constraints": 8 * ns + rate + 8 + 8 * (n - 1)}
+    assert forms[1].size == {"inputs": 132, "states": 8 * ns,
+                             "constraints": 8 * ns + 2 * 132 + 2 * rate + 8 + 2 * 8 * (n - 1)}
+    for form in forms[2:]:
+        assert form.size == {"inputs": 132, "states": 0, "constraints": rate + 8 + len(form.binding)}
 
 
 def test_observability_from_the_locomotives():
@@ -192,7 +203,7 @@ def study(tmp_path, **changes):
     return tmp_path / "hh.yaml"
 
 
-@pytest.mark.slow  # 20 s: the longest of the fast suite (make test < 3 min, issue 15); CI runs it
+@pytest.mark.slow  # 20 s: the longest of the fast suite (make test < 3 min); CI runs it
 def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path):
     """Two K_b on a 5 km line with a hump: every run stops near the end on the reference's final
     approach, tracks within 2 m/s on average (it stops about 100 m short, where the
@@ -201,9 +212,10 @@ def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path
     real car, the default, than with eq. 11 read literally); a third K_b re-uses the stored runs."""
     out = tmp_path / "out"
     first = runner.invoke(app, ["heavyhaul", str(study(tmp_path)), "--out", str(out), "--no-progress"])
-    assert first.exit_code == 0, first.output
+    assert first.exit_code == 1, first.output  # flagged: the speed tracker stops about 100 m short
     runs = pd.read_csv(out / "runs.csv")
-    assert list(runs["K_b"]) == [1, 60] and (runs["status"] == "ok").all()
+    assert list(runs["K_b"]) == [1, 60] and (runs["status"] == "flagged").all()
+    assert runs["reason"].str.fullmatch(r"stopped 10\d\.\d m short of the stop \(tolerance 1 m\)").all()
     assert (runs["tracking_mean_mps"] < 2.0).all() and (runs["force_max_kN"] < 2000).all()  # 1.73, 1.74 measured
     assert (runs["stop_error_m"].abs() < 300).all() and (runs["qp_inputs"] == 2 * 22).all()
     assert runs["wagon_brake_kWh"].iloc[1] < 0.95 * runs["wagon_brake_kWh"].iloc[0]  # 218.9 against 240.6 kWh
@@ -217,7 +229,7 @@ def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path
     assert "2 already stored, 1 computed now" in again.output, again.output
     literal = runner.invoke(app, ["heavyhaul", str(study(tmp_path, fence_weights="virtual", brake_penalty=[60])),
                                   "--out", str(tmp_path / "virtual"), "--no-progress", "--no-plot"])
-    assert literal.exit_code == 0, literal.output
+    assert literal.exit_code == 1, literal.output
     virtual = pd.read_csv(tmp_path / "virtual" / "runs.csv")
     assert virtual["wagon_brake_kWh"].iloc[0] < 0.6 * runs["wagon_brake_kWh"].iloc[0]  # 191 against 436 kWh
 
@@ -249,12 +261,12 @@ def load_yaml_doc(path):
 
 @pytest.mark.slow
 def test_the_brake_penalty_on_the_shipped_line(tmp_path):
-    """Paper 002 Table IV's direction on the shipped 45 km line (Np = 4, Nc = 2, f = 10, the
-    energy-optimal reference at +10 %, the objective weighted per real car): K_b 1 -> 60 lowers the
-    wagons' braking energy, the total and the largest in-train force while braking (647 -> 481 kN),
-    the tracking error moves by less than 0.3 m/s, and no coupler comes near its limit. (The paper's
-    2x lower largest in-train force and 10 % lower total are not reached here: the largest force is
-    the start's, and the route needs its braking, whoever brakes; docs/heavyhaul.md.)"""
+    """Zhang & Zhuan's Table IV on the shipped 45 km line (Np = 4, Nc = 2, f = 10, the energy-optimal
+    reference at +10 %, per-car weights, the paper's units): K_b 1 -> 60 lowers the wagons' braking
+    energy and the total a little (-5 %, -1.2 %), the largest in-train force over the braking samples
+    (a brake acts, no locomotive pulls) more than 2x (538 -> 101 kN), the tracking error moves by
+    less than 0.25 m/s; the braking term stays under 2 % of the force term and the dynamic brakes
+    under 30 % of their limit (docs/heavyhaul.md, "The braking penalty, measured")."""
     from .conftest import STUDIES, load_yaml
     doc = load_yaml(STUDIES / "heavyhaul_brake_penalty.yaml")
     doc.update(consist=str(PAPER), track=str(STUDIES.parent / "tracks/heavyhaul_representative_45km.yaml"),
@@ -262,10 +274,12 @@ def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     write_yaml(tmp_path / "kb.yaml", doc)
     result = runner.invoke(app, ["heavyhaul", str(tmp_path / "kb.yaml"), "--out", str(tmp_path / "out"),
                                  "--no-progress", "--no-plot", "--workers", "2"])
-    assert result.exit_code == 0, result.output
+    assert result.exit_code == 1, result.output  # flagged: both stop about 98 m short
     low, high = pd.read_csv(tmp_path / "out" / "runs.csv").itertuples()
-    assert high.energy_wagons_MJ < 0.97 * low.energy_wagons_MJ  # 11930 against 12570 MJ
+    assert "short of the stop" in low.reason and "short of the stop" in high.reason
+    assert high.energy_wagons_MJ < 0.97 * low.energy_wagons_MJ  # 11930 against 12568 MJ
     assert high.energy_total_MJ < low.energy_total_MJ
-    assert high.force_max_braking_kN < 0.8 * low.force_max_braking_kN
-    assert abs(high.tracking_mean_mps - low.tracking_mean_mps) < 0.3
+    assert high.force_max_braking_kN < 0.5 * low.force_max_braking_kN
+    assert abs(high.tracking_mean_mps - low.tracking_mean_mps) < 0.25
     assert max(low.force_max_kN, high.force_max_kN) < 1000 and high.over_ts == 0
+    assert high.J_braking < 0.02 * high.J_force and max(low.dynamic_brake_use_max, high.dynamic_brake_use_max) < 0.3

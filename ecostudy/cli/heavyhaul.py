@@ -5,13 +5,15 @@ from typing import Optional
 import typer
 
 from ecostudy.cli.app import app, case_progress, check_options, counts_line, guarded
+from ecostudy.cli.blas import limit_blas_threads
 
-SHOWN = ["K_b", "f", "Np", "Nc", "status", "tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_mean_kN",
-         "force_std_kN", "energy_wagons_MJ", "energy_total_MJ", "qp_inputs", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts"]
+SHOWN = ["K_b", "f", "Np", "Nc", "status", "tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN",
+         "force_mean_kN", "force_std_kN", "energy_wagons_MJ", "energy_total_MJ", "qp_inputs", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts", "stop_error_m"]
 
 
-def _heavyhaul(study, workers, dask, retry_failed, out, no_progress, no_plot):
+def _heavyhaul(study, workers, dask, retry_failed, out, no_progress, no_plot, blas_threads):
     check_options(workers=workers)
+    limit_blas_threads(blas_threads)  # before the workers fork: they inherit it
     from ecostudy.studies.heavyhaul import heavyhaul_study
     with case_progress("runs", no_progress) as progress:
         outcome = heavyhaul_study(study, workers, dask, retry_failed, Path(out) if out else None, progress)
@@ -38,9 +40,11 @@ def heavyhaul(
     out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's 'output')."),
     no_progress: bool = typer.Option(False, "--no-progress", help="No progress bar."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the plots."),
+    blas_threads: int = typer.Option(1, min=1, max=256, help="OpenBLAS threads per process (1: the small QPs run "
+                                     "fastest single-threaded, docs/heavyhaul.md)."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Heavy haul: Zhang & Zhuan's braking-penalised receding-horizon controller on the coupled-mass train (resumable)."""
-    counts = guarded(debug, _heavyhaul, study, workers, dask, retry_failed, out, no_progress, no_plot)
+    counts = guarded(debug, _heavyhaul, study, workers, dask, retry_failed, out, no_progress, no_plot, blas_threads)
     if counts["not_ok"]:
         raise typer.Exit(1)

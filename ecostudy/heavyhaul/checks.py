@@ -22,3 +22,25 @@ def starting_coupler_force(consist, grade):
     efforts = strength / strength.sum() * needed
     forces = np.cumsum(efforts - held)[:-1]
     return float(np.max(np.abs(forces))), needed
+
+
+def reference_problems(reference, segment, tolerance):
+    """What makes a reference (:class:`~ecostudy.heavyhaul.reference.Reference`) unfollowable on
+    ``segment``: it ends before (or beyond) the stop by more than a metre, or asks for more than the
+    train's limit at the head by more than ``tolerance`` [m/s]. A list of messages (empty: fine)."""
+    out = []
+    end = float(reference.distance[-1])
+    if abs(end - segment.distance) > 1.0:
+        out.append(f"ends at {end:.0f} m but the stop is at {segment.distance:.0f} m (the table must cover the route)")
+    excess = reference.speeds - segment.limit(reference.distance)
+    worst = int(np.argmax(excess))
+    if excess[worst] > tolerance:
+        out.append(f"{3.6 * reference.speeds[worst]:.0f} km/h at {reference.distance[worst]:.0f} m is above the "
+                   f"train's limit there ({3.6 * segment.limit(reference.distance[worst]):.0f} km/h): it cannot be followed")
+    return out
+
+
+def samples_to_start(needed, rate, groups):
+    """Samples the locomotives need to ramp from 0 to the traction ``needed`` [N] at ``rate`` [N per
+    sample per locomotive (virtual) car], ``groups`` of them ramping together."""
+    return needed / (rate * groups)

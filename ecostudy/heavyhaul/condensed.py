@@ -29,7 +29,7 @@ from scipy import sparse
 from ecostudy.core.errors import SolverError
 from ecostudy.core.units import KN
 from ecostudy.heavyhaul.qp import QpOutcome, clarabel_settings
-from ecostudy.heavyhaul.rhc import objective_terms, qp_size, sample_inputs
+from ecostudy.heavyhaul.rhc import objective_terms, objective_values, sample_inputs
 
 ROUNDS = 6  # re-solves with newly binding force rows, per sample
 INFINITE = 1e30  # DAQP's bound for "none"
@@ -96,13 +96,15 @@ class CondensedHorizon:
     """The receding-horizon QP over the inputs only; same interface as ``RecedingHorizon``."""
 
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
-                 force_limit_kN=2000.0, represented=None, solver=DaqpSolver):
+                 force_limit_kN=2000.0, represented=None, scales=None, solver=DaqpSolver):
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
         n = self.n = len(self.kinds)
         ns, nu = 2 * n - 1, nc * n
         self.locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
         self.rate, self.force_limit = rate_kN, force_limit_kN
-        self.terms = terms = objective_terms(model, self.kinds, weights, represented)
+        self.terms = terms = objective_terms(model, self.kinds, weights, represented, scales)
+        self.wagons = np.array([kind != "locomotive" for kind in self.kinds])
+        self.values = None  # eq. 4's terms at the last optimum (objective_values)
         A, B = model.A, model.B * KN
         self.powers = [np.eye(ns)]
         for _ in range(np_):
@@ -138,8 +140,10 @@ class CondensedHorizon:
 
     @property
     def size(self):
-        """The uncondensed program's size (the same program)."""
-        return qp_size(self.n, self.np_, self.nc, self.locos)
+        """The program solved: the inputs only (no states), the input bounds as simple bounds (not
+        counted), rows for the locomotives' rate limits (two-sided), the mean speed and the force rows
+        found binding so far (two-sided)."""
+        return {"inputs": self.nc * self.n, "states": 0, "constraints": len(self.rows)}
 
     def _force_row(self, k, j):
         return self.terms.stiff[j] * self.G[k][self.n + j]
@@ -179,4 +183,6 @@ class CondensedHorizon:
         if not self.last.usable:
             raise SolverError(f"heavy-haul QP (condensed): {status} after {iterations} iterations")
         self.previous = u[:n].copy()
+        self.values = objective_values(self.terms, self.wagons, np.array([self.G[k] @ u + d[k] for k in range(np_)]),
+                                       u.reshape(nc, n), vr, self.model.ts)
         return self.previous.copy()

@@ -124,6 +124,16 @@ class Fence(NamedTuple):
                            np.array([np.sum(self.shares(cars, mass) ** 2) for cars in self.members]),
                            np.asarray(self.spanned, float))
 
+    def effort_scale(self, largest, mass, weighting="per_car"):
+        """Each virtual car's effort unit [N] from its cars' ``largest`` efforts [N] (``objective_scale:
+        limits``): ``per_car`` the U with (u / U)^2 = sum over its cars of (share u / U_i)^2 / sum of
+        share^2 (its cars' own limit when they are alike), ``virtual`` the sum of its cars' limits."""
+        largest = np.asarray(largest, float)
+        if weighting == "virtual":
+            return np.array([largest[cars].sum() for cars in self.members])
+        return np.array([np.sqrt(np.sum(self.shares(cars, mass) ** 2) / np.sum((self.shares(cars, mass) / largest[cars]) ** 2))
+                         for cars in self.members])
+
     def reduce(self, values, mass=None):
         """Per-car speeds (mass-weighted means, with ``mass``) or efforts (sums) of each virtual car."""
         if mass is None:

@@ -13,7 +13,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core.units import KN
-from ecostudy.heavyhaul.rhc import input_offsets
+from ecostudy.heavyhaul.plant import LOSSES
+from ecostudy.heavyhaul.rhc import TERMS, input_offsets
 
 
 class LoopRecord(NamedTuple):
@@ -25,10 +26,16 @@ class LoopRecord(NamedTuple):
     couplers: np.ndarray       # (samples, couplers) f_in at the end of each sample [N]
     efforts: np.ndarray        # (samples, virtual cars) [N]
     solve_seconds: np.ndarray
+    speed_excess: np.ndarray   # largest (fastest car - the train's limit at the head) within each sample [m/s]
+    dynamic_limits: np.ndarray  # (samples, locomotive virtual cars) their dynamic brakes' limits [N, > 0]
+    terms: np.ndarray          # (samples, 4) eq. 4's terms at each sample's optimum (rhc.TERMS; nan if unknown)
     traction_work: float       # [J]
     dynamic_brake_work: float
     wagon_brake_work: float
     overruns: int = 0          # solves slower than Ts: the previous input was held
+    arrived: bool = True       # stopped on the reference's final approach (False: the sample cap came first)
+    losses: tuple = ()         # plant.LOSSES over the run [J]
+    stored_change: float = 0.0  # kinetic plus coupler elastic energy at the end minus at the start [J]
 
 
 def reduced_state(plant, reduction, state):
@@ -81,7 +88,8 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     c, ts = plant.consist, reduction.model.ts
     nv, locos = len(reduction.members), reduction.locomotives
     u = np.zeros(nv) if applied is None else np.asarray(applied, float)
-    rows, works, overruns = [], np.zeros(3), 0
+    rows, works, overruns, arrived = [], np.zeros(3), 0, False
+    losses, stored = np.zeros(len(LOSSES)), plant.stored_energy(state)
     for _ in range(samples):
         measured = reduced_state(plant, reduction, state)
         x0 = measured if observer is None else observer.x.copy()  # eq. 10's x^(k|k-1)
@@ -97,10 +105,15 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         step = plant.step(state, reduction.share(u, c.mass), ts)
         state = step.state
         works += [step.traction_work, step.dynamic_brake_work, step.wagon_brake_work]
+        losses += step.losses
         head = head_position(plant, state)
+        values = getattr(controller, "values", None) or {}
         rows.append((state.time, head, np.dot(c.mass, state.speeds) / c.mass.sum(), reference.speed(head),
-                     step.largest_coupler_force, step.coupler_forces, u, controller.last.seconds))
+                     step.largest_coupler_force, step.coupler_forces, u, controller.last.seconds, step.speed_excess,
+                     -low[locos], [values.get(t, np.nan) for t in TERMS]))
         if finished(plant, reference, state):
+            arrived = True
             break
     columns = (np.array(v) for v in zip(*rows))
-    return state, LoopRecord(*columns, *map(float, works), overruns)
+    return state, LoopRecord(*columns, *map(float, works), overruns, arrived, tuple(map(float, losses)),
+                             plant.stored_energy(state) - stored)

@@ -32,6 +32,7 @@ RTOL, ATOL_POSITION, ATOL_SPEED, ATOL_WORK = 1e-6, 1e-4, 1e-6, 1.0
 # through 0) chatter on the jump and the integrator stalls (a 20 s step from rest did not finish
 # in 300 s); the rounding is below 1 % of c0 above 0.07 m/s
 STANDSTILL_SPEED = 0.01
+QUADRATURES = 7  # works of traction, dynamic brakes, wagon brakes, then the four LOSSES
 
 
 class CascadeState(NamedTuple):
@@ -47,13 +48,25 @@ class CascadeStep(NamedTuple):
     traction_work: float         # locomotives [J]
     dynamic_brake_work: float    # locomotives [J]
     wagon_brake_work: float      # pneumatic brakes of the wagons [J]
+    speed_excess: float = 0.0    # largest (fastest car's speed - the train's limit at the head) over the step [m/s]
+    losses: tuple = (0.0, 0.0, 0.0, 0.0)  # work against running resistance, curves, grades; coupler damping [J]
+
+
+LOSSES = ("running_resistance", "curve_resistance", "grade", "coupler_damping")  # CascadeStep.losses
+
+
+def curtius_kniffler(speed):
+    """Adhesion coefficient of dry rail [-] at ``speed`` [m/s]: Curtius & Kniffler's
+    mu = 0.161 + 7.5 / (v + 44), v in km/h (0.33 at rest, 0.22 at 80 km/h)."""
+    return 0.161 + 7.5 / (3.6 * np.abs(speed) + 44.0)
 
 
 class CascadePlant:
     """One consist (:class:`ecostudy.core.types.Consist`) on one segment (its gradient profile)."""
 
-    def __init__(self, consist, segment, curves=True, rtol=RTOL):
+    def __init__(self, consist, segment, curves=True, rtol=RTOL, adhesion=False):
         self.consist, self.segment, self.curves, self.rtol = consist, segment, curves, rtol
+        self.adhesion = adhesion  # cap each locomotive's traction and dynamic braking at mu(v) m g (curtius_kniffler)
         self.n = consist.cars
         self.spacing = 0.5 * (consist.length[:-1] + consist.length[1:])
         self.loco = np.array([k == "locomotive" for k in consist.kinds])
@@ -93,27 +106,43 @@ class CascadePlant:
         return (c.stiffness * (positions[:-1] - positions[1:] - self.spacing)
                 + c.damping * (speeds[:-1] - speeds[1:]))
 
-    def resistance(self, positions, speeds):
-        """f_a,i [N]: running resistance (opposing the motion) and the grade at each car's own position."""
+    def running(self, speeds):
+        """Running resistance [N] of every car, opposing the motion."""
         c = self.consist
         c0, c1, c2 = c.resistance.T
         direction = speeds / np.sqrt(speeds * speeds + STANDSTILL_SPEED ** 2)  # sign(v), smooth through 0
-        running = c.mass * (c0 * direction + c1 * speeds + c2 * speeds * np.abs(speeds))
-        return running + self.fixed_forces(positions)
+        return c.mass * (c0 * direction + c1 * speeds + c2 * speeds * np.abs(speeds))
+
+    def resistance(self, positions, speeds):
+        """f_a,i [N]: running resistance (opposing the motion) and the grade at each car's own position."""
+        return self.running(speeds) + self.fixed_forces(positions)
+
+    def grade_curve(self, positions):
+        """(grade, curve) forces [N] of every car, over its length, at ``positions``."""
+        c = self.consist
+        grade = c.mass * GRAVITY * self.segment.gradient.mean_over(positions, c.length)
+        if not self.curves:
+            return grade, np.zeros_like(grade)
+        return grade, roeckl_force(c.mass, self.segment.curvature.mean_over(positions, c.length))
 
     def fixed_forces(self, positions):
         """f_p,i [N]: the grade and curve forces of every car, over its length, at ``positions``."""
+        return sum(self.grade_curve(positions))
+
+    def stored_energy(self, state):
+        """Kinetic energy of the cars plus the couplers' elastic energy [J]."""
         c = self.consist
-        fixed = c.mass * GRAVITY * self.segment.gradient.mean_over(positions, c.length)
-        if self.curves:
-            fixed = fixed + roeckl_force(c.mass, self.segment.curvature.mean_over(positions, c.length))
-        return fixed
+        extension = state.positions[:-1] - state.positions[1:] - self.spacing
+        return 0.5 * float(np.dot(c.mass, state.speeds ** 2) + np.dot(c.stiffness * np.ones(self.n - 1), extension ** 2))
 
     def envelopes(self, speeds):
         """(lowest, highest) effort of every car at its speed [N]: traction; dynamic plus pneumatic brake."""
         speeds = np.maximum(speeds, 1e-9)
         upper = np.minimum(self.traction_limits[0], self.traction_limits[1] / speeds)
         dynamic = np.minimum(self.dynamic_limits[0], self.dynamic_limits[1] / speeds)
+        if self.adhesion:
+            grip = np.where(self.loco, curtius_kniffler(speeds) * self.consist.mass * GRAVITY, np.inf)
+            upper, dynamic = np.minimum(upper, grip), np.minimum(dynamic, grip)
         return -(dynamic + self.consist.pneumatic_brake), upper
 
     def efforts(self, requested, speeds):
@@ -125,18 +154,22 @@ class CascadePlant:
         p, v = y[:n], y[n:2 * n]
         u = self.efforts(requested, v)
         fin = self.coupler_forces(p, v)
-        net = u - self.resistance(p, v)
+        running = self.running(v)
+        grade, curve = self.grade_curve(p)
+        net = u - running - grade - curve
         net[1:] += fin
         net[:-1] -= fin
         power = u * v
         traction = np.sum(np.maximum(power, 0.0)[self.loco])
         dynamic = np.sum(np.maximum(-power, 0.0)[self.loco])
         wagons = np.sum(np.maximum(-power, 0.0)[~self.loco])
-        return np.concatenate([v, net / c.mass, [traction, dynamic, wagons]])
+        closing = v[:-1] - v[1:]
+        return np.concatenate([v, net / c.mass, [traction, dynamic, wagons, running @ v, curve @ v, grade @ v,
+                                                 np.sum(c.damping * closing ** 2)]])
 
     def _sparsity(self):
         n = self.n
-        s = lil_matrix((2 * n + 3, 2 * n + 3))
+        s = lil_matrix((2 * n + QUADRATURES, 2 * n + QUADRATURES))
         for i in range(n):
             s[i, n + i] = 1  # dp/dt = v
             for j in (i - 1, i, i + 1):
@@ -151,9 +184,10 @@ class CascadePlant:
         """Advance ``state`` by ``dt`` [s] with the efforts ``requested`` [N per car] held."""
         n = self.n
         requested = np.asarray(requested, float)
-        y0 = np.concatenate([state.positions, state.speeds, [0.0, 0.0, 0.0]])
+        y0 = np.concatenate([state.positions, state.speeds, np.zeros(QUADRATURES)])
         scale = self.rtol / RTOL
-        atol = np.concatenate([np.full(n, ATOL_POSITION * scale), np.full(n, ATOL_SPEED * scale), np.full(3, ATOL_WORK)])
+        atol = np.concatenate([np.full(n, ATOL_POSITION * scale), np.full(n, ATOL_SPEED * scale),
+                               np.full(QUADRATURES, ATOL_WORK)])
         sol = solve_ivp(lambda t, y: self.derivatives(y, requested), (state.time, state.time + dt), y0,
                         method="BDF", rtol=self.rtol, atol=atol, jac_sparsity=self.jac_sparsity)
         if not sol.success:
@@ -161,4 +195,7 @@ class CascadePlant:
         p, v, works = sol.y[:n, -1], sol.y[n:2 * n, -1], sol.y[2 * n:, -1]
         largest = max(float(np.max(np.abs(self.coupler_forces(sol.y[:n, k], sol.y[n:2 * n, k]))))
                       for k in range(sol.y.shape[1]))
-        return CascadeStep(CascadeState(p, v, state.time + dt), self.coupler_forces(p, v), largest, *map(float, works))
+        heads = sol.y[0] + 0.5 * self.consist.length[0]
+        excess = float(np.max(np.max(sol.y[n:2 * n], axis=0) - self.segment.limit(heads)))
+        return CascadeStep(CascadeState(p, v, state.time + dt), self.coupler_forces(p, v), largest,
+                           *map(float, works[:3]), excess, tuple(map(float, works[3:])))

@@ -17,7 +17,7 @@ from scipy import sparse
 
 from ecostudy.core.errors import SolverError
 from ecostudy.core.units import KN
-from ecostudy.heavyhaul.rhc import objective_terms, qp_size, sample_inputs
+from ecostudy.heavyhaul.rhc import objective_terms, objective_values, sample_inputs
 
 
 def clarabel_settings(**chosen):
@@ -52,12 +52,14 @@ class ConicHorizon:
     mispredict the undamped coupler modes by as much as the forces themselves)."""
 
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
-                 force_limit_kN=2000.0, represented=None):
+                 force_limit_kN=2000.0, represented=None, scales=None):
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
         n = self.n = len(self.kinds)
         self.locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
         self.rate, self.force_limit = rate_kN, force_limit_kN
-        terms = objective_terms(model, self.kinds, weights, represented)
+        self.terms = terms = objective_terms(model, self.kinds, weights, represented, scales)
+        self.wagons = np.array([kind != "locomotive" for kind in self.kinds])
+        self.values = None  # eq. 4's terms at the last optimum (objective_values)
         ns = 2 * n - 1
         self.nu, self.ns = nc * n, ns
         nz = self.nu + np_ * ns
@@ -120,7 +122,9 @@ class ConicHorizon:
 
     @property
     def size(self):
-        return qp_size(self.n, self.np_, self.nc, self.locos)
+        """The program Clarabel solves: inputs and states, every row of A (dynamics, input bounds and
+        rate limits one-sided, mean speed, force limits one-sided)."""
+        return {"inputs": self.nu, "states": self.np_ * self.ns, "constraints": self.A.shape[0]}
 
     def solve(self, state, offsets_kN, low_kN, high_kN, reference):
         """As :meth:`RecedingHorizon.solve`: the first move [kN per (virtual) car]."""
@@ -149,4 +153,6 @@ class ConicHorizon:
             raise SolverError(f"heavy-haul QP: Clarabel {self.last.status} after {self.last.iterations} iterations")
         z = np.asarray(solution.x)
         self.previous = z[:n].copy()
+        self.values = objective_values(self.terms, self.wagons, z[self.nu:].reshape(np_, self.ns),
+                                       z[:self.nu].reshape(nc, n), vr, self.model.ts)
         return self.previous.copy()

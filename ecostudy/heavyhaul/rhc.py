@@ -36,20 +36,58 @@ class Terms(NamedTuple):
     stiff: np.ndarray     # coupler stiffness [kN/m] (f_in = k x_in, eq. 8)
 
 
-def objective_terms(model, kinds, weights, represented=None):
+UNIT_KN, UNIT_MPS = 100.0, 1.0  # the QP's units: forces in 100 kN (the /1e4 on squared kN), speeds in m/s
+
+
+class Scales(NamedTuple):
+    """What eq. 4's terms are measured in (``objective_scale: limits``, docs/heavyhaul.md): every
+    in-train force in the coupler limit [kN], each (virtual) car's effort in its largest effort
+    [kN] (an array), every speed error in the route's highest speed [m/s]. ``None`` in
+    :func:`objective_terms`: the paper's units (100 kN, 1 m/s) for every term."""
+
+    force_kN: float
+    effort_kN: np.ndarray
+    speed_mps: float
+
+
+def objective_terms(model, kinds, weights, represented=None, scales=None):
     """Eq. 4's weights (K_f, K_v, K_e, K_b) on a model of ``kinds``; ``represented``
-    (:class:`~ecostudy.heavyhaul.linear.Represented`) what each (virtual) car and coupler stands for."""
+    (:class:`~ecostudy.heavyhaul.linear.Represented`) what each (virtual) car and coupler stands for;
+    ``scales`` (:class:`Scales`) the units each term is measured in (default: the paper's)."""
     kf, kv, ke, kb = weights
     r = represented or Represented.each(len(kinds))
     penalty = np.array([1.0 if kind == "locomotive" else kb for kind in kinds])
+    if scales is not None:  # (x / scale)^2 = (x / unit)^2 (unit / scale)^2
+        kf = kf * (UNIT_KN / scales.force_kN) ** 2
+        kv = kv * (UNIT_MPS / scales.speed_mps) ** 2
+        penalty = penalty * (UNIT_KN / np.asarray(scales.effort_kN, float)) ** 2
     return Terms(kf * r.couplers, kv * r.cars, ke, penalty * r.effort, model.mass / model.mass.sum(),
                  model.stiffness / KN)
 
 
+TERMS = ("force", "tracking", "energy", "braking")  # eq. 4's terms as reported: K_f, K_v, K_e locomotives, K_e K_b wagons
+
+
+def objective_values(terms, wagons, predicted, moves, vr, ts):
+    """Eq. 4's terms at a solution (same scaling as the QP): ``predicted`` the states x(1..Np) (rows),
+    ``moves`` the Nc moves [kN] (rows), ``vr`` v_r(0..Np), ``wagons`` a mask of the wagon (virtual)
+    cars; a dict by :data:`TERMS` (the energy term the locomotives', the braking term the wagons')."""
+    predicted, moves = np.atleast_2d(predicted), np.atleast_2d(moves)
+    np_, nc = len(predicted), len(moves)
+    n = len(wagons)
+    forces = predicted[:, n:] * terms.stiff
+    efforts = moves[[min(k, nc - 1) for k in range(np_)]] ** 2 * terms.ke * terms.penalty / 1e4
+    scale = ts / np_
+    return {"force": scale * float(np.sum(terms.kf * forces ** 2)) / 1e4,
+            "tracking": scale * float(np.sum(terms.kv * (predicted[:, :n] - np.asarray(vr)[1:, None]) ** 2)),
+            "energy": scale * float(np.sum(efforts[:, ~wagons])), "braking": scale * float(np.sum(efforts[:, wagons]))}
+
+
 def qp_size(n, np_, nc, locomotives):
-    """The QP's decision variables and constraints (input bounds are variable bounds), with the
-    states kept: the paper condenses them away (n Nc variables, (6n - 2) Nc constraints:
-    linear.paper_counts); the three forms here solve this same program."""
+    """The Pyomo form's decision variables and constraints, as Ipopt receives them (input bounds are
+    variable bounds; the rate and force rows two-sided, one row each; the states kept). The paper
+    condenses the states away (n Nc variables, (6n - 2) Nc constraints: linear.paper_counts); each
+    form reports the rows it solves (``size``)."""
     return {"inputs": nc * n, "states": np_ * (2 * n - 1),
             "constraints": np_ * (2 * n - 1) + nc * len(locomotives) + np_ + np_ * (n - 1)}
 
@@ -69,9 +107,9 @@ class RecedingHorizon:
     input and the reference are variables fixed by their bounds) and warm-starts Ipopt."""
 
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
-                 force_limit_kN=2000.0, represented=None):
+                 force_limit_kN=2000.0, represented=None, scales=None):
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
-        terms = objective_terms(model, self.kinds, weights, represented)
+        terms = objective_terms(model, self.kinds, weights, represented, scales)
         n = len(self.kinds)
         self.n = n
         self.locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
@@ -93,6 +131,8 @@ class RecedingHorizon:
             B[s, i] * (m.u[move(k), i] - m.offset[k, i]) for i in range(n) if B[s, i] != 0.0))
         m.rate = pyo.Constraint(m.U, self.locos, rule=lambda m, k, i: pyo.inequality(
             -rate_kN, m.u[k, i] - (m.previous[i] if k == 0 else m.u[k - 1, i]), rate_kN))
+        self.terms, self.wagons = terms, np.array([kind != "locomotive" for kind in self.kinds])
+        self.values = None  # eq. 4's terms at the last optimum (objective_values)
         weight, stiff, penalty = terms.weight, terms.stiff, terms.penalty
         m.mean_speed = pyo.Constraint(pyo.RangeSet(1, np_), rule=lambda m, k: sum(
             weight[i] * m.x[k, i] for i in range(n)) - m.vr[k] <= 0.0)
@@ -129,6 +169,9 @@ class RecedingHorizon:
         if not self.last.usable:
             raise SolverError(f"heavy-haul QP: Ipopt {self.last.status} after {self.last.iterations} iterations")
         self.previous = np.array([pyo.value(m.u[0, i]) for i in range(n)])
+        states = np.array([[pyo.value(m.x[k, s]) for s in m.S] for k in range(1, self.np_ + 1)])
+        moves = np.array([[pyo.value(m.u[k, i]) for i in range(n)] for k in m.U])
+        self.values = objective_values(self.terms, self.wagons, states, moves, vr, self.model.ts)
         return self.previous.copy()
 
 

@@ -1,10 +1,10 @@
-"""The schema of a heavy-haul study file (``ecostudy heavyhaul``): paper 002's receding-horizon
+"""The schema of a heavy-haul study file (``ecostudy heavyhaul``): Zhang & Zhuan's receding-horizon
 controller on a consist's cascade plant, swept over the brake penalty K_b, the fence factor f and
-the horizons (Np, Nc). Units are in the field names; defaults are paper 002's (Ts = 20 s, K_f = 10,
+the horizons (Np, Nc). Units are in the field names; defaults are Zhang & Zhuan's (Ts = 20 s, K_f = 10,
 K_v = 60, K_e = 10)."""
 from typing import Literal, Optional
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from ecostudy.io.schemabase import Strict
 
@@ -40,7 +40,7 @@ class Horizon(Strict):
 
 
 class Weights(Strict):
-    """K_f, K_v, K_e of paper 002 eq. 4 (K_b is swept: ``brake_penalty``)."""
+    """K_f, K_v, K_e of Zhang & Zhuan eq. 4 (K_b is swept: ``brake_penalty``)."""
 
     force: float = Field(10.0, ge=0, description="K_f, on in-train forces [per kN^2 / 1e4].")
     speed: float = Field(60.0, ge=0, description="K_v, on speed tracking [per (m/s)^2].")
@@ -67,16 +67,39 @@ class HeavyhaulFile(Strict):
         "per_car", description="A virtual car's terms in the objective: weighted by the cars and couplers it "
         "stands for (the full train's objective, as nearly as virtual cars allow), or each as one car (eq. 11 "
         "read literally: grouped wagons' braking then costs about f times more).")
+    objective_scale: Literal["paper", "limits"] = Field(
+        "paper", description="The units of eq. 4's terms: the paper's (forces and efforts in 100 kN, speeds in m/s) "
+        "or each by its physical limit (in-train forces by the coupler limit, each car's effort by its largest, "
+        "speed errors by the route's highest speed).")
+    adhesion: bool = Field(False, description="Cap each locomotive's traction and dynamic braking at its adhesion, "
+                           "mu(v) m g with Curtius & Kniffler's dry-rail mu (the plant; the controller sees the "
+                           "capped envelopes).")
     weights: Weights = Weights()
     rate_kN_per_sample: float = Field(200.0, gt=0, description="Largest change of a locomotive group's effort "
-                                      "per sample (paper 002 gives none).")
+                                      "per sample (Zhang & Zhuan give none).")
     qp_solver: Literal["daqp", "condensed", "clarabel", "ipopt"] = Field(
         "daqp", description="The same QP four ways: condensed to the inputs (force rows as they bind) and solved "
         "by DAQP warm-started from the last sample (fastest) or by Clarabel, with the states kept (Clarabel), "
         "or Ipopt on its Pyomo model.")
     observer: bool = Field(False, description="Feed the controller the Kalman observer's estimate (eq. 10).")
-    max_samples: int = Field(1000, ge=1, le=100000, description="Stop a run after this many samples.")
+    max_samples: int = Field(1000, ge=1, le=100000, description="Stop a run after this many samples (a run "
+                             "that has not arrived by then is flagged).")
+    stop_tolerance_m: float = Field(1.0, gt=0, description="A run that stops farther from the stop (short or "
+                                    "beyond) is flagged.")
+    speed_tolerance_kmh: float = Field(1.0, ge=0, description="A run in which a car runs faster than the line's "
+                                       "limit by more is flagged.")
     output: Optional[str] = None
+
+    @field_validator("brake_penalty", "fence", "horizons")
+    @classmethod
+    def _once(cls, values):
+        seen = []
+        for v in values:
+            key = (v.np, v.nc) if isinstance(v, Horizon) else v
+            if key in seen:
+                raise ValueError(f"{key} is listed twice (each value is one run)")
+            seen.append(key)
+        return values
 
     @model_validator(mode="after")
     def _values(self):

@@ -3,10 +3,12 @@ controller on the full cascade plant, one case per (K_b, f, Np, Nc), on the batc
 (resumable, processes or Dask). The reference speed is solved once, when the study is expanded, and
 travels in every case (cases are self-contained and keyed by a hash of their inputs).
 
-Per run, the columns of paper 002's Tables III-IV: the tracking error |mean speed - v_r| (mean,
-std), the in-train forces (max over the integrator's points, also over the samples in which any car
-brakes, mean and std of |f_in| over couplers and samples), the energies int |u v| dt of the wagons and in total; and the QP's size, its solve
-time per step (mean, max), the steps over Ts and the process's peak memory.
+Per run, the columns of Zhang & Zhuan's Tables III-IV: the tracking error |mean speed - v_r| (mean,
+std), the in-train forces (max over the integrator's points, also over the braking samples, mean and
+std of |f_in| over couplers and samples), the energies int |u v| dt of the wagons and in total; what
+:mod:`ecostudy.heavyhaul.metrics` reads (arrival, stop error, limits, eq. 4's terms at the optimum,
+the energy balance); and the QP's size as solved, its solve time per step (mean, p95, max), the steps
+over Ts and the process's peak memory. A run that missed anything is ``flagged`` with every reason.
 """
 import resource
 import warnings
@@ -21,16 +23,17 @@ import pandas as pd
 from ecostudy import __version__
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
-from ecostudy.core.units import KN, KWH
-from ecostudy.heavyhaul.checks import ruling_grade, starting_coupler_force
+from ecostudy.core.units import KMH, KN, KWH
+from ecostudy.heavyhaul.checks import reference_problems, ruling_grade, samples_to_start, starting_coupler_force
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
 from ecostudy.heavyhaul.linear import fence
 from ecostudy.heavyhaul.loop import reduced_state, run
+from ecostudy.heavyhaul.metrics import Tolerances, reasons, run_metrics
 from ecostudy.heavyhaul.observer import KalmanObserver
 from ecostudy.heavyhaul.plant import CascadePlant
 from ecostudy.heavyhaul.reference import Reference, optimal_reference, single_mass, table_reference
 from ecostudy.heavyhaul.qp import ConicHorizon
-from ecostudy.heavyhaul.rhc import RecedingHorizon
+from ecostudy.heavyhaul.rhc import RecedingHorizon, Scales
 from ecostudy.io import schemas
 from ecostudy.io.heavyhaulfile import HeavyhaulFile
 from ecostudy.io.loaders import (chosen_stops, consist_from_document, read_document, track_document,
@@ -69,6 +72,18 @@ def expand(path):
                                  f"is below the {force / KN:.0f} kN a coupler carries when the train starts on the "
                                  f"ruling grade ({1e3 * grade:.1f} per mille) of '{track.name}'"))
     reference = _reference(s, path, consist, track, from_stop, to_stop)
+    field = "reference.table" if s.reference.table else "reference"
+    problems = [problem(path, field, p) for p in reference_problems(reference, segment, s.speed_tolerance_kmh * KMH)]
+    problems += [problem(path, "fence", f"{f} is not within 1..{consist.cars} (the consist's cars)")
+                 for f in s.fence if f > consist.cars]
+    fewest = min([len(fence(consist, f, s.sample_time_s).locomotives) for f in s.fence if f <= consist.cars] or [1])
+    ramp = samples_to_start(needed, s.rate_kN_per_sample * KN, fewest)  # the fewest locomotive groups ramp slowest
+    if ramp * s.sample_time_s > reference.running_time:
+        problems.append(problem(path, "rate_kN_per_sample", f"{s.rate_kN_per_sample:g} kN per sample takes {ramp:.3g} "
+                                f"samples to reach the {needed / KN:.0f} kN the train needs on the ruling grade; the "
+                                f"trip has {reference.running_time / s.sample_time_s:.0f}"))
+    if problems:
+        raise InputError(problems)
     longest = max(h.np for h in s.horizons) * s.sample_time_s
     if longest > reference.running_time:
         raise InputError(problem(path, "horizons", f"a horizon of {longest:g} s (np x sample_time_s) is longer than "
@@ -78,7 +93,9 @@ def expand(path):
                             "times": reference.times.tolist(), "energy": reference.energy},
               "sample_time": s.sample_time_s, "weights": s.weights.model_dump(), "rate_kN": s.rate_kN_per_sample,
               "observer": s.observer, "qp_solver": s.qp_solver,
-              "fence_coupling": s.fence_coupling, "fence_sharing": s.fence_sharing, "fence_weights": s.fence_weights, "max_samples": s.max_samples, "version": __version__}
+              "fence_coupling": s.fence_coupling, "fence_sharing": s.fence_sharing, "fence_weights": s.fence_weights,
+              "objective_scale": s.objective_scale, "adhesion": s.adhesion, "max_samples": s.max_samples,
+              "stop_tolerance_m": s.stop_tolerance_m, "speed_tolerance_kmh": s.speed_tolerance_kmh, "version": __version__}
     cases = []
     for kb, f, h in product(s.brake_penalty, s.fence, s.horizons):
         case = {**shared, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",
@@ -105,12 +122,18 @@ def drive(case):
         track = track_from_schema(schemas.TrackFile.model_validate(case["track"]))
     r = case["reference"]
     reference = Reference(*(np.array(r[k]) for k in ("distance", "speeds", "times")), r["energy"])
-    plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]))
+    plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]),
+                         adhesion=case["adhesion"])
     labels, w, ts = case["labels"], case["weights"], case["sample_time"]
     reduction = fence(consist, labels["f"], ts, case["fence_coupling"], case["fence_sharing"])
+    scales = None
+    if case["objective_scale"] == "limits":  # docs/heavyhaul.md, "What the terms are measured in"
+        largest = np.maximum(plant.traction_limits[0], plant.dynamic_limits[0] + consist.pneumatic_brake)
+        scales = Scales(consist.force_limit / KN, reduction.effort_scale(largest, consist.mass, case["fence_weights"]) / KN,
+                        float(plant.segment.limit.values.max()))
     controller = QP_FORMS[case["qp_solver"]](reduction.model, reduction.kinds, np_=labels["Np"], nc=labels["Nc"],
                       weights=(w["force"], w["speed"], w["energy"], labels["K_b"]), rate_kN=case["rate_kN"],
-                      force_limit_kN=consist.force_limit / KN,
+                      force_limit_kN=consist.force_limit / KN, scales=scales,
                       represented=reduction.represented(consist.mass, case["fence_weights"]))
     state = plant.initial(head=-0.5 * consist.length[0], speed=0.0)
     observer = (KalmanObserver(reduction.model, reduction.kinds, estimate=reduced_state(plant, reduction, state))
@@ -119,24 +142,22 @@ def drive(case):
     return consist, controller, record, reference
 
 
-def summarise(consist, controller, record, reference):
-    """The per-run numbers (SI in, the units in the names out)."""
+def summarise(consist, controller, record, reference, locomotives=()):
+    """The per-run numbers (SI in, the units in the names out); ``locomotives`` the controller's
+    locomotive (virtual) cars."""
     error = record.mean_speed - record.reference
     forces = np.abs(record.couplers) / KN
     wagons, total = record.wagon_brake_work, record.traction_work + record.dynamic_brake_work + record.wagon_brake_work
     size = controller.size
-    braking = record.efforts.min(axis=1) < -KN  # samples in which some (virtual) car brakes (by 1 kN or more)
     step = max(1, consist.cars // 100)  # the heat map keeps at most about 100 couplers
     return {
         "tracking_mean_mps": float(np.mean(np.abs(error))), "tracking_std_mps": float(np.std(error)),
-        "force_max_kN": float(record.largest_coupler.max() / KN),
-        "force_max_braking_kN": float(record.largest_coupler[braking].max() / KN) if braking.any() else 0.0,
+        **run_metrics(record, reference, list(locomotives), consist.force_limit),
         "force_mean_kN": float(forces.mean()),
         "force_std_kN": float(forces.std()), "energy_wagons_MJ": wagons / 1e6, "energy_total_MJ": total / 1e6,
         "traction_kWh": record.traction_work / KWH, "dynamic_brake_kWh": record.dynamic_brake_work / KWH,
         "wagon_brake_kWh": wagons / KWH, "reference_kWh": reference.energy / KWH,
-        "arrival_s": float(record.times[-1]), "reference_time_s": reference.running_time,
-        "stop_error_m": float(record.head[-1] - reference.distance[-1]), "samples": len(record.times),
+        "reference_time_s": reference.running_time, "samples": len(record.times),
         "virtual_cars": controller.n, "qp_inputs": size["inputs"], "qp_states": size["states"],
         "qp_constraints": size["constraints"], "solve_mean_s": float(record.solve_seconds.mean()),
         "solve_p95_s": float(np.percentile(record.solve_seconds, 95)), "solve_max_s": float(record.solve_seconds.max()), "over_ts": record.overruns,
@@ -153,16 +174,21 @@ def run_heavyhaul_case(case):
 
 
 def _run(case):
-    summary = summarise(*drive(case))
-    if summary["over_ts"]:
-        return "flagged", f"{summary['over_ts']} solves over Ts (the previous input was held)", summary
-    return "ok", None, summary
+    consist, controller, record, reference = drive(case)
+    summary = summarise(consist, controller, record, reference, controller.locos)
+    why = reasons(summary, case["max_samples"], summary["over_ts"],
+                  Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH))
+    return ("flagged", "; ".join(why), summary) if why else ("ok", None, summary)
 
 
-COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN", "force_mean_kN", "force_std_kN",
-           "energy_wagons_MJ", "energy_total_MJ", "traction_kWh", "dynamic_brake_kWh", "wagon_brake_kWh",
-           "arrival_s", "reference_time_s", "stop_error_m", "samples", "virtual_cars", "qp_inputs", "qp_states",
-           "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts", "peak_memory_MB")
+COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN", "force_limit_kN",
+           "force_mean_kN", "force_std_kN", "energy_wagons_MJ", "energy_total_MJ", "traction_kWh", "dynamic_brake_kWh",
+           "wagon_brake_kWh", "J_force", "J_tracking", "J_energy", "J_braking", "dynamic_brake_use_max",
+           "dynamic_brake_use_mean", "dynamic_brake_at_limit_samples", "braking_samples", "stretch_braking_samples",
+           "speed_excess_kmh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "coupler_damping_kWh", "stored_change_kWh",
+           "balance_residual_kWh", "arrived", "arrival_s", "reference_time_s", "reference_kWh", "stop_error_m", "samples", "virtual_cars",
+           "qp_inputs", "qp_states", "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts",
+           "peak_memory_MB")
 
 
 def heavyhaul_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):

@@ -1,0 +1,97 @@
+"""What a heavy-haul run reports and when it is not ok: the numbers read from a closed-loop record
+(:class:`~ecostudy.heavyhaul.loop.LoopRecord`) and the reasons that flag it.
+
+A run is ``flagged`` (never ``ok``) when the train did not arrive (the sample cap came first), when
+it stopped farther from the stop than the tolerance (short or beyond), when a car ran faster than the
+train's limit at the head by more than the tolerance, when a coupler carried more than the consist's
+limit, or when a solve took longer than Ts (its input was not applied).
+
+Per run also: eq. 4's terms at each sample's optimum, summed over the run (in-train forces,
+tracking, the locomotives' efforts, the wagons' braking: the value the controller traded), the
+locomotives' dynamic braking against its limit at their speed, and the samples in which the
+locomotives pull while a wagon brakes (stretch braking).
+"""
+from typing import NamedTuple
+
+import numpy as np
+
+from ecostudy.core.units import KMH, KN, KWH
+from ecostudy.heavyhaul.plant import LOSSES
+from ecostudy.heavyhaul.rhc import TERMS
+
+PULLING = KN     # a (virtual) car's effort above this pulls, below minus this brakes [N]
+AT_LIMIT = 0.99  # dynamic braking at this share of its limit or more is "at the limit"
+
+
+class Tolerances(NamedTuple):
+    """How far a run may miss before it is flagged."""
+
+    stop_m: float = 1.0        # |head at the end - the stop| [m]
+    speed_mps: float = KMH     # fastest car over the train's limit [m/s]
+
+
+def braking_samples(efforts, locomotives):
+    """Samples in which some (virtual) car brakes and no locomotive pulls (``efforts`` rows [N])."""
+    pulls = (efforts[:, locomotives] > PULLING).any(axis=1)
+    return (efforts.min(axis=1) < -PULLING) & ~pulls
+
+
+def run_metrics(record, reference, locomotives, force_limit):
+    """The checked numbers of a run (units in the names): ``locomotives`` the indices of the
+    locomotive (virtual) cars, ``force_limit`` the consist's coupler limit [N]."""
+    efforts = record.efforts
+    loco = efforts[:, locomotives]
+    braking = braking_samples(efforts, locomotives)
+    wagons = np.ones(efforts.shape[1], bool)
+    wagons[locomotives] = False
+    stretch = (loco > PULLING).any(axis=1) & (efforts[:, wagons] < -PULLING).any(axis=1)
+    dynamic = np.maximum(-loco, 0.0).sum(axis=1) / np.maximum(record.dynamic_limits.sum(axis=1), 1.0)
+    using = dynamic > 1e-3
+    terms = np.nansum(record.terms, axis=0)
+    return {
+        "arrived": bool(record.arrived), "arrival_s": float(record.times[-1]),
+        "stop_error_m": float(record.head[-1] - reference.distance[-1]),
+        "force_max_kN": float(record.largest_coupler.max() / KN),
+        "force_max_braking_kN": float(record.largest_coupler[braking].max() / KN) if braking.any() else 0.0,
+        "force_limit_kN": force_limit / KN, "braking_samples": int(braking.sum()),
+        "stretch_braking_samples": int(stretch.sum()),
+        "speed_excess_kmh": float(max(record.speed_excess.max(), 0.0) / KMH),
+        "dynamic_brake_use_max": float(dynamic.max()),
+        "dynamic_brake_use_mean": float(dynamic[using].mean()) if using.any() else 0.0,
+        "dynamic_brake_at_limit_samples": int((dynamic >= AT_LIMIT).sum()),
+        **{f"J_{name}": float(value) for name, value in zip(TERMS, terms)},
+        **energy_balance(record),
+    }
+
+
+def energy_balance(record):
+    """The plant's energy balance over the run [kWh]: what the efforts put in (traction minus the
+    dynamic and wagon brakes) against each named loss (running and curve resistance, the grades,
+    the couplers' damping) and the change of kinetic plus coupler elastic energy; the residual is
+    the integrator's error."""
+    put_in = record.traction_work - record.dynamic_brake_work - record.wagon_brake_work
+    out = {f"{name}_kWh": value / KWH for name, value in zip(LOSSES, record.losses)}
+    out["stored_change_kWh"] = record.stored_change / KWH
+    out["balance_residual_kWh"] = (put_in - sum(record.losses) - record.stored_change) / KWH
+    return out
+
+
+def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
+    """Why a run is not ok (empty: ok); ``samples`` the cap it ran under."""
+    out = []
+    if not metrics["arrived"]:
+        where = (f"{-metrics['stop_error_m']:.0f} m before the stop" if metrics["stop_error_m"] <= 0
+                 else f"with the train {metrics['stop_error_m']:.0f} m beyond the stop, not stopped")
+        out.append(f"the sample cap ({samples}) came {where}")
+    elif abs(metrics["stop_error_m"]) > tolerances.stop_m:
+        where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
+        out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m)")
+    if metrics["force_max_kN"] > metrics["force_limit_kN"]:
+        out.append(f"largest coupler force {metrics['force_max_kN']:.1f} kN above the consist's "
+                   f"{metrics['force_limit_kN']:g} kN limit")
+    if metrics["speed_excess_kmh"] * KMH > tolerances.speed_mps:
+        out.append(f"a car ran {metrics['speed_excess_kmh']:.1f} km/h over the line's limit "
+                   f"(tolerance {tolerances.speed_mps / KMH:g} km/h)")
+    if over_ts:
+        out.append(f"{over_ts} solves over Ts (the previous input was held)")
+    return out

@@ -1,0 +1,92 @@
+"""`ecostudy heavyhaul` says when a run missed: every failure class is flagged (exit 1) or refused
+in one line before computing (exit 2), each by a real run or a real expansion on a 5 km line."""
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+from ecostudy.core.units import KMH
+from ecostudy.heavyhaul.metrics import Tolerances, reasons
+
+from .conftest import load_yaml, write_yaml
+from .test_heavyhaul_study import PAPER, study
+
+runner = CliRunner()
+
+
+def invoke(path, out):
+    return runner.invoke(app, ["heavyhaul", str(path), "--out", str(out), "--no-progress", "--no-plot"])
+
+
+def refused(result, *words):
+    """Exit 2, one line naming ``words``, no traceback."""
+    lines = [line for line in result.output.splitlines() if line.strip()]
+    assert result.exit_code == 2, result.output
+    assert len(lines) == 1 and all(w in lines[0] for w in words) and "Traceback" not in result.output, result.output
+
+
+def test_a_sample_cap_short_of_the_stop_is_flagged(tmp_path):
+    result = invoke(study(tmp_path, brake_penalty=[1], max_samples=3), tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert run["status"] == "flagged" and not run["arrived"] and run["samples"] == 3
+    assert "sample cap (3)" in run["reason"] and "before the stop" in run["reason"]
+    assert run["stop_error_m"] < -4000  # 60 s from rest on a 5 km trip
+
+
+def test_a_stop_short_and_a_coupler_over_its_limit_are_flagged(tmp_path):
+    """The speed tracker stops about 100 m short of the stop (flagged against the 1 m tolerance);
+    with a coupler limit of 600 kN (above the 230-380 kN the start on the ruling grade needs, so
+    the file is accepted) the plant's start pulls about 980 kN through the head couplers."""
+    weak = load_yaml(PAPER)
+    weak["couplers"]["force_limit_kN"] = 600
+    write_yaml(tmp_path / "weak.yaml", weak)
+    result = invoke(study(tmp_path, brake_penalty=[1], consist=str(tmp_path / "weak.yaml")), tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert run["status"] == "flagged" and run["arrived"] and run["force_limit_kN"] == 600
+    assert run["force_max_kN"] > 600 and "above the consist's 600 kN limit" in run["reason"]
+    assert run["stop_error_m"] < -1 and "short of the stop" in run["reason"]
+    assert run["arrival_s"] > 0 and run["speed_excess_kmh"] >= 0
+    assert run["J_force"] > 0 and run["J_tracking"] > 0 and run["J_braking"] >= 0
+
+
+def test_each_missed_limit_is_a_reason():
+    """The rule itself on the numbers of a run: an overrun of metres, a car over the line's limit,
+    solves over Ts; a run within every tolerance is ok."""
+    good = {"arrived": True, "stop_error_m": 0.4, "force_max_kN": 900.0, "force_limit_kN": 2000.0,
+            "speed_excess_kmh": 0.5}
+    assert reasons(good, 100, 0) == []
+    assert reasons({**good, "stop_error_m": 2.7}, 100, 0) == ["stopped 2.7 m beyond the stop (tolerance 1 m)"]
+    assert reasons({**good, "speed_excess_kmh": 3.0}, 100, 0) == [
+        "a car ran 3.0 km/h over the line's limit (tolerance 1 km/h)"]
+    assert reasons({**good, "force_max_kN": 815.6, "force_limit_kN": 800.0}, 100, 0) == [
+        "largest coupler force 815.6 kN above the consist's 800 kN limit"]
+    assert reasons(good, 100, 2) == ["2 solves over Ts (the previous input was held)"]
+    assert reasons({**good, "arrived": False, "stop_error_m": 50.0}, 100, 0) == [
+        "the sample cap (100) came with the train 50 m beyond the stop, not stopped"]
+    assert reasons({**good, "stop_error_m": 2.7}, 100, 0, Tolerances(5.0, 2 * KMH)) == []
+
+
+def reference_table(tmp_path, rows):
+    (tmp_path / "ref.csv").write_text("distance_m,speed_kmh\n" + "\n".join(f"{d},{v}" for d, v in rows) + "\n")
+    return {"table": str(tmp_path / "ref.csv")}
+
+
+@pytest.mark.parametrize("changes, words", [
+    ({"fence": [300]}, ["fence", "300", "1..204"]),
+    ({"brake_penalty": [60, 1, 60]}, ["brake_penalty", "60", "twice"]),
+    ({"horizons": [{"np": 4, "nc": 2}, {"np": 4, "nc": 2}]}, ["horizons", "twice"]),
+    ({"rate_kN_per_sample": 1e-9}, ["rate_kN_per_sample", "1e-09 kN per sample"]),
+])
+def test_bad_sweeps_are_refused_in_one_line(tmp_path, changes, words):
+    refused(invoke(study(tmp_path, **changes), tmp_path / "out"), *words)
+
+
+@pytest.mark.parametrize("rows, words", [
+    ([(0, 0), (100, 30), (4000, 30), (4600, 0)], ["reference.table", "ends at 4600 m", "5000 m"]),
+    ([(0, 0), (100, 300), (4900, 300), (5000, 0)], ["reference.table", "300 km/h", "cannot be followed"]),
+    ([(0, 0), (100, "fast"), (5000, 0)], ["ref.csv", "speed_kmh (row 3)", "'fast' is not a number"]),
+])
+def test_unfollowable_reference_tables_are_refused_in_one_line(tmp_path, rows, words):
+    refused(invoke(study(tmp_path, reference=reference_table(tmp_path, rows)), tmp_path / "out"), *words)
