@@ -86,7 +86,7 @@ def test_bad_sweeps_are_refused_in_one_line(tmp_path, changes, words):
 @pytest.mark.parametrize("rows, words", [
     ([(0, 0), (100, 30), (4000, 30), (4600, 0)], ["reference.table", "ends at 4600 m", "5000 m"]),
     ([(0, 0), (100, 300), (4900, 300), (5000, 0)], ["reference.table", "300 km/h", "cannot be followed"]),
-    ([(0, 0), (100, "fast"), (5000, 0)], ["ref.csv", "speed_kmh (row 3)", "'fast' is not a number"]),
+    ([(0, 0), (100, "fast"), (5000, 0)], ["ref.csv", "speed_kmh, row 3", "'fast' is not a finite number"]),
 ])
 def test_unfollowable_reference_tables_are_refused_in_one_line(tmp_path, rows, words):
     refused(invoke(study(tmp_path, reference=reference_table(tmp_path, rows)), tmp_path / "out"), *words)

@@ -224,6 +224,10 @@ def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path
     assert (runs["energy_total_MJ"] > runs["energy_wagons_MJ"]).all()
     assert (out / "tracking.png").exists() and (out / "brake_penalty.png").exists()
     assert (out / "forces_K_b60_f10_Np4_Nc2.png").exists()
+    from .conftest import assert_folder
+    folder = assert_folder(out, "heavyhaul", ["runs"], rows=2, status="flagged")
+    assert folder.cases["flagged"] == 2 and "stopped 10" in str(folder.status) and (out / "report.html").is_file()
+    assert "flagged: " in first.output and "short of the stop" in first.output
     again = runner.invoke(app, ["heavyhaul", str(study(tmp_path, brake_penalty=[1, 60, 40])), "--out", str(out),
                                 "--no-progress", "--no-plot"])
     assert "2 already stored, 1 computed now" in again.output, again.output

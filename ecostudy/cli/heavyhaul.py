@@ -4,7 +4,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import app, case_progress, check_options, counts_line, guarded
+from ecostudy.cli.app import app, case_progress, check_options, counts_line, flag_folder, guarded
 from ecostudy.cli.blas import limit_blas_threads
 
 SHOWN = ["K_b", "f", "Np", "Nc", "status", "tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN",
@@ -22,13 +22,14 @@ def _heavyhaul(study, workers, dask, retry_failed, out, no_progress, no_plot, bl
         from ecostudy.report import heavyplots
         plots = heavyplots.draw(outcome)
     runs, counts = outcome.runs, outcome.counts
+    from ecostudy.report.files import write_cases_folder
+    write_cases_folder(outcome.output, "heavyhaul", outcome.cases, runs, {"runs": "runs.csv"},
+                       ["results.sqlite", *plots], study=str(study))
     typer.echo(runs[[c for c in SHOWN if c in runs]].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     typer.echo(counts_line(counts, "runs"))
-    typer.echo(f"outputs {outcome.output}/ ({', '.join(['runs.csv', 'results.sqlite'] + plots[:3])}"
+    typer.echo(f"outputs {outcome.output}/ ({', '.join(['runs.csv', 'summary.json', 'report.html'] + plots[:3])}"
                f"{', ...' if len(plots) > 3 else ''})")
-    for _, row in runs[runs["status"] != "ok"].iterrows():
-        typer.echo(f"  K_b={row['K_b']:g} f={row['f']} Np={row['Np']} Nc={row['Nc']}: {row['status']}: {row['reason']}")
-    return counts
+    return outcome.output
 
 
 @app.command(short_help="Heavy-haul train as coupled masses under braking-penalised RHC (Zhang & Zhuan).")
@@ -45,6 +46,5 @@ def heavyhaul(
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Heavy haul: Zhang & Zhuan's braking-penalised receding-horizon controller on the coupled-mass train (resumable)."""
-    counts = guarded(debug, _heavyhaul, study, workers, dask, retry_failed, out, no_progress, no_plot, blas_threads)
-    if counts["not_ok"]:
-        raise typer.Exit(1)
+    flag_folder(guarded(debug, _heavyhaul, study, workers, dask, retry_failed, out, no_progress, no_plot,
+                        blas_threads))

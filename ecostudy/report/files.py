@@ -11,6 +11,7 @@ from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import write_csv, write_json
 from ecostudy.report import style
 from ecostudy.report.html import write_html
+from ecostudy.studies.batch import case_statuses
 
 
 def figures(out_dir, plot, drawings, out=style.Output()):
@@ -150,3 +151,11 @@ def write_network(run, st, out_dir, plot=True, out=style.Output()):
                   dt_s=st.dt)
     write_html(out_dir)
     return table
+
+
+def write_cases_folder(out_dir, kind, cases, table, tables, files=(), **fields):
+    """``summary.json`` and ``report.html`` of a resumable study's folder (``heavyhaul``,
+    ``simulate``): every case's status from the table's ``status`` and ``reason`` columns, named
+    by its labels (``studies.batch.case_statuses``)."""
+    write_summary(out_dir, kind, case_statuses(cases, table), tables, files, **fields)
+    write_html(out_dir)
