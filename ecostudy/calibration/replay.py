@@ -1,0 +1,159 @@
+"""The replayed dynamics of a logged run: the speed a train with given parameters would have had
+under the logged work at the wheel, run by run between stops.
+
+Energy balance from the departure (thesis 000 eq. 2.1 multiplied by v and integrated over time):
+
+    1/2 M v(t)^2 = W(t) - int_0^t R_v(v) v dt - Ms * w_fixed(t)
+
+W is the logged work at the wheel (the wheel power's interval means times the interval, or the
+trapezoid of force times speed), R_v the Davis resistance (:func:`physics.davis_resistance`, linear
+in A, B and C, so its three integrals over the logged speed are taken once), w_fixed the work per
+kilogram of static mass against gradients and curves along the logged positions
+(:func:`physics.running_resistance` at zero speed and zero Davis terms; the gradient work is
+g times the height gained, exact across gradient changes). A run starts where the train stands
+(v = 0, so no initial speed is fitted) and ends where it stands again. Samples below
+:data:`MIN_SPEED` are left out of the residuals: there the model speed is the square root of a
+small difference.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ecostudy.core.errors import InputError, problem
+from ecostudy.core.grid import Profile
+from ecostudy.core.physics import davis_resistance, running_resistance
+
+STANDING_SPEED = 0.25   # [m/s] below this, without traction, a train stands (speed noise allowed)
+STANDING_TIME = 1.0     # [s] a stand lasts at least this long
+MIN_SPEED = 1.0         # [m/s] residuals only above this speed
+TRACTION_SHARE = 0.05   # efficiency samples: power above this share of the log's largest
+
+
+@dataclass
+class Run:
+    """One run of a log between two stands, prepared for the replay (SI, per sample)."""
+
+    log: str
+    index: int
+    t: np.ndarray        # [s] from the log's start
+    x: np.ndarray        # track position [m]
+    v: np.ndarray        # measured speed [m/s]
+    work: np.ndarray     # logged work at the wheel since the departure [J]
+    davis: np.ndarray    # (3, n) integrals of R_v(v) v dt for A = 1, B = 1, C = 1 [J per unit coefficient]
+    fixed: np.ndarray    # gradient and curve work per kg of static mass since the departure [J/kg]
+    used: np.ndarray     # samples whose speed residual counts
+
+    @property
+    def distance(self):
+        return float(abs(self.x[-1] - self.x[0]))
+
+    def speed(self, mass, static_mass, davis):
+        """Replayed speed at every sample [m/s] for effective and static mass [kg] and (A, B, C)."""
+        energy = self.work - np.dot(davis, self.davis) - static_mass * self.fixed
+        return np.sqrt(np.maximum(2.0 * energy / mass, 0.0))
+
+
+def wheel_work(log):
+    """Work at the wheel over each interval between rows [J] (len n - 1)."""
+    dt = np.diff(log.t)
+    if log.power_wheel is not None:
+        p = log.power_wheel
+        return p[:-1] * dt if log.header.power_sampling == "interval_mean" else 0.5 * (p[1:] + p[:-1]) * dt
+    if log.force is not None and log.v is not None:
+        fv = log.force * log.v
+        return 0.5 * (fv[1:] + fv[:-1]) * dt
+    raise InputError(problem(log.path or log.name, "columns", "the replay needs the work at the wheel: a "
+                             "force_kN or power_wheel_kW column (with speed_mps for the force)"))
+
+
+def line_power(log):
+    """Mean line power over each interval [W] (len n - 1), or None."""
+    p = log.power_line
+    if p is None:
+        return None
+    return p[:-1] if log.header.power_sampling == "interval_mean" else 0.5 * (p[1:] + p[:-1])
+
+
+def speeds(log):
+    """Measured speed, or the positions differenced where the log has no speed [m/s]."""
+    return log.v if log.v is not None else np.abs(np.gradient(log.x, log.t))
+
+
+def standing(log, work):
+    """Samples at which the train stands: slow and without traction, for at least STANDING_TIME."""
+    v = speeds(log)
+    slow = (v < STANDING_SPEED) & (np.append(work, 0.0) <= 0.0) & (np.append(0.0, work) <= 0.0)
+    slow[0] |= v[0] < STANDING_SPEED  # at rest when the log starts, even if it departs at once
+    out = np.zeros_like(slow)
+    i, n = 0, len(slow)
+    while i < n:
+        if slow[i]:
+            j = i
+            while j < n and slow[j]:
+                j += 1
+            if log.t[j - 1] - log.t[i] >= STANDING_TIME or i == 0:
+                out[i:j] = True
+            i = j
+        else:
+            i += 1
+    return out
+
+
+def cumulative(values):
+    return np.concatenate([[0.0], np.cumsum(values)])
+
+
+def prepare(log, track, train):
+    """The runs of ``log`` on ``track`` (each from a stand to the next), ready for :class:`Run`;
+    a log that never stands and moves refuses in one line."""
+    work = wheel_work(log)
+    v = speeds(log)
+    stand = standing(log, work)
+    height = Profile(track.gradient_positions, track.gradients).integral(log.x)
+    curve = Profile(track.curve_positions, track.curvatures, track.curvature_slopes)
+    ds = np.abs(np.diff(log.x))
+    grade = np.diff(height) / np.maximum(ds, 1e-9)  # along the travel: the height gained per metre run
+    per_kg = running_resistance(0.0, (0.0, 0.0, 0.0), 1.0, grade, train.curve_coefficient,
+                                curve(0.5 * (log.x[1:] + log.x[:-1])), roeckl=train.curve_resistance == "roeckl")
+    fixed = per_kg * ds
+    dt = np.diff(log.t)
+    basis = [davis_resistance(v, *unit) * v for unit in np.eye(3)]
+    trapezoid = np.array([0.5 * (b[1:] + b[:-1]) * dt for b in basis])
+    runs, index = [], 0
+    departures = np.nonzero(stand[:-1] & ~stand[1:])[0]
+    for d in departures:
+        following = np.nonzero(stand[d + 1:])[0]
+        end = d + 1 + (following[0] if following.size else len(stand) - d - 2)
+        sl = slice(d, end + 1)
+        if end - d < 10:
+            continue
+        runs.append(Run(log.name, index, log.t[sl], log.x[sl], v[sl], cumulative(work[d:end]),
+                        np.array([cumulative(row[d:end]) for row in trapezoid]), cumulative(fixed[d:end]),
+                        v[sl] > MIN_SPEED))
+        index += 1
+    if not runs:
+        raise InputError(problem(log.path or log.name, "speed", "no run from a stand to a stand: the train never "
+                                 f"stands (speed below {STANDING_SPEED} m/s without traction for {STANDING_TIME:g} s) "
+                                 "and then moves"))
+    return runs
+
+
+def efficiency_samples(log, train):
+    """(traction, regeneration) log-ratios ln(P_line / P_wheel) of intervals well inside a traction
+    or an electric-braking phase (both neighbours alike; braking within the regeneration
+    envelope, so that no friction brake hides in the wheel power); empty without a line power."""
+    line = line_power(log)
+    if line is None:
+        return np.zeros(0), np.zeros(0)
+    wheel = wheel_work(log) / np.diff(log.t)
+    scale = TRACTION_SHARE * np.max(np.abs(wheel))
+    inner = np.zeros(len(wheel), bool)
+    inner[1:-1] = True
+    pull = (wheel > scale) & (line > 0)
+    pull &= inner & np.roll(pull, 1) & np.roll(pull, -1)
+    brake = (wheel < -scale) & (line < 0)
+    if train.regeneration is not None:
+        v = 0.5 * (speeds(log)[1:] + speeds(log)[:-1])
+        brake &= -wheel / np.maximum(v, 1.0) < 0.95 * train.regeneration.force(np.maximum(v, 0.1))
+    brake &= inner & np.roll(brake, 1) & np.roll(brake, -1)
+    return np.log(line[pull] / wheel[pull]), np.log(line[brake] / wheel[brake])
