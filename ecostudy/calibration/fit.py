@@ -21,7 +21,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from ecostudy.calibration.replay import MIN_SPEED, efficiency_samples, prepare
+from ecostudy.calibration.replay import coefficients, efficiency_samples, prepare
 
 # name -> (unit, what it is)
 PARAMETERS = {
@@ -71,14 +71,35 @@ class Problem:
     prior: dict
     sigma: dict = field(default_factory=lambda: {"speed": 0.05, "traction": 0.014, "regeneration": 0.014,
                                                  "power": 0.01})
+    gains: list = field(default_factory=list)   # per run: its whitened basis (Run.whitened)
 
     @classmethod
     def from_logs(cls, logs, track, train):
+        """The problem of ``logs``, with the noise levels measured from them (:meth:`measure_noise`)."""
         runs, traction, regeneration = [], {}, {}
         for log in logs:
             runs += prepare(log, track, train)
             traction[log.name], regeneration[log.name] = efficiency_samples(log, train)
-        return cls(runs, traction, regeneration, priors(train))
+        problem = cls(runs, traction, regeneration, priors(train))
+        problem.measure_noise(logs)
+        return problem
+
+    def measure_noise(self, logs):
+        """Speed noise from the logged speeds' second differences (robust spread / sqrt 6: a smooth
+        motion leaves nothing there); power noise from the header, else from the traction
+        log-ratios (two independent readings: spread / sqrt 2), else 1 %; then the filter gains."""
+        second = np.concatenate([np.diff(run.v[run.used], 2) for run in self.runs])
+        if second.size > 10:
+            self.sigma["speed"] = max(1.4826 * float(np.median(np.abs(second - np.median(second)))) / np.sqrt(6), 1e-4)
+        declared = [log.header.power_sigma_percent for log in logs if log.header.power_sigma_percent]
+        ratios = np.concatenate(list(self.traction.values()))
+        if declared:
+            self.sigma["power"] = float(np.mean(declared)) / 100.0
+        elif ratios.size > 20:
+            self.sigma["power"] = max(float(np.std(ratios)) / np.sqrt(2), 1e-4)
+        mass = self.prior["mass"] * (1.0 + self.prior["rotating_mass_factor"])
+        self.gains = [run.whitened(run.gains(mass, self.sigma["speed"], self.sigma["power"]), self.sigma["speed"])
+                      for run in self.runs]
 
     def theta(self, names, p):
         s = scales(self.prior)
@@ -92,22 +113,24 @@ class Problem:
         th = self.theta(names, p)
         mass, davis = th["mass"] * (1.0 + th["rotating_mass_factor"]), (th["davis_a"], th["davis_b"], th["davis_c"])
         chosen = logs if logs is not None else list(self.traction)
-        speed = [run.speed(mass, th["mass"], davis)[run.used] - run.v[run.used] for run in self.ordered_runs(chosen)]
+        weights = coefficients(mass, th["mass"], davis)
+        speed = [whitened @ weights for _, whitened in self.ordered_runs(chosen)]
         eta_t, eta_r = max(th["efficiency"], 1e-6), max(th["regeneration_efficiency"], 1e-6)
         return {"speed": np.concatenate(speed),
                 "traction": np.concatenate([self.traction[n] + np.log(eta_t) for n in chosen]),
                 "regeneration": np.concatenate([self.regeneration[n] - np.log(eta_r) for n in chosen])}
 
     def ordered_runs(self, logs=None):
-        """The runs of the logs named in ``logs`` (all when None), in the order of the residuals."""
+        """(run, whitened basis) of the logs named in ``logs`` (all when None), in the order of the residuals."""
         by_log = {}
-        for run in self.runs:
-            by_log.setdefault(run.log, []).append(run)
+        for run, gains in zip(self.runs, self.gains):
+            by_log.setdefault(run.log, []).append((run, gains))
         return [run for n in (logs if logs is not None else list(self.traction)) for run in by_log[n]]
 
     def residuals(self, names, p, logs=None):
         b = self.blocks(names, p, logs)
-        return np.concatenate([b[k] / self.sigma[k] for k in ("speed", "traction", "regeneration")])
+        return np.concatenate([b["speed"], b["traction"] / self.sigma["traction"],
+                               b["regeneration"] / self.sigma["regeneration"]])
 
     def jacobian(self, names, p, step=1e-5):
         cols = []
@@ -131,33 +154,9 @@ def solve(problem, names, start=None, logs=None):
     return result.x
 
 
-def drift(problem, names, p, jac):
-    """J^T Sigma_w J of the speed residuals' drift: the noise of the logged work adds up along a
-    run (a random walk in kinetic energy), so the speed residuals of one run are correlated.
-    Sigma_w[i, k] = g_i g_k sum_{j < min(i, k)} q_j, g_i = 1 / (sigma_v M v_i) the weighted speed
-    per joule at sample i, q_j = (relative power noise * work of interval j)^2; computed as
-    sum_j q_j c_j c_j^T with c_j = sum_{i > j} g_i J_i (the rows of J from sample j + 1 on)."""
-    th = problem.theta(names, p)
-    mass, davis = th["mass"] * (1.0 + th["rotating_mass_factor"]), (th["davis_a"], th["davis_b"], th["davis_c"])
-    out, row = np.zeros((jac.shape[1], jac.shape[1])), 0
-    for run in problem.ordered_runs():
-        n_used = int(run.used.sum())
-        full = np.zeros((len(run.v), jac.shape[1]))
-        full[run.used] = jac[row:row + n_used]
-        row += n_used
-        speed = np.maximum(run.speed(mass, th["mass"], davis), MIN_SPEED)
-        weighted = full / (problem.sigma["speed"] * mass * speed)[:, None]
-        after = np.cumsum(weighted[::-1], axis=0)[::-1]   # after[i] = sum over samples >= i
-        c = after[1:]                                        # c_j: samples > j, one per interval j
-        q = (problem.sigma["power"] * np.diff(run.work)) ** 2
-        out += (c * q[:, None]).T @ c
-    return out
-
-
 def covariance(problem, names, p):
-    """(covariance of p, singular values of the column-scaled J, its weakest right singular vector):
-    the sandwich H^-1 (s^2 J^T J + J^T Sigma_w J) H^-1, H = J^T J (:func:`drift`); variances
-    along null directions of J are infinite."""
+    """(covariance s^2 (J^T J)^-1 of p, singular values of the column-scaled J, its weakest right
+    singular vector); variances along null directions of J are infinite."""
     jac = problem.jacobian(names, p)
     r = problem.residuals(names, p)
     dof = max(len(r) - len(names), 1)
@@ -169,7 +168,7 @@ def covariance(problem, names, p):
     null = (sv < NULL_SINGULAR * sv[0]) if sv.size and sv[0] > 0 else np.ones(sv.size, bool)
     inv = np.where(null, 0.0, 1.0 / np.where(null, 1.0, sv) ** 2)
     h_inv = (vt.T * inv) @ vt / np.outer(safe, safe)
-    cov = h_inv @ (s2 * jac.T @ jac + drift(problem, names, p, jac)) @ h_inv
+    cov = h_inv * s2
     lost = np.any(np.abs(vt[null]) > 0.1, axis=0) | (norms == 0)
     cov[lost, :] = np.inf
     cov[:, lost] = np.inf
@@ -180,10 +179,10 @@ def estimate_noise(problem, names, p):
     """Set each block's noise to its residuals' standard deviation at ``p`` (degrees of freedom:
     the parameters that act on the block)."""
     b = problem.blocks(names, p)
-    acting = {"speed": [n for n in names if n not in ("efficiency", "regeneration_efficiency")],
-              "traction": [n for n in names if n == "efficiency"],
+    acting = {"traction": [n for n in names if n == "efficiency"],
               "regeneration": [n for n in names if n == "regeneration_efficiency"]}
-    for key, values in b.items():
+    for key in acting:
+        values = b[key]
         dof = len(values) - len(acting[key])
         if dof > 0:
             problem.sigma[key] = max(float(np.sqrt(values @ values / dof)), 1e-9)

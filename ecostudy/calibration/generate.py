@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.core.grid import make_segment
+from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import davis_resistance
 from ecostudy.core.plant import Plant
 
@@ -83,12 +84,18 @@ def sample_run(plant, run, times):
     starts = np.array([s.t[0] for s in solutions])
     out = np.zeros((len(times), 5))
     node_list = nodes.tolist()
-    for k, t in enumerate(np.minimum(times, t_stop)):
-        sol = solutions[max(int(np.searchsorted(starts, t, side="right")) - 1, 0)]
-        x, v, wt, wb, _, line = sol.sol(min(t, sol.t[-1]))
-        v = max(v, 0.0) if t < t_stop else 0.0
+    clipped = np.minimum(times, t_stop)
+    piece = np.maximum(np.searchsorted(starts, clipped, side="right") - 1, 0)
+    states = np.zeros((6, len(times)))
+    for i in np.unique(piece):
+        sol = solutions[i]
+        states[:, piece == i] = sol.sol(np.minimum(clipped[piece == i], sol.t[-1]))
+    states[1] = np.where(clipped < t_stop, np.maximum(states[1], 0.0), 0.0)
+    resists = davis_resistance(states[1], *plant.davis) + point_resistance(plant.segment, plant.train, states[0])
+    for k, t in enumerate(clipped):
+        x, v, wt, wb, _, line = states[:, k]
         u = handle[min(max(bisect_right(node_list, x) - 1, 0), len(handle) - 1)]
-        resist = davis_resistance(v, *plant.davis) + plant.grade_force(x)
+        resist = float(resists[k])
         ft, fb = plant.forces(v, u, resist) if t < t_stop else (0.0, 0.0)
         out[k] = x, v, ft - fb, wt - wb, line
     return out
@@ -111,7 +118,7 @@ def generate_log(track, train, stops, truth, seed=0, noise=LogNoise(), dwell=20.
         nodes, handle = phases(distance, rng)
         brake = -rng.uniform(0.5, 0.8)
         start = brake_point(plant, nodes, handle, brake, distance)
-        for i in range(3):  # move the braking start by the stop's miss; the last drive is the run
+        for i in range(2):  # move the braking start by the stop's miss; the last drive is the run
             steps = np.append(nodes[nodes < start], [start, segment.distance])
             run = drive(plant, steps, handle[:len(steps) - 2] + [brake])
             start = float(np.clip(start + distance - float(run[2][0][0]), nodes[1], distance))

@@ -47,10 +47,53 @@ class Run:
     def distance(self):
         return float(abs(self.x[-1] - self.x[0]))
 
+    def basis(self, sigma_speed=0.0):
+        """Columns whose combination with :func:`coefficients` is the kinetic energy per effective
+        mass from the logged speed minus the replayed one [J/kg] at every sample; sigma^2 / 2 taken
+        off the logged v^2 / 2, the mean that speed noise adds. Per unit mass, so that the noisy
+        logged speed is the observation, not a regressor whose noise would bias the mass low."""
+        return np.column_stack([0.5 * (self.v * self.v - sigma_speed ** 2), -self.work, self.davis.T, self.fixed])
+
+    def gains(self, mass, sigma_speed, sigma_power):
+        """(K, S) of the scalar Kalman filter that whitens :meth:`balance` at the used samples: the
+        logged work's noise (``sigma_power`` of each interval's work, per ``mass``) adds up along the
+        run as a random walk in kinetic energy per mass, the speed noise (``sigma_speed``) reads it
+        as v sigma_speed [J/kg]. Gains depend on the noise levels only, so they are computed once."""
+        q = (sigma_power * np.diff(self.work) / mass) ** 2
+        r = (np.maximum(self.v, MIN_SPEED) * sigma_speed) ** 2
+        walk = np.concatenate([[0.0], np.cumsum(q)])
+        k_out, s_out, p, last = [], [], 0.0, 0
+        for i in np.nonzero(self.used)[0]:
+            p += walk[i] - walk[last]
+            last = i
+            s = p + r[i]
+            k_out.append(p / s)
+            s_out.append(s)
+            p *= 1.0 - p / s
+        return np.array(k_out), np.array(s_out)
+
+    def whitened(self, gains, sigma_speed):
+        """:meth:`basis` at the used samples through the filter of :meth:`gains`, divided by the
+        innovations' spread: ``whitened @ coefficients(...)`` are the standardised innovations,
+        white with unit variance when the model and the noise levels are right (the filter is
+        linear, so the columns are filtered once)."""
+        gain, spread = gains
+        rows = self.basis(sigma_speed)[self.used]
+        z, out = np.zeros(rows.shape[1]), np.empty_like(rows)
+        for i, (row, k) in enumerate(zip(rows, gain)):
+            out[i] = row - z
+            z += k * out[i]
+        return out / np.sqrt(spread)[:, None]
+
     def speed(self, mass, static_mass, davis):
         """Replayed speed at every sample [m/s] for effective and static mass [kg] and (A, B, C)."""
         energy = self.work - np.dot(davis, self.davis) - static_mass * self.fixed
         return np.sqrt(np.maximum(2.0 * energy / mass, 0.0))
+
+
+def coefficients(mass, static_mass, davis):
+    """The weights of :meth:`Run.basis`: 1, and 1, A, B, C and the static mass per effective mass."""
+    return np.array([1.0, 1.0 / mass, *(np.asarray(davis) / mass), static_mass / mass])
 
 
 def wheel_work(log):
