@@ -18,7 +18,7 @@ from ecostudy.calibration.fit import (
 )
 
 MAX_RMS_SPEED = 0.3    # [m/s]
-MAX_STRUCTURE = 4.0    # moving-average residual over white-noise expectation
+MAX_STRUCTURE = 2.0    # moving-average innovations over white-noise expectation (1.3 at most on 200 generated logs)
 WINDOW = 5.0           # [s]
 BOOTSTRAP_DRAWS = 200
 

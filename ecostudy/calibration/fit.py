@@ -1,20 +1,23 @@
 """Least squares on the replayed dynamics, 95 % intervals, identifiability and a bootstrap over logs.
 
 Parameters are fitted as multiples of the train file's values (the prior), p = theta / theta_0,
-by :func:`scipy.optimize.least_squares`. The residuals are the replayed speed minus the logged
-one (:mod:`ecostudy.calibration.replay`) and, where the log has the line power, the log-ratios
-ln(P_line / P_wheel) against -ln eta_T in traction and ln eta_R in electric braking. Each block is
-weighted by its own noise, estimated from a first fit (so the weighted residuals have unit
-variance). The 95 % interval of a parameter is 1.96 standard deviations of cov = s^2 (J^T J)^-1
-at the optimum (J by central differences, s^2 the weighted residual variance); with several logs a
-bootstrap over logs (logs drawn with replacement, refitted) gives a second interval.
+by :func:`scipy.optimize.least_squares`. The residuals are the standardised innovations of the
+replayed energy balance (:mod:`ecostudy.calibration.replay`: a scalar Kalman filter whitens the
+random walk that the logged work's noise leaves, so the residuals are white with unit variance
+when model and noise levels are right) and, where the log has the line power, the log-ratios
+ln(P_line / P_wheel) against -ln eta_T in traction and ln eta_R in electric braking, each weighted
+by its spread at a first fit. Noise levels come from the logs (:meth:`Problem.measure_noise`).
+The 95 % interval of a parameter is 1.96 standard deviations of cov = s^2 (J^T J)^-1 at the
+optimum (J by central differences, s^2 the residual variance); with several logs a bootstrap over
+logs (logs drawn with replacement, refitted) gives a second interval.
 
 Identifiability: a parameter whose 95 % half-width exceeds :data:`MAX_RELATIVE_WIDTH` of its
 prior value (or that lies in a null direction of J: a singular value below 1e-9 of the largest)
 is not identifiable from these logs. It is held at its prior, not fitted to noise, and the fit
 is repeated without it; the report says which parameters it moves with (the weakest singular
-direction of J). Examples: the quadratic Davis term C from a slow run, and the static mass
-against the rotating-mass allowance on flat track (only M = Ms (1 + f) is seen there).
+direction of J). Examples: the quadratic Davis term C from a slow run, the static mass against
+the rotating-mass allowance on flat track (only M = Ms (1 + f) is seen there), the efficiency of
+a log without line power.
 """
 from dataclasses import dataclass, field, replace
 
@@ -97,7 +100,11 @@ class Problem:
             self.sigma["power"] = float(np.mean(declared)) / 100.0
         elif ratios.size > 20:
             self.sigma["power"] = max(float(np.std(ratios)) / np.sqrt(2), 1e-4)
-        mass = self.prior["mass"] * (1.0 + self.prior["rotating_mass_factor"])
+        self.refilter(self.prior["mass"] * (1.0 + self.prior["rotating_mass_factor"]))
+
+    def refilter(self, mass):
+        """The filter gains and whitened bases for effective mass ``mass`` [kg] (the work's noise per
+        unit mass depends on it)."""
         self.gains = [run.whitened(run.gains(mass, self.sigma["speed"], self.sigma["power"]), self.sigma["speed"])
                       for run in self.runs]
 
@@ -196,6 +203,8 @@ def identify(problem, requested):
     while True:
         p = solve(problem, free)
         estimate_noise(problem, free, p)
+        th = problem.theta(free, p)
+        problem.refilter(th["mass"] * (1.0 + th["rotating_mass_factor"]))  # weights at the fitted mass
         p = solve(problem, free, p)
         cov, sv, weakest = covariance(problem, free, p)
         if not free:

@@ -15,9 +15,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from ecostudy.core.grid import make_segment
+from ecostudy.core.grid import Profile, make_segment
 from ecostudy.core.kinematics import point_resistance
-from ecostudy.core.physics import davis_resistance
+from ecostudy.core.physics import davis_resistance, gradient_force
 from ecostudy.core.plant import Plant
 
 
@@ -142,3 +142,28 @@ def generate_log(track, train, stops, truth, seed=0, noise=LogNoise(), dwell=20.
         "power_line_kW": line * (1 + rng.normal(0.0, noise.power, n)) / 1000.0,
     })
     return frame, {"t": t, "x": x, "v": v, "force": force, "power_wheel": wheel, "power_line": line}
+
+
+def follow_work(record, track, truth, model):
+    """Per run of a generated log (between stands): (the traction work [J] ``model`` needs to follow
+    the noise-free speed of ``truth`` in ``record``, the true traction work [J]). Pointwise: the true
+    acceleration from the recorded force, F = M a + R_v(v) + Ms g gradient of ``model`` at each
+    sample, its positive part times the speed by the trapezoid rule; a check of
+    :func:`ecostudy.calibration.validate.speed_reference` that shares none of its steps."""
+    t, x, v, force = record["t"], record["x"], record["v"], record["force"]
+    direction = np.sign(np.gradient(x))
+    gradient = Profile(track.gradient_positions, track.gradients)(x) * np.where(direction == 0, 1.0, direction)
+
+    def resistance(train):
+        return davis_resistance(v, *train.davis) + gradient_force(train.static_mass, gradient)
+
+    accel = np.where(v > 0, (force - resistance(truth)) / truth.mass, 0.0)
+    power = np.where(v > 0, np.maximum(model.mass * accel + resistance(model), 0.0) * v, 0.0)
+    dt = np.diff(t)
+    work = record["power_wheel"][:-1] * dt
+    stops = np.nonzero(np.diff((v > 0).astype(int)) == -1)[0] + 1
+    out = []
+    for s, e in zip(np.concatenate([[0], stops[:-1]]), stops):
+        out.append((float(np.sum(0.5 * (power[s:e] + power[s + 1:e + 1]) * dt[s:e])),
+                    float(np.sum(np.maximum(work[s:e], 0.0)))))
+    return out

@@ -1,31 +1,38 @@
-"""The replayed dynamics of a logged run: the speed a train with given parameters would have had
+"""The replayed dynamics of a logged run: the energy balance a train with given parameters obeys
 under the logged work at the wheel, run by run between stops.
 
-Energy balance from the departure (thesis 000 eq. 2.1 multiplied by v and integrated over time):
+Energy balance per unit effective mass from the departure (thesis 000 eq. 2.1, Farooqi 2018,
+multiplied by v and integrated over time):
 
-    1/2 M v(t)^2 = W(t) - int_0^t R_v(v) v dt - Ms * w_fixed(t)
+    v(t)^2 / 2 = [W(t) - A I_1(t) - B I_2(t) - C I_3(t) - Ms w_fixed(t)] / M
 
 W is the logged work at the wheel (the wheel power's interval means times the interval, or the
-trapezoid of force times speed), R_v the Davis resistance (:func:`physics.davis_resistance`, linear
-in A, B and C, so its three integrals over the logged speed are taken once), w_fixed the work per
-kilogram of static mass against gradients and curves along the logged positions
-(:func:`physics.running_resistance` at zero speed and zero Davis terms; the gradient work is
-g times the height gained, exact across gradient changes). A run starts where the train stands
-(v = 0, so no initial speed is fitted) and ends where it stands again. Samples below
-:data:`MIN_SPEED` are left out of the residuals: there the model speed is the square root of a
-small difference.
+trapezoid of force times speed), I_k the integrals of R_v(v) v dt for unit Davis coefficients
+(:func:`physics.davis_resistance` is linear in A, B and C, so they are taken once over the logged
+speed), w_fixed the work per kilogram of static mass against gradients and curves along the logged
+positions (:func:`physics.running_resistance` at zero speed; the gradient work is g times the
+height gained, exact across gradient changes). A run starts where the train stands (v = 0, so no
+initial speed is fitted) and ends where it stands again.
+
+The logged speed is the observation (per unit mass, so its noise does not sit in a regressor and
+bias the mass low); the noise of the logged work adds up along a run as a random walk, which a
+scalar Kalman filter whitens (:meth:`Run.gains`, :meth:`Run.whitened`; thesis 001 Ch. 10,
+Yazhemsky 2017, estimates the mass with a scalar Kalman filter too). Samples below
+:data:`MIN_SPEED` (smoothed) are left out: there the speed says little about the energy.
 """
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from ecostudy.core.errors import InputError, problem
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import Profile
 from ecostudy.core.physics import davis_resistance, running_resistance
 
 STANDING_SPEED = 0.25   # [m/s] below this, without traction, a train stands (speed noise allowed)
 STANDING_TIME = 1.0     # [s] a stand lasts at least this long
-MIN_SPEED = 1.0         # [m/s] residuals only above this speed
+MIN_SPEED = 2.0         # [m/s] residuals only above this speed (of the speed smoothed over SMOOTHING)
+SMOOTHING = 1.0         # [s]
 TRACTION_SHARE = 0.05   # efficiency samples: power above this share of the log's largest
 
 
@@ -60,7 +67,7 @@ class Run:
         run as a random walk in kinetic energy per mass, the speed noise (``sigma_speed``) reads it
         as v sigma_speed [J/kg]. Gains depend on the noise levels only, so they are computed once."""
         q = (sigma_power * np.diff(self.work) / mass) ** 2
-        r = (np.maximum(self.v, MIN_SPEED) * sigma_speed) ** 2
+        r = (np.maximum(smoothed(self.t, self.v), MIN_SPEED) * sigma_speed) ** 2  # weights free of the noise
         walk = np.concatenate([[0.0], np.cumsum(q)])
         k_out, s_out, p, last = [], [], 0.0, 0
         for i in np.nonzero(self.used)[0]:
@@ -142,6 +149,14 @@ def standing(log, work):
     return out
 
 
+def smoothed(t, v, span=SMOOTHING):
+    """Centred moving average of ``v`` over ``span`` seconds: choosing samples or weights by it
+    instead of the noisy speed keeps the choice independent of the noise (no selection bias)."""
+    w = max(int(round(span / float(np.median(np.diff(t))))) | 1, 1) if len(t) > 1 else 1
+    padded = np.pad(v, w // 2, mode="edge")
+    return np.convolve(padded, np.ones(w) / w, mode="valid")
+
+
 def cumulative(values):
     return np.concatenate([[0.0], np.cumsum(values)])
 
@@ -149,6 +164,9 @@ def cumulative(values):
 def prepare(log, track, train):
     """The runs of ``log`` on ``track`` (each from a stand to the next), ready for :class:`Run`;
     a log that never stands and moves refuses in one line."""
+    if track.tunnels and train.tunnel_resistance:
+        warnings.warn(f"track '{track.name}': the replay does not model the tunnel resistance; the Davis "
+                      "coefficients fitted there include it", EcostudyWarning, stacklevel=2)
     work = wheel_work(log)
     v = speeds(log)
     stand = standing(log, work)
@@ -172,7 +190,7 @@ def prepare(log, track, train):
             continue
         runs.append(Run(log.name, index, log.t[sl], log.x[sl], v[sl], cumulative(work[d:end]),
                         np.array([cumulative(row[d:end]) for row in trapezoid]), cumulative(fixed[d:end]),
-                        v[sl] > MIN_SPEED))
+                        smoothed(log.t[sl], v[sl]) > MIN_SPEED))
         index += 1
     if not runs:
         raise InputError(problem(log.path or log.name, "speed", "no run from a stand to a stand: the train never "

@@ -157,8 +157,8 @@ def check_series(log, path):
     step = float(np.median(dt))
     if np.any(dt > GAP_FACTOR * step):
         i = int(np.argmax(dt > GAP_FACTOR * step))
-        lines.append(problem(path, "time_s", f"row {i + 2}: gap of {dt[i]:g} s after {t[i]:g} s (the log "
-                             f"samples every {step:g} s); split the log there"))
+        raise InputError(problem(path, "time_s", f"row {i + 2}: gap of {dt[i]:g} s after {t[i]:g} s (the log "
+                                 f"samples every {step:g} s); split the log there"))
     if log.v is not None:
         if log.v.min() < MIN_SPEED or log.v.max() > MAX_SPEED:
             i = int(np.argmax((log.v < MIN_SPEED) | (log.v > MAX_SPEED)))
