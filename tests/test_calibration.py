@@ -232,3 +232,14 @@ def test_calibrate_refuses_unknown_parameters_and_logs_without_wheel_work(tmp_pa
     assert result.exit_code == 2 and "--fit: unknown parameter 'colour'" in result.output
     result = run("calibrate", path, "--out", tmp_path / "o")
     assert result.exit_code == 2 and "nowork.csv: columns: the replay needs the work at the wheel" in result.output
+
+
+def test_savings_against_the_logged_driving(inputs, calibrated, logged):
+    """The optimum for each logged running time (verified by the plant) uses less traction energy
+    than the logged driving; the band over parameter draws holds the central saving."""
+    from ecostudy.calibration.savings import savings
+    table = savings(as_log(logged[0][0], "there"), inputs[0], calibrated, draws=2, points=300)
+    assert len(table) == 2 and table["verified"].all()
+    assert (table["optimal_traction_kWh"] < table["logged_traction_kWh"]).all()
+    assert (table["saving_low_pct"] <= table["saving_pct"]).all() and (table["saving_pct"] <= table["saving_high_pct"]).all()
+    assert (table["saving_high_pct"] - table["saving_low_pct"] < 2.0).all()

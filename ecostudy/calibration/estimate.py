@@ -34,6 +34,8 @@ class Calibration:
     quality: dict            # residual statistics and noise levels
     theta: dict              # every parameter's value after the fit (SI)
     train: object            # the calibrated :class:`~ecostudy.core.types.Train`
+    free: list               # the parameters fitted (identified)
+    covariance: np.ndarray   # of ``free`` (SI)
 
 
 def structure(residual, t):
@@ -99,5 +101,6 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     if quality["structure"] > MAX_STRUCTURE:
         reasons.append(f"residuals drift ({quality['structure']:.1f} times white noise over {WINDOW:g} s, "
                        f"more than {MAX_STRUCTURE:g}): the model misses something the logs show")
+    scale = np.array([s[n] for n in free])
     return Calibration(table, "flagged" if reasons else "ok", "; ".join(reasons), residuals, quality, theta,
-                       train_with(train, theta))
+                       train_with(train, theta), free, cov * np.outer(scale, scale))

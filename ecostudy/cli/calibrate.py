@@ -10,9 +10,9 @@ from ecostudy.cli.app import app, guarded
 SHOWN = ["name", "unit", "prior", "estimate", "low", "high", "boot_low", "boot_high", "identifiable"]
 
 
-def _calibrate(logs, train, track, fit, out, draws, no_plot):
+def _calibrate(logs, train, track, fit, out, draws, savings, no_plot):
     from ecostudy.studies.calibrate import calibrate_study
-    result, summary = calibrate_study(logs, train, track, fit, out, draws)
+    result, summary = calibrate_study(logs, train, track, fit, out, draws, savings)
     if not no_plot:
         from ecostudy.report import calplots
         calplots.residuals(result.residuals, Path(out) / "residuals.png", "calibration from logged runs")
@@ -21,6 +21,11 @@ def _calibrate(logs, train, track, fit, out, draws, no_plot):
     q = result.quality
     typer.echo(f"{q['runs']} runs, {q['speed_samples']} speed samples: replayed speed off the logged by "
                f"{q['rms_speed_mps']:.3f} m/s RMS; innovations {q['structure']:.2f} times white noise over 5 s")
+    for row in summary.get("savings", []):
+        typer.echo(f"{row['log']} run {row['run']}: optimum for {row['running_time_s']:.1f} s uses "
+                   f"{row['optimal_traction_kWh']:.2f} kWh against {row['logged_traction_kWh']:.2f} kWh logged: saving "
+                   f"{row['saving_pct']:.1f} % (band {row['saving_low_pct']:.1f} to {row['saving_high_pct']:.1f} % over "
+                   f"{row['draws']} parameter draws)" + ("" if row["verified"] else " (optimum not verified)"))
     typer.echo(f"{result.status}" + (f": {result.reason}" if result.reason else ""))
     typer.echo(f"outputs {out}/ ({', '.join(summary['outputs'])}{'' if no_plot else ', residuals.png'})")
     return result.status
@@ -36,12 +41,15 @@ def calibrate(
                                       "(default: mass,davis_a,davis_b,davis_c,efficiency)."),
     out: Path = typer.Option(Path("out/calibration"), help="Output folder."),
     bootstrap: int = typer.Option(200, min=0, max=10000, help="Bootstrap draws over the logs (with two or more logs)."),
+    savings: Optional[int] = typer.Option(None, min=0, max=100, help="Also the savings against the logged driving: "
+                                          "the optimum for each logged running time, and its band over this many "
+                                          "parameter draws from the fit (e.g. 8)."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the residual plot."),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Fit train parameters to logged runs: least squares on the replayed dynamics, 95 % intervals,
     identifiability (parameters the logs do not excite are held at the train file's value, exit 1)."""
-    status = guarded(debug, _calibrate, logs, train, track, fit, out, bootstrap, no_plot)
+    status = guarded(debug, _calibrate, logs, train, track, fit, out, bootstrap, savings, no_plot)
     if status != "ok":
         raise typer.Exit(1)
 

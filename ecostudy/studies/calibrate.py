@@ -4,7 +4,8 @@ validation computed (:mod:`ecostudy.calibration`), and their files written.
 calibrate writes ``summary.json`` (status, the estimates with their 95 % intervals, the
 identifiability report, residual statistics), ``parameters.csv``, ``residuals.csv``,
 ``<train>_calibrated.yaml`` (the train file with the identified parameters
-replaced, its source naming the logs and the fit). validate writes ``validate.csv`` and
+replaced, its source naming the logs and the fit) and, when asked, ``savings.csv`` (the optimum for
+each logged running time against the logged energy, with the calibration's band). validate writes ``validate.csv`` and
 ``summary.json``. The command line draws ``residuals.png`` and ``validate.png``
 (:mod:`ecostudy.report.calplots`).
 """
@@ -12,10 +13,12 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from ecostudy import __version__
 from ecostudy.calibration.estimate import calibrate_logs
 from ecostudy.calibration.fit import DEFAULT_FIT, PARAMETERS
+from ecostudy.calibration.savings import savings
 from ecostudy.calibration.validate import validate_log
 from ecostudy.core.errors import InputError, problem
 from ecostudy.io.loaders import load_track, load_train
@@ -53,8 +56,9 @@ def load_inputs(log_paths, train_path, track_path):
     return logs, track, train, track_path, train_path
 
 
-def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200):
-    """Calibrate ``fit`` (text, ``a,b,c``) from the logs and write the outputs to ``out``."""
+def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, saving_draws=None):
+    """Calibrate ``fit`` (text, ``a,b,c``) from the logs and write the outputs to ``out``; with
+    ``saving_draws`` (a count) also the savings against the logged driving (``savings.csv``)."""
     names = parse_fit(fit)
     logs, track, train, track_path, train_path = load_inputs(log_paths, train_path, track_path)
     out = check_output_dir(out, CALIBRATE_FILES)
@@ -79,6 +83,11 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200):
                "parameters": result.table.replace({np.nan: None}).to_dict("records"),
                "quality": result.quality, "calibrated_train": str(calibrated),
                "outputs": [*CALIBRATE_FILES[:3], calibrated.name]}
+    if saving_draws is not None:
+        table = pd.concat([savings(log, track, result, saving_draws) for log in logs], ignore_index=True)
+        write_csv(out / "savings.csv", table)
+        summary["savings"] = table.to_dict("records")
+        summary["outputs"].append("savings.csv")
     write_json(out / "summary.json", summary)
     return result, summary
 
