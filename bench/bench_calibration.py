@@ -2,9 +2,10 @@
 flat track, and the energy difference `validate` reports against an independent computation.
 
     .venv/bin/python bench/bench_calibration.py --logs 200            # coverage (a few minutes)
-    .venv/bin/python bench/bench_calibration.py --logs 0 --validate   # the validate check only
+    .venv/bin/python bench/bench_calibration.py --logs 0 --validate   # identifiability and the validate check
+    .venv/bin/python bench/bench_calibration.py --example out/logs    # two example logs for docs/calibration.md
 
-Each log: the regional train of thesis 000 §6.3 (Farooqi 2018) with true parameters drawn around
+Each log: the regional train of Farooqi 2018 §6.3 with true parameters drawn around
 the train file (mass +-5 %, Davis A, B, C +-15 %, traction efficiency +-3 %), driven by the plant
 over four runs of tracks/calibration_line.yaml (there and back), sampled at 10 Hz with speed noise 0.05 m/s and 1 %
 power noise; one calibration per log from the train file's values. Prints one table.
@@ -12,6 +13,7 @@ power noise; one calibration per log from the train file's values. Prints one ta
 import argparse
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +22,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from ecostudy.calibration.fit import DEFAULT_FIT, priors  # noqa: E402
-from ecostudy.calibration.generate import generate_log, true_train  # noqa: E402
+from ecostudy.calibration.generate import follow_work, generate_log, true_train  # noqa: E402
+from ecostudy.calibration.validate import validate_log  # noqa: E402
 from ecostudy.calibration.estimate import calibrate_logs  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train, track_from_dict  # noqa: E402
 from ecostudy.io.logfile import parse_log, write_log  # noqa: E402
@@ -42,26 +45,33 @@ def as_log(frame, name):
     return parse_log(text, f"{name}.csv", name)
 
 
-def coverage(count, track, train):
+def one_log(seed):
+    """(true parameters, the calibration's table as records, its status, innovation drift, fit seconds)."""
+    track, train = load_track(TRACK), load_train(TRAIN)
+    truth = drawn_truth(train, seed)
+    frame, _ = generate_log(track, truth, STOPS, truth, seed=seed)
+    start = time.perf_counter()
+    result = calibrate_logs([as_log(frame, f"log{seed}")], track, train, DEFAULT_FIT)
+    return (priors(truth), result.table.to_dict("records"), result.status, result.quality["structure"],
+            time.perf_counter() - start)
+
+
+def coverage(count, workers):
     hits, widths, held, times = {n: [] for n in DEFAULT_FIT}, {n: [] for n in DEFAULT_FIT}, [], []
     drift, flagged = [], 0
-    for seed in range(count):
-        truth = drawn_truth(train, seed)
-        frame, _ = generate_log(track, truth, STOPS, truth, seed=seed)
-        start = time.perf_counter()
-        result = calibrate_logs([as_log(frame, f"log{seed}")], track, train, DEFAULT_FIT)
-        times.append(time.perf_counter() - start)
-        drift.append(result.quality["structure"])
-        flagged += result.status != "ok"
-        true = priors(truth)
-        for row in result.table.itertuples():
-            if row.name not in hits:
-                continue
-            if not row.identifiable:
-                held.append(row.name)
-                continue
-            hits[row.name].append(row.low <= true[row.name] <= row.high)
-            widths[row.name].append(100 * 0.5 * (row.high - row.low) / true[row.name])
+    with ProcessPoolExecutor(workers) as pool:
+        for true, rows, status, structure, seconds in pool.map(one_log, range(count)):
+            times.append(seconds)
+            drift.append(structure)
+            flagged += status != "ok"
+            for row in rows:
+                if row["name"] not in hits:
+                    continue
+                if not row["identifiable"]:
+                    held.append(row["name"])
+                    continue
+                hits[row["name"]].append(row["low"] <= true[row["name"]] <= row["high"])
+                widths[row["name"]].append(100 * 0.5 * (row["high"] - row["low"]) / true[row["name"]])
     print(f"{count} logs, one calibration each (fit {np.median(times):.2f} s median, busy machine)")
     print(f"{'parameter':12s} {'fitted':>6s} {'coverage %':>10s} {'median half-width %':>20s}")
     for n in DEFAULT_FIT:
@@ -103,10 +113,29 @@ def write_examples(folder, track, train):
         print(f"wrote {folder / name}.csv ({len(frame)} rows)")
 
 
+def validate_check(count, track, train):
+    """validate on logs of the train 5 % heavier with 5 % more resistance (and 5 % lower traction
+    efficiency) than its file, against the pointwise computation on the noise-free record."""
+    truth = true_train(train, mass=1.05, davis=(1.05, 1.05, 1.05), efficiency=0.95)
+    gaps = []
+    print("log run  validate %  independent %  gap (points)")
+    for seed in range(count):
+        frame, clean = generate_log(track, truth, STOPS[:3], truth, seed=100 + seed)
+        table = validate_log(as_log(frame, f"v{seed}"), track, train)
+        for row, (model, true) in zip(table.itertuples(), follow_work(clean, track, truth, train)):
+            independent = 100 * (model - true) / true
+            gaps.append(row.traction_difference_pct - independent)
+            print(f"{seed:3d} {row.run:3d} {row.traction_difference_pct:11.3f} {independent:14.3f} {gaps[-1]:+12.3f}")
+    print(f"validate against the independent computation: largest gap {np.max(np.abs(gaps)):.3f} percentage points "
+          f"over {len(gaps)} runs (mean {np.mean(gaps):+.3f})")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--logs", type=int, default=200)
     parser.add_argument("--validate", action="store_true", help="also the validate check")
+    parser.add_argument("--validate-logs", type=int, default=10, help="logs of the validate check")
+    parser.add_argument("--workers", type=int, default=1, help="processes for the coverage logs")
     parser.add_argument("--example", type=Path, help="write example logs into this folder and stop")
     args = parser.parse_args()
     track, train = load_track(TRACK), load_train(TRAIN)
@@ -114,8 +143,12 @@ def main():
         return write_examples(args.example, track, train)
     print(f"command: python bench/bench_calibration.py {' '.join(sys.argv[1:])}")
     if args.logs:
-        coverage(args.logs, track, train)
+        start = time.perf_counter()
+        coverage(args.logs, args.workers)
+        print(f"coverage wall time {time.perf_counter() - start:.0f} s with {args.workers} worker(s)")
     identifiability(track, train)
+    if args.validate:
+        validate_check(args.validate_logs, track, train)
 
 
 if __name__ == "__main__":

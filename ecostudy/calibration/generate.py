@@ -104,7 +104,7 @@ def sample_run(plant, run, times):
 def generate_log(track, train, stops, truth, seed=0, noise=LogNoise(), dwell=20.0):
     """A logged run of ``truth`` (a train, see :func:`true_train`) over the track's ``stops`` (names,
     in travel order): a table with the columns of a log file (:mod:`ecostudy.io.logfile`) and the
-    noise-free record (a dict of arrays and the true work per run)."""
+    noise-free record (a dict of arrays: t, x, v, force, power_wheel, power_line, SI)."""
     rng = np.random.default_rng(seed)
     dt = 1.0 / noise.rate
     rows, position, clock, counters = [], track.stops[stops[0]], 0.0, np.zeros(2)
