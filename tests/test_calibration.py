@@ -241,5 +241,6 @@ def test_savings_against_the_logged_driving(inputs, calibrated, logged):
     table = savings(as_log(logged[0][0], "there"), inputs[0], calibrated, draws=2, points=300)
     assert len(table) == 2 and table["verified"].all()
     assert (table["optimal_traction_kWh"] < table["logged_traction_kWh"]).all()
-    assert (table["saving_low_pct"] <= table["saving_pct"]).all() and (table["saving_pct"] <= table["saving_high_pct"]).all()
+    assert (table["saving_low_pct"] <= table["saving_pct"]).all()
+    assert (table["saving_pct"] <= table["saving_high_pct"]).all()
     assert (table["saving_high_pct"] - table["saving_low_pct"] < 2.0).all()

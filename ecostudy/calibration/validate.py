@@ -8,10 +8,11 @@ Two replays, each answering one question:
   1/2 M (v_e^2 - v_s^2) + int R_v(v) v dt + Ms w_fixed, the end speeds from straight lines fitted
   to the phase's own samples (:data:`END_FIT` seconds at each end; the speed noise averages out, a
   change of handle between phases does not bend the line; a traction phase takes its end speeds
-  from its neighbours' lines, because the handle changes inside its edge intervals). The model's traction energy is the sum
-  of the work of the traction phases and of the phases without traction where the model needs
-  traction beyond twice the work's standard error from the end speeds (so that speed noise on a
-  coast the model would also coast is not counted as traction). Its time is the logged time.
+  from its neighbours' lines, because the handle changes inside its edge intervals). The model's
+  traction energy is the sum of the work of the traction phases and of the phases without
+  traction where the model needs traction beyond twice the work's standard error from the end
+  speeds (so that speed noise on a coast the model would also coast is not counted as traction).
+  Its time is the logged time.
 - **handle as input** (time at equal driving): the logged force divided by the model's traction
   or braking envelope at the logged speed is the driver's handle; :meth:`Plant.drive` drives it
   by position from the departure until the model stops, which gives the model's running time,

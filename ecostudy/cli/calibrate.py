@@ -24,7 +24,8 @@ def _calibrate(logs, train, track, fit, out, draws, savings, no_plot):
     for row in summary.get("savings", []):
         typer.echo(f"{row['log']} run {row['run']}: optimum for {row['running_time_s']:.1f} s uses "
                    f"{row['optimal_traction_kWh']:.2f} kWh against {row['logged_traction_kWh']:.2f} kWh logged: saving "
-                   f"{row['saving_pct']:.1f} % (band {row['saving_low_pct']:.1f} to {row['saving_high_pct']:.1f} % over "
+                   f"{row['saving_pct']:.1f} % (band {row['saving_low_pct']:.1f} to "
+                   f"{row['saving_high_pct']:.1f} % over "
                    f"{row['draws']} parameter draws)" + ("" if row["verified"] else " (optimum not verified)"))
     typer.echo(f"{result.status}" + (f": {result.reason}" if result.reason else ""))
     typer.echo(f"outputs {out}/ ({', '.join(summary['outputs'])}{'' if no_plot else ', residuals.png'})")
