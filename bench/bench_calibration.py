@@ -1,0 +1,156 @@
+"""Coverage of the calibration's 95 % intervals over generated logs, the identifiability report on a
+flat track, and the energy difference `validate` reports against an independent computation.
+
+    .venv/bin/python bench/bench_calibration.py --logs 200            # coverage (a few minutes)
+    .venv/bin/python bench/bench_calibration.py --logs 0 --validate   # identifiability and the validate check
+    .venv/bin/python bench/bench_calibration.py --example out/logs    # two example logs for docs/calibration.md
+
+Each log: the regional train of Farooqi 2018 §6.3 with true parameters drawn around
+the train file (mass +-5 %, Davis A, B, C +-15 %, traction efficiency +-3 %), driven by the plant
+over four runs of tracks/calibration_line.yaml (there and back), sampled at 10 Hz with speed noise 0.05 m/s and 1 %
+power noise; one calibration per log from the train file's values. Prints one table.
+"""
+import argparse
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from ecostudy.calibration.fit import DEFAULT_FIT, priors  # noqa: E402
+from ecostudy.calibration.generate import follow_work, generate_log, true_train  # noqa: E402
+from ecostudy.calibration.validate import validate_log  # noqa: E402
+from ecostudy.calibration.estimate import calibrate_logs  # noqa: E402
+from ecostudy.io.loaders import load_track, load_train, track_from_dict  # noqa: E402
+from ecostudy.io.logfile import parse_log, write_log  # noqa: E402
+
+TRAIN, TRACK = ROOT / "trains" / "regional_alstom.yaml", ROOT / "tracks" / "calibration_line.yaml"
+STOPS = ["West", "Middle", "East", "Middle", "West"]
+
+
+def drawn_truth(train, seed):
+    rng = np.random.default_rng(10_000 + seed)
+    return true_train(train, mass=rng.uniform(0.95, 1.05), davis=tuple(rng.uniform(0.85, 1.15, 3)),
+                      efficiency=rng.uniform(0.97, 1.03))
+
+
+def as_log(frame, name):
+    """A generated table as a parsed log (through the file format's text)."""
+    text = "---\ntrack: calibration_line.yaml\ntrain: regional_alstom.yaml\n---\n" + frame.to_csv(
+        index=False, float_format="%.6f")
+    return parse_log(text, f"{name}.csv", name)
+
+
+def one_log(seed):
+    """(true parameters, the calibration's table as records, its status, innovation drift, fit seconds)."""
+    track, train = load_track(TRACK), load_train(TRAIN)
+    truth = drawn_truth(train, seed)
+    frame, _ = generate_log(track, truth, STOPS, truth, seed=seed)
+    start = time.perf_counter()
+    result = calibrate_logs([as_log(frame, f"log{seed}")], track, train, DEFAULT_FIT)
+    return (priors(truth), result.table.to_dict("records"), result.status, result.quality["structure"],
+            time.perf_counter() - start)
+
+
+def coverage(count, workers):
+    hits, widths, held, times = {n: [] for n in DEFAULT_FIT}, {n: [] for n in DEFAULT_FIT}, [], []
+    drift, flagged = [], 0
+    with ProcessPoolExecutor(workers) as pool:
+        for true, rows, status, structure, seconds in pool.map(one_log, range(count)):
+            times.append(seconds)
+            drift.append(structure)
+            flagged += status != "ok"
+            for row in rows:
+                if row["name"] not in hits:
+                    continue
+                if not row["identifiable"]:
+                    held.append(row["name"])
+                    continue
+                hits[row["name"]].append(row["low"] <= true[row["name"]] <= row["high"])
+                widths[row["name"]].append(100 * 0.5 * (row["high"] - row["low"]) / true[row["name"]])
+    print(f"{count} logs, one calibration each (fit {np.median(times):.2f} s median, busy machine)")
+    print(f"{'parameter':12s} {'fitted':>6s} {'coverage %':>10s} {'median half-width %':>20s}")
+    for n in DEFAULT_FIT:
+        h = np.array(hits[n])
+        print(f"{n:12s} {len(h):6d} {100 * h.mean() if len(h) else float('nan'):10.1f} "
+              f"{np.median(widths[n]) if widths[n] else float('nan'):20.3f}")
+    print(f"held at the prior (not identifiable): {len(held)} ({', '.join(sorted(set(held))) or 'none'}); "
+          f"flagged {flagged} of {count}; residual drift median {np.median(drift):.2f}, max {np.max(drift):.2f}")
+
+
+def flat_track(track):
+    """The calibration line without gradients: static mass and rotating mass cannot be told apart."""
+    return track_from_dict({"name": "flat calibration line", "source": "bench", "length_m": track.length,
+                            "stops": [{"name": k, "position_m": float(v)} for k, v in track.stops.items()],
+                            "gradients": [{"position_m": 0, "gradient_permille": 0}],
+                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
+
+
+def identifiability(track, train):
+    flat = flat_track(track)
+    truth = drawn_truth(train, 0)
+    frame, _ = generate_log(flat, truth, STOPS, truth, seed=0)
+    result = calibrate_logs([as_log(frame, "flat")], flat, train, ("mass", "rotating_mass_factor", "davis_a"))
+    print("flat track, fitting mass, rotating_mass_factor, davis_a:", result.status, "-", result.reason)
+
+
+def write_examples(folder, track, train):
+    """Two logs of the regional train 5 % heavier, with 10 % more running resistance and a traction
+    efficiency 3 % lower than its train file says (there and back, two runs each)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    truth = true_train(train, mass=1.05, davis=(1.1, 1.1, 1.1), efficiency=0.97)
+    inside = folder.resolve().parent.parent == ROOT  # out/logs: name the files relative to the log
+    header = {"track": str(Path("../../tracks") / TRACK.name) if inside else str(TRACK),
+              "train": str(Path("../../trains") / TRAIN.name) if inside else str(TRAIN),
+              "source": "generated by bench/bench_calibration.py --example: the plant with known parameters, "
+                        "speed noise 0.05 m/s, power noise 1 %, 10 Hz"}
+    for name, stops, seed in (("there", STOPS[:3], 1), ("back", STOPS[2:], 2)):
+        frame, _ = generate_log(track, truth, stops, truth, seed=seed)
+        write_log(folder / f"{name}.csv", header, frame)
+        print(f"wrote {folder / name}.csv ({len(frame)} rows)")
+
+
+def validate_check(count, track, train):
+    """validate on logs of the train 5 % heavier with 5 % more resistance (and 5 % lower traction
+    efficiency) than its file, against the pointwise computation on the noise-free record."""
+    truth = true_train(train, mass=1.05, davis=(1.05, 1.05, 1.05), efficiency=0.95)
+    gaps = []
+    print("log run  validate %  independent %  gap (points)")
+    for seed in range(count):
+        frame, clean = generate_log(track, truth, STOPS[:3], truth, seed=100 + seed)
+        table = validate_log(as_log(frame, f"v{seed}"), track, train)
+        for row, (model, true) in zip(table.itertuples(), follow_work(clean, track, truth, train)):
+            independent = 100 * (model - true) / true
+            gaps.append(row.traction_difference_pct - independent)
+            print(f"{seed:3d} {row.run:3d} {row.traction_difference_pct:11.3f} {independent:14.3f} {gaps[-1]:+12.3f}")
+    print(f"validate against the independent computation: largest gap {np.max(np.abs(gaps)):.3f} percentage points "
+          f"over {len(gaps)} runs (mean {np.mean(gaps):+.3f})")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--logs", type=int, default=200)
+    parser.add_argument("--validate", action="store_true", help="also the validate check")
+    parser.add_argument("--validate-logs", type=int, default=10, help="logs of the validate check")
+    parser.add_argument("--workers", type=int, default=1, help="processes for the coverage logs")
+    parser.add_argument("--example", type=Path, help="write example logs into this folder and stop")
+    args = parser.parse_args()
+    track, train = load_track(TRACK), load_train(TRAIN)
+    if args.example:
+        return write_examples(args.example, track, train)
+    print(f"command: python bench/bench_calibration.py {' '.join(sys.argv[1:])}")
+    if args.logs:
+        start = time.perf_counter()
+        coverage(args.logs, args.workers)
+        print(f"coverage wall time {time.perf_counter() - start:.0f} s with {args.workers} worker(s)")
+    identifiability(track, train)
+    if args.validate:
+        validate_check(args.validate_logs, track, train)
+
+
+if __name__ == "__main__":
+    main()

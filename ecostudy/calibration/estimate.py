@@ -1,0 +1,106 @@
+"""A calibration of a train from logged runs: the fit (:mod:`ecostudy.calibration.fit`), its table of
+estimates and intervals, the residuals and their checks, and the status.
+
+Status: ``ok``; ``flagged`` when a requested parameter is not identifiable from the logs (held at
+its prior) or the residuals are bad: the replayed speed off the logged one by more than
+:data:`MAX_RMS_SPEED` RMS, or the filter's innovations not white (their moving average over
+:data:`WINDOW` seconds :data:`MAX_STRUCTURE` times larger than white noise leaves: the model misses
+something the logs show).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ecostudy.calibration.replay import coefficients
+from ecostudy.calibration.fit import (
+    PARAMETERS, Z95, Problem, bootstrap, identify, scales, train_with,
+)
+
+MAX_RMS_SPEED = 0.3    # [m/s]
+MAX_STRUCTURE = 2.0    # moving-average innovations over white-noise expectation (1.3 at most on 200 generated logs)
+WINDOW = 5.0           # [s]
+BOOTSTRAP_DRAWS = 200
+
+
+@dataclass
+class Calibration:
+    """The result of :func:`calibrate_logs`."""
+
+    table: pd.DataFrame      # one row per requested parameter (SI): prior, estimate, std, 95 % bounds
+    status: str              # ok | flagged
+    reason: str
+    residuals: pd.DataFrame  # per sample: log, run, time_s, position_m, speed_mps, model_speed_mps
+    quality: dict            # residual statistics and noise levels
+    theta: dict              # every parameter's value after the fit (SI)
+    train: object            # the calibrated :class:`~ecostudy.core.types.Train`
+    free: list               # the parameters fitted (identified)
+    covariance: np.ndarray   # of ``free`` (SI)
+
+
+def structure(residual, t):
+    """Drift of residuals: the RMS of their moving average over WINDOW seconds against what white
+    noise of the same spread leaves (1 for white noise)."""
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    w = max(int(round(WINDOW / step)), 1)
+    if len(residual) < 2 * w or np.std(residual) == 0:
+        return 1.0
+    mean = np.convolve(residual, np.ones(w) / w, mode="valid")
+    return float(np.sqrt(np.mean(mean ** 2)) * np.sqrt(w) / np.std(residual))
+
+
+def residual_table(problem, theta):
+    mass = theta["mass"] * (1.0 + theta["rotating_mass_factor"])
+    davis = (theta["davis_a"], theta["davis_b"], theta["davis_c"])
+    frames = []
+    for run in problem.runs:
+        model = run.speed(mass, theta["mass"], davis)
+        frames.append(pd.DataFrame({"log": run.log, "run": run.index, "time_s": run.t, "position_m": run.x,
+                                    "speed_mps": run.v, "model_speed_mps": model, "used": run.used}))
+    out = pd.concat(frames, ignore_index=True)
+    out["residual_mps"] = out["model_speed_mps"] - out["speed_mps"]
+    return out
+
+
+def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
+    """Fit ``names`` (of :data:`~ecostudy.calibration.fit.PARAMETERS`) to ``logs`` on ``track``,
+    starting from and regularised by nothing but the ``train``'s values (the prior)."""
+    problem = Problem.from_logs(logs, track, train)
+    free, p, cov, held = identify(problem, list(names))
+    theta = problem.theta(free, p)
+    s = scales(problem.prior)
+    boot = bootstrap(problem, free, p, draws, seed) if len(logs) > 1 and free else None
+    rows = []
+    for name in names:
+        row = {"name": name, "unit": PARAMETERS[name][0], "prior": problem.prior[name], "estimate": theta[name],
+               "std": np.nan, "low": np.nan, "high": np.nan, "boot_low": np.nan, "boot_high": np.nan,
+               "identifiable": name not in held, "note": held.get(name, "")}
+        if name in free:
+            j = free.index(name)
+            row["std"] = float(np.sqrt(cov[j, j])) * s[name]
+            row["low"], row["high"] = theta[name] - Z95 * row["std"], theta[name] + Z95 * row["std"]
+            if boot is not None:
+                row["boot_low"], row["boot_high"] = np.percentile(boot[:, j], [2.5, 97.5])
+        rows.append(row)
+    table = pd.DataFrame(rows)
+    residuals = residual_table(problem, theta)
+    used = residuals[residuals["used"]]
+    mass = theta["mass"] * (1.0 + theta["rotating_mass_factor"])
+    davis = (theta["davis_a"], theta["davis_b"], theta["davis_c"])
+    drifts = [structure(whitened @ coefficients(mass, theta["mass"], davis), run.t[run.used])
+              for run, whitened in problem.ordered_runs()]
+    blocks = problem.blocks(free, p)
+    quality = {"rms_speed_mps": float(np.sqrt(np.mean(used["residual_mps"] ** 2))),
+               "structure": float(max(drifts)) if drifts else 1.0,
+               "speed_samples": int(blocks["speed"].size), "traction_samples": int(blocks["traction"].size),
+               "regeneration_samples": int(blocks["regeneration"].size), "runs": len(problem.runs),
+               "noise": dict(problem.sigma)}
+    reasons = [f"{n} not identifiable from these logs, held at its prior: {why}" for n, why in held.items()]
+    if quality["rms_speed_mps"] > MAX_RMS_SPEED:
+        reasons.append(f"speed residuals of {quality['rms_speed_mps']:.3g} m/s RMS (more than {MAX_RMS_SPEED} m/s)")
+    if quality["structure"] > MAX_STRUCTURE:
+        reasons.append(f"residuals drift ({quality['structure']:.1f} times white noise over {WINDOW:g} s, "
+                       f"more than {MAX_STRUCTURE:g}): the model misses something the logs show")
+    scale = np.array([s[n] for n in free])
+    return Calibration(table, "flagged" if reasons else "ok", "; ".join(reasons), residuals, quality, theta,
+                       train_with(train, theta), free, cov * np.outer(scale, scale))

@@ -1,0 +1,238 @@
+"""Least squares on the replayed dynamics, 95 % intervals, identifiability and a bootstrap over logs.
+
+Parameters are fitted as multiples of the train file's values (the prior), p = theta / theta_0,
+by :func:`scipy.optimize.least_squares`. The residuals are the standardised innovations of the
+replayed energy balance (:mod:`ecostudy.calibration.replay`: a scalar Kalman filter whitens the
+random walk that the logged work's noise leaves, so the residuals are white with unit variance
+when model and noise levels are right) and, where the log has the line power, the log-ratios
+ln(P_line / P_wheel) against -ln eta_T in traction and ln eta_R in electric braking, each weighted
+by its spread at a first fit. Noise levels come from the logs (:meth:`Problem.measure_noise`).
+The 95 % interval of a parameter is 1.96 standard deviations of cov = s^2 (J^T J)^-1 at the
+optimum (J by central differences, s^2 the residual variance); with several logs a bootstrap over
+logs (logs drawn with replacement, refitted) gives a second interval.
+
+Identifiability: a parameter whose 95 % half-width exceeds :data:`MAX_RELATIVE_WIDTH` of its
+prior value (or that lies in a null direction of J: a singular value below 1e-9 of the largest)
+is not identifiable from these logs. It is held at its prior, not fitted to noise, and the fit
+is repeated without it; the report says which parameters it moves with (the weakest singular
+direction of J). Examples: the quadratic Davis term C from a slow run, the static mass against
+the rotating-mass allowance on flat track (only M = Ms (1 + f) is seen there), the efficiency of
+a log without line power.
+"""
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ecostudy.calibration.replay import coefficients, efficiency_samples, prepare
+
+# name -> (unit, what it is)
+PARAMETERS = {
+    "mass": ("kg", "static mass Ms; the effective mass M keeps its ratio to it"),
+    "rotating_mass_factor": ("-", "rotating-mass allowance f, M = Ms (1 + f)"),
+    "davis_a": ("N", "Davis A"),
+    "davis_b": ("N s/m", "Davis B"),
+    "davis_c": ("N s^2/m^2", "Davis C"),
+    "efficiency": ("-", "traction efficiency, wheel work per line energy"),
+    "regeneration_efficiency": ("-", "regeneration efficiency, line energy per wheel work"),
+}
+DEFAULT_FIT = ("mass", "davis_a", "davis_b", "davis_c", "efficiency")
+MAX_RELATIVE_WIDTH = 0.5   # 95 % half-width above this share of the prior: not identifiable
+NULL_SINGULAR = 1e-9       # singular value of the column-scaled J below this share of the largest: a null direction
+Z95 = 1.959964
+
+
+def priors(train):
+    """The train file's value of every parameter (SI)."""
+    return {"mass": train.static_mass, "rotating_mass_factor": train.mass / train.static_mass - 1.0,
+            "davis_a": train.davis[0], "davis_b": train.davis[1], "davis_c": train.davis[2],
+            "efficiency": train.traction_efficiency, "regeneration_efficiency": train.regeneration_efficiency}
+
+
+def scales(prior):
+    """theta = theta_0 + scale (p - 1): the prior itself, or a typical size where the prior is 0."""
+    fallback = {"rotating_mass_factor": 0.05, "davis_a": 1e-3 * prior["mass"], "davis_b": 1e-5 * prior["mass"],
+                "davis_c": 1e-6 * prior["mass"], "efficiency": 0.8, "regeneration_efficiency": 0.8, "mass": 1.0}
+    return {k: abs(v) if v else fallback[k] for k, v in prior.items()}
+
+
+def train_with(train, theta):
+    """``train`` with the parameter values ``theta`` (SI)."""
+    static = theta["mass"]
+    return replace(train, static_mass=static, mass=static * (1.0 + theta["rotating_mass_factor"]),
+                   davis=(theta["davis_a"], theta["davis_b"], theta["davis_c"]),
+                   traction_efficiency=theta["efficiency"], regeneration_efficiency=theta["regeneration_efficiency"])
+
+
+@dataclass
+class Problem:
+    """The runs and efficiency samples of some logs, the prior and the parameters to fit."""
+
+    runs: list
+    traction: dict           # log name -> ln(P_line / P_wheel) in traction
+    regeneration: dict       # log name -> the same in electric braking
+    prior: dict
+    sigma: dict = field(default_factory=lambda: {"speed": 0.05, "traction": 0.014, "regeneration": 0.014,
+                                                 "power": 0.01})
+    gains: list = field(default_factory=list)   # per run: its whitened basis (Run.whitened)
+
+    @classmethod
+    def from_logs(cls, logs, track, train):
+        """The problem of ``logs``, with the noise levels measured from them (:meth:`measure_noise`)."""
+        runs, traction, regeneration = [], {}, {}
+        for log in logs:
+            runs += prepare(log, track, train)
+            traction[log.name], regeneration[log.name] = efficiency_samples(log, train)
+        problem = cls(runs, traction, regeneration, priors(train))
+        problem.measure_noise(logs)
+        return problem
+
+    def measure_noise(self, logs):
+        """Speed noise from the logged speeds' second differences (robust spread / sqrt 6: a smooth
+        motion leaves nothing there); power noise from the header, else from the traction
+        log-ratios (two independent readings: spread / sqrt 2), else 1 %; then the filter gains."""
+        second = np.concatenate([np.diff(run.v[run.used], 2) for run in self.runs])
+        if second.size > 10:
+            self.sigma["speed"] = max(1.4826 * float(np.median(np.abs(second - np.median(second)))) / np.sqrt(6), 1e-4)
+        declared = [log.header.power_sigma_percent for log in logs if log.header.power_sigma_percent]
+        ratios = np.concatenate(list(self.traction.values()))
+        if declared:
+            self.sigma["power"] = float(np.mean(declared)) / 100.0
+        elif ratios.size > 20:
+            self.sigma["power"] = max(float(np.std(ratios)) / np.sqrt(2), 1e-4)
+        self.refilter(self.prior["mass"] * (1.0 + self.prior["rotating_mass_factor"]))
+
+    def refilter(self, mass):
+        """The filter gains and whitened bases for effective mass ``mass`` [kg] (the work's noise per
+        unit mass depends on it)."""
+        self.gains = [run.whitened(run.gains(mass, self.sigma["speed"], self.sigma["power"]), self.sigma["speed"])
+                      for run in self.runs]
+
+    def theta(self, names, p):
+        s = scales(self.prior)
+        out = dict(self.prior)
+        out.update({n: self.prior[n] + s[n] * (float(x) - 1.0) for n, x in zip(names, p)})
+        return out
+
+    def blocks(self, names, p, logs=None):
+        """Unweighted residuals per block (speed [m/s], traction and regeneration log-ratios [-])
+        over the logs named in ``logs`` (a list, repeats allowed; None: all)."""
+        th = self.theta(names, p)
+        mass, davis = th["mass"] * (1.0 + th["rotating_mass_factor"]), (th["davis_a"], th["davis_b"], th["davis_c"])
+        chosen = logs if logs is not None else list(self.traction)
+        weights = coefficients(mass, th["mass"], davis)
+        speed = [whitened @ weights for _, whitened in self.ordered_runs(chosen)]
+        eta_t, eta_r = max(th["efficiency"], 1e-6), max(th["regeneration_efficiency"], 1e-6)
+        return {"speed": np.concatenate(speed),
+                "traction": np.concatenate([self.traction[n] + np.log(eta_t) for n in chosen]),
+                "regeneration": np.concatenate([self.regeneration[n] - np.log(eta_r) for n in chosen])}
+
+    def ordered_runs(self, logs=None):
+        """(run, whitened basis) of the logs named in ``logs`` (all when None), in the order of the residuals."""
+        by_log = {}
+        for run, gains in zip(self.runs, self.gains):
+            by_log.setdefault(run.log, []).append((run, gains))
+        return [run for n in (logs if logs is not None else list(self.traction)) for run in by_log[n]]
+
+    def residuals(self, names, p, logs=None):
+        b = self.blocks(names, p, logs)
+        return np.concatenate([b["speed"], b["traction"] / self.sigma["traction"],
+                               b["regeneration"] / self.sigma["regeneration"]])
+
+    def jacobian(self, names, p, step=1e-5):
+        cols = []
+        for j in range(len(names)):
+            hi, lo = np.array(p, float), np.array(p, float)
+            hi[j] += step
+            lo[j] -= step
+            cols.append((self.residuals(names, hi) - self.residuals(names, lo)) / (2 * step))
+        return np.column_stack(cols) if cols else np.zeros((len(self.residuals(names, p)), 0))
+
+
+def solve(problem, names, start=None, logs=None):
+    """Least squares over ``names`` (relative values p, each theta >= 0); returns p."""
+    if not names:
+        return np.zeros(0)
+    s = scales(problem.prior)
+    lower = [1.0 - problem.prior[n] / s[n] for n in names]
+    x0 = np.ones(len(names)) if start is None else np.clip(start, np.array(lower) + 1e-6, None)
+    result = least_squares(lambda p: problem.residuals(names, p, logs), x0, method="trf",
+                           bounds=(lower, np.inf), x_scale=1.0, xtol=1e-10, ftol=1e-10)
+    return result.x
+
+
+def covariance(problem, names, p):
+    """(covariance s^2 (J^T J)^-1 of p, singular values of the column-scaled J, its weakest right
+    singular vector); variances along null directions of J are infinite."""
+    jac = problem.jacobian(names, p)
+    r = problem.residuals(names, p)
+    dof = max(len(r) - len(names), 1)
+    s2 = float(r @ r) / dof
+    norms = np.linalg.norm(jac, axis=0)
+    safe = np.where(norms > 0, norms, 1.0)
+    scaled = jac / safe
+    _, sv, vt = np.linalg.svd(scaled, full_matrices=False)
+    null = (sv < NULL_SINGULAR * sv[0]) if sv.size and sv[0] > 0 else np.ones(sv.size, bool)
+    inv = np.where(null, 0.0, 1.0 / np.where(null, 1.0, sv) ** 2)
+    h_inv = (vt.T * inv) @ vt / np.outer(safe, safe)
+    cov = h_inv * s2
+    lost = np.any(np.abs(vt[null]) > 0.1, axis=0) | (norms == 0)
+    cov[lost, :] = np.inf
+    cov[:, lost] = np.inf
+    return cov, sv, (vt[-1] if sv.size else np.zeros(0))
+
+
+def estimate_noise(problem, names, p):
+    """Set each block's noise to its residuals' standard deviation at ``p`` (degrees of freedom:
+    the parameters that act on the block)."""
+    b = problem.blocks(names, p)
+    acting = {"traction": [n for n in names if n == "efficiency"],
+              "regeneration": [n for n in names if n == "regeneration_efficiency"]}
+    for key in acting:
+        values = b[key]
+        dof = len(values) - len(acting[key])
+        if dof > 0:
+            problem.sigma[key] = max(float(np.sqrt(values @ values / dof)), 1e-9)
+
+
+def identify(problem, requested):
+    """Fit ``requested`` parameters, holding those the logs do not identify at their prior.
+
+    Returns (free names, p, covariance, held: {name: reason})."""
+    free, held = list(requested), {}
+    while True:
+        p = solve(problem, free)
+        estimate_noise(problem, free, p)
+        th = problem.theta(free, p)
+        problem.refilter(th["mass"] * (1.0 + th["rotating_mass_factor"]))  # weights at the fitted mass
+        p = solve(problem, free, p)
+        cov, sv, weakest = covariance(problem, free, p)
+        if not free:
+            return free, p, cov, held
+        s = scales(problem.prior)
+        width = np.array([Z95 * np.sqrt(cov[j, j]) * s[n] / max(abs(problem.prior[n]), 1e-300)
+                          for j, n in enumerate(free)])
+        worst = int(np.argmax(width))
+        if width[worst] <= MAX_RELATIVE_WIDTH:
+            return free, p, cov, held
+        partners = [n for j, n in enumerate(free) if j != worst and abs(weakest[j]) > 0.3]
+        ratio = sv[-1] / sv[0] if sv[0] > 0 else 0.0
+        reason = (f"95 % half-width {'unbounded' if not np.isfinite(width[worst]) else f'{100 * width[worst]:.0f} %'}"
+                  f" of the prior (limit {100 * MAX_RELATIVE_WIDTH:.0f} %)")
+        if partners:
+            reason += f"; moves with {', '.join(partners)} (singular value ratio {ratio:.1e})"
+        held[free[worst]] = reason
+        free.pop(worst)
+
+
+def bootstrap(problem, names, p, draws, seed=0):
+    """Estimates of ``names`` refitted on ``draws`` resamples of the logs (with replacement) [SI]."""
+    logs = list(problem.traction)
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(draws):
+        pick = [logs[i] for i in rng.integers(0, len(logs), len(logs))]
+        q = solve(problem, names, p, pick)
+        th = problem.theta(names, q)
+        out.append([th[n] for n in names])
+    return np.array(out)

@@ -1,0 +1,220 @@
+"""The replayed dynamics of a logged run: the energy balance a train with given parameters obeys
+under the logged work at the wheel, run by run between stops.
+
+Energy balance per unit effective mass from the departure (thesis 000 eq. 2.1, Farooqi 2018,
+multiplied by v and integrated over time):
+
+    v(t)^2 / 2 = [W(t) - A I_1(t) - B I_2(t) - C I_3(t) - Ms w_fixed(t)] / M
+
+W is the logged work at the wheel (the wheel power's interval means times the interval, or the
+trapezoid of force times speed), I_k the integrals of R_v(v) v dt for unit Davis coefficients
+(:func:`physics.davis_resistance` is linear in A, B and C, so they are taken once over the logged
+speed), w_fixed the work per kilogram of static mass against gradients and curves along the logged
+positions (:func:`physics.running_resistance` at zero speed; the gradient work is g times the
+height gained, exact across gradient changes). A run starts where the train stands (v = 0, so no
+initial speed is fitted) and ends where it stands again.
+
+The logged speed is the observation (per unit mass, so its noise does not sit in a regressor and
+bias the mass low); the noise of the logged work adds up along a run as a random walk, which a
+scalar Kalman filter whitens (:meth:`Run.gains`, :meth:`Run.whitened`; thesis 001 Ch. 10,
+Yazhemsky 2017, estimates the mass with a scalar Kalman filter too). Samples below
+:data:`MIN_SPEED` (smoothed) are left out: there the speed says little about the energy.
+"""
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.grid import Profile
+from ecostudy.core.physics import davis_resistance, running_resistance
+
+STANDING_SPEED = 0.25   # [m/s] below this, without traction, a train stands (speed noise allowed)
+STANDING_TIME = 1.0     # [s] a stand lasts at least this long
+MIN_SPEED = 2.0         # [m/s] residuals only above this speed (of the speed smoothed over SMOOTHING)
+SMOOTHING = 1.0         # [s]
+TRACTION_SHARE = 0.05   # efficiency samples: power above this share of the log's largest
+
+
+@dataclass
+class Run:
+    """One run of a log between two stands, prepared for the replay (SI, per sample)."""
+
+    log: str
+    index: int
+    t: np.ndarray        # [s] from the log's start
+    x: np.ndarray        # track position [m]
+    v: np.ndarray        # measured speed [m/s]
+    work: np.ndarray     # logged work at the wheel since the departure [J]
+    davis: np.ndarray    # (3, n) integrals of R_v(v) v dt for A = 1, B = 1, C = 1 [J per unit coefficient]
+    fixed: np.ndarray    # gradient and curve work per kg of static mass since the departure [J/kg]
+    used: np.ndarray     # samples whose speed residual counts
+
+    @property
+    def distance(self):
+        return float(abs(self.x[-1] - self.x[0]))
+
+    def basis(self, sigma_speed=0.0):
+        """Columns whose combination with :func:`coefficients` is the kinetic energy per effective
+        mass from the logged speed minus the replayed one [J/kg] at every sample; sigma^2 / 2 taken
+        off the logged v^2 / 2, the mean that speed noise adds. Per unit mass, so that the noisy
+        logged speed is the observation, not a regressor whose noise would bias the mass low."""
+        return np.column_stack([0.5 * (self.v * self.v - sigma_speed ** 2), -self.work, self.davis.T, self.fixed])
+
+    def gains(self, mass, sigma_speed, sigma_power):
+        """(K, S) of the scalar Kalman filter that whitens :meth:`balance` at the used samples: the
+        logged work's noise (``sigma_power`` of each interval's work, per ``mass``) adds up along the
+        run as a random walk in kinetic energy per mass, the speed noise (``sigma_speed``) reads it
+        as v sigma_speed [J/kg]. Gains depend on the noise levels only, so they are computed once."""
+        q = (sigma_power * np.diff(self.work) / mass) ** 2
+        r = (np.maximum(smoothed(self.t, self.v), MIN_SPEED) * sigma_speed) ** 2  # weights free of the noise
+        walk = np.concatenate([[0.0], np.cumsum(q)])
+        k_out, s_out, p, last = [], [], 0.0, 0
+        for i in np.nonzero(self.used)[0]:
+            p += walk[i] - walk[last]
+            last = i
+            s = p + r[i]
+            k_out.append(p / s)
+            s_out.append(s)
+            p *= 1.0 - p / s
+        return np.array(k_out), np.array(s_out)
+
+    def whitened(self, gains, sigma_speed):
+        """:meth:`basis` at the used samples through the filter of :meth:`gains`, divided by the
+        innovations' spread: ``whitened @ coefficients(...)`` are the standardised innovations,
+        white with unit variance when the model and the noise levels are right (the filter is
+        linear, so the columns are filtered once)."""
+        gain, spread = gains
+        rows = self.basis(sigma_speed)[self.used]
+        z, out = np.zeros(rows.shape[1]), np.empty_like(rows)
+        for i, (row, k) in enumerate(zip(rows, gain)):
+            out[i] = row - z
+            z += k * out[i]
+        return out / np.sqrt(spread)[:, None]
+
+    def speed(self, mass, static_mass, davis):
+        """Replayed speed at every sample [m/s] for effective and static mass [kg] and (A, B, C)."""
+        energy = self.work - np.dot(davis, self.davis) - static_mass * self.fixed
+        return np.sqrt(np.maximum(2.0 * energy / mass, 0.0))
+
+
+def coefficients(mass, static_mass, davis):
+    """The weights of :meth:`Run.basis`: 1, and 1, A, B, C and the static mass per effective mass."""
+    return np.array([1.0, 1.0 / mass, *(np.asarray(davis) / mass), static_mass / mass])
+
+
+def wheel_work(log):
+    """Work at the wheel over each interval between rows [J] (len n - 1)."""
+    dt = np.diff(log.t)
+    if log.power_wheel is not None:
+        p = log.power_wheel
+        return p[:-1] * dt if log.header.power_sampling == "interval_mean" else 0.5 * (p[1:] + p[:-1]) * dt
+    if log.force is not None and log.v is not None:
+        fv = log.force * log.v
+        return 0.5 * (fv[1:] + fv[:-1]) * dt
+    raise InputError(problem(log.path or log.name, "columns", "the replay needs the work at the wheel: a "
+                             "force_kN or power_wheel_kW column (with speed_mps for the force)"))
+
+
+def line_power(log):
+    """Mean line power over each interval [W] (len n - 1), or None."""
+    p = log.power_line
+    if p is None:
+        return None
+    return p[:-1] if log.header.power_sampling == "interval_mean" else 0.5 * (p[1:] + p[:-1])
+
+
+def speeds(log):
+    """Measured speed, or the positions differenced where the log has no speed [m/s]."""
+    return log.v if log.v is not None else np.abs(np.gradient(log.x, log.t))
+
+
+def standing(log, work):
+    """Samples at which the train stands: slow and without traction, for at least STANDING_TIME."""
+    v = speeds(log)
+    slow = (v < STANDING_SPEED) & (np.append(work, 0.0) <= 0.0) & (np.append(0.0, work) <= 0.0)
+    slow[0] |= v[0] < STANDING_SPEED  # at rest when the log starts, even if it departs at once
+    out = np.zeros_like(slow)
+    i, n = 0, len(slow)
+    while i < n:
+        if slow[i]:
+            j = i
+            while j < n and slow[j]:
+                j += 1
+            if log.t[j - 1] - log.t[i] >= STANDING_TIME or i == 0:
+                out[i:j] = True
+            i = j
+        else:
+            i += 1
+    return out
+
+
+def smoothed(t, v, span=SMOOTHING):
+    """Centred moving average of ``v`` over ``span`` seconds: choosing samples or weights by it
+    instead of the noisy speed keeps the choice independent of the noise (no selection bias)."""
+    w = max(int(round(span / float(np.median(np.diff(t))))) | 1, 1) if len(t) > 1 else 1
+    padded = np.pad(v, w // 2, mode="edge")
+    return np.convolve(padded, np.ones(w) / w, mode="valid")
+
+
+def cumulative(values):
+    return np.concatenate([[0.0], np.cumsum(values)])
+
+
+def prepare(log, track, train):
+    """The runs of ``log`` on ``track`` (each from a stand to the next), ready for :class:`Run`;
+    a log that never stands and moves refuses in one line."""
+    if track.tunnels and train.tunnel_resistance:
+        warnings.warn(f"track '{track.name}': the replay does not model the tunnel resistance; the Davis "
+                      "coefficients fitted there include it", EcostudyWarning, stacklevel=2)
+    work = wheel_work(log)
+    v = speeds(log)
+    stand = standing(log, work)
+    height = Profile(track.gradient_positions, track.gradients).integral(log.x)
+    curve = Profile(track.curve_positions, track.curvatures, track.curvature_slopes)
+    ds = np.abs(np.diff(log.x))
+    grade = np.diff(height) / np.maximum(ds, 1e-9)  # along the travel: the height gained per metre run
+    per_kg = running_resistance(0.0, (0.0, 0.0, 0.0), 1.0, grade, train.curve_coefficient,
+                                curve(0.5 * (log.x[1:] + log.x[:-1])), roeckl=train.curve_resistance == "roeckl")
+    fixed = per_kg * ds
+    dt = np.diff(log.t)
+    basis = [davis_resistance(v, *unit) * v for unit in np.eye(3)]
+    trapezoid = np.array([0.5 * (b[1:] + b[:-1]) * dt for b in basis])
+    runs, index = [], 0
+    departures = np.nonzero(stand[:-1] & ~stand[1:])[0]
+    for d in departures:
+        following = np.nonzero(stand[d + 1:])[0]
+        end = d + 1 + (following[0] if following.size else len(stand) - d - 2)
+        sl = slice(d, end + 1)
+        if end - d < 10:
+            continue
+        runs.append(Run(log.name, index, log.t[sl], log.x[sl], v[sl], cumulative(work[d:end]),
+                        np.array([cumulative(row[d:end]) for row in trapezoid]), cumulative(fixed[d:end]),
+                        smoothed(log.t[sl], v[sl]) > MIN_SPEED))
+        index += 1
+    if not runs:
+        raise InputError(problem(log.path or log.name, "speed", "no run from a stand to a stand: the train never "
+                                 f"stands (speed below {STANDING_SPEED} m/s without traction for {STANDING_TIME:g} s) "
+                                 "and then moves"))
+    return runs
+
+
+def efficiency_samples(log, train):
+    """(traction, regeneration) log-ratios ln(P_line / P_wheel) of intervals well inside a traction
+    or an electric-braking phase (both neighbours alike; braking within the regeneration
+    envelope, so that no friction brake hides in the wheel power); empty without a line power."""
+    line = line_power(log)
+    if line is None:
+        return np.zeros(0), np.zeros(0)
+    wheel = wheel_work(log) / np.diff(log.t)
+    scale = TRACTION_SHARE * np.max(np.abs(wheel))
+    inner = np.zeros(len(wheel), bool)
+    inner[1:-1] = True
+    pull = (wheel > scale) & (line > 0)
+    pull &= inner & np.roll(pull, 1) & np.roll(pull, -1)
+    brake = (wheel < -scale) & (line < 0)
+    if train.regeneration is not None:
+        v = 0.5 * (speeds(log)[1:] + speeds(log)[:-1])
+        brake &= -wheel / np.maximum(v, 1.0) < 0.95 * train.regeneration.force(np.maximum(v, 0.1))
+    brake &= inner & np.roll(brake, 1) & np.roll(brake, -1)
+    return np.log(line[pull] / wheel[pull]), np.log(line[brake] / wheel[brake])

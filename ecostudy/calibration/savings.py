@@ -1,0 +1,52 @@
+"""Savings against the logged driving: per run between stops, the energy-optimal driving of the
+calibrated train for the logged running time (:func:`ecostudy.analysis.single.solve_run`, verified
+by the plant) against the traction energy the log used, with the calibration's uncertainty
+carried through as a band: the optimum solved again for parameter sets drawn from the fit's
+covariance (normal, seeded), the band their lowest and highest saving.
+"""
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+
+from ecostudy.analysis.single import solve_run
+from ecostudy.calibration.fit import train_with
+from ecostudy.calibration.replay import prepare, wheel_work
+from ecostudy.core.types import Timing
+from ecostudy.core.units import to_kwh
+
+
+def parameter_draws(calibration, count, seed=0):
+    """``count`` trains with parameters drawn from the calibration's estimate and covariance."""
+    if not calibration.free or count <= 0:
+        return []
+    rng = np.random.default_rng(seed)
+    mean = np.array([calibration.theta[n] for n in calibration.free])
+    draws = rng.multivariate_normal(mean, calibration.covariance, size=count, method="eigh")
+    return [train_with(calibration.train, dict(calibration.theta, **dict(zip(calibration.free, np.maximum(d, 0.0)))))
+            for d in draws]
+
+
+def savings(log, track, calibration, draws=8, points=500, seed=0):
+    """One row per run of ``log``: logged time and traction energy, the calibrated optimum's, the
+    saving [%] and its band over ``draws`` parameter draws."""
+    trains = parameter_draws(calibration, draws, seed)
+    work, rows = wheel_work(log), []
+    for run in prepare(log, track, calibration.train):
+        first = int(np.searchsorted(log.t, run.t[0]))
+        logged = float(np.sum(np.maximum(work[first:first + len(run.t) - 1], 0.0)))
+        timing = Timing(running_time=float(run.t[-1] - run.t[0]))
+        here = replace(track, stops=dict(track.stops, _departure=float(run.x[0]), _arrival=float(run.x[-1])))
+        best = solve_run(here, calibration.train, "_departure", "_arrival", timing, points=points)
+        energies = [best.summary["traction_energy_kWh"]]
+        for train in trains:
+            energies.append(solve_run(here, train, "_departure", "_arrival", timing, points=points,
+                                      warm_start=best).summary["traction_energy_kWh"])
+        saving = [100 * (to_kwh(logged) - e) / to_kwh(logged) for e in energies]
+        verified = best.summary["verification"] or {}
+        rows.append({"log": log.name, "run": run.index, "from_m": float(run.x[0]), "to_m": float(run.x[-1]),
+                     "running_time_s": timing.running_time, "logged_traction_kWh": to_kwh(logged),
+                     "optimal_traction_kWh": energies[0], "saving_pct": saving[0],
+                     "saving_low_pct": min(saving), "saving_high_pct": max(saving), "draws": len(trains),
+                     "verified": bool(verified.get("passed", False))})
+    return pd.DataFrame(rows)

@@ -1,0 +1,134 @@
+"""Replaying a logged run on a model train: energy and time differences per run between stops.
+
+Two replays, each answering one question:
+
+- **speed as reference** (energy at equal running): the model follows the logged speed. Over each
+  phase of the log (runs of intervals with traction, or without), its work at the wheel is the
+  energy balance of :mod:`ecostudy.calibration.replay` with the model's parameters,
+  1/2 M (v_e^2 - v_s^2) + int R_v(v) v dt + Ms w_fixed, the end speeds from straight lines fitted
+  to the phase's own samples (:data:`END_FIT` seconds at each end; the speed noise averages out, a
+  change of handle between phases does not bend the line; a traction phase takes its end speeds
+  from its neighbours' lines, because the handle changes inside its edge intervals). The model's
+  traction energy is the sum of the work of the traction phases and of the phases without
+  traction where the model needs traction beyond twice the work's standard error from the end
+  speeds (so that speed noise on a coast the model would also coast is not counted as traction).
+  Its time is the logged time.
+- **handle as input** (time at equal driving): the logged force divided by the model's traction
+  or braking envelope at the logged speed is the driver's handle; :meth:`Plant.drive` drives it
+  by position from the departure until the model stops, which gives the model's running time,
+  where it stops and its traction energy.
+
+A run is ``flagged`` when its traction energy differs from the log's by more than
+``energy_tolerance`` or its running time by more than ``time_tolerance`` (shares).
+"""
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+
+from ecostudy.calibration.replay import coefficients, line_power, prepare, wheel_work
+from ecostudy.core.grid import make_segment
+from ecostudy.core.plant import Plant
+from ecostudy.core.units import to_kwh
+
+END_FIT = 3.0          # [s] of samples at each end of a phase for its end speeds
+TRACTION_SHARE = 0.01  # an interval draws traction above this share of the log's largest power
+HANDLE_STEP = 0.01     # the replayed handle is rounded to this
+
+
+def end_speed(t, v, at_start, span=END_FIT):
+    """(speed, its standard error) at the first (``at_start``) or last sample of a phase: a straight
+    line through the samples within ``span`` seconds of that end, evaluated there."""
+    keep = (t - t[0] <= span) if at_start else (t[-1] - t <= span)
+    if keep.sum() < 4:
+        return float(v[0] if at_start else v[-1]), 0.0
+    tt, vv = t[keep] - t[0 if at_start else -1], v[keep]
+    slope, level = np.polyfit(tt, vv, 1)
+    spread = np.std(vv - (level + slope * tt), ddof=2)
+    error = spread * np.sqrt(1.0 / len(tt) + np.mean(tt) ** 2 / np.sum((tt - np.mean(tt)) ** 2))
+    return float(max(level, 0.0)), float(error)
+
+
+def phase_bounds(work, share=TRACTION_SHARE):
+    """(start, end) sample indices of runs of intervals with traction and without."""
+    pulling = work > share * np.max(np.abs(work)) if work.size and np.max(np.abs(work)) > 0 else np.zeros(0, bool)
+    edges = np.concatenate([[0], np.nonzero(np.diff(pulling.astype(int)))[0] + 1, [len(work)]])
+    return list(zip(edges[:-1], edges[1:]))
+
+
+def speed_reference(run, train, work):
+    """The model's traction work at the wheel [J] following the logged speed of ``run`` (whose
+    intervals have the logged work ``work``)."""
+    weights = coefficients(train.mass, train.static_mass, train.davis) * train.mass
+    bounds = phase_bounds(work)
+    ends = [[end_speed(run.t[s:e + 1], run.v[s:e + 1], True) if s > 0 else (0.0, 0.0),
+             end_speed(run.t[s:e + 1], run.v[s:e + 1], False)] for s, e in bounds]
+    total = 0.0
+    for i, (s, e) in enumerate(bounds):
+        pulling = work[s] > 0
+        # the handle changes inside a traction phase's edge interval: at the shared sample the
+        # neighbouring phase's line is on the right side of the kink
+        (v0, e0) = ends[i - 1][1] if pulling and i > 0 else ends[i][0]
+        (v1, e1) = ends[i + 1][0] if pulling and i + 1 < len(bounds) else ends[i][1]
+        basis = run.basis()[[s, e]]
+        basis[:, 0] = 0.5 * np.square([v0, v1])
+        basis[:, 1] = 0.0  # the balance with the logged work left out: the model's work to get there
+        phase = float(np.diff(basis @ weights)[0])
+        noise = train.mass * np.hypot(v0 * e0, v1 * e1)
+        if pulling or phase > 2.0 * noise:  # a phase without traction counts only beyond its noise
+            total += max(phase, 0.0)
+    return total
+
+
+def handle_replay(run, track, train, log):
+    """(running time [s], stop position from the departure [m], traction work [J]) of the model
+    driven by the logged handle, by position."""
+    sign = 1.0 if run.x[-1] >= run.x[0] else -1.0
+    far = float(np.clip(run.x[-1] + sign * 500.0, 0.0, track.length))
+    segment = make_segment(replace(track, stops=dict(track.stops, _a=float(run.x[0]), _b=far)), train, "_a", "_b")
+    travel = np.abs(run.x - run.x[0])
+    first = np.searchsorted(log.t, run.t[0])
+    force = log.force[first:first + len(run.t)] if log.force is not None else None
+    if force is None:
+        force = np.append(np.diff(run.work) / np.diff(run.t), 0.0) / np.maximum(run.v, 1.0)
+    v = np.maximum(run.v, 0.0)
+    handle = np.where(force > 0, force / train.traction.force(v), force / train.braking.force(v))
+    handle = np.round(np.clip(handle, -1.0, 1.0) / HANDLE_STEP) * HANDLE_STEP
+    keep = np.append(np.diff(travel) > 1e-3, True)  # the last sample at each position: the one that moves on
+    nodes, handle = travel[keep], handle[keep][:-1]
+    nodes[-1] = max(nodes[-1], nodes[-2] + 1e-3)
+    y, t_stop, _ = Plant(segment, train).drive(nodes, handle, max_time=4 * (run.t[-1] - run.t[0]) + 600)
+    return float(t_stop), float(y[0]), float(y[2])
+
+
+def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
+    """One row per run of ``log``: logged and model running time and traction energy, the
+    differences, where the model stops, and the status."""
+    rows, work_all = [], wheel_work(log)
+    line = line_power(log)
+    for run in prepare(log, track, train):
+        first = int(np.searchsorted(log.t, run.t[0]))
+        work = work_all[first:first + len(run.t) - 1]
+        logged = float(np.sum(np.maximum(work, 0.0)))
+        model = speed_reference(run, train, work)
+        model_time, stop, handle_work = handle_replay(run, track, train, log)
+        logged_time = float(run.t[-1] - run.t[0])
+        row = {"log": log.name, "run": run.index, "from_m": float(run.x[0]), "to_m": float(run.x[-1]),
+               "logged_time_s": logged_time, "model_time_s": model_time,
+               "time_difference_pct": 100 * (model_time - logged_time) / logged_time,
+               "model_stop_error_m": stop - run.distance,
+               "logged_traction_kWh": to_kwh(logged), "model_traction_kWh": to_kwh(model),
+               "traction_difference_pct": 100 * (model - logged) / logged if logged > 0 else np.nan,
+               "model_traction_at_logged_handle_kWh": to_kwh(handle_work)}
+        if line is not None:
+            drawn = line[first:first + len(run.t) - 1]
+            row["logged_line_traction_kWh"] = to_kwh(float(np.sum(np.maximum(drawn, 0.0) * np.diff(run.t))))
+            row["model_line_traction_kWh"] = to_kwh(model / train.traction_efficiency)
+        reasons = []
+        if abs(row["traction_difference_pct"]) > 100 * energy_tolerance:
+            reasons.append(f"traction energy {row['traction_difference_pct']:+.1f} % off the log")
+        if abs(row["time_difference_pct"]) > 100 * time_tolerance:
+            reasons.append(f"running time {row['time_difference_pct']:+.1f} % off the log under the logged handle")
+        row["status"], row["reason"] = ("flagged", "; ".join(reasons)) if reasons else ("ok", "")
+        rows.append(row)
+    return pd.DataFrame(rows)

@@ -1,0 +1,241 @@
+"""Logged runs: a CSV with a small YAML header, read into SI arrays and checked like every input.
+
+The file::
+
+    ---
+    track: ../tracks/line.yaml        # the files it ran on, relative to the log
+    train: ../trains/train.yaml
+    source: event recorder of unit 4711, 2026-05-12
+    ---
+    time_s,position_m,speed_mps,force_kN,power_wheel_kW,power_line_kW
+    0.0,1200.0,0.0,0.0,0.0,0.0
+    ...
+
+Units are in the column names (:data:`COLUMNS`). Time is required, and position and/or speed;
+any of the force at the wheel (traction positive, braking negative), the power at the wheel, the
+power at the pantograph (or the line voltage and current) may follow. Positions are track
+positions (the track file's kilometrage), in either direction of travel. Powers are the means
+over the interval from their row to the next (energy counters differenced) unless the header
+says ``power_sampling: instant``; speed, position and force are instantaneous.
+
+Every problem is one line ``file: field: what is wrong`` (exit status 2): a missing header,
+unknown columns (units), values that are not finite numbers, time not increasing, gaps, speeds
+that do not fit the positions (a unit mix-up), positions off the track (:func:`check_on_track`).
+"""
+import csv
+import io
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal, Optional
+
+import numpy as np
+import yaml
+from pydantic import Field
+
+from ecostudy.core import units
+from ecostudy.core.errors import InputError, problem
+from ecostudy.io.documents import validate
+from ecostudy.io.schemabase import Strict
+from ecostudy.io.writers import atomic_write
+from ecostudy.io.yamlsafe import MAX_FILE_BYTES, DocumentError, load_yaml
+
+# column name -> (quantity, [SI] per [unit])
+COLUMNS = {
+    "time_s": ("time", 1.0),
+    "position_m": ("position", 1.0), "position_km": ("position", 1000.0),
+    "speed_mps": ("speed", 1.0), "speed_kmh": ("speed", units.KMH),
+    "force_N": ("force", 1.0), "force_kN": ("force", units.KN),
+    "power_wheel_W": ("power_wheel", 1.0), "power_wheel_kW": ("power_wheel", units.KW),
+    "power_line_W": ("power_line", 1.0), "power_line_kW": ("power_line", units.KW),
+    "line_voltage_V": ("voltage", 1.0), "line_voltage_kV": ("voltage", 1000.0),
+    "line_current_A": ("current", 1.0),
+}
+MIN_ROWS = 10
+GAP_FACTOR = 5.0       # a time step this many times the median step is a gap
+MIN_SPEED = -1.0       # [m/s] below this a negative speed is not sensor noise
+MAX_SPEED = 150.0      # [m/s] (540 km/h)
+SPEED_DISTANCE = (0.8, 1.25)  # speeds integrated over the positions' travel, outside: a unit mix-up
+
+
+class LogHeader(Strict):
+    """The YAML header of a logged run."""
+
+    track: str = Field(description="Track file the run was logged on, relative to the log.")
+    train: str = Field(description="Train file of the vehicle, relative to the log.")
+    source: str = Field("", description="Where the log comes from.")
+    start_position_m: Optional[float] = Field(None, description="Track position at the first row; needed "
+                                              "when there is no position column.")
+    power_sampling: Literal["interval_mean", "instant"] = Field(
+        "interval_mean", description="Powers as means over the interval to the next row, or instantaneous.")
+    speed_sigma_mps: Optional[float] = Field(None, gt=0, description="Speed sensor noise, if known [m/s].")
+    power_sigma_percent: Optional[float] = Field(None, gt=0, description="Power noise, if known [%].")
+
+
+@dataclass
+class LoggedRun:
+    """A logged run in SI: arrays per row (None where the log has no such column)."""
+
+    name: str
+    header: LogHeader
+    t: np.ndarray                       # [s]
+    x: np.ndarray                       # track position [m] (integrated from the speed without a column)
+    v: np.ndarray | None = None         # [m/s]
+    force: np.ndarray | None = None     # at the wheel, traction > 0, braking < 0 [N]
+    power_wheel: np.ndarray | None = None  # [W]
+    power_line: np.ndarray | None = None   # drawn from the line > 0, fed back < 0 [W]
+    path: Path | None = None
+    columns: tuple = field(default=())
+
+    @property
+    def files(self):
+        """(track, train) paths as the header gives them, relative to the log's folder."""
+        base = self.path.parent if self.path else Path(".")
+        return base / self.header.track, base / self.header.train
+
+
+def split_header(text, path):
+    """(header mapping, CSV text) of a log: the header between two '---' lines at the top."""
+    lines = text.splitlines(keepends=True)
+    if not lines or lines[0].strip() != "---":
+        raise InputError(problem(path, "header", "expected a YAML header between two '---' lines before the CSV"))
+    try:
+        end = next(i for i in range(1, len(lines)) if lines[i].strip() == "---")
+    except StopIteration:
+        raise InputError(problem(path, "header", "the YAML header has no closing '---' line"))
+    try:
+        header = load_yaml("".join(lines[1:end]))
+    except DocumentError as exc:
+        raise InputError(problem(path, "header", str(exc)))
+    except Exception as exc:  # a YAML parse error: one line with its reason
+        raise InputError(problem(path, "header", f"malformed YAML: {getattr(exc, 'problem', exc)}"))
+    if not isinstance(header, dict):
+        raise InputError(problem(path, "header", "expected a mapping of fields"))
+    return header, "".join(lines[end + 1:])
+
+
+def read_table(text, path):
+    """(column names, float rows array) of the CSV part; one line for the first bad cell of each column."""
+    rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)]
+    if not rows:
+        raise InputError(problem(path, "columns", "no CSV header row after the YAML header"))
+    names = [c.strip() for c in rows[0]]
+    lines = [problem(path, name, f"unknown column (known: {', '.join(COLUMNS)}; the unit is part of the name)")
+             for name in names if name not in COLUMNS]
+    quantities = [COLUMNS[n][0] for n in names if n in COLUMNS]
+    lines += [problem(path, "columns", f"two columns give the {q}") for q in sorted(set(quantities))
+              if quantities.count(q) > 1]
+    if lines:
+        raise InputError(lines)
+    data = np.full((len(rows) - 1, len(names)), np.nan)
+    bad = {}
+    for i, row in enumerate(rows[1:]):
+        if len(row) != len(names):
+            raise InputError(problem(path, f"row {i + 1}", f"{len(row)} values for {len(names)} columns"))
+        for j, cell in enumerate(row):
+            try:
+                data[i, j] = float(cell)
+            except ValueError:
+                bad.setdefault(names[j], (i + 1, f"'{cell.strip()}' is not a number"))
+        for j in np.nonzero(~np.isfinite(data[i]))[0]:
+            bad.setdefault(names[j], (i + 1, f"'{row[j].strip()}' is not a finite number"))
+    if bad:
+        raise InputError([problem(path, name, f"row {row}: {msg}") for name, (row, msg) in bad.items()])
+    return names, data
+
+
+def check_series(log, path):
+    """Refuse time that does not increase, gaps, implausible speeds and speeds that do not fit the
+    positions (a unit mix-up): one line each."""
+    t, lines = log.t, []
+    if len(t) < MIN_ROWS:
+        raise InputError(problem(path, "time_s", f"{len(t)} rows; a log needs at least {MIN_ROWS}"))
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.argmax(dt <= 0)) + 1
+        raise InputError(problem(path, "time_s", f"row {i + 1}: time {t[i]:g} s does not increase "
+                                 f"(previous {t[i - 1]:g} s)"))
+    step = float(np.median(dt))
+    if np.any(dt > GAP_FACTOR * step):
+        i = int(np.argmax(dt > GAP_FACTOR * step))
+        raise InputError(problem(path, "time_s", f"row {i + 2}: gap of {dt[i]:g} s after {t[i]:g} s (the log "
+                                 f"samples every {step:g} s); split the log there"))
+    if log.v is not None:
+        if log.v.min() < MIN_SPEED or log.v.max() > MAX_SPEED:
+            i = int(np.argmax((log.v < MIN_SPEED) | (log.v > MAX_SPEED)))
+            lines.append(problem(path, log.columns[1], f"row {i + 1}: speed {log.v[i]:g} m/s is not plausible "
+                                 f"({MIN_SPEED:g} to {MAX_SPEED:g} m/s)"))
+        elif "position" in log.columns[0]:
+            travel = float(np.sum(np.abs(np.diff(log.x))))
+            driven = float(np.sum(0.5 * (np.abs(log.v[1:]) + np.abs(log.v[:-1])) * dt))
+            low, high = SPEED_DISTANCE
+            if travel > 50.0 and not low <= driven / travel <= high:
+                lines.append(problem(path, log.columns[1], f"the speeds integrate to {driven:.0f} m but the "
+                                     f"positions advance {travel:.0f} m: check the units"))
+    if lines:
+        raise InputError(lines)
+
+
+def parse_log(text, path, name=None):
+    """A :class:`LoggedRun` from a log's text (``path`` names it in messages)."""
+    header, table = split_header(text, path)
+    header = validate(LogHeader, header, f"{path}: header")
+    names, data = read_table(table, path)
+    column = {COLUMNS[n][0]: (n, data[:, j] * COLUMNS[n][1]) for j, n in enumerate(names)}
+    if "time" not in column:
+        raise InputError(problem(path, "columns", "no time column (time_s)"))
+    if "position" not in column and "speed" not in column:
+        raise InputError(problem(path, "columns", "needs a position column (position_m) or a speed column "
+                                 "(speed_mps, speed_kmh)"))
+    t = column["time"][1]
+    v = column["speed"][1] if "speed" in column else None
+    if "position" in column:
+        x = column["position"][1]
+    elif header.start_position_m is None:
+        raise InputError(problem(path, "header", "start_position_m is needed when there is no position column"))
+    else:
+        x = header.start_position_m + np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
+    line = column["power_line"][1] if "power_line" in column else None
+    if line is None and "voltage" in column and "current" in column:
+        line = column["voltage"][1] * column["current"][1]
+    get = lambda q: column[q][1] if q in column else None  # noqa: E731
+    log = LoggedRun(name or Path(path).stem, header, t, x, v, get("force"), get("power_wheel"), line, Path(path),
+                    (column.get("position", ("(start_position_m)",))[0], column.get("speed", ("",))[0]))
+    check_series(log, path)
+    return log
+
+
+def load_log(path):
+    """Read a logged run (:func:`parse_log`); a missing, too large or non-UTF-8 file is one line."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(problem(path, "", "file not found"))
+    if path.stat().st_size > MAX_FILE_BYTES:
+        raise InputError(problem(path, "", f"larger than the {MAX_FILE_BYTES / 1e6:.0f} MB ecostudy reads"))
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(problem(path, "", f"not UTF-8 text (byte {exc.start}: {exc.reason})"))
+    return parse_log(text, path)
+
+
+def check_on_track(log, track):
+    """Every logged position must lie on the track [0, length]: one line naming the first that does not."""
+    off = (log.x < -1e-6) | (log.x > track.length + 1e-6)
+    if np.any(off):
+        i = int(np.argmax(off))
+        raise InputError(problem(log.path or log.name, log.columns[0], f"row {i + 1}: position {log.x[i]:.1f} m is "
+                                 f"off track '{track.name}' (0 to {track.length:g} m)"))
+
+
+def write_log(path, header, frame):
+    """Write a logged run: ``header`` (a mapping, the fields of :class:`LogHeader`) and ``frame``
+    (a table whose columns are names of :data:`COLUMNS`, in those units)."""
+    unknown = [c for c in frame.columns if c not in COLUMNS]
+    if unknown:
+        raise ValueError(f"unknown log columns {unknown}")
+
+    def write(tmp):
+        with open(tmp, "w") as fh:
+            fh.write("---\n" + yaml.safe_dump(dict(header), sort_keys=False) + "---\n")
+            frame.to_csv(fh, index=False, float_format="%.6f")
+    atomic_write(path, write)

@@ -1,0 +1,111 @@
+"""`ecostudy calibrate` and `ecostudy validate`: logged runs read and checked, the calibration or the
+validation computed (:mod:`ecostudy.calibration`), and their files written.
+
+calibrate writes ``summary.json`` (status, the estimates with their 95 % intervals, the
+identifiability report, residual statistics), ``parameters.csv``, ``residuals.csv``,
+``<train>_calibrated.yaml`` (the train file with the identified parameters
+replaced, its source naming the logs and the fit) and, when asked, ``savings.csv`` (the optimum for
+each logged running time against the logged energy, with the calibration's band). validate writes ``validate.csv`` and
+``summary.json``. The command line draws ``residuals.png`` and ``validate.png``
+(:mod:`ecostudy.report.calplots`).
+"""
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ecostudy import __version__
+from ecostudy.calibration.estimate import calibrate_logs
+from ecostudy.calibration.fit import DEFAULT_FIT, PARAMETERS
+from ecostudy.calibration.savings import savings
+from ecostudy.calibration.validate import validate_log
+from ecostudy.core.errors import InputError, problem
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.io.logfile import check_on_track, load_log
+from ecostudy.io.trainout import calibrated_document, write_train
+from ecostudy.io.writers import check_output_dir, write_csv, write_json
+
+CALIBRATE_FILES = ("summary.json", "parameters.csv", "residuals.csv", "residuals.png")
+VALIDATE_FILES = ("summary.json", "validate.csv", "validate.png")
+
+
+def parse_fit(text):
+    """The parameter names of ``--fit a,b,c``; unknown names refused in one line."""
+    names = [n.strip() for n in (text or ",".join(DEFAULT_FIT)).split(",") if n.strip()]
+    unknown = [n for n in names if n not in PARAMETERS]
+    if unknown or not names or len(set(names)) != len(names):
+        what = f"unknown parameter '{unknown[0]}'" if unknown else "give each parameter once"
+        raise InputError(problem("command line", "--fit", f"{what} (known: {', '.join(PARAMETERS)})"))
+    return names
+
+
+def load_inputs(log_paths, train_path, track_path):
+    """(logs, track, train, track path, train path): the logs read and checked, the track and train
+    given, or else the ones the first log's header names; every log's positions on the track."""
+    logs = [load_log(p) for p in log_paths]
+    names = [log.name for log in logs]
+    if len(set(names)) != len(names):
+        raise InputError(problem("command line", "LOG", "two logs with the same file name: "
+                                 + ", ".join(sorted({n for n in names if names.count(n) > 1}))))
+    header_track, header_train = logs[0].files
+    track_path, train_path = Path(track_path or header_track), Path(train_path or header_train)
+    track, train = load_track(track_path), load_train(train_path)
+    for log in logs:
+        check_on_track(log, track)
+    return logs, track, train, track_path, train_path
+
+
+def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, saving_draws=None):
+    """Calibrate ``fit`` (text, ``a,b,c``) from the logs and write the outputs to ``out``; with
+    ``saving_draws`` (a count) also the savings against the logged driving (``savings.csv``)."""
+    names = parse_fit(fit)
+    logs, track, train, track_path, train_path = load_inputs(log_paths, train_path, track_path)
+    out = check_output_dir(out, CALIBRATE_FILES)
+    result = calibrate_logs(logs, track, train, names, draws)
+    identified = [n for n in names if n not in set(result.table.loc[~result.table["identifiable"], "name"])]
+    stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d")
+    estimates = ", ".join(f"{r.name} {r.estimate:.5g} +- {r.high - r.estimate:.2g} {r.unit}"
+                          for r in result.table.itertuples() if r.identifiable)
+    provenance = (f"Calibrated by ecostudy {__version__} calibrate on {stamp} from {len(logs)} logged run(s) "
+                  f"({', '.join(log.name for log in logs)}) on track '{track.name}': {estimates} "
+                  f"(95 % intervals); held at this file's values: "
+                  f"{', '.join(n for n in names if n not in identified) or 'none'}.")
+    calibrated = out / f"{train_path.stem}_calibrated.yaml"
+    write_train(calibrated, calibrated_document(train_path, result.train, identified, provenance))
+    write_csv(out / "parameters.csv", result.table)
+    write_csv(out / "residuals.csv", result.residuals)
+    summary = {"command": "calibrate", "status": result.status, "reason": result.reason,
+               "ecostudy_version": __version__, "logs": [str(p) for p in log_paths], "train": str(train_path),
+               "track": str(track_path), "fitted": names,
+               "method": "least squares (scipy least_squares) on the replayed energy balance, whitened by a scalar "
+                         "Kalman filter; 95 % intervals from the Jacobian; bootstrap over logs when several",
+               "parameters": result.table.replace({np.nan: None}).to_dict("records"),
+               "quality": result.quality, "calibrated_train": str(calibrated),
+               "outputs": [*CALIBRATE_FILES[:3], calibrated.name]}
+    if saving_draws is not None:
+        table = pd.concat([savings(log, track, result, saving_draws) for log in logs], ignore_index=True)
+        write_csv(out / "savings.csv", table)
+        summary["savings"] = table.to_dict("records")
+        summary["outputs"].append("savings.csv")
+    write_json(out / "summary.json", summary)
+    return result, summary
+
+
+def validate_study(log_path, train_path, track_path, out, energy_tolerance=0.05, time_tolerance=0.05):
+    """Replay one log on the train file's model and write the differences per run to ``out``."""
+    logs, track, train, track_path, train_path = load_inputs([log_path], train_path, track_path)
+    out = check_output_dir(out, VALIDATE_FILES)
+    table = validate_log(logs[0], track, train, energy_tolerance, time_tolerance)
+    write_csv(out / "validate.csv", table)
+    flagged = table[table["status"] != "ok"]
+    logged, model = table["logged_traction_kWh"].sum(), table["model_traction_kWh"].sum()
+    summary = {"command": "validate", "status": "flagged" if len(flagged) else "ok",
+               "reason": "; ".join(f"run {r.run}: {r.reason}" for r in flagged.itertuples()),
+               "ecostudy_version": __version__, "log": str(log_path), "train": str(train_path),
+               "track": str(track_path), "runs": table.replace({np.nan: None}).to_dict("records"),
+               "logged_traction_kWh": logged, "model_traction_kWh": model,
+               "traction_difference_pct": 100 * (model - logged) / logged if logged > 0 else None,
+               "tolerances_pct": {"energy": 100 * energy_tolerance, "time": 100 * time_tolerance}}
+    write_json(out / "summary.json", summary)
+    return table, summary

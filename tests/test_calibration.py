@@ -1,0 +1,264 @@
+"""Calibrating a train from logged runs and validating a model against them: the log format and its
+refusals, the generator against the replay, the fit's intervals and identifiability, validate's
+energy difference against an independent computation, and both commands."""
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.calibration.estimate import calibrate_logs
+from ecostudy.calibration.fit import DEFAULT_FIT, priors
+from ecostudy.calibration.generate import LogNoise, follow_work, generate_log, true_train
+from ecostudy.calibration.replay import prepare
+from ecostudy.calibration.validate import validate_log
+from ecostudy.cli import app
+from ecostudy.io.loaders import load_track, load_train, track_from_dict
+from ecostudy.io.logfile import parse_log, write_log
+
+from .conftest import TRACKS, TRAINS
+
+TRAIN, TRACK = TRAINS / "regional_alstom.yaml", TRACKS / "calibration_line.yaml"
+THERE, BACK = ["West", "Middle", "East"], ["East", "Middle", "West"]
+
+
+def run(*args):
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def as_log(frame, name="log"):
+    text = "---\ntrack: t.yaml\ntrain: r.yaml\n---\n" + frame.to_csv(index=False, float_format="%.6f")
+    return parse_log(text, f"{name}.csv", name)
+
+
+@pytest.fixture(scope="module")
+def inputs():
+    return load_track(TRACK), load_train(TRAIN)
+
+
+@pytest.fixture(scope="module")
+def truth(inputs):
+    """The regional train 4 % heavier, A 10 % higher, B 10 % lower, C 5 % higher, efficiency 2 % lower."""
+    return true_train(inputs[1], mass=1.04, davis=(1.1, 0.9, 1.05), efficiency=0.98)
+
+
+@pytest.fixture(scope="module")
+def logged(inputs, truth):
+    """Two logs of the true train (there and back), as tables and noise-free records."""
+    track = inputs[0]
+    return [generate_log(track, truth, stops, truth, seed=seed) for seed, stops in ((1, THERE), (2, BACK))]
+
+
+@pytest.fixture(scope="module")
+def log_files(tmp_path_factory, logged):
+    folder = tmp_path_factory.mktemp("logs")
+    header = {"track": str(TRACK), "train": str(TRAIN), "source": "generated"}
+    for name, (frame, _) in zip(("there", "back"), logged):
+        write_log(folder / f"{name}.csv", header, frame)
+    return folder / "there.csv", folder / "back.csv"
+
+
+# ------------------------------------------------------------------------- the generator and the replay
+def test_noise_free_log_replays_exactly(inputs, truth):
+    """The replayed energy balance with the true parameters gives the plant's speed (DOP853 at
+    rtol 1e-8) to a millimetre per second: the replay and the plant share their physics."""
+    track, _ = inputs
+    frame, _ = generate_log(track, truth, THERE, truth, seed=3, noise=LogNoise(speed=0.0, power=0.0))
+    runs = prepare(as_log(frame), track, truth)
+    assert len(runs) == 2
+    for r in runs:
+        model = r.speed(truth.mass, truth.static_mass, truth.davis)
+        assert np.max(np.abs(model - r.v)[r.used]) < 1e-3
+        assert r.distance > 5000
+
+
+def test_generated_noise_is_as_asked(logged):
+    frame, clean = logged[0]
+    moving = clean["v"] > 1
+    assert abs(np.std((frame["speed_mps"] - clean["v"])[moving]) - 0.05) < 0.005
+    pulling = clean["power_wheel"] > 1e5
+    ratio = frame["power_wheel_kW"][pulling] * 1000 / clean["power_wheel"][pulling] - 1
+    assert abs(np.std(ratio) - 0.01) < 0.001
+    assert np.allclose(np.diff(frame["time_s"]), 0.1)
+
+
+# ------------------------------------------------------------------------- the fit
+@pytest.fixture(scope="module")
+def calibrated(inputs, logged):
+    track, train = inputs
+    return calibrate_logs([as_log(f, n) for (f, _), n in zip(logged, ("there", "back"))], track, train, DEFAULT_FIT,
+                          draws=40)
+
+
+def test_intervals_hold_the_true_parameters(calibrated, truth):
+    true = priors(truth)
+    table = calibrated.table.set_index("name")
+    assert calibrated.status == "ok", calibrated.reason
+    for name in DEFAULT_FIT:
+        row = table.loc[name]
+        assert row.identifiable
+        assert row.low <= true[name] <= row.high, (name, row.low, true[name], row.high)
+        assert row.boot_low < row.estimate < row.boot_high
+    assert (table.loc["mass", "high"] - table.loc["mass", "low"]) / 2 < 0.02 * true["mass"]
+    assert calibrated.quality["structure"] < 1.5  # the filter's innovations are white
+
+
+def test_a_parameter_the_logs_do_not_excite_is_held(inputs, truth, logged):
+    """Without the line power the efficiency is not seen at all; on flat track the static mass
+    cannot be told from the rotating-mass allowance."""
+    track, train = inputs
+    frame = logged[0][0].drop(columns=["power_line_kW"])
+    result = calibrate_logs([as_log(frame)], track, train, ("mass", "davis_a", "efficiency"), draws=0)
+    table = result.table.set_index("name")
+    assert result.status == "flagged" and "efficiency not identifiable" in result.reason
+    assert not table.loc["efficiency", "identifiable"]
+    assert table.loc["efficiency", "estimate"] == train.traction_efficiency  # held, not fitted
+    assert table.loc["mass", "identifiable"]
+
+    flat = track_from_dict({"name": "flat", "source": "test", "length_m": track.length,
+                            "stops": [{"name": k, "position_m": float(v)} for k, v in track.stops.items()],
+                            "gradients": [{"position_m": 0, "gradient_permille": 0}],
+                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
+    frame, _ = generate_log(flat, truth, THERE, truth, seed=4)
+    result = calibrate_logs([as_log(frame)], flat, train, ("mass", "rotating_mass_factor", "davis_a"), draws=0)
+    held = result.table.set_index("name")["identifiable"]
+    assert result.status == "flagged"
+    assert held.sum() == 2 and not (held["mass"] and held["rotating_mass_factor"])
+    assert "moves with" in result.reason
+
+
+# ------------------------------------------------------------------------- validate
+def test_validate_energy_difference_matches_an_independent_computation(inputs):
+    """A log of the train 5 % heavier with 5 % more resistance: the train file's model needs about
+    5 % less traction energy; validate (phase energy balances on the noisy log) agrees with the
+    pointwise computation on the noise-free record within 0.5 percentage points."""
+    track, train = inputs
+    truth = true_train(train, mass=1.05, davis=(1.05, 1.05, 1.05))
+    frame, clean = generate_log(track, truth, THERE, truth, seed=5)
+    table = validate_log(as_log(frame), track, train)
+    independent = follow_work(clean, track, truth, train)
+    assert len(table) == len(independent) == 2
+    for row, (model, true) in zip(table.itertuples(), independent):
+        assert -7 < row.traction_difference_pct < -3
+        assert abs(row.traction_difference_pct - 100 * (model - true) / true) < 0.5
+        assert row.model_time_s < row.logged_time_s  # lighter under the same handle: earlier
+        assert abs(row.model_stop_error_m) < 100
+
+
+# ------------------------------------------------------------------------- the commands
+def test_calibrate_command(tmp_path, log_files, truth):
+    out = tmp_path / "cal"
+    result = run("calibrate", *log_files, "--out", out, "--bootstrap", 20)
+    assert result.exit_code == 0, result.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "ok" and summary["fitted"] == list(DEFAULT_FIT)
+    for name in ("parameters.csv", "residuals.csv", "residuals.png", "regional_alstom_calibrated.yaml"):
+        assert (out / name).is_file(), name
+    calibrated = load_train(out / "regional_alstom_calibrated.yaml")
+    assert abs(calibrated.static_mass / truth.static_mass - 1) < 0.005
+    assert "Calibrated by ecostudy" in (out / "regional_alstom_calibrated.yaml").read_text()
+
+
+def test_calibrate_command_flags_what_it_cannot_identify(tmp_path, log_files):
+    frame = log_files[0].read_text().replace(",power_line_kW", "")
+    lines = frame.splitlines()
+    head = lines.index("---", 1) + 2
+    text = "\n".join(lines[:head] + [",".join(r.split(",")[:-1]) for r in lines[head:]])
+    (tmp_path / "noline.csv").write_text(text + "\n")
+    result = run("calibrate", tmp_path / "noline.csv", "--fit", "mass,efficiency", "--out", tmp_path / "o",
+                 "--no-plot")
+    assert result.exit_code == 1, result.output
+    assert "efficiency not identifiable" in result.output
+
+
+def test_validate_command(tmp_path, log_files):
+    out = tmp_path / "val"
+    result = run("validate", log_files[0], "--train", TRAIN, "--track", TRACK, "--out", out)
+    # the train file's model is 4 % lighter than the logged train: flagged beyond 2 %, ok within 10 %
+    summary = json.loads((out / "summary.json").read_text())
+    assert (out / "validate.csv").is_file() and (out / "validate.png").is_file()
+    assert result.exit_code == (0 if summary["status"] == "ok" else 1)
+    strict = run("validate", log_files[0], "--energy-tolerance", 1, "--out", tmp_path / "v2", "--no-plot")
+    assert strict.exit_code == 1 and "traction energy" in strict.output
+
+
+# ------------------------------------------------------------------------- bad logs: one line, exit 2
+def good(x0=300.0):
+    """A log accelerating at 2 m/s^2 for 9.9 s from track position ``x0``, 10 Hz."""
+    rows = "".join(f"{0.1 * i:.1f},{x0 + 0.01 * i * i:.3f},{0.2 * i:.2f},100\n" for i in range(100))
+    return f"---\ntrack: {TRACK}\ntrain: {TRAIN}\n---\ntime_s,position_m,speed_mps,force_kN\n" + rows
+
+
+def without_column(text, index):
+    _, head, body = text.split("---\n", 2)
+    rows = [",".join(c for j, c in enumerate(r.split(",")) if j != index) for r in body.splitlines()]
+    return "---\n" + head + "---\n" + "\n".join(rows) + "\n"
+
+
+@pytest.mark.parametrize("text, fragments", [
+    (good().replace("---\n", "", 1), ["header", "YAML header between two '---'"]),
+    (good().replace("---\ntime_s", "time_s"), ["header", "no closing '---'"]),
+    (good().replace("train:", "colour: red\ntrain:"), ["header", "colour", "unknown field"]),
+    (good().replace("speed_mps", "speed_mph"), ["speed_mph", "unknown column", "unit is part of the name"]),
+    (good().replace("force_kN", "speed_kmh"), ["columns", "two columns give the speed"]),
+    (good().replace("\n1.0,", "\n1.0x,", 1), ["time_s", "row 11", "'1.0x' is not a number"]),
+    (good().replace(",100\n", ",nan\n", 1), ["force_kN", "row 1", "not a finite number"]),
+    (good().replace("\n1.0,", "\n0.5,", 1), ["time_s", "row 11", "does not increase"]),
+    (good().replace("\n9.9,", "\n19.9,", 1), ["time_s", "row 100", "gap of 10.1 s"]),
+    ("\n".join(good().splitlines()[:14]) + "\n", ["time_s", "at least 10"]),
+    (good().replace(",19.80,", ",390.00,"), ["speed_mps", "row 100", "not plausible"]),
+    (good().replace("speed_mps", "speed_kmh"), ["speed_kmh", "integrate to", "check the units"]),
+    (good(x0=10850.0), ["position_m", "row 72", "off track"]),
+    (good().replace("force_kN\n", "force_kN,power_line_kW\n"), ["row 1", "4 values for 5 columns"]),
+    (without_column(good(), 1), ["header", "start_position_m is needed"]),
+])
+def test_bad_logs_are_one_line(tmp_path, text, fragments):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    result = run("validate", path, "--out", tmp_path / "o", "--no-plot")
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert len(lines) == 1 and "Traceback" not in result.output, result.output
+    assert "bad.csv" in lines[0]
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+    assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def test_calibrate_refuses_unknown_parameters_and_logs_without_wheel_work(tmp_path):
+    path = tmp_path / "nowork.csv"
+    path.write_text(good().replace("force_kN", "power_line_kW"))
+    result = run("calibrate", path, "--fit", "mass,colour", "--out", tmp_path / "o")
+    assert result.exit_code == 2 and "--fit: unknown parameter 'colour'" in result.output
+    result = run("calibrate", path, "--out", tmp_path / "o")
+    assert result.exit_code == 2 and "nowork.csv: columns: the replay needs the work at the wheel" in result.output
+
+
+def test_savings_against_the_logged_driving(inputs, calibrated, logged):
+    """The optimum for each logged running time (verified by the plant) uses less traction energy
+    than the logged driving; the band over parameter draws holds the central saving."""
+    from ecostudy.calibration.savings import savings
+    table = savings(as_log(logged[0][0], "there"), inputs[0], calibrated, draws=2, points=300)
+    assert len(table) == 2 and table["verified"].all()
+    assert (table["optimal_traction_kWh"] < table["logged_traction_kWh"]).all()
+    assert (table["saving_low_pct"] <= table["saving_pct"]).all()
+    assert (table["saving_pct"] <= table["saving_high_pct"]).all()
+    assert (table["saving_high_pct"] - table["saving_low_pct"] < 2.0).all()
+
+
+def test_line_power_from_voltage_and_current_and_work_from_force(inputs, truth):
+    """The line power is voltage times current when the log has no line power column; without a
+    wheel power the work is the trapezoid of force times speed (instantaneous samples: the handle's
+    jumps between samples leave errors of about 0.1 % of the kinetic energy, where the interval
+    means of energy counters are exact)."""
+    track, _ = inputs
+    frame, clean = generate_log(track, truth, THERE, truth, seed=6, noise=LogNoise(speed=0.0, power=0.0))
+    frame = frame.drop(columns=["power_wheel_kW"])
+    frame["line_voltage_V"] = 750.0
+    frame["line_current_A"] = frame.pop("power_line_kW") * 1000 / 750.0
+    log = as_log(frame)
+    assert np.allclose(log.power_line, clean["power_line"], rtol=1e-6, atol=1.0)
+    for r in prepare(log, track, truth):
+        model = r.speed(truth.mass, truth.static_mass, truth.davis)
+        assert np.max(np.abs(model ** 2 - r.v ** 2)) < 0.005 * np.max(r.v) ** 2  # measured: 0.14 %
+        assert np.max(np.abs(model - r.v)[r.v > 10]) < 0.15                    # measured: 0.10 m/s
