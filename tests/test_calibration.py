@@ -154,6 +154,8 @@ def test_calibrate_command(tmp_path, log_files, truth):
     assert summary["status"] == "ok" and summary["fitted"] == list(DEFAULT_FIT)
     for name in ("parameters.csv", "residuals.csv", "residuals.png", "regional_alstom_calibrated.yaml"):
         assert (out / name).is_file(), name
+    from .conftest import assert_folder
+    assert_folder(out, "calibrate", ["parameters", "residuals"])
     calibrated = load_train(out / "regional_alstom_calibrated.yaml")
     assert abs(calibrated.static_mass / truth.static_mass - 1) < 0.005
     assert "Calibrated by ecostudy" in (out / "regional_alstom_calibrated.yaml").read_text()
@@ -178,6 +180,8 @@ def test_validate_command(tmp_path, log_files):
     summary = json.loads((out / "summary.json").read_text())
     assert (out / "validate.csv").is_file() and (out / "validate.png").is_file()
     assert result.exit_code == (0 if summary["status"] == "ok" else 1)
+    from .conftest import assert_folder
+    assert_folder(out, "validate", ["validate"], status=summary["status"].split(":")[0])
     strict = run("validate", log_files[0], "--energy-tolerance", 1, "--out", tmp_path / "v2", "--no-plot")
     assert strict.exit_code == 1 and "traction energy" in strict.output
 

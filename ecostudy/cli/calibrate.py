@@ -5,17 +5,19 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import app, guarded
+from ecostudy.cli.app import app, guarded, listed
 
 SHOWN = ["name", "unit", "prior", "estimate", "low", "high", "boot_low", "boot_high", "identifiable"]
 
 
 def _calibrate(logs, train, track, fit, out, draws, savings, no_plot):
     from ecostudy.studies.calibrate import calibrate_study
-    result, summary = calibrate_study(logs, train, track, fit, out, draws, savings)
+    result, summary = calibrate_study(logs, train, track, fit, out, draws, savings, () if no_plot else ("residuals.png",))
     if not no_plot:
         from ecostudy.report import calplots
         calplots.residuals(result.residuals, Path(out) / "residuals.png", "calibration from logged runs")
+    from ecostudy.report.html import write_html
+    write_html(out)
     table = result.table[[c for c in SHOWN if c in result.table]].dropna(axis=1, how="all")
     typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.5g}"))
     q = result.quality
@@ -28,11 +30,11 @@ def _calibrate(logs, train, track, fit, out, draws, savings, no_plot):
                    f"{row['saving_high_pct']:.1f} % over "
                    f"{row['draws']} parameter draws)" + ("" if row["verified"] else " (optimum not verified)"))
     typer.echo(f"{result.status}" + (f": {result.reason}" if result.reason else ""))
-    typer.echo(f"outputs {out}/ ({', '.join(summary['outputs'])}{'' if no_plot else ', residuals.png'})")
+    typer.echo("outputs " + listed(out))
     return result.status
 
 
-@app.command()
+@app.command(short_help="Fit a train's parameters to logged runs, with 95 % intervals.")
 def calibrate(
     logs: list[Path] = typer.Argument(..., help="Logged runs (CSV with a YAML header), one or more."),
     train: Optional[Path] = typer.Option(None, help="Train file (default: the one the first log names)."),
@@ -57,21 +59,24 @@ def calibrate(
 
 def _validate(log, train, track, out, energy_tolerance, time_tolerance, no_plot):
     from ecostudy.studies.calibrate import validate_study
-    table, summary = validate_study(log, train, track, out, energy_tolerance / 100, time_tolerance / 100)
+    table, summary = validate_study(log, train, track, out, energy_tolerance / 100, time_tolerance / 100,
+                                    () if no_plot else ("validate.png",))
     if not no_plot:
         from ecostudy.report import calplots
         calplots.validation(table, Path(out) / "validate.png", f"{Path(log).stem}: logged and model")
+    from ecostudy.report.html import write_html
+    write_html(out)
     shown = ["run", "from_m", "to_m", "logged_time_s", "model_time_s", "time_difference_pct", "logged_traction_kWh",
              "model_traction_kWh", "traction_difference_pct", "status"]
     typer.echo(table[shown].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     typer.echo(f"traction energy: logged {summary['logged_traction_kWh']:.2f} kWh, model "
                f"{summary['model_traction_kWh']:.2f} kWh ({summary['traction_difference_pct']:+.2f} %)")
     typer.echo(f"{summary['status']}" + (f": {summary['reason']}" if summary["reason"] else ""))
-    typer.echo(f"outputs {out}/ (validate.csv, summary.json{'' if no_plot else ', validate.png'})")
+    typer.echo("outputs " + listed(out))
     return summary["status"]
 
 
-@app.command()
+@app.command(short_help="Replay a logged run on the model: energy and time differences.")
 def validate(
     log: Path = typer.Argument(..., help="A logged run (CSV with a YAML header)."),
     train: Optional[Path] = typer.Option(None, help="Train file (default: the one the log names)."),

@@ -24,7 +24,9 @@ from ecostudy.core.errors import InputError, problem
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.io.logfile import check_on_track, load_log
 from ecostudy.io.trainout import calibrated_document, write_train
-from ecostudy.io.writers import check_output_dir, write_csv, write_json
+from ecostudy.core.status import Status
+from ecostudy.io.folder import write_summary
+from ecostudy.io.writers import check_output_dir, write_csv
 
 CALIBRATE_FILES = ("summary.json", "parameters.csv", "residuals.csv", "residuals.png")
 VALIDATE_FILES = ("summary.json", "validate.csv", "validate.png")
@@ -56,7 +58,7 @@ def load_inputs(log_paths, train_path, track_path):
     return logs, track, train, track_path, train_path
 
 
-def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, saving_draws=None):
+def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, saving_draws=None, figures=()):
     """Calibrate ``fit`` (text, ``a,b,c``) from the logs and write the outputs to ``out``; with
     ``saving_draws`` (a count) also the savings against the logged driving (``savings.csv``)."""
     names = parse_fit(fit)
@@ -75,8 +77,7 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
     write_train(calibrated, calibrated_document(train_path, result.train, identified, provenance))
     write_csv(out / "parameters.csv", result.table)
     write_csv(out / "residuals.csv", result.residuals)
-    summary = {"command": "calibrate", "status": result.status, "reason": result.reason,
-               "ecostudy_version": __version__, "logs": [str(p) for p in log_paths], "train": str(train_path),
+    summary = {"command": "calibrate", "logs": [str(p) for p in log_paths], "train": str(train_path),
                "track": str(track_path), "fitted": names,
                "method": "least squares (scipy least_squares) on the replayed energy balance, whitened by a scalar "
                          "Kalman filter; 95 % intervals from the Jacobian; bootstrap over logs when several",
@@ -88,11 +89,14 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
         write_csv(out / "savings.csv", table)
         summary["savings"] = table.to_dict("records")
         summary["outputs"].append("savings.csv")
-    write_json(out / "summary.json", summary)
+    tables = {"parameters": "parameters.csv", "residuals": "residuals.csv",
+              **({"savings": "savings.csv"} if saving_draws is not None else {})}
+    write_summary(out, "calibrate", {"calibration": Status.parse(result.status, result.reason or "")}, tables,
+                  [calibrated.name, *figures], **summary)
     return result, summary
 
 
-def validate_study(log_path, train_path, track_path, out, energy_tolerance=0.05, time_tolerance=0.05):
+def validate_study(log_path, train_path, track_path, out, energy_tolerance=0.05, time_tolerance=0.05, figures=()):
     """Replay one log on the train file's model and write the differences per run to ``out``."""
     logs, track, train, track_path, train_path = load_inputs([log_path], train_path, track_path)
     out = check_output_dir(out, VALIDATE_FILES)
@@ -100,12 +104,14 @@ def validate_study(log_path, train_path, track_path, out, energy_tolerance=0.05,
     write_csv(out / "validate.csv", table)
     flagged = table[table["status"] != "ok"]
     logged, model = table["logged_traction_kWh"].sum(), table["model_traction_kWh"].sum()
-    summary = {"command": "validate", "status": "flagged" if len(flagged) else "ok",
-               "reason": "; ".join(f"run {r.run}: {r.reason}" for r in flagged.itertuples()),
-               "ecostudy_version": __version__, "log": str(log_path), "train": str(train_path),
+    summary = {"command": "validate", "reason": "; ".join(f"run {r.run}: {r.reason}" for r in flagged.itertuples()),
+               "log": str(log_path), "train": str(train_path),
                "track": str(track_path), "runs": table.replace({np.nan: None}).to_dict("records"),
                "logged_traction_kWh": logged, "model_traction_kWh": model,
                "traction_difference_pct": 100 * (model - logged) / logged if logged > 0 else None,
                "tolerances_pct": {"energy": 100 * energy_tolerance, "time": 100 * time_tolerance}}
-    write_json(out / "summary.json", summary)
+    statuses = {f"run {r.run}": Status.parse(r.status, r.reason if isinstance(r.reason, str) else "")
+                for r in table.itertuples()}
+    write_summary(out, "validate", statuses, {"validate": "validate.csv"}, figures, **summary)
+    summary["status"] = "flagged" if len(flagged) else "ok"
     return table, summary
