@@ -348,3 +348,64 @@ def test_text_in_a_reference_table_is_one_line(tmp_path, edit, fragment):
     (tmp_path / "heavyhaul_limit_reference.csv").write_text("\n".join(edit(lines)) + "\n")
     with pytest.raises(InputError, match=re.escape(fragment)):
         expand(write_yaml(tmp_path / "study.yaml", doc))
+
+
+# ----------------------------------------------------------------------------------- unclear messages
+def weak_train(tmp_path, share):
+    """The thesis 001 commuter train with ``share`` of its traction force table."""
+    text = (TRAINS / "thesis001_commuter.yaml").read_text()
+    table = re.search(r"force_kN: \[([^\]]*)\]", text)
+    forces = ", ".join(f"{float(x) * share:g}" for x in table.group(1).split(","))
+    path = tmp_path / f"weak{share:g}.yaml"
+    path.write_text(text[:table.start()] + f"force_kN: [{forces}]" + text[table.end():])
+    return path
+
+
+def hill(tmp_path, permille):
+    text = (TRACKS / "thesis001_advanced_1km.yaml").read_text()
+    text = text.replace("{position_m: 200, gradient_permille: -20.3943}", "{position_m: 200, gradient_permille: 0}")
+    text = text.replace("{position_m: 400, gradient_permille: 20.3943}", f"{{position_m: 400, gradient_permille: {permille}}}")
+    path = tmp_path / "hill.yaml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("share, permille, fragments", [
+    (0.05, 20.3943, ["the train cannot climb", "stops 4", "m after A", "kN of gradient and curves"]),
+    (0.05, 60, ["the train cannot climb", "m after A"]),
+    (0.01, 20.3943, ["the train cannot overcome its running resistance", "stops 0 m after A"]),
+])
+def test_a_train_that_cannot_climb_is_told_where(tmp_path, share, permille, fragments):
+    r = run("solve", "--track", hill(tmp_path, permille), "--train", weak_train(tmp_path, share), "--time", 200,
+            "--out", tmp_path / "o", "--no-plot")
+    one_line(r, "infeasible:", *fragments)
+    assert "nan" not in r.output
+
+
+def test_a_closed_loop_study_of_a_train_that_cannot_run_says_why(tmp_path):
+    doc = load_yaml((STUDIES / "thesis001_closed_loop.yaml").read_text())
+    doc.update(track=str(TRACKS / "thesis001_advanced_1km.yaml"), train=str(weak_train(tmp_path, 0.01)),
+               output=str(tmp_path / "out"))
+    r = run("simulate", write_yaml(tmp_path / "loop.yaml", doc), "--no-progress")
+    one_line(r, "the train cannot overcome its running resistance")
+    assert "nan" not in r.output
+
+
+def test_a_journey_through_a_repeated_stop_is_refused_not_stalled(tmp_path):
+    r = run("journey", "--track", LINE4, "--train", METRO, "--stops", "Noord,Station,Station", "--time", 200,
+            "--out", tmp_path / "o")
+    one_line(r, "'Station' straight after 'Station'")
+    assert "stalls" not in r.output and "warning" not in r.output
+
+
+def test_a_minlp_search_cut_short_reports_no_bound_and_its_overrun(tmp_path):
+    r = run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--points", 200, "--das", "minlp",
+            "--das-time-limit", 1, "--out", tmp_path / "o", "--no-plot")
+    assert r.exit_code in (0, 1), r.output
+    line = next(x for x in r.output.splitlines() if "MINLP search" in x)
+    assert "bound 0.000" not in line and ("no bound" in line or "(gap" in line), line
+    das = json.loads((tmp_path / "o" / "summary.json").read_text())["das"]
+    assert das["bound_kWh"] is None or das["bound_kWh"] > 0
+    if das["search_s"] > 2.0:
+        assert "over its 1 s limit" in das["status"]
+    assert all("against ATO" in x for x in r.output.splitlines() if "MindtPy" in x), r.output  # no raw solver line

@@ -43,9 +43,9 @@ def _report(result, out_dir):
             typer.echo(f"                    {d['gap_to_ato_on_time_pct']:+.3f} % against ATO with lateness charged at "
                        f"{abs(s['marginal_energy_kWh_per_s']):.4f} kWh/s; {d['status']}")
         if d["method"] == "minlp":
-            bound = "none" if d["bound_kWh"] is None else f"{d['bound_kWh']:.3f} kWh (gap {d['gap_pct']:.2f} %)"
+            bound = "no bound" if d["bound_kWh"] is None else f"bound {d['bound_kWh']:.3f} kWh (gap {d['gap_pct']:.2f} %)"
             typer.echo(f"                    MINLP search {d['search_s']:.1f} s, {d['oa_iterations']} OA iterations, "
-                       f"bound {bound}")
+                       f"{bound}")
     typer.echo(f"  outputs           {listed(out_dir, ('profile.csv', 'summary.json', 'advice.csv', 'speed.png'))}")
 
 
