@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import app, guarded
+from ecostudy.cli.app import FORCE_HELP, app, guarded, with_force
 
 
 def _network(study_path, out, no_plot, workers=1):
@@ -19,6 +19,8 @@ def _network(study_path, out, no_plot, workers=1):
     from ecostudy.studies.workers import worker_pool
     import pandas as pd
     st = load_network_study(study_path)
+    from ecostudy.studies.estimate import check_network
+    check_network(st, study_path)  # legs too big for a run refused with their estimate (unless --force)
     out_dir = check_output_dir(Path(out) if out else st.output)
     with worker_pool(workers) if workers > 1 else nullcontext() as pool:
         fl = fleet.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
@@ -67,10 +69,11 @@ def network(
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip network.png."),
     workers: int = typer.Option(1, min=1, help="Processes: the segments' first runs, then the strategies in "
                                 "parallel (at least twice as many as workers), else one train's legs."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""
-    table = guarded(debug, _network, study, out, no_plot, workers)
+    table = guarded(debug, with_force(force, _network), study, out, no_plot, workers)
     if not bool(table["all_verified"].all()) or not bool((table["status"] == "ok").all()):
         typer.secho("flagged: a strategy failed, its runs failed re-simulation, or its status says why (traction not "
                     "served, trains overlapping)",

@@ -7,7 +7,10 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, Objective, app, check_options, guarded, listed, only_one, parse_pair
+from ecostudy.cli.app import (
+    DasMethod, FORCE_HELP, Objective, app, check_options, guarded,
+    listed, only_one, parse_pair, with_force,
+)
 from ecostudy.core.errors import InputError, problem
 
 
@@ -135,10 +138,11 @@ def solve(
         None, help="Also driver advice: round (nearest handle level), phases (optimal phase lengths, "
                    "thesis 000 Ch. 5) or minlp (mode per phase chosen by binaries)."),
     das_time_limit: float = typer.Option(60.0, help="Time limit of the minlp search [s]."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Energy-optimal (or all-out) run between two stops, verified by re-simulation."""
-    result = guarded(debug, _solve, study, track, train, time, supplement, window, from_stop, to_stop,
+    result = guarded(debug, with_force(force, _solve), study, track, train, time, supplement, window, from_stop, to_stop,
                      objective, weights, points, out, no_plot, das, das_time_limit)
     if not result.ok:
         typer.secho("flagged: the result is not verified optimal (see summary.json)", fg=typer.colors.YELLOW, err=True)

@@ -7,7 +7,10 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, app, case_progress, check_options, guarded, listed, only_one
+from ecostudy.cli.app import (
+    DasMethod, FORCE_HELP, app, case_progress, check_options, guarded,
+    listed, only_one, with_force,
+)
 from ecostudy.core.errors import InputError, problem
 
 
@@ -91,10 +94,11 @@ def pareto(
     das_time_limit: float = typer.Option(60.0, help="Time limit of each MINLP search [s] (--das minlp)."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the PNG files."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS."""
-    meta = guarded(debug, _pareto, study, track, train, from_stop, to_stop, count, supplement_max, points,
+    meta = guarded(debug, with_force(force, _pareto), study, track, train, from_stop, to_stop, count, supplement_max, points,
                    workers, cold, out, no_plot, weighted, das, das_time_limit)
     if not (meta["monotone"] and meta["all_verified"] and meta["all_optimal"]):
         typer.secho("flagged: a point is not optimal or not verified, or the front is not monotone",
@@ -143,10 +147,11 @@ def compare_command(
     points: Optional[int] = typer.Option(None, "--points", "-K", help="Grid nodes K (default 1000)."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip compare.png."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Strategies side by side: all-out, ATO optimum, eco-drive coasting, DAS round (simulated)."""
-    table = guarded(debug, _compare, study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot)
+    table = guarded(debug, with_force(force, _compare), study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot)
     if not table.attrs["verified"]:
         typer.secho("flagged: the ATO optimum is not verified optimal (its re-simulation or Ipopt's status; see "
                     "compare.csv)", fg=typer.colors.YELLOW, err=True)
@@ -235,10 +240,11 @@ def journey_command(
     workers: int = typer.Option(1, help="Processes for the segments' fronts."),
     out: Optional[Path] = typer.Option(None, help="Output folder."),
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip journey.png."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Spread a journey's running time over its segments: equal marginal saving vs same percentage."""
-    table = guarded(debug, _journey, track, train, stops, time, supplement, timetable, dwell, points, workers, out,
+    table = guarded(debug, with_force(force, _journey), track, train, stops, time, supplement, timetable, dwell, points, workers, out,
                     no_plot)
     if not table["verified"].all():
         bad = table[~table["verified"]]
@@ -268,9 +274,10 @@ def run(
     retry_failed: bool = typer.Option(False, help="Compute failed cases again (infeasible ones stay)."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's 'output')."),
     no_progress: bool = typer.Option(False, "--no-progress", help="No progress bar."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Run every case of a study; finished cases are stored and never computed twice."""
-    counts = guarded(debug, _run, study, workers, dask, retry_failed, out, no_progress)
+    counts = guarded(debug, with_force(force, _run), study, workers, dask, retry_failed, out, no_progress)
     if counts["not_ok"]:
         raise typer.Exit(1)
