@@ -166,3 +166,22 @@ def test_a_table_at_the_limit_is_read(tmp_path):
                                  "force_kN": np.interp(speeds, [0, 60, 80, 90], [171, 171, 150, 140]).tolist()}}
     train = load_train(write_yaml(tmp_path / "t.yaml", doc))
     assert train.traction.force(10.0) == pytest.approx(171e3, rel=1e-3)
+
+
+def test_force_reads_a_long_table_here_and_in_workers_started_inside(tmp_path):
+    import os
+
+    import numpy as np
+
+    from ecostudy.core.budget import ENVIRONMENT, forced
+    doc = load_yaml(METRO.read_text())
+    speeds = np.linspace(0, 90, 6000)
+    doc["traction"] = {"table": {"speed_kmh": speeds.tolist(),
+                                 "force_kN": np.interp(speeds, [0, 60, 80, 90], [171, 171, 150, 140]).tolist()}}
+    path = write_yaml(tmp_path / "t.yaml", doc)
+    with pytest.raises(InputError, match="a table of 6,000 points"):
+        load_train(path)
+    with forced():
+        assert os.environ[ENVIRONMENT] == "1"  # inherited by the worker processes a command starts
+        assert load_train(path).traction.force(10.0) == pytest.approx(171e3, rel=1e-3)
+    assert ENVIRONMENT not in os.environ

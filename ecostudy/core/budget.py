@@ -12,19 +12,34 @@ FORCE = contextvars.ContextVar("ecostudy_force", default=False)
 MAX_RUN_SECONDS = 2 * 3600.0     # the longest one run (a case) may be estimated to compute
 
 
+ENVIRONMENT = "ECOSTUDY_FORCE"   # the same, for worker processes started inside the block
+
+
 @contextmanager
 def forced(force=True):
-    """Within this block, :func:`refuse_unless_forced` lets the work run."""
-    token = FORCE.set(bool(force))
+    """Within this block (and in worker processes it starts), :func:`refuse_unless_forced` lets the
+    work run."""
+    token, before = FORCE.set(bool(force)), os.environ.get(ENVIRONMENT)
+    if force:
+        os.environ[ENVIRONMENT] = "1"
     try:
         yield
     finally:
         FORCE.reset(token)
+        if before is None:
+            os.environ.pop(ENVIRONMENT, None)
+        else:
+            os.environ[ENVIRONMENT] = before
+
+
+def is_forced():
+    """Whether the size guards are lifted here (:func:`forced`)."""
+    return FORCE.get() or os.environ.get(ENVIRONMENT) == "1"
 
 
 def refuse_unless_forced(where, field, message):
     """Raise the one-line refusal ``where: field: message; ...--force`` unless forced."""
-    if not FORCE.get():
+    if not is_forced():
         raise InputError(problem(where, field, f"{message}; give --force to run it anyway"))
 
 
