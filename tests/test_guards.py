@@ -4,9 +4,7 @@ import json
 import re
 
 import pytest
-from typer.testing import CliRunner
 
-from ecostudy.cli import app
 from ecostudy.core.errors import InputError
 from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import load_track, load_train

@@ -147,6 +147,6 @@ def test_the_check_sees_a_cycle_and_an_upward_import(tmp_path, monkeypatch):
     assert "ecostudy.cli.app" in edges["ecostudy.core.errors"]
     for check, message in ((test_imports_go_downwards_and_features_stay_apart,
                             "ecostudy.core.errors (core) imports ecostudy.cli.app (cli)"),
-                           (test_no_import_cycles, "ecostudy.cli.app -> ecostudy.core.errors -> ecostudy.cli.app")):
+                           (test_no_import_cycles, "ecostudy.core.errors -> ecostudy.cli.app")):
         with pytest.raises(AssertionError, match=re.escape(message)):
             check()

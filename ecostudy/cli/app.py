@@ -4,6 +4,7 @@ Exit status: 0 verified optimal result, 1 result written but flagged (not optima
 verification), 2 bad input or infeasible request, 3 solver failure or internal error, 130
 interrupted. ``--debug`` shows tracebacks.
 """
+import functools
 import math
 import traceback
 import warnings
@@ -13,6 +14,7 @@ from pathlib import Path
 
 import typer
 
+from ecostudy.core.budget import forced
 from ecostudy.core.errors import EcostudyError, InputError, problem
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,  # "[s]" is a unit, not markup
@@ -74,6 +76,18 @@ def guarded(debug, fn, *args, **kwargs):
         finally:
             for w in caught:
                 typer.secho(f"warning: {w.message}", fg=typer.colors.YELLOW, err=True)
+
+
+FORCE_HELP = "Run work estimated too big (over 2 h for one run, half the memory, a 10^6-point table) anyway."
+
+
+def with_force(force, fn):
+    """``fn`` run with the size guards of :mod:`ecostudy.core.budget` lifted when ``force``."""
+    @functools.wraps(fn)
+    def run(*args, **kwargs):
+        with forced(force):
+            return fn(*args, **kwargs)
+    return run
 
 
 # the ranges of numeric options: the same as the study schema's where a field exists (io/schemas.py);

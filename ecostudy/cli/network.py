@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import app, flag_rows, guarded, listed
+from ecostudy.cli.app import FORCE_HELP, app, flag_rows, guarded, listed, with_force
 
 
 def _network(study_path, out, no_plot, workers=1, figures=("png", None)):
@@ -18,6 +18,8 @@ def _network(study_path, out, no_plot, workers=1, figures=("png", None)):
     from ecostudy.report.files import write_network
     from ecostudy.studies.network import run_network
     st = load_network_study(study_path)
+    from ecostudy.studies.estimate import check_network
+    check_network(st, study_path)  # legs too big for a run refused with their estimate (unless --force)
     out_dir = check_output_dir(Path(out) if out else st.output)
     table = write_network(run_network(st, workers, progress=typer.echo), st, out_dir, plot=not no_plot, out=figures)
     cols = ["strategy", "status", "substation_kWh", "saving_vs_independent_pct", "traction_input_kWh", "regen_used_kWh",
@@ -37,8 +39,9 @@ def network(
     dpi: float = typer.Option(110.0, help="Figure resolution [dots per inch] (raster images)."),
     workers: int = typer.Option(1, min=1, help="Processes: the segments' first runs, then the strategies in "
                                 "parallel (at least twice as many as workers), else one train's legs."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""
-    table = guarded(debug, _network, study, out, no_plot, workers, (fig_format, dpi))
+    table = guarded(debug, with_force(force, _network), study, out, no_plot, workers, (fig_format, dpi))
     flag_rows(table, "strategy", "network_substation.csv")

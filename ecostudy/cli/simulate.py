@@ -4,7 +4,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import app, case_progress, check_options, counts_line, guarded
+from ecostudy.cli.app import FORCE_HELP, app, case_progress, check_options, counts_line, guarded, with_force
 
 SHOWN = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_per_kg_std", "arrival_s_mean",
          "arrival_s_max", "stop_error_m_min", "stop_error_m_max", "max_overspeed_kmh_max", "solve_mean_ms_mean",
@@ -13,7 +13,9 @@ SHOWN = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_per_kg_st
 
 def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot, only):
     check_options(workers=workers)
-    from ecostudy.studies.closedloop import not_ok, simulate_study
+    from ecostudy.studies.closedloop import expand, not_ok, simulate_study
+    from ecostudy.studies.estimate import check_closed_loop
+    check_closed_loop(expand(study)[2], study)  # runs that cannot end or are too big: refused (unless --force)
     with case_progress("runs", no_progress) as progress:
         outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress,
                                  only)
@@ -43,9 +45,10 @@ def simulate(
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the plots."),
     only: Optional[list[str]] = typer.Option(None, "--only", help="Run only this controller's runs (repeatable); "
                                              "the tables show every stored run."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Closed loop: every controller drives every draw of the plant's deviations and noise (resumable)."""
-    counts = guarded(debug, _simulate, study, workers, dask, retry_failed, out, no_progress, no_plot, only)
+    counts = guarded(debug, with_force(force, _simulate), study, workers, dask, retry_failed, out, no_progress, no_plot, only)
     if counts["not_ok"]:
         raise typer.Exit(1)

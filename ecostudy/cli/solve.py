@@ -7,7 +7,10 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import DasMethod, Objective, app, check_options, guarded, listed, only_one, parse_pair
+from ecostudy.cli.app import (
+    DasMethod, FORCE_HELP, Objective, app, check_options, guarded,
+    listed, only_one, parse_pair, with_force,
+)
 from ecostudy.core.errors import InputError, problem
 
 
@@ -43,9 +46,9 @@ def _report(result, out_dir):
             typer.echo(f"                    {d['gap_to_ato_on_time_pct']:+.3f} % against ATO with lateness charged at "
                        f"{abs(s['marginal_energy_kWh_per_s']):.4f} kWh/s; {d['status']}")
         if d["method"] == "minlp":
-            bound = "none" if d["bound_kWh"] is None else f"{d['bound_kWh']:.3f} kWh (gap {d['gap_pct']:.2f} %)"
+            bound = "no bound" if d["bound_kWh"] is None else f"bound {d['bound_kWh']:.3f} kWh (gap {d['gap_pct']:.2f} %)"
             typer.echo(f"                    MINLP search {d['search_s']:.1f} s, {d['oa_iterations']} OA iterations, "
-                       f"bound {bound}")
+                       f"{bound}")
     typer.echo(f"  outputs           {listed(out_dir)}")
 
 
@@ -139,10 +142,11 @@ def solve(
         None, help="Also driver advice: round (nearest handle level), phases (optimal phase lengths, "
                    "Farooqi 2018, Ch. 5) or minlp (mode per phase chosen by binaries)."),
     das_time_limit: float = typer.Option(60.0, help="Time limit of the minlp search [s]."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Energy-optimal (or all-out) run between two stops, verified by re-simulation."""
-    result = guarded(debug, _solve, study, track, train, time, supplement, window, from_stop, to_stop,
+    result = guarded(debug, with_force(force, _solve), study, track, train, time, supplement, window, from_stop, to_stop,
                      objective, weights, points, out, no_plot, das, das_time_limit, (fig_format, dpi))
     if not result.ok:
         typer.secho("flagged: the result is not verified optimal (see summary.json)", fg=typer.colors.YELLOW, err=True)

@@ -7,8 +7,8 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import (DasMethod, app, case_progress, check_options, flag_folder, flag_rows, guarded, listed,
-                              only_one)
+from ecostudy.cli.app import (DasMethod, FORCE_HELP, app, case_progress, check_options, flag_folder, flag_rows,
+                              guarded, listed, only_one, with_force)
 from ecostudy.core.errors import InputError, problem
 
 
@@ -96,10 +96,11 @@ def pareto(
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the figures."),
     fig_format: str = typer.Option("png", "--format", help="Figure format: png, svg or pdf."),
     dpi: float = typer.Option(110.0, help="Figure resolution [dots per inch] (raster images)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS."""
-    meta = guarded(debug, _pareto, study, track, train, from_stop, to_stop, count, supplement_max, points,
+    meta = guarded(debug, with_force(force, _pareto), study, track, train, from_stop, to_stop, count, supplement_max, points,
                    workers, cold, out, no_plot, weighted, das, das_time_limit, (fig_format, dpi))
     if not (meta["monotone"] and meta["all_verified"] and meta["all_optimal"]):
         typer.secho("flagged: a point is not optimal or not verified, or the front is not monotone",
@@ -150,6 +151,7 @@ def compare_command(
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip compare.png."),
     fig_format: str = typer.Option("png", "--format", help="Figure format: png, svg or pdf."),
     dpi: float = typer.Option(110.0, help="Figure resolution [dots per inch] (raster images)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Strategies side by side, every one scored by the same independent simulator: all-out, ATO optimum,
@@ -157,7 +159,7 @@ def compare_command(
 
     Example: ecostudy compare studies/default.yaml --out out/compare
     """
-    table = guarded(debug, _compare, study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot,
+    table = guarded(debug, with_force(force, _compare), study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot,
                     (fig_format, dpi))
     flag_rows(table, "strategy", "compare.csv")
 
@@ -245,10 +247,11 @@ def journey_command(
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip journey.png."),
     fig_format: str = typer.Option("png", "--format", help="Figure format: png, svg or pdf."),
     dpi: float = typer.Option(110.0, help="Figure resolution [dots per inch] (raster images)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Spread a journey's running time over its segments: equal marginal saving vs same percentage."""
-    table = guarded(debug, _journey, track, train, stops, time, supplement, timetable, dwell, points, workers, out,
+    table = guarded(debug, with_force(force, _journey), track, train, stops, time, supplement, timetable, dwell, points, workers, out,
                     no_plot, (fig_format, dpi))
     if not table["verified"].all():
         bad = table[~table["verified"]]
@@ -280,7 +283,8 @@ def run(
     retry_failed: bool = typer.Option(False, help="Compute failed cases again (infeasible ones stay)."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's 'output')."),
     no_progress: bool = typer.Option(False, "--no-progress", help="No progress bar."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Run every case of a study; finished cases are stored and never computed twice."""
-    flag_folder(guarded(debug, _run, study, workers, dask, retry_failed, out, no_progress))
+    flag_folder(guarded(debug, with_force(force, _run), study, workers, dask, retry_failed, out, no_progress))

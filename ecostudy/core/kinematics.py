@@ -98,12 +98,24 @@ def envelope_speeds(segment, train, nodes, limits):
                   train.max_acceleration)
         v2 = v * v + 2 * ds[k] * acc
         if v2 <= 0 and k < len(ds) - 1:
-            raise InfeasibleError(f"infeasible: even at full traction the train stalls at "
-                                  f"{nodes[k + 1]:.0f} m from {segment.from_stop or 'the start'}")
+            raise InfeasibleError(stall_message(segment, nodes[k], train.traction.force(v),
+                                                davis_resistance(v, a[k], b[k], c[k]), fixed[k], v))
         fwd[k + 1] = min(np.sqrt(max(v2, 0.0)), limits[k + 1])
     out = np.minimum(fwd, braking_curve(segment, train, nodes, limits))
     out[0] = out[-1] = 0.0
     return out
+
+
+def stall_message(segment, position, traction, resistance, grade, speed):
+    """Why no driving reaches the stop: where the train stops moving at full traction and the
+    forces there [N] (grade: gradient and curves; positive uphill)."""
+    what = ("the train cannot climb" if grade > 0 and traction > resistance
+            else "the train cannot overcome its running resistance" if grade <= 0 else
+            "the train cannot move against its resistance and the gradient")
+    where = f"{position:.0f} m after {segment.from_stop or 'the start'}"
+    return (f"infeasible: {what}: at full traction it stops {where} ({traction / 1e3:.3g} kN of traction at "
+            f"{3.6 * speed:.0f} km/h against {resistance / 1e3:.3g} kN of running resistance and {grade / 1e3:.3g} kN "
+            "of gradient and curves)")
 
 
 def interval_times(speeds, nodes):

@@ -37,15 +37,23 @@ def das_minlp(result, points=None, time_limit=60.0):
     e_ref = m_mi.energy_ref
     best_kwh = best[0]
     oa_bound = to_kwh(lower * e_ref) if np.isfinite(lower) else None
-    # a nonconvex OA master can cut off the incumbent itself; such a "bound" is no bound at all
-    valid = oa_bound is not None and oa_bound <= best_kwh * (1 + 1e-6)
+    iterations = int(res.solver.iterations or 0)
+    # a nonconvex OA master can cut off the incumbent itself; such a "bound" is no bound at all, and
+    # neither is the 0 a search stopped before its first master problem reports
+    valid = oa_bound is not None and 0 < oa_bound <= best_kwh * (1 + 1e-6) and iterations > 0
+    over = seconds > time_limit + 1.0
     block = summary_block("minlp", result, sim, advice,
-                       f"MindtPy {res.solver.termination_condition}; {name} re-simulated",
+                       f"MindtPy {res.solver.termination_condition}; {name} re-simulated"
+                       + (f"; the search took {seconds:.0f} s, over its {time_limit:g} s limit (MindtPy checks "
+                          "the limit between its iterations, and its set-up cannot be cut short)" if over else ""),
                        planned_traction_energy_kWh=plan, search_s=seconds,
                        search_objective_kWh=to_kwh(upper * e_ref) if np.isfinite(upper) else None,
-                       oa_master_bound_kWh=oa_bound, oa_iterations=int(res.solver.iterations or 0),
+                       oa_master_bound_kWh=oa_bound, oa_iterations=iterations,
                        bound_note=("MindtPy OA master bound on the coarse model (nonconvex: not a proven "
                                    "global bound)" if valid else
+                                   "no bound: the search stopped before a master problem bounded the energy; "
+                                   "the ATO optimum is the relaxation" if oa_bound is None or oa_bound <= 0
+                                   or iterations == 0 else
                                    "no valid bound: the nonconvex OA master cut off the incumbent "
                                    "(its bound exceeds the best solution); the ATO optimum is the relaxation"))
     block["bound_kWh"] = oa_bound if valid else None

@@ -128,4 +128,5 @@ def osrd_train(doc, path, selector=None):
         "max_speed_kmh": top / units.KMH,
         **bounds,
     }, {"davis.a_N": "rolling_resistance.A", "davis.b_N_per_mps": "rolling_resistance.B",
-        "davis.c_N_per_mps2": "rolling_resistance.C"}
+        "davis.c_N_per_mps2": "rolling_resistance.C", "traction.table.speed_kmh": f"effort_curves.modes.{mode}",
+        "traction.table.force_kN": f"effort_curves.modes.{mode}", "mass_t": "mass", "length_m": "length"}

@@ -3,7 +3,13 @@ from typing import ClassVar, Literal, Optional
 
 from pydantic import Field, field_validator, model_validator
 
+from ecostudy.core.budget import duration, is_forced
 from ecostudy.io.schemabase import Name, Strict, increasing as _increasing
+
+MAX_TABLE_POINTS = 5000
+# solve time per table point and grid node: the Amsterdam metro with its traction table resampled
+# to 500 and 2000 points took 11.6 s and 36.0 s at K = 300 (8 points: 2.6 s), on a shared machine
+SECONDS_PER_POINT_NODE = 6e-5
 
 
 class ForceTable(Strict):
@@ -17,6 +23,10 @@ class ForceTable(Strict):
     def _speeds(cls, v):
         if v[0] < 0 or v[-1] > 1000:
             raise ValueError("speeds must lie in [0, 1000] km/h")
+        if len(v) > MAX_TABLE_POINTS and not is_forced():
+            raise ValueError(f"a table of {len(v):,} points: every point is a term of the force at every grid node, "
+                             f"an estimated {duration(SECONDS_PER_POINT_NODE * len(v) * 1000)} to solve at K = 1000; "
+                             f"thin it to at most {MAX_TABLE_POINTS:,} points, or give --force to run it anyway")
         return _increasing(v, "speeds")
 
     @field_validator("force_kN")

@@ -70,10 +70,14 @@ def expand(path):
     track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{path} track"))
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     segment = make_segment(track, train, from_stop, to_stop)
+    prepare(track, train, from_stop, to_stop, s.points)  # a train that cannot climb: refused, saying where
     fastest = all_out_time(segment, train, s.points)
-    if fastest is None or s.window_s[1] < fastest:
+    if fastest is None:
+        raise InputError(problem(path, "train", "the nominal train has no run to the stop at all (the convex "
+                                 "program of its fastest run is infeasible)"))
+    if s.window_s[1] < fastest:
         raise InputError(problem(path, "window_s", f"the latest arrival {s.window_s[1]:g} s is below the all-out "
-                                 f"time {fastest or float('nan'):.2f} s of the nominal train"))
+                                 f"time {fastest:.2f} s of the nominal train"))
     rng = np.random.default_rng(s.seed)
     draws = []
     for _ in range(s.draws):

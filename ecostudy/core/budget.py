@@ -1,0 +1,78 @@
+"""Work too big to be meant: refused before computing, with its size and an estimate, unless the
+user says ``--force``. The commands set :data:`FORCE` around their work (:func:`forced`); checks
+anywhere below read it, so a loader refuses a 10^6-point curve as a study refuses a run that
+would be simulated to its time cap."""
+import contextvars
+import os
+from contextlib import contextmanager
+
+from ecostudy.core.errors import InputError, problem
+
+FORCE = contextvars.ContextVar("ecostudy_force", default=False)
+MAX_RUN_SECONDS = 2 * 3600.0     # the longest one run (a case) may be estimated to compute
+
+
+ENVIRONMENT = "ECOSTUDY_FORCE"   # the same, for worker processes started inside the block
+
+
+@contextmanager
+def forced(force=True):
+    """Within this block (and in worker processes it starts), :func:`refuse_unless_forced` lets the
+    work run."""
+    token, before = FORCE.set(bool(force)), os.environ.get(ENVIRONMENT)
+    if force:
+        os.environ[ENVIRONMENT] = "1"
+    try:
+        yield
+    finally:
+        FORCE.reset(token)
+        if before is None:
+            os.environ.pop(ENVIRONMENT, None)
+        else:
+            os.environ[ENVIRONMENT] = before
+
+
+def is_forced():
+    """Whether the size guards are lifted here (:func:`forced`)."""
+    return FORCE.get() or os.environ.get(ENVIRONMENT) == "1"
+
+
+def refuse_unless_forced(where, field, message):
+    """Raise the one-line refusal ``where: field: message; ...--force`` unless forced."""
+    if not is_forced():
+        raise InputError(problem(where, field, f"{message}; give --force to run it anyway"))
+
+
+def duration(seconds):
+    """A duration as people say it: 40 s, 12 min, 3.5 h, 9 days."""
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 3 * 86400:
+        return f"{seconds / 3600:.1f}".removesuffix(".0") + " h"
+    return f"{seconds / 86400:.0f} days"
+
+
+def size(nbytes):
+    """Bytes as people say them: 300 MB, 2.5 GB."""
+    return f"{nbytes / 1e9:.1f} GB" if nbytes >= 1e9 else f"{nbytes / 1e6:.0f} MB"
+
+
+def machine_memory():
+    """Physical memory of this machine [bytes] (None where the system does not say)."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def check_run(where, field, what, seconds=None, nbytes=None):
+    """Refuse (unless forced) one run estimated above :data:`MAX_RUN_SECONDS` or half the memory."""
+    memory = machine_memory()
+    if seconds is not None and seconds > MAX_RUN_SECONDS:
+        refuse_unless_forced(where, field, f"{what}: an estimated {duration(seconds)} of computing, above the "
+                             f"{duration(MAX_RUN_SECONDS)} one run may take")
+    if nbytes is not None and memory and nbytes > memory / 2:
+        refuse_unless_forced(where, field, f"{what}: an estimated {size(nbytes)} of memory, above half of this "
+                             f"machine's {size(memory)}")

@@ -1,0 +1,88 @@
+"""Size and time estimates of one run, made before anything is computed: work that would run for
+days, fill the memory or simulate a train that never arrives is refused with its estimate
+(:func:`ecostudy.core.budget.check_run`), unless the command is given ``--force``.
+
+The constants are measured on this project's shared 2-core machine (so they are pessimistic):
+
+- a network leg (the time-domain NLP of :mod:`ecostudy.ocp.timedomain`) of 200 and 2 000 clock
+  steps (the metro's Noord - Station in 100 s) took 28 s and 233 s to build and solve from a cold
+  start (286 and 332 Ipopt iterations) and 24 MB and 144 MB of memory: about 0.12 s and 72 kB a step;
+- a closed-loop sample: the controllers' mean solve times of the metro Monte Carlo study
+  (docs/closed_loop.md): convex 28 ms at K = 200 (growing with K), SBPC 91 ms, SPPC 253 ms, RSPC
+  22 ms; a replay only steps the plant.
+"""
+from dataclasses import replace
+
+import numpy as np
+
+from ecostudy.core import kinematics
+from ecostudy.core.budget import check_run, duration, refuse_unless_forced
+from ecostudy.core.errors import InfeasibleError
+from ecostudy.core.grid import make_grid, make_segment, node_limits
+from ecostudy.io.loaders import track_from_schema, train_from_schema, validate
+from ecostudy.io import schemas
+from ecostudy.ocp.problem import prepare
+
+LEG_SECONDS_PER_STEP = 0.12
+LEG_BYTES_PER_STEP = 72e3
+SAMPLE_SECONDS = {"convex": 0.028 / 200, "sbpc": 0.091, "sppc": 0.253, "rspc": 0.022}  # convex: per grid point
+REPLAY_SECONDS = 0.001
+
+
+def check_network(study, path):
+    """Refuse a network study whose time-domain legs are estimated above one run's budget."""
+    for i, (a, b) in enumerate(zip(study.stops[:-1], study.stops[1:])):
+        if study.running_times is not None:
+            seconds, field = float(study.running_times[i]), f"running_times_s[{i}]"
+        else:
+            case = prepare(study.track, study.train, a, b, study.points)
+            seconds, field = case.estimate * (1 + study.supplement), "supplement_percent"
+        steps = int(np.ceil(seconds / study.dt))
+        check_run(path, field, f"the leg {a} - {b} of {seconds:g} s is {steps:,} clock steps of {study.dt:g} s "
+                  "for each train and strategy", steps * LEG_SECONDS_PER_STEP, steps * LEG_BYTES_PER_STEP)
+
+
+def true_train(train, truth):
+    """The plant's train of a draw (``core.plant.Truth`` as a dict): the heavier mass, the larger
+    resistance and the weaker traction that :class:`~ecostudy.core.plant.Plant` drives."""
+    return replace(train, mass=train.mass * truth["mass"], static_mass=train.static_mass * truth["mass"],
+                   davis=tuple(c * truth["resistance"] for c in train.davis),
+                   traction=train.traction.scaled(truth["traction"]))
+
+
+def check_closed_loop(cases, path):
+    """Refuse a closed-loop study with a run whose true train cannot reach the stop before the
+    loop's time cap (it would be simulated to the cap, sample by sample), or estimated above one
+    run's budget. ``cases``: :func:`ecostudy.studies.closedloop.expand`'s."""
+    seen = {}
+    for case in cases:
+        truth = case["truth"]
+        key = (tuple(sorted(truth.items())), case["from"], case["to"])
+        if key not in seen:
+            seen[key] = _true_all_out(case, truth)
+        fastest, cap, message = seen[key]
+        label = f"{case['labels']['controller']} draw {case['labels']['draw']}"
+        if message is not None or fastest > cap:
+            why = message or f"its all-out time is {fastest:.0f} s"
+            refuse_unless_forced(path, "deviations", f"{label}: the true train (mass x{truth['mass']:.3g}, resistance "
+                                 f"x{truth['resistance']:.3g}, traction x{truth['traction']:.3g}) cannot reach the stop "
+                                 f"({why}): the run would be simulated to the loop's cap of {cap:,.0f} s ({duration(cap)})")
+        kind = case["controller"].get("kind", "convex")
+        per_sample = SAMPLE_SECONDS.get(kind, REPLAY_SECONDS) * (case["points"] if kind == "convex" else 1)
+        span = max(fastest, case["window"][1])
+        samples = span / case["sample_time"]
+        check_run(path, "controllers", f"{label}: {samples:,.0f} samples of {case['sample_time']:g} s", samples * per_sample)
+
+
+def _true_all_out(case, truth):
+    """(all-out time of the draw's true train [s], the loop's time cap [s], why it cannot run or None)."""
+    track = track_from_schema(validate(schemas.TrackFile, case["track"], "track"))
+    train = true_train(train_from_schema(validate(schemas.TrainFile, case["train"], "train"), "train"), truth)
+    segment = make_segment(track, train, case["from"], case["to"])
+    cap = 20 * segment.distance + 600  # control.loop.run_loop's max_time
+    nodes = make_grid(segment, case["points"])
+    try:
+        speeds = kinematics.envelope_speeds(segment, train, nodes, node_limits(segment, nodes))
+    except InfeasibleError as exc:
+        return np.inf, cap, str(exc).removeprefix("infeasible: ")
+    return kinematics.running_time(speeds, nodes), cap, None

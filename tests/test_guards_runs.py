@@ -1,0 +1,187 @@
+"""Unclear messages made clear and runaways refused before computing with their estimate
+(``--force`` to run anyway); the companion of ``test_guards.py``."""
+import json
+import re
+
+import pytest
+
+from ecostudy.core.errors import InputError
+from ecostudy.io.loaders import load_train
+from ecostudy.io.yamlsafe import load_yaml
+
+from .conftest import DATA, STUDIES, TRACKS, TRAINS, write_yaml
+from .test_bad_input import one_line, run
+
+METRO, AMS = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml"
+LINE4 = TRACKS / "metro_line_4stops.yaml"
+
+
+# ----------------------------------------------------------------------------------- unclear messages
+def weak_train(tmp_path, share):
+    """The thesis 001 commuter train with ``share`` of its traction force table."""
+    text = (TRAINS / "thesis001_commuter.yaml").read_text()
+    table = re.search(r"force_kN: \[([^\]]*)\]", text)
+    forces = ", ".join(f"{float(x) * share:g}" for x in table.group(1).split(","))
+    path = tmp_path / f"weak{share:g}.yaml"
+    path.write_text(text[:table.start()] + f"force_kN: [{forces}]" + text[table.end():])
+    return path
+
+
+def hill(tmp_path, permille):
+    text = (TRACKS / "thesis001_advanced_1km.yaml").read_text()
+    text = text.replace("{position_m: 200, gradient_permille: -20.3943}", "{position_m: 200, gradient_permille: 0}")
+    text = text.replace("{position_m: 400, gradient_permille: 20.3943}", f"{{position_m: 400, gradient_permille: {permille}}}")
+    path = tmp_path / "hill.yaml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("share, permille, fragments", [
+    (0.05, 20.3943, ["the train cannot climb", "stops 4", "m after A", "kN of gradient and curves"]),
+    (0.05, 60, ["the train cannot climb", "m after A"]),
+    (0.01, 20.3943, ["the train cannot overcome its running resistance", "stops 0 m after A"]),
+])
+def test_a_train_that_cannot_climb_is_told_where(tmp_path, share, permille, fragments):
+    r = run("solve", "--track", hill(tmp_path, permille), "--train", weak_train(tmp_path, share), "--time", 200,
+            "--out", tmp_path / "o", "--no-plot")
+    one_line(r, "infeasible:", *fragments)
+    assert "nan" not in r.output
+
+
+def test_a_closed_loop_study_of_a_train_that_cannot_run_says_why(tmp_path):
+    doc = load_yaml((STUDIES / "thesis001_closed_loop.yaml").read_text())
+    doc.update(track=str(TRACKS / "thesis001_advanced_1km.yaml"), train=str(weak_train(tmp_path, 0.01)),
+               output=str(tmp_path / "out"))
+    r = run("simulate", write_yaml(tmp_path / "loop.yaml", doc), "--no-progress")
+    one_line(r, "the train cannot overcome its running resistance")
+    assert "nan" not in r.output
+
+
+def test_a_journey_through_a_repeated_stop_is_refused_not_stalled(tmp_path):
+    r = run("journey", "--track", LINE4, "--train", METRO, "--stops", "Noord,Station,Station", "--time", 200,
+            "--out", tmp_path / "o")
+    one_line(r, "'Station' straight after 'Station'")
+    assert "stalls" not in r.output and "warning" not in r.output
+
+
+def test_a_minlp_search_cut_short_reports_no_bound_and_its_overrun(tmp_path):
+    r = run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--points", 200, "--das", "minlp",
+            "--das-time-limit", 1, "--out", tmp_path / "o", "--no-plot")
+    assert r.exit_code in (0, 1), r.output
+    line = next(x for x in r.output.splitlines() if "MINLP search" in x)
+    assert "bound 0.000" not in line and ("no bound" in line or "(gap" in line), line
+    das = json.loads((tmp_path / "o" / "summary.json").read_text())["das"]
+    assert das["bound_kWh"] is None or das["bound_kWh"] > 0
+    if das["search_s"] > 2.0:
+        assert "over its 1 s limit" in das["status"]
+    assert all("against ATO" in x for x in r.output.splitlines() if "MindtPy" in x), r.output  # no raw solver line
+
+
+# ----------------------------------------------------------------------------------- runaways
+def network_study(tmp_path, **fields):
+    doc = load_yaml((STUDIES / "network_metro_2trains.yaml").read_text())
+    doc.pop("supplement_percent")
+    doc.update(track=str(LINE4), train=str(METRO), output=str(tmp_path / "out"), **fields)
+    return write_yaml(tmp_path / "net.yaml", doc)
+
+
+@pytest.mark.parametrize("fields, fragments", [
+    ({"running_times_s": [1e7, 200, 120]}, ["running_times_s[0]", "20,000,000 clock steps", "28 days"]),
+    ({"running_times_s": [60, 2e5, 120]}, ["running_times_s[1]", "400,000 clock steps"]),
+    ({"supplement_percent": 1e6}, ["supplement_percent: the leg Noord - Station", "clock steps"]),
+    ({"running_times_s": [60, 80, 1e5], "time_step_s": 0.05}, ["running_times_s[2]", "2,000,000 clock steps"]),
+])
+def test_a_network_leg_too_big_is_refused_with_its_estimate(tmp_path, fields, fragments):
+    r = run("network", network_study(tmp_path, **fields), "--no-plot")
+    one_line(r, "net.yaml", "an estimated", "--force", *fragments)
+    assert not (tmp_path / "out").exists()
+
+
+def test_force_lifts_the_estimate_and_nothing_else(tmp_path):
+    from ecostudy.core.budget import forced
+    from ecostudy.io.loaders import load_network_study
+    from ecostudy.studies.estimate import check_network
+    path = network_study(tmp_path, running_times_s=[1e7, 200, 120])
+    study = load_network_study(path)
+    with pytest.raises(InputError, match="--force"):
+        check_network(study, path)
+    with forced():
+        check_network(study, path)
+    with pytest.raises(InputError, match="--force"):
+        check_network(study, path)  # only inside the block
+
+
+def closed_loop_study(tmp_path, traction, draws=1):
+    doc = {"name": "weak", "track": str(AMS), "train": str(METRO), "window_s": [0, 76], "points": 200,
+           "sample_time_s": 0.1, "controllers": [{"name": "convex", "kind": "convex"}],
+           "deviations": {"traction": {"low": traction[0], "high": traction[1]}}, "draws": draws,
+           "output": str(tmp_path / "out")}
+    return write_yaml(tmp_path / "loop.yaml", doc)
+
+
+@pytest.mark.parametrize("traction, draws, fragments", [
+    ((0.01, 0.01), 1, ["convex draw 0", "traction x0.01", "cannot overcome its running resistance",
+                       "the loop's cap of 22,720 s"]),
+    ((0.01, 1.0), 40, ["cannot reach the stop", "22,720 s"]),
+    ((0.015, 0.02), 2, ["convex draw 0", "cannot reach the stop"]),
+])
+def test_a_closed_loop_run_that_would_run_to_the_cap_is_refused(tmp_path, traction, draws, fragments):
+    r = run("simulate", closed_loop_study(tmp_path, traction, draws), "--no-progress", "--no-plot")
+    one_line(r, "loop.yaml: deviations", "--force", *fragments)
+    assert not (tmp_path / "out" / "results.sqlite").exists()
+
+
+def test_every_shipped_study_passes_the_estimates():
+    from ecostudy.io.loaders import load_network_study
+    from ecostudy.studies.closedloop import expand
+    from ecostudy.studies.estimate import check_closed_loop, check_network
+    for name in ("network_metro_2trains", "network_metro_3trains", "network_regional_20stops"):
+        path = STUDIES / f"{name}.yaml"
+        check_network(load_network_study(path), path)
+    for name in ("metro_monte_carlo", "thesis001_closed_loop", "thesis001_monte_carlo"):
+        path = STUDIES / f"{name}.yaml"
+        check_closed_loop(expand(path)[2], path)
+
+
+@pytest.mark.parametrize("points", [5001, 1_000_000])
+def test_an_effort_curve_of_a_million_points_is_refused_at_once(tmp_path, points):
+    import numpy as np
+    doc = json.loads((DATA / "osrd_rolling_stock.json").read_text())
+    speeds = np.linspace(0, 40, points)
+    efforts = np.interp(speeds, [0, 10, 20, 30, 40], [2e5, 2e5, 1.1e5, 7.5e4, 5.6e4])
+    doc["effort_curves"]["modes"]["1500V"]["default_curve"] = {"speeds": speeds.tolist(),
+                                                               "max_efforts": efforts.tolist()}
+    path = tmp_path / "stock.json"
+    path.write_text(json.dumps(doc))
+    one_line(run("solve", "--track", AMS, "--train", path, "--supplement", 10, "--out", tmp_path / "o"),
+             "stock.json: effort_curves.modes.1500V", f"a table of {points:,} points", "at most 5,000 points",
+             "--force")
+
+
+def test_a_table_at_the_limit_is_read(tmp_path):
+    import numpy as np
+    doc = load_yaml(METRO.read_text())
+    speeds = np.linspace(0, 90, 5000)
+    doc["traction"] = {"table": {"speed_kmh": speeds.tolist(),
+                                 "force_kN": np.interp(speeds, [0, 60, 80, 90], [171, 171, 150, 140]).tolist()}}
+    train = load_train(write_yaml(tmp_path / "t.yaml", doc))
+    assert train.traction.force(10.0) == pytest.approx(171e3, rel=1e-3)
+
+
+def test_force_reads_a_long_table_here_and_in_workers_started_inside(tmp_path):
+    import os
+
+    import numpy as np
+
+    from ecostudy.core.budget import ENVIRONMENT, forced
+    doc = load_yaml(METRO.read_text())
+    speeds = np.linspace(0, 90, 6000)
+    doc["traction"] = {"table": {"speed_kmh": speeds.tolist(),
+                                 "force_kN": np.interp(speeds, [0, 60, 80, 90], [171, 171, 150, 140]).tolist()}}
+    path = write_yaml(tmp_path / "t.yaml", doc)
+    with pytest.raises(InputError, match="a table of 6,000 points"):
+        load_train(path)
+    with forced():
+        assert os.environ[ENVIRONMENT] == "1"  # inherited by the worker processes a command starts
+        assert load_train(path).traction.force(10.0) == pytest.approx(171e3, rel=1e-3)
+    assert ENVIRONMENT not in os.environ
