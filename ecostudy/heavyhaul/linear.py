@@ -18,7 +18,7 @@ couplers spanned)), which keeps the train's total compliance, and a virtual car'
 among its cars in proportion to their mass (every car then accelerates alike inside it).
 """
 import math
-from typing import NamedTuple
+from typing import NamedTuple, Optional
 
 import numpy as np
 from scipy.linalg import expm
@@ -90,7 +90,7 @@ class Fence(NamedTuple):
     kinds: tuple
     resistance: np.ndarray
     sharing: str = "mass"   # how a virtual car's effort is shared among its cars: "mass" or "equal"
-    spanned: np.ndarray = None  # real couplers between the centres of neighbouring virtual cars
+    spanned: Optional[np.ndarray] = None  # real couplers between the centres of neighbouring virtual cars
 
     @property
     def locomotives(self):

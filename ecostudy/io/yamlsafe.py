@@ -5,6 +5,7 @@ and yes/no/on/off booleans, and over-deep nesting are refused by name instead of
 twice keeps the last value. Each of these once turned a mistyped file into a wrong number.
 """
 import re
+from functools import partial
 
 import yaml
 
@@ -47,10 +48,6 @@ def _construct_mapping(loader, node, deep=False):
 
 
 _Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
-for _tag in ("tag:yaml.org,2002:int", "tag:yaml.org,2002:bool"):
-    _Loader.add_constructor(_tag, lambda loader, node, _tag=_tag: _checked(loader, node, _tag))
-
-
 def _checked(loader, node, tag):
     if node.style is None:
         for pattern, what in _SURPRISING:
@@ -58,6 +55,10 @@ def _checked(loader, node, tag):
                 raise DocumentError(f"'{node.value}' at line {node.start_mark.line + 1} is {what}: write it "
                                     "unambiguously (quote text, drop leading zeros, true/false for booleans)")
     return yaml.SafeLoader.yaml_constructors[tag](loader, node)
+
+
+for _tag in ("tag:yaml.org,2002:int", "tag:yaml.org,2002:bool"):
+    _Loader.add_constructor(_tag, partial(_checked, tag=_tag))
 
 
 def load_yaml(text):

@@ -221,7 +221,8 @@ def block(name: str, value: Any) -> str:
     """A nested summary field: its scalars as a key-value table, its lists of records as tables."""
     if isinstance(value, list):
         value = {"": value}
-    flat, lists = {}, {}
+    flat: dict = {}
+    lists: dict = {}
     flatten(value, "", flat, lists)
     out = [f"<div><h3>{esc(name)}</h3>"]
     if flat:
@@ -314,7 +315,7 @@ def fmt_scalar(v: Any) -> str:
     if isinstance(v, bool):
         return "yes" if v else "no"
     if isinstance(v, Number) and not isinstance(v, bool):
-        x = float(v)
+        x = float(v)  # type: ignore[arg-type]
         if x == round(x) and abs(x) < 1e15:
             return f"{int(round(x)):,}".replace(",", "\u2009")
         if abs(x) < 1e-3 or abs(x) >= 1e9:
