@@ -68,7 +68,7 @@ def record(stages, outcome, nl_seconds=0.0):
 class Written:
     """Written NLPs kept by structure for re-use: a solve that differs from an earlier one only in
     its running time (or window) and starting point changes the bounds of T and the start of the
-    written model instead of building and writing it again (issue 15: the NL write once per model
+    written model instead of building and writing it again (the NL write once per model
     structure). The caller names the structure (``key``): everything that changes the model but
     the timing (track, train, stops, grid, objective, weights). The ``size`` latest are kept."""
 
