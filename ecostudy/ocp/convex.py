@@ -40,7 +40,7 @@ import clarabel
 import numpy as np
 from scipy import sparse
 
-from ecostudy.core.grid import node_limits, warn_unmodelled
+from ecostudy.core.grid import drop_idle_power, node_limits, warn_unmodelled
 from ecostudy.core.kinematics import interval_grade_force
 
 NAMES = ("v", "t", "rho", "g", "gp", "b", "h")  # variable blocks, in this order
@@ -148,8 +148,11 @@ class ConvexProgram:
     def __init__(self, segment, train, nodes, weights=ConvexWeights(), scheme="midpoint", epsilon=0.1, margin=0.05):
         if scheme not in ("left", "midpoint"):
             raise ValueError(f"scheme must be 'left' or 'midpoint', not {scheme!r}")
-        self.segment, self.train, self.nodes = segment, train, np.asarray(nodes, float)
+        self.segment, self.nodes = segment, np.asarray(nodes, float)
         warn_unmodelled(segment, "the convex SOCP")
+        # a power limit that never binds would only add a badly scaled tangent row (the relaxation
+        # then ends inexact, max |rho s - 1| up to 3e-2 on a 1e7 kW train): left out
+        self.train, self.idle_power = drop_idle_power(segment, train, "the convex SOCP")
         self.weights, self.scheme, self.epsilon, self.margin = weights, scheme, epsilon, margin
         self.traction = envelope_pieces(train.traction)
         self.brake = envelope_pieces(train.braking)
@@ -159,6 +162,14 @@ class ConvexProgram:
         self.settings.iterative_refinement_enable = False  # halves the solve; the gap stays below 1e-7 (tests)
         self.refined = clarabel.DefaultSettings()  # for a solve that ended inaccurate
         self.refined.verbose = False
+
+    def limit(self, max_iter=None, seconds=None):
+        """Cap every Clarabel solve of the next ``solve`` at ``max_iter`` iterations and ``seconds``
+        (None: Clarabel's defaults, 200 iterations and no time limit). A solve that hits either
+        ends unusable, as an on-board solver's would."""
+        for settings in (self.settings, self.refined):
+            settings.max_iter = 200 if max_iter is None else int(max_iter)
+            settings.time_limit = float("inf") if seconds is None else float(seconds)
 
     def grid_from(self, position, reach=0.0):
         """Nodes of the grid ahead of ``position`` (eq. 4.2d). With ``reach`` > 0 the first
