@@ -154,8 +154,8 @@ class ConvexProgram:
         # then ends inexact, max |rho s - 1| up to 3e-2 on a 1e7 kW train): left out
         self.train, self.idle_power = drop_idle_power(segment, train, "the convex SOCP")
         self.weights, self.scheme, self.epsilon, self.margin = weights, scheme, epsilon, margin
-        self.traction = envelope_pieces(train.traction)
-        self.brake = envelope_pieces(train.braking)
+        self.traction = envelope_pieces(self.train.traction)
+        self.brake = envelope_pieces(self.train.braking)
         self.previous = None  # (nodes, speeds) of the last plan: where the power tangents touch
         self.settings = clarabel.DefaultSettings()
         self.settings.verbose = False
