@@ -11,30 +11,18 @@ from ecostudy.cli import app
 from ecostudy.control.controllers import Convex
 from ecostudy.control.loop import run_loop
 from ecostudy.core.errors import EcostudyWarning
-from ecostudy.core.grid import make_segment
 from ecostudy.core.physics import Envelope, power_never_binds
 from ecostudy.core.plant import Plant
 from ecostudy.core.types import State
-from ecostudy.io.loaders import load_track, load_train
 from ecostudy.io.writers import write_csv
 from ecostudy.ocp.convex import ConvexProgram, ConvexWeights, trapezoid_grid
 from ecostudy.ocp.problem import prepare
 from ecostudy.studies.loopsteps import step_columns, step_counts, steps_frame
 
 from .conftest import TRACKS, TRAINS, write_yaml
+from .test_convex import advanced, commuter  # noqa: F401 (fixtures: the thesis train on the advanced trip)
 
 runner = CliRunner()
-
-
-@pytest.fixture(scope="module")
-def commuter():
-    return load_train(TRAINS / "thesis001_commuter.yaml")
-
-
-@pytest.fixture(scope="module")
-def advanced(commuter):
-    track = load_track(TRACKS / "thesis001_advanced_1km.yaml")
-    return track, make_segment(track, commuter, "A", "B")
 
 
 class CappedAt:
