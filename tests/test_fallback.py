@@ -37,7 +37,7 @@ class CappedAt:
         return self.inner.solve_seconds
 
     def plan(self, measured):
-        self.inner.max_iter = 1 if len(self.inner.steps) in self.samples else None
+        self.inner.max_iter = 1 if len(self.inner.step_log) in self.samples else None
         return self.inner.plan(measured)
 
 

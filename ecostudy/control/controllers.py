@@ -144,10 +144,11 @@ class Convex(Fallback):
     controller brakes in full (the final approach). A step without a plan to drive (no usable
     solve, ``max_iter`` Clarabel iterations or the ``budget`` [s] exceeded, or a plan that brakes
     and leans on the relaxation, max |rho s - 1| > 1e-3: no service brake stops the train as
-    planned) falls back (``control.fallback``): the last accepted plan at the measured position
-    while the train is within ``tracking`` [m/s] of its speed there, else, for the leaning braking
-    plan, the brake reserve of eq. 6.8 in full (``reserve`` counts these samples), else full
-    braking. ``full_reserve=False`` is thesis 001's controller, which drives the leaning plan.
+    planned) falls back (``control.fallback``): the leaning braking plan to the brake reserve of
+    eq. 6.8 in full (``reserve`` counts these samples; the solve showed that no plan, the shifted
+    one included, stops the train with the planned brake), any other to the last accepted plan at
+    the measured position while the train is within ``tracking`` [m/s] of its speed there, else
+    to full braking. ``full_reserve=False`` is thesis 001's controller, which drives the leaning plan.
     A plan with max |rho s - 1| above ``EXACT`` after the tightening rounds is driven and counted
     (``inexact``). Per solve it records the time, the gap and whether the arrival window had to be
     dropped.
@@ -190,7 +191,9 @@ class Convex(Fallback):
             self.accept(self._held(plan))
             handle, kind = force_handle(self.program.train, max(measured.speed, 0.0), plan.force[0]), None
         else:
-            handle, kind = self.fall_back(measured, reserve=-1.0 if leaning else None)
+            # a leaning plan is the program's proof that no plan, the shifted one included, stops the
+            # train from the measured state with the service brake it plans with: the reserve
+            handle, kind = self.fall_back(measured, reserve=-1.0 if leaning else None, shifted=not leaning)
             self.reserve += int(kind == "reserve")
         self.record(status, plan.seconds, gap, kind, ("arrival_window",) if plan.usable and plan.softened else (),
                     self.estimator)

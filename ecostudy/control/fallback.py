@@ -42,18 +42,19 @@ class Fallback:
     shift_samples = SHIFT_SAMPLES
 
     def _start_records(self):
-        self.steps, self.last_plan, self.shifts = [], None, 0
+        self.step_log, self.last_plan, self.shifts = [], None, 0
         self.fallbacks = dict.fromkeys(KINDS, 0)
 
     def accept(self, handle_at):
         """Keep ``handle_at`` as the plan to fall back on."""
         self.last_plan, self.shifts = handle_at, 0
 
-    def fall_back(self, measured, reserve=None):
+    def fall_back(self, measured, reserve=None, shifted=True):
         """(handle, kind) for a step without a usable plan: the last plan shifted to ``measured``
-        if it holds there, else ``reserve`` (a handle, the eq. 6.8 reserve) if given, else full
-        braking. The use is counted by kind."""
-        if self.last_plan is not None and self.shifts < self.shift_samples:
+        if it holds there (``shifted=False``: the step's solve showed that no plan does), else
+        ``reserve`` (a handle, the eq. 6.8 reserve) if given, else full braking. The use is
+        counted by kind."""
+        if shifted and self.last_plan is not None and self.shifts < self.shift_samples:
             handle = self.last_plan(measured)
             if handle is not None:
                 self.shifts += 1
@@ -69,5 +70,5 @@ class Fallback:
     def record(self, status, seconds, gap=None, fallback=None, softened=(), estimator=None):
         """One :class:`Step` (``softened``: the names of the rows softened this step)."""
         mass = getattr(estimator, "estimate", None) if estimator is not None else None
-        self.steps.append(Step(str(status), float(seconds), None if gap is None else float(gap), fallback,
+        self.step_log.append(Step(str(status), float(seconds), None if gap is None else float(gap), fallback,
                                " ".join(softened), mass))

@@ -11,8 +11,9 @@ measured at sample k cannot act at k.
 
 - ``0``: it acts at k, as if solving took no time;
 - ``d`` samples (1: the default of a study): it acts from k + d, and the controller plans from
-  the state predicted for k + d (the controller's own model of the train, run from the measured
-  state under the controls already planned, which hold meanwhile). Deterministic and repeatable;
+  the state predicted for k + d (the controller's own model of the train, with the estimated mass
+  when it has an estimator, run from the measured state under the controls already planned,
+  which hold meanwhile). Deterministic and repeatable;
 - ``"measured"``: it acts when its solve time has elapsed (the held control until then; a solve
   longer than a sample holds it over the next samples, which then plan nothing), planned from the
   state predicted that far ahead by the previous solve's time. Not repeatable: for studies of the
@@ -23,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core.physics import davis_resistance
-from ecostudy.core.plant import Noise, Plant
+from ecostudy.core.plant import Noise, Plant, Truth
 from ecostudy.core.types import State
 from ecostudy.core.units import to_kmh
 
@@ -123,11 +124,13 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
             grade = nominal.grade_force(measured0.position) / model.mass
             reading = noise.read_acceleration((state.speed - before.speed) / (state.time - before.time), trip.rng)
             estimator.update(reading, grade, net, measured0.position)
+        # the controller's model for the prediction: with the mass it estimates, if it does
+        ahead_model = nominal if estimator is None else Plant(segment, model, Truth(mass=estimator.estimate))
         if delay == MEASURED:
-            pieces = _measured_cycle(controller, nominal, measured, sample_time, held, lag, busy_until, pending)
+            pieces = _measured_cycle(controller, ahead_model, measured, sample_time, held, lag, busy_until, pending)
             pieces, held, lag, busy_until, pending = pieces
         elif delay:
-            ahead = predict(nominal, measured, [(sample_time, u) for u in planned])
+            ahead = predict(ahead_model, measured, [(sample_time, u) for u in planned])
             planned.append(float(controller.plan(ahead)))
             held = planned.pop(0)
             pieces = [(sample_time, held)]

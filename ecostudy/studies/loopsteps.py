@@ -19,7 +19,7 @@ def step_columns(result, planner):
     """The columns of ``steps.csv`` (lists, JSON-storable) of a loop ``result`` (``LoopResult``)
     driven by ``planner`` (a controller with ``steps``)."""
     n = len(result.handles)
-    steps = list(getattr(planner, "steps", []))
+    steps = list(getattr(planner, "step_log", []))
     steps += [None] * (n - len(steps))
     states, readings = result.states[:n], list(result.readings)[:n]
 
@@ -47,7 +47,7 @@ def step_counts(planner):
     """Per run: the fallbacks by kind, the steps with a softened row (steps, not solver retries),
     the convex solves above the exactness bound, and full braking before the final approach
     (a ``full_brake`` or ``reserve`` fallback)."""
-    steps = list(getattr(planner, "steps", []))
+    steps = list(getattr(planner, "step_log", []))
     kinds = [s.fallback for s in steps]
     gaps = np.array([s.gap for s in steps if s.gap is not None])
     return {**{f"fallback_{k}": kinds.count(k) for k in KINDS},
