@@ -20,11 +20,11 @@ from ecostudy.analysis.tables import handles
 from ecostudy.core.grid import interval_of
 from ecostudy.control.fallback import Fallback
 from ecostudy.core.types import State
+from ecostudy.ocp.convex import EXACT
 from ecostudy.ocp.restart import Replanner
 
 REPLAN_OPTIONS = {"max_iter": 300}  # a re-plan that needs more has no plan worth waiting for
 RELAXED = 1e-3  # a convex plan with max |rho s - 1| above this uses the relaxation materially
-EXACT = 1e-6    # a convex plan with max |rho s - 1| above this is not exact (counted, flagged)
 
 
 def from_departure(measured):

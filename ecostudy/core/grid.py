@@ -144,7 +144,7 @@ def drop_idle_power(segment, train, formulation):
     if idle:
         warnings.warn(f"{formulation}: {', '.join(idle)} power limit never binds: dropped (P >= F_max(v) v at "
                       f"every admissible speed on '{segment.from_stop}'-'{segment.to_stop}')", EcostudyWarning,
-                      stacklevel=2)
+                      stacklevel=3)
     return lean, idle
 
 

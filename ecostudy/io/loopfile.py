@@ -53,6 +53,8 @@ class Controller(Strict):
     parametrised controller (DAS modes, ``variant`` nominal or two_step); ``rspc``: thesis 000's
     receding-horizon switched controller (DAS modes, ``rspc`` settings). ``das_levels`` applies any controller's
     handle as the nearest of the train's DAS levels, ``delay_samples`` later (a driver).
+    ``compute_delay`` is the solver's delay (``control/loop.py``), for every kind. An option the
+    kind does not read (``USES``) is refused, so a misplaced one cannot pass silently.
     """
 
     name: str
