@@ -8,11 +8,12 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
-from ecostudy.control.controllers import Convex
+from ecostudy.control.controllers import Convex, ForceReplay
 from ecostudy.control.loop import run_loop
+from ecostudy.control.terminal import TerminalApproach
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.physics import Envelope, power_never_binds
-from ecostudy.core.plant import Plant
+from ecostudy.core.plant import Plant, Truth
 from ecostudy.core.types import State
 from ecostudy.io.writers import write_csv
 from ecostudy.ocp.convex import ConvexProgram, ConvexWeights, trapezoid_grid
@@ -138,3 +139,19 @@ def test_a_study_writes_steps_per_run_and_counts_fallbacks(tmp_path):
     assert len(steps) > 100 and runs.loc[0, "compute_delay"] == 1 and steps["sample"].is_monotonic_increasing
     assert runs.loc[0, "fallback_full_brake"] == (steps["fallback"] == "full_brake").sum()
     assert steps.loc[0, "handle"] == 0.0  # one sample of computation delay: the train waits a sample
+
+
+def test_a_terminal_approach_with_a_braking_reserve_stops_a_replayed_plan_on_the_mark(commuter, advanced):
+    """The stop of SBPC and SPPC (control/terminal.py): the convex plan from the stand replayed
+    open loop on a heavier train with weaker brakes overruns; with the terminal approach (full
+    braking on the stopping curve of 80 % of the model's brake, coasting otherwise) it stops
+    within 1 m, on the DAS levels -1 and 0 only once engaged."""
+    track, segment = advanced
+    case = prepare(track, commuter, "A", "B", 200)
+    plan = ConvexProgram(segment, commuter, trapezoid_grid(segment, 200), ConvexWeights()).solve(State(), (0.0, 200.0))
+    plant = Plant(segment, commuter, Truth(mass=1.1, braking=0.9))
+    blind = run_loop(plant, ForceReplay(commuter, plan.nodes, plan.force), 0.38, plant_step=0.38)
+    approach = TerminalApproach(ForceReplay(commuter, plan.nodes, plan.force), case, 0.38, reserve=0.2)
+    seeing = run_loop(plant, approach, 0.38, plant_step=0.38)
+    assert blind.stop_error_m > 1.0 and abs(seeing.stop_error_m) <= 1.0 and approach.engaged > 0
+    assert set(seeing.handles[-approach.engaged:]) <= {-1.0, 0.0}

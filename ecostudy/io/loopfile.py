@@ -27,8 +27,8 @@ USES = {  # the fields each kind reads besides COMMON: any other field given is 
     "convex": {"settings", "estimator", "scheme", "time_budget_s"},
     "open_loop": {"settings", "scheme"},
     "ato": set(),
-    "sbpc": {"block", "variant", "omega", "transcription", "brake_reserve"},
-    "sppc": {"variant", "brake_reserve"},
+    "sbpc": {"block", "variant", "omega", "transcription", "brake_reserve", "terminal_reserve"},
+    "sppc": {"variant", "brake_reserve", "terminal_reserve"},
     "rspc": {"rspc", "brake_reserve"},
 }
 
@@ -80,6 +80,10 @@ class Controller(Strict):
         1, description="The computation delay: the control planned from the state at sample k acts from k + "
         "compute_delay, planned from the state predicted for then (the previous control holds meanwhile); "
         "'measured': when its solve time has elapsed (not repeatable). 0: solving takes no time.")
+    terminal_reserve: Optional[float] = Field(None, ge=0, lt=1, description="sbpc, sppc: stop with a terminal "
+                                              "approach (control/terminal.py): full braking on the stopping "
+                                              "curve of the brake less this share, coasting otherwise (none: "
+                                              "the controller's own stop).")
     time_budget_s: Optional[float] = Field(None, gt=0, description="convex: a solve longer than this is not "
                                            "applied; the last plan is, shifted (default: none, repeatable).")
 

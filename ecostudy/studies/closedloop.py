@@ -21,6 +21,7 @@ from ecostudy.control.sbpc import Sbpc
 from ecostudy.control.sppc import Sppc
 from ecostudy.control.estimator import MassEstimator
 from ecostudy.control.loop import run_loop
+from ecostudy.control.terminal import TerminalApproach
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
@@ -132,9 +133,13 @@ def build_controller(case, track, segment, train, estimator):
             speeds = np.interp(prepared.nodes, ato.trajectory.nodes, ato.trajectory.v)
             inner = Sbpc(prepared, window[1], case["sample_time"], spec["block"], speeds, spec["variant"], spec["omega"],
                          transcription=spec["transcription"], **reserve)
+    outer = inner
+    if spec["terminal_reserve"] is not None:
+        outer = TerminalApproach(inner, prepare(track, train, case["from"], case["to"], points), case["sample_time"],
+                                 spec["terminal_reserve"])
     if spec["das_levels"]:
-        return Quantised(inner, train.das_levels, spec["delay_samples"]), inner
-    return inner, inner
+        return Quantised(outer, train.das_levels, spec["delay_samples"]), inner
+    return outer, inner
 
 
 def _mode_changes(handles):
