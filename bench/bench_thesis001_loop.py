@@ -5,7 +5,7 @@
 ``--delay``: the computation delay (control/loop.py); ``--power-kw``: the trips on the commuter
 with a constant traction force limit of 1e6 N and a power limit of P kW instead of the traction
 loss table (a TTOBench-style train; P = 1e6 kW never binds and is dropped from the SOCP);
-``--table1``: Table 1 only.
+``--table1``: Table 1 only; ``--figures 9.7``: those rows of it.
 
 The convex controller (SOCP 6.10 by Clarabel, re-solved every 100 ms from the measured state on
 the grid ahead) drives the plant (DOP853 between samples). Table 1: Figs. 9.1, 9.4, 9.2, 9.7
@@ -70,6 +70,7 @@ def main():
     p.add_argument("--delay", default="0")
     p.add_argument("--power-kw", type=float, default=None)
     p.add_argument("--table1", action="store_true")
+    p.add_argument("--figures", nargs="*", default=None, help="Table 1 rows of these figures only (e.g. 9.7)")
     args = p.parse_args()
     global DELAY
     DELAY = args.delay if args.delay == "measured" else int(args.delay)
@@ -84,6 +85,8 @@ def main():
     print(head + "\n|" + "---|" * 11)
     runs = {}
     for c in published.to_dict("records"):
+        if args.figures and c["figure"] not in args.figures:
+            continue
         result, controller = drive(train, c["track"], ConvexWeights(time=c["time_weight"], energy=c["energy_weight"]),
                                    c["latest_s"], args.points)
         runs[c["figure"]] = result
