@@ -63,7 +63,7 @@ def test_no_admissible_sequence_brakes(case):
 @pytest.mark.parametrize("where", ["amsterdam", pytest.param("regional", marks=pytest.mark.slow)])
 def test_the_loop_applies_only_das_modes_arrives_on_time_and_costs_between_coasting_and_all_out(where, metro,
                                                                                                  amsterdam):
-    """Issue 12: only allowed modes are applied; arrival on time or early; energy between the
+    """Only allowed modes are applied; arrival on time or early; energy between the
     coasting-only industrial strategy (thesis 000 Table 6.1's 'eco-drive coasting') and all-out;
     stops on the mark. Both the model train and the corners of +-10 % parameters."""
     if where == "amsterdam":
