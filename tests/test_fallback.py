@@ -9,7 +9,8 @@ from typer.testing import CliRunner
 
 from ecostudy.cli import app
 from ecostudy.control.controllers import Convex, ForceReplay
-from ecostudy.control.loop import run_loop
+from ecostudy.control.fallback import KINDS
+from ecostudy.control.loop import check_delay, run_loop
 from ecostudy.control.terminal import TerminalApproach
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.physics import Envelope, power_never_binds
@@ -56,7 +57,10 @@ def test_an_unusable_solve_mid_trip_applies_the_shifted_plan_and_steps_csv_says_
     assert list(steps.loc[capped[1:], "fallback"]) == ["shifted_plan"] * 3
     assert (steps.loc[capped[1:], "handle"] > -1.0).all()  # no full braking mid-trip
     assert steps.loc[capped[1:], "speed_mps"].min() > 5.0  # mid-trip indeed
-    assert steps["fallback"].notna().sum() == step_counts(controller)["fallback_shifted_plan"] + 1
+    counts = step_counts(controller)
+    assert all((steps["fallback"] == kind).sum() == counts[f"fallback_{kind}"] for kind in KINDS)
+    assert counts["fallback_full_brake"] == 1  # at the stand only (a braking plan leaning on the
+    # relaxation near the stop of this coarse grid goes to the eq. 6.8 reserve, not a full brake)
     assert abs(result.stop_error_m) < 0.5 and result.max_overspeed_kmh == 0.0
 
 
@@ -155,3 +159,10 @@ def test_a_terminal_approach_with_a_braking_reserve_stops_a_replayed_plan_on_the
     seeing = run_loop(plant, approach, 0.38, plant_step=0.38)
     assert blind.stop_error_m > 1.0 and abs(seeing.stop_error_m) <= 1.0 and approach.engaged > 0
     assert set(seeing.handles[-approach.engaged:]) <= {-1.0, 0.0}
+
+
+def test_the_computation_delay_is_samples_or_measured():
+    assert check_delay(0) == 0 and check_delay(2) == 2 and check_delay("measured") == "measured"
+    for bad in (-1, 0.5, True, "later"):
+        with pytest.raises(ValueError, match="number of samples >= 0 or 'measured'"):
+            check_delay(bad)
