@@ -51,10 +51,12 @@ class Train:
         return replace(self, braking=self.braking.scaled(1.0 - share)) if share else self
 
     def without_idle_power(self, speeds):
-        """(this train without the power limits that never bind at ``speeds`` [m/s], the names of the
-        envelopes whose limit was dropped): see :func:`ecostudy.core.physics.power_never_binds`."""
-        idle = {name: getattr(self, name).without_power() for name in ("traction", "braking", "regeneration")
-                if getattr(self, name) is not None and getattr(self, name).idle_power(speeds)}
+        """(this train without a traction power limit that never binds at ``speeds`` [m/s], the names
+        of the envelopes whose limit was dropped): see :func:`ecostudy.core.physics.power_never_binds`.
+        Only traction, the limit every formulation has (the SOCP as tangent rows); a braking or
+        regenerative power limit is left as it is."""
+        idle = {name: getattr(self, name).without_power() for name in ("traction",)
+                if getattr(self, name).idle_power(speeds)}
         return (replace(self, **idle) if idle else self), tuple(idle)
 
     def tunnel_coefficient(self, cross_section):
