@@ -4,11 +4,9 @@ import pytest
 
 from ecostudy.analysis.single import solve_run
 from ecostudy.control.loop import run_loop
-from ecostudy.control.sbpc import Sbpc
 from ecostudy.control.sppc import Sppc
 from ecostudy.core.plant import Plant
 from ecostudy.core.types import State, Timing
-from ecostudy.ocp.problem import prepare
 
 TS = 0.38  # thesis 000 §4.4's sample
 MODES = {"traction 1", "traction 0.75", "traction 0.5", "cruise", "coast", "brake"}
@@ -40,16 +38,17 @@ def test_a_train_that_cannot_stop_in_time_gets_the_plan_that_overruns_least(ato)
 
 
 @pytest.mark.slow
-def test_the_nominal_loop_stops_on_the_mark_with_das_modes_and_costs_at_least_sbpc(ato, metro, amsterdam):
+def test_the_nominal_loop_stops_on_the_mark_with_das_modes_and_costs_at_least_the_optimum(ato, metro):
     controller = Sppc(ato, 76.0)
     result = run_loop(Plant(ato.segment, metro), controller, TS, plant_step=TS)
     assert abs(result.stop_error_m) < 0.5 and result.arrival_time_s <= 76.0 + TS + 1e-6
     assert result.max_overspeed_kmh < 0.5
     assert set(controller.modes) <= MODES
-    case = prepare(amsterdam, metro, "Rokin", "Centraal", 200)
-    sbpc = Sbpc(case, 76.0, TS, 20, np.interp(case.nodes, ato.trajectory.nodes, ato.trajectory.v))
-    blocked = run_loop(Plant(ato.segment, metro), sbpc, TS, plant_step=TS)
-    assert result.traction_work >= blocked.traction_work  # DAS modes cost at least SBPC's free handle
+    # DAS modes cost at least the free handle's optimum (22.6 MJ; the loop 24.6 MJ). SBPC with blocks
+    # of L = 20 is no bound (25.8 MJ): SPPC cost more only while a sample without a plan braked in
+    # full; that sample now drives the last plan shifted (control/fallback.py)
+    optimum = float(np.sum(ato.trajectory.ft * np.diff(ato.trajectory.nodes)))
+    assert result.traction_work >= optimum and controller.fallbacks["full_brake"] == 0
 
 
 def test_a_study_asking_for_a_multi_objective_sppc_is_refused():

@@ -18,7 +18,9 @@ import numpy as np
 
 from ecostudy.analysis.tables import handles
 from ecostudy.core.grid import interval_of
+from ecostudy.control.fallback import Fallback
 from ecostudy.core.types import State
+from ecostudy.ocp.convex import EXACT
 from ecostudy.ocp.restart import Replanner
 
 REPLAN_OPTIONS = {"max_iter": 300}  # a re-plan that needs more has no plan worth waiting for
@@ -35,7 +37,7 @@ def handle_of(train, speed, traction, braking):
     return float(handles(train, np.array([speed, speed]), np.array([traction]), np.array([braking]))[0])
 
 
-class OpenLoop:
+class OpenLoop(Fallback):
     """Replay a solved run's handle (``RunResult``): ``by="position"`` switches where the plan
     switches, ``by="time"`` on the plan's clock."""
 
@@ -43,36 +45,41 @@ class OpenLoop:
         self.result, self.by = result, by
         self.key = result.nodes if by == "position" else result.trajectory.time
         self.solve_seconds = []
+        self._start_records()
 
     def plan(self, measured):
         x = measured.position if self.by == "position" else measured.time
         self.solve_seconds.append(0.0)
+        self.record("replay", 0.0)
         return float(self.result.handle[interval_of(self.key, x)])
 
 
-class ForceReplay:
+class ForceReplay(Fallback):
     """Replay a plan's force per interval of ``nodes`` [N] (traction > 0, braking < 0) by position,
     as the handle that asks for it at the measured speed: a full-horizon plan without feedback."""
 
     def __init__(self, train, nodes, force):
         self.train, self.nodes, self.force = train, np.asarray(nodes, float), np.asarray(force, float)
         self.solve_seconds = []
+        self._start_records()
 
     def plan(self, measured):
         self.solve_seconds.append(0.0)
+        self.record("replay", 0.0)
         if measured.position >= self.nodes[-1]:
             return -1.0
         return force_handle(self.train, max(measured.speed, 0.0), self.force[interval_of(self.nodes, measured.position)])
 
 
-class Replanning:
+class Replanning(Fallback):
     """Re-solve the energy-optimal run from every measured state (see the module docstring).
 
     ``arrival``: the timetabled arrival [s] on the trip's clock, kept as 'arrive by' so a plan
     exists while the train is early; a train too late for it re-plans to arrive within a minute
     more (``late`` counts those cycles). Near the stop (``final_m``), or when no plan reaches
-    the stop at all (``failures``), the controller brakes in full. ``brake_reserve``: the share of
-    the braking envelope the plans leave unused, for the deviations between samples.
+    the stop at all (``failures``), the controller falls back (``control.fallback``: the last plan
+    at the measured position, else full braking). ``brake_reserve``: the share of the braking
+    envelope the plans leave unused, for the deviations between samples.
     """
 
     def __init__(self, case, arrival, estimator=None, final_m=1.0, brake_reserve=0.1, options=None):
@@ -83,14 +90,16 @@ class Replanning:
         self.replanner = Replanner(dataclasses.replace(case, train=model), window=(0.0, self.arrival),
                                    options={**REPLAN_OPTIONS, **(options or {})})
         self.last, self.failures, self.late, self.solve_seconds, self.iterations = 0.0, 0, 0, [], []
+        self._start_records()
 
     def plan(self, measured):
         distance, measured = self.case.segment.distance, from_departure(measured)
         if measured.position >= distance - self.final_m:
             self.solve_seconds.append(0.0)
+            self.record("final", 0.0, estimator=self.estimator)
             return -1.0
         scale = self.estimator.estimate if self.estimator is not None else None
-        t0 = time.perf_counter()
+        t0, late = time.perf_counter(), self.late
         try:
             plan = self.replanner.solve(measured, arrival=(0.0, max(self.arrival, measured.time + 1.0)),
                                         mass_scale=scale)
@@ -100,13 +109,24 @@ class Replanning:
         finally:
             self.solve_seconds.append(time.perf_counter() - t0)
         self.iterations.append(plan.outcome.iterations)
-        if not plan.outcome.usable:  # no plan reaches the stop: brake
+        status = plan.outcome.status
+        if not plan.outcome.usable:  # no plan reaches the stop: the last one, else brake
             self.failures += 1
-            self.last = -1.0
-            return self.last
-        k = interval_of(self.case.nodes, measured.position)
-        self.last = handle_of(self.case.train, max(measured.speed, 0.0), plan.ft[k], plan.fb[k])
+            self.last, kind = self.fall_back(measured)
+        else:
+            self.accept(self._held(plan))
+            self.last, kind = self._held(plan)(measured), None
+        self.record(status, self.solve_seconds[-1], fallback=kind, softened=("arrival_window",) if self.late > late else (),
+                    estimator=self.estimator)
         return self.last
+
+    def _held(self, plan):
+        nodes, train, ft, fb = self.case.nodes, self.case.train, np.array(plan.ft), np.array(plan.fb)
+
+        def handle_at(measured):
+            k = interval_of(nodes, measured.position)
+            return handle_of(train, max(measured.speed, 0.0), ft[k], fb[k])
+        return handle_at
 
 
 def force_handle(train, speed, force):
@@ -114,25 +134,33 @@ def force_handle(train, speed, force):
     return handle_of(train, speed, max(force, 0.0), max(-force, 0.0))
 
 
-class Convex:
+class Convex(Fallback):
     """Thesis 001 Alg. 1: every sample, solve ``program`` (``ocp.convex.ConvexProgram``) from the
     measured state and apply the first interval's force as a handle held to the next sample.
 
     ``arrival``: (T_min, T_max) [s] on the trip's clock; ``lead``: a leading train's clock as a
     function of position (eq. 6.9, already shifted by the separation); a train at a stand waits
-    while the leader is still within that separation of it. Within ``final_m`` of the stop, or
-    without any plan, the controller brakes in full; so it does when the plan brakes and leans on
-    the relaxation (max |rho s - 1| > 1e-3: no service brake stops the train as planned), which
-    is the emergency the brake reserve of eq. 6.8 is kept for (``reserve`` counts these samples;
-    ``full_reserve=False`` is thesis 001's controller, which leans on the relaxation instead).
-    Per solve it records the time, the gap and whether the arrival window had to be dropped.
+    while the leader is still within that separation of it. Within ``final_m`` of the stop the
+    controller brakes in full (the final approach). A step without a plan to drive (no usable
+    solve, ``max_iter`` Clarabel iterations or the ``budget`` [s] exceeded, or a plan that brakes
+    and leans on the relaxation, max |rho s - 1| > 1e-3: no service brake stops the train as
+    planned) falls back (``control.fallback``): the leaning braking plan to the brake reserve of
+    eq. 6.8 in full (``reserve`` counts these samples; the solve showed that no plan, the shifted
+    one included, stops the train with the planned brake), any other to the last accepted plan at
+    the measured position while the train is within ``tracking`` [m/s] of its speed there, else
+    to full braking. ``full_reserve=False`` is thesis 001's controller, which drives the leaning plan.
+    A plan with max |rho s - 1| above ``EXACT`` after the tightening rounds is driven and counted
+    (``inexact``). Per solve it records the time, the gap and whether the arrival window had to be
+    dropped.
     """
 
     def __init__(self, program, arrival=(0.0, np.inf), estimator=None, lead=None, final_m=0.05, hold=0.1,
-                 full_reserve=True):
+                 full_reserve=True, max_iter=None, budget=None, tracking=0.5):
         self.program, self.arrival, self.estimator, self.lead, self.final_m = program, arrival, estimator, lead, final_m
-        self.hold, self.full_reserve = hold, full_reserve
-        self.solve_seconds, self.gaps, self.softened, self.failures, self.reserve = [], [], 0, 0, 0
+        self.hold, self.full_reserve, self.max_iter, self.budget, self.tracking = (hold, full_reserve, max_iter,
+                                                                                  budget, tracking)
+        self.solve_seconds, self.gaps, self.softened, self.failures, self.reserve, self.inexact = [], [], 0, 0, 0, 0
+        self._start_records()
 
     def plan(self, measured):
         distance = self.program.segment.distance
@@ -140,22 +168,47 @@ class Convex:
                    and float(self.lead(np.array([measured.position + 1.0]))[0]) > measured.time)
         if waiting or measured.position >= distance - self.final_m:
             self.solve_seconds.append(0.0)
+            self.record("wait" if waiting else "final", 0.0, estimator=self.estimator)
             return -1.0
         measured = from_departure(measured)
         scale = self.estimator.estimate if self.estimator is not None else 1.0
+        self.program.limit(self.max_iter, self.budget)
         plan = self.program.solve(measured, self.arrival, mass_scale=scale, lead=self.lead, hold=self.hold)
         self.solve_seconds.append(plan.seconds)
-        if not plan.usable:
+        status, gap = plan.status, (plan.gap if plan.usable else None)
+        if plan.usable:
+            self.gaps.append(plan.gap)
+            self.softened += int(plan.softened)
+            self.inexact += int(plan.gap > EXACT)
+            if self.budget is not None and plan.seconds > self.budget:
+                status = "over_budget"
+        else:
             self.failures += 1
-            return -1.0
-        self.gaps.append(plan.gap)
-        self.softened += int(plan.softened)
-        if self.full_reserve and plan.force[0] < 0.0 and plan.gap > RELAXED:
-            # the plan brakes and needs the relaxation (rho s > 1: braking impulse no train has):
-            # it cannot stop in time with the service brake it assumed; use the reserve in full
-            self.reserve += 1
-            return -1.0
-        return force_handle(self.program.train, max(measured.speed, 0.0), plan.force[0])
+        # the plan brakes and needs the relaxation (rho s > 1: braking impulse no train has): it
+        # cannot stop in time with the service brake it assumed
+        leaning = plan.usable and self.full_reserve and plan.force[0] < 0.0 and plan.gap > RELAXED
+        if plan.usable and status != "over_budget" and not leaning:
+            self.accept(self._held(plan))
+            handle, kind = force_handle(self.program.train, max(measured.speed, 0.0), plan.force[0]), None
+        else:
+            # a leaning plan is the program's proof that no plan, the shifted one included, stops the
+            # train from the measured state with the service brake it plans with: the reserve
+            handle, kind = self.fall_back(measured, reserve=-1.0 if leaning else None, shifted=not leaning)
+            self.reserve += int(kind == "reserve")
+        self.record(status, plan.seconds, gap, kind, ("arrival_window",) if plan.usable and plan.softened else (),
+                    self.estimator)
+        return handle
+
+    def _held(self, plan):
+        """The plan as a handle at a later measured state (None where it does not cover it)."""
+        x, v, force, train = plan.nodes, plan.v, plan.force, self.program.train
+
+        def handle_at(measured):
+            p = measured.position
+            if not x[0] - 1e-6 <= p < x[-1] or abs(measured.speed - float(np.interp(p, x, v))) > self.tracking:
+                return None
+            return force_handle(train, max(measured.speed, 0.0), force[interval_of(x, p)])
+        return handle_at
 
 
 def leader_clock(states, separation):

@@ -1,23 +1,40 @@
 """The closed loop: a controller sampled every ``sample_time`` drives a plant stepped finely.
 
 Each cycle the sensors read the plant's state (with measurement noise, ``core.plant.Noise``), a
-mass estimator (optional) takes the accelerometer's reading of the last cycle's mean acceleration, the controller plans a
-handle, and the plant runs that handle for ``sample_time`` in steps of ``plant_step`` with the
-acceleration disturbance drawn per step (or held for ``noise.period``). The trip ends when the train has moved and stands.
+mass estimator (optional) takes the accelerometer's reading of the last cycle's mean acceleration,
+the controller plans a handle, and the plant runs for ``sample_time`` in steps of ``plant_step``
+with the acceleration disturbance drawn per step (or held for ``noise.period``). The trip ends
+when the train has moved and stands.
+
+The computation delay (``delay``): solving takes time, so the control planned from the state
+measured at sample k cannot act at k.
+
+- ``0``: it acts at k, as if solving took no time;
+- ``d`` samples (1: the default of a study): it acts from k + d, and the controller plans from
+  the state predicted for k + d (the controller's own model of the train, with the estimated mass
+  when it has an estimator, run from the measured state under the controls already planned,
+  which hold meanwhile). Deterministic and repeatable;
+- ``"measured"``: it acts when its solve time has elapsed (the held control until then; a solve
+  longer than a sample holds it over the next samples, which then plan nothing), planned from the
+  state predicted that far ahead by the previous solve's time. Not repeatable: for studies of the
+  real-time budget.
 """
 from typing import NamedTuple
 
 import numpy as np
 
 from ecostudy.core.physics import davis_resistance
-from ecostudy.core.plant import Noise, Plant
+from ecostudy.core.plant import Noise, Plant, Truth
 from ecostudy.core.types import State
 from ecostudy.core.units import to_kmh
+
+MEASURED = "measured"
 
 
 class LoopResult(NamedTuple):
     """A closed-loop trip: the true states at every sample, the handles applied, the work at the
-    wheel [J], the solve time of every cycle [s], and the summary numbers."""
+    wheel [J], the solve time of every cycle [s], the summary numbers, and per sample the
+    measured state (``readings``)."""
 
     states: list
     handles: list
@@ -28,20 +45,74 @@ class LoopResult(NamedTuple):
     arrival_time_s: float
     max_overspeed_kmh: float
     mass_estimates: list
+    readings: list = []
 
 
-def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max_time=None, estimator=None):
-    """Drive ``plant`` with ``controller`` (``plan(measured state) -> handle``) to a stand."""
+def check_delay(delay):
+    """``delay`` if it is a number of samples >= 0 or ``"measured"``; ValueError otherwise."""
+    if delay == MEASURED or (isinstance(delay, (int, np.integer)) and not isinstance(delay, bool) and delay >= 0):
+        return delay
+    raise ValueError(f"the computation delay is a number of samples >= 0 or 'measured', not {delay!r}")
+
+
+def predict(model, state, pieces):
+    """The state ``model`` (a Plant: the controller's train) reaches from ``state`` under ``pieces``
+    [(duration [s], handle)], without disturbance."""
+    for duration, handle in pieces:
+        if duration > 0.0:
+            state = model.step(state, handle, duration).state
+    return state
+
+
+class _Trip:
+    """The plant side of the loop: the true state, the work and the overspeed, the noise draws."""
+
+    def __init__(self, plant, noise, plant_step):
+        self.plant, self.noise, self.plant_step, self.rng = plant, noise, plant_step, noise.generator()
+        self.state, self.work_t, self.work_b, self.over = State(), 0.0, 0.0, 0.0
+        self.moved, self.arrival, self.drawn = False, None, (None, 0.0)
+
+    @property
+    def stood(self):
+        return self.moved and self.state.speed <= 0.0
+
+    def run(self, pieces):
+        """Run the plant under ``pieces`` [(duration [s], handle)], in steps of at most plant_step."""
+        segment = self.plant.segment
+        for duration, u in pieces:
+            steps = max(int(round(duration / self.plant_step)), 1) if duration > 0.0 else 0
+            for _ in range(steps):
+                slot = int(self.state.time // self.noise.period) if self.noise.period else None
+                if slot is None or slot != self.drawn[0]:  # a new draw each step, or each noise period
+                    self.drawn = (slot, self.noise.disturbance(self.rng))
+                step = self.plant.step(self.state, u, duration / steps, self.drawn[1])
+                self.state = step.state
+                self.work_t += step.traction_work
+                self.work_b += step.braking_work
+                limit = float(segment.limit(np.clip(self.state.position, 0.0, segment.distance)))
+                self.over = max(self.over, self.state.speed - limit)
+                self.moved = self.moved or self.state.speed > 0.5
+                if self.stood:
+                    self.arrival = step.stood if step.stood is not None else self.state.time  # not the step's end
+                    return
+
+
+def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max_time=None, estimator=None, delay=0):
+    """Drive ``plant`` with ``controller`` (``plan(measured state) -> handle``) to a stand, the
+    control acting ``delay`` after its measurement (the module docstring)."""
+    delay = check_delay(delay)
     segment, model = plant.segment, plant.train
-    nominal = Plant(segment, model)  # the controller's model of the train, for the estimator
-    rng = noise.generator()
-    state, states, handles = State(), [State()], []
-    work_t = work_b = 0.0
+    nominal = Plant(segment, model)  # the controller's model of the train: estimator and prediction
+    trip = _Trip(plant, noise, plant_step)
+    states, handles, readings = [State()], [], []
     max_time = max_time or 20 * segment.distance + 600
-    moved, last, over, drawn, arrival = False, None, 0.0, (None, 0.0), None
-    substeps = max(int(round(sample_time / plant_step)), 1)
-    while state.time < max_time:
-        measured = noise.measure(state, rng)
+    last, held = None, 0.0
+    planned = [0.0] * (delay if delay != MEASURED else 0)  # controls planned, not acting yet
+    busy_until, pending, lag = -np.inf, None, 0.0  # "measured": the solve under way and its result
+    while trip.state.time < max_time:
+        state = trip.state
+        measured = noise.measure(state, trip.rng)
+        readings.append(measured)
         if estimator is not None and last is not None and max(last[3].speed, state.speed) > 0.0:
             # what the model says the handle did (a train that stood throughout tells nothing)
             u, v0, measured0, before = last
@@ -51,29 +122,45 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
                 ft, fb = nominal.forces(v, u, davis)
                 net += 0.5 * (ft - fb - davis) / model.mass
             grade = nominal.grade_force(measured0.position) / model.mass
-            reading = noise.read_acceleration((state.speed - before.speed) / (state.time - before.time), rng)
+            reading = noise.read_acceleration((state.speed - before.speed) / (state.time - before.time), trip.rng)
             estimator.update(reading, grade, net, measured0.position)
-        u = float(controller.plan(measured))
-        handles.append(u)
-        last = (u, max(measured.speed, 0.0), measured, state)
-        for _ in range(substeps):
-            slot = int(state.time // noise.period) if noise.period else None
-            if slot is None or slot != drawn[0]:  # a new draw each step, or each noise period
-                drawn = (slot, noise.disturbance(rng))
-            step = plant.step(state, u, plant_step, drawn[1])
-            state = step.state
-            work_t += step.traction_work
-            work_b += step.braking_work
-            limit = float(segment.limit(np.clip(state.position, 0.0, segment.distance)))
-            over = max(over, state.speed - limit)
-            moved = moved or state.speed > 0.5
-            if moved and state.speed <= 0.0:
-                arrival = step.stood if step.stood is not None else state.time  # not the step's end
-                break
-        states.append(state)
-        if moved and state.speed <= 0.0:
+        # the controller's model for the prediction: with the mass it estimates, if it does
+        ahead_model = nominal if estimator is None else Plant(segment, model, Truth(mass=estimator.estimate))
+        if delay == MEASURED:
+            pieces = _measured_cycle(controller, ahead_model, measured, sample_time, held, lag, busy_until, pending)
+            pieces, held, lag, busy_until, pending = pieces
+        elif delay:
+            ahead = predict(ahead_model, measured, [(sample_time, u) for u in planned])
+            planned.append(float(controller.plan(ahead)))
+            held = planned.pop(0)
+            pieces = [(sample_time, held)]
+        else:
+            held = float(controller.plan(measured))
+            pieces = [(sample_time, held)]
+        handles.append(pieces[0][1])
+        last = (pieces[0][1], max(measured.speed, 0.0), measured, state)
+        trip.run(pieces)
+        states.append(trip.state)
+        if trip.stood:
             break
     estimates = list(estimator.history) if estimator is not None else []
-    return LoopResult(states, handles, work_t, work_b, list(controller.solve_seconds),
-                      state.position - segment.distance,
-                      arrival if arrival is not None else state.time, to_kmh(max(over, 0.0)), estimates)
+    state = trip.state
+    return LoopResult(states, handles, trip.work_t, trip.work_b, list(controller.solve_seconds),
+                      state.position - segment.distance, trip.arrival if trip.arrival is not None else state.time,
+                      to_kmh(max(trip.over, 0.0)), estimates, readings)
+
+
+def _measured_cycle(controller, nominal, measured, sample_time, held, lag, busy_until, pending):
+    """One sample of the measured computation delay: (the pieces the plant runs, the control held
+    at the sample's end, the last solve time, when the solve under way ends, its control)."""
+    t = measured.time
+    if pending is None and busy_until <= t + 1e-9:  # free: start a solve from the state predicted by the last lag
+        ahead = predict(nominal, measured, [(lag, held)])
+        u = float(controller.plan(ahead))
+        lag = float(controller.solve_seconds[-1]) if controller.solve_seconds else 0.0
+        busy_until, pending = t + lag, u
+    if pending is not None and busy_until < t + sample_time:  # it acts within this sample
+        switch = max(busy_until - t, 0.0)
+        pieces = [(switch, held), (sample_time - switch, pending)] if switch > 0.0 else [(sample_time, pending)]
+        return pieces, pending, lag, busy_until, None
+    return [(sample_time, held)], held, lag, busy_until, pending

@@ -38,13 +38,14 @@ import time
 import numpy as np
 
 from ecostudy.control.controllers import handle_of
+from ecostudy.control.fallback import Fallback
 from ecostudy.core import kinematics
 from ecostudy.core.physics import acceleration, davis_resistance
 from ecostudy.core.plant import Cruise, Plant
 from ecostudy.ocp.phases import all_modes
 
 
-class Rspc:
+class Rspc(Fallback):
     """``case``: a prepared case (``ocp.problem.prepare``: segment, nominal train, grid, limits);
     ``arrival``: the timetabled arrival [s] on the trip's clock; ``sample_time``: the loop's T_s
     [s]; ``horizon``: N; ``distance``: D [m]; ``gamma``: gamma_S of (6.7)."""
@@ -70,6 +71,7 @@ class Rspc:
         reference, run = self._reference(self.arrival - margin)
         self.t_ref, self.t_run = kinematics.clock(reference, nodes), kinematics.clock(run, nodes)
         self.braking, self.solve_seconds, self.chosen, self.failures = False, [], [], 0
+        self._start_records()
 
     # ------------------------------------------------------------------ the model
     def _accel(self, x_mid, v, control):
@@ -185,20 +187,25 @@ class Rspc:
         x, v = min(max(measured.position, 0.0), distance), max(measured.speed, 0.0)
         if x >= distance - self.final_m:
             self.solve_seconds.append(0.0)
+            self.record("final", 0.0)
             return -1.0
-        t0 = time.perf_counter()
+        t0, status = time.perf_counter(), "ok"
         if self.must_brake(x, v):
-            self.braking = True
-            mode = self.brake
+            self.braking, mode, status = True, self.brake, "stopping_curve"
         elif self.braking:
             mode = self.coast  # between the stopping curve's samples: coast
         else:
             found = self.best(x, v, measured.time)
-            if found is None:  # no admissible sequence: brake (the safe mode)
-                self.failures += 1
-                mode = self.brake
-            else:
-                mode = found[1]
+            mode = None if found is None else found[1]
         self.solve_seconds.append(time.perf_counter() - t0)
+        # no admissible sequence: every sequence, the last one's tail among them, leaves X from the
+        # measured state, so no shifted plan holds there: full braking (the safe mode)
+        if mode is None:
+            self.failures += 1
+            handle, kind = self.fall_back(measured)
+            self.chosen.append(self.brake.kind)
+            self.record("no_sequence", self.solve_seconds[-1], fallback=kind)
+            return handle
         self.chosen.append(mode.kind if mode.kind != "traction" else f"traction {mode.level:g}")
+        self.record(status, self.solve_seconds[-1])
         return self.handle(x, v, mode)

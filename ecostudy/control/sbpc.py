@@ -12,11 +12,16 @@ Variants:
 - ``two_step`` (Alg. 2): first the smallest reachable terminal distance gamma (4.18), then the
   least energy within it (4.19);
 - ``multi`` (4.31): least energy plus omega gamma in one solve.
-After k_f, or at the stop, the controller brakes in full.
+After k_f, or at the stop, the controller brakes in full. A sample without a usable solve applies
+the last accepted plan's handle for that sample (``control.fallback``; it covers every sample to
+k_f), for at most ``fallback.SHIFT_SAMPLES`` samples in a row, then brakes in full.
 """
 import dataclasses
 import time
 
+import numpy as np
+
+from ecostudy.control.fallback import Fallback
 from ecostudy.core.types import State
 from ecostudy.ocp.blocked import Blocked, samples, time_guess
 from ecostudy.ocp.condensed import Condensed
@@ -30,7 +35,7 @@ TRANSCRIPTIONS = ("simultaneous", "condensed")
 OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}
 
 
-class Sbpc:
+class Sbpc(Fallback):
     """``case``: a prepared case (``ocp.problem.prepare``); ``guess_speeds``: a speed profile on its
     grid (e.g. the ATO optimum's) for the first solve; ``omega``: the weight of eq. 4.31 on the
     terminal distance [per metre], with J in kJ (thesis 000 §4.4 uses 3505); ``transcription``: one
@@ -60,6 +65,7 @@ class Sbpc:
                 self.program.follow()
         self.setup_seconds = time.perf_counter() - t0
         self.solve_seconds, self.gammas, self.iterations, self.softened, self.failures = [], [], [], 0, 0
+        self._start_records()
 
     def _solve(self, alpha, omega, gamma_max):
         outcome = self.program.solve(alpha, omega, gamma_max)
@@ -74,25 +80,37 @@ class Sbpc:
         return self._solve(1.0, 0.0, gamma + self.tolerance)  # 4.19: least energy within it
 
     def plan(self, measured):
-        k = int(round(measured.time / self.ts))
+        k = self._sample(measured)
         if k >= self.kf or measured.position >= self.case.segment.distance - 0.05:
             self.solve_seconds.append(0.0)
+            self.record("final", 0.0)
             return -1.0
-        t0 = time.perf_counter()
+        t0, softened = time.perf_counter(), ()
         self.program.start(k, measured)
         if self.variant == "nominal":
             outcome = self._solve(1.0, 0.0, 0.0)
             if not outcome.usable:
                 self.softened += 1
+                softened = ("terminal_set",)
                 outcome = self._smallest_gamma()
         elif self.variant == "two_step":
             outcome = self._smallest_gamma()
         else:
             outcome = self._solve(1.0, self.omega, None)
-        self.solve_seconds.append(time.perf_counter() - t0)
+        seconds = time.perf_counter() - t0
+        self.solve_seconds.append(seconds)
+        status = "no_plan" if outcome is None else outcome.status
         if outcome is None or not outcome.usable:
             self.failures += 1
-            return -1.0
+            handle, kind = self.fall_back(measured)
+            self.record(status, seconds, fallback=kind)
+            return handle
         self.gammas.append(self.program.gamma)
         self.program.follow()  # the next sample's grade and bounds follow this prediction
-        return self.program.handle(k)
+        planned = np.array([self.program.handle(j) for j in range(k, self.kf)])
+        self.accept(lambda later: float(planned[j]) if 0 <= (j := self._sample(later) - k) < planned.size else None)
+        self.record(status, seconds, softened=softened)
+        return float(planned[0])
+
+    def _sample(self, measured):
+        return int(round(measured.time / self.ts))

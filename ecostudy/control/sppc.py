@@ -21,6 +21,9 @@ arrival (arriving early is allowed; least energy then uses the time). Variants:
   A train past the last point from which full service braking stops it (the handle is held for a
   sample, so the plant brakes later than the plan) gets the plan that overruns least.
 
+A sample without a usable solve applies the last accepted plan's mode at the measured position
+(``control.fallback``), then, with no plan left, brakes in full.
+
 Modes (thesis 000 §3.1.2): traction at a DAS level, coasting and full service braking are applied
 as their handle; cruise as the handle that holds the planned force at the measured speed.
 """
@@ -30,6 +33,7 @@ import numpy as np
 
 from ecostudy.analysis.regimes import guess_from_result
 from ecostudy.control.controllers import force_handle, from_departure
+from ecostudy.control.fallback import Fallback
 from ecostudy.ocp import phases
 from ecostudy.ocp.restart import set_end, set_phases_start
 from ecostudy.ocp.session import WARM_START, Session
@@ -38,7 +42,7 @@ VARIANTS = ("nominal", "two_step")
 OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}  # from the previous plan
 
 
-class Sppc:
+class Sppc(Fallback):
     """``ato``: the energy-optimal run of the segment (``analysis.single.solve_run``), whose regimes
     start the first plan; ``arrival``: the timetabled arrival [s] on the trip's clock; ``points``:
     about how many intervals the phases share (``phases.substeps_for``); ``lookahead`` [s]: the
@@ -67,6 +71,7 @@ class Sppc:
         self.setup_seconds = time.perf_counter() - t0
         self.solve_seconds, self.iterations, self.modes, self.softened, self.failures = [], [], [], 0, 0
         self.unsolved = []  # (position, speed, clock, Ipopt status) of every solve without a plan
+        self._start_records()
 
     def _solve(self, session, measured, arrival, end_speed=(0.0, 0.0)):
         set_phases_start(session, session.model, self.layout, measured)
@@ -99,27 +104,36 @@ class Sppc:
         measured = from_departure(measured)  # a noisy reading at the stand may be behind the start
         if measured.position >= self.segment.distance - 0.05:
             self.solve_seconds.append(0.0)
+            self.record("final", 0.0)
             return -1.0
-        t0 = time.perf_counter()
+        t0, softened = time.perf_counter(), ()
         if self.variant == "nominal":
             outcome = self._solve(self.session, measured, (measured.time, self.arrival))
             if not outcome.usable:
                 self.softened += 1
+                softened = ("terminal_set",)
                 outcome = self._relaxed(measured)
         else:
             outcome = self._relaxed(measured)
-        self.solve_seconds.append(time.perf_counter() - t0)
+        seconds = time.perf_counter() - t0
+        self.solve_seconds.append(seconds)
+        status = "no_plan" if outcome is None else outcome.status
         if outcome is None or not outcome.usable:
             self.failures += 1
-            return -1.0
-        return self._first_mode(measured)
-
-    def _first_mode(self, measured):
-        """The handle of the phase the train is in: the phase covering most of the next
-        ``lookahead`` seconds' run (an interior-point solution leaves skipped phases a few
-        micrometres long, so "the first phase of positive length" would often be a skipped one)."""
+            handle, kind = self.fall_back(measured)
+            self.record(status, seconds, fallback=kind)
+            return handle
         lengths, _, _, _, ft, fb = phases.solution(self.model, self.layout)
         x = phases.node_positions(self.layout, lengths, origin=measured.position)
+        self.accept(lambda later: self._mode_at(x, ft, fb, later) if x[0] <= later.position < x[-1] else None)
+        self.record(status, seconds, softened=softened)
+        return self._mode_at(x, ft, fb, measured)
+
+    def _mode_at(self, x, ft, fb, measured):
+        """The handle of the plan's phase (node positions ``x``, forces ``ft``, ``fb``) the train is
+        in: the phase covering most of the next ``lookahead`` seconds' run (an interior-point
+        solution leaves skipped phases a few micrometres long, so "the first phase of positive
+        length" would often be a skipped one)."""
         n = self.layout.substeps
         ahead = measured.position + max(measured.speed * self.lookahead, 0.05)
         starts, ends = x[:-1:n], x[n::n]

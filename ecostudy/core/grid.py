@@ -129,6 +129,25 @@ def warn_unmodelled(segment, formulation, train=None):
                       stacklevel=3)
 
 
+def admissible_speeds(segment, count=101):
+    """Every speed the train may run on ``segment`` [m/s], sampled: 0 up to its highest limit
+    (the train's top speed caps the limits already) in ``count`` steps."""
+    x = np.unique(np.concatenate([np.linspace(0.0, segment.distance, 1001), segment.breakpoints()]))
+    return np.linspace(0.0, float(np.max(node_limits(segment, x))), count)
+
+
+def drop_idle_power(segment, train, formulation):
+    """(``train`` without the power limits that never bind on ``segment``, the names of the
+    envelopes whose limit was dropped), with one warning saying so: a limit with P >= F_max(v) v
+    at every admissible speed (``physics.power_never_binds``) is no row of ``formulation``."""
+    lean, idle = train.without_idle_power(admissible_speeds(segment))
+    if idle:
+        warnings.warn(f"{formulation}: {', '.join(idle)} power limit never binds: dropped (P >= F_max(v) v at "
+                      f"every admissible speed on '{segment.from_stop}'-'{segment.to_stop}')", EcostudyWarning,
+                      stacklevel=3)
+    return lean, idle
+
+
 def travel_distance(track, from_stop, to_stop, position):
     """Distance from ``from_stop`` of a track position, in the direction of travel [m]."""
     start, end = track.stops[from_stop], track.stops[to_stop]

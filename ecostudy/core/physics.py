@@ -11,7 +11,7 @@ M      effective (inertial) mass, static mass plus rotating-mass allowance [kg]
 Ms     static mass, the mass gravity acts on [kg]
 A,B,C  Davis coefficients [N], [N s/m], [N s^2/m^2]
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -184,6 +184,32 @@ class Envelope:
     def peak(self):
         """Largest force the envelope ever allows [N]."""
         return max(self.forces) if self.kind == "table" else self.max_force
+
+    def idle_power(self, speeds):
+        """True when this envelope has a power limit that never binds at ``speeds`` [m/s]
+        (:func:`power_never_binds` on its force limit)."""
+        return (self.kind == "force_power" and bool(np.isfinite(self.max_power))
+                and power_never_binds(self.max_force, self.max_power, speeds))
+
+    def without_power(self):
+        """This envelope without its power limit."""
+        return replace(self, max_power=float("inf"))
+
+
+def power_never_binds(force, power, speeds):
+    """True when a power limit can never be the binding one: P >= F_max(v) v at every speed.
+
+    Checked pointwise on the envelope, so a table or a speed-dependent force limit is judged where
+    it is, not by its peak. A limit that never binds only adds rows (and, in the convex program,
+    a badly scaled tangent) to a formulation, so the formulations drop it.
+
+    Parameters
+    ----------
+    force : numeric  F_max(v), the force limit without the power limit, at ``speeds`` [N].
+    power : float  P, the power limit [W].
+    speeds : numeric  Every admissible speed, e.g. 0 up to the highest limit of the segment [m/s].
+    """
+    return bool(np.all(power >= np.asarray(force, float) * np.maximum(np.asarray(speeds, float), 0.0)))
 
 
 def force_power_fit(speeds, forces, tolerance=0.005):

@@ -50,6 +50,15 @@ class Train:
         braking envelope times 1 - share), for the deviations a plan cannot see."""
         return replace(self, braking=self.braking.scaled(1.0 - share)) if share else self
 
+    def without_idle_power(self, speeds):
+        """(this train without a traction power limit that never binds at ``speeds`` [m/s], the names
+        of the envelopes whose limit was dropped): see :func:`ecostudy.core.physics.power_never_binds`.
+        Only traction, the limit every formulation has (the SOCP as tangent rows); a braking or
+        regenerative power limit is left as it is."""
+        idle = {name: getattr(self, name).without_power() for name in ("traction",)
+                if getattr(self, name).idle_power(speeds)}
+        return (replace(self, **idle) if idle else self), tuple(idle)
+
     def tunnel_coefficient(self, cross_section):
         """Extra quadratic resistance C [N s^2/m^2] in a tunnel of ``cross_section`` [m^2]: the
         train's table, interpolated linearly between its sections, held beyond its ends."""

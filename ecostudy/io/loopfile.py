@@ -3,7 +3,7 @@
 Units are in the field names, as in :mod:`ecostudy.io.schemas`. Defaults are thesis 001's Ch.9
 (controller) and Ch.10 (noise) values.
 """
-from typing import Literal, Optional
+from typing import Annotated, Literal, Optional, Union
 
 from pydantic import Field, model_validator
 
@@ -22,6 +22,15 @@ class ConvexSettings(Strict):
 
 
 RESERVE_KINDS = ("sbpc", "sppc", "rspc")  # the controllers that plan with a brake reserve
+COMMON = {"name", "kind", "sample_time_s", "das_levels", "delay_samples", "compute_delay"}
+USES = {  # the fields each kind reads besides COMMON: any other field given is refused
+    "convex": {"settings", "estimator", "scheme", "time_budget_s"},
+    "open_loop": {"settings", "scheme"},
+    "ato": set(),
+    "sbpc": {"block", "variant", "omega", "transcription", "brake_reserve", "terminal_reserve"},
+    "sppc": {"variant", "brake_reserve", "terminal_reserve"},
+    "rspc": {"rspc", "brake_reserve"},
+}
 
 
 class RspcSettings(Strict):
@@ -44,6 +53,8 @@ class Controller(Strict):
     parametrised controller (DAS modes, ``variant`` nominal or two_step); ``rspc``: thesis 000's
     receding-horizon switched controller (DAS modes, ``rspc`` settings). ``das_levels`` applies any controller's
     handle as the nearest of the train's DAS levels, ``delay_samples`` later (a driver).
+    ``compute_delay`` is the solver's delay (``control/loop.py``), for every kind. An option the
+    kind does not read (``USES``) is refused, so a misplaced one cannot pass silently.
     """
 
     name: str
@@ -65,9 +76,19 @@ class Controller(Strict):
                                            "a train 10 % heavier with 10 % weaker brakes).")
     das_levels: bool = Field(False, description="Apply the handle as the nearest DAS level of the train.")
     delay_samples: int = Field(0, ge=0, le=100, description="Driver reaction delay with das_levels [samples].")
+    compute_delay: Union[Annotated[int, Field(ge=0, le=100)], Literal["measured"]] = Field(
+        1, description="The computation delay: the control planned from the state at sample k acts from k + "
+        "compute_delay, planned from the state predicted for then (the previous control holds meanwhile); "
+        "'measured': when its solve time has elapsed (not repeatable). 0: solving takes no time.")
+    terminal_reserve: Optional[float] = Field(None, ge=0, lt=1, description="sbpc, sppc: stop with a terminal "
+                                              "approach (control/terminal.py): full braking on the stopping "
+                                              "curve of the brake less this share, coasting otherwise (none: "
+                                              "the controller's own stop).")
+    time_budget_s: Optional[float] = Field(None, gt=0, description="convex: a solve longer than this is not "
+                                           "applied; the last plan is, shifted (default: none, repeatable).")
 
     @model_validator(mode="after")
-    def _sppc_variant(self):
+    def _options_of_the_kind(self):
         if self.kind == "sppc" and self.variant == "multi":
             raise ValueError("sppc has the variants nominal and two_step (no multi-objective one is built)")
         if self.transcription != "simultaneous" and self.kind != "sbpc":
@@ -75,6 +96,10 @@ class Controller(Strict):
         if self.brake_reserve is not None and self.kind not in RESERVE_KINDS:
             raise ValueError(f"brake_reserve is for {', '.join(RESERVE_KINDS)} (the convex controller's is "
                              "settings.brake_level_mps2)")
+        unused = sorted(self.model_fields_set - COMMON - USES[self.kind])
+        if unused:
+            raise ValueError(f"{', '.join(unused)}: not used by a controller of kind {self.kind!r} (it reads "
+                             f"{', '.join(sorted(USES[self.kind])) or 'none of the controller options'})")
         return self
 
 

@@ -40,13 +40,15 @@ import clarabel
 import numpy as np
 from scipy import sparse
 
-from ecostudy.core.grid import node_limits, warn_unmodelled
+from ecostudy.core.grid import drop_idle_power, node_limits, warn_unmodelled
 from ecostudy.core.kinematics import interval_grade_force
 
 NAMES = ("v", "t", "rho", "g", "gp", "b", "h")  # variable blocks, in this order
 USABLE = ("Solved", "AlmostSolved")  # Clarabel's statuses whose plan is driven
 TIGHT = 5e-7  # rho s - 1 above which an interval's relaxation is tightened by another solve
-POLISH = 3    # tightening rounds at most
+EXACT = 1e-6  # max |rho s - 1| up to which a plan is a driving of the real train
+POLISH = 3    # tightening rounds at most while the plan is exact (max |rho s - 1| <= EXACT)
+MORE_POLISH = 6  # rounds at most for a plan that is not exact yet
 
 
 @dataclass(frozen=True)
@@ -148,17 +150,28 @@ class ConvexProgram:
     def __init__(self, segment, train, nodes, weights=ConvexWeights(), scheme="midpoint", epsilon=0.1, margin=0.05):
         if scheme not in ("left", "midpoint"):
             raise ValueError(f"scheme must be 'left' or 'midpoint', not {scheme!r}")
-        self.segment, self.train, self.nodes = segment, train, np.asarray(nodes, float)
+        self.segment, self.nodes = segment, np.asarray(nodes, float)
         warn_unmodelled(segment, "the convex SOCP")
+        # a power limit that never binds would only add a badly scaled tangent row (the relaxation
+        # then ends inexact, max |rho s - 1| up to 3e-2 on a 1e7 kW train): left out
+        self.train, self.idle_power = drop_idle_power(segment, train, "the convex SOCP")
         self.weights, self.scheme, self.epsilon, self.margin = weights, scheme, epsilon, margin
-        self.traction = envelope_pieces(train.traction)
-        self.brake = envelope_pieces(train.braking)
+        self.traction = envelope_pieces(self.train.traction)
+        self.brake = envelope_pieces(self.train.braking)
         self.previous = None  # (nodes, speeds) of the last plan: where the power tangents touch
         self.settings = clarabel.DefaultSettings()
         self.settings.verbose = False
         self.settings.iterative_refinement_enable = False  # halves the solve; the gap stays below 1e-7 (tests)
         self.refined = clarabel.DefaultSettings()  # for a solve that ended inaccurate
         self.refined.verbose = False
+
+    def limit(self, max_iter=None, seconds=None):
+        """Cap every Clarabel solve of the next ``solve`` at ``max_iter`` iterations and ``seconds``
+        (None: Clarabel's defaults, 200 iterations and no time limit). A solve that hits either
+        ends unusable, as an on-board solver's would."""
+        for settings in (self.settings, self.refined):
+            settings.max_iter = 200 if max_iter is None else int(max_iter)
+            settings.time_limit = float("inf") if seconds is None else float(seconds)
 
     def grid_from(self, position, reach=0.0):
         """Nodes of the grid ahead of ``position`` (eq. 4.2d). With ``reach`` > 0 the first
@@ -180,8 +193,9 @@ class ConvexProgram:
         x = self.grid_from(state.position, max(state.speed, 0.5) * hold if hold else 0.0)
         plan = self._solve(x, state, arrival, end_speed, mass_scale, lead)
         # at the edge of the window Clarabel may end with reduced accuracy and a plan faster than the
-        # physics (rho s < 1 by 3e-5, measured on Fig. 9.7's last metre): no plan in the window either
-        edge = plan.status == "AlmostSolved" and plan.gap > 10 * TIGHT
+        # physics (rho s < 1 by 3e-5, measured on Fig. 9.7's last metre; 1e-6 to 4.5e-6 there with a
+        # sample of computation delay): no plan in the window either, when it is not exact (1e-6)
+        edge = plan.status == "AlmostSolved" and plan.gap > EXACT
         if (not plan.usable or edge) and np.isfinite(arrival[1]):
             dropped = self._solve(x, state, (arrival[0], np.inf), end_speed, mass_scale, lead)._replace(softened=True)
             if dropped.usable or not plan.usable:
@@ -201,11 +215,13 @@ class ConvexProgram:
         # an optimum on a face of the relaxation (braking at the reserve or the full brake): the
         # interior point sits inside it, rho s - 1 up to 2e-5. Solve again with those intervals' rho
         # below the tangent of 1/s at their speed (a sequential convex step; only rho = 1/s meets
-        # it); the slack may move to other intervals of the face, so up to POLISH rounds
+        # it); the slack may move to other intervals of the face, so up to POLISH rounds, and up to
+        # MORE_POLISH while the plan is not exact (one solve of Fig. 9.7 with a sample of delay on a
+        # force-limited train was 3.3e-6 after three)
         tight, speeds = np.zeros(len(rho), bool), np.zeros(len(rho))
-        for _ in range(POLISH if status in USABLE else 0):
+        for round_ in range(MORE_POLISH if status in USABLE else 0):
             loose = (rho * s - 1.0 > TIGHT) & ~tight
-            if not loose.any():
+            if not loose.any() or (round_ >= POLISH and np.max(rho * s - 1.0) <= EXACT):
                 break
             tight, speeds[loose] = tight | loose, s[loose]
             again = self._conic(problem, tight=(tight, speeds[tight]))

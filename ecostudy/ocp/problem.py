@@ -11,7 +11,7 @@ import numpy as np
 
 from ecostudy.core import kinematics
 from ecostudy.core.errors import InfeasibleError, SolverError
-from ecostudy.core.grid import make_grid, make_segment, node_limits
+from ecostudy.core.grid import drop_idle_power, make_grid, make_segment, node_limits
 from ecostudy.core.units import to_kmh
 from ecostudy.ocp import session
 from ecostudy.ocp import space
@@ -36,17 +36,21 @@ class Case:
     envelope: np.ndarray   # fastest speeds on the grid [m/s] (kinematics.envelope_speeds)
     estimate: float        # running time of that envelope [s], close to the all-out time
     windows: tuple = ()    # core.types.Window timing points, each on a node
+    idle_power: tuple = ()  # the envelopes whose power limit never binds here, dropped from ``train``
 
 
 def prepare(track, train, from_stop, to_stop, points, stages=None, windows=()):
-    """Segment between two stops, grid of ``points`` nodes, limits and the fastest envelope."""
+    """Segment between two stops, grid of ``points`` nodes, limits and the fastest envelope. A power
+    limit that never binds on the segment is left out of the case's train (``grid.drop_idle_power``):
+    every formulation built from the case (space, time-domain, phases, blocked) then has no row for it."""
     with stage(stages if stages is not None else {}, "grid"):
         segment = make_segment(track, train, from_stop, to_stop)
+        train, idle = drop_idle_power(segment, train, "the optimisation")
         nodes = make_grid(segment, points, extra=[w.distance for w in windows])
         limits = node_limits(segment, nodes)
         envelope = kinematics.envelope_speeds(segment, train, nodes, limits)
     return Case(track, train, segment, nodes, limits, envelope, kinematics.running_time(envelope, nodes),
-                tuple(windows))
+                tuple(windows), idle)
 
 
 def build(case, guess, objective, stages, weights=(1.0, 1.0), **timing):

@@ -1,4 +1,4 @@
-"""Plots of a closed-loop study: the speed band of all runs per controller, the solve time of every
+"""Plots of a closed-loop study: the speed band (5-95 %, median) of the runs per controller, the solve time of every
 step against the real-time budget, and the mass estimates over distance."""
 import numpy as np
 
@@ -6,15 +6,32 @@ from ecostudy.core.units import to_kmh
 from ecostudy.report.plots import _save, figure, _steps
 
 
+def speed_percentiles(group, positions, levels=(5, 50, 95)):
+    """Per position [m]: the ``levels`` percentiles of the runs' speeds [m/s] (each run's speed
+    interpolated on ``positions``; a run that stopped short counts as standing beyond its stop)."""
+    speeds = np.array([np.interp(positions, *_increasing(s["profile"]["x"], s["profile"]["v"]), right=0.0)
+                       for s in group])
+    return np.percentile(speeds, levels, axis=0)
+
+
+def _increasing(x, v):
+    x, v = np.asarray(x, float), np.asarray(v, float)
+    keep = np.concatenate([[True], np.diff(x) > 0])
+    return x[keep], v[keep]
+
+
 def bands(runs, segment, path, title=""):
-    """Speed against distance of every run, one panel per controller, with the speed limit."""
+    """Speed against distance per controller, one panel each, with the speed limit: the 5-95 %
+    band of the runs and their median (a single run: its profile)."""
     fig, axes = figure(len(runs), 1, figsize=(9, 2.6 * len(runs) + 0.6), sharex=True, squeeze=False)
     x_lim, v_lim = _steps(segment.limit, segment.distance)
+    positions = np.linspace(0.0, segment.distance, 600)
     for ax, (name, group) in zip(axes[:, 0], runs.items()):
         ax.step(x_lim, to_kmh(v_lim), where="post", color="0.4", lw=1, label="speed limit")
-        for i, s in enumerate(group):
-            ax.plot(s["profile"]["x"], to_kmh(np.asarray(s["profile"]["v"])), color="C0", lw=0.7,
-                    alpha=max(0.08, 1.0 / len(group)), label="runs" if i == 0 else None)
+        low, median, high = to_kmh(speed_percentiles(group, positions))
+        if len(group) > 1:
+            ax.fill_between(positions, low, high, color="C0", alpha=0.25, lw=0, label="5-95 % of the runs")
+        ax.plot(positions, median, color="C0", lw=1.0, label="median" if len(group) > 1 else "run")
         ax.set_ylabel("speed [km/h]")
         ax.set_title(f"{name}: {len(group)} runs", fontsize=9)
         ax.set_ylim(bottom=0)

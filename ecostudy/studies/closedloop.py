@@ -21,6 +21,7 @@ from ecostudy.control.sbpc import Sbpc
 from ecostudy.control.sppc import Sppc
 from ecostudy.control.estimator import MassEstimator
 from ecostudy.control.loop import run_loop
+from ecostudy.control.terminal import TerminalApproach
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
@@ -34,6 +35,7 @@ from ecostudy.ocp.problem import prepare
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.studies.batch import outcome, stored_rows
 from ecostudy.studies.cases import case_key
+from ecostudy.studies.loopsteps import step_columns, step_counts, steps_frame
 
 PARAMETERS = ("mass", "resistance", "traction", "braking")
 
@@ -112,7 +114,8 @@ def build_controller(case, track, segment, train, estimator):
     # the study's brake reserve if it gives one, else the controller's own default
     reserve = {} if spec["brake_reserve"] is None else {"brake_reserve": spec["brake_reserve"]}
     if spec["kind"] == "convex":
-        inner = Convex(convex_program(segment, train, points, spec), window, estimator, hold=case["sample_time"])
+        inner = Convex(convex_program(segment, train, points, spec), window, estimator, hold=case["sample_time"],
+                       budget=spec["time_budget_s"])
     elif spec["kind"] == "rspc":
         r = spec["rspc"]
         inner = Rspc(prepare(track, train, case["from"], case["to"], points), window[1], case["sample_time"],
@@ -134,9 +137,13 @@ def build_controller(case, track, segment, train, estimator):
             speeds = np.interp(prepared.nodes, ato.trajectory.nodes, ato.trajectory.v)
             inner = Sbpc(prepared, window[1], case["sample_time"], spec["block"], speeds, spec["variant"], spec["omega"],
                          transcription=spec["transcription"], **reserve)
+    outer = inner
+    if spec["terminal_reserve"] is not None:
+        outer = TerminalApproach(inner, prepare(track, train, case["from"], case["to"], points), case["sample_time"],
+                                 spec["terminal_reserve"])
     if spec["das_levels"]:
-        return Quantised(inner, train.das_levels, spec["delay_samples"]), inner
-    return inner, inner
+        return Quantised(outer, train.das_levels, spec["delay_samples"]), inner
+    return outer, inner
 
 
 def _mode_changes(handles):
@@ -153,6 +160,7 @@ def summarise(case, result, controller, train, estimator):
     x = [round(s.position, 3) for s in result.states]
     v = [round(s.speed, 4) for s in result.states]
     gaps = getattr(controller, "gaps", [])
+    counts = step_counts(controller)
     return {
         "energy_J_per_kg": result.traction_work / mass, "traction_energy_kWh": result.traction_work / 3.6e6,
         "braking_energy_kWh": result.braking_work / 3.6e6, "arrival_s": result.arrival_time_s,
@@ -160,7 +168,8 @@ def summarise(case, result, controller, train, estimator):
         "stop_error_m": result.stop_error_m, "max_overspeed_kmh": result.max_overspeed_kmh,
         "solve_mean_ms": 1e3 * float(solved.mean()), "solve_p95_ms": 1e3 * float(np.percentile(solved, 95)),
         "solve_max_ms": 1e3 * float(solved.max()), "over_budget": int(np.sum(seconds > sample)),
-        "samples": len(seconds), "softened": getattr(controller, "softened", 0),
+        "samples": len(seconds), "softened": counts["softened_steps"], **counts,
+        "power_limit_dropped": _dropped(controller), "compute_delay": case_delay(case),
         "failures": getattr(controller, "failures", 0), "max_gap": max(gaps) if gaps else None,
         "terminal_gamma_m": controller.gammas[-1] if getattr(controller, "gammas", None) else None,
         "mode_changes": _mode_changes(np.array(result.handles)),
@@ -168,7 +177,21 @@ def summarise(case, result, controller, train, estimator):
         **{f"true_{name}": case["truth"][name] for name in PARAMETERS},
         "profile": {"x": x, "v": v}, "solve_ms": [round(1e3 * s, 2) for s in seconds],
         "estimates": [(round(p, 2), round(e, 5)) for p, e in result.mass_estimates[::10] if p is not None],
+        "steps": step_columns(result, controller),
     }
+
+
+def _dropped(controller):
+    """The note of a formulation whose power limit never binds: 'traction power limit never binds: dropped'."""
+    program = getattr(controller, "program", None)
+    case = getattr(controller, "case", None)
+    idle = getattr(program, "idle_power", None) or getattr(case, "idle_power", None) or ()
+    return f"{', '.join(idle)} power limit never binds: dropped" if idle else None
+
+
+def case_delay(case):
+    """A case's computation delay (``loop.run_loop``): samples, or 'measured'."""
+    return controller_spec(case)["compute_delay"]
 
 
 def run_loop_case(case):
@@ -185,7 +208,7 @@ def _trip(case):
                   n["accelerometer_mps2"])
     plant = Plant(segment, train, Truth(**case["truth"]))
     result = run_loop(plant, controller, case["sample_time"], noise, plant_step=case["sample_time"],
-                      estimator=estimator)
+                      estimator=estimator, delay=case_delay(case))
     summary = summarise(case, result, planner, train, estimator)
     reasons = []
     if abs(summary["stop_error_m"]) > 1.0:
@@ -200,6 +223,8 @@ def _trip(case):
 
 COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "stop_error_m", "max_overspeed_kmh",
            "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget", "softened", "failures", "max_gap",
+           "fallback_shifted_plan", "fallback_reserve", "fallback_full_brake", "full_brake_before_final",
+           "inexact_solves", "power_limit_dropped", "compute_delay",
            "terminal_gamma_m", "mode_changes", "mass_estimate", *(f"true_{name}" for name in PARAMETERS))
 
 
@@ -224,6 +249,8 @@ def aggregate(runs):
     energy, arrival, stop error, overspeed and solve times."""
     rows = []
     for name, group in runs.groupby("controller", sort=False):
+        if (group["status"] == "missing").all():  # not run (``--only``): no row of NaNs
+            continue
         row = {"controller": name, "runs": len(group), "ok": int((group["status"] == "ok").sum())}
         for column in ("energy_J_per_kg", "arrival_s", "stop_error_m"):
             values = pd.to_numeric(group[column], errors="coerce")
@@ -231,7 +258,8 @@ def aggregate(runs):
                         f"{column}_min": values.min(), f"{column}_max": values.max()})
         for column, how in (("max_overspeed_kmh", "max"), ("late_s", "max"), ("solve_mean_ms", "mean"),
                             ("solve_p95_ms", "max"), ("solve_max_ms", "max"), ("over_budget", "sum"),
-                            ("softened", "sum"), ("max_gap", "max")):
+                            ("softened", "sum"), ("max_gap", "max"), ("fallback_shifted_plan", "sum"),
+                            ("fallback_reserve", "sum"), ("fallback_full_brake", "sum"), ("inexact_solves", "sum")):
             row[f"{column}_{how}"] = getattr(pd.to_numeric(group[column], errors="coerce"), how)()
         rows.append(row)
     return pd.DataFrame(rows)
@@ -239,7 +267,8 @@ def aggregate(runs):
 
 def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None, only=None):
     """Run the runs of a closed-loop study not stored yet (``only``: of these controllers) and write
-    runs.csv and aggregate.csv of every stored run (a controller not run yet counts as missing).
+    runs.csv and aggregate.csv of every stored run (a controller not run yet counts as missing) and
+    each run's steps/<controller>_draw<i>.csv (``studies.loopsteps``).
 
     Returns a :class:`LoopStudy` (the plots are drawn from it by ``report.loopplots``)."""
     study, output, cases = expand(path)
@@ -258,6 +287,9 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
     by_controller, budgets = {}, {}
     for case in cases:
         s = (rows.get(case["key"]) or {}).get("summary")
+        if s and s.get("steps"):
+            labels = case["labels"]
+            write_csv(output / "steps" / f"{labels['controller']}_draw{labels['draw']}.csv", steps_frame(s["steps"]))
         if s:
             by_controller.setdefault(case["labels"]["controller"], []).append(s)
             budgets[case["labels"]["controller"]] = case["sample_time"]

@@ -1,0 +1,74 @@
+"""What a controller does when a sample's solve gives no plan to drive, and what it records per step.
+
+Every controller keeps its last accepted plan. A step whose solve is unusable (no optimum, the
+iteration cap, an inexact braking plan) or over its time budget applies that plan shifted to the
+present, i.e. what it planned for this sample (``shifted_plan``), as long as the plan still covers
+the measured state and it has not been used more than ``shift_samples`` times in a row. Only
+without such a plan does the controller brake: with the braking reserve of Yazhemsky 2017
+eq. 6.8 (``reserve``: the share of the service brake the plans held back, used when a plan
+needs more braking than it was allowed) or, with nothing else left, in full (``full_brake``).
+
+Per call of ``plan`` a controller records a :class:`Step`; ``steps.csv`` of a closed-loop run
+is these records next to the loop's states.
+"""
+from typing import NamedTuple, Optional
+
+KINDS = ("shifted_plan", "reserve", "full_brake")
+SHIFT_SAMPLES = 10  # a plan older than this many samples is not driven any more
+
+
+class Step(NamedTuple):
+    """One call of a controller's ``plan``: the solver's status (``final`` inside the final
+    approach, ``none`` without a solve), the solve time [s], the relaxation gap max |rho s - 1|
+    (convex programs), the fallback used (one of ``KINDS``, or None), the rows softened
+    (e.g. ``arrival_window``, ``terminal_set``; '' for none) and the mass estimate (a multiple of
+    the model's; None without an estimator)."""
+
+    status: str
+    seconds: float
+    gap: Optional[float] = None
+    fallback: Optional[str] = None
+    softened: str = ""
+    mass_estimate: Optional[float] = None
+
+
+class Fallback:
+    """Mixin of the controllers: the last accepted plan, the fallback chain and the step records.
+
+    A controller calls :meth:`accept` with ``handle_at(measured) -> handle or None`` (None: the
+    plan does not hold for that state) after every usable solve, :meth:`fall_back` when a step has
+    no plan, and :meth:`record` once per call of ``plan``."""
+
+    shift_samples = SHIFT_SAMPLES
+
+    def _start_records(self):
+        self.step_log, self.last_plan, self.shifts = [], None, 0
+        self.fallbacks = dict.fromkeys(KINDS, 0)
+
+    def accept(self, handle_at):
+        """Keep ``handle_at`` as the plan to fall back on."""
+        self.last_plan, self.shifts = handle_at, 0
+
+    def fall_back(self, measured, reserve=None, shifted=True):
+        """(handle, kind) for a step without a usable plan: the last plan shifted to ``measured``
+        if it holds there (``shifted=False``: the step's solve showed that no plan does), else
+        ``reserve`` (a handle, the eq. 6.8 reserve) if given, else full braking. The use is
+        counted by kind."""
+        if shifted and self.last_plan is not None and self.shifts < self.shift_samples:
+            handle = self.last_plan(measured)
+            if handle is not None:
+                self.shifts += 1
+                return self._count(float(handle), "shifted_plan")
+        if reserve is not None:
+            return self._count(float(reserve), "reserve")
+        return self._count(-1.0, "full_brake")
+
+    def _count(self, handle, kind):
+        self.fallbacks[kind] += 1
+        return handle, kind
+
+    def record(self, status, seconds, gap=None, fallback=None, softened=(), estimator=None):
+        """One :class:`Step` (``softened``: the names of the rows softened this step)."""
+        mass = getattr(estimator, "estimate", None) if estimator is not None else None
+        self.step_log.append(Step(str(status), float(seconds), None if gap is None else float(gap), fallback,
+                               " ".join(softened), mass))

@@ -1,0 +1,61 @@
+"""Per-step diagnostics of a closed-loop run (``steps.csv``) and their counts in the run's summary.
+
+One row per sample: the true position and speed at the sample, the measured ones, the handle the
+plant ran from that sample, and what the controller recorded for the call of ``plan`` it made at
+that sample (``control.fallback.Step``): the solver's status, the solve time, the relaxation gap,
+the fallback used, the rows softened and the mass estimate. With a measured computation delay a
+sample that planned nothing has an empty controller part.
+"""
+import numpy as np
+import pandas as pd
+
+from ecostudy.control.fallback import KINDS
+
+COLUMNS = ("sample", "time_s", "position_m", "speed_mps", "measured_position_m", "measured_speed_mps", "handle",
+           "status", "solve_ms", "gap", "fallback", "softened", "mass_estimate")
+
+
+def step_columns(result, planner):
+    """The columns of ``steps.csv`` (lists, JSON-storable) of a loop ``result`` (``LoopResult``)
+    driven by ``planner`` (a controller with ``steps``)."""
+    n = len(result.handles)
+    steps = list(getattr(planner, "step_log", []))
+    steps += [None] * (n - len(steps))
+    states, readings = result.states[:n], list(result.readings)[:n]
+
+    def part(i):
+        return (lambda s: None if s is None else s[i])
+
+    return {
+        "sample": list(range(n)),
+        "time_s": [round(s.time, 4) for s in states],
+        "position_m": [round(s.position, 4) for s in states],
+        "speed_mps": [round(s.speed, 5) for s in states],
+        "measured_position_m": [round(s.position, 4) for s in readings],
+        "measured_speed_mps": [round(s.speed, 5) for s in readings],
+        "handle": [round(float(u), 6) for u in result.handles],
+        "status": [None if s is None else s.status for s in steps[:n]],
+        "solve_ms": [None if s is None else round(1e3 * s.seconds, 3) for s in steps[:n]],
+        "gap": list(map(part(2), steps[:n])),
+        "fallback": list(map(part(3), steps[:n])),
+        "softened": list(map(part(4), steps[:n])),
+        "mass_estimate": list(map(part(5), steps[:n])),
+    }
+
+
+def step_counts(planner):
+    """Per run: the fallbacks by kind, the steps with a softened row (steps, not solver retries),
+    the convex solves above the exactness bound, and full braking before the final approach
+    (a ``full_brake`` or ``reserve`` fallback)."""
+    steps = list(getattr(planner, "step_log", []))
+    kinds = [s.fallback for s in steps]
+    gaps = np.array([s.gap for s in steps if s.gap is not None])
+    return {**{f"fallback_{k}": kinds.count(k) for k in KINDS},
+            "softened_steps": sum(1 for s in steps if s.softened),
+            "inexact_solves": int(np.sum(gaps > 1e-6)) if gaps.size else 0,
+            "full_brake_before_final": sum(1 for k in kinds if k in ("full_brake", "reserve"))}
+
+
+def steps_frame(columns):
+    """``steps.csv`` as a table from :func:`step_columns`."""
+    return pd.DataFrame({c: columns.get(c, []) for c in COLUMNS})
