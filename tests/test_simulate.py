@@ -95,6 +95,11 @@ def test_rspc_runs_at_its_own_sample_time_and_only_runs_what_it_is_asked(tmp_pat
     assert (rspc["solve_max_ms"] < 380.0).all()  # the enumeration is cheap; generous on a shared machine
     second = runner.invoke(app, ["simulate", str(path), "--out", str(out), "--no-progress", "--no-plot"])
     assert "2 already stored, 2 computed now" in second.output, second.output
+    from .conftest import assert_folder
+    every_ok = (pd.read_csv(out / "runs.csv")["status"] == "ok").all()
+    folder = assert_folder(out, "simulate", ["runs", "aggregate"], rows=4, status="ok" if every_ok else "flagged")
+    assert folder.cases["total"] == 4 and folder.summary["missing_runs"] == 0
+    assert (second.exit_code == 0) == folder.ok
     unknown = runner.invoke(app, ["simulate", str(path), "--out", str(out), "--no-progress", "--only", "sppc"])
     assert unknown.exit_code == 2 and "--only" in unknown.output and "sppc" in unknown.output
     zero = runner.invoke(app, ["simulate", str(study(tmp_path, controllers=[

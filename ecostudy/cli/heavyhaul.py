@@ -23,7 +23,7 @@ def _heavyhaul(study, workers, dask, retry_failed, out, no_progress, no_plot, bl
         plots = heavyplots.draw(outcome)
     runs, counts = outcome.runs, outcome.counts
     from ecostudy.report.files import write_cases_folder
-    write_cases_folder(outcome.output, "heavyhaul", outcome.cases, runs, {"runs": "runs.csv"},
+    write_cases_folder(outcome.output, "heavyhaul", runs, ["K_b", "f", "Np", "Nc"], {"runs": "runs.csv"},
                        ["results.sqlite", *plots], study=str(study))
     typer.echo(runs[[c for c in SHOWN if c in runs]].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     typer.echo(counts_line(counts, "runs"))

@@ -4,7 +4,8 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import FORCE_HELP, app, case_progress, check_options, counts_line, guarded, with_force
+from ecostudy.cli.app import (FORCE_HELP, app, case_progress, check_options, counts_line, flag_folder, guarded, listed,
+                              with_force)
 
 SHOWN = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_per_kg_std", "arrival_s_mean",
          "arrival_s_max", "stop_error_m_min", "stop_error_m_max", "max_overspeed_kmh_max", "solve_mean_ms_mean",
@@ -13,7 +14,7 @@ SHOWN = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_per_kg_st
 
 def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot, only):
     check_options(workers=workers)
-    from ecostudy.studies.closedloop import expand, not_ok, simulate_study
+    from ecostudy.studies.closedloop import expand, simulate_study
     from ecostudy.studies.estimate import check_closed_loop
     check_closed_loop(expand(study)[2], study)  # runs that cannot end or are too big: refused (unless --force)
     with case_progress("runs", no_progress) as progress:
@@ -23,15 +24,19 @@ def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot, onl
     if not no_plot:
         from ecostudy.report import loopplots
         loopplots.draw(outcome)
+    from ecostudy.report.files import write_cases_folder
+    figures = [n for n in ("bands.png", "solve_times.png", "mass_estimates.png") if not no_plot and (output / n).is_file()]
+    computed = runs[runs["status"] != "missing"]  # runs left out by --only are not results
+    write_cases_folder(output, "simulate", computed, ["controller", "draw"],
+                       {"runs": "runs.csv", "aggregate": "aggregate.csv"}, ["results.sqlite", *figures],
+                       study=str(study), missing_runs=int(counts["missing"]))
     typer.echo(summary[[c for c in SHOWN if c in summary]].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     typer.echo(counts_line(counts, "runs"))
-    typer.echo(f"outputs {output}/ (runs.csv, aggregate.csv, results.sqlite{'' if no_plot else ', bands.png, solve_times.png'})")
-    for _, row in runs[not_ok(runs)].iterrows():
-        typer.echo(f"  {row['controller']} draw {row['draw']}: {row['status']}: {row['reason']}")
+    typer.echo("outputs " + listed(output))
     if counts["missing"]:
         left = runs.loc[runs["status"] == "missing", "controller"].unique()
         typer.echo(f"not run yet: {counts['missing']} runs of {', '.join(left)} (run without --only to compute them)")
-    return counts
+    return output
 
 
 @app.command(short_help="Closed loop: controllers drive a perturbed plant, Monte Carlo, resumable.")
@@ -49,6 +54,5 @@ def simulate(
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Closed loop: every controller drives every draw of the plant's deviations and noise (resumable)."""
-    counts = guarded(debug, with_force(force, _simulate), study, workers, dask, retry_failed, out, no_progress, no_plot, only)
-    if counts["not_ok"]:
-        raise typer.Exit(1)
+    flag_folder(guarded(debug, with_force(force, _simulate), study, workers, dask, retry_failed, out, no_progress,
+                        no_plot, only))

@@ -11,7 +11,6 @@ from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import write_csv, write_json
 from ecostudy.report import style
 from ecostudy.report.html import write_html
-from ecostudy.studies.batch import case_statuses
 
 
 def figures(out_dir, plot, drawings, out=style.Output()):
@@ -153,9 +152,13 @@ def write_network(run, st, out_dir, plot=True, out=style.Output()):
     return table
 
 
-def write_cases_folder(out_dir, kind, cases, table, tables, files=(), **fields):
+def write_cases_folder(out_dir, kind, table, name_columns, tables, files=(), **fields):
     """``summary.json`` and ``report.html`` of a resumable study's folder (``heavyhaul``,
-    ``simulate``): every case's status from the table's ``status`` and ``reason`` columns, named
-    by its labels (``studies.batch.case_statuses``)."""
-    write_summary(out_dir, kind, case_statuses(cases, table), tables, files, **fields)
+    ``simulate``): every row's status from the table's ``status`` and ``reason`` columns, named by
+    its ``name_columns`` (``controller=convex, draw=3``)."""
+    reasons = table["reason"] if "reason" in table else [None] * len(table)
+    statuses = {", ".join(f"{c}={row[c]}" for c in name_columns):
+                Status.parse(row["status"], reason if isinstance(reason, str) else "")
+                for (_, row), reason in zip(table.iterrows(), reasons)}
+    write_summary(out_dir, kind, statuses, tables, files, **fields)
     write_html(out_dir)
