@@ -5,6 +5,8 @@ import re
 
 import pytest
 
+from ecostudy.core.errors import EcostudyWarning
+
 from ecostudy.core.errors import InputError
 from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import load_track, load_train
@@ -101,14 +103,20 @@ def no_limit_pair(tmp_path_factory):
     from ecostudy.api import solve
     tmp = tmp_path_factory.mktemp("power")
     track = load_track(DATA / "ttobench_track.json")
-    return [solve(track, load_train(ttobench_train(tmp, p, f"t{p:g}.json")), supplement_percent=10, points=300)
-            for p in (1e6, 1e7)]
+    out = []
+    for p in (1e6, 1e7):
+        # neither limit can bind on this line: the solve drops the row and says so
+        with pytest.warns(EcostudyWarning, match="traction power limit never binds: dropped") as notes:
+            out.append(solve(track, load_train(ttobench_train(tmp, p, f"t{p:g}.json")), supplement_percent=10,
+                             points=300))
+        assert len(notes) >= 1
+    return out
 
 
 def test_a_no_limit_power_of_1e7_kW_solves_like_1e6_kW(no_limit_pair):
     e6, e7 = (s.summary["traction_energy_kWh"] for s in no_limit_pair)
     assert all(s.summary["solver"]["status"] == "optimal" and s.verification["passed"] for s in no_limit_pair)
-    assert e7 == pytest.approx(e6, rel=1e-4)
+    assert e7 == pytest.approx(e6, rel=1e-4)  # the same problem once the row is dropped: measured equal to 1e-12
 
 
 @pytest.mark.parametrize("power", [1e7, 1e9, 3100.0])
