@@ -5,9 +5,7 @@ import re
 
 import pytest
 
-from ecostudy.core.errors import EcostudyWarning
-
-from ecostudy.core.errors import InputError
+from ecostudy.core.errors import EcostudyWarning, InputError
 from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.io.yamlsafe import MAX_NODES, check_nodes, load_yaml
