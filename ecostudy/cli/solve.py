@@ -183,6 +183,32 @@ def check(
         raise typer.Exit(1)
 
 
+def _export(result_dir, every):
+    import re
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*(s|m)\s*", every or "")
+    if not match or float(match.group(1)) <= 0:
+        raise InputError(problem("command line", "--every", f"expected a step such as '1s' (seconds) or '10m' "
+                                 f"(metres), not '{every}'"))
+    from ecostudy.report.files import write_fixed_step
+    step = float(match.group(1))
+    table, csv, js = write_fixed_step(result_dir, *((step, None) if match.group(2) == "s" else (None, step)))
+    typer.echo(f"{len(table)} rows every {every.strip()}: {csv} and {js.name}")
+
+
+@app.command(short_help="A solved run every N s or N m (CSV and JSON), for on-board systems.")
+def export(
+    result_dir: Path = typer.Argument(..., help="Output folder of `ecostudy solve`."),
+    every: str = typer.Option("1s", help="Step: seconds ('1s') or metres ('10m')."),
+    debug: bool = typer.Option(False, help="Show tracebacks."),
+):
+    """The run of a solve folder at fixed steps of time or distance: position, time, speed, handle and,
+    with driver advice, the advised mode (profile_every_<step>.csv and .json in the folder).
+
+    Example: ecostudy export out/default --every 10m
+    """
+    guarded(debug, _export, result_dir, every)
+
+
 def _doctor():
 
     from ecostudy import __version__

@@ -3,9 +3,10 @@ an SI :class:`~ecostudy.core.types.Trajectory` (the display units converted here
 import hashlib
 import json
 from pathlib import Path
-from typing import NamedTuple
+from typing import NamedTuple, Optional
 
 import numpy as np
+import pandas as pd
 
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.types import Trajectory
@@ -41,6 +42,8 @@ class SavedRun(NamedTuple):
     inputs: dict          # inputs.json: track and train paths, stops, grid size
     summary: dict         # summary.json
     trajectory: Trajectory
+    handle: np.ndarray    # the handle per interval (profile.csv's handle on the interval's first row)
+    advice: Optional[pd.DataFrame] = None  # advice.csv, when the run has driver advice
 
 
 def load_result(result_dir):
@@ -57,10 +60,18 @@ def load_result(result_dir):
         raise InputError(problem(result_dir / "inputs.json", "points", "not a result folder of `ecostudy solve` "
                                  "(no grid size)"))
     p = number_columns(result_dir / "profile.csv", PROFILE_COLUMNS, rows=points,
-                       open_last=("traction_force_kN", "braking_force_kN"))
+                       open_last=("traction_force_kN", "braking_force_kN", "handle"))
     trajectory = Trajectory(p["position_m"], p["speed_kmh"] * KMH, np.diff(p["time_s"]),
                             p["traction_force_kN"][:-1] * KN, p["braking_force_kN"][:-1] * KN)
-    return SavedRun(inputs, summary, trajectory)
+    advice = None
+    if (result_dir / "advice.csv").is_file():
+        try:
+            advice = pd.read_csv(result_dir / "advice.csv")
+        except (OSError, ValueError) as exc:
+            raise InputError(problem(result_dir / "advice.csv", "", f"cannot be read ({exc})"))
+        if "start_position_m" not in advice or "mode" not in advice:
+            raise InputError(problem(result_dir / "advice.csv", "start_position_m/mode", "missing"))
+    return SavedRun(inputs, summary, trajectory, p["handle"][:-1], advice)
 
 
-PROFILE_COLUMNS = ("position_m", "time_s", "speed_kmh", "traction_force_kN", "braking_force_kN")
+PROFILE_COLUMNS = ("position_m", "time_s", "speed_kmh", "traction_force_kN", "braking_force_kN", "handle")

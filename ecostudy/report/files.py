@@ -6,8 +6,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ecostudy.analysis.export import fixed_step
 from ecostudy.core.status import OK, Status, flagged
 from ecostudy.io.folder import write_summary
+from ecostudy.io.results import load_result
 from ecostudy.io.writers import write_csv, write_json
 from ecostudy.report import style
 from ecostudy.report.html import write_html
@@ -162,3 +164,24 @@ def write_cases_folder(out_dir, kind, table, name_columns, tables, files=(), **f
                 for (_, row), reason in zip(table.iterrows(), reasons)}
     write_summary(out_dir, kind, statuses, tables, files, **fields)
     write_html(out_dir)
+
+
+EXPORT_UNITS = {"time_s": "s", "position_m": "m", "speed_kmh": "km/h", "speed_mps": "m/s",
+                "handle": "-1 (full braking) to 1 (full traction)", "advice_mode": "",
+                "advice_handle": "-1 to 1", "advice_target_speed_kmh": "km/h (cruise modes)"}
+
+
+def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
+    """The run of a solve folder every ``time_step_s`` or ``distance_step_m`` (``analysis.export``),
+    as ``profile_every_<step>.csv`` and ``.json`` beside it (the JSON: units, step, rows). Returns
+    (table, csv path, json path)."""
+    saved = load_result(result_dir)
+    table = fixed_step(saved.trajectory, saved.handle, time_step_s, distance_step_m, saved.advice)
+    step = f"{time_step_s:g}s" if time_step_s is not None else f"{distance_step_m:g}m"
+    csv, js = (Path(result_dir) / f"profile_every_{step}.{ext}" for ext in ("csv", "json"))
+    write_csv(csv, table)
+    write_json(js, {"run": {k: saved.summary.get(k) for k in ("track", "train", "from", "to", "running_time_s")},
+                    "step": {"time_s": time_step_s} if time_step_s is not None else {"distance_m": distance_step_m},
+                    "units": {c: u for c, u in EXPORT_UNITS.items() if c in table},
+                    "rows": table.to_dict("records")})
+    return table, csv, js

@@ -1,0 +1,75 @@
+"""A solved run at fixed steps of time or distance: the form on-board advisory systems and
+simulators take (position, time, speed, handle and, with driver advice, the advised mode).
+
+Between grid nodes the run has constant acceleration, as the transcription assumes (the interval
+time of the space-domain NLP is dt = 2 ds / (v0 + v1)): v is linear in time, and
+v^2 = v0^2 + 2 a (s - s0) in distance. The handle of an interval holds over the whole interval.
+"""
+from typing import Optional
+
+import numpy as np
+import pandas as pd
+
+from ecostudy.core.types import Trajectory
+from ecostudy.core.units import to_kmh
+
+
+def _intervals(traj: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+    """(clock at every node [s], acceleration of every interval [m/s^2])."""
+    t = traj.time
+    a = np.divide(np.diff(traj.v), traj.dt, out=np.zeros(len(traj.dt)), where=traj.dt > 0)
+    return t, a
+
+
+def at_times(traj: Trajectory, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(position [m], speed [m/s], interval index) at each clock value of ``times`` [s]."""
+    t, a = _intervals(traj)
+    k = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(traj.dt) - 1)
+    tau = np.clip(times - t[k], 0.0, traj.dt[k])
+    v = traj.v[k] + a[k] * tau
+    s = traj.nodes[k] + traj.v[k] * tau + 0.5 * a[k] * tau ** 2
+    return np.minimum(s, traj.nodes[k + 1]), np.maximum(v, 0.0), k
+
+
+def at_positions(traj: Trajectory, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(clock [s], speed [m/s], interval index) at each position of ``positions`` [m]."""
+    t, a = _intervals(traj)
+    k = np.clip(np.searchsorted(traj.nodes, positions, side="right") - 1, 0, len(traj.dt) - 1)
+    xi = np.clip(positions - traj.nodes[k], 0.0, np.diff(traj.nodes)[k])
+    v = np.sqrt(np.maximum(traj.v[k] ** 2 + 2.0 * a[k] * xi, 0.0))
+    moving = np.abs(a[k]) > 1e-12
+    tau = np.where(moving, (v - traj.v[k]) / np.where(moving, a[k], 1.0),
+                   xi / np.maximum(traj.v[k], 1e-12))
+    return t[k] + np.minimum(tau, traj.dt[k]), v, k
+
+
+def fixed_step(traj: Trajectory, handle: np.ndarray, time_step_s: Optional[float] = None,
+               distance_step_m: Optional[float] = None, advice: Optional[pd.DataFrame] = None) -> pd.DataFrame:
+    """The run every ``time_step_s`` seconds or every ``distance_step_m`` metres (one of them),
+    the arrival always the last row: ``time_s``, ``position_m``, ``speed_kmh``, ``speed_mps``,
+    ``handle`` (the interval's, the last row 0) and, with an ``advice`` table (``advice.csv``:
+    ``start_position_m``, ``mode``, ``handle``, ``target_speed_kmh``), the advised ``advice_mode``,
+    ``advice_handle`` and ``advice_target_speed_kmh`` in force there."""
+    if (time_step_s is None) == (distance_step_m is None):
+        raise ValueError("give one of time_step_s and distance_step_m")
+    if time_step_s is not None:
+        end = float(traj.time[-1])
+        times = np.append(np.arange(0.0, end, time_step_s), end)
+        position, speed, k = at_times(traj, times)
+    else:
+        end = float(traj.nodes[-1])
+        position = np.append(np.arange(traj.nodes[0], end, distance_step_m), end)
+        times, speed, k = at_positions(traj, position)
+    # the last row is the arrival itself (a saved profile's rounding must not move it)
+    times[-1], position[-1], speed[-1] = traj.time[-1], traj.nodes[-1], traj.v[-1]
+    u = np.asarray(handle, dtype=float)[k]
+    u[-1] = 0.0  # at the stop
+    out = pd.DataFrame({"time_s": times, "position_m": position, "speed_kmh": to_kmh(speed), "speed_mps": speed,
+                        "handle": u})
+    if advice is not None and len(advice):
+        row = np.clip(np.searchsorted(advice["start_position_m"].to_numpy(), position, side="right") - 1,
+                      0, len(advice) - 1)
+        out["advice_mode"] = advice["mode"].to_numpy()[row]
+        out["advice_handle"] = advice["handle"].to_numpy()[row]
+        out["advice_target_speed_kmh"] = advice["target_speed_kmh"].to_numpy()[row]
+    return out

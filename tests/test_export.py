@@ -1,0 +1,67 @@
+"""A solved run at fixed steps of time or distance (`ecostudy export`), for on-board systems."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.analysis.export import at_positions, at_times, fixed_step
+from ecostudy.cli import app
+from ecostudy.core.types import Trajectory
+
+from .conftest import STUDIES
+
+
+def uniform_acceleration(a=0.5, length=100.0, nodes=7):
+    """A train accelerating at ``a`` from rest over ``length`` metres, on an uneven grid."""
+    s = length * np.linspace(0.0, 1.0, nodes) ** 1.5
+    v = np.sqrt(2 * a * s)
+    dt = 2 * np.diff(s) / (v[:-1] + v[1:])
+    return Trajectory(s, v, dt, np.ones(nodes - 1), np.zeros(nodes - 1))
+
+
+def test_between_nodes_the_run_has_the_transcription_s_constant_acceleration():
+    traj = uniform_acceleration()
+    t = np.linspace(0.0, traj.time[-1], 37)
+    s, v, _ = at_times(traj, t)
+    np.testing.assert_allclose(s, 0.25 * t ** 2, atol=1e-9)   # s = a t^2 / 2
+    np.testing.assert_allclose(v, 0.5 * t, atol=1e-9)
+    x = np.linspace(0.0, 100.0, 41)
+    tx, vx, _ = at_positions(traj, x)
+    np.testing.assert_allclose(tx, np.sqrt(x / 0.25), atol=1e-9)
+    np.testing.assert_allclose(vx, np.sqrt(x), atol=1e-9)
+
+
+def test_fixed_steps_end_at_the_arrival_and_hold_each_interval_s_handle():
+    traj = uniform_acceleration()
+    handle = np.linspace(0.1, 0.6, len(traj.dt))
+    table = fixed_step(traj, handle, time_step_s=3.0)
+    assert table["time_s"].iloc[-1] == pytest.approx(traj.time[-1]) and table["position_m"].iloc[-1] == 100.0
+    assert np.all(np.diff(table["time_s"]) <= 3.0 + 1e-12) and table["handle"].iloc[-1] == 0.0
+    k = np.searchsorted(traj.time, table["time_s"].iloc[1], side="right") - 1
+    assert table["handle"].iloc[1] == handle[k]
+    with pytest.raises(ValueError):
+        fixed_step(traj, handle)
+
+
+def test_export_command_on_a_solved_run_with_driver_advice(tmp_path):
+    runner = CliRunner()
+    out = tmp_path / "run"
+    assert runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "200", "--das", "round",
+                               "--no-plot", "--out", str(out)]).exit_code == 0
+    profile = pd.read_csv(out / "profile.csv")
+    for every, column, step in (("1s", "time_s", 1.0), ("10m", "position_m", 10.0)):
+        r = runner.invoke(app, ["export", str(out), "--every", every])
+        assert r.exit_code == 0, r.output
+        table = pd.read_csv(out / f"profile_every_{every}.csv")
+        assert table[column].iloc[1] == pytest.approx(step)
+        assert table["time_s"].iloc[-1] == pytest.approx(profile["time_s"].iloc[-1], abs=1e-4)
+        assert table["position_m"].iloc[-1] == pytest.approx(profile["position_m"].iloc[-1])
+        # speeds between the profile's own nodes, and the advised mode in force at each row
+        assert table["speed_kmh"].max() <= profile["speed_kmh"].max() + 1e-6
+        assert set(table["advice_mode"]) <= set(pd.read_csv(out / "advice.csv")["mode"])
+        data = json.loads((out / f"profile_every_{every}.json").read_text())
+        assert len(data["rows"]) == len(table) and data["units"]["speed_kmh"] == "km/h"
+    bad = runner.invoke(app, ["export", str(out), "--every", "fast"])
+    assert bad.exit_code == 2 and "--every" in bad.output and "Traceback" not in bad.output
