@@ -54,6 +54,7 @@ def test_the_nominal_loop_stops_on_the_mark_with_das_modes_and_costs_at_least_th
 def test_a_study_asking_for_a_multi_objective_sppc_is_refused():
     from pydantic import ValidationError
 
+    import ecostudy.studies.controllers  # noqa: F401  (the closed-loop study registers the controller kinds)
     from ecostudy.io.loopfile import Controller
     assert Controller.model_validate({"name": "s", "kind": "sppc", "variant": "two_step"}).kind == "sppc"
     with pytest.raises(ValidationError, match="nominal and two_step"):

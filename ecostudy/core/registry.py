@@ -6,19 +6,21 @@ A :class:`Registry` maps a name to an entry (a builder or a runner) with an opti
 and a one-line description. An unknown name is refused with the list of known ones.
 """
 from dataclasses import dataclass
-from typing import Any, Callable, Generic, Iterator, Optional, TypeVar
+from typing import Any, Callable, Generic, Iterable, Iterator, Optional, TypeVar
 
 T = TypeVar("T")
 
 
 @dataclass(frozen=True)
 class Spec(Generic[T]):
-    """A registered kind: its name, its entry, its option schema (or None) and what it is."""
+    """A registered kind: its name, its entry, its option schema (or None), what it is, and the
+    names of the shared options it reads (``uses``: any other option given to it is refused)."""
 
     name: str
     entry: T
     schema: Optional[type] = None
     doc: str = ""
+    uses: frozenset[str] = frozenset()
 
 
 class Registry(Generic[T]):
@@ -28,18 +30,21 @@ class Registry(Generic[T]):
         self.what = what
         self._specs: dict[str, Spec[T]] = {}
 
-    def register(self, name: str, entry: T, schema: Optional[type] = None, doc: str = "") -> T:
-        """Register ``entry`` under ``name``; a name registered twice is a programming error."""
+    def register(self, name: str, entry: T, schema: Optional[type] = None, doc: Optional[str] = None,
+                 uses: Iterable[str] = ()) -> T:
+        """Register ``entry`` under ``name`` (``doc``: what it is; by default the first line of the
+        entry's docstring); a name registered twice is a programming error."""
         if name in self._specs:
             raise ValueError(f"{self.what} {name!r} is registered twice")
-        self._specs[name] = Spec(name, entry, schema, doc)
+        if doc is None:
+            doc = ((getattr(entry, "__doc__", None) or "").strip().splitlines() or [""])[0]
+        self._specs[name] = Spec(name, entry, schema, doc, frozenset(uses))
         return entry
 
     def add(self, name: str, schema: Optional[type] = None, doc: str = "") -> Callable[[T], T]:
         """Decorator form of :meth:`register` (the docstring's first line is the description)."""
         def wrap(entry: T) -> T:
-            text = doc or ((getattr(entry, "__doc__", None) or "").strip().splitlines() or [""])[0]
-            return self.register(name, entry, schema, text)
+            return self.register(name, entry, schema, doc or None)
         return wrap
 
     def spec(self, name: str) -> Spec[T]:

@@ -7,6 +7,7 @@ from typing import Annotated, Literal, Optional, Union
 
 from pydantic import Field, model_validator
 
+from ecostudy.core.registry import Registry
 from ecostudy.io.schemas import Strict
 
 
@@ -21,16 +22,10 @@ class ConvexSettings(Strict):
     brake_level_mps2: float = Field(0.8, gt=0, description="B_brk: planned braking above it is penalised [m/s^2].")
 
 
-RESERVE_KINDS = ("sbpc", "sppc", "rspc")  # the controllers that plan with a brake reserve
 COMMON = {"name", "kind", "sample_time_s", "das_levels", "delay_samples", "compute_delay"}
-USES = {  # the fields each kind reads besides COMMON: any other field given is refused
-    "convex": {"settings", "estimator", "scheme", "time_budget_s"},
-    "open_loop": {"settings", "scheme"},
-    "ato": set(),
-    "sbpc": {"block", "variant", "omega", "transcription", "brake_reserve", "terminal_reserve"},
-    "sppc": {"variant", "brake_reserve", "terminal_reserve"},
-    "rspc": {"rspc", "brake_reserve"},
-}
+# The controller kinds, registered by the closed-loop study (``studies.controllers``: a builder per
+# kind, with the fields it reads besides COMMON; any other field given to it is refused here).
+CONTROLLER_KINDS: Registry = Registry("controller kind")
 
 
 class RspcSettings(Strict):
@@ -58,7 +53,7 @@ class Controller(Strict):
     """
 
     name: str
-    kind: Literal["convex", "open_loop", "ato", "sbpc", "sppc", "rspc"]
+    kind: str = Field(description="A registered controller kind (``studies.controllers``).")
     settings: ConvexSettings = ConvexSettings()
     rspc: RspcSettings = RspcSettings()
     estimator: bool = Field(False, description="Feed the controller a Kalman mass estimate (thesis 001 §10.3).")
@@ -89,17 +84,21 @@ class Controller(Strict):
 
     @model_validator(mode="after")
     def _options_of_the_kind(self):
+        if self.kind not in CONTROLLER_KINDS:
+            raise ValueError(f"kind: unknown controller kind {self.kind!r}; known: {', '.join(CONTROLLER_KINDS.names())}")
+        uses = CONTROLLER_KINDS.spec(self.kind).uses
         if self.kind == "sppc" and self.variant == "multi":
             raise ValueError("sppc has the variants nominal and two_step (no multi-objective one is built)")
         if self.transcription != "simultaneous" and self.kind != "sbpc":
             raise ValueError("transcription is an SBPC setting")
-        if self.brake_reserve is not None and self.kind not in RESERVE_KINDS:
-            raise ValueError(f"brake_reserve is for {', '.join(RESERVE_KINDS)} (the convex controller's is "
+        reserve_kinds = [s.name for s in CONTROLLER_KINDS if "brake_reserve" in s.uses]
+        if self.brake_reserve is not None and "brake_reserve" not in uses:
+            raise ValueError(f"brake_reserve is for {', '.join(reserve_kinds)} (the convex controller's is "
                              "settings.brake_level_mps2)")
-        unused = sorted(self.model_fields_set - COMMON - USES[self.kind])
+        unused = sorted(self.model_fields_set - COMMON - uses)
         if unused:
             raise ValueError(f"{', '.join(unused)}: not used by a controller of kind {self.kind!r} (it reads "
-                             f"{', '.join(sorted(USES[self.kind])) or 'none of the controller options'})")
+                             f"{', '.join(sorted(uses)) or 'none of the controller options'})")
         return self
 
 

@@ -14,27 +14,24 @@ import numpy as np
 import pandas as pd
 
 from ecostudy import __version__
-from ecostudy.analysis.single import solve_run
-from ecostudy.control.controllers import Convex, ForceReplay, OpenLoop, Quantised
-from ecostudy.control.rspc import Rspc
-from ecostudy.control.sbpc import Sbpc
-from ecostudy.control.sppc import Sppc
+from ecostudy.control.controllers import Quantised
 from ecostudy.control.estimator import MassEstimator
 from ecostudy.control.loop import run_loop
 from ecostudy.control.terminal import TerminalApproach
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
-from ecostudy.core.types import State, Timing
+from ecostudy.core.types import State
 from ecostudy.io import schemas
 from ecostudy.io.loaders import (chosen_stops, read_document, track_document, track_from_schema,
                                  train_document, train_from_schema, validate)
 from ecostudy.io.loopfile import Controller, SimulateFile
-from ecostudy.ocp.convex import FASTEST, ConvexProgram, ConvexWeights, trapezoid_grid
+from ecostudy.ocp.convex import FASTEST, ConvexProgram, trapezoid_grid
 from ecostudy.ocp.problem import prepare
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.studies.batch import outcome, stored_rows
 from ecostudy.studies.cases import case_key
+from ecostudy.studies.controllers import CONTROLLER_KINDS, Build
 from ecostudy.studies.loopsteps import step_columns, step_counts, steps_frame
 
 PARAMETERS = ("mass", "resistance", "traction", "braking")
@@ -46,14 +43,6 @@ def _inputs(case):
         train = train_from_schema(schemas.TrainFile.model_validate(case["train"]), case["study"])
     track = track_from_schema(schemas.TrackFile.model_validate(case["track"]))
     return track, train, make_segment(track, train, case["from"], case["to"])
-
-
-def convex_program(segment, train, points, spec):
-    """The thesis 001 SOCP of a controller spec (a ``loopfile.Controller`` as a dict)."""
-    s = spec["settings"]
-    weights = ConvexWeights(s["time"], s["energy"], s["overspeed"], s["braking"], s["buffer_mps"],
-                            s["brake_level_mps2"])
-    return ConvexProgram(segment, train, trapezoid_grid(segment, points), weights, scheme=spec["scheme"])
 
 
 def all_out_time(segment, train, points):
@@ -113,30 +102,8 @@ def build_controller(case, track, segment, train, estimator):
     spec, window, points = controller_spec(case), tuple(case["window"]), case["points"]
     # the study's brake reserve if it gives one, else the controller's own default
     reserve = {} if spec["brake_reserve"] is None else {"brake_reserve": spec["brake_reserve"]}
-    if spec["kind"] == "convex":
-        inner = Convex(convex_program(segment, train, points, spec), window, estimator, hold=case["sample_time"],
-                       budget=spec["time_budget_s"])
-    elif spec["kind"] == "rspc":
-        r = spec["rspc"]
-        inner = Rspc(prepare(track, train, case["from"], case["to"], points), window[1], case["sample_time"],
-                     r["horizon"], r["distance_m"], r["gamma"], r["margin_s"], **reserve)
-    elif spec["kind"] == "open_loop":  # the convex controller's own plan from the stand, replayed
-        plan = convex_program(segment, train, points, spec).solve(State(), window)
-        if not plan.usable:
-            raise InputError(f"no open-loop plan in the window {window}")
-        inner = ForceReplay(train, plan.nodes, plan.force)
-    else:
-        ato = solve_run(track, train, case["from"], case["to"], Timing(running_time=window[1]), points=points,
-                        verify_result=False)
-        if spec["kind"] == "ato":
-            inner = OpenLoop(ato)
-        elif spec["kind"] == "sppc":
-            inner = Sppc(ato, window[1], points, spec["variant"], **reserve)
-        else:
-            prepared = prepare(track, train, case["from"], case["to"], points)
-            speeds = np.interp(prepared.nodes, ato.trajectory.nodes, ato.trajectory.v)
-            inner = Sbpc(prepared, window[1], case["sample_time"], spec["block"], speeds, spec["variant"], spec["omega"],
-                         transcription=spec["transcription"], **reserve)
+    inner = CONTROLLER_KINDS.get(spec["kind"])(Build(case, spec, track, segment, train, estimator, window, points,
+                                                     reserve, case["sample_time"]))
     outer = inner
     if spec["terminal_reserve"] is not None:
         outer = TerminalApproach(inner, prepare(track, train, case["from"], case["to"], points), case["sample_time"],

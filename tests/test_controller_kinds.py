@@ -1,0 +1,47 @@
+"""Controller kinds are registered: the guide's new kind (docs/closed_loop.md, "Adding a controller
+kind"), run as written, is accepted by a study file and driven, scored and tabled like the others;
+an unknown kind and an option the kind does not read are refused in one line."""
+import re
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+from ecostudy.io.loopfile import CONTROLLER_KINDS
+
+from .test_simulate import study
+
+GUIDE = Path(__file__).resolve().parent.parent / "docs" / "closed_loop.md"
+
+
+@pytest.fixture
+def guide_kind():
+    block = next(b for b in re.findall(r"```python\n(.*?)```", GUIDE.read_text(), re.S)
+                 if "CONTROLLER_KINDS.register" in b)
+    exec(block, {})
+    yield "coast_then_brake"
+    CONTROLLER_KINDS._specs.pop("coast_then_brake", None)
+
+
+def test_the_guide_s_new_kind_runs_in_a_study(tmp_path, guide_kind):
+    path = study(tmp_path, controllers=[{"name": "rule", "kind": guide_kind, "compute_delay": 0}], deviations={})
+    out = tmp_path / "out"
+    r = CliRunner().invoke(app, ["simulate", str(path), "--out", str(out), "--no-progress", "--no-plot"])
+    assert r.exit_code in (0, 1), r.output
+    runs = pd.read_csv(out / "runs.csv")
+    assert list(runs["controller"]) == ["rule", "rule"]
+    assert runs["status"].isin(["ok", "flagged"]).all() and (runs["traction_energy_kWh"] > 0).all()
+    assert (runs["stop_error_m"].abs() < 10).all()  # it brakes for the stop (a rule of thumb, not to 1 m)
+    assert (runs["max_overspeed_kmh"] < 0.5).all()
+    assert (r.exit_code == 0) == (runs["status"] == "ok").all()
+
+
+def test_unknown_kinds_and_foreign_options_are_refused(tmp_path, guide_kind):
+    for controller, words in (({"name": "x", "kind": "nope"}, ["unknown controller kind 'nope'", "convex"]),
+                              ({"name": "x", "kind": guide_kind, "block": 3}, ["block", "not used by"])):
+        r = CliRunner().invoke(app, ["simulate", str(study(tmp_path, controllers=[controller])),
+                                     "--out", str(tmp_path / "o"), "--no-progress"])
+        lines = [line for line in r.output.splitlines() if line.startswith("error:")]
+        assert r.exit_code == 2 and len(lines) == 1 and all(w in lines[0] for w in words), r.output
