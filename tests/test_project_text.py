@@ -4,17 +4,19 @@ import re
 import subprocess
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parent.parent
+SKIPPED_DIRS = {".git", ".venv", ".pyomo", "site", "out", "__pycache__", ".pytest_cache", ".mypy_cache"}
 
 
 def tracked(*patterns):
+    """The files git tracks (matching ``patterns``); outside a git checkout (a source archive) every
+    file of the tree but the installed and generated folders."""
     try:
         out = subprocess.run(["git", "ls-files", *patterns], cwd=ROOT, capture_output=True, text=True, check=True)
+        return [ROOT / name for name in out.stdout.splitlines() if (ROOT / name).is_file()]
     except (OSError, subprocess.CalledProcessError):
-        pytest.skip("not a git checkout")
-    return [ROOT / name for name in out.stdout.splitlines() if (ROOT / name).is_file()]
+        files = [p for p in ROOT.rglob("*") if p.is_file() and not SKIPPED_DIRS & set(p.relative_to(ROOT).parts)]
+        return [p for p in files if not patterns or any(p.relative_to(ROOT).match(pat) for pat in patterns)]
 
 
 def hits(files, pattern):

@@ -202,12 +202,3 @@ def flag_folder(out_dir, shown=20):
     if bad:
         raise typer.Exit(1)
 
-
-def flag_rows(table, name_column, where):
-    """Exit status 1, naming every row whose ``status`` is not ok (one line on stderr each)."""
-    bad = table[table["status"].astype(str) != "ok"]
-    for _, row in bad.iterrows():
-        typer.secho(f"{row['status'].split(':')[0]}: {row[name_column]}: {row['status'].partition(':')[2].strip()} "
-                    f"({where})", fg=typer.colors.YELLOW, err=True)
-    if len(bad):
-        raise typer.Exit(1)

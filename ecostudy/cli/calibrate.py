@@ -5,7 +5,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import app, guarded, listed
+from ecostudy.cli.app import app, flag_folder, guarded, listed
 
 SHOWN = ["name", "unit", "prior", "estimate", "low", "high", "boot_low", "boot_high", "identifiable"]
 
@@ -31,7 +31,7 @@ def _calibrate(logs, train, track, fit, out, draws, savings, no_plot):
                    f"{row['draws']} parameter draws)" + ("" if row["verified"] else " (optimum not verified)"))
     typer.echo(f"{result.status}" + (f": {result.reason}" if result.reason else ""))
     typer.echo("outputs " + listed(out))
-    return result.status
+    return out
 
 
 @app.command(short_help="Fit a train's parameters to logged runs, with 95 % intervals.")
@@ -52,9 +52,7 @@ def calibrate(
 ):
     """Fit train parameters to logged runs: least squares on the replayed dynamics, 95 % intervals,
     identifiability (parameters the logs do not excite are held at the train file's value, exit 1)."""
-    status = guarded(debug, _calibrate, logs, train, track, fit, out, bootstrap, savings, no_plot)
-    if status != "ok":
-        raise typer.Exit(1)
+    flag_folder(guarded(debug, _calibrate, logs, train, track, fit, out, bootstrap, savings, no_plot))
 
 
 def _validate(log, train, track, out, energy_tolerance, time_tolerance, no_plot):
@@ -73,7 +71,7 @@ def _validate(log, train, track, out, energy_tolerance, time_tolerance, no_plot)
                f"{summary['model_traction_kWh']:.2f} kWh ({summary['traction_difference_pct']:+.2f} %)")
     typer.echo(f"{summary['status']}" + (f": {summary['reason']}" if summary["reason"] else ""))
     typer.echo("outputs " + listed(out))
-    return summary["status"]
+    return out
 
 
 @app.command(short_help="Replay a logged run on the model: energy and time differences.")
@@ -89,6 +87,4 @@ def validate(
 ):
     """Replay a logged run on the train file's model: traction energy following the logged speed, and
     running time driven by the logged handle, per run between stops."""
-    status = guarded(debug, _validate, log, train, track, out, energy_tolerance, time_tolerance, no_plot)
-    if status != "ok":
-        raise typer.Exit(1)
+    flag_folder(guarded(debug, _validate, log, train, track, out, energy_tolerance, time_tolerance, no_plot))

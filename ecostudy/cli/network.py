@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import FORCE_HELP, app, flag_rows, guarded, listed, with_force
+from ecostudy.cli.app import FORCE_HELP, app, flag_folder, guarded, listed, with_force
 
 
 def _network(study_path, out, no_plot, workers=1, figures=("png", None)):
@@ -27,7 +27,7 @@ def _network(study_path, out, no_plot, workers=1, figures=("png", None)):
             "all_verified"]
     typer.echo(table[[c for c in cols if c in table]].to_string(index=False, float_format=lambda x: f"{x:.3f}"))
     typer.echo("outputs " + listed(out_dir))
-    return table
+    return out_dir
 
 
 @app.command(short_help="Trains sharing a DC substation: independent, supervisor rules, joint optimum.")
@@ -43,5 +43,4 @@ def network(
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""
-    table = guarded(debug, with_force(force, _network), study, out, no_plot, workers, (fig_format, dpi))
-    flag_rows(table, "strategy", "network_substation.csv")
+    flag_folder(guarded(debug, with_force(force, _network), study, out, no_plot, workers, (fig_format, dpi)))

@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 
 from ecostudy.cli.app import (
-    DasMethod, FORCE_HELP, Objective, app, check_options, guarded,
+    DasMethod, FORCE_HELP, Objective, app, check_options, flag_folder, guarded,
     listed, only_one, parse_pair, with_force,
 )
 from ecostudy.core.errors import InputError, problem
@@ -118,7 +118,7 @@ def _solve(study, track, train, time, supplement, window, from_stop, to_stop, ob
                                          "track_sha256": file_digest(paths[0]), "train_sha256": file_digest(paths[1]),
                                          "from": f, "to": t, "points": k})
     _report(result, out_dir)
-    return result
+    return out_dir
 
 
 @app.command(short_help="Energy-optimal (or all-out) run between two stops, verified.")
@@ -146,11 +146,8 @@ def solve(
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Energy-optimal (or all-out) run between two stops, verified by re-simulation."""
-    result = guarded(debug, with_force(force, _solve), study, track, train, time, supplement, window, from_stop, to_stop,
-                     objective, weights, points, out, no_plot, das, das_time_limit, (fig_format, dpi))
-    if not result.ok:
-        typer.secho("flagged: the result is not verified optimal (see summary.json)", fg=typer.colors.YELLOW, err=True)
-        raise typer.Exit(1)
+    flag_folder(guarded(debug, with_force(force, _solve), study, track, train, time, supplement, window, from_stop,
+                        to_stop, objective, weights, points, out, no_plot, das, das_time_limit, (fig_format, dpi)))
 
 
 def _check(result_dir, time):

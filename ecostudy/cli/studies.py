@@ -7,8 +7,8 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import (DasMethod, FORCE_HELP, app, case_progress, check_options, flag_folder, flag_rows,
-                              guarded, listed, only_one, with_force)
+from ecostudy.cli.app import (DasMethod, FORCE_HELP, app, case_progress, check_options, flag_folder, guarded,
+                              listed, only_one, with_force)
 from ecostudy.core.errors import InputError, problem
 
 
@@ -74,7 +74,7 @@ def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, poin
     typer.echo(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
                f"{meta['all_verified']}; {meta['wall_s']:.1f} s; outputs "
                + listed(out_dir))
-    return meta
+    return out_dir
 
 
 @app.command(short_help="Energy against running time: the Pareto front.")
@@ -100,12 +100,9 @@ def pareto(
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS."""
-    meta = guarded(debug, with_force(force, _pareto), study, track, train, from_stop, to_stop, count, supplement_max, points,
-                   workers, cold, out, no_plot, weighted, das, das_time_limit, (fig_format, dpi))
-    if not (meta["monotone"] and meta["all_verified"] and meta["all_optimal"]):
-        typer.secho("flagged: a point is not optimal or not verified, or the front is not monotone",
-                    fg=typer.colors.YELLOW, err=True)
-        raise typer.Exit(1)
+    flag_folder(guarded(debug, with_force(force, _pareto), study, track, train, from_stop, to_stop, count,
+                        supplement_max, points, workers, cold, out, no_plot, weighted, das, das_time_limit,
+                        (fig_format, dpi)))
 
 
 def _compare(study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot, figures=("png", None)):
@@ -134,7 +131,7 @@ def _compare(study, track, train, from_stop, to_stop, time, supplement, points, 
                   out=figures)
     typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
     typer.echo("outputs " + listed(out_dir))
-    return table
+    return out_dir
 
 
 @app.command(name="compare", short_help="Strategies side by side, each re-simulated by one simulator.")
@@ -159,9 +156,8 @@ def compare_command(
 
     Example: ecostudy compare studies/default.yaml --out out/compare
     """
-    table = guarded(debug, with_force(force, _compare), study, track, train, from_stop, to_stop, time, supplement, points, out, no_plot,
-                    (fig_format, dpi))
-    flag_rows(table, "strategy", "compare.csv")
+    flag_folder(guarded(debug, with_force(force, _compare), study, track, train, from_stop, to_stop, time, supplement,
+                        points, out, no_plot, (fig_format, dpi)))
 
 
 def associated_track(tt, path):
@@ -226,7 +222,7 @@ def _journey(track, train, stops, time, supplement, timetable, dwell, points, wo
     typer.echo(table.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
     typer.echo(totals.to_string(index=False, float_format=lambda x: f"{x:.3f}"))
     typer.echo("outputs " + listed(out_dir))
-    return table
+    return out_dir
 
 
 @app.command(name="journey", short_help="Spread a journey's running time over its segments.")
@@ -251,14 +247,8 @@ def journey_command(
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Spread a journey's running time over its segments: equal marginal saving vs same percentage."""
-    table = guarded(debug, with_force(force, _journey), track, train, stops, time, supplement, timetable, dwell, points, workers, out,
-                    no_plot, (fig_format, dpi))
-    if not table["verified"].all():
-        bad = table[~table["verified"]]
-        typer.secho("flagged: not verified by the re-simulation: " + ", ".join(
-            f"{r['distribution']} {r['from']}-{r['to']}" for _, r in bad.iterrows()) + " (journey.csv)",
-            fg=typer.colors.YELLOW, err=True)
-        raise typer.Exit(1)
+    flag_folder(guarded(debug, with_force(force, _journey), track, train, stops, time, supplement, timetable, dwell,
+                        points, workers, out, no_plot, (fig_format, dpi)))
 
 
 def _run(study, workers, dask, retry_failed, out, no_progress):

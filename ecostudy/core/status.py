@@ -68,6 +68,13 @@ def failed(reason: str) -> Status:
     return Status("failed", reason)
 
 
+def parsed(names: Iterable[str], words: Iterable[str], reasons: Iterable[object]) -> dict[str, Status]:
+    """Statuses by name from a table's ``status`` words and ``reason`` cells (a reason that is not
+    text, e.g. an empty cell read as NaN, is none)."""
+    return {name: Status.parse(word, reason if isinstance(reason, str) else "")
+            for name, word, reason in zip(names, words, reasons)}
+
+
 def from_checks(checks: dict[str, bool]) -> Status:
     """``ok`` when every named check passed, else ``flagged`` naming the ones that did not."""
     missed = [name for name, passed in checks.items() if not passed]

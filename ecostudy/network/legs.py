@@ -142,18 +142,19 @@ def solve_leg(task):
     """
     run, outcome, cost = _solve(task)
     notes = {}
+    restart = None  # the solve from the trapezoidal start, once made
     if task[5] == CHECKED:
-        cold, cold_outcome, cold_cost = _solve(_restart(task))
-        notes["warm_vs_cold_pct"] = 100 * (cost - cold_cost) / max(abs(cold_cost), 1e-9)
-        if cost - cold_cost > DEARER * abs(cold_cost):
-            run, outcome, cost = cold, cold_outcome, cold_cost
+        restart = _solve(_restart(task))
+        notes["warm_vs_cold_pct"] = 100 * (cost - restart[2]) / max(abs(restart[2]), 1e-9)
+        if cost - restart[2] > DEARER * abs(restart[2]):
+            run, outcome, cost = restart
             notes["replaced_by_cold"] = True
     stood = standing_s(run, task[0])
     if stood > STAND_TIME_S:
         notes["stood_s"] = stood
-        again, again_outcome, again_cost = _solve(_restart(task))
-        if standing_s(again, task[0]) <= STAND_TIME_S:
-            run, outcome, cost = again, again_outcome, again_cost
+        restart = restart or _solve(_restart(task))  # the same problem from the same start: solved once
+        if standing_s(restart[0], task[0]) <= STAND_TIME_S:
+            run, outcome, cost = restart
             notes["restarted"] = True
     return run._replace(notes=notes or None), outcome
 

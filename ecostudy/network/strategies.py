@@ -142,6 +142,8 @@ def _scored(fleet, runs, info, wall, mapper=map):
     # line cannot carry or a current limit forbids; it is not served and the result is flagged
     flags = [f"{totals['unserved_kWh']:.3f} kWh of traction not served (current limit or line)"] \
         if totals["unserved_kWh"] > 1e-3 else []
+    if not totals["all_verified"]:
+        flags.append("a train's run failed its re-simulation (network_trains.csv)")
     if totals["min_separation_m"] is not None and totals["min_separation_m"] < 0.0:  # head past the tail ahead
         flags.append(f"trains overlap on the line by up to {-totals['min_separation_m']:.1f} m (timetable)")
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.analysis.export import fixed_step
-from ecostudy.core.status import OK, Status, flagged
+from ecostudy.core.status import OK, Status, flagged, parsed
 from ecostudy.io.folder import write_summary
 from ecostudy.io.results import load_result
 from ecostudy.io.writers import write_csv, write_json
@@ -129,13 +129,7 @@ def write_network(run, st, out_dir, plot=True, out=style.Output()):
             trains.append({"strategy": name, "train": train, **rec})
         write_csv(out_dir / f"network_steps_{name}.csv", res["steps"])
     table = pd.DataFrame(subs)
-    statuses = {}
-    for _, row in table.iterrows():
-        st_ = Status.parse(row["status"]) if isinstance(row["status"], str) else OK
-        if st_.ok and not row["all_verified"]:
-            st_ = flagged("a train's run failed its re-simulation")
-        statuses[row["strategy"]] = st_
-    table["status"] = [str(statuses[n]) for n in table["strategy"]]
+    statuses = {row["strategy"]: Status.parse(row["status"]) for _, row in table.iterrows()}
     write_csv(out_dir / "network_substation.csv", table)
     write_csv(out_dir / "network_trains.csv", pd.DataFrame(trains))
     write_json(out_dir / "network.json", {"study": st.name, "segment_times_s": [leg.running_time for leg in fl.legs[0]],
@@ -158,10 +152,8 @@ def write_cases_folder(out_dir, kind, table, name_columns, tables, files=(), **f
     """``summary.json`` and ``report.html`` of a resumable study's folder (``heavyhaul``,
     ``simulate``): every row's status from the table's ``status`` and ``reason`` columns, named by
     its ``name_columns`` (``controller=convex, draw=3``)."""
-    reasons = table["reason"] if "reason" in table else [None] * len(table)
-    statuses = {", ".join(f"{c}={row[c]}" for c in name_columns):
-                Status.parse(row["status"], reason if isinstance(reason, str) else "")
-                for (_, row), reason in zip(table.iterrows(), reasons)}
+    names = [", ".join(f"{c}={row[c]}" for c in name_columns) for _, row in table.iterrows()]
+    statuses = parsed(names, table["status"], table["reason"] if "reason" in table else [None] * len(table))
     write_summary(out_dir, kind, statuses, tables, files, **fields)
     write_html(out_dir)
 

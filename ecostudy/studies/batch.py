@@ -18,7 +18,7 @@ from ecostudy.das.methods import das_columns
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.io.store import Store
-from ecostudy.core.status import Status
+from ecostudy.core.status import parsed
 from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.ocp.problem import Written
@@ -182,9 +182,7 @@ def case_statuses(cases, table):
     """Every case's :class:`~ecostudy.core.status.Status`, named by its labels, from a study table's
     ``status`` and ``reason`` columns."""
     names = [", ".join(f"{k}={v}" for k, v in c["labels"].items()) or c["key"] for c in cases]
-    reasons = table["reason"] if "reason" in table else [None] * len(table)
-    return {name: Status.parse(word, reason if isinstance(reason, str) else "")
-            for name, word, reason in zip(names, table["status"], reasons)}
+    return parsed(names, table["status"], table["reason"] if "reason" in table else [None] * len(table))
 
 
 RESULT_COLUMNS = {"running_time_s", "points", "status", "key", "reason", "seconds", "verified"}  # never labels
