@@ -22,7 +22,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from ecostudy.cli.blas import limit_blas_threads  # noqa: E402
+from ecostudy.api.blas import limit_blas_threads  # noqa: E402
 from ecostudy.core.errors import EcostudyWarning  # noqa: E402
 from ecostudy.heavyhaul.linear import fence  # noqa: E402
 from ecostudy.heavyhaul.loop import horizon, limits, reduced_state  # noqa: E402

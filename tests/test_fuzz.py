@@ -178,7 +178,7 @@ def test_arbitrary_bytes_as_a_file(tmp_path_factory, data):
                        min_size=1),
        st.text(max_size=10))
 def test_cli_option_checks(options, pair):
-    from ecostudy.cli.app import OPTION_RANGES, check_options, parse_pair
+    from ecostudy.studies.options import OPTION_RANGES, check_options, parse_pair
     try:
         check_options(**options)
     except InputError:

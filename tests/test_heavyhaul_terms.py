@@ -5,7 +5,7 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
-from ecostudy.cli.blas import blas_threads, limit_blas_threads
+from ecostudy.api.blas import blas_threads, limit_blas_threads
 from ecostudy.heavyhaul.linear import fence
 from ecostudy.heavyhaul.rhc import Scales, objective_terms, objective_values
 from ecostudy.io.loaders import load_consist

@@ -16,7 +16,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "ecostudy"
 # rank of every layer; features share a rank and may not import each other
 LAYERS = {"core": 0, "io": 1, "ocp": 2, "analysis": 3, "das": 4, "heuristics": 4, "network": 4, "control": 4,
           "heavyhaul": 4, "calibration": 4,
-          "studies": 5, "report": 6, "api": 7, "cli": 7}
+          "studies": 5, "report": 6, "api": 7, "cli": 8}
 FEATURES = {"das", "heuristics", "network", "control", "heavyhaul", "calibration"}
 # optional or heavy dependencies a function may import when it needs them
 LAZY_OK = ("matplotlib", "dask", "distributed", "rich", "ecostudy.report.plots")

@@ -5,6 +5,12 @@ field names, validated as files are); solve a run; sweep a front. Results carry 
 pandas DataFrame with SI and display columns, the summary as a dict, the verification and a
 ``plot()`` that returns a matplotlib figure (or writes a PNG).
 
+Every command of the command line is a function here too, with the same options as arguments
+(``solve_folder``, ``pareto_folder``, ``compare_folder``, ``journey_folder``, ``run_folder``,
+``simulate_folder``, ``heavyhaul_folder``, ``network_folder``, ``calibrate_folder``,
+``validate_folder``; ``check_folder``, ``export_folder``, ``doctor``): each writes its output
+folder and returns it read back (:class:`Report`, a :class:`StudyResult` with the printed report).
+
 Everything is SI inside; the arguments here say their unit in their name where it is not SI.
 """
 from dataclasses import dataclass
@@ -25,9 +31,18 @@ from ecostudy.ocp.problem import prepare  # noqa: E402
 from ecostudy.ocp.restart import Replanner  # noqa: E402
 from ecostudy.report.files import write_run  # noqa: E402
 from ecostudy.studies.pareto import sweep  # noqa: E402
+# one function per command: each writes its output folder and returns it read back with its report
+from ecostudy.api.outcome import Note, Report  # noqa: E402
+from ecostudy.api.single import check_folder, doctor, export_folder, solve_folder  # noqa: E402
+from ecostudy.api.fronts import compare_folder, journey_folder, pareto_folder  # noqa: E402
+from ecostudy.api.cases import (calibrate_folder, heavyhaul_folder, network_folder, run_folder,  # noqa: E402
+                                simulate_folder, validate_folder)
 
 __all__ = ["load", "StudyResult", "load_train", "load_track", "train_from_dict", "track_from_dict", "solve", "pareto", "replanner",
-           "Solution", "Front", "Train", "Track", "State", "Window"]
+           "Solution", "Front", "Train", "Track", "State", "Window",
+           "Report", "Note", "solve_folder", "check_folder", "export_folder", "doctor", "pareto_folder", "compare_folder",
+           "journey_folder", "run_folder", "simulate_folder", "heavyhaul_folder", "network_folder", "calibrate_folder",
+           "validate_folder"]
 
 
 @dataclass

@@ -1,0 +1,149 @@
+"""Studies of many cases into an output folder, each resumable from its store where it has one:
+the commands ``run``, ``simulate``, ``heavyhaul``, ``network``, ``calibrate`` and ``validate`` as
+functions (the command line only parses and prints).
+
+``progress(done, failed, remaining, total)`` is called after each case (``studies.batch.execute``);
+``note(line)`` receives the network study's progress lines.
+"""
+import logging
+from pathlib import Path
+from typing import Callable, Optional, Sequence
+
+from ecostudy.api.blas import limit_blas_threads
+from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
+from ecostudy.io.loaders import load_network_study
+from ecostudy.io.writers import check_output_dir
+from ecostudy.report import calplots, heavyplots, loopplots
+from ecostudy.report.files import write_cases_folder, write_network
+from ecostudy.report.html import write_html
+from ecostudy.report.style import output
+from ecostudy.studies.batch import run_study
+from ecostudy.studies.calibrate import calibrate_study, validate_study
+from ecostudy.studies.closedloop import expand, simulate_study
+from ecostudy.studies.estimate import check_closed_loop, check_network
+from ecostudy.studies.heavyhaul import heavyhaul_study
+from ecostudy.studies.network import run_network
+from ecostudy.studies.options import check_options, output_folder
+
+Progress = Optional[Callable[[int, int, int, int], None]]
+log = logging.getLogger("ecostudy")
+
+LOOP_COLUMNS = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_per_kg_std", "arrival_s_mean",
+                "arrival_s_max", "stop_error_m_min", "stop_error_m_max", "max_overspeed_kmh_max", "solve_mean_ms_mean",
+                "solve_p95_ms_max", "over_budget_sum", "softened_sum"]
+HEAVY_COLUMNS = ["K_b", "f", "Np", "Nc", "status", "tracking_mean_mps", "tracking_std_mps", "force_max_kN",
+                 "force_max_braking_kN", "force_mean_kN", "force_std_kN", "energy_wagons_MJ", "energy_total_MJ",
+                 "qp_inputs", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts", "stop_error_m"]
+NETWORK_COLUMNS = ["strategy", "status", "substation_kWh", "saving_vs_independent_pct", "traction_input_kWh",
+                   "regen_used_kWh", "regen_lost_kWh", "line_losses_kWh", "unserved_kWh", "balance_error_pct",
+                   "min_separation_m", "all_verified"]
+CALIBRATION_COLUMNS = ["name", "unit", "prior", "estimate", "low", "high", "boot_low", "boot_high", "identifiable"]
+VALIDATION_COLUMNS = ["run", "from_m", "to_m", "logged_time_s", "model_time_s", "time_difference_pct",
+                      "logged_traction_kWh", "model_traction_kWh", "traction_difference_pct", "status"]
+
+
+def run_folder(study: Path, workers: int = 1, dask: Optional[str] = None, retry_failed: bool = False,
+               out: Optional[Path] = None, progress: Progress = None) -> Report:
+    """``ecostudy run``: every case of a study file (scenarios, sweep, library) not stored yet."""
+    check_options(workers=workers)
+    table, counts, folder = run_study(study, workers=workers, dask=dask, retry_failed=retry_failed,
+                                      out=Path(out) if out else None, progress=progress)
+    write_html(folder)
+    return reported(folder, [f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} "
+                             f"computed now ({counts['failed']} of them failed or infeasible); not ok in the table: "
+                             f"{counts['not_ok']}", "outputs " + listed(folder, ("results.csv", "results.sqlite",
+                                                                                  "report.html"))])
+
+
+def simulate_folder(study: Path, workers: int = 1, dask: Optional[str] = None, retry_failed: bool = False,
+                    out: Optional[Path] = None, progress: Progress = None, plot: bool = True,
+                    only: Optional[Sequence[str]] = None) -> Report:
+    """``ecostudy simulate``: every controller of a closed-loop study drives every draw of the
+    plant's deviations and noise (``only``: these controllers' runs computed now)."""
+    check_options(workers=workers)
+    check_closed_loop(expand(study)[2], study)  # runs that cannot end or are too big: refused (unless --force)
+    outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress, only)
+    runs, counts, folder = outcome.runs, outcome.counts, outcome.output
+    if plot:
+        loopplots.draw(outcome)
+    figures = [n for n in ("bands.png", "solve_times.png", "mass_estimates.png") if plot and (folder / n).is_file()]
+    computed = runs[runs["status"] != "missing"]  # runs left out by --only are not results
+    write_cases_folder(folder, "simulate", computed, ["controller", "draw"],
+                       {"runs": "runs.csv", "aggregate": "aggregate.csv"}, ["results.sqlite", *figures],
+                       study=str(study), missing_runs=int(counts["missing"]))
+    lines = [shown(outcome.aggregate, LOOP_COLUMNS, ".4g"), counts_line(counts, "runs"), "outputs " + listed(folder)]
+    if counts["missing"]:
+        left = runs.loc[runs["status"] == "missing", "controller"].unique()
+        lines.append(f"not run yet: {counts['missing']} runs of {', '.join(left)} (run without --only to compute them)")
+    return reported(folder, lines)
+
+
+def heavyhaul_folder(study: Path, workers: int = 1, dask: Optional[str] = None, retry_failed: bool = False,
+                     out: Optional[Path] = None, progress: Progress = None, plot: bool = True,
+                     blas_threads: int = 1) -> Report:
+    """``ecostudy heavyhaul``: Zhang & Zhuan's braking-penalised receding-horizon controller on the
+    coupled-mass train, every K_b, fence and horizon of the study (OpenBLAS set to ``blas_threads``)."""
+    check_options(workers=workers)
+    limit_blas_threads(blas_threads)  # before the workers fork: they inherit it
+    outcome = heavyhaul_study(study, workers, dask, retry_failed, Path(out) if out else None, progress)
+    plots = heavyplots.draw(outcome) if plot else []
+    runs, folder = outcome.runs, outcome.output
+    write_cases_folder(folder, "heavyhaul", runs, ["K_b", "f", "Np", "Nc"], {"runs": "runs.csv"},
+                       ["results.sqlite", *plots], study=str(study))
+    return reported(folder, [shown(runs, HEAVY_COLUMNS, ".4g"), counts_line(outcome.counts, "runs"),
+                             f"outputs {folder}/ ({', '.join(['runs.csv', 'summary.json', 'report.html'] + plots[:3])}"
+                             f"{', ...' if len(plots) > 3 else ''})"])
+
+
+def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, workers: int = 1,
+                   fig_format: str = "png", dpi: Optional[float] = None,
+                   note: Callable[[str], None] = log.info) -> Report:
+    """``ecostudy network``: trains sharing one DC substation under every strategy of the study
+    (independent, rules 7.7 / 7.11, dissension, joint optimum, following; Farooqi 2018, Ch. 7)."""
+    figures = output(fig_format, dpi)
+    st = load_network_study(study)
+    check_network(st, study)  # legs too big for a run refused with their estimate (unless --force)
+    folder = check_output_dir(output_folder(out, st.output))
+    table = write_network(run_network(st, workers, progress=note), st, folder, plot=plot, out=figures)
+    return reported(folder, [shown(table, NETWORK_COLUMNS), "outputs " + listed(folder)])
+
+
+def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: Optional[Path] = None,
+                     fit: Optional[str] = None, out: Path = Path("out/calibration"), bootstrap: int = 200,
+                     savings: Optional[int] = None, plot: bool = True) -> Report:
+    """``ecostudy calibrate``: train parameters fitted to logged runs (least squares on the replayed
+    dynamics), 95 % intervals, ``bootstrap`` draws, and optionally the savings against the logs."""
+    result, summary = calibrate_study(logs, train, track, fit, out, bootstrap, savings,
+                                      ("residuals.png",) if plot else ())
+    if plot:
+        calplots.residuals(result.residuals, Path(out) / "residuals.png", "calibration from logged runs")
+    write_html(out)
+    q = result.quality
+    lines = [shown(result.table[[c for c in CALIBRATION_COLUMNS if c in result.table]].dropna(axis=1, how="all"),
+                   places=".5g"),
+             f"{q['runs']} runs, {q['speed_samples']} speed samples: replayed speed off the logged by "
+             f"{q['rms_speed_mps']:.3f} m/s RMS; innovations {q['structure']:.2f} times white noise over 5 s"]
+    lines += [f"{row['log']} run {row['run']}: optimum for {row['running_time_s']:.1f} s uses "
+              f"{row['optimal_traction_kWh']:.2f} kWh against {row['logged_traction_kWh']:.2f} kWh logged: saving "
+              f"{row['saving_pct']:.1f} % (band {row['saving_low_pct']:.1f} to {row['saving_high_pct']:.1f} % over "
+              f"{row['draws']} parameter draws)" + ("" if row["verified"] else " (optimum not verified)")
+              for row in summary.get("savings", [])]
+    lines += [f"{result.status}" + (f": {result.reason}" if result.reason else ""), "outputs " + listed(out)]
+    return reported(out, lines)
+
+
+def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optional[Path] = None,
+                    out: Path = Path("out/validate"), energy_tolerance: float = 5.0, time_tolerance: float = 5.0,
+                    plot: bool = True) -> Report:
+    """``ecostudy validate``: a logged run replayed on the train file's model, per run between stops;
+    a run whose traction energy or running time differs by more than the tolerances [%] is flagged."""
+    table, summary = validate_study(log_file, train, track, out, energy_tolerance / 100, time_tolerance / 100,
+                                    ("validate.png",) if plot else ())
+    if plot:
+        calplots.validation(table, Path(out) / "validate.png", f"{Path(log_file).stem}: logged and model")
+    write_html(out)
+    return reported(out, [shown(table[VALIDATION_COLUMNS], places=".4g"),
+                          f"traction energy: logged {summary['logged_traction_kWh']:.2f} kWh, model "
+                          f"{summary['model_traction_kWh']:.2f} kWh ({summary['traction_difference_pct']:+.2f} %)",
+                          f"{summary['status']}" + (f": {summary['reason']}" if summary["reason"] else ""),
+                          "outputs " + listed(out)])

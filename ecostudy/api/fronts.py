@@ -1,0 +1,148 @@
+"""Studies over one segment or one journey into an output folder: the commands ``pareto``,
+``compare`` and ``journey`` as functions (the command line only parses and prints).
+"""
+from pathlib import Path
+from typing import Optional
+
+from ecostudy.api.outcome import Report, listed, reported, shown
+from ecostudy.core import units
+from ecostudy.core.errors import InputError, problem
+from ecostudy.io.loaders import check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
+from ecostudy.io.timetable import journey_plan, name_stops
+from ecostudy.io.writers import check_output_dir
+from ecostudy.report.files import write_compare, write_front, write_journey
+from ecostudy.report.style import output
+from ecostudy.studies.compare import compare
+from ecostudy.studies.journey import journey
+from ecostudy.studies.options import case_from, check_options, no_windows, only_one, output_folder, timing_of
+from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
+
+FRONT_COLUMNS = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
+                 "marginal_saving_kWh_per_s", "coasting_share_pct", "regime_sequence"]
+DAS_COLUMNS = ["das_traction_energy_kWh", "das_gap_to_ato_on_time_pct", "das_mode_changes"]
+
+
+def beside(st, suffix: str, default: str) -> Path:
+    """The default folder of a study's second command: the study's output with ``suffix``."""
+    return st.output.parent / (st.output.name + suffix) if st is not None else Path("out") / default
+
+
+def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
+                  from_stop: Optional[str] = None, to_stop: Optional[str] = None, count: int = 20,
+                  supplement_max: float = 40.0, points: Optional[int] = None, workers: int = 1, cold: bool = False,
+                  out: Optional[Path] = None, plot: bool = True, weighted: int = 0, das: Optional[str] = None,
+                  das_time_limit: float = 60.0, fig_format: str = "png", dpi: Optional[float] = None) -> Report:
+    """``ecostudy pareto``: energy against running time, ``count`` points from the all-out run to
+    ``supplement_max`` [%] over it (epsilon constraint), optionally ``weighted`` weighted-sum points
+    (Yazhemsky 2017, eq. 4.1a) and the driver-advice front ``das`` at every point."""
+    figures = output(fig_format, dpi)
+    check_options(count=count, supplement_max=supplement_max, points=points, workers=workers, weighted=weighted,
+                  das_time_limit=das_time_limit)
+    trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points)
+    no_windows(st, "pareto")
+    k = k or 500
+    out_dir = output_folder(out, beside(st, "_pareto", "pareto"))
+    check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png"))
+    table, results = sweep(trk, trn, f, t, count=count, supplement_max=supplement_max * units.PERCENT,
+                           points=k, workers=workers, warm=not cold)
+    meta = front_meta(table, {"track": trk.name, "train": trn.name, "from": f, "to": t}, k, count, workers, not cold)
+    if das is not None:
+        table = das_front(table, results, das, k, workers, das_time_limit)
+        meta["das"] = das_meta(table)
+    extra = weighted_points(trk, trn, f, t, count=weighted, points=k) if weighted else None
+    write_front(table, results, out_dir, meta, plot=plot, weighted=extra, out=figures)
+    lines = [shown(table, FRONT_COLUMNS + (DAS_COLUMNS if das is not None else []))]
+    if das is not None:
+        d = meta["das"]
+        lines.append(f"DAS {d['method']}: {d['solved']} of {d['points']} points; gap to ATO on time "
+                     f"{d['min_gap_on_time_pct']:.2f} to {d['max_gap_on_time_pct']:.2f} %; monotone: {d['monotone']}")
+    lines.append(f"all-out {meta['all_out_time_s']:.2f} s; +5 % saves {meta['saving_at_5_pct_supplement_pct']:.1f} %, "
+                 f"+10 % saves {meta['saving_at_10_pct_supplement_pct']:.1f} % of the all-out traction energy")
+    lines.append(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
+                 f"{meta['all_verified']}; {meta['wall_s']:.1f} s; outputs " + listed(out_dir))
+    return reported(out_dir, lines)
+
+
+def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
+                   from_stop: Optional[str] = None, to_stop: Optional[str] = None, time: Optional[float] = None,
+                   supplement: Optional[float] = None, points: Optional[int] = None, out: Optional[Path] = None,
+                   plot: bool = True, fig_format: str = "png", dpi: Optional[float] = None) -> Report:
+    """``ecostudy compare``: the strategies side by side for one running time [s] or supplement [%],
+    every one scored by the same independent simulator."""
+    figures = output(fig_format, dpi)
+    check_options(time=time, supplement=supplement, points=points)
+    only_one(time=time, supplement=supplement)
+    trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points)
+    no_windows(st, "compare")
+    if time is not None or supplement is not None:
+        timing = timing_of(time, supplement)
+    elif st is not None:
+        timing = st.timing
+    else:
+        raise InputError(problem("command line", "--time", "give --time or --supplement"))
+    out_dir = output_folder(out, beside(st, "_compare", "compare"))
+    check_output_dir(out_dir, ("compare.csv", "compare.png"))
+    table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000)
+    write_compare(table, outcomes, case.segment, out_dir,
+                  f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s", plot=plot, out=figures)
+    return reported(out_dir, [shown(table), "outputs " + listed(out_dir)])
+
+
+def associated_track(tt, path: Path) -> Path:
+    """The track file a timetable names (TTOBench 'associated track'), looked for beside it and in a
+    sibling ``tracks/`` folder (the library's layout)."""
+    if tt is None or tt.track is None:
+        raise InputError(problem("command line", "--track", "missing (the timetable names no track)"))
+    here = Path(path).resolve().parent
+    for candidate in (here / f"{tt.track}.json", here.parent / "tracks" / f"{tt.track}.json",
+                      here / f"{tt.track}.yaml"):
+        if candidate.is_file():
+            return candidate
+    raise InputError(problem(path, "metadata.associated track", f"track '{tt.track}' not found beside the "
+                             "timetable or in ../tracks/; give --track"))
+
+
+def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[str] = None,
+                   time: Optional[float] = None, supplement: Optional[float] = None,
+                   timetable: Optional[Path] = None, dwell: float = 0.0, points: int = 500, workers: int = 1,
+                   out: Optional[Path] = None, plot: bool = True, fig_format: str = "png",
+                   dpi: Optional[float] = None) -> Report:
+    """``ecostudy journey``: a journey's total running time [s] or supplement [%] spread over its
+    segments (equal marginal saving against the same percentage), or a timetable's times."""
+    figures = output(fig_format, dpi)
+    check_options(time=time, supplement=supplement, dwell=dwell, points=points, workers=workers)
+    tt = load_timetable(timetable) if timetable is not None else None
+    trk, trn = load_track(track if track is not None else associated_track(tt, timetable)), load_train(train)
+    scheduled, plan = None, None
+    if tt is not None:
+        if stops or time is not None or supplement is not None or not tt.stops:
+            raise InputError(problem("command line", "--timetable", "a timetable with stop times replaces --stops, "
+                                     "--time and --supplement"))
+        tt, trk = name_stops(tt, trk, timetable)
+        names = [row.stop for row in tt.stops]
+        if tt.windowed:
+            plan = journey_plan(tt, trk, timetable, dwell)
+        else:
+            scheduled = [timing_from_timetable(tt, a, b, timetable).running_time for a, b in zip(names, names[1:])]
+        time, supplement = None, None
+    else:
+        names = list(trk.stops) if stops is None else [n.strip() for n in stops.split(",")]
+    check_stop_list(trk, names, "command line", "--stops")
+    if scheduled is None and plan is None and (time is None) == (supplement is None):
+        raise InputError(problem("command line", "--time/--supplement",
+                                 "give one total running time or supplement, or --timetable"))
+    out_dir = check_output_dir(output_folder(out, Path("out") / "journey"),
+                               ("journey.csv", "journey_totals.csv", "journey.png"))
+    table, totals, results, _ = journey(trk, trn, names, total_time=time,
+                                        supplement=None if supplement is None else supplement * units.PERCENT,
+                                        points=points, workers=workers, scheduled=scheduled, plan=plan)
+    passing = []
+    if plan is not None:  # timing points along the journey (segment lengths from the first split)
+        start = 0.0
+        for windows, run in zip(plan.windows, next(iter(results.values()))):
+            passing += [(start + w.distance, None if w.max_speed is None else units.to_kmh(w.max_speed))
+                        for w in windows]
+            start += run.summary["distance_m"]
+    write_journey(table, totals, results, out_dir, f"{trn.name}: {' - '.join(names)}", passing, plot=plot,
+                  out=figures)
+    return reported(out_dir, [shown(table), shown(totals), "outputs " + listed(out_dir)])

@@ -1,0 +1,72 @@
+"""What a command of :mod:`ecostudy.api` returns: the output folder it wrote, read back as a
+:class:`~ecostudy.io.folder.StudyResult`, with the report the command line prints; and the helpers
+that turn tables into that report.
+"""
+import json
+import logging
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any, Iterable, Sequence
+
+import pandas as pd
+
+from ecostudy.io.folder import StudyResult, load
+
+log = logging.getLogger("ecostudy")
+
+
+@dataclass
+class Report(StudyResult):
+    """An output folder a command wrote (every field of :class:`StudyResult`) and ``text``: the
+    lines the command line prints, ending with the folder and its files."""
+
+    text: str = ""
+
+    def problems(self, shown: int = 20) -> list[str]:
+        """'status: case: reason' of each case not ok (the first ``shown``, then how many more)."""
+        bad = self.summary.get("not_ok", [])
+        lines = [f"{c['status'].split(':')[0]}: {c['case']}: {c['status'].partition(':')[2].strip()}" for c in bad[:shown]]
+        return lines + ([f"... and {len(bad) - shown} more cases not ok (summary.json, report.html)"]
+                        if len(bad) > shown else [])
+
+
+@dataclass
+class Note:
+    """What a command that writes beside an existing folder returns (``check``, ``export``,
+    ``doctor``): ``ok``, the ``text`` printed, and the command's data."""
+
+    ok: bool
+    text: str
+    data: Any = None
+
+
+def reported(folder: Path | str, lines: Iterable[str]) -> Report:
+    """``folder`` read back (:func:`~ecostudy.io.folder.load`) with the printed ``lines``."""
+    result = load(folder)
+    log.info("%s: %s, written to %s", result.kind, result.status, Path(folder).resolve())
+    return Report(**{f.name: getattr(result, f.name) for f in fields(StudyResult)}, text="\n".join(lines))
+
+
+def shown(frame: pd.DataFrame, columns: Sequence[str] | None = None, places: str = ".3f") -> str:
+    """``frame``'s ``columns`` (those it has; all without ``columns``) as a plain text table."""
+    if columns is not None:
+        frame = frame[[c for c in columns if c in frame]]
+    return frame.to_string(index=False, float_format=lambda x: f"{x:{places}}")
+
+
+def listed(out_dir: Path | str, names: Sequence[str] = ()) -> str:
+    """``DIR/ (a, b)``: the files this run left in ``out_dir``: its tables and files as its
+    ``summary.json`` lists them, else those of ``names`` that exist (a figure skipped with
+    ``--no-plot`` is not listed)."""
+    try:
+        summary = json.loads((Path(out_dir) / "summary.json").read_text())
+        names = list(dict.fromkeys([*summary["tables"].values(), *summary["files"]]))
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    return f"{out_dir}/ ({', '.join(n for n in names if (Path(out_dir) / n).is_file())})"
+
+
+def counts_line(counts: dict[str, int], noun: str) -> str:
+    """The one-line summary of a resumable study's counts (``studies.batch.execute``)."""
+    return (f"{counts['total']} {noun}: {counts['stored_before']} already stored, {counts['computed']} computed now "
+            f"({counts['failed']} failed); not ok: {counts['not_ok']}")

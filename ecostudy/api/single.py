@@ -1,0 +1,164 @@
+"""One run into an output folder, and what reads a solved folder back: the commands ``solve``,
+``check``, ``export`` and ``doctor`` as functions (the command line only parses and prints).
+"""
+import re
+from pathlib import Path
+from typing import Any, Optional
+
+import pyomo.environ as pyo
+
+from ecostudy import __version__
+from ecostudy.analysis.single import RunResult, solve_run
+from ecostudy.api.outcome import Note, Report, listed, reported
+from ecostudy.core.errors import InputError, problem
+from ecostudy.das.methods import das_run
+from ecostudy.io.loaders import chosen_stops, load_track, load_train
+from ecostudy.io.results import file_digest
+from ecostudy.io.writers import check_output_dir, write_json
+from ecostudy.ocp import session
+from ecostudy.report.files import write_fixed_step, write_run
+from ecostudy.report.style import output
+from ecostudy.studies.cases import load_checked_study
+from ecostudy.studies.check import check_result
+from ecostudy.studies.options import check_options, only_one, output_folder, parse_pair, timing_of
+
+
+def run_lines(result: RunResult, out_dir: Path) -> list[str]:
+    """The report of one solved run: times, energies, solver, regimes, checks, driver advice, files."""
+    s = result.summary
+    ver = s["verification"]
+    lines = [f"{s['train']}: {s['from']} -> {s['to']} ({s['distance_m']:.0f} m), objective {s['objective']}, "
+             f"K = {s['points']}",
+             f"  running time      {s['running_time_s']:9.2f} s",
+             f"  traction energy   {s['traction_energy_kWh']:9.3f} kWh  ({s['traction_energy_J_per_kg']:.2f} J/kg)",
+             f"  net energy        {s['net_energy_kWh']:9.3f} kWh  (regenerated {s['regenerated_energy_kWh']:.3f} kWh)",
+             f"  solver            {s['solver']['status']}, {s['solver']['iterations']} iterations, "
+             f"{s['solver']['seconds']:.2f} s",
+             f"  regimes           {s['regimes']['sequence']}"]
+    if s.get("pontryagin"):
+        pm = s["pontryagin"]
+        lines.append(f"  Pontryagin check  {pm['agreement_pct']:.1f} % of the distance obeys "
+                     f"{pm.get('conditions', 'eq. 2.17')}" + "".join(f"; {d['regime']} at {d['start_m']:.0f}-"
+                                                                     f"{d['end_m']:.0f} m disagrees"
+                                                                     for d in pm["disagreements"][:3]))
+    if ver is not None:
+        flag = "passed" if ver["passed"] else "FAILED"
+        lines.append(f"  verification      {flag}: arrival {ver['arrival_time_error_s']:+.3f} s, stop "
+                     f"{ver['stop_error_m']:+.3f} m, energy {ver['energy_error_pct']:+.3f} %, overspeed "
+                     f"{ver['max_overspeed_kmh']:.3f} km/h")
+    if s.get("das"):
+        d = s["das"]
+        lines.append(f"  driver advice     {d['method']}: {d['traction_energy_kWh']:.3f} kWh ({d['gap_to_ato_pct']:+.2f} "
+                     f"% against ATO), {d['mode_changes']} mode changes, arrival {d['arrival_error_s']:+.2f} s, "
+                     f"stop {d['stop_error_m']:+.2f} m (advice.csv)")
+        if d.get("gap_to_ato_on_time_pct") is not None:
+            lines.append(f"                    {d['gap_to_ato_on_time_pct']:+.3f} % against ATO with lateness charged "
+                         f"at {abs(s['marginal_energy_kWh_per_s']):.4f} kWh/s; {d['status']}")
+        if d["method"] == "minlp":
+            bound = "no bound" if d["bound_kWh"] is None else f"bound {d['bound_kWh']:.3f} kWh (gap {d['gap_pct']:.2f} %)"
+            lines.append(f"                    MINLP search {d['search_s']:.1f} s, {d['oa_iterations']} OA iterations, "
+                         f"{bound}")
+    lines.append(f"  outputs           {listed(out_dir)}")
+    return lines
+
+
+def solve_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
+                 time: Optional[float] = None, supplement: Optional[float] = None, window: Optional[str] = None,
+                 from_stop: Optional[str] = None, to_stop: Optional[str] = None, objective: Optional[str] = None,
+                 weights: Optional[str] = None, points: Optional[int] = None, out: Optional[Path] = None,
+                 plot: bool = True, das: Optional[str] = None, das_time_limit: float = 60.0, fig_format: str = "png",
+                 dpi: Optional[float] = None) -> Report:
+    """``ecostudy solve``: the energy-optimal (or all-out) run of a study file, or of a track and a
+    train file, verified and written to ``out`` (profile.csv, summary.json, the figures, inputs.json);
+    ``time`` [s], ``supplement`` [%] and ``window`` ('earliest,latest' [s]) override the study's timing."""
+    figures = output(fig_format, dpi)
+    check_options(time=time, supplement=supplement, points=points, das_time_limit=das_time_limit)
+    only_one(time=time, supplement=supplement, window=window)
+    if objective == "time" and any(x is not None for x in (time, supplement, window)):
+        raise InputError(problem("command line", "--objective time", "finds the fastest run: it takes no --time, "
+                                 "--supplement or --window"))
+    if weights is not None and objective != "mixed":
+        raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
+    if study is not None:
+        if track or train:
+            raise InputError(problem("command line", "--track/--train",
+                                     "give a study file or --track and --train, not both"))
+        st = load_checked_study(study)
+        paths = (st.track_path, st.train_path)
+        trk, trn, f, t, windows = st.track, st.train, st.from_stop, st.to_stop, st.windows
+        timing, obj, w, k = st.timing, objective or st.objective, st.weights, points or st.points
+        out_dir = output_folder(out, st.output)
+        if time is not None or supplement is not None:
+            timing = timing_of(time, supplement)
+    else:
+        if not (track and train):
+            raise InputError(problem("command line", "--track/--train",
+                                     "give a study file, or both --track and --train"))
+        trk, trn, paths, windows = load_track(track), load_train(train), (Path(track), Path(train)), ()
+        f, t = chosen_stops(trk, from_stop, to_stop, "command line")
+        obj = objective or "energy"
+        if all(x is None for x in (time, supplement, window)) and obj not in ("time", "mixed"):
+            raise InputError(problem("command line", "--time", "give --time, --supplement or --window "
+                                     "(or --objective time for the all-out run)"))
+        timing = timing_of(time, supplement, window)
+        w = parse_pair(weights, "--weights", nonnegative=True) if weights else (1.0, 1.0)
+        k = points or 1000
+        out_dir = output_folder(out, Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_"))
+    check_output_dir(out_dir, ("profile.csv", "summary.json", "speed.png", "inputs.json"))
+    result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
+    if das is not None:
+        if windows and das != "round":
+            raise InputError(problem(str(study), "windows", f"--das {das} does not handle timing "
+                                     "windows on the way yet; use --das round"))
+        result.das = das_run(result, das, time_limit=das_time_limit)
+        result.summary["das"] = result.das.summary
+    write_run(result, out_dir, plot=plot, out=figures)
+    write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
+                                         "track_sha256": file_digest(paths[0]), "train_sha256": file_digest(paths[1]),
+                                         "from": f, "to": t, "points": k})
+    return reported(out_dir, run_lines(result, out_dir))
+
+
+def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
+    """``ecostudy check``: the Pontryagin regime check of a solve folder (Farooqi 2018, eq. 2.17;
+    eq. 7.4 for net-energy runs), written to its check.json; ``ok`` at 95 % agreement or more."""
+    check_options(time=time)
+    result_dir = Path(result_dir)
+    report = check_result(result_dir, time)
+    write_json(result_dir / "check.json", report)
+    lines = [f"checked as the {report['checked_as']}",
+             "regimes: " + ", ".join(f"{r['regime']} {r['start_m']:.0f}-{r['end_m']:.0f} m" for r in report["sequence"]),
+             f"Pontryagin: {report['agreement_pct']:.1f} % of the distance agrees; stationarity "
+             f"residual {report['stationarity_residual']:.1e}"]
+    lines += [f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m "
+              f"(lambda/v from {d['psi_min']:.2f} to {d['psi_max']:.2f})" for d in report["disagreements"]]
+    lines.append(f"written {result_dir}/check.json")
+    return Note(report["agreement_pct"] >= 95.0, "\n".join(lines), report)
+
+
+def export_folder(result_dir: Path, every: str = "1s") -> Note:
+    """``ecostudy export``: a solve folder's run at fixed steps ('1s': seconds, '10m': metres) as
+    profile_every_<step>.csv and .json in the folder."""
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*(s|m)\s*", every or "")
+    if not match or float(match.group(1)) <= 0:
+        raise InputError(problem("command line", "--every", f"expected a step such as '1s' (seconds) or '10m' "
+                                 f"(metres), not '{every}'"))
+    step = float(match.group(1))
+    table, csv, js = write_fixed_step(result_dir, *((step, None) if match.group(2) == "s" else (None, step)))
+    return Note(True, f"{len(table)} rows every {every.strip()}: {csv} and {js.name}", table)
+
+
+def doctor() -> Note:
+    """``ecostudy doctor``: the solver chain's versions and a toy NLP solved with Ipopt."""
+    lines = [f"{name:10s} {version}" for name, version in {"ecostudy": __version__, **session.versions()}.items()]
+    m = pyo.ConcreteModel()
+    m.x = pyo.Var(initialize=1.0)
+    m.y = pyo.Var(initialize=1.0)
+    m.c = pyo.Constraint(expr=m.x**2 + m.y**2 == 1)
+    m.o = pyo.Objective(expr=m.x + 2 * m.y)
+    out: Any = session.solve(m)
+    ok = out.optimal and abs(pyo.value(m.o) + 5**0.5) < 1e-6
+    lines.append(f"toy NLP    {out.status} in {out.iterations} iterations, objective {pyo.value(m.o):.6f} "
+                 f"(expected {-(5**0.5):.6f}): {'ok' if ok else 'WRONG'}")
+    return Note(bool(ok), "\n".join(lines))
+

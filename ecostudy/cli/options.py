@@ -1,0 +1,44 @@
+"""Options that several commands share, declared once (``Annotated`` types for Typer)."""
+from enum import Enum
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+
+class DasMethod(str, Enum):
+    round = "round"
+    phases = "phases"
+    minlp = "minlp"
+
+
+class Objective(str, Enum):
+    energy = "energy"
+    net_energy = "net_energy"
+    time = "time"
+    mixed = "mixed"
+
+
+FORCE_HELP = "Run work estimated too big (over 2 h for one run, half the memory, a 10^6-point table) anyway."
+
+Study = Annotated[Optional[Path], typer.Argument(help="Study file (YAML).")]
+Track = Annotated[Optional[Path], typer.Option(help="Track file (YAML, or TTOBench JSON).")]
+Train = Annotated[Optional[Path], typer.Option(help="Train file (YAML, or TTOBench/OSRD JSON).")]
+From = Annotated[Optional[str], typer.Option("--from", help="Departure stop (default: first).")]
+To = Annotated[Optional[str], typer.Option("--to", help="Arrival stop (default: last).")]
+Time = Annotated[Optional[float], typer.Option("--time", help="Running time [s].")]
+Supplement = Annotated[Optional[float], typer.Option(help="Running-time supplement over all-out [%].")]
+Points = Annotated[Optional[int], typer.Option("--points", "-K", help="Grid nodes K (default: the study's, else "
+                                                                      "1000; 500 for a front).")]
+Out = Annotated[Optional[Path], typer.Option(help="Output folder (relative: to the working directory; default: "
+                                                  "the study's 'output').")]
+Workers = Annotated[int, typer.Option(help="Local worker processes.")]
+Dask = Annotated[Optional[str], typer.Option(help="Address of a running Dask scheduler (tcp://host:port).")]
+RetryFailed = Annotated[bool, typer.Option(help="Compute failed cases again (infeasible ones stay).")]
+NoProgress = Annotated[bool, typer.Option("--no-progress", help="No progress bar.")]
+NoPlot = Annotated[bool, typer.Option("--no-plot", help="Skip the figures.")]
+Format = Annotated[str, typer.Option("--format", help="Figure format: png, svg or pdf.")]
+Dpi = Annotated[float, typer.Option(help="Figure resolution [dots per inch] (raster images).")]
+DasTimeLimit = Annotated[float, typer.Option(help="Time limit of each MINLP search [s] (--das minlp).")]
+Force = Annotated[bool, typer.Option("--force", help=FORCE_HELP)]
+Debug = Annotated[bool, typer.Option(help="Show tracebacks.")]

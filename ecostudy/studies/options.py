@@ -1,0 +1,111 @@
+"""A command's options checked and expanded before anything is computed: numeric ranges, pairs
+'a,b', options that exclude each other, the case a study file or ``--track``/``--train`` give.
+
+Every refusal is one line naming ``command line`` and the option (exit status 2, as a bad field of
+an input file); the functions of :mod:`ecostudy.api` call them first.
+"""
+import math
+from pathlib import Path
+from typing import Any, NamedTuple, Optional
+
+from ecostudy.core import units
+from ecostudy.core.errors import InputError, problem
+from ecostudy.core.types import Timing, Track, Train
+from ecostudy.io.loaders import chosen_stops, load_track, load_train
+from ecostudy.studies.cases import load_checked_study
+
+# the ranges of numeric options: the same as the study schema's where a field exists (io/schemas.py);
+# (lowest, highest, lowest allowed itself)
+OPTION_RANGES = {
+    "points": (10, 100000, True), "workers": (1, 256, True), "count": (2, 10000, True),
+    "weighted": (0, 1000, True), "time": (0.0, None, False), "supplement": (0.0, None, True),
+    "supplement_max": (0.0, None, False), "dwell": (0.0, None, True), "das_time_limit": (0.0, None, False),
+}
+
+
+def check_options(**values: Any) -> None:
+    """Refuse numeric options that are not finite or out of their range (:data:`OPTION_RANGES`):
+    one line each, naming the option, before anything is computed (exit status 2)."""
+    lines = []
+    for name, value in values.items():
+        if value is None:
+            continue
+        option = "--" + name.replace("_", "-")
+        low, high, closed = OPTION_RANGES[name]
+        if isinstance(value, float) and not math.isfinite(value):
+            lines.append(problem("command line", option, f"must be a finite number, not {value}"))
+        elif value < low or (value == low and not closed) or (high is not None and value > high):
+            bound = f"at least {low}" if closed else f"more than {low}"
+            lines.append(problem("command line", option, f"must be {bound}" + (f" and at most {high}" if high else "")
+                                 + f", not {value}"))
+    if lines:
+        raise InputError(lines)
+
+
+def parse_pair(text: str, option: str, ordered: bool = False, nonnegative: bool = False) -> tuple[float, float]:
+    """Two finite numbers 'a,b'; ``ordered``: a <= b; ``nonnegative``: both >= 0, not both 0."""
+    try:
+        a, b = (float(x) for x in text.split(","))
+    except ValueError:
+        raise InputError(problem("command line", option, f"expected two numbers 'a,b', got '{text}'"))
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise InputError(problem("command line", option, f"must be finite numbers, not '{text}'"))
+    if ordered and not 0 <= a <= b:
+        raise InputError(problem("command line", option, f"must be 'earliest,latest' with 0 <= earliest <= latest, "
+                                 f"not '{text}'"))
+    if nonnegative and (a < 0 or b < 0 or a == b == 0):
+        raise InputError(problem("command line", option, f"must be two weights >= 0, not both 0, not '{text}'"))
+    return a, b
+
+
+def only_one(**options: Any) -> None:
+    """Refuse two options that each set the same thing (one would be ignored)."""
+    given = ["--" + name.replace("_", "-") for name, value in options.items() if value is not None]
+    if len(given) > 1:
+        raise InputError(problem("command line", "/".join(given), "give only one: each sets the running time"))
+
+
+def no_windows(st: Any, command: str) -> None:
+    """Refuse a study's timing windows where ``command`` would ignore them."""
+    if st is not None and (st.windows or st.timing.window is not None):
+        raise InputError(problem(str(st.name), "windows/window_s", f"{command} does not keep timing windows yet; "
+                                 "use `ecostudy solve` (or remove the windows)"))
+
+
+class Case(NamedTuple):
+    """One run's inputs as a command gives them: a study file or ``--track``/``--train``."""
+
+    track: Track
+    train: Train
+    from_stop: str
+    to_stop: str
+    points: Optional[int]
+    study: Any  # the loaded study file, or None
+
+
+def case_from(study: Optional[Path], track: Optional[Path], train: Optional[Path], from_stop: Optional[str],
+              to_stop: Optional[str], points: Optional[int]) -> Case:
+    """The case of a study file (``points`` overrides its K) or of a track and a train file."""
+    if study is not None:
+        if track or train:
+            raise InputError(problem("command line", "--track/--train",
+                                     "give a study file or --track and --train, not both"))
+        st = load_checked_study(study)
+        return Case(st.track, st.train, st.from_stop, st.to_stop, points or st.points, st)
+    if not (track and train):
+        raise InputError(problem("command line", "--track/--train", "give a study file, or both --track and --train"))
+    trk, trn = load_track(track), load_train(train)
+    f, t = chosen_stops(trk, from_stop, to_stop, "command line")
+    return Case(trk, trn, f, t, points, None)
+
+
+def timing_of(time: Optional[float], supplement_pct: Optional[float], window: Optional[str] = None) -> Timing:
+    """The timing the options give: a running time [s], a supplement [%] or a window 'earliest,latest' [s]."""
+    return Timing(running_time=time, supplement=None if supplement_pct is None else supplement_pct * units.PERCENT,
+                  window=parse_pair(window, "--window", ordered=True) if window else None)
+
+
+def output_folder(out: Optional[Path], default: Path) -> Path:
+    """The output folder: ``--out`` if given, else ``default``; a relative one is relative to the
+    working directory in every command (the study file's own ``output`` too)."""
+    return Path(out) if out else Path(default)
