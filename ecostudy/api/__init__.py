@@ -32,7 +32,7 @@ from ecostudy.ocp.restart import Replanner  # noqa: E402
 from ecostudy.report.files import write_run  # noqa: E402
 from ecostudy.studies.pareto import sweep  # noqa: E402
 # one function per command: each writes its output folder and returns it read back with its report
-from ecostudy.api.outcome import Note, Report  # noqa: E402
+from ecostudy.api.outcome import Note, Report, one_line  # noqa: E402
 from ecostudy.api.single import check_folder, doctor, export_folder, solve_folder  # noqa: E402
 from ecostudy.api.fronts import compare_folder, journey_folder, pareto_folder  # noqa: E402
 from ecostudy.api.cases import (calibrate_folder, heavyhaul_folder, network_folder, run_folder,  # noqa: E402
@@ -40,7 +40,7 @@ from ecostudy.api.cases import (calibrate_folder, heavyhaul_folder, network_fold
 
 __all__ = ["load", "StudyResult", "load_train", "load_track", "train_from_dict", "track_from_dict", "solve", "pareto", "replanner",
            "Solution", "Front", "Train", "Track", "State", "Window",
-           "Report", "Note", "solve_folder", "check_folder", "export_folder", "doctor", "pareto_folder", "compare_folder",
+           "Report", "Note", "one_line", "solve_folder", "check_folder", "export_folder", "doctor", "pareto_folder", "compare_folder",
            "journey_folder", "run_folder", "simulate_folder", "heavyhaul_folder", "network_folder", "calibrate_folder",
            "validate_folder"]
 

@@ -17,7 +17,7 @@ from ecostudy.report import calplots, heavyplots, loopplots
 from ecostudy.report.files import write_cases_folder, write_network
 from ecostudy.report.html import write_html
 from ecostudy.report.style import output
-from ecostudy.studies.batch import run_study
+from ecostudy.studies.batch import run_kind
 from ecostudy.studies.calibrate import calibrate_study, validate_study
 from ecostudy.studies.closedloop import expand, simulate_study
 from ecostudy.studies.estimate import check_closed_loop, check_network
@@ -43,11 +43,12 @@ VALIDATION_COLUMNS = ["run", "from_m", "to_m", "logged_time_s", "model_time_s", 
 
 
 def run_folder(study: Path, workers: int = 1, dask: Optional[str] = None, retry_failed: bool = False,
-               out: Optional[Path] = None, progress: Progress = None) -> Report:
-    """``ecostudy run``: every case of a study file (scenarios, sweep, library) not stored yet."""
+               out: Optional[Path] = None, kind: str = "run", *, progress: Progress = None) -> Report:
+    """``ecostudy run``: every case of a study file not stored yet, through the one study engine
+    (:func:`~ecostudy.studies.batch.run_kind`); ``kind``: a registered study kind
+    (:data:`~ecostudy.studies.batch.STUDY_KINDS`; ``run``: scenarios x sweep, or a library)."""
     check_options(workers=workers)
-    table, counts, folder = run_study(study, workers=workers, dask=dask, retry_failed=retry_failed,
-                                      out=Path(out) if out else None, progress=progress)
+    table, counts, folder = run_kind(kind, study, workers, dask, retry_failed, Path(out) if out else None, progress)
     write_html(folder)
     return reported(folder, [f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} "
                              f"computed now ({counts['failed']} of them failed or infeasible); not ok in the table: "
@@ -56,8 +57,8 @@ def run_folder(study: Path, workers: int = 1, dask: Optional[str] = None, retry_
 
 
 def simulate_folder(study: Path, workers: int = 1, dask: Optional[str] = None, retry_failed: bool = False,
-                    out: Optional[Path] = None, progress: Progress = None, plot: bool = True,
-                    only: Optional[Sequence[str]] = None) -> Report:
+                    out: Optional[Path] = None, plot: bool = True, only: Optional[Sequence[str]] = None, *,
+                    progress: Progress = None) -> Report:
     """``ecostudy simulate``: every controller of a closed-loop study drives every draw of the
     plant's deviations and noise (``only``: these controllers' runs computed now)."""
     check_options(workers=workers)
@@ -79,8 +80,8 @@ def simulate_folder(study: Path, workers: int = 1, dask: Optional[str] = None, r
 
 
 def heavyhaul_folder(study: Path, workers: int = 1, dask: Optional[str] = None, retry_failed: bool = False,
-                     out: Optional[Path] = None, progress: Progress = None, plot: bool = True,
-                     blas_threads: int = 1) -> Report:
+                     out: Optional[Path] = None, plot: bool = True, blas_threads: int = 1, *,
+                     progress: Progress = None) -> Report:
     """``ecostudy heavyhaul``: Zhang & Zhuan's braking-penalised receding-horizon controller on the
     coupled-mass train, every K_b, fence and horizon of the study (OpenBLAS set to ``blas_threads``)."""
     check_options(workers=workers)

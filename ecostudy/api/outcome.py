@@ -3,16 +3,14 @@
 that turn tables into that report.
 """
 import json
-import logging
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any, Iterable, Sequence
 
 import pandas as pd
 
+from ecostudy.core.errors import EcostudyError
 from ecostudy.io.folder import StudyResult, load
-
-log = logging.getLogger("ecostudy")
 
 
 @dataclass
@@ -43,7 +41,6 @@ class Note:
 def reported(folder: Path | str, lines: Iterable[str]) -> Report:
     """``folder`` read back (:func:`~ecostudy.io.folder.load`) with the printed ``lines``."""
     result = load(folder)
-    log.info("%s: %s, written to %s", result.kind, result.status, Path(folder).resolve())
     return Report(**{f.name: getattr(result, f.name) for f in fields(StudyResult)}, text="\n".join(lines))
 
 
@@ -70,3 +67,12 @@ def counts_line(counts: dict[str, int], noun: str) -> str:
     """The one-line summary of a resumable study's counts (``studies.batch.execute``)."""
     return (f"{counts['total']} {noun}: {counts['stored_before']} already stored, {counts['computed']} computed now "
             f"({counts['failed']} failed); not ok: {counts['not_ok']}")
+
+
+def one_line(exc: Exception, debug: bool = False) -> tuple[str, int]:
+    """What a user reads of a failure and the exit status: an ecostudy error's own lines and its
+    ``exit_code``, else 'internal error: ...' and 3."""
+    if isinstance(exc, EcostudyError):
+        return str(exc), exc.exit_code
+    return (f"internal error: {type(exc).__name__}: {exc}" + ("" if debug else " (rerun with --debug for the "
+                                                                "traceback)"), 3)

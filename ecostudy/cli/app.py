@@ -9,14 +9,12 @@ import logging
 import sys
 import traceback
 import warnings
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Optional
 
 import typer
 
 from ecostudy.core.budget import forced
-from ecostudy.core.errors import EcostudyError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,  # "[s]" is a unit, not markup
                   help="Energy-efficient train control studies (Pyomo + Ipopt).")
@@ -49,41 +47,37 @@ def _main(ctx: typer.Context,
     configure()  # once, before any command imports the solver chain
 
 
-def guarded(debug, fn, *args, force=False):
-    """Run ``fn`` (with the size guards of :mod:`ecostudy.core.budget` lifted when ``force``); turn
-    ecostudy errors into one-line messages and exit codes, warnings into log lines."""
-    with warnings.catch_warnings(record=True) as caught:
+def call(debug, name, *args, force=False, bar=None):
+    """``ecostudy.api.<name>(*args)`` (size guards of :mod:`ecostudy.core.budget` lifted when ``force``;
+    ``bar``: (label, off) of a progress bar passed as its ``progress``); errors become one line and
+    an exit code, warnings log lines, Ctrl-C exit status 130 (the finished cases are kept)."""
+    from ecostudy import api
+    from ecostudy.report.console import progress_bar
+
+    with warnings.catch_warnings(record=True) as caught, forced(force):
         warnings.simplefilter("always")
         try:
-            with forced(force):
-                return fn(*args)
-        except (KeyboardInterrupt, typer.Exit):
+            if bar is None:
+                return getattr(api, name)(*args)
+            with progress_bar(bar[0], bar[1] or quiet[0]) as progress:
+                return getattr(api, name)(*args, progress=progress)
+        except typer.Exit:
             raise
+        except KeyboardInterrupt:
+            if bar is None:
+                raise
+            log.warning(f"interrupted: every finished {bar[0][:-1]} is stored; run the same command again to continue")
+            raise typer.Exit(130)
         except Exception as exc:  # an unexpected failure still gets one line by default
             if debug:
                 traceback.print_exc()
-            known = isinstance(exc, EcostudyError)
-            for line in str(exc if known else f"internal error: {type(exc).__name__}: {exc}" + (
-                    "" if debug else " (rerun with --debug for the traceback)")).splitlines():
+            text, code = api.one_line(exc, debug)
+            for line in text.splitlines():
                 log.error(line)
-            raise typer.Exit(exc.exit_code if known else 3)
+            raise typer.Exit(code)
         finally:
             for w in caught:
                 log.warning(str(w.message))
-
-
-@contextmanager
-def case_progress(label, disabled):
-    """:func:`ecostudy.report.console.progress_bar`, off with ``--quiet``; Ctrl-C inside ends with exit
-    status 130 and says that the finished cases are kept."""
-    from ecostudy.report.console import progress_bar
-
-    try:
-        with progress_bar(label, disabled or quiet[0]) as progress:
-            yield progress
-    except KeyboardInterrupt:
-        log.warning(f"interrupted: every finished {label[:-1]} is stored; run the same command again to continue")
-        raise typer.Exit(130)
 
 
 def finish(result):
@@ -92,5 +86,13 @@ def finish(result):
     typer.echo(result.text)
     for line in result.problems():
         typer.secho(line, fg=typer.colors.YELLOW, err=True)
+    log.info(f"{result.kind}: {result.status}, written to {result.folder.resolve()}")  # on stderr, last
     if result.summary.get("not_ok"):
         raise typer.Exit(1)
+
+
+def told(note, code):
+    """Print a command's note (:class:`ecostudy.api.Note`); exit status ``code`` when it is not ok."""
+    typer.echo(note.text)
+    if not note.ok:
+        raise typer.Exit(code)

@@ -6,7 +6,7 @@ from typing import Optional
 import typer
 
 from ecostudy.cli import options as o
-from ecostudy.cli.app import app, finish, guarded
+from ecostudy.cli.app import app, call, finish
 
 
 @app.command(short_help="Fit a train's parameters to logged runs, with 95 % intervals.")
@@ -27,8 +27,7 @@ def calibrate(
 ):
     """Fit train parameters to logged runs: least squares on the replayed dynamics, 95 % intervals,
     identifiability (parameters the logs do not excite are held at the train file's value, exit 1)."""
-    from ecostudy import api
-    finish(guarded(debug, api.calibrate_folder, logs, train, track, fit, out, bootstrap, savings, not no_plot))
+    finish(call(debug, "calibrate_folder", logs, train, track, fit, out, bootstrap, savings, not no_plot))
 
 
 @app.command(short_help="Replay a logged run on the model: energy and time differences.")
@@ -44,5 +43,4 @@ def validate(
 ):
     """Replay a logged run on the train file's model: traction energy following the logged speed, and
     running time driven by the logged handle, per run between stops."""
-    from ecostudy import api
-    finish(guarded(debug, api.validate_folder, log, train, track, out, energy_tolerance, time_tolerance, not no_plot))
+    finish(call(debug, "validate_folder", log, train, track, out, energy_tolerance, time_tolerance, not no_plot))

@@ -4,7 +4,7 @@ from pathlib import Path
 import typer
 
 from ecostudy.cli import options as o
-from ecostudy.cli.app import app, case_progress, finish, guarded
+from ecostudy.cli.app import app, call, finish
 
 
 @app.command(short_help="Heavy-haul train as coupled masses under braking-penalised RHC (Zhang & Zhuan).")
@@ -18,8 +18,5 @@ def heavyhaul(
     debug: o.Debug = False,
 ):
     """Heavy haul: Zhang & Zhuan's braking-penalised receding-horizon controller on the coupled-mass train (resumable)."""
-    from ecostudy import api
-    with case_progress("runs", no_progress) as progress:
-        result = guarded(debug, api.heavyhaul_folder, study, workers, dask, retry_failed, out, progress, not no_plot,
-                         blas_threads)
-    finish(result)
+    finish(call(debug, "heavyhaul_folder", study, workers, dask, retry_failed, out, not no_plot, blas_threads,
+                bar=("runs", no_progress)))

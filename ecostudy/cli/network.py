@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from ecostudy.cli import options as o
-from ecostudy.cli.app import app, finish, guarded
+from ecostudy.cli.app import app, call, finish
 
 
 @app.command(short_help="Trains sharing a DC substation: independent, supervisor rules, joint optimum.")
@@ -19,5 +19,4 @@ def network(
     force: o.Force = False, debug: o.Debug = False,
 ):
     """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""
-    from ecostudy import api
-    finish(guarded(debug, api.network_folder, study, out, not no_plot, workers, fig_format, dpi, force=force))
+    finish(call(debug, "network_folder", study, out, not no_plot, workers, fig_format, dpi, force=force))

@@ -6,18 +6,9 @@ from typing import Annotated, Optional
 import typer
 
 
-class DasMethod(str, Enum):
-    round = "round"
-    phases = "phases"
-    minlp = "minlp"
-
-
-class Objective(str, Enum):
-    energy = "energy"
-    net_energy = "net_energy"
-    time = "time"
-    mixed = "mixed"
-
+# the choices of --das and --objective (a str Enum each, as Typer lists them in the help)
+DasMethod = Enum("DasMethod", {name: name for name in ("round", "phases", "minlp")}, type=str)
+Objective = Enum("Objective", {name: name for name in ("energy", "net_energy", "time", "mixed")}, type=str)
 
 FORCE_HELP = "Run work estimated too big (over 2 h for one run, half the memory, a 10^6-point table) anyway."
 

@@ -5,7 +5,7 @@ from typing import Optional
 import typer
 
 from ecostudy.cli import options as o
-from ecostudy.cli.app import app, case_progress, finish, guarded
+from ecostudy.cli.app import app, call, finish
 
 
 @app.command(short_help="Closed loop: controllers drive a perturbed plant, Monte Carlo, resumable.")
@@ -19,8 +19,5 @@ def simulate(
     force: o.Force = False, debug: o.Debug = False,
 ):
     """Closed loop: every controller drives every draw of the plant's deviations and noise (resumable)."""
-    from ecostudy import api
-    with case_progress("runs", no_progress) as progress:
-        result = guarded(debug, api.simulate_folder, study, workers, dask, retry_failed, out,
-                         progress, not no_plot, only, force=force)
-    finish(result)
+    finish(call(debug, "simulate_folder", study, workers, dask, retry_failed, out, not no_plot, only, force=force,
+                bar=("runs", no_progress)))

@@ -1,6 +1,6 @@
 """Single-run commands: solve, check, export, doctor (registered on :data:`ecostudy.cli.app.app`).
 
-They parse options, call :mod:`ecostudy.api` and print; errors become one line (:func:`guarded`).
+They parse options, call :mod:`ecostudy.api` and print; errors become one line (:func:`~ecostudy.cli.app.call`).
 """
 from pathlib import Path
 from typing import Optional
@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 
 from ecostudy.cli import options as o
-from ecostudy.cli.app import app, finish, guarded
+from ecostudy.cli.app import app, call, finish, told
 
 
 @app.command(short_help="Energy-optimal (or all-out) run between two stops, verified.")
@@ -27,10 +27,9 @@ def solve(
     das_time_limit: o.DasTimeLimit = 60.0, force: o.Force = False, debug: o.Debug = False,
 ):
     """Energy-optimal (or all-out) run between two stops, verified by re-simulation."""
-    from ecostudy import api
-    finish(guarded(debug, api.solve_folder, study, track, train, time, supplement, window,
-                   from_stop, to_stop, objective and objective.value, weights, points, out, not no_plot,
-                   das and das.value, das_time_limit, fig_format, dpi, force=force))
+    finish(call(debug, "solve_folder", study, track, train, time, supplement, window, from_stop, to_stop,
+                objective and objective.value, weights, points, out, not no_plot, das and das.value, das_time_limit,
+                fig_format, dpi, force=force))
 
 
 @app.command(short_help="Pontryagin regime check of a solved profile.")
@@ -40,11 +39,7 @@ def check(
     debug: o.Debug = False,
 ):
     """Pontryagin regime check of a solved profile (Farooqi 2018, eq. 2.17; eq. 7.4 for net-energy runs); exit 1 below 95 % agreement."""
-    from ecostudy import api
-    note = guarded(debug, api.check_folder, result_dir, time)
-    typer.echo(note.text)
-    if not note.ok:
-        raise typer.Exit(1)
+    told(call(debug, "check_folder", result_dir, time), 1)
 
 
 @app.command(short_help="A solved run every N s or N m (CSV and JSON), for on-board systems.")
@@ -58,15 +53,10 @@ def export(
 
     Example: ecostudy export out/default --every 10m
     """
-    from ecostudy import api
-    typer.echo(guarded(debug, api.export_folder, result_dir, every).text)
+    typer.echo(call(debug, "export_folder", result_dir, every).text)
 
 
 @app.command(short_help="Check the install: solver chain versions and a toy solve.")
 def doctor(debug: o.Debug = False):
     """Check the install: versions of the solver chain and a toy NLP solved with Ipopt."""
-    from ecostudy import api
-    note = guarded(debug, api.doctor)
-    typer.echo(note.text)
-    if not note.ok:
-        raise typer.Exit(3)
+    told(call(debug, "doctor"), 3)

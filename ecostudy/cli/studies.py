@@ -8,7 +8,7 @@ from typing import Optional
 import typer
 
 from ecostudy.cli import options as o
-from ecostudy.cli.app import app, case_progress, finish, guarded
+from ecostudy.cli.app import app, call, finish
 
 
 @app.command(short_help="Energy against running time: the Pareto front.")
@@ -25,10 +25,9 @@ def pareto(
     dpi: o.Dpi = 110.0, force: o.Force = False, debug: o.Debug = False,
 ):
     """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS."""
-    from ecostudy import api
-    finish(guarded(debug, api.pareto_folder, study, track, train, from_stop, to_stop, count,
-                   supplement_max, points, workers, cold, out, not no_plot, weighted, das and das.value,
-                   das_time_limit, fig_format, dpi, force=force))
+    finish(call(debug, "pareto_folder", study, track, train, from_stop, to_stop, count, supplement_max, points,
+                workers, cold, out, not no_plot, weighted, das and das.value, das_time_limit, fig_format, dpi,
+                force=force))
 
 
 @app.command(name="compare", short_help="Strategies side by side, each re-simulated by one simulator.")
@@ -43,9 +42,8 @@ def compare_command(
 
     Example: ecostudy compare studies/default.yaml --out out/compare
     """
-    from ecostudy import api
-    finish(guarded(debug, api.compare_folder, study, track, train, from_stop, to_stop, time,
-                   supplement, points, out, not no_plot, fig_format, dpi, force=force))
+    finish(call(debug, "compare_folder", study, track, train, from_stop, to_stop, time, supplement, points, out,
+                not no_plot, fig_format, dpi, force=force))
 
 
 @app.command(name="journey", short_help="Spread a journey's running time over its segments.")
@@ -66,9 +64,8 @@ def journey_command(
     force: o.Force = False, debug: o.Debug = False,
 ):
     """Spread a journey's running time over its segments: equal marginal saving vs same percentage."""
-    from ecostudy import api
-    finish(guarded(debug, api.journey_folder, train, track, stops, time, supplement, timetable,
-                   dwell, points, workers, out, not no_plot, fig_format, dpi, force=force))
+    finish(call(debug, "journey_folder", train, track, stops, time, supplement, timetable, dwell, points, workers,
+                out, not no_plot, fig_format, dpi, force=force))
 
 
 @app.command(short_help="Every case of a study file; resumable, in parallel.")
@@ -76,10 +73,8 @@ def run(
     study: Path = typer.Argument(..., help="Study file (YAML) with optional scenarios and sweep."),
     workers: o.Workers = 1, dask: o.Dask = None, retry_failed: o.RetryFailed = False, out: o.Out = None,
     no_progress: o.NoProgress = False, force: o.Force = False, debug: o.Debug = False,
+    kind: str = typer.Option("run", help="Study kind: run (scenarios x sweep, or a library), or one registered."),
 ):
     """Run every case of a study; finished cases are stored and never computed twice."""
-    from ecostudy import api
-    with case_progress("cases", no_progress) as progress:
-        result = guarded(debug, api.run_folder, study, workers, dask, retry_failed, out, progress,
-                         force=force)
-    finish(result)
+    finish(call(debug, "run_folder", study, workers, dask, retry_failed, out, kind, force=force,
+                bar=("cases", no_progress)))

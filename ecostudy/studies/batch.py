@@ -8,10 +8,14 @@ import re
 import time
 import warnings
 from concurrent.futures import as_completed
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, NamedTuple
 
 import pandas as pd
 
 from ecostudy.analysis.single import solve_run
+from ecostudy.core.registry import Registry
 from ecostudy.core.errors import EcostudyError, EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.types import Timing
 from ecostudy.das.methods import das_columns
@@ -154,28 +158,68 @@ def stored_rows(cases, path, task, workers=1, dask=None, retry_failed=False, pro
         store.close()
 
 
-def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
-    """Run the cases of a study file that are not stored yet; returns (table, counts, output folder).
+class Expanded(NamedTuple):
+    """A study file expanded by its kind: the output folder, the cases (dicts, each with its
+    ``key`` (:func:`~ecostudy.studies.cases.case_key` of what changes the answer), ``study`` and
+    ``scenario`` names and ``labels`` (the columns naming it in the table)) and tables of the expansion
+    itself written beside the results (file name -> table, e.g. a library's ``skipped.csv``)."""
 
-    ``progress(done, failed, remaining, total)`` is called after each case.
-    """
-    skipped = []
-    study, output, cases = expand(path, skipped)
-    output = check_output_dir(out or output, ("results.csv", "results.sqlite", "skipped.csv"))
-    if skipped:  # a library's train-track pairs left out, and why
-        write_csv(output / "skipped.csv", pd.DataFrame(skipped))
-    store = Store(output / "results.sqlite")
+    output: Path
+    cases: list
+    inputs: dict = {}
+
+
+@dataclass(frozen=True)
+class StudyKind:
+    """What makes a kind of study: ``expand(path)`` -> :class:`Expanded` (validated, before anything
+    runs), ``task(case)`` -> a result dict (pure, picklable, never raising: wrap the work in
+    :func:`outcome`), ``table(cases, rows)`` -> one row per case with ``status`` and ``reason``
+    from the stored ``rows`` by case key."""
+
+    expand: Callable[[Path], Expanded]
+    task: Callable[[dict], dict]
+    table: Callable[[list, dict], pd.DataFrame]
+
+
+STUDY_KINDS: Registry[StudyKind] = Registry("study kind")
+
+
+def run_kind(kind, path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
+    """The one study engine: a study file of ``kind`` expanded into cases; the cases not stored yet
+    run (serially, in ``workers`` processes or on ``dask``, :func:`execute`), each stored as it
+    arrives; the table of every stored case; results.csv and summary.json written. Returns
+    (table, counts, output folder); ``progress(done, failed, remaining, total)`` after each case."""
     try:
-        counts = execute(cases, store, run_case, workers, dask, retry_failed, progress)
-        table = study_table(cases, store)
-    finally:
-        store.close()
+        spec = STUDY_KINDS.get(kind)
+    except KeyError as exc:
+        raise InputError(problem("command line", "--kind", exc.args[0]))
+    expanded = spec.expand(Path(path))
+    output = check_output_dir(out or expanded.output, ("results.csv", "results.sqlite", *expanded.inputs))
+    for name, frame in expanded.inputs.items():
+        write_csv(output / name, frame)
+    counts, rows = stored_rows(expanded.cases, output / "results.sqlite", spec.task, workers, dask, retry_failed,
+                               progress)
+    table = spec.table(expanded.cases, rows)
     write_csv(output / "results.csv", table)
-    write_summary(output, "run", case_statuses(cases, table), {"results": "results.csv",
-                  **({"skipped": "skipped.csv"} if skipped else {})}, ["results.sqlite"], study=str(path),
+    write_summary(output, kind, case_statuses(expanded.cases, table), {"results": "results.csv", **{
+                  Path(name).stem: name for name in expanded.inputs}}, ["results.sqlite"], study=str(path),
                   computed_now=counts["computed"], stored_before=counts["stored_before"])
     counts["not_ok"] = int((table["status"] != "ok").sum())
     return table, counts, output
+
+
+def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
+    """Run the cases of a study file that are not stored yet (:func:`run_kind` of ``run``);
+    returns (table, counts, output folder)."""
+    return run_kind("run", path, workers, dask, retry_failed, out, progress)
+
+
+def expand_study(path):
+    """A study file's cases (:func:`~ecostudy.studies.cases.expand`), a library's pairs left out
+    beside them as ``skipped.csv``."""
+    skipped = []
+    _, output, cases = expand(path, skipped)
+    return Expanded(output, cases, {"skipped.csv": pd.DataFrame(skipped)} if skipped else {})
 
 
 def case_statuses(cases, table):
@@ -188,9 +232,9 @@ def case_statuses(cases, table):
 RESULT_COLUMNS = {"running_time_s", "points", "status", "key", "reason", "seconds", "verified"}  # never labels
 
 
-def study_table(cases, store):
-    """One row per case of the study, in study order: labels, status, reason and key results."""
-    rows = store.get([c["key"] for c in cases])
+def study_table(cases, rows):
+    """One row per case of the study, in study order: labels, status, reason and key results
+    (``rows``: the stored results by case key)."""
     out = []
     for case in cases:
         row = rows.get(case["key"])
@@ -208,3 +252,7 @@ def study_table(cases, store):
         if any(c.get("das") for c in cases):
             out[-1].update(s.get("das") or {})
     return pd.DataFrame(out)
+
+
+STUDY_KINDS.register("run", StudyKind(expand_study, run_case, study_table),
+                     doc="single runs: a study file's scenarios x sweep, or a TTOBench library")

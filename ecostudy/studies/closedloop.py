@@ -89,7 +89,7 @@ def expand(path):
                     "noise": {**noise, "seed": seed}, "version": __version__}
             case["key"] = case_key(case)
             cases.append(case)
-    output = path.parent / s.output if s.output else Path("out") / s.name
+    output = Path(s.output) if s.output else Path("out") / s.name  # relative: to the working directory
     return s, output, cases
 
 

@@ -102,7 +102,7 @@ def expand(path):
                 "labels": {"K_b": kb, "f": f, "Np": h.np, "Nc": h.nc}}
         case["key"] = case_key(case)
         cases.append(case)
-    output = path.parent / s.output if s.output else Path("out") / s.name
+    output = Path(s.output) if s.output else Path("out") / s.name  # relative: to the working directory
     return s, output, reference, cases
 
 

@@ -1,0 +1,52 @@
+"""--quiet, --verbose and --log-file: messages through the standard ``logging`` module, progress on
+stderr only (never with --quiet), results alone on stdout."""
+import subprocess
+import sys
+from pathlib import Path
+
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+
+from .conftest import STUDIES, TRACKS, TRAINS
+
+ECOSTUDY = str(Path(sys.executable).parent / "ecostudy")
+SOLVE = ["solve", str(STUDIES / "default.yaml"), "--points", "100", "--no-plot"]
+
+
+def test_log_file_gets_the_messages_and_the_errors(tmp_path):
+    log = tmp_path / "run.log"
+    r = CliRunner().invoke(app, ["--log-file", str(log), *SOLVE, "--out", str(tmp_path / "s")])
+    assert r.exit_code == 0, r.output
+    assert f"INFO ecostudy: solve: ok, written to {tmp_path / 's'}" in log.read_text()
+    bad = CliRunner().invoke(app, ["--log-file", str(log), *SOLVE, "--points", "-3"])
+    assert bad.exit_code == 2
+    assert "ERROR ecostudy: command line: --points: must be at least 10" in log.read_text()
+
+
+def test_verbose_logs_every_case_and_the_command_line(tmp_path):
+    log = tmp_path / "run.log"
+    study = tmp_path / "study.yaml"
+    study.write_text(f"name: v\ntrack: {TRACKS / 'amsterdam_rokin_centraal.yaml'}\ntrain: "
+                     f"{TRAINS / 'amsterdam_metro.yaml'}\npoints: 100\nsweep: {{running_time_s: [76, 80]}}\n")
+    r = CliRunner().invoke(app, ["--verbose", "--log-file", str(log), "run", str(study), "--out", str(tmp_path / "r")])
+    assert r.exit_code == 0, r.output
+    text = log.read_text()
+    assert "DEBUG ecostudy: cases: 2 of 2 done (0 failed)" in text and "DEBUG ecostudy: ecostudy " in text
+
+
+def test_quiet_prints_the_results_and_nothing_else(tmp_path):
+    quiet = CliRunner().invoke(app, ["--quiet", *SOLVE, "--out", str(tmp_path / "q")])
+    assert quiet.exit_code == 0, quiet.output
+    assert "written to" not in quiet.output  # information (and progress) off
+    assert "traction energy" in quiet.output
+    bad = CliRunner().invoke(app, ["--quiet", *SOLVE, "--points", "-3"])
+    assert bad.exit_code == 2 and bad.output.startswith("error: command line: --points")  # errors stay
+
+
+def test_piped_solve_prints_no_carriage_return_on_stdout(tmp_path):
+    """`ecostudy solve studies/default.yaml --no-plot --out X | cat`: results on stdout, the rest on stderr."""
+    r = subprocess.run([ECOSTUDY, *SOLVE, "--out", "X"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert "traction energy" in r.stdout and "\r" not in r.stdout and "\x1b[" not in r.stdout
+    assert "written to" not in r.stdout and r.stderr.strip() == f"solve: ok, written to {tmp_path / 'X'}"

@@ -1,0 +1,66 @@
+"""One rule for output folders: a relative folder, from ``--out`` or from a study file's ``output``,
+is relative to the working directory in every command (never to the study file's folder), and the
+folder is printed at the end."""
+from pathlib import Path
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+from ecostudy.io.loaders import load_network_study
+from ecostudy.studies import cases, closedloop, heavyhaul
+from ecostudy.studies.cases import load_checked_study
+
+from .conftest import ROOT, STUDIES
+
+# each kind of study file and what reads its output folder (the commands that use it)
+READERS = {
+    "default.yaml": lambda p: load_checked_study(p).output,  # solve, pareto, compare
+    "metro_supplements.yaml": lambda p: cases.expand(p)[1],  # run
+    "network_metro_2trains.yaml": lambda p: load_network_study(p).output,  # network
+    "thesis001_closed_loop.yaml": lambda p: closedloop.expand(p)[1],  # simulate
+    "heavyhaul_fence.yaml": lambda p: heavyhaul.expand(p)[1],  # heavyhaul
+}
+
+
+@pytest.fixture
+def layout(tmp_path, monkeypatch):
+    """The shipped studies copied to ``tmp/studies`` (their ``../tracks`` and ``../trains`` linked)
+    and a working directory ``tmp/work`` elsewhere."""
+    for folder in ("tracks", "trains"):
+        (tmp_path / folder).symlink_to(ROOT / folder)
+    (tmp_path / "studies").mkdir()
+    (tmp_path / "work").mkdir()
+    monkeypatch.chdir(tmp_path / "work")
+    return tmp_path
+
+
+def copied(layout, name, output):
+    doc = yaml.safe_load((STUDIES / name).read_text())
+    doc["output"] = output
+    path = layout / "studies" / name
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path
+
+
+@pytest.mark.parametrize("name", sorted(READERS))
+def test_a_study_files_relative_output_is_relative_to_the_working_directory(layout, name):
+    folder = READERS[name](copied(layout, name, "results/here"))
+    assert Path(folder).resolve() == layout / "work" / "results" / "here"
+
+
+def test_solve_writes_where_the_study_says_from_the_working_directory_and_prints_it(layout):
+    study = copied(layout, "default.yaml", "results/solved")
+    r = CliRunner().invoke(app, ["solve", str(study), "--points", "100", "--no-plot"])
+    assert r.exit_code == 0, r.output
+    folder = layout / "work" / "results" / "solved"
+    assert (folder / "summary.json").is_file() and not (layout / "studies" / "results").exists()
+    assert r.output.rstrip().splitlines()[-1] == f"solve: ok, written to {folder}"  # the folder, last
+
+
+def test_pareto_and_compare_put_their_folder_beside_the_studys_in_the_working_directory(layout):
+    from ecostudy.api.fronts import beside
+    st = load_checked_study(copied(layout, "default.yaml", "results/d"))
+    for suffix in ("_pareto", "_compare"):
+        assert beside(st, suffix, "x").resolve() == layout / "work" / "results" / f"d{suffix}"
