@@ -132,6 +132,12 @@ def test_every_module_is_in_a_layer_and_short():
     assert not stray, f"modules outside the layers: {stray}"
 
 
+def test_the_command_line_is_thin():
+    """The command line parses, calls ``ecostudy.api`` and prints: all of ``cli/`` under 400 lines."""
+    sizes = {p.name: len(p.read_text().splitlines()) for p in sorted((PACKAGE / "cli").glob("*.py"))}
+    assert sum(sizes.values()) < MAX_LINES, f"ecostudy/cli: {sum(sizes.values())} lines ({sizes}); move logic to the API"
+
+
 def test_the_check_sees_a_cycle_and_an_upward_import(tmp_path, monkeypatch):
     """The checks above can fail: core.errors importing the cli is both an upward import and
     (cli.app imports core.errors) a cycle."""
