@@ -1,10 +1,7 @@
-"""The Typer application and what every command shares: logging, one-line errors, exit codes, progress.
-
-Exit status: 0 verified optimal result, 1 result written but flagged (not optimal or failed
-verification), 2 bad input or infeasible request, 3 solver failure or internal error, 130
-interrupted. ``--debug`` shows tracebacks. Messages go through the ``ecostudy`` logger to stderr
-(``--quiet``: errors only; ``--verbose``: each case too) and to ``--log-file``.
-"""
+"""The Typer application and what every command shares: messages through the ``ecostudy`` logger
+(``--quiet``, ``--verbose``, ``--log-file``), one-line errors (``--debug``: tracebacks), exit status:
+0 ok, 1 written but not ok (flagged or failed cases), 2 bad input or infeasible request, 3 solver
+failure or internal error, 130 interrupted."""
 import logging
 import sys
 import traceback
@@ -64,9 +61,8 @@ def call(debug, name, *args, force=False, bar=None):
         except typer.Exit:
             raise
         except KeyboardInterrupt:
-            if bar is None:
-                raise
-            log.warning(f"interrupted: every finished {bar[0][:-1]} is stored; run the same command again to continue")
+            log.warning("interrupted" + (f": every finished {bar[0][:-1]} is stored; run the same command again to "
+                                         "continue" if bar else ""))
             raise typer.Exit(130)
         except Exception as exc:  # an unexpected failure still gets one line by default
             if debug:
