@@ -1,16 +1,11 @@
 """--quiet, --verbose and --log-file: messages through the standard ``logging`` module, progress on
-stderr only (never with --quiet), results alone on stdout."""
-import subprocess
-import sys
-from pathlib import Path
-
+stderr only (never with --quiet), results alone on stdout (piped: tests/test_cli_output.py)."""
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
 
 from .conftest import STUDIES, TRACKS, TRAINS
 
-ECOSTUDY = str(Path(sys.executable).parent / "ecostudy")
 SOLVE = ["solve", str(STUDIES / "default.yaml"), "--points", "100", "--no-plot"]
 
 
@@ -42,11 +37,3 @@ def test_quiet_prints_the_results_and_nothing_else(tmp_path):
     assert "traction energy" in quiet.output
     bad = CliRunner().invoke(app, ["--quiet", *SOLVE, "--points", "-3"])
     assert bad.exit_code == 2 and bad.output.startswith("error: command line: --points")  # errors stay
-
-
-def test_piped_solve_prints_no_carriage_return_on_stdout(tmp_path):
-    """`ecostudy solve studies/default.yaml --no-plot --out X | cat`: results on stdout, the rest on stderr."""
-    r = subprocess.run([ECOSTUDY, *SOLVE, "--out", "X"], cwd=tmp_path, capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stderr
-    assert "traction energy" in r.stdout and "\r" not in r.stdout and "\x1b[" not in r.stdout
-    assert "written to" not in r.stdout and r.stderr.strip() == f"solve: ok, written to {tmp_path / 'X'}"

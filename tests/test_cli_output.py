@@ -40,7 +40,9 @@ def test_piped_solve_and_pareto_print_no_progress_on_stdout(tmp_path):
                    TRAINS / "amsterdam_metro.yaml", "--count", 3, "--points", 200, "--no-plot", "--out", "p",
                    tmp_path=tmp_path)
     assert pareto.returncode == 0, pareto.stderr
-    for result in (solve, pareto):
+    for result, kind, folder in ((solve, "solve", "s"), (pareto, "pareto", "p")):
         assert result.stdout.strip(), "the results are printed on stdout"
+        # the folder, resolved against the working directory, printed last on stderr
+        assert result.stderr.strip().splitlines()[-1] == f"{kind}: ok, written to {tmp_path / folder}"
         assert "\r" not in result.stdout and "\x1b[" not in result.stdout, result.stdout
         assert "━" not in result.stdout  # rich's bar

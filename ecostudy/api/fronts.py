@@ -88,10 +88,10 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
     return reported(out_dir, [shown(table), "outputs " + listed(out_dir)])
 
 
-def associated_track(tt, path: Path) -> Path:
+def associated_track(tt, path: Optional[Path]) -> Path:
     """The track file a timetable names (TTOBench 'associated track'), looked for beside it and in a
     sibling ``tracks/`` folder (the library's layout)."""
-    if tt is None or tt.track is None:
+    if tt is None or tt.track is None or path is None:
         raise InputError(problem("command line", "--track", "missing (the timetable names no track)"))
     here = Path(path).resolve().parent
     for candidate in (here / f"{tt.track}.json", here.parent / "tracks" / f"{tt.track}.json",

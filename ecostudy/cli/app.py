@@ -31,7 +31,7 @@ def _main(ctx: typer.Context,
           version: Annotated[bool, typer.Option("--version", callback=_print_version, is_eager=True,
                                                 help="Print the version and exit.")] = False,
           quiet_: Annotated[bool, typer.Option("--quiet", "-q", help="No progress, errors only.")] = False,
-          verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Every message on stderr, each case's progress too.")] = False,
+          verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Debug messages too (each case).")] = False,
           log_file: Annotated[Optional[Path], typer.Option(help="Also write the messages to this file.")] = None,
           ) -> None:
     """Energy-efficient train control studies (Pyomo + Ipopt)."""

@@ -7,8 +7,9 @@ import typer
 
 
 # the choices of --das and --objective (a str Enum each, as Typer lists them in the help)
-DasMethod = Enum("DasMethod", {name: name for name in ("round", "phases", "minlp")}, type=str)
-Objective = Enum("Objective", {name: name for name in ("energy", "net_energy", "time", "mixed")}, type=str)
+DasMethod = Enum("DasMethod", {"round": "round", "phases": "phases", "minlp": "minlp"}, type=str)
+Objective = Enum("Objective", {"energy": "energy", "net_energy": "net_energy", "time": "time", "mixed": "mixed"},
+                 type=str)
 
 FORCE_HELP = "Run work estimated too big (over 2 h for one run, half the memory, a 10^6-point table) anyway."
 

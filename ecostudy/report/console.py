@@ -16,7 +16,7 @@ log = logging.getLogger("ecostudy")
 class Stderr(logging.StreamHandler):
     """Messages on the current ``sys.stderr`` ('error: ...', 'warning: ...', information as is)."""
 
-    stream = property(lambda self: sys.stderr, lambda self, value: None)  # type: ignore[assignment]
+    stream = property(lambda self: sys.stderr, lambda self, value: None)
 
     def format(self, record: logging.LogRecord) -> str:
         return (f"{record.levelname.lower()}: " if record.levelno >= logging.WARNING else "") + record.getMessage()
