@@ -37,3 +37,18 @@ def test_quiet_prints_the_results_and_nothing_else(tmp_path):
     assert "traction energy" in quiet.output
     bad = CliRunner().invoke(app, ["--quiet", *SOLVE, "--points", "-3"])
     assert bad.exit_code == 2 and bad.output.startswith("error: command line: --points")  # errors stay
+
+
+def test_a_front_reports_its_progress_point_by_point(tmp_path):
+    from ecostudy import api
+    calls = []
+    api.pareto_folder(track=TRACKS / "amsterdam_rokin_centraal.yaml", train=TRAINS / "amsterdam_metro.yaml", count=3,
+                      points=100, workers=2, out=tmp_path / "p", plot=False, progress=lambda *a: calls.append(a))
+    assert calls[0] == (1, 0, 2, 3) and calls[-1] == (3, 0, 0, 3)  # the all-out run, then a chain per worker
+    log = tmp_path / "run.log"
+    r = CliRunner().invoke(app, ["--verbose", "--log-file", str(log), "pareto", "--track",
+                                 str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train", str(TRAINS / "amsterdam_metro.yaml"),
+                                 "--count", "3", "--points", "100", "--no-plot", "--out", str(tmp_path / "c")])
+    assert r.exit_code == 0, r.output
+    assert [line.split("ecostudy: ")[1] for line in log.read_text().splitlines() if "points:" in line] == [
+        f"points: {n} of 3 done (0 failed)" for n in (1, 2, 3)]

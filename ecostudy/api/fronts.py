@@ -2,7 +2,7 @@
 ``compare`` and ``journey`` as functions (the command line only parses and prints).
 """
 from pathlib import Path
-from typing import Optional
+from typing import Callable, Optional
 
 from ecostudy.api.outcome import Report, listed, reported, shown
 from ecostudy.core import units
@@ -31,7 +31,8 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
                   from_stop: Optional[str] = None, to_stop: Optional[str] = None, count: int = 20,
                   supplement_max: float = 40.0, points: Optional[int] = None, workers: int = 1, cold: bool = False,
                   out: Optional[Path] = None, plot: bool = True, weighted: int = 0, das: Optional[str] = None,
-                  das_time_limit: float = 60.0, fig_format: str = "png", dpi: Optional[float] = None) -> Report:
+                  das_time_limit: float = 60.0, fig_format: str = "png", dpi: Optional[float] = None, *,
+                  progress: Optional[Callable[[int, int, int, int], None]] = None) -> Report:
     """``ecostudy pareto``: energy against running time, ``count`` points from the all-out run to
     ``supplement_max`` [%] over it (epsilon constraint), optionally ``weighted`` weighted-sum points
     (Yazhemsky 2017, eq. 4.1a) and the driver-advice front ``das`` at every point."""
@@ -44,7 +45,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     out_dir = output_folder(out, beside(st, "_pareto", "pareto"))
     check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png"))
     table, results = sweep(trk, trn, f, t, count=count, supplement_max=supplement_max * units.PERCENT,
-                           points=k, workers=workers, warm=not cold)
+                           points=k, workers=workers, warm=not cold, progress=progress)
     meta = front_meta(table, {"track": trk.name, "train": trn.name, "from": f, "to": t}, k, count, workers, not cold)
     if das is not None:
         table = das_front(table, results, das, k, workers, das_time_limit)

@@ -45,9 +45,9 @@ def _main(ctx: typer.Context,
 
 
 def call(debug, name, *args, force=False, bar=None):
-    """``ecostudy.api.<name>(*args)`` (size guards of :mod:`ecostudy.core.budget` lifted when ``force``;
-    ``bar``: (label, off) of a progress bar passed as its ``progress``); errors become one line and
-    an exit code, warnings log lines, Ctrl-C exit status 130 (the finished cases are kept)."""
+    """``ecostudy.api.<name>(*args)``, the size guards lifted when ``force`` (:mod:`ecostudy.core.budget`);
+    ``bar``: (label, off[, stored]) of a progress bar passed as ``progress`` (stored False: Ctrl-C keeps
+    nothing). Errors: one line and an exit code; warnings: log lines; Ctrl-C: exit status 130."""
     from ecostudy import api
     from ecostudy.report.console import progress_bar
 
@@ -62,7 +62,7 @@ def call(debug, name, *args, force=False, bar=None):
             raise
         except KeyboardInterrupt:
             log.warning("interrupted" + (f": every finished {bar[0][:-1]} is stored; run the same command again to "
-                                         "continue" if bar else ""))
+                                         "continue" if bar and bar[2:] != (False,) else ""))
             raise typer.Exit(130)
         except Exception as exc:  # an unexpected failure still gets one line by default
             if debug:

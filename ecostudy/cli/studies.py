@@ -27,7 +27,7 @@ def pareto(
     """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS."""
     finish(call(debug, "pareto_folder", study, track, train, from_stop, to_stop, count, supplement_max, points,
                 workers, cold, out, not no_plot, weighted, das and das.value, das_time_limit, fig_format, dpi,
-                force=force))
+                force=force, bar=("points", False, False)))
 
 
 @app.command(name="compare", short_help="Strategies side by side, each re-simulated by one simulator.")

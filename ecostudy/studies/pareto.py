@@ -8,6 +8,7 @@ after the chain's first point Ipopt starts from the previous point's primal and 
 chain. ``workers`` > 1 splits the sweep into contiguous chains solved in forked processes.
 """
 import time
+from concurrent.futures import as_completed
 
 import numpy as np
 import pandas as pd
@@ -28,12 +29,18 @@ WARM_START = {"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound
               "warm_start_mult_bound_push": 1e-6, "warm_start_slack_bound_push": 1e-6}
 
 
-def _chain(case, times, objective, options, verify_result, warm):
-    """Energy-optimal results at ``times`` [s], one model and NL file for the whole chain."""
+def _chain(case, times, objective, options, verify_result, warm, tick=None):
+    """Energy-optimal results at ``times`` [s], one model and NL file for the whole chain
+    (``tick(n)``: n more points solved, in this process)."""
+    tick = tick or (lambda n: None)
     if not warm:  # every point on its own, exactly as `ecostudy solve --time T` would
-        return [solve_run(case.track, case.train, case.segment.from_stop, case.segment.to_stop,
-                          Timing(running_time=t), objective=objective, points=len(case.nodes),
-                          options=options, verify_result=verify_result) for t in times]
+        results = []
+        for t in times:
+            results.append(solve_run(case.track, case.train, case.segment.from_stop, case.segment.to_stop,
+                                     Timing(running_time=t), objective=objective, points=len(case.nodes),
+                                     options=options, verify_result=verify_result))
+            tick(1)
+        return results
     stages = {}
     m = build(case, capped_guess(case, times[0]), objective, stages, running_time=times[0])
     nlp = session.Session(m)
@@ -47,8 +54,9 @@ def _chain(case, times, objective, options, verify_result, warm):
             if i == 0:  # a cold start failed: nothing better to try
                 raise SolverError(f"Ipopt failed at running time {t:.2f} s ({outcome.status})")
             # a warm start that fails is retried cold: a fresh chain from this point on
-            return results + _chain(case, times[i:], objective, options, verify_result, warm)
+            return results + _chain(case, times[i:], objective, options, verify_result, warm, tick)
         results.append(finish(case, m, outcome, point_stages, objective, None, verify_result))
+        tick(1)
     return results
 
 
@@ -74,7 +82,7 @@ def _split(items, parts):
 
 
 def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, points=500,
-          objective="energy", workers=1, warm=True, options=None, verify_result=True):
+          objective="energy", workers=1, warm=True, options=None, verify_result=True, progress=None):
     """The front as (table, results); results[0] is the all-out run itself.
 
     Parameters
@@ -83,6 +91,8 @@ def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, point
     supplement_max : float  Largest supplement over the all-out time [-], e.g. 0.40.
     workers : int  Processes (contiguous warm-start chains); 1 solves in this process.
     warm : bool  Reuse one model per chain and start from the neighbour (False: cold, independent).
+    progress : callable  ``progress(done, failed, remaining, total)`` as points are solved (a whole
+        chain at a time with ``workers`` > 1), as :func:`ecostudy.studies.batch.execute` calls it.
     """
     stages = {}
     t0 = time.perf_counter()
@@ -91,13 +101,22 @@ def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, point
     allout = finish(case, m, outcome, stages, "time", t_allout, verify_result)
     supplements = front_supplements(count, supplement_max)[1:]
     times = t_allout * (1 + supplements)
+    done = [0]
+
+    def tick(n):
+        done[0] += n
+        if progress:
+            progress(done[0], 0, len(times) + 1 - done[0], len(times) + 1)
+    tick(1)  # the all-out run
     chunks = _split(times, max(1, min(workers, len(times))))
     if len(chunks) > 1:
         with worker_pool(len(chunks)) as pool:
-            parts = list(pool.map(_chain, [case] * len(chunks), chunks, [objective] * len(chunks),
-                                  [options] * len(chunks), [verify_result] * len(chunks), [warm] * len(chunks)))
+            futures = {pool.submit(_chain, case, c, objective, options, verify_result, warm): len(c) for c in chunks}
+            for future in as_completed(futures):
+                tick(futures[future])
+            parts = [future.result() for future in futures]
     else:
-        parts = [_chain(case, chunks[0], objective, options, verify_result, warm)] if chunks else []
+        parts = [_chain(case, chunks[0], objective, options, verify_result, warm, tick)] if chunks else []
     results = [allout] + [r for part in parts for r in part]
     table = front_table(results, t_allout)
     table.attrs["wall_s"] = time.perf_counter() - t0
