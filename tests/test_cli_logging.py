@@ -47,8 +47,19 @@ def test_a_front_reports_its_progress_point_by_point(tmp_path):
     assert calls[0] == (1, 0, 2, 3) and calls[-1] == (3, 0, 0, 3)  # the all-out run, then a chain per worker
     log = tmp_path / "run.log"
     r = CliRunner().invoke(app, ["--verbose", "--log-file", str(log), "pareto", "--track",
-                                 str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train", str(TRAINS / "amsterdam_metro.yaml"),
-                                 "--count", "3", "--points", "100", "--no-plot", "--out", str(tmp_path / "c")])
+                                 str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train",
+                                 str(TRAINS / "amsterdam_metro.yaml"), "--count", "3", "--points", "100", "--no-plot",
+                                 "--out", str(tmp_path / "c")])
     assert r.exit_code == 0, r.output
     assert [line.split("ecostudy: ")[1] for line in log.read_text().splitlines() if "points:" in line] == [
         f"points: {n} of 3 done (0 failed)" for n in (1, 2, 3)]
+
+
+def test_a_journey_reports_each_front_and_each_run(tmp_path):
+    from ecostudy import api
+    calls = []
+    report = api.journey_folder(TRAINS / "amsterdam_metro.yaml", TRACKS / "metro_line_4stops.yaml",
+                                stops="Noord,Station", supplement=10, points=100, out=tmp_path, plot=False,
+                                progress=lambda *a: calls.append(a))
+    assert len(report.table) == 4  # one segment, four splits
+    assert calls == [(n, 0, 5 - n, 5) for n in range(1, 6)]  # the segment's front, then the four runs

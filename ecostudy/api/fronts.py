@@ -19,6 +19,7 @@ from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weig
 
 FRONT_COLUMNS = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
                  "marginal_saving_kWh_per_s", "coasting_share_pct", "regime_sequence"]
+Progress = Callable[[int, int, int, int], None]  # progress(done, failed, remaining, total)
 DAS_COLUMNS = ["das_traction_energy_kWh", "das_gap_to_ato_on_time_pct", "das_mode_changes"]
 
 
@@ -32,7 +33,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
                   supplement_max: float = 40.0, points: Optional[int] = None, workers: int = 1, cold: bool = False,
                   out: Optional[Path] = None, plot: bool = True, weighted: int = 0, das: Optional[str] = None,
                   das_time_limit: float = 60.0, fig_format: str = "png", dpi: Optional[float] = None, *,
-                  progress: Optional[Callable[[int, int, int, int], None]] = None) -> Report:
+                  progress: Optional[Progress] = None) -> Report:
     """``ecostudy pareto``: energy against running time, ``count`` points from the all-out run to
     ``supplement_max`` [%] over it (epsilon constraint), optionally ``weighted`` weighted-sum points
     (Yazhemsky 2017, eq. 4.1a) and the driver-advice front ``das`` at every point."""
@@ -107,7 +108,7 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
                    time: Optional[float] = None, supplement: Optional[float] = None,
                    timetable: Optional[Path] = None, dwell: float = 0.0, points: int = 500, workers: int = 1,
                    out: Optional[Path] = None, plot: bool = True, fig_format: str = "png",
-                   dpi: Optional[float] = None) -> Report:
+                   dpi: Optional[float] = None, *, progress: Optional[Progress] = None) -> Report:
     """``ecostudy journey``: a journey's total running time [s] or supplement [%] spread over its
     segments (equal marginal saving against the same percentage), or a timetable's times."""
     figures = output(fig_format, dpi)
@@ -136,7 +137,8 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
                                ("journey.csv", "journey_totals.csv", "journey.png"))
     table, totals, results, _ = journey(trk, trn, names, total_time=time,
                                         supplement=None if supplement is None else supplement * units.PERCENT,
-                                        points=points, workers=workers, scheduled=scheduled, plan=plan)
+                                        points=points, workers=workers, scheduled=scheduled, plan=plan,
+                                        progress=progress)
     passing = []
     if plan is not None:  # timing points along the journey (segment lengths from the first split)
         start = 0.0

@@ -65,7 +65,7 @@ def journey_command(
 ):
     """Spread a journey's running time over its segments: equal marginal saving vs same percentage."""
     finish(call(debug, "journey_folder", train, track, stops, time, supplement, timetable, dwell, points, workers,
-                out, not no_plot, fig_format, dpi, force=force))
+                out, not no_plot, fig_format, dpi, force=force, bar=("runs", False, False)))
 
 
 @app.command(short_help="Every case of a study file; resumable, in parallel.")

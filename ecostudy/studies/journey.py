@@ -32,6 +32,7 @@ from ecostudy.ocp import session
 from ecostudy.ocp.problem import Written, build, capped_guess, prepare
 from ecostudy.ocp.space import passing_time
 from ecostudy.studies.pareto import sweep
+from ecostudy.studies.workers import ticker
 
 
 def too_short(total_time, fastest, basis=""):
@@ -234,7 +235,7 @@ def timing_columns(plan, n, departure, arrival, run):
 
 
 def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=15, workers=1,
-            scheduled=None, plan=None):
+            scheduled=None, plan=None, progress=None):
     """Per-segment table for each distribution of one total running time, and the totals.
 
     Give ``total_time`` [s], ``supplement`` [-] over the sum of the segments' all-out times,
@@ -242,6 +243,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
     their own, compared with the same total spread the other ways, or a ``plan``
     (timetable.JourneyPlan) with windows: the windowed journey NLP decides the running times and
     the other distributions spread its total; every row says whether it keeps the windows.
+    ``progress(done, failed, remaining, total)``: each segment's front, then each run solved.
     """
     windowed = None
     if plan is not None:
@@ -260,8 +262,12 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
             too_short(total_time, fastest, " (kinematic envelope)")
         mean = max(total_time / fastest - 1.0, 0.0)
     reach = max(0.6, 2.5 * mean)
-    fronts = [sweep(track, train, a, b, count=front_count, supplement_max=reach, points=points,
-                    workers=workers, verify_result=False)[0] for a, b in pairs]
+    tick = ticker(progress, len(pairs) * (5 + (scheduled is not None) + (plan is not None)))  # fronts, 4+ splits
+    fronts = []
+    for a, b in pairs:
+        fronts.append(sweep(track, train, a, b, count=front_count, supplement_max=reach, points=points,
+                            workers=workers, verify_result=False)[0])
+        tick()
     all_out = sum(float(f["running_time_s"].iloc[0]) for f in fronts)
     if total_time is None:
         total_time = all_out * (1 + supplement)
@@ -286,6 +292,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=500, f
             r = solve_run(track, train, a, b, Timing(running_time=t), points=points, windows=keep,
                           written=written, structure=None if keep else (n, a, b))
             results[name].append(r)
+            tick()
             t0 = float(f["running_time_s"].iloc[0])
             rows.append({"distribution": name, "from": a, "to": b, "distance_m": r.summary["distance_m"],
                          "all_out_time_s": t0, "running_time_s": r.summary["running_time_s"],

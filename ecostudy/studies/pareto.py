@@ -19,7 +19,7 @@ from ecostudy.core.types import Timing
 from ecostudy.das.methods import das_columns
 from ecostudy.ocp import session
 from ecostudy.ocp.problem import all_out, build, capped_guess, prepare, record
-from ecostudy.studies.workers import worker_pool
+from ecostudy.studies.workers import ticker, worker_pool
 
 # After the first point of a chain, Ipopt starts from the previous point's primal AND dual
 # solution with a small barrier parameter. Measured (bench/bench_pareto.py, docs/benchmarks.md):
@@ -101,12 +101,7 @@ def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, point
     allout = finish(case, m, outcome, stages, "time", t_allout, verify_result)
     supplements = front_supplements(count, supplement_max)[1:]
     times = t_allout * (1 + supplements)
-    done = [0]
-
-    def tick(n):
-        done[0] += n
-        if progress:
-            progress(done[0], 0, len(times) + 1 - done[0], len(times) + 1)
+    tick = ticker(progress, len(times) + 1)
     tick(1)  # the all-out run
     chunks = _split(times, max(1, min(workers, len(times))))
     if len(chunks) > 1:

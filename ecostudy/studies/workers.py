@@ -20,3 +20,15 @@ def worker_pool(workers):
     """A forked process pool (workers inherit the loaded modules) whose workers die with the parent."""
     return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
                                initializer=die_with_parent)
+
+
+def ticker(progress, total):
+    """``tick(n)``: ``n`` more of ``total`` units of work done, reported as ``progress(done, 0,
+    remaining, total)`` (the form :func:`ecostudy.studies.batch.execute` reports in; None: silent)."""
+    done = [0]
+
+    def tick(n=1):
+        done[0] += n
+        if progress:
+            progress(done[0], 0, total - done[0], total)
+    return tick
