@@ -1,11 +1,19 @@
 """--quiet, --verbose and --log-file: messages through the standard ``logging`` module, progress on
 stderr only (never with --quiet), results alone on stdout (piped: tests/test_cli_output.py)."""
+import os
+import pty
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
 
 from .conftest import STUDIES, TRACKS, TRAINS
 
+ECOSTUDY = str(Path(sys.executable).parent / "ecostudy")
 SOLVE = ["solve", str(STUDIES / "default.yaml"), "--points", "100", "--no-plot"]
 
 
@@ -63,3 +71,36 @@ def test_a_journey_reports_each_front_and_each_run(tmp_path):
                                 progress=lambda *a: calls.append(a))
     assert len(report.table) == 4  # one segment, four splits
     assert calls == [(n, 0, 5 - n, 5) for n in range(1, 6)]  # the segment's front, then the four runs
+
+
+def on_a_terminal(args, cwd):
+    """(exit status, stdout, stderr) of the command run with its stderr on a terminal (a pty)."""
+    master, slave = pty.openpty()
+    proc = subprocess.Popen([ECOSTUDY, *map(str, args)], cwd=cwd, stdout=subprocess.PIPE, stderr=slave)
+    os.close(slave)
+    seen = []
+    while True:
+        try:
+            data = os.read(master, 4096)
+        except OSError:  # the command closed the terminal
+            break
+        if not data:
+            break
+        seen.append(data)
+    out = proc.stdout.read()
+    proc.wait(timeout=600)
+    os.close(master)
+    return proc.returncode, out.decode(), b"".join(seen).decode(errors="replace")
+
+
+@pytest.mark.slow  # two commands started afresh: 25 s
+def test_the_bar_is_drawn_on_a_terminal_and_never_with_quiet(tmp_path):
+    study = tmp_path / "study.yaml"
+    study.write_text(f"name: t\ntrack: {TRACKS / 'amsterdam_rokin_centraal.yaml'}\ntrain: "
+                     f"{TRAINS / 'amsterdam_metro.yaml'}\npoints: 100\nsweep: {{running_time_s: [76, 80]}}\n")
+    code, out, err = on_a_terminal(["run", study, "--out", "a"], tmp_path)
+    assert code == 0 and "cases" in err and "━" in err and "2/2" in err, err  # the bar, on stderr
+    assert "━" not in out and "\r" not in out
+    code, out, err = on_a_terminal(["--quiet", "run", study, "--out", "b"], tmp_path)
+    assert code == 0 and "━" not in err and "2/2" not in err and "written to" not in err, err
+    assert "2 cases: 0 already stored, 2 computed now" in out
