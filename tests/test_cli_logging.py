@@ -104,3 +104,12 @@ def test_the_bar_is_drawn_on_a_terminal_and_never_with_quiet(tmp_path):
     code, out, err = on_a_terminal(["--quiet", "run", study, "--out", "b"], tmp_path)
     assert code == 0 and "━" not in err and "2/2" not in err and "written to" not in err, err
     assert "2 cases: 0 already stored, 2 computed now" in out
+
+
+@pytest.mark.slow  # six strategies solved and simulated: 28 s on a busy machine
+def test_compare_reports_each_strategy(tmp_path):
+    from ecostudy import api
+    calls = []
+    report = api.compare_folder(track=TRACKS / "amsterdam_rokin_centraal.yaml", train=TRAINS / "amsterdam_metro.yaml",
+                                time=80.0, points=100, out=tmp_path, plot=False, progress=lambda *a: calls.append(a))
+    assert len(report.table) == 6 and calls == [(n, 0, 6 - n, 6) for n in range(1, 7)]

@@ -68,7 +68,8 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
 def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
                    from_stop: Optional[str] = None, to_stop: Optional[str] = None, time: Optional[float] = None,
                    supplement: Optional[float] = None, points: Optional[int] = None, out: Optional[Path] = None,
-                   plot: bool = True, fig_format: str = "png", dpi: Optional[float] = None) -> Report:
+                   plot: bool = True, fig_format: str = "png", dpi: Optional[float] = None, *,
+                   progress: Optional[Progress] = None) -> Report:
     """``ecostudy compare``: the strategies side by side for one running time [s] or supplement [%],
     every one scored by the same independent simulator."""
     figures = output(fig_format, dpi)
@@ -84,7 +85,7 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
         raise InputError(problem("command line", "--time", "give --time or --supplement"))
     out_dir = output_folder(out, beside(st, "_compare", "compare"))
     check_output_dir(out_dir, ("compare.csv", "compare.png"))
-    table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000)
+    table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000, progress=progress)
     write_compare(table, outcomes, case.segment, out_dir,
                   f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s", plot=plot, out=figures)
     return reported(out_dir, [shown(table), "outputs " + listed(out_dir)])

@@ -43,7 +43,7 @@ def compare_command(
     Example: ecostudy compare studies/default.yaml --out out/compare
     """
     finish(call(debug, "compare_folder", study, track, train, from_stop, to_stop, time, supplement, points, out,
-                not no_plot, fig_format, dpi, force=force))
+                not no_plot, fig_format, dpi, force=force, bar=("strategies", False, False)))
 
 
 @app.command(name="journey", short_help="Spread a journey's running time over its segments.")

@@ -13,15 +13,20 @@ from ecostudy.core.status import driven_run, failed
 from ecostudy.das.advice import das_phases, nearest_levels
 from ecostudy.heuristics import ecodrive
 from ecostudy.ocp.problem import prepare
+from ecostudy.studies.workers import ticker
 
 
-def compare(track, train, from_stop, to_stop, timing, points=1000):
+def compare(track, train, from_stop, to_stop, timing, points=1000, progress=None):
     """(table, outcomes): all-out, ATO optimum, eco-drive coasting, MARECO-style, DAS round and DAS phases.
 
-    ``mode_changes`` counts the handle changes of each run (DAS runs: the advice rows minus one).
+    ``mode_changes`` counts the handle changes of each run (DAS runs: the advice rows minus one);
+    ``progress(done, failed, remaining, total)`` after each strategy.
     """
+    tick = ticker(progress, 6)
     allout = solve_run(track, train, from_stop, to_stop, Timing(), objective="time", points=points)
+    tick()
     ato = solve_run(track, train, from_stop, to_stop, timing, points=points)
+    tick()
     case = prepare(track, train, from_stop, to_stop, points)
     outcomes = [Driven("all-out", allout.handle, allout.trace),
                 Driven("ATO optimum", ato.handle, ato.trace)]
@@ -32,9 +37,12 @@ def compare(track, train, from_stop, to_stop, timing, points=1000):
             outcomes.append(heuristic(case, target))
         except InfeasibleError as exc:
             rows_extra.append({"strategy": name, "note": str(exc)})
+        tick()
     outcomes.append(nearest_levels(case.segment, train, case.nodes, ato.handle))
+    tick()
     block, _, phased = das_phases(ato, points)
     outcomes.append(phased)
+    tick()
     rows = [o.row(train, case.segment.distance) for o in outcomes] + rows_extra
     rows[len(outcomes) - 1]["handle_changes"] = block["mode_changes"]
     table = pd.DataFrame(rows)
