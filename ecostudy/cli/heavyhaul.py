@@ -4,7 +4,8 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import app, case_progress, check_options, counts_line, flag_folder, guarded
+from ecostudy.cli.app import (FORCE_HELP, app, case_progress, check_options, counts_line, flag_folder, guarded,
+                              with_force)
 from ecostudy.cli.blas import limit_blas_threads
 
 SHOWN = ["K_b", "f", "Np", "Nc", "status", "tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN",
@@ -43,8 +44,9 @@ def heavyhaul(
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the plots."),
     blas_threads: int = typer.Option(1, min=1, max=256, help="OpenBLAS threads per process (1: the small QPs run "
                                      "fastest single-threaded, docs/heavyhaul.md)."),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):
     """Heavy haul: Zhang & Zhuan's braking-penalised receding-horizon controller on the coupled-mass train (resumable)."""
-    flag_folder(guarded(debug, _heavyhaul, study, workers, dask, retry_failed, out, no_progress, no_plot,
+    flag_folder(guarded(debug, with_force(force, _heavyhaul), study, workers, dask, retry_failed, out, no_progress, no_plot,
                         blas_threads))

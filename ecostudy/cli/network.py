@@ -18,8 +18,8 @@ def _network(study_path, out, no_plot, workers=1, figures=("png", None)):
     from ecostudy.report.files import write_network
     from ecostudy.studies.network import run_network
     st = load_network_study(study_path)
-    from ecostudy.studies.estimate import check_network
-    check_network(st, study_path)  # legs too big for a run refused with their estimate (unless --force)
+    from ecostudy.studies.sizes import check_network_study
+    check_network_study(st, study_path, workers)  # too big for a run or the command: refused (unless --force)
     out_dir = check_output_dir(Path(out) if out else st.output)
     table = write_network(run_network(st, workers, progress=typer.echo), st, out_dir, plot=not no_plot, out=figures)
     cols = ["strategy", "status", "substation_kWh", "saving_vs_independent_pct", "traction_input_kWh", "regen_used_kWh",

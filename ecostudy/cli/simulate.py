@@ -14,9 +14,9 @@ SHOWN = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_per_kg_st
 
 def _simulate(study, workers, dask, retry_failed, out, no_progress, no_plot, only):
     check_options(workers=workers)
-    from ecostudy.studies.closedloop import expand, simulate_study
-    from ecostudy.studies.estimate import check_closed_loop
-    check_closed_loop(expand(study)[2], study)  # runs that cannot end or are too big: refused (unless --force)
+    from ecostudy.studies.closedloop import simulate_study
+    from ecostudy.studies.sizes import check_closed_loop_study
+    check_closed_loop_study(study, workers, only)  # runs that cannot end, or too big: refused (unless --force)
     with case_progress("runs", no_progress) as progress:
         outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress,
                                  only)

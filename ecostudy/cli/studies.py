@@ -52,6 +52,8 @@ def _pareto(study, track, train, from_stop, to_stop, count, supplement_max, poin
         raise InputError(problem("command line", "--supplement-max", "must be > 0 (per cent)"))
     out_dir = Path(out) if out else (st.output.parent / (st.output.name + "_pareto") if st else Path("out") / "pareto")
     check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png"))
+    from ecostudy.studies.sizes import check_front
+    check_front("command line", count, k, workers, das.value if das else None, das_time_limit)
     table, results = sweep(trk, trn, f, t, count=count, supplement_max=supplement_max * units.PERCENT,
                            points=k, workers=workers, warm=not cold)
     meta = front_meta(table, {"track": trk.name, "train": trn.name, "from": f, "to": t}, k, count, workers, not cold)
@@ -254,6 +256,8 @@ def journey_command(
 def _run(study, workers, dask, retry_failed, out, no_progress):
     check_options(workers=workers)
     from ecostudy.studies.batch import run_study
+    from ecostudy.studies.sizes import check_run_study
+    check_run_study(study, workers)  # too big for the command: refused with its estimate (unless --force)
     with case_progress("cases", no_progress) as progress:
         table, counts, output = run_study(study, workers=workers, dask=dask, retry_failed=retry_failed,
                                           out=Path(out) if out else None, progress=progress)

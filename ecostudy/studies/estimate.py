@@ -30,7 +30,9 @@ REPLAY_SECONDS = 0.001
 
 
 def check_network(study, path):
-    """Refuse a network study whose time-domain legs are estimated above one run's budget."""
+    """Refuse a network study whose time-domain legs are estimated above one run's budget; returns
+    every leg's clock steps."""
+    legs = []
     for i, (a, b) in enumerate(zip(study.stops[:-1], study.stops[1:])):
         if study.running_times is not None:
             seconds, field = float(study.running_times[i]), f"running_times_s[{i}]"
@@ -40,6 +42,8 @@ def check_network(study, path):
         steps = int(np.ceil(seconds / study.dt))
         check_run(path, field, f"the leg {a} - {b} of {seconds:g} s is {steps:,} clock steps of {study.dt:g} s "
                   "for each train and strategy", steps * LEG_SECONDS_PER_STEP, steps * LEG_BYTES_PER_STEP)
+        legs.append(steps)
+    return legs
 
 
 def true_train(train, truth):
@@ -53,8 +57,9 @@ def true_train(train, truth):
 def check_closed_loop(cases, path):
     """Refuse a closed-loop study with a run whose true train cannot reach the stop before the
     loop's time cap (it would be simulated to the cap, sample by sample), or estimated above one
-    run's budget. ``cases``: :func:`ecostudy.studies.closedloop.expand`'s."""
-    seen = {}
+    run's budget. ``cases``: :func:`ecostudy.studies.closedloop.expand`'s. Returns every run's
+    estimated seconds."""
+    seen, runs = {}, []
     for case in cases:
         truth = case["truth"]
         key = (tuple(sorted(truth.items())), case["from"], case["to"])
@@ -72,6 +77,8 @@ def check_closed_loop(cases, path):
         span = max(fastest, case["window"][1])
         samples = span / case["sample_time"]
         check_run(path, "controllers", f"{label}: {samples:,.0f} samples of {case['sample_time']:g} s", samples * per_sample)
+        runs.append(samples * per_sample)
+    return runs
 
 
 def _true_all_out(case, truth):
