@@ -125,3 +125,16 @@ def test_every_shipped_study_passes_its_estimate(path):
 @pytest.mark.parametrize("path", HEAVY, ids=[p.stem for p in HEAVY])
 def test_every_shipped_heavyhaul_study_passes_its_estimate(path):
     check_file(path, 1)
+
+
+@pytest.mark.parametrize("points, sample_time, fragments", [
+    (20000, 0.1, ["convex: 760 samples of 0.1 s at K = 20000", "5.9 h", "one run"]),
+    (10000, 0.05, ["convex: 1,520 samples of 0.05 s at K = 10000", "one run"]),
+])
+def test_a_convex_controller_on_a_huge_grid_is_refused_from_the_file_alone(tmp_path, points, sample_time, fragments):
+    """Refused before the study's set-up solves its all-out SOCP (over 100 s at K = 20 000)."""
+    doc = {"name": "k", "track": str(AMS), "train": str(METRO), "window_s": [0, 76], "points": points,
+           "sample_time_s": sample_time, "controllers": [{"name": "convex", "kind": "convex"}], "draws": 1,
+           "output": str(tmp_path / "out")}
+    r = run("simulate", write_yaml(tmp_path / "k.yaml", doc), "--no-progress", "--no-plot")
+    one_line(r, "k.yaml: controllers:", "--force", *fragments)

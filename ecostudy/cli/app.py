@@ -15,7 +15,7 @@ from pathlib import Path
 import typer
 
 from ecostudy.core.budget import forced
-from ecostudy.core.errors import EcostudyError, InputError, problem
+from ecostudy.core.errors import EcostudyError, InputError, printable, problem
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,  # "[s]" is a unit, not markup
                   help="Energy-efficient train control studies (Pyomo + Ipopt).")
@@ -51,8 +51,8 @@ class Objective(str, Enum):
 
 
 def fail(lines, code):
-    for line in str(lines).splitlines():
-        typer.secho(f"error: {line}", fg=typer.colors.RED, err=True)
+    for line in str(lines).rstrip("\n").split("\n"):  # one problem a line; what a user typed, escaped
+        typer.secho(f"error: {printable(line)}", fg=typer.colors.RED, err=True)
     raise typer.Exit(code)
 
 

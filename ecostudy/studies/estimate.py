@@ -8,8 +8,10 @@ The constants are measured on this project's shared 2-core machine (so they are 
   steps (the metro's Noord - Station in 100 s) took 28 s and 233 s to build and solve from a cold
   start (286 and 332 Ipopt iterations) and 24 MB and 144 MB of memory: about 0.12 s and 72 kB a step;
 - a closed-loop sample: the controllers' mean solve times of the metro Monte Carlo study
-  (docs/closed_loop.md): convex 28 ms at K = 200 (growing with K), SBPC 91 ms, SPPC 253 ms, RSPC
-  22 ms; a replay only steps the plant.
+  (docs/closed_loop.md): convex 28 ms at K = 200, SBPC 91 ms, SPPC 253 ms, RSPC 22 ms; a replay
+  only steps the plant. The convex SOCP grows faster than K: the all-out SOCP of the Amsterdam
+  case took 0.17, 0.69, 3.3 and 9.4 s at K = 200, 1000, 2000 and 5000 and over 100 s at 20 000
+  (busy machine), so a sample is taken as 28 ms x (K / 200)^1.5 (:func:`sample_seconds`).
 """
 from dataclasses import replace
 
@@ -25,8 +27,16 @@ from ecostudy.ocp.problem import prepare
 
 LEG_SECONDS_PER_STEP = 0.12
 LEG_BYTES_PER_STEP = 72e3
-SAMPLE_SECONDS = {"convex": 0.028 / 200, "sbpc": 0.091, "sppc": 0.253, "rspc": 0.022}  # convex: per grid point
+SAMPLE_SECONDS = {"convex": 0.028, "sbpc": 0.091, "sppc": 0.253, "rspc": 0.022}  # convex: at K = 200
 REPLAY_SECONDS = 0.001
+CONVEX_GROWTH = 1.5   # a convex sample's time grows as K^1.5
+
+
+def sample_seconds(kind, points):
+    """Estimated computing of one closed-loop sample of a controller ``kind`` at ``points`` nodes [s]."""
+    if kind == "convex":
+        return SAMPLE_SECONDS["convex"] * (points / 200) ** CONVEX_GROWTH
+    return SAMPLE_SECONDS.get(kind, REPLAY_SECONDS)
 
 
 def check_network(study, path):
@@ -72,8 +82,7 @@ def check_closed_loop(cases, path):
             refuse_unless_forced(path, "deviations", f"{label}: the true train (mass x{truth['mass']:.3g}, resistance "
                                  f"x{truth['resistance']:.3g}, traction x{truth['traction']:.3g}) cannot reach the stop "
                                  f"({why}): the run would be simulated to the loop's cap of {cap:,.0f} s ({duration(cap)})")
-        kind = case["controller"].get("kind", "convex")
-        per_sample = SAMPLE_SECONDS.get(kind, REPLAY_SECONDS) * (case["points"] if kind == "convex" else 1)
+        per_sample = sample_seconds(case["controller"].get("kind", "convex"), case["points"])
         span = max(fastest, case["window"][1])
         samples = span / case["sample_time"]
         check_run(path, "controllers", f"{label}: {samples:,.0f} samples of {case['sample_time']:g} s", samples * per_sample)

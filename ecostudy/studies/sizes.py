@@ -20,10 +20,13 @@ The constants are measured on this project's shared 2-core machine (pessimistic)
 """
 import numpy as np
 
-from ecostudy.core.budget import check_study
+from ecostudy.core.budget import check_run, check_study
+from ecostudy.io.documents import read_document
+from ecostudy.io.loaders import validate
+from ecostudy.io.loopfile import SimulateFile
 from ecostudy.studies import cases as study_cases
 from ecostudy.studies import closedloop
-from ecostudy.studies.estimate import check_closed_loop, check_network
+from ecostudy.studies.estimate import check_closed_loop, check_network, sample_seconds
 
 RUN_SECONDS_PER_POINT = 2.6e-3
 DAS_EXTRA_POINT_RUNS = {"round": 0.0, "phases": 2.0, "minlp": 3.0}
@@ -59,13 +62,25 @@ def check_front(where, count, points, workers=1, das=None, das_time_limit=60.0):
 
 
 def check_closed_loop_study(path, workers=1, only=None):
-    """Refuse a closed-loop study that cannot end (:func:`check_closed_loop`) or whose runs (of the
-    controllers ``only`` names, all when None) are estimated above the command's budget."""
+    """Refuse a closed-loop study too big for the command or a run, or that cannot end: first from
+    the file alone (controllers x draws x samples to the latest arrival), before the study's own
+    set-up solves anything (its all-out SOCP took minutes at K = 20 000); then with every draw's
+    true train (:func:`check_closed_loop`). ``only``: the controllers run (all when None)."""
+    s = validate(SimulateFile, read_document(path), path)
+    chosen = [c for c in s.controllers if not only or c.name in only]
+    what = f"{len(chosen)} controllers x {s.draws} draws"
+    per_run = []
+    for c in chosen:
+        samples = s.window_s[1] / (c.sample_time_s or s.sample_time_s)
+        seconds = samples * sample_seconds(c.kind, s.points)
+        check_run(path, "controllers", f"{c.name}: {samples:,.0f} samples of {c.sample_time_s or s.sample_time_s:g} s "
+                  f"at K = {s.points}", seconds)
+        per_run += [seconds] * s.draws
+    check_study(path, what, per_run, workers, s.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")
     study, _, cases = closedloop.expand(path)
     runs = check_closed_loop(cases, path)
-    chosen = [r for r, c in zip(runs, cases) if not only or c["labels"]["controller"] in only]
-    check_study(path, f"{len(study.controllers) if not only else len(set(only))} controllers x {study.draws} draws",
-                chosen, workers, study.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")
+    check_study(path, what, [r for r, c in zip(runs, cases) if not only or c["labels"]["controller"] in only],
+                workers, study.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")
 
 
 def network_runs(study, path):
