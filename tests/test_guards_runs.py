@@ -209,3 +209,20 @@ def test_force_reads_a_long_table_here_and_in_workers_started_inside(tmp_path):
         assert os.environ[ENVIRONMENT] == "1"  # inherited by the worker processes a command starts
         assert load_train(path).traction.force(10.0) == pytest.approx(171e3, rel=1e-3)
     assert ENVIRONMENT not in os.environ
+
+
+def test_the_deadline_runner_runs_inline_where_no_child_may_be_started():
+    """In a daemonic process (a Dask worker) the work runs in place, held only by its own limit."""
+    import multiprocessing
+    ctx = multiprocessing.get_context("fork")
+    queue = ctx.Queue()
+    worker = ctx.Process(target=_inline_probe, args=(queue,), daemon=True)
+    worker.start()
+    worker.join(60)
+    assert queue.get(timeout=5) == (True, 42, [21])
+
+
+def _inline_probe(queue):
+    from ecostudy.core.deadline import run_until
+    ended = run_until(30, lambda post, x: post(x) or 2 * x, 21)
+    queue.put((ended.finished, ended.value, ended.posts))

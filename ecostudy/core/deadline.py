@@ -57,6 +57,8 @@ def run_until(seconds: float, work: Callable, *args) -> Ended:
     """``work(post, *args)`` in a forked child, stopped (SIGTERM, then SIGKILL) ``seconds`` after
     the start. ``post(message)`` sends a picklable message to the parent at once."""
     t0 = time.perf_counter()
+    if multiprocessing.current_process().daemon:  # a daemonic worker (Dask's) may not start children:
+        return _inline(t0, work, args)             # the work runs here, held only by its own limit
     receive, send = multiprocessing.Pipe(duplex=False)
     child = multiprocessing.get_context("fork").Process(target=_child, args=(send, work, args), daemon=True)
     child.start()
@@ -89,6 +91,16 @@ def run_until(seconds: float, work: Callable, *args) -> Ended:
     if ended.stopped:  # what the child posted just before it was stopped
         _drain(receive, ended)
     receive.close()
+    ended.seconds = time.perf_counter() - t0
+    return ended
+
+
+def _inline(t0, work, args):
+    ended = Ended(seconds=0.0)
+    try:
+        ended.value, ended.finished = work(ended.posts.append, *args), True
+    except Exception as exc:  # noqa: BLE001 - reported as the child's would be
+        ended.error = f"{type(exc).__name__}: {exc}"
     ended.seconds = time.perf_counter() - t0
     return ended
 
