@@ -223,7 +223,9 @@ def minlp_limit(limit):
 
 def tto_power(text, out):
     s = json.loads((out / "summary.json").read_text())
-    return s["verification"]["passed"], f"{s['traction_energy_kWh']:.9f} kWh"
+    note = "never binds" in text
+    return s["verification"]["passed"] and note, f"{s['traction_energy_kWh']:.9f} kWh" + (
+        ", noted: the limit never binds" if note else ", no note")
 
 
 # ------------------------------------------------------------------------------------------ probes
