@@ -19,11 +19,11 @@ from ecostudy.report.html import write_html
 from ecostudy.report.style import output
 from ecostudy.studies.batch import run_kind
 from ecostudy.studies.calibrate import calibrate_study, validate_study
-from ecostudy.studies.closedloop import expand, simulate_study
-from ecostudy.studies.estimate import check_closed_loop, check_network
+from ecostudy.studies.closedloop import simulate_study
 from ecostudy.studies.heavyhaul import heavyhaul_study
 from ecostudy.studies.network import run_network
 from ecostudy.studies.options import check_options, output_folder
+from ecostudy.studies.sizes import KIND_SIZES, check_closed_loop_study, check_network_study
 
 Progress = Optional[Callable[[int, int, int, int], None]]
 log = logging.getLogger("ecostudy")
@@ -48,6 +48,8 @@ def run_folder(study: Path, workers: int = 1, dask: Optional[str] = None, retry_
     (:func:`~ecostudy.studies.batch.run_kind`); ``kind``: a registered study kind
     (:data:`~ecostudy.studies.batch.STUDY_KINDS`; ``run``: scenarios x sweep, or a library)."""
     check_options(workers=workers)
+    if kind in KIND_SIZES:  # too big for the command: refused with its estimate (unless --force)
+        KIND_SIZES[kind](study, workers)
     table, counts, folder = run_kind(kind, study, workers, dask, retry_failed, Path(out) if out else None, progress)
     write_html(folder)
     return reported(folder, [f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} "
@@ -62,7 +64,7 @@ def simulate_folder(study: Path, workers: int = 1, dask: Optional[str] = None, r
     """``ecostudy simulate``: every controller of a closed-loop study drives every draw of the
     plant's deviations and noise (``only``: these controllers' runs computed now)."""
     check_options(workers=workers)
-    check_closed_loop(expand(study)[2], study)  # runs that cannot end or are too big: refused (unless --force)
+    check_closed_loop_study(study, workers, only)  # runs that cannot end, or too big: refused (unless --force)
     outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress, only)
     runs, counts, folder = outcome.runs, outcome.counts, outcome.output
     if plot:
@@ -103,7 +105,7 @@ def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, w
     (independent, rules 7.7 / 7.11, dissension, joint optimum, following; Farooqi 2018, Ch. 7)."""
     figures = output(fig_format, dpi)
     st = load_network_study(study)
-    check_network(st, study)  # legs too big for a run refused with their estimate (unless --force)
+    check_network_study(st, study, workers)  # too big for a run or the command: refused (unless --force)
     folder = check_output_dir(output_folder(out, st.output))
     table = write_network(run_network(st, workers, progress=note), st, folder, plot=plot, out=figures)
     return reported(folder, [shown(table, NETWORK_COLUMNS), "outputs " + listed(folder)])

@@ -16,6 +16,7 @@ from ecostudy.studies.compare import compare
 from ecostudy.studies.journey import journey
 from ecostudy.studies.options import case_from, check_options, no_windows, only_one, output_folder, timing_of
 from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
+from ecostudy.studies.sizes import check_front
 
 FRONT_COLUMNS = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
                  "marginal_saving_kWh_per_s", "coasting_share_pct", "regime_sequence"]
@@ -45,6 +46,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     k = k or 500
     out_dir = output_folder(out, beside(st, "_pareto", "pareto"))
     check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png"))
+    check_front("command line", count, k, workers, das, das_time_limit)  # too big: refused (unless --force)
     table, results = sweep(trk, trn, f, t, count=count, supplement_max=supplement_max * units.PERCENT,
                            points=k, workers=workers, warm=not cold, progress=progress)
     meta = front_meta(table, {"track": trk.name, "train": trn.name, "from": f, "to": t}, k, count, workers, not cold)

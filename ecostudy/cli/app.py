@@ -12,6 +12,7 @@ from typing import Annotated, Optional
 import typer
 
 from ecostudy.core.budget import forced
+from ecostudy.core.errors import printable
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,  # "[s]" is a unit, not markup
                   help="Energy-efficient train control studies (Pyomo + Ipopt).")
@@ -68,8 +69,8 @@ def call(debug, name, *args, force=False, bar=None):
             if debug:
                 traceback.print_exc()
             text, code = api.one_line(exc, debug)
-            for line in text.splitlines():
-                log.error(line)
+            for line in text.rstrip("\n").split("\n"):  # one problem a line; what a user typed, escaped
+                log.error(printable(line))
             raise typer.Exit(code)
         finally:
             for w in caught:

@@ -15,8 +15,8 @@ def heavyhaul(
     out: o.Out = None, no_progress: o.NoProgress = False, no_plot: o.NoPlot = False,
     blas_threads: int = typer.Option(1, min=1, max=256, help="OpenBLAS threads per process (1: the small QPs run "
                                      "fastest single-threaded, docs/heavyhaul.md)."),
-    debug: o.Debug = False,
+    force: o.Force = False, debug: o.Debug = False,
 ):
     """Heavy haul: Zhang & Zhuan's braking-penalised receding-horizon controller on the coupled-mass train (resumable)."""
     finish(call(debug, "heavyhaul_folder", study, workers, dask, retry_failed, out, not no_plot, blas_threads,
-                bar=("runs", no_progress)))
+                force=force, bar=("runs", no_progress)))

@@ -10,6 +10,8 @@ from ecostudy.core.errors import InputError, problem
 
 FORCE = contextvars.ContextVar("ecostudy_force", default=False)
 MAX_RUN_SECONDS = 2 * 3600.0     # the longest one run (a case) may be estimated to compute
+MAX_STUDY_SECONDS = 2 * 3600.0   # the longest one command may be estimated to run (its workers together)
+WORKER_BYTES = 0.4e9             # a worker with the solver stack loaded (170 MB measured) and its model
 
 
 ENVIRONMENT = "ECOSTUDY_FORCE"   # the same, for worker processes started inside the block
@@ -76,3 +78,29 @@ def check_run(where, field, what, seconds=None, nbytes=None):
     if nbytes is not None and memory and nbytes > memory / 2:
         refuse_unless_forced(where, field, f"{what}: an estimated {size(nbytes)} of memory, above half of this "
                              f"machine's {size(memory)}")
+
+
+def study_estimate(runs, workers=1, run_bytes=0.0):
+    """(seconds of computing, wall seconds with ``workers``, peak bytes) of a study whose runs are
+    estimated at ``runs`` seconds each: the work shared among the workers (never below its longest
+    run); every worker holds the solver stack and one run's model."""
+    total = float(sum(runs))
+    workers = max(1, min(int(workers), len(runs) or 1))
+    return total, max(total / workers, max(runs, default=0.0)), workers * (WORKER_BYTES + run_bytes)
+
+
+def check_study(where, what, runs, workers=1, run_bytes=0.0, part_hint=""):
+    """Refuse (unless forced) a study whose runs (estimated seconds each), shared among ``workers``,
+    are estimated above :data:`MAX_STUDY_SECONDS` of wall time or half the memory. ``part_hint``:
+    how to run a part of it (``--only NAME``), added to the refusal."""
+    total, wall, nbytes = study_estimate(runs, workers, run_bytes)
+    memory = machine_memory()
+    how = f"{len(runs)} runs, an estimated {duration(total)} of computing"
+    if wall > MAX_STUDY_SECONDS:
+        hint = f"; run a part of it ({part_hint}) and the rest later" if part_hint else ""
+        refuse_unless_forced(where, "study", f"{what}: {how} ({duration(wall)} with {workers} worker"
+                             f"{'s' if workers > 1 else ''}), above the {duration(MAX_STUDY_SECONDS)} one command "
+                             f"may take{hint}")
+    if memory and nbytes > memory / 2:
+        refuse_unless_forced(where, "study", f"{what}: {how}, with {workers} workers an estimated {size(nbytes)} of "
+                             f"memory, above half of this machine's {size(memory)}; use fewer --workers")

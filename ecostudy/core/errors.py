@@ -35,6 +35,12 @@ class EcostudyWarning(UserWarning):
     """Suspicious but usable input (e.g. Davis coefficients of an implausible size)."""
 
 
+def printable(line: str) -> str:
+    """``line`` with every character a terminal would not print as itself (a control character, a
+    line or paragraph separator) written as its escape, so one problem stays one line."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in line)
+
+
 def problem(file: Union[str, PathLike[str]], field: str, message: str) -> str:
     """Format one problem line: ``file: field: message``."""
     where = f"{file}: {field}" if field else f"{file}"

@@ -20,10 +20,13 @@ phases NLP at the full resolution, and the better of that and the ``phases`` run
 """
 import logging
 import time
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pyomo.environ as pyo
 
+from ecostudy.core.deadline import run_until
 from ecostudy.ocp import phases, session
 from ecostudy.ocp.space import FORCE_SCALE
 
@@ -60,8 +63,33 @@ def define_mode_choice(m, layout, train):
         m.choice.add(m.v[i] - m.v[i + 1] <= v_max * (1 - z[cruise]))
 
 
+@dataclass
+class Searched:
+    """How a MINLP search ended. ``model`` holds the best pattern found (its binaries and the NLP
+    solution with them) when ``found``; otherwise its starting pattern. ``termination``: MindtPy's
+    word, or ``stopped at its ... time limit`` when the search was killed at its deadline, or
+    ``failed: ...``. ``upper``/``lower``: MindtPy's bounds on the scaled objective (NaN: none).
+    ``limited``: the time limit ended the search (killed, or MindtPy stopped at its own limit)."""
+
+    model: Any
+    layout: Any
+    termination: str
+    seconds: float
+    found: bool
+    upper: float = float("nan")
+    lower: float = float("nan")
+    iterations: int = 0
+    stopped: bool = False
+    limited: bool = False
+
+
+GRACE_S = 2.0  # MindtPy's own limit comes this much earlier (at most a fifth of the limit): time to hand back
+
+
 def search(result, start_model, start_layout, objective, time_limit, points):
-    """MindtPy OA from the phases solution on a coarse sub-grid: (model, layout, results, seconds)."""
+    """MindtPy OA from the phases solution on a coarse sub-grid, in a child process killed at
+    ``time_limit`` [s] (MindtPy checks its own limit, :data:`GRACE_S` earlier, only between its
+    iterations): a :class:`Searched` with the best pattern found so far."""
     seg, train = result.segment, result.train
     layout = phases.Layout(start_layout.sectors, start_layout.phases,
                            phases.substeps_for(points, len(start_layout.phases), least=3))
@@ -69,14 +97,56 @@ def search(result, start_model, start_layout, objective, time_limit, points):
     coarse_v = np.interp(phases.node_positions(layout, lengths), x, v)
     m = phases.build(seg, train, layout, (lengths, coarse_v), running_time=result.summary["running_time_s"],
                      objective=objective, extend=define_mode_choice)
+    own = max(1, int(time_limit - min(GRACE_S, 0.2 * time_limit)))  # MindtPy's limit: whole seconds
+    ended = run_until(float(time_limit), _mindtpy, m, own)
+    incumbents = [p for p in ended.posts if p[0] == "incumbent"]
+    iterations = sum(1 for p in ended.posts if p[0] == "master")
+    if ended.finished:
+        termination, upper, lower, values, elapsed = ended.value
+        _load(m, values)
+        return Searched(m, layout, termination, ended.seconds, found=bool(incumbents) or np.isfinite(upper),
+                        upper=upper, lower=lower, iterations=iterations, limited=elapsed >= own)
+    if incumbents:
+        _load(m, incumbents[-1][2])
+    termination = (f"stopped at its {time_limit:g} s time limit" if ended.stopped
+                   else f"failed: {ended.error.splitlines()[0] if ended.error else 'no answer'}")
+    return Searched(m, layout, termination, ended.seconds, found=bool(incumbents),
+                    upper=incumbents[-1][1] if incumbents else float("nan"), iterations=iterations,
+                    stopped=ended.stopped, limited=ended.stopped)
+
+
+def _values(model):
+    return {v.name: v.value for v in model.component_data_objects(pyo.Var, descend_into=True)
+            if not v.name.startswith("MindtPy_utils")}
+
+
+def _load(m, values):
+    for name, value in values.items():
+        var = m.find_component(name)
+        if var is not None and value is not None:
+            var.set_value(value, skip_validation=True)
+
+
+def _mindtpy(post, m, time_limit):
+    """In the child: MindtPy OA, posting every better NLP solution (``incumbent``) and every master
+    problem solved (``master``) as it goes; returns (termination, upper, lower, values, seconds)."""
     t0 = time.perf_counter()
-    logging.getLogger("pyomo.contrib.mindtpy").setLevel(logging.ERROR)
+    logging.getLogger("pyomo").setLevel(logging.ERROR)
     session.repeatable()  # its NLP subproblems in the same order of solves repeat (unless the time limit cuts in)
+    best = [np.inf]
+
+    def feasible(fixed_nlp):
+        value = pyo.value(fixed_nlp.MindtPy_utils.objective_list[-1].expr)  # what MindtPy's upper bound reads
+        if value < best[0]:
+            best[0] = value
+            post(("incumbent", value, _values(fixed_nlp)))
+
     res = pyo.SolverFactory("mindtpy").solve(
         m, strategy="OA", init_strategy="initial_binary", mip_solver="appsi_highs", nlp_solver="cyipopt",
         nlp_solver_args={"options": {"print_level": 0, "max_iter": 1500, "tol": 1e-7}},
-        time_limit=max(int(time_limit), 1), iteration_limit=50, heuristic_nonconvex=True, add_no_good_cuts=True,
-        calculate_dual_at_solution=False, tee=False)
-    return m, layout, res, time.perf_counter() - t0
-
-
+        time_limit=time_limit, iteration_limit=50, heuristic_nonconvex=True, add_no_good_cuts=True,
+        calculate_dual_at_solution=False, tee=False, call_after_subproblem_feasible=feasible,
+        call_after_main_solve=lambda *_: post(("master",)))
+    upper, lower = res.problem.upper_bound, res.problem.lower_bound
+    return (str(res.solver.termination_condition), float(upper if upper is not None else np.nan),
+            float(lower if lower is not None else np.nan), _values(m), time.perf_counter() - t0)

@@ -8,8 +8,10 @@ The constants are measured on this project's shared 2-core machine (so they are 
   steps (the metro's Noord - Station in 100 s) took 28 s and 233 s to build and solve from a cold
   start (286 and 332 Ipopt iterations) and 24 MB and 144 MB of memory: about 0.12 s and 72 kB a step;
 - a closed-loop sample: the controllers' mean solve times of the metro Monte Carlo study
-  (docs/closed_loop.md): convex 28 ms at K = 200 (growing with K), SBPC 91 ms, SPPC 253 ms, RSPC
-  22 ms; a replay only steps the plant.
+  (docs/closed_loop.md): convex 28 ms at K = 200, SBPC 91 ms, SPPC 253 ms, RSPC 22 ms; a replay
+  only steps the plant. The convex SOCP grows faster than K: the all-out SOCP of the Amsterdam
+  case took 0.17, 0.69, 3.3 and 9.4 s at K = 200, 1000, 2000 and 5000 and over 100 s at 20 000
+  (busy machine), so a sample is taken as 28 ms x (K / 200)^1.5 (:func:`sample_seconds`).
 """
 from dataclasses import replace
 
@@ -25,12 +27,22 @@ from ecostudy.ocp.problem import prepare
 
 LEG_SECONDS_PER_STEP = 0.12
 LEG_BYTES_PER_STEP = 72e3
-SAMPLE_SECONDS = {"convex": 0.028 / 200, "sbpc": 0.091, "sppc": 0.253, "rspc": 0.022}  # convex: per grid point
+SAMPLE_SECONDS = {"convex": 0.028, "sbpc": 0.091, "sppc": 0.253, "rspc": 0.022}  # convex: at K = 200
 REPLAY_SECONDS = 0.001
+CONVEX_GROWTH = 1.5   # a convex sample's time grows as K^1.5
+
+
+def sample_seconds(kind, points):
+    """Estimated computing of one closed-loop sample of a controller ``kind`` at ``points`` nodes [s]."""
+    if kind == "convex":
+        return SAMPLE_SECONDS["convex"] * (points / 200) ** CONVEX_GROWTH
+    return SAMPLE_SECONDS.get(kind, REPLAY_SECONDS)
 
 
 def check_network(study, path):
-    """Refuse a network study whose time-domain legs are estimated above one run's budget."""
+    """Refuse a network study whose time-domain legs are estimated above one run's budget; returns
+    every leg's clock steps."""
+    legs = []
     for i, (a, b) in enumerate(zip(study.stops[:-1], study.stops[1:])):
         if study.running_times is not None:
             seconds, field = float(study.running_times[i]), f"running_times_s[{i}]"
@@ -40,6 +52,8 @@ def check_network(study, path):
         steps = int(np.ceil(seconds / study.dt))
         check_run(path, field, f"the leg {a} - {b} of {seconds:g} s is {steps:,} clock steps of {study.dt:g} s "
                   "for each train and strategy", steps * LEG_SECONDS_PER_STEP, steps * LEG_BYTES_PER_STEP)
+        legs.append(steps)
+    return legs
 
 
 def true_train(train, truth):
@@ -53,8 +67,9 @@ def true_train(train, truth):
 def check_closed_loop(cases, path):
     """Refuse a closed-loop study with a run whose true train cannot reach the stop before the
     loop's time cap (it would be simulated to the cap, sample by sample), or estimated above one
-    run's budget. ``cases``: :func:`ecostudy.studies.closedloop.expand`'s."""
-    seen = {}
+    run's budget. ``cases``: :func:`ecostudy.studies.closedloop.expand`'s. Returns every run's
+    estimated seconds."""
+    seen, runs = {}, []
     for case in cases:
         truth = case["truth"]
         key = (tuple(sorted(truth.items())), case["from"], case["to"])
@@ -67,11 +82,12 @@ def check_closed_loop(cases, path):
             refuse_unless_forced(path, "deviations", f"{label}: the true train (mass x{truth['mass']:.3g}, resistance "
                                  f"x{truth['resistance']:.3g}, traction x{truth['traction']:.3g}) cannot reach the stop "
                                  f"({why}): the run would be simulated to the loop's cap of {cap:,.0f} s ({duration(cap)})")
-        kind = case["controller"].get("kind", "convex")
-        per_sample = SAMPLE_SECONDS.get(kind, REPLAY_SECONDS) * (case["points"] if kind == "convex" else 1)
+        per_sample = sample_seconds(case["controller"].get("kind", "convex"), case["points"])
         span = max(fastest, case["window"][1])
         samples = span / case["sample_time"]
         check_run(path, "controllers", f"{label}: {samples:,.0f} samples of {case['sample_time']:g} s", samples * per_sample)
+        runs.append(samples * per_sample)
+    return runs
 
 
 def _true_all_out(case, truth):

@@ -42,6 +42,7 @@ from ecostudy.io.tables import number_columns
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.studies.batch import outcome, stored_rows
 from ecostudy.studies.cases import case_key
+from ecostudy.studies.sizes import check_heavyhaul_study
 
 
 def _reference(s, path, consist, track, from_stop, to_stop):
@@ -194,6 +195,7 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
 def heavyhaul_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
     """Run the cases not stored yet and write runs.csv; returns a :class:`HeavyhaulStudy`."""
     study, output, reference, cases = expand(path)
+    check_heavyhaul_study(path, study, reference, cases, workers)  # too big for the command: refused (--force)
     output = check_output_dir(Path(out) if out else output, ("runs.csv", "results.sqlite"))
     counts, rows = stored_rows(cases, output / "results.sqlite", run_heavyhaul_case, workers, dask, retry_failed,
                                progress)

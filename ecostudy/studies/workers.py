@@ -1,19 +1,8 @@
 """Worker processes that never outlive the command that started them."""
-import ctypes
 import multiprocessing
-import signal
 from concurrent.futures import ProcessPoolExecutor
 
-PR_SET_PDEATHSIG = 1  # linux/prctl.h
-
-
-def die_with_parent():
-    """Ask Linux to send SIGTERM to this process when its parent dies (a killed ``ecostudy run``
-    must not leave workers computing); elsewhere nothing happens."""
-    try:
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
-    except (OSError, AttributeError):
-        pass
+from ecostudy.core.deadline import die_with_parent
 
 
 def worker_pool(workers):

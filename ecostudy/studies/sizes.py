@@ -1,0 +1,115 @@
+"""The size of a whole study, estimated before anything is computed: its runs (cases × grid points,
+draws × controllers × samples, legs × trains × strategies, sweeps × samples) shared among the
+workers, refused above the 2 h one command may take or half the machine's memory
+(:func:`ecostudy.core.budget.check_study`), unless ``--force``. One run's own limits are
+:mod:`ecostudy.studies.estimate`'s.
+
+The constants are measured on this project's shared 2-core machine (pessimistic):
+
+- one space-domain run (build, NL write, Ipopt, verification) of the default study (K = 1000):
+  1.3 s on a quiet machine, 2.6 s on a busy one: :data:`RUN_SECONDS_PER_POINT`; a DAS ``phases``
+  advice adds two NLPs of the same size and ``minlp`` its time limit;
+- a network study: its clock steps (every leg of every train, for every strategy) against the
+  measured commands (``--workers 2``, so twice their wall time of computing: 2 trains 33.8 s over
+  6 146 steps, 3 trains 94.7 s over 9 219, the 20-stop line 319.5 s over 34 083; docs/benchmarks.md):
+  11, 20.5 and 18.7 ms a step, taken as 25 ms (:data:`NETWORK_SECONDS_PER_STEP`);
+- a heavy-haul run: ``ecostudy heavyhaul studies/heavyhaul_fence.yaml`` (busy machine) took 85.6 s
+  over 140 samples at f = 10 (0.61 s a sample: the plant's integration, the observer and the QP)
+  and 261.5 s over 138 at f = 1 (1.9 s): 0.8 and 2.5 s a sample
+  (:data:`HEAVYHAUL_SECONDS_PER_SAMPLE`), over 1.5 times the reference's samples.
+"""
+import numpy as np
+
+from ecostudy.core.budget import check_run, check_study
+from ecostudy.io.documents import read_document
+from ecostudy.io.loaders import validate
+from ecostudy.io.loopfile import SimulateFile
+from ecostudy.studies import cases as study_cases
+from ecostudy.studies import closedloop
+from ecostudy.studies.estimate import check_closed_loop, check_network, sample_seconds
+
+RUN_SECONDS_PER_POINT = 2.6e-3
+DAS_EXTRA_POINT_RUNS = {"round": 0.0, "phases": 2.0, "minlp": 3.0}
+NETWORK_SECONDS_PER_STEP = 0.025
+HEAVYHAUL_SECONDS_PER_SAMPLE = {1: 2.5}  # f = 1: one locomotive group per car, the largest QP
+HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED = 0.8
+RUN_BYTES_PER_POINT = 20e3        # the space NLP of K points (Ipopt's factor and the model): 20 MB at K = 1000
+
+
+def run_seconds(points, das=None, das_time_limit=60.0):
+    """One space-domain run of ``points`` grid nodes, with its DAS advice [s]."""
+    seconds = points * RUN_SECONDS_PER_POINT * (1 + DAS_EXTRA_POINT_RUNS.get(das or "round", 0.0))
+    return seconds + (das_time_limit if das == "minlp" else 0.0)
+
+
+def run_study_runs(path):
+    """(seconds per case, bytes of the largest case) of a ``run`` study file."""
+    _, _, cases = study_cases.expand(path, [])
+    runs = [run_seconds(c["points"], c.get("das"), c.get("das_time_limit_s", 60.0)) for c in cases]
+    return runs, max((c["points"] for c in cases), default=0) * RUN_BYTES_PER_POINT
+
+
+def check_run_study(path, workers=1):
+    """Refuse a ``run`` study estimated above the command's budget (unless forced)."""
+    runs, nbytes = run_study_runs(path)
+    check_study(path, "the study's cases", runs, workers, nbytes)
+
+
+# a study kind's whole-study size check by its name (studies.batch.STUDY_KINDS); a kind without one
+# runs unchecked (its runs still meet core.budget.check_run where they build a model)
+KIND_SIZES = {"run": check_run_study}
+
+
+def check_front(where, count, points, workers=1, das=None, das_time_limit=60.0):
+    """Refuse a Pareto front of ``count`` runs of ``points`` nodes estimated above the budget."""
+    check_study(where, f"a front of {count} points at K = {points}",
+                [run_seconds(points, das, das_time_limit)] * count, workers, points * RUN_BYTES_PER_POINT)
+
+
+def check_closed_loop_study(path, workers=1, only=None):
+    """Refuse a closed-loop study too big for the command or a run, or that cannot end: first from
+    the file alone (controllers x draws x samples to the latest arrival), before the study's own
+    set-up solves anything (its all-out SOCP took minutes at K = 20 000); then with every draw's
+    true train (:func:`check_closed_loop`). ``only``: the controllers run (all when None)."""
+    s = validate(SimulateFile, read_document(path), path)
+    chosen = [c for c in s.controllers if not only or c.name in only]
+    what = f"{len(chosen)} controllers x {s.draws} draws"
+    per_run = []
+    for c in chosen:
+        samples = s.window_s[1] / (c.sample_time_s or s.sample_time_s)
+        seconds = samples * sample_seconds(c.kind, s.points)
+        check_run(path, "controllers", f"{c.name}: {samples:,.0f} samples of {c.sample_time_s or s.sample_time_s:g} s "
+                  f"at K = {s.points}", seconds)
+        per_run += [seconds] * s.draws
+    check_study(path, what, per_run, workers, s.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")
+    study, _, cases = closedloop.expand(path)
+    runs = check_closed_loop(cases, path)
+    check_study(path, what, [r for r, c in zip(runs, cases) if not only or c["labels"]["controller"] in only],
+                workers, study.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")
+
+
+def network_runs(study, path):
+    """Seconds of each strategy of a network study (every train over every leg)."""
+    legs = check_network(study, path)
+    per_strategy = sum(legs) * len(study.names) * NETWORK_SECONDS_PER_STEP
+    return [per_strategy] * len(study.strategies)
+
+
+def check_network_study(study, path, workers=1):
+    """Refuse a network study (loaded: :func:`ecostudy.io.loaders.load_network_study`) too big for one
+    run (its legs) or for the command (every strategy)."""
+    check_study(path, f"{len(study.strategies)} strategies x {len(study.names)} trains", network_runs(study, path),
+                workers)
+
+
+def heavyhaul_runs(study, reference, cases):
+    """Seconds of each run of a heavy-haul study (its samples, up to ``max_samples``):
+    :func:`ecostudy.studies.heavyhaul.expand`'s study, reference and cases."""
+    samples = min(study.max_samples, int(np.ceil(1.5 * reference.running_time / study.sample_time_s)))
+    return [samples * HEAVYHAUL_SECONDS_PER_SAMPLE.get(c["labels"]["f"], HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED)
+            for c in cases]
+
+
+def check_heavyhaul_study(path, study, reference, cases, workers=1):
+    """Refuse a heavy-haul study estimated above the command's budget (unless forced)."""
+    check_study(path, "the study's runs", heavyhaul_runs(study, reference, cases), workers)

@@ -1,0 +1,139 @@
+"""The size of a whole study estimated before computing (``studies/sizes.py``, ``core/budget.check_study``):
+runs × their estimate shared among the workers, refused above the 2 h one command may take or half
+the machine's memory, with the estimate and how to run a part, unless ``--force``. Every shipped
+study passes."""
+from pathlib import Path
+
+import pytest
+
+from ecostudy.core.budget import check_study, forced, study_estimate
+from ecostudy.core.errors import InputError
+from ecostudy.io.loaders import load_network_study
+from ecostudy.io.yamlsafe import load_yaml
+from ecostudy.studies import sizes
+
+from .conftest import STUDIES, TRACKS, TRAINS, write_yaml
+from .test_bad_input import one_line, run
+
+METRO, AMS = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml"
+HEAVY = sorted(p for p in STUDIES.glob("*.yaml") if "consist" in load_yaml(p.read_text()))
+LIGHT = sorted(p for p in STUDIES.glob("*.yaml") if p not in HEAVY)
+
+
+def check_file(path, workers, only=None):
+    """The study check its command makes, by the study's kind."""
+    doc = load_yaml(Path(path).read_text())
+    if "controllers" in doc:
+        sizes.check_closed_loop_study(path, workers, only)
+    elif "trains" in doc:
+        sizes.check_network_study(load_network_study(path), path, workers)
+    elif "consist" in doc:
+        from ecostudy.studies.heavyhaul import expand
+        study, _, reference, cases = expand(path)
+        sizes.check_heavyhaul_study(path, study, reference, cases, workers)
+    else:
+        sizes.check_run_study(path, workers)
+
+
+def test_the_estimate_shares_the_work_and_counts_every_worker():
+    total, wall, nbytes = study_estimate([10.0] * 8, workers=4, run_bytes=1e8)
+    assert (total, wall) == (80.0, 20.0) and nbytes == pytest.approx(4 * (0.4e9 + 1e8))
+    assert study_estimate([100.0, 1.0], workers=2)[1] == 100.0  # never below the longest run
+    assert study_estimate([5.0], workers=64)[2] == pytest.approx(0.4e9)  # one run: one worker busy
+
+
+@pytest.mark.parametrize("runs, workers, fragments", [
+    ([3600.0] * 3, 1, ["3 runs, an estimated 3 h of computing (3 h with 1 worker)", "above the 2 h"]),
+    ([600.0] * 100, 4, ["100 runs", "16.7 h of computing (4.2 h with 4 workers)"]),
+    ([1.0] * 1000, 1000, ["with 1000 workers an estimated 400.0 GB of memory", "use fewer --workers"]),
+])
+def test_a_study_too_big_for_one_command_is_refused_with_its_estimate(runs, workers, fragments):
+    with pytest.raises(InputError) as refused:
+        check_study("s.yaml", "the study's cases", runs, workers)
+    text = str(refused.value)
+    assert text.startswith("s.yaml: study: the study's cases:") and "--force" in text
+    for fragment in fragments:
+        assert fragment in text, text
+    with forced():
+        check_study("s.yaml", "the study's cases", runs, workers)
+
+
+def sweep_study(tmp_path, n, points=1000, das=None):
+    doc = {"name": "big", "track": str(AMS), "train": str(METRO), "points": points, "objective": "energy",
+           "sweep": {"supplement_percent": [1 + 0.01 * i for i in range(n)]}, "output": str(tmp_path / "out")}
+    if das:
+        doc["das"] = das
+    return write_yaml(tmp_path / "big.yaml", doc)
+
+
+@pytest.mark.parametrize("n, points, das, workers, fragments", [
+    (3000, 1000, None, 1, ["3000 runs", "h of computing"]),
+    (200, 2000, "minlp", 2, ["200 runs", "with 2 workers"]),
+    (256, 200, None, 256, ["memory", "use fewer --workers"]),
+])
+def test_run_refuses_a_sweep_too_big_before_computing(tmp_path, n, points, das, workers, fragments):
+    r = run("run", sweep_study(tmp_path, n, points, das), "--workers", workers, "--no-progress")
+    one_line(r, "big.yaml: study:", "--force", *fragments)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("count, points, fragments", [
+    (10000, 100000, ["a front of 10000 points at K = 100000", "days of computing"]),
+    (5000, 20000, ["a front of 5000 points at K = 20000", "above the 2 h"]),
+])
+def test_pareto_refuses_a_front_too_big_before_computing(tmp_path, count, points, fragments):
+    r = run("pareto", "--track", AMS, "--train", METRO, "--count", count, "--points", points, "--out",
+            tmp_path / "o", "--no-plot")
+    one_line(r, "command line: study:", "--force", *fragments)
+
+
+def test_a_closed_loop_study_too_big_is_refused_and_a_part_of_it_runs(tmp_path):
+    doc = load_yaml((STUDIES / "metro_monte_carlo.yaml").read_text())
+    doc.update(track=str(AMS), train=str(METRO), output=str(tmp_path / "out"), draws=300)
+    path = write_yaml(tmp_path / "mc.yaml", doc)
+    r = run("simulate", path, "--workers", 2, "--no-progress", "--no-plot")
+    one_line(r, "mc.yaml: study: 8 controllers x 300 draws: 2400 runs", "with 2 workers", "--only CONTROLLER",
+             "--force")
+    sizes.check_closed_loop_study(path, 2, ["rspc"])  # one controller's 300 runs: about 22 min
+
+
+def test_a_network_study_too_big_for_the_command_is_refused(tmp_path):
+    doc = load_yaml((STUDIES / "network_metro_2trains.yaml").read_text())
+    doc.update(track=str(TRACKS / "metro_line_4stops.yaml"), train=str(METRO), output=str(tmp_path / "out"),
+               supplement_percent=None, running_times_s=[1000, 1000, 1000], time_step_s=0.05)
+    doc["trains"] = [{"name": f"T{i}", "offset_s": 60.0 * i} for i in range(8)]
+    doc["strategies"] = ["independent", "receptivity", "triggering", "voltage", "dissension", "joint"]
+    r = run("network", write_yaml(tmp_path / "net.yaml", doc), "--no-plot")
+    one_line(r, "net.yaml: study: 6 strategies x 8 trains", "above the 2 h", "--force")
+
+
+@pytest.mark.parametrize("path", LIGHT, ids=[p.stem for p in LIGHT])
+def test_every_shipped_study_passes_its_estimate(path):
+    """Each shipped study with --workers 2 (the metro Monte Carlo study's header asks for it); with
+    one worker, all but that study, which is refused with how to run a part of it."""
+    check_file(path, 2)
+    if path.stem == "metro_monte_carlo":
+        with pytest.raises(InputError, match="--only CONTROLLER"):
+            check_file(path, 1)
+        check_file(path, 1, ["sppc"])  # its heaviest part (100 runs of 200 samples at 253 ms): the others are lighter
+    else:
+        check_file(path, 1)
+
+
+@pytest.mark.slow  # each heavy-haul study solves its reference run first (10-20 s)
+@pytest.mark.parametrize("path", HEAVY, ids=[p.stem for p in HEAVY])
+def test_every_shipped_heavyhaul_study_passes_its_estimate(path):
+    check_file(path, 1)
+
+
+@pytest.mark.parametrize("points, sample_time, fragments", [
+    (20000, 0.1, ["convex: 760 samples of 0.1 s at K = 20000", "5.9 h", "one run"]),
+    (10000, 0.05, ["convex: 1,520 samples of 0.05 s at K = 10000", "one run"]),
+])
+def test_a_convex_controller_on_a_huge_grid_is_refused_from_the_file_alone(tmp_path, points, sample_time, fragments):
+    """Refused before the study's set-up solves its all-out SOCP (over 100 s at K = 20 000)."""
+    doc = {"name": "k", "track": str(AMS), "train": str(METRO), "window_s": [0, 76], "points": points,
+           "sample_time_s": sample_time, "controllers": [{"name": "convex", "kind": "convex"}], "draws": 1,
+           "output": str(tmp_path / "out")}
+    r = run("simulate", write_yaml(tmp_path / "k.yaml", doc), "--no-progress", "--no-plot")
+    one_line(r, "k.yaml: controllers:", "--force", *fragments)
