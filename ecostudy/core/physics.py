@@ -154,7 +154,7 @@ class Envelope:
     def force(self, speed: Numeric) -> Numeric:
         """Maximum force at ``speed`` [N] for floats and numpy arrays (tables: Pyomo too)."""
         if self.kind == "table":
-            return smooth_table(speed, self._table, self.width)
+            return smooth_table(speed, self.smooth_coefficients, self.width)
         if isinstance(speed, float):  # the simulator's hot path
             return min(self.max_force, self.max_power / max(speed, 1e-9))
         speed = np.maximum(speed, 1e-9)
@@ -172,7 +172,7 @@ class Envelope:
     def smooth_function(self, corner_share: float = 0.0005) -> Callable[[Numeric], Numeric]:
         """:meth:`smooth_force` as a function of the speed alone (a scalar loop calls it cheaply)."""
         if self.kind == "table":
-            coefficients, width = self._table, self.width
+            coefficients, width = self.smooth_coefficients, self.width
             return lambda speed: smooth_table(speed, coefficients, width)
         force, power = self.max_force, self.max_power
         if not np.isfinite(power):
@@ -198,7 +198,7 @@ class Envelope:
                 and power_never_binds(self.max_force, self.max_power, speeds))
 
     @property
-    def _table(self) -> Coefficients:
+    def smooth_coefficients(self) -> Coefficients:
         """The coefficients of a table envelope (set by ``__post_init__``)."""
         if not self.coefficients:
             raise ValueError(f"a {self.kind} envelope has no table")
