@@ -35,7 +35,8 @@ def interval_davis(segment: Segment, train: Train, nodes: FloatArray) -> tuple[F
     return np.full(n, float(a)), np.full(n, float(b)), np.asarray(c_k, float)
 
 
-def braking_curve(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray, end_speed: float = 0.0) -> FloatArray:
+def braking_curve(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray,
+                  end_speed: float = 0.0) -> FloatArray:
     """Highest speeds from which full service braking still meets every limit and the stop [m/s]
     (``end_speed``: the speed allowed at the last node instead of the stop; inf: its limit)."""
     ds = np.diff(nodes)

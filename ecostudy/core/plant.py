@@ -205,8 +205,8 @@ class Plant:
         return Step(State(y[0], max(y[1], 0.0), t_end), y[2], y[3], y[4], stood)
 
     # ------------------------------------------------------------------ a whole trip
-    def drive(self, nodes: FloatArray, handle: Sequence[float] | FloatArray, targets: Sequence[float] | FloatArray | None = None,
-              gain: float = 1.0, max_time: float | None = None,
+    def drive(self, nodes: FloatArray, handle: Sequence[float] | FloatArray,
+              targets: Sequence[float] | FloatArray | None = None, gain: float = 1.0, max_time: float | None = None,
               initial_speed: float = 0.0) -> tuple[list[float], float, list[Any]]:
         """Drive ``handle`` (one value per interval of ``nodes``, switching by position) from
         standstill (or ``initial_speed`` [m/s]) until the train stops; ``targets`` (one per interval, nan elsewhere) asks for
@@ -216,7 +216,8 @@ class Plant:
         a, b, c = self.davis
         handles = [float(u) for u in handle]
         target = [float(x) for x in targets] if targets is not None else [float("nan")] * len(handles)
-        controls: list[float | Cruise] = [Cruise(x, gain) if x == x else u for u, x in zip(handles, target)]  # nan: the handle
+        # nan: the handle; else cruise control at that speed
+        controls: list[float | Cruise] = [Cruise(x, gain) if x == x else u for u, x in zip(handles, target)]
         last = len(handles) - 1
         max_time = max_time or 20 * segment.distance + 600
         node_list = nodes.tolist()

@@ -32,7 +32,8 @@ class Train:
     max_acceleration: float = float("inf")  # bound on the net acceleration [m/s^2] (comfort, adhesion)
     max_deceleration: float = float("inf")  # bound on the net deceleration [m/s^2], on top of the brakes
     curve_resistance: str = "coefficient"   # "coefficient": Ms lambda_t / r; "roeckl": Roeckl's formula
-    tunnel_resistance: tuple[tuple[float, float], ...] = ()  # ((cross section [m^2], extra C [N s^2/m^2]), ...) ascending
+    # ((cross section [m^2], extra C [N s^2/m^2]), ...) ascending
+    tunnel_resistance: tuple[tuple[float, float], ...] = ()
     traction_efficiency_map: EfficiencyMap | None = None      # eta_T(v, F) instead of the constant
     regeneration_efficiency_map: EfficiencyMap | None = None  # eta_R(v, F) instead of the constant
 

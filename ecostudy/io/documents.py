@@ -3,7 +3,7 @@
 import json
 from os import PathLike
 from pathlib import Path
-from typing import Any, Mapping, Sequence, TypeVar
+from typing import Any, Mapping, Sequence, TypeAlias, TypeVar
 
 import yaml
 from pydantic import BaseModel, ValidationError
@@ -12,6 +12,16 @@ from ecostudy.core.errors import InputError, problem
 from ecostudy.io.yamlsafe import MAX_DEPTH, MAX_FILE_BYTES, DocumentError, check_depth, load_yaml, unique_keys
 
 Model = TypeVar("Model", bound=BaseModel)
+Value = TypeVar("Value")
+Where: TypeAlias = str | PathLike[str]  # a file, or what names an input in messages
+
+
+def given(value: Value | None) -> Value:
+    """A schema field that the schema's own checks guarantee where it is read (one of the forms of a
+    field is complete, a study that is no library names its track): never None there."""
+    if value is None:
+        raise ValueError("a field the schema guarantees is missing (a schema check was dropped?)")
+    return value
 
 
 def read_document(path: str | PathLike[str]) -> dict[str, Any]:

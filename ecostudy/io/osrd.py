@@ -72,7 +72,8 @@ def _curve(doc: Mapping[str, Any], path: Where, selector: str | None) -> tuple[s
             raise InputError(problem(path, f"effort_curves.modes.{mode}", f"no curve for comfort {comfort!r}"))
         chosen = entry.get("default_curve")
     try:
-        speeds, efforts = np.asarray(chosen["speeds"], dtype=np.float64), np.asarray(chosen["max_efforts"], dtype=np.float64)
+        speeds = np.asarray(chosen["speeds"], dtype=np.float64)
+        efforts = np.asarray(chosen["max_efforts"], dtype=np.float64)
     except (KeyError, TypeError, ValueError):
         raise InputError(problem(path, f"effort_curves.modes.{mode}", "expected a curve with 'speeds' and 'max_efforts'"))
     if speeds.size < 2 or speeds.size != efforts.size or not np.all(np.isfinite(speeds) & np.isfinite(efforts)):

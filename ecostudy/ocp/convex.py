@@ -46,8 +46,7 @@ from ecostudy.core.physics import Envelope
 from ecostudy.core.types import State, Train
 from ecostudy.core.units import FloatArray, Numeric
 
-# pieces (a [N], b [N s/m], c [N s^2/m^2]) of an envelope, scalars or arrays per interval
-Pieces: TypeAlias = Callable[[FloatArray], list[tuple[Numeric, Numeric, Numeric]]]
+Pieces: TypeAlias = Callable[[FloatArray], list[tuple[Numeric, Numeric, Numeric]]]  # (a [N], b [N s/m], c [N s^2/m^2])
 Term: TypeAlias = tuple[Any, Any]  # (column indices, coefficients), each broadcast to the block's rows
 Block: TypeAlias = tuple[list[np.ndarray], list[np.ndarray], np.ndarray]
 Lead: TypeAlias = Callable[[FloatArray], Any]  # the earliest clock at positions [s] (eq. 6.9's T_buff)
@@ -170,7 +169,8 @@ class ConvexProgram:
         self.weights, self.scheme, self.epsilon, self.margin = weights, scheme, epsilon, margin
         self.traction = envelope_pieces(self.train.traction)
         self.brake = envelope_pieces(self.train.braking)
-        self.previous: tuple[FloatArray, FloatArray] | None = None  # (nodes, speeds) of the last plan: where the power tangents touch
+        # (nodes, speeds) of the last plan: where the power tangents touch
+        self.previous: tuple[FloatArray, FloatArray] | None = None
         self.settings = clarabel.DefaultSettings()
         self.settings.verbose = False
         self.settings.iterative_refinement_enable = False  # halves the solve; the gap stays below 1e-7 (tests)
@@ -262,13 +262,13 @@ class ConvexProgram:
         return v[:-1] if self.scheme == "left" else 0.5 * (v[:-1] + v[1:])
 
     def assemble(self, x: FloatArray, state: State, arrival: tuple[float, float], end_speed: float, mass_scale: float,
-                 lead: Lead | None, tight: tuple[np.ndarray, FloatArray] | None = None) -> tuple[Any, FloatArray, FloatArray, list[Any], dict[str, np.ndarray]]:
+                 lead: Lead | None, tight: tuple[np.ndarray, FloatArray] | None = None
+                 ) -> tuple[Any, FloatArray, FloatArray, list[Any], dict[str, np.ndarray]]:
         """Clarabel's (A, b, q, cones) of the program on nodes ``x``: A z + s = b, s in cones.
         ``tight``: (mask of intervals, their speeds s0): rho <= 2 / s0 - s / s0^2 + TIGHT / s0 there."""
         n = len(x) - 1
         sizes = {"v": n + 1, "t": n + 1, "rho": n, "g": n, "gp": n, "b": n, "h": n}
-        index: dict[str, np.ndarray] = {}
-        start = 0
+        index, start = {}, 0
         for name in NAMES:
             index[name] = np.arange(start, start + sizes[name])
             start += sizes[name]
@@ -368,12 +368,7 @@ class _Rows:
         self.groups["soc"].append([self._block(terms, r) for terms, r in zip(parts, rhs)])
 
     def matrices(self) -> tuple[Any, FloatArray, list[Any]]:
-        data: list[np.ndarray] = []
-        rows: list[np.ndarray] = []
-        cols: list[np.ndarray] = []
-        b: list[tuple[np.ndarray, np.ndarray]] = []
-        cones: list[Any] = []
-        r = 0
+        data, rows, cols, b, cones, r = [], [], [], [], [], 0
 
         def put(block: Block, row_of: np.ndarray) -> None:
             cs, vs, rhs = block

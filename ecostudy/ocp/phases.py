@@ -121,7 +121,8 @@ def substeps_for(points: int, n_phases: int, least: int = 4) -> int:
 
 
 @space.gc_paused
-def build(segment: Segment, train: Train, layout: Layout, guess: tuple[Sequence[float] | FloatArray, Sequence[float] | FloatArray],
+def build(segment: Segment, train: Train, layout: Layout,
+          guess: tuple[Sequence[float] | FloatArray, Sequence[float] | FloatArray],
           running_time: float | None = None, window: tuple[float, float] | None = None, objective: str = "energy",
           extend: Callable[[Model, Layout, Train], None] | None = None, movable: bool = False) -> Model:
     """The phases NLP of ``layout`` (or, with ``extend``, e.g. the mode-choice MINLP of ``ocp/modechoice.py``).

@@ -98,7 +98,8 @@ class Session:
         self.nlp = PyomoNLP(model, nl_file_options=NL_OPTIONS)
         self.nl_seconds = time.perf_counter() - t0
         self.x = np.array(self.nlp.init_primals(), dtype=float)
-        self.multipliers: tuple[Any, Any, Any] | None = None   # (constraints, lower bounds, upper bounds) of the last solve
+        # (constraints, lower bounds, upper bounds) of the last solve
+        self.multipliers: tuple[Any, Any, Any] | None = None
         self._problem_class = CyIpoptNLP
 
     def set_bounds(self, var: Var, lower: float | None, upper: float | None) -> None:
@@ -136,7 +137,8 @@ class Session:
         """Solve from ``x0`` (default: the last solution); loads the point into the model."""
         iterations = [0]
 
-        held: list[bool] = []  # a Ctrl-C that arrived during the solve (ctrl_c_after): Ipopt stops at its next iteration
+        # a Ctrl-C that arrived during the solve (ctrl_c_after): Ipopt stops at its next iteration
+        held: list[bool] = []
 
         base: Any = self._problem_class
 

@@ -101,8 +101,9 @@ def limit_profile(case: Case, ramp: float, dt: float = 0.0) -> tuple[FloatArray,
 
 
 @space.gc_paused
-def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | FloatArray] | None = None, width: float = 2.0,
-            ramp: float = 20.0, limit_margin: float = 0.1, one_handle: bool | Sequence[bool] | FloatArray = True) -> Model:
+def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | FloatArray] | None = None,
+            width: float = 2.0, ramp: float = 20.0, limit_margin: float = 0.1,
+            one_handle: bool | Sequence[bool] | FloatArray = True) -> Model:
     """Add one leg as a block ``m.<name>`` with variables s, v, ft, fb, fr and expression p [kW].
 
     ``guess``: (s, v) arrays on the leg's steps, optionally followed by (F_T, F_B, F_R) per step
