@@ -1,5 +1,5 @@
 # Two commands: `make run` and `make test`. Both install whatever is missing first.
-.PHONY: install run test test-slow test-all docs typecheck bench doctor clean
+.PHONY: install run test test-slow test-all docs docs-gallery typecheck bench doctor clean
 
 ECOSTUDY := .venv/bin/ecostudy
 # pytest-xdist processes: the suite runs in two on this machine kind's two cores
@@ -24,6 +24,10 @@ test-all: install
 # the guide (docs/, mkdocs.yml) as a site in site/; --strict: a broken link or reference fails the build
 docs: install
 	NO_MKDOCS_2_WARNING=1 .venv/bin/mkdocs build --strict --site-dir site
+
+# the same with the examples gallery executed, so its pages show their tables and figures (minutes)
+docs-gallery: install
+	ECOSTUDY_GALLERY_EXECUTE=true NO_MKDOCS_2_WARNING=1 .venv/bin/mkdocs build --strict --site-dir site
 
 typecheck: install
 	.venv/bin/mypy ecostudy

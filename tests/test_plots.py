@@ -17,11 +17,14 @@ from ecostudy.core.units import to_kwh
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.network import fleet as fleets
 from ecostudy.network import strategies
-from ecostudy.report import plots, style
+from ecostudy.report import heavyplots, loopplots, plots, style
+from ecostudy.studies.closedloop import simulate_study
 from ecostudy.studies.compare import compare
+from ecostudy.studies.heavyhaul import heavyhaul_study
 from ecostudy.studies.pareto import sweep, weighted_points
 
-from .conftest import TRACKS, TRAINS
+from .conftest import TRACKS, TRAINS, write_yaml
+from .test_heavyhaul_study import study as heavyhaul_file
 
 SPEED_LIMIT = style.LIMIT["speed limit"]
 
@@ -100,10 +103,11 @@ def test_a_palette_never_repeats_a_colour_and_keeps_named_and_repeated_keys():
     assert style.colour("ATO optimum").lower() not in {c.lower() for c in given}
 
 
-def test_plots_take_every_colour_from_the_style_module():
-    source = (Path(plots.__file__)).read_text()
-    assert not re.search(r"color\s*=\s*[\"'f]", source), "a colour written into report/plots.py"
-    assert not re.search(r"[\"'](tab:|C\d[\"'])|colormaps|#[0-9a-fA-F]{6}", source)
+@pytest.mark.parametrize("module", [plots, loopplots, heavyplots], ids=lambda m: m.__name__)
+def test_plots_take_every_colour_from_the_style_module(module):
+    source = (Path(module.__file__)).read_text()
+    assert not re.search(r"color\s*=\s*[\"'f]", source), f"a colour written into {module.__name__}"
+    assert not re.search(r"[\"'](tab:|C\d[\"'])|colormaps|cmap\s*=\s*[\"']|#[0-9a-fA-F]{6}", source)
 
 
 def test_figures_written_in_each_format_at_the_resolution_asked(rokin, tmp_path):
@@ -241,3 +245,58 @@ def test_substation_voltage_and_current_over_time(network):
     line_i = labelled(amps)[0].get_ydata()
     drawing = line_i > 1.0
     assert line_v[drawing] == pytest.approx(f.supply.voltage - f.supply.resistance * line_i[drawing], rel=1e-6)
+
+
+# --- closed-loop and heavy-haul figures -------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def loop_study(tmp_path_factory):
+    """Yazhemsky 2017's flat 1 km trip driven by the convex controller with and without the mass
+    estimator and by its plan replayed open loop, two draws of a plant 10 % off in mass."""
+    folder = tmp_path_factory.mktemp("loop")
+    write_yaml(folder / "loop.yaml", {
+        "name": "loop", "track": str(TRACKS / "thesis001_flat_1km.yaml"), "train": str(TRAINS / "thesis001_commuter.yaml"),
+        "window_s": [0, 100], "points": 100, "sample_time_s": 0.5, "draws": 2, "seed": 3,
+        "deviations": {"mass": {"low": 0.9, "high": 1.1}},
+        "controllers": [{"name": "convex", "kind": "convex"}, {"name": "with estimator", "kind": "convex", "estimator": True},
+                        {"name": "plan replayed", "kind": "open_loop", "sample_time_s": 1.0}]})
+    return simulate_study(folder / "loop.yaml", out=folder / "out")
+
+
+def test_closed_loop_plots_give_each_controller_one_colour_in_every_plot(loop_study):
+    runs, names = loop_study.by_controller, list(loop_study.by_controller)
+    bands = loopplots.bands(runs, loop_study.segment, None)
+    medians = {}
+    for ax, name in zip(bands.axes, names):
+        median = [line for line in labelled(ax) if line.get_label() in ("median", "run")]
+        limit = [line for line in ax.get_lines() if line.get_label() == "speed limit"]
+        assert len(median) == 1 and len(limit) == 1 and hexes(limit) == [SPEED_LIMIT]  # as in plots.py's figures
+        medians[name] = hexes(median)[0]
+        band = ax.collections[0]  # the 5-95 % band, in the median's colour
+        assert to_hex(band.get_facecolor()[0][:3]) == medians[name]
+    assert len(set(medians.values())) == 3 and medians["convex"] == style.CONTROLLER["convex"]
+    assert not set(medians.values()) & {c.lower() for c in style.LIMIT.values()}
+    times = loopplots.solve_times(runs, loop_study.budgets, None).axes[0]
+    assert {line.get_label(): to_hex(line.get_color()) for line in labelled(times) if line.get_label() in runs} == medians
+    budgets = [line for line in labelled(times) if line.get_label().startswith("budget")]
+    assert len(budgets) == 2 and set(hexes(budgets)) == {style.LIMIT["budget"]}
+    assert len({line.get_linestyle() for line in budgets}) == 2
+    masses = loopplots.mass_estimates(runs, None).axes[0]
+    estimated = labelled(masses)
+    assert [line.get_label() for line in estimated] == ["with estimator"]
+    assert hexes(estimated) == [medians["with estimator"]]
+
+
+@pytest.mark.slow  # the two heavy-haul runs take about 20 s
+def test_heavy_haul_curves_each_in_a_colour_of_their_own(tmp_path):
+    outcome = heavyhaul_study(heavyhaul_file(tmp_path, brake_penalty=[1, 60], horizons=[{"np": 4, "nc": 2},
+                                                                                          {"np": 6, "nc": 2}]),
+                              out=tmp_path / "out")
+    trade = heavyplots.trade_off(outcome.runs, None)
+    curves = [line for ax in trade.axes[:2] for line in labelled(ax)]
+    assert len(curves) == 2 * 2 * 2  # (f, Np, Nc) groups x two quantities x two panels
+    assert len(set(hexes(curves))) == len(curves)
+    assert all(len(line.get_xdata()) == 2 for line in curves)  # one point per K_b
+    tracking = labelled(heavyplots.tracking(outcome, None).axes[0])
+    assert hexes(tracking[:1]) == [style.colour("reference")] and len(tracking) == 1 + 4
+    assert len(set(hexes(tracking))) == len(tracking)

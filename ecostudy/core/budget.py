@@ -5,10 +5,12 @@ would be simulated to its time cap."""
 import contextvars
 import os
 from contextlib import contextmanager
+from os import PathLike
+from typing import Iterator
 
 from ecostudy.core.errors import InputError, problem
 
-FORCE = contextvars.ContextVar("ecostudy_force", default=False)
+FORCE: contextvars.ContextVar[bool] = contextvars.ContextVar("ecostudy_force", default=False)
 MAX_RUN_SECONDS = 2 * 3600.0     # the longest one run (a case) may be estimated to compute
 MAX_STUDY_SECONDS = 2 * 3600.0   # the longest one command may be estimated to run (its workers together)
 WORKER_BYTES = 0.4e9             # a worker with the solver stack loaded (170 MB measured) and its model
@@ -18,7 +20,7 @@ ENVIRONMENT = "ECOSTUDY_FORCE"   # the same, for worker processes started inside
 
 
 @contextmanager
-def forced(force=True):
+def forced(force: bool = True) -> Iterator[None]:
     """Within this block (and in worker processes it starts), :func:`refuse_unless_forced` lets the
     work run."""
     token, before = FORCE.set(bool(force)), os.environ.get(ENVIRONMENT)
@@ -34,18 +36,18 @@ def forced(force=True):
             os.environ[ENVIRONMENT] = before
 
 
-def is_forced():
+def is_forced() -> bool:
     """Whether the size guards are lifted here (:func:`forced`)."""
     return FORCE.get() or os.environ.get(ENVIRONMENT) == "1"
 
 
-def refuse_unless_forced(where, field, message):
+def refuse_unless_forced(where: str | PathLike[str], field: str, message: str) -> None:
     """Raise the one-line refusal ``where: field: message; ...--force`` unless forced."""
     if not is_forced():
         raise InputError(problem(where, field, f"{message}; give --force to run it anyway"))
 
 
-def duration(seconds):
+def duration(seconds: float) -> str:
     """A duration as people say it: 40 s, 12 min, 3.5 h, 9 days."""
     if seconds < 120:
         return f"{seconds:.0f} s"
@@ -56,12 +58,12 @@ def duration(seconds):
     return f"{seconds / 86400:.0f} days"
 
 
-def size(nbytes):
+def size(nbytes: float) -> str:
     """Bytes as people say them: 300 MB, 2.5 GB."""
     return f"{nbytes / 1e9:.1f} GB" if nbytes >= 1e9 else f"{nbytes / 1e6:.0f} MB"
 
 
-def machine_memory():
+def machine_memory() -> int | None:
     """Physical memory of this machine [bytes] (None where the system does not say)."""
     try:
         return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
@@ -69,7 +71,8 @@ def machine_memory():
         return None
 
 
-def check_run(where, field, what, seconds=None, nbytes=None):
+def check_run(where: str | PathLike[str], field: str, what: str, seconds: float | None = None,
+              nbytes: float | None = None) -> None:
     """Refuse (unless forced) one run estimated above :data:`MAX_RUN_SECONDS` or half the memory."""
     memory = machine_memory()
     if seconds is not None and seconds > MAX_RUN_SECONDS:

@@ -7,10 +7,13 @@ proportion to their length.
 """
 import warnings
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 
 from ecostudy.core.errors import EcostudyWarning, InputError
+from ecostudy.core.types import Track, Train
+from ecostudy.core.units import FloatArray, Numeric
 
 
 @dataclass(frozen=True)
@@ -23,13 +26,13 @@ class Profile:
     values: np.ndarray
     slopes: np.ndarray | None = None
 
-    def __call__(self, x):
+    def __call__(self, x: Numeric) -> Numeric:
         i = np.clip(np.searchsorted(self.starts, x, side="right") - 1, 0, len(self.values) - 1)
         if self.slopes is None:
             return self.values[i]
         return self.values[i] + self.slopes[i] * (np.asarray(x, float) - self.starts[i])
 
-    def integral(self, x):
+    def integral(self, x: Numeric) -> Numeric:
         """The integral of the profile from ``starts[0]`` to ``x`` (the first piece extends below it,
         the last beyond its start)."""
         slopes = np.zeros(len(self.values)) if self.slopes is None else self.slopes
@@ -39,23 +42,23 @@ class Profile:
         h = np.asarray(x, float) - self.starts[i]
         return pieces[i] + self.values[i] * h + 0.5 * slopes[i] * h * h
 
-    def mean_over(self, centre, length):
+    def mean_over(self, centre: Numeric, length: Numeric) -> Numeric:
         """The mean of the profile over ``[centre - length/2, centre + length/2]`` (a car's length):
         continuous in ``centre`` where the profile jumps."""
         half = 0.5 * np.asarray(length, float)
         return (self.integral(centre + half) - self.integral(centre - half)) / (2.0 * half)
 
 
-def _directed(positions, values, start, end, slopes=None):
+def _directed(positions: Sequence[float] | FloatArray, values: Sequence[float] | FloatArray, start: float, end: float,
+              slopes: FloatArray | None = None) -> Profile:
     """Profile of a track quantity as seen by a train running from ``start`` to ``end``.
 
     Returns travel-distance starts and values; for a train running towards decreasing
     positions the order is mirrored (the caller flips the sign of gradients).
     """
-    positions = np.asarray(positions, float)
-    values = np.asarray(values, float)
+    positions, values = np.asarray(positions, float), np.asarray(values, float)
     lo, hi = min(start, end), max(start, end)
-    idx = np.searchsorted(positions, lo, side="right") - 1
+    idx = int(np.searchsorted(positions, lo, side="right")) - 1
     keep = [max(idx, 0)] + [i for i in range(len(positions)) if lo < positions[i] < hi]
     pos = np.array([lo] + [positions[i] for i in keep[1:]])
     slope = None if slopes is None else np.asarray(slopes, float)[keep]
@@ -69,10 +72,11 @@ def _directed(positions, values, start, end, slopes=None):
     return Profile((hi - ends)[::-1], (val + slope * (ends - pos))[::-1], -slope[::-1])
 
 
-def tunnel_profile(track, train, start, end):
+def tunnel_profile(track: Track, train: Train, start: float, end: float) -> Profile:
     """Extra quadratic resistance C [N s^2/m^2] along the run: the train's coefficient for each
     tunnel's cross section inside the tunnel, 0 outside (TTOBench ``tunnels``, ``tunnel resistance``)."""
-    edges, extra = [0.0], [0.0]
+    edges: list[float] = [0.0]
+    extra: list[float] = [0.0]
     for pos, length, area in sorted(track.tunnels):
         if edges[-1] == pos:  # starts where the last one ends (or at 0): no straight piece between
             edges.pop(), extra.pop()
@@ -81,7 +85,7 @@ def tunnel_profile(track, train, start, end):
     return _directed(np.array(edges), np.array(extra), start, end)
 
 
-def train_length_limit(limit, length):
+def train_length_limit(limit: Profile, length: float) -> Profile:
     """Speed limit for the train's head: min of the limit over the train, [x - L, x].
 
     A train may speed up only when its tail has left a restriction; before the start the
@@ -94,9 +98,9 @@ def train_length_limit(limit, length):
         lo = x - length
         inside = (limit.starts <= x) & (np.append(limit.starts[1:], np.inf) > lo)
         values.append(limit.values[inside].min())
-    values = np.array(values)
-    keep = np.concatenate([[True], values[1:] != values[:-1]])
-    return Profile(candidates[keep], values[keep])
+    lowest = np.array(values)
+    keep = np.concatenate([[True], lowest[1:] != lowest[:-1]])
+    return Profile(candidates[keep], lowest[keep])
 
 
 @dataclass(frozen=True)
@@ -111,12 +115,12 @@ class Segment:
     to_stop: str = ""
     tunnel: Profile = Profile(np.zeros(1), np.zeros(1))  # extra quadratic resistance C [N s^2/m^2]
 
-    def breakpoints(self):
+    def breakpoints(self) -> FloatArray:
         pts = np.concatenate([self.gradient.starts, self.curvature.starts, self.limit.starts, self.tunnel.starts])
         return np.unique(pts[(pts > 0) & (pts < self.distance)])
 
 
-def warn_unmodelled(segment, formulation, train=None):
+def warn_unmodelled(segment: Segment, formulation: str, train: Train | None = None) -> None:
     """One warning when ``formulation`` leaves out the tunnel resistance of ``segment`` or the
     ``train``'s efficiency maps (it then uses the constant efficiencies)."""
     if np.any(segment.tunnel.values != 0):
@@ -129,14 +133,14 @@ def warn_unmodelled(segment, formulation, train=None):
                       stacklevel=3)
 
 
-def admissible_speeds(segment, count=101):
+def admissible_speeds(segment: Segment, count: int = 101) -> FloatArray:
     """Every speed the train may run on ``segment`` [m/s], sampled: 0 up to its highest limit
     (the train's top speed caps the limits already) in ``count`` steps."""
     x = np.unique(np.concatenate([np.linspace(0.0, segment.distance, 1001), segment.breakpoints()]))
     return np.linspace(0.0, float(np.max(node_limits(segment, x))), count)
 
 
-def drop_idle_power(segment, train, formulation):
+def drop_idle_power(segment: Segment, train: Train, formulation: str) -> tuple[Train, tuple[str, ...]]:
     """(``train`` without the power limits that never bind on ``segment``, the names of the
     envelopes whose limit was dropped), with one warning saying so: a limit with P >= F_max(v) v
     at every admissible speed (``physics.power_never_binds``) is no row of ``formulation``."""
@@ -148,16 +152,16 @@ def drop_idle_power(segment, train, formulation):
     return lean, idle
 
 
-def travel_distance(track, from_stop, to_stop, position):
+def travel_distance(track: Track, from_stop: str, to_stop: str, position: Numeric) -> Numeric:
     """Distance from ``from_stop`` of a track position, in the direction of travel [m]."""
     start, end = track.stops[from_stop], track.stops[to_stop]
     return position - start if end >= start else start - position
 
 
-_WARNED: set = set()
+_WARNED: set[tuple[str, str, str]] = set()
 
 
-def warn_unpaired(track, train):
+def warn_unpaired(track: Track, train: Train) -> None:
     """Once per track and train: curves or tunnels on the track that the train gives no resistance for."""
     lines = []
     if np.any(track.curvatures != 0) and train.curve_resistance == "coefficient" and train.curve_coefficient == 0:
@@ -171,7 +175,7 @@ def warn_unpaired(track, train):
             warnings.warn(f"track '{track.name}' with train '{train.name}': {line}", EcostudyWarning, stacklevel=3)
 
 
-def make_segment(track, train, from_stop, to_stop):
+def make_segment(track: Track, train: Train, from_stop: str, to_stop: str) -> Segment:
     """Cut the track between two stops into travel-direction profiles."""
     warn_unpaired(track, train)
     start, end = track.stops[from_stop], track.stops[to_stop]
@@ -189,7 +193,7 @@ def make_segment(track, train, from_stop, to_stop):
                    tunnel_profile(track, train, start, end))
 
 
-def make_grid(segment, points, extra=()):
+def make_grid(segment: Segment, points: int, extra: Sequence[float] | FloatArray = ()) -> FloatArray:
     """``points`` node positions on [0, D], including every profile change and ``extra`` positions.
 
     The intervals between changes get a share of the nodes proportional to their length
@@ -207,13 +211,13 @@ def make_grid(segment, points, extra=()):
     return np.append(np.concatenate(nodes), segment.distance)
 
 
-def interval_of(nodes, x):
+def interval_of(nodes: FloatArray, x: float) -> int:
     """Index of the grid interval holding position ``x`` (the first or last one beyond the ends)."""
     return int(np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, len(nodes) - 2))
 
 
-def node_limits(segment, nodes):
+def node_limits(segment: Segment, nodes: FloatArray) -> FloatArray:
     """Speed limit at each node: the lower of the limits on its two sides [m/s]."""
     left = segment.limit(np.maximum(nodes - 1e-9, 0.0))
     right = segment.limit(nodes)
-    return np.minimum(left, right)
+    return np.asarray(np.minimum(left, right), float)

@@ -2,26 +2,31 @@
 
 Used as Ipopt's starting point and to estimate the all-out time before any NLP is solved.
 """
+from typing import Callable
+
 import numpy as np
 
 from ecostudy.core.errors import InfeasibleError
+from ecostudy.core.grid import Segment
 from ecostudy.core.physics import davis_resistance, interval_resistance, running_resistance
+from ecostudy.core.types import Train
+from ecostudy.core.units import FloatArray, Numeric
 
 
-def point_resistance(segment, train, positions):
+def point_resistance(segment: Segment, train: Train, positions: Numeric) -> Numeric:
     """Speed-independent resistance (gradient and curve) at travel positions [N]."""
     return running_resistance(0.0, (0.0, 0.0, 0.0), train.static_mass, segment.gradient(positions),
                               train.curve_coefficient, segment.curvature(positions),
                               roeckl=train.curve_resistance == "roeckl")
 
 
-def interval_grade_force(segment, train, nodes):
+def interval_grade_force(segment: Segment, train: Train, nodes: FloatArray) -> FloatArray:
     """Speed-independent resistance per interval (gradient and curve) at its middle [N]; on a
     clothoid the middle's curvature is the interval's mean curvature."""
-    return point_resistance(segment, train, 0.5 * (nodes[:-1] + nodes[1:]))
+    return np.asarray(point_resistance(segment, train, 0.5 * (nodes[:-1] + nodes[1:])), float)
 
 
-def interval_davis(segment, train, nodes):
+def interval_davis(segment: Segment, train: Train, nodes: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Davis coefficients per interval (A, B, C_k) [N, N s/m, N s^2/m^2]: the train's C plus the
     tunnel coefficient where the interval's middle is in a tunnel (arrays of one per interval)."""
     a, b, c = train.davis
@@ -30,7 +35,8 @@ def interval_davis(segment, train, nodes):
     return np.full(n, float(a)), np.full(n, float(b)), np.asarray(c_k, float)
 
 
-def braking_curve(segment, train, nodes, limits, end_speed=0.0):
+def braking_curve(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray,
+                  end_speed: float = 0.0) -> FloatArray:
     """Highest speeds from which full service braking still meets every limit and the stop [m/s]
     (``end_speed``: the speed allowed at the last node instead of the stop; inf: its limit)."""
     ds = np.diff(nodes)
@@ -46,7 +52,8 @@ def braking_curve(segment, train, nodes, limits, end_speed=0.0):
     return bwd
 
 
-def coast_speeds(segment, train, nodes, limits, start, v_start):
+def coast_speeds(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray, start: int,
+                 v_start: float) -> FloatArray:
     """Speeds when coasting from node ``start`` at ``v_start``; held at limits by braking [m/s].
 
     Nodes before ``start`` are NaN; a train that stops while coasting stays at 0.
@@ -63,7 +70,8 @@ def coast_speeds(segment, train, nodes, limits, start, v_start):
     return out
 
 
-def coasting_profile(segment, train, nodes, limits, fastest, start):
+def coasting_profile(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray, fastest: FloatArray,
+                     start: int) -> FloatArray:
     """``fastest`` (a profile ending at the stop) up to node ``start``, coasting from there, never
     above ``fastest``: the eco-drive coasting strategy's profile (thesis 000 Table 6.1) [m/s]."""
     coast = coast_speeds(segment, train, nodes, limits, start, fastest[start])
@@ -73,7 +81,7 @@ def coasting_profile(segment, train, nodes, limits, fastest, start):
     return v
 
 
-def earliest_coasting_point(meets, last, first=1):
+def earliest_coasting_point(meets: Callable[[int], bool], last: int, first: int = 1) -> int:
     """The smallest node k in [first + 1, last] at which coasting from k still ``meets(k)`` the
     time (``meets`` true at ``last``; coasting later only arrives earlier), by bisection."""
     lo, hi = first, last
@@ -83,7 +91,7 @@ def earliest_coasting_point(meets, last, first=1):
     return hi
 
 
-def envelope_speeds(segment, train, nodes, limits):
+def envelope_speeds(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray) -> FloatArray:
     """Fastest speeds: max traction forward from the start, max braking back from the stop.
 
     Raises :class:`InfeasibleError` when maximum traction cannot keep the train moving.
@@ -106,7 +114,8 @@ def envelope_speeds(segment, train, nodes, limits):
     return out
 
 
-def stall_message(segment, position, traction, resistance, grade, speed):
+def stall_message(segment: Segment, position: float, traction: float, resistance: float, grade: float,
+                  speed: float) -> str:
     """Why no driving reaches the stop: where the train stops moving at full traction and the
     forces there [N] (grade: gradient and curves; positive uphill)."""
     what = ("the train cannot climb" if grade > 0 and traction > resistance
@@ -118,22 +127,22 @@ def stall_message(segment, position, traction, resistance, grade, speed):
             "of gradient and curves)")
 
 
-def interval_times(speeds, nodes):
+def interval_times(speeds: FloatArray, nodes: FloatArray) -> FloatArray:
     """Time per interval 2 ds / (v_k + v_k+1) [s], exact for constant acceleration (ocp/space.py)."""
     return 2 * np.diff(nodes) / np.maximum(speeds[:-1] + speeds[1:], 1e-9)
 
 
-def clock(speeds, nodes):
+def clock(speeds: FloatArray, nodes: FloatArray) -> FloatArray:
     """Clock at every node of a speed profile from its first node [s]."""
     return np.concatenate([[0.0], np.cumsum(interval_times(speeds, nodes))])
 
 
-def running_time(speeds, nodes):
+def running_time(speeds: FloatArray, nodes: FloatArray) -> float:
     """Running time of a speed profile on the grid [s]."""
     return float(np.sum(interval_times(speeds, nodes)))
 
 
-def capped_speeds(envelope, nodes, target):
+def capped_speeds(envelope: FloatArray, nodes: FloatArray, target: float) -> FloatArray:
     """Envelope capped at one cruise speed, the cap chosen so the running time is ``target``."""
     if target <= running_time(envelope, nodes):
         return envelope.copy()
@@ -147,7 +156,7 @@ def capped_speeds(envelope, nodes, target):
     return np.minimum(envelope, hi)
 
 
-def forces_for(speeds, segment, train, nodes):
+def forces_for(speeds: FloatArray, segment: Segment, train: Train, nodes: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Traction and braking forces per interval [N] that realise ``speeds`` (clipped to the envelopes)."""
     ds = np.diff(nodes)
     v0, v1 = speeds[:-1], speeds[1:]

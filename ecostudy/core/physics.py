@@ -12,13 +12,20 @@ Ms     static mass, the mass gravity acts on [kg]
 A,B,C  Davis coefficients [N], [N s/m], [N s^2/m^2]
 """
 from dataclasses import dataclass, field, replace
+from typing import Callable, Sequence, TypeAlias
 
 import numpy as np
 
+from ecostudy.core.units import FloatArray, Numeric
+
 GRAVITY = 9.80665  # [m/s^2]
 
+# (c0, c1, [(a_j, v_j)]) of a smoothed table (:func:`table_coefficients`)
+Coefficients: TypeAlias = tuple[float, float, list[tuple[float, float]]]
+Samples: TypeAlias = Sequence[float] | FloatArray  # a table's column, as a list or an array
 
-def davis_resistance(speed, a, b, c):
+
+def davis_resistance(speed: Numeric, a: Numeric, b: Numeric, c: Numeric) -> Numeric:
     """Running resistance R_v = A + B v + C v^2 [N] (thesis 000 eq. 2.2, thesis 001 eq. 3.2).
 
     Parameters
@@ -29,7 +36,7 @@ def davis_resistance(speed, a, b, c):
     return a + b * speed + c * speed**2
 
 
-def gradient_force(static_mass, gradient):
+def gradient_force(static_mass: Numeric, gradient: Numeric) -> Numeric:
     """Gravity component along the track, Ms g tan(alpha) [N] (thesis 000 eq. 2.2).
 
     Parameters
@@ -40,7 +47,7 @@ def gradient_force(static_mass, gradient):
     return static_mass * GRAVITY * gradient
 
 
-def curve_force(static_mass, coefficient, curvature):
+def curve_force(static_mass: Numeric, coefficient: Numeric, curvature: Numeric) -> Numeric:
     """Curve resistance Ms lambda_t / r_c [N] (thesis 000 eq. 2.2).
 
     Parameters
@@ -52,7 +59,7 @@ def curve_force(static_mass, coefficient, curvature):
     return static_mass * coefficient * abs(curvature)
 
 
-def roeckl_force(static_mass, curvature):
+def roeckl_force(static_mass: Numeric, curvature: Numeric) -> Numeric:
     """Curve resistance by Roeckl's formula, as ms-eetc uses it (``mseetc/train.py``) [N]:
     Ms g 0.5 / (r - 30) for radii r >= 300 m, Ms g 0.65 / (r - 55) below, written in curvature
     k = 1 / r so that straight track (k = 0) costs nothing. numpy only (curvature is data).
@@ -67,30 +74,29 @@ def roeckl_force(static_mass, curvature):
     return static_mass * GRAVITY * share
 
 
-def hinge(x, width):
+def hinge(x: Numeric, width: float) -> Numeric:
     """Smooth max(x, 0): (x + sqrt(x^2 + w^2)) / 2. Error at the kink w/2, C-infinity."""
     return 0.5 * (x + (x * x + width * width) ** 0.5)
 
 
-def smooth_max(a, b, width):
+def smooth_max(a: Numeric, b: Numeric, width: float) -> Numeric:
     """max(a, b) rounded over ``width``: (a + b + sqrt((a - b)^2 + w^2)) / 2 (at most w/2 too high)."""
     return 0.5 * (a + b + ((a - b) ** 2 + width * width) ** 0.5)
 
 
-def smooth_min(a, b, width):
+def smooth_min(a: Numeric, b: Numeric, width: float) -> Numeric:
     """min(a, b) rounded over ``width`` (at most w/2 too low)."""
     return 0.5 * (a + b - ((a - b) ** 2 + width * width) ** 0.5)
 
 
-def table_coefficients(speeds, forces, width):
+def table_coefficients(speeds: Samples, forces: Samples, width: float) -> Coefficients:
     """(c0, c1, [(a_j, v_j)]) with table_force = c0 + c1 v + sum a_j sqrt((v - v_j)^2 + w^2).
 
     The linear interpolant of the table is f0 + sum_j (s_j - s_j-1) max(v - v_j, 0) with zero
     slope outside the table; each max is replaced by the hinge (x + sqrt(x^2 + w^2)) / 2 and the
     linear halves of all hinges are gathered into c0 + c1 v, so an expression has one sqrt per kink.
     """
-    speeds = [float(x) for x in speeds]
-    forces = [float(x) for x in forces]
+    speeds, forces = [float(x) for x in speeds], [float(x) for x in forces]
     slopes = [(f1 - f0) / (v1 - v0) for v0, v1, f0, f1 in zip(speeds, speeds[1:], forces, forces[1:])]
     jumps = [b - a for a, b in zip([0.0] + slopes, slopes + [0.0])]  # slope change at each table speed
     terms = [(0.5 * d, v) for d, v in zip(jumps, speeds) if d != 0.0]
@@ -101,7 +107,7 @@ def table_coefficients(speeds, forces, width):
     return c0, c1, terms
 
 
-def smooth_table(speed, coefficients, width):
+def smooth_table(speed: Numeric, coefficients: Coefficients, width: float) -> Numeric:
     """Evaluate c0 + c1 v + sum a_j sqrt((v - v_j)^2 + w^2) (see :func:`table_coefficients`)."""
     c0, c1, terms = coefficients
     value = c0 + c1 * speed
@@ -110,7 +116,7 @@ def smooth_table(speed, coefficients, width):
     return value
 
 
-def table_force(speed, speeds, forces, width):
+def table_force(speed: Numeric, speeds: Samples, forces: Samples, width: float) -> Numeric:
     """Speed-force table as a smooth piecewise-linear interpolant [N].
 
     Linear between table points, constant below the first and beyond the last; each kink is
@@ -136,25 +142,25 @@ class Envelope:
     kind: str
     max_force: float = float("inf")
     max_power: float = float("inf")
-    speeds: tuple = ()
-    forces: tuple = ()
+    speeds: tuple[float, ...] = ()
+    forces: tuple[float, ...] = ()
     width: float = 0.0
-    coefficients: tuple = field(default=(), compare=False, repr=False)
+    coefficients: Coefficients | tuple[()] = field(default=(), compare=False, repr=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.kind == "table" and not self.coefficients:
             object.__setattr__(self, "coefficients", table_coefficients(self.speeds, self.forces, self.width))
 
-    def force(self, speed):
+    def force(self, speed: Numeric) -> Numeric:
         """Maximum force at ``speed`` [N] for floats and numpy arrays (tables: Pyomo too)."""
         if self.kind == "table":
-            return smooth_table(speed, self.coefficients, self.width)
+            return smooth_table(speed, self.smooth_coefficients, self.width)
         if isinstance(speed, float):  # the simulator's hot path
             return min(self.max_force, self.max_power / max(speed, 1e-9))
         speed = np.maximum(speed, 1e-9)
         return np.minimum(self.max_force, self.max_power / speed)
 
-    def smooth_force(self, speed, corner_share=0.0005):
+    def smooth_force(self, speed: Numeric, corner_share: float = 0.0005) -> Numeric:
         """Maximum force as one smooth expression [N], usable in equality constraints.
 
         Tables are smooth already. min(F_max, P_max / v) = P_max / max(v, v_c) with the corner
@@ -163,10 +169,10 @@ class Envelope:
         """
         return self.smooth_function(corner_share)(speed)
 
-    def smooth_function(self, corner_share=0.0005):
+    def smooth_function(self, corner_share: float = 0.0005) -> Callable[[Numeric], Numeric]:
         """:meth:`smooth_force` as a function of the speed alone (a scalar loop calls it cheaply)."""
         if self.kind == "table":
-            coefficients, width = self.coefficients, self.width
+            coefficients, width = self.smooth_coefficients, self.width
             return lambda speed: smooth_table(speed, coefficients, width)
         force, power = self.max_force, self.max_power
         if not np.isfinite(power):
@@ -174,29 +180,36 @@ class Envelope:
         corner = power / force
         return lambda speed: power / smooth_max(speed, corner, corner_share * corner)
 
-    def scaled(self, share):
+    def scaled(self, share: float) -> "Envelope":
         """This envelope with every force (and the power) times ``share``."""
         if self.kind == "table":
             return Envelope("table", speeds=self.speeds, forces=tuple(f * share for f in self.forces), width=self.width)
         return Envelope("force_power", max_force=self.max_force * share, max_power=self.max_power * share)
 
     @property
-    def peak(self):
+    def peak(self) -> float:
         """Largest force the envelope ever allows [N]."""
         return max(self.forces) if self.kind == "table" else self.max_force
 
-    def idle_power(self, speeds):
+    def idle_power(self, speeds: Numeric) -> bool:
         """True when this envelope has a power limit that never binds at ``speeds`` [m/s]
         (:func:`power_never_binds` on its force limit)."""
         return (self.kind == "force_power" and bool(np.isfinite(self.max_power))
                 and power_never_binds(self.max_force, self.max_power, speeds))
 
-    def without_power(self):
+    @property
+    def smooth_coefficients(self) -> Coefficients:
+        """The coefficients of a table envelope (set by ``__post_init__``)."""
+        if not self.coefficients:
+            raise ValueError(f"a {self.kind} envelope has no table")
+        return self.coefficients
+
+    def without_power(self) -> "Envelope":
         """This envelope without its power limit."""
         return replace(self, max_power=float("inf"))
 
 
-def power_never_binds(force, power, speeds):
+def power_never_binds(force: Numeric, power: float, speeds: Numeric) -> bool:
     """True when a power limit can never be the binding one: P >= F_max(v) v at every speed.
 
     Checked pointwise on the envelope, so a table or a speed-dependent force limit is judged where
@@ -212,24 +225,25 @@ def power_never_binds(force, power, speeds):
     return bool(np.all(power >= np.asarray(force, float) * np.maximum(np.asarray(speeds, float), 0.0)))
 
 
-def force_power_fit(speeds, forces, tolerance=0.005):
+def force_power_fit(speeds: Samples, forces: Samples,
+                    tolerance: float = 0.005) -> tuple[float, float] | None:
     """(F_max, P_max) if every table point lies on min(F_max, P_max / v) within ``tolerance``.
 
     Such a table is then modelled exactly by F <= F_max and F v <= P_max: cheaper than the
     smoothed interpolant, and never above the table's linear interpolation (the hyperbola lies
     below its chords). Returns None for any other shape.
     """
-    speeds, forces = np.asarray(speeds, float), np.asarray(forces, float)
-    f_max = float(forces[0])
-    if f_max <= 0 or np.any(forces > f_max * (1 + tolerance)):
+    v, f = np.asarray(speeds, float), np.asarray(forces, float)
+    f_max = float(f[0])
+    if f_max <= 0 or np.any(f > f_max * (1 + tolerance)):
         return None
-    weak = (speeds > 0) & (forces < f_max * (1 - tolerance))
-    power = float(np.median(forces[weak] * speeds[weak])) if np.any(weak) else float("inf")
-    model = np.minimum(f_max, power / np.maximum(speeds, 1e-9))
-    return (f_max, power) if np.all(np.abs(model - forces) <= tolerance * forces) else None
+    weak = (v > 0) & (f < f_max * (1 - tolerance))
+    power = float(np.median(f[weak] * v[weak])) if np.any(weak) else float("inf")
+    model = np.minimum(f_max, power / np.maximum(v, 1e-9))
+    return (f_max, power) if np.all(np.abs(model - f) <= tolerance * f) else None
 
 
-def table_width(speeds, forces, tolerance=0.002):
+def table_width(speeds: Samples, forces: Samples, tolerance: float = 0.002) -> float:
     """Largest kink rounding [m/s] keeping the smooth table within ``tolerance`` of the linear one."""
     speeds, forces = np.asarray(speeds, float), np.asarray(forces, float)
     fine = np.linspace(speeds[0], speeds[-1], 4000)
@@ -244,7 +258,8 @@ def table_width(speeds, forces, tolerance=0.002):
     return width
 
 
-def running_resistance(speed, davis, static_mass, gradient, curve_coefficient, curvature, roeckl=False):
+def running_resistance(speed: Numeric, davis: Sequence[float], static_mass: float, gradient: Numeric,
+                       curve_coefficient: float, curvature: Numeric, roeckl: bool = False) -> Numeric:
     """Total resistance F_R = R_v(v) + R_g(s) [N] (thesis 000 eq. 2.2); the curve term by
     Roeckl's formula instead of lambda_t / r when ``roeckl``."""
     a, b, c = davis
@@ -252,7 +267,7 @@ def running_resistance(speed, davis, static_mass, gradient, curve_coefficient, c
     return davis_resistance(speed, a, b, c) + gradient_force(static_mass, gradient) + curve
 
 
-def interval_resistance(v0, v1, davis, fixed):
+def interval_resistance(v0: Numeric, v1: Numeric, davis: Sequence[Numeric], fixed: Numeric) -> Numeric:
     """Mean resistance over an interval between speeds v0 and v1 [N]: the trapezoidal mean of the
     Davis resistance at both ends plus the speed-independent gradient and curve force ``fixed``
     of the interval (thesis 000 eq. 2.2). The one formula of the NLP, the phases NLP, the
@@ -262,7 +277,7 @@ def interval_resistance(v0, v1, davis, fixed):
     return a + 0.5 * b * (v0 + v1) + 0.5 * c * (v0 * v0 + v1 * v1) + fixed
 
 
-def moving_share(speed_sum, width=0.01):
+def moving_share(speed_sum: Numeric, width: float = 0.01) -> Numeric:
     """Share of the braking, resisting and grade forces that act over a time step whose end speeds
     add up to ``speed_sum`` [m/s]: s^2 / (s^2 + width^2), 0 for a step that starts and ends at a
     stand, above 0.99 once the ends add up to 0.1 m/s. A smooth standstill for time-domain NLPs: a
@@ -271,7 +286,7 @@ def moving_share(speed_sum, width=0.01):
     return speed_sum * speed_sum / (speed_sum * speed_sum + width * width)
 
 
-def acceleration(traction, braking, resistance, mass):
+def acceleration(traction: Numeric, braking: Numeric, resistance: Numeric, mass: Numeric) -> Numeric:
     """dv/dt = (F_T - F_B - F_R) / M [m/s^2] (thesis 000 eq. 2.1)."""
     return (traction - braking - resistance) / mass
 
@@ -287,13 +302,13 @@ class EfficiencyMap:
     forces and row_j the interpolant of column j over the speeds.
     """
 
-    speeds: tuple
-    forces: tuple
-    values: tuple
-    hats: tuple = field(default=(), compare=False, repr=False)
-    rows: tuple = field(default=(), compare=False, repr=False)
+    speeds: tuple[float, ...]
+    forces: tuple[float, ...]
+    values: tuple[tuple[float, ...], ...]
+    hats: tuple[tuple[Coefficients, float], ...] = field(default=(), compare=False, repr=False)
+    rows: tuple[tuple[Coefficients, float], ...] = field(default=(), compare=False, repr=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         values = np.asarray(self.values, float)
         wf = 0.002 * float(np.min(np.diff(self.forces)))  # rounding of the hats: 0.1 % at a table point
         wv = min(table_width(self.speeds, values[:, j], 0.0005) for j in range(len(self.forces)))
@@ -303,19 +318,20 @@ class EfficiencyMap:
         object.__setattr__(self, "rows", tuple((table_coefficients(self.speeds, values[:, j], wv), wv)
                                                for j in range(len(self.forces))))
 
-    def __call__(self, speed, force):
-        total = 0.0
+    def __call__(self, speed: Numeric, force: Numeric) -> Numeric:
+        total: Numeric = 0.0
         for (hat, wf), (row, wv) in zip(self.hats, self.rows):
             total = total + smooth_table(force, hat, wf) * smooth_table(speed, row, wv)
         return total
 
 
-def efficiency(eta, speed, force):
+def efficiency(eta: "EfficiencyMap | float", speed: Numeric, force: Numeric) -> Numeric:
     """A constant efficiency, or an :class:`EfficiencyMap` at (speed, force)."""
     return eta(speed, force) if isinstance(eta, EfficiencyMap) else eta
 
 
-def line_energy(ft, fr, speed, ds, eta_t, eta_r):
+def line_energy(ft: Numeric, fr: Numeric, speed: Numeric, ds: Numeric, eta_t: "EfficiencyMap | float",
+                eta_r: "EfficiencyMap | float") -> Numeric:
     """Energy drawn from the line minus energy fed back [J] per interval: F_T ds / eta_T(v, F_T)
     - eta_R(v, F_R) F_R ds (thesis 000 eq. 7.3 with efficiencies that may depend on speed and
     force). ``speed`` is the interval's mean speed; floats, arrays or Pyomo expressions."""

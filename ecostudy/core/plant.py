@@ -16,17 +16,27 @@ Standing trains are not pushed backwards by resistance; work is accumulated at t
 """
 from bisect import bisect_right
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, Callable, NamedTuple, Sequence, TypeAlias
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from ecostudy.core.grid import Profile
+from ecostudy.core.grid import Profile, Segment
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import acceleration, davis_resistance, line_energy
-from ecostudy.core.types import State
+from ecostudy.core.types import State, Train
+from ecostudy.core.units import FloatArray
 
 RTOL, ATOL = 1e-8, [1e-6, 1e-8, 1.0, 1.0, 1.0, 1.0]  # state: position, speed, three works, net line energy [J]
+
+Event: TypeAlias = Callable[..., float]  # an event function of solve_ivp: (t, y) -> value
+
+
+def terminal(event: Event, direction: int) -> Event:
+    """``event`` marked for ``solve_ivp``: the integration stops where it crosses zero in ``direction``."""
+    setattr(event, "terminal", True)
+    setattr(event, "direction", direction)
+    return event
 
 
 @dataclass(frozen=True)
@@ -73,31 +83,32 @@ class Noise:
     period: float = 0.0  # the acceleration noise is held this long [s] (thesis 001 §10.1: 1 s); 0: per step
     accelerometer: float = 0.0  # noise of the acceleration reading [m/s^2] (thesis 001 §10.3.5, sigma_A)
 
-    def read_acceleration(self, mean, rng):
+    def read_acceleration(self, mean: float, rng: np.random.Generator) -> float:
         """The accelerometer's reading of the mean acceleration ``mean`` over the last sample."""
         return mean + (float(rng.normal(0.0, self.accelerometer)) if self.accelerometer else 0.0)
 
-    def generator(self):
+    def generator(self) -> np.random.Generator:
         return np.random.default_rng(self.seed)
 
-    def disturbance(self, rng):
+    def disturbance(self, rng: np.random.Generator) -> float:
         return float(rng.normal(0.0, self.acceleration)) if self.acceleration else 0.0
 
-    def measure(self, state, rng):
+    def measure(self, state: State, rng: np.random.Generator) -> State:
         """``state`` as a sensor reports it."""
         dx = float(rng.normal(0.0, self.position)) if self.position else 0.0
         dv = float(rng.normal(0.0, self.speed)) if self.speed else 0.0
         return State(state.position + dx, state.speed + dv, state.time)
 
 
-def pieces(nodes, handle, segment, jump=1e-3, targets=None):
+def pieces(nodes: FloatArray, handle: Sequence[float] | FloatArray, segment: Segment, jump: float = 1e-3,
+           targets: Sequence[float] | FloatArray | None = None) -> FloatArray:
     """Start indices of runs of intervals with (nearly) the same handle, gradient and curvature.
 
     An adaptive stepper can step straight over a short interval of different control without
     sampling it, so the integration restarts at every such discontinuity (and wherever a cruise
     target speed starts, ends or changes).
     """
-    mid = 0.5 * (nodes[:-1] + nodes[1:])
+    mid, handle = 0.5 * (nodes[:-1] + nodes[1:]), np.asarray(handle, float)
     grade, curve, tunnel = segment.gradient(mid), segment.curvature(mid), segment.tunnel(mid)
     change = ((np.abs(np.diff(handle)) > jump) | (np.diff(grade) != 0) | (np.diff(curve) != 0)
               | (np.diff(tunnel) != 0)
@@ -111,27 +122,27 @@ def pieces(nodes, handle, segment, jump=1e-3, targets=None):
 class Plant:
     """One train on one segment, with true parameters (:class:`Truth`)."""
 
-    def __init__(self, segment, train, truth=Truth()):
+    def __init__(self, segment: Segment, train: Train, truth: Truth = Truth()) -> None:
         self.segment, self.train, self.truth = segment, train, truth
         self.mass = train.mass * truth.mass
         self.davis = tuple(float(c) * truth.resistance for c in train.davis)
         self.edges = segment.breakpoints()
 
     # ------------------------------------------------------------------ forces
-    def grade_force(self, x):
+    def grade_force(self, x: float) -> float:
         """Gradient and curve force at travel position ``x`` [N] (true static mass)."""
         return float(point_resistance(self.segment, self.train, x)) * self.truth.mass
 
-    def varying(self, x):
+    def varying(self, x: float) -> bool:
         """Whether the curvature changes along the piece at travel position ``x`` (a clothoid)."""
         curve = self.segment.curvature
         return curve.slopes is not None and bool(Profile(curve.starts, curve.slopes)(x) != 0)
 
-    def tunnel(self, x):
+    def tunnel(self, x: float) -> float:
         """Extra quadratic resistance of a tunnel at travel position ``x`` [N s^2/m^2] (true resistance)."""
         return float(self.segment.tunnel(x)) * self.truth.resistance
 
-    def forces(self, v, control, resist):
+    def forces(self, v: float, control: "float | Cruise", resist: float) -> tuple[float, float]:
         """(F_T, F_B) [N] of a handle u or a :class:`Cruise` at speed ``v`` with resistance ``resist``."""
         train = self.train
         if isinstance(control, Cruise):
@@ -146,7 +157,7 @@ class Plant:
             fb = max(self.mass * train.max_deceleration - resist, 0.0)
         return ft, fb
 
-    def derivatives(self, v, ft, fb, resist, disturbance=0.0):
+    def derivatives(self, v: float, ft: float, fb: float, resist: float, disturbance: float = 0.0) -> list[float]:
         """d/dt of (position, speed, traction work, braking work, regenerated work, net line
         energy); the last by :func:`physics.line_energy` per unit distance, times v."""
         if v <= 0.0 and ft - resist + self.mass * disturbance <= 0.0:  # standing stays standing
@@ -157,12 +168,12 @@ class Plant:
         return [v, acceleration(ft, fb, resist, self.mass) + disturbance, ft * v, fb * v, fr * v, line]
 
     # ------------------------------------------------------------------ stepping
-    def step(self, state, control, dt, disturbance=0.0):
+    def step(self, state: State, control: "float | Cruise", dt: float, disturbance: float = 0.0) -> Step:
         """Advance ``state`` by ``dt`` [s] under ``control`` held constant (a :class:`Step`)."""
         a, b, c = self.davis
         y = [float(state.position), max(float(state.speed), 0.0), 0.0, 0.0, 0.0, 0.0]
         t, t_end = float(state.time), float(state.time) + dt
-        stood = None
+        stood: float | None = None
         while t < t_end - 1e-12:
             i = bisect_right(self.edges, y[0] + 1e-9)
             edge = self.edges[i] if i < len(self.edges) else np.inf
@@ -170,21 +181,20 @@ class Plant:
             c_x = c + self.tunnel(y[0] + 1e-9)
             varying = self.varying(y[0] + 1e-9)  # on a clothoid the curve force follows the position
 
-            def rhs(_, z):
+            def rhs(_: float, z: Sequence[float]) -> list[float]:
                 resist = davis_resistance(z[1], a, b, c_x) + (self.grade_force(z[0]) if varying else fixed)
                 ft, fb = self.forces(z[1], control, resist)
                 return self.derivatives(z[1], ft, fb, resist, disturbance)
 
             t_start = t
 
-            def stopped(tt, z):
+            def stopped(tt: float, z: Sequence[float]) -> float:
                 return z[1] if tt > t_start else 1.0
-            stopped.terminal, stopped.direction = True, -1
 
-            def reached(_, z):
-                return z[0] - edge
-            reached.terminal, reached.direction = True, 1
-            sol = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=RTOL, atol=ATOL, events=(stopped, reached))
+            def reached(_: float, z: Sequence[float]) -> float:
+                return float(z[0] - edge)
+            sol = solve_ivp(rhs, (t, t_end), y, method="DOP853", rtol=RTOL, atol=ATOL,
+                            events=(terminal(stopped, -1), terminal(reached, 1)))
             y, t = sol.y[:, -1].tolist(), float(sol.t[-1])
             if sol.t_events[1].size:
                 y[0] = edge  # on the boundary exactly; the next piece has its own grade
@@ -195,47 +205,49 @@ class Plant:
         return Step(State(y[0], max(y[1], 0.0), t_end), y[2], y[3], y[4], stood)
 
     # ------------------------------------------------------------------ a whole trip
-    def drive(self, nodes, handle, targets=None, gain=1.0, max_time=None, initial_speed=0.0):
+    def drive(self, nodes: FloatArray, handle: Sequence[float] | FloatArray,
+              targets: Sequence[float] | FloatArray | None = None, gain: float = 1.0, max_time: float | None = None,
+              initial_speed: float = 0.0) -> tuple[list[float], float, list[Any]]:
         """Drive ``handle`` (one value per interval of ``nodes``, switching by position) from
         standstill (or ``initial_speed`` [m/s]) until the train stops; ``targets`` (one per interval, nan elsewhere) asks for
         cruise control at that speed there. Returns (position, speed, three works, stop time)
         and the integrator's pieces, restarted at every control, gradient or curve change."""
         segment = self.segment
         a, b, c = self.davis
-        handle = [float(u) for u in handle]
-        target = [float(x) for x in targets] if targets is not None else [float("nan")] * len(handle)
-        controls = [Cruise(x, gain) if x == x else u for u, x in zip(handle, target)]  # nan: the handle
-        last = len(handle) - 1
+        handles = [float(u) for u in handle]
+        target = [float(x) for x in targets] if targets is not None else [float("nan")] * len(handles)
+        # nan: the handle; else cruise control at that speed
+        controls: list[float | Cruise] = [Cruise(x, gain) if x == x else u for u, x in zip(handles, target)]
+        last = len(handles) - 1
         max_time = max_time or 20 * segment.distance + 600
         node_list = nodes.tolist()
         fixed = [0.0, c]  # gradient + curve force [N] and C with the tunnel's: constant within a piece
         span = [0, last]  # a step that overshoots the piece's end must not sample the next piece's control
 
-        def rhs(t, y):
+        def rhs(t: float, y: Sequence[float]) -> list[float]:
             k = min(max(bisect_right(node_list, y[0]) - 1, span[0]), span[1])
             resist = davis_resistance(y[1], a, b, fixed[1]) + fixed[0]
             ft, fb = self.forces(y[1], controls[k], resist)
             return self.derivatives(y[1], ft, fb, resist)
 
-        def stopped(t, y):
+        def stopped(t: float, y: Sequence[float]) -> float:
             return y[1] if t > t_start else 1.0
-        stopped.terminal, stopped.direction = True, -1
 
-        starts = pieces(nodes, handle, segment, targets=targets)
+        starts = pieces(nodes, handles, segment, targets=targets)
         bounds = list(nodes[starts[1:]]) + [segment.distance + 100.0]  # past the stop: runaway guard
-        y, t_start, solutions = [0.0, max(initial_speed, 1e-9), 0.0, 0.0, 0.0, 0.0], 0.0, []
+        y, t_start = [0.0, max(initial_speed, 1e-9), 0.0, 0.0, 0.0, 0.0], 0.0
+        solutions: list[Any] = []  # scipy's OdeResult per piece
         for first, following, x_end in zip(starts, list(starts[1:]) + [last + 1], bounds):
             span[0], span[1] = first, following - 1
             fixed[0] = self.grade_force(0.5 * (nodes[first] + nodes[first + 1]))
             fixed[1] = c + self.tunnel(0.5 * (nodes[first] + nodes[first + 1]))
 
-            def reached(t, y, x_end=x_end):
+            def reached(t: float, y: Sequence[float], x_end: float = x_end) -> float:
                 return y[0] - x_end
-            reached.terminal, reached.direction = True, 1
             sol = solve_ivp(rhs, (t_start, max_time), y, method="DOP853", rtol=RTOL, atol=ATOL,
-                            events=(stopped, reached), dense_output=True)
+                            events=(terminal(stopped, -1), terminal(reached, 1)), dense_output=True)
             solutions.append(sol)
-            y, t_start = sol.y[:, -1].copy(), sol.t[-1]
+            y, t_start = sol.y[:, -1].tolist(), float(sol.t[-1])
             if sol.status != 1 or sol.t_events[0].size:  # stopped, or ran out of time
                 break
             y[0] = x_end  # land exactly on the boundary (event location is accurate to rounding)

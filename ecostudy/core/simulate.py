@@ -8,11 +8,14 @@ stepper can otherwise step clean over a short interval of different control). De
 sampled to find the worst overspeed against the train-length limit.
 """
 from dataclasses import dataclass
+from typing import Any, Sequence
 
 import numpy as np
 
+from ecostudy.core.grid import Segment
 from ecostudy.core.plant import Plant, Truth
-from ecostudy.core.units import to_kmh, to_kwh
+from ecostudy.core.types import Train, Window
+from ecostudy.core.units import FloatArray, to_kmh, to_kwh
 
 TOLERANCES = {"arrival_time_error_s": 0.5, "stop_error_m": 1.0, "energy_error_pct": 1.0,
               "max_overspeed_kmh": 0.5}
@@ -31,7 +34,9 @@ class Trace:
     net_energy: float = 0.0  # drawn from the line minus fed back [J] (physics.line_energy)
 
 
-def simulate(segment, train, nodes, handle, max_time=None, targets=None, gain=1.0, truth=Truth()):
+def simulate(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[float] | FloatArray,
+             max_time: float | None = None, targets: Sequence[float] | FloatArray | None = None, gain: float = 1.0,
+             truth: Truth = Truth()) -> tuple["Trace", list[Any]]:
     """Drive ``handle`` (one value per interval of ``nodes``) from standstill until the train stops:
     :meth:`Plant.drive` of the nominal train (or of ``truth``). ``targets`` (optional, one per
     interval, nan elsewhere) asks for cruise control there: a speed-holding controller
@@ -42,10 +47,12 @@ def simulate(segment, train, nodes, handle, max_time=None, targets=None, gain=1.
     return Trace(t, x, v, float(y[2]), float(y[3]), float(y[4]), float(y[0]), t_stop, float(y[5])), solutions
 
 
-def dense_samples(solutions, samples=4000):
+def dense_samples(solutions: Sequence[Any], samples: int = 4000) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Time, position and speed from the pieces' dense output, about ``samples`` points in all."""
     total = sum(s.t[-1] - s.t[0] for s in solutions) or 1.0
-    t, x, v = [], [], []
+    t: list[FloatArray] = []
+    x: list[FloatArray] = []
+    v: list[FloatArray] = []
     for sol in solutions:
         n = max(int(samples * (sol.t[-1] - sol.t[0]) / total), 2)
         tt = np.union1d(np.linspace(sol.t[0], sol.t[-1], n), sol.t)
@@ -56,13 +63,14 @@ def dense_samples(solutions, samples=4000):
     return np.concatenate(t), np.concatenate(x), np.concatenate(v)
 
 
-def worst_overspeed(segment, trace):
+def worst_overspeed(segment: Segment, trace: Trace) -> float:
     """Largest speed above the train-length limit [m/s] along the simulated run (dense samples)."""
     over = trace.v - segment.limit(np.clip(trace.x, 0, segment.distance))
     return float(np.max(over, initial=0.0))
 
 
-def window_checks(trace, windows, time_tolerance=0.5, speed_tolerance=0.5 / 3.6):
+def window_checks(trace: Trace, windows: Sequence[Window], time_tolerance: float = 0.5,
+                  speed_tolerance: float = 0.5 / 3.6) -> list[dict[str, Any]]:
     """Simulated passing time and speed at each timing point, and whether they keep its bounds."""
     x = np.maximum.accumulate(trace.x)
     out = []
@@ -77,12 +85,13 @@ def window_checks(trace, windows, time_tolerance=0.5, speed_tolerance=0.5 / 3.6)
     return out
 
 
-def verify(segment, train, nodes, handle, running_time, traction_energy, windows=()):
+def verify(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[float] | FloatArray, running_time: float,
+           traction_energy: float, windows: Sequence[Window] = ()) -> tuple[dict[str, Any], Trace]:
     """Compare an optimised run with its re-simulation; returns the ``verification`` block."""
     trace, _ = simulate(segment, train, nodes, handle)
     overspeed = worst_overspeed(segment, trace)
     energy_err = 100.0 * (trace.traction_energy - traction_energy) / max(traction_energy, 1.0)
-    out = {
+    out: dict[str, Any] = {
         "arrival_time_error_s": trace.arrival_time - running_time,
         "stop_error_m": trace.stop_position - segment.distance,
         "energy_error_pct": energy_err,
@@ -104,9 +113,9 @@ class Driven:
 
     name: str
     handle: np.ndarray
-    trace: object
+    trace: Trace
 
-    def row(self, train, distance):
+    def row(self, train: Train, distance: float) -> dict[str, Any]:
         t = self.trace
         changes = int(np.count_nonzero(np.abs(np.diff(self.handle)) > 1e-3))
         return {"strategy": self.name, "running_time_s": t.arrival_time,

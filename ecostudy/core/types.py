@@ -9,6 +9,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core.physics import EfficiencyMap, Envelope
+from ecostudy.core.units import FloatArray, Numeric
 
 
 @dataclass(frozen=True)
@@ -19,38 +20,39 @@ class Train:
     mass: float                 # effective (inertial) mass M [kg]
     static_mass: float          # Ms [kg]
     length: float               # [m]
-    davis: tuple                # (A [N], B [N s/m], C [N s^2/m^2])
+    davis: tuple[float, float, float]  # (A [N], B [N s/m], C [N s^2/m^2])
     traction: Envelope
     braking: Envelope
     regeneration: Envelope | None = None
     traction_efficiency: float = 1.0
     regeneration_efficiency: float = 0.0
     curve_coefficient: float = 0.0    # lambda_t [m^2/s^2]
-    das_levels: tuple = (-1.0, 0.0, 0.5, 0.75, 1.0)
+    das_levels: tuple[float, ...] = (-1.0, 0.0, 0.5, 0.75, 1.0)
     max_speed: float = float("inf")   # the train's top speed [m/s]: caps every speed limit
     max_acceleration: float = float("inf")  # bound on the net acceleration [m/s^2] (comfort, adhesion)
     max_deceleration: float = float("inf")  # bound on the net deceleration [m/s^2], on top of the brakes
     curve_resistance: str = "coefficient"   # "coefficient": Ms lambda_t / r; "roeckl": Roeckl's formula
-    tunnel_resistance: tuple = ()           # ((cross section [m^2], extra C [N s^2/m^2]), ...) ascending
+    # ((cross section [m^2], extra C [N s^2/m^2]), ...) ascending
+    tunnel_resistance: tuple[tuple[float, float], ...] = ()
     traction_efficiency_map: EfficiencyMap | None = None      # eta_T(v, F) instead of the constant
     regeneration_efficiency_map: EfficiencyMap | None = None  # eta_R(v, F) instead of the constant
 
     @property
-    def eta_traction(self):
+    def eta_traction(self) -> EfficiencyMap | float:
         """The traction efficiency as the net energy uses it: the map, else the constant."""
         return self.traction_efficiency_map or self.traction_efficiency
 
     @property
-    def eta_regeneration(self):
+    def eta_regeneration(self) -> EfficiencyMap | float:
         """The regeneration efficiency: the map, else the constant."""
         return self.regeneration_efficiency_map or self.regeneration_efficiency
 
-    def with_brake_reserve(self, share):
+    def with_brake_reserve(self, share: float) -> "Train":
         """This train as a controller plans with it: ``share`` of the service brake held back (the
         braking envelope times 1 - share), for the deviations a plan cannot see."""
         return replace(self, braking=self.braking.scaled(1.0 - share)) if share else self
 
-    def without_idle_power(self, speeds):
+    def without_idle_power(self, speeds: Numeric) -> tuple["Train", tuple[str, ...]]:
         """(this train without a traction power limit that never binds at ``speeds`` [m/s], the names
         of the envelopes whose limit was dropped): see :func:`ecostudy.core.physics.power_never_binds`.
         Only traction, the limit every formulation has (the SOCP as tangent rows); a braking or
@@ -59,7 +61,7 @@ class Train:
                 if getattr(self, name).idle_power(speeds)}
         return (replace(self, **idle) if idle else self), tuple(idle)
 
-    def tunnel_coefficient(self, cross_section):
+    def tunnel_coefficient(self, cross_section: float) -> float:
         """Extra quadratic resistance C [N s^2/m^2] in a tunnel of ``cross_section`` [m^2]: the
         train's table, interpolated linearly between its sections, held beyond its ends."""
         if not self.tunnel_resistance:
@@ -74,7 +76,7 @@ class Track:
 
     name: str
     length: float
-    stops: dict                      # name -> position [m]
+    stops: dict[str, float]          # name -> position [m]
     gradient_positions: np.ndarray   # [m]
     gradients: np.ndarray            # tan(alpha) [-], positive uphill
     curve_positions: np.ndarray      # [m]
@@ -82,7 +84,7 @@ class Track:
     limit_positions: np.ndarray      # [m]
     limits: np.ndarray               # [m/s]
     curvature_slopes: np.ndarray | None = None  # d(1/radius)/dx [1/m^2]: clothoids; None: all constant
-    tunnels: tuple = ()              # ((start [m], length [m], cross section [m^2]), ...)
+    tunnels: tuple[tuple[float, float, float], ...] = ()  # ((start [m], length [m], cross section [m^2]), ...)
 
 
 @dataclass(frozen=True)
@@ -91,7 +93,7 @@ class Timing:
 
     running_time: float | None = None       # [s]
     supplement: float | None = None         # fraction of the all-out time [-]
-    window: tuple | None = None             # (earliest, latest) [s]
+    window: tuple[float, float] | None = None  # (earliest, latest) [s]
 
 
 @dataclass(frozen=True)
@@ -118,7 +120,7 @@ class Supply:
     max_current: float = float("inf")        # largest current a train draws [A] (thesis Fig. 7.7)
     max_regen_current: float = float("inf")  # largest current a train feeds [A] (thesis Fig. 7.7)
 
-    def feeder(self, x):
+    def feeder(self, x: Numeric) -> FloatArray:
         """R(x) [Ohm] between the bus and a train at line position ``x`` [m]."""
         return self.line_resistance * np.abs(np.asarray(x, float) - self.position)
 
@@ -142,7 +144,7 @@ class Trajectory(NamedTuple):
     fb: np.ndarray
 
     @property
-    def time(self):
+    def time(self) -> FloatArray:
         """Clock at every node [s], 0 at the start of the run."""
         return np.concatenate([[0.0], np.cumsum(self.dt)])
 
@@ -152,22 +154,22 @@ class Consist:
     """A long train as cars in train order (the head first) joined by couplers, SI (paper 002 eq. 1)."""
 
     name: str
-    kinds: tuple                 # "locomotive" | "wagon" per car
+    kinds: tuple[str, ...]       # "locomotive" | "wagon" per car
     mass: np.ndarray             # [kg] per car
     length: np.ndarray           # [m] per car
     resistance: np.ndarray       # (n, 3): c0 [m/s^2], c1 [1/s], c2 [1/m] per car, per unit mass
-    traction: tuple              # Envelope per car, None for wagons
-    dynamic_brake: tuple         # Envelope per car, None where there is none
+    traction: tuple[Envelope | None, ...]  # Envelope per car, None for wagons
+    dynamic_brake: tuple[Envelope | None, ...]  # Envelope per car, None where there is none
     pneumatic_brake: np.ndarray  # [N] per car, largest pneumatic brake force
     stiffness: float             # k [N/m] of every coupler
     damping: float               # d [N s/m]
     force_limit: float           # |f_in| allowed [N]
 
     @property
-    def cars(self):
+    def cars(self) -> int:
         return len(self.kinds)
 
     @property
-    def locomotives(self):
+    def locomotives(self) -> list[int]:
         """Indices of the locomotives."""
         return [i for i, k in enumerate(self.kinds) if k == "locomotive"]

@@ -3,6 +3,16 @@
 Files name their units in field names (``speed_kmh``, ``force_kN``, ``mass_t``); loaders multiply
 by the factors below, here and nowhere else.
 """
+from typing import Any, TypeAlias
+
+import numpy as np
+import numpy.typing as npt
+
+# A float, a numpy array of floats or a Pyomo expression: the physics written with + - * / ** only
+# takes any of them, so the simulator and the NLP share one formula (typing cannot say "anything
+# with these operators" more narrowly than Any).
+Numeric: TypeAlias = Any
+FloatArray: TypeAlias = npt.NDArray[np.float64]
 
 KMH = 1.0 / 3.6          # [m/s] per [km/h]
 KN = 1000.0              # [N] per [kN]
@@ -13,12 +23,12 @@ KWH = 3.6e6              # [J] per [kWh]
 PERCENT = 0.01           # [-] per [%]
 
 
-def to_kmh(speed):
+def to_kmh(speed: Numeric) -> Numeric:
     """Speed [m/s] -> [km/h]."""
     return speed / KMH
 
 
-def to_kwh(energy):
+def to_kwh(energy: Numeric) -> Numeric:
     """Energy [J] -> [kWh]."""
     return energy / KWH
 
@@ -41,6 +51,6 @@ BY_DIMENSION = {
 }
 
 
-def si_factor(unit, dimension):
+def si_factor(unit: object, dimension: str) -> float | None:
     """[SI] per [unit] for a unit of ``dimension``; None for a unit ecostudy does not know."""
     return BY_DIMENSION[dimension].get(unit) if isinstance(unit, str) else None

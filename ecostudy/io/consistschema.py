@@ -1,6 +1,6 @@
 """The consist file's schema: a long train as an ordered list of vehicles joined by couplers
 (paper 002 eq. 1, Tables I-II); units in the field names."""
-from typing import Literal, Optional
+from typing import Literal, Optional, Self
 
 from pydantic import Field, model_validator
 
@@ -30,7 +30,7 @@ class VehicleType(Strict):
     pneumatic_brake_kN: float = Field(0.0, ge=0, le=2000, description="Wagons: largest pneumatic brake force.")
 
     @model_validator(mode="after")
-    def _kind(self):
+    def _kind(self) -> Self:
         if self.kind == "locomotive" and self.traction is None:
             raise ValueError("a locomotive needs 'traction'")
         if self.kind == "wagon" and (self.traction is not None or self.dynamic_brake is not None):
@@ -59,7 +59,7 @@ class ConsistFile(Strict):
     couplers: Couplers
 
     @model_validator(mode="after")
-    def _known(self):
+    def _known(self) -> Self:
         unknown = sorted({g.type for g in self.vehicles} - set(self.types))
         if unknown:
             raise ValueError(f"vehicles name unknown types: {', '.join(unknown)} (types: {', '.join(self.types)})")

@@ -1,16 +1,30 @@
 """Reading a file into Python data and validating it against a schema: every problem one line
 ``file: field: what is wrong`` (:class:`ecostudy.core.errors.InputError`)."""
 import json
+from os import PathLike
 from pathlib import Path
+from typing import Any, Mapping, Sequence, TypeAlias, TypeVar
 
 import yaml
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
 from ecostudy.core.errors import InputError, problem
 from ecostudy.io.yamlsafe import MAX_DEPTH, MAX_FILE_BYTES, DocumentError, check_depth, load_yaml, unique_keys
 
+Model = TypeVar("Model", bound=BaseModel)
+Value = TypeVar("Value")
+Where: TypeAlias = str | PathLike[str]  # a file, or what names an input in messages
 
-def read_document(path):
+
+def given(value: Value | None) -> Value:
+    """A schema field that the schema's own checks guarantee where it is read (one of the forms of a
+    field is complete, a study that is no library names its track): never None there."""
+    if value is None:
+        raise ValueError("a field the schema guarantees is missing (a schema check was dropped?)")
+    return value
+
+
+def read_document(path: str | PathLike[str]) -> dict[str, Any]:
     """Parse a YAML or JSON file into Python data; malformed files raise one-line errors.
 
     Refused by name: files that are not UTF-8, too large or nested too deeply, duplicate keys,
@@ -46,7 +60,7 @@ def read_document(path):
     return data
 
 
-def _field_path(loc):
+def _field_path(loc: Sequence[int | str]) -> str:
     out = ""
     for part in loc:
         if isinstance(part, int):
@@ -56,13 +70,14 @@ def _field_path(loc):
     return out
 
 
-def validate(schema, data, path, aliases=None):
+def validate(schema: type[Model], data: object, path: str | PathLike[str],
+             aliases: Mapping[str, str] | None = None) -> Model:
     """Validate ``data`` against a schema; every pydantic error becomes one problem line.
     ``aliases`` maps a schema field path to the name the file gives it (a TTOBench key)."""
     try:
         return schema.model_validate(data)
     except ValidationError as exc:
-        lines = []
+        lines: list[str] = []
         for err in exc.errors():
             loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]
             msg = err["msg"].removeprefix("Value error, ")

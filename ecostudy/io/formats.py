@@ -11,14 +11,18 @@
 The result is a dict in the YAML schema, validated afterwards like any YAML file.
 """
 import math
+from os import PathLike
+from typing import Any, Mapping, TypeAlias
 
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
 from ecostudy.io.osrd import osrd_train
 from ecostudy.io.ttobench import metadata, ttobench_track, ttobench_train
 
+Where: TypeAlias = str | PathLike[str]
 
-def track_document_to_schema(doc, path):
+
+def track_document_to_schema(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
     if "speed limits" in doc:
         return ttobench_track(doc, path)
     raise InputError(problem(path, "", "not a TTOBench track (no 'speed limits' field)"))
@@ -28,7 +32,7 @@ _POSITION = {"m": 1.0, "km": 1000.0}          # [m] per unit
 _SPEED_KMH = {"km/h": 1.0, "m/s": 1.0 / units.KMH}  # [km/h] per unit
 
 
-def ttobench_journey(doc, path):
+def ttobench_journey(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
     """A TTOBench journey as a timetable dict (stops by position, arrival windows, windows)."""
     points = doc.get("timing points")
     if not isinstance(points, dict) or "values" not in points:
@@ -44,9 +48,11 @@ def ttobench_journey(doc, path):
     rows = points["values"]
     if not isinstance(rows, list) or len(rows) < 2:
         raise InputError(problem(path, "timing points.values", "need at least two timing points"))
-    stops, windows, lines = [], [], []
+    stops: list[dict[str, Any]] = []
+    windows: list[dict[str, Any]] = []
+    lines: list[str] = []
 
-    def scaled(x, factor):
+    def scaled(x: float | None, factor: float) -> float | None:
         return None if x is None else float(x) * factor
 
     for i, row in enumerate(rows):
@@ -83,20 +89,21 @@ def ttobench_journey(doc, path):
             **({"track": str(meta["associated track"])} if meta.get("associated track") else {})}
 
 
-def _departure(lo, hi):
+def _departure(lo: float | None, hi: float | None) -> dict[str, float | None]:
     """A stopping point's times as a departure: fixed when both are equal, else a window."""
     if lo is not None and lo == hi:
         return {"departure_s": lo}
     return {"departure_earliest_s": lo, "departure_latest_s": hi}
 
 
-def timetable_document_to_schema(doc, path):
+def timetable_document_to_schema(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
     if "timing points" in doc:
         return ttobench_journey(doc, path)
     raise InputError(problem(path, "", "not a TTOBench journey (no 'timing points' field)"))
 
 
-def train_document_to_schema(doc, path, selector=None):
+def train_document_to_schema(doc: Mapping[str, Any], path: Where,
+                             selector: str | None = None) -> tuple[dict[str, Any], dict[str, str]]:
     """(schema dict, field-name aliases for messages) from a TTOBench or OSRD train document;
     ``selector`` picks an OSRD power mode (and comfort): ``MODE`` or ``MODE/COMFORT``."""
     try:

@@ -2,7 +2,7 @@
 controller on a consist's cascade plant, swept over the brake penalty K_b, the fence factor f and
 the horizons (Np, Nc). Units are in the field names; defaults are Zhang & Zhuan's (Ts = 20 s, K_f = 10,
 K_v = 60, K_e = 10)."""
-from typing import Literal, Optional
+from typing import Any, Literal, Optional, Self
 
 from pydantic import Field, field_validator, model_validator
 
@@ -21,7 +21,7 @@ class ReferenceSpec(Strict):
                                              "hard (a heavy train's service braking, not its brakes' full force).")
 
     @model_validator(mode="after")
-    def _one(self):
+    def _one(self) -> Self:
         given = [x is not None for x in (self.running_time_s, self.supplement_percent, self.table)]
         if sum(given) != 1:
             raise ValueError("give exactly one of running_time_s, supplement_percent or table")
@@ -33,7 +33,7 @@ class Horizon(Strict):
     nc: int = Field(ge=1, le=100, description="Nc, the control moves (the last is held to Np).")
 
     @model_validator(mode="after")
-    def _order(self):
+    def _order(self) -> Self:
         if self.nc > self.np:
             raise ValueError(f"nc ({self.nc}) must not exceed np ({self.np})")
         return self
@@ -92,8 +92,8 @@ class HeavyhaulFile(Strict):
 
     @field_validator("brake_penalty", "fence", "horizons")
     @classmethod
-    def _once(cls, values):
-        seen = []
+    def _once(cls, values: list[Any]) -> list[Any]:
+        seen: list[Any] = []
         for v in values:
             key = (v.np, v.nc) if isinstance(v, Horizon) else v
             if key in seen:
@@ -102,7 +102,7 @@ class HeavyhaulFile(Strict):
         return values
 
     @model_validator(mode="after")
-    def _values(self):
+    def _values(self) -> Self:
         if any(k < 0 for k in self.brake_penalty):
             raise ValueError("brake_penalty values must be >= 0")
         if any(f < 1 for f in self.fence):

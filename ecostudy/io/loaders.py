@@ -6,6 +6,7 @@ reported together (:class:`ecostudy.errors.InputError`).
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -13,7 +14,7 @@ from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import travel_distance
 from ecostudy.core.physics import EfficiencyMap, Envelope, force_power_fit, table_width
-from ecostudy.core.types import Consist, Supply, Timing, Track, Train
+from ecostudy.core.types import Consist, Supply, Timing, Track, Train, Window
 from ecostudy.io import schemas
 from ecostudy.io.consistschema import ConsistFile
 from ecostudy.io.formats import (
@@ -22,12 +23,15 @@ from ecostudy.io.formats import (
     train_document_to_schema,
 )
 from ecostudy.io.timetable import name_stops, window_si
-from ecostudy.io.documents import read_document, validate  # noqa: F401  (read_document: re-exported)
+from ecostudy.io.documents import Where, given, read_document as read_document, validate as validate  # re-exported
 
 
-def windows_from_schema(windows, track, from_stop, to_stop, where):
+
+def windows_from_schema(windows: Sequence[schemas.Window], track: Track, from_stop: str, to_stop: str,
+                        where: Where) -> tuple[Window, ...]:
     """Windows in SI and travel distance; each must lie strictly between the two stops."""
-    out, lines = [], []
+    out: list[Window] = []
+    lines: list[str] = []
     length = abs(track.stops[to_stop] - track.stops[from_stop])
     for i, w in enumerate(windows):
         d = travel_distance(track, from_stop, to_stop, w.position_m)
@@ -50,16 +54,16 @@ class Study:
     to_stop: str
     timing: Timing
     objective: str = "energy"
-    weights: tuple = (1.0, 1.0)
+    weights: tuple[float, float] = (1.0, 1.0)
     points: int = 1000
     output: Path = field(default_factory=lambda: Path("out"))
     track_path: Path | None = None
     train_path: Path | None = None
-    windows: tuple = ()
+    windows: tuple[Window, ...] = ()
 
 
 # --------------------------------------------------------------------------- conversions
-def _envelope(spec, mass):
+def _envelope(spec: schemas.Traction | schemas.Braking, mass: float) -> Envelope:
     """Traction or braking schema -> :class:`Envelope` in N, W, m/s."""
     if spec.table is not None:
         speeds = np.asarray(spec.table.speed_kmh) * units.KMH
@@ -69,13 +73,13 @@ def _envelope(spec, mass):
             return Envelope("force_power", max_force=fit[0], max_power=fit[1])
         return Envelope("table", speeds=tuple(speeds.tolist()), forces=tuple(forces.tolist()),
                         width=table_width(speeds, forces))
-    if getattr(spec, "max_deceleration_mps2", None) is not None:
+    if isinstance(spec, schemas.Braking) and spec.max_deceleration_mps2 is not None:
         return Envelope("force_power", max_force=mass * spec.max_deceleration_mps2)
     power = spec.max_power_kW * units.KW if spec.max_power_kW is not None else float("inf")
-    return Envelope("force_power", max_force=spec.max_force_kN * units.KN, max_power=power)
+    return Envelope("force_power", max_force=given(spec.max_force_kN) * units.KN, max_power=power)
 
 
-def _efficiency_map(table):
+def _efficiency_map(table: schemas.EfficiencyTable | None) -> EfficiencyMap | None:
     """An efficiency table of a train file as an :class:`EfficiencyMap` in m/s and N (or None)."""
     if table is None:
         return None
@@ -83,22 +87,22 @@ def _efficiency_map(table):
                          tuple(tuple(row) for row in table.efficiency))
 
 
-def _davis(d, static_mass):
+def _davis(d: schemas.Davis, static_mass: float) -> tuple[tuple[float, float, float], tuple[str, str, str]]:
     """Davis triple in N, N s/m, N s^2/m^2 from whichever unit system the file used, and its fields."""
     if d.a_N is not None:
-        return (d.a_N, d.b_N_per_mps, d.c_N_per_mps2), d.TRIPLES[0]
+        return (d.a_N, given(d.b_N_per_mps), given(d.c_N_per_mps2)), d.TRIPLES[0]
     if d.a_kN is not None:
-        return (d.a_kN * units.KN, d.b_kN_per_kmh * units.KN / units.KMH,
-                d.c_kN_per_kmh2 * units.KN / units.KMH**2), d.TRIPLES[1]
-    return (d.a_N_per_kg * static_mass, d.b_N_per_kg_per_mps * static_mass,
-            d.c_N_per_kg_per_mps2 * static_mass), d.TRIPLES[2]
+        return (d.a_kN * units.KN, given(d.b_kN_per_kmh) * units.KN / units.KMH,
+                given(d.c_kN_per_kmh2) * units.KN / units.KMH**2), d.TRIPLES[1]
+    return (given(d.a_N_per_kg) * static_mass, given(d.b_N_per_kg_per_mps) * static_mass,
+            given(d.c_N_per_kg_per_mps2) * static_mass), d.TRIPLES[2]
 
 
 # plausible Davis coefficients per unit static mass: A [N/kg], B [N s/(m kg)], C [N s^2/(m^2 kg)]
 DAVIS_PER_KG = {"a": (2e-4, 0.15), "b": (0.0, 5e-3), "c": (1e-7, 2e-3)}
 
 
-def check_davis_plausible(davis, static_mass, fields, path):
+def check_davis_plausible(davis: Sequence[float], static_mass: float, fields: Sequence[str], path: Where) -> None:
     """Warn when a Davis coefficient is of an implausible size for the mass (mixed-up units).
 
     ``fields`` names the file's fields for (A, B, C), so the warning points at what to fix.
@@ -115,10 +119,10 @@ def check_davis_plausible(davis, static_mass, fields, path):
                                   "in N, m/s units per kg); check the units"), EcostudyWarning, stacklevel=2)
 
 
-def train_from_schema(t, path, aliases=None):
+def train_from_schema(t: schemas.TrainFile, path: Where, aliases: Mapping[str, str] | None = None) -> Train:
     static = t.mass_t * units.TONNE
     mass = (t.effective_mass_t * units.TONNE if t.effective_mass_t is not None
-            else static * (1 + t.rotating_mass_factor))
+            else static * (1 + given(t.rotating_mass_factor)))
     davis, fields = _davis(t.davis, static)
     aliases = aliases or {}
     check_davis_plausible(davis, static, [aliases.get(f"davis.{f}", f"davis.{f}") for f in fields], path)
@@ -145,7 +149,7 @@ def train_from_schema(t, path, aliases=None):
                                          for x in t.tunnel_resistance))
 
 
-def track_from_schema(t):
+def track_from_schema(t: schemas.TrackFile) -> Track:
     curves = t.curves or [schemas.Curve(position_m=0, radius_m=None)]
     if curves[0].position_m > 0:  # straight before the first curve entry
         curves = [schemas.Curve(position_m=0, radius_m=None)] + list(curves)
@@ -164,7 +168,7 @@ def track_from_schema(t):
         tunnels=tuple((x.position_m, x.length_m, x.cross_section_m2) for x in t.tunnels))
 
 
-def train_document(path):
+def train_document(path: Where) -> tuple[dict[str, Any], dict[str, str] | None]:
     """(schema-shaped data, field aliases for messages) of a train file: YAML, or TTOBench/OSRD JSON.
     ``file.json#MODE`` (or ``#MODE/COMFORT``) picks an OSRD rolling stock's power mode."""
     path, selector = split_selector(path)
@@ -176,7 +180,7 @@ def train_document(path):
     return data, None
 
 
-def split_selector(path):
+def split_selector(path: Where) -> tuple[Path, str | None]:
     """(file path, selector or None) of ``file#selector``; a file whose name holds '#' stays whole."""
     text = str(path)
     if "#" in text and not Path(text).is_file():
@@ -185,7 +189,7 @@ def split_selector(path):
     return Path(text), None
 
 
-def track_document(path):
+def track_document(path: Where) -> dict[str, Any]:
     """Schema-shaped data of a track file: YAML, or TTOBench JSON."""
     data = read_document(path)
     if Path(path).suffix.lower() == ".json":
@@ -193,13 +197,13 @@ def track_document(path):
     return data
 
 
-def load_train(path):
+def load_train(path: Where) -> Train:
     """Read a train file (YAML, or TTOBench/OSRD JSON) into a :class:`Train`."""
     data, aliases = train_document(path)
     return train_from_schema(validate(schemas.TrainFile, data, path, aliases), split_selector(path)[0], aliases)
 
 
-def load_track(path):
+def load_track(path: Where) -> Track:
     """Read a track file (YAML, or TTOBench JSON) into a :class:`Track`; a line whose every limit is
     below 25 km/h is warned about (m/s given as km/h?)."""
     track = track_from_schema(validate(schemas.TrackFile, track_document(path), path))
@@ -209,18 +213,18 @@ def load_track(path):
     return track
 
 
-def train_from_dict(data, where="train (in code)"):
+def train_from_dict(data: Mapping[str, Any], where: str = "train (in code)") -> Train:
     """A :class:`Train` from the fields of a train file (units in the field names), validated and
     converted exactly as a file is; ``where`` names it in error messages."""
     return train_from_schema(validate(schemas.TrainFile, data, where), where)
 
 
-def track_from_dict(data, where="track (in code)"):
+def track_from_dict(data: Mapping[str, Any], where: str = "track (in code)") -> Track:
     """A :class:`Track` from the fields of a track file, validated and converted as a file is."""
     return track_from_schema(validate(schemas.TrackFile, data, where))
 
 
-def load_timetable(path):
+def load_timetable(path: Where) -> schemas.TimetableFile:
     """Read a timetable file (YAML, or a TTOBench journey JSON)."""
     data = read_document(path)
     if Path(path).suffix.lower() == ".json":
@@ -229,9 +233,9 @@ def load_timetable(path):
 
 
 # --------------------------------------------------------------------------- cross-file checks
-def check_stops(track, from_stop, to_stop, where):
+def check_stops(track: Track, from_stop: str, to_stop: str, where: Where) -> None:
     """Both stops must be on the track and distinct."""
-    lines = []
+    lines: list[str] = []
     for field_name, stop in (("from", from_stop), ("to", to_stop)):
         if stop not in track.stops:
             lines.append(problem(where, field_name, f"unknown stop '{stop}' (track '{track.name}' has: "
@@ -242,10 +246,10 @@ def check_stops(track, from_stop, to_stop, where):
         raise InputError(lines)
 
 
-def check_stop_list(track, names, where, field):
+def check_stop_list(track: Track, names: Sequence[str], where: Where, field: str) -> None:
     """A journey's stops in order: two or more, each a stop of the track by its exact name (an
     empty name is refused, never read as "all stops"), no stop straight after itself."""
-    lines = []
+    lines: list[str] = []
     for i, name in enumerate(names):
         if not name.strip():
             lines.append(problem(where, f"{field}[{i}]", "an empty stop name"))
@@ -262,16 +266,16 @@ def check_stop_list(track, names, where, field):
         raise InputError(lines)
 
 
-def chosen_stops(track, from_stop, to_stop, where):
+def chosen_stops(track: Track, from_stop: str | None, to_stop: str | None, where: Where) -> tuple[str, str]:
     """(from, to): the stops asked for, the track's first and last where not, checked (:func:`check_stops`)."""
     names = list(track.stops)
-    from_stop = names[0] if from_stop is None else from_stop  # '' is a name given (and refused), not "default"
-    to_stop = names[-1] if to_stop is None else to_stop
-    check_stops(track, from_stop, to_stop, where)
-    return from_stop, to_stop
+    first = names[0] if from_stop is None else from_stop  # '' is a name given (and refused), not "default"
+    last = names[-1] if to_stop is None else to_stop
+    check_stops(track, first, last, where)
+    return first, last
 
 
-def timing_from_timetable(tt, from_stop, to_stop, path):
+def timing_from_timetable(tt: schemas.TimetableFile, from_stop: str, to_stop: str, path: Where) -> Timing:
     """Running time between two stops of a timetable: arrival at ``to`` minus departure at ``from``."""
     if tt.supplement_percent is not None:
         return Timing(supplement=tt.supplement_percent * units.PERCENT)
@@ -280,9 +284,10 @@ def timing_from_timetable(tt, from_stop, to_stop, path):
              if s not in rows]
     if lines:
         raise InputError(lines)
-    dep = rows[from_stop].departure_s
-    if dep is None and rows[from_stop].arrival_s is not None:
-        dep = rows[from_stop].arrival_s + (rows[from_stop].dwell_s or 0.0)
+    start = rows[from_stop]
+    dep = start.departure_s
+    if dep is None and start.arrival_s is not None:
+        dep = start.arrival_s + (start.dwell_s or 0.0)
     arr = rows[to_stop].arrival_s
     if dep is None or arr is None:
         raise InputError(problem(path, "stops", f"need a departure at '{from_stop}' and an arrival at '{to_stop}'"))
@@ -291,15 +296,15 @@ def timing_from_timetable(tt, from_stop, to_stop, path):
     return Timing(running_time=arr - dep)
 
 
-def load_study(path):
+def load_study(study_path: Where) -> "Study":
     """Read a study file and the files it names (relative to the study file)."""
-    path = Path(path)
+    path = Path(study_path)
     s = validate(schemas.StudyFile, read_document(path), path)
     if s.library is not None:
         raise InputError(problem(path, "library", "a library study runs with `ecostudy run`"))
-    base = path.parent
-    track = load_track(base / s.track)
-    train = load_train(base / s.train)
+    base, track_file, train_file = path.parent, given(s.track), given(s.train)
+    track = load_track(base / track_file)
+    train = load_train(base / train_file)
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     if s.timetable is not None:
         tt, _ = name_stops(load_timetable(base / s.timetable), track, base / s.timetable)
@@ -311,7 +316,7 @@ def load_study(path):
     output = Path(s.output) if s.output else Path("out") / s.name
     return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop,
                  timing=timing, objective=s.objective, weights=(s.weights.time, s.weights.energy),
-                 points=s.points, output=output, track_path=base / s.track, train_path=base / s.train,
+                 points=s.points, output=output, track_path=base / track_file, train_path=base / train_file,
                  windows=windows_from_schema(s.windows, track, from_stop, to_stop, path))
 
 
@@ -322,23 +327,23 @@ class NetworkStudy:
     name: str
     track: Track
     train: Train
-    stops: list
-    running_times: list | None      # [s] per segment, or None with ``supplement``
+    stops: list[str]
+    running_times: list[float] | None  # [s] per segment, or None with ``supplement``
     supplement: float | None        # [-] per segment over its all-out time
     dwell: float                    # [s]
     dt: float                       # [s]
-    names: list
-    offsets: list                   # [s]
-    supply: object                  # core.types.Supply
-    strategies: list
+    names: list[str]
+    offsets: list[float]            # [s]
+    supply: Supply
+    strategies: list[str]
     buffer: float | None            # [m]
     points: int
     output: Path
 
 
-def load_network_study(path):
+def load_network_study(study_path: Where) -> NetworkStudy:
     """Read a network study file and the files it names; units converted here."""
-    path = Path(path)
+    path = Path(study_path)
     s = validate(schemas.NetworkStudyFile, read_document(path), path)
     track, train = load_track(path.parent / s.track), load_train(path.parent / s.train)
     stops = list(track.stops) if s.stops is None else s.stops
@@ -363,17 +368,17 @@ __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "loa
            "load_timetable", "check_stops", "check_stop_list"]
 
 
-def load_consist(path):
+def load_consist(path: Where) -> Consist:
     """Read a consist file (YAML: vehicle types, groups in train order, couplers) into a :class:`Consist`."""
     return consist_from_document(read_document(path), path)
 
 
-def consist_from_document(document, where):
+def consist_from_document(document: Mapping[str, Any], where: Where) -> Consist:
     """A :class:`Consist` (SI) from a consist file's document, validated; ``where`` names it in errors."""
     c = validate(ConsistFile, document, where)
     cars = [c.types[g.type] for g in c.vehicles for _ in range(g.count)]
 
-    def envelope(spec):
+    def envelope(spec: Any) -> Envelope | None:
         if spec is None:
             return None
         power = spec.max_power_kW * units.KW if spec.max_power_kW else float("inf")

@@ -26,7 +26,8 @@ import csv
 import io
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal, Optional
+from os import PathLike
+from typing import Any, Literal, Mapping, Optional, TypeAlias
 
 import numpy as np
 import yaml
@@ -34,10 +35,14 @@ from pydantic import Field
 
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
+from ecostudy.core.types import Track
+from ecostudy.core.units import FloatArray
 from ecostudy.io.documents import validate
 from ecostudy.io.schemabase import Strict
 from ecostudy.io.writers import atomic_write
 from ecostudy.io.yamlsafe import MAX_FILE_BYTES, DocumentError, load_yaml
+
+Where: TypeAlias = str | PathLike[str]
 
 # column name -> (quantity, [SI] per [unit])
 COLUMNS = {
@@ -84,16 +89,16 @@ class LoggedRun:
     power_wheel: np.ndarray | None = None  # [W]
     power_line: np.ndarray | None = None   # drawn from the line > 0, fed back < 0 [W]
     path: Path | None = None
-    columns: tuple = field(default=())
+    columns: tuple[str, ...] = field(default=())  # (position column, speed column) as the file names them
 
     @property
-    def files(self):
+    def files(self) -> tuple[Path, Path]:
         """(track, train) paths as the header gives them, relative to the log's folder."""
         base = self.path.parent if self.path else Path(".")
         return base / self.header.track, base / self.header.train
 
 
-def split_header(text, path):
+def split_header(text: str, path: Where) -> tuple[dict[str, Any], str]:
     """(header mapping, CSV text) of a log: the header between two '---' lines at the top."""
     lines = text.splitlines(keepends=True)
     if not lines or lines[0].strip() != "---":
@@ -113,7 +118,7 @@ def split_header(text, path):
     return header, "".join(lines[end + 1:])
 
 
-def read_table(text, path):
+def read_table(text: str, path: Where) -> tuple[list[str], FloatArray]:
     """(column names, float rows array) of the CSV part; one line for the first bad cell of each column."""
     rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)]
     if not rows:
@@ -127,7 +132,7 @@ def read_table(text, path):
     if lines:
         raise InputError(lines)
     data = np.full((len(rows) - 1, len(names)), np.nan)
-    bad = {}
+    bad: dict[str, tuple[int, str]] = {}
     for i, row in enumerate(rows[1:]):
         if len(row) != len(names):
             raise InputError(problem(path, f"row {i + 1}", f"{len(row)} values for {len(names)} columns"))
@@ -136,17 +141,18 @@ def read_table(text, path):
                 data[i, j] = float(cell)
             except ValueError:
                 bad.setdefault(names[j], (i + 1, f"'{cell.strip()}' is not a number"))
-        for j in np.nonzero(~np.isfinite(data[i]))[0]:
-            bad.setdefault(names[j], (i + 1, f"'{row[j].strip()}' is not a finite number"))
+        for k in np.nonzero(~np.isfinite(data[i]))[0]:
+            bad.setdefault(names[k], (i + 1, f"'{row[k].strip()}' is not a finite number"))
     if bad:
         raise InputError([problem(path, name, f"row {row}: {msg}") for name, (row, msg) in bad.items()])
     return names, data
 
 
-def check_series(log, path):
+def check_series(log: "LoggedRun", path: Where) -> None:
     """Refuse time that does not increase, gaps, implausible speeds and speeds that do not fit the
     positions (a unit mix-up): one line each."""
-    t, lines = log.t, []
+    t = log.t
+    lines: list[str] = []
     if len(t) < MIN_ROWS:
         raise InputError(problem(path, "time_s", f"{len(t)} rows; a log needs at least {MIN_ROWS}"))
     dt = np.diff(t)
@@ -175,10 +181,10 @@ def check_series(log, path):
         raise InputError(lines)
 
 
-def parse_log(text, path, name=None):
+def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
     """A :class:`LoggedRun` from a log's text (``path`` names it in messages)."""
-    header, table = split_header(text, path)
-    header = validate(LogHeader, header, f"{path}: header")
+    fields, table = split_header(text, path)
+    header = validate(LogHeader, fields, f"{path}: header")
     names, data = read_table(table, path)
     column = {COLUMNS[n][0]: (n, data[:, j] * COLUMNS[n][1]) for j, n in enumerate(names)}
     if "time" not in column:
@@ -190,35 +196,38 @@ def parse_log(text, path, name=None):
     v = column["speed"][1] if "speed" in column else None
     if "position" in column:
         x = column["position"][1]
-    elif header.start_position_m is None:
+    elif header.start_position_m is None or v is None:
         raise InputError(problem(path, "header", "start_position_m is needed when there is no position column"))
     else:
         x = header.start_position_m + np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
     line = column["power_line"][1] if "power_line" in column else None
     if line is None and "voltage" in column and "current" in column:
         line = column["voltage"][1] * column["current"][1]
-    get = lambda q: column[q][1] if q in column else None  # noqa: E731
+
+    def get(q: str) -> FloatArray | None:
+        return column[q][1] if q in column else None
+
     log = LoggedRun(name or Path(path).stem, header, t, x, v, get("force"), get("power_wheel"), line, Path(path),
                     (column.get("position", ("(start_position_m)",))[0], column.get("speed", ("",))[0]))
     check_series(log, path)
     return log
 
 
-def load_log(path):
+def load_log(path: Where) -> "LoggedRun":
     """Read a logged run (:func:`parse_log`); a missing, too large or non-UTF-8 file is one line."""
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(problem(path, "", "file not found"))
-    if path.stat().st_size > MAX_FILE_BYTES:
-        raise InputError(problem(path, "", f"larger than the {MAX_FILE_BYTES / 1e6:.0f} MB ecostudy reads"))
+    file = Path(path)
+    if not file.is_file():
+        raise InputError(problem(file, "", "file not found"))
+    if file.stat().st_size > MAX_FILE_BYTES:
+        raise InputError(problem(file, "", f"larger than the {MAX_FILE_BYTES / 1e6:.0f} MB ecostudy reads"))
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = file.read_bytes().decode("utf-8")
     except UnicodeDecodeError as exc:
-        raise InputError(problem(path, "", f"not UTF-8 text (byte {exc.start}: {exc.reason})"))
-    return parse_log(text, path)
+        raise InputError(problem(file, "", f"not UTF-8 text (byte {exc.start}: {exc.reason})"))
+    return parse_log(text, file)
 
 
-def check_on_track(log, track):
+def check_on_track(log: "LoggedRun", track: Track) -> None:
     """Every logged position must lie on the track [0, length]: one line naming the first that does not."""
     off = (log.x < -1e-6) | (log.x > track.length + 1e-6)
     if np.any(off):
@@ -227,14 +236,14 @@ def check_on_track(log, track):
                                  f"off track '{track.name}' (0 to {track.length:g} m)"))
 
 
-def write_log(path, header, frame):
+def write_log(path: str | Path, header: Mapping[str, Any], frame: Any) -> None:
     """Write a logged run: ``header`` (a mapping, the fields of :class:`LogHeader`) and ``frame``
     (a table whose columns are names of :data:`COLUMNS`, in those units)."""
     unknown = [c for c in frame.columns if c not in COLUMNS]
     if unknown:
         raise ValueError(f"unknown log columns {unknown}")
 
-    def write(tmp):
+    def write(tmp: str) -> None:
         with open(tmp, "w") as fh:
             fh.write("---\n" + yaml.safe_dump(dict(header), sort_keys=False) + "---\n")
             frame.to_csv(fh, index=False, float_format="%.6f")

@@ -3,7 +3,7 @@
 Units are in the field names, as in :mod:`ecostudy.io.schemas`. Defaults are thesis 001's Ch.9
 (controller) and Ch.10 (noise) values.
 """
-from typing import Annotated, Literal, Optional, Union
+from typing import Annotated, Any, Literal, Optional, Self, Union
 
 from pydantic import Field, model_validator
 
@@ -25,7 +25,7 @@ class ConvexSettings(Strict):
 COMMON = {"name", "kind", "sample_time_s", "das_levels", "delay_samples", "compute_delay"}
 # The controller kinds, registered by the closed-loop study (``studies.controllers``: a builder per
 # kind, with the fields it reads besides COMMON; any other field given to it is refused here).
-CONTROLLER_KINDS: Registry = Registry("controller kind")
+CONTROLLER_KINDS: Registry[Any] = Registry("controller kind")  # builders of studies.controllers
 
 
 class RspcSettings(Strict):
@@ -83,7 +83,7 @@ class Controller(Strict):
                                            "applied; the last plan is, shifted (default: none, repeatable).")
 
     @model_validator(mode="after")
-    def _options_of_the_kind(self):
+    def _options_of_the_kind(self) -> Self:
         if self.kind not in CONTROLLER_KINDS:
             raise ValueError(f"kind: unknown controller kind {self.kind!r}; known: {', '.join(CONTROLLER_KINDS.names())}")
         uses = CONTROLLER_KINDS.spec(self.kind).uses
@@ -109,7 +109,7 @@ class Range(Strict):
     high: float = Field(gt=0)
 
     @model_validator(mode="after")
-    def _ordered(self):
+    def _ordered(self) -> Self:
         if self.high < self.low:
             raise ValueError("high must be at least low")
         return self
@@ -152,7 +152,7 @@ class SimulateFile(Strict):
     output: Optional[str] = None
 
     @model_validator(mode="after")
-    def _checks(self):
+    def _checks(self) -> Self:
         names = [c.name for c in self.controllers]
         if len(set(names)) != len(names):
             raise ValueError("controller names must be unique")

@@ -18,11 +18,16 @@
 """
 import math
 import warnings
+from os import PathLike
+from typing import Any, Mapping, TypeAlias
 
 import numpy as np
 
 from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.units import FloatArray
+
+Where: TypeAlias = str | PathLike[str]
 
 MODELLED = {"effort_curves", "max_speed", "comfort_acceleration", "mass", "inertia_coefficient", "length",
             "rolling_resistance", "const_gamma", "gamma"}
@@ -30,7 +35,7 @@ DESCRIPTIVE = {"name", "railjson_version", "metadata", "version", "locked", "sup
                "primary_category", "other_categories", "liveries", "id"}
 
 
-def _number(doc, key, path, positive=True):
+def _number(doc: Mapping[str, Any], key: str, path: Where, positive: bool = True) -> float:
     value = doc.get(key)
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or (
             positive and value <= 0):
@@ -38,19 +43,20 @@ def _number(doc, key, path, positive=True):
     return float(value)
 
 
-def _curve(doc, path, selector):
+def _curve(doc: Mapping[str, Any], path: Where, selector: str | None) -> tuple[str, str, FloatArray, FloatArray]:
     """(mode, comfort, speeds [m/s], efforts [N]) of the chosen mode and comfort."""
     curves = doc.get("effort_curves")
     if not isinstance(curves, dict) or not isinstance(curves.get("modes"), dict) or not curves["modes"]:
         raise InputError(problem(path, "effort_curves", "expected {'modes': {...}, 'default_mode': ...}"))
-    mode, _, comfort = (selector or "").partition("/")
-    mode, comfort = mode or curves.get("default_mode"), comfort or "STANDARD"
+    asked, _, comfort = (selector or "").partition("/")
+    mode, comfort = asked or curves.get("default_mode"), comfort or "STANDARD"
     if not isinstance(mode, str) or mode not in curves["modes"]:
         raise InputError(problem(path, "effort_curves.modes", f"no mode {mode!r} (modes: {', '.join(curves['modes'])})"))
     entry = curves["modes"][mode]
     if not isinstance(entry, dict):
         raise InputError(problem(path, f"effort_curves.modes.{mode}", "expected a mode with 'curves' and 'default_curve'"))
-    chosen, others = None, 0
+    chosen: Any = None
+    others = 0
     listed = entry.get("curves") or []
     if not isinstance(listed, list) or not all(isinstance(x, dict) and isinstance(x.get("cond") or {}, dict)
                                                for x in listed):
@@ -66,7 +72,8 @@ def _curve(doc, path, selector):
             raise InputError(problem(path, f"effort_curves.modes.{mode}", f"no curve for comfort {comfort!r}"))
         chosen = entry.get("default_curve")
     try:
-        speeds, efforts = np.asarray(chosen["speeds"], float), np.asarray(chosen["max_efforts"], float)
+        speeds = np.asarray(chosen["speeds"], dtype=np.float64)
+        efforts = np.asarray(chosen["max_efforts"], dtype=np.float64)
     except (KeyError, TypeError, ValueError):
         raise InputError(problem(path, f"effort_curves.modes.{mode}", "expected a curve with 'speeds' and 'max_efforts'"))
     if speeds.size < 2 or speeds.size != efforts.size or not np.all(np.isfinite(speeds) & np.isfinite(efforts)):
@@ -79,7 +86,7 @@ def _curve(doc, path, selector):
     return mode, comfort, speeds[keep], efforts[keep]
 
 
-def _braking(doc, path, mass):
+def _braking(doc: Mapping[str, Any], path: Where, mass: float) -> tuple[dict[str, float], float | None]:
     """(braking schema, net-deceleration bound or None) from const_gamma or gamma {type, value}."""
     gamma = doc.get("gamma")
     if isinstance(gamma, dict):
@@ -93,7 +100,8 @@ def _braking(doc, path, mass):
     return {"max_force_kN": mass * value / units.KN}, (value if kind == "CONST" else None)
 
 
-def osrd_train(doc, path, selector=None):
+def osrd_train(doc: Mapping[str, Any], path: Where,
+               selector: str | None = None) -> tuple[dict[str, Any], dict[str, str]]:
     """An OSRD rolling stock as a train-schema dict, and the field names for messages."""
     ignored = [k for k in doc if k not in MODELLED | DESCRIPTIVE and doc[k] not in (None, {}, [], "")]
     if ignored:
@@ -111,7 +119,7 @@ def osrd_train(doc, path, selector=None):
     if not isinstance(rr, dict) or rr.get("type", "davis") != "davis":
         raise InputError(problem(path, "rolling_resistance", "expected {'type': 'davis', 'A', 'B', 'C'}"))
     braking, deceleration = _braking(doc, path, mass * inertia)
-    bounds = {"max_deceleration_mps2": deceleration} if deceleration else {}
+    bounds: dict[str, float] = {"max_deceleration_mps2": deceleration} if deceleration else {}
     if "comfort_acceleration" in doc:
         bounds["max_acceleration_mps2"] = _number(doc, "comfort_acceleration", path)
     return {

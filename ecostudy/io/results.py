@@ -2,8 +2,9 @@
 an SI :class:`~ecostudy.core.types.Trajectory` (the display units converted here)."""
 import hashlib
 import json
+from os import PathLike
 from pathlib import Path
-from typing import NamedTuple, Optional
+from typing import Any, NamedTuple, Optional
 
 import numpy as np
 import pandas as pd
@@ -14,14 +15,14 @@ from ecostudy.core.units import KMH, KN
 from ecostudy.io.tables import number_columns
 
 
-def file_digest(path):
+def file_digest(path: str | PathLike[str]) -> str:
     """SHA-256 of a file's bytes (of ``file#selector``: of the file), to tell whether it changed."""
     text = str(path)
-    path = Path(text.rsplit("#", 1)[0] if "#" in text and not Path(text).is_file() else text)
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+    file = Path(text.rsplit("#", 1)[0] if "#" in text and not Path(text).is_file() else text)
+    return hashlib.sha256(file.read_bytes()).hexdigest()
 
 
-def check_unchanged(inputs, result_dir):
+def check_unchanged(inputs: dict[str, Any], result_dir: str | PathLike[str]) -> None:
     """Refuse a saved run whose track or train file changed since it was solved (``inputs.json``
     keeps their digests): checking it against the edited file would check another problem."""
     for name in ("track", "train"):
@@ -39,14 +40,14 @@ def check_unchanged(inputs, result_dir):
 
 
 class SavedRun(NamedTuple):
-    inputs: dict          # inputs.json: track and train paths, stops, grid size
-    summary: dict         # summary.json
+    inputs: dict[str, Any]  # inputs.json: track and train paths, stops, grid size
+    summary: dict[str, Any]  # summary.json
     trajectory: Trajectory
     handle: np.ndarray    # the handle per interval (profile.csv's handle on the interval's first row)
     advice: Optional[pd.DataFrame] = None  # advice.csv, when the run has driver advice
 
 
-def load_result(result_dir):
+def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     """The :class:`SavedRun` of a result folder; a folder that is not one, or whose profile is cut
     short or holds anything but finite numbers, is one clear line."""
     result_dir = Path(result_dir)
@@ -63,7 +64,7 @@ def load_result(result_dir):
                        open_last=("traction_force_kN", "braking_force_kN", "handle"))
     trajectory = Trajectory(p["position_m"], p["speed_kmh"] * KMH, np.diff(p["time_s"]),
                             p["traction_force_kN"][:-1] * KN, p["braking_force_kN"][:-1] * KN)
-    advice = None
+    advice: pd.DataFrame | None = None
     if (result_dir / "advice.csv").is_file():
         try:
             advice = pd.read_csv(result_dir / "advice.csv")

@@ -1,8 +1,11 @@
 """The base of every file schema: frozen pydantic models that refuse unknown keys, NaN and
 infinity (unless a field says otherwise) and true/false where a number is meant."""
 import typing
+from typing import Any, Sequence, TypeVar
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, field_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationInfo, field_validator
+
+Values = TypeVar("Values", bound=Sequence[Any])
 
 
 class Strict(BaseModel):
@@ -10,7 +13,7 @@ class Strict(BaseModel):
 
     @field_validator("*", mode="before")
     @classmethod
-    def _no_boolean_numbers(cls, value, info):
+    def _no_boolean_numbers(cls, value: Any, info: ValidationInfo) -> Any:
         """YAML's ``true`` is 1 to pydantic: refuse it for any field that is not a boolean."""
         if isinstance(value, bool) and info.field_name in cls.model_fields:
             annotation = cls.model_fields[info.field_name].annotation
@@ -19,13 +22,13 @@ class Strict(BaseModel):
         return value
 
 
-def increasing(values, what):
+def increasing(values: Values, what: str) -> Values:
     if any(b <= a for a, b in zip(values, values[1:])):
         raise ValueError(f"{what} must be strictly increasing")
     return values
 
 
-def _not_blank(value):
+def _not_blank(value: str) -> str:
     if not value.strip():
         raise ValueError("an empty name")
     return value

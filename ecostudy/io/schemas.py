@@ -5,13 +5,14 @@ Cross-field rules that concern one file live here as validators; rules that need
 functions in :mod:`ecostudy.io.loaders`.
 """
 import math
-from typing import Annotated, Literal, Optional, get_args
+from typing import Annotated, Literal, Optional, Self, get_args
 
 from pydantic import Field, model_validator
 
-from ecostudy.io.schemabase import Name, Strict, increasing as _increasing
-from ecostudy.io.trainschema import (  # noqa: F401  (re-exported: schemas is the one place to look)
-    Braking, Davis, EfficiencyTable, ForceTable, Regeneration, Traction, TrainFile, TunnelResistance)
+from ecostudy.io.schemabase import Name as Name, Strict as Strict, increasing as _increasing
+from ecostudy.io.trainschema import (  # re-exported (X as X): schemas is the one place to look
+    Braking as Braking, Davis as Davis, EfficiencyTable as EfficiencyTable, ForceTable as ForceTable,
+    Regeneration as Regeneration, Traction as Traction, TrainFile as TrainFile, TunnelResistance as TunnelResistance)
 
 
 
@@ -36,14 +37,14 @@ class Curve(Strict):
                                           "straight); omitted: constant radius.")
 
     @model_validator(mode="after")
-    def _radii(self):
+    def _radii(self) -> Self:
         for name in ("radius_m", "end_radius_m"):
             r = getattr(self, name)
             if r is not None and (math.isnan(r) or abs(r) < 10):
                 raise ValueError(f"{name} must be at least 10 m in size (null or .inf for straight track)")
         return self
 
-    def curvatures(self):
+    def curvatures(self) -> tuple[float, float]:
         """(curvature at the start, at the end) [1/m], signed."""
         start = 0.0 if self.radius_m is None else 1.0 / self.radius_m
         return start, start if self.end_radius_m is None else 1.0 / self.end_radius_m
@@ -75,7 +76,7 @@ class TrackFile(Strict):
     tunnels: list[Tunnel] = Field(default_factory=list, max_length=MAX_ROWS)
 
     @model_validator(mode="after")
-    def _positions(self):
+    def _positions(self) -> Self:
         for name in ("stops", "gradients", "curves", "speed_limits"):
             items = getattr(self, name)
             _increasing([x.position_m for x in items], f"{name} positions")
@@ -105,7 +106,7 @@ class Window(Strict):
     max_speed_kmh: Optional[float] = Field(None, gt=0)
 
     @model_validator(mode="after")
-    def _order(self):
+    def _order(self) -> Self:
         if self.earliest_s is not None and self.latest_s is not None and self.earliest_s > self.latest_s:
             raise ValueError("earliest_s must not exceed latest_s")
         if all(x is None for x in (self.earliest_s, self.latest_s, self.min_speed_kmh, self.max_speed_kmh)):
@@ -127,7 +128,7 @@ class TimetableStop(Strict):
     departure_latest_s: Optional[float] = Field(None, ge=0, description="Departure window: not after [s].")
 
     @model_validator(mode="after")
-    def _named(self):
+    def _named(self) -> Self:
         if (self.stop is None) == (self.position_m is None):
             raise ValueError("give either 'stop' (a name) or 'position_m'")
         lo, hi = self.departure_earliest_s, self.departure_latest_s
@@ -157,7 +158,7 @@ class TimetableFile(Strict):
                                  "'associated track'): found beside the timetable when no track is given.")
 
     @model_validator(mode="after")
-    def _one_form(self):
+    def _one_form(self) -> Self:
         if bool(self.stops) == (self.supplement_percent is not None):
             raise ValueError("give either 'stops' with times or 'supplement_percent'")
         if self.windows and not self.stops:
@@ -165,7 +166,7 @@ class TimetableFile(Strict):
         return self
 
     @property
-    def windowed(self):
+    def windowed(self) -> bool:
         """Whether any time is a window rather than a fixed time (solved as one journey NLP)."""
         return bool(self.windows) or any(
             x is not None for s in self.stops
@@ -202,7 +203,7 @@ class Sweep(Strict):
     objective: Optional[list[Literal["energy", "net_energy", "time", "mixed"]]] = Field(None, min_length=1)
 
     @model_validator(mode="after")
-    def _timing(self):
+    def _timing(self) -> Self:
         if self.running_time_s is not None and self.supplement_percent is not None:
             raise ValueError("sweep either running_time_s or supplement_percent, not both")
         for name in ("running_time_s", "supplement_percent", "points", "objective"):
@@ -246,7 +247,7 @@ class StudyFile(Strict):
     sweep: Optional[Sweep] = None
 
     @model_validator(mode="after")
-    def _timing(self):
+    def _timing(self) -> Self:
         names = [sc.name for sc in self.scenarios]
         if len(set(names)) != len(names):
             raise ValueError("scenario names must be unique")
@@ -279,7 +280,7 @@ class Substation(Strict):
                                                  "back (thesis 000 Fig. 7.7); default none.")
 
     @model_validator(mode="after")
-    def _voltages(self):
+    def _voltages(self) -> Self:
         hi = self.max_voltage_V if self.max_voltage_V is not None else self.voltage_V * 685 / 600
         lo = self.min_voltage_V if self.min_voltage_V is not None else self.voltage_V * 2 / 3
         if not lo < self.voltage_V < hi:
@@ -316,7 +317,7 @@ class NetworkStudyFile(Strict):
     output: Optional[str] = None
 
     @model_validator(mode="after")
-    def _choices(self):
+    def _choices(self) -> Self:
         if (self.running_times_s is None) == (self.supplement_percent is None):
             raise ValueError("give exactly one of running_times_s, supplement_percent")
         if "following" in self.strategies and self.buffer_m is None:

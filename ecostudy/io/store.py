@@ -10,7 +10,9 @@ import os
 import sqlite3
 import time
 import warnings
+from os import PathLike
 from pathlib import Path
+from typing import IO, Any, Iterable, Mapping
 
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 
@@ -31,7 +33,7 @@ class Store:
     """The store of one output folder, locked for the one process that writes it; a file that is
     not such a store (corrupt, truncated, foreign) is refused by name with how to recover."""
 
-    def __init__(self, path):
+    def __init__(self, path: str | PathLike[str]) -> None:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.lock_path = self.path.with_name(self.path.name + ".lock")
@@ -51,13 +53,13 @@ class Store:
             raise InputError(problem(self.path, "cases", "a table of another program or version (columns "
                                      f"{', '.join(columns)}): move the file away to start afresh"))
 
-    def finished_keys(self, retry_failed=False):
+    def finished_keys(self, retry_failed: bool = False) -> set[str]:
         """Keys with a stored result (without failed ones when they are to be retried)."""
         query = "SELECT key FROM cases" + (" WHERE status != 'failed'" if retry_failed else "")
         keys = {row[0] for row in self.conn.execute(query)}
         return set(self.get(keys))  # a damaged row is dropped there: its case is computed again
 
-    def put(self, case, result):
+    def put(self, case: Mapping[str, Any], result: Mapping[str, Any]) -> None:
         """Store one case's result atomically (replacing an earlier failure)."""
         with self.conn:
             self.conn.execute(
@@ -65,9 +67,9 @@ class Store:
                 (case["key"], case["study"], case["scenario"], json.dumps(case["labels"]), result["status"],
                  result.get("error"), json.dumps(result.get("summary")), result.get("seconds"), time.time()))
 
-    def get(self, keys):
+    def get(self, keys: Iterable[str]) -> dict[str, dict[str, Any]]:
         """{key: row dict} for the given keys."""
-        out = {}
+        out: dict[str, dict[str, Any]] = {}
         for key in keys:
             row = self.conn.execute("SELECT key, scenario, labels, status, error, summary, seconds FROM cases "
                                     "WHERE key = ?", (key,)).fetchone()
@@ -83,13 +85,13 @@ class Store:
                 self.conn.commit()
         return out
 
-    def close(self):
+    def close(self) -> None:
         """Close the database and remove the lock file (while still holding it: a run that opened the
         old file before the removal sees it gone and takes the new one, :func:`_locked`)."""
         self.conn.close()
         self._unlock()
 
-    def _unlock(self):
+    def _unlock(self) -> None:
         try:
             if os.stat(self.lock_path).st_ino == os.fstat(self.lock.fileno()).st_ino:
                 self.lock_path.unlink()
@@ -98,7 +100,7 @@ class Store:
         self.lock.close()
 
 
-def _locked(lock_path, store_path, attempts=5):
+def _locked(lock_path: Path, store_path: Path, attempts: int = 5) -> IO[str]:
     """The lock file opened and locked for this process alone; refused when another run holds it.
     A lock taken on a file that a finishing run removed meanwhile is let go and taken again."""
     for _ in range(attempts):

@@ -1,15 +1,19 @@
 """CSV tables of numbers read back (a saved profile, a reference speed table): every cell that is
 not a finite number, a missing column or a file cut short is one line naming the file, the column
 and the row, never an internal error further on."""
+from os import PathLike
 from pathlib import Path
+from typing import Any, Collection, Sequence
 
 import numpy as np
 import pandas as pd
 
 from ecostudy.core.errors import InputError, problem
+from ecostudy.core.units import FloatArray
 
 
-def number_columns(path, columns, min_rows=2, rows=None, open_last=()):
+def number_columns(path: str | PathLike[str], columns: Sequence[str], min_rows: int = 2, rows: int | None = None,
+                   open_last: Collection[str] = ()) -> dict[str, FloatArray]:
     """{column: float array} of the named columns of a CSV file.
 
     Refused by name, in one line: a file that cannot be read, a missing column, the first cell
@@ -25,7 +29,8 @@ def number_columns(path, columns, min_rows=2, rows=None, open_last=()):
     missing = [c for c in columns if c not in table.columns]
     if missing:
         raise InputError(problem(path, ", ".join(missing), f"missing column (the file has {', '.join(table.columns)})"))
-    out, first = {}, None
+    out: dict[str, FloatArray] = {}
+    first: tuple[int, str, Any] | None = None
     for column in columns:
         cells = table[column]
         values = pd.to_numeric(cells, errors="coerce").to_numpy(float)

@@ -6,22 +6,30 @@ with windows into a :class:`JourneyPlan` in SI, the passing points assigned to t
 lie on. Times are on the journey clock (0 at the first departure), as TTOBench counts them.
 """
 from dataclasses import dataclass, replace
+from os import PathLike
+from typing import Sequence, TypeAlias
 
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.grid import travel_distance
-from ecostudy.core.types import Window
+from ecostudy.core.types import Track, Window
+from ecostudy.io import schemas
+
+Where: TypeAlias = str | PathLike[str]
+Bounds: TypeAlias = tuple[float | None, float | None]  # (earliest, latest) [s], None where open
 
 POSITION_TOLERANCE = 1.0  # [m] a timetable position within this of a track stop is that stop
 
 
-def name_stops(tt, track, path):
+def name_stops(tt: schemas.TimetableFile, track: Track, path: Where) -> tuple[schemas.TimetableFile, Track]:
     """(``tt`` with every stop given by position named after the track's stop there, the track).
 
     A position that is no stop of the track becomes one (named ``at_<position>m``), so a journey
     may stop anywhere (TTOBench journeys do): the returned track has it among its stops.
     """
-    rows, lines, added = [], [], {}
+    rows: list[schemas.TimetableStop] = []
+    lines: list[str] = []
+    added: dict[str, float] = {}
     for i, row in enumerate(tt.stops):
         if row.stop is not None:
             if row.stop not in track.stops:
@@ -29,13 +37,14 @@ def name_stops(tt, track, path):
                                      f"({', '.join(track.stops)})"))
             rows.append(row)
             continue
-        if not 0 <= row.position_m <= track.length:
-            lines.append(problem(path, f"stops[{i}].position_m", f"{row.position_m:g} m is not on track "
+        position = row.position_m if row.position_m is not None else float("nan")  # not None: the schema says
+        if not 0 <= position <= track.length:
+            lines.append(problem(path, f"stops[{i}].position_m", f"{position:g} m is not on track "
                                  f"'{track.name}' (0 to {track.length:g} m)"))
             continue
-        near = [n for n, x in {**track.stops, **added}.items() if abs(x - row.position_m) <= POSITION_TOLERANCE]
-        name = near[0] if near else f"at_{row.position_m:g}m"
-        added.setdefault(name, row.position_m) if not near else None
+        near = [n for n, x in {**track.stops, **added}.items() if abs(x - position) <= POSITION_TOLERANCE]
+        name = near[0] if near else f"at_{position:g}m"
+        added.setdefault(name, position) if not near else None
         rows.append(row.model_copy(update={"stop": name, "position_m": None}))
     if lines:
         raise InputError(lines)
@@ -56,17 +65,17 @@ class JourneyPlan:
     ``windows[n]``: core.types.Window passing points of segment n, distance from its departure stop.
     """
 
-    stops: tuple
-    departure: tuple
-    dwell: tuple
-    arrival: tuple
-    windows: tuple
+    stops: tuple[str, ...]
+    departure: tuple[Bounds | None, ...]
+    dwell: tuple[float, ...]
+    arrival: tuple[Bounds, ...]
+    windows: tuple[tuple[Window, ...], ...]
 
 
-def journey_plan(tt, track, path, dwell=0.0):
+def journey_plan(tt: schemas.TimetableFile, track: Track, path: Where, dwell: float = 0.0) -> JourneyPlan:
     """The :class:`JourneyPlan` of a named timetable ``tt``; ``dwell`` [s] where a stop gives none."""
-    names = [row.stop for row in tt.stops]
-    lines = []
+    names = [str(row.stop) for row in tt.stops]
+    lines: list[str] = []
     if len(names) < 2:
         lines.append(problem(path, "stops", "need at least two stops"))
     for i, (a, b) in enumerate(zip(names, names[1:])):
@@ -75,8 +84,9 @@ def journey_plan(tt, track, path, dwell=0.0):
     if lines:
         raise InputError(lines)
     first = tt.stops[0]
-    departure = [_departure(first) or (first.arrival_s or 0.0,) * 2]
-    dwells, arrival = [0.0], []
+    departure: list[Bounds | None] = [_departure(first) or (first.arrival_s or 0.0, first.arrival_s or 0.0)]
+    dwells: list[float] = [0.0]
+    arrival: list[Bounds] = []
     for row in tt.stops[1:]:
         if row.arrival_s is not None:
             arrival.append((row.arrival_s, row.arrival_s))
@@ -85,7 +95,7 @@ def journey_plan(tt, track, path, dwell=0.0):
     for row in tt.stops[1:-1]:
         departure.append(_departure(row))
         dwells.append(row.dwell_s if row.dwell_s is not None else dwell)
-    windows = [[] for _ in names[1:]]
+    windows: list[list[Window]] = [[] for _ in names[1:]]
     for i, w in enumerate(tt.windows):
         for n, (a, b) in enumerate(zip(names, names[1:])):
             d = travel_distance(track, a, b, w.position_m)
@@ -101,7 +111,7 @@ def journey_plan(tt, track, path, dwell=0.0):
                        tuple(tuple(sorted(w, key=lambda x: x.distance)) for w in windows))
 
 
-def _departure(row):
+def _departure(row: schemas.TimetableStop) -> Bounds | None:
     """A timetable stop's departure as (earliest, latest), or None when it gives none."""
     if row.departure_s is not None:
         return (row.departure_s, row.departure_s)
@@ -110,10 +120,12 @@ def _departure(row):
     return (row.departure_earliest_s, row.departure_latest_s)
 
 
-def schedule(plan, running_times):
+def schedule(plan: JourneyPlan, running_times: Sequence[float]) -> tuple[list[float], list[float]]:
     """Departure and arrival times [s] per segment on the journey clock for ``running_times``:
     each departure as early as its window and the previous arrival plus the dwell allow."""
-    dep, arr, clock = [], [], 0.0
+    dep: list[float] = []
+    arr: list[float] = []
+    clock = 0.0
     for n, t in enumerate(running_times):
         window = plan.departure[n]
         ready = clock + plan.dwell[n] if n else 0.0
@@ -124,7 +136,7 @@ def schedule(plan, running_times):
     return dep, arr
 
 
-def window_si(w, distance):
+def window_si(w: schemas.Window, distance: float) -> Window:
     """A schema window as an SI :class:`Window` at ``distance`` [m] from its departure stop."""
     return Window(distance, w.earliest_s, w.latest_s,
                   None if w.min_speed_kmh is None else w.min_speed_kmh * units.KMH,

@@ -1,18 +1,23 @@
 """A train file with calibrated parameters: the original document with the fitted fields replaced
 (SI units written in the file's field names) and its ``source`` extended by the fit's provenance."""
 import copy
+from pathlib import Path
+from os import PathLike
+from typing import Any, Collection
 
 import yaml
 
 from ecostudy.core import units
+from ecostudy.core.types import Train
 from ecostudy.io.loaders import train_document
 from ecostudy.io.writers import atomic_write
 
 
-def calibrated_document(path, train, fitted, provenance):
+def calibrated_document(path: str | PathLike[str], train: Train, fitted: Collection[str],
+                        provenance: str) -> dict[str, Any]:
     """The train file at ``path`` (YAML, or TTOBench / OSRD JSON as ecostudy reads it) with the
     parameters named in ``fitted`` taken from ``train`` (SI) and ``provenance`` added to its source."""
-    data = copy.deepcopy(train_document(path)[0])
+    data: dict[str, Any] = copy.deepcopy(train_document(path)[0])
     if {"mass", "rotating_mass_factor"} & set(fitted):
         data["mass_t"] = round(train.static_mass / units.TONNE, 6)
         if data.get("effective_mass_t") is not None:
@@ -30,9 +35,9 @@ def calibrated_document(path, train, fitted, provenance):
     return data
 
 
-def write_train(path, data):
+def write_train(path: str | Path, data: dict[str, Any]) -> None:
     """Write a train document as YAML."""
-    def write(tmp):
+    def write(tmp: str) -> None:
         with open(tmp, "w") as fh:
             yaml.safe_dump(data, fh, sort_keys=False, allow_unicode=True)
     atomic_write(path, write)

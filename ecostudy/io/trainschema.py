@@ -1,5 +1,5 @@
 """The train file's schema (units in the field names); see :mod:`ecostudy.io.schemas`."""
-from typing import ClassVar, Literal, Optional
+from typing import ClassVar, Literal, Optional, Self
 
 from pydantic import Field, field_validator, model_validator
 
@@ -20,7 +20,7 @@ class ForceTable(Strict):
 
     @field_validator("speed_kmh")
     @classmethod
-    def _speeds(cls, v):
+    def _speeds(cls, v: list[float]) -> list[float]:
         if v[0] < 0 or v[-1] > 1000:
             raise ValueError("speeds must lie in [0, 1000] km/h")
         if len(v) > MAX_TABLE_POINTS and not is_forced():
@@ -31,13 +31,13 @@ class ForceTable(Strict):
 
     @field_validator("force_kN")
     @classmethod
-    def _forces(cls, v):
+    def _forces(cls, v: list[float]) -> list[float]:
         if min(v) < 0 or max(v) > 100000:
             raise ValueError("forces must lie in [0, 100000] kN")
         return v
 
     @model_validator(mode="after")
-    def _lengths(self):
+    def _lengths(self) -> Self:
         if len(self.speed_kmh) != len(self.force_kN):
             raise ValueError("speed_kmh and force_kN must have the same length")
         return self
@@ -52,7 +52,7 @@ class EfficiencyTable(Strict):
                                           "one row per speed, one value per force.")
 
     @model_validator(mode="after")
-    def _shape(self):
+    def _shape(self) -> Self:
         _increasing(self.speed_kmh, "speed_kmh")
         _increasing(self.force_kN, "force_kN")
         if min(self.speed_kmh) < 0 or min(self.force_kN) < 0:
@@ -72,7 +72,7 @@ class Traction(Strict):
     max_power_kW: Optional[float] = Field(None, gt=0)
 
     @model_validator(mode="after")
-    def _one_form(self):
+    def _one_form(self) -> Self:
         if (self.table is None) == (self.max_force_kN is None):
             raise ValueError("give either 'table' or 'max_force_kN' (with optional 'max_power_kW')")
         if self.table is not None and self.max_power_kW is not None:
@@ -86,7 +86,7 @@ class Braking(Traction):
     max_deceleration_mps2: Optional[float] = Field(None, gt=0)
 
     @model_validator(mode="after")
-    def _one_form(self):
+    def _one_form(self) -> Self:
         forms = [self.table is not None, self.max_force_kN is not None,
                  self.max_deceleration_mps2 is not None]
         if sum(forms) != 1:
@@ -117,12 +117,12 @@ class Davis(Strict):
     b_N_per_kg_per_mps: Optional[float] = None
     c_N_per_kg_per_mps2: Optional[float] = None
 
-    TRIPLES: ClassVar[tuple] = (("a_N", "b_N_per_mps", "c_N_per_mps2"),
+    TRIPLES: ClassVar[tuple[tuple[str, str, str], ...]] = (("a_N", "b_N_per_mps", "c_N_per_mps2"),
                ("a_kN", "b_kN_per_kmh", "c_kN_per_kmh2"),
                ("a_N_per_kg", "b_N_per_kg_per_mps", "c_N_per_kg_per_mps2"))
 
     @model_validator(mode="after")
-    def _one_triple(self):
+    def _one_triple(self) -> Self:
         given = [t for t in self.TRIPLES if any(getattr(self, f) is not None for f in t)]
         if len(given) != 1 or any(getattr(self, f) is None for f in given[0]):
             raise ValueError("give one complete triple: " + " | ".join("/".join(t) for t in self.TRIPLES))
@@ -167,14 +167,14 @@ class TrainFile(Strict):
     das_handle_levels: list[float] = Field(default_factory=lambda: [-1.0, 0.0, 0.5, 0.75, 1.0])
 
     @model_validator(mode="after")
-    def _curves_and_tunnels(self):
+    def _curves_and_tunnels(self) -> Self:
         if self.curve_resistance == "roeckl" and self.curve_coefficient_m2ps2:
             raise ValueError("curve_coefficient_m2ps2 goes with curve_resistance 'coefficient', not 'roeckl'")
         _increasing([t.cross_section_m2 for t in self.tunnel_resistance], "tunnel_resistance cross sections")
         return self
 
     @model_validator(mode="after")
-    def _mass(self):
+    def _mass(self) -> Self:
         if (self.rotating_mass_factor is None) == (self.effective_mass_t is None):
             raise ValueError("give either 'rotating_mass_factor' or 'effective_mass_t'")
         if self.effective_mass_t is not None and self.effective_mass_t < self.mass_t:
@@ -183,7 +183,7 @@ class TrainFile(Strict):
 
     @field_validator("das_handle_levels")
     @classmethod
-    def _levels(cls, v):
+    def _levels(cls, v: list[float]) -> list[float]:
         if any(x < -1 or x > 1 for x in v):
             raise ValueError("handle levels must lie in [-1, 1]")
         if len(set(v)) != len(v):

@@ -22,11 +22,15 @@ coaches`` and ``altitude`` are descriptive and read silently.
 """
 import math
 import warnings
+from os import PathLike
+from typing import Any, Collection, Mapping, Sequence, TypeAlias
 
 import numpy as np
 
 from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
+
+Where: TypeAlias = str | PathLike[str]
 
 DESCRIPTIVE = {"metadata", "num seats", "num coaches", "altitude"}
 TRAIN_FIELDS = {"mass", "rho", "length", "max traction power", "max reg braking power", "max traction force",
@@ -39,13 +43,13 @@ ETCS_TRAIN = {"A_brake_emergency": None, "A_brake_service": None, "K_dry_rst": "
 ETCS_TRACK = {"M_NVAVADH": "share", "Kt_int": "share"}
 
 
-def metadata(doc):
+def metadata(doc: Mapping[str, Any]) -> dict[str, str]:
     """The ``metadata`` mapping of a document (an empty one when it is missing or not a mapping)."""
     meta = doc.get("metadata")
     return {k: str(v) for k, v in meta.items()} if isinstance(meta, dict) else {}
 
 
-def _convert(value, unit, dimension, path, key):
+def _convert(value: object, unit: object, dimension: str, path: Where, key: str) -> float:
     factor = units.si_factor(unit, dimension)
     if factor is None:
         known = ", ".join(units.BY_DIMENSION[dimension])
@@ -55,7 +59,7 @@ def _convert(value, unit, dimension, path, key):
     return float(value) * factor
 
 
-def quantity(doc, key, path, dimension, default=None):
+def quantity(doc: Mapping[str, Any], key: str, path: Where, dimension: str, default: float | None = None) -> float:
     """A ``{"unit": u, "value": x}`` field in SI; ``default`` (SI) when absent, else refused."""
     if key not in doc:
         if default is None:
@@ -67,19 +71,19 @@ def quantity(doc, key, path, dimension, default=None):
     return _convert(item["value"], item["unit"], dimension, path, key)
 
 
-def table(doc, key, path, columns):
+def table(doc: Mapping[str, Any], key: str, path: Where, columns: Sequence[tuple[str, str]]) -> list[list[float]]:
     """A ``{"units": {...}, "values": [[...], ...]}`` field as rows in SI; ``columns`` is a list of
-    (unit name, dimension or None for a radius that may be "infinity")."""
+    (unit name, dimension); a cell "infinity" is read as inf (a straight's radius)."""
     item = doc.get(key)
     if not isinstance(item, dict) or not isinstance(item.get("values"), list) or not isinstance(item.get("units"), dict):
         raise InputError(problem(path, key, "expected {\"units\": {...}, \"values\": [[...], ...]}"))
     given = item["units"]
-    rows = []
+    rows: list[list[float]] = []
     for i, row in enumerate(item["values"]):
         where = f"{key}.values[{i}]"
         if not isinstance(row, list) or len(row) != len(columns):
             raise InputError(problem(path, where, f"expected [{', '.join(c for c, _ in columns)}]"))
-        out = []
+        out: list[float] = []
         for (name, dimension), value in zip(columns, row):
             unit = given.get(name)
             if unit is None:
@@ -92,14 +96,15 @@ def table(doc, key, path, columns):
     return rows
 
 
-def _unmodelled(doc, known, path, what):
+def _unmodelled(doc: Mapping[str, Any], known: Collection[str], path: Where, what: str) -> None:
     for key in doc:
         if key not in known and key not in DESCRIPTIVE:
             warnings.warn(problem(path, key, f"a {what} field ecostudy does not model: ignored"),
                           EcostudyWarning, stacklevel=3)
 
 
-def _etcs(doc, path, fields, what, used=False):
+def _etcs(doc: Mapping[str, Any], path: Where, fields: Mapping[str, str | None], what: str,
+          used: bool = False) -> list[tuple[float, float]] | None:
     """Check ``ETCS braking data`` complete and in known units; warn that it is not modelled
     (``used``: only the service-brake curve is, as the braking envelope). Returns the service
     curve [(speed m/s, deceleration m/s^2)] of a train's data."""
@@ -109,14 +114,14 @@ def _etcs(doc, path, fields, what, used=False):
     missing = sorted(set(fields) - set(data))
     if missing:
         raise InputError(problem(path, "ETCS braking data", "missing " + ", ".join(missing)))
-    service = None
+    service: list[tuple[float, float]] | None = None
     for name, dimension in fields.items():
         if dimension is None:  # a deceleration curve: [velocity, deceleration], both > = 0
             rows = table(data, name, path, [("velocity", "speed"), ("deceleration", "acceleration")])
             if len(rows) < 2 or any(a < 0 or v < 0 for v, a in rows) or any(b[0] <= a[0] for a, b in zip(rows, rows[1:])):
                 raise InputError(problem(path, f"ETCS braking data.{name}", "need two or more rows, velocities "
                                          "increasing from 0 and decelerations >= 0"))
-            service = rows if name == "A_brake_service" else service
+            service = [(v, a) for v, a in rows] if name == "A_brake_service" else service
         else:
             quantity(data, name, path, dimension)
     if used:
@@ -130,7 +135,7 @@ def _etcs(doc, path, fields, what, used=False):
     return service
 
 
-def ttobench_track(doc, path):
+def ttobench_track(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
     """A TTOBench track as a track-schema dict (SI converted to the schema's field units)."""
     meta = metadata(doc)
     name = meta.get("id") or str(path)
@@ -169,7 +174,8 @@ def ttobench_track(doc, path):
     }
 
 
-def _braking(doc, path, top, f_reg, p_reg, f_pn):
+def _braking(doc: Mapping[str, Any], path: Where, top: float, f_reg: float, p_reg: float,
+             f_pn: float) -> dict[str, Any]:
     """Regenerative (force and power limited) plus pneumatic braking as a force table [kN] over
     [0, top], with the regenerative corner speed P/F as a table point."""
     if f_reg <= 0 and f_pn <= 0:
@@ -182,7 +188,8 @@ def _braking(doc, path, top, f_reg, p_reg, f_pn):
     return {"table": {"speed_kmh": (speeds / units.KMH).tolist(), "force_kN": (force / units.KN).tolist()}}
 
 
-def ttobench_train(doc, path, selector=None):
+def ttobench_train(doc: Mapping[str, Any], path: Where,
+                   selector: str | None = None) -> tuple[dict[str, Any], dict[str, str]]:
     """A TTOBench train as a train-schema dict, and the field names for messages. ``selector``
     ``etcs``: brake on the service-brake deceleration curve of ``ETCS braking data`` (times the
     effective mass) instead of the brake forces."""
@@ -220,6 +227,8 @@ def ttobench_train(doc, path, selector=None):
     mass = quantity(doc, "mass", path, "mass")
     braking = _braking(doc, path, top, f_reg, p_reg, f_pn)
     if selector == "etcs":  # the deceleration curve of the whole train: force = M a, M with the rotating allowance
+        if service is None:
+            raise InputError(problem(path, "ETCS braking data", "missing: '#etcs' brakes on its A_brake_service curve"))
         effective = mass * (1 + factor)
         braking = {"table": {"speed_kmh": [v / units.KMH for v, _ in service],
                              "force_kN": [effective * a / units.KN for _, a in service]}}

@@ -6,6 +6,7 @@ twice keeps the last value. Each of these once turned a mistyped file into a wro
 """
 import re
 from functools import partial
+from typing import Any, Iterable
 
 import yaml
 
@@ -17,7 +18,7 @@ MAX_NODES = 5_000_000       # values of a YAML document once its aliases are exp
 class DocumentError(ValueError):
     """A document ecostudy refuses to read; ``field`` names where."""
 
-    def __init__(self, message, field=""):
+    def __init__(self, message: str, field: str = "") -> None:
         super().__init__(message)
         self.field = field
 
@@ -34,9 +35,10 @@ class _Loader(yaml.SafeLoader):
     """SafeLoader that refuses duplicate keys and YAML 1.1 implicit types that surprise."""
 
 
-def _construct_mapping(loader, node, deep=False):
+def _construct_mapping(loader: _Loader, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
     loader.flatten_mapping(node)
-    seen, out = set(), {}
+    seen: set[Any] = set()
+    out: dict[Any, Any] = {}
     for key_node, value_node in node.value:
         key = loader.construct_object(key_node, deep=True)
         if key in seen:
@@ -48,7 +50,7 @@ def _construct_mapping(loader, node, deep=False):
 
 
 _Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
-def _checked(loader, node, tag):
+def _checked(loader: _Loader, node: yaml.ScalarNode, tag: str) -> Any:
     if node.style is None:
         for pattern, what in _SURPRISING:
             if pattern.match(node.value):
@@ -61,7 +63,7 @@ for _tag in ("tag:yaml.org,2002:int", "tag:yaml.org,2002:bool"):
     _Loader.add_constructor(_tag, partial(_checked, tag=_tag))
 
 
-def load_yaml(text):
+def load_yaml(text: str) -> Any:
     """Parse YAML text with :class:`_Loader`: the node graph is checked (:func:`check_nodes`)
     before any Python object is built from it."""
     loader = _Loader(text)
@@ -75,7 +77,7 @@ def load_yaml(text):
         loader.dispose()
 
 
-def check_nodes(root, budget=MAX_NODES, max_depth=MAX_DEPTH):
+def check_nodes(root: yaml.Node, budget: int = MAX_NODES, max_depth: int = MAX_DEPTH) -> None:
     """Refuse a YAML node graph whose aliases expand beyond ``budget`` values, that nests deeper
     than ``max_depth`` or that refers to itself, without expanding anything.
 
@@ -83,9 +85,11 @@ def check_nodes(root, budget=MAX_NODES, max_depth=MAX_DEPTH):
     levels deep (the "billion laughs"), is a file of 600 bytes holding 9^9 values. Each node is
     visited once; its expanded size and depth are memoised by identity, so the cost is the number
     of distinct nodes, not the expanded size."""
-    sizes, depths, open_ = {}, {}, set()
+    sizes: dict[int, int] = {}
+    depths: dict[int, int] = {}
+    open_: set[int] = set()
 
-    def visit(node, level):
+    def visit(node: yaml.Node, level: int) -> int:
         key = id(node)
         if key in sizes:
             if level + depths[key] > max_depth:
@@ -96,7 +100,7 @@ def check_nodes(root, budget=MAX_NODES, max_depth=MAX_DEPTH):
                                 "it (a recursive document)")
         if level > max_depth:
             raise DocumentError(f"nested more than {max_depth} levels deep")
-        children = []
+        children: list[yaml.Node] = []
         if isinstance(node, yaml.MappingNode):
             children = [part for pair in node.value for part in pair]
         elif isinstance(node, yaml.SequenceNode):
@@ -116,9 +120,9 @@ def check_nodes(root, budget=MAX_NODES, max_depth=MAX_DEPTH):
     visit(root, 0)
 
 
-def unique_keys(pairs):
+def unique_keys(pairs: Iterable[tuple[str, Any]]) -> dict[str, Any]:
     """``object_pairs_hook`` for :func:`json.loads` refusing a key given twice."""
-    out = {}
+    out: dict[str, Any] = {}
     for key, value in pairs:
         if key in out:
             raise DocumentError("duplicate key (the earlier value would be dropped)", key)
@@ -126,7 +130,7 @@ def unique_keys(pairs):
     return out
 
 
-def check_depth(data, depth=0):
+def check_depth(data: object, depth: int = 0) -> None:
     """Refuse documents nested more than :data:`MAX_DEPTH` levels deep."""
     if depth > MAX_DEPTH:
         raise DocumentError(f"nested more than {MAX_DEPTH} levels deep")

@@ -34,14 +34,23 @@ conic solver); ``docs/closed_loop.md`` compares it with Ipopt on the same progra
 """
 import time
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, Callable, NamedTuple, Sequence, TypeAlias
 
 import clarabel
 import numpy as np
 from scipy import sparse
 
-from ecostudy.core.grid import drop_idle_power, node_limits, warn_unmodelled
+from ecostudy.core.grid import Segment, drop_idle_power, node_limits, warn_unmodelled
 from ecostudy.core.kinematics import interval_grade_force
+from ecostudy.core.physics import Envelope
+from ecostudy.core.types import State, Train
+from ecostudy.core.units import FloatArray, Numeric
+
+Pieces: TypeAlias = Callable[[FloatArray], list[tuple[Numeric, Numeric, Numeric]]]  # (a [N], b [N s/m], c [N s^2/m^2])
+Term: TypeAlias = tuple[Any, Any]  # (column indices, coefficients), each broadcast to the block's rows
+Block: TypeAlias = tuple[list[np.ndarray], list[np.ndarray], np.ndarray]
+Lead: TypeAlias = Callable[[FloatArray], Any]  # the earliest clock at positions [s] (eq. 6.9's T_buff)
+Problem: TypeAlias = tuple[FloatArray, State, tuple[float, float], float, float, Lead | None]
 
 NAMES = ("v", "t", "rho", "g", "gp", "b", "h")  # variable blocks, in this order
 USABLE = ("Solved", "AlmostSolved")  # Clarabel's statuses whose plan is driven
@@ -66,7 +75,7 @@ class ConvexWeights:
 FASTEST = ConvexWeights(time=1.0, energy=0.0, overspeed=0.0, braking=0.0, buffer=0.0, brake_level=1.0)  # all-out
 
 
-def envelope_pieces(envelope, tolerance=0.002):
+def envelope_pieces(envelope: Envelope, tolerance: float = 0.002) -> Pieces:
     """A function of the intervals' reference speeds [m/s] giving pieces (a [N], b [N s/m],
     c [N s^2/m^2]) with envelope(v) <= min a + b v + c v^2 (scalars, or arrays per interval).
     Each piece enters the program linearly: g M <= a rho + b + c s (as v rho = 1, v^2 rho = s).
@@ -79,7 +88,7 @@ def envelope_pieces(envelope, tolerance=0.002):
       train runs and below the envelope elsewhere (a sequential convex step).
     """
     if envelope.kind != "table":
-        fixed = [(envelope.max_force, 0.0, 0.0)]
+        fixed: list[tuple[Numeric, Numeric, Numeric]] = [(envelope.max_force, 0.0, 0.0)]
         if not np.isfinite(envelope.max_power):
             return lambda speeds: fixed
         power = envelope.max_power
@@ -98,13 +107,13 @@ def envelope_pieces(envelope, tolerance=0.002):
     if np.all(np.diff(slope) <= 1e-9 * max(abs(slope).max(), 1.0)):  # concave
         return lambda speeds: chords
 
-    def at(speeds):
+    def at(speeds: FloatArray) -> list[tuple[Numeric, Numeric, Numeric]]:
         k = np.clip(np.searchsorted(v, speeds) - 1, 0, slope.size - 1)
         return [(f.max(), 0.0, 0.0), (f[k] - slope[k] * v[k], slope[k], 0.0)]
     return at
 
 
-def trapezoid_grid(segment, points, ramp=0.1, smallest=0.2):
+def trapezoid_grid(segment: Segment, points: int, ramp: float = 0.1, smallest: float = 0.2) -> FloatArray:
     """Thesis 001 §3.2.2's grid: ``points`` nodes whose spacing grows linearly from ``smallest``
     times the mean over the first ``ramp`` share of the nodes, stays flat, and shrinks again to
     the stop; every profile change is a node (the nearest node moves there)."""
@@ -139,7 +148,7 @@ class ConvexPlan(NamedTuple):
     softened: bool
 
     @property
-    def usable(self):
+    def usable(self) -> bool:
         return self.status in USABLE
 
 
@@ -147,7 +156,9 @@ class ConvexProgram:
     """SOCP 6.10 for one segment and train; ``solve(state, ...)`` assembles the program on the grid
     from the measured position (eqs. 4.2a-e) and solves it."""
 
-    def __init__(self, segment, train, nodes, weights=ConvexWeights(), scheme="midpoint", epsilon=0.1, margin=0.05):
+    def __init__(self, segment: Segment, train: Train, nodes: Sequence[float] | FloatArray,
+                 weights: ConvexWeights = ConvexWeights(), scheme: str = "midpoint", epsilon: float = 0.1,
+                 margin: float = 0.05) -> None:
         if scheme not in ("left", "midpoint"):
             raise ValueError(f"scheme must be 'left' or 'midpoint', not {scheme!r}")
         self.segment, self.nodes = segment, np.asarray(nodes, float)
@@ -158,14 +169,15 @@ class ConvexProgram:
         self.weights, self.scheme, self.epsilon, self.margin = weights, scheme, epsilon, margin
         self.traction = envelope_pieces(self.train.traction)
         self.brake = envelope_pieces(self.train.braking)
-        self.previous = None  # (nodes, speeds) of the last plan: where the power tangents touch
+        # (nodes, speeds) of the last plan: where the power tangents touch
+        self.previous: tuple[FloatArray, FloatArray] | None = None
         self.settings = clarabel.DefaultSettings()
         self.settings.verbose = False
         self.settings.iterative_refinement_enable = False  # halves the solve; the gap stays below 1e-7 (tests)
         self.refined = clarabel.DefaultSettings()  # for a solve that ended inaccurate
         self.refined.verbose = False
 
-    def limit(self, max_iter=None, seconds=None):
+    def limit(self, max_iter: int | None = None, seconds: float | None = None) -> None:
         """Cap every Clarabel solve of the next ``solve`` at ``max_iter`` iterations and ``seconds``
         (None: Clarabel's defaults, 200 iterations and no time limit). A solve that hits either
         ends unusable, as an on-board solver's would."""
@@ -173,7 +185,7 @@ class ConvexProgram:
             settings.max_iter = 200 if max_iter is None else int(max_iter)
             settings.time_limit = float("inf") if seconds is None else float(seconds)
 
-    def grid_from(self, position, reach=0.0):
+    def grid_from(self, position: float, reach: float = 0.0) -> FloatArray:
         """Nodes of the grid ahead of ``position`` (eq. 4.2d). With ``reach`` > 0 the first
         interval is [position, position + reach], the distance the train runs under the control
         held until the next sample, and the grid continues from the next node beyond it."""
@@ -184,7 +196,8 @@ class ConvexProgram:
             return np.array([position, max(last, position + 1e-3)])
         return np.concatenate([[position, end] if end > position + 1e-3 else [position], ahead])
 
-    def solve(self, state, arrival=(0.0, np.inf), end_speed=0.0, mass_scale=1.0, lead=None, hold=0.0):
+    def solve(self, state: State, arrival: tuple[float, float] = (0.0, np.inf), end_speed: float = 0.0,
+              mass_scale: float = 1.0, lead: Lead | None = None, hold: float = 0.0) -> ConvexPlan:
         """Plan from ``state`` (State, SI). ``arrival``: (T_min, T_max) on the state's clock;
         ``lead``: a callable giving the earliest clock at positions (eq. 6.9's T_buff);
         ``hold`` [s]: the sample time, so the first interval is what the first control drives.
@@ -202,8 +215,9 @@ class ConvexProgram:
                 plan = dropped
         return plan._replace(seconds=time.perf_counter() - t0)
 
-    def _solve(self, x, state, arrival, end_speed, mass_scale, lead):
-        problem = (x, state, arrival, end_speed, mass_scale, lead)
+    def _solve(self, x: FloatArray, state: State, arrival: tuple[float, float], end_speed: float, mass_scale: float,
+               lead: Lead | None) -> ConvexPlan:
+        problem: Problem = (x, state, arrival, end_speed, mass_scale, lead)
         v, t, rho, g, status = self._conic(problem)
         s = self._speed(v)
         if status != "Solved" and (status != "AlmostSolved" or np.max(np.abs(rho * s - 1.0)) > TIGHT):
@@ -235,18 +249,21 @@ class ConvexProgram:
             self.previous = (0.5 * (x[:-1] + x[1:]), s)
         return ConvexPlan(x, v, t, rho, force, gap, status, 0.0, False)
 
-    def _conic(self, problem, tight=None, refined=False):
+    def _conic(self, problem: Problem, tight: tuple[np.ndarray, FloatArray] | None = None,
+               refined: bool = False) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, str]:
         """(v, t, rho, g, Clarabel's status) of one solve of the program ``problem`` (assemble's arguments)."""
         A, b, q, cones, index = self.assemble(*problem, tight)
         P = sparse.csc_matrix((A.shape[1], A.shape[1]))
         solution = clarabel.DefaultSolver(P, q, A, b, cones, self.refined if refined else self.settings).solve()
-        z = np.asarray(solution.x)
-        return *(z[index[name]] for name in ("v", "t", "rho", "g")), str(solution.status)
+        z = np.asarray(solution.x, float)
+        return z[index["v"]], z[index["t"]], z[index["rho"]], z[index["g"]], str(solution.status)
 
-    def _speed(self, v):
+    def _speed(self, v: FloatArray) -> FloatArray:
         return v[:-1] if self.scheme == "left" else 0.5 * (v[:-1] + v[1:])
 
-    def assemble(self, x, state, arrival, end_speed, mass_scale, lead, tight=None):
+    def assemble(self, x: FloatArray, state: State, arrival: tuple[float, float], end_speed: float, mass_scale: float,
+                 lead: Lead | None, tight: tuple[np.ndarray, FloatArray] | None = None
+                 ) -> tuple[Any, FloatArray, FloatArray, list[Any], dict[str, np.ndarray]]:
         """Clarabel's (A, b, q, cones) of the program on nodes ``x``: A z + s = b, s in cones.
         ``tight``: (mask of intervals, their speeds s0): rho <= 2 / s0 - s / s0^2 + TIGHT / s0 there."""
         n = len(x) - 1
@@ -327,32 +344,33 @@ class _Rows:
     """Constraint rows grouped by cone, in Clarabel's form A z + s = b. A block is one row per
     element of ``rhs``; its terms are (column indices, coefficients), each broadcast to it."""
 
-    def __init__(self, columns):
-        self.columns, self.groups = columns, {"eq": [], "le": [], "soc": []}
+    def __init__(self, columns: int) -> None:
+        self.columns = columns
+        self.groups: dict[str, list[Any]] = {"eq": [], "le": [], "soc": []}
 
     @staticmethod
-    def _block(terms, rhs):
-        rhs = np.atleast_1d(np.asarray(rhs, float))
-        return ([np.broadcast_to(np.asarray(c), rhs.shape) for c, _ in terms],
-                [np.broadcast_to(np.asarray(v, float), rhs.shape) for _, v in terms], rhs)
+    def _block(terms: Sequence[Term], rhs: Any) -> Block:
+        right = np.atleast_1d(np.asarray(rhs, float))
+        return ([np.broadcast_to(np.asarray(c), right.shape) for c, _ in terms],
+                [np.broadcast_to(np.asarray(v, float), right.shape) for _, v in terms], right)
 
-    def eq(self, terms, rhs):
+    def eq(self, terms: Sequence[Term], rhs: Any) -> None:
         """sum of terms = rhs."""
         self.groups["eq"].append(self._block(terms, rhs))
 
-    def le(self, terms, rhs):
+    def le(self, terms: Sequence[Term], rhs: Any) -> None:
         """sum of terms <= rhs."""
         self.groups["le"].append(self._block(terms, rhs))
 
-    def soc(self, parts, rhs):
+    def soc(self, parts: Sequence[Sequence[Term]], rhs: Sequence[Any]) -> None:
         """Three-dimensional cones, one per element: ``parts`` are the terms of the cone's three
         components (each rhs minus terms), the first at least the norm of the other two."""
         self.groups["soc"].append([self._block(terms, r) for terms, r in zip(parts, rhs)])
 
-    def matrices(self):
+    def matrices(self) -> tuple[Any, FloatArray, list[Any]]:
         data, rows, cols, b, cones, r = [], [], [], [], [], 0
 
-        def put(block, row_of):
+        def put(block: Block, row_of: np.ndarray) -> None:
             cs, vs, rhs = block
             for c, v in zip(cs, vs):
                 rows.append(row_of)

@@ -26,14 +26,18 @@ With ``extend=modechoice.define_mode_choice`` the mode of every phase becomes a 
 variables (``ocp/modechoice.py``); the fixed sequence above is then one of its binary patterns.
 """
 from dataclasses import dataclass
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import pyomo.environ as pyo
 
-from ecostudy.core.grid import warn_unmodelled
+from ecostudy.core.grid import Segment, warn_unmodelled
 from ecostudy.core.kinematics import point_resistance
-from ecostudy.core.physics import interval_resistance, smooth_min
+from ecostudy.core.physics import Envelope, interval_resistance, smooth_min
+from ecostudy.core.types import Train
+from ecostudy.core.units import FloatArray, Numeric
 from ecostudy.ocp import space
+from ecostudy.ocp.solver import Model
 from ecostudy.ocp.space import FORCE_SCALE, energy_reference
 
 MIN_PHASE = 1.0  # [m]: shorter phases are dropped from the driver's advice
@@ -45,14 +49,14 @@ class Mode:
     level: float   # handle: traction share, 0 coasting, -1 braking; nan for cruise
 
 
-def all_modes(train):
+def all_modes(train: Train) -> list["Mode"]:
     """Every distinct DAS mode, traction levels highest first: the choices of one MINLP phase."""
     levels = sorted((lv for lv in train.das_levels if lv > 0), reverse=True)
     return [Mode("traction", lv) for lv in levels] + [Mode("cruise", float("nan")),
                                                         Mode("coast", 0.0), Mode("brake", -1.0)]
 
 
-def sequence(train):
+def sequence(train: Train) -> list["Mode"]:
     """The phase sequence of every sector (module docstring): a leading coast, then all modes."""
     return [Mode("coast", 0.0)] + all_modes(train)
 
@@ -65,15 +69,15 @@ class Sector:
     limit: float   # speed limit of the head [m/s]
 
     @property
-    def length(self):
+    def length(self) -> float:
         return self.end - self.start
 
 
-def sectors(segment, train):
+def sectors(segment: Segment, train: Train) -> list[Sector]:
     """Sectors between consecutive profile changes (constant gradient, curvature and limit)."""
     warn_unmodelled(segment, "the phases NLP", train)
     edges = np.concatenate([[0.0], segment.breakpoints(), [segment.distance]])
-    out = []
+    out: list[Sector] = []
     for a, b in zip(edges[:-1], edges[1:]):
         mid = 0.5 * (a + b)
         force = point_resistance(segment, train, mid)
@@ -87,38 +91,40 @@ class Layout:
     i % n of phase i // n. The first sector has no leading coast: at standstill it would leave
     only degenerate constraints (v = 0 on both sides of every step)."""
 
-    sectors: list
-    phases: list
+    sectors: list[Sector]
+    phases: list[tuple[int, Mode]]
     substeps: int
 
     @classmethod
-    def make(cls, sectors, modes, substeps):
+    def make(cls, sectors: list[Sector], modes: Sequence[Mode], substeps: int) -> "Layout":
         phases = [(s, mode) for s in range(len(sectors)) for p, mode in enumerate(modes) if s > 0 or p > 0]
         return cls(sectors, phases, substeps)
 
     @property
-    def intervals(self):
+    def intervals(self) -> int:
         return len(self.phases) * self.substeps
 
-    def owner(self, i):
+    def owner(self, i: int) -> tuple[int, int, Mode]:
         """(phase index q, sector index, mode) of interval i."""
         q = i // self.substeps
         return (q, *self.phases[q])
 
-    def node_limits(self):
+    def node_limits(self) -> FloatArray:
         """Limit of each node: the lower one of the sectors of the intervals on its two sides."""
-        lim = np.array([self.sectors[self.owner(i)[1]].limit for i in range(self.intervals)])
-        return np.minimum(np.append(lim, lim[-1]), np.insert(lim, 0, lim[0]))
+        lim = np.array([self.sectors[self.owner(i)[1]].limit for i in range(self.intervals)], float)
+        return np.asarray(np.minimum(np.append(lim, lim[-1]), np.insert(lim, 0, lim[0])), float)
 
 
-def substeps_for(points, n_phases, least=4):
+def substeps_for(points: int, n_phases: int, least: int = 4) -> int:
     """Sub-steps per phase so that the whole run has about ``points`` intervals."""
     return max(least, int(round(points / n_phases)))
 
 
 @space.gc_paused
-def build(segment, train, layout, guess, running_time=None, window=None, objective="energy",
-          extend=None, movable=False):
+def build(segment: Segment, train: Train, layout: Layout,
+          guess: tuple[Sequence[float] | FloatArray, Sequence[float] | FloatArray],
+          running_time: float | None = None, window: tuple[float, float] | None = None, objective: str = "energy",
+          extend: Callable[[Model, Layout, Train], None] | None = None, movable: bool = False) -> Model:
     """The phases NLP of ``layout`` (or, with ``extend``, e.g. the mode-choice MINLP of ``ocp/modechoice.py``).
 
     ``guess`` = (phase lengths [m], node speeds [m/s]); times follow from them. A ``movable``
@@ -154,7 +160,7 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
     m.ft = pyo.Var(m.I, bounds=(0.0, train.traction.peak / FORCE_SCALE), initialize=0.0)
     m.fb = pyo.Var(m.I, bounds=(0.0, train.braking.peak / FORCE_SCALE), initialize=0.0)
 
-    def accel(i, v_a, v_b):
+    def accel(i: int, v_a: Numeric, v_b: Numeric) -> Numeric:
         """Mean acceleration over an interval [m/s^2] (physics.interval_resistance, as ocp.space)."""
         return km * (m.ft[i] - m.fb[i]) - interval_resistance(v_a, v_b, per_kg, secs[layout.owner(i)[1]].force / M)
 
@@ -163,7 +169,7 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
         m.v[i + 1] ** 2 - m.v[i] ** 2 - 2 * ds[i] * accel(i, m.v[i], m.v[i + 1])) / (2 * h[layout.owner(i)[1]]) == 0.0)
     m.time = pyo.Constraint(m.I, rule=lambda m, i: (
         m.dt[i] * (m.v[i] + m.v[i + 1]) - 2 * ds[i]) / (2 * h[layout.owner(i)[1]]) == 0.0)
-    def mean(envelope, i):
+    def mean(envelope: Envelope, i: int) -> Numeric:
         return 0.5 * (envelope.smooth_force(m.v[i]) + envelope.smooth_force(m.v[i + 1])) / FORCE_SCALE
 
     m.mean_t = {i: mean(train.traction, i) for i in range(N)}
@@ -173,8 +179,10 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
     else:
         _fixed_modes(m, layout)
     bounds = (running_time, running_time) if running_time is not None else window
+    if bounds is None:
+        raise ValueError("the phases NLP needs a running time or an arrival window")
     m.T = pyo.Var(bounds=bounds, initialize=float(np.clip(np.sum(dt0), *bounds)))
-    t_ref = m.time_ref = max(running_time or window[1], 1.0)
+    t_ref = m.time_ref = max(running_time or bounds[1], 1.0)
     clock = m.t0 if movable else 0.0
     m.arrival = pyo.Constraint(expr=(sum(m.dt[i] for i in m.I) + clock - m.T) / t_ref == 0.0)
     _objective(m, train, segment, layout, ds, objective)
@@ -183,7 +191,7 @@ def build(segment, train, layout, guess, running_time=None, window=None, objecti
     return m
 
 
-def _fixed_modes(m, layout):
+def _fixed_modes(m: Model, layout: Layout) -> None:
     """Each phase's own mode, exact inside it (module docstring).
 
     Cruise replaces the speed recursion's content by its meaning: v_{k+1} = v_k and the force
@@ -209,7 +217,7 @@ def _fixed_modes(m, layout):
             m.mode.add(m.fb[i] <= m.mean_b[i])
 
 
-def _objective(m, train, segment, layout, ds, objective):
+def _objective(m: Model, train: Train, segment: Segment, layout: Layout, ds: dict[int, Any], objective: str) -> None:
     """Traction work (thesis 000 eq. 2.16) or net energy (eq. 7.3) over an O(1) reference, or the
     arrival time (with the work as a tie-break, as ``space.define_objective`` does), or the speed at
     the end (with the arrival time as one)."""
@@ -220,7 +228,7 @@ def _objective(m, train, segment, layout, ds, objective):
     if objective == "energy":
         expr = work / e_ref
     elif objective == "net_energy":
-        regen = 0.0
+        regen: Numeric = 0.0
         if train.regeneration is not None:
             cap = {i: 0.5 * (train.regeneration.smooth_force(m.v[i])
                              + train.regeneration.smooth_force(m.v[i + 1])) / FORCE_SCALE for i in range(N)}
@@ -236,7 +244,7 @@ def _objective(m, train, segment, layout, ds, objective):
     m.objective = pyo.Objective(expr=expr, sense=pyo.minimize)
 
 
-def node_positions(layout, lengths, origin=0.0):
+def node_positions(layout: Layout, lengths: Sequence[float] | FloatArray, origin: float = 0.0) -> FloatArray:
     """Positions of every node of the layout for given phase lengths [m]; ``origin``: where a
     re-plan starts (the sectors behind it have phases of length 0, their nodes sit there)."""
     n = layout.substeps
@@ -250,7 +258,7 @@ def node_positions(layout, lengths, origin=0.0):
     return np.array(pos)
 
 
-def speeds_at(layout, lengths, x, v):
+def speeds_at(layout: Layout, lengths: Sequence[float] | FloatArray, x: FloatArray, v: FloatArray) -> FloatArray:
     """ATO speeds interpolated at the layout's nodes; zero at both ends."""
     out = np.interp(node_positions(layout, lengths), x, v)
     out = np.minimum(out, layout.node_limits())
@@ -258,12 +266,13 @@ def speeds_at(layout, lengths, x, v):
     return out
 
 
-def active(layout, lengths, modes, points):
+def active(layout: Layout, lengths: Sequence[float] | FloatArray, modes: Sequence[Mode],
+           points: int) -> tuple[Layout, FloatArray]:
     """Layout of the phases at least ``MIN_PHASE`` long (each sector keeps its longest one), with
     ``modes[q]`` as the mode of phase q, on a sub-grid of about ``points`` intervals in all; and
     the kept lengths, scaled to fill their sectors. Refining on the phases actually driven puts
     the whole grid where the modes are (and no driver is told to change mode for centimetres)."""
-    keep = []
+    keep: list[int] = []
     for s in range(len(layout.sectors)):
         mine = [q for q, (owner, _) in enumerate(layout.phases) if owner == s]
         long_ = [q for q in mine if lengths[q] >= MIN_PHASE]
@@ -277,7 +286,7 @@ def active(layout, lengths, modes, points):
     return out, kept
 
 
-def solution(m, layout):
+def solution(m: Model, layout: Layout) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """(phase lengths [m], node positions, speeds, interval times, F_T [N], F_B [N])."""
     lengths = np.array([pyo.value(m.L[q]) for q in m.Q])
     v = np.array([pyo.value(m.v[k]) for k in m.K])

@@ -6,19 +6,32 @@ import time
 from collections import OrderedDict
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Any, Hashable, Iterator, MutableMapping, Protocol, Sequence
 
 import numpy as np
 
 from ecostudy.core import kinematics
 from ecostudy.core.errors import InfeasibleError, SolverError
-from ecostudy.core.grid import drop_idle_power, make_grid, make_segment, node_limits
-from ecostudy.core.units import to_kmh
+from ecostudy.core.grid import Segment, drop_idle_power, make_grid, make_segment, node_limits
+from ecostudy.core.types import Track, Train, Trajectory, Window
+from ecostudy.core.units import FloatArray, to_kmh
 from ecostudy.ocp import session
 from ecostudy.ocp import space
+from ecostudy.ocp.solver import Model
+from ecostudy.ocp.space import Guess
+
+Stages = MutableMapping[str, float]  # seconds per stage (and the Ipopt iterations) of a run
+
+
+class Solved(Protocol):
+    """Any earlier result a warm start reads: its trajectory in SI."""
+
+    @property
+    def trajectory(self) -> Trajectory: ...
 
 
 @contextmanager
-def stage(stages, name):
+def stage(stages: Stages, name: str) -> Iterator[None]:
     t0 = time.perf_counter()
     yield
     stages[name] = stages.get(name, 0.0) + time.perf_counter() - t0
@@ -28,18 +41,19 @@ def stage(stages, name):
 class Case:
     """One segment prepared for solving: profiles, grid, node limits and the fastest envelope."""
 
-    track: object
-    train: object
-    segment: object
+    track: Track
+    train: Train
+    segment: Segment
     nodes: np.ndarray
     limits: np.ndarray
     envelope: np.ndarray   # fastest speeds on the grid [m/s] (kinematics.envelope_speeds)
     estimate: float        # running time of that envelope [s], close to the all-out time
-    windows: tuple = ()    # core.types.Window timing points, each on a node
-    idle_power: tuple = ()  # the envelopes whose power limit never binds here, dropped from ``train``
+    windows: tuple[Window, ...] = ()  # core.types.Window timing points, each on a node
+    idle_power: tuple[str, ...] = ()  # the envelopes whose power limit never binds here, dropped from ``train``
 
 
-def prepare(track, train, from_stop, to_stop, points, stages=None, windows=()):
+def prepare(track: Track, train: Train, from_stop: str, to_stop: str, points: int, stages: Stages | None = None,
+            windows: Sequence[Window] = ()) -> Case:
     """Segment between two stops, grid of ``points`` nodes, limits and the fastest envelope. A power
     limit that never binds on the segment is left out of the case's train (``grid.drop_idle_power``):
     every formulation built from the case (space, time-domain, phases, blocked) then has no row for it."""
@@ -53,16 +67,17 @@ def prepare(track, train, from_stop, to_stop, points, stages=None, windows=()):
                 tuple(windows), idle)
 
 
-def build(case, guess, objective, stages, weights=(1.0, 1.0), **timing):
+def build(case: Case, guess: Guess, objective: str, stages: Stages, weights: tuple[float, float] = (1.0, 1.0),
+          **timing: Any) -> Model:
     """The Pyomo model of ``case`` (``space.build_model``, built with the cyclic GC paused)."""
     with stage(stages, "build"):
-        time_ref = max(kinematics.running_time(guess[0], case.nodes), 1.0)
+        time_ref = max(kinematics.running_time(np.asarray(guess[0], float), case.nodes), 1.0)
         return space.build_model(case.segment, case.train, case.nodes, case.limits, guess,
                                        objective=objective, time_ref=time_ref, weights=weights,
                                        windows=case.windows, **timing)
 
 
-def record(stages, outcome, nl_seconds=0.0):
+def record(stages: Stages, outcome: session.Outcome, nl_seconds: float = 0.0) -> None:
     """Add one solve's NL-write and Ipopt times and iterations to ``stages``."""
     stages["nl_write"] = stages.get("nl_write", 0.0) + nl_seconds
     stages["solve"] = stages.get("solve", 0.0) + outcome.seconds
@@ -76,21 +91,24 @@ class Written:
     structure). The caller names the structure (``key``): everything that changes the model but
     the timing (track, train, stops, grid, objective, weights). The ``size`` latest are kept."""
 
-    def __init__(self, size=4):
-        self.size, self.models = size, OrderedDict()
+    def __init__(self, size: int = 4) -> None:
+        self.size = size
+        self.models: OrderedDict[Hashable, tuple[Model, session.Session]] = OrderedDict()
 
-    def get(self, key):
+    def get(self, key: Hashable) -> tuple[Model, session.Session] | None:
         if key in self.models:
             self.models.move_to_end(key)
         return self.models.get(key)
 
-    def put(self, key, model, nlp):
+    def put(self, key: Hashable, model: Model, nlp: session.Session) -> None:
         self.models[key] = (model, nlp)
         while len(self.models) > self.size:
             self.models.popitem(last=False)
 
 
-def solve_once(case, guess, objective, stages, options, written=None, key=None, **timing):
+def solve_once(case: Case, guess: Guess, objective: str, stages: Stages, options: session.Options | None,
+               written: Written | None = None, key: Hashable | None = None,
+               **timing: Any) -> tuple[Model, session.Outcome]:
     """Build, write and solve; or, with ``written`` holding ``key``, re-solve its written model
     from ``guess`` with this timing (no build, no NL write)."""
     kept = written.get((key, objective)) if written is not None and key is not None else None
@@ -112,19 +130,19 @@ def solve_once(case, guess, objective, stages, options, written=None, key=None, 
     return m, outcome
 
 
-def guess_from_speeds(case, speeds):
+def guess_from_speeds(case: Case, speeds: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """(v, dt, F_T, F_B) on the grid realising ``speeds``: Ipopt's starting point."""
     dt = kinematics.interval_times(np.maximum(speeds, 5e-4), case.nodes)  # no infinite first/last step
     ft, fb = kinematics.forces_for(speeds, case.segment, case.train, case.nodes)
     return speeds, dt, ft, fb
 
 
-def capped_guess(case, running_time):
+def capped_guess(case: Case, running_time: float) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Fastest envelope capped at one cruise speed so that it takes ``running_time``."""
     return guess_from_speeds(case, kinematics.capped_speeds(case.envelope, case.nodes, running_time))
 
 
-def warm_guess(previous, case):
+def warm_guess(previous: Solved, case: Case) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Starting point interpolated from a previous result's trajectory (speed vs position)."""
     run = previous.trajectory
     speeds = np.minimum(np.interp(case.nodes, run.nodes, run.v), case.limits)
@@ -132,7 +150,7 @@ def warm_guess(previous, case):
     return guess_from_speeds(case, speeds)
 
 
-def all_out(case, stages, options=None):
+def all_out(case: Case, stages: Stages, options: session.Options | None = None) -> tuple[float, Model, session.Outcome]:
     """Minimum running time on this grid [s], the solved model and Ipopt's outcome."""
     m, outcome = solve_once(case, guess_from_speeds(case, case.envelope), "time", stages, options)
     if not outcome.usable and case.windows and outcome.status in ("infeasible", "restoration_failed"):
@@ -144,7 +162,7 @@ def all_out(case, stages, options=None):
     return float(np.sum(space.solution_arrays(m)[1])), m, outcome
 
 
-def check_windows(case, margin=0.02):
+def check_windows(case: Case, margin: float = 0.02) -> None:
     """Refuse at once a timing window no run can keep: passing later than ``latest`` even on the
     fastest envelope (with every window's speed cap), or a minimum speed above that envelope.
     Within ``margin`` of these bounds the NLP decides (the envelope is an explicit estimate)."""
@@ -167,7 +185,7 @@ def check_windows(case, margin=0.02):
                                   f"{to_kmh(w.min_speed):.1f} km/h)")
 
 
-def check_feasible(latest, t_allout):
+def check_feasible(latest: float | None, t_allout: float) -> None:
     if latest is not None and latest < t_allout - 1e-6 * t_allout:
         raise InfeasibleError(f"infeasible: the fastest possible run takes {t_allout:.1f} s "
                               f"(asked for {latest:.1f} s)")

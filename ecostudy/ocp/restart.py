@@ -15,36 +15,42 @@ The multiplied-through recursions (``space.define_dynamics``) are what make a ze
 The DAS phases NLP (``ocp.phases.build(movable=True)``) re-plans the same way by sector shares
 (:func:`set_phases_start`).
 """
-from typing import NamedTuple
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
 from ecostudy.core.errors import InputError
 from ecostudy.core.grid import interval_of
-from ecostudy.core.types import State
+from ecostudy.core.types import State, Train
+from ecostudy.core.units import FloatArray
 from ecostudy.ocp import space
-from ecostudy.ocp.problem import build, capped_guess
-from ecostudy.ocp.session import Session
+from ecostudy.ocp.phases import Layout
+from ecostudy.ocp.problem import Case, Stages, build, capped_guess
+from ecostudy.ocp.session import Options, Outcome, Session
+from ecostudy.ocp.solver import Model, Var
 
 
-def _on_segment(position, end):
+def _on_segment(position: float, end: float) -> None:
     if not 0.0 <= position < end:
         raise InputError(f"start position {position:.1f} m is not on the segment [0, {end:.1f}) m")
 
 
-def start_interval(nodes, position):
+def start_interval(nodes: FloatArray, position: float) -> tuple[int, float]:
     """(k, share): the interval holding ``position`` [m] and the share of it still to run."""
     _on_segment(position, nodes[-1])
     k = interval_of(nodes, position)
     return k, float((nodes[k + 1] - position) / (nodes[k + 1] - nodes[k]))
 
 
-def _start_speeds(m, first, speed, ceiling=None):
+def _start_speeds(m: Model, first: int, speed: float,
+                  ceiling: FloatArray | None = None) -> tuple[list[Var], list[float], list[float]]:
     """(variables, lows, highs) of the node speeds but the last (the terminal condition's):
     node 0 is the measured ``speed``; nodes up to ``first`` (already run, or the start itself)
     may carry it even above the limit behind; the others keep their limits, lifted to
     ``ceiling[k]`` where given."""
-    variables, lows, highs = [], [], []
+    variables: list[Var] = []
+    lows: list[float] = []
+    highs: list[float] = []
     for k in range(len(m.K) - 1):
         lo, hi = m.base_bounds["v"][k]
         if k <= first:
@@ -57,7 +63,7 @@ def _start_speeds(m, first, speed, ceiling=None):
     return variables, lows, highs
 
 
-def set_start(session, m, nodes, state, train=None):
+def set_start(session: Session, m: Model, nodes: FloatArray, state: State, train: Train | None = None) -> None:
     """Bounds of a movable model for a run starting at ``state`` (:class:`State`, SI). With the
     ``train`` given, speed limits ahead that the measured speed cannot meet even under full
     braking are lifted to the speed braking reaches there."""
@@ -92,7 +98,7 @@ def set_start(session, m, nodes, state, train=None):
                              [state.speed] * (k + 1) + [0.0] * k)
 
 
-def set_phases_start(session, m, layout, state):
+def set_phases_start(session: Session, m: Model, layout: Layout, state: State) -> None:
     """Bounds of a movable phases NLP (``ocp.phases.build(movable=True)``) for a run from ``state``:
     the sectors behind it filled to share 0 (their phases length 0, the speed carried through
     unchanged), the sector holding it to the share still to run."""
@@ -109,20 +115,26 @@ def set_phases_start(session, m, layout, state):
                              [0.0] * len(behind) + [state.speed] * (first + 1))
 
 
-def set_end(session, m, speed=(0.0, 0.0), arrival=None):
+def set_end(session: Session, m: Model, speed: tuple[float, float] = (0.0, 0.0),
+            arrival: float | Sequence[float] | None = None) -> None:
     """Terminal speed range [m/s] at the end of the grid, and the arrival time [s] on the clock of
     the start: a number (exact) or (earliest, latest); None leaves the arrival as it is. For the
     space-domain and the phases NLP alike."""
-    variables, lows, highs = [m.v[len(m.K) - 1]], [speed[0]], [speed[1]]
+    variables: list[Var] = [m.v[len(m.K) - 1]]
+    lows: list[float | None] = [speed[0]]
+    highs: list[float | None] = [speed[1]]
     if arrival is not None:
-        lo, hi = (arrival, arrival) if np.isscalar(arrival) else arrival
+        if isinstance(arrival, (int, float, np.integer, np.floating)):
+            lo = hi = float(arrival)
+        else:
+            lo, hi = arrival
         variables.append(m.T)
         lows.append(lo)
         highs.append(hi)
     session.set_many_bounds(variables, lows, highs)
 
 
-def set_mass(session, m, scale):
+def set_mass(session: Session, m: Model, scale: float) -> None:
     """The train's mass (inertial and static) as ``scale`` times the model's, e.g. from an estimator."""
     session.set_bounds(m.mass_scale, scale, scale)
 
@@ -137,15 +149,15 @@ class Plan(NamedTuple):
     fb: np.ndarray
     shares: np.ndarray
     start_time: float
-    outcome: object
+    outcome: Outcome
 
     @property
-    def time(self):
+    def time(self) -> FloatArray:
         """Clock at every node [s] (nodes already run sit at the start time)."""
         return self.start_time + np.concatenate([[0.0], np.cumsum(self.dt)])
 
     @property
-    def traction_energy(self):
+    def traction_energy(self) -> float:
         """Traction work still to do [J]: sum F_T w ds over the intervals ahead."""
         return float(np.sum(self.ft * self.shares * np.diff(self.nodes)))
 
@@ -157,15 +169,21 @@ class Replanner:
     departure, clock 0) by bounds alone, warm-started from the previous plan.
     """
 
-    def __init__(self, case, running_time=None, window=None, objective="energy", options=None, stages=None):
+    def __init__(self, case: Case, running_time: float | None = None, window: tuple[float, float] | None = None,
+                 objective: str = "energy", options: Options | None = None, stages: Stages | None = None) -> None:
         self.case, self.options, self.stages = case, options, stages if stages is not None else {}
-        timing = {"running_time": running_time} if running_time is not None else {"window": window}
-        guess = capped_guess(case, running_time if running_time is not None else window[1])
+        timing: dict[str, Any] = {"running_time": running_time} if running_time is not None else {"window": window}
+        latest = running_time if running_time is not None else window[1] if window is not None else None
+        if latest is None:
+            raise InputError("a re-planner needs a running time or an arrival window")
+        guess = capped_guess(case, latest)
         self.model = build(case, guess, objective, self.stages, movable=True, **timing)
         self.session = Session(self.model)
         self.stages["nl_write"] = self.stages.get("nl_write", 0.0) + self.session.nl_seconds
 
-    def solve(self, state=State(), end_speed=(0.0, 0.0), arrival=None, options=None, mass_scale=None):
+    def solve(self, state: State = State(), end_speed: tuple[float, float] = (0.0, 0.0),
+              arrival: float | Sequence[float] | None = None, options: Options | None = None,
+              mass_scale: float | None = None) -> Plan:
         m, nodes = self.model, self.case.nodes
         if mass_scale is not None:
             set_mass(self.session, m, mass_scale)

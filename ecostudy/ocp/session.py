@@ -10,6 +10,7 @@ import threading
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Any, Iterator, Mapping, Sequence, TypeAlias
 
 import cyipopt
 import numpy as np
@@ -21,7 +22,9 @@ from pyomo.contrib.pynumero.interfaces.pyomo_nlp import PyomoNLP
 
 from ecostudy.core.errors import SolverError
 from ecostudy.ocp import solver
-from ecostudy.ocp.solver import NL_OPTIONS
+from ecostudy.ocp.solver import NL_OPTIONS, Model, Var
+
+Options: TypeAlias = Mapping[str, Any]  # Ipopt options by name
 
 DEFAULT_OPTIONS = {
     "tol": 1e-8,
@@ -54,16 +57,16 @@ class Outcome:
     max_violation: float   # largest constraint violation at the returned point
 
     @property
-    def optimal(self):
+    def optimal(self) -> bool:
         return self.status == "optimal"
 
     @property
-    def usable(self):
+    def usable(self) -> bool:
         """A point that satisfies the constraints, even if not proven optimal (then flagged)."""
         return self.status in ("optimal", "acceptable") or self.max_violation < 1e-6
 
 
-def repeatable():
+def repeatable() -> None:
     """Every solve repeats bit for bit: the solver chain set up (``ocp.solver.prepare``) and
     Scotch's generator reset, so the solves that follow order their matrices as they did the first
     time (``Session.solve`` calls it; so does a MINLP search whose NLPs Pyomo solves)."""
@@ -71,7 +74,7 @@ def repeatable():
     solver.repeatable()
 
 
-def _imports():
+def _imports() -> tuple[Any, Any]:
     """PyNumero classes, with the solver chain prepared (``ocp.solver.prepare``) and the ASL library
     found even when Pyomo was imported before ecostudy."""
     if not solver.prepare(NLWriter.CONFIG, AmplInterface):
@@ -88,27 +91,29 @@ class Session:
     times changes one bound instead of writing the model again.
     """
 
-    def __init__(self, model):
+    def __init__(self, model: Model) -> None:
         CyIpoptNLP, PyomoNLP = _imports()
         self.model = model
         t0 = time.perf_counter()
         self.nlp = PyomoNLP(model, nl_file_options=NL_OPTIONS)
         self.nl_seconds = time.perf_counter() - t0
         self.x = np.array(self.nlp.init_primals(), dtype=float)
-        self.multipliers = None   # (constraints, lower bounds, upper bounds) of the last solve
+        # (constraints, lower bounds, upper bounds) of the last solve
+        self.multipliers: tuple[Any, Any, Any] | None = None
         self._problem_class = CyIpoptNLP
 
-    def set_bounds(self, var, lower, upper):
+    def set_bounds(self, var: Var, lower: float | None, upper: float | None) -> None:
         """Change the bounds of one model variable (``None`` for none) before the next solve.
 
         Both the NLP's bound arrays and the Pyomo variable change, so the model stays consistent.
         """
         self.set_many_bounds([var], [lower], [upper])
 
-    def set_many_bounds(self, variables, lowers, uppers):
+    def set_many_bounds(self, variables: Sequence[Var], lowers: Sequence[float | None],
+                        uppers: Sequence[float | None]) -> None:
         """:meth:`set_bounds` for many variables at once (one copy of the bound arrays)."""
         index = np.asarray(self.nlp.get_primal_indices(list(variables)), dtype=int)
-        arrays = {}
+        arrays: dict[str, np.ndarray] = {}
         for name, values, default in (("_primals_lb", lowers, -np.inf), ("_primals_ub", uppers, np.inf)):
             arr = np.array(getattr(self.nlp, name), dtype=float)  # PyNumero keeps them read-only
             arr[index] = [default if v is None else float(v) for v in values]
@@ -120,21 +125,25 @@ class Session:
             var.setub(None if hi is None else float(hi))
         self.x[index] = np.clip(self.x[index], arrays["_primals_lb"][index], arrays["_primals_ub"][index])
 
-    def set_start_values(self, variables, values, clip=True):
+    def set_start_values(self, variables: Sequence[Var], values: Sequence[float] | np.ndarray,
+                         clip: bool = True) -> None:
         """Set the starting point of some variables for the next solve, clipped to their bounds
         unless ``clip`` is False (then Ipopt moves them inside, as it does a new model's start)."""
         index = np.asarray(self.nlp.get_primal_indices(list(variables)), dtype=int)
-        values = np.asarray(values, dtype=float)
-        self.x[index] = np.clip(values, self.nlp.primals_lb()[index], self.nlp.primals_ub()[index]) if clip else values
+        start = np.asarray(values, dtype=float)
+        self.x[index] = np.clip(start, self.nlp.primals_lb()[index], self.nlp.primals_ub()[index]) if clip else start
 
-    def solve(self, options=None, x0=None):
+    def solve(self, options: Options | None = None, x0: Sequence[float] | np.ndarray | None = None) -> Outcome:
         """Solve from ``x0`` (default: the last solution); loads the point into the model."""
         iterations = [0]
 
-        held = []  # a Ctrl-C that arrived during the solve (ctrl_c_after): Ipopt stops at its next iteration
+        # a Ctrl-C that arrived during the solve (ctrl_c_after): Ipopt stops at its next iteration
+        held: list[bool] = []
 
-        class Counting(self._problem_class):
-            def intermediate(self, alg_mod, iter_count, *args):
+        base: Any = self._problem_class
+
+        class Counting(base):  # type: ignore[misc]  # cyipopt's problem class: untyped third-party code
+            def intermediate(self, alg_mod: int, iter_count: int, *args: Any) -> bool:
                 iterations[0] = iter_count
                 return not held
 
@@ -142,7 +151,7 @@ class Session:
         for key, value in {**DEFAULT_OPTIONS, **(options or {})}.items():
             problem.add_option(key, value)
         start = self.x if x0 is None else np.asarray(x0, dtype=float)
-        duals = {}
+        duals: dict[str, Any] = {}
         if (options or {}).get("warm_start_init_point") == "yes" and self.multipliers is not None:
             duals = dict(zip(("lagrange", "zl", "zu"), self.multipliers))
         repeatable()  # the same ordering for the same matrix, every solve
@@ -166,7 +175,7 @@ class Session:
                        seconds, 0.0, float(np.max(viol, initial=0.0)))
 
 
-def solve(model, options=None):
+def solve(model: Model, options: Options | None = None) -> Outcome:
     """Solve ``model`` once, in place; returns an :class:`Outcome` (never raises on non-optimal)."""
     session = Session(model)
     outcome = session.solve(options)
@@ -174,11 +183,11 @@ def solve(model, options=None):
     return outcome
 
 
-def versions():
+def versions() -> dict[str, str]:
     """Versions of the solver chain: Pyomo, cyipopt, Ipopt, MUMPS (as Ipopt's package reports them)."""
 
 
-    def pkg(name):
+    def pkg(name: str) -> str:
         try:
             return subprocess.run(["dpkg-query", "-W", "-f=${Version}", name], capture_output=True,
                                   text=True, timeout=5).stdout.strip() or "unknown"
@@ -190,7 +199,7 @@ def versions():
 
 
 @contextmanager
-def ctrl_c_after(held):
+def ctrl_c_after(held: list[bool]) -> Iterator[None]:
     """Hold a Ctrl-C (SIGINT) that arrives inside Ipopt (noted in the list ``held``, which the
     intermediate callback reads to stop Ipopt at its next iteration) and raise it when Ipopt
     returns: raised inside one of cyipopt's callbacks it was swallowed there and the solve went on

@@ -14,7 +14,7 @@ What each setting is for is said where it is set.
 import ctypes
 import os
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any, Optional, TypeAlias
 
 from pyomo.common.dependencies import DeferredImportCallbackFinder
 
@@ -29,6 +29,10 @@ REPO_ASL = Path(__file__).resolve().parents[2] / ".pyomo" / "lib" / "libpynumero
 # default study's space NLP (which the bug did not hit): NL write unchanged, Ipopt about 12 % longer
 # (quiet machine, alternating: 1.40-1.58 s against 1.22-1.36 s; energy equal to 4e-9).
 NL_OPTIONS = {"export_defined_variables": False}
+
+# Pyomo and PyNumero ship no type information: a model, its components and expressions are Any
+Model: TypeAlias = Any   # a pyomo ConcreteModel
+Var: TypeAlias = Any     # a Pyomo variable (scalar, or an element of an indexed one)
 
 _state: dict[str, Any] = {"configured": False, "prepared": False, "scotch": None}
 

@@ -14,6 +14,7 @@ with R_k the trapezoidal mean of the Davis resistance at both nodes plus the gra
 forces of the interval (eq. 2.2). Envelopes hold at both ends of each interval.
 """
 import functools
+from typing import Any, Callable, ParamSpec, Sequence, TypeAlias, TypeVar
 
 import numpy as np
 import pyomo.environ as pyo
@@ -21,7 +22,17 @@ from pyomo.common.gc_manager import PauseGC
 
 from ecostudy.core.kinematics import interval_davis, interval_grade_force
 from ecostudy.core.physics import interval_resistance, line_energy
-from ecostudy.core.physics import smooth_table
+from ecostudy.core.physics import Envelope, smooth_table
+from ecostudy.core.grid import Segment
+from ecostudy.core.types import Train, Window
+from ecostudy.core.units import FloatArray, Numeric
+from ecostudy.ocp.solver import Model, Var
+
+# a starting point on the grid: (v [m/s] per node, dt [s], F_T [N], F_B [N] per interval)
+Guess: TypeAlias = tuple[Sequence[float] | FloatArray, Sequence[float] | FloatArray, Sequence[float] | FloatArray,
+                         Sequence[float] | FloatArray]
+P = ParamSpec("P")
+R = TypeVar("R")
 
 FORCE_SCALE = 1000.0  # [N] per NLP force unit: forces in kN (bench/bench_variants.py measures N)
 # multiplier on the speed recursion: 1 = dynamics per unit mass (bench_variants.py measures M)
@@ -31,17 +42,18 @@ DYNAMICS_SCALE = 1.0
 TIME_REGULARISATION = 1e-4
 
 
-def _bounded(envelope):
+def _bounded(envelope: Envelope) -> float:
     """Upper bound of a force variable [kN]."""
     return envelope.peak / FORCE_SCALE
 
 
-def energy_reference(train, segment):
+def energy_reference(train: Train, segment: Segment) -> float:
     """Scale of the energy objectives [J]: a tenth of peak traction over the whole distance."""
     return max(train.traction.peak * segment.distance * 0.1, 1.0)
 
 
-def define_variables(m, nodes, limits, train, guess, with_regeneration, movable=False):
+def define_variables(m: Model, nodes: FloatArray, limits: FloatArray, train: Train, guess: Guess,
+                     with_regeneration: bool, movable: bool = False) -> None:
     """Speeds per node, interval times and forces [kN] per interval. Standstill at both ends is
     fixed, or, for a ``movable`` model, held by bounds that :func:`set_start` and :func:`set_end`
     change; a movable model also has the share w_k of each interval still to run (bounds 1) and
@@ -65,11 +77,13 @@ def define_variables(m, nodes, limits, train, guess, with_regeneration, movable=
     m.ft = pyo.Var(m.I, bounds=(0.0, _bounded(train.traction)), initialize=lambda m, k: float(ft0[k]) / FORCE_SCALE)
     m.fb = pyo.Var(m.I, bounds=(0.0, _bounded(train.braking)), initialize=lambda m, k: float(fb0[k]) / FORCE_SCALE)
     if with_regeneration:
+        if train.regeneration is None:
+            raise ValueError("with_regeneration: the train has no electric brake")
         top = min(train.regeneration.max_force, train.braking.peak) / FORCE_SCALE
         m.fr = pyo.Var(m.I, bounds=(0.0, top), initialize=lambda m, k: min(float(fb0[k]) / FORCE_SCALE, top))
 
 
-def start_point(m, guess):
+def start_point(m: Model, guess: Guess) -> tuple[list[Var], list[float]]:
     """(variables, values) that start a re-solve of a written model ``m`` from ``guess`` = (v, dt,
     F_T [N], F_B [N]) exactly as :func:`define_variables` and :func:`define_timing` would have
     started a new one (T within its current bounds); fixed variables (the end speeds) are left
@@ -87,14 +101,14 @@ def start_point(m, guess):
     return [p[0] for p in pairs], [p[1] for p in pairs]
 
 
-def define_dynamics(m, nodes, segment, train):
+def define_dynamics(m: Model, nodes: FloatArray, segment: Segment, train: Train) -> None:
     """Speed (energy form) and time recursions, scaled to O(1) residuals."""
     ds = np.diff(nodes).tolist()  # Python floats: numpy scalars make Pyomo expressions slow
     per_kg = [tuple(float(x) / train.mass for x in abc) for abc in zip(*interval_davis(segment, train, nodes))]
     fixed = (interval_grade_force(segment, train, nodes) / train.mass).tolist()
     km, s = float(FORCE_SCALE / train.mass), DYNAMICS_SCALE
 
-    def speed(m, k):
+    def speed(m: Model, k: int) -> Any:
         # (v1^2 - v0^2) / (2 ds) = w ((F_T - F_B) / M - R(v0, v1) / M)  (physics.interval_resistance);
         # w = 1, or the share of the interval still to run in a movable model (0: already run)
         if hasattr(m, "mass_scale"):  # an estimated mass: inertia and the grade and curve force scale with it
@@ -104,7 +118,7 @@ def define_dynamics(m, nodes, segment, train):
         net = interval_resistance(m.v[k], m.v[k + 1], per_kg[k], fixed[k]) - km * (m.ft[k] - m.fb[k])
         return s * ((m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k]) + share(m, k, net)) == 0.0
 
-    def time(m, k):
+    def time(m: Model, k: int) -> Any:
         return m.dt[k] * (m.v[k] + m.v[k + 1]) / (2 * ds[k]) == share(m, k, 1.0)
 
     m.speed = pyo.Constraint(m.I, rule=speed)
@@ -112,10 +126,10 @@ def define_dynamics(m, nodes, segment, train):
     m.running_time = pyo.Expression(expr=sum(m.dt[k] for k in m.I))
 
 
-def _envelope_constraints(m, name, force, envelope):
+def _envelope_constraints(m: Model, name: str, force: Var, envelope: Envelope) -> None:
     """force_k <= envelope(v) at both ends of interval k."""
     if envelope.kind == "table":
-        c0, c1, terms = envelope.coefficients  # in N; the force variables are in kN
+        c0, c1, terms = envelope.smooth_coefficients  # in N; the force variables are in kN
         scaled = (c0 / FORCE_SCALE, c1 / FORCE_SCALE, [(a / FORCE_SCALE, v) for a, v in terms])
         m.add_component(name + "_env", pyo.Expression(
             m.K, rule=lambda m, k: smooth_table(m.v[k], scaled, envelope.width)))
@@ -128,12 +142,15 @@ def _envelope_constraints(m, name, force, envelope):
         m.add_component(name + "_hi", pyo.Constraint(m.I, rule=lambda m, k: force[k] * m.v[k + 1] / pk <= 1.0))
 
 
-def define_acceleration_bounds(m, nodes, train):
+def define_acceleration_bounds(m: Model, nodes: FloatArray, train: Train) -> None:
     """Net acceleration and deceleration bounds of the train (TTOBench ``max acceleration`` and
     ``max deceleration``, OSRD comfort acceleration), per interval on the recursion's mean
     acceleration: (v_k+1^2 - v_k^2) / (2 ds_k) in [-d_max, a_max] (times the share still to run)."""
     ds = np.diff(nodes).tolist()
-    mean = lambda m, k: (m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k])  # noqa: E731
+
+    def mean(m: Model, k: int) -> Numeric:
+        return (m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k])
+
     if np.isfinite(train.max_acceleration):
         a = float(train.max_acceleration)
         m.max_acceleration = pyo.Constraint(m.I, rule=lambda m, k: mean(m, k) <= share(m, k, a))
@@ -142,21 +159,23 @@ def define_acceleration_bounds(m, nodes, train):
         m.max_deceleration = pyo.Constraint(m.I, rule=lambda m, k: -mean(m, k) <= share(m, k, d))
 
 
-def define_envelopes(m, train, with_regeneration):
+def define_envelopes(m: Model, train: Train, with_regeneration: bool) -> None:
     """Traction, braking and regenerative limits F <= F_max(v) (thesis 000 eqs. 2.3-2.4)."""
     _envelope_constraints(m, "traction", m.ft, train.traction)
     _envelope_constraints(m, "braking", m.fb, train.braking)
     if with_regeneration:
         m.regen_share = pyo.Constraint(m.I, rule=lambda m, k: m.fr[k] <= m.fb[k])
-        _envelope_constraints(m, "regen", m.fr, train.regeneration)
+        if train.regeneration is not None:
+            _envelope_constraints(m, "regen", m.fr, train.regeneration)
 
 
-def share(m, k, expr):
+def share(m: Model, k: int, expr: Numeric) -> Numeric:
     """``expr`` times the share of interval k still to run (movable models), else ``expr``."""
     return m.w[k] * expr if hasattr(m, "w") else expr
 
 
-def define_timing(m, time_ref, running_time=None, window=None):
+def define_timing(m: Model, time_ref: float, running_time: float | None = None,
+                  window: tuple[float, float] | None = None) -> None:
     """Running time T as a variable tied to the interval times; the timing request is its bounds.
 
     A fixed running time (eq. 2.6 as equality) is T in [t, t], an arrival window (thesis 001
@@ -171,18 +190,18 @@ def define_timing(m, time_ref, running_time=None, window=None):
     m.arrival = pyo.Constraint(expr=(m.running_time + clock - m.T) / time_ref == 0.0)
 
 
-def window_node(nodes, distance):
+def window_node(nodes: FloatArray, distance: float) -> int:
     """The grid node of a timing point (``core.grid.make_grid`` places one there)."""
     return int(np.argmin(np.abs(nodes - distance)))
 
 
-def passing_time(m, nodes, distance):
+def passing_time(m: Model, nodes: FloatArray, distance: float) -> Numeric:
     """Time [s] from departure to the node at ``distance``: the sum of the interval times before it
     (plus the start clock t0 of a movable model)."""
     return sum(m.dt[j] for j in range(window_node(nodes, distance))) + (m.t0 if hasattr(m, "t0") else 0.0)
 
 
-def define_windows(m, nodes, windows, time_ref):
+def define_windows(m: Model, nodes: FloatArray, windows: Sequence[Window], time_ref: float) -> None:
     """Timing points on the way: earliest/latest passing time and speed bounds at a node.
 
     The time at node k is the sum of the interval times before it; each window has its own node
@@ -202,7 +221,8 @@ def define_windows(m, nodes, windows, time_ref):
         m.v[k].setub(min(hi, w.max_speed) if w.max_speed is not None else hi)
 
 
-def timing_bounds(running_time=None, window=None):
+def timing_bounds(running_time: float | None = None,
+                  window: tuple[float, float] | None = None) -> tuple[float, float | None]:
     """(lower, upper) bounds of T [s] for a fixed running time, a window, or neither."""
     if running_time is not None:
         return (float(running_time), float(running_time))
@@ -211,7 +231,8 @@ def timing_bounds(running_time=None, window=None):
     return (0.0, None)
 
 
-def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
+def define_objective(m: Model, nodes: FloatArray, train: Train, objective: str, weights: tuple[float, float],
+                     time_ref: float, energy_ref: float) -> None:
     """Objectives, each divided by a reference so that it is O(1).
 
     energy      traction work sum F_T,k ds_k (thesis 000 eq. 2.16)
@@ -226,7 +247,7 @@ def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
     if objective == "energy":
         expr = energy
     elif objective == "net_energy":  # a train without an electric brake regenerates nothing
-        def line(k):  # physics.line_energy: constant efficiencies or maps over (speed, force)
+        def line(k: int) -> Numeric:  # physics.line_energy: constant efficiencies or maps over (speed, force)
             fr = FORCE_SCALE * m.fr[k] if hasattr(m, "fr") else 0.0
             return line_energy(FORCE_SCALE * m.ft[k], fr, 0.5 * (m.v[k] + m.v[k + 1]), ds[k],
                                train.eta_traction, train.eta_regeneration)
@@ -241,20 +262,22 @@ def define_objective(m, nodes, train, objective, weights, time_ref, energy_ref):
     m.objective = pyo.Objective(expr=expr, sense=pyo.minimize)
 
 
-def gc_paused(build):
+def gc_paused(build: Callable[P, R]) -> Callable[P, R]:
     """``build`` with Python's cyclic garbage collector paused: each collection walks every Pyomo
     object made so far (70 % of a space build; a DAS phases build 0.39-1.01 -> 0.13-0.21 s, a
     network leg 0.20 -> 0.045 s). Nothing a build makes is garbage until the model is dropped."""
     @functools.wraps(build)
-    def paused(*args, **kwargs):
+    def paused(*args: P.args, **kwargs: P.kwargs) -> R:
         with PauseGC():
             return build(*args, **kwargs)
     return paused
 
 
 @gc_paused
-def build_model(segment, train, nodes, limits, guess, objective="energy", running_time=None,
-                window=None, weights=(1.0, 1.0), time_ref=100.0, windows=(), movable=False):
+def build_model(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray, guess: Guess,
+                objective: str = "energy", running_time: float | None = None, window: tuple[float, float] | None = None,
+                weights: tuple[float, float] = (1.0, 1.0), time_ref: float = 100.0, windows: Sequence[Window] = (),
+                movable: bool = False) -> Model:
     """Assemble the NLP in named steps; ``guess`` = (v, dt, F_T [N], F_B [N]) on the grid.
 
     A ``movable`` model can be re-solved from any state and towards any terminal speed and
@@ -278,7 +301,7 @@ def build_model(segment, train, nodes, limits, guess, objective="energy", runnin
     return m
 
 
-def marginal_energy(m):
+def marginal_energy(m: Model) -> float | None:
     """dE/dT [J/s] of a solved fixed-time model: the arrival constraint's multiplier, unscaled.
 
     Ipopt's y of (sum dt - T) / t_ref = 0 with T fixed gives d(objective)/dT = -y / t_ref; the
@@ -287,10 +310,10 @@ def marginal_energy(m):
     lo, hi = m.T.bounds
     if lo is None or hi is None or hi - lo > 1e-9 * max(abs(hi), 1.0) or m.arrival not in m.dual:
         return None
-    return -float(m.dual[m.arrival]) * m.energy_ref / m.time_ref
+    return -float(m.dual[m.arrival]) * float(m.energy_ref) / float(m.time_ref)
 
 
-def solution_arrays(m):
+def solution_arrays(m: Model) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray | None]:
     """(v, dt, F_T [N], F_B [N], F_regen [N] or None) from a solved model."""
     v = np.array([pyo.value(m.v[k]) for k in m.K])
     dt = np.array([pyo.value(m.dt[k]) for k in m.I])

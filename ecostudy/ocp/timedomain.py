@@ -18,7 +18,7 @@ The electrical power at the pantograph in step j [kW] is
 p_j = F_T,j vbar_j / eta_T - eta_R F_R,j vbar_j, vbar_j = (v_j + v_{j+1}) / 2 (thesis 000 eq. 7.3).
 """
 from dataclasses import dataclass
-from typing import NamedTuple, Optional
+from typing import Any, NamedTuple, Optional, Sequence
 
 import numpy as np
 import pyomo.environ as pyo
@@ -26,7 +26,10 @@ import pyomo.environ as pyo
 from ecostudy.core.grid import warn_unmodelled
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import interval_resistance, smooth_table, table_coefficients
+from ecostudy.core.units import FloatArray, Numeric
 from ecostudy.ocp import space
+from ecostudy.ocp.problem import Case, Solved
+from ecostudy.ocp.solver import Model
 
 FORCE_SCALE = space.FORCE_SCALE
 
@@ -35,7 +38,7 @@ FORCE_SCALE = space.FORCE_SCALE
 class Leg:
     """One train's run between two stops: departure step, steps and the space-grid case."""
 
-    case: object          # run.Case of the segment (grid, limits, envelope)
+    case: Case            # the prepared segment (grid, limits, envelope)
     start: int            # departure step on the common clock
     steps: int            # running time / dt
     dt: float
@@ -43,11 +46,11 @@ class Leg:
     direction: float      # +1 or -1 along the line
 
     @property
-    def running_time(self):
+    def running_time(self) -> float:
         return self.steps * self.dt
 
 
-def force_profile(case, width):
+def force_profile(case: Case, width: float) -> tuple[FloatArray, FloatArray]:
     """(positions, values) of the gradient + curve force [N] as a smooth step function of s."""
     seg = case.segment
     warn_unmodelled(seg, "the time-domain legs", case.train)
@@ -55,7 +58,8 @@ def force_profile(case, width):
     mids = 0.5 * (cuts[:-1] + cuts[1:])
     force = point_resistance(seg, case.train, mids)
     # a step at each cut is the limit of a ramp of width -> 0; use ramps of ``width`` centred on it
-    xs, fs = [0.0], [force[0]]
+    xs: list[float] = [0.0]
+    fs: list[float] = [force[0]]
     for c, f0, f1 in zip(cuts[1:-1], force[:-1], force[1:]):
         if f0 != f1:
             xs += [c - 0.5 * width, c + 0.5 * width]
@@ -65,7 +69,7 @@ def force_profile(case, width):
     return np.array(xs), np.array(fs)
 
 
-def limit_profile(case, ramp, dt=0.0):
+def limit_profile(case: Case, ramp: float, dt: float = 0.0) -> tuple[FloatArray, FloatArray]:
     """(positions, speeds) of a continuous piecewise-linear bound never above the node limits.
 
     The bound holds at the time steps only, and near a change a train covers at most
@@ -74,7 +78,8 @@ def limit_profile(case, ramp, dt=0.0):
     never crosses the true limit.
     """
     x, lim = case.nodes, case.limits
-    xs, vs = [0.0], [lim[0]]
+    xs: list[float] = [0.0]
+    vs: list[float] = [lim[0]]
     for k in range(1, len(x)):
         if lim[k] == lim[k - 1]:
             continue
@@ -90,13 +95,15 @@ def limit_profile(case, ramp, dt=0.0):
             vs += [lim[k - 1], lim[k]]
     xs.append(case.segment.distance)
     vs.append(lim[-1])
-    xs, vs = np.array(xs), np.array(vs)
-    keep = np.concatenate([[True], np.diff(xs) > 1e-9])
-    return xs[keep], vs[keep]
+    x_out, v_out = np.array(xs), np.array(vs)
+    keep = np.concatenate([[True], np.diff(x_out) > 1e-9])
+    return x_out[keep], v_out[keep]
 
 
 @space.gc_paused
-def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, one_handle=True):
+def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | FloatArray] | None = None,
+            width: float = 2.0, ramp: float = 20.0, limit_margin: float = 0.1,
+            one_handle: bool | Sequence[bool] | FloatArray = True) -> Model:
     """Add one leg as a block ``m.<name>`` with variables s, v, ft, fb, fr and expression p [kW].
 
     ``guess``: (s, v) arrays on the leg's steps, optionally followed by (F_T, F_B, F_R) per step
@@ -114,8 +121,8 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
     b.v = pyo.Var(b.K, bounds=(0.0, top), initialize=lambda b, j: float(v0[j]))
     for var, value in ((b.s[0], 0.0), (b.v[0], 0.0), (b.s[n], case.segment.distance), (b.v[n], 0.0)):
         var.fix(value)
-    given = guess is not None and len(guess) >= 5
-    forces = [np.asarray(f) / FORCE_SCALE for f in guess[2:5]] if given else [np.zeros(n)] * 3
+    given = guess[2:5] if guess is not None and len(guess) >= 5 else None
+    forces = [np.asarray(f) / FORCE_SCALE for f in given] if given is not None else [np.zeros(n)] * 3
     regen_top = min(train.regeneration.max_force, train.braking.peak) / FORCE_SCALE if train.regeneration else 0.0
     tops = (train.traction.peak / FORCE_SCALE, train.braking.peak / FORCE_SCALE, regen_top)
     b.ft, b.fb, b.fr = (pyo.Var(b.I, bounds=(0.0, top), initialize=lambda b, j, f=f, top=top: min(float(f[j]), top))
@@ -126,15 +133,15 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
     lx, lv = limit_profile(case, ramp, dt)
     l_coef = table_coefficients(lx, lv, 0.25 * width)
 
-    def kinematics(b, j):
+    def kinematics(b: Model, j: int) -> Any:
         return b.s[j + 1] - b.s[j] == 0.5 * dt * (b.v[j] + b.v[j + 1])
 
-    def dynamics(b, j):
+    def dynamics(b: Model, j: int) -> Any:
         davis = interval_resistance(b.v[j], b.v[j + 1], train.davis, 0.0) / FORCE_SCALE
         grade = smooth_table(0.5 * (b.s[j] + b.s[j + 1]), g_coef, 0.25 * width)
         return (b.v[j + 1] - b.v[j]) * (mass / FORCE_SCALE) / dt == b.ft[j] - b.fb[j] - davis - grade
 
-    def limit(b, j):
+    def limit(b: Model, j: int) -> Any:
         return b.v[j] <= smooth_table(b.s[j], l_coef, 0.25 * width) - limit_margin
 
     # one handle: traction and braking never together. A discounted traction cost (rules 7.7 and
@@ -161,7 +168,7 @@ def add_leg(m, name, leg, guess=None, width=2.0, ramp=20.0, limit_margin=0.1, on
     return b
 
 
-def _trapezoid(case, n, dt):
+def _trapezoid(case: Case, n: int, dt: float) -> tuple[FloatArray, FloatArray]:
     """A feasible-looking start: accelerate, hold, brake, with the area equal to the distance."""
     t = np.arange(n + 1) * dt
     total = n * dt
@@ -183,10 +190,10 @@ class LegRun(NamedTuple):
     fb: np.ndarray
     fr: np.ndarray
     p: np.ndarray
-    notes: Optional[dict] = None  # what the local-optimum guards did (``network.legs.solve_leg``)
+    notes: Optional[dict[str, Any]] = None  # what the local-optimum guards did (``network.legs.solve_leg``)
 
 
-def net_forces(b):
+def net_forces(b: Model) -> None:
     """Take the common part out of traction and braking at every step of a solved leg block
     (where no one-handle constraint held them apart, the optimum may keep a little of both where
     it costs nothing): the same net force, the regenerated share at most the braking force (also
@@ -200,7 +207,7 @@ def net_forces(b):
             b.fr[j].set_value(min(pyo.value(b.fr[j]), fb - common))
 
 
-def leg_arrays(b):
+def leg_arrays(b: Model) -> LegRun:
     """The :class:`LegRun` of a solved leg block, traction and braking netted (:func:`net_forces`)."""
     net_forces(b)
     s = np.array([pyo.value(b.s[j]) for j in b.K])
@@ -210,7 +217,7 @@ def leg_arrays(b):
     return LegRun(s, v, ft, fb, fr, p)
 
 
-def guess_from_space(result, leg):
+def guess_from_space(result: Solved, leg: Leg) -> tuple[FloatArray, FloatArray]:
     """(s, v) on the leg's steps from a space-domain run of the same segment (its time profile)."""
     t, x = result.trajectory.time, result.trajectory.nodes
     scale = leg.running_time / t[-1]

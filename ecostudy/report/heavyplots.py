@@ -3,6 +3,7 @@ train over distance (a heat map per run), and the K_b trade-off (largest in-trai
 import numpy as np
 
 from ecostudy.core.units import to_kmh
+from ecostudy.report import style
 from ecostudy.report.plots import _save, figure
 
 
@@ -14,11 +15,14 @@ def tracking(outcome, path):
     """Mean speed of every run and the reference speed against the head's position."""
     fig, ax = figure(figsize=(10, 4.5))
     ref = outcome.reference
-    ax.plot(ref.distance, to_kmh(ref.speeds), color="k", lw=1.2, label="reference (single-mass optimum)")
+    ax.plot(ref.distance, to_kmh(ref.speeds), color=style.colour("reference"), lw=1.2,
+            label="reference (single-mass optimum)")
+    palette = style.Palette()  # a colour per run, none the reference's black
     for i, case in enumerate(outcome.cases):
         p = outcome.summaries[case["key"]].get("profile")
         if p:
-            ax.plot(p["head_m"], to_kmh(np.asarray(p["speed_mps"])), lw=0.8, color=f"C{i % 10}", label=_label(case))
+            ax.plot(p["head_m"], to_kmh(np.asarray(p["speed_mps"])), lw=0.8, color=palette(_label(case)),
+                    ls=style.DASHES[i % len(style.DASHES)], label=_label(case))
     ax.set_xlabel("head position from departure [m]")
     ax.set_ylabel("mean speed of the cars [km/h]")
     ax.set_ylim(bottom=0)
@@ -35,7 +39,7 @@ def forces(case, summary, path):
     head = np.asarray(summary["profile"]["head_m"])
     limit = max(np.abs(f).max(), 1.0)
     fig, ax = figure(figsize=(10, 4))
-    mesh = ax.pcolormesh(head, np.arange(f.shape[0]) * summary["coupler_step"] + 1, f, cmap="RdBu_r",
+    mesh = ax.pcolormesh(head, np.arange(f.shape[0]) * summary["coupler_step"] + 1, f, cmap=style.DIVERGING,
                          vmin=-limit, vmax=limit, shading="nearest")
     fig.colorbar(mesh, ax=ax, label="in-train force [kN] (tension +)")
     ax.set_xlabel("head position from departure [m]")
@@ -50,13 +54,14 @@ def trade_off(runs, path, title=""):
     K_b, one line per (f, Np, Nc)."""
     fig, (a, b) = figure(1, 2, figsize=(10, 4))
     ok = runs[runs["status"].isin(["ok", "flagged"])]
-    for i, ((f, n_p, n_c), group) in enumerate(ok.groupby(["f", "Np", "Nc"])):
+    palette = style.Palette()  # every curve in a colour of its own; whole run / total solid, the part dashed
+    for (f, n_p, n_c), group in ok.groupby(["f", "Np", "Nc"]):
         group = group.sort_values("K_b")
         label = f"f={f} Np={n_p} Nc={n_c}"
-        a.plot(group["K_b"], group["force_max_kN"], "o-", color=f"C{i}", label=label + " whole run")
-        a.plot(group["K_b"], group["force_max_braking_kN"], "s--", color=f"C{i}", label=label + " while braking")
-        b.plot(group["K_b"], group["energy_total_MJ"], "o-", color=f"C{i}", label=label + " total")
-        b.plot(group["K_b"], group["energy_wagons_MJ"], "s--", color=f"C{i}", label=label + " wagons")
+        for ax, column, drawn, part in ((a, "force_max_kN", "o-", " whole run"),
+                                         (a, "force_max_braking_kN", "s--", " while braking"),
+                                         (b, "energy_total_MJ", "o-", " total"), (b, "energy_wagons_MJ", "s--", " wagons")):
+            ax.plot(group["K_b"], group[column], drawn, color=palette(label + part), label=label + part)
     a.set_ylabel("largest |in-train force| [kN]")
     b.set_ylabel("energy int |u v| dt [MJ]")
     for ax in (a, b):

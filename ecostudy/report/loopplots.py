@@ -3,6 +3,7 @@ step against the real-time budget, and the mass estimates over distance."""
 import numpy as np
 
 from ecostudy.core.units import to_kmh
+from ecostudy.report import style
 from ecostudy.report.plots import _save, figure, _steps
 
 
@@ -26,12 +27,14 @@ def bands(runs, segment, path, title=""):
     fig, axes = figure(len(runs), 1, figsize=(9, 2.6 * len(runs) + 0.6), sharex=True, squeeze=False)
     x_lim, v_lim = _steps(segment.limit, segment.distance)
     positions = np.linspace(0.0, segment.distance, 600)
+    palette = style.Palette(list(runs))
     for ax, (name, group) in zip(axes[:, 0], runs.items()):
-        ax.step(x_lim, to_kmh(v_lim), where="post", color="0.4", lw=1, label="speed limit")
+        colour = palette(name)
+        ax.step(x_lim, to_kmh(v_lim), where="post", color=style.LIMIT["speed limit"], lw=1, label="speed limit")
         low, median, high = to_kmh(speed_percentiles(group, positions))
         if len(group) > 1:
-            ax.fill_between(positions, low, high, color="C0", alpha=0.25, lw=0, label="5-95 % of the runs")
-        ax.plot(positions, median, color="C0", lw=1.0, label="median" if len(group) > 1 else "run")
+            ax.fill_between(positions, low, high, color=colour, alpha=0.25, lw=0, label="5-95 % of the runs")
+        ax.plot(positions, median, color=colour, lw=1.0, label="median" if len(group) > 1 else "run")
         ax.set_ylabel("speed [km/h]")
         ax.set_title(f"{name}: {len(group)} runs", fontsize=9)
         ax.set_ylim(bottom=0)
@@ -47,12 +50,13 @@ def solve_times(runs, budgets, path, title=""):
     """Solve time of every control step [ms] of every run, per controller, against its budget
     (``budgets``: controller name -> sample time [s])."""
     fig, ax = figure(figsize=(9, 4))
-    for c, (name, group) in enumerate(runs.items()):
+    palette = style.Palette(list(runs))
+    for name, group in runs.items():
         for i, s in enumerate(group):
             ms = np.asarray(s["solve_ms"])
-            ax.plot(np.arange(ms.size), ms, ".", ms=1.5, color=f"C{c}", alpha=0.5, label=name if i == 0 else None)
-    for budget in sorted(set(budgets.values())):
-        ax.axhline(1e3 * budget, color="r", lw=1, ls="-" if budget == max(budgets.values()) else "--",
+            ax.plot(np.arange(ms.size), ms, ".", ms=1.5, color=palette(name), alpha=0.5, label=name if i == 0 else None)
+    for j, budget in enumerate(sorted(set(budgets.values()), reverse=True)):
+        ax.axhline(1e3 * budget, color=style.LIMIT["budget"], lw=1, ls=style.DASHES[j % len(style.DASHES)],
                    label=f"budget {1e3 * budget:g} ms ({', '.join(n for n, b in budgets.items() if b == budget)})")
     ax.set_xlabel("control step")
     ax.set_ylabel("solve time [ms]")
@@ -65,13 +69,14 @@ def solve_times(runs, budgets, path, title=""):
 def mass_estimates(runs, path, title=""):
     """The Kalman mass estimate over distance of every run with an estimator, and its true mass."""
     fig, ax = figure(figsize=(9, 4))
-    for c, (name, group) in enumerate(runs.items()):
+    palette = style.Palette(list(runs))
+    for name, group in runs.items():
         for i, s in enumerate(group):
             if not s.get("estimates"):
                 continue
             x, e = np.asarray(s["estimates"]).T
-            ax.plot(x, e, color=f"C{c}", lw=0.8, alpha=0.6, label=name if i == 0 else None)
-            ax.plot([x[0], x[-1]], [s["true_mass"]] * 2, color=f"C{c}", lw=0.5, ls=":")
+            ax.plot(x, e, color=palette(name), lw=0.8, alpha=0.6, label=name if i == 0 else None)
+            ax.plot([x[0], x[-1]], [s["true_mass"]] * 2, color=palette(name), lw=0.5, ls=":")
     ax.set_xlabel("distance from departure [m]")
     ax.set_ylabel("mass / model mass")
     ax.grid(alpha=0.3)

@@ -65,6 +65,18 @@ KIND = {
     "weighted sum": "#9467bd",    # points of the weighted-sum objective
     "marginal saving": "#17becf",
     "handle": "#bcbd22",          # the handle u beneath a run
+    "reference": "#000000",       # a reference a controller tracks (heavy haul's single-mass optimum)
+}
+
+# Closed-loop controllers by kind (``io.loopfile.CONTROLLER_KINDS``): a controller named after its
+# kind has this colour in every closed-loop plot; two controllers of one kind get a colour each.
+CONTROLLER = {
+    "convex": "#1f77b4",
+    "open_loop": "#bcbd22",
+    "ato": "#2ca02c",
+    "sbpc": "#ff7f0e",
+    "sppc": "#9467bd",
+    "rspc": "#17becf",
 }
 
 # Handle regimes shaded beneath a run.
@@ -90,17 +102,19 @@ ENERGY = {
 }
 
 GROUPS = {"limit": LIMIT, "strategy": STRATEGY, "distribution": DISTRIBUTION, "network": NETWORK,
-          "kind": KIND, "regime": REGIME, "energy": ENERGY}
+          "kind": KIND, "controller": CONTROLLER, "regime": REGIME, "energy": ENERGY}
 
 # colour(name) looks a name up in this order: a limit, then a strategy, ... (the same name in two
 # tables, e.g. "MARECO-style", has the same colour in both)
-_ORDER = (LIMIT, STRATEGY, DISTRIBUTION, NETWORK, KIND, REGIME, ENERGY)
+_ORDER = (LIMIT, STRATEGY, DISTRIBUTION, NETWORK, KIND, CONTROLLER, REGIME, ENERGY)
 
 # Colours for unnamed series, in the order handed out: matplotlib's tab10 without the limits'
 # red, brown and grey, then Dark2 and the light tab20 shades; beyond these, generated hues.
 _FRESH = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#e377c2", "#bcbd22", "#17becf", "#1b9e77",
           "#d95f02", "#7570b3", "#66a61e", "#e6ab02", "#a6761d", "#aec7e8", "#ffbb78", "#98df8a",
           "#c5b0d5", "#f7b6d2", "#dbdb8d", "#9edae5")
+
+DIVERGING = "RdBu_r"  # colour map of a signed field (in-train forces: compression blue, tension red)
 
 DASHES = ("-", "--", "-.", ":")  # line styles cycled with the colours where curves overlap
 
