@@ -119,12 +119,12 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
     tt = load_timetable(timetable) if timetable is not None else None
     trk, trn = load_track(track if track is not None else associated_track(tt, timetable)), load_train(train)
     scheduled, plan = None, None
-    if tt is not None:
+    if tt is not None and timetable is not None:
         if stops or time is not None or supplement is not None or not tt.stops:
             raise InputError(problem("command line", "--timetable", "a timetable with stop times replaces --stops, "
                                      "--time and --supplement"))
         tt, trk = name_stops(tt, trk, timetable)
-        names = [row.stop for row in tt.stops]
+        names = [str(row.stop) for row in tt.stops]  # every stop named by name_stops
         if tt.windowed:
             plan = journey_plan(tt, trk, timetable, dwell)
         else:

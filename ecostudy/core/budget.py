@@ -6,7 +6,7 @@ import contextvars
 import os
 from contextlib import contextmanager
 from os import PathLike
-from typing import Iterator
+from typing import Iterator, Sequence
 
 from ecostudy.core.errors import InputError, problem
 
@@ -83,7 +83,7 @@ def check_run(where: str | PathLike[str], field: str, what: str, seconds: float 
                              f"machine's {size(memory)}")
 
 
-def study_estimate(runs, workers=1, run_bytes=0.0):
+def study_estimate(runs: Sequence[float], workers: int = 1, run_bytes: float = 0.0) -> tuple[float, float, float]:
     """(seconds of computing, wall seconds with ``workers``, peak bytes) of a study whose runs are
     estimated at ``runs`` seconds each: the work shared among the workers (never below its longest
     run); every worker holds the solver stack and one run's model."""
@@ -92,7 +92,8 @@ def study_estimate(runs, workers=1, run_bytes=0.0):
     return total, max(total / workers, max(runs, default=0.0)), workers * (WORKER_BYTES + run_bytes)
 
 
-def check_study(where, what, runs, workers=1, run_bytes=0.0, part_hint=""):
+def check_study(where: str | PathLike[str], what: str, runs: Sequence[float], workers: int = 1, run_bytes: float = 0.0,
+                part_hint: str = "") -> None:
     """Refuse (unless forced) a study whose runs (estimated seconds each), shared among ``workers``,
     are estimated above :data:`MAX_STUDY_SECONDS` of wall time or half the memory. ``part_hint``:
     how to run a part of it (``--only NAME``), added to the refusal."""
