@@ -118,9 +118,16 @@ def stall_message(segment, position, traction, resistance, grade, speed):
             "of gradient and curves)")
 
 
+def interval_time(v0, v1, ds):
+    """Time over an interval of length ``ds`` [m] between speeds ``v0`` and ``v1`` [m/s]:
+    2 ds / (v0 + v1) [s], exact for constant acceleration (thesis 000 eq. 2.16).
+    Written with ``+ /`` only, so the space NLP (Pyomo expressions) and the re-simulation share it."""
+    return 2 * ds / (v0 + v1)
+
+
 def interval_times(speeds, nodes):
-    """Time per interval 2 ds / (v_k + v_k+1) [s], exact for constant acceleration (ocp/space.py)."""
-    return 2 * np.diff(nodes) / np.maximum(speeds[:-1] + speeds[1:], 1e-9)
+    """:func:`interval_time` of every grid interval [s], the speed sum floored at 1e-9 m/s."""
+    return interval_time(0.0, np.maximum(speeds[:-1] + speeds[1:], 1e-9), np.diff(nodes))
 
 
 def clock(speeds, nodes):
