@@ -6,6 +6,7 @@ interrupted. ``--debug`` shows tracebacks.
 """
 import functools
 import math
+import os
 import traceback
 import warnings
 from contextlib import contextmanager
@@ -97,6 +98,12 @@ OPTION_RANGES = {
     "weighted": (0, 1000, True), "time": (0.0, None, False), "supplement": (0.0, None, True),
     "supplement_max": (0.0, None, False), "dwell": (0.0, None, True), "das_time_limit": (0.0, None, False),
 }
+
+
+def every_core(workers):
+    """``--workers`` as given, else every core this process may run on: a study's default (its
+    results are the same bit for bit with any number of workers: tests/test_workers.py)."""
+    return workers if workers is not None else len(os.sched_getaffinity(0))
 
 
 def check_options(**values):

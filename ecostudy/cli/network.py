@@ -7,10 +7,11 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import FORCE_HELP, app, flag_folder, guarded, listed, with_force
+from ecostudy.cli.app import FORCE_HELP, app, every_core, flag_folder, guarded, listed, with_force
 
 
-def _network(study_path, out, no_plot, workers=1, figures=("png", None)):
+def _network(study_path, out, no_plot, workers=None, figures=("png", None)):
+    workers = every_core(workers)
     from ecostudy.report.style import output
     figures = output(*figures)
     from ecostudy.io.loaders import load_network_study
@@ -37,8 +38,9 @@ def network(
     no_plot: bool = typer.Option(False, "--no-plot", help="Skip the figures."),
     fig_format: str = typer.Option("png", "--format", help="Figure format: png, svg or pdf."),
     dpi: float = typer.Option(110.0, help="Figure resolution [dots per inch] (raster images)."),
-    workers: int = typer.Option(1, min=1, help="Processes: the segments' first runs, then the strategies in "
-                                "parallel (at least twice as many as workers), else one train's legs."),
+    workers: Optional[int] = typer.Option(None, min=1, help="Processes: the segments' first runs, then the strategies "
+                                          "in parallel (at least twice as many as workers), else one train's legs "
+                                          "(default: every core)."),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     debug: bool = typer.Option(False, help="Show tracebacks."),
 ):

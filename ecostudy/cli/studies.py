@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from ecostudy.cli.app import (DasMethod, FORCE_HELP, app, case_progress, check_options, flag_folder, guarded,
+from ecostudy.cli.app import (DasMethod, FORCE_HELP, app, case_progress, check_options, every_core, flag_folder, guarded,
                               listed, only_one, with_force)
 from ecostudy.core.errors import InputError, problem
 
@@ -253,6 +253,7 @@ def journey_command(
 
 def _run(study, workers, dask, retry_failed, out, no_progress):
     check_options(workers=workers)
+    workers = every_core(workers)
     from ecostudy.studies.batch import run_study
     with case_progress("cases", no_progress) as progress:
         table, counts, output = run_study(study, workers=workers, dask=dask, retry_failed=retry_failed,
@@ -268,7 +269,7 @@ def _run(study, workers, dask, retry_failed, out, no_progress):
 @app.command(short_help="Every case of a study file; resumable, in parallel.")
 def run(
     study: Path = typer.Argument(..., help="Study file (YAML) with optional scenarios and sweep."),
-    workers: int = typer.Option(1, help="Local worker processes."),
+    workers: Optional[int] = typer.Option(None, help="Local worker processes (default: every core)."),
     dask: Optional[str] = typer.Option(None, help="Address of a running Dask scheduler (tcp://host:port)."),
     retry_failed: bool = typer.Option(False, help="Compute failed cases again (infeasible ones stay)."),
     out: Optional[Path] = typer.Option(None, help="Output folder (default: the study's 'output')."),
