@@ -25,6 +25,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.ocp import phases, session
+from ecostudy.ocp.solver import IPOPT
 from ecostudy.ocp.space import FORCE_SCALE
 
 
@@ -74,7 +75,7 @@ def search(result, start_model, start_layout, objective, time_limit, points):
     session.repeatable()  # its NLP subproblems in the same order of solves repeat (unless the time limit cuts in)
     res = pyo.SolverFactory("mindtpy").solve(
         m, strategy="OA", init_strategy="initial_binary", mip_solver="appsi_highs", nlp_solver="cyipopt",
-        nlp_solver_args={"options": {"print_level": 0, "max_iter": 1500, "tol": 1e-7}},
+        nlp_solver_args={"options": dict(IPOPT["mode_choice"])},
         time_limit=max(int(time_limit), 1), iteration_limit=50, heuristic_nonconvex=True, add_no_good_cuts=True,
         calculate_dual_at_solution=False, tee=False)
     return m, layout, res, time.perf_counter() - t0

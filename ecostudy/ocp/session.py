@@ -21,21 +21,10 @@ from pyomo.contrib.pynumero.interfaces.pyomo_nlp import PyomoNLP
 
 from ecostudy.core.errors import SolverError
 from ecostudy.ocp import solver
-from ecostudy.ocp.solver import NL_OPTIONS
+from ecostudy.ocp.solver import IPOPT, NL_OPTIONS
 
-DEFAULT_OPTIONS = {
-    "tol": 1e-8,
-    "acceptable_tol": 1e-6,
-    "max_iter": 3000,
-    "print_level": 0,
-    "mu_strategy": "adaptive",
-    "sb": "yes",
-}
-
-# a re-solve from the previous solve's primal and dual point (Session keeps the multipliers) with a
-# small barrier parameter: SBPC 14.1 -> 4.9 and SPPC 38.6 -> 18.4 Ipopt iterations per sample
-WARM_START = {"warm_start_init_point": "yes", "mu_init": 1e-5, "warm_start_bound_push": 1e-6,
-              "warm_start_mult_bound_push": 1e-6}
+DEFAULT_OPTIONS = IPOPT["space"]  # every solve's base; the families' options: ``ocp.solver.IPOPT``
+WARM_START = IPOPT["warm_start"]
 
 # Ipopt ApplicationReturnStatus -> our status word
 STATUS = {0: "optimal", 1: "acceptable", 2: "infeasible", 3: "search_direction_too_small",
