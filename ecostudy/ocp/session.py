@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import cyipopt
 import numpy as np
 import pyomo
+from pyomo.common.env import CtypesEnviron
 from pyomo.repn.plugins.nl_writer import NLWriter
 from pyomo.contrib.pynumero.asl import AmplInterface
 from pyomo.contrib.pynumero.interfaces.cyipopt_interface import CyIpoptNLP
@@ -56,14 +57,14 @@ def repeatable():
     """Every solve repeats bit for bit: the solver chain set up (``ocp.solver.prepare``) and
     Scotch's generator reset, so the solves that follow order their matrices as they did the first
     time (``Session.solve`` calls it; so does a MINLP search whose NLPs Pyomo solves)."""
-    solver.prepare(NLWriter.CONFIG, AmplInterface)
+    solver.prepare(NLWriter.CONFIG, AmplInterface, CtypesEnviron)
     solver.repeatable()
 
 
 def _imports():
     """PyNumero classes, with the solver chain prepared (``ocp.solver.prepare``) and the ASL library
     found even when Pyomo was imported before ecostudy."""
-    if not solver.prepare(NLWriter.CONFIG, AmplInterface):
+    if not solver.prepare(NLWriter.CONFIG, AmplInterface, CtypesEnviron):
         raise SolverError("PyNumero's ASL library (libpynumero_ASL.so) is missing: run `make install` "
                           "(scripts/install.sh builds it into .pyomo/)")
     return CyIpoptNLP, PyomoNLP

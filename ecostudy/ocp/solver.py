@@ -97,19 +97,27 @@ def configure() -> None:
     _state["configured"] = True
 
 
-def prepare(nl_writer_config: Any, ampl_interface: Any) -> bool:
+def prepare(nl_writer_config: Any, ampl_interface: Any, environ: Any = None) -> bool:
     """Make the solver chain ready in this process (idempotent; ``ocp.session`` calls it with
-    Pyomo's ``NLWriter.CONFIG`` and PyNumero's ``AmplInterface``). Returns whether PyNumero's ASL
-    library is available.
+    Pyomo's ``NLWriter.CONFIG``, PyNumero's ``AmplInterface`` and Pyomo's ``CtypesEnviron``).
+    Returns whether PyNumero's ASL library is available.
 
     - the NL writer's defaults (:data:`NL_OPTIONS`) for every NL file written in this process,
       also by Pyomo's own cyipopt interface (MindtPy's NLP subproblems of the DAS mode choice);
     - the ASL library built into the repository's ``.pyomo`` when Pyomo's search finds none
       (Pyomo reads PYOMO_CONFIG_DIR once, when it is first imported);
-    - the Scotch library that Ipopt's MUMPS loaded, for :func:`repeatable`.
+    - the Scotch library that Ipopt's MUMPS loaded, for :func:`repeatable`;
+    - off Windows, Pyomo's ``CtypesEnviron`` (which every NL file load enters) told that Windows'
+      C runtimes are absent: it otherwise looks for eleven of them with ``ctypes.util.find_library``,
+      which runs gcc and ld for each, once per process (0.67-1.67 s for the first ``CtypesEnviron()``
+      in a fresh process here, three runs on a busy machine; 0.2 ms after).
     """
     configure()
     if not _state["prepared"]:
+        if environ is not None and os.name != "nt":
+            for dll in environ.DLLs:
+                if dll._loaded is None:  # not probed yet: Pyomo's own "absent" state, as for a None name
+                    dll._loaded = False
         for key, value in NL_OPTIONS.items():
             setattr(nl_writer_config, key, value)
         if REPO_ASL.is_file() and ("PYOMO_CONFIG_DIR" not in os.environ or not ampl_interface.available()):
