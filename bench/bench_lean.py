@@ -67,7 +67,7 @@ def ecostudy_run(case, running_time, objective):
 
 def lean_run(case, running_time, objective):
     """The lean transcription: (seconds, status, iterations, objective [J], n, m, Ipopt s)."""
-    t0, c0 = time.perf_counter(), time.process_time()
+    t0, cpu0 = time.perf_counter(), time.process_time()
     train, segment, nodes = case.train, case.segment, case.nodes
     n, fs = len(nodes) - 1, space.FORCE_SCALE
     dsd = ca.DM(np.diff(nodes))
@@ -119,7 +119,7 @@ def lean_run(case, running_time, objective):
     nlp = ca.nlpsol("lean", "ipopt", {"x": x, "f": f, "g": ca.vertcat(*g)}, opts)
     t1 = time.perf_counter()
     sol = nlp(x0=x0, lbx=lbx, ubx=ubx, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
-    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+    seconds, cpu = time.perf_counter() - t0, time.process_time() - cpu0
     stats = nlp.stats()
     return (seconds, stats["return_status"], stats["iter_count"], float(sol["f"]) * energy_ref,
             x.shape[0], sum(e.shape[0] for e in g), seconds - (t1 - t0), cpu)
