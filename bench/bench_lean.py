@@ -8,8 +8,9 @@ this reference is written as lean as the problem allows, independently of ``ocp.
 variables are the speeds at the nodes (both ends fixed by bounds) and the traction, braking and,
 where the regenerative envelope does not cover the braking one, regenerative forces per interval;
 the running time is a single equality sum 2 ds_k / (v_k + v_k+1) = T (no time-step variable, no T
-variable); power limits hold once per interval at its mean speed and are left out where they never
-bind; speed-force tables hold at both ends of each interval. The physics functions
+variable); power limits are left out where they never bind and otherwise hold where ecostudy's
+default holds them (at both ends of each interval; once at the mean speed if ``space.CUTS`` has
+``mid_power``); speed-force tables hold at both ends of each interval. The physics functions
 (``core.physics``) and per-interval coefficients are ecostudy's, so the optima must agree.
 
 ecostudy's time is its in-process build + NL write + Ipopt (``ocp.problem.build``, Debian's Ipopt
@@ -97,8 +98,11 @@ def lean_run(case, running_time, objective):
             top = smooth_table(v, (c0 / fs, c1 / fs, [(a / fs, s) for a, s in terms]), env.width)
             add(force - top[:-1], -np.inf, 0.0)
             add(force - top[1:], -np.inf, 0.0)
-        elif np.isfinite(env.max_power) and not env.idle_power(speeds):
+        elif np.isfinite(env.max_power) and not env.idle_power(speeds) and "mid_power" in space.CUTS:
             add(force * (va + vb) / (2 * env.max_power / fs), -np.inf, 1.0)
+        elif np.isfinite(env.max_power) and not env.idle_power(speeds):  # the physics ecostudy solves
+            add(force * va / (env.max_power / fs), -np.inf, 1.0)
+            add(force * vb / (env.max_power / fs), -np.inf, 1.0)
     if own_regen:
         add(fr - fb, -np.inf, 0.0)
     if np.isfinite(train.max_acceleration):

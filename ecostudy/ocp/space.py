@@ -16,11 +16,11 @@ forces of the interval (eq. 2.2).
 The NLP is as lean as the problem allows (:data:`CUTS`, each measured in docs/speed.md): the
 interval time is an expression of the speeds, not a variable (``time_step``); the regenerative
 force is the braking force where the regenerative envelope covers the whole braking envelope
-(``one_brake``); a power limit is one row per interval at its mean speed (v_k + v_{k+1}) / 2,
-the speed at which the objective prices the interval's power (``physics.line_energy``), not one
-at each end (``mid_power``); a braking or regenerative power limit that never binds is no row
-(``idle_power``, as ``core.grid.drop_idle_power`` does for traction). A speed-force table holds
-at both ends of each interval still (the guarantee that the forces keep the table as written). A movable model
+(``one_brake``); a braking or regenerative power limit that never binds is no row
+(``idle_power``, as ``core.grid.drop_idle_power`` does for traction). On request (not by default,
+:data:`CUTS`), a power limit is one row per interval at its mean speed (v_k + v_{k+1}) / 2, the speed
+at which the objective prices the interval's power (``physics.line_energy``), not one at each end
+(``mid_power``); a speed-force table holds at both ends of each interval in any case. A movable model
 (:mod:`ecostudy.ocp.restart`), whose intervals may be partly run, keeps its interval times as
 variables tied by dt_k (v_k + v_{k+1}) = 2 ds_k w_k (an interval already run has w_k = 0 and may
 have v_k + v_{k+1} = 0) and a regenerative force of its own (:data:`MOVABLE_CUTS`).
@@ -41,8 +41,12 @@ DYNAMICS_SCALE = 1.0
 # weight of traction + braking work in the all-out objective: removes the flat direction of
 # simultaneous traction and braking; its effect on the minimum time is measured in the tests
 TIME_REGULARISATION = 1e-4
-# the cuts of the lean NLP (module docstring); bench/bench_size.py builds with fewer to measure each
-CUTS = ("time_step", "one_brake", "mid_power", "idle_power")
+# the cuts of the lean NLP (module docstring) made by default: the exact ones. ``mid_power`` moves
+# optima by up to 0.05 % (bench/bench_size.py), but the network studies start their legs from these
+# runs, and a leg started from the moved run found another local optimum: +5 % on the 2-train study's
+# independent strategy (docs/speed.md). bench/bench_size.py builds with each of ALL_CUTS in turn.
+CUTS = ("time_step", "one_brake", "idle_power")
+ALL_CUTS = CUTS + ("mid_power",)
 MOVABLE_CUTS = ("mid_power", "idle_power")  # the cuts a movable model makes: its envelope rows as any model's
 
 
