@@ -9,13 +9,15 @@ Centraal in 76 s, traction energy minimised: ``studies/default.yaml``) and ``int
 track ``00_var_speed_limit_100``, 48 531 m, with TTOBench's ``NL_Intercity_VIRM6`` as the library
 gives it, standstill to standstill in 1541 s, net energy minimised).
 
-Both sides start from the same grid, node limits and initial point (``ocp.problem.prepare`` and
+It mirrors the space NLP without its lean cuts (``space.build_model(cuts=())``: interval times as
+variables, a regenerative force of its own, envelopes at both ends); ``bench/bench_lean.py``
+compares ecostudy as it solves (every cut) with a lean transcription. Both sides start from the same grid, node limits and initial point (``ocp.problem.prepare`` and
 ``capped_guess``) and use the same physics functions (``core.physics``) on the same per-interval
 coefficients, so the NLPs have the same variables, constraints and scaling (checked: the counts
 are printed). ecostudy's time is its in-process build + NL write + Ipopt (Debian's Ipopt 3.11.9
 through PyNumero/cyipopt); CasADi's is building the expression graph and ``nlpsol`` + solving with
 CasADi's bundled Ipopt (3.14, MUMPS), timed in the same process. Medians of ``--repeat`` runs.
-CasADi comes from PyPI (``pip install casadi``); it is a benchmark reference, not a dependency.
+CasADi comes from PyPI (``pip install -e '.[bench]'``); it is a benchmark reference, not a dependency.
 """
 import argparse
 import shlex
@@ -53,12 +55,23 @@ def ecostudy_run(case, running_time, objective):
     stages = {}
     guess = problem.capped_guess(case, running_time)
     t0 = time.perf_counter()
-    m = problem.build(case, guess, objective, stages, running_time=running_time)
+    with problem.stage(stages, "build"):  # the full form, without the lean cuts, as mirrored below
+        m = space.build_model(case.segment, case.train, case.nodes, case.limits, guess, objective=objective,
+                              running_time=running_time, cuts=(),
+                              time_ref=max(problem.kinematics.running_time(guess[0], case.nodes), 1.0))
     s = session.Session(m)
     outcome = s.solve()
     seconds = time.perf_counter() - t0
     value = float(m.objective.expr()) * m.energy_ref
     return seconds, outcome, value, s.nlp.n_primals(), s.nlp.n_constraints(), outcome.seconds
+
+
+def objective_expr(objective, train, ft, fr, va, vb, dsd):
+    """Traction work or net line energy [J] of CasADi force vectors [kN] (``space.define_objective``)."""
+    fs = space.FORCE_SCALE
+    if objective == "energy":
+        return fs * ca.dot(dsd, ft)
+    return ca.sum1(line_energy(fs * ft, fs * fr, 0.5 * (va + vb), dsd, train.eta_traction, train.eta_regeneration))
 
 
 def casadi_run(case, running_time, objective):
@@ -108,11 +121,7 @@ def casadi_run(case, running_time, objective):
     time_ref = max(float(np.sum(dt0)), 1.0)
     add(ca.sum1(dt) / time_ref - T / time_ref, 0.0, 0.0)
     energy_ref = space.energy_reference(train, segment)
-    if objective == "energy":
-        f = fs * ca.dot(dsd, ft) / energy_ref
-    else:
-        f = ca.sum1(line_energy(fs * ft, fs * fr, 0.5 * (va + vb), dsd, train.eta_traction,
-                                train.eta_regeneration)) / energy_ref
+    f = objective_expr(objective, train, ft, fr, va, vb, dsd) / energy_ref
     x = ca.vertcat(v, dt, ft, fb, *([fr] if regen else []), T)
     top_r = min(train.regeneration.max_force, train.braking.peak) / fs if regen else 0.0
     lbx = np.concatenate([np.zeros(n + 1), np.zeros(n), np.zeros(n), np.zeros(n)] + ([np.zeros(n)] if regen else [])

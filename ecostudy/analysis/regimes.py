@@ -1,7 +1,7 @@
 """Driving regimes of a profile, read off the control (thesis 000 eqs. 2.15, 2.17, 7.2, 7.4).
 
 Each interval is classified by where its forces sit against the envelopes that bind them in
-the NLP (the lower of the envelope at the interval's two ends):
+the NLP (a table the lower of its values at the interval's two ends, a power limit at its mean speed):
 
 MA   maximum acceleration: traction on its envelope
 CR   partial traction (cruising, or holding a limit uphill)
@@ -17,14 +17,15 @@ single transitional intervals are merged into the run before them.
 """
 import numpy as np
 
-from ecostudy.ocp import phases
+from ecostudy.ocp import phases, space
 
 REGIMES = ("MA", "CR", "CO", "RB", "CR2", "MB")
 
 
 def _lower_end(envelope, v0, v1):
-    """The envelope at the interval's lower end, as the NLP binds it [N]."""
-    return np.maximum(np.minimum(envelope.force(v0), envelope.force(v1)), 1e-9)
+    """The envelope of the interval as the NLP binds it [N] (``ocp.space.interval_envelope``: a table
+    at the interval's lower end, a power limit at its mean speed)."""
+    return np.maximum(space.interval_envelope(envelope, v0, v1), 1e-9)
 
 
 def regenerative_limit(train, v):

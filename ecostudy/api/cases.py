@@ -23,6 +23,7 @@ from ecostudy.studies.closedloop import simulate_study
 from ecostudy.studies.heavyhaul import heavyhaul_study
 from ecostudy.studies.network import run_network
 from ecostudy.studies.options import check_options, output_folder
+from ecostudy.studies.workers import every_core
 from ecostudy.studies.sizes import KIND_SIZES, check_closed_loop_study, check_network_study
 
 Progress = Optional[Callable[[int, int, int, int], None]]
@@ -42,11 +43,12 @@ VALIDATION_COLUMNS = ["run", "from_m", "to_m", "logged_time_s", "model_time_s", 
                       "logged_traction_kWh", "model_traction_kWh", "traction_difference_pct", "status"]
 
 
-def run_folder(study: Path, workers: int = 1, dask: Optional[str] = None, retry_failed: bool = False,
+def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
                out: Optional[Path] = None, kind: str = "run", *, progress: Progress = None) -> Report:
     """``ecostudy run``: every case of a study file not stored yet, through the one study engine
     (:func:`~ecostudy.studies.batch.run_kind`); ``kind``: a registered study kind
     (:data:`~ecostudy.studies.batch.STUDY_KINDS`; ``run``: scenarios x sweep, or a library)."""
+    workers = every_core(workers)
     check_options(workers=workers)
     if kind in KIND_SIZES:  # too big for the command: refused with its estimate (unless --force)
         KIND_SIZES[kind](study, workers)
@@ -98,12 +100,12 @@ def heavyhaul_folder(study: Path, workers: int = 1, dask: Optional[str] = None, 
                              f"{', ...' if len(plots) > 3 else ''})"])
 
 
-def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, workers: int = 1,
+def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, workers: Optional[int] = None,
                    fig_format: str = "png", dpi: Optional[float] = None,
                    note: Callable[[str], None] = log.info) -> Report:
     """``ecostudy network``: trains sharing one DC substation under every strategy of the study
     (independent, rules 7.7 / 7.11, dissension, joint optimum, following; Farooqi 2018, Ch. 7)."""
-    figures = output(fig_format, dpi)
+    figures, workers = output(fig_format, dpi), every_core(workers)
     st = load_network_study(study)
     check_network_study(st, study, workers)  # too big for a run or the command: refused (unless --force)
     folder = check_output_dir(output_folder(out, st.output))

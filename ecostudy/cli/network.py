@@ -14,8 +14,7 @@ from ecostudy.cli.app import app, call, finish
 def network(
     study: Path = typer.Argument(..., help="Network study file (YAML)."),
     out: o.Out = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
-    workers: int = typer.Option(1, min=1, help="Processes: the segments' first runs, then the strategies in "
-                                "parallel (at least twice as many as workers), else one train's legs."),
+    workers: o.EveryCore = None,
     force: o.Force = False, debug: o.Debug = False,
 ):
     """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""

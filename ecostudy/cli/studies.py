@@ -71,7 +71,7 @@ def journey_command(
 @app.command(short_help="Every case of a study file; resumable, in parallel.")
 def run(
     study: Path = typer.Argument(..., help="Study file (YAML) with optional scenarios and sweep."),
-    workers: o.Workers = 1, dask: o.Dask = None, retry_failed: o.RetryFailed = False, out: o.Out = None,
+    workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False, out: o.Out = None,
     no_progress: o.NoProgress = False, force: o.Force = False, debug: o.Debug = False,
     kind: str = typer.Option("run", help="Study kind: run (scenarios x sweep, or a library), or one registered."),
 ):

@@ -22,8 +22,9 @@ from ecostudy.control.fallback import Fallback
 from ecostudy.core.types import State
 from ecostudy.ocp.convex import EXACT
 from ecostudy.ocp.restart import Replanner
+from ecostudy.ocp.solver import IPOPT
 
-REPLAN_OPTIONS = {"max_iter": 300}  # a re-plan that needs more has no plan worth waiting for
+REPLAN_OPTIONS = IPOPT["replan"]  # a re-plan that needs more has no plan worth waiting for
 RELAXED = 1e-3  # a convex plan with max |rho s - 1| above this uses the relaxation materially
 
 

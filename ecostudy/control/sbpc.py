@@ -26,13 +26,14 @@ from ecostudy.core.types import State
 from ecostudy.ocp.blocked import Blocked, samples, time_guess
 from ecostudy.ocp.condensed import Condensed
 from ecostudy.ocp.session import WARM_START
+from ecostudy.ocp.solver import IPOPT
 
 VARIANTS = ("nominal", "two_step", "multi")
 # the FHOCP with the states as variables (Ipopt on ``ocp.blocked``), or condensed to the block
 # handles (SLSQP on ``ocp.condensed``, as thesis 000's fmincon: the time of a solve falls with L)
 TRANSCRIPTIONS = ("simultaneous", "condensed")
 # each solve starts from the previous one (the shifted tail), primal and dual (docs/closed_loop.md)
-OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}
+OPTIONS = {**IPOPT["receding"], **WARM_START}
 
 
 class Sbpc(Fallback):

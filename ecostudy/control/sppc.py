@@ -37,9 +37,10 @@ from ecostudy.control.fallback import Fallback
 from ecostudy.ocp import phases
 from ecostudy.ocp.restart import set_end, set_phases_start
 from ecostudy.ocp.session import WARM_START, Session
+from ecostudy.ocp.solver import IPOPT
 
 VARIANTS = ("nominal", "two_step")
-OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}  # from the previous plan
+OPTIONS = {**IPOPT["receding"], **WARM_START}  # from the previous plan (``ocp.solver.IPOPT``)
 
 
 class Sppc(Fallback):

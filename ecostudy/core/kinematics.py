@@ -2,7 +2,7 @@
 
 Used as Ipopt's starting point and to estimate the all-out time before any NLP is solved.
 """
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -127,9 +127,17 @@ def stall_message(segment: Segment, position: float, traction: float, resistance
             "of gradient and curves)")
 
 
+def interval_time(v0: Any, v1: Any, ds: Any) -> Any:
+    """Time over an interval of length ``ds`` [m] between speeds ``v0`` and ``v1`` [m/s]:
+    2 ds / (v0 + v1) [s], exact for constant acceleration (Farooqi 2018, eq. 2.16).
+    Written with ``+ /`` only, so the space NLP (Pyomo expressions) and the re-simulation share it."""
+    return 2 * ds / (v0 + v1)
+
+
 def interval_times(speeds: FloatArray, nodes: FloatArray) -> FloatArray:
-    """Time per interval 2 ds / (v_k + v_k+1) [s], exact for constant acceleration (ocp/space.py)."""
-    return 2 * np.diff(nodes) / np.maximum(speeds[:-1] + speeds[1:], 1e-9)
+    """:func:`interval_time` of every grid interval [s], the speed sum floored at 1e-9 m/s."""
+    result: FloatArray = interval_time(0.0, np.maximum(speeds[:-1] + speeds[1:], 1e-9), np.diff(nodes))
+    return result
 
 
 def clock(speeds: FloatArray, nodes: FloatArray) -> FloatArray:

@@ -9,13 +9,11 @@ from ecostudy.network import circuit
 from ecostudy.network.fleet import REGULARISATION, energy_ref, solve_model
 from ecostudy.network.legs import NEAR_START
 from ecostudy.ocp import space, timedomain
+from ecostudy.ocp.solver import IPOPT
 
 
-# MUMPS's METIS ordering instead of its automatic choice (3 trains: 35 -> 26 s for
-# the same 105 iterations; SCOTCH was as fast but not deterministic: runs differed by 38 kW in a
-# step's power along a flat direction; on the legs and on one run's space NLP neither bought
-# anything measurable). Both go through Scotch here, which ``ocp.solver`` makes repeat exactly.
-ORDERING = {"mumps_pivot_order": 5}
+# MUMPS's METIS ordering for the joint NLP: measured where it is set (``ocp.solver.IPOPT``)
+ORDERING = IPOPT["joint"]
 
 
 def joint(fleet, start, one_handle=False, floating=False):

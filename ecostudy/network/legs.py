@@ -13,21 +13,14 @@ import pyomo.environ as pyo
 from ecostudy.core.errors import SolverError
 from ecostudy.core.physics import hinge
 from ecostudy.ocp import session, space, timedomain
+from ecostudy.ocp.solver import IPOPT
 
 HINGE_KW = 10.0  # [kW] width of the smooth min/max in a leg's cost (allowance, credit)
 
-# a solve from a feasible run: keep Ipopt near it instead of pushing every variable at a bound
-# 1 % inside (measured on the 2-train study's joint NLP: the adaptive barrier update left the
-# start and took 3000 iterations; a monotone one from mu 1e-3 converged in 730)
-NEAR_START = {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_strategy": "monotone", "mu_init": 1e-3}
-
-# MUMPS without its own row and column scaling (Ipopt's default 77 computes one at every
-# factorisation): a leg's KKT matrix is small and banded, and the scaling took about a fifth of
-# Ipopt's time (`python bench/bench_leg_options.py studies/network_metro_3trains.yaml`:
-# six legs 4.85 -> 3.82 s, the same iterations, costs equal to 1e-14; the supervisor rules 3-34 %
-# faster, their rounds at the same or lower energies; docs/benchmarks.md). Not for the joint NLP:
-# slower there (18.9 / 19.2 against 16.9 / 15.8 s).
-KKT = {"mumps_scaling": 0}
+# a solve from a feasible run kept near it, and a leg's MUMPS options: measured where they are set
+# (``ocp.solver.IPOPT``, with every problem family's options)
+NEAR_START = IPOPT["near_start"]
+KKT = IPOPT["leg"]
 
 
 def leg_energy_ref(leg):

@@ -28,6 +28,7 @@ import pyomo.environ as pyo
 
 from ecostudy.core.deadline import run_until
 from ecostudy.ocp import phases, session
+from ecostudy.ocp.solver import IPOPT
 from ecostudy.ocp.space import FORCE_SCALE
 
 
@@ -143,7 +144,7 @@ def _mindtpy(post, m, time_limit):
 
     res = pyo.SolverFactory("mindtpy").solve(
         m, strategy="OA", init_strategy="initial_binary", mip_solver="appsi_highs", nlp_solver="cyipopt",
-        nlp_solver_args={"options": {"print_level": 0, "max_iter": 1500, "tol": 1e-7}},
+        nlp_solver_args={"options": dict(IPOPT["mode_choice"])},
         time_limit=time_limit, iteration_limit=50, heuristic_nonconvex=True, add_no_good_cuts=True,
         calculate_dual_at_solution=False, tee=False, call_after_subproblem_feasible=feasible,
         call_after_main_solve=lambda *_: post(("master",)))

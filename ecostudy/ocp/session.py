@@ -15,6 +15,7 @@ from typing import Any, Iterator, Mapping, Sequence, TypeAlias
 import cyipopt
 import numpy as np
 import pyomo
+from pyomo.common.env import CtypesEnviron
 from pyomo.repn.plugins.nl_writer import NLWriter
 from pyomo.contrib.pynumero.asl import AmplInterface
 from pyomo.contrib.pynumero.interfaces.cyipopt_interface import CyIpoptNLP
@@ -22,23 +23,12 @@ from pyomo.contrib.pynumero.interfaces.pyomo_nlp import PyomoNLP
 
 from ecostudy.core.errors import SolverError
 from ecostudy.ocp import solver
-from ecostudy.ocp.solver import NL_OPTIONS, Model, Var
+from ecostudy.ocp.solver import IPOPT, NL_OPTIONS, Model, Var
 
 Options: TypeAlias = Mapping[str, Any]  # Ipopt options by name
 
-DEFAULT_OPTIONS = {
-    "tol": 1e-8,
-    "acceptable_tol": 1e-6,
-    "max_iter": 3000,
-    "print_level": 0,
-    "mu_strategy": "adaptive",
-    "sb": "yes",
-}
-
-# a re-solve from the previous solve's primal and dual point (Session keeps the multipliers) with a
-# small barrier parameter: SBPC 14.1 -> 4.9 and SPPC 38.6 -> 18.4 Ipopt iterations per sample
-WARM_START = {"warm_start_init_point": "yes", "mu_init": 1e-5, "warm_start_bound_push": 1e-6,
-              "warm_start_mult_bound_push": 1e-6}
+DEFAULT_OPTIONS = IPOPT["space"]  # every solve's base; the families' options: ``ocp.solver.IPOPT``
+WARM_START = IPOPT["warm_start"]
 
 # Ipopt ApplicationReturnStatus -> our status word
 STATUS = {0: "optimal", 1: "acceptable", 2: "infeasible", 3: "search_direction_too_small",
@@ -70,14 +60,14 @@ def repeatable() -> None:
     """Every solve repeats bit for bit: the solver chain set up (``ocp.solver.prepare``) and
     Scotch's generator reset, so the solves that follow order their matrices as they did the first
     time (``Session.solve`` calls it; so does a MINLP search whose NLPs Pyomo solves)."""
-    solver.prepare(NLWriter.CONFIG, AmplInterface)
+    solver.prepare(NLWriter.CONFIG, AmplInterface, CtypesEnviron)
     solver.repeatable()
 
 
 def _imports() -> tuple[Any, Any]:
     """PyNumero classes, with the solver chain prepared (``ocp.solver.prepare``) and the ASL library
     found even when Pyomo was imported before ecostudy."""
-    if not solver.prepare(NLWriter.CONFIG, AmplInterface):
+    if not solver.prepare(NLWriter.CONFIG, AmplInterface, CtypesEnviron):
         raise SolverError("PyNumero's ASL library (libpynumero_ASL.so) is missing: run `make install` "
                           "(scripts/install.sh builds it into .pyomo/)")
     return CyIpoptNLP, PyomoNLP

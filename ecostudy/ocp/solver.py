@@ -33,6 +33,47 @@ NL_OPTIONS = {"export_defined_variables": False}
 # Pyomo and PyNumero ship no type information: a model, its components and expressions are Any
 Model: TypeAlias = Any   # a pyomo ConcreteModel
 Var: TypeAlias = Any     # a Pyomo variable (scalar, or an element of an indexed one)
+# Ipopt's options per problem family, in one place; each family's measurement is said beside it.
+# ``ocp.session.Session.solve`` starts from "space" (Ipopt's defaults but for these) and a caller adds
+# its family's options on top; the modules named keep them under their old names.
+IPOPT: dict[str, dict[str, Any]] = {
+    # every NLP: the space NLP of one run, and the base of the others
+    "space": {"tol": 1e-8, "acceptable_tol": 1e-6, "max_iter": 3000, "print_level": 0, "mu_strategy": "adaptive",
+              "sb": "yes"},
+    # a re-solve from the previous solve's primal and dual point (Session keeps the multipliers) with
+    # a small barrier parameter: SBPC 14.1 -> 4.9 and SPPC 38.6 -> 18.4 Ipopt iterations per sample
+    # (ocp.session.WARM_START, control/sbpc.py, control/sppc.py)
+    "warm_start": {"warm_start_init_point": "yes", "mu_init": 1e-5, "warm_start_bound_push": 1e-6,
+                   "warm_start_mult_bound_push": 1e-6},
+    # the predictive controllers' re-plans, on top of "warm_start" (docs/closed_loop.md)
+    "receding": {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5},
+    # a closed-loop re-plan that needs more has no plan worth waiting for (control/controllers.py)
+    "replan": {"max_iter": 300},
+    # a Pareto chain after its first point, from the previous point's primal and dual solution
+    # (bench/bench_pareto.py: 27-56 % fewer iterations than a primal-only start, fronts equal or lower
+    # by up to 5e-5; the primal-only chain took 204 s instead of 14 s on the thesis 001 advanced trip at
+    # K = 1000; studies/pareto.py)
+    "pareto_warm": {"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound_push": 1e-6,
+                    "warm_start_mult_bound_push": 1e-6, "warm_start_slack_bound_push": 1e-6},
+    # a network leg: MUMPS without its own row and column scaling (a leg's KKT matrix is small and
+    # banded; the scaling took about a fifth of Ipopt's time: `python bench/bench_leg_options.py
+    # studies/network_metro_3trains.yaml`, six legs 4.85 -> 3.82 s, the same iterations; slower on the
+    # joint NLP, 18.9 / 19.2 against 16.9 / 15.8 s; network/legs.py KKT)
+    "leg": {"mumps_scaling": 0},
+    # a solve from a feasible run (a warm leg, the joint NLP): stay near it instead of pushing every
+    # variable 1 % inside its bounds (the 2-train joint NLP: adaptive barrier 3000 iterations, monotone
+    # from mu 1e-3 730; network/legs.py NEAR_START)
+    "near_start": {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_strategy": "monotone", "mu_init": 1e-3},
+    # the NLP subproblems of the DAS mode choice's MINLP search (MindtPy through Pyomo's cyipopt;
+    # ocp/modechoice.py)
+    "mode_choice": {"print_level": 0, "max_iter": 1500, "tol": 1e-7},
+    # the joint network NLP: MUMPS's METIS ordering instead of its automatic choice (3 trains: 35 -> 26 s
+    # for the same 105 iterations; SCOTCH was as fast but not deterministic, runs differed by 38 kW in a
+    # step's power along a flat direction; on the legs and the space NLP neither bought anything
+    # measurable). Both go through Scotch here, which :func:`repeatable` makes repeat exactly
+    # (network/joint.py ORDERING)
+    "joint": {"mumps_pivot_order": 5},
+}
 
 _state: dict[str, Any] = {"configured": False, "prepared": False, "scotch": None}
 
@@ -59,19 +100,27 @@ def configure() -> None:
     _state["configured"] = True
 
 
-def prepare(nl_writer_config: Any, ampl_interface: Any) -> bool:
+def prepare(nl_writer_config: Any, ampl_interface: Any, environ: Any = None) -> bool:
     """Make the solver chain ready in this process (idempotent; ``ocp.session`` calls it with
-    Pyomo's ``NLWriter.CONFIG`` and PyNumero's ``AmplInterface``). Returns whether PyNumero's ASL
-    library is available.
+    Pyomo's ``NLWriter.CONFIG``, PyNumero's ``AmplInterface`` and Pyomo's ``CtypesEnviron``).
+    Returns whether PyNumero's ASL library is available.
 
     - the NL writer's defaults (:data:`NL_OPTIONS`) for every NL file written in this process,
       also by Pyomo's own cyipopt interface (MindtPy's NLP subproblems of the DAS mode choice);
     - the ASL library built into the repository's ``.pyomo`` when Pyomo's search finds none
       (Pyomo reads PYOMO_CONFIG_DIR once, when it is first imported);
-    - the Scotch library that Ipopt's MUMPS loaded, for :func:`repeatable`.
+    - the Scotch library that Ipopt's MUMPS loaded, for :func:`repeatable`;
+    - off Windows, Pyomo's ``CtypesEnviron`` (which every NL file load enters) told that Windows'
+      C runtimes are absent: it otherwise looks for eleven of them with ``ctypes.util.find_library``,
+      which runs gcc and ld for each, once per process (0.67-1.67 s for the first ``CtypesEnviron()``
+      in a fresh process here, three runs on a busy machine; 0.2 ms after).
     """
     configure()
     if not _state["prepared"]:
+        if environ is not None and os.name != "nt":
+            for dll in environ.DLLs:
+                if dll._loaded is None:  # not probed yet: Pyomo's own "absent" state, as for a None name
+                    dll._loaded = False
         for key, value in NL_OPTIONS.items():
             setattr(nl_writer_config, key, value)
         if REPO_ASL.is_file() and ("PYOMO_CONFIG_DIR" not in os.environ or not ampl_interface.available()):

@@ -1,17 +1,29 @@
 """Space-domain direct transcription of the train OCP in Pyomo (thesis 000 eq. 2.16, thesis 001 eq. 4.1).
 
-On nodes x_0 = 0 < ... < x_N = D with steps ds_k, states are the speed v_k [m/s] and the
-interval times dt_k [s]; controls are traction and braking forces per interval, in kN
-(scaling: forces in kN, dynamics per unit mass; see docs/benchmarks.md).
+On nodes x_0 = 0 < ... < x_N = D with steps ds_k, the variables are the speed v_k [m/s] and
+traction and braking forces per interval, in kN (scaling: forces in kN, dynamics per unit mass;
+see docs/benchmarks.md).
 
 Dynamics, exact for constant acceleration over an interval, and free of the standstill
 singularity of dv/ds = a/v (thesis 001 §3.2.1) because they never divide by v:
 
     (v_{k+1}^2 - v_k^2) / (2 ds_k) = (F_T,k - F_B,k - R_k) / M          (energy form of eq. 2.7)
-    dt_k (v_k + v_{k+1}) = 2 ds_k                                          (time, eq. 2.16)
+    dt_k = 2 ds_k / (v_k + v_{k+1})                                        (time, eq. 2.16)
 
 with R_k the trapezoidal mean of the Davis resistance at both nodes plus the gradient and curve
-forces of the interval (eq. 2.2). Envelopes hold at both ends of each interval.
+forces of the interval (eq. 2.2).
+
+The NLP is as lean as the problem allows (:data:`CUTS`, each measured in docs/speed.md): the
+interval time is an expression of the speeds, not a variable (``time_step``); the regenerative
+force is the braking force where the regenerative envelope covers the whole braking envelope
+(``one_brake``); a braking or regenerative power limit that never binds is no row
+(``idle_power``, as ``core.grid.drop_idle_power`` does for traction). On request (not by default,
+:data:`CUTS`), a power limit is one row per interval at its mean speed (v_k + v_{k+1}) / 2, the speed
+at which the objective prices the interval's power (``physics.line_energy``), not one at each end
+(``mid_power``); a speed-force table holds at both ends of each interval in any case. A movable model
+(:mod:`ecostudy.ocp.restart`), whose intervals may be partly run, keeps its interval times as
+variables tied by dt_k (v_k + v_{k+1}) = 2 ds_k w_k (an interval already run has w_k = 0 and may
+have v_k + v_{k+1} = 0) and a regenerative force of its own (:data:`MOVABLE_CUTS`).
 """
 import functools
 from typing import Any, Callable, ParamSpec, Sequence, TypeAlias, TypeVar
@@ -20,7 +32,7 @@ import numpy as np
 import pyomo.environ as pyo
 from pyomo.common.gc_manager import PauseGC
 
-from ecostudy.core.kinematics import interval_davis, interval_grade_force
+from ecostudy.core.kinematics import interval_davis, interval_grade_force, interval_time
 from ecostudy.core.physics import interval_resistance, line_energy
 from ecostudy.core.physics import Envelope, smooth_table
 from ecostudy.core.grid import Segment
@@ -40,6 +52,13 @@ DYNAMICS_SCALE = 1.0
 # weight of traction + braking work in the all-out objective: removes the flat direction of
 # simultaneous traction and braking; its effect on the minimum time is measured in the tests
 TIME_REGULARISATION = 1e-4
+# the cuts of the lean NLP (module docstring) made by default: the exact ones. ``mid_power`` moves
+# optima by up to 0.05 % (bench/bench_size.py), but the network studies start their legs from these
+# runs, and a leg started from the moved run found another local optimum: +5 % on the 2-train study's
+# independent strategy (docs/speed.md). bench/bench_size.py builds with each of ALL_CUTS in turn.
+CUTS = ("time_step", "one_brake", "idle_power")
+ALL_CUTS = CUTS + ("mid_power",)
+MOVABLE_CUTS = ("mid_power", "idle_power")  # the cuts a movable model makes: its envelope rows as any model's
 
 
 def _bounded(envelope: Envelope) -> float:
@@ -52,12 +71,21 @@ def energy_reference(train: Train, segment: Segment) -> float:
     return max(train.traction.peak * segment.distance * 0.1, 1.0)
 
 
+def regeneration_covers_braking(train: Train, speeds: FloatArray) -> bool:
+    """True when the regenerative envelope allows the whole braking force at every admissible
+    speed [m/s]: then the regenerative force of a net-energy optimum is the braking force (the
+    objective credits it, nothing else limits it), and one variable serves both."""
+    return train.regeneration is not None and bool(np.all(
+        np.asarray(train.regeneration.force(speeds)) >= np.asarray(train.braking.force(speeds))))
+
+
 def define_variables(m: Model, nodes: FloatArray, limits: FloatArray, train: Train, guess: Guess,
-                     with_regeneration: bool, movable: bool = False) -> None:
-    """Speeds per node, interval times and forces [kN] per interval. Standstill at both ends is
-    fixed, or, for a ``movable`` model, held by bounds that :func:`set_start` and :func:`set_end`
-    change; a movable model also has the share w_k of each interval still to run (bounds 1) and
-    the clock t0 at the start (bounds 0)."""
+                     with_regeneration: bool, movable: bool = False, cuts: Sequence[str] = CUTS) -> None:
+    """Speeds per node and forces [kN] per interval; the interval times as variables (a movable
+    model, or without the ``time_step`` cut) or as expressions of the speeds. Standstill at both
+    ends is fixed, or, for a ``movable`` model, held by bounds that :func:`set_start` and
+    :func:`set_end` change; a movable model also has the share w_k of each interval still to run
+    (bounds 1) and the clock t0 at the start (bounds 0)."""
     n = len(nodes) - 1
     m.K = pyo.RangeSet(0, n)
     m.I = pyo.RangeSet(0, n - 1)
@@ -73,12 +101,19 @@ def define_variables(m: Model, nodes: FloatArray, limits: FloatArray, train: Tra
     else:
         m.v[0].fix(0.0)
         m.v[n].fix(0.0)
-    m.dt = pyo.Var(m.I, bounds=(0.0, None), initialize=lambda m, k: float(dt0[k]))
+    if "time_step" in cuts and not movable:
+        ds = np.diff(nodes).tolist()
+        m.dt = pyo.Expression(m.I, rule=lambda m, k: interval_time(m.v[k], m.v[k + 1], ds[k]))
+    else:
+        m.dt = pyo.Var(m.I, bounds=(0.0, None), initialize=lambda m, k: float(dt0[k]))
     m.ft = pyo.Var(m.I, bounds=(0.0, _bounded(train.traction)), initialize=lambda m, k: float(ft0[k]) / FORCE_SCALE)
     m.fb = pyo.Var(m.I, bounds=(0.0, _bounded(train.braking)), initialize=lambda m, k: float(fb0[k]) / FORCE_SCALE)
-    if with_regeneration:
-        if train.regeneration is None:
-            raise ValueError("with_regeneration: the train has no electric brake")
+    if with_regeneration and train.regeneration is None:
+        raise ValueError("with_regeneration: the train has no electric brake")
+    if with_regeneration and "one_brake" in cuts and not movable and regeneration_covers_braking(
+            train, np.linspace(0.0, float(np.max(limits)), 101)):
+        m.fr = pyo.Reference(m.fb)  # the same variables: no row, no bound of its own
+    elif with_regeneration and train.regeneration is not None:
         top = min(train.regeneration.max_force, train.braking.peak) / FORCE_SCALE
         m.fr = pyo.Var(m.I, bounds=(0.0, top), initialize=lambda m, k: min(float(fb0[k]) / FORCE_SCALE, top))
 
@@ -90,10 +125,11 @@ def start_point(m: Model, guess: Guess) -> tuple[list[Var], list[float]]:
     out, as the NLP has none of them."""
     v0, dt0, ft0, fb0 = guess
     pairs = [(m.v[k], float(v0[k])) for k in m.K if not m.v[k].fixed]
-    pairs += [(m.dt[k], float(dt0[k])) for k in m.I]
+    if m.dt.ctype is pyo.Var:
+        pairs += [(m.dt[k], float(dt0[k])) for k in m.I]
     pairs += [(m.ft[k], float(ft0[k]) / FORCE_SCALE) for k in m.I]
     pairs += [(m.fb[k], float(fb0[k]) / FORCE_SCALE) for k in m.I]
-    if hasattr(m, "fr"):
+    if hasattr(m, "fr") and not is_braking(m):
         top = m.fr[0].ub
         pairs += [(m.fr[k], min(float(fb0[k]) / FORCE_SCALE, top)) for k in m.I]
     lo, hi = m.T.bounds
@@ -101,8 +137,14 @@ def start_point(m: Model, guess: Guess) -> tuple[list[Var], list[float]]:
     return [p[0] for p in pairs], [p[1] for p in pairs]
 
 
+def is_braking(m: Model) -> bool:
+    """True when the regenerative force of ``m`` is its braking force (the ``one_brake`` cut)."""
+    return hasattr(m, "fr") and m.fr.ctype is pyo.Var and m.fr[0] is m.fb[0]
+
+
 def define_dynamics(m: Model, nodes: FloatArray, segment: Segment, train: Train) -> None:
-    """Speed (energy form) and time recursions, scaled to O(1) residuals."""
+    """Speed (energy form) recursion and, where the interval times are variables, the time
+    recursion, scaled to O(1) residuals."""
     ds = np.diff(nodes).tolist()  # Python floats: numpy scalars make Pyomo expressions slow
     per_kg = [tuple(float(x) / train.mass for x in abc) for abc in zip(*interval_davis(segment, train, nodes))]
     fixed = (interval_grade_force(segment, train, nodes) / train.mass).tolist()
@@ -122,12 +164,14 @@ def define_dynamics(m: Model, nodes: FloatArray, segment: Segment, train: Train)
         return m.dt[k] * (m.v[k] + m.v[k + 1]) / (2 * ds[k]) == share(m, k, 1.0)
 
     m.speed = pyo.Constraint(m.I, rule=speed)
-    m.time = pyo.Constraint(m.I, rule=time)
+    if m.dt.ctype is pyo.Var:
+        m.time = pyo.Constraint(m.I, rule=time)
     m.running_time = pyo.Expression(expr=sum(m.dt[k] for k in m.I))
 
 
-def _envelope_constraints(m: Model, name: str, force: Var, envelope: Envelope) -> None:
-    """force_k <= envelope(v) at both ends of interval k."""
+def _envelope_constraints(m: Model, name: str, force: Var, envelope: Envelope, mid: bool = False) -> None:
+    """force_k <= envelope(v) at both ends of interval k; a power limit, with ``mid``, once at the
+    mean speed: F_k (v_k + v_{k+1}) / 2 <= P, one row per interval instead of two."""
     if envelope.kind == "table":
         c0, c1, terms = envelope.smooth_coefficients  # in N; the force variables are in kN
         scaled = (c0 / FORCE_SCALE, c1 / FORCE_SCALE, [(a / FORCE_SCALE, v) for a, v in terms])
@@ -138,8 +182,21 @@ def _envelope_constraints(m: Model, name: str, force: Var, envelope: Envelope) -
         m.add_component(name + "_hi", pyo.Constraint(m.I, rule=lambda m, k: force[k] <= env[k + 1]))
     elif np.isfinite(envelope.max_power):
         pk = envelope.max_power / FORCE_SCALE  # [kW]; force [kN] * speed [m/s] is in kW
+        if mid:
+            m.add_component(name + "_mid", pyo.Constraint(
+                m.I, rule=lambda m, k: force[k] * (m.v[k] + m.v[k + 1]) / (2 * pk) <= 1.0))
+            return
         m.add_component(name + "_lo", pyo.Constraint(m.I, rule=lambda m, k: force[k] * m.v[k] / pk <= 1.0))
         m.add_component(name + "_hi", pyo.Constraint(m.I, rule=lambda m, k: force[k] * m.v[k + 1] / pk <= 1.0))
+
+
+def interval_envelope(envelope: Envelope, v0: Any, v1: Any, cuts: Sequence[str] = CUTS) -> FloatArray:
+    """The force limit of intervals between speeds ``v0`` and ``v1`` [m/s] as the NLP binds it [N]
+    (numpy arrays): a table the lower of its two ends, a power limit min(F_max, P / v_mean) at the
+    mean speed (``mid_power``; else at the lower end too)."""
+    if envelope.kind != "table" and "mid_power" in cuts:
+        return np.asarray(envelope.force(0.5 * (np.asarray(v0, float) + np.asarray(v1, float))), float)
+    return np.minimum(envelope.force(v0), envelope.force(v1))
 
 
 def define_acceleration_bounds(m: Model, nodes: FloatArray, train: Train) -> None:
@@ -159,14 +216,21 @@ def define_acceleration_bounds(m: Model, nodes: FloatArray, train: Train) -> Non
         m.max_deceleration = pyo.Constraint(m.I, rule=lambda m, k: -mean(m, k) <= share(m, k, d))
 
 
-def define_envelopes(m: Model, train: Train, with_regeneration: bool) -> None:
-    """Traction, braking and regenerative limits F <= F_max(v) (thesis 000 eqs. 2.3-2.4)."""
-    _envelope_constraints(m, "traction", m.ft, train.traction)
-    _envelope_constraints(m, "braking", m.fb, train.braking)
-    if with_regeneration:
+def define_envelopes(m: Model, train: Train, with_regeneration: bool, speeds: FloatArray,
+                     lean: Sequence[str] = CUTS) -> None:
+    """Traction, braking and regenerative limits F <= F_max(v) (Farooqi 2018, eqs. 2.3-2.4); with the
+    ``idle_power`` cut, a power limit that never binds at the admissible ``speeds`` [m/s] is no row
+    (``physics.power_never_binds``), with ``mid_power`` a power limit is one row per interval."""
+    mid = "mid_power" in lean
+
+    def lean_envelope(envelope: Envelope) -> Envelope:
+        return envelope.without_power() if "idle_power" in lean and envelope.idle_power(speeds) else envelope
+
+    _envelope_constraints(m, "traction", m.ft, lean_envelope(train.traction), mid)
+    _envelope_constraints(m, "braking", m.fb, lean_envelope(train.braking), mid)
+    if with_regeneration and not is_braking(m) and train.regeneration is not None:
         m.regen_share = pyo.Constraint(m.I, rule=lambda m, k: m.fr[k] <= m.fb[k])
-        if train.regeneration is not None:
-            _envelope_constraints(m, "regen", m.fr, train.regeneration)
+        _envelope_constraints(m, "regen", m.fr, lean_envelope(train.regeneration), mid)
 
 
 def share(m: Model, k: int, expr: Numeric) -> Numeric:
@@ -277,16 +341,18 @@ def gc_paused(build: Callable[P, R]) -> Callable[P, R]:
 def build_model(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray, guess: Guess,
                 objective: str = "energy", running_time: float | None = None, window: tuple[float, float] | None = None,
                 weights: tuple[float, float] = (1.0, 1.0), time_ref: float = 100.0, windows: Sequence[Window] = (),
-                movable: bool = False) -> Model:
+                movable: bool = False, cuts: Sequence[str] = CUTS) -> Model:
     """Assemble the NLP in named steps; ``guess`` = (v, dt, F_T [N], F_B [N]) on the grid.
 
     A ``movable`` model can be re-solved from any state and towards any terminal speed and
-    arrival window by changing bounds only (:mod:`ecostudy.ocp.restart`)."""
+    arrival window by changing bounds only (:mod:`ecostudy.ocp.restart`); it makes only :data:`MOVABLE_CUTS`.
+    ``cuts``: which of :data:`CUTS` to make (all by default)."""
     with_regeneration = objective == "net_energy" and train.regeneration is not None
+    lean = tuple(c for c in cuts if not movable or c in MOVABLE_CUTS)
     m = pyo.ConcreteModel(name="ecostudy")
-    define_variables(m, nodes, limits, train, guess, with_regeneration, movable)
+    define_variables(m, nodes, limits, train, guess, with_regeneration, movable, lean)
     define_dynamics(m, nodes, segment, train)
-    define_envelopes(m, train, with_regeneration)
+    define_envelopes(m, train, with_regeneration, np.linspace(0.0, float(np.max(limits)), 101), lean)
     define_acceleration_bounds(m, nodes, train)
     define_timing(m, time_ref, running_time, window)
     define_windows(m, nodes, windows, time_ref)

@@ -11,8 +11,10 @@ with R_D the trapezoidal mean of the Davis resistance and G(s) the gradient and 
 the segment, smoothed over ``width`` metres at each change (the only way a position-dependent
 force enters a smooth NLP). Speed limits become a continuous piecewise-linear bound L(s) that is
 never above the train-length limit of the space grid: it ramps down over ``ramp`` metres before a
-restriction and up over ``ramp`` metres after it ends. Envelopes hold at both step ends, forces
-are in kN and the regenerative part F_R <= F_B obeys its own envelope, as in ``ocp/space.py``.
+restriction and up over ``ramp`` metres after it ends. Envelopes hold as in ``ocp/space.py``
+(at both step ends; of its lean cuts, a power limit left out where it never binds and the regenerative
+force taken as the braking force where the regenerative envelope covers the braking one; else
+F_R <= F_B under its own envelope); forces are in kN.
 
 The electrical power at the pantograph in step j [kW] is
 p_j = F_T,j vbar_j / eta_T - eta_R F_R,j vbar_j, vbar_j = (v_j + v_{j+1}) / 2 (thesis 000 eq. 7.3).
@@ -32,6 +34,9 @@ from ecostudy.ocp.problem import Case, Solved
 from ecostudy.ocp.solver import Model
 
 FORCE_SCALE = space.FORCE_SCALE
+# the lean cuts of ``ocp.space`` a leg makes: not ``mid_power``, which moved a network leg's energy by
+# 1.3 % on 0.5 s steps (bench/bench_size.py --case leg), over the 0.1 % allowed for a cut
+CUTS = ("one_brake", "idle_power")
 
 
 @dataclass
@@ -103,12 +108,13 @@ def limit_profile(case: Case, ramp: float, dt: float = 0.0) -> tuple[FloatArray,
 @space.gc_paused
 def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | FloatArray] | None = None,
             width: float = 2.0, ramp: float = 20.0, limit_margin: float = 0.1,
-            one_handle: bool | Sequence[bool] | FloatArray = True) -> Model:
+            one_handle: bool | Sequence[bool] | FloatArray = True, cuts: Sequence[str] = CUTS) -> Model:
     """Add one leg as a block ``m.<name>`` with variables s, v, ft, fb, fr and expression p [kW].
 
     ``guess``: (s, v) arrays on the leg's steps, optionally followed by (F_T, F_B, F_R) per step
     [N]; else a trapezoidal speed profile. ``one_handle``: forbid traction and braking together,
     at every step (True), none (False) or the steps where a boolean array per step is True.
+    ``cuts``: the lean cuts of ``ocp.space`` to make (``time_step`` has no meaning here).
     """
     case, train, n, dt = leg.case, leg.case.train, leg.steps, leg.dt
     b = pyo.Block()
@@ -125,8 +131,11 @@ def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | Flo
     forces = [np.asarray(f) / FORCE_SCALE for f in given] if given is not None else [np.zeros(n)] * 3
     regen_top = min(train.regeneration.max_force, train.braking.peak) / FORCE_SCALE if train.regeneration else 0.0
     tops = (train.traction.peak / FORCE_SCALE, train.braking.peak / FORCE_SCALE, regen_top)
-    b.ft, b.fb, b.fr = (pyo.Var(b.I, bounds=(0.0, top), initialize=lambda b, j, f=f, top=top: min(float(f[j]), top))
-                        for f, top in zip(forces, tops))
+    speeds = np.linspace(0.0, top, 101)
+    one_brake = "one_brake" in cuts and space.regeneration_covers_braking(train, speeds)
+    b.ft, b.fb, fr = (pyo.Var(b.I, bounds=(0.0, top), initialize=lambda b, j, f=f, top=top: min(float(f[j]), top))
+                      for f, top in zip(forces, tops))
+    b.fr = pyo.Reference(b.fb) if one_brake else fr
     mass = train.mass
     gx, gf = force_profile(case, width)
     g_coef = table_coefficients(gx, gf / FORCE_SCALE, 0.25 * width)
@@ -153,12 +162,8 @@ def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | Flo
     b.kinematics = pyo.Constraint(b.I, rule=kinematics)
     b.dynamics = pyo.Constraint(b.I, rule=dynamics)
     b.limit = pyo.Constraint(pyo.RangeSet(1, n - 1), rule=limit)
-    space._envelope_constraints(b, "traction", b.ft, train.traction)
-    space._envelope_constraints(b, "braking", b.fb, train.braking)
-    if train.regeneration is not None:
-        b.regen_share = pyo.Constraint(b.I, rule=lambda b, j: b.fr[j] <= b.fb[j])
-        space._envelope_constraints(b, "regen", b.fr, train.regeneration)
-    else:
+    space.define_envelopes(b, train, train.regeneration is not None, speeds, cuts)
+    if train.regeneration is None:
         b.fr.fix(0.0)
     eta_t, eta_r = train.traction_efficiency, train.regeneration_efficiency
     b.vbar = pyo.Expression(b.I, rule=lambda b, j: 0.5 * (b.v[j] + b.v[j + 1]))

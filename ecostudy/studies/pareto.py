@@ -19,14 +19,12 @@ from ecostudy.core.types import Timing
 from ecostudy.das.methods import das_columns
 from ecostudy.ocp import session
 from ecostudy.ocp.problem import all_out, build, capped_guess, prepare, record
+from ecostudy.ocp.solver import IPOPT
 from ecostudy.studies.workers import ticker, worker_pool
 
 # After the first point of a chain, Ipopt starts from the previous point's primal AND dual
-# solution with a small barrier parameter. Measured (bench/bench_pareto.py, docs/benchmarks.md):
-# 27-56 % fewer iterations than a primal-only start, fronts equal or lower by up to 5e-5; the
-# primal-only chain took 204 s instead of 14 s on the thesis 001 advanced trip at K = 1000.
-WARM_START = {"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound_push": 1e-6,
-              "warm_start_mult_bound_push": 1e-6, "warm_start_slack_bound_push": 1e-6}
+# solution with a small barrier parameter (measured where it is set: ``ocp.solver.IPOPT``).
+WARM_START = IPOPT["pareto_warm"]
 
 
 def _chain(case, times, objective, options, verify_result, warm, tick=None):

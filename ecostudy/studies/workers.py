@@ -1,8 +1,16 @@
 """Worker processes that never outlive the command that started them."""
 import multiprocessing
+import os
 from concurrent.futures import ProcessPoolExecutor
 
 from ecostudy.core.deadline import die_with_parent
+
+
+def every_core(workers):
+    """``workers`` as given, else every core this process may run on: the default of ``run`` and
+    ``network`` (their results are the same bit for bit with any number of workers:
+    tests/test_workers.py)."""
+    return workers if workers is not None else len(os.sched_getaffinity(0))
 
 
 def worker_pool(workers):

@@ -1,0 +1,169 @@
+"""ecostudy end to end against a lean CasADi transcription of the same physics: speeds and forces only.
+
+    pip install -e '.[bench]'    # CasADi: a benchmark reference, not a dependency of ecostudy
+    PYTHONPATH=$PWD .venv/bin/python bench/bench_lean.py [--points 1000 5000] [--repeat 3] [--case long metro]
+
+Unlike ``bench/bench_casadi.py``, which writes ecostudy's own NLP in CasADi (how fast the stack is),
+this reference is written as lean as the problem allows, independently of ``ocp.space``: the
+variables are the speeds at the nodes (both ends fixed by bounds) and the traction, braking and,
+where the regenerative envelope does not cover the braking one, regenerative forces per interval;
+the running time is a single equality sum 2 ds_k / (v_k + v_k+1) = T (no time-step variable, no T
+variable); power limits are left out where they never bind and otherwise hold where ecostudy's
+default holds them (at both ends of each interval; once at the mean speed if ``space.CUTS`` has
+``mid_power``); speed-force tables hold at both ends of each interval. The physics functions
+(``core.physics``) and per-interval coefficients are ecostudy's, so the optima must agree.
+
+ecostudy's time is its in-process build + NL write + Ipopt (``ocp.problem.build``, Debian's Ipopt
+through PyNumero); CasADi's is building the SX graph + ``nlpsol`` + solving with CasADi's bundled
+Ipopt, in the same process, from the same start (``problem.capped_guess``). Medians of ``--repeat``,
+wall and the process's CPU time (the latter less disturbed by other processes on a shared machine).
+
+Cases (shipped): ``long`` is tracks/regional_line_20stops.yaml S01 to S20 (22.4 km run through) with
+trains/regional_alstom.yaml, net energy, in 1.15 times its envelope time; ``metro`` is
+studies/default.yaml (Amsterdam metro, Rokin to Centraal in 76 s, traction energy).
+"""
+import argparse
+import shlex
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from ecostudy.core.kinematics import interval_davis, interval_grade_force  # noqa: E402
+from ecostudy.core.physics import interval_resistance, smooth_table  # noqa: E402
+from ecostudy.core.units import to_kwh  # noqa: E402
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
+from ecostudy.ocp import problem, session, solver, space  # noqa: E402
+
+sys.path.insert(0, str(ROOT / "bench"))
+from bench_casadi import objective_expr  # noqa: E402
+
+
+def cases(points):
+    """name -> (case, running time [s], objective)."""
+    line = problem.prepare(load_track(ROOT / "tracks/regional_line_20stops.yaml"),
+                           load_train(ROOT / "trains/regional_alstom.yaml"), "S01", "S20", points)
+    metro = problem.prepare(load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml"),
+                            load_train(ROOT / "trains/amsterdam_metro.yaml"), "Rokin", "Centraal", points)
+    return {"long": (line, round(1.15 * line.estimate), "net_energy"), "metro": (metro, 76.0, "energy")}
+
+
+def ecostudy_run(case, running_time, objective):
+    """(seconds build + NL write + Ipopt, Outcome, objective [J], variables, constraints, Ipopt s)."""
+    guess = problem.capped_guess(case, running_time)
+    t0, c0 = time.perf_counter(), time.process_time()
+    m = problem.build(case, guess, objective, {}, running_time=running_time)
+    s = session.Session(m)
+    outcome = s.solve()
+    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+    return seconds, outcome, float(m.objective.expr()) * m.energy_ref, s.nlp.n_primals(), s.nlp.n_constraints(), \
+        outcome.seconds, cpu
+
+
+def lean_run(case, running_time, objective):
+    """The lean transcription: (seconds, status, iterations, objective [J], n, m, Ipopt s)."""
+    t0, cpu0 = time.perf_counter(), time.process_time()
+    train, segment, nodes = case.train, case.segment, case.nodes
+    n, fs = len(nodes) - 1, space.FORCE_SCALE
+    dsd = ca.DM(np.diff(nodes))
+    v0, _, ft0, fb0 = problem.capped_guess(case, running_time)
+    speeds = np.linspace(0.0, float(np.max(case.limits)), 101)
+    regen = objective == "net_energy" and train.regeneration is not None
+    own_regen = regen and not np.all(train.regeneration.force(speeds) >= train.braking.force(speeds))
+    v, ft, fb = ca.SX.sym("v", n + 1), ca.SX.sym("ft", n), ca.SX.sym("fb", n)
+    fr = ca.SX.sym("fr", n) if own_regen else (fb if regen else ca.SX.zeros(n))
+    va, vb = v[:-1], v[1:]
+    per_kg = [ca.DM(np.asarray(x, float) / train.mass) for x in interval_davis(segment, train, nodes)]
+    fixed = ca.DM(interval_grade_force(segment, train, nodes) / train.mass)
+    g, lbg, ubg = [], [], []
+
+    def add(expr, lo, hi):
+        g.append(expr)
+        lbg.append(np.full(expr.shape[0], lo))
+        ubg.append(np.full(expr.shape[0], hi))
+
+    accel = (vb ** 2 - va ** 2) * (0.5 / dsd)
+    add(accel + interval_resistance(va, vb, per_kg, fixed) - (fs / train.mass) * (ft - fb), 0.0, 0.0)
+    add(ca.sum1(2 * dsd / (va + vb)) / running_time, 1.0, 1.0)
+    envelopes = [(ft, train.traction), (fb, train.braking)] + ([(fr, train.regeneration)] if own_regen else [])
+    for force, env in envelopes:
+        if env.kind == "table":
+            c0, c1, terms = env.coefficients
+            top = smooth_table(v, (c0 / fs, c1 / fs, [(a / fs, s) for a, s in terms]), env.width)
+            add(force - top[:-1], -np.inf, 0.0)
+            add(force - top[1:], -np.inf, 0.0)
+        elif np.isfinite(env.max_power) and not env.idle_power(speeds) and "mid_power" in space.CUTS:
+            add(force * (va + vb) / (2 * env.max_power / fs), -np.inf, 1.0)
+        elif np.isfinite(env.max_power) and not env.idle_power(speeds):  # the physics ecostudy solves
+            add(force * va / (env.max_power / fs), -np.inf, 1.0)
+            add(force * vb / (env.max_power / fs), -np.inf, 1.0)
+    if own_regen:
+        add(fr - fb, -np.inf, 0.0)
+    if np.isfinite(train.max_acceleration):
+        add(accel, -np.inf, float(train.max_acceleration))
+    if np.isfinite(train.max_deceleration):
+        add(-accel, -np.inf, float(train.max_deceleration))
+    energy_ref = space.energy_reference(train, segment)
+    f = objective_expr(objective, train, ft, fr, va, vb, dsd) / energy_ref
+    top_r = min(train.regeneration.max_force, train.braking.peak) / fs if own_regen else 0.0
+    x = ca.vertcat(v, ft, fb, *([fr] if own_regen else []))
+    lbx = np.zeros(x.shape[0])
+    ubx = np.concatenate([case.limits, np.full(n, train.traction.peak / fs), np.full(n, train.braking.peak / fs)]
+                         + ([np.full(n, top_r)] if own_regen else []))
+    ubx[0] = ubx[n] = 0.0
+    x0 = np.clip(np.concatenate([v0, ft0 / fs, fb0 / fs] + ([np.minimum(fb0 / fs, top_r)] if own_regen else [])),
+                 lbx, ubx)
+    opts = {"ipopt": dict(session.DEFAULT_OPTIONS), "print_time": False}
+    nlp = ca.nlpsol("lean", "ipopt", {"x": x, "f": f, "g": ca.vertcat(*g)}, opts)
+    t1 = time.perf_counter()
+    sol = nlp(x0=x0, lbx=lbx, ubx=ubx, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
+    seconds, cpu = time.perf_counter() - t0, time.process_time() - cpu0
+    stats = nlp.stats()
+    return (seconds, stats["return_status"], stats["iter_count"], float(sol["f"]) * energy_ref,
+            x.shape[0], sum(e.shape[0] for e in g), seconds - (t1 - t0), cpu)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--points", type=int, nargs="+", default=[1000, 5000])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--case", nargs="+", default=["long"])
+    args = ap.parse_args()
+    solver.configure()
+    print(f"`{shlex.join(['python', 'bench/bench_lean.py'] + sys.argv[1:])}`\n")
+    print("| case | K | variables (ecostudy / lean) | constraints | ecostudy s | iterations | lean s | iterations "
+          "| ratio | CPU s (ecostudy / lean) | CPU ratio | Ipopt alone s (ecostudy / lean) | ecostudy kWh | lean kWh "
+          "| difference % |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    grown = {}
+    for name in args.case:
+        for points in args.points:
+            case, running_time, objective = cases(points)[name]
+            eco, lean = [], []
+            for _ in range(args.repeat):
+                eco.append(ecostudy_run(case, running_time, objective))
+                lean.append(lean_run(case, running_time, objective))
+            te, tl = statistics.median(r[0] for r in eco), statistics.median(r[0] for r in lean)
+            ce, cl = statistics.median(r[6] for r in eco), statistics.median(r[7] for r in lean)
+            e, c = eco[-1], lean[-1]
+            grown.setdefault(name, []).append((points, te, tl, ce, cl))
+            print(f"| {name} | {points} | {e[3]} / {c[4]} | {e[4]} / {c[5]} | {te:.2f} | {e[1].iterations} ({e[1].status}) "
+                  f"| {tl:.2f} | {c[2]} ({c[1]}) | {te / tl:.2f} | {ce:.2f} / {cl:.2f} | {ce / cl:.2f} "
+                  f"| {statistics.median(r[5] for r in eco):.2f} / "
+                  f"{statistics.median(r[6] for r in lean):.2f} | {to_kwh(e[2]):.4f} | {to_kwh(c[3]):.4f} | "
+                  f"{100 * (e[2] - c[3]) / abs(c[3]):+.4f} |", flush=True)
+    print("\n| case | K | ecostudy growth (wall / CPU) | lean growth (wall / CPU) |\n|---|---|---|---|")
+    for name, rows in grown.items():
+        k0, e0, l0, ce0, cl0 = rows[0]
+        for k, e, lt, ce, cl in rows[1:]:
+            print(f"| {name} | {k0} -> {k} | {e / e0:.2f}x / {ce / ce0:.2f}x | {lt / l0:.2f}x / {cl / cl0:.2f}x |")
+
+
+if __name__ == "__main__":
+    main()
