@@ -8,7 +8,7 @@ from ecostudy.cli.app import app, case_progress, check_options, counts_line, fla
 from ecostudy.cli.blas import limit_blas_threads
 
 SHOWN = ["K_b", "f", "Np", "Nc", "status", "tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN",
-         "force_mean_kN", "force_std_kN", "energy_wagons_MJ", "energy_total_MJ", "qp_inputs", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts", "stop_error_m"]
+         "force_mean_kN", "force_std_kN", "wagon_brake_kWh", "energy_total_kWh", "qp_inputs", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts", "stop_error_m"]
 
 
 def _heavyhaul(study, workers, dask, retry_failed, out, no_progress, no_plot, blas_threads):

@@ -55,10 +55,10 @@ def trade_off(runs, path, title=""):
         label = f"f={f} Np={n_p} Nc={n_c}"
         a.plot(group["K_b"], group["force_max_kN"], "o-", color=f"C{i}", label=label + " whole run")
         a.plot(group["K_b"], group["force_max_braking_kN"], "s--", color=f"C{i}", label=label + " while braking")
-        b.plot(group["K_b"], group["energy_total_MJ"], "o-", color=f"C{i}", label=label + " total")
-        b.plot(group["K_b"], group["energy_wagons_MJ"], "s--", color=f"C{i}", label=label + " wagons")
+        b.plot(group["K_b"], group["energy_total_kWh"], "o-", color=f"C{i}", label=label + " total")
+        b.plot(group["K_b"], group["wagon_brake_kWh"], "s--", color=f"C{i}", label=label + " wagons")
     a.set_ylabel("largest |in-train force| [kN]")
-    b.set_ylabel("energy int |u v| dt [MJ]")
+    b.set_ylabel("energy int |u v| dt [kWh]")
     for ax in (a, b):
         ax.set_ylim(bottom=0)
         ax.ticklabel_format(axis="y", useOffset=False)
