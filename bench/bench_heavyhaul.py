@@ -98,7 +98,7 @@ def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesio
         if changes:
             doc = yaml.safe_load(path.read_text())
             doc.update(changes)
-            tag = "_".join(k if v is True else str(v) for k, v in changes.items())
+            tag = "_".join(k if v is True else f"{k}_{v}" for k, v in changes.items())  # never another study's name
             path, out = path.with_name(f".{name}_{tag}.yaml"), out.with_name(f"{out.name}_{tag}")
             path.write_text(yaml.safe_dump(doc))
         try:

@@ -264,11 +264,12 @@ def load_yaml_doc(path):
 @pytest.mark.slow
 def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     """Zhang & Zhuan's Table IV on the shipped 45 km line (Np = 4, Nc = 2, f = 10, the energy-optimal
-    reference at +10 %, per-car weights, the paper's units): K_b 1 -> 60 lowers the wagons' braking
-    energy and the total a little (-5 %, -1.2 %), the largest in-train force over the braking samples
-    (a brake acts, no locomotive pulls) more than 2x (538 -> 101 kN), the tracking error moves by
-    less than 0.25 m/s; the braking term stays under 2 % of the force term and the dynamic brakes
-    under 30 % of their limit (docs/heavyhaul.md, "The braking penalty, measured")."""
+    reference at +10 %, per-car weights, the paper's units): both runs stop within 1 m (ok); K_b
+    1 -> 60 lowers the wagons' braking energy and E a little (3488 -> 3310 kWh, 8473 -> 8371 kWh:
+    -1.2 %), the largest in-train force over the braking samples (a brake acts, no locomotive pulls)
+    more than 2x (515 -> 101 kN), the tracking error moves by less than 0.25 m/s; the braking term
+    stays under 5 % of the force term and the dynamic brakes under 30 % of their limit
+    (docs/heavyhaul.md, "The braking penalty, measured")."""
     from .conftest import STUDIES, load_yaml
     doc = load_yaml(STUDIES / "heavyhaul_brake_penalty.yaml")
     doc.update(consist=str(PAPER), track=str(STUDIES.parent / "tracks/heavyhaul_representative_45km.yaml"),
@@ -276,12 +277,12 @@ def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     write_yaml(tmp_path / "kb.yaml", doc)
     result = runner.invoke(app, ["heavyhaul", str(tmp_path / "kb.yaml"), "--out", str(tmp_path / "out"),
                                  "--no-progress", "--no-plot", "--workers", "2"])
-    assert result.exit_code == 1, result.output  # flagged: both stop about 98 m short
+    assert result.exit_code == 0, result.output
     low, high = pd.read_csv(tmp_path / "out" / "runs.csv").itertuples()
-    assert "short of the stop" in low.reason and "short of the stop" in high.reason
-    assert high.energy_wagons_MJ < 0.97 * low.energy_wagons_MJ  # 11930 against 12568 MJ
-    assert high.energy_total_MJ < low.energy_total_MJ
+    assert low.status == high.status == "ok" and abs(low.stop_error_m) < 1 and abs(high.stop_error_m) < 1
+    assert high.wagon_brake_kWh < 0.97 * low.wagon_brake_kWh
+    assert high.energy_total_kWh < low.energy_total_kWh
     assert high.force_max_braking_kN < 0.5 * low.force_max_braking_kN
     assert abs(high.tracking_mean_mps - low.tracking_mean_mps) < 0.25
     assert max(low.force_max_kN, high.force_max_kN) < 1000 and high.over_ts == 0
-    assert high.J_braking < 0.02 * high.J_force and max(low.dynamic_brake_use_max, high.dynamic_brake_use_max) < 0.3
+    assert high.J_braking < 0.05 * high.J_force and max(low.dynamic_brake_use_max, high.dynamic_brake_use_max) < 0.3
