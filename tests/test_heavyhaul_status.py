@@ -54,7 +54,7 @@ def test_a_coupler_over_its_limit_and_a_stop_off_the_mark_are_flagged(tmp_path):
                    tmp_path / "exact")
     assert exact.exit_code == 1, exact.output
     run = pd.read_csv(tmp_path / "exact" / "runs.csv").iloc[0]
-    assert "of the stop (tolerance 1e-06 m)" in run["reason"]
+    assert "the stop (tolerance 1e-06 m)" in run["reason"]
 
 
 def test_each_missed_limit_is_a_reason():
