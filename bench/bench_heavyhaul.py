@@ -5,6 +5,7 @@ QP's solve time per step and memory for f = 1 and f = 10.
     python bench/bench_heavyhaul.py --fence-weights virtual   # the same with eq. 11 read literally
     python bench/bench_heavyhaul.py --terms --scale limits heavyhaul_brake_penalty   # Table IV with eq. 4's terms
     python bench/bench_heavyhaul.py --balance [--adhesion] heavyhaul_brake_penalty   # the energy balance, an effect on
+    python bench/bench_heavyhaul.py --stops heavyhaul_brake_penalty heavyhaul_brake_penalty_descents   # where each run stopped
     python bench/bench_heavyhaul.py --qp 1 [--solver daqp|condensed|clarabel|ipopt] [--blas-threads 2]   # one QP size: build + 20 solves
 
 The studies run through ``ecostudy.studies.heavyhaul.heavyhaul_study`` (resumable: outputs in
@@ -32,7 +33,7 @@ from ecostudy.studies.heavyhaul import QP_FORMS  # noqa: E402
 from ecostudy.io.loaders import load_consist  # noqa: E402
 
 COLUMNS = ["K_b", "f", "Np", "Nc", "tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN",
-           "force_mean_kN", "force_std_kN", "energy_wagons_MJ", "energy_total_MJ", "stop_error_m", "qp_inputs",
+           "force_mean_kN", "force_std_kN", "wagon_brake_kWh", "energy_total_kWh", "stop_error_m", "qp_inputs",
            "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts", "seconds"]
 
 
@@ -72,12 +73,16 @@ def qp(factor, solver, np_=8, nc=6, solves=20, threads=1):
           f"{np.median(seconds[1:]):.3f} | {np.percentile(seconds[1:], 95):.3f} | {seconds.max():.3f} | {rss_mb() - before:.0f} |")
 
 
-EFFECTS = ["K_b", "status", "tracking_mean_mps", "force_max_kN", "force_max_braking_kN", "force_mean_kN", "energy_total_MJ",
+EFFECTS = ["K_b", "status", "tracking_mean_mps", "force_max_kN", "force_max_braking_kN", "force_mean_kN", "energy_total_kWh",
            "traction_kWh", "dynamic_brake_kWh", "wagon_brake_kWh", "running_resistance_kWh", "curve_resistance_kWh",
            "grade_kWh", "coupler_damping_kWh", "stored_change_kWh", "balance_residual_kWh"]
 TERMS = ["K_b", "status", "tracking_mean_mps", "force_max_kN", "force_max_braking_kN", "braking_samples",
-         "stretch_braking_samples", "energy_wagons_MJ", "dynamic_brake_kWh", "energy_total_MJ", "J_force", "J_tracking",
+         "stretch_braking_samples", "stretch_braking_kWh", "traction_kWh", "wagon_brake_kWh", "dynamic_brake_kWh",
+         "energy_total_kWh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "J_force", "J_tracking",
          "J_energy", "J_braking", "dynamic_brake_use_max", "dynamic_brake_use_mean", "stop_error_m"]
+
+STOPS = ["K_b", "f", "Np", "Nc", "status", "arrived", "stop_error_m", "arrival_s", "reference_time_s", "force_max_kN",
+         "force_limit_kN", "speed_excess_kmh", "over_ts", "reason"]
 
 
 def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesion=False):
@@ -93,7 +98,7 @@ def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesio
         if changes:
             doc = yaml.safe_load(path.read_text())
             doc.update(changes)
-            tag = "_".join(k if v is True else str(v) for k, v in changes.items())
+            tag = "_".join(k if v is True else f"{k}_{v}" for k, v in changes.items())  # never another study's name
             path, out = path.with_name(f".{name}_{tag}.yaml"), out.with_name(f"{out.name}_{tag}")
             path.write_text(yaml.safe_dump(doc))
         try:
@@ -120,6 +125,7 @@ if __name__ == "__main__":
     parser.add_argument("--adhesion", action="store_true", help="the plant's adhesion limit on (adhesion: true)")
     parser.add_argument("--terms", action="store_true", help="print the brake-penalty columns (eq. 4's terms at the optimum)")
     parser.add_argument("--balance", action="store_true", help="print the energy balance columns")
+    parser.add_argument("--stops", action="store_true", help="print the status columns (where each run stopped)")
     parser.add_argument("--blas-threads", type=int, default=1, help="OpenBLAS threads (the CLI's default: 1)")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("studies", nargs="*", help="study names (default: all four)")
@@ -129,4 +135,4 @@ if __name__ == "__main__":
         print("| solver | f | BLAS threads | virtual cars | Np/Nc | inputs | states | constraints | build s | first solve s | median s | p95 s | max s | RSS growth MB |")
         qp(args.qp, args.solver, threads=args.blas_threads)
     else:
-        studies(args.studies, args.fence_weights, args.scale, TERMS if args.terms else EFFECTS if args.balance else COLUMNS, args.workers, args.adhesion)
+        studies(args.studies, args.fence_weights, args.scale, TERMS if args.terms else EFFECTS if args.balance else STOPS if args.stops else COLUMNS, args.workers, args.adhesion)

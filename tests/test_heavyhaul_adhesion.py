@@ -37,7 +37,7 @@ def test_the_energy_balance_closes_with_and_without_adhesion(tmp_path):
         out = tmp_path / str(adhesion)
         result = CliRunner().invoke(app, ["heavyhaul", str(study(tmp_path, brake_penalty=[1], adhesion=adhesion)),
                                           "--out", str(out), "--no-progress", "--no-plot"])
-        assert result.exit_code == 1, result.output  # flagged: stopped about 100 m short
+        assert result.exit_code == 0, result.output  # ok: the run stops within 1 m of the stop
         runs[adhesion] = run = pd.read_csv(out / "runs.csv").iloc[0]
         assert abs(run["balance_residual_kWh"]) < 1e-3 * run["traction_kWh"]
         assert run["running_resistance_kWh"] > 0 and run["coupler_damping_kWh"] > 0 and run["grade_kWh"] != 0

@@ -205,35 +205,33 @@ def study(tmp_path, **changes):
 
 @pytest.mark.slow  # 20 s: the longest of the fast suite (make test < 3 min); CI runs it
 def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path):
-    """Two K_b on a 5 km line with a hump: every run stops near the end on the reference's final
-    approach, tracks within 2 m/s on average (it stops about 100 m short, where the
-    reference still runs), keeps |f_in| below the coupler limit; the braking
+    """Two K_b on a 5 km line with a hump: every run stops within the 1 m tolerance of the stop
+    (ok), tracks within 2 m/s on average, keeps |f_in| below the coupler limit; the braking
     penalty moves braking from the wagons to the locomotives (less so with the objective weighted per
     real car, the default, than with eq. 11 read literally); a third K_b re-uses the stored runs."""
     out = tmp_path / "out"
     first = runner.invoke(app, ["heavyhaul", str(study(tmp_path)), "--out", str(out), "--no-progress"])
-    assert first.exit_code == 1, first.output  # flagged: the speed tracker stops about 100 m short
+    assert first.exit_code == 0, first.output
     runs = pd.read_csv(out / "runs.csv")
-    assert list(runs["K_b"]) == [1, 60] and (runs["status"] == "flagged").all()
-    assert runs["reason"].str.fullmatch(r"stopped 10\d\.\d m short of the stop \(tolerance 1 m\)").all()
+    assert list(runs["K_b"]) == [1, 60] and (runs["status"] == "ok").all() and runs["arrived"].all()
     assert (runs["tracking_mean_mps"] < 2.0).all() and (runs["force_max_kN"] < 2000).all()  # 1.73, 1.74 measured
-    assert (runs["stop_error_m"].abs() < 300).all() and (runs["qp_inputs"] == 2 * 22).all()
+    assert (runs["stop_error_m"].abs() < 1).all() and (runs["qp_inputs"] == 2 * 22).all()
     assert runs["wagon_brake_kWh"].iloc[1] < 0.95 * runs["wagon_brake_kWh"].iloc[0]  # 218.9 against 240.6 kWh
     assert runs["dynamic_brake_kWh"].iloc[1] > runs["dynamic_brake_kWh"].iloc[0]
-    assert runs["energy_total_MJ"].iloc[1] < runs["energy_total_MJ"].iloc[0]
-    assert (runs["energy_total_MJ"] > runs["energy_wagons_MJ"]).all()
+    assert runs["energy_total_kWh"].iloc[1] < runs["energy_total_kWh"].iloc[0]
+    assert (runs["energy_total_kWh"] > runs["wagon_brake_kWh"]).all()
     assert (out / "tracking.png").exists() and (out / "brake_penalty.png").exists()
     assert (out / "forces_K_b60_f10_Np4_Nc2.png").exists()
     from .conftest import assert_folder
-    folder = assert_folder(out, "heavyhaul", ["runs"], rows=2, status="flagged")
-    assert folder.cases["flagged"] == 2 and "stopped 10" in str(folder.status) and (out / "report.html").is_file()
-    assert "flagged: " in first.output and "short of the stop" in first.output
+    folder = assert_folder(out, "heavyhaul", ["runs"], rows=2, status="ok")
+    assert folder.cases["ok"] == 2 and (out / "report.html").is_file()
+    assert "kWh" in first.output and "MJ" not in first.output
     again = runner.invoke(app, ["heavyhaul", str(study(tmp_path, brake_penalty=[1, 60, 40])), "--out", str(out),
                                 "--no-progress", "--no-plot"])
     assert "2 already stored, 1 computed now" in again.output, again.output
     literal = runner.invoke(app, ["heavyhaul", str(study(tmp_path, fence_weights="virtual", brake_penalty=[60])),
                                   "--out", str(tmp_path / "virtual"), "--no-progress", "--no-plot"])
-    assert literal.exit_code == 1, literal.output
+    assert literal.exit_code == 0, literal.output
     virtual = pd.read_csv(tmp_path / "virtual" / "runs.csv")
     assert virtual["wagon_brake_kWh"].iloc[0] < 0.6 * runs["wagon_brake_kWh"].iloc[0]  # 191 against 436 kWh
 
@@ -266,11 +264,12 @@ def load_yaml_doc(path):
 @pytest.mark.slow
 def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     """Zhang & Zhuan's Table IV on the shipped 45 km line (Np = 4, Nc = 2, f = 10, the energy-optimal
-    reference at +10 %, per-car weights, the paper's units): K_b 1 -> 60 lowers the wagons' braking
-    energy and the total a little (-5 %, -1.2 %), the largest in-train force over the braking samples
-    (a brake acts, no locomotive pulls) more than 2x (538 -> 101 kN), the tracking error moves by
-    less than 0.25 m/s; the braking term stays under 2 % of the force term and the dynamic brakes
-    under 30 % of their limit (docs/heavyhaul.md, "The braking penalty, measured")."""
+    reference at +10 %, per-car weights, the paper's units): both runs stop within 1 m (ok); K_b
+    1 -> 60 lowers the wagons' braking energy and E a little (3488 -> 3310 kWh, 8473 -> 8371 kWh:
+    -1.2 %), the largest in-train force over the braking samples (a brake acts, no locomotive pulls)
+    more than 2x (515 -> 101 kN), the tracking error moves by less than 0.25 m/s; the braking term
+    stays under 5 % of the force term and the dynamic brakes under 30 % of their limit
+    (docs/heavyhaul.md, "The braking penalty, measured")."""
     from .conftest import STUDIES, load_yaml
     doc = load_yaml(STUDIES / "heavyhaul_brake_penalty.yaml")
     doc.update(consist=str(PAPER), track=str(STUDIES.parent / "tracks/heavyhaul_representative_45km.yaml"),
@@ -278,12 +277,12 @@ def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     write_yaml(tmp_path / "kb.yaml", doc)
     result = runner.invoke(app, ["heavyhaul", str(tmp_path / "kb.yaml"), "--out", str(tmp_path / "out"),
                                  "--no-progress", "--no-plot", "--workers", "2"])
-    assert result.exit_code == 1, result.output  # flagged: both stop about 98 m short
+    assert result.exit_code == 0, result.output
     low, high = pd.read_csv(tmp_path / "out" / "runs.csv").itertuples()
-    assert "short of the stop" in low.reason and "short of the stop" in high.reason
-    assert high.energy_wagons_MJ < 0.97 * low.energy_wagons_MJ  # 11930 against 12568 MJ
-    assert high.energy_total_MJ < low.energy_total_MJ
+    assert low.status == high.status == "ok" and abs(low.stop_error_m) < 1 and abs(high.stop_error_m) < 1
+    assert high.wagon_brake_kWh < 0.97 * low.wagon_brake_kWh
+    assert high.energy_total_kWh < low.energy_total_kWh
     assert high.force_max_braking_kN < 0.5 * low.force_max_braking_kN
     assert abs(high.tracking_mean_mps - low.tracking_mean_mps) < 0.25
     assert max(low.force_max_kN, high.force_max_kN) < 1000 and high.over_ts == 0
-    assert high.J_braking < 0.02 * high.J_force and max(low.dynamic_brake_use_max, high.dynamic_brake_use_max) < 0.3
+    assert high.J_braking < 0.05 * high.J_force and max(low.dynamic_brake_use_max, high.dynamic_brake_use_max) < 0.3

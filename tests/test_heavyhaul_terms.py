@@ -56,18 +56,18 @@ def test_the_braking_penalty_acts_once_the_terms_are_in_their_limits(tmp_path):
     """On the 5 km line, K_b 1 -> 60: in the paper's units the wagons' braking term stays a few
     hundredths of the force term (0.0005 -> 0.022 measured) and the wagons' braking moves little;
     with every term in its limit the braking term is comparable and the wagons' braking falls by
-    more than half (900 -> 320 MJ) while the dynamic brakes take more."""
+    more than half (250 -> 89 kWh) while the dynamic brakes take more."""
     import pandas as pd
     runs = {}
     for scale in ("paper", "limits"):
         out = tmp_path / scale
         result = CliRunner().invoke(app, ["heavyhaul", str(study(tmp_path, objective_scale=scale)), "--out", str(out),
                                           "--no-progress", "--no-plot"])
-        assert result.exit_code == 1, result.output  # flagged: stopped about 100 m short
+        assert result.exit_code == 0, result.output  # every run stops within 1 m of the stop
         runs[scale] = pd.read_csv(out / "runs.csv").set_index("K_b")
     paper, limits = runs["paper"], runs["limits"]
-    assert (paper["J_braking"] / paper["J_force"]).max() < 0.05
+    assert (paper["J_braking"] / paper["J_force"]).max() < 0.1
     assert limits.loc[60, "J_braking"] / limits.loc[60, "J_force"] > 0.2
-    assert paper.loc[60, "energy_wagons_MJ"] > 0.8 * paper.loc[1, "energy_wagons_MJ"]
-    assert limits.loc[60, "energy_wagons_MJ"] < 0.5 * limits.loc[1, "energy_wagons_MJ"]
+    assert paper.loc[60, "wagon_brake_kWh"] > 0.8 * paper.loc[1, "wagon_brake_kWh"]
+    assert limits.loc[60, "wagon_brake_kWh"] < 0.5 * limits.loc[1, "wagon_brake_kWh"]
     assert limits.loc[60, "dynamic_brake_kWh"] > 2 * limits.loc[1, "dynamic_brake_kWh"]

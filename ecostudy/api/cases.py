@@ -33,7 +33,7 @@ LOOP_COLUMNS = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_pe
                 "arrival_s_max", "stop_error_m_min", "stop_error_m_max", "max_overspeed_kmh_max", "solve_mean_ms_mean",
                 "solve_p95_ms_max", "over_budget_sum", "softened_sum"]
 HEAVY_COLUMNS = ["K_b", "f", "Np", "Nc", "status", "tracking_mean_mps", "tracking_std_mps", "force_max_kN",
-                 "force_max_braking_kN", "force_mean_kN", "force_std_kN", "energy_wagons_MJ", "energy_total_MJ",
+                 "force_max_braking_kN", "force_mean_kN", "force_std_kN", "wagon_brake_kWh", "energy_total_kWh",
                  "qp_inputs", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts", "stop_error_m"]
 NETWORK_COLUMNS = ["strategy", "status", "substation_kWh", "saving_vs_independent_pct", "traction_input_kWh",
                    "regen_used_kWh", "regen_lost_kWh", "line_losses_kWh", "unserved_kWh", "balance_error_pct",

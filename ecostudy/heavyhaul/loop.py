@@ -7,13 +7,18 @@ stiffness) or, given an ``observer`` (heavyhaul.observer, eq. 10), its estimate 
 locomotives' measured speeds. Efforts are per virtual car, shared back to its cars in proportion
 to mass, clipped by the plant to every car's envelope. A solve that takes longer than Ts is not
 applied: the previous input is held, as the paper does (counted in ``overruns``).
+
+The terminal approach: past the reference's stop v_r continues its final deceleration below zero
+(a held last move then brakes into the stop at the reference's rate instead of stopping within a
+sample to stand for the rest of the horizon), and the sample in which the controller's plan stops
+the train brakes it onto the stop and ends when it stands (:func:`stopping`).
 """
 from typing import NamedTuple
 
 import numpy as np
 
 from ecostudy.core.units import KN
-from ecostudy.heavyhaul.plant import LOSSES
+from ecostudy.heavyhaul.plant import LOSSES, CascadeStep
 from ecostudy.heavyhaul.rhc import TERMS, input_offsets
 
 
@@ -61,24 +66,71 @@ def head_position(plant, state):
 def horizon(plant, reduction, reference, state, speeds, np_):
     """(input offsets per sample [N], v_r(k) for k = 0..Np [m/s]) along the predicted positions
     (eq. 9's F1, F2): the head advances as the reference does from the reference's clock at the
-    head's position; each sample's offsets are the grade and curve forces at its middle and the
-    resistance at the (virtual) cars' ``speeds``."""
+    head's position, and past the stop v_r continues the final deceleration below zero
+    (:meth:`~ecostudy.heavyhaul.reference.Reference.speed_in`); each sample's offsets are the grade
+    and curve forces at its middle and the resistance at the (virtual) cars' ``speeds``."""
     ts, head = reduction.model.ts, head_position(plant, state)
     heads = reference.position_at(reference.time_at(head) + ts * np.arange(np_ + 1))
     middles = 0.5 * (heads[:-1] + heads[1:]) - head
     offsets = np.array([input_offsets(reduction.model.mass, reduction.resistance, speeds,
                                       reduction.reduce(plant.fixed_forces(state.positions + d))) for d in middles])
-    return offsets, reference.speed(heads)
+    return offsets, reference.speed_in(ts * np.arange(np_ + 1), head)
 
 
 STOPPED = 0.3  # [m/s]: a train crawling slower on its final approach has stopped (1 km/h)
 
 
 def finished(plant, reference, state):
-    """Stopped (mean speed below :data:`STOPPED`) on the reference's final approach: a speed-tracking
-    controller stops where its speed runs out, not at a point (the stop error is reported)."""
-    mean = np.dot(plant.consist.mass, state.speeds) / plant.consist.mass.sum()
-    return mean < STOPPED and head_position(plant, state) > reference.final_approach
+    """Stopped (mean speed below :data:`STOPPED`) on the reference's final approach (where it stopped:
+    the stop error, reported and checked)."""
+    return mean_speed(plant, state) < STOPPED and head_position(plant, state) > reference.final_approach
+
+
+PIECE = 1.0  # [s]: the stopping sample is stepped in pieces this long (at most)
+STANDING = 0.02  # [m/s]: the stopping sample ends when the train's mean speed is below
+
+
+def mean_speed(plant, state):
+    """The train's mass-weighted mean speed [m/s]."""
+    return float(np.dot(plant.consist.mass, state.speeds) / plant.consist.mass.sum())
+
+
+def stopping(plant, reduction, reference, state, planned, ts):
+    """The sample in which the controller's plan stops the train (its predicted mean speed v(1) below
+    :data:`STOPPED`, on the final approach), stepped in pieces of :data:`PIECE`: in each the train
+    brakes for the constant deceleration v^2 / 2d that stops its head at the stop (d the distance to
+    go; the whole brake beyond it), the planned move's braking scaled to that force on the
+    resistance and grades the train feels, and the sample ends when the train stands (brakes hold a
+    standing train, mean speed under :data:`STANDING`; the cascade plant's efforts are forces, so a
+    brake held on for the rest of Ts would push the train back: a piece lasts at most the time the
+    train needs to stop). One :class:`~ecostudy.heavyhaul.plant.CascadeStep` for the sample."""
+    c, steps, u, now = plant.consist, [], planned, state
+    end = state.time + ts
+    while end - now.time > 1e-6 and mean_speed(plant, now) >= STANDING and len(steps) < 10 * ts / PIECE:
+        v, d = mean_speed(plant, now), reference.distance[-1] - head_position(plant, now)
+        held = float(plant.resistance(now.positions, now.speeds).sum())  # running, grade, curve [N]
+        low, _ = limits(plant, reduction, now)
+        if d > 0:  # the constant deceleration that stops the head at the stop, for at most its 2d/v
+            wanted, stop_in = held - c.mass.sum() * v * v / (2 * d), 2 * d / v
+            shape = planned if planned.sum() < 0 else low  # else every car the same share of its brakes
+            u = np.clip(shape * (min(wanted, 0.0) / shape.sum()), low, 0.0)  # coasts if it needs no brake
+        else:  # beyond: the whole brake until the train stands
+            u, stop_in = low, v * c.mass.sum() / max(held - low.sum(), 1.0)
+        dt = min(PIECE, max(stop_in, 0.01), end - now.time)
+        steps.append(plant.step(now, reduction.share(u, c.mass), dt))
+        now = steps[-1].state
+    return combined(steps), u
+
+
+def combined(steps):
+    """Consecutive steps as one :class:`~ecostudy.heavyhaul.plant.CascadeStep`."""
+    if not steps:
+        return None
+    last = steps[-1]
+    return CascadeStep(last.state, last.coupler_forces, max(s.largest_coupler_force for s in steps),
+                       *(sum(getattr(s, k) for s in steps) for k in ("traction_work", "dynamic_brake_work",
+                                                                      "wagon_brake_work")),
+                       max(s.speed_excess for s in steps), tuple(np.sum([s.losses for s in steps], axis=0)))
 
 
 def run(plant, reduction, controller, state, reference, samples, observer=None, applied=None):
@@ -93,23 +145,28 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     for _ in range(samples):
         measured = reduced_state(plant, reduction, state)
         x0 = measured if observer is None else observer.x.copy()  # eq. 10's x^(k|k-1)
-        offsets, vr = horizon(plant, reduction, reference, state, x0[:nv], controller.np_)
         low, high = limits(plant, reduction, state)
+        offsets, vr = horizon(plant, reduction, reference, state, x0[:nv], controller.np_)
         planned = controller.solve(x0, offsets / KN, low / KN, high / KN, vr) * KN
-        if controller.last.seconds <= ts:
+        seconds = controller.last.seconds
+        if seconds <= ts:
             u = planned
         else:
             overruns += 1
         if observer is not None:  # only the locomotives' speeds are measured (eq. 3)
             observer.update(measured[locos], u - offsets[0])
-        step = plant.step(state, reduction.share(u, c.mass), ts)
+        step = None
+        if (head_position(plant, state) > reference.final_approach
+                and (getattr(controller, "values", None) or {}).get("planned", [np.inf])[0] < STOPPED):
+            step, u = stopping(plant, reduction, reference, state, u, ts)  # the plan stops within this sample
+        step = step or plant.step(state, reduction.share(u, c.mass), ts)
         state = step.state
         works += [step.traction_work, step.dynamic_brake_work, step.wagon_brake_work]
         losses += step.losses
         head = head_position(plant, state)
         values = getattr(controller, "values", None) or {}
         rows.append((state.time, head, np.dot(c.mass, state.speeds) / c.mass.sum(), reference.speed(head),
-                     step.largest_coupler_force, step.coupler_forces, u, controller.last.seconds, step.speed_excess,
+                     step.largest_coupler_force, step.coupler_forces, u, seconds, step.speed_excess,
                      -low[locos], [values.get(t, np.nan) for t in TERMS]))
         if finished(plant, reference, state):
             arrived = True

@@ -9,7 +9,9 @@ limit, or when a solve took longer than Ts (its input was not applied).
 Per run also: eq. 4's terms at each sample's optimum, summed over the run (in-train forces,
 tracking, the locomotives' efforts, the wagons' braking: the value the controller traded), the
 locomotives' dynamic braking against its limit at their speed, and the samples in which the
-locomotives pull while a wagon brakes (stretch braking).
+locomotives pull while a wagon brakes (stretch braking) and about the energy the locomotives put in
+there only for the wagons to brake it away (the smaller of the two forces times the mean speed over
+the sample): E = int |u v| dt counts it twice.
 """
 from typing import NamedTuple
 
@@ -45,6 +47,8 @@ def run_metrics(record, reference, locomotives, force_limit):
     wagons = np.ones(efforts.shape[1], bool)
     wagons[locomotives] = False
     stretch = (loco > PULLING).any(axis=1) & (efforts[:, wagons] < -PULLING).any(axis=1)
+    both = np.minimum(np.maximum(loco, 0.0).sum(axis=1), np.maximum(-efforts[:, wagons], 0.0).sum(axis=1))
+    speeds = 0.5 * (record.mean_speed + np.concatenate([[0.0], record.mean_speed[:-1]]))  # over each sample
     dynamic = np.maximum(-loco, 0.0).sum(axis=1) / np.maximum(record.dynamic_limits.sum(axis=1), 1.0)
     using = dynamic > 1e-3
     terms = np.nansum(record.terms, axis=0)
@@ -55,6 +59,7 @@ def run_metrics(record, reference, locomotives, force_limit):
         "force_max_braking_kN": float(record.largest_coupler[braking].max() / KN) if braking.any() else 0.0,
         "force_limit_kN": force_limit / KN, "braking_samples": int(braking.sum()),
         "stretch_braking_samples": int(stretch.sum()),
+        "stretch_braking_kWh": float(np.sum(both * speeds * np.diff(record.times, prepend=0.0)) / KWH),
         "speed_excess_kmh": float(max(record.speed_excess.max(), 0.0) / KMH),
         "dynamic_brake_use_max": float(dynamic.max()),
         "dynamic_brake_use_mean": float(dynamic[using].mean()) if using.any() else 0.0,

@@ -45,6 +45,20 @@ class Reference(NamedTuple):
             i -= 1
         return float(self.distance[i])
 
+    @property
+    def final_deceleration(self):
+        """The deceleration of the reference's last piece into the stop [m/s^2, > 0]."""
+        return float((self.speeds[-2] - self.speeds[-1]) / (self.times[-1] - self.times[-2]))
+
+    def speed_in(self, seconds, head):
+        """v_r [m/s] ``seconds`` after the reference passes ``head`` [m] (its clock): beyond the stop the
+        final deceleration continued, below zero, the speed a braking effort held past the stop gives
+        the controller's linear model (eq. 2). A held last move (Nc < Np) then brakes into the stop at
+        the reference's rate rather than stopping within one sample to stand still for the rest."""
+        times = self.time_at(head) + np.asarray(seconds, float)
+        past = np.maximum(times - self.running_time, 0.0)
+        return self.speed(self.position_at(times)) - self.final_deceleration * past
+
     def speed(self, distance):
         return np.interp(distance, self.distance, self.speeds)
 

@@ -71,7 +71,9 @@ TERMS = ("force", "tracking", "energy", "braking")  # eq. 4's terms as reported:
 def objective_values(terms, wagons, predicted, moves, vr, ts):
     """Eq. 4's terms at a solution (same scaling as the QP): ``predicted`` the states x(1..Np) (rows),
     ``moves`` the Nc moves [kN] (rows), ``vr`` v_r(0..Np), ``wagons`` a mask of the wagon (virtual)
-    cars; a dict by :data:`TERMS` (the energy term the locomotives', the braking term the wagons')."""
+    cars; a dict by :data:`TERMS` (the energy term the locomotives', the braking term the wagons'), and
+    ``planned``: the predicted mean speeds v(1..Np) [m/s] (eq. 7's left side), where the loop reads
+    the positions of the next horizon from."""
     predicted, moves = np.atleast_2d(predicted), np.atleast_2d(moves)
     np_, nc = len(predicted), len(moves)
     n = len(wagons)
@@ -80,7 +82,8 @@ def objective_values(terms, wagons, predicted, moves, vr, ts):
     scale = ts / np_
     return {"force": scale * float(np.sum(terms.kf * forces ** 2)) / 1e4,
             "tracking": scale * float(np.sum(terms.kv * (predicted[:, :n] - np.asarray(vr)[1:, None]) ** 2)),
-            "energy": scale * float(np.sum(efforts[:, ~wagons])), "braking": scale * float(np.sum(efforts[:, wagons]))}
+            "energy": scale * float(np.sum(efforts[:, ~wagons])), "braking": scale * float(np.sum(efforts[:, wagons])),
+            "planned": predicted[:, :n] @ terms.weight}
 
 
 def qp_size(n, np_, nc, locomotives):

@@ -196,7 +196,7 @@ def interval_envelope(envelope: Envelope, v0: Any, v1: Any, cuts: Sequence[str] 
     mean speed (``mid_power``; else at the lower end too)."""
     if envelope.kind != "table" and "mid_power" in cuts:
         return np.asarray(envelope.force(0.5 * (np.asarray(v0, float) + np.asarray(v1, float))), float)
-    return np.minimum(envelope.force(v0), envelope.force(v1))
+    return np.asarray(np.minimum(envelope.force(v0), envelope.force(v1)), float)
 
 
 def define_acceleration_bounds(m: Model, nodes: FloatArray, train: Train) -> None:

@@ -60,10 +60,10 @@ def trade_off(runs, path, title=""):
         label = f"f={f} Np={n_p} Nc={n_c}"
         for ax, column, drawn, part in ((a, "force_max_kN", "o-", " whole run"),
                                          (a, "force_max_braking_kN", "s--", " while braking"),
-                                         (b, "energy_total_MJ", "o-", " total"), (b, "energy_wagons_MJ", "s--", " wagons")):
+                                         (b, "energy_total_kWh", "o-", " total"), (b, "wagon_brake_kWh", "s--", " wagons")):
             ax.plot(group["K_b"], group[column], drawn, color=palette(label + part), label=label + part)
     a.set_ylabel("largest |in-train force| [kN]")
-    b.set_ylabel("energy int |u v| dt [MJ]")
+    b.set_ylabel("energy int |u v| dt [kWh]")
     for ax in (a, b):
         ax.set_ylim(bottom=0)
         ax.ticklabel_format(axis="y", useOffset=False)

@@ -155,7 +155,7 @@ def summarise(consist, controller, record, reference, locomotives=()):
         "tracking_mean_mps": float(np.mean(np.abs(error))), "tracking_std_mps": float(np.std(error)),
         **run_metrics(record, reference, list(locomotives), consist.force_limit),
         "force_mean_kN": float(forces.mean()),
-        "force_std_kN": float(forces.std()), "energy_wagons_MJ": wagons / 1e6, "energy_total_MJ": total / 1e6,
+        "force_std_kN": float(forces.std()), "energy_total_kWh": total / KWH,
         "traction_kWh": record.traction_work / KWH, "dynamic_brake_kWh": record.dynamic_brake_work / KWH,
         "wagon_brake_kWh": wagons / KWH, "reference_kWh": reference.energy / KWH,
         "reference_time_s": reference.running_time, "samples": len(record.times),
@@ -183,9 +183,10 @@ def _run(case):
 
 
 COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN", "force_limit_kN",
-           "force_mean_kN", "force_std_kN", "energy_wagons_MJ", "energy_total_MJ", "traction_kWh", "dynamic_brake_kWh",
+           "force_mean_kN", "force_std_kN", "energy_total_kWh", "traction_kWh", "dynamic_brake_kWh",
            "wagon_brake_kWh", "J_force", "J_tracking", "J_energy", "J_braking", "dynamic_brake_use_max",
            "dynamic_brake_use_mean", "dynamic_brake_at_limit_samples", "braking_samples", "stretch_braking_samples",
+           "stretch_braking_kWh",
            "speed_excess_kmh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "coupler_damping_kWh", "stored_change_kWh",
            "balance_residual_kWh", "arrived", "arrival_s", "reference_time_s", "reference_kWh", "stop_error_m", "samples", "virtual_cars",
            "qp_inputs", "qp_states", "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts",
