@@ -96,7 +96,7 @@ def in_train_metrics(history, consist):
     run-outs summed over the couplers; the rainflow damage proxy (heavyhaul.fatigue) summed over
     the couplers and the largest one's, and the rainflow cycles of 100 kN range or more."""
     times = np.concatenate([t for t, _ in history])
-    forces = np.concatenate([f for _, f in history]).astype(float)
+    forces = np.concatenate([f for _, f in history])  # float32 as kept (a long run with slack: 1e7 numbers)
     where = np.cumsum(consist.length)[:-1]
     out = {}
     for name, sign in (("draft", 1.0), ("buff", -1.0)):
@@ -104,7 +104,7 @@ def in_train_metrics(history, consist):
         out |= {f"{name}_max_kN": max(sign * float(forces[point, coupler]), 0.0) / KN, f"{name}_coupler": int(coupler) + 1,
                 f"{name}_position_m": float(where[coupler]), f"{name}_time_s": float(times[point])}
     ins, outs = run_ins(forces)
-    cycles = [rainflow(column) for column in forces.T]
+    cycles = [rainflow(column.astype(float)) for column in forces.T]
     damages = np.array([damage(c) for c in cycles])
     return {**out, "run_ins": int(ins.sum()), "run_outs": int(outs.sum()),
             "fatigue_damage": float(damages.sum()), "fatigue_damage_max": float(damages.max()),
