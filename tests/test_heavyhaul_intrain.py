@@ -199,3 +199,22 @@ def test_an_effect_without_its_data_is_refused_in_one_line(tmp_path):
     doc["draft_gear"]["unloading_stiffness_kN_per_m"] = 2e4
     with pytest.raises(Exception, match="must not exceed loading_stiffness_kN_per_m"):
         consist_from_document(doc, "gear")
+
+
+def test_lagged_brakes_stop_a_train_and_never_drive_it_back():
+    """A 2 + 20 + 2 ore train at 1 m/s on the level, its wagons braking 20 kN each for 20 s and then
+    released: it stops within the first step while the brakes still build up, stays stopped while
+    they are released (17 s), and the brakes put no energy in (balance within 0.1 % of the kinetic
+    energy it had)."""
+    c = consist(wagons=20)
+    plant = CascadePlant(c, level(), air_brake=True)
+    state = plant.initial(5000.0, 1.0)
+    stored, works = plant.stored_energy(state), np.zeros(3 + len(LOSSES))
+    for u in (np.where(plant.loco, 0.0, -20e3), np.zeros(c.cars)):
+        step = plant.step(state, u, 20.0)
+        state = step.state
+        works += [step.traction_work, step.dynamic_brake_work, step.wagon_brake_work, *step.losses]
+        assert np.abs(state.speeds).max() < 1e-3
+    traction, dynamic, wagons, *losses = works
+    residual = traction - dynamic - wagons - sum(losses) - (plant.stored_energy(state) - stored)
+    assert abs(residual) < 1e-3 * stored and wagons > 0.5 * stored

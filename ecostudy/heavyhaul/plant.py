@@ -188,8 +188,8 @@ class CascadePlant:
         n, c = self.n, self.consist
         p, v = y[:n], y[n:2 * n]
         u = self.efforts(requested, v)
-        if brakes is not None:
-            u = np.where(self.loco, u, brakes)
+        if brakes is not None:  # a friction brake opposes the motion: never drives a train stopping under lagged brakes
+            u = np.where(self.loco, u, brakes * v / np.sqrt(v * v + STANDSTILL_SPEED ** 2))
         elastic, hysteresis, damping = self.coupler_parts(p, v)
         fin = elastic + hysteresis + damping
         running = self.running(v)
