@@ -4,6 +4,7 @@ and buff forces and where, slack run-ins, the rainflow damage proxy and the ener
 
     python bench/bench_intrain.py                      # the five plants, two K_b each (outputs in out/bench_intrain_*)
     python bench/bench_intrain.py none air_brake       # some of them
+    python bench/bench_intrain.py --study heavyhaul_intrain_5km   # the same on the 5 km line with a hump
 
 Each plant is a copy of studies/heavyhaul_brake_penalty.yaml with ``brake_penalty: [1, 60]`` and the
 switches set (written beside it, removed after the run); runs are resumable. Prints markdown for
@@ -32,16 +33,17 @@ ENERGY = ["traction_kWh", "dynamic_brake_kWh", "wagon_brake_kWh", "running_resis
           "grade_kWh", "coupler_damping_kWh", "draft_gear_kWh", "stored_change_kWh", "balance_residual_kWh"]
 
 
-def plant_runs(name, workers):
-    """The runs table of one plant (a study copy with its switches)."""
+def plant_runs(name, workers, study=STUDY):
+    """The runs table of one plant (a copy of the shipped ``study`` with its switches)."""
     from ecostudy.studies.heavyhaul import heavyhaul_study
-    path = ROOT / "studies" / f"{STUDY}.yaml"
+    path = ROOT / "studies" / f"{study}.yaml"
     doc = yaml.safe_load(path.read_text())
     doc.update({"brake_penalty": [1, 60], **PLANTS[name]})
-    copy = path.with_name(f".{STUDY}_intrain_{name}.yaml")
+    copy = path.with_name(f".{study}_intrain_{name}.yaml")
     copy.write_text(yaml.safe_dump(doc))
+    out = ROOT / "out" / (f"bench_intrain_{name}" if study == STUDY else f"bench_intrain_{study}_{name}")
     try:
-        return heavyhaul_study(copy, workers=workers, out=ROOT / "out" / f"bench_intrain_{name}").runs
+        return heavyhaul_study(copy, workers=workers, out=out).runs
     finally:
         copy.unlink()
 
@@ -59,6 +61,7 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser()
     parser.add_argument("plants", nargs="*", help=f"plants among {', '.join(PLANTS)} (default: all five)")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--study", default=STUDY, help="a shipped heavy-haul study (default: Table IV's line)")
     args = parser.parse_args()
     if set(args.plants) - set(PLANTS):
         parser.error(f"unknown plants {sorted(set(args.plants) - set(PLANTS))} (known: {', '.join(PLANTS)})")
@@ -66,7 +69,7 @@ if __name__ == "__main__":
     rows = []
     for name in args.plants or PLANTS:
         t0 = time.perf_counter()
-        runs = plant_runs(name, args.workers)
+        runs = plant_runs(name, args.workers, args.study)
         print(f"{name}: {time.perf_counter() - t0:.0f} s wall", file=sys.stderr, flush=True)
         rows += [(name, row) for _, row in runs.iterrows()]
     table(rows, FORCES)
