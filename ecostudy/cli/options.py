@@ -25,7 +25,7 @@ Points = Annotated[Optional[int], typer.Option("--points", "-K", help="Grid node
 Out = Annotated[Optional[Path], typer.Option(help="Output folder (relative: to the working directory; default: "
                                                   "the study's 'output').")]
 Workers = Annotated[int, typer.Option(help="Local worker processes.")]
-EveryCore = Annotated[Optional[int], typer.Option(min=1, help="Local worker processes (default: every core).")]
+EveryCore = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core).")]
 Dask = Annotated[Optional[str], typer.Option(help="Address of a running Dask scheduler (tcp://host:port).")]
 RetryFailed = Annotated[bool, typer.Option(help="Compute failed cases again (infeasible ones stay).")]
 NoProgress = Annotated[bool, typer.Option("--no-progress", help="No progress bar.")]

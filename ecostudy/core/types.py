@@ -150,6 +150,26 @@ class Trajectory(NamedTuple):
 
 
 @dataclass(frozen=True)
+class AirBrake:
+    """The wagons' air brakes as a brake pipe signal and a cylinder build-up (SI)."""
+
+    signal_speed: float   # c [m/s]: the brake signal runs from the head at this speed
+    build_up: float       # tau_b [s]: first-order time constant of a wagon's brake force rising
+    release: float        # tau_r [s]: the same falling
+
+
+@dataclass(frozen=True)
+class DraftGear:
+    """Every coupling's draft gear: free slack and loading/unloading stiffness (SI)."""
+
+    slack: float                 # total free play of a coupling [m] (the dead band, +-slack/2)
+    loading_stiffness: float     # k_l [N/m]: |deflection| growing
+    unloading_stiffness: float   # k_u [N/m]: |deflection| shrinking
+    transition_speed: float      # v_0 [m/s]: loading and unloading blend over this closing speed
+    smoothing: float             # epsilon [m]: the dead band's corners rounded over this deflection
+
+
+@dataclass(frozen=True)
 class Consist:
     """A long train as cars in train order (the head first) joined by couplers, SI (paper 002 eq. 1)."""
 
@@ -164,6 +184,8 @@ class Consist:
     stiffness: float             # k [N/m] of every coupler
     damping: float               # d [N s/m]
     force_limit: float           # |f_in| allowed [N]
+    air_brake: AirBrake | None = None    # the plant's air-brake propagation, where the file gives it
+    draft_gear: DraftGear | None = None  # the plant's draft gears, where the file gives them
 
     @property
     def cars(self) -> int:

@@ -18,9 +18,11 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core.units import KMH, KN, KWH
+from ecostudy.heavyhaul.fatigue import damage, rainflow
 from ecostudy.heavyhaul.plant import LOSSES
 from ecostudy.heavyhaul.rhc import TERMS
 
+RUN_IN = 50 * KN  # a coupler's force from above +this (draft) to below -this (buff) is a slack run-in [N]
 PULLING = KN     # a (virtual) car's effort above this pulls, below minus this brakes [N]
 AT_LIMIT = 0.99  # dynamic braking at this share of its limit or more is "at the limit"
 
@@ -79,6 +81,40 @@ def energy_balance(record):
     out["stored_change_kWh"] = record.stored_change / KWH
     out["balance_residual_kWh"] = (put_in - sum(record.losses) - record.stored_change) / KWH
     return out
+
+
+def run_ins(forces, threshold=RUN_IN):
+    """(run-ins, run-outs) of every coupler: its force going from draft (>= ``threshold``) to buff
+    (<= -``threshold``) and back, over a history ``forces`` (points, couplers) [N]."""
+    ins, outs = np.zeros(forces.shape[1], int), np.zeros(forces.shape[1], int)
+    for j, column in enumerate(forces.T):
+        side = np.sign(column[np.abs(column) >= threshold])
+        ins[j], outs[j] = np.sum((side[:-1] > 0) & (side[1:] < 0)), np.sum((side[:-1] < 0) & (side[1:] > 0))
+    return ins, outs
+
+
+def in_train_metrics(history, consist):
+    """What heavy-haul engineers read from the couplers' force histories (the plant's ``history``:
+    per step the integrator's times [s] and forces [N], tension positive): the largest draft
+    (tension) and buff (compression) force, at which coupler (1: behind the head car), how far
+    behind the head's front [m] and when [s]; the slack run-ins (draft to buff, :data:`RUN_IN`) and
+    run-outs summed over the couplers; the rainflow damage proxy (heavyhaul.fatigue) summed over
+    the couplers and the largest one's, and the rainflow cycles of 100 kN range or more."""
+    times = np.concatenate([t for t, _ in history])
+    forces = np.concatenate([f for _, f in history])  # float32 as kept (a long run with slack: 1e7 numbers)
+    where = np.cumsum(consist.length)[:-1]
+    out = {}
+    for name, sign in (("draft", 1.0), ("buff", -1.0)):
+        point, coupler = np.unravel_index(np.argmax(sign * forces), forces.shape)
+        out |= {f"{name}_max_kN": max(sign * float(forces[point, coupler]), 0.0) / KN, f"{name}_coupler": int(coupler) + 1,
+                f"{name}_position_m": float(where[coupler]), f"{name}_time_s": float(times[point])}
+    ins, outs = run_ins(forces)
+    cycles = [rainflow(column.astype(float)) for column in forces.T]
+    damages = np.array([damage(c) for c in cycles])
+    return {**out, "run_ins": int(ins.sum()), "run_outs": int(outs.sum()),
+            "fatigue_damage": float(damages.sum()), "fatigue_damage_max": float(damages.max()),
+            "fatigue_damage_coupler": int(np.argmax(damages)) + 1,
+            "rainflow_cycles_100kN": float(sum(n for c in cycles for r, _, n in c if r >= 100 * KN))}
 
 
 def reasons(metrics, samples, over_ts, tolerances=Tolerances()):

@@ -51,12 +51,47 @@ class Couplers(Strict):
     force_limit_kN: float = Field(gt=0, le=1e5, description="Largest allowed |in-train force|.")
 
 
+class AirBrake(Strict):
+    """The wagons' air brakes (the plant's ``air_brake`` effect): a wagon's brake force follows its
+    command once the brake pipe signal, running from the head at ``signal_speed_mps``, has reached it,
+    rising (falling) as a first-order lag of ``build_up_s`` (``release_s``)."""
+
+    signal_speed_mps: float = Field(gt=0, le=400, description="Brake pipe signal speed (UIC 540: >= 250 m/s).")
+    build_up_s: float = Field(gt=0, le=120, description="Time constant of a wagon's brake force rising.")
+    release_s: float = Field(gt=0, le=300, description="Time constant of a wagon's brake force falling.")
+    source: str = Field(min_length=1, description="Where the values come from (or that they are typical).")
+
+
+class DraftGear(Strict):
+    """Every coupling's draft gear (the plant's ``draft_gear`` effect): ``slack_mm`` of free play, then
+    the loading stiffness while the deflection grows and the unloading stiffness while it shrinks (the
+    loop between them is the energy the gear dissipates). The controller keeps ``couplers``' linear
+    stiffness and damping (its design model); the damping acts only with the slack taken up."""
+
+    slack_mm: float = Field(ge=0, le=200, description="Total free play of a coupling (dead band +-slack/2).")
+    loading_stiffness_kN_per_m: float = Field(gt=0, le=1e6)
+    unloading_stiffness_kN_per_m: float = Field(gt=0, le=1e6)
+    transition_speed_mps: float = Field(0.01, gt=0, le=1, description="Loading and unloading blend over "
+                                        "this closing speed (tanh).")
+    smoothing_mm: float = Field(0.5, gt=0, le=10, description="The dead band's corners rounded over this.")
+    source: str = Field(min_length=1, description="Where the values come from (or that they are typical).")
+
+    @model_validator(mode="after")
+    def _loop(self) -> "DraftGear":
+        if self.unloading_stiffness_kN_per_m > self.loading_stiffness_kN_per_m:
+            raise ValueError("unloading_stiffness_kN_per_m must not exceed loading_stiffness_kN_per_m "
+                             "(the gear would make energy)")
+        return self
+
+
 class ConsistFile(Strict):
     name: str
     source: str
     types: dict[str, VehicleType] = Field(min_length=1)
     vehicles: list[Group] = Field(min_length=1, max_length=1000)
     couplers: Couplers
+    air_brake: Optional[AirBrake] = Field(None, description="Air-brake propagation data (switched on in a study).")
+    draft_gear: Optional[DraftGear] = Field(None, description="Draft-gear data (switched on in a study).")
 
     @model_validator(mode="after")
     def _known(self) -> Self:

@@ -74,6 +74,10 @@ class HeavyhaulFile(Strict):
     adhesion: bool = Field(False, description="Cap each locomotive's traction and dynamic braking at its adhesion, "
                            "mu(v) m g with Curtius & Kniffler's dry-rail mu (the plant; the controller sees the "
                            "capped envelopes).")
+    air_brake: bool = Field(False, description="The plant's wagon brakes delayed along the train and lagged "
+                            "(the consist's air_brake data; docs/heavyhaul.md, In-train physics).")
+    draft_gear: bool = Field(False, description="The plant's couplers with slack and loading/unloading stiffness "
+                             "(the consist's draft_gear data); the controller keeps the linear couplers.")
     weights: Weights = Weights()
     rate_kN_per_sample: float = Field(200.0, gt=0, description="Largest change of a locomotive group's effort "
                                       "per sample (Zhang & Zhuan give none).")

@@ -17,6 +17,7 @@ from ecostudy.core.physics import EfficiencyMap, Envelope, force_power_fit, tabl
 from ecostudy.core.types import Consist, Supply, Timing, Track, Train, Window
 from ecostudy.io import schemas
 from ecostudy.io.consistschema import ConsistFile
+from ecostudy.io.intrain import in_train_physics
 from ecostudy.io.formats import (
     timetable_document_to_schema,
     track_document_to_schema,
@@ -392,4 +393,4 @@ def consist_from_document(document: Mapping[str, Any], where: Where) -> Consist:
                    dynamic_brake=tuple(envelope(v.dynamic_brake) for v in cars),
                    pneumatic_brake=np.array([v.pneumatic_brake_kN * units.KN for v in cars]),
                    stiffness=c.couplers.stiffness_kN_per_m * units.KN, damping=c.couplers.damping_kNs_per_m * units.KN,
-                   force_limit=c.couplers.force_limit_kN * units.KN)
+                   force_limit=c.couplers.force_limit_kN * units.KN, **in_train_physics(c))

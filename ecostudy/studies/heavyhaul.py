@@ -28,7 +28,7 @@ from ecostudy.heavyhaul.checks import reference_problems, ruling_grade, samples_
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
 from ecostudy.heavyhaul.linear import fence
 from ecostudy.heavyhaul.loop import reduced_state, run
-from ecostudy.heavyhaul.metrics import Tolerances, reasons, run_metrics
+from ecostudy.heavyhaul.metrics import Tolerances, in_train_metrics, reasons, run_metrics
 from ecostudy.heavyhaul.observer import KalmanObserver
 from ecostudy.heavyhaul.plant import CascadePlant
 from ecostudy.heavyhaul.reference import Reference, optimal_reference, single_mass, table_reference
@@ -62,6 +62,10 @@ def expand(path):
     s = validate(HeavyhaulFile, read_document(path), path)
     consist_doc = read_document(path.parent / s.consist)
     consist = consist_from_document(consist_doc, path.parent / s.consist)
+    missing = [problem(path, name, f"the consist '{s.consist}' gives no {name} data") for name in ("air_brake", "draft_gear")
+               if getattr(s, name) and getattr(consist, name) is None]
+    if missing:
+        raise InputError(missing)
     track_doc = track_document(path.parent / s.track)
     track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{path} track"))
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
@@ -95,7 +99,8 @@ def expand(path):
               "sample_time": s.sample_time_s, "weights": s.weights.model_dump(), "rate_kN": s.rate_kN_per_sample,
               "observer": s.observer, "qp_solver": s.qp_solver,
               "fence_coupling": s.fence_coupling, "fence_sharing": s.fence_sharing, "fence_weights": s.fence_weights,
-              "objective_scale": s.objective_scale, "adhesion": s.adhesion, "max_samples": s.max_samples,
+              "objective_scale": s.objective_scale, "adhesion": s.adhesion, "air_brake": s.air_brake, "draft_gear": s.draft_gear,
+              "max_samples": s.max_samples,
               "stop_tolerance_m": s.stop_tolerance_m, "speed_tolerance_kmh": s.speed_tolerance_kmh, "version": __version__}
     cases = []
     for kb, f, h in product(s.brake_penalty, s.fence, s.horizons):
@@ -124,7 +129,8 @@ def drive(case):
     r = case["reference"]
     reference = Reference(*(np.array(r[k]) for k in ("distance", "speeds", "times")), r["energy"])
     plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]),
-                         adhesion=case["adhesion"])
+                         adhesion=case["adhesion"], air_brake=case["air_brake"],
+                         draft_gear=case["draft_gear"])
     labels, w, ts = case["labels"], case["weights"], case["sample_time"]
     reduction = fence(consist, labels["f"], ts, case["fence_coupling"], case["fence_sharing"])
     scales = None
@@ -140,7 +146,7 @@ def drive(case):
     observer = (KalmanObserver(reduction.model, reduction.kinds, estimate=reduced_state(plant, reduction, state))
                 if case["observer"] else None)
     state, record = run(plant, reduction, controller, state, reference, case["max_samples"], observer=observer)
-    return consist, controller, record, reference
+    return consist, controller, record, reference, plant
 
 
 def summarise(consist, controller, record, reference, locomotives=()):
@@ -175,22 +181,26 @@ def run_heavyhaul_case(case):
 
 
 def _run(case):
-    consist, controller, record, reference = drive(case)
-    summary = summarise(consist, controller, record, reference, controller.locos)
+    consist, controller, record, reference, plant = drive(case)
+    summary = {**summarise(consist, controller, record, reference, controller.locos),
+               **in_train_metrics(plant.history, consist)}
     why = reasons(summary, case["max_samples"], summary["over_ts"],
                   Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH))
     return ("flagged", "; ".join(why), summary) if why else ("ok", None, summary)
 
 
+IN_TRAIN = ("draft_max_kN", "draft_coupler", "draft_position_m", "draft_time_s", "buff_max_kN", "buff_coupler",
+            "buff_position_m", "buff_time_s", "run_ins", "run_outs", "fatigue_damage", "fatigue_damage_max",
+            "fatigue_damage_coupler", "rainflow_cycles_100kN")  # metrics.in_train_metrics
 COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN", "force_limit_kN",
            "force_mean_kN", "force_std_kN", "energy_total_kWh", "traction_kWh", "dynamic_brake_kWh",
            "wagon_brake_kWh", "J_force", "J_tracking", "J_energy", "J_braking", "dynamic_brake_use_max",
            "dynamic_brake_use_mean", "dynamic_brake_at_limit_samples", "braking_samples", "stretch_braking_samples",
            "stretch_braking_kWh",
-           "speed_excess_kmh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "coupler_damping_kWh", "stored_change_kWh",
+           "speed_excess_kmh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "coupler_damping_kWh", "draft_gear_kWh", "stored_change_kWh",
            "balance_residual_kWh", "arrived", "arrival_s", "reference_time_s", "reference_kWh", "stop_error_m", "samples", "virtual_cars",
            "qp_inputs", "qp_states", "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts",
-           "peak_memory_MB")
+           "peak_memory_MB", *IN_TRAIN)
 
 
 def heavyhaul_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
