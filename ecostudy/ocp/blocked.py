@@ -186,9 +186,10 @@ class Blocked:
     def start(self, k, state):
         set_blocked_start(self.session, self.model, k, state)
 
-    def solve(self, alpha, omega, gamma_max):
+    def solve(self, alpha, omega, gamma_max, options=None):
+        """``options``: Ipopt options for this solve over the program's own."""
         set_objective(self.session, self.model, alpha, omega, gamma_max)
-        return self.session.solve(self.options)
+        return self.session.solve({**self.options, **(options or {})})
 
     @property
     def gamma(self):
