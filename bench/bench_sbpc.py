@@ -41,7 +41,6 @@ from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp.problem import prepare  # noqa: E402
 from ecostudy.ocp.solver import configure  # noqa: E402
-from ecostudy.studies.batch import outcome  # noqa: E402
 from ecostudy.studies.cases import case_key  # noqa: E402
 from ecostudy.studies.closedloop import expand, run_loop_case  # noqa: E402
 from ecostudy.studies.workers import worker_pool  # noqa: E402
