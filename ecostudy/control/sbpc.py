@@ -9,9 +9,10 @@ Variants:
 - ``nominal`` (Alg. 1): the terminal set as a hard constraint (gamma = 0). When the plant has
   drifted so far that no input reaches it, the solve falls back to the two-step relaxation for
   that sample and counts it (``softened``). The hard-constrained solve gets ``NOMINAL_ITERATIONS``
-  Ipopt iterations: warm from the shifted tail a reachable terminal set takes 3-20, and an
-  unreachable one spent up to the 500 of ``OPTIONS`` proving it (an SBPC nominal run under
-  +-10 % deviations took 9 min on a busy machine);
+  Ipopt iterations: warm from the shifted tail a reachable terminal set takes 3.5-7 a sample on
+  average, and an unreachable one spent up to the 500 of ``OPTIONS`` proving it (an SBPC nominal
+  run under +-10 % deviations took 9 min on a busy machine). A reachable X_f that needs more is
+  not lost: the relaxation that follows finds gamma* = 0 and plans within it;
 - ``two_step`` (Alg. 2): first the smallest reachable terminal distance gamma (4.18), then the
   least energy within it (4.19). Where the terminal set itself is reachable, 4.18's minimum is
   gamma* = 0 and 4.19 is the nominal problem, so the nominal problem is tried first (within
@@ -38,7 +39,7 @@ VARIANTS = ("nominal", "two_step", "multi")
 TRANSCRIPTIONS = ("simultaneous", "condensed")
 # each solve starts from the previous one (the shifted tail), primal and dual (docs/closed_loop.md)
 OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}
-NOMINAL_ITERATIONS = 60  # Ipopt iterations for the hard terminal set (gamma = 0) before it counts as unreachable
+NOMINAL_ITERATIONS = 15  # Ipopt iterations for the hard terminal set (gamma = 0) before it counts as unreachable
 
 
 class Sbpc(Fallback):
