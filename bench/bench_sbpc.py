@@ -63,10 +63,10 @@ def timed(case):
     return case, run_loop_case(case), time.perf_counter() - t0
 
 
-def draws_table(study, draws, workers, only):
-    """Run each controller of ``study`` over ``draws`` draws and on the model train; a row each."""
+def draws_table(study, draws, workers, only, skip=0):
+    """Run each controller of ``study`` over draws ``skip`` .. ``draws`` - 1 and on the model train; a row each."""
     _, _, cases = expand(study)
-    chosen = [c for c in cases if c["labels"]["draw"] < draws and (not only or c["scenario"] in only)]
+    chosen = [c for c in cases if skip <= c["labels"]["draw"] < draws and (not only or c["scenario"] in only)]
     print("| controller | draws | stop error max abs / median [m] | within 1 m | arrival - 76 s median / max [s] | "
           "overspeed max [km/h] | energy / model train, mean (min-max) | statuses | run wall mean [s] |\n|"
           + "---|" * 9, flush=True)
@@ -113,13 +113,14 @@ def main():
     p.add_argument("--study", default=STUDY, help="the closed-loop study of --draws")
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--only", nargs="*", help="with --draws: only these controllers of the study")
+    p.add_argument("--skip", type=int, default=0, help="with --draws: leave out the first SKIP draws (run them apart)")
     args = p.parse_args()
     print(f"`python bench/bench_sbpc.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
     track = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
     train = load_train(ROOT / "trains/amsterdam_metro.yaml")
     if args.draws:
         configure()
-        draws_table(args.study, args.draws, args.workers, args.only)
+        draws_table(args.study, args.draws, args.workers, args.only, args.skip)
         return
     ato = solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=200)
     case = prepare(track, train, "Rokin", "Centraal", 200)
