@@ -79,7 +79,8 @@ def draws_table(study, draws, workers, only, skip=0):
                 s = row["summary"] or {}
                 print(f"  {name} draw {case['labels']['draw']}: {row['status']} stop "
                       f"{s.get('stop_error_m', float('nan')):+.3f} m, arrival {s.get('arrival_s', float('nan')):.2f} s, "
-                      f"{wall:.0f} s wall", file=sys.stderr, flush=True)
+                      f"{wall:.0f} s wall, overspeed {s.get('max_overspeed_kmh', float('nan')):.2f} km/h, "
+                      f"{s.get('energy_J_per_kg', float('nan')):.1f} J/kg", file=sys.stderr, flush=True)
             print(draws_row(name, runs[0][0], runs[1:], mine[0]["window"][1]), flush=True)
 
 
