@@ -8,17 +8,9 @@ absolute multiples of L is exactly the shifted tail of thesis 000 Prop. 4.2.1.
 Variants:
 - ``nominal`` (Alg. 1): the terminal set as a hard constraint (gamma = 0). When the plant has
   drifted so far that no input reaches it, the solve falls back to the two-step relaxation for
-  that sample and counts it (``softened``). The hard-constrained solve gets ``NOMINAL_ITERATIONS``
-  Ipopt iterations: warm from the shifted tail a reachable terminal set takes 3.5-7 a sample on
-  average, and an unreachable one spent up to the 500 of ``OPTIONS`` proving it (an SBPC nominal
-  run under +-10 % deviations took 9 min on a busy machine). A reachable X_f that needs more is
-  not lost: the relaxation that follows finds gamma* = 0 and plans within it;
+  that sample and counts it (``softened``);
 - ``two_step`` (Alg. 2): first the smallest reachable terminal distance gamma (4.18), then the
-  least energy within it (4.19). Where the terminal set itself is reachable, 4.18's minimum is
-  gamma* = 0 and 4.19 is the nominal problem, so the nominal problem is tried first (within
-  ``NOMINAL_ITERATIONS``) and the two solves are made only when it has no solution: one solve a
-  sample instead of two while the plant is within reach of X_f (4.18 alone is degenerate, many
-  handles reach the same gamma, and took 19 iterations a sample);
+  least energy within it (4.19);
 - ``multi`` (4.31): least energy plus omega gamma in one solve.
 After k_f, or at the stop, the controller brakes in full. A sample without a usable solve applies
 the last accepted plan's handle for that sample (``control.fallback``; it covers every sample to
@@ -39,7 +31,6 @@ VARIANTS = ("nominal", "two_step", "multi")
 TRANSCRIPTIONS = ("simultaneous", "condensed")
 # each solve starts from the previous one (the shifted tail), primal and dual (docs/closed_loop.md)
 OPTIONS = {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5, **WARM_START}
-NOMINAL_ITERATIONS = 15  # Ipopt iterations for the hard terminal set (gamma = 0) before it counts as unreachable
 
 
 class Sbpc(Fallback):
@@ -74,8 +65,8 @@ class Sbpc(Fallback):
         self.solve_seconds, self.gammas, self.iterations, self.softened, self.failures = [], [], [], 0, 0
         self._start_records()
 
-    def _solve(self, alpha, omega, gamma_max, options=None):
-        outcome = self.program.solve(alpha, omega, gamma_max, options)
+    def _solve(self, alpha, omega, gamma_max):
+        outcome = self.program.solve(alpha, omega, gamma_max)
         self.iterations.append(outcome.iterations)
         return outcome
 
@@ -94,12 +85,14 @@ class Sbpc(Fallback):
             return -1.0
         t0, softened = time.perf_counter(), ()
         self.program.start(k, measured)
-        if self.variant in ("nominal", "two_step"):
-            outcome = self._solve(1.0, 0.0, 0.0, {"max_iter": NOMINAL_ITERATIONS})
+        if self.variant == "nominal":
+            outcome = self._solve(1.0, 0.0, 0.0)
             if not outcome.usable:
-                self.softened += self.variant == "nominal"
-                softened = ("terminal_set",) if self.variant == "nominal" else ()
+                self.softened += 1
+                softened = ("terminal_set",)
                 outcome = self._smallest_gamma()
+        elif self.variant == "two_step":
+            outcome = self._smallest_gamma()
         else:
             outcome = self._solve(1.0, self.omega, None)
         seconds = time.perf_counter() - t0

@@ -186,10 +186,9 @@ class Blocked:
     def start(self, k, state):
         set_blocked_start(self.session, self.model, k, state)
 
-    def solve(self, alpha, omega, gamma_max, options=None):
-        """``options``: Ipopt options for this solve over the program's own."""
+    def solve(self, alpha, omega, gamma_max):
         set_objective(self.session, self.model, alpha, omega, gamma_max)
-        return self.session.solve({**self.options, **(options or {})})
+        return self.session.solve(self.options)
 
     @property
     def gamma(self):

@@ -137,14 +137,13 @@ class Condensed:
         self.k, self._memo = k, None
         self.state = (float(np.clip(state.position, 0.0, self.case.segment.distance + 200.0)), max(float(state.speed), 0.0))
 
-    def solve(self, alpha, omega, gamma_max, options=None):
+    def solve(self, alpha, omega, gamma_max):
         """min (alpha J + omega gamma) / J_ref within Delta(x_kf, X_f) <= gamma <= ``gamma_max``
         (None: any; 0: the nominal terminal set); keeps the handles, predicted states and gamma.
 
         The nominal program is tried only where the smallest gamma (4.18, warm: a few iterations)
         is within ``FEASIBLE``: SLSQP spends up to ``max_iter`` iterations before it gives up on an
-        unreachable terminal set. That solve is kept for a 4.18 asked next from the same state.
-        ``options`` (Ipopt's, for the simultaneous program) are not read: SLSQP has its own cap."""
+        unreachable terminal set. That solve is kept for a 4.18 asked next from the same state."""
         key = (self.k, self.state, alpha, omega, gamma_max)
         if self._memo is not None and self._memo[0] == key:
             _, outcome, self.u, self.gamma, self.s, self.v = self._memo
