@@ -1,5 +1,5 @@
 # Two commands: `make run` and `make test`. Both install whatever is missing first.
-.PHONY: install run test test-slow test-all docs docs-gallery typecheck bench doctor clean
+.PHONY: install run test test-slow test-long test-all docs docs-gallery typecheck bench doctor clean
 
 ECOSTUDY := .venv/bin/ecostudy
 # pytest-xdist processes: the suite runs in two on this machine kind's two cores
@@ -16,7 +16,10 @@ test: install
 	$(PYTEST) -m "not slow"
 
 test-slow: install
-	$(PYTEST) -m slow
+	$(PYTEST) -m "slow and not long"
+
+test-long: install
+	$(PYTEST) -m long
 
 test-all: install
 	$(PYTEST)

@@ -2,6 +2,14 @@
 
     .venv/bin/python bench/bench_sbpc.py [--sample 0.38] [--blocks 45 20 1] [--disturbances 0.1 0.05 0.02]
         [--sppc] [--transcription condensed]
+    .venv/bin/python bench/bench_sbpc.py --draws 20 [--workers 2] [--only sbpc_multi ...] [--study FILE]
+
+With ``--draws N``: the stop over N random draws (``studies/metro_terminal.yaml``, its draws set
+to N: mass, resistance, traction and braking uniform within +-10 %, DAS levels, Yazhemsky 2017
+Ch. 10 noise, one sample of computation delay), per controller of the study: the stop error (max
+|e|, median), the arrival against the timetable (median, max), the energy per kg against the same
+controller on the model train without noise (mean ratio), the statuses and the wall time of a
+run. The time SBPC nominal L = 1 takes for the 200 samples: ``--blocks 1 --disturbances`` (run wall).
 
 Table 1 (Table 4.1's trend): the nominal SBPC for each L on the model train: energy at the wheel,
 arrival, stop error, solve time per step (mean, max), Ipopt iterations per step, samples where
@@ -32,6 +40,61 @@ from ecostudy.core.plant import Plant, Truth  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp.problem import prepare  # noqa: E402
+from ecostudy.ocp.solver import configure  # noqa: E402
+from ecostudy.studies.cases import case_key  # noqa: E402
+from ecostudy.studies.closedloop import expand, run_loop_case  # noqa: E402
+from ecostudy.studies.workers import worker_pool  # noqa: E402
+
+STUDY = ROOT / "studies/metro_terminal.yaml"
+
+
+def nominal_case(case):
+    """``case`` on the model train without noise (the energy reference of its controller)."""
+    quiet = {**case, "truth": dict.fromkeys(case["truth"], 1.0),
+             "noise": {**dict.fromkeys(case["noise"], 0.0), "period_s": case["noise"]["period_s"], "seed": 0},
+             "labels": {**case["labels"], "draw": "model"}}
+    quiet["key"] = case_key({k: v for k, v in quiet.items() if k != "key"})
+    return quiet
+
+
+def timed(case):
+    """``run_loop_case`` with the run's wall time."""
+    t0 = time.perf_counter()
+    return case, run_loop_case(case), time.perf_counter() - t0
+
+
+def draws_table(study, draws, workers, only, skip=0):
+    """Run each controller of ``study`` over draws ``skip`` .. ``draws`` - 1 and on the model train; a row each."""
+    _, _, cases = expand(study)
+    chosen = [c for c in cases if skip <= c["labels"]["draw"] < draws and (not only or c["scenario"] in only)]
+    print("| controller | draws | stop error max abs / median [m] | within 1 m | arrival - 76 s median / max [s] | "
+          "overspeed max [km/h] | energy / model train, mean (min-max) | statuses | run wall mean [s] |\n|"
+          + "---|" * 9, flush=True)
+    with worker_pool(workers) as pool:
+        for name in only or dict.fromkeys(c["scenario"] for c in chosen):
+            mine = [c for c in chosen if c["scenario"] == name]
+            runs = []
+            for case, row, wall in pool.map(timed, [nominal_case(mine[0])] + mine):
+                runs.append((row, wall))
+                s = row["summary"] or {}
+                print(f"  {name} draw {case['labels']['draw']}: {row['status']} stop "
+                      f"{s.get('stop_error_m', float('nan')):+.3f} m, arrival {s.get('arrival_s', float('nan')):.2f} s, "
+                      f"{wall:.0f} s wall, overspeed {s.get('max_overspeed_kmh', float('nan')):.2f} km/h, "
+                      f"{s.get('energy_J_per_kg', float('nan')):.1f} J/kg", file=sys.stderr, flush=True)
+            print(draws_row(name, runs[0][0], runs[1:], mine[0]["window"][1]), flush=True)
+
+
+def draws_row(name, model, runs, arrival):
+    """One table row: ``model`` the run on the model train, ``runs`` [(row, wall)] the draws."""
+    s = [r["summary"] for r, _ in runs if r["summary"]]
+    e = np.array([x["stop_error_m"] for x in s])
+    late = np.array([x["arrival_s"] for x in s]) - arrival
+    ratio = np.array([x["energy_J_per_kg"] for x in s]) / model["summary"]["energy_J_per_kg"]
+    statuses = {k: sum(r["status"] == k for r, _ in runs) for k in ("ok", "flagged", "failed")}
+    return (f"| {name} | {len(s)} of {len(runs)} | {np.max(np.abs(e)):.3f} / {np.median(e):+.3f} | "
+            f"{int(np.sum(np.abs(e) <= 1.0))} | {np.median(late):+.2f} / {np.max(late):+.2f} | "
+            f"{max(x['max_overspeed_kmh'] for x in s):.2f} | {ratio.mean():.3f} ({ratio.min():.3f}-{ratio.max():.3f}) | "
+            f"{' '.join(f'{k} {n}' for k, n in statuses.items() if n)} | {np.mean([w for _, w in runs]):.0f} |")
 
 
 def main():
@@ -47,10 +110,19 @@ def main():
                    help="the variant of the rows for each L on the model train")
     p.add_argument("--transcription", default="simultaneous", choices=TRANSCRIPTIONS,
                    help="SBPC's FHOCP with the states as variables (Ipopt) or condensed to the block handles (SLSQP)")
+    p.add_argument("--draws", type=int, help="the stop over this many random draws of --study (see above)")
+    p.add_argument("--study", default=STUDY, help="the closed-loop study of --draws")
+    p.add_argument("--workers", type=int, default=1)
+    p.add_argument("--only", nargs="*", help="with --draws: only these controllers of the study")
+    p.add_argument("--skip", type=int, default=0, help="with --draws: leave out the first SKIP draws (run them apart)")
     args = p.parse_args()
     print(f"`python bench/bench_sbpc.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
     track = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
     train = load_train(ROOT / "trains/amsterdam_metro.yaml")
+    if args.draws:
+        configure()
+        draws_table(args.study, args.draws, args.workers, args.only, args.skip)
+        return
     ato = solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=200)
     case = prepare(track, train, "Rokin", "Centraal", 200)
     speeds = np.interp(case.nodes, ato.trajectory.nodes, ato.trajectory.v)

@@ -42,6 +42,7 @@ def test_a_plan_from_a_later_sample_keeps_the_past_and_the_blocks(amsterdam_case
     assert m.up[0].value == 0.0 and m.um[0].value == 0.0  # block 0 (samples 0-4) is over
     assert m.s[50].value == pytest.approx(case.segment.distance, abs=1e-3) and m.v[50].value == pytest.approx(0.0, abs=1e-3)
     assert handle_at(m, 7) == handle_at(m, 9)  # samples 5-9 share block 1
+    assert list(controller.program.handles(7)) == [handle_at(m, j) for j in range(7, 50)]
     # each variable meets a handful of others in the Lagrangian's Hessian: alpha times the whole
     # work sum made it dense (825 variables: 172 595 entries at k_f = 200, 17 s a sample more)
     nlp = controller.program.session.nlp

@@ -19,8 +19,6 @@ k_f), for at most ``fallback.SHIFT_SAMPLES`` samples in a row, then brakes in fu
 import dataclasses
 import time
 
-import numpy as np
-
 from ecostudy.control.fallback import Fallback
 from ecostudy.core.types import State
 from ecostudy.ocp.blocked import Blocked, samples, time_guess
@@ -108,7 +106,7 @@ class Sbpc(Fallback):
             return handle
         self.gammas.append(self.program.gamma)
         self.program.follow()  # the next sample's grade and bounds follow this prediction
-        planned = np.array([self.program.handle(j) for j in range(k, self.kf)])
+        planned = self.program.handles(k)
         self.accept(lambda later: float(planned[j]) if 0 <= (j := self._sample(later) - k) < planned.size else None)
         self.record(status, seconds, softened=softened)
         return float(planned[0])

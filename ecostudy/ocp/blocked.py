@@ -199,3 +199,9 @@ class Blocked:
 
     def handle(self, k):
         return handle_at(self.model, k)
+
+    def handles(self, k):
+        """The handles of samples k .. k_f - 1 (one read of the block values)."""
+        m = self.model
+        u = np.array([pyo.value(m.up[b]) - pyo.value(m.um[b]) for b in m.B])
+        return u[np.minimum(np.arange(k, len(m.I)) // m.block, len(u) - 1)]

@@ -227,3 +227,8 @@ class Condensed:
         """The handle the solved program applies at sample ``k``."""
         b = min(k // self.block, self.nb - 1)
         return float(self.u[b] - self.u[self.nb + b])
+
+    def handles(self, k):
+        """The handles of samples k .. k_f - 1."""
+        u = self.u[:self.nb] - self.u[self.nb:]
+        return u[np.minimum(np.arange(k, self.kf) // self.block, self.nb - 1)]
