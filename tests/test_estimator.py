@@ -2,9 +2,12 @@
 §10.1 noise, the convex controller at 10 Hz, compute delay 1): the EKF of position, speed, mass and
 disturbance against the scalar filter of eqs. 10.5-10.8, and the registered estimator choices."""
 import numpy as np
+import pandas as pd
 import pytest
+from typer.testing import CliRunner
 
 from ecostudy.analysis.single import solve_run
+from ecostudy.cli import app
 from ecostudy.control.ekf import StateEstimator
 from ecostudy.control.estimator import MassEstimator
 from ecostudy.control.estimators import ESTIMATORS, make_estimator
@@ -16,7 +19,7 @@ from ecostudy.io.loopfile import Controller
 from ecostudy.studies import controllers  # noqa: F401  (registers the controller kinds)
 from ecostudy.studies.estimator_trips import ch10_noise, estimate_at, estimator_trip
 
-from .conftest import ROOT
+from .conftest import ROOT, TRACKS, TRAINS, write_yaml
 
 
 @pytest.fixture(scope="module")
@@ -57,3 +60,20 @@ def test_over_20_noise_seeds_the_ekf_is_within_2_percent_at_2_km():
     errors = [estimator_trip(ROOT, seed, "state", points=60, marks=(2000.0,), until=2000.0).errors[2000.0]
               for seed in range(20)]
     assert np.percentile(np.abs(errors), 95) <= 0.02, errors
+
+
+def test_a_study_runs_the_state_estimator_by_name(tmp_path):
+    """``estimator: state`` in a study file: the run's mass estimate is the EKF's, near the draw's mass."""
+    path = tmp_path / "ekf.yaml"
+    write_yaml(path, {"name": "ekf", "track": str(TRACKS / "thesis001_advanced_1km.yaml"),
+                      "train": str(TRAINS / "thesis001_commuter.yaml"), "window_s": [0, 200], "points": 60,
+                      "sample_time_s": 0.2, "draws": 1, "seed": 5,
+                      "controllers": [{"name": "ekf", "kind": "convex", "estimator": "state"}],
+                      "deviations": {"mass": {"low": 1.1, "high": 1.1}},
+                      "noise": {"acceleration_mps2": 0.05, "period_s": 1.0, "speed_mps": 0.01, "position_m": 0.01,
+                                "accelerometer_mps2": 0.01}})
+    result = CliRunner().invoke(app, ["simulate", str(path), "--out", str(tmp_path / "out"), "--no-progress",
+                                      "--no-plot"])
+    runs = pd.read_csv(tmp_path / "out" / "runs.csv")
+    assert result.exit_code in (0, 1) and runs.loc[0, "status"] != "failed", result.output
+    assert abs(runs.loc[0, "mass_estimate"] / runs.loc[0, "true_mass"] - 1) < 0.03
