@@ -1,4 +1,7 @@
-"""Scalar Kalman filter of the train's mass (thesis 001 §10.3, eqs. 10.5-10.8).
+"""Mass estimators of the closed loop (``control.loop.run_loop`` calls ``observe`` once a cycle).
+
+``MassEstimator``: the scalar Kalman filter of the train's mass (Yazhemsky 2017, "A real-time
+capable adaptive optimal controller for a commuter train", §10.3, eqs. 10.5-10.8).
 
 The state is the inverse mass, here normalised by the model's mass: e = M_model / M (eq. 10.5),
 constant between cycles (M_A = 1, M_B = 0, eq. 10.6c). Each control cycle measures
@@ -7,13 +10,29 @@ constant between cycles (M_A = 1, M_B = 0, eq. 10.6c). Each control cycle measur
 
 where g_j is the grade and curve acceleration (it does not depend on the mass: the static mass
 scales with the inertial one) and C_j the net force the train was commanded over the last cycle,
-per model mass (eq. 10.6b, 10.6e in this model's units: thesis 001 writes the resistance per unit
-mass, ecostudy as a force). The update is eqs. 10.7/10.8, with the two defects of the printed
+per model mass (eq. 10.6b, 10.6e in this model's units: Yazhemsky 2017 writes the resistance per
+unit mass, ecostudy as a force). The update is eqs. 10.7/10.8, with the two defects of the printed
 text mended: eq. 10.7 swaps the process noise H and the measurement noise R (here: the prior
 covariance grows by the process noise ``process``, the innovation covariance adds the measurement
 noise ``measurement``), and eq. 10.8c is read as e + chi (l - C e).
+
+``StateEstimator`` (``estimator: state`` in a study): an extended Kalman filter of position,
+speed, inverse mass and the acceleration disturbance (:mod:`ecostudy.control.ekf`), for the
+case the scalar filter cannot handle: a disturbance held over many cycles (Yazhemsky 2017 §10.1
+holds it 1 s) that the controller reacts to, so that the commanded force correlates with it.
 """
 from dataclasses import dataclass, field
+
+from ecostudy.core.physics import davis_resistance
+
+
+def net_per_mass(nominal, u, v):
+    """The net force [N] of handle ``u`` at speed ``v`` on the model train, per model mass [m/s^2]
+    (C_j of eq. 10.6d, with Davis resistance)."""
+    train = nominal.train
+    davis = davis_resistance(v, *train.davis)
+    ft, fb = nominal.forces(v, u, davis)
+    return (ft - fb - davis) / train.mass
 
 
 @dataclass
@@ -32,6 +51,14 @@ class MassEstimator:
     @property
     def estimate(self):
         return 1.0 / self.e
+
+    def observe(self, nominal, u, before, after, reading):
+        """One cycle from the measured states ``before`` and ``after`` the model train ``nominal``
+        (a ``core.plant.Plant``) ran handle ``u``, and the accelerometer's ``reading`` of the
+        cycle's mean acceleration: C_j as the mean of the cycle's ends (trapezoid)."""
+        net = 0.5 * sum(net_per_mass(nominal, u, max(v, 0.0)) for v in (before.speed, after.speed))
+        grade = nominal.grade_force(before.position) / nominal.train.mass
+        return self.update(reading, grade, net, before.position)
 
     def update(self, acceleration, grade_acceleration, net_force_per_mass, position=None):
         """One cycle (eqs. 10.8a-e); returns the mass estimate as a multiple of the model's."""

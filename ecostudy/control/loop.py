@@ -23,7 +23,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ecostudy.core.physics import davis_resistance
 from ecostudy.core.plant import Noise, Plant, Truth
 from ecostudy.core.types import State
 from ecostudy.core.units import to_kmh
@@ -97,9 +96,12 @@ class _Trip:
                     return
 
 
-def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max_time=None, estimator=None, delay=0):
+def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max_time=None, estimator=None, delay=0,
+             until=None):
     """Drive ``plant`` with ``controller`` (``plan(measured state) -> handle``) to a stand, the
-    control acting ``delay`` after its measurement (the module docstring)."""
+    control acting ``delay`` after its measurement (the module docstring); ``until`` [m]: stop the
+    trip at the first sample at or past this position instead (a partial trip: for studies of the
+    estimator's convergence)."""
     delay = check_delay(delay)
     segment, model = plant.segment, plant.train
     nominal = Plant(segment, model)  # the controller's model of the train: estimator and prediction
@@ -115,15 +117,9 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
         readings.append(measured)
         if estimator is not None and last is not None and max(last[3].speed, state.speed) > 0.0:
             # what the model says the handle did (a train that stood throughout tells nothing)
-            u, v0, measured0, before = last
-            net = 0.0
-            for v in (v0, max(measured.speed, 0.0)):  # the cycle's mean: trapezoid over its ends
-                davis = davis_resistance(v, *model.davis)
-                ft, fb = nominal.forces(v, u, davis)
-                net += 0.5 * (ft - fb - davis) / model.mass
-            grade = nominal.grade_force(measured0.position) / model.mass
+            u, _, measured0, before = last
             reading = noise.read_acceleration((state.speed - before.speed) / (state.time - before.time), trip.rng)
-            estimator.update(reading, grade, net, measured0.position)
+            estimator.observe(nominal, u, measured0, measured, reading)
         # the controller's model for the prediction: with the mass it estimates, if it does
         ahead_model = nominal if estimator is None else Plant(segment, model, Truth(mass=estimator.estimate))
         if delay == MEASURED:
@@ -141,7 +137,7 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
         last = (pieces[0][1], max(measured.speed, 0.0), measured, state)
         trip.run(pieces)
         states.append(trip.state)
-        if trip.stood:
+        if trip.stood or (until is not None and trip.state.position >= until):
             break
     estimates = list(estimator.history) if estimator is not None else []
     state = trip.state

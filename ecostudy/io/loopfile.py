@@ -56,7 +56,9 @@ class Controller(Strict):
     kind: str = Field(description="A registered controller kind (``studies.controllers``).")
     settings: ConvexSettings = ConvexSettings()
     rspc: RspcSettings = RspcSettings()
-    estimator: bool = Field(False, description="Feed the controller a Kalman mass estimate (thesis 001 §10.3).")
+    estimator: Union[bool, Literal["mass", "state"]] = Field(
+        False, description="Feed the controller a mass estimate: true or 'mass', the scalar Kalman filter of "
+        "Yazhemsky 2017 §10.3; 'state', the EKF of position, speed, mass and disturbance (control/ekf.py).")
     scheme: Literal["midpoint", "left"] = "midpoint"
     block: int = Field(20, ge=1, description="SBPC: L, samples per blocked move (thesis 000 eq. 4.8).")
     variant: Literal["nominal", "two_step", "multi"] = "nominal"

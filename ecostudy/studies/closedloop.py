@@ -15,7 +15,7 @@ import pandas as pd
 
 from ecostudy import __version__
 from ecostudy.control.controllers import Quantised
-from ecostudy.control.estimator import MassEstimator
+from ecostudy.control.estimators import make_estimator
 from ecostudy.control.loop import run_loop
 from ecostudy.control.terminal import TerminalApproach
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
@@ -169,11 +169,11 @@ def run_loop_case(case):
 
 def _trip(case):
     track, train, segment = _inputs(case)
-    estimator = MassEstimator() if controller_spec(case)["estimator"] else None
-    controller, planner = build_controller(case, track, segment, train, estimator)
     n = case["noise"]
     noise = Noise(n["acceleration_mps2"], n["position_m"], n["speed_mps"], n["seed"], n["period_s"],
                   n["accelerometer_mps2"])
+    estimator = make_estimator(controller_spec(case)["estimator"], noise)
+    controller, planner = build_controller(case, track, segment, train, estimator)
     plant = Plant(segment, train, Truth(**case["truth"]))
     result = run_loop(plant, controller, case["sample_time"], noise, plant_step=case["sample_time"],
                       estimator=estimator, delay=case_delay(case))

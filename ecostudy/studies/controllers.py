@@ -6,6 +6,7 @@ ones (``uses``); the study file's loader refuses any other option given to that 
 is a module with its builder and one ``CONTROLLER_KINDS.register`` line, imported below
 (docs/closed_loop.md, "Adding a controller kind").
 """
+import json
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -48,9 +49,19 @@ def convex_program(segment, train, points, spec):
     return ConvexProgram(segment, train, trapezoid_grid(segment, points), weights, scheme=spec["scheme"])
 
 
+_ATO_RUNS: dict = {}  # the ATO run of each (line, train, stops, arrival, grid) solved in this process
+
+
 def _ato(b):
-    return solve_run(b.track, b.train, b.case["from"], b.case["to"], Timing(running_time=b.window[1]),
-                     points=b.points, verify_result=False)
+    """The nominal train's energy-optimal ATO run at the latest arrival: the same for every draw of a
+    study (the draws change the plant, not the model), so solved once per process and shared
+    (the controllers only read it)."""
+    key = json.dumps([b.case["track"], b.case["train"], b.case["from"], b.case["to"], b.window[1], b.points],
+                     sort_keys=True, default=str)
+    if key not in _ATO_RUNS:
+        _ATO_RUNS[key] = solve_run(b.track, b.train, b.case["from"], b.case["to"], Timing(running_time=b.window[1]),
+                                   points=b.points, verify_result=False)
+    return _ATO_RUNS[key]
 
 
 def convex(b):
