@@ -15,15 +15,12 @@
 # A driver cannot follow a continuous optimal handle; a driver advisory system (DAS) gives a few
 # phases instead. The `compare` command drives one run every way and scores each with the same
 # independent simulator: all-out, the ATO optimum, eco-drive coasting, a MARECO-style run, and
-# two kinds of DAS advice (Farooqi 2018 §3.1 and Ch. 5). The Python API reads its output folder back.
-#
-# `compare` has no function of its own in `ecostudy.api` yet, so the example runs the command
-# (as `!ecostudy compare ...` would in a notebook) and reads the folder with `api.load`.
+# two kinds of DAS advice (Farooqi 2018 §3.1 and Ch. 5). In Python it is `api.compare_folder`,
+# with the command's options as arguments: it writes the same output folder and returns it read
+# back (an `api.Report`: status, case counts, tables as DataFrames, and the text the command prints).
 
 # %%
 # %matplotlib inline
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
@@ -36,25 +33,16 @@ from ecostudy import api
 ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents, Path(api.__file__).parents[1]) if (p / "tracks").is_dir())
 OUT = Path(tempfile.mkdtemp(prefix="ecostudy-gallery-"))
 
-
-def ecostudy(*args):
-    """Run an ecostudy command; exit code 0 (all ok) or 1 (a case flagged or failed), else an error."""
-    done = subprocess.run([sys.executable, "-m", "ecostudy", *map(str, args)], capture_output=True, text=True)
-    if done.returncode not in (0, 1):
-        raise RuntimeError(done.stderr)
-    return done.returncode
-
-
 # %%
-ecostudy("compare", "--track", ROOT / "tracks" / "regional_808m.yaml", "--train", ROOT / "trains" / "regional_alstom.yaml",
-         "--time", 80, "--points", 200, "--out", OUT / "compare")
-result = api.load(OUT / "compare")
+result = api.compare_folder(track=ROOT / "tracks" / "regional_808m.yaml", train=ROOT / "trains" / "regional_alstom.yaml",
+                            time=80, points=200, out=OUT / "compare")
 print(result.kind, "|", result.status, "|", result.cases)
+print("\n".join(result.problems()))
 result.table
 
 # %% [markdown]
-# A case that is not `ok` carries its reason: a DAS advice that stops a little beyond the stop is
-# `flagged`, and the command exits with 1 so a script notices.
+# A case that is not `ok` carries its reason, and `result.problems()` lists them one a line
+# (the command line would exit with 1 so a script notices; the function returns the status).
 #
 # The energies side by side, from the table (kWh of traction at the wheel and net of
 # regeneration):
@@ -74,7 +62,7 @@ fig.tight_layout()
 fig
 
 # %% [markdown]
-# The command's own figure: every strategy's speed in its own colour from `ecostudy.report.style`.
+# The figure the function wrote into the folder: every strategy's speed in its own colour.
 
 # %%
-Image(filename=OUT / "compare" / "compare.png")
+Image(filename=result.folder / "compare.png")

@@ -19,8 +19,6 @@
 
 # %%
 # %matplotlib inline
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
@@ -56,9 +54,9 @@ for late in (0.0, 5.0):
 #
 # The `simulate` command drives a plant that is not the model (here the mass drawn within
 # +-10 % per run) with a controller in the loop, and with the controller's own first plan
-# replayed open loop for comparison, over a few Monte Carlo draws. `simulate` has no function of
-# its own in `ecostudy.api` yet: the study file is written from Python, the command runs it and
-# `api.load` reads the folder back.
+# replayed open loop for comparison, over a few Monte Carlo draws. In Python it is
+# `api.simulate_folder`: the study file is written from Python, the function runs it into its
+# output folder and returns the folder read back (an `api.Report`).
 
 # %%
 OUT = Path(tempfile.mkdtemp(prefix="ecostudy-gallery-"))
@@ -75,11 +73,9 @@ study = {
     "seed": 1,
 }
 (OUT / "closed_loop.yaml").write_text(yaml.safe_dump(study))
-done = subprocess.run([sys.executable, "-m", "ecostudy", "simulate", OUT / "closed_loop.yaml", "--out", OUT / "loop"],
-                      capture_output=True, text=True)
-assert done.returncode in (0, 1), done.stderr  # 1: a run flagged or failed, listed in the folder
-result = api.load(OUT / "loop")
+result = api.simulate_folder(OUT / "closed_loop.yaml", out=OUT / "loop")
 print(result.status, result.cases)
+print("\n".join(result.problems()))  # each run not ok, with its reason
 
 # %% [markdown]
 # One row per run: its status (with the reason when it is not ok), energy, arrival and where it
@@ -93,4 +89,4 @@ result.tables["runs"][["controller", "draw", "status", "reason", "traction_energ
 # the colour it has in every ecostudy figure:
 
 # %%
-Image(filename=OUT / "loop" / "bands.png")
+Image(filename=result.folder / "bands.png")

@@ -16,13 +16,12 @@
 # regeneration can feed the other one if it draws power at the time; otherwise the line's
 # receptivity cuts it off. The `network` command drives the trains independently, with the
 # receptivity rule of Farooqi 2018 (Ch. 7), and keeping a separation (`following`), solving the
-# DC circuit at every step. It has no function of its own in `ecostudy.api` yet: the study file is
-# written from Python, the command runs it and `api.load` reads the folder back.
+# DC circuit at every step. In Python it is `api.network_folder`: the study file is written from
+# Python, the function runs it into its output folder and returns the folder read back (an
+# `api.Report`).
 
 # %%
 # %matplotlib inline
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
@@ -49,11 +48,9 @@ study = {
     "buffer_m": 300,
 }
 (OUT / "network.yaml").write_text(yaml.safe_dump(study))
-done = subprocess.run([sys.executable, "-m", "ecostudy", "network", OUT / "network.yaml", "--out", OUT / "network"],
-                      capture_output=True, text=True)
-assert done.returncode in (0, 1), done.stderr  # 1: a strategy flagged or failed, listed in the folder
-result = api.load(OUT / "network")
+result = api.network_folder(OUT / "network.yaml", out=OUT / "network")
 print(result.status, result.cases)
+print("\n".join(result.problems()))  # each strategy not ok, with its reason
 
 # %% [markdown]
 # Per strategy: the energy the substation delivers, the saving against independent driving, and
@@ -68,7 +65,7 @@ result.tables["substation"][["strategy", "status", "substation_kWh", "saving_vs_
 # every train and strategy in a colour of its own.
 
 # %%
-Image(filename=OUT / "network" / "network.png")
+Image(filename=result.folder / "network.png")
 
 # %%
-Image(filename=OUT / "network" / "network_supply.png")
+Image(filename=result.folder / "network_supply.png")

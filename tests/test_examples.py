@@ -1,6 +1,7 @@
 """The examples gallery (``examples/``): jupytext percent scripts that use the Python API only.
 
-Fast: each script is a jupytext notebook that reads ecostudy through ``ecostudy.api`` alone.
+Fast: each script is a jupytext notebook that reads ecostudy through ``ecostudy.api`` alone and
+runs no command in a subprocess (every command is an API function).
 Slow: each is converted to a notebook and executed by a Jupyter kernel (nbclient), as the docs
 render it; a cell that raises fails the test, and every example shows at least one figure.
 """
@@ -33,6 +34,8 @@ def test_an_example_is_a_notebook_that_uses_the_python_api_only(script):
             imported |= {a.name for a in node.names}
     ours = {name for name in imported if name.split(".")[0] == "ecostudy"}
     assert ours == {"ecostudy.api"}, sorted(ours)
+    shelled = {name for name in imported if name.split(".")[0] in ("subprocess", "os")}
+    assert not shelled, f"every command is an api function: no {sorted(shelled)}"
 
 
 @pytest.mark.slow
