@@ -102,14 +102,14 @@ def heavyhaul_folder(study: Path, workers: int = 1, dask: Optional[str] = None, 
 
 def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, workers: Optional[int] = None,
                    fig_format: str = "png", dpi: Optional[float] = None,
-                   note: Callable[[str], None] = log.info) -> Report:
+                   note: Callable[[str], None] = log.info, *, progress: Progress = None) -> Report:
     """``ecostudy network``: trains sharing one DC substation under every strategy of the study
     (independent, rules 7.7 / 7.11, dissension, joint optimum, following; Farooqi 2018, Ch. 7)."""
     figures, workers = output(fig_format, dpi), every_core(workers)
     st = load_network_study(study)
     check_network_study(st, study, workers)  # too big for a run or the command: refused (unless --force)
     folder = check_output_dir(output_folder(out, st.output))
-    table = write_network(run_network(st, workers, progress=note), st, folder, plot=plot, out=figures)
+    table = write_network(run_network(st, workers, progress=note, tick=progress), st, folder, plot=plot, out=figures)
     return reported(folder, [shown(table, NETWORK_COLUMNS), "outputs " + listed(folder)])
 
 

@@ -18,4 +18,5 @@ def network(
     force: o.Force = False, debug: o.Debug = False,
 ):
     """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""
-    finish(call(debug, "network_folder", study, out, not no_plot, workers, fig_format, dpi, force=force))
+    finish(call(debug, "network_folder", study, out, not no_plot, workers, fig_format, dpi, force=force,
+                bar=("strategies", False, False)))

@@ -45,9 +45,10 @@ from ecostudy.network.scoring import evaluate, separations, verify_leg
 DEAREST_FIRST = ("triggering", "dissension", "voltage", "receptivity", "joint", "following")
 
 
-def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
+def run_strategies(fleet, strategies, progress=print, pool=None, workers=1, tick=None):
     """Every strategy on ``fleet``: {name: {"runs", "steps", "trains", "totals", "info"}}, in the
-    order asked; one that fails is {"failed": why, "wall_s"} and the others go on.
+    order asked; one that fails is {"failed": why, "wall_s"} and the others go on. ``progress``
+    receives a line per strategy, ``tick(done, failed, remaining, total)`` the counts (a bar).
 
     The independent runs are solved first: they are strategy (a) and the start of the others.
     ``pool``: a process pool of ``workers`` processes (``--workers``) or None. With one, the
@@ -66,6 +67,9 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1):
 
     def report(name, result):
         out[name] = result
+        if tick:
+            failed = sum("failed" in r for r in out.values())
+            tick(len(out), failed, len(strategies) - len(out), len(strategies))
         if progress and "failed" in result:
             progress(f"{name:12s} FAILED: {result['failed']}")
         elif progress:

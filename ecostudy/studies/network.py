@@ -3,7 +3,7 @@ strategy run and scored by the same circuit (``network.fleet``, ``network.strate
 pool of worker processes when ``workers`` > 1. The tables and files: ``report.files.write_network``.
 """
 from contextlib import nullcontext
-from typing import Any, Callable, NamedTuple
+from typing import Any, Callable, NamedTuple, Optional
 
 from ecostudy.network import fleet, strategies
 from ecostudy.studies.workers import worker_pool
@@ -17,12 +17,15 @@ class NetworkRun(NamedTuple):
     outcome: dict
 
 
-def run_network(st, workers: int = 1, progress: Callable[[str], None] = print) -> NetworkRun:
-    """Plan the fleet of a loaded network study ``st`` and run its strategies."""
+def run_network(st, workers: int = 1, progress: Callable[[str], None] = print,
+                tick: Optional[Callable[[int, int, int, int], None]] = None) -> NetworkRun:
+    """Plan the fleet of a loaded network study ``st`` and run its strategies (``progress``: a line
+    each, ``tick(done, failed, remaining, total)``: the strategies' counts)."""
     with worker_pool(workers) if workers > 1 else nullcontext() as pool:
         fl = fleet.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
                         st.supply, st.points, st.buffer, pool, st.supplement)
         progress(f"{len(st.names)} trains, {len(st.stops) - 1} segments ({', '.join(f'{t:.1f}' for t in fl.asked_times)} s "
                  f"before rounding to {st.dt} s steps), {fl.steps} steps")
-        outcome = strategies.run_strategies(fl, st.strategies, progress=progress, pool=pool, workers=workers)
+        outcome = strategies.run_strategies(fl, st.strategies, progress=progress, pool=pool, workers=workers,
+                                               tick=tick)
     return NetworkRun(fl, outcome)
