@@ -6,7 +6,7 @@ from typing import Any, Literal, Optional, Self
 
 from pydantic import Field, field_validator, model_validator
 
-from ecostudy.io.schemabase import Strict
+from ecostudy.io.schemabase import Name, Strict
 
 
 class ReferenceSpec(Strict):
@@ -48,7 +48,7 @@ class Weights(Strict):
 
 
 class HeavyhaulFile(Strict):
-    name: str
+    name: Name
     consist: str
     track: str
     from_stop: Optional[str] = Field(None, alias="from")

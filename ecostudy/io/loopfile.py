@@ -8,6 +8,7 @@ from typing import Annotated, Any, Literal, Optional, Self, Union
 from pydantic import Field, model_validator
 
 from ecostudy.core.registry import Registry
+from ecostudy.io.schemabase import Name
 from ecostudy.io.schemas import Strict
 
 
@@ -52,7 +53,7 @@ class Controller(Strict):
     kind does not read (``USES``) is refused, so a misplaced one cannot pass silently.
     """
 
-    name: str
+    name: Name
     kind: str = Field(description="A registered controller kind (``studies.controllers``).")
     settings: ConvexSettings = ConvexSettings()
     rspc: RspcSettings = RspcSettings()
@@ -138,7 +139,7 @@ class NoiseSettings(Strict):
 
 
 class SimulateFile(Strict):
-    name: str
+    name: Name
     track: str
     train: str
     from_stop: Optional[str] = Field(None, alias="from")

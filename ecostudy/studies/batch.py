@@ -111,7 +111,7 @@ def _dask(todo, address, task):
         raise EcostudyError("--dask needs Dask: pip install 'ecostudy[dask]'") from None
     if not re.fullmatch(r"(tcp|tls|ucx)://[^\s:/]+:\d{1,5}", address or ""):
         raise InputError(problem("command line", "--dask", f"expected a scheduler address tcp://host:port, got "
-                                 f"'{address}'"))
+                                 f"{address!r}"))
     try:
         client = Client(address, timeout=15)
     except (OSError, TimeoutError) as exc:

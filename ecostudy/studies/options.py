@@ -47,7 +47,7 @@ def parse_pair(text: str, option: str, ordered: bool = False, nonnegative: bool 
     try:
         a, b = (float(x) for x in text.split(","))
     except ValueError:
-        raise InputError(problem("command line", option, f"expected two numbers 'a,b', got '{text}'"))
+        raise InputError(problem("command line", option, f"expected two numbers 'a,b', got {text!r}"))
     if not (math.isfinite(a) and math.isfinite(b)):
         raise InputError(problem("command line", option, f"must be finite numbers, not '{text}'"))
     if ordered and not 0 <= a <= b:
