@@ -26,7 +26,7 @@ def calibrate(
     debug: o.Debug = False,
 ):
     """Fit train parameters to logged runs: least squares on the replayed dynamics, 95 % intervals,
-    identifiability (parameters the logs do not excite are held at the train file's value, exit 1)."""
+    identifiability (parameters the logs do not excite are held at the train file's value, exit 1). Example: ecostudy calibrate LOG.csv --train TRAIN.yaml --track TRACK.yaml --out out/cal"""
     finish(call(debug, "calibrate_folder", logs, train, track, fit, out, bootstrap, savings, not no_plot))
 
 
@@ -42,5 +42,5 @@ def validate(
     debug: o.Debug = False,
 ):
     """Replay a logged run on the train file's model: traction energy following the logged speed, and
-    running time driven by the logged handle, per run between stops."""
+    running time driven by the logged handle, per run between stops. Example: ecostudy validate LOG.csv --train TRAIN.yaml --track TRACK.yaml --out out/val"""
     finish(call(debug, "validate_folder", log, train, track, out, energy_tolerance, time_tolerance, not no_plot))

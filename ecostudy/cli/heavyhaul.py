@@ -17,6 +17,6 @@ def heavyhaul(
                                      "fastest single-threaded, docs/heavyhaul.md)."),
     force: o.Force = False, debug: o.Debug = False,
 ):
-    """Heavy haul: Zhang & Zhuan's braking-penalised receding-horizon controller on the coupled-mass train (resumable)."""
+    """Heavy haul: Zhang & Zhuan's braking-penalised receding-horizon controller on the coupled-mass train (resumable). Example: ecostudy heavyhaul studies/heavyhaul_brake_penalty.yaml"""
     finish(call(debug, "heavyhaul_folder", study, workers, dask, retry_failed, out, not no_plot, blas_threads,
                 force=force, bar=("runs", no_progress)))

@@ -17,6 +17,6 @@ def network(
     workers: o.EveryCore = None,
     force: o.Force = False, debug: o.Debug = False,
 ):
-    """Trains sharing one DC substation: independent, rules 7.7 / 7.11, dissension, joint optimum, following."""
+    """Trains sharing one DC substation (Farooqi 2018): independent, rules 7.7 / 7.11, dissension, joint optimum, following. Example: ecostudy network studies/network_metro_2trains.yaml"""
     finish(call(debug, "network_folder", study, out, not no_plot, workers, fig_format, dpi, force=force,
                 bar=("strategies", False, False)))

@@ -18,6 +18,6 @@ def simulate(
                                              "the tables show every stored run."),
     force: o.Force = False, debug: o.Debug = False,
 ):
-    """Closed loop: every controller drives every draw of the plant's deviations and noise (resumable)."""
+    """Closed loop: every controller drives every draw of the plant's deviations and noise (resumable). Example: ecostudy simulate studies/thesis001_closed_loop.yaml"""
     finish(call(debug, "simulate_folder", study, workers, dask, retry_failed, out, not no_plot, only, force=force,
                 bar=("runs", no_progress)))

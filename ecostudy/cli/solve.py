@@ -26,7 +26,7 @@ def solve(
                    "Farooqi 2018, Ch. 5) or minlp (mode per phase chosen by binaries)."),
     das_time_limit: o.DasTimeLimit = 60.0, force: o.Force = False, debug: o.Debug = False,
 ):
-    """Energy-optimal (or all-out) run between two stops, verified by re-simulation."""
+    """Energy-optimal (or all-out) run between two stops, verified by re-simulation. Example: ecostudy solve studies/default.yaml"""
     finish(call(debug, "solve_folder", study, track, train, time, supplement, window, from_stop, to_stop,
                 objective and objective.value, weights, points, out, not no_plot, das and das.value, das_time_limit,
                 fig_format, dpi, force=force))
@@ -38,7 +38,7 @@ def check(
     time: Optional[float] = typer.Option(None, "--time", help="Test as the energy-optimal run arriving by this time [s]."),
     debug: o.Debug = False,
 ):
-    """Pontryagin regime check of a solved profile (Farooqi 2018, eq. 2.17; eq. 7.4 for net-energy runs); exit 1 below 95 % agreement."""
+    """Pontryagin regime check of a solved profile (Farooqi 2018, eq. 2.17; eq. 7.4 for net-energy runs); exit 1 below 95 % agreement. Example: ecostudy check out/default"""
     told(call(debug, "check_folder", result_dir, time), 1)
 
 
@@ -58,5 +58,5 @@ def export(
 
 @app.command(short_help="Check the install: solver chain versions and a toy solve.")
 def doctor(debug: o.Debug = False):
-    """Check the install: versions of the solver chain and a toy NLP solved with Ipopt."""
+    """Check the install: versions of the solver chain and a toy NLP solved with Ipopt. Example: ecostudy doctor"""
     told(call(debug, "doctor"), 3)

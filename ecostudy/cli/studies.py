@@ -24,7 +24,7 @@ def pareto(
     das_time_limit: o.DasTimeLimit = 60.0, out: o.Out = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png",
     dpi: o.Dpi = 110.0, force: o.Force = False, debug: o.Debug = False,
 ):
-    """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS."""
+    """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS. Example: ecostudy pareto studies/default.yaml --count 9"""
     finish(call(debug, "pareto_folder", study, track, train, from_stop, to_stop, count, supplement_max, points,
                 workers, cold, out, not no_plot, weighted, das and das.value, das_time_limit, fig_format, dpi,
                 force=force, bar=("points", False, False)))
@@ -63,7 +63,7 @@ def journey_command(
     out: o.Out = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
     force: o.Force = False, debug: o.Debug = False,
 ):
-    """Spread a journey's running time over its segments: equal marginal saving vs same percentage."""
+    """Spread a journey's running time over its segments: equal marginal saving vs same percentage. Example: ecostudy journey --train trains/amsterdam_metro.yaml --track tracks/metro_line_4stops.yaml --supplement 10"""
     finish(call(debug, "journey_folder", train, track, stops, time, supplement, timetable, dwell, points, workers,
                 out, not no_plot, fig_format, dpi, force=force, bar=("runs", False, False)))
 
@@ -75,6 +75,6 @@ def run(
     no_progress: o.NoProgress = False, force: o.Force = False, debug: o.Debug = False,
     kind: str = typer.Option("run", help="Study kind: run (scenarios x sweep, or a library), or one registered."),
 ):
-    """Run every case of a study; finished cases are stored and never computed twice."""
+    """Run every case of a study; finished cases are stored and never computed twice. Example: ecostudy run studies/metro_supplements.yaml"""
     finish(call(debug, "run_folder", study, workers, dask, retry_failed, out, kind, force=force,
                 bar=("cases", no_progress)))
