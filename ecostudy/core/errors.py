@@ -44,4 +44,4 @@ def printable(line: str) -> str:
 def problem(file: Union[str, PathLike[str]], field: str, message: str) -> str:
     """Format one problem line: ``file: field: message``."""
     where = f"{file}: {field}" if field else f"{file}"
-    return f"{where}: {message}"
+    return printable(f"{where}: {message}")  # what a user typed, escaped: one problem stays one line
