@@ -119,13 +119,8 @@ def test_compare_reports_each_strategy(tmp_path):
 def test_a_network_study_reports_each_strategy(tmp_path):
     from ecostudy import api
 
-    from .conftest import write_yaml
-    study = write_yaml(tmp_path / "net.yaml", {
-        "name": "tiny", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
-        "stops": ["Noord", "Station"], "running_times_s": [56.0], "time_step_s": 1.0,
-        "trains": [{"name": "A", "offset_s": 0}, {"name": "B", "offset_s": 45}],
-        "substation": {"position_m": 300}, "strategies": ["independent", "triggering"], "points": 300,
-        "output": str(tmp_path / "out")})
+    from .test_network import tiny_network_study
+    study = tiny_network_study(tmp_path, ["independent", "triggering"])
     calls, lines = [], []
     api.network_folder(study, plot=False, workers=1, note=lines.append, progress=lambda *a: calls.append(a))
     assert calls == [(1, 0, 1, 2), (2, 0, 0, 2)]

@@ -305,17 +305,23 @@ def test_a_plan_from_all_out_times_over_a_pool_is_the_plan_of_one_process():
     assert serial.asked_times[1] == pytest.approx(1.1 * all_out, rel=1e-12) and leg.steps == int(np.ceil(1.1 * all_out))
 
 
+def tiny_network_study(folder, strategies):
+    """Two metro trains 45 s apart on one segment and one substation, 300 grid points: a network
+    study file in ``folder`` (output in ``folder/out``)."""
+    return write_yaml(folder / "net.yaml", {
+        "name": "tiny", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
+        "stops": ["Noord", "Station"], "running_times_s": [56.0], "time_step_s": 1.0,
+        "trains": [{"name": "A", "offset_s": 0}, {"name": "B", "offset_s": 45}],
+        "substation": {"position_m": 300}, "strategies": list(strategies), "points": 300,
+        "output": str(folder / "out")})
+
+
 @pytest.mark.slow
 def test_network_command_and_a_bad_study(tmp_path):
     from typer.testing import CliRunner
 
     from ecostudy.cli import app
-    study = write_yaml(tmp_path / "net.yaml", {
-        "name": "tiny", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
-        "stops": ["Noord", "Station"], "running_times_s": [56.0], "time_step_s": 1.0,
-        "trains": [{"name": "A", "offset_s": 0}, {"name": "B", "offset_s": 45}],
-        "substation": {"position_m": 300}, "strategies": ["independent", "joint"], "points": 300,
-        "output": str(tmp_path / "out")})
+    study = tiny_network_study(tmp_path, ["independent", "joint"])
     r = CliRunner().invoke(app, ["network", str(study), "--workers", "2"])
     assert r.exit_code == 0, r.output
     for name in ("network_substation.csv", "network_trains.csv", "network_steps_joint.csv", "network.png"):
