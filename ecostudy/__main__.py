@@ -1,3 +1,3 @@
-from ecostudy.cli import app
+from ecostudy.cli import main
 
-app()
+main()

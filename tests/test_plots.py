@@ -17,7 +17,7 @@ from ecostudy.core.units import to_kwh
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.network import fleet as fleets
 from ecostudy.network import strategies
-from ecostudy.report import heavyplots, loopplots, plots, style
+from ecostudy.report import heavyplots, loopplots, netplots, plots, style
 from ecostudy.studies.closedloop import simulate_study
 from ecostudy.studies.compare import compare
 from ecostudy.studies.heavyhaul import heavyhaul_study
@@ -103,7 +103,7 @@ def test_a_palette_never_repeats_a_colour_and_keeps_named_and_repeated_keys():
     assert style.colour("ATO optimum").lower() not in {c.lower() for c in given}
 
 
-@pytest.mark.parametrize("module", [plots, loopplots, heavyplots], ids=lambda m: m.__name__)
+@pytest.mark.parametrize("module", [plots, netplots, loopplots, heavyplots], ids=lambda m: m.__name__)
 def test_plots_take_every_colour_from_the_style_module(module):
     source = (Path(module.__file__)).read_text()
     assert not re.search(r"color\s*=\s*[\"'f]", source), f"a colour written into {module.__name__}"
@@ -181,7 +181,7 @@ def test_pareto_axis_spans_the_front_not_the_weighted_points(metro):
 @pytest.mark.slow
 def test_network_substation_curves_and_trains_in_distinct_colours(network):
     f, outcome = network
-    fig = plots.network_plot(f, outcome, None, "two trains")
+    fig = netplots.network_plot(f, outcome, None, "two trains")
     substation = fig.axes[-1]
     curves = labelled(substation)
     assert len(curves) == 3
@@ -230,7 +230,7 @@ def test_energy_flow_adds_up_to_the_traction_energy(rokin):
 @pytest.mark.slow
 def test_substation_voltage_and_current_over_time(network):
     f, outcome = network
-    fig = plots.supply_plot(f, outcome, None, "two trains")
+    fig = netplots.supply_plot(f, outcome, None, "two trains")
     volts, amps = fig.axes
     for ax, unit in ((volts, "[V]"), (amps, "[A]")):
         curves = [line for line in labelled(ax) if line.get_label() in outcome]

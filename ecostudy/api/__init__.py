@@ -13,121 +13,54 @@ folder and returns it read back (:class:`Report`, a :class:`StudyResult` with th
 
 Everything is SI inside; the arguments here say their unit in their name where it is not SI.
 """
-from dataclasses import dataclass
+import importlib
+from typing import TYPE_CHECKING, Any
 
 from ecostudy.ocp.solver import configure
 
 configure()  # the API is an entry point: set the process up once, before pandas, scipy and Pyomo load
 
-import pandas as pd  # noqa: E402
-
-from ecostudy.analysis.single import RunResult, solve_run  # noqa: E402
-from ecostudy.core.errors import InputError  # noqa: E402
-from ecostudy.core.types import State, Timing, Track, Train, Window  # noqa: E402
-from ecostudy.core.units import PERCENT  # noqa: E402
-from ecostudy.io.folder import StudyResult, load  # noqa: E402,F401  (api.load: any output folder)
-from ecostudy.io.loaders import chosen_stops, load_track, load_train, track_from_dict, train_from_dict  # noqa: E402
-from ecostudy.ocp.problem import prepare  # noqa: E402
-from ecostudy.ocp.restart import Replanner  # noqa: E402
-from ecostudy.report.files import write_run  # noqa: E402
-from ecostudy.studies.pareto import sweep  # noqa: E402
-# one function per command: each writes its output folder and returns it read back with its report
-from ecostudy.api.outcome import Note, Report, one_line  # noqa: E402
-from ecostudy.api.single import check_folder, doctor, export_folder, solve_folder  # noqa: E402
-from ecostudy.api.fronts import compare_folder, journey_folder, pareto_folder  # noqa: E402
-from ecostudy.api.cases import (calibrate_folder, heavyhaul_folder, network_folder, run_folder,  # noqa: E402
-                                simulate_folder, validate_folder)
-
-__all__ = ["load", "StudyResult", "load_train", "load_track", "train_from_dict", "track_from_dict", "solve", "pareto", "replanner",
-           "Solution", "Front", "Train", "Track", "State", "Window",
-           "Report", "Note", "one_line", "solve_folder", "check_folder", "export_folder", "doctor", "pareto_folder", "compare_folder",
-           "journey_folder", "run_folder", "simulate_folder", "heavyhaul_folder", "network_folder", "calibrate_folder",
-           "validate_folder"]
+# Each name is imported from its module when first used (PEP 562): a command loads only what it runs
+# (``ecostudy solve`` neither matplotlib without plots nor the closed-loop, heavy-haul or network code).
+WHERE = {
+    "load": "ecostudy.io.folder", "StudyResult": "ecostudy.io.folder",
+    "load_train": "ecostudy.io.loaders", "load_track": "ecostudy.io.loaders",
+    "train_from_dict": "ecostudy.io.loaders", "track_from_dict": "ecostudy.io.loaders",
+    "Train": "ecostudy.core.types", "Track": "ecostudy.core.types", "State": "ecostudy.core.types",
+    "Window": "ecostudy.core.types",
+    "solve": "ecostudy.api.python", "pareto": "ecostudy.api.python", "replanner": "ecostudy.api.python",
+    "Solution": "ecostudy.api.python", "Front": "ecostudy.api.python",
+    "Report": "ecostudy.api.outcome", "Note": "ecostudy.api.outcome", "one_line": "ecostudy.api.outcome",
+    "solve_folder": "ecostudy.api.single", "check_folder": "ecostudy.api.single",
+    "export_folder": "ecostudy.api.single", "doctor": "ecostudy.api.single",
+    "pareto_folder": "ecostudy.api.fronts", "compare_folder": "ecostudy.api.fronts",
+    "journey_folder": "ecostudy.api.fronts",
+    "run_folder": "ecostudy.api.cases", "simulate_folder": "ecostudy.api.cases",
+    "heavyhaul_folder": "ecostudy.api.cases", "network_folder": "ecostudy.api.cases",
+    "calibrate_folder": "ecostudy.api.cases", "validate_folder": "ecostudy.api.cases",
+}
+__all__ = list(WHERE)
 
 
-@dataclass
-class Solution:
-    """One solved and verified run."""
-
-    run: RunResult
-
-    @property
-    def profile(self):
-        """Per grid node: SI columns (``speed_mps``, ``traction_force_N``, ...) beside the display
-        columns of ``profile.csv`` (``speed_kmh``, ``traction_force_kN``, ...)."""
-        traj = self.run.trajectory
-        pad = lambda a: list(a) + [float("nan")]  # noqa: E731  interval values sit on their first node
-        si = pd.DataFrame({"speed_mps": traj.v, "traction_force_N": pad(traj.ft), "braking_force_N": pad(traj.fb),
-                           "interval_time_s": pad(traj.dt)})
-        return pd.concat([self.run.profile, si], axis=1)
-
-    @property
-    def summary(self):
-        """The ``summary.json`` dict: energies, running time, regimes, solver, verification."""
-        return self.run.summary
-
-    @property
-    def verification(self):
-        """Re-simulation against the optimum (arrival, stop, energy, overspeed, passed)."""
-        return self.run.summary["verification"]
-
-    @property
-    def trajectory(self):
-        """The run in SI arrays (:class:`~ecostudy.core.types.Trajectory`)."""
-        return self.run.trajectory
-
-    def plot(self, path=None):
-        """Speed, gradient and handle against distance: a figure, or a PNG written to ``path``."""
-        from ecostudy.report.plots import speed_plot
-        return speed_plot(self.run, path)
-
-    def save(self, out_dir, plot=True):
-        """The files of ``ecostudy solve`` (profile.csv, summary.json, speed.png) into ``out_dir``."""
-        return write_run(self.run, out_dir, plot)
+def __getattr__(name: str) -> Any:
+    if name not in WHERE:
+        raise AttributeError(f"module 'ecostudy.api' has no attribute {name!r}")
+    value = getattr(importlib.import_module(WHERE[name]), name)
+    globals()[name] = value  # found once
+    return value
 
 
-@dataclass
-class Front:
-    """Energy against running time: one row per point, and the runs themselves."""
-
-    table: pd.DataFrame
-    runs: list
-
-    def plot(self, path=None):
-        from ecostudy.report.plots import pareto_plot
-        return pareto_plot(self.table, path, f"{self.runs[0].summary['train']}")
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(WHERE))
 
 
-def _timing(running_time, supplement_percent, window):
-    given = [x is not None for x in (running_time, supplement_percent, window)]
-    if sum(given) > 1:
-        raise InputError("arguments: give one of running_time, supplement_percent, window")
-    return Timing(running_time=running_time, window=window,
-                  supplement=None if supplement_percent is None else supplement_percent * PERCENT)
-
-
-def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplement_percent=None, window=None,
-          objective="energy", points=1000, windows=()):
-    """The energy-optimal run (``objective`` ``energy``, ``net_energy``, ``time`` or ``mixed``)
-    between two stops (default: the first and the last), for a running time [s], a supplement
-    over the all-out time [%] or an arrival window (earliest, latest) [s]; verified by simulation."""
-    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
-    return Solution(solve_run(track, train, from_stop, to_stop, _timing(running_time, supplement_percent, window),
-                              objective=objective, points=points, windows=windows))
-
-
-def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_percent=40.0, points=500,
-           objective="energy", workers=1):
-    """Energy against running time from the all-out run to ``supplement_max_percent`` over it."""
-    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
-    table, runs = sweep(track, train, from_stop, to_stop, count=count, supplement_max=supplement_max_percent * PERCENT,
-                        points=points, objective=objective, workers=workers)
-    return Front(table, runs)
-
-
-def replanner(track, train, from_stop=None, to_stop=None, running_time=None, window=None, points=500,
-              objective="energy"):
-    """A :class:`~ecostudy.ocp.restart.Replanner`: one model re-solved from any :class:`State`."""
-    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
-    return Replanner(prepare(track, train, from_stop, to_stop, points), running_time=running_time, window=window,
-                     objective=objective)
+if TYPE_CHECKING:  # what type checkers and editors see
+    from ecostudy.api.cases import (calibrate_folder, heavyhaul_folder, network_folder, run_folder,  # noqa: F401
+                                    simulate_folder, validate_folder)
+    from ecostudy.api.fronts import compare_folder, journey_folder, pareto_folder  # noqa: F401
+    from ecostudy.api.outcome import Note, Report, one_line  # noqa: F401
+    from ecostudy.api.python import Front, Solution, pareto, replanner, solve  # noqa: F401
+    from ecostudy.api.single import check_folder, doctor, export_folder, solve_folder  # noqa: F401
+    from ecostudy.core.types import State, Track, Train, Window  # noqa: F401
+    from ecostudy.io.folder import StudyResult, load  # noqa: F401
+    from ecostudy.io.loaders import load_track, load_train, track_from_dict, train_from_dict  # noqa: F401

@@ -13,6 +13,7 @@ import typer
 
 from ecostudy.core.budget import forced
 from ecostudy.core.errors import printable
+from ecostudy.report.console import leave, logging_to, progress_bar
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,  # "[s]" is a unit, not markup
                   help="Energy-efficient train control studies (Pyomo + Ipopt).")
@@ -37,7 +38,6 @@ def _main(ctx: typer.Context,
           ) -> None:
     """Energy-efficient train control studies (Pyomo + Ipopt)."""
     from ecostudy.ocp.solver import configure
-    from ecostudy.report.console import logging_to
 
     quiet[0] = quiet_
     ctx.call_on_close(logging_to(quiet_, verbose, log_file))
@@ -50,7 +50,6 @@ def call(debug, name, *args, force=False, bar=None):
     ``bar``: (label, off[, stored]) of a progress bar passed as ``progress`` (stored False: Ctrl-C keeps
     nothing). Errors: one line and an exit code; warnings: log lines; Ctrl-C: exit status 130."""
     from ecostudy import api
-    from ecostudy.report.console import progress_bar
 
     with warnings.catch_warnings(record=True) as caught, forced(force):
         warnings.simplefilter("always")
@@ -93,3 +92,11 @@ def told(note, code):
     typer.echo(note.text)
     if not note.ok:
         raise typer.Exit(code)
+
+
+def main() -> None:
+    """The ``ecostudy`` command: the application, then a quick exit (:func:`ecostudy.report.console.leave`)."""
+    try:
+        app()
+    except SystemExit as done:  # the application always ends so
+        leave(done.code)

@@ -4,8 +4,12 @@ logger's handlers (stderr, a log file) and a progress bar over a study's cases o
 Progress and messages never go to stdout, where the results are printed (``ecostudy ... | cat``
 stays clean); the bar is drawn only when stderr is a terminal.
 """
+import atexit
 import logging
+import multiprocessing
+import os
 import sys
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Iterator, Optional
@@ -61,3 +65,22 @@ def progress_bar(label: str, disabled: bool = False) -> Iterator[Callable[[int, 
             bar.update(task, completed=done, total=total, failed=failed, remaining=remaining)
 
         yield progress
+
+
+def leave(code: object) -> None:
+    """Exit with ``code`` once everything is finished, without the interpreter's teardown: freeing
+    Pyomo's, pandas' and matplotlib's objects one by one took 0.4-0.5 s after every file was written
+    (``docs/speed.md``). First the exit handlers run as at a normal exit (log files flushed and
+    closed, temporary files removed, worker pools joined); then, when no worker process and no
+    thread other than daemons is left, ``os._exit``. Otherwise, or for an exit code that is not a
+    number, the normal exit."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    atexit._run_exitfuncs()  # what a normal exit runs first: logging.shutdown, tempfile and pool clean-up
+    busy = multiprocessing.active_children() or [
+        t for t in threading.enumerate() if t is not threading.main_thread() and t.is_alive() and not t.daemon]
+    if busy or not (code is None or isinstance(code, int)):
+        sys.exit(code)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code or 0)

@@ -1,6 +1,5 @@
 """The files of a run (``profile.csv``, ``summary.json``, ``speed.png``, ``advice.csv``) and of a
 front (``pareto.csv``, ``pareto.json``, the plots), each written atomically."""
-from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +26,18 @@ def figures(out_dir, plot, drawings, out=style.Output()):
     return [style.write(out_dir, stem, draw, out) for stem, draw in drawings.items()]
 
 
+def later(name, *args, **kwargs):
+    """A figure of ``report.plots`` (``report.netplots`` for a network's) drawn as
+    ``name(*args, path, ...)`` when it is written: matplotlib loads only in a process that draws."""
+    def draw(path, **more):
+        if name in ("network_plot", "supply_plot"):
+            from ecostudy.report import netplots as module
+        else:
+            from ecostudy.report import plots as module
+        return getattr(module, name)(*args, path, **kwargs, **more)
+    return draw
+
+
 def write_run(result, out_dir, plot=True, out=style.Output()):
     """``profile.csv``, ``summary.json``, ``speed.png``, ``energy.png`` (the energy flow; figures in
     the format of ``out``) and ``advice.csv`` of one run into ``out_dir``."""
@@ -36,9 +47,8 @@ def write_run(result, out_dir, plot=True, out=style.Output()):
     if result.das is not None:
         write_csv(out_dir / "advice.csv", result.das.advice)
         tables["advice"] = "advice.csv"
-    from ecostudy.report import plots
-    drawn = figures(out_dir, plot, {"speed": partial(plots.speed_plot, result),
-                                    "energy": partial(plots.energy_plot, result)}, out)
+    drawn = figures(out_dir, plot, {"speed": later("speed_plot", result),
+                                    "energy": later("energy_plot", result)}, out)
     s = result.summary
     write_summary(out_dir, "solve", {f"{s['from']}-{s['to']}": result.status}, tables, drawn, **s)
     stale(out_dir, advice=result.das is None, names={"advice": ["advice.csv"]})
@@ -66,12 +76,11 @@ def write_front(table, results, out_dir, meta, plot=True, weighted=None, out=sty
     statuses = {f"{t:.2f} s": Status.parse(st) for t, st in zip(table["running_time_s"], table["status"])}
     if not meta["monotone"]:
         statuses["front"] = flagged("energy does not fall as the running time grows")
-    from ecostudy.report import plots
     title = f"{meta['train']} - {meta['from']} to {meta['to']} (K = {meta['points']})"
     picks = sorted(set(np.linspace(0, len(results) - 1, min(5, len(results))).round().astype(int)))
     drawn = figures(out_dir, plot, {
-        "pareto": partial(plots.pareto_plot, table, title=title, weighted=weighted),
-        "pareto_profiles": partial(plots.profiles_plot, [results[i] for i in picks], title=title)}, out)
+        "pareto": later("pareto_plot", table, title=title, weighted=weighted),
+        "pareto_profiles": later("profiles_plot", [results[i] for i in picks], title=title)}, out)
     write_summary(out_dir, "pareto", statuses, tables, ["pareto.json"] + drawn, **meta)
     stale(out_dir, weighted=weighted is None, names={"weighted": ["pareto_weighted.csv"]})
     write_html(out_dir)
@@ -82,8 +91,7 @@ def write_compare(table, outcomes, segment, out_dir, title, plot=True, out=style
     """``compare.csv``, ``summary.json`` and ``compare.png`` of strategies side by side."""
     out_dir = Path(out_dir)
     write_csv(out_dir / "compare.csv", table)
-    from ecostudy.report import plots
-    drawn = figures(out_dir, plot, {"compare": partial(plots.compare_plot, outcomes, segment, title=title)}, out)
+    drawn = figures(out_dir, plot, {"compare": later("compare_plot", outcomes, segment, title=title)}, out)
     statuses = {name: Status.parse(st) for name, st in zip(table["strategy"], table["status"])}
     write_summary(out_dir, "compare", statuses, {"compare": "compare.csv"}, drawn,
                   title=title, target_running_time_s=table.attrs["target_s"],
@@ -98,8 +106,7 @@ def write_journey(table, totals, results, out_dir, title, passing=(), plot=True,
     out_dir = Path(out_dir)
     write_csv(out_dir / "journey.csv", table)
     write_csv(out_dir / "journey_totals.csv", totals)
-    from ecostudy.report import plots
-    drawn = figures(out_dir, plot, {"journey": partial(plots.journey_plot, results, title=title, passing=passing)}, out)
+    drawn = figures(out_dir, plot, {"journey": later("journey_plot", results, title=title, passing=passing)}, out)
     statuses = {f"{r['distribution']} {r['from']}-{r['to']}":
                 OK if r["verified"] else flagged("not verified by the re-simulation") for _, r in table.iterrows()}
     write_summary(out_dir, "journey", statuses, {"segments": "journey.csv", "totals": "journey_totals.csv"},
@@ -137,9 +144,8 @@ def write_network(run, st, out_dir, plot=True, out=style.Output()):
                                           "strategies": {**{n: {**r["totals"], **r["info"]} for n, r in done.items()},
                                                          **{n: {"status": f"failed: {r['failed']}"}
                                                             for n, r in failed_.items()}}})
-    from ecostudy.report import plots
-    drawn = figures(out_dir, plot, {"network": partial(plots.network_plot, fl, done, title=st.name),
-                                    "network_supply": partial(plots.supply_plot, fl, done, title=st.name)}, out)
+    drawn = figures(out_dir, plot, {"network": later("network_plot", fl, done, title=st.name),
+                                    "network_supply": later("supply_plot", fl, done, title=st.name)}, out)
     steps = [f"network_steps_{name}.csv" for name in done]
     write_summary(out_dir, "network", statuses, {"substation": "network_substation.csv", "trains": "network_trains.csv"},
                   steps + ["network.json"] + drawn, study=st.name, steps=fl.steps,
