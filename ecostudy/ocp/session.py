@@ -16,6 +16,7 @@ import cyipopt
 import numpy as np
 import pyomo
 from pyomo.common.env import CtypesEnviron
+from pyomo.common.gc_manager import PauseGC
 from pyomo.repn.plugins.nl_writer import NLWriter
 from pyomo.contrib.pynumero.asl import AmplInterface
 from pyomo.contrib.pynumero.interfaces.cyipopt_interface import CyIpoptNLP
@@ -85,7 +86,8 @@ class Session:
         CyIpoptNLP, PyomoNLP = _imports()
         self.model = model
         t0 = time.perf_counter()
-        self.nlp = PyomoNLP(model, nl_file_options=NL_OPTIONS)
+        with PauseGC():  # the write makes no garbage; a collection would walk every Pyomo object
+            self.nlp = PyomoNLP(model, nl_file_options=NL_OPTIONS)  # (0.39 -> 0.29 s, metro K = 1000)
         self.nl_seconds = time.perf_counter() - t0
         self.x = np.array(self.nlp.init_primals(), dtype=float)
         # (constraints, lower bounds, upper bounds) of the last solve
