@@ -58,8 +58,12 @@ IPOPT: dict[str, dict[str, Any]] = {
     # a network leg: MUMPS without its own row and column scaling (a leg's KKT matrix is small and
     # banded; the scaling took about a fifth of Ipopt's time: `python bench/bench_leg_options.py
     # studies/network_metro_3trains.yaml`, six legs 4.85 -> 3.82 s, the same iterations; slower on the
-    # joint NLP, 18.9 / 19.2 against 16.9 / 15.8 s; network/legs.py KKT)
-    "leg": {"mumps_scaling": 0},
+    # joint NLP, 18.9 / 19.2 against 16.9 / 15.8 s; network/legs.py KKT), and PORD's ordering instead of
+    # MUMPS's automatic choice (first-round legs: metro 2 trains 2.83 -> 2.17 s, 3 trains 5.12 -> 3.40 s,
+    # regional 20 stops 6.14 -> 3.71 s, costs within 5e-9; the whole 2-train study's Ipopt 44.9 -> 41.0 s,
+    # substation energies equal to 1e-4 kWh; docs/speed.md). On the space NLP the automatic choice is the
+    # fastest (metro K = 1000: 0.71 s; Scotch 0.84, AMD and PORD 1.63 s), so it stays there.
+    "leg": {"mumps_scaling": 0, "mumps_pivot_order": 4},
     # a solve from a feasible run (a warm leg, the joint NLP): stay near it instead of pushing every
     # variable 1 % inside its bounds (the 2-train joint NLP: adaptive barrier 3000 iterations, monotone
     # from mu 1e-3 730; network/legs.py NEAR_START)
