@@ -85,3 +85,8 @@ sweep:
     assert again.returncode == 0, again.stderr
     assert "4 cases: 0 already stored, 4 computed now" in done.stdout, done.stdout
     assert "4 cases: 4 already stored, 0 computed now" in again.stdout, again.stdout
+
+
+def test_the_api_lists_every_name_it_serves():
+    from ecostudy import api
+    assert sorted(api.__all__) == sorted(api.WHERE)
