@@ -77,10 +77,10 @@ def leave(code: object) -> None:
     sys.stdout.flush()
     sys.stderr.flush()
     atexit._run_exitfuncs()  # what a normal exit runs first: logging.shutdown, tempfile and pool clean-up
-    busy = multiprocessing.active_children() or [
-        t for t in threading.enumerate() if t is not threading.main_thread() and t.is_alive() and not t.daemon]
-    if busy or not (code is None or isinstance(code, int)):
-        sys.exit(code)
+    children = multiprocessing.active_children()
+    threads = [t for t in threading.enumerate() if t is not threading.main_thread() and t.is_alive() and not t.daemon]
+    if children or threads or not (code is None or isinstance(code, int)):
+        sys.exit(code if code is None or isinstance(code, (int, str)) else str(code))
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code or 0)
