@@ -24,7 +24,7 @@ from ecostudy.studies.heavyhaul import heavyhaul_study
 from ecostudy.studies.network import run_network
 from ecostudy.studies.options import check_options, output_folder
 from ecostudy.studies.workers import every_core
-from ecostudy.studies.sizes import KIND_SIZES, check_closed_loop_study, check_network_study
+from ecostudy.studies.sizes import check_closed_loop_study, check_network_study
 
 Progress = Optional[Callable[[int, int, int, int], None]]
 log = logging.getLogger("ecostudy")
@@ -49,9 +49,7 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
     (:func:`~ecostudy.studies.batch.run_kind`); ``kind``: a registered study kind
     (:data:`~ecostudy.studies.batch.STUDY_KINDS`; ``run``: scenarios x sweep, or a library)."""
     workers = every_core(workers)
-    check_options(workers=workers)
-    if kind in KIND_SIZES:  # too big for the command: refused with its estimate (unless --force)
-        KIND_SIZES[kind](study, workers)
+    check_options(workers=workers)  # a study too big for the command: refused by its kind's size (unless --force)
     table, counts, folder = run_kind(kind, study, workers, dask, retry_failed, Path(out) if out else None, progress)
     write_html(folder)
     return reported(folder, [f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} "

@@ -11,7 +11,10 @@ The constants are measured on this project's shared 2-core machine (so they are 
   (docs/closed_loop.md): convex 28 ms at K = 200, SBPC 91 ms, SPPC 253 ms, RSPC 22 ms; a replay
   only steps the plant. The convex SOCP grows faster than K: the all-out SOCP of the Amsterdam
   case took 0.17, 0.69, 3.3 and 9.4 s at K = 200, 1000, 2000 and 5000 and over 100 s at 20 000
-  (busy machine), so a sample is taken as 28 ms x (K / 200)^1.5 (:func:`sample_seconds`).
+  (busy machine), so a sample is taken as 28 ms x (K / 200)^1.5 (:func:`sample_seconds`);
+- one space-domain run (build, NL write, Ipopt, verification) of the default study (K = 1000):
+  1.3 s on a quiet machine, 2.6 s on a busy one: :data:`RUN_SECONDS_PER_POINT`; a DAS ``phases``
+  advice adds two NLPs of the same size and ``minlp`` its time limit (:func:`run_seconds`).
 """
 from dataclasses import replace
 
@@ -30,6 +33,15 @@ LEG_BYTES_PER_STEP = 72e3
 SAMPLE_SECONDS = {"convex": 0.028, "sbpc": 0.091, "sppc": 0.253, "rspc": 0.022}  # convex: at K = 200
 REPLAY_SECONDS = 0.001
 CONVEX_GROWTH = 1.5   # a convex sample's time grows as K^1.5
+RUN_SECONDS_PER_POINT = 2.6e-3
+DAS_EXTRA_POINT_RUNS = {"round": 0.0, "phases": 2.0, "minlp": 3.0}
+RUN_BYTES_PER_POINT = 20e3        # the space NLP of K points (Ipopt's factor and the model): 20 MB at K = 1000
+
+
+def run_seconds(points, das=None, das_time_limit=60.0):
+    """One space-domain run of ``points`` grid nodes, with its DAS advice [s]."""
+    seconds = points * RUN_SECONDS_PER_POINT * (1 + DAS_EXTRA_POINT_RUNS.get(das or "round", 0.0))
+    return seconds + (das_time_limit if das == "minlp" else 0.0)
 
 
 def sample_seconds(kind, points):
