@@ -254,8 +254,8 @@ def probes(tmp, src):
     yield "runaway", "pareto 10 000 points at K = 100 000", [
         "pareto", "--track", AMS, "--train", METRO, "--count", 10000, "--points", 100000, "--out", o("p"),
         "--no-plot"], refused("--force"), None, 120
-    yield "runaway", "a sweep of 3 000 cases", ["run", write(tmp / "sweep.yaml", {
-        "name": "sweep", "track": str(AMS), "train": str(METRO), "points": 1000, "objective": "energy",
+    yield "runaway", "a sweep of 3 000 cases at K = 5 000", ["run", write(tmp / "sweep.yaml", {
+        "name": "sweep", "track": str(AMS), "train": str(METRO), "points": 5000, "objective": "energy",
         "sweep": {"supplement_percent": [1 + 0.01 * i for i in range(3000)]}, "output": str(tmp / "out_sweep")}),
         "--no-progress"], refused("--force"), None, 120
 

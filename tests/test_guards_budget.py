@@ -11,6 +11,7 @@ from ecostudy.core.errors import InputError
 from ecostudy.io.loaders import load_network_study
 from ecostudy.io.yamlsafe import load_yaml
 from ecostudy.studies import sizes
+from ecostudy.studies.workers import every_core
 
 from .conftest import STUDIES, TRACKS, TRAINS, write_yaml
 from .test_bad_input import one_line, run
@@ -67,8 +68,8 @@ def sweep_study(tmp_path, n, points=1000, das=None):
 
 
 @pytest.mark.parametrize("n, points, das, workers, fragments", [
-    (3000, 1000, None, 1, ["3000 runs", "h of computing"]),
-    (200, 2000, "minlp", 2, ["200 runs", "with 2 workers"]),
+    (3000, 2000, None, 1, ["3000 runs", "h of computing"]),
+    (300, 2000, "minlp", 2, ["300 runs", "with 2 workers"]),
     (256, 200, None, 256, ["memory", "use fewer --workers"]),
 ])
 def test_run_refuses_a_sweep_too_big_before_computing(tmp_path, n, points, das, workers, fragments):
@@ -109,25 +110,21 @@ def test_a_network_study_too_big_for_the_command_is_refused(tmp_path):
 
 @pytest.mark.parametrize("path", LIGHT, ids=[p.stem for p in LIGHT])
 def test_every_shipped_study_passes_its_estimate(path):
-    """Each shipped study with --workers 2 (the metro Monte Carlo study's header asks for it); with
-    one worker, all but that study, which is refused with how to run a part of it."""
-    check_file(path, 2)
-    if path.stem == "metro_monte_carlo":
-        with pytest.raises(InputError, match="--only CONTROLLER"):
-            check_file(path, 1)
-        check_file(path, 1, ["sppc"])  # its heaviest part (100 runs of 200 samples at 253 ms): the others are lighter
-    else:
-        check_file(path, 1)
+    """Each shipped study at its default workers (every core) and with one worker (metro_monte_carlo,
+    the nearest the limit, at about 1.9 h)."""
+    check_file(path, every_core(None))
+    check_file(path, 1)
 
 
 @pytest.mark.slow  # each heavy-haul study solves its reference run first (10-20 s)
 @pytest.mark.parametrize("path", HEAVY, ids=[p.stem for p in HEAVY])
 def test_every_shipped_heavyhaul_study_passes_its_estimate(path):
+    check_file(path, every_core(None))
     check_file(path, 1)
 
 
 @pytest.mark.parametrize("points, sample_time, fragments", [
-    (20000, 0.1, ["convex: 760 samples of 0.1 s at K = 20000", "5.9 h", "one run"]),
+    (20000, 0.1, ["convex: 760 samples of 0.1 s at K = 20000", "5.1 h", "one run"]),
     (10000, 0.05, ["convex: 1,520 samples of 0.05 s at K = 10000", "one run"]),
 ])
 def test_a_convex_controller_on_a_huge_grid_is_refused_from_the_file_alone(tmp_path, points, sample_time, fragments):

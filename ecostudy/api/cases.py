@@ -24,7 +24,7 @@ from ecostudy.studies.heavyhaul import heavyhaul_study
 from ecostudy.studies.network import run_network
 from ecostudy.studies.options import check_options, output_folder
 from ecostudy.studies.workers import every_core
-from ecostudy.studies.sizes import KIND_SIZES, check_closed_loop_study, check_network_study
+from ecostudy.studies.sizes import check_closed_loop_study, check_network_study
 
 Progress = Optional[Callable[[int, int, int, int], None]]
 log = logging.getLogger("ecostudy")
@@ -49,9 +49,7 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
     (:func:`~ecostudy.studies.batch.run_kind`); ``kind``: a registered study kind
     (:data:`~ecostudy.studies.batch.STUDY_KINDS`; ``run``: scenarios x sweep, or a library)."""
     workers = every_core(workers)
-    check_options(workers=workers)
-    if kind in KIND_SIZES:  # too big for the command: refused with its estimate (unless --force)
-        KIND_SIZES[kind](study, workers)
+    check_options(workers=workers)  # a study too big for the command: refused by its kind's size (unless --force)
     table, counts, folder = run_kind(kind, study, workers, dask, retry_failed, Path(out) if out else None, progress)
     write_html(folder)
     return reported(folder, [f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} "
@@ -60,11 +58,13 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
                                                                                   "report.html"))])
 
 
-def simulate_folder(study: Path, workers: int = 1, dask: Optional[str] = None, retry_failed: bool = False,
+def simulate_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
                     out: Optional[Path] = None, plot: bool = True, only: Optional[Sequence[str]] = None, *,
                     progress: Progress = None) -> Report:
     """``ecostudy simulate``: every controller of a closed-loop study drives every draw of the
-    plant's deviations and noise (``only``: these controllers' runs computed now)."""
+    plant's deviations and noise (``only``: these controllers' runs computed now); ``workers``: every
+    core by default (the per-step solve times are then measured with every core busy)."""
+    workers = every_core(workers)
     check_options(workers=workers)
     check_closed_loop_study(study, workers, only)  # runs that cannot end, or too big: refused (unless --force)
     outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress, only)
@@ -83,11 +83,13 @@ def simulate_folder(study: Path, workers: int = 1, dask: Optional[str] = None, r
     return reported(folder, lines)
 
 
-def heavyhaul_folder(study: Path, workers: int = 1, dask: Optional[str] = None, retry_failed: bool = False,
+def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
                      out: Optional[Path] = None, plot: bool = True, blas_threads: int = 1, *,
                      progress: Progress = None) -> Report:
     """``ecostudy heavyhaul``: Zhang & Zhuan's braking-penalised receding-horizon controller on the
-    coupled-mass train, every K_b, fence and horizon of the study (OpenBLAS set to ``blas_threads``)."""
+    coupled-mass train, every K_b, fence and horizon of the study (OpenBLAS set to ``blas_threads``);
+    ``workers``: every core by default (the per-step solve times are then measured with every core busy)."""
+    workers = every_core(workers)
     check_options(workers=workers)
     limit_blas_threads(blas_threads)  # before the workers fork: they inherit it
     outcome = heavyhaul_study(study, workers, dask, retry_failed, Path(out) if out else None, progress)

@@ -16,7 +16,7 @@ from ecostudy.studies.compare import compare
 from ecostudy.studies.journey import journey
 from ecostudy.studies.options import case_from, check_options, no_windows, only_one, output_folder, timing_of
 from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
-from ecostudy.studies.sizes import check_front
+from ecostudy.studies.sizes import check_compare, check_front, check_journey
 
 FRONT_COLUMNS = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
                  "marginal_saving_kWh_per_s", "coasting_share_pct", "regime_sequence"]
@@ -86,6 +86,7 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
     else:
         raise InputError(problem("command line", "--time", "give --time or --supplement"))
     out_dir = output_folder(out, beside(st, "_compare", "compare"))
+    check_compare("command line", k or 1000)  # too big: refused with its estimate (unless --force)
     check_output_dir(out_dir, ("compare.csv", "compare.png"))
     table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000, progress=progress)
     write_compare(table, outcomes, case.segment, out_dir,
@@ -136,6 +137,8 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
     if scheduled is None and plan is None and (time is None) == (supplement is None):
         raise InputError(problem("command line", "--time/--supplement",
                                  "give one total running time or supplement, or --timetable"))
+    check_journey(timetable or "command line", len(names) - 1, points, workers,  # too big: refused (unless --force)
+                  splits=4 + (scheduled is not None) + (plan is not None), whole=1 + (plan is not None))
     out_dir = check_output_dir(output_folder(out, Path("out") / "journey"),
                                ("journey.csv", "journey_totals.csv", "journey.png"))
     table, totals, results, _ = journey(trk, trn, names, total_time=time,

@@ -26,6 +26,8 @@ Out = Annotated[Optional[Path], typer.Option(help="Output folder (relative: to t
                                                   "the study's 'output').")]
 Workers = Annotated[int, typer.Option(help="Local worker processes.")]
 EveryCore = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core).")]
+StepTimed = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core). Per-step solve "
+                      "times are measured with every worker busy; --workers 1 measures them on a quiet machine.")]
 Dask = Annotated[Optional[str], typer.Option(help="Address of a running Dask scheduler (tcp://host:port).")]
 RetryFailed = Annotated[bool, typer.Option(help="Compute failed cases again (infeasible ones stay).")]
 NoProgress = Annotated[bool, typer.Option("--no-progress", help="No progress bar.")]

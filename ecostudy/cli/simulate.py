@@ -11,13 +11,13 @@ from ecostudy.cli.app import app, call, finish
 @app.command(short_help="Closed loop: controllers drive a perturbed plant, Monte Carlo, resumable.")
 def simulate(
     study: Path = typer.Argument(..., help="Closed-loop study file (YAML): controllers, deviations, draws."),
-    workers: o.Workers = 1, dask: o.Dask = None,
+    workers: o.StepTimed = None, dask: o.Dask = None,
     retry_failed: bool = typer.Option(False, help="Compute failed runs again."),
     out: o.Out = None, no_progress: o.NoProgress = False, no_plot: o.NoPlot = False,
     only: Optional[list[str]] = typer.Option(None, "--only", help="Run only this controller's runs (repeatable); "
                                              "the tables show every stored run."),
     force: o.Force = False, debug: o.Debug = False,
 ):
-    """Closed loop: every controller drives every draw of the plant's deviations and noise (resumable). Example: ecostudy simulate studies/thesis001_closed_loop.yaml"""
+    """Closed loop: every controller drives every draw of the plant's deviations and noise (resumable). Every core by default; the step times are then measured with every core busy (--workers 1: quiet-machine step times). Example: ecostudy simulate studies/thesis001_closed_loop.yaml"""
     finish(call(debug, "simulate_folder", study, workers, dask, retry_failed, out, not no_plot, only, force=force,
                 bar=("runs", no_progress)))

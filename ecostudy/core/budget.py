@@ -83,23 +83,26 @@ def check_run(where: str | PathLike[str], field: str, what: str, seconds: float 
                              f"machine's {size(memory)}")
 
 
-def study_estimate(runs: Sequence[float], workers: int = 1, run_bytes: float = 0.0) -> tuple[float, float, float]:
+def study_estimate(runs: Sequence[float], workers: int = 1, run_bytes: float = 0.0,
+                   serial: Sequence[float] = ()) -> tuple[float, float, float]:
     """(seconds of computing, wall seconds with ``workers``, peak bytes) of a study whose runs are
     estimated at ``runs`` seconds each: the work shared among the workers (never below its longest
-    run); every worker holds the solver stack and one run's model."""
+    run), then the ``serial`` runs one after the other in the command's own process; every worker
+    holds the solver stack and one run's model."""
     total = float(sum(runs))
     workers = max(1, min(int(workers), len(runs) or 1))
-    return total, max(total / workers, max(runs, default=0.0)), workers * (WORKER_BYTES + run_bytes)
+    wall = max(total / workers, max(runs, default=0.0)) + float(sum(serial))
+    return total + float(sum(serial)), wall, workers * (WORKER_BYTES + run_bytes)
 
 
 def check_study(where: str | PathLike[str], what: str, runs: Sequence[float], workers: int = 1, run_bytes: float = 0.0,
-                part_hint: str = "") -> None:
+                part_hint: str = "", serial: Sequence[float] = ()) -> None:
     """Refuse (unless forced) a study whose runs (estimated seconds each), shared among ``workers``,
-    are estimated above :data:`MAX_STUDY_SECONDS` of wall time or half the memory. ``part_hint``:
-    how to run a part of it (``--only NAME``), added to the refusal."""
-    total, wall, nbytes = study_estimate(runs, workers, run_bytes)
+    then its ``serial`` runs, are estimated above :data:`MAX_STUDY_SECONDS` of wall time or half the
+    memory. ``part_hint``: how to run a part of it (``--only NAME``), added to the refusal."""
+    total, wall, nbytes = study_estimate(runs, workers, run_bytes, serial)
     memory = machine_memory()
-    how = f"{len(runs)} runs, an estimated {duration(total)} of computing"
+    how = f"{len(runs) + len(serial)} runs, an estimated {duration(total)} of computing"
     if wall > MAX_STUDY_SECONDS:
         hint = f"; run a part of it ({part_hint}) and the rest later" if part_hint else ""
         refuse_unless_forced(where, "study", f"{what}: {how} ({duration(wall)} with {workers} worker"

@@ -10,11 +10,12 @@ import warnings
 from concurrent.futures import as_completed
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, NamedTuple
+from typing import Callable, NamedTuple, Optional
 
 import pandas as pd
 
 from ecostudy.analysis.single import solve_run
+from ecostudy.core.budget import check_study
 from ecostudy.core.registry import Registry
 from ecostudy.core.errors import EcostudyError, EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.types import Timing
@@ -27,6 +28,7 @@ from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.ocp.problem import Written
 from ecostudy.studies.cases import case_key, expand
+from ecostudy.studies.estimate import RUN_BYTES_PER_POINT, run_seconds
 from ecostudy.studies.workers import worker_pool
 
 _ALL_OUT: dict = {}  # all-out time per (train, track, stops, grid), per process: shared by a scenario's cases
@@ -174,11 +176,15 @@ class StudyKind:
     """What makes a kind of study: ``expand(path)`` -> :class:`Expanded` (validated, before anything
     runs), ``task(case)`` -> a result dict (pure, picklable, never raising: wrap the work in
     :func:`outcome`), ``table(cases, rows)`` -> one row per case with ``status`` and ``reason``
-    from the stored ``rows`` by case key."""
+    from the stored ``rows`` by case key, and optionally ``size`` (below)."""
 
     expand: Callable[[Path], Expanded]
     task: Callable[[dict], dict]
     table: Callable[[list, dict], pd.DataFrame]
+    size: Optional[Callable[[Path, list, int], None]] = None
+    """``size(path, cases, workers)``: refuse (unless forced) a study estimated too big for one
+    command (:func:`~ecostudy.core.budget.check_study`), after ``expand`` and before anything
+    runs; None: unchecked as a whole (its runs still meet ``check_run`` where they build a model)."""
 
 
 STUDY_KINDS: Registry[StudyKind] = Registry("study kind")
@@ -194,6 +200,8 @@ def run_kind(kind, path, workers=1, dask=None, retry_failed=False, out=None, pro
     except KeyError as exc:
         raise InputError(problem("command line", "--kind", exc.args[0]))
     expanded = spec.expand(Path(path))
+    if spec.size is not None:  # too big for the command: refused with its estimate (unless --force)
+        spec.size(Path(path), expanded.cases, workers)
     output = check_output_dir(out or expanded.output, ("results.csv", "results.sqlite", *expanded.inputs))
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
@@ -254,5 +262,13 @@ def study_table(cases, rows):
     return pd.DataFrame(out)
 
 
-STUDY_KINDS.register("run", StudyKind(expand_study, run_case, study_table),
+def run_study_size(path, cases, workers=1):
+    """Refuse a ``run`` study whose cases (:func:`~ecostudy.studies.estimate.run_seconds` each),
+    shared among ``workers``, are estimated above the command's budget (unless forced)."""
+    runs = [run_seconds(c["points"], c.get("das"), c.get("das_time_limit_s", 60.0)) for c in cases]
+    check_study(path, "the study's cases", runs, workers, max((c["points"] for c in cases), default=0)
+                * RUN_BYTES_PER_POINT)
+
+
+STUDY_KINDS.register("run", StudyKind(expand_study, run_case, study_table, run_study_size),
                      doc="single runs: a study file's scenarios x sweep, or a TTOBench library")

@@ -7,11 +7,21 @@ The constants are measured on this project's shared 2-core machine (so they are 
 - a network leg (the time-domain NLP of :mod:`ecostudy.ocp.timedomain`) of 200 and 2 000 clock
   steps (the metro's Noord - Station in 100 s) took 28 s and 233 s to build and solve from a cold
   start (286 and 332 Ipopt iterations) and 24 MB and 144 MB of memory: about 0.12 s and 72 kB a step;
-- a closed-loop sample: the controllers' mean solve times of the metro Monte Carlo study
-  (docs/closed_loop.md): convex 28 ms at K = 200, SBPC 91 ms, SPPC 253 ms, RSPC 22 ms; a replay
-  only steps the plant. The convex SOCP grows faster than K: the all-out SOCP of the Amsterdam
-  case took 0.17, 0.69, 3.3 and 9.4 s at K = 200, 1000, 2000 and 5000 and over 100 s at 20 000
-  (busy machine), so a sample is taken as 28 ms x (K / 200)^1.5 (:func:`sample_seconds`).
+- a closed-loop sample, CPU seconds per sample with the run's set-up (``python bench/bench_sizes.py
+  --kinds simulate [--loop-study studies/metro_terminal.yaml]``, busy machine, draw 0 of each
+  controller): SBPC nominal 548 ms, two-step 384 ms, multi-objective 88 ms (simultaneous, K = 200) and
+  52 ms (condensed, K = 100); SPPC nominal 59 ms (K = 200), two-step 147 ms (K = 100); RSPC 5.7 ms;
+  convex 8.4 ms at K = 100; a replay (open loop, ATO) 0.8-1.1 ms: :data:`SAMPLE_SECONDS`, to two
+  digits. SBPC and SPPC plan over the samples left, so their grid matters less than their variant. The
+  convex SOCP grows faster than K: the all-out SOCP of the Amsterdam case took 0.17, 0.69, 3.3 and
+  9.4 s at K = 200, 1000, 2000 and 5000 and over 100 s at 20 000 (busy machine), so a sample is
+  taken as 24 ms x (K / 200)^1.5 (:func:`sample_seconds`);
+- one space-domain run (build, NL write, Ipopt, verification): the first 12 cases of
+  ``studies/metro_supplements.yaml`` (K = 500, ``python bench/bench_sizes.py --kinds run --cases
+  12``, busy machine) took 0.52-2.25 CPU s, 1.86 ms a grid point on average (the first case of a
+  scenario 3.9-4.5 ms: it solves the all-out run and writes the NLP the others re-use):
+  :data:`RUN_SECONDS_PER_POINT`; a DAS ``phases`` advice adds two NLPs of the same size and ``minlp``
+  its time limit (:func:`run_seconds`).
 """
 from dataclasses import replace
 
@@ -27,16 +37,38 @@ from ecostudy.ocp.problem import prepare
 
 LEG_SECONDS_PER_STEP = 0.12
 LEG_BYTES_PER_STEP = 72e3
-SAMPLE_SECONDS = {"convex": 0.028, "sbpc": 0.091, "sppc": 0.253, "rspc": 0.022}  # convex: at K = 200
-REPLAY_SECONDS = 0.001
+SAMPLE_SECONDS = {  # [s] a sample, by (kind, variant[, transcription]) or kind
+    ("sbpc", "nominal"): 0.55, ("sbpc", "two_step"): 0.39, ("sbpc", "multi"): 0.09,
+    ("sbpc", "multi", "condensed"): 0.055, ("sppc", "nominal"): 0.06, ("sppc", "two_step"): 0.15, "rspc": 0.006,
+    "convex": 0.024}  # convex: at K = 200
+REPLAY_SECONDS = 0.0012
 CONVEX_GROWTH = 1.5   # a convex sample's time grows as K^1.5
+RUN_SECONDS_PER_POINT = 2.0e-3
+DAS_EXTRA_POINT_RUNS = {"round": 0.0, "phases": 2.0, "minlp": 3.0}
+RUN_BYTES_PER_POINT = 20e3        # the space NLP of K points (Ipopt's factor and the model): 20 MB at K = 1000
 
 
-def sample_seconds(kind, points):
-    """Estimated computing of one closed-loop sample of a controller ``kind`` at ``points`` nodes [s]."""
+def run_seconds(points, das=None, das_time_limit=60.0):
+    """One space-domain run of ``points`` grid nodes, with its DAS advice [s]."""
+    seconds = points * RUN_SECONDS_PER_POINT * (1 + DAS_EXTRA_POINT_RUNS.get(das or "round", 0.0))
+    return seconds + (das_time_limit if das == "minlp" else 0.0)
+
+
+def sample_seconds(kind, points, variant="nominal", transcription="simultaneous"):
+    """Estimated computing of one closed-loop sample of a controller ``kind`` (its ``variant`` and
+    ``transcription`` where it has them) at ``points`` nodes, its set-up spread over its samples [s]."""
     if kind == "convex":
         return SAMPLE_SECONDS["convex"] * (points / 200) ** CONVEX_GROWTH
-    return SAMPLE_SECONDS.get(kind, REPLAY_SECONDS)
+    for key in ((kind, variant, transcription), (kind, variant), kind):
+        if key in SAMPLE_SECONDS:
+            return SAMPLE_SECONDS[key]
+    return REPLAY_SECONDS
+
+
+def spec_seconds(spec, points):
+    """:func:`sample_seconds` of a controller spec (a dict as a study file writes it, defaults left out)."""
+    return sample_seconds(spec.get("kind", "convex"), points, spec.get("variant", "nominal"),
+                          spec.get("transcription", "simultaneous"))
 
 
 def check_network(study, path):
@@ -82,7 +114,7 @@ def check_closed_loop(cases, path):
             refuse_unless_forced(path, "deviations", f"{label}: the true train (mass x{truth['mass']:.3g}, resistance "
                                  f"x{truth['resistance']:.3g}, traction x{truth['traction']:.3g}) cannot reach the stop "
                                  f"({why}): the run would be simulated to the loop's cap of {cap:,.0f} s ({duration(cap)})")
-        per_sample = sample_seconds(case["controller"].get("kind", "convex"), case["points"])
+        per_sample = spec_seconds(case["controller"], case["points"])
         span = max(fastest, case["window"][1])
         samples = span / case["sample_time"]
         check_run(path, "controllers", f"{label}: {samples:,.0f} samples of {case['sample_time']:g} s", samples * per_sample)

@@ -34,6 +34,8 @@ from ecostudy.ocp.space import passing_time
 from ecostudy.studies.pareto import sweep
 from ecostudy.studies.workers import ticker
 
+FRONT_COUNT = 15  # points of each segment's front
+
 
 def too_short(total_time, fastest, basis=""):
     """Refuse a journey whose total time is below the sum of the segments' all-out times."""
@@ -234,7 +236,7 @@ def timing_columns(plan, n, departure, arrival, run):
             "windows_kept": departed and all(w["kept"] for w in checks)}
 
 
-def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=15, workers=1,
+def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=FRONT_COUNT, workers=1,
             scheduled=None, plan=None, progress=None):
     """Per-segment table for each distribution of one total running time, and the totals.
 

@@ -6,58 +6,47 @@ workers, refused above the 2 h one command may take or half the machine's memory
 
 The constants are measured on this project's shared 2-core machine (pessimistic):
 
-- one space-domain run (build, NL write, Ipopt, verification) of the default study (K = 1000):
-  1.3 s on a quiet machine, 2.6 s on a busy one: :data:`RUN_SECONDS_PER_POINT`; a DAS ``phases``
-  advice adds two NLPs of the same size and ``minlp`` its time limit;
-- a network study: its clock steps (every leg of every train, for every strategy) against the
-  measured commands (``--workers 2``, so twice their wall time of computing: 2 trains 33.8 s over
-  6 146 steps, 3 trains 94.7 s over 9 219, the 20-stop line 319.5 s over 34 083; docs/benchmarks.md):
-  11, 20.5 and 18.7 ms a step, taken as 25 ms (:data:`NETWORK_SECONDS_PER_STEP`);
-- a heavy-haul run: ``ecostudy heavyhaul studies/heavyhaul_fence.yaml`` (busy machine) took 85.6 s
-  over 140 samples at f = 10 (0.61 s a sample: the plant's integration, the observer and the QP)
-  and 261.5 s over 138 at f = 1 (1.9 s): 0.8 and 2.5 s a sample
-  (:data:`HEAVYHAUL_SECONDS_PER_SAMPLE`), over 1.5 times the reference's samples.
+- one space-domain run: :func:`ecostudy.studies.estimate.run_seconds` (a ``run`` study's own check is
+  its kind's ``size``, :func:`ecostudy.studies.batch.run_study_size`);
+- a network study: its clock steps (every leg of every train, for every strategy): the 2-train study
+  took 78.0 CPU s over 6 146 steps with one worker (12.7 ms a step; ``python bench/bench_sizes.py
+  --kinds network``, busy machine); as a user starts them on a quiet machine with one worker, the
+  2-train, 3-train and 20-stop studies took 52, 149 and 579 s (8.5, 16.2 and 17.0 ms a step): taken
+  as 20 ms (:data:`NETWORK_SECONDS_PER_STEP`);
+- a heavy-haul run: the first 30 samples of ``studies/heavyhaul_fence.yaml`` (``python
+  bench/bench_sizes.py --kinds heavyhaul``, busy machine) took 0.11 CPU s a sample at f = 10 (the
+  plant's integration, the observer and the QP) and 0.42 s at f = 1 (every car a locomotive group,
+  the largest QP): 0.15 and 0.5 s a sample (:data:`HEAVYHAUL_SECONDS_PER_SAMPLE`), over 1.5 times
+  the reference's samples;
+- a comparison (``compare``): the all-out run, the ATO optimum with its DAS phases (two NLPs more)
+  and the heuristics (taken as one run more), one after the other (:func:`check_compare`);
+- a journey (``journey``): each segment's front (:data:`~ecostudy.studies.journey.FRONT_COUNT` runs, shared among the workers), then the
+  whole-journey NLP (every segment at once) and every split's runs, one after the other
+  (:func:`check_journey`).
 """
+from pathlib import Path
+
 import numpy as np
 
 from ecostudy.core.budget import check_run, check_study
 from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import validate
 from ecostudy.io.loopfile import SimulateFile
-from ecostudy.studies import cases as study_cases
 from ecostudy.studies import closedloop
-from ecostudy.studies.estimate import check_closed_loop, check_network, sample_seconds
+from ecostudy.studies.batch import STUDY_KINDS
+from ecostudy.studies.journey import FRONT_COUNT
+from ecostudy.studies.estimate import RUN_BYTES_PER_POINT, check_closed_loop, check_network, run_seconds, spec_seconds
 
-RUN_SECONDS_PER_POINT = 2.6e-3
-DAS_EXTRA_POINT_RUNS = {"round": 0.0, "phases": 2.0, "minlp": 3.0}
-NETWORK_SECONDS_PER_STEP = 0.025
-HEAVYHAUL_SECONDS_PER_SAMPLE = {1: 2.5}  # f = 1: one locomotive group per car, the largest QP
-HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED = 0.8
-RUN_BYTES_PER_POINT = 20e3        # the space NLP of K points (Ipopt's factor and the model): 20 MB at K = 1000
-
-
-def run_seconds(points, das=None, das_time_limit=60.0):
-    """One space-domain run of ``points`` grid nodes, with its DAS advice [s]."""
-    seconds = points * RUN_SECONDS_PER_POINT * (1 + DAS_EXTRA_POINT_RUNS.get(das or "round", 0.0))
-    return seconds + (das_time_limit if das == "minlp" else 0.0)
-
-
-def run_study_runs(path):
-    """(seconds per case, bytes of the largest case) of a ``run`` study file."""
-    _, _, cases = study_cases.expand(path, [])
-    runs = [run_seconds(c["points"], c.get("das"), c.get("das_time_limit_s", 60.0)) for c in cases]
-    return runs, max((c["points"] for c in cases), default=0) * RUN_BYTES_PER_POINT
+NETWORK_SECONDS_PER_STEP = 0.02
+HEAVYHAUL_SECONDS_PER_SAMPLE = {1: 0.5}  # f = 1: one locomotive group per car, the largest QP
+HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED = 0.15
 
 
 def check_run_study(path, workers=1):
-    """Refuse a ``run`` study estimated above the command's budget (unless forced)."""
-    runs, nbytes = run_study_runs(path)
-    check_study(path, "the study's cases", runs, workers, nbytes)
-
-
-# a study kind's whole-study size check by its name (studies.batch.STUDY_KINDS); a kind without one
-# runs unchecked (its runs still meet core.budget.check_run where they build a model)
-KIND_SIZES = {"run": check_run_study}
+    """Refuse a ``run`` study estimated above the command's budget (unless forced): its kind's
+    ``size`` (:func:`ecostudy.studies.batch.run_study_size`) on its cases."""
+    kind = STUDY_KINDS.get("run")
+    kind.size(Path(path), kind.expand(Path(path)).cases, workers)
 
 
 def check_front(where, count, points, workers=1, das=None, das_time_limit=60.0):
@@ -77,7 +66,7 @@ def check_closed_loop_study(path, workers=1, only=None):
     per_run = []
     for c in chosen:
         samples = s.window_s[1] / (c.sample_time_s or s.sample_time_s)
-        seconds = samples * sample_seconds(c.kind, s.points)
+        seconds = samples * spec_seconds(c.model_dump(), s.points)
         check_run(path, "controllers", f"{c.name}: {samples:,.0f} samples of {c.sample_time_s or s.sample_time_s:g} s "
                   f"at K = {s.points}", seconds)
         per_run += [seconds] * s.draws
@@ -113,3 +102,19 @@ def heavyhaul_runs(study, reference, cases):
 def check_heavyhaul_study(path, study, reference, cases, workers=1):
     """Refuse a heavy-haul study estimated above the command's budget (unless forced)."""
     check_study(path, "the study's runs", heavyhaul_runs(study, reference, cases), workers)
+
+
+def check_compare(where, points):
+    """Refuse a comparison at K = ``points`` estimated above the command's budget (unless forced)."""
+    runs = [run_seconds(points), run_seconds(points, "phases"), run_seconds(points)]  # all-out, ATO + DAS, heuristics
+    check_study(where, f"a comparison at K = {points}", [], 1, points * RUN_BYTES_PER_POINT, serial=runs)
+
+
+def check_journey(where, segments, points, workers=1, splits=4, whole=1):
+    """Refuse a journey of ``segments`` at K = ``points`` estimated above the command's budget (unless
+    forced): the fronts shared among ``workers``, then ``whole`` NLPs of every segment at once and
+    ``splits`` distributions of a run a segment."""
+    fronts = [run_seconds(points)] * (segments * FRONT_COUNT)
+    serial = [run_seconds(points * segments)] * whole + [run_seconds(points)] * (segments * splits)
+    check_study(where, f"a journey of {segments} segments at K = {points}", fronts, workers,
+                points * segments * RUN_BYTES_PER_POINT, serial=serial)

@@ -1,0 +1,43 @@
+"""Whole-command estimates of ``journey`` and ``compare`` (``studies/sizes.check_journey``,
+``check_compare``): refused before computing above the 2 h one command may take or half the
+memory, with the estimate in one line, unless ``--force``."""
+import pytest
+
+from ecostudy.core.budget import forced
+from ecostudy.core.errors import InputError
+from ecostudy.studies.sizes import check_compare, check_journey
+
+from .conftest import TRACKS, TRAINS
+from .test_bad_input import one_line, run
+
+METRO, LINE = TRAINS / "amsterdam_metro.yaml", TRACKS / "metro_line_4stops.yaml"
+
+
+def test_a_journey_too_big_for_one_command_is_refused_with_its_estimate(tmp_path):
+    """Three segments at K = 100 000: 45 front runs, the whole-journey NLP of 300 000 nodes and
+    12 split runs, one worker."""
+    r = run("journey", "--train", METRO, "--track", LINE, "--supplement", 10, "--points", 100000, "--workers", 1,
+            "--out", tmp_path / "out", "--no-plot")
+    one_line(r, "command line: study: a journey of 3 segments at K = 100000: 58 runs, an estimated",
+             "h of computing", "above the 2 h one command may take", "--force")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_journey_within_the_budget_passes():
+    check_journey("command line", 19, 500, workers=1)  # the 20-stop regional line at the default K
+    check_journey("timetable.json", 3, 2000, workers=2, splits=6, whole=2)  # a windowed timetable
+
+
+def test_a_comparison_too_big_is_refused_and_passes_when_forced():
+    """The command's --points stops at 100 000 (refused in one line before this check); beyond it
+    a comparison's five NLPs are estimated above the 2 h."""
+    with pytest.raises(InputError, match=r"a comparison at K = 1000000: 3 runs, an estimated .* h of computing .*"
+                                         r"above the 2 h one command may take; give --force"):
+        check_compare("command line", 1000000)
+    with forced():
+        check_compare("command line", 1000000)
+
+
+def test_a_comparison_within_the_budget_passes():
+    check_compare("command line", 1000)
+    check_compare("command line", 100000)  # the largest --points: about an hour
