@@ -10,8 +10,7 @@ from ecostudy.cli.app import app, call, finish
 @app.command(short_help="Heavy-haul train as coupled masses under braking-penalised RHC (Zhang & Zhuan).")
 def heavyhaul(
     study: Path = typer.Argument(..., help="Heavy-haul study file (YAML): consist, track, reference, K_b/f/horizons."),
-    workers: o.StepTimed = None, dask: o.Dask = None,
-    retry_failed: bool = typer.Option(False, help="Compute failed runs again."),
+    workers: o.StepTimed = None, dask: o.Dask = None, retry_failed: bool = typer.Option(False, help="Compute failed runs again."),
     out: o.Out = None, no_progress: o.NoProgress = False, no_plot: o.NoPlot = False,
     blas_threads: int = typer.Option(1, min=1, max=256, help="OpenBLAS threads per process (1: the small QPs run "
                                      "fastest single-threaded, docs/heavyhaul.md)."),

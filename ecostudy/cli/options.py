@@ -24,7 +24,6 @@ Points = Annotated[Optional[int], typer.Option("--points", "-K", help="Grid node
                                                                       "1000; 500 for a front).")]
 Out = Annotated[Optional[Path], typer.Option(help="Output folder (relative: to the working directory; default: "
                                                   "the study's 'output').")]
-Workers = Annotated[int, typer.Option(help="Local worker processes.")]
 EveryCore = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core).")]
 StepTimed = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core). Per-step solve "
                       "times are measured with every worker busy; --workers 1 measures them on a quiet machine.")]

@@ -11,8 +11,7 @@ from ecostudy.cli.app import app, call, finish
 @app.command(short_help="Closed loop: controllers drive a perturbed plant, Monte Carlo, resumable.")
 def simulate(
     study: Path = typer.Argument(..., help="Closed-loop study file (YAML): controllers, deviations, draws."),
-    workers: o.StepTimed = None, dask: o.Dask = None,
-    retry_failed: bool = typer.Option(False, help="Compute failed runs again."),
+    workers: o.StepTimed = None, dask: o.Dask = None, retry_failed: bool = typer.Option(False, help="Compute failed runs again."),
     out: o.Out = None, no_progress: o.NoProgress = False, no_plot: o.NoPlot = False,
     only: Optional[list[str]] = typer.Option(None, "--only", help="Run only this controller's runs (repeatable); "
                                              "the tables show every stored run."),
