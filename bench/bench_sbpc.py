@@ -63,8 +63,8 @@ def timed(case):
     return case, run_loop_case(case), time.perf_counter() - t0
 
 
-def draws_table(study, draws, workers, only, skip=0):
-    """Run each controller of ``study`` over draws ``skip`` .. ``draws`` - 1 and on the model train; a row each."""
+def draws_table(study, draws, workers, only, skip=0, model=True):
+    """Run each controller of ``study`` over draws ``skip`` .. ``draws`` - 1 and (``model``) on the model train; a row each."""
     _, _, cases = expand(study)
     chosen = [c for c in cases if skip <= c["labels"]["draw"] < draws and (not only or c["scenario"] in only)]
     print("| controller | draws | stop error max abs / median [m] | within 1 m | arrival - 76 s median / max [s] | "
@@ -74,22 +74,22 @@ def draws_table(study, draws, workers, only, skip=0):
         for name in only or dict.fromkeys(c["scenario"] for c in chosen):
             mine = [c for c in chosen if c["scenario"] == name]
             runs = []
-            for case, row, wall in pool.map(timed, [nominal_case(mine[0])] + mine):
+            for case, row, wall in pool.map(timed, [nominal_case(mine[0])] * model + mine):
                 runs.append((row, wall))
                 s = row["summary"] or {}
                 print(f"  {name} draw {case['labels']['draw']}: {row['status']} stop "
                       f"{s.get('stop_error_m', float('nan')):+.3f} m, arrival {s.get('arrival_s', float('nan')):.2f} s, "
                       f"{wall:.0f} s wall, overspeed {s.get('max_overspeed_kmh', float('nan')):.2f} km/h, "
                       f"{s.get('energy_J_per_kg', float('nan')):.1f} J/kg", file=sys.stderr, flush=True)
-            print(draws_row(name, runs[0][0], runs[1:], mine[0]["window"][1]), flush=True)
+            print(draws_row(name, runs[0][0] if model else None, runs[model:], mine[0]["window"][1]), flush=True)
 
 
 def draws_row(name, model, runs, arrival):
-    """One table row: ``model`` the run on the model train, ``runs`` [(row, wall)] the draws."""
+    """One table row: ``model`` the run on the model train (None: no energy ratio), ``runs`` [(row, wall)] the draws."""
     s = [r["summary"] for r, _ in runs if r["summary"]]
     e = np.array([x["stop_error_m"] for x in s])
     late = np.array([x["arrival_s"] for x in s]) - arrival
-    ratio = np.array([x["energy_J_per_kg"] for x in s]) / model["summary"]["energy_J_per_kg"]
+    ratio = np.array([x["energy_J_per_kg"] for x in s]) / (model["summary"]["energy_J_per_kg"] if model else np.nan)
     statuses = {k: sum(r["status"] == k for r, _ in runs) for k in ("ok", "flagged", "failed")}
     return (f"| {name} | {len(s)} of {len(runs)} | {np.max(np.abs(e)):.3f} / {np.median(e):+.3f} | "
             f"{int(np.sum(np.abs(e) <= 1.0))} | {np.median(late):+.2f} / {np.max(late):+.2f} | "
@@ -115,13 +115,14 @@ def main():
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--only", nargs="*", help="with --draws: only these controllers of the study")
     p.add_argument("--skip", type=int, default=0, help="with --draws: leave out the first SKIP draws (run them apart)")
+    p.add_argument("--no-model", action="store_true", help="with --draws: no run on the model train (no energy ratio)")
     args = p.parse_args()
     print(f"`python bench/bench_sbpc.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
     track = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
     train = load_train(ROOT / "trains/amsterdam_metro.yaml")
     if args.draws:
         configure()
-        draws_table(args.study, args.draws, args.workers, args.only, args.skip)
+        draws_table(args.study, args.draws, args.workers, args.only, args.skip, not args.no_model)
         return
     ato = solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=200)
     case = prepare(track, train, "Rokin", "Centraal", 200)

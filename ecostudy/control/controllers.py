@@ -239,3 +239,8 @@ class Quantised:
         u = float(self.controller.plan(measured))
         self.pending.append(float(self.levels[np.argmin(np.abs(self.levels - u))]))
         return self.pending[-1 - self.delay] if len(self.pending) > self.delay else 0.0
+
+    def observe(self, pieces, before, after):
+        """Passed on to the controller if it observes (``run_loop``: the pieces hold the levels applied)."""
+        if hasattr(self.controller, "observe"):
+            self.controller.observe(pieces, before, after)

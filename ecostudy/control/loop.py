@@ -4,7 +4,9 @@ Each cycle the sensors read the plant's state (with measurement noise, ``core.pl
 mass estimator (optional) takes the accelerometer's reading of the last cycle's mean acceleration,
 the controller plans a handle, and the plant runs for ``sample_time`` in steps of ``plant_step``
 with the acceleration disturbance drawn per step (or held for ``noise.period``). The trip ends
-when the train has moved and stands.
+when the train has moved and stands. A controller with an ``observe(pieces, before, after)``
+method is told each sample what ran: the pieces [(duration [s], handle)] applied and the measured
+states at the sample's start and end (the terminal approach's braking fit, ``control.brakefit``).
 
 The computation delay (``delay``): solving takes time, so the control planned from the state
 measured at sample k cannot act at k.
@@ -108,7 +110,8 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
     trip = _Trip(plant, noise, plant_step)
     states, handles, readings = [State()], [], []
     max_time = max_time or 20 * segment.distance + 600
-    last, held = None, 0.0
+    last, held, acted = None, 0.0, None
+    observe = getattr(controller, "observe", None)
     planned = [0.0] * (delay if delay != MEASURED else 0)  # controls planned, not acting yet
     busy_until, pending, lag = -np.inf, None, 0.0  # "measured": the solve under way and its result
     while trip.state.time < max_time:
@@ -120,6 +123,8 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
             u, _, measured0, before = last
             reading = noise.read_acceleration((state.speed - before.speed) / (state.time - before.time), trip.rng)
             estimator.observe(nominal, u, measured0, measured, reading)
+        if observe is not None and acted is not None:
+            observe(acted, last[2], measured)
         # the controller's model for the prediction: with the mass it estimates, if it does
         ahead_model = nominal if estimator is None else Plant(segment, model, Truth(mass=estimator.estimate))
         if delay == MEASURED:
@@ -134,7 +139,7 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
             held = float(controller.plan(measured))
             pieces = [(sample_time, held)]
         handles.append(pieces[0][1])
-        last = (pieces[0][1], max(measured.speed, 0.0), measured, state)
+        last, acted = (pieces[0][1], max(measured.speed, 0.0), measured, state), list(pieces)
         trip.run(pieces)
         states.append(trip.state)
         if trip.stood or (until is not None and trip.state.position >= until):

@@ -8,7 +8,10 @@ sample on the measured position. :class:`TerminalApproach` gives any controller 
 approach: the stopping curve is integrated with the model's braking envelope less ``reserve``
 (``kinematics.braking_curve``), so a train whose brakes are weaker than the model's (by less than
 the reserve) still stops on the mark. Braking and coasting are the DAS levels -1 and 0, so the
-approach needs no other handle on a driver-advisory loop.
+approach needs no other handle on a driver-advisory loop. With ``fit`` the reserve is the prior
+only: the curve is re-integrated with the share of the brake the train's full-brake samples show
+(``control.brakefit``), so a train braking as the model does stops on a curve near its own brake
+instead of 1 - reserve of it (the fixed reserve's lateness).
 
 Before the approach, a handle that could take the train over the speed limit within the sample
 is replaced by coasting, or full braking where coasting could too (``capped`` counts them): a
@@ -21,6 +24,7 @@ over the sample enlarged by ``boost``, against the lowest limit within the sampl
 """
 import numpy as np
 
+from ecostudy.control.brakefit import BrakeFit
 from ecostudy.core import kinematics
 from ecostudy.core.physics import davis_resistance
 from ecostudy.core.plant import Plant
@@ -30,33 +34,55 @@ class TerminalApproach:
     """``inner`` (a controller with ``solve_seconds`` and ``record``) until the stopping curve of
     ``case`` (``ocp.problem.prepare``: segment, nominal train, grid) braking with (1 - ``reserve``)
     of the service brake is one ``sample_time`` ahead; then that curve (``engaged`` counts the
-    samples)."""
+    samples). ``fit``: (1 - ``reserve``) is the prior of a :class:`BrakeFit` (``bound``: the
+    deviation bound d) fed by ``observe``, and the curve follows its share (``scales``: the share
+    at every sample of the approach)."""
 
-    def __init__(self, inner, case, sample_time, reserve=0.2, boost=0.25, level_step=0.125):
+    def __init__(self, inner, case, sample_time, reserve=0.2, boost=0.25, level_step=0.125, fit=False, bound=0.1):
         self.inner, self.ts, self.nodes, self.segment = inner, float(sample_time), case.nodes, case.segment
-        self.boost, self.level_step, self.capped = boost, level_step, 0
+        self.boost, self.level_step, self.capped, self.train = boost, level_step, 0, case.train
         self.model = Plant(case.segment, case.train)
-        reserved = case.train.with_brake_reserve(reserve)
-        self.stop_sq = kinematics.braking_curve(case.segment, reserved, case.nodes,
-                                                np.full_like(case.nodes, np.inf)) ** 2
-        self.engaged = 0
+        self.fit = BrakeFit(self.model, reserve, bound) if fit else None
+        self.scale = 1.0 - reserve
+        self.prior_sq = self.stop_sq = self._curve(self.scale)
+        self.engaged, self.scales = 0, []
+
+    def _curve(self, scale):
+        """The stopping curve's squared speeds on the grid, braking at ``scale`` of the service brake."""
+        train = self.train.with_brake_reserve(1.0 - scale)
+        return kinematics.braking_curve(self.segment, train, self.nodes, np.full_like(self.nodes, np.inf)) ** 2
+
+    def observe(self, pieces, before, after):
+        """The loop's report of a sample (``run_loop``): the pieces run, the measured states at its
+        ends; with ``fit`` the curve is re-integrated when the fitted share moves by 0.001 or more."""
+        if self.fit is None:
+            return
+        self.fit.observe(pieces, before, after)
+        scale = round(self.fit.scale, 3)
+        if scale != self.scale:
+            self.scale, self.stop_sq = scale, self._curve(scale)
 
     @property
     def solve_seconds(self):
         return self.inner.solve_seconds
 
-    def must_brake(self, position, speed):
-        """Coasting one more sample would leave the train above the stopping curve."""
+    def must_brake(self, position, speed, curve=None):
+        """Coasting one more sample would leave the train above the stopping curve (``curve``: its
+        squared speeds on the grid; the fitted one if not given)."""
         run = speed * self.ts
         x_mid = position + 0.5 * run
         coast = -(davis_resistance(speed, *self.model.davis) + self.model.grade_force(x_mid)) / self.model.mass
-        return speed * speed + 2.0 * run * coast >= float(np.interp(position + run, self.nodes, self.stop_sq))
+        return speed * speed + 2.0 * run * coast >= float(np.interp(position + run, self.nodes,
+                                                                             self.stop_sq if curve is None else curve))
 
     def plan(self, measured):
         x, v = max(measured.position, 0.0), max(measured.speed, 0.0)
-        if not self.engaged and not self.must_brake(x, v):
+        # engaged on the lower of the prior's curve and the fitted one: a train found to brake better
+        # than the prior coasts from the prior's curve to its own (half the braking time's loss)
+        if not self.engaged and not (self.must_brake(x, v) or self.must_brake(x, v, self.prior_sq)):
             return self.below_limit(measured, float(self.inner.plan(measured)))
         self.engaged += 1
+        self.scales.append(self.scale)
         brake = self.must_brake(x, v)
         self.inner.solve_seconds.append(0.0)
         self.inner.record("terminal_brake" if brake else "terminal_coast", 0.0)

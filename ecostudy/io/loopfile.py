@@ -82,6 +82,9 @@ class Controller(Strict):
                                               "approach (control/terminal.py): full braking on the stopping "
                                               "curve of the brake less this share, coasting otherwise (none: "
                                               "the controller's own stop).")
+    terminal_fit: bool = Field(False, description="sbpc, sppc: the terminal approach's curve follows the "
+                               "braking measured on the run's full-brake samples, terminal_reserve its prior "
+                               "(control/brakefit.py; needs terminal_reserve).")
     time_budget_s: Optional[float] = Field(None, gt=0, description="convex: a solve longer than this is not "
                                            "applied; the last plan is, shifted (default: none, repeatable).")
 
@@ -98,6 +101,9 @@ class Controller(Strict):
         if self.brake_reserve is not None and "brake_reserve" not in uses:
             raise ValueError(f"brake_reserve is for {', '.join(reserve_kinds)} (the convex controller's is "
                              "settings.brake_level_mps2)")
+        if self.terminal_fit and self.terminal_reserve is None:
+            raise ValueError("terminal_fit needs terminal_reserve (the share of the brake held back until "
+                             "the train's braking is measured)")
         unused = sorted(self.model_fields_set - COMMON - uses)
         if unused:
             raise ValueError(f"{', '.join(unused)}: not used by a controller of kind {self.kind!r} (it reads "

@@ -108,7 +108,7 @@ def build_controller(case, track, segment, train, estimator):
     outer = inner
     if spec["terminal_reserve"] is not None:
         outer = TerminalApproach(inner, prepare(track, train, case["from"], case["to"], points), case["sample_time"],
-                                 spec["terminal_reserve"])
+                                 spec["terminal_reserve"], fit=spec["terminal_fit"])
     if spec["das_levels"]:
         return Quantised(outer, train.das_levels, spec["delay_samples"]), inner
     return outer, inner

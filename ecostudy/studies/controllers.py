@@ -109,6 +109,6 @@ CONTROLLER_KINDS.register("convex", convex, uses={"settings", "estimator", "sche
 CONTROLLER_KINDS.register("open_loop", open_loop, uses={"settings", "scheme"})
 CONTROLLER_KINDS.register("ato", ato)
 CONTROLLER_KINDS.register("sbpc", sbpc, uses={"block", "variant", "omega", "transcription", "brake_reserve",
-                                              "terminal_reserve"})
-CONTROLLER_KINDS.register("sppc", sppc, uses={"variant", "brake_reserve", "terminal_reserve"})
+                                              "terminal_reserve", "terminal_fit"})
+CONTROLLER_KINDS.register("sppc", sppc, uses={"variant", "brake_reserve", "terminal_reserve", "terminal_fit"})
 CONTROLLER_KINDS.register("rspc", rspc, uses={"rspc", "brake_reserve"})
