@@ -82,7 +82,7 @@ def test_calibrate_tells_each_bootstrap_draw(tmp_path, log_files):
     assert seen.steps("bootstrap over logs") == [(n, "") for n in (1, 2, 3, 4)]
 
 
-@pytest.mark.slow  # eight optimal runs of 500 points: 30 s on a quiet machine
+@pytest.mark.slow  # eight optimal runs of 500 points
 def test_calibrate_tells_each_optimal_run_of_the_savings(tmp_path, log_files):
     seen = Recorder()
     api.calibrate_folder(list(log_files), out=tmp_path, bootstrap=0, savings=1, plot=False, progress=seen)
@@ -119,23 +119,23 @@ def bar_only_on_a_terminal(args, cwd, shown):
     assert code in (0, 1) and "━" not in err + out and "\r" not in err + out and "written to" in err, err
 
 
-@pytest.mark.slow  # three runs of solve with its driver advice: 30 s on a busy machine
+@pytest.mark.slow  # three solves with driver advice, each a fresh process: minutes at load 14
 def test_solve_shows_its_stages_on_a_terminal(tmp_path):
     bar_only_on_a_terminal([*SOLVE, "--das", "phases"], tmp_path, ["solve: DAS phases NLP", "solve: figures"])
 
 
-@pytest.mark.slow  # three MINLP searches of 3 s each, with the phases NLPs around them
+@pytest.mark.slow  # three fresh processes, each a MINLP search of 3 s with the phases NLPs around it
 def test_the_minlp_search_shows_its_time_limit_on_a_terminal(tmp_path):
     bar_only_on_a_terminal([*SOLVE, "--das", "minlp", "--das-time-limit", "3"], tmp_path,
                            ["solve: MINLP search", "/3 s"])
 
 
-@pytest.mark.slow  # three calibrations of two logs, five bootstrap draws each
+@pytest.mark.slow  # three calibrations in fresh processes: 124 s at load 14
 def test_calibrate_shows_its_draws_on_a_terminal(tmp_path, log_files):
     bar_only_on_a_terminal(["calibrate", *log_files, "--bootstrap", "5", "--no-plot"], tmp_path,
                            ["calibrate: bootstrap over logs", "5/5 draws"])
 
 
-@pytest.mark.slow  # three validations of a log of two runs
+@pytest.mark.slow  # three validations in fresh processes: 150 s at load 14
 def test_validate_shows_its_runs_on_a_terminal(tmp_path, log_files):
     bar_only_on_a_terminal(["validate", log_files[0], "--no-plot"], tmp_path, ["validate: replaying there", "2/2 runs"])
