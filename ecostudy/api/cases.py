@@ -3,7 +3,8 @@ the commands ``run``, ``simulate``, ``heavyhaul``, ``network``, ``calibrate`` an
 functions (the command line only parses and prints).
 
 ``progress(done, failed, remaining, total)`` is called after each case (``studies.batch.execute``);
-``note(line)`` receives the network study's progress lines.
+``note(line)`` receives the network study's progress lines. calibrate and validate tell their
+``progress`` (a :class:`ecostudy.core.progress.Watcher`) their stages and the steps of each.
 """
 import logging
 from pathlib import Path
@@ -11,6 +12,7 @@ from typing import Callable, Optional, Sequence
 
 from ecostudy.api.blas import limit_blas_threads
 from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
+from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.io.loaders import load_network_study
 from ecostudy.io.writers import check_output_dir
 from ecostudy.report import calplots, heavyplots, loopplots
@@ -117,11 +119,15 @@ def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, w
 
 def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: Optional[Path] = None,
                      fit: Optional[str] = None, out: Path = Path("out/calibration"), bootstrap: int = 200,
-                     savings: Optional[int] = None, plot: bool = True) -> Report:
+                     savings: Optional[int] = None, plot: bool = True, *, progress: Optional[Watcher] = None) -> Report:
     """``ecostudy calibrate``: train parameters fitted to logged runs (least squares on the replayed
-    dynamics), 95 % intervals, ``bootstrap`` draws, and optionally the savings against the logs."""
-    result, summary = calibrate_study(logs, train, track, fit, out, bootstrap, savings,
-                                      ("residuals.png",) if plot else ())
+    dynamics), 95 % intervals, ``bootstrap`` draws, and optionally the savings against the logs.
+    ``progress`` watches the fit, each bootstrap draw and each optimal run of the savings
+    (:mod:`ecostudy.core.progress`)."""
+    with watched(progress):
+        result, summary = calibrate_study(logs, train, track, fit, out, bootstrap, savings,
+                                          ("residuals.png",) if plot else ())
+        stage("figures and report")
     if plot:
         calplots.residuals(result.residuals, Path(out) / "residuals.png", "calibration from logged runs")
     write_html(out)
@@ -141,11 +147,14 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
 
 def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optional[Path] = None,
                     out: Path = Path("out/validate"), energy_tolerance: float = 5.0, time_tolerance: float = 5.0,
-                    plot: bool = True) -> Report:
+                    plot: bool = True, *, progress: Optional[Watcher] = None) -> Report:
     """``ecostudy validate``: a logged run replayed on the train file's model, per run between stops;
-    a run whose traction energy or running time differs by more than the tolerances [%] is flagged."""
-    table, summary = validate_study(log_file, train, track, out, energy_tolerance / 100, time_tolerance / 100,
-                                    ("validate.png",) if plot else ())
+    a run whose traction energy or running time differs by more than the tolerances [%] is flagged.
+    ``progress`` watches the runs replayed (:mod:`ecostudy.core.progress`)."""
+    with watched(progress):
+        table, summary = validate_study(log_file, train, track, out, energy_tolerance / 100, time_tolerance / 100,
+                                        ("validate.png",) if plot else ())
+        stage("figures and report")
     if plot:
         calplots.validation(table, Path(out) / "validate.png", f"{Path(log_file).stem}: logged and model")
     write_html(out)

@@ -11,6 +11,7 @@ from ecostudy import __version__
 from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.errors import InputError, problem
+from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.das.methods import das_run
 from ecostudy.io.loaders import chosen_stops, load_track, load_train
 from ecostudy.io.results import file_digest
@@ -67,10 +68,19 @@ def solve_folder(study: Optional[Path] = None, track: Optional[Path] = None, tra
                  from_stop: Optional[str] = None, to_stop: Optional[str] = None, objective: Optional[str] = None,
                  weights: Optional[str] = None, points: Optional[int] = None, out: Optional[Path] = None,
                  plot: bool = True, das: Optional[str] = None, das_time_limit: float = 60.0, fig_format: str = "png",
-                 dpi: Optional[float] = None) -> Report:
+                 dpi: Optional[float] = None, *, progress: Optional[Watcher] = None) -> Report:
     """``ecostudy solve``: the energy-optimal (or all-out) run of a study file, or of a track and a
     train file, verified and written to ``out`` (profile.csv, summary.json, the figures, inputs.json);
-    ``time`` [s], ``supplement`` [%] and ``window`` ('earliest,latest' [s]) override the study's timing."""
+    ``time`` [s], ``supplement`` [%] and ``window`` ('earliest,latest' [s]) override the study's timing.
+    ``progress`` watches its stages (:mod:`ecostudy.core.progress`): the ATO solve, each stage of the
+    driver advice (the MINLP search against its time limit), the files."""
+    with watched(progress):
+        return _solve_folder(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights,
+                             points, out, plot, das, das_time_limit, fig_format, dpi)
+
+
+def _solve_folder(study, track, train, time, supplement, window, from_stop, to_stop, objective, weights, points,
+                  out, plot, das, das_time_limit, fig_format, dpi):
     figures = output(fig_format, dpi)
     check_options(time=time, supplement=supplement, points=points, das_time_limit=das_time_limit)
     only_one(time=time, supplement=supplement, window=window)
@@ -105,6 +115,7 @@ def solve_folder(study: Optional[Path] = None, track: Optional[Path] = None, tra
         k = points or 1000
         out_dir = output_folder(out, Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_"))
     check_output_dir(out_dir, ("profile.csv", "summary.json", "speed.png", "inputs.json"))
+    stage(f"{obj} optimum, verified")
     result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
     if das is not None:
         if windows and das != "round":
@@ -112,6 +123,7 @@ def solve_folder(study: Optional[Path] = None, track: Optional[Path] = None, tra
                                      "windows on the way yet; use --das round"))
         result.das = das_run(result, das, time_limit=das_time_limit)
         result.summary["das"] = result.das.summary
+    stage("figures and files")
     write_run(result, out_dir, plot=plot, out=figures)
     write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
                                          "track_sha256": file_digest(paths[0]), "train_sha256": file_digest(paths[1]),

@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.calibration.replay import coefficients
+from ecostudy.core.progress import stage
 from ecostudy.calibration.fit import (
     PARAMETERS, Z95, Problem, bootstrap, identify, scales, train_with,
 )
@@ -65,11 +66,12 @@ def residual_table(problem, theta):
 def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     """Fit ``names`` (of :data:`~ecostudy.calibration.fit.PARAMETERS`) to ``logs`` on ``track``,
     starting from and regularised by nothing but the ``train``'s values (the prior)."""
+    stage("least-squares fit, identifiability")
     problem = Problem.from_logs(logs, track, train)
     free, p, cov, held = identify(problem, list(names))
     theta = problem.theta(free, p)
     s = scales(problem.prior)
-    boot = bootstrap(problem, free, p, draws, seed) if len(logs) > 1 and free else None
+    boot = bootstrap(problem, free, p, draws, seed) if len(logs) > 1 and free and draws > 0 else None
     rows = []
     for name in names:
         row = {"name": name, "unit": PARAMETERS[name][0], "prior": problem.prior[name], "estimate": theta[name],

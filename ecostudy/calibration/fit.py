@@ -25,6 +25,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ecostudy.calibration.replay import coefficients, efficiency_samples, prepare
+from ecostudy.core.progress import stage, step
 
 # name -> (unit, what it is)
 PARAMETERS = {
@@ -230,9 +231,11 @@ def bootstrap(problem, names, p, draws, seed=0):
     logs = list(problem.traction)
     rng = np.random.default_rng(seed)
     out = []
-    for _ in range(draws):
+    stage("bootstrap over logs", total=draws, unit="draws")
+    for draw in range(draws):
         pick = [logs[i] for i in rng.integers(0, len(logs), len(logs))]
         q = solve(problem, names, p, pick)
         th = problem.theta(names, q)
         out.append([th[n] for n in names])
+        step(draw + 1)
     return np.array(out)

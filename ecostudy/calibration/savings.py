@@ -12,6 +12,7 @@ import pandas as pd
 from ecostudy.analysis.single import solve_run
 from ecostudy.calibration.fit import train_with
 from ecostudy.calibration.replay import prepare, wheel_work
+from ecostudy.core.progress import stage, step
 from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kwh
 
@@ -31,17 +32,21 @@ def savings(log, track, calibration, draws=8, points=500, seed=0):
     """One row per run of ``log``: logged time and traction energy, the calibrated optimum's, the
     saving [%] and its band over ``draws`` parameter draws."""
     trains = parameter_draws(calibration, draws, seed)
-    work, rows = wheel_work(log), []
-    for run in prepare(log, track, calibration.train):
+    work, rows, runs = wheel_work(log), [], prepare(log, track, calibration.train)
+    stage(f"savings {log.name}", total=len(runs) * (1 + len(trains)), unit="solves")
+    for i, run in enumerate(runs):
+        step(i * (1 + len(trains)), f"run {run.index}")
         first = int(np.searchsorted(log.t, run.t[0]))
         logged = float(np.sum(np.maximum(work[first:first + len(run.t) - 1], 0.0)))
         timing = Timing(running_time=float(run.t[-1] - run.t[0]))
         here = replace(track, stops=dict(track.stops, _departure=float(run.x[0]), _arrival=float(run.x[-1])))
         best = solve_run(here, calibration.train, "_departure", "_arrival", timing, points=points)
         energies = [best.summary["traction_energy_kWh"]]
+        step(i * (1 + len(trains)) + 1, f"run {run.index}")
         for train in trains:
             energies.append(solve_run(here, train, "_departure", "_arrival", timing, points=points,
                                       warm_start=best).summary["traction_energy_kWh"])
+            step(i * (1 + len(trains)) + len(energies), f"run {run.index}")
         saving = [100 * (to_kwh(logged) - e) / to_kwh(logged) for e in energies]
         verified = best.summary["verification"] or {}
         rows.append({"log": log.name, "run": run.index, "from_m": float(run.x[0]), "to_m": float(run.x[-1]),

@@ -29,6 +29,7 @@ import pandas as pd
 from ecostudy.calibration.replay import coefficients, line_power, prepare, wheel_work
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Plant
+from ecostudy.core.progress import stage, step
 from ecostudy.core.units import to_kwh
 
 END_FIT = 3.0          # [s] of samples at each end of a phase for its end speeds
@@ -106,7 +107,10 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
     differences, where the model stops, and the status."""
     rows, work_all = [], wheel_work(log)
     line = line_power(log)
-    for run in prepare(log, track, train):
+    runs = prepare(log, track, train)
+    stage(f"replaying {log.name}", total=len(runs), unit="runs")
+    for i, run in enumerate(runs):
+        step(i, f"run {run.index}")
         first = int(np.searchsorted(log.t, run.t[0]))
         work = work_all[first:first + len(run.t) - 1]
         logged = float(np.sum(np.maximum(work, 0.0)))
@@ -131,4 +135,5 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
             reasons.append(f"running time {row['time_difference_pct']:+.1f} % off the log under the logged handle")
         row["status"], row["reason"] = ("flagged", "; ".join(reasons)) if reasons else ("ok", "")
         rows.append(row)
+    step(len(runs))
     return pd.DataFrame(rows)

@@ -27,7 +27,8 @@ def calibrate(
 ):
     """Fit train parameters to logged runs: least squares on the replayed dynamics, 95 % intervals,
     identifiability (parameters the logs do not excite are held at the train file's value, exit 1). Example: ecostudy calibrate LOG.csv --train TRAIN.yaml --track TRACK.yaml --out out/cal"""
-    finish(call(debug, "calibrate_folder", logs, train, track, fit, out, bootstrap, savings, not no_plot))
+    finish(call(debug, "calibrate_folder", logs, train, track, fit, out, bootstrap, savings, not no_plot,
+                bar=("calibrate", False, False)))
 
 
 @app.command(short_help="Replay a logged run on the model: energy and time differences.")
@@ -43,4 +44,5 @@ def validate(
 ):
     """Replay a logged run on the train file's model: traction energy following the logged speed, and
     running time driven by the logged handle, per run between stops. Example: ecostudy validate LOG.csv --train TRAIN.yaml --track TRACK.yaml --out out/val"""
-    finish(call(debug, "validate_folder", log, train, track, out, energy_tolerance, time_tolerance, not no_plot))
+    finish(call(debug, "validate_folder", log, train, track, out, energy_tolerance, time_tolerance, not no_plot,
+                bar=("validate", False, False)))

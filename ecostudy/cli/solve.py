@@ -29,7 +29,7 @@ def solve(
     """Energy-optimal (or all-out) run between two stops, verified by re-simulation. Example: ecostudy solve studies/default.yaml"""
     finish(call(debug, "solve_folder", study, track, train, time, supplement, window, from_stop, to_stop,
                 objective and objective.value, weights, points, out, not no_plot, das and das.value, das_time_limit,
-                fig_format, dpi, force=force))
+                fig_format, dpi, force=force, bar=("solve", False, False)))
 
 
 @app.command(short_help="Pontryagin regime check of a solved profile.")

@@ -53,9 +53,10 @@ def _child(conn, work, args):
         conn.close()
 
 
-def run_until(seconds: float, work: Callable, *args) -> Ended:
+def run_until(seconds: float, work: Callable, *args, tick: Callable[[float, list], None] | None = None) -> Ended:
     """``work(post, *args)`` in a forked child, stopped (SIGTERM, then SIGKILL) ``seconds`` after
-    the start. ``post(message)`` sends a picklable message to the parent at once."""
+    the start. ``post(message)`` sends a picklable message to the parent at once. ``tick(elapsed,
+    posts)``, if given, is called in the parent about twice a second while it waits (progress)."""
     t0 = time.perf_counter()
     if multiprocessing.current_process().daemon:  # a daemonic worker (Dask's) may not start children:
         return _inline(t0, work, args)             # the work runs here, held only by its own limit
@@ -66,6 +67,8 @@ def run_until(seconds: float, work: Callable, *args) -> Ended:
     ended = Ended(seconds=0.0)
     while True:
         left = seconds - (time.perf_counter() - t0)
+        if tick is not None:
+            tick(min(seconds - left, seconds), ended.posts)
         if left <= 0:
             ended.stopped = True
             break

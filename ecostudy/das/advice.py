@@ -22,6 +22,7 @@ import pandas as pd
 
 from ecostudy.analysis.regimes import guess_from_result
 from ecostudy.core.errors import SolverError
+from ecostudy.core.progress import stage
 from ecostudy.core.simulate import Driven, simulate
 from ecostudy.core.units import KMH, to_kmh, to_kwh
 from ecostudy.ocp import phases, session
@@ -177,11 +178,13 @@ def solve_phases(result, points=None, options=None, stages=2):
     points = points or len(result.nodes)
     layout = phases.Layout.make(phases.sectors(seg, train), phases.sequence(train), 1)
     layout.substeps = phases.substeps_for(points, len(layout.phases))
+    stage("DAS phases NLP (every mode)")
     m, outcome = solve_layout(result, layout, guess_from_result(result, layout), options)
     if not outcome.usable:
         raise SolverError(f"the DAS phases NLP failed ({outcome.status}, {outcome.iterations} iterations)")
     if stages == 1:
         return m, layout, outcome
+    stage("DAS phases NLP (modes driven)")
     m2, layout2, again = refine(result, m, layout, [md for _, md in layout.phases], points, options)
     if again.usable:
         for k in ("seconds", "nl_seconds", "iterations", "build_seconds"):
@@ -192,6 +195,7 @@ def solve_phases(result, points=None, options=None, stages=2):
 
 def advice_outcome(name, result, layout, m):
     """Driver advice of a solved phases (or MINLP) model, re-simulated as a driver follows it."""
+    stage(f"{name} advice re-simulated")
     lengths, _, v, _, ft, _ = phases.solution(m, layout)
     starts, levels, targets = phase_advice(layout, lengths, v)
     nodes, handle, target, trace = follow(result.segment, result.train, starts, levels, targets)

@@ -4,6 +4,7 @@ the two, re-simulated as a driver follows it, is the advice."""
 import numpy as np
 import pyomo.environ as pyo
 
+from ecostudy.core.progress import stage
 from ecostudy.core.units import to_kwh
 from ecostudy.das.advice import DasRun, advice_outcome, objective_of, refine, solve_phases, summary_block
 from ecostudy.ocp import phases
@@ -19,10 +20,12 @@ def das_minlp(result, points=None, time_limit=60.0):
     # stage 1 of `phases` (the full sequence of every sector) is the MINLP's starting pattern
     m_ph, lay_ph, _ = solve_phases(result, points, stages=1)
     found = search(result, m_ph, lay_ph, objective, time_limit, max(points // 4, 150))
+    stage("DAS phases NLP (modes driven)")
     m_ph, lay_ph, _ = refine(result, m_ph, lay_ph, [md for _, md in lay_ph.phases], points)
     candidates = [("phases start", m_ph, lay_ph)]
     if found.found:  # the pattern found, solved again at the full resolution on the phases it drives
         m_mi, modes = found.model, phases.all_modes(result.train)
+        stage("DAS minlp pattern at full resolution")
         chosen = [modes[max(m_mi.J, key=lambda j: pyo.value(m_mi.z[q, j]))] for q in m_mi.Q]
         m_fine, fine, out_fine = refine(result, m_mi, found.layout, chosen, points)
         if out_fine.usable:

@@ -27,6 +27,8 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.deadline import run_until
+from ecostudy.core.progress import stage, step
+from ecostudy.core.units import to_kwh
 from ecostudy.ocp import phases, session
 from ecostudy.ocp.solver import IPOPT
 from ecostudy.ocp.space import FORCE_SCALE
@@ -99,7 +101,8 @@ def search(result, start_model, start_layout, objective, time_limit, points):
     m = phases.build(seg, train, layout, (lengths, coarse_v), running_time=result.summary["running_time_s"],
                      objective=objective, extend=define_mode_choice)
     own = max(1, int(time_limit - min(GRACE_S, 0.2 * time_limit)))  # MindtPy's limit: whole seconds
-    ended = run_until(float(time_limit), _mindtpy, m, own)
+    stage("MINLP search", total=float(time_limit), unit="s")  # the time limit spent
+    ended = run_until(float(time_limit), _mindtpy, m, own, tick=lambda t, posts: step(t, _found(posts, m.energy_ref)))
     incumbents = [p for p in ended.posts if p[0] == "incumbent"]
     iterations = sum(1 for p in ended.posts if p[0] == "master")
     if ended.finished:
@@ -114,6 +117,15 @@ def search(result, start_model, start_layout, objective, time_limit, points):
     return Searched(m, layout, termination, ended.seconds, found=bool(incumbents),
                     upper=incumbents[-1][1] if incumbents else float("nan"), iterations=iterations,
                     stopped=ended.stopped, limited=ended.stopped)
+
+
+def _found(posts, energy_ref):
+    """What the search has found so far, from its posts: the best pattern's objective and the OA
+    iterations (master problems) solved."""
+    better = [p[1] for p in posts if p[0] == "incumbent"]
+    masters = sum(1 for p in posts if p[0] == "master")
+    best = f"best {to_kwh(better[-1] * energy_ref):.3f} kWh" if better else "no pattern yet"
+    return best + (f", OA iteration {masters}" if masters else "")
 
 
 def _values(model):

@@ -14,6 +14,10 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Iterator, Optional
 
+from rich.console import Console
+from rich.progress import BarColumn, Progress, ProgressColumn, TextColumn
+from rich.text import Text
+
 log = logging.getLogger("ecostudy")
 
 
@@ -47,24 +51,64 @@ def logging_to(quiet: bool = False, verbose: bool = False, log_file: Optional[Pa
     return close
 
 
-@contextmanager
-def progress_bar(label: str, disabled: bool = False) -> Iterator[Callable[[int, int, int, int], None]]:
-    """A progress bar over a study's cases on stderr (off when ``disabled`` or stderr is not a
-    terminal): yields ``progress(done, failed, remaining, total)``, which also logs each step."""
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+class Bar:
+    """The progress of one command on stderr: over its cases, called as ``progress(done, failed,
+    remaining, total)`` (each call also logged), or over the stages of one long piece of work and
+    the steps of each (a :class:`ecostudy.core.progress.Watcher`: a stage without a count shows
+    its elapsed time only; a time limit counted in seconds, how much of it is spent)."""
 
-    columns = [TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-               TextColumn("failed {task.fields[failed]}, remaining {task.fields[remaining]}"), TimeRemainingColumn()]
+    def __init__(self, label: str, bar) -> None:
+        self.label, self.bar, self.total, self.unit = label, bar, None, ""
+        self.task = bar.add_task(label, total=None, count="", detail="", limit=False)
+
+    def __call__(self, done: int, failed: int, remaining: int, total: int) -> None:
+        log.debug("%s: %d of %d done (%d failed)", self.label, done, total, failed)
+        self.bar.update(self.task, completed=done, total=total, count=f"{done}/{total}",
+                        detail=f"failed {failed}, remaining {remaining}")
+
+    def stage(self, name: str, total: Optional[float] = None, unit: str = "") -> None:
+        log.debug("%s: %s", self.label, name)
+        self.bar.remove_task(self.task)
+        self.total, self.unit = total, unit
+        self.task = self.bar.add_task(f"{self.label}: {name}", total=total, count=self._count(0), detail="",
+                                      limit=unit == "s")
+
+    def step(self, done: float, note: str = "") -> None:
+        self.bar.update(self.task, completed=done, count=self._count(done), detail=note)
+
+    def _count(self, done: float) -> str:
+        return "" if self.total is None else f"{done:.0f}/{self.total:.0f}{' ' + self.unit if self.unit else ''}"
+
+
+class Clock(ProgressColumn):
+    """Elapsed time of the current stage and, where its total is known, the time left at the rate
+    of the finished steps (nothing for a time limit: the count shows the seconds spent of it)."""
+
+    def render(self, task) -> Text:
+        if task.fields.get("limit"):  # its count is the time spent out of the limit already
+            return Text("")
+        text = _clock(task.elapsed)
+        if task.total is not None and not task.finished and task.time_remaining is not None:
+            text += f", {_clock(task.time_remaining)} left"
+        return Text(text, style="progress.remaining")
+
+
+def _clock(seconds: Optional[float]) -> str:
+    """m:ss, or h:mm:ss from an hour on."""
+    seconds = int(seconds or 0)
+    hours = f"{seconds // 3600}:{seconds // 60 % 60:02d}" if seconds >= 3600 else f"{seconds // 60}"
+    return f"{hours}:{seconds % 60:02d}"
+
+
+@contextmanager
+def progress_bar(label: str, disabled: bool = False) -> Iterator[Bar]:
+    """A progress bar on stderr (off when ``disabled`` or stderr is not a terminal): yields the
+    :class:`Bar`, for cases (``progress(done, failed, remaining, total)``) or stages and steps."""
+    columns = [TextColumn("{task.description}"), BarColumn(bar_width=20), TextColumn("{task.fields[count]}"),
+               TextColumn("{task.fields[detail]}"), Clock()]
     with Progress(*columns, console=Console(stderr=True), disable=disabled or not sys.stderr.isatty(),
                   transient=False) as bar:
-        task = bar.add_task(label, total=None, failed=0, remaining="?")
-
-        def progress(done: int, failed: int, remaining: int, total: int) -> None:
-            log.debug("%s: %d of %d done (%d failed)", label, done, total, failed)
-            bar.update(task, completed=done, total=total, failed=failed, remaining=remaining)
-
-        yield progress
+        yield Bar(label, bar)
 
 
 def leave(code: object) -> None:
