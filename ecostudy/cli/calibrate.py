@@ -14,9 +14,8 @@ def calibrate(
     logs: list[Path] = typer.Argument(..., help="Logged runs (CSV with a YAML header), one or more."),
     train: Optional[Path] = typer.Option(None, help="Train file (default: the one the first log names)."),
     track: Optional[Path] = typer.Option(None, help="Track file (default: the one the first log names)."),
-    fit: Optional[str] = typer.Option(None, help="Parameters to fit, comma-separated: mass, rotating_mass_factor, "
-                                      "davis_a, davis_b, davis_c, efficiency, regeneration_efficiency "
-                                      "(default: mass,davis_a,davis_b,davis_c,efficiency)."),
+    fit: Optional[str] = typer.Option(None, help="Parameters to fit, comma-separated: mass, rotating_mass_factor, davis_a, "
+                                      "davis_b, davis_c, efficiency, regeneration_efficiency (default: mass,davis_a,davis_b,davis_c,efficiency)."),
     out: Path = typer.Option(Path("out/calibration"), help="Output folder (relative: to the working directory)."),
     bootstrap: int = typer.Option(200, min=0, max=10000, help="Bootstrap draws over the logs (with two or more logs)."),
     savings: Optional[int] = typer.Option(None, min=0, max=100, help="Also the savings against the logged driving: "
