@@ -10,6 +10,7 @@ import pandas as pd
 from ecostudy.analysis import pontryagin, regimes
 from ecostudy.analysis.summary import run_summary
 from ecostudy.analysis.tables import handles, tabulate
+from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import verify
 from ecostudy.core.status import Status, from_checks
@@ -64,7 +65,7 @@ class RunResult:
         return self.status.ok
 
 
-def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="energy", points=1000,
+def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="energy", points=RUN_POINTS,
               weights=(1.0, 1.0), warm_start=None, options=None, verify_result=True, windows=(),
               written=None, structure=None):
     """Energy-optimal (or all-out, or mixed) run between two stops, verified by simulation.

@@ -15,6 +15,7 @@ Everything is SI inside; the arguments here say their unit in their name where i
 """
 from dataclasses import dataclass
 
+from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.ocp.solver import configure
 
 configure()  # the API is an entry point: set the process up once, before pandas, scipy and Pyomo load
@@ -107,7 +108,7 @@ def _timing(running_time, supplement_percent, window):
 
 
 def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplement_percent=None, window=None,
-          objective="energy", points=1000, windows=()):
+          objective="energy", points=RUN_POINTS, windows=()):
     """The energy-optimal run (``objective`` ``energy``, ``net_energy``, ``time`` or ``mixed``)
     between two stops (default: the first and the last), for a running time [s], a supplement
     over the all-out time [%] or an arrival window (earliest, latest) [s]; verified by simulation."""
@@ -116,7 +117,7 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
                               objective=objective, points=points, windows=windows))
 
 
-def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_percent=40.0, points=500,
+def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_percent=40.0, points=FRONT_POINTS,
            objective="energy", workers=1):
     """Energy against running time from the all-out run to ``supplement_max_percent`` over it."""
     from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
@@ -125,7 +126,7 @@ def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_
     return Front(table, runs)
 
 
-def replanner(track, train, from_stop=None, to_stop=None, running_time=None, window=None, points=500,
+def replanner(track, train, from_stop=None, to_stop=None, running_time=None, window=None, points=FRONT_POINTS,
               objective="energy"):
     """A :class:`~ecostudy.ocp.restart.Replanner`: one model re-solved from any :class:`State`."""
     from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")

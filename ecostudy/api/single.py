@@ -10,6 +10,7 @@ import pyomo.environ as pyo
 from ecostudy import __version__
 from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.outcome import Note, Report, listed, reported
+from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import InputError, problem
 from ecostudy.das.methods import das_run
 from ecostudy.io.loaders import chosen_stops, load_track, load_train
@@ -102,7 +103,7 @@ def solve_folder(study: Optional[Path] = None, track: Optional[Path] = None, tra
                                      "(or --objective time for the all-out run)"))
         timing = timing_of(time, supplement, window)
         w = parse_pair(weights, "--weights", nonnegative=True) if weights else (1.0, 1.0)
-        k = points or 1000
+        k = points or RUN_POINTS
         out_dir = output_folder(out, Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_"))
     check_output_dir(out_dir, ("profile.csv", "summary.json", "speed.png", "inputs.json"))
     result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
