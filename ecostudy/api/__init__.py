@@ -2,8 +2,8 @@
 
 Load a train and a track from files, or build them in code from the same fields (units in the
 field names, validated as files are); solve a run; sweep a front. Results carry the profile as a
-pandas DataFrame with SI and display columns, the summary as a dict, the verification and a
-``plot()`` that returns a matplotlib figure (or writes a PNG).
+pandas DataFrame with SI and display columns, the summary typed (``facts``; ``summary``: the dict of
+``summary.json``), the verification and a ``plot()`` that returns a matplotlib figure (or writes a PNG).
 
 Every command of the command line is a function here too, with the same options as arguments
 (``solve_folder``, ``pareto_folder``, ``compare_folder``, ``journey_folder``, ``run_folder``,
@@ -28,6 +28,7 @@ from ecostudy.core.types import State, Timing, Track, Train, Window  # noqa: E40
 from ecostudy.core.units import PERCENT  # noqa: E402
 from ecostudy.io.folder import StudyResult, load  # noqa: E402,F401  (api.load: any output folder)
 from ecostudy.io.loaders import chosen_stops, load_track, load_train, track_from_dict, train_from_dict  # noqa: E402
+from ecostudy.io.runsummary import RunSummary, Verification  # noqa: E402
 from ecostudy.ocp.problem import prepare  # noqa: E402
 from ecostudy.ocp.restart import Replanner  # noqa: E402
 from ecostudy.report.files import write_run  # noqa: E402
@@ -40,7 +41,7 @@ from ecostudy.api.cases import (calibrate_folder, heavyhaul_folder, network_fold
                                 simulate_folder, validate_folder)
 
 __all__ = ["load", "StudyResult", "load_train", "load_track", "train_from_dict", "track_from_dict", "solve", "pareto", "replanner",
-           "Solution", "Front", "Train", "Track", "State", "Window",
+           "Solution", "Front", "RunSummary", "Verification", "Train", "Track", "State", "Window",
            "Report", "Note", "one_line", "solve_folder", "check_folder", "export_folder", "doctor", "pareto_folder", "compare_folder",
            "journey_folder", "run_folder", "simulate_folder", "heavyhaul_folder", "network_folder", "calibrate_folder",
            "validate_folder"]
@@ -68,9 +69,16 @@ class Solution:
         return self.run.summary
 
     @property
+    def facts(self) -> RunSummary:
+        """The summary typed: ``facts.running_time_s``, ``facts.traction_energy_kWh``, ``facts.solver``,
+        ``facts.verification``, ... (units in the names, as in ``summary.json``)."""
+        return self.run.facts
+
+    @property
     def verification(self):
-        """Re-simulation against the optimum (arrival, stop, energy, overspeed, passed)."""
-        return self.run.summary["verification"]
+        """Re-simulation against the optimum, the ``verification`` block of ``summary.json`` as a
+        dict (arrival, stop, energy, overspeed, passed); typed: ``facts.verification``."""
+        return self.summary["verification"]
 
     @property
     def trajectory(self):
@@ -96,7 +104,7 @@ class Front:
 
     def plot(self, path=None):
         from ecostudy.report.plots import pareto_plot
-        return pareto_plot(self.table, path, f"{self.runs[0].summary['train']}")
+        return pareto_plot(self.table, path, self.runs[0].facts.train)
 
 
 def _timing(running_time, supplement_percent, window):

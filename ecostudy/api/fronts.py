@@ -149,7 +149,7 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
         for windows, run in zip(plan.windows, next(iter(results.values()))):
             passing += [(start + w.distance, None if w.max_speed is None else units.to_kmh(w.max_speed))
                         for w in windows]
-            start += run.summary["distance_m"]
+            start += run.facts.distance_m
     write_journey(table, totals, results, out_dir, f"{trn.name}: {' - '.join(names)}", passing, plot=plot,
                   out=figures)
     return reported(out_dir, [shown(table), shown(totals), "outputs " + listed(out_dir)])
