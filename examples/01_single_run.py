@@ -39,10 +39,10 @@ train = api.load_train(ROOT / "trains" / "amsterdam_metro.yaml")
 
 # %%
 run = api.solve(track, train, "Rokin", "Centraal", running_time=76.0, points=300)
-s = run.summary
-print(f"status {run.run.status}; traction energy {s['traction_energy_kWh']:.3f} kWh, "
-      f"net of regeneration {s['net_energy_kWh']:.3f} kWh, running time {s['running_time_s']:.1f} s")
-print("verified by re-simulation:", run.verification["passed"])
+s = run.facts  # the summary typed, units in the names (run.summary: the dict of summary.json)
+print(f"status {run.run.status}; traction energy {s.traction_energy_kWh:.3f} kWh, "
+      f"net of regeneration {s.net_energy_kWh:.3f} kWh, running time {s.running_time_s:.1f} s")
+print("verified by re-simulation:", s.verification.passed)
 
 # %% [markdown]
 # The profile has a row per grid node: the display columns of `profile.csv` beside SI columns.
@@ -67,5 +67,5 @@ fields = yaml.safe_load((ROOT / "trains" / "amsterdam_metro.yaml").read_text())
 fields.update(mass_t=1.2 * fields["mass_t"], effective_mass_t=1.2 * fields["effective_mass_t"])
 heavier = api.train_from_dict(fields, "heavier metro train")
 run_heavy = api.solve(track, heavier, "Rokin", "Centraal", running_time=76.0, points=300)
-ratio = run_heavy.summary["traction_energy_kWh"] / s["traction_energy_kWh"]
-print(f"20 % more mass: {run_heavy.summary['traction_energy_kWh']:.3f} kWh, {ratio:.2f} times the energy")
+ratio = run_heavy.facts.traction_energy_kWh / s.traction_energy_kWh
+print(f"20 % more mass: {run_heavy.facts.traction_energy_kWh:.3f} kWh, {ratio:.2f} times the energy")

@@ -83,7 +83,8 @@ def assert_folder(out, kind, tables, rows=None, status="ok"):
     assert list(folder.tables) == list(tables)
     for name, table in folder.tables.items():
         pd.testing.assert_frame_equal(table, pd.read_csv(Path(out) / folder.summary["tables"][name]))
-    assert folder.cases["total"] == sum(folder.cases[k] for k in ("ok", "flagged", "failed")) >= 1
+    assert folder.cases.total == folder.cases.ok + folder.cases.flagged + folder.cases.failed >= 1
+    assert len(folder.not_ok) == folder.cases.not_ok
     assert all((Path(out) / f).is_file() for f in folder.files), folder.files
     if rows is not None:
         assert len(folder.table) == rows

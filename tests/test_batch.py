@@ -119,7 +119,7 @@ def test_failures_are_recorded_and_do_not_stop_the_study(tmp_path):
     line = next(x for x in r.output.splitlines() if x.startswith("failed: "))
     assert "scenario=too_fast" in line and "infeasible" in line and "fastest possible run takes" in line
     folder = assert_folder(tmp_path / "out", "run", ["results"], status="failed")
-    assert folder.cases["failed"] == 1 and folder.cases["ok"] == len(table) - 1
+    assert folder.cases.failed == 1 and folder.cases.ok == len(table) - 1
 
 
 def test_case_equals_a_direct_solve(reference):

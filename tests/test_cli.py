@@ -41,7 +41,7 @@ def test_solve_study_writes_outputs(tmp_path):
     assert header.startswith("position_m,time_s,speed_kmh,handle")
     assert not list(out.glob("*.tmp"))
     folder = assert_folder(out, "solve", ["profile"])
-    assert folder.summary["running_time_s"] == summary["running_time_s"] and folder.cases["total"] == 1
+    assert folder.summary["running_time_s"] == summary["running_time_s"] and folder.cases.total == 1
 
 
 def test_solve_with_options_and_supplement(tmp_path):

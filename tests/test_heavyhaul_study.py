@@ -224,7 +224,7 @@ def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path
     assert (out / "forces_K_b60_f10_Np4_Nc2.png").exists()
     from .conftest import assert_folder
     folder = assert_folder(out, "heavyhaul", ["runs"], rows=2, status="ok")
-    assert folder.cases["ok"] == 2 and (out / "report.html").is_file()
+    assert folder.cases.ok == 2 and (out / "report.html").is_file()
     assert "kWh" in first.output and "MJ" not in first.output
     again = runner.invoke(app, ["heavyhaul", str(study(tmp_path, brake_penalty=[1, 60, 40])), "--out", str(out),
                                 "--no-progress", "--no-plot"])

@@ -113,8 +113,8 @@ def check_page(path):
     page = Page(path.read_text(encoding="utf-8"))
     assert page.title.startswith(f"ecostudy {result.kind}")
     assert page.status.strip().startswith(result.status.kind)
-    assert counts(path) == {"total": sum(result.cases[k] for k in ("ok", "flagged", "failed")), **{
-        k: result.cases[k] for k in ("ok", "flagged", "failed")}}
+    assert counts(path) == {"total": result.cases.ok + result.cases.flagged + result.cases.failed,
+                            **{k: getattr(result.cases, k) for k in ("ok", "flagged", "failed")}}
     assert __version__ in path.read_text()
     for name, frame in result.tables.items():
         rows = page.table(frame.columns)

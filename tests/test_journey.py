@@ -36,7 +36,7 @@ def test_journey_command_saves_against_the_same_percentage(tmp_path):
         assert best["traction_energy_kWh"] <= other["traction_energy_kWh"] * (1 + 1e-6)
     assert (tmp_path / "journey.png").stat().st_size > 10_000
     folder = assert_folder(tmp_path, "journey", ["segments", "totals"])
-    assert folder.cases["total"] == len(folder.table)
+    assert folder.cases.total == len(folder.table)
 
 
 @pytest.mark.slow

@@ -98,7 +98,7 @@ def test_rspc_runs_at_its_own_sample_time_and_only_runs_what_it_is_asked(tmp_pat
     from .conftest import assert_folder
     every_ok = (pd.read_csv(out / "runs.csv")["status"] == "ok").all()
     folder = assert_folder(out, "simulate", ["runs", "aggregate"], rows=4, status="ok" if every_ok else "flagged")
-    assert folder.cases["total"] == 4 and folder.summary["missing_runs"] == 0
+    assert folder.cases.total == 4 and folder.summary["missing_runs"] == 0
     assert (second.exit_code == 0) == folder.ok
     unknown = runner.invoke(app, ["simulate", str(path), "--out", str(out), "--no-progress", "--only", "sppc"])
     assert unknown.exit_code == 2 and "--only" in unknown.output and "sppc" in unknown.output

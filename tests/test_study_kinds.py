@@ -13,6 +13,7 @@ from ecostudy.cli import app
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.physics import davis_resistance
+from ecostudy.io.folder import Counts
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome, run_kind
 from ecostudy.studies.cases import case_key
 
@@ -62,7 +63,7 @@ def test_a_registered_kind_runs_through_the_engine_and_resumes(study, tmp_path):
     failed = table[table.status == "failed"]
     assert list(failed.speed_kmh) == [-10] and "is negative" in failed.reason.iloc[0]
     folder = api.load(output)
-    assert folder.kind == "resistance" and folder.cases == {"total": 4, "ok": 3, "flagged": 0, "failed": 1}
+    assert folder.kind == "resistance" and folder.cases == Counts(total=4, ok=3, flagged=0, failed=1)
     _, again, _ = run_kind("resistance", study, workers=2)  # nothing left to compute: all four stored
     assert again["stored_before"] == 4 and again["computed"] == 0
 

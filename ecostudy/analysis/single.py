@@ -10,11 +10,13 @@ import pandas as pd
 from ecostudy.analysis import pontryagin, regimes
 from ecostudy.analysis.summary import run_summary
 from ecostudy.analysis.tables import handles, tabulate
+from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import verify
 from ecostudy.core.status import Status, from_checks
 from ecostudy.core.types import Timing, Trajectory
 from ecostudy.core.units import KWH
+from ecostudy.io.runsummary import RunSummary, SolverRun, Verification
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import (
     all_out,
@@ -46,17 +48,25 @@ class RunResult:
     trajectory: Optional[Trajectory] = None  # the run in SI arrays: read these, not the display table
 
     @property
+    def facts(self) -> RunSummary:
+        """The run's summary typed (times, energies, solver, regimes, checks, driver advice): read
+        ``facts.traction_energy_kWh``, not ``summary["traction_energy_kWh"]``."""
+        return RunSummary.from_dict(self.summary)
+
+    @property
     def status(self) -> Status:
         """``ok`` when Ipopt proved optimality and the independent re-simulation agrees; else
         ``flagged`` with what did not pass."""
-        solver, ver = self.summary["solver"]["status"], self.summary["verification"]
+        block = self.summary["verification"]  # these two blocks only: a study may put a table row under "das"
+        solver = SolverRun.from_dict(self.summary["solver"]).status
+        ver = None if block is None else Verification.from_dict(block)
         checks = {f"Ipopt ended {solver}, not optimal": solver == "optimal"}
         if ver is None:
             checks["not re-simulated"] = False
         else:
-            checks[f"re-simulation outside tolerance (arrival {ver['arrival_time_error_s']:+.3f} s, stop "
-                   f"{ver['stop_error_m']:+.3f} m, energy {ver['energy_error_pct']:+.3f} %, overspeed "
-                   f"{ver['max_overspeed_kmh']:.3f} km/h)"] = bool(ver["passed"])
+            checks[f"re-simulation outside tolerance (arrival {ver.arrival_time_error_s:+.3f} s, stop "
+                   f"{ver.stop_error_m:+.3f} m, energy {ver.energy_error_pct:+.3f} %, overspeed "
+                   f"{ver.max_overspeed_kmh:.3f} km/h)"] = ver.passed
         return from_checks(checks)
 
     @property
@@ -64,7 +74,7 @@ class RunResult:
         return self.status.ok
 
 
-def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="energy", points=1000,
+def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="energy", points=RUN_POINTS,
               weights=(1.0, 1.0), warm_start=None, options=None, verify_result=True, windows=(),
               written=None, structure=None):
     """Energy-optimal (or all-out, or mixed) run between two stops, verified by simulation.

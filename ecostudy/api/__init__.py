@@ -2,8 +2,8 @@
 
 Load a train and a track from files, or build them in code from the same fields (units in the
 field names, validated as files are); solve a run; sweep a front. Results carry the profile as a
-pandas DataFrame with SI and display columns, the summary as a dict, the verification and a
-``plot()`` that returns a matplotlib figure (or writes a PNG).
+pandas DataFrame with SI and display columns, the summary typed (``facts``; ``summary``: the dict of
+``summary.json``), the verification and a ``plot()`` that returns a matplotlib figure (or writes a PNG).
 
 Every command of the command line is a function here too, with the same options as arguments
 (``solve_folder``, ``pareto_folder``, ``compare_folder``, ``journey_folder``, ``run_folder``,
@@ -30,6 +30,7 @@ WHERE = {
     "Window": "ecostudy.core.types",
     "solve": "ecostudy.api.python", "pareto": "ecostudy.api.python", "replanner": "ecostudy.api.python",
     "Solution": "ecostudy.api.python", "Front": "ecostudy.api.python",
+    "RunSummary": "ecostudy.io.runsummary", "Verification": "ecostudy.io.runsummary",
     "Report": "ecostudy.api.outcome", "Note": "ecostudy.api.outcome", "one_line": "ecostudy.api.outcome",
     "solve_folder": "ecostudy.api.single", "check_folder": "ecostudy.api.single",
     "export_folder": "ecostudy.api.single", "doctor": "ecostudy.api.single",
@@ -40,7 +41,7 @@ WHERE = {
     "calibrate_folder": "ecostudy.api.cases", "validate_folder": "ecostudy.api.cases",
 }
 __all__ = ["load", "StudyResult", "load_train", "load_track", "train_from_dict", "track_from_dict", "Train", "Track",
-           "State", "Window", "solve", "pareto", "replanner", "Solution", "Front", "Report", "Note", "one_line",
+           "State", "Window", "solve", "pareto", "replanner", "Solution", "Front", "RunSummary", "Verification", "Report", "Note", "one_line",
            "solve_folder", "check_folder", "export_folder", "doctor", "pareto_folder", "compare_folder",
            "journey_folder", "run_folder", "simulate_folder", "heavyhaul_folder", "network_folder",
            "calibrate_folder", "validate_folder"]  # = WHERE's names, written out for the reference's static reader
@@ -68,3 +69,4 @@ if TYPE_CHECKING:  # what type checkers and editors see
     from ecostudy.core.types import State, Track, Train, Window  # noqa: F401
     from ecostudy.io.folder import StudyResult, load  # noqa: F401
     from ecostudy.io.loaders import load_track, load_train, track_from_dict, train_from_dict  # noqa: F401
+    from ecostudy.io.runsummary import RunSummary, Verification  # noqa: F401

@@ -6,6 +6,7 @@ from typing import Callable, Optional
 
 from ecostudy.api.outcome import Report, listed, reported, shown
 from ecostudy.core import units
+from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.core.errors import InputError, problem
 from ecostudy.io.loaders import check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
 from ecostudy.io.timetable import journey_plan, name_stops
@@ -43,7 +44,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
                   das_time_limit=das_time_limit)
     trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points)
     no_windows(st, "pareto")
-    k = k or 500
+    k = k or FRONT_POINTS
     out_dir = output_folder(out, beside(st, "_pareto", "pareto"))
     check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png"))
     check_front("command line", count, k, workers, das, das_time_limit)  # too big: refused (unless --force)
@@ -88,7 +89,7 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
     out_dir = output_folder(out, beside(st, "_compare", "compare"))
     check_compare("command line", k or 1000)  # too big: refused with its estimate (unless --force)
     check_output_dir(out_dir, ("compare.csv", "compare.png"))
-    table, outcomes, case = compare(trk, trn, f, t, timing, points=k or 1000, progress=progress)
+    table, outcomes, case = compare(trk, trn, f, t, timing, points=k or RUN_POINTS, progress=progress)
     write_compare(table, outcomes, case.segment, out_dir,
                   f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s", plot=plot, out=figures)
     return reported(out_dir, [shown(table), "outputs " + listed(out_dir)])
@@ -110,7 +111,7 @@ def associated_track(tt, path: Optional[Path]) -> Path:
 
 def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[str] = None,
                    time: Optional[float] = None, supplement: Optional[float] = None,
-                   timetable: Optional[Path] = None, dwell: float = 0.0, points: int = 500, workers: int = 1,
+                   timetable: Optional[Path] = None, dwell: float = 0.0, points: int = FRONT_POINTS, workers: int = 1,
                    out: Optional[Path] = None, plot: bool = True, fig_format: str = "png",
                    dpi: Optional[float] = None, *, progress: Optional[Progress] = None) -> Report:
     """``ecostudy journey``: a journey's total running time [s] or supplement [%] spread over its
@@ -151,7 +152,7 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
         for windows, run in zip(plan.windows, next(iter(results.values()))):
             passing += [(start + w.distance, None if w.max_speed is None else units.to_kmh(w.max_speed))
                         for w in windows]
-            start += run.summary["distance_m"]
+            start += run.facts.distance_m
     write_journey(table, totals, results, out_dir, f"{trn.name}: {' - '.join(names)}", passing, plot=plot,
                   out=figures)
     return reported(out_dir, [shown(table), shown(totals), "outputs " + listed(out_dir)])

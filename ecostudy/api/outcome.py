@@ -22,9 +22,8 @@ class Report(StudyResult):
 
     def problems(self, shown: int = 20) -> list[str]:
         """'status: case: reason' of each case not ok (the first ``shown``, then how many more)."""
-        bad = self.summary.get("not_ok", [])
-        lines = [f"{c['status'].split(':')[0]}: {c['case']}: {c['status'].partition(':')[2].strip()}"
-                 for c in bad[:shown]]
+        bad = self.not_ok
+        lines = [f"{c.status.kind}: {c.case}: {c.status.reason}" for c in bad[:shown]]
         return lines + ([f"... and {len(bad) - shown} more cases not ok (summary.json, report.html)"]
                         if len(bad) > shown else [])
 

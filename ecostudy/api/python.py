@@ -5,10 +5,12 @@ from dataclasses import dataclass
 import pandas as pd
 
 from ecostudy.analysis.single import RunResult, solve_run
+from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.core.errors import InputError
 from ecostudy.core.types import Timing
 from ecostudy.core.units import PERCENT
 from ecostudy.io.loaders import chosen_stops
+from ecostudy.io.runsummary import RunSummary
 from ecostudy.ocp.problem import prepare
 from ecostudy.ocp.restart import Replanner
 from ecostudy.report.files import write_run
@@ -37,9 +39,16 @@ class Solution:
         return self.run.summary
 
     @property
+    def facts(self) -> RunSummary:
+        """The summary typed: ``facts.running_time_s``, ``facts.traction_energy_kWh``, ``facts.solver``,
+        ``facts.verification``, ... (units in the names, as in ``summary.json``)."""
+        return self.run.facts
+
+    @property
     def verification(self):
-        """Re-simulation against the optimum (arrival, stop, energy, overspeed, passed)."""
-        return self.run.summary["verification"]
+        """Re-simulation against the optimum, the ``verification`` block of ``summary.json`` as a
+        dict (arrival, stop, energy, overspeed, passed); typed: ``facts.verification``."""
+        return self.summary["verification"]
 
     @property
     def trajectory(self):
@@ -65,7 +74,7 @@ class Front:
 
     def plot(self, path=None):
         from ecostudy.report.plots import pareto_plot
-        return pareto_plot(self.table, path, f"{self.runs[0].summary['train']}")
+        return pareto_plot(self.table, path, self.runs[0].facts.train)
 
 
 def _timing(running_time, supplement_percent, window):
@@ -77,7 +86,7 @@ def _timing(running_time, supplement_percent, window):
 
 
 def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplement_percent=None, window=None,
-          objective="energy", points=1000, windows=()):
+          objective="energy", points=RUN_POINTS, windows=()):
     """The energy-optimal run (``objective`` ``energy``, ``net_energy``, ``time`` or ``mixed``)
     between two stops (default: the first and the last), for a running time [s], a supplement
     over the all-out time [%] or an arrival window (earliest, latest) [s]; verified by simulation."""
@@ -86,7 +95,7 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
                               objective=objective, points=points, windows=windows))
 
 
-def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_percent=40.0, points=500,
+def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_percent=40.0, points=FRONT_POINTS,
            objective="energy", workers=1):
     """Energy against running time from the all-out run to ``supplement_max_percent`` over it."""
     from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
@@ -95,7 +104,7 @@ def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_
     return Front(table, runs)
 
 
-def replanner(track, train, from_stop=None, to_stop=None, running_time=None, window=None, points=500,
+def replanner(track, train, from_stop=None, to_stop=None, running_time=None, window=None, points=FRONT_POINTS,
               objective="energy"):
     """A :class:`~ecostudy.ocp.restart.Replanner`: one model re-solved from any :class:`State`."""
     from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")

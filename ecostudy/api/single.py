@@ -10,6 +10,7 @@ import pyomo.environ as pyo
 from ecostudy import __version__
 from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.outcome import Note, Report, listed, reported
+from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.das.methods import das_run
@@ -26,38 +27,36 @@ from ecostudy.studies.options import check_options, only_one, output_folder, par
 
 def run_lines(result: RunResult, out_dir: Path) -> list[str]:
     """The report of one solved run: times, energies, solver, regimes, checks, driver advice, files."""
-    s = result.summary
-    ver = s["verification"]
-    lines = [f"{s['train']}: {s['from']} -> {s['to']} ({s['distance_m']:.0f} m), objective {s['objective']}, "
-             f"K = {s['points']}",
-             f"  running time      {s['running_time_s']:9.2f} s",
-             f"  traction energy   {s['traction_energy_kWh']:9.3f} kWh  ({s['traction_energy_J_per_kg']:.2f} J/kg)",
-             f"  net energy        {s['net_energy_kWh']:9.3f} kWh  (regenerated {s['regenerated_energy_kWh']:.3f} kWh)",
-             f"  solver            {s['solver']['status']}, {s['solver']['iterations']} iterations, "
-             f"{s['solver']['seconds']:.2f} s",
-             f"  regimes           {s['regimes']['sequence']}"]
-    if s.get("pontryagin"):
-        pm = s["pontryagin"]
-        lines.append(f"  Pontryagin check  {pm['agreement_pct']:.1f} % of the distance obeys "
-                     f"{pm.get('conditions', 'eq. 2.17')}" + "".join(f"; {d['regime']} at {d['start_m']:.0f}-"
-                                                                     f"{d['end_m']:.0f} m disagrees"
-                                                                     for d in pm["disagreements"][:3]))
+    s = result.facts
+    ver = s.verification
+    lines = [f"{s.train}: {s.from_stop} -> {s.to_stop} ({s.distance_m:.0f} m), objective {s.objective}, K = {s.points}",
+             f"  running time      {s.running_time_s:9.2f} s",
+             f"  traction energy   {s.traction_energy_kWh:9.3f} kWh  ({s.traction_energy_J_per_kg:.2f} J/kg)",
+             f"  net energy        {s.net_energy_kWh:9.3f} kWh  (regenerated {s.regenerated_energy_kWh:.3f} kWh)",
+             f"  solver            {s.solver.status}, {s.solver.iterations} iterations, {s.solver.seconds:.2f} s",
+             f"  regimes           {s.regime_sequence}"]
+    if s.pontryagin is not None:
+        pm = s.pontryagin
+        lines.append(f"  Pontryagin check  {pm.agreement_pct:.1f} % of the distance obeys {pm.conditions}"
+                     + "".join(f"; {d.regime} at {d.start_m:.0f}-{d.end_m:.0f} m disagrees"
+                               for d in pm.disagreements[:3]))
     if ver is not None:
-        flag = "passed" if ver["passed"] else "FAILED"
-        lines.append(f"  verification      {flag}: arrival {ver['arrival_time_error_s']:+.3f} s, stop "
-                     f"{ver['stop_error_m']:+.3f} m, energy {ver['energy_error_pct']:+.3f} %, overspeed "
-                     f"{ver['max_overspeed_kmh']:.3f} km/h")
-    if s.get("das"):
-        d = s["das"]
-        lines.append(f"  driver advice     {d['method']}: {d['traction_energy_kWh']:.3f} kWh ({d['gap_to_ato_pct']:+.2f} "
-                     f"% against ATO), {d['mode_changes']} mode changes, arrival {d['arrival_error_s']:+.2f} s, "
-                     f"stop {d['stop_error_m']:+.2f} m (advice.csv)")
-        if d.get("gap_to_ato_on_time_pct") is not None:
-            lines.append(f"                    {d['gap_to_ato_on_time_pct']:+.3f} % against ATO with lateness charged "
-                         f"at {abs(s['marginal_energy_kWh_per_s']):.4f} kWh/s; {d['status']}")
-        if d["method"] == "minlp":
-            bound = "no bound" if d["bound_kWh"] is None else f"bound {d['bound_kWh']:.3f} kWh (gap {d['gap_pct']:.2f} %)"
-            lines.append(f"                    MINLP search {d['search_s']:.1f} s, {d['oa_iterations']} OA iterations, "
+        flag = "passed" if ver.passed else "FAILED"
+        lines.append(f"  verification      {flag}: arrival {ver.arrival_time_error_s:+.3f} s, stop "
+                     f"{ver.stop_error_m:+.3f} m, energy {ver.energy_error_pct:+.3f} %, overspeed "
+                     f"{ver.max_overspeed_kmh:.3f} km/h")
+    if s.das is not None:
+        d = s.das
+        gap = "n/a" if d.gap_to_ato_pct is None else f"{d.gap_to_ato_pct:+.2f}"
+        lines.append(f"  driver advice     {d.method}: {d.traction_energy_kWh:.3f} kWh ({gap} "
+                     f"% against ATO), {d.mode_changes} mode changes, arrival {d.arrival_error_s:+.2f} s, "
+                     f"stop {d.stop_error_m:+.2f} m (advice.csv)")
+        if d.gap_to_ato_on_time_pct is not None and s.marginal_energy_kWh_per_s is not None:
+            lines.append(f"                    {d.gap_to_ato_on_time_pct:+.3f} % against ATO with lateness charged "
+                         f"at {abs(s.marginal_energy_kWh_per_s):.4f} kWh/s; {d.status}")
+        if d.method == "minlp":
+            bound = "no bound" if d.bound_kWh is None else f"bound {d.bound_kWh:.3f} kWh (gap {d.gap_pct:.2f} %)"
+            lines.append(f"                    MINLP search {d.search_s:.1f} s, {d.oa_iterations} OA iterations, "
                          f"{bound}")
     lines.append(f"  outputs           {listed(out_dir)}")
     return lines
@@ -112,7 +111,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
                                      "(or --objective time for the all-out run)"))
         timing = timing_of(time, supplement, window)
         w = parse_pair(weights, "--weights", nonnegative=True) if weights else (1.0, 1.0)
-        k = points or 1000
+        k = points or RUN_POINTS
         out_dir = output_folder(out, Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_"))
     check_output_dir(out_dir, ("profile.csv", "summary.json", "speed.png", "inputs.json"))
     stage(f"{obj} optimum, verified")

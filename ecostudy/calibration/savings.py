@@ -13,6 +13,7 @@ from ecostudy.analysis.single import solve_run
 from ecostudy.calibration.fit import train_with
 from ecostudy.calibration.replay import prepare, wheel_work
 from ecostudy.core.progress import stage, step
+from ecostudy.core.defaults import FRONT_POINTS
 from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kwh
 
@@ -28,7 +29,7 @@ def parameter_draws(calibration, count, seed=0):
             for d in draws]
 
 
-def savings(log, track, calibration, draws=8, points=500, seed=0):
+def savings(log, track, calibration, draws=8, points=FRONT_POINTS, seed=0):
     """One row per run of ``log``: logged time and traction energy, the calibrated optimum's, the
     saving [%] and its band over ``draws`` parameter draws."""
     trains = parameter_draws(calibration, draws, seed)

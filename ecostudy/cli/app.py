@@ -83,7 +83,7 @@ def finish(result):
     for line in result.problems():
         typer.secho(line, fg=typer.colors.YELLOW, err=True)
     log.info(f"{result.kind}: {result.status}, written to {result.folder.resolve()}")  # on stderr, last
-    if result.summary.get("not_ok"):
+    if result.not_ok:
         raise typer.Exit(1)
 
 

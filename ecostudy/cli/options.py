@@ -5,6 +5,8 @@ from typing import Annotated, Optional
 
 import typer
 
+from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
+
 
 # the choices of --das and --objective (a str Enum each, as Typer lists them in the help)
 DasMethod = Enum("DasMethod", {"round": "round", "phases": "phases", "minlp": "minlp"}, type=str)
@@ -21,7 +23,7 @@ To = Annotated[Optional[str], typer.Option("--to", help="Arrival stop (default: 
 Time = Annotated[Optional[float], typer.Option("--time", help="Running time [s].")]
 Supplement = Annotated[Optional[float], typer.Option(help="Running-time supplement over all-out [%].")]
 Points = Annotated[Optional[int], typer.Option("--points", "-K", help="Grid nodes K (default: the study's, else "
-                                                                      "1000; 500 for a front).")]
+                                                                      f"{RUN_POINTS}; {FRONT_POINTS} for a front).")]
 Out = Annotated[Optional[Path], typer.Option(help="Output folder (relative: to the working directory; default: "
                                                   "the study's 'output').")]
 EveryCore = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core).")]

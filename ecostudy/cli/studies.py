@@ -58,7 +58,7 @@ def journey_command(
                                              "redistributed) or with windows, or a TTOBench journey JSON."),
     dwell: float = typer.Option(0.0, help="Dwell at intermediate stops whose timetable gives none; with "
                                 "departure windows, the least dwell [s]."),
-    points: int = typer.Option(500, "--points", "-K", help="Grid nodes per segment."),
+    points: int = typer.Option(o.FRONT_POINTS, "--points", "-K", help="Grid nodes per segment."),
     workers: int = typer.Option(1, help="Processes for the segments' fronts."),
     out: o.Out = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
     force: o.Force = False, debug: o.Debug = False,

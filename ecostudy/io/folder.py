@@ -16,6 +16,7 @@ import pandas as pd
 from ecostudy import __version__
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.status import Status, worst
+from ecostudy.io.runsummary import RunSummary
 from ecostudy.io.writers import write_json
 
 SUMMARY = "summary.json"
@@ -26,24 +27,52 @@ LAYOUT = 1  # the version of summary.json's common fields; a reader refuses a ne
 COMMON = ("kind", "ecostudy_version", "summary_layout", "status", "cases", "not_ok", "tables", "files")
 
 
+@dataclass(frozen=True)
+class Counts:
+    """How many cases of a folder are in each status (``summary.json`` field ``cases``)."""
+
+    total: int = 0
+    ok: int = 0
+    flagged: int = 0
+    failed: int = 0
+
+    @property
+    def not_ok(self) -> int:
+        return self.flagged + self.failed
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Counts":
+        return cls(**{k: int(data.get(k, 0)) for k in ("total", "ok", "flagged", "failed")})
+
+
+@dataclass(frozen=True)
+class NotOk:
+    """A case that is not ok, with its status (``summary.json`` field ``not_ok``)."""
+
+    case: str
+    status: Status
+
+
 @dataclass
 class StudyResult:
     """An output folder of any command, read back by :func:`load`.
 
     ``kind`` is the command that wrote it (``solve``, ``pareto``, ``compare``, ``journey``,
     ``run``, ``network``, ``simulate``, ``heavyhaul``, ...); ``status`` the folder's status (the
-    worst of its cases); ``cases`` the count of cases by status (``total``, ``ok``, ``flagged``,
-    ``failed``); ``tables`` every table the folder lists, as DataFrames with the CSV's columns
-    (units in the column names); ``summary`` the whole ``summary.json``.
+    worst of its cases); ``cases`` the count of cases by status (:class:`Counts`); ``not_ok`` each
+    case not ok with its status; ``tables`` every table the folder lists, as DataFrames with the
+    CSV's columns (units in the column names); ``summary`` the whole ``summary.json`` (the typed
+    run of a ``solve`` folder: :meth:`run`).
     """
 
     kind: str
     status: Status
-    cases: dict[str, int]
+    cases: Counts
     tables: dict[str, pd.DataFrame]
     summary: dict[str, Any]
     folder: Path
     files: list[str] = field(default_factory=list)
+    not_ok: tuple[NotOk, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -55,6 +84,12 @@ class StudyResult:
         if not self.tables:
             raise KeyError(f"{self.folder}: the {self.kind} folder lists no table")
         return next(iter(self.tables.values()))
+
+    def run(self) -> RunSummary:
+        """The typed run of a ``solve`` folder (or of any folder whose summary is one run's)."""
+        if "traction_energy_kWh" not in self.summary or "solver" not in self.summary:
+            raise InputError(problem(self.folder / SUMMARY, "kind", f"a {self.kind} folder, not one run's"))
+        return RunSummary.from_dict(self.summary)
 
 
 def write_summary(out_dir: Path | str, kind: str, statuses: Mapping[str, Status] | Iterable[Status],
@@ -104,5 +139,7 @@ def load(folder: Path | str) -> StudyResult:
             tables[name] = pd.read_csv(folder / file)
         except (OSError, ValueError) as exc:
             raise InputError(problem(folder / file, "", f"the {name} table of this folder cannot be read ({exc})"))
-    return StudyResult(kind=str(data["kind"]), status=Status.parse(data["status"]), cases=dict(data.get("cases", {})),
-                       tables=tables, summary=data, folder=folder, files=list(data.get("files", [])))
+    not_ok = tuple(NotOk(str(c["case"]), Status.parse(c["status"])) for c in data.get("not_ok") or ())
+    return StudyResult(kind=str(data["kind"]), status=Status.parse(data["status"]),
+                       cases=Counts.from_dict(data.get("cases") or {}), tables=tables, summary=data, folder=folder,
+                       files=list(data.get("files", [])), not_ok=not_ok)

@@ -11,6 +11,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ecostudy.core import units
+from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import travel_distance
 from ecostudy.core.physics import EfficiencyMap, Envelope, force_power_fit, table_width
@@ -56,7 +57,7 @@ class Study:
     timing: Timing
     objective: str = "energy"
     weights: tuple[float, float] = (1.0, 1.0)
-    points: int = 1000
+    points: int = RUN_POINTS
     output: Path = field(default_factory=lambda: Path("out"))
     track_path: Path | None = None
     train_path: Path | None = None

@@ -9,6 +9,7 @@ from typing import Annotated, Literal, Optional, Self, get_args
 
 from pydantic import Field, model_validator
 
+from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.io.schemabase import Name as Name, Strict as Strict, increasing as _increasing
 from ecostudy.io.trainschema import (  # re-exported (X as X): schemas is the one place to look
     Braking as Braking, Davis as Davis, EfficiencyTable as EfficiencyTable, ForceTable as ForceTable,
@@ -237,7 +238,7 @@ class StudyFile(Strict):
     window_s: Optional[tuple[float, float]] = None
     objective: Literal["energy", "net_energy", "time", "mixed"] = "energy"
     weights: Weights = Weights()
-    points: int = Field(1000, ge=10, le=100000)
+    points: int = Field(RUN_POINTS, ge=10, le=100000)
     das: Optional[Literal["round", "phases", "minlp"]] = Field(
         None, description="Also a DAS run of every energy-optimal case: das_ columns in results.csv.")
     das_time_limit_s: float = Field(60.0, gt=0, description="Time limit of each MINLP search (das: minlp).")
@@ -313,7 +314,7 @@ class NetworkStudyFile(Strict):
     substation: Substation
     strategies: list[Strategy] = Field(default_factory=lambda: list(STRATEGIES), min_length=1)
     buffer_m: Optional[float] = Field(None, gt=0, description="Separation kept by `following` (thesis 001 eq. 6.9).")
-    points: int = Field(500, ge=10, le=100000, description="Space grid of the per-segment starting runs.")
+    points: int = Field(FRONT_POINTS, ge=10, le=100000, description="Space grid of the per-segment starting runs.")
     output: Optional[str] = None
 
     @model_validator(mode="after")

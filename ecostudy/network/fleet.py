@@ -11,6 +11,7 @@ from typing import Optional
 import numpy as np
 
 from ecostudy.analysis.single import solve_run
+from ecostudy.core.defaults import FRONT_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.types import Timing
 from ecostudy.core.types import Supply
@@ -35,7 +36,7 @@ class Fleet:
     asked_times: Optional[list] = None  # running time per segment before rounding to whole steps [s]
 
 
-def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=500, buffer=None,
+def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=FRONT_POINTS, buffer=None,
          pool=None, supplement=0.0):
     """A :class:`Fleet`: running times and dwells rounded up to whole steps, departures offset;
     each segment's space-domain net-energy run (the legs' first guess) solved.

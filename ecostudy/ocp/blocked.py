@@ -26,23 +26,29 @@ kN) and alpha, omega variables fixed by bounds, so the nominal (gamma = 0), the 
 relaxed strategy (alpha = 0, omega = 1; then alpha = 1, gamma <= its minimum) and the
 multi-objective one (alpha = 1, omega) are the same NL file.
 """
+from typing import Any
+
 import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.grid import warn_unmodelled
 from ecostudy.core.kinematics import clock, point_resistance
-from ecostudy.core.physics import davis_resistance, interval_resistance, moving_share
-from ecostudy.ocp.session import Session
+from ecostudy.core.physics import Envelope, davis_resistance, interval_resistance, moving_share
+from ecostudy.core.types import State
+from ecostudy.core.units import FloatArray
+from ecostudy.ocp.problem import Case
+from ecostudy.ocp.session import Options, Outcome, Session
+from ecostudy.ocp.solver import Model, Var
 from ecostudy.ocp.space import gc_paused
 from ecostudy.ocp.timedomain import FORCE_SCALE
 
 
-def samples(running_time, sample_time):
+def samples(running_time: float, sample_time: float) -> int:
     """k_f = floor(t_f / T_s) (thesis 000 §4.1)."""
     return int(np.floor(running_time / sample_time + 1e-9))
 
 
-def time_guess(case, speeds_on_nodes, kf, ts):
+def time_guess(case: Case, speeds_on_nodes: FloatArray, kf: int, ts: float) -> tuple[FloatArray, FloatArray]:
     """(s, v) on the samples from a speed profile on the space grid, stretched to k_f T_s."""
     v = np.maximum(speeds_on_nodes, 1e-3)
     t = clock(v, case.nodes)
@@ -54,7 +60,7 @@ def time_guess(case, speeds_on_nodes, kf, ts):
     return s, vi
 
 
-def handle_guess(case, s, v, ts, block):
+def handle_guess(case: Case, s: FloatArray, v: FloatArray, ts: float, block: int) -> FloatArray:
     """The handle per block that the speed profile (s, v) on the samples needs (mean over the block)."""
     train = case.train
     vm = 0.5 * (v[:-1] + v[1:])
@@ -66,7 +72,8 @@ def handle_guess(case, s, v, ts, block):
 
 
 @gc_paused
-def build_blocked(case, ts, kf, block, guess, margin=0.1):
+def build_blocked(case: Case, ts: float, kf: int, block: int, guess: tuple[FloatArray, FloatArray],
+                  margin: float = 0.1) -> Model:
     """The FHOCP on samples 0..k_f with blocks of ``block`` samples; ``guess`` = (s, v) on them."""
     train, seg = case.train, case.segment
     warn_unmodelled(seg, "the SBPC time-domain NLP")
@@ -78,8 +85,8 @@ def build_blocked(case, ts, kf, block, guess, margin=0.1):
     m.s = pyo.Var(m.K, bounds=(0.0, m.s_top), initialize=lambda m, i: float(s0[i]))
     m.v = pyo.Var(m.K, bounds=(0.0, float(np.max(case.limits))), initialize=lambda m, i: float(v0[i]))
     u0 = handle_guess(case, s0, v0, ts, block)
-    m.up = pyo.Var(m.B, bounds=(0.0, 1.0), initialize=lambda m, b: float(max(u0[b], 0.0)))
-    m.um = pyo.Var(m.B, bounds=(0.0, 1.0), initialize=lambda m, b: float(max(-u0[b], 0.0)))
+    m.up = pyo.Var(m.B, bounds=(0.0, 1.0), initialize=lambda m, b: max(float(u0[b]), 0.0))
+    m.um = pyo.Var(m.B, bounds=(0.0, 1.0), initialize=lambda m, b: max(-float(u0[b]), 0.0))
     m.w = pyo.Var(m.I, bounds=(1.0, 1.0), initialize=1.0)
     m.grade = pyo.Var(m.I, initialize=0.0)  # G per step [kN], held by bounds (update_profile)
     m.gamma = pyo.Var(bounds=(0.0, 0.0), initialize=0.0)
@@ -88,14 +95,14 @@ def build_blocked(case, ts, kf, block, guess, margin=0.1):
     mass = train.mass / FORCE_SCALE
     davis = tuple(c / FORCE_SCALE for c in train.davis)
 
-    def mean(envelope, i):
+    def mean(envelope: Envelope, i: int) -> Any:
         return 0.5 * (envelope.smooth_force(m.v[i]) + envelope.smooth_force(m.v[i + 1])) / FORCE_SCALE
 
     m.ft = pyo.Expression(m.I, rule=lambda m, i: mean(train.traction, i) * m.up[i // block])
     m.fb = pyo.Expression(m.I, rule=lambda m, i: mean(train.braking, i) * m.um[i // block])
     m.kinematics = pyo.Constraint(m.I, rule=lambda m, i: m.s[i + 1] - m.s[i] == m.w[i] * 0.5 * ts * (m.v[i] + m.v[i + 1]))
 
-    def dynamics(m, i):
+    def dynamics(m: Model, i: int) -> Any:
         resist = interval_resistance(m.v[i], m.v[i + 1], davis, m.grade[i])
         held = moving_share(m.v[i] + m.v[i + 1])  # a standstill: the train may wait at the stop
         return (m.v[i + 1] - m.v[i]) * mass / ts == m.w[i] * (m.ft[i] - held * (m.fb[i] + resist))
@@ -115,7 +122,7 @@ def build_blocked(case, ts, kf, block, guess, margin=0.1):
     return m
 
 
-def profile_along(case, s, v, ts, margin):
+def profile_along(case: Case, s: FloatArray, v: FloatArray, ts: float, margin: float) -> tuple[FloatArray, FloatArray]:
     """(grade force per step [kN], speed bound per node [m/s]) along predicted positions ``s``:
     the grade and curve force averaged over each step's span, and at each node the lowest limit
     within the distance run in a step either side (a restriction is met before it is reached)."""
@@ -130,21 +137,23 @@ def profile_along(case, s, v, ts, margin):
     return grade, np.maximum(bound, 0.5)
 
 
-def update_profile(m):
+def update_profile(m: Model) -> None:
     """Move the grade and the speed bounds to the positions the last solve predicts."""
     s = np.array([pyo.value(m.s[i]) for i in m.K])
     v = np.array([pyo.value(m.v[i]) for i in m.K])
     m.profile = profile_along(m.case, s, v, m.ts, m.margin)
 
 
-def set_blocked_start(session, m, k, state):
+def set_blocked_start(session: Session, m: Model, k: int, state: State) -> None:
     """Bounds for a solve from sample ``k`` at ``state`` (position, speed), with the grade and the
     speed bounds of the last predicted positions (:func:`update_profile`)."""
     n = len(m.I)
     grade, bound = m.profile
     s = float(np.clip(state.position, 0.0, m.s_top))
     v = max(float(state.speed), 0.0)
-    variables, lows, highs = [], [], []
+    variables: list[Var] = []
+    lows: list[float | None] = []
+    highs: list[float | None] = []
     for i in range(n):
         variables += [m.w[i], m.grade[i]]
         lows += [0.0 if i < k else 1.0, float(grade[i])]
@@ -163,12 +172,12 @@ def set_blocked_start(session, m, k, state):
     session.set_start_values([m.s[i] for i in range(k + 1)] + [m.v[i] for i in range(k + 1)], [s] * (k + 1) + [v] * (k + 1))
 
 
-def set_objective(session, m, alpha, omega, gamma_max):
+def set_objective(session: Session, m: Model, alpha: float, omega: float, gamma_max: float | None) -> None:
     """The objective's weights and the terminal distance allowed (``gamma_max`` None: any)."""
     session.set_many_bounds([m.alpha, m.omega, m.gamma], [alpha, omega, 0.0], [alpha, omega, gamma_max])
 
 
-def handle_at(m, k):
+def handle_at(m: Model, k: int) -> float:
     """The handle the solved model applies at sample ``k``."""
     b = min(k // m.block, len(m.B) - 1)
     return float(pyo.value(m.up[b]) - pyo.value(m.um[b]))
@@ -179,29 +188,31 @@ class Blocked:
     is the other): ``start(k, state)``, ``solve(alpha, omega, gamma_max)``, ``gamma``, ``follow()``,
     ``handle(k)``; one model and NL file for the whole trip, each solve warm from the last."""
 
-    def __init__(self, case, ts, kf, block, guess, options):
+    def __init__(self, case: Case, ts: float, kf: int, block: int, guess: tuple[FloatArray, FloatArray],
+                 options: Options) -> None:
         self.model = build_blocked(case, ts, kf, block, guess)
         self.session, self.options = Session(self.model), options
 
-    def start(self, k, state):
+    def start(self, k: int, state: State) -> None:
         set_blocked_start(self.session, self.model, k, state)
 
-    def solve(self, alpha, omega, gamma_max):
+    def solve(self, alpha: float, omega: float, gamma_max: float | None) -> Outcome:
         set_objective(self.session, self.model, alpha, omega, gamma_max)
         return self.session.solve(self.options)
 
     @property
-    def gamma(self):
+    def gamma(self) -> float:
         return float(self.model.gamma.value)
 
-    def follow(self):
+    def follow(self) -> None:
         update_profile(self.model)
 
-    def handle(self, k):
+    def handle(self, k: int) -> float:
         return handle_at(self.model, k)
 
-    def handles(self, k):
+    def handles(self, k: int) -> FloatArray:
         """The handles of samples k .. k_f - 1 (one read of the block values)."""
         m = self.model
-        u = np.array([pyo.value(m.up[b]) - pyo.value(m.um[b]) for b in m.B])
-        return u[np.minimum(np.arange(k, len(m.I)) // m.block, len(u) - 1)]
+        u = np.array([pyo.value(m.up[b]) - pyo.value(m.um[b]) for b in m.B], dtype=float)
+        handles: FloatArray = u[np.minimum(np.arange(k, len(m.I)) // m.block, len(u) - 1)]
+        return handles

@@ -19,13 +19,16 @@ The envelopes are the trains' ``smooth_force`` (the simultaneous program's), the
 differences. Solved by SLSQP (scipy), warm from the previous sample's handles (the shifted tail).
 """
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple, Optional, TypeAlias
 
 import numpy as np
 from scipy.optimize import minimize
 
-from ecostudy.core.physics import interval_resistance, moving_share
+from ecostudy.core.physics import Envelope, interval_resistance, moving_share
+from ecostudy.core.types import State
+from ecostudy.core.units import FloatArray
 from ecostudy.ocp.blocked import handle_guess, profile_along
+from ecostudy.ocp.problem import Case
 from ecostudy.ocp.timedomain import FORCE_SCALE
 
 DIFF = 1e-6  # [m/s] difference step of the envelopes, the share and the resistance
@@ -40,13 +43,18 @@ class Outcome(NamedTuple):
     status: str
 
 
+# simulate's answer: positions and speeds on samples k .. k_f, their derivatives by the free
+# handles, the traction work [kJ] and its gradient
+Simulated: TypeAlias = tuple[FloatArray, FloatArray, FloatArray, FloatArray, float, FloatArray]
+
+
 class _Envelope:
     """An envelope's ``smooth_force`` [kN] and its slope (central difference) at a float speed."""
 
-    def __init__(self, envelope):
+    def __init__(self, envelope: Envelope) -> None:
         self.force = envelope.smooth_function()
 
-    def __call__(self, v):
+    def __call__(self, v: float) -> tuple[float, float]:
         """(force, slope) at speed ``v``."""
         f = self.force
         return f(v) / FORCE_SCALE, (f(v + DIFF) - f(v - DIFF)) / (2 * DIFF * FORCE_SCALE)
@@ -55,7 +63,8 @@ class _Envelope:
 class Condensed:
     """The FHOCP on samples 0 .. k_f with blocks of ``block`` samples, from ``guess`` = (s, v) on them."""
 
-    def __init__(self, case, ts, kf, block, guess, margin=0.1, max_iter=100):
+    def __init__(self, case: Case, ts: float, kf: int, block: int, guess: tuple[FloatArray, FloatArray],
+                 margin: float = 0.1, max_iter: int = 100) -> None:
         train, self.case, self.ts, self.kf, self.block, self.margin = case.train, case, ts, kf, block, margin
         self.nb = (kf - 1) // block + 1
         self.mass = train.mass / FORCE_SCALE
@@ -66,18 +75,20 @@ class Condensed:
         self.u = np.concatenate([np.maximum(u, 0.0), np.maximum(-u, 0.0)])
         self.profile = profile_along(case, s0, v0, ts, margin)
         self.max_iter, self.k, self.state = max_iter, 0, (0.0, 0.0)
-        self.gamma, self.s, self.v, self._memo = 0.0, s0, v0, None
+        self.gamma, self.s, self.v = 0.0, s0, v0
+        self._memo: Optional[tuple[tuple[Any, ...], Outcome, FloatArray, float, FloatArray, FloatArray]] = None
         self.work_ref = max(train.traction.peak * case.segment.distance * 0.1 / 1e3, 1.0)  # kJ, as ocp.blocked
 
     # --- the model -------------------------------------------------------------------------------
-    def _step(self, v0, up, um, grade):
+    def _step(self, v0: float, up: float, um: float,
+              grade: float) -> tuple[float, tuple[float, float, float], tuple[float, float, float, float]]:
         """v_i+1 and its derivatives by v_i, u+, u- (Newton on the implicit trapezoid from an explicit
         step), and the step's traction work [kJ] with its derivatives by v_i, v_i+1, u+."""
         ts, mass, davis = self.ts, self.mass, self.davis
         ft0, dft0 = self.traction(v0)
         fb0, dfb0 = self.braking(v0)
 
-        def residual(v1):
+        def residual(v1: float) -> tuple[float, float, float, float, float, float, float, float]:
             ft1, dft1 = self.traction(v1)
             fb1, dfb1 = self.braking(v1)
             ftm, fbm, total = 0.5 * (ft0 + ft1), 0.5 * (fb0 + fb1), v0 + v1
@@ -104,7 +115,7 @@ class Condensed:
         return v1, (dv0, dup, dum), (work, ts * up * (0.5 * dft0 * vbar + 0.5 * ftm), ts * up * (0.5 * dft1 * vbar + 0.5 * ftm),
                                      ts * ftm * vbar)
 
-    def simulate(self, z):
+    def simulate(self, z: FloatArray) -> Simulated:
         """Positions, speeds on samples k .. k_f, their derivatives by z (the free handles) and the
         traction work [kJ] with its gradient."""
         k, L, ts = self.k, self.block, self.ts
@@ -132,12 +143,12 @@ class Condensed:
         return s, v, ds, dv, work, dwork
 
     # --- the program ----------------------------------------------------------------------------
-    def start(self, k, state):
+    def start(self, k: int, state: State) -> None:
         """Solve from sample ``k`` at ``state`` next (the blocks already run are dropped)."""
         self.k, self._memo = k, None
         self.state = (float(np.clip(state.position, 0.0, self.case.segment.distance + 200.0)), max(float(state.speed), 0.0))
 
-    def solve(self, alpha, omega, gamma_max):
+    def solve(self, alpha: float, omega: float, gamma_max: float | None) -> Outcome:
         """min (alpha J + omega gamma) / J_ref within Delta(x_kf, X_f) <= gamma <= ``gamma_max``
         (None: any; 0: the nominal terminal set); keeps the handles, predicted states and gamma.
 
@@ -158,38 +169,38 @@ class Condensed:
             return outcome._replace(iterations=outcome.iterations + check.iterations)
         return self._program(alpha, omega, gamma_max)
 
-    def _program(self, alpha, omega, gamma_max):
+    def _program(self, alpha: float, omega: float, gamma_max: float | None) -> Outcome:
         first, distance = self.k // self.block, self.case.segment.distance
         nfree = self.nb - first
         bound = self.profile[1][self.k + 1:]
-        cache = {}
+        cache: dict[bytes, Simulated] = {}
 
-        def run(x):
+        def run(x: FloatArray) -> Simulated:
             key = x.tobytes()
             if key not in cache:
                 cache.clear()
                 cache[key] = self.simulate(x[:-1])
             return cache[key]
 
-        def objective(x):
-            return (alpha * run(x)[4] + omega * x[-1]) / self.work_ref
+        def objective(x: FloatArray) -> float:
+            return float(alpha * run(x)[4] + omega * x[-1]) / self.work_ref
 
-        def objective_grad(x):
+        def objective_grad(x: FloatArray) -> FloatArray:
             return np.append(alpha * run(x)[5], omega) / self.work_ref
 
-        def path(x):  # bound - v >= 0 and v >= 0 on the predicted nodes
+        def path(x: FloatArray) -> FloatArray:  # bound - v >= 0 and v >= 0 on the predicted nodes
             v = run(x)[1][1:]
             return np.concatenate([bound - v, v])
 
-        def path_jac(x):
+        def path_jac(x: FloatArray) -> FloatArray:
             dv = run(x)[3][1:]
             return np.hstack([np.vstack([-dv, dv]), np.zeros((2 * len(dv), 1))])
 
-        def terminal(x):  # gamma - Delta >= 0, Delta = max(|s_kf - x_f|, 1 s * v_kf)
+        def terminal(x: FloatArray) -> FloatArray:  # gamma - Delta >= 0, Delta = max(|s_kf - x_f|, 1 s * v_kf)
             s, v = run(x)[0][-1], run(x)[1][-1]
             return np.array([x[-1] - (s - distance), x[-1] + (s - distance), x[-1] - v])
 
-        def terminal_jac(x):
+        def terminal_jac(x: FloatArray) -> FloatArray:
             ds, dv = run(x)[2][-1], run(x)[3][-1]
             return np.vstack([np.append(-ds, 1.0), np.append(ds, 1.0), np.append(-dv, 1.0)])
 
@@ -219,16 +230,17 @@ class Condensed:
             self.v = np.concatenate([np.full(self.k, v[0]), v])
         return Outcome(usable, int(res.nit), res.message)
 
-    def follow(self):
+    def follow(self) -> None:
         """Move the grade and the speed bounds to the positions the last solve predicts."""
         self.profile = profile_along(self.case, self.s, self.v, self.ts, self.margin)
 
-    def handle(self, k):
+    def handle(self, k: int) -> float:
         """The handle the solved program applies at sample ``k``."""
         b = min(k // self.block, self.nb - 1)
         return float(self.u[b] - self.u[self.nb + b])
 
-    def handles(self, k):
+    def handles(self, k: int) -> FloatArray:
         """The handles of samples k .. k_f - 1."""
         u = self.u[:self.nb] - self.u[self.nb:]
-        return u[np.minimum(np.arange(k, self.kf) // self.block, self.nb - 1)]
+        handles: FloatArray = u[np.minimum(np.arange(k, self.kf) // self.block, self.nb - 1)]
+        return handles

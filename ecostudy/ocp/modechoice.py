@@ -21,7 +21,7 @@ phases NLP at the full resolution, and the better of that and the ``phases`` run
 import logging
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable, Mapping, Protocol
 
 import numpy as np
 import pyomo.environ as pyo
@@ -29,17 +29,19 @@ import pyomo.environ as pyo
 from ecostudy.core.deadline import run_until
 from ecostudy.core.progress import stage, step
 from ecostudy.core.units import to_kwh
+from ecostudy.core.grid import Segment
+from ecostudy.core.types import Train
 from ecostudy.ocp import phases, session
-from ecostudy.ocp.solver import IPOPT
+from ecostudy.ocp.solver import IPOPT, Model
 from ecostudy.ocp.space import FORCE_SCALE
 
 
-def define_mode_choice(m, layout, train):
+def define_mode_choice(m: Model, layout: phases.Layout, train: Train) -> None:
     """Binaries per phase and the big-M constraints tying each interval's forces to them."""
     modes = phases.all_modes(train)
     m.J = pyo.RangeSet(0, len(modes) - 1)
 
-    def start(m, q, j):
+    def start(m: Model, q: int, j: int) -> float:
         mine = layout.phases[q][1]
         return 1.0 if (mine.kind == modes[j].kind and (mine.kind == "cruise" or mine.level == modes[j].level)) else 0.0
 
@@ -74,8 +76,8 @@ class Searched:
     ``failed: ...``. ``upper``/``lower``: MindtPy's bounds on the scaled objective (NaN: none).
     ``limited``: the time limit ended the search (killed, or MindtPy stopped at its own limit)."""
 
-    model: Any
-    layout: Any
+    model: Model
+    layout: phases.Layout
     termination: str
     seconds: float
     found: bool
@@ -86,10 +88,20 @@ class Searched:
     limited: bool = False
 
 
+class SolvedRun(Protocol):
+    """The ATO run a search starts from (an ``analysis.single.RunResult``): its segment, train and
+    summary (the running time to keep)."""
+
+    segment: Segment
+    train: Train
+    summary: dict[str, Any]
+
+
 GRACE_S = 2.0  # MindtPy's own limit comes this much earlier (at most a fifth of the limit): time to hand back
 
 
-def search(result, start_model, start_layout, objective, time_limit, points):
+def search(result: SolvedRun, start_model: Model, start_layout: phases.Layout, objective: str, time_limit: float,
+           points: int) -> Searched:
     """MindtPy OA from the phases solution on a coarse sub-grid, in a child process killed at
     ``time_limit`` [s] (MindtPy checks its own limit, :data:`GRACE_S` earlier, only between its
     iterations): a :class:`Searched` with the best pattern found so far."""
@@ -119,7 +131,7 @@ def search(result, start_model, start_layout, objective, time_limit, points):
                     stopped=ended.stopped, limited=ended.stopped)
 
 
-def _found(posts, energy_ref):
+def _found(posts: list[tuple[Any, ...]], energy_ref: float) -> str:
     """What the search has found so far, from its posts: the best pattern's objective and the OA
     iterations (master problems) solved."""
     better = [p[1] for p in posts if p[0] == "incumbent"]
@@ -128,19 +140,20 @@ def _found(posts, energy_ref):
     return best + (f", OA iteration {masters}" if masters else "")
 
 
-def _values(model):
+def _values(model: Model) -> dict[str, float | None]:
     return {v.name: v.value for v in model.component_data_objects(pyo.Var, descend_into=True)
             if not v.name.startswith("MindtPy_utils")}
 
 
-def _load(m, values):
+def _load(m: Model, values: Mapping[str, float | None]) -> None:
     for name, value in values.items():
         var = m.find_component(name)
         if var is not None and value is not None:
             var.set_value(value, skip_validation=True)
 
 
-def _mindtpy(post, m, time_limit):
+def _mindtpy(post: Callable[[tuple[Any, ...]], None], m: Model,
+             time_limit: int) -> tuple[str, float, float, dict[str, float | None], float]:
     """In the child: MindtPy OA, posting every better NLP solution (``incumbent``) and every master
     problem solved (``master``) as it goes; returns (termination, upper, lower, values, seconds)."""
     t0 = time.perf_counter()
@@ -148,7 +161,7 @@ def _mindtpy(post, m, time_limit):
     session.repeatable()  # its NLP subproblems in the same order of solves repeat (unless the time limit cuts in)
     best = [np.inf]
 
-    def feasible(fixed_nlp):
+    def feasible(fixed_nlp: Model) -> None:
         value = pyo.value(fixed_nlp.MindtPy_utils.objective_list[-1].expr)  # what MindtPy's upper bound reads
         if value < best[0]:
             best[0] = value

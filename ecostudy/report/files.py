@@ -49,8 +49,9 @@ def write_run(result, out_dir, plot=True, out=style.Output()):
         tables["advice"] = "advice.csv"
     drawn = figures(out_dir, plot, {"speed": later("speed_plot", result),
                                     "energy": later("energy_plot", result)}, out)
-    s = result.summary
-    write_summary(out_dir, "solve", {f"{s['from']}-{s['to']}": result.status}, tables, drawn, **s)
+    facts = result.facts
+    write_summary(out_dir, "solve", {f"{facts.from_stop}-{facts.to_stop}": result.status}, tables, drawn,
+                  **result.summary)
     stale(out_dir, advice=result.das is None, names={"advice": ["advice.csv"]})
     write_html(out_dir)
     return out_dir

@@ -20,7 +20,7 @@ from urllib.parse import quote
 
 import pandas as pd
 
-from ecostudy.io.folder import SUMMARY, StudyResult, load
+from ecostudy.io.folder import SUMMARY, Counts, StudyResult, load
 from ecostudy.io.writers import atomic_write
 
 REPORT = "report.html"
@@ -143,10 +143,9 @@ def render(result: StudyResult) -> str:
              f'<p class="sub">ecostudy {esc(s.get("ecostudy_version", "?"))} &middot; '
              f'<code>{esc(result.kind)}</code> output folder <code>{esc(result.folder.resolve())}</code></p>',
              status_box(str(result.status), result.status.kind), counts(result.cases)]
-    not_ok = s.get("not_ok") or []
-    if not_ok:
-        parts.append(f"<h2>Cases not ok ({len(not_ok)})</h2>")
-        parts.append(data_table(pd.DataFrame([{"case": r.get("case"), "status": r.get("status")} for r in not_ok])))
+    if result.not_ok:
+        parts.append(f"<h2>Cases not ok ({len(result.not_ok)})</h2>")
+        parts.append(data_table(pd.DataFrame([{"case": r.case, "status": str(r.status)} for r in result.not_ok])))
     inputs_json = read_inputs(result)
     parts.append("<h2>Inputs</h2>")
     if inputs or inputs_json:
@@ -198,8 +197,8 @@ def chunks(values: dict, rows: int = 8) -> list[dict]:
     return [dict(items[i:i + size]) for i in range(0, len(items), size)]
 
 
-def counts(cases: dict[str, int]) -> str:
-    tiles = [f'<div class="count {k}"><span>{int(cases.get(k, 0))}</span><small>{label}</small></div>'
+def counts(cases: Counts) -> str:
+    tiles = [f'<div class="count {k}"><span>{getattr(cases, k)}</span><small>{label}</small></div>'
              for k, label in (("total", "cases"), ("ok", "ok"), ("flagged", "flagged"), ("failed", "failed"))]
     return '<div class="counts" id="cases">' + "".join(tiles) + "</div>"
 

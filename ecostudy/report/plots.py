@@ -146,7 +146,7 @@ def profiles_plot(results, path, title="", fmt=None, dpi=None):
     for r, colour in zip(results, style.sequence(len(results))):
         p = r.profile
         ax.plot(p["position_m"], p["speed_kmh"], color=colour, lw=1.3,
-                label=f"{r.summary['running_time_s']:.1f} s, {r.summary['traction_energy_kWh']:.2f} kWh")
+                label=f"{r.facts.running_time_s:.1f} s, {r.facts.traction_energy_kWh:.2f} kWh")
     _finish_speed_axes(ax, title)
     return _save(fig, path, fmt, dpi)
 
@@ -178,18 +178,18 @@ def journey_plot(results, path, title="", passing=(), fmt=None, dpi=None):
     palette = style.Palette(list(results))
     for n, (name, runs) in enumerate(results.items()):
         offset, colour = 0.0, palette(name)
-        label = f"{name}: {sum(r.summary['traction_energy_kWh'] for r in runs):.2f} kWh"
+        label = f"{name}: {sum(r.facts.traction_energy_kWh for r in runs):.2f} kWh"
         for i, r in enumerate(runs):
             p = r.profile
             ax.plot(offset + p["position_m"], p["speed_kmh"], color=colour, lw=1.2,
                     ls=style.DASHES[n % len(style.DASHES)], label=label if i == 0 else None)
-            offset += r.summary["distance_m"]
+            offset += r.facts.distance_m
     start = 0.0
     for i, r in enumerate(next(iter(results.values()), [])):  # limits and stops: once, not per distribution
         x, y = _steps(r.segment.limit, r.segment.distance)
         ax.step(start + x, to_kmh(y), where="post", color=style.LIMIT["speed limit"], lw=1.0,
                 label=SPEED_LIMIT if i == 0 else None)
-        start += r.summary["distance_m"]
+        start += r.facts.distance_m
         ax.axvline(start, color=style.LIMIT["stop"], lw=0.5)
     _finish_speed_axes(ax, title, xlabel="distance along the journey [m]", legend_size=8)
     return _save(fig, path, fmt, dpi)

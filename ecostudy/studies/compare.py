@@ -6,6 +6,7 @@ simulated ones), so optimised and heuristic strategies are measured alike.
 import pandas as pd
 
 from ecostudy.analysis.single import solve_run
+from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import InfeasibleError
 from ecostudy.core.types import Timing
 from ecostudy.core.simulate import Driven
@@ -16,7 +17,7 @@ from ecostudy.ocp.problem import prepare
 from ecostudy.studies.workers import ticker
 
 
-def compare(track, train, from_stop, to_stop, timing, points=1000, progress=None):
+def compare(track, train, from_stop, to_stop, timing, points=RUN_POINTS, progress=None):
     """(table, outcomes): all-out, ATO optimum, eco-drive coasting, MARECO-style, DAS round and DAS phases.
 
     ``mode_changes`` counts the handle changes of each run (DAS runs: the advice rows minus one);

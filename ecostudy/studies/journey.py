@@ -21,6 +21,7 @@ import pyomo.environ as pyo
 from scipy.interpolate import PchipInterpolator
 
 from ecostudy.analysis.single import solve_run
+from ecostudy.core.defaults import FRONT_POINTS
 from ecostudy.core.errors import InfeasibleError, SolverError
 from ecostudy.core import kinematics
 from ecostudy.core.kinematics import running_time
@@ -236,7 +237,7 @@ def timing_columns(plan, n, departure, arrival, run):
             "windows_kept": departed and all(w["kept"] for w in checks)}
 
 
-def journey(track, train, stops, total_time=None, supplement=None, points=500, front_count=FRONT_COUNT, workers=1,
+def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_POINTS, front_count=FRONT_COUNT, workers=1,
             scheduled=None, plan=None, progress=None):
     """Per-segment table for each distribution of one total running time, and the totals.
 

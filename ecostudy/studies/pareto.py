@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.analysis.single import finish, solve_run
+from ecostudy.core.defaults import FRONT_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.types import Timing
 from ecostudy.das.methods import das_columns
@@ -58,7 +59,7 @@ def _chain(case, times, objective, options, verify_result, warm, tick=None):
     return results
 
 
-def weighted_points(track, train, from_stop, to_stop, count=8, points=500, energy_weights=None):
+def weighted_points(track, train, from_stop, to_stop, count=8, points=FRONT_POINTS, energy_weights=None):
     """Weighted-sum points: minima of w_t T + w_e E / Ms (thesis 001 eq. 4.1a) for w_t = 1 and
     ``count`` energy weights w_e [s kg/J] from 0.03 to 30. On a convex front each lies on the
     epsilon-constraint front; the weighted sum cannot reach points where the front is not convex."""
@@ -79,7 +80,7 @@ def _split(items, parts):
     return [list(chunk) for chunk in np.array_split(np.asarray(items, dtype=float), parts) if len(chunk)]
 
 
-def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, points=500,
+def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, points=FRONT_POINTS,
           objective="energy", workers=1, warm=True, options=None, verify_result=True, progress=None):
     """The front as (table, results); results[0] is the all-out run itself.
 

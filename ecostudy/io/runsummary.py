@@ -1,0 +1,169 @@
+"""One run's ``summary.json`` as typed, named results: what the API and the command line read.
+
+``summary.json`` stays the file (its layout is built in ``analysis.summary`` and written by
+``report.files``); :meth:`RunSummary.from_dict` reads that layout into these dataclasses, whose
+field names carry their units as the file's keys do (``traction_energy_kWh``, ``stop_error_m``).
+A reader writes ``run.facts.traction_energy_kWh``, not ``run.summary["traction_energy_kWh"]``:
+a misspelt attribute is an error mypy and the interpreter name, a misspelt key is not.
+"""
+from dataclasses import dataclass
+from typing import Any, Mapping, Optional
+
+
+def _opt(data: Mapping[str, Any], key: str) -> Optional[float]:
+    value = data.get(key)
+    return None if value is None else float(value)
+
+
+@dataclass(frozen=True)
+class SolverRun:
+    """How Ipopt ended on the run's NLP (``summary.json`` block ``solver``)."""
+
+    status: str                       # "optimal", or the termination Ipopt reported
+    iterations: int
+    seconds: float                    # the solve stage's wall time [s]
+    max_constraint_violation: Optional[float]
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "SolverRun":
+        return cls(status=str(data["status"]), iterations=int(data["iterations"]), seconds=float(data["seconds"]),
+                   max_constraint_violation=_opt(data, "max_constraint_violation"))
+
+
+@dataclass(frozen=True)
+class Verification:
+    """The independent re-simulation of the run's handles against the optimum (block
+    ``verification``, ``core.simulate.verify``): ``passed`` when every error is within its
+    tolerance and every timing window is kept."""
+
+    passed: bool
+    arrival_time_error_s: float
+    stop_error_m: float
+    energy_error_pct: float
+    max_overspeed_kmh: float
+    simulated_running_time_s: float
+    simulated_traction_energy_kWh: float
+    simulated_net_energy_kWh: float
+    windows_kept: tuple[bool, ...] = ()
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Verification":
+        return cls(passed=bool(data["passed"]), arrival_time_error_s=float(data["arrival_time_error_s"]),
+                   stop_error_m=float(data["stop_error_m"]), energy_error_pct=float(data["energy_error_pct"]),
+                   max_overspeed_kmh=float(data["max_overspeed_kmh"]),
+                   simulated_running_time_s=float(data["simulated_running_time_s"]),
+                   simulated_traction_energy_kWh=float(data["simulated_traction_energy_kWh"]),
+                   simulated_net_energy_kWh=float(data["simulated_net_energy_kWh"]),
+                   windows_kept=tuple(bool(w["kept"]) for w in data.get("windows") or ()))
+
+
+@dataclass(frozen=True)
+class RegimeRun:
+    """One stretch of one driving regime (MA, CR, CO, CR2, MB, RB) [m from the departure]."""
+
+    regime: str
+    start_m: float
+    end_m: float
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "RegimeRun":
+        return cls(regime=str(data["regime"]), start_m=float(data["start_m"]), end_m=float(data["end_m"]))
+
+
+@dataclass(frozen=True)
+class PontryaginCheck:
+    """The costate check of the regimes (Farooqi 2018 eq. 2.17; eq. 7.4 for net energy), block
+    ``pontryagin``: the share of the distance whose regime agrees with psi = lambda / v, and the
+    stretches that disagree."""
+
+    agreement_pct: float
+    conditions: str
+    disagreements: tuple[RegimeRun, ...]
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "PontryaginCheck":
+        return cls(agreement_pct=float(data["agreement_pct"]), conditions=str(data.get("conditions", "eq. 2.17")),
+                   disagreements=tuple(RegimeRun.from_dict(d) for d in data.get("disagreements") or ()))
+
+
+@dataclass(frozen=True)
+class DasSummary:
+    """The driver advice of a run (block ``das``): a DAS method's driven advice against the ATO
+    optimum; ``bound_kWh``, ``gap_pct``, ``search_s`` and ``oa_iterations`` of the MINLP only."""
+
+    method: str                        # round, phases or minlp
+    traction_energy_kWh: float
+    net_energy_kWh: float
+    gap_to_ato_pct: Optional[float]    # on the quantity the ATO run minimised
+    gap_to_ato_on_time_pct: Optional[float]  # with a late arrival charged at the marginal energy
+    mode_changes: int
+    arrival_error_s: float
+    stop_error_m: float
+    status: str
+    bound_kWh: Optional[float] = None
+    gap_pct: Optional[float] = None
+    search_s: Optional[float] = None
+    oa_iterations: Optional[int] = None
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "DasSummary":
+        oa = data.get("oa_iterations")
+        return cls(method=str(data["method"]), traction_energy_kWh=float(data["traction_energy_kWh"]),
+                   net_energy_kWh=float(data["net_energy_kWh"]), gap_to_ato_pct=_opt(data, "gap_to_ato_pct"),
+                   gap_to_ato_on_time_pct=_opt(data, "gap_to_ato_on_time_pct"),
+                   mode_changes=int(data["mode_changes"]), arrival_error_s=float(data["arrival_error_s"]),
+                   stop_error_m=float(data["stop_error_m"]), status=str(data["status"]),
+                   bound_kWh=_opt(data, "bound_kWh"), gap_pct=_opt(data, "gap_pct"), search_s=_opt(data, "search_s"),
+                   oa_iterations=None if oa is None else int(oa))
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """One solved run, typed: what was solved, its times and energies, how Ipopt ended, the
+    regimes, the costate check, the re-simulation and the driver advice (all from ``summary.json``;
+    SI or the unit its name carries)."""
+
+    track: str
+    train: str
+    from_stop: str
+    to_stop: str
+    distance_m: float
+    points: int                        # K, the grid nodes
+    objective: str                     # energy, net_energy, time or mixed
+    running_time_s: float
+    traction_energy_kWh: float
+    traction_energy_J_per_kg: float
+    braking_energy_kWh: float
+    regenerated_energy_kWh: float
+    net_energy_kWh: float
+    top_speed_kmh: float
+    all_out_time_s: Optional[float]    # when the all-out run was solved on the way
+    marginal_energy_kWh_per_s: Optional[float]  # dE/dT at the optimum (energy objectives)
+    regime_sequence: str               # e.g. "MA CR CO MB"
+    regimes: tuple[RegimeRun, ...]
+    solver: SolverRun
+    pontryagin: Optional[PontryaginCheck]
+    verification: Optional[Verification]  # None: not re-simulated
+    das: Optional[DasSummary] = None
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "RunSummary":
+        """The typed run of a ``summary.json`` mapping (a run's ``summary``, or the file read back)."""
+        regimes = data.get("regimes") or {}
+        pm, ver, das = data.get("pontryagin"), data.get("verification"), data.get("das")
+        return cls(track=str(data["track"]), train=str(data["train"]), from_stop=str(data["from"]),
+                   to_stop=str(data["to"]), distance_m=float(data["distance_m"]), points=int(data["points"]),
+                   objective=str(data["objective"]), running_time_s=float(data["running_time_s"]),
+                   traction_energy_kWh=float(data["traction_energy_kWh"]),
+                   traction_energy_J_per_kg=float(data["traction_energy_J_per_kg"]),
+                   braking_energy_kWh=float(data["braking_energy_kWh"]),
+                   regenerated_energy_kWh=float(data["regenerated_energy_kWh"]),
+                   net_energy_kWh=float(data["net_energy_kWh"]), top_speed_kmh=float(data["top_speed_kmh"]),
+                   all_out_time_s=_opt(data, "all_out_time_s"),
+                   marginal_energy_kWh_per_s=_opt(data, "marginal_energy_kWh_per_s"),
+                   regime_sequence=str(regimes.get("sequence", "")),
+                   regimes=tuple(RegimeRun.from_dict(r) for r in regimes.get("runs") or ()),
+                   solver=SolverRun.from_dict(data["solver"]),
+                   pontryagin=None if not pm else PontryaginCheck.from_dict(pm),
+                   verification=None if ver is None else Verification.from_dict(ver),
+                   das=None if not das else DasSummary.from_dict(das))
