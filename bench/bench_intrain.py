@@ -21,7 +21,7 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from ecostudy.cli.blas import limit_blas_threads  # noqa: E402
+from ecostudy.api.blas import limit_blas_threads  # noqa: E402
 from ecostudy.core.errors import EcostudyWarning  # noqa: E402
 
 STUDY = "heavyhaul_brake_penalty"

@@ -68,6 +68,42 @@ def test_the_last_wagons_brake_starts_later_by_the_trains_length_over_the_signal
     assert released.at(delays[last] + 17.0)[last] == pytest.approx(reached * np.exp(-1))
 
 
+def test_a_command_sent_while_another_still_travels_reaches_each_wagon_in_turn():
+    """The last wagon (9.795 s down the pipe) is sent -100 kN and, 1 s later, a release: the release
+    is still travelling when the step starts; 12 s after the brake command it has built up for 1 s
+    (1 - exp(-1/8)) and released for 12 - 10.795 s (exp(-t/17)); the first wagon (0.188 s) had both
+    before the step."""
+    c = load_consist(PAPER)
+    delays = signal_delays(c, c.air_brake.signal_speed)
+    first, last = 2, 201
+    command = np.where(np.isin(np.arange(c.cars), [first, last]), -100e3, 0.0)
+    zero = np.zeros(c.cars)
+    forces = BrakePipe(zero, zero, command, delays, c.air_brake).at(1.0)  # the brake command's first second
+    pipe = BrakePipe(forces, zero, zero, delays, c.air_brake, flight=[(1.0, command)])  # then the release
+    built = -100e3 * (1 - np.exp(-1 / 8.0))
+    assert pipe.at(11.0)[last] == pytest.approx(built * np.exp(-(12.0 - delays[last] - 1.0) / 17.0))
+    assert pipe.at(delays[last] - 1.0 - 1e-6)[last] == pytest.approx(0.0)  # the brake not there yet
+    head = -100e3 * (1 - np.exp(-(1.0 - delays[first]) / 8.0))  # applied for 1 s - d, released at 1 s + d
+    on = -100e3 + (head + 100e3) * np.exp(-delays[first] / 8.0)
+    assert pipe.at(11.0)[first] == pytest.approx(on * np.exp(-(11.0 - delays[first]) / 17.0))
+
+
+def test_the_plant_brakes_alike_in_one_step_and_in_pieces_shorter_than_the_pipe():
+    """The 20 s wagon braking of the next test taken as 5 steps of 4 s (shorter than the 9.8 s the
+    signal needs to the last wagon, as the terminal approach's 1 s pieces are): the same brake forces
+    and, to the integrator's tolerance, speeds at the end."""
+    c = consist(resistance=False)
+    plant = CascadePlant(c, level(), air_brake=True)
+    state = plant.initial(5000.0, 15.0)
+    command = np.where(plant.loco, 0.0, -20e3)
+    whole = plant.step(state, command, 20.0).state
+    pieces = state
+    for _ in range(5):
+        pieces = plant.step(pieces, command, 4.0).state
+    assert np.allclose(pieces.brakes, whole.brakes, rtol=1e-9, atol=1e-6)
+    assert np.allclose(pieces.speeds, whole.speeds, atol=1e-4) and len(pieces.sent) == 3  # sent at 8 (seen), 12, 16 s
+
+
 def test_the_plant_brakes_with_the_impulse_of_the_delayed_lagged_brakes():
     """The ore train without resistance on the level at 15 m/s, every wagon commanded -20 kN for
     one 20 s step: the train's momentum falls by the brakes' impulse, sum over wagons of

@@ -266,8 +266,9 @@ def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     """Zhang & Zhuan's Table IV on the shipped 45 km line (Np = 4, Nc = 2, f = 10, the energy-optimal
     reference at +10 %, per-car weights, the paper's units): both runs stop within 1 m (ok); K_b
     1 -> 60 lowers the wagons' braking energy and E a little (3488 -> 3310 kWh, 8473 -> 8371 kWh:
-    -1.2 %), the largest in-train force over the braking samples (a brake acts, no locomotive pulls)
-    more than 2x (515 -> 101 kN), the tracking error moves by less than 0.25 m/s; the braking term
+    -1.2 %, before the reference's limit lead; with it E 8485 -> 8354 kWh, -1.5 %), the largest
+    in-train force over the braking samples (a brake acts, no locomotive pulls) more than 2x (515 ->
+    101 kN; with the lead 647 -> 113 kN), the tracking error moves by less than 0.25 m/s; the braking term
     stays under 5 % of the force term and the dynamic brakes under 30 % of their limit
     (docs/heavyhaul.md, "The braking penalty, measured")."""
     from .conftest import STUDIES, load_yaml

@@ -61,8 +61,10 @@ def test_the_braking_penalty_acts_once_the_terms_are_in_their_limits(tmp_path):
     runs = {}
     for scale in ("paper", "limits"):
         out = tmp_path / scale
-        result = CliRunner().invoke(app, ["heavyhaul", str(study(tmp_path, objective_scale=scale)), "--out", str(out),
-                                          "--no-progress", "--no-plot"])
+        # with every term in its limit tracking weighs less: a run arrived 103 s (21.7 %) late, which the
+        # default arrival tolerance (5 % or 60 s) flags; this test is about the terms, so it allows 30 %
+        file = study(tmp_path, objective_scale=scale, arrival_tolerance_percent=30)
+        result = CliRunner().invoke(app, ["heavyhaul", str(file), "--out", str(out), "--no-progress", "--no-plot"])
         assert result.exit_code == 0, result.output  # every run stops within 1 m of the stop
         runs[scale] = pd.read_csv(out / "runs.csv").set_index("K_b")
     paper, limits = runs["paper"], runs["limits"]

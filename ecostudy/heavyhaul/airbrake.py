@@ -13,7 +13,10 @@ command u_k after u_k-1, wagon i's force is, s = t - t_k, d_i = x_i / c < the st
     b_i(s) = u_k + (b_i(t_k + d_i) - u_k) exp(-(s - d_i) / tau)     s >= d_i
 
 tau = tau_b where the target is the larger brake force (|target| >= |b| at the start of the piece),
-else tau_r: closed form, continuous in time, so the plant's integrator needs no extra state.
+else tau_r: closed form, continuous in time, so the plant's integrator needs no extra state. A step
+shorter than the signal's run to the last wagon (the terminal approach's 1 s pieces against 9.8 s on
+the ore train) leaves earlier commands still travelling: each wagon then sees, piece by piece, every
+command in turn, d_i after it was sent (``flight``).
 """
 import numpy as np
 
@@ -31,17 +34,24 @@ def _lag(start, target, elapsed, brake):
 
 
 class BrakePipe:
-    """The wagons' brake forces over one step: at its start ``forces`` [N], the command before
-    ``previous`` and from the step on ``current`` [N per car], ``delays`` [s], ``brake`` an
-    :class:`~ecostudy.core.types.AirBrake`."""
+    """The wagons' brake forces over one step: at its start ``forces`` [N], the command every wagon
+    sees at the step's start ``previous``, the commands sent after it and still travelling
+    ``flight`` ((seconds before the step's start, command), oldest first) and from the step on
+    ``current`` [N per car], ``delays`` [s], ``brake`` an :class:`~ecostudy.core.types.AirBrake`."""
 
-    def __init__(self, forces, previous, current, delays, brake):
+    def __init__(self, forces, previous, current, delays, brake, flight=()):
         self.forces, self.previous, self.current = (np.asarray(a, float) for a in (forces, previous, current))
         self.delays, self.brake = delays, brake
-        self.reached = _lag(self.forces, self.previous, delays, brake)  # b_i(t_k + d_i)
+        self.sent = [(float(-ago), np.asarray(u, float)) for ago, u in flight] + [(0.0, self.current)]
 
     def at(self, elapsed):
-        """b_i [N] ``elapsed`` [s] after the step's start."""
-        before = _lag(self.forces, self.previous, elapsed, self.brake)
-        after = _lag(self.reached, self.current, elapsed - self.delays, self.brake)
-        return np.where(elapsed < self.delays, before, after)
+        """b_i [N] ``elapsed`` [s] after the step's start: each wagon's lag towards the command it
+        sees, the seen command changing d_i after each was sent."""
+        force, seen, since = self.forces, self.previous, np.zeros_like(self.forces)
+        for sent, command in self.sent:
+            arrives = sent + self.delays
+            seen = np.where(arrives <= 0, command, seen)  # arrived before the step
+            change = (arrives > 0) & (arrives <= elapsed)
+            force = np.where(change, _lag(force, seen, arrives - since, self.brake), force)
+            since, seen = np.where(change, arrives, since), np.where(change, command, seen)
+        return _lag(force, seen, elapsed - since, self.brake)

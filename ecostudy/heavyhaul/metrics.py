@@ -2,7 +2,8 @@
 (:class:`~ecostudy.heavyhaul.loop.LoopRecord`) and the reasons that flag it.
 
 A run is ``flagged`` (never ``ok``) when the train did not arrive (the sample cap came first), when
-it stopped farther from the stop than the tolerance (short or beyond), when a car ran faster than the
+it stopped farther from the stop than the tolerance (short or beyond), when it arrived later than the
+reference's running time by more than the tolerance (a share of it or seconds, the larger), when a car ran faster than the
 train's limit at the head by more than the tolerance, when a coupler carried more than the consist's
 limit, or when a solve took longer than Ts (its input was not applied).
 
@@ -32,6 +33,8 @@ class Tolerances(NamedTuple):
 
     stop_m: float = 1.0        # |head at the end - the stop| [m]
     speed_mps: float = KMH     # fastest car over the train's limit [m/s]
+    arrival: float = 0.05      # later than the reference's running time by this share of it [-] ...
+    arrival_s: float = 60.0    # ... and by more than this [s]
 
 
 def braking_samples(efforts, locomotives):
@@ -56,6 +59,8 @@ def run_metrics(record, reference, locomotives, force_limit):
     terms = np.nansum(record.terms, axis=0)
     return {
         "arrived": bool(record.arrived), "arrival_s": float(record.times[-1]),
+        "arrival_late_s": float(record.times[-1] - reference.running_time),
+        "arrival_late_percent": float(100 * (record.times[-1] / reference.running_time - 1)),
         "stop_error_m": float(record.head[-1] - reference.distance[-1]),
         "force_max_kN": float(record.largest_coupler.max() / KN),
         "force_max_braking_kN": float(record.largest_coupler[braking].max() / KN) if braking.any() else 0.0,
@@ -127,6 +132,10 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     elif abs(metrics["stop_error_m"]) > tolerances.stop_m:
         where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
         out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m)")
+    late, share = metrics["arrival_late_s"], metrics["arrival_late_percent"]
+    if metrics["arrived"] and share > 100 * tolerances.arrival and late > tolerances.arrival_s:
+        out.append(f"arrived {late:.0f} s ({share:.1f} %) after the reference's running time "
+                   f"(tolerance {100 * tolerances.arrival:g} % or {tolerances.arrival_s:g} s, the larger)")
     if metrics["force_max_kN"] > metrics["force_limit_kN"]:
         out.append(f"largest coupler force {metrics['force_max_kN']:.1f} kN above the consist's "
                    f"{metrics['force_limit_kN']:g} kN limit")

@@ -55,6 +55,7 @@ class CascadeState(NamedTuple):
     time: float = 0.0       # [s]
     brakes: Optional[np.ndarray] = None     # the wagons' air-brake forces [N] (air_brake on; None: none applied)
     commanded: Optional[np.ndarray] = None  # the efforts commanded over the last step [N] (air_brake on)
+    sent: tuple = ()  # ((time [s], wagons' command [N]), ...): the newest every wagon sees, then those still travelling
 
 
 class CascadeStep(NamedTuple):
@@ -237,8 +238,9 @@ class CascadePlant:
         self.history.append((sol.t, forces.astype(np.float32)))
         heads = sol.y[0] + 0.5 * self.consist.length[0]
         excess = float(np.max(np.max(sol.y[n:2 * n], axis=0) - self.segment.limit(heads)))
-        brakes, commanded = (None, None) if pipe is None else (pipe.at(dt), pipe.current)
-        return CascadeStep(CascadeState(p, v, t0 + dt, brakes, commanded), forces[-1], float(np.abs(forces).max()),
+        brakes, commanded, sent = (None, None, ()) if pipe is None else (pipe.at(dt), pipe.current,
+                                                                         self._sent(state, pipe.current, t0 + dt))
+        return CascadeStep(CascadeState(p, v, t0 + dt, brakes, commanded, sent), forces[-1], float(np.abs(forces).max()),
                            *map(float, works[:3]), excess, tuple(map(float, works[3:])))
 
     def _pipe(self, state, requested, dt):
@@ -247,11 +249,19 @@ class CascadePlant:
         if self.air_brake is None:
             return None
         wagons = np.where(self.loco, 0.0, self.efforts(requested, state.speeds))
+        forces = np.zeros(self.n) if state.brakes is None else state.brakes
+        (_, previous), *flight = self._seen(state, state.time)
+        return BrakePipe(forces, previous, wagons, self.delays, self.air_brake,
+                         [(state.time - t, u) for t, u in flight])
+
+    def _seen(self, state, now, also=()):
+        """The commands sent (``state.sent`` and ``also``) from the newest every wagon sees at ``now``
+        [s] on: ((time, command), ...)."""
+        sent = [*(state.sent or [(-np.inf, np.zeros(self.n) if state.commanded is None else state.commanded)]), *also]
         late = self.delays[~self.loco].max(initial=0.0)
-        if late >= dt:
-            raise ValueError(f"the brake signal reaches the last wagon after {late:.1f} s, not within the "
-                             f"{dt:g} s step")
-        zero = np.zeros(self.n)
-        forces = zero if state.brakes is None else state.brakes
-        previous = zero if state.commanded is None else state.commanded
-        return BrakePipe(forces, previous, wagons, self.delays, self.air_brake)
+        first = max([i for i, (t, _) in enumerate(sent) if t + late <= now] or [0])
+        return tuple(sent[first:])
+
+    def _sent(self, state, command, end):
+        """``state.sent`` with ``command`` sent at the step's start, from the newest every wagon sees at ``end``."""
+        return self._seen(state, end, [(state.time, command)])

@@ -112,13 +112,38 @@ def spread_grades(track, length, forward=True, step=None):
     return replace(track, gradient_positions=starts, gradients=profile.mean_over(centres, length))
 
 
+def advanced_limits(track, seconds, forward=True):
+    """The track with every drop of the speed limit moved ``seconds`` of running at the lower limit
+    towards the start of the run (``forward``: towards lower positions): a train that follows the
+    result is at the lower limit that long before its head reaches the drop. Rises stay where they
+    are. (Zhang & Zhuan design v_r below the limits; a controller that tracks v_r only at its samples
+    Ts apart crosses a drop between two of them, so v_r must be at the lower limit a sample before.)"""
+    if seconds <= 0:
+        return track
+    p, limit = np.asarray(track.limit_positions, float), np.asarray(track.limits, float)
+    ends = np.append(p[1:], np.inf)
+    lead = limit * seconds
+    moved = p - lead if forward else ends + lead
+    starts = np.unique(np.concatenate([p, moved[np.isfinite(moved) & (moved > p[0])]]))
+    if forward:  # piece j is ahead within its own lead of x
+        seen = (p[None, :] <= starts[:, None] + lead[None, :]) & (ends[None, :] > starts[:, None])
+    else:
+        seen = (p[None, :] <= starts[:, None]) & (ends[None, :] + lead[None, :] > starts[:, None])
+    values = np.where(seen, limit[None, :], np.inf).min(axis=1)
+    keep = np.concatenate([[True], np.diff(values) != 0])  # no repeated pieces
+    return replace(track, limit_positions=starts[keep], limits=values[keep])
+
+
 def optimal_reference(consist, track, from_stop, to_stop, running_time=None, supplement=None, points=500,
-                      service_deceleration=0.3):
+                      service_deceleration=0.3, limit_lead=0.0):
     """The energy-optimal single-mass run for ``running_time`` [s] (or a ``supplement`` [-] over the
-    all-out time), on the grades spread over the train (:func:`spread_grades`), verified by
-    simulation; returns a :class:`Reference` and the :class:`RunResult`."""
+    all-out time), on the grades spread over the train (:func:`spread_grades`) and below the limits
+    with each drop moved ``limit_lead`` [s] of running at the lower limit ahead
+    (:func:`advanced_limits`), verified by simulation; returns a :class:`Reference` and the
+    :class:`RunResult`."""
     train = single_mass(consist, service_deceleration)
-    track = spread_grades(track, train.length, track.stops[to_stop] >= track.stops[from_stop])
+    forward = track.stops[to_stop] >= track.stops[from_stop]
+    track = advanced_limits(spread_grades(track, train.length, forward), limit_lead, forward)
     timing = Timing(running_time=running_time) if running_time is not None else Timing(supplement=supplement)
     run = solve_run(track, train, from_stop, to_stop, timing, points=points)
     t = run.trajectory

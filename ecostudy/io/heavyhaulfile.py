@@ -19,6 +19,9 @@ class ReferenceSpec(Strict):
     points: int = Field(500, ge=50, le=20000, description="K of the single-mass NLP.")
     service_deceleration_mps2: float = Field(0.3, gt=0, le=3, description="The single mass brakes at most this "
                                              "hard (a heavy train's service braking, not its brakes' full force).")
+    limit_lead_samples: float = Field(1.0, ge=0, le=10, description="The single mass reaches each lower speed limit "
+                                      "this many samples (Ts) of running at it before the drop: the controller tracks "
+                                      "v_r only at its samples and crosses a drop between two (0: at the drop).")
 
     @model_validator(mode="after")
     def _one(self) -> Self:
@@ -92,6 +95,11 @@ class HeavyhaulFile(Strict):
                                     "beyond) is flagged.")
     speed_tolerance_kmh: float = Field(1.0, ge=0, description="A run in which a car runs faster than the line's "
                                        "limit by more is flagged.")
+    arrival_tolerance_percent: float = Field(5.0, ge=0, le=1000, description="A run that arrives later than the "
+                                             "reference's running time by more than this share of it and by more "
+                                             "than arrival_tolerance_s is flagged.")
+    arrival_tolerance_s: float = Field(60.0, ge=0, le=1e6, description="See arrival_tolerance_percent (the larger "
+                                       "of the two is the tolerance).")
     output: Optional[str] = None
 
     @field_validator("brake_penalty", "fence", "horizons")

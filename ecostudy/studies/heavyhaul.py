@@ -53,7 +53,7 @@ def _reference(s, path, consist, track, from_stop, to_stop):
         return table_reference(table["distance_m"], table["speed_kmh"], str(where))
     supplement = None if r.supplement_percent is None else r.supplement_percent / 100
     return optimal_reference(consist, track, from_stop, to_stop, r.running_time_s, supplement, r.points,
-                             r.service_deceleration_mps2)[0]
+                             r.service_deceleration_mps2, r.limit_lead_samples * s.sample_time_s)[0]
 
 
 def expand(path):
@@ -101,7 +101,9 @@ def expand(path):
               "fence_coupling": s.fence_coupling, "fence_sharing": s.fence_sharing, "fence_weights": s.fence_weights,
               "objective_scale": s.objective_scale, "adhesion": s.adhesion, "air_brake": s.air_brake, "draft_gear": s.draft_gear,
               "max_samples": s.max_samples,
-              "stop_tolerance_m": s.stop_tolerance_m, "speed_tolerance_kmh": s.speed_tolerance_kmh, "version": __version__}
+              "stop_tolerance_m": s.stop_tolerance_m, "speed_tolerance_kmh": s.speed_tolerance_kmh,
+              "arrival_tolerance_percent": s.arrival_tolerance_percent, "arrival_tolerance_s": s.arrival_tolerance_s,
+              "version": __version__}
     cases = []
     for kb, f, h in product(s.brake_penalty, s.fence, s.horizons):
         case = {**shared, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",
@@ -185,7 +187,8 @@ def _run(case):
     summary = {**summarise(consist, controller, record, reference, controller.locos),
                **in_train_metrics(plant.history, consist)}
     why = reasons(summary, case["max_samples"], summary["over_ts"],
-                  Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH))
+                  Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH,
+                             case["arrival_tolerance_percent"] / 100, case["arrival_tolerance_s"]))
     return ("flagged", "; ".join(why), summary) if why else ("ok", None, summary)
 
 
@@ -198,7 +201,7 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
            "dynamic_brake_use_mean", "dynamic_brake_at_limit_samples", "braking_samples", "stretch_braking_samples",
            "stretch_braking_kWh",
            "speed_excess_kmh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "coupler_damping_kWh", "draft_gear_kWh", "stored_change_kWh",
-           "balance_residual_kWh", "arrived", "arrival_s", "reference_time_s", "reference_kWh", "stop_error_m", "samples", "virtual_cars",
+           "balance_residual_kWh", "arrived", "arrival_s", "arrival_late_s", "arrival_late_percent", "reference_time_s", "reference_kWh", "stop_error_m", "samples", "virtual_cars",
            "qp_inputs", "qp_states", "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts",
            "peak_memory_MB", *IN_TRAIN)
 
