@@ -58,7 +58,8 @@ class Bar:
     its elapsed time only; a time limit counted in seconds, how much of it is spent)."""
 
     def __init__(self, label: str, bar) -> None:
-        self.label, self.bar, self.total, self.unit = label, bar, None, ""
+        self.label, self.bar, self.unit = label, bar, ""
+        self.total: Optional[float] = None
         self.task = bar.add_task(label, total=None, count="", detail="", limit=False)
 
     def __call__(self, done: int, failed: int, remaining: int, total: int) -> None:
