@@ -7,7 +7,6 @@ import typer
 
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 
-
 # the choices of --das and --objective (a str Enum each, as Typer lists them in the help)
 DasMethod = Enum("DasMethod", {"round": "round", "phases": "phases", "minlp": "minlp"}, type=str)
 Objective = Enum("Objective", {"energy": "energy", "net_energy": "net_energy", "time": "time", "mixed": "mixed"},
@@ -27,8 +26,7 @@ Points = Annotated[Optional[int], typer.Option("--points", "-K", help="Grid node
 Out = Annotated[Optional[Path], typer.Option(help="Output folder (relative: to the working directory; default: "
                                                   "the study's 'output').")]
 EveryCore = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core).")]
-StepTimed = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core). Per-step solve "
-                      "times are measured with every worker busy; --workers 1 measures them on a quiet machine.")]
+StepTimed = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core; step times then measured with every worker busy, --workers 1 for quiet-machine ones).")]
 Dask = Annotated[Optional[str], typer.Option(help="Address of a running Dask scheduler (tcp://host:port).")]
 RetryFailed = Annotated[bool, typer.Option(help="Compute failed cases again (infeasible ones stay).")]
 NoProgress = Annotated[bool, typer.Option("--no-progress", help="No progress bar.")]
