@@ -256,6 +256,45 @@ def test_the_store_lock_is_removed_on_a_clean_exit_and_still_excludes_a_second_w
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results.sqlite"]
 
 
+KILLED_WRITER = """
+import signal, sys, time
+from ecostudy.io.store import Store
+from ecostudy.studies.workers import worker_pool
+
+def stubborn(_):
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a worker that outlives its parent for a while
+    time.sleep(20)
+
+store = Store(sys.argv[1])
+pool = worker_pool(1)
+pool.submit(stubborn, 0)
+time.sleep(2)  # the worker has started and ignores SIGTERM
+print("ready", flush=True)
+time.sleep(60)
+"""
+
+
+def test_a_store_is_free_as_soon_as_its_writer_is_killed_even_while_a_worker_lives_on(tmp_path):
+    """kill -9 of a study: its store's lock goes with the process, not with its last worker (a
+    forked worker closes its copies of the parent's lock files, ``io.store.release_inherited``)."""
+    import signal
+    import subprocess
+    import sys
+    from ecostudy.io.store import Store
+    path = tmp_path / "results.sqlite"
+    writer = subprocess.Popen([sys.executable, "-c", KILLED_WRITER, str(path)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert writer.stdout.readline().strip() == "ready"
+        with pytest.raises(InputError, match="another ecostudy run is writing this store"):
+            Store(path)  # the writer holds it
+        writer.send_signal(signal.SIGKILL)
+        writer.wait(timeout=30)
+        Store(path).close()  # at once, while the stubborn worker still sleeps
+    finally:
+        writer.kill()
+        subprocess.run(["pkill", "-f", str(path)], check=False)
+
+
 def test_a_study_run_leaves_no_lock(tmp_path):
     doc = load_yaml((STUDIES / "metro_supplements.yaml").read_text())
     doc.update(track=str(AMS), train=str(METRO), points=60, scenarios=[], sweep={"supplement_percent": [10]})

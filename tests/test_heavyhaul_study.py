@@ -231,8 +231,11 @@ def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path
     assert "2 already stored, 1 computed now" in again.output, again.output
     literal = runner.invoke(app, ["heavyhaul", str(study(tmp_path, fence_weights="virtual", brake_penalty=[60])),
                                   "--out", str(tmp_path / "virtual"), "--no-progress", "--no-plot"])
-    assert literal.exit_code == 0, literal.output
+    # eq. 11 read literally (weights per virtual car) trades tracking for braking: on this 5 km line it
+    # arrives about 108 s (23 %) after the reference's time, flagged late, and says so
+    assert literal.exit_code == 1 and "after the reference's running time" in literal.output, literal.output
     virtual = pd.read_csv(tmp_path / "virtual" / "runs.csv")
+    assert virtual["status"].iloc[0] == "flagged" and abs(virtual["stop_error_m"].iloc[0]) < 1
     assert virtual["wagon_brake_kWh"].iloc[0] < 0.6 * runs["wagon_brake_kWh"].iloc[0]  # 191 against 436 kWh
 
 
@@ -269,7 +272,7 @@ def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     -1.2 %, before the reference's limit lead; with it E 8485 -> 8354 kWh, -1.5 %), the largest
     in-train force over the braking samples (a brake acts, no locomotive pulls) more than 2x (515 ->
     101 kN; with the lead 647 -> 113 kN), the tracking error moves by less than 0.25 m/s; the braking term
-    stays under 5 % of the force term and the dynamic brakes under 30 % of their limit
+    stays under 5 % of the force term and at K_b 60 the dynamic brakes under 30 % of their limit
     (docs/heavyhaul.md, "The braking penalty, measured")."""
     from .conftest import STUDIES, load_yaml
     doc = load_yaml(STUDIES / "heavyhaul_brake_penalty.yaml")
@@ -286,4 +289,6 @@ def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     assert high.force_max_braking_kN < 0.5 * low.force_max_braking_kN
     assert abs(high.tracking_mean_mps - low.tracking_mean_mps) < 0.25
     assert max(low.force_max_kN, high.force_max_kN) < 1000 and high.over_ts == 0
-    assert high.J_braking < 0.05 * high.J_force and max(low.dynamic_brake_use_max, high.dynamic_brake_use_max) < 0.3
+    # the dynamic brakes stay far from their limit at K_b 60 (0.22 of it at most); at K_b 1, with the
+    # reference's limit lead, one sample or more reaches it (dynamic_brake_use_max 1.0)
+    assert high.J_braking < 0.05 * high.J_force and high.dynamic_brake_use_max < 0.3

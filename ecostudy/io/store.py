@@ -27,6 +27,15 @@ CREATE TABLE IF NOT EXISTS cases (
 
 
 COLUMNS = ["key", "study", "scenario", "labels", "status", "error", "summary", "seconds", "finished"]
+HELD: list[IO[str]] = []  # the lock files this process holds (a forked worker closes its copies: release_inherited)
+
+
+def release_inherited() -> None:
+    """In a forked worker: close its copies of the parent's lock files. A lock belongs to the open
+    file, which a fork shares; with the copies closed it goes with the parent, so the store of a run
+    killed with kill -9 is free at once, not only once its last worker has died too."""
+    while HELD:
+        HELD.pop().close()
 
 
 class Store:
@@ -97,6 +106,8 @@ class Store:
                 self.lock_path.unlink()
         except FileNotFoundError:
             pass
+        if self.lock in HELD:
+            HELD.remove(self.lock)
         self.lock.close()
 
 
@@ -113,6 +124,7 @@ def _locked(lock_path: Path, store_path: Path, attempts: int = 5) -> IO[str]:
                                      "finish, or give another --out"))
         try:
             if os.stat(lock_path).st_ino == os.fstat(lock.fileno()).st_ino:
+                HELD.append(lock)
                 return lock
         except FileNotFoundError:
             pass

@@ -69,6 +69,7 @@ class Bar:
 
     def stage(self, name: str, total: Optional[float] = None, unit: str = "") -> None:
         log.debug("%s: %s", self.label, name)
+        self.bar.refresh()  # the stage ending is drawn as it ended (its last count), however fast it went
         self.bar.remove_task(self.task)
         self.total, self.unit = total, unit
         self.task = self.bar.add_task(f"{self.label}: {name}", total=total, count=self._count(0), detail="",

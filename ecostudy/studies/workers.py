@@ -4,6 +4,7 @@ import os
 from concurrent.futures import ProcessPoolExecutor
 
 from ecostudy.core.deadline import die_with_parent
+from ecostudy.io.store import release_inherited
 
 
 def every_core(workers):
@@ -15,9 +16,15 @@ def every_core(workers):
 
 
 def worker_pool(workers):
-    """A forked process pool (workers inherit the loaded modules) whose workers die with the parent."""
+    """A forked process pool (workers inherit the loaded modules) whose workers die with the parent
+    and hold none of its store locks."""
     return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
-                               initializer=die_with_parent)
+                               initializer=_worker_start)
+
+
+def _worker_start():
+    die_with_parent()
+    release_inherited()
 
 
 def ticker(progress, total):
