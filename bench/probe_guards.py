@@ -11,7 +11,6 @@ are written to a temporary folder, kept apart from the project's own files as a 
 """
 import argparse
 import json
-import math
 import os
 import re
 import subprocess
