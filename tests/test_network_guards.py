@@ -7,6 +7,8 @@ import pytest
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.network import fleet, legs, scoring
 from ecostudy.network.strategies import guard_counts
+from ecostudy.ocp import timedomain
+from pyomo.environ import value as pyo_value
 
 from .test_network import SUPPLY, TRACKS, TRAINS
 
@@ -88,3 +90,21 @@ def test_the_guide_s_new_strategy_runs_with_one_registration_line(one_leg):
         assert result["totals"]["status"] == "ok" and result["totals"]["all_verified"]
     finally:
         STRATEGIES._specs.pop("lazy", None)
+
+
+def test_a_cold_leg_with_the_one_handle_rows_is_solved_relaxed_first_and_ends_at_their_own_bound(one_leg):
+    f, leg, cold = one_leg
+    steps = f.steps
+    weights, allowance = np.full(steps, 0.34), np.full(steps, 500.0)  # rule 7.7's discount with others' power to take
+    task = (leg, "T1 leg 1", f.dt, None, None, False, weights, allowance, None, None)
+    m, b = legs.leg_model(task)
+    assert len(b.one_handle) > 0  # traction discounted: traction while braking would pay
+    m, b, outcome = legs._relaxed_first(task)
+    assert outcome.usable
+    product = [pyo_value(b.ft[j]) * pyo_value(b.fb[j]) for j in b.one_handle]
+    assert max(product) <= timedomain.ONE_HANDLE * (1 + 1e-6) + 1e-9  # the tight bound is the one solved last
+    assert all(row.upper == timedomain.ONE_HANDLE for row in b.one_handle.values())
+    # without a discount the leg has no such rows and is solved in one go
+    plain = (leg, "T1 leg 1", f.dt, None, None, False, None, None, None, None)
+    m0, b0 = legs.leg_model(plain)
+    assert not timedomain.relax_one_handle(b0, 1.0)

@@ -178,14 +178,44 @@ def _restart(task):
     return task[:4] + (None, False) + task[6:]
 
 
+RELAXED_ONE_HANDLE = 1.0  # [kN^2] the one-handle bound of a cold leg's first solve (:func:`_relaxed_first`)
+
+
+def _relaxed_first(task):
+    """(model, leg block, outcome) of a cold leg's solve: where the leg holds the one-handle
+    complementarity, first with its rows relaxed to F_T F_B <= :data:`RELAXED_ONE_HANDLE`
+    (Scholtes' regularisation), then with their own bound from there (near that start); else, or
+    where that is not usable, in one go from the task's start. Measured on the 3-train metro
+    study's three hardest cold legs (rule 7.7, T3's second leg): 1167 / 1031 / 935 Ipopt iterations
+    in one go, 283 + 142 / 367 + 71 / 419 + 89 relaxed first (2.3x less CPU), at costs 85 / 24 /
+    1.6 % lower (an interior point started at the tight bound is caught by one of the
+    complementarity's many local optima)."""
+    m, b = leg_model(task)
+    if timedomain.relax_one_handle(b, RELAXED_ONE_HANDLE):
+        first = session.solve(m, KKT)
+        timedomain.relax_one_handle(b)
+        if first.usable:
+            outcome = session.solve(m, {**NEAR_START, **KKT})
+            if outcome.usable:
+                outcome.iterations += first.iterations
+                outcome.seconds += first.seconds
+                outcome.nl_seconds += first.nl_seconds
+                return m, b, outcome
+        m, b = leg_model(task)
+    return m, b, session.solve(m, KKT)
+
+
 def _solve(task):
     """(LegRun, outcome, cost) of one solve of a task: warm from its guess near the start, else
     cold; a warm solve that fails is tried again with Ipopt's defaults."""
     label, warm = task[1], task[5]
     tries = ({**NEAR_START, **KKT}, KKT) if warm else (KKT,)
     for n, options in enumerate(tries, 1):
-        m, b = leg_model(task)
-        outcome = session.solve(m, options)
+        if warm:
+            m, b = leg_model(task)
+            outcome = session.solve(m, options)
+        else:
+            m, b, outcome = _relaxed_first(task)
         if outcome.usable:
             return timedomain.leg_arrays(b), outcome, float(pyo.value(m.objective))
         if n == len(tries):

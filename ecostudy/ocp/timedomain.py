@@ -105,6 +105,20 @@ def limit_profile(case: Case, ramp: float, dt: float = 0.0) -> tuple[FloatArray,
     return x_out[keep], v_out[keep]
 
 
+ONE_HANDLE = 1e-3  # [kN^2] F_T F_B at most this: traction and braking never together (a complementarity)
+
+
+def relax_one_handle(b: Model, bound: float = ONE_HANDLE) -> bool:
+    """Set the bound of a leg's one-handle rows (:func:`add_leg`) to ``bound`` [kN^2]; False where
+    the leg has none. A larger bound relaxes the complementarity (Scholtes' regularisation)."""
+    rows = getattr(b, "one_handle", None)
+    if rows is None or not len(rows):
+        return False
+    for j, row in rows.items():
+        row.set_value(b.ft[j] * b.fb[j] <= bound)
+    return True
+
+
 @space.gc_paused
 def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | FloatArray] | None = None,
             width: float = 2.0, ramp: float = 20.0, limit_margin: float = 0.1,
@@ -158,7 +172,7 @@ def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | Flo
     # both cannot pay (the caller's ``one_handle`` mask) the constraint, a complementarity, is left out
     held = np.broadcast_to(np.asarray(one_handle, bool), (n,))
     if held.any():
-        b.one_handle = pyo.Constraint([j for j in range(n) if held[j]], rule=lambda b, j: b.ft[j] * b.fb[j] <= 1e-3)
+        b.one_handle = pyo.Constraint([j for j in range(n) if held[j]], rule=lambda b, j: b.ft[j] * b.fb[j] <= ONE_HANDLE)
     b.kinematics = pyo.Constraint(b.I, rule=kinematics)
     b.dynamics = pyo.Constraint(b.I, rule=dynamics)
     b.limit = pyo.Constraint(pyo.RangeSet(1, n - 1), rule=limit)
