@@ -27,7 +27,7 @@ from ecostudy.analysis.single import solve_run  # noqa: E402
 STAGES = ["load", "grid", "build", "nl_write", "solve", "verify", "write"]
 PARAMS = {"points": 1000, "track": str(ROOT / "tracks/amsterdam_rokin_centraal.yaml"),
           "train": str(ROOT / "trains/amsterdam_metro.yaml"), "from_stop": "Rokin", "to_stop": "Centraal",
-          "time": 76.0}
+          "time": 76.0, "write": True}
 
 
 def one_run(p, objective):
@@ -38,7 +38,8 @@ def one_run(p, objective):
     timing = Timing() if objective == "time" else Timing(running_time=p["time"])
     r = solve_run(track, train, p["from_stop"], p["to_stop"], timing, objective=objective, points=p["points"])
     with tempfile.TemporaryDirectory() as d, harness.stage() as write:
-        write_run(r, d)
+        if p["write"]:
+            write_run(r, d)
     res = r.summary
     stages = {k: v for k, v in r.stages.items() if k in STAGES}
     return {"stages": dict(stages, load=load.seconds, write=write.seconds), "iterations": res["solver"]["iterations"],
@@ -65,7 +66,7 @@ def main():
     p.add_argument("--cli-points", type=int, nargs="*", default=[1000],
                    help="also time the whole `ecostudy solve` command (new process) at these K")
     args = p.parse_args()
-    params = {k: getattr(args, k) for k in PARAMS if k != "points"}
+    params = {k: getattr(args, k) for k in PARAMS if k not in ("points", "write")}
 
     lines = [harness.command(__file__), ""]
     energies = {}

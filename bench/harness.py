@@ -312,7 +312,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     for script, reason in failed.items():
         print(f"bench/{script}.py: not loaded ({reason})", file=sys.stderr)
     if args.command == "list":
-        rows = [{"case": n, "parameters": ", ".join(f"{k}={v}" for k, v in CASES[n].params.items()),
+        rows = [{"case": n, "parameters": ", ".join(f"{k}={str(v).replace(f'{ROOT}/', '')}"
+                                                    for k, v in CASES[n].params.items()),
                  "reference": CASES[n].reference or "", "measures": CASES[n].doc} for n in chosen(args.patterns)]
         print(markdown(rows, ["case", "parameters", "reference", "measures"]))
         return 0
