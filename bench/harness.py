@@ -180,12 +180,12 @@ def cast(value: Any, like: Any) -> Any:
 
 
 def measure(names: Sequence[str], repeat: int = 1, overrides: Mapping[str, Any] | None = None,
-            errors: str = "raise") -> dict[str, Samples]:
-    """Each named case (and the references they name) set up once, then ``repeat`` rounds of
-    one timed call each, alternating the cases; name -> samples. ``errors``: ``raise`` (a script's
-    table needs every sample) or ``report`` (a failed sample says why; the others go on)."""
+            errors: str = "raise", references: bool = True) -> dict[str, Samples]:
+    """Each named case (and, with ``references``, the references they name) set up once, then
+    ``repeat`` rounds of one timed call each, alternating the cases; name -> samples. ``errors``:
+    ``raise`` (a script's table needs every sample) or ``report`` (a failed sample says why)."""
     overrides = overrides or {}
-    order = list(dict.fromkeys(n for name in names for n in (name, CASES[name].reference) if n))
+    order = list(dict.fromkeys(n for name in names for n in (name, CASES[name].reference if references else None) if n))
     states, results = {}, {}
     for name in order:
         params = parameters(CASES[name], overrides)
