@@ -89,7 +89,7 @@ def every_cut(objective):
 @harness.case("size.cuts", setup=lambda p: (cases(p["points"])[p["case"]], p),
               params={"case": "metro", "points": 1000, "cuts": 99})
 def with_cuts(state):
-    """One build and solve of ``case`` with its first ``cuts`` lean cuts: sizes, iterations, CPU per iteration."""
+    """One build and solve of ``case`` with its first ``cuts`` lean cuts (99: all): sizes, iterations, CPU per iteration."""
     (case, running_time, objective), p = state
     solver.configure()
     r = measure(case, running_time, objective, tuple(every_cut(objective)[:p["cuts"]]))
