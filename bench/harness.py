@@ -22,6 +22,7 @@ The scripts ``bench/bench_*.py`` keep their own command lines; they register the
 time, summarise and print through this module.
 """
 import argparse
+import csv
 import fnmatch
 import importlib
 import json
@@ -285,7 +286,6 @@ def chosen(patterns: Sequence[str]) -> list[str]:
 def write(rows: Sequence[Mapping[str, Any]], csv_path: str | None, json_path: str | None) -> None:
     """The rows for machines: CSV (every column) and JSON (a list of objects)."""
     if csv_path:
-        import csv
         columns = list(dict.fromkeys(k for r in rows for k in r))
         with open(csv_path, "w", newline="") as f:
             writer = csv.DictWriter(f, columns)
@@ -293,6 +293,25 @@ def write(rows: Sequence[Mapping[str, Any]], csv_path: str | None, json_path: st
             writer.writerows(rows)
     if json_path:
         Path(json_path).write_text(json.dumps(list(rows), indent=1, default=str) + "\n")
+
+
+def refused(args: argparse.Namespace, names: Sequence[str], overrides: Mapping[str, str]) -> str | None:
+    """Why ``run`` cannot start (checked before anything is computed), or None."""
+    for name in args.names:
+        if not chosen([name]):
+            return f"{name}: no such case (see `python -m bench list`)"
+    for text in args.set:
+        if "=" not in text:
+            return f"--set {text}: not KEY=VALUE"
+    for key, value in overrides.items():
+        if not any(key in CASES[n].params for n in names):
+            return f"--set {key}: no chosen case has this parameter"
+        for name in names:
+            try:
+                parameters(CASES[name], {key: value})
+            except ValueError:
+                return f"--set {key}={value}: not of type {type(CASES[name].params[key]).__name__} ({name})"
+    return None if args.repeat >= 1 else f"--repeat {args.repeat}: must be at least 1"
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -317,16 +336,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                  "reference": CASES[n].reference or "", "measures": CASES[n].doc} for n in chosen(args.patterns)]
         print(markdown(rows, ["case", "parameters", "reference", "measures"]))
         return 0
-    names = chosen(args.names)
-    bad = [n for n in args.names if not chosen([n])] + [s for s in args.set if "=" not in s]
-    if bad or args.repeat < 1:
-        print(f"python -m bench run: {', '.join(bad) or '--repeat'}: " + (
-            "no such case (see `python -m bench list`) or not KEY=VALUE" if bad else "must be at least 1"), file=sys.stderr)
-        return 2
-    overrides = dict(s.split("=", 1) for s in args.set)
-    unknown = [k for k in overrides if not any(k in CASES[n].params for n in names)]
-    if unknown:
-        print(f"python -m bench run: --set {unknown[0]}: no chosen case has this parameter", file=sys.stderr)
+    names, overrides = chosen(args.names), dict(s.split("=", 1) for s in args.set if "=" in s)
+    problem = refused(args, names, overrides)
+    if problem:
+        print(f"python -m bench run: {problem}", file=sys.stderr)
         return 2
     print(command("-m bench", argv) + "\n")
     rows = summarise(measure(names, args.repeat, overrides, errors="report"))

@@ -78,6 +78,9 @@ def test_bad_names_and_parameters_are_refused_before_computing(capsys):
     assert "no_such.case: no such case" in capsys.readouterr().err
     assert harness.main(["run", "solve.energy", "--set", "pointz=60"]) == 2
     assert "--set pointz: no chosen case has this parameter" in capsys.readouterr().err
+    assert harness.main(["run", "solve.energy", "--set", "points=many"]) == 2
+    assert "--set points=many: not of type int (solve.energy)" in capsys.readouterr().err
+    assert harness.main(["run", "solve.energy", "--repeat", "0"]) == 2
 
 
 def test_a_failing_case_is_reported_failed_and_the_command_exits_1(capsys):
