@@ -68,14 +68,18 @@ def sessions(tasks):
     return out
 
 
+def study_fleet(study):
+    """The fleet of a network study file."""
+    st = load_network_study(Path(study))
+    return fleet.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
+                      st.supply, st.points, st.buffer, supplement=st.supplement)
+
+
 @functools.lru_cache(maxsize=2)
 def prepared(study, rule, n):
     """(session, start point, base options) of the first ``n`` legs of ``rule``'s first round (shared by
     the option sets: each NLP written once)."""
-    st = load_network_study(Path(study))
-    fl = fleet.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
-                    st.supply, st.points, st.buffer, supplement=st.supplement)
-    return sessions(round_tasks(fl, rule)[:n])
+    return sessions(round_tasks(study_fleet(study), rule)[:n])
 
 
 def setup(p):

@@ -16,8 +16,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
-from ecostudy.io.loaders import load_network_study  # noqa: E402
-from ecostudy.network import fleet, legs, rules  # noqa: E402
+from bench.bench_leg_options import study_fleet  # noqa: E402
+from ecostudy.network import legs, rules  # noqa: E402
 from ecostudy.ocp import session  # noqa: E402
 
 PAYS = legs.pumping_pays
@@ -28,6 +28,15 @@ def everywhere(train, weights=None, allowance=None, credit=None):
     return weights is not None
 
 
+@harness.case("rules.supervised", setup=lambda p: (study_fleet(p["study"]), p),
+              params={"study": str(ROOT / "studies/network_metro_3trains.yaml"), "rule": "receptivity"})
+def supervised(state):
+    """A supervisor rule's rounds (Farooqi 2018 Ch. 7) from the independent runs: rounds, substation energy."""
+    fl, p = state
+    _, history, _ = rules.supervised(fl, p["rule"], rules.independent(fl))
+    return {"rounds": len(history), "substation_kWh": history[-1]}
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("study")
@@ -35,9 +44,7 @@ def main():
     p.add_argument("--variants", nargs="+", default=["everywhere", "pays"], choices=["everywhere", "pays"])
     args = p.parse_args()
     print(harness.command(__file__) + "\n")
-    st = load_network_study(Path(args.study))
-    fl = fleet.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
-                    st.supply, st.points, st.buffer, supplement=st.supplement)
+    fl = study_fleet(args.study)
     counts = []
     solve = session.Session.solve
 
