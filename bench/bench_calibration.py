@@ -12,7 +12,6 @@ power noise; one calibration per log from the train file's values. Prints one ta
 """
 import argparse
 import sys
-import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -21,6 +20,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.calibration.fit import DEFAULT_FIT, priors  # noqa: E402
 from ecostudy.calibration.generate import follow_work, generate_log, true_train  # noqa: E402
 from ecostudy.calibration.validate import validate_log  # noqa: E402
@@ -45,15 +45,28 @@ def as_log(frame, name):
     return parse_log(text, f"{name}.csv", name)
 
 
-def one_log(seed):
-    """(true parameters, the calibration's table as records, its status, innovation drift, fit seconds)."""
+def drawn_log(seed):
+    """(track, file train, true train, the generated log) of one seed (untimed)."""
     track, train = load_track(TRACK), load_train(TRAIN)
     truth = drawn_truth(train, seed)
     frame, _ = generate_log(track, truth, STOPS, truth, seed=seed)
-    start = time.perf_counter()
-    result = calibrate_logs([as_log(frame, f"log{seed}")], track, train, DEFAULT_FIT)
-    return (priors(truth), result.table.to_dict("records"), result.status, result.quality["structure"],
-            time.perf_counter() - start)
+    return track, train, truth, as_log(frame, f"log{seed}")
+
+
+@harness.case("calibration.log", params={"seed": 0}, setup=lambda p: drawn_log(p["seed"]))
+def calibrate_one(state):
+    """One calibration of a generated log (four runs, 10 Hz, noisy) from the train file's values."""
+    track, train, _, log = state
+    result = calibrate_logs([log], track, train, DEFAULT_FIT)
+    return {"status": str(result.status), "drift": result.quality["structure"],
+            "identifiable": int(result.table["identifiable"].sum())}
+
+
+def one_log(seed):
+    """(true parameters, the calibration's table as records, its status, innovation drift, fit seconds)."""
+    track, train, truth, log = drawn_log(seed)
+    result, _, seconds = harness.timed(lambda: calibrate_logs([log], track, train, DEFAULT_FIT))
+    return priors(truth), result.table.to_dict("records"), result.status, result.quality["structure"], seconds
 
 
 def coverage(count, workers):
@@ -142,11 +155,10 @@ def main():
     track, train = load_track(TRACK), load_train(TRAIN)
     if args.example:
         return write_examples(args.example, track, train)
-    print(f"command: python bench/bench_calibration.py {' '.join(sys.argv[1:])}")
+    print(harness.command(__file__))
     if args.logs:
-        start = time.perf_counter()
-        coverage(args.logs, args.workers)
-        print(f"coverage wall time {time.perf_counter() - start:.0f} s with {args.workers} worker(s)")
+        _, _, wall = harness.timed(lambda: coverage(args.logs, args.workers))
+        print(f"coverage wall time {wall:.0f} s with {args.workers} worker(s)")
     identifiability(track, train)
     if args.validate:
         validate_check(args.validate_logs, track, train)

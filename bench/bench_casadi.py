@@ -20,10 +20,7 @@ CasADi's bundled Ipopt (3.14, MUMPS), timed in the same process. Medians of ``--
 CasADi comes from PyPI (``pip install -e '.[bench]'``); it is a benchmark reference, not a dependency.
 """
 import argparse
-import shlex
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import casadi as ca
@@ -32,38 +29,48 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.core.kinematics import interval_davis, interval_grade_force  # noqa: E402
 from ecostudy.core.physics import interval_resistance, line_energy, smooth_table  # noqa: E402
 from ecostudy.core.units import to_kwh  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp import problem, session, space  # noqa: E402
 
-
-def cases(ttobench):
-    out = {"amsterdam": (load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml"),
-                         load_train(ROOT / "trains/amsterdam_metro.yaml"), "Rokin", "Centraal", 76.0, "energy")}
-    if ttobench:
-        lib = Path(ttobench)
-        track = load_track(lib / "tracks" / "00_var_speed_limit_100.json")
-        out["intercity"] = (track, load_train(lib / "trains" / "NL_Intercity_VIRM6.json"),
-                            *list(track.stops)[::len(track.stops) - 1], 1541.0, "net_energy")
-    return out
+PARAMS = {"case": "amsterdam", "points": 1000, "ttobench": "/work/data/ttobench"}
 
 
-def ecostudy_run(case, running_time, objective):
-    """(seconds build + NL write + Ipopt, Outcome, objective value [J], variables, constraints)."""
+def load_case(name, ttobench):
+    """(track, train, from, to, running time [s], objective) of a named case."""
+    if name == "amsterdam":
+        return (load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml"),
+                load_train(ROOT / "trains/amsterdam_metro.yaml"), "Rokin", "Centraal", 76.0, "energy")
+    lib = Path(ttobench)
+    track = load_track(lib / "tracks" / "00_var_speed_limit_100.json")
+    return (track, load_train(lib / "trains" / "NL_Intercity_VIRM6.json"),
+            *list(track.stops)[::len(track.stops) - 1], 1541.0, "net_energy")
+
+
+def setup(p):
+    """(prepared case, running time, objective, start point): the same for both sides, untimed."""
+    track, train, a, b, running_time, objective = load_case(p["case"], p["ttobench"])
+    case = problem.prepare(track, train, a, b, p["points"])
+    return case, running_time, objective, problem.capped_guess(case, running_time)
+
+
+@harness.case("casadi.ecostudy", params=PARAMS, setup=setup, reference="casadi.casadi")
+def ecostudy_run(state):
+    """ecostudy's space NLP without its lean cuts: build + NL write + Ipopt (PyNumero), in process."""
+    case, running_time, objective, guess = state
     stages = {}
-    guess = problem.capped_guess(case, running_time)
-    t0 = time.perf_counter()
     with problem.stage(stages, "build"):  # the full form, without the lean cuts, as mirrored below
         m = space.build_model(case.segment, case.train, case.nodes, case.limits, guess, objective=objective,
                               running_time=running_time, cuts=(),
                               time_ref=max(problem.kinematics.running_time(guess[0], case.nodes), 1.0))
     s = session.Session(m)
     outcome = s.solve()
-    seconds = time.perf_counter() - t0
-    value = float(m.objective.expr()) * m.energy_ref
-    return seconds, outcome, value, s.nlp.n_primals(), s.nlp.n_constraints(), outcome.seconds
+    return {"variables": s.nlp.n_primals(), "constraints": s.nlp.n_constraints(), "iterations": outcome.iterations,
+            "ipopt": outcome.status, "ipopt_s": outcome.seconds,
+            "energy_kWh": to_kwh(float(m.objective.expr()) * m.energy_ref)}
 
 
 def objective_expr(objective, train, ft, fr, va, vb, dsd):
@@ -74,14 +81,13 @@ def objective_expr(objective, train, ft, fr, va, vb, dsd):
     return ca.sum1(line_energy(fs * ft, fs * fr, 0.5 * (va + vb), dsd, train.eta_traction, train.eta_regeneration))
 
 
-def casadi_run(case, running_time, objective):
-    """The same NLP written with CasADi SX vectors: (seconds, status, iterations, objective [J], n, m)."""
-    t0 = time.perf_counter()
+def casadi_nlp(state):
+    """The same NLP written with CasADi SX vectors: (nlpsol, its arguments, energy_ref, n, m)."""
+    case, running_time, objective, (v0, dt0, ft0, fb0) = state
     train, segment, nodes, limits = case.train, case.segment, case.nodes, case.limits
     n = len(nodes) - 1
     fs = space.FORCE_SCALE
     ds = np.diff(nodes)
-    v0, dt0, ft0, fb0 = problem.capped_guess(case, running_time)
     regen = objective == "net_energy" and train.regeneration is not None
     v, dt, ft, fb = ca.SX.sym("v", n + 1), ca.SX.sym("dt", n), ca.SX.sym("ft", n), ca.SX.sym("fb", n)
     fr = ca.SX.sym("fr", n) if regen else ca.SX.zeros(n)
@@ -137,12 +143,19 @@ def casadi_run(case, running_time, objective):
             "print_time": False}
     opts["ipopt"]["sb"] = "yes"
     solver = ca.nlpsol("eetc", "ipopt", {"x": x, "f": f, "g": ca.vertcat(*g)}, opts)
-    built = time.perf_counter() - t0
-    sol = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
-    seconds = time.perf_counter() - t0
+    arguments = dict(x0=x0, lbx=lbx, ubx=ubx, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
+    return solver, arguments, energy_ref, x.shape[0], sum(e.shape[0] for e in g)
+
+
+@harness.case("casadi.casadi", params=PARAMS, setup=setup)
+def casadi_run(state):
+    """The NLP of casadi.ecostudy in CasADi: graph + nlpsol + CasADi's bundled Ipopt (3.14), in process."""
+    solver, arguments, energy_ref, n, m = casadi_nlp(state)
+    with harness.stage() as solve:
+        sol = solver(**arguments)
     stats = solver.stats()
-    return (seconds, stats["return_status"], stats["iter_count"], float(sol["f"]) * energy_ref,
-            x.shape[0], sum(e.shape[0] for e in g), seconds - built)
+    return {"variables": n, "constraints": m, "iterations": stats["iter_count"], "ipopt": stats["return_status"],
+            "ipopt_s": solve.seconds, "energy_kWh": to_kwh(float(sol["f"]) * energy_ref)}
 
 
 def main():
@@ -152,31 +165,32 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--case", nargs="+", default=["amsterdam", "intercity"])
     args = ap.parse_args()
-    print(f"`{shlex.join(['python', 'bench/bench_casadi.py'] + sys.argv[1:])}`\n")
-    print("| case | K | variables | constraints | ecostudy s | iterations | CasADi s | iterations | ratio "
-          "| Ipopt alone s (ecostudy / CasADi) | ecostudy kWh | CasADi kWh | difference % |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    all_cases = cases(args.ttobench)
+    print(harness.command(__file__) + "\n")
+    table = harness.Table(["case", "K", "variables", "constraints", "ecostudy s", "iterations", "CasADi s", "iterations",
+                           "ratio", "Ipopt alone s (ecostudy / CasADi)", "ecostudy kWh", "CasADi kWh", "difference %"])
     base = {}
     for name in args.case:
-        track, train, a, b, running_time, objective = all_cases[name]
+        if name == "intercity" and not args.ttobench:
+            continue
         for points in args.points:
-            case = problem.prepare(track, train, a, b, points)
-            eco, cas = [], []
-            for _ in range(args.repeat):
-                eco.append(ecostudy_run(case, running_time, objective))
-                cas.append(casadi_run(case, running_time, objective))
-            te, tc = statistics.median(r[0] for r in eco), statistics.median(r[0] for r in cas)
+            runs = harness.measure(["casadi.ecostudy"], args.repeat,
+                                   {"case": name, "points": points, "ttobench": args.ttobench})
+            eco, cas = runs["casadi.ecostudy"], runs["casadi.casadi"]
+            te, tc = eco.median("wall_s"), cas.median("wall_s")
             e, c = eco[-1], cas[-1]
             base.setdefault(name, []).append((points, te, tc))
-            print(f"| {name} | {points} | {e[3]} / {c[4]} | {e[4]} / {c[5]} | {te:.2f} | {e[1].iterations} ({e[1].status}) | "
-                  f"{tc:.2f} | {c[2]} ({c[1]}) | {te / tc:.2f} | {statistics.median(r[5] for r in eco):.2f} / {statistics.median(r[6] for r in cas):.2f} | {to_kwh(e[2]):.4f} | {to_kwh(c[3]):.4f} | "
-                  f"{100 * (e[2] - c[3]) / abs(c[3]):+.4f} |", flush=True)
-    print("\n| case | K | ecostudy growth | CasADi growth |\n|---|---|---|---|")
+            table.add(name, points, f"{e['variables']} / {c['variables']}", f"{e['constraints']} / {c['constraints']}",
+                      f"{te:.2f}", f"{e['iterations']} ({e['ipopt']})", f"{tc:.2f}", f"{c['iterations']} ({c['ipopt']})",
+                      f"{te / tc:.2f}", f"{eco.median('ipopt_s'):.2f} / {cas.median('ipopt_s'):.2f}",
+                      f"{e['energy_kWh']:.4f}", f"{c['energy_kWh']:.4f}",
+                      f"{100 * (e['energy_kWh'] - c['energy_kWh']) / abs(c['energy_kWh']):+.4f}")
+    print()
+    growth = harness.Table(["case", "K", "ecostudy growth", "CasADi growth"])
     for name, rows in base.items():
         k0, e0, c0 = rows[0]
         for k, e, c in rows[1:]:
-            print(f"| {name} | {k0} -> {k} | {e / e0:.2f}x | {c / c0:.2f}x |")
+            growth.add(name, f"{k0} -> {k}", f"{e / e0:.2f}x", f"{c / c0:.2f}x")
+
 
 if __name__ == "__main__":
     main()

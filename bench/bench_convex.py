@@ -12,9 +12,8 @@ Part 2: the Fig. 9.2 trip in closed loop (10 Hz, plant DOP853) at each K: solve 
 (mean, p95, max), steps over the 100 ms budget, arrival, energy, stop error.
 """
 import argparse
-import shlex
+import functools
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +26,7 @@ import clarabel  # noqa: E402
 import cyipopt  # noqa: E402
 import ecos  # noqa: E402
 
+from bench import harness  # noqa: E402
 from ecostudy.control.controllers import Convex  # noqa: E402
 from ecostudy.control.loop import run_loop  # noqa: E402
 from ecostudy.core.grid import make_segment  # noqa: E402
@@ -110,54 +110,72 @@ class IpoptSocp:
         return z, info["status"]
 
 
+@functools.lru_cache(maxsize=1)
+def program():
+    """The Fig. 9.2 SOCP from a stand at K = 500, assembled once: (segment, train, weights, nodes, A, b, q, cones, index)."""
+    train = load_train(ROOT / "trains/thesis001_commuter.yaml")
+    segment = make_segment(load_track(ROOT / "tracks/thesis001_advanced_1km.yaml"), train, "A", "B")
+    weights = ConvexWeights(time=10.0, energy=1.0)
+    prog = ConvexProgram(segment, train, trapezoid_grid(segment, 500), weights)
+    x = prog.grid_from(0.0, 0.05)
+    A, b, q, cones, index = prog.assemble(x, State(), (0.0, 200.0), 0.0, 1.0, None)
+    return segment, train, weights, len(x), A, b, q, cones, index
+
+
+def run_clarabel(A, b, q, cones, refine):
+    settings = clarabel.DefaultSettings()
+    settings.verbose, settings.iterative_refinement_enable = False, refine
+    sol = clarabel.DefaultSolver(sparse.csc_matrix((A.shape[1], A.shape[1])), q, A, b, cones, settings).solve()
+    return np.asarray(sol.x), sol.iterations
+
+
+SOLVERS = {"clarabel": ("Clarabel (ecostudy's settings)", lambda A, b, q, cones: run_clarabel(A, b, q, cones, False)),
+           "clarabel_refine": ("Clarabel (iterative refinement on)", lambda A, b, q, cones: run_clarabel(A, b, q, cones, True)),
+           "ecos": ("ECOS", solve_ecos),
+           "ipopt": ("Ipopt 3.11 (cyipopt, rho s >= 1)", lambda A, b, q, cones: IpoptSocp(A, b, q, cones).solve())}
+
+
+def socp_case(key):
+    """The harness case of one solver on the Fig. 9.2 SOCP: iterations, arrival, relaxation gap, objective."""
+    def run(_):
+        *_, A, b, q, cones, index = program()
+        z, iters = SOLVERS[key][1](A, b, q, cones)
+        v, rho, t = z[index["v"]], z[index["rho"]], z[index["t"]]
+        return {"iterations": str(iters), "arrival_s": float(t[-1]), "objective": float(q @ z),
+                "gap": float(np.max(np.abs(rho * 0.5 * (v[:-1] + v[1:]) - 1.0)))}
+    return harness.register(f"convex.{key}", run, reference=None if key == "clarabel" else "convex.clarabel",
+                            doc=f"Yazhemsky 2017's SOCP (Fig. 9.2, K = 500) solved once by {SOLVERS[key][0]}")
+
+
+for _key in SOLVERS:
+    socp_case(_key)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--repeat", type=int, default=5)
     p.add_argument("--loop-points", type=int, nargs="*", default=[250, 500, 1000])
     args = p.parse_args()
-    print(f"`python bench/bench_convex.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
-    train = load_train(ROOT / "trains/thesis001_commuter.yaml")
-    segment = make_segment(load_track(ROOT / "tracks/thesis001_advanced_1km.yaml"), train, "A", "B")
-    weights = ConvexWeights(time=10.0, energy=1.0)
-    program = ConvexProgram(segment, train, trapezoid_grid(segment, 500), weights)
-    x = program.grid_from(0.0, 0.05)
-    A, b, q, cones, index = program.assemble(x, State(), (0.0, 200.0), 0.0, 1.0, None)
-    P = sparse.csc_matrix((A.shape[1], A.shape[1]))
-    ipopt = IpoptSocp(A, b, q, cones)
-
-    def run_clarabel(refine):
-        settings = clarabel.DefaultSettings()
-        settings.verbose, settings.iterative_refinement_enable = False, refine
-        sol = clarabel.DefaultSolver(P, q, A, b, cones, settings).solve()
-        return np.asarray(sol.x), sol.iterations
-
-    solvers = {"Clarabel (ecostudy's settings)": lambda: run_clarabel(False),
-               "Clarabel (iterative refinement on)": lambda: run_clarabel(True),
-               "ECOS": lambda: solve_ecos(A, b, q, cones),
-               "Ipopt 3.11 (cyipopt, rho s >= 1)": lambda: ipopt.solve()}
-    print(f"K = {len(x)} nodes: {A.shape[1]} variables, {A.shape[0]} rows, {A.nnz} nonzeros\n")
-    print("| solver | median wall [ms] | iterations / status | arrival [s] | max abs(rho s - 1) | objective - Clarabel's |")
-    print("|---|---|---|---|---|---|")
-    reference = None
-    for name, solve in solvers.items():
-        times = []
-        for _ in range(args.repeat):
-            t0 = time.perf_counter()
-            z, iters = solve()
-            times.append(time.perf_counter() - t0)
-        v, rho, t = z[index["v"]], z[index["rho"]], z[index["t"]]
-        gap = np.max(np.abs(rho * 0.5 * (v[:-1] + v[1:]) - 1.0))
-        obj = float(q @ z)
-        reference = obj if reference is None else reference
-        print(f"| {name} | {1e3 * np.median(times):.1f} | {iters} | {t[-1]:.3f} | {gap:.1e} | {obj - reference:+.1e} |")
-    print("\n| K | steps | solve mean [ms] | p95 [ms] | max [ms] | steps over 100 ms | arrival [s] | energy [J/kg] | stop error [m] |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(harness.command(__file__) + "\n")
+    segment, train, weights, nodes, A, *_ = program()
+    print(f"K = {nodes} nodes: {A.shape[1]} variables, {A.shape[0]} rows, {A.nnz} nonzeros\n")
+    runs = harness.measure([f"convex.{key}" for key in SOLVERS], args.repeat)
+    table = harness.Table(["solver", "median wall [ms]", "iterations / status", "arrival [s]", "max abs(rho s - 1)",
+                           "objective - Clarabel's"])
+    reference = runs["convex.clarabel"].last("objective")
+    for key, (name, _) in SOLVERS.items():
+        r = runs[f"convex.{key}"]
+        table.add(name, f"{1e3 * r.median('wall_s'):.1f}", r.last("iterations"), f"{r.last('arrival_s'):.3f}",
+                  f"{r.last('gap'):.1e}", f"{r.last('objective') - reference:+.1e}")
+    print()
+    table = harness.Table(["K", "steps", "solve mean [ms]", "p95 [ms]", "max [ms]", "steps over 100 ms", "arrival [s]",
+                           "energy [J/kg]", "stop error [m]"])
     for k in args.loop_points:
         controller = Convex(ConvexProgram(segment, train, trapezoid_grid(segment, k), weights), (0.0, 200.0))
         result = run_loop(Plant(segment, train), controller, 0.1, plant_step=0.1)
         s = 1e3 * np.array([x for x in controller.solve_seconds if x > 0])
-        print(f"| {k} | {s.size} | {s.mean():.1f} | {np.percentile(s, 95):.1f} | {s.max():.1f} | {int(np.sum(s > 100))} "
-              f"| {result.arrival_time_s:.2f} | {result.traction_work / train.mass:.2f} | {result.stop_error_m:+.3f} |")
+        table.add(k, s.size, f"{s.mean():.1f}", f"{np.percentile(s, 95):.1f}", f"{s.max():.1f}", int(np.sum(s > 100)),
+                  f"{result.arrival_time_s:.2f}", f"{result.traction_work / train.mass:.2f}", f"{result.stop_error_m:+.3f}")
 
 
 if __name__ == "__main__":

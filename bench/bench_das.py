@@ -7,21 +7,41 @@ bounds the grid error of the ATO reference), then `round`, `phases` and `minlp`,
 as a driver follows the advice. Wall time per method excludes the ATO solve it starts from.
 """
 import argparse
-import shlex
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.das.methods import das_run  # noqa: E402
-from ecostudy.core.types import Timing
+from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.analysis.single import solve_run  # noqa: E402
 
-CASES = {"Amsterdam metro 76 s": ("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal", 76.0),
+TRIPS = {"Amsterdam metro 76 s": ("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal", 76.0),
          "regional 80 s": ("regional_alstom", "regional_808m", "Origin", "Destination", 80.0)}
+
+
+def ato_run(p):
+    """The ATO optimum a DAS method starts from (untimed): Amsterdam metro, 76 s, K = ``points``."""
+    trn, trk, a, b, t = TRIPS["Amsterdam metro 76 s"]
+    return solve_run(load_track(ROOT / f"tracks/{trk}.yaml"), load_train(ROOT / f"trains/{trn}.yaml"), a, b,
+                     Timing(running_time=t), points=p["points"]), p
+
+
+def method_case(method):
+    def run(state):
+        ato, p = state
+        d = dict(das_run(ato, method, time_limit=p["time_limit"])[0])
+        d["das"] = d.pop("status")  # the method's own word ("re-simulated", ...); a failure stays the case's status
+        return {**d, **({"status": d["das"]} if d["das"].startswith("failed") else {})}
+    harness.register(f"das.{method}", run, params={"points": 1000, "time_limit": 60.0}, setup=ato_run,
+                     doc=f"Driver advice by `{method}` from the ATO optimum (Amsterdam metro, 76 s), re-simulated")
+
+
+for _method in ("round", "phases", "minlp"):
+    method_case(_method)
 
 
 def main():
@@ -29,39 +49,35 @@ def main():
     p.add_argument("--points", type=int, default=1000)
     p.add_argument("--time-limit", type=float, default=60.0)
     args = p.parse_args()
-    print(f"`python bench/bench_das.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
+    print(harness.command(__file__) + "\n")
     minlp_rows = []
-    for name, (trn, trk, a, b, t) in CASES.items():
+    for name, (trn, trk, a, b, t) in TRIPS.items():
         train, track = load_train(ROOT / f"trains/{trn}.yaml"), load_track(ROOT / f"tracks/{trk}.yaml")
-        t0 = time.perf_counter()
-        ato = solve_run(track, train, a, b, Timing(running_time=t), points=args.points)
-        t_ato = time.perf_counter() - t0
+        ato, _, t_ato = harness.timed(lambda: solve_run(track, train, a, b, Timing(running_time=t), points=args.points))
         fine = solve_run(track, train, a, b, Timing(running_time=t), points=4 * args.points)
         s = ato.summary
         print(f"**{name}**, K = {args.points}: ATO {s['traction_energy_kWh']:.4f} kWh ({t_ato:.2f} s, "
               f"regimes {s['regimes']['sequence']}); ATO at K = {4 * args.points}: "
               f"{fine.summary['traction_energy_kWh']:.4f} kWh; marginal dE/dT "
               f"{s['marginal_energy_kWh_per_s']:.4f} kWh/s\n")
-        print("| method | traction kWh | gap to ATO % | gap, lateness charged % | vs ATO 4K % | arrival error s "
-              "| stop error m | mode changes | wall s | status |\n|---|---|---|---|---|---|---|---|---|---|")
+        table = harness.Table(["method", "traction kWh", "gap to ATO %", "gap, lateness charged %", "vs ATO 4K %",
+                               "arrival error s", "stop error m", "mode changes", "wall s", "status"])
         for method in ("round", "phases", "minlp"):
-            t0 = time.perf_counter()
-            d = das_run(ato, method, time_limit=args.time_limit)[0]
-            wall = time.perf_counter() - t0
+            d, _, wall = harness.timed(lambda: das_run(ato, method, time_limit=args.time_limit)[0])
             vs_fine = 100 * (d["traction_energy_kWh"] / fine.summary["traction_energy_kWh"] - 1)
-            print(f"| {method} | {d['traction_energy_kWh']:.4f} | {d['gap_to_ato_pct']:+.3f} | "
-                  f"{d['gap_to_ato_on_time_pct']:+.3f} | {vs_fine:+.3f} | {d['arrival_error_s']:+.3f} | "
-                  f"{d['stop_error_m']:+.3f} | {d['mode_changes']} | {wall:.1f} | {d['status']} |")
+            table.add(method, f"{d['traction_energy_kWh']:.4f}", f"{d['gap_to_ato_pct']:+.3f}",
+                      f"{d['gap_to_ato_on_time_pct']:+.3f}", f"{vs_fine:+.3f}", f"{d['arrival_error_s']:+.3f}",
+                      f"{d['stop_error_m']:+.3f}", d["mode_changes"], f"{wall:.1f}", d["status"])
             if method == "minlp":
                 minlp_rows.append((name, d))
         print()
     print(f"MINLP search (MindtPy OA, HiGHS master, cyipopt subproblems, time limit {args.time_limit:.0f} s):\n")
-    print("| case | search s | OA iterations | best kWh | OA master bound kWh | gap % | note |\n|---|---|---|---|---|---|---|")
+    table = harness.Table(["case", "search s", "OA iterations", "best kWh", "OA master bound kWh", "gap %", "note"])
     for name, d in minlp_rows:
         bound = "-" if d["oa_master_bound_kWh"] is None else f"{d['oa_master_bound_kWh']:.4f}"
         gap = "-" if d["gap_pct"] is None else f"{d['gap_pct']:.2f}"
-        print(f"| {name} | {d['search_s']:.1f} | {d['oa_iterations']} | {d['traction_energy_kWh']:.4f} | {bound} | "
-              f"{gap} | {d['bound_note']} |")
+        table.add(name, f"{d['search_s']:.1f}", d["oa_iterations"], f"{d['traction_energy_kWh']:.4f}", bound, gap,
+                  d["bound_note"])
 
 
 if __name__ == "__main__":

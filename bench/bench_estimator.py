@@ -10,9 +10,7 @@ stop (5 km), the stop error, and the 95th percentile of the absolute errors over
 the same as the whole trip's: the trip is the same up to there), as tests/test_estimator.py's.
 """
 import argparse
-import shlex
 import sys
-import time
 from functools import partial
 from multiprocessing import Pool
 from pathlib import Path
@@ -22,10 +20,24 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.ocp.solver import configure  # noqa: E402
 from ecostudy.studies.estimator_trips import estimator_trip  # noqa: E402
 
 MARKS = (2000.0, 5000.0)
+
+
+def trip_setup(p):
+    configure()
+    return p
+
+
+@harness.case("estimator.trip", setup=trip_setup, params={"estimator": "state", "seed": 0, "points": 300, "until": 5000.0})
+def one_trip(p):
+    """One noisy trip with the estimator (Yazhemsky 2017): relative errors at 2 and 5 km, stop error."""
+    trip = estimator_trip(ROOT, p["seed"], choice=p["estimator"], points=p["points"], marks=MARKS, until=p["until"])
+    return {**{f"error_{m / 1e3:g}km_pct": 100 * trip.errors[m] for m in MARKS if m in trip.errors},
+            "stop_error_m": trip.stop_error_m}
 
 
 def main():
@@ -37,23 +49,26 @@ def main():
     p.add_argument("--first", type=int, default=0, help="the first seed")
     p.add_argument("--until", type=float, default=None, help="stop each trip at this position [m]")
     args = p.parse_args()
-    print(f"`python bench/bench_estimator.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
+    print(harness.command(__file__) + "\n")
     configure()
     run = partial(estimator_trip, ROOT, choice=args.estimator, points=args.points, marks=MARKS, until=args.until)
-    start = time.perf_counter()
-    print("| seed | error at 2 km [%] | error at 5 km [%] | stop error [m] |\n|---|---|---|---|")
-    with Pool(args.workers) as pool:
-        trips = []
-        for trip in pool.imap(run, range(args.first, args.first + args.seeds)):
-            trips.append(trip)
-            cells = [f"{100 * trip.errors[m]:+.3f}" if m in trip.errors else "-" for m in MARKS]
-            stop = "-" if trip.stop_error_m is None else f"{trip.stop_error_m:+.3f}"
-            print(f"| {trip.seed} | {' | '.join(cells)} | {stop} |", flush=True)
+    table = harness.Table(["seed", "error at 2 km [%]", "error at 5 km [%]", "stop error [m]"])
+
+    def all_trips():
+        with Pool(args.workers) as pool:
+            trips = []
+            for trip in pool.imap(run, range(args.first, args.first + args.seeds)):
+                trips.append(trip)
+                cells = [f"{100 * trip.errors[m]:+.3f}" if m in trip.errors else "-" for m in MARKS]
+                table.add(trip.seed, *cells, "-" if trip.stop_error_m is None else f"{trip.stop_error_m:+.3f}")
+            return trips
+
+    trips, _, wall = harness.timed(all_trips)
     for mark in [m for m in MARKS if all(m in t.errors for t in trips)]:
         errors = np.abs([t.errors[mark] for t in trips])
         print(f"\nat {mark / 1e3:g} km over {len(trips)} seeds: p95 |error| {100 * np.percentile(errors, 95):.3f} %, "
               f"max {100 * errors.max():.3f} %", end="")
-    print(f"\n\n{time.perf_counter() - start:.0f} s wall, {args.workers} workers, K = {args.points}")
+    print(f"\n\n{wall:.0f} s wall, {args.workers} workers, K = {args.points}")
 
 
 if __name__ == "__main__":

@@ -11,9 +11,7 @@ The optimum is re-driven by the plant (DOP853) from 1 m/s to the end of the line
 gives both energies and their difference from GPOPS-II.
 """
 import argparse
-import shlex
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +20,7 @@ from scipy.optimize import brentq
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.analysis.tables import handles  # noqa: E402
 from ecostudy.core.plant import Plant  # noqa: E402
 from ecostudy.core.types import State  # noqa: E402
@@ -52,11 +51,10 @@ def at_end(solutions, distance):
 
 
 def run(track, train, points, v_end=1.0, running_time=1541.0):
-    t0 = time.perf_counter()
-    case = prepare(track, train, "S0", "S1", points)
-    planner = Replanner(case, running_time=running_time, objective="net_energy")
-    plan = planner.solve(State(0.0, v_end, 0.0), end_speed=(v_end, v_end), arrival=running_time)
-    seconds = time.perf_counter() - t0
+    with harness.stage() as solving:
+        case = prepare(track, train, "S0", "S1", points)
+        planner = Replanner(case, running_time=running_time, objective="net_energy")
+        plan = planner.solve(State(0.0, v_end, 0.0), end_speed=(v_end, v_end), arrival=running_time)
     m = planner.model
     ds = np.diff(case.nodes)
     fr = np.array([m.fr[k].value for k in m.I]) * 1e3 if hasattr(m, "fr") else np.zeros(len(ds))
@@ -65,9 +63,17 @@ def run(track, train, points, v_end=1.0, running_time=1541.0):
     _, _, solutions = Plant(case.segment, train).drive(case.nodes, u, initial_speed=v_end)
     t_end, y = at_end(solutions, case.segment.distance)
     sim = y[2] / train.traction_efficiency - train.regeneration_efficiency * y[4]
-    return {"points": points, "status": plan.outcome.status, "iterations": plan.outcome.iterations,
-            "seconds": seconds, "model_kWh": to_kwh(net), "simulated_kWh": to_kwh(sim),
+    return {"points": points, "ipopt": plan.outcome.status, "iterations": plan.outcome.iterations,
+            "seconds": solving.seconds, "model_kWh": to_kwh(net), "simulated_kWh": to_kwh(sim),
             "simulated_time_s": t_end, "simulated_end_speed": y[1]}
+
+
+@harness.case("gpops.virm6", params={"ttobench": "/work/data/ttobench", "points": 500},
+              setup=lambda p: (load_track(Path(p["ttobench"]) / "tracks" / "00_var_speed_limit_100.json"),
+                               train_from_dict(VIRM6_GPOPS, "bench_gpops VIRM6"), p["points"]))
+def gpops_case(state):
+    """TTOBench's VIRM6 run at 1541 s against GPOPS-II's net energy: solve, then re-driven by the plant."""
+    return run(*state)
 
 
 def main():
@@ -77,16 +83,15 @@ def main():
     args = ap.parse_args()
     track = load_track(Path(args.ttobench) / "tracks" / "00_var_speed_limit_100.json")
     train = train_from_dict(VIRM6_GPOPS, "bench_gpops VIRM6")
-    print(f"`{shlex.join(['python', 'bench/bench_gpops.py'] + sys.argv[1:])}`\n")
-    print("| K | Ipopt | iterations | s | NLP net energy kWh | vs GPOPS-II | re-driven kWh | vs GPOPS-II "
-          "| re-driven time s | end speed m/s |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print(harness.command(__file__) + "\n")
+    table = harness.Table(["K", "Ipopt", "iterations", "s", "NLP net energy kWh", "vs GPOPS-II", "re-driven kWh",
+                           "vs GPOPS-II", "re-driven time s", "end speed m/s"])
     for k in args.points:
         r = run(track, train, k)
-        print(f"| {k} | {r['status']} | {r['iterations']} | {r['seconds']:.1f} | {r['model_kWh']:.3f} | "
-              f"{100 * (r['model_kWh'] / GPOPS_KWH - 1):+.3f} % | {r['simulated_kWh']:.3f} | "
-              f"{100 * (r['simulated_kWh'] / GPOPS_KWH - 1):+.3f} % | {r['simulated_time_s']:.2f} | "
-              f"{r['simulated_end_speed']:.3f} |")
+        table.add(k, r["ipopt"], r["iterations"], f"{r['seconds']:.1f}", f"{r['model_kWh']:.3f}",
+                  f"{100 * (r['model_kWh'] / GPOPS_KWH - 1):+.3f} %", f"{r['simulated_kWh']:.3f}",
+                  f"{100 * (r['simulated_kWh'] / GPOPS_KWH - 1):+.3f} %", f"{r['simulated_time_s']:.2f}",
+                  f"{r['simulated_end_speed']:.3f}")
 
 
 if __name__ == "__main__":

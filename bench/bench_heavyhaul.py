@@ -14,7 +14,6 @@ out/bench_heavyhaul_*); the tables are printed as markdown for docs/benchmarks.m
 import argparse
 import resource
 import sys
-import time
 import warnings
 from pathlib import Path
 
@@ -23,6 +22,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.api.blas import limit_blas_threads  # noqa: E402
 from ecostudy.core.errors import EcostudyWarning  # noqa: E402
 from ecostudy.heavyhaul.linear import fence  # noqa: E402
@@ -41,36 +41,50 @@ def rss_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def qp(factor, solver, np_=8, nc=6, solves=20, threads=1):
+QP_PARAMS = {"factor": 1, "solver": "daqp", "np": 8, "nc": 6, "solves": 20, "threads": 1}
+
+
+@harness.case("heavyhaul.qp", params=QP_PARAMS)
+def qp_case(p):
     """Build the controller for fence ``factor`` and solve ``solves`` samples of a 15 -> 20 m/s
     manoeuvre on a 10 per-mille climb (the plant stepping the full train between them)."""
     from ecostudy.core.grid import Profile, Segment
+    limit_blas_threads(p["threads"])
     consist = load_consist(ROOT / "trains/heavyhaul_paper002.yaml")
     segment = Segment(60000.0, Profile(np.zeros(1), np.array([0.010])), Profile(np.zeros(1), np.zeros(1)),
                       Profile(np.zeros(1), np.array([30.0])))
     plant = CascadePlant(consist, segment)
-    reduction = fence(consist, factor, 20.0)
+    reduction = fence(consist, p["factor"], 20.0)
     before = rss_mb()
-    t0 = time.perf_counter()
-    controller = QP_FORMS[solver](reduction.model, reduction.kinds, np_=np_, nc=nc)
-    build = time.perf_counter() - t0
+    with harness.stage() as build:
+        controller = QP_FORMS[p["solver"]](reduction.model, reduction.kinds, np_=p["np"], nc=p["nc"])
     u = np.zeros(consist.cars)
     u[consist.locomotives] = plant.resistance(plant.initial(5000.0, 15.0).positions, np.full(consist.cars, 15.0)).sum() / 4
     state = plant.quasi_static(5000.0, 15.0, u)
     controller.previous = reduction.reduce(u) / 1e3
     reference = table_reference([0.0, 1e6], [72.0, 72.0])
     seconds = []
-    for _ in range(solves):
+    for _ in range(p["solves"]):
         x0 = reduced_state(plant, reduction, state)
-        offsets, vr = horizon(plant, reduction, reference, state, x0[:len(reduction.kinds)], np_)
+        offsets, vr = horizon(plant, reduction, reference, state, x0[:len(reduction.kinds)], p["np"])
         low, high = limits(plant, reduction, state)
         planned = controller.solve(x0, offsets / 1e3, low / 1e3, high / 1e3, vr) * 1e3
         seconds.append(controller.last.seconds)
         state = plant.step(state, reduction.share(planned, consist.mass), 20.0).state
     seconds = np.array(seconds)
-    print(f"| {solver} | {factor} | {threads} | {len(reduction.kinds)} | {np_}/{nc} | {controller.size['inputs']} | "
-          f"{controller.size['states']} | {controller.size['constraints']} | {build:.2f} | {seconds[0]:.3f} | "
-          f"{np.median(seconds[1:]):.3f} | {np.percentile(seconds[1:], 95):.3f} | {seconds.max():.3f} | {rss_mb() - before:.0f} |")
+    return {"virtual_cars": len(reduction.kinds), **{k: controller.size[k] for k in ("inputs", "states", "constraints")},
+            "stages": {"build": build.seconds}, "first_solve_s": seconds[0], "median_solve_s": np.median(seconds[1:]),
+            "p95_solve_s": np.percentile(seconds[1:], 95), "max_solve_s": seconds.max(), "rss_growth_MB": rss_mb() - before}
+
+
+def qp(factor, solver, threads=1):
+    """One row: the QP of fence ``factor`` built and solved (``heavyhaul.qp``)."""
+    r = harness.measure(["heavyhaul.qp"], 1, {"factor": factor, "solver": solver, "threads": threads})["heavyhaul.qp"][0]
+    harness.Table(["solver", "f", "BLAS threads", "virtual cars", "Np/Nc", "inputs", "states", "constraints", "build s",
+                   "first solve s", "median s", "p95 s", "max s", "RSS growth MB"]).add(
+        solver, factor, threads, r["virtual_cars"], f"{QP_PARAMS['np']}/{QP_PARAMS['nc']}", r["inputs"], r["states"],
+        r["constraints"], f"{r['build_s']:.2f}", f"{r['first_solve_s']:.3f}", f"{r['median_solve_s']:.3f}",
+        f"{r['p95_solve_s']:.3f}", f"{r['max_solve_s']:.3f}", f"{r['rss_growth_MB']:.0f}")
 
 
 EFFECTS = ["K_b", "status", "tracking_mean_mps", "force_max_kN", "force_max_braking_kN", "force_mean_kN", "energy_total_kWh",
@@ -93,7 +107,6 @@ def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesio
     from ecostudy.studies.heavyhaul import heavyhaul_study
     for name in names or ("heavyhaul_brake_penalty", "heavyhaul_brake_penalty_limits", "heavyhaul_horizons",
                           "heavyhaul_fence"):
-        t0 = time.perf_counter()
         path, out = ROOT / "studies" / f"{name}.yaml", ROOT / "out" / f"bench_{name}"
         changes = {k: v for k, v in (("fence_weights", weights), ("objective_scale", scale), ("adhesion", adhesion)) if v}
         if changes:
@@ -103,17 +116,13 @@ def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesio
             path, out = path.with_name(f".{name}_{tag}.yaml"), out.with_name(f"{out.name}_{tag}")
             path.write_text(yaml.safe_dump(doc))
         try:
-            outcome = heavyhaul_study(path, workers=workers, out=out)
+            outcome, _, wall = harness.timed(lambda: heavyhaul_study(path, workers=workers, out=out))
         finally:
             if changes:
                 path.unlink()
-        print(f"\n`{name}`{f' ({changes})' if changes else ''} ({time.perf_counter() - t0:.0f} s wall; "
+        print(f"\n`{name}`{f' ({changes})' if changes else ''} ({wall:.0f} s wall; "
               f"reference {outcome.reference.running_time:.0f} s, {outcome.reference.energy / 3.6e6:.0f} kWh single mass)\n")
-        runs = outcome.runs[list(columns)]
-        print("| " + " | ".join(columns) + " |")
-        print("|" + "---|" * len(columns))
-        for _, row in runs.iterrows():
-            print("| " + " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in row) + " |")
+        print(harness.markdown(outcome.runs[list(columns)].to_dict("records"), columns))
 
 
 if __name__ == "__main__":
@@ -133,7 +142,6 @@ if __name__ == "__main__":
     args = parser.parse_args()
     limit_blas_threads(args.blas_threads)
     if args.qp:
-        print("| solver | f | BLAS threads | virtual cars | Np/Nc | inputs | states | constraints | build s | first solve s | median s | p95 s | max s | RSS growth MB |")
         qp(args.qp, args.solver, threads=args.blas_threads)
     else:
         studies(args.studies, args.fence_weights, args.scale, TERMS if args.terms else EFFECTS if args.balance else STOPS if args.stops else COLUMNS, args.workers, args.adhesion)

@@ -12,7 +12,6 @@ docs/heavyhaul.md ("In-train physics").
 """
 import argparse
 import sys
-import time
 import warnings
 from pathlib import Path
 
@@ -21,6 +20,7 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.api.blas import limit_blas_threads  # noqa: E402
 from ecostudy.core.errors import EcostudyWarning  # noqa: E402
 
@@ -48,12 +48,17 @@ def plant_runs(name, workers, study=STUDY):
         copy.unlink()
 
 
+@harness.case("intrain.plant", params={"plant": "air_brake", "workers": 2, "study": STUDY})
+def one_plant(p):
+    """A whole heavy-haul study (K_b 1 and 60) on one in-train plant (minutes; outputs in out/bench_intrain_*)."""
+    limit_blas_threads(1)
+    runs = plant_runs(p["plant"], p["workers"], p["study"])
+    return {"runs": len(runs), "status": "ok" if (runs["status"] == "ok").all() else "flagged: a run is not ok"}
+
+
 def table(rows, columns):
-    print("| plant | K_b | " + " | ".join(columns) + " |")
-    print("|" + "---|" * (len(columns) + 2))
-    for name, row in rows:
-        cells = [f"{row[c]:.4g}" if isinstance(row[c], float) else str(row[c]) for c in columns]
-        print(f"| {name} | {row['K_b']:g} | " + " | ".join(cells) + " |")
+    print(harness.markdown([{"plant": name, "K_b": f"{row['K_b']:g}", **{c: row[c] for c in columns}} for name, row in rows],
+                           ["plant", "K_b"] + list(columns)))
 
 
 if __name__ == "__main__":
@@ -68,9 +73,8 @@ if __name__ == "__main__":
     limit_blas_threads(1)
     rows = []
     for name in args.plants or PLANTS:
-        t0 = time.perf_counter()
-        runs = plant_runs(name, args.workers, args.study)
-        print(f"{name}: {time.perf_counter() - t0:.0f} s wall", file=sys.stderr, flush=True)
+        runs, _, wall = harness.timed(lambda: plant_runs(name, args.workers, args.study))
+        print(f"{name}: {wall:.0f} s wall", file=sys.stderr, flush=True)
         rows += [(name, row) for _, row in runs.iterrows()]
     table(rows, FORCES)
     print()

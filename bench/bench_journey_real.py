@@ -9,15 +9,14 @@ total time), journey NLP (build, NL write and Ipopt of the one model), segments 
 solved and re-simulated at its running time). The energy is the sum of the verified segments.
 """
 import argparse
-import shlex
 import sys
-import time
 import warnings
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.analysis.single import solve_run  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
@@ -28,21 +27,32 @@ from ecostudy.studies.journey import whole_journey  # noqa: E402
 def run(track, train, supplement, points):
     stops = list(track.stops)
     pairs = list(zip(stops, stops[1:]))
-    t0 = time.perf_counter()
-    cases = [prepare(track, train, a, b, points) for a, b in pairs]
-    t1 = time.perf_counter()
-    all_out = [solve_run(track, train, a, b, Timing(), objective="time", points=points, verify_result=False)
-               .summary["running_time_s"] for a, b in pairs]
-    t2 = time.perf_counter()
+    with harness.stage() as grid:
+        cases = [prepare(track, train, a, b, points) for a, b in pairs]
+    with harness.stage() as all_out_s:
+        all_out = [solve_run(track, train, a, b, Timing(), objective="time", points=points, verify_result=False)
+                   .summary["running_time_s"] for a, b in pairs]
     total = sum(all_out) * (1 + supplement)
-    times = whole_journey(track, train, pairs, total, [t * (1 + supplement) for t in all_out], points)
-    t3 = time.perf_counter()
-    runs = [solve_run(track, train, a, b, Timing(running_time=t), points=points) for (a, b), t in zip(pairs, times)]
-    t4 = time.perf_counter()
-    return {"points": points, "segments": len(cases), "grid": t1 - t0, "all_out": t2 - t1, "journey_nlp": t3 - t2,
-            "segments_s": t4 - t3, "total": t4 - t0, "time": sum(times),
+    with harness.stage() as journey_nlp:
+        times = whole_journey(track, train, pairs, total, [t * (1 + supplement) for t in all_out], points)
+    with harness.stage() as segments:
+        runs = [solve_run(track, train, a, b, Timing(running_time=t), points=points) for (a, b), t in zip(pairs, times)]
+    return {"points": points, "segments": len(cases), "grid": grid.seconds, "all_out": all_out_s.seconds,
+            "journey_nlp": journey_nlp.seconds, "segments_s": segments.seconds,
+            "total": grid.seconds + all_out_s.seconds + journey_nlp.seconds + segments.seconds, "time": sum(times),
             "energy": sum(r.summary["traction_energy_kWh"] for r in runs),
             "verified": all(r.summary["verification"]["passed"] for r in runs)}
+
+
+@harness.case("journey_real.journey", setup=lambda p: (load_track(ROOT / p["track"]), load_train(ROOT / p["train"]), p),
+              params={"track": "tracks/regional_line_20stops.yaml", "train": "trains/regional_alstom.yaml",
+                      "supplement": 10.0, "points": 150})
+def journey(state):
+    """A whole journey (every segment's all-out run, the journey NLP sharing the time, each segment solved and verified)."""
+    track, train, p = state
+    r = run(track, train, p["supplement"] / 100, p["points"])
+    return {"segments": r["segments"], "stages": {k: r[k] for k in ("grid", "all_out", "journey_nlp", "segments_s")},
+            "energy_kWh": r["energy"], "verified": r["verified"]}
 
 
 def main():
@@ -54,14 +64,13 @@ def main():
     args = ap.parse_args()
     warnings.simplefilter("ignore")
     track, train = load_track(args.track), load_train(args.train)
-    print(f"`{shlex.join(['python', 'bench/bench_journey_real.py'] + sys.argv[1:])}`\n")
-    print("| K per segment | segments | grid s | all-out s | journey NLP s | segments solved + verified s "
-          "| total s | running time s | traction kWh | verified |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print(harness.command(__file__) + "\n")
+    table = harness.Table(["K per segment", "segments", "grid s", "all-out s", "journey NLP s",
+                           "segments solved + verified s", "total s", "running time s", "traction kWh", "verified"])
     for k in args.points:
         r = run(track, train, args.supplement / 100, k)
-        print(f"| {k} | {r['segments']} | {r['grid']:.2f} | {r['all_out']:.1f} | {r['journey_nlp']:.1f} | "
-              f"{r['segments_s']:.1f} | {r['total']:.1f} | {r['time']:.1f} | {r['energy']:.3f} | {r['verified']} |")
+        table.add(k, r["segments"], f"{r['grid']:.2f}", f"{r['all_out']:.1f}", f"{r['journey_nlp']:.1f}",
+                  f"{r['segments_s']:.1f}", f"{r['total']:.1f}", f"{r['time']:.1f}", f"{r['energy']:.3f}", r["verified"])
 
 
 if __name__ == "__main__":

@@ -23,10 +23,7 @@ trains/regional_alstom.yaml, net energy, in 1.15 times its envelope time; ``metr
 studies/default.yaml (Amsterdam metro, Rokin to Centraal in 76 s, traction energy).
 """
 import argparse
-import shlex
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import casadi as ca
@@ -35,44 +32,50 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
+from bench.bench_casadi import objective_expr  # noqa: E402
 from ecostudy.core.kinematics import interval_davis, interval_grade_force  # noqa: E402
 from ecostudy.core.physics import interval_resistance, smooth_table  # noqa: E402
 from ecostudy.core.units import to_kwh  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp import problem, session, solver, space  # noqa: E402
 
-sys.path.insert(0, str(ROOT / "bench"))
-from bench_casadi import objective_expr  # noqa: E402
+PARAMS = {"case": "long", "points": 1000}
 
 
-def cases(points):
-    """name -> (case, running time [s], objective)."""
-    line = problem.prepare(load_track(ROOT / "tracks/regional_line_20stops.yaml"),
-                           load_train(ROOT / "trains/regional_alstom.yaml"), "S01", "S20", points)
-    metro = problem.prepare(load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml"),
-                            load_train(ROOT / "trains/amsterdam_metro.yaml"), "Rokin", "Centraal", points)
-    return {"long": (line, round(1.15 * line.estimate), "net_energy"), "metro": (metro, 76.0, "energy")}
+def setup(p):
+    """(prepared case, running time [s], objective, start point) of ``long`` or ``metro``, untimed."""
+    solver.configure()
+    if p["case"] == "long":
+        case = problem.prepare(load_track(ROOT / "tracks/regional_line_20stops.yaml"),
+                               load_train(ROOT / "trains/regional_alstom.yaml"), "S01", "S20", p["points"])
+        running_time, objective = round(1.15 * case.estimate), "net_energy"
+    else:
+        case = problem.prepare(load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml"),
+                               load_train(ROOT / "trains/amsterdam_metro.yaml"), "Rokin", "Centraal", p["points"])
+        running_time, objective = 76.0, "energy"
+    return case, running_time, objective, problem.capped_guess(case, running_time)
 
 
-def ecostudy_run(case, running_time, objective):
-    """(seconds build + NL write + Ipopt, Outcome, objective [J], variables, constraints, Ipopt s)."""
-    guess = problem.capped_guess(case, running_time)
-    t0, c0 = time.perf_counter(), time.process_time()
+@harness.case("lean.ecostudy", params=PARAMS, setup=setup, reference="lean.lean")
+def ecostudy_run(state):
+    """ecostudy as it solves (every cut): build + NL write + Ipopt (PyNumero), in process."""
+    case, running_time, objective, guess = state
     m = problem.build(case, guess, objective, {}, running_time=running_time)
     s = session.Session(m)
     outcome = s.solve()
-    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
-    return seconds, outcome, float(m.objective.expr()) * m.energy_ref, s.nlp.n_primals(), s.nlp.n_constraints(), \
-        outcome.seconds, cpu
+    return {"variables": s.nlp.n_primals(), "constraints": s.nlp.n_constraints(), "iterations": outcome.iterations,
+            "ipopt": outcome.status, "ipopt_s": outcome.seconds,
+            "energy_kWh": to_kwh(float(m.objective.expr()) * m.energy_ref)}
 
 
-def lean_run(case, running_time, objective):
-    """The lean transcription: (seconds, status, iterations, objective [J], n, m, Ipopt s)."""
-    t0, cpu0 = time.perf_counter(), time.process_time()
+@harness.case("lean.lean", params=PARAMS, setup=setup)
+def lean_run(state):
+    """The lean CasADi transcription (speeds and forces only): graph + nlpsol + CasADi's Ipopt, in process."""
+    case, running_time, objective, (v0, _, ft0, fb0) = state
     train, segment, nodes = case.train, case.segment, case.nodes
     n, fs = len(nodes) - 1, space.FORCE_SCALE
     dsd = ca.DM(np.diff(nodes))
-    v0, _, ft0, fb0 = problem.capped_guess(case, running_time)
     speeds = np.linspace(0.0, float(np.max(case.limits)), 101)
     regen = objective == "net_energy" and train.regeneration is not None
     own_regen = regen and not np.all(train.regeneration.force(speeds) >= train.braking.force(speeds))
@@ -121,12 +124,11 @@ def lean_run(case, running_time, objective):
                  lbx, ubx)
     opts = {"ipopt": dict(session.DEFAULT_OPTIONS), "print_time": False}
     nlp = ca.nlpsol("lean", "ipopt", {"x": x, "f": f, "g": ca.vertcat(*g)}, opts)
-    t1 = time.perf_counter()
-    sol = nlp(x0=x0, lbx=lbx, ubx=ubx, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
-    seconds, cpu = time.perf_counter() - t0, time.process_time() - cpu0
+    with harness.stage() as solve:
+        sol = nlp(x0=x0, lbx=lbx, ubx=ubx, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
     stats = nlp.stats()
-    return (seconds, stats["return_status"], stats["iter_count"], float(sol["f"]) * energy_ref,
-            x.shape[0], sum(e.shape[0] for e in g), seconds - (t1 - t0), cpu)
+    return {"variables": x.shape[0], "constraints": sum(e.shape[0] for e in g), "iterations": stats["iter_count"],
+            "ipopt": stats["return_status"], "ipopt_s": solve.seconds, "energy_kWh": to_kwh(float(sol["f"]) * energy_ref)}
 
 
 def main():
@@ -135,34 +137,30 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--case", nargs="+", default=["long"])
     args = ap.parse_args()
-    solver.configure()
-    print(f"`{shlex.join(['python', 'bench/bench_lean.py'] + sys.argv[1:])}`\n")
-    print("| case | K | variables (ecostudy / lean) | constraints | ecostudy s | iterations | lean s | iterations "
-          "| ratio | CPU s (ecostudy / lean) | CPU ratio | Ipopt alone s (ecostudy / lean) | ecostudy kWh | lean kWh "
-          "| difference % |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print(harness.command(__file__) + "\n")
+    table = harness.Table(["case", "K", "variables (ecostudy / lean)", "constraints", "ecostudy s", "iterations",
+                           "lean s", "iterations", "ratio", "CPU s (ecostudy / lean)", "CPU ratio",
+                           "Ipopt alone s (ecostudy / lean)", "ecostudy kWh", "lean kWh", "difference %"])
     grown = {}
     for name in args.case:
         for points in args.points:
-            case, running_time, objective = cases(points)[name]
-            eco, lean = [], []
-            for _ in range(args.repeat):
-                eco.append(ecostudy_run(case, running_time, objective))
-                lean.append(lean_run(case, running_time, objective))
-            te, tl = statistics.median(r[0] for r in eco), statistics.median(r[0] for r in lean)
-            ce, cl = statistics.median(r[6] for r in eco), statistics.median(r[7] for r in lean)
+            runs = harness.measure(["lean.ecostudy"], args.repeat, {"case": name, "points": points})
+            eco, lean = runs["lean.ecostudy"], runs["lean.lean"]
+            te, tl = eco.median("wall_s"), lean.median("wall_s")
+            ce, cl = eco.median("cpu_s"), lean.median("cpu_s")
             e, c = eco[-1], lean[-1]
             grown.setdefault(name, []).append((points, te, tl, ce, cl))
-            print(f"| {name} | {points} | {e[3]} / {c[4]} | {e[4]} / {c[5]} | {te:.2f} | {e[1].iterations} ({e[1].status}) "
-                  f"| {tl:.2f} | {c[2]} ({c[1]}) | {te / tl:.2f} | {ce:.2f} / {cl:.2f} | {ce / cl:.2f} "
-                  f"| {statistics.median(r[5] for r in eco):.2f} / "
-                  f"{statistics.median(r[6] for r in lean):.2f} | {to_kwh(e[2]):.4f} | {to_kwh(c[3]):.4f} | "
-                  f"{100 * (e[2] - c[3]) / abs(c[3]):+.4f} |", flush=True)
-    print("\n| case | K | ecostudy growth (wall / CPU) | lean growth (wall / CPU) |\n|---|---|---|---|")
+            table.add(name, points, f"{e['variables']} / {c['variables']}", f"{e['constraints']} / {c['constraints']}",
+                      f"{te:.2f}", f"{e['iterations']} ({e['ipopt']})", f"{tl:.2f}", f"{c['iterations']} ({c['ipopt']})",
+                      f"{te / tl:.2f}", f"{ce:.2f} / {cl:.2f}", f"{ce / cl:.2f}",
+                      f"{eco.median('ipopt_s'):.2f} / {lean.median('ipopt_s'):.2f}", f"{e['energy_kWh']:.4f}",
+                      f"{c['energy_kWh']:.4f}", f"{100 * (e['energy_kWh'] - c['energy_kWh']) / abs(c['energy_kWh']):+.4f}")
+    print()
+    growth = harness.Table(["case", "K", "ecostudy growth (wall / CPU)", "lean growth (wall / CPU)"])
     for name, rows in grown.items():
         k0, e0, l0, ce0, cl0 = rows[0]
         for k, e, lt, ce, cl in rows[1:]:
-            print(f"| {name} | {k0} -> {k} | {e / e0:.2f}x / {ce / ce0:.2f}x | {lt / l0:.2f}x / {cl / cl0:.2f}x |")
+            growth.add(name, f"{k0} -> {k}", f"{e / e0:.2f}x / {ce / ce0:.2f}x", f"{lt / l0:.2f}x / {cl / cl0:.2f}x")
 
 
 if __name__ == "__main__":

@@ -10,7 +10,6 @@ re-simulated top speed and largest acceleration, which must stay within them.
 """
 import argparse
 import json
-import shlex
 import sys
 import warnings
 from pathlib import Path
@@ -20,6 +19,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.analysis.single import solve_run  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
@@ -34,10 +34,9 @@ def main():
     args = ap.parse_args()
     track = load_track(args.track)
     a, b = list(track.stops)[0], list(track.stops)[-1]
-    print(f"`{shlex.join(['python', 'bench/bench_osrd.py'] + sys.argv[1:])}` on {track.name}\n")
-    print("| file | mode | cap km/h | comfort acc m/s^2 | warnings | all-out s | +10 % kWh | verified "
-          "| top speed km/h | largest acc m/s^2 |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print(f"{harness.command(__file__)} on {track.name}\n")
+    table = harness.Table(["file", "mode", "cap km/h", "comfort acc m/s^2", "warnings", "all-out s", "+10 % kWh",
+                           "verified", "top speed km/h", "largest acc m/s^2"])
     for path in sorted(Path(args.folder).glob("*.json")):
         doc = json.loads(path.read_text())
         modes = list(doc["effort_curves"]["modes"]) if args.modes else [doc["effort_curves"]["default_mode"]]
@@ -49,9 +48,9 @@ def main():
             dt = np.diff(r.trace.t)
             acc = np.diff(r.trace.v)[dt > 1e-3] / dt[dt > 1e-3]
             s = r.summary
-            print(f"| {path.name} | {mode} | {train.max_speed * 3.6:.0f} | {train.max_acceleration:g} | "
-                  f"{len(caught)} | {s['all_out_time_s']:.1f} | {s['traction_energy_kWh']:.3f} | "
-                  f"{s['verification']['passed']} | {max(r.trace.v) * 3.6:.1f} | {acc.max():.3f} |")
+            table.add(path.name, mode, f"{train.max_speed * 3.6:.0f}", f"{train.max_acceleration:g}", len(caught),
+                      f"{s['all_out_time_s']:.1f}", f"{s['traction_energy_kWh']:.3f}", s["verification"]["passed"],
+                      f"{max(r.trace.v) * 3.6:.1f}", f"{acc.max():.3f}")
 
 
 if __name__ == "__main__":

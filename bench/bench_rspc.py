@@ -11,9 +11,7 @@ N swept on the model train: energy at the wheel, arrival, stop error, overspeed,
 sample (the enumeration of 6^N sequences), mode changes, samples without an admissible sequence.
 """
 import argparse
-import shlex
 import sys
-import time
 from collections import Counter
 from pathlib import Path
 
@@ -22,7 +20,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from bench_das import CASES  # noqa: E402  (the two cases of Farooqi 2018 Tables 4.1 and 6.1)
+from bench import harness  # noqa: E402
+from bench.bench_das import TRIPS  # noqa: E402  (the two cases of Farooqi 2018 Tables 4.1 and 6.1)
 from ecostudy.control.loop import run_loop  # noqa: E402
 from ecostudy.control.rspc import Rspc  # noqa: E402
 from ecostudy.core.plant import Plant, Truth  # noqa: E402
@@ -31,37 +30,56 @@ from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp.problem import prepare  # noqa: E402
 
 
+def prepared(name):
+    train, track, a, b, arrival = TRIPS[name]
+    return prepare(load_track(ROOT / f"tracks/{track}.yaml"), load_train(ROOT / f"trains/{train}.yaml"), a, b, 400), arrival
+
+
+def drive_rspc(case, arrival, sample, n, truth):
+    """RSPC with horizon ``n`` driving the plant: energy, arrival, stop, solve times, mode changes."""
+    controller = Rspc(case, arrival, sample, horizon=n)
+    result = run_loop(Plant(case.segment, case.train, truth), controller, sample, plant_step=sample)
+    ms = 1e3 * np.array([s for s in controller.solve_seconds if s > 0])
+    return {"energy_kWh": result.traction_work / 3.6e6, "arrival_s": result.arrival_time_s,
+            "stop_error_m": result.stop_error_m, "overspeed_kmh": result.max_overspeed_kmh, "solve_mean_ms": ms.mean(),
+            "solve_p95_ms": np.percentile(ms, 95), "solve_max_ms": ms.max(),
+            "mode_changes": sum(a != b for a, b in zip(controller.chosen, controller.chosen[1:])),
+            "failures": controller.failures,
+            "modes": ", ".join(f"{m} {k}" for m, k in Counter(controller.chosen).most_common())}
+
+
+@harness.case("rspc.model", params={"trip": "Amsterdam metro 76 s", "sample": 0.38, "horizon": 3},
+              setup=lambda p: (*prepared(p["trip"]), p))
+def rspc_model(state):
+    """RSPC (Farooqi 2018 Ch. 6) with horizon N driving the model train."""
+    case, arrival, p = state
+    return drive_rspc(case, arrival, p["sample"], p["horizon"], Truth())
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sample", type=float, default=0.38)
     p.add_argument("--horizons", type=int, nargs="*", default=[1, 2, 3, 4])
     p.add_argument("--disturbances", type=float, nargs="*", default=[0.1, 0.05])
     args = p.parse_args()
-    print(f"`python bench/bench_rspc.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
+    print(harness.command(__file__) + "\n")
     cases = {}
-    print("| case | strategy | arrival [s] | energy [kWh] |\n|---|---|---|---|")
-    for name, (train, track, a, b, arrival) in CASES.items():
-        case = prepare(load_track(ROOT / f"tracks/{track}.yaml"), load_train(ROOT / f"trains/{train}.yaml"), a, b, 400)
-        cases[name] = (case, arrival)
+    table = harness.Table(["case", "strategy", "arrival [s]", "energy [kWh]"])
+    for name in TRIPS:
+        case, arrival = cases[name] = prepared(name)
         for label, trace in (("eco-drive coasting", eco_coasting(case, arrival).trace),
                              ("all-out", drive(case, case.envelope)[1])):
-            print(f"| {name} | {label} | {trace.arrival_time:.2f} | {trace.traction_energy / 3.6e6:.3f} |")
-    print("\n| case | N | plant | energy [kWh] | arrival [s] | stop error [m] | overspeed [km/h] | solve mean / p95 / "
-          "max [ms] | mode changes | no admissible sequence | run wall [s] | modes applied |")
-    print("|" + "---|" * 12, flush=True)
+            table.add(name, label, f"{trace.arrival_time:.2f}", f"{trace.traction_energy / 3.6e6:.3f}")
+    print()
+    table = harness.Table(["case", "N", "plant", "energy [kWh]", "arrival [s]", "stop error [m]", "overspeed [km/h]",
+                           "solve mean / p95 / max [ms]", "mode changes", "no admissible sequence", "run wall [s]",
+                           "modes applied"])
 
     def row(name, n, label, truth):
-        case, arrival = cases[name]
-        controller = Rspc(case, arrival, args.sample, horizon=n)
-        t0 = time.perf_counter()
-        result = run_loop(Plant(case.segment, case.train, truth), controller, args.sample, plant_step=args.sample)
-        ms = 1e3 * np.array([s for s in controller.solve_seconds if s > 0])
-        changes = sum(a != b for a, b in zip(controller.chosen, controller.chosen[1:]))
-        modes = ", ".join(f"{m} {k}" for m, k in Counter(controller.chosen).most_common())
-        print(f"| {name} | {n} | {label} | {result.traction_work / 3.6e6:.3f} | {result.arrival_time_s:.2f} | "
-              f"{result.stop_error_m:+.3f} | {result.max_overspeed_kmh:.2f} | {ms.mean():.1f} / "
-              f"{np.percentile(ms, 95):.1f} / {ms.max():.1f} | {changes} | {controller.failures} | "
-              f"{time.perf_counter() - t0:.1f} | {modes} |", flush=True)
+        r = harness.sample(lambda c: drive_rspc(*c, args.sample, n, truth), cases[name])
+        table.add(name, n, label, f"{r['energy_kWh']:.3f}", f"{r['arrival_s']:.2f}", f"{r['stop_error_m']:+.3f}",
+                  f"{r['overspeed_kmh']:.2f}", f"{r['solve_mean_ms']:.1f} / {r['solve_p95_ms']:.1f} / {r['solve_max_ms']:.1f}",
+                  r["mode_changes"], r["failures"], f"{r['wall_s']:.1f}", r["modes"])
 
     for name in cases:
         row(name, 3, "model", Truth())
@@ -75,6 +93,5 @@ def main():
 
 
 if __name__ == "__main__":
-    start = time.perf_counter()
-    main()
-    print(f"\n{time.perf_counter() - start:.0f} s in all")
+    _, _, seconds = harness.timed(main)
+    print(f"\n{seconds:.0f} s in all")

@@ -9,16 +9,15 @@ legs serially), Ipopt iterations summed over the leg solves, the number of solve
 substation energy of each round (the start first).
 """
 import argparse
-import shlex
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ecostudy.io.loaders import load_network_study  # noqa: E402
-from ecostudy.network import fleet, legs, rules  # noqa: E402
+from bench import harness  # noqa: E402
+from bench.bench_leg_options import study_fleet  # noqa: E402
+from ecostudy.network import legs, rules  # noqa: E402
 from ecostudy.ocp import session  # noqa: E402
 
 PAYS = legs.pumping_pays
@@ -29,16 +28,23 @@ def everywhere(train, weights=None, allowance=None, credit=None):
     return weights is not None
 
 
+@harness.case("rules.supervised", setup=lambda p: (study_fleet(p["study"]), p),
+              params={"study": str(ROOT / "studies/network_metro_3trains.yaml"), "rule": "receptivity"})
+def supervised(state):
+    """A supervisor rule's rounds (Farooqi 2018 Ch. 7) from the independent runs: rounds, substation energy."""
+    fl, p = state
+    _, history, _ = rules.supervised(fl, p["rule"], rules.independent(fl))
+    return {"rounds": len(history), "substation_kWh": history[-1]}
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("study")
     p.add_argument("--rules", nargs="+", default=["receptivity", "triggering", "voltage", "dissension"])
     p.add_argument("--variants", nargs="+", default=["everywhere", "pays"], choices=["everywhere", "pays"])
     args = p.parse_args()
-    print(f"`python bench/bench_rules.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
-    st = load_network_study(Path(args.study))
-    fl = fleet.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
-                    st.supply, st.points, st.buffer, supplement=st.supplement)
+    print(harness.command(__file__) + "\n")
+    fl = study_fleet(args.study)
     counts = []
     solve = session.Session.solve
 
@@ -49,17 +55,13 @@ def main():
 
     session.Session.solve = counted
     start = rules.independent(fl)
-    print("| rule | one-handle | wall s | Ipopt iterations | leg solves | rounds (substation kWh) |")
-    print("|---|---|---|---|---|---|")
+    table = harness.Table(["rule", "one-handle", "wall s", "Ipopt iterations", "leg solves", "rounds (substation kWh)"])
     for rule in args.rules:
         for variant in args.variants:
             legs.pumping_pays = PAYS if variant == "pays" else everywhere
             counts.clear()
-            t0 = time.perf_counter()
-            _, history, _ = rules.supervised(fl, rule, start)
-            wall = time.perf_counter() - t0
-            print(f"| {rule} | {variant} | {wall:.1f} | {sum(counts)} | {len(counts)} | "
-                  f"{', '.join(f'{h:.3f}' for h in history)} |", flush=True)
+            (_, history, _), _, wall = harness.timed(lambda: rules.supervised(fl, rule, start))
+            table.add(rule, variant, f"{wall:.1f}", sum(counts), len(counts), ", ".join(f"{h:.3f}" for h in history))
     legs.pumping_pays = PAYS
 
 

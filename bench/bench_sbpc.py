@@ -21,9 +21,7 @@ only SPPC (Farooqi 2018 Ch. 5, ``control/sppc.py``; DAS modes by construction): 
 train, then the two-step variant on the d-disturbed trains.
 """
 import argparse
-import shlex
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +29,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.analysis.single import solve_run  # noqa: E402
 from ecostudy.control.controllers import Quantised  # noqa: E402
 from ecostudy.control.loop import run_loop  # noqa: E402
@@ -59,8 +58,34 @@ def nominal_case(case):
 
 def timed(case):
     """``run_loop_case`` with the run's wall time."""
-    t0 = time.perf_counter()
-    return case, run_loop_case(case), time.perf_counter() - t0
+    row, _, wall = harness.timed(lambda: run_loop_case(case))
+    return case, row, wall
+
+
+def setup(p):
+    """The Amsterdam case (K = 200) and the ATO optimum's speeds SBPC starts from (untimed)."""
+    track = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
+    train = load_train(ROOT / "trains/amsterdam_metro.yaml")
+    ato = solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=200)
+    case = prepare(track, train, "Rokin", "Centraal", 200)
+    return track, train, ato, case, np.interp(case.nodes, ato.trajectory.nodes, ato.trajectory.v), p
+
+
+def loop_report(case, train, controller, driven, truth, sample):
+    """Drive the plant with ``driven`` (``controller`` or its quantised handle): energy, arrival, stop, solves."""
+    result = run_loop(Plant(case.segment, train, truth), driven, sample, plant_step=sample)
+    s = np.array([x for x in controller.solve_seconds if x > 0])
+    return {"energy_kWh": result.traction_work / 3.6e6, "arrival_s": result.arrival_time_s,
+            "stop_error_m": result.stop_error_m, "overspeed_kmh": result.max_overspeed_kmh, "solve_mean_s": s.mean(),
+            "solve_max_s": s.max(), "iterations": float(np.mean(controller.iterations)), "softened": controller.softened}
+
+
+@harness.case("sbpc.nominal", setup=setup, params={"block": 20, "sample": 0.38, "transcription": "simultaneous"})
+def sbpc_nominal(state):
+    """Nominal SBPC (Farooqi 2018 Ch. 4) with blocks of L samples driving the model train, Rokin to Centraal in 76 s."""
+    _, train, _, case, speeds, p = state
+    controller = Sbpc(case, 76.0, p["sample"], p["block"], speeds, "nominal", transcription=p["transcription"])
+    return loop_report(case, train, controller, controller, Truth(), p["sample"])
 
 
 def draws_table(study, draws, workers, only, skip=0, model=True):
@@ -117,29 +142,22 @@ def main():
     p.add_argument("--skip", type=int, default=0, help="with --draws: leave out the first SKIP draws (run them apart)")
     p.add_argument("--no-model", action="store_true", help="with --draws: no run on the model train (no energy ratio)")
     args = p.parse_args()
-    print(f"`python bench/bench_sbpc.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
-    track = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
-    train = load_train(ROOT / "trains/amsterdam_metro.yaml")
+    print(harness.command(__file__) + "\n")
     if args.draws:
         configure()
         draws_table(args.study, args.draws, args.workers, args.only, args.skip, not args.no_model)
         return
-    ato = solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=200)
-    case = prepare(track, train, "Rokin", "Centraal", 200)
-    speeds = np.interp(case.nodes, ato.trajectory.nodes, ato.trajectory.v)
+    track, train, ato, case, speeds, _ = setup({})
     print(f"ATO optimum (space-domain NLP, K = 200, 76 s): {ato.summary['traction_energy_kWh']:.3f} kWh\n")
-    head = ("| variant | L | plant | energy [kWh] | arrival [s] | stop error [m] | overspeed [km/h] | solve mean / max "
-            "[s] | iterations per step | nominal infeasible | run wall [s] |")
-    print(head + "\n|" + "---|" * 11, flush=True)
+    table = harness.Table(["variant", "L", "plant", "energy [kWh]", "arrival [s]", "stop error [m]", "overspeed [km/h]",
+                           "solve mean / max [s]", "iterations per step", "nominal infeasible", "run wall [s]"])
 
     def drive(name, block, label, controller, driven, truth):
         """Run the loop and print one table row."""
-        t0 = time.perf_counter()
-        result = run_loop(Plant(case.segment, train, truth), driven, args.sample, plant_step=args.sample)
-        s = np.array([x for x in controller.solve_seconds if x > 0])
-        print(f"| {name} | {block} | {label} | {result.traction_work / 3.6e6:.3f} | {result.arrival_time_s:.2f} | "
-              f"{result.stop_error_m:+.3f} | {result.max_overspeed_kmh:.2f} | {s.mean():.2f} / {s.max():.2f} | "
-              f"{np.mean(controller.iterations):.1f} | {controller.softened} | {time.perf_counter() - t0:.0f} |", flush=True)
+        r = harness.sample(lambda _: loop_report(case, train, controller, driven, truth, args.sample), None)
+        table.add(name, block, label, f"{r['energy_kWh']:.3f}", f"{r['arrival_s']:.2f}", f"{r['stop_error_m']:+.3f}",
+                  f"{r['overspeed_kmh']:.2f}", f"{r['solve_mean_s']:.2f} / {r['solve_max_s']:.2f}",
+                  f"{r['iterations']:.1f}", r["softened"], f"{r['wall_s']:.0f}")
 
     def run(variant, block, truth, quantised, label):
         controller = Sbpc(case, 76.0, args.sample, block, speeds, variant, brake_reserve=args.brake_reserve or 0.0,

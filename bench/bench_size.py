@@ -22,7 +22,6 @@ leave out.
 """
 import argparse
 import sys
-import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -32,6 +31,7 @@ import pyomo.environ as pyo
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.core.physics import Envelope  # noqa: E402
 from ecostudy.core.units import to_kwh  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
@@ -74,13 +74,27 @@ def measure(case, running_time, objective, cuts):
         m = space.build_model(case.segment, case.train, case.nodes, case.limits, guess, objective=objective,
                               running_time=running_time, time_ref=time_ref, cuts=cuts)
     nlp = session.Session(m)
-    cpu = time.process_time()
-    out = nlp.solve()
-    cpu = time.process_time() - cpu
+    out, cpu, _ = harness.timed(nlp.solve)
     n, eq, ineq = nlp.nlp.n_primals(), nlp.nlp.n_eq_constraints(), nlp.nlp.n_ineq_constraints()
     energy = to_kwh(pyo.value(m.objective) * m.energy_ref)
     return dict(variables=n, constraints=eq + ineq, kkt=n + eq + 2 * ineq, iterations=out.iterations,
                 ms=1e3 * cpu / max(out.iterations, 1), seconds=out.seconds, energy=energy, status=out.status)
+
+
+def every_cut(objective):
+    """The cuts in the order the table adds them: the defaults, then mid_power."""
+    return space.ALL_CUTS if objective != "leg" else timedomain.CUTS + ("mid_power",)
+
+
+@harness.case("size.cuts", setup=lambda p: (cases(p["points"])[p["case"]], p),
+              params={"case": "metro", "points": 1000, "cuts": 99})
+def with_cuts(state):
+    """One build and solve of ``case`` with its first ``cuts`` lean cuts (99: all): sizes, iterations, CPU per iteration."""
+    (case, running_time, objective), p = state
+    solver.configure()
+    r = measure(case, running_time, objective, tuple(every_cut(objective)[:p["cuts"]]))
+    r["ipopt"] = r.pop("status")  # Ipopt's word; the harness's status is ok / flagged / failed
+    return r
 
 
 def main():
@@ -90,21 +104,20 @@ def main():
     args = parser.parse_args()
     solver.configure()
     every = cases(args.points)
-    print("| case | cuts | variables | constraints | KKT rows | iterations | CPU ms/iteration | Ipopt wall s | energy kWh "
-          "| vs full |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print(harness.command(__file__) + "\n")
+    table = harness.Table(["case", "cuts", "variables", "constraints", "KKT rows", "iterations", "CPU ms/iteration",
+                           "Ipopt wall s", "energy kWh", "vs full"])
     for name in args.case:
         case, running_time, objective = every[name]
         full = None
-        every_cut = space.ALL_CUTS if objective != "leg" else timedomain.CUTS + ("mid_power",)  # the defaults, then mid_power
-        for i in range(len(every_cut) + 1):
-            cuts = tuple(every_cut[:i])
+        for i in range(len(every_cut(objective)) + 1):
+            cuts = tuple(every_cut(objective)[:i])
             r = measure(case, running_time, objective, cuts)
             full = r["energy"] if full is None else full
             flag = "" if r["status"] == "optimal" else f" ({r['status']})"
-            print(f"| {name} | {' + '.join(cuts) or 'none'} | {r['variables']} | {r['constraints']} | {r['kkt']} | "
-                  f"{r['iterations']}{flag} | {r['ms']:.1f} | {r['seconds']:.2f} | {r['energy']:.4f} | "
-                  f"{100 * (r['energy'] - full) / full:+.3f} % |", flush=True)
+            table.add(name, " + ".join(cuts) or "none", r["variables"], r["constraints"], r["kkt"],
+                      f"{r['iterations']}{flag}", f"{r['ms']:.1f}", f"{r['seconds']:.2f}", f"{r['energy']:.4f}",
+                      f"{100 * (r['energy'] - full) / full:+.3f} %")
 
 
 if __name__ == "__main__":

@@ -19,10 +19,7 @@ the load, the CPU time the work), beside what the estimate says for the same run
   (``--no-heavy``: without the heavy-haul ones, which solve their reference first).
 """
 import argparse
-import os
-import shlex
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +27,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.core.budget import duration, study_estimate  # noqa: E402
 from ecostudy.io.loaders import load_network_study  # noqa: E402
 from ecostudy.io.yamlsafe import load_yaml  # noqa: E402
@@ -42,35 +40,61 @@ from ecostudy.studies.workers import every_core  # noqa: E402
 STUDIES = ROOT / "studies"
 
 
-def cpu():
-    """CPU seconds of this process and its waited-for children (the Ipopt processes) so far."""
-    t = os.times()
-    return t.user + t.system + t.children_user + t.children_system
+def summary_of(result):
+    """A study case's result as the harness reports it: its status and samples."""
+    return {"status": result["status"], "samples": (result["summary"] or {}).get("samples") or 0}
 
 
-def timed(work):
-    c0, w0 = cpu(), time.perf_counter()
-    out = work()
-    return out, cpu() - c0, time.perf_counter() - w0
+def nth_run(p):
+    return run_cases.expand(Path(p["study"]), [])[2][p["case"]]
 
 
-def row(*cells):
-    print("| " + " | ".join(str(c) for c in cells) + " |", flush=True)
+@harness.case("sizes.run", setup=nth_run, params={"study": str(STUDIES / "metro_supplements.yaml"), "case": 0})
+def one_run(case):
+    """One case of a run study (``batch.run_case``), beside ``estimate.run_seconds``."""
+    return {"status": batch.run_case(case)["status"], "points": case["points"],
+            "estimate_s": run_seconds(case["points"], case.get("das"), case.get("das_time_limit_s", 60.0))}
+
+
+def nth_loop(p):
+    return closedloop.expand(Path(p["study"]))[2][p["case"]]
+
+
+@harness.case("sizes.simulate", setup=nth_loop, params={"study": str(STUDIES / "metro_monte_carlo.yaml"), "case": 0})
+def one_loop(case):
+    """One closed-loop run (``closedloop.run_loop_case``): CPU per sample, set-up included."""
+    return summary_of(closedloop.run_loop_case(case))
+
+
+@harness.case("sizes.network", setup=lambda p: load_network_study(Path(p["study"])),
+              params={"study": str(STUDIES / "network_metro_2trains.yaml")})
+def one_network(st):
+    """A whole network study with one worker (``run_network``), beside ``sizes.network_runs``."""
+    run_network(st, 1, progress=lambda line: None)
+
+
+def nth_heavyhaul(p):
+    return {**heavyhaul.expand(Path(p["study"]))[3][p["case"]], "max_samples": p["samples"]}
+
+
+@harness.case("sizes.heavyhaul", setup=nth_heavyhaul,
+              params={"study": str(STUDIES / "heavyhaul_fence.yaml"), "case": 0, "samples": 30})
+def one_heavyhaul(case):
+    """The first samples of one heavy-haul run (``run_heavyhaul_case``): CPU per sample."""
+    return summary_of(heavyhaul.run_heavyhaul_case(case))
 
 
 def bench_run(n):
     path = STUDIES / "metro_supplements.yaml"
     _, _, cases = run_cases.expand(path, [])
     print(f"\n### run: the first {n} cases of {path.name}\n")
-    row("case", "K", "status", "CPU s", "wall s", "estimate s", "CPU ms a point")
-    print("|---|---|---|---|---|---|---|")
+    table = harness.Table(["case", "K", "status", "CPU s", "wall s", "estimate s", "CPU ms a point"])
     per_point = []
     for case in cases[:n]:
-        result, c, w = timed(lambda: batch.run_case(case))
-        estimate = run_seconds(case["points"], case.get("das"), case.get("das_time_limit_s", 60.0))
-        per_point.append(c / case["points"])
-        row(case["labels"], case["points"], result["status"], f"{c:.2f}", f"{w:.2f}", f"{estimate:.2f}",
-            f"{1e3 * per_point[-1]:.2f}")
+        r = harness.sample(one_run, case)
+        per_point.append(r["cpu_s"] / case["points"])
+        table.add(case["labels"], case["points"], r["status"], f"{r['cpu_s']:.2f}", f"{r['wall_s']:.2f}",
+                  f"{r['estimate_s']:.2f}", f"{1e3 * per_point[-1]:.2f}")
     print(f"\nmean {1e3 * np.mean(per_point):.2f} ms a point (constant {1e3 * RUN_SECONDS_PER_POINT:.2f})")
 
 
@@ -79,18 +103,16 @@ def bench_simulate(draws, path):
     chosen = [c for c in cases if c["labels"]["draw"] < draws]
     estimates = check_closed_loop(chosen, path)
     print(f"\n### simulate: draws 0..{draws - 1} of every controller of {path.name}\n")
-    row("controller", "kind", "draw", "status", "samples", "CPU s", "wall s", "estimate s", "CPU ms a sample",
-        "constant ms")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    table = harness.Table(["controller", "kind", "draw", "status", "samples", "CPU s", "wall s", "estimate s",
+                           "CPU ms a sample", "constant ms"])
     by_kind = {}
     for case, estimate in zip(chosen, estimates):
         kind = closedloop.controller_spec(case)["kind"]
-        result, c, w = timed(lambda: closedloop.run_loop_case(case))
-        samples = (result["summary"] or {}).get("samples") or 0
-        by_kind.setdefault(kind, []).append(c / max(samples, 1))
-        row(case["labels"]["controller"], kind, case["labels"]["draw"], result["status"], samples, f"{c:.2f}",
-            f"{w:.2f}", f"{estimate:.2f}", f"{1e3 * by_kind[kind][-1]:.2f}",
-            f"{1e3 * spec_seconds(case['controller'], case['points']):.2f}")
+        r = harness.sample(one_loop, case)
+        by_kind.setdefault(kind, []).append(r["cpu_s"] / max(r["samples"], 1))
+        table.add(case["labels"]["controller"], kind, case["labels"]["draw"], r["status"], r["samples"],
+                  f"{r['cpu_s']:.2f}", f"{r['wall_s']:.2f}", f"{estimate:.2f}", f"{1e3 * by_kind[kind][-1]:.2f}",
+                  f"{1e3 * spec_seconds(case['controller'], case['points']):.2f}")
     print("\nmean CPU a sample by kind (set-up included): " + ", ".join(
         f"{kind} {1e3 * np.mean(v):.2f} ms" for kind, v in by_kind.items()))
 
@@ -100,12 +122,11 @@ def bench_network():
     st = load_network_study(path)
     estimate = sum(sizes.network_runs(st, path))
     steps = estimate / sizes.NETWORK_SECONDS_PER_STEP
-    _, c, w = timed(lambda: run_network(st, 1, progress=lambda line: None))
+    r = harness.sample(one_network, st)
     print(f"\n### network: {path.name}, {len(st.strategies)} strategies, one worker\n")
-    row("steps (legs x trains x strategies)", "CPU s", "wall s", "estimate s", "CPU ms a step", "constant ms")
-    print("|---|---|---|---|---|---|")
-    row(f"{steps:,.0f}", f"{c:.1f}", f"{w:.1f}", f"{estimate:.1f}", f"{1e3 * c / steps:.2f}",
-        f"{1e3 * sizes.NETWORK_SECONDS_PER_STEP:.2f}")
+    harness.Table(["steps (legs x trains x strategies)", "CPU s", "wall s", "estimate s", "CPU ms a step", "constant ms"]
+                  ).add(f"{steps:,.0f}", f"{r['cpu_s']:.1f}", f"{r['wall_s']:.1f}", f"{estimate:.1f}",
+                        f"{1e3 * r['cpu_s'] / steps:.2f}", f"{1e3 * sizes.NETWORK_SECONDS_PER_STEP:.2f}")
 
 
 def bench_heavyhaul(samples):
@@ -113,15 +134,15 @@ def bench_heavyhaul(samples):
     study, _, reference, cases = heavyhaul.expand(path)
     full = sizes.heavyhaul_runs(study, reference, cases)
     print(f"\n### heavyhaul: the first {samples} samples of each run of {path.name}\n")
-    row("f", "status", "samples", "CPU s", "wall s", "CPU s a sample", "constant s", "estimate of the whole run s")
-    print("|---|---|---|---|---|---|---|---|")
+    table = harness.Table(["f", "status", "samples", "CPU s", "wall s", "CPU s a sample", "constant s",
+                           "estimate of the whole run s"])
     for case, estimate in zip(cases, full):
         case = {**case, "max_samples": samples}
-        result, c, w = timed(lambda: heavyhaul.run_heavyhaul_case(case))
-        n = (result["summary"] or {}).get("samples") or 0
+        r = harness.sample(one_heavyhaul, case)
         f = case["labels"]["f"]
         constant = sizes.HEAVYHAUL_SECONDS_PER_SAMPLE.get(f, sizes.HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED)
-        row(f, result["status"], n, f"{c:.1f}", f"{w:.1f}", f"{c / max(n, 1):.3f}", constant, f"{estimate:.0f}")
+        table.add(f, r["status"], r["samples"], f"{r['cpu_s']:.1f}", f"{r['wall_s']:.1f}",
+                  f"{r['cpu_s'] / max(r['samples'], 1):.3f}", constant, f"{estimate:.0f}")
 
 
 def shipped_runs(path):
@@ -142,14 +163,13 @@ def shipped_runs(path):
 def bench_shipped(heavy):
     cores = every_core(None)
     print(f"\n### the estimate of every shipped study (one worker, every core: {cores})\n")
-    row("study", "runs", "computing", "one worker", f"{cores} workers")
-    print("|---|---|---|---|---|")
+    table = harness.Table(["study", "runs", "computing", "one worker", f"{cores} workers"])
     for path in sorted(STUDIES.glob("*.yaml")):
         if not heavy and "consist" in load_yaml(path.read_text()):
             continue
         runs = shipped_runs(path)
         one, many = study_estimate(runs, 1), study_estimate(runs, cores)
-        row(path.stem, len(runs), duration(one[0]), duration(one[1]), duration(many[1]))
+        table.add(path.stem, len(runs), duration(one[0]), duration(one[1]), duration(many[1]))
 
 
 def main():
@@ -162,7 +182,7 @@ def main():
     p.add_argument("--shipped", action="store_true")
     p.add_argument("--no-heavy", action="store_true")
     args = p.parse_args()
-    print(f"`python bench/bench_sizes.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`")
+    print(harness.command(__file__))
     configure()
     for kind in args.kinds:
         {"run": lambda: bench_run(args.cases), "simulate": lambda: bench_simulate(args.draws, args.loop_study),

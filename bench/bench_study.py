@@ -8,10 +8,8 @@ energy-optimal and verified; the all-out time is solved once per scenario and pr
 configuration starts from an empty store.
 """
 import argparse
-import shlex
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import yaml
@@ -19,6 +17,7 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.studies.batch import run_study  # noqa: E402
 
 
@@ -35,21 +34,25 @@ def study(folder, points):
     return path
 
 
+@harness.case("study.batch", params={"points": 500, "workers": 1})
+def batch(p):
+    """The 200-case run study (5 masses x 40 supplements, Amsterdam metro) through studies.batch, from an empty store."""
+    with tempfile.TemporaryDirectory() as d:
+        _, counts, _ = run_study(study(Path(d), p["points"]), workers=p["workers"])
+    return {"cases": counts["computed"], "not_ok": counts["not_ok"]}
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--points", type=int, default=500)
     p.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     args = p.parse_args()
-    print(f"`python bench/bench_study.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
-    print("| workers | cases | wall s | cases per s | s per case | not ok |\n|---|---|---|---|---|---|")
+    print(harness.command(__file__) + "\n")
+    table = harness.Table(["workers", "cases", "wall s", "cases per s", "s per case", "not ok"])
     for w in args.workers:
-        with tempfile.TemporaryDirectory() as d:
-            path = study(Path(d), args.points)
-            t0 = time.perf_counter()
-            table, counts, _ = run_study(path, workers=w)
-            wall = time.perf_counter() - t0
-            print(f"| {w} | {counts['computed']} | {wall:.1f} | {counts['computed'] / wall:.2f} | "
-                  f"{wall / counts['computed']:.3f} | {counts['not_ok']} |", flush=True)
+        r = harness.sample(batch, {"points": args.points, "workers": w})
+        table.add(w, r["cases"], f"{r['wall_s']:.1f}", f"{r['cases'] / r['wall_s']:.2f}",
+                  f"{r['wall_s'] / r['cases']:.3f}", r["not_ok"])
 
 
 if __name__ == "__main__":

@@ -15,7 +15,6 @@ without the Kalman mass estimator).
 """
 import argparse
 import dataclasses
-import shlex
 import sys
 from pathlib import Path
 
@@ -25,6 +24,7 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 from ecostudy.control.controllers import Convex, leader_clock  # noqa: E402
 from ecostudy.control.estimator import MassEstimator  # noqa: E402
 from ecostudy.control.loop import run_loop  # noqa: E402
@@ -59,6 +59,18 @@ def row(name, result, controller, train, mass=1.0):
             f"{f['full_brake']} | {s.mean():.0f} / {np.percentile(s, 95):.0f} / {s.max():.0f}")
 
 
+@harness.case("thesis001_loop.convex", params={"track": "thesis001_advanced_1km", "time_weight": 10.0,
+                                              "energy_weight": 1.0, "latest": 200.0, "points": 500})
+def convex_trip(p):
+    """Yazhemsky 2017's convex controller at 10 Hz on a trip (Fig. 9.2 by default): arrival, energy, stop, solve ms."""
+    train = load_train(ROOT / "trains/thesis001_commuter.yaml")
+    result, controller = drive(train, p["track"], ConvexWeights(time=p["time_weight"], energy=p["energy_weight"]),
+                               p["latest"], p["points"])
+    s = 1e3 * np.array([x for x in controller.solve_seconds if x > 0])
+    return {"arrival_s": result.arrival_time_s, "energy_J_per_kg": result.traction_work / train.mass,
+            "stop_error_m": result.stop_error_m, "solve_mean_ms": s.mean(), "solve_max_ms": s.max()}
+
+
 def power_limited(train, power_kw):
     """The commuter with F <= 1e6 N and F v <= ``power_kw`` instead of its traction loss table."""
     return dataclasses.replace(train, traction=Envelope("force_power", max_force=1e6, max_power=power_kw * 1e3))
@@ -74,7 +86,7 @@ def main():
     args = p.parse_args()
     global DELAY
     DELAY = args.delay if args.delay == "measured" else int(args.delay)
-    print(f"`python bench/bench_thesis001_loop.py {' '.join(shlex.quote(a) for a in sys.argv[1:])}`\n")
+    print(harness.command(__file__) + "\n")
     train = load_train(ROOT / "trains/thesis001_commuter.yaml")
     if args.power_kw is not None:
         train = power_limited(train, args.power_kw)

@@ -16,8 +16,6 @@ recursion per unit mass) on the Amsterdam case at 76 s:
 Energy errors are against the shipped formulation at ``--reference`` nodes.
 """
 import argparse
-import shlex
-import statistics
 import sys
 from pathlib import Path
 
@@ -26,11 +24,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from bench import harness  # noqa: E402
 import ecostudy.ocp.space as model  # noqa: E402
 import ecostudy.analysis.single as single  # noqa: E402
 import ecostudy.ocp.problem as run  # noqa: E402
 from ecostudy.core.grid import make_grid  # noqa: E402
-from ecostudy.core.types import Timing
+from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 
 
@@ -64,11 +63,35 @@ def solve(track, train, points, variant, timeout):
     run.make_grid = variant.get("grid", make_grid)
     try:
         return single.solve_run(track, train, "Rokin", "Centraal", Timing(running_time=76.0), points=points,
-                             options={"max_cpu_time": float(timeout)})
-    except Exception as exc:  # a variant that fails is a result too
-        return exc
+                                options={"max_cpu_time": float(timeout)})
     finally:
         model.FORCE_SCALE, model.DYNAMICS_SCALE, run.make_grid = 1000.0, 1.0, make_grid
+
+
+def slug(name):
+    return "variants." + name.replace(" ", "_")
+
+
+def setup(p):
+    return load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml"), load_train(ROOT / "trains/amsterdam_metro.yaml"), p
+
+
+def variant_case(name):
+    """The harness case of one formulation variant: Ipopt seconds, iterations, energy, verification."""
+    def run_variant(state):
+        track, train, p = state
+        r = solve(track, train, p["points"], VARIANTS[name], p["timeout"])
+        s, v = r.summary, r.summary["verification"]
+        return {"solve_s": r.stages["solve"], "iterations": s["solver"]["iterations"], "ipopt": s["solver"]["status"],
+                "energy_kWh": s["traction_energy_kWh"], "verified": v["passed"], "stop_error_m": v["stop_error_m"],
+                "overspeed_kmh": v["max_overspeed_kmh"]}
+    harness.register(slug(name), run_variant, params={"points": 1000, "timeout": 120.0}, setup=setup,
+                     reference=None if name == "shipped" else slug("shipped"),
+                     doc=f"Rokin to Centraal in 76 s with the NLP's {name} formulation")
+
+
+for _name in VARIANTS:
+    variant_case(_name)
 
 
 def main():
@@ -79,27 +102,23 @@ def main():
     p.add_argument("--timeout", type=float, default=120.0)
     p.add_argument("--out", default=str(ROOT / "bench/results"))
     args = p.parse_args()
-    command = "python bench/bench_variants.py " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     track = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
     train = load_train(ROOT / "trains/amsterdam_metro.yaml")
     ref = solve(track, train, args.reference, {}, args.timeout).summary["traction_energy_kWh"]
-    lines = [f"`{command}`", "", f"reference: shipped formulation, K = {args.reference}: {ref:.6f} kWh", "",
-             "| variant | K | solve s | iterations | status | energy error % | verified | stop error m | overspeed km/h |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for name, variant in VARIANTS.items():
-        for k in args.points:
-            results = [solve(track, train, k, variant, args.timeout) for _ in range(args.repeat)]
-            r = results[-1]
-            if isinstance(r, Exception):
-                lines.append(f"| {name} | {k} | - | - | {type(r).__name__}: {str(r)[:60]} | - | - | - | - |")
+    lines = [harness.command(__file__), "", f"reference: shipped formulation, K = {args.reference}: {ref:.6f} kWh", ""]
+    table = harness.Table(["variant", "K", "solve s", "iterations", "status", "energy error %", "verified",
+                           "stop error m", "overspeed km/h"])
+    for name in VARIANTS:
+        for k in args.points:  # a variant that fails is a result too
+            r = harness.measure([slug(name)], args.repeat, {"points": k, "timeout": args.timeout},
+                                 errors="report", references=False)[slug(name)]
+            if r.status != "ok":
+                table.add(name, k, "-", "-", r.status[:70], "-", "-", "-", "-")
             else:
-                s, v = r.summary, r.summary["verification"]
-                t = statistics.median(x.stages["solve"] for x in results)
-                lines.append(f"| {name} | {k} | {t:.3f} | {s['solver']['iterations']} | {s['solver']['status']} | "
-                             f"{100 * (s['traction_energy_kWh'] / ref - 1):+.4f} | {v['passed']} | "
-                             f"{v['stop_error_m']:+.3f} | {v['max_overspeed_kmh']:.3f} |")
-            print(lines[-1], flush=True)
-    text = "\n".join(lines) + "\n"
+                table.add(name, k, f"{r.median('solve_s'):.3f}", r.last("iterations"), r.last("ipopt"),
+                          f"{100 * (r.last('energy_kWh') / ref - 1):+.4f}", r.last("verified"),
+                          f"{r.last('stop_error_m'):+.3f}", f"{r.last('overspeed_kmh'):.3f}")
+    text = "\n".join(lines) + "\n" + table.text() + "\n"
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "bench_variants.md").write_text(text)

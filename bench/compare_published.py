@@ -14,7 +14,8 @@ import pandas as pd
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from ecostudy.core.types import Timing
+from bench import harness  # noqa: E402
+from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.analysis.single import solve_run  # noqa: E402
 
@@ -24,17 +25,17 @@ def main():
     p.add_argument("--points", type=int, default=1000)
     args = p.parse_args()
     train = load_train(ROOT / "trains/thesis001_commuter.yaml")
-    rows = ["| trip | figure | time s | published J/kg | ecostudy J/kg | difference % | status | verified |",
-            "|---|---|---|---|---|---|---|---|"]
+    table = harness.Table(["trip", "figure", "time s", "published J/kg", "ecostudy J/kg", "difference %", "status",
+                           "verified"], show=False)
     for case in pd.read_csv(ROOT / "tests/data/thesis001_published.csv").to_dict("records"):
         track = load_track(ROOT / f"tracks/{case['track']}.yaml")
         r = solve_run(track, train, "A", "B", Timing(running_time=case["running_time_s"]), points=args.points)
         e = r.summary["traction_energy_J_per_kg"]
         pub = case["published_energy_J_per_kg"]
-        rows.append(f"| {case['track']} | {case['figure']} | {case['running_time_s']} | {pub:.2f} | {e:.2f} | "
-                    f"{100 * (e / pub - 1):+.1f} | {r.summary['solver']['status']} | {r.summary['verification']['passed']} |")
+        table.add(case["track"], case["figure"], case["running_time_s"], f"{pub:.2f}", f"{e:.2f}",
+                  f"{100 * (e / pub - 1):+.1f}", r.summary["solver"]["status"], r.summary["verification"]["passed"])
     print(f"`python bench/compare_published.py --points {args.points}`\n")
-    print("\n".join(rows))
+    print(table.text())
 
 
 if __name__ == "__main__":

@@ -1,0 +1,1 @@
+"""ecostudy's benchmarks: ``bench/harness.py`` (``python -m bench``) and the scripts that are its cases."""
