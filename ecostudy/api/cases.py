@@ -20,6 +20,7 @@ from ecostudy.report.files import write_cases_folder, write_network
 from ecostudy.report.html import write_html
 from ecostudy.report.style import output
 from ecostudy.studies.batch import run_kind
+from ecostudy.studies.kinds import STUDY_KINDS  # noqa: F401  (every built-in kind registered)
 from ecostudy.studies.calibrate import calibrate_study, validate_study
 from ecostudy.studies.closedloop import simulate_study
 from ecostudy.studies.heavyhaul import heavyhaul_study

@@ -88,19 +88,6 @@ def write_front(table, results, out_dir, meta, plot=True, weighted=None, out=sty
     return out_dir
 
 
-def write_compare(table, outcomes, segment, out_dir, title, plot=True, out=style.Output()):
-    """``compare.csv``, ``summary.json`` and ``compare.png`` of strategies side by side."""
-    out_dir = Path(out_dir)
-    write_csv(out_dir / "compare.csv", table)
-    drawn = figures(out_dir, plot, {"compare": later("compare_plot", outcomes, segment, title=title)}, out)
-    statuses = {name: Status.parse(st) for name, st in zip(table["strategy"], table["status"])}
-    write_summary(out_dir, "compare", statuses, {"compare": "compare.csv"}, drawn,
-                  title=title, target_running_time_s=table.attrs["target_s"],
-                  ato_verified=table.attrs["verified"])
-    write_html(out_dir)
-    return out_dir
-
-
 def write_journey(table, totals, results, out_dir, title, passing=(), plot=True, out=style.Output()):
     """``journey.csv``, ``journey_totals.csv``, ``summary.json`` and ``journey.png`` of a journey's
     distributions (every segment's run re-simulated: ``verified``)."""
