@@ -9,7 +9,7 @@ import pytest
 
 from ecostudy import api
 
-from .conftest import TRACKS, TRAINS, assert_folder, killed_part_way
+from .conftest import TRACKS, TRAINS, assert_folder, killed_part_way, load_yaml, write_yaml
 
 METRO = {"track": TRACKS / "amsterdam_rokin_centraal.yaml", "train": TRAINS / "amsterdam_metro.yaml"}
 COMPARE_NUMBERS = ["running_time_s", "arrival_error_s", "traction_energy_kWh", "net_energy_kWh",
@@ -76,3 +76,54 @@ def test_a_killed_comparison_resumes_and_workers_agree(compared, tmp_path):
     assert before >= 2 and resumed.summary["computed_now"] == 6 - before
     assert same_table(resumed.table, report.table, COMPARE_NUMBERS)
     assert same_table(compare_at(tmp_path / "w", workers=2).table, report.table, COMPARE_NUMBERS)
+
+
+NETWORK_NUMBERS = ["substation_kWh", "saving_vs_independent_pct", "traction_input_kWh", "regen_used_kWh",
+                   "regen_lost_kWh", "line_losses_kWh", "unserved_kWh", "balance_error_pct", "min_separation_m"]
+
+
+def network_table(report):
+    return report.table.drop(columns=["wall_s"])  # measured, not computed
+
+
+def network_study(folder, strategies):
+    """The tiny two-train study of tests/test_network.py, trains kept 50 m apart when following."""
+    from .test_network import tiny_network_study
+    path = tiny_network_study(folder, strategies)
+    return write_yaml(path, {**load_yaml(path), "buffer_m": 50.0})
+
+
+@pytest.fixture(scope="module")
+def networked(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("network")
+    study = network_study(folder, ["independent", "following"])
+    return api.network_folder(study, plot=False, workers=1, note=lambda line: None), study, folder / "out"
+
+
+def test_a_network_study_stores_each_strategy_and_resumes(networked, tmp_path):
+    report, study, out = networked
+    assert "2 strategies: 0 already stored, 2 computed now" in report.text and stored(out / "results.sqlite") == 2
+    assert_folder(out, "network", ["substation", "trains"], rows=2, status=report.status.kind)
+    again = api.network_folder(study, plot=False, workers=1, note=lambda line: None)
+    assert "2 strategies: 2 already stored, 0 computed now" in again.text
+    assert again.table.equals(report.table)
+    (tmp_path / "results.sqlite").write_bytes((out / "results.sqlite").read_bytes())
+    forget(tmp_path / "results.sqlite", ["following"])  # as a network study killed before it finished leaves it
+    resumed = api.network_folder(study, out=tmp_path, plot=False, workers=1, note=lambda line: None)
+    assert "2 strategies: 1 already stored, 1 computed now" in resumed.text
+    assert same_table(network_table(resumed), network_table(report), NETWORK_NUMBERS)
+
+
+@pytest.mark.slow
+def test_a_killed_network_study_resumes_and_workers_agree(networked, tmp_path):
+    report, _, _ = networked
+    study = network_study(tmp_path, ["independent", "following", "triggering"])
+    done = killed_part_way(["network", study, "--no-plot", "--workers", 1], tmp_path / "out" / "results.sqlite",
+                           at_least=1, timeout=300)
+    assert 1 <= done < 3, "the network study should have been killed part-way"
+    resumed = api.network_folder(study, plot=False, workers=1, note=lambda line: None)
+    assert resumed.summary["computed_now"] == 3 - int(resumed.summary["stored_before"])
+    first_two = resumed.table.iloc[:2].drop(columns=["wall_s"]).reset_index(drop=True)
+    assert same_table(first_two, network_table(report), NETWORK_NUMBERS)
+    pooled = api.network_folder(study, out=tmp_path / "w", plot=False, workers=2, note=lambda line: None)
+    assert same_table(network_table(pooled), resumed.table.drop(columns=["wall_s"]), NETWORK_NUMBERS)

@@ -12,11 +12,12 @@ from ecostudy.io.loaders import (check_stop_list, load_timetable, load_track, lo
                                  track_document, train_document)
 from ecostudy.io.timetable import journey_plan, name_stops
 from ecostudy.io.writers import check_output_dir
-from ecostudy.report.files import figures, later, write_front, write_journey
+from ecostudy.report.files import write_front, write_journey
 from ecostudy.report.html import write_html
-from ecostudy.report.style import Output, output
+from ecostudy.report.studyfiles import compare_figures
+from ecostudy.report.style import output
 from ecostudy.studies.batch import Expanded, run_expanded
-from ecostudy.studies.compare import compare_cases, outcomes, segment_of, study_documents
+from ecostudy.studies.compare import compare_cases, study_documents
 from ecostudy.studies.journey import journey
 from ecostudy.studies.options import case_from, check_options, no_windows, only_one, output_folder, timing_of
 from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
@@ -70,17 +71,6 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     lines.append(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
                  f"{meta['all_verified']}; {meta['wall_s']:.1f} s; outputs " + listed(out_dir))
     return reported(out_dir, lines)
-
-
-def compare_figures(plot: bool = True, out: Output = Output()) -> Callable:
-    """The study engine's ``draw`` (:func:`ecostudy.studies.batch.run_expanded`) of a comparison:
-    ``compare.png``, every stored strategy's simulated speed (none with ``plot`` False: an
-    earlier figure is removed)."""
-    def draw(out_dir, cases, rows, table):
-        drawings = {"compare": later("compare_plot", outcomes(cases, rows), segment_of(cases[0]),
-                                     title=table.attrs["title"]) if plot else None}
-        return figures(out_dir, plot, drawings, out)
-    return draw
 
 
 def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,

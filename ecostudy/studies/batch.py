@@ -177,7 +177,7 @@ class StudyKind:
     runs), ``task(case)`` -> a result dict (pure, picklable, never raising: wrap the work in
     :func:`outcome`), ``table(cases, rows)`` -> one row per case with ``status`` and ``reason``
     from the stored ``rows`` by case key (its ``attrs``, if any, go into ``summary.json``),
-    optionally ``size`` (below), and the name of the table's file (``results.csv``)."""
+    optionally ``size`` (below), the table's file and its name in ``summary.json``."""
 
     expand: Callable[[Path], Expanded]
     task: Callable[[dict], dict]
@@ -187,6 +187,8 @@ class StudyKind:
     command (:func:`~ecostudy.core.budget.check_study`), after ``expand`` and before anything
     runs; None: unchecked as a whole (its runs still meet ``check_run`` where they build a model)."""
     table_file: str = "results.csv"
+    table_name: str = "results"
+    """The table's name in ``summary.json`` (``api.load(folder).tables[table_name]``)."""
 
 
 STUDY_KINDS: Registry[StudyKind] = Registry("study kind")
@@ -223,7 +225,8 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     """A study of ``kind`` already expanded (from a study file, or from a command's options: ``where``
     names it): the cases not stored yet run (serially, in ``workers`` processes or on ``dask``,
     :func:`execute`), each stored as it arrives; the table of every stored case; the table's file
-    and summary.json written, with the files ``draw(output, cases, rows, table)`` returns (figures).
+    and summary.json written, with the files and tables ``draw(output, cases, rows, table)`` writes
+    and returns as (file names, {table name: file name}) (figures, a kind's other files).
     ``progress(done, failed, remaining, total)`` after each case. Returns a :class:`StudyRun`."""
     spec = kind_named(kind)
     if spec.size is not None:  # too big for the command: refused with its estimate (unless --force)
@@ -235,8 +238,8 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
                                progress)
     table = spec.table(expanded.cases, rows)
     write_csv(output / spec.table_file, table)
-    drawn = draw(output, expanded.cases, rows, table) if draw is not None else []
-    write_summary(output, kind, case_statuses(expanded.cases, table), {Path(spec.table_file).stem: spec.table_file, **{
+    drawn, tables = draw(output, expanded.cases, rows, table) if draw is not None else ([], {})
+    write_summary(output, kind, case_statuses(expanded.cases, table), {spec.table_name: spec.table_file, **tables, **{
                   Path(name).stem: name for name in expanded.inputs}}, ["results.sqlite", *drawn], study=str(where),
                   computed_now=counts["computed"], stored_before=counts["stored_before"], **table.attrs)
     counts["not_ok"] = int((table["status"] != "ok").sum())

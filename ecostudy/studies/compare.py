@@ -186,5 +186,5 @@ def compare_size(where, cases, workers=1):
 
 
 STUDY_KINDS.register("compare", StudyKind(expand_compare, run_strategy, compare_table, compare_size,
-                                          table_file="compare.csv"),
+                                          table_file="compare.csv", table_name="compare"),
                      doc="strategies side by side on a study's base case, each scored by the simulator")
