@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from ecostudy import api
+from ecostudy.studies import compare, network
 
 from .conftest import TRACKS, TRAINS, assert_folder, killed_part_way, load_yaml, write_yaml
 
@@ -57,7 +58,8 @@ def test_an_interrupted_comparison_computes_only_the_rest(compared, tmp_path):
     report, out = compared
     (tmp_path / "results.sqlite").write_bytes((out / "results.sqlite").read_bytes())
     forget(tmp_path / "results.sqlite", ["MARECO-style", "DAS round (nearest level)", "DAS phases"])
-    resumed = compare_at(tmp_path)  # the ATO optimum solved again in this process: the same optimum
+    compare._ATO.clear()  # as in a new process: the ATO optimum solved again, to the same optimum
+    resumed = compare_at(tmp_path)
     assert "6 strategies: 3 already stored, 3 computed now" in resumed.text
     assert same_table(resumed.table, report.table, COMPARE_NUMBERS)
 
@@ -71,10 +73,12 @@ def test_a_killed_comparison_resumes_and_workers_agree(compared, tmp_path):
                             100, "--no-plot", "--workers", 1, "--out", tmp_path / "k"], tmp_path / "k" / "results.sqlite",
                            timeout=300)
     assert 2 <= done < 6, "the comparison should have been killed part-way"
+    compare._ATO.clear()  # as in a new process
     resumed = compare_at(tmp_path / "k")
     before = int(resumed.summary["stored_before"])
     assert before >= 2 and resumed.summary["computed_now"] == 6 - before
     assert same_table(resumed.table, report.table, COMPARE_NUMBERS)
+    compare._ATO.clear()  # each worker solves the ATO optimum itself
     assert same_table(compare_at(tmp_path / "w", workers=2).table, report.table, COMPARE_NUMBERS)
 
 
@@ -109,6 +113,7 @@ def test_a_network_study_stores_each_strategy_and_resumes(networked, tmp_path):
     assert again.table.equals(report.table)
     (tmp_path / "results.sqlite").write_bytes((out / "results.sqlite").read_bytes())
     forget(tmp_path / "results.sqlite", ["following"])  # as a network study killed before it finished leaves it
+    network._INDEPENDENT.clear()  # as in a new process: the independent runs solved again, to the same runs
     resumed = api.network_folder(study, out=tmp_path, plot=False, workers=1, note=lambda line: None)
     assert "2 strategies: 1 already stored, 1 computed now" in resumed.text
     assert same_table(network_table(resumed), network_table(report), NETWORK_NUMBERS)
@@ -121,9 +126,11 @@ def test_a_killed_network_study_resumes_and_workers_agree(networked, tmp_path):
     done = killed_part_way(["network", study, "--no-plot", "--workers", 1], tmp_path / "out" / "results.sqlite",
                            at_least=1, timeout=300)
     assert 1 <= done < 3, "the network study should have been killed part-way"
+    network._INDEPENDENT.clear()  # as in a new process
     resumed = api.network_folder(study, plot=False, workers=1, note=lambda line: None)
     assert resumed.summary["computed_now"] == 3 - int(resumed.summary["stored_before"])
     first_two = resumed.table.iloc[:2].drop(columns=["wall_s"]).reset_index(drop=True)
     assert same_table(first_two, network_table(report), NETWORK_NUMBERS)
+    network._INDEPENDENT.clear()  # each worker solves the independent runs itself
     pooled = api.network_folder(study, out=tmp_path / "w", plot=False, workers=2, note=lambda line: None)
     assert same_table(network_table(pooled), resumed.table.drop(columns=["wall_s"]), NETWORK_NUMBERS)
