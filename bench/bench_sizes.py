@@ -19,6 +19,7 @@ the load, the CPU time the work), beside what the estimate says for the same run
   (``--no-heavy``: without the heavy-haul ones, which solve their reference first).
 """
 import argparse
+import tempfile
 import sys
 from pathlib import Path
 
@@ -34,7 +35,7 @@ from ecostudy.io.yamlsafe import load_yaml  # noqa: E402
 from ecostudy.ocp.solver import configure  # noqa: E402
 from ecostudy.studies import batch, cases as run_cases, closedloop, heavyhaul, sizes  # noqa: E402
 from ecostudy.studies.estimate import RUN_SECONDS_PER_POINT, check_closed_loop, run_seconds, spec_seconds  # noqa: E402
-from ecostudy.studies.network import run_network  # noqa: E402
+from ecostudy.studies.network import expand_network  # noqa: E402
 from ecostudy.studies.workers import every_core  # noqa: E402
 
 STUDIES = ROOT / "studies"
@@ -66,11 +67,13 @@ def one_loop(case):
     return summary_of(closedloop.run_loop_case(case))
 
 
-@harness.case("sizes.network", setup=lambda p: load_network_study(Path(p["study"])),
+@harness.case("sizes.network", setup=lambda p: Path(p["study"]),
               params={"study": str(STUDIES / "network_metro_2trains.yaml")})
-def one_network(st):
-    """A whole network study with one worker (``run_network``), beside ``sizes.network_runs``."""
-    run_network(st, 1, progress=lambda line: None)
+def one_network(path):
+    """A whole network study with one worker (the study kind ``network``, every strategy computed
+    into a fresh store), beside ``sizes.network_runs``."""
+    with tempfile.TemporaryDirectory() as out:
+        batch.run_expanded("network", expand_network(path, out=out), path)
 
 
 def nth_heavyhaul(p):
@@ -122,7 +125,7 @@ def bench_network():
     st = load_network_study(path)
     estimate = sum(sizes.network_runs(st, path))
     steps = estimate / sizes.NETWORK_SECONDS_PER_STEP
-    r = harness.sample(one_network, st)
+    r = harness.sample(one_network, path)
     print(f"\n### network: {path.name}, {len(st.strategies)} strategies, one worker\n")
     harness.Table(["steps (legs x trains x strategies)", "CPU s", "wall s", "estimate s", "CPU ms a step", "constant ms"]
                   ).add(f"{steps:,.0f}", f"{r['cpu_s']:.1f}", f"{r['wall_s']:.1f}", f"{estimate:.1f}",

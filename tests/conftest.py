@@ -1,4 +1,11 @@
 """Shared fixtures: each expensive solve runs once per session and many tests read it."""
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from contextlib import closing
 from pathlib import Path
 
 from ecostudy.ocp.solver import configure
@@ -89,3 +96,24 @@ def assert_folder(out, kind, tables, rows=None, status="ok"):
     if rows is not None:
         assert len(folder.table) == rows
     return folder
+
+
+def killed_part_way(args, db, at_least=2, timeout=120):
+    """Start ``python -m ecostudy *args``, kill -9 it once ``at_least`` cases are in the store
+    ``db`` (or after ``timeout`` s); returns how many were stored then."""
+    proc = subprocess.Popen([sys.executable, "-m", "ecostudy", *map(str, args)], cwd=ROOT,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline, stored = time.time() + timeout, 0
+    while time.time() < deadline and proc.poll() is None:
+        if db.exists():
+            try:
+                with closing(sqlite3.connect(db)) as conn:
+                    stored = conn.execute("SELECT count(*) FROM cases").fetchone()[0]
+            except sqlite3.OperationalError:  # file created, table not yet
+                stored = 0
+            if stored >= at_least:
+                break
+        time.sleep(0.05)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    return stored

@@ -13,7 +13,7 @@ import pytest
 from ecostudy.studies.batch import run_study
 from ecostudy.studies.cases import expand
 
-from .conftest import assert_folder, ROOT, TRACKS, TRAINS, load_yaml, write_yaml
+from .conftest import assert_folder, killed_part_way, ROOT, TRACKS, TRAINS, load_yaml, write_yaml
 
 NUMERIC = ["running_time_s", "traction_energy_kWh", "net_energy_kWh", "top_speed_kmh"]
 
@@ -75,22 +75,7 @@ def test_two_workers_give_identical_table(reference, tmp_path):
 def test_killed_study_resumes_with_the_remaining_cases(reference, tmp_path):
     path = study_file(tmp_path, tmp_path / "out")
     db = tmp_path / "out" / "results.sqlite"
-    proc = subprocess.Popen([sys.executable, "-m", "ecostudy", "run", str(path), "--no-progress"],
-                            cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.time() + 120
-    stored = 0
-    while time.time() < deadline and proc.poll() is None:
-        if db.exists():
-            try:
-                with sqlite3.connect(db) as conn:
-                    stored = conn.execute("SELECT count(*) FROM cases").fetchone()[0]
-            except sqlite3.OperationalError:  # file created, table not yet
-                stored = 0
-            if stored >= 2:
-                break
-        time.sleep(0.05)
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
+    stored = killed_part_way(["run", path, "--no-progress"], db)
     assert 2 <= stored < 6, "the study should have been killed part-way"
     table, counts, _ = run_study(path)
     assert counts["stored_before"] >= 2

@@ -2,24 +2,23 @@
 import pytest
 from typer.testing import CliRunner
 
+from ecostudy import api
 from ecostudy.cli import app
-from ecostudy.studies.compare import compare
-from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train
 
 from .conftest import assert_folder, TRACKS, TRAINS
 
 
 @pytest.fixture(scope="module")
-def regional_compare():
-    return compare(load_track(TRACKS / "regional_808m.yaml"), load_train(TRAINS / "regional_alstom.yaml"),
-                   "Origin", "Destination", Timing(running_time=80.0), points=500)
+def regional_compare(tmp_path_factory):
+    return api.compare_folder(track=TRACKS / "regional_808m.yaml", train=TRAINS / "regional_alstom.yaml",
+                              from_stop="Origin", to_stop="Destination", time=80.0, points=500, plot=False,
+                              workers=1, out=tmp_path_factory.mktemp("regional"))
 
 
 @pytest.mark.slow
 def test_optimum_beats_every_strategy_at_the_same_time(regional_compare):
-    table, outcomes, _ = regional_compare
-    rows = table.set_index("strategy")
+    rows = regional_compare.table.set_index("strategy")
     assert list(rows.index) == ["all-out", "ATO optimum", "eco-drive coasting", "MARECO-style",
                                 "DAS round (nearest level)", "DAS phases"]
     # the phases advice keeps the timetable and lands within 0.5 % of the optimum

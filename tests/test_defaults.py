@@ -13,7 +13,7 @@ from ecostudy.cli import app
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.io import loaders, schemas
 from ecostudy.network.fleet import plan
-from ecostudy.studies.compare import compare
+from ecostudy.studies.compare import compare_cases
 from ecostudy.studies.journey import journey
 from ecostudy.studies.pareto import sweep, weighted_points
 
@@ -36,7 +36,7 @@ def test_the_study_schemas_default_to_the_constants():
 
 
 def test_the_api_and_the_library_default_to_the_constants():
-    assert [default(f) for f in (api.solve, solve_run, compare)] == [RUN_POINTS] * 3
+    assert [default(f) for f in (api.solve, solve_run, compare_cases)] == [RUN_POINTS] * 3
     assert [default(f) for f in (api.pareto, api.replanner, fronts.journey_folder, sweep, weighted_points,
                                  journey, plan, savings)] == [FRONT_POINTS] * 8
     # None: the study file's K, else the constant (below)

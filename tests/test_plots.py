@@ -4,6 +4,7 @@ run adding up, and figures written as PNG, SVG or PDF at a chosen resolution."""
 import re
 from functools import partial
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -14,12 +15,13 @@ from ecostudy.analysis.single import solve_run
 from ecostudy.core.errors import InputError
 from ecostudy.core.types import Supply, Timing
 from ecostudy.core.units import to_kwh
-from ecostudy.io.loaders import load_track, load_train
+from ecostudy.io.loaders import load_track, load_train, track_document, train_document
 from ecostudy.network import fleet as fleets
 from ecostudy.network import strategies
 from ecostudy.report import heavyplots, loopplots, netplots, plots, style
 from ecostudy.studies.closedloop import simulate_study
-from ecostudy.studies.compare import compare
+from ecostudy.studies.batch import Expanded, run_expanded
+from ecostudy.studies.compare import compare_cases, outcomes, segment_of
 from ecostudy.studies.heavyhaul import heavyhaul_study
 from ecostudy.studies.pareto import sweep, weighted_points
 
@@ -55,9 +57,13 @@ def rokin():
 
 
 @pytest.fixture(scope="module")
-def regional_compare():
-    return compare(load_track(TRACKS / "regional_808m.yaml"), load_train(TRAINS / "regional_alstom.yaml"),
-                   "Origin", "Destination", Timing(running_time=80.0), points=200)
+def regional_compare(tmp_path_factory):
+    """(table, the strategies' simulated runs, something with the segment) of a comparison run by
+    the study engine, as ``ecostudy compare`` runs it."""
+    cases = compare_cases(train_document(TRAINS / "regional_alstom.yaml")[0], track_document(TRACKS / "regional_808m.yaml"),
+                          "Origin", "Destination", Timing(running_time=80.0), points=200)
+    ran = run_expanded("compare", Expanded(tmp_path_factory.mktemp("compare"), cases), "test")
+    return ran.table, outcomes(ran.cases, ran.rows), SimpleNamespace(segment=segment_of(cases[0]))
 
 
 @pytest.fixture(scope="module")

@@ -7,26 +7,27 @@ functions (the command line only parses and prints).
 ``progress`` (a :class:`ecostudy.core.progress.Watcher`) their stages and the steps of each.
 """
 import logging
+from contextlib import nullcontext
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 from ecostudy.api.blas import limit_blas_threads
 from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
-from ecostudy.io.loaders import load_network_study
-from ecostudy.io.writers import check_output_dir
 from ecostudy.report import calplots, heavyplots, loopplots
-from ecostudy.report.files import write_cases_folder, write_network
+from ecostudy.report.files import write_cases_folder
+from ecostudy.report.studyfiles import network_files
 from ecostudy.report.html import write_html
 from ecostudy.report.style import output
-from ecostudy.studies.batch import run_kind
+from ecostudy.studies.batch import run_expanded, run_kind
+from ecostudy.studies.kinds import STUDY_KINDS  # noqa: F401  (every built-in kind registered)
 from ecostudy.studies.calibrate import calibrate_study, validate_study
 from ecostudy.studies.closedloop import simulate_study
 from ecostudy.studies.heavyhaul import heavyhaul_study
-from ecostudy.studies.network import run_network
-from ecostudy.studies.options import check_options, output_folder
-from ecostudy.studies.workers import every_core
-from ecostudy.studies.sizes import check_closed_loop_study, check_network_study
+from ecostudy.studies.network import expand_network
+from ecostudy.studies.options import check_options
+from ecostudy.studies.workers import every_core, worker_pool
+from ecostudy.studies.sizes import check_closed_loop_study
 
 Progress = Optional[Callable[[int, int, int, int], None]]
 log = logging.getLogger("ecostudy")
@@ -106,15 +107,24 @@ def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[
 
 def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, workers: Optional[int] = None,
                    fig_format: str = "png", dpi: Optional[float] = None,
-                   note: Callable[[str], None] = log.info, *, progress: Progress = None) -> Report:
+                   dask: Optional[str] = None, retry_failed: bool = False, note: Callable[[str], None] = log.info, *,
+                   progress: Progress = None) -> Report:
     """``ecostudy network``: trains sharing one DC substation under every strategy of the study
-    (independent, rules 7.7 / 7.11, dissension, joint optimum, following; Farooqi 2018, Ch. 7)."""
+    (independent, rules 7.7 / 7.11, dissension, joint optimum, following; Farooqi 2018, Ch. 7); each
+    strategy a case of the study kind ``network`` (:mod:`ecostudy.studies.network`), stored in
+    ``results.sqlite`` and resumed, over ``workers`` processes (every core by default) or Dask."""
     figures, workers = output(fig_format, dpi), every_core(workers)
-    st = load_network_study(study)
-    check_network_study(st, study, workers)  # too big for a run or the command: refused (unless --force)
-    folder = check_output_dir(output_folder(out, st.output))
-    table = write_network(run_network(st, workers, progress=note, tick=progress), st, folder, plot=plot, out=figures)
-    return reported(folder, [shown(table, NETWORK_COLUMNS), "outputs " + listed(folder)])
+    check_options(workers=workers)
+    with worker_pool(workers) if workers > 1 else nullcontext() as pool:  # the fleet's first runs
+        expanded = expand_network(study, workers, pool, note, out)  # too big: refused first (unless --force)
+    ran = run_expanded("network", expanded, study, workers, dask, retry_failed, progress=progress,
+                       draw=network_files(plot, figures))
+    for name, row in ran.table.set_index("strategy").iterrows():
+        note(f"{name:12s} " + (f"substation {row['substation_kWh']:.3f} kWh, {row['wall_s']:.1f} s"
+                               if str(row["status"]).split(":")[0] != "failed" else str(row["status"]).upper()))
+    write_html(ran.output)
+    return reported(ran.output, [shown(ran.table, NETWORK_COLUMNS), counts_line(ran.counts, "strategies"),
+                                 "outputs " + listed(ran.output)])
 
 
 def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: Optional[Path] = None,

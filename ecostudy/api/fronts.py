@@ -4,20 +4,25 @@
 from pathlib import Path
 from typing import Callable, Optional
 
-from ecostudy.api.outcome import Report, listed, reported, shown
+from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
 from ecostudy.core import units
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.core.errors import InputError, problem
-from ecostudy.io.loaders import check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
+from ecostudy.io.loaders import (check_stop_list, load_timetable, load_track, load_train, timing_from_timetable,
+                                 track_document, train_document)
 from ecostudy.io.timetable import journey_plan, name_stops
 from ecostudy.io.writers import check_output_dir
-from ecostudy.report.files import write_compare, write_front, write_journey
+from ecostudy.report.files import write_front, write_journey
+from ecostudy.report.html import write_html
+from ecostudy.report.studyfiles import compare_figures
 from ecostudy.report.style import output
-from ecostudy.studies.compare import compare
+from ecostudy.studies.batch import Expanded, run_expanded
+from ecostudy.studies.compare import compare_cases, study_documents
 from ecostudy.studies.journey import journey
 from ecostudy.studies.options import case_from, check_options, no_windows, only_one, output_folder, timing_of
 from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
-from ecostudy.studies.sizes import check_compare, check_front, check_journey
+from ecostudy.studies.sizes import check_front, check_journey
+from ecostudy.studies.workers import every_core
 
 FRONT_COLUMNS = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
                  "marginal_saving_kWh_per_s", "coasting_share_pct", "regime_sequence"]
@@ -71,14 +76,17 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
 def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
                    from_stop: Optional[str] = None, to_stop: Optional[str] = None, time: Optional[float] = None,
                    supplement: Optional[float] = None, points: Optional[int] = None, out: Optional[Path] = None,
-                   plot: bool = True, fig_format: str = "png", dpi: Optional[float] = None, *,
+                   plot: bool = True, fig_format: str = "png", dpi: Optional[float] = None,
+                   workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False, *,
                    progress: Optional[Progress] = None) -> Report:
     """``ecostudy compare``: the strategies side by side for one running time [s] or supplement [%],
-    every one scored by the same independent simulator."""
-    figures = output(fig_format, dpi)
-    check_options(time=time, supplement=supplement, points=points)
+    every one scored by the same independent simulator; each strategy a case of the study kind
+    ``compare`` (:mod:`ecostudy.studies.compare`), stored in ``results.sqlite`` and resumed, over
+    ``workers`` processes (every core by default) or a Dask scheduler."""
+    figures, workers = output(fig_format, dpi), every_core(workers)
+    check_options(time=time, supplement=supplement, points=points, workers=workers)
     only_one(time=time, supplement=supplement)
-    trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points)
+    _, _, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points)
     no_windows(st, "compare")
     if time is not None or supplement is not None:
         timing = timing_of(time, supplement)
@@ -86,13 +94,13 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
         timing = st.timing
     else:
         raise InputError(problem("command line", "--time", "give --time or --supplement"))
+    train_doc, track_doc = study_documents(st) if st is not None else (train_document(train)[0], track_document(track))
+    cases = compare_cases(train_doc, track_doc, f, t, timing, k or RUN_POINTS, st.name if st is not None else "compare")
     out_dir = output_folder(out, beside(st, "_compare", "compare"))
-    check_compare("command line", k or 1000)  # too big: refused with its estimate (unless --force)
-    check_output_dir(out_dir, ("compare.csv", "compare.png"))
-    table, outcomes, case = compare(trk, trn, f, t, timing, points=k or RUN_POINTS, progress=progress)
-    write_compare(table, outcomes, case.segment, out_dir,
-                  f"{trn.name} - {f} to {t}, target {table.attrs['target_s']:.1f} s", plot=plot, out=figures)
-    return reported(out_dir, [shown(table), "outputs " + listed(out_dir)])
+    ran = run_expanded("compare", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,
+                       progress=progress, draw=compare_figures(plot, figures))
+    write_html(out_dir)
+    return reported(out_dir, [shown(ran.table), counts_line(ran.counts, "strategies"), "outputs " + listed(out_dir)])
 
 
 def associated_track(tt, path: Optional[Path]) -> Path:

@@ -61,7 +61,7 @@ def call(debug, name, *args, force=False, bar=None):
         except typer.Exit:
             raise
         except KeyboardInterrupt:
-            log.warning("interrupted" + (f": every finished {bar[0][:-1]} is stored; run the same command again to "
+            log.warning("interrupted" + (f": every finished {bar[0][:-3] + 'y' if bar[0].endswith('ies') else bar[0][:-1]} is stored; run the same command again to "
                                          "continue" if bar and bar[2:] != (False,) else ""))
             raise typer.Exit(130)
         except Exception as exc:  # an unexpected failure still gets one line by default

@@ -35,15 +35,15 @@ def compare_command(
     study: o.Study = None, track: o.Track = None, train: o.Train = None, from_stop: o.From = None, to_stop: o.To = None,
     time: o.Time = None, supplement: o.Supplement = None, points: o.Points = None, out: o.Out = None,
     no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0, force: o.Force = False,
-    debug: o.Debug = False,
+    debug: o.Debug = False, workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False,
 ):
     """Strategies side by side, every one scored by the same independent simulator: all-out, ATO optimum,
-    eco-drive coasting, MARECO-style (after OSRD's MARECO), DAS round and DAS phases.
+    eco-drive coasting, MARECO-style (after OSRD's MARECO), DAS round and DAS phases; resumable.
 
     Example: ecostudy compare studies/default.yaml --out out/compare
     """
     finish(call(debug, "compare_folder", study, track, train, from_stop, to_stop, time, supplement, points, out,
-                not no_plot, fig_format, dpi, force=force, bar=("strategies", False, False)))
+                not no_plot, fig_format, dpi, workers, dask, retry_failed, force=force, bar=("strategies", False)))
 
 
 @app.command(name="journey", short_help="Spread a journey's running time over its segments.")

@@ -90,6 +90,20 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1, tick
     return {name: out[name] for name in strategies}
 
 
+def solve_independent(fleet):
+    """The independent runs of ``fleet`` (strategy (a), the start of every other) and their wall
+    time [s]."""
+    t0 = time.perf_counter()
+    ind = independent(fleet)
+    return ind, time.perf_counter() - t0
+
+
+def one_strategy(fleet, name, ind, wall=0.0):
+    """One strategy of ``fleet`` from the independent runs ``ind`` (``wall``: their solve time [s]),
+    solved and scored as :func:`run_strategies` does; a failed solve is {"failed": why, "wall_s"}."""
+    return _scored(fleet, ind, {}, wall) if name == "independent" else _strategy(fleet, name, ind)
+
+
 def _supervised(rule):
     def run(fleet, ind, mapper):
         runs, history, stopped = supervised(fleet, rule, ind, mapper=mapper)

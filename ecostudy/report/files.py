@@ -3,7 +3,6 @@ front (``pareto.csv``, ``pareto.json``, the plots), each written atomically."""
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ecostudy.analysis.export import fixed_step
 from ecostudy.core.status import OK, Status, flagged, parsed
@@ -88,19 +87,6 @@ def write_front(table, results, out_dir, meta, plot=True, weighted=None, out=sty
     return out_dir
 
 
-def write_compare(table, outcomes, segment, out_dir, title, plot=True, out=style.Output()):
-    """``compare.csv``, ``summary.json`` and ``compare.png`` of strategies side by side."""
-    out_dir = Path(out_dir)
-    write_csv(out_dir / "compare.csv", table)
-    drawn = figures(out_dir, plot, {"compare": later("compare_plot", outcomes, segment, title=title)}, out)
-    statuses = {name: Status.parse(st) for name, st in zip(table["strategy"], table["status"])}
-    write_summary(out_dir, "compare", statuses, {"compare": "compare.csv"}, drawn,
-                  title=title, target_running_time_s=table.attrs["target_s"],
-                  ato_verified=table.attrs["verified"])
-    write_html(out_dir)
-    return out_dir
-
-
 def write_journey(table, totals, results, out_dir, title, passing=(), plot=True, out=style.Output()):
     """``journey.csv``, ``journey_totals.csv``, ``summary.json`` and ``journey.png`` of a journey's
     distributions (every segment's run re-simulated: ``verified``)."""
@@ -114,45 +100,6 @@ def write_journey(table, totals, results, out_dir, title, passing=(), plot=True,
                   drawn, title=title)
     write_html(out_dir)
     return out_dir
-
-
-def write_network(run, st, out_dir, plot=True, out=style.Output()):
-    """``network_substation.csv`` (per strategy, with its ``status``), ``network_trains.csv``,
-    ``network_steps_<strategy>.csv``, ``network.json``, ``summary.json`` and ``network.png``.
-    Returns the per-strategy table."""
-    out_dir = Path(out_dir)
-    fl, outcome = run.fleet, run.outcome
-    base = outcome.get("independent", {}).get("totals", {}).get("substation_kWh")
-    subs, trains = [], []
-    failed_ = {n: r for n, r in outcome.items() if "failed" in r}
-    done = {n: r for n, r in outcome.items() if "failed" not in r}
-    for name, res in failed_.items():
-        subs.append({"strategy": name, "status": f"failed: {res['failed']}", "wall_s": res["wall_s"],
-                     "all_verified": False})
-    for name, res in done.items():
-        tot = res["totals"]
-        subs.append({"strategy": name, **tot,
-                     "saving_vs_independent_pct": None if base is None else 100 * (1 - tot["substation_kWh"] / base)})
-        for train, rec in res["trains"].items():
-            trains.append({"strategy": name, "train": train, **rec})
-        write_csv(out_dir / f"network_steps_{name}.csv", res["steps"])
-    table = pd.DataFrame(subs)
-    statuses = {row["strategy"]: Status.parse(row["status"]) for _, row in table.iterrows()}
-    write_csv(out_dir / "network_substation.csv", table)
-    write_csv(out_dir / "network_trains.csv", pd.DataFrame(trains))
-    write_json(out_dir / "network.json", {"study": st.name, "segment_times_s": [leg.running_time for leg in fl.legs[0]],
-                                          "steps": fl.steps, "dt_s": st.dt,
-                                          "strategies": {**{n: {**r["totals"], **r["info"]} for n, r in done.items()},
-                                                         **{n: {"status": f"failed: {r['failed']}"}
-                                                            for n, r in failed_.items()}}})
-    drawn = figures(out_dir, plot, {"network": later("network_plot", fl, done, title=st.name),
-                                    "network_supply": later("supply_plot", fl, done, title=st.name)}, out)
-    steps = [f"network_steps_{name}.csv" for name in done]
-    write_summary(out_dir, "network", statuses, {"substation": "network_substation.csv", "trains": "network_trains.csv"},
-                  steps + ["network.json"] + drawn, study=st.name, steps=fl.steps,
-                  dt_s=st.dt)
-    write_html(out_dir)
-    return table
 
 
 def write_cases_folder(out_dir, kind, table, name_columns, tables, files=(), **fields):

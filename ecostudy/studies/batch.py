@@ -176,7 +176,8 @@ class StudyKind:
     """What makes a kind of study: ``expand(path)`` -> :class:`Expanded` (validated, before anything
     runs), ``task(case)`` -> a result dict (pure, picklable, never raising: wrap the work in
     :func:`outcome`), ``table(cases, rows)`` -> one row per case with ``status`` and ``reason``
-    from the stored ``rows`` by case key, and optionally ``size`` (below)."""
+    from the stored ``rows`` by case key (its ``attrs``, if any, go into ``summary.json``),
+    optionally ``size`` (below), the table's file and its name in ``summary.json``."""
 
     expand: Callable[[Path], Expanded]
     task: Callable[[dict], dict]
@@ -185,35 +186,64 @@ class StudyKind:
     """``size(path, cases, workers)``: refuse (unless forced) a study estimated too big for one
     command (:func:`~ecostudy.core.budget.check_study`), after ``expand`` and before anything
     runs; None: unchecked as a whole (its runs still meet ``check_run`` where they build a model)."""
+    table_file: str = "results.csv"
+    table_name: str = "results"
+    """The table's name in ``summary.json`` (``api.load(folder).tables[table_name]``)."""
 
 
 STUDY_KINDS: Registry[StudyKind] = Registry("study kind")
 
 
+class StudyRun(NamedTuple):
+    """A study run by :func:`run_expanded`: its table, counts (``total``, ``stored_before``,
+    ``computed``, ``failed``, ``not_ok``), output folder, cases and stored rows by case key."""
+
+    table: pd.DataFrame
+    counts: dict
+    output: Path
+    cases: list
+    rows: dict
+
+
 def run_kind(kind, path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
-    """The one study engine: a study file of ``kind`` expanded into cases; the cases not stored yet
-    run (serially, in ``workers`` processes or on ``dask``, :func:`execute`), each stored as it
-    arrives; the table of every stored case; results.csv and summary.json written. Returns
-    (table, counts, output folder); ``progress(done, failed, remaining, total)`` after each case."""
+    """The one study engine: a study file of ``kind`` expanded into cases, then
+    :func:`run_expanded`. Returns (table, counts, output folder)."""
+    expanded = kind_named(kind).expand(Path(path))
+    return run_expanded(kind, expanded, path, workers, dask, retry_failed, out, progress)[:3]
+
+
+def kind_named(kind):
+    """The registered :class:`StudyKind` ``kind``; an unknown one is one line (exit status 2)."""
     try:
-        spec = STUDY_KINDS.get(kind)
+        return STUDY_KINDS.get(kind)
     except KeyError as exc:
         raise InputError(problem("command line", "--kind", exc.args[0]))
-    expanded = spec.expand(Path(path))
+
+
+def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False, out=None, progress=None,
+                 draw=None):
+    """A study of ``kind`` already expanded (from a study file, or from a command's options: ``where``
+    names it): the cases not stored yet run (serially, in ``workers`` processes or on ``dask``,
+    :func:`execute`), each stored as it arrives; the table of every stored case; the table's file
+    and summary.json written, with the files and tables ``draw(output, cases, rows, table)`` writes
+    and returns as (file names, {table name: file name}) (figures, a kind's other files).
+    ``progress(done, failed, remaining, total)`` after each case. Returns a :class:`StudyRun`."""
+    spec = kind_named(kind)
     if spec.size is not None:  # too big for the command: refused with its estimate (unless --force)
-        spec.size(Path(path), expanded.cases, workers)
-    output = check_output_dir(out or expanded.output, ("results.csv", "results.sqlite", *expanded.inputs))
+        spec.size(Path(where), expanded.cases, workers)
+    output = check_output_dir(out or expanded.output, (spec.table_file, "results.sqlite", *expanded.inputs))
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
     counts, rows = stored_rows(expanded.cases, output / "results.sqlite", spec.task, workers, dask, retry_failed,
                                progress)
     table = spec.table(expanded.cases, rows)
-    write_csv(output / "results.csv", table)
-    write_summary(output, kind, case_statuses(expanded.cases, table), {"results": "results.csv", **{
-                  Path(name).stem: name for name in expanded.inputs}}, ["results.sqlite"], study=str(path),
-                  computed_now=counts["computed"], stored_before=counts["stored_before"])
+    write_csv(output / spec.table_file, table)
+    drawn, tables = draw(output, expanded.cases, rows, table) if draw is not None else ([], {})
+    write_summary(output, kind, case_statuses(expanded.cases, table), {spec.table_name: spec.table_file, **tables, **{
+                  Path(name).stem: name for name in expanded.inputs}}, ["results.sqlite", *drawn], study=str(where),
+                  computed_now=counts["computed"], stored_before=counts["stored_before"], **table.attrs)
     counts["not_ok"] = int((table["status"] != "ok").sum())
-    return table, counts, output
+    return StudyRun(table, counts, output, expanded.cases, rows)
 
 
 def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
@@ -231,9 +261,9 @@ def expand_study(path):
 
 
 def case_statuses(cases, table):
-    """Every case's :class:`~ecostudy.core.status.Status`, named by its labels, from a study table's
+    """Every case's :class:`~ecostudy.core.status.Status`, named by its ``name`` or labels, from a study table's
     ``status`` and ``reason`` columns."""
-    names = [", ".join(f"{k}={v}" for k, v in c["labels"].items()) or c["key"] for c in cases]
+    names = [c.get("name") or ", ".join(f"{k}={v}" for k, v in c["labels"].items()) or c["key"] for c in cases]
     return parsed(names, table["status"], table["reason"] if "reason" in table else [None] * len(table))
 
 

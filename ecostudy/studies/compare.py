@@ -1,61 +1,190 @@
-"""Strategies side by side on one scenario (thesis 000 Tables 4.2, 6.1): one table, one plot.
+"""Strategies side by side on one scenario (Farooqi 2018, Tables 4.2, 6.1): a study kind, each
+strategy a case (all-out, ATO optimum, eco-drive coasting, MARECO-style, DAS round, DAS phases),
+run by the one study engine (:func:`ecostudy.studies.batch.run_expanded`: stored, resumable, in
+worker processes or on Dask).
 
 Every row is scored by the independent simulator (times, energies and stop errors are the
-simulated ones), so optimised and heuristic strategies are measured alike.
+simulated ones), so optimised and heuristic strategies are measured alike. The four strategies
+after the ATO optimum start from it (its running time, its handle, its run for the DAS phases
+NLP): a process solves it once and keeps it (:data:`_ATO`); a worker or a resumed command that
+did not solve it solves it again from the same inputs, which gives the same optimum (Ipopt is
+deterministic for one NL file).
 """
+import warnings
+
+import numpy as np
 import pandas as pd
 
+from ecostudy import __version__
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.defaults import RUN_POINTS
-from ecostudy.core.errors import InfeasibleError
+from ecostudy.core.errors import EcostudyWarning
+from ecostudy.core.grid import make_segment
+from ecostudy.core.simulate import Driven, Trace
+from ecostudy.core.status import Status, driven_run, failed
 from ecostudy.core.types import Timing
-from ecostudy.core.simulate import Driven
-from ecostudy.core.status import driven_run, failed
 from ecostudy.das.advice import das_phases, nearest_levels
 from ecostudy.heuristics import ecodrive
+from ecostudy.io.loaders import track_document, track_from_schema, train_document, train_from_schema
+from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.ocp.problem import prepare
-from ecostudy.studies.workers import ticker
+from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
+from ecostudy.studies.cases import case_key, load_checked_study
+from ecostudy.studies.options import no_windows
+from ecostudy.studies.sizes import check_compare
+
+HEURISTICS = {"eco-drive coasting": ecodrive.eco_coasting, "MARECO-style": ecodrive.mareco}
+STRATEGIES = ("all-out", "ATO optimum", *HEURISTICS, "DAS round (nearest level)", "DAS phases")
+ROW = ("strategy", "running_time_s", "traction_energy_kWh", "net_energy_kWh", "stop_error_m", "handle_changes")
+_SCENARIO = ("train", "track", "from", "to", "running_time_s", "supplement", "points", "version")
+_ATO: dict = {}  # the ATO optimum of a scenario, per process: the base of the strategies after it
 
 
-def compare(track, train, from_stop, to_stop, timing, points=RUN_POINTS, progress=None):
-    """(table, outcomes): all-out, ATO optimum, eco-drive coasting, MARECO-style, DAS round and DAS phases.
+def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_POINTS, study="compare"):
+    """One case per strategy (:data:`STRATEGIES`) of a scenario: the train and track documents
+    (schema-shaped), the stops, the timing (a running time [s] or a supplement, a fraction over the
+    all-out time) and the grid; each keyed by a hash of all of them and the strategy."""
+    scenario = {"study": study, "train": train_doc, "track": track_doc, "from": from_stop, "to": to_stop,
+                "running_time_s": timing.running_time, "supplement": timing.supplement, "points": points,
+                "version": __version__}
+    cases = []
+    for name in STRATEGIES:
+        case = {**scenario, "strategy": name, "scenario": name, "name": name, "labels": {"strategy": name}}
+        case["key"] = case_key(case)
+        cases.append(case)
+    return cases
 
-    ``mode_changes`` counts the handle changes of each run (DAS runs: the advice rows minus one);
-    ``progress(done, failed, remaining, total)`` after each strategy.
-    """
-    tick = ticker(progress, 6)
-    allout = solve_run(track, train, from_stop, to_stop, Timing(), objective="time", points=points)
-    tick()
-    ato = solve_run(track, train, from_stop, to_stop, timing, points=points)
-    tick()
-    case = prepare(track, train, from_stop, to_stop, points)
-    outcomes = [Driven("all-out", allout.handle, allout.trace),
-                Driven("ATO optimum", ato.handle, ato.trace)]
+
+def study_documents(st):
+    """(train document, track document) of a loaded study's base case, as its files give them."""
+    return train_document(st.train_path)[0], track_document(st.track_path)
+
+
+def expand_compare(path):
+    """A study file's base case as a comparison (``ecostudy run FILE --kind compare``): its timing,
+    its grid; written beside its output (``<output>_compare``)."""
+    st = load_checked_study(path)
+    no_windows(st, "compare")
+    train_doc, track_doc = study_documents(st)
+    cases = compare_cases(train_doc, track_doc, st.from_stop, st.to_stop, st.timing, st.points or RUN_POINTS, st.name)
+    return Expanded(st.output.parent / (st.output.name + "_compare"), cases)
+
+
+def _inputs(case):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EcostudyWarning)  # shown once when the comparison was expanded
+        train = train_from_schema(TrainFile.model_validate(case["train"]), case["study"])
+    return track_from_schema(TrackFile.model_validate(case["track"])), train
+
+
+def _ato(case, track, train):
+    key = case_key({k: case[k] for k in _SCENARIO})
+    if key not in _ATO:
+        _ATO.clear()  # one scenario at a time: a worker keeps one run, not every comparison's
+        _ATO[key] = solve_run(track, train, case["from"], case["to"],
+                              Timing(running_time=case["running_time_s"], supplement=case["supplement"]),
+                              points=case["points"])
+    return _ATO[key]
+
+
+def run_strategy(case):
+    """One strategy of :func:`compare_cases`, driven by the simulator; never raises."""
+    return outcome(case, lambda: _strategy(case))
+
+
+def _strategy(case):
+    track, train = _inputs(case)
+    name, extra = case["strategy"], {}
+    if name == "all-out":
+        run = solve_run(track, train, case["from"], case["to"], Timing(), objective="time", points=case["points"])
+        return _stored(Driven(name, run.handle, run.trace), train, run.segment.distance, run.status,
+                       verified=bool(run.summary["verification"]["passed"]))
+    ato = _ato(case, track, train)
     target = ato.summary["running_time_s"]
-    rows_extra = []
-    for name, heuristic in (("eco-drive coasting", ecodrive.eco_coasting), ("MARECO-style", ecodrive.mareco)):
-        try:
-            outcomes.append(heuristic(case, target))
-        except InfeasibleError as exc:
-            rows_extra.append({"strategy": name, "note": str(exc)})
-        tick()
-    outcomes.append(nearest_levels(case.segment, train, case.nodes, ato.handle))
-    tick()
-    block, _, phased = das_phases(ato, points)
-    outcomes.append(phased)
-    tick()
-    rows = [o.row(train, case.segment.distance) for o in outcomes] + rows_extra
-    rows[len(outcomes) - 1]["handle_changes"] = block["mode_changes"]
-    table = pd.DataFrame(rows)
-    e_allout = table["traction_energy_kWh"].iloc[0]
-    e_opt = table["traction_energy_kWh"].iloc[1]
+    if name == "ATO optimum":
+        return _stored(Driven(name, ato.handle, ato.trace), train, ato.segment.distance, ato.status, target_s=target,
+                       verified=bool(ato.summary["verification"]["passed"]))
+    prepared = prepare(track, train, case["from"], case["to"], case["points"])
+    if name in HEURISTICS:
+        driven = HEURISTICS[name](prepared, target)
+    elif name == "DAS phases":
+        block, _, driven = das_phases(ato, case["points"])
+        extra["handle_changes"] = block["mode_changes"]  # the advice rows minus one
+    else:
+        driven = nearest_levels(prepared.segment, train, prepared.nodes, ato.handle)
+    row = driven.row(train, prepared.segment.distance)
+    status = driven_run(row["stop_error_m"], row["running_time_s"] - target)
+    return _stored(driven, train, prepared.segment.distance, status, target_s=target, **extra)
+
+
+def _stored(driven, train, distance, status, **fields):
+    """(status, reason, summary) of a strategy's run: its table row and its simulated trace."""
+    t = driven.trace
+    trace = {"t_s": t.t.tolist(), "x_m": t.x.tolist(), "v_mps": t.v.tolist(),
+             **{k: float(getattr(t, k)) for k in ("traction_energy", "braking_energy", "regenerated_energy",
+                                                  "stop_position", "arrival_time", "net_energy")}}
+    summary = {**driven.row(train, distance), **fields, "handle": np.asarray(driven.handle).tolist(), "trace": trace}
+    return status.kind, status.reason or None, summary
+
+
+def outcomes(cases, rows):
+    """The strategies' simulated runs (:class:`~ecostudy.core.simulate.Driven`) from the stored rows,
+    in study order (a strategy not stored, or failed, has none)."""
+    driven = []
+    for case in cases:
+        s = (rows.get(case["key"]) or {}).get("summary")
+        if s:
+            t = s["trace"]
+            trace = Trace(*(np.asarray(t[k]) for k in ("t_s", "x_m", "v_mps")),
+                          *(t[k] for k in ("traction_energy", "braking_energy", "regenerated_energy", "stop_position",
+                                           "arrival_time", "net_energy")))
+            driven.append(Driven(case["strategy"], np.asarray(s["handle"]), trace))
+    return driven
+
+
+def segment_of(case):
+    """The segment a comparison's case runs over (for its figure: the speed limits)."""
+    track, train = _inputs(case)
+    return make_segment(track, train, case["from"], case["to"])
+
+
+def compare_table(cases, rows):
+    """One row per strategy: simulated running time, arrival error against the ATO optimum's time,
+    energies, saving against the all-out run, gap to the optimum, stop error, handle changes
+    (DAS phases: the advice rows minus one), status; a failed strategy's reason in ``note``. Its
+    attrs (``summary.json``): the title, the target running time and whether both NLPs verified."""
+    table, statuses, by_name = [], [], {}
+    for case in cases:
+        row = rows.get(case["key"]) or {"status": "missing", "error": "not computed yet"}
+        s = row.get("summary")
+        by_name[case["strategy"]] = s or {}
+        if s and row["status"] in ("ok", "flagged"):
+            table.append({k: s[k] for k in ROW})
+            statuses.append(str(Status.parse(row["status"], row.get("error") or "")))
+        else:
+            table.append({"strategy": case["strategy"], "note": row.get("error")})
+            statuses.append(str(failed(row.get("error") or row["status"])))
+    table = pd.DataFrame(table, columns=[*ROW, *(["note"] if any("note" in r for r in table) else [])])
+    e_allout = by_name["all-out"].get("traction_energy_kWh", np.nan)
+    e_opt = by_name["ATO optimum"].get("traction_energy_kWh", np.nan)
+    target = next((s["target_s"] for s in by_name.values() if "target_s" in s), np.nan)
     table.insert(4, "saving_vs_all_out_pct", 100 * (1 - table["traction_energy_kWh"] / e_allout))
     table.insert(5, "gap_to_optimum_pct", 100 * (table["traction_energy_kWh"] / e_opt - 1))
     table.insert(2, "arrival_error_s", table["running_time_s"] - target)
-    statuses = [allout.status, ato.status] + [driven_run(r["stop_error_m"], r["running_time_s"] - target)
-                                              for r in rows[2:len(outcomes)]]
-    statuses += [failed(r["note"]) for r in rows_extra]
-    table["status"] = [str(st) for st in statuses]
-    table.attrs.update(target_s=target, verified=bool(ato.summary["verification"]["passed"]
-                                                     and allout.summary["verification"]["passed"]))
-    return table, outcomes, case
+    table["status"] = statuses
+    case = cases[0]
+    train_name = case["train"].get("name", "train")
+    table.attrs.update(title=f"{train_name} - {case['from']} to {case['to']}, target {target:.1f} s",
+                       target_running_time_s=None if np.isnan(target) else float(target),
+                       ato_verified=bool(by_name["ATO optimum"].get("verified") and by_name["all-out"].get("verified")))
+    return table
+
+
+def compare_size(where, cases, workers=1):
+    """Refuse a comparison estimated above the command's budget (unless forced)."""
+    check_compare(where, cases[0]["points"])
+
+
+STUDY_KINDS.register("compare", StudyKind(expand_compare, run_strategy, compare_table, compare_size,
+                                          table_file="compare.csv", table_name="compare"),
+                     doc="strategies side by side on a study's base case, each scored by the simulator")

@@ -1,31 +1,131 @@
-"""A network study: the fleet planned (all-out times, every segment's first run), then every
-strategy run and scored by the same circuit (``network.fleet``, ``network.strategies``), over a
-pool of worker processes when ``workers`` > 1. The tables and files: ``report.files.write_network``.
+"""A network study as a study kind: each strategy a case (Farooqi 2018, Ch. 7), run by the one
+study engine (:func:`ecostudy.studies.batch.run_expanded`: stored, resumable, in worker processes
+or on Dask).
+
+:func:`expand_network` checks the study's size, then plans the fleet once (all-out times, every
+segment's first run; over ``pool`` when given), which travels in every case beside its key (the
+key hashes the study's fields, its track and train documents and the strategy, not the fleet).
+Every strategy but the independent runs starts from them: a process solves them once and keeps
+them (:data:`_INDEPENDENT`); a worker or a resumed command that did not solve them solves them
+again from the same fleet, which gives the same runs (the results are the same with any number of
+workers, ``tests/test_workers.py``). The table is one row per strategy
+(``network_substation.csv``); the other files: ``report.files.write_network_files``.
 """
-from contextlib import nullcontext
-from typing import Any, Callable, NamedTuple, Optional
+import json
+from pathlib import Path
 
-from ecostudy.network import fleet, strategies
-from ecostudy.studies.workers import worker_pool
+import numpy as np
+import pandas as pd
+
+from ecostudy import __version__
+from ecostudy.io.documents import read_document
+from ecostudy.io.loaders import load_network_study, track_document, train_document, validate
+from ecostudy.io.schemas import NetworkStudyFile
+from ecostudy.io.writers import check_output_dir
+from ecostudy.network import fleet as fleets
+from ecostudy.network.strategies import one_strategy, solve_independent
+from ecostudy.ocp.timedomain import LegRun
+from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
+from ecostudy.studies.cases import case_key
+from ecostudy.studies.sizes import check_network_study
+
+_INDEPENDENT: dict = {}  # the independent runs of a study and their wall time, per process
 
 
-class NetworkRun(NamedTuple):
-    """A network study's results: the planned fleet, every strategy's outcome (``totals``,
-    ``trains``, ``steps``, ``info``; a failed strategy has ``failed`` and ``wall_s`` only)."""
+def expand_network(path, workers=1, pool=None, note=None, out=None):
+    """A network study file's strategies as cases, each carrying the planned fleet (``pool``: a
+    process pool for the segments' first runs; ``note(line)``: the plan in a line), into ``out``
+    (default: the study's output). Before anything is solved, a study too big for a run or for the
+    command is refused (unless forced) and the output folder checked."""
+    path = Path(path)
+    st = load_network_study(path)
+    check_network_study(st, path, workers)
+    output = check_output_dir(Path(out) if out else st.output, ("network_substation.csv", "results.sqlite"))
+    s = validate(NetworkStudyFile, read_document(path), path)
+    fl = fleets.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
+                     st.supply, st.points, st.buffer, pool, st.supplement)
+    if note:
+        note(f"{len(st.names)} trains, {len(st.stops) - 1} segments ({', '.join(f'{t:.1f}' for t in fl.asked_times)} s "
+             f"before rounding to {st.dt} s steps), {fl.steps} steps")
+    inputs = {"fields": s.model_dump(mode="json", exclude={"output", "strategies"}),
+              "track": track_document(path.parent / s.track), "train": train_document(path.parent / s.train)[0],
+              "version": __version__}
+    base = case_key(inputs)
+    cases = []
+    for name in st.strategies:
+        case = {"study": st.name, "inputs": base, "strategy": name, "scenario": name, "name": name,
+                "labels": {"strategy": name}}
+        case["key"] = case_key(case)
+        case["fleet"] = fl  # after the key: the fleet follows from the inputs the key hashes
+        cases.append(case)
+    return Expanded(output, cases)
 
-    fleet: Any
-    outcome: dict
+
+def run_network_strategy(case):
+    """One strategy of :func:`expand_network`, solved and scored; never raises."""
+    return outcome(case, lambda: _strategy(case))
 
 
-def run_network(st, workers: int = 1, progress: Callable[[str], None] = print,
-                tick: Optional[Callable[[int, int, int, int], None]] = None) -> NetworkRun:
-    """Plan the fleet of a loaded network study ``st`` and run its strategies (``progress``: a line
-    each, ``tick(done, failed, remaining, total)``: the strategies' counts)."""
-    with worker_pool(workers) if workers > 1 else nullcontext() as pool:
-        fl = fleet.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
-                        st.supply, st.points, st.buffer, pool, st.supplement)
-        progress(f"{len(st.names)} trains, {len(st.stops) - 1} segments ({', '.join(f'{t:.1f}' for t in fl.asked_times)} s "
-                 f"before rounding to {st.dt} s steps), {fl.steps} steps")
-        outcome = strategies.run_strategies(fl, st.strategies, progress=progress, pool=pool, workers=workers,
-                                               tick=tick)
-    return NetworkRun(fl, outcome)
+def _strategy(case):
+    if case["inputs"] not in _INDEPENDENT:
+        _INDEPENDENT.clear()  # one study at a time
+        _INDEPENDENT[case["inputs"]] = solve_independent(case["fleet"])
+    ind, wall = _INDEPENDENT[case["inputs"]]
+    result = one_strategy(case["fleet"], case["strategy"], ind, wall)
+    if "failed" in result:
+        return "failed", result["failed"], {"wall_s": result["wall_s"]}
+    status, _, reason = result["totals"]["status"].partition(": ")
+    summary = {"totals": result["totals"], "trains": result["trains"], "info": result["info"],
+               "steps": result["steps"].to_dict("list"),
+               "runs": [[{**{k: getattr(run, k) for k in ("s", "v", "ft", "fb", "fr", "p")}, "notes": run.notes}
+                         for run in train] for train in result["runs"]]}
+    return status, reason or None, _plain(summary)
+
+
+def _plain(data):
+    """``data`` with numpy numbers and arrays as Python ones (the store keeps JSON)."""
+    return json.loads(json.dumps(data, default=lambda x: x.tolist() if isinstance(x, (np.ndarray, np.generic))
+                                 else str(x)))
+
+
+def outcomes(cases, rows):
+    """{strategy: its outcome as ``network.strategies.run_strategies`` gives it} from the stored
+    rows (``runs`` as :class:`~ecostudy.ocp.timedomain.LegRun`, ``steps`` a DataFrame; a failed
+    one: ``failed`` and ``wall_s``), in study order."""
+    out = {}
+    for case in cases:
+        row = rows.get(case["key"]) or {"status": "failed", "error": "not computed yet", "summary": None}
+        s = row["summary"] or {}
+        if "totals" not in s:
+            out[case["strategy"]] = {"failed": row["error"] or row["status"], "wall_s": s.get("wall_s")}
+            continue
+        runs = [[LegRun(*(np.asarray(r[k]) for k in ("s", "v", "ft", "fb", "fr", "p")), r["notes"]) for r in train]
+                for train in s["runs"]]
+        out[case["strategy"]] = {"runs": runs, "steps": pd.DataFrame(s["steps"]), "trains": s["trains"],
+                                 "totals": s["totals"], "info": s["info"]}
+    return out
+
+
+def network_table(cases, rows):
+    """One row per strategy (``network_substation.csv``): the substation's energy and every total
+    of the circuit, the saving against independent driving, ``status``; attrs: the clock."""
+    done = outcomes(cases, rows)
+    base = done.get("independent", {}).get("totals", {}).get("substation_kWh")
+    table = []
+    for name, res in done.items():
+        if "failed" in res:
+            table.append({"strategy": name, "status": f"failed: {res['failed']}", "wall_s": res["wall_s"],
+                          "all_verified": False})
+            continue
+        tot = res["totals"]
+        table.append({"strategy": name, **tot,
+                      "saving_vs_independent_pct": None if base is None else 100 * (1 - tot["substation_kWh"] / base)})
+    fl = cases[0]["fleet"]
+    table = pd.DataFrame(table)
+    table.attrs.update(steps=fl.steps, dt_s=fl.dt)
+    return table
+
+
+STUDY_KINDS.register("network", StudyKind(expand_network, run_network_strategy, network_table,
+                                          table_file="network_substation.csv", table_name="substation"),
+                     doc="trains sharing a DC substation, each strategy a case (Farooqi 2018, Ch. 7)")

@@ -9,7 +9,7 @@ from ecostudy.io.store import release_inherited
 
 def every_core(workers):
     """``workers`` as given, else every core this process may run on: the default of every study
-    command (``run``, ``network``, ``simulate``, ``heavyhaul``); their results are the same bit for bit
+    command (``run``, ``compare``, ``network``, ``simulate``, ``heavyhaul``); their results are the same bit for bit
     with any number of workers (tests/test_workers.py), except what is measured: wall and per-step
     solve times (slower with every core busy) and a process's peak memory."""
     return workers if workers is not None else len(os.sched_getaffinity(0))

@@ -1,0 +1,46 @@
+"""The files of a study kind beyond its table and ``summary.json``: each a ``draw`` of the study
+engine (:func:`ecostudy.studies.batch.run_expanded`), called with the output folder, the cases,
+the stored rows and the table; it writes its files atomically and returns (file names,
+{table name: file name})."""
+from pathlib import Path
+
+import pandas as pd
+
+from ecostudy.io.writers import write_csv, write_json
+from ecostudy.report import style
+from ecostudy.report.files import figures, later
+from ecostudy.studies import compare, network
+
+
+def compare_figures(plot=True, out=style.Output()):
+    """The study engine's ``draw`` (:func:`ecostudy.studies.batch.run_expanded`) of a comparison:
+    ``compare.png``, every stored strategy's simulated speed (none with ``plot`` False: an
+    earlier figure is removed)."""
+    def draw(out_dir, cases, rows, table):
+        drawings = {"compare": later("compare_plot", compare.outcomes(cases, rows), compare.segment_of(cases[0]),
+                                     title=table.attrs["title"]) if plot else None}
+        return figures(out_dir, plot, drawings, out), {}
+    return draw
+
+
+def network_files(plot=True, out=style.Output()):
+    """The study engine's ``draw`` (:func:`ecostudy.studies.batch.run_expanded`) of a network study:
+    ``network_trains.csv``, ``network_steps_<strategy>.csv``, ``network.json``, ``network.png`` and
+    ``network_supply.png`` from the stored strategies (``studies.network.outcomes``)."""
+    def draw(out_dir, cases, rows, table):
+        out_dir, fl, study = Path(out_dir), cases[0]["fleet"], cases[0]["study"]
+        outcome = network.outcomes(cases, rows)
+        done = {n: r for n, r in outcome.items() if "failed" not in r}
+        trains = [{"strategy": name, "train": train, **rec} for name, res in done.items()
+                  for train, rec in res["trains"].items()]
+        for name, res in done.items():
+            write_csv(out_dir / f"network_steps_{name}.csv", res["steps"])
+        write_csv(out_dir / "network_trains.csv", pd.DataFrame(trains))
+        write_json(out_dir / "network.json", {
+            "study": study, "segment_times_s": [leg.running_time for leg in fl.legs[0]], "steps": fl.steps,
+            "dt_s": fl.dt, "strategies": {n: {**r["totals"], **r["info"]} if n in done else
+                                          {"status": f"failed: {r['failed']}"} for n, r in outcome.items()}})
+        drawn = figures(out_dir, plot, {"network": later("network_plot", fl, done, title=study),
+                                        "network_supply": later("supply_plot", fl, done, title=study)}, out)
+        return [f"network_steps_{name}.csv" for name in done] + ["network.json"] + drawn, {"trains": "network_trains.csv"}
+    return draw
