@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 import yaml
 
+from ecostudy.heavyhaul.airbrake import application_time
 from ecostudy.heavyhaul.approach import brake_share, braked_distance, braking_point, service_share
 from ecostudy.heavyhaul.plant import CascadePlant
 
@@ -12,6 +13,12 @@ from .conftest import write_yaml
 from .test_heavyhaul_intrain import consist
 from .test_heavyhaul_limits import drop_study, run
 from .test_heavyhaul_study import level
+
+
+def test_the_pipes_application_time_is_the_last_wagons_delay_plus_the_build_up():
+    """The ore train: the last wagon's centre 2 x 20.47 + 199.5 x 12.07 m behind the front, at 250 m/s,
+    plus tau_b = 8 s (the lead a limit drop gets on top of a sample's running with air brakes on)."""
+    assert application_time(consist()) == pytest.approx((2 * 20.47 + 199.5 * 12.07) / 250.0 + 8.0, rel=1e-9)
 
 
 def test_a_constant_brake_without_the_pipe_stands_the_train_at_v2_over_2a():

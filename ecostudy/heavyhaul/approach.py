@@ -26,12 +26,14 @@ import numpy as np
 PREDICT_STEP = 0.25  # [s]: the one-mass prediction's time step
 HORIZON = 600.0      # [s]: a train that has not stood by then does not stand (inf)
 BISECTIONS = 30
+CHUNK = 80           # time steps of the pipe read at once (20 s)
 
 
 def braked_distance(plant, state, efforts):
     """(distance [m], time [s]) the train runs from ``state`` until it stands with ``efforts`` [N per
     car] held: one mass, the locomotives at once, the wagons' brakes through the pipe (instant with
-    the pipe off), against the resistance and grades felt now ((inf, inf) if it never stands)."""
+    the pipe off), against the resistance and grades felt now ((inf, inf) if it never stands). The
+    pipe's forces are read for a chunk of :data:`CHUNK` time steps at once."""
     c = plant.consist
     mass = float(c.mass.sum())
     held = float(plant.resistance(state.positions, state.speeds).sum())
@@ -41,11 +43,13 @@ def braked_distance(plant, state, efforts):
     v = float(np.dot(c.mass, state.speeds) / mass)
     x = t = 0.0
     while v > 0.0 and t < HORIZON:
-        wagons = float(applied[~plant.loco].sum()) if pipe is None else float(pipe.at(t + 0.5 * PREDICT_STEP).sum())
-        a = (locos + wagons - held) / mass
-        if v + a * PREDICT_STEP <= 0.0:
-            return x + v * v / (-2.0 * a), t - v / a
-        x, v, t = x + (v + 0.5 * a * PREDICT_STEP) * PREDICT_STEP, v + a * PREDICT_STEP, t + PREDICT_STEP
+        middles = t + (np.arange(CHUNK) + 0.5) * PREDICT_STEP
+        wagons = (np.full(CHUNK, float(applied[~plant.loco].sum())) if pipe is None
+                  else pipe.at(middles[:, None]).sum(axis=1))
+        for a in (locos + wagons - held) / mass:
+            if v + a * PREDICT_STEP <= 0.0:
+                return float(x + v * v / (-2.0 * a)), float(t - v / a)
+            x, v, t = x + (v + 0.5 * a * PREDICT_STEP) * PREDICT_STEP, v + a * PREDICT_STEP, t + PREDICT_STEP
     return (x, t) if v <= 0.0 else (np.inf, np.inf)
 
 
