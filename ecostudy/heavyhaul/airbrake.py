@@ -55,3 +55,11 @@ class BrakePipe:
             force = np.where(change, _lag(force, seen, arrives - since, self.brake), force)
             since, seen = np.where(change, arrives, since), np.where(change, command, seen)
         return _lag(force, seen, elapsed - since, self.brake)
+
+
+def application_time(consist):
+    """[s] the brake signal's run to the last wagon plus the build-up time constant: how much later
+    than an instant brake a train braked from its head has its brakes (9.8 + 8 s on the ore train)."""
+    wagons = np.array([kind != "locomotive" for kind in consist.kinds])
+    return float(signal_delays(consist, consist.air_brake.signal_speed)[wagons].max(initial=0.0)
+                 + consist.air_brake.build_up)

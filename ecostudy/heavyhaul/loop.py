@@ -18,6 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core.units import KN
+from ecostudy.heavyhaul.approach import brake_share, braking_point
 from ecostudy.heavyhaul.plant import LOSSES, CascadeStep
 from ecostudy.heavyhaul.rhc import TERMS, input_offsets
 
@@ -110,7 +111,10 @@ def stopping(plant, reduction, reference, state, planned, ts):
         v, d = mean_speed(plant, now), reference.distance[-1] - head_position(plant, now)
         held = float(plant.resistance(now.positions, now.speeds).sum())  # running, grade, curve [N]
         low, _ = limits(plant, reduction, now)
-        if d > 0:  # the constant deceleration that stops the head at the stop, for at most its 2d/v
+        if plant.air_brake is not None and d > 0:  # the pipe's delays and build-up anticipated (heavyhaul.approach)
+            share, stop_in = brake_share(plant, now, reduction.share(low, c.mass), d)
+            u = share * low
+        elif d > 0:  # the constant deceleration that stops the head at the stop, for at most its 2d/v
             wanted, stop_in = held - c.mass.sum() * v * v / (2 * d), 2 * d / v
             shape = planned if planned.sum() < 0 else low  # else every car the same share of its brakes
             u = np.clip(shape * (min(wanted, 0.0) / shape.sum()), low, 0.0)  # coasts if it needs no brake
@@ -120,6 +124,14 @@ def stopping(plant, reduction, reference, state, planned, ts):
         steps.append(plant.step(now, reduction.share(u, c.mass), dt))
         now = steps[-1].state
     return combined(steps), u
+
+
+def anticipated(plant, reduction, reference, state, ts):
+    """With air brakes: the final application is due now (:func:`~ecostudy.heavyhaul.approach.braking_point`
+    at the reference's final deceleration); from then on every sample is a stopping sample."""
+    low, _ = limits(plant, reduction, state)
+    return braking_point(plant, state, reduction.share(low, plant.consist.mass),
+                         reference.distance[-1] - head_position(plant, state), reference.final_deceleration, ts)
 
 
 def combined(steps):
@@ -140,7 +152,7 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     c, ts = plant.consist, reduction.model.ts
     nv, locos = len(reduction.members), reduction.locomotives
     u = np.zeros(nv) if applied is None else np.asarray(applied, float)
-    rows, works, overruns, arrived = [], np.zeros(3), 0, False
+    rows, works, overruns, arrived, braking = [], np.zeros(3), 0, False, False
     losses, stored = np.zeros(len(LOSSES)), plant.stored_energy(state)
     for _ in range(samples):
         measured = reduced_state(plant, reduction, state)
@@ -156,8 +168,9 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         if observer is not None:  # only the locomotives' speeds are measured (eq. 3)
             observer.update(measured[locos], u - offsets[0])
         step = None
-        if (head_position(plant, state) > reference.final_approach
-                and (getattr(controller, "values", None) or {}).get("planned", [np.inf])[0] < STOPPED):
+        braking = braking or (plant.air_brake is not None and anticipated(plant, reduction, reference, state, ts))
+        if braking or (head_position(plant, state) > reference.final_approach
+                       and (getattr(controller, "values", None) or {}).get("planned", [np.inf])[0] < STOPPED):
             step, u = stopping(plant, reduction, reference, state, u, ts)  # the plan stops within this sample
         step = step or plant.step(state, reduction.share(u, c.mass), ts)
         state = step.state

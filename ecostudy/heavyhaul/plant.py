@@ -227,7 +227,7 @@ class CascadePlant:
         scale = self.rtol / RTOL
         atol = np.concatenate([np.full(n, ATOL_POSITION * scale), np.full(n, ATOL_SPEED * scale),
                                np.full(QUADRATURES, ATOL_WORK)])
-        pipe = self._pipe(state, requested, dt)
+        pipe = self.brake_pipe(state, requested, dt)
         t0 = state.time
         sol = solve_ivp(lambda t, y: self.derivatives(y, requested, None if pipe is None else pipe.at(t - t0)),
                         (t0, t0 + dt), y0, method="BDF", rtol=self.rtol, atol=atol, jac_sparsity=self.jac_sparsity)
@@ -243,7 +243,7 @@ class CascadePlant:
         return CascadeStep(CascadeState(p, v, t0 + dt, brakes, commanded, sent), forces[-1], float(np.abs(forces).max()),
                            *map(float, works[:3]), excess, tuple(map(float, works[3:])))
 
-    def _pipe(self, state, requested, dt):
+    def brake_pipe(self, state, requested, dt):
         """The wagons' brakes over a step from ``state`` (None: air_brake off): the command is the
         request clipped to each wagon's envelope (speed-independent)."""
         if self.air_brake is None:
