@@ -9,7 +9,10 @@ to N: mass, resistance, traction and braking uniform within +-10 %, DAS levels, 
 Ch. 10 noise, one sample of computation delay), per controller of the study: the stop error (max
 |e|, median), the arrival against the timetable (median, max), the energy per kg against the same
 controller on the model train without noise (mean ratio), the statuses and the wall time of a
-run. The time SBPC nominal L = 1 takes for the 200 samples: ``--blocks 1 --disturbances`` (run wall).
+run; per run (stderr) the lateness split in two: the plan part (the earliest stand on the mark
+from the true state where the terminal approach's first handle acts, coasting then braking in
+full on the draw's own brake, against the timetable) and the approach part (the run's stand
+against that earliest one). The time SBPC nominal L = 1 takes for the 200 samples: ``--blocks 1 --disturbances`` (run wall).
 
 Table 1 (Table 4.1's trend): the nominal SBPC for each L on the model train: energy at the wheel,
 arrival, stop error, solve time per step (mean, max), Ipopt iterations per step, samples where
@@ -36,12 +39,12 @@ from ecostudy.control.loop import run_loop  # noqa: E402
 from ecostudy.control.sbpc import TRANSCRIPTIONS, VARIANTS, Sbpc  # noqa: E402
 from ecostudy.control.sppc import Sppc  # noqa: E402
 from ecostudy.core.plant import Plant, Truth  # noqa: E402
-from ecostudy.core.types import Timing  # noqa: E402
+from ecostudy.core.types import State, Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp.problem import prepare  # noqa: E402
 from ecostudy.ocp.solver import configure  # noqa: E402
 from ecostudy.studies.cases import case_key  # noqa: E402
-from ecostudy.studies.closedloop import expand, run_loop_case  # noqa: E402
+from ecostudy.studies.closedloop import case_delay, expand, run_loop_case  # noqa: E402
 from ecostudy.studies.workers import worker_pool  # noqa: E402
 
 STUDY = ROOT / "studies/metro_terminal.yaml"
@@ -56,9 +59,50 @@ def nominal_case(case):
     return quiet
 
 
+def earliest_stop(plant, state, distance, dt=0.02):
+    """The earliest stand at ``distance`` from ``state`` with the DAS levels 0 and -1 on ``plant``
+    (the draw's train, no noise): coast, then brake in full on the train's own brake; the switch
+    found by bisection. The clock at the stand [s] (``state``'s clock if even full braking overruns)."""
+    def stop(coast):
+        s = state
+        while s.time < state.time + coast - 1e-9:
+            s = plant.step(s, 0.0, min(dt, state.time + coast - s.time)).state
+        while True:
+            step = plant.step(s, -1.0, dt)
+            if step.stood is not None or step.state.speed <= 0.0:
+                return step.state.position, step.stood if step.stood is not None else step.state.time
+            s = step.state
+    lo, hi = 0.0, 60.0
+    if stop(0.0)[0] > distance:
+        return stop(0.0)[1]
+    for _ in range(30):
+        lo, hi = (lo, 0.5 * (lo + hi)) if stop(0.5 * (lo + hi))[0] > distance else (0.5 * (lo + hi), hi)
+    return stop(lo)[1]
+
+
+def lateness_parts(case, summary, arrival):
+    """(plan part, approach part) [s] of a run's lateness: the earliest stand from the true state
+    where the terminal approach's first handle acts (:func:`earliest_stop`) against the timetable,
+    and the run's stand against that earliest one. (nan, nan) without an approach."""
+    steps = summary.get("steps") or {}
+    first = next((i for i, s in enumerate(steps.get("status", [])) if s and s.startswith("terminal_")), None)
+    if first is None:
+        return float("nan"), float("nan")
+    delay = case_delay(case)
+    k = min(first + (delay if isinstance(delay, int) else 1), len(steps["time_s"]) - 1)
+    track, train = load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml"), load_train(ROOT / "trains/amsterdam_metro.yaml")
+    segment = prepare(track, train, "Rokin", "Centraal", 200).segment
+    plant = Plant(segment, train, Truth(**case["truth"]))
+    earliest = earliest_stop(plant, State(steps["position_m"][k], steps["speed_mps"][k], steps["time_s"][k]),
+                             segment.distance)
+    return earliest - arrival, summary["arrival_s"] - earliest
+
+
 def timed(case):
     """``run_loop_case`` with the run's wall time."""
     row, _, wall = harness.timed(lambda: run_loop_case(case))
+    if row["summary"]:
+        row["summary"]["parts"] = lateness_parts(case, row["summary"], case["window"][1])
     return case, row, wall
 
 
@@ -105,7 +149,9 @@ def draws_table(study, draws, workers, only, skip=0, model=True):
                 print(f"  {name} draw {case['labels']['draw']}: {row['status']} stop "
                       f"{s.get('stop_error_m', float('nan')):+.3f} m, arrival {s.get('arrival_s', float('nan')):.2f} s, "
                       f"{wall:.0f} s wall, overspeed {s.get('max_overspeed_kmh', float('nan')):.2f} km/h, "
-                      f"{s.get('energy_J_per_kg', float('nan')):.1f} J/kg", file=sys.stderr, flush=True)
+                      f"{s.get('energy_J_per_kg', float('nan')):.1f} J/kg, lateness: plan part "
+                      f"{s.get('parts', (np.nan,) * 2)[0]:+.2f} s, approach part {s.get('parts', (np.nan,) * 2)[1]:+.2f} s",
+                      file=sys.stderr, flush=True)
             print(draws_row(name, runs[0][0] if model else None, runs[model:], mine[0]["window"][1]), flush=True)
 
 
