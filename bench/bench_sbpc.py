@@ -12,7 +12,8 @@ controller on the model train without noise (mean ratio), the statuses and the w
 run; per run (stderr) the lateness split in two: the plan part (the earliest stand on the mark
 from the true state where the terminal approach's first handle acts, coasting then braking in
 full on the draw's own brake, against the timetable) and the approach part (the run's stand
-against that earliest one). The time SBPC nominal L = 1 takes for the 200 samples: ``--blocks 1 --disturbances`` (run wall).
+against that earliest one). The time SBPC nominal L = 1 takes for the 200 samples: ``--blocks 1
+--disturbances`` (run wall, and the process's CPU seconds: on a busy machine the better measure).
 
 Table 1 (Table 4.1's trend): the nominal SBPC for each L on the model train: energy at the wheel,
 arrival, stop error, solve time per step (mean, max), Ipopt iterations per step, samples where
@@ -196,14 +197,15 @@ def main():
     track, train, ato, case, speeds, _ = setup({})
     print(f"ATO optimum (space-domain NLP, K = 200, 76 s): {ato.summary['traction_energy_kWh']:.3f} kWh\n")
     table = harness.Table(["variant", "L", "plant", "energy [kWh]", "arrival [s]", "stop error [m]", "overspeed [km/h]",
-                           "solve mean / max [s]", "iterations per step", "nominal infeasible", "run wall [s]"])
+                           "solve mean / max [s]", "iterations per step", "nominal infeasible", "run wall [s]",
+                           "run CPU [s]"])
 
     def drive(name, block, label, controller, driven, truth):
         """Run the loop and print one table row."""
         r = harness.sample(lambda _: loop_report(case, train, controller, driven, truth, args.sample), None)
         table.add(name, block, label, f"{r['energy_kWh']:.3f}", f"{r['arrival_s']:.2f}", f"{r['stop_error_m']:+.3f}",
                   f"{r['overspeed_kmh']:.2f}", f"{r['solve_mean_s']:.2f} / {r['solve_max_s']:.2f}",
-                  f"{r['iterations']:.1f}", r["softened"], f"{r['wall_s']:.0f}")
+                  f"{r['iterations']:.1f}", r["softened"], f"{r['wall_s']:.0f}", f"{r['cpu_s']:.1f}")
 
     def run(variant, block, truth, quantised, label):
         controller = Sbpc(case, 76.0, args.sample, block, speeds, variant, brake_reserve=args.brake_reserve or 0.0,

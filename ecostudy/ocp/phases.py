@@ -288,9 +288,10 @@ def active(layout: Layout, lengths: Sequence[float] | FloatArray, modes: Sequenc
 
 def solution(m: Model, layout: Layout) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """(phase lengths [m], node positions, speeds, interval times, F_T [N], F_B [N])."""
-    lengths = np.array([pyo.value(m.L[q]) for q in m.Q])
-    v = np.array([pyo.value(m.v[k]) for k in m.K])
-    dt = np.array([pyo.value(m.dt[i]) for i in m.I])
-    ft = np.array([pyo.value(m.ft[i]) for i in m.I]) * FORCE_SCALE
-    fb = np.array([pyo.value(m.fb[i]) for i in m.I]) * FORCE_SCALE
+    # the values as stored (``pyo.value`` gives the same numbers, at 3.3 of 58 CPU s of an SPPC run)
+    lengths = np.array([m.L[q].value for q in m.Q], float)
+    v = np.array([m.v[k].value for k in m.K], float)
+    dt = np.array([m.dt[i].value for i in m.I], float)
+    ft = np.array([m.ft[i].value for i in m.I], float) * FORCE_SCALE
+    fb = np.array([m.fb[i].value for i in m.I], float) * FORCE_SCALE
     return lengths, node_positions(layout, lengths), v, dt, ft, fb

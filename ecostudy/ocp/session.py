@@ -15,6 +15,7 @@ from typing import Any, Iterator, Mapping, Sequence, TypeAlias
 import cyipopt
 import numpy as np
 import pyomo
+from pyomo.core.base.suffix import active_import_suffix_generator
 from pyomo.common.env import CtypesEnviron
 from pyomo.common.gc_manager import PauseGC
 from pyomo.repn.plugins.nl_writer import NLWriter
@@ -90,9 +91,19 @@ class Session:
             self.nlp = PyomoNLP(model, nl_file_options=NL_OPTIONS)  # (0.39 -> 0.29 s, metro K = 1000)
         self.nl_seconds = time.perf_counter() - t0
         self.x = np.array(self.nlp.init_primals(), dtype=float)
+        # the model's variables in the NLP's order, and each one's place: PyNumero rebuilds the list
+        # and looks each variable up in a ComponentMap on every call (SPPC re-plans: 2.6 + 1.3 of
+        # 58 CPU s per run under cProfile; docs/closed_loop.md)
+        self.variables = self.nlp.get_pyomo_variables()
+        self._place = {id(var): i for i, var in enumerate(self.variables)}
         # (constraints, lower bounds, upper bounds) of the last solve
         self.multipliers: tuple[Any, Any, Any] | None = None
         self._problem_class = CyIpoptNLP
+
+    def indices(self, variables: Sequence[Var]) -> np.ndarray:
+        """The places of model variables in the NLP's primal vector (``PyomoNLP.get_primal_indices``)."""
+        place = self._place
+        return np.fromiter((place[id(var)] for var in variables), dtype=int, count=len(variables))
 
     def set_bounds(self, var: Var, lower: float | None, upper: float | None) -> None:
         """Change the bounds of one model variable (``None`` for none) before the next solve.
@@ -104,24 +115,31 @@ class Session:
     def set_many_bounds(self, variables: Sequence[Var], lowers: Sequence[float | None],
                         uppers: Sequence[float | None]) -> None:
         """:meth:`set_bounds` for many variables at once (one copy of the bound arrays)."""
-        index = np.asarray(self.nlp.get_primal_indices(list(variables)), dtype=int)
+        index = self.indices(variables)
         arrays: dict[str, np.ndarray] = {}
+        changed = np.zeros(len(index), dtype=bool)
         for name, values, default in (("_primals_lb", lowers, -np.inf), ("_primals_ub", uppers, np.inf)):
             arr = np.array(getattr(self.nlp, name), dtype=float)  # PyNumero keeps them read-only
-            arr[index] = [default if v is None else float(v) for v in values]
+            new = np.array([default if v is None else float(v) for v in values], dtype=float)
+            changed |= arr[index] != new
+            arr[index] = new
             arr.flags.writeable = False
             setattr(self.nlp, name, arr)
             arrays[name] = arr
-        for var, lo, hi in zip(variables, lowers, uppers):
-            var.setlb(None if lo is None else float(lo))
-            var.setub(None if hi is None else float(hi))
+        # the Pyomo variables whose bounds move (the others hold these bounds already: an SBPC
+        # re-plan at L = 1 sets about 1 200 bounds and moves a few; Pyomo's setters were a quarter
+        # of its Python time)
+        for j in np.flatnonzero(changed):
+            lo, hi = lowers[j], uppers[j]
+            variables[j].setlb(None if lo is None else float(lo))
+            variables[j].setub(None if hi is None else float(hi))
         self.x[index] = np.clip(self.x[index], arrays["_primals_lb"][index], arrays["_primals_ub"][index])
 
     def set_start_values(self, variables: Sequence[Var], values: Sequence[float] | np.ndarray,
                          clip: bool = True) -> None:
         """Set the starting point of some variables for the next solve, clipped to their bounds
         unless ``clip`` is False (then Ipopt moves them inside, as it does a new model's start)."""
-        index = np.asarray(self.nlp.get_primal_indices(list(variables)), dtype=int)
+        index = self.indices(variables)
         start = np.asarray(values, dtype=float)
         self.x[index] = np.clip(start, self.nlp.primals_lb()[index], self.nlp.primals_ub()[index]) if clip else start
 
@@ -158,13 +176,30 @@ class Session:
         self.x = np.clip(np.array(x, dtype=float), self.nlp.primals_lb(), self.nlp.primals_ub())
         self.nlp.set_primals(self.x)
         self.nlp.set_duals(info["mult_g"])
-        self.nlp.load_state_into_pyomo(bound_multipliers=(info["mult_x_L"], info["mult_x_U"]))
+        self._load(info["mult_g"], info["mult_x_L"], info["mult_x_U"])
         self.multipliers = (info["mult_g"], info["mult_x_L"], info["mult_x_U"])
         g = np.asarray(info["g"])
         viol = np.maximum(self.nlp.constraints_lb() - g, g - self.nlp.constraints_ub())
         problem.close()
         return Outcome(STATUS.get(int(info["status"]), f"ipopt_{info['status']}"), int(iterations[0]),
                        seconds, 0.0, float(np.max(viol, initial=0.0)))
+
+
+    def _load(self, duals: Any, lower: Any, upper: Any) -> None:
+        """``PyomoNLP.load_state_into_pyomo`` without its per-call lookups: the primal point into the
+        variables (in their bounds already, so Pyomo's domain and bound checks, which only warn,
+        are skipped: 9.2 of 58 CPU s of an SPPC run under cProfile went into the load), the
+        multipliers into the model's import suffixes as before."""
+        for var, value in zip(self.variables, self.x):
+            var.set_value(value, skip_validation=True)
+        suffixes = dict(active_import_suffix_generator(self.model))
+        if "dual" in suffixes:
+            suffixes["dual"].clear()
+            suffixes["dual"].update(zip(self.nlp.get_pyomo_constraints(), duals))
+        for name, values in (("ipopt_zL_out", lower), ("ipopt_zU_out", upper)):
+            if name in suffixes:
+                suffixes[name].clear()
+                suffixes[name].update(zip(self.variables, values))
 
 
 def solve(model: Model, options: Options | None = None) -> Outcome:

@@ -10,7 +10,8 @@ The constants are measured on this project's shared 2-core machine (so they are 
 - a closed-loop sample, CPU seconds per sample with the run's set-up (``python bench/bench_sizes.py
   --kinds simulate [--loop-study studies/metro_terminal.yaml]``, busy machine, draw 0 of each
   controller): SBPC nominal 548 ms, two-step 384 ms, multi-objective 88 ms (simultaneous, K = 200) and
-  52 ms (condensed, K = 100); SPPC nominal 59 ms (K = 200), two-step 147 ms (K = 100); RSPC 5.7 ms;
+  52 ms (condensed, K = 100; 17-21 ms since each process runs one OpenBLAS thread, draws 0-2 with
+  ``python bench/bench_monte_carlo.py``, docs/closed_loop.md); SPPC nominal 59 ms (K = 200), two-step 147 ms (K = 100); RSPC 5.7 ms;
   convex 8.4 ms at K = 100; a replay (open loop, ATO) 0.8-1.1 ms: :data:`SAMPLE_SECONDS`, to two
   digits. SBPC and SPPC plan over the samples left, so their grid matters less than their variant. The
   convex SOCP grows faster than K: the all-out SOCP of the Amsterdam case took 0.17, 0.69, 3.3 and
@@ -39,7 +40,7 @@ LEG_SECONDS_PER_STEP = 0.12
 LEG_BYTES_PER_STEP = 72e3
 SAMPLE_SECONDS = {  # [s] a sample, by (kind, variant[, transcription]) or kind
     ("sbpc", "nominal"): 0.55, ("sbpc", "two_step"): 0.39, ("sbpc", "multi"): 0.09,
-    ("sbpc", "multi", "condensed"): 0.055, ("sppc", "nominal"): 0.06, ("sppc", "two_step"): 0.15, "rspc": 0.006,
+    ("sbpc", "multi", "condensed"): 0.022, ("sppc", "nominal"): 0.06, ("sppc", "two_step"): 0.15, "rspc": 0.006,
     "convex": 0.024}  # convex: at K = 200
 REPLAY_SECONDS = 0.0012
 CONVEX_GROWTH = 1.5   # a convex sample's time grows as K^1.5
