@@ -94,7 +94,11 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
         timing = st.timing
     else:
         raise InputError(problem("command line", "--time", "give --time or --supplement"))
-    train_doc, track_doc = study_documents(st) if st is not None else (train_document(train)[0], track_document(track))
+    if st is not None:
+        train_doc, track_doc = study_documents(st)
+    else:
+        assert train is not None and track is not None  # case_from refused a command without both
+        train_doc, track_doc = train_document(train)[0], track_document(track)
     cases = compare_cases(train_doc, track_doc, f, t, timing, k or RUN_POINTS, st.name if st is not None else "compare")
     out_dir = output_folder(out, beside(st, "_compare", "compare"))
     ran = run_expanded("compare", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,

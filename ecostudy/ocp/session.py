@@ -129,7 +129,7 @@ class Session:
         # the Pyomo variables whose bounds move (the others hold these bounds already: an SBPC
         # re-plan at L = 1 sets about 1 200 bounds and moves a few; Pyomo's setters were a quarter
         # of its Python time)
-        for j in np.flatnonzero(changed):
+        for j in map(int, np.flatnonzero(changed)):
             lo, hi = lowers[j], uppers[j]
             variables[j].setlb(None if lo is None else float(lo))
             variables[j].setub(None if hi is None else float(hi))
