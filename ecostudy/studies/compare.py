@@ -32,6 +32,7 @@ from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
 from ecostudy.studies.cases import case_key, load_checked_study
 from ecostudy.studies.options import no_windows
 from ecostudy.studies.sizes import check_compare
+from ecostudy.studies.workers import kept
 
 HEURISTICS = {"eco-drive coasting": ecodrive.eco_coasting, "MARECO-style": ecodrive.mareco}
 STRATEGIES = ("all-out", "ATO optimum", *HEURISTICS, "DAS round (nearest level)", "DAS phases")
@@ -78,13 +79,10 @@ def _inputs(case):
 
 
 def _ato(case, track, train):
-    key = case_key({k: case[k] for k in _SCENARIO})
-    if key not in _ATO:
-        _ATO.clear()  # one scenario at a time: a worker keeps one run, not every comparison's
-        _ATO[key] = solve_run(track, train, case["from"], case["to"],
-                              Timing(running_time=case["running_time_s"], supplement=case["supplement"]),
-                              points=case["points"])
-    return _ATO[key]
+    return kept(_ATO, case_key({k: case[k] for k in _SCENARIO}),
+                lambda: solve_run(track, train, case["from"], case["to"],
+                                  Timing(running_time=case["running_time_s"], supplement=case["supplement"]),
+                                  points=case["points"]))
 
 
 def run_strategy(case):

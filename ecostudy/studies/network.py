@@ -28,6 +28,7 @@ from ecostudy.ocp.timedomain import LegRun
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
 from ecostudy.studies.cases import case_key
 from ecostudy.studies.sizes import check_network_study
+from ecostudy.studies.workers import kept
 
 _INDEPENDENT: dict = {}  # the independent runs of a study and their wall time, per process
 
@@ -67,10 +68,7 @@ def run_network_strategy(case):
 
 
 def _strategy(case):
-    if case["inputs"] not in _INDEPENDENT:
-        _INDEPENDENT.clear()  # one study at a time
-        _INDEPENDENT[case["inputs"]] = solve_independent(case["fleet"])
-    ind, wall = _INDEPENDENT[case["inputs"]]
+    ind, wall = kept(_INDEPENDENT, case["inputs"], lambda: solve_independent(case["fleet"]))
     result = one_strategy(case["fleet"], case["strategy"], ind, wall)
     if "failed" in result:
         return "failed", result["failed"], {"wall_s": result["wall_s"]}

@@ -37,3 +37,13 @@ def ticker(progress, total):
         if progress:
             progress(done[0], 0, total - done[0], total)
     return tick
+
+
+def kept(memo, key, compute):
+    """``compute()`` kept in this process's ``memo`` under ``key``, one key at a time: the shared
+    start of a study's cases (the ATO optimum of a comparison, the independent runs of a network
+    study) solved once per worker process, while a worker never holds every study's."""
+    if key not in memo:
+        memo.clear()
+        memo[key] = compute()
+    return memo[key]
