@@ -13,12 +13,16 @@ import signal
 import time
 import traceback
 from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
+from multiprocessing.process import BaseProcess
 from typing import Any, Callable
+
+Work = Callable[..., Any]  # work(post, *args): post(message) sends a message to the parent
 
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 
-def die_with_parent():
+def die_with_parent() -> None:
     """Ask Linux to send SIGTERM to this process when its parent dies (a killed command must not
     leave children computing); elsewhere nothing happens."""
     try:
@@ -37,10 +41,10 @@ class Ended:
     stopped: bool = False
     value: Any = None
     error: str | None = None
-    posts: list = field(default_factory=list)
+    posts: list[Any] = field(default_factory=list)
 
 
-def _child(conn, work, args):
+def _child(conn: Connection, work: Work, args: tuple[Any, ...]) -> None:
     die_with_parent()
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 1)  # solver lines (C-level prints too) are not the command's output
@@ -53,7 +57,8 @@ def _child(conn, work, args):
         conn.close()
 
 
-def run_until(seconds: float, work: Callable, *args, tick: Callable[[float, list], None] | None = None) -> Ended:
+def run_until(seconds: float, work: Work, *args: Any,
+              tick: Callable[[float, list[Any]], None] | None = None) -> Ended:
     """``work(post, *args)`` in a forked child, stopped (SIGTERM, then SIGKILL) ``seconds`` after
     the start. ``post(message)`` sends a picklable message to the parent at once. ``tick(elapsed,
     posts)``, if given, is called in the parent about twice a second while it waits (progress)."""
@@ -98,7 +103,7 @@ def run_until(seconds: float, work: Callable, *args, tick: Callable[[float, list
     return ended
 
 
-def _inline(t0, work, args):
+def _inline(t0: float, work: Work, args: tuple[Any, ...]) -> Ended:
     ended = Ended(seconds=0.0)
     try:
         ended.value, ended.finished = work(ended.posts.append, *args), True
@@ -108,7 +113,7 @@ def _inline(t0, work, args):
     return ended
 
 
-def _drain(receive, ended):
+def _drain(receive: Connection, ended: Ended) -> None:
     try:
         while receive.poll(0):
             kind, payload = receive.recv()
@@ -118,7 +123,7 @@ def _drain(receive, ended):
         pass
 
 
-def _stop(child):
+def _stop(child: BaseProcess) -> None:
     child.join(0.5 if child.is_alive() else None)
     if child.is_alive():
         child.terminate()
