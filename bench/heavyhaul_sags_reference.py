@@ -1,13 +1,14 @@
-"""Writes ``studies/heavyhaul_sags_reference.csv``: the cruising reference of
-``studies/heavyhaul_brake_penalty_sags.yaml`` (docs/heavyhaul.md, "A line whose descents pass the
-dynamic brakes").
+"""Writes ``studies/heavyhaul_sags_reference.csv`` and ``studies/heavyhaul_rolling_reference.csv``: the
+references of flat pieces of ``studies/heavyhaul_brake_penalty_sags.yaml`` and
+``heavyhaul_brake_penalty_rolling.yaml`` (docs/heavyhaul.md, "A line whose descents pass the dynamic
+brakes").
 
 Zhang & Zhuan ("Braking penalized receding horizon control of heavy haul trains") track a given
 reference of flat pieces (Fig. 2) that is faster after 7000 m (Section III-B) and bound the mean speed
 by it (eq. 7). Their pieces and rates are not published; the ones below are assumed: 50 km/h to 7000 m,
-70 km/h to 24 000 m (the top of the steepest descent), 60 km/h to 33 000 m, 70 km/h to the stop at
-40 000 m; rises at 0.05 m/s^2, drops and the final stop at 0.1 m/s^2 (each piece's speed reached
-within its piece), every 50 m.
+then on the sags line 70 km/h to 24 000 m (the top of its steepest descent), 60 km/h to 33 000 m, 70 km/h
+to the stop at 40 000 m; on the rolling line 70 km/h to the stop at 40 000 m; rises at 0.05 m/s^2, drops
+and the final stop at 0.1 m/s^2 (a drop's lower speed reached where its piece starts), every 50 m.
 
     python bench/heavyhaul_sags_reference.py
 """
@@ -17,6 +18,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 PIECES = [(0.0, 50.0), (7000.0, 70.0), (24000.0, 60.0), (33000.0, 70.0)]  # (from [m], speed [km/h])
+TABLES = {"heavyhaul_sags_reference.csv": PIECES, "heavyhaul_rolling_reference.csv": [(0.0, 50.0), (7000.0, 70.0)]}
 LENGTH, STEP, RISE, DROP = 40000.0, 50.0, 0.05, 0.1  # [m], [m], [m/s^2], [m/s^2]
 
 
@@ -42,7 +44,8 @@ def sags_reference(pieces=PIECES, length=LENGTH, step=STEP, rise=RISE, drop=DROP
 
 
 if __name__ == "__main__":
-    x, v = sags_reference()
-    path = ROOT / "studies" / "heavyhaul_sags_reference.csv"
-    path.write_text("distance_m,speed_kmh\n" + "".join(f"{d:.0f},{s * 3.6:.2f}\n" for d, s in zip(x, v)))
-    print(f"{path}: {len(x)} rows, {x[-1]:.0f} m")
+    for name, pieces in TABLES.items():
+        x, v = sags_reference(pieces)
+        path = ROOT / "studies" / name
+        path.write_text("distance_m,speed_kmh\n" + "".join(f"{d:.0f},{s * 3.6:.2f}\n" for d, s in zip(x, v)))
+        print(f"{path}: {len(x)} rows, {x[-1]:.0f} m")
