@@ -5,6 +5,7 @@ QP's solve time per step and memory for f = 1 and f = 10.
     python bench/bench_heavyhaul.py --fence-weights virtual   # the same with eq. 11 read literally
     python bench/bench_heavyhaul.py --terms --scale limits heavyhaul_brake_penalty   # Table IV with eq. 4's terms
     python bench/bench_heavyhaul.py --terms heavyhaul_brake_penalty_cruise   # Table IV with a cruising reference
+    python bench/bench_heavyhaul.py --terms [--scale limits] heavyhaul_brake_penalty_sags   # Table IV where the descents pass the dynamic brakes
     python bench/bench_heavyhaul.py --balance [--adhesion] heavyhaul_brake_penalty   # the energy balance, an effect on
     python bench/bench_heavyhaul.py --stops heavyhaul_brake_penalty heavyhaul_brake_penalty_descents   # where each run stopped
     python bench/bench_heavyhaul.py --qp 1 [--solver daqp|condensed|clarabel|ipopt] [--blas-threads 2]   # one QP size: build + 20 solves
