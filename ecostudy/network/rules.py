@@ -166,6 +166,12 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     cannot keep its buffer behind the new run ahead: the 3-train metro study's rule 7.7 once, its
     path moved by last-bit differences of the start) ends the rounds; every complete round is
     consistent (each train planned behind the run ahead as it stayed).
+
+    The warm-against-cold check of ``legs.solve_leg`` is made in the first round only: there each
+    leg starts from a run of another problem (independent driving); a later round starts it from
+    its own previous optimum under costs that moved less. On the 3-train metro study's rule 7.7 the
+    later rounds' cold solves of the checked legs were 43 % of the rule's Ipopt time and never
+    replaced a warm run (their warm runs were 2-23 % cheaper than cold); docs/speed.md.
     """
     runs = list(start)
     _, _, totals = evaluate(fleet, runs)
@@ -179,7 +185,8 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
                 weights, allowance = rule_terms(fleet, rule, runs, i)
                 ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]]) if rank and fleet.buffer else None
                 runs[i] = solve_train(fleet, i, weights, guesses=runs[i], allowance=allowance,
-                                      credit=receptivity(fleet, runs, i), ahead=ahead, mapper=mapper, memo=memo)[0]
+                                      credit=receptivity(fleet, runs, i), ahead=ahead, mapper=mapper, memo=memo,
+                                      check=number == 1)[0]
         except SolverError as exc:
             if number == 1:
                 raise
