@@ -127,6 +127,8 @@ def test_the_supervisor_rounds_check_warm_legs_against_cold_in_their_first_round
     first = warmth[:2]  # both trains' one leg in the first round, T1's in the sample
     assert first == [("train T1, leg 1", legs.CHECKED), ("train T2, leg 1", True)]
     assert len(history) == 3 and len(warmth) > 2 and all(flag is True for _, flag in warmth[2:])
+    assert "warm_vs_cold_pct" in runs[0][0].notes  # the first round's check, reported on the final run
+    assert guard_counts(runs)["legs_checked_cold"] == 1
     # solve_train's own switch: the sampled leg solved warm only, no cold check noted
     run = fleet.solve_train(f, 0, guesses=start[0], check=False)[0][0]
     assert run.notes is None
