@@ -108,3 +108,27 @@ def test_a_cold_leg_with_the_one_handle_rows_is_solved_relaxed_first_and_ends_at
     plain = (leg, "T1 leg 1", f.dt, None, None, False, None, None, None, None)
     m0, b0 = legs.leg_model(plain)
     assert not timedomain.relax_one_handle(b0, 1.0)
+
+
+def test_the_supervisor_rounds_check_warm_legs_against_cold_in_their_first_round_only(monkeypatch):
+    from ecostudy.network import rules
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 30.0], ["T1", "T2"], 1.0, SUPPLY,
+                   points=300)
+    start = rules.independent(f)
+    warmth, solve = [], fleet.solve_leg
+
+    def noted(task):  # the real solve, with what each task asked for noted
+        warmth.append((task[1], task[5]))
+        return solve(task)
+
+    monkeypatch.setattr(fleet, "solve_leg", noted)
+    runs, history, _ = rules.supervised(f, "triggering", start, rounds=2)
+    first = warmth[:2]  # both trains' one leg in the first round, T1's in the sample
+    assert first == [("train T1, leg 1", legs.CHECKED), ("train T2, leg 1", True)]
+    assert len(history) == 3 and len(warmth) > 2 and all(flag is True for _, flag in warmth[2:])
+    assert "warm_vs_cold_pct" in runs[0][0].notes  # the first round's check, reported on the final run
+    assert guard_counts(runs)["legs_checked_cold"] == 1
+    # solve_train's own switch: the sampled leg solved warm only, no cold check noted
+    run = fleet.solve_train(f, 0, guesses=start[0], check=False)[0][0]
+    assert run.notes is None

@@ -144,7 +144,7 @@ def energy_ref(fleet):
 
 
 def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None, credit=None, mapper=map,
-                memo=None):
+                memo=None, check=True):
     """Train ``i`` alone: minimise sum (w_t traction - regeneration) dt over its legs.
 
     ``weights``: traction weight per clock step (default 1). ``allowance``: power [kW] per clock
@@ -159,13 +159,15 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
     ``memo``: a dict kept across calls (the supervisor rounds); a leg whose weights, allowance,
     credit and train ahead over its own steps are those of its last solve, started from that
     solve's run, is that run again and is not solved (the same problem from its own optimum).
+    ``check``: whether warm legs of the sample (``legs.warmth``) are also solved cold (the
+    supervisor rounds check in their first round only: ``rules.supervised``).
     Returns ([(s, v, ft, fb, fr, p) per leg], [solver outcome per leg]).
     """
     memo = {} if memo is None else memo
     known = [memo.get((i, k)) for k in range(len(fleet.legs[i]))]
     tasks = [(leg, f"train {fleet.names[i]}, leg {k + 1}", fleet.dt, fleet.buffer,
               guesses[k][:5] if guesses is not None else _guess(fleet, leg),
-              warmth(i, k) if guesses is not None else False, weights, allowance, credit, ahead)
+              (warmth(i, k) if check else True) if guesses is not None else False, weights, allowance, credit, ahead)
              for k, leg in enumerate(fleet.legs[i])]
     terms = [_own_terms(leg, weights, allowance, credit, ahead) for leg in fleet.legs[i]]
     again = [k for k, old in enumerate(known) if old is None or guesses is None or old[1] is not guesses[k]
