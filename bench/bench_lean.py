@@ -17,6 +17,8 @@ ecostudy's time is its in-process build + NL write + Ipopt (``ocp.problem.build`
 through PyNumero); CasADi's is building the SX graph + ``nlpsol`` + solving with CasADi's bundled
 Ipopt, in the same process, from the same start (``problem.capped_guess``). Medians of ``--repeat``,
 wall and the process's CPU time (the latter less disturbed by other processes on a shared machine).
+``--timing FOLDER`` writes Ipopt's own timers (``print_timing_statistics``: function evaluations,
+linear system, back-solves, ...) of each side's last solve to a file per side, case and K.
 
 Cases (shipped): ``long`` is tracks/regional_line_20stops.yaml S01 to S20 (22.4 km run through) with
 trains/regional_alstom.yaml, net energy, in 1.15 times its envelope time; ``metro`` is
@@ -41,6 +43,16 @@ from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp import problem, session, solver, space  # noqa: E402
 
 PARAMS = {"case": "long", "points": 1000}
+TIMING: dict = {"folder": None}  # --timing FOLDER: Ipopt's timing statistics of each solve, a file per side
+
+
+def timing_options(side: str, p: dict) -> dict:
+    """Ipopt options that write ``side``'s timers (``print_timing_statistics``) to a file in the
+    ``--timing`` folder (``{side}_{case}_{points}.txt``, the last repeat's), or none."""
+    if TIMING["folder"] is None:
+        return {}
+    path = Path(TIMING["folder"]) / f"{side}_{p['case']}_{p['points']}.txt"
+    return {"print_timing_statistics": "yes", "output_file": str(path), "file_print_level": 5}
 
 
 def setup(p):
@@ -54,16 +66,16 @@ def setup(p):
         case = problem.prepare(load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml"),
                                load_train(ROOT / "trains/amsterdam_metro.yaml"), "Rokin", "Centraal", p["points"])
         running_time, objective = 76.0, "energy"
-    return case, running_time, objective, problem.capped_guess(case, running_time)
+    return case, running_time, objective, problem.capped_guess(case, running_time), p
 
 
 @harness.case("lean.ecostudy", params=PARAMS, setup=setup, reference="lean.lean")
 def ecostudy_run(state):
     """ecostudy as it solves (every cut): build + NL write + Ipopt (PyNumero), in process."""
-    case, running_time, objective, guess = state
+    case, running_time, objective, guess, p = state
     m = problem.build(case, guess, objective, {}, running_time=running_time)
     s = session.Session(m)
-    outcome = s.solve()
+    outcome = s.solve(timing_options("ecostudy", p))
     return {"variables": s.nlp.n_primals(), "constraints": s.nlp.n_constraints(), "iterations": outcome.iterations,
             "ipopt": outcome.status, "ipopt_s": outcome.seconds,
             "energy_kWh": to_kwh(float(m.objective.expr()) * m.energy_ref)}
@@ -72,7 +84,7 @@ def ecostudy_run(state):
 @harness.case("lean.lean", params=PARAMS, setup=setup)
 def lean_run(state):
     """The lean CasADi transcription (speeds and forces only): graph + nlpsol + CasADi's Ipopt, in process."""
-    case, running_time, objective, (v0, _, ft0, fb0) = state
+    case, running_time, objective, (v0, _, ft0, fb0), p = state
     train, segment, nodes = case.train, case.segment, case.nodes
     n, fs = len(nodes) - 1, space.FORCE_SCALE
     dsd = ca.DM(np.diff(nodes))
@@ -122,7 +134,7 @@ def lean_run(state):
     ubx[0] = ubx[n] = 0.0
     x0 = np.clip(np.concatenate([v0, ft0 / fs, fb0 / fs] + ([np.minimum(fb0 / fs, top_r)] if own_regen else [])),
                  lbx, ubx)
-    opts = {"ipopt": dict(session.DEFAULT_OPTIONS), "print_time": False}
+    opts = {"ipopt": {**session.DEFAULT_OPTIONS, **timing_options("lean", p)}, "print_time": False}
     nlp = ca.nlpsol("lean", "ipopt", {"x": x, "f": f, "g": ca.vertcat(*g)}, opts)
     with harness.stage() as solve:
         sol = nlp(x0=x0, lbx=lbx, ubx=ubx, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
@@ -136,7 +148,11 @@ def main():
     ap.add_argument("--points", type=int, nargs="+", default=[1000, 5000])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--case", nargs="+", default=["long"])
+    ap.add_argument("--timing", metavar="FOLDER", help="write Ipopt's timing statistics of each side's solve there")
     args = ap.parse_args()
+    if args.timing:
+        Path(args.timing).mkdir(parents=True, exist_ok=True)
+        TIMING["folder"] = args.timing
     print(harness.command(__file__) + "\n")
     table = harness.Table(["case", "K", "variables (ecostudy / lean)", "constraints", "ecostudy s", "iterations",
                            "lean s", "iterations", "ratio", "CPU s (ecostudy / lean)", "CPU ratio",

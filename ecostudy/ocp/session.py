@@ -176,7 +176,8 @@ class Session:
         self.x = np.clip(np.array(x, dtype=float), self.nlp.primals_lb(), self.nlp.primals_ub())
         self.nlp.set_primals(self.x)
         self.nlp.set_duals(info["mult_g"])
-        self._load(info["mult_g"], info["mult_x_L"], info["mult_x_U"])
+        with PauseGC():  # the load makes a tuple per constraint: a collection would walk every Pyomo object
+            self._load(info["mult_g"], info["mult_x_L"], info["mult_x_U"])
         self.multipliers = (info["mult_g"], info["mult_x_L"], info["mult_x_U"])
         g = np.asarray(info["g"])
         viol = np.maximum(self.nlp.constraints_lb() - g, g - self.nlp.constraints_ub())

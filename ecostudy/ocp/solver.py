@@ -37,7 +37,9 @@ Var: TypeAlias = Any     # a Pyomo variable (scalar, or an element of an indexed
 # ``ocp.session.Session.solve`` starts from "space" (Ipopt's defaults but for these) and a caller adds
 # its family's options on top; the modules named keep them under their old names.
 IPOPT: dict[str, dict[str, Any]] = {
-    # every NLP: the space NLP of one run, and the base of the others
+    # every NLP: the space NLP of one run, and the base of the others; MUMPS's own defaults here: no
+    # ordering, scaling or memory option was faster on it (long case, K = 1000: Scotch, the automatic
+    # choice, and METIS equal, AMD, PORD and QAMD 4-5x slower; docs/speed.md)
     "space": {"tol": 1e-8, "acceptable_tol": 1e-6, "max_iter": 3000, "print_level": 0, "mu_strategy": "adaptive",
               "sb": "yes"},
     # a re-solve from the previous solve's primal and dual point (Session keeps the multipliers) with
