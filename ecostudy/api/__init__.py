@@ -16,6 +16,7 @@ Everything is SI inside; the arguments here say their unit in their name where i
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from ecostudy.core import startup
 from ecostudy.ocp.solver import configure
 
 configure()  # the API is an entry point: set the process up once, before pandas, scipy and Pyomo load
@@ -51,6 +52,7 @@ def __getattr__(name: str) -> Any:
     if name not in WHERE:
         raise AttributeError(f"module 'ecostudy.api' has no attribute {name!r}")
     value = getattr(importlib.import_module(WHERE[name]), name)
+    startup.resume()  # the command line paused the collector at its start: what loaded is frozen now
     globals()[name] = value  # found once
     return value
 

@@ -18,6 +18,7 @@ from ecostudy.io.loaders import chosen_stops, load_track, load_train
 from ecostudy.io.results import file_digest
 from ecostudy.io.writers import check_output_dir, write_json
 from ecostudy.ocp import session
+from ecostudy.report.drawer import drawing
 from ecostudy.report.files import write_fixed_step, write_run
 from ecostudy.report.style import output
 from ecostudy.studies.cases import load_checked_study
@@ -114,16 +115,17 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         k = points or RUN_POINTS
         out_dir = output_folder(out, Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_"))
     check_output_dir(out_dir, ("profile.csv", "summary.json", "speed.png", "inputs.json"))
-    stage(f"{obj} optimum, verified")
-    result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
-    if das is not None:
-        if windows and das != "round":
-            raise InputError(problem(str(study), "windows", f"--das {das} does not handle timing "
-                                     "windows on the way yet; use --das round"))
-        result.das = das_run(result, das, time_limit=das_time_limit)
-        result.summary["das"] = result.das.summary
-    stage("figures and files")
-    write_run(result, out_dir, plot=plot, out=figures)
+    if das is not None and windows and das != "round":
+        raise InputError(problem(str(study), "windows", f"--das {das} does not handle timing "
+                                 "windows on the way yet; use --das round"))
+    with drawing(plot) as drawer:  # matplotlib loads in a child while this process solves
+        stage(f"{obj} optimum, verified")
+        result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
+        if das is not None:
+            result.das = das_run(result, das, time_limit=das_time_limit)
+            result.summary["das"] = result.das.summary
+        stage("figures and files")
+        write_run(result, out_dir, plot=plot, out=figures, drawer=drawer)
     write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
                                          "track_sha256": file_digest(paths[0]), "train_sha256": file_digest(paths[1]),
                                          "from": f, "to": t, "points": k})

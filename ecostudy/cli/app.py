@@ -13,6 +13,7 @@ import typer
 
 from ecostudy.core.budget import forced
 from ecostudy.core.errors import printable
+from ecostudy.core.startup import pause
 from ecostudy.report.console import leave, logging_to, progress_bar
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,  # "[s]" is a unit, not markup
@@ -95,7 +96,8 @@ def told(note, code):
 
 
 def main() -> None:
-    """The ``ecostudy`` command: the application, then a quick exit (:func:`ecostudy.report.console.leave`)."""
+    """The ``ecostudy`` command: the collector paused while it loads (:mod:`ecostudy.core.startup`), the application, a quick exit (:func:`ecostudy.report.console.leave`)."""
+    pause()
     try:
         app()
     except SystemExit as done:  # the application always ends so

@@ -9,10 +9,7 @@ from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 
 # the choices of --das and --objective (a str Enum each, as Typer lists them in the help)
 DasMethod = Enum("DasMethod", {"round": "round", "phases": "phases", "minlp": "minlp"}, type=str)
-Objective = Enum("Objective", {"energy": "energy", "net_energy": "net_energy", "time": "time", "mixed": "mixed"},
-                 type=str)
-
-FORCE_HELP = "Run work estimated too big (over 2 h for one run, half the memory, a 10^6-point table) anyway."
+Objective = Enum("Objective", {"energy": "energy", "net_energy": "net_energy", "time": "time", "mixed": "mixed"}, type=str)
 
 Study = Annotated[Optional[Path], typer.Argument(help="Study file (YAML).")]
 Track = Annotated[Optional[Path], typer.Option(help="Track file (YAML, or TTOBench JSON).")]
@@ -34,5 +31,5 @@ NoPlot = Annotated[bool, typer.Option("--no-plot", help="Skip the figures.")]
 Format = Annotated[str, typer.Option("--format", help="Figure format: png, svg or pdf.")]
 Dpi = Annotated[float, typer.Option(help="Figure resolution [dots per inch] (raster images).")]
 DasTimeLimit = Annotated[float, typer.Option(help="Time limit of each MINLP search [s] (--das minlp).")]
-Force = Annotated[bool, typer.Option("--force", help=FORCE_HELP)]
+Force = Annotated[bool, typer.Option("--force", help="Run work estimated too big (over 2 h for one run, half the memory, a 10^6-point table) anyway.")]
 Debug = Annotated[bool, typer.Option(help="Show tracebacks.")]

@@ -1,5 +1,6 @@
 """The files of a run (``profile.csv``, ``summary.json``, ``speed.png``, ``advice.csv``) and of a
 front (``pareto.csv``, ``pareto.json``, the plots), each written atomically."""
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -25,31 +26,44 @@ def figures(out_dir, plot, drawings, out=style.Output()):
     return [style.write(out_dir, stem, draw, out) for stem, draw in drawings.items()]
 
 
+def figures_meanwhile(drawer, out_dir, plot, drawings, out=style.Output()):
+    """:func:`figures` drawn by ``drawer`` (a :class:`ecostudy.report.drawer.Drawer`, or None: here
+    and now) while the caller goes on; returns the function that waits for the file names."""
+    if drawer is None or not plot:
+        names = figures(out_dir, plot, drawings, out)
+        return lambda: names
+    return drawer.submit(figures, out_dir, plot, drawings, out)
+
+
 def later(name, *args, **kwargs):
     """A figure of ``report.plots`` (``report.netplots`` for a network's) drawn as
-    ``name(*args, path, ...)`` when it is written: matplotlib loads only in a process that draws."""
-    def draw(path, **more):
-        if name in ("network_plot", "supply_plot"):
-            from ecostudy.report import netplots as module
-        else:
-            from ecostudy.report import plots as module
-        return getattr(module, name)(*args, path, **kwargs, **more)
-    return draw
+    ``name(*args, path, ...)`` when it is written: matplotlib loads only in a process that draws.
+    It pickles with its data (:mod:`ecostudy.report.drawer` sends it to a figure process)."""
+    return partial(_draw, name, args, kwargs)
 
 
-def write_run(result, out_dir, plot=True, out=style.Output()):
+def _draw(name, args, kwargs, path, **more):
+    if name in ("network_plot", "supply_plot"):
+        from ecostudy.report import netplots as module
+    else:
+        from ecostudy.report import plots as module
+    return getattr(module, name)(*args, path, **kwargs, **more)
+
+
+def write_run(result, out_dir, plot=True, out=style.Output(), drawer=None):
     """``profile.csv``, ``summary.json``, ``speed.png``, ``energy.png`` (the energy flow; figures in
-    the format of ``out``) and ``advice.csv`` of one run into ``out_dir``."""
+    the format of ``out``, drawn by ``drawer`` while the tables are written when one is given) and
+    ``advice.csv`` of one run into ``out_dir``."""
     out_dir = Path(out_dir)
+    drawn = figures_meanwhile(drawer, out_dir, plot, {"speed": later("speed_plot", result),
+                                                      "energy": later("energy_plot", result)}, out)
     write_csv(out_dir / "profile.csv", result.profile)
     tables = {"profile": "profile.csv"}
     if result.das is not None:
         write_csv(out_dir / "advice.csv", result.das.advice)
         tables["advice"] = "advice.csv"
-    drawn = figures(out_dir, plot, {"speed": later("speed_plot", result),
-                                    "energy": later("energy_plot", result)}, out)
     facts = result.facts
-    write_summary(out_dir, "solve", {f"{facts.from_stop}-{facts.to_stop}": result.status}, tables, drawn,
+    write_summary(out_dir, "solve", {f"{facts.from_stop}-{facts.to_stop}": result.status}, tables, drawn(),
                   **result.summary)
     stale(out_dir, advice=result.das is None, names={"advice": ["advice.csv"]})
     write_html(out_dir)

@@ -1,0 +1,146 @@
+"""Figures drawn in a second process while this one solves.
+
+matplotlib's import with the plots module takes about 0.6 s and a run's two figures about 0.3 s
+more: in one process that is a quarter of ``ecostudy solve``. A :class:`Drawer` forks a child
+before the solve; the child imports matplotlib and :mod:`ecostudy.report.plots` on the other core
+while the parent solves, then waits. The parent sends it the figures (their plot functions and
+data, pickled: :func:`ecostudy.report.files.later`) as soon as the result is known and writes its
+tables meanwhile; the child writes the figures and answers with their file names, or with the
+error that stopped it, which the parent raises as its own (same type, so the same one line and
+exit status as a figure drawn in this process; the child's traceback is attached as a note). The
+parent waits for that answer, then for the child's exit, before it writes ``summary.json`` and
+``report.html``: every file exists when the command returns, and no process is left behind.
+
+Where a child cannot be forked (no ``fork`` start method, or in a daemonic worker, which may not
+start processes) or the data cannot be pickled, the figures are drawn in this process as before.
+"""
+import io
+import multiprocessing
+import pickle
+import signal
+import sys
+import traceback
+from contextlib import contextmanager
+from typing import Any, Callable, Iterator, Optional
+
+from ecostudy.core.deadline import die_with_parent
+from ecostudy.core.errors import EcostudyError
+
+
+class FigureError(EcostudyError):
+    """The figure process failed in a way that has no exception of its own to raise here (it died,
+    or its error could not be sent back); ``exit_code`` 3 as any internal failure."""
+
+
+def available() -> bool:
+    """Whether this process can fork a figure process (Linux and other ``fork`` platforms, not
+    inside a daemonic worker)."""
+    return "fork" in multiprocessing.get_all_start_methods() and not multiprocessing.current_process().daemon
+
+
+def _serve(conn, other) -> None:
+    """The child: import the plotting code at once, then run each job ``(work, args)`` sent and
+    answer ``("ok", value)`` or ``("error", exception or its text, traceback)``; ``None`` or a closed
+    pipe (the parent gone) ends it."""
+    other.close()  # the parent's end: when the parent goes, this side reads end-of-file
+    die_with_parent()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle; it stops this child
+    failed: Optional[BaseException] = None
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        from matplotlib.figure import Figure
+
+        from ecostudy.report import plots  # noqa: F401  (loaded while the parent solves)
+        warm = Figure()  # a first figure loads the fonts and the renderer: 0.08 s off the wait
+        warm.subplots().plot([0, 1], label="m")
+        warm.savefig(io.BytesIO(), format="png")
+    except Exception as exc:  # noqa: BLE001 - reported with the first job
+        failed = exc
+    while True:
+        try:
+            job = conn.recv_bytes()
+        except (EOFError, OSError):
+            return
+        if not job:
+            return
+        try:
+            if failed is not None:
+                raise failed
+            work, args = pickle.loads(job)
+            answer: tuple = ("ok", work(*args))
+        except Exception as exc:  # noqa: BLE001 - sent to the parent, which raises it
+            answer = ("error", exc, traceback.format_exc())
+        try:
+            data = pickle.dumps(answer)
+        except Exception:  # noqa: BLE001 - an exception that cannot travel goes as its text
+            data = pickle.dumps(("error", f"{type(answer[1]).__name__}: {answer[1]}", answer[2]))
+        conn.send_bytes(data)
+
+
+class Drawer:
+    """A forked child that draws what :meth:`submit` sends it (see the module's docstring). Close it
+    with :meth:`close` (:func:`drawing` does)."""
+
+    def __init__(self) -> None:
+        ctx = multiprocessing.get_context("fork")
+        self.conn, child = ctx.Pipe()
+        sys.stdout.flush()  # nothing buffered is copied into the child
+        sys.stderr.flush()
+        self.process = ctx.Process(target=_serve, args=(child, self.conn), daemon=True, name="ecostudy-figures")
+        self.process.start()
+        child.close()
+
+    def submit(self, work: Callable[..., Any], *args: Any) -> Callable[[], Any]:
+        """Send ``work(*args)`` to the child; returns the function that waits for its value (and
+        raises its error). Data that cannot be pickled is drawn here at once."""
+        try:
+            job = pickle.dumps((work, args), protocol=pickle.HIGHEST_PROTOCOL)
+        except Exception:  # noqa: BLE001 - e.g. a plot bound to a local function: drawn in this process
+            value = work(*args)
+            return lambda: value
+        try:
+            self.conn.send_bytes(job)
+        except OSError:
+            raise self._ended() from None
+        return self._answer
+
+    def _answer(self) -> Any:
+        try:
+            kind, value, *where = pickle.loads(self.conn.recv_bytes())
+        except (EOFError, OSError):
+            raise self._ended() from None
+        if kind == "ok":
+            return value
+        error = value if isinstance(value, BaseException) else FigureError(f"figures: {value}")
+        error.add_note("in the figure process:\n" + where[0].rstrip())
+        raise error
+
+    def _ended(self) -> FigureError:
+        self.process.join(5.0)
+        return FigureError(f"figures: the figure process ended (exit code {self.process.exitcode}) before it "
+                           "answered")
+
+    def close(self) -> None:
+        """Tell the child to end and wait for it (terminated if it does not end in 10 s)."""
+        try:
+            self.conn.send_bytes(b"")
+        except OSError:
+            pass
+        self.conn.close()
+        self.process.join(10.0)
+        if self.process.is_alive():
+            self.process.terminate()
+            self.process.join()
+
+
+@contextmanager
+def drawing(plot: bool) -> Iterator[Optional[Drawer]]:
+    """A :class:`Drawer` while the block runs, when ``plot`` and a child can be forked (else None:
+    draw in this process); the child has ended when the block is left, however it is left."""
+    drawer = Drawer() if plot and available() else None
+    try:
+        yield drawer
+    finally:
+        if drawer is not None:
+            drawer.close()

@@ -1,0 +1,77 @@
+"""Figures drawn in a forked child while the parent solves (``report.drawer``): every file exists
+and the child has ended when the command returns; the child's failure is the command's failure
+(same one line and exit status as a figure drawn in the parent); data that cannot be pickled is
+drawn in the parent."""
+import json
+import multiprocessing
+import os
+import subprocess
+import sys
+
+import pytest
+
+from ecostudy import api
+from ecostudy.report import drawer as drawer_module
+from ecostudy.report.drawer import Drawer, FigureError, drawing
+
+from .conftest import ROOT
+
+pytestmark = pytest.mark.skipif(not drawer_module.available(), reason="no fork start method here")
+DEFAULT = ROOT / "studies" / "default.yaml"
+
+
+def test_a_solve_with_figures_returns_with_every_file_written_and_the_child_ended(tmp_path):
+    report = api.solve_folder(DEFAULT, points=150, out=tmp_path / "s")
+    assert multiprocessing.active_children() == []
+    summary = json.loads((tmp_path / "s" / "summary.json").read_text())
+    assert summary["status"] == "ok" and report.status.ok
+    for name in ("speed.png", "energy.png", "profile.csv", "report.html", "inputs.json"):
+        assert (tmp_path / "s" / name).stat().st_size > 0, name
+    assert {"speed.png", "energy.png"} <= set(summary["files"])
+    assert (tmp_path / "s" / "speed.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "data:image/png;base64," in (tmp_path / "s" / "report.html").read_text()
+
+
+def test_the_figures_are_the_same_drawn_in_the_child_or_here(tmp_path, monkeypatch):
+    api.solve_folder(DEFAULT, points=150, out=tmp_path / "child")
+    monkeypatch.setattr(drawer_module, "available", lambda: False)  # as where fork is missing: drawn here
+    api.solve_folder(DEFAULT, points=150, out=tmp_path / "here")
+    for name in ("speed.png", "energy.png", "profile.csv"):
+        assert (tmp_path / "child" / name).read_bytes() == (tmp_path / "here" / name).read_bytes(), name
+
+
+def test_a_figure_the_child_cannot_write_fails_the_command_with_exit_status_3(tmp_path):
+    (tmp_path / "s" / "energy.png").mkdir(parents=True)  # a folder where the figure goes
+    done = subprocess.run([sys.executable, "-m", "ecostudy", "solve", str(DEFAULT), "--points", "150", "--out", "s"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=900)
+    assert done.returncode == 3, done.stderr
+    assert "internal error: IsADirectoryError" in done.stderr
+    assert not (tmp_path / "s" / "summary.json").exists()  # nothing claims the folder is complete
+
+
+def test_the_childs_error_is_raised_here_with_its_type_and_traceback():
+    with drawing(True) as drawer:
+        assert isinstance(drawer, Drawer)
+        wait = drawer.submit(int, "not a number")
+        with pytest.raises(ValueError, match="invalid literal") as raised:
+            wait()
+        assert "in the figure process" in "\n".join(raised.value.__notes__)
+        assert drawer.submit(sorted, [3, 1, 2])() == [1, 2, 3]  # the child serves on after an error
+    assert not drawer.process.is_alive() and drawer.process.exitcode == 0
+
+
+def test_a_child_that_dies_is_a_figure_error_naming_its_exit_code():
+    with drawing(True) as drawer:
+        wait = drawer.submit(os._exit, 7)
+        with pytest.raises(FigureError, match="exit code 7"):
+            wait()
+        with pytest.raises(FigureError, match="ended"):
+            drawer.submit(sorted, [1])()
+
+
+def test_work_that_cannot_be_pickled_is_done_here_and_no_plot_forks_nothing():
+    with drawing(True) as drawer:
+        assert drawer is not None
+        assert drawer.submit(lambda x: x + 1, 1)() == 2
+    with drawing(False) as nothing:
+        assert nothing is None
