@@ -1,11 +1,9 @@
 """The files of a run (``profile.csv``, ``summary.json``, ``speed.png``, ``advice.csv``) and of a
-front (``pareto.csv``, ``pareto.json``, the plots), each written atomically."""
+journey, each written atomically (a front's: :func:`ecostudy.report.studyfiles.front_files`)."""
 from pathlib import Path
 
-import numpy as np
-
 from ecostudy.analysis.export import fixed_step
-from ecostudy.core.status import OK, Status, flagged, parsed
+from ecostudy.core.status import OK, flagged, parsed
 from ecostudy.io.folder import write_summary
 from ecostudy.io.results import load_result
 from ecostudy.io.writers import write_csv, write_json
@@ -63,28 +61,6 @@ def stale(out_dir, names, **drop):
         if drop.get(kind):
             for name in files:
                 (Path(out_dir) / name).unlink(missing_ok=True)
-
-
-def write_front(table, results, out_dir, meta, plot=True, weighted=None, out=style.Output()):
-    """``pareto.csv``, ``pareto.json`` and the two plots of a front (and ``pareto_weighted.csv``)."""
-    out_dir = Path(out_dir)
-    write_csv(out_dir / "pareto.csv", table)
-    if weighted is not None:
-        write_csv(out_dir / "pareto_weighted.csv", weighted)
-    write_json(out_dir / "pareto.json", meta)
-    tables = {"pareto": "pareto.csv", **({"weighted": "pareto_weighted.csv"} if weighted is not None else {})}
-    statuses = {f"{t:.2f} s": Status.parse(st) for t, st in zip(table["running_time_s"], table["status"])}
-    if not meta["monotone"]:
-        statuses["front"] = flagged("energy does not fall as the running time grows")
-    title = f"{meta['train']} - {meta['from']} to {meta['to']} (K = {meta['points']})"
-    picks = sorted(set(np.linspace(0, len(results) - 1, min(5, len(results))).round().astype(int)))
-    drawn = figures(out_dir, plot, {
-        "pareto": later("pareto_plot", table, title=title, weighted=weighted),
-        "pareto_profiles": later("profiles_plot", [results[i] for i in picks], title=title)}, out)
-    write_summary(out_dir, "pareto", statuses, tables, ["pareto.json"] + drawn, **meta)
-    stale(out_dir, weighted=weighted is None, names={"weighted": ["pareto_weighted.csv"]})
-    write_html(out_dir)
-    return out_dir
 
 
 def write_journey(table, totals, results, out_dir, title, passing=(), plot=True, out=style.Output()):
