@@ -8,8 +8,8 @@ cold, from its own capped-speed start, so that it is the same whichever process 
 whatever was stored before; a process writes the model once and re-solves it with the bound of
 the running time changed (:class:`ecostudy.ocp.problem.Written`), and solves the all-out run once
 (the supplements' base). Measured against the warm-started chains of
-:func:`ecostudy.studies.pareto.sweep` on the shipped trips: energies within 2.4e-6 of the chained
-ones, 1.3-1.6 times the CPU time on one core (docs/pareto.md).
+:func:`ecostudy.studies.pareto.sweep` on the shipped trips: energies within 2.7e-6 of the chained
+ones, 1.15-1.53 times the CPU time on one core (docs/pareto.md).
 """
 from typing import NamedTuple
 
