@@ -3,7 +3,7 @@ journey, each written atomically (a front's: :func:`ecostudy.report.studyfiles.f
 from pathlib import Path
 
 from ecostudy.analysis.export import fixed_step
-from ecostudy.core.status import OK, flagged, parsed
+from ecostudy.core.status import OK, flagged
 from ecostudy.io.folder import write_summary
 from ecostudy.io.results import load_result
 from ecostudy.io.writers import write_csv, write_json
@@ -76,16 +76,6 @@ def write_journey(table, totals, results, out_dir, title, passing=(), plot=True,
                   drawn, title=title)
     write_html(out_dir)
     return out_dir
-
-
-def write_cases_folder(out_dir, kind, table, name_columns, tables, files=(), **fields):
-    """``summary.json`` and ``report.html`` of a resumable study's folder (``heavyhaul``,
-    ``simulate``): every row's status from the table's ``status`` and ``reason`` columns, named by
-    its ``name_columns`` (``controller=convex, draw=3``)."""
-    names = [", ".join(f"{c}={row[c]}" for c in name_columns) for _, row in table.iterrows()]
-    statuses = parsed(names, table["status"], table["reason"] if "reason" in table else [None] * len(table))
-    write_summary(out_dir, kind, statuses, tables, files, **fields)
-    write_html(out_dir)
 
 
 EXPORT_UNITS = {"time_s": "s", "position_m": "m", "speed_kmh": "km/h", "speed_mps": "m/s",

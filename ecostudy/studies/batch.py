@@ -228,25 +228,30 @@ def kind_named(kind):
 
 
 def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False, out=None, progress=None,
-                 draw=None):
+                 draw=None, compute=None):
     """A study of ``kind`` already expanded (from a study file, or from a command's options: ``where``
     names it): the cases not stored yet run (serially, in ``workers`` processes or on ``dask``,
     :func:`execute`), each stored as it arrives; the table of every stored case; the table's file
     and summary.json written, with the files and tables ``draw(output, cases, rows, table)`` writes
     and returns as (file names, {table name: file name}) (figures, a kind's other files).
-    ``progress(done, failed, remaining, total)`` after each case. Returns a :class:`StudyRun`."""
+    ``progress(done, failed, remaining, total)`` after each case; ``compute``: only these cases
+    computed now (the others' stored results still in the table; a case neither stored nor computed
+    is ``missing`` there, and no result in ``summary.json``). Returns a :class:`StudyRun`."""
     spec = kind_named(kind)
-    if spec.size is not None:  # too big for the command: refused with its estimate (unless --force)
+    if spec.size is not None and compute is None:  # too big: refused with its estimate (unless --force); a part
+        # computed now (``compute``) is checked by its caller
         spec.size(Path(where), expanded.cases, workers)
     output = check_output_dir(out or expanded.output, (spec.table_file, "results.sqlite", *expanded.inputs))
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
     counts, rows = stored_rows(expanded.cases, output / "results.sqlite", spec.task, workers, dask, retry_failed,
-                               progress)
+                               progress, compute)
     table = spec.table(expanded.cases, rows)
     write_csv(output / spec.table_file, table)
     drawn, tables = draw(output, expanded.cases, rows, table) if draw is not None else ([], {})
-    statuses = {**case_statuses(expanded.cases, table), **(spec.verdict(table) if spec.verdict else {})}
+    results = [compute is None or k in rows for k in (c["key"] for c in expanded.cases)]  # left out: not results
+    statuses = {**case_statuses([c for c, r in zip(expanded.cases, results) if r], table[results]),
+                **(spec.verdict(table) if spec.verdict else {})}
     write_summary(output, kind, statuses, {spec.table_name: spec.table_file, **tables, **{
                   Path(name).stem: name for name in expanded.inputs}}, ["results.sqlite", *drawn], study=str(where),
                   computed_now=counts["computed"], stored_before=counts["stored_before"], **table.attrs)
