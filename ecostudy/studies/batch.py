@@ -228,7 +228,7 @@ def kind_named(kind):
 
 
 def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False, out=None, progress=None,
-                 draw=None, compute=None):
+                 draw=None, compute=None, spec=None):
     """A study of ``kind`` already expanded (from a study file, or from a command's options: ``where``
     names it): the cases not stored yet run (serially, in ``workers`` processes or on ``dask``,
     :func:`execute`), each stored as it arrives; the table of every stored case; the table's file
@@ -236,8 +236,9 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     and returns as (file names, {table name: file name}) (figures, a kind's other files).
     ``progress(done, failed, remaining, total)`` after each case; ``compute``: only these cases
     computed now (the others' stored results still in the table; a case neither stored nor computed
-    is ``missing`` there, and no result in ``summary.json``). Returns a :class:`StudyRun`."""
-    spec = kind_named(kind)
+    is ``missing`` there, and no result in ``summary.json``); ``spec``: the :class:`StudyKind` itself
+    (default: the one registered as ``kind``). Returns a :class:`StudyRun`."""
+    spec = spec or kind_named(kind)
     if spec.size is not None and compute is None:  # too big: refused with its estimate (unless --force); a part
         # computed now (``compute``) is checked by its caller
         spec.size(Path(where), expanded.cases, workers)

@@ -30,7 +30,7 @@ from ecostudy.io.loopfile import Controller, SimulateFile
 from ecostudy.ocp.convex import FASTEST, ConvexProgram, trapezoid_grid
 from ecostudy.ocp.problem import prepare
 from ecostudy.io.writers import write_csv
-from ecostudy.studies.batch import Expanded, outcome, run_expanded
+from ecostudy.studies.batch import Expanded, StudyKind, outcome, run_expanded
 from ecostudy.studies.cases import case_key
 from ecostudy.studies.controllers import CONTROLLER_KINDS, Build
 from ecostudy.studies.loopsteps import step_columns, step_counts, steps_frame
@@ -247,7 +247,7 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
         done.append(loop_study(study, cases, rows, table, Path(out_dir)))
         return (draw(done[0]) if draw is not None else []), {"aggregate": "aggregate.csv"}
     ran = run_expanded("simulate", Expanded(output, cases), path, workers, dask, retry_failed, out, progress, files,
-                       compute)
+                       compute, SIMULATE)
     counts = {**ran.counts, "missing": int((ran.table["status"] == "missing").sum())}  # left out by ``only``
     return done[0]._replace(counts=counts)
 
@@ -294,3 +294,8 @@ class LoopStudy(NamedTuple):
     by_controller: dict
     segment: object
     budgets: dict  # each controller's sample time, its real-time budget [s]
+
+
+SIMULATE = StudyKind(expand_simulate, run_loop_case, loop_table, table_file="runs.csv", table_name="runs")
+"""The closed-loop study kind (registered as ``simulate``, its study file checked first, by
+:mod:`ecostudy.studies.loopkind`)."""

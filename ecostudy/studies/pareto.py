@@ -69,10 +69,11 @@ def weighted_points(track, train, from_stop, to_stop, count=8, points=FRONT_POIN
     for we in weights:
         r = solve_run(track, train, from_stop, to_stop, Timing(), objective="mixed", weights=(1.0, float(we)),
                       points=points)
-        s = r.summary
-        rows.append({"energy_weight_s_kg_per_J": float(we), "running_time_s": s["running_time_s"],
-                     "traction_energy_kWh": s["traction_energy_kWh"], "net_energy_kWh": s["net_energy_kWh"],
-                     "solver_status": s["solver"]["status"], "verified": s["verification"]["passed"]})
+        f = r.facts
+        rows.append({"energy_weight_s_kg_per_J": float(we), "running_time_s": f.running_time_s,
+                     "traction_energy_kWh": f.traction_energy_kWh, "net_energy_kWh": f.net_energy_kWh,
+                     "solver_status": f.solver.status,
+                     "verified": None if f.verification is None else f.verification.passed})
     return pd.DataFrame(rows)
 
 
