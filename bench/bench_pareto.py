@@ -1,6 +1,7 @@
 """Pareto sweep timings (cold/warm, serial/parallel) and the savings of +5 % and +10 % supplements.
 
     .venv/bin/python bench/bench_pareto.py [--count 20] [--points 500] [--repeat 3]
+    .venv/bin/python bench/bench_pareto.py --cold-points [--count 20] [--points 500]
 
 Cold: every point its own model, NL file and capped-speed start (as `ecostudy solve` would).
 Warm: one model and NL file per chain, only the running-time bound changes, each solve starts
@@ -9,14 +10,20 @@ process start-up for workers, not the plots.
 """
 import argparse
 import sys
+import time
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
+from ecostudy.analysis.single import solve_run  # noqa: E402
+from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
-from ecostudy.studies.pareto import is_monotone, saving_at, sweep  # noqa: E402
+from ecostudy.ocp.problem import Written  # noqa: E402
+from ecostudy.studies.pareto import front_supplements, is_monotone, saving_at, sweep  # noqa: E402
 
 TRIPS = {"Amsterdam metro": ("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal"),
          "regional": ("regional_alstom", "regional_808m", "Origin", "Destination"),
@@ -42,13 +49,39 @@ harness.register("pareto.warm", lambda p: front(p, True), params=PARAMS, referen
                  doc="A Pareto front, warm: one model and NL file per chain, each solve from the previous point")
 
 
+def cold_points(count, points):
+    """The command's front (every point cold on one written model per process, as a case of the
+    ``pareto`` study kind solves it) against the warm-started chain, in this process: the largest
+    relative energy difference, CPU seconds and iterations of each."""
+    table = harness.Table(["trip", "largest energy difference", "CPU s chained", "CPU s cold",
+                           "iterations chained / cold"])
+    for name, c in TRIPS.items():
+        track, train = load(c)
+        cpu = time.process_time()
+        chained, _ = sweep(track, train, c[2], c[3], count=count, supplement_max=0.4, points=points)
+        cpu_chained, cpu = time.process_time() - cpu, time.process_time()
+        allout = solve_run(track, train, c[2], c[3], Timing(), objective="time", points=points)
+        written, runs = Written(), [allout]
+        for s in front_supplements(count, 0.4)[1:]:
+            runs.append(solve_run(track, train, c[2], c[3], Timing(running_time=allout.facts.running_time_s * (1 + s)),
+                                  points=points, written=written, structure=name))
+        cpu_cold = time.process_time() - cpu
+        energy = np.array([r.facts.traction_energy_kWh for r in runs])
+        gap = np.max(np.abs(energy / chained["traction_energy_kWh"].to_numpy() - 1))
+        table.add(name, f"{gap:.1e}", f"{cpu_chained:.2f}", f"{cpu_cold:.2f}",
+                  f"{int(chained['iterations'].sum())} / {sum(r.facts.solver.iterations for r in runs)}")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--count", type=int, default=20)
     p.add_argument("--points", type=int, default=500)
     p.add_argument("--repeat", type=int, default=3)
+    p.add_argument("--cold-points", action="store_true", help="the command's cold points against the chain")
     args = p.parse_args()
     print(harness.command(__file__) + "\n")
+    if args.cold_points:
+        return cold_points(args.count, args.points)
     print(f"Amsterdam metro, {args.count} points, K = {args.points}, supplement 0-40 %\n")
     table = harness.Table(["mode", "workers", "wall s (median)", "iterations", "monotone", "all verified"])
     for warm in (False, True):

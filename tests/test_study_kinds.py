@@ -75,4 +75,5 @@ def test_the_command_line_and_the_api_run_a_registered_kind(study, tmp_path):
     assert r.exit_code == 1 and "failed: speed_kmh=-10: study: speeds_kmh: -10 is negative" in r.output, r.output
     unknown = CliRunner().invoke(app, ["run", str(study), "--kind", "nope"])
     known = unknown.output.split("unknown study kind 'nope'; known: ")[-1].strip().split(", ")
-    assert unknown.exit_code == 2 and sorted(known) == ["compare", "network", "resistance", "run"], unknown.output
+    assert unknown.exit_code == 2, unknown.output
+    assert sorted(known) == ["compare", "heavyhaul", "network", "pareto", "resistance", "run", "simulate"], unknown.output

@@ -15,7 +15,6 @@ from ecostudy.api.blas import limit_blas_threads
 from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.report import calplots, heavyplots, loopplots
-from ecostudy.report.files import write_cases_folder
 from ecostudy.report.studyfiles import network_files
 from ecostudy.report.html import write_html
 from ecostudy.report.style import output
@@ -70,20 +69,21 @@ def simulate_folder(study: Path, workers: Optional[int] = None, dask: Optional[s
     workers = every_core(workers)
     check_options(workers=workers)
     check_closed_loop_study(study, workers, only)  # runs that cannot end, or too big: refused (unless --force)
-    outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress, only)
+    outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress, only,
+                             loop_figures if plot else None)
     runs, counts, folder = outcome.runs, outcome.counts, outcome.output
-    if plot:
-        loopplots.draw(outcome)
-    figures = [n for n in ("bands.png", "solve_times.png", "mass_estimates.png") if plot and (folder / n).is_file()]
-    computed = runs[runs["status"] != "missing"]  # runs left out by --only are not results
-    write_cases_folder(folder, "simulate", computed, ["controller", "draw"],
-                       {"runs": "runs.csv", "aggregate": "aggregate.csv"}, ["results.sqlite", *figures],
-                       study=str(study), missing_runs=int(counts["missing"]))
+    write_html(folder)
     lines = [shown(outcome.aggregate, LOOP_COLUMNS, ".4g"), counts_line(counts, "runs"), "outputs " + listed(folder)]
     if counts["missing"]:
         left = runs.loc[runs["status"] == "missing", "controller"].unique()
         lines.append(f"not run yet: {counts['missing']} runs of {', '.join(left)} (run without --only to compute them)")
     return reported(folder, lines)
+
+
+def loop_figures(outcome) -> list:
+    """The figures of a closed-loop study (``report.loopplots``), drawn; their file names."""
+    loopplots.draw(outcome)
+    return [n for n in ("bands.png", "solve_times.png", "mass_estimates.png") if (outcome.output / n).is_file()]
 
 
 def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
@@ -95,11 +95,10 @@ def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[
     workers = every_core(workers)
     check_options(workers=workers)
     limit_blas_threads(blas_threads)  # before the workers fork: they inherit it
-    outcome = heavyhaul_study(study, workers, dask, retry_failed, Path(out) if out else None, progress)
-    plots = heavyplots.draw(outcome) if plot else []
-    runs, folder = outcome.runs, outcome.output
-    write_cases_folder(folder, "heavyhaul", runs, ["K_b", "f", "Np", "Nc"], {"runs": "runs.csv"},
-                       ["results.sqlite", *plots], study=str(study))
+    outcome = heavyhaul_study(study, workers, dask, retry_failed, Path(out) if out else None, progress,
+                              heavyplots.draw if plot else None)
+    runs, folder, plots = outcome.runs, outcome.output, list(outcome.files)
+    write_html(folder)
     return reported(folder, [shown(runs, HEAVY_COLUMNS, ".4g"), counts_line(outcome.counts, "runs"),
                              f"outputs {folder}/ ({', '.join(['runs.csv', 'summary.json', 'report.html'] + plots[:3])}"
                              f"{', ...' if len(plots) > 3 else ''})"])

@@ -2,6 +2,7 @@
 ``compare`` and ``journey`` as functions (the command line only parses and prints).
 """
 from pathlib import Path
+from time import perf_counter
 from typing import Callable, Optional
 
 from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
@@ -12,15 +13,16 @@ from ecostudy.io.loaders import (check_stop_list, load_timetable, load_track, lo
                                  track_document, train_document)
 from ecostudy.io.timetable import journey_plan, name_stops
 from ecostudy.io.writers import check_output_dir
-from ecostudy.report.files import write_front, write_journey
+from ecostudy.report.files import write_journey
 from ecostudy.report.html import write_html
-from ecostudy.report.studyfiles import compare_figures
+from ecostudy.report.studyfiles import compare_figures, front_files
 from ecostudy.report.style import output
 from ecostudy.studies.batch import Expanded, run_expanded
 from ecostudy.studies.compare import compare_cases, study_documents
 from ecostudy.studies.journey import journey
 from ecostudy.studies.options import case_from, check_options, no_windows, only_one, output_folder, timing_of
-from ecostudy.studies.pareto import das_front, das_meta, front_meta, sweep, weighted_points
+from ecostudy.studies.front import front_cases
+from ecostudy.studies.pareto import weighted_points
 from ecostudy.studies.sizes import check_front, check_journey
 from ecostudy.studies.workers import every_core
 
@@ -37,30 +39,32 @@ def beside(st, suffix: str, default: str) -> Path:
 
 def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
                   from_stop: Optional[str] = None, to_stop: Optional[str] = None, count: int = 20,
-                  supplement_max: float = 40.0, points: Optional[int] = None, workers: int = 1, cold: bool = False,
+                  supplement_max: float = 40.0, points: Optional[int] = None, workers: Optional[int] = None,
                   out: Optional[Path] = None, plot: bool = True, weighted: int = 0, das: Optional[str] = None,
-                  das_time_limit: float = 60.0, fig_format: str = "png", dpi: Optional[float] = None, *,
+                  das_time_limit: float = 60.0, fig_format: str = "png", dpi: Optional[float] = None,
+                  dask: Optional[str] = None, retry_failed: bool = False, *,
                   progress: Optional[Progress] = None) -> Report:
     """``ecostudy pareto``: energy against running time, ``count`` points from the all-out run to
     ``supplement_max`` [%] over it (epsilon constraint), optionally ``weighted`` weighted-sum points
-    (Yazhemsky 2017, eq. 4.1a) and the driver-advice front ``das`` at every point."""
-    figures = output(fig_format, dpi)
+    (Yazhemsky 2017, eq. 4.1a) and the driver-advice front ``das`` at every point; each point a case
+    of the study kind ``pareto`` (:mod:`ecostudy.studies.front`), stored in ``results.sqlite`` and
+    resumed, over ``workers`` processes (every core by default) or a Dask scheduler."""
+    figures, workers, started = output(fig_format, dpi), every_core(workers), perf_counter()
     check_options(count=count, supplement_max=supplement_max, points=points, workers=workers, weighted=weighted,
                   das_time_limit=das_time_limit)
     trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points)
     no_windows(st, "pareto")
-    k = k or FRONT_POINTS
+    train_doc, track_doc = documents(st, train, track)
+    cases = front_cases(train_doc, track_doc, f, t, count, supplement_max * units.PERCENT, k or FRONT_POINTS,
+                        st.name if st is not None else "pareto", das, das_time_limit)
     out_dir = output_folder(out, beside(st, "_pareto", "pareto"))
-    check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png"))
-    check_front("command line", count, k, workers, das, das_time_limit)  # too big: refused (unless --force)
-    table, results = sweep(trk, trn, f, t, count=count, supplement_max=supplement_max * units.PERCENT,
-                           points=k, workers=workers, warm=not cold, progress=progress)
-    meta = front_meta(table, {"track": trk.name, "train": trn.name, "from": f, "to": t}, k, count, workers, not cold)
-    if das is not None:
-        table = das_front(table, results, das, k, workers, das_time_limit)
-        meta["das"] = das_meta(table)
-    extra = weighted_points(trk, trn, f, t, count=weighted, points=k) if weighted else None
-    write_front(table, results, out_dir, meta, plot=plot, weighted=extra, out=figures)
+    check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png", "results.sqlite"))
+    check_front("command line", count, k or FRONT_POINTS, workers, das, das_time_limit)  # refused (unless --force)
+    extra = weighted_points(trk, trn, f, t, count=weighted, points=k or FRONT_POINTS) if weighted else None
+    ran = run_expanded("pareto", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,
+                       progress=progress, draw=front_files(plot, figures, extra, workers, started))
+    write_html(out_dir)
+    table, meta = ran.table, ran.table.attrs
     lines = [shown(table, FRONT_COLUMNS + (DAS_COLUMNS if das is not None else []))]
     if das is not None:
         d = meta["das"]
@@ -69,8 +73,16 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     lines.append(f"all-out {meta['all_out_time_s']:.2f} s; +5 % saves {meta['saving_at_5_pct_supplement_pct']:.1f} %, "
                  f"+10 % saves {meta['saving_at_10_pct_supplement_pct']:.1f} % of the all-out traction energy")
     lines.append(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
-                 f"{meta['all_verified']}; {meta['wall_s']:.1f} s; outputs " + listed(out_dir))
-    return reported(out_dir, lines)
+                 f"{meta['all_verified']}; {perf_counter() - started:.1f} s")
+    return reported(out_dir, lines + [counts_line(ran.counts, "points"), "outputs " + listed(out_dir)])
+
+
+def documents(st, train: Optional[Path], track: Optional[Path]) -> tuple[dict, dict]:
+    """(train document, track document) of a study file's base case, or of the given files."""
+    if st is not None:
+        return study_documents(st)
+    assert train is not None and track is not None  # case_from refused a command without both
+    return train_document(train)[0], track_document(track)
 
 
 def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
@@ -94,11 +106,7 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
         timing = st.timing
     else:
         raise InputError(problem("command line", "--time", "give --time or --supplement"))
-    if st is not None:
-        train_doc, track_doc = study_documents(st)
-    else:
-        assert train is not None and track is not None  # case_from refused a command without both
-        train_doc, track_doc = train_document(train)[0], track_document(track)
+    train_doc, track_doc = documents(st, train, track)
     cases = compare_cases(train_doc, track_doc, f, t, timing, k or RUN_POINTS, st.name if st is not None else "compare")
     out_dir = output_folder(out, beside(st, "_compare", "compare"))
     ran = run_expanded("compare", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,

@@ -16,18 +16,16 @@ def pareto(
     study: o.Study = None, track: o.Track = None, train: o.Train = None, from_stop: o.From = None, to_stop: o.To = None,
     count: int = typer.Option(20, help="Points on the front, the all-out run included."),
     supplement_max: float = typer.Option(40.0, help="Largest running-time supplement over all-out [%]."),
-    points: o.Points = None,
-    workers: int = typer.Option(1, help="Processes; each solves a contiguous warm-started chain."),
-    cold: bool = typer.Option(False, help="Solve every point on its own (no shared model, no warm start)."),
+    points: o.Points = None, workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False,
     weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T + w_e E/m, Yazhemsky 2017, eq. 4.1a)."),
     das: Optional[o.DasMethod] = typer.Option(None, help="Also the DAS front: round | phases | minlp at every point."),
     das_time_limit: o.DasTimeLimit = 60.0, out: o.Out = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png",
     dpi: o.Dpi = 110.0, force: o.Force = False, debug: o.Debug = False,
 ):
-    """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS. Example: ecostudy pareto studies/default.yaml --count 9"""
+    """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS; every point stored, resumable. Example: ecostudy pareto studies/default.yaml --count 9"""
     finish(call(debug, "pareto_folder", study, track, train, from_stop, to_stop, count, supplement_max, points,
-                workers, cold, out, not no_plot, weighted, das and das.value, das_time_limit, fig_format, dpi,
-                force=force, bar=("points", False, False)))
+                workers, out, not no_plot, weighted, das and das.value, das_time_limit, fig_format, dpi, dask,
+                retry_failed, force=force, bar=("points", False)))
 
 
 @app.command(name="compare", short_help="Strategies side by side, each re-simulated by one simulator.")

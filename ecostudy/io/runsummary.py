@@ -6,7 +6,7 @@ field names carry their units as the file's keys do (``traction_energy_kWh``, ``
 A reader writes ``run.facts.traction_energy_kWh``, not ``run.summary["traction_energy_kWh"]``:
 a misspelt attribute is an error mypy and the interpreter name, a misspelt key is not.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional
 
 
@@ -145,6 +145,7 @@ class RunSummary:
     pontryagin: Optional[PontryaginCheck]
     verification: Optional[Verification]  # None: not re-simulated
     das: Optional[DasSummary] = None
+    distance_shares: Mapping[str, float] = field(default_factory=dict)  # regime -> share of the distance [-]
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "RunSummary":
@@ -166,4 +167,5 @@ class RunSummary:
                    solver=SolverRun.from_dict(data["solver"]),
                    pontryagin=None if not pm else PontryaginCheck.from_dict(pm),
                    verification=None if ver is None else Verification.from_dict(ver),
-                   das=None if not das else DasSummary.from_dict(das))
+                   das=None if not das else DasSummary.from_dict(das),
+                   distance_shares={str(k): float(v) for k, v in (regimes.get("distance_shares") or {}).items()})

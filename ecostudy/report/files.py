@@ -1,12 +1,10 @@
 """The files of a run (``profile.csv``, ``summary.json``, ``speed.png``, ``advice.csv``) and of a
-front (``pareto.csv``, ``pareto.json``, the plots), each written atomically."""
+journey, each written atomically (a front's: :func:`ecostudy.report.studyfiles.front_files`)."""
 from functools import partial
 from pathlib import Path
 
-import numpy as np
-
 from ecostudy.analysis.export import fixed_step
-from ecostudy.core.status import OK, Status, flagged, parsed
+from ecostudy.core.status import OK, flagged
 from ecostudy.io.folder import write_summary
 from ecostudy.io.results import load_result
 from ecostudy.io.writers import write_csv, write_json
@@ -79,28 +77,6 @@ def stale(out_dir, names, **drop):
                 (Path(out_dir) / name).unlink(missing_ok=True)
 
 
-def write_front(table, results, out_dir, meta, plot=True, weighted=None, out=style.Output()):
-    """``pareto.csv``, ``pareto.json`` and the two plots of a front (and ``pareto_weighted.csv``)."""
-    out_dir = Path(out_dir)
-    write_csv(out_dir / "pareto.csv", table)
-    if weighted is not None:
-        write_csv(out_dir / "pareto_weighted.csv", weighted)
-    write_json(out_dir / "pareto.json", meta)
-    tables = {"pareto": "pareto.csv", **({"weighted": "pareto_weighted.csv"} if weighted is not None else {})}
-    statuses = {f"{t:.2f} s": Status.parse(st) for t, st in zip(table["running_time_s"], table["status"])}
-    if not meta["monotone"]:
-        statuses["front"] = flagged("energy does not fall as the running time grows")
-    title = f"{meta['train']} - {meta['from']} to {meta['to']} (K = {meta['points']})"
-    picks = sorted(set(np.linspace(0, len(results) - 1, min(5, len(results))).round().astype(int)))
-    drawn = figures(out_dir, plot, {
-        "pareto": later("pareto_plot", table, title=title, weighted=weighted),
-        "pareto_profiles": later("profiles_plot", [results[i] for i in picks], title=title)}, out)
-    write_summary(out_dir, "pareto", statuses, tables, ["pareto.json"] + drawn, **meta)
-    stale(out_dir, weighted=weighted is None, names={"weighted": ["pareto_weighted.csv"]})
-    write_html(out_dir)
-    return out_dir
-
-
 def write_journey(table, totals, results, out_dir, title, passing=(), plot=True, out=style.Output()):
     """``journey.csv``, ``journey_totals.csv``, ``summary.json`` and ``journey.png`` of a journey's
     distributions (every segment's run re-simulated: ``verified``)."""
@@ -114,16 +90,6 @@ def write_journey(table, totals, results, out_dir, title, passing=(), plot=True,
                   drawn, title=title)
     write_html(out_dir)
     return out_dir
-
-
-def write_cases_folder(out_dir, kind, table, name_columns, tables, files=(), **fields):
-    """``summary.json`` and ``report.html`` of a resumable study's folder (``heavyhaul``,
-    ``simulate``): every row's status from the table's ``status`` and ``reason`` columns, named by
-    its ``name_columns`` (``controller=convex, draw=3``)."""
-    names = [", ".join(f"{c}={row[c]}" for c in name_columns) for _, row in table.iterrows()]
-    statuses = parsed(names, table["status"], table["reason"] if "reason" in table else [None] * len(table))
-    write_summary(out_dir, kind, statuses, tables, files, **fields)
-    write_html(out_dir)
 
 
 EXPORT_UNITS = {"time_s": "s", "position_m": "m", "speed_kmh": "km/h", "speed_mps": "m/s",

@@ -2,14 +2,16 @@
 engine (:func:`ecostudy.studies.batch.run_expanded`), called with the output folder, the cases,
 the stored rows and the table; it writes its files atomically and returns (file names,
 {table name: file name})."""
+import time
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from ecostudy.io.writers import write_csv, write_json
 from ecostudy.report import style
-from ecostudy.report.files import figures, later
-from ecostudy.studies import compare, network
+from ecostudy.report.files import figures, later, stale
+from ecostudy.studies import compare, front, network
 
 
 def compare_figures(plot=True, out=style.Output()):
@@ -43,4 +45,27 @@ def network_files(plot=True, out=style.Output()):
         drawn = figures(out_dir, plot, {"network": later("network_plot", fl, done, title=study),
                                         "network_supply": later("supply_plot", fl, done, title=study)}, out)
         return [f"network_steps_{name}.csv" for name in done] + ["network.json"] + drawn, {"trains": "network_trains.csv"}
+    return draw
+
+
+def front_files(plot=True, out=style.Output(), weighted=None, workers=1, started=None):
+    """The study engine's ``draw`` (:func:`ecostudy.studies.batch.run_expanded`) of a Pareto front:
+    ``pareto.json`` (the table's facts, ``workers`` and the wall seconds since ``started``),
+    ``pareto_weighted.csv`` (the ``weighted`` points, if any), ``pareto.png`` and
+    ``pareto_profiles.png`` (five stored points' speed profiles)."""
+    started = time.perf_counter() if started is None else started
+
+    def draw(out_dir, cases, rows, table):
+        out_dir = Path(out_dir)
+        meta = {**table.attrs, "workers": workers, "wall_s": time.perf_counter() - started}
+        if weighted is not None:
+            write_csv(out_dir / "pareto_weighted.csv", weighted)
+        write_json(out_dir / "pareto.json", meta)
+        stale(out_dir, weighted=weighted is None, names={"weighted": ["pareto_weighted.csv"]})
+        title = f"{meta['train']} - {meta['from']} to {meta['to']} (K = {meta['points']})"
+        picks = sorted(set(np.linspace(0, len(cases) - 1, min(5, len(cases))).round().astype(int)))
+        drawn = figures(out_dir, plot, {
+            "pareto": later("pareto_plot", table, title=title, weighted=weighted),
+            "pareto_profiles": later("profiles_plot", front.front_points(cases, rows, picks), title=title)}, out)
+        return ["pareto.json", *drawn], {"weighted": "pareto_weighted.csv"} if weighted is not None else {}
     return draw

@@ -42,7 +42,7 @@ def _all_out_time(case, track, train):
     if key not in _ALL_OUT:
         r = solve_run(track, train, case["from"], case["to"], Timing(), objective="time",
                       points=case["points"], verify_result=False)
-        _ALL_OUT[key] = r.summary["running_time_s"]
+        _ALL_OUT[key] = r.facts.running_time_s
     return _ALL_OUT[key]
 
 
@@ -81,11 +81,15 @@ def _solve_case(case):
     r = solve_run(track, train, case["from"], case["to"], timing, objective=case["objective"],
                   points=case["points"], weights=tuple(case["weights"]), written=_WRITTEN, structure=structure)
     summary = r.summary
+    if case["objective"] == "time" and not case["window_s"]:  # the scenario's all-out time: kept for its supplements
+        _ALL_OUT[case_key({k: case[k] for k in _SCENARIO})] = r.facts.running_time_s
     if case.get("das"):
         summary["das"] = das_columns(r, case["das"], case["points"], case.get("das_time_limit_s", 60.0))
     if t_allout is not None:
         summary["all_out_time_s"] = t_allout
-    return ("ok" if r.ok else "flagged"), None, summary
+    if case.get("profile"):  # the speed profile, for a figure drawn from the store (a front's)
+        summary["profile"] = {k: r.profile[k].tolist() for k in ("position_m", "speed_kmh")}
+    return r.status.kind, r.status.reason or None, summary
 
 
 def _serial(todo, task):
@@ -189,6 +193,9 @@ class StudyKind:
     table_file: str = "results.csv"
     table_name: str = "results"
     """The table's name in ``summary.json`` (``api.load(folder).tables[table_name]``)."""
+    verdict: Optional[Callable[[pd.DataFrame], dict]] = None
+    """``verdict(table)``: statuses of the study as a whole beside its cases' ({name: Status}; a
+    front whose energy does not fall as the running time grows is flagged)."""
 
 
 STUDY_KINDS: Registry[StudyKind] = Registry("study kind")
@@ -221,28 +228,35 @@ def kind_named(kind):
 
 
 def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False, out=None, progress=None,
-                 draw=None):
+                 draw=None, compute=None, spec=None):
     """A study of ``kind`` already expanded (from a study file, or from a command's options: ``where``
     names it): the cases not stored yet run (serially, in ``workers`` processes or on ``dask``,
     :func:`execute`), each stored as it arrives; the table of every stored case; the table's file
     and summary.json written, with the files and tables ``draw(output, cases, rows, table)`` writes
     and returns as (file names, {table name: file name}) (figures, a kind's other files).
-    ``progress(done, failed, remaining, total)`` after each case. Returns a :class:`StudyRun`."""
-    spec = kind_named(kind)
-    if spec.size is not None:  # too big for the command: refused with its estimate (unless --force)
+    ``progress(done, failed, remaining, total)`` after each case; ``compute``: only these cases
+    computed now (the others' stored results still in the table; a case neither stored nor computed
+    is ``missing`` there, and no result in ``summary.json``); ``spec``: the :class:`StudyKind` itself
+    (default: the one registered as ``kind``). Returns a :class:`StudyRun`."""
+    spec = spec or kind_named(kind)
+    if spec.size is not None and compute is None:  # too big: refused with its estimate (unless --force); a part
+        # computed now (``compute``) is checked by its caller
         spec.size(Path(where), expanded.cases, workers)
     output = check_output_dir(out or expanded.output, (spec.table_file, "results.sqlite", *expanded.inputs))
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
     counts, rows = stored_rows(expanded.cases, output / "results.sqlite", spec.task, workers, dask, retry_failed,
-                               progress)
+                               progress, compute)
     table = spec.table(expanded.cases, rows)
     write_csv(output / spec.table_file, table)
     drawn, tables = draw(output, expanded.cases, rows, table) if draw is not None else ([], {})
-    write_summary(output, kind, case_statuses(expanded.cases, table), {spec.table_name: spec.table_file, **tables, **{
+    results = [compute is None or k in rows for k in (c["key"] for c in expanded.cases)]  # left out: not results
+    statuses = {**case_statuses([c for c, r in zip(expanded.cases, results) if r], table[results]),
+                **(spec.verdict(table) if spec.verdict else {})}
+    write_summary(output, kind, statuses, {spec.table_name: spec.table_file, **tables, **{
                   Path(name).stem: name for name in expanded.inputs}}, ["results.sqlite", *drawn], study=str(where),
                   computed_now=counts["computed"], stored_before=counts["stored_before"], **table.attrs)
-    counts["not_ok"] = int((table["status"] != "ok").sum())
+    counts["not_ok"] = sum(not s.ok for s in statuses.values())
     return StudyRun(table, counts, output, expanded.cases, rows)
 
 

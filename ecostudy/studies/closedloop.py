@@ -29,8 +29,8 @@ from ecostudy.io.loaders import (chosen_stops, read_document, track_document, tr
 from ecostudy.io.loopfile import Controller, SimulateFile
 from ecostudy.ocp.convex import FASTEST, ConvexProgram, trapezoid_grid
 from ecostudy.ocp.problem import prepare
-from ecostudy.io.writers import check_output_dir, write_csv
-from ecostudy.studies.batch import outcome, stored_rows
+from ecostudy.io.writers import write_csv
+from ecostudy.studies.batch import Expanded, StudyKind, outcome, run_expanded
 from ecostudy.studies.cases import case_key
 from ecostudy.studies.controllers import CONTROLLER_KINDS, Build
 from ecostudy.studies.loopsteps import step_columns, step_counts, steps_frame
@@ -228,10 +228,11 @@ def aggregate(runs):
     return pd.DataFrame(rows)
 
 
-def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None, only=None):
-    """Run the runs of a closed-loop study not stored yet (``only``: of these controllers) and write
-    runs.csv and aggregate.csv of every stored run (a controller not run yet counts as missing) and
-    each run's steps/<controller>_draw<i>.csv (``studies.loopsteps``).
+def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None, only=None, draw=None):
+    """Run the runs of a closed-loop study not stored yet (``only``: of these controllers) through
+    the study engine (kind ``simulate``): runs.csv and aggregate.csv of every stored run (a
+    controller not run yet counts as missing), each run's steps/<controller>_draw<i>.csv
+    (``studies.loopsteps``), ``summary.json`` and the figures ``draw(study)`` writes and returns.
 
     Returns a :class:`LoopStudy` (the plots are drawn from it by ``report.loopplots``)."""
     study, output, cases = expand(path)
@@ -239,13 +240,22 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
     unknown = sorted(set(only or ()) - set(names))
     if unknown:
         raise InputError(problem(path, "controllers", f"--only names {', '.join(unknown)}, not among {', '.join(names)}"))
-    output = check_output_dir(Path(out) if out else output, ("runs.csv", "aggregate.csv", "results.sqlite"))
     compute = [c for c in cases if c["labels"]["controller"] in only] if only else None
-    counts, rows = stored_rows(cases, output / "results.sqlite", run_loop_case, workers, dask, retry_failed, progress,
-                               compute)
-    runs = runs_table(cases, rows)
+    done = []
+
+    def files(out_dir, cases, rows, table):
+        done.append(loop_study(study, cases, rows, table, Path(out_dir)))
+        return (draw(done[0]) if draw is not None else []), {"aggregate": "aggregate.csv"}
+    ran = run_expanded("simulate", Expanded(output, cases), path, workers, dask, retry_failed, out, progress, files,
+                       compute, SIMULATE)
+    counts = {**ran.counts, "missing": int((ran.table["status"] == "missing").sum())}  # left out by ``only``
+    return done[0]._replace(counts=counts)
+
+
+def loop_study(study, cases, rows, runs, output):
+    """The :class:`LoopStudy` of the stored ``rows`` (``runs``: their table), its aggregate.csv and
+    every run's steps/<controller>_draw<i>.csv written into ``output``."""
     summary = aggregate(runs)
-    write_csv(output / "runs.csv", runs)
     write_csv(output / "aggregate.csv", summary)
     by_controller, budgets = {}, {}
     for case in cases:
@@ -256,9 +266,20 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
         if s:
             by_controller.setdefault(case["labels"]["controller"], []).append(s)
             budgets[case["labels"]["controller"]] = case["sample_time"]
-    counts["missing"] = int((runs["status"] == "missing").sum())  # controllers left out by ``only``
-    counts["not_ok"] = int(not_ok(runs).sum())
-    return LoopStudy(study, runs, summary, counts, output, by_controller, _inputs(cases[0])[2], budgets)
+    return LoopStudy(study, runs, summary, {}, output, by_controller, _inputs(cases[0])[2], budgets)
+
+
+def expand_simulate(path):
+    """A closed-loop study file as the study engine's cases (:func:`expand`), into its output."""
+    _, output, cases = expand(path)
+    return Expanded(output, cases)
+
+
+def loop_table(cases, rows):
+    """:func:`runs_table`, the runs not computed yet counted in its attrs (``summary.json``)."""
+    table = runs_table(cases, rows)
+    table.attrs["missing_runs"] = int((table["status"] == "missing").sum())
+    return table
 
 
 class LoopStudy(NamedTuple):
@@ -273,3 +294,8 @@ class LoopStudy(NamedTuple):
     by_controller: dict
     segment: object
     budgets: dict  # each controller's sample time, its real-time budget [s]
+
+
+SIMULATE = StudyKind(expand_simulate, run_loop_case, loop_table, table_file="runs.csv", table_name="runs")
+"""The closed-loop study kind (registered as ``simulate``, its study file checked first, by
+:mod:`ecostudy.studies.loopkind`)."""

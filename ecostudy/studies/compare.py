@@ -96,12 +96,12 @@ def _strategy(case):
     if name == "all-out":
         run = solve_run(track, train, case["from"], case["to"], Timing(), objective="time", points=case["points"])
         return _stored(Driven(name, run.handle, run.trace), train, run.segment.distance, run.status,
-                       verified=bool(run.summary["verification"]["passed"]))
+                       verified=verified(run))
     ato = _ato(case, track, train)
-    target = ato.summary["running_time_s"]
+    target = ato.facts.running_time_s
     if name == "ATO optimum":
         return _stored(Driven(name, ato.handle, ato.trace), train, ato.segment.distance, ato.status, target_s=target,
-                       verified=bool(ato.summary["verification"]["passed"]))
+                       verified=verified(ato))
     prepared = prepare(track, train, case["from"], case["to"], case["points"])
     if name in HEURISTICS:
         driven = HEURISTICS[name](prepared, target)
@@ -113,6 +113,11 @@ def _strategy(case):
     row = driven.row(train, prepared.segment.distance)
     status = driven_run(row["stop_error_m"], row["running_time_s"] - target)
     return _stored(driven, train, prepared.segment.distance, status, target_s=target, **extra)
+
+
+def verified(run):
+    """Whether the independent re-simulation passed the run (a :class:`RunResult`)."""
+    return bool(run.facts.verification and run.facts.verification.passed)
 
 
 def _stored(driven, train, distance, status, **fields):

@@ -1,7 +1,9 @@
-"""Heavy-haul studies (``ecostudy heavyhaul``): paper 002's braking-penalised receding-horizon
-controller on the full cascade plant, one case per (K_b, f, Np, Nc), on the batch machinery
-(resumable, processes or Dask). The reference speed is solved once, when the study is expanded, and
-travels in every case (cases are self-contained and keyed by a hash of their inputs).
+"""Heavy-haul studies (``ecostudy heavyhaul``, ``ecostudy run FILE --kind heavyhaul``): Zhang &
+Zhuan's braking-penalised receding-horizon controller on the full cascade plant, one case per
+(K_b, f, Np, Nc), a registered study kind run by the one study engine
+(:func:`ecostudy.studies.batch.run_expanded`: stored, resumable, processes or Dask). The reference
+speed is solved once, when the study is expanded, and travels in every case (cases are
+self-contained and keyed by a hash of their inputs).
 
 Per run, the columns of Zhang & Zhuan's Tables III-IV: the tracking error |mean speed - v_r| (mean,
 std), the in-train forces (max over the integrator's points, also over the braking samples, mean and
@@ -40,8 +42,7 @@ from ecostudy.io.heavyhaulfile import HeavyhaulFile
 from ecostudy.io.loaders import (chosen_stops, consist_from_document, read_document, track_document,
                                  track_from_schema, validate)
 from ecostudy.io.tables import number_columns
-from ecostudy.io.writers import check_output_dir, write_csv
-from ecostudy.studies.batch import outcome, stored_rows
+from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome, run_expanded
 from ecostudy.studies.cases import case_key
 from ecostudy.studies.sizes import check_heavyhaul_study
 
@@ -111,9 +112,18 @@ def expand(path):
         case = {**shared, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",
                 "labels": {"K_b": kb, "f": f, "Np": h.np, "Nc": h.nc}}
         case["key"] = case_key(case)
+        case["plan"] = Plan(s, reference)  # after the key: both follow from the inputs the key hashes
         cases.append(case)
     output = Path(s.output) if s.output else Path("out") / s.name  # relative: to the working directory
     return s, output, reference, cases
+
+
+class Plan(NamedTuple):
+    """What a heavy-haul case carries beside its key: the study file and the reference solved once
+    at expansion (for the study's size and its plots)."""
+
+    study: HeavyhaulFile
+    reference: Reference
 
 
 QP_FORMS = {  # a study's qp_solver: the same QP four ways (docs/heavyhaul.md)
@@ -208,29 +218,53 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
            "peak_memory_MB", *IN_TRAIN)
 
 
-def heavyhaul_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
-    """Run the cases not stored yet and write runs.csv; returns a :class:`HeavyhaulStudy`."""
-    study, output, reference, cases = expand(path)
-    check_heavyhaul_study(path, study, reference, cases, workers)  # too big for the command: refused (--force)
-    output = check_output_dir(Path(out) if out else output, ("runs.csv", "results.sqlite"))
-    counts, rows = stored_rows(cases, output / "results.sqlite", run_heavyhaul_case, workers, dask, retry_failed,
-                               progress)
-    table, summaries = [], {}
+def expand_heavyhaul(path):
+    """A heavy-haul study file as the study engine's cases (:func:`expand`), into its output."""
+    _, output, _, cases = expand(path)
+    return Expanded(output, cases)
+
+
+def heavyhaul_size(where, cases, workers=1):
+    """Refuse a heavy-haul study estimated above the command's budget (unless forced)."""
+    study, reference = cases[0]["plan"]
+    check_heavyhaul_study(where, study, reference, cases, workers)
+
+
+def heavyhaul_table(cases, rows):
+    """One row per run (``runs.csv``): its labels, status and reason, :data:`COLUMNS`, seconds."""
+    table = []
     for case in cases:
         row = rows.get(case["key"]) or {}
         s = row.get("summary") or {}
-        summaries[case["key"]] = s
         table.append({**case["labels"], "status": row.get("status", "missing"), "reason": row.get("error"),
                       **{c: s.get(c) for c in COLUMNS}, "seconds": row.get("seconds")})
-    runs = pd.DataFrame(table)
-    write_csv(output / "runs.csv", runs)
-    counts["not_ok"] = int((runs["status"] != "ok").sum())
-    return HeavyhaulStudy(study, runs, counts, output, reference, cases, summaries)
+    return pd.DataFrame(table)
+
+
+def heavyhaul_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None, draw=None):
+    """Run the cases not stored yet through the study engine (kind ``heavyhaul``: ``runs.csv``,
+    ``summary.json``, and the files ``draw(study)`` writes of the :class:`HeavyhaulStudy` and returns);
+    returns a :class:`HeavyhaulStudy`."""
+    study, output, reference, cases = expand(path)
+    drawn = []  # the figures of the draw
+
+    def files(out_dir, cases, rows, table):
+        if draw is not None:
+            drawn.extend(draw(HeavyhaulStudy(study, table, {}, Path(out_dir), reference, cases, summaries_of(cases, rows))))
+        return drawn, {}
+    ran = run_expanded("heavyhaul", Expanded(output, cases), path, workers, dask, retry_failed, out, progress, files)
+    return HeavyhaulStudy(study, ran.table, ran.counts, ran.output, reference, cases, summaries_of(cases, ran.rows),
+                          tuple(drawn))
+
+
+def summaries_of(cases, rows):
+    """Every case's stored summary by key ({} for a run not stored, or failed)."""
+    return {c["key"]: (rows.get(c["key"]) or {}).get("summary") or {} for c in cases}
 
 
 class HeavyhaulStudy(NamedTuple):
     """A heavy-haul study's outcome: the study file, the runs table, the counts, the output folder,
-    the reference, the cases and every stored run's summary by case key."""
+    the reference, the cases, every stored run's summary by case key and the figures drawn."""
 
     study: object
     runs: pd.DataFrame
@@ -239,3 +273,9 @@ class HeavyhaulStudy(NamedTuple):
     reference: Reference
     cases: list
     summaries: dict
+    files: tuple = ()
+
+
+STUDY_KINDS.register("heavyhaul", StudyKind(expand_heavyhaul, run_heavyhaul_case, heavyhaul_table, heavyhaul_size,
+                                            table_file="runs.csv", table_name="runs"),
+                     doc="Zhang & Zhuan's braking-penalised receding-horizon control, one run per (K_b, f, Np, Nc)")

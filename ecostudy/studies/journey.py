@@ -228,7 +228,7 @@ def timing_columns(plan, n, departure, arrival, run):
     """Journey-clock columns of segment n and whether the run keeps its windows: the passing
     points and the arrival (a window at the stop) on the simulated trace (``simulate.window_checks``)."""
     lo, hi = plan.arrival[n]
-    stop = Window(run.summary["distance_m"], _relative(lo, departure), _relative(hi, departure))
+    stop = Window(run.facts.distance_m, _relative(lo, departure), _relative(hi, departure))
     checks = window_checks(run.trace, _segment_windows(plan, n, departure) + (stop,))
     d_lo, d_hi = plan.departure[n] or (None, None)
     departed = (d_lo is None or departure >= d_lo - 1e-3) and (d_hi is None or departure <= d_hi + 1e-3)
@@ -297,12 +297,13 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
             results[name].append(r)
             tick()
             t0 = float(f["running_time_s"].iloc[0])
-            rows.append({"distribution": name, "from": a, "to": b, "distance_m": r.summary["distance_m"],
-                         "all_out_time_s": t0, "running_time_s": r.summary["running_time_s"],
-                         "supplement_pct": 100 * (t / t0 - 1), "traction_energy_kWh": r.summary["traction_energy_kWh"],
-                         "net_energy_kWh": r.summary["net_energy_kWh"],
+            facts = r.facts
+            rows.append({"distribution": name, "from": a, "to": b, "distance_m": facts.distance_m,
+                         "all_out_time_s": t0, "running_time_s": facts.running_time_s,
+                         "supplement_pct": 100 * (t / t0 - 1), "traction_energy_kWh": facts.traction_energy_kWh,
+                         "net_energy_kWh": facts.net_energy_kWh,
                          **(timing_columns(plan, n, departures[n], arrivals[n], r) if plan is not None else {}),
-                         "verified": r.summary["verification"]["passed"]})
+                         "verified": bool(facts.verification and facts.verification.passed)})
     table = pd.DataFrame(rows)
     totals = table.groupby("distribution", sort=False)[["running_time_s", "traction_energy_kWh", "net_energy_kWh"]].sum()
     if plan is not None:

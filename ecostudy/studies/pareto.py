@@ -18,6 +18,7 @@ from ecostudy.core.defaults import FRONT_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.types import Timing
 from ecostudy.das.methods import das_columns
+from ecostudy.io.runsummary import RunSummary
 from ecostudy.ocp import session
 from ecostudy.ocp.problem import all_out, build, capped_guess, prepare, record
 from ecostudy.ocp.solver import IPOPT
@@ -68,10 +69,11 @@ def weighted_points(track, train, from_stop, to_stop, count=8, points=FRONT_POIN
     for we in weights:
         r = solve_run(track, train, from_stop, to_stop, Timing(), objective="mixed", weights=(1.0, float(we)),
                       points=points)
-        s = r.summary
-        rows.append({"energy_weight_s_kg_per_J": float(we), "running_time_s": s["running_time_s"],
-                     "traction_energy_kWh": s["traction_energy_kWh"], "net_energy_kWh": s["net_energy_kWh"],
-                     "solver_status": s["solver"]["status"], "verified": s["verification"]["passed"]})
+        f = r.facts
+        rows.append({"energy_weight_s_kg_per_J": float(we), "running_time_s": f.running_time_s,
+                     "traction_energy_kWh": f.traction_energy_kWh, "net_energy_kWh": f.net_energy_kWh,
+                     "solver_status": f.solver.status,
+                     "verified": None if f.verification is None else f.verification.passed})
     return pd.DataFrame(rows)
 
 
@@ -112,7 +114,7 @@ def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, point
     else:
         parts = [_chain(case, chunks[0], objective, options, verify_result, warm, tick)] if chunks else []
     results = [allout] + [r for part in parts for r in part]
-    table = front_table(results, t_allout)
+    table = front_table([(r.summary, r.status) for r in results], t_allout)
     table.attrs["wall_s"] = time.perf_counter() - t0
     return table, results
 
@@ -139,43 +141,44 @@ def front_supplements(count, supplement_max):
     return points
 
 
-def front_meta(table, case_names, points, count, workers, warm):
-    """The facts of a front that a reader asks first: savings at +5 % and +10 %, checks, timing."""
-    return {**case_names, "points": points, "count": count,
-            "all_out_time_s": float(table["running_time_s"].iloc[0]),
-            "saving_at_5_pct_supplement_pct": saving_at(table, 5.0),
-            "saving_at_10_pct_supplement_pct": saving_at(table, 10.0),
-            "monotone": is_monotone(table), "all_verified": bool(table["verified"].all()),
-            "all_optimal": bool((table["solver_status"] == "optimal").all()),
-            "workers": workers, "warm_start": warm, "wall_s": table.attrs["wall_s"]}
+def facts_of(summary):
+    """A point's summary typed (a study's ``das`` is a table row, not a run's advice block: left out)."""
+    return RunSummary.from_dict({**summary, "das": None})
 
 
-def front_table(results, t_allout):
-    """One row per point, columns named with their units."""
+def front_table(points, t_allout):
+    """One row per point, columns named with their units; ``points``: (summary, status) of each
+    point, the all-out run first (a point not solved: summary None, its row empty but its status)."""
     rows = []
-    for r in results:
-        s = r.summary
-        ver = s["verification"] or {}
+    for summary, status in points:
+        if summary is None:
+            rows.append({"status": str(status)})
+            continue
+        s = facts_of(summary)
         rows.append({
-            "running_time_s": s["running_time_s"],
-            "supplement_pct": 100 * (s["running_time_s"] / t_allout - 1),
-            "traction_energy_kWh": s["traction_energy_kWh"],
-            "net_energy_kWh": s["net_energy_kWh"],
-            "top_speed_kmh": s["top_speed_kmh"],
-            "coasting_share_pct": 100 * s["regimes"]["distance_shares"]["CO"],
-            "regime_sequence": s["regimes"]["sequence"],
-            "solver_status": s["solver"]["status"],
-            "iterations": s["solver"]["iterations"],
-            "verified": ver.get("passed"),
-            "status": str(r.status),
+            "running_time_s": s.running_time_s,
+            "supplement_pct": 100 * (s.running_time_s / t_allout - 1),
+            "traction_energy_kWh": s.traction_energy_kWh,
+            "net_energy_kWh": s.net_energy_kWh,
+            "top_speed_kmh": s.top_speed_kmh,
+            "coasting_share_pct": 100 * s.distance_shares["CO"],
+            "regime_sequence": s.regime_sequence,
+            "solver_status": s.solver.status,
+            "iterations": s.solver.iterations,
+            "verified": None if s.verification is None else s.verification.passed,
+            "status": str(status),
         })
-    table = pd.DataFrame(rows)
+    table = pd.DataFrame(rows, columns=list(FRONT_ROW))
     e0 = table["traction_energy_kWh"].iloc[0]
     table.insert(4, "saving_vs_all_out_pct", 100 * (1 - table["traction_energy_kWh"] / e0))
     # what one more second buys: -dE/dT by central differences (one-sided at the ends) [kWh/s]
     table.insert(5, "marginal_saving_kWh_per_s",
-                 -np.gradient(table["traction_energy_kWh"].to_numpy(), table["running_time_s"].to_numpy()))
+                 -np.gradient(table["traction_energy_kWh"].to_numpy(float), table["running_time_s"].to_numpy(float)))
     return table
+
+
+FRONT_ROW = ("running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "top_speed_kmh",
+             "coasting_share_pct", "regime_sequence", "solver_status", "iterations", "verified", "status")
 
 
 def saving_at(table, supplement_pct):
@@ -223,4 +226,4 @@ def das_meta(table):
             "monotone": bool(np.all(np.diff(energy) <= 1e-6 * energy[:-1])) if len(energy) > 1 else None}
 
 
-__all__ = ["sweep", "das_front", "das_meta", "weighted_points", "front_table", "front_meta", "saving_at", "is_monotone"]
+__all__ = ["sweep", "das_front", "das_meta", "weighted_points", "front_table", "saving_at", "is_monotone"]
