@@ -33,16 +33,26 @@ def early_start(leg, run, early):
     return s, v
 
 
+def dearer_start(f, leg, cold):
+    """The first early start (5-30 steps early) that a warm solve follows into a local optimum
+    more than 5 % dearer than the cold one, and that warm run. Which starts do depends on the leg's
+    NLP to rounding and on MUMPS's ordering (with PORD about one in three of them); none at all
+    fails the test."""
+    for early in range(5, 31):
+        guess = early_start(leg, cold, early)
+        warm, _ = legs.solve_leg((leg, "T1 leg 1", f.dt, None, guess, True, None, None, None, None))
+        if warm.notes is None and warm.p.sum() > 1.05 * cold.p.sum():
+            return guess, warm
+    pytest.fail("no early start led the warm solve to a dearer local optimum")
+
+
 def test_a_warm_leg_dearer_than_its_cold_solve_is_replaced(one_leg):
     f, leg, cold = one_leg
-    guess = early_start(leg, cold, 13)  # a start Ipopt follows into a dearer local optimum (which start does
-    # depends on the leg's NLP and MUMPS's ordering: with PORD, 13, 15, 19, 21, 24 and 25 steps early do)
     assert [legs.warmth(0, k) for k in range(4)] == [legs.CHECKED, True, True, legs.CHECKED]
     assert [legs.warmth(1, k) for k in range(3)] == [True, True, legs.CHECKED]
-    # outside the sample the warm solve stays where its start led it: 11 % dearer, yet verified
-    warm, _ = legs.solve_leg((leg, "T1 leg 1", f.dt, None, guess, True, None, None, None, None))
-    assert warm.notes is None
-    assert warm.p.sum() > 1.05 * cold.p.sum() and scoring.verify_leg(leg, warm)["passed"]
+    # outside the sample the warm solve stays where its start led it: dearer, yet verified
+    guess, warm = dearer_start(f, leg, cold)
+    assert scoring.verify_leg(leg, warm)["passed"]
     # in the sample the cold solve replaces it, and says so
     run, outcome = legs.solve_leg((leg, "T1 leg 1", f.dt, None, guess, legs.CHECKED, None, None, None, None))
     assert outcome.usable and run.notes["replaced_by_cold"] and run.notes["warm_vs_cold_pct"] > 5.0
