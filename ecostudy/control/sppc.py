@@ -40,7 +40,7 @@ from ecostudy.ocp.session import WARM_START, Session
 from ecostudy.ocp.solver import IPOPT
 
 VARIANTS = ("nominal", "two_step")
-OPTIONS = {**IPOPT["receding"], **WARM_START}  # from the previous plan (``ocp.solver.IPOPT``)
+OPTIONS = {**IPOPT["receding"], **WARM_START, **IPOPT["sppc"]}  # from the previous plan (``ocp.solver.IPOPT``)
 
 
 class Sppc(Fallback):

@@ -49,6 +49,13 @@ IPOPT: dict[str, dict[str, Any]] = {
                    "warm_start_mult_bound_push": 1e-6},
     # the predictive controllers' re-plans, on top of "warm_start" (docs/closed_loop.md)
     "receding": {"max_iter": 500, "tol": 1e-7, "acceptable_tol": 1e-5},
+    # SPPC's re-plans, on top of "receding": the warm start's point and multipliers pushed 1e-10 instead
+    # of 1e-6 inside their bounds (Ipopt's two warm_start_*bound_push options): 10.0 -> 8.3 Ipopt
+    # iterations per phases NLP over the 388 NLPs of draw 0 of studies/metro_monte_carlo.yaml replayed
+    # from their recorded starts (1e-9: 7.4, 1e-8 and 1e-12: 8.0), draws 0-3 of that study 27 against
+    # 32 CPU s a run; 1e-8, 1e-9 and 1e-12 turned draw 1 to a neighbouring plan stopping 2.1-2.3 m past
+    # the mark (+0.76 m as before with 1e-10). docs/closed_loop.md; control/sppc.py
+    "sppc": {"warm_start_bound_push": 1e-10, "warm_start_mult_bound_push": 1e-10},
     # a closed-loop re-plan that needs more has no plan worth waiting for (control/controllers.py)
     "replan": {"max_iter": 300},
     # a Pareto chain after its first point, from the previous point's primal and dual solution
