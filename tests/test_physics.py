@@ -52,16 +52,3 @@ def test_same_formula_builds_pyomo_expressions():
 def test_envelope_force_power():
     env = physics.Envelope("force_power", max_force=200e3, max_power=2e6)
     assert_allclose(env.force(np.array([5.0, 10.0, 20.0])), [200e3, 200e3, 100e3])
-
-
-def test_interval_recursion_is_the_energy_form_plus_resistance():
-    # the space NLP's speed recursion, squares collected per speed: (v1^2 - v0^2) / (2 ds) + R(v0, v1)
-    rng = np.random.default_rng(3)
-    v0, v1, ds = rng.uniform(0, 40, 50), rng.uniform(0, 40, 50), rng.uniform(1, 500, 50)
-    davis, fixed = (0.012, 1.3e-4, 2.6e-5), rng.uniform(-0.2, 0.2, 50)
-    energy_form = (v1 ** 2 - v0 ** 2) / (2 * ds) + physics.interval_resistance(v0, v1, davis, fixed)
-    assert_allclose(physics.interval_recursion(v0, v1, davis, fixed, ds), energy_form, rtol=1e-12, atol=1e-12)
-    m = pyo.ConcreteModel()
-    m.v = pyo.Var([0, 1], initialize={0: 7.5, 1: 9.0})
-    expr = physics.interval_recursion(m.v[0], m.v[1], davis, 0.05, 120.0)
-    assert_allclose(pyo.value(expr), (81.0 - 56.25) / 240.0 + physics.interval_resistance(7.5, 9.0, davis, 0.05))

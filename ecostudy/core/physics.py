@@ -277,17 +277,6 @@ def interval_resistance(v0: Numeric, v1: Numeric, davis: Sequence[Numeric], fixe
     return a + 0.5 * b * (v0 + v1) + 0.5 * c * (v0 * v0 + v1 * v1) + fixed
 
 
-def interval_recursion(v0: Numeric, v1: Numeric, davis: Sequence[Numeric], fixed: Numeric, ds: Numeric) -> Numeric:
-    """(v1^2 - v0^2) / (2 ds) + :func:`interval_resistance` (per unit mass when ``davis`` and ``fixed``
-    are): the space NLP's speed recursion without the forces (energy form of thesis 000 eq. 2.7),
-    its squares collected per speed, q1 v1^2 + q0 v0^2 + b (v0 + v1) / 2 + a + fixed with
-    q1 = 1 / (2 ds) + c / 2 and q0 = c / 2 - 1 / (2 ds). The same function; as a Pyomo expression
-    two products instead of two powers and four products, which ASL evaluates with its derivatives
-    in about half the time (docs/speed.md)."""
-    a, b, c = davis
-    return (0.5 / ds + 0.5 * c) * (v1 * v1) + (0.5 * c - 0.5 / ds) * (v0 * v0) + 0.5 * b * (v0 + v1) + (a + fixed)
-
-
 def moving_share(speed_sum: Numeric, width: float = 0.01) -> Numeric:
     """Share of the braking, resisting and grade forces that act over a time step whose end speeds
     add up to ``speed_sum`` [m/s]: s^2 / (s^2 + width^2), 0 for a step that starts and ends at a

@@ -33,7 +33,7 @@ import pyomo.environ as pyo
 from pyomo.common.gc_manager import PauseGC
 
 from ecostudy.core.kinematics import interval_davis, interval_grade_force, interval_time
-from ecostudy.core.physics import interval_recursion, interval_resistance, line_energy
+from ecostudy.core.physics import interval_resistance, line_energy
 from ecostudy.core.physics import Envelope, smooth_table
 from ecostudy.core.grid import Segment
 from ecostudy.core.types import Train, Window
@@ -157,11 +157,8 @@ def define_dynamics(m: Model, nodes: FloatArray, segment: Segment, train: Train)
             inertia = m.mass_scale * (m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k])
             net = interval_resistance(m.v[k], m.v[k + 1], per_kg[k], m.mass_scale * fixed[k]) - km * (m.ft[k] - m.fb[k])
             return s * (inertia + share(m, k, net)) == 0.0
-        if hasattr(m, "w"):
-            net = interval_resistance(m.v[k], m.v[k + 1], per_kg[k], fixed[k]) - km * (m.ft[k] - m.fb[k])
-            return s * ((m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k]) + share(m, k, net)) == 0.0
-        # a whole run: the same recursion with its squares collected per speed (physics.interval_recursion)
-        return s * (interval_recursion(m.v[k], m.v[k + 1], per_kg[k], fixed[k], ds[k]) - km * (m.ft[k] - m.fb[k])) == 0.0
+        net = interval_resistance(m.v[k], m.v[k + 1], per_kg[k], fixed[k]) - km * (m.ft[k] - m.fb[k])
+        return s * ((m.v[k + 1] ** 2 - m.v[k] ** 2) * (0.5 / ds[k]) + share(m, k, net)) == 0.0
 
     def time(m: Model, k: int) -> Any:
         return m.dt[k] * (m.v[k] + m.v[k + 1]) / (2 * ds[k]) == share(m, k, 1.0)
