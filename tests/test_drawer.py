@@ -11,12 +11,13 @@ import sys
 import pytest
 
 from ecostudy import api
+from ecostudy.core.deadline import can_fork
 from ecostudy.report import drawer as drawer_module
 from ecostudy.report.drawer import Drawer, FigureError, drawing
 
 from .conftest import ROOT
 
-pytestmark = pytest.mark.skipif(not drawer_module.available(), reason="no fork start method here")
+pytestmark = pytest.mark.skipif(not can_fork(), reason="no fork start method here")
 DEFAULT = ROOT / "studies" / "default.yaml"
 
 
@@ -34,7 +35,7 @@ def test_a_solve_with_figures_returns_with_every_file_written_and_the_child_ende
 
 def test_the_figures_are_the_same_drawn_in_the_child_or_here(tmp_path, monkeypatch):
     api.solve_folder(DEFAULT, points=150, out=tmp_path / "child")
-    monkeypatch.setattr(drawer_module, "available", lambda: False)  # as where fork is missing: drawn here
+    monkeypatch.setattr(drawer_module, "can_fork", lambda: False)  # as where fork is missing: drawn here
     api.solve_folder(DEFAULT, points=150, out=tmp_path / "here")
     for name in ("speed.png", "energy.png", "profile.csv"):
         assert (tmp_path / "child" / name).read_bytes() == (tmp_path / "here" / name).read_bytes(), name

@@ -31,6 +31,12 @@ def die_with_parent() -> None:
         pass
 
 
+def can_fork() -> bool:
+    """Whether this process may start a forked child: a ``fork`` platform, and not a daemonic worker
+    (Dask's, a pool's), which may not start processes."""
+    return "fork" in multiprocessing.get_all_start_methods() and not multiprocessing.current_process().daemon
+
+
 @dataclass
 class Ended:
     """How a :func:`run_until` ended: ``finished`` with ``value``; ``stopped`` at the deadline;
@@ -63,8 +69,8 @@ def run_until(seconds: float, work: Work, *args: Any,
     the start. ``post(message)`` sends a picklable message to the parent at once. ``tick(elapsed,
     posts)``, if given, is called in the parent about twice a second while it waits (progress)."""
     t0 = time.perf_counter()
-    if multiprocessing.current_process().daemon:  # a daemonic worker (Dask's) may not start children:
-        return _inline(t0, work, args)             # the work runs here, held only by its own limit
+    if not can_fork():                 # a daemonic worker (Dask's) may not start children:
+        return _inline(t0, work, args)  # the work runs here, held only by its own limit
     receive, send = multiprocessing.Pipe(duplex=False)
     child = multiprocessing.get_context("fork").Process(target=_child, args=(send, work, args), daemon=True)
     child.start()

@@ -205,11 +205,15 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
 CHECK_NOTES = ("warm_vs_cold_pct", "replaced_by_cold")  # what ``legs.solve_leg``'s cold check notes
 
 
+def _checked(run):
+    """Whether a leg's run carries the notes of a cold check."""
+    return bool(run.notes) and CHECK_NOTES[0] in run.notes
+
+
 def _checks(runs):
     """{(train, leg): the cold check's notes} of the legs checked in ``runs`` (the first round)."""
     return {(i, k): {key: run.notes[key] for key in CHECK_NOTES if key in run.notes}
-            for i, train in enumerate(runs) for k, run in enumerate(train)
-            if run.notes and "warm_vs_cold_pct" in run.notes}
+            for i, train in enumerate(runs) for k, run in enumerate(train) if _checked(run)}
 
 
 def _with_checks(runs, checked):
@@ -218,7 +222,7 @@ def _with_checks(runs, checked):
     out = [list(train) for train in runs]
     for (i, k), notes in checked.items():
         run = out[i][k]
-        if not (run.notes and "warm_vs_cold_pct" in run.notes):
+        if not _checked(run):
             out[i][k] = run._replace(notes={**notes, **(run.notes or {})})
     return out
 

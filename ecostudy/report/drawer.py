@@ -23,19 +23,13 @@ import traceback
 from contextlib import contextmanager
 from typing import Any, Callable, Iterator, Optional
 
-from ecostudy.core.deadline import die_with_parent
+from ecostudy.core.deadline import can_fork, die_with_parent
 from ecostudy.core.errors import EcostudyError
 
 
 class FigureError(EcostudyError):
     """The figure process failed in a way that has no exception of its own to raise here (it died,
     or its error could not be sent back); ``exit_code`` 3 as any internal failure."""
-
-
-def available() -> bool:
-    """Whether this process can fork a figure process (Linux and other ``fork`` platforms, not
-    inside a daemonic worker)."""
-    return "fork" in multiprocessing.get_all_start_methods() and not multiprocessing.current_process().daemon
 
 
 def _serve(conn, other) -> None:
@@ -138,7 +132,7 @@ class Drawer:
 def drawing(plot: bool) -> Iterator[Optional[Drawer]]:
     """A :class:`Drawer` while the block runs, when ``plot`` and a child can be forked (else None:
     draw in this process); the child has ended when the block is left, however it is left."""
-    drawer = Drawer() if plot and available() else None
+    drawer = Drawer() if plot and can_fork() else None
     try:
         yield drawer
     finally:
