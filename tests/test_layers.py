@@ -19,7 +19,8 @@ LAYERS = {"core": 0, "io": 1, "ocp": 2, "analysis": 3, "das": 4, "heuristics": 4
           "studies": 5, "report": 6, "api": 7, "cli": 8}
 FEATURES = {"das", "heuristics", "network", "control", "heavyhaul", "calibration"}
 # optional or heavy dependencies a function may import when it needs them
-LAZY_OK = ("matplotlib", "dask", "distributed", "rich", "ecostudy.report.plots", "ecostudy.report.netplots")
+LAZY_OK = ("matplotlib", "dask", "distributed", "rich", "ecostudy.report.plots", "ecostudy.report.netplots",
+           "pyomo.environ")  # Pyomo's plugins (solvers, MindtPy): the DAS mode choice's search only
 # the command line imports the library inside each command, so that `ecostudy --help` and option
 # errors answer at once (0.3 s instead of 3 s with Pyomo, scipy and pandas loaded)
 LAZY_LAYERS = {"cli"}

@@ -14,12 +14,13 @@ import pytest
 
 from .conftest import ROOT, TRACKS, TRAINS
 
-FEATURES = ("ecostudy.control", "ecostudy.heavyhaul", "ecostudy.network", "ecostudy.calibration", "matplotlib")
+FEATURES = ("ecostudy.control", "ecostudy.heavyhaul", "ecostudy.network", "ecostudy.calibration", "matplotlib",
+            "pyomo.environ")  # Pyomo's plugins: a solve registers the NL writer only (ocp.solver.prepare)
 
 
 def loaded_after(code, tmp_path):
     """The ecostudy and plotting modules in ``sys.modules`` after running ``code`` in a fresh process."""
-    probe = code + "\nimport sys, json\nprint(json.dumps(sorted(m for m in sys.modules if m.startswith(('ecostudy', 'matplotlib')))))"
+    probe = code + "\nimport sys, json\nprint(json.dumps(sorted(m for m in sys.modules if m.startswith(('ecostudy', 'matplotlib', 'pyomo.environ')))))"
     done = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     return set(json.loads(done.stdout.strip().splitlines()[-1]))
@@ -31,6 +32,35 @@ def test_a_solve_without_plots_loads_no_feature_package_and_no_matplotlib(tmp_pa
     assert "ecostudy.api.single" in modules and "ecostudy.ocp.session" in modules  # it did solve
     assert not {m for m in modules if m.startswith(FEATURES)}, sorted(m for m in modules if m.startswith(FEATURES))
     assert json.loads((tmp_path / "s" / "summary.json").read_text())["status"] == "ok"
+
+
+NL_PROBE = """
+import hashlib, sys
+{first}
+from ecostudy.ocp.solver import NL_OPTIONS, configure
+configure()
+from pyomo.opt import WriterFactory
+from ecostudy.ocp import problem, session
+from ecostudy.studies.cases import load_checked_study
+st = load_checked_study({study!r})
+case = problem.prepare(st.track, st.train, st.from_stop, st.to_stop, 200, {{}}, ())
+m = problem.build(case, problem.capped_guess(case, 76.0), "energy", {{}}, running_time=76.0)
+session.repeatable()  # the solver chain prepared as before a solve: the NL writer registered
+WriterFactory("nl")(m, "m.nl", lambda x: True, NL_OPTIONS)  # what PyomoNLP writes
+print("pyomo.environ" in sys.modules, hashlib.sha256(open("m.nl", "rb").read()).hexdigest())
+"""
+
+
+def test_the_nl_file_written_with_pyomo_core_only_is_the_one_written_with_every_pyomo_plugin(tmp_path):
+    def written(first):
+        code = NL_PROBE.format(first=first, study=str(ROOT / "studies" / "default.yaml"))
+        done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr
+        return done.stdout.split()[-2:]
+
+    lean, full = written(""), written("import pyomo.environ")
+    assert lean[0] == "False" and full[0] == "True"  # the lean process never loaded Pyomo's plugins
+    assert lean[1] == full[1]
 
 
 def test_every_api_name_resolves_and_unknown_names_are_an_attribute_error():

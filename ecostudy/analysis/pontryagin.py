@@ -27,7 +27,7 @@ or fitted at any profile by :func:`estimated_psi`.
 """
 
 import numpy as np
-import pyomo.environ as pyo
+import pyomo.core as pyo  # not pyomo.environ: see ocp.solver.prepare
 from scipy.sparse import hstack, identity
 
 from ecostudy.analysis import regimes

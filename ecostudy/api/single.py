@@ -5,7 +5,7 @@ import re
 from pathlib import Path
 from typing import Any, Optional
 
-import pyomo.environ as pyo
+import pyomo.core as pyo  # not pyomo.environ: see ocp.solver.prepare
 
 from ecostudy import __version__
 from ecostudy.analysis.single import RunResult, solve_run

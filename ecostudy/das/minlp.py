@@ -2,7 +2,7 @@
 ``phases`` advice; the pattern it finds is solved again at the full resolution and the better of
 the two, re-simulated as a driver follows it, is the advice."""
 import numpy as np
-import pyomo.environ as pyo
+import pyomo.core as pyo
 
 from ecostudy.core.progress import stage
 from ecostudy.core.units import to_kwh

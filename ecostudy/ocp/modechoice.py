@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Mapping, Protocol
 
 import numpy as np
-import pyomo.environ as pyo
+import pyomo.core as pyo
 
 from ecostudy.core.deadline import run_until
 from ecostudy.core.progress import stage, step
@@ -167,7 +167,9 @@ def _mindtpy(post: Callable[[tuple[Any, ...]], None], m: Model,
             best[0] = value
             post(("incumbent", value, _values(fixed_nlp)))
 
-    res = pyo.SolverFactory("mindtpy").solve(
+    import pyomo.environ as environ  # MindtPy and its subsolvers' plugins: only this search needs them (ocp.solver.prepare)
+
+    res = environ.SolverFactory("mindtpy").solve(
         m, strategy="OA", init_strategy="initial_binary", mip_solver="appsi_highs", nlp_solver="cyipopt",
         nlp_solver_args={"options": dict(IPOPT["mode_choice"])},
         time_limit=time_limit, iteration_limit=50, heuristic_nonconvex=True, add_no_good_cuts=True,

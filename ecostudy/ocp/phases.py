@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import numpy as np
-import pyomo.environ as pyo
+import pyomo.core as pyo  # not pyomo.environ: see ocp.solver.prepare
 
 from ecostudy.core.grid import Segment, warn_unmodelled
 from ecostudy.core.kinematics import point_resistance

@@ -18,6 +18,7 @@ import pyomo
 from pyomo.core.base.suffix import active_import_suffix_generator
 from pyomo.common.env import CtypesEnviron
 from pyomo.common.gc_manager import PauseGC
+from pyomo.opt import WriterFactory
 from pyomo.repn.plugins.nl_writer import NLWriter
 from pyomo.contrib.pynumero.asl import AmplInterface
 from pyomo.contrib.pynumero.interfaces.cyipopt_interface import CyIpoptNLP
@@ -62,14 +63,14 @@ def repeatable() -> None:
     """Every solve repeats bit for bit: the solver chain set up (``ocp.solver.prepare``) and
     Scotch's generator reset, so the solves that follow order their matrices as they did the first
     time (``Session.solve`` calls it; so does a MINLP search whose NLPs Pyomo solves)."""
-    solver.prepare(NLWriter.CONFIG, AmplInterface, CtypesEnviron)
+    solver.prepare(NLWriter, AmplInterface, CtypesEnviron, WriterFactory)
     solver.repeatable()
 
 
 def _imports() -> tuple[Any, Any]:
     """PyNumero classes, with the solver chain prepared (``ocp.solver.prepare``) and the ASL library
     found even when Pyomo was imported before ecostudy."""
-    if not solver.prepare(NLWriter.CONFIG, AmplInterface, CtypesEnviron):
+    if not solver.prepare(NLWriter, AmplInterface, CtypesEnviron, WriterFactory):
         raise SolverError("PyNumero's ASL library (libpynumero_ASL.so) is missing: run `make install` "
                           "(scripts/install.sh builds it into .pyomo/)")
     return CyIpoptNLP, PyomoNLP

@@ -117,11 +117,17 @@ def configure() -> None:
     _state["configured"] = True
 
 
-def prepare(nl_writer_config: Any, ampl_interface: Any, environ: Any = None) -> bool:
+def prepare(nl_writer: Any, ampl_interface: Any, environ: Any = None, writers: Any = None) -> bool:
     """Make the solver chain ready in this process (idempotent; ``ocp.session`` calls it with
-    Pyomo's ``NLWriter.CONFIG``, PyNumero's ``AmplInterface`` and Pyomo's ``CtypesEnviron``).
+    Pyomo's ``NLWriter``, PyNumero's ``AmplInterface``, Pyomo's ``CtypesEnviron`` and ``WriterFactory``).
     Returns whether PyNumero's ASL library is available.
 
+    - the NL writer registered as Pyomo's ``nl`` writer, which ``PyomoNLP`` asks ``writers`` for.
+      ``import pyomo.environ`` would register it, with every other plugin of Pyomo and its contrib
+      packages (solvers, GDP, DAE, MindtPy, APPSI, ...): 0.15-0.21 CPU s of the default study's
+      imports (busy machine, 5 fresh processes; ``docs/speed.md``). The modules on a solve's path
+      import ``pyomo.core``, and only this one plugin is registered, as ``pyomo.environ`` registers
+      it (the same class: a later ``import pyomo.environ``, for MindtPy, registers it again);
     - the NL writer's defaults (:data:`NL_OPTIONS`) for every NL file written in this process,
       also by Pyomo's own cyipopt interface (MindtPy's NLP subproblems of the DAS mode choice);
     - the ASL library built into the repository's ``.pyomo`` when Pyomo's search finds none
@@ -138,8 +144,10 @@ def prepare(nl_writer_config: Any, ampl_interface: Any, environ: Any = None) -> 
             for dll in environ.DLLs:
                 if dll._loaded is None:  # not probed yet: Pyomo's own "absent" state, as for a None name
                     dll._loaded = False
+        if writers is not None and "nl" not in writers:
+            writers.register("nl", "Generate the corresponding AMPL NL file.")(nl_writer)
         for key, value in NL_OPTIONS.items():
-            setattr(nl_writer_config, key, value)
+            setattr(nl_writer.CONFIG, key, value)
         if REPO_ASL.is_file() and ("PYOMO_CONFIG_DIR" not in os.environ or not ampl_interface.available()):
             ampl_interface.libname = str(REPO_ASL)  # also spares Pyomo's library search (a compiler probe)
         _state["scotch"] = _scotch()

@@ -29,7 +29,7 @@ import functools
 from typing import Any, Callable, ParamSpec, Sequence, TypeAlias, TypeVar
 
 import numpy as np
-import pyomo.environ as pyo
+import pyomo.core as pyo  # not pyomo.environ: see ocp.solver.prepare
 from pyomo.common.gc_manager import PauseGC
 
 from ecostudy.core.kinematics import interval_davis, interval_grade_force, interval_time
