@@ -4,6 +4,7 @@ and the child has ended when the command returns; the child's failure is the com
 drawn in the parent."""
 import json
 import multiprocessing
+import operator
 import os
 import subprocess
 import sys
@@ -13,7 +14,7 @@ import pytest
 from ecostudy import api
 from ecostudy.core.deadline import can_fork
 from ecostudy.report import drawer as drawer_module
-from ecostudy.report.drawer import Drawer, FigureError, drawing
+from ecostudy.report.drawer import Drawer, FigureError, apart, drawing
 
 from .conftest import ROOT
 
@@ -76,3 +77,19 @@ def test_work_that_cannot_be_pickled_is_done_here_and_no_plot_forks_nothing():
         assert drawer.submit(lambda x: x + 1, 1)() == 2
     with drawing(False) as nothing:
         assert nothing is None
+
+
+def test_the_figure_process_runs_each_job_in_a_fork_and_raises_the_forks_error_with_its_type():
+    with drawing(True) as drawer:
+        assert drawer.submit(apart, int, [("1",), ("2",), ("3",)])() == [1, 2, 3]  # in the order given
+        with pytest.raises(ValueError, match="invalid literal") as raised:
+            drawer.submit(apart, int, [("1",), ("not a number",)])()
+        assert "in a figure's process" in "\n".join(raised.value.__notes__)
+        with pytest.raises(FigureError, match=r"a figure's process ended \(exit code 5\)"):
+            drawer.submit(apart, operator.call, [(sorted, [2, 1]), (os._exit, 5)])()
+        assert drawer.submit(sorted, [3, 1, 2])() == [1, 2, 3]  # the figure process serves on, no fork left
+    assert not drawer.process.is_alive() and drawer.process.exitcode == 0
+
+
+def test_outside_the_figure_process_the_jobs_run_here_one_after_the_other():
+    assert apart(os.getpid, [(), ()]) == [os.getpid(), os.getpid()]

@@ -9,13 +9,16 @@ tables meanwhile; the child writes the figures and answers with their file names
 error that stopped it, which the parent raises as its own (same type, so the same one line and
 exit status as a figure drawn in this process; the child's traceback is attached as a note). The
 parent waits for that answer, then for the child's exit, before it writes ``summary.json`` and
-``report.html``: every file exists when the command returns, and no process is left behind.
+``report.html``: every file exists when the command returns, and no process is left behind. The
+child draws a run's figures side by side (:func:`apart`: the second in a fork of the warm child):
+the wait is the longer figure's, not their sum.
 
 Where a child cannot be forked (no ``fork`` start method, or in a daemonic worker, which may not
 start processes) or the data cannot be pickled, the figures are drawn in this process as before.
 """
 import io
 import multiprocessing
+import os
 import pickle
 import signal
 import sys
@@ -32,10 +35,14 @@ class FigureError(EcostudyError):
     or its error could not be sent back); ``exit_code`` 3 as any internal failure."""
 
 
+_serving = [False]  # True in the figure process
+
+
 def _serve(conn, other) -> None:
     """The child: import the plotting code at once, then run each job ``(work, args)`` sent and
     answer ``("ok", value)`` or ``("error", exception or its text, traceback)``; ``None`` or a closed
     pipe (the parent gone) ends it."""
+    _serving[0] = True
     other.close()  # the parent's end: when the parent goes, this side reads end-of-file
     die_with_parent()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle; it stops this child
@@ -65,11 +72,64 @@ def _serve(conn, other) -> None:
             answer: tuple = ("ok", work(*args))
         except Exception as exc:  # noqa: BLE001 - sent to the parent, which raises it
             answer = ("error", exc, traceback.format_exc())
-        try:
-            data = pickle.dumps(answer)
-        except Exception:  # noqa: BLE001 - an exception that cannot travel goes as its text
-            data = pickle.dumps(("error", f"{type(answer[1]).__name__}: {answer[1]}", answer[2]))
-        conn.send_bytes(data)
+        conn.send_bytes(_pickled(answer))
+
+
+def apart(work: Callable[..., Any], jobs: list[tuple]) -> list[Any]:
+    """``[work(*args) for args in jobs]``, the first here and each other one in a process forked for
+    it, so that a run's figures draw side by side on both cores (called in the figure process, where
+    matplotlib is loaded and warm: the forks start ready to draw). Values in the order of ``jobs``;
+    the first error raised as it was raised (same type; its traceback attached as a note), once
+    every forked process has been waited for. Anywhere but in the figure process (work drawn in the
+    parent: data that cannot be pickled) the jobs run here, one after the other."""
+    if not _serving[0] or not jobs:
+        return [work(*args) for args in jobs]
+    forked = []
+    for args in jobs[1:]:
+        read, write = os.pipe()
+        pid = os.fork()
+        if pid == 0:  # the fork: draw, send the value or the error, leave without any clean-up
+            try:
+                os.close(read)
+                die_with_parent()
+                try:
+                    answer: tuple = ("ok", work(*args))
+                except BaseException as exc:  # noqa: BLE001 - sent back and raised there
+                    answer = ("error", exc, traceback.format_exc())
+                with os.fdopen(write, "wb") as pipe:
+                    pipe.write(_pickled(answer))
+            finally:
+                os._exit(0)  # never back into the figure process's loop
+        os.close(write)
+        forked.append((pid, read))
+    answers: list[tuple] = []
+    try:
+        answers.append(("ok", work(*jobs[0])))
+    finally:
+        for pid, read in forked:
+            with os.fdopen(read, "rb") as pipe:
+                data = pipe.read()
+            status = os.waitpid(pid, 0)[1]
+            answers.append(pickle.loads(data) if data else
+                           ("error", FigureError(f"figures: a figure's process ended (exit code "
+                                                 f"{os.waitstatus_to_exitcode(status)}) before it answered"), ""))
+    values = []
+    for kind, value, *where in answers:
+        if kind != "ok":
+            error = value if isinstance(value, BaseException) else FigureError(f"figures: {value}")
+            if where and where[0]:
+                error.add_note("in a figure's process:\n" + where[0].rstrip())
+            raise error
+        values.append(value)
+    return values
+
+
+def _pickled(answer: tuple) -> bytes:
+    """``answer`` pickled; an error that cannot travel goes as its text."""
+    try:
+        return pickle.dumps(answer)
+    except Exception:  # noqa: BLE001
+        return pickle.dumps(("error", f"{type(answer[1]).__name__}: {answer[1]}", answer[2]))
 
 
 class Drawer:
