@@ -1,0 +1,75 @@
+"""SPPC's step one (Farooqi 2018 Alg. 4, eq. 5.22) skipped where a closed-form reckoning knows its
+answer: the earliest stand on the mark (``control.reach``) against the step one NLP, and the plan
+of a sample with the step skipped against the plan of the same sample with it solved."""
+import numpy as np
+import pytest
+
+from ecostudy.analysis.single import solve_run
+from ecostudy.control.sppc import STEP_ONE_MARGIN, Sppc
+from ecostudy.core.types import State, Timing
+from ecostudy.ocp import phases
+
+ARRIVAL = 76.0
+
+
+@pytest.fixture(scope="module")
+def ato(metro, amsterdam):
+    return solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=ARRIVAL), points=300)
+
+
+def test_the_earliest_stand_in_closed_form_is_the_step_one_nlp_s_arrival(ato):
+    """Where a stop is reachable, step one's answer is gamma = 0 and its earliest arrival: the
+    closed form gives that arrival within a few hundredths of a second (the margin is 0.1 s)."""
+    controller = Sppc(ato, ARRIVAL, points=150, variant="two_step")
+    for state in (State(), State(300.0, 19.0, 25.0), State(900.0, 18.0, 57.0)):
+        gamma, arrival = controller._closest(state)
+        earliest = state.time + controller.reach(state.position, state.speed)
+        assert gamma < 1e-6
+        assert abs(arrival - earliest) < 0.5 * STEP_ONE_MARGIN
+
+
+def test_a_train_above_the_stopping_curve_has_no_earliest_stand(ato):
+    controller = Sppc(ato, ARRIVAL, points=150, variant="two_step")
+    state = State(1080.0, 14.0, 70.0)  # 14 m/s, 30 m before the mark: it cannot stand on it
+    assert controller.reach(state.position, state.speed) == np.inf
+    gamma, _ = controller._closest(state)
+    assert gamma > 1.0
+
+
+def test_a_sample_with_step_one_skipped_drives_the_plan_step_two_gives_after_it(ato):
+    """The skip solves the NLP step two would be given (end speed within the tolerance, arrival by
+    the timetable), from the same warm start: the same plan."""
+    skipping, solving = (Sppc(ato, ARRIVAL, points=150, variant="two_step") for _ in range(2))
+    for state in (State(), State(0.4, 0.6, 0.38)):
+        assert skipping._relaxed(state, skip=True).usable and solving._relaxed(state).usable
+        np.testing.assert_allclose(phases.solution(skipping.model, skipping.layout)[0],
+                                   phases.solution(solving.model, solving.layout)[0], atol=1e-6)
+    assert skipping.skipped == 2 and skipping.closest is None and solving.skipped == 0
+
+
+def test_the_two_step_loop_skips_step_one_until_the_approach(ato):
+    controller = Sppc(ato, ARRIVAL, points=150, variant="two_step")
+    for k, x in enumerate((0.0, 100.0, 500.0)):
+        run = ato.trajectory
+        state = State(x, float(np.interp(x, run.nodes, run.v)), float(np.interp(x, run.nodes, run.time)))
+        controller.plan(state)
+        assert controller.skipped == k + 1
+    controller.plan(State(1080.0, 14.0, 70.0))  # cannot stand on the mark: step one decides
+    assert controller.skipped == 3 and controller.closest is not None and controller.failures == 0
+
+
+def test_a_run_s_first_plan_starts_from_the_plan_from_the_stand(ato):
+    """A study solves the plan from the stand once per process (``Sppc.stand_start``) and starts
+    every run's first plan from it: the same plan, in a fraction of the iterations."""
+    cold, warmed = (Sppc(ato, ARRIVAL, points=150, variant="two_step") for _ in range(2))
+    warmed.warm(Sppc(ato, ARRIVAL, points=150, variant="two_step").stand_start())
+    state = State(0.01, 0.01, 0.38)  # the first sample of a noisy run
+    assert cold.plan(state) == warmed.plan(state) == 1.0
+    assert warmed.iterations[0] < cold.iterations[0] / 5
+    # the same driving (phase lengths may differ: two coasts with nothing between them are one, and
+    # the sub-steps of a phase split otherwise move the speeds by up to 0.05 m/s)
+    assert warmed.model.traction_work() == pytest.approx(cold.model.traction_work(), rel=1e-4)
+    assert warmed.model.T.value == pytest.approx(cold.model.T.value, abs=1e-3)
+    x = np.linspace(0.0, ato.segment.distance, 500)
+    speeds = [np.interp(x, *phases.solution(c.model, c.layout)[1:3]) for c in (warmed, cold)]
+    np.testing.assert_allclose(*speeds, atol=0.1)
