@@ -57,19 +57,3 @@ def test_the_two_step_loop_skips_step_one_until_the_approach(ato):
     controller.plan(State(1080.0, 14.0, 70.0))  # cannot stand on the mark: step one decides
     assert controller.skipped == 3 and controller.closest is not None and controller.failures == 0
 
-
-def test_a_run_s_first_plan_starts_from_the_plan_from_the_stand(ato):
-    """A study solves the plan from the stand once per process (``Sppc.stand_start``) and starts
-    every run's first plan from it: the same plan, in a fraction of the iterations."""
-    cold, warmed = (Sppc(ato, ARRIVAL, points=150, variant="two_step") for _ in range(2))
-    warmed.warm(Sppc(ato, ARRIVAL, points=150, variant="two_step").stand_start())
-    state = State(0.01, 0.01, 0.38)  # the first sample of a noisy run
-    assert cold.plan(state) == warmed.plan(state) == 1.0
-    assert warmed.iterations[0] < cold.iterations[0] / 5
-    # the same driving (phase lengths may differ: two coasts with nothing between them are one, and
-    # the sub-steps of a phase split otherwise move the speeds by up to 0.05 m/s)
-    assert warmed.model.traction_work() == pytest.approx(cold.model.traction_work(), rel=1e-4)
-    assert warmed.model.T.value == pytest.approx(cold.model.T.value, abs=1e-3)
-    x = np.linspace(0.0, ato.segment.distance, 500)
-    speeds = [np.interp(x, *phases.solution(c.model, c.layout)[1:3]) for c in (warmed, cold)]
-    np.testing.assert_allclose(*speeds, atol=0.1)

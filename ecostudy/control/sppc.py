@@ -43,7 +43,6 @@ from ecostudy.analysis.regimes import guess_from_result
 from ecostudy.control.controllers import force_handle, from_departure
 from ecostudy.control.fallback import Fallback
 from ecostudy.control.reach import EarliestStand
-from ecostudy.core.types import State
 from ecostudy.ocp import phases
 from ecostudy.ocp.restart import set_end, set_phases_start
 from ecostudy.ocp.session import WARM_START, Session
@@ -90,31 +89,6 @@ class Sppc(Fallback):
         self.unsolved = []  # (position, speed, clock, Ipopt status) of every solve without a plan
         self._start_records()
 
-    def _first_bounds(self):
-        """(end speed range, latest arrival) of the first NLP a sample solves: the terminal set, or
-        step two as the skip of step one solves it."""
-        return ((0.0, 0.0) if self.variant == "nominal" else (0.0, self.tolerance)), self.arrival
-
-    def stand_start(self):
-        """The first plan from the stand (``State()``), solved from the ATO run's guess: (primal point,
-        multipliers) as :meth:`warm` takes them, or None without a usable plan. The same for every
-        run of the segment and model train (the draws change the plant), so a study solves it once
-        per process (``studies.controllers``) and every run's first plan starts from it: a few
-        Ipopt iterations instead of about 150 from the ATO guess."""
-        speeds, latest = self._first_bounds()
-        set_phases_start(self.session, self.model, self.layout, State())
-        set_end(self.session, self.model, speeds, (0.0, latest))
-        outcome = self.session.solve(self.options)
-        if not outcome.usable or self.session.multipliers is None:
-            return None
-        return self.session.x.copy(), tuple(np.array(m, float) for m in self.session.multipliers)
-
-    def warm(self, start):
-        """Start the next plan from ``start`` (:meth:`stand_start`'s answer; None: as built)."""
-        if start is not None:
-            self.session.x = start[0].copy()
-            self.session.multipliers = tuple(m.copy() for m in start[1])
-
     def _solve(self, session, measured, arrival, end_speed=(0.0, 0.0)):
         set_phases_start(session, session.model, self.layout, measured)
         set_end(session, session.model, end_speed, arrival)
@@ -137,8 +111,7 @@ class Sppc(Fallback):
     def _relaxed(self, measured, skip=False):
         if skip and measured.time + self.reach(measured.position, measured.speed) \
                 <= self.arrival - self.tolerance - STEP_ONE_MARGIN:
-            speeds, latest = self._first_bounds()
-            outcome = self._solve(self.session, measured, (measured.time, latest), speeds)
+            outcome = self._solve(self.session, measured, (measured.time, self.arrival), (0.0, self.tolerance))
             if outcome.usable:
                 self.skipped += 1
                 return outcome

@@ -50,19 +50,14 @@ def convex_program(segment, train, points, spec):
 
 
 _ATO_RUNS: dict = {}  # the ATO run of each (line, train, stops, arrival, grid) solved in this process
-_SPPC_STARTS: dict = {}  # SPPC's plan from the stand per (ATO run, variant, brake reserve), solved in this process
-
-
-def _ato_key(b):
-    return json.dumps([b.case["track"], b.case["train"], b.case["from"], b.case["to"], b.window[1], b.points],
-                      sort_keys=True, default=str)
 
 
 def _ato(b):
     """The nominal train's energy-optimal ATO run at the latest arrival: the same for every draw of a
     study (the draws change the plant, not the model), so solved once per process and shared
     (the controllers only read it)."""
-    key = _ato_key(b)
+    key = json.dumps([b.case["track"], b.case["train"], b.case["from"], b.case["to"], b.window[1], b.points],
+                     sort_keys=True, default=str)
     if key not in _ATO_RUNS:
         _ATO_RUNS[key] = solve_run(b.track, b.train, b.case["from"], b.case["to"], Timing(running_time=b.window[1]),
                                    points=b.points, verify_result=False)
@@ -100,14 +95,7 @@ def sbpc(b):
 
 def sppc(b):
     """Farooqi 2018's shrinking-horizon parametrised controller (Ch. 5), DAS modes by construction."""
-    controller = Sppc(_ato(b), b.window[1], b.points, b.spec["variant"], **b.reserve)
-    # its first plan starts from the plan from the stand, solved once per process (``Sppc.stand_start``):
-    # every run of the study starts from the same point, whichever runs the process made before
-    key = (_ato_key(b), b.spec["variant"], json.dumps(b.reserve, sort_keys=True))
-    if key not in _SPPC_STARTS:
-        _SPPC_STARTS[key] = controller.stand_start()
-    controller.warm(_SPPC_STARTS[key])
-    return controller
+    return Sppc(_ato(b), b.window[1], b.points, b.spec["variant"], **b.reserve)
 
 
 def rspc(b):
