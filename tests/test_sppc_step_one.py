@@ -57,3 +57,17 @@ def test_the_two_step_loop_skips_step_one_until_the_approach(ato):
     controller.plan(State(1080.0, 14.0, 70.0))  # cannot stand on the mark: step one decides
     assert controller.skipped == 3 and controller.closest is not None and controller.failures == 0
 
+
+
+def test_a_train_over_the_limit_on_a_downgrade_has_no_plan_and_no_nlp_is_solved(ato):
+    """At 190-210 m the line falls (the grade pulls 32 kN) under a 50 km/h limit: a train read a few
+    hundredths of a m/s over it cannot coast under it, and the phases NLP brakes only at a sector's
+    end, so it has no plan (the step one NLP ends infeasible); the controller solves none."""
+    probe, controller = (Sppc(ato, ARRIVAL, points=150, variant="two_step") for _ in range(2))
+    limit = float(ato.segment.limit(200.0))
+    assert controller.reach.coasting_over_limit(200.0, limit + 0.04)
+    assert not controller.reach.coasting_over_limit(200.0, limit - 0.01)
+    state = State(200.0, limit + 0.04, 20.5)
+    assert probe._closest(state) is None  # the NLP: no plan
+    controller.plan(state)
+    assert controller.failures == 1 and controller.iterations == [] and controller.fallbacks["full_brake"] == 1

@@ -24,7 +24,7 @@ from ecostudy.core.types import Train
 
 class EarliestStand:
     """The earliest time to stand on the mark [s] from (position [m], speed [m/s]), or inf; and
-    whether the speed limits ahead can still be kept (:meth:`keeps_limits`)."""
+    whether the train is over a limit it cannot coast under (:meth:`coasting_over_limit`)."""
 
     def __init__(self, segment: Segment, train: Train, spacing: float = 2.0) -> None:
         n = max(int(np.ceil(segment.distance / spacing)), 1)
@@ -32,14 +32,14 @@ class EarliestStand:
         limits = node_limits(segment, nodes)
         self.train, self.nodes, self.limits = train, nodes, limits
         self.curve = braking_curve(segment, train, nodes, limits)
-        self.limit_curve = braking_curve(segment, train, nodes, limits, end_speed=np.inf)
+        self.interval_limits = np.asarray(segment.limit(0.5 * (nodes[:-1] + nodes[1:])), float)
         fixed = interval_grade_force(segment, train, nodes)
         a, b, c = interval_davis(segment, train, nodes)
         self.forces = [(float(a[k]), float(b[k]), float(c[k]), float(fixed[k])) for k in range(len(nodes) - 1)]
 
     def _curve_at(self, curve: np.ndarray, position: float) -> tuple[int, float]:
         """(the first node ahead of ``position``, the speed [m/s] from which full service braking over
-        the rest of its interval reaches ``curve`` there: the limit of a node behind not counted)."""
+        the rest of its interval reaches ``curve`` there: the limit of the node behind not counted)."""
         x = self.nodes
         j = int(np.searchsorted(x, position, side="right"))
         if j >= len(x):
@@ -50,11 +50,15 @@ class EarliestStand:
                   self.train.max_deceleration)
         return j, float(np.sqrt(v * v + 2 * (x[j] - position) * max(dec, 1e-3)))
 
-    def keeps_limits(self, position: float, speed: float, tolerance: float = 1e-3) -> bool:
-        """Whether full service braking from the state still keeps every speed limit ahead (within
-        ``tolerance`` [m/s]): where it does not, no plan of the phases NLP exists (its limits hold
-        at every node ahead of the train)."""
-        return speed <= self._curve_at(self.limit_curve, position)[1] + tolerance
+    def coasting_over_limit(self, position: float, speed: float, tolerance: float = 1e-3) -> bool:
+        """Whether the train runs over the limit where it is (by more than ``tolerance`` [m/s]) on a
+        stretch where coasting does not slow it (the grade pulls at least as hard as the running
+        resistance holds back). There no plan of SPPC's phases NLP exists: every node ahead of the
+        train must be under the limit, and a sector brakes only in its last phase, after phases that
+        at best coast (``ocp.phases``)."""
+        j = min(max(int(np.searchsorted(self.nodes, position, side="right")), 1), len(self.nodes) - 1)
+        a, b, c, fixed = self.forces[j - 1]
+        return speed > self.interval_limits[j - 1] + tolerance and davis_resistance(speed, a, b, c) + fixed <= 0.0
 
     def __call__(self, position: float, speed: float) -> float:
         x, curve = self.nodes, self.curve

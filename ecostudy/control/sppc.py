@@ -27,10 +27,11 @@ arrival (arriving early is allowed; least energy then uses the time). Variants:
   two would be given); step one runs when that solve gives no plan, or near the limit.
 
 A sample without a usable solve applies the last accepted plan's mode at the measured position
-(``control.fallback``), then, with no plan left, brakes in full. A train that full service braking
-no longer keeps under a limit ahead (``EarliestStand.keeps_limits``; measured speed a few
-hundredths over a limit it runs at) has no plan of the NLP, whose limits hold at every node ahead:
-no NLP is solved (each such solve had ended "infeasible" after 35-183 Ipopt iterations).
+(``control.fallback``), then, with no plan left, brakes in full. A train over the limit where it
+is, on a downgrade where coasting does not slow it (``EarliestStand.coasting_over_limit``: a
+train at the limit read a few hundredths over it), has no plan of the NLP, whose sectors brake
+only last and whose every node ahead is under its limit: no NLP is solved (each such solve had
+ended "infeasible" after 31-183 Ipopt iterations).
 
 Modes (thesis 000 §3.1.2): traction at a DAS level, coasting and full service braking are applied
 as their handle; cruise as the handle that holds the planned force at the measured speed.
@@ -129,8 +130,8 @@ class Sppc(Fallback):
             self.record("final", 0.0)
             return -1.0
         t0, softened, outcome = time.perf_counter(), (), None
-        # over a limit ahead even braking in full: no plan exists, no NLP is solved
-        if self.reach.keeps_limits(measured.position, measured.speed):
+        # over the limit where coasting does not slow the train: no plan exists, no NLP is solved
+        if not self.reach.coasting_over_limit(measured.position, measured.speed):
             if self.variant == "nominal":
                 outcome = self._solve(self.session, measured, (measured.time, self.arrival))
                 if not outcome.usable:
