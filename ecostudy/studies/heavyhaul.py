@@ -26,7 +26,7 @@ from ecostudy import __version__
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KMH, KN, KWH
-from ecostudy.heavyhaul.airbrake import application_time, brake_lag
+from ecostudy.heavyhaul.airbrake import application_time
 from ecostudy.heavyhaul.checks import reference_problems, ruling_grade, samples_to_start, starting_coupler_force
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
 from ecostudy.heavyhaul.linear import fence
@@ -56,7 +56,7 @@ def _reference(s, path, consist, track, from_stop, to_stop):
     supplement = None if r.supplement_percent is None else r.supplement_percent / 100
     lead = r.limit_lead_samples * s.sample_time_s + (application_time(consist) if s.air_brake else 0.0)  # the pipe's lateness
     return optimal_reference(consist, track, from_stop, to_stop, r.running_time_s, supplement, r.points,
-                             r.service_deceleration_mps2, lead, brake_lag(consist) if s.air_brake else 0.0)[0]
+                             r.service_deceleration_mps2, lead)[0]
 
 
 def expand(path):
