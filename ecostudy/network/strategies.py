@@ -41,7 +41,8 @@ from ecostudy.network.scoring import evaluate, separations, verify_leg
 
 # the strategies after independent driving, dearest first, so that a pool's workers end together
 # (`ecostudy network <study> --no-plot --workers 2`, each in its worker: 3-train study
-# 45.2, 38.3, 32.1, 24.6, 19.1, 5.1 s; 2-train study 9.8, 10.4, 10.8, 9.0, 5.6, 2.0 s)
+# 45.2, 38.3, 32.1, 24.6, 19.1, 5.1 s; 2-train study 9.8, 10.4, 10.8, 9.0, 5.6, 2.0 s); also the
+# order in which a network study starts its strategies on a shared pool (``studies.network``)
 DEAREST_FIRST = ("triggering", "dissension", "voltage", "receptivity", "joint", "following")
 
 
