@@ -9,6 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
+from ecostudy.studies import kinds  # noqa: F401  (registers the built-in study kinds)
 from ecostudy.studies.batch import kind_named
 from ecostudy.studies.legpool import shared_pool
 
