@@ -41,7 +41,8 @@ from ecostudy.network.scoring import evaluate, separations, verify_leg
 
 # the strategies after independent driving, dearest first, so that a pool's workers end together
 # (`ecostudy network <study> --no-plot --workers 2`, each in its worker: 3-train study
-# 45.2, 38.3, 32.1, 24.6, 19.1, 5.1 s; 2-train study 9.8, 10.4, 10.8, 9.0, 5.6, 2.0 s)
+# 45.2, 38.3, 32.1, 24.6, 19.1, 5.1 s; 2-train study 9.8, 10.4, 10.8, 9.0, 5.6, 2.0 s); also the
+# order in which a network study starts its strategies on a shared pool (``studies.network``)
 DEAREST_FIRST = ("triggering", "dissension", "voltage", "receptivity", "joint", "following")
 
 
@@ -90,18 +91,32 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1, tick
     return {name: out[name] for name in strategies}
 
 
-def solve_independent(fleet):
-    """The independent runs of ``fleet`` (strategy (a), the start of every other) and their wall
-    time [s]."""
+def solve_independent(fleet, mapper=map):
+    """The independent runs of ``fleet`` (strategy (a), the start of every other; each train's legs
+    over ``mapper``) and their wall time [s]."""
     t0 = time.perf_counter()
-    ind = independent(fleet)
+    ind = independent(fleet, mapper)
     return ind, time.perf_counter() - t0
 
 
-def one_strategy(fleet, name, ind, wall=0.0):
+# strategies that solve no legs one by one (one NLP of everything): given a pool, :func:`one_strategy`
+# runs them whole in one of its workers, not in the calling process
+WHOLE = ("joint",)
+
+
+def one_strategy(fleet, name, ind, wall=0.0, pool=None):
     """One strategy of ``fleet`` from the independent runs ``ind`` (``wall``: their solve time [s]),
-    solved and scored as :func:`run_strategies` does; a failed solve is {"failed": why, "wall_s"}."""
-    return _scored(fleet, ind, {}, wall) if name == "independent" else _strategy(fleet, name, ind)
+    solved and scored as :func:`run_strategies` does; a failed solve is {"failed": why, "wall_s"}.
+    ``pool``: a process pool shared with other strategies (``studies.legpool``): the legs and
+    re-simulations go to its workers, a :data:`WHOLE` strategy goes there in one piece; this
+    process keeps the rounds' own work (rule terms, the circuit). A leg's run depends only on its
+    task, never on the process that solved it, so the results are those of ``pool=None``."""
+    mapper = pool.map if pool is not None else map
+    if name == "independent":
+        return _scored(fleet, ind, {}, wall, mapper)
+    if pool is not None and name in WHOLE:
+        return pool.submit(_strategy, fleet, name, ind).result()
+    return _strategy(fleet, name, ind, mapper)
 
 
 def _supervised(rule):

@@ -133,17 +133,23 @@ def _dask(todo, address, task):
             raise
 
 
-def execute(cases, store, task=run_case, workers=1, dask=None, retry_failed=False, progress=None):
+def execute(cases, store, task=run_case, workers=1, dask=None, retry_failed=False, progress=None, spread=None):
     """Run ``task`` (a pure function of a case dict returning a result dict, never raising) on every
     case not in ``store`` yet, serially, in ``workers`` processes or on a Dask scheduler, storing
-    each result as it arrives; returns the counts. ``progress(done, failed, remaining, total)``."""
+    each result as it arrives; returns the counts. ``progress(done, failed, remaining, total)``.
+    ``spread(todo, workers, task)``: how ``workers`` local processes run the cases (even one case)
+    when not one case per process (:attr:`StudyKind.spread`)."""
     finished = store.finished_keys(retry_failed=retry_failed)
     todo = [c for c in cases if c["key"] not in finished]
     counts = {"total": len(cases), "stored_before": len(cases) - len(todo), "computed": 0, "failed": 0}
     if workers < 1:
         raise EcostudyError("--workers must be at least 1")
-    source = (_dask(todo, dask, task) if dask else _processes(todo, workers, task) if workers > 1 and len(todo) > 1
-              else _serial(todo, task))
+    if dask:
+        source = _dask(todo, dask, task)
+    elif workers > 1 and todo and (spread is not None or len(todo) > 1):
+        source = (spread or _processes)(todo, workers, task)
+    else:
+        source = _serial(todo, task)
     for case, result in source:
         store.put(case, result)
         counts["computed"] += 1
@@ -153,12 +159,14 @@ def execute(cases, store, task=run_case, workers=1, dask=None, retry_failed=Fals
     return counts
 
 
-def stored_rows(cases, path, task, workers=1, dask=None, retry_failed=False, progress=None, compute=None):
+def stored_rows(cases, path, task, workers=1, dask=None, retry_failed=False, progress=None, compute=None,
+                spread=None):
     """Run ``task`` on the cases not in the store at ``path`` yet (:func:`execute`; only those of
     ``compute`` when given); returns (counts, the stored row of every case by key)."""
     store = Store(path)
     try:
-        counts = execute(cases if compute is None else compute, store, task, workers, dask, retry_failed, progress)
+        counts = execute(cases if compute is None else compute, store, task, workers, dask, retry_failed, progress,
+                         spread)
         return counts, store.get([c["key"] for c in cases])
     finally:
         store.close()
@@ -193,6 +201,10 @@ class StudyKind:
     table_file: str = "results.csv"
     table_name: str = "results"
     """The table's name in ``summary.json`` (``api.load(folder).tables[table_name]``)."""
+    spread: Optional[Callable] = None
+    """``spread(todo, workers, task)`` -> (case, result) pairs: how local worker processes run the
+    cases instead of one case per process (a network study's strategies share one pool for their
+    legs: :mod:`ecostudy.studies.legpool`); Dask still runs one case per task."""
     verdict: Optional[Callable[[pd.DataFrame], dict]] = None
     """``verdict(table)``: statuses of the study as a whole beside its cases' ({name: Status}; a
     front whose energy does not fall as the running time grows is flagged)."""
@@ -246,7 +258,7 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
     counts, rows = stored_rows(expanded.cases, output / "results.sqlite", spec.task, workers, dask, retry_failed,
-                               progress, compute)
+                               progress, compute, spec.spread)
     table = spec.table(expanded.cases, rows)
     write_csv(output / spec.table_file, table)
     drawn, tables = draw(output, expanded.cases, rows, table) if draw is not None else ([], {})

@@ -12,6 +12,8 @@ workers, ``tests/test_workers.py``). The table is one row per strategy
 (``network_substation.csv``); the other files: ``report.files.write_network_files``.
 """
 import json
+import threading
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -23,14 +25,16 @@ from ecostudy.io.loaders import load_network_study, track_document, train_docume
 from ecostudy.io.schemas import NetworkStudyFile
 from ecostudy.io.writers import check_output_dir
 from ecostudy.network import fleet as fleets
-from ecostudy.network.strategies import one_strategy, solve_independent
+from ecostudy.network.strategies import DEAREST_FIRST, one_strategy, solve_independent
 from ecostudy.ocp.timedomain import LegRun
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
 from ecostudy.studies.cases import case_key
+from ecostudy.studies.legpool import shared_pool
 from ecostudy.studies.sizes import check_network_study
 from ecostudy.studies.workers import kept
 
 _INDEPENDENT: dict = {}  # the independent runs of a study and their wall time, per process
+_SOLVING = threading.Lock()  # held while a thread reads or solves them
 
 
 def expand_network(path, workers=1, pool=None, note=None, out=None):
@@ -62,14 +66,18 @@ def expand_network(path, workers=1, pool=None, note=None, out=None):
     return Expanded(output, cases)
 
 
-def run_network_strategy(case):
-    """One strategy of :func:`expand_network`, solved and scored; never raises."""
-    return outcome(case, lambda: _strategy(case))
+def run_network_strategy(case, pool=None):
+    """One strategy of :func:`expand_network`, solved and scored; never raises. ``pool``: a process
+    pool its legs share with the other strategies of the study (:mod:`ecostudy.studies.legpool`,
+    which calls this in threads of one process)."""
+    return outcome(case, lambda: _strategy(case, pool))
 
 
-def _strategy(case):
-    ind, wall = kept(_INDEPENDENT, case["inputs"], lambda: solve_independent(case["fleet"]))
-    result = one_strategy(case["fleet"], case["strategy"], ind, wall)
+def _strategy(case, pool):
+    mapper = pool.map if pool is not None else map
+    with _SOLVING:  # the first thread here solves the independent runs, the others wait for them
+        ind, wall = kept(_INDEPENDENT, case["inputs"], lambda: solve_independent(case["fleet"], mapper))
+    result = one_strategy(case["fleet"], case["strategy"], ind, wall, pool)
     if "failed" in result:
         return "failed", result["failed"], {"wall_s": result["wall_s"]}
     status, _, reason = result["totals"]["status"].partition(": ")
@@ -124,6 +132,11 @@ def network_table(cases, rows):
     return table
 
 
+def _dearest_first(case):
+    return DEAREST_FIRST.index(case["strategy"]) if case["strategy"] in DEAREST_FIRST else -1
+
+
 STUDY_KINDS.register("network", StudyKind(expand_network, run_network_strategy, network_table,
-                                          table_file="network_substation.csv", table_name="substation"),
+                                          table_file="network_substation.csv", table_name="substation",
+                                          spread=partial(shared_pool, first=_dearest_first)),
                      doc="trains sharing a DC substation, each strategy a case (Farooqi 2018, Ch. 7)")

@@ -1,0 +1,31 @@
+"""A study's cases run side by side in threads of the command's process, their inner work (a network
+strategy's legs) spread over one pool of worker processes that every case shares.
+
+One case per worker process (``batch._processes``) leaves a core idle as soon as fewer cases are
+left than workers: on the 20-stop network study (Farooqi 2018 Sec. 8.4) the dissension rounds ran
+alone on one core for most of the study. Here every case submits its legs to the same pool as it
+reaches them, so the cores stay busy while any case has legs to solve; a case's own sequential
+work (a supervisor round's rule terms, the circuit) runs in its thread. The results do not depend
+on this: a leg's run depends only on its task, never on which process solved it.
+"""
+from concurrent.futures import ThreadPoolExecutor, as_completed
+
+from ecostudy.studies.workers import worker_pool
+
+
+def shared_pool(todo, workers, task, first=None):
+    """(case, result) of every case in ``todo`` as it finishes: ``task(case, pool)`` in a thread per
+    case, ``pool`` a process pool of ``workers`` that every case shares. ``first(case)``: a sort key,
+    the cases started in its order (the dearest first: their legs enter the pool's queue first)."""
+    ordered = sorted(todo, key=first) if first is not None else list(todo)
+    with worker_pool(workers) as pool:
+        threads = ThreadPoolExecutor(max_workers=max(len(ordered), 1), thread_name_prefix="case")
+        futures = {threads.submit(task, case, pool): case for case in ordered}
+        try:
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+        except BaseException:  # interrupted: nothing new starts, the workers stop with their legs
+            threads.shutdown(wait=False, cancel_futures=True)
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        threads.shutdown()

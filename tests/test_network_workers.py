@@ -1,0 +1,72 @@
+"""A network study's strategies share one pool of worker processes for their legs
+(``studies.legpool``): the same results, bit for bit, as one process; a resumed study with one
+strategy left still spreads its legs."""
+import json
+import sqlite3
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+from ecostudy.studies import kinds  # noqa: F401  (registers the built-in study kinds)
+from ecostudy.studies.batch import kind_named
+from ecostudy.studies.legpool import shared_pool
+
+from .conftest import TRACKS, TRAINS, write_yaml
+
+runner = CliRunner()
+TIMED = ["wall_s"]  # wall times: the only columns that may differ from run to run
+
+
+def two_leg_study(folder):
+    """Two metro trains 45 s apart over two segments (two legs each: a train's legs go to both
+    workers), four strategies: the independent runs, a supervisor rule's rounds, the joint optimum
+    (whole, in one worker) and following."""
+    return write_yaml(folder / "net.yaml", {
+        "name": "spread", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
+        "stops": ["Noord", "Station", "Centrum"], "running_times_s": [56.0, 110.0], "dwell_s": 10,
+        "time_step_s": 1.0, "trains": [{"name": "A", "offset_s": 0}, {"name": "B", "offset_s": 45}],
+        "substation": {"position_m": 1500}, "strategies": ["independent", "triggering", "joint", "following"],
+        "buffer_m": 60, "points": 300, "output": str(folder / "out")})
+
+
+def table(study, out, workers):
+    r = runner.invoke(app, ["network", str(study), "--out", str(out), "--no-plot", "--workers", workers])
+    assert r.exit_code == 0, r.output
+    return pd.read_csv(out / "network_substation.csv", dtype=str, keep_default_na=False).drop(columns=TIMED)
+
+
+def stored(out):
+    """{key: stored summary} at full precision, wall times left out."""
+    with sqlite3.connect(out / "results.sqlite") as db:
+        rows = dict(db.execute("SELECT key, summary FROM cases").fetchall())
+    summaries = {key: json.loads(text) for key, text in rows.items()}
+    for summary in summaries.values():
+        summary["totals"].pop("wall_s")
+        for timed in ("build_s", "solve_s"):  # the joint optimum's
+            summary["info"].pop(timed, None)
+    return summaries
+
+
+@pytest.mark.slow
+def test_strategies_sharing_a_pool_give_the_results_of_one_process(tmp_path):
+    study = two_leg_study(tmp_path)
+    one = table(study, tmp_path / "one", "1")
+    two = table(study, tmp_path / "two", "2")
+    assert list(one["strategy"]) == ["independent", "triggering", "joint", "following"]
+    assert (one["status"] == "ok").all(), one
+    pd.testing.assert_frame_equal(one, two)  # every number as written, to the last digit
+    assert stored(tmp_path / "one") == stored(tmp_path / "two")  # and as computed
+    # resumed with one strategy left: it runs alone, its legs still spread over both workers
+    with sqlite3.connect(tmp_path / "two" / "results.sqlite") as db:
+        db.execute("DELETE FROM cases WHERE key = (SELECT key FROM cases WHERE summary LIKE '%rounds_substation%')")
+    again = table(study, tmp_path / "two", "2")
+    pd.testing.assert_frame_equal(one, again)
+    assert stored(tmp_path / "one") == stored(tmp_path / "two")
+
+
+def test_the_network_kind_spreads_and_the_pool_runs_every_case_once():
+    assert kind_named("network").spread is not None and kind_named("run").spread is None
+    seen = list(shared_pool([3, 1, 2], 2, lambda case, pool: pool.submit(pow, case, 2).result(), first=lambda c: -c))
+    assert sorted(seen) == [(1, 1), (2, 4), (3, 9)]
