@@ -46,7 +46,18 @@ def hostile(tmp_path, shipped, **changes):
 
 
 def nothing_written(tmp_path):
-    assert not (tmp_path / "out").exists()
+    """No output file (an infeasible running time is found after the output folder was checked: it may be there, empty)."""
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+def swapped(lines, a, b):
+    lines = list(lines)
+    lines[a], lines[b] = lines[b], lines[a]
+    return lines
+
+
+def first_cell(lines, row, value):
+    return lines[:row] + [",".join([value] + lines[row].split(",")[1:])] + lines[row + 1:]
 
 
 # ----------------------------------------------------------------------------------- the file itself
@@ -67,6 +78,10 @@ def test_a_folder_given_as_the_study_file_is_named_a_folder(tmp_path, command):
     ("network_metro_2trains.yaml", {"buffer_m": None}, "buffer_m: the following strategy needs it"),
     ("heavyhaul_fence.yaml", {"brake_penalty": [40, -1]}, "brake_penalty[1]: Input should be greater than or equal to 0"),
     ("heavyhaul_fence.yaml", {"fence": [10, 0]}, "fence[1]: Input should be greater than or equal to 1"),
+    ("heavyhaul_fence.yaml", {"reference": {"running_time_s": 1}},
+     "reference.running_time_s: infeasible: the fastest possible run takes"),
+    ("network_metro_2trains.yaml", {"supplement_percent": None, "running_times_s": [10, 90, 90]},
+     "running_times_s: infeasible: the fastest possible run takes"),
     ("network_metro_2trains.yaml", {"strategies": ["independent", "joint", "independent"]},
      "strategies: names must be unique ('independent' given twice)"),
     ("metro_monte_carlo.yaml", {"controllers": [{"name": "s", "kind": "sbpc", "delay_samples": 3}]},
@@ -85,6 +100,7 @@ def test_a_check_across_fields_names_its_field(tmp_path, shipped, changes, fragm
     ("network_metro_2trains.yaml", {"supplement_percent": None, "running_times_s": [-80, 90, 90]},
      "running_times_s[0]: Input should be greater than 0"),
     ("network_metro_2trains.yaml", {"train": ""}, "train: an empty name"),
+    ("network_metro_2trains.yaml", {"buffer_m": 1e12}, "buffer_m: 1e+12 m is not shorter than the line"),
     ("heavyhaul_brake_penalty_rolling.yaml", {"consist": " "}, "consist: an empty name"),
     ("heavyhaul_fence.yaml", {"brake_penalty": [1e300]}, "brake_penalty[0]: Input should be less than or equal to 10000"),
     ("heavyhaul_fence.yaml", {"weights": {"speed": 1e300}}, "weights.speed: Input should be less than or equal to 10000"),
@@ -93,8 +109,57 @@ def test_a_check_across_fields_names_its_field(tmp_path, shipped, changes, fragm
      "deviations.mass.high: Input should be less than or equal to 10"),
     ("metro_monte_carlo.yaml", {"controllers": [{"name": "s", "kind": "sbpc", "block": 10**9, "sample_time_s": 0.38}]},
      "controllers[0].block: 1000000000 samples a move is more than the run's 200"),
+    ("heavyhaul_brake_penalty_rolling.yaml", {"sample_time_s": 1e-6},
+     "max_samples: 1000 samples of 1e-06 s (sample_time_s) end 0.001 s in, before the reference's"),
+    ("heavyhaul_brake_penalty_rolling.yaml", {"fence": [1], "horizons": [{"np": 100, "nc": 100}]},
+     "horizons: Kb=1 f=1 Np=100 Nc=100: 20,400 QP inputs (virtual cars x Nc) a sample"),
 ])
 def test_values_no_run_can_use_are_refused_before_computing(tmp_path, shipped, changes, fragment):
     command = {"metro": "simulate", "netwo": "network", "heavy": "heavyhaul"}[shipped[:5]]
     refused(run(command, hostile(tmp_path, shipped, **changes), "--workers", 1, "--no-plot"), fragment)
     nothing_written(tmp_path)
+
+
+# ----------------------------------------------------------------------------------- a heavy-haul reference table
+def reference_study(tmp_path, edit):
+    path = hostile(tmp_path, "heavyhaul_brake_penalty_rolling.yaml")
+    table = tmp_path / "heavyhaul_rolling_reference.csv"
+    table.write_text("\n".join(edit(table.read_text().splitlines())) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("edit, fragment", [
+    (lambda ls: swapped(ls, 3, 6), "heavyhaul_rolling_reference.csv: distance_m, row 5: 150 after 250: the distances "
+                                   "must increase"),
+    (lambda ls: first_cell(ls, 5, ls[4].split(",")[0]), "distance_m, row 6: 150 after 150"),
+    (lambda ls: ls[:3] + [ls[3].split(",")[0] + ",-11"] + ls[4:], "speed_kmh, row 4: -11 is below 0"),
+])
+def test_a_reference_table_out_of_order_names_its_row(tmp_path, edit, fragment):
+    refused(run("heavyhaul", reference_study(tmp_path, edit), "--workers", 1, "--no-plot"), fragment)
+    nothing_written(tmp_path)
+
+
+def test_a_reference_table_column_not_read_is_warned(tmp_path):
+    from ecostudy.studies.heavyhaul import expand
+    path = reference_study(tmp_path, lambda ls: [ls[0] + ",note"] + [line + ",x" for line in ls[1:]])
+    with pytest.warns(UserWarning, match="heavyhaul_rolling_reference.csv: note: not read"):
+        expand(path)
+
+
+# ----------------------------------------------------------------------------------- resuming into another study's folder
+@pytest.mark.parametrize("command, shipped, changes", [
+    ("network", "network_metro_2trains.yaml", {}),
+    ("simulate", "metro_monte_carlo.yaml", {"controllers": [{"name": "a", "kind": "ato"}], "draws": 1}),
+    ("heavyhaul", "heavyhaul_brake_penalty_rolling.yaml", {}),
+])
+def test_an_out_folder_holding_another_study_is_refused_before_computing(tmp_path, command, shipped, changes):
+    from ecostudy.io.store import Store
+    other = tmp_path / "other"
+    store = Store(other / "results.sqlite")
+    store.put({"key": "k", "study": "someone_else", "scenario": "s", "labels": {}}, {"status": "ok", "summary": {}})
+    store.close()
+    refused(run(command, hostile(tmp_path, shipped, **changes), "--workers", 1, "--no-plot", "--out", other),
+            str(other), "--out: holds the results of another study ('someone_else')")
+    store = Store(other / "results.sqlite")
+    assert store.finished_keys() == {"k"} and not (other / "summary.json").exists()
+    store.close()
