@@ -1,9 +1,10 @@
-"""Hostile copies of the shipped study files of ``network``, ``simulate`` and ``heavyhaul``, through
-the command line: one line naming the file and the field, exit status 2, before anything is
-computed (no output folder, no store)."""
+"""Hostile copies of the shipped study files of ``network``, ``simulate`` and ``heavyhaul``, and
+damaged solve folders for ``export``, through the command line: one line naming the file and the
+field, exit status 2, before anything is computed (no output folder, no store)."""
 import shutil
 
 import pytest
+import yaml
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
@@ -163,3 +164,47 @@ def test_an_out_folder_holding_another_study_is_refused_before_computing(tmp_pat
     store = Store(other / "results.sqlite")
     assert store.finished_keys() == {"k"} and not (other / "summary.json").exists()
     store.close()
+
+
+# ----------------------------------------------------------------------------------- export
+@pytest.fixture(scope="module")
+def saved(tmp_path_factory):
+    out = tmp_path_factory.mktemp("saved") / "run"
+    r = run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--points", 30, "--das", "round", "--no-plot",
+            "--out", out)
+    assert r.exit_code in (0, 1) and (out / "advice.csv").is_file(), r.output
+    return out
+
+
+def damaged(saved, tmp_path, name, edit):
+    folder = tmp_path / "copy"
+    shutil.copytree(saved, folder)
+    lines = (folder / name).read_text().splitlines()
+    (folder / name).write_text("\n".join(edit(lines)) + "\n")
+    return folder
+
+
+@pytest.mark.parametrize("every, fragments", [
+    ("0.0000000001s", ["--every", "a step of 1e-10 s over the run", "rows, above the 1,000,000 exported"]),
+    ("0.00000001m", ["--every", "rows, above the 1,000,000 exported"]),
+])
+def test_export_refuses_a_step_too_small_with_its_row_count(saved, every, fragments):
+    refused(run("export", saved, "--every", every), *fragments)
+
+
+@pytest.mark.parametrize("name, edit, fragments", [
+    ("profile.csv", lambda ls: swapped(ls, 4, 11), ["profile.csv: position_m, row 6", "the rows must increase"]),
+    ("advice.csv", lambda ls: first_cell(ls, 1, "here"), ["advice.csv: start_position_m, row 2", "'here'"]),
+    ("advice.csv", lambda ls: first_cell(ls, 2, "nan"), ["advice.csv: start_position_m, row 3", "'nan'"]),
+])
+def test_export_refuses_a_damaged_folder_in_one_line(saved, tmp_path, name, edit, fragments):
+    folder = damaged(saved, tmp_path, name, edit)
+    refused(run("export", folder), *fragments)
+    assert not list(folder.glob("profile_every_*"))
+
+
+def test_export_of_an_intact_folder_still_writes(saved):
+    r = run("export", saved, "--every", "10m")
+    assert r.exit_code == 0 and (saved / "profile_every_10m.csv").is_file(), r.output
+    rows = yaml.safe_load((saved / "profile_every_10m.json").read_text())["rows"]
+    assert len(rows) > 10
