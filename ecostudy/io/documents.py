@@ -32,7 +32,7 @@ def read_document(path: str | PathLike[str]) -> dict[str, Any]:
     :mod:`ecostudy.io.yamlsafe`."""
     path = Path(path)
     if not path.is_file():
-        raise InputError(problem(path, "", "file not found"))
+        raise InputError(problem(path, "", "a folder, not a file" if path.is_dir() else "file not found"))
     if path.stat().st_size > MAX_FILE_BYTES:
         raise InputError(problem(path, "", f"file of {path.stat().st_size / 1e6:.0f} MB is larger than the "
                                  f"{MAX_FILE_BYTES / 1e6:.0f} MB ecostudy reads"))
@@ -70,6 +70,15 @@ def _field_path(loc: Sequence[int | str]) -> str:
     return out
 
 
+def _names(schema: type[BaseModel]) -> set[str]:
+    """The top-level field names of ``schema`` as a file spells them (aliases too)."""
+    names = set(schema.model_fields)
+    for f in schema.model_fields.values():
+        if f.alias:
+            names.add(f.alias)
+    return names
+
+
 def validate(schema: type[Model], data: object, path: str | PathLike[str],
              aliases: Mapping[str, str] | None = None) -> Model:
     """Validate ``data`` against a schema; every pydantic error becomes one problem line.
@@ -86,5 +95,8 @@ def validate(schema: type[Model], data: object, path: str | PathLike[str],
             elif err["type"] == "missing":
                 msg = "missing field"
             field = _field_path(loc) or "(top level)"
+            head, _, rest = msg.partition(": ")
+            if not loc and rest and head.split("[")[0] in _names(schema):  # a check across fields that names its field
+                field, msg = head, rest
             lines.append(problem(path, (aliases or {}).get(field, field), msg))
         raise InputError(lines)

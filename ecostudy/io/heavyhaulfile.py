@@ -2,11 +2,14 @@
 controller on a consist's cascade plant, swept over the brake penalty K_b, the fence factor f and
 the horizons (Np, Nc). Units are in the field names; defaults are Zhang & Zhuan's (Ts = 20 s, K_f = 10,
 K_v = 60, K_e = 10)."""
-from typing import Any, Literal, Optional, Self
+from typing import Annotated, Any, Literal, Optional, Self
 
 from pydantic import Field, field_validator, model_validator
 
 from ecostudy.io.schemabase import Name, Strict
+
+
+WEIGHT_MAX = 1e4  # K_b, K_f, K_v, K_e: the paper's are 1 to 80; 1e300 made the QP's setup fail (DAQP flag -5)
 
 
 class ReferenceSpec(Strict):
@@ -45,21 +48,22 @@ class Horizon(Strict):
 class Weights(Strict):
     """K_f, K_v, K_e of Zhang & Zhuan eq. 4 (K_b is swept: ``brake_penalty``)."""
 
-    force: float = Field(10.0, ge=0, description="K_f, on in-train forces [per kN^2 / 1e4].")
-    speed: float = Field(60.0, ge=0, description="K_v, on speed tracking [per (m/s)^2].")
-    energy: float = Field(10.0, ge=0, description="K_e, on efforts [per kN^2 / 1e4].")
+    force: float = Field(10.0, ge=0, le=WEIGHT_MAX, description="K_f, on in-train forces [per kN^2 / 1e4].")
+    speed: float = Field(60.0, ge=0, le=WEIGHT_MAX, description="K_v, on speed tracking [per (m/s)^2].")
+    energy: float = Field(10.0, ge=0, le=WEIGHT_MAX, description="K_e, on efforts [per kN^2 / 1e4].")
 
 
 class HeavyhaulFile(Strict):
     name: Name
-    consist: str
-    track: str
+    consist: Name
+    track: Name
     from_stop: Optional[str] = Field(None, alias="from")
     to_stop: Optional[str] = Field(None, alias="to")
     reference: ReferenceSpec = ReferenceSpec(supplement_percent=10.0)
     sample_time_s: float = Field(20.0, gt=0, le=600, description="Ts, also the real-time budget of a solve.")
-    brake_penalty: list[float] = Field([40.0], min_length=1, description="K_b values swept.")
-    fence: list[int] = Field([10], min_length=1, description="Fence factors f swept (1: every car).")
+    brake_penalty: list[Annotated[float, Field(ge=0, le=WEIGHT_MAX)]] = Field(
+        [40.0], min_length=1, description="K_b values swept (0 to 1e4).")
+    fence: list[Annotated[int, Field(ge=1)]] = Field([10], min_length=1, description="Fence factors f swept (1: every car).")
     horizons: list[Horizon] = Field([Horizon(np=4, nc=2)], min_length=1, description="(Np, Nc) pairs swept.")
     fence_coupling: Literal["series", "single"] = Field("series", description="A virtual coupler: the real couplers "
                                                         "between the virtual cars' centres in series (k / spanned) "
@@ -113,10 +117,3 @@ class HeavyhaulFile(Strict):
             seen.append(key)
         return values
 
-    @model_validator(mode="after")
-    def _values(self) -> Self:
-        if any(k < 0 for k in self.brake_penalty):
-            raise ValueError("brake_penalty values must be >= 0")
-        if any(f < 1 for f in self.fence):
-            raise ValueError("fence factors must be >= 1")
-        return self

@@ -353,6 +353,8 @@ def load_network_study(study_path: Where) -> NetworkStudy:
     if s.running_times_s is not None and len(s.running_times_s) != len(stops) - 1:
         raise InputError(problem(path, "running_times_s", f"need {len(stops) - 1} values, one per segment"))
     sub = s.substation
+    if not 0 <= sub.position_m <= track.length:
+        raise InputError(problem(path, "substation.position_m", f"{sub.position_m:g} m is off the line (0 to {track.length:g} m)"))
     supply = Supply(position=sub.position_m, voltage=sub.voltage_V, resistance=sub.internal_resistance_ohm,
                     line_resistance=sub.line_resistance_ohm_per_km / 1000.0,
                     max_voltage=sub.max_voltage_V or sub.voltage_V * 685 / 600,

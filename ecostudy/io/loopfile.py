@@ -3,6 +3,7 @@
 Units are in the field names, as in :mod:`ecostudy.io.schemas`. Defaults are thesis 001's Ch.9
 (controller) and Ch.10 (noise) values.
 """
+import math
 from typing import Annotated, Any, Literal, Optional, Self, Union
 
 from pydantic import Field, model_validator
@@ -101,6 +102,8 @@ class Controller(Strict):
         if self.brake_reserve is not None and "brake_reserve" not in uses:
             raise ValueError(f"brake_reserve is for {', '.join(reserve_kinds)} (the convex controller's is "
                              "settings.brake_level_mps2)")
+        if self.delay_samples and not self.das_levels:
+            raise ValueError("delay_samples: the driver's reaction delay acts on the DAS levels only (das_levels: true)")
         if self.terminal_fit and self.terminal_reserve is None:
             raise ValueError("terminal_fit needs terminal_reserve (the share of the brake held back until "
                              "the train's braking is measured)")
@@ -114,8 +117,8 @@ class Controller(Strict):
 class Range(Strict):
     """True parameter as a multiple of the model's, drawn uniformly from [low, high] per run."""
 
-    low: float = Field(gt=0)
-    high: float = Field(gt=0)
+    low: float = Field(gt=0, le=10)
+    high: float = Field(gt=0, le=10, description="At most 10 times the model's (a wider spread is another train).")
 
     @model_validator(mode="after")
     def _ordered(self) -> Self:
@@ -146,8 +149,8 @@ class NoiseSettings(Strict):
 
 class SimulateFile(Strict):
     name: Name
-    track: str
-    train: str
+    track: Name
+    train: Name
     from_stop: Optional[str] = Field(None, alias="from")
     to_stop: Optional[str] = Field(None, alias="to")
     window_s: tuple[float, float] = Field(description="Arrival window [T_min, T_max] on the trip's clock [s].")
@@ -163,12 +166,17 @@ class SimulateFile(Strict):
     @model_validator(mode="after")
     def _checks(self) -> Self:
         names = [c.name for c in self.controllers]
-        if len(set(names)) != len(names):
-            raise ValueError("controller names must be unique")
+        twice = sorted({n for n in names if names.count(n) > 1})
+        if twice:
+            raise ValueError(f"controllers: names must be unique ({', '.join(map(repr, twice))} given twice)")
         if not 0 <= self.window_s[0] <= self.window_s[1]:
-            raise ValueError("window_s must be [earliest, latest] with 0 <= earliest <= latest")
-        for c in self.controllers:
+            raise ValueError("window_s: must be [earliest, latest] with 0 <= earliest <= latest")
+        for i, c in enumerate(self.controllers):
             if (c.sample_time_s or self.sample_time_s) >= self.window_s[1]:
-                raise ValueError(f"sample_time_s{'' if c.sample_time_s is None else ' of ' + c.name} must be "
-                                 "shorter than the latest arrival window_s[1]")
+                raise ValueError(f"{'sample_time_s' if c.sample_time_s is None else f'controllers[{i}].sample_time_s'}: "
+                                 "must be shorter than the latest arrival window_s[1]")
+            samples = math.ceil(self.window_s[1] / (c.sample_time_s or self.sample_time_s))
+            if "block" in c.model_fields_set and c.block > samples:
+                raise ValueError(f"controllers[{i}].block: {c.block} samples a move is more than the run's {samples} "
+                                 "(window_s[1] / sample_time_s)")
         return self

@@ -62,6 +62,12 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
                                  "(no grid size)"))
     p = number_columns(result_dir / "profile.csv", PROFILE_COLUMNS, rows=points,
                        open_last=("traction_force_kN", "braking_force_kN", "handle"))
+    for column, strictly in (("position_m", True), ("time_s", False)):  # rows out of order: a run read backwards
+        steps = np.diff(p[column])
+        back = np.flatnonzero(steps <= 0 if strictly else steps < 0)
+        if back.size:
+            raise InputError(problem(result_dir / "profile.csv", f"{column}, row {back[0] + 3}", f"{p[column][back[0] + 1]:g} "
+                                     f"after {p[column][back[0]]:g}: the rows must {'increase' if strictly else 'not decrease'}"))
     trajectory = Trajectory(p["position_m"], p["speed_kmh"] * KMH, np.diff(p["time_s"]),
                             p["traction_force_kN"][:-1] * KN, p["braking_force_kN"][:-1] * KN)
     advice: pd.DataFrame | None = None
@@ -72,6 +78,13 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
             raise InputError(problem(result_dir / "advice.csv", "", f"cannot be read ({exc})"))
         if "start_position_m" not in advice or "mode" not in advice:
             raise InputError(problem(result_dir / "advice.csv", "start_position_m/mode", "missing"))
+        starts = pd.to_numeric(advice["start_position_m"], errors="coerce").to_numpy(float)
+        bad = np.flatnonzero(~np.isfinite(starts) | (np.diff(starts, prepend=-np.inf) < 0))
+        if bad.size:
+            raise InputError(problem(result_dir / "advice.csv", f"start_position_m, row {bad[0] + 2}",
+                                     f"'{advice['start_position_m'].iloc[bad[0]]}' is not a finite number at least "
+                                     "the row's before"))
+        advice = advice.assign(start_position_m=starts)
     return SavedRun(inputs, summary, trajectory, p["handle"][:-1], advice)
 
 

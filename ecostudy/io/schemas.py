@@ -303,12 +303,12 @@ class NetworkStudyFile(Strict):
     """Several trains on one line and one substation: `ecostudy network STUDY.yaml`."""
 
     name: Name
-    track: str
-    train: str
+    track: Name
+    train: Name
     stops: Optional[list[Name]] = Field(None, description="Stops served, in order (default: all).")
-    running_times_s: Optional[list[float]] = Field(None, description="Per segment [s].")
+    running_times_s: Optional[list[Annotated[float, Field(gt=0)]]] = Field(None, description="Per segment [s].")
     supplement_percent: Optional[float] = Field(None, ge=0, description="Per segment, over its all-out time.")
-    dwell_s: float = Field(20.0, ge=0)
+    dwell_s: float = Field(20.0, ge=0, le=86400, description="Dwell at each stop [s], within a day.")
     time_step_s: float = Field(0.5, ge=0.05, le=5, description="Simulation step [s], 0.05 to 5.")
     trains: list[FleetTrain] = Field(min_length=1)
     substation: Substation
@@ -322,11 +322,12 @@ class NetworkStudyFile(Strict):
         if (self.running_times_s is None) == (self.supplement_percent is None):
             raise ValueError("give exactly one of running_times_s, supplement_percent")
         if "following" in self.strategies and self.buffer_m is None:
-            raise ValueError("the following strategy needs buffer_m")
-        names = [t.name for t in self.trains]
-        if len(set(names)) != len(names):
-            raise ValueError("train names must be unique")
+            raise ValueError("buffer_m: the following strategy needs it")
+        for field, names in (("trains", [t.name for t in self.trains]), ("strategies", [str(n) for n in self.strategies])):
+            twice = sorted({n for n in names if names.count(n) > 1})
+            if twice:
+                raise ValueError(f"{field}: names must be unique ({', '.join(map(repr, twice))} given twice)")
         offsets = sorted(t.offset_s for t in self.trains)
         if any(b - a < self.time_step_s for a, b in zip(offsets, offsets[1:])):
-            raise ValueError("two trains depart at the same time (offset_s): they would stand on each other")
+            raise ValueError("trains: two trains depart at the same time (offset_s): they would stand on each other")
         return self

@@ -10,6 +10,7 @@ import os
 import sqlite3
 import time
 import warnings
+from contextlib import closing
 from os import PathLike
 from pathlib import Path
 from typing import IO, Any, Iterable, Mapping
@@ -131,3 +132,21 @@ def _locked(lock_path: Path, store_path: Path, attempts: int = 5) -> IO[str]:
         lock.close()  # the file was removed by a run that just finished: take the new one
     raise InputError(problem(store_path, "", "its lock file keeps changing: another ecostudy run is starting or "
                              "finishing on this folder; try again"))
+
+
+def check_one_study(folder: str | PathLike[str], name: str) -> None:
+    """Refuse an output folder whose store holds the cases of another study than ``name`` (the
+    tables, figures and summary.json of one would be written over the other's), before anything
+    is computed; a store that cannot be read is left to :class:`Store`'s own refusal."""
+    path = Path(folder) / "results.sqlite"
+    if not path.is_file():
+        return
+    try:
+        with closing(sqlite3.connect(f"file:{path}?mode=ro", uri=True)) as db:
+            others = sorted({row[0] for row in db.execute("SELECT DISTINCT study FROM cases")} - {name})
+    except sqlite3.DatabaseError:
+        return
+    if others:
+        raise InputError(problem(folder, "--out", f"holds the results of another study ({', '.join(map(repr, others))}), "
+                                 f"not of '{name}': give another --out"))
+

@@ -4,6 +4,7 @@ from functools import partial
 from pathlib import Path
 
 from ecostudy.analysis.export import fixed_step
+from ecostudy.core.errors import InputError, problem
 from ecostudy.core.status import OK, flagged
 from ecostudy.io.folder import write_summary
 from ecostudy.io.results import load_result
@@ -100,11 +101,20 @@ EXPORT_UNITS = {"time_s": "s", "position_m": "m", "speed_kmh": "km/h", "speed_mp
                 "advice_handle": "-1 to 1", "advice_target_speed_kmh": "km/h (cruise modes)"}
 
 
+MAX_EXPORT_ROWS = 1_000_000  # a run every 1 ms for 15 min; a step below was a typo (5.8 TiB asked for at 1e-10 s)
+
+
 def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
     """The run of a solve folder every ``time_step_s`` or ``distance_step_m`` (``analysis.export``),
     as ``profile_every_<step>.csv`` and ``.json`` beside it (the JSON: units, step, rows). Returns
     (table, csv path, json path)."""
     saved = load_result(result_dir)
+    span, unit = (saved.trajectory.time[-1], "s") if time_step_s is not None else (saved.trajectory.nodes[-1], "m")
+    rows = float(span) / (time_step_s if time_step_s is not None else distance_step_m) + 2
+    if rows > MAX_EXPORT_ROWS:
+        raise InputError(problem("command line", "--every", f"a step of {time_step_s or distance_step_m:g} {unit} over "
+                                 f"the run's {span:.0f} {unit} is {rows:,.0f} rows, above the {MAX_EXPORT_ROWS:,} "
+                                 f"exported (a step of at least {float(span) / MAX_EXPORT_ROWS:.2g} {unit})"))
     table = fixed_step(saved.trajectory, saved.handle, time_step_s, distance_step_m, saved.advice)
     step = f"{time_step_s:g}s" if time_step_s is not None else f"{distance_step_m:g}m"
     csv, js = (Path(result_dir) / f"profile_every_{step}.{ext}" for ext in ("csv", "json"))

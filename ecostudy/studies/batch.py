@@ -22,7 +22,7 @@ from ecostudy.core.types import Timing
 from ecostudy.das.methods import das_columns
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
-from ecostudy.io.store import Store
+from ecostudy.io.store import Store, check_one_study
 from ecostudy.core.status import parsed
 from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
@@ -239,6 +239,9 @@ def kind_named(kind):
         raise InputError(problem("command line", "--kind", exc.args[0]))
 
 
+ONE_STUDY = ("network", "simulate", "heavyhaul")  # kinds whose folder holds one study file's results
+
+
 def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False, out=None, progress=None,
                  draw=None, compute=None, spec=None):
     """A study of ``kind`` already expanded (from a study file, or from a command's options: ``where``
@@ -255,6 +258,8 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
         # computed now (``compute``) is checked by its caller
         spec.size(Path(where), expanded.cases, workers)
     output = check_output_dir(out or expanded.output, (spec.table_file, "results.sqlite", *expanded.inputs))
+    if kind in ONE_STUDY and expanded.cases:
+        check_one_study(output, expanded.cases[0]["study"])
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
     counts, rows = stored_rows(expanded.cases, output / "results.sqlite", spec.task, workers, dask, retry_failed,

@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy import __version__
-from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KMH, KN, KWH
 from ecostudy.heavyhaul.airbrake import application_time
@@ -52,11 +52,27 @@ def _reference(s, path, consist, track, from_stop, to_stop):
     if r.table is not None:
         where = path.parent / r.table
         table = number_columns(where, ("distance_m", "speed_kmh"))  # text, NaN, a missing column: one line
-        return table_reference(table["distance_m"], table["speed_kmh"], str(where))
+        distance, speed = table["distance_m"], table["speed_kmh"]
+        found = [(i + 1, "distance_m", f"{distance[i + 1]:g} after {distance[i]:g}: the distances must increase")
+                 for i in np.flatnonzero(np.diff(distance) <= 0)[:1]]
+        found += [(i, column, f"{values[i]:g} is below 0") for column, values in table.items()
+                  for i in np.flatnonzero(values < 0)[:1]]
+        if found:  # the first by row, numbered as a spreadsheet shows it (the header is row 1)
+            i, column, what = min(found)
+            raise InputError(problem(where, f"{column}, row {i + 2}", what))
+        extra = [c for c in pd.read_csv(where, nrows=0).columns if c not in ("distance_m", "speed_kmh")]
+        if extra:
+            warnings.warn(problem(where, ", ".join(map(str, extra)), "not read: a reference table is distance_m and "
+                                  "speed_kmh"), EcostudyWarning, stacklevel=2)
+        return table_reference(distance, speed, str(where))
     supplement = None if r.supplement_percent is None else r.supplement_percent / 100
     lead = r.limit_lead_samples * s.sample_time_s + (application_time(consist) if s.air_brake else 0.0)  # the pipe's lateness
-    return optimal_reference(consist, track, from_stop, to_stop, r.running_time_s, supplement, r.points,
-                             r.service_deceleration_mps2, lead)[0]
+    try:
+        return optimal_reference(consist, track, from_stop, to_stop, r.running_time_s, supplement, r.points,
+                                 r.service_deceleration_mps2, lead)[0]
+    except InfeasibleError as exc:  # the single mass cannot run so fast: the study's field, by name
+        field = "reference.running_time_s" if r.running_time_s is not None else "reference.supplement_percent"
+        raise InfeasibleError([problem(path, field, f"infeasible: {p.removeprefix('infeasible: ')}") for p in exc.problems])
 
 
 def expand(path):
@@ -90,6 +106,10 @@ def expand(path):
         problems.append(problem(path, "rate_kN_per_sample", f"{s.rate_kN_per_sample:g} kN per sample takes {ramp:.3g} "
                                 f"samples to reach the {needed / KN:.0f} kN the train needs on the ruling grade; the "
                                 f"trip has {reference.running_time / s.sample_time_s:.0f}"))
+    if s.max_samples * s.sample_time_s < reference.running_time:  # every run would stop short, flagged, at the cap
+        problems.append(problem(path, "max_samples", f"{s.max_samples} samples of {s.sample_time_s:g} s (sample_time_s) "
+                                f"end {s.max_samples * s.sample_time_s:.3g} s in, before the reference's "
+                                f"{reference.running_time:.0f} s trip ends"))
     if problems:
         raise InputError(problems)
     longest = max(h.np for h in s.horizons) * s.sample_time_s

@@ -20,9 +20,11 @@ import numpy as np
 import pandas as pd
 
 from ecostudy import __version__
+from ecostudy.core.errors import InfeasibleError, InputError, problem
 from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import load_network_study, track_document, train_document, validate
 from ecostudy.io.schemas import NetworkStudyFile
+from ecostudy.io.store import check_one_study
 from ecostudy.io.writers import check_output_dir
 from ecostudy.network import fleet as fleets
 from ecostudy.network.strategies import DEAREST_FIRST, one_strategy, solve_independent
@@ -44,11 +46,18 @@ def expand_network(path, workers=1, pool=None, note=None, out=None):
     command is refused (unless forced) and the output folder checked."""
     path = Path(path)
     st = load_network_study(path)
+    if st.buffer is not None and st.buffer >= st.track.length:
+        raise InputError(problem(path, "buffer_m", f"{st.buffer:g} m is not shorter than the line ({st.track.length:g} m): "
+                                 "no train could follow another"))
     check_network_study(st, path, workers)
     output = check_output_dir(Path(out) if out else st.output, ("network_substation.csv", "results.sqlite"))
+    check_one_study(output, st.name)  # before the fleet's first runs are solved
     s = validate(NetworkStudyFile, read_document(path), path)
-    fl = fleets.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
-                     st.supply, st.points, st.buffer, pool, st.supplement)
+    try:
+        fl = fleets.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
+                         st.supply, st.points, st.buffer, pool, st.supplement)
+    except InfeasibleError as exc:  # a running time below a segment's all-out time: the study's field, by name
+        raise InfeasibleError([problem(path, "running_times_s", p) for p in exc.problems]) from None
     if note:
         note(f"{len(st.names)} trains, {len(st.stops) - 1} segments ({', '.join(f'{t:.1f}' for t in fl.asked_times)} s "
              f"before rounding to {st.dt} s steps), {fl.steps} steps")

@@ -24,13 +24,15 @@ The constants are measured on this project's shared 2-core machine (pessimistic)
   whole-journey NLP (every segment at once) and every split's runs, one after the other
   (:func:`check_journey`).
 """
+from itertools import groupby
 from pathlib import Path
 
 import numpy as np
 
 from ecostudy.core.budget import check_run, check_study
+from ecostudy.heavyhaul.linear import virtual_car_count
 from ecostudy.io.documents import read_document
-from ecostudy.io.loaders import validate
+from ecostudy.io.loaders import consist_from_document, validate
 from ecostudy.io.loopfile import SimulateFile
 from ecostudy.studies import closedloop
 from ecostudy.studies.batch import STUDY_KINDS
@@ -40,6 +42,8 @@ from ecostudy.studies.estimate import RUN_BYTES_PER_POINT, check_closed_loop, ch
 NETWORK_SECONDS_PER_STEP = 0.02
 HEAVYHAUL_SECONDS_PER_SAMPLE = {1: 0.5}  # f = 1: one locomotive group per car, the largest QP
 HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED = 0.15
+HEAVYHAUL_MEASURED_INPUTS = {1: 1224}  # the QP inputs of those measurements: 204 cars x Nc = 6 (f = 1)
+HEAVYHAUL_MEASURED_INPUTS_GROUPED = 132  # 22 virtual cars x Nc = 6 (f = 10)
 
 
 def check_run_study(path, workers=1):
@@ -91,17 +95,32 @@ def check_network_study(study, path, workers=1):
                 workers)
 
 
-def heavyhaul_runs(study, reference, cases):
+def heavyhaul_runs(study, reference, cases, path=None):
     """Seconds of each run of a heavy-haul study (its samples, up to ``max_samples``):
-    :func:`ecostudy.studies.heavyhaul.expand`'s study, reference and cases."""
+    :func:`ecostudy.studies.heavyhaul.expand`'s study, reference and cases. A QP of more inputs
+    (virtual cars x Nc) than measured costs the cube of the ratio more a sample (a dense QP); with
+    ``path``, a run estimated above one run's budget is refused (unless forced)."""
     samples = min(study.max_samples, int(np.ceil(1.5 * reference.running_time / study.sample_time_s)))
-    return [samples * HEAVYHAUL_SECONDS_PER_SAMPLE.get(c["labels"]["f"], HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED)
-            for c in cases]
+    kinds = consist_from_document(cases[0]["consist"], "consist").kinds if cases else ()
+    lengths = [len(list(run)) for _, run in groupby(kinds)]
+    out = []
+    for c in cases:
+        f, nc = c["labels"]["f"], c["labels"]["Nc"]
+        inputs = virtual_car_count(lengths, f) * nc
+        measured = HEAVYHAUL_MEASURED_INPUTS.get(f, HEAVYHAUL_MEASURED_INPUTS_GROUPED)
+        seconds = samples * HEAVYHAUL_SECONDS_PER_SAMPLE.get(f, HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED) * max(
+            1.0, inputs / measured) ** 3
+        if path is not None:
+            check_run(path, "horizons", f"{c['scenario']}: {inputs:,} QP inputs (virtual cars x Nc) a sample, "
+                      f"{samples} samples", seconds, 8.0 * inputs ** 2)
+        out.append(seconds)
+    return out
 
 
 def check_heavyhaul_study(path, study, reference, cases, workers=1):
-    """Refuse a heavy-haul study estimated above the command's budget (unless forced)."""
-    check_study(path, "the study's runs", heavyhaul_runs(study, reference, cases), workers)
+    """Refuse a heavy-haul study with a run estimated above one run's budget, or the study above the
+    command's (unless forced)."""
+    check_study(path, "the study's runs", heavyhaul_runs(study, reference, cases, path), workers)
 
 
 def check_compare(where, points):
