@@ -61,7 +61,7 @@ def amsterdam():
 
 @pytest.fixture(scope="session")
 def amsterdam_76s(metro, amsterdam):
-    """Energy-optimal Rokin -> Centraal in 76 s (thesis 000 §4.4), K = 1000."""
+    """Energy-optimal Rokin -> Centraal in 76 s (Farooqi 2018 §4.4), K = 1000."""
     return solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=1000)
 
 

@@ -2,7 +2,7 @@
 
 With constant maximum traction F, constant braking force B and constant resistance R on level
 track the optimal control is full traction to a speed V, cruise at V, coast to a speed W and
-brake at full force (Howlett & Pudney; thesis 000 eq. 2.15). For a running time T the optimum is
+brake at full force (Howlett & Pudney; Farooqi 2018 eq. 2.15). For a running time T the optimum is
 found by a search over V, with W fixed by the time constraint.
 """
 import pytest
@@ -87,7 +87,7 @@ def test_constant_resistance_optimum_has_no_cruise(flat):
 
 @pytest.mark.parametrize("T", [77.99, 95.0, 110.0])
 def test_flat_track_with_davis_resistance_is_ma_cr_co_mb(T):
-    """Thesis 001 §9.1 flat trip, one speed limit, quadratic resistance (thesis 001 Fig. 9.1)."""
+    """Yazhemsky 2017 §9.1 flat trip, one speed limit, quadratic resistance (Yazhemsky 2017 Fig. 9.1)."""
     from .conftest import TRACKS, TRAINS
     r = solve_run(load_track(TRACKS / "thesis001_flat_1km.yaml"), load_train(TRAINS / "thesis001_commuter.yaml"),
                   "A", "B", Timing(running_time=T), points=500)

@@ -1,4 +1,4 @@
-"""Thesis 001 Chs. 9-10 in closed loop: the convex controller (SOCP 6.10, Clarabel) re-solved at
+"""Yazhemsky 2017 Chs. 9-10 in closed loop: the convex controller (SOCP 6.10, Clarabel) re-solved at
 10 Hz on a plant integrated by DOP853, against the published trips (tests/data/
 thesis001_closed_loop_published.csv), a following train, and the uncertainty trends of Ch. 10."""
 import numpy as np
@@ -17,7 +17,7 @@ from .conftest import DATA, TRACKS, TRAINS
 
 pytestmark = pytest.mark.slow
 PUBLISHED = pd.read_csv(DATA / "thesis001_closed_loop_published.csv", dtype={"figure": str}).to_dict("records")
-TS = 0.1  # thesis 001 Ch.9: measured and re-solved every 100 ms
+TS = 0.1  # Yazhemsky 2017 Ch.9: measured and re-solved every 100 ms
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,5 @@
 """Closed-loop groundwork (control/): the loop, open-loop replay, re-planning from the measured
-state on one movable model, and the Kalman mass estimator of thesis 001 §10.3 (eqs. 10.5-10.8)."""
+state on one movable model, and the Kalman mass estimator of Yazhemsky 2017 §10.3 (eqs. 10.5-10.8)."""
 import numpy as np
 import pytest
 
@@ -44,7 +44,7 @@ def test_the_mass_estimator_finds_a_heavier_train_from_what_it_measures(metro_pl
 
 @pytest.mark.slow
 def test_replanning_with_the_estimator_stops_a_heavier_train_where_open_loop_cannot(metro_plan, metro, amsterdam):
-    """Thesis 001 Ch. 10 in kind: with a 10 % heavier train, the plan replayed on its clock stops
+    """Yazhemsky 2017 Ch. 10 in kind: with a 10 % heavier train, the plan replayed on its clock stops
     13.7 m short; re-planned every second from the measured state, with the mass estimate fed to
     the model, the train stops within 1 m of the stop, about on time."""
     heavy = Plant(metro_plan.segment, metro, Truth(mass=1.1))
@@ -61,7 +61,7 @@ def test_replanning_with_the_estimator_stops_a_heavier_train_where_open_loop_can
 
 def test_move_blocking_counts_agree_with_fig_4_2_and_with_eq_4_8():
     from ecostudy.control.blocking import blocks, free_moves
-    # thesis 000 Fig. 4.2: L = 20, kf = 60
+    # Farooqi 2018 Fig. 4.2: L = 20, kf = 60
     assert free_moves(0, 60, 20) == 3 and free_moves(10, 60, 20) == 3 and free_moves(20, 60, 20) == 2
     assert free_moves(59, 60, 20) == 1
     assert blocks(10, 60, 20)[:12] == [1] * 10 + [2] * 2  # the first block shrinks as k advances

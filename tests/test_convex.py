@@ -1,4 +1,4 @@
-"""Thesis 001's convex controller program (ocp/convex.py, eq. 6.10) solved by Clarabel: the
+"""Yazhemsky 2017's convex controller program (ocp/convex.py, eq. 6.10) solved by Clarabel: the
 relaxation is exact, the plan drives the independent plant to the stop, its all-out time is the
 Ipopt NLP's, the envelope pieces, the grid ahead, a leading train's clock, and bad study input."""
 import numpy as np

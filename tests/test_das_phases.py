@@ -1,4 +1,4 @@
-"""DAS `phases` and `minlp` (thesis 000 Ch. 5, §4.2) against ATO and `round`; the driver re-simulation.
+"""DAS `phases` and `minlp` (Farooqi 2018 Ch. 5, §4.2) against ATO and `round`; the driver re-simulation.
 
 Acceptance of the DAS issue, measured on the shipped metro and regional cases at their published
 running times (76 s, 80 s): DAS energy >= ATO energy; `phases` within 3 % of ATO; `phases` and

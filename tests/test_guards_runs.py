@@ -18,7 +18,7 @@ LINE4 = TRACKS / "metro_line_4stops.yaml"
 
 # ----------------------------------------------------------------------------------- unclear messages
 def weak_train(tmp_path, share):
-    """The thesis 001 commuter train with ``share`` of its traction force table."""
+    """The Yazhemsky 2017 commuter train with ``share`` of its traction force table."""
     text = (TRAINS / "thesis001_commuter.yaml").read_text()
     table = re.search(r"force_kN: \[([^\]]*)\]", text)
     forces = ", ".join(f"{float(x) * share:g}" for x in table.group(1).split(","))

@@ -62,7 +62,7 @@ def test_every_car_feels_its_own_grade():
 
 
 def test_the_ore_train_in_steady_pull_keeps_the_static_in_train_forces():
-    """Paper 002's train (2 + 200 + 2, 13 704 t) at 15 m/s on flat track, the four locomotives
+    """Zhang & Zhuan's train (2 + 200 + 2, 13 704 t) at 15 m/s on flat track, the four locomotives
     each pulling a quarter of the whole train's running resistance, started in the quasi-static
     state: it holds its speed for a minute and every coupler keeps carrying the sum of (effort -
     resistance) of the cars ahead (within 1 N): tension behind the head locomotives, compression
@@ -103,7 +103,7 @@ def test_a_train_started_unstretched_swings_slowly_about_the_static_forces():
 
 
 def test_the_design_model_predicts_the_plant_over_one_sample():
-    """Paper 002 eq. 2 (linearised, damping left out, ZOH at Ts = 20 s) against the nonlinear
+    """Zhang & Zhuan eq. 2 (linearised, damping left out, ZOH at Ts = 20 s) against the nonlinear
     cascade plant: +50 kN on each locomotive from the quasi-static state at 15 m/s moves the mean
     speed by 0.2916 m/s in the model and 0.2902 m/s in the plant (0.5 %); the head and middle cars
     within 3 %; the coupler-force changes behind the head within 6 %. With c1 = 0 the model keeps
@@ -168,7 +168,7 @@ def test_the_fence_method_keeps_the_slow_mode_and_the_momentum():
 
 
 def test_the_receding_horizon_controller_tracks_a_new_reference_within_the_limits():
-    """Paper 002's RHC (eqs. 4-8; Ts = 20 s, Np = 8, Nc = 4, K_f = 10, K_v = 60, K_e = 10,
+    """Zhang & Zhuan's RHC (eqs. 4-8; Ts = 20 s, Np = 8, Nc = 4, K_f = 10, K_v = 60, K_e = 10,
     K_b = 40) on the fence-reduced model (f = 10, 22 virtual cars) drives the full 204-car plant
     on flat track from 15 m/s to a new reference of 20 m/s: the mean speed never exceeds the
     reference (eq. 7), reaches it within 0.05 m/s in 8 samples, in-train forces stay far below

@@ -30,7 +30,7 @@ def level(grade=0.0):
 
 
 def test_the_fence_arithmetic_of_the_paper():
-    """Paper 002 §III-B: f = 10 gives n_f = 22 virtual cars; its condensed QP has n Nc = 1224 -> 132
+    """Zhang & Zhuan §III-B: f = 10 gives n_f = 22 virtual cars; its condensed QP has n Nc = 1224 -> 132
     variables and (6n - 2) Nc = 7332 -> 780 constraints for Np = 8, Nc = 6. ecostudy keeps the states
     (sparse, banded): Nc n inputs, Np (2n - 1) states, Np (2n - 1) dynamics + Nc m rate + Np mean-speed +
     Np (n - 1) coupler rows."""

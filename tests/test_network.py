@@ -44,7 +44,7 @@ def test_regeneration_is_used_by_a_neighbour_or_lost_behind_the_diode():
 
 
 def test_current_limits_cut_traction_and_regeneration():
-    """thesis 000 Fig. 7.7: a train draws at most max_current and feeds at most max_regen_current;
+    """Farooqi 2018 Fig. 7.7: a train draws at most max_current and feeds at most max_regen_current;
     traction beyond is not served, regeneration beyond goes to the rheostat; the balance holds."""
     from dataclasses import replace
     limited = replace(SUPPLY, max_current=1500.0, max_regen_current=400.0)
@@ -81,7 +81,7 @@ def test_rule_7_11_sees_regeneration_on_eq_7_8_as_written():
 
 @pytest.mark.slow
 def test_time_domain_leg_matches_the_space_domain_optimum_on_flat_track():
-    """Same physics on a common clock: the thesis 001 flat trip within 0.05 % at dt = 0.25 s."""
+    """Same physics on a common clock: the Yazhemsky 2017 flat trip within 0.05 % at dt = 0.25 s."""
     track, train = load_track(TRACKS / "thesis001_flat_1km.yaml"), load_train(TRAINS / "thesis001_commuter.yaml")
     space = solve_run(track, train, "A", "B", Timing(running_time=95.0), points=1000)
     case = prepare(track, train, "A", "B", 1000)
@@ -367,7 +367,7 @@ def test_voltage_rule_lowers_substation_energy_with_three_trains():
 
 @pytest.mark.slow
 def test_joint_optimum_keeps_the_current_limits_that_independent_runs_break():
-    """With a 2500 A traction and 1500 A regeneration limit per train (thesis 000 Fig. 7.7),
+    """With a 2500 A traction and 1500 A regeneration limit per train (Farooqi 2018 Fig. 7.7),
     independent runs ask for traction the line cannot serve (flagged); the joint NLP bounds the
     pantograph currents and serves all of it."""
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")

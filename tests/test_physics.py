@@ -7,7 +7,7 @@ from ecostudy.core import physics
 
 
 def test_davis_resistance_scalar_and_array():
-    # Amsterdam metro, thesis 000 §4.4: A + B v + C v^2 at 10 m/s = 3975.9 + 243.6 + 438
+    # Amsterdam metro, Farooqi 2018 §4.4: A + B v + C v^2 at 10 m/s = 3975.9 + 243.6 + 438
     assert_allclose(physics.davis_resistance(10.0, 3975.9, 24.36, 4.38), 4657.5)
     assert_allclose(physics.davis_resistance(np.array([0.0, 10.0]), 3975.9, 24.36, 4.38), [3975.9, 4657.5])
 

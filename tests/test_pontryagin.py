@@ -1,4 +1,4 @@
-"""The Pontryagin regime check (thesis 000 eq. 2.17) on optimal runs of every shipped case."""
+"""The Pontryagin regime check (Farooqi 2018 eq. 2.17) on optimal runs of every shipped case."""
 import numpy as np
 import pytest
 
@@ -78,7 +78,7 @@ def test_check_command_passes_an_optimum_and_rejects_a_poor_profile(tmp_path):
 
 
 def _regenerative(train, eta_t=0.9, eta_r=0.8, force_kN=400):
-    """The thesis 001 commuter with an electric brake of ``force_kN`` (the shipped file has none)."""
+    """The Yazhemsky 2017 commuter with an electric brake of ``force_kN`` (the shipped file has none)."""
     import dataclasses
 
     from ecostudy.core.physics import Envelope
@@ -88,7 +88,7 @@ def _regenerative(train, eta_t=0.9, eta_r=0.8, force_kN=400):
 
 def test_net_energy_runs_obey_eq_7_4_with_regenerative_braking():
     """Flat track, one limit, regeneration credited: MA-CR-CO-RB(-MB); CO where eta < psi < 1 and
-    RB where psi = eta = eta_T eta_R (thesis 000 eq. 7.4); >= 95 % agreement."""
+    RB where psi = eta = eta_T eta_R (Farooqi 2018 eq. 7.4); >= 95 % agreement."""
     train = _regenerative(load_train(TRAINS / "thesis001_commuter.yaml"))
     r = solve_run(load_track(TRACKS / "thesis001_flat_1km.yaml"), train, "A", "B", Timing(running_time=95.0),
                   objective="net_energy", points=300)

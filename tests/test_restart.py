@@ -87,7 +87,7 @@ def test_a_window_behind_the_start_or_a_start_off_the_segment_is_refused(metro, 
 
 @pytest.mark.slow  # over 7 s: make test stays under 3 min; CI runs it
 def test_the_das_phases_nlp_replans_from_a_mid_run_state(regional_ato):
-    """The phases NLP (thesis 000 Ch. 5) as a movable model: from states on its own optimum in the
+    """The phases NLP (Farooqi 2018 Ch. 5) as a movable model: from states on its own optimum in the
     first sector (where traction is still to come) the tail's traction work is the same."""
     from ecostudy.analysis.regimes import guess_from_result
     from ecostudy.ocp import phases

@@ -1,4 +1,4 @@
-"""RSPC (thesis 000 Ch. 6): the six DAS modes enumerated over a short receding horizon, with the
+"""RSPC (Farooqi 2018 Ch. 6): the six DAS modes enumerated over a short receding horizon, with the
 braking-distance trigger and adaptive sampling of Alg. 6, driving real plants."""
 import numpy as np
 import pytest
@@ -64,7 +64,7 @@ def test_no_admissible_sequence_brakes(case):
 def test_the_loop_applies_only_das_modes_arrives_on_time_and_costs_between_coasting_and_all_out(where, metro,
                                                                                                  amsterdam):
     """Only allowed modes are applied; arrival on time or early; energy between the
-    coasting-only industrial strategy (thesis 000 Table 6.1's 'eco-drive coasting') and all-out;
+    coasting-only industrial strategy (Farooqi 2018 Table 6.1's 'eco-drive coasting') and all-out;
     stops on the mark. Both the model train and the corners of +-10 % parameters."""
     if where == "amsterdam":
         case, arrival = prepare(amsterdam, metro, "Rokin", "Centraal", 400), 76.0

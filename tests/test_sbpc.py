@@ -1,4 +1,4 @@
-"""SBPC (thesis 000 Ch. 4): the blocked FHOCP from any sample and state, and the loop."""
+"""SBPC (Farooqi 2018 Ch. 4): the blocked FHOCP from any sample and state, and the loop."""
 import numpy as np
 import pytest
 

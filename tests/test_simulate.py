@@ -73,7 +73,7 @@ def test_sbpc_with_a_driver_on_das_levels_runs_in_a_study(tmp_path):
 
 
 def test_rspc_runs_at_its_own_sample_time_and_only_runs_what_it_is_asked(tmp_path):
-    """A controller's sample_time_s overrides the study's (thesis 000's controllers at 0.38 s beside
+    """A controller's sample_time_s overrides the study's (Farooqi 2018's controllers at 0.38 s beside
     a 10 Hz one in one study); --only computes one controller's runs and the rest stay 'missing'
     without failing the command; the next run without --only computes them."""
     path = study(tmp_path, track=str(TRACKS / "amsterdam_rokin_centraal.yaml"), train=str(TRAINS / "amsterdam_metro.yaml"),

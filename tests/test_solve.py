@@ -199,7 +199,7 @@ def test_net_energy_without_regenerative_braking():
 
 
 def test_rotating_mass_slows_acceleration_but_not_gravity(tmp_path):
-    """Inertia uses the effective mass M, gravity and the grade the static mass Ms (thesis 000 eq. 2.1-2.2):
+    """Inertia uses the effective mass M, gravity and the grade the static mass Ms (Farooqi 2018 eq. 2.1-2.2):
     with a 10 % rotating-mass allowance the first interval of the all-out run accelerates at (F - A) / M."""
     from .conftest import write_yaml
     base = {"name": "t", "source": "test", "mass_t": 100.0, "length_m": 0.0,

@@ -1,4 +1,4 @@
-"""SPPC (thesis 000 Ch. 5): the movable phases NLP re-solved from every sample, applying DAS modes."""
+"""SPPC (Farooqi 2018 Ch. 5): the movable phases NLP re-solved from every sample, applying DAS modes."""
 import numpy as np
 import pytest
 
@@ -8,7 +8,7 @@ from ecostudy.control.sppc import Sppc
 from ecostudy.core.plant import Plant
 from ecostudy.core.types import State, Timing
 
-TS = 0.38  # thesis 000 §4.4's sample
+TS = 0.38  # Farooqi 2018 §4.4's sample
 MODES = {"traction 1", "traction 0.75", "traction 0.5", "cruise", "coast", "brake"}
 
 

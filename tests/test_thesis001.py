@@ -1,8 +1,8 @@
-"""Thesis 001 Ch.9 trips at their published arrival times.
+"""Yazhemsky 2017 Ch.9 trips at their published arrival times.
 
 The published controller keeps a 1 m/s speed buffer and a 20 % braking reserve, so the true
 optimum of the same model can only use less energy than the published figure.
-Published numbers: tests/data/thesis001_published.csv (thesis 001 Figs. 9.1-9.4).
+Published numbers: tests/data/thesis001_published.csv (Yazhemsky 2017 Figs. 9.1-9.4).
 """
 import pandas as pd
 import pytest

@@ -1,4 +1,4 @@
-"""Pontryagin regime check: does a profile obey the switching conditions of thesis 000 eq. 2.17
+"""Pontryagin regime check: does a profile obey the switching conditions of Farooqi 2018 eq. 2.17
 (eq. 7.4 when regenerated energy is credited)?
 
 The costate of the speed dynamics is estimated from the multipliers mu_k of the discretised

@@ -1,4 +1,4 @@
-"""Driving regimes of a profile, read off the control (thesis 000 eqs. 2.15, 2.17, 7.2, 7.4).
+"""Driving regimes of a profile, read off the control (Farooqi 2018 eqs. 2.15, 2.17, 7.2, 7.4).
 
 Each interval is classified by where its forces sit against the envelopes that bind them in
 the NLP (a table the lower of its values at the interval's two ends, a power limit at its mean speed):

@@ -1,7 +1,7 @@
 """The replayed dynamics of a logged run: the energy balance a train with given parameters obeys
 under the logged work at the wheel, run by run between stops.
 
-Energy balance per unit effective mass from the departure (thesis 000 eq. 2.1, Farooqi 2018,
+Energy balance per unit effective mass from the departure (Farooqi 2018 eq. 2.1, Farooqi 2018,
 multiplied by v and integrated over time):
 
     v(t)^2 / 2 = [W(t) - A I_1(t) - B I_2(t) - C I_3(t) - Ms w_fixed(t)] / M
@@ -16,7 +16,7 @@ initial speed is fitted) and ends where it stands again.
 
 The logged speed is the observation (per unit mass, so its noise does not sit in a regressor and
 bias the mass low); the noise of the logged work adds up along a run as a random walk, which a
-scalar Kalman filter whitens (:meth:`Run.gains`, :meth:`Run.whitened`; thesis 001 Ch. 10,
+scalar Kalman filter whitens (:meth:`Run.gains`, :meth:`Run.whitened`; Yazhemsky 2017 Ch. 10,
 Yazhemsky 2017, estimates the mass with a scalar Kalman filter too). Samples below
 :data:`MIN_SPEED` (smoothed) are left out: there the speed says little about the energy.
 """

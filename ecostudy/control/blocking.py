@@ -1,4 +1,4 @@
-"""Move blocking of the shrinking-horizon controller SBPC (thesis 000 §4.2, note 003).
+"""Move blocking of the shrinking-horizon controller SBPC (Farooqi 2018 §4.2, Farooqi, Fagiano & Colaneri).
 
 The horizon runs from sample k to the final sample kf; the predicted inputs are held over blocks
 of L samples aligned to absolute multiples of L (Fig. 4.2), so the first block shrinks as k

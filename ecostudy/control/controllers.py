@@ -3,11 +3,11 @@
 - :class:`OpenLoop`: the full-horizon ATO optimum replayed, by position or on its clock: the
   baseline that shows what feedback buys.
 - :class:`Replanning`: the space-domain NLP re-solved from the measured state every sample
-  (thesis 001 §4.2, Alg. 1: the horizon recedes to the measured position; here with the
+  (Yazhemsky 2017 §4.2, Alg. 1: the horizon recedes to the measured position; here with the
   movable NLP of ``ocp.restart`` instead of the SOCP of Ch. 6), its first control applied. One
   model and NL file for the whole trip, warm from the previous plan; a mass estimate, when one is
   given, changes the model's mass by a bound.
-- :class:`Convex`: thesis 001's real-time controller (Alg. 1): the SOCP 6.10 of
+- :class:`Convex`: Yazhemsky 2017's real-time controller (Alg. 1): the SOCP 6.10 of
   ``ocp.convex`` solved from every measured state on the grid ahead, its first force applied;
   optionally following a leading train's clock (eq. 6.9) and fed by a mass estimator.
 """
@@ -85,7 +85,7 @@ class Replanning(Fallback):
 
     def __init__(self, case, arrival, estimator=None, final_m=1.0, brake_reserve=0.1, options=None):
         self.case, self.arrival, self.estimator, self.final_m = case, float(arrival), estimator, final_m
-        # plan with a share of the service brake held back (thesis 001 eq. 6.8's braking reserve):
+        # plan with a share of the service brake held back (Yazhemsky 2017 eq. 6.8's braking reserve):
         # between samples the handle is held, and a plan that brakes at the limit is then late
         model = case.train.with_brake_reserve(brake_reserve)
         self.replanner = Replanner(dataclasses.replace(case, train=model), window=(0.0, self.arrival),
@@ -136,7 +136,7 @@ def force_handle(train, speed, force):
 
 
 class Convex(Fallback):
-    """Thesis 001 Alg. 1: every sample, solve ``program`` (``ocp.convex.ConvexProgram``) from the
+    """Yazhemsky 2017 Alg. 1: every sample, solve ``program`` (``ocp.convex.ConvexProgram``) from the
     measured state and apply the first interval's force as a handle held to the next sample.
 
     ``arrival``: (T_min, T_max) [s] on the trip's clock; ``lead``: a leading train's clock as a
@@ -149,7 +149,7 @@ class Convex(Fallback):
     eq. 6.8 in full (``reserve`` counts these samples; the solve showed that no plan, the shifted
     one included, stops the train with the planned brake), any other to the last accepted plan at
     the measured position while the train is within ``tracking`` [m/s] of its speed there, else
-    to full braking. ``full_reserve=False`` is thesis 001's controller, which drives the leaning plan.
+    to full braking. ``full_reserve=False`` is Yazhemsky 2017's controller, which drives the leaning plan.
     A plan with max |rho s - 1| above ``EXACT`` after the tightening rounds is driven and counted
     (``inexact``). Per solve it records the time, the gap and whether the arrival window had to be
     dropped.
@@ -224,7 +224,7 @@ def leader_clock(states, separation):
 
 class Quantised:
     """A driver-advisory loop: the ``controller``'s handle applied as the nearest of the train's
-    DAS ``levels`` (thesis 000 §3.1.2 and §4.4: {-1, 0, 0.5, 0.75, 1}), optionally ``delay``
+    DAS ``levels`` (Farooqi 2018 §3.1.2 and §4.4: {-1, 0, 0.5, 0.75, 1}), optionally ``delay``
     samples late (the driver's reaction time)."""
 
     def __init__(self, controller, levels, delay=0):

@@ -1,4 +1,4 @@
-"""RSPC: receding-horizon switched predictive control (thesis 000 Ch. 6, Alg. 5 and the adaptive Alg. 6).
+"""RSPC: receding-horizon switched predictive control (Farooqi 2018 Ch. 6, Alg. 5 and the adaptive Alg. 6).
 
 Every sample the controller enumerates the switching sequences chi = [sigma(0|k), ..., sigma(N-1|k)]
 over the six DAS modes of Remark 6.1.1 (traction at each DAS level, cruise, coast, full service

@@ -1,9 +1,9 @@
-"""SBPC: shrinking-horizon move-blocking predictive control (thesis 000 Ch. 4, note 003).
+"""SBPC: shrinking-horizon move-blocking predictive control (Farooqi 2018 Ch. 4, Farooqi, Fagiano & Colaneri).
 
 Every sample k (T_s) the controller solves the FHOCP of ``ocp.blocked`` from the measured state
 to the terminal sample k_f and applies the first predicted input (Alg. 1). One model and NL file
 serve the whole trip; each solve starts from the previous solution, which with blocks aligned to
-absolute multiples of L is exactly the shifted tail of thesis 000 Prop. 4.2.1.
+absolute multiples of L is exactly the shifted tail of Farooqi 2018 Prop. 4.2.1.
 
 Variants:
 - ``nominal`` (Alg. 1): the terminal set as a hard constraint (gamma = 0). When the plant has
@@ -28,7 +28,7 @@ from ecostudy.ocp.solver import IPOPT
 
 VARIANTS = ("nominal", "two_step", "multi")
 # the FHOCP with the states as variables (Ipopt on ``ocp.blocked``), or condensed to the block
-# handles (SLSQP on ``ocp.condensed``, as thesis 000's fmincon: the time of a solve falls with L)
+# handles (SLSQP on ``ocp.condensed``, as Farooqi 2018's fmincon: the time of a solve falls with L)
 TRANSCRIPTIONS = ("simultaneous", "condensed")
 # each solve starts from the previous one (the shifted tail), primal and dual (docs/closed_loop.md)
 OPTIONS = {**IPOPT["receding"], **WARM_START}
@@ -37,7 +37,7 @@ OPTIONS = {**IPOPT["receding"], **WARM_START}
 class Sbpc(Fallback):
     """``case``: a prepared case (``ocp.problem.prepare``); ``guess_speeds``: a speed profile on its
     grid (e.g. the ATO optimum's) for the first solve; ``omega``: the weight of eq. 4.31 on the
-    terminal distance [per metre], with J in kJ (thesis 000 §4.4 uses 3505); ``transcription``: one
+    terminal distance [per metre], with J in kJ (Farooqi 2018 §4.4 uses 3505); ``transcription``: one
     of ``TRANSCRIPTIONS``."""
 
     def __init__(self, case, running_time, sample_time, block, guess_speeds, variant="nominal", omega=3505.0,

@@ -1,4 +1,4 @@
-"""SPPC: shrinking-horizon parametrised predictive control (thesis 000 Ch. 5, Alg. 3 and Alg. 4).
+"""SPPC: shrinking-horizon parametrised predictive control (Farooqi 2018 Ch. 5, Alg. 3 and Alg. 4).
 
 Every sample the controller re-solves the phases NLP of ``ocp/phases.py`` (eqs. 5.7-5.13: the
 track cut into sectors of constant gradient, curve and limit, each with a fixed sequence of DAS
@@ -33,7 +33,7 @@ train at the limit read a few hundredths over it), has no plan of the NLP, whose
 only last and whose every node ahead is under its limit: no NLP is solved (each such solve had
 ended "infeasible" after 31-183 Ipopt iterations).
 
-Modes (thesis 000 §3.1.2): traction at a DAS level, coasting and full service braking are applied
+Modes (Farooqi 2018 §3.1.2): traction at a DAS level, coasting and full service braking are applied
 as their handle; cruise as the handle that holds the planned force at the measured speed.
 """
 import time

@@ -73,7 +73,7 @@ def coast_speeds(segment: Segment, train: Train, nodes: FloatArray, limits: Floa
 def coasting_profile(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray, fastest: FloatArray,
                      start: int) -> FloatArray:
     """``fastest`` (a profile ending at the stop) up to node ``start``, coasting from there, never
-    above ``fastest``: the eco-drive coasting strategy's profile (thesis 000 Table 6.1) [m/s]."""
+    above ``fastest``: the eco-drive coasting strategy's profile (Farooqi 2018 Table 6.1) [m/s]."""
     coast = coast_speeds(segment, train, nodes, limits, start, fastest[start])
     v = fastest.copy()
     v[start:] = np.minimum(coast[start:], fastest[start:])

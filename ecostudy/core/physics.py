@@ -1,4 +1,4 @@
-"""Point-mass train physics as pure functions (thesis 000 §2.1, thesis 001 Ch.3).
+"""Point-mass train physics as pure functions (Farooqi 2018 §2.1, Yazhemsky 2017 Ch.3).
 
 Every function is written with ``+ - * / **`` only, so it accepts floats, numpy arrays and Pyomo
 expressions alike: the optimisation model and the verifying simulator share one formula.
@@ -26,7 +26,7 @@ Samples: TypeAlias = Sequence[float] | FloatArray  # a table's column, as a list
 
 
 def davis_resistance(speed: Numeric, a: Numeric, b: Numeric, c: Numeric) -> Numeric:
-    """Running resistance R_v = A + B v + C v^2 [N] (thesis 000 eq. 2.2, thesis 001 eq. 3.2).
+    """Running resistance R_v = A + B v + C v^2 [N] (Farooqi 2018 eq. 2.2, Yazhemsky 2017 eq. 3.2).
 
     Parameters
     ----------
@@ -37,7 +37,7 @@ def davis_resistance(speed: Numeric, a: Numeric, b: Numeric, c: Numeric) -> Nume
 
 
 def gradient_force(static_mass: Numeric, gradient: Numeric) -> Numeric:
-    """Gravity component along the track, Ms g tan(alpha) [N] (thesis 000 eq. 2.2).
+    """Gravity component along the track, Ms g tan(alpha) [N] (Farooqi 2018 eq. 2.2).
 
     Parameters
     ----------
@@ -48,7 +48,7 @@ def gradient_force(static_mass: Numeric, gradient: Numeric) -> Numeric:
 
 
 def curve_force(static_mass: Numeric, coefficient: Numeric, curvature: Numeric) -> Numeric:
-    """Curve resistance Ms lambda_t / r_c [N] (thesis 000 eq. 2.2).
+    """Curve resistance Ms lambda_t / r_c [N] (Farooqi 2018 eq. 2.2).
 
     Parameters
     ----------
@@ -260,7 +260,7 @@ def table_width(speeds: Samples, forces: Samples, tolerance: float = 0.002) -> f
 
 def running_resistance(speed: Numeric, davis: Sequence[float], static_mass: float, gradient: Numeric,
                        curve_coefficient: float, curvature: Numeric, roeckl: bool = False) -> Numeric:
-    """Total resistance F_R = R_v(v) + R_g(s) [N] (thesis 000 eq. 2.2); the curve term by
+    """Total resistance F_R = R_v(v) + R_g(s) [N] (Farooqi 2018 eq. 2.2); the curve term by
     Roeckl's formula instead of lambda_t / r when ``roeckl``."""
     a, b, c = davis
     curve = roeckl_force(static_mass, curvature) if roeckl else curve_force(static_mass, curve_coefficient, curvature)
@@ -270,7 +270,7 @@ def running_resistance(speed: Numeric, davis: Sequence[float], static_mass: floa
 def interval_resistance(v0: Numeric, v1: Numeric, davis: Sequence[Numeric], fixed: Numeric) -> Numeric:
     """Mean resistance over an interval between speeds v0 and v1 [N]: the trapezoidal mean of the
     Davis resistance at both ends plus the speed-independent gradient and curve force ``fixed``
-    of the interval (thesis 000 eq. 2.2). The one formula of the NLP, the phases NLP, the
+    of the interval (Farooqi 2018 eq. 2.2). The one formula of the NLP, the phases NLP, the
     time-domain legs and the kinematic profiles; per unit mass when ``davis`` and ``fixed`` are.
     """
     a, b, c = davis
@@ -287,7 +287,7 @@ def moving_share(speed_sum: Numeric, width: float = 0.01) -> Numeric:
 
 
 def acceleration(traction: Numeric, braking: Numeric, resistance: Numeric, mass: Numeric) -> Numeric:
-    """dv/dt = (F_T - F_B - F_R) / M [m/s^2] (thesis 000 eq. 2.1)."""
+    """dv/dt = (F_T - F_B - F_R) / M [m/s^2] (Farooqi 2018 eq. 2.1)."""
     return (traction - braking - resistance) / mass
 
 
@@ -333,6 +333,6 @@ def efficiency(eta: "EfficiencyMap | float", speed: Numeric, force: Numeric) -> 
 def line_energy(ft: Numeric, fr: Numeric, speed: Numeric, ds: Numeric, eta_t: "EfficiencyMap | float",
                 eta_r: "EfficiencyMap | float") -> Numeric:
     """Energy drawn from the line minus energy fed back [J] per interval: F_T ds / eta_T(v, F_T)
-    - eta_R(v, F_R) F_R ds (thesis 000 eq. 7.3 with efficiencies that may depend on speed and
+    - eta_R(v, F_R) F_R ds (Farooqi 2018 eq. 7.3 with efficiencies that may depend on speed and
     force). ``speed`` is the interval's mean speed; floats, arrays or Pyomo expressions."""
     return ft * ds / efficiency(eta_t, speed, ft) - efficiency(eta_r, speed, fr) * fr * ds

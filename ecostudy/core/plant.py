@@ -80,8 +80,8 @@ class Noise:
     position: float = 0.0
     speed: float = 0.0
     seed: int = 0
-    period: float = 0.0  # the acceleration noise is held this long [s] (thesis 001 §10.1: 1 s); 0: per step
-    accelerometer: float = 0.0  # noise of the acceleration reading [m/s^2] (thesis 001 §10.3.5, sigma_A)
+    period: float = 0.0  # the acceleration noise is held this long [s] (Yazhemsky 2017 §10.1: 1 s); 0: per step
+    accelerometer: float = 0.0  # noise of the acceleration reading [m/s^2] (Yazhemsky 2017 §10.3.5, sigma_A)
 
     def read_acceleration(self, mean: float, rng: np.random.Generator) -> float:
         """The accelerometer's reading of the mean acceleration ``mean`` over the last sample."""

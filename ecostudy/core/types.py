@@ -114,7 +114,7 @@ class Supply:
     position: float               # x_sub on the line [m]
     voltage: float = 750.0        # V_s [V]
     resistance: float = 0.01      # R_s [Ohm]
-    line_resistance: float = 25e-6  # r [Ohm/m] (thesis 000 §7.2.1: 25 mOhm/km)
+    line_resistance: float = 25e-6  # r [Ohm/m] (Farooqi 2018 §7.2.1: 25 mOhm/km)
     max_voltage: float = 856.0    # V_max, regeneration cut-off [V] (685/600 of 750 V)
     min_voltage: float = 500.0    # lowest pantograph voltage [V]
     max_current: float = float("inf")        # largest current a train draws [A] (thesis Fig. 7.7)
@@ -171,7 +171,7 @@ class DraftGear:
 
 @dataclass(frozen=True)
 class Consist:
-    """A long train as cars in train order (the head first) joined by couplers, SI (paper 002 eq. 1)."""
+    """A long train as cars in train order (the head first) joined by couplers, SI (Zhang & Zhuan eq. 1)."""
 
     name: str
     kinds: tuple[str, ...]       # "locomotive" | "wagon" per car

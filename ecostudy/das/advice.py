@@ -1,13 +1,13 @@
-"""Driver advice (thesis 000 §3.1.2): a few modes instead of a continuous handle.
+"""Driver advice (Farooqi 2018 §3.1.2): a few modes instead of a continuous handle.
 
 A driver can be told a handle level of the train's ``das_handle_levels`` (traction levels,
 coast 0, full service braking -1) or "hold this speed" (cruise). The advice is the sequence of
 modes with where and when each starts. Methods:
 
-``round``   nearest level to the ATO optimum's handle in every interval (thesis 000 §4.4),
+``round``   nearest level to the ATO optimum's handle in every interval (Farooqi 2018 §4.4),
             re-simulated: the baseline better DAS methods must beat.
 ``phases``  phase lengths of a fixed mode sequence per sector optimised over the whole journey
-            (thesis 000 Ch. 5; ``ocp/phases.py``).
+            (Farooqi 2018 Ch. 5; ``ocp/phases.py``).
 ``minlp``   the mode of every phase chosen by binaries, started from ``phases`` (``das/minlp.py``).
 
 Every advice is re-simulated as a driver would follow it: mode by mode from the advised
@@ -216,7 +216,7 @@ def das_phases(result, points=None):
 
 def nearest_levels(segment, train, nodes, optimal_handle):
     """Nearest DAS handle level (train's ``das_handle_levels``) to the optimal handle of every
-    interval (thesis 000 §4.4), without a cruise mode, re-simulated; it keeps no timetable of its
+    interval (Farooqi 2018 §4.4), without a cruise mode, re-simulated; it keeps no timetable of its
     own, so its arrival and stop errors are part of a comparison."""
     levels = np.asarray(train.das_levels)
     u = levels[np.abs(optimal_handle[:, None] - levels[None, :]).argmin(axis=1)]

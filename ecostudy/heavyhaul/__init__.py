@@ -1,1 +1,1 @@
-"""Feature (layer 4): heavy-haul trains as coupled masses (paper 002): the cascade plant so far."""
+"""Feature (layer 4): heavy-haul trains as coupled masses (Zhang & Zhuan): the cascade plant so far."""

@@ -1,4 +1,4 @@
-"""Paper 002's QP condensed as the paper writes it (the states eliminated: x(k) = G_k U + d_k), for
+"""Zhang & Zhuan's QP condensed as the paper writes it (the states eliminated: x(k) = G_k U + d_k), for
 long trains without fencing: the same program as :class:`~ecostudy.heavyhaul.qp.ConicHorizon`.
 
 Kept sparse, the 204-car train's dynamics rows carry the dense zero-order-hold matrix (a wave

@@ -1,7 +1,7 @@
-"""Paper 002's design model: the cascade train linearised (eq. 2) and discretised by zero-order
+"""Zhang & Zhuan's design model: the cascade train linearised (eq. 2) and discretised by zero-order
 hold at Ts, and the fence method's reduced train of virtual cars.
 
-Linearisation (paper 002 §II-A step 1): the effort is shifted by the speed-independent and
+Linearisation (Zhang & Zhuan §II-A step 1): the effort is shifted by the speed-independent and
 quadratic parts of the resistance at the operating point, u'_i = u_i - m_i (c0_i + c2_i v_i^2) -
 f_p,i, so the origin is an equilibrium, and coupler damping is left out:
 
@@ -9,7 +9,7 @@ f_p,i, so the origin is an equilibrium, and coupler damping is left out:
 
 with the state x = [v_1..v_n, x_1..x_n-1] (speeds, coupler extensions beyond the free length).
 
-Fence method (paper 002 §III-C): f consecutive cars of one kind form a virtual car, never mixing
+Fence method (Zhang & Zhuan §III-C): f consecutive cars of one kind form a virtual car, never mixing
 locomotives and wagons, so n_f = sum over the consist's runs of ceil(run / f). The paper does not
 say how cars merge; ecostudy's choice (docs/heavyhaul.md): a virtual car's mass is the sum of its
 cars', its resistance coefficients are their mass-weighted means, the coupler between two virtual
@@ -25,7 +25,7 @@ from scipy.linalg import expm
 
 
 class DesignModel(NamedTuple):
-    """x(k+1) = A x(k) + B u'(k) at sample time ``ts`` (paper 002 eq. 2), and the continuous pair."""
+    """x(k+1) = A x(k) + B u'(k) at sample time ``ts`` (Zhang & Zhuan eq. 2), and the continuous pair."""
 
     A: np.ndarray
     B: np.ndarray
@@ -114,7 +114,7 @@ class Fence(NamedTuple):
         reduced objective the full train's sum over its cars and couplers, as nearly as the virtual
         cars allow (a virtual car's speed counts for its cars, its effort's square for the sum of its
         cars' squares, a virtual coupler's force for the real couplers it spans); ``virtual`` weighs
-        every virtual car and coupler as one (paper 002's eq. 11 read literally: a group of f wagons
+        every virtual car and coupler as one (Zhang & Zhuan's eq. 11 read literally: a group of f wagons
         braking is then penalised about f times more per newton than f wagons of the full model)."""
         if weighting == "virtual":
             return Represented.each(len(self.members))
@@ -168,10 +168,10 @@ def fence(consist, factor, ts, coupling="series", sharing="mass"):
 
 
 def virtual_car_count(runs, factor):
-    """n_f = sum of ceil(run / f) over the consist's runs of one kind (paper 002 §III-C)."""
+    """n_f = sum of ceil(run / f) over the consist's runs of one kind (Zhang & Zhuan §III-C)."""
     return sum(math.ceil(r / factor) for r in runs)
 
 
 def paper_counts(cars, nc):
-    """Paper 002's QP size (§III-B): n Nc control variables and (6 n - 2) Nc constraints."""
+    """Zhang & Zhuan's QP size (§III-B): n Nc control variables and (6 n - 2) Nc constraints."""
     return cars * nc, (6 * cars - 2) * nc

@@ -1,4 +1,4 @@
-"""Paper 002 eq. 10: a discrete Kalman estimator of every (virtual) car's speed and coupler
+"""Zhang & Zhuan eq. 10: a discrete Kalman estimator of every (virtual) car's speed and coupler
 extension from the locomotives' measured speeds (eq. 3: C picks the locomotives' speed rows),
 in the one-step predictor form of the paper:
 

@@ -1,4 +1,4 @@
-"""The cascade mass-point train of paper 002 eq. 1, stepped in time: every car at its own position
+"""The cascade mass-point train of Zhang & Zhuan eq. 1, stepped in time: every car at its own position
 (so each feels its own grade), joined by couplers with stiffness and damping.
 
     m_i dv_i/dt = u_i + f_in,i-1 - f_in,i - f_a,i        f_a,i = m_i (c0 + c1 v_i + c2 v_i^2) + f_p(p_i)

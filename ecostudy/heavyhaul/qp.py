@@ -1,4 +1,4 @@
-"""Paper 002's QP (eqs. 4-8) in matrix form for Clarabel, the same program as
+"""Zhang & Zhuan's QP (eqs. 4-8) in matrix form for Clarabel, the same program as
 :class:`~ecostudy.heavyhaul.rhc.RecedingHorizon` (Pyomo + Ipopt) without the modelling layer.
 
 Variables z = [u(0..Nc-1) per (virtual) car [kN], x(1..Np) [m/s, m]]: the states are kept (sparse,

@@ -1,14 +1,14 @@
-"""The reference speed of paper 002's controller (v_r of eqs. 4 and 7), from ecostudy itself: the
+"""The reference speed of Zhang & Zhuan's controller (v_r of eqs. 4 and 7), from ecostudy itself: the
 energy-optimal run of the whole consist as one mass (the space-domain NLP, verified by simulation)
 between two stops for a running time, or a user's speed-distance table.
 
-The single mass (paper 002 eq. 1 summed over the cars, couplers cancelling): the consist's mass
+The single mass (Zhang & Zhuan eq. 1 summed over the cars, couplers cancelling): the consist's mass
 (no rotating-mass share: eq. 1 has none), its length (the speed limits hold for the whole train;
 the grades are averaged over it, :func:`spread_grades`),
 Davis terms sum_i m_i (c0_i, c1_i, c2_i), Roeckl's curve resistance (as the cascade plant),
 traction the locomotives' envelopes summed, braking their dynamic brakes plus the wagons'
 pneumatic brakes, bounded by a service deceleration (a heavy train does not brake at its brakes'
-full force in normal running: a setting). Energy: traction only (no regeneration), as paper 002
+full force in normal running: a setting). Energy: traction only (no regeneration), as Zhang & Zhuan
 counts it.
 """
 from dataclasses import replace

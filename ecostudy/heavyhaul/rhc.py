@@ -1,4 +1,4 @@
-"""Paper 002's braking-penalised receding-horizon controller (eqs. 4-9), first version: one convex
+"""Zhang & Zhuan's braking-penalised receding-horizon controller (eqs. 4-9), first version: one convex
 QP over Np samples with Nc moves on the design model (full or fence-reduced), built once in Pyomo
 and re-solved every Ts with new parameters.
 

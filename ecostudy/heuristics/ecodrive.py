@@ -1,6 +1,6 @@
 """Driving strategies to compare with the optimum, each scored by the independent simulator.
 
-- ``eco_coasting``: the industrial baseline of thesis 000 Table 6.1: full traction up to the
+- ``eco_coasting``: the industrial baseline of Farooqi 2018 Table 6.1: full traction up to the
   limits, hold the limits, and from a coasting point on coast (braking only to respect a limit
   and to stop); the coasting point is the earliest one whose simulated arrival meets the time.
 - ``mareco``: a margin-distribution heuristic in the style of OSRD's MARECO (ecostudy/heuristics/mareco.py):

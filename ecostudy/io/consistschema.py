@@ -1,5 +1,5 @@
 """The consist file's schema: a long train as an ordered list of vehicles joined by couplers
-(paper 002 eq. 1, Tables I-II); units in the field names."""
+(Zhang & Zhuan eq. 1, Tables I-II); units in the field names."""
 from typing import Literal, Optional, Self
 
 from pydantic import Field, model_validator
@@ -8,7 +8,7 @@ from ecostudy.io.schemabase import Strict
 
 
 class CarResistance(Strict):
-    """f_r = m (c0 + c1 v + c2 v^2), per unit mass (paper 002 eq. 1; its Table I misprints c2 as c0)."""
+    """f_r = m (c0 + c1 v + c2 v^2), per unit mass (Zhang & Zhuan eq. 1; its Table I misprints c2 as c0)."""
 
     c0_mps2: float = Field(ge=0, le=1)
     c1_per_s: float = Field(ge=0, le=1)

@@ -1,6 +1,6 @@
 """The schema of a closed-loop study file (``ecostudy simulate``): controllers x deviation draws.
 
-Units are in the field names, as in :mod:`ecostudy.io.schemas`. Defaults are thesis 001's Ch.9
+Units are in the field names, as in :mod:`ecostudy.io.schemas`. Defaults are Yazhemsky 2017's Ch.9
 (controller) and Ch.10 (noise) values.
 """
 import math
@@ -14,7 +14,7 @@ from ecostudy.io.schemas import Strict
 
 
 class ConvexSettings(Strict):
-    """Weights and buffers of thesis 001 eq. 6.10 (Ch.9 values)."""
+    """Weights and buffers of Yazhemsky 2017 eq. 6.10 (Ch.9 values)."""
 
     time: float = Field(1.0, ge=0, description="w_t [1/s].")
     energy: float = Field(1.0, ge=0, description="w_e, on the force per speed and unit mass.")
@@ -31,7 +31,7 @@ CONTROLLER_KINDS: Registry[Any] = Registry("controller kind")  # builders of stu
 
 
 class RspcSettings(Strict):
-    """Thesis 000 Ch. 6's receding-horizon switched controller (``control/rspc.py``)."""
+    """Farooqi 2018 Ch. 6's receding-horizon switched controller (``control/rspc.py``)."""
 
     horizon: int = Field(3, ge=1, le=6, description="N, prediction steps (6^N mode sequences per sample).")
     distance_m: float = Field(25.0, gt=0, description="D, the nominal prediction step [m] (Alg. 6).")
@@ -42,12 +42,12 @@ class RspcSettings(Strict):
 class Controller(Strict):
     """One controller of the study.
 
-    ``convex``: thesis 001's SOCP 6.10 re-solved every sample; ``open_loop``: the same SOCP's plan
+    ``convex``: Yazhemsky 2017's SOCP 6.10 re-solved every sample; ``open_loop``: the same SOCP's plan
     from the stand, replayed by position without feedback; ``ato``: the full-horizon
     energy-optimal ATO run (Ipopt NLP) at the latest arrival, replayed open loop by position;
-    ``sbpc``: thesis 000's shrinking-horizon move-blocking controller arriving at the latest
-    arrival (blocks of ``block`` samples, ``variant``); ``sppc``: thesis 000's shrinking-horizon
-    parametrised controller (DAS modes, ``variant`` nominal or two_step); ``rspc``: thesis 000's
+    ``sbpc``: Farooqi 2018's shrinking-horizon move-blocking controller arriving at the latest
+    arrival (blocks of ``block`` samples, ``variant``); ``sppc``: Farooqi 2018's shrinking-horizon
+    parametrised controller (DAS modes, ``variant`` nominal or two_step); ``rspc``: Farooqi 2018's
     receding-horizon switched controller (DAS modes, ``rspc`` settings). ``das_levels`` applies any controller's
     handle as the nearest of the train's DAS levels, ``delay_samples`` later (a driver).
     ``compute_delay`` is the solver's delay (``control/loop.py``), for every kind. An option the
@@ -62,7 +62,7 @@ class Controller(Strict):
         False, description="Feed the controller a mass estimate: true or 'mass', the scalar Kalman filter of "
         "Yazhemsky 2017 §10.3; 'state', the EKF of position, speed, mass and disturbance (control/ekf.py).")
     scheme: Literal["midpoint", "left"] = "midpoint"
-    block: int = Field(20, ge=1, description="SBPC: L, samples per blocked move (thesis 000 eq. 4.8).")
+    block: int = Field(20, ge=1, description="SBPC: L, samples per blocked move (Farooqi 2018 eq. 4.8).")
     variant: Literal["nominal", "two_step", "multi"] = "nominal"
     omega: float = Field(3505.0, gt=0, description="SBPC multi-objective weight on the terminal distance (4.31).")
     transcription: Literal["simultaneous", "condensed"] = Field(
@@ -137,14 +137,14 @@ class Deviations(Strict):
 
 
 class NoiseSettings(Strict):
-    """Standard deviations of thesis 001 eqs. 10.2-10.4 (zero: none)."""
+    """Standard deviations of Yazhemsky 2017 eqs. 10.2-10.4 (zero: none)."""
 
     acceleration_mps2: float = Field(0.0, ge=0, le=5, description="sigma_a of the process noise.")
     period_s: float = Field(1.0, gt=0, description="The process noise is redrawn every period (thesis: 1 Hz).")
     position_m: float = Field(0.0, ge=0, le=100, description="sigma_X of the position reading.")
     speed_mps: float = Field(0.0, ge=0, le=10, description="sigma_V of the speed reading.")
     accelerometer_mps2: float = Field(0.0, ge=0, le=10, description="sigma_A of the acceleration reading "
-                                      "(the mass estimator's input, thesis 001 §10.3.5).")
+                                      "(the mass estimator's input, Yazhemsky 2017 §10.3.5).")
 
 
 class SimulateFile(Strict):

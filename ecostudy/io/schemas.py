@@ -175,7 +175,7 @@ class TimetableFile(Strict):
 
 
 class Weights(Strict):
-    time: float = Field(1.0, ge=0, description="w_t [1/s] (thesis 001 eq. 4.1a).")
+    time: float = Field(1.0, ge=0, description="w_t [1/s] (Yazhemsky 2017 eq. 4.1a).")
     energy: float = Field(1.0, ge=0, description="w_e [kg/J], on traction energy per unit mass.")
 
 
@@ -192,7 +192,7 @@ class Scenario(Strict):
     objective: Optional[Literal["energy", "net_energy", "time", "mixed"]] = None
     points: Optional[int] = Field(None, ge=10, le=100000)
     das: Optional[Literal["round", "phases", "minlp"]] = Field(
-        None, description="Also a DAS run of every case of this scenario (thesis 000 §3.1.2, Ch. 5).")
+        None, description="Also a DAS run of every case of this scenario (Farooqi 2018 §3.1.2, Ch. 5).")
 
 
 class Sweep(Strict):
@@ -267,18 +267,18 @@ class StudyFile(Strict):
 
 
 class Substation(Strict):
-    """One DC substation and its line (thesis 000 §7.2.1, eq. 7.8)."""
+    """One DC substation and its line (Farooqi 2018 §7.2.1, eq. 7.8)."""
 
     position_m: float = Field(description="Line position of the substation [m].")
     voltage_V: float = Field(750.0, gt=0, description="Source voltage V_s.")
     internal_resistance_ohm: float = Field(0.01, gt=0, description="R_s.")
-    line_resistance_ohm_per_km: float = Field(0.025, ge=0, description="Thesis 000: 25 mOhm/km.")
+    line_resistance_ohm_per_km: float = Field(0.025, ge=0, description="Farooqi 2018: 25 mOhm/km.")
     max_voltage_V: Optional[float] = Field(None, gt=0, description="Regeneration cut-off; default V_s 685/600.")
     min_voltage_V: Optional[float] = Field(None, gt=0, description="Lowest pantograph voltage; default 2/3 V_s.")
     max_train_current_A: Optional[float] = Field(None, gt=0, description="Largest current a train draws "
-                                                 "(thesis 000 Fig. 7.7); default none.")
+                                                 "(Farooqi 2018 Fig. 7.7); default none.")
     max_regen_current_A: Optional[float] = Field(None, gt=0, description="Largest current a train feeds "
-                                                 "back (thesis 000 Fig. 7.7); default none.")
+                                                 "back (Farooqi 2018 Fig. 7.7); default none.")
 
     @model_validator(mode="after")
     def _voltages(self) -> Self:
@@ -313,7 +313,7 @@ class NetworkStudyFile(Strict):
     trains: list[FleetTrain] = Field(min_length=1)
     substation: Substation
     strategies: list[Strategy] = Field(default_factory=lambda: list(STRATEGIES), min_length=1)
-    buffer_m: Optional[float] = Field(None, gt=0, description="Separation kept by `following` (thesis 001 eq. 6.9).")
+    buffer_m: Optional[float] = Field(None, gt=0, description="Separation kept by `following` (Yazhemsky 2017 eq. 6.9).")
     points: int = Field(FRONT_POINTS, ge=10, le=100000, description="Space grid of the per-segment starting runs.")
     output: Optional[str] = None
 

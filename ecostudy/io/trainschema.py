@@ -155,9 +155,9 @@ class TrainFile(Strict):
         None, description="Efficiency over speed and force instead of the constant (net energy and its check; "
         "formulations that cannot use it keep traction_efficiency and say so).")
     regenerative_braking: Optional[Regeneration] = None
-    curve_coefficient_m2ps2: float = Field(0.0, ge=0, description="lambda_t of thesis 000 eq. 2.2.")
+    curve_coefficient_m2ps2: float = Field(0.0, ge=0, description="lambda_t of Farooqi 2018 eq. 2.2.")
     curve_resistance: Literal["coefficient", "roeckl"] = Field(
-        "coefficient", description="'coefficient': Ms lambda_t / r (thesis 000 eq. 2.2); 'roeckl': Roeckl's "
+        "coefficient", description="'coefficient': Ms lambda_t / r (Farooqi 2018 eq. 2.2); 'roeckl': Roeckl's "
         "formula, as ms-eetc (TTOBench's reference implementation) uses it.")
     tunnel_resistance: list[TunnelResistance] = Field(default_factory=list)
     max_speed_kmh: Optional[float] = Field(None, gt=0, le=1000, description="The train's top speed: caps every limit.")

@@ -1,4 +1,4 @@
-"""The DC supply of trains on one substation (thesis 000 §7.2.1, eq. 7.8).
+"""The DC supply of trains on one substation (Farooqi 2018 §7.2.1, eq. 7.8).
 
 Every running train i is a node at pantograph voltage V_i, joined to the substation bus by the
 line resistance R(x_i) = r |x_i - x_sub| (r per km, thesis: 25 mOhm/km); the bus is fed by the
@@ -102,7 +102,7 @@ def sensed_voltages(supply, positions, powers):
     (no diode, no V_max), V_0 = V_s - R_s sum I_i solved by bisection; trains (T, n) as in
     :func:`solve_steps` (NaN where not running), or the running trains of one instant (n,).
 
-    This is the supervisor's view for rule 7.11 (thesis 000 §7.2.1: regeneration is detected
+    This is the supervisor's view for rule 7.11 (Farooqi 2018 §7.2.1: regeneration is detected
     by the voltage change at the train nodes). On the real line (:func:`solve_steps`) a surplus that
     nobody draws carries no current, every node sits at the same voltage and the comparison
     V_i < V_(i-1) sees nothing, just when the energy is lost; here the feeding train is always

@@ -1,5 +1,5 @@
-"""Supervisor rules (thesis 000 Ch. 7-8): triggering 7.7, voltage 7.11, dissension 8.14-8.17, the
-receptivity credit, and following a train ahead (thesis 001 eq. 6.9). See :mod:`.strategies`."""
+"""Supervisor rules (Farooqi 2018 Ch. 7-8): triggering 7.7, voltage 7.11, dissension 8.14-8.17, the
+receptivity credit, and following a train ahead (Yazhemsky 2017 eq. 6.9). See :mod:`.strategies`."""
 import copy
 
 import numpy as np
@@ -10,7 +10,7 @@ from ecostudy.network.fleet import departure_order, line_positions, solve_train,
 from ecostudy.network.scoring import evaluate
 
 
-GAMMA = (0.71, 0.9)  # thesis 000 Fig. 7.3: time weights without / with a braking neighbour
+GAMMA = (0.71, 0.9)  # Farooqi 2018 Fig. 7.3: time weights without / with a braking neighbour
 
 
 def _braking_steps(fleet, runs_by_train, share=0.1):
@@ -45,7 +45,7 @@ DISSENSION = {"gamma0": 0.5, "rate": 0.05, "influence": 0.15}  # [-], [1/s], [1/
 
 
 def dissension_weights(fleet, flags):
-    """Traction weights gamma_i(t) / gamma0 of the dissension strategy (thesis 000 eqs. 8.14-8.17).
+    """Traction weights gamma_i(t) / gamma0 of the dissension strategy (Farooqi 2018 eqs. 8.14-8.17).
 
     Each train's q_i = [gamma_i, 1 - gamma_i] follows q' = (Q^T + A_i^T) q with the two-state
     generator Q = [[-r, r], [r, -r]] (rest value gamma0 = 0.5) and the interaction rate
@@ -155,7 +155,7 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     against a run that has already been replaced).
 
     With a ``fleet.buffer``, each train stays that far behind the tail of the one ahead, as that
-    one now runs (thesis 001 eq. 6.9, as in :func:`following`).
+    one now runs (Yazhemsky 2017 eq. 6.9, as in :func:`following`).
     Each train minimises w traction (discounted up to an allowance, :func:`rule_terms`; a zero
     weight on unlimited traction only moves consumption to the substation) minus its regeneration
     credited up to what the line could take from it then (:func:`receptivity`; crediting all of it,

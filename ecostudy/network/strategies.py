@@ -1,7 +1,7 @@
 """Several trains on one line and one substation: timetables, strategies, the joint optimum.
 
 Every train runs the same stops with the same running times and dwells, offset by its departure
-time, on one clock of step dt (``timedomain``). Strategies (thesis 000 Ch. 7-8, thesis 001 §6.2.3):
+time, on one clock of step dt (``timedomain``). Strategies (Farooqi 2018 Ch. 7-8, Yazhemsky 2017 §6.2.3):
 
 independent  each train minimises its own pantograph net energy, regeneration credited as if
              the line always took it (a): no collaboration
@@ -15,13 +15,13 @@ voltage      rule 7.11 as the thesis' text applies it, between consecutive train
              that train's traction weighs 0 (c); the voltages are those of eq. 7.8 as written
              (a receptive source, :func:`sensed`): on the line with the diode a surplus nobody
              draws carries no current and the comparison would see nothing
-dissension   thesis 000 eqs. 8.14-8.17: each train's weight gamma_i follows a two-state Markov
+dissension   Farooqi 2018 eqs. 8.14-8.17: each train's weight gamma_i follows a two-state Markov
              law whose rate away from "braking" grows with the number of braking neighbours;
              traction weighs gamma_i / gamma0 (d)
 joint        one NLP over all trains and the network of eq. 7.8 minimising substation energy:
              the bound no rule can beat (e)
 following    the independent runs, each train's head kept ``buffer`` metres behind the tail of
-             the one ahead on the common clock (thesis 001 eq. 6.9), the leader's time-position
+             the one ahead on the common clock (Yazhemsky 2017 eq. 6.9), the leader's time-position
              profile fixed (f)
 
 The rules (b), (c), (d) re-optimise one train at a time against the others' latest runs, for a

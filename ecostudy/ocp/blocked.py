@@ -1,4 +1,4 @@
-"""Thesis 000's shrinking-horizon move-blocking FHOCP (eqs. 4.9, 4.18, 4.19, 4.31) as one movable
+"""Farooqi 2018's shrinking-horizon move-blocking FHOCP (eqs. 4.9, 4.18, 4.19, 4.31) as one movable
 time-domain NLP, written once and re-solved from every sample by bounds alone.
 
 On absolute samples i = 0 .. k_f (sample time T_s) the states are the position s_i and speed v_i;
@@ -44,7 +44,7 @@ from ecostudy.ocp.timedomain import FORCE_SCALE
 
 
 def samples(running_time: float, sample_time: float) -> int:
-    """k_f = floor(t_f / T_s) (thesis 000 §4.1)."""
+    """k_f = floor(t_f / T_s) (Farooqi 2018 §4.1)."""
     return int(np.floor(running_time / sample_time + 1e-9))
 
 

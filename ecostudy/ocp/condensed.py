@@ -1,4 +1,4 @@
-"""Thesis 000's SBPC FHOCP condensed to its block handles (single shooting), as fmincon solved it.
+"""Farooqi 2018's SBPC FHOCP condensed to its block handles (single shooting), as fmincon solved it.
 
 The program of ``ocp.blocked`` (eqs. 4.9, 4.18, 4.19, 4.31) with the states eliminated: from the
 measured state at sample k the free block handles u+_b, u-_b (b >= floor(k / L)) are the only
@@ -12,7 +12,7 @@ trapezoidal step
 (implicit differentiation of each step). The speed bounds of the predicted nodes, v >= 0 and the
 terminal set are constraints of the handles. A block of L samples is then one variable where the
 simultaneous program of ``ocp.blocked`` keeps (s, v) on every sample whatever L is: the time of a
-solve falls with the number of blocks (thesis 000 Table 4.1's trend), at the price of dense
+solve falls with the number of blocks (Farooqi 2018 Table 4.1's trend), at the price of dense
 derivatives (one row per predicted node, one column per block), which is why L = 1 is slow here.
 
 The envelopes are the trains' ``smooth_force`` (the simultaneous program's), their slopes central

@@ -1,8 +1,8 @@
-"""The convex controller's program: thesis 001's SOCP (eq. 6.10) from any state, on a trimmed grid.
+"""The convex controller's program: Yazhemsky 2017's SOCP (eq. 6.10) from any state, on a trimmed grid.
 
 On nodes x_0 = X0 (the measured position) < x_1 < ... < x_n = D (the grid ahead, eqs. 4.2a-e)
 the variables are the node speeds v and clocks t, and per interval the inverse speed rho,
-the force per speed and unit mass g = Gamma / (M v) [1/s] (thesis 001's gamma / m), its positive
+the force per speed and unit mass g = Gamma / (M v) [1/s] (Yazhemsky 2017's gamma / m), its positive
 part g+, the overspeed slack b and the over-braking slack h:
 
     minimise  w_t t_n + sum dx_i (w_e g+_i + w_br h_i + w_os b_i)                       (6.10)
@@ -62,7 +62,7 @@ MORE_POLISH = 6  # rounds at most for a plan that is not exact yet
 
 @dataclass(frozen=True)
 class ConvexWeights:
-    """Objective weights and buffers of eq. 6.10 (defaults: thesis 001 Ch.9)."""
+    """Objective weights and buffers of eq. 6.10 (defaults: Yazhemsky 2017 Ch.9)."""
 
     time: float = 1.0          # w_t [1/s]
     energy: float = 1.0        # w_e
@@ -81,7 +81,7 @@ def envelope_pieces(envelope: Envelope, tolerance: float = 0.002) -> Pieces:
     Each piece enters the program linearly: g M <= a rho + b + c s (as v rho = 1, v^2 rho = s).
 
     - a table that is a constant force up to a corner, then a concave quadratic within
-      ``tolerance`` of its peak (thesis 001's F_max and R(v), eqs. 6.1h, 6.1j): those two pieces;
+      ``tolerance`` of its peak (Yazhemsky 2017's F_max and R(v), eqs. 6.1h, 6.1j): those two pieces;
     - another concave table: its chords (their minimum is the table);
     - a table with a convex part, and a power limit P / v (convex in v): the force limit and, per
       interval, the chord or tangent at the reference speed (the previous plan's): exact where the
@@ -114,7 +114,7 @@ def envelope_pieces(envelope: Envelope, tolerance: float = 0.002) -> Pieces:
 
 
 def trapezoid_grid(segment: Segment, points: int, ramp: float = 0.1, smallest: float = 0.2) -> FloatArray:
-    """Thesis 001 §3.2.2's grid: ``points`` nodes whose spacing grows linearly from ``smallest``
+    """Yazhemsky 2017 §3.2.2's grid: ``points`` nodes whose spacing grows linearly from ``smallest``
     times the mean over the first ``ramp`` share of the nodes, stays flat, and shrinks again to
     the stop; every profile change is a node (the nearest node moves there)."""
     n = points - 1

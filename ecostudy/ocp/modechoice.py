@@ -1,4 +1,4 @@
-"""DAS run as a MINLP: binaries choose the mode of every phase (move blocking, thesis 000 §4.2).
+"""DAS run as a MINLP: binaries choose the mode of every phase (move blocking, Farooqi 2018 §4.2).
 
 The phases of ``ocp/phases.py`` are blocks of variable length; here the mode of each block is a
 choice among all DAS modes (traction levels, cruise, coast, full braking) by binaries z[q, j]

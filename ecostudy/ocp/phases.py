@@ -1,8 +1,8 @@
-"""Driver-advisory runs as phases of variable length (thesis 000 Ch. 5, eqs. 5.7-5.12, Fig. 5.1).
+"""Driver-advisory runs as phases of variable length (Farooqi 2018 Ch. 5, eqs. 5.7-5.12, Fig. 5.1).
 
 The segment is cut into sectors at every gradient, curve and (train-length) speed-limit change,
 so that the track is constant inside a sector. Every sector gets the same fixed sequence of
-phases, each with one DAS mode (thesis 000 §3.1.2):
+phases, each with one DAS mode (Farooqi 2018 §3.1.2):
 
     coast, traction at each DAS level (1, 0.75, 0.5), cruise, coast, full service braking
 
@@ -218,7 +218,7 @@ def _fixed_modes(m: Model, layout: Layout) -> None:
 
 
 def _objective(m: Model, train: Train, segment: Segment, layout: Layout, ds: dict[int, Any], objective: str) -> None:
-    """Traction work (thesis 000 eq. 2.16) or net energy (eq. 7.3) over an O(1) reference, or the
+    """Traction work (Farooqi 2018 eq. 2.16) or net energy (eq. 7.3) over an O(1) reference, or the
     arrival time (with the work as a tie-break, as ``space.define_objective`` does), or the speed at
     the end (with the arrival time as one)."""
     e_ref = m.energy_ref = energy_reference(train, segment)

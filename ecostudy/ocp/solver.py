@@ -60,7 +60,7 @@ IPOPT: dict[str, dict[str, Any]] = {
     "replan": {"max_iter": 300},
     # a Pareto chain after its first point, from the previous point's primal and dual solution
     # (bench/bench_pareto.py: 27-56 % fewer iterations than a primal-only start, fronts equal or lower
-    # by up to 5e-5; the primal-only chain took 204 s instead of 14 s on the thesis 001 advanced trip at
+    # by up to 5e-5; the primal-only chain took 204 s instead of 14 s on the Yazhemsky 2017 advanced trip at
     # K = 1000; studies/pareto.py)
     "pareto_warm": {"warm_start_init_point": "yes", "mu_init": 1e-4, "warm_start_bound_push": 1e-6,
                     "warm_start_mult_bound_push": 1e-6, "warm_start_slack_bound_push": 1e-6},

@@ -1,11 +1,11 @@
-"""Space-domain direct transcription of the train OCP in Pyomo (thesis 000 eq. 2.16, thesis 001 eq. 4.1).
+"""Space-domain direct transcription of the train OCP in Pyomo (Farooqi 2018 eq. 2.16, Yazhemsky 2017 eq. 4.1).
 
 On nodes x_0 = 0 < ... < x_N = D with steps ds_k, the variables are the speed v_k [m/s] and
 traction and braking forces per interval, in kN (scaling: forces in kN, dynamics per unit mass;
 see docs/benchmarks.md).
 
 Dynamics, exact for constant acceleration over an interval, and free of the standstill
-singularity of dv/ds = a/v (thesis 001 §3.2.1) because they never divide by v:
+singularity of dv/ds = a/v (Yazhemsky 2017 §3.2.1) because they never divide by v:
 
     (v_{k+1}^2 - v_k^2) / (2 ds_k) = (F_T,k - F_B,k - R_k) / M          (energy form of eq. 2.7)
     dt_k = 2 ds_k / (v_k + v_{k+1})                                        (time, eq. 2.16)
@@ -242,7 +242,7 @@ def define_timing(m: Model, time_ref: float, running_time: float | None = None,
                   window: tuple[float, float] | None = None) -> None:
     """Running time T as a variable tied to the interval times; the timing request is its bounds.
 
-    A fixed running time (eq. 2.6 as equality) is T in [t, t], an arrival window (thesis 001
+    A fixed running time (eq. 2.6 as equality) is T in [t, t], an arrival window (Yazhemsky 2017
     eq. 4.1g) is T in [Tmin, Tmax], all-out leaves T free. Keeping the request in bounds lets a
     sweep change it without writing the NL file again (:class:`ecostudy.ocp.session.Session`).
     """
@@ -299,10 +299,10 @@ def define_objective(m: Model, nodes: FloatArray, train: Train, objective: str, 
                      time_ref: float, energy_ref: float) -> None:
     """Objectives, each divided by a reference so that it is O(1).
 
-    energy      traction work sum F_T,k ds_k (thesis 000 eq. 2.16)
-    net_energy  traction work / eta_T - eta_R * regenerated work (thesis 000 eq. 7.3)
+    energy      traction work sum F_T,k ds_k (Farooqi 2018 eq. 2.16)
+    net_energy  traction work / eta_T - eta_R * regenerated work (Farooqi 2018 eq. 7.3)
     time        running time, plus a small multiple of traction + braking work ("all-out")
-    mixed       w_t T + w_e E / Ms (thesis 001 eq. 4.1a, energy per unit mass [J/kg])
+    mixed       w_t T + w_e E / Ms (Yazhemsky 2017 eq. 4.1a, energy per unit mass [J/kg])
     """
     ds = np.diff(nodes).tolist()
     m.traction_work = pyo.Expression(expr=FORCE_SCALE * sum(share(m, k, ds[k] * m.ft[k]) for k in m.I))

@@ -1,4 +1,4 @@
-"""One train's run between two stops on a common clock: the time-domain model (thesis 000 eq. 8.1).
+"""One train's run between two stops on a common clock: the time-domain model (Farooqi 2018 eq. 8.1).
 
 Several trains meet only in time (a shared substation, a leader ahead), so their runs are
 written on one clock with a fixed step dt. On steps j = 0..n of one segment (n dt = the
@@ -17,7 +17,7 @@ force taken as the braking force where the regenerative envelope covers the brak
 F_R <= F_B under its own envelope); forces are in kN.
 
 The electrical power at the pantograph in step j [kW] is
-p_j = F_T,j vbar_j / eta_T - eta_R F_R,j vbar_j, vbar_j = (v_j + v_{j+1}) / 2 (thesis 000 eq. 7.3).
+p_j = F_T,j vbar_j / eta_T - eta_R F_R,j vbar_j, vbar_j = (v_j + v_{j+1}) / 2 (Farooqi 2018 eq. 7.3).
 """
 from dataclasses import dataclass
 from typing import Any, NamedTuple, Optional, Sequence

@@ -2,7 +2,7 @@
 
 Each segment's energy-optimal front E_i(T_i) is convex and decreasing (ecostudy.pareto). For a
 total running time the least total energy has equal marginal saving -dE_i/dT_i on every segment
-that gets a supplement (Lagrange; thesis 000 §7.1.1 fronts). The allocation is made on the
+that gets a supplement (Lagrange; Farooqi 2018 §7.1.1 fronts). The allocation is made on the
 fronts, linearly interpolated, by handing out small time steps to the segment whose next step
 saves most; every segment is then solved exactly at its allocated time and verified.
 Two baselines: every segment the same percentage over its all-out time, and a MARECO-style
@@ -146,7 +146,7 @@ def windowed_journey(track, train, plan, points, start_times=None):
     departs within its departure window (a fixed time: equal bounds) or at the previous arrival
     plus the dwell, never before that arrival plus the (least) dwell; its arrival keeps the stop's
     (earliest, latest) window and every passing point's node time keeps its window (speed bounds
-    sit on the node, ``model.define_windows``; thesis 001 eq. 4.1g on a whole journey, the
+    sit on the node, ``model.define_windows``; Yazhemsky 2017 eq. 4.1g on a whole journey, the
     TTOBench journey format). Returns the running times and the departures [s].
     """
 

@@ -1,4 +1,4 @@
-"""Energy against running time: the epsilon-constraint Pareto front (thesis 000 §7.1.1, Table 7.1).
+"""Energy against running time: the epsilon-constraint Pareto front (Farooqi 2018 §7.1.1, Table 7.1).
 
 The running time is swept from the all-out time T0 to T0 (1 + supplement_max). Every point is
 energy-optimal for its running time. A chain of points shares one Pyomo model and one NL file
@@ -61,7 +61,7 @@ def _chain(case, times, objective, options, verify_result, warm, tick=None):
 
 
 def weighted_points(track, train, from_stop, to_stop, count=8, points=FRONT_POINTS, energy_weights=None):
-    """Weighted-sum points: minima of w_t T + w_e E / Ms (thesis 001 eq. 4.1a) for w_t = 1 and
+    """Weighted-sum points: minima of w_t T + w_e E / Ms (Yazhemsky 2017 eq. 4.1a) for w_t = 1 and
     ``count`` energy weights w_e [s kg/J] from 0.03 to 30. On a convex front each lies on the
     epsilon-constraint front; the weighted sum cannot reach points where the front is not convex."""
     weights = energy_weights if energy_weights is not None else np.geomspace(0.03, 30.0, count)
