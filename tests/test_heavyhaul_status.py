@@ -25,13 +25,19 @@ def refused(result, *words):
     assert len(lines) == 1 and all(w in lines[0] for w in words) and "Traceback" not in result.output, result.output
 
 
+def test_a_sample_cap_before_the_reference_ends_is_refused(tmp_path):
+    refused(invoke(study(tmp_path, brake_penalty=[1], max_samples=3), tmp_path / "out"),
+            "max_samples", "before the reference's")
+
+
 def test_a_sample_cap_short_of_the_stop_is_flagged(tmp_path):
-    result = invoke(study(tmp_path, brake_penalty=[1], max_samples=3), tmp_path / "out")
+    """24 samples of 20 s reach past the reference's 472 s, but the train is not at the stop by then."""
+    result = invoke(study(tmp_path, brake_penalty=[1], max_samples=24), tmp_path / "out")
     assert result.exit_code == 1, result.output
     run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
-    assert run["status"] == "flagged" and not run["arrived"] and run["samples"] == 3
-    assert "sample cap (3)" in run["reason"] and "before the stop" in run["reason"]
-    assert run["stop_error_m"] < -4000  # 60 s from rest on a 5 km trip
+    assert run["status"] == "flagged" and not run["arrived"] and run["samples"] == 24
+    assert "sample cap (24)" in run["reason"] and "before the stop" in run["reason"]
+    assert run["stop_error_m"] < -1.0
 
 
 def test_a_coupler_over_its_limit_and_a_stop_off_the_mark_are_flagged(tmp_path):
