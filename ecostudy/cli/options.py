@@ -21,7 +21,7 @@ Supplement = Annotated[Optional[float], typer.Option(help="Running-time suppleme
 Points = Annotated[Optional[int], typer.Option("--points", "-K", help="Grid nodes K (default: the study's, else "
                                                                       f"{RUN_POINTS}; {FRONT_POINTS} for a front).")]
 Out = Annotated[Optional[Path], typer.Option(help="Output folder (relative: to the working directory; default: "
-                                                  "the study's 'output').")]
+                                                  "the study's 'output', with '_pareto' or '_compare' added for those commands).")]
 EveryCore = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core).")]
 StepTimed = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core; step times then measured with every worker busy, --workers 1 for quiet-machine ones).")]
 Dask = Annotated[Optional[str], typer.Option(help="Address of a running Dask scheduler (tcp://host:port).")]
