@@ -208,3 +208,11 @@ def test_export_of_an_intact_folder_still_writes(saved):
     assert r.exit_code == 0 and (saved / "profile_every_10m.csv").is_file(), r.output
     rows = yaml.safe_load((saved / "profile_every_10m.json").read_text())["rows"]
     assert len(rows) > 10
+
+
+def test_export_reads_a_step_in_exponent_notation(saved):
+    """'2.5e1m' is the 25 m step it says, written under the step's own name."""
+    r = run("export", saved, "--every", "2.5e1m")
+    assert r.exit_code == 0 and (saved / "profile_every_25m.csv").is_file(), r.output
+    rows = yaml.safe_load((saved / "profile_every_25m.json").read_text())["rows"]
+    assert len(rows) > 10 and abs(rows[1]["position_m"] - rows[0]["position_m"] - 25.0) < 1e-9

@@ -152,7 +152,7 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
 def export_folder(result_dir: Path, every: str = "1s") -> Note:
     """``ecostudy export``: a solve folder's run at fixed steps ('1s': seconds, '10m': metres) as
     profile_every_<step>.csv and .json in the folder."""
-    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*(s|m)\s*", every or "")
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|m)\s*", every or "")
     if not match or float(match.group(1)) <= 0:
         raise InputError(problem("command line", "--every", f"expected a step such as '1s' (seconds) or '10m' "
                                  f"(metres), not '{every}'"))
