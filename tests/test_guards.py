@@ -292,7 +292,7 @@ def test_a_store_is_free_as_soon_as_its_writer_is_killed_even_while_a_worker_liv
         Store(path).close()  # at once, while the stubborn worker still sleeps
     finally:
         writer.kill()
-        subprocess.run(["pkill", "-f", str(path)], check=False)
+        subprocess.run(["pkill", "-KILL", "-f", str(path)], check=False)  # the worker ignores SIGTERM
 
 
 def test_a_study_run_leaves_no_lock(tmp_path):
