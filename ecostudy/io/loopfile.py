@@ -10,6 +10,7 @@ from pydantic import Field, model_validator
 
 from ecostudy.core.registry import Registry
 from ecostudy.io.schemabase import Name
+from ecostudy.io.schemabase import unique
 from ecostudy.io.schemas import Strict
 
 
@@ -165,10 +166,7 @@ class SimulateFile(Strict):
 
     @model_validator(mode="after")
     def _checks(self) -> Self:
-        names = [c.name for c in self.controllers]
-        twice = sorted({n for n in names if names.count(n) > 1})
-        if twice:
-            raise ValueError(f"controllers: names must be unique ({', '.join(map(repr, twice))} given twice)")
+        unique("controllers", [c.name for c in self.controllers])
         if not 0 <= self.window_s[0] <= self.window_s[1]:
             raise ValueError("window_s: must be [earliest, latest] with 0 <= earliest <= latest")
         for i, c in enumerate(self.controllers):

@@ -22,6 +22,14 @@ class Strict(BaseModel):
         return value
 
 
+def unique(field: str, names: Sequence[str]) -> None:
+    """Refuse names given twice (a check across items: the message names ``field``, which
+    ``io.documents.validate`` then reports the error at)."""
+    twice = sorted({n for n in names if list(names).count(n) > 1})
+    if twice:
+        raise ValueError(f"{field}: names must be unique ({', '.join(map(repr, twice))} given twice)")
+
+
 def increasing(values: Values, what: str) -> Values:
     if any(b <= a for a, b in zip(values, values[1:])):
         raise ValueError(f"{what} must be strictly increasing")

@@ -10,7 +10,7 @@ from typing import Annotated, Literal, Optional, Self, get_args
 from pydantic import Field, model_validator
 
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
-from ecostudy.io.schemabase import Name as Name, Strict as Strict, increasing as _increasing
+from ecostudy.io.schemabase import Name as Name, Strict as Strict, increasing as _increasing, unique as _unique
 from ecostudy.io.trainschema import (  # re-exported (X as X): schemas is the one place to look
     Braking as Braking, Davis as Davis, EfficiencyTable as EfficiencyTable, ForceTable as ForceTable,
     Regeneration as Regeneration, Traction as Traction, TrainFile as TrainFile, TunnelResistance as TunnelResistance)
@@ -91,9 +91,7 @@ class TrackFile(Strict):
                 raise ValueError(f"tunnels[{i + 1}] starts inside tunnels[{i}]")
         if self.tunnels and self.tunnels[-1].position_m + self.tunnels[-1].length_m > self.length_m + 1e-6:
             raise ValueError("tunnels: the last tunnel ends beyond length_m")
-        names = [s.name for s in self.stops]
-        if len(set(names)) != len(names):
-            raise ValueError("stop names must be unique")
+        _unique("stops", [s.name for s in self.stops])
         return self
 
 
@@ -249,9 +247,7 @@ class StudyFile(Strict):
 
     @model_validator(mode="after")
     def _timing(self) -> Self:
-        names = [sc.name for sc in self.scenarios]
-        if len(set(names)) != len(names):
-            raise ValueError("scenario names must be unique")
+        _unique("scenarios", [sc.name for sc in self.scenarios])
         if self.library is None and (self.track is None or self.train is None):
             raise ValueError("give 'track' and 'train', or a 'library'")
         if self.library is not None and (self.track or self.train or self.from_stop or self.to_stop
@@ -323,10 +319,8 @@ class NetworkStudyFile(Strict):
             raise ValueError("give exactly one of running_times_s, supplement_percent")
         if "following" in self.strategies and self.buffer_m is None:
             raise ValueError("buffer_m: the following strategy needs it")
-        for field, names in (("trains", [t.name for t in self.trains]), ("strategies", [str(n) for n in self.strategies])):
-            twice = sorted({n for n in names if names.count(n) > 1})
-            if twice:
-                raise ValueError(f"{field}: names must be unique ({', '.join(map(repr, twice))} given twice)")
+        _unique("trains", [t.name for t in self.trains])
+        _unique("strategies", [str(n) for n in self.strategies])
         offsets = sorted(t.offset_s for t in self.trains)
         if any(b - a < self.time_step_s for a, b in zip(offsets, offsets[1:])):
             raise ValueError("trains: two trains depart at the same time (offset_s): they would stand on each other")

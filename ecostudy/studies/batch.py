@@ -205,6 +205,10 @@ class StudyKind:
     """``spread(todo, workers, task)`` -> (case, result) pairs: how local worker processes run the
     cases instead of one case per process (a network study's strategies share one pool for their
     legs: :mod:`ecostudy.studies.legpool`); Dask still runs one case per task."""
+    one_study: bool = False
+    """True: an output folder holds one study file's results (its tables and summary.json are the
+    study's own), so a folder whose store holds another study's cases is refused before computing
+    (``io.store.check_one_study``)."""
     verdict: Optional[Callable[[pd.DataFrame], dict]] = None
     """``verdict(table)``: statuses of the study as a whole beside its cases' ({name: Status}; a
     front whose energy does not fall as the running time grows is flagged)."""
@@ -239,9 +243,6 @@ def kind_named(kind):
         raise InputError(problem("command line", "--kind", exc.args[0]))
 
 
-ONE_STUDY = ("network", "simulate", "heavyhaul")  # kinds whose folder holds one study file's results
-
-
 def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False, out=None, progress=None,
                  draw=None, compute=None, spec=None):
     """A study of ``kind`` already expanded (from a study file, or from a command's options: ``where``
@@ -258,7 +259,7 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
         # computed now (``compute``) is checked by its caller
         spec.size(Path(where), expanded.cases, workers)
     output = check_output_dir(out or expanded.output, (spec.table_file, "results.sqlite", *expanded.inputs))
-    if kind in ONE_STUDY and expanded.cases:
+    if spec.one_study and expanded.cases:
         check_one_study(output, expanded.cases[0]["study"])
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
