@@ -28,6 +28,7 @@ from scipy import sparse
 
 from ecostudy.core.errors import SolverError
 from ecostudy.core.units import KN
+from ecostudy.heavyhaul.magnitude import Magnitudes
 from ecostudy.heavyhaul.qp import QpOutcome, clarabel_settings
 from ecostudy.heavyhaul.rhc import objective_terms, objective_values, sample_inputs
 
@@ -96,13 +97,13 @@ class CondensedHorizon:
     """The receding-horizon QP over the inputs only; same interface as ``RecedingHorizon``."""
 
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
-                 force_limit_kN=2000.0, represented=None, scales=None, solver=DaqpSolver):
+                 force_limit_kN=2000.0, represented=None, scales=None, solver=DaqpSolver, effort="squared"):
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
         n = self.n = len(self.kinds)
         ns, nu = 2 * n - 1, nc * n
         self.locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
         self.rate, self.force_limit = rate_kN, force_limit_kN
-        self.terms = terms = objective_terms(model, self.kinds, weights, represented, scales)
+        self.terms = terms = objective_terms(model, self.kinds, weights, represented, scales, effort)
         self.wagons = np.array([kind != "locomotive" for kind in self.kinds])
         self.values = None  # eq. 4's terms at the last optimum (objective_values)
         A, B = model.A, model.B * KN
@@ -122,6 +123,7 @@ class CondensedHorizon:
             move = min(k - 1, nc - 1)
             effort[move * n:(move + 1) * n] += terms.ke * terms.penalty / 1e4
         hessian = 2 * self.scale * (sum(g.T @ (self.q[:, None] * g) for g in self.G) + np.diag(effort))
+        self.magnitude = Magnitudes(terms, self.wagons, self.locos, np_, nc, self.scale, hessian)
         rate = []
         for k in range(nc):
             for i in self.locos:
@@ -131,22 +133,23 @@ class CondensedHorizon:
                     row[(k - 1) * n + i] = -1.0
                 rate.append(row)
         mean = np.concatenate([terms.weight, np.zeros(n - 1)])
-        self.fixed_rows = np.vstack([np.array(rate).reshape(-1, nu), [mean @ g for g in self.G]])
+        self.fixed_rows = self.magnitude.rows(np.vstack([np.array(rate).reshape(-1, nu), [mean @ g for g in self.G]]))
         self.binding = []  # (sample, coupler) force rows found binding so far, in the order found
         self.rows = self.fixed_rows
-        self.solver = solver(hessian, self.rows)
+        self.solver = solver(self.magnitude.hessian, self.rows)
         self.previous = np.zeros(n)
         self.last = None
 
     @property
     def size(self):
-        """The program solved: the inputs only (no states), the input bounds as simple bounds (not
-        counted), rows for the locomotives' rate limits (two-sided), the mean speed and the force rows
-        found binding so far (two-sided)."""
-        return {"inputs": self.nc * self.n, "states": 0, "constraints": len(self.rows)}
+        """The program solved: the inputs only (no states; with ``effort_penalty: magnitude`` one
+        variable more per locomotive move, its |u|), the input bounds as simple bounds (not counted),
+        rows for the locomotives' rate limits (two-sided), the mean speed, the magnitudes' rows and the
+        force rows found binding so far (two-sided)."""
+        return {"inputs": self.nc * self.n + self.magnitude.extra, "states": 0, "constraints": len(self.rows)}
 
     def _force_row(self, k, j):
-        return self.terms.stiff[j] * self.G[k][self.n + j]
+        return self.magnitude.pad(self.terms.stiff[j] * self.G[k][self.n + j])
 
     def solve(self, state, offsets_kN, low_kN, high_kN, reference):
         """As :meth:`RecedingHorizon.solve`: the first move [kN per (virtual) car]."""
@@ -160,9 +163,9 @@ class CondensedHorizon:
         target[:, :n] = vr[1:, None]
         g = 2 * self.scale * sum(self.G[k].T @ (self.q * (d[k] - target[k])) for k in range(np_))
         ahead = np.array([previous[i] if k == 0 else 0.0 for k in range(nc) for i in self.locos])
-        fixed_hi = np.concatenate([self.rate + ahead, vr[1:] - d[:, :n] @ self.terms.weight])
-        fixed_lo = np.concatenate([ahead - self.rate, np.full(np_, -np.inf)])
-        lo, hi = np.tile(low_kN, nc), np.tile(high_kN, nc)
+        fixed_hi = self.magnitude.upper(np.concatenate([self.rate + ahead, vr[1:] - d[:, :n] @ self.terms.weight]))
+        fixed_lo = self.magnitude.lower(np.concatenate([ahead - self.rate, np.full(np_, -np.inf)]))
+        g, (lo, hi) = self.magnitude.linear(g, high_kN), self.magnitude.bounds(np.tile(low_kN, nc), np.tile(high_kN, nc))
         iterations = 0
         for _ in range(ROUNDS):
             rest = np.array([self.terms.stiff[j] * d[k][n + j] for k, j in self.binding]).reshape(-1)
@@ -172,6 +175,7 @@ class CondensedHorizon:
             iterations += its
             if status not in ("Solved", "AlmostSolved"):
                 break
+            u = u[:nc * n]  # the moves (a magnitude's variables after them)
             forces = self.terms.stiff * np.array([self.G[k][n:] @ u + d[k][n:] for k in range(np_)])
             over = sorted({(k, j) for k, j in zip(*np.nonzero(np.abs(forces) > self.force_limit * (1 + 1e-6)))}
                           - set(self.binding))

@@ -34,6 +34,7 @@ class Terms(NamedTuple):
     penalty: np.ndarray   # 1 for locomotives, K_b for wagons (eq. 5's R), times the effort's weight
     weight: np.ndarray    # mass shares (eq. 7's mean speed)
     stiff: np.ndarray     # coupler stiffness [kN/m] (f_in = k x_in, eq. 8)
+    magnitude: np.ndarray  # per kN of |u| (``effort_penalty: magnitude``, eq. 11 as printed); zeros for eq. 4
 
 
 UNIT_KN, UNIT_MPS = 100.0, 1.0  # the QP's units: forces in 100 kN (the /1e4 on squared kN), speeds in m/s
@@ -50,19 +51,32 @@ class Scales(NamedTuple):
     speed_mps: float
 
 
-def objective_terms(model, kinds, weights, represented=None, scales=None):
+EFFORT_PENALTIES = ("squared", "magnitude")  # eq. 4's K_e (u^2 ...), eq. 11's K_e (|u| ...) as printed
+# ``magnitude`` keeps eq. 4's squared effort term at this fraction, so that the condensed QP stays strictly
+# convex (DAQP's dual active set needs a positive definite Hessian); docs/heavyhaul.md measures what it moves
+MAGNITUDE_CURVATURE = 1e-3
+
+
+def objective_terms(model, kinds, weights, represented=None, scales=None, effort="squared"):
     """Eq. 4's weights (K_f, K_v, K_e, K_b) on a model of ``kinds``; ``represented``
     (:class:`~ecostudy.heavyhaul.linear.Represented`) what each (virtual) car and coupler stands for;
-    ``scales`` (:class:`Scales`) the units each term is measured in (default: the paper's)."""
+    ``scales`` (:class:`Scales`) the units each term is measured in (default: the paper's); ``effort``
+    the effort term's form (:data:`EFFORT_PENALTIES`): eq. 4's squares or eq. 11's magnitudes, each
+    car's |u| in its unit (a virtual car's |u| is the sum of its braking cars' |share u|, so it is
+    weighted as one whatever it stands for)."""
+    if effort not in EFFORT_PENALTIES:
+        raise ValueError(f"effort penalty one of {EFFORT_PENALTIES} (got {effort})")
     kf, kv, ke, kb = weights
     r = represented or Represented.each(len(kinds))
     penalty = np.array([1.0 if kind == "locomotive" else kb for kind in kinds])
+    unit = np.full(len(kinds), UNIT_KN) if scales is None else np.asarray(scales.effort_kN, float)
     if scales is not None:  # (x / scale)^2 = (x / unit)^2 (unit / scale)^2
         kf = kf * (UNIT_KN / scales.force_kN) ** 2
         kv = kv * (UNIT_MPS / scales.speed_mps) ** 2
-        penalty = penalty * (UNIT_KN / np.asarray(scales.effort_kN, float)) ** 2
-    return Terms(kf * r.couplers, kv * r.cars, ke, penalty * r.effort, model.mass / model.mass.sum(),
-                 model.stiffness / KN)
+    squared = penalty * (UNIT_KN / unit) ** 2 * r.effort
+    magnitude = ke * penalty / unit if effort == "magnitude" else np.zeros(len(kinds))
+    return Terms(kf * r.couplers, kv * r.cars, ke, squared * (MAGNITUDE_CURVATURE if effort == "magnitude" else 1.0),
+                 model.mass / model.mass.sum(), model.stiffness / KN, magnitude)
 
 
 TERMS = ("force", "tracking", "energy", "braking")  # eq. 4's terms as reported: K_f, K_v, K_e locomotives, K_e K_b wagons
@@ -78,7 +92,8 @@ def objective_values(terms, wagons, predicted, moves, vr, ts):
     np_, nc = len(predicted), len(moves)
     n = len(wagons)
     forces = predicted[:, n:] * terms.stiff
-    efforts = moves[[min(k, nc - 1) for k in range(np_)]] ** 2 * terms.ke * terms.penalty / 1e4
+    held = moves[[min(k, nc - 1) for k in range(np_)]]
+    efforts = held ** 2 * terms.ke * terms.penalty / 1e4 + np.abs(held) * terms.magnitude
     scale = ts / np_
     return {"force": scale * float(np.sum(terms.kf * forces ** 2)) / 1e4,
             "tracking": scale * float(np.sum(terms.kv * (predicted[:, :n] - np.asarray(vr)[1:, None]) ** 2)),
@@ -110,7 +125,9 @@ class RecedingHorizon:
     input and the reference are variables fixed by their bounds) and warm-starts Ipopt."""
 
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
-                 force_limit_kN=2000.0, represented=None, scales=None):
+                 force_limit_kN=2000.0, represented=None, scales=None, effort="squared"):
+        if effort != "squared":  # a magnitude is not a square: the condensed forms split it (condensed.py)
+            raise ValueError(f"effort penalty '{effort}': this QP form has eq. 4's squared term only")
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
         terms = objective_terms(model, self.kinds, weights, represented, scales)
         n = len(self.kinds)

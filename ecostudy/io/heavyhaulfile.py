@@ -78,6 +78,10 @@ class HeavyhaulFile(Strict):
         "paper", description="The units of eq. 4's terms: the paper's (forces and efforts in 100 kN, speeds in m/s) "
         "or each by its physical limit (in-train forces by the coupler limit, each car's effort by its largest, "
         "speed errors by the route's highest speed).")
+    effort_penalty: Literal["squared", "magnitude"] = Field(
+        "squared", description="Eq. 4's effort term, K_e (sum u^2 over the locomotives + K_b sum u^2 over the "
+        "wagons), or eq. 11's as Zhang & Zhuan print it, with each effort's magnitude |u| in its unit (solved by "
+        "qp_solver daqp or condensed).")
     adhesion: bool = Field(False, description="Cap each locomotive's traction and dynamic braking at its adhesion, "
                            "mu(v) m g with Curtius & Kniffler's dry-rail mu (the plant; the controller sees the "
                            "capped envelopes).")

@@ -100,6 +100,9 @@ def expand(path):
     problems = [problem(path, field, p) for p in reference_problems(reference, segment, s.speed_tolerance_kmh * KMH)]
     problems += [problem(path, "fence", f"{f} is not within 1..{consist.cars} (the consist's cars)")
                  for f in s.fence if f > consist.cars]
+    if s.effort_penalty == "magnitude" and s.qp_solver not in MAGNITUDE_FORMS:
+        problems.append(problem(path, "effort_penalty", f"magnitude is solved by qp_solver {' or '.join(MAGNITUDE_FORMS)} "
+                                f"(the condensed QP), not {s.qp_solver}"))
     fewest = min([len(fence(consist, f, s.sample_time_s).locomotives) for f in s.fence if f <= consist.cars] or [1])
     ramp = samples_to_start(needed, s.rate_kN_per_sample * KN, fewest)  # the fewest locomotive groups ramp slowest
     if ramp * s.sample_time_s > reference.running_time:
@@ -122,7 +125,7 @@ def expand(path):
               "sample_time": s.sample_time_s, "weights": s.weights.model_dump(), "rate_kN": s.rate_kN_per_sample,
               "observer": s.observer, "qp_solver": s.qp_solver,
               "fence_coupling": s.fence_coupling, "fence_sharing": s.fence_sharing, "fence_weights": s.fence_weights,
-              "objective_scale": s.objective_scale, "adhesion": s.adhesion, "air_brake": s.air_brake, "draft_gear": s.draft_gear,
+              "objective_scale": s.objective_scale, "effort_penalty": s.effort_penalty, "adhesion": s.adhesion, "air_brake": s.air_brake, "draft_gear": s.draft_gear,
               "max_samples": s.max_samples,
               "stop_tolerance_m": s.stop_tolerance_m, "speed_tolerance_kmh": s.speed_tolerance_kmh,
               "arrival_tolerance_percent": s.arrival_tolerance_percent, "arrival_tolerance_s": s.arrival_tolerance_s,
@@ -152,6 +155,7 @@ QP_FORMS = {  # a study's qp_solver: the same QP four ways (docs/heavyhaul.md)
     "clarabel": ConicHorizon,  # the states kept
     "ipopt": RecedingHorizon,  # the Pyomo model
 }
+MAGNITUDE_FORMS = ("daqp", "condensed")  # the forms with eq. 11's magnitudes (heavyhaul.magnitude)
 
 
 def drive(case):
@@ -175,7 +179,8 @@ def drive(case):
     controller = QP_FORMS[case["qp_solver"]](reduction.model, reduction.kinds, np_=labels["Np"], nc=labels["Nc"],
                       weights=(w["force"], w["speed"], w["energy"], labels["K_b"]), rate_kN=case["rate_kN"],
                       force_limit_kN=consist.force_limit / KN, scales=scales,
-                      represented=reduction.represented(consist.mass, case["fence_weights"]))
+                      represented=reduction.represented(consist.mass, case["fence_weights"]),
+                      effort=case["effort_penalty"])
     state = plant.initial(head=-0.5 * consist.length[0], speed=0.0)
     observer = (KalmanObserver(reduction.model, reduction.kinds, estimate=reduced_state(plant, reduction, state))
                 if case["observer"] else None)

@@ -1,0 +1,60 @@
+"""Eq. 11's effort term as Zhang & Zhuan print it, K_e (sum_loco |u| + K_b sum_wagon |u|), in the
+condensed QP (``effort_penalty: magnitude``; eq. 4 squares the efforts, eq. 11, the fenced objective
+Table IV's f = 10 runs use, does not). A wagon only brakes (u <= 0), so its |u| is -u, a linear term; a
+locomotive pulls and brakes, so each locomotive move gets a variable t >= |u| (two rows, t >= u and
+t >= -u) whose cost is the magnitude's. With the term squared (eq. 4) nothing here adds anything."""
+import numpy as np
+
+from ecostudy.core.errors import SolverError
+
+
+class Magnitudes:
+    """The variables, rows and linear costs a magnitude adds to the condensed QP over the moves
+    u(0..Nc-1) (``terms`` from :func:`~ecostudy.heavyhaul.rhc.objective_terms`; ``hessian`` over the
+    moves, ``scale`` Ts / Np, move m held over ``count[m]`` samples of the horizon)."""
+
+    def __init__(self, terms, wagons, locos, np_, nc, scale, hessian):
+        n = len(wagons)
+        count = np.bincount([min(k, nc - 1) for k in range(np_)], minlength=nc).astype(float)
+        weight = np.asarray(terms.magnitude, float)
+        self.moves = nc * n
+        self.cost = np.zeros(self.moves)  # on u: a wagon's -u
+        self.wagon_cols = [m * n + i for m in range(nc) for i in range(n) if wagons[i] and weight[i] > 0]
+        pairs = [(m, i) for m in range(nc) for i in locos if weight[i] > 0]
+        self.cols = [m * n + i for m, i in pairs]
+        for m in range(nc):
+            self.cost[m * n:(m + 1) * n] = np.where(wagons, -scale * count[m] * weight, 0.0)
+        self.t_cost = np.array([scale * count[m] * weight[i] for m, i in pairs])
+        self.extra = len(pairs)
+        curvature = np.array([2 * scale * count[m] * terms.ke * terms.penalty[i] / 1e4 for m, i in pairs])
+        self.hessian = np.block([[hessian, np.zeros((self.moves, self.extra))],
+                                 [np.zeros((self.extra, self.moves)), np.diag(curvature)]]) if pairs else hessian
+        pick = np.zeros((self.extra, self.moves))
+        pick[np.arange(self.extra), self.cols] = 1.0
+        eye = np.eye(self.extra)
+        self.abs_rows = np.vstack([np.hstack([pick, -eye]), np.hstack([-pick, -eye])])  # +-u - t <= 0
+
+    def pad(self, row):
+        """A row over the moves, with zeros for the magnitudes' variables."""
+        return np.concatenate([row, np.zeros(self.extra)])
+
+    def rows(self, rows):
+        """The fixed rows over the moves, padded, and the magnitudes' rows after them."""
+        return np.vstack([np.hstack([rows, np.zeros((len(rows), self.extra))]), self.abs_rows]) if self.extra else rows
+
+    def upper(self, c_hi):
+        return np.concatenate([c_hi, np.zeros(2 * self.extra)])
+
+    def lower(self, c_lo):
+        return np.concatenate([c_lo, np.full(2 * self.extra, -np.inf)])
+
+    def linear(self, g, high_kN):
+        """The linear term over the moves and the magnitudes' variables."""
+        if self.wagon_cols and np.any(np.tile(high_kN, self.moves // len(high_kN))[self.wagon_cols] > 0):
+            raise SolverError("heavy-haul QP: a wagon may pull, so its |u| is not -u (effort_penalty: magnitude)")
+        return np.concatenate([g + self.cost, self.t_cost])
+
+    def bounds(self, lo, hi):
+        """Bounds over the moves and the magnitudes' variables (0 <= t <= the larger of |lo| and |hi|)."""
+        top = np.maximum(np.abs(lo), np.abs(hi))[self.cols]
+        return np.concatenate([lo, np.zeros(self.extra)]), np.concatenate([hi, top])
