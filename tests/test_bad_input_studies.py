@@ -134,6 +134,8 @@ def reference_study(tmp_path, edit):
                                    "must increase"),
     (lambda ls: first_cell(ls, 5, ls[4].split(",")[0]), "distance_m, row 6: 150 after 150"),
     (lambda ls: ls[:3] + [ls[3].split(",")[0] + ",-11"] + ls[4:], "speed_kmh, row 4: -11 is below 0"),
+    (lambda ls: ls[:2] + [ls[2].split(",")[0] + ",0"] + ls[3:], "speed_kmh, row 3: 0 after 0: the speed may be 0 "
+                                                                "only at single points"),
 ])
 def test_a_reference_table_out_of_order_names_its_row(tmp_path, edit, fragment):
     refused(run("heavyhaul", reference_study(tmp_path, edit), "--workers", 1, "--no-plot"), fragment)

@@ -52,19 +52,11 @@ def _reference(s, path, consist, track, from_stop, to_stop):
     if r.table is not None:
         where = path.parent / r.table
         table = number_columns(where, ("distance_m", "speed_kmh"))  # text, NaN, a missing column: one line
-        distance, speed = table["distance_m"], table["speed_kmh"]
-        found = [(i + 1, "distance_m", f"{distance[i + 1]:g} after {distance[i]:g}: the distances must increase")
-                 for i in np.flatnonzero(np.diff(distance) <= 0)[:1]]
-        found += [(i, column, f"{values[i]:g} is below 0") for column, values in table.items()
-                  for i in np.flatnonzero(values < 0)[:1]]
-        if found:  # the first by row, numbered as a spreadsheet shows it (the header is row 1)
-            i, column, what = min(found)
-            raise InputError(problem(where, f"{column}, row {i + 2}", what))
         extra = [c for c in pd.read_csv(where, nrows=0).columns if c not in ("distance_m", "speed_kmh")]
         if extra:
             warnings.warn(problem(where, ", ".join(map(str, extra)), "not read: a reference table is distance_m and "
                                   "speed_kmh"), EcostudyWarning, stacklevel=2)
-        return table_reference(distance, speed, str(where))
+        return table_reference(table["distance_m"], table["speed_kmh"], where)  # a bad row: one line naming it
     supplement = None if r.supplement_percent is None else r.supplement_percent / 100
     lead = r.limit_lead_samples * s.sample_time_s + (application_time(consist) if s.air_brake else 0.0)  # the pipe's lateness
     try:
