@@ -95,6 +95,40 @@ def test_a_check_across_fields_names_its_field(tmp_path, shipped, changes, fragm
     nothing_written(tmp_path)
 
 
+# ----------------------------------------------------------------------------------- a file named by a study, not there
+@pytest.mark.parametrize("command, shipped, field, changes", [
+    ("solve", "default.yaml", "track", {"track": "missing.yaml"}),
+    ("solve", "default.yaml", "train", {"train": "missing.yaml"}),
+    ("solve", "regional_80s.yaml", "timetable", {"timetable": "missing.yaml"}),
+    ("pareto", "default.yaml", "train", {"train": "missing.yaml"}),
+    ("compare", "default.yaml", "track", {"track": "missing.yaml"}),
+    ("run", "regional_80s.yaml", "timetable", {"timetable": "missing.yaml"}),
+    ("run", "metro_supplements.yaml", "scenarios[0].track", {"scenarios": [{"name": "x", "track": "missing.yaml"}]}),
+    ("network", "network_metro_2trains.yaml", "track", {"track": "missing.yaml"}),
+    ("network", "network_metro_2trains.yaml", "train", {"train": "missing.yaml"}),
+    ("simulate", "metro_monte_carlo.yaml", "train", {"train": "missing.yaml"}),
+    ("simulate", "metro_monte_carlo.yaml", "track", {"track": "missing.yaml"}),
+    ("heavyhaul", "heavyhaul_fence.yaml", "consist", {"consist": "missing.yaml"}),
+    ("heavyhaul", "heavyhaul_fence.yaml", "track", {"track": "missing.yaml"}),
+    ("heavyhaul", "heavyhaul_brake_penalty_rolling.yaml", "reference.table", {"reference": {"table": "missing.csv"}}),
+])
+def test_a_file_named_by_a_study_that_is_not_there_names_the_field(tmp_path, command, shipped, field, changes):
+    name = next(iter(changes.values()))
+    name = name if isinstance(name, str) else "missing.csv" if "reference" in changes else "missing.yaml"
+    path = hostile(tmp_path, shipped, **changes)
+    options = {"solve": ["--no-plot"], "run": ["--workers", 1]}.get(command, ["--workers", 1, "--no-plot"])
+    line = refused(run(command, path, *options),
+                   f"{path}: {field}: '{name}': file not found ({tmp_path / name})")
+    assert line.count("file not found") == 1
+    nothing_written(tmp_path)
+
+
+def test_a_folder_named_as_a_study_file_field_is_named_a_folder(tmp_path):
+    (tmp_path / "tracks").mkdir()
+    path = hostile(tmp_path, "network_metro_2trains.yaml", track="tracks")
+    refused(run("network", path, "--workers", 1, "--no-plot"), f"{path}: track: 'tracks': a folder, not a file")
+
+
 # ----------------------------------------------------------------------------------- values out of range
 @pytest.mark.parametrize("shipped, changes, fragment", [
     ("network_metro_2trains.yaml", {"dwell_s": 1e9}, "dwell_s: Input should be less than or equal to 86400"),
