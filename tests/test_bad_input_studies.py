@@ -47,8 +47,8 @@ def hostile(tmp_path, shipped, **changes):
 
 
 def nothing_written(tmp_path):
-    """No output file (an infeasible running time is found after the output folder was checked: it may be there, empty)."""
-    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+    """No output folder: not even an empty one (an infeasible running time is found after the folder was checked)."""
+    assert not (tmp_path / "out").exists()
 
 
 def swapped(lines, a, b):
@@ -127,6 +127,16 @@ def test_a_folder_named_as_a_study_file_field_is_named_a_folder(tmp_path):
     (tmp_path / "tracks").mkdir()
     path = hostile(tmp_path, "network_metro_2trains.yaml", track="tracks")
     refused(run("network", path, "--workers", 1, "--no-plot"), f"{path}: track: 'tracks': a folder, not a file")
+
+
+# ----------------------------------------------------------------------------------- an infeasible running time
+@pytest.mark.parametrize("args", [
+    ["solve", STUDIES / "default.yaml", "--time", 10, "--no-plot"],
+    ["journey", "--train", METRO, "--track", TRACKS / "metro_line_4stops.yaml", "--time", 10, "--no-plot"],
+])
+def test_an_infeasible_running_time_leaves_no_output_folder(tmp_path, args):
+    refused(run(*args, "--out", tmp_path / "out" / "nested"), "infeasible: ")
+    nothing_written(tmp_path)
 
 
 # ----------------------------------------------------------------------------------- values out of range
