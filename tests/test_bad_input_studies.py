@@ -47,8 +47,8 @@ def hostile(tmp_path, shipped, **changes):
 
 
 def nothing_written(tmp_path):
-    """No output file (an infeasible running time is found after the output folder was checked: it may be there, empty)."""
-    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+    """No output folder: not even an empty one (an infeasible running time is found after the folder was checked)."""
+    assert not (tmp_path / "out").exists()
 
 
 def swapped(lines, a, b):
@@ -95,6 +95,50 @@ def test_a_check_across_fields_names_its_field(tmp_path, shipped, changes, fragm
     nothing_written(tmp_path)
 
 
+# ----------------------------------------------------------------------------------- a file named by a study, not there
+@pytest.mark.parametrize("command, shipped, field, changes", [
+    ("solve", "default.yaml", "track", {"track": "missing.yaml"}),
+    ("solve", "default.yaml", "train", {"train": "missing.yaml"}),
+    ("solve", "regional_80s.yaml", "timetable", {"timetable": "missing.yaml"}),
+    ("pareto", "default.yaml", "train", {"train": "missing.yaml"}),
+    ("compare", "default.yaml", "track", {"track": "missing.yaml"}),
+    ("run", "regional_80s.yaml", "timetable", {"timetable": "missing.yaml"}),
+    ("run", "metro_supplements.yaml", "scenarios[0].track", {"scenarios": [{"name": "x", "track": "missing.yaml"}]}),
+    ("network", "network_metro_2trains.yaml", "track", {"track": "missing.yaml"}),
+    ("network", "network_metro_2trains.yaml", "train", {"train": "missing.yaml"}),
+    ("simulate", "metro_monte_carlo.yaml", "train", {"train": "missing.yaml"}),
+    ("simulate", "metro_monte_carlo.yaml", "track", {"track": "missing.yaml"}),
+    ("heavyhaul", "heavyhaul_fence.yaml", "consist", {"consist": "missing.yaml"}),
+    ("heavyhaul", "heavyhaul_fence.yaml", "track", {"track": "missing.yaml"}),
+    ("heavyhaul", "heavyhaul_brake_penalty_rolling.yaml", "reference.table", {"reference": {"table": "missing.csv"}}),
+])
+def test_a_file_named_by_a_study_that_is_not_there_names_the_field(tmp_path, command, shipped, field, changes):
+    name = next(iter(changes.values()))
+    name = name if isinstance(name, str) else "missing.csv" if "reference" in changes else "missing.yaml"
+    path = hostile(tmp_path, shipped, **changes)
+    options = {"solve": ["--no-plot"], "run": ["--workers", 1]}.get(command, ["--workers", 1, "--no-plot"])
+    line = refused(run(command, path, *options),
+                   f"{path}: {field}: '{name}': file not found ({tmp_path / name})")
+    assert line.count("file not found") == 1
+    nothing_written(tmp_path)
+
+
+def test_a_folder_named_as_a_study_file_field_is_named_a_folder(tmp_path):
+    (tmp_path / "tracks").mkdir()
+    path = hostile(tmp_path, "network_metro_2trains.yaml", track="tracks")
+    refused(run("network", path, "--workers", 1, "--no-plot"), f"{path}: track: 'tracks': a folder, not a file")
+
+
+# ----------------------------------------------------------------------------------- an infeasible running time
+@pytest.mark.parametrize("args", [
+    ["solve", STUDIES / "default.yaml", "--time", 10, "--no-plot"],
+    ["journey", "--train", METRO, "--track", TRACKS / "metro_line_4stops.yaml", "--time", 10, "--no-plot"],
+])
+def test_an_infeasible_running_time_leaves_no_output_folder(tmp_path, args):
+    refused(run(*args, "--out", tmp_path / "out" / "nested"), "infeasible: ")
+    nothing_written(tmp_path)
+
+
 # ----------------------------------------------------------------------------------- values out of range
 @pytest.mark.parametrize("shipped, changes, fragment", [
     ("network_metro_2trains.yaml", {"dwell_s": 1e9}, "dwell_s: Input should be less than or equal to 86400"),
@@ -134,6 +178,8 @@ def reference_study(tmp_path, edit):
                                    "must increase"),
     (lambda ls: first_cell(ls, 5, ls[4].split(",")[0]), "distance_m, row 6: 150 after 150"),
     (lambda ls: ls[:3] + [ls[3].split(",")[0] + ",-11"] + ls[4:], "speed_kmh, row 4: -11 is below 0"),
+    (lambda ls: ls[:2] + [ls[2].split(",")[0] + ",0"] + ls[3:], "speed_kmh, row 3: 0 after 0: the speed may be 0 "
+                                                                "only at single points"),
 ])
 def test_a_reference_table_out_of_order_names_its_row(tmp_path, edit, fragment):
     refused(run("heavyhaul", reference_study(tmp_path, edit), "--workers", 1, "--no-plot"), fragment)

@@ -266,3 +266,14 @@ def test_line_power_from_voltage_and_current_and_work_from_force(inputs, truth):
         model = r.speed(truth.mass, truth.static_mass, truth.davis)
         assert np.max(np.abs(model ** 2 - r.v ** 2)) < 0.005 * np.max(r.v) ** 2  # measured: 0.14 %
         assert np.max(np.abs(model - r.v)[r.v > 10]) < 0.15                    # measured: 0.10 m/s
+
+
+@pytest.mark.parametrize("command, field", [("calibrate", "train"), ("validate", "track")])
+def test_a_file_the_log_header_names_that_is_not_there_names_the_field(tmp_path, command, field):
+    path = tmp_path / "log.csv"
+    path.write_text(good().replace(f"{field}: {TRAIN if field == 'train' else TRACK}", f"{field}: missing.yaml"))
+    result = run(command, path, "--out", tmp_path / "o")
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert result.exit_code == 2 and len(lines) == 1 and "Traceback" not in result.output, result.output
+    assert f"log.csv: header.{field}: 'missing.yaml': file not found ({tmp_path / 'missing.yaml'})" in lines[0]
+    assert not (tmp_path / "o").exists()

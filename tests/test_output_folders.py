@@ -65,3 +65,26 @@ def test_pareto_and_compare_put_their_folder_beside_the_studys_in_the_working_di
     st = load_checked_study(copied(layout, "default.yaml", "results/d"))
     for suffix in ("_pareto", "_compare"):
         assert beside(st, suffix, "x").resolve() == layout / "work" / "results" / f"d{suffix}"
+
+
+@pytest.mark.parametrize("command, default", [
+    ("solve", "default: the study's 'output', else out/TRACK_FROM_TO)"),
+    ("pareto", "default: the study's 'output' with '_pareto' added, else out/pareto)"),
+    ("compare", "default: the study's 'output' with '_compare' added, else out/compare)"),
+    ("journey", "default: out/journey)"),
+    ("run", "default: the study's 'output', '_pareto' or '_compare' added for those kinds)"),
+    ("network", "default: the study's 'output', else out/NAME"),
+    ("simulate", "default: the study's 'output', else out/NAME"),
+    ("heavyhaul", "default: the study's 'output', else out/NAME"),
+])
+def test_each_commands_out_help_says_its_own_default(command, default):
+    text = " ".join(CliRunner().invoke(app, [command, "--help"]).output.split())
+    assert f"--out <path> Output folder (relative: to the working directory; {default}" in text, text
+
+
+def test_solve_without_a_study_writes_to_out_track_from_to(layout):
+    r = CliRunner().invoke(app, ["solve", "--track", str(ROOT / "tracks" / "amsterdam_rokin_centraal.yaml"), "--train",
+                                 str(ROOT / "trains" / "amsterdam_metro.yaml"), "--time", "80", "--points", "100",
+                                 "--no-plot"])
+    assert r.exit_code == 0, r.output
+    assert (layout / "work" / "out" / "amsterdam_rokin_centraal_Rokin_Centraal" / "summary.json").is_file()

@@ -20,8 +20,13 @@ Time = Annotated[Optional[float], typer.Option("--time", help="Running time [s].
 Supplement = Annotated[Optional[float], typer.Option(help="Running-time supplement over all-out [%].")]
 Points = Annotated[Optional[int], typer.Option("--points", "-K", help="Grid nodes K (default: the study's, else "
                                                                       f"{RUN_POINTS}; {FRONT_POINTS} for a front).")]
-Out = Annotated[Optional[Path], typer.Option(help="Output folder (relative: to the working directory; default: "
-                                                  "the study's 'output', with '_pareto' or '_compare' added for those commands).")]
+_OUT = "Output folder (relative: to the working directory; default: {}).".format  # each command's own default
+Out = Annotated[Optional[Path], typer.Option(help=_OUT("the study's 'output', else out/NAME (the study's name)"))]
+RunOut = Annotated[Optional[Path], typer.Option(help=_OUT("the study's 'output', '_pareto' or '_compare' added for those kinds"))]
+SolveOut = Annotated[Optional[Path], typer.Option(help=_OUT("the study's 'output', else out/TRACK_FROM_TO"))]
+ParetoOut = Annotated[Optional[Path], typer.Option(help=_OUT("the study's 'output' with '_pareto' added, else out/pareto"))]
+CompareOut = Annotated[Optional[Path], typer.Option(help=_OUT("the study's 'output' with '_compare' added, else out/compare"))]
+JourneyOut = Annotated[Optional[Path], typer.Option(help=_OUT("out/journey"))]
 EveryCore = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core).")]
 StepTimed = Annotated[Optional[int], typer.Option(help="Local worker processes (default: every core; step times then measured with every worker busy, --workers 1 for quiet-machine ones).")]
 Dask = Annotated[Optional[str], typer.Option(help="Address of a running Dask scheduler (tcp://host:port).")]

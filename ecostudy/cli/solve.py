@@ -13,14 +13,12 @@ from ecostudy.cli.app import app, call, finish, told
 
 @app.command(short_help="Energy-optimal (or all-out) run between two stops, verified.")
 def solve(
-    study: o.Study = None, track: o.Track = None, train: o.Train = None, time: o.Time = None,
-    supplement: o.Supplement = None,
+    study: o.Study = None, track: o.Track = None, train: o.Train = None, time: o.Time = None, supplement: o.Supplement = None,
     window: Optional[str] = typer.Option(None, help="Arrival window 'earliest,latest' [s]."),
     from_stop: o.From = None, to_stop: o.To = None,
     objective: Optional[o.Objective] = typer.Option(None, help="energy | net_energy | time | mixed."),
     weights: Optional[str] = typer.Option(None, help="Mixed objective weights 'w_t,w_e' (Yazhemsky 2017, eq. 4.1)."),
-    points: o.Points = None, out: o.Out = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png",
-    dpi: o.Dpi = 110.0,
+    points: o.Points = None, out: o.SolveOut = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
     das: Optional[o.DasMethod] = typer.Option(
         None, help="Also driver advice: round (nearest handle level), phases (optimal phase lengths, "
                    "Farooqi 2018, Ch. 5) or minlp (mode per phase chosen by binaries)."),

@@ -19,7 +19,7 @@ def pareto(
     points: o.Points = None, workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False,
     weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T + w_e E/m, Yazhemsky 2017, eq. 4.1a)."),
     das: Optional[o.DasMethod] = typer.Option(None, help="Also the DAS front: round | phases | minlp at every point."),
-    das_time_limit: o.DasTimeLimit = 60.0, out: o.Out = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png",
+    das_time_limit: o.DasTimeLimit = 60.0, out: o.ParetoOut = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png",
     dpi: o.Dpi = 110.0, force: o.Force = False, debug: o.Debug = False,
 ):
     """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS; every point stored, resumable. Example: ecostudy pareto studies/default.yaml --count 9"""
@@ -31,7 +31,7 @@ def pareto(
 @app.command(name="compare", short_help="Strategies side by side, each re-simulated by one simulator.")
 def compare_command(
     study: o.Study = None, track: o.Track = None, train: o.Train = None, from_stop: o.From = None, to_stop: o.To = None,
-    time: o.Time = None, supplement: o.Supplement = None, points: o.Points = None, out: o.Out = None,
+    time: o.Time = None, supplement: o.Supplement = None, points: o.Points = None, out: o.CompareOut = None,
     no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0, force: o.Force = False,
     debug: o.Debug = False, workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False,
 ):
@@ -58,7 +58,7 @@ def journey_command(
                                 "departure windows, the least dwell [s]."),
     points: int = typer.Option(o.FRONT_POINTS, "--points", "-K", help="Grid nodes per segment."),
     workers: int = typer.Option(1, help="Processes for the segments' fronts."),
-    out: o.Out = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
+    out: o.JourneyOut = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
     force: o.Force = False, debug: o.Debug = False,
 ):
     """Spread a journey's running time over its segments: equal marginal saving vs same percentage. Example: ecostudy journey --train trains/amsterdam_metro.yaml --track tracks/metro_line_4stops.yaml --supplement 10"""
@@ -69,7 +69,7 @@ def journey_command(
 @app.command(short_help="Every case of a study file; resumable, in parallel.")
 def run(
     study: Path = typer.Argument(..., help="Study file (YAML) with optional scenarios and sweep."),
-    workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False, out: o.Out = None,
+    workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False, out: o.RunOut = None,
     no_progress: o.NoProgress = False, force: o.Force = False, debug: o.Debug = False,
     kind: str = typer.Option("run", help="Study kind: run (scenarios x sweep, or a library), or one registered."),
 ):

@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.analysis.single import solve_run
-from ecostudy.core.errors import InputError
+from ecostudy.core.errors import InputError, problem
 from ecostudy.core.grid import Profile
 from ecostudy.core.physics import Envelope
 from ecostudy.core.types import Timing, Train
@@ -69,12 +69,10 @@ class Reference(NamedTuple):
         return np.interp(time, self.times, self.distance)
 
 
-def clock(distance, speeds, where="reference"):
-    """Times [s] along a speed-distance profile (the mean speed over each piece)."""
+def clock(distance, speeds):
+    """Times [s] along a speed-distance profile (the mean speed over each piece); the distances
+    increase and no two neighbouring speeds are 0 (:func:`table_reference` checks a user's table)."""
     mean = 0.5 * (speeds[1:] + speeds[:-1])
-    if np.any(np.diff(distance) <= 0) or np.any(mean <= 0) or np.any(speeds < 0):
-        raise InputError(f"{where}: distances must increase and the speed may be 0 only at single points "
-                         "(a train that stands never arrives)")
     return np.concatenate([[0.0], np.cumsum(np.diff(distance) / mean)])
 
 
@@ -150,7 +148,30 @@ def optimal_reference(consist, track, from_stop, to_stop, running_time=None, sup
     return Reference(t.nodes, t.v, t.time, float(np.sum(t.ft * np.diff(t.nodes)))), run
 
 
+def _bad_row(distance_m, speed_kmh):
+    """The first bad row of a speed-distance table as (row, column, what), rows numbered as a spreadsheet
+    shows them (the header is row 1), or None: the distances increase, no value is below 0, the speed is
+    0 only at single points (a train that stands never arrives)."""
+    columns = {"distance_m": np.asarray(distance_m, float), "speed_kmh": np.asarray(speed_kmh, float)}
+    distance, speed = columns["distance_m"], columns["speed_kmh"]
+    found = [(i + 1, "distance_m", f"{distance[i + 1]:g} after {distance[i]:g}: the distances must increase")
+             for i in np.flatnonzero(np.diff(distance) <= 0)[:1]]
+    found += [(i, column, f"{values[i]:g} is below 0") for column, values in columns.items()
+              for i in np.flatnonzero(values < 0)[:1]]
+    found += [(i + 1, "speed_kmh", "0 after 0: the speed may be 0 only at single points (a train that stands "
+               "never arrives)") for i in np.flatnonzero((speed[1:] == 0) & (speed[:-1] == 0))[:1]]
+    if not found:
+        return None
+    i, column, what = min(found)
+    return i + 2, column, what
+
+
 def table_reference(distance_m, speed_kmh, where="reference table"):
-    """A user's speed-distance table (distance from the start [m], speed [km/h])."""
+    """A user's speed-distance table (distance from the start [m], speed [km/h]) read from ``where``;
+    a bad row is refused naming it (the first by row)."""
+    bad = _bad_row(distance_m, speed_kmh)
+    if bad:
+        row, column, what = bad
+        raise InputError(problem(where, f"{column}, row {row}", what))
     distance, speeds = np.asarray(distance_m, float), np.asarray(speed_kmh, float) * KMH
-    return Reference(distance, speeds, clock(distance, speeds, where), float("nan"))
+    return Reference(distance, speeds, clock(distance, speeds), float("nan"))

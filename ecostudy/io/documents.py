@@ -24,6 +24,27 @@ def given(value: Value | None) -> Value:
     return value
 
 
+def split_selector(path: Where) -> tuple[Path, str | None]:
+    """(file path, selector or None) of ``file#selector``; a file whose name holds '#' stays whole."""
+    text = str(path)
+    if "#" in text and not Path(text).is_file():
+        text, selector = text.rsplit("#", 1)
+        return Path(text), selector
+    return Path(text), None
+
+
+def named_file(study: Where, field: str, name: Where) -> Path:
+    """The file ``name`` that the study file ``study`` gives in ``field`` (relative to the study file's
+    folder; ``file#selector`` keeps its selector); one that is not there is refused in one line naming
+    the study file and the field."""
+    path = Path(study).parent / name
+    file = split_selector(path)[0]
+    if not file.is_file():
+        what = "a folder, not a file" if file.is_dir() else "file not found"
+        raise InputError(problem(study, field, f"'{name}': {what}" + ("" if Path(name).is_absolute() else f" ({file})")))
+    return path
+
+
 def read_document(path: str | PathLike[str]) -> dict[str, Any]:
     """Parse a YAML or JSON file into Python data; malformed files raise one-line errors.
 

@@ -25,7 +25,8 @@ from ecostudy.io.formats import (
     train_document_to_schema,
 )
 from ecostudy.io.timetable import name_stops, window_si
-from ecostudy.io.documents import Where, given, read_document as read_document, validate as validate  # re-exported
+from ecostudy.io.documents import (Where, given, named_file, read_document as read_document,  # re-exported
+                                   split_selector, validate as validate)
 
 
 
@@ -182,15 +183,6 @@ def train_document(path: Where) -> tuple[dict[str, Any], dict[str, str] | None]:
     return data, None
 
 
-def split_selector(path: Where) -> tuple[Path, str | None]:
-    """(file path, selector or None) of ``file#selector``; a file whose name holds '#' stays whole."""
-    text = str(path)
-    if "#" in text and not Path(text).is_file():
-        text, selector = text.rsplit("#", 1)
-        return Path(text), selector
-    return Path(text), None
-
-
 def track_document(path: Where) -> dict[str, Any]:
     """Schema-shaped data of a track file: YAML, or TTOBench JSON."""
     data = read_document(path)
@@ -304,13 +296,14 @@ def load_study(study_path: Where) -> "Study":
     s = validate(schemas.StudyFile, read_document(path), path)
     if s.library is not None:
         raise InputError(problem(path, "library", "a library study runs with `ecostudy run`"))
-    base, track_file, train_file = path.parent, given(s.track), given(s.train)
-    track = load_track(base / track_file)
-    train = load_train(base / train_file)
+    track_file, train_file = named_file(path, "track", given(s.track)), named_file(path, "train", given(s.train))
+    track = load_track(track_file)
+    train = load_train(train_file)
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     if s.timetable is not None:
-        tt, _ = name_stops(load_timetable(base / s.timetable), track, base / s.timetable)
-        timing = timing_from_timetable(tt, from_stop, to_stop, base / s.timetable)
+        timetable = named_file(path, "timetable", s.timetable)
+        tt, _ = name_stops(load_timetable(timetable), track, timetable)
+        timing = timing_from_timetable(tt, from_stop, to_stop, timetable)
     else:
         timing = Timing(running_time=s.running_time_s,
                         supplement=None if s.supplement_percent is None else s.supplement_percent * units.PERCENT,
@@ -318,7 +311,7 @@ def load_study(study_path: Where) -> "Study":
     output = Path(s.output) if s.output else Path("out") / s.name
     return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop,
                  timing=timing, objective=s.objective, weights=(s.weights.time, s.weights.energy),
-                 points=s.points, output=output, track_path=base / track_file, train_path=base / train_file,
+                 points=s.points, output=output, track_path=track_file, train_path=train_file,
                  windows=windows_from_schema(s.windows, track, from_stop, to_stop, path))
 
 
@@ -347,7 +340,7 @@ def load_network_study(study_path: Where) -> NetworkStudy:
     """Read a network study file and the files it names; units converted here."""
     path = Path(study_path)
     s = validate(schemas.NetworkStudyFile, read_document(path), path)
-    track, train = load_track(path.parent / s.track), load_train(path.parent / s.train)
+    track, train = load_track(named_file(path, "track", s.track)), load_train(named_file(path, "train", s.train))
     stops = list(track.stops) if s.stops is None else s.stops
     check_stop_list(track, stops, path, "stops")
     if s.running_times_s is not None and len(s.running_times_s) != len(stops) - 1:

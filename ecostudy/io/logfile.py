@@ -37,7 +37,7 @@ from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.types import Track
 from ecostudy.core.units import FloatArray
-from ecostudy.io.documents import validate
+from ecostudy.io.documents import named_file, validate
 from ecostudy.io.schemabase import Strict
 from ecostudy.io.writers import atomic_write
 from ecostudy.io.yamlsafe import MAX_FILE_BYTES, DocumentError, load_yaml
@@ -91,11 +91,10 @@ class LoggedRun:
     path: Path | None = None
     columns: tuple[str, ...] = field(default=())  # (position column, speed column) as the file names them
 
-    @property
-    def files(self) -> tuple[Path, Path]:
-        """(track, train) paths as the header gives them, relative to the log's folder."""
-        base = self.path.parent if self.path else Path(".")
-        return base / self.header.track, base / self.header.train
+    def named(self, field: str) -> Path:
+        """The header's ``track`` or ``train`` file, relative to the log's folder; one that is not there
+        is refused naming the log and the header field."""
+        return named_file(self.path or Path("log"), f"header.{field}", getattr(self.header, field))
 
 
 def split_header(text: str, path: Where) -> tuple[dict[str, Any], str]:

@@ -22,13 +22,17 @@ FILE_MODE = 0o666 & ~_umask()  # what open() would give: the user's umask, not m
 
 def check_output_dir(path: Union[str, Path], files: Iterable[str] = ()) -> Path:
     """Refuse, before any computation, an output folder that is a file, cannot be created or
-    written, or holds a folder where one of ``files`` goes: one line naming it (exit 2)."""
+    written, or holds a folder where one of ``files`` goes: one line naming it (exit 2). The
+    folders this check creates to try are removed again: a command refused later (an infeasible
+    running time) leaves nothing behind; the first file written creates the folder
+    (:func:`atomic_write`, the store)."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise InputError(problem(path, "", "the output folder is a file"))
     for name in files:
         if (path / name).is_dir():
             raise InputError(problem(path / name, "", "is a folder where an output file goes"))
+    created = [p for p in (path, *path.parents) if not p.exists()]  # deepest first
     try:
         path.mkdir(parents=True, exist_ok=True)
         fd, probe = tempfile.mkstemp(prefix=".write-test", dir=path)
@@ -36,6 +40,12 @@ def check_output_dir(path: Union[str, Path], files: Iterable[str] = ()) -> Path:
         os.unlink(probe)
     except OSError as exc:
         raise InputError(problem(path, "", f"cannot write the output folder ({exc.strerror})"))
+    finally:
+        for level in created:
+            try:
+                level.rmdir()
+            except OSError:  # not made here after all, or something came into it meanwhile
+                break
     return path
 
 

@@ -50,8 +50,8 @@ def load_inputs(log_paths, train_path, track_path):
     if len(set(names)) != len(names):
         raise InputError(problem("command line", "LOG", "two logs with the same file name: "
                                  + ", ".join(sorted({n for n in names if names.count(n) > 1}))))
-    header_track, header_train = logs[0].files
-    track_path, train_path = Path(track_path or header_track), Path(train_path or header_train)
+    track_path = Path(track_path) if track_path else logs[0].named("track")
+    train_path = Path(train_path) if train_path else logs[0].named("train")
     track, train = load_track(track_path), load_train(train_path)
     for log in logs:
         check_on_track(log, track)

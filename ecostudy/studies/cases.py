@@ -14,6 +14,7 @@ from pathlib import Path
 from ecostudy import __version__
 from ecostudy.core.errors import InputError, problem
 from ecostudy.io import schemas
+from ecostudy.io.documents import named_file
 from ecostudy.io.loaders import (
     chosen_stops,
     load_timetable,
@@ -37,11 +38,12 @@ def case_key(case):
 
 def _scenario_units(s, path):
     """(name, labels, train document, track document, from, to, scenario) of each scenario."""
-    base = path.parent
     for i, sc in enumerate([schemas.Scenario(name="base")] + list(s.scenarios)):
         where = f"{path}: scenarios[{i - 1}] ({sc.name})" if i else str(path)
-        train_doc = {**train_document(base / (sc.train or s.train))[0], **sc.train_overrides}
-        track_doc = track_document(base / (sc.track or s.track))
+        field = f"scenarios[{i - 1}]." if i else ""
+        train_doc = {**train_document(named_file(path, field + "train" if sc.train else "train", sc.train or s.train))[0],
+                     **sc.train_overrides}
+        track_doc = track_document(named_file(path, field + "track" if sc.track else "track", sc.track or s.track))
         with warnings.catch_warnings():
             if i:
                 warnings.simplefilter("ignore")  # the base train already warned
@@ -77,7 +79,8 @@ def expand(path, skipped=None):
         timing = {"running_time_s": s.running_time_s, "supplement_percent": s.supplement_percent,
                   "window_s": list(s.window_s) if s.window_s else None}
         if s.timetable is not None:
-            t = timing_from_timetable(load_timetable(base / s.timetable), from_stop, to_stop, base / s.timetable)
+            timetable = named_file(path, "timetable", s.timetable)
+            t = timing_from_timetable(load_timetable(timetable), from_stop, to_stop, timetable)
             timing = {"running_time_s": t.running_time,
                       "supplement_percent": None if t.supplement is None else 100 * t.supplement, "window_s": None}
         for field in ("running_time_s", "supplement_percent"):

@@ -26,6 +26,7 @@ from ecostudy.core.types import State
 from ecostudy.io import schemas
 from ecostudy.io.loaders import (chosen_stops, read_document, track_document, track_from_schema,
                                  train_document, train_from_schema, validate)
+from ecostudy.io.documents import named_file
 from ecostudy.io.loopfile import Controller, SimulateFile
 from ecostudy.ocp.convex import FASTEST, ConvexProgram, trapezoid_grid
 from ecostudy.ocp.problem import prepare
@@ -56,8 +57,8 @@ def expand(path):
     """(study, output folder, cases); the inputs are validated here, once."""
     path = Path(path)
     s = validate(SimulateFile, read_document(path), path)
-    train_doc = train_document(path.parent / s.train)[0]
-    track_doc = track_document(path.parent / s.track)
+    train_doc = train_document(named_file(path, "train", s.train))[0]
+    track_doc = track_document(named_file(path, "track", s.track))
     train = train_from_schema(validate(schemas.TrainFile, train_doc, f"{path} train"), path)
     track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{path} track"))
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)

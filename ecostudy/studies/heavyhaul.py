@@ -38,6 +38,7 @@ from ecostudy.heavyhaul.reference import Reference, optimal_reference, single_ma
 from ecostudy.heavyhaul.qp import ConicHorizon
 from ecostudy.heavyhaul.rhc import RecedingHorizon, Scales
 from ecostudy.io import schemas
+from ecostudy.io.documents import named_file
 from ecostudy.io.heavyhaulfile import HeavyhaulFile
 from ecostudy.io.loaders import (chosen_stops, consist_from_document, read_document, track_document,
                                  track_from_schema, validate)
@@ -50,21 +51,13 @@ from ecostudy.studies.sizes import check_heavyhaul_study
 def _reference(s, path, consist, track, from_stop, to_stop):
     r = s.reference
     if r.table is not None:
-        where = path.parent / r.table
+        where = named_file(path, "reference.table", r.table)
         table = number_columns(where, ("distance_m", "speed_kmh"))  # text, NaN, a missing column: one line
-        distance, speed = table["distance_m"], table["speed_kmh"]
-        found = [(i + 1, "distance_m", f"{distance[i + 1]:g} after {distance[i]:g}: the distances must increase")
-                 for i in np.flatnonzero(np.diff(distance) <= 0)[:1]]
-        found += [(i, column, f"{values[i]:g} is below 0") for column, values in table.items()
-                  for i in np.flatnonzero(values < 0)[:1]]
-        if found:  # the first by row, numbered as a spreadsheet shows it (the header is row 1)
-            i, column, what = min(found)
-            raise InputError(problem(where, f"{column}, row {i + 2}", what))
         extra = [c for c in pd.read_csv(where, nrows=0).columns if c not in ("distance_m", "speed_kmh")]
         if extra:
             warnings.warn(problem(where, ", ".join(map(str, extra)), "not read: a reference table is distance_m and "
                                   "speed_kmh"), EcostudyWarning, stacklevel=2)
-        return table_reference(distance, speed, str(where))
+        return table_reference(table["distance_m"], table["speed_kmh"], where)  # a bad row: one line naming it
     supplement = None if r.supplement_percent is None else r.supplement_percent / 100
     lead = r.limit_lead_samples * s.sample_time_s + (application_time(consist) if s.air_brake else 0.0)  # the pipe's lateness
     try:
@@ -79,20 +72,21 @@ def expand(path):
     """(study, output folder, reference, cases); inputs and the bad-input checks run here, once."""
     path = Path(path)
     s = validate(HeavyhaulFile, read_document(path), path)
-    consist_doc = read_document(path.parent / s.consist)
-    consist = consist_from_document(consist_doc, path.parent / s.consist)
+    consist_path = named_file(path, "consist", s.consist)
+    consist_doc = read_document(consist_path)
+    consist = consist_from_document(consist_doc, consist_path)
     missing = [problem(path, name, f"the consist '{s.consist}' gives no {name} data") for name in ("air_brake", "draft_gear")
                if getattr(s, name) and getattr(consist, name) is None]
     if missing:
         raise InputError(missing)
-    track_doc = track_document(path.parent / s.track)
+    track_doc = track_document(named_file(path, "track", s.track))
     track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{path} track"))
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     segment = make_segment(track, single_mass(consist, 1.0), from_stop, to_stop)
     grade = ruling_grade(segment, float(consist.length.sum()))
     force, needed = starting_coupler_force(consist, grade)
     if force > consist.force_limit:
-        raise InputError(problem(path.parent / s.consist, "couplers.force_limit_kN", f"{consist.force_limit / KN:g} kN "
+        raise InputError(problem(consist_path, "couplers.force_limit_kN", f"{consist.force_limit / KN:g} kN "
                                  f"is below the {force / KN:.0f} kN a coupler carries when the train starts on the "
                                  f"ruling grade ({1e3 * grade:.1f} per mille) of '{track.name}'"))
     reference = _reference(s, path, consist, track, from_stop, to_stop)
