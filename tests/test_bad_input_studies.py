@@ -139,6 +139,17 @@ def test_an_infeasible_running_time_leaves_no_output_folder(tmp_path, args):
     nothing_written(tmp_path)
 
 
+def test_an_infeasible_solve_names_where_its_time_was_given(tmp_path):
+    """The study file's field, or the command line's option, that asked for the impossible time."""
+    path = hostile(tmp_path, "default.yaml", running_time_s=10)
+    refused(run("solve", path, "--no-plot"), f"{path}: running_time_s: infeasible: the fastest possible run takes")
+    nothing_written(tmp_path)
+    refused(run("solve", STUDIES / "default.yaml", "--supplement", 0, "--time", 10, "--no-plot", "--out", tmp_path / "out"),
+            "--time")  # two timings: refused before any solve
+    refused(run("solve", STUDIES / "default.yaml", "--time", 10, "--no-plot", "--out", tmp_path / "out"),
+            "command line: --time: infeasible: the fastest possible run takes")
+
+
 # ----------------------------------------------------------------------------------- values out of range
 @pytest.mark.parametrize("shipped, changes, fragment", [
     ("network_metro_2trains.yaml", {"dwell_s": 1e9}, "dwell_s: Input should be less than or equal to 86400"),

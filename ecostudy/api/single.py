@@ -11,7 +11,7 @@ from ecostudy import __version__
 from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
-from ecostudy.core.errors import InputError, problem
+from ecostudy.core.errors import InfeasibleError, InputError, problem
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.das.methods import das_run
 from ecostudy.io.loaders import chosen_stops, load_track, load_train
@@ -120,7 +120,11 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
                                  "windows on the way yet; use --das round"))
     with drawing(plot) as drawer:  # matplotlib loads in a child while this process solves
         stage(f"{obj} optimum, verified")
-        result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
+        try:
+            result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
+        except InfeasibleError as exc:  # the timing cannot be met: where it was given, by name
+            where, field = timing_source(study, st if study is not None else None, time, supplement, window)
+            raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
         if das is not None:
             result.das = das_run(result, das, time_limit=das_time_limit)
             result.summary["das"] = result.das.summary
@@ -130,6 +134,15 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
                                          "track_sha256": file_digest(paths[0]), "train_sha256": file_digest(paths[1]),
                                          "from": f, "to": t, "points": k})
     return reported(out_dir, run_lines(result, out_dir))
+
+
+def timing_source(study, st, time, supplement, window) -> tuple[str, str]:
+    """(file or 'command line', field) that set a solve's timing, for a line that names it."""
+    given = [name for name, value in (("--time", time), ("--supplement", supplement), ("--window", window))
+             if value is not None]
+    if given or st is None:
+        return "command line", given[0] if given else "--time"
+    return str(study), st.timing_field
 
 
 def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:

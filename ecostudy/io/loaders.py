@@ -63,6 +63,7 @@ class Study:
     track_path: Path | None = None
     train_path: Path | None = None
     windows: tuple[Window, ...] = ()
+    timing_field: str = "running_time_s"  # the study file's field the timing came from (for errors)
 
 
 # --------------------------------------------------------------------------- conversions
@@ -308,11 +309,14 @@ def load_study(study_path: Where) -> "Study":
         timing = Timing(running_time=s.running_time_s,
                         supplement=None if s.supplement_percent is None else s.supplement_percent * units.PERCENT,
                         window=s.window_s)
+    timing_field = "timetable" if s.timetable is not None else next(
+        (name for name in ("running_time_s", "supplement_percent", "window_s") if getattr(s, name) is not None),
+        "running_time_s")
     output = Path(s.output) if s.output else Path("out") / s.name
     return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop,
                  timing=timing, objective=s.objective, weights=(s.weights.time, s.weights.energy),
                  points=s.points, output=output, track_path=track_file, train_path=train_file,
-                 windows=windows_from_schema(s.windows, track, from_stop, to_stop, path))
+                 windows=windows_from_schema(s.windows, track, from_stop, to_stop, path), timing_field=timing_field)
 
 
 @dataclass
