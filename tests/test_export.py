@@ -48,7 +48,7 @@ def test_fixed_steps_end_at_the_arrival_and_hold_each_interval_s_handle():
 def test_export_command_on_a_solved_run_with_driver_advice(tmp_path):
     runner = CliRunner()
     out = tmp_path / "run"
-    assert runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "200", "--das", "round",
+    assert runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "500", "--das", "round",
                                "--no-plot", "--out", str(out)]).exit_code == 0
     profile = pd.read_csv(out / "profile.csv")
     for every, column, step in (("1s", "time_s", 1.0), ("10m", "position_m", 10.0)):

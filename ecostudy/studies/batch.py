@@ -19,11 +19,11 @@ from ecostudy.core.budget import check_study
 from ecostudy.core.registry import Registry
 from ecostudy.core.errors import EcostudyError, EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.types import Timing
-from ecostudy.das.methods import das_columns
+from ecostudy.das.methods import advice_status, das_columns
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.io.store import Store, check_one_study
-from ecostudy.core.status import parsed
+from ecostudy.core.status import parsed, worst
 from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.ocp.problem import Written
@@ -80,16 +80,17 @@ def _solve_case(case):
     structure = case_key({**{k: case[k] for k in _SCENARIO}, "weights": case["weights"]})
     r = solve_run(track, train, case["from"], case["to"], timing, objective=case["objective"],
                   points=case["points"], weights=tuple(case["weights"]), written=_WRITTEN, structure=structure)
-    summary = r.summary
+    summary, status = r.summary, r.status
     if case["objective"] == "time" and not case["window_s"]:  # the scenario's all-out time: kept for its supplements
         _ALL_OUT[case_key({k: case[k] for k in _SCENARIO})] = r.facts.running_time_s
     if case.get("das"):
         summary["das"] = das_columns(r, case["das"], case["points"], case.get("das_time_limit_s", 60.0))
+        status = worst([status, advice_status(summary["das"])])
     if t_allout is not None:
         summary["all_out_time_s"] = t_allout
     if case.get("profile"):  # the speed profile, for a figure drawn from the store (a front's)
         summary["profile"] = {k: r.profile[k].tolist() for k in ("position_m", "speed_kmh")}
-    return r.status.kind, r.status.reason or None, summary
+    return status.kind, status.reason or None, summary
 
 
 def _serial(todo, task):
