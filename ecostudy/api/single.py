@@ -151,14 +151,16 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
 
 def export_folder(result_dir: Path, every: str = "1s") -> Note:
     """``ecostudy export``: a solve folder's run at fixed steps ('1s': seconds, '10m': metres) as
-    profile_every_<step>.csv and .json in the folder."""
+    profile_every_<step>.csv and .json in the folder; ``ok`` when the run exported is (its status is
+    in the JSON and the text)."""
     match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|m)\s*", every or "")
     if not match or float(match.group(1)) <= 0:
         raise InputError(problem("command line", "--every", f"expected a step such as '1s' (seconds) or '10m' "
                                  f"(metres), not '{every}'"))
     step = float(match.group(1))
-    table, csv, js = write_fixed_step(result_dir, *((step, None) if match.group(2) == "s" else (None, step)))
-    return Note(True, f"{len(table)} rows every {every.strip()}: {csv} and {js.name}", table)
+    table, csv, js, status = write_fixed_step(result_dir, *((step, None) if match.group(2) == "s" else (None, step)))
+    return Note(status.ok, f"{len(table)} rows every {every.strip()}: {csv} and {js.name}\nthe run exported: {status}",
+                table)
 
 
 def doctor() -> Note:

@@ -49,11 +49,12 @@ def export(
     debug: o.Debug = False,
 ):
     """The run of a solve folder at fixed steps of time or distance: position, time, speed, handle and,
-    with driver advice, the advised mode (profile_every_<step>.csv and .json in the folder).
+    with driver advice, the advised mode (profile_every_<step>.csv and .json in the folder, with the
+    run's status); exit 1 when the run exported is not ok.
 
     Example: ecostudy export out/default --every 10m
     """
-    typer.echo(call(debug, "export_folder", result_dir, every).text)
+    told(call(debug, "export_folder", result_dir, every), 1)
 
 
 @app.command(short_help="Check the install: solver chain versions and a toy solve.")
