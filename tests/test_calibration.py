@@ -266,3 +266,17 @@ def test_line_power_from_voltage_and_current_and_work_from_force(inputs, truth):
         model = r.speed(truth.mass, truth.static_mass, truth.davis)
         assert np.max(np.abs(model ** 2 - r.v ** 2)) < 0.005 * np.max(r.v) ** 2  # measured: 0.14 %
         assert np.max(np.abs(model - r.v)[r.v > 10]) < 0.15                    # measured: 0.10 m/s
+
+
+@pytest.mark.flagged_on_purpose
+def test_savings_of_an_optimum_not_verified_are_flagged(inputs, calibrated, logged):
+    """K = 10: the optimum for a logged running time solves, but its re-simulation misses; its
+    savings row says so (flagged, naming the run), and so does the calibrate command's summary."""
+    from ecostudy.calibration.savings import savings
+    from ecostudy.studies.calibrate import savings_statuses
+    table = savings(as_log(logged[0][0], "there"), inputs[0], calibrated, draws=1, points=10)
+    assert not table["verified"].all()
+    assert table.loc[~table["verified"], "status"].str.startswith("flagged: re-simulation outside tolerance").all()
+    statuses = savings_statuses(table)
+    assert len(statuses) == len(table) and not all(s.ok for s in statuses.values())
+    assert all(name.startswith("savings there run ") for name in statuses)
