@@ -120,7 +120,10 @@ def test_pareto_command_with_das(tmp_path):
     r = CliRunner().invoke(app, ["pareto", "--track", str(TRACKS / "regional_808m.yaml"), "--train",
                                  str(TRAINS / "regional_alstom.yaml"), "--count", "3", "--supplement-max", "20",
                                  "--points", "200", "--das", "round", "--out", str(tmp_path)])
-    assert r.exit_code == 0, r.output
+    # on this grid the rounded advice stops about 6 m short at two points: those are flagged, naming it
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert r.exit_code == 1 and len(summary["not_ok"]) == 2, r.output
+    assert all(c["status"].startswith("flagged: driver advice round: stopped") for c in summary["not_ok"]), r.output
     header = (tmp_path / "pareto.csv").read_text().splitlines()[0]
     assert "das_traction_energy_kWh" in header and "das_gap_to_ato_on_time_pct" in header
     assert json.loads((tmp_path / "pareto.json").read_text())["das"]["solved"] == 3  # --count 3: three points
