@@ -52,7 +52,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     figures, workers, started = output(fig_format, dpi), every_core(workers), perf_counter()
     check_options(count=count, supplement_max=supplement_max, points=points, workers=workers, weighted=weighted,
                   das_time_limit=das_time_limit)
-    trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points)
+    trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points, "pareto")
     no_windows(st, "pareto")
     train_doc, track_doc = documents(st, train, track)
     cases = front_cases(train_doc, track_doc, f, t, count, supplement_max * units.PERCENT, k or FRONT_POINTS,
@@ -98,7 +98,7 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
     figures, workers = output(fig_format, dpi), every_core(workers)
     check_options(time=time, supplement=supplement, points=points, workers=workers)
     only_one(time=time, supplement=supplement)
-    _, _, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points)
+    _, _, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points, "compare")
     no_windows(st, "compare")
     if time is not None or supplement is not None:
         timing = timing_of(time, supplement)

@@ -93,7 +93,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         if track or train:
             raise InputError(problem("command line", "--track/--train",
                                      "give a study file or --track and --train, not both"))
-        st = load_checked_study(study)
+        st = load_checked_study(study, "solve")
         paths = (st.track_path, st.train_path)
         trk, trn, f, t, windows = st.track, st.train, st.from_stop, st.to_stop, st.windows
         timing, obj, w, k = st.timing, objective or st.objective, st.weights, points or st.points

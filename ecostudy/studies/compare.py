@@ -66,7 +66,7 @@ def study_documents(st):
 def expand_compare(path):
     """A study file's base case as a comparison (``ecostudy run FILE --kind compare``): its timing,
     its grid; written beside its output (``<output>_compare``)."""
-    st = load_checked_study(path)
+    st = load_checked_study(path, "compare")
     no_windows(st, "compare")
     train_doc, track_doc = study_documents(st)
     cases = compare_cases(train_doc, track_doc, st.from_stop, st.to_stop, st.timing, st.points or RUN_POINTS, st.name)
