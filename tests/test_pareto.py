@@ -1,9 +1,11 @@
 """Pareto fronts: monotone, verified, equal to individual solves, the same serial and in parallel."""
 import json
 
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
+from ecostudy import api
 from ecostudy.cli import app
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train
@@ -127,3 +129,17 @@ def test_pareto_command_with_das(tmp_path):
     header = (tmp_path / "pareto.csv").read_text().splitlines()[0]
     assert "das_traction_energy_kWh" in header and "das_gap_to_ato_on_time_pct" in header
     assert json.loads((tmp_path / "pareto.json").read_text())["das"]["solved"] == 3  # --count 3: three points
+
+
+@pytest.mark.flagged_on_purpose
+def test_weighted_points_are_runs_with_their_status(tmp_path):
+    """`pareto --weighted 3` at K = 10: the weighted-sum point at w_e = 0.03 solves but its
+    re-simulation misses; it is a case of the command's status, named by its weight, and
+    `pareto_weighted.csv` says each point's status."""
+    report = api.pareto_folder(track=TRACKS / "amsterdam_rokin_centraal.yaml", train=TRAINS / "amsterdam_metro.yaml",
+                               count=2, points=10, weighted=3, plot=False, workers=1, out=tmp_path)
+    weighted = pd.read_csv(tmp_path / "pareto_weighted.csv")
+    assert list(weighted["status"] == "ok") == list(weighted["verified"]) and not weighted["verified"].all()
+    named = {c.case: c.status for c in report.not_ok}
+    assert "weighted w_e = 0.03" in named, named
+    assert str(named["weighted w_e = 0.03"]).startswith("flagged: re-simulation outside tolerance")

@@ -22,7 +22,7 @@ from ecostudy.studies.compare import compare_cases, study_documents
 from ecostudy.studies.journey import journey
 from ecostudy.studies.options import case_from, check_options, no_windows, only_one, output_folder, timing_of
 from ecostudy.studies.front import front_cases
-from ecostudy.studies.pareto import weighted_points
+from ecostudy.studies.pareto import weighted_points, weighted_statuses
 from ecostudy.studies.sizes import check_front, check_journey
 from ecostudy.studies.workers import every_core
 
@@ -62,7 +62,8 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     check_front("command line", count, k or FRONT_POINTS, workers, das, das_time_limit)  # refused (unless --force)
     extra = weighted_points(trk, trn, f, t, count=weighted, points=k or FRONT_POINTS) if weighted else None
     ran = run_expanded("pareto", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,
-                       progress=progress, draw=front_files(plot, figures, extra, workers, started))
+                       progress=progress, draw=front_files(plot, figures, extra, workers, started),
+                       more=weighted_statuses(extra) if extra is not None else None)
     write_html(out_dir)
     table, meta = ran.table, ran.table.attrs
     lines = [shown(table, FRONT_COLUMNS + (DAS_COLUMNS if das is not None else []))]

@@ -245,7 +245,7 @@ def kind_named(kind):
 
 
 def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False, out=None, progress=None,
-                 draw=None, compute=None, spec=None):
+                 draw=None, compute=None, spec=None, more=None):
     """A study of ``kind`` already expanded (from a study file, or from a command's options: ``where``
     names it): the cases not stored yet run (serially, in ``workers`` processes or on ``dask``,
     :func:`execute`), each stored as it arrives; the table of every stored case; the table's file
@@ -254,7 +254,8 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     ``progress(done, failed, remaining, total)`` after each case; ``compute``: only these cases
     computed now (the others' stored results still in the table; a case neither stored nor computed
     is ``missing`` there, and no result in ``summary.json``); ``spec``: the :class:`StudyKind` itself
-    (default: the one registered as ``kind``). Returns a :class:`StudyRun`."""
+    (default: the one registered as ``kind``); ``more``: statuses of runs the command made beside the
+    cases (by name), part of the folder's status. Returns a :class:`StudyRun`."""
     spec = spec or kind_named(kind)
     if spec.size is not None and compute is None:  # too big: refused with its estimate (unless --force); a part
         # computed now (``compute``) is checked by its caller
@@ -271,7 +272,7 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     drawn, tables = draw(output, expanded.cases, rows, table) if draw is not None else ([], {})
     results = [compute is None or k in rows for k in (c["key"] for c in expanded.cases)]  # left out: not results
     statuses = {**case_statuses([c for c, r in zip(expanded.cases, results) if r], table[results]),
-                **(spec.verdict(table) if spec.verdict else {})}
+                **(spec.verdict(table) if spec.verdict else {}), **(more or {})}
     write_summary(output, kind, statuses, {spec.table_name: spec.table_file, **tables, **{
                   Path(name).stem: name for name in expanded.inputs}}, ["results.sqlite", *drawn], study=str(where),
                   computed_now=counts["computed"], stored_before=counts["stored_before"], **table.attrs)
