@@ -13,6 +13,7 @@ from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.progress import Watcher, stage, watched
+from ecostudy.core.status import Status
 from ecostudy.das.methods import das_run
 from ecostudy.io.loaders import chosen_stops, load_track, load_train
 from ecostudy.io.results import file_digest
@@ -134,7 +135,8 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
 
 def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
     """``ecostudy check``: the Pontryagin regime check of a solve folder (Farooqi 2018, eq. 2.17;
-    eq. 7.4 for net-energy runs), written to its check.json; ``ok`` at 95 % agreement or more."""
+    eq. 7.4 for net-energy runs), written to its check.json with the run's own status; ``ok`` at 95 %
+    agreement or more for a run that is ok."""
     check_options(time=time)
     result_dir = Path(result_dir)
     report = check_result(result_dir, time)
@@ -145,8 +147,9 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
              f"residual {report['stationarity_residual']:.1e}"]
     lines += [f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m "
               f"(lambda/v from {d['psi_min']:.2f} to {d['psi_max']:.2f})" for d in report["disagreements"]]
-    lines.append(f"written {result_dir}/check.json")
-    return Note(report["agreement_pct"] >= 95.0, "\n".join(lines), report)
+    lines += [f"the run checked: {report['run_status']}", f"written {result_dir}/check.json"]
+    run_ok = Status.parse(report["run_status"]).ok
+    return Note(report["agreement_pct"] >= 95.0 and run_ok, "\n".join(lines), report)
 
 
 def export_folder(result_dir: Path, every: str = "1s") -> Note:

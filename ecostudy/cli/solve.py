@@ -38,7 +38,7 @@ def check(
     time: Optional[float] = typer.Option(None, "--time", help="Test as the energy-optimal run arriving by this time [s]."),
     debug: o.Debug = False,
 ):
-    """Pontryagin regime check of a solved profile (Farooqi 2018, eq. 2.17; eq. 7.4 for net-energy runs); exit 1 below 95 % agreement. Example: ecostudy check out/default"""
+    """Pontryagin regime check of a solved profile (Farooqi 2018, eq. 2.17; eq. 7.4 for net-energy runs); exit 1 below 95 % agreement, or when the run checked is not ok. Example: ecostudy check out/default"""
     told(call(debug, "check_folder", result_dir, time), 1)
 
 
