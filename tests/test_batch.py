@@ -166,7 +166,7 @@ def test_das_columns_in_a_study(tmp_path):
     assert counts["failed"] == 0
     rows = table.set_index("scenario")
     assert rows.loc["base", "das_method"] == "phases" and rows.loc["rounded", "das_method"] == "round"
-    assert rows.loc["base", "das_status"].startswith("optimal")
+    assert rows.loc["base", "das_solver"].startswith("optimal") and rows.loc["base", "das_status"] == "ok"
     assert abs(rows.loc["base", "das_gap_to_ato_on_time_pct"]) < 0.5
     plain = write_yaml(tmp_path / "plain.yaml", {
         "name": "das_study", "track": str(TRACKS / "regional_808m.yaml"), "train": str(TRAINS / "regional_alstom.yaml"),
@@ -236,3 +236,19 @@ def test_workers_die_with_their_parent(tmp_path):
         time.sleep(0.1)
     alive = [p for p in workers if os.path.exists(f"/proc/{p}") and "Z" not in open(f"/proc/{p}/stat").read().split()[2]]
     assert not alive, f"workers {alive} outlived their parent"
+
+
+def test_a_case_whose_advice_misses_the_stop_is_flagged(tmp_path):
+    """`das: round` at K = 200: the case's ATO optimum is verified, its rounded advice as driven
+    stops about 1.9 m short: the case is flagged naming the advice (as `compare` flags that run)."""
+    path = write_yaml(tmp_path / "study.yaml", {
+        "name": "das_flag", "track": str(TRACKS / "amsterdam_rokin_centraal.yaml"),
+        "train": str(TRAINS / "amsterdam_metro.yaml"), "running_time_s": 76, "points": 200, "das": "round",
+        "output": str(tmp_path / "out")})
+    table, counts, _ = run_study(path)
+    row = table.iloc[0]
+    assert row["verified"] and row["solver_status"] == "optimal"
+    assert abs(row["das_stop_error_m"]) > 1.0 and row["das_status"].startswith("flagged: stopped")
+    assert row["status"] == "flagged", row
+    assert str(row["reason"]).startswith("driver advice round: stopped"), row["reason"]
+    assert counts["not_ok"] == 1

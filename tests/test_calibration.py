@@ -277,3 +277,17 @@ def test_a_file_the_log_header_names_that_is_not_there_names_the_field(tmp_path,
     assert result.exit_code == 2 and len(lines) == 1 and "Traceback" not in result.output, result.output
     assert f"log.csv: header.{field}: 'missing.yaml': file not found ({tmp_path / 'missing.yaml'})" in lines[0]
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.flagged_on_purpose
+def test_savings_of_an_optimum_not_verified_are_flagged(inputs, calibrated, logged):
+    """K = 10: the optimum for a logged running time solves, but its re-simulation misses; its
+    savings row says so (flagged, naming the run), and so does the calibrate command's summary."""
+    from ecostudy.calibration.savings import savings
+    from ecostudy.studies.calibrate import savings_statuses
+    table = savings(as_log(logged[0][0], "there"), inputs[0], calibrated, draws=1, points=10)
+    assert not table["verified"].all()
+    assert table.loc[~table["verified"], "status"].str.startswith("flagged: re-simulation outside tolerance").all()
+    statuses = savings_statuses(table)
+    assert len(statuses) == len(table) and not all(s.ok for s in statuses.values())
+    assert all(name.startswith("savings there run ") for name in statuses)

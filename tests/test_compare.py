@@ -72,3 +72,17 @@ def test_mareco_profile_coasts_before_braking_and_downhill():
     descent = (case.nodes[:-1] > 100) & (case.nodes[:-1] < 200)
     assert coasting[descent].all()  # no holding of the 50 km/h limit by braking on the descent
     assert coasting[(case.nodes[:-1] > 400) & (case.nodes[:-1] < 800)].mean() > 0.95
+
+
+def test_a_strategy_that_overspeeds_is_flagged(tmp_path):
+    """K = 20, 80 s: the nearest-level advice (the optimum's handle rounded) runs about 1.6 km/h
+    over the limit, on time and within 1 m of the stop. Its row says so: flagged for the overspeed,
+    the largest excess in its own column."""
+    folder = api.compare_folder(track=TRACKS / "amsterdam_rokin_centraal.yaml", train=TRAINS / "amsterdam_metro.yaml",
+                                time=80.0, points=20, plot=False, workers=1, out=tmp_path / "cmp")
+    rows = folder.table.set_index("strategy")
+    das = rows.loc["DAS round (nearest level)"]
+    assert abs(das["stop_error_m"]) < 1.0 and das["arrival_error_s"] < 1.0
+    assert das["max_overspeed_kmh"] > 0.5
+    assert das["status"].startswith("flagged: overspeed"), das["status"]
+    assert rows.loc["ATO optimum", "status"] == "ok" and rows.loc["ATO optimum", "max_overspeed_kmh"] < 0.5

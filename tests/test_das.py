@@ -37,3 +37,19 @@ def test_round_advice_is_written_and_consistent(tmp_path, train, track, time):
     # rounding a nearly bang-bang optimum costs little and keeps the run close to the timetable
     assert abs(das["gap_to_ato_pct"]) < 3
     assert abs(das["arrival_error_s"]) < 2
+
+
+def test_advice_that_misses_the_stop_is_flagged(tmp_path):
+    """`solve --das round` at K = 200: the ATO optimum is verified, but the rounded advice, driven
+    by the simulator, stops about 1.9 m short of the stop (compare flags the same run): the run is
+    flagged naming the advice, and the command exits 1."""
+    r = CliRunner().invoke(app, ["solve", "--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train",
+                                 str(TRAINS / "amsterdam_metro.yaml"), "--time", "76", "--points", "200",
+                                 "--das", "round", "--no-plot", "--out", str(tmp_path)])
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["verification"]["passed"] and summary["solver"]["status"] == "optimal"
+    das = summary["das"]
+    assert abs(das["stop_error_m"]) > 1.0  # the advice as driven misses the stop
+    assert das["status"].startswith("flagged: stopped") and das["solver"] == "re-simulated"
+    assert summary["status"].startswith("flagged: driver advice round: stopped"), summary["status"]
+    assert r.exit_code == 1, r.output

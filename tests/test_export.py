@@ -48,7 +48,7 @@ def test_fixed_steps_end_at_the_arrival_and_hold_each_interval_s_handle():
 def test_export_command_on_a_solved_run_with_driver_advice(tmp_path):
     runner = CliRunner()
     out = tmp_path / "run"
-    assert runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "200", "--das", "round",
+    assert runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "500", "--das", "round",
                                "--no-plot", "--out", str(out)]).exit_code == 0
     profile = pd.read_csv(out / "profile.csv")
     for every, column, step in (("1s", "time_s", 1.0), ("10m", "position_m", 10.0)):
@@ -65,3 +65,26 @@ def test_export_command_on_a_solved_run_with_driver_advice(tmp_path):
         assert len(data["rows"]) == len(table) and data["units"]["speed_kmh"] == "km/h"
     bad = runner.invoke(app, ["export", str(out), "--every", "fast"])
     assert bad.exit_code == 2 and "--every" in bad.output and "Traceback" not in bad.output
+
+
+@pytest.mark.flagged_on_purpose
+def test_export_of_a_flagged_run_carries_its_status(tmp_path):
+    """K = 10: the run solves but its re-simulation stops 3 m short (flagged). Its export is written,
+    says the run's status in the JSON and on the screen, and exits 1, as the solve did; an ok run's
+    export says ok and exits 0."""
+    runner = CliRunner()
+    out = tmp_path / "coarse"
+    solved = runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "10", "--no-plot",
+                                 "--out", str(out)])
+    assert solved.exit_code == 1, solved.output
+    r = runner.invoke(app, ["export", str(out), "--every", "1s"])
+    data = json.loads((out / "profile_every_1s.json").read_text())
+    assert data["run"]["status"].startswith("flagged: re-simulation outside tolerance"), data["run"]
+    assert (out / "profile_every_1s.csv").is_file()
+    assert r.exit_code == 1 and "flagged: re-simulation outside tolerance" in r.output, r.output
+    fine = tmp_path / "fine"
+    assert runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "200", "--no-plot",
+                               "--out", str(fine)]).exit_code == 0
+    r = runner.invoke(app, ["export", str(fine), "--every", "10m"])
+    assert r.exit_code == 0, r.output
+    assert json.loads((fine / "profile_every_10m.json").read_text())["run"]["status"] == "ok"

@@ -6,7 +6,7 @@ from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.analysis.single import solve_run
 
-from .conftest import TRACKS, TRAINS
+from .conftest import STUDIES, TRACKS, TRAINS
 
 CASES = [("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal", 76.0),
          ("regional_alstom", "regional_808m", "Origin", "Destination", 80.0),
@@ -129,3 +129,24 @@ def test_shipped_net_energy_run_and_its_check(tmp_path):
     assert report["checked_as"].startswith("net-energy-optimal") and report["agreement_pct"] >= 95
     poor = runner.invoke(app, ["check", str(tmp_path / "n"), "--time", "90"])
     assert poor.exit_code == 1, poor.output
+
+
+@pytest.mark.flagged_on_purpose
+def test_check_of_a_flagged_run_says_so(tmp_path):
+    """K = 10: the run obeys eq. 2.17 on its own grid, but its re-simulation stops 3 m short
+    (flagged). `check` finds the regimes consistent and still says the run is flagged, in
+    check.json and on the screen, and exits 1 as its solve did."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from ecostudy.cli import app
+    runner = CliRunner()
+    out = tmp_path / "coarse"
+    assert runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "10", "--no-plot",
+                               "--out", str(out)]).exit_code == 1
+    r = runner.invoke(app, ["check", str(out)])
+    report = json.loads((out / "check.json").read_text())
+    assert report["agreement_pct"] >= 95
+    assert report["run_status"].startswith("flagged: re-simulation outside tolerance"), report["run_status"]
+    assert r.exit_code == 1 and "the run checked: flagged: re-simulation" in r.output, r.output

@@ -2,7 +2,7 @@
 and the re-simulation. ``solve_run`` is the library entry point behind ``ecostudy solve``.
 """
 from dataclasses import dataclass, field
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 import pandas as pd
@@ -44,7 +44,7 @@ class RunResult:
     handle: np.ndarray
     trace: object = None
     stages: dict = field(default_factory=dict)
-    das: object = None  # das.advice.DasRun when a DAS method was asked for
+    das: Any = None  # das.advice.DasRun when a DAS method was asked for
     trajectory: Optional[Trajectory] = None  # the run in SI arrays: read these, not the display table
 
     @property
@@ -55,8 +55,9 @@ class RunResult:
 
     @property
     def status(self) -> Status:
-        """``ok`` when Ipopt proved optimality and the independent re-simulation agrees; else
-        ``flagged`` with what did not pass."""
+        """``ok`` when Ipopt proved optimality, the independent re-simulation agrees and the driver
+        advice (when asked for) keeps the stop, the time and the limits as driven; else ``flagged``
+        with what did not pass."""
         block = self.summary["verification"]  # these two blocks only: a study may put a table row under "das"
         solver = SolverRun.from_dict(self.summary["solver"]).status
         ver = None if block is None else Verification.from_dict(block)
@@ -67,6 +68,9 @@ class RunResult:
             checks[f"re-simulation outside tolerance (arrival {ver.arrival_time_error_s:+.3f} s, stop "
                    f"{ver.stop_error_m:+.3f} m, energy {ver.energy_error_pct:+.3f} %, overspeed "
                    f"{ver.max_overspeed_kmh:.3f} km/h)"] = ver.passed
+        if self.das is not None:  # the driver advice as driven: a run of this command too
+            advice = Status.parse(self.das.summary["status"])
+            checks[f"driver advice {self.das.summary['method']}: {advice.reason}"] = advice.ok
         return from_checks(checks)
 
     @property

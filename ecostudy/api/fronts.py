@@ -22,7 +22,7 @@ from ecostudy.studies.compare import compare_cases, study_documents
 from ecostudy.studies.journey import journey
 from ecostudy.studies.options import case_from, check_options, no_windows, only_one, output_folder, timing_of
 from ecostudy.studies.front import front_cases
-from ecostudy.studies.pareto import weighted_points
+from ecostudy.studies.pareto import weighted_points, weighted_statuses
 from ecostudy.studies.sizes import check_front, check_journey
 from ecostudy.studies.workers import every_core
 
@@ -52,7 +52,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     figures, workers, started = output(fig_format, dpi), every_core(workers), perf_counter()
     check_options(count=count, supplement_max=supplement_max, points=points, workers=workers, weighted=weighted,
                   das_time_limit=das_time_limit)
-    trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points)
+    trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points, "pareto")
     no_windows(st, "pareto")
     train_doc, track_doc = documents(st, train, track)
     cases = front_cases(train_doc, track_doc, f, t, count, supplement_max * units.PERCENT, k or FRONT_POINTS,
@@ -62,7 +62,8 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     check_front("command line", count, k or FRONT_POINTS, workers, das, das_time_limit)  # refused (unless --force)
     extra = weighted_points(trk, trn, f, t, count=weighted, points=k or FRONT_POINTS) if weighted else None
     ran = run_expanded("pareto", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,
-                       progress=progress, draw=front_files(plot, figures, extra, workers, started))
+                       progress=progress, draw=front_files(plot, figures, extra, workers, started),
+                       more=weighted_statuses(extra) if extra is not None else None)
     write_html(out_dir)
     table, meta = ran.table, ran.table.attrs
     lines = [shown(table, FRONT_COLUMNS + (DAS_COLUMNS if das is not None else []))]
@@ -98,7 +99,7 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
     figures, workers = output(fig_format, dpi), every_core(workers)
     check_options(time=time, supplement=supplement, points=points, workers=workers)
     only_one(time=time, supplement=supplement)
-    _, _, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points)
+    _, _, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points, "compare")
     no_windows(st, "compare")
     if time is not None or supplement is not None:
         timing = timing_of(time, supplement)

@@ -13,6 +13,7 @@ from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import InfeasibleError, InputError, problem
 from ecostudy.core.progress import Watcher, stage, watched
+from ecostudy.core.status import Status
 from ecostudy.das.methods import das_run
 from ecostudy.io.loaders import chosen_stops, load_track, load_train
 from ecostudy.io.results import file_digest
@@ -93,7 +94,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         if track or train:
             raise InputError(problem("command line", "--track/--train",
                                      "give a study file or --track and --train, not both"))
-        st = load_checked_study(study)
+        st = load_checked_study(study, "solve")
         paths = (st.track_path, st.train_path)
         trk, trn, f, t, windows = st.track, st.train, st.from_stop, st.to_stop, st.windows
         timing, obj, w, k = st.timing, objective or st.objective, st.weights, points or st.points
@@ -147,7 +148,8 @@ def timing_source(study, st, time, supplement, window) -> tuple[str, str]:
 
 def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
     """``ecostudy check``: the Pontryagin regime check of a solve folder (Farooqi 2018, eq. 2.17;
-    eq. 7.4 for net-energy runs), written to its check.json; ``ok`` at 95 % agreement or more."""
+    eq. 7.4 for net-energy runs), written to its check.json with the run's own status; ``ok`` at 95 %
+    agreement or more for a run that is ok."""
     check_options(time=time)
     result_dir = Path(result_dir)
     report = check_result(result_dir, time)
@@ -158,20 +160,23 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
              f"residual {report['stationarity_residual']:.1e}"]
     lines += [f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m "
               f"(lambda/v from {d['psi_min']:.2f} to {d['psi_max']:.2f})" for d in report["disagreements"]]
-    lines.append(f"written {result_dir}/check.json")
-    return Note(report["agreement_pct"] >= 95.0, "\n".join(lines), report)
+    lines += [f"the run checked: {report['run_status']}", f"written {result_dir}/check.json"]
+    run_ok = Status.parse(report["run_status"]).ok
+    return Note(report["agreement_pct"] >= 95.0 and run_ok, "\n".join(lines), report)
 
 
 def export_folder(result_dir: Path, every: str = "1s") -> Note:
     """``ecostudy export``: a solve folder's run at fixed steps ('1s': seconds, '10m': metres) as
-    profile_every_<step>.csv and .json in the folder."""
+    profile_every_<step>.csv and .json in the folder; ``ok`` when the run exported is (its status is
+    in the JSON and the text)."""
     match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|m)\s*", every or "")
     if not match or float(match.group(1)) <= 0:
         raise InputError(problem("command line", "--every", f"expected a step such as '1s' (seconds) or '10m' "
                                  f"(metres), not '{every}'"))
     step = float(match.group(1))
-    table, csv, js = write_fixed_step(result_dir, *((step, None) if match.group(2) == "s" else (None, step)))
-    return Note(True, f"{len(table)} rows every {every.strip()}: {csv} and {js.name}", table)
+    table, csv, js, status = write_fixed_step(result_dir, *((step, None) if match.group(2) == "s" else (None, step)))
+    return Note(status.ok, f"{len(table)} rows every {every.strip()}: {csv} and {js.name}\nthe run exported: {status}",
+                table)
 
 
 def doctor() -> Note:

@@ -14,6 +14,7 @@ from ecostudy.calibration.fit import train_with
 from ecostudy.calibration.replay import prepare, wheel_work
 from ecostudy.core.progress import stage, step
 from ecostudy.core.defaults import FRONT_POINTS
+from ecostudy.core.status import flagged, worst
 from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kwh
 
@@ -31,7 +32,8 @@ def parameter_draws(calibration, count, seed=0):
 
 def savings(log, track, calibration, draws=8, points=FRONT_POINTS, seed=0):
     """One row per run of ``log``: logged time and traction energy, the calibrated optimum's, the
-    saving [%] and its band over ``draws`` parameter draws."""
+    saving [%] and its band over ``draws`` parameter draws, and its status: the optimum's (solver
+    and re-simulation, :attr:`RunResult.status`), flagged too when a draw of the band is not ok."""
     trains = parameter_draws(calibration, draws, seed)
     work, rows, runs = wheel_work(log), [], prepare(log, track, calibration.train)
     stage(f"savings {log.name}", total=len(runs) * (1 + len(trains)), unit="solves")
@@ -42,11 +44,12 @@ def savings(log, track, calibration, draws=8, points=FRONT_POINTS, seed=0):
         timing = Timing(running_time=float(run.t[-1] - run.t[0]))
         here = replace(track, stops=dict(track.stops, _departure=float(run.x[0]), _arrival=float(run.x[-1])))
         best = solve_run(here, calibration.train, "_departure", "_arrival", timing, points=points)
-        energies = [best.summary["traction_energy_kWh"]]
+        energies, statuses = [best.summary["traction_energy_kWh"]], [best.status]
         step(i * (1 + len(trains)) + 1, f"run {run.index}")
-        for train in trains:
-            energies.append(solve_run(here, train, "_departure", "_arrival", timing, points=points,
-                                      warm_start=best).summary["traction_energy_kWh"])
+        for n, train in enumerate(trains):
+            drawn = solve_run(here, train, "_departure", "_arrival", timing, points=points, warm_start=best)
+            energies.append(drawn.summary["traction_energy_kWh"])
+            statuses.append(drawn.status if drawn.ok else flagged(f"parameter draw {n + 1}: {drawn.status.reason}"))
             step(i * (1 + len(trains)) + len(energies), f"run {run.index}")
         saving = [100 * (to_kwh(logged) - e) / to_kwh(logged) for e in energies]
         verified = best.summary["verification"] or {}
@@ -54,5 +57,5 @@ def savings(log, track, calibration, draws=8, points=FRONT_POINTS, seed=0):
                      "running_time_s": timing.running_time, "logged_traction_kWh": to_kwh(logged),
                      "optimal_traction_kWh": energies[0], "saving_pct": saving[0],
                      "saving_low_pct": min(saving), "saving_high_pct": max(saving), "draws": len(trains),
-                     "verified": bool(verified.get("passed", False))})
+                     "verified": bool(verified.get("passed", False)), "status": str(worst(statuses))})
     return pd.DataFrame(rows)

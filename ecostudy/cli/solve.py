@@ -36,7 +36,7 @@ def check(
     time: Optional[float] = typer.Option(None, "--time", help="Test as the energy-optimal run arriving by this time [s]."),
     debug: o.Debug = False,
 ):
-    """Pontryagin regime check of a solved profile (Farooqi 2018, eq. 2.17; eq. 7.4 for net-energy runs); exit 1 below 95 % agreement. Example: ecostudy check out/default"""
+    """Pontryagin regime check of a solved profile (Farooqi 2018, eq. 2.17; eq. 7.4 for net-energy runs); exit 1 below 95 % agreement, or when the run checked is not ok. Example: ecostudy check out/default"""
     told(call(debug, "check_folder", result_dir, time), 1)
 
 
@@ -47,11 +47,12 @@ def export(
     debug: o.Debug = False,
 ):
     """The run of a solve folder at fixed steps of time or distance: position, time, speed, handle and,
-    with driver advice, the advised mode (profile_every_<step>.csv and .json in the folder).
+    with driver advice, the advised mode (profile_every_<step>.csv and .json in the folder, with the
+    run's status); exit 1 when the run exported is not ok.
 
     Example: ecostudy export out/default --every 10m
     """
-    typer.echo(call(debug, "export_folder", result_dir, every).text)
+    told(call(debug, "export_folder", result_dir, every), 1)
 
 
 @app.command(short_help="Check the install: solver chain versions and a toy solve.")

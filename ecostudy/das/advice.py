@@ -23,7 +23,8 @@ import pandas as pd
 from ecostudy.analysis.regimes import guess_from_result
 from ecostudy.core.errors import SolverError
 from ecostudy.core.progress import stage
-from ecostudy.core.simulate import Driven, simulate
+from ecostudy.core.simulate import Driven, simulate, worst_overspeed
+from ecostudy.core.status import driven_run, flagged, worst
 from ecostudy.core.units import KMH, to_kmh, to_kwh
 from ecostudy.ocp import phases, session
 
@@ -126,14 +127,20 @@ def _gap_on_time(energies, result, arrival):
     return 100 * ((energies[key] + abs(marginal) * late) / ato - 1)
 
 
-def summary_block(method, result, outcome, advice, status, **extra):
+def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
+    """The ``das`` block of a DAS method's run: energies and gaps, and its ``status`` as a driven run
+    (:func:`~ecostudy.core.status.driven_run`: stop, arrival against the ATO run's time, overspeed
+    over the limits), flagged too for each reason in ``flags``; ``solver`` says how the advice was
+    made (e.g. ``optimal, re-simulated``)."""
     row = outcome.row(result.train, result.segment.distance)
     energies = {k: row[k] for k in ("traction_energy_kWh", "net_energy_kWh")}
+    arrival_error = row["running_time_s"] - result.summary["running_time_s"]
+    overspeed = to_kmh(worst_overspeed(result.segment, outcome.trace))
+    status = worst([driven_run(row["stop_error_m"], arrival_error, overspeed), *(flagged(f) for f in flags)])
     return {"method": method, **energies, "gap_to_ato_pct": _gap(energies, result),
             "gap_to_ato_on_time_pct": _gap_on_time(energies, result, row["running_time_s"]),
-            "mode_changes": len(advice) - 1, "bound_kWh": None, "status": status,
-            "arrival_error_s": row["running_time_s"] - result.summary["running_time_s"],
-            "stop_error_m": row["stop_error_m"],
+            "mode_changes": len(advice) - 1, "bound_kWh": None, "status": str(status), "solver": solver,
+            "arrival_error_s": arrival_error, "stop_error_m": row["stop_error_m"], "max_overspeed_kmh": overspeed,
             "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v))), **extra}
 
 
@@ -207,7 +214,8 @@ def advice_outcome(name, result, layout, m):
 def das_phases(result, points=None):
     m, layout, outcome = solve_phases(result, points)
     advice, sim, plan_kwh = advice_outcome("DAS phases", result, layout, m)
-    block = summary_block("phases", result, sim, advice, f"{outcome.status}, re-simulated",
+    flags = () if outcome.status == "optimal" else (f"the DAS phases NLP ended {outcome.status}, not optimal",)
+    block = summary_block("phases", result, sim, advice, f"{outcome.status}, re-simulated", flags,
                    planned_traction_energy_kWh=plan_kwh, phases=len(layout.phases),
                    intervals=layout.intervals, solve_s=outcome.seconds + outcome.nl_seconds,
                    build_s=outcome.build_seconds)

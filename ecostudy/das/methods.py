@@ -1,11 +1,12 @@
 """The DAS methods by name (``round``, ``phases``, ``minlp``) and their table columns."""
 from ecostudy.core.errors import EcostudyError
 from ecostudy.core.registry import Registry
+from ecostudy.core.status import OK, Status, flagged
 from ecostudy.das.advice import das_phases, das_round
 from ecostudy.das.minlp import das_minlp
 
 DAS_COLUMNS = ("method", "traction_energy_kWh", "net_energy_kWh", "gap_to_ato_pct", "gap_to_ato_on_time_pct",
-               "mode_changes", "arrival_error_s", "stop_error_m", "status")
+               "mode_changes", "arrival_error_s", "stop_error_m", "max_overspeed_kmh", "status", "solver")
 
 
 def das_columns(result, method, points=None, time_limit=60.0):
@@ -18,6 +19,16 @@ def das_columns(result, method, points=None, time_limit=60.0):
     arrival = block.get("arrival_error_s")
     row["das_running_time_s"] = None if arrival is None else result.summary["running_time_s"] + arrival
     return row
+
+
+def advice_status(row):
+    """What the ``das_`` columns of a table row (:func:`das_columns`) add to its case's status: ``ok``,
+    or ``flagged`` naming the advice (an advice not kept or not computed; the ATO run stands)."""
+    advice = Status.parse(row["das_status"])
+    if advice.ok:
+        return OK
+    return flagged(f"driver advice {row['das_method']}: {advice.reason}" if advice.kind == "flagged"
+                   else f"driver advice {row['das_method']} failed: {advice.reason}")
 
 
 DAS_METHODS: Registry = Registry("DAS method")

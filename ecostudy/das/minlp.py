@@ -42,8 +42,8 @@ def das_minlp(result, points=None, time_limit=60.0):
     # a nonconvex OA master can cut off the incumbent itself; such a "bound" is no bound at all, and
     # neither is the 0 a search stopped before its first master problem reports
     valid = oa_bound is not None and 0 < oa_bound <= best_kwh * (1 + 1e-6) and found.iterations > 0
-    status = _status(found, name, time_limit)
-    block = summary_block("minlp", result, sim, advice, status,
+    solver, flags = _status(found, name, time_limit)
+    block = summary_block("minlp", result, sim, advice, solver, flags,
                           planned_traction_energy_kWh=plan, search_s=found.seconds,
                           search_objective_kWh=to_kwh(found.upper * e_ref) if np.isfinite(found.upper) else None,
                           oa_master_bound_kWh=oa_bound, oa_iterations=found.iterations,
@@ -54,14 +54,15 @@ def das_minlp(result, points=None, time_limit=60.0):
 
 
 def _status(found, name, time_limit):
+    """(how the advice was made, the reasons to flag it): a search stopped at its time limit or
+    failed is flagged."""
     if found.limited:
         how = "was stopped at" if found.stopped else "reached"
         pattern = "the best pattern it had found" if found.found else "no pattern found by then"
-        return f"flagged: the MINLP search {how} its {time_limit:g} s time limit ({pattern}); {name} re-simulated"
-
+        return f"{name} re-simulated", (f"the MINLP search {how} its {time_limit:g} s time limit ({pattern})",)
     if found.termination.startswith("failed"):
-        return f"flagged: the MINLP search {found.termination}; {name} re-simulated"
-    return f"MindtPy {found.termination}; {name} re-simulated"
+        return f"{name} re-simulated", (f"the MINLP search {found.termination}",)
+    return f"MindtPy {found.termination}; {name} re-simulated", ()
 
 
 def _bound_note(valid, oa_bound, found):

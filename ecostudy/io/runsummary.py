@@ -99,7 +99,9 @@ class DasSummary:
     mode_changes: int
     arrival_error_s: float
     stop_error_m: float
-    status: str
+    status: str                        # as a driven run: ok, or flagged with the reasons
+    solver: Optional[str] = None       # how the advice was made, e.g. "optimal, re-simulated"
+    max_overspeed_kmh: Optional[float] = None
     bound_kWh: Optional[float] = None
     gap_pct: Optional[float] = None
     search_s: Optional[float] = None
@@ -113,6 +115,8 @@ class DasSummary:
                    gap_to_ato_on_time_pct=_opt(data, "gap_to_ato_on_time_pct"),
                    mode_changes=int(data["mode_changes"]), arrival_error_s=float(data["arrival_error_s"]),
                    stop_error_m=float(data["stop_error_m"]), status=str(data["status"]),
+                   solver=None if data.get("solver") is None else str(data["solver"]),
+                   max_overspeed_kmh=_opt(data, "max_overspeed_kmh"),
                    bound_kWh=_opt(data, "bound_kWh"), gap_pct=_opt(data, "gap_pct"), search_s=_opt(data, "search_s"),
                    oa_iterations=None if oa is None else int(oa))
 

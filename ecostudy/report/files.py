@@ -5,7 +5,7 @@ from pathlib import Path
 
 from ecostudy.analysis.export import fixed_step
 from ecostudy.core.errors import InputError, problem
-from ecostudy.core.status import OK, flagged
+from ecostudy.core.status import OK, Status, flagged
 from ecostudy.io.folder import write_summary
 from ecostudy.io.results import load_result
 from ecostudy.io.writers import write_csv, write_json
@@ -106,8 +106,8 @@ MAX_EXPORT_ROWS = 1_000_000  # a run every 1 ms for 15 min; a step below was a t
 
 def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
     """The run of a solve folder every ``time_step_s`` or ``distance_step_m`` (``analysis.export``),
-    as ``profile_every_<step>.csv`` and ``.json`` beside it (the JSON: units, step, rows). Returns
-    (table, csv path, json path)."""
+    as ``profile_every_<step>.csv`` and ``.json`` beside it (the JSON: the run with its status, units,
+    step, rows). Returns (table, csv path, json path, the run's :class:`~ecostudy.core.status.Status`)."""
     saved = load_result(result_dir)
     span, unit = (saved.trajectory.time[-1], "s") if time_step_s is not None else (saved.trajectory.nodes[-1], "m")
     rows = float(span) / (time_step_s if time_step_s is not None else distance_step_m) + 2
@@ -119,8 +119,9 @@ def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
     step = f"{time_step_s:g}s" if time_step_s is not None else f"{distance_step_m:g}m"
     csv, js = (Path(result_dir) / f"profile_every_{step}.{ext}" for ext in ("csv", "json"))
     write_csv(csv, table)
-    write_json(js, {"run": {k: saved.summary.get(k) for k in ("track", "train", "from", "to", "running_time_s")},
+    run = {k: saved.summary.get(k) for k in ("track", "train", "from", "to", "running_time_s", "status")}
+    write_json(js, {"run": run,
                     "step": {"time_s": time_step_s} if time_step_s is not None else {"distance_m": distance_step_m},
                     "units": {c: u for c, u in EXPORT_UNITS.items() if c in table},
                     "rows": table.to_dict("records")})
-    return table, csv, js
+    return table, csv, js, Status.parse(str(saved.summary.get("status") or "failed: no status recorded"))

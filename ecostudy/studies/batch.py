@@ -19,11 +19,11 @@ from ecostudy.core.budget import check_study
 from ecostudy.core.registry import Registry
 from ecostudy.core.errors import EcostudyError, EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.types import Timing
-from ecostudy.das.methods import das_columns
+from ecostudy.das.methods import advice_status, das_columns
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.io.store import Store, check_one_study
-from ecostudy.core.status import parsed
+from ecostudy.core.status import parsed, worst
 from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.ocp.problem import Written
@@ -80,16 +80,17 @@ def _solve_case(case):
     structure = case_key({**{k: case[k] for k in _SCENARIO}, "weights": case["weights"]})
     r = solve_run(track, train, case["from"], case["to"], timing, objective=case["objective"],
                   points=case["points"], weights=tuple(case["weights"]), written=_WRITTEN, structure=structure)
-    summary = r.summary
+    summary, status = r.summary, r.status
     if case["objective"] == "time" and not case["window_s"]:  # the scenario's all-out time: kept for its supplements
         _ALL_OUT[case_key({k: case[k] for k in _SCENARIO})] = r.facts.running_time_s
     if case.get("das"):
         summary["das"] = das_columns(r, case["das"], case["points"], case.get("das_time_limit_s", 60.0))
+        status = worst([status, advice_status(summary["das"])])
     if t_allout is not None:
         summary["all_out_time_s"] = t_allout
     if case.get("profile"):  # the speed profile, for a figure drawn from the store (a front's)
         summary["profile"] = {k: r.profile[k].tolist() for k in ("position_m", "speed_kmh")}
-    return r.status.kind, r.status.reason or None, summary
+    return status.kind, status.reason or None, summary
 
 
 def _serial(todo, task):
@@ -244,7 +245,7 @@ def kind_named(kind):
 
 
 def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False, out=None, progress=None,
-                 draw=None, compute=None, spec=None):
+                 draw=None, compute=None, spec=None, more=None):
     """A study of ``kind`` already expanded (from a study file, or from a command's options: ``where``
     names it): the cases not stored yet run (serially, in ``workers`` processes or on ``dask``,
     :func:`execute`), each stored as it arrives; the table of every stored case; the table's file
@@ -253,7 +254,8 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     ``progress(done, failed, remaining, total)`` after each case; ``compute``: only these cases
     computed now (the others' stored results still in the table; a case neither stored nor computed
     is ``missing`` there, and no result in ``summary.json``); ``spec``: the :class:`StudyKind` itself
-    (default: the one registered as ``kind``). Returns a :class:`StudyRun`."""
+    (default: the one registered as ``kind``); ``more``: statuses of runs the command made beside the
+    cases (by name), part of the folder's status. Returns a :class:`StudyRun`."""
     spec = spec or kind_named(kind)
     if spec.size is not None and compute is None:  # too big: refused with its estimate (unless --force); a part
         # computed now (``compute``) is checked by its caller
@@ -270,7 +272,7 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     drawn, tables = draw(output, expanded.cases, rows, table) if draw is not None else ([], {})
     results = [compute is None or k in rows for k in (c["key"] for c in expanded.cases)]  # left out: not results
     statuses = {**case_statuses([c for c, r in zip(expanded.cases, results) if r], table[results]),
-                **(spec.verdict(table) if spec.verdict else {})}
+                **(spec.verdict(table) if spec.verdict else {}), **(more or {})}
     write_summary(output, kind, statuses, {spec.table_name: spec.table_file, **tables, **{
                   Path(name).stem: name for name in expanded.inputs}}, ["results.sqlite", *drawn], study=str(where),
                   computed_now=counts["computed"], stored_before=counts["stored_before"], **table.attrs)

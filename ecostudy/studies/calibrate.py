@@ -91,9 +91,15 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
         summary["outputs"].append("savings.csv")
     tables = {"parameters": "parameters.csv", "residuals": "residuals.csv",
               **({"savings": "savings.csv"} if saving_draws is not None else {})}
-    write_summary(out, "calibrate", {"calibration": Status.parse(result.status, result.reason or "")}, tables,
-                  [calibrated.name, *figures], **summary)
+    statuses = {"calibration": Status.parse(result.status, result.reason or ""),
+                **(savings_statuses(table) if saving_draws is not None else {})}
+    write_summary(out, "calibrate", statuses, tables, [calibrated.name, *figures], **summary)
     return result, summary
+
+
+def savings_statuses(table):
+    """The status of every row of a savings table (``savings.csv``), named ``savings LOG run N``."""
+    return {f"savings {r.log} run {r.run}": Status.parse(r.status) for r in table.itertuples()}
 
 
 def validate_study(log_path, train_path, track_path, out, energy_tolerance=0.05, time_tolerance=0.05, figures=()):

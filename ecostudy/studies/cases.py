@@ -12,7 +12,7 @@ import warnings
 from pathlib import Path
 
 from ecostudy import __version__
-from ecostudy.core.errors import InputError, problem
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.io import schemas
 from ecostudy.io.documents import named_file
 from ecostudy.io.loaders import (
@@ -112,10 +112,26 @@ def expand(path, skipped=None):
     return s, output, cases
 
 
-def load_checked_study(path):
+# the fields of a study file each base-case command reads but does not use (``run`` uses them all)
+UNUSED = {"solve": ("das", "das_time_limit_s", "scenarios", "sweep"),
+          "compare": ("objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep"),
+          "pareto": ("objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep")}  # its own times
+
+
+def load_checked_study(path, command=None):
     """:func:`~ecostudy.io.loaders.load_study` (the base case), after every scenario and sweep value of
     the file is checked as ``ecostudy run`` checks them (:func:`expand`): a command that runs only the
-    base case never leaves a bad scenario unnoticed."""
+    base case never leaves a bad scenario unnoticed. For ``command`` (a key of :data:`UNUSED`), one
+    warning names the fields the file gives (other than their defaults) that the command does not use."""
     study = load_study(path)
     expand(path)
+    if command is not None:
+        s = validate(schemas.StudyFile, read_document(Path(path)), path)
+        fields = schemas.StudyFile.model_fields
+        unused = [name for name in UNUSED[command]  # given, and not the value the command uses anyway
+                  if getattr(s, name) != fields[name].get_default(call_default_factory=True)]
+        if unused:
+            warnings.warn(problem(path, ", ".join(unused), f"read but not used by `ecostudy {command}`, which runs the "
+                                  "study's base case with its own options; `ecostudy run` uses them"),
+                          EcostudyWarning, stacklevel=2)
     return study

@@ -8,7 +8,8 @@ from ecostudy.io.results import check_unchanged, load_result
 
 
 def check_result(result_dir, running_time=None):
-    """:func:`check_profile` of an `ecostudy solve` output folder (inputs.json, summary.json, profile.csv).
+    """:func:`check_profile` of an `ecostudy solve` output folder (inputs.json, summary.json, profile.csv),
+    with ``run_status``: the saved run's own status (solver, re-simulation, driver advice).
 
     A net-energy run is checked against eq. 7.4; energy and all-out runs against eq. 2.17.
     """
@@ -20,5 +21,6 @@ def check_result(result_dir, running_time=None):
         raise InputError(problem("command line", "--time", f"the saved run takes {took:.2f} s: it cannot be the "
                                  f"optimum for arriving by {running_time:g} s"))
     objective = "net_energy" if saved.summary.get("objective") == "net_energy" else "energy"
-    return check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, saved.trajectory,
-                         running_time, objective=objective, where=Path(result_dir) / "profile.csv")[0]
+    report = check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, saved.trajectory,
+                           running_time, objective=objective, where=Path(result_dir) / "profile.csv")[0]
+    return {**report, "run_status": str(saved.summary.get("status") or "failed: no status recorded")}

@@ -20,9 +20,10 @@ from ecostudy.analysis.single import solve_run
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.grid import make_segment
-from ecostudy.core.simulate import Driven, Trace
-from ecostudy.core.status import Status, driven_run, failed
+from ecostudy.core.simulate import Driven, Trace, worst_overspeed
+from ecostudy.core.status import Status, driven_run, failed, worst
 from ecostudy.core.types import Timing
+from ecostudy.core.units import to_kmh
 from ecostudy.das.advice import das_phases, nearest_levels
 from ecostudy.heuristics import ecodrive
 from ecostudy.io.loaders import track_document, track_from_schema, train_document, train_from_schema
@@ -36,7 +37,8 @@ from ecostudy.studies.workers import kept
 
 HEURISTICS = {"eco-drive coasting": ecodrive.eco_coasting, "MARECO-style": ecodrive.mareco}
 STRATEGIES = ("all-out", "ATO optimum", *HEURISTICS, "DAS round (nearest level)", "DAS phases")
-ROW = ("strategy", "running_time_s", "traction_energy_kWh", "net_energy_kWh", "stop_error_m", "handle_changes")
+ROW = ("strategy", "running_time_s", "traction_energy_kWh", "net_energy_kWh", "stop_error_m", "max_overspeed_kmh",
+       "handle_changes")
 _SCENARIO = ("train", "track", "from", "to", "running_time_s", "supplement", "points", "version")
 _ATO: dict = {}  # the ATO optimum of a scenario, per process: the base of the strategies after it
 
@@ -64,7 +66,7 @@ def study_documents(st):
 def expand_compare(path):
     """A study file's base case as a comparison (``ecostudy run FILE --kind compare``): its timing,
     its grid; written beside its output (``<output>_compare``)."""
-    st = load_checked_study(path)
+    st = load_checked_study(path, "compare")
     no_windows(st, "compare")
     train_doc, track_doc = study_documents(st)
     cases = compare_cases(train_doc, track_doc, st.from_stop, st.to_stop, st.timing, st.points or RUN_POINTS, st.name)
@@ -95,12 +97,11 @@ def _strategy(case):
     name, extra = case["strategy"], {}
     if name == "all-out":
         run = solve_run(track, train, case["from"], case["to"], Timing(), objective="time", points=case["points"])
-        return _stored(Driven(name, run.handle, run.trace), train, run.segment.distance, run.status,
-                       verified=verified(run))
+        return _stored(Driven(name, run.handle, run.trace), train, run.segment, run.status, verified=verified(run))
     ato = _ato(case, track, train)
     target = ato.facts.running_time_s
     if name == "ATO optimum":
-        return _stored(Driven(name, ato.handle, ato.trace), train, ato.segment.distance, ato.status, target_s=target,
+        return _stored(Driven(name, ato.handle, ato.trace), train, ato.segment, ato.status, target_s=target,
                        verified=verified(ato))
     prepared = prepare(track, train, case["from"], case["to"], case["points"])
     if name in HEURISTICS:
@@ -111,8 +112,11 @@ def _strategy(case):
     else:
         driven = nearest_levels(prepared.segment, train, prepared.nodes, ato.handle)
     row = driven.row(train, prepared.segment.distance)
-    status = driven_run(row["stop_error_m"], row["running_time_s"] - target)
-    return _stored(driven, train, prepared.segment.distance, status, target_s=target, **extra)
+    status = driven_run(row["stop_error_m"], row["running_time_s"] - target,
+                        to_kmh(worst_overspeed(prepared.segment, driven.trace)))
+    if name == "DAS phases":  # the same checks, and how its NLP ended
+        status = worst([status, Status.parse(block["status"])])
+    return _stored(driven, train, prepared.segment, status, target_s=target, **extra)
 
 
 def verified(run):
@@ -120,13 +124,16 @@ def verified(run):
     return bool(run.facts.verification and run.facts.verification.passed)
 
 
-def _stored(driven, train, distance, status, **fields):
-    """(status, reason, summary) of a strategy's run: its table row and its simulated trace."""
+def _stored(driven, train, segment, status, **fields):
+    """(status, reason, summary) of a strategy's run: its table row (with its largest speed over the
+    limits, :func:`~ecostudy.core.simulate.worst_overspeed`) and its simulated trace."""
     t = driven.trace
     trace = {"t_s": t.t.tolist(), "x_m": t.x.tolist(), "v_mps": t.v.tolist(),
              **{k: float(getattr(t, k)) for k in ("traction_energy", "braking_energy", "regenerated_energy",
                                                   "stop_position", "arrival_time", "net_energy")}}
-    summary = {**driven.row(train, distance), **fields, "handle": np.asarray(driven.handle).tolist(), "trace": trace}
+    overspeed = to_kmh(worst_overspeed(segment, t))
+    summary = {**driven.row(train, segment.distance), "max_overspeed_kmh": overspeed, **fields,
+               "handle": np.asarray(driven.handle).tolist(), "trace": trace}
     return status.kind, status.reason or None, summary
 
 
@@ -162,7 +169,7 @@ def compare_table(cases, rows):
         s = row.get("summary")
         by_name[case["strategy"]] = s or {}
         if s and row["status"] in ("ok", "flagged"):
-            table.append({k: s[k] for k in ROW})
+            table.append({k: s.get(k) for k in ROW})  # a row stored before a column existed: empty there
             statuses.append(str(Status.parse(row["status"], row.get("error") or "")))
         else:
             table.append({"strategy": case["strategy"], "note": row.get("error")})

@@ -52,7 +52,7 @@ def front_cases(train_doc, track_doc, from_stop, to_stop, count=DEFAULT_COUNT, s
 def expand_front(path):
     """A study file's base case as a front (``ecostudy run FILE --kind pareto``): 20 points to +40 %
     on its grid, written beside its output (``<output>_pareto``)."""
-    st = load_checked_study(path)
+    st = load_checked_study(path, "pareto")
     no_windows(st, "pareto")
     train_doc, track_doc = study_documents(st)
     cases = front_cases(train_doc, track_doc, st.from_stop, st.to_stop, points=st.points or FRONT_POINTS, study=st.name)

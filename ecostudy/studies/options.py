@@ -84,13 +84,14 @@ class Case(NamedTuple):
 
 
 def case_from(study: Optional[Path], track: Optional[Path], train: Optional[Path], from_stop: Optional[str],
-              to_stop: Optional[str], points: Optional[int]) -> Case:
-    """The case of a study file (``points`` overrides its K) or of a track and a train file."""
+              to_stop: Optional[str], points: Optional[int], command: Optional[str] = None) -> Case:
+    """The case of a study file (``points`` overrides its K; the fields ``command`` does not use named
+    in a warning) or of a track and a train file."""
     if study is not None:
         if track or train:
             raise InputError(problem("command line", "--track/--train",
                                      "give a study file or --track and --train, not both"))
-        st = load_checked_study(study)
+        st = load_checked_study(study, command)
         return Case(st.track, st.train, st.from_stop, st.to_stop, points or st.points, st)
     if not (track and train):
         raise InputError(problem("command line", "--track/--train", "give a study file, or both --track and --train"))

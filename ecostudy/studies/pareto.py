@@ -16,6 +16,7 @@ import pandas as pd
 from ecostudy.analysis.single import finish, solve_run
 from ecostudy.core.defaults import FRONT_POINTS
 from ecostudy.core.errors import SolverError
+from ecostudy.core.status import Status
 from ecostudy.core.types import Timing
 from ecostudy.das.methods import das_columns
 from ecostudy.io.runsummary import RunSummary
@@ -63,7 +64,8 @@ def _chain(case, times, objective, options, verify_result, warm, tick=None):
 def weighted_points(track, train, from_stop, to_stop, count=8, points=FRONT_POINTS, energy_weights=None):
     """Weighted-sum points: minima of w_t T + w_e E / Ms (Yazhemsky 2017 eq. 4.1a) for w_t = 1 and
     ``count`` energy weights w_e [s kg/J] from 0.03 to 30. On a convex front each lies on the
-    epsilon-constraint front; the weighted sum cannot reach points where the front is not convex."""
+    epsilon-constraint front; the weighted sum cannot reach points where the front is not convex.
+    Each row has its run's status (solver and re-simulation)."""
     weights = energy_weights if energy_weights is not None else np.geomspace(0.03, 30.0, count)
     rows = []
     for we in weights:
@@ -73,8 +75,13 @@ def weighted_points(track, train, from_stop, to_stop, count=8, points=FRONT_POIN
         rows.append({"energy_weight_s_kg_per_J": float(we), "running_time_s": f.running_time_s,
                      "traction_energy_kWh": f.traction_energy_kWh, "net_energy_kWh": f.net_energy_kWh,
                      "solver_status": f.solver.status,
-                     "verified": None if f.verification is None else f.verification.passed})
+                     "verified": None if f.verification is None else f.verification.passed, "status": str(r.status)})
     return pd.DataFrame(rows)
+
+
+def weighted_statuses(table):
+    """Every weighted-sum point's status (a table of :func:`weighted_points`), named by its weight."""
+    return {f"weighted w_e = {r.energy_weight_s_kg_per_J:.3g}": Status.parse(r.status) for r in table.itertuples()}
 
 
 def _split(items, parts):
@@ -226,4 +233,5 @@ def das_meta(table):
             "monotone": bool(np.all(np.diff(energy) <= 1e-6 * energy[:-1])) if len(energy) > 1 else None}
 
 
-__all__ = ["sweep", "das_front", "das_meta", "weighted_points", "front_table", "saving_at", "is_monotone"]
+__all__ = ["sweep", "das_front", "das_meta", "weighted_points", "weighted_statuses", "front_table", "saving_at",
+           "is_monotone"]
