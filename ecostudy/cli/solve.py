@@ -46,9 +46,8 @@ def export(
     every: str = typer.Option("1s", help="Step: seconds ('1s') or metres ('10m')."),
     debug: o.Debug = False,
 ):
-    """The run of a solve folder at fixed steps of time or distance: position, time, speed, handle and,
-    with driver advice, the advised mode (profile_every_<step>.csv and .json in the folder, with the
-    run's status); exit 1 when the run exported is not ok.
+    """The run of a solve folder at fixed steps of time or distance: position, time, speed, handle and, with driver
+    advice, the advised mode (profile_every_<step>.csv and .json, with the run's status); exit 1 when it is not ok.
 
     Example: ecostudy export out/default --every 10m
     """
