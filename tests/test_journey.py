@@ -37,6 +37,23 @@ def test_journey_command_saves_against_the_same_percentage(tmp_path):
     assert (tmp_path / "journey.png").stat().st_size > 10_000
     folder = assert_folder(tmp_path, "journey", ["segments", "totals"])
     assert folder.cases.total == len(folder.table)
+    segments = pd.read_csv(tmp_path / "journey.csv")
+    assert (segments["status"] == "ok").all() and segments["verified"].all()  # each segment's run: Ipopt and re-simulation
+
+
+@pytest.mark.flagged_on_purpose
+def test_a_journey_segment_is_its_runs_status(tmp_path):
+    """K = 16: segments whose re-simulation misses are flagged with the run's own reason (Ipopt's end
+    and the re-simulation's numbers), and the command exits 1."""
+    import pandas as pd
+    r = CliRunner().invoke(app, ["journey", "--track", str(TRACKS / "metro_line_4stops.yaml"), "--train",
+                                 str(TRAINS / "amsterdam_metro.yaml"), "--supplement", "10", "--points", "16",
+                                 "--workers", "1", "--no-plot", "--out", str(tmp_path)])
+    assert r.exit_code == 1, r.output
+    segments = pd.read_csv(tmp_path / "journey.csv")
+    bad = segments[segments["status"] != "ok"]
+    assert len(bad) and bad["status"].str.startswith("flagged: ").all()
+    assert (~bad["verified"] | bad["status"].str.contains("Ipopt ended")).all()
 
 
 @pytest.mark.slow

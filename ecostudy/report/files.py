@@ -5,7 +5,7 @@ from pathlib import Path
 
 from ecostudy.analysis.export import fixed_step
 from ecostudy.core.errors import InputError, problem
-from ecostudy.core.status import OK, Status, flagged
+from ecostudy.core.status import Status
 from ecostudy.io.folder import write_summary
 from ecostudy.io.results import load_result
 from ecostudy.io.writers import write_csv, write_json
@@ -83,13 +83,13 @@ def stale(out_dir, names, **drop):
 
 def write_journey(table, totals, results, out_dir, title, passing=(), plot=True, out=style.Output()):
     """``journey.csv``, ``journey_totals.csv``, ``summary.json`` and ``journey.png`` of a journey's
-    distributions (every segment's run re-simulated: ``verified``)."""
+    distributions (every segment's run re-simulated: ``verified``; its ``status`` the run's own: Ipopt's
+    end and the re-simulation)."""
     out_dir = Path(out_dir)
     write_csv(out_dir / "journey.csv", table)
     write_csv(out_dir / "journey_totals.csv", totals)
     drawn = figures(out_dir, plot, {"journey": later("journey_plot", results, title=title, passing=passing)}, out)
-    statuses = {f"{r['distribution']} {r['from']}-{r['to']}":
-                OK if r["verified"] else flagged("not verified by the re-simulation") for _, r in table.iterrows()}
+    statuses = {f"{r['distribution']} {r['from']}-{r['to']}": Status.parse(r["status"]) for _, r in table.iterrows()}
     write_summary(out_dir, "journey", statuses, {"segments": "journey.csv", "totals": "journey_totals.csv"},
                   drawn, title=title)
     write_html(out_dir)

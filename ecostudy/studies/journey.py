@@ -303,7 +303,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
                          "supplement_pct": 100 * (t / t0 - 1), "traction_energy_kWh": facts.traction_energy_kWh,
                          "net_energy_kWh": facts.net_energy_kWh,
                          **(timing_columns(plan, n, departures[n], arrivals[n], r) if plan is not None else {}),
-                         "verified": bool(facts.verification and facts.verification.passed)})
+                         "verified": bool(facts.verification and facts.verification.passed), "status": str(r.status)})
     table = pd.DataFrame(rows)
     totals = table.groupby("distribution", sort=False)[["running_time_s", "traction_energy_kWh", "net_energy_kWh"]].sum()
     if plan is not None:
