@@ -209,7 +209,7 @@ def study_with(tmp_path, scenario):
     ({"train_overrides": {"mass_t": 1.0e9}}, "scenarios[0] (bad) train: mass_t"),
     ({"train_overrides": {"mas_t": 100}}, "mas_t: unknown field"),
     ({"train_overrides": {"mass_t": float("nan")}}, "mass_t: Input should be a finite number"),
-    ({"train": "nowhere.yaml"}, "nowhere.yaml: file not found"),
+    ({"train": "nowhere.yaml"}, "scenarios[0].train: 'nowhere.yaml': file not found"),
     ({"points": 5}, "scenarios[0].points"),
     ({"name": ""}, "scenarios[0].name: an empty name"),
 ])
