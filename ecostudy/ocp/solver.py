@@ -186,13 +186,15 @@ MALLOC_VARIABLES = ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "MALLOC_
 
 def keep_freed_memory() -> None:
     """Tell glibc's allocator to keep freed memory for the next allocation, unless the user set
-    its thresholds. MUMPS allocates its factorization workspace anew for each of Ipopt's
-    factorizations; at long K = 5000 it is larger than glibc's largest automatic mmap threshold
-    (32 MiB), so each one was mapped fresh and every page of it faulted in and zeroed by the
-    kernel: 313 000 page faults and 1.0 s of system time per solve, against 0.01 s at K = 1000
-    (docs/speed.md "ecostudy against a lean transcription"). Kept, the same solve faults 156 000
-    times. The cost: a process keeps its peak heap (a solve at K = 5000 peaks at about 320 MB).
-    Nothing happens where the C library is not glibc."""
+    its thresholds. Ipopt's linear solver (MUMPS) allocates its workspace again for each
+    factorization; at long K = 5000 it is larger than glibc's largest automatic mmap threshold
+    (32 MiB), so each one was mapped afresh and every page faulted in and zeroed by the kernel
+    (Ipopt's timers put 0.65 of the solve's 0.71 s system time in the linear system, against
+    0.01 s at K = 1000). A process solving long K = 5000 once: 313 000 page faults and 0.9-1.0 s
+    system time; kept, 81 000 and 0.4 s, with the same iterations and a bit-identical result
+    (docs/speed.md "Where an Ipopt iteration goes"). The cost: a process keeps its peak heap (that
+    solve peaks at about 320 MB). A user's own MALLOC_* or GLIBC_TUNABLES setting is left alone.
+    """
     if any(name in os.environ for name in MALLOC_VARIABLES):
         return
     try:
