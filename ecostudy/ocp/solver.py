@@ -191,8 +191,9 @@ def keep_freed_memory() -> None:
     (32 MiB), so each one was mapped afresh and every page faulted in and zeroed by the kernel
     (Ipopt's timers put 0.65 of the solve's 0.71 s system time in the linear system, against
     0.01 s at K = 1000). A process solving long K = 5000 once: 313 000 page faults and 0.9-1.0 s
-    system time; kept, 81 000 and 0.4 s, with the same iterations and a bit-identical result
-    (docs/speed.md "Where an Ipopt iteration goes"). The cost: a process keeps its peak heap (that
+    system time; kept, 81 000 and 0.4 s, build + write + solve 8.80 -> 7.33 CPU s (medians of four
+    alternated pairs), the same iterations and a bit-identical result (docs/speed.md "What was
+    cut, and what each cut bought"). The cost: a process keeps its peak heap (that
     solve peaks at about 320 MB). A user's own MALLOC_* or GLIBC_TUNABLES setting is left alone.
     """
     if any(name in os.environ for name in MALLOC_VARIABLES):
