@@ -19,6 +19,10 @@ Ipopt, in the same process, from the same start (``problem.capped_guess``). Medi
 wall and the process's CPU time (the latter less disturbed by other processes on a shared machine).
 ``--timing FOLDER`` writes Ipopt's own timers (``print_timing_statistics``: function evaluations,
 linear system, back-solves, ...) of each side's last solve to a file per side, case and K.
+A last table per case gives each side's stages in CPU seconds of the process (ecostudy: build, NL
+write, ASL load, solve with the load of the point into the model, energy; the reference: graph,
+``nlpsol``, solve), Ipopt's ms per iteration (with ``--timing``: its function evaluations', linear
+system's and whole algorithm's CPU ms) and each one's growth from the smallest K to the largest.
 
 Cases (shipped): ``long`` is tracks/regional_line_20stops.yaml S01 to S20 (22.4 km run through) with
 trains/regional_alstom.yaml, net energy, in 1.15 times its envelope time; ``metro`` is
