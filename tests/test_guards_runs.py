@@ -48,6 +48,43 @@ def test_a_train_that_cannot_climb_is_told_where(tmp_path, share, permille, frag
     assert "nan" not in r.output
 
 
+def weak_brakes(tmp_path, share):
+    """The Yazhemsky 2017 commuter train with ``share`` of its braking force (its braking envelope and
+    service deceleration scaled)."""
+    doc = load_yaml((TRAINS / "thesis001_commuter.yaml").read_text())
+    braking = doc["braking"]
+    for key in ("max_force_kN", "max_power_kW"):
+        if key in braking:
+            braking[key] *= share
+    if "table" in braking:
+        braking["table"]["force_kN"] = [f * share for f in braking["table"]["force_kN"]]
+    return write_yaml(tmp_path / f"weak_brakes{share:g}.yaml", doc)
+
+
+def descent_then_slow(tmp_path):
+    """1.5 km: level, 40 per mille down from 200 to 700 m, level again with 20 km/h from 700 m to the stop."""
+    return write_yaml(tmp_path / "descent.yaml", {
+        "name": "descent", "source": "made for this test", "length_m": 1500,
+        "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 1500}],
+        "gradients": [{"position_m": 0, "gradient_permille": 0}, {"position_m": 200, "gradient_permille": -40},
+                      {"position_m": 700, "gradient_permille": 0}],
+        "speed_limits": [{"position_m": 0, "speed_kmh": 80}, {"position_m": 700, "speed_kmh": 20}]})
+
+
+@pytest.mark.parametrize("track, fragments", [
+    (lambda tmp: hill(tmp, -60), ["the train runs away", "m after A", "cannot stand at the stop"]),
+    (descent_then_slow, ["the train runs away", "kN more than its brakes and resistance hold",
+                         "cannot keep to 20 km/h at 700 m after A"]),
+])
+def test_a_train_whose_brakes_cannot_hold_it_is_told_where(tmp_path, track, fragments):
+    """A descent its brakes (2 % of the commuter train's) cannot hold: refused before any solve with
+    the limit or stop it cannot keep (without the check the all-out NLP failed: exit 3)."""
+    r = run("solve", "--track", track(tmp_path), "--train", weak_brakes(tmp_path, 0.02), "--time", 300,
+            "--out", tmp_path / "o", "--no-plot")
+    one_line(r, "infeasible:", *fragments)
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_closed_loop_study_of_a_train_that_cannot_run_says_why(tmp_path):
     doc = load_yaml((STUDIES / "thesis001_closed_loop.yaml").read_text())
     doc.update(track=str(TRACKS / "thesis001_advanced_1km.yaml"), train=str(weak_train(tmp_path, 0.01)),

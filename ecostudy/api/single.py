@@ -11,7 +11,7 @@ from ecostudy import __version__
 from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
-from ecostudy.core.errors import InfeasibleError, InputError, problem
+from ecostudy.core.errors import InfeasibleError, InputError, TooFastError, problem
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status
 from ecostudy.das.methods import das_run
@@ -123,7 +123,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         stage(f"{obj} optimum, verified")
         try:
             result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
-        except InfeasibleError as exc:  # the timing cannot be met: where it was given, by name
+        except TooFastError as exc:  # the timing cannot be met: where it was given, by name
             where, field = timing_source(study, st if study is not None else None, time, supplement, window)
             raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
         if das is not None:

@@ -25,6 +25,11 @@ class InfeasibleError(InputError):
     """The request cannot be met by any driving (e.g. a running time below the all-out time)."""
 
 
+class TooFastError(InfeasibleError):
+    """The time asked for is below the fastest possible run's: the timing's fault, not the train's or
+    the line's (those raise :class:`InfeasibleError`)."""
+
+
 class SolverError(EcostudyError):
     """Ipopt did not return a usable point."""
 

@@ -44,12 +44,34 @@ def braking_curve(segment: Segment, train: Train, nodes: FloatArray, limits: Flo
     a, b, c = interval_davis(segment, train, nodes)
     bwd = np.zeros_like(nodes)
     bwd[-1] = min(end_speed, limits[-1])
+    target = (bwd[-1], nodes[-1])  # (speed, position) the braking curve leads to
     for k in range(len(ds) - 1, -1, -1):
         v = bwd[k + 1]
-        dec = min((train.braking.force(v) + davis_resistance(v, a[k], b[k], c[k]) + fixed[k]) / train.mass,
-                  train.max_deceleration)
-        bwd[k] = min(np.sqrt(v * v + 2 * ds[k] * max(dec, 1e-3)), limits[k])
+        held = train.braking.force(v) + davis_resistance(v, a[k], b[k], c[k]) + fixed[k]
+        dec = min(held / train.mass, train.max_deceleration)
+        # a train its brakes cannot slow here must enter slower (dec < 0): over a long enough descent, even
+        # from standing it would leave faster than it may; where they can, at least 1e-3 m/s^2
+        v2 = v * v + 2 * ds[k] * (dec if dec <= 0 else max(dec, 1e-3))
+        if v2 < 0 or (v2 == 0 and k > 0):
+            raise InfeasibleError(runaway_message(segment, nodes[k], train.braking.force(v), held, *target))
+        bwd[k] = min(np.sqrt(v2), limits[k])
+        if limits[k] < np.sqrt(v2):  # a limit binds: what a runaway upstream would miss
+            target = (limits[k], nodes[k])
     return bwd
+
+
+def runaway_message(segment: Segment, position: float, braking: float, held: float, speed: float,
+                    limit_at: float) -> str:
+    """Why no driving keeps a limit or the stop: at full braking the train still gains speed (``held``:
+    braking plus resistance plus gradient and curves [N], negative) on its way to ``speed`` [m/s] at
+    ``limit_at`` [m] (0 at the end: the stop)."""
+    start = segment.from_stop or "the start"
+    where = f"{position:.0f} m after {start}"
+    keep = ("stand at the stop" if speed == 0 else
+            f"keep to {3.6 * speed:.0f} km/h at {limit_at:.0f} m after {start}")
+    return (f"infeasible: the train runs away: at full braking ({braking / 1e3:.3g} kN) it still gains speed {where} "
+            f"(the gradient and curves pull {-held / 1e3:,.0f} kN more than its brakes and resistance hold), so it "
+            f"cannot {keep}")
 
 
 def coast_speeds(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray, start: int,

@@ -11,7 +11,7 @@ from typing import Any, Hashable, Iterator, MutableMapping, Protocol, Sequence
 import numpy as np
 
 from ecostudy.core import kinematics
-from ecostudy.core.errors import InfeasibleError, SolverError
+from ecostudy.core.errors import InfeasibleError, SolverError, TooFastError
 from ecostudy.core.grid import Segment, drop_idle_power, make_grid, make_segment, node_limits
 from ecostudy.core.types import Track, Train, Trajectory, Window
 from ecostudy.core.units import FloatArray, to_kmh
@@ -187,7 +187,7 @@ def check_windows(case: Case, margin: float = 0.02) -> None:
 
 def check_feasible(latest: float | None, t_allout: float) -> None:
     if latest is not None and latest < t_allout - 1e-6 * t_allout:
-        raise InfeasibleError(f"infeasible: the fastest possible run takes {t_allout:.1f} s "
+        raise TooFastError(f"infeasible: the fastest possible run takes {t_allout:.1f} s "
                               f"(asked for {latest:.1f} s)")
 
 
