@@ -7,7 +7,7 @@ import pytest
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.network import fleet, legs, scoring
 from ecostudy.network.strategies import guard_counts
-from ecostudy.ocp import timedomain
+from ecostudy.ocp import session, timedomain
 from pyomo.environ import value as pyo_value
 
 from .test_network import SUPPLY, TRACKS, TRAINS
@@ -109,11 +109,15 @@ def test_a_cold_leg_with_the_one_handle_rows_is_solved_relaxed_first_and_ends_at
     task = (leg, "T1 leg 1", f.dt, None, None, False, weights, allowance, None, None)
     m, b = legs.leg_model(task)
     assert len(b.one_handle) > 0  # traction discounted: traction while braking would pay
-    m, b, outcome = legs._relaxed_first(task)
+    nlp = legs.LegNLP(task)
+    outcome = legs._relaxed_first(nlp, nlp.start(cold=False))
     assert outcome.usable
+    b = nlp.block
     product = [pyo_value(b.ft[j]) * pyo_value(b.fb[j]) for j in b.one_handle]
     assert max(product) <= timedomain.ONE_HANDLE * (1 + 1e-6) + 1e-9  # the tight bound is the one solved last
     assert all(row.upper == timedomain.ONE_HANDLE for row in b.one_handle.values())
+    rows = nlp.session.nlp.get_constraint_indices(list(b.one_handle.values()))
+    assert set(nlp.session.nlp.constraints_ub()[rows]) == {timedomain.ONE_HANDLE}  # and so does the NLP
     # without a discount the leg has no such rows and is solved in one go
     plain = (leg, "T1 leg 1", f.dt, None, None, False, None, None, None, None)
     m0, b0 = legs.leg_model(plain)
@@ -142,3 +146,28 @@ def test_the_supervisor_rounds_check_warm_legs_against_cold_in_their_first_round
     # solve_train's own switch: the sampled leg solved warm only, no cold check noted
     run = fleet.solve_train(f, 0, guesses=start[0], check=False)[0][0]
     assert run.notes is None
+
+
+def test_a_leg_s_nlp_written_once_solves_as_one_written_for_each_solve(one_leg):
+    """The cold check and the relaxed first solve reuse the task's NL file: from the trapezoidal
+    start, relaxed first, the same run bit for bit as a model built from that start and written
+    for each of its solves (the same NLP from the same start)."""
+    f, leg, cold = one_leg
+    steps = f.steps
+    weights, allowance = np.full(steps, 0.34), np.full(steps, 500.0)
+    warm = (leg, "T1 leg 1", f.dt, None, cold[:5], True, weights, allowance, None, None)
+    nlp = legs.LegNLP(warm)
+    legs._solve(nlp)  # the warm solve first, as the check makes it
+    again = legs._solve(nlp, cold=True)
+    # written afresh: a model built from the trapezoidal start, its relaxed and tight solves each
+    # in a model written with its own bound and start
+    m, b = legs.leg_model(warm[:4] + (None, False) + warm[6:])
+    assert timedomain.relax_one_handle(b, legs.RELAXED_ONE_HANDLE)
+    first = session.solve(m, legs.KKT)
+    timedomain.relax_one_handle(b)
+    second = session.solve(m, {**legs.NEAR_START, **legs.KKT})
+    assert first.usable and second.usable
+    fresh = timedomain.leg_arrays(b)
+    assert again[1].iterations == first.iterations + second.iterations
+    for mine, theirs in zip(again[0][:6], fresh[:6]):
+        np.testing.assert_array_equal(mine, theirs)

@@ -1,7 +1,9 @@
 """One train's leg between two stops, solved against a cost per clock step (the supervisor rules'
 traction weight and allowance, the regeneration credit) and a train ahead (:func:`solve_leg`).
 
-Each solve builds and writes its own NLP. (Tried and not kept: one NLP written per
+Each task builds and writes its own NLP once (:class:`LegNLP`): the guards' cold solves, the relaxed
+first solve and a warm retry solve the same NLP from another start or with other row bounds.
+(Tried and not kept: one NLP written per
 leg and re-solved with the cost's coefficients as variables held by bounds and the one-handle
 constraint at every step with its bound lifted where it cannot pay: no build or NL write after
 the first, but the always-present terms and rows made each solve dearer, 24-31 against 18-24 s
@@ -133,11 +135,12 @@ def solve_leg(task):
       its last metre is solved again from the trapezoidal start, and replaced where that one
       does not stand; one that still stands fails its verification (``network.scoring``).
     """
-    run, outcome, cost = _solve(task)
+    nlp = LegNLP(task)
+    run, outcome, cost = _solve(nlp)
     notes = {}
     restart = None  # the solve from the trapezoidal start, once made
     if task[5] == CHECKED:
-        restart = _solve(_restart(task))
+        restart = _solve(nlp, cold=True)
         notes["warm_vs_cold_pct"] = 100 * (cost - restart[2]) / max(abs(restart[2]), 1e-9)
         if cost - restart[2] > DEARER * abs(restart[2]):
             run, outcome, cost = restart
@@ -145,7 +148,7 @@ def solve_leg(task):
     stood = standing_s(run, task[0])
     if stood > STAND_TIME_S:
         notes["stood_s"] = stood
-        restart = restart or _solve(_restart(task))  # the same problem from the same start: solved once
+        restart = restart or _solve(nlp, cold=True)  # the same problem from the same start: solved once
         if standing_s(restart[0], task[0]) <= STAND_TIME_S:
             run, outcome, cost = restart
             notes["restarted"] = True
@@ -173,50 +176,81 @@ def standing_s(run, leg):
     return float(np.count_nonzero(slow & early)) * leg.dt
 
 
-def _restart(task):
-    """The same leg problem, started cold from the trapezoidal speed profile."""
-    return task[:4] + (None, False) + task[6:]
-
-
 RELAXED_ONE_HANDLE = 1.0  # [kN^2] the one-handle bound of a cold leg's first solve (:func:`_relaxed_first`)
 
 
-def _relaxed_first(task):
-    """(model, leg block, outcome) of a cold leg's solve: where the leg holds the one-handle
+class LegNLP:
+    """A task's leg NLP (:func:`leg_model`), written once (``session.Session``) and solved from the
+    task's own start or from the trapezoidal one (the same leg problem restarted cold), its one-handle
+    rows at their own bound or relaxed. Each of these solves is the one a model built and written
+    for it would make: the same rows in the same order, the start the values it would be written
+    with, a relaxed row's bound the one it would be written with."""
+
+    def __init__(self, task):
+        self.task = task
+        self.model, self.block = leg_model(task)
+        self.session = session.Session(self.model)
+        self.own = self.session.x.copy()  # the task's start, as the NL file holds it
+        self.cold = None
+        self.written = False  # whether a solve has reported the NL write's time
+
+    def start(self, cold):
+        """The primal start: the task's own, or (``cold``) the trapezoidal speed profile's."""
+        if not cold:
+            return self.own
+        if self.cold is None:  # the block's values are those of the last solve, read out already
+            timedomain.set_start(self.block, self.task[0])
+            self.cold = np.array([var.value for var in self.session.variables], dtype=float)
+        return self.cold
+
+    def relax(self, bound):
+        """Set the one-handle rows' bound [kN^2] in the model and the NLP; False where there are none."""
+        if not timedomain.relax_one_handle(self.block, bound):
+            return False
+        self.session.set_row_uppers(list(self.block.one_handle.values()), bound)
+        return True
+
+    def solve(self, options, x0=None):
+        """``Session.solve`` from ``x0`` (default: the last solution); the NL write's time is given
+        to the first solve."""
+        outcome = self.session.solve(options, x0)
+        if not self.written:
+            outcome.nl_seconds, self.written = self.session.nl_seconds, True
+        return outcome
+
+
+def _relaxed_first(nlp, x0):
+    """The outcome of a cold solve of ``nlp`` from ``x0``: where the leg holds the one-handle
     complementarity, first with its rows relaxed to F_T F_B <= :data:`RELAXED_ONE_HANDLE`
     (Scholtes' regularisation), then with their own bound from there (near that start); else, or
-    where that is not usable, in one go from the task's start. Measured on the 3-train metro
+    where that is not usable, in one go from ``x0``. Measured on the 3-train metro
     study's three hardest cold legs (rule 7.7, T3's second leg): 1167 / 1031 / 935 Ipopt iterations
     in one go, 283 + 142 / 367 + 71 / 419 + 89 relaxed first (2.3x less CPU), at costs 85 / 24 /
     1.6 % lower (an interior point started at the tight bound is caught by one of the
     complementarity's many local optima)."""
-    m, b = leg_model(task)
-    if timedomain.relax_one_handle(b, RELAXED_ONE_HANDLE):
-        first = session.solve(m, KKT)
-        timedomain.relax_one_handle(b)
+    if nlp.relax(RELAXED_ONE_HANDLE):
+        first = nlp.solve(KKT, x0)
+        nlp.relax(timedomain.ONE_HANDLE)
         if first.usable:
-            outcome = session.solve(m, {**NEAR_START, **KKT})
+            outcome = nlp.solve({**NEAR_START, **KKT})
             if outcome.usable:
                 outcome.iterations += first.iterations
                 outcome.seconds += first.seconds
                 outcome.nl_seconds += first.nl_seconds
-                return m, b, outcome
-        m, b = leg_model(task)
-    return m, b, session.solve(m, KKT)
+                return outcome
+    return nlp.solve(KKT, x0)
 
 
-def _solve(task):
-    """(LegRun, outcome, cost) of one solve of a task: warm from its guess near the start, else
-    cold; a warm solve that fails is tried again with Ipopt's defaults."""
-    label, warm = task[1], task[5]
+def _solve(nlp, cold=False):
+    """(LegRun, outcome, cost) of one solve of a task's NLP: warm from its own start, near it; else
+    cold (:func:`_relaxed_first`) from its own start or, ``cold``, the trapezoidal one. A warm
+    solve that fails is tried again with Ipopt's defaults."""
+    label, warm = nlp.task[1], nlp.task[5] and not cold
     tries = ({**NEAR_START, **KKT}, KKT) if warm else (KKT,)
     for n, options in enumerate(tries, 1):
-        if warm:
-            m, b = leg_model(task)
-            outcome = session.solve(m, options)
-        else:
-            m, b, outcome = _relaxed_first(task)
+        x0 = nlp.start(cold)
+        outcome = nlp.solve(options, x0) if warm else _relaxed_first(nlp, x0)
         if outcome.usable:
-            return timedomain.leg_arrays(b), outcome, float(pyo.value(m.objective))
+            return timedomain.leg_arrays(nlp.block), outcome, float(pyo.value(nlp.model.objective))
         if n == len(tries):
             raise SolverError(f"{label}: Ipopt {outcome.status} after {outcome.iterations} iterations")

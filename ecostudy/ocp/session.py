@@ -136,6 +136,18 @@ class Session:
             variables[j].setub(None if hi is None else float(hi))
         self.x[index] = np.clip(self.x[index], arrays["_primals_lb"][index], arrays["_primals_ub"][index])
 
+    def set_row_uppers(self, constraints: Sequence[Any], upper: float) -> None:
+        """Change the upper bound of some inequality rows of the NLP before the next solve, as a model
+        written with that bound would hold it (the caller keeps the Pyomo rows alike)."""
+        index = np.asarray(self.nlp.get_constraint_indices(list(constraints)), dtype=int)
+        nlp = self.nlp
+        bound = np.array(nlp.constraints_ub(), dtype=float)  # PyNumero keeps it read-only
+        bound[index] = upper
+        inequalities = np.compress(nlp._con_full_ineq_mask, bound)
+        for array in (bound, inequalities):
+            array.flags.writeable = False
+        nlp._con_full_ub, nlp._con_ineq_ub = bound, inequalities
+
     def set_start_values(self, variables: Sequence[Var], values: Sequence[float] | np.ndarray,
                          clip: bool = True) -> None:
         """Set the starting point of some variables for the next solve, clipped to their bounds

@@ -135,21 +135,16 @@ def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | Flo
     m.add_component(name, b)
     b.K = pyo.RangeSet(0, n)
     b.I = pyo.RangeSet(0, n - 1)
-    s0, v0 = guess[:2] if guess is not None else _trapezoid(case, n, dt)
     top = float(np.max(case.limits))
-    b.s = pyo.Var(b.K, bounds=(0.0, case.segment.distance), initialize=lambda b, j: float(s0[j]))
-    b.v = pyo.Var(b.K, bounds=(0.0, top), initialize=lambda b, j: float(v0[j]))
+    b.s = pyo.Var(b.K, bounds=(0.0, case.segment.distance))
+    b.v = pyo.Var(b.K, bounds=(0.0, top))
     for var, value in ((b.s[0], 0.0), (b.v[0], 0.0), (b.s[n], case.segment.distance), (b.v[n], 0.0)):
         var.fix(value)
-    given = guess[2:5] if guess is not None and len(guess) >= 5 else None
-    forces = [np.asarray(f) / FORCE_SCALE for f in given] if given is not None else [np.zeros(n)] * 3
-    regen_top = min(train.regeneration.max_force, train.braking.peak) / FORCE_SCALE if train.regeneration else 0.0
-    tops = (train.traction.peak / FORCE_SCALE, train.braking.peak / FORCE_SCALE, regen_top)
     speeds = np.linspace(0.0, top, 101)
     one_brake = "one_brake" in cuts and space.regeneration_covers_braking(train, speeds)
-    b.ft, b.fb, fr = (pyo.Var(b.I, bounds=(0.0, top), initialize=lambda b, j, f=f, top=top: min(float(f[j]), top))
-                      for f, top in zip(forces, tops))
+    b.ft, b.fb, fr = (pyo.Var(b.I, bounds=(0.0, top)) for top in _force_tops(train))
     b.fr = pyo.Reference(b.fb) if one_brake else fr
+    set_start(b, leg, guess)
     mass = train.mass
     gx, gf = force_profile(case, width)
     g_coef = table_coefficients(gx, gf / FORCE_SCALE, 0.25 * width)
@@ -185,6 +180,32 @@ def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | Flo
     b.regen_kw = pyo.Expression(b.I, rule=lambda b, j: eta_r * b.fr[j] * b.vbar[j])
     b.p = pyo.Expression(b.I, rule=lambda b, j: b.traction_kw[j] - b.regen_kw[j])
     return b
+
+
+def _force_tops(train: Any) -> tuple[float, float, float]:
+    """Peaks of a leg's traction, braking and regenerative forces [kN]: their variables' upper bounds."""
+    regen_top = min(train.regeneration.max_force, train.braking.peak) / FORCE_SCALE if train.regeneration else 0.0
+    return train.traction.peak / FORCE_SCALE, train.braking.peak / FORCE_SCALE, regen_top
+
+
+def set_start(b: Model, leg: Leg, guess: Sequence[Sequence[float] | FloatArray] | None = None) -> None:
+    """Set the free variables of a leg block (:func:`add_leg`) to a start: ``guess``, (s, v) arrays on
+    the leg's steps, optionally followed by (F_T, F_B, F_R) per step [N] (each force at most its peak);
+    else a trapezoidal speed profile and no force. ``add_leg`` starts its block here; a solved block
+    set back here starts again where a block built from the same ``guess`` would."""
+    n = leg.steps
+    s0, v0 = guess[:2] if guess is not None else _trapezoid(leg.case, n, leg.dt)
+    given = guess[2:5] if guess is not None and len(guess) >= 5 else None
+    forces = [np.asarray(f) / FORCE_SCALE for f in given] if given is not None else [np.zeros(n)] * 3
+    for var, values in ((b.s, s0), (b.v, v0)):
+        for j in b.K:
+            if not var[j].fixed:
+                var[j].set_value(float(values[j]))
+    own = [b.ft, b.fb] + ([] if b.fr.is_reference() else [b.fr])  # F_R may be F_B itself (``one_brake``)
+    for var, f, top in zip(own, forces, _force_tops(leg.case.train)):
+        for j in b.I:
+            if not var[j].fixed:
+                var[j].set_value(min(float(f[j]), top))
 
 
 def _trapezoid(case: Case, n: int, dt: float) -> tuple[FloatArray, FloatArray]:
