@@ -19,9 +19,11 @@ def shared_pool(todo, workers, task, first=None):
     the cases started in its order (the dearest first: their legs enter the pool's queue first)."""
     ordered = sorted(todo, key=first) if first is not None else list(todo)
     with worker_pool(workers) as pool:
-        # the pool forks all its workers at its first task: here, before any thread of ours runs. Forked
-        # from a case's thread while the others submitted, a worker waited for ever on the task queue's
-        # lock (a test run hung at the pool's shutdown)
+        # the pool forks all its workers at its first task: here, in the thread that outlives the pool.
+        # A worker dies with the thread that forked it (die_with_parent: Linux's parent-death signal
+        # follows the thread), so forked from a case's thread it was killed when the case threads ended,
+        # at the pool's shutdown, once holding the task queue's lock: the other worker waited on that lock
+        # for ever and the shutdown with it (a test run hung so)
         pool.submit(int).result()
         threads = ThreadPoolExecutor(max_workers=max(len(ordered), 1), thread_name_prefix="case")
         futures = {threads.submit(task, case, pool): case for case in ordered}
