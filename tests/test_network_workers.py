@@ -70,3 +70,19 @@ def test_the_network_kind_spreads_and_the_pool_runs_every_case_once():
     assert kind_named("network").spread is not None and kind_named("run").spread is None
     seen = list(shared_pool([3, 1, 2], 2, lambda case, pool: pool.submit(pow, case, 2).result(), first=lambda c: -c))
     assert sorted(seen) == [(1, 1), (2, 4), (3, 9)]
+
+
+def test_the_pool_workers_outlive_the_case_threads():
+    """A worker dies with the thread that forked it (the parent-death signal follows the thread): the
+    shared pool forks its workers from its own thread, so they end at the pool's shutdown (exit code
+    0), not killed when the case threads end (-SIGTERM; once while holding the task queue's lock,
+    which hung the pool's shutdown)."""
+    workers = []
+
+    def task(case, pool):
+        result = pool.submit(pow, case, 2).result()
+        workers.extend(pool._processes.values())  # the pool's worker processes, to read their exit codes
+        return result
+
+    assert sorted(shared_pool([1, 2, 3], 2, task)) == [(1, 1), (2, 4), (3, 9)]
+    assert workers and all(w.exitcode == 0 for w in workers), [w.exitcode for w in workers]
