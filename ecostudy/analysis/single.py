@@ -13,7 +13,7 @@ from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import verify
-from ecostudy.core.status import Status, from_checks
+from ecostudy.core.status import Status, from_checks, part, worst
 from ecostudy.core.types import Timing, Trajectory
 from ecostudy.core.units import KWH
 from ecostudy.io.runsummary import RunSummary, SolverRun, Verification
@@ -68,10 +68,10 @@ class RunResult:
             checks[f"re-simulation outside tolerance (arrival {ver.arrival_time_error_s:+.3f} s, stop "
                    f"{ver.stop_error_m:+.3f} m, energy {ver.energy_error_pct:+.3f} %, overspeed "
                    f"{ver.max_overspeed_kmh:.3f} km/h)"] = ver.passed
-        if self.das is not None:  # the driver advice as driven: a run of this command too
-            advice = Status.parse(self.das.summary["status"])
-            checks[f"driver advice {self.das.summary['method']}: {advice.reason}"] = advice.ok
-        return from_checks(checks)
+        if self.das is None:
+            return from_checks(checks)
+        advice = Status.parse(self.das.summary["status"])  # the driver advice as driven: a run of this command too
+        return worst([from_checks(checks), part(f"driver advice {self.das.summary['method']}", advice)])
 
     @property
     def ok(self) -> bool:

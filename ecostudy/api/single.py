@@ -90,6 +90,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
                                  "--supplement or --window"))
     if weights is not None and objective != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
+    st = None  # the study file's case, when one is given
     if study is not None:
         if track or train:
             raise InputError(problem("command line", "--track/--train",
@@ -124,7 +125,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         try:
             result = solve_run(trk, trn, f, t, timing=timing, objective=obj, points=k, weights=w, windows=windows)
         except TooFastError as exc:  # the timing cannot be met: where it was given, by name
-            where, field = timing_source(study, st if study is not None else None, time, supplement, window)
+            where, field = timing_source(study, st, time, supplement, window)
             raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
         if das is not None:
             result.das = das_run(result, das, time_limit=das_time_limit)

@@ -54,8 +54,9 @@ def braking_curve(segment: Segment, train: Train, nodes: FloatArray, limits: Flo
         v2 = v * v + 2 * ds[k] * (dec if dec <= 0 else max(dec, 1e-3))
         if v2 < 0 or (v2 == 0 and k > 0):
             raise InfeasibleError(runaway_message(segment, nodes[k], train.braking.force(v), held, *target))
-        bwd[k] = min(np.sqrt(v2), limits[k])
-        if limits[k] < np.sqrt(v2):  # a limit binds: what a runaway upstream would miss
+        reach = np.sqrt(v2)
+        bwd[k] = min(reach, limits[k])
+        if limits[k] < reach:  # a limit binds: what a runaway upstream would miss
             target = (limits[k], nodes[k])
     return bwd
 

@@ -81,6 +81,14 @@ def from_checks(checks: dict[str, bool]) -> Status:
     return OK if not missed else flagged("; ".join(missed))
 
 
+def part(name: str, status: Status) -> Status:
+    """``status`` of a part named ``name`` as the whole it belongs to reports it: ``ok``, or ``flagged``
+    naming the part (a failed part too: the whole still stands, e.g. a run whose driver advice failed)."""
+    if status.ok:
+        return OK
+    return flagged(f"{name}: {status.reason}" if status.kind == "flagged" else f"{name} failed: {status.reason}")
+
+
 def worst(statuses: Iterable[Status]) -> Status:
     """The status of a whole: the worst kind, with the reasons of every result of that kind."""
     statuses = list(statuses)

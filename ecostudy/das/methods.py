@@ -1,7 +1,7 @@
 """The DAS methods by name (``round``, ``phases``, ``minlp``) and their table columns."""
 from ecostudy.core.errors import EcostudyError
 from ecostudy.core.registry import Registry
-from ecostudy.core.status import OK, Status, flagged
+from ecostudy.core.status import Status, part
 from ecostudy.das.advice import das_phases, das_round
 from ecostudy.das.minlp import das_minlp
 
@@ -24,11 +24,7 @@ def das_columns(result, method, points=None, time_limit=60.0):
 def advice_status(row):
     """What the ``das_`` columns of a table row (:func:`das_columns`) add to its case's status: ``ok``,
     or ``flagged`` naming the advice (an advice not kept or not computed; the ATO run stands)."""
-    advice = Status.parse(row["das_status"])
-    if advice.ok:
-        return OK
-    return flagged(f"driver advice {row['das_method']}: {advice.reason}" if advice.kind == "flagged"
-                   else f"driver advice {row['das_method']} failed: {advice.reason}")
+    return part(f"driver advice {row['das_method']}", Status.parse(row["das_status"]))
 
 
 DAS_METHODS: Registry = Registry("DAS method")

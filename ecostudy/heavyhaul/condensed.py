@@ -118,12 +118,10 @@ class CondensedHorizon:
                 self.G[k - 1][:, move * n:(move + 1) * n] += self.AB[k - 1 - j]
         self.q = np.concatenate([terms.kv, terms.kf * terms.stiff ** 2 / 1e4])
         self.scale = model.ts / np_
-        effort = np.zeros(nu)
-        for k in range(1, np_ + 1):
-            move = min(k - 1, nc - 1)
-            effort[move * n:(move + 1) * n] += terms.ke * terms.penalty / 1e4
+        held = np.bincount([min(k, nc - 1) for k in range(np_)], minlength=nc)  # samples each move is held
+        effort = np.concatenate([count * terms.ke * terms.penalty / 1e4 for count in held])
         hessian = 2 * self.scale * (sum(g.T @ (self.q[:, None] * g) for g in self.G) + np.diag(effort))
-        self.magnitude = Magnitudes(terms, self.wagons, self.locos, np_, nc, self.scale, hessian)
+        self.magnitude = Magnitudes(terms, self.wagons, self.locos, held, self.scale, hessian, effort)
         rate = []
         for k in range(nc):
             for i in self.locos:

@@ -10,23 +10,21 @@ from ecostudy.core.errors import SolverError
 
 class Magnitudes:
     """The variables, rows and linear costs a magnitude adds to the condensed QP over the moves
-    u(0..Nc-1) (``terms`` from :func:`~ecostudy.heavyhaul.rhc.objective_terms`; ``hessian`` over the
-    moves, ``scale`` Ts / Np, move m held over ``count[m]`` samples of the horizon)."""
+    u(0..Nc-1) (``terms`` from :func:`~ecostudy.heavyhaul.rhc.objective_terms`; ``scale`` Ts / Np, move m
+    held over ``count[m]`` samples of the horizon; ``hessian`` over the moves, ``effort`` its diagonal's
+    share from eq. 4's squared term, which a locomotive move's |u| variable takes on as its own)."""
 
-    def __init__(self, terms, wagons, locos, np_, nc, scale, hessian):
-        n = len(wagons)
-        count = np.bincount([min(k, nc - 1) for k in range(np_)], minlength=nc).astype(float)
+    def __init__(self, terms, wagons, locos, count, scale, hessian, effort):
+        n, nc = len(wagons), len(count)
         weight = np.asarray(terms.magnitude, float)
         self.moves = nc * n
-        self.cost = np.zeros(self.moves)  # on u: a wagon's -u
+        self.cost = np.concatenate([np.where(wagons, -scale * c * weight, 0.0) for c in count])  # on u: a wagon's -u
         self.wagon_cols = [m * n + i for m in range(nc) for i in range(n) if wagons[i] and weight[i] > 0]
         pairs = [(m, i) for m in range(nc) for i in locos if weight[i] > 0]
         self.cols = [m * n + i for m, i in pairs]
-        for m in range(nc):
-            self.cost[m * n:(m + 1) * n] = np.where(wagons, -scale * count[m] * weight, 0.0)
         self.t_cost = np.array([scale * count[m] * weight[i] for m, i in pairs])
         self.extra = len(pairs)
-        curvature = np.array([2 * scale * count[m] * terms.ke * terms.penalty[i] / 1e4 for m, i in pairs])
+        curvature = 2 * scale * np.asarray(effort)[self.cols]
         self.hessian = np.block([[hessian, np.zeros((self.moves, self.extra))],
                                  [np.zeros((self.extra, self.moves)), np.diag(curvature)]]) if pairs else hessian
         pick = np.zeros((self.extra, self.moves))

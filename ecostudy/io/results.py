@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.core.errors import InputError, problem
+from ecostudy.core.status import Status
 from ecostudy.core.types import Trajectory
 from ecostudy.core.units import KMH, KN
 from ecostudy.io.tables import number_columns
@@ -45,6 +46,11 @@ class SavedRun(NamedTuple):
     trajectory: Trajectory
     handle: np.ndarray    # the handle per interval (profile.csv's handle on the interval's first row)
     advice: Optional[pd.DataFrame] = None  # advice.csv, when the run has driver advice
+
+    @property
+    def status(self) -> Status:
+        """The run's status as it was saved (``failed`` for a folder that recorded none)."""
+        return Status.parse(str(self.summary.get("status") or "failed: no status recorded"))
 
 
 def load_result(result_dir: str | PathLike[str]) -> SavedRun:

@@ -119,9 +119,9 @@ def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
     step = f"{time_step_s:g}s" if time_step_s is not None else f"{distance_step_m:g}m"
     csv, js = (Path(result_dir) / f"profile_every_{step}.{ext}" for ext in ("csv", "json"))
     write_csv(csv, table)
-    run = {k: saved.summary.get(k) for k in ("track", "train", "from", "to", "running_time_s", "status")}
+    run = {**{k: saved.summary.get(k) for k in ("track", "train", "from", "to", "running_time_s")}, "status": str(saved.status)}
     write_json(js, {"run": run,
                     "step": {"time_s": time_step_s} if time_step_s is not None else {"distance_m": distance_step_m},
                     "units": {c: u for c, u in EXPORT_UNITS.items() if c in table},
                     "rows": table.to_dict("records")})
-    return table, csv, js, Status.parse(str(saved.summary.get("status") or "failed: no status recorded"))
+    return table, csv, js, saved.status

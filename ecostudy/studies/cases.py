@@ -124,9 +124,8 @@ def load_checked_study(path, command=None):
     base case never leaves a bad scenario unnoticed. For ``command`` (a key of :data:`UNUSED`), one
     warning names the fields the file gives (other than their defaults) that the command does not use."""
     study = load_study(path)
-    expand(path)
+    s = expand(path)[0]  # the file as validated there
     if command is not None:
-        s = validate(schemas.StudyFile, read_document(Path(path)), path)
         fields = schemas.StudyFile.model_fields
         unused = [name for name in UNUSED[command]  # given, and not the value the command uses anyway
                   if getattr(s, name) != fields[name].get_default(call_default_factory=True)]

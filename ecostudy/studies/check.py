@@ -23,4 +23,4 @@ def check_result(result_dir, running_time=None):
     objective = "net_energy" if saved.summary.get("objective") == "net_energy" else "energy"
     report = check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, saved.trajectory,
                            running_time, objective=objective, where=Path(result_dir) / "profile.csv")[0]
-    return {**report, "run_status": str(saved.summary.get("status") or "failed: no status recorded")}
+    return {**report, "run_status": str(saved.status)}

@@ -111,12 +111,11 @@ def _strategy(case):
         extra["handle_changes"] = block["mode_changes"]  # the advice rows minus one
     else:
         driven = nearest_levels(prepared.segment, train, prepared.nodes, ato.handle)
-    row = driven.row(train, prepared.segment.distance)
-    status = driven_run(row["stop_error_m"], row["running_time_s"] - target,
-                        to_kmh(worst_overspeed(prepared.segment, driven.trace)))
+    row, overspeed = driven.row(train, prepared.segment.distance), overspeed_kmh(prepared.segment, driven)
+    status = driven_run(row["stop_error_m"], row["running_time_s"] - target, overspeed)
     if name == "DAS phases":  # the same checks, and how its NLP ended
         status = worst([status, Status.parse(block["status"])])
-    return _stored(driven, train, prepared.segment, status, target_s=target, **extra)
+    return _stored(driven, train, prepared.segment, status, target_s=target, max_overspeed_kmh=overspeed, **extra)
 
 
 def verified(run):
@@ -124,15 +123,21 @@ def verified(run):
     return bool(run.facts.verification and run.facts.verification.passed)
 
 
+def overspeed_kmh(segment, driven):
+    """The largest speed over the limits of a driven run [km/h] (:func:`~ecostudy.core.simulate.worst_overspeed`)."""
+    return to_kmh(worst_overspeed(segment, driven.trace))
+
+
 def _stored(driven, train, segment, status, **fields):
     """(status, reason, summary) of a strategy's run: its table row (with its largest speed over the
-    limits, :func:`~ecostudy.core.simulate.worst_overspeed`) and its simulated trace."""
+    limits, ``max_overspeed_kmh``, measured here unless ``fields`` gives it) and its simulated trace."""
     t = driven.trace
     trace = {"t_s": t.t.tolist(), "x_m": t.x.tolist(), "v_mps": t.v.tolist(),
              **{k: float(getattr(t, k)) for k in ("traction_energy", "braking_energy", "regenerated_energy",
                                                   "stop_position", "arrival_time", "net_energy")}}
-    overspeed = to_kmh(worst_overspeed(segment, t))
-    summary = {**driven.row(train, segment.distance), "max_overspeed_kmh": overspeed, **fields,
+    if "max_overspeed_kmh" not in fields:
+        fields["max_overspeed_kmh"] = overspeed_kmh(segment, driven)
+    summary = {**driven.row(train, segment.distance), **fields,
                "handle": np.asarray(driven.handle).tolist(), "trace": trace}
     return status.kind, status.reason or None, summary
 
