@@ -26,6 +26,7 @@ from ecostudy.core.errors import InfeasibleError, SolverError
 from ecostudy.core import kinematics
 from ecostudy.core.kinematics import running_time
 from ecostudy.core.simulate import window_checks
+from ecostudy.core.status import OK, flagged, worst
 from ecostudy.core.types import Timing, Window
 from ecostudy.heuristics import mareco
 from ecostudy.io.timetable import schedule
@@ -224,17 +225,36 @@ def _segment_windows(plan, n, departure):
                         w.min_speed, w.max_speed) for w in plan.windows[n])
 
 
+def _span(lo, hi, unit):
+    return f"[{'' if lo is None else f'{lo:g}'}, {'' if hi is None else f'{hi:g}'}] {unit}"
+
+
 def timing_columns(plan, n, departure, arrival, run):
-    """Journey-clock columns of segment n and whether the run keeps its windows: the passing
-    points and the arrival (a window at the stop) on the simulated trace (``simulate.window_checks``)."""
+    """(journey-clock columns of segment n with whether the run keeps its windows, the first window
+    it breaks in words or ""): the departure, the passing points and the arrival (a window at the
+    stop) on the simulated trace (``simulate.window_checks``), times on the journey clock."""
     lo, hi = plan.arrival[n]
     stop = Window(run.facts.distance_m, _relative(lo, departure), _relative(hi, departure))
-    checks = window_checks(run.trace, _segment_windows(plan, n, departure) + (stop,))
+    windows = _segment_windows(plan, n, departure)
+    checks = window_checks(run.trace, windows + (stop,))
     d_lo, d_hi = plan.departure[n] or (None, None)
-    departed = (d_lo is None or departure >= d_lo - 1e-3) and (d_hi is None or departure <= d_hi + 1e-3)
-    return {"departure_s": departure, "arrival_s": arrival,
-            "arrival_earliest_s": math.nan if lo is None else lo, "arrival_latest_s": math.nan if hi is None else hi,
-            "windows_kept": departed and all(w["kept"] for w in checks)}
+    broken = []
+    if not ((d_lo is None or departure >= d_lo - 1e-3) and (d_hi is None or departure <= d_hi + 1e-3)):
+        broken.append(f"departs {plan.stops[n]} at {departure:.1f} s, window {_span(d_lo, d_hi, 's')}")
+    for w, check in zip(windows, checks):
+        if not check["kept"]:
+            src = next(p for p in plan.windows[n] if p.distance == w.distance)
+            speeds = _span(*(None if v is None else 3.6 * v for v in (src.min_speed, src.max_speed)), "km/h")
+            broken.append(f"passes {w.distance:g} m after {plan.stops[n]} at {departure + check['simulated_time_s']:.1f} s "
+                          f"and {check['simulated_speed_kmh']:.1f} km/h, window {_span(src.earliest, src.latest, 's')} "
+                          f"and {speeds}")
+    if not checks[-1]["kept"]:
+        broken.append(f"arrives at {plan.stops[n + 1]} at {departure + checks[-1]['simulated_time_s']:.1f} s, "
+                      f"window {_span(lo, hi, 's')}")
+    columns = {"departure_s": departure, "arrival_s": arrival,
+               "arrival_earliest_s": math.nan if lo is None else lo, "arrival_latest_s": math.nan if hi is None else hi,
+               "windows_kept": not broken}
+    return columns, "; ".join(broken)
 
 
 def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_POINTS, front_count=FRONT_COUNT, workers=1,
@@ -298,12 +318,13 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
             tick()
             t0 = float(f["running_time_s"].iloc[0])
             facts = r.facts
+            clock, broken = timing_columns(plan, n, departures[n], arrivals[n], r) if plan is not None else ({}, "")
+            status = worst([r.status, flagged(f"breaks the timetable: {broken}") if broken else OK])
             rows.append({"distribution": name, "from": a, "to": b, "distance_m": facts.distance_m,
                          "all_out_time_s": t0, "running_time_s": facts.running_time_s,
                          "supplement_pct": 100 * (t / t0 - 1), "traction_energy_kWh": facts.traction_energy_kWh,
-                         "net_energy_kWh": facts.net_energy_kWh,
-                         **(timing_columns(plan, n, departures[n], arrivals[n], r) if plan is not None else {}),
-                         "verified": bool(facts.verification and facts.verification.passed), "status": str(r.status)})
+                         "net_energy_kWh": facts.net_energy_kWh, **clock,
+                         "verified": bool(facts.verification and facts.verification.passed), "status": str(status)})
     table = pd.DataFrame(rows)
     totals = table.groupby("distribution", sort=False)[["running_time_s", "traction_energy_kWh", "net_energy_kWh"]].sum()
     if plan is not None:
