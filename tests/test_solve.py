@@ -140,6 +140,16 @@ def test_net_energy_objective_credits_regeneration():
     assert net.summary["net_energy_kWh"] <= mech.summary["net_energy_kWh"] + 1e-6
     assert net.summary["regenerated_energy_kWh"] > 0
     assert net.summary["traction_energy_kWh"] >= mech.summary["traction_energy_kWh"] - 1e-6
+    # the net energy is re-simulated too: the simulator's agrees, and one 5 % off fails the check
+    ver = net.summary["verification"]
+    assert abs(ver["net_energy_error_pct"]) <= 0.01
+    assert ver["simulated_net_energy_kWh"] == pytest.approx(net.summary["net_energy_kWh"], rel=1e-4)
+    from ecostudy.core.simulate import verify
+    from ecostudy.core.units import KWH
+    args = (net.segment, net.train, net.nodes, net.handle, 80.0, net.summary["traction_energy_kWh"] * KWH)
+    wrong, _ = verify(*args, net_energy=1.05 * net.summary["net_energy_kWh"] * KWH)
+    assert not wrong["passed"] and wrong["net_energy_error_pct"] < -1.0
+    assert verify(*args, net_energy=net.summary["net_energy_kWh"] * KWH)[0]["passed"]
 
 
 def test_reverse_direction_run_verifies(amsterdam, metro):

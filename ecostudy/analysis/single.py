@@ -66,7 +66,7 @@ class RunResult:
             checks["not re-simulated"] = False
         else:
             checks[f"re-simulation outside tolerance (arrival {ver.arrival_time_error_s:+.3f} s, stop "
-                   f"{ver.stop_error_m:+.3f} m, energy {ver.energy_error_pct:+.3f} %, overspeed "
+                   f"{ver.stop_error_m:+.3f} m, energy {ver.energy_error_pct:+.3f} %{ver.net_text}, overspeed "
                    f"{ver.max_overspeed_kmh:.3f} km/h)"] = ver.passed
         if self.das is None:
             return from_checks(checks)
@@ -143,7 +143,8 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
     if verify_result:
         with stage(stages, "verify"):
             verification, trace = verify(segment, train, nodes, u, totals["running_time_s"],
-                                         totals["traction_energy_kWh"] * KWH, case.windows)
+                                         totals["traction_energy_kWh"] * KWH, case.windows,
+                                         net_energy=totals["net_energy_kWh"] * KWH)
     summary = run_summary(case, totals, objective, t_allout, marginal, labels, regime_runs, costate,
                           outcome, verification, stages)
     return RunResult(profile, summary, segment, train, nodes, u, trace, stages,

@@ -45,7 +45,7 @@ def run_lines(result: RunResult, out_dir: Path) -> list[str]:
     if ver is not None:
         flag = "passed" if ver.passed else "FAILED"
         lines.append(f"  verification      {flag}: arrival {ver.arrival_time_error_s:+.3f} s, stop "
-                     f"{ver.stop_error_m:+.3f} m, energy {ver.energy_error_pct:+.3f} %, overspeed "
+                     f"{ver.stop_error_m:+.3f} m, energy {ver.energy_error_pct:+.3f} %{ver.net_text}, overspeed "
                      f"{ver.max_overspeed_kmh:.3f} km/h")
     if s.das is not None:
         d = s.das

@@ -45,6 +45,12 @@ class Verification:
     simulated_traction_energy_kWh: float
     simulated_net_energy_kWh: float
     windows_kept: tuple[bool, ...] = ()
+    net_energy_error_pct: float | None = None  # [% of the traction work]; None in runs saved without it
+
+    @property
+    def net_text(self) -> str:
+        """The net energy's error as the status and the screen print it, or "" where not measured."""
+        return "" if self.net_energy_error_pct is None else f", net energy {self.net_energy_error_pct:+.3f} % of traction"
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Verification":
@@ -54,7 +60,8 @@ class Verification:
                    simulated_running_time_s=float(data["simulated_running_time_s"]),
                    simulated_traction_energy_kWh=float(data["simulated_traction_energy_kWh"]),
                    simulated_net_energy_kWh=float(data["simulated_net_energy_kWh"]),
-                   windows_kept=tuple(bool(w["kept"]) for w in data.get("windows") or ()))
+                   windows_kept=tuple(bool(w["kept"]) for w in data.get("windows") or ()),
+                   net_energy_error_pct=_opt(data, "net_energy_error_pct"))
 
 
 @dataclass(frozen=True)
