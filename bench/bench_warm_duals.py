@@ -2,6 +2,7 @@
 
     PYTHONPATH=$PWD .venv/bin/python bench/bench_warm_duals.py studies/network_metro_3trains.yaml \
         triggering [receptivity ...] [--variants 1e-3:1e-6 1e-4:1e-6 1e-5:1e-6 1e-4:1e-9 1e-5:1e-9]
+        [--partial] [--carry [MU:PUSH]]
 
 Plays each named strategy as ``ecostudy network`` does (``strategies.one_strategy``, one process),
 noting the multipliers (constraint duals, lower and upper bound duals) of the solve behind every leg
@@ -14,6 +15,11 @@ NLP has the same variables and rows (by name, put in this NLP's order: a leg's o
 separation rows may come and go between rounds); else the task is counted as primal only and (b)
 is (a), not solved again.
 ``--partial``: where only rows differ, the rows both have keep their multipliers, new rows start at 0.
+
+``--carry MU:PUSH`` plays the strategies only, each warm solve whose previous run's multipliers fit
+made from them (where that fails, as the legs are: primal start, then Ipopt's defaults);
+``--carry`` alone plays them as they are: substation kWh per round, the legs' Ipopt iterations and
+CPU seconds.
 
 Per variant: Ipopt iterations over the tasks (exact), CPU seconds of the solves (this process,
 inflated on a busy machine), solves that failed (not usable), and each task's cost against (a):
@@ -37,12 +43,14 @@ from ecostudy.ocp import solver  # noqa: E402
 solver.configure()
 
 from ecostudy.network import fleet, legs  # noqa: E402
+from ecostudy.ocp import timedomain  # noqa: E402
 from ecostudy.network.strategies import one_strategy, solve_independent  # noqa: E402
 from ecostudy.studies.network import expand_network  # noqa: E402
 
 DUALS: dict = {}   # run key -> ((variable names, row names), (mult_g, z_L, z_U)) of the solve that gave that run
 TASKS: list = []   # (strategy, warm task) in the order solved
 MISSES = [0, 0]    # warm tasks whose previous run was not noted, whose NLP differs
+PLAYED = {"iterations": 0, "cpu_s": 0.0, "carried": 0, "failed": 0}  # a strategy's leg solves (``--carry``)
 
 
 def run_key(arrays):
@@ -75,10 +83,34 @@ def fitted(known, nlp, partial=False):
     return g, z_l[col], z_u[col]
 
 
-def noting(solve_one):
+def noting(solve_one, carry=None):
+    """``legs._solve`` noting the multipliers behind each run; ``carry`` (MU:PUSH): a warm solve
+    whose previous run's multipliers fit is made from them first (:func:`options`), and where that
+    fails as the legs are (primal start, then Ipopt's defaults)."""
     def wrapper(nlp, cold=False):
-        out = solve_one(nlp, cold)
+        known = DUALS.get(run_key(nlp.task[4])) if carry and nlp.task[5] and not cold else None
+        duals = fitted(known, nlp) if known is not None else None
+        out = None
+        if duals is not None:
+            nlp.session.multipliers = duals
+            outcome = nlp.solve(options(*map(float, carry.split(":"))), nlp.own)
+            if outcome.usable:
+                out = timedomain.leg_arrays(nlp.block), outcome, float(pyo.value(nlp.model.objective))
+            PLAYED["carried"] += 1
+            PLAYED["failed"] += not outcome.usable
+        out = out or solve_one(nlp, cold)
         DUALS[run_key(out[0])] = (names(nlp), tuple(np.array(a, float) for a in nlp.session.multipliers))
+        return out
+    return wrapper
+
+
+def counting(solve_one):
+    """``LegNLP.solve`` adding its Ipopt iterations and CPU seconds to :data:`PLAYED`."""
+    def wrapper(self, opts, x0=None):
+        c0 = time.process_time()
+        out = solve_one(self, opts, x0)
+        PLAYED["iterations"] += out.iterations
+        PLAYED["cpu_s"] += time.process_time() - c0
         return out
     return wrapper
 
@@ -157,10 +189,15 @@ def main():
     p.add_argument("strategies", nargs="+")
     p.add_argument("--variants", nargs="+", default=["1e-3:1e-6", "1e-4:1e-6", "1e-5:1e-6", "1e-4:1e-9", "1e-5:1e-9"],
                    help="MU:PUSH per variant (b)")
+    p.add_argument("--carry", nargs="?", const="none", default=None, metavar="MU:PUSH",
+                   help="play the strategies only, warm legs from their previous run's multipliers where they fit "
+                        "(MU:PUSH; 'none': as the strategies are): substation kWh, leg iterations, CPU s")
     p.add_argument("--partial", action="store_true",
                    help="multipliers also where rows came or went (new rows from 0), the variables the same")
     a = p.parse_args()
-    legs._solve = noting(legs._solve)
+    carry = a.carry if a.carry != "none" else None
+    legs._solve = noting(legs._solve, carry)
+    legs.LegNLP.solve = counting(legs.LegNLP.solve)
     name = [""]
     fleet.solve_leg = keeping(fleet.solve_leg, name)
     with tempfile.TemporaryDirectory() as out:
@@ -168,9 +205,11 @@ def main():
         ind, wall = solve_independent(fl)
         for strategy in a.strategies:
             name[0] = strategy
+            PLAYED.update(iterations=0, cpu_s=0.0, carried=0, failed=0)
             res = one_strategy(fl, strategy, ind, wall)
-            print(f"{strategy}: substation {res.get('totals', {}).get('substation_kWh')} kWh", flush=True)
-        for strategy in a.strategies:
+            print(f"{strategy}: substation {res.get('totals', {}).get('substation_kWh')} kWh, "
+                  f"rounds {res.get('info', {}).get('rounds_substation_kWh')}, leg solves {PLAYED}", flush=True)
+        for strategy in a.strategies if a.carry is None else ():
             table(strategy, replay([t for t in TASKS if t[0] == strategy], a.variants, a.partial))
 
 
