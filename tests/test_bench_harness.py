@@ -103,7 +103,7 @@ def test_command_line_overrides_take_the_defaults_types():
 
 @pytest.mark.slow  # a new Python process per script (imports: seconds each on a busy machine)
 @pytest.mark.parametrize("script", ["bench_solve", "bench_leg_options", "bench_network", "bench_sizes",
-                                    "bench_monte_carlo", "bench_sbpc", "bench_heavyhaul"])
+                                    "bench_monte_carlo", "bench_sbpc", "bench_heavyhaul", "bench_warm_duals"])
 def test_documented_scripts_still_parse_their_command_lines(script):
     out = subprocess.run([sys.executable, f"bench/{script}.py", "--help"], cwd=ROOT, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
