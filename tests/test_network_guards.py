@@ -1,5 +1,6 @@
 """Local-optimum guards of the network legs: a warm leg in the sample is solved cold too and
-replaced where it is dearer; a run that stands before its stop is solved again or fails its
+replaced where it is dearer; a cold leg is solved from the trapezoidal start too and the cheaper
+run kept; a run that stands before its stop is solved again or fails its
 verification."""
 import numpy as np
 import pytest
@@ -60,6 +61,29 @@ def test_a_warm_leg_dearer_than_its_cold_solve_is_replaced(one_leg):
     counts = guard_counts([[run, warm]])
     assert counts["legs_checked_cold"] == 1 and counts["legs_replaced_by_cold"] == 1
     assert counts["worst_warm_vs_cold_pct"] == pytest.approx(run.notes["warm_vs_cold_pct"])
+
+
+def test_a_cold_leg_keeps_the_cheaper_of_its_two_starts(one_leg):
+    f, leg, cold = one_leg
+    # from the space run's guess both starts reach the same optimum: the guess's run stays
+    assert cold.notes["independent_vs_trapezoid_pct"] <= 100 * legs.TIE and "replaced_by_trapezoid" not in cold.notes
+    # from a start that arrives early, a cold solve may stop in a dearer local optimum: the first
+    # such start (5-30 steps early) is replaced by the trapezoidal start's run, and says so
+    for early in range(5, 31):
+        task = (leg, "T1 leg 1", f.dt, None, early_start(leg, cold, early), False, None, None, None, None)
+        run, outcome = legs.solve_leg(task)
+        if run.notes.get("replaced_by_trapezoid"):
+            break
+    else:
+        pytest.fail("no early start led the cold solve to a dearer local optimum")
+    assert outcome.usable and scoring.verify_leg(leg, run)["passed"]
+    assert run.p.sum() == pytest.approx(cold.p.sum(), rel=1e-6)
+    # the two solves on their own: the guess's run dearer by the noted share
+    nlp = legs.LegNLP(task)
+    own, trapezoid = legs._solve(nlp)[2], legs._solve(nlp, cold=True)[2]
+    assert own > trapezoid * (1 + legs.TIE)
+    assert run.notes["independent_vs_trapezoid_pct"] == pytest.approx(100 * (own - trapezoid) / abs(trapezoid))
+    assert guard_counts([[run, cold]])["legs_replaced_by_trapezoid"] == 1
 
 
 def test_a_run_that_stands_before_its_stop_fails_verification(one_leg):

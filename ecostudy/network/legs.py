@@ -125,12 +125,14 @@ def solve_leg(task):
     study's rounds but stopped the 3-train study's rounds at worse local optima: receptivity
     52.123 against 51.789 kWh, rule 7.11 50.497 against 49.764.)
 
-    Two guards against local optima that pass the re-simulation but are not what the user wants
+    Three guards against local optima that pass the re-simulation but are not what the user wants
     (the run's ``notes`` say what they did):
 
     - a warm leg in the sample (``warm`` is :data:`CHECKED`, :func:`warmth`) is solved cold too, from the trapezoidal start;
       where the warm run costs more than :data:`DEARER` more, the cold run replaces it (a warm
       start that arrived early and stood ended 10 % dearer than the cold optimum);
+    - a cold leg (``warm`` False, from the space run's guess) is solved from the trapezoidal start
+      too, and the cheaper run kept (the guess's where they tie within :data:`TIE`);
     - a run that stands (below :data:`STAND_SPEED_MPS` for more than :data:`STAND_TIME_S`) before
       its last metre is solved again from the trapezoidal start, and replaced where that one
       does not stand; one that still stands fails its verification (``network.scoring``).
@@ -139,12 +141,14 @@ def solve_leg(task):
     run, outcome, cost = _solve(nlp)
     notes = {}
     restart = None  # the solve from the trapezoidal start, once made
-    if task[5] == CHECKED:
+    second = SECOND_START.get(task[5])  # a checked warm leg or a cold one: from the trapezoidal start too
+    if second is not None:
+        spread, replaced, margin = second
         restart = _solve(nlp, cold=True)
-        notes["warm_vs_cold_pct"] = 100 * (cost - restart[2]) / max(abs(restart[2]), 1e-9)
-        if cost - restart[2] > DEARER * abs(restart[2]):
+        notes[spread] = 100 * (cost - restart[2]) / max(abs(restart[2]), 1e-9)
+        if cost - restart[2] > margin * abs(restart[2]):
             run, outcome, cost = restart
-            notes["replaced_by_cold"] = True
+            notes[replaced] = True
     stood = standing_s(run, task[0])
     if stood > STAND_TIME_S:
         notes["stood_s"] = stood
@@ -158,8 +162,13 @@ def solve_leg(task):
 STAND_SPEED_MPS = 0.1  # [m/s] below this a train stands
 STAND_TIME_S = 1.0     # [s] standing longer than this before the last metre: arrived early and waits
 DEARER = 0.01          # [-] a warm leg dearer than its cold solve by more than this is replaced
+TIE = 1e-6             # [-] a cold leg's trapezoidal run replaces its guess's run only where cheaper by more
 CHECK_EVERY = 3        # one warm leg in this many is also solved cold (:func:`warmth`)
 CHECKED = "checked"    # a task's ``warm``: warm, and in the sample solved cold too
+# per task ``warm``, the notes of its solve from the trapezoidal start (the cost difference [%],
+# replaced) and the relative margin by which that solve must be cheaper to replace the first
+SECOND_START = {CHECKED: ("warm_vs_cold_pct", "replaced_by_cold", DEARER),
+                False: ("independent_vs_trapezoid_pct", "replaced_by_trapezoid", TIE)}
 
 
 def warmth(train, leg):
