@@ -65,9 +65,7 @@ class RunResult:
         if ver is None:
             checks["not re-simulated"] = False
         else:
-            checks[f"re-simulation outside tolerance (arrival {ver.arrival_time_error_s:+.3f} s, stop "
-                   f"{ver.stop_error_m:+.3f} m, energy {ver.energy_error_pct:+.3f} %{ver.net_text}, overspeed "
-                   f"{ver.max_overspeed_kmh:.3f} km/h)"] = ver.passed
+            checks[f"re-simulation outside tolerance ({ver.errors})"] = ver.passed
         if self.das is None:
             return from_checks(checks)
         advice = Status.parse(self.das.summary["status"])  # the driver advice as driven: a run of this command too

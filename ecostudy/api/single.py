@@ -44,9 +44,7 @@ def run_lines(result: RunResult, out_dir: Path) -> list[str]:
                                for d in pm.disagreements[:3]))
     if ver is not None:
         flag = "passed" if ver.passed else "FAILED"
-        lines.append(f"  verification      {flag}: arrival {ver.arrival_time_error_s:+.3f} s, stop "
-                     f"{ver.stop_error_m:+.3f} m, energy {ver.energy_error_pct:+.3f} %{ver.net_text}, overspeed "
-                     f"{ver.max_overspeed_kmh:.3f} km/h")
+        lines.append(f"  verification      {flag}: {ver.errors}")
     if s.das is not None:
         d = s.das
         gap = "n/a" if d.gap_to_ato_pct is None else f"{d.gap_to_ato_pct:+.2f}"

@@ -93,13 +93,12 @@ def verify(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[f
     work (a net energy can be near zero or below on a descent)."""
     trace, _ = simulate(segment, train, nodes, handle)
     overspeed = worst_overspeed(segment, trace)
-    energy_err = 100.0 * (trace.traction_energy - traction_energy) / max(traction_energy, 1.0)
+    percent = 100.0 / max(traction_energy, 1.0)  # an energy's error in % of the traction work
     out: dict[str, Any] = {
         "arrival_time_error_s": trace.arrival_time - running_time,
         "stop_error_m": trace.stop_position - segment.distance,
-        "energy_error_pct": energy_err,
-        **({} if net_energy is None else
-           {"net_energy_error_pct": 100.0 * (trace.net_energy - net_energy) / max(traction_energy, 1.0)}),
+        "energy_error_pct": percent * (trace.traction_energy - traction_energy),
+        **({} if net_energy is None else {"net_energy_error_pct": percent * (trace.net_energy - net_energy)}),
         "max_overspeed_kmh": to_kmh(max(overspeed, 0.0)),
         "simulated_running_time_s": trace.arrival_time,
         "simulated_traction_energy_kWh": to_kwh(trace.traction_energy),

@@ -48,9 +48,12 @@ class Verification:
     net_energy_error_pct: float | None = None  # [% of the traction work]; None in runs saved without it
 
     @property
-    def net_text(self) -> str:
-        """The net energy's error as the status and the screen print it, or "" where not measured."""
-        return "" if self.net_energy_error_pct is None else f", net energy {self.net_energy_error_pct:+.3f} % of traction"
+    def errors(self) -> str:
+        """The re-simulation's errors as the run's status and the screen print them (the net energy's
+        where it was measured)."""
+        net = "" if self.net_energy_error_pct is None else f", net energy {self.net_energy_error_pct:+.3f} % of traction"
+        return (f"arrival {self.arrival_time_error_s:+.3f} s, stop {self.stop_error_m:+.3f} m, energy "
+                f"{self.energy_error_pct:+.3f} %{net}, overspeed {self.max_overspeed_kmh:.3f} km/h")
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Verification":

@@ -28,6 +28,7 @@ from ecostudy.core.kinematics import running_time
 from ecostudy.core.simulate import window_checks
 from ecostudy.core.status import OK, flagged, worst
 from ecostudy.core.types import Timing, Window
+from ecostudy.core.units import to_kmh
 from ecostudy.heuristics import mareco
 from ecostudy.io.timetable import schedule
 from ecostudy.ocp import session
@@ -235,18 +236,16 @@ def timing_columns(plan, n, departure, arrival, run):
     stop) on the simulated trace (``simulate.window_checks``), times on the journey clock."""
     lo, hi = plan.arrival[n]
     stop = Window(run.facts.distance_m, _relative(lo, departure), _relative(hi, departure))
-    windows = _segment_windows(plan, n, departure)
-    checks = window_checks(run.trace, windows + (stop,))
+    checks = window_checks(run.trace, _segment_windows(plan, n, departure) + (stop,))
     d_lo, d_hi = plan.departure[n] or (None, None)
     broken = []
     if not ((d_lo is None or departure >= d_lo - 1e-3) and (d_hi is None or departure <= d_hi + 1e-3)):
         broken.append(f"departs {plan.stops[n]} at {departure:.1f} s, window {_span(d_lo, d_hi, 's')}")
-    for w, check in zip(windows, checks):
+    for w, check in zip(plan.windows[n], checks):  # on the journey clock, as the plan gives them
         if not check["kept"]:
-            src = next(p for p in plan.windows[n] if p.distance == w.distance)
-            speeds = _span(*(None if v is None else 3.6 * v for v in (src.min_speed, src.max_speed)), "km/h")
+            speeds = _span(*(None if v is None else to_kmh(v) for v in (w.min_speed, w.max_speed)), "km/h")
             broken.append(f"passes {w.distance:g} m after {plan.stops[n]} at {departure + check['simulated_time_s']:.1f} s "
-                          f"and {check['simulated_speed_kmh']:.1f} km/h, window {_span(src.earliest, src.latest, 's')} "
+                          f"and {check['simulated_speed_kmh']:.1f} km/h, window {_span(w.earliest, w.latest, 's')} "
                           f"and {speeds}")
     if not checks[-1]["kept"]:
         broken.append(f"arrives at {plan.stops[n + 1]} at {departure + checks[-1]['simulated_time_s']:.1f} s, "
