@@ -241,3 +241,38 @@ def test_an_unreachable_dask_scheduler_is_named(tmp_path):
     path = study(tmp_path)
     one_line(run("run", path, "--dask", "tcp://127.0.0.1:1", "--no-progress"), "--dask",
              "cannot reach the Dask scheduler at tcp://127.0.0.1:1")
+
+
+# ----------------------------------------------------------------------------------- a study and options
+DEFAULT_STUDY = TRACKS.parent / "studies" / "default.yaml"
+
+
+@pytest.mark.parametrize("command, options, fragment", [
+    ("solve", ["--from", "Nowhere"], "--from"),
+    ("solve", ["--from", ""], "--from"),
+    ("solve", ["--to", "Centraal Station"], "--to"),
+    ("compare", ["--from", "Nowhere"], "--from"),
+    ("pareto", ["--to", "Nowhere", "--count", "2"], "--to"),
+])
+def test_stops_beside_a_study_file_are_refused(tmp_path, command, options, fragment):
+    """A study file sets its stops and its timing for them: --from/--to beside it are refused, not ignored."""
+    one_line(run(command, DEFAULT_STUDY, *options, "--points", 50, "--out", tmp_path / "o"), fragment,
+             "a study file sets its stops")
+    assert not (tmp_path / "o").exists()
+
+
+def test_window_and_weights_beside_a_study_file_are_used(tmp_path):
+    """--window and --weights override a study's timing and weights, as --time does (they were ignored)."""
+    r = run("solve", DEFAULT_STUDY, "--window", "84,86", "--points", 50, "--out", tmp_path / "w", "--no-plot")
+    assert r.exit_code == 0, r.output
+    s = json.loads((tmp_path / "w" / "summary.json").read_text())
+    assert 84 - 1e-6 <= s["running_time_s"] <= 86 + 1e-6, s["running_time_s"]  # the study's own time is 76 s
+    one_line(run("solve", DEFAULT_STUDY, "--weights", "1,2", "--points", 50, "--out", tmp_path / "x"),
+             "--weights", "--objective mixed only")
+    times = []
+    for weights in ("1,0.01", "1,100"):  # the pair's weights move the mixed optimum across the window
+        r = run("solve", DEFAULT_STUDY, "--objective", "mixed", "--weights", weights, "--window", "70,100",
+                "--points", 50, "--out", tmp_path / weights, "--no-plot")
+        assert r.exit_code in (0, 1), r.output
+        times.append(json.loads((tmp_path / weights / "summary.json").read_text())["running_time_s"])
+    assert abs(times[1] - times[0]) > 10.0, times  # 72.0 and 100.0 s

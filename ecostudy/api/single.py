@@ -24,7 +24,8 @@ from ecostudy.report.files import write_fixed_step, write_run
 from ecostudy.report.style import output
 from ecostudy.studies.cases import load_checked_study
 from ecostudy.studies.check import check_result
-from ecostudy.studies.options import check_options, only_one, output_folder, parse_pair, timing_of
+from ecostudy.studies.options import (check_options, no_stops_with_study, only_one, output_folder, parse_pair,
+                                      timing_of)
 
 
 def run_lines(result: RunResult, out_dir: Path) -> list[str]:
@@ -86,20 +87,20 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
     if objective == "time" and any(x is not None for x in (time, supplement, window)):
         raise InputError(problem("command line", "--objective time", "finds the fastest run: it takes no --time, "
                                  "--supplement or --window"))
-    if weights is not None and objective != "mixed":
-        raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
     st = None  # the study file's case, when one is given
     if study is not None:
         if track or train:
             raise InputError(problem("command line", "--track/--train",
                                      "give a study file or --track and --train, not both"))
+        no_stops_with_study(from_stop, to_stop)
         st = load_checked_study(study, "solve")
         paths = (st.track_path, st.train_path)
         trk, trn, f, t, windows = st.track, st.train, st.from_stop, st.to_stop, st.windows
-        timing, obj, w, k = st.timing, objective or st.objective, st.weights, points or st.points
+        timing, obj, k = st.timing, objective or st.objective, points or st.points
+        w = parse_pair(weights, "--weights", nonnegative=True) if weights else st.weights
         out_dir = output_folder(out, st.output)
-        if time is not None or supplement is not None:
-            timing = timing_of(time, supplement)
+        if any(x is not None for x in (time, supplement, window)):
+            timing = timing_of(time, supplement, window)
     else:
         if not (track and train):
             raise InputError(problem("command line", "--track/--train",
@@ -114,6 +115,8 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         w = parse_pair(weights, "--weights", nonnegative=True) if weights else (1.0, 1.0)
         k = points or RUN_POINTS
         out_dir = output_folder(out, Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_"))
+    if weights is not None and obj != "mixed":
+        raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
     check_output_dir(out_dir, ("profile.csv", "summary.json", "speed.png", "inputs.json"))
     if das is not None and windows and das != "round":
         raise InputError(problem(str(study), "windows", f"--das {das} does not handle timing "

@@ -14,8 +14,8 @@ Objective = Enum("Objective", {"energy": "energy", "net_energy": "net_energy", "
 Study = Annotated[Optional[Path], typer.Argument(help="Study file (YAML).")]
 Track = Annotated[Optional[Path], typer.Option(help="Track file (YAML, or TTOBench JSON).")]
 Train = Annotated[Optional[Path], typer.Option(help="Train file (YAML, or TTOBench/OSRD JSON).")]
-From = Annotated[Optional[str], typer.Option("--from", help="Departure stop (default: first).")]
-To = Annotated[Optional[str], typer.Option("--to", help="Arrival stop (default: last).")]
+From = Annotated[Optional[str], typer.Option("--from", help="Departure stop (default: first; a study file sets its own).")]
+To = Annotated[Optional[str], typer.Option("--to", help="Arrival stop (default: last; a study file sets its own).")]
 Time = Annotated[Optional[float], typer.Option("--time", help="Running time [s].")]
 Supplement = Annotated[Optional[float], typer.Option(help="Running-time supplement over all-out [%].")]
 Points = Annotated[Optional[int], typer.Option("--points", "-K", help="Grid nodes K (default: the study's, else "

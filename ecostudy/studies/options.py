@@ -83,6 +83,15 @@ class Case(NamedTuple):
     study: Any  # the loaded study file, or None
 
 
+def no_stops_with_study(from_stop: Optional[str], to_stop: Optional[str]) -> None:
+    """Refuse ``--from``/``--to`` beside a study file: its stops and its timing for them (a running time,
+    a timetable's times between those stops) come together from the file."""
+    given = [name for name, value in (("--from", from_stop), ("--to", to_stop)) if value is not None]
+    if given:
+        raise InputError(problem("command line", "/".join(given), "a study file sets its stops (from:, to:) and "
+                                 "its timing for them: edit the study, or give --track and --train"))
+
+
 def case_from(study: Optional[Path], track: Optional[Path], train: Optional[Path], from_stop: Optional[str],
               to_stop: Optional[str], points: Optional[int], command: Optional[str] = None) -> Case:
     """The case of a study file (``points`` overrides its K; the fields ``command`` does not use named
@@ -91,6 +100,7 @@ def case_from(study: Optional[Path], track: Optional[Path], train: Optional[Path
         if track or train:
             raise InputError(problem("command line", "--track/--train",
                                      "give a study file or --track and --train, not both"))
+        no_stops_with_study(from_stop, to_stop)
         st = load_checked_study(study, command)
         return Case(st.track, st.train, st.from_stop, st.to_stop, points or st.points, st)
     if not (track and train):
