@@ -29,7 +29,7 @@ def test_a_solve_with_figures_returns_with_every_file_written_and_the_child_ende
     assert summary["status"] == "ok" and report.status.ok
     for name in ("speed.png", "energy.png", "profile.csv", "report.html", "inputs.json"):
         assert (tmp_path / "s" / name).stat().st_size > 0, name
-    assert {"speed.png", "energy.png"} <= set(summary["files"])
+    assert {"speed.png", "energy.png", "inputs.json"} <= set(summary["files"])  # every file it wrote, listed
     assert (tmp_path / "s" / "speed.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "data:image/png;base64," in (tmp_path / "s" / "report.html").read_text()
 

@@ -132,10 +132,10 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
             result.das = das_run(result, das, time_limit=das_time_limit)
             result.summary["das"] = result.das.summary
         stage("figures and files")
-        write_run(result, out_dir, plot=plot, out=figures, drawer=drawer)
-    write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
-                                         "track_sha256": file_digest(paths[0]), "train_sha256": file_digest(paths[1]),
-                                         "from": f, "to": t, "points": k})
+        write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
+                                             "track_sha256": file_digest(paths[0]),
+                                             "train_sha256": file_digest(paths[1]), "from": f, "to": t, "points": k})
+        write_run(result, out_dir, plot=plot, out=figures, drawer=drawer, files=("inputs.json",))
     return reported(out_dir, run_lines(result, out_dir))
 
 

@@ -52,10 +52,10 @@ def _draw(name, args, kwargs, path, **more):
     return getattr(module, name)(*args, path, **kwargs, **more)
 
 
-def write_run(result, out_dir, plot=True, out=style.Output(), drawer=None):
+def write_run(result, out_dir, plot=True, out=style.Output(), drawer=None, files=()):
     """``profile.csv``, ``summary.json``, ``speed.png``, ``energy.png`` (the energy flow; figures in
     the format of ``out``, drawn by ``drawer`` while the tables are written when one is given) and
-    ``advice.csv`` of one run into ``out_dir``."""
+    ``advice.csv`` of one run into ``out_dir``; ``files``: others the caller wrote there, listed too."""
     out_dir = Path(out_dir)
     drawn = figures_meanwhile(drawer, out_dir, plot, {"speed": later("speed_plot", result),
                                                       "energy": later("energy_plot", result)}, out)
@@ -65,8 +65,8 @@ def write_run(result, out_dir, plot=True, out=style.Output(), drawer=None):
         write_csv(out_dir / "advice.csv", result.das.advice)
         tables["advice"] = "advice.csv"
     facts = result.facts
-    write_summary(out_dir, "solve", {f"{facts.from_stop}-{facts.to_stop}": result.status}, tables, drawn(),
-                  **result.summary)
+    write_summary(out_dir, "solve", {f"{facts.from_stop}-{facts.to_stop}": result.status}, tables,
+                  [*drawn(), *files], **result.summary)
     stale(out_dir, advice=result.das is None, names={"advice": ["advice.csv"]})
     write_html(out_dir)
     return out_dir
