@@ -113,3 +113,28 @@ def test_bad_sweeps_are_refused_in_one_line(tmp_path, changes, words):
 ])
 def test_unfollowable_reference_tables_are_refused_in_one_line(tmp_path, rows, words):
     refused(invoke(study(tmp_path, reference=reference_table(tmp_path, rows)), tmp_path / "out"), *words)
+
+
+def test_a_train_that_stalls_on_a_climb_and_rolls_back_says_so(tmp_path):
+    """One locomotive (560 kN) and 40 wagons (2766 t: 678 kN of grade alone) told by a reference
+    table to climb 25 per mille at 30 km/h: the train stalls on the climb about 1.6 km before the
+    stop and rolls back hundreds of metres before the sample cap (25 samples, 500 s) ends the run.
+    Flagged, and the reason names the stall and the roll back, not only the cap."""
+    consist = load_yaml(PAPER)
+    consist["vehicles"] = [{"type": "locomotive", "count": 1}, {"type": "wagon", "count": 40}]
+    write_yaml(tmp_path / "one.yaml", consist)
+    line = {"name": "climb", "source": "test", "length_m": 4000,
+            "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 3000}],
+            "gradients": [{"position_m": 0, "gradient_permille": 0}, {"position_m": 300, "gradient_permille": 25}],
+            "speed_limits": [{"position_m": 0, "speed_kmh": 60}]}
+    write_yaml(tmp_path / "climb.yaml", line)
+    path = study(tmp_path, consist=str(tmp_path / "one.yaml"), track=str(tmp_path / "climb.yaml"), brake_penalty=[60],
+                 horizons=[{"np": 1, "nc": 1}], max_samples=25,
+                 reference=reference_table(tmp_path, [(0, 0), (200, 30), (2800, 30), (3000, 0)]))
+    result = invoke(path, tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert run["status"] == "flagged" and not run["arrived"]
+    assert run["rollback_m"] > 100 and 1000 < run["stalled_before_stop_m"] < 2500
+    assert "stalled" in run["reason"] and "rolled back" in run["reason"] and "sample cap (25)" in run["reason"]
+
