@@ -138,3 +138,21 @@ def test_a_train_that_stalls_on_a_climb_and_rolls_back_says_so(tmp_path):
     assert run["rollback_m"] > 100 and 1000 < run["stalled_before_stop_m"] < 2500
     assert "stalled" in run["reason"] and "rolled back" in run["reason"] and "sample cap (25)" in run["reason"]
 
+
+def test_a_reference_table_over_a_restriction_between_its_rows_is_refused(tmp_path):
+    """A table at 50 km/h from 500 m to 4500 m over a line limited to 30 km/h from 2000 to 3000 m:
+    no row of the table lies in the restriction, yet the table asks for 50 km/h all through it. It
+    cannot be followed: refused in one line before computing (a 2 + 20 + 2 train, 323 m, ran it and a
+    car went 20 km/h over the limit)."""
+    small = load_yaml(PAPER)
+    small["vehicles"][1]["count"] = 20
+    write_yaml(tmp_path / "small.yaml", small)
+    line = {"name": "restricted", "source": "test", "length_m": 6000,
+            "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 5000}],
+            "speed_limits": [{"position_m": 0, "speed_kmh": 60}, {"position_m": 2000, "speed_kmh": 30},
+                             {"position_m": 3000, "speed_kmh": 60}]}
+    write_yaml(tmp_path / "restricted.yaml", line)
+    path = study(tmp_path, consist=str(tmp_path / "small.yaml"), track=str(tmp_path / "restricted.yaml"), brake_penalty=[60], horizons=[{"np": 1, "nc": 1}],
+                 reference=reference_table(tmp_path, [(0, 0), (500, 50), (4500, 50), (5000, 0)]))
+    refused(invoke(path, tmp_path / "out"), "reference.table", "50 km/h at 2000 m", "(30 km/h)", "cannot be followed")
+    assert not (tmp_path / "out" / "runs.csv").exists()
