@@ -156,3 +156,30 @@ def test_a_reference_table_over_a_restriction_between_its_rows_is_refused(tmp_pa
                  reference=reference_table(tmp_path, [(0, 0), (500, 50), (4500, 50), (5000, 0)]))
     refused(invoke(path, tmp_path / "out"), "reference.table", "50 km/h at 2000 m", "(30 km/h)", "cannot be followed")
     assert not (tmp_path / "out" / "runs.csv").exists()
+
+
+def test_a_qp_that_fails_says_where_the_train_was(tmp_path):
+    """A 2 + 20 + 2 train with brakes of 300 kN in all (50 kN per locomotive, 5 kN per wagon) told by
+    a reference table to hold 40 km/h down 40 per mille (about 700 kN of grade): the train runs
+    faster than v_r and no braking brings its mean speed back under it, so the QP has no solution.
+    The run is failed, and its reason says when and where, at what speed against v_r, besides the
+    solver's word."""
+    weak = load_yaml(PAPER)
+    weak["vehicles"][1]["count"] = 20
+    weak["types"]["locomotive"]["dynamic_brake"] = {"max_force_kN": 50, "max_power_kW": 1000}
+    weak["types"]["wagon"]["pneumatic_brake_kN"] = 5
+    write_yaml(tmp_path / "weak.yaml", weak)
+    line = {"name": "descent", "source": "test", "length_m": 8000,
+            "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 7000}],
+            "gradients": [{"position_m": 0, "gradient_permille": 0}, {"position_m": 1000, "gradient_permille": -40},
+                          {"position_m": 6000, "gradient_permille": 0}],
+            "speed_limits": [{"position_m": 0, "speed_kmh": 60}]}
+    write_yaml(tmp_path / "descent.yaml", line)
+    path = study(tmp_path, consist=str(tmp_path / "weak.yaml"), track=str(tmp_path / "descent.yaml"), brake_penalty=[60],
+                 horizons=[{"np": 1, "nc": 1}],
+                 reference=reference_table(tmp_path, [(0, 0), (300, 40), (6700, 40), (7000, 0)]))
+    result = invoke(path, tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert run["status"] == "failed" and "daqp exit flag" in run["reason"]
+    assert "head at" in run["reason"] and "mean speed" in run["reason"] and "v_r" in run["reason"], run["reason"]
