@@ -115,22 +115,28 @@ def test_unfollowable_reference_tables_are_refused_in_one_line(tmp_path, rows, w
     refused(invoke(study(tmp_path, reference=reference_table(tmp_path, rows)), tmp_path / "out"), *words)
 
 
-def test_a_train_that_stalls_on_a_climb_and_rolls_back_says_so(tmp_path):
-    """One locomotive (560 kN) and 40 wagons (2766 t: 678 kN of grade alone) told by a reference
-    table to climb 25 per mille at 30 km/h: the train stalls on the climb about 1.6 km before the
-    stop and rolls back hundreds of metres before the sample cap (25 samples, 500 s) ends the run.
-    Flagged, and the reason names the stall and the roll back, not only the cap."""
+def climb_study(tmp_path, permille, **changes):
+    """One locomotive and 40 wagons (2766 t) from rest to rest over 3 km, climbing ``permille`` from
+    300 m on; K_b = 60, f = 10, Np = Nc = 1."""
     consist = load_yaml(PAPER)
     consist["vehicles"] = [{"type": "locomotive", "count": 1}, {"type": "wagon", "count": 40}]
     write_yaml(tmp_path / "one.yaml", consist)
     line = {"name": "climb", "source": "test", "length_m": 4000,
             "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 3000}],
-            "gradients": [{"position_m": 0, "gradient_permille": 0}, {"position_m": 300, "gradient_permille": 25}],
+            "gradients": [{"position_m": 0, "gradient_permille": 0}, {"position_m": 300, "gradient_permille": permille}],
             "speed_limits": [{"position_m": 0, "speed_kmh": 60}]}
     write_yaml(tmp_path / "climb.yaml", line)
-    path = study(tmp_path, consist=str(tmp_path / "one.yaml"), track=str(tmp_path / "climb.yaml"), brake_penalty=[60],
-                 horizons=[{"np": 1, "nc": 1}], max_samples=25,
-                 reference=reference_table(tmp_path, [(0, 0), (200, 30), (2800, 30), (3000, 0)]))
+    return study(tmp_path, consist=str(tmp_path / "one.yaml"), track=str(tmp_path / "climb.yaml"), brake_penalty=[60],
+                 horizons=[{"np": 1, "nc": 1}], **changes)
+
+
+def test_a_train_that_stalls_on_a_climb_and_rolls_back_says_so(tmp_path):
+    """One locomotive (560 kN) and 40 wagons (2766 t: 678 kN of grade alone) told by a reference
+    table to climb 25 per mille at 30 km/h: the train stalls on the climb about 1.6 km before the
+    stop and rolls back hundreds of metres before the sample cap (25 samples, 500 s) ends the run.
+    Flagged, and the reason names the stall and the roll back, not only the cap."""
+    path = climb_study(tmp_path, 25, max_samples=25,
+                       reference=reference_table(tmp_path, [(0, 0), (200, 30), (2800, 30), (3000, 0)]))
     result = invoke(path, tmp_path / "out")
     assert result.exit_code == 1, result.output
     run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
@@ -183,3 +189,18 @@ def test_a_qp_that_fails_says_where_the_train_was(tmp_path):
     run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
     assert run["status"] == "failed" and "daqp exit flag" in run["reason"]
     assert "head at" in run["reason"] and "mean speed" in run["reason"] and "v_r" in run["reason"], run["reason"]
+
+
+def test_a_train_that_stalls_where_the_reference_runs_says_the_reference_speed(tmp_path):
+    """With adhesion (409.7 kN per locomotive at rest, less with speed) one locomotive and 40 wagons
+    cannot hold 17 per mille (478 kN of grade and resistance) that its 560 kN motors, and so the
+    single-mass reference, can: the train comes to rest on the climb about 1.3 km short of the stop.
+    The loop ends the run there (standing past the reference's final approach, which begins where
+    the reference slows on the climb); the reason says the reference ran about 36 km/h there, so the
+    stop reads as the stall it is."""
+    path = climb_study(tmp_path, 17, max_samples=60, adhesion=True, reference={"supplement_percent": 10, "points": 150})
+    result = invoke(path, tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert run["status"] == "flagged" and run["stop_error_m"] < -1000
+    assert run["reference_at_end_kmh"] > 30 and "with the reference at" in run["reason"], run["reason"]

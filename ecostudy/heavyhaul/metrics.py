@@ -64,6 +64,7 @@ def run_metrics(record, reference, locomotives, force_limit):
         "arrival_late_percent": float(100 * (record.times[-1] / reference.running_time - 1)),
         "stop_error_m": float(record.head[-1] - reference.distance[-1]),
         **rollback(record.head, reference.distance[-1]),
+        "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
         "force_max_kN": float(record.largest_coupler.max() / KN),
         "force_max_braking_kN": float(record.largest_coupler[braking].max() / KN) if braking.any() else 0.0,
         "force_limit_kN": force_limit / KN, "braking_samples": int(braking.sum()),
@@ -146,7 +147,9 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
         out.append(f"the sample cap ({samples}) came {where}")
     elif abs(metrics["stop_error_m"]) > tolerances.stop_m:
         where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
-        out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m)")
+        asked = (f" with the reference at {metrics['reference_at_end_kmh']:.1f} km/h there"  # a stall reads as one
+                 if metrics["stop_error_m"] < 0 and "reference_at_end_kmh" in metrics else "")
+        out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m){asked}")
     late, share = metrics["arrival_late_s"], metrics["arrival_late_percent"]
     if metrics["arrived"] and share > 100 * tolerances.arrival and late > tolerances.arrival_s:
         out.append(f"arrived {late:.0f} s ({share:.1f} %) after the reference's running time "
