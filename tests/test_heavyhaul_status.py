@@ -113,3 +113,94 @@ def test_bad_sweeps_are_refused_in_one_line(tmp_path, changes, words):
 ])
 def test_unfollowable_reference_tables_are_refused_in_one_line(tmp_path, rows, words):
     refused(invoke(study(tmp_path, reference=reference_table(tmp_path, rows)), tmp_path / "out"), *words)
+
+
+def climb_study(tmp_path, permille, **changes):
+    """One locomotive and 40 wagons (2766 t) from rest to rest over 3 km, climbing ``permille`` from
+    300 m on; K_b = 60, f = 10, Np = Nc = 1."""
+    consist = load_yaml(PAPER)
+    consist["vehicles"] = [{"type": "locomotive", "count": 1}, {"type": "wagon", "count": 40}]
+    write_yaml(tmp_path / "one.yaml", consist)
+    line = {"name": "climb", "source": "test", "length_m": 4000,
+            "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 3000}],
+            "gradients": [{"position_m": 0, "gradient_permille": 0}, {"position_m": 300, "gradient_permille": permille}],
+            "speed_limits": [{"position_m": 0, "speed_kmh": 60}]}
+    write_yaml(tmp_path / "climb.yaml", line)
+    return study(tmp_path, consist=str(tmp_path / "one.yaml"), track=str(tmp_path / "climb.yaml"), brake_penalty=[60],
+                 horizons=[{"np": 1, "nc": 1}], **changes)
+
+
+def test_a_train_that_stalls_on_a_climb_and_rolls_back_says_so(tmp_path):
+    """One locomotive (560 kN) and 40 wagons (2766 t: 678 kN of grade alone) told by a reference
+    table to climb 25 per mille at 30 km/h: the train stalls on the climb about 1.6 km before the
+    stop and rolls back hundreds of metres before the sample cap (25 samples, 500 s) ends the run.
+    Flagged, and the reason names the stall and the roll back, not only the cap."""
+    path = climb_study(tmp_path, 25, max_samples=25,
+                       reference=reference_table(tmp_path, [(0, 0), (200, 30), (2800, 30), (3000, 0)]))
+    result = invoke(path, tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert run["status"] == "flagged" and not run["arrived"]
+    assert run["rollback_m"] > 100 and 1000 < run["stalled_before_stop_m"] < 2500
+    assert "stalled" in run["reason"] and "rolled back" in run["reason"] and "sample cap (25)" in run["reason"]
+
+
+def test_a_reference_table_over_a_restriction_between_its_rows_is_refused(tmp_path):
+    """A table at 50 km/h from 500 m to 4500 m over a line limited to 30 km/h from 2000 to 3000 m:
+    no row of the table lies in the restriction, yet the table asks for 50 km/h all through it. It
+    cannot be followed: refused in one line before computing (a 2 + 20 + 2 train, 323 m, ran it and a
+    car went 20 km/h over the limit)."""
+    small = load_yaml(PAPER)
+    small["vehicles"][1]["count"] = 20
+    write_yaml(tmp_path / "small.yaml", small)
+    line = {"name": "restricted", "source": "test", "length_m": 6000,
+            "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 5000}],
+            "speed_limits": [{"position_m": 0, "speed_kmh": 60}, {"position_m": 2000, "speed_kmh": 30},
+                             {"position_m": 3000, "speed_kmh": 60}]}
+    write_yaml(tmp_path / "restricted.yaml", line)
+    path = study(tmp_path, consist=str(tmp_path / "small.yaml"), track=str(tmp_path / "restricted.yaml"), brake_penalty=[60], horizons=[{"np": 1, "nc": 1}],
+                 reference=reference_table(tmp_path, [(0, 0), (500, 50), (4500, 50), (5000, 0)]))
+    refused(invoke(path, tmp_path / "out"), "reference.table", "50 km/h at 2000 m", "(30 km/h)", "cannot be followed")
+    assert not (tmp_path / "out" / "runs.csv").exists()
+
+
+def test_a_qp_that_fails_says_where_the_train_was(tmp_path):
+    """A 2 + 20 + 2 train with brakes of 300 kN in all (50 kN per locomotive, 5 kN per wagon) told by
+    a reference table to hold 40 km/h down 40 per mille (about 700 kN of grade): the train runs
+    faster than v_r and no braking brings its mean speed back under it, so the QP has no solution.
+    The run is failed, and its reason says when and where, at what speed against v_r, besides the
+    solver's word."""
+    weak = load_yaml(PAPER)
+    weak["vehicles"][1]["count"] = 20
+    weak["types"]["locomotive"]["dynamic_brake"] = {"max_force_kN": 50, "max_power_kW": 1000}
+    weak["types"]["wagon"]["pneumatic_brake_kN"] = 5
+    write_yaml(tmp_path / "weak.yaml", weak)
+    line = {"name": "descent", "source": "test", "length_m": 8000,
+            "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 7000}],
+            "gradients": [{"position_m": 0, "gradient_permille": 0}, {"position_m": 1000, "gradient_permille": -40},
+                          {"position_m": 6000, "gradient_permille": 0}],
+            "speed_limits": [{"position_m": 0, "speed_kmh": 60}]}
+    write_yaml(tmp_path / "descent.yaml", line)
+    path = study(tmp_path, consist=str(tmp_path / "weak.yaml"), track=str(tmp_path / "descent.yaml"), brake_penalty=[60],
+                 horizons=[{"np": 1, "nc": 1}],
+                 reference=reference_table(tmp_path, [(0, 0), (300, 40), (6700, 40), (7000, 0)]))
+    result = invoke(path, tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert run["status"] == "failed" and "daqp exit flag" in run["reason"]
+    assert "head at" in run["reason"] and "mean speed" in run["reason"] and "v_r" in run["reason"], run["reason"]
+
+
+def test_a_train_that_stalls_where_the_reference_runs_says_the_reference_speed(tmp_path):
+    """With adhesion (409.7 kN per locomotive at rest, less with speed) one locomotive and 40 wagons
+    cannot hold 17 per mille (478 kN of grade and resistance) that its 560 kN motors, and so the
+    single-mass reference, can: the train comes to rest on the climb about 1.3 km short of the stop.
+    The loop ends the run there (standing past the reference's final approach, which begins where
+    the reference slows on the climb); the reason says the reference ran about 36 km/h there, so the
+    stop reads as the stall it is."""
+    path = climb_study(tmp_path, 17, max_samples=60, adhesion=True, reference={"supplement_percent": 10, "points": 150})
+    result = invoke(path, tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert run["status"] == "flagged" and run["stop_error_m"] < -1000
+    assert run["reference_at_end_kmh"] > 30 and "with the reference at" in run["reason"], run["reason"]

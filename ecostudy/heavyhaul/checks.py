@@ -32,11 +32,16 @@ def reference_problems(reference, segment, tolerance):
     end = float(reference.distance[-1])
     if abs(end - segment.distance) > 1.0:
         out.append(f"ends at {end:.0f} m but the stop is at {segment.distance:.0f} m (the table must cover the route)")
-    excess = reference.speeds - segment.limit(reference.distance)
+    # the reference is linear between its points and the limit constant between its changes: the
+    # largest excess is at a point of either (a change read on both sides)
+    changes = segment.limit.starts[(segment.limit.starts > 0) & (segment.limit.starts < end)]
+    at = np.unique(np.concatenate([reference.distance, changes, np.maximum(changes - 1e-6, 0.0)]))
+    speeds = reference.speed(at)
+    excess = speeds - segment.limit(at)
     worst = int(np.argmax(excess))
     if excess[worst] > tolerance:
-        out.append(f"{3.6 * reference.speeds[worst]:.0f} km/h at {reference.distance[worst]:.0f} m is above the "
-                   f"train's limit there ({3.6 * segment.limit(reference.distance[worst]):.0f} km/h): it cannot be followed")
+        out.append(f"{3.6 * speeds[worst]:.0f} km/h at {at[worst]:.0f} m is above the "
+                   f"train's limit there ({3.6 * segment.limit(at[worst]):.0f} km/h): it cannot be followed")
     return out
 
 

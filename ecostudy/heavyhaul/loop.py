@@ -17,7 +17,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ecostudy.core.units import KN
+from ecostudy.core.errors import SolverError
+from ecostudy.core.units import KMH, KN
 from ecostudy.heavyhaul.approach import brake_share, braking_point
 from ecostudy.heavyhaul.plant import LOSSES, CascadeStep
 from ecostudy.heavyhaul.rhc import TERMS, input_offsets
@@ -159,7 +160,12 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         x0 = measured if observer is None else observer.x.copy()  # eq. 10's x^(k|k-1)
         low, high = limits(plant, reduction, state)
         offsets, vr = horizon(plant, reduction, reference, state, x0[:nv], controller.np_)
-        planned = controller.solve(x0, offsets / KN, low / KN, high / KN, vr) * KN
+        try:
+            planned = controller.solve(x0, offsets / KN, low / KN, high / KN, vr) * KN
+        except SolverError as exc:  # where the train was, in the reason
+            raise SolverError(f"{exc} at {state.time:.0f} s, head at {head_position(plant, state):.0f} m, "
+                              f"mean speed {mean_speed(plant, state) / KMH:.1f} km/h against v_r "
+                              f"{vr[1] / KMH:.1f} km/h at the sample's end") from exc
         seconds = controller.last.seconds
         if seconds <= ts:
             u = planned

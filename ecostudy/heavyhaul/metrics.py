@@ -1,7 +1,8 @@
 """What a heavy-haul run reports and when it is not ok: the numbers read from a closed-loop record
 (:class:`~ecostudy.heavyhaul.loop.LoopRecord`) and the reasons that flag it.
 
-A run is ``flagged`` (never ``ok``) when the train did not arrive (the sample cap came first), when
+A run is ``flagged`` (never ``ok``) when the train stalled and rolled back (more than the stop
+tolerance, at the sample ends), when it did not arrive (the sample cap came first), when
 it stopped farther from the stop than the tolerance (short or beyond), when it arrived later than the
 reference's running time by more than the tolerance (a share of it or seconds, the larger), when a car ran faster than the
 train's limit at the head by more than the tolerance, when a coupler carried more than the consist's
@@ -62,6 +63,8 @@ def run_metrics(record, reference, locomotives, force_limit):
         "arrival_late_s": float(record.times[-1] - reference.running_time),
         "arrival_late_percent": float(100 * (record.times[-1] / reference.running_time - 1)),
         "stop_error_m": float(record.head[-1] - reference.distance[-1]),
+        **rollback(record.head, reference.distance[-1]),
+        "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
         "force_max_kN": float(record.largest_coupler.max() / KN),
         "force_max_braking_kN": float(record.largest_coupler[braking].max() / KN) if braking.any() else 0.0,
         "force_limit_kN": force_limit / KN, "braking_samples": int(braking.sum()),
@@ -74,6 +77,16 @@ def run_metrics(record, reference, locomotives, force_limit):
         **{f"J_{name}": float(value) for name, value in zip(TERMS, terms)},
         **energy_balance(record),
     }
+
+
+def rollback(head, stop):
+    """How far the train rolled back at most (the head at a sample end behind the farthest it had
+    reached before, ``rollback_m`` [m]) and how far before the ``stop`` [m] it stalled there
+    (``stalled_before_stop_m``, the farthest point reached; 0 without a roll back)."""
+    farthest = np.maximum.accumulate(head)
+    back = farthest - head
+    i = int(np.argmax(back))
+    return {"rollback_m": float(back[i]), "stalled_before_stop_m": float(stop - farthest[i]) if back[i] > 0 else 0.0}
 
 
 def energy_balance(record):
@@ -125,13 +138,18 @@ def in_train_metrics(history, consist):
 def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     """Why a run is not ok (empty: ok); ``samples`` the cap it ran under."""
     out = []
+    if metrics.get("rollback_m", 0.0) > tolerances.stop_m:
+        out.append(f"the train stalled {metrics['stalled_before_stop_m']:.0f} m before the stop and rolled back "
+                   f"{metrics['rollback_m']:.0f} m")
     if not metrics["arrived"]:
         where = (f"{-metrics['stop_error_m']:.0f} m before the stop" if metrics["stop_error_m"] <= 0
                  else f"with the train {metrics['stop_error_m']:.0f} m beyond the stop, not stopped")
         out.append(f"the sample cap ({samples}) came {where}")
     elif abs(metrics["stop_error_m"]) > tolerances.stop_m:
         where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
-        out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m)")
+        asked = (f" with the reference at {metrics['reference_at_end_kmh']:.1f} km/h there"  # a stall reads as one
+                 if metrics["stop_error_m"] < 0 and "reference_at_end_kmh" in metrics else "")
+        out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m){asked}")
     late, share = metrics["arrival_late_s"], metrics["arrival_late_percent"]
     if metrics["arrived"] and share > 100 * tolerances.arrival and late > tolerances.arrival_s:
         out.append(f"arrived {late:.0f} s ({share:.1f} %) after the reference's running time "
