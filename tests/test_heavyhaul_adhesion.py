@@ -42,3 +42,6 @@ def test_the_energy_balance_closes_with_and_without_adhesion(tmp_path):
         assert abs(run["balance_residual_kWh"]) < 1e-3 * run["traction_kWh"]
         assert run["running_resistance_kWh"] > 0 and run["coupler_damping_kWh"] > 0 and run["grade_kWh"] != 0
     assert runs[True]["force_max_kN"] < 0.9 * runs[False]["force_max_kN"]
+    # the locomotives' largest effort against mu(v) m g: the paper's plant pulls its 560 kN motors past
+    # the 409.7 kN a 126 t locomotive's wheels hold at rest (560 / 409.7 = 1.37); capped, at most the grip
+    assert runs[False]["adhesion_use_max"] > 1.3 and runs[True]["adhesion_use_max"] <= 1.0 + 1e-6

@@ -36,6 +36,7 @@ class LoopRecord(NamedTuple):
     speed_excess: np.ndarray   # largest (fastest car - the train's limit at the head) within each sample [m/s]
     dynamic_limits: np.ndarray  # (samples, locomotive virtual cars) their dynamic brakes' limits [N, > 0]
     terms: np.ndarray          # (samples, 4) eq. 4's terms at each sample's optimum (rhc.TERMS; nan if unknown)
+    grips: np.ndarray          # (samples, locomotive virtual cars) mu(v) m g at the sample's start [N]
     traction_work: float       # [J]
     dynamic_brake_work: float
     wagon_brake_work: float
@@ -159,6 +160,7 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         measured = reduced_state(plant, reduction, state)
         x0 = measured if observer is None else observer.x.copy()  # eq. 10's x^(k|k-1)
         low, high = limits(plant, reduction, state)
+        grip = reduction.reduce(plant.grip(state.speeds))[locos]
         offsets, vr = horizon(plant, reduction, reference, state, x0[:nv], controller.np_)
         try:
             planned = controller.solve(x0, offsets / KN, low / KN, high / KN, vr) * KN
@@ -186,7 +188,7 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         values = getattr(controller, "values", None) or {}
         rows.append((state.time, head, np.dot(c.mass, state.speeds) / c.mass.sum(), reference.speed(head),
                      step.largest_coupler_force, step.coupler_forces, u, seconds, step.speed_excess,
-                     -low[locos], [values.get(t, np.nan) for t in TERMS]))
+                     -low[locos], [values.get(t, np.nan) for t in TERMS], grip))
         if finished(plant, reference, state):
             arrived = True
             break

@@ -74,6 +74,11 @@ def run_metrics(record, reference, locomotives, force_limit):
         "dynamic_brake_use_max": float(dynamic.max()),
         "dynamic_brake_use_mean": float(dynamic[using].mean()) if using.any() else 0.0,
         "dynamic_brake_at_limit_samples": int((dynamic >= AT_LIMIT).sum()),
+        # each locomotive (virtual) car's traction or dynamic braking (a stopping sample's whole-brake request
+        # as far as its dynamic brake goes) against mu(v) m g at the sample's start speed: above 1 where the
+        # plant does not model adhesion (the paper's plant) and the motors exceed it
+        "adhesion_use_max": float((np.abs(np.maximum(loco, -record.dynamic_limits))
+                                   / np.maximum(record.grips, 1.0)).max()),
         **{f"J_{name}": float(value) for name, value in zip(TERMS, terms)},
         **energy_balance(record),
     }

@@ -176,9 +176,14 @@ class CascadePlant:
         upper = np.minimum(self.traction_limits[0], self.traction_limits[1] / speeds)
         dynamic = np.minimum(self.dynamic_limits[0], self.dynamic_limits[1] / speeds)
         if self.adhesion:
-            grip = np.where(self.loco, curtius_kniffler(speeds) * self.consist.mass * GRAVITY, np.inf)
+            grip = np.where(self.loco, self.grip(speeds), np.inf)
             upper, dynamic = np.minimum(upper, grip), np.minimum(dynamic, grip)
         return -(dynamic + self.consist.pneumatic_brake), upper
+
+    def grip(self, speeds):
+        """mu(v) m g of every car at its speed [N] (Curtius & Kniffler's dry rail): what a locomotive's
+        traction or dynamic brake can transmit; 0 for a wagon (it has no motor)."""
+        return np.where(self.loco, curtius_kniffler(speeds) * self.consist.mass * GRAVITY, 0.0)
 
     def efforts(self, requested, speeds):
         """The requested efforts u_i [N] clipped to each car's envelope at its speed."""
