@@ -9,11 +9,16 @@ every Ipopt solve. Per strategy: substation energy [kWh], the process's CPU seco
 sensitive than wall time to other work on a shared machine), solves, Ipopt iterations, cold solves
 (the warm-against-cold check and relaxed-first pairs) with their iterations and CPU seconds, and
 the largest leg's variables and rows. ``--leg-options``: Ipopt options added to the legs' own
-(``ocp.solver.IPOPT["leg"]``) for this run, the independent runs included. Iterations and energies
-do not depend on the machine; seconds do.
+(``ocp.solver.IPOPT["leg"]``) for this run, the independent runs included. ``--warm-relaxed B``:
+warm legs that hold the one-handle rows are solved first with those rows relaxed to B kN^2, then at
+their own bound from there, as cold legs are (``legs._relaxed_first``; measured, not adopted).
+``--solves FILE``: every solve (variables, rows, iterations, CPU s, warm) per strategy as JSON, and
+the iterations' median, 90th percentile and largest printed. Iterations and energies do not depend
+on the machine; seconds do.
 """
 import argparse
 import json
+import statistics
 import sys
 import tempfile
 import time
@@ -26,10 +31,12 @@ from ecostudy.ocp import solver  # noqa: E402
 
 solver.configure()
 
+import pyomo.environ as pyo  # noqa: E402
+
 from ecostudy.network import legs  # noqa: E402
 from ecostudy.network.scoring import evaluate  # noqa: E402
 from ecostudy.network.strategies import one_strategy, solve_independent  # noqa: E402
-from ecostudy.ocp import session  # noqa: E402
+from ecostudy.ocp import session, timedomain  # noqa: E402
 from ecostudy.studies.network import expand_network  # noqa: E402
 
 SOLVES: list = []  # (variables, rows, iterations, CPU s, warm) per Ipopt solve
@@ -46,6 +53,29 @@ def noted(solve):
     return wrapper
 
 
+def warm_relaxed(bound):
+    """``legs._solve`` with each warm leg that holds one-handle rows solved relaxed to ``bound`` first."""
+    plain = legs._solve
+
+    def solve(nlp, cold=False):
+        if not nlp.task[5] or cold or not nlp.relax(bound):
+            return plain(nlp, cold)
+        first = nlp.solve({**legs.NEAR_START, **legs.KKT}, nlp.start(False))
+        nlp.relax(timedomain.ONE_HANDLE)
+        if first.usable:
+            outcome = nlp.solve({**legs.NEAR_START, **legs.KKT})
+            if outcome.usable:
+                return timedomain.leg_arrays(nlp.block), outcome, float(pyo.value(nlp.model.objective))
+        return plain(nlp, cold)
+    return solve
+
+
+def spread(solves):
+    """Iterations per solve: median, 90th percentile, largest."""
+    its = sorted(s[2] for s in solves)
+    return f"per solve: median {statistics.median(its):.0f}, p90 {its[int(0.9 * (len(its) - 1))]}, largest {its[-1]}"
+
+
 def line(name, kwh, cpu, solves):
     cold = [s for s in solves if not s[4]]
     return (f"{name:12s} kWh {kwh:.3f} cpu {cpu:6.1f} solves {len(solves):3d} iterations {sum(s[2] for s in solves):5d} "
@@ -58,8 +88,13 @@ def main():
     p.add_argument("study")
     p.add_argument("strategies", nargs="+")
     p.add_argument("--leg-options", default="{}", help="JSON: Ipopt options added to the legs' own")
+    p.add_argument("--warm-relaxed", type=float, help="warm legs' one-handle rows relaxed to this [kN^2] first")
+    p.add_argument("--solves", help="JSON file: every solve of every strategy")
     a = p.parse_args()
     legs.KKT.update(json.loads(a.leg_options))
+    if a.warm_relaxed is not None:
+        legs._solve = warm_relaxed(a.warm_relaxed)
+    noted_solves = {}
     session.Session.solve = noted(session.Session.solve)
     with tempfile.TemporaryDirectory() as out:
         fleet = expand_network(a.study, out=out).cases[0]["fleet"]
@@ -67,6 +102,7 @@ def main():
         c0 = time.process_time()
         ind, wall = solve_independent(fleet)
         print(line("independent", evaluate(fleet, ind)[2]["substation_kWh"], time.process_time() - c0, SOLVES), flush=True)
+        noted_solves["independent"] = list(SOLVES)
         for name in a.strategies:
             SOLVES.clear()
             c0 = time.process_time()
@@ -75,6 +111,10 @@ def main():
                 print(f"{name:12s} failed: {res.get('failed')}", flush=True)
                 continue
             print(line(name, res["totals"]["substation_kWh"], time.process_time() - c0, SOLVES), flush=True)
+            print(f"{'':12s} {spread(SOLVES)}", flush=True)
+            noted_solves[name] = list(SOLVES)
+    if a.solves:
+        Path(a.solves).write_text(json.dumps(noted_solves))
 
 if __name__ == "__main__":
     main()
