@@ -21,7 +21,7 @@ from ecostudy.control.terminal import TerminalApproach
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
-from ecostudy.core.status import driven_run
+from ecostudy.core.status import driven_run, flagged, worst
 from ecostudy.core.types import State
 from ecostudy.io import schemas
 from ecostudy.io.loaders import (chosen_stops, read_document, track_document, track_from_schema,
@@ -181,6 +181,9 @@ def _trip(case):
     summary = summarise(case, result, planner, train, estimator)
     # "late" is after the window's latest arrival: the window is the timetable of a closed-loop study
     status = driven_run(summary["stop_error_m"], summary["late_s"], summary["max_overspeed_kmh"])
+    if summary["failures"]:  # solves that did not converge: the fallback drove those samples, not the controller
+        status = worst([status, flagged(f"{summary['failures']} solves in {summary['samples']} samples gave no "
+                                        "usable plan (the fallback drove them)")])
     status, error = (status.kind, status.reason or None)
     return status, error, summary
 
