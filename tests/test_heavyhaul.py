@@ -305,3 +305,19 @@ def test_the_fenced_objective_weighs_what_each_virtual_car_stands_for():
     assert all(np.allclose(a, 1) for a in reduced.represented(consist.mass, "virtual"))
     terms = objective_terms(reduced.model, reduced.kinds, (10.0, 60.0, 10.0, 40.0), r)
     assert terms.kv[1] == 600.0 and terms.penalty[1] == pytest.approx(4.0) and terms.penalty[0] == 0.5
+
+
+def test_a_car_entering_a_curve_below_300_m_feels_roeckls_force_grow_without_a_jump():
+    """Roeckl's two fits jump by 43 % at 300 m radius. A 12 m wagon entering a 250 m curve feels the
+    force grow with the share of its length in the curve, 0 to 0.65 / (250 - 55) of its weight, by
+    at most its 1/12000 per millimetre: no step where its mean curvature passes 1/300 (which read
+    through the formula would be a 24 % jump of the full force for the stiff integrator to step
+    through)."""
+    seg = Segment(5000.0, Profile(np.zeros(1), np.zeros(1)), Profile(np.array([0.0, 1000.0]), np.array([0.0, 1 / 250])),
+                  Profile(np.zeros(1), np.array([30.0])))
+    plant = CascadePlant(two_cars(), seg)
+    centres = np.arange(990.0, 1010.0, 0.001)  # the wagon's centre across the entry, 1 mm apart
+    force = np.array([plant.grade_curve(np.array([c + 16.0, c]))[1][1] for c in centres])
+    full = 60e3 * GRAVITY * 0.65 / (250 - 55)
+    assert force[0] == 0.0 and force[-1] == pytest.approx(full)
+    assert np.all(np.diff(force) >= -1e-9 * full) and np.max(np.diff(force)) < 1.01 * full * 0.001 / 12.0
