@@ -236,7 +236,7 @@ def test_no_plot_lists_no_plot(tmp_path):
     r = run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--points", 100, "--out", tmp_path / "o",
             "--no-plot")
     assert r.exit_code == 0, r.output
-    assert "speed.png" not in r.output and "(profile.csv, report.html, summary.json)" in r.output
+    assert "speed.png" not in r.output and "(profile.csv, inputs.json, report.html, summary.json)" in r.output
     assert not (tmp_path / "o" / "speed.png").exists()
 
 
