@@ -1,0 +1,21 @@
+"""A network study's statuses on timetables and lines built to be hard: every result ok, flagged or
+failed with its reason, never an ok for a run that misses a limit (real solves, one metro segment)."""
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+
+from .conftest import TRACKS, TRAINS, write_yaml
+
+
+def test_a_study_whose_every_strategy_failed_says_so(tmp_path):
+    """`following` cannot keep 300 m behind a train that left 10 s earlier: the strategy fails, and
+    the command says which and why (exit 1), not that its own output cannot be read."""
+    study = write_yaml(tmp_path / "s.yaml", {
+        "name": "allfail", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
+        "stops": ["Noord", "Station"], "running_times_s": [56.0], "dwell_s": 10, "time_step_s": 1.0,
+        "trains": [{"name": "T1", "offset_s": 0}, {"name": "T2", "offset_s": 10}],
+        "substation": {"position_m": 300}, "strategies": ["following"], "buffer_m": 300, "points": 200,
+        "output": str(tmp_path / "out")})
+    r = CliRunner().invoke(app, ["network", str(study), "--workers", "1", "--no-plot"])
+    assert r.exit_code == 1, r.output
+    assert "failed: following" in r.output and "cannot be read" not in r.output, r.output
