@@ -3,8 +3,22 @@ failed with its reason, never an ok for a run that misses a limit (real solves, 
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
+from ecostudy.core.types import Supply
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.network import fleet, strategies
 
 from .conftest import TRACKS, TRAINS, write_yaml
+
+
+def test_a_pantograph_voltage_below_min_voltage_is_flagged():
+    """The circuit sags the pantograph to about 680 V (750 V supply, 10 mOhm, 25 mOhm/km); with
+    min_voltage_V 700 the run misses the line's voltage limit, so it is not ok."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 1.0,
+                   Supply(position=650.0, min_voltage=700.0), points=200)
+    totals = strategies.run_strategies(f, ["independent"], progress=None)["independent"]["totals"]
+    assert totals["min_voltage_V"] < 700.0
+    assert totals["status"].startswith("flagged") and "min_voltage_V" in totals["status"], totals["status"]
 
 
 def test_a_study_whose_every_strategy_failed_says_so(tmp_path):

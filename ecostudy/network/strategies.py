@@ -177,6 +177,10 @@ def _scored(fleet, runs, info, wall, mapper=map):
         if totals["unserved_kWh"] > 1e-3 else []
     if not totals["all_verified"]:
         flags.append("a train's run failed its re-simulation (network_trains.csv)")
+    floor = fleet.supply.min_voltage  # the lowest pantograph voltage of the line (V_min)
+    if totals["min_voltage_V"] < floor - 0.5:  # 0.5 V: the circuit's bisection is exact to far less
+        flags.append(f"a pantograph voltage fell to {totals['min_voltage_V']:.1f} V, below min_voltage_V "
+                     f"{floor:.0f} V (network_steps_*.csv)")
     if totals["min_separation_m"] is not None and totals["min_separation_m"] < 0.0:  # head past the tail ahead
         flags.append(f"trains overlap on the line by up to {-totals['min_separation_m']:.1f} m (timetable)")
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
