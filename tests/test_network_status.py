@@ -33,3 +33,16 @@ def test_a_study_whose_every_strategy_failed_says_so(tmp_path):
     r = CliRunner().invoke(app, ["network", str(study), "--workers", "1", "--no-plot"])
     assert r.exit_code == 1, r.output
     assert "failed: following" in r.output and "cannot be read" not in r.output, r.output
+
+
+def test_a_running_time_rounded_up_past_the_arrival_tolerance_is_flagged():
+    """At 1 s steps the 55.2 s asked of the segment become 56 s: the train arrives 0.8 s after its
+    timetable, beyond the re-simulation's 0.5 s, and the result says so (the re-simulation itself
+    checks the 56 s and passes)."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [55.2], 10.0, [0.0], ["T1"], 1.0, Supply(position=650.0),
+                   points=200)
+    out = strategies.run_strategies(f, ["independent"], progress=None)["independent"]
+    assert out["trains"]["T1"]["arrival_s"] == 56.0 and out["trains"]["T1"]["verified"]
+    assert out["totals"]["status"].startswith("flagged") and "time_step_s" in out["totals"]["status"], \
+        out["totals"]["status"]
