@@ -35,6 +35,16 @@ def test_a_study_whose_every_strategy_failed_says_so(tmp_path):
     assert "failed: following" in r.output and "cannot be read" not in r.output, r.output
 
 
+def test_a_train_that_departs_inside_the_buffer_fails_with_the_reason():
+    """10 s after the first train, the second departs with the first's tail well inside 300 m: the
+    leg says that, not only that Ipopt found its NLP infeasible."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 10.0], ["T1", "T2"], 1.0,
+                   Supply(position=300.0), points=200, buffer=300.0)
+    out = strategies.run_strategies(f, ["independent", "following"], progress=None)["following"]
+    assert "cannot keep buffer_m 300 m behind the train ahead" in out["failed"], out["failed"]
+
+
 def test_a_running_time_rounded_up_past_the_arrival_tolerance_is_flagged():
     """At 1 s steps the 55.2 s asked of the segment become 56 s: the train arrives 0.8 s after its
     timetable, beyond the re-simulation's 0.5 s, and the result says so (the re-simulation itself
