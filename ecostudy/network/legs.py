@@ -161,15 +161,16 @@ def solve_leg(task):
 
 
 def _check_departure_gap(task):
-    """A leg whose departure, fixed at its stop, is already nearer the tail of the train ahead than
-    ``buffer``: no run can keep the buffer there (Ipopt only reports the NLP infeasible), said so."""
+    """A leg whose departure or arrival, fixed at its stops, is nearer the tail of the train ahead
+    than ``buffer``: no run can keep the buffer there (Ipopt only reports the NLP infeasible), said so."""
     leg, label, _, buffer, *_, ahead = task
-    if ahead is None or buffer is None or not np.isfinite(ahead[leg.start]):
+    if ahead is None or buffer is None:
         return
-    gap = leg.direction * (ahead[leg.start] - leg.line_start) - leg.case.train.length
-    if gap < buffer - 1e-6:
-        raise SolverError(f"{label}: cannot keep buffer_m {buffer:g} m behind the train ahead, whose tail is "
-                          f"{gap:.1f} m ahead when this leg departs (offset_s, dwell_s)")
+    for step, at, when in ((leg.start, 0.0, "departs"), (leg.start + leg.steps, leg.case.segment.distance, "arrives")):
+        gap = leg.direction * (ahead[step] - leg.line_start) - at - leg.case.train.length
+        if np.isfinite(gap) and gap < buffer - 1e-6:
+            raise SolverError(f"{label}: cannot keep buffer_m {buffer:g} m behind the train ahead, whose tail is "
+                              f"{gap:.1f} m ahead when this leg {when} (offset_s, dwell_s)")
 
 
 STAND_SPEED_MPS = 0.1  # [m/s] below this a train stands
