@@ -137,6 +137,7 @@ def solve_leg(task):
       its last metre is solved again from the trapezoidal start, and replaced where that one
       does not stand; one that still stands fails its verification (``network.scoring``).
     """
+    _check_departure_gap(task)
     nlp = LegNLP(task)
     run, outcome, cost = _solve(nlp)
     notes = {}
@@ -157,6 +158,19 @@ def solve_leg(task):
             run, outcome, cost = restart
             notes["restarted"] = True
     return run._replace(notes=notes or None), outcome
+
+
+def _check_departure_gap(task):
+    """A leg whose departure or arrival, fixed at its stops, is nearer the tail of the train ahead
+    than ``buffer``: no run can keep the buffer there (Ipopt only reports the NLP infeasible), said so."""
+    leg, label, _, buffer, *_, ahead = task
+    if ahead is None or buffer is None:
+        return
+    for step, at, when in ((leg.start, 0.0, "departs"), (leg.start + leg.steps, leg.case.segment.distance, "arrives")):
+        gap = leg.direction * (ahead[step] - leg.line_start) - at - leg.case.train.length
+        if np.isfinite(gap) and gap < buffer - 1e-3:  # [m] well beyond what Ipopt leaves a row violated
+            raise SolverError(f"{label}: cannot keep buffer_m {buffer:g} m behind the train ahead, whose tail is "
+                              f"{gap:.1f} m ahead when this leg {when} (offset_s, dwell_s)")
 
 
 STAND_SPEED_MPS = 0.1  # [m/s] below this a train stands

@@ -33,6 +33,7 @@ import time
 from concurrent.futures import as_completed
 
 from ecostudy.core.errors import SolverError
+from ecostudy.core.simulate import TOLERANCES
 from ecostudy.core.registry import Registry
 from ecostudy.network.joint import joint
 from ecostudy.network.rules import following, independent, supervised
@@ -177,6 +178,14 @@ def _scored(fleet, runs, info, wall, mapper=map):
         if totals["unserved_kWh"] > 1e-3 else []
     if not totals["all_verified"]:
         flags.append("a train's run failed its re-simulation (network_trains.csv)")
+    floor = fleet.supply.min_voltage  # the lowest pantograph voltage of the line (V_min)
+    if totals["min_voltage_V"] < floor - 0.5:  # 0.5 V: the circuit's bisection is exact to far less
+        flags.append(f"a pantograph voltage fell to {totals['min_voltage_V']:.1f} V, below min_voltage_V "
+                     f"{floor:.0f} V (network_steps_*.csv)")
+    late = max((leg.running_time - asked for leg, asked in zip(fleet.legs[0], fleet.asked_times or [])), default=0.0)
+    if late > TOLERANCES["arrival_time_error_s"]:  # each leg runs whole clock steps, its asked time rounded up
+        flags.append(f"a segment runs {late:.1f} s over its timetabled running time, rounded up to whole "
+                     f"{fleet.dt:g} s steps (time_step_s)")
     if totals["min_separation_m"] is not None and totals["min_separation_m"] < 0.0:  # head past the tail ahead
         flags.append(f"trains overlap on the line by up to {-totals['min_separation_m']:.1f} m (timetable)")
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)

@@ -37,7 +37,8 @@ def network_files(plot=True, out=style.Output()):
                   for train, rec in res["trains"].items()]
         for name, res in done.items():
             write_csv(out_dir / f"network_steps_{name}.csv", res["steps"])
-        write_csv(out_dir / "network_trains.csv", pd.DataFrame(trains))
+        # with its header also when every strategy failed: an empty file is no table to read back
+        write_csv(out_dir / "network_trains.csv", pd.DataFrame(trains, columns=None if trains else ["strategy", "train"]))
         write_json(out_dir / "network.json", {
             "study": study, "segment_times_s": [leg.running_time for leg in fl.legs[0]], "steps": fl.steps,
             "dt_s": fl.dt, "strategies": {n: {**r["totals"], **r["info"]} if n in done else

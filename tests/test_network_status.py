@@ -1,0 +1,58 @@
+"""A network study's statuses on timetables and lines built to be hard: every result ok, flagged or
+failed with its reason, never an ok for a run that misses a limit (real solves, one metro segment)."""
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+from ecostudy.core.types import Supply
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.network import fleet, strategies
+
+from .conftest import TRACKS, TRAINS, write_yaml
+
+
+def test_a_pantograph_voltage_below_min_voltage_is_flagged():
+    """The circuit sags the pantograph to about 680 V (750 V supply, 10 mOhm, 25 mOhm/km); with
+    min_voltage_V 700 the run misses the line's voltage limit, so it is not ok."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 1.0,
+                   Supply(position=650.0, min_voltage=700.0), points=200)
+    totals = strategies.run_strategies(f, ["independent"], progress=None)["independent"]["totals"]
+    assert totals["min_voltage_V"] < 700.0
+    assert totals["status"].startswith("flagged") and "min_voltage_V" in totals["status"], totals["status"]
+
+
+def test_a_study_whose_every_strategy_failed_says_so(tmp_path):
+    """`following` cannot keep 300 m behind a train that left 10 s earlier: the strategy fails, and
+    the command says which and why (exit 1), not that its own output cannot be read."""
+    study = write_yaml(tmp_path / "s.yaml", {
+        "name": "allfail", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
+        "stops": ["Noord", "Station"], "running_times_s": [56.0], "dwell_s": 10, "time_step_s": 1.0,
+        "trains": [{"name": "T1", "offset_s": 0}, {"name": "T2", "offset_s": 10}],
+        "substation": {"position_m": 300}, "strategies": ["following"], "buffer_m": 300, "points": 200,
+        "output": str(tmp_path / "out")})
+    r = CliRunner().invoke(app, ["network", str(study), "--workers", "1", "--no-plot"])
+    assert r.exit_code == 1, r.output
+    assert "failed: following" in r.output and "cannot be read" not in r.output, r.output
+
+
+def test_a_train_that_departs_inside_the_buffer_fails_with_the_reason():
+    """10 s after the first train, the second departs with the first's tail well inside 300 m: the
+    leg says that, not only that Ipopt found its NLP infeasible."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 10.0], ["T1", "T2"], 1.0,
+                   Supply(position=300.0), points=200, buffer=300.0)
+    out = strategies.run_strategies(f, ["independent", "following"], progress=None)["following"]
+    assert "cannot keep buffer_m 300 m behind the train ahead" in out["failed"], out["failed"]
+
+
+def test_a_running_time_rounded_up_past_the_arrival_tolerance_is_flagged():
+    """At 1 s steps the 55.2 s asked of the segment become 56 s: the train arrives 0.8 s after its
+    timetable, beyond the re-simulation's 0.5 s, and the result says so (the re-simulation itself
+    checks the 56 s and passes)."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [55.2], 10.0, [0.0], ["T1"], 1.0, Supply(position=650.0),
+                   points=200)
+    out = strategies.run_strategies(f, ["independent"], progress=None)["independent"]
+    assert out["trains"]["T1"]["arrival_s"] == 56.0 and out["trains"]["T1"]["verified"]
+    assert out["totals"]["status"].startswith("flagged") and "time_step_s" in out["totals"]["status"], \
+        out["totals"]["status"]
