@@ -15,17 +15,14 @@ from ecostudy.core.errors import InfeasibleError, InputError, TooFastError, prob
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status
 from ecostudy.das.methods import das_run
-from ecostudy.io.loaders import chosen_stops, load_track, load_train
 from ecostudy.io.results import file_digest
 from ecostudy.io.writers import check_output_dir, write_json
 from ecostudy.ocp import session
 from ecostudy.report.drawer import drawing
 from ecostudy.report.files import write_fixed_step, write_run
 from ecostudy.report.style import output
-from ecostudy.studies.cases import load_checked_study
 from ecostudy.studies.check import check_result
-from ecostudy.studies.options import (check_options, no_stops_with_study, only_one, output_folder, parse_pair,
-                                      timing_of)
+from ecostudy.studies.options import case_from, check_options, only_one, output_folder, parse_pair, timing_of
 
 
 def run_lines(result: RunResult, out_dir: Path) -> list[str]:
@@ -84,37 +81,23 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
     figures = output(fig_format, dpi)
     check_options(time=time, supplement=supplement, points=points, das_time_limit=das_time_limit)
     only_one(time=time, supplement=supplement, window=window)
-    if objective == "time" and any(x is not None for x in (time, supplement, window)):
+    timed = any(x is not None for x in (time, supplement, window))  # the options override a study's timing
+    if objective == "time" and timed:
         raise InputError(problem("command line", "--objective time", "finds the fastest run: it takes no --time, "
                                  "--supplement or --window"))
-    st = None  # the study file's case, when one is given
-    if study is not None:
-        if track or train:
-            raise InputError(problem("command line", "--track/--train",
-                                     "give a study file or --track and --train, not both"))
-        no_stops_with_study(from_stop, to_stop)
-        st = load_checked_study(study, "solve")
-        paths = (st.track_path, st.train_path)
-        trk, trn, f, t, windows = st.track, st.train, st.from_stop, st.to_stop, st.windows
-        timing, obj, k = st.timing, objective or st.objective, points or st.points
-        w = parse_pair(weights, "--weights", nonnegative=True) if weights else st.weights
+    trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points, "solve")
+    if st is not None:
+        paths, windows, obj = (st.track_path, st.train_path), st.windows, objective or st.objective
+        timing, w = (timing_of(time, supplement, window) if timed else st.timing), st.weights
         out_dir = output_folder(out, st.output)
-        if any(x is not None for x in (time, supplement, window)):
-            timing = timing_of(time, supplement, window)
     else:
-        if not (track and train):
-            raise InputError(problem("command line", "--track/--train",
-                                     "give a study file, or both --track and --train"))
-        trk, trn, paths, windows = load_track(track), load_train(train), (Path(track), Path(train)), ()
-        f, t = chosen_stops(trk, from_stop, to_stop, "command line")
-        obj = objective or "energy"
-        if all(x is None for x in (time, supplement, window)) and obj not in ("time", "mixed"):
+        paths, windows, obj = (Path(track), Path(train)), (), objective or "energy"
+        if not timed and obj not in ("time", "mixed"):
             raise InputError(problem("command line", "--time", "give --time, --supplement or --window "
                                      "(or --objective time for the all-out run)"))
-        timing = timing_of(time, supplement, window)
-        w = parse_pair(weights, "--weights", nonnegative=True) if weights else (1.0, 1.0)
-        k = points or RUN_POINTS
+        timing, w, k = timing_of(time, supplement, window), (1.0, 1.0), k or RUN_POINTS
         out_dir = output_folder(out, Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_"))
+    w = parse_pair(weights, "--weights", nonnegative=True) if weights else w
     if weights is not None and obj != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
     check_output_dir(out_dir, ("profile.csv", "summary.json", "speed.png", "inputs.json"))

@@ -10,7 +10,7 @@ right-hand side continuous in position: a point reading makes every car's crossi
 a jump the stiff integrator must step through, 7 s per 20 s step on the shipped route against
 0.1-0.2 s). Roeckl's formula jumps by 43 % at 300 m radius (its two fits), so on curves of constant
 radius the plant averages the curve force, not the curvature: a car entering a 250 m curve felt that
-jump half-way in (a 7 km line with a 250 m curve: 51.7 CPU s against 2.4 s for its 27 samples);
+jump half-way in (a 7 km line with a 250 m curve: 51.7 CPU s against 1.8 s for its 27 samples);
 on clothoids it reads the formula at the car's mean curvature. p_i is the travel position of car i's centre (the
 head car first), u_i its effort: traction or
 dynamic braking for a locomotive, pneumatic braking (<= 0) for a wagon, clipped at every instant to

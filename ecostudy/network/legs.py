@@ -106,9 +106,9 @@ def leg_model(task):
     if ahead is not None and buffer is not None:
         m.separation = pyo.ConstraintList()
         for j in b.K:
-            x_ahead = ahead[leg.start + j]
-            if np.isfinite(x_ahead):  # head-to-tail: the train ahead is train.length long
-                m.separation.add(leg.direction * (x_ahead - leg.line_start) - b.s[j] >= buffer + leg.case.train.length)
+            x_ahead, least = separation(leg, ahead, buffer, j)
+            if np.isfinite(x_ahead):
+                m.separation.add(x_ahead - b.s[j] >= least)
     return m, b
 
 
@@ -160,17 +160,25 @@ def solve_leg(task):
     return run._replace(notes=notes or None), outcome
 
 
+def separation(leg, ahead, buffer, j):
+    """(the head of the train ahead at the leg's clock step ``j`` in the leg's own distance [m], inf where
+    none; the least distance the leg's head keeps behind it: ``buffer`` plus the train's length, head to
+    tail, as the train ahead is as long)."""
+    return leg.direction * (ahead[leg.start + j] - leg.line_start), buffer + leg.case.train.length
+
+
 def _check_departure_gap(task):
     """A leg whose departure or arrival, fixed at its stops, is nearer the tail of the train ahead
     than ``buffer``: no run can keep the buffer there (Ipopt only reports the NLP infeasible), said so."""
     leg, label, _, buffer, *_, ahead = task
     if ahead is None or buffer is None:
         return
-    for step, at, when in ((leg.start, 0.0, "departs"), (leg.start + leg.steps, leg.case.segment.distance, "arrives")):
-        gap = leg.direction * (ahead[step] - leg.line_start) - at - leg.case.train.length
-        if np.isfinite(gap) and gap < buffer - 1e-3:  # [m] well beyond what Ipopt leaves a row violated
+    for j, at, when in ((0, 0.0, "departs"), (leg.steps, leg.case.segment.distance, "arrives")):
+        x_ahead, least = separation(leg, ahead, buffer, j)
+        if np.isfinite(x_ahead) and x_ahead - at < least - 1e-3:  # [m] well beyond what Ipopt leaves a row violated
             raise SolverError(f"{label}: cannot keep buffer_m {buffer:g} m behind the train ahead, whose tail is "
-                              f"{gap:.1f} m ahead when this leg {when} (offset_s, dwell_s)")
+                              f"{x_ahead - at - leg.case.train.length:.1f} m ahead when this leg {when} "
+                              "(offset_s, dwell_s)")
 
 
 STAND_SPEED_MPS = 0.1  # [m/s] below this a train stands

@@ -182,6 +182,7 @@ def _scored(fleet, runs, info, wall, mapper=map):
     if totals["min_voltage_V"] < floor - 0.5:  # 0.5 V: the circuit's bisection is exact to far less
         flags.append(f"a pantograph voltage fell to {totals['min_voltage_V']:.1f} V, below min_voltage_V "
                      f"{floor:.0f} V (network_steps_*.csv)")
+    # every train runs the same segment times (the first train's legs stand for all)
     late = max((leg.running_time - asked for leg, asked in zip(fleet.legs[0], fleet.asked_times or [])), default=0.0)
     if late > TOLERANCES["arrival_time_error_s"]:  # each leg runs whole clock steps, its asked time rounded up
         flags.append(f"a segment runs {late:.1f} s over its timetabled running time, rounded up to whole "
