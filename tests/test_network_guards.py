@@ -63,6 +63,21 @@ def test_a_warm_leg_dearer_than_its_cold_solve_is_replaced(one_leg):
     assert counts["worst_warm_vs_cold_pct"] == pytest.approx(run.notes["warm_vs_cold_pct"])
 
 
+def test_a_checked_warm_leg_stopped_at_its_cap_gives_way_to_its_cold_solve(one_leg, monkeypatch):
+    f, leg, cold = one_leg
+    guess = early_start(leg, cold, 10)
+    task = (leg, "T1 leg 1", f.dt, None, guess, legs.CHECKED, None, None, None, None)
+    free, _ = legs.solve_leg(task)
+    assert "warm_capped_at" not in free.notes  # the shipped cap leaves this leg's warm solve alone
+    monkeypatch.setattr(legs, "CHECKED_MAX_ITER", 3)  # a cap the warm solve cannot finish within
+    run, outcome = legs.solve_leg(task)
+    assert run.notes["warm_capped_at"] == 3 and run.notes["replaced_by_cold"]
+    assert outcome.optimal and scoring.verify_leg(leg, run)["passed"]
+    assert run.p.sum() == pytest.approx(cold.p.sum(), rel=1e-6)  # the cold solve's optimum
+    counts = guard_counts([[run]])
+    assert counts["legs_checked_cold"] == 1 and counts["legs_warm_capped"] == 1 and counts["legs_replaced_by_cold"] == 1
+
+
 def test_a_cold_leg_keeps_the_cheaper_of_its_two_starts(one_leg):
     f, leg, cold = one_leg
     # from the space run's guess both starts reach the same optimum: the guess's run stays

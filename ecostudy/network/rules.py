@@ -202,7 +202,7 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     return _with_checks(best[1], checked), history, None
 
 
-CHECK_NOTES = ("warm_vs_cold_pct", "replaced_by_cold")  # what ``legs.solve_leg``'s cold check notes
+CHECK_NOTES = ("warm_vs_cold_pct", "replaced_by_cold", "warm_capped_at")  # what ``legs.solve_leg``'s cold check notes
 
 
 def _checked(run):

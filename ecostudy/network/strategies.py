@@ -195,12 +195,15 @@ def _scored(fleet, runs, info, wall, mapper=map):
 
 def guard_counts(runs):
     """What the local-optimum guards of ``legs.solve_leg`` did on a strategy's final runs: warm legs
-    also solved cold, the largest warm-over-cold cost difference among them [%], warm legs
-    replaced by their cold solve, cold legs replaced by their solve from the trapezoidal start, and
+    also solved cold, the largest warm-over-cold cost difference among them [%] (of the warm solves
+    that ended before ``legs.CHECKED_MAX_ITER``), warm legs stopped there, warm legs replaced by
+    their cold solve, cold legs replaced by their solve from the trapezoidal start, and
     runs that stood before their stop and were solved again."""
     notes = [run.notes for train in runs for run in train if run.notes]
-    spread = [n["warm_vs_cold_pct"] for n in notes if "warm_vs_cold_pct" in n]
-    return {"legs_checked_cold": len(spread), "worst_warm_vs_cold_pct": max(spread, default=None),
+    checked = [n for n in notes if "warm_vs_cold_pct" in n]
+    finished = [n["warm_vs_cold_pct"] for n in checked if "warm_capped_at" not in n]
+    return {"legs_checked_cold": len(checked), "worst_warm_vs_cold_pct": max(finished, default=None),
+            "legs_warm_capped": sum("warm_capped_at" in n for n in notes),
             "legs_replaced_by_cold": sum(bool(n.get("replaced_by_cold")) for n in notes),
             "legs_replaced_by_trapezoid": sum(bool(n.get("replaced_by_trapezoid")) for n in notes),
             "legs_restarted_standing": sum(bool(n.get("restarted")) for n in notes)}
