@@ -77,6 +77,13 @@ def test_each_missed_limit_is_a_reason():
     assert reasons({**good, "force_max_kN": 815.6, "force_limit_kN": 800.0}, 100, 0) == [
         "largest coupler force 815.6 kN above the consist's 800 kN limit"]
     assert reasons(good, 100, 2) == ["2 solves over Ts (the previous input was held)"]
+    grip = {"adhesion_use_max": 1.47, "adhesion_use_effort_kN": -400.0, "adhesion_use_kmh": 43.2,
+            "adhesion_use_time_s": 340.0, "adhesion_use_head_m": 1200.0}
+    assert reasons({**good, **grip}, 100, 0) == [
+        "a locomotive asked 1.47 of its adhesion (mu(v) m g, Curtius & Kniffler, tolerance 1 %), braking 400 kN at "
+        "43.2 km/h, 340 s, head at 1200 m, which the plant does not limit (adhesion: false): set adhesion: true or "
+        "lower the locomotives' envelopes"]
+    assert reasons({**good, **grip, "adhesion_use_max": 1.0099}, 100, 0) == []  # within the 1 % of the inputs' digits
     assert reasons({**good, "arrived": False, "stop_error_m": 50.0}, 100, 0) == [
         "the sample cap (100) came with the train 50 m beyond the stop, not stopped"]
     assert reasons({**good, "stop_error_m": 2.7}, 100, 0, Tolerances(5.0, 2 * KMH)) == []
