@@ -41,9 +41,10 @@ class LoopRecord(NamedTuple):
     dynamic_brake_work: float
     wagon_brake_work: float
     overruns: int = 0          # solves slower than Ts: the previous input was held
-    arrived: bool = True       # stopped on the reference's final approach (False: the sample cap came first)
+    arrived: bool = True       # stopped on the reference's final approach (False: the sample cap came first, or rolling_back)
     losses: tuple = ()         # plant.LOSSES over the run [J]
     stored_change: float = 0.0  # kinetic plus coupler elastic energy at the end minus at the start [J]
+    rolling_back: bool = False  # the run ended on the final approach with the train rolling back (not arrived)
 
 
 def reduced_state(plant, reduction, state):
@@ -155,7 +156,7 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     c, ts = plant.consist, reduction.model.ts
     nv, locos = len(reduction.members), reduction.locomotives
     u = np.zeros(nv) if applied is None else np.asarray(applied, float)
-    rows, works, overruns, arrived, braking = [], np.zeros(3), 0, False, False
+    rows, works, overruns, arrived, braking, rolling_back = [], np.zeros(3), 0, False, False, False
     losses, stored = np.zeros(len(LOSSES)), plant.stored_energy(state)
     for _ in range(samples):
         measured = reduced_state(plant, reduction, state)
@@ -190,8 +191,9 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
                      step.largest_coupler_force, step.coupler_forces, u, seconds, step.speed_excess,
                      -low[locos], [values.get(t, np.nan) for t in TERMS], step.adhesion))
         if finished(plant, reference, state):
-            arrived = True
+            rolling_back = mean_speed(plant, state) <= -STANDING  # it does not stand: not arrived
+            arrived = not rolling_back
             break
     columns = (np.array(v) for v in zip(*rows))
     return state, LoopRecord(*columns, *map(float, works), overruns, arrived, tuple(map(float, losses)),
-                             plant.stored_energy(state) - stored)
+                             plant.stored_energy(state) - stored, rolling_back)

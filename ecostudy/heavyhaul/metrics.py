@@ -74,6 +74,7 @@ def run_metrics(record, reference, locomotives, force_limit):
         "stop_error_m": float(record.head[-1] - reference.distance[-1]),
         **rollback(record.head, reference.distance[-1]),
         "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
+        "speed_at_end_kmh": float(record.mean_speed[-1] / KMH), "rolling_back": bool(record.rolling_back),
         "force_max_kN": float(record.largest_coupler.max() / KN),
         "force_max_braking_kN": float(record.largest_coupler[braking].max() / KN) if braking.any() else 0.0,
         "force_limit_kN": force_limit / KN, "braking_samples": int(braking.sum()),
@@ -160,14 +161,19 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     if metrics.get("rollback_m", 0.0) > tolerances.stop_m:
         out.append(f"the train stalled {metrics['stalled_before_stop_m']:.0f} m before the stop and rolled back "
                    f"{metrics['rollback_m']:.0f} m")
-    if not metrics["arrived"]:
+    asked = (f" with the reference at {metrics['reference_at_end_kmh']:.1f} km/h there"  # a stall reads as one
+             if metrics["stop_error_m"] < 0 and "reference_at_end_kmh" in metrics else "")
+    if metrics.get("rolling_back"):  # the loop ended the run on the final approach: the train did not stand
+        error = metrics["stop_error_m"]
+        where = f"{-error:.1f} m before the stop" if error <= 0 else f"{error:.1f} m beyond the stop"
+        out.append(f"rolling back at {-metrics['speed_at_end_kmh']:.2f} km/h {where} when the run ended (the loop "
+                   f"ends a run under 1 km/h on the reference's final approach){asked}")
+    elif not metrics["arrived"]:
         where = (f"{-metrics['stop_error_m']:.0f} m before the stop" if metrics["stop_error_m"] <= 0
                  else f"with the train {metrics['stop_error_m']:.0f} m beyond the stop, not stopped")
         out.append(f"the sample cap ({samples}) came {where}")
     elif abs(metrics["stop_error_m"]) > tolerances.stop_m:
         where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
-        asked = (f" with the reference at {metrics['reference_at_end_kmh']:.1f} km/h there"  # a stall reads as one
-                 if metrics["stop_error_m"] < 0 and "reference_at_end_kmh" in metrics else "")
         out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m){asked}")
     late, share = metrics["arrival_late_s"], metrics["arrival_late_percent"]
     if metrics["arrived"] and share > 100 * tolerances.arrival and late > tolerances.arrival_s:
