@@ -203,6 +203,8 @@ class CascadePlant:
         to the envelope at the car's speed, v that speed as the envelope reads it; when [s]; the head
         [m]; that locomotive's speed [m/s] and effort [N], traction positive). At most 1 with
         ``adhesion`` on."""
+        if not self.loco.any():
+            return (0.0,) * 5
         v = speeds.T
         u = self.efforts(requested, v)[:, self.loco]
         use = np.abs(u) / np.maximum(self.grip(np.maximum(v, ENVELOPE_SPEED))[:, self.loco], 1.0)  # as envelopes
