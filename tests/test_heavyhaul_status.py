@@ -6,6 +6,7 @@ from typer.testing import CliRunner
 
 from ecostudy.cli import app
 from ecostudy.core.units import KMH
+from ecostudy.heavyhaul.loop import STANDING
 from ecostudy.heavyhaul.metrics import Tolerances, reasons
 
 from .conftest import load_yaml, write_yaml
@@ -77,6 +78,16 @@ def test_each_missed_limit_is_a_reason():
     assert reasons({**good, "force_max_kN": 815.6, "force_limit_kN": 800.0}, 100, 0) == [
         "largest coupler force 815.6 kN above the consist's 800 kN limit"]
     assert reasons(good, 100, 2) == ["2 solves over Ts (the previous input was held)"]
+    grip = {"adhesion_use_max": 1.47, "adhesion_use_effort_kN": -400.0, "adhesion_use_kmh": 43.2,
+            "adhesion_use_time_s": 340.0, "adhesion_use_head_m": 1200.0}
+    assert reasons({**good, **grip}, 100, 0) == [
+        "a locomotive asked 1.47 of its adhesion (mu(v) m g, Curtius & Kniffler, tolerance 1 %), braking 400 kN at "
+        "43.2 km/h, 340 s, head at 1200 m, which the plant does not limit (adhesion: false): set adhesion: true or "
+        "lower the locomotives' envelopes"]
+    assert reasons({**good, **grip, "adhesion_use_max": 1.0099}, 100, 0) == []  # within the 1 % of the inputs' digits
+    back = {**good, "arrived": False, "rolling_back": True, "speed_at_end_kmh": -0.26, "stop_error_m": -1329.52}
+    assert reasons(back, 100, 0) == ["rolling back at 0.26 km/h 1329.5 m before the stop when the run ended (the loop "
+                                     "ends a run under 1 km/h on the reference's final approach)"]
     assert reasons({**good, "arrived": False, "stop_error_m": 50.0}, 100, 0) == [
         "the sample cap (100) came with the train 50 m beyond the stop, not stopped"]
     assert reasons({**good, "stop_error_m": 2.7}, 100, 0, Tolerances(5.0, 2 * KMH)) == []
@@ -195,12 +206,17 @@ def test_a_train_that_stalls_where_the_reference_runs_says_the_reference_speed(t
     """With adhesion (409.7 kN per locomotive at rest, less with speed) one locomotive and 40 wagons
     cannot hold 17 per mille (478 kN of grade and resistance) that its 560 kN motors, and so the
     single-mass reference, can: the train comes to rest on the climb about 1.3 km short of the stop.
-    The loop ends the run there (standing past the reference's final approach, which begins where
-    the reference slows on the climb); the reason says the reference ran about 36 km/h there, so the
-    stop reads as the stall it is."""
+    The loop ends the run there (under 1 km/h past the reference's final approach, which begins where
+    the reference slows on the climb) with the train already rolling back (-0.26 km/h measured): not
+    arrived, and the reason says so, and that the reference ran about 36 km/h there, so the end reads
+    as the stall it is."""
     path = climb_study(tmp_path, 17, max_samples=60, adhesion=True, reference={"supplement_percent": 10, "points": 150})
     result = invoke(path, tmp_path / "out")
     assert result.exit_code == 1, result.output
     run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
-    assert run["status"] == "flagged" and run["stop_error_m"] < -1000
-    assert run["reference_at_end_kmh"] > 30 and "with the reference at" in run["reason"], run["reason"]
+    assert run["status"] == "flagged" and run["stop_error_m"] < -1000 and run["samples"] < 60
+    assert not run["arrived"] and run["rolling_back"] and run["speed_at_end_kmh"] * KMH <= -STANDING
+    assert run["reason"] == (f"rolling back at {-run['speed_at_end_kmh']:.2f} km/h {-run['stop_error_m']:.1f} m before "
+                             "the stop when the run ended (the loop ends a run under 1 km/h on the reference's final "
+                             f"approach) with the reference at {run['reference_at_end_kmh']:.1f} km/h there")
+    assert run["reference_at_end_kmh"] > 30

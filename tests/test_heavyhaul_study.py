@@ -195,6 +195,16 @@ def short_line(tmp_path):
     return tmp_path / "line.yaml"
 
 
+ADHESION_REASON = "a locomotive asked"  # metrics.reasons: more than mu(v) m g (Curtius & Kniffler)
+
+
+def besides_adhesion(reason):
+    """A run's reasons (runs.csv's ``reason``) other than the adhesion flag: with adhesion off (the
+    paper's plant) the ore train's 560 kN motors ask more than dry rail gives (1.54 of it on the 5 km
+    line), which flags such a run; the rest of its checks are what these tests are about."""
+    return [r for r in reason.split("; ") if not r.startswith(ADHESION_REASON)] if isinstance(reason, str) else []
+
+
 def study(tmp_path, **changes):
     doc = {"name": "hh", "consist": str(PAPER), "track": str(short_line(tmp_path)), "from": "A", "to": "B",
            "reference": {"supplement_percent": 10, "points": 100}, "brake_penalty": [1, 60], "fence": [10],
@@ -206,14 +216,15 @@ def study(tmp_path, **changes):
 @pytest.mark.slow  # 20 s: the longest of the fast suite (make test < 3 min); CI runs it
 def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path):
     """Two K_b on a 5 km line with a hump: every run stops within the 1 m tolerance of the stop
-    (ok), tracks within 2 m/s on average, keeps |f_in| below the coupler limit; the braking
+    (flagged only for adhesion: the paper's plant), tracks within 2 m/s on average, keeps |f_in| below the coupler limit; the braking
     penalty moves braking from the wagons to the locomotives (less so with the objective weighted per
     real car, the default, than with eq. 11 read literally); a third K_b re-uses the stored runs."""
     out = tmp_path / "out"
     first = runner.invoke(app, ["heavyhaul", str(study(tmp_path)), "--out", str(out), "--no-progress"])
-    assert first.exit_code == 0, first.output
+    assert first.exit_code == 1, first.output  # flagged: the paper's plant asks more than dry rail gives
     runs = pd.read_csv(out / "runs.csv")
-    assert list(runs["K_b"]) == [1, 60] and (runs["status"] == "ok").all() and runs["arrived"].all()
+    assert list(runs["K_b"]) == [1, 60] and (runs["status"] == "flagged").all() and runs["arrived"].all()
+    assert all(besides_adhesion(r) == [] and r.startswith(ADHESION_REASON) for r in runs["reason"])
     assert (runs["tracking_mean_mps"] < 2.0).all() and (runs["force_max_kN"] < 2000).all()  # 1.73, 1.74 measured
     assert (runs["stop_error_m"].abs() < 1).all() and (runs["qp_inputs"] == 2 * 22).all()
     assert runs["wagon_brake_kWh"].iloc[1] < 0.95 * runs["wagon_brake_kWh"].iloc[0]  # 218.9 against 240.6 kWh
@@ -223,8 +234,8 @@ def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path
     assert (out / "tracking.png").exists() and (out / "brake_penalty.png").exists()
     assert (out / "forces_K_b60_f10_Np4_Nc2.png").exists()
     from .conftest import assert_folder
-    folder = assert_folder(out, "heavyhaul", ["runs"], rows=2, status="ok")
-    assert folder.cases.ok == 2 and (out / "report.html").is_file()
+    folder = assert_folder(out, "heavyhaul", ["runs"], rows=2, status="flagged")
+    assert folder.cases.flagged == 2 and (out / "report.html").is_file()
     assert "kWh" in first.output and "MJ" not in first.output
     again = runner.invoke(app, ["heavyhaul", str(study(tmp_path, brake_penalty=[1, 60, 40])), "--out", str(out),
                                 "--no-progress", "--no-plot"])
@@ -236,6 +247,8 @@ def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path
     assert literal.exit_code == 1 and "after the reference's running time" in literal.output, literal.output
     virtual = pd.read_csv(tmp_path / "virtual" / "runs.csv")
     assert virtual["status"].iloc[0] == "flagged" and abs(virtual["stop_error_m"].iloc[0]) < 1
+    assert [r.split(" s (")[0] for r in besides_adhesion(virtual["reason"].iloc[0])] == [
+        f"arrived {virtual['arrival_late_s'].iloc[0]:.0f}"]
     assert virtual["wagon_brake_kWh"].iloc[0] < 0.6 * runs["wagon_brake_kWh"].iloc[0]  # 191 against 436 kWh
 
 
@@ -267,7 +280,8 @@ def load_yaml_doc(path):
 @pytest.mark.slow
 def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     """Zhang & Zhuan's Table IV on the shipped 45 km line (Np = 4, Nc = 2, f = 10, the energy-optimal
-    reference at +10 %, per-car weights, the paper's units): both runs stop within 1 m (ok); K_b
+    reference at +10 %, per-car weights, the paper's units): both runs stop within 1 m (flagged only
+    for adhesion: the paper's plant asks more than dry rail gives, docs/heavyhaul.md); K_b
     1 -> 60 lowers the wagons' braking energy and E a little (3488 -> 3310 kWh, 8473 -> 8371 kWh:
     -1.2 %, before the reference's limit lead; with it E 8485 -> 8354 kWh, -1.5 %), the largest
     in-train force over the braking samples (a brake acts, no locomotive pulls) more than 2x (515 ->
@@ -281,9 +295,11 @@ def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     write_yaml(tmp_path / "kb.yaml", doc)
     result = runner.invoke(app, ["heavyhaul", str(tmp_path / "kb.yaml"), "--out", str(tmp_path / "out"),
                                  "--no-progress", "--no-plot", "--workers", "2"])
-    assert result.exit_code == 0, result.output
+    assert result.exit_code == 1, result.output
     low, high = pd.read_csv(tmp_path / "out" / "runs.csv").itertuples()
-    assert low.status == high.status == "ok" and abs(low.stop_error_m) < 1 and abs(high.stop_error_m) < 1
+    assert low.status == high.status == "flagged" and besides_adhesion(low.reason) == besides_adhesion(high.reason) == []
+    assert low.adhesion_use_max > 1.01 and high.adhesion_use_max > 1.01
+    assert abs(low.stop_error_m) < 1 and abs(high.stop_error_m) < 1
     assert high.wagon_brake_kWh < 0.97 * low.wagon_brake_kWh
     assert high.energy_total_kWh < low.energy_total_kWh
     assert high.force_max_braking_kN < 0.5 * low.force_max_braking_kN

@@ -36,14 +36,15 @@ class LoopRecord(NamedTuple):
     speed_excess: np.ndarray   # largest (fastest car - the train's limit at the head) within each sample [m/s]
     dynamic_limits: np.ndarray  # (samples, locomotive virtual cars) their dynamic brakes' limits [N, > 0]
     terms: np.ndarray          # (samples, 4) eq. 4's terms at each sample's optimum (rhc.TERMS; nan if unknown)
-    grips: np.ndarray          # (samples, locomotive virtual cars) mu(v) m g at the sample's start [N]
+    adhesion: np.ndarray       # (samples, 5) the largest adhesion use within each sample (CascadePlant.adhesion_use)
     traction_work: float       # [J]
     dynamic_brake_work: float
     wagon_brake_work: float
     overruns: int = 0          # solves slower than Ts: the previous input was held
-    arrived: bool = True       # stopped on the reference's final approach (False: the sample cap came first)
+    arrived: bool = True       # stopped on the reference's final approach (False: the sample cap came first, or rolling_back)
     losses: tuple = ()         # plant.LOSSES over the run [J]
     stored_change: float = 0.0  # kinetic plus coupler elastic energy at the end minus at the start [J]
+    rolling_back: bool = False  # the run ended on the final approach with the train rolling back (not arrived)
 
 
 def reduced_state(plant, reduction, state):
@@ -144,7 +145,8 @@ def combined(steps):
     return CascadeStep(last.state, last.coupler_forces, max(s.largest_coupler_force for s in steps),
                        *(sum(getattr(s, k) for s in steps) for k in ("traction_work", "dynamic_brake_work",
                                                                       "wagon_brake_work")),
-                       max(s.speed_excess for s in steps), tuple(np.sum([s.losses for s in steps], axis=0)))
+                       max(s.speed_excess for s in steps), tuple(np.sum([s.losses for s in steps], axis=0)),
+                       max((s.adhesion for s in steps), key=lambda a: a[0]))
 
 
 def run(plant, reduction, controller, state, reference, samples, observer=None, applied=None):
@@ -154,13 +156,12 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     c, ts = plant.consist, reduction.model.ts
     nv, locos = len(reduction.members), reduction.locomotives
     u = np.zeros(nv) if applied is None else np.asarray(applied, float)
-    rows, works, overruns, arrived, braking = [], np.zeros(3), 0, False, False
+    rows, works, overruns, arrived, braking, rolling_back = [], np.zeros(3), 0, False, False, False
     losses, stored = np.zeros(len(LOSSES)), plant.stored_energy(state)
     for _ in range(samples):
         measured = reduced_state(plant, reduction, state)
         x0 = measured if observer is None else observer.x.copy()  # eq. 10's x^(k|k-1)
         low, high = limits(plant, reduction, state)
-        grip = reduction.reduce(plant.grip(state.speeds))[locos]
         offsets, vr = horizon(plant, reduction, reference, state, x0[:nv], controller.np_)
         try:
             planned = controller.solve(x0, offsets / KN, low / KN, high / KN, vr) * KN
@@ -188,10 +189,11 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         values = getattr(controller, "values", None) or {}
         rows.append((state.time, head, np.dot(c.mass, state.speeds) / c.mass.sum(), reference.speed(head),
                      step.largest_coupler_force, step.coupler_forces, u, seconds, step.speed_excess,
-                     -low[locos], [values.get(t, np.nan) for t in TERMS], grip))
+                     -low[locos], [values.get(t, np.nan) for t in TERMS], step.adhesion))
         if finished(plant, reference, state):
-            arrived = True
+            rolling_back = mean_speed(plant, state) <= -STANDING  # it does not stand: not arrived
+            arrived = not rolling_back
             break
     columns = (np.array(v) for v in zip(*rows))
     return state, LoopRecord(*columns, *map(float, works), overruns, arrived, tuple(map(float, losses)),
-                             plant.stored_energy(state) - stored)
+                             plant.stored_energy(state) - stored, rolling_back)

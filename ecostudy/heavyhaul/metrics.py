@@ -6,7 +6,10 @@ tolerance, at the sample ends), when it did not arrive (the sample cap came firs
 it stopped farther from the stop than the tolerance (short or beyond), when it arrived later than the
 reference's running time by more than the tolerance (a share of it or seconds, the larger), when a car ran faster than the
 train's limit at the head by more than the tolerance, when a coupler carried more than the consist's
-limit, or when a solve took longer than Ts (its input was not applied).
+limit, when a locomotive asked more of its wheels than dry rail gives (its traction or dynamic
+braking as the plant applied it over Curtius & Kniffler's mu(v) m g, by more than :data:`ADHESION`:
+only where the plant does not model adhesion, the paper's plant), or when a solve took longer than
+Ts (its input was not applied).
 
 Per run also: eq. 4's terms at each sample's optimum, summed over the run (in-train forces,
 tracking, the locomotives' efforts, the wagons' braking: the value the controller traded), the
@@ -27,6 +30,11 @@ from ecostudy.heavyhaul.rhc import TERMS
 RUN_IN = 50 * KN  # a coupler's force from above +this (draft) to below -this (buff) is a slack run-in [N]
 PULLING = KN     # a (virtual) car's effort above this pulls, below minus this brakes [N]
 AT_LIMIT = 0.99  # dynamic braking at this share of its limit or more is "at the limit"
+# a locomotive may ask 1 % more than mu(v) m g before the run is flagged: the inputs of the ratio are
+# given to about three digits (Curtius & Kniffler's 0.161, 7.5, 44; a consist's 126 t, 560 kN), so
+# within 1 % a run is not shown to exceed dry rail's grip; the plant's own arithmetic is exact (with
+# adhesion on it clips the effort to the grip: the ratio is at most 1)
+ADHESION = 0.01
 
 
 class Tolerances(NamedTuple):
@@ -36,6 +44,7 @@ class Tolerances(NamedTuple):
     speed_mps: float = KMH     # fastest car over the train's limit [m/s]
     arrival: float = 0.05      # later than the reference's running time by this share of it [-] ...
     arrival_s: float = 60.0    # ... and by more than this [s]
+    adhesion: float = ADHESION  # a locomotive's effort over mu(v) m g by more than this share [-]
 
 
 def braking_samples(efforts, locomotives):
@@ -65,6 +74,7 @@ def run_metrics(record, reference, locomotives, force_limit):
         "stop_error_m": float(record.head[-1] - reference.distance[-1]),
         **rollback(record.head, reference.distance[-1]),
         "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
+        "speed_at_end_kmh": float(record.mean_speed[-1] / KMH), "rolling_back": bool(record.rolling_back),
         "force_max_kN": float(record.largest_coupler.max() / KN),
         "force_max_braking_kN": float(record.largest_coupler[braking].max() / KN) if braking.any() else 0.0,
         "force_limit_kN": force_limit / KN, "braking_samples": int(braking.sum()),
@@ -74,14 +84,19 @@ def run_metrics(record, reference, locomotives, force_limit):
         "dynamic_brake_use_max": float(dynamic.max()),
         "dynamic_brake_use_mean": float(dynamic[using].mean()) if using.any() else 0.0,
         "dynamic_brake_at_limit_samples": int((dynamic >= AT_LIMIT).sum()),
-        # each locomotive (virtual) car's traction or dynamic braking (a stopping sample's whole-brake request
-        # as far as its dynamic brake goes) against mu(v) m g at the sample's start speed: above 1 where the
-        # plant does not model adhesion (the paper's plant) and the motors exceed it
-        "adhesion_use_max": float((np.abs(np.maximum(loco, -record.dynamic_limits))
-                                   / np.maximum(record.grips, 1.0)).max()),
+        **adhesion_use(record.adhesion),
         **{f"J_{name}": float(value) for name, value in zip(TERMS, terms)},
         **energy_balance(record),
     }
+
+
+def adhesion_use(samples):
+    """The most a locomotive asked of its wheels over the run (``samples`` the loop's rows of
+    :meth:`~ecostudy.heavyhaul.plant.CascadePlant.adhesion_use`): its traction or dynamic braking as
+    the plant applied it over mu(v) m g (Curtius & Kniffler), where, when, at what speed and effort."""
+    use, time, head, speed, effort = samples[int(np.argmax(samples[:, 0]))]
+    return {"adhesion_use_max": float(use), "adhesion_use_time_s": float(time), "adhesion_use_head_m": float(head),
+            "adhesion_use_kmh": float(speed / KMH), "adhesion_use_effort_kN": float(effort / KN)}
 
 
 def rollback(head, stop):
@@ -146,14 +161,19 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     if metrics.get("rollback_m", 0.0) > tolerances.stop_m:
         out.append(f"the train stalled {metrics['stalled_before_stop_m']:.0f} m before the stop and rolled back "
                    f"{metrics['rollback_m']:.0f} m")
-    if not metrics["arrived"]:
+    asked = (f" with the reference at {metrics['reference_at_end_kmh']:.1f} km/h there"  # a stall reads as one
+             if metrics["stop_error_m"] < 0 and "reference_at_end_kmh" in metrics else "")
+    if metrics.get("rolling_back"):  # the loop ended the run on the final approach: the train did not stand
+        error = metrics["stop_error_m"]
+        where = f"{-error:.1f} m before the stop" if error <= 0 else f"{error:.1f} m beyond the stop"
+        out.append(f"rolling back at {-metrics['speed_at_end_kmh']:.2f} km/h {where} when the run ended (the loop "
+                   f"ends a run under 1 km/h on the reference's final approach){asked}")
+    elif not metrics["arrived"]:
         where = (f"{-metrics['stop_error_m']:.0f} m before the stop" if metrics["stop_error_m"] <= 0
                  else f"with the train {metrics['stop_error_m']:.0f} m beyond the stop, not stopped")
         out.append(f"the sample cap ({samples}) came {where}")
     elif abs(metrics["stop_error_m"]) > tolerances.stop_m:
         where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
-        asked = (f" with the reference at {metrics['reference_at_end_kmh']:.1f} km/h there"  # a stall reads as one
-                 if metrics["stop_error_m"] < 0 and "reference_at_end_kmh" in metrics else "")
         out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m){asked}")
     late, share = metrics["arrival_late_s"], metrics["arrival_late_percent"]
     if metrics["arrived"] and share > 100 * tolerances.arrival and late > tolerances.arrival_s:
@@ -165,6 +185,13 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     if metrics["speed_excess_kmh"] * KMH > tolerances.speed_mps:
         out.append(f"a car ran {metrics['speed_excess_kmh']:.1f} km/h over the line's limit "
                    f"(tolerance {tolerances.speed_mps / KMH:g} km/h)")
+    if metrics.get("adhesion_use_max", 0.0) > 1.0 + tolerances.adhesion:
+        effort = metrics["adhesion_use_effort_kN"]
+        out.append(f"a locomotive asked {metrics['adhesion_use_max']:.2f} of its adhesion (mu(v) m g, Curtius & Kniffler, "
+                   f"tolerance {100 * tolerances.adhesion:g} %), {'pulling' if effort > 0 else 'braking'} {abs(effort):.0f} kN at "
+                   f"{metrics['adhesion_use_kmh']:.1f} km/h, {metrics['adhesion_use_time_s']:.0f} s, head at "
+                   f"{metrics['adhesion_use_head_m']:.0f} m, which the plant does not limit (adhesion: false): "
+                   "set adhesion: true or lower the locomotives' envelopes")  # no ';': it parts the reasons
     if over_ts:
         out.append(f"{over_ts} solves over Ts (the previous input was held)")
     return out

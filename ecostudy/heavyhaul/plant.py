@@ -50,6 +50,7 @@ SLACK_RTOL = 1e-4
 # through 0) chatter on the jump and the integrator stalls (a 20 s step from rest did not finish
 # in 300 s); the rounding is below 1 % of c0 above 0.07 m/s
 STANDSTILL_SPEED = 0.01
+ENVELOPE_SPEED = 1e-9  # [m/s]: the envelopes read a standing or reversing car at this speed (no power / 0)
 QUADRATURES = 8  # works of traction, dynamic brakes, wagon brakes, then the five LOSSES
 
 
@@ -71,6 +72,7 @@ class CascadeStep(NamedTuple):
     wagon_brake_work: float      # pneumatic brakes of the wagons [J]
     speed_excess: float = 0.0    # largest (fastest car's speed - the train's limit at the head) over the step [m/s]
     losses: tuple = (0.0,) * 5  # work against running resistance, curves, grades; coupler damping, draft gear [J]
+    adhesion: tuple = (0.0,) * 5  # the largest adhesion use over the step (CascadePlant.adhesion_use)
 
 
 LOSSES = ("running_resistance", "curve_resistance", "grade", "coupler_damping", "draft_gear")  # CascadeStep.losses
@@ -182,7 +184,7 @@ class CascadePlant:
 
     def envelopes(self, speeds):
         """(lowest, highest) effort of every car at its speed [N]: traction; dynamic plus pneumatic brake."""
-        speeds = np.maximum(speeds, 1e-9)
+        speeds = np.maximum(speeds, ENVELOPE_SPEED)
         upper = np.minimum(self.traction_limits[0], self.traction_limits[1] / speeds)
         dynamic = np.minimum(self.dynamic_limits[0], self.dynamic_limits[1] / speeds)
         if self.adhesion:
@@ -194,6 +196,21 @@ class CascadePlant:
         """mu(v) m g of every car at its speed [N] (Curtius & Kniffler's dry rail): what a locomotive's
         traction or dynamic brake can transmit; 0 for a wagon (it has no motor)."""
         return np.where(self.loco, curtius_kniffler(speeds) * self.consist.mass * GRAVITY, 0.0)
+
+    def adhesion_use(self, times, positions, speeds, requested):
+        """The most any locomotive asked of its wheels over the integrator's points (``times`` [s];
+        ``positions``, ``speeds`` (cars, points)): (|u| / mu(v) m g [-], the efforts as applied, clipped
+        to the envelope at the car's speed, v that speed as the envelope reads it; when [s]; the head
+        [m]; that locomotive's speed [m/s] and effort [N], traction positive). At most 1 with
+        ``adhesion`` on."""
+        if not self.loco.any():
+            return (0.0,) * 5
+        v = speeds.T
+        u = self.efforts(requested, v)[:, self.loco]
+        use = np.abs(u) / np.maximum(self.grip(np.maximum(v, ENVELOPE_SPEED))[:, self.loco], 1.0)  # as envelopes
+        k, j = np.unravel_index(np.argmax(use), use.shape)
+        head = positions[0, k] + 0.5 * self.consist.length[0]
+        return float(use[k, j]), float(times[k]), float(head), float(v[k][self.loco][j]), float(u[k, j])
 
     def efforts(self, requested, speeds):
         """The requested efforts u_i [N] clipped to each car's envelope at its speed."""
@@ -256,7 +273,8 @@ class CascadePlant:
         brakes, commanded, sent = (None, None, ()) if pipe is None else (pipe.at(dt), pipe.current,
                                                                          self._sent(state, pipe.current, t0 + dt))
         return CascadeStep(CascadeState(p, v, t0 + dt, brakes, commanded, sent), forces[-1], float(np.abs(forces).max()),
-                           *map(float, works[:3]), excess, tuple(map(float, works[3:])))
+                           *map(float, works[:3]), excess, tuple(map(float, works[3:])),
+                           self.adhesion_use(sol.t, sol.y[:n], sol.y[n:2 * n], requested))
 
     def brake_pipe(self, state, requested, dt):
         """The wagons' brakes over a step from ``state`` (None: air_brake off): the command is the
