@@ -145,6 +145,20 @@ def test_validate_energy_difference_matches_an_independent_computation(inputs):
         assert abs(row.model_stop_error_m) < 100
 
 
+def test_a_log_whose_force_reads_zero_at_the_stand_replays_the_same(inputs, truth, logged):
+    """A data logger samples the force an instant before the driver applies traction: zero at the
+    departure row, the last at the stand's position. Under the logged handle the model leaves the
+    stand as on the log whose departure row has the traction force (it stood still and ran -100 %
+    of the time when the departure interval took the stand's zero handle)."""
+    track, _ = inputs
+    frame, record = logged[0]
+    stood = frame.assign(force_kN=np.where(record["v"] > 1e-6, frame["force_kN"], 0.0))
+    zero, moving = (validate_log(as_log(f), track, truth) for f in (stood, frame))
+    assert len(zero) == len(moving) == 2
+    for a, b in zip(zero.itertuples(), moving.itertuples()):
+        assert abs(a.model_time_s - b.model_time_s) < 1.0 and abs(a.time_difference_pct) < 2, (a, b)
+
+
 # ------------------------------------------------------------------------- the commands
 def test_calibrate_command(tmp_path, log_files, truth):
     out = tmp_path / "cal"

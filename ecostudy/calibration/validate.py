@@ -96,7 +96,11 @@ def handle_replay(run, track, train, log):
     handle = np.where(force > 0, force / train.traction.force(v), force / train.braking.force(v))
     handle = np.round(np.clip(handle, -1.0, 1.0) / HANDLE_STEP) * HANDLE_STEP
     keep = np.append(np.diff(travel) > 1e-3, True)  # the last sample at each position: the one that moves on
-    nodes, handle = travel[keep], handle[keep][:-1]
+    handle = handle[keep]
+    # a logger may sample the stand's zero force an instant before traction: the departure interval
+    # takes the larger handle of its two ends (with the stand's zero the model never leaves)
+    handle[0] = max(handle[0], handle[1]) if len(handle) > 1 else handle[0]
+    nodes, handle = travel[keep], handle[:-1]
     nodes[-1] = max(nodes[-1], nodes[-2] + 1e-3)
     y, t_stop, _ = Plant(segment, train).drive(nodes, handle, max_time=4 * (run.t[-1] - run.t[0]) + 600)
     return float(t_stop), float(y[0]), float(y[2])
