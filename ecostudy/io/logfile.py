@@ -20,7 +20,8 @@ says ``power_sampling: instant``; speed, position and force are instantaneous.
 
 Every problem is one line ``file: field: what is wrong`` (exit status 2): a missing header,
 unknown columns (units), values that are not finite numbers, time not increasing, gaps, speeds
-that do not fit the positions (a unit mix-up), positions off the track (:func:`check_on_track`).
+that do not fit the positions (a unit mix-up), a force or wheel power negative where the train
+pulls (a sign flipped), positions off the track (:func:`check_on_track`).
 """
 import csv
 import io
@@ -60,6 +61,8 @@ GAP_FACTOR = 5.0       # a time step this many times the median step is a gap
 MIN_SPEED = -1.0       # [m/s] below this a negative speed is not sensor noise
 MAX_SPEED = 150.0      # [m/s] (540 km/h)
 SPEED_DISTANCE = (0.8, 1.25)  # speeds integrated over the positions' travel, outside: a unit mix-up
+PULLING = 0.3          # [m/s^2] speed gained faster than this over PULLING_TIME: in traction (no gradient of a
+PULLING_TIME = 2.0     # [s]  railway gives it while braking); the work at the wheel must be positive there
 
 
 class LogHeader(Strict):
@@ -180,6 +183,22 @@ def check_series(log: "LoggedRun", path: Where) -> None:
         raise InputError(lines)
 
 
+def check_traction_sign(t: FloatArray, v: FloatArray, columns: Mapping[str, tuple[str, FloatArray]],
+                        path: Where) -> None:
+    """Refuse a force or wheel power that is negative in most rows where the train gains speed faster
+    than :data:`PULLING` (traction is positive, braking negative: a sign flipped at the logger)."""
+    k = max(int(round(PULLING_TIME / float(np.median(np.diff(t))))), 1)
+    speed = np.abs(v)
+    rows = np.nonzero((speed[k:] - speed[:-k]) / (t[k:] - t[:-k]) > PULLING)[0] + k // 2
+    for quantity in ("force", "power_wheel"):
+        if quantity in columns and rows.size >= 5:
+            name, values = columns[quantity]
+            negative = int(np.sum(values[rows] < 0))
+            if negative > rows.size / 2:
+                raise InputError(problem(path, name, f"negative in {negative} of {rows.size} rows where the train "
+                                         f"gains more than {PULLING:g} m/s^2: traction is positive, braking negative"))
+
+
 def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
     """A :class:`LoggedRun` from a log's text (``path`` names it in messages)."""
     fields, table = split_header(text, path)
@@ -209,6 +228,8 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
     log = LoggedRun(name or Path(path).stem, header, t, x, v, get("force"), get("power_wheel"), line, Path(path),
                     (column.get("position", ("(start_position_m)",))[0], column.get("speed", ("",))[0]))
     check_series(log, path)
+    if v is not None:
+        check_traction_sign(t, v, column, path)
     return log
 
 
