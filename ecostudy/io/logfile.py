@@ -20,8 +20,8 @@ says ``power_sampling: instant``; speed, position and force are instantaneous.
 
 Every problem is one line ``file: field: what is wrong`` (exit status 2): a missing header,
 unknown columns (units), values that are not finite numbers, time not increasing, gaps, speeds
-that do not fit the positions (a unit mix-up), a force or wheel power negative where the train
-pulls (a sign flipped), positions off the track (:func:`check_on_track`).
+that do not fit the positions (a unit mix-up), a force or wheel power not positive where the
+train pulls (a sign flipped, a dead channel), positions off the track (:func:`check_on_track`).
 """
 import csv
 import io
@@ -185,17 +185,18 @@ def check_series(log: "LoggedRun", path: Where) -> None:
 
 def check_traction_sign(t: FloatArray, v: FloatArray, columns: Mapping[str, tuple[str, FloatArray]],
                         path: Where) -> None:
-    """Refuse a force or wheel power that is negative in most rows where the train gains speed faster
-    than :data:`PULLING` (traction is positive, braking negative: a sign flipped at the logger)."""
+    """Refuse a force or wheel power that is not positive in most rows where the train gains speed
+    faster than :data:`PULLING` (traction is positive, braking negative: a sign flipped at the
+    logger, or a dead channel reading zero)."""
     k = max(int(round(PULLING_TIME / float(np.median(np.diff(t))))), 1)
     speed = np.abs(v)
     rows = np.nonzero((speed[k:] - speed[:-k]) / (t[k:] - t[:-k]) > PULLING)[0] + k // 2
     for quantity in ("force", "power_wheel"):
         if quantity in columns and rows.size >= 5:
             name, values = columns[quantity]
-            negative = int(np.sum(values[rows] < 0))
+            negative = int(np.sum(values[rows] <= 0))
             if negative > rows.size / 2:
-                raise InputError(problem(path, name, f"negative in {negative} of {rows.size} rows where the train "
+                raise InputError(problem(path, name, f"not positive in {negative} of {rows.size} rows where the train "
                                          f"gains more than {PULLING:g} m/s^2: traction is positive, braking negative"))
 
 
