@@ -13,6 +13,7 @@ from ecostudy.calibration.generate import LogNoise, follow_work, generate_log, t
 from ecostudy.calibration.replay import prepare
 from ecostudy.calibration.validate import validate_log
 from ecostudy.cli import app
+from ecostudy.core.errors import EcostudyWarning, InputError
 from ecostudy.io.loaders import load_track, load_train, track_from_dict
 from ecostudy.io.logfile import parse_log, write_log
 
@@ -245,6 +246,18 @@ def test_bad_logs_are_one_line(tmp_path, text, fragments):
     for fragment in fragments:
         assert fragment in lines[0], lines[0]
     assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def test_a_column_ecostudy_does_not_model_is_warned_by_name_and_ignored():
+    """A data logger writes more than the format models (brake pipe pressure, GPS): each such column
+    is named in a warning and left out; a known quantity in an unknown unit is still refused."""
+    text = good().replace("force_kN\n", "force_kN,brake_pipe_bar,latitude_deg\n").replace(",100\n", ",100,5.0,47.1\n")
+    with pytest.warns(EcostudyWarning, match="brake_pipe_bar, latitude_deg") as caught:
+        log = parse_log(text, "extra.csv")
+    assert len(caught) == 1 and "not modelled" in str(caught[0].message) and "extra.csv" in str(caught[0].message)
+    assert np.allclose(log.force, 1e5)
+    with pytest.raises(InputError, match="speed_mph: unknown column"):
+        parse_log(good().replace("force_kN", "speed_mph"), "mph.csv")
 
 
 def test_calibrate_refuses_unknown_parameters_and_logs_without_wheel_work(tmp_path):

@@ -18,13 +18,15 @@ positions (the track file's kilometrage), in either direction of travel. Powers 
 over the interval from their row to the next (energy counters differenced) unless the header
 says ``power_sampling: instant``; speed, position and force are instantaneous.
 
+A column of a quantity ecostudy does not model is left out with a warning naming it.
 Every problem is one line ``file: field: what is wrong`` (exit status 2): a missing header,
-unknown columns (units), values that are not finite numbers, time not increasing, gaps, speeds
+unknown units of a known quantity, values that are not finite numbers, time not increasing, gaps, speeds
 that do not fit the positions (a unit mix-up), a force or wheel power not positive where the
 train pulls (a sign flipped, a dead channel), positions off the track (:func:`check_on_track`).
 """
 import csv
 import io
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from os import PathLike
@@ -35,7 +37,7 @@ import yaml
 from pydantic import Field
 
 from ecostudy.core import units
-from ecostudy.core.errors import InputError, problem
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.types import Track
 from ecostudy.core.units import FloatArray
 from ecostudy.io.documents import named_file, validate
@@ -56,6 +58,7 @@ COLUMNS = {
     "line_voltage_V": ("voltage", 1.0), "line_voltage_kV": ("voltage", 1000.0),
     "line_current_A": ("current", 1.0),
 }
+QUANTITIES = {name.rsplit("_", 1)[0] for name in COLUMNS}  # time, position, speed, ... (a known one in another unit: refused)
 MIN_ROWS = 10
 GAP_FACTOR = 5.0       # a time step this many times the median step is a gap
 MIN_SPEED = -1.0       # [m/s] below this a negative speed is not sensor noise
@@ -126,8 +129,13 @@ def read_table(text: str, path: Where) -> tuple[list[str], FloatArray]:
     if not rows:
         raise InputError(problem(path, "columns", "no CSV header row after the YAML header"))
     names = [c.strip() for c in rows[0]]
+    unknown = [name for name in names if name not in COLUMNS]
     lines = [problem(path, name, f"unknown column (known: {', '.join(COLUMNS)}; the unit is part of the name)")
-             for name in names if name not in COLUMNS]
+             for name in unknown if quantity_of(name) in QUANTITIES]
+    ignored = [name for name in unknown if quantity_of(name) not in QUANTITIES]
+    if ignored and not lines:
+        warnings.warn(problem(path, "columns", f"{', '.join(ignored)} not modelled by ecostudy: left out"),
+                      EcostudyWarning, stacklevel=2)
     quantities = [COLUMNS[n][0] for n in names if n in COLUMNS]
     lines += [problem(path, "columns", f"two columns give the {q}") for q in sorted(set(quantities))
               if quantities.count(q) > 1]
@@ -139,6 +147,9 @@ def read_table(text: str, path: Where) -> tuple[list[str], FloatArray]:
         if len(row) != len(names):
             raise InputError(problem(path, f"row {i + 1}", f"{len(row)} values for {len(names)} columns"))
         for j, cell in enumerate(row):
+            if names[j] in ignored:  # left out: not read
+                data[i, j] = 0.0
+                continue
             try:
                 data[i, j] = float(cell)
             except ValueError:
@@ -147,7 +158,13 @@ def read_table(text: str, path: Where) -> tuple[list[str], FloatArray]:
             bad.setdefault(names[k], (i + 1, f"'{row[k].strip()}' is not a finite number"))
     if bad:
         raise InputError([problem(path, name, f"row {row}: {msg}") for name, (row, msg) in bad.items()])
-    return names, data
+    kept = [j for j, name in enumerate(names) if name not in ignored]
+    return [names[j] for j in kept], data[:, kept]
+
+
+def quantity_of(name: str) -> str:
+    """The quantity a column name gives: its name without the unit (``speed_mph`` -> ``speed``; ``speed`` itself)."""
+    return name if name in QUANTITIES else name.rsplit("_", 1)[0]
 
 
 def check_series(log: "LoggedRun", path: Where) -> None:
