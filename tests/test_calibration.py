@@ -4,6 +4,7 @@ energy difference against an independent computation, and both commands."""
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
@@ -154,10 +155,20 @@ def test_a_log_whose_force_reads_zero_at_the_stand_replays_the_same(inputs, trut
     track, _ = inputs
     frame, record = logged[0]
     stood = frame.assign(force_kN=np.where(record["v"] > 1e-6, frame["force_kN"], 0.0))
-    zero, moving = (validate_log(as_log(f), track, truth) for f in (stood, frame))
-    assert len(zero) == len(moving) == 2
-    for a, b in zip(zero.itertuples(), moving.itertuples()):
+    # 3 s at the stand before, the speed sensor reading 0.02 m/s noise unsigned; without a position
+    # column the positions are the speed integrated: they creep at the stand
+    stand = frame.iloc[[0] * 30].assign(time_s=np.arange(30) * 0.1, force_kN=0.0, power_wheel_kW=0.0,
+                                        power_line_kW=0.0,
+                                        speed_mps=np.abs(np.random.default_rng(3).normal(0.0, 0.02, 30)))
+    later = pd.concat([stand, stood.assign(time_s=stood["time_s"] + 3.0)])
+    text = ("---\ntrack: t.yaml\ntrain: r.yaml\nstart_position_m: 300\n---\n"
+            + later.drop(columns="position_m").to_csv(index=False, float_format="%.6f"))
+    creeping = parse_log(text, "creeping.csv")
+    zero, crept, moving = (validate_log(log, track, truth) for log in (as_log(stood), creeping, as_log(frame)))
+    assert len(zero) == len(crept) == len(moving) == 2
+    for a, c, b in zip(zero.itertuples(), crept.itertuples(), moving.itertuples()):
         assert abs(a.model_time_s - b.model_time_s) < 1.0 and abs(a.time_difference_pct) < 2, (a, b)
+        assert abs(c.model_time_s - b.model_time_s) < 1.0, (c, b)
 
 
 # ------------------------------------------------------------------------- the commands

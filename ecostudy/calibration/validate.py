@@ -97,9 +97,12 @@ def handle_replay(run, track, train, log):
     handle = np.round(np.clip(handle, -1.0, 1.0) / HANDLE_STEP) * HANDLE_STEP
     keep = np.append(np.diff(travel) > 1e-3, True)  # the last sample at each position: the one that moves on
     handle = handle[keep]
-    # a logger may sample the stand's zero force an instant before traction: the departure interval
-    # takes the larger handle of its two ends (with the stand's zero the model never leaves)
-    handle[0] = max(handle[0], handle[1]) if len(handle) > 1 else handle[0]
+    # the rows before the first traction are the stand (a logger samples its zero force an instant
+    # before traction; positions integrated from a noisy speed creep there): they take the first
+    # traction handle, with the stand's zero the model never leaves
+    pulling = np.nonzero(handle > 0)[0]
+    if pulling.size:
+        handle[:pulling[0]] = handle[pulling[0]]
     nodes, handle = travel[keep], handle[:-1]
     nodes[-1] = max(nodes[-1], nodes[-2] + 1e-3)
     y, t_stop, _ = Plant(segment, train).drive(nodes, handle, max_time=4 * (run.t[-1] - run.t[0]) + 600)
