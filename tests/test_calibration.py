@@ -171,6 +171,18 @@ def test_a_log_whose_force_reads_zero_at_the_stand_replays_the_same(inputs, trut
         assert abs(c.model_time_s - b.model_time_s) < 1.0, (c, b)
 
 
+def test_a_log_that_ends_while_the_train_moves_flags_that_run_saying_so(inputs, truth, logged):
+    """A log cut off 60 s before its second run stops: that run has no logged running time, it is
+    flagged saying the log ends while the train moves (not a running time off the model's)."""
+    track, _ = inputs
+    frame = logged[0][0]
+    end = frame["time_s"].iloc[np.nonzero(frame["speed_mps"].to_numpy() > 1.0)[0][-1]] - 60.0
+    table = validate_log(as_log(frame[frame["time_s"] < end]), track, truth)
+    assert list(table["status"]) == ["ok", "flagged"], table
+    assert "the log ends while the train moves" in table["reason"].iloc[1]
+    assert "off the log" not in table["reason"].iloc[1] and np.isnan(table["time_difference_pct"].iloc[1])
+
+
 # ------------------------------------------------------------------------- the commands
 def test_calibrate_command(tmp_path, log_files, truth):
     out = tmp_path / "cal"
@@ -290,6 +302,17 @@ def test_savings_against_the_logged_driving(inputs, calibrated, logged):
     assert (table["saving_low_pct"] <= table["saving_pct"]).all()
     assert (table["saving_pct"] <= table["saving_high_pct"]).all()
     assert (table["saving_high_pct"] - table["saving_low_pct"] < 2.0).all()
+
+
+def test_savings_of_a_run_the_log_cuts_off_are_flagged(inputs, calibrated, logged):
+    """A log cut off 60 s before its second run stops: the optimum for that run would stop where the
+    log ends while the logged train moves on; its row is flagged saying so."""
+    from ecostudy.calibration.savings import savings
+    frame = logged[0][0]
+    end = frame["time_s"].iloc[np.nonzero(frame["speed_mps"].to_numpy() > 1.0)[0][-1]] - 60.0
+    table = savings(as_log(frame[frame["time_s"] < end], "cut"), inputs[0], calibrated, draws=0, points=300)
+    assert list(table["status"].str.split(":").str[0]) == ["ok", "flagged"], table["status"]
+    assert "the log ends while the train moves" in table["status"].iloc[1]
 
 
 def test_line_power_from_voltage_and_current_and_work_from_force(inputs, truth):

@@ -149,7 +149,8 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
               f"{row['optimal_traction_kWh']:.2f} kWh against {row['logged_traction_kWh']:.2f} kWh logged: saving "
               f"{row['saving_pct']:.1f} % (band {row['saving_low_pct']:.1f} to {row['saving_high_pct']:.1f} % over "
               f"{row['draws']} parameter draws)" + ("" if row["verified"] else " (optimum not verified)")
-              for row in summary.get("savings", [])]
+              if row["saving_pct"] == row["saving_pct"] else f"{row['log']} run {row['run']}: {row['status']}"
+              for row in summary.get("savings", [])]  # (a NaN saving: no optimum, its status says why)
     lines += [f"{result.status}" + (f": {result.reason}" if result.reason else ""), "outputs " + listed(out)]
     return reported(out, lines)
 
