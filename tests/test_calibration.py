@@ -269,6 +269,14 @@ def good(x0=300.0):
     return f"---\ntrack: {TRACK}\ntrain: {TRAIN}\n---\ntime_s,position_m,speed_mps,force_kN\n" + rows
 
 
+def shifted(text, row, by):
+    """``text`` with the positions from data row ``row`` (0-based) on moved by ``by`` m (a GPS re-fix)."""
+    _, head, body = text.split("---\n", 2)
+    rows = body.splitlines()
+    moved = [",".join([c[0], f"{float(c[1]) + by:.3f}", *c[2:]]) for c in (r.split(",") for r in rows[1 + row:])]
+    return "---\n" + head + "---\n" + "\n".join(rows[:1 + row] + moved) + "\n"
+
+
 def without_column(text, index):
     _, head, body = text.split("---\n", 2)
     rows = [",".join(c for j, c in enumerate(r.split(",")) if j != index) for r in body.splitlines()]
@@ -288,6 +296,8 @@ def without_column(text, index):
     ("\n".join(good().splitlines()[:14]) + "\n", ["time_s", "at least 10"]),
     (good().replace(",19.80,", ",390.00,"), ["speed_mps", "row 100", "not plausible"]),
     (good().replace("speed_mps", "speed_kmh"), ["speed_kmh", "integrate to", "check the units"]),
+    (good().replace(",325.000,", ",405.000,"), ["position_m", "row 51", "jumps by +81 m in 0.1 s", "2 such steps"]),
+    (shifted(good(), 50, 400.0), ["position_m", "row 51", "jumps by +401 m in 0.1 s", "1 such step"]),
     (good(x0=10850.0), ["position_m", "row 72", "off track"]),
     (good().replace("force_kN\n", "force_kN,power_line_kW\n"), ["row 1", "4 values for 5 columns"]),
     (without_column(good(), 1), ["header", "start_position_m is needed"]),

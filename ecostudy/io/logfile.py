@@ -21,7 +21,7 @@ says ``power_sampling: instant``; speed, position and force are instantaneous.
 A column of a quantity ecostudy does not model is left out with a warning naming it.
 Every problem is one line ``file: field: what is wrong`` (exit status 2): a missing header,
 unknown units of a known quantity, values that are not finite numbers, time not increasing, gaps, speeds
-that do not fit the positions (a unit mix-up), a force or wheel power not positive where the
+that do not fit the positions (a unit mix-up), positions that jump (GPS), a force or wheel power not positive where the
 train pulls (a sign flipped, a dead channel), positions off the track (:func:`check_on_track`).
 """
 import csv
@@ -64,6 +64,8 @@ GAP_FACTOR = 5.0       # a time step this many times the median step is a gap
 MIN_SPEED = -1.0       # [m/s] below this a negative speed is not sensor noise
 MAX_SPEED = 150.0      # [m/s] (540 km/h)
 SPEED_DISTANCE = (0.8, 1.25)  # speeds integrated over the positions' travel, outside: a unit mix-up
+JUMP = 10.0            # [m] a position step this much (plus half the speeds' distance) off the speeds' is a jump
+JUMP_SHARE = 0.1       # jumps in more than this share of the steps: not jumps but a unit mix-up
 PULLING = 0.3          # [m/s^2] speed gained faster than this over PULLING_TIME: in traction (no gradient of a
 PULLING_TIME = 2.0     # [s]  railway gives it while braking); the work at the wheel must be positive there
 
@@ -190,6 +192,7 @@ def check_series(log: "LoggedRun", path: Where) -> None:
             lines.append(problem(path, log.columns[1], f"row {i + 1}: speed {log.v[i]:g} m/s is not plausible "
                                  f"({MIN_SPEED:g} to {MAX_SPEED:g} m/s)"))
         elif "position" in log.columns[0]:
+            check_jumps(log, path)
             travel = float(np.sum(np.abs(np.diff(log.x))))
             driven = float(np.sum(0.5 * (np.abs(log.v[1:]) + np.abs(log.v[:-1])) * dt))
             low, high = SPEED_DISTANCE
@@ -198,6 +201,22 @@ def check_series(log: "LoggedRun", path: Where) -> None:
                                      f"positions advance {travel:.0f} m: check the units"))
     if lines:
         raise InputError(lines)
+
+
+def check_jumps(log: "LoggedRun", path: Where) -> None:
+    """Refuse positions that jump: a step more than :data:`JUMP` m (or six robust spreads of the
+    positions' own noise) plus half the distance the speeds give away from it, in a few rows (a GPS jump or re-fix); in many rows it is a unit mix-up, which
+    the travel check names."""
+    assert log.v is not None
+    by_speed = 0.5 * (np.abs(log.v[1:]) + np.abs(log.v[:-1])) * np.diff(log.t)
+    off = np.abs(np.abs(np.diff(log.x)) - by_speed)
+    noise = 6.0 * 1.4826 * float(np.median(off))  # positions' own noise (GPS): six robust spreads
+    jumps = np.nonzero(off > max(JUMP, noise) + 0.5 * by_speed)[0]
+    if 0 < jumps.size <= JUMP_SHARE * off.size:
+        i = int(jumps[0])
+        raise InputError(problem(path, log.columns[0], f"row {i + 2}: the position jumps by {log.x[i + 1] - log.x[i]:+.0f} m "
+                                 f"in {log.t[i + 1] - log.t[i]:g} s, the speeds give {by_speed[i]:.1f} m "
+                                 f"({jumps.size} such step{'s' if jumps.size > 1 else ''}; a GPS jump?)"))
 
 
 def check_traction_sign(t: FloatArray, v: FloatArray, columns: Mapping[str, tuple[str, FloatArray]],
