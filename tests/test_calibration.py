@@ -167,6 +167,18 @@ def test_a_davis_split_that_constant_speed_does_not_show_is_not_reported_with_na
         assert row["low"] <= true[name] <= row["high"], (name, true[name], row.to_dict())
 
 
+def test_speed_residuals_of_a_noisy_speed_sensor_say_so(inputs, truth):
+    """A speed sensor with 0.5 m/s noise: the replayed speed is off the logged one by about that, more
+    than the 0.3 m/s RMS limit; the reason gives the speed noise measured from the log next to it,
+    so that the sensor is not read as a model that misses."""
+    track, train = inputs
+    frame, _ = generate_log(track, truth, THERE, truth, seed=3, noise=LogNoise(speed=0.5))
+    frame["speed_mps"] = frame["speed_mps"].abs()  # an unsigned sensor
+    result = calibrate_logs([as_log(frame)], track, train, ("mass", "davis_a"), draws=0)
+    assert result.status == "flagged" and "speed residuals of 0.5" in result.reason, result.reason
+    assert "the logged speed's own noise is 0.5" in result.reason, result.reason
+
+
 # ------------------------------------------------------------------------- validate
 def test_validate_energy_difference_matches_an_independent_computation(inputs):
     """A log of the train 5 % heavier with 5 % more resistance: the train file's model needs about
