@@ -343,6 +343,18 @@ def test_a_column_ecostudy_does_not_model_is_warned_by_name_and_ignored():
         parse_log(good().replace("force_kN", "speed_mph"), "mph.csv")
 
 
+def test_a_run_without_logged_traction_is_flagged_not_ok(tmp_path, inputs):
+    """A dead wheel-power channel (zeros) on a train that gains speed gently (0.2 m/s^2, below what
+    the sign check reads as traction): validate has no logged traction to compare with; the run is
+    flagged saying so (a NaN difference passed every tolerance as ok, and the summary line crashed)."""
+    frame = steady_log(inputs[1], 1, level=15.0, hold=100.0, rate=0.2).assign(power_wheel_kW=0.0)
+    path = tmp_path / "dead.csv"
+    path.write_text(f"---\ntrack: {TRACK}\ntrain: {TRAIN}\n---\n" + frame.to_csv(index=False, float_format="%.6f"))
+    result = run("validate", path, "--out", tmp_path / "o", "--no-plot")
+    assert result.exit_code == 1, result.output
+    assert "no traction logged in this run" in result.output
+
+
 def test_calibrate_refuses_unknown_parameters_and_logs_without_wheel_work(tmp_path):
     path = tmp_path / "nowork.csv"
     path.write_text(good().replace("force_kN", "power_line_kW"))

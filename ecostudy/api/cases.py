@@ -170,6 +170,8 @@ def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optiona
     write_html(out)
     return reported(out, [shown(table[VALIDATION_COLUMNS], places=".4g"),
                           f"traction energy: logged {summary['logged_traction_kWh']:.2f} kWh, model "
-                          f"{summary['model_traction_kWh']:.2f} kWh ({summary['traction_difference_pct']:+.2f} %)",
+                          f"{summary['model_traction_kWh']:.2f} kWh ("
+                          + (f"{summary['traction_difference_pct']:+.2f} %)" if summary["traction_difference_pct"]
+                             is not None else "none logged)"),
                           f"{summary['status']}" + (f": {summary['reason']}" if summary["reason"] else ""),
                           "outputs " + listed(out)])

@@ -136,7 +136,9 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
             row["logged_line_traction_kWh"] = to_kwh(float(np.sum(np.maximum(drawn, 0.0) * np.diff(run.t))))
             row["model_line_traction_kWh"] = to_kwh(model / train.traction_efficiency)
         reasons = []
-        if abs(row["traction_difference_pct"]) > 100 * energy_tolerance:
+        if not logged > 0:  # a NaN difference would pass every tolerance
+            reasons.append("no traction logged in this run: no energy to compare")
+        elif abs(row["traction_difference_pct"]) > 100 * energy_tolerance:
             reasons.append(f"traction energy {row['traction_difference_pct']:+.1f} % off the log")
         if not run.stands:  # no logged running time: the time is not compared
             row["time_difference_pct"] = np.nan
