@@ -221,6 +221,20 @@ def test_a_log_whose_force_reads_zero_at_the_stand_replays_the_same(inputs, trut
         assert abs(c.model_time_s - b.model_time_s) < 1.0, (c, b)
 
 
+def gps(frame, sigma=3.0, seed=7):
+    """``frame`` with normal noise of ``sigma`` m on its positions (GPS)."""
+    return frame.assign(position_m=frame["position_m"] + np.random.default_rng(seed).normal(0.0, sigma, len(frame)))
+
+
+def test_positions_with_gps_noise_are_not_a_unit_mix_up(logged):
+    """3 m of noise on positions at 10 Hz adds 0.7 m of back and forth per row: the positions' travel
+    is measured over 10 s steps, so the speeds still fit it; km/h given as m/s is still refused."""
+    noisy = gps(logged[0][0])
+    assert len(as_log(noisy).t) == len(noisy)
+    with pytest.raises(InputError, match="speed_mps: the speeds integrate to .* check the units"):
+        as_log(noisy.assign(speed_mps=3.6 * noisy["speed_mps"]))
+
+
 def test_a_log_that_ends_while_the_train_moves_flags_that_run_saying_so(inputs, truth, logged):
     """A log cut off 60 s before its second run stops: that run has no logged running time, it is
     flagged saying the log ends while the train moves (not a running time off the model's)."""

@@ -64,6 +64,7 @@ GAP_FACTOR = 5.0       # a time step this many times the median step is a gap
 MIN_SPEED = -1.0       # [m/s] below this a negative speed is not sensor noise
 MAX_SPEED = 150.0      # [m/s] (540 km/h)
 SPEED_DISTANCE = (0.8, 1.25)  # speeds integrated over the positions' travel, outside: a unit mix-up
+TRAVEL_STEP = 10.0     # [s] the positions' travel is summed over steps of this length
 JUMP = 10.0            # [m] a position step this much (plus half the speeds' distance) off the speeds' is a jump
 JUMP_SHARE = 0.1       # jumps in more than this share of the steps: not jumps but a unit mix-up
 PULLING = 0.3          # [m/s^2] speed gained faster than this over PULLING_TIME: in traction (no gradient of a
@@ -193,7 +194,8 @@ def check_series(log: "LoggedRun", path: Where) -> None:
                                  f"({MIN_SPEED:g} to {MAX_SPEED:g} m/s)"))
         elif "position" in log.columns[0]:
             check_jumps(log, path)
-            travel = float(np.sum(np.abs(np.diff(log.x))))
+            k = max(int(round(TRAVEL_STEP / step)), 1)  # over steps of seconds: GPS noise does not add up
+            travel = float(np.sum(np.abs(np.diff(log.x[np.unique(np.append(np.arange(0, len(t), k), len(t) - 1))]))))
             driven = float(np.sum(0.5 * (np.abs(log.v[1:]) + np.abs(log.v[:-1])) * dt))
             low, high = SPEED_DISTANCE
             if travel > 50.0 and not low <= driven / travel <= high:
