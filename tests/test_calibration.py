@@ -235,6 +235,16 @@ def test_positions_with_gps_noise_are_not_a_unit_mix_up(logged):
         as_log(noisy.assign(speed_mps=3.6 * noisy["speed_mps"]))
 
 
+def test_positions_with_gps_noise_replay_the_handle_as_clean_ones(inputs, truth, logged):
+    """Positions with 3 m of noise (GPS): under the logged handle, by position, the model runs as on
+    the clean positions (the noisy travel went back and forth, and the handle's nodes with it)."""
+    track, _ = inputs
+    frame = logged[0][0]
+    noisy, clean = (validate_log(as_log(f), track, truth) for f in (gps(frame), frame))
+    for a, b in zip(noisy.itertuples(), clean.itertuples()):
+        assert abs(a.model_time_s - b.model_time_s) < 2.0, (a, b)
+
+
 def test_a_log_that_ends_while_the_train_moves_flags_that_run_saying_so(inputs, truth, logged):
     """A log cut off 60 s before its second run stops: that run has no logged running time, it is
     flagged saying the log ends while the train moves (not a running time off the model's)."""

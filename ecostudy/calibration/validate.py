@@ -87,7 +87,8 @@ def handle_replay(run, track, train, log):
     sign = 1.0 if run.x[-1] >= run.x[0] else -1.0
     far = float(np.clip(run.x[-1] + sign * 500.0, 0.0, track.length))
     segment = make_segment(replace(track, stops=dict(track.stops, _a=float(run.x[0]), _b=far)), train, "_a", "_b")
-    travel = np.abs(run.x - run.x[0])
+    # the furthest the train has come: noisy (GPS) positions go back and forth, the handle's nodes may not
+    travel = np.maximum.accumulate(np.abs(run.x - run.x[0]))
     first = np.searchsorted(log.t, run.t[0])
     force = log.force[first:first + len(run.t)] if log.force is not None else None
     if force is None:
@@ -95,7 +96,7 @@ def handle_replay(run, track, train, log):
     v = np.maximum(run.v, 0.0)
     handle = np.where(force > 0, force / train.traction.force(v), force / train.braking.force(v))
     handle = np.round(np.clip(handle, -1.0, 1.0) / HANDLE_STEP) * HANDLE_STEP
-    keep = np.append(np.diff(travel) > 1e-3, True)  # the last sample at each position: the one that moves on
+    keep = np.append(np.diff(travel) > 1e-3, True)  # the last sample at each furthest position: the one that moves on
     handle = handle[keep]
     # the rows before the first traction are the stand (a logger samples its zero force an instant
     # before traction; positions integrated from a noisy speed creep there): they take the first
