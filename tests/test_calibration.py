@@ -337,6 +337,8 @@ def without_column(text, index):
     (good(x0=10850.0), ["position_m", "row 72", "off track"]),
     (good().replace("force_kN\n", "force_kN,power_line_kW\n"), ["row 1", "4 values for 5 columns"]),
     (without_column(good(), 1), ["header", "start_position_m is needed"]),
+    (without_column(good(), 1).replace("train:", "start_position_m: 10850\ntrain:"),
+     ["speed_mps", "off track", "the positions are the speeds integrated from start_position_m"]),
     (good().replace(",100\n", ",-100\n"), ["force_kN", "not positive in 80 of 80 rows", "traction is positive"]),
     (good().replace(",100\n", ",0\n"), ["force_kN", "not positive in 80 of 80 rows"]),
     (good().replace("force_kN", "power_wheel_kW").replace(",100\n", ",-100\n"),

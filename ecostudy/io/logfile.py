@@ -291,8 +291,12 @@ def check_on_track(log: "LoggedRun", track: Track) -> None:
     off = (log.x < -1e-6) | (log.x > track.length + 1e-6)
     if np.any(off):
         i = int(np.argmax(off))
-        raise InputError(problem(log.path or log.name, log.columns[0], f"row {i + 1}: position {log.x[i]:.1f} m is "
-                                 f"off track '{track.name}' (0 to {track.length:g} m)"))
+        integrated = log.columns[0] == "(start_position_m)"  # no position column: the speeds integrated
+        raise InputError(problem(log.path or log.name, log.columns[1] if integrated else log.columns[0],
+                                 f"row {i + 1}: position {log.x[i]:.1f} m is off track '{track.name}' (0 to "
+                                 f"{track.length:g} m)" + ("; the positions are the speeds integrated from "
+                                                           "start_position_m: check their unit and the start"
+                                                           if integrated else "")))
 
 
 def write_log(path: str | Path, header: Mapping[str, Any], frame: Any) -> None:
