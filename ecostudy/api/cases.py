@@ -149,7 +149,8 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
               f"{row['optimal_traction_kWh']:.2f} kWh against {row['logged_traction_kWh']:.2f} kWh logged: saving "
               f"{row['saving_pct']:.1f} % (band {row['saving_low_pct']:.1f} to {row['saving_high_pct']:.1f} % over "
               f"{row['draws']} parameter draws)" + ("" if row["verified"] else " (optimum not verified)")
-              for row in summary.get("savings", [])]
+              if row["saving_pct"] == row["saving_pct"] else f"{row['log']} run {row['run']}: {row['status']}"
+              for row in summary.get("savings", [])]  # (a NaN saving: no optimum, its status says why)
     lines += [f"{result.status}" + (f": {result.reason}" if result.reason else ""), "outputs " + listed(out)]
     return reported(out, lines)
 
@@ -169,6 +170,8 @@ def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optiona
     write_html(out)
     return reported(out, [shown(table[VALIDATION_COLUMNS], places=".4g"),
                           f"traction energy: logged {summary['logged_traction_kWh']:.2f} kWh, model "
-                          f"{summary['model_traction_kWh']:.2f} kWh ({summary['traction_difference_pct']:+.2f} %)",
+                          f"{summary['model_traction_kWh']:.2f} kWh ("
+                          + (f"{summary['traction_difference_pct']:+.2f} %)" if summary["traction_difference_pct"]
+                             is not None else "none logged)"),
                           f"{summary['status']}" + (f": {summary['reason']}" if summary["reason"] else ""),
                           "outputs " + listed(out)])

@@ -99,7 +99,8 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                "noise": dict(problem.sigma)}
     reasons = [f"{n} not identifiable from these logs, held at its prior: {why}" for n, why in held.items()]
     if quality["rms_speed_mps"] > MAX_RMS_SPEED:
-        reasons.append(f"speed residuals of {quality['rms_speed_mps']:.3g} m/s RMS (more than {MAX_RMS_SPEED} m/s)")
+        reasons.append(f"speed residuals of {quality['rms_speed_mps']:.3g} m/s RMS (more than {MAX_RMS_SPEED} m/s; "
+                       f"the logged speed's own noise is {problem.sigma['speed']:.2g} m/s)")
     if quality["structure"] > MAX_STRUCTURE:
         reasons.append(f"residuals drift ({quality['structure']:.1f} times white noise over {WINDOW:g} s, "
                        f"more than {MAX_STRUCTURE:g}): the model misses something the logs show")

@@ -14,7 +14,7 @@ logs (logs drawn with replacement, refitted) gives a second interval.
 Identifiability: a parameter whose 95 % half-width exceeds :data:`MAX_RELATIVE_WIDTH` of its
 prior value (or that lies in a null direction of J: a singular value below 1e-9 of the largest)
 is not identifiable from these logs. It is held at its prior, not fitted to noise, and the fit
-is repeated without it; the report says which parameters it moves with (the weakest singular
+is repeated without it (the others keep the variance they had while it was free: :func:`widened`); the report says which parameters it moves with (the weakest singular
 direction of J). Examples: the quadratic Davis term C from a slow run, the static mass against
 the rotating-mass allowance on flat track (only M = Ms (1 + f) is seen there), the efficiency of
 a log without line power.
@@ -196,11 +196,26 @@ def estimate_noise(problem, names, p):
             problem.sigma[key] = max(float(np.sqrt(values @ values / dof)), 1e-9)
 
 
+def widened(cov, free, widest):
+    """``cov`` with each parameter's variance raised to the largest finite one it had in an earlier
+    fit (recorded in ``widest``, by name), correlations kept: holding a parameter at its prior does
+    not make the others better known than when it was free (their estimates move with the held
+    value). A variance that was infinite (a null direction: only a combination is seen, the prior
+    fixes the split) is not carried over."""
+    variance = np.diag(cov).copy()
+    for j, name in enumerate(free):
+        if np.isfinite(variance[j]):
+            widest[name] = max(widest.get(name, 0.0), variance[j])
+    ratio = [np.sqrt(widest[n] / variance[j]) if np.isfinite(variance[j]) and variance[j] > 0 else 1.0
+             for j, n in enumerate(free)]
+    return cov * np.outer(ratio, ratio)
+
+
 def identify(problem, requested):
     """Fit ``requested`` parameters, holding those the logs do not identify at their prior.
 
     Returns (free names, p, covariance, held: {name: reason})."""
-    free, held = list(requested), {}
+    free, held, widest = list(requested), {}, {}
     while True:
         p = solve(problem, free)
         estimate_noise(problem, free, p)
@@ -210,6 +225,7 @@ def identify(problem, requested):
         cov, sv, weakest = covariance(problem, free, p)
         if not free:
             return free, p, cov, held
+        cov = widened(cov, free, widest)
         s = scales(problem.prior)
         width = np.array([Z95 * np.sqrt(cov[j, j]) * s[n] / max(abs(problem.prior[n]), 1e-300)
                           for j, n in enumerate(free)])

@@ -49,6 +49,7 @@ class Run:
     davis: np.ndarray    # (3, n) integrals of R_v(v) v dt for A = 1, B = 1, C = 1 [J per unit coefficient]
     fixed: np.ndarray    # gradient and curve work per kg of static mass since the departure [J/kg]
     used: np.ndarray     # samples whose speed residual counts
+    stands: bool = True  # ends at a stand (False: the log ends while the train moves)
 
     @property
     def distance(self):
@@ -190,7 +191,7 @@ def prepare(log, track, train):
             continue
         runs.append(Run(log.name, index, log.t[sl], log.x[sl], v[sl], cumulative(work[d:end]),
                         np.array([cumulative(row[d:end]) for row in trapezoid]), cumulative(fixed[d:end]),
-                        smoothed(log.t[sl], v[sl]) > MIN_SPEED))
+                        smoothed(log.t[sl], v[sl]) > MIN_SPEED, bool(following.size)))
         index += 1
     if not runs:
         raise InputError(problem(log.path or log.name, "speed", "no run from a stand to a stand: the train never "

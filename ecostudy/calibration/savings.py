@@ -42,6 +42,14 @@ def savings(log, track, calibration, draws=8, points=FRONT_POINTS, seed=0):
         first = int(np.searchsorted(log.t, run.t[0]))
         logged = float(np.sum(np.maximum(work[first:first + len(run.t) - 1], 0.0)))
         timing = Timing(running_time=float(run.t[-1] - run.t[0]))
+        if not run.stands:  # no logged running time to the next stop: nothing to optimise for
+            rows.append({"log": log.name, "run": run.index, "from_m": float(run.x[0]), "to_m": float(run.x[-1]),
+                         "running_time_s": timing.running_time, "logged_traction_kWh": to_kwh(logged),
+                         "optimal_traction_kWh": np.nan, "saving_pct": np.nan, "saving_low_pct": np.nan,
+                         "saving_high_pct": np.nan, "draws": 0, "verified": False,
+                         "status": str(flagged(f"the log ends while the train moves (at {run.x[-1]:.0f} m, "
+                                               f"{run.v[-1]:.1f} m/s): no running time to optimise for"))})
+            continue
         here = replace(track, stops=dict(track.stops, _departure=float(run.x[0]), _arrival=float(run.x[-1])))
         best = solve_run(here, calibration.train, "_departure", "_arrival", timing, points=points)
         energies, statuses = [best.summary["traction_energy_kWh"]], [best.status]

@@ -87,7 +87,8 @@ def handle_replay(run, track, train, log):
     sign = 1.0 if run.x[-1] >= run.x[0] else -1.0
     far = float(np.clip(run.x[-1] + sign * 500.0, 0.0, track.length))
     segment = make_segment(replace(track, stops=dict(track.stops, _a=float(run.x[0]), _b=far)), train, "_a", "_b")
-    travel = np.abs(run.x - run.x[0])
+    # the furthest the train has come: noisy (GPS) positions go back and forth, the handle's nodes may not
+    travel = np.maximum.accumulate(np.abs(run.x - run.x[0]))
     first = np.searchsorted(log.t, run.t[0])
     force = log.force[first:first + len(run.t)] if log.force is not None else None
     if force is None:
@@ -95,8 +96,15 @@ def handle_replay(run, track, train, log):
     v = np.maximum(run.v, 0.0)
     handle = np.where(force > 0, force / train.traction.force(v), force / train.braking.force(v))
     handle = np.round(np.clip(handle, -1.0, 1.0) / HANDLE_STEP) * HANDLE_STEP
-    keep = np.append(np.diff(travel) > 1e-3, True)  # the last sample at each position: the one that moves on
-    nodes, handle = travel[keep], handle[keep][:-1]
+    keep = np.append(np.diff(travel) > 1e-3, True)  # the last sample at each furthest position: the one that moves on
+    handle = handle[keep]
+    # the rows before the first traction are the stand (a logger samples its zero force an instant
+    # before traction; positions integrated from a noisy speed creep there): they take the first
+    # traction handle, with the stand's zero the model never leaves
+    pulling = np.nonzero(handle > 0)[0]
+    if pulling.size:
+        handle[:pulling[0]] = handle[pulling[0]]
+    nodes, handle = travel[keep], handle[:-1]
     nodes[-1] = max(nodes[-1], nodes[-2] + 1e-3)
     y, t_stop, _ = Plant(segment, train).drive(nodes, handle, max_time=4 * (run.t[-1] - run.t[0]) + 600)
     return float(t_stop), float(y[0]), float(y[2])
@@ -129,9 +137,15 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
             row["logged_line_traction_kWh"] = to_kwh(float(np.sum(np.maximum(drawn, 0.0) * np.diff(run.t))))
             row["model_line_traction_kWh"] = to_kwh(model / train.traction_efficiency)
         reasons = []
-        if abs(row["traction_difference_pct"]) > 100 * energy_tolerance:
+        if not logged > 0:  # a NaN difference would pass every tolerance
+            reasons.append("no traction logged in this run: no energy to compare")
+        elif abs(row["traction_difference_pct"]) > 100 * energy_tolerance:
             reasons.append(f"traction energy {row['traction_difference_pct']:+.1f} % off the log")
-        if abs(row["time_difference_pct"]) > 100 * time_tolerance:
+        if not run.stands:  # no logged running time: the time is not compared
+            row["time_difference_pct"] = np.nan
+            reasons.append(f"the log ends while the train moves (at {run.x[-1]:.0f} m, {run.v[-1]:.1f} m/s): "
+                           "no running time to compare")
+        elif abs(row["time_difference_pct"]) > 100 * time_tolerance:
             reasons.append(f"running time {row['time_difference_pct']:+.1f} % off the log under the logged handle")
         row["status"], row["reason"] = ("flagged", "; ".join(reasons)) if reasons else ("ok", "")
         rows.append(row)

@@ -18,12 +18,15 @@ positions (the track file's kilometrage), in either direction of travel. Powers 
 over the interval from their row to the next (energy counters differenced) unless the header
 says ``power_sampling: instant``; speed, position and force are instantaneous.
 
+A column of a quantity ecostudy does not model is left out with a warning naming it.
 Every problem is one line ``file: field: what is wrong`` (exit status 2): a missing header,
-unknown columns (units), values that are not finite numbers, time not increasing, gaps, speeds
-that do not fit the positions (a unit mix-up), positions off the track (:func:`check_on_track`).
+unknown units of a known quantity, values that are not finite numbers, time not increasing, gaps, speeds
+that do not fit the positions (a unit mix-up), positions that jump (GPS), a force or wheel power not positive where the
+train pulls (a sign flipped, a dead channel), positions off the track (:func:`check_on_track`).
 """
 import csv
 import io
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from os import PathLike
@@ -34,7 +37,7 @@ import yaml
 from pydantic import Field
 
 from ecostudy.core import units
-from ecostudy.core.errors import InputError, problem
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.types import Track
 from ecostudy.core.units import FloatArray
 from ecostudy.io.documents import named_file, validate
@@ -55,11 +58,17 @@ COLUMNS = {
     "line_voltage_V": ("voltage", 1.0), "line_voltage_kV": ("voltage", 1000.0),
     "line_current_A": ("current", 1.0),
 }
+QUANTITIES = {name.rsplit("_", 1)[0] for name in COLUMNS}  # time, position, speed, ... (a known one in another unit: refused)
 MIN_ROWS = 10
 GAP_FACTOR = 5.0       # a time step this many times the median step is a gap
 MIN_SPEED = -1.0       # [m/s] below this a negative speed is not sensor noise
 MAX_SPEED = 150.0      # [m/s] (540 km/h)
 SPEED_DISTANCE = (0.8, 1.25)  # speeds integrated over the positions' travel, outside: a unit mix-up
+TRAVEL_STEP = 10.0     # [s] the positions' travel is summed over steps of this length
+JUMP = 10.0            # [m] a position step this much (plus half the speeds' distance) off the speeds' is a jump
+JUMP_SHARE = 0.1       # jumps in more than this share of the steps: not jumps but a unit mix-up
+PULLING = 0.3          # [m/s^2] speed gained faster than this over PULLING_TIME: in traction (no gradient of a
+PULLING_TIME = 2.0     # [s]  railway gives it while braking); the work at the wheel must be positive there
 
 
 class LogHeader(Strict):
@@ -123,8 +132,13 @@ def read_table(text: str, path: Where) -> tuple[list[str], FloatArray]:
     if not rows:
         raise InputError(problem(path, "columns", "no CSV header row after the YAML header"))
     names = [c.strip() for c in rows[0]]
+    unknown = [name for name in names if name not in COLUMNS]
     lines = [problem(path, name, f"unknown column (known: {', '.join(COLUMNS)}; the unit is part of the name)")
-             for name in names if name not in COLUMNS]
+             for name in unknown if quantity_of(name) in QUANTITIES]
+    ignored = [name for name in unknown if quantity_of(name) not in QUANTITIES]
+    if ignored and not lines:
+        warnings.warn(problem(path, "columns", f"{', '.join(ignored)} not modelled by ecostudy: left out"),
+                      EcostudyWarning, stacklevel=2)
     quantities = [COLUMNS[n][0] for n in names if n in COLUMNS]
     lines += [problem(path, "columns", f"two columns give the {q}") for q in sorted(set(quantities))
               if quantities.count(q) > 1]
@@ -136,6 +150,9 @@ def read_table(text: str, path: Where) -> tuple[list[str], FloatArray]:
         if len(row) != len(names):
             raise InputError(problem(path, f"row {i + 1}", f"{len(row)} values for {len(names)} columns"))
         for j, cell in enumerate(row):
+            if names[j] in ignored:  # left out: not read
+                data[i, j] = 0.0
+                continue
             try:
                 data[i, j] = float(cell)
             except ValueError:
@@ -144,7 +161,13 @@ def read_table(text: str, path: Where) -> tuple[list[str], FloatArray]:
             bad.setdefault(names[k], (i + 1, f"'{row[k].strip()}' is not a finite number"))
     if bad:
         raise InputError([problem(path, name, f"row {row}: {msg}") for name, (row, msg) in bad.items()])
-    return names, data
+    kept = [j for j, name in enumerate(names) if name not in ignored]
+    return [names[j] for j in kept], data[:, kept]
+
+
+def quantity_of(name: str) -> str:
+    """The quantity a column name gives: its name without the unit (``speed_mph`` -> ``speed``; ``speed`` itself)."""
+    return name if name in QUANTITIES else name.rsplit("_", 1)[0]
 
 
 def check_series(log: "LoggedRun", path: Where) -> None:
@@ -170,7 +193,9 @@ def check_series(log: "LoggedRun", path: Where) -> None:
             lines.append(problem(path, log.columns[1], f"row {i + 1}: speed {log.v[i]:g} m/s is not plausible "
                                  f"({MIN_SPEED:g} to {MAX_SPEED:g} m/s)"))
         elif "position" in log.columns[0]:
-            travel = float(np.sum(np.abs(np.diff(log.x))))
+            check_jumps(log, path)
+            k = max(int(round(TRAVEL_STEP / step)), 1)  # over steps of seconds: GPS noise does not add up
+            travel = float(np.sum(np.abs(np.diff(log.x[np.unique(np.append(np.arange(0, len(t), k), len(t) - 1))]))))
             driven = float(np.sum(0.5 * (np.abs(log.v[1:]) + np.abs(log.v[:-1])) * dt))
             low, high = SPEED_DISTANCE
             if travel > 50.0 and not low <= driven / travel <= high:
@@ -178,6 +203,39 @@ def check_series(log: "LoggedRun", path: Where) -> None:
                                      f"positions advance {travel:.0f} m: check the units"))
     if lines:
         raise InputError(lines)
+
+
+def check_jumps(log: "LoggedRun", path: Where) -> None:
+    """Refuse positions that jump: a step more than :data:`JUMP` m (or six robust spreads of the
+    positions' own noise) plus half the distance the speeds give away from it, in a few rows (a GPS jump or re-fix); in many rows it is a unit mix-up, which
+    the travel check names."""
+    assert log.v is not None
+    by_speed = 0.5 * (np.abs(log.v[1:]) + np.abs(log.v[:-1])) * np.diff(log.t)
+    off = np.abs(np.abs(np.diff(log.x)) - by_speed)
+    noise = 6.0 * 1.4826 * float(np.median(off))  # positions' own noise (GPS): six robust spreads
+    jumps = np.nonzero(off > max(JUMP, noise) + 0.5 * by_speed)[0]
+    if 0 < jumps.size <= JUMP_SHARE * off.size:
+        i = int(jumps[0])
+        raise InputError(problem(path, log.columns[0], f"row {i + 2}: the position jumps by {log.x[i + 1] - log.x[i]:+.0f} m "
+                                 f"in {log.t[i + 1] - log.t[i]:g} s, the speeds give {by_speed[i]:.1f} m "
+                                 f"({jumps.size} such step{'s' if jumps.size > 1 else ''}; a GPS jump?)"))
+
+
+def check_traction_sign(t: FloatArray, v: FloatArray, columns: Mapping[str, tuple[str, FloatArray]],
+                        path: Where) -> None:
+    """Refuse a force or wheel power that is not positive in most rows where the train gains speed
+    faster than :data:`PULLING` (traction is positive, braking negative: a sign flipped at the
+    logger, or a dead channel reading zero)."""
+    k = max(int(round(PULLING_TIME / float(np.median(np.diff(t))))), 1)
+    speed = np.abs(v)
+    rows = np.nonzero((speed[k:] - speed[:-k]) / (t[k:] - t[:-k]) > PULLING)[0] + k // 2
+    for quantity in ("force", "power_wheel"):
+        if quantity in columns and rows.size >= 5:
+            name, values = columns[quantity]
+            negative = int(np.sum(values[rows] <= 0))
+            if negative > rows.size / 2:
+                raise InputError(problem(path, name, f"not positive in {negative} of {rows.size} rows where the train "
+                                         f"gains more than {PULLING:g} m/s^2: traction is positive, braking negative"))
 
 
 def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
@@ -209,6 +267,8 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
     log = LoggedRun(name or Path(path).stem, header, t, x, v, get("force"), get("power_wheel"), line, Path(path),
                     (column.get("position", ("(start_position_m)",))[0], column.get("speed", ("",))[0]))
     check_series(log, path)
+    if v is not None:
+        check_traction_sign(t, v, column, path)
     return log
 
 
@@ -231,8 +291,12 @@ def check_on_track(log: "LoggedRun", track: Track) -> None:
     off = (log.x < -1e-6) | (log.x > track.length + 1e-6)
     if np.any(off):
         i = int(np.argmax(off))
-        raise InputError(problem(log.path or log.name, log.columns[0], f"row {i + 1}: position {log.x[i]:.1f} m is "
-                                 f"off track '{track.name}' (0 to {track.length:g} m)"))
+        integrated = log.columns[0] == "(start_position_m)"  # no position column: the speeds integrated
+        raise InputError(problem(log.path or log.name, log.columns[1] if integrated else log.columns[0],
+                                 f"row {i + 1}: position {log.x[i]:.1f} m is off track '{track.name}' (0 to "
+                                 f"{track.length:g} m)" + ("; the positions are the speeds integrated from "
+                                                           "start_position_m: check their unit and the start"
+                                                           if integrated else "")))
 
 
 def write_log(path: str | Path, header: Mapping[str, Any], frame: Any) -> None:
