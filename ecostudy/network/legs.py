@@ -167,6 +167,9 @@ def separation(leg, ahead, buffer, j):
     return leg.direction * (ahead[leg.start + j] - leg.line_start), buffer + leg.case.train.length
 
 
+BUFFER_SLACK_M = 1e-3  # [m] a separation nearer than the buffer by more is missed: well beyond what Ipopt leaves a row violated
+
+
 def _check_departure_gap(task):
     """A leg whose departure or arrival, fixed at its stops, is nearer the tail of the train ahead
     than ``buffer``: no run can keep the buffer there (Ipopt only reports the NLP infeasible), said so."""
@@ -175,7 +178,7 @@ def _check_departure_gap(task):
         return
     for j, at, when in ((0, 0.0, "departs"), (leg.steps, leg.case.segment.distance, "arrives")):
         x_ahead, least = separation(leg, ahead, buffer, j)
-        if np.isfinite(x_ahead) and x_ahead - at < least - 1e-3:  # [m] well beyond what Ipopt leaves a row violated
+        if np.isfinite(x_ahead) and x_ahead - at < least - BUFFER_SLACK_M:
             raise SolverError(f"{label}: cannot keep buffer_m {buffer:g} m behind the train ahead, whose tail is "
                               f"{x_ahead - at - leg.case.train.length:.1f} m ahead when this leg {when} "
                               "(offset_s, dwell_s)")

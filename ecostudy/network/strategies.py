@@ -37,7 +37,7 @@ from ecostudy.core.simulate import TOLERANCES
 from ecostudy.core.registry import Registry
 from ecostudy.network.joint import joint
 from ecostudy.network.rules import following, independent, supervised
-from ecostudy.network.scoring import evaluate, separations, verify_leg
+from ecostudy.network.scoring import buffer_missed, evaluate, separations, verify_leg
 
 
 # the strategies after independent driving, dearest first, so that a pool's workers end together
@@ -189,6 +189,11 @@ def _scored(fleet, runs, info, wall, mapper=map):
                      f"{fleet.dt:g} s steps (time_step_s)")
     if totals["min_separation_m"] is not None and totals["min_separation_m"] < 0.0:  # head past the tail ahead
         flags.append(f"trains overlap on the line by up to {-totals['min_separation_m']:.1f} m (timetable)")
+    missed = buffer_missed(fleet, runs)
+    if missed is not None and missed["gap_m"] >= 0.0:  # nearer than buffer_m, no overlap (flagged above)
+        flags.append(f"train {missed['train']}'s head came within {missed['gap_m']:.1f} m of the tail of train "
+                     f"{missed['ahead']} at {missed['time_s']:g} s, {missed['position_m']:.0f} m along the line: "
+                     f"closer than buffer_m {fleet.buffer:g} m (network_trains.csv min_separation_m)")
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
     return {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
 
