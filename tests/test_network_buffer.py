@@ -2,13 +2,17 @@
 overlapping) is flagged with its closest approach, and the strategies that keep the buffer keep it
 (real solves: two metro trains 30 s apart on one segment, dt 1 s, buffer_m 150, which the
 independent runs break by some 35 m)."""
-import pytest
+import json
 
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
 from ecostudy.core.types import Supply
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.network import fleet, strategies
 
-from .conftest import TRACKS, TRAINS
+from .conftest import TRACKS, TRAINS, write_yaml
 
 BUFFER = 150.0
 SLACK = 1e-3  # [m] what Ipopt may leave a separation row violated
@@ -55,3 +59,23 @@ def test_the_joint_optimum_keeps_the_buffer_and_bounds_the_strategies_that_keep_
     for name in ("receptivity", "following"):
         assert buffered[name]["totals"]["status"] == "ok", (name, buffered[name]["totals"]["status"])
         assert joint["substation_kWh"] <= buffered[name]["totals"]["substation_kWh"] * (1 + 1e-4), name
+
+
+@pytest.mark.slow
+def test_the_command_exits_1_and_network_json_carries_each_strategys_own_status(tmp_path):
+    """Through `ecostudy network`: the independent runs break the buffer, so the command exits 1 and
+    says why; network.json's status of each strategy is the study's (ok / flagged), not the joint
+    NLP's Ipopt status."""
+    study = write_yaml(tmp_path / "s.yaml", {
+        "name": "buffer", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
+        "stops": ["Noord", "Station"], "running_times_s": [56.0], "dwell_s": 10, "time_step_s": 1.0,
+        "trains": [{"name": "T1", "offset_s": 0}, {"name": "T2", "offset_s": 30}],
+        "substation": {"position_m": 300}, "strategies": ["independent", "joint"], "buffer_m": BUFFER, "points": 200,
+        "output": str(tmp_path / "out")})
+    r = CliRunner().invoke(app, ["network", str(study), "--workers", "1", "--no-plot"])
+    assert r.exit_code == 1 and "buffer_m 150 m" in r.output, r.output
+    saved = json.loads((tmp_path / "out" / "network.json").read_text())["strategies"]
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert saved["independent"]["status"].startswith("flagged") and "buffer_m 150 m" in saved["independent"]["status"]
+    assert saved["joint"]["status"] == "ok", saved["joint"]["status"]
+    assert summary["status"] != "ok" and summary["cases"]["flagged"] == 1, summary["cases"]
