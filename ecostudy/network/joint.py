@@ -33,7 +33,7 @@ def joint(fleet, start, one_handle=False, floating=False):
     runs = [[timedomain.leg_arrays(b) for b in bl] for bl in blocks]
     own = sum(pyo.value(m.substation_mw[t]) for t in m.T_net) * fleet.dt / 3.6  # MW s -> kWh
     return runs, {"build_s": build_s, "solve_s": outcome.seconds + outcome.nl_seconds, "nlp_substation_kWh": own,
-                  "iterations": outcome.iterations, "status": outcome.status,
+                  "iterations": outcome.iterations, "solver_status": outcome.status,
                   "variables": sum(1 for _ in m.component_data_objects(pyo.Var, active=True))}
 
 
