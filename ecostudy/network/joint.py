@@ -1,5 +1,6 @@
 """Strategy (e): every train and the circuit of eq. 7.8 in one NLP minimising substation energy,
-the bound no supervisor rule can beat."""
+each train ``fleet.buffer`` behind the one ahead as the rules keep it: the bound no supervisor rule
+can beat."""
 import time
 from types import SimpleNamespace
 
