@@ -192,8 +192,9 @@ def _same(a, b):
 
 
 def line_positions(fleet, i, runs):
-    """Line position of train ``i`` per clock step (NaN before departure and after arrival)."""
-    x = np.full(fleet.steps + fleet.dwell_steps + 1, np.nan)
+    """Line position of train ``i`` per clock step (NaN before departure and after arrival); of
+    expressions where the runs' ``s`` are arrays of variables (the joint NLP's separation rows)."""
+    x = np.full(fleet.steps + fleet.dwell_steps + 1, np.nan, dtype=np.asarray(runs[0].s).dtype)
     for k, (leg, run) in enumerate(zip(fleet.legs[i], runs)):
         x[leg.start:leg.start + leg.steps + 1] = leg.line_start + leg.direction * run.s
         end = leg.start + leg.steps

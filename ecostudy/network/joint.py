@@ -1,13 +1,15 @@
 """Strategy (e): every train and the circuit of eq. 7.8 in one NLP minimising substation energy,
-the bound no supervisor rule can beat."""
+each train ``fleet.buffer`` behind the one ahead as the rules keep it: the bound no supervisor rule
+can beat."""
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.network import circuit
-from ecostudy.network.fleet import REGULARISATION, energy_ref, solve_model
-from ecostudy.network.legs import NEAR_START
+from ecostudy.network.fleet import REGULARISATION, departure_order, energy_ref, line_positions, solve_model
+from ecostudy.network.legs import NEAR_START, separation_rows
 from ecostudy.ocp import space, timedomain
 from ecostudy.ocp.solver import IPOPT
 
@@ -32,7 +34,7 @@ def joint(fleet, start, one_handle=False, floating=False):
     runs = [[timedomain.leg_arrays(b) for b in bl] for bl in blocks]
     own = sum(pyo.value(m.substation_mw[t]) for t in m.T_net) * fleet.dt / 3.6  # MW s -> kWh
     return runs, {"build_s": build_s, "solve_s": outcome.seconds + outcome.nl_seconds, "nlp_substation_kWh": own,
-                  "iterations": outcome.iterations, "status": outcome.status,
+                  "iterations": outcome.iterations, "solver_status": outcome.status,
                   "variables": sum(1 for _ in m.component_data_objects(pyo.Var, active=True))}
 
 
@@ -49,6 +51,8 @@ def _model(fleet, start, one_handle, floating):
         for leg, b in zip(legs, blocks[i]):
             for j in range(leg.steps):
                 steps[leg.start + j].append((b, j, leg.line_start, leg.direction))
+    if fleet.buffer:
+        _add_separation(m, fleet, blocks)
     if not all(steps):  # steps where no train runs carry no network variables
         keep = [t for t, s in enumerate(steps) if s]
         steps = [steps[t] for t in keep]
@@ -62,6 +66,20 @@ def _model(fleet, start, one_handle, floating):
     m.objective = pyo.Objective(expr=(sum(m.substation_mw[t] for t in m.T_net) + regular) * 1e3 * fleet.dt
                                 / energy_ref(fleet))
     return m, blocks
+
+
+def _add_separation(m, fleet, blocks):
+    """Each train's head ``fleet.buffer`` behind the tail of the one ahead (departure order) at
+    every step both are on the line: the rows of ``legs.separation_rows``, the train ahead's
+    positions expressions of its own leg variables."""
+    order = departure_order(fleet)
+    m.separation = pyo.ConstraintList()
+    for ahead, me in zip(order[:-1], order[1:]):
+        x = line_positions(fleet, ahead, [SimpleNamespace(s=np.array([b.s[j] for j in b.K], dtype=object))
+                                          for b in blocks[ahead]])
+        for leg, b in zip(fleet.legs[me], blocks[me]):
+            for row in separation_rows(leg, x, fleet.buffer, b.s):
+                m.separation.add(row)
 
 
 def _initialise_network(m, fleet, steps, floating):

@@ -105,10 +105,8 @@ def leg_model(task):
     m.objective = pyo.Objective(expr=leg_cost(b, coefficients) * dt / leg_energy_ref(leg))
     if ahead is not None and buffer is not None:
         m.separation = pyo.ConstraintList()
-        for j in b.K:
-            x_ahead, least = separation(leg, ahead, buffer, j)
-            if np.isfinite(x_ahead):
-                m.separation.add(x_ahead - b.s[j] >= least)
+        for row in separation_rows(leg, ahead, buffer, b.s):
+            m.separation.add(row)
     return m, b
 
 
@@ -171,6 +169,20 @@ def separation(leg, ahead, buffer, j):
     return leg.direction * (ahead[leg.start + j] - leg.line_start), buffer + leg.case.train.length
 
 
+BUFFER_SLACK_M = 1e-3  # [m] a separation nearer than the buffer by more is missed: well beyond what Ipopt leaves a row violated
+
+
+def separation_rows(leg, ahead, buffer, s):
+    """The rows keeping a leg's head (``s``: its distance per step, a leg block's variables) ``buffer``
+    behind the tail of the train ahead at every step where that one is on the line. ``ahead``: its
+    line position per clock step, numbers (NaN: off the line) or, in the joint NLP, expressions of
+    its own variables."""
+    for j in range(leg.steps + 1):
+        x_ahead, least = separation(leg, ahead, buffer, j)
+        if not (isinstance(x_ahead, float) and np.isnan(x_ahead)):
+            yield x_ahead - s[j] >= least
+
+
 def _check_departure_gap(task):
     """A leg whose departure or arrival, fixed at its stops, is nearer the tail of the train ahead
     than ``buffer``: no run can keep the buffer there (Ipopt only reports the NLP infeasible), said so."""
@@ -179,7 +191,7 @@ def _check_departure_gap(task):
         return
     for j, at, when in ((0, 0.0, "departs"), (leg.steps, leg.case.segment.distance, "arrives")):
         x_ahead, least = separation(leg, ahead, buffer, j)
-        if np.isfinite(x_ahead) and x_ahead - at < least - 1e-3:  # [m] well beyond what Ipopt leaves a row violated
+        if np.isfinite(x_ahead) and x_ahead - at < least - BUFFER_SLACK_M:
             raise SolverError(f"{label}: cannot keep buffer_m {buffer:g} m behind the train ahead, whose tail is "
                               f"{x_ahead - at - leg.case.train.length:.1f} m ahead when this leg {when} "
                               "(offset_s, dwell_s)")

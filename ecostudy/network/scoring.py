@@ -8,7 +8,7 @@ from ecostudy.core.simulate import verify
 from ecostudy.core.units import KWH
 from ecostudy.network import circuit
 from ecostudy.network.fleet import departure_order, line_positions, step_arrays
-from ecostudy.network.legs import STAND_TIME_S, standing_s
+from ecostudy.network.legs import BUFFER_SLACK_M, STAND_TIME_S, standing_s
 
 
 def evaluate(fleet, runs_by_train):
@@ -71,15 +71,47 @@ def verify_leg(leg, run):
     return out
 
 
+def _gaps(fleet, runs_by_train):
+    """Per consecutive pair in departure order: (train ahead, train behind, the gap [m] from the
+    behind train's head to the tail of the one ahead per clock step, NaN where either is off the
+    line, the behind train's head per clock step [m])."""
+    order = departure_order(fleet)
+    length = fleet.legs[0][0].case.train.length
+    for ahead, me in zip(order[:-1], order[1:]):
+        mine = line_positions(fleet, me, runs_by_train[me])
+        gap = fleet.legs[me][0].direction * (line_positions(fleet, ahead, runs_by_train[ahead]) - mine) - length
+        yield ahead, me, gap, mine
+
+
 def separations(fleet, runs_by_train):
     """Smallest gap [m] from each train's head to the tail of the train ahead while both are on
     the line (None for the first train); negative: the trains would overlap."""
-    order = departure_order(fleet)
-    out = {fleet.names[order[0]]: None}
-    length = fleet.legs[0][0].case.train.length
-    for ahead, me in zip(order[:-1], order[1:]):
-        gap = fleet.legs[me][0].direction * (line_positions(fleet, ahead, runs_by_train[ahead])
-                                             - line_positions(fleet, me, runs_by_train[me])) - length
+    out = {fleet.names[departure_order(fleet)[0]]: None}
+    for _, me, gap, _ in _gaps(fleet, runs_by_train):
         both = np.isfinite(gap)
         out[fleet.names[me]] = float(gap[both].min()) if both.any() else None
     return out
+
+
+def closest_approach(fleet, runs_by_train):
+    """The smallest gap of :func:`separations` over every pair: {"gap_m", "train" (behind), "ahead",
+    "time_s" (on the study's clock), "position_m" (the behind train's head on the line)}; None where
+    no two consecutive trains share the line."""
+    best = None
+    for ahead, me, gap, mine in _gaps(fleet, runs_by_train):
+        both = np.flatnonzero(np.isfinite(gap))
+        if both.size:
+            t = int(both[np.argmin(gap[both])])
+            if best is None or gap[t] < best["gap_m"]:
+                best = {"gap_m": float(gap[t]), "train": fleet.names[me], "ahead": fleet.names[ahead],
+                        "time_s": t * fleet.dt, "position_m": float(mine[t])}
+    return best
+
+
+def buffer_missed(fleet, runs_by_train):
+    """The closest approach (:func:`closest_approach`) where it is nearer than ``fleet.buffer``
+    (beyond what Ipopt leaves a separation row violated, ``legs.BUFFER_SLACK_M``), else None."""
+    if not fleet.buffer:
+        return None
+    closest = closest_approach(fleet, runs_by_train)
+    return closest if closest is not None and closest["gap_m"] < fleet.buffer - BUFFER_SLACK_M else None

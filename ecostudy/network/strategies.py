@@ -4,7 +4,8 @@ Every train runs the same stops with the same running times and dwells, offset b
 time, on one clock of step dt (``timedomain``). Strategies (Farooqi 2018 Ch. 7-8, Yazhemsky 2017 §6.2.3):
 
 independent  each train minimises its own pantograph net energy, regeneration credited as if
-             the line always took it (a): no collaboration
+             the line always took it (a): no collaboration; it ignores ``buffer`` (flagged
+             where its trains come nearer)
 receptivity  the supervisor rounds below with no rule: each train's regeneration credited only
              up to what the line could take from it, given the others' runs (a baseline that
              shows what the rules add)
@@ -18,8 +19,8 @@ voltage      rule 7.11 as the thesis' text applies it, between consecutive train
 dissension   Farooqi 2018 eqs. 8.14-8.17: each train's weight gamma_i follows a two-state Markov
              law whose rate away from "braking" grows with the number of braking neighbours;
              traction weighs gamma_i / gamma0 (d)
-joint        one NLP over all trains and the network of eq. 7.8 minimising substation energy:
-             the bound no rule can beat (e)
+joint        one NLP over all trains and the network of eq. 7.8 minimising substation energy,
+             each train ``buffer`` behind the one ahead: the bound no rule can beat (e)
 following    the independent runs, each train's head kept ``buffer`` metres behind the tail of
              the one ahead on the common clock (Yazhemsky 2017 eq. 6.9), the leader's time-position
              profile fixed (f)
@@ -37,7 +38,7 @@ from ecostudy.core.simulate import TOLERANCES
 from ecostudy.core.registry import Registry
 from ecostudy.network.joint import joint
 from ecostudy.network.rules import following, independent, supervised
-from ecostudy.network.scoring import evaluate, separations, verify_leg
+from ecostudy.network.scoring import buffer_missed, evaluate, separations, verify_leg
 
 
 # the strategies after independent driving, dearest first, so that a pool's workers end together
@@ -189,6 +190,11 @@ def _scored(fleet, runs, info, wall, mapper=map):
                      f"{fleet.dt:g} s steps (time_step_s)")
     if totals["min_separation_m"] is not None and totals["min_separation_m"] < 0.0:  # head past the tail ahead
         flags.append(f"trains overlap on the line by up to {-totals['min_separation_m']:.1f} m (timetable)")
+    missed = buffer_missed(fleet, runs)
+    if missed is not None and missed["gap_m"] >= 0.0:  # nearer than buffer_m, no overlap (flagged above)
+        flags.append(f"train {missed['train']}'s head came within {missed['gap_m']:.1f} m of the tail of train "
+                     f"{missed['ahead']} at {missed['time_s']:g} s, {missed['position_m']:.0f} m along the line: "
+                     f"closer than buffer_m {fleet.buffer:g} m (network_trains.csv min_separation_m)")
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
     return {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
 
