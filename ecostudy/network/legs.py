@@ -179,7 +179,7 @@ def separation_rows(leg, ahead, buffer, s):
     its own variables."""
     for j in range(leg.steps + 1):
         x_ahead, least = separation(leg, ahead, buffer, j)
-        if not (isinstance(x_ahead, float) and np.isnan(x_ahead)):
+        if not (isinstance(x_ahead, float) and not np.isfinite(x_ahead)):  # NaN (inf): not on the line
             yield x_ahead - s[j] >= least
 
 
