@@ -60,6 +60,7 @@ COLUMNS = {
 }
 QUANTITIES = {name.rsplit("_", 1)[0] for name in COLUMNS}  # time, position, speed, ... (a known one in another unit: refused)
 MIN_ROWS = 10
+INTEGRATED = "(start_position_m)"  # the position column's name where there is none: the speeds integrated
 GAP_FACTOR = 5.0       # a time step this many times the median step is a gap
 MIN_SPEED = -1.0       # [m/s] below this a negative speed is not sensor noise
 MAX_SPEED = 150.0      # [m/s] (540 km/h)
@@ -196,7 +197,7 @@ def check_series(log: "LoggedRun", path: Where) -> None:
             check_jumps(log, path)
             k = max(int(round(TRAVEL_STEP / step)), 1)  # over steps of seconds: GPS noise does not add up
             travel = float(np.sum(np.abs(np.diff(log.x[np.unique(np.append(np.arange(0, len(t), k), len(t) - 1))]))))
-            driven = float(np.sum(0.5 * (np.abs(log.v[1:]) + np.abs(log.v[:-1])) * dt))
+            driven = float(np.sum(speed_steps(log)))
             low, high = SPEED_DISTANCE
             if travel > 50.0 and not low <= driven / travel <= high:
                 lines.append(problem(path, log.columns[1], f"the speeds integrate to {driven:.0f} m but the "
@@ -205,12 +206,19 @@ def check_series(log: "LoggedRun", path: Where) -> None:
         raise InputError(lines)
 
 
+def speed_steps(log: "LoggedRun") -> FloatArray:
+    """The distance [m] the speeds give over each time step (trapezoidal, either direction)."""
+    assert log.v is not None
+    steps: FloatArray = 0.5 * (np.abs(log.v[1:]) + np.abs(log.v[:-1])) * np.diff(log.t)
+    return steps
+
+
 def check_jumps(log: "LoggedRun", path: Where) -> None:
     """Refuse positions that jump: a step more than :data:`JUMP` m (or six robust spreads of the
     positions' own noise) plus half the distance the speeds give away from it, in a few rows (a GPS jump or re-fix); in many rows it is a unit mix-up, which
     the travel check names."""
     assert log.v is not None
-    by_speed = 0.5 * (np.abs(log.v[1:]) + np.abs(log.v[:-1])) * np.diff(log.t)
+    by_speed = speed_steps(log)
     off = np.abs(np.abs(np.diff(log.x)) - by_speed)
     noise = 6.0 * 1.4826 * float(np.median(off))  # positions' own noise (GPS): six robust spreads
     jumps = np.nonzero(off > max(JUMP, noise) + 0.5 * by_speed)[0]
@@ -265,7 +273,7 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
         return column[q][1] if q in column else None
 
     log = LoggedRun(name or Path(path).stem, header, t, x, v, get("force"), get("power_wheel"), line, Path(path),
-                    (column.get("position", ("(start_position_m)",))[0], column.get("speed", ("",))[0]))
+                    (column.get("position", (INTEGRATED,))[0], column.get("speed", ("",))[0]))
     check_series(log, path)
     if v is not None:
         check_traction_sign(t, v, column, path)
@@ -291,7 +299,7 @@ def check_on_track(log: "LoggedRun", track: Track) -> None:
     off = (log.x < -1e-6) | (log.x > track.length + 1e-6)
     if np.any(off):
         i = int(np.argmax(off))
-        integrated = log.columns[0] == "(start_position_m)"  # no position column: the speeds integrated
+        integrated = log.columns[0] == INTEGRATED
         raise InputError(problem(log.path or log.name, log.columns[1] if integrated else log.columns[0],
                                  f"row {i + 1}: position {log.x[i]:.1f} m is off track '{track.name}' (0 to "
                                  f"{track.length:g} m)" + ("; the positions are the speeds integrated from "

@@ -145,7 +145,8 @@ def solve_leg(task):
     if second is not None:
         spread, replaced, margin = second
         restart = _solve(nlp, cold=True)
-        notes[spread] = 100 * (cost - restart[2]) / max(abs(restart[2]), 1e-9)
+        # None: a capped warm solve with no usable point (nothing to compare; JSON has no inf)
+        notes[spread] = None if run is None else 100 * (cost - restart[2]) / max(abs(restart[2]), 1e-9)
         capped = checked and (run is None or outcome.status == "max_iterations")  # stopped at the cap
         if capped:
             notes["warm_capped_at"] = outcome.iterations
@@ -163,8 +164,8 @@ def solve_leg(task):
 
 
 def separation(leg, ahead, buffer, j):
-    """(the head of the train ahead at the leg's clock step ``j`` in the leg's own distance [m], inf where
-    none; the least distance the leg's head keeps behind it: ``buffer`` plus the train's length, head to
+    """(the head of the train ahead at the leg's clock step ``j`` in the leg's own distance [m], NaN where
+    it is off the line; the least distance the leg's head keeps behind it: ``buffer`` plus the train's length, head to
     tail, as the train ahead is as long)."""
     return leg.direction * (ahead[leg.start + j] - leg.line_start), buffer + leg.case.train.length
 
@@ -179,7 +180,7 @@ def separation_rows(leg, ahead, buffer, s):
     its own variables."""
     for j in range(leg.steps + 1):
         x_ahead, least = separation(leg, ahead, buffer, j)
-        if not (isinstance(x_ahead, float) and not np.isfinite(x_ahead)):  # NaN (inf): not on the line
+        if not (isinstance(x_ahead, float) and np.isnan(x_ahead)):  # NaN: not on the line
             yield x_ahead - s[j] >= least
 
 
