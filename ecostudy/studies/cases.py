@@ -5,6 +5,7 @@ objective and grid, and the ecostudy version. Its key is a hash of all of that, 
 stored under a key is valid for exactly those inputs, on any worker, and a rerun after a change
 of any input (or of ecostudy) recomputes only the cases it affects.
 """
+import functools
 import hashlib
 import itertools
 import json
@@ -28,6 +29,23 @@ from ecostudy.io.loaders import (
     validate,
 )
 from ecostudy.studies.library import library_units
+
+
+def source_fingerprint(root):
+    """12 hex digits of the SHA-256 of every ``.py`` file under ``root`` (names and contents, in
+    sorted order): any change to the code gives another fingerprint."""
+    digest = hashlib.sha256()
+    for file in sorted(Path(root).rglob("*.py")):
+        digest.update(file.relative_to(root).as_posix().encode() + b"\0" + file.read_bytes() + b"\0")
+    return digest.hexdigest()[:12]
+
+
+@functools.cache
+def code_version():
+    """The code a result was computed by, as every case records it: ecostudy's version and the
+    fingerprint of its source (``0.2.0+3f9a1c0b7d2e``). Being part of each case's key, it keeps a
+    study from resuming with results stored by other code, whose checks and statuses may differ."""
+    return f"{__version__}+{source_fingerprint(Path(__file__).resolve().parents[1])}"
 
 
 def case_key(case):
@@ -90,7 +108,7 @@ def expand(path, skipped=None):
         common = {"study": s.name, "scenario": name, "train": train_doc, "track": track_doc,
                   "from": from_stop, "to": to_stop, **timing, "objective": sc.objective or s.objective,
                   "weights": [s.weights.time, s.weights.energy], "points": sc.points or s.points,
-                  "version": __version__}
+                  "version": code_version()}
         names = list(sweep)
         for values in itertools.product(*(sweep[n] for n in names)) if names else [()]:
             case = dict(common)

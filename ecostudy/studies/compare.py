@@ -15,7 +15,6 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from ecostudy import __version__
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import EcostudyWarning
@@ -30,7 +29,7 @@ from ecostudy.io.loaders import track_document, track_from_schema, train_documen
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.ocp.problem import prepare
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
-from ecostudy.studies.cases import case_key, load_checked_study
+from ecostudy.studies.cases import case_key, code_version, load_checked_study
 from ecostudy.studies.options import no_windows
 from ecostudy.studies.sizes import check_compare
 from ecostudy.studies.workers import kept
@@ -49,7 +48,7 @@ def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_P
     all-out time) and the grid; each keyed by a hash of all of them and the strategy."""
     scenario = {"study": study, "train": train_doc, "track": track_doc, "from": from_stop, "to": to_stop,
                 "running_time_s": timing.running_time, "supplement": timing.supplement, "points": points,
-                "version": __version__}
+                "version": code_version()}
     cases = []
     for name in STRATEGIES:
         case = {**scenario, "strategy": name, "scenario": name, "name": name, "labels": {"strategy": name}}

@@ -19,7 +19,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ecostudy import __version__
 from ecostudy.core.errors import InfeasibleError, InputError, problem
 from ecostudy.io.documents import named_file, read_document
 from ecostudy.io.loaders import load_network_study, track_document, train_document, validate
@@ -30,7 +29,7 @@ from ecostudy.network import fleet as fleets
 from ecostudy.network.strategies import DEAREST_FIRST, one_strategy, solve_independent
 from ecostudy.ocp.timedomain import LegRun
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
-from ecostudy.studies.cases import case_key
+from ecostudy.studies.cases import case_key, code_version
 from ecostudy.studies.legpool import shared_pool
 from ecostudy.studies.sizes import check_network_study
 from ecostudy.studies.workers import kept
@@ -64,7 +63,7 @@ def expand_network(path, workers=1, pool=None, note=None, out=None):
     inputs = {"fields": s.model_dump(mode="json", exclude={"output", "strategies"}),
               "track": track_document(named_file(path, "track", s.track)),
               "train": train_document(named_file(path, "train", s.train))[0],
-              "version": __version__}
+              "version": code_version()}
     base = case_key(inputs)
     cases = []
     for name in st.strategies:
