@@ -53,6 +53,11 @@ def test_results_stored_by_other_code_are_computed_again(tmp_path):
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "out" / "results.sqlite").exists()
     _, counts, _ = run_study(study)
-    assert counts["stored_before"] == 0 and counts["computed"] == 1
+    assert counts["stored_before"] == 0 and counts["computed"] == 1 and counts["stored_other"] == 1
     _, counts, _ = run_study(study)
-    assert counts["stored_before"] == 1 and counts["computed"] == 0
+    assert counts["stored_before"] == 1 and counts["computed"] == 0 and counts["stored_other"] == 1
+    again = subprocess.run([sys.executable, "-m", "ecostudy", "run", str(study), "--no-progress"], cwd=ROOT,
+                           capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0, again.stderr
+    assert "1 already stored, 0 computed now" in again.stdout
+    assert "1 result in the store not reused (stored for other inputs or by other code)" in again.stdout

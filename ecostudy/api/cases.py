@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Callable, Optional, Sequence
 
 from ecostudy.api.blas import limit_blas_threads
-from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
+from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.report import calplots, heavyplots, loopplots
 from ecostudy.report.studyfiles import network_files
@@ -56,7 +56,7 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
     write_html(folder)
     return reported(folder, [f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} "
                              f"computed now ({counts['failed']} of them failed or infeasible); not ok in the table: "
-                             f"{counts['not_ok']}", "outputs " + listed(folder, ("results.csv", "results.sqlite",
+                             f"{counts['not_ok']}" + not_reused(counts), "outputs " + listed(folder, ("results.csv", "results.sqlite",
                                                                                   "report.html"))])
 
 

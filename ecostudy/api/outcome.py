@@ -66,7 +66,15 @@ def listed(out_dir: Path | str, names: Sequence[str] = ()) -> str:
 def counts_line(counts: dict[str, int], noun: str) -> str:
     """The one-line summary of a resumable study's counts (``studies.batch.execute``)."""
     return (f"{counts['total']} {noun}: {counts['stored_before']} already stored, {counts['computed']} computed now "
-            f"({counts['failed']} failed); not ok: {counts['not_ok']}")
+            f"({counts['failed']} failed); not ok: {counts['not_ok']}" + not_reused(counts))
+
+
+def not_reused(counts: dict[str, int]) -> str:
+    """``; N results in the store not reused (...)`` when the store holds results of no case of the
+    study (``studies.batch.stored_rows``'s ``stored_other``), else nothing."""
+    n = counts.get("stored_other", 0)
+    return (f"; {n} result{'s' if n != 1 else ''} in the store not reused (stored for other inputs or by other "
+            "code)") if n else ""
 
 
 def one_line(exc: Exception, debug: bool = False) -> tuple[str, int]:

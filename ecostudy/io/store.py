@@ -63,6 +63,10 @@ class Store:
             raise InputError(problem(self.path, "cases", "a table of another program or version (columns "
                                      f"{', '.join(columns)}): move the file away to start afresh"))
 
+    def keys(self) -> set[str]:
+        """Every stored key, whatever its status."""
+        return {row[0] for row in self.conn.execute("SELECT key FROM cases")}
+
     def finished_keys(self, retry_failed: bool = False) -> set[str]:
         """Keys with a stored result (without failed ones when they are to be retried)."""
         query = "SELECT key FROM cases" + (" WHERE status != 'failed'" if retry_failed else "")

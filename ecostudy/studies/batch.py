@@ -163,12 +163,16 @@ def execute(cases, store, task=run_case, workers=1, dask=None, retry_failed=Fals
 def stored_rows(cases, path, task, workers=1, dask=None, retry_failed=False, progress=None, compute=None,
                 spread=None):
     """Run ``task`` on the cases not in the store at ``path`` yet (:func:`execute`; only those of
-    ``compute`` when given); returns (counts, the stored row of every case by key)."""
+    ``compute`` when given); returns (counts, the stored row of every case by key). ``stored_other``
+    counts the results in the store under keys of no case of the study: other inputs, or other code
+    (:func:`~ecostudy.studies.cases.code_version`), never reused."""
     store = Store(path)
     try:
         counts = execute(cases if compute is None else compute, store, task, workers, dask, retry_failed, progress,
                          spread)
-        return counts, store.get([c["key"] for c in cases])
+        keys = [c["key"] for c in cases]
+        counts["stored_other"] = len(store.keys() - set(keys))
+        return counts, store.get(keys)
     finally:
         store.close()
 
