@@ -112,10 +112,11 @@ def reach_conflict(fleet):
     length = fleet.legs[0][0].case.train.length
     steps = sorted({(leg.start + j, rank) for rank in range(1, len(order)) for leg in fleet.legs[order[rank]]
                     for j in (0, leg.steps)})
+    at = {i: _extremes(fleet, i)[0] for i in order[1:]}  # where each train is; at its stops both extremes agree
     for t, rank in steps:
         ahead, me = order[rank - 1], order[rank]
         d = fleet.legs[me][0].direction
-        mine = d * _extremes(fleet, me)[0][t]  # at its stop: both extremes agree
+        mine = d * at[me][t]
         for leg in fleet.legs[ahead]:
             if leg.start < t < leg.start + leg.steps:  # the train ahead runs this leg at t
                 far = furthest(leg, t - leg.start)
