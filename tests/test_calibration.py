@@ -322,7 +322,11 @@ def without_column(text, index):
 @pytest.mark.parametrize("text, fragments", [
     (good().replace("---\n", "", 1), ["header", "YAML header between two '---'"]),
     (good().replace("---\ntime_s", "time_s"), ["header", "no closing '---'"]),
-    (good().replace("train:", "colour: red\ntrain:"), ["header", "colour", "unknown field"]),
+    (good().replace("track:", "tracks:", 1), ["header: tracks: unknown field; did you mean track?"]),
+    (good().replace("\n---\ntime_s", "\npower_sampling_mode: instant\n---\ntime_s"),
+     ["header: power_sampling_mode: unknown field; did you mean power_sampling?"]),
+    (good().replace("\n---\ntime_s", "\nstart_position_km: 0.3\n---\ntime_s"),
+     ["header: start_position_km: unknown field; did you mean start_position_m?"]),
     (good().replace("speed_mps", "speed_mph"), ["speed_mph", "unknown column", "unit is part of the name"]),
     (good().replace("force_kN", "speed_kmh"), ["columns", "two columns give the speed"]),
     (good().replace("\n1.0,", "\n1.0x,", 1), ["time_s", "row 11", "'1.0x' is not a number"]),
@@ -367,6 +371,34 @@ def test_a_column_ecostudy_does_not_model_is_warned_by_name_and_ignored():
     assert np.allclose(log.force, 1e5)
     with pytest.raises(InputError, match="speed_mph: unknown column"):
         parse_log(good().replace("force_kN", "speed_mph"), "mph.csv")
+
+
+def test_header_fields_ecostudy_does_not_know_are_warned_by_name_and_left_out():
+    """A data logger's header says more than the format models (the vehicle, the recorder): each
+    such field is named in one warning with the file and left out; the log reads as without them.
+    A near miss of a known field that is not given is refused (tests above): left out, it would
+    run with that field's default."""
+    extra = good().replace("train:", "vehicle: unit 4711\nrecorder: {make: Hasler, channels: 12}\ntrain:")
+    with pytest.warns(EcostudyWarning, match="vehicle, recorder not modelled by ecostudy: left out") as caught:
+        log = parse_log(extra, "extra.csv")
+    assert len(caught) == 1 and str(caught[0].message).startswith("extra.csv: header: "), caught[0].message
+    plain = parse_log(good(), "plain.csv")
+    assert log.header == plain.header and np.array_equal(log.x, plain.x) and np.array_equal(log.force, plain.force)
+    # a field close to a known one that the header gives is not taken for it: warned like any other
+    both = good().replace("train:", "power_sampling: instant\npower_sampling_mode: 2 Hz\ntrain:")
+    with pytest.warns(EcostudyWarning, match="power_sampling_mode not modelled"):
+        assert parse_log(both, "both.csv").header.power_sampling == "instant"
+
+
+def test_validate_names_unknown_header_fields_and_runs(tmp_path, log_files):
+    """Through `ecostudy validate`: the warning on stderr names the field and the log; the run goes on."""
+    text = log_files[0].read_text().replace("source:", "vehicle: unit 4711\nsource:", 1)
+    path = tmp_path / "there.csv"
+    path.write_text(text)
+    result = run("validate", path, "--train", TRAIN, "--track", TRACK, "--out", tmp_path / "v", "--no-plot")
+    assert result.exit_code in (0, 1) and "Traceback" not in result.output, result.output
+    assert f"warning: {path}: header: vehicle not modelled by ecostudy: left out" in result.output, result.output
+    assert (tmp_path / "v" / "summary.json").is_file()
 
 
 def test_a_run_without_logged_traction_is_flagged_not_ok(tmp_path, inputs):

@@ -23,10 +23,12 @@ def test_a_pantograph_voltage_below_min_voltage_is_flagged():
 
 def test_a_study_whose_every_strategy_failed_says_so(tmp_path):
     """`following` cannot keep 300 m behind a train that left 10 s earlier: the strategy fails, and
-    the command says which and why (exit 1), not that its own output cannot be read."""
+    the command says which and why (exit 1), not that its own output cannot be read. (No dwell: with
+    one, T2 would arrive where T1 still stands, and the study would be refused before solving,
+    tests/test_network_headway.py.)"""
     study = write_yaml(tmp_path / "s.yaml", {
         "name": "allfail", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
-        "stops": ["Noord", "Station"], "running_times_s": [56.0], "dwell_s": 10, "time_step_s": 1.0,
+        "stops": ["Noord", "Station"], "running_times_s": [56.0], "dwell_s": 0, "time_step_s": 1.0,
         "trains": [{"name": "T1", "offset_s": 0}, {"name": "T2", "offset_s": 10}],
         "substation": {"position_m": 300}, "strategies": ["following"], "buffer_m": 300, "points": 200,
         "output": str(tmp_path / "out")})

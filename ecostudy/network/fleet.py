@@ -37,15 +37,28 @@ class Fleet:
 
 
 def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=FRONT_POINTS, buffer=None,
-         pool=None, supplement=0.0):
+         pool=None, supplement=0.0, check=None):
     """A :class:`Fleet`: running times and dwells rounded up to whole steps, departures offset;
     each segment's space-domain net-energy run (the legs' first guess) solved.
 
     ``running_times`` [s] per segment, or None: each segment's all-out time plus ``supplement``
     (a fraction). ``pool``: a process pool (else this process); a segment's first run is submitted
-    as soon as its running time is known, so all-out and first runs of different segments overlap."""
+    as soon as its running time is known, so all-out and first runs of different segments overlap.
+    ``check(fleet)``: called with the timetable (a :class:`Fleet` without runs) as soon as its running
+    times are known: before anything is solved where ``running_times`` are given."""
     cases = [prepare(track, train, a, b, points) for a, b in zip(stops[:-1], stops[1:])]
+    if check is not None and running_times is not None:
+        check(_timetable(track, stops, cases, running_times, dwell, offsets, names, dt, supply, buffer))
     asked, firsts = _first_runs(track, train, cases, running_times, supplement, dt, points, pool)
+    out = _timetable(track, stops, cases, asked, dwell, offsets, names, dt, supply, buffer)
+    if check is not None and running_times is None:
+        check(out)
+    out.results = {(c.segment.from_stop, c.segment.to_stop): r for c, r in zip(cases, firsts)}
+    return out
+
+
+def _timetable(track, stops, cases, asked, dwell, offsets, names, dt, supply, buffer):
+    """The :class:`Fleet` of running times ``asked`` [s] per segment, without its first runs."""
     steps = [_steps(t, dt) for t in asked]
     pause = _steps(dwell, dt)
     legs = []
@@ -58,8 +71,7 @@ def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, 
             start += n + pause
         legs.append(mine)
     total = max(leg.start + leg.steps for mine in legs for leg in mine)
-    results = {(c.segment.from_stop, c.segment.to_stop): r for c, r in zip(cases, firsts)}
-    return Fleet(list(names), legs, dt, total, supply, buffer, results, pause, list(asked))
+    return Fleet(list(names), legs, dt, total, supply, buffer, {}, pause, list(asked))
 
 
 def _steps(seconds, dt):

@@ -7,7 +7,8 @@ from types import SimpleNamespace
 import numpy as np
 import pyomo.environ as pyo
 
-from ecostudy.network import circuit
+from ecostudy.core.errors import SolverError
+from ecostudy.network import circuit, headway
 from ecostudy.network.fleet import REGULARISATION, departure_order, energy_ref, line_positions, solve_model
 from ecostudy.network.legs import NEAR_START, separation_rows
 from ecostudy.network.scoring import buffer_missed
@@ -36,10 +37,30 @@ def joint(fleet, start, one_handle=False, floating=False):
     at the closest with buffer_m 60).
     """
     runs, info = _solve(fleet, start, one_handle, floating, separated=False)
-    if buffer_missed(fleet, runs):  # the buffer binds: solved again with its rows
-        runs, again = _solve(fleet, start, one_handle, floating, separated=True)
+    missed = buffer_missed(fleet, runs)
+    if missed:  # the buffer binds: solved again with its rows
+        try:
+            runs, again = _solve(fleet, start, one_handle, floating, separated=True)
+        except SolverError as exc:
+            raise SolverError(why_not_separated(fleet, exc, missed)) from None
         info = {**again, **{k: info[k] + again[k] for k in ("build_s", "solve_s", "iterations")}}
     return runs, info
+
+
+def why_not_separated(fleet, exc, missed):
+    """The reason the joint NLP with the buffer's rows has no usable point (``exc``: Ipopt's word): a
+    train that departs or arrives where the train ahead cannot be ``buffer_m`` ahead even on its
+    fastest start, or in the timetable alone (``network.headway``); else Ipopt's word with the
+    closest approach ``missed`` of the optimum without the rows."""
+    found = headway.timetable_conflict(fleet)
+    if found is not None:
+        return f"{headway.say_timetable(found, fleet.buffer)} ({exc})"
+    found = headway.reach_conflict(fleet)
+    if found is not None:
+        return f"{headway.say_reach(found, fleet.buffer)} ({exc})"
+    return (f"{exc}; no departure or arrival inside buffer_m {fleet.buffer:g} m explains it (without the rows train "
+            f"{missed['train']}'s head came within {missed['gap_m']:.1f} m of the tail of train {missed['ahead']} at "
+            f"{missed['time_s']:g} s, {missed['position_m']:.0f} m along the line)")
 
 
 def _solve(fleet, start, one_handle, floating, separated):
@@ -47,7 +68,7 @@ def _solve(fleet, start, one_handle, floating, separated):
     t0 = time.perf_counter()
     m, blocks = _model(fleet, start, one_handle, floating, separated)
     build_s = time.perf_counter() - t0
-    outcome = solve_model(m, "joint optimum", {**NEAR_START, **ORDERING})
+    outcome = solve_model(m, "joint optimum" + (" with buffer_m's rows" if separated else ""), {**NEAR_START, **ORDERING})
     runs = [[timedomain.leg_arrays(b) for b in bl] for bl in blocks]
     own = sum(pyo.value(m.substation_mw[t]) for t in m.T_net) * fleet.dt / 3.6  # MW s -> kWh
     return runs, {"build_s": build_s, "solve_s": outcome.seconds + outcome.nl_seconds, "nlp_substation_kWh": own,

@@ -193,9 +193,10 @@ def _check_departure_gap(task):
     for j, at, when in ((0, 0.0, "departs"), (leg.steps, leg.case.segment.distance, "arrives")):
         x_ahead, least = separation(leg, ahead, buffer, j)
         if np.isfinite(x_ahead) and x_ahead - at < least - BUFFER_SLACK_M:
+            gap = x_ahead - at - leg.case.train.length
+            where = f"{gap:.1f} m ahead of its head" if gap >= 0 else f"{-gap:.1f} m behind its head (they overlap)"
             raise SolverError(f"{label}: cannot keep buffer_m {buffer:g} m behind the train ahead, whose tail is "
-                              f"{x_ahead - at - leg.case.train.length:.1f} m ahead when this leg {when} "
-                              "(offset_s, dwell_s)")
+                              f"{where} when this leg {when} at {(leg.start + j) * leg.dt:g} s (offset_s, dwell_s)")
 
 
 STAND_SPEED_MPS = 0.1  # [m/s] below this a train stands

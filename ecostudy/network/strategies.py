@@ -38,7 +38,7 @@ from ecostudy.core.simulate import TOLERANCES
 from ecostudy.core.registry import Registry
 from ecostudy.network.joint import joint
 from ecostudy.network.rules import following, independent, supervised
-from ecostudy.network.scoring import buffer_missed, evaluate, separations, verify_leg
+from ecostudy.network.scoring import buffer_missed, closest_approach, evaluate, separations, verify_leg
 
 
 # the strategies after independent driving, dearest first, so that a pool's workers end together
@@ -188,8 +188,11 @@ def _scored(fleet, runs, info, wall, mapper=map):
     if late > TOLERANCES["arrival_time_error_s"]:  # each leg runs whole clock steps, its asked time rounded up
         flags.append(f"a segment runs {late:.1f} s over its timetabled running time, rounded up to whole "
                      f"{fleet.dt:g} s steps (time_step_s)")
-    if totals["min_separation_m"] is not None and totals["min_separation_m"] < 0.0:  # head past the tail ahead
-        flags.append(f"trains overlap on the line by up to {-totals['min_separation_m']:.1f} m (timetable)")
+    closest = closest_approach(fleet, runs)
+    if closest is not None and closest["gap_m"] < 0.0:  # head past the tail ahead
+        flags.append(f"trains overlap on the line: train {closest['train']}'s head came {-closest['gap_m']:.1f} m past "
+                     f"the tail of train {closest['ahead']} at {closest['time_s']:g} s, {closest['position_m']:.0f} m "
+                     "along the line (offset_s)")
     missed = buffer_missed(fleet, runs)
     if missed is not None and missed["gap_m"] >= 0.0:  # nearer than buffer_m, no overlap (flagged above)
         flags.append(f"train {missed['train']}'s head came within {missed['gap_m']:.1f} m of the tail of train "

@@ -26,6 +26,7 @@ from ecostudy.io.schemas import NetworkStudyFile
 from ecostudy.io.store import check_one_study
 from ecostudy.io.writers import check_output_dir
 from ecostudy.network import fleet as fleets
+from ecostudy.network.headway import say_timetable, timetable_conflict
 from ecostudy.network.strategies import DEAREST_FIRST, one_strategy, solve_independent
 from ecostudy.ocp.timedomain import LegRun
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
@@ -54,7 +55,7 @@ def expand_network(path, workers=1, pool=None, note=None, out=None):
     s = validate(NetworkStudyFile, read_document(path), path)
     try:
         fl = fleets.plan(st.track, st.train, st.stops, st.running_times, st.dwell, st.offsets, st.names, st.dt,
-                         st.supply, st.points, st.buffer, pool, st.supplement)
+                         st.supply, st.points, st.buffer, pool, st.supplement, check=partial(_timetable_kept, path))
     except InfeasibleError as exc:  # a running time below a segment's all-out time: the study's field, by name
         raise InfeasibleError([problem(path, "running_times_s", p) for p in exc.problems]) from None
     if note:
@@ -73,6 +74,14 @@ def expand_network(path, workers=1, pool=None, note=None, out=None):
         case["fleet"] = fl  # after the key: the fleet follows from the inputs the key hashes
         cases.append(case)
     return Expanded(output, cases)
+
+
+def _timetable_kept(path, fleet):
+    """Refuse a study whose timetable alone puts a train nearer the tail of the one ahead than
+    ``buffer_m`` (without it: on it), whatever the trains run (``network.headway.timetable_conflict``)."""
+    found = timetable_conflict(fleet)
+    if found is not None:
+        raise InputError(problem(path, "trains", say_timetable(found, fleet.buffer)))
 
 
 def run_network_strategy(case, pool=None):
