@@ -88,6 +88,13 @@ def test_each_missed_limit_is_a_reason():
     back = {**good, "arrived": False, "rolling_back": True, "speed_at_end_kmh": -0.26, "stop_error_m": -1329.52}
     assert reasons(back, 100, 0) == ["rolling back at 0.26 km/h 1329.5 m before the stop when the run ended (the loop "
                                      "ends a run under 1 km/h on the reference's final approach)"]
+    stall = {**good, "stop_error_m": -1323.14, "reference_at_end_kmh": 36.1, "resistance_at_end_kN": 478.9,
+             "traction_utmost_at_end_kN": 407.9}
+    assert reasons(stall, 100, 0) == ["stopped 1323.1 m short of the stop (tolerance 1 m) with the reference at 36.1 "
+                                      "km/h there, stalled: the grade and resistance there (479 kN) exceed the "
+                                      "locomotives' utmost traction (408 kN)"]
+    assert reasons({**stall, "traction_utmost_at_end_kN": 480.0}, 100, 0) == [
+        "stopped 1323.1 m short of the stop (tolerance 1 m) with the reference at 36.1 km/h there"]
     assert reasons({**good, "arrived": False, "stop_error_m": 50.0}, 100, 0) == [
         "the sample cap (100) came with the train 50 m beyond the stop, not stopped"]
     assert reasons({**good, "stop_error_m": 2.7}, 100, 0, Tolerances(5.0, 2 * KMH)) == []
@@ -126,11 +133,15 @@ def test_unfollowable_reference_tables_are_refused_in_one_line(tmp_path, rows, w
     refused(invoke(study(tmp_path, reference=reference_table(tmp_path, rows)), tmp_path / "out"), *words)
 
 
-def climb_study(tmp_path, permille, **changes):
-    """One locomotive and 40 wagons (2766 t) from rest to rest over 3 km, climbing ``permille`` from
-    300 m on; K_b = 60, f = 10, Np = Nc = 1."""
+def climb_study(tmp_path, permille, wagons=40, motors_kN=None, **changes):
+    """One locomotive and 40 ``wagons`` (2766 t) from rest to rest over 3 km, climbing ``permille`` from
+    300 m on; K_b = 60, f = 10, Np = Nc = 1; ``motors_kN``: the locomotive's traction and dynamic brake
+    at most this force (560 and 400 kN)."""
     consist = load_yaml(PAPER)
-    consist["vehicles"] = [{"type": "locomotive", "count": 1}, {"type": "wagon", "count": 40}]
+    consist["vehicles"] = [{"type": "locomotive", "count": 1}, {"type": "wagon", "count": wagons}]
+    if motors_kN is not None:
+        for envelope in ("traction", "dynamic_brake"):
+            consist["types"]["locomotive"][envelope]["max_force_kN"] = motors_kN
     write_yaml(tmp_path / "one.yaml", consist)
     line = {"name": "climb", "source": "test", "length_m": 4000,
             "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 3000}],
@@ -205,18 +216,40 @@ def test_a_qp_that_fails_says_where_the_train_was(tmp_path):
 def test_a_train_that_stalls_where_the_reference_runs_says_the_reference_speed(tmp_path):
     """With adhesion (409.7 kN per locomotive at rest, less with speed) one locomotive and 40 wagons
     cannot hold 17 per mille (478 kN of grade and resistance) that its 560 kN motors, and so the
-    single-mass reference, can: the train comes to rest on the climb about 1.3 km short of the stop.
-    The loop ends the run there (under 1 km/h past the reference's final approach, which begins where
-    the reference slows on the climb) with the train already rolling back (-0.26 km/h measured): not
-    arrived, and the reason says so, and that the reference ran about 36 km/h there, so the end reads
-    as the stall it is."""
+    single-mass reference, can: on the reference's final approach (which begins where the reference
+    slows on the climb) the stopping rule pulls with all the grip there is and the train still comes
+    to rest about 1.3 km short of the stop (1323.1 m measured). Flagged, and the reason says so, that
+    the reference ran about 36 km/h there and that the grade and resistance exceed the locomotives'
+    utmost traction, so the end reads as the stall it is."""
     path = climb_study(tmp_path, 17, max_samples=60, adhesion=True, reference={"supplement_percent": 10, "points": 150})
     result = invoke(path, tmp_path / "out")
     assert result.exit_code == 1, result.output
     run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
     assert run["status"] == "flagged" and run["stop_error_m"] < -1000 and run["samples"] < 60
-    assert not run["arrived"] and run["rolling_back"] and run["speed_at_end_kmh"] * KMH <= -STANDING
-    assert run["reason"] == (f"rolling back at {-run['speed_at_end_kmh']:.2f} km/h {-run['stop_error_m']:.1f} m before "
-                             "the stop when the run ended (the loop ends a run under 1 km/h on the reference's final "
-                             f"approach) with the reference at {run['reference_at_end_kmh']:.1f} km/h there")
+    assert run["resistance_at_end_kN"] > run["traction_utmost_at_end_kN"] > 400  # 479 against 408 kN measured
+    assert run["reason"] == (f"stopped {-run['stop_error_m']:.1f} m short of the stop (tolerance 1 m) with the reference "
+                             f"at {run['reference_at_end_kmh']:.1f} km/h there, stalled: the grade and resistance there "
+                             f"({run['resistance_at_end_kN']:.0f} kN) exceed the locomotives' utmost traction "
+                             f"({run['traction_utmost_at_end_kN']:.0f} kN)")
     assert run["reference_at_end_kmh"] > 30
+
+
+@pytest.mark.parametrize("air_brake", [False, True])
+@pytest.mark.parametrize("permille, wagons, motors_kN, adhesion", [(20, 20, None, True), (15, 25, 280, False)])
+def test_a_train_that_can_hold_the_climb_pulls_into_the_stop(tmp_path, permille, wagons, motors_kN, adhesion, air_brake):
+    """One locomotive and 20 wagons on 20 per mille with adhesion on (294 kN of grade and resistance
+    against 366 kN of grip at 11 km/h), and one locomotive of 280 kN (within its grip at every speed to
+    60 km/h) and 25 wagons on 15 per mille with adhesion off (273 kN), each with the air brake off
+    and on: on the final approach, where coasting would stand the train short of the stop (the grade
+    alone decelerates it more than v^2 / 2d), the stopping rule pulls the force that leaves v^2 / 2d
+    (without the air brake 8.8 and 4.2 kN measured at the first piece, 25 and 19 m before the stop)
+    and the train stands at the stop: ok. A rule that coasts there stood the trains short: rolling
+    back 0.8 and 0.3 m before the stop, and with the air brake (every sample from the braking point
+    on a stopping sample) 114.7 and 53.1 m short."""
+    path = climb_study(tmp_path, permille, wagons, motors_kN, max_samples=60, adhesion=adhesion, air_brake=air_brake,
+                       reference={"supplement_percent": 10, "points": 150})
+    result = invoke(path, tmp_path / "out")
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert result.exit_code == 0 and run["status"] == "ok", run["reason"]
+    assert run["arrived"] and not run["rolling_back"] and abs(run["stop_error_m"]) < 0.01  # 0.0005 m at most
+    assert run["traction_utmost_at_end_kN"] > run["resistance_at_end_kN"]

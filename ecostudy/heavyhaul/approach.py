@@ -2,7 +2,8 @@
 delay and build-up (heavyhaul.airbrake; known from the consist file), as a driver of a long
 air-braked train brakes ahead for them.
 
-With instant brakes the stopping sample brakes for the constant deceleration v^2 / 2d (heavyhaul.loop).
+With instant brakes the stopping sample brakes for the constant deceleration v^2 / 2d (heavyhaul.loop;
+where coasting would stand the train short, on a climb, its locomotives pull instead, pipe on or off).
 With the pipe on, the wagons' brakes reach the last wagon d_i = 9.8 s after a command (the ore train at
 250 m/s) and build up over tau_b = 8 s, so that rule, re-planned every second, stops the train tens of
 metres past the mark, and a late, hard application runs the train in against its front wagons

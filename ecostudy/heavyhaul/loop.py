@@ -11,7 +11,8 @@ applied: the previous input is held, as the paper does (counted in ``overruns``)
 The terminal approach: past the reference's stop v_r continues its final deceleration below zero
 (a held last move then brakes into the stop at the reference's rate instead of stopping within a
 sample to stand for the rest of the horizon), and the sample in which the controller's plan stops
-the train brakes it onto the stop and ends when it stands (:func:`stopping`).
+the train brakes it onto the stop (or pulls it there, where coasting would stand it short on a
+climb) and ends when it stands (:func:`stopping`).
 """
 from typing import NamedTuple
 
@@ -45,6 +46,7 @@ class LoopRecord(NamedTuple):
     losses: tuple = ()         # plant.LOSSES over the run [J]
     stored_change: float = 0.0  # kinetic plus coupler elastic energy at the end minus at the start [J]
     rolling_back: bool = False  # the run ended on the final approach with the train rolling back (not arrived)
+    end_forces: tuple = (0.0, 0.0)  # where the run ended: (grade and resistance the train feels, its locomotives' utmost traction) [N]
 
 
 def reduced_state(plant, reduction, state):
@@ -102,9 +104,12 @@ def mean_speed(plant, state):
 def stopping(plant, reduction, reference, state, planned, ts):
     """The sample in which the controller's plan stops the train (its predicted mean speed v(1) below
     :data:`STOPPED`, on the final approach), stepped in pieces of :data:`PIECE`: in each the train
-    brakes for the constant deceleration v^2 / 2d that stops its head at the stop (d the distance to
-    go; the whole brake beyond it), the planned move's braking scaled to that force on the
-    resistance and grades the train feels, and the sample ends when the train stands (brakes hold a
+    runs at the constant deceleration v^2 / 2d that stops its head at the stop (d the distance to
+    go; the whole brake beyond it): where the resistance and grades the train feels decelerate it
+    more (coasting would stand it short, on a climb) the locomotives pull the difference, each its
+    share of its traction envelope (adhesion included when on; all of it when that is not enough);
+    else the planned move's braking is scaled to the brake needed; and the sample ends when the
+    train stands (brakes hold a
     standing train, mean speed under :data:`STANDING`; the cascade plant's efforts are forces, so a
     brake held on for the rest of Ts would push the train back: a piece lasts at most the time the
     train needs to stop). One :class:`~ecostudy.heavyhaul.plant.CascadeStep` for the sample."""
@@ -113,14 +118,17 @@ def stopping(plant, reduction, reference, state, planned, ts):
     while end - now.time > 1e-6 and mean_speed(plant, now) >= STANDING and len(steps) < 10 * ts / PIECE:
         v, d = mean_speed(plant, now), reference.distance[-1] - head_position(plant, now)
         held = float(plant.resistance(now.positions, now.speeds).sum())  # running, grade, curve [N]
-        low, _ = limits(plant, reduction, now)
-        if plant.air_brake is not None and d > 0:  # the pipe's delays and build-up anticipated (heavyhaul.approach)
+        low, high = limits(plant, reduction, now)
+        wanted = held - c.mass.sum() * v * v / (2 * d) if d > 0 else 0.0  # [N]: the constant deceleration v^2 / 2d
+        if wanted > 0:  # coasting stands it short (a climb): the locomotives pull that force, within their envelopes
+            u, stop_in = np.clip(high * (wanted / max(high.sum(), 1.0)), 0.0, high), 2 * d / v
+        elif plant.air_brake is not None and d > 0:  # the pipe's delays and build-up anticipated (heavyhaul.approach)
             share, stop_in = brake_share(plant, now, reduction.share(low, c.mass), d)
             u = share * low
         elif d > 0:  # the constant deceleration that stops the head at the stop, for at most its 2d/v
-            wanted, stop_in = held - c.mass.sum() * v * v / (2 * d), 2 * d / v
+            stop_in = 2 * d / v
             shape = planned if planned.sum() < 0 else low  # else every car the same share of its brakes
-            u = np.clip(shape * (min(wanted, 0.0) / shape.sum()), low, 0.0)  # coasts if it needs no brake
+            u = np.clip(shape * (wanted / shape.sum()), low, 0.0)
         else:  # beyond: the whole brake until the train stands
             u, stop_in = low, v * c.mass.sum() / max(held - low.sum(), 1.0)
         dt = min(PIECE, max(stop_in, 0.01), end - now.time)
@@ -196,4 +204,11 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
             break
     columns = (np.array(v) for v in zip(*rows))
     return state, LoopRecord(*columns, *map(float, works), overruns, arrived, tuple(map(float, losses)),
-                             plant.stored_energy(state) - stored, rolling_back)
+                             plant.stored_energy(state) - stored, rolling_back, end_forces(plant, reduction, state))
+
+
+def end_forces(plant, reduction, state):
+    """(grade, curve and running resistance the train feels [N], its locomotives' utmost traction at
+    their speeds [N], adhesion included when on): a train short of the stop whose utmost is the
+    smaller cannot go on (a stall)."""
+    return float(plant.resistance(state.positions, state.speeds).sum()), float(limits(plant, reduction, state)[1].sum())

@@ -3,7 +3,8 @@
 
 A run is ``flagged`` (never ``ok``) when the train stalled and rolled back (more than the stop
 tolerance, at the sample ends), when it did not arrive (the sample cap came first), when
-it stopped farther from the stop than the tolerance (short or beyond), when it arrived later than the
+it stopped farther from the stop than the tolerance (short or beyond; short where the grade and
+resistance exceed the locomotives' utmost traction, a stall, it says so), when it arrived later than the
 reference's running time by more than the tolerance (a share of it or seconds, the larger), when a car ran faster than the
 train's limit at the head by more than the tolerance, when a coupler carried more than the consist's
 limit, when a locomotive asked more of its wheels than dry rail gives (its traction or dynamic
@@ -75,6 +76,7 @@ def run_metrics(record, reference, locomotives, force_limit):
         **rollback(record.head, reference.distance[-1]),
         "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
         "speed_at_end_kmh": float(record.mean_speed[-1] / KMH), "rolling_back": bool(record.rolling_back),
+        "resistance_at_end_kN": record.end_forces[0] / KN, "traction_utmost_at_end_kN": record.end_forces[1] / KN,
         "force_max_kN": float(record.largest_coupler.max() / KN),
         "force_max_braking_kN": float(record.largest_coupler[braking].max() / KN) if braking.any() else 0.0,
         "force_limit_kN": force_limit / KN, "braking_samples": int(braking.sum()),
@@ -163,6 +165,10 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
                    f"{metrics['rollback_m']:.0f} m")
     asked = (f" with the reference at {metrics['reference_at_end_kmh']:.1f} km/h there"  # a stall reads as one
              if metrics["stop_error_m"] < 0 and "reference_at_end_kmh" in metrics else "")
+    held, utmost = metrics.get("resistance_at_end_kN", 0.0), metrics.get("traction_utmost_at_end_kN", np.inf)
+    if metrics["stop_error_m"] < 0 and held > utmost:  # it cannot go on
+        asked += (f", stalled: the grade and resistance there ({held:.0f} kN) exceed the locomotives' utmost "
+                  f"traction ({utmost:.0f} kN)")
     if metrics.get("rolling_back"):  # the loop ended the run on the final approach: the train did not stand
         error = metrics["stop_error_m"]
         where = f"{-error:.1f} m before the stop" if error <= 0 else f"{error:.1f} m beyond the stop"
