@@ -150,3 +150,16 @@ def test_a_true_train_stronger_than_its_model_still_transmits_at_most_the_limit(
         assert ft == pytest.approx(train.adhesion.limit(v), rel=1e-9)
     metro = load_train(METRO)
     assert Plant(segment, metro, Truth(traction=1.5)).forces(0.0, 1.0, 0.0)[0] == pytest.approx(300e3)
+
+
+def test_a_study_warns_once_naming_the_train_file(tmp_path):
+    """A study file's train is read twice (the base case and the study's cases): its warnings are
+    one line each, naming the train file, not the study."""
+    train = metro_with(tmp_path, {"adhesive_mass_t": 50})
+    study = write_yaml(tmp_path / "s.yaml", {"name": "s", "track": str(AMS), "train": str(train), "from": "Rokin",
+                                             "to": "Centraal", "running_time_s": 80, "points": 50})
+    result = CliRunner().invoke(app, ["solve", str(study), "--out", str(tmp_path / "o"), "--no-plot"])
+    assert result.exit_code == 0, result.output
+    lines = [line for line in result.output.splitlines() if "above adhesion" in line]
+    assert [line.split(": adhesion: ")[0] for line in lines] == [f"warning: {train}"] * 2, result.output
+    assert sum("traction envelope" in line for line in lines) == 1
