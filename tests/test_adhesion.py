@@ -21,7 +21,7 @@ from ecostudy.core.units import KMH, TONNE
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.ocp.problem import prepare
 
-from .conftest import TRACKS, TRAINS, load_yaml, write_yaml
+from .conftest import DATA, TRACKS, TRAINS, load_yaml, write_yaml
 
 METRO, AMS = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml"
 
@@ -163,3 +163,22 @@ def test_a_study_warns_once_naming_the_train_file(tmp_path):
     lines = [line for line in result.output.splitlines() if "above adhesion" in line]
     assert [line.split(": adhesion: ")[0] for line in lines] == [f"warning: {train}"] * 2, result.output
     assert sum("traction envelope" in line for line in lines) == 1
+
+
+def test_a_scenario_gives_a_published_train_its_adhesion(tmp_path):
+    """TTOBench's train files have no adhesion field; a study's scenario adds one through
+    ``train_overrides``: the subway train's 310 kN against 80 t (261 kN at rest) is capped, warned
+    naming the scenario (the base train, without the field, warns of nothing), and both runs are ok."""
+    study = write_yaml(tmp_path / "s.yaml", {
+        "name": "s", "track": str(DATA / "ttobench_track.json"), "train": str(DATA / "ttobench_subway_train.json"),
+        "supplement_percent": 10, "points": 100, "output": str(tmp_path / "o"),
+        "scenarios": [{"name": "grip80", "train_overrides": {"adhesion": {"adhesive_mass_t": 80}}}]})
+    result = CliRunner().invoke(app, ["run", str(study), "--workers", "1", "--no-progress"])
+    assert result.exit_code == 0, result.output
+    lines = [line for line in result.output.splitlines() if "above adhesion" in line]
+    assert lines == [f"warning: {study}: scenarios[0] (grip80): adhesion: traction envelope above adhesion (Curtius & "
+                     "Kniffler, 80 t adhesive) below 61 km/h: capped there",
+                     f"warning: {study}: scenarios[0] (grip80): adhesion: regenerative braking above adhesion (Curtius "
+                     "& Kniffler, 80 t adhesive) at every speed up to 80 km/h: capped there"], result.output
+    table = load_yaml(tmp_path / "o" / "summary.json")  # JSON is YAML
+    assert table["cases"]["ok"] == 2, table

@@ -130,8 +130,9 @@ def capped_warned(envelope: Envelope, limit: "Adhesion", top: float, what: str, 
     out, binds = capped(envelope, limit, top)
     if binds is not None:
         low, high, end = binds[0] / KMH, binds[1] / KMH, top / KMH
-        speeds = (f"below {high:.0f} km/h" if low == 0 and high < end - 0.5
-                  else f"at every speed up to {high:.0f} km/h" if low == 0 else f"from {low:.0f} to {high:.0f} km/h")
+        start = low < 0.5  # from rest, as the message rounds it
+        speeds = (f"below {high:.0f} km/h" if start and high < end - 0.5
+                  else f"at every speed up to {high:.0f} km/h" if start else f"from {low:.0f} to {high:.0f} km/h")
         warnings.warn(problem(where, "adhesion", f"{what} above adhesion ({limit.describe()}) {speeds}: capped there"),
                       EcostudyWarning, stacklevel=5)
     return out
