@@ -6,8 +6,9 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
+from ecostudy.core.adhesion import curtius_kniffler
 from ecostudy.core.physics import GRAVITY
-from ecostudy.heavyhaul.plant import CascadePlant, curtius_kniffler
+from ecostudy.heavyhaul.plant import CascadePlant
 from ecostudy.io.loaders import load_consist
 
 from .test_heavyhaul_study import PAPER, level, study

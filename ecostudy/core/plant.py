@@ -127,6 +127,8 @@ class Plant:
         self.mass = train.mass * truth.mass
         self.davis = tuple(float(c) * truth.resistance for c in train.davis)
         self.edges = segment.breakpoints()
+        # a true train stronger than its model still transmits at most mu(v) m_adh g (its envelope is capped there)
+        self.grip = train.adhesion.limit if train.adhesion is not None and truth.traction > 1.0 else None
 
     # ------------------------------------------------------------------ forces
     def grade_force(self, x: float) -> float:
@@ -147,15 +149,21 @@ class Plant:
         train = self.train
         if isinstance(control, Cruise):
             net = resist + self.mass * control.gain * (control.target - v)
-            return ((min(net, self.truth.traction * train.traction.force(v)), 0.0) if net >= 0
+            return ((min(net, self.traction(v)), 0.0) if net >= 0
                     else (0.0, min(-net, self.truth.braking * train.braking.force(v))))
-        ft = control * (self.truth.traction * train.traction.force(v)) if control > 0 else 0.0
+        ft = control * self.traction(v) if control > 0 else 0.0
         fb = -control * (self.truth.braking * train.braking.force(v)) if control < 0 else 0.0
         if ft > 0.0 and ft - resist > self.mass * train.max_acceleration:  # the traction control's limit
             ft = max(self.mass * train.max_acceleration + resist, 0.0)
         if fb > 0.0 and fb + resist > self.mass * train.max_deceleration:  # the brake control's limit
             fb = max(self.mass * train.max_deceleration - resist, 0.0)
         return ft, fb
+
+    def traction(self, v: float) -> float:
+        """The true traction envelope at speed ``v`` [N]: the model's times ``truth.traction``, at most
+        the train's adhesion limit (where it has one)."""
+        force = float(self.truth.traction * self.train.traction.force(v))
+        return force if self.grip is None else min(force, float(self.grip(v)))
 
     def derivatives(self, v: float, ft: float, fb: float, resist: float, disturbance: float = 0.0) -> list[float]:
         """d/dt of (position, speed, traction work, braking work, regenerated work, net line

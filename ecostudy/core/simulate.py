@@ -12,6 +12,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ecostudy.core import adhesion
 from ecostudy.core.grid import Segment
 from ecostudy.core.plant import Plant, Truth
 from ecostudy.core.types import Train, Window
@@ -19,6 +20,7 @@ from ecostudy.core.units import FloatArray, to_kmh, to_kwh
 
 TOLERANCES = {"arrival_time_error_s": 0.5, "stop_error_m": 1.0, "energy_error_pct": 1.0,
               "net_energy_error_pct": 1.0, "max_overspeed_kmh": 0.5}
+ADHESION_USE = 1.0 + adhesion.TOLERANCE  # a train with an adhesion limit: the largest share of it a run may ask
 
 
 @dataclass
@@ -85,12 +87,29 @@ def window_checks(trace: Trace, windows: Sequence[Window], time_tolerance: float
     return out
 
 
+def adhesion_use(train: Train, nodes: FloatArray, handle: Sequence[float] | FloatArray, trace: Trace) -> float:
+    """The largest share of the train's adhesion limit mu(v) m_adh g (:mod:`ecostudy.core.adhesion`)
+    that the re-simulated run's traction or electric brake asked for, at the trace's dense samples:
+    the force the plant applies for the interval's handle at the sample's speed (before the bound on
+    the net acceleration, which only lowers it). 0 for a train without an adhesion limit."""
+    if train.adhesion is None:
+        return 0.0
+    k = np.clip(np.searchsorted(nodes, trace.x, side="right") - 1, 0, len(nodes) - 2)
+    u, v = np.asarray(handle, float)[k], np.maximum(trace.v, 0.0)
+    traction = np.maximum(u, 0.0) * train.traction.force(v)
+    braking = np.maximum(-u, 0.0) * train.braking.force(v)
+    electric = np.minimum(braking, train.regeneration.force(v)) if train.regeneration is not None else 0.0 * v
+    return float(np.max(np.maximum(adhesion.use(train.adhesion, v, traction), adhesion.use(train.adhesion, v, electric)),
+                        initial=0.0))
+
+
 def verify(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[float] | FloatArray, running_time: float,
            traction_energy: float, windows: Sequence[Window] = (),
            net_energy: float | None = None) -> tuple[dict[str, Any], Trace]:
     """Compare an optimised run with its re-simulation; returns the ``verification`` block. With
     ``net_energy`` [J] (drawn from the line minus fed back) its error too, in % of the traction
-    work (a net energy can be near zero or below on a descent)."""
+    work (a net energy can be near zero or below on a descent). A train with an adhesion limit
+    also has ``adhesion_use_max`` (:func:`adhesion_use`), at most :data:`ADHESION_USE` to pass."""
     trace, _ = simulate(segment, train, nodes, handle)
     overspeed = worst_overspeed(segment, trace)
     percent = 100.0 / max(traction_energy, 1.0)  # an energy's error in % of the traction work
@@ -104,10 +123,14 @@ def verify(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[f
         "simulated_traction_energy_kWh": to_kwh(trace.traction_energy),
         "simulated_net_energy_kWh": to_kwh(trace.net_energy),
     }
+    tolerances = dict(TOLERANCES)
+    if train.adhesion is not None:  # only then: a run of a train without the limit is written as before
+        out["adhesion_use_max"] = adhesion_use(train, nodes, handle, trace)
+        tolerances["adhesion_use_max"] = ADHESION_USE
     out["windows"] = window_checks(trace, windows)
-    out["passed"] = bool(all(abs(out[k]) <= tol for k, tol in TOLERANCES.items() if k in out)
+    out["passed"] = bool(all(abs(out[k]) <= tol for k, tol in tolerances.items() if k in out)
                          and all(w["kept"] for w in out["windows"]))
-    out["tolerances"] = dict(TOLERANCES)
+    out["tolerances"] = tolerances
     return out, trace
 
 

@@ -2,9 +2,25 @@
 ``failed: <reason>``.
 
 ``ok`` means computed, and every check passed (solver converged, the independent re-simulation
-agrees, stop, time, speed, force and adhesion limits kept). ``flagged`` means computed and
-written, but a check did not pass: the reason says which. ``failed`` means no usable result: the
-reason says why. A command exits with status 1 when any of its results is not ok.
+agrees, stop, time, speed and force limits kept, and adhesion limits where the train has one).
+``flagged`` means computed and written, but a check did not pass: the reason says which.
+``failed`` means no usable result: the reason says why. A command exits with status 1 when any of
+its results is not ok.
+
+Adhesion, what "kept" means:
+
+- a point-mass train whose file gives ``adhesion`` (:mod:`ecostudy.core.adhesion`): its traction
+  envelope and electric brake are capped at mu(v) m_adh g when it is loaded, so every formulation
+  and the plant use the capped curve; a run verified by re-simulation (``solve``, ``run``,
+  ``pareto``, ``journey``, ``compare``'s ATO run, a network leg) records the largest share of the
+  limit its forces asked for (``adhesion_use_max``) and is flagged above ``1 + adhesion.TOLERANCE``;
+  driven runs (``compare``'s strategies, driver advice, closed loop) apply at most the capped
+  envelope, and a true train stronger than its model at most the limit itself (of the model's
+  adhesive mass), so they keep it by construction and are not checked;
+- a point-mass train without the field has no adhesion limit: nothing is capped or checked (its
+  ``max_acceleration_mps2`` bounds the net acceleration, not the wheels' grip);
+- a heavy-haul run is flagged when a locomotive asks more than 1 % above its mu(v) m g
+  (:mod:`ecostudy.heavyhaul.metrics`), capped by its plant with ``adhesion: true``.
 """
 from dataclasses import dataclass
 from typing import Iterable, Literal

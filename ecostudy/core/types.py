@@ -8,6 +8,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ecostudy.core.adhesion import Adhesion
 from ecostudy.core.physics import EfficiencyMap, Envelope
 from ecostudy.core.units import FloatArray, Numeric
 
@@ -29,13 +30,14 @@ class Train:
     curve_coefficient: float = 0.0    # lambda_t [m^2/s^2]
     das_levels: tuple[float, ...] = (-1.0, 0.0, 0.5, 0.75, 1.0)
     max_speed: float = float("inf")   # the train's top speed [m/s]: caps every speed limit
-    max_acceleration: float = float("inf")  # bound on the net acceleration [m/s^2] (comfort, adhesion)
+    max_acceleration: float = float("inf")  # bound on the net acceleration [m/s^2] (comfort)
     max_deceleration: float = float("inf")  # bound on the net deceleration [m/s^2], on top of the brakes
     curve_resistance: str = "coefficient"   # "coefficient": Ms lambda_t / r; "roeckl": Roeckl's formula
     # ((cross section [m^2], extra C [N s^2/m^2]), ...) ascending
     tunnel_resistance: tuple[tuple[float, float], ...] = ()
     traction_efficiency_map: EfficiencyMap | None = None      # eta_T(v, F) instead of the constant
     regeneration_efficiency_map: EfficiencyMap | None = None  # eta_R(v, F) instead of the constant
+    adhesion: Adhesion | None = None  # mu(v) m_adh g: the envelopes are capped at it, runs checked against it
 
     @property
     def eta_traction(self) -> EfficiencyMap | float:

@@ -32,6 +32,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.sparse import lil_matrix
 
+from ecostudy.core.adhesion import curtius_kniffler
 from ecostudy.core.grid import Profile
 from ecostudy.core.physics import GRAVITY, roeckl_force
 from ecostudy.heavyhaul import draftgear
@@ -76,12 +77,6 @@ class CascadeStep(NamedTuple):
 
 
 LOSSES = ("running_resistance", "curve_resistance", "grade", "coupler_damping", "draft_gear")  # CascadeStep.losses
-
-
-def curtius_kniffler(speed):
-    """Adhesion coefficient of dry rail [-] at ``speed`` [m/s]: Curtius & Kniffler's
-    mu = 0.161 + 7.5 / (v + 44), v in km/h (0.33 at rest, 0.22 at 80 km/h)."""
-    return 0.161 + 7.5 / (3.6 * np.abs(speed) + 44.0)
 
 
 class CascadePlant:

@@ -117,7 +117,7 @@ def validate(schema: type[Model], data: object, path: str | PathLike[str],
                 msg = "missing field"
             field = _field_path(loc) or "(top level)"
             head, _, rest = msg.partition(": ")
-            if not loc and rest and head.split("[")[0] in _names(schema):  # a check across fields that names its field
+            if not loc and rest and head.split("[")[0].split(".")[0] in _names(schema):  # a check across fields naming its field
                 field, msg = head, rest
             lines.append(problem(path, (aliases or {}).get(field, field), msg))
         raise InputError(lines)

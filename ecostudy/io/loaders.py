@@ -11,6 +11,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ecostudy.core import units
+from ecostudy.core.adhesion import TOP_SPEED, Adhesion, capped_envelopes
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import travel_distance
@@ -27,7 +28,6 @@ from ecostudy.io.formats import (
 from ecostudy.io.timetable import name_stops, window_si
 from ecostudy.io.documents import (Where, given, named_file, read_document as read_document,  # re-exported
                                    split_selector, validate as validate)
-
 
 
 def windows_from_schema(windows: Sequence[schemas.Window], track: Track, from_stop: str, to_stop: str,
@@ -133,12 +133,16 @@ def train_from_schema(t: schemas.TrainFile, path: Where, aliases: Mapping[str, s
     regen, eta_r = None, 0.0
     if t.regenerative_braking is not None:
         r = t.regenerative_braking
-        regen = Envelope("force_power",
-                         max_force=r.max_force_kN * units.KN if r.max_force_kN else float("inf"),
+        regen = Envelope("force_power", max_force=r.max_force_kN * units.KN if r.max_force_kN else float("inf"),
                          max_power=r.max_power_kW * units.KW if r.max_power_kW else float("inf"))
         eta_r = r.efficiency
+    traction, a = _envelope(t.traction, mass), t.adhesion
+    adhesion = None if a is None else Adhesion(a.adhesive_mass_t * units.TONNE, a.law, a.mu)
+    if adhesion is not None:  # capped once here: every formulation and the plant see the same curve
+        top = t.max_speed_kmh * units.KMH if t.max_speed_kmh is not None else TOP_SPEED
+        traction, regen = capped_envelopes(traction, regen, adhesion, top, path)
     return Train(name=t.name, mass=mass, static_mass=static, length=t.length_m, davis=davis,
-                 traction=_envelope(t.traction, mass), braking=_envelope(t.braking, mass),
+                 traction=traction, braking=_envelope(t.braking, mass), adhesion=adhesion,
                  regeneration=regen, traction_efficiency=t.traction_efficiency,
                  regeneration_efficiency=eta_r, curve_coefficient=t.curve_coefficient_m2ps2,
                  das_levels=tuple(t.das_handle_levels),

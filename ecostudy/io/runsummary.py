@@ -46,14 +46,16 @@ class Verification:
     simulated_net_energy_kWh: float
     windows_kept: tuple[bool, ...] = ()
     net_energy_error_pct: float | None = None  # [% of the traction work]; None in runs saved without it
+    adhesion_use_max: float | None = None  # largest share of mu(v) m_adh g asked; None: a train without the limit
 
     @property
     def errors(self) -> str:
         """The re-simulation's errors as the run's status and the screen print them (the net energy's
         where it was measured)."""
         net = "" if self.net_energy_error_pct is None else f", net energy {self.net_energy_error_pct:+.3f} % of traction"
+        grip = "" if self.adhesion_use_max is None else f", adhesion use {self.adhesion_use_max:.3f} of mu(v) m_adh g"
         return (f"arrival {self.arrival_time_error_s:+.3f} s, stop {self.stop_error_m:+.3f} m, energy "
-                f"{self.energy_error_pct:+.3f} %{net}, overspeed {self.max_overspeed_kmh:.3f} km/h")
+                f"{self.energy_error_pct:+.3f} %{net}, overspeed {self.max_overspeed_kmh:.3f} km/h{grip}")
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Verification":
@@ -64,7 +66,8 @@ class Verification:
                    simulated_traction_energy_kWh=float(data["simulated_traction_energy_kWh"]),
                    simulated_net_energy_kWh=float(data["simulated_net_energy_kWh"]),
                    windows_kept=tuple(bool(w["kept"]) for w in data.get("windows") or ()),
-                   net_energy_error_pct=_opt(data, "net_energy_error_pct"))
+                   net_energy_error_pct=_opt(data, "net_energy_error_pct"),
+                   adhesion_use_max=_opt(data, "adhesion_use_max"))
 
 
 @dataclass(frozen=True)

@@ -139,6 +139,24 @@ class TunnelResistance(Strict):
     c_kN_per_kmh2: float = Field(ge=0)
 
 
+class AdhesionLimit(Strict):
+    """What the driven wheels transmit: mu(v) m_adh g caps traction and electric braking."""
+
+    adhesive_mass_t: float = Field(gt=0, description="Mass on the driven (motored) axles [t], at most mass_t.")
+    law: Literal["curtius_kniffler", "constant"] = Field(
+        "curtius_kniffler", description="mu over speed: 'curtius_kniffler' (dry rail, mu = 0.161 + 7.5 / (v + 44), "
+        "v in km/h) or 'constant' (mu).")
+    mu: Optional[float] = Field(None, gt=0, le=1, description="Adhesion coefficient [-] of law 'constant'.")
+
+    @model_validator(mode="after")
+    def _law(self) -> Self:
+        if self.law == "constant" and self.mu is None:
+            raise ValueError("law 'constant' needs mu (the adhesion coefficient, e.g. 0.3)")
+        if self.law != "constant" and self.mu is not None:
+            raise ValueError(f"mu goes with law 'constant'; law '{self.law}' gives mu over speed itself")
+        return self
+
+
 class TrainFile(Strict):
     name: Name
     source: str = Field(description="Where the numbers come from.")
@@ -165,6 +183,15 @@ class TrainFile(Strict):
     max_deceleration_mps2: Optional[float] = Field(None, gt=0, description="Bound on the net deceleration "
                                                    "(on top of the braking forces; not the brake itself).")
     das_handle_levels: list[float] = Field(default_factory=lambda: [-1.0, 0.0, 0.5, 0.75, 1.0])
+    adhesion: Optional[AdhesionLimit] = Field(None, description="Caps the traction envelope and the electric "
+                                              "brake at mu(v) m_adh g; none: no adhesion limit.")
+
+    @model_validator(mode="after")
+    def _adhesive_mass(self) -> Self:
+        if self.adhesion is not None and self.adhesion.adhesive_mass_t > self.mass_t:
+            raise ValueError(f"adhesion.adhesive_mass_t: {self.adhesion.adhesive_mass_t:g} t exceeds mass_t "
+                             f"({self.mass_t:g} t): the driven axles carry at most the whole train")
+        return self
 
     @model_validator(mode="after")
     def _curves_and_tunnels(self) -> Self:

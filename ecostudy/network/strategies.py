@@ -169,7 +169,9 @@ def _scored(fleet, runs, info, wall, mapper=map):
                          worst_stop_error_m=max(abs(v["stop_error_m"]) for v in ver),
                          worst_energy_error_pct=max(abs(v["energy_error_pct"]) for v in ver),
                          worst_overspeed_kmh=max(v["max_overspeed_kmh"] for v in ver),
-                         verified=all(v["passed"] for v in ver), min_separation_m=gaps[n])
+                         verified=all(v["passed"] for v in ver), min_separation_m=gaps[n],
+                         **({"worst_adhesion_use": max(v["adhesion_use_max"] for v in ver)}  # a train with the limit
+                            if "adhesion_use_max" in ver[0] else {}))
     totals.update(wall_s=wall, all_verified=all(t["verified"] for t in trains.values()),
                   min_separation_m=min([g for g in gaps.values() if g is not None], default=None),
                   **guard_counts(runs))

@@ -56,16 +56,23 @@ def case_key(case):
 
 def _scenario_units(s, path):
     """(name, labels, train document, track document, from, to, scenario) of each scenario."""
+    base_said: set[str] = set()  # what the base train warned of: a scenario warns only of what differs
     for i, sc in enumerate([schemas.Scenario(name="base")] + list(s.scenarios)):
         where = f"{path}: scenarios[{i - 1}] ({sc.name})" if i else str(path)
         field = f"scenarios[{i - 1}]." if i else ""
-        train_doc = {**train_document(named_file(path, field + "train" if sc.train else "train", sc.train or s.train))[0],
-                     **sc.train_overrides}
+        train_file = named_file(path, field + "train" if sc.train else "train", sc.train or s.train)
+        train_doc = {**train_document(train_file)[0], **sc.train_overrides}
         track_doc = track_document(named_file(path, field + "track" if sc.track else "track", sc.track or s.track))
-        with warnings.catch_warnings():
-            if i:
-                warnings.simplefilter("ignore")  # the base train already warned
-            train_from_schema(validate(schemas.TrainFile, train_doc, f"{where} train"), where)
+        named = where if i else train_file  # the base train's warnings name its file
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            train_from_schema(validate(schemas.TrainFile, train_doc, f"{where} train"), named)
+        for w in seen:
+            said = str(w.message).removeprefix(f"{named}: ")
+            if i and said in base_said:
+                continue
+            base_said.update(() if i else (said,))
+            warnings.warn(w.message, w.category, stacklevel=2)
         track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{where} track"))
         from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
         yield sc.name, {"scenario": sc.name}, train_doc, track_doc, from_stop, to_stop, sc
@@ -141,8 +148,12 @@ def load_checked_study(path, command=None):
     the file is checked as ``ecostudy run`` checks them (:func:`expand`): a command that runs only the
     base case never leaves a bad scenario unnoticed. For ``command`` (a key of :data:`UNUSED`), one
     warning names the fields the file gives (other than their defaults) that the command does not use."""
-    study = load_study(path)
-    s = expand(path)[0]  # the file as validated there
+    with warnings.catch_warnings(record=True) as seen:  # the base case's warnings come from both: shown once
+        warnings.simplefilter("always")
+        study = load_study(path)
+        s = expand(path)[0]  # the file as validated there
+    for w in {str(w.message): w for w in seen}.values():
+        warnings.warn(w.message, w.category, stacklevel=2)
     if command is not None:
         fields = schemas.StudyFile.model_fields
         unused = [name for name in UNUSED[command]  # given, and not the value the command uses anyway

@@ -56,9 +56,10 @@ def expand(path):
     """(study, output folder, cases); the inputs are validated here, once."""
     path = Path(path)
     s = validate(SimulateFile, read_document(path), path)
-    train_doc = train_document(named_file(path, "train", s.train))[0]
+    train_file = named_file(path, "train", s.train)
+    train_doc = train_document(train_file)[0]
     track_doc = track_document(named_file(path, "track", s.track))
-    train = train_from_schema(validate(schemas.TrainFile, train_doc, f"{path} train"), path)
+    train = train_from_schema(validate(schemas.TrainFile, train_doc, f"{path} train"), train_file)  # warnings: its file
     track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{path} track"))
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     segment = make_segment(track, train, from_stop, to_stop)
