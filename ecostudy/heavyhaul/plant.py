@@ -238,7 +238,8 @@ class CascadePlant:
 
     def efforts(self, requested, speeds, levels=None):
         """The requested efforts u_i [N] clipped to each car's envelope at its speed; with notch
-        ``levels`` (:meth:`levels`) each locomotive's its level of its envelope at its speed."""
+        ``levels`` (:meth:`levels`) a locomotive's effort is its level times its traction (or
+        dynamic-brake) envelope at its speed (capped by the grip with ``adhesion`` on)."""
         u = np.clip(requested, *self.envelopes(speeds))
         if levels is None:
             return u
