@@ -7,6 +7,8 @@ QP's solve time per step and memory for f = 1 and f = 10.
     python bench/bench_heavyhaul.py --terms heavyhaul_brake_penalty_cruise   # Table IV with a cruising reference
     python bench/bench_heavyhaul.py --terms [--scale limits] heavyhaul_brake_penalty_sags   # Table IV where the descents pass the dynamic brakes
     python bench/bench_heavyhaul.py --terms --effort magnitude heavyhaul_brake_penalty   # Table IV with eq. 11's magnitudes
+    python bench/bench_heavyhaul.py --terms --notches heavyhaul_brake_penalty   # Table IV with the locomotives' notches
+    python bench/bench_heavyhaul.py --terms --notch-count 2 heavyhaul_brake_penalty   # the same with 2 notches each way
     python bench/bench_heavyhaul.py --balance [--adhesion] heavyhaul_brake_penalty   # the energy balance, an effect on
     python bench/bench_heavyhaul.py --stops heavyhaul_brake_penalty heavyhaul_brake_penalty_descents   # where each run stopped
     python bench/bench_heavyhaul.py --qp 1 [--solver daqp|condensed|clarabel|ipopt] [--blas-threads 2]   # one QP size: build + 20 solves
@@ -103,28 +105,34 @@ STOPS = ["K_b", "f", "Np", "Nc", "status", "arrived", "stop_error_m", "arrival_s
          "force_limit_kN", "speed_excess_kmh", "over_ts", "reason"]
 
 
-def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesion=False, effort=None):
-    """The shipped studies; ``weights``, ``scale``, ``adhesion`` and ``effort`` override their
-    ``fence_weights``, ``objective_scale``, ``adhesion`` and ``effort_penalty`` (a copy of the study file
-    beside it, removed after the run)."""
+def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesion=False, effort=None, notches=False):
+    """The shipped studies; ``weights``, ``scale``, ``adhesion``, ``effort`` and ``notches`` override their
+    ``fence_weights``, ``objective_scale``, ``adhesion``, ``effort_penalty`` and ``notches`` (a copy of the
+    study file beside it, removed after the run); ``notches`` a count: on, with a copy of the consist
+    that has that many traction and dynamic-brake notches."""
     import yaml
     from ecostudy.studies.heavyhaul import heavyhaul_study
     for name in names or ("heavyhaul_brake_penalty", "heavyhaul_brake_penalty_limits", "heavyhaul_horizons",
                           "heavyhaul_fence"):
         path, out = ROOT / "studies" / f"{name}.yaml", ROOT / "out" / f"bench_{name}"
         changes = {k: v for k, v in (("fence_weights", weights), ("objective_scale", scale), ("adhesion", adhesion),
-                                     ("effort_penalty", effort)) if v}
+                                     ("effort_penalty", effort), ("notches", notches)) if v}
         if changes:
             doc = yaml.safe_load(path.read_text())
             doc.update(changes)
             tag = "_".join(k if v is True else f"{k}_{v}" for k, v in changes.items())  # never another study's name
             path, out = path.with_name(f".{name}_{tag}.yaml"), out.with_name(f"{out.name}_{tag}")
+            if notches is not True and notches:  # a count: the consist copied beside the study with it
+                consist = yaml.safe_load((ROOT / "studies" / doc["consist"]).read_text())
+                consist["notches"].update(traction=notches, dynamic_brake=notches)
+                doc.update(consist=f".{name}_{tag}_consist.yaml", notches=True)
+                path.with_name(doc["consist"]).write_text(yaml.safe_dump(consist))
             path.write_text(yaml.safe_dump(doc))
         try:
             outcome, _, wall = harness.timed(lambda: heavyhaul_study(path, workers=workers, out=out))
         finally:
-            if changes:
-                path.unlink()
+            for copy in (path, path.with_name(f".{name}_{tag}_consist.yaml")) if changes else ():
+                copy.unlink(missing_ok=True)
         print(f"\n`{name}`{f' ({changes})' if changes else ''} ({wall:.0f} s wall; "
               f"reference {outcome.reference.running_time:.0f} s, {outcome.reference.energy / 3.6e6:.0f} kWh single mass)\n")
         print(harness.markdown(outcome.runs[list(columns)].to_dict("records"), columns))
@@ -139,6 +147,8 @@ if __name__ == "__main__":
     parser.add_argument("--scale", choices=["paper", "limits"], help="override the studies' objective_scale")
     parser.add_argument("--effort", choices=["squared", "magnitude"], help="override the studies' effort_penalty")
     parser.add_argument("--adhesion", action="store_true", help="the plant's adhesion limit on (adhesion: true)")
+    parser.add_argument("--notches", action="store_true", help="the locomotives' notches on (notches: true)")
+    parser.add_argument("--notch-count", type=int, help="the locomotives' notches on, this many each way (a consist copy)")
     parser.add_argument("--terms", action="store_true", help="print the brake-penalty columns (eq. 4's terms at the optimum)")
     parser.add_argument("--balance", action="store_true", help="print the energy balance columns")
     parser.add_argument("--stops", action="store_true", help="print the status columns (where each run stopped)")
@@ -150,4 +160,4 @@ if __name__ == "__main__":
     if args.qp:
         qp(args.qp, args.solver, threads=args.blas_threads)
     else:
-        studies(args.studies, args.fence_weights, args.scale, TERMS if args.terms else EFFECTS if args.balance else STOPS if args.stops else COLUMNS, args.workers, args.adhesion, args.effort)
+        studies(args.studies, args.fence_weights, args.scale, TERMS if args.terms else EFFECTS if args.balance else STOPS if args.stops else COLUMNS, args.workers, args.adhesion, args.effort, args.notch_count or args.notches)

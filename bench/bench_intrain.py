@@ -1,8 +1,8 @@
 """Heavy haul: what each in-train effect of the plant (air-brake propagation, draft gear, adhesion,
-all three) changes on the shipped line, at K_b = 1 and 60 (Np = 4, Nc = 2, f = 10): the largest draft
+all three; the locomotives' notches) changes on the shipped line, at K_b = 1 and 60 (Np = 4, Nc = 2, f = 10): the largest draft
 and buff forces and where, slack run-ins, the rainflow damage proxy and the energy balance [kWh].
 
-    python bench/bench_intrain.py                      # the five plants, two K_b each (outputs in out/bench_intrain_*)
+    python bench/bench_intrain.py                      # the six plants, two K_b each (outputs in out/bench_intrain_*)
     python bench/bench_intrain.py none air_brake       # some of them
     python bench/bench_intrain.py --study heavyhaul_intrain_5km   # the same on the 5 km line with a hump
 
@@ -26,7 +26,8 @@ from ecostudy.core.errors import EcostudyWarning  # noqa: E402
 
 STUDY = "heavyhaul_brake_penalty"
 PLANTS = {"none": {}, "air_brake": {"air_brake": True}, "draft_gear": {"draft_gear": True},
-          "adhesion": {"adhesion": True}, "all": {"air_brake": True, "draft_gear": True, "adhesion": True}}
+          "adhesion": {"adhesion": True}, "all": {"air_brake": True, "draft_gear": True, "adhesion": True},
+          "notches": {"notches": True}}
 FORCES = ["status", "tracking_mean_mps", "draft_max_kN", "draft_coupler", "buff_max_kN", "buff_coupler", "run_ins",
           "fatigue_damage", "fatigue_damage_max", "rainflow_cycles_100kN", "force_max_braking_kN"]
 ENERGY = ["traction_kWh", "dynamic_brake_kWh", "wagon_brake_kWh", "running_resistance_kWh", "curve_resistance_kWh",
@@ -64,7 +65,7 @@ def table(rows, columns):
 if __name__ == "__main__":
     warnings.simplefilter("ignore", EcostudyWarning)
     parser = argparse.ArgumentParser()
-    parser.add_argument("plants", nargs="*", help=f"plants among {', '.join(PLANTS)} (default: all five)")
+    parser.add_argument("plants", nargs="*", help=f"plants among {', '.join(PLANTS)} (default: all six)")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--study", default=STUDY, help="a shipped heavy-haul study (default: Table IV's line)")
     args = parser.parse_args()

@@ -172,6 +172,16 @@ class DraftGear:
 
 
 @dataclass(frozen=True)
+class Notches:
+    """The locomotives' discrete control positions: traction notch k of ``traction`` applies k /
+    ``traction`` of the traction envelope at the locomotive's speed, dynamic-brake notch k of
+    ``dynamic_brake`` k / ``dynamic_brake`` of the dynamic-brake envelope."""
+
+    traction: int        # notches above idle
+    dynamic_brake: int   # dynamic-brake notches above off
+
+
+@dataclass(frozen=True)
 class Consist:
     """A long train as cars in train order (the head first) joined by couplers, SI (Zhang & Zhuan eq. 1)."""
 
@@ -188,6 +198,7 @@ class Consist:
     force_limit: float           # |f_in| allowed [N]
     air_brake: AirBrake | None = None    # the plant's air-brake propagation, where the file gives it
     draft_gear: DraftGear | None = None  # the plant's draft gears, where the file gives them
+    notches: Notches | None = None        # the locomotives' throttle and dynamic-brake notches, where the file gives them
 
     @property
     def cars(self) -> int:

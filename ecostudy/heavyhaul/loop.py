@@ -154,7 +154,7 @@ def combined(steps):
                        *(sum(getattr(s, k) for s in steps) for k in ("traction_work", "dynamic_brake_work",
                                                                       "wagon_brake_work")),
                        max(s.speed_excess for s in steps), tuple(np.sum([s.losses for s in steps], axis=0)),
-                       max((s.adhesion for s in steps), key=lambda a: a[0]))
+                       max((s.adhesion for s in steps), key=lambda a: a[0]), last.levels)
 
 
 def run(plant, reduction, controller, state, reference, samples, observer=None, applied=None):

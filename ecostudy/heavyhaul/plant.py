@@ -22,7 +22,9 @@ locomotives (traction, dynamic brake) and of the wagons' brakes, apart.
 Two in-train effects of TrainDy-class tools are switchable where the consist gives their data (off:
 the paper's plant): ``air_brake`` (heavyhaul.airbrake: the wagons' brake forces delayed along the
 train and lagged) and ``draft_gear`` (heavyhaul.draftgear: slack and loading/unloading stiffness in
-place of the linear coupler; its hysteresis loss is a named term). The forces of every coupler at
+place of the linear coupler; its hysteresis loss is a named term); so are the locomotives'
+``notches`` (:meth:`CascadePlant.levels`: each step's request rounded to the nearest notch, notch k
+of N applying k/N of the envelope at the locomotive's speed throughout the step). The forces of every coupler at
 every integrator point are kept in ``history`` for the metrics (largest draft and buff, run-ins,
 rainflow).
 """
@@ -74,6 +76,7 @@ class CascadeStep(NamedTuple):
     speed_excess: float = 0.0    # largest (fastest car's speed - the train's limit at the head) over the step [m/s]
     losses: tuple = (0.0,) * 5  # work against running resistance, curves, grades; coupler damping, draft gear [J]
     adhesion: tuple = (0.0,) * 5  # the largest adhesion use over the step (CascadePlant.adhesion_use)
+    levels: Optional[np.ndarray] = None  # the notch levels held over the step (CascadePlant.levels; None: notches off)
 
 
 LOSSES = ("running_resistance", "curve_resistance", "grade", "coupler_damping", "draft_gear")  # CascadeStep.losses
@@ -82,15 +85,17 @@ LOSSES = ("running_resistance", "curve_resistance", "grade", "coupler_damping", 
 class CascadePlant:
     """One consist (:class:`ecostudy.core.types.Consist`) on one segment (its gradient profile)."""
 
-    def __init__(self, consist, segment, curves=True, rtol=None, adhesion=False, air_brake=False, draft_gear=False):
+    def __init__(self, consist, segment, curves=True, rtol=None, adhesion=False, air_brake=False, draft_gear=False,
+                 notches=False):
         self.consist, self.segment, self.curves = consist, segment, curves
         self.rtol = rtol if rtol is not None else SLACK_RTOL if draft_gear else RTOL
         self.adhesion = adhesion  # cap each locomotive's traction and dynamic braking at mu(v) m g (curtius_kniffler)
-        for name, on in (("air_brake", air_brake), ("draft_gear", draft_gear)):
+        for name, on in (("air_brake", air_brake), ("draft_gear", draft_gear), ("notches", notches)):
             if on and getattr(consist, name) is None:
                 raise ValueError(f"the consist '{consist.name}' gives no {name} data")
         self.air_brake = consist.air_brake if air_brake else None
         self.gear = consist.draft_gear if draft_gear else None
+        self.notches = consist.notches if notches else None
         self.delays = signal_delays(consist, self.air_brake.signal_speed) if air_brake else None
         self.history = []  # per step: (times [s], coupler forces [N] (points, couplers)) at the integrator's points
         self.n = consist.cars
@@ -179,20 +184,39 @@ class CascadePlant:
 
     def envelopes(self, speeds):
         """(lowest, highest) effort of every car at its speed [N]: traction; dynamic plus pneumatic brake."""
+        dynamic, upper = self.motor_envelopes(speeds)
+        return -(dynamic + self.consist.pneumatic_brake), upper
+
+    def motor_envelopes(self, speeds):
+        """(dynamic brake [N, >= 0], traction [N]) of every car at its speed (0 where it has none)."""
         speeds = np.maximum(speeds, ENVELOPE_SPEED)
         upper = np.minimum(self.traction_limits[0], self.traction_limits[1] / speeds)
         dynamic = np.minimum(self.dynamic_limits[0], self.dynamic_limits[1] / speeds)
         if self.adhesion:
             grip = np.where(self.loco, self.grip(speeds), np.inf)
             upper, dynamic = np.minimum(upper, grip), np.minimum(dynamic, grip)
-        return -(dynamic + self.consist.pneumatic_brake), upper
+        return dynamic, upper
+
+    def levels(self, requested, speeds):
+        """The notch every locomotive takes for a step from ``speeds`` [m/s] (None: notches off): its
+        request clipped to its envelope, as a share of the traction (or dynamic-brake) envelope at its
+        speed, rounded to the nearest of k / N (k = 0..N, N the consist's traction or dynamic-brake
+        notches); signed (dynamic braking negative), NaN for a wagon. A locomotive's own pneumatic
+        brake, if the consist gives one, is not applied with notches on (only its dynamic-brake notch)."""
+        if self.notches is None:
+            return None
+        dynamic, upper = self.motor_envelopes(speeds)
+        u = np.clip(requested, -dynamic, upper)
+        share = np.where(u >= 0, u / np.where(upper > 0, upper, np.inf), u / np.where(dynamic > 0, dynamic, np.inf))
+        count = np.where(u >= 0, self.notches.traction, self.notches.dynamic_brake)
+        return np.where(self.loco, np.rint(share * count) / count, np.nan)
 
     def grip(self, speeds):
         """mu(v) m g of every car at its speed [N] (Curtius & Kniffler's dry rail): what a locomotive's
         traction or dynamic brake can transmit; 0 for a wagon (it has no motor)."""
         return np.where(self.loco, curtius_kniffler(speeds) * self.consist.mass * GRAVITY, 0.0)
 
-    def adhesion_use(self, times, positions, speeds, requested):
+    def adhesion_use(self, times, positions, speeds, requested, levels=None):
         """The most any locomotive asked of its wheels over the integrator's points (``times`` [s];
         ``positions``, ``speeds`` (cars, points)): (|u| / mu(v) m g [-], the efforts as applied, clipped
         to the envelope at the car's speed, v that speed as the envelope reads it; when [s]; the head
@@ -201,21 +225,28 @@ class CascadePlant:
         if not self.loco.any():
             return (0.0,) * 5
         v = speeds.T
-        u = self.efforts(requested, v)[:, self.loco]
+        u = self.efforts(requested, v, levels)[:, self.loco]
         use = np.abs(u) / np.maximum(self.grip(np.maximum(v, ENVELOPE_SPEED))[:, self.loco], 1.0)  # as envelopes
         k, j = np.unravel_index(np.argmax(use), use.shape)
         head = positions[0, k] + 0.5 * self.consist.length[0]
         return float(use[k, j]), float(times[k]), float(head), float(v[k][self.loco][j]), float(u[k, j])
 
-    def efforts(self, requested, speeds):
-        """The requested efforts u_i [N] clipped to each car's envelope at its speed."""
-        return np.clip(requested, *self.envelopes(speeds))
+    def efforts(self, requested, speeds, levels=None):
+        """The requested efforts u_i [N] clipped to each car's envelope at its speed; with notch
+        ``levels`` (:meth:`levels`) a locomotive's effort is its level times its traction (or
+        dynamic-brake) envelope at its speed (capped by the grip with ``adhesion`` on)."""
+        u = np.clip(requested, *self.envelopes(speeds))
+        if levels is None:
+            return u
+        dynamic, upper = self.motor_envelopes(speeds)
+        return np.where(self.loco, np.where(levels >= 0, levels * upper, levels * dynamic), u)
 
-    def derivatives(self, y, requested, brakes=None):
-        """d/dt of (positions, speeds, works); ``brakes`` the wagons' air-brake forces now [N]."""
+    def derivatives(self, y, requested, brakes=None, levels=None):
+        """d/dt of (positions, speeds, works); ``brakes`` the wagons' air-brake forces now [N];
+        ``levels`` the locomotives' notches (:meth:`levels`)."""
         n, c = self.n, self.consist
         p, v = y[:n], y[n:2 * n]
-        u = self.efforts(requested, v)
+        u = self.efforts(requested, v, levels)
         if brakes is not None:  # a friction brake opposes the motion: never drives a train stopping under lagged brakes
             u = np.where(self.loco, u, brakes * v / np.sqrt(v * v + STANDSTILL_SPEED ** 2))
         elastic, hysteresis, damping = self.coupler_parts(p, v)
@@ -254,9 +285,9 @@ class CascadePlant:
         scale = self.rtol / RTOL
         atol = np.concatenate([np.full(n, ATOL_POSITION * scale), np.full(n, ATOL_SPEED * scale),
                                np.full(QUADRATURES, ATOL_WORK)])
-        pipe = self.brake_pipe(state, requested, dt)
+        pipe, levels = self.brake_pipe(state, requested, dt), self.levels(requested, state.speeds)
         t0 = state.time
-        sol = solve_ivp(lambda t, y: self.derivatives(y, requested, None if pipe is None else pipe.at(t - t0)),
+        sol = solve_ivp(lambda t, y: self.derivatives(y, requested, None if pipe is None else pipe.at(t - t0), levels),
                         (t0, t0 + dt), y0, method="BDF", rtol=self.rtol, atol=atol, jac_sparsity=self.jac_sparsity)
         if not sol.success:
             raise RuntimeError(f"cascade plant: integration failed ({sol.message})")
@@ -269,7 +300,7 @@ class CascadePlant:
                                                                          self._sent(state, pipe.current, t0 + dt))
         return CascadeStep(CascadeState(p, v, t0 + dt, brakes, commanded, sent), forces[-1], float(np.abs(forces).max()),
                            *map(float, works[:3]), excess, tuple(map(float, works[3:])),
-                           self.adhesion_use(sol.t, sol.y[:n], sol.y[n:2 * n], requested))
+                           self.adhesion_use(sol.t, sol.y[:n], sol.y[n:2 * n], requested, levels), levels)
 
     def brake_pipe(self, state, requested, dt):
         """The wagons' brakes over a step from ``state`` (None: air_brake off): the command is the

@@ -84,6 +84,17 @@ class DraftGear(Strict):
         return self
 
 
+class Notches(Strict):
+    """The locomotives' throttle and dynamic-brake notches (the plant's ``notches`` effect): a
+    locomotive applies traction notch k of ``traction`` as k / ``traction`` of its traction envelope
+    at its speed, and dynamic-brake notch k of ``dynamic_brake`` alike; the controller's request is
+    rounded to the nearest notch at each sample."""
+
+    traction: int = Field(gt=0, le=1000, description="Traction notches above idle (North American practice: 8).")
+    dynamic_brake: int = Field(gt=0, le=1000, description="Dynamic-brake notches above off (8 on many locomotives).")
+    source: str = Field(min_length=1, description="Where the values come from (or that they are typical).")
+
+
 class ConsistFile(Strict):
     name: str
     source: str
@@ -92,6 +103,7 @@ class ConsistFile(Strict):
     couplers: Couplers
     air_brake: Optional[AirBrake] = Field(None, description="Air-brake propagation data (switched on in a study).")
     draft_gear: Optional[DraftGear] = Field(None, description="Draft-gear data (switched on in a study).")
+    notches: Optional[Notches] = Field(None, description="Locomotive notch data (switched on in a study).")
 
     @model_validator(mode="after")
     def _known(self) -> Self:

@@ -89,6 +89,8 @@ class HeavyhaulFile(Strict):
                             "(the consist's air_brake data; docs/heavyhaul.md, In-train physics).")
     draft_gear: bool = Field(False, description="The plant's couplers with slack and loading/unloading stiffness "
                              "(the consist's draft_gear data); the controller keeps the linear couplers.")
+    notches: bool = Field(False, description="The plant's locomotives apply traction and dynamic braking in the "
+                          "consist's notches (the request rounded to the nearest); the controller keeps continuous efforts.")
     weights: Weights = Weights()
     rate_kN_per_sample: float = Field(200.0, gt=0, description="Largest change of a locomotive group's effort "
                                       "per sample (Zhang & Zhuan give none).")

@@ -74,7 +74,7 @@ def expand(path):
     consist_path = named_file(path, "consist", s.consist)
     consist_doc = read_document(consist_path)
     consist = consist_from_document(consist_doc, consist_path)
-    missing = [problem(path, name, f"the consist '{s.consist}' gives no {name} data") for name in ("air_brake", "draft_gear")
+    missing = [problem(path, name, f"the consist '{s.consist}' gives no {name} data") for name in ("air_brake", "draft_gear", "notches")
                if getattr(s, name) and getattr(consist, name) is None]
     if missing:
         raise InputError(missing)
@@ -119,6 +119,7 @@ def expand(path):
               "observer": s.observer, "qp_solver": s.qp_solver,
               "fence_coupling": s.fence_coupling, "fence_sharing": s.fence_sharing, "fence_weights": s.fence_weights,
               "objective_scale": s.objective_scale, "effort_penalty": s.effort_penalty, "adhesion": s.adhesion, "air_brake": s.air_brake, "draft_gear": s.draft_gear,
+              **({"notches": True} if s.notches else {}),  # absent when off: the cases' keys as without the switch
               "max_samples": s.max_samples,
               "stop_tolerance_m": s.stop_tolerance_m, "speed_tolerance_kmh": s.speed_tolerance_kmh,
               "arrival_tolerance_percent": s.arrival_tolerance_percent, "arrival_tolerance_s": s.arrival_tolerance_s,
@@ -161,7 +162,7 @@ def drive(case):
     reference = Reference(*(np.array(r[k]) for k in ("distance", "speeds", "times")), r["energy"])
     plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]),
                          adhesion=case["adhesion"], air_brake=case["air_brake"],
-                         draft_gear=case["draft_gear"])
+                         draft_gear=case["draft_gear"], notches=case.get("notches", False))
     labels, w, ts = case["labels"], case["weights"], case["sample_time"]
     reduction = fence(consist, labels["f"], ts, case["fence_coupling"], case["fence_sharing"])
     scales = None
