@@ -105,18 +105,22 @@ STOPS = ["K_b", "f", "Np", "Nc", "status", "arrived", "stop_error_m", "arrival_s
          "force_limit_kN", "speed_excess_kmh", "over_ts", "reason"]
 
 
-def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesion=False, effort=None, notches=False):
+def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesion=False, effort=None, notches=False,
+            observer=None):
     """The shipped studies; ``weights``, ``scale``, ``adhesion``, ``effort`` and ``notches`` override their
     ``fence_weights``, ``objective_scale``, ``adhesion``, ``effort_penalty`` and ``notches`` (a copy of the
     study file beside it, removed after the run); ``notches`` a count: on, with a copy of the consist
-    that has that many traction and dynamic-brake notches."""
+    that has that many traction and dynamic-brake notches; ``observer`` (q, r): the Kalman observer on
+    with those noises (``observer``, ``observer_q``, ``observer_r``)."""
     import yaml
     from ecostudy.studies.heavyhaul import heavyhaul_study
     for name in names or ("heavyhaul_brake_penalty", "heavyhaul_brake_penalty_limits", "heavyhaul_horizons",
                           "heavyhaul_fence"):
         path, out = ROOT / "studies" / f"{name}.yaml", ROOT / "out" / f"bench_{name}"
         changes = {k: v for k, v in (("fence_weights", weights), ("objective_scale", scale), ("adhesion", adhesion),
-                                     ("effort_penalty", effort), ("notches", notches)) if v}
+                                     ("effort_penalty", effort), ("notches", notches), ("observer", bool(observer)),
+                                     ("observer_q", observer and observer[0]), ("observer_r", observer and observer[1]))
+                   if v}
         if changes:
             doc = yaml.safe_load(path.read_text())
             doc.update(changes)
@@ -149,6 +153,8 @@ if __name__ == "__main__":
     parser.add_argument("--adhesion", action="store_true", help="the plant's adhesion limit on (adhesion: true)")
     parser.add_argument("--notches", action="store_true", help="the locomotives' notches on (notches: true)")
     parser.add_argument("--notch-count", type=int, help="the locomotives' notches on, this many each way (a consist copy)")
+    parser.add_argument("--observer", nargs=2, type=float, metavar=("Q", "R"),
+                        help="the Kalman observer on, with Q = q I and R = r I (observer: true, observer_q, observer_r)")
     parser.add_argument("--terms", action="store_true", help="print the brake-penalty columns (eq. 4's terms at the optimum)")
     parser.add_argument("--balance", action="store_true", help="print the energy balance columns")
     parser.add_argument("--stops", action="store_true", help="print the status columns (where each run stopped)")
@@ -160,4 +166,5 @@ if __name__ == "__main__":
     if args.qp:
         qp(args.qp, args.solver, threads=args.blas_threads)
     else:
-        studies(args.studies, args.fence_weights, args.scale, TERMS if args.terms else EFFECTS if args.balance else STOPS if args.stops else COLUMNS, args.workers, args.adhesion, args.effort, args.notch_count or args.notches)
+        studies(args.studies, args.fence_weights, args.scale, TERMS if args.terms else EFFECTS if args.balance else STOPS if args.stops else COLUMNS, args.workers, args.adhesion, args.effort, args.notch_count or args.notches,
+                args.observer)

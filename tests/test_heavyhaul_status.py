@@ -119,6 +119,8 @@ def reference_table(tmp_path, rows):
     ({"brake_penalty": [60, 1, 60]}, ["brake_penalty", "60", "twice"]),
     ({"horizons": [{"np": 4, "nc": 2}, {"np": 4, "nc": 2}]}, ["horizons", "twice"]),
     ({"rate_kN_per_sample": 1e-9}, ["rate_kN_per_sample", "1e-09 kN per sample"]),
+    ({"observer": True, "observer_q": 0}, ["observer_q", "greater than 0"]),
+    ({"observer": True, "observer_r": -0.01}, ["observer_r", "greater than 0"]),
 ])
 def test_bad_sweeps_are_refused_in_one_line(tmp_path, changes, words):
     refused(invoke(study(tmp_path, **changes), tmp_path / "out"), *words)

@@ -308,3 +308,20 @@ def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     # the dynamic brakes stay far from their limit at K_b 60 (0.22 of it at most); at K_b 1, with the
     # reference's limit lead, one sample or more reaches it (dynamic_brake_use_max 1.0)
     assert high.J_braking < 0.05 * high.J_force and high.dynamic_brake_use_max < 0.3
+
+
+@pytest.mark.slow  # two closed-loop runs on the 5 km line
+def test_the_observers_noises_are_the_studys(tmp_path):
+    """observer_q and observer_r reach the Kalman observer: the paper's q = 50, r = 0.01 estimate the
+    train otherwise than the defaults, so the runs differ; both are recorded in the cases' keys."""
+    runs = {}
+    for tag, noises in (("default", {}), ("paper", {"observer_q": 50, "observer_r": 0.01})):
+        folder = tmp_path / tag
+        folder.mkdir()
+        out = folder / "out"
+        result = runner.invoke(app, ["heavyhaul", str(study(folder, brake_penalty=[60], observer=True, **noises)),
+                                     "--out", str(out), "--no-progress", "--no-plot"])
+        assert result.exit_code in (0, 1), result.output
+        runs[tag] = pd.read_csv(out / "runs.csv").iloc[0]
+    assert runs["default"]["tracking_mean_mps"] != runs["paper"]["tracking_mean_mps"]
+    assert runs["default"]["energy_total_kWh"] != runs["paper"]["energy_total_kWh"]

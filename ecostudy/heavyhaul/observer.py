@@ -7,15 +7,18 @@ in the one-step predictor form of the paper:
 
 with Q = q I and R = r I. The paper uses q = 50, r = 0.01 in units it does not state; in SI
 (m/s, m) those leave the middle of the ore train's estimate 0.8 m/s off after 8 samples, so the
-defaults here are q = 1e-3, r = 1e-4 (measured: docs/heavyhaul.md). Sampled at Ts = 20 s the
+defaults here are q = 1e-3, r = 1e-4 (measured: docs/heavyhaul.md); a study sets its own
+(``observer_q``, ``observer_r``). Sampled at Ts = 20 s the
 coupler modes alias, yet the pair (A, C) stays observable (rank 43 of 43 for the 22 virtual cars);
 the estimate converges within about 15 samples. Inputs u' are the shifted efforts of eq. 2 [N].
 """
 import numpy as np
 
+from ecostudy.io.heavyhaulfile import OBSERVER_Q, OBSERVER_R
+
 
 class KalmanObserver:
-    def __init__(self, model, kinds, q=1e-3, r=1e-4, estimate=None, covariance=1.0):
+    def __init__(self, model, kinds, q=OBSERVER_Q, r=OBSERVER_R, estimate=None, covariance=1.0):
         n = len(kinds)
         self.model = model
         self.C = np.zeros((sum(k == "locomotive" for k in kinds), 2 * n - 1))

@@ -9,6 +9,9 @@ from pydantic import Field, field_validator, model_validator
 from ecostudy.io.schemabase import Name, Strict
 
 
+# the Kalman observer's Q = q I, R = r I in SI (m/s, m): Zhang & Zhuan's q = 50, r = 0.01 leave the middle of
+# the ore train's estimate 0.8 m/s off after 8 samples; these converge (docs/heavyhaul.md, "The Kalman observer")
+OBSERVER_Q, OBSERVER_R = 1e-3, 1e-4
 WEIGHT_MAX = 1e4  # K_b, K_f, K_v, K_e: the paper's are 1 to 80; 1e300 made the QP's setup fail (DAQP flag -5)
 
 
@@ -99,6 +102,10 @@ class HeavyhaulFile(Strict):
         "by DAQP warm-started from the last sample (fastest) or by Clarabel, with the states kept (Clarabel), "
         "or Ipopt on its Pyomo model.")
     observer: bool = Field(False, description="Feed the controller the Kalman observer's estimate (eq. 10).")
+    observer_q: float = Field(OBSERVER_Q, gt=0, description="The observer's process noise, Q = q I (SI: m/s and m; "
+                              "Zhang & Zhuan give 50, units unstated).")
+    observer_r: float = Field(OBSERVER_R, gt=0, description="The observer's measurement noise, R = r I [(m/s)^2] "
+                              "(Zhang & Zhuan give 0.01).")
     max_samples: int = Field(1000, ge=1, le=100000, description="Stop a run after this many samples (a run "
                              "that has not arrived by then is flagged).")
     stop_tolerance_m: float = Field(1.0, gt=0, description="A run that stops farther from the stop (short or "

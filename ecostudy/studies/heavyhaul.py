@@ -117,6 +117,7 @@ def expand(path):
                             "times": reference.times.tolist(), "energy": reference.energy},
               "sample_time": s.sample_time_s, "weights": s.weights.model_dump(), "rate_kN": s.rate_kN_per_sample,
               "observer": s.observer, "qp_solver": s.qp_solver,
+              **({"observer_q": s.observer_q, "observer_r": s.observer_r} if s.observer else {}),
               "fence_coupling": s.fence_coupling, "fence_sharing": s.fence_sharing, "fence_weights": s.fence_weights,
               "objective_scale": s.objective_scale, "effort_penalty": s.effort_penalty, "adhesion": s.adhesion, "air_brake": s.air_brake, "draft_gear": s.draft_gear,
               **({"notches": True} if s.notches else {}),  # absent when off: the cases' keys as without the switch
@@ -176,8 +177,8 @@ def drive(case):
                       represented=reduction.represented(consist.mass, case["fence_weights"]),
                       effort=case["effort_penalty"])
     state = plant.initial(head=-0.5 * consist.length[0], speed=0.0)
-    observer = (KalmanObserver(reduction.model, reduction.kinds, estimate=reduced_state(plant, reduction, state))
-                if case["observer"] else None)
+    observer = (KalmanObserver(reduction.model, reduction.kinds, q=case["observer_q"], r=case["observer_r"],
+                               estimate=reduced_state(plant, reduction, state)) if case["observer"] else None)
     state, record = run(plant, reduction, controller, state, reference, case["max_samples"], observer=observer)
     return consist, controller, record, reference, plant
 
