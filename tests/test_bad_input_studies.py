@@ -224,6 +224,25 @@ def test_an_out_folder_holding_another_study_is_refused_before_computing(tmp_pat
     store.close()
 
 
+def test_an_out_folder_holding_another_commands_results_is_refused_before_computing(tmp_path):
+    """A solve's folder given to compare, pareto or run: refused in one line (their
+    tables and summary.json would be written beside the solve's and read as one); the folder unchanged;
+    the same command again is not refused."""
+    out = tmp_path / "solved"
+    assert run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--points", 30, "--no-plot",
+               "--out", out).exit_code == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    study = STUDIES / "default.yaml"
+    for command, kind in ((["compare", study], "compare"), (["pareto", study, "--count", 3], "pareto"),
+                          (["run", study], "run")):
+        refused(run(*command, "--no-plot" if kind != "run" else "--no-progress", "--out", out),
+                str(out), "--out: holds the results of `ecostudy solve` (its summary.json), "
+                f"not of `ecostudy {kind}`")
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert run("solve", "--track", AMS, "--train", METRO, "--time", 80, "--points", 30, "--no-plot",
+               "--out", out).exit_code == 0
+
+
 # ----------------------------------------------------------------------------------- export
 @pytest.fixture(scope="module")
 def saved(tmp_path_factory):

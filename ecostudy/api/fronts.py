@@ -58,7 +58,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     cases = front_cases(train_doc, track_doc, f, t, count, supplement_max * units.PERCENT, k or FRONT_POINTS,
                         st.name if st is not None else "pareto", das, das_time_limit)
     out_dir = output_folder(out, beside(st, "_pareto", "pareto"))
-    check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png", "results.sqlite"))
+    check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png", "results.sqlite"), "pareto")
     check_front("command line", count, k or FRONT_POINTS, workers, das, das_time_limit)  # refused (unless --force)
     extra = weighted_points(trk, trn, f, t, count=weighted, points=k or FRONT_POINTS) if weighted else None
     ran = run_expanded("pareto", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,
@@ -162,7 +162,7 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
     check_journey(timetable or "command line", len(names) - 1, points, workers,  # too big: refused (unless --force)
                   splits=4 + (scheduled is not None) + (plan is not None), whole=1 + (plan is not None))
     out_dir = check_output_dir(output_folder(out, Path("out") / "journey"),
-                               ("journey.csv", "journey_totals.csv", "journey.png"))
+                               ("journey.csv", "journey_totals.csv", "journey.png"), "journey")
     table, totals, results, _ = journey(trk, trn, names, total_time=time,
                                         supplement=None if supplement is None else supplement * units.PERCENT,
                                         points=points, workers=workers, scheduled=scheduled, plan=plan,

@@ -20,9 +20,21 @@ def _umask() -> int:
 FILE_MODE = 0o666 & ~_umask()  # what open() would give: the user's umask, not mkstemp's 0600
 
 
-def check_output_dir(path: Union[str, Path], files: Iterable[str] = ()) -> Path:
+def _kind_of(folder: Path) -> str | None:
+    """The ``kind`` in a folder's summary.json, None where there is none or it cannot be read."""
+    try:
+        data = json.loads((folder / "summary.json").read_text())
+    except (OSError, ValueError):
+        return None
+    kind = data.get("kind") if isinstance(data, dict) else None
+    return kind if isinstance(kind, str) else None
+
+
+def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: str | None = None) -> Path:
     """Refuse, before any computation, an output folder that is a file, cannot be created or
-    written, or holds a folder where one of ``files`` goes: one line naming it (exit 2). The
+    written, or holds a folder where one of ``files`` goes, or (``kind`` given) holds the results
+    of another kind of command (its ``summary.json``'s ``kind``: this command's tables and
+    summary would be written beside the other's, and read as one): one line naming it (exit 2). The
     folders this check creates to try are removed again: a command refused later (an infeasible
     running time) leaves nothing behind; the first file written creates the folder
     (:func:`atomic_write`, the store)."""
@@ -32,6 +44,10 @@ def check_output_dir(path: Union[str, Path], files: Iterable[str] = ()) -> Path:
     for name in files:
         if (path / name).is_dir():
             raise InputError(problem(path / name, "", "is a folder where an output file goes"))
+    other = _kind_of(path)
+    if kind is not None and other is not None and other != kind:
+        raise InputError(problem(path, "--out", f"holds the results of `ecostudy {other}` (its summary.json), "
+                                 f"not of `ecostudy {kind}`: give another --out, or remove the folder"))
     created = [p for p in (path, *path.parents) if not p.exists()]  # deepest first
     try:
         path.mkdir(parents=True, exist_ok=True)

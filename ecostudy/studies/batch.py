@@ -264,7 +264,8 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     if spec.size is not None and compute is None:  # too big: refused with its estimate (unless --force); a part
         # computed now (``compute``) is checked by its caller
         spec.size(Path(where), expanded.cases, workers)
-    output = check_output_dir(out or expanded.output, (spec.table_file, "results.sqlite", *expanded.inputs))
+    output = check_output_dir(out or expanded.output, (spec.table_file, "results.sqlite", *expanded.inputs),
+                              kind)
     if spec.one_study and expanded.cases:
         check_one_study(output, expanded.cases[0]["study"])
     for name, frame in expanded.inputs.items():

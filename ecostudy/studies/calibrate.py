@@ -63,7 +63,7 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
     ``saving_draws`` (a count) also the savings against the logged driving (``savings.csv``)."""
     names = parse_fit(fit)
     logs, track, train, track_path, train_path = load_inputs(log_paths, train_path, track_path)
-    out = check_output_dir(out, CALIBRATE_FILES)
+    out = check_output_dir(out, CALIBRATE_FILES, "calibrate")
     result = calibrate_logs(logs, track, train, names, draws)
     identified = [n for n in names if n not in set(result.table.loc[~result.table["identifiable"], "name"])]
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d")
@@ -105,7 +105,7 @@ def savings_statuses(table):
 def validate_study(log_path, train_path, track_path, out, energy_tolerance=0.05, time_tolerance=0.05, figures=()):
     """Replay one log on the train file's model and write the differences per run to ``out``."""
     logs, track, train, track_path, train_path = load_inputs([log_path], train_path, track_path)
-    out = check_output_dir(out, VALIDATE_FILES)
+    out = check_output_dir(out, VALIDATE_FILES, "validate")
     table = validate_log(logs[0], track, train, energy_tolerance, time_tolerance)
     write_csv(out / "validate.csv", table)
     flagged = table[table["status"] != "ok"]

@@ -50,7 +50,8 @@ def expand_network(path, workers=1, pool=None, note=None, out=None):
         raise InputError(problem(path, "buffer_m", f"{st.buffer:g} m is not shorter than the line ({st.track.length:g} m): "
                                  "no train could follow another"))
     check_network_study(st, path, workers)
-    output = check_output_dir(Path(out) if out else st.output, ("network_substation.csv", "results.sqlite"))
+    output = check_output_dir(Path(out) if out else st.output, ("network_substation.csv", "results.sqlite"),
+                              "network")
     check_one_study(output, st.name)  # before the fleet's first runs are solved
     s = validate(NetworkStudyFile, read_document(path), path)
     try:
