@@ -327,6 +327,8 @@ def without_column(text, index):
      ["header: power_sampling_mode: unknown field; did you mean power_sampling?"]),
     (good().replace("\n---\ntime_s", "\nstart_position_km: 0.3\n---\ntime_s"),
      ["header: start_position_km: unknown field; did you mean start_position_m?"]),
+    (good().replace("train:", "'': instant\ntrain:"), ["header: a field without a name (value 'instant')"]),
+    (good().replace("train:", "null: instant\ntrain:"), ["header: a field without a name (value 'instant')"]),
     (good().replace("speed_mps", "speed_mph"), ["speed_mph", "unknown column", "unit is part of the name"]),
     (good().replace("force_kN", "speed_kmh"), ["columns", "two columns give the speed"]),
     (good().replace("\n1.0,", "\n1.0x,", 1), ["time_s", "row 11", "'1.0x' is not a number"]),
