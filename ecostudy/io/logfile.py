@@ -323,7 +323,7 @@ def load_log(path: Where) -> "LoggedRun":
     if file.stat().st_size > MAX_FILE_BYTES:
         raise InputError(problem(file, "", f"larger than the {MAX_FILE_BYTES / 1e6:.0f} MB ecostudy reads"))
     try:
-        text = file.read_bytes().decode("utf-8")
+        text = file.read_bytes().decode("utf-8-sig")  # a byte order mark (a spreadsheet's "CSV UTF-8") is dropped
     except UnicodeDecodeError as exc:
         raise InputError(problem(file, "", f"not UTF-8 text (byte {exc.start}: {exc.reason})"))
     return parse_log(text, file)
