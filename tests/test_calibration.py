@@ -16,7 +16,7 @@ from ecostudy.calibration.validate import validate_log
 from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning, InputError
 from ecostudy.io.loaders import load_track, load_train, track_from_dict
-from ecostudy.io.logfile import parse_log, write_log
+from ecostudy.io.logfile import load_log, parse_log, write_log
 
 from .conftest import TRACKS, TRAINS
 
@@ -327,6 +327,8 @@ def without_column(text, index):
      ["header: power_sampling_mode: unknown field; did you mean power_sampling?"]),
     (good().replace("\n---\ntime_s", "\nstart_position_km: 0.3\n---\ntime_s"),
      ["header: start_position_km: unknown field; did you mean start_position_m?"]),
+    (good().replace("train:", "'': instant\ntrain:"), ["header: a field without a name (value 'instant')"]),
+    (good().replace("train:", "null: instant\ntrain:"), ["header: a field without a name (value 'instant')"]),
     (good().replace("speed_mps", "speed_mph"), ["speed_mph", "unknown column", "unit is part of the name"]),
     (good().replace("force_kN", "speed_kmh"), ["columns", "two columns give the speed"]),
     (good().replace("\n1.0,", "\n1.0x,", 1), ["time_s", "row 11", "'1.0x' is not a number"]),
@@ -388,6 +390,17 @@ def test_header_fields_ecostudy_does_not_know_are_warned_by_name_and_left_out():
     both = good().replace("train:", "power_sampling: instant\npower_sampling_mode: 2 Hz\ntrain:")
     with pytest.warns(EcostudyWarning, match="power_sampling_mode not modelled"):
         assert parse_log(both, "both.csv").header.power_sampling == "instant"
+
+
+def test_a_log_saved_with_a_byte_order_mark_reads_as_without(tmp_path):
+    """A spreadsheet's "CSV UTF-8" starts the file with a byte order mark: the header is still the
+    first line (it was refused: "expected a YAML header between two '---' lines", which it has)."""
+    path = tmp_path / "bom.csv"
+    path.write_bytes(b"\xef\xbb\xbf" + good().encode())
+    plain = tmp_path / "plain.csv"
+    plain.write_text(good())
+    log = load_log(path)
+    assert log.header == load_log(plain).header and np.array_equal(log.x, load_log(plain).x)
 
 
 def test_validate_names_unknown_header_fields_and_runs(tmp_path, log_files):

@@ -110,3 +110,33 @@ def test_the_other_strategies_stay_honest(too_close):
     status = out["independent"]["totals"]["status"]
     assert status.startswith("flagged: trains overlap on the line: train T2's head came"), status
     assert "past the tail of train T1 at" in status and "m along the line" in status, status
+
+
+def test_a_train_behind_that_must_start_while_the_train_ahead_stands_is_named(tmp_path):
+    """T2 departs 60 s after T1, buffer_m 560: when T2 departs, T1 stands at Station, its tail exactly
+    560 m ahead, so the timetable passes. But T1 stands there until 66 s (its terminus dwell) and T2,
+    to cover the 650 m by 116 s, must have left Noord by then (its latest start: 0.8 m along at 66 s
+    measured, its all-out time 50.x s): no run keeps the buffer. The joint optimum's NLP with the
+    buffer's rows is infeasible, and its reason names T2's latest start and T1 standing, not only
+    Ipopt's word (before, it read "no departure or arrival inside buffer_m 560 m explains it"); the
+    rules' and `following`'s leg NLP, given T1's run, is infeasible too, and its reason says how near
+    T2 must come and when (before: Ipopt's word only)."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 60.0], ["T1", "T2"], 1.0,
+                   Supply(position=300.0), points=200, buffer=560.0)
+    assert headway.timetable_conflict(f) is None
+    found = headway.reach_conflict(f)
+    assert (found["train"], found["ahead"], found["time_s"], found["least"]) == ("T2", "T1", 66.0, True), found
+    least = headway.furthest(f.legs[1][0], 6, least=True)
+    assert 0.0 < least < 5.0 and found["furthest_m"] == pytest.approx(least, abs=1e-9), least  # 0.8 m measured
+    out = strategies.run_strategies(f, ["independent", "receptivity", "joint", "following"], progress=None)
+    for name in ("receptivity", "following"):  # the leg's own reason: the nearest any run must come, and when
+        assert out[name]["failed"].startswith(  # (before: "train T2, leg 1: Ipopt infeasible after 158 iterations")
+            "train T2, leg 1: cannot keep buffer_m 560 m behind the train ahead: on any run that arrives on time its "
+            f"head comes within {560.0 - least:.1f} m of that train's tail, at 66 s (offset_s, dwell_s) (Ipopt "
+            "infeasible after"), out[name]
+    why = out["joint"]["failed"]
+    assert why.startswith("train T2 runs from Noord to Station at 66 s, 6 s after it departed, when train T1 stands at "
+                          f"Station: to arrive on time it must be at least {least:.1f} m along its leg (its latest "
+                          f"start): T2's head is at most {560.0 - least:.1f} m behind T1's tail"), why
+    assert "buffer_m 560 m is asked" in why and "Ipopt" in why, why

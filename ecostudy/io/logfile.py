@@ -141,10 +141,14 @@ def known_header(fields: Mapping[Any, Any], path: Where) -> dict[str, Any]:
     naming it and the file, unless it is a near miss (:data:`NEAR_MISS`) of a known field the header
     does not give: that one is refused naming the field(s) it may be, as every known field changes
     what is computed (a misspelt ``power_sampling: instant`` left out would integrate the powers as
-    interval means)."""
+    interval means). A field without a name (empty, or YAML's null) is refused."""
     known = list(LogHeader.model_fields)
     lines, ignored = [], []
-    for name in (str(key) for key in fields if str(key) not in known):
+    for key, value in fields.items():
+        if key is None or not str(key).strip():  # '': x, null: x: nothing to name in a warning
+            lines.append(problem(f"{path}: header", "", f"a field without a name (value {value!r}): name it or "
+                                 "remove it"))
+    for name in (str(key) for key in fields if key is not None and str(key).strip() and str(key) not in known):
         near = [k for k in difflib.get_close_matches(name, known, n=3, cutoff=NEAR_MISS) if k not in fields]
         if near:
             lines.append(problem(f"{path}: header", name, f"unknown field; did you mean {' or '.join(near)}?"))
@@ -319,7 +323,7 @@ def load_log(path: Where) -> "LoggedRun":
     if file.stat().st_size > MAX_FILE_BYTES:
         raise InputError(problem(file, "", f"larger than the {MAX_FILE_BYTES / 1e6:.0f} MB ecostudy reads"))
     try:
-        text = file.read_bytes().decode("utf-8")
+        text = file.read_bytes().decode("utf-8-sig")  # a byte order mark (a spreadsheet's "CSV UTF-8") is dropped
     except UnicodeDecodeError as exc:
         raise InputError(problem(file, "", f"not UTF-8 text (byte {exc.start}: {exc.reason})"))
     return parse_log(text, file)

@@ -1,7 +1,8 @@
 """Whether a timetable lets each train keep ``buffer_m`` behind the train ahead: from the timetable
 alone (:func:`timetable_conflict`: where a train stands, departs or arrives, its position is its
-stop; while it runs, it is between its two stops), or with the train ahead's fastest start
-(:func:`reach_conflict`: the furthest its leg NLP can take it by a clock step, a real Ipopt solve).
+stop; while it runs, it is between its two stops), or with the running train's dynamics
+(:func:`reach_conflict`: the furthest the train ahead's leg NLP can take it by a clock step, or
+the least far the train behind can be and still arrive on time, real Ipopt solves).
 
 The first is decidable from the study file (stops, running times, dwell, departures, the train's
 length, the buffer): a network study that fails it is refused before anything is solved. The
@@ -93,43 +94,61 @@ def say_timetable(conflict, buffer):
             "(offset_s), or change dwell_s or running_times_s")
 
 
-def furthest(leg, j):
+def furthest(leg, j, least=False):
     """The furthest [m] leg ``leg`` can take its train by its step ``j``: its leg NLP (the joint's
-    rows, ``timedomain.add_leg``: the same stops, running time and limits) maximising s_j."""
+    rows, ``timedomain.add_leg``: the same stops, running time and limits) maximising s_j; with
+    ``least``, the least far it can be and still arrive on time (minimising s_j: its latest start)."""
     m = pyo.ConcreteModel()
     b = timedomain.add_leg(m, "leg", leg, None, one_handle=False)
-    m.objective = pyo.Objective(expr=b.s[j], sense=pyo.maximize)
+    m.objective = pyo.Objective(expr=b.s[j], sense=pyo.minimize if least else pyo.maximize)
     outcome = session.solve(m)
-    return float(pyo.value(b.s[j])) if outcome.usable else float(leg.case.segment.distance)
+    return float(pyo.value(b.s[j])) if outcome.usable else 0.0 if least else float(leg.case.segment.distance)
 
 
 def reach_conflict(fleet):
-    """The earliest clock step where a train departs or arrives (its head at its stop) and the train
-    ahead, running, cannot be ``fleet.buffer`` ahead of it even on its fastest start (:func:`furthest`):
-    :func:`timetable_conflict`'s dict with "furthest_m" (how far along its leg the train ahead can
-    be); None where there is none (then no such bound explains an infeasible joint NLP)."""
+    """The earliest clock step where a train's position is fixed by the timetable and the other of a
+    pair, running, cannot keep ``fleet.buffer`` between them: a train departs or arrives (its head at
+    its stop) while the train ahead, on its fastest start (:func:`furthest`), is still too near; or
+    the train ahead stands at a stop for the last step (it departs, or leaves the line after its
+    terminus dwell) while the train behind, on its latest start (``furthest(least=True)``), is
+    already too near. :func:`timetable_conflict`'s dict with "furthest_m" (how far along its leg
+    the running train can be at the most, or with "least", at the least) and "since_s" (since it
+    departed); None where there is none (then no such bound explains an infeasible joint NLP)."""
     order = departure_order(fleet)
     length = fleet.legs[0][0].case.train.length
-    steps = sorted({(leg.start + j, rank) for rank in range(1, len(order)) for leg in fleet.legs[order[rank]]
-                    for j in (0, leg.steps)})
-    at = {i: _extremes(fleet, i)[0] for i in order[1:]}  # where each train is; at its stops both extremes agree
-    for t, rank in steps:
+    fixed = {(leg.start + j, rank, False) for rank in range(1, len(order)) for leg in fleet.legs[order[rank]]
+             for j in (0, leg.steps)}  # the train behind departs or arrives
+    fixed |= {(t, rank, True) for rank in range(1, len(order)) for t in _last_standing(fleet, order[rank - 1])}
+    at = {i: _extremes(fleet, i)[0] for i in order}  # where each train is; where it does not run both extremes agree
+    for t, rank, behind_runs in sorted(fixed):
         ahead, me = order[rank - 1], order[rank]
         d = fleet.legs[me][0].direction
-        mine = d * at[me][t]
-        for leg in fleet.legs[ahead]:
-            if leg.start < t < leg.start + leg.steps:  # the train ahead runs this leg at t
-                far = furthest(leg, t - leg.start)
-                gap = d * (leg.line_start + leg.direction * far) - mine - length
+        runner = me if behind_runs else ahead
+        for leg in fleet.legs[runner]:
+            if leg.start < t < leg.start + leg.steps:  # it runs this leg at t
+                far = furthest(leg, t - leg.start, least=behind_runs)
+                there = d * (leg.line_start + leg.direction * far)
+                gap = d * at[ahead][t] - there - length if behind_runs else there - d * at[me][t] - length
                 if gap < _least(fleet):
-                    return {**_conflict(fleet, ahead, me, t, gap), "furthest_m": far,
+                    return {**_conflict(fleet, ahead, me, t, gap), "furthest_m": far, "least": behind_runs,
                             "since_s": (t - leg.start) * fleet.dt}
     return None
+
+
+def _last_standing(fleet, i):
+    """The clock steps at which train ``i`` stands at a stop for the last time before it moves on:
+    each departure after the first, and the last step of its terminus dwell."""
+    legs = fleet.legs[i]
+    return [leg.start for leg in legs[1:]] + [legs[-1].start + legs[-1].steps + fleet.dwell_steps]
 
 
 def say_reach(conflict, buffer):
     """A :func:`reach_conflict` in words."""
     c = conflict
+    if c.get("least"):
+        return (f"train {c['train']} {c['doing']} at {c['time_s']:g} s, {c['since_s']:g} s after it departed, when "
+                f"train {c['ahead']} {c['ahead_doing']}: to arrive on time it must be at least {c['furthest_m']:.1f} m "
+                f"along its leg (its latest start): {_gap(c)}, where {_asked(buffer)} is asked (offset_s, dwell_s)")
     return (f"train {c['train']} {c['doing']} at {c['time_s']:g} s, when train {c['ahead']}, {c['since_s']:g} s "
             f"after it departed, can be at most {c['furthest_m']:.1f} m along its leg (its fastest start): "
             f"{_gap(c)}, where {_asked(buffer)} is asked (offset_s)")

@@ -50,8 +50,9 @@ def joint(fleet, start, one_handle=False, floating=False):
 def why_not_separated(fleet, exc, missed):
     """The reason the joint NLP with the buffer's rows has no usable point (``exc``: Ipopt's word): a
     train that departs or arrives where the train ahead cannot be ``buffer_m`` ahead even on its
-    fastest start, or in the timetable alone (``network.headway``); else Ipopt's word with the
-    closest approach ``missed`` of the optimum without the rows."""
+    fastest start, a train ahead that stands where the train behind is too near even on its latest
+    start, or the timetable alone (``network.headway``); else Ipopt's word with the closest approach
+    ``missed`` of the optimum without the rows."""
     found = headway.timetable_conflict(fleet)
     if found is not None:
         return f"{headway.say_timetable(found, fleet.buffer)} ({exc})"

@@ -138,7 +138,10 @@ def solve_leg(task):
     _check_departure_gap(task)
     nlp = LegNLP(task)
     checked = task[5] == CHECKED
-    run, outcome, cost = _solve(nlp, max_iter=CHECKED_MAX_ITER if checked else None)
+    try:
+        run, outcome, cost = _solve(nlp, max_iter=CHECKED_MAX_ITER if checked else None)
+    except SolverError as exc:
+        raise SolverError(_why_not_kept(task, exc)) from None
     notes = {}
     restart = None  # the solve from the trapezoidal start, once made
     second = SECOND_START.get(task[5])  # a checked warm leg or a cold one: from the trapezoidal start too
@@ -197,6 +200,35 @@ def _check_departure_gap(task):
             where = f"{gap:.1f} m ahead of its head" if gap >= 0 else f"{-gap:.1f} m behind its head (they overlap)"
             raise SolverError(f"{label}: cannot keep buffer_m {buffer:g} m behind the train ahead, whose tail is "
                               f"{where} when this leg {when} at {(leg.start + j) * leg.dt:g} s (offset_s, dwell_s)")
+
+
+def _why_not_kept(task, exc):
+    """Ipopt's word ``exc`` for a leg kept ``buffer`` behind the train ahead, with the nearest any run
+    of the leg must come to that train's tail and when, where that is nearer than the buffer: the
+    leg's NLP without its cost (one handle relaxed), minimising the largest shortfall z of the
+    separation rows (x_ahead - s_j >= buffer + length - z)."""
+    leg, label, _, buffer, *_, ahead = task
+    if ahead is None or buffer is None or "infeasible" not in str(exc):
+        return str(exc)
+    m = pyo.ConcreteModel()
+    b = timedomain.add_leg(m, "leg", leg, None, one_handle=False)
+    m.z = pyo.Var(bounds=(0.0, None), initialize=buffer)
+    m.rows = pyo.ConstraintList()
+    ahead_at = {}
+    for j in range(leg.steps + 1):
+        x_ahead, least = separation(leg, ahead, buffer, j)
+        if np.isfinite(x_ahead):
+            m.rows.add(x_ahead - b.s[j] >= least - m.z)
+            ahead_at[j] = x_ahead - leg.case.train.length  # its tail in the leg's distance
+    m.objective = pyo.Objective(expr=m.z)
+    if not ahead_at or not session.solve(m).usable or pyo.value(m.z) <= BUFFER_SLACK_M:
+        return str(exc)
+    j = min(ahead_at, key=lambda k: ahead_at[k] - pyo.value(b.s[k]))  # where the shortfall binds
+    gap = buffer - pyo.value(m.z)
+    near = f"within {gap:.1f} m of" if gap >= 0 else f"{-gap:.1f} m past"
+    return (f"{label}: cannot keep buffer_m {buffer:g} m behind the train ahead: on any run that arrives on time "
+            f"its head comes {near} that train's tail, at {(leg.start + j) * leg.dt:g} s (offset_s, dwell_s) "
+            f"({str(exc).removeprefix(label + ': ')})")
 
 
 STAND_SPEED_MPS = 0.1  # [m/s] below this a train stands
