@@ -18,10 +18,7 @@ def handles(train, v, ft, fb):
 
 def regenerated_force(train, v, fb):
     """Part of the braking force the electric brake can take at the interval's mean speed [N]."""
-    if train.regeneration is None:
-        return np.zeros_like(fb)
-    vm = 0.5 * (v[:-1] + v[1:])
-    return np.minimum(fb, train.regeneration.force(vm))
+    return train.electric_brake(np.asarray(fb, float), 0.5 * (v[:-1] + v[1:]))
 
 
 def tabulate(train, nodes, v, dt, ft, fb):

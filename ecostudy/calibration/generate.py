@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
-from ecostudy.core.grid import Profile, make_segment
+from ecostudy.core.grid import Profile, intervals_of, make_segment
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import davis_resistance, gradient_force
 from ecostudy.core.plant import Plant
@@ -72,7 +72,7 @@ def drive(plant, nodes, handle):
     (the plant holds the profile of each piece constant, so a change must start a piece)."""
     fine = np.union1d(nodes, plant.segment.breakpoints())
     fine = fine[fine <= nodes[-1]]
-    index = np.clip(np.searchsorted(nodes, fine[:-1], side="right") - 1, 0, len(handle) - 1)
+    index = intervals_of(nodes, fine[:-1])
     steps = [handle[i] for i in index]
     return fine, steps, plant.drive(fine, steps)
 

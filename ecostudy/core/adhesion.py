@@ -19,10 +19,10 @@ from ecostudy.core.errors import EcostudyWarning, problem
 from ecostudy.core.physics import GRAVITY, Envelope, table_width
 from ecostudy.core.units import KMH, FloatArray, Numeric
 
-# a run whose traction or electric braking asks more than 1 + this share of mu(v) m_adh g is flagged:
-# the capped table is within CAP_TOLERANCE of the cap between its points and its rounded kinks add as
-# much again (physics.table_width), so 1 % is well clear of the cap's own error (the heavy-haul
-# check's share, heavyhaul.metrics.ADHESION)
+# a run whose traction or electric braking asks more than 1 + this share of mu(v) m_adh g is flagged
+# (a point-mass train, and a heavy-haul locomotive: heavyhaul.metrics.ADHESION): the capped table is
+# within CAP_TOLERANCE of the cap between its points and its rounded kinks add as much again
+# (physics.table_width), so 1 % is well clear of the cap's own error
 TOLERANCE = 0.01
 CAP_TOLERANCE = 0.001  # a capped table's linear interpolation within 0.1 % of min(envelope, mu m g)
 CAP_SAMPLES = 4001     # speeds at which the capped curve is sampled from 0 to the top speed

@@ -7,7 +7,7 @@ proportion to their length.
 """
 import warnings
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -211,9 +211,15 @@ def make_grid(segment: Segment, points: int, extra: Sequence[float] | FloatArray
     return np.append(np.concatenate(nodes), segment.distance)
 
 
+def intervals_of(nodes: FloatArray, x: Numeric) -> Any:
+    """Index of the grid interval holding each position of ``x`` (the first or last one beyond the
+    ends); an array for an array."""
+    return np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, len(nodes) - 2)
+
+
 def interval_of(nodes: FloatArray, x: float) -> int:
-    """Index of the grid interval holding position ``x`` (the first or last one beyond the ends)."""
-    return int(np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, len(nodes) - 2))
+    """Index of the grid interval holding position ``x`` (:func:`intervals_of` of one position)."""
+    return int(intervals_of(nodes, x))
 
 
 def node_limits(segment: Segment, nodes: FloatArray) -> FloatArray:

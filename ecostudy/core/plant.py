@@ -171,7 +171,7 @@ class Plant:
         if v <= 0.0 and ft - resist + self.mass * disturbance <= 0.0:  # standing stays standing
             return [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
         train = self.train
-        fr = min(fb, train.regeneration.force(v)) if train.regeneration is not None and fb > 0 else 0.0
+        fr = float(train.electric_brake(fb, v)) if fb > 0 else 0.0
         line = line_energy(ft, fr, v, v, train.eta_traction, train.eta_regeneration)
         return [v, acceleration(ft, fb, resist, self.mass) + disturbance, ft * v, fb * v, fr * v, line]
 

@@ -13,7 +13,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ecostudy.core import adhesion
-from ecostudy.core.grid import Segment
+from ecostudy.core.grid import Segment, intervals_of
 from ecostudy.core.plant import Plant, Truth
 from ecostudy.core.types import Train, Window
 from ecostudy.core.units import FloatArray, to_kmh, to_kwh
@@ -94,11 +94,11 @@ def adhesion_use(train: Train, nodes: FloatArray, handle: Sequence[float] | Floa
     the net acceleration, which only lowers it). 0 for a train without an adhesion limit."""
     if train.adhesion is None:
         return 0.0
-    k = np.clip(np.searchsorted(nodes, trace.x, side="right") - 1, 0, len(nodes) - 2)
+    k = intervals_of(nodes, trace.x)
     u, v = np.asarray(handle, float)[k], np.maximum(trace.v, 0.0)
     traction = np.maximum(u, 0.0) * train.traction.force(v)
     braking = np.maximum(-u, 0.0) * train.braking.force(v)
-    electric = np.minimum(braking, train.regeneration.force(v)) if train.regeneration is not None else 0.0 * v
+    electric = train.electric_brake(braking, v)
     return float(np.max(np.maximum(adhesion.use(train.adhesion, v, traction), adhesion.use(train.adhesion, v, electric)),
                         initial=0.0))
 

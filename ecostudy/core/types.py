@@ -49,6 +49,13 @@ class Train:
         """The regeneration efficiency: the map, else the constant."""
         return self.regeneration_efficiency_map or self.regeneration_efficiency
 
+    def electric_brake(self, braking: Numeric, speed: Numeric) -> Numeric:
+        """The part [N] of a braking force ``braking`` [N] the electric (regenerative) brake takes at
+        ``speed`` [m/s]: all of it up to the regenerative envelope, none without one."""
+        if self.regeneration is None:
+            return 0.0 * braking
+        return np.minimum(braking, self.regeneration.force(speed))
+
     def with_brake_reserve(self, share: float) -> "Train":
         """This train as a controller plans with it: ``share`` of the service brake held back (the
         braking envelope times 1 - share), for the deviations a plan cannot see."""

@@ -23,6 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ecostudy.core import adhesion
 from ecostudy.core.units import KMH, KN, KWH
 from ecostudy.heavyhaul.fatigue import damage, rainflow
 from ecostudy.heavyhaul.plant import LOSSES
@@ -31,11 +32,11 @@ from ecostudy.heavyhaul.rhc import TERMS
 RUN_IN = 50 * KN  # a coupler's force from above +this (draft) to below -this (buff) is a slack run-in [N]
 PULLING = KN     # a (virtual) car's effort above this pulls, below minus this brakes [N]
 AT_LIMIT = 0.99  # dynamic braking at this share of its limit or more is "at the limit"
-# a locomotive may ask 1 % more than mu(v) m g before the run is flagged: the inputs of the ratio are
-# given to about three digits (Curtius & Kniffler's 0.161, 7.5, 44; a consist's 126 t, 560 kN), so
-# within 1 % a run is not shown to exceed dry rail's grip; the plant's own arithmetic is exact (with
-# adhesion on it clips the effort to the grip: the ratio is at most 1)
-ADHESION = 0.01
+# a locomotive may ask 1 % more than mu(v) m g before the run is flagged (core.adhesion.TOLERANCE, the
+# point-mass trains' share too): the inputs of the ratio are given to about three digits (Curtius &
+# Kniffler's 0.161, 7.5, 44; a consist's 126 t, 560 kN), so within 1 % a run is not shown to exceed dry
+# rail's grip; the plant's own arithmetic is exact (with adhesion on it clips the effort to the grip)
+ADHESION = adhesion.TOLERANCE
 
 
 class Tolerances(NamedTuple):

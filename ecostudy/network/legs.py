@@ -176,15 +176,22 @@ def separation(leg, ahead, buffer, j):
 BUFFER_SLACK_M = 1e-3  # [m] a separation nearer than the buffer by more is missed: well beyond what Ipopt leaves a row violated
 
 
-def separation_rows(leg, ahead, buffer, s):
-    """The rows keeping a leg's head (``s``: its distance per step, a leg block's variables) ``buffer``
-    behind the tail of the train ahead at every step where that one is on the line. ``ahead``: its
-    line position per clock step, numbers (NaN: off the line) or, in the joint NLP, expressions of
-    its own variables."""
+def separated_steps(leg, ahead, buffer):
+    """(step j, :func:`separation` at j) for every step of the leg where the train ahead is on the
+    line. ``ahead``: its line position per clock step, numbers (NaN: off the line) or, in the joint
+    NLP, expressions of its own variables."""
     for j in range(leg.steps + 1):
         x_ahead, least = separation(leg, ahead, buffer, j)
         if not (isinstance(x_ahead, float) and np.isnan(x_ahead)):  # NaN: not on the line
-            yield x_ahead - s[j] >= least
+            yield j, x_ahead, least
+
+
+def separation_rows(leg, ahead, buffer, s, slack=0.0):
+    """The rows keeping a leg's head (``s``: its distance per step, a leg block's variables) ``buffer``
+    behind the tail of the train ahead (less ``slack``) at every step where that one is on the line
+    (:func:`separated_steps`)."""
+    for j, x_ahead, least in separated_steps(leg, ahead, buffer):
+        yield x_ahead - s[j] >= least - slack
 
 
 def _check_departure_gap(task):
@@ -214,12 +221,10 @@ def _why_not_kept(task, exc):
     b = timedomain.add_leg(m, "leg", leg, None, one_handle=False)
     m.z = pyo.Var(bounds=(0.0, None), initialize=buffer)
     m.rows = pyo.ConstraintList()
-    ahead_at = {}
-    for j in range(leg.steps + 1):
-        x_ahead, least = separation(leg, ahead, buffer, j)
-        if np.isfinite(x_ahead):
-            m.rows.add(x_ahead - b.s[j] >= least - m.z)
-            ahead_at[j] = x_ahead - leg.case.train.length  # its tail in the leg's distance
+    for row in separation_rows(leg, ahead, buffer, b.s, slack=m.z):
+        m.rows.add(row)
+    ahead_at = {j: x_ahead - leg.case.train.length  # its tail in the leg's distance
+                for j, x_ahead, _ in separated_steps(leg, ahead, buffer)}
     m.objective = pyo.Objective(expr=m.z)
     if not ahead_at or not session.solve(m).usable or pyo.value(m.z) <= BUFFER_SLACK_M:
         return str(exc)

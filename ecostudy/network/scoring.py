@@ -108,10 +108,11 @@ def closest_approach(fleet, runs_by_train):
     return best
 
 
-def buffer_missed(fleet, runs_by_train):
-    """The closest approach (:func:`closest_approach`) where it is nearer than ``fleet.buffer``
-    (beyond what Ipopt leaves a separation row violated, ``legs.BUFFER_SLACK_M``), else None."""
+def buffer_missed(fleet, runs_by_train, closest=None):
+    """The closest approach (:func:`closest_approach`, or ``closest`` where already found) where it
+    is nearer than ``fleet.buffer`` (beyond what Ipopt leaves a separation row violated,
+    ``legs.BUFFER_SLACK_M``), else None."""
     if not fleet.buffer:
         return None
-    closest = closest_approach(fleet, runs_by_train)
+    closest = closest or closest_approach(fleet, runs_by_train)
     return closest if closest is not None and closest["gap_m"] < fleet.buffer - BUFFER_SLACK_M else None

@@ -195,7 +195,7 @@ def _scored(fleet, runs, info, wall, mapper=map):
         flags.append(f"trains overlap on the line: train {closest['train']}'s head came {-closest['gap_m']:.1f} m past "
                      f"the tail of train {closest['ahead']} at {closest['time_s']:g} s, {closest['position_m']:.0f} m "
                      "along the line (offset_s)")
-    missed = buffer_missed(fleet, runs)
+    missed = buffer_missed(fleet, runs, closest)
     if missed is not None and missed["gap_m"] >= 0.0:  # nearer than buffer_m, no overlap (flagged above)
         flags.append(f"train {missed['train']}'s head came within {missed['gap_m']:.1f} m of the tail of train "
                      f"{missed['ahead']} at {missed['time_s']:g} s, {missed['position_m']:.0f} m along the line: "
