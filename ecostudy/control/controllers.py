@@ -45,13 +45,11 @@ class OpenLoop(Fallback):
     def __init__(self, result, by="position"):
         self.result, self.by = result, by
         self.key = result.nodes if by == "position" else result.trajectory.time
-        self.solve_seconds = []
         self._start_records()
 
     def plan(self, measured):
         x = measured.position if self.by == "position" else measured.time
-        self.solve_seconds.append(0.0)
-        self.record("replay", 0.0)
+        self.without_solve("replay")
         return float(self.result.handle[interval_of(self.key, x)])
 
 
@@ -61,12 +59,10 @@ class ForceReplay(Fallback):
 
     def __init__(self, train, nodes, force):
         self.train, self.nodes, self.force = train, np.asarray(nodes, float), np.asarray(force, float)
-        self.solve_seconds = []
         self._start_records()
 
     def plan(self, measured):
-        self.solve_seconds.append(0.0)
-        self.record("replay", 0.0)
+        self.without_solve("replay")
         if measured.position >= self.nodes[-1]:
             return -1.0
         return force_handle(self.train, max(measured.speed, 0.0), self.force[interval_of(self.nodes, measured.position)])
@@ -90,14 +86,13 @@ class Replanning(Fallback):
         model = case.train.with_brake_reserve(brake_reserve)
         self.replanner = Replanner(dataclasses.replace(case, train=model), window=(0.0, self.arrival),
                                    options={**REPLAN_OPTIONS, **(options or {})})
-        self.last, self.failures, self.late, self.solve_seconds, self.iterations = 0.0, 0, 0, [], []
+        self.last, self.late, self.iterations = 0.0, 0, []
         self._start_records()
 
     def plan(self, measured):
         distance, measured = self.case.segment.distance, from_departure(measured)
         if measured.position >= distance - self.final_m:
-            self.solve_seconds.append(0.0)
-            self.record("final", 0.0, estimator=self.estimator)
+            self.without_solve("final", self.estimator)
             return -1.0
         scale = self.estimator.estimate if self.estimator is not None else None
         t0, late = time.perf_counter(), self.late
@@ -160,7 +155,7 @@ class Convex(Fallback):
         self.program, self.arrival, self.estimator, self.lead, self.final_m = program, arrival, estimator, lead, final_m
         self.hold, self.full_reserve, self.max_iter, self.budget, self.tracking = (hold, full_reserve, max_iter,
                                                                                   budget, tracking)
-        self.solve_seconds, self.gaps, self.softened, self.failures, self.reserve, self.inexact = [], [], 0, 0, 0, 0
+        self.gaps, self.softened, self.reserve, self.inexact = [], 0, 0, 0
         self._start_records()
 
     def plan(self, measured):
@@ -168,8 +163,7 @@ class Convex(Fallback):
         waiting = (self.lead is not None and measured.speed < 0.01
                    and float(self.lead(np.array([measured.position + 1.0]))[0]) > measured.time)
         if waiting or measured.position >= distance - self.final_m:
-            self.solve_seconds.append(0.0)
-            self.record("wait" if waiting else "final", 0.0, estimator=self.estimator)
+            self.without_solve("wait" if waiting else "final", self.estimator)
             return -1.0
         measured = from_departure(measured)
         scale = self.estimator.estimate if self.estimator is not None else 1.0

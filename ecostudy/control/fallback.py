@@ -11,6 +11,7 @@ needs more braking than it was allowed) or, with nothing else left, in full (``f
 Per call of ``plan`` a controller records a :class:`Step`; ``steps.csv`` of a closed-loop run
 is these records next to the loop's states.
 """
+import time
 from typing import NamedTuple, Optional
 
 KINDS = ("shifted_plan", "reserve", "full_brake")
@@ -37,13 +38,16 @@ class Fallback:
 
     A controller calls :meth:`accept` with ``handle_at(measured) -> handle or None`` (None: the
     plan does not hold for that state) after every usable solve, :meth:`fall_back` when a step has
-    no plan, and :meth:`record` once per call of ``plan``."""
+    no plan, and :meth:`record` once per call of ``plan`` (:meth:`without_solve` for a step that
+    solves nothing, :meth:`settle` after a step's solves)."""
 
     shift_samples = SHIFT_SAMPLES
 
     def _start_records(self):
         self.step_log, self.last_plan, self.shifts = [], None, 0
         self.fallbacks = dict.fromkeys(KINDS, 0)
+        self.solve_seconds = []  # per call of ``plan``
+        self.failures = 0  # steps without a usable plan
 
     def accept(self, handle_at):
         """Keep ``handle_at`` as the plan to fall back on."""
@@ -62,6 +66,26 @@ class Fallback:
         if reserve is not None:
             return self._count(float(reserve), "reserve")
         return self._count(-1.0, "full_brake")
+
+    def without_solve(self, status, estimator=None):
+        """Record a step that solves nothing (``final``, ``replay``, ``wait``, a terminal rule's)."""
+        self.solve_seconds.append(0.0)
+        self.record(status, 0.0, estimator=estimator)
+
+    def settle(self, outcome, t0, measured):
+        """After a step's solves, started at ``t0`` (``outcome``: the last one's, None for none that
+        gives a plan): their time kept; (status, seconds, handle), the handle the fallback's, with
+        the failure counted and the step recorded, when ``outcome`` is not usable, else None (the
+        controller accepts its plan and records the step)."""
+        seconds = time.perf_counter() - t0
+        self.solve_seconds.append(seconds)
+        status = "no_plan" if outcome is None else outcome.status
+        if outcome is not None and outcome.usable:
+            return status, seconds, None
+        self.failures += 1
+        handle, kind = self.fall_back(measured)
+        self.record(status, seconds, fallback=kind)
+        return status, seconds, handle
 
     def _count(self, handle, kind):
         self.fallbacks[kind] += 1

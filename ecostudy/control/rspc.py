@@ -70,7 +70,7 @@ class Rspc(Fallback):
         self.stop_sq = kinematics.braking_curve(segment, reserved, nodes, np.full_like(nodes, np.inf)) ** 2
         reference, run = self._reference(self.arrival - margin)
         self.t_ref, self.t_run = kinematics.clock(reference, nodes), kinematics.clock(run, nodes)
-        self.braking, self.solve_seconds, self.chosen, self.failures = False, [], [], 0
+        self.braking, self.chosen = False, []
         self._start_records()
 
     # ------------------------------------------------------------------ the model
@@ -186,8 +186,7 @@ class Rspc(Fallback):
         distance = self.case.segment.distance
         x, v = min(max(measured.position, 0.0), distance), max(measured.speed, 0.0)
         if x >= distance - self.final_m:
-            self.solve_seconds.append(0.0)
-            self.record("final", 0.0)
+            self.without_solve("final")
             return -1.0
         t0, status = time.perf_counter(), "ok"
         if self.must_brake(x, v):

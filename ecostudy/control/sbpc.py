@@ -63,7 +63,7 @@ class Sbpc(Fallback):
             if self.program.solve(0.0, 1.0, None).usable:
                 self.program.follow()
         self.setup_seconds = time.perf_counter() - t0
-        self.solve_seconds, self.gammas, self.iterations, self.softened, self.failures = [], [], [], 0, 0
+        self.gammas, self.iterations, self.softened = [], [], 0
         self._start_records()
 
     def _solve(self, alpha, omega, gamma_max):
@@ -81,8 +81,7 @@ class Sbpc(Fallback):
     def plan(self, measured):
         k = self._sample(measured)
         if k >= self.kf or measured.position >= self.case.segment.distance - 0.05:
-            self.solve_seconds.append(0.0)
-            self.record("final", 0.0)
+            self.without_solve("final")
             return -1.0
         t0, softened = time.perf_counter(), ()
         self.program.start(k, measured)
@@ -96,13 +95,8 @@ class Sbpc(Fallback):
             outcome = self._smallest_gamma()
         else:
             outcome = self._solve(1.0, self.omega, None)
-        seconds = time.perf_counter() - t0
-        self.solve_seconds.append(seconds)
-        status = "no_plan" if outcome is None else outcome.status
-        if outcome is None or not outcome.usable:
-            self.failures += 1
-            handle, kind = self.fall_back(measured)
-            self.record(status, seconds, fallback=kind)
+        status, seconds, handle = self.settle(outcome, t0, measured)
+        if handle is not None:
             return handle
         self.gammas.append(self.program.gamma)
         self.program.follow()  # the next sample's grade and bounds follow this prediction

@@ -86,7 +86,7 @@ class Sppc(Fallback):
         self.reach = EarliestStand(self.segment, self.train)
         self.skipped = 0  # samples whose step one was known (skipped)
         self.setup_seconds = time.perf_counter() - t0
-        self.solve_seconds, self.iterations, self.modes, self.softened, self.failures = [], [], [], 0, 0
+        self.iterations, self.modes, self.softened = [], [], 0
         self.unsolved = []  # (position, speed, clock, Ipopt status) of every solve without a plan
         self._start_records()
 
@@ -130,8 +130,7 @@ class Sppc(Fallback):
     def plan(self, measured):
         measured = from_departure(measured)  # a noisy reading at the stand may be behind the start
         if measured.position >= self.segment.distance - 0.05:
-            self.solve_seconds.append(0.0)
-            self.record("final", 0.0)
+            self.without_solve("final")
             return -1.0
         t0, softened, outcome = time.perf_counter(), (), None
         # over the limit where coasting does not slow the train: no plan exists, no NLP is solved
@@ -144,13 +143,8 @@ class Sppc(Fallback):
                     outcome = self._relaxed(measured)
             else:
                 outcome = self._relaxed(measured, skip=True)
-        seconds = time.perf_counter() - t0
-        self.solve_seconds.append(seconds)
-        status = "no_plan" if outcome is None else outcome.status
-        if outcome is None or not outcome.usable:
-            self.failures += 1
-            handle, kind = self.fall_back(measured)
-            self.record(status, seconds, fallback=kind)
+        status, seconds, handle = self.settle(outcome, t0, measured)
+        if handle is not None:
             return handle
         lengths, _, _, _, ft, fb = phases.solution(self.model, self.layout)
         x = phases.node_positions(self.layout, lengths, origin=measured.position)

@@ -84,8 +84,7 @@ class TerminalApproach:
         self.engaged += 1
         self.scales.append(self.scale)
         brake = self.must_brake(x, v)
-        self.inner.solve_seconds.append(0.0)
-        self.inner.record("terminal_brake" if brake else "terminal_coast", 0.0)
+        self.inner.without_solve("terminal_brake" if brake else "terminal_coast")
         return -1.0 if brake else 0.0
 
     def below_limit(self, measured, handle):
