@@ -25,7 +25,7 @@ from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kmh
 from ecostudy.das.advice import das_phases, nearest_levels
 from ecostudy.heuristics import ecodrive
-from ecostudy.io.loaders import track_document, track_from_schema, train_document, train_from_schema
+from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.ocp.problem import prepare
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
@@ -57,17 +57,12 @@ def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_P
     return cases
 
 
-def study_documents(st):
-    """(train document, track document) of a loaded study's base case, as its files give them."""
-    return train_document(st.train_path)[0], track_document(st.track_path)
-
-
 def expand_compare(path):
     """A study file's base case as a comparison (``ecostudy run FILE --kind compare``): its timing,
     its grid; written beside its output (``<output>_compare``)."""
     st = load_checked_study(path, "compare")
     no_windows(st, "compare")
-    train_doc, track_doc = study_documents(st)
+    train_doc, track_doc = st.documents
     cases = compare_cases(train_doc, track_doc, st.from_stop, st.to_stop, st.timing, st.points or RUN_POINTS, st.name)
     return Expanded(st.output.parent / (st.output.name + "_compare"), cases)
 
