@@ -1,9 +1,9 @@
 """Study files expanded into cases: self-contained tasks keyed by a hash of their inputs.
 
 A case carries the train and track documents themselves (not paths), the stops, the timing,
-objective and grid, and the ecostudy version. Its key is a hash of all of that, so a result
-stored under a key is valid for exactly those inputs, on any worker, and a rerun after a change
-of any input (or of ecostudy) recomputes only the cases it affects.
+objective and grid. Its key is a hash of all of that and of the code (:func:`case_key`), so a
+result stored under a key is valid for exactly those inputs and that code, on any worker, and a
+rerun after a change of any input (or of ecostudy) recomputes only the cases it affects.
 """
 import functools
 import hashlib
@@ -41,15 +41,16 @@ def source_fingerprint(root):
 
 @functools.cache
 def code_version():
-    """The code a result was computed by, as every case records it: ecostudy's version and the
-    fingerprint of its source (``0.2.0+3f9a1c0b7d2e``). Being part of each case's key, it keeps a
-    study from resuming with results stored by other code, whose checks and statuses may differ."""
+    """The code a result is computed by: ecostudy's version and the fingerprint of its source
+    (``0.2.0+3f9a1c0b7d2e``). Being part of every case's key (:func:`case_key`), it keeps a study
+    from resuming with results stored by other code, whose checks and statuses may differ."""
     return f"{__version__}+{source_fingerprint(Path(__file__).resolve().parents[1])}"
 
 
 def case_key(case):
-    """16 hex digits of the SHA-256 of the case's inputs (everything but its key and labels)."""
-    payload = {k: v for k, v in case.items() if k not in ("key", "labels")}
+    """16 hex digits of the SHA-256 of the case's inputs (everything but its key and labels) and of
+    the code that computes it (:func:`code_version`): the one place a key is made, for every kind."""
+    payload = [code_version(), {k: v for k, v in case.items() if k not in ("key", "labels")}]
     return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
@@ -138,8 +139,7 @@ def expand(path, skipped=None, read=None):
                           field: getattr(sc, field)}
         common = {"study": s.name, "scenario": name, "train": train_doc, "track": track_doc,
                   "from": from_stop, "to": to_stop, **timing, "objective": sc.objective or s.objective,
-                  "weights": [s.weights.time, s.weights.energy], "points": sc.points or s.points,
-                  "version": code_version()}
+                  "weights": [s.weights.time, s.weights.energy], "points": sc.points or s.points}
         names = list(sweep)
         for values in itertools.product(*(sweep[n] for n in names)) if names else [()]:
             case = dict(common)

@@ -30,7 +30,7 @@ from ecostudy.network.headway import say_timetable, timetable_conflict
 from ecostudy.network.strategies import DEAREST_FIRST, one_strategy, solve_independent
 from ecostudy.ocp.timedomain import LegRun
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
-from ecostudy.studies.cases import case_key, code_version
+from ecostudy.studies.cases import case_key
 from ecostudy.studies.legpool import shared_pool
 from ecostudy.studies.sizes import check_network_study
 from ecostudy.studies.workers import kept
@@ -63,8 +63,7 @@ def expand_network(path, workers=1, pool=None, note=None, out=None):
         note(f"{len(st.names)} trains, {len(st.stops) - 1} segments ({', '.join(f'{t:.1f}' for t in fl.asked_times)} s "
              f"before rounding to {st.dt} s steps), {fl.steps} steps")
     inputs = {"fields": s.model_dump(mode="json", exclude={"output", "strategies"}),
-              "train": st.documents[0], "track": st.documents[1],
-              "version": code_version()}
+              "train": st.documents[0], "track": st.documents[1]}
     base = case_key(inputs)
     cases = []
     for name in st.strategies:
