@@ -1,12 +1,15 @@
 """A study resumes only with results stored by the same code: the case key holds the code's fingerprint."""
+import json
 import os
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 from ecostudy import __version__
 from ecostudy.studies.batch import run_study
-from ecostudy.studies.cases import case_key, code_version, expand, source_fingerprint
+from ecostudy.studies.cases import code_version, expand, source_fingerprint
+from ecostudy.studies.kinds import STUDY_KINDS
 
 from .conftest import ROOT, TRACKS, TRAINS, write_yaml
 
@@ -29,13 +32,39 @@ def test_the_fingerprint_follows_every_source_file(tmp_path):
     assert source_fingerprint(tmp_path / "ecostudy") != before
 
 
-def test_every_case_records_the_code_and_its_key_changes_with_it(tmp_path):
-    _, _, cases = expand(one_case_study(tmp_path))
+KEYS = ("import json, sys; from pathlib import Path; import ecostudy; from ecostudy.studies.kinds import STUDY_KINDS; "
+        "print(json.dumps([ecostudy.__file__, {k: [c['key'] for c in STUDY_KINDS.get(k).expand(Path(sys.argv[1])).cases] "
+        "for k in ('run', 'compare', 'pareto')}]))")
+
+
+def keys_of(code, study):
+    """The case keys of ``study`` in the kinds run, compare and pareto, as the package at ``code`` expands it."""
+    done = subprocess.run([sys.executable, "-c", KEYS, str(study)], cwd=code, env={**os.environ, "PYTHONPATH": str(code)},
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    where, keys = json.loads(done.stdout)
+    assert Path(where).is_relative_to(code), where  # that copy of the package, not another
+    return keys
+
+
+def test_every_case_key_holds_the_code(tmp_path):
+    """The key of every kind's case is made with the code that computes it (``cases.case_key``): an
+    identical copy of the package gives the same keys, a copy that differs by one comment others."""
     assert code_version().startswith(__version__ + "+")
     assert code_version() == f"{__version__}+{source_fingerprint(ROOT / 'ecostudy')}"
-    (case,) = cases
-    assert case["version"] == code_version()
-    assert case_key({**case, "version": __version__ + "+000000000000"}) != case["key"]
+    study = one_case_study(tmp_path)
+    same, other = tmp_path / "same", tmp_path / "other"
+    for code in (same, other):
+        shutil.copytree(ROOT / "ecostudy", code / "ecostudy", ignore=shutil.ignore_patterns("__pycache__"))
+        (code / ".pyomo").symlink_to(ROOT / ".pyomo")
+    with open(other / "ecostudy" / "core" / "status.py", "a") as f:
+        f.write("# other code\n")
+    here = {"run": [c["key"] for c in expand(study)[2]],
+            **{k: [c["key"] for c in STUDY_KINDS.get(k).expand(study).cases] for k in ("compare", "pareto")}}
+    assert keys_of(same, study) == here
+    there = keys_of(other, study)
+    assert {k: len(v) for k, v in there.items()} == {"run": 1, "compare": 6, "pareto": 20}
+    assert not set(sum(there.values(), [])) & set(sum(here.values(), []))
 
 
 def test_results_stored_by_other_code_are_computed_again(tmp_path):

@@ -9,8 +9,7 @@ from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
 from ecostudy.core import units
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.core.errors import InputError, problem
-from ecostudy.io.loaders import (check_stop_list, load_timetable, load_track, load_train, timing_from_timetable,
-                                 track_document, train_document)
+from ecostudy.io.loaders import check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
 from ecostudy.io.timetable import journey_plan, name_stops
 from ecostudy.io.writers import check_output_dir
 from ecostudy.report.files import write_journey
@@ -18,7 +17,7 @@ from ecostudy.report.html import write_html
 from ecostudy.report.studyfiles import compare_figures, front_files
 from ecostudy.report.style import output
 from ecostudy.studies.batch import Expanded, run_expanded
-from ecostudy.studies.compare import compare_cases, study_documents
+from ecostudy.studies.compare import compare_cases
 from ecostudy.studies.journey import journey
 from ecostudy.studies.options import case_from, check_options, no_windows, only_one, output_folder, timing_of
 from ecostudy.studies.front import front_cases
@@ -52,9 +51,9 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     figures, workers, started = output(fig_format, dpi), every_core(workers), perf_counter()
     check_options(count=count, supplement_max=supplement_max, points=points, workers=workers, weighted=weighted,
                   das_time_limit=das_time_limit)
-    trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points, "pareto")
+    trk, trn, f, t, k, st, (train_doc, track_doc) = case_from(study, track, train, from_stop, to_stop, points,
+                                                              "pareto")
     no_windows(st, "pareto")
-    train_doc, track_doc = documents(st, train, track)
     cases = front_cases(train_doc, track_doc, f, t, count, supplement_max * units.PERCENT, k or FRONT_POINTS,
                         st.name if st is not None else "pareto", das, das_time_limit)
     out_dir = output_folder(out, beside(st, "_pareto", "pareto"))
@@ -78,14 +77,6 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     return reported(out_dir, lines + [counts_line(ran.counts, "points"), "outputs " + listed(out_dir)])
 
 
-def documents(st, train: Optional[Path], track: Optional[Path]) -> tuple[dict, dict]:
-    """(train document, track document) of a study file's base case, or of the given files."""
-    if st is not None:
-        return study_documents(st)
-    assert train is not None and track is not None  # case_from refused a command without both
-    return train_document(train)[0], track_document(track)
-
-
 def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
                    from_stop: Optional[str] = None, to_stop: Optional[str] = None, time: Optional[float] = None,
                    supplement: Optional[float] = None, points: Optional[int] = None, out: Optional[Path] = None,
@@ -99,7 +90,7 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
     figures, workers = output(fig_format, dpi), every_core(workers)
     check_options(time=time, supplement=supplement, points=points, workers=workers)
     only_one(time=time, supplement=supplement)
-    _, _, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points, "compare")
+    _, _, f, t, k, st, (train_doc, track_doc) = case_from(study, track, train, from_stop, to_stop, points, "compare")
     no_windows(st, "compare")
     if time is not None or supplement is not None:
         timing = timing_of(time, supplement)
@@ -107,7 +98,6 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
         timing = st.timing
     else:
         raise InputError(problem("command line", "--time", "give --time or --supplement"))
-    train_doc, track_doc = documents(st, train, track)
     cases = compare_cases(train_doc, track_doc, f, t, timing, k or RUN_POINTS, st.name if st is not None else "compare")
     out_dir = output_folder(out, beside(st, "_compare", "compare"))
     ran = run_expanded("compare", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,

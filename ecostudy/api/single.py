@@ -85,7 +85,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
     if objective == "time" and timed:
         raise InputError(problem("command line", "--objective time", "finds the fastest run: it takes no --time, "
                                  "--supplement or --window"))
-    trk, trn, f, t, k, st = case_from(study, track, train, from_stop, to_stop, points, "solve")
+    trk, trn, f, t, k, st, _ = case_from(study, track, train, from_stop, to_stop, points, "solve")
     if st is not None:
         paths, windows, obj = (st.track_path, st.train_path), st.windows, objective or st.objective
         timing, w = (timing_of(time, supplement, window) if timed else st.timing), st.weights

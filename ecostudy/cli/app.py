@@ -73,8 +73,8 @@ def call(debug, name, *args, force=False, bar=None):
                 log.error(printable(line))
             raise typer.Exit(code)
         finally:
-            for line in dict.fromkeys(str(w.message) for w in caught):  # a warning seen twice is one line
-                log.warning(line)
+            for w in caught:
+                log.warning(str(w.message))
 
 
 def finish(result):

@@ -6,7 +6,7 @@ reported together (:class:`ecostudy.errors.InputError`).
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -14,7 +14,6 @@ from ecostudy.core import units
 from ecostudy.core.adhesion import TOP_SPEED, Adhesion, capped_envelopes
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
-from ecostudy.core.grid import travel_distance
 from ecostudy.core.physics import EfficiencyMap, Envelope, force_power_fit, table_width
 from ecostudy.core.types import Consist, Supply, Timing, Track, Train, Window
 from ecostudy.io import schemas
@@ -25,27 +24,9 @@ from ecostudy.io.formats import (
     track_document_to_schema,
     train_document_to_schema,
 )
-from ecostudy.io.timetable import name_stops, window_si
+from ecostudy.io.timetable import name_stops, windows_from_schema
 from ecostudy.io.documents import (Where, given, named_file, read_document as read_document,  # re-exported
                                    split_selector, validate as validate)
-
-
-def windows_from_schema(windows: Sequence[schemas.Window], track: Track, from_stop: str, to_stop: str,
-                        where: Where) -> tuple[Window, ...]:
-    """Windows in SI and travel distance; each must lie strictly between the two stops."""
-    out: list[Window] = []
-    lines: list[str] = []
-    length = abs(track.stops[to_stop] - track.stops[from_stop])
-    for i, w in enumerate(windows):
-        d = travel_distance(track, from_stop, to_stop, w.position_m)
-        if not 0 < d < length:
-            lines.append(problem(where, f"windows[{i}].position_m", f"{w.position_m} m is not between "
-                                 f"'{from_stop}' and '{to_stop}'"))
-            continue
-        out.append(window_si(w, d))
-    if lines:
-        raise InputError(lines)
-    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -64,6 +45,7 @@ class Study:
     train_path: Path | None = None
     windows: tuple[Window, ...] = ()
     timing_field: str = "running_time_s"  # the study file's field the timing came from (for errors)
+    documents: tuple[Mapping[str, Any], ...] = ()  # (train, track) as their files give them
 
 
 # --------------------------------------------------------------------------- conversions
@@ -196,20 +178,31 @@ def track_document(path: Where) -> dict[str, Any]:
     return data
 
 
-def load_train(path: Where) -> Train:
-    """Read a train file (YAML, or TTOBench/OSRD JSON) into a :class:`Train`."""
+def read_train(path: Where) -> tuple[dict[str, Any], Train]:
+    """(document, :class:`Train`) of a train file (YAML, or TTOBench/OSRD JSON): its warnings, naming it."""
     data, aliases = train_document(path)
-    return train_from_schema(validate(schemas.TrainFile, data, path, aliases), split_selector(path)[0], aliases)
+    return data, train_from_schema(validate(schemas.TrainFile, data, path, aliases), split_selector(path)[0], aliases)
 
 
-def load_track(path: Where) -> Track:
-    """Read a track file (YAML, or TTOBench JSON) into a :class:`Track`; a line whose every limit is
+def read_track(path: Where) -> tuple[dict[str, Any], Track]:
+    """(document, :class:`Track`) of a track file (YAML, or TTOBench JSON); a line whose every limit is
     below 25 km/h is warned about (m/s given as km/h?)."""
-    track = track_from_schema(validate(schemas.TrackFile, track_document(path), path))
+    data = track_document(path)
+    track = track_from_schema(validate(schemas.TrackFile, data, path))
     if track.limits.max() < 25 * units.KMH and track.length > 2000:
         warnings.warn(problem(path, "speed_limits", f"every limit is below 25 km/h on a {track.length / 1000:.1f} km "
                               "line: check the unit (m/s given as km/h?)"), EcostudyWarning, stacklevel=2)
-    return track
+    return data, track
+
+
+def load_train(path: Where) -> Train:
+    """A train file's :class:`Train` (:func:`read_train`)."""
+    return read_train(path)[1]
+
+
+def load_track(path: Where) -> Track:
+    """A track file's :class:`Track` (:func:`read_track`)."""
+    return read_track(path)[1]
 
 
 def train_from_dict(data: Mapping[str, Any], where: str = "train (in code)") -> Train:
@@ -295,15 +288,15 @@ def timing_from_timetable(tt: schemas.TimetableFile, from_stop: str, to_stop: st
     return Timing(running_time=arr - dep)
 
 
-def load_study(study_path: Where) -> "Study":
-    """Read a study file and the files it names (relative to the study file)."""
+def load_study(study_path: Where, read: Callable[..., Any] = lambda file, reader: reader(file)) -> "Study":
+    """Read a study file and the files it names (relative to the study file), each by
+    ``read(file, reader)`` (``reader``: :func:`read_track` or :func:`read_train`)."""
     path = Path(study_path)
     s = validate(schemas.StudyFile, read_document(path), path)
     if s.library is not None:
         raise InputError(problem(path, "library", "a library study runs with `ecostudy run`"))
     track_file, train_file = named_file(path, "track", given(s.track)), named_file(path, "train", given(s.train))
-    track = load_track(track_file)
-    train = load_train(train_file)
+    (track_doc, track), (train_doc, train) = read(track_file, read_track), read(train_file, read_train)
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     if s.timetable is not None:
         timetable = named_file(path, "timetable", s.timetable)
@@ -320,7 +313,8 @@ def load_study(study_path: Where) -> "Study":
     return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop,
                  timing=timing, objective=s.objective, weights=(s.weights.time, s.weights.energy),
                  points=s.points, output=output, track_path=track_file, train_path=train_file,
-                 windows=windows_from_schema(s.windows, track, from_stop, to_stop, path), timing_field=timing_field)
+                 windows=windows_from_schema(s.windows, track, from_stop, to_stop, path), timing_field=timing_field,
+                 documents=(train_doc, track_doc))
 
 
 @dataclass
@@ -342,13 +336,15 @@ class NetworkStudy:
     buffer: float | None            # [m]
     points: int
     output: Path
+    documents: tuple[Mapping[str, Any], ...] = ()  # (train, track) as their files give them
 
 
 def load_network_study(study_path: Where) -> NetworkStudy:
     """Read a network study file and the files it names; units converted here."""
     path = Path(study_path)
     s = validate(schemas.NetworkStudyFile, read_document(path), path)
-    track, train = load_track(named_file(path, "track", s.track)), load_train(named_file(path, "train", s.train))
+    (track_doc, track), (train_doc, train) = (read_track(named_file(path, "track", s.track)),
+                                              read_train(named_file(path, "train", s.train)))
     stops = list(track.stops) if s.stops is None else s.stops
     check_stop_list(track, stops, path, "stops")
     if s.running_times_s is not None and len(s.running_times_s) != len(stops) - 1:
@@ -366,10 +362,10 @@ def load_network_study(study_path: Where) -> NetworkStudy:
                         None if s.supplement_percent is None else s.supplement_percent * units.PERCENT,
                         s.dwell_s, s.time_step_s, [t.name for t in s.trains], [t.offset_s for t in s.trains],
                         supply, list(s.strategies), s.buffer_m, s.points,
-                        Path(s.output) if s.output else Path("out") / s.name)
+                        Path(s.output) if s.output else Path("out") / s.name, (train_doc, track_doc))
 
 
-__all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study",
+__all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study", "read_train", "read_track",
            "load_timetable", "check_stops", "check_stop_list"]
 
 

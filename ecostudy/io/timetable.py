@@ -141,3 +141,21 @@ def window_si(w: schemas.Window, distance: float) -> Window:
     return Window(distance, w.earliest_s, w.latest_s,
                   None if w.min_speed_kmh is None else w.min_speed_kmh * units.KMH,
                   None if w.max_speed_kmh is None else w.max_speed_kmh * units.KMH)
+
+
+def windows_from_schema(windows: Sequence[schemas.Window], track: Track, from_stop: str, to_stop: str,
+                        where: Where) -> tuple[Window, ...]:
+    """Windows in SI and travel distance; each must lie strictly between the two stops."""
+    out: list[Window] = []
+    lines: list[str] = []
+    length = abs(track.stops[to_stop] - track.stops[from_stop])
+    for i, w in enumerate(windows):
+        d = travel_distance(track, from_stop, to_stop, w.position_m)
+        if not 0 < d < length:
+            lines.append(problem(where, f"windows[{i}].position_m", f"{w.position_m} m is not between "
+                                 f"'{from_stop}' and '{to_stop}'"))
+            continue
+        out.append(window_si(w, d))
+    if lines:
+        raise InputError(lines)
+    return tuple(out)

@@ -15,7 +15,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.network.fleet import departure_order, line_positions
-from ecostudy.network.legs import BUFFER_SLACK_M
+from ecostudy.network.legs import BUFFER_SLACK_M, head_to_tail
 from ecostudy.ocp import session, timedomain
 
 
@@ -67,7 +67,7 @@ def timetable_conflict(fleet):
     for ahead, me in zip(order[:-1], order[1:]):
         d = fleet.legs[me][0].direction  # along the line as ``scoring.separations`` measures it
         front, back = (d * np.stack(_extremes(fleet, i)) for i in (ahead, me))
-        gap = np.max(front, axis=0) - np.min(back, axis=0) - length  # NaN where either is off the line
+        gap = head_to_tail(np.max(front, axis=0), np.min(back, axis=0), length)  # NaN where either is off the line
         close = np.flatnonzero(np.isfinite(gap) & (gap < _least(fleet)))
         if close.size and (found is None or close[0] * fleet.dt < found["time_s"]):
             found = _conflict(fleet, ahead, me, int(close[0]), gap[close[0]])
@@ -128,7 +128,8 @@ def reach_conflict(fleet):
             if leg.start < t < leg.start + leg.steps:  # it runs this leg at t
                 far = furthest(leg, t - leg.start, least=behind_runs)
                 there = d * (leg.line_start + leg.direction * far)
-                gap = d * at[ahead][t] - there - length if behind_runs else there - d * at[me][t] - length
+                gap = (head_to_tail(d * at[ahead][t], there, length) if behind_runs
+                       else head_to_tail(there, d * at[me][t], length))
                 if gap < _least(fleet):
                     return {**_conflict(fleet, ahead, me, t, gap), "furthest_m": far, "least": behind_runs,
                             "since_s": (t - leg.start) * fleet.dt}

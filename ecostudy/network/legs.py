@@ -166,6 +166,13 @@ def solve_leg(task):
     return run._replace(notes=notes or None), outcome
 
 
+def head_to_tail(ahead, behind, length, direction=1):
+    """The gap [m] from a train's head to the tail of the train ahead (as long as it), of their head
+    positions ``ahead`` and ``behind`` (numbers or arrays, NaN where off the line) along ``direction``
+    (+1 or -1 times the line's): negative where they overlap. The one formula of every such gap."""
+    return direction * (ahead - behind) - length
+
+
 def separation(leg, ahead, buffer, j):
     """(the head of the train ahead at the leg's clock step ``j`` in the leg's own distance [m], NaN where
     it is off the line; the least distance the leg's head keeps behind it: ``buffer`` plus the train's length, head to
@@ -203,7 +210,7 @@ def _check_departure_gap(task):
     for j, at, when in ((0, 0.0, "departs"), (leg.steps, leg.case.segment.distance, "arrives")):
         x_ahead, least = separation(leg, ahead, buffer, j)
         if np.isfinite(x_ahead) and x_ahead - at < least - BUFFER_SLACK_M:
-            gap = x_ahead - at - leg.case.train.length
+            gap = head_to_tail(x_ahead, at, leg.case.train.length)
             where = f"{gap:.1f} m ahead of its head" if gap >= 0 else f"{-gap:.1f} m behind its head (they overlap)"
             raise SolverError(f"{label}: cannot keep buffer_m {buffer:g} m behind the train ahead, whose tail is "
                               f"{where} when this leg {when} at {(leg.start + j) * leg.dt:g} s (offset_s, dwell_s)")

@@ -8,7 +8,7 @@ from ecostudy.core.simulate import verify
 from ecostudy.core.units import KWH
 from ecostudy.network import circuit
 from ecostudy.network.fleet import departure_order, line_positions, step_arrays
-from ecostudy.network.legs import BUFFER_SLACK_M, STAND_TIME_S, standing_s
+from ecostudy.network.legs import BUFFER_SLACK_M, STAND_TIME_S, head_to_tail, standing_s
 
 
 def evaluate(fleet, runs_by_train):
@@ -79,7 +79,7 @@ def _gaps(fleet, runs_by_train):
     length = fleet.legs[0][0].case.train.length
     for ahead, me in zip(order[:-1], order[1:]):
         mine = line_positions(fleet, me, runs_by_train[me])
-        gap = fleet.legs[me][0].direction * (line_positions(fleet, ahead, runs_by_train[ahead]) - mine) - length
+        gap = head_to_tail(line_positions(fleet, ahead, runs_by_train[ahead]), mine, length, fleet.legs[me][0].direction)
         yield ahead, me, gap, mine
 
 

@@ -33,7 +33,7 @@ from ecostudy.studies.workers import worker_pool
 
 _ALL_OUT: dict = {}  # all-out time per (train, track, stops, grid), per process: shared by a scenario's cases
 _WRITTEN = Written()  # written NLPs per process: cases that differ only in timing re-use one NL file
-_SCENARIO = ("train", "track", "from", "to", "points", "version")
+_SCENARIO = ("train", "track", "from", "to", "points")
 
 
 def _all_out_time(case, track, train):

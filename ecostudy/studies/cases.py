@@ -1,9 +1,9 @@
 """Study files expanded into cases: self-contained tasks keyed by a hash of their inputs.
 
 A case carries the train and track documents themselves (not paths), the stops, the timing,
-objective and grid, and the ecostudy version. Its key is a hash of all of that, so a result
-stored under a key is valid for exactly those inputs, on any worker, and a rerun after a change
-of any input (or of ecostudy) recomputes only the cases it affects.
+objective and grid. Its key is a hash of all of that and of the code (:func:`case_key`), so a
+result stored under a key is valid for exactly those inputs and that code, on any worker, and a
+rerun after a change of any input (or of ecostudy) recomputes only the cases it affects.
 """
 import functools
 import hashlib
@@ -15,16 +15,15 @@ from pathlib import Path
 from ecostudy import __version__
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.io import schemas
-from ecostudy.io.documents import named_file
+from ecostudy.io.documents import named_file, split_selector
 from ecostudy.io.loaders import (
     chosen_stops,
     load_timetable,
     load_study,
     read_document,
+    read_track,
+    read_train,
     timing_from_timetable,
-    track_document,
-    track_from_schema,
-    train_document,
     train_from_schema,
     validate,
 )
@@ -42,45 +41,71 @@ def source_fingerprint(root):
 
 @functools.cache
 def code_version():
-    """The code a result was computed by, as every case records it: ecostudy's version and the
-    fingerprint of its source (``0.2.0+3f9a1c0b7d2e``). Being part of each case's key, it keeps a
-    study from resuming with results stored by other code, whose checks and statuses may differ."""
+    """The code a result is computed by: ecostudy's version and the fingerprint of its source
+    (``0.2.0+3f9a1c0b7d2e``). Being part of every case's key (:func:`case_key`), it keeps a study
+    from resuming with results stored by other code, whose checks and statuses may differ."""
     return f"{__version__}+{source_fingerprint(Path(__file__).resolve().parents[1])}"
 
 
 def case_key(case):
-    """16 hex digits of the SHA-256 of the case's inputs (everything but its key and labels)."""
-    payload = {k: v for k, v in case.items() if k not in ("key", "labels")}
+    """16 hex digits of the SHA-256 of the case's inputs (everything but its key and labels) and of
+    the code that computes it (:func:`code_version`): the one place a key is made, for every kind."""
+    payload = [code_version(), {k: v for k, v in case.items() if k not in ("key", "labels")}]
     return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
-def _scenario_units(s, path):
-    """(name, labels, train document, track document, from, to, scenario) of each scenario."""
-    base_said: set[str] = set()  # what the base train warned of: a scenario warns only of what differs
+class Files:
+    """``read(file, reader)``: each train and track file of a study read once (``reader``:
+    :func:`~ecostudy.io.loaders.read_train` or :func:`~ecostudy.io.loaders.read_track`), its
+    warnings shown then; ``said[file]``: what it warned of (after its name), which a scenario
+    overriding its fields does not repeat."""
+
+    def __init__(self):
+        self.read, self.said = {}, {}
+
+    def __call__(self, file, reader):
+        if file not in self.read:
+            with warnings.catch_warnings(record=True) as seen:
+                warnings.simplefilter("always")
+                self.read[file] = reader(file)
+            for w in seen:
+                warnings.warn(w.message, w.category, stacklevel=2)
+            self.said[file] = {str(w.message).removeprefix(f"{split_selector(file)[0]}: ") for w in seen}
+        return self.read[file]
+
+
+def _overridden(train_doc, where, said):
+    """Warn of what a scenario's train overrides change (``where`` names the scenario): the warnings
+    of its train that its file (``said``) did not give."""
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        train_from_schema(validate(schemas.TrainFile, train_doc, f"{where} train"), where)
+    for w in seen:
+        if str(w.message).removeprefix(f"{where}: ") not in said:
+            warnings.warn(w.message, w.category, stacklevel=3)
+
+
+def _scenario_units(s, path, read):
+    """(name, labels, train document, track document, from, to, scenario) of each scenario, each file
+    read once by ``read`` (:class:`Files`)."""
     for i, sc in enumerate([schemas.Scenario(name="base")] + list(s.scenarios)):
         where = f"{path}: scenarios[{i - 1}] ({sc.name})" if i else str(path)
         field = f"scenarios[{i - 1}]." if i else ""
         train_file = named_file(path, field + "train" if sc.train else "train", sc.train or s.train)
-        train_doc = {**train_document(train_file)[0], **sc.train_overrides}
-        track_doc = track_document(named_file(path, field + "track" if sc.track else "track", sc.track or s.track))
-        named = where if i else train_file  # the base train's warnings name its file
-        with warnings.catch_warnings(record=True) as seen:
-            warnings.simplefilter("always")
-            train_from_schema(validate(schemas.TrainFile, train_doc, f"{where} train"), named)
-        for w in seen:
-            said = str(w.message).removeprefix(f"{named}: ")
-            if i and said in base_said:
-                continue
-            base_said.update(() if i else (said,))
-            warnings.warn(w.message, w.category, stacklevel=2)
-        track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{where} track"))
+        train_doc = read(train_file, read_train)[0]
+        track_doc, track = read(named_file(path, field + "track" if sc.track else "track", sc.track or s.track),
+                                read_track)
+        if sc.train_overrides:
+            train_doc = {**train_doc, **sc.train_overrides}
+            _overridden(train_doc, where, read.said[train_file])
         from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
         yield sc.name, {"scenario": sc.name}, train_doc, track_doc, from_stop, to_stop, sc
 
 
-def expand(path, skipped=None):
+def expand(path, skipped=None, read=None):
     """(study schema, output folder, cases) for a study file; inputs are validated here, once.
-    A library study's pairs left out are appended to ``skipped`` (track, train, reason)."""
+    A library study's pairs left out are appended to ``skipped`` (track, train, reason); ``read``:
+    the :class:`Files` of the study, when its base case was read before."""
     path = Path(path)
     s = validate(schemas.StudyFile, read_document(path), path)
     base = path.parent
@@ -98,7 +123,7 @@ def expand(path, skipped=None):
         if skipped is not None:
             skipped.extend(left_out)
     else:
-        units = _scenario_units(s, path)
+        units = _scenario_units(s, path, read or Files())
     cases = []
     for name, labels, train_doc, track_doc, from_stop, to_stop, sc in units:
         timing = {"running_time_s": s.running_time_s, "supplement_percent": s.supplement_percent,
@@ -114,8 +139,7 @@ def expand(path, skipped=None):
                           field: getattr(sc, field)}
         common = {"study": s.name, "scenario": name, "train": train_doc, "track": track_doc,
                   "from": from_stop, "to": to_stop, **timing, "objective": sc.objective or s.objective,
-                  "weights": [s.weights.time, s.weights.energy], "points": sc.points or s.points,
-                  "version": code_version()}
+                  "weights": [s.weights.time, s.weights.energy], "points": sc.points or s.points}
         names = list(sweep)
         for values in itertools.product(*(sweep[n] for n in names)) if names else [()]:
             case = dict(common)
@@ -148,12 +172,9 @@ def load_checked_study(path, command=None):
     the file is checked as ``ecostudy run`` checks them (:func:`expand`): a command that runs only the
     base case never leaves a bad scenario unnoticed. For ``command`` (a key of :data:`UNUSED`), one
     warning names the fields the file gives (other than their defaults) that the command does not use."""
-    with warnings.catch_warnings(record=True) as seen:  # the base case's warnings come from both: shown once
-        warnings.simplefilter("always")
-        study = load_study(path)
-        s = expand(path)[0]  # the file as validated there
-    for w in {str(w.message): w for w in seen}.values():
-        warnings.warn(w.message, w.category, stacklevel=2)
+    read = Files()  # each file read once, for the base case and the study's cases
+    study = load_study(path, read)
+    s = expand(path, read=read)[0]  # the file as validated there
     if command is not None:
         fields = schemas.StudyFile.model_fields
         unused = [name for name in UNUSED[command]  # given, and not the value the command uses anyway

@@ -31,7 +31,7 @@ from ecostudy.ocp.convex import FASTEST, ConvexProgram, trapezoid_grid
 from ecostudy.ocp.problem import prepare
 from ecostudy.io.writers import write_csv
 from ecostudy.studies.batch import Expanded, StudyKind, outcome, run_expanded
-from ecostudy.studies.cases import case_key, code_version
+from ecostudy.studies.cases import case_key
 from ecostudy.studies.controllers import CONTROLLER_KINDS, Build
 from ecostudy.studies.loopsteps import step_columns, step_counts, steps_frame
 
@@ -87,7 +87,7 @@ def expand(path):
                     "sample_time": spec.sample_time_s or s.sample_time_s,
                     # the spec as written (defaults left out): a field added later keeps the keys
                     "controller": spec.model_dump(exclude_defaults=True), "truth": truth,
-                    "noise": {**noise, "seed": seed}, "version": code_version()}
+                    "noise": {**noise, "seed": seed}}
             case["key"] = case_key(case)
             cases.append(case)
     output = Path(s.output) if s.output else Path("out") / s.name  # relative: to the working directory

@@ -25,11 +25,11 @@ from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kmh
 from ecostudy.das.advice import das_phases, nearest_levels
 from ecostudy.heuristics import ecodrive
-from ecostudy.io.loaders import track_document, track_from_schema, train_document, train_from_schema
+from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.ocp.problem import prepare
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
-from ecostudy.studies.cases import case_key, code_version, load_checked_study
+from ecostudy.studies.cases import case_key, load_checked_study
 from ecostudy.studies.options import no_windows
 from ecostudy.studies.sizes import check_compare
 from ecostudy.studies.workers import kept
@@ -38,7 +38,7 @@ HEURISTICS = {"eco-drive coasting": ecodrive.eco_coasting, "MARECO-style": ecodr
 STRATEGIES = ("all-out", "ATO optimum", *HEURISTICS, "DAS round (nearest level)", "DAS phases")
 ROW = ("strategy", "running_time_s", "traction_energy_kWh", "net_energy_kWh", "stop_error_m", "max_overspeed_kmh",
        "handle_changes")
-_SCENARIO = ("train", "track", "from", "to", "running_time_s", "supplement", "points", "version")
+_SCENARIO = ("train", "track", "from", "to", "running_time_s", "supplement", "points")
 _ATO: dict = {}  # the ATO optimum of a scenario, per process: the base of the strategies after it
 
 
@@ -47,8 +47,7 @@ def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_P
     (schema-shaped), the stops, the timing (a running time [s] or a supplement, a fraction over the
     all-out time) and the grid; each keyed by a hash of all of them and the strategy."""
     scenario = {"study": study, "train": train_doc, "track": track_doc, "from": from_stop, "to": to_stop,
-                "running_time_s": timing.running_time, "supplement": timing.supplement, "points": points,
-                "version": code_version()}
+                "running_time_s": timing.running_time, "supplement": timing.supplement, "points": points}
     cases = []
     for name in STRATEGIES:
         case = {**scenario, "strategy": name, "scenario": name, "name": name, "labels": {"strategy": name}}
@@ -57,17 +56,12 @@ def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_P
     return cases
 
 
-def study_documents(st):
-    """(train document, track document) of a loaded study's base case, as its files give them."""
-    return train_document(st.train_path)[0], track_document(st.track_path)
-
-
 def expand_compare(path):
     """A study file's base case as a comparison (``ecostudy run FILE --kind compare``): its timing,
     its grid; written beside its output (``<output>_compare``)."""
     st = load_checked_study(path, "compare")
     no_windows(st, "compare")
-    train_doc, track_doc = study_documents(st)
+    train_doc, track_doc = st.documents
     cases = compare_cases(train_doc, track_doc, st.from_stop, st.to_stop, st.timing, st.points or RUN_POINTS, st.name)
     return Expanded(st.output.parent / (st.output.name + "_compare"), cases)
 

@@ -20,8 +20,8 @@ from ecostudy.core.defaults import FRONT_POINTS
 from ecostudy.core.status import Status, flagged
 from ecostudy.io.runsummary import RunSummary
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, run_case
-from ecostudy.studies.cases import case_key, code_version, load_checked_study
-from ecostudy.studies.compare import segment_of, study_documents
+from ecostudy.studies.cases import case_key, load_checked_study
+from ecostudy.studies.compare import segment_of
 from ecostudy.studies.options import no_windows
 from ecostudy.studies.pareto import das_meta, facts_of, front_supplements, front_table, is_monotone, saving_at
 from ecostudy.studies.sizes import check_front
@@ -36,7 +36,7 @@ def front_cases(train_doc, track_doc, from_stop, to_stop, count=DEFAULT_COUNT, s
     documents (schema-shaped), the stops, the grid and the driver-advice method ``das`` of every
     point; each keyed by a hash of all of them and its supplement."""
     base = {"study": study, "train": train_doc, "track": track_doc, "from": from_stop, "to": to_stop,
-            "running_time_s": None, "window_s": None, "weights": [1.0, 1.0], "points": points, "version": code_version(),
+            "running_time_s": None, "window_s": None, "weights": [1.0, 1.0], "points": points,
             "profile": True, "das": das, "das_time_limit_s": das_time_limit}
     cases = []
     for s in front_supplements(count, supplement_max):
@@ -53,7 +53,7 @@ def expand_front(path):
     on its grid, written beside its output (``<output>_pareto``)."""
     st = load_checked_study(path, "pareto")
     no_windows(st, "pareto")
-    train_doc, track_doc = study_documents(st)
+    train_doc, track_doc = st.documents
     cases = front_cases(train_doc, track_doc, st.from_stop, st.to_stop, points=st.points or FRONT_POINTS, study=st.name)
     return Expanded(st.output.parent / (st.output.name + "_pareto"), cases)
 

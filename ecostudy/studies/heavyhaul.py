@@ -43,7 +43,7 @@ from ecostudy.io.loaders import (chosen_stops, consist_from_document, read_docum
                                  track_from_schema, validate)
 from ecostudy.io.tables import number_columns
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome, run_expanded
-from ecostudy.studies.cases import case_key, code_version
+from ecostudy.studies.cases import case_key
 from ecostudy.studies.sizes import check_heavyhaul_study
 
 
@@ -123,8 +123,7 @@ def expand(path):
               **({"notches": True} if s.notches else {}),  # absent when off: the cases' keys as without the switch
               "max_samples": s.max_samples,
               "stop_tolerance_m": s.stop_tolerance_m, "speed_tolerance_kmh": s.speed_tolerance_kmh,
-              "arrival_tolerance_percent": s.arrival_tolerance_percent, "arrival_tolerance_s": s.arrival_tolerance_s,
-              "version": code_version()}
+              "arrival_tolerance_percent": s.arrival_tolerance_percent, "arrival_tolerance_s": s.arrival_tolerance_s}
     cases = []
     for kb, f, h in product(s.brake_penalty, s.fence, s.horizons):
         case = {**shared, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",

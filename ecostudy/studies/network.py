@@ -20,8 +20,8 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.core.errors import InfeasibleError, InputError, problem
-from ecostudy.io.documents import named_file, read_document
-from ecostudy.io.loaders import load_network_study, track_document, train_document, validate
+from ecostudy.io.documents import read_document
+from ecostudy.io.loaders import load_network_study, validate
 from ecostudy.io.schemas import NetworkStudyFile
 from ecostudy.io.store import check_one_study
 from ecostudy.io.writers import check_output_dir
@@ -30,7 +30,7 @@ from ecostudy.network.headway import say_timetable, timetable_conflict
 from ecostudy.network.strategies import DEAREST_FIRST, one_strategy, solve_independent
 from ecostudy.ocp.timedomain import LegRun
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
-from ecostudy.studies.cases import case_key, code_version
+from ecostudy.studies.cases import case_key
 from ecostudy.studies.legpool import shared_pool
 from ecostudy.studies.sizes import check_network_study
 from ecostudy.studies.workers import kept
@@ -63,9 +63,7 @@ def expand_network(path, workers=1, pool=None, note=None, out=None):
         note(f"{len(st.names)} trains, {len(st.stops) - 1} segments ({', '.join(f'{t:.1f}' for t in fl.asked_times)} s "
              f"before rounding to {st.dt} s steps), {fl.steps} steps")
     inputs = {"fields": s.model_dump(mode="json", exclude={"output", "strategies"}),
-              "track": track_document(named_file(path, "track", s.track)),
-              "train": train_document(named_file(path, "train", s.train))[0],
-              "version": code_version()}
+              "train": st.documents[0], "track": st.documents[1]}
     base = case_key(inputs)
     cases = []
     for name in st.strategies:

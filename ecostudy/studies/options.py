@@ -11,7 +11,7 @@ from typing import Any, NamedTuple, Optional
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.types import Timing, Track, Train
-from ecostudy.io.loaders import chosen_stops, load_track, load_train
+from ecostudy.io.loaders import chosen_stops, read_track, read_train
 from ecostudy.studies.cases import load_checked_study
 
 # the ranges of numeric options: the same as the study schema's where a field exists (io/schemas.py);
@@ -81,6 +81,7 @@ class Case(NamedTuple):
     to_stop: str
     points: Optional[int]
     study: Any  # the loaded study file, or None
+    documents: tuple[Any, ...]  # (train, track) as their files give them
 
 
 def no_stops_with_study(from_stop: Optional[str], to_stop: Optional[str]) -> None:
@@ -102,12 +103,12 @@ def case_from(study: Optional[Path], track: Optional[Path], train: Optional[Path
                                      "give a study file or --track and --train, not both"))
         no_stops_with_study(from_stop, to_stop)
         st = load_checked_study(study, command)
-        return Case(st.track, st.train, st.from_stop, st.to_stop, points or st.points, st)
+        return Case(st.track, st.train, st.from_stop, st.to_stop, points or st.points, st, st.documents)
     if not (track and train):
         raise InputError(problem("command line", "--track/--train", "give a study file, or both --track and --train"))
-    trk, trn = load_track(track), load_train(train)
+    (trk_doc, trk), (trn_doc, trn) = read_track(track), read_train(train)  # each file once
     f, t = chosen_stops(trk, from_stop, to_stop, "command line")
-    return Case(trk, trn, f, t, points, None)
+    return Case(trk, trn, f, t, points, None, (trn_doc, trk_doc))
 
 
 def timing_of(time: Optional[float], supplement_pct: Optional[float], window: Optional[str] = None) -> Timing:
