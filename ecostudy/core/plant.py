@@ -191,14 +191,17 @@ class Plant:
             fb = max(self.mass * train.max_deceleration - resist, 0.0)
         return ft, fb
 
-    def applied(self, x: FloatArray, v: FloatArray, controls: Sequence["float | Cruise"]) -> tuple[FloatArray, FloatArray]:
+    def applied(self, x: FloatArray, v: FloatArray,
+                controls: Sequence["float | Cruise"]) -> tuple[FloatArray, FloatArray]:
         """(F_T, F_B) [N] the plant applies at travel positions ``x`` [m] and speeds ``v`` [m/s]
         (arrays) under the control at each: :meth:`forces` with the true resistance there."""
         a, b, c = self.davis
         x = np.clip(x, 0.0, self.segment.distance)
         resist = davis_resistance(v, a, b, c + self.tunnels(x)) + self.grade_forces(x)
-        ft, fb = zip(*(self.forces(float(s), u, float(r)) for s, u, r in zip(v, controls, resist))) if len(v) else ((), ())
-        return np.asarray(ft, float), np.asarray(fb, float)
+        resist = np.broadcast_to(resist, np.shape(v))
+        pairs = [self.forces(float(s), u, float(r)) for s, u, r in zip(v, controls, resist)]
+        out = np.asarray(pairs, float).reshape(-1, 2)
+        return out[:, 0], out[:, 1]
 
     def traction(self, v: float) -> float:
         """The true traction envelope at speed ``v`` [N]: the model's times ``truth.traction``, at most

@@ -130,8 +130,8 @@ def _gap_on_time(energies, result, arrival):
 def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     """The ``das`` block of a DAS method's run: energies and gaps, and its ``status`` as a driven run
     (:func:`~ecostudy.core.status.driven_run`: stop, arrival against the ATO run's time, overspeed
-    over the limits, a train with an adhesion limit its ``adhesion_use_max``), flagged too for each reason in ``flags``; ``solver`` says how the advice was
-    made (e.g. ``optimal, re-simulated``)."""
+    over the limits, a train with an adhesion limit its ``adhesion_use_max``), flagged too for each
+    reason in ``flags``; ``solver`` says how the advice was made (e.g. ``optimal, re-simulated``)."""
     row = outcome.row(result.train, result.segment.distance)
     energies = {k: row[k] for k in ("traction_energy_kWh", "net_energy_kWh")}
     arrival_error = row["running_time_s"] - result.summary["running_time_s"]
