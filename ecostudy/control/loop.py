@@ -26,6 +26,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core.plant import Noise, Plant, Truth
+from ecostudy.core.simulate import adhesion_use
 from ecostudy.core.types import State
 from ecostudy.core.units import to_kmh
 
@@ -34,8 +35,9 @@ MEASURED = "measured"
 
 class LoopResult(NamedTuple):
     """A closed-loop trip: the true states at every sample, the handles applied, the work at the
-    wheel [J], the solve time of every cycle [s], the summary numbers, and per sample the
-    measured state (``readings``)."""
+    wheel [J], the solve time of every cycle [s], the summary numbers, per sample the measured
+    state (``readings``), and for a train with an adhesion limit the largest share of the true
+    train's limit asked (``core.simulate.adhesion_use`` at every plant step's start and end)."""
 
     states: list
     handles: list
@@ -47,6 +49,7 @@ class LoopResult(NamedTuple):
     max_overspeed_kmh: float
     mass_estimates: list
     readings: list = []
+    adhesion_use_max: float | None = None
 
 
 def check_delay(delay):
@@ -72,6 +75,7 @@ class _Trip:
         self.plant, self.noise, self.plant_step, self.rng = plant, noise, plant_step, noise.generator()
         self.state, self.work_t, self.work_b, self.over = State(), 0.0, 0.0, 0.0
         self.moved, self.arrival, self.drawn = False, None, (None, 0.0)
+        self.grip = None if plant.truth.adhesion(plant.train) is None else 0.0  # the largest adhesion use
 
     @property
     def stood(self):
@@ -86,8 +90,12 @@ class _Trip:
                 slot = int(self.state.time // self.noise.period) if self.noise.period else None
                 if slot is None or slot != self.drawn[0]:  # a new draw each step, or each noise period
                     self.drawn = (slot, self.noise.disturbance(self.rng))
-                step = self.plant.step(self.state, u, duration / steps, self.drawn[1])
+                before, step = self.state, self.plant.step(self.state, u, duration / steps, self.drawn[1])
                 self.state = step.state
+                if self.grip is not None:
+                    ends = (before, step.state)
+                    use = adhesion_use(self.plant, [s.position for s in ends], [s.speed for s in ends], [u, u])
+                    self.grip = max(self.grip, use or 0.0)
                 self.work_t += step.traction_work
                 self.work_b += step.braking_work
                 limit = float(segment.limit(np.clip(self.state.position, 0.0, segment.distance)))
@@ -148,7 +156,7 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
     state = trip.state
     return LoopResult(states, handles, trip.work_t, trip.work_b, list(controller.solve_seconds),
                       state.position - segment.distance, trip.arrival if trip.arrival is not None else state.time,
-                      to_kmh(max(trip.over, 0.0)), estimates, readings)
+                      to_kmh(max(trip.over, 0.0)), estimates, readings, trip.grip)
 
 
 def _measured_cycle(controller, nominal, measured, sample_time, held, lag, busy_until, pending):

@@ -15,17 +15,18 @@ controller planning with the nominal train can be run against a train that is no
 Standing trains are not pushed backwards by resistance; work is accumulated at the wheel.
 """
 from bisect import bisect_right
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable, NamedTuple, Sequence, TypeAlias
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from ecostudy.core.adhesion import Adhesion
 from ecostudy.core.grid import Profile, Segment
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import acceleration, davis_resistance, line_energy
 from ecostudy.core.types import State, Train
-from ecostudy.core.units import FloatArray
+from ecostudy.core.units import FloatArray, Numeric
 
 RTOL, ATOL = 1e-8, [1e-6, 1e-8, 1.0, 1.0, 1.0, 1.0]  # state: position, speed, three works, net line energy [J]
 
@@ -43,14 +44,27 @@ def terminal(event: Event, direction: int) -> Event:
 class Truth:
     """The plant's true parameters as multiples of the model's (1: the model itself).
 
-    ``mass`` scales the inertial and the static mass (grade and curve forces with it),
-    ``resistance`` the Davis terms, ``traction`` and ``braking`` the envelopes.
+    ``mass`` scales the inertial and the static mass (grade and curve forces with it) and the
+    adhesive mass of a train with an adhesion limit, ``resistance`` the Davis terms, ``traction`` and
+    ``braking`` the envelopes.
     """
 
     mass: float = 1.0
     resistance: float = 1.0
     traction: float = 1.0
     braking: float = 1.0
+
+    def adhesion(self, train: Train) -> Adhesion | None:
+        """The true train's adhesion limit: the model's law on its adhesive mass times ``mass`` (the
+        load on the driven axles grows and shrinks with the train's); None for a train without one."""
+        limit = train.adhesion
+        return None if limit is None else replace(limit, mass=limit.mass * self.mass)
+
+    def capped(self, train: Train) -> bool:
+        """Whether the plant caps the true traction and electric brake at the true train's adhesion
+        limit: where it has one and the model's envelopes, capped at the model's limit, could ask
+        more of it (a stronger traction, or a lighter train with less grip)."""
+        return train.adhesion is not None and (self.traction > 1.0 or self.mass < 1.0)
 
 
 @dataclass(frozen=True)
@@ -100,6 +114,15 @@ class Noise:
         return State(state.position + dx, state.speed + dv, state.time)
 
 
+def controls_of(handle: Sequence[float] | FloatArray, targets: Sequence[float] | FloatArray | None = None,
+                gain: float = 1.0) -> list["float | Cruise"]:
+    """The control of each interval: its handle, or :class:`Cruise` at its target speed where
+    ``targets`` (one per interval) is not nan."""
+    handles = [float(u) for u in handle]
+    target = [float(x) for x in targets] if targets is not None else [float("nan")] * len(handles)
+    return [Cruise(x, gain) if x == x else u for u, x in zip(handles, target)]
+
+
 def pieces(nodes: FloatArray, handle: Sequence[float] | FloatArray, segment: Segment, jump: float = 1e-3,
            targets: Sequence[float] | FloatArray | None = None) -> FloatArray:
     """Start indices of runs of intervals with (nearly) the same handle, gradient and curvature.
@@ -127,22 +150,31 @@ class Plant:
         self.mass = train.mass * truth.mass
         self.davis = tuple(float(c) * truth.resistance for c in train.davis)
         self.edges = segment.breakpoints()
-        # a true train stronger than its model still transmits at most mu(v) m_adh g (its envelope is capped there)
-        self.grip = train.adhesion.limit if train.adhesion is not None and truth.traction > 1.0 else None
+        # a true train stronger or lighter than its model transmits at most its own mu(v) m_adh g (Truth.capped)
+        limit = truth.adhesion(train)
+        self.grip = limit.limit if limit is not None and truth.capped(train) else None
 
     # ------------------------------------------------------------------ forces
     def grade_force(self, x: float) -> float:
         """Gradient and curve force at travel position ``x`` [N] (true static mass)."""
-        return float(point_resistance(self.segment, self.train, x)) * self.truth.mass
+        return float(self.grade_forces(x))
+
+    def grade_forces(self, x: Numeric) -> Numeric:
+        """:meth:`grade_force` at each travel position of ``x`` (an array for an array)."""
+        return point_resistance(self.segment, self.train, x) * self.truth.mass
 
     def varying(self, x: float) -> bool:
         """Whether the curvature changes along the piece at travel position ``x`` (a clothoid)."""
         curve = self.segment.curvature
         return curve.slopes is not None and bool(Profile(curve.starts, curve.slopes)(x) != 0)
 
-    def tunnel(self, x: float) -> float:
+    def tunnel(self, x: Numeric) -> float:
         """Extra quadratic resistance of a tunnel at travel position ``x`` [N s^2/m^2] (true resistance)."""
-        return float(self.segment.tunnel(x)) * self.truth.resistance
+        return float(self.tunnels(x))
+
+    def tunnels(self, x: Numeric) -> Numeric:
+        """:meth:`tunnel` at each travel position of ``x`` (an array for an array)."""
+        return self.segment.tunnel(x) * self.truth.resistance
 
     def forces(self, v: float, control: "float | Cruise", resist: float) -> tuple[float, float]:
         """(F_T, F_B) [N] of a handle u or a :class:`Cruise` at speed ``v`` with resistance ``resist``."""
@@ -159,11 +191,30 @@ class Plant:
             fb = max(self.mass * train.max_deceleration - resist, 0.0)
         return ft, fb
 
+    def applied(self, x: FloatArray, v: FloatArray,
+                controls: Sequence["float | Cruise"]) -> tuple[FloatArray, FloatArray]:
+        """(F_T, F_B) [N] the plant applies at travel positions ``x`` [m] and speeds ``v`` [m/s]
+        (arrays) under the control at each: :meth:`forces` with the true resistance there."""
+        a, b, c = self.davis
+        x = np.clip(x, 0.0, self.segment.distance)
+        resist = davis_resistance(v, a, b, c + self.tunnels(x)) + self.grade_forces(x)
+        resist = np.broadcast_to(resist, np.shape(v))
+        pairs = [self.forces(float(s), u, float(r)) for s, u, r in zip(v, controls, resist)]
+        out = np.asarray(pairs, float).reshape(-1, 2)
+        return out[:, 0], out[:, 1]
+
     def traction(self, v: float) -> float:
         """The true traction envelope at speed ``v`` [N]: the model's times ``truth.traction``, at most
         the train's adhesion limit (where it has one)."""
         force = float(self.truth.traction * self.train.traction.force(v))
         return force if self.grip is None else min(force, float(self.grip(v)))
+
+    def electric(self, fb: float, v: float) -> float:
+        """The part [N] of the braking force ``fb`` [N] the electric brake takes at speed ``v``
+        (:meth:`Train.electric_brake`), at most the true adhesion limit where the plant caps it; the
+        friction brake takes the rest."""
+        fr = float(self.train.electric_brake(fb, v))
+        return fr if self.grip is None else min(fr, float(self.grip(v)))
 
     def derivatives(self, v: float, ft: float, fb: float, resist: float, disturbance: float = 0.0) -> list[float]:
         """d/dt of (position, speed, traction work, braking work, regenerated work, net line
@@ -171,7 +222,7 @@ class Plant:
         if v <= 0.0 and ft - resist + self.mass * disturbance <= 0.0:  # standing stays standing
             return [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
         train = self.train
-        fr = float(train.electric_brake(fb, v)) if fb > 0 else 0.0
+        fr = self.electric(fb, v) if fb > 0 else 0.0
         line = line_energy(ft, fr, v, v, train.eta_traction, train.eta_regeneration)
         return [v, acceleration(ft, fb, resist, self.mass) + disturbance, ft * v, fb * v, fr * v, line]
 
@@ -223,9 +274,7 @@ class Plant:
         segment = self.segment
         a, b, c = self.davis
         handles = [float(u) for u in handle]
-        target = [float(x) for x in targets] if targets is not None else [float("nan")] * len(handles)
-        # nan: the handle; else cruise control at that speed
-        controls: list[float | Cruise] = [Cruise(x, gain) if x == x else u for u, x in zip(handles, target)]
+        controls = controls_of(handles, targets, gain)
         last = len(handles) - 1
         max_time = max_time or 20 * segment.distance + 600
         node_list = nodes.tolist()

@@ -14,13 +14,13 @@ import numpy as np
 
 from ecostudy.core import adhesion
 from ecostudy.core.grid import Segment, intervals_of
-from ecostudy.core.plant import Plant, Truth
+from ecostudy.core.plant import Cruise, Plant, Truth, controls_of
+from ecostudy.core.status import ADHESION_USE
 from ecostudy.core.types import Train, Window
 from ecostudy.core.units import FloatArray, to_kmh, to_kwh
 
 TOLERANCES = {"arrival_time_error_s": 0.5, "stop_error_m": 1.0, "energy_error_pct": 1.0,
               "net_energy_error_pct": 1.0, "max_overspeed_kmh": 0.5}
-ADHESION_USE = 1.0 + adhesion.TOLERANCE  # a train with an adhesion limit: the largest share of it a run may ask
 
 
 @dataclass
@@ -34,6 +34,7 @@ class Trace:
     stop_position: float     # [m]
     arrival_time: float      # [s]
     net_energy: float = 0.0  # drawn from the line minus fed back [J] (physics.line_energy)
+    adhesion_use: float | None = None  # the largest share of the adhesion limit asked (adhesion_use); None: no limit
 
 
 def simulate(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[float] | FloatArray,
@@ -43,10 +44,16 @@ def simulate(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence
     :meth:`Plant.drive` of the nominal train (or of ``truth``). ``targets`` (optional, one per
     interval, nan elsewhere) asks for cruise control there: a speed-holding controller
     F = F_R(x, v) + M * gain * (v_target - v), the resistance fed forward, clipped to the traction
-    and braking envelopes (a driver or DAS holding a speed). Returns (:class:`Trace`, pieces)."""
-    y, t_stop, solutions = Plant(segment, train, truth).drive(nodes, handle, targets, gain, max_time)
+    and braking envelopes (a driver or DAS holding a speed). A train with an adhesion limit has the
+    trace's :func:`adhesion_use` too. Returns (:class:`Trace`, pieces)."""
+    plant = Plant(segment, train, truth)
+    y, t_stop, solutions = plant.drive(nodes, handle, targets, gain, max_time)
     t, x, v = dense_samples(solutions)
-    return Trace(t, x, v, float(y[2]), float(y[3]), float(y[4]), float(y[0]), t_stop, float(y[5])), solutions
+    grip = None
+    if train.adhesion is not None:
+        controls = controls_of(handle, targets, gain)
+        grip = adhesion_use(plant, x, v, [controls[k] for k in intervals_of(nodes, x)])
+    return Trace(t, x, v, float(y[2]), float(y[3]), float(y[4]), float(y[0]), t_stop, float(y[5]), grip), solutions
 
 
 def dense_samples(solutions: Sequence[Any], samples: int = 4000) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -87,20 +94,20 @@ def window_checks(trace: Trace, windows: Sequence[Window], time_tolerance: float
     return out
 
 
-def adhesion_use(train: Train, nodes: FloatArray, handle: Sequence[float] | FloatArray, trace: Trace) -> float:
-    """The largest share of the train's adhesion limit mu(v) m_adh g (:mod:`ecostudy.core.adhesion`)
-    that the re-simulated run's traction or electric brake asked for, at the trace's dense samples:
-    the force the plant applies for the interval's handle at the sample's speed (before the bound on
-    the net acceleration, which only lowers it). 0 for a train without an adhesion limit."""
-    if train.adhesion is None:
-        return 0.0
-    k = intervals_of(nodes, trace.x)
-    u, v = np.asarray(handle, float)[k], np.maximum(trace.v, 0.0)
-    traction = np.maximum(u, 0.0) * train.traction.force(v)
-    braking = np.maximum(-u, 0.0) * train.braking.force(v)
-    electric = train.electric_brake(braking, v)
-    return float(np.max(np.maximum(adhesion.use(train.adhesion, v, traction), adhesion.use(train.adhesion, v, electric)),
-                        initial=0.0))
+def adhesion_use(plant: Plant, positions: Sequence[float] | FloatArray, speeds: Sequence[float] | FloatArray,
+                 controls: Sequence["float | Cruise"]) -> float | None:
+    """The largest share of the true train's adhesion limit mu(v) m_adh g (:meth:`Truth.adhesion`,
+    :mod:`ecostudy.core.adhesion`) that the plant's traction or electric brake asked for at the
+    samples: the forces it applies (:meth:`Plant.applied`, :meth:`Plant.electric`) at each position
+    [m] and speed [m/s] under the control there (a handle or :class:`Cruise`). The one check of every
+    run, re-simulated or driven; None for a train without an adhesion limit."""
+    limit = plant.truth.adhesion(plant.train)
+    if limit is None:
+        return None
+    v = np.maximum(np.asarray(speeds, float), 0.0)
+    traction, braking = plant.applied(np.asarray(positions, float), v, controls)
+    electric = [plant.electric(fb, s) if fb > 0 else 0.0 for fb, s in zip(braking, v)]
+    return float(np.max(np.maximum(adhesion.use(limit, v, traction), adhesion.use(limit, v, electric)), initial=0.0))
 
 
 def verify(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[float] | FloatArray, running_time: float,
@@ -109,7 +116,7 @@ def verify(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[f
     """Compare an optimised run with its re-simulation; returns the ``verification`` block. With
     ``net_energy`` [J] (drawn from the line minus fed back) its error too, in % of the traction
     work (a net energy can be near zero or below on a descent). A train with an adhesion limit
-    also has ``adhesion_use_max`` (:func:`adhesion_use`), at most :data:`ADHESION_USE` to pass."""
+    also has ``adhesion_use_max`` (the trace's :func:`adhesion_use`), at most :data:`ADHESION_USE` to pass."""
     trace, _ = simulate(segment, train, nodes, handle)
     overspeed = worst_overspeed(segment, trace)
     percent = 100.0 / max(traction_energy, 1.0)  # an energy's error in % of the traction work
@@ -125,7 +132,7 @@ def verify(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[f
     }
     tolerances = dict(TOLERANCES)
     if train.adhesion is not None:  # only then: a run of a train without the limit is written as before
-        out["adhesion_use_max"] = adhesion_use(train, nodes, handle, trace)
+        out["adhesion_use_max"] = trace.adhesion_use
         tolerances["adhesion_use_max"] = ADHESION_USE
     out["windows"] = window_checks(trace, windows)
     out["passed"] = bool(all(abs(out[k]) <= tol for k, tol in tolerances.items() if k in out)
@@ -148,4 +155,5 @@ class Driven:
         return {"strategy": self.name, "running_time_s": t.arrival_time,
                 "traction_energy_kWh": to_kwh(t.traction_energy),
                 "net_energy_kWh": to_kwh(t.net_energy),
-                "stop_error_m": t.stop_position - distance, "handle_changes": changes}
+                "stop_error_m": t.stop_position - distance, "handle_changes": changes,
+                **({} if t.adhesion_use is None else {"adhesion_use_max": t.adhesion_use})}

@@ -13,10 +13,12 @@ Adhesion, what "kept" means:
   envelope and electric brake are capped at mu(v) m_adh g when it is loaded, so every formulation
   and the plant use the capped curve; a run verified by re-simulation (``solve``, ``run``,
   ``pareto``, ``journey``, ``compare``'s ATO run, a network leg) records the largest share of the
-  limit its forces asked for (``adhesion_use_max``) and is flagged above ``1 + adhesion.TOLERANCE``;
-  driven runs (``compare``'s strategies, driver advice, closed loop) apply at most the capped
-  envelope, and a true train stronger than its model at most the limit itself (of the model's
-  adhesive mass), so they keep it by construction and are not checked;
+  limit its forces asked for (``adhesion_use_max``) and is flagged above :data:`ADHESION_USE`;
+  driven runs (``compare``'s strategies, driver advice, closed loop) record and are flagged alike
+  (:func:`driven_run`), against the true train's limit (its adhesive mass times the drawn mass):
+  they apply at most the capped envelope, and a true train stronger or lighter than its model at
+  most that limit itself, so they keep it by construction unless the train was built in code with
+  envelopes above its limit;
 - a point-mass train without the field has no adhesion limit: nothing is capped or checked (its
   ``max_acceleration_mps2`` bounds the net acceleration, not the wheels' grip);
 - a heavy-haul run is flagged when a locomotive asks more than 1 % above its mu(v) m g
@@ -24,6 +26,8 @@ Adhesion, what "kept" means:
 """
 from dataclasses import dataclass
 from typing import Iterable, Literal
+
+from ecostudy.core.adhesion import TOLERANCE
 
 Kind = Literal["ok", "flagged", "failed"]
 ORDER = {"ok": 0, "flagged": 1, "failed": 2}
@@ -74,6 +78,7 @@ OK = Status("ok")
 STOP_TOLERANCE_M = 1.0        # |stopping position - stop| [m]
 LATE_TOLERANCE_S = 1.0        # arrival after the asked time or window [s]
 OVERSPEED_TOLERANCE_KMH = 0.5  # largest excess over the speed limit [km/h]
+ADHESION_USE = 1.0 + TOLERANCE  # a train with an adhesion limit: the largest share of it any run may ask
 
 
 def flagged(reason: str) -> Status:
@@ -118,10 +123,11 @@ def worst(statuses: Iterable[Status]) -> Status:
 
 
 def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
-               overspeed_kmh: float | None = None) -> Status:
+               overspeed_kmh: float | None = None, adhesion_use: float | None = None) -> Status:
     """The status of a driven run from what it missed (``None``: not measured): ``flagged`` when
     it stops more than :data:`STOP_TOLERANCE_M` off, arrives more than :data:`LATE_TOLERANCE_S`
-    late or overspeeds by more than :data:`OVERSPEED_TOLERANCE_KMH`."""
+    late, overspeeds by more than :data:`OVERSPEED_TOLERANCE_KMH` or asks more than
+    :data:`ADHESION_USE` of its adhesion limit (``core.simulate.adhesion_use``)."""
     reasons = []
     if stop_error_m is not None and not abs(stop_error_m) <= STOP_TOLERANCE_M:
         reasons.append(f"stopped {stop_error_m:+.2f} m from the stop")
@@ -129,4 +135,6 @@ def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
         reasons.append(f"arrived {late_s:.2f} s late")
     if overspeed_kmh is not None and not overspeed_kmh <= OVERSPEED_TOLERANCE_KMH:
         reasons.append(f"overspeed {overspeed_kmh:.2f} km/h")
+    if adhesion_use is not None and not adhesion_use <= ADHESION_USE:
+        reasons.append(f"adhesion use {adhesion_use:.3f} of mu(v) m_adh g (tolerance {ADHESION_USE:g})")
     return OK if not reasons else flagged("; ".join(reasons))

@@ -130,18 +130,20 @@ def _gap_on_time(energies, result, arrival):
 def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     """The ``das`` block of a DAS method's run: energies and gaps, and its ``status`` as a driven run
     (:func:`~ecostudy.core.status.driven_run`: stop, arrival against the ATO run's time, overspeed
-    over the limits), flagged too for each reason in ``flags``; ``solver`` says how the advice was
-    made (e.g. ``optimal, re-simulated``)."""
+    over the limits, a train with an adhesion limit its ``adhesion_use_max``), flagged too for each
+    reason in ``flags``; ``solver`` says how the advice was made (e.g. ``optimal, re-simulated``)."""
     row = outcome.row(result.train, result.segment.distance)
     energies = {k: row[k] for k in ("traction_energy_kWh", "net_energy_kWh")}
     arrival_error = row["running_time_s"] - result.summary["running_time_s"]
     overspeed = to_kmh(worst_overspeed(result.segment, outcome.trace))
-    status = worst([driven_run(row["stop_error_m"], arrival_error, overspeed), *(flagged(f) for f in flags)])
+    grip = {} if "adhesion_use_max" not in row else {"adhesion_use_max": row["adhesion_use_max"]}
+    status = worst([driven_run(row["stop_error_m"], arrival_error, overspeed, row.get("adhesion_use_max")),
+                    *(flagged(f) for f in flags)])
     return {"method": method, **energies, "gap_to_ato_pct": _gap(energies, result),
             "gap_to_ato_on_time_pct": _gap_on_time(energies, result, row["running_time_s"]),
             "mode_changes": len(advice) - 1, "bound_kWh": None, "status": str(status), "solver": solver,
             "arrival_error_s": arrival_error, "stop_error_m": row["stop_error_m"], "max_overspeed_kmh": overspeed,
-            "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v))), **extra}
+            "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v))), **grip, **extra}
 
 
 def das_round(result):

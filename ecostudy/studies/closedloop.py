@@ -143,6 +143,7 @@ def summarise(case, result, controller, train, estimator):
         "terminal_gamma_m": controller.gammas[-1] if getattr(controller, "gammas", None) else None,
         "mode_changes": _mode_changes(np.array(result.handles)),
         "mass_estimate": estimator.estimate if estimator is not None else None,
+        **({} if result.adhesion_use_max is None else {"adhesion_use_max": result.adhesion_use_max}),
         **{f"true_{name}": case["truth"][name] for name in PARAMETERS},
         "profile": {"x": x, "v": v}, "solve_ms": [round(1e3 * s, 2) for s in seconds],
         "estimates": [(round(p, 2), round(e, 5)) for p, e in result.mass_estimates[::10] if p is not None],
@@ -180,7 +181,8 @@ def _trip(case):
                       estimator=estimator, delay=case_delay(case))
     summary = summarise(case, result, planner, train, estimator)
     # "late" is after the window's latest arrival: the window is the timetable of a closed-loop study
-    status = driven_run(summary["stop_error_m"], summary["late_s"], summary["max_overspeed_kmh"])
+    status = driven_run(summary["stop_error_m"], summary["late_s"], summary["max_overspeed_kmh"],
+                        summary.get("adhesion_use_max"))
     if summary["failures"]:  # solves that did not converge: the fallback drove those samples, not the controller
         status = worst([status, flagged(f"{summary['failures']} solves in {summary['samples']} samples gave no "
                                         "usable plan (the fallback drove them)")])
@@ -188,6 +190,7 @@ def _trip(case):
     return status, error, summary
 
 
+GRIP = "adhesion_use_max"  # a column of a train with an adhesion limit only (core.simulate.adhesion_use)
 COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "stop_error_m", "max_overspeed_kmh",
            "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget", "softened", "failures", "max_gap",
            "fallback_shifted_plan", "fallback_reserve", "fallback_full_brake", "full_brake_before_final",
@@ -198,11 +201,12 @@ COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "sto
 def runs_table(cases, rows):
     """One row per run: labels, status, reason and the numbers of :func:`summarise`."""
     out = []
-    for case in cases:
+    stored = [(rows.get(case["key"]) or {}).get("summary") or {} for case in cases]
+    columns = (*COLUMNS, GRIP) if any(GRIP in s for s in stored) else COLUMNS  # a train with an adhesion limit
+    for case, s in zip(cases, stored):
         row = rows.get(case["key"]) or {}
-        s = row.get("summary") or {}
         out.append({**case["labels"], "key": case["key"], "status": row.get("status", "missing"),
-                    "reason": row.get("error"), **{c: s.get(c) for c in COLUMNS}, "seconds": row.get("seconds")})
+                    "reason": row.get("error"), **{c: s.get(c) for c in columns}, "seconds": row.get("seconds")})
     return pd.DataFrame(out)
 
 
@@ -226,7 +230,8 @@ def aggregate(runs):
         for column, how in (("max_overspeed_kmh", "max"), ("late_s", "max"), ("solve_mean_ms", "mean"),
                             ("solve_p95_ms", "max"), ("solve_max_ms", "max"), ("over_budget", "sum"),
                             ("softened", "sum"), ("max_gap", "max"), ("fallback_shifted_plan", "sum"),
-                            ("fallback_reserve", "sum"), ("fallback_full_brake", "sum"), ("inexact_solves", "sum")):
+                            ("fallback_reserve", "sum"), ("fallback_full_brake", "sum"), ("inexact_solves", "sum"),
+                            *([(GRIP, "max")] if GRIP in runs else [])):
             row[f"{column}_{how}"] = getattr(pd.to_numeric(group[column], errors="coerce"), how)()
         rows.append(row)
     return pd.DataFrame(rows)

@@ -38,6 +38,7 @@ HEURISTICS = {"eco-drive coasting": ecodrive.eco_coasting, "MARECO-style": ecodr
 STRATEGIES = ("all-out", "ATO optimum", *HEURISTICS, "DAS round (nearest level)", "DAS phases")
 ROW = ("strategy", "running_time_s", "traction_energy_kWh", "net_energy_kWh", "stop_error_m", "max_overspeed_kmh",
        "handle_changes")
+GRIP = ("adhesion_use_max",)  # a column of a train with an adhesion limit only (core.simulate.adhesion_use)
 _SCENARIO = ("train", "track", "from", "to", "running_time_s", "supplement", "points")
 _ATO: dict = {}  # the ATO optimum of a scenario, per process: the base of the strategies after it
 
@@ -105,7 +106,7 @@ def _strategy(case):
     else:
         driven = nearest_levels(prepared.segment, train, prepared.nodes, ato.handle)
     row, overspeed = driven.row(train, prepared.segment.distance), overspeed_kmh(prepared.segment, driven)
-    status = driven_run(row["stop_error_m"], row["running_time_s"] - target, overspeed)
+    status = driven_run(row["stop_error_m"], row["running_time_s"] - target, overspeed, row.get("adhesion_use_max"))
     if name == "DAS phases":  # the same checks, and how its NLP ended
         status = worst([status, Status.parse(block["status"])])
     return _stored(driven, train, prepared.segment, status, target_s=target, max_overspeed_kmh=overspeed, **extra)
@@ -162,17 +163,19 @@ def compare_table(cases, rows):
     (DAS phases: the advice rows minus one), status; a failed strategy's reason in ``note``. Its
     attrs (``summary.json``): the title, the target running time and whether both NLPs verified."""
     table, statuses, by_name = [], [], {}
+    stored = [(rows.get(case["key"]) or {}).get("summary") or {} for case in cases]
+    columns = (*ROW, *GRIP) if any(GRIP[0] in s for s in stored) else ROW  # a train with an adhesion limit
     for case in cases:
         row = rows.get(case["key"]) or {"status": "missing", "error": "not computed yet"}
         s = row.get("summary")
         by_name[case["strategy"]] = s or {}
         if s and row["status"] in ("ok", "flagged"):
-            table.append({k: s.get(k) for k in ROW})  # a row stored before a column existed: empty there
+            table.append({k: s.get(k) for k in columns})  # a row stored before a column existed: empty there
             statuses.append(str(Status.parse(row["status"], row.get("error") or "")))
         else:
             table.append({"strategy": case["strategy"], "note": row.get("error")})
             statuses.append(str(failed(row.get("error") or row["status"])))
-    table = pd.DataFrame(table, columns=[*ROW, *(["note"] if any("note" in r for r in table) else [])])
+    table = pd.DataFrame(table, columns=[*columns, *(["note"] if any("note" in r for r in table) else [])])
     e_allout = by_name["all-out"].get("traction_energy_kWh", np.nan)
     e_opt = by_name["ATO optimum"].get("traction_energy_kWh", np.nan)
     target = next((s["target_s"] for s in by_name.values() if "target_s" in s), np.nan)

@@ -30,6 +30,8 @@ from dataclasses import replace
 import numpy as np
 
 from ecostudy.core import kinematics
+from ecostudy.core.adhesion import TOP_SPEED, capped
+from ecostudy.core.plant import Truth
 from ecostudy.core.budget import check_run, duration, refuse_unless_forced
 from ecostudy.core.errors import EcostudyWarning, InfeasibleError
 from ecostudy.core.grid import make_grid, make_segment, node_limits
@@ -92,10 +94,15 @@ def check_network(study, path):
 
 def true_train(train, truth):
     """The plant's train of a draw (``core.plant.Truth`` as a dict): the heavier mass, the larger
-    resistance and the weaker traction that :class:`~ecostudy.core.plant.Plant` drives."""
+    resistance and the weaker traction that :class:`~ecostudy.core.plant.Plant` drives; a train
+    with an adhesion limit its traction capped at the true train's limit where the plant caps it
+    (``Truth.capped``: a stronger or lighter true train)."""
+    plant = Truth(**truth)
+    traction, limit = train.traction.scaled(truth["traction"]), plant.adhesion(train)
+    if limit is not None and plant.capped(train):
+        traction, _ = capped(traction, limit, train.max_speed if np.isfinite(train.max_speed) else TOP_SPEED)
     return replace(train, mass=train.mass * truth["mass"], static_mass=train.static_mass * truth["mass"],
-                   davis=tuple(c * truth["resistance"] for c in train.davis),
-                   traction=train.traction.scaled(truth["traction"]))
+                   davis=tuple(c * truth["resistance"] for c in train.davis), traction=traction, adhesion=limit)
 
 
 def check_closed_loop(cases, path):
