@@ -1,5 +1,5 @@
-"""A study stopped by SIGTERM or SIGINT sent to its main process alone (as `kill`, `timeout`, a batch
-scheduler or systemd send it): exit status 128 + the signal, one line saying what was kept, every
+"""A study stopped by SIGTERM or SIGINT sent to its main process alone (`kill PID`) or to its process
+group (`timeout`, systemd, a batch scheduler): exit status 128 + the signal, one line saying what was kept, every
 case that reached the main process stored, no worker left running, no temporary file, no lock
 file; the same command again computes only the other cases."""
 import glob
@@ -57,8 +57,9 @@ def ecostudy(args):
                             stderr=subprocess.PIPE, text=True, preexec_fn=start)
 
 
-def signalled(args, db, sig, workers=2, timeout=300):
-    """Start a study, send ``sig`` to its main process once the store holds a case; returns (the
+def signalled(args, db, sig, workers=2, timeout=300, group=False):
+    """Start a study, send ``sig`` to its main process (``group``: to its whole process group, as
+    ``timeout``, systemd and batch schedulers do) once the store holds a case; returns (the
     finished process, its stdout and stderr, the worker PIDs seen before the signal, cases stored
     when the signal was sent)."""
     proc = ecostudy(args)
@@ -72,7 +73,7 @@ def signalled(args, db, sig, workers=2, timeout=300):
     kids |= children(proc.pid)
     assert proc.poll() is None, proc.communicate()
     assert len(kids) >= workers, f"the workers were not seen: {kids}"
-    os.kill(proc.pid, sig)
+    (os.killpg if group else os.kill)(proc.pid, sig)
     out, err = proc.communicate(timeout=120)
     return proc, out, err, kids, before
 
@@ -104,10 +105,11 @@ def study(tmp_path, count):
 
 
 @pytest.mark.slow
-def test_sigterm_to_the_main_process_keeps_every_finished_case_and_stops_the_workers(tmp_path):
+@pytest.mark.parametrize("group", [False, True], ids=["main process", "process group"])
+def test_sigterm_keeps_every_finished_case_and_stops_the_workers(tmp_path, group):
     out = tmp_path / "out"
     args = ["run", study(tmp_path, 10), "--workers", 2, "--no-progress"]
-    proc, _, err, kids, before = signalled(args, out / "results.sqlite", signal.SIGTERM)
+    proc, _, err, kids, before = signalled(args, out / "results.sqlite", signal.SIGTERM, group=group)
     kept = assert_stopped_cleanly(proc, err, kids, before, out, signal.SIGTERM, 10, "cases")
     assert not (out / "summary.json").exists()  # no table or summary of a part of the study
     again = ecostudy(args)

@@ -19,10 +19,12 @@ def every_core(workers):
 
 @contextmanager
 def worker_pool(workers):
-    """A forked process pool (workers inherit the loaded modules) whose workers die with the parent,
-    hold none of its store locks and leave a stop signal to it: SIGINT (a Ctrl-C reaches the whole
-    process group) is ignored, SIGTERM ends them. Left by an exception (an interrupt, or a generator
-    closed before its end) the workers are stopped at once (:func:`stop_workers`), not waited for."""
+    """A forked process pool (workers inherit the loaded modules) whose workers die with the parent
+    (SIGKILL when it dies), hold none of its store locks and leave a stop signal to it: SIGINT and
+    SIGTERM are ignored (Ctrl-C reaches the whole process group, as SIGTERM does from ``timeout``,
+    systemd or a batch scheduler; the parent stores what reached it, then stops them). Left by an
+    exception (an interrupt, or a generator closed before its end) the workers are stopped at once
+    (:func:`stop_workers`), not waited for."""
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
                                initializer=_worker_start)
     try:
@@ -35,18 +37,15 @@ def worker_pool(workers):
 
 
 def stop_workers(pool):
-    """Stop a pool's worker processes now (SIGTERM, then SIGKILL after 2 s), whatever they compute:
-    the tasks they run are lost, the others cancelled; every worker has ended when this returns.
-    (The pool's ``_processes``, as Python 3.14's ``ProcessPoolExecutor.terminate_workers`` reads it.)"""
+    """Stop a pool's worker processes now (SIGKILL: they ignore SIGTERM), whatever they compute: the
+    tasks they run are lost, the others cancelled; every worker has ended when this returns. (The
+    pool's ``_processes``, as Python 3.14's ``ProcessPoolExecutor.kill_workers`` reads it.)"""
     processes = list((pool._processes or {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
     for process in processes:
-        process.terminate()
+        process.kill()
     for process in processes:
-        process.join(2.0)
-        if process.is_alive():
-            process.kill()
-            process.join()
+        process.join()
 
 
 @contextmanager
@@ -63,8 +62,9 @@ def arriving(futures, arrived):
 
 
 def _worker_start():
-    die_with_parent()
+    die_with_parent(signal.SIGKILL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     release_inherited()
 
 
