@@ -228,10 +228,6 @@ class StudyKind:
     """``spread(todo, workers, task, arrived)`` -> (case, result) pairs: how local worker processes run the
     cases instead of one case per process (a network study's strategies share one pool for their
     legs: :mod:`ecostudy.studies.legpool`); Dask still runs one case per task."""
-    one_study: bool = False
-    """True: an output folder holds one study file's results (its tables and summary.json are the
-    study's own), so a folder whose store holds another study's cases is refused before computing
-    (``io.store.check_one_study``)."""
     verdict: Optional[Callable[[pd.DataFrame], dict]] = None
     """``verdict(table)``: statuses of the study as a whole beside its cases' ({name: Status}; a
     front whose energy does not fall as the running time grows is flagged)."""
@@ -284,7 +280,7 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
         spec.size(Path(where), expanded.cases, workers)
     output = check_output_dir(out or expanded.output, (spec.table_file, "results.sqlite", *expanded.inputs),
                               kind)
-    if spec.one_study and expanded.cases:
+    if expanded.cases:  # a folder holds one study's results: its tables and summary.json are the study's own
         check_one_study(output, expanded.cases[0]["study"])
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
