@@ -13,12 +13,13 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from ecostudy.studies.workers import arriving, worker_pool
 
 
-def shared_pool(todo, workers, task, arrived, first=None):
+def shared_pool(todo, workers, task, arrived=None, first=None):
     """(case, result) of every case in ``todo`` as it finishes: ``task(case, pool)`` in a thread per
     case, ``pool`` a process pool of ``workers`` that every case shares. ``first(case)``: a sort key,
     the cases started in its order (the dearest first: their legs enter the pool's queue first).
-    Interrupted: the cases finished put in ``arrived``, the workers stopped, nothing new started (a
-    case's thread ends at its next leg)."""
+    Interrupted: the cases finished put in ``arrived`` (a list), the workers stopped, nothing new
+    started (a case's thread ends at its next leg)."""
+    arrived = [] if arrived is None else arrived
     ordered = sorted(todo, key=first) if first is not None else list(todo)
     with worker_pool(workers) as pool:
         # the pool forks all its workers at its first task: here, in the thread that outlives the pool.
