@@ -14,6 +14,10 @@ from contextlib import closing
 
 import pytest
 
+from ecostudy.io.store import Store
+from ecostudy.studies.batch import execute
+from ecostudy.studies.cases import expand
+
 from .conftest import ROOT, TRACKS, TRAINS, write_yaml
 
 
@@ -96,11 +100,11 @@ def assert_stopped_cleanly(proc, err, kids, before, folder, sig, total, noun):
     return kept
 
 
-def study(tmp_path, count):
+def study(tmp_path, count, points=1000):
     return write_yaml(tmp_path / "study.yaml", {
         "name": "signalled", "track": str(TRACKS / "amsterdam_rokin_centraal.yaml"),
         "train": str(TRAINS / "amsterdam_metro.yaml"), "from": "Rokin", "to": "Centraal",
-        "supplement_percent": 10, "points": 1000,
+        "supplement_percent": 10, "points": points,
         "sweep": {"supplement_percent": list(range(2, 2 + count))}, "output": str(tmp_path / "out")})
 
 
@@ -129,3 +133,23 @@ def test_sigint_to_the_main_process_of_a_front_keeps_every_finished_point(tmp_pa
     stdout, err = again.communicate(timeout=600)
     assert again.returncode == 0, err
     assert f"10 points: {kept} already stored, {10 - kept} computed now (0 failed)" in stdout
+
+
+def test_results_that_reached_the_main_process_while_it_stored_a_case_are_stored(tmp_path):
+    """SIGINT while the main process is busy with a case it took (here: its progress callback, which
+    waits for the other cases to finish in the workers and their results to reach it): those results
+    are stored too, not only the cases it had taken."""
+    _, _, cases = expand(study(tmp_path, 3, points=30))
+    store = Store(tmp_path / "results.sqlite")
+
+    def progress(done, failed, remaining, total):
+        if done == 1:
+            time.sleep(10)  # the two other cases finish meanwhile (0.1 s each at K = 30)
+            os.kill(os.getpid(), signal.SIGINT)
+    try:
+        with pytest.raises(KeyboardInterrupt) as stop:
+            execute(cases, store, workers=2, progress=progress)
+        assert store.finished_keys() == {c["key"] for c in cases}
+        assert stop.value.counts == {"total": 3, "stored_before": 0, "computed": 3, "failed": 0}
+    finally:
+        store.close()

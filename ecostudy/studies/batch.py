@@ -175,6 +175,8 @@ def execute(cases, store, task=run_case, workers=1, dask=None, retry_failed=Fals
                 if case["key"] not in stored:
                     keep(case, result)
         raise Interrupted(counts) from None
+    finally:
+        source.close()  # any other error: the workers stopped now, not when the source is collected
     return counts
 
 
