@@ -11,6 +11,7 @@ from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.core.errors import InputError, problem
 from ecostudy.io.loaders import check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
 from ecostudy.io.timetable import journey_plan, name_stops
+from ecostudy.io.store import check_one_study
 from ecostudy.io.writers import check_output_dir
 from ecostudy.report.files import write_journey
 from ecostudy.report.html import write_html
@@ -19,7 +20,8 @@ from ecostudy.report.style import output
 from ecostudy.studies.batch import Expanded, run_expanded
 from ecostudy.studies.compare import compare_cases
 from ecostudy.studies.journey import journey
-from ecostudy.studies.options import case_from, check_options, no_windows, only_one, output_folder, timing_of
+from ecostudy.studies.options import (case_from, check_options, no_windows, only_one, output_folder, study_name,
+                                      timing_of)
 from ecostudy.studies.front import front_cases
 from ecostudy.studies.pareto import weighted_points, weighted_statuses
 from ecostudy.studies.sizes import check_front, check_journey
@@ -55,9 +57,10 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
                                                               "pareto")
     no_windows(st, "pareto")
     cases = front_cases(train_doc, track_doc, f, t, count, supplement_max * units.PERCENT, k or FRONT_POINTS,
-                        st.name if st is not None else "pareto", das, das_time_limit)
+                        study_name(st, "pareto", track, train, f, t), das, das_time_limit)
     out_dir = output_folder(out, beside(st, "_pareto", "pareto"))
     check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png", "results.sqlite"), "pareto")
+    check_one_study(out_dir, cases[0]["study"])  # before the weighted points are solved
     check_front("command line", count, k or FRONT_POINTS, workers, das, das_time_limit)  # refused (unless --force)
     extra = weighted_points(trk, trn, f, t, count=weighted, points=k or FRONT_POINTS) if weighted else None
     ran = run_expanded("pareto", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,
@@ -98,7 +101,8 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
         timing = st.timing
     else:
         raise InputError(problem("command line", "--time", "give --time or --supplement"))
-    cases = compare_cases(train_doc, track_doc, f, t, timing, k or RUN_POINTS, st.name if st is not None else "compare")
+    cases = compare_cases(train_doc, track_doc, f, t, timing, k or RUN_POINTS,
+                          study_name(st, "compare", track, train, f, t))
     out_dir = output_folder(out, beside(st, "_compare", "compare"))
     ran = run_expanded("compare", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,
                        progress=progress, draw=compare_figures(plot, figures))

@@ -1,7 +1,7 @@
 """The Typer application and what every command shares: messages through the ``ecostudy`` logger
 (``--quiet``, ``--verbose``, ``--log-file``), one-line errors (``--debug``: tracebacks), exit status:
 0 ok, 1 written but not ok (flagged or failed cases), 2 bad input or infeasible request, 3 solver
-failure or internal error, 130 interrupted."""
+failure or internal error, 130 interrupted (SIGINT), 143 terminated (SIGTERM)."""
 import logging
 import sys
 import traceback
@@ -13,8 +13,9 @@ import typer
 
 from ecostudy.core.budget import forced
 from ecostudy.core.errors import printable
+from ecostudy.core.interrupt import exit_status, stopped_by_signals
 from ecostudy.core.startup import pause
-from ecostudy.report.console import leave, logging_to, progress_bar
+from ecostudy.report.console import interrupted, leave, logging_to, progress_bar
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,  # "[s]" is a unit, not markup
                   help="Energy-efficient train control studies (Pyomo + Ipopt).")
@@ -49,10 +50,10 @@ def _main(ctx: typer.Context,
 def call(debug, name, *args, force=False, bar=None):
     """``ecostudy.api.<name>(*args)``, the size guards lifted when ``force`` (:mod:`ecostudy.core.budget`);
     ``bar``: (label, off[, stored]) of a progress bar passed as ``progress`` (stored False: Ctrl-C keeps
-    nothing). Errors: one line and an exit code; warnings: log lines; Ctrl-C: exit status 130."""
+    nothing). Errors: one line and an exit code; warnings: log lines; SIGINT or SIGTERM: exit status 130 or 143."""
     from ecostudy import api
 
-    with warnings.catch_warnings(record=True) as caught, forced(force):
+    with warnings.catch_warnings(record=True) as caught, forced(force), stopped_by_signals():
         warnings.simplefilter("always")
         try:
             if bar is None:
@@ -61,10 +62,9 @@ def call(debug, name, *args, force=False, bar=None):
                 return getattr(api, name)(*args, progress=progress)
         except typer.Exit:
             raise
-        except KeyboardInterrupt:
-            log.warning("interrupted" + (f": every finished {bar[0][:-3] + 'y' if bar[0].endswith('ies') else bar[0][:-1]} is stored; run the same command again to "
-                                         "continue" if bar and bar[2:] != (False,) else ""))
-            raise typer.Exit(130)
+        except KeyboardInterrupt as exc:
+            log.warning(interrupted(exc, bar))
+            raise typer.Exit(exit_status())
         except Exception as exc:  # an unexpected failure still gets one line by default
             if debug:
                 traceback.print_exc()

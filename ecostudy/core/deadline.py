@@ -22,11 +22,14 @@ Work = Callable[..., Any]  # work(post, *args): post(message) sends a message to
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 
-def die_with_parent() -> None:
-    """Ask Linux to send SIGTERM to this process when its parent dies (a killed command must not
-    leave children computing); elsewhere nothing happens."""
+def die_with_parent(sig: int = signal.SIGTERM) -> None:
+    """Ask Linux to send ``sig`` to this process when its parent dies (a killed command must not
+    leave children computing; elsewhere nothing is sent), and let SIGTERM end it at once: a forked
+    child inherits the command's own handler, which turns SIGTERM into KeyboardInterrupt
+    (:mod:`ecostudy.core.interrupt`) for the command to handle, not its children."""
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     try:
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(PR_SET_PDEATHSIG, sig)
     except (OSError, AttributeError):
         pass
 

@@ -141,12 +141,16 @@ def _locked(lock_path: Path, store_path: Path, attempts: int = 5) -> IO[str]:
 def check_one_study(folder: str | PathLike[str], name: str) -> None:
     """Refuse an output folder whose store holds the cases of another study than ``name`` (the
     tables, figures and summary.json of one would be written over the other's), before anything
-    is computed; a store that cannot be read is left to :class:`Store`'s own refusal."""
+    is computed, the folder unchanged; a store that cannot be read is left to :class:`Store`'s own
+    refusal."""
     path = Path(folder) / "results.sqlite"
     if not path.is_file():
         return
+    # read-only; without a -wal file beside it (a store closed cleanly) as immutable, which makes
+    # none: a read-only connection to a store in WAL mode leaves its -wal and -shm files behind
+    immutable = "" if path.with_name(path.name + "-wal").exists() else "&immutable=1"
     try:
-        with closing(sqlite3.connect(f"file:{path}?mode=ro", uri=True)) as db:
+        with closing(sqlite3.connect(f"file:{path}?mode=ro{immutable}", uri=True)) as db:
             others = sorted({row[0] for row in db.execute("SELECT DISTINCT study FROM cases")} - {name})
     except sqlite3.DatabaseError:
         return

@@ -4,13 +4,10 @@ The glue is ours rather than ``SolverFactory('cyipopt')`` so that the NL write (
 which writes and loads an AMPL NL file through PyNumero's ASL) and the solve are timed apart,
 iterations are counted, and the NLP object can be reused.
 """
-import signal
 import subprocess
-import threading
 import time
-from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any, Iterator, Mapping, Sequence, TypeAlias
+from typing import Any, Mapping, Sequence, TypeAlias
 
 import cyipopt
 import numpy as np
@@ -25,6 +22,7 @@ from pyomo.contrib.pynumero.interfaces.cyipopt_interface import CyIpoptNLP
 from pyomo.contrib.pynumero.interfaces.pyomo_nlp import PyomoNLP
 
 from ecostudy.core.errors import SolverError
+from ecostudy.core.interrupt import held as stop_signals_held
 from ecostudy.ocp import solver
 from ecostudy.ocp.solver import IPOPT, NL_OPTIONS, Model, Var
 
@@ -160,7 +158,9 @@ class Session:
         """Solve from ``x0`` (default: the last solution); loads the point into the model."""
         iterations = [0]
 
-        # a Ctrl-C that arrived during the solve (ctrl_c_after): Ipopt stops at its next iteration
+        # a Ctrl-C or SIGTERM that arrived during the solve is held (raised inside one of cyipopt's
+        # callbacks it was swallowed there and the solve went on: a K = 1000 Amsterdam solve sent
+        # SIGINT 1.5 s in returned its optimum); Ipopt stops at its next iteration, then it is raised
         held: list[bool] = []
 
         base: Any = self._problem_class
@@ -180,7 +180,7 @@ class Session:
         repeatable()  # the same ordering for the same matrix, every solve
         t1 = time.perf_counter()
         try:
-            with ctrl_c_after(held):
+            with stop_signals_held(held):
                 x, info = problem.solve(start, **duals)
         except Exception as exc:  # cyipopt raises on evaluation errors it cannot recover from
             raise SolverError(f"Ipopt stopped with an error: {exc}") from exc
@@ -237,24 +237,3 @@ def versions() -> dict[str, str]:
 
     return {"pyomo": pyomo.__version__, "cyipopt": cyipopt.__version__,
             "ipopt": pkg("coinor-libipopt-dev"), "mumps": pkg("libmumps-seq-dev")}
-
-
-@contextmanager
-def ctrl_c_after(held: list[bool]) -> Iterator[None]:
-    """Hold a Ctrl-C (SIGINT) that arrives inside Ipopt (noted in the list ``held``, which the
-    intermediate callback reads to stop Ipopt at its next iteration) and raise it when Ipopt
-    returns: raised inside one of cyipopt's callbacks it was swallowed there and the solve went on
-    (measured: a K = 1000 Amsterdam solve sent SIGINT 1.5 s in returned its optimum). Only in the
-    main thread, and only where Ctrl-C raises KeyboardInterrupt (a process that ignores SIGINT,
-    as a background job does, keeps ignoring it)."""
-    if threading.current_thread() is not threading.main_thread() or \
-            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-        yield
-        return
-    signal.signal(signal.SIGINT, lambda *_: held.append(True))
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-    if held:
-        raise KeyboardInterrupt

@@ -18,6 +18,8 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, ProgressColumn, TextColumn
 from rich.text import Text
 
+from ecostudy.core.interrupt import Interrupted, signal_name
+
 log = logging.getLogger("ecostudy")
 
 
@@ -111,6 +113,21 @@ def progress_bar(label: str, disabled: bool = False) -> Iterator[Bar]:
     with Progress(*columns, console=Console(stderr=True), disable=disabled or not sys.stderr.isatty(),
                   transient=False) as bar:
         yield Bar(label, bar)
+
+
+def interrupted(exc: BaseException, bar: Optional[tuple]) -> str:
+    """The line of a command stopped by SIGINT or SIGTERM (:mod:`ecostudy.core.interrupt`): what it
+    kept and how to continue. ``bar``: the command's progress bar (label, off[, stored]); stored
+    False, or no bar: a command that stores nothing before its end."""
+    line = f"interrupted by {signal_name()}"
+    if not bar or bar[2:] == (False,):
+        return line
+    if isinstance(exc, Interrupted):  # a study, with its counts
+        c = exc.counts
+        return (f"{line}: {c['stored_before'] + c['computed']} of {c['total']} {bar[0]} stored ({c['computed']} "
+                "of them computed now); run the same command again to continue")
+    one = bar[0][:-3] + "y" if bar[0].endswith("ies") else bar[0][:-1]
+    return f"{line}: every finished {one} is stored; run the same command again to continue"
 
 
 def leave(code: object) -> None:

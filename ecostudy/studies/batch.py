@@ -17,6 +17,7 @@ import pandas as pd
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.budget import check_study
 from ecostudy.core.registry import Registry
+from ecostudy.core.interrupt import Interrupted, held
 from ecostudy.core.errors import EcostudyError, EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.types import Timing
 from ecostudy.das.methods import advice_status, das_columns
@@ -29,7 +30,7 @@ from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.ocp.problem import Written
 from ecostudy.studies.cases import case_key, expand
 from ecostudy.studies.estimate import RUN_BYTES_PER_POINT, run_seconds
-from ecostudy.studies.workers import worker_pool
+from ecostudy.studies.workers import arriving, worker_pool
 
 _ALL_OUT: dict = {}  # all-out time per (train, track, stops, grid), per process: shared by a scenario's cases
 _WRITTEN = Written()  # written NLPs per process: cases that differ only in timing re-use one NL file
@@ -93,24 +94,20 @@ def _solve_case(case):
     return status.kind, status.reason or None, summary
 
 
-def _serial(todo, task):
+def _serial(todo, task, arrived):
     for case in todo:
         yield case, task(case)
 
 
-def _processes(todo, workers, task):
-    with worker_pool(workers) as pool:
+def _processes(todo, workers, task, arrived):
+    with worker_pool(workers) as pool:  # interrupted: the workers stopped at once, their running cases lost
         futures = {pool.submit(task, case): case for case in todo}
-        try:
+        with arriving(futures, arrived):
             for future in as_completed(futures):
                 yield futures[future], future.result()
-        except BaseException:
-            for future in futures:
-                future.cancel()
-            raise
 
 
-def _dask(todo, address, task):
+def _dask(todo, address, task, arrived):
     try:
         from distributed import Client
         from distributed import as_completed as dask_completed
@@ -129,7 +126,8 @@ def _dask(todo, address, task):
         try:
             for future in dask_completed(futures):
                 yield futures[future], future.result()
-        except BaseException:
+        except BaseException:  # interrupted: the cases finished on the cluster kept, the others cancelled
+            arrived.extend((case, f.result()) for f, case in futures.items() if f.status == "finished")
             client.cancel(list(futures))
             raise
 
@@ -138,25 +136,47 @@ def execute(cases, store, task=run_case, workers=1, dask=None, retry_failed=Fals
     """Run ``task`` (a pure function of a case dict returning a result dict, never raising) on every
     case not in ``store`` yet, serially, in ``workers`` processes or on a Dask scheduler, storing
     each result as it arrives; returns the counts. ``progress(done, failed, remaining, total)``.
-    ``spread(todo, workers, task)``: how ``workers`` local processes run the cases (even one case)
-    when not one case per process (:attr:`StudyKind.spread`)."""
+    ``spread(todo, workers, task, arrived)``: how ``workers`` local processes run the cases (even one
+    case) when not one case per process (:attr:`StudyKind.spread`).
+
+    Interrupted (KeyboardInterrupt: SIGINT or SIGTERM, :mod:`ecostudy.core.interrupt`), the workers
+    are stopped at once and every result that reached this process is stored (a case a worker
+    finished whose result had not reached it yet is lost, and computed by the next run); raises
+    :class:`~ecostudy.core.interrupt.Interrupted` with the counts."""
     finished = store.finished_keys(retry_failed=retry_failed)
     todo = [c for c in cases if c["key"] not in finished]
     counts = {"total": len(cases), "stored_before": len(cases) - len(todo), "computed": 0, "failed": 0}
     if workers < 1:
         raise EcostudyError("--workers must be at least 1")
+    arrived = []  # the sources' (case, result) pairs that reached this process when interrupted
     if dask:
-        source = _dask(todo, dask, task)
+        source = _dask(todo, dask, task, arrived)
     elif workers > 1 and todo and (spread is not None or len(todo) > 1):
-        source = (spread or _processes)(todo, workers, task)
+        source = (spread or _processes)(todo, workers, task, arrived)
     else:
-        source = _serial(todo, task)
-    for case, result in source:
-        store.put(case, result)
-        counts["computed"] += 1
-        counts["failed"] += result["status"] in ("failed", "infeasible")
-        if progress:
-            progress(counts["computed"], counts["failed"], len(todo) - counts["computed"], len(todo))
+        source = _serial(todo, task, arrived)
+    stored = set()
+
+    def keep(case, result):
+        with held([]):  # a signal now is raised once the case is stored
+            store.put(case, result)
+            stored.add(case["key"])
+            counts["computed"] += 1
+            counts["failed"] += result["status"] in ("failed", "infeasible")
+    try:
+        for case, result in source:
+            keep(case, result)
+            if progress:
+                progress(counts["computed"], counts["failed"], len(todo) - counts["computed"], len(todo))
+    except KeyboardInterrupt:
+        with held([]):
+            source.close()  # interrupted here rather than in the source: it stops its workers and lists what arrived
+            for case, result in arrived:
+                if case["key"] not in stored:
+                    keep(case, result)
+        raise Interrupted(counts) from None
+    finally:
+        source.close()  # any other error: the workers stopped now, not when the source is collected
     return counts
 
 
@@ -207,13 +227,9 @@ class StudyKind:
     table_name: str = "results"
     """The table's name in ``summary.json`` (``api.load(folder).tables[table_name]``)."""
     spread: Optional[Callable] = None
-    """``spread(todo, workers, task)`` -> (case, result) pairs: how local worker processes run the
+    """``spread(todo, workers, task, arrived)`` -> (case, result) pairs: how local worker processes run the
     cases instead of one case per process (a network study's strategies share one pool for their
     legs: :mod:`ecostudy.studies.legpool`); Dask still runs one case per task."""
-    one_study: bool = False
-    """True: an output folder holds one study file's results (its tables and summary.json are the
-    study's own), so a folder whose store holds another study's cases is refused before computing
-    (``io.store.check_one_study``)."""
     verdict: Optional[Callable[[pd.DataFrame], dict]] = None
     """``verdict(table)``: statuses of the study as a whole beside its cases' ({name: Status}; a
     front whose energy does not fall as the running time grows is flagged)."""
@@ -266,7 +282,7 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
         spec.size(Path(where), expanded.cases, workers)
     output = check_output_dir(out or expanded.output, (spec.table_file, "results.sqlite", *expanded.inputs),
                               kind)
-    if spec.one_study and expanded.cases:
+    if expanded.cases:  # a folder holds one study's results: its tables and summary.json are the study's own
         check_one_study(output, expanded.cases[0]["study"])
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)

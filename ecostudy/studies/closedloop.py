@@ -305,7 +305,6 @@ class LoopStudy(NamedTuple):
     budgets: dict  # each controller's sample time, its real-time budget [s]
 
 
-SIMULATE = StudyKind(expand_simulate, run_loop_case, loop_table, table_file="runs.csv", table_name="runs",
-                     one_study=True)
+SIMULATE = StudyKind(expand_simulate, run_loop_case, loop_table, table_file="runs.csv", table_name="runs")
 """The closed-loop study kind (registered as ``simulate``, its study file checked first, by
 :mod:`ecostudy.studies.loopkind`)."""

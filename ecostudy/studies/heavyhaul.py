@@ -298,5 +298,5 @@ class HeavyhaulStudy(NamedTuple):
 
 
 STUDY_KINDS.register("heavyhaul", StudyKind(expand_heavyhaul, run_heavyhaul_case, heavyhaul_table, heavyhaul_size,
-                                            table_file="runs.csv", table_name="runs", one_study=True),
+                                            table_file="runs.csv", table_name="runs"),
                      doc="Zhang & Zhuan's braking-penalised receding-horizon control, one run per (K_b, f, Np, Nc)")

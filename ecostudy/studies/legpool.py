@@ -10,13 +10,16 @@ on this: a leg's run depends only on its task, never on which process solved it.
 """
 from concurrent.futures import ThreadPoolExecutor, as_completed
 
-from ecostudy.studies.workers import worker_pool
+from ecostudy.studies.workers import arriving, worker_pool
 
 
-def shared_pool(todo, workers, task, first=None):
+def shared_pool(todo, workers, task, arrived=None, first=None):
     """(case, result) of every case in ``todo`` as it finishes: ``task(case, pool)`` in a thread per
     case, ``pool`` a process pool of ``workers`` that every case shares. ``first(case)``: a sort key,
-    the cases started in its order (the dearest first: their legs enter the pool's queue first)."""
+    the cases started in its order (the dearest first: their legs enter the pool's queue first).
+    Interrupted: the cases finished put in ``arrived`` (a list), the workers stopped, nothing new
+    started (a case's thread ends at its next leg)."""
+    arrived = [] if arrived is None else arrived
     ordered = sorted(todo, key=first) if first is not None else list(todo)
     with worker_pool(workers) as pool:
         # the pool forks all its workers at its first task: here, in the thread that outlives the pool.
@@ -28,10 +31,10 @@ def shared_pool(todo, workers, task, first=None):
         threads = ThreadPoolExecutor(max_workers=max(len(ordered), 1), thread_name_prefix="case")
         futures = {threads.submit(task, case, pool): case for case in ordered}
         try:
-            for future in as_completed(futures):
-                yield futures[future], future.result()
-        except BaseException:  # interrupted: nothing new starts, the workers stop with their legs
+            with arriving(futures, arrived):
+                for future in as_completed(futures):
+                    yield futures[future], future.result()
+        except BaseException:
             threads.shutdown(wait=False, cancel_futures=True)
-            pool.shutdown(wait=False, cancel_futures=True)
             raise
         threads.shutdown()

@@ -155,5 +155,5 @@ def _dearest_first(case):
 
 STUDY_KINDS.register("network", StudyKind(expand_network, run_network_strategy, network_table,
                                           table_file="network_substation.csv", table_name="substation",
-                                          spread=partial(shared_pool, first=_dearest_first), one_study=True),
+                                          spread=partial(shared_pool, first=_dearest_first)),
                      doc="trains sharing a DC substation, each strategy a case (Farooqi 2018, Ch. 7)")

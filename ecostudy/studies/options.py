@@ -111,6 +111,15 @@ def case_from(study: Optional[Path], track: Optional[Path], train: Optional[Path
     return Case(trk, trn, f, t, points, None, (trn_doc, trk_doc))
 
 
+def study_name(st, command: str, track: Optional[Path], train: Optional[Path], from_stop: str, to_stop: str) -> str:
+    """The name a ``command``'s cases carry as their study: a study file's ``name``, else (built
+    from --track and --train) the command, the two files resolved and the stops: another segment is
+    another study, whose folder is refused (:func:`~ecostudy.io.store.check_one_study`)."""
+    if st is not None:
+        return st.name
+    return f"{command} of {Path(train or '').resolve()} on {Path(track or '').resolve()}, {from_stop} to {to_stop}"
+
+
 def timing_of(time: Optional[float], supplement_pct: Optional[float], window: Optional[str] = None) -> Timing:
     """The timing the options give: a running time [s], a supplement [%] or a window 'earliest,latest' [s]."""
     return Timing(running_time=time, supplement=None if supplement_pct is None else supplement_pct * units.PERCENT,

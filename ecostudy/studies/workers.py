@@ -1,7 +1,9 @@
 """Worker processes that never outlive the command that started them."""
 import multiprocessing
 import os
+import signal
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 
 from ecostudy.core.deadline import die_with_parent
 from ecostudy.io.store import release_inherited
@@ -15,15 +17,54 @@ def every_core(workers):
     return workers if workers is not None else len(os.sched_getaffinity(0))
 
 
+@contextmanager
 def worker_pool(workers):
     """A forked process pool (workers inherit the loaded modules) whose workers die with the parent
-    and hold none of its store locks."""
-    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
+    (SIGKILL when it dies), hold none of its store locks and leave a stop signal to it: SIGINT and
+    SIGTERM are ignored (Ctrl-C reaches the whole process group, as SIGTERM does from ``timeout``,
+    systemd or a batch scheduler; the parent stores what reached it, then stops them). Left by an
+    exception (an interrupt, or a generator closed before its end) the workers are stopped at once
+    (:func:`stop_workers`), not waited for."""
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
                                initializer=_worker_start)
+    try:
+        yield pool
+    except BaseException:
+        stop_workers(pool)
+        raise
+    finally:
+        pool.shutdown()
+
+
+def stop_workers(pool):
+    """Stop a pool's worker processes now (SIGKILL: they ignore SIGTERM), whatever they compute: the
+    tasks they run are lost, the others cancelled; every worker has ended when this returns. (The
+    pool's ``_processes``, as Python 3.14's ``ProcessPoolExecutor.kill_workers`` reads it.)"""
+    processes = list((pool._processes or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        process.kill()
+    for process in processes:
+        process.join()
+
+
+@contextmanager
+def arriving(futures, arrived):
+    """Left by an exception (an interrupt, or its generator closed): the (case, result) of every
+    future of ``futures`` ({future: case}) whose result has reached this process put in ``arrived``,
+    before the workers are stopped (a task they cut short is no result)."""
+    try:
+        yield
+    except BaseException:
+        arrived.extend((case, f.result()) for f, case in futures.items()
+                       if f.done() and not f.cancelled() and f.exception() is None)
+        raise
 
 
 def _worker_start():
-    die_with_parent()
+    die_with_parent(signal.SIGKILL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     release_inherited()
 
 

@@ -1,0 +1,91 @@
+"""A command stopped by a signal: SIGINT (Ctrl-C, ``kill -INT``) and SIGTERM (``kill``, ``timeout``,
+a batch scheduler, systemd) both raise ``KeyboardInterrupt`` in the main thread, so one path
+handles both (a study's results that reached the command stored, its workers stopped, its store
+closed and unlocked, no temporary file left); the exit status tells them apart (128 + the signal:
+130 for SIGINT, 143 for SIGTERM). A SIGINT that the command inherited as ignored (a job started
+with ``&`` by a shell without job control) stays ignored, as POSIX has it.
+"""
+import signal
+import threading
+from contextlib import contextmanager
+from types import FrameType
+from typing import Iterator, Optional
+
+STOPS = (signal.SIGINT, signal.SIGTERM)
+RECEIVED: list[int] = []  # the stop signals this process received while a handler of this module was set
+
+
+class Interrupted(KeyboardInterrupt):
+    """A study stopped by a signal, with what it kept: ``counts`` (``total``, ``stored_before``,
+    ``computed``: stored now), the signal received (``signum``)."""
+
+    def __init__(self, counts: dict[str, int]) -> None:
+        super().__init__()
+        self.counts = counts
+        self.signum = RECEIVED[0] if RECEIVED else signal.SIGINT
+
+
+def _raise(signum: int, frame: Optional[FrameType]) -> None:
+    RECEIVED.append(signum)
+    raise KeyboardInterrupt
+
+
+def _ours(handler: object) -> bool:
+    return handler is signal.default_int_handler or handler is _raise
+
+
+@contextmanager
+def stopped_by_signals() -> Iterator[None]:
+    """While inside (a command's work), SIGTERM raises KeyboardInterrupt as SIGINT does, and either
+    is noted for :func:`exit_status`; only in the main thread (elsewhere nothing changes)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = {s: signal.getsignal(s) for s in STOPS}
+    for s in STOPS:
+        if not (s == signal.SIGINT and old[s] == signal.SIG_IGN):
+            signal.signal(s, _raise)
+    try:
+        yield
+    finally:
+        for s, handler in old.items():
+            signal.signal(s, handler)
+
+
+def exit_status() -> int:
+    """128 + the first stop signal received (130 when none was noted: a KeyboardInterrupt as such)."""
+    return 128 + (RECEIVED[0] if RECEIVED else signal.SIGINT)
+
+
+def signal_name() -> str:
+    """The first stop signal received, by name (``SIGTERM``), SIGINT when none was noted."""
+    return signal.Signals(RECEIVED[0] if RECEIVED else signal.SIGINT).name
+
+
+@contextmanager
+def held(flag: list[bool]) -> Iterator[None]:
+    """A stop signal that arrives inside is noted (in ``flag``, and for :func:`exit_status`) rather
+    than raised, and raised as KeyboardInterrupt when the block ends: for a C library's callbacks,
+    which swallow an exception raised in them (cyipopt's: the caller's intermediate callback reads
+    ``flag`` to stop at its next iteration), and for the clean-up of an interrupt, which a second
+    signal must not cut short. Only in the main thread, and only for signals that raise
+    KeyboardInterrupt there (one ignored stays ignored; inside another ``held``, nothing changes)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = {s: signal.getsignal(s) for s in STOPS}
+    ours = [s for s in STOPS if _ours(old[s])]
+
+    def note(signum: int, frame: Optional[FrameType]) -> None:
+        RECEIVED.append(signum)
+        flag.append(True)
+
+    for s in ours:
+        signal.signal(s, note)
+    try:
+        yield
+    finally:
+        for s in ours:
+            signal.signal(s, old[s])
+    if flag:
+        raise KeyboardInterrupt

@@ -1,0 +1,155 @@
+"""A study stopped by SIGTERM or SIGINT sent to its main process alone (`kill PID`) or to its process
+group (`timeout`, systemd, a batch scheduler): exit status 128 + the signal, one line saying what was kept, every
+case that reached the main process stored, no worker left running, no temporary file, no lock
+file; the same command again computes only the other cases."""
+import glob
+import os
+import re
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+from contextlib import closing
+
+import pytest
+
+from ecostudy.io.store import Store
+from ecostudy.studies.batch import execute
+from ecostudy.studies.cases import expand
+
+from .conftest import ROOT, TRACKS, TRAINS, write_yaml
+
+
+def stored(db):
+    """Cases in the store (read-only, once the study has put it in WAL mode), or 0."""
+    if not db.with_name(db.name + "-wal").exists():
+        return 0
+    try:
+        with closing(sqlite3.connect(f"file:{db}?mode=ro", uri=True)) as conn:
+            return conn.execute("SELECT count(*) FROM cases").fetchone()[0]
+    except sqlite3.OperationalError:  # busy, or the table not there yet
+        return 0
+
+
+def children(pid):
+    """The PIDs of a process's children, from every one of its threads."""
+    kids = set()
+    for path in glob.glob(f"/proc/{pid}/task/*/children"):
+        try:
+            kids |= {int(k) for k in open(path).read().split()}
+        except OSError:  # a thread that ended meanwhile
+            pass
+    return kids
+
+
+def running(pid):
+    """Whether a process exists and is not a zombie."""
+    try:
+        return open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def ecostudy(args):
+    """``python -m ecostudy *args`` in its own process group (a signal to it reaches it alone, not
+    this test run), SIGINT not ignored (as a runner started in the background would have it)."""
+    def start():
+        os.setsid()
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+    return subprocess.Popen([sys.executable, "-m", "ecostudy", *map(str, args)], cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, preexec_fn=start)
+
+
+def signalled(args, db, sig, workers=2, timeout=300, group=False):
+    """Start a study, send ``sig`` to its main process (``group``: to its whole process group, as
+    ``timeout``, systemd and batch schedulers do) once the store holds a case; returns (the
+    finished process, its stdout and stderr, the worker PIDs seen before the signal, cases stored
+    when the signal was sent)."""
+    proc = ecostudy(args)
+    deadline, kids, before = time.time() + timeout, set(), 0
+    while time.time() < deadline and proc.poll() is None:
+        kids |= children(proc.pid)
+        before = stored(db)
+        if before >= 1:
+            break
+        time.sleep(0.05)
+    kids |= children(proc.pid)
+    assert proc.poll() is None, proc.communicate()
+    assert len(kids) >= workers, f"the workers were not seen: {kids}"
+    (os.killpg if group else os.kill)(proc.pid, sig)
+    out, err = proc.communicate(timeout=120)
+    return proc, out, err, kids, before
+
+
+def assert_stopped_cleanly(proc, err, kids, before, folder, sig, total, noun):
+    """What every interrupted study must show; returns the cases stored."""
+    if proc.returncode in (0, 1):
+        pytest.fail("the study finished before it could be interrupted")
+    assert proc.returncode == 128 + sig, err
+    line = re.search(rf"warning: interrupted by {signal.Signals(sig).name}: (\d+) of {total} {noun} stored "
+                     r"\((\d+) of them computed now\); run the same command again to continue", err)
+    assert line, err
+    assert [k for k in kids if running(k)] == [], "a worker outlived the command"
+    names = sorted(p.name for p in folder.iterdir())
+    assert "results.sqlite.lock" not in names and not [n for n in names if n.endswith(".tmp")], names
+    with closing(sqlite3.connect(folder / "results.sqlite")) as conn:
+        kept = conn.execute("SELECT count(*) FROM cases").fetchone()[0]
+    assert int(line.group(1)) == int(line.group(2)) == kept  # the line says what the store holds
+    assert before <= kept < total
+    return kept
+
+
+def study(tmp_path, count, points=1000):
+    return write_yaml(tmp_path / "study.yaml", {
+        "name": "signalled", "track": str(TRACKS / "amsterdam_rokin_centraal.yaml"),
+        "train": str(TRAINS / "amsterdam_metro.yaml"), "from": "Rokin", "to": "Centraal",
+        "supplement_percent": 10, "points": points,
+        "sweep": {"supplement_percent": list(range(2, 2 + count))}, "output": str(tmp_path / "out")})
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("group", [False, True], ids=["main process", "process group"])
+def test_sigterm_keeps_every_finished_case_and_stops_the_workers(tmp_path, group):
+    out = tmp_path / "out"
+    args = ["run", study(tmp_path, 10), "--workers", 2, "--no-progress"]
+    proc, _, err, kids, before = signalled(args, out / "results.sqlite", signal.SIGTERM, group=group)
+    kept = assert_stopped_cleanly(proc, err, kids, before, out, signal.SIGTERM, 10, "cases")
+    assert not (out / "summary.json").exists()  # no table or summary of a part of the study
+    again = ecostudy(args)
+    stdout, err = again.communicate(timeout=600)
+    assert again.returncode == 0, err
+    assert f"10 cases: {kept} already stored, {10 - kept} computed now (0 of them failed" in stdout
+
+
+@pytest.mark.slow
+def test_sigint_to_the_main_process_of_a_front_keeps_every_finished_point(tmp_path):
+    out = tmp_path / "front"
+    args = ["pareto", "--track", TRACKS / "amsterdam_rokin_centraal.yaml", "--train", TRAINS / "amsterdam_metro.yaml",
+            "--count", 10, "--points", 1000, "--workers", 2, "--no-plot", "--out", out]
+    proc, _, err, kids, before = signalled(args, out / "results.sqlite", signal.SIGINT)
+    kept = assert_stopped_cleanly(proc, err, kids, before, out, signal.SIGINT, 10, "points")
+    again = ecostudy(args)
+    stdout, err = again.communicate(timeout=600)
+    assert again.returncode == 0, err
+    assert f"10 points: {kept} already stored, {10 - kept} computed now (0 failed)" in stdout
+
+
+def test_results_that_reached_the_main_process_while_it_stored_a_case_are_stored(tmp_path):
+    """SIGINT while the main process is busy with a case it took (here: its progress callback, which
+    waits for the other cases to finish in the workers and their results to reach it): those results
+    are stored too, not only the cases it had taken."""
+    _, _, cases = expand(study(tmp_path, 3, points=30))
+    store = Store(tmp_path / "results.sqlite")
+
+    def progress(done, failed, remaining, total):
+        if done == 1:
+            time.sleep(10)  # the two other cases finish meanwhile (0.1 s each at K = 30)
+            os.kill(os.getpid(), signal.SIGINT)
+    try:
+        with pytest.raises(KeyboardInterrupt) as stop:
+            execute(cases, store, workers=2, progress=progress)
+        assert store.finished_keys() == {c["key"] for c in cases}
+        assert stop.value.counts == {"total": 3, "stored_before": 0, "computed": 3, "failed": 0}
+    finally:
+        store.close()
