@@ -20,12 +20,8 @@ from ecostudy.core.types import Consist, Supply, Timing, Track, Train, Window
 from ecostudy.io import schemas
 from ecostudy.io.consistschema import ConsistFile
 from ecostudy.io.intrain import in_train_physics
-from ecostudy.io.formats import (
-    timetable_document_to_schema,
-    track_document_to_schema,
-    train_document_to_schema,
-)
-from ecostudy.io.timetable import name_stops, window_si
+from ecostudy.io.formats import timetable_document_to_schema, track_document_to_schema, train_document_to_schema
+from ecostudy.io.timetable import name_stops, off_clock, window_si
 from ecostudy.io.documents import (Where, given, named_file, read_document as read_document,  # re-exported
                                    split_selector, validate as validate)
 
@@ -348,6 +344,8 @@ def load_network_study(study_path: Where) -> NetworkStudy:
     """Read a network study file and the files it names; units converted here."""
     path = Path(study_path)
     s = validate(schemas.NetworkStudyFile, read_document(path), path)
+    off_clock(path, s.time_step_s, [(f"trains[{i}].offset_s", t.offset_s) for i, t in enumerate(s.trains)]
+              + [("dwell_s", s.dwell_s)])
     track, train = load_track(named_file(path, "track", s.track)), load_train(named_file(path, "train", s.train))
     stops = list(track.stops) if s.stops is None else s.stops
     check_stop_list(track, stops, path, "stops")

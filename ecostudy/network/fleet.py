@@ -15,6 +15,7 @@ from ecostudy.core.defaults import FRONT_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.types import Timing
 from ecostudy.core.types import Supply
+from ecostudy.io.timetable import clock_steps
 from ecostudy.network.legs import leg_energy_ref, solve_leg, warmth
 from ecostudy.ocp import session
 from ecostudy.ocp import timedomain
@@ -38,14 +39,16 @@ class Fleet:
 
 def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=FRONT_POINTS, buffer=None,
          pool=None, supplement=0.0, check=None):
-    """A :class:`Fleet`: running times and dwells rounded up to whole steps, departures offset;
-    each segment's space-domain net-energy run (the legs' first guess) solved.
+    """A :class:`Fleet`: running times rounded up to whole steps, departures offset; the dwell and
+    the departures ``offsets`` [s] on the clock (else ValueError: they are not moved); each
+    segment's space-domain net-energy run (the legs' first guess) solved.
 
     ``running_times`` [s] per segment, or None: each segment's all-out time plus ``supplement``
     (a fraction). ``pool``: a process pool (else this process); a segment's first run is submitted
     as soon as its running time is known, so all-out and first runs of different segments overlap.
     ``check(fleet)``: called with the timetable (a :class:`Fleet` without runs) as soon as its running
     times are known: before anything is solved where ``running_times`` are given."""
+    _on_clock(dwell, offsets, dt)  # before anything is prepared
     cases = [prepare(track, train, a, b, points) for a, b in zip(stops[:-1], stops[1:])]
     if check is not None and running_times is not None:
         check(_timetable(track, stops, cases, running_times, dwell, offsets, names, dt, supply, buffer))
@@ -60,10 +63,10 @@ def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, 
 def _timetable(track, stops, cases, asked, dwell, offsets, names, dt, supply, buffer):
     """The :class:`Fleet` of running times ``asked`` [s] per segment, without its first runs."""
     steps = [_steps(t, dt) for t in asked]
-    pause = _steps(dwell, dt)
+    pause, starts = _on_clock(dwell, offsets, dt)
     legs = []
-    for offset in offsets:
-        start, mine = int(round(offset / dt)), []
+    for start in starts:
+        mine = []
         for case, n, a in zip(cases, steps, stops[:-1]):
             b = stops[stops.index(a) + 1]
             direction = 1.0 if track.stops[b] >= track.stops[a] else -1.0
@@ -72,6 +75,16 @@ def _timetable(track, stops, cases, asked, dwell, offsets, names, dt, supply, bu
         legs.append(mine)
     total = max(leg.start + leg.steps for mine in legs for leg in mine)
     return Fleet(list(names), legs, dt, total, supply, buffer, {}, pause, list(asked))
+
+
+def _on_clock(dwell, offsets, dt):
+    """(the dwell, each departure) in whole clock steps; ValueError where one falls between two
+    steps: the clock cannot honour it, and it is not moved (a study file's are refused on loading,
+    ``io.timetable.off_clock``)."""
+    pause, starts = clock_steps(dwell, dt), [clock_steps(offset, dt) for offset in offsets]
+    if pause is None or None in starts:
+        raise ValueError(f"dwell {dwell:g} s or a departure of {offsets} s is not on the {dt:g} s clock")
+    return pause, starts
 
 
 def _steps(seconds, dt):
