@@ -6,6 +6,7 @@ time, on one clock of step dt (``ocp.timedomain``). The strategies are in :mod:`
 """
 from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 from typing import Optional
 
 import numpy as np
@@ -226,6 +227,19 @@ def line_positions(fleet, i, runs):
         nxt = fleet.legs[i][k + 1].start if k + 1 < len(fleet.legs[i]) else end + fleet.dwell_steps + 1
         x[end:nxt] = leg.line_start + leg.direction * run.s[-1]  # dwelling (at the terminus too)
     return x
+
+
+def following_legs(fleet, blocks):
+    """(train behind, train ahead, leg, its block, the train ahead's line position per clock step)
+    for every leg of every train behind another (departure order), ``blocks[train][leg]`` leg
+    blocks of one NLP: the train ahead's positions expressions of its own blocks' variables (the
+    joint NLP's separation rows)."""
+    order = departure_order(fleet)
+    for ahead, me in zip(order[:-1], order[1:]):
+        x = line_positions(fleet, ahead, [SimpleNamespace(s=np.array([b.s[j] for j in b.K], dtype=object))
+                                          for b in blocks[ahead]])
+        for leg, b in zip(fleet.legs[me], blocks[me]):
+            yield me, ahead, leg, b, x
 
 
 def step_arrays(fleet, runs_by_train):
