@@ -2,6 +2,7 @@
 refusals, the generator against the replay, the fit's intervals and identifiability, validate's
 energy difference against an independent computation, and both commands."""
 import json
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -15,6 +16,8 @@ from ecostudy.calibration.replay import prepare
 from ecostudy.calibration.validate import validate_log
 from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning, InputError
+from ecostudy.core.physics import Envelope
+from ecostudy.core.status import STOP_TOLERANCE_M
 from ecostudy.io.loaders import load_track, load_train, track_from_dict
 from ecostudy.io.logfile import load_log, parse_log, write_log
 
@@ -499,3 +502,25 @@ def test_savings_of_an_optimum_not_verified_are_flagged(inputs, calibrated, logg
     statuses = savings_statuses(table)
     assert len(statuses) == len(table) and not all(s.ok for s in statuses.values())
     assert all(name.startswith("savings there run ") for name in statuses)
+
+
+def test_a_model_that_stops_short_of_the_logged_stop_is_flagged_saying_so(inputs, truth, logged):
+    """Under the logged handle a model with 10 % less traction force and power than the logged train
+    stops tens of metres short of the logged stop: flagged with the distance and the tolerance
+    (``core.status.STOP_TOLERANCE_M`` plus what the replay itself moves the stop by), though its
+    energy at the logged speed and its running time are within their tolerances; the logged
+    train's own model stops within the tolerance and is ok."""
+    track, _ = inputs
+    log = as_log(logged[0][0])
+    weak = replace(truth, traction=Envelope("force_power", 0.9 * truth.traction.max_force, 0.9 * truth.traction.max_power))
+    same, short = validate_log(log, track, truth), validate_log(log, track, weak)
+    assert list(same["status"]) == ["ok", "ok"], same
+    assert (same["model_stop_error_m"].abs() <= same["stop_tolerance_m"]).all(), same
+    assert (same["stop_tolerance_m"] >= STOP_TOLERANCE_M).all() and (same["stop_tolerance_m"] < 10.0).all(), same
+    assert list(short["status"]) == ["flagged", "flagged"], short
+    for row in short.itertuples():
+        assert row.model_stop_error_m < -3 * row.stop_tolerance_m, row  # 47.6 and 56.8 m short, measured
+        assert abs(row.time_difference_pct) < 5 and abs(row.traction_difference_pct) < 5, row
+        assert row.reason == (f"under the logged handle the model stops {-row.model_stop_error_m:.1f} m short of the "
+                              f"logged stop (tolerance {row.stop_tolerance_m:.1f} m): its running time is not the "
+                              "logged run's"), row.reason

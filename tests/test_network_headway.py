@@ -140,3 +140,40 @@ def test_a_train_behind_that_must_start_while_the_train_ahead_stands_is_named(tm
                           f"Station: to arrive on time it must be at least {least:.1f} m along its leg (its latest "
                           f"start): T2's head is at most {560.0 - least:.1f} m behind T1's tail"), why
     assert "buffer_m 560 m is asked" in why and "Ipopt" in why, why
+
+
+@pytest.fixture(scope="module")
+def restricted(tmp_path_factory):
+    """T2 departs 30 s after T1 over 1200 m with a 15 km/h restriction from 500 to 700 m, 152 s
+    each (all-out 141.1 s), buffer_m 150: T1 may be far enough ahead when T2 departs and T2 far
+    enough behind when T1 arrives (both checks pass), but through the restriction both crawl and
+    30 s at 4.2 m/s is 125 m, less than buffer_m plus the 90 m train: no runs of both keep it."""
+    path = write_yaml(tmp_path_factory.mktemp("restricted") / "track.yaml", {
+        "name": "restricted", "source": "test: a 15 km/h restriction mid-segment", "length_m": 1200,
+        "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 1200}],
+        "gradients": [{"position_m": 0, "gradient_permille": 0}], "curves": [{"position_m": 0, "radius_m": None}],
+        "speed_limits": [{"position_m": 0, "speed_kmh": 80}, {"position_m": 500, "speed_kmh": 15},
+                         {"position_m": 700, "speed_kmh": 80}]})
+    f = fleet.plan(load_track(path), load_train(TRAINS / "amsterdam_metro.yaml"), ["A", "B"], [152.0], 0.0, [0.0, 30.0],
+                   ["T1", "T2"], 1.0, Supply(position=600.0), points=200, buffer=150.0)
+    return f, strategies.run_strategies(f, ["independent", "joint"], progress=None)
+
+
+def test_a_conflict_while_both_trains_run_names_the_trains_the_least_gap_and_when(restricted):
+    """Neither the timetable nor a departure or arrival explains the joint NLP's infeasibility; its
+    reason is the nearest any runs of both must come (``headway.running_conflict``: both trains'
+    leg NLPs minimising the largest shortfall of the buffer's rows, the legs' own formula), the
+    trains and the time, not only Ipopt's word and the closest approach of the optimum without the
+    rows (before: "no departure or arrival inside buffer_m 150 m explains it")."""
+    f, out = restricted
+    assert headway.timetable_conflict(f) is None and headway.reach_conflict(f) is None
+    found = headway.running_conflict(f)
+    assert (found["train"], found["ahead"]) == ("T2", "T1") and 0.0 < found["gap_m"] < 150.0, found
+    assert found["doing"] == "runs from A to B" and found["ahead_doing"] == "runs from A to B", found
+    why = out["joint"]["failed"]
+    assert why.startswith(f"train T2 runs from A to B at {found['time_s']:g} s while train T1 runs from A to B: on any "
+                          f"runs of both that keep the timetable, T2's head is at most {found['gap_m']:.1f} m behind "
+                          "T1's tail there, where buffer_m 150 m is asked"), why
+    assert "(joint optimum with buffer_m's rows: Ipopt infeasible after" in why, why
+    # the independent runs ignore the buffer: they come no further apart than the most any runs keep
+    assert out["independent"]["totals"]["min_separation_m"] <= found["gap_m"] + 1e-3, out["independent"]["totals"]

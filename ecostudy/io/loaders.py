@@ -24,7 +24,7 @@ from ecostudy.io.formats import (
     track_document_to_schema,
     train_document_to_schema,
 )
-from ecostudy.io.timetable import name_stops, windows_from_schema
+from ecostudy.io.timetable import name_stops, off_clock, windows_from_schema
 from ecostudy.io.documents import (Where, given, named_file, read_document as read_document,  # re-exported
                                    split_selector, validate as validate)
 
@@ -343,6 +343,8 @@ def load_network_study(study_path: Where) -> NetworkStudy:
     """Read a network study file and the files it names; units converted here."""
     path = Path(study_path)
     s = validate(schemas.NetworkStudyFile, read_document(path), path)
+    off_clock(path, s.time_step_s, [(f"trains[{i}].offset_s", t.offset_s) for i, t in enumerate(s.trains)]
+              + [("dwell_s", s.dwell_s)])
     (track_doc, track), (train_doc, train) = (read_track(named_file(path, "track", s.track)),
                                               read_train(named_file(path, "train", s.train)))
     stops = list(track.stops) if s.stops is None else s.stops

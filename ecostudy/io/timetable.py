@@ -5,6 +5,7 @@ latter); :func:`name_stops` puts the track's names on them. :func:`journey_plan`
 with windows into a :class:`JourneyPlan` in SI, the passing points assigned to the segment they
 lie on. Times are on the journey clock (0 at the first departure), as TTOBench counts them.
 """
+import math
 from dataclasses import dataclass, replace
 from os import PathLike
 from typing import Sequence, TypeAlias
@@ -19,6 +20,9 @@ Where: TypeAlias = str | PathLike[str]
 Bounds: TypeAlias = tuple[float | None, float | None]  # (earliest, latest) [s], None where open
 
 POSITION_TOLERANCE = 1.0  # [m] a timetable position within this of a track stop is that stop
+# [-] of a clock step: a time this near a whole number of steps is on the clock (0.1 s and the
+# like are not exact in binary: 48 s / 0.4 s is 120.00000000000001)
+CLOCK_TOLERANCE = 1e-6
 
 
 def name_stops(tt: schemas.TimetableFile, track: Track, path: Where) -> tuple[schemas.TimetableFile, Track]:
@@ -159,3 +163,26 @@ def windows_from_schema(windows: Sequence[schemas.Window], track: Track, from_st
     if lines:
         raise InputError(lines)
     return tuple(out)
+
+
+def clock_steps(seconds: float, dt: float) -> int | None:
+    """``seconds`` as a whole number of clock steps ``dt`` [s]; None where it falls between two."""
+    steps = seconds / dt
+    return round(steps) if abs(steps - round(steps)) <= CLOCK_TOLERANCE else None
+
+
+def off_clock(path: Where, dt: float, times: Sequence[tuple[str, float]]) -> None:
+    """Refuse every time (field, [s]) of a study on a clock of step ``dt`` [s] (``time_step_s``) that
+    falls between two steps, naming the two nearest times on the clock: the clock cannot honour it,
+    and moving a departure or a dwell to a step would run another timetable than the one written."""
+    def said(x: float) -> str:
+        return f"{round(x, 9):.12g}"  # 48.400000000000006 as 48.4, 86399.65 in full
+
+    lines = []
+    for name, seconds in times:
+        if clock_steps(seconds, dt) is None:
+            below, above = (said(n * dt) for n in (math.floor(seconds / dt), math.ceil(seconds / dt)))
+            lines.append(problem(path, name, f"{said(seconds)} s is not on the {said(dt)} s clock (time_step_s): "
+                                 f"give {below} or {above}"))
+    if lines:
+        raise InputError(lines)

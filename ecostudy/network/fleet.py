@@ -6,6 +6,7 @@ time, on one clock of step dt (``ocp.timedomain``). The strategies are in :mod:`
 """
 from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 from typing import Optional
 
 import numpy as np
@@ -15,6 +16,7 @@ from ecostudy.core.defaults import FRONT_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.types import Timing
 from ecostudy.core.types import Supply
+from ecostudy.io.timetable import clock_steps
 from ecostudy.network.legs import leg_energy_ref, solve_leg, warmth
 from ecostudy.ocp import session
 from ecostudy.ocp import timedomain
@@ -38,14 +40,16 @@ class Fleet:
 
 def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=FRONT_POINTS, buffer=None,
          pool=None, supplement=0.0, check=None):
-    """A :class:`Fleet`: running times and dwells rounded up to whole steps, departures offset;
-    each segment's space-domain net-energy run (the legs' first guess) solved.
+    """A :class:`Fleet`: running times rounded up to whole steps, departures offset; the dwell and
+    the departures ``offsets`` [s] on the clock (else ValueError: they are not moved); each
+    segment's space-domain net-energy run (the legs' first guess) solved.
 
     ``running_times`` [s] per segment, or None: each segment's all-out time plus ``supplement``
     (a fraction). ``pool``: a process pool (else this process); a segment's first run is submitted
     as soon as its running time is known, so all-out and first runs of different segments overlap.
     ``check(fleet)``: called with the timetable (a :class:`Fleet` without runs) as soon as its running
     times are known: before anything is solved where ``running_times`` are given."""
+    _on_clock(dwell, offsets, dt)  # before anything is prepared
     cases = [prepare(track, train, a, b, points) for a, b in zip(stops[:-1], stops[1:])]
     if check is not None and running_times is not None:
         check(_timetable(track, stops, cases, running_times, dwell, offsets, names, dt, supply, buffer))
@@ -60,10 +64,10 @@ def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, 
 def _timetable(track, stops, cases, asked, dwell, offsets, names, dt, supply, buffer):
     """The :class:`Fleet` of running times ``asked`` [s] per segment, without its first runs."""
     steps = [_steps(t, dt) for t in asked]
-    pause = _steps(dwell, dt)
+    pause, starts = _on_clock(dwell, offsets, dt)
     legs = []
-    for offset in offsets:
-        start, mine = int(round(offset / dt)), []
+    for start in starts:
+        mine = []
         for case, n, a in zip(cases, steps, stops[:-1]):
             b = stops[stops.index(a) + 1]
             direction = 1.0 if track.stops[b] >= track.stops[a] else -1.0
@@ -72,6 +76,16 @@ def _timetable(track, stops, cases, asked, dwell, offsets, names, dt, supply, bu
         legs.append(mine)
     total = max(leg.start + leg.steps for mine in legs for leg in mine)
     return Fleet(list(names), legs, dt, total, supply, buffer, {}, pause, list(asked))
+
+
+def _on_clock(dwell, offsets, dt):
+    """(the dwell, each departure) in whole clock steps; ValueError where one falls between two
+    steps: the clock cannot honour it, and it is not moved (a study file's are refused on loading,
+    ``io.timetable.off_clock``)."""
+    pause, starts = clock_steps(dwell, dt), [clock_steps(offset, dt) for offset in offsets]
+    if pause is None or None in starts:
+        raise ValueError(f"dwell {dwell:g} s or a departure of {offsets} s is not on the {dt:g} s clock")
+    return pause, starts
 
 
 def _steps(seconds, dt):
@@ -213,6 +227,19 @@ def line_positions(fleet, i, runs):
         nxt = fleet.legs[i][k + 1].start if k + 1 < len(fleet.legs[i]) else end + fleet.dwell_steps + 1
         x[end:nxt] = leg.line_start + leg.direction * run.s[-1]  # dwelling (at the terminus too)
     return x
+
+
+def following_legs(fleet, blocks):
+    """(train behind, train ahead, leg, its block, the train ahead's line position per clock step)
+    for every leg of every train behind another (departure order), ``blocks[train][leg]`` leg
+    blocks of one NLP: the train ahead's positions expressions of its own blocks' variables (the
+    joint NLP's separation rows)."""
+    order = departure_order(fleet)
+    for ahead, me in zip(order[:-1], order[1:]):
+        x = line_positions(fleet, ahead, [SimpleNamespace(s=np.array([b.s[j] for j in b.K], dtype=object))
+                                          for b in blocks[ahead]])
+        for leg, b in zip(fleet.legs[me], blocks[me]):
+            yield me, ahead, leg, b, x
 
 
 def step_arrays(fleet, runs_by_train):

@@ -2,7 +2,9 @@
 alone (:func:`timetable_conflict`: where a train stands, departs or arrives, its position is its
 stop; while it runs, it is between its two stops), or with the running train's dynamics
 (:func:`reach_conflict`: the furthest the train ahead's leg NLP can take it by a clock step, or
-the least far the train behind can be and still arrive on time, real Ipopt solves).
+the least far the train behind can be and still arrive on time, real Ipopt solves), or with both
+trains' dynamics at once (:func:`running_conflict`: the largest gap any runs of both keep, where
+both run, e.g. the train ahead slowed by a restriction the train behind has not reached).
 
 The first is decidable from the study file (stops, running times, dwell, departures, the train's
 length, the buffer): a network study that fails it is refused before anything is solved. The
@@ -14,8 +16,8 @@ from types import SimpleNamespace
 import numpy as np
 import pyomo.environ as pyo
 
-from ecostudy.network.fleet import departure_order, line_positions
-from ecostudy.network.legs import BUFFER_SLACK_M, head_to_tail
+from ecostudy.network.fleet import departure_order, following_legs, line_positions
+from ecostudy.network.legs import BUFFER_SLACK_M, closest_reachable, head_to_tail
 from ecostudy.ocp import session, timedomain
 
 
@@ -153,3 +155,30 @@ def say_reach(conflict, buffer):
     return (f"train {c['train']} {c['doing']} at {c['time_s']:g} s, when train {c['ahead']}, {c['since_s']:g} s "
             f"after it departed, can be at most {c['furthest_m']:.1f} m along its leg (its fastest start): "
             f"{_gap(c)}, where {_asked(buffer)} is asked (offset_s)")
+
+
+def running_conflict(fleet):
+    """Where no runs of the trains, all free (their leg NLPs: the joint's rows without its cost or
+    circuit), keep ``fleet.buffer`` between a train's head and the tail of the one ahead, whatever
+    each does (``legs.closest_reachable`` over every train's legs at once): a conflict while both
+    run, which no bound of :func:`reach_conflict` names. :func:`timetable_conflict`'s dict at the
+    first step where the gap is least, "gap_m" the largest gap any runs keep there; None where the
+    buffer can be kept (or that NLP has no usable point)."""
+    m = pyo.ConcreteModel()
+    blocks = [[timedomain.add_leg(m, f"t{i}_leg{k}", leg, None, one_handle=False) for k, leg in enumerate(legs)]
+              for i, legs in enumerate(fleet.legs)]
+    pairs = list(following_legs(fleet, blocks))
+    found = closest_reachable(m, [(leg, x, b.s) for _, _, leg, b, x in pairs], fleet.buffer)
+    if found is None:
+        return None
+    gap, n, j = found
+    me, ahead, leg, *_ = pairs[n]
+    return _conflict(fleet, ahead, me, leg.start + j, gap)
+
+
+def say_running(conflict, buffer):
+    """A :func:`running_conflict` in words."""
+    c = conflict
+    return (f"train {c['train']} {c['doing']} at {c['time_s']:g} s while train {c['ahead']} {c['ahead_doing']}: "
+            f"on any runs of both that keep the timetable, {_gap(c)} there, where {_asked(buffer)} is asked; "
+            f"depart {c['train']} later (offset_s), or change running_times_s")

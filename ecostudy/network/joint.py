@@ -2,14 +2,13 @@
 each train ``fleet.buffer`` behind the one ahead as the rules keep it: the bound no supervisor rule
 can beat."""
 import time
-from types import SimpleNamespace
 
 import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.errors import SolverError
 from ecostudy.network import circuit, headway
-from ecostudy.network.fleet import REGULARISATION, departure_order, energy_ref, line_positions, solve_model
+from ecostudy.network.fleet import REGULARISATION, energy_ref, following_legs, solve_model
 from ecostudy.network.legs import NEAR_START, separation_rows
 from ecostudy.network.scoring import buffer_missed
 from ecostudy.ocp import space, timedomain
@@ -51,14 +50,18 @@ def why_not_separated(fleet, exc, missed):
     """The reason the joint NLP with the buffer's rows has no usable point (``exc``: Ipopt's word): a
     train that departs or arrives where the train ahead cannot be ``buffer_m`` ahead even on its
     fastest start, a train ahead that stands where the train behind is too near even on its latest
-    start, or the timetable alone (``network.headway``); else Ipopt's word with the closest approach
-    ``missed`` of the optimum without the rows."""
+    start, or the timetable alone; or, both trains running, the nearest any runs must come
+    (``network.headway``); else Ipopt's word with the closest approach ``missed`` of the optimum
+    without the rows."""
     found = headway.timetable_conflict(fleet)
     if found is not None:
         return f"{headway.say_timetable(found, fleet.buffer)} ({exc})"
     found = headway.reach_conflict(fleet)
     if found is not None:
         return f"{headway.say_reach(found, fleet.buffer)} ({exc})"
+    found = headway.running_conflict(fleet)
+    if found is not None:
+        return f"{headway.say_running(found, fleet.buffer)} ({exc})"
     return (f"{exc}; no departure or arrival inside buffer_m {fleet.buffer:g} m explains it (without the rows train "
             f"{missed['train']}'s head came within {missed['gap_m']:.1f} m of the tail of train {missed['ahead']} at "
             f"{missed['time_s']:g} s, {missed['position_m']:.0f} m along the line)")
@@ -111,15 +114,11 @@ def _model(fleet, start, one_handle, floating, separated):
 def _add_separation(m, fleet, blocks):
     """Each train's head ``fleet.buffer`` behind the tail of the one ahead (departure order) at
     every step both are on the line: the rows of ``legs.separation_rows``, the train ahead's
-    positions expressions of its own leg variables."""
-    order = departure_order(fleet)
+    positions expressions of its own leg variables (``fleet.following_legs``)."""
     m.separation = pyo.ConstraintList()
-    for ahead, me in zip(order[:-1], order[1:]):
-        x = line_positions(fleet, ahead, [SimpleNamespace(s=np.array([b.s[j] for j in b.K], dtype=object))
-                                          for b in blocks[ahead]])
-        for leg, b in zip(fleet.legs[me], blocks[me]):
-            for row in separation_rows(leg, x, fleet.buffer, b.s):
-                m.separation.add(row)
+    for _, _, leg, b, x in following_legs(fleet, blocks):
+        for row in separation_rows(leg, x, fleet.buffer, b.s):
+            m.separation.add(row)
 
 
 def _initialise_network(m, fleet, steps, floating):

@@ -218,29 +218,45 @@ def _check_departure_gap(task):
 
 def _why_not_kept(task, exc):
     """Ipopt's word ``exc`` for a leg kept ``buffer`` behind the train ahead, with the nearest any run
-    of the leg must come to that train's tail and when, where that is nearer than the buffer: the
-    leg's NLP without its cost (one handle relaxed), minimising the largest shortfall z of the
-    separation rows (x_ahead - s_j >= buffer + length - z)."""
+    of the leg must come to that train's tail and when, where that is nearer than the buffer
+    (:func:`closest_reachable` of the leg alone, the train ahead's run given)."""
     leg, label, _, buffer, *_, ahead = task
     if ahead is None or buffer is None or "infeasible" not in str(exc):
         return str(exc)
     m = pyo.ConcreteModel()
     b = timedomain.add_leg(m, "leg", leg, None, one_handle=False)
-    m.z = pyo.Var(bounds=(0.0, None), initialize=buffer)
-    m.rows = pyo.ConstraintList()
-    for row in separation_rows(leg, ahead, buffer, b.s, slack=m.z):
-        m.rows.add(row)
-    ahead_at = {j: x_ahead - leg.case.train.length  # its tail in the leg's distance
-                for j, x_ahead, _ in separated_steps(leg, ahead, buffer)}
-    m.objective = pyo.Objective(expr=m.z)
-    if not ahead_at or not session.solve(m).usable or pyo.value(m.z) <= BUFFER_SLACK_M:
+    found = closest_reachable(m, [(leg, ahead, b.s)], buffer)
+    if found is None:
         return str(exc)
-    j = min(ahead_at, key=lambda k: ahead_at[k] - pyo.value(b.s[k]))  # where the shortfall binds
-    gap = buffer - pyo.value(m.z)
+    gap, _, j = found
     near = f"within {gap:.1f} m of" if gap >= 0 else f"{-gap:.1f} m past"
     return (f"{label}: cannot keep buffer_m {buffer:g} m behind the train ahead: on any run that arrives on time "
             f"its head comes {near} that train's tail, at {(leg.start + j) * leg.dt:g} s (offset_s, dwell_s) "
             f"({str(exc).removeprefix(label + ': ')})")
+
+
+def closest_reachable(m, pairs, buffer):
+    """The nearest runs of the legs in ``m`` (leg blocks without a cost; one handle relaxed) must
+    come to the trains ahead: the NLP minimising the largest shortfall z of the separation rows
+    (x_ahead - s_j >= buffer + length - z) of every (leg, ``ahead``, ``s``) in ``pairs``
+    (:func:`separation_rows`; ``ahead``: numbers, or expressions of the model's variables where the
+    trains ahead run too). (the largest gap head to tail those runs keep at their closest, buffer - z
+    [m]; the index in ``pairs`` and the leg's step j of the row that binds first on the clock) where z exceeds
+    :data:`BUFFER_SLACK_M`; None where the buffer can be kept or Ipopt finds no usable point."""
+    m.z = pyo.Var(bounds=(0.0, None), initialize=buffer)
+    m.rows = pyo.ConstraintList()
+    terms = []  # (pair, step, the train ahead's head, the leg's distance) of every row
+    for n, (leg, ahead, s) in enumerate(pairs):
+        for row in separation_rows(leg, ahead, buffer, s, slack=m.z):
+            m.rows.add(row)
+        terms += [(n, j, x_ahead, s[j]) for j, x_ahead, _ in separated_steps(leg, ahead, buffer)]
+    m.objective = pyo.Objective(expr=m.z)
+    if not terms or not session.solve(m).usable or pyo.value(m.z) <= BUFFER_SLACK_M:
+        return None
+    room = [pyo.value(x_ahead - s) for _, _, x_ahead, s in terms]  # head to head, per row
+    tied = [k for k, r in enumerate(room) if r <= min(room) + BUFFER_SLACK_M]  # the rows that bind
+    n, j, *_ = terms[min(tied, key=lambda k: pairs[terms[k][0]][0].start + terms[k][1])]  # the earliest on the clock
+    return buffer - pyo.value(m.z), n, j
 
 
 STAND_SPEED_MPS = 0.1  # [m/s] below this a train stands
