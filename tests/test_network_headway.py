@@ -118,9 +118,8 @@ def test_a_train_behind_that_must_start_while_the_train_ahead_stands_is_named(tm
     to cover the 650 m by 116 s, must have left Noord by then (its latest start: 0.8 m along at 66 s
     measured, its all-out time 50.x s): no run keeps the buffer. The joint optimum's NLP with the
     buffer's rows is infeasible, and its reason names T2's latest start and T1 standing, not only
-    Ipopt's word (before, it read "no departure or arrival inside buffer_m 560 m explains it"); the
-    rules' and `following`'s leg NLP, given T1's run, is infeasible too, and its reason says how near
-    T2 must come and when (before: Ipopt's word only)."""
+    Ipopt's word; the rules' and `following`'s leg NLP, given T1's run, is infeasible too, and its
+    reason says how near T2 must come and when."""
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
     f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 60.0], ["T1", "T2"], 1.0,
                    Supply(position=300.0), points=200, buffer=560.0)
@@ -131,7 +130,7 @@ def test_a_train_behind_that_must_start_while_the_train_ahead_stands_is_named(tm
     assert 0.0 < least < 5.0 and found["furthest_m"] == pytest.approx(least, abs=1e-9), least  # 0.8 m measured
     out = strategies.run_strategies(f, ["independent", "receptivity", "joint", "following"], progress=None)
     for name in ("receptivity", "following"):  # the leg's own reason: the nearest any run must come, and when
-        assert out[name]["failed"].startswith(  # (before: "train T2, leg 1: Ipopt infeasible after 158 iterations")
+        assert out[name]["failed"].startswith(
             "train T2, leg 1: cannot keep buffer_m 560 m behind the train ahead: on any run that arrives on time its "
             f"head comes within {560.0 - least:.1f} m of that train's tail, at 66 s (offset_s, dwell_s) (Ipopt "
             "infeasible after"), out[name]
@@ -159,12 +158,13 @@ def restricted(tmp_path_factory):
     return f, strategies.run_strategies(f, ["independent", "joint"], progress=None)
 
 
+@pytest.mark.slow  # about a minute of CPU: three Ipopt solves of both trains' legs
 def test_a_conflict_while_both_trains_run_names_the_trains_the_least_gap_and_when(restricted):
     """Neither the timetable nor a departure or arrival explains the joint NLP's infeasibility; its
     reason is the nearest any runs of both must come (``headway.running_conflict``: both trains'
     leg NLPs minimising the largest shortfall of the buffer's rows, the legs' own formula), the
     trains and the time, not only Ipopt's word and the closest approach of the optimum without the
-    rows (before: "no departure or arrival inside buffer_m 150 m explains it")."""
+    rows."""
     f, out = restricted
     assert headway.timetable_conflict(f) is None and headway.reach_conflict(f) is None
     found = headway.running_conflict(f)
