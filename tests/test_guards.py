@@ -266,11 +266,11 @@ def stubborn(_):
     time.sleep(20)
 
 store = Store(sys.argv[1])
-pool = worker_pool(1)
-pool.submit(stubborn, 0)
-time.sleep(2)  # the worker has started and ignores SIGTERM
-print("ready", flush=True)
-time.sleep(60)
+with worker_pool(1) as pool:
+    pool.submit(stubborn, 0)
+    time.sleep(2)  # the worker has started and ignores SIGTERM
+    print("ready", flush=True)
+    time.sleep(60)
 """
 
 
