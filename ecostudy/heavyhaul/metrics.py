@@ -55,9 +55,30 @@ def braking_samples(efforts, locomotives):
     return (efforts.min(axis=1) < -PULLING) & ~pulls
 
 
-def run_metrics(record, reference, locomotives, force_limit):
+def ended(record, stop_error, stop_tolerance):
+    """How a run ended, one of :data:`ENDS`: ``record`` a :class:`~ecostudy.heavyhaul.loop.LoopRecord`,
+    ``stop_error`` the head's end minus the stop [m] (positive beyond), ``stop_tolerance`` [m]."""
+    if record.rolling_back:
+        return "rolling back"
+    if not record.stood:
+        return "sample cap"
+    if abs(stop_error) <= stop_tolerance:
+        return "at the stop"
+    if stop_error > 0:
+        return "beyond the stop"
+    return "stalled short of the stop" if record.end_forces[0] > record.end_forces[1] else "short of the stop"
+
+
+# how a run ended (runs.csv ``ended``); ``arrived`` is True for the first alone
+ENDS = ("at the stop", "short of the stop", "stalled short of the stop", "beyond the stop", "rolling back",
+        "sample cap")
+STOOD = ENDS[:4]  # the train stood on the reference's final approach (its arrival time is a time it stood)
+
+
+def run_metrics(record, reference, locomotives, force_limit, stop_tolerance=Tolerances().stop_m):
     """The checked numbers of a run (units in the names): ``locomotives`` the indices of the
-    locomotive (virtual) cars, ``force_limit`` the consist's coupler limit [N]."""
+    locomotive (virtual) cars, ``force_limit`` the consist's coupler limit [N], ``stop_tolerance``
+    [m] how far from the stop a train that stood has ``arrived``."""
     efforts = record.efforts
     loco = efforts[:, locomotives]
     braking = braking_samples(efforts, locomotives)
@@ -69,11 +90,13 @@ def run_metrics(record, reference, locomotives, force_limit):
     dynamic = np.maximum(-loco, 0.0).sum(axis=1) / np.maximum(record.dynamic_limits.sum(axis=1), 1.0)
     using = dynamic > 1e-3
     terms = np.nansum(record.terms, axis=0)
+    error = float(record.head[-1] - reference.distance[-1])
+    end = ended(record, error, stop_tolerance)
     return {
-        "arrived": bool(record.arrived), "arrival_s": float(record.times[-1]),
+        "arrived": end == ENDS[0], "ended": end, "arrival_s": float(record.times[-1]),
         "arrival_late_s": float(record.times[-1] - reference.running_time),
         "arrival_late_percent": float(100 * (record.times[-1] / reference.running_time - 1)),
-        "stop_error_m": float(record.head[-1] - reference.distance[-1]),
+        "stop_error_m": error,
         **rollback(record.head, reference.distance[-1]),
         "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
         "speed_at_end_kmh": float(record.mean_speed[-1] / KMH), "rolling_back": bool(record.rolling_back),
@@ -170,12 +193,12 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     if metrics["stop_error_m"] < 0 and held > utmost:  # it cannot go on
         asked += (f", stalled: the grade and resistance there ({held:.0f} kN) exceed the locomotives' utmost "
                   f"traction ({utmost:.0f} kN)")
-    if metrics.get("rolling_back"):  # the loop ended the run on the final approach: the train did not stand
+    if metrics["ended"] == "rolling back":  # the loop ended the run on the final approach: the train did not stand
         error = metrics["stop_error_m"]
         where = f"{-error:.1f} m before the stop" if error <= 0 else f"{error:.1f} m beyond the stop"
         out.append(f"rolling back at {-metrics['speed_at_end_kmh']:.2f} km/h {where} when the run ended (the loop "
                    f"ends a run under 1 km/h on the reference's final approach){asked}")
-    elif not metrics["arrived"]:
+    elif metrics["ended"] == "sample cap":
         where = (f"{-metrics['stop_error_m']:.0f} m before the stop" if metrics["stop_error_m"] <= 0
                  else f"with the train {metrics['stop_error_m']:.0f} m beyond the stop, not stopped")
         out.append(f"the sample cap ({samples}) came {where}")
@@ -183,7 +206,7 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
         where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
         out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m){asked}")
     late, share = metrics["arrival_late_s"], metrics["arrival_late_percent"]
-    if metrics["arrived"] and share > 100 * tolerances.arrival and late > tolerances.arrival_s:
+    if metrics["ended"] in STOOD and share > 100 * tolerances.arrival and late > tolerances.arrival_s:
         out.append(f"arrived {late:.0f} s ({share:.1f} %) after the reference's running time "
                    f"(tolerance {100 * tolerances.arrival:g} % or {tolerances.arrival_s:g} s, the larger)")
     if metrics["force_max_kN"] > metrics["force_limit_kN"]:
