@@ -94,6 +94,8 @@ def test_each_missed_limit_is_a_reason():
     assert reasons(stall, 100, 0) == ["stopped 1323.1 m short of the stop (tolerance 1 m) with the reference at 36.1 "
                                       "km/h there, stalled: the grade and resistance there (479 kN) exceed the "
                                       "locomotives' utmost traction (408 kN)"]
+    start = {**good, "rollback_m": 183.0, "stalled_before_stop_m": 19305.4, "stalled_after_start_m": 0.0}
+    assert reasons(start, 100, 0) == ["the train rolled back 183 m from the start before it moved off"]
     assert reasons({**stall, "traction_utmost_at_end_kN": 480.0}, 100, 0) == [
         "stopped 1323.1 m short of the stop (tolerance 1 m) with the reference at 36.1 km/h there"]
     assert reasons({**good, "arrived": False, "ended": "sample cap", "stop_error_m": 50.0}, 100, 0) == [
@@ -139,9 +141,9 @@ def test_unfollowable_reference_tables_are_refused_in_one_line(tmp_path, rows, w
     refused(invoke(study(tmp_path, reference=reference_table(tmp_path, rows)), tmp_path / "out"), *words)
 
 
-def climb_study(tmp_path, permille, wagons=40, motors_kN=None, gradients=(), limit_kmh=60, **changes):
-    """One locomotive and 40 ``wagons`` (2766 t) from rest to rest over 3 km, climbing ``permille`` from
-    300 m on (then the ``gradients``, (position m, per mille) pairs) under ``limit_kmh``; K_b = 60, f = 10,
+def climb_study(tmp_path, permille, wagons=40, motors_kN=None, gradients=(), limit_kmh=60, start_permille=0, **changes):
+    """One locomotive and 40 ``wagons`` (2766 t) from rest to rest over 3 km, ``start_permille`` to 300 m,
+    climbing ``permille`` from there (then the ``gradients``, (position m, per mille) pairs) under ``limit_kmh``; K_b = 60, f = 10,
     Np = Nc = 1; ``motors_kN``: the locomotive's traction and dynamic brake at most this force (560 and
     400 kN)."""
     consist = load_yaml(PAPER)
@@ -152,7 +154,8 @@ def climb_study(tmp_path, permille, wagons=40, motors_kN=None, gradients=(), lim
     write_yaml(tmp_path / "one.yaml", consist)
     line = {"name": "climb", "source": "test", "length_m": 4000,
             "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 3000}],
-            "gradients": [{"position_m": 0, "gradient_permille": 0}, {"position_m": 300, "gradient_permille": permille},
+            "gradients": [{"position_m": 0, "gradient_permille": start_permille},
+                          {"position_m": 300, "gradient_permille": permille},
                           *({"position_m": x, "gradient_permille": g} for x, g in gradients)],
             "speed_limits": [{"position_m": 0, "speed_kmh": limit_kmh}]}
     write_yaml(tmp_path / "climb.yaml", line)
@@ -280,3 +283,16 @@ def test_a_sag_into_the_stop_with_air_brakes_pulls_through_their_release(tmp_pat
     run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
     assert result.exit_code == 0 and run["status"] == "ok", run["reason"]
     assert run["arrived"] and run["ended"] == "at the stop" and abs(run["stop_error_m"]) < 0.01
+
+
+def test_a_train_that_rolls_back_from_a_start_on_a_climb_says_so(tmp_path):
+    """One locomotive and 40 wagons (2766 t) starting from rest on 15 per mille (about 430 kN of grade
+    and resistance) while the locomotive's effort ramps at the default 200 kN per sample: the train
+    rolls back from the start before it moves off, and the reason says that, not a stall before the
+    stop."""
+    path = climb_study(tmp_path, 0, start_permille=15, max_samples=60, reference={"supplement_percent": 10, "points": 150})
+    result = invoke(path, tmp_path / "out")
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert result.exit_code == 1 and run["rollback_m"] > 1 and run["stalled_after_start_m"] <= 0, run["reason"]
+    assert f"the train rolled back {run['rollback_m']:.0f} m from the start before it moved off" in run["reason"]
+    assert "stalled" not in run["reason"]

@@ -97,7 +97,7 @@ def run_metrics(record, reference, locomotives, force_limit, stop_tolerance=Tole
         "arrival_late_s": float(record.times[-1] - reference.running_time),
         "arrival_late_percent": float(100 * (record.times[-1] / reference.running_time - 1)),
         "stop_error_m": error,
-        **rollback(record.head, reference.distance[-1]),
+        **rollback(record.head, reference.distance[0], reference.distance[-1]),
         "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
         "speed_at_end_kmh": float(record.mean_speed[-1] / KMH), "rolling_back": bool(record.rolling_back),
         "resistance_at_end_kN": record.end_forces[0] / KN, "traction_utmost_at_end_kN": record.end_forces[1] / KN,
@@ -125,14 +125,18 @@ def adhesion_use(samples):
             "adhesion_use_kmh": float(speed / KMH), "adhesion_use_effort_kN": float(effort / KN)}
 
 
-def rollback(head, stop):
+def rollback(head, start, stop):
     """How far the train rolled back at most (the head at a sample end behind the farthest it had
-    reached before, ``rollback_m`` [m]) and how far before the ``stop`` [m] it stalled there
-    (``stalled_before_stop_m``, the farthest point reached; 0 without a roll back)."""
-    farthest = np.maximum.accumulate(head)
+    reached before, ``rollback_m`` [m]), how far before the ``stop`` [m] it stalled there
+    (``stalled_before_stop_m``, the farthest point reached; 0 without a roll back) and how far past
+    the ``start`` [m] that was (``stalled_after_start_m``: at most 0 when it rolled back from the
+    start before it moved off)."""
+    farthest = np.maximum.accumulate(np.concatenate([[start], head]))[1:]
     back = farthest - head
     i = int(np.argmax(back))
-    return {"rollback_m": float(back[i]), "stalled_before_stop_m": float(stop - farthest[i]) if back[i] > 0 else 0.0}
+    moved = back[i] > 0
+    return {"rollback_m": float(back[i]), "stalled_before_stop_m": float(stop - farthest[i]) if moved else 0.0,
+            "stalled_after_start_m": float(farthest[i] - start) if moved else 0.0}
 
 
 def energy_balance(record):
@@ -184,7 +188,9 @@ def in_train_metrics(history, consist):
 def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     """Why a run is not ok (empty: ok); ``samples`` the cap it ran under."""
     out = []
-    if metrics.get("rollback_m", 0.0) > tolerances.stop_m:
+    if metrics.get("rollback_m", 0.0) > tolerances.stop_m and metrics.get("stalled_after_start_m", np.inf) <= tolerances.stop_m:
+        out.append(f"the train rolled back {metrics['rollback_m']:.0f} m from the start before it moved off")
+    elif metrics.get("rollback_m", 0.0) > tolerances.stop_m:
         out.append(f"the train stalled {metrics['stalled_before_stop_m']:.0f} m before the stop and rolled back "
                    f"{metrics['rollback_m']:.0f} m")
     asked = (f" with the reference at {metrics['reference_at_end_kmh']:.1f} km/h there"  # a stall reads as one

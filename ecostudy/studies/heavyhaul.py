@@ -234,7 +234,7 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
            "adhesion_use_kmh", "adhesion_use_effort_kN", "braking_samples", "stretch_braking_samples",
            "stretch_braking_kWh",
            "speed_excess_kmh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "coupler_damping_kWh", "draft_gear_kWh", "stored_change_kWh",
-           "balance_residual_kWh", "arrived", "ended", "arrival_s", "arrival_late_s", "arrival_late_percent", "reference_time_s", "reference_kWh", "stop_error_m", "rollback_m", "stalled_before_stop_m", "reference_at_end_kmh",
+           "balance_residual_kWh", "arrived", "ended", "arrival_s", "arrival_late_s", "arrival_late_percent", "reference_time_s", "reference_kWh", "stop_error_m", "rollback_m", "stalled_before_stop_m", "stalled_after_start_m", "reference_at_end_kmh",
            "speed_at_end_kmh", "rolling_back", "resistance_at_end_kN", "traction_utmost_at_end_kN", "samples", "virtual_cars",
            "qp_inputs", "qp_states", "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts",
            "peak_memory_MB", *IN_TRAIN)
