@@ -100,7 +100,7 @@ TERMS = ["K_b", "status", "tracking_mean_mps", "force_max_kN", "force_max_brakin
          "energy_total_kWh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "J_force", "J_tracking",
          "J_energy", "J_braking", "dynamic_brake_use_max", "dynamic_brake_use_mean", "stop_error_m"]
 
-STOPS = ["K_b", "f", "Np", "Nc", "status", "arrived", "stop_error_m", "arrival_s", "reference_time_s", "arrival_late_s",
+STOPS = ["K_b", "f", "Np", "Nc", "status", "arrived", "ended", "stop_error_m", "arrival_s", "reference_time_s", "arrival_late_s",
          "arrival_late_percent", "force_max_kN",
          "force_limit_kN", "speed_excess_kmh", "over_ts", "reason"]
 

@@ -80,7 +80,7 @@ def test_a_closed_loop_run_applies_only_notches_and_its_energy_balance_closes(tm
     assert off_notch > 10 and any((s.levels[plant.loco] < 0).any() for _, _, s in Recording.taken)
     residual = (record.traction_work - record.dynamic_brake_work - record.wagon_brake_work - sum(record.losses)
                 - record.stored_change)
-    assert abs(residual) < 1e-3 * record.traction_work and record.arrived
+    assert abs(residual) < 1e-3 * record.traction_work and record.stood
     assert record.losses[LOSSES.index("running_resistance")] > 0
 
 

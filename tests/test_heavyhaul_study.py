@@ -224,6 +224,7 @@ def test_a_heavy_haul_study_runs_resumes_and_reports_the_papers_columns(tmp_path
     assert first.exit_code == 1, first.output  # flagged: the paper's plant asks more than dry rail gives
     runs = pd.read_csv(out / "runs.csv")
     assert list(runs["K_b"]) == [1, 60] and (runs["status"] == "flagged").all() and runs["arrived"].all()
+    assert (runs["ended"] == "at the stop").all()
     assert all(besides_adhesion(r) == [] and r.startswith(ADHESION_REASON) for r in runs["reason"])
     assert (runs["tracking_mean_mps"] < 2.0).all() and (runs["force_max_kN"] < 2000).all()  # 1.73, 1.74 measured
     assert (runs["stop_error_m"].abs() < 1).all() and (runs["qp_inputs"] == 2 * 22).all()

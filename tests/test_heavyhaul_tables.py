@@ -1,5 +1,8 @@
 """The shipped flat-piece references of the sags and rolling lines (docs/heavyhaul.md, "A line whose
-descents pass the dynamic brakes") are what bench/heavyhaul_sags_reference.py writes, and keep its rates."""
+descents pass the dynamic brakes") are what bench/heavyhaul_sags_reference.py writes, and keep its rates;
+every runs.csv column is documented."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -26,3 +29,11 @@ def test_pieces_are_reached_at_the_rates_and_drops_by_their_start():
     assert v[x == 7900.0][0] > 40 / 3.6  # and not earlier
     assert v[(x >= 2000) & (x < 3000)].max() == pytest.approx(50 / 3.6)  # a piece's speed, never above it
     assert v.max() == pytest.approx(70 / 3.6)
+
+
+def test_every_runs_csv_column_is_documented():
+    """Every column a heavy-haul study writes to runs.csv is named in docs/heavyhaul.md's column table."""
+    from ecostudy.studies.heavyhaul import COLUMNS
+    text = (Path(__file__).resolve().parent.parent / "docs" / "heavyhaul.md").read_text()
+    table = text[text.index("**runs.csv, column by column**"):text.index("## Bad input")]
+    assert [c for c in (*COLUMNS, "K_b", "f", "Np", "Nc", "status", "reason", "seconds") if f"`{c}`" not in table] == []

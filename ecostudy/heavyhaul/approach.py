@@ -13,9 +13,11 @@ own model:
 * :func:`braked_distance`: how far the train runs until it stands with efforts held, as one mass
   (every car's mass summed, the resistance, grades and curves it feels now), the locomotives'
   dynamic brakes acting at once and the wagons' brakes as the pipe delivers them (each wagon's
-  delay, lag and the commands still travelling, ``plant.brake_pipe``); :func:`brake_share` finds by
+  delay, lag and the commands still travelling, ``plant.brake_pipe``); :func:`stopping_share` finds by
   bisection the share s of every car's brake (u = s * the lowest efforts, the driver's graduated
-  application of automatic and dynamic brake) that stands the head at the stop.
+  application of automatic and dynamic brake) that stands the head at the stop, or, where even
+  coasting stands it short because the wagons' brakes are still releasing (tau_r after the pipe's
+  delay: a sag into a stop on a climb), the share of the locomotives' traction that pulls it there.
 * :func:`braking_point`: the final application starts at the first sample from which waiting one
   more sample (the train running v Ts further) would leave less than the distance the reference's
   own final deceleration needs with the pipe's delays: the application then starts no harder than
@@ -54,18 +56,33 @@ def braked_distance(plant, state, efforts):
     return (x, t) if v <= 0.0 else (np.inf, np.inf)
 
 
-def brake_share(plant, state, lowest, distance):
-    """(s in [0, 1], time to stand [s]): the share of every car's brake (``lowest`` efforts, N) that
-    stands the train ``distance`` [m] on (1: the whole brake, when even that runs further)."""
+def brake_share(plant, state, effort, distance, pull=False):
+    """(s in [0, 1], time to stand [s]): the share of every car's ``effort`` (N per car: the lowest
+    efforts, every brake; with ``pull`` the highest, the locomotives' traction) that stands the train
+    ``distance`` [m] on; an end of [0, 1] when even that one misses (braking: the whole brake runs
+    further, 1, or coasting stands it short, 0; pulling: all the traction stands it short, 1, or
+    coasting runs further, 0)."""
     lo, hi = 0.0, 1.0
-    for share in (1.0, 0.0):  # even the whole brake runs further; coasting stands it soon enough
-        run, seconds = braked_distance(plant, state, share * lowest)
-        if (run >= distance) == (share == 1.0):
+    for share in (1.0, 0.0):
+        run, seconds = braked_distance(plant, state, share * effort)
+        if (run >= distance) == ((share == 1.0) != pull):
             return share, seconds
     for _ in range(BISECTIONS):
         mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if braked_distance(plant, state, mid * lowest)[0] > distance else (lo, mid)
-    return hi, braked_distance(plant, state, hi * lowest)[1]
+        lo, hi = (mid, hi) if (braked_distance(plant, state, mid * effort)[0] > distance) != pull else (lo, mid)
+    share = lo if pull else hi  # the end that stands the train within the distance
+    return share, braked_distance(plant, state, share * effort)[1]
+
+
+def stopping_share(plant, state, lowest, highest, distance):
+    """(s, time to stand [s], pulling): the share s of every car's brake (``lowest``, N per car) that
+    stands the train ``distance`` [m] on, or, where even coasting stands it short (a climb: the
+    wagons' brakes still releasing through the pipe, tau_r, slow it), the share of every
+    locomotive's traction (``highest``) that does (pulling True)."""
+    share, seconds = brake_share(plant, state, lowest, distance)
+    if share > 0.0 or braked_distance(plant, state, 0.0 * lowest)[0] >= distance:
+        return share, seconds, False
+    return (*brake_share(plant, state, highest, distance, pull=True), True)
 
 
 def service_share(plant, state, lowest, deceleration):

@@ -20,7 +20,7 @@ import numpy as np
 
 from ecostudy.core.errors import SolverError
 from ecostudy.core.units import KMH, KN
-from ecostudy.heavyhaul.approach import brake_share, braking_point
+from ecostudy.heavyhaul.approach import braking_point, stopping_share
 from ecostudy.heavyhaul.plant import LOSSES, CascadeStep
 from ecostudy.heavyhaul.rhc import TERMS, input_offsets
 
@@ -42,10 +42,10 @@ class LoopRecord(NamedTuple):
     dynamic_brake_work: float
     wagon_brake_work: float
     overruns: int = 0          # solves slower than Ts: the previous input was held
-    arrived: bool = True       # stopped on the reference's final approach (False: the sample cap came first, or rolling_back)
+    stood: bool = True         # stood on the reference's final approach, anywhere on it (False: the sample cap came first, or rolling_back)
     losses: tuple = ()         # plant.LOSSES over the run [J]
     stored_change: float = 0.0  # kinetic plus coupler elastic energy at the end minus at the start [J]
-    rolling_back: bool = False  # the run ended on the final approach with the train rolling back (not arrived)
+    rolling_back: bool = False  # the run ended on the final approach with the train rolling back (not stood)
     end_forces: tuple = (0.0, 0.0)  # where the run ended: (grade and resistance the train feels, its locomotives' utmost traction) [N]
 
 
@@ -108,7 +108,10 @@ def stopping(plant, reduction, reference, state, planned, ts):
     go; the whole brake beyond it): where the resistance and grades the train feels decelerate it
     more (coasting would stand it short, on a climb) the locomotives pull the difference, each its
     share of its traction envelope (adhesion included when on; all of it when that is not enough);
-    else the planned move's braking is scaled to the brake needed; and the sample ends when the
+    else the planned move's braking is scaled to the brake needed. With air brakes the pipe's delays,
+    build-up and release are anticipated instead (:func:`~ecostudy.heavyhaul.approach.stopping_share`:
+    the share of every brake, or where even coasting stands the train short, of the traction, that
+    stands the head at the stop in the one-mass prediction); and the sample ends when the
     train stands (brakes hold a
     standing train, mean speed under :data:`STANDING`; the cascade plant's efforts are forces, so a
     brake held on for the rest of Ts would push the train back: a piece lasts at most the time the
@@ -120,11 +123,12 @@ def stopping(plant, reduction, reference, state, planned, ts):
         held = float(plant.resistance(now.positions, now.speeds).sum())  # running, grade, curve [N]
         low, high = limits(plant, reduction, now)
         wanted = held - c.mass.sum() * v * v / (2 * d) if d > 0 else 0.0  # [N]: the constant deceleration v^2 / 2d
-        if wanted > 0:  # coasting stands it short (a climb): the locomotives pull that force, within their envelopes
+        if plant.air_brake is not None and d > 0:  # the pipe's delays, build-up and release anticipated (heavyhaul.approach)
+            share, stop_in, pulling = stopping_share(plant, now, reduction.share(low, c.mass),
+                                                     reduction.share(high, c.mass), d)
+            u = share * (high if pulling else low)
+        elif wanted > 0:  # coasting stands it short (a climb): the locomotives pull that force, within their envelopes
             u, stop_in = np.clip(high * (wanted / max(high.sum(), 1.0)), 0.0, high), 2 * d / v
-        elif plant.air_brake is not None and d > 0:  # the pipe's delays and build-up anticipated (heavyhaul.approach)
-            share, stop_in = brake_share(plant, now, reduction.share(low, c.mass), d)
-            u = share * low
         elif d > 0:  # the constant deceleration that stops the head at the stop, for at most its 2d/v
             stop_in = 2 * d / v
             shape = planned if planned.sum() < 0 else low  # else every car the same share of its brakes
@@ -164,7 +168,7 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     c, ts = plant.consist, reduction.model.ts
     nv, locos = len(reduction.members), reduction.locomotives
     u = np.zeros(nv) if applied is None else np.asarray(applied, float)
-    rows, works, overruns, arrived, braking, rolling_back = [], np.zeros(3), 0, False, False, False
+    rows, works, overruns, stood, braking, rolling_back = [], np.zeros(3), 0, False, False, False
     losses, stored = np.zeros(len(LOSSES)), plant.stored_energy(state)
     for _ in range(samples):
         measured = reduced_state(plant, reduction, state)
@@ -199,11 +203,11 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
                      step.largest_coupler_force, step.coupler_forces, u, seconds, step.speed_excess,
                      -low[locos], [values.get(t, np.nan) for t in TERMS], step.adhesion))
         if finished(plant, reference, state):
-            rolling_back = mean_speed(plant, state) <= -STANDING  # it does not stand: not arrived
-            arrived = not rolling_back
+            rolling_back = mean_speed(plant, state) <= -STANDING  # it does not stand
+            stood = not rolling_back
             break
     columns = (np.array(v) for v in zip(*rows))
-    return state, LoopRecord(*columns, *map(float, works), overruns, arrived, tuple(map(float, losses)),
+    return state, LoopRecord(*columns, *map(float, works), overruns, stood, tuple(map(float, losses)),
                              plant.stored_energy(state) - stored, rolling_back, end_forces(plant, reduction, state))
 
 

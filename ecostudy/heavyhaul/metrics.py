@@ -55,9 +55,30 @@ def braking_samples(efforts, locomotives):
     return (efforts.min(axis=1) < -PULLING) & ~pulls
 
 
-def run_metrics(record, reference, locomotives, force_limit):
+def ended(record, stop_error, stop_tolerance):
+    """How a run ended, one of :data:`ENDS`: ``record`` a :class:`~ecostudy.heavyhaul.loop.LoopRecord`,
+    ``stop_error`` the head's end minus the stop [m] (positive beyond), ``stop_tolerance`` [m]."""
+    if record.rolling_back:
+        return "rolling back"
+    if not record.stood:
+        return "sample cap"
+    if abs(stop_error) <= stop_tolerance:
+        return "at the stop"
+    if stop_error > 0:
+        return "beyond the stop"
+    return "stalled short of the stop" if record.end_forces[0] > record.end_forces[1] else "short of the stop"
+
+
+# how a run ended (runs.csv ``ended``); ``arrived`` is True for the first alone
+ENDS = ("at the stop", "short of the stop", "stalled short of the stop", "beyond the stop", "rolling back",
+        "sample cap")
+STOOD = ENDS[:4]  # the train stood on the reference's final approach (its arrival time is a time it stood)
+
+
+def run_metrics(record, reference, locomotives, force_limit, stop_tolerance=Tolerances().stop_m):
     """The checked numbers of a run (units in the names): ``locomotives`` the indices of the
-    locomotive (virtual) cars, ``force_limit`` the consist's coupler limit [N]."""
+    locomotive (virtual) cars, ``force_limit`` the consist's coupler limit [N], ``stop_tolerance``
+    [m] how far from the stop a train that stood has ``arrived``."""
     efforts = record.efforts
     loco = efforts[:, locomotives]
     braking = braking_samples(efforts, locomotives)
@@ -69,12 +90,14 @@ def run_metrics(record, reference, locomotives, force_limit):
     dynamic = np.maximum(-loco, 0.0).sum(axis=1) / np.maximum(record.dynamic_limits.sum(axis=1), 1.0)
     using = dynamic > 1e-3
     terms = np.nansum(record.terms, axis=0)
+    error = float(record.head[-1] - reference.distance[-1])
+    end = ended(record, error, stop_tolerance)
     return {
-        "arrived": bool(record.arrived), "arrival_s": float(record.times[-1]),
+        "arrived": end == ENDS[0], "ended": end, "arrival_s": float(record.times[-1]),
         "arrival_late_s": float(record.times[-1] - reference.running_time),
         "arrival_late_percent": float(100 * (record.times[-1] / reference.running_time - 1)),
-        "stop_error_m": float(record.head[-1] - reference.distance[-1]),
-        **rollback(record.head, reference.distance[-1]),
+        "stop_error_m": error,
+        **rollback(record.head, reference.distance[0], reference.distance[-1]),
         "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
         "speed_at_end_kmh": float(record.mean_speed[-1] / KMH), "rolling_back": bool(record.rolling_back),
         "resistance_at_end_kN": record.end_forces[0] / KN, "traction_utmost_at_end_kN": record.end_forces[1] / KN,
@@ -102,14 +125,18 @@ def adhesion_use(samples):
             "adhesion_use_kmh": float(speed / KMH), "adhesion_use_effort_kN": float(effort / KN)}
 
 
-def rollback(head, stop):
+def rollback(head, start, stop):
     """How far the train rolled back at most (the head at a sample end behind the farthest it had
-    reached before, ``rollback_m`` [m]) and how far before the ``stop`` [m] it stalled there
-    (``stalled_before_stop_m``, the farthest point reached; 0 without a roll back)."""
-    farthest = np.maximum.accumulate(head)
+    reached before, ``rollback_m`` [m]), how far before the ``stop`` [m] it stalled there
+    (``stalled_before_stop_m``, the farthest point reached; 0 without a roll back) and how far past
+    the ``start`` [m] that was (``stalled_after_start_m``: at most 0 when it rolled back from the
+    start before it moved off)."""
+    farthest = np.maximum.accumulate(np.concatenate([[start], head]))[1:]
     back = farthest - head
     i = int(np.argmax(back))
-    return {"rollback_m": float(back[i]), "stalled_before_stop_m": float(stop - farthest[i]) if back[i] > 0 else 0.0}
+    moved = back[i] > 0
+    return {"rollback_m": float(back[i]), "stalled_before_stop_m": float(stop - farthest[i]) if moved else 0.0,
+            "stalled_after_start_m": float(farthest[i] - start) if moved else 0.0}
 
 
 def energy_balance(record):
@@ -161,7 +188,9 @@ def in_train_metrics(history, consist):
 def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     """Why a run is not ok (empty: ok); ``samples`` the cap it ran under."""
     out = []
-    if metrics.get("rollback_m", 0.0) > tolerances.stop_m:
+    if metrics.get("rollback_m", 0.0) > tolerances.stop_m and metrics.get("stalled_after_start_m", np.inf) <= tolerances.stop_m:
+        out.append(f"the train rolled back {metrics['rollback_m']:.0f} m from the start before it moved off")
+    elif metrics.get("rollback_m", 0.0) > tolerances.stop_m:
         out.append(f"the train stalled {metrics['stalled_before_stop_m']:.0f} m before the stop and rolled back "
                    f"{metrics['rollback_m']:.0f} m")
     asked = (f" with the reference at {metrics['reference_at_end_kmh']:.1f} km/h there"  # a stall reads as one
@@ -170,12 +199,12 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     if metrics["stop_error_m"] < 0 and held > utmost:  # it cannot go on
         asked += (f", stalled: the grade and resistance there ({held:.0f} kN) exceed the locomotives' utmost "
                   f"traction ({utmost:.0f} kN)")
-    if metrics.get("rolling_back"):  # the loop ended the run on the final approach: the train did not stand
+    if metrics["ended"] == "rolling back":  # the loop ended the run on the final approach: the train did not stand
         error = metrics["stop_error_m"]
         where = f"{-error:.1f} m before the stop" if error <= 0 else f"{error:.1f} m beyond the stop"
         out.append(f"rolling back at {-metrics['speed_at_end_kmh']:.2f} km/h {where} when the run ended (the loop "
                    f"ends a run under 1 km/h on the reference's final approach){asked}")
-    elif not metrics["arrived"]:
+    elif metrics["ended"] == "sample cap":
         where = (f"{-metrics['stop_error_m']:.0f} m before the stop" if metrics["stop_error_m"] <= 0
                  else f"with the train {metrics['stop_error_m']:.0f} m beyond the stop, not stopped")
         out.append(f"the sample cap ({samples}) came {where}")
@@ -183,7 +212,7 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
         where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
         out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m){asked}")
     late, share = metrics["arrival_late_s"], metrics["arrival_late_percent"]
-    if metrics["arrived"] and share > 100 * tolerances.arrival and late > tolerances.arrival_s:
+    if metrics["ended"] in STOOD and share > 100 * tolerances.arrival and late > tolerances.arrival_s:
         out.append(f"arrived {late:.0f} s ({share:.1f} %) after the reference's running time "
                    f"(tolerance {100 * tolerances.arrival:g} % or {tolerances.arrival_s:g} s, the larger)")
     if metrics["force_max_kN"] > metrics["force_limit_kN"]:

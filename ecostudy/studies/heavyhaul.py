@@ -182,9 +182,9 @@ def drive(case):
     return consist, controller, record, reference, plant
 
 
-def summarise(consist, controller, record, reference, locomotives=()):
+def summarise(consist, controller, record, reference, locomotives=(), stop_tolerance=Tolerances().stop_m):
     """The per-run numbers (SI in, the units in the names out); ``locomotives`` the controller's
-    locomotive (virtual) cars."""
+    locomotive (virtual) cars, ``stop_tolerance`` [m] how near the stop a run has arrived."""
     error = record.mean_speed - record.reference
     forces = np.abs(record.couplers) / KN
     wagons, total = record.wagon_brake_work, record.traction_work + record.dynamic_brake_work + record.wagon_brake_work
@@ -192,7 +192,7 @@ def summarise(consist, controller, record, reference, locomotives=()):
     step = max(1, consist.cars // 100)  # the heat map keeps at most about 100 couplers
     return {
         "tracking_mean_mps": float(np.mean(np.abs(error))), "tracking_std_mps": float(np.std(error)),
-        **run_metrics(record, reference, list(locomotives), consist.force_limit),
+        **run_metrics(record, reference, list(locomotives), consist.force_limit, stop_tolerance),
         "force_mean_kN": float(forces.mean()),
         "force_std_kN": float(forces.std()), "energy_total_kWh": total / KWH,
         "traction_kWh": record.traction_work / KWH, "dynamic_brake_kWh": record.dynamic_brake_work / KWH,
@@ -215,7 +215,7 @@ def run_heavyhaul_case(case):
 
 def _run(case):
     consist, controller, record, reference, plant = drive(case)
-    summary = {**summarise(consist, controller, record, reference, controller.locos),
+    summary = {**summarise(consist, controller, record, reference, controller.locos, case["stop_tolerance_m"]),
                **in_train_metrics(plant.history, consist)}
     why = reasons(summary, case["max_samples"], summary["over_ts"],
                   Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH,
@@ -233,7 +233,7 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
            "adhesion_use_kmh", "adhesion_use_effort_kN", "braking_samples", "stretch_braking_samples",
            "stretch_braking_kWh",
            "speed_excess_kmh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "coupler_damping_kWh", "draft_gear_kWh", "stored_change_kWh",
-           "balance_residual_kWh", "arrived", "arrival_s", "arrival_late_s", "arrival_late_percent", "reference_time_s", "reference_kWh", "stop_error_m", "rollback_m", "stalled_before_stop_m", "reference_at_end_kmh",
+           "balance_residual_kWh", "arrived", "ended", "arrival_s", "arrival_late_s", "arrival_late_percent", "reference_time_s", "reference_kWh", "stop_error_m", "rollback_m", "stalled_before_stop_m", "stalled_after_start_m", "reference_at_end_kmh",
            "speed_at_end_kmh", "rolling_back", "resistance_at_end_kN", "traction_utmost_at_end_kN", "samples", "virtual_cars",
            "qp_inputs", "qp_states", "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts",
            "peak_memory_MB", *IN_TRAIN)
