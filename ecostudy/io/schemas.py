@@ -9,8 +9,8 @@ from typing import Annotated, Literal, Optional, Self, get_args
 
 from pydantic import Field, model_validator
 
-from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
-from ecostudy.io.schemabase import Name as Name, Strict as Strict, increasing as _increasing, unique as _unique
+from ecostudy.core.defaults import FRONT_POINTS, MAX_SUPPLEMENT_PERCENT, RUN_POINTS
+from ecostudy.io.schemabase import Name as Name, Strict as Strict, unique as _unique
 from ecostudy.io.trainschema import (  # re-exported (X as X): schemas is the one place to look
     Braking as Braking, Davis as Davis, EfficiencyTable as EfficiencyTable, ForceTable as ForceTable,
     Regeneration as Regeneration, Traction as Traction, TrainFile as TrainFile, TunnelResistance as TunnelResistance)
@@ -80,7 +80,10 @@ class TrackFile(Strict):
     def _positions(self) -> Self:
         for name in ("stops", "gradients", "curves", "speed_limits"):
             items = getattr(self, name)
-            _increasing([x.position_m for x in items], f"{name} positions")
+            for i, (a, b) in enumerate(zip(items, items[1:]), start=1):
+                if b.position_m <= a.position_m:
+                    raise ValueError(f"{name}[{i}].position_m: {b.position_m:g} m does not follow {name}[{i - 1}]'s "
+                                     f"{a.position_m:g} m (positions must be strictly increasing)")
             if items and items[-1].position_m > self.length_m:
                 raise ValueError(f"{name}: position {items[-1].position_m} m is beyond length_m")
         for name in ("gradients", "speed_limits"):
@@ -151,7 +154,7 @@ class TimetableFile(Strict):
     name: Name
     source: str = ""
     stops: list[TimetableStop] = Field(default_factory=list)
-    supplement_percent: Optional[float] = Field(None, ge=0)
+    supplement_percent: Optional[float] = Field(None, ge=0, le=MAX_SUPPLEMENT_PERCENT)
     windows: list[Window] = Field(default_factory=list)
     track: Optional[str] = Field(None, description="Id of the track the timetable belongs to (TTOBench "
                                  "'associated track'): found beside the timetable when no track is given.")
@@ -186,7 +189,7 @@ class Scenario(Strict):
     train_overrides: dict[str, object] = Field(default_factory=dict,
                                                description="Top-level train fields, e.g. mass_t.")
     running_time_s: Optional[float] = Field(None, gt=0)
-    supplement_percent: Optional[float] = Field(None, ge=0)
+    supplement_percent: Optional[float] = Field(None, ge=0, le=MAX_SUPPLEMENT_PERCENT)
     objective: Optional[Literal["energy", "net_energy", "time", "mixed"]] = None
     points: Optional[int] = Field(None, ge=10, le=100000)
     das: Optional[Literal["round", "phases", "minlp"]] = Field(
@@ -197,7 +200,8 @@ class Sweep(Strict):
     """Values to combine (cartesian product) with every scenario."""
 
     running_time_s: Optional[list[Annotated[float, Field(gt=0)]]] = Field(None, min_length=1)
-    supplement_percent: Optional[list[Annotated[float, Field(ge=0)]]] = Field(None, min_length=1)
+    supplement_percent: Optional[list[Annotated[float, Field(ge=0, le=MAX_SUPPLEMENT_PERCENT)]]] = Field(
+        None, min_length=1)
     points: Optional[list[Annotated[int, Field(ge=10, le=100000)]]] = Field(None, min_length=1)
     objective: Optional[list[Literal["energy", "net_energy", "time", "mixed"]]] = Field(None, min_length=1)
 
@@ -232,7 +236,7 @@ class StudyFile(Strict):
     from_stop: Optional[Name] = Field(None, alias="from")
     to_stop: Optional[Name] = Field(None, alias="to")
     running_time_s: Optional[float] = Field(None, gt=0)
-    supplement_percent: Optional[float] = Field(None, ge=0)
+    supplement_percent: Optional[float] = Field(None, ge=0, le=MAX_SUPPLEMENT_PERCENT)
     window_s: Optional[tuple[float, float]] = None
     objective: Literal["energy", "net_energy", "time", "mixed"] = "energy"
     weights: Weights = Weights()
@@ -253,10 +257,11 @@ class StudyFile(Strict):
         if self.library is not None and (self.track or self.train or self.from_stop or self.to_stop
                                          or self.scenarios or self.timetable or self.windows):
             raise ValueError("a 'library' study names no track, train, from, to, scenarios, timetable or windows")
-        given = [self.running_time_s is not None, self.supplement_percent is not None,
-                 self.window_s is not None, self.timetable is not None]
-        if sum(given) > 1:
-            raise ValueError("give at most one of running_time_s, supplement_percent, window_s, timetable")
+        given = [name for name in ("running_time_s", "supplement_percent", "window_s", "timetable")
+                 if getattr(self, name) is not None]
+        if len(given) > 1:
+            raise ValueError(f"{given[-1]}: {' and '.join(given[:-1])} given too; give at most one of running_time_s, "
+                             "supplement_percent, window_s, timetable")
         if self.window_s is not None and not 0 <= self.window_s[0] <= self.window_s[1]:
             raise ValueError("window_s must be [earliest, latest] with 0 <= earliest <= latest")
         return self
@@ -303,7 +308,8 @@ class NetworkStudyFile(Strict):
     train: Name
     stops: Optional[list[Name]] = Field(None, description="Stops served, in order (default: all).")
     running_times_s: Optional[list[Annotated[float, Field(gt=0)]]] = Field(None, description="Per segment [s].")
-    supplement_percent: Optional[float] = Field(None, ge=0, description="Per segment, over its all-out time.")
+    supplement_percent: Optional[float] = Field(None, ge=0, le=MAX_SUPPLEMENT_PERCENT,
+                                                description="Per segment, over its all-out time.")
     dwell_s: float = Field(20.0, ge=0, le=86400, description="Dwell at each stop [s], within a day.")
     time_step_s: float = Field(0.5, ge=0.05, le=5, description="Simulation step [s], 0.05 to 5.")
     trains: list[FleetTrain] = Field(min_length=1)
