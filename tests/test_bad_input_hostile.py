@@ -81,7 +81,7 @@ def test_a_byte_order_mark_before_json_is_read(tmp_path):
 @pytest.mark.parametrize("options, fragments", [
     # 1e308 s ended in "Ipopt failed (restoration_failed)", exit 3; 1e6 s was solved and flagged (1102 m short)
     (["--time", "1e308"], ["command line: --time", "would crawl"]),
-    (["--time", "1e6"], ["command line: --time", "1000000.0 s is over 3 times"]),
+    (["--time", "1e6"], ["command line: --time", "1000000.0 s is over 5 times"]),
     (["--window", "70,1e308"], ["command line: --window", "would crawl"]),
     (["--supplement", "1e308"], ["command line: --supplement", "at most 200"]),
 ])
@@ -117,3 +117,68 @@ def test_a_study_field_is_named_not_the_top_level(tmp_path, changes, fragments):
     doc.update(changes)
     line = refused(run("solve", write_yaml(tmp_path / "s.yaml", doc), "--no-plot"), *fragments)
     assert "(top level)" not in line and "a folder" not in line
+
+
+TIMETABLE = TRAINS.parent / "studies" / "timetables" / "metro_line.yaml"
+LINE4 = TRACKS / "metro_line_4stops.yaml"
+
+
+def journey(*options):
+    return run("journey", "--track", LINE4, "--train", METRO, "--points", 50, "--no-plot", *options)
+
+
+@pytest.mark.parametrize("old, new, fragments", [
+    # an arrival at 1e308 s: "Var 'T' created with an invalid non-finite lower bound", exit 3
+    ("arrival_s: 276", "arrival_s: 1.0e+308", ["tt.yaml: stops[3].arrival_s", "less than or equal to 604800"]),
+    # leaving a stop before arriving there was solved and flagged
+    ("{stop: Station, arrival_s: 58, dwell_s: 25}", "{stop: Station, arrival_s: 58, departure_s: 40}",
+     ["tt.yaml: stops[1]: departure_s: 40 s is before this stop's arrival_s (58 s)"]),
+    # stops out of track order made a journey that turns back twice (refused only as too fast)
+    ("{stop: Station, arrival_s: 58, dwell_s: 25}\n  - {stop: Centrum, arrival_s: 181",
+     "{stop: Centrum, arrival_s: 58, dwell_s: 25}\n  - {stop: Station, arrival_s: 181",
+     ["tt.yaml: stops: 'Station' lies back toward 'Noord' after 'Centrum'"]),
+])
+def test_a_timetable_that_no_train_can_run_is_named(tmp_path, old, new, fragments):
+    refused(journey("--timetable", edited(tmp_path, TIMETABLE, old, new, "tt.yaml"), "--out", tmp_path / "o"),
+            *fragments)
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_timetable_without_stops_names_the_field(tmp_path):
+    """It was reported at "(top level)"."""
+    path = tmp_path / "tt.yaml"
+    path.write_text("name: empty\nstops: []\n")
+    refused(journey("--timetable", path, "--out", tmp_path / "o"), "tt.yaml: stops: give either")
+
+
+def test_stops_that_turn_back_are_refused(tmp_path):
+    refused(journey("--stops", "Noord,Centrum,Station", "--supplement", 10, "--out", tmp_path / "o"),
+            "command line: --stops", "'Station' lies back toward 'Noord' after 'Centrum'")
+    assert journey("--stops", "Zuid,Centrum,Noord", "--supplement", 10, "--out", tmp_path / "p").exit_code in (0, 1)
+
+
+@pytest.mark.parametrize("options, fragments", [
+    # a total of 1e308 s: "Var 'T' created with an invalid non-finite lower bound", exit 3
+    (["--time", "1e308"], ["would crawl"]),
+    (["--supplement", "10", "--dwell", "1e308"], ["command line: --dwell", "at most 86400"]),
+])
+def test_a_journey_time_without_physical_sense_is_refused(tmp_path, options, fragments):
+    refused(journey(*options, "--out", tmp_path / "o"), *fragments)
+    assert not (tmp_path / "o" / "journey.csv").exists()
+
+
+@pytest.mark.parametrize("changes, fragments", [
+    # a 1 uV substation was simulated and flagged (38.9 kWh not served); 1e308 Ohm ran on past 40 s
+    ({"substation": {"position_m": 1500, "voltage_V": 1e-6}}, ["n.yaml: substation.voltage_V", "100"]),
+    ({"substation": {"position_m": 1500, "internal_resistance_ohm": 1e308}},
+     ["n.yaml: substation.internal_resistance_ohm", "10"]),
+    # stops out of track order: a network of trains turning back
+    ({"stops": ["Noord", "Centrum", "Station"]}, ["n.yaml: stops", "'Station' lies back toward 'Noord'"]),
+])
+def test_a_network_study_without_physical_sense_is_named(tmp_path, changes, fragments):
+    from .conftest import STUDIES, load_yaml, write_yaml
+    doc = load_yaml(STUDIES / "network_metro_2trains.yaml")
+    doc.update(track=str(LINE4), train=str(METRO), output=str(tmp_path / "o"), strategies=["independent"], points=50)
+    doc.update(changes)
+    refused(run("network", write_yaml(tmp_path / "n.yaml", doc), "--no-plot", "--workers", 1), *fragments)
+    assert not (tmp_path / "o").exists()

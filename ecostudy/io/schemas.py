@@ -116,23 +116,31 @@ class Window(Strict):
         return self
 
 
+WEEK_S = 7 * 86400.0
+Clock = Annotated[Optional[float], Field(None, ge=0, le=WEEK_S)]
+"""A time on a journey's clock [s]: 0 at the first departure, within a week."""
+
+
 class TimetableStop(Strict):
     """A stop of the timetable, by name or by track position; times since the journey's start."""
 
     stop: Optional[Name] = None
     position_m: Optional[float] = Field(None, ge=0, description="Instead of 'stop': the stop at this position.")
-    arrival_s: Optional[float] = Field(None, ge=0)
-    departure_s: Optional[float] = Field(None, ge=0)
-    dwell_s: Optional[float] = Field(None, ge=0)
-    earliest_s: Optional[float] = Field(None, ge=0, description="Arrival window: not before [s].")
-    latest_s: Optional[float] = Field(None, ge=0, description="Arrival window: not after [s].")
-    departure_earliest_s: Optional[float] = Field(None, ge=0, description="Departure window: not before [s].")
-    departure_latest_s: Optional[float] = Field(None, ge=0, description="Departure window: not after [s].")
+    arrival_s: Clock = None
+    departure_s: Clock = None
+    dwell_s: Optional[float] = Field(None, ge=0, le=86400, description="Dwell [s], within a day.")
+    earliest_s: Clock = Field(None, description="Arrival window: not before [s].")
+    latest_s: Clock = Field(None, description="Arrival window: not after [s].")
+    departure_earliest_s: Clock = Field(None, description="Departure window: not before [s].")
+    departure_latest_s: Clock = Field(None, description="Departure window: not after [s].")
 
     @model_validator(mode="after")
     def _named(self) -> Self:
         if (self.stop is None) == (self.position_m is None):
             raise ValueError("give either 'stop' (a name) or 'position_m'")
+        if self.arrival_s is not None and self.departure_s is not None and self.departure_s < self.arrival_s:
+            raise ValueError(f"departure_s: {self.departure_s:g} s is before this stop's arrival_s "
+                             f"({self.arrival_s:g} s)")
         lo, hi = self.departure_earliest_s, self.departure_latest_s
         if self.departure_s is not None and (lo is not None or hi is not None):
             raise ValueError("give either 'departure_s' or a departure window (departure_earliest_s/_latest_s)")
@@ -162,9 +170,10 @@ class TimetableFile(Strict):
     @model_validator(mode="after")
     def _one_form(self) -> Self:
         if bool(self.stops) == (self.supplement_percent is not None):
-            raise ValueError("give either 'stops' with times or 'supplement_percent'")
+            field = "supplement_percent" if self.stops else "stops"
+            raise ValueError(f"{field}: give either 'stops' with times or 'supplement_percent'")
         if self.windows and not self.stops:
-            raise ValueError("windows need 'stops'")
+            raise ValueError("windows: windows need 'stops'")
         return self
 
     @property
@@ -271,9 +280,11 @@ class Substation(Strict):
     """One DC substation and its line (Farooqi 2018 §7.2.1, eq. 7.8)."""
 
     position_m: float = Field(description="Line position of the substation [m].")
-    voltage_V: float = Field(750.0, gt=0, description="Source voltage V_s.")
-    internal_resistance_ohm: float = Field(0.01, gt=0, description="R_s.")
-    line_resistance_ohm_per_km: float = Field(0.025, ge=0, description="Farooqi 2018: 25 mOhm/km.")
+    voltage_V: float = Field(750.0, ge=100, le=30000, description="Source voltage V_s, 100 V to 30 kV (DC lines: "
+                             "600 V to 3 kV).")
+    internal_resistance_ohm: float = Field(0.01, gt=0, le=10, description="R_s, at most 10 Ohm.")
+    line_resistance_ohm_per_km: float = Field(0.025, ge=0, le=10, description="Farooqi 2018: 25 mOhm/km; at most "
+                                              "10 Ohm/km.")
     max_voltage_V: Optional[float] = Field(None, gt=0, description="Regeneration cut-off; default V_s 685/600.")
     min_voltage_V: Optional[float] = Field(None, gt=0, description="Lowest pantograph voltage; default 2/3 V_s.")
     max_train_current_A: Optional[float] = Field(None, gt=0, description="Largest current a train draws "

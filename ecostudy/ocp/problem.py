@@ -11,7 +11,7 @@ from typing import Any, Hashable, Iterator, MutableMapping, Protocol, Sequence
 import numpy as np
 
 from ecostudy.core import kinematics
-from ecostudy.core.defaults import MAX_SUPPLEMENT_PERCENT, SLOWEST
+from ecostudy.core.defaults import SLOWEST
 from ecostudy.core.errors import InfeasibleError, SolverError, TooFastError
 from ecostudy.core.grid import Segment, drop_idle_power, make_grid, make_segment, node_limits
 from ecostudy.core.types import Track, Train, Trajectory, Window
@@ -191,7 +191,7 @@ def check_not_crawling(latest: float | None, case: Case) -> None:
     times the fastest envelope's: its energy optimum crawls and fails its re-simulation."""
     if latest is not None and latest > SLOWEST * case.estimate:
         raise TooFastError(f"{latest:.1f} s is over {SLOWEST:g} times the fastest possible run's "
-                           f"{case.estimate:.1f} s: the train would crawl (supplements up to {MAX_SUPPLEMENT_PERCENT:.0f} % are solved)")
+                           f"{case.estimate:.1f} s: the train would crawl")
 
 
 def check_feasible(latest: float | None, t_allout: float) -> None:

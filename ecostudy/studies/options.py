@@ -20,7 +20,7 @@ from ecostudy.studies.cases import load_checked_study
 OPTION_RANGES = {
     "points": (10, 100000, True), "workers": (1, 256, True), "count": (2, 10000, True),
     "weighted": (0, 1000, True), "time": (0.0, None, False), "supplement": (0.0, MAX_SUPPLEMENT_PERCENT, True),
-    "supplement_max": (0.0, MAX_SUPPLEMENT_PERCENT, False), "dwell": (0.0, None, True),
+    "supplement_max": (0.0, MAX_SUPPLEMENT_PERCENT, False), "dwell": (0.0, 86400.0, True),
     "das_time_limit": (0.0, None, False),
 }
 
