@@ -182,3 +182,31 @@ def test_a_network_study_without_physical_sense_is_named(tmp_path, changes, frag
     doc.update(changes)
     refused(run("network", write_yaml(tmp_path / "n.yaml", doc), "--no-plot", "--workers", 1), *fragments)
     assert not (tmp_path / "o").exists()
+
+
+def test_a_closed_loop_window_without_end_is_named(tmp_path):
+    """window_s [0, 1e308]: "OverflowError: cannot convert float infinity to integer", exit 3."""
+    from .conftest import STUDIES, load_yaml, write_yaml
+    doc = load_yaml(STUDIES / "metro_monte_carlo.yaml")
+    doc.update(track=str(AMS), train=str(METRO), output=str(tmp_path / "o"), draws=1, window_s=[0, 1e308],
+               controllers=[{"name": "convex", "kind": "convex"}])
+    refused(run("simulate", write_yaml(tmp_path / "m.yaml", doc), "--no-plot", "--workers", 1, "--no-progress"),
+            "m.yaml: window_s[1]", "less than or equal to 86400")
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("edit, fragment", [
+    # these were reported at "(top level)"
+    (lambda c: c["vehicles"].append({"type": "caboose", "count": 1}), "c.yaml: vehicles: unknown types caboose"),
+    (lambda c: c.update(vehicles=[{"type": "locomotive", "count": 1}]), "c.yaml: vehicles: a consist needs at least two"),
+    (lambda c: c.update(vehicles=[{"type": "wagon", "count": 3}]), "c.yaml: vehicles: a consist needs a locomotive"),
+])
+def test_a_consist_names_its_vehicles_field(tmp_path, edit, fragment):
+    from .conftest import STUDIES, load_yaml, write_yaml
+    doc = load_yaml(STUDIES / "heavyhaul_fence.yaml")
+    consist = load_yaml((STUDIES / doc["consist"]).resolve())
+    edit(consist)
+    doc.update(consist=str(write_yaml(tmp_path / "c.yaml", consist)), track=str((STUDIES / doc["track"]).resolve()),
+               output=str(tmp_path / "o"))
+    refused(run("heavyhaul", write_yaml(tmp_path / "h.yaml", doc), "--no-plot", "--workers", 1, "--no-progress"),
+            fragment)
