@@ -81,7 +81,7 @@ def test_a_byte_order_mark_before_json_is_read(tmp_path):
 @pytest.mark.parametrize("options, fragments", [
     # 1e308 s ended in "Ipopt failed (restoration_failed)", exit 3; 1e6 s was solved and flagged (1102 m short)
     (["--time", "1e308"], ["command line: --time", "would crawl"]),
-    (["--time", "1e6"], ["command line: --time", "1000000.0 s is over 5 times"]),
+    (["--time", "1e6"], ["command line: --time", "1e+06 s is over 5 times"]),
     (["--window", "70,1e308"], ["command line: --window", "would crawl"]),
     (["--supplement", "1e308"], ["command line: --supplement", "at most 200"]),
 ])
@@ -210,3 +210,28 @@ def test_a_consist_names_its_vehicles_field(tmp_path, edit, fragment):
                output=str(tmp_path / "o"))
     refused(run("heavyhaul", write_yaml(tmp_path / "h.yaml", doc), "--no-plot", "--workers", 1, "--no-progress"),
             fragment)
+
+
+@pytest.mark.parametrize("old, new, fragment", [
+    # these were reported at "(top level)"
+    ("effective_mass_t: 142.403", "effective_mass_t: 142.403\nrotating_mass_factor: 0.05",
+     "t.yaml: effective_mass_t: give either"),
+    ("effective_mass_t: 142.403\n", "", "t.yaml: rotating_mass_factor: give either"),
+    ("curve_coefficient_m2ps2: 6.0", "curve_coefficient_m2ps2: 6.0\ncurve_resistance: roeckl",
+     "t.yaml: curve_coefficient_m2ps2: goes with"),
+])
+def test_a_train_check_across_fields_names_its_field(tmp_path, old, new, fragment):
+    assert "(top level)" not in refused(solve(tmp_path, train=edited(tmp_path, METRO, old, new)), fragment)
+
+
+@pytest.mark.parametrize("changes, fragment", [
+    ({"train": None}, "s.yaml: train: give 'track' and 'train'"),
+    ({"running_time_s": None, "window_s": [80, 70]}, "s.yaml: window_s: must be [earliest, latest]"),
+])
+def test_a_study_check_across_fields_names_its_field(tmp_path, changes, fragment):
+    from .conftest import load_yaml, write_yaml
+    doc = load_yaml(TRAINS.parent / "studies" / "default.yaml")
+    doc.update(track=str(AMS), train=str(METRO), points=50, output=str(tmp_path / "o"))
+    doc.update(changes)
+    doc = {k: v for k, v in doc.items() if v is not None}
+    assert "(top level)" not in refused(run("solve", write_yaml(tmp_path / "s.yaml", doc), "--no-plot"), fragment)

@@ -262,17 +262,18 @@ class StudyFile(Strict):
     def _timing(self) -> Self:
         _unique("scenarios", [sc.name for sc in self.scenarios])
         if self.library is None and (self.track is None or self.train is None):
-            raise ValueError("give 'track' and 'train', or a 'library'")
+            raise ValueError(f"{'track' if self.track is None else 'train'}: give 'track' and 'train', or a 'library'")
         if self.library is not None and (self.track or self.train or self.from_stop or self.to_stop
                                          or self.scenarios or self.timetable or self.windows):
-            raise ValueError("a 'library' study names no track, train, from, to, scenarios, timetable or windows")
+            raise ValueError("library: a 'library' study names no track, train, from, to, scenarios, timetable or "
+                             "windows")
         given = [name for name in ("running_time_s", "supplement_percent", "window_s", "timetable")
                  if getattr(self, name) is not None]
         if len(given) > 1:
             raise ValueError(f"{given[-1]}: {' and '.join(given[:-1])} given too; give at most one of running_time_s, "
                              "supplement_percent, window_s, timetable")
         if self.window_s is not None and not 0 <= self.window_s[0] <= self.window_s[1]:
-            raise ValueError("window_s must be [earliest, latest] with 0 <= earliest <= latest")
+            raise ValueError("window_s: must be [earliest, latest] with 0 <= earliest <= latest")
         return self
 
 
@@ -333,7 +334,7 @@ class NetworkStudyFile(Strict):
     @model_validator(mode="after")
     def _choices(self) -> Self:
         if (self.running_times_s is None) == (self.supplement_percent is None):
-            raise ValueError("give exactly one of running_times_s, supplement_percent")
+            raise ValueError("running_times_s: give exactly one of running_times_s, supplement_percent")
         if "following" in self.strategies and self.buffer_m is None:
             raise ValueError("buffer_m: the following strategy needs it")
         _unique("trains", [t.name for t in self.trains])

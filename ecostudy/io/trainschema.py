@@ -203,14 +203,15 @@ class TrainFile(Strict):
     @model_validator(mode="after")
     def _curves_and_tunnels(self) -> Self:
         if self.curve_resistance == "roeckl" and self.curve_coefficient_m2ps2:
-            raise ValueError("curve_coefficient_m2ps2 goes with curve_resistance 'coefficient', not 'roeckl'")
+            raise ValueError("curve_coefficient_m2ps2: goes with curve_resistance 'coefficient', not 'roeckl'")
         _increasing([t.cross_section_m2 for t in self.tunnel_resistance], "tunnel_resistance cross sections")
         return self
 
     @model_validator(mode="after")
     def _mass(self) -> Self:
         if (self.rotating_mass_factor is None) == (self.effective_mass_t is None):
-            raise ValueError("give either 'rotating_mass_factor' or 'effective_mass_t'")
+            field = "effective_mass_t" if self.effective_mass_t is not None else "rotating_mass_factor"
+            raise ValueError(f"{field}: give either 'rotating_mass_factor' or 'effective_mass_t'")
         if self.effective_mass_t is not None and not self.mass_t <= self.effective_mass_t <= 2 * self.mass_t:
             raise ValueError(f"effective_mass_t: {self.effective_mass_t:g} t must lie between mass_t and twice it "
                              f"({self.mass_t:g} to {2 * self.mass_t:g} t): the rotating masses add a share of the "

@@ -190,7 +190,7 @@ def check_not_crawling(latest: float | None, case: Case) -> None:
     """Refuse, before solving, a running time (or a window's latest arrival) over :data:`SLOWEST`
     times the fastest envelope's: its energy optimum crawls and fails its re-simulation."""
     if latest is not None and latest > SLOWEST * case.estimate:
-        raise TooFastError(f"{latest:.1f} s is over {SLOWEST:g} times the fastest possible run's "
+        raise TooFastError(f"{latest:.6g} s is over {SLOWEST:g} times the fastest possible run's "
                            f"{case.estimate:.1f} s: the train would crawl")
 
 

@@ -283,7 +283,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
         if total_time < 0.99 * fastest:  # the kinematic all-out times: refused before any front is solved
             too_short(total_time, fastest, " (kinematic envelope)")
         if total_time > SLOWEST * fastest:
-            raise InfeasibleError(f"the total time {total_time:.1f} s is over {SLOWEST:g} times the sum of the fastest "
+            raise InfeasibleError(f"the total time {total_time:.6g} s is over {SLOWEST:g} times the sum of the fastest "
                                   f"runs' {fastest:.1f} s (kinematic envelope): the train would crawl")
         mean = max(total_time / fastest - 1.0, 0.0)
     reach = max(0.6, 2.5 * mean)
