@@ -235,3 +235,15 @@ def test_a_study_check_across_fields_names_its_field(tmp_path, changes, fragment
     doc.update(changes)
     doc = {k: v for k, v in doc.items() if v is not None}
     assert "(top level)" not in refused(run("solve", write_yaml(tmp_path / "s.yaml", doc), "--no-plot"), fragment)
+
+
+def test_a_network_leg_that_would_crawl_names_its_segment(tmp_path):
+    """running_times_s [60, 1e308, 100]: "OverflowError: cannot convert float infinity to integer", exit 3."""
+    from .conftest import STUDIES, load_yaml, write_yaml
+    doc = load_yaml(STUDIES / "network_metro_2trains.yaml")
+    doc.pop("supplement_percent")
+    doc.update(track=str(LINE4), train=str(METRO), output=str(tmp_path / "o"), strategies=["independent"], points=50,
+               running_times_s=[60, 1e308, 100])
+    refused(run("network", write_yaml(tmp_path / "n.yaml", doc), "--no-plot", "--workers", 1),
+            "n.yaml: running_times_s[1]", "would crawl")
+    assert not (tmp_path / "o").exists()
