@@ -239,7 +239,7 @@ def probes(tmp, src):
         refused("alias bomb"), None, 30
 
     yield "runaway", "network leg 1e7 s", ["network", network(tmp, "n1e7", running_times_s=[1e7, 200, 120]),
-                                           "--no-plot"], refused("28 days", "--force"), None, 60
+                                           "--no-plot"], refused("running_times_s[0]", "would crawl"), None, 60
     yield "runaway", "controller sample time 1e-4 s", [
         "simulate", loop_study(tmp, "ts", sample_time_s=1e-4), "--no-progress", "--no-plot"], refused(), None, 120
     yield "runaway", "convex controller at 20 000 points", [

@@ -58,6 +58,12 @@ def swapped(lines, a, b):
     return lines
 
 
+def named_cell(lines, row, column, value):
+    cells = lines[row].split(",")
+    cells[lines[0].split(",").index(column)] = value
+    return lines[:row] + [",".join(cells)] + lines[row + 1:]
+
+
 def first_cell(lines, row, value):
     return lines[:row] + [",".join([value] + lines[row].split(",")[1:])] + lines[row + 1:]
 
@@ -273,6 +279,10 @@ def test_export_refuses_a_step_too_small_with_its_row_count(saved, every, fragme
     ("profile.csv", lambda ls: swapped(ls, 4, 11), ["profile.csv: position_m, row 6", "the rows must increase"]),
     ("advice.csv", lambda ls: first_cell(ls, 1, "here"), ["advice.csv: start_position_m, row 2", "'here'"]),
     ("advice.csv", lambda ls: first_cell(ls, 2, "nan"), ["advice.csv: start_position_m, row 3", "'nan'"]),
+    # a negative speed was exported; a summary that is no mapping was blamed on inputs.json
+    ("profile.csv", lambda ls: named_cell(ls, 5, "speed_kmh", "-5"), ["profile.csv: speed_kmh, row 6", "-5 is below 0"]),
+    ("profile.csv", lambda ls: named_cell(ls, 3, "braking_force_kN", "-20"), ["braking_force_kN, row 4", "below 0"]),
+    ("summary.json", lambda ls: ["[1, 2]"], ["summary.json: not a result folder", "expected a mapping"]),
 ])
 def test_export_refuses_a_damaged_folder_in_one_line(saved, tmp_path, name, edit, fragments):
     folder = damaged(saved, tmp_path, name, edit)

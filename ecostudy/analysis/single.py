@@ -22,6 +22,7 @@ from ecostudy.ocp.problem import (
     all_out,
     capped_guess,
     check_feasible,
+    check_not_crawling,
     check_windows,
     prepare,
     solve_once,
@@ -96,6 +97,7 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     check_windows(case)
     target, window, t_allout = timing.running_time, timing.window, None
     latest = target if target is not None else (window[1] if window else None)
+    check_not_crawling(latest, case)
     if objective == "time" or timing.supplement is not None or (latest is not None and latest < 0.97 * case.estimate):
         t_allout, m, outcome = all_out(case, stages, options)
         if timing.supplement is not None:

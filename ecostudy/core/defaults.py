@@ -15,3 +15,14 @@ FRONT_POINTS = 500
 study file, ``api.pareto``), a journey's segment fronts, a network's per-segment starting runs, a
 re-planner (``api.replanner``) and the runs drawn by a calibration's savings estimate. Half of
 :data:`RUN_POINTS`: a command that solves many runs trades some grid accuracy for time."""
+
+SLOWEST = 5.0
+"""The longest running time a run is solved for, as a multiple of its fastest envelope's (the
+kinematic all-out estimate). Slower, the energy optimum crawls: on the metro case at K = 100, whose
+fastest envelope takes 71.6 s, 350 s passed the re-simulation, 450 s missed its arrival tolerance
+and 550 s stopped 1 km short of its stop (``ecostudy solve --track tracks/amsterdam_rokin_centraal.yaml
+--train trains/amsterdam_metro.yaml --time 550 --points 100``)."""
+
+MAX_SUPPLEMENT_PERCENT = 200.0
+"""The largest running-time supplement over the all-out time a file or an option may give [%]
+(a Pareto front's reach too); no timetable asks for more."""

@@ -26,8 +26,8 @@ class InfeasibleError(InputError):
 
 
 class TooFastError(InfeasibleError):
-    """The time asked for is below the fastest possible run's: the timing's fault, not the train's or
-    the line's (those raise :class:`InfeasibleError`)."""
+    """The time asked for is below the fastest possible run's (or so far above it that the train would
+    crawl): the timing's fault, not the train's or the line's (those raise :class:`InfeasibleError`)."""
 
 
 class SolverError(EcostudyError):

@@ -109,9 +109,9 @@ class ConsistFile(Strict):
     def _known(self) -> Self:
         unknown = sorted({g.type for g in self.vehicles} - set(self.types))
         if unknown:
-            raise ValueError(f"vehicles name unknown types: {', '.join(unknown)} (types: {', '.join(self.types)})")
+            raise ValueError(f"vehicles: unknown types {', '.join(unknown)} (types: {', '.join(self.types)})")
         if sum(g.count for g in self.vehicles) < 2:
-            raise ValueError("a consist needs at least two vehicles (one coupler)")
+            raise ValueError("vehicles: a consist needs at least two vehicles (one coupler)")
         if not any(self.types[g.type].kind == "locomotive" for g in self.vehicles):
-            raise ValueError("a consist needs a locomotive")
+            raise ValueError("vehicles: a consist needs a locomotive")
         return self

@@ -33,15 +33,29 @@ def split_selector(path: Where) -> tuple[Path, str | None]:
     return Path(text), None
 
 
+def not_a_file(path: Path) -> str:
+    """Why ``path`` cannot be read as a file: a folder, a symbolic link that leads nowhere (to a
+    missing target, or round in a loop), something that is not a regular file (a device, a pipe),
+    or nothing there."""
+    if path.is_dir():
+        return "a folder, not a file"
+    if path.is_symlink():
+        return "a symbolic link that leads nowhere (its target is missing, or the links form a loop)"
+    if path.exists():
+        return "not a regular file (a device, a pipe or a socket)"
+    return "file not found"
+
+
 def named_file(study: Where, field: str, name: Where) -> Path:
     """The file ``name`` that the study file ``study`` gives in ``field`` (relative to the study file's
     folder; ``file#selector`` keeps its selector); one that is not there is refused in one line naming
     the study file and the field."""
+    if not str(name).strip():
+        raise InputError(problem(study, field, "an empty file name"))
     path = Path(study).parent / name
     file = split_selector(path)[0]
     if not file.is_file():
-        what = "a folder, not a file" if file.is_dir() else "file not found"
-        raise InputError(problem(study, field, f"'{name}': {what}" + ("" if Path(name).is_absolute() else f" ({file})")))
+        raise InputError(problem(study, field, f"'{name}': {not_a_file(file)}" + ("" if Path(name).is_absolute() else f" ({file})")))
     return path
 
 
@@ -53,12 +67,12 @@ def read_document(path: str | PathLike[str]) -> dict[str, Any]:
     :mod:`ecostudy.io.yamlsafe`."""
     path = Path(path)
     if not path.is_file():
-        raise InputError(problem(path, "", "a folder, not a file" if path.is_dir() else "file not found"))
+        raise InputError(problem(path, "", not_a_file(path)))
     if path.stat().st_size > MAX_FILE_BYTES:
         raise InputError(problem(path, "", f"file of {path.stat().st_size / 1e6:.0f} MB is larger than the "
                                  f"{MAX_FILE_BYTES / 1e6:.0f} MB ecostudy reads"))
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = path.read_bytes().decode("utf-8-sig")  # a byte order mark (Windows editors) is dropped
     except UnicodeDecodeError as exc:
         raise InputError(problem(path, "", f"not UTF-8 text (byte {exc.start}: {exc.reason})"))
     try:

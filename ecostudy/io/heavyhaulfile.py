@@ -6,6 +6,7 @@ from typing import Annotated, Any, Literal, Optional, Self
 
 from pydantic import Field, field_validator, model_validator
 
+from ecostudy.core.defaults import MAX_SUPPLEMENT_PERCENT
 from ecostudy.io.schemabase import Name, Strict
 
 
@@ -20,7 +21,7 @@ class ReferenceSpec(Strict):
     ``supplement_percent`` over the all-out time, or a user's ``table`` (CSV: distance_m, speed_kmh)."""
 
     running_time_s: Optional[float] = Field(None, gt=0, le=1e6)
-    supplement_percent: Optional[float] = Field(None, ge=0, le=200)
+    supplement_percent: Optional[float] = Field(None, ge=0, le=MAX_SUPPLEMENT_PERCENT)
     table: Optional[str] = Field(None, description="CSV with columns distance_m, speed_kmh (relative to the study).")
     points: int = Field(500, ge=50, le=20000, description="K of the single-mass NLP.")
     service_deceleration_mps2: float = Field(0.3, gt=0, le=3, description="The single mass brakes at most this "

@@ -19,12 +19,8 @@ from ecostudy.core.types import Consist, Supply, Timing, Track, Train, Window
 from ecostudy.io import schemas
 from ecostudy.io.consistschema import ConsistFile
 from ecostudy.io.intrain import in_train_physics
-from ecostudy.io.formats import (
-    timetable_document_to_schema,
-    track_document_to_schema,
-    train_document_to_schema,
-)
-from ecostudy.io.timetable import name_stops, off_clock, windows_from_schema
+from ecostudy.io.formats import timetable_document_to_schema, track_document_to_schema, train_document_to_schema
+from ecostudy.io.timetable import name_stops, off_clock, turning_back, windows_from_schema
 from ecostudy.io.documents import (Where, given, named_file, read_document as read_document,  # re-exported
                                    split_selector, validate as validate)
 
@@ -254,6 +250,7 @@ def check_stop_list(track: Track, names: Sequence[str], where: Where, field: str
     if not lines and len(names) < 2:
         lines.append(problem(where, field, f"need two or more stops (track '{track.name}' has: "
                              + ", ".join(track.stops) + ")"))
+    lines += [] if lines else [problem(where, field, back) for back in [turning_back(track, names)] if back]
     if lines:
         raise InputError(lines)
 

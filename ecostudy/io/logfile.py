@@ -43,7 +43,7 @@ from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.types import Track
 from ecostudy.core.units import FloatArray
-from ecostudy.io.documents import named_file, validate
+from ecostudy.io.documents import named_file, not_a_file, validate
 from ecostudy.io.schemabase import Strict
 from ecostudy.io.writers import atomic_write
 from ecostudy.io.yamlsafe import MAX_FILE_BYTES, DocumentError, load_yaml
@@ -319,7 +319,7 @@ def load_log(path: Where) -> "LoggedRun":
     """Read a logged run (:func:`parse_log`); a missing, too large or non-UTF-8 file is one line."""
     file = Path(path)
     if not file.is_file():
-        raise InputError(problem(file, "", "file not found"))
+        raise InputError(problem(file, "", not_a_file(file)))
     if file.stat().st_size > MAX_FILE_BYTES:
         raise InputError(problem(file, "", f"larger than the {MAX_FILE_BYTES / 1e6:.0f} MB ecostudy reads"))
     try:

@@ -154,7 +154,8 @@ class SimulateFile(Strict):
     train: Name
     from_stop: Optional[str] = Field(None, alias="from")
     to_stop: Optional[str] = Field(None, alias="to")
-    window_s: tuple[float, float] = Field(description="Arrival window [T_min, T_max] on the trip's clock [s].")
+    window_s: tuple[Annotated[float, Field(le=86400)], Annotated[float, Field(le=86400)]] = Field(
+        description="Arrival window [T_min, T_max] on the trip's clock [s], within a day.")
     points: int = Field(500, ge=10, le=20000, description="K, the controller's grid nodes.")
     sample_time_s: float = Field(0.1, gt=0, le=60, description="Controller period; also its real-time budget.")
     controllers: list[Controller] = Field(min_length=1)

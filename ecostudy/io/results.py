@@ -63,9 +63,12 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     except (OSError, ValueError) as exc:
         raise InputError(problem(result_dir, "", f"not a result folder of `ecostudy solve` ({exc})"))
     points = inputs.get("points") if isinstance(inputs, dict) else None
-    if not isinstance(points, int) or isinstance(points, bool) or not isinstance(summary, dict):
+    if not isinstance(points, int) or isinstance(points, bool):
         raise InputError(problem(result_dir / "inputs.json", "points", "not a result folder of `ecostudy solve` "
                                  "(no grid size)"))
+    if not isinstance(summary, dict):
+        raise InputError(problem(result_dir / "summary.json", "", "not a result folder of `ecostudy solve` "
+                                 "(expected a mapping of fields)"))
     p = number_columns(result_dir / "profile.csv", PROFILE_COLUMNS, rows=points,
                        open_last=("traction_force_kN", "braking_force_kN", "handle"))
     for column, strictly in (("position_m", True), ("time_s", False)):  # rows out of order: a run read backwards
@@ -74,6 +77,11 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
         if back.size:
             raise InputError(problem(result_dir / "profile.csv", f"{column}, row {back[0] + 3}", f"{p[column][back[0] + 1]:g} "
                                      f"after {p[column][back[0]]:g}: the rows must {'increase' if strictly else 'not decrease'}"))
+    for column in ("speed_kmh", "traction_force_kN", "braking_force_kN"):  # the solver's noise is far smaller
+        below = np.flatnonzero(p[column] < -NOISE)
+        if below.size:
+            raise InputError(problem(result_dir / "profile.csv", f"{column}, row {below[0] + 2}",
+                                     f"{p[column][below[0]]:g} is below 0 (a speed and each force are >= 0)"))
     trajectory = Trajectory(p["position_m"], p["speed_kmh"] * KMH, np.diff(p["time_s"]),
                             p["traction_force_kN"][:-1] * KN, p["braking_force_kN"][:-1] * KN)
     advice: pd.DataFrame | None = None
@@ -94,4 +102,5 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     return SavedRun(inputs, summary, trajectory, p["handle"][:-1], advice)
 
 
+NOISE = 1e-3  # [km/h, kN] below -NOISE a saved speed or force is an edit, not the solver's rounding
 PROFILE_COLUMNS = ("position_m", "time_s", "speed_kmh", "traction_force_kN", "braking_force_kN", "handle")

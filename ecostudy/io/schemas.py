@@ -9,8 +9,8 @@ from typing import Annotated, Literal, Optional, Self, get_args
 
 from pydantic import Field, model_validator
 
-from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
-from ecostudy.io.schemabase import Name as Name, Strict as Strict, increasing as _increasing, unique as _unique
+from ecostudy.core.defaults import FRONT_POINTS, MAX_SUPPLEMENT_PERCENT, RUN_POINTS
+from ecostudy.io.schemabase import Name as Name, Strict as Strict, unique as _unique
 from ecostudy.io.trainschema import (  # re-exported (X as X): schemas is the one place to look
     Braking as Braking, Davis as Davis, EfficiencyTable as EfficiencyTable, ForceTable as ForceTable,
     Regeneration as Regeneration, Traction as Traction, TrainFile as TrainFile, TunnelResistance as TunnelResistance)
@@ -80,7 +80,10 @@ class TrackFile(Strict):
     def _positions(self) -> Self:
         for name in ("stops", "gradients", "curves", "speed_limits"):
             items = getattr(self, name)
-            _increasing([x.position_m for x in items], f"{name} positions")
+            for i, (a, b) in enumerate(zip(items, items[1:]), start=1):
+                if b.position_m <= a.position_m:
+                    raise ValueError(f"{name}[{i}].position_m: {b.position_m:g} m does not follow {name}[{i - 1}]'s "
+                                     f"{a.position_m:g} m (positions must be strictly increasing)")
             if items and items[-1].position_m > self.length_m:
                 raise ValueError(f"{name}: position {items[-1].position_m} m is beyond length_m")
         for name in ("gradients", "speed_limits"):
@@ -113,23 +116,31 @@ class Window(Strict):
         return self
 
 
+WEEK_S = 7 * 86400.0
+Clock = Annotated[Optional[float], Field(None, ge=0, le=WEEK_S)]
+"""A time on a journey's clock [s]: 0 at the first departure, within a week."""
+
+
 class TimetableStop(Strict):
     """A stop of the timetable, by name or by track position; times since the journey's start."""
 
     stop: Optional[Name] = None
     position_m: Optional[float] = Field(None, ge=0, description="Instead of 'stop': the stop at this position.")
-    arrival_s: Optional[float] = Field(None, ge=0)
-    departure_s: Optional[float] = Field(None, ge=0)
-    dwell_s: Optional[float] = Field(None, ge=0)
-    earliest_s: Optional[float] = Field(None, ge=0, description="Arrival window: not before [s].")
-    latest_s: Optional[float] = Field(None, ge=0, description="Arrival window: not after [s].")
-    departure_earliest_s: Optional[float] = Field(None, ge=0, description="Departure window: not before [s].")
-    departure_latest_s: Optional[float] = Field(None, ge=0, description="Departure window: not after [s].")
+    arrival_s: Clock = None
+    departure_s: Clock = None
+    dwell_s: Optional[float] = Field(None, ge=0, le=86400, description="Dwell [s], within a day.")
+    earliest_s: Clock = Field(None, description="Arrival window: not before [s].")
+    latest_s: Clock = Field(None, description="Arrival window: not after [s].")
+    departure_earliest_s: Clock = Field(None, description="Departure window: not before [s].")
+    departure_latest_s: Clock = Field(None, description="Departure window: not after [s].")
 
     @model_validator(mode="after")
     def _named(self) -> Self:
         if (self.stop is None) == (self.position_m is None):
             raise ValueError("give either 'stop' (a name) or 'position_m'")
+        if self.arrival_s is not None and self.departure_s is not None and self.departure_s < self.arrival_s:
+            raise ValueError(f"departure_s: {self.departure_s:g} s is before this stop's arrival_s "
+                             f"({self.arrival_s:g} s)")
         lo, hi = self.departure_earliest_s, self.departure_latest_s
         if self.departure_s is not None and (lo is not None or hi is not None):
             raise ValueError("give either 'departure_s' or a departure window (departure_earliest_s/_latest_s)")
@@ -151,7 +162,7 @@ class TimetableFile(Strict):
     name: Name
     source: str = ""
     stops: list[TimetableStop] = Field(default_factory=list)
-    supplement_percent: Optional[float] = Field(None, ge=0)
+    supplement_percent: Optional[float] = Field(None, ge=0, le=MAX_SUPPLEMENT_PERCENT)
     windows: list[Window] = Field(default_factory=list)
     track: Optional[str] = Field(None, description="Id of the track the timetable belongs to (TTOBench "
                                  "'associated track'): found beside the timetable when no track is given.")
@@ -159,9 +170,10 @@ class TimetableFile(Strict):
     @model_validator(mode="after")
     def _one_form(self) -> Self:
         if bool(self.stops) == (self.supplement_percent is not None):
-            raise ValueError("give either 'stops' with times or 'supplement_percent'")
+            field = "supplement_percent" if self.stops else "stops"
+            raise ValueError(f"{field}: give either 'stops' with times or 'supplement_percent'")
         if self.windows and not self.stops:
-            raise ValueError("windows need 'stops'")
+            raise ValueError("windows: windows need 'stops'")
         return self
 
     @property
@@ -186,7 +198,7 @@ class Scenario(Strict):
     train_overrides: dict[str, object] = Field(default_factory=dict,
                                                description="Top-level train fields, e.g. mass_t.")
     running_time_s: Optional[float] = Field(None, gt=0)
-    supplement_percent: Optional[float] = Field(None, ge=0)
+    supplement_percent: Optional[float] = Field(None, ge=0, le=MAX_SUPPLEMENT_PERCENT)
     objective: Optional[Literal["energy", "net_energy", "time", "mixed"]] = None
     points: Optional[int] = Field(None, ge=10, le=100000)
     das: Optional[Literal["round", "phases", "minlp"]] = Field(
@@ -197,7 +209,8 @@ class Sweep(Strict):
     """Values to combine (cartesian product) with every scenario."""
 
     running_time_s: Optional[list[Annotated[float, Field(gt=0)]]] = Field(None, min_length=1)
-    supplement_percent: Optional[list[Annotated[float, Field(ge=0)]]] = Field(None, min_length=1)
+    supplement_percent: Optional[list[Annotated[float, Field(ge=0, le=MAX_SUPPLEMENT_PERCENT)]]] = Field(
+        None, min_length=1)
     points: Optional[list[Annotated[int, Field(ge=10, le=100000)]]] = Field(None, min_length=1)
     objective: Optional[list[Literal["energy", "net_energy", "time", "mixed"]]] = Field(None, min_length=1)
 
@@ -232,7 +245,7 @@ class StudyFile(Strict):
     from_stop: Optional[Name] = Field(None, alias="from")
     to_stop: Optional[Name] = Field(None, alias="to")
     running_time_s: Optional[float] = Field(None, gt=0)
-    supplement_percent: Optional[float] = Field(None, ge=0)
+    supplement_percent: Optional[float] = Field(None, ge=0, le=MAX_SUPPLEMENT_PERCENT)
     window_s: Optional[tuple[float, float]] = None
     objective: Literal["energy", "net_energy", "time", "mixed"] = "energy"
     weights: Weights = Weights()
@@ -249,16 +262,18 @@ class StudyFile(Strict):
     def _timing(self) -> Self:
         _unique("scenarios", [sc.name for sc in self.scenarios])
         if self.library is None and (self.track is None or self.train is None):
-            raise ValueError("give 'track' and 'train', or a 'library'")
+            raise ValueError(f"{'track' if self.track is None else 'train'}: give 'track' and 'train', or a 'library'")
         if self.library is not None and (self.track or self.train or self.from_stop or self.to_stop
                                          or self.scenarios or self.timetable or self.windows):
-            raise ValueError("a 'library' study names no track, train, from, to, scenarios, timetable or windows")
-        given = [self.running_time_s is not None, self.supplement_percent is not None,
-                 self.window_s is not None, self.timetable is not None]
-        if sum(given) > 1:
-            raise ValueError("give at most one of running_time_s, supplement_percent, window_s, timetable")
+            raise ValueError("library: a 'library' study names no track, train, from, to, scenarios, timetable or "
+                             "windows")
+        given = [name for name in ("running_time_s", "supplement_percent", "window_s", "timetable")
+                 if getattr(self, name) is not None]
+        if len(given) > 1:
+            raise ValueError(f"{given[-1]}: {' and '.join(given[:-1])} given too; give at most one of running_time_s, "
+                             "supplement_percent, window_s, timetable")
         if self.window_s is not None and not 0 <= self.window_s[0] <= self.window_s[1]:
-            raise ValueError("window_s must be [earliest, latest] with 0 <= earliest <= latest")
+            raise ValueError("window_s: must be [earliest, latest] with 0 <= earliest <= latest")
         return self
 
 
@@ -266,9 +281,11 @@ class Substation(Strict):
     """One DC substation and its line (Farooqi 2018 §7.2.1, eq. 7.8)."""
 
     position_m: float = Field(description="Line position of the substation [m].")
-    voltage_V: float = Field(750.0, gt=0, description="Source voltage V_s.")
-    internal_resistance_ohm: float = Field(0.01, gt=0, description="R_s.")
-    line_resistance_ohm_per_km: float = Field(0.025, ge=0, description="Farooqi 2018: 25 mOhm/km.")
+    voltage_V: float = Field(750.0, ge=100, le=30000, description="Source voltage V_s, 100 V to 30 kV (DC lines: "
+                             "600 V to 3 kV).")
+    internal_resistance_ohm: float = Field(0.01, gt=0, le=10, description="R_s, at most 10 Ohm.")
+    line_resistance_ohm_per_km: float = Field(0.025, ge=0, le=10, description="Farooqi 2018: 25 mOhm/km; at most "
+                                              "10 Ohm/km.")
     max_voltage_V: Optional[float] = Field(None, gt=0, description="Regeneration cut-off; default V_s 685/600.")
     min_voltage_V: Optional[float] = Field(None, gt=0, description="Lowest pantograph voltage; default 2/3 V_s.")
     max_train_current_A: Optional[float] = Field(None, gt=0, description="Largest current a train draws "
@@ -303,7 +320,8 @@ class NetworkStudyFile(Strict):
     train: Name
     stops: Optional[list[Name]] = Field(None, description="Stops served, in order (default: all).")
     running_times_s: Optional[list[Annotated[float, Field(gt=0)]]] = Field(None, description="Per segment [s].")
-    supplement_percent: Optional[float] = Field(None, ge=0, description="Per segment, over its all-out time.")
+    supplement_percent: Optional[float] = Field(None, ge=0, le=MAX_SUPPLEMENT_PERCENT,
+                                                description="Per segment, over its all-out time.")
     dwell_s: float = Field(20.0, ge=0, le=86400, description="Dwell at each stop [s], within a day.")
     time_step_s: float = Field(0.5, ge=0.05, le=5, description="Simulation step [s], 0.05 to 5.")
     trains: list[FleetTrain] = Field(min_length=1)
@@ -316,7 +334,7 @@ class NetworkStudyFile(Strict):
     @model_validator(mode="after")
     def _choices(self) -> Self:
         if (self.running_times_s is None) == (self.supplement_percent is None):
-            raise ValueError("give exactly one of running_times_s, supplement_percent")
+            raise ValueError("running_times_s: give exactly one of running_times_s, supplement_percent")
         if "following" in self.strategies and self.buffer_m is None:
             raise ValueError("buffer_m: the following strategy needs it")
         _unique("trains", [t.name for t in self.trains])

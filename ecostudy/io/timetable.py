@@ -29,7 +29,8 @@ def name_stops(tt: schemas.TimetableFile, track: Track, path: Where) -> tuple[sc
     """(``tt`` with every stop given by position named after the track's stop there, the track).
 
     A position that is no stop of the track becomes one (named ``at_<position>m``), so a journey
-    may stop anywhere (TTOBench journeys do): the returned track has it among its stops.
+    may stop anywhere (TTOBench journeys do): the returned track has it among its stops. Stops that
+    turn back (:func:`turning_back`) are refused.
     """
     rows: list[schemas.TimetableStop] = []
     lines: list[str] = []
@@ -55,7 +56,21 @@ def name_stops(tt: schemas.TimetableFile, track: Track, path: Where) -> tuple[sc
     if added:
         stops = dict(sorted({**track.stops, **added}.items(), key=lambda kv: kv[1]))
         track = replace(track, stops=stops)
+    back = turning_back(track, [str(row.stop) for row in rows])
+    if back is not None:
+        raise InputError(problem(path, "stops", back))
     return tt.model_copy(update={"stops": rows}), track
+
+
+def turning_back(track: Track, names: Sequence[str]) -> str | None:
+    """What is wrong with the first stop of ``names`` (known stops of ``track``, in journey order) that
+    lies back the way the journey came, or None: a journey runs one way along the track."""
+    x = [track.stops[n] for n in names]
+    for i in range(2, len(x)):
+        if (x[i] - x[i - 1]) * (x[i - 1] - x[i - 2]) < 0:
+            return (f"'{names[i]}' lies back toward '{names[i - 2]}' after '{names[i - 1]}': a journey runs one way "
+                    "along the track (list its stops in track order, either way)")
+    return None
 
 
 @dataclass(frozen=True)

@@ -10,6 +10,9 @@ MAX_TABLE_POINTS = 5000
 # solve time per table point and grid node: the Amsterdam metro with its traction table resampled
 # to 500 and 2000 points took 11.6 s and 36.0 s at K = 300 (8 points: 2.6 s), on a shared machine
 SECONDS_PER_POINT_NODE = 6e-5
+MAX_ACCELERATION = 10.0  # [m/s^2] about 1 g: wheels on rails transmit a third of it; more is a unit slip
+MIN_DECELERATION = 0.1  # [m/s^2] a net bound below it leaves a train that cannot stop, not one that brakes gently
+MAX_CURVE_COEFFICIENT = 100.0  # [m^2/s^2] lambda_t: 600 m g / 1000 (the usual 600 / r in N/kN) is 5.9
 
 
 class ForceTable(Strict):
@@ -83,7 +86,7 @@ class Traction(Strict):
 class Braking(Traction):
     """Service braking: a table, a maximum force (and power), or a maximum deceleration."""
 
-    max_deceleration_mps2: Optional[float] = Field(None, gt=0)
+    max_deceleration_mps2: Optional[float] = Field(None, gt=0, le=MAX_ACCELERATION)
 
     @model_validator(mode="after")
     def _one_form(self) -> Self:
@@ -161,8 +164,9 @@ class TrainFile(Strict):
     name: Name
     source: str = Field(description="Where the numbers come from.")
     mass_t: float = Field(ge=1, le=100000, description="Static mass Ms [t] (1 t to 100 000 t).")
-    rotating_mass_factor: Optional[float] = Field(None, ge=0, description="M = Ms (1 + factor).")
-    effective_mass_t: Optional[float] = Field(None, gt=0, description="Effective mass M [t].")
+    rotating_mass_factor: Optional[float] = Field(None, ge=0, le=1, description="M = Ms (1 + factor), at most 1 "
+                                                  "(a share: 0.06, not 1.06 or per cent).")
+    effective_mass_t: Optional[float] = Field(None, gt=0, description="Effective mass M [t], mass_t to twice it.")
     length_m: float = Field(ge=0, description="Train length [m]; 0 for a point mass.")
     davis: Davis
     traction: Traction
@@ -173,14 +177,17 @@ class TrainFile(Strict):
         None, description="Efficiency over speed and force instead of the constant (net energy and its check; "
         "formulations that cannot use it keep traction_efficiency and say so).")
     regenerative_braking: Optional[Regeneration] = None
-    curve_coefficient_m2ps2: float = Field(0.0, ge=0, description="lambda_t of Farooqi 2018 eq. 2.2.")
+    curve_coefficient_m2ps2: float = Field(0.0, ge=0, le=MAX_CURVE_COEFFICIENT,
+                                           description="lambda_t of Farooqi 2018 eq. 2.2 (about 6).")
     curve_resistance: Literal["coefficient", "roeckl"] = Field(
         "coefficient", description="'coefficient': Ms lambda_t / r (Farooqi 2018 eq. 2.2); 'roeckl': Roeckl's "
         "formula, as ms-eetc (TTOBench's reference implementation) uses it.")
     tunnel_resistance: list[TunnelResistance] = Field(default_factory=list)
     max_speed_kmh: Optional[float] = Field(None, gt=0, le=1000, description="The train's top speed: caps every limit.")
-    max_acceleration_mps2: Optional[float] = Field(None, gt=0, description="Bound on the net acceleration.")
-    max_deceleration_mps2: Optional[float] = Field(None, gt=0, description="Bound on the net deceleration "
+    max_acceleration_mps2: Optional[float] = Field(None, gt=0, le=MAX_ACCELERATION,
+                                                   description="Bound on the net acceleration.")
+    max_deceleration_mps2: Optional[float] = Field(None, ge=MIN_DECELERATION, le=MAX_ACCELERATION,
+                                                   description="Bound on the net deceleration "
                                                    "(on top of the braking forces; not the brake itself).")
     das_handle_levels: list[float] = Field(default_factory=lambda: [-1.0, 0.0, 0.5, 0.75, 1.0])
     adhesion: Optional[AdhesionLimit] = Field(None, description="Caps the traction envelope and the electric "
@@ -196,16 +203,19 @@ class TrainFile(Strict):
     @model_validator(mode="after")
     def _curves_and_tunnels(self) -> Self:
         if self.curve_resistance == "roeckl" and self.curve_coefficient_m2ps2:
-            raise ValueError("curve_coefficient_m2ps2 goes with curve_resistance 'coefficient', not 'roeckl'")
+            raise ValueError("curve_coefficient_m2ps2: goes with curve_resistance 'coefficient', not 'roeckl'")
         _increasing([t.cross_section_m2 for t in self.tunnel_resistance], "tunnel_resistance cross sections")
         return self
 
     @model_validator(mode="after")
     def _mass(self) -> Self:
         if (self.rotating_mass_factor is None) == (self.effective_mass_t is None):
-            raise ValueError("give either 'rotating_mass_factor' or 'effective_mass_t'")
-        if self.effective_mass_t is not None and self.effective_mass_t < self.mass_t:
-            raise ValueError("effective_mass_t must be >= mass_t (static mass)")
+            field = "effective_mass_t" if self.effective_mass_t is not None else "rotating_mass_factor"
+            raise ValueError(f"{field}: give either 'rotating_mass_factor' or 'effective_mass_t'")
+        if self.effective_mass_t is not None and not self.mass_t <= self.effective_mass_t <= 2 * self.mass_t:
+            raise ValueError(f"effective_mass_t: {self.effective_mass_t:g} t must lie between mass_t and twice it "
+                             f"({self.mass_t:g} to {2 * self.mass_t:g} t): the rotating masses add a share of the "
+                             "static mass")
         return self
 
     @field_validator("das_handle_levels")
@@ -215,7 +225,7 @@ class TrainFile(Strict):
             raise ValueError("handle levels must lie in [-1, 1]")
         if len(set(v)) != len(v):
             raise ValueError("handle levels must differ")
-        if min(v) >= 0 or max(v) <= 0:
+        if not v or min(v) >= 0 or max(v) <= 0:
             raise ValueError("need a braking level (< 0) and a traction level (> 0): advice cannot stop or start "
                              "otherwise")
         return sorted(v)

@@ -11,6 +11,7 @@ from typing import Any, Hashable, Iterator, MutableMapping, Protocol, Sequence
 import numpy as np
 
 from ecostudy.core import kinematics
+from ecostudy.core.defaults import SLOWEST
 from ecostudy.core.errors import InfeasibleError, SolverError, TooFastError
 from ecostudy.core.grid import Segment, drop_idle_power, make_grid, make_segment, node_limits
 from ecostudy.core.types import Track, Train, Trajectory, Window
@@ -183,6 +184,14 @@ def check_windows(case: Case, margin: float = 0.02) -> None:
             raise InfeasibleError(f"infeasible: at {w.distance:.0f} m from {case.segment.from_stop} the train "
                                   f"reaches at most {to_kmh(fastest[k]):.1f} km/h (window: at least "
                                   f"{to_kmh(w.min_speed):.1f} km/h)")
+
+
+def check_not_crawling(latest: float | None, case: Case) -> None:
+    """Refuse, before solving, a running time (or a window's latest arrival) over :data:`SLOWEST`
+    times the fastest envelope's: its energy optimum crawls and fails its re-simulation."""
+    if latest is not None and latest > SLOWEST * case.estimate:
+        raise TooFastError(f"{latest:.6g} s is over {SLOWEST:g} times the fastest possible run's "
+                           f"{case.estimate:.1f} s: the train would crawl")
 
 
 def check_feasible(latest: float | None, t_allout: float) -> None:

@@ -33,11 +33,11 @@ from ecostudy.core import kinematics
 from ecostudy.core.adhesion import TOP_SPEED, capped
 from ecostudy.core.plant import Truth
 from ecostudy.core.budget import check_run, duration, refuse_unless_forced
-from ecostudy.core.errors import EcostudyWarning, InfeasibleError
+from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, TooFastError, problem
 from ecostudy.core.grid import make_grid, make_segment, node_limits
 from ecostudy.io.loaders import track_from_schema, train_from_schema, validate
 from ecostudy.io import schemas
-from ecostudy.ocp.problem import prepare
+from ecostudy.ocp.problem import check_not_crawling, prepare
 
 LEG_SECONDS_PER_STEP = 0.12
 LEG_BYTES_PER_STEP = 72e3
@@ -80,10 +80,14 @@ def check_network(study, path):
     every leg's clock steps."""
     legs = []
     for i, (a, b) in enumerate(zip(study.stops[:-1], study.stops[1:])):
+        case = prepare(study.track, study.train, a, b, study.points)
         if study.running_times is not None:
             seconds, field = float(study.running_times[i]), f"running_times_s[{i}]"
+            try:  # a leg that crawls is refused before its size is (1e308 s overflowed the step count)
+                check_not_crawling(seconds, case)
+            except TooFastError as exc:
+                raise InputError(problem(path, field, str(exc))) from None
         else:
-            case = prepare(study.track, study.train, a, b, study.points)
             seconds, field = case.estimate * (1 + study.supplement), "supplement_percent"
         steps = int(np.ceil(seconds / study.dt))
         check_run(path, field, f"the leg {a} - {b} of {seconds:g} s is {steps:,} clock steps of {study.dt:g} s "

@@ -21,7 +21,7 @@ import pyomo.environ as pyo
 from scipy.interpolate import PchipInterpolator
 
 from ecostudy.analysis.single import solve_run
-from ecostudy.core.defaults import FRONT_POINTS
+from ecostudy.core.defaults import FRONT_POINTS, SLOWEST
 from ecostudy.core.errors import InfeasibleError, SolverError
 from ecostudy.core import kinematics
 from ecostudy.core.kinematics import running_time
@@ -282,6 +282,9 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
         fastest = sum(prepare(track, train, a, b, points).estimate for a, b in pairs)
         if total_time < 0.99 * fastest:  # the kinematic all-out times: refused before any front is solved
             too_short(total_time, fastest, " (kinematic envelope)")
+        if total_time > SLOWEST * fastest:
+            raise InfeasibleError(f"the total time {total_time:.6g} s is over {SLOWEST:g} times the sum of the fastest "
+                                  f"runs' {fastest:.1f} s (kinematic envelope): the train would crawl")
         mean = max(total_time / fastest - 1.0, 0.0)
     reach = max(0.6, 2.5 * mean)
     tick = ticker(progress, len(pairs) * (5 + (scheduled is not None) + (plan is not None)))  # fronts, 4+ splits

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any, NamedTuple, Optional
 
 from ecostudy.core import units
+from ecostudy.core.defaults import MAX_SUPPLEMENT_PERCENT
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.types import Timing, Track, Train
 from ecostudy.io.loaders import chosen_stops, read_track, read_train
@@ -18,8 +19,9 @@ from ecostudy.studies.cases import load_checked_study
 # (lowest, highest, lowest allowed itself)
 OPTION_RANGES = {
     "points": (10, 100000, True), "workers": (1, 256, True), "count": (2, 10000, True),
-    "weighted": (0, 1000, True), "time": (0.0, None, False), "supplement": (0.0, None, True),
-    "supplement_max": (0.0, None, False), "dwell": (0.0, None, True), "das_time_limit": (0.0, None, False),
+    "weighted": (0, 1000, True), "time": (0.0, None, False), "supplement": (0.0, MAX_SUPPLEMENT_PERCENT, True),
+    "supplement_max": (0.0, MAX_SUPPLEMENT_PERCENT, False), "dwell": (0.0, 86400.0, True),
+    "das_time_limit": (0.0, None, False),
 }
 
 
