@@ -92,7 +92,7 @@ def test_negative_mass(tmp_path, train_data):
 
 def test_non_increasing_positions(tmp_path, track_data):
     track_data["gradients"][2]["position_m"] = 50
-    assert_one_line_error(solve_files(tmp_path, track=track_data), "track.yaml", "gradients positions",
+    assert_one_line_error(solve_files(tmp_path, track=track_data), "track.yaml", "gradients[2].position_m",
                           "strictly increasing")
 
 

@@ -101,7 +101,7 @@ def test_a_closed_loop_study_too_big_is_refused_and_a_part_of_it_runs(tmp_path):
 def test_a_network_study_too_big_for_the_command_is_refused(tmp_path):
     doc = load_yaml((STUDIES / "network_metro_2trains.yaml").read_text())
     doc.update(track=str(TRACKS / "metro_line_4stops.yaml"), train=str(METRO), output=str(tmp_path / "out"),
-               supplement_percent=None, running_times_s=[1000, 1000, 1000], time_step_s=0.05)
+               supplement_percent=None, running_times_s=[240, 400, 250], time_step_s=0.05)
     doc["trains"] = [{"name": f"T{i}", "offset_s": 60.0 * i} for i in range(8)]
     doc["strategies"] = ["independent", "receptivity", "triggering", "voltage", "dissension", "joint"]
     r = run("network", write_yaml(tmp_path / "net.yaml", doc), "--no-plot")

@@ -147,23 +147,44 @@ def network_study(tmp_path, **fields):
 
 
 @pytest.mark.parametrize("fields, fragments", [
-    ({"running_times_s": [1e7, 200, 120]}, ["running_times_s[0]", "20,000,000 clock steps", "28 days"]),
-    ({"running_times_s": [60, 2e5, 120]}, ["running_times_s[1]", "400,000 clock steps"]),
-    ({"supplement_percent": 1e6}, ["supplement_percent: the leg Noord - Station", "clock steps"]),
-    ({"running_times_s": [60, 80, 1e5], "time_step_s": 0.05}, ["running_times_s[2]", "2,000,000 clock steps"]),
+    ({"running_times_s": [1e7, 200, 120]}, ["running_times_s[0]", "1e+07 s is over 5 times the fastest"]),
+    ({"running_times_s": [60, 2e5, 120]}, ["running_times_s[1]", "200000 s is over 5 times the fastest"]),
+    ({"running_times_s": [60, 80, 1e5], "time_step_s": 0.05}, ["running_times_s[2]", "100000 s is over 5 times"]),
+])
+def test_a_network_leg_that_would_crawl_is_refused_before_its_size(tmp_path, fields, fragments):
+    """A leg far slower than the train's fastest run is refused as a crawl (``core.defaults.SLOWEST``)
+    before its clock steps are counted: no leg a file can give reaches the runaway estimate below."""
+    r = run("network", network_study(tmp_path, **fields), "--no-plot")
+    one_line(r, "net.yaml", "the train would crawl", *fragments)
+    assert not (tmp_path / "out").exists()
+
+
+def small_steps(tmp_path, dt, **fields):
+    """A network study loaded, then given clock steps of ``dt`` [s] (below what a file may give)."""
+    import dataclasses
+    from ecostudy.io.loaders import load_network_study
+    path = network_study(tmp_path, **fields)
+    return dataclasses.replace(load_network_study(path), dt=dt), path
+
+
+@pytest.mark.parametrize("fields, fragments", [
+    ({"running_times_s": [200, 200, 120]}, ["running_times_s[0]", "2,000,000 clock steps"]),
+    ({"supplement_percent": 100}, ["supplement_percent: the leg Noord - Station", "clock steps"]),
 ])
 def test_a_network_leg_too_big_is_refused_with_its_estimate(tmp_path, fields, fragments):
-    r = run("network", network_study(tmp_path, **fields), "--no-plot")
-    one_line(r, "net.yaml", "an estimated", "--force", *fragments)
-    assert not (tmp_path / "out").exists()
+    """The legs' runaway estimate (``studies.estimate.check_network``) on clock steps of 0.1 ms."""
+    from ecostudy.studies.estimate import check_network
+    study, path = small_steps(tmp_path, 1e-4, **fields)
+    with pytest.raises(InputError) as refused:
+        check_network(study, path)
+    for fragment in ["net.yaml", "an estimated", "--force", *fragments]:
+        assert fragment in str(refused.value), str(refused.value)
 
 
 def test_force_lifts_the_estimate_and_nothing_else(tmp_path):
     from ecostudy.core.budget import forced
-    from ecostudy.io.loaders import load_network_study
     from ecostudy.studies.estimate import check_network
-    path = network_study(tmp_path, running_times_s=[1e7, 200, 120])
-    study = load_network_study(path)
+    study, path = small_steps(tmp_path, 1e-4, running_times_s=[200, 200, 120])
     with pytest.raises(InputError, match="--force"):
         check_network(study, path)
     with forced():
