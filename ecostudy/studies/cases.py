@@ -164,7 +164,8 @@ def expand(path, skipped=None, read=None):
 # the fields of a study file each base-case command reads but does not use (``run`` uses them all)
 UNUSED = {"solve": ("das", "das_time_limit_s", "scenarios", "sweep"),
           "compare": ("objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep"),
-          "pareto": ("objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep")}  # its own times
+          "pareto": ("running_time_s", "supplement_percent", "timetable",  # its own times: all-out to +supplement_max
+                     "objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep")}
 
 
 def load_checked_study(path, command=None):
