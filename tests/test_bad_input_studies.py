@@ -183,6 +183,25 @@ def test_values_no_run_can_use_are_refused_before_computing(tmp_path, shipped, c
     nothing_written(tmp_path)
 
 
+@pytest.mark.parametrize("where, fragment", [
+    ("override", "scenarios[0].train_overrides: scenario 'long': train 'Amsterdam metro (Alstom, Rokin-Centraal case)': "
+                 "length_m: 1e+308 m is longer than track 'Amsterdam metro Rokin - Centraal' (1106 m)"),
+    ("scenario train", "scenarios[0].train: scenario 'long': train 'Amsterdam metro (Alstom, Rokin-Centraal case)': "
+                       "length_m: 5000 m is longer than track"),
+    ("base train", "hostile_default.yaml: train: train 'Amsterdam metro (Alstom, Rokin-Centraal case)': length_m: 5000 m"),
+])
+def test_a_train_longer_than_its_track_is_refused_before_computing(tmp_path, where, fragment):
+    """`ecostudy run`: a scenario whose train (its overrides or its file) is longer than the track is
+    refused in one line naming the study file, the scenario and the field; no case is computed."""
+    long_train = write_yaml(tmp_path / "long.yaml", {**load_yaml(METRO), "length_m": 5000})
+    changes = {"override": {"scenarios": [{"name": "long", "train_overrides": {"length_m": 1e308}}]},
+               "scenario train": {"scenarios": [{"name": "long", "train": str(long_train)}]},
+               "base train": {"train": str(long_train)}}[where]
+    line = refused(run("run", hostile(tmp_path, "default.yaml", **changes), "--workers", 1, "--no-progress"), fragment)
+    assert "hostile_default.yaml" in line, line
+    nothing_written(tmp_path)
+
+
 # ----------------------------------------------------------------------------------- a heavy-haul reference table
 def reference_study(tmp_path, edit):
     path = hostile(tmp_path, "heavyhaul_brake_penalty_rolling.yaml")

@@ -190,3 +190,25 @@ def test_departure_windows_in_the_journey_nlp_and_unreachable_points_refused(tmp
     with pytest.raises(InfeasibleError, match=r"the departure from Station \(not before 95 s\) and the arrival at "
                                               r"Centrum \(not after 120 s\) leave 25 s; the fastest run between them"):
         windowed_journey(trk, train, journey_plan(tt, trk, path), 120)
+
+
+def test_a_large_supplement_s_fronts_end_at_the_longest_run_solved():
+    """+170 %: the fronts would reach 2.5 x 170 % over each all-out time, past SLOWEST x the fastest
+    envelope's time, where a run is refused as crawling (a front's point retried cold was refused
+    part-way). Each front ends there instead; the equal-marginal split stays inside every front and
+    every distribution's runs are solved (K = 60: seconds)."""
+    from ecostudy.core.defaults import SLOWEST
+    from ecostudy.io.loaders import load_track, load_train
+    from ecostudy.ocp.problem import prepare
+    from ecostudy.studies.journey import journey
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    stops = list(track.stops)
+    table, totals, _, fronts = journey(track, train, stops, supplement=1.7, points=60)
+    for (a, b), front in zip(zip(stops, stops[1:]), fronts):
+        slowest, times = SLOWEST * prepare(track, train, a, b, 60).estimate, front["running_time_s"]
+        assert 0.999 * slowest < times.iloc[-1] <= slowest, (a, b, times.iloc[-1], slowest)
+        split = table[(table["distribution"] == "equal marginal saving") & (table["from"] == a)]["running_time_s"]
+        assert times.iloc[0] <= float(split.iloc[0]) <= times.iloc[-1], (a, b, float(split.iloc[0]), times.tolist())
+    assert (table["status"] == "ok").all(), table[["distribution", "from", "status"]]
+    assert totals["running_time_s"].to_numpy() == pytest.approx(2.7 * sum(f["running_time_s"].iloc[0] for f in fronts),
+                                                                rel=1e-6)

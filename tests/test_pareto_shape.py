@@ -5,6 +5,7 @@ cold stays within 0.1 % of the warm-started chain of ``studies.pareto.sweep``.""
 import pytest
 
 from ecostudy import api
+from ecostudy.core.errors import EcostudyWarning
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.studies import batch
 from ecostudy.studies.pareto import sweep
@@ -97,7 +98,8 @@ def test_a_study_file_runs_as_a_front(tmp_path):
     study = write_yaml(tmp_path / "s.yaml", {"name": "s", "track": str(METRO["track"]), "train": str(METRO["train"]),
                                              "from": "Rokin", "to": "Centraal", "running_time_s": 80, "points": 60,
                                              "output": str(tmp_path / "out")})
-    report = api.run_folder(study, workers=1, kind="pareto")
+    with pytest.warns(EcostudyWarning, match="running_time_s: read but not used by `ecostudy pareto`"):
+        report = api.run_folder(study, workers=1, kind="pareto")
     assert "20 cases: 0 already stored, 20 computed now" in report.text
     folder = assert_folder(tmp_path / "out_pareto", "pareto", ["pareto"], rows=20, status=report.status.kind)
     assert folder.summary["monotone"]

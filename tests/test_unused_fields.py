@@ -5,8 +5,10 @@ folder that is a file (their runs cost seconds and say nothing more about the wa
 import warnings
 
 import pytest
+from typer.testing import CliRunner
 
 from ecostudy import api
+from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning, InputError
 
 from .conftest import TRACKS, TRAINS, write_yaml
@@ -55,6 +57,22 @@ def test_pareto_names_the_study_s_advice_and_a_plain_study_nothing(tmp_path):
     said = unused_warnings(refused(api.pareto_folder, path, tmp_path, count=2))
     assert len(said) == 1 and "das" in said[0] and "`ecostudy pareto`" in said[0], said
     plain = study(tmp_path, objective="energy")  # without das; the objective compare and the front use anyway
-    for command in (api.compare_folder, api.pareto_folder):
-        assert unused_warnings(refused(command, plain, tmp_path)) == []
+    assert unused_warnings(refused(api.compare_folder, plain, tmp_path)) == []
     assert unused_warnings(lambda: api.solve_folder(plain, plot=False, out=tmp_path / "plain")) == []
+
+
+@pytest.mark.parametrize("field", ["running_time_s", "supplement_percent", "timetable"])
+def test_pareto_names_the_study_s_timing_it_does_not_use(tmp_path, field):
+    """The front runs its own running times (all-out to +--supplement-max): the study's running time,
+    supplement or timetable is named, with the file, in one warning line of the command (a front of
+    two points on a coarse grid: the warning goes to stderr after the command's work)."""
+    timetable = write_yaml(tmp_path / "tt.yaml", {"name": "tt", "stops": [{"stop": "Rokin", "departure_s": 0},
+                                                                         {"stop": "Centraal", "arrival_s": 80}]})
+    value = {"running_time_s": 76, "supplement_percent": 12, "timetable": str(timetable)}[field]
+    path = study(tmp_path, **{"running_time_s": None, field: value})
+    result = CliRunner().invoke(app, ["pareto", str(path), "--count", "2", "--supplement-max", "10", "--points", "30",
+                                      "--workers", "1", "--no-plot", "--out", str(tmp_path / "front")])
+    assert result.exit_code == 0, result.output
+    lines = [line for line in result.stderr.splitlines() if "not used by" in line]
+    assert lines == [f"warning: {path}: {field}: read but not used by `ecostudy pareto`, which runs "
+                     "the study's base case with its own options; `ecostudy run` uses them"], result.stderr

@@ -175,13 +175,21 @@ def warn_unpaired(track: Track, train: Train) -> None:
             warnings.warn(f"track '{track.name}' with train '{train.name}': {line}", EcostudyWarning, stacklevel=3)
 
 
+def too_long(train: Train, track: Track) -> str | None:
+    """Why the train cannot run on the track (its ``length_m`` is longer than the track), else None:
+    the one check of it, for every case a study expands and for every segment cut."""
+    if train.length > track.length:
+        return f"train '{train.name}': length_m: {train.length:g} m is longer than track '{track.name}' ({track.length:g} m)"
+    return None
+
+
 def make_segment(track: Track, train: Train, from_stop: str, to_stop: str) -> Segment:
     """Cut the track between two stops into travel-direction profiles."""
     warn_unpaired(track, train)
     start, end = track.stops[from_stop], track.stops[to_stop]
-    if train.length > track.length:
-        raise InputError(f"train '{train.name}': length_m: {train.length:g} m is longer than track "
-                         f"'{track.name}' ({track.length:g} m)")
+    why = too_long(train, track)
+    if why is not None:
+        raise InputError(why)
     sign = 1.0 if end >= start else -1.0
     gradient = _directed(track.gradient_positions, track.gradients, start, end)
     gradient = Profile(gradient.starts, sign * gradient.values)

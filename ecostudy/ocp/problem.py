@@ -186,10 +186,15 @@ def check_windows(case: Case, margin: float = 0.02) -> None:
                                   f"{to_kmh(w.min_speed):.1f} km/h)")
 
 
+def slowest_time(case: Case) -> float:
+    """The longest running time [s] solved: :data:`SLOWEST` times the fastest envelope's."""
+    return SLOWEST * case.estimate
+
+
 def check_not_crawling(latest: float | None, case: Case) -> None:
-    """Refuse, before solving, a running time (or a window's latest arrival) over :data:`SLOWEST`
-    times the fastest envelope's: its energy optimum crawls and fails its re-simulation."""
-    if latest is not None and latest > SLOWEST * case.estimate:
+    """Refuse, before solving, a running time (or a window's latest arrival) over :func:`slowest_time`:
+    its energy optimum crawls and fails its re-simulation."""
+    if latest is not None and latest > slowest_time(case):
         raise TooFastError(f"{latest:.6g} s is over {SLOWEST:g} times the fastest possible run's "
                            f"{case.estimate:.1f} s: the train would crawl")
 

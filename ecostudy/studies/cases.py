@@ -14,6 +14,7 @@ from pathlib import Path
 
 from ecostudy import __version__
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.grid import too_long
 from ecostudy.io import schemas
 from ecostudy.io.documents import named_file, split_selector
 from ecostudy.io.loaders import (
@@ -75,14 +76,15 @@ class Files:
 
 
 def _overridden(train_doc, where, said):
-    """Warn of what a scenario's train overrides change (``where`` names the scenario): the warnings
-    of its train that its file (``said``) did not give."""
+    """The train of a scenario's train overrides (``where`` names the scenario), warning of what they
+    change: the warnings of its train that its file (``said``) did not give."""
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
-        train_from_schema(validate(schemas.TrainFile, train_doc, f"{where} train"), where)
+        train = train_from_schema(validate(schemas.TrainFile, train_doc, f"{where} train"), where)
     for w in seen:
         if str(w.message).removeprefix(f"{where}: ") not in said:
             warnings.warn(w.message, w.category, stacklevel=3)
+    return train
 
 
 def _scenario_units(s, path, read):
@@ -92,12 +94,16 @@ def _scenario_units(s, path, read):
         where = f"{path}: scenarios[{i - 1}] ({sc.name})" if i else str(path)
         field = f"scenarios[{i - 1}]." if i else ""
         train_file = named_file(path, field + "train" if sc.train else "train", sc.train or s.train)
-        train_doc = read(train_file, read_train)[0]
+        train_doc, train = read(train_file, read_train)
         track_doc, track = read(named_file(path, field + "track" if sc.track else "track", sc.track or s.track),
                                 read_track)
         if sc.train_overrides:
             train_doc = {**train_doc, **sc.train_overrides}
-            _overridden(train_doc, where, read.said[train_file])
+            train = _overridden(train_doc, where, read.said[train_file])
+        too = too_long(train, track)  # refused here, before any case of the study is computed
+        if too is not None:
+            given = "train_overrides" if "length_m" in (sc.train_overrides or {}) else "train"
+            raise InputError(problem(path, field + given, (f"scenario '{sc.name}': " if i else "") + too))
         from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
         yield sc.name, {"scenario": sc.name}, train_doc, track_doc, from_stop, to_stop, sc
 
@@ -164,7 +170,8 @@ def expand(path, skipped=None, read=None):
 # the fields of a study file each base-case command reads but does not use (``run`` uses them all)
 UNUSED = {"solve": ("das", "das_time_limit_s", "scenarios", "sweep"),
           "compare": ("objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep"),
-          "pareto": ("objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep")}  # its own times
+          "pareto": ("running_time_s", "supplement_percent", "timetable",  # its own times: all-out to +supplement_max
+                     "objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep")}
 
 
 def load_checked_study(path, command=None):

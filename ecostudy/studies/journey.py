@@ -276,7 +276,8 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
     pairs = list(zip(stops[:-1], stops[1:]))
     # the fronts reach 2.5 times the mean supplement (at least 60 %): a segment can take more than
     # the mean, and 15 points over a longer reach interpolate too coarsely (measured: a fixed
-    # 150 % reach put the equal-marginal split 4.6 % above the whole-journey NLP at +15 %)
+    # 150 % reach put the equal-marginal split 4.6 % above the whole-journey NLP at +15 %); each
+    # front ends at its segment's longest running time solved (SLOWEST): no run of it can take longer
     mean = supplement or 0.0
     if total_time is not None:
         fastest = sum(prepare(track, train, a, b, points).estimate for a, b in pairs)
@@ -291,7 +292,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
     fronts = []
     for a, b in pairs:
         fronts.append(sweep(track, train, a, b, count=front_count, supplement_max=reach, points=points,
-                            workers=workers, verify_result=False)[0])
+                            workers=workers, verify_result=False, within_slowest=True)[0])
         tick()
     all_out = sum(float(f["running_time_s"].iloc[0]) for f in fronts)
     if total_time is None:
