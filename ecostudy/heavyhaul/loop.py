@@ -7,7 +7,7 @@ stiffness) or, given an ``observer`` (heavyhaul.observer, eq. 10), its estimate 
 locomotives' measured speeds. Efforts are per virtual car, shared back to its cars in proportion
 to mass, clipped by the plant to every car's envelope. A solve that takes longer than Ts is not
 applied: the previous input is held, as the paper does (counted in ``overruns``).
-A standing train is held on its brakes while the traction asked of its locomotives is below the grade
+A standing train on a climb is held on its brakes while the traction asked of its locomotives is below the grade
 and resistance it feels (:func:`held`: a driver's hill start; the held time counts in the run).
 
 The terminal approach: past the reference's stop v_r continues its final deceleration below zero
@@ -144,11 +144,12 @@ def stopping(plant, reduction, reference, state, planned, ts):
 
 
 def held(plant, reduction, state, planned):
-    """A standing train (mean speed under :data:`STANDING`) is held on its brakes for the sample (a
-    hill start: :meth:`~ecostudy.heavyhaul.plant.CascadePlant.hold`) while the traction its
+    """A standing train (mean speed under :data:`STANDING`) on a climb is held on its brakes for the
+    sample (a hill start: :meth:`~ecostudy.heavyhaul.plant.CascadePlant.hold`) while the traction its
     locomotives would apply (``planned`` per virtual car, within their envelopes) is below the grade,
-    curve and running resistance it feels; the controller's plan is kept."""
-    if abs(mean_speed(plant, state)) >= STANDING:
+    curve and running resistance it feels; the controller's plan is kept. Where the grade does not
+    pull it back (level or falling on the whole) a standing train stays standing without the hold."""
+    if abs(mean_speed(plant, state)) >= STANDING or float(plant.grade_curve(state.positions)[0].sum()) <= 0.0:
         return False
     efforts = plant.efforts(reduction.share(planned, plant.consist.mass), state.speeds)
     return float(np.maximum(efforts[plant.loco], 0.0).sum()) < float(plant.resistance(state.positions, state.speeds).sum())
