@@ -7,6 +7,8 @@ stiffness) or, given an ``observer`` (heavyhaul.observer, eq. 10), its estimate 
 locomotives' measured speeds. Efforts are per virtual car, shared back to its cars in proportion
 to mass, clipped by the plant to every car's envelope. A solve that takes longer than Ts is not
 applied: the previous input is held, as the paper does (counted in ``overruns``).
+A standing train on a climb is held on its brakes while the traction asked of its locomotives is below the grade
+and resistance it feels (:func:`held`: a driver's hill start; the held time counts in the run).
 
 The terminal approach: past the reference's stop v_r continues its final deceleration below zero
 (a held last move then brakes into the stop at the reference's rate instead of stopping within a
@@ -141,6 +143,18 @@ def stopping(plant, reduction, reference, state, planned, ts):
     return combined(steps), u
 
 
+def held(plant, reduction, state, planned):
+    """A standing train (mean speed under :data:`STANDING`) on a climb is held on its brakes for the
+    sample (a hill start: :meth:`~ecostudy.heavyhaul.plant.CascadePlant.hold`) while the traction its
+    locomotives would apply (``planned`` per virtual car, within their envelopes) is below the grade,
+    curve and running resistance it feels; the controller's plan is kept. Where the grade does not
+    pull it back (level or falling on the whole) a standing train stays standing without the hold."""
+    if abs(mean_speed(plant, state)) >= STANDING or float(plant.grade_curve(state.positions)[0].sum()) <= 0.0:
+        return False
+    efforts = plant.efforts(reduction.share(planned, plant.consist.mass), state.speeds)
+    return float(np.maximum(efforts[plant.loco], 0.0).sum()) < float(plant.resistance(state.positions, state.speeds).sum())
+
+
 def anticipated(plant, reduction, reference, state, ts):
     """With air brakes: the final application is due now (:func:`~ecostudy.heavyhaul.approach.braking_point`
     at the reference's final deceleration); from then on every sample is a stopping sample."""
@@ -193,6 +207,8 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         if braking or (head_position(plant, state) > reference.final_approach
                        and (getattr(controller, "values", None) or {}).get("planned", [np.inf])[0] < STOPPED):
             step, u = stopping(plant, reduction, reference, state, u, ts)  # the plan stops within this sample
+        if step is None and held(plant, reduction, state, u):
+            step = plant.hold(state, ts)
         step = step or plant.step(state, reduction.share(u, c.mass), ts)
         state = step.state
         works += [step.traction_work, step.dynamic_brake_work, step.wagon_brake_work]

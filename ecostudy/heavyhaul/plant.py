@@ -302,6 +302,17 @@ class CascadePlant:
                            *map(float, works[:3]), excess, tuple(map(float, works[3:])),
                            self.adhesion_use(sol.t, sol.y[:n], sol.y[n:2 * n], requested, levels), levels)
 
+    def hold(self, state, dt):
+        """A standing train held on its brakes for ``dt`` [s] (a driver's hill start): every car stands
+        where it is; with ``air_brake`` on the wagons' brakes are full on (their lowest efforts, seen by
+        every wagon), so the next :meth:`step` releases them through the pipe (delay and tau_r)."""
+        forces = self.coupler_forces(state.positions, np.zeros(self.n))
+        brakes = None if self.air_brake is None else np.where(self.loco, 0.0, self.envelopes(np.zeros(self.n))[0])
+        self.history.append((np.array([state.time, state.time + dt]), np.array([forces, forces], np.float32)))
+        standing = CascadeState(state.positions, np.zeros(self.n), state.time + dt, brakes, brakes)
+        return CascadeStep(standing, forces, float(np.abs(forces).max(initial=0.0)), 0.0, 0.0, 0.0,
+                           float(np.max(-self.segment.limit(np.atleast_1d(state.positions[0] + 0.5 * self.consist.length[0])))))
+
     def brake_pipe(self, state, requested, dt):
         """The wagons' brakes over a step from ``state`` (None: air_brake off): the command is the
         request clipped to each wagon's envelope (speed-independent)."""
