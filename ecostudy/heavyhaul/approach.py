@@ -80,7 +80,7 @@ def stopping_share(plant, state, lowest, highest, distance):
     wagons' brakes still releasing through the pipe, tau_r, slow it), the share of every
     locomotive's traction (``highest``) that does (pulling True)."""
     share, seconds = brake_share(plant, state, lowest, distance)
-    if share > 0.0 or braked_distance(plant, state, 0.0 * lowest)[0] >= distance:
+    if share > 0.0:  # 0 only where coasting stands it short (brake_share's own coasting run)
         return share, seconds, False
     return (*brake_share(plant, state, highest, distance, pull=True), True)
 
