@@ -8,6 +8,7 @@ QP's solve time per step and memory for f = 1 and f = 10.
     python bench/bench_heavyhaul.py --terms [--scale limits] heavyhaul_brake_penalty_sags   # Table IV where the descents pass the dynamic brakes
     python bench/bench_heavyhaul.py --terms --effort magnitude heavyhaul_brake_penalty   # Table IV with eq. 11's magnitudes
     python bench/bench_heavyhaul.py --terms --notches heavyhaul_brake_penalty   # Table IV with the locomotives' notches
+    python bench/bench_heavyhaul.py --terms --brake-on all heavyhaul_brake_penalty   # K_b on the dynamic brakes too
     python bench/bench_heavyhaul.py --terms --notch-count 2 heavyhaul_brake_penalty   # the same with 2 notches each way
     python bench/bench_heavyhaul.py --balance [--adhesion] heavyhaul_brake_penalty   # the energy balance, an effect on
     python bench/bench_heavyhaul.py --stops heavyhaul_brake_penalty heavyhaul_brake_penalty_descents   # where each run stopped
@@ -106,9 +107,10 @@ STOPS = ["K_b", "f", "Np", "Nc", "status", "arrived", "ended", "stop_error_m", "
 
 
 def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesion=False, effort=None, notches=False,
-            observer=None):
-    """The shipped studies; ``weights``, ``scale``, ``adhesion``, ``effort`` and ``notches`` override their
-    ``fence_weights``, ``objective_scale``, ``adhesion``, ``effort_penalty`` and ``notches`` (a copy of the
+            observer=None, brake_on=None):
+    """The shipped studies; ``weights``, ``scale``, ``adhesion``, ``effort``, ``notches`` and ``brake_on`` override
+    their ``fence_weights``, ``objective_scale``, ``adhesion``, ``effort_penalty``, ``notches`` and
+    ``brake_penalty_on`` (a copy of the
     study file beside it, removed after the run); ``notches`` a count: on, with a copy of the consist
     that has that many traction and dynamic-brake notches; ``observer`` (q, r): the Kalman observer on
     with those noises (``observer``, ``observer_q``, ``observer_r``)."""
@@ -118,7 +120,8 @@ def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesio
                           "heavyhaul_fence"):
         path, out = ROOT / "studies" / f"{name}.yaml", ROOT / "out" / f"bench_{name}"
         changes = {k: v for k, v in (("fence_weights", weights), ("objective_scale", scale), ("adhesion", adhesion),
-                                     ("effort_penalty", effort), ("notches", notches), ("observer", bool(observer)),
+                                     ("effort_penalty", effort), ("notches", notches), ("brake_penalty_on", brake_on),
+                                     ("observer", bool(observer)),
                                      ("observer_q", observer and observer[0]), ("observer_r", observer and observer[1]))
                    if v}
         if changes:
@@ -150,6 +153,7 @@ if __name__ == "__main__":
     parser.add_argument("--fence-weights", choices=["per_car", "virtual"], help="override the studies' fence_weights")
     parser.add_argument("--scale", choices=["paper", "limits"], help="override the studies' objective_scale")
     parser.add_argument("--effort", choices=["squared", "magnitude"], help="override the studies' effort_penalty")
+    parser.add_argument("--brake-on", choices=["wagons", "all"], help="override the studies' brake_penalty_on")
     parser.add_argument("--adhesion", action="store_true", help="the plant's adhesion limit on (adhesion: true)")
     parser.add_argument("--notches", action="store_true", help="the locomotives' notches on (notches: true)")
     parser.add_argument("--notch-count", type=int, help="the locomotives' notches on, this many each way (a consist copy)")
@@ -167,4 +171,4 @@ if __name__ == "__main__":
         qp(args.qp, args.solver, threads=args.blas_threads)
     else:
         studies(args.studies, args.fence_weights, args.scale, TERMS if args.terms else EFFECTS if args.balance else STOPS if args.stops else COLUMNS, args.workers, args.adhesion, args.effort, args.notch_count or args.notches,
-                args.observer)
+                args.observer, args.brake_on)

@@ -3,6 +3,7 @@
 
     python bench/heavyhaul_split.py heavyhaul_brake_penalty_rolling --kb 1 60
     python bench/heavyhaul_split.py heavyhaul_brake_penalty_rolling --kb 1 60 --integral
+    python bench/heavyhaul_split.py heavyhaul_brake_penalty_rolling --kb 1 60 --brake-on all
 
 Per K_b: the run's numbers (the largest braking-sample force, E, tracking, the head and rear
 locomotive groups' dynamic braking), then the braking samples with the largest in-train forces:
@@ -12,7 +13,8 @@ the plant's real couplers there at the sample's end, and the plant's largest for
 (where). "without dynamic braking": the same QP at the same sample with the locomotives' braking
 held off (their lower bound 0): its terms and its predicted largest force, i.e. what the optimum
 traded. ``--integral``: eq. 4's force term integrated over each sample under the zero-order hold
-(Van Loan) instead of taken at the sample ends: tried, not adopted (docs/heavyhaul.md).
+(Van Loan) instead of taken at the sample ends: tried, not adopted (docs/heavyhaul.md). ``--brake-on all``:
+the study's cases with ``brake_penalty_on: all`` (K_b on the locomotives' dynamic braking too).
 """
 import argparse
 import sys
@@ -80,7 +82,7 @@ class Recorded(condensed.CondensedHorizon):
 
         def solve(g, lo, hi, rows, c_lo, c_hi):
             u, status, its = inner(g + self.extra, lo, hi, rows, c_lo, c_hi)
-            self.u = np.asarray(u).copy()
+            self.u = np.asarray(u)[:self.nc * self.n].copy()  # the moves (brake_penalty_on: all's variables after them)
             return u, status, its
         self.solver.solve, self.extra = solve, 0.0
 
@@ -125,10 +127,10 @@ class RecordedIntegral(Recorded):
 
 
 def one(job):
-    path, kb, integral, top = job
+    path, kb, integral, top, brake_on = job
     study.QP_FORMS["daqp"] = RecordedIntegral if integral else Recorded
     _, _, _, cases = study.expand(path)
-    case = next(c for c in cases if c["labels"]["K_b"] == kb)
+    case = {**next(c for c in cases if c["labels"]["K_b"] == kb), "brake_penalty_on": brake_on}
     consist, controller, record, reference, plant = study.drive(case)
     s = study.summarise(consist, controller, record, reference, controller.locos)
     locos = controller.locos
@@ -174,9 +176,10 @@ if __name__ == "__main__":
     parser.add_argument("--kb", type=float, nargs="+", default=[1.0, 60.0])
     parser.add_argument("--top", type=int, default=4, help="braking samples shown (the largest forces)")
     parser.add_argument("--integral", action="store_true", help="eq. 4's force term over each whole sample")
+    parser.add_argument("--brake-on", choices=["wagons", "all"], default="wagons", help="the study's brake_penalty_on")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
-    jobs = [(ROOT / "studies" / f"{args.study}.yaml", kb, args.integral, args.top) for kb in args.kb]
+    jobs = [(ROOT / "studies" / f"{args.study}.yaml", kb, args.integral, args.top, args.brake_on) for kb in args.kb]
     with Pool(min(args.workers, len(jobs))) as pool:
         for text in pool.map(one, jobs):
             print(text)

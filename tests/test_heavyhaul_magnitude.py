@@ -38,6 +38,20 @@ def test_a_magnitude_by_hand():
         objective_terms(reduction.model, reduction.kinds, (10.0, 60.0, 10.0, 40.0), r, effort="cubed")
 
 
+def on_a_descent(grade):
+    """The ore train at 20 m/s on a constant ``grade``, v_r 15 m/s, f = 10, Np = 4: (the fence, the
+    arguments of a QP form's ``solve``)."""
+    consist = load_consist(PAPER)
+    plant = CascadePlant(consist, level(grade))
+    reduction = fence(consist, 10, 20.0)
+    state = plant.initial(5000.0, 20.0)
+    x0 = reduced_state(plant, reduction, state)
+    offsets, vr = horizon(plant, reduction, table_reference([0.0, 1e6], [54.0, 54.0]), state,
+                          x0[:len(reduction.kinds)], 4)
+    low, high = limits(plant, reduction, state)
+    return reduction, (x0, offsets / 1e3, low / 1e3, high / 1e3, vr)
+
+
 def test_the_condensed_qp_with_magnitudes_against_the_program_written_out():
     """The ore train on a 6 per-mille descent at 20 m/s, v_r 15 m/s (f = 10, Np = 4, Nc = 2, K_b = 60):
     DAQP and Clarabel on the condensed QP with the magnitudes' variables give the same moves, and so
@@ -45,15 +59,7 @@ def test_the_condensed_qp_with_magnitudes_against_the_program_written_out():
     w_i |u_i| with w by hand (Ts / Np times the samples a move is held times K_e (1 or K_b) / 100 kN),
     |u| smoothed at 1e-3 kN, under the same rate, mean-speed and input bounds; the magnitude moves the
     wagons' braking to the locomotives."""
-    consist = load_consist(PAPER)
-    plant = CascadePlant(consist, level(-0.006))
-    reduction = fence(consist, 10, 20.0)
-    state = plant.initial(5000.0, 20.0)
-    x0 = reduced_state(plant, reduction, state)
-    offsets, vr = horizon(plant, reduction, table_reference([0.0, 1e6], [54.0, 54.0]), state,
-                          x0[:len(reduction.kinds)], 4)
-    low, high = limits(plant, reduction, state)
-    args = (x0, offsets / 1e3, low / 1e3, high / 1e3, vr)
+    reduction, args = on_a_descent(-0.006)
     weights = (10.0, 60.0, 10.0, 60.0)
 
     def form(effort, solver=None):
@@ -108,21 +114,31 @@ def test_the_condensed_qp_with_magnitudes_against_the_program_written_out():
     assert np.max(np.abs(x.x - u)) < 5.0  # kN: the smoothing's and SLSQP's tolerance
 
 
-def test_a_study_with_magnitudes_and_a_form_without_them(tmp_path):
-    """The 5 km line, K_b 1 and 60, eq. 11's magnitudes: both runs miss nothing but adhesion (the paper's
-    plant asks more than dry rail gives) and the wagons brake less at 60;
-    the Pyomo form (squares only) refused in one line naming the field, before any computing."""
+def runs_besides_adhesion(tmp_path, **changes):
+    """The 5 km study with ``changes`` run by the CLI: every run flagged for adhesion alone (the paper's
+    plant asks more than dry rail gives); runs.csv by K_b."""
     import pandas as pd
-    runner = CliRunner()
     out = tmp_path / "out"
-    result = runner.invoke(app, ["heavyhaul", str(study(tmp_path, effort_penalty="magnitude")), "--out", str(out),
-                                 "--no-progress", "--no-plot"])
+    result = CliRunner().invoke(app, ["heavyhaul", str(study(tmp_path, **changes)), "--out", str(out), "--no-progress",
+                                      "--no-plot"])
     assert result.exit_code == 1, result.output
     runs = pd.read_csv(out / "runs.csv").set_index("K_b")
     assert (runs["status"] == "flagged").all() and all(besides_adhesion(r) == [] for r in runs["reason"])
-    assert runs.loc[60, "wagon_brake_kWh"] < 0.8 * runs.loc[1, "wagon_brake_kWh"]
-    refused = runner.invoke(app, ["heavyhaul", str(study(tmp_path, effort_penalty="magnitude", qp_solver="ipopt")),
-                                  "--out", str(tmp_path / "no"), "--no-progress"])
-    assert refused.exit_code == 2 and "effort_penalty" in refused.output and "Traceback" not in refused.output
+    return runs
+
+
+def refused_in_one_line(tmp_path, field, **changes):
+    """The 5 km study with ``changes`` refused by the CLI in one line naming ``field``, before any computing."""
+    refused = CliRunner().invoke(app, ["heavyhaul", str(study(tmp_path, **changes)), "--out", str(tmp_path / "no"),
+                                       "--no-progress"])
+    assert refused.exit_code == 2 and field in refused.output and "Traceback" not in refused.output
     assert len(refused.output.strip().splitlines()) == 1, refused.output
     assert not (tmp_path / "no").exists()
+
+
+def test_a_study_with_magnitudes_and_a_form_without_them(tmp_path):
+    """The 5 km line, K_b 1 and 60, eq. 11's magnitudes: both runs miss nothing but adhesion and the wagons
+    brake less at 60; the Pyomo form (squares only) refused in one line naming the field, before any computing."""
+    runs = runs_besides_adhesion(tmp_path, effort_penalty="magnitude")
+    assert runs.loc[60, "wagon_brake_kWh"] < 0.8 * runs.loc[1, "wagon_brake_kWh"]
+    refused_in_one_line(tmp_path, "effort_penalty", effort_penalty="magnitude", qp_solver="ipopt")

@@ -6,7 +6,8 @@ crosses the train within Ts) and Clarabel's factorisation takes 20-25 s. Condens
 n Nc inputs only: a dense Hessian (built once), the input bounds, the locomotives' rate rows, Np
 mean-speed rows, and the in-train force rows (8), which are dense in U and rarely bind: they enter
 lazily, only the (sample, coupler) pairs whose predicted force exceeds the limit, and the QP is
-solved again until no predicted force does (the rows found stay for the next samples).
+solved again until no predicted force does (the rows found stay for the next samples). ``effort_penalty: magnitude`` and ``brake_penalty_on: all`` add variables
+and rows after the moves (:mod:`~ecostudy.heavyhaul.magnitude`).
 
 Two solvers of that one program, passed in as ``solver``:
 
@@ -97,13 +98,14 @@ class CondensedHorizon:
     """The receding-horizon QP over the inputs only; same interface as ``RecedingHorizon``."""
 
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
-                 force_limit_kN=2000.0, represented=None, scales=None, solver=DaqpSolver, effort="squared"):
+                 force_limit_kN=2000.0, represented=None, scales=None, solver=DaqpSolver, effort="squared",
+                 brake_on="wagons"):
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
         n = self.n = len(self.kinds)
         ns, nu = 2 * n - 1, nc * n
         self.locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]
         self.rate, self.force_limit = rate_kN, force_limit_kN
-        self.terms = terms = objective_terms(model, self.kinds, weights, represented, scales, effort)
+        self.terms = terms = objective_terms(model, self.kinds, weights, represented, scales, effort, brake_on)
         self.wagons = np.array([kind != "locomotive" for kind in self.kinds])
         self.values = None  # eq. 4's terms at the last optimum (objective_values)
         A, B = model.A, model.B * KN
@@ -141,7 +143,7 @@ class CondensedHorizon:
     @property
     def size(self):
         """The program solved: the inputs only (no states; with ``effort_penalty: magnitude`` one
-        variable more per locomotive move, its |u|), the input bounds as simple bounds (not counted),
+        variable more per locomotive move, its |u|, with ``brake_penalty_on: all`` its braking), the input bounds as simple bounds (not counted),
         rows for the locomotives' rate limits (two-sided), the mean speed, the magnitudes' rows and the
         force rows found binding so far (two-sided)."""
         return {"inputs": self.nc * self.n + self.magnitude.extra, "states": 0, "constraints": len(self.rows)}

@@ -35,6 +35,7 @@ class Terms(NamedTuple):
     weight: np.ndarray    # mass shares (eq. 7's mean speed)
     stiff: np.ndarray     # coupler stiffness [kN/m] (f_in = k x_in, eq. 8)
     magnitude: np.ndarray  # per kN of |u| (``effort_penalty: magnitude``, eq. 11 as printed); zeros for eq. 4
+    brake: np.ndarray     # on min(u, 0)^2 besides ``penalty`` (``brake_penalty_on: all``: K_b - 1 for the locomotives)
 
 
 UNIT_KN, UNIT_MPS = 100.0, 1.0  # the QP's units: forces in 100 kN (the /1e4 on squared kN), speeds in m/s
@@ -55,18 +56,27 @@ EFFORT_PENALTIES = ("squared", "magnitude")  # eq. 4's K_e (u^2 ...), eq. 11's K
 # ``magnitude`` keeps eq. 4's squared effort term at this fraction, so that the condensed QP stays strictly
 # convex (DAQP's dual active set needs a positive definite Hessian); docs/heavyhaul.md measures what it moves
 MAGNITUDE_CURVATURE = 1e-3
+# where K_b applies: the wagons' (pneumatic) braking only, eq. 5's R; or every brake, the locomotives' dynamic
+# braking too (a departure from eq. 5, docs/heavyhaul.md "A penalty on every brake")
+BRAKE_PENALTY_ON = ("wagons", "all")
 
 
-def objective_terms(model, kinds, weights, represented=None, scales=None, effort="squared"):
+def objective_terms(model, kinds, weights, represented=None, scales=None, effort="squared", brake_on="wagons"):
     """Eq. 4's weights (K_f, K_v, K_e, K_b) on a model of ``kinds``; ``represented``
     (:class:`~ecostudy.heavyhaul.linear.Represented`) what each (virtual) car and coupler stands for;
     ``scales`` (:class:`Scales`) the units each term is measured in (default: the paper's); ``effort``
     the effort term's form (:data:`EFFORT_PENALTIES`): eq. 4's squares or eq. 11's magnitudes, each
     car's |u| in its unit (a virtual car's |u| is the sum of its braking cars' |share u|, so it is
-    weighted as one whatever it stands for)."""
+    weighted as one whatever it stands for); ``brake_on`` (:data:`BRAKE_PENALTY_ON`) where K_b applies:
+    with ``all`` a locomotive's effort costs u^2 pulling and K_b u^2 braking (``brake``: K_b - 1 on
+    min(u, 0)^2, so K_b >= 1; the squared form only)."""
     if effort not in EFFORT_PENALTIES:
         raise ValueError(f"effort penalty one of {EFFORT_PENALTIES} (got {effort})")
+    if brake_on not in BRAKE_PENALTY_ON:
+        raise ValueError(f"brake penalty on one of {BRAKE_PENALTY_ON} (got {brake_on})")
     kf, kv, ke, kb = weights
+    if brake_on == "all" and (effort != "squared" or kb < 1):
+        raise ValueError(f"brake_penalty_on: all needs effort_penalty squared and K_b >= 1 (got {effort}, {kb:g})")
     r = represented or Represented.each(len(kinds))
     penalty = np.array([1.0 if kind == "locomotive" else kb for kind in kinds])
     unit = np.full(len(kinds), UNIT_KN) if scales is None else np.asarray(scales.effort_kN, float)
@@ -75,8 +85,10 @@ def objective_terms(model, kinds, weights, represented=None, scales=None, effort
         kv = kv * (UNIT_MPS / scales.speed_mps) ** 2
     squared = penalty * (UNIT_KN / unit) ** 2 * r.effort
     magnitude = ke * penalty / unit if effort == "magnitude" else np.zeros(len(kinds))
+    locos = np.array([kind == "locomotive" for kind in kinds])
+    brake = np.where(locos, (kb - 1.0) * squared, 0.0) if brake_on == "all" else np.zeros(len(kinds))
     return Terms(kf * r.couplers, kv * r.cars, ke, squared * (MAGNITUDE_CURVATURE if effort == "magnitude" else 1.0),
-                 model.mass / model.mass.sum(), model.stiffness / KN, magnitude)
+                 model.mass / model.mass.sum(), model.stiffness / KN, magnitude, brake)
 
 
 TERMS = ("force", "tracking", "energy", "braking")  # eq. 4's terms as reported: K_f, K_v, K_e locomotives, K_e K_b wagons
@@ -93,11 +105,14 @@ def objective_values(terms, wagons, predicted, moves, vr, ts):
     n = len(wagons)
     forces = predicted[:, n:] * terms.stiff
     held = moves[[min(k, nc - 1) for k in range(np_)]]
-    efforts = held ** 2 * terms.ke * terms.penalty / 1e4 + np.abs(held) * terms.magnitude
+    brake = terms.brake > 0
+    efforts = ((held ** 2 * terms.penalty + np.minimum(held, 0.0) ** 2 * terms.brake) * terms.ke / 1e4
+               + np.abs(held) * terms.magnitude)
+    braking = wagons[None, :] | (brake[None, :] & (held < 0))
     scale = ts / np_
     return {"force": scale * float(np.sum(terms.kf * forces ** 2)) / 1e4,
             "tracking": scale * float(np.sum(terms.kv * (predicted[:, :n] - np.asarray(vr)[1:, None]) ** 2)),
-            "energy": scale * float(np.sum(efforts[:, ~wagons])), "braking": scale * float(np.sum(efforts[:, wagons])),
+            "energy": scale * float(np.sum(efforts[~braking])), "braking": scale * float(np.sum(efforts[braking])),
             "planned": predicted[:, :n] @ terms.weight}
 
 
@@ -125,9 +140,9 @@ class RecedingHorizon:
     input and the reference are variables fixed by their bounds) and warm-starts Ipopt."""
 
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
-                 force_limit_kN=2000.0, represented=None, scales=None, effort="squared"):
-        if effort != "squared":  # a magnitude is not a square: the condensed forms split it (condensed.py)
-            raise ValueError(f"effort penalty '{effort}': this QP form has eq. 4's squared term only")
+                 force_limit_kN=2000.0, represented=None, scales=None, effort="squared", brake_on="wagons"):
+        if effort != "squared" or brake_on != "wagons":  # the condensed forms add the variables these need
+            raise ValueError(f"effort penalty '{effort}' on '{brake_on}': this QP form has eq. 4 and 5 as printed only")
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
         terms = objective_terms(model, self.kinds, weights, represented, scales)
         n = len(self.kinds)

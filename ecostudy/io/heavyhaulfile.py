@@ -86,6 +86,11 @@ class HeavyhaulFile(Strict):
         "squared", description="Eq. 4's effort term, K_e (sum u^2 over the locomotives + K_b sum u^2 over the "
         "wagons), or eq. 11's as Zhang & Zhuan print it, with each effort's magnitude |u| in its unit (solved by "
         "qp_solver daqp or condensed).")
+    brake_penalty_on: Literal["wagons", "all"] = Field(
+        "wagons", description="Where K_b applies: the wagons' braking (eq. 5's R, as Zhang & Zhuan) or every "
+        "brake, the locomotives' dynamic braking too (K_b u^2 for a braking locomotive; a departure from eq. 5: "
+        "otherwise the penalty moves the braking to the dynamic brakes for free). 'all' needs effort_penalty "
+        "squared, every K_b >= 1 and qp_solver daqp or condensed.")
     adhesion: bool = Field(False, description="Cap each locomotive's traction and dynamic braking at its adhesion, "
                            "mu(v) m g with Curtius & Kniffler's dry-rail mu (the plant; the controller sees the "
                            "capped envelopes).")

@@ -96,6 +96,12 @@ def expand(path):
     if s.effort_penalty == "magnitude" and s.qp_solver not in MAGNITUDE_FORMS:
         problems.append(problem(path, "effort_penalty", f"magnitude is solved by qp_solver {' or '.join(MAGNITUDE_FORMS)} "
                                 f"(the condensed QP), not {s.qp_solver}"))
+    if s.brake_penalty_on == "all" and (s.qp_solver not in MAGNITUDE_FORMS or s.effort_penalty != "squared"):
+        problems.append(problem(path, "brake_penalty_on", f"all is solved with effort_penalty squared by qp_solver "
+                                f"{' or '.join(MAGNITUDE_FORMS)} (the condensed QP), not {s.effort_penalty} by {s.qp_solver}"))
+    if s.brake_penalty_on == "all" and min(s.brake_penalty) < 1:
+        problems.append(problem(path, "brake_penalty_on", f"all needs every brake_penalty >= 1 (a braking locomotive's "
+                                f"term K_b u^2 is u^2 plus (K_b - 1) u^2; got {min(s.brake_penalty):g})"))
     fewest = min([len(fence(consist, f, s.sample_time_s).locomotives) for f in s.fence if f <= consist.cars] or [1])
     ramp = samples_to_start(needed, s.rate_kN_per_sample * KN, fewest)  # the fewest locomotive groups ramp slowest
     if ramp * s.sample_time_s > reference.running_time:
@@ -121,6 +127,7 @@ def expand(path):
               "fence_coupling": s.fence_coupling, "fence_sharing": s.fence_sharing, "fence_weights": s.fence_weights,
               "objective_scale": s.objective_scale, "effort_penalty": s.effort_penalty, "adhesion": s.adhesion, "air_brake": s.air_brake, "draft_gear": s.draft_gear,
               **({"notches": True} if s.notches else {}),  # absent when off: the cases' keys as without the switch
+              **({"brake_penalty_on": "all"} if s.brake_penalty_on == "all" else {}),  # likewise
               "max_samples": s.max_samples,
               "stop_tolerance_m": s.stop_tolerance_m, "speed_tolerance_kmh": s.speed_tolerance_kmh,
               "arrival_tolerance_percent": s.arrival_tolerance_percent, "arrival_tolerance_s": s.arrival_tolerance_s}
@@ -149,7 +156,7 @@ QP_FORMS = {  # a study's qp_solver: the same QP four ways (docs/heavyhaul.md)
     "clarabel": ConicHorizon,  # the states kept
     "ipopt": RecedingHorizon,  # the Pyomo model
 }
-MAGNITUDE_FORMS = ("daqp", "condensed")  # the forms with eq. 11's magnitudes (heavyhaul.magnitude)
+MAGNITUDE_FORMS = ("daqp", "condensed")  # the forms with eq. 11's magnitudes and brake_penalty_on: all (heavyhaul.magnitude)
 
 
 def drive(case):
@@ -174,7 +181,7 @@ def drive(case):
                       weights=(w["force"], w["speed"], w["energy"], labels["K_b"]), rate_kN=case["rate_kN"],
                       force_limit_kN=consist.force_limit / KN, scales=scales,
                       represented=reduction.represented(consist.mass, case["fence_weights"]),
-                      effort=case["effort_penalty"])
+                      effort=case["effort_penalty"], brake_on=case.get("brake_penalty_on", "wagons"))
     state = plant.initial(head=-0.5 * consist.length[0], speed=0.0)
     observer = (KalmanObserver(reduction.model, reduction.kinds, q=case["observer_q"], r=case["observer_r"],
                                estimate=reduced_state(plant, reduction, state)) if case["observer"] else None)
