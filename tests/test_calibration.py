@@ -19,7 +19,7 @@ from ecostudy.core.errors import EcostudyWarning, InputError
 from ecostudy.core.physics import Envelope
 from ecostudy.core.status import STOP_TOLERANCE_M
 from ecostudy.io.loaders import load_track, load_train, track_from_dict
-from ecostudy.io.logfile import load_log, parse_log, write_log
+from ecostudy.io.logfile import check_traction_sign, load_log, parse_log, write_log
 
 from .conftest import TRACKS, TRAINS
 
@@ -386,6 +386,40 @@ def test_bad_logs_are_one_line(tmp_path, text, fragments):
     for fragment in fragments:
         assert fragment in lines[0], lines[0]
     assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def steep_line(permille):
+    """A line of two descents of ``permille`` (2.1 km each) between three stops on level track."""
+    return track_from_dict({"name": f"steep {permille}", "source": "test", "length_m": 6300,
+                            "stops": [{"name": "Top", "position_m": 300}, {"name": "Mid", "position_m": 3000},
+                                      {"name": "Bottom", "position_m": 5700}],
+                            "gradients": [{"position_m": 0, "gradient_permille": 0},
+                                          {"position_m": 600, "gradient_permille": -permille},
+                                          {"position_m": 2700, "gradient_permille": 0},
+                                          {"position_m": 3300, "gradient_permille": -permille},
+                                          {"position_m": 5400, "gradient_permille": 0}],
+                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
+
+
+@pytest.mark.parametrize("permille", [40, 60])
+def test_the_traction_sign_check_on_steep_grades(inputs, permille):
+    """Mountain and rack lines have 40 to 60 per mille. Down them a train that takes traction for the
+    first 4 % of the run and then coasts gains 0.3 m/s^2 and more with no force at the wheel
+    (g times the grade is 0.39 and 0.59 m/s^2): its log is read, the speed gained beyond what the
+    gradient gives is what shows traction. Up them a train under full traction for 75 % of the run,
+    logged the same. Each log with the sign of its force and wheel power flipped is refused."""
+    track, train = steep_line(permille), inputs[1]
+    coast = generate_log(track, train, ["Top", "Mid", "Bottom"], train, seed=1,
+                         driver=lambda distance, rng: (np.array([0.0, 0.04]) * distance, [1.0, 0.0]))[0]
+    climb = generate_log(track, train, ["Bottom", "Mid", "Top"], train, seed=2,
+                         driver=lambda distance, rng: (np.array([0.0, 0.75]) * distance, [1.0, 0.0]))[0]
+    for frame in (coast, climb):
+        check_traction_sign(as_log(frame), track)
+        flipped = frame.assign(force_kN=-frame["force_kN"], power_wheel_kW=-frame["power_wheel_kW"])
+        with pytest.raises(InputError, match="force_kN: not positive in .* beyond what the gradient gives"):
+            check_traction_sign(as_log(flipped), track)
+        with pytest.raises(InputError, match="power_wheel_kW: not positive in"):
+            check_traction_sign(as_log(flipped.drop(columns="force_kN")), track)
 
 
 def test_a_column_ecostudy_does_not_model_is_warned_by_name_and_ignored():

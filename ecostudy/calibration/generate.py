@@ -101,9 +101,10 @@ def sample_run(plant, run, times):
     return out
 
 
-def generate_log(track, train, stops, truth, seed=0, noise=LogNoise(), dwell=20.0):
+def generate_log(track, train, stops, truth, seed=0, noise=LogNoise(), dwell=20.0, driver=phases):
     """A logged run of ``truth`` (a train, see :func:`true_train`) over the track's ``stops`` (names,
-    in travel order): a table with the columns of a log file (:mod:`ecostudy.io.logfile`) and the
+    in travel order), each run driven by ``driver(distance, rng)`` (node positions, handles; as
+    :func:`phases`) and braked into the stop: a table with the columns of a log file (:mod:`ecostudy.io.logfile`) and the
     noise-free record (a dict of arrays: t, x, v, force, power_wheel, power_line, SI)."""
     rng = np.random.default_rng(seed)
     dt = 1.0 / noise.rate
@@ -115,7 +116,7 @@ def generate_log(track, train, stops, truth, seed=0, noise=LogNoise(), dwell=20.
                                "_from", "_far")
         distance = abs(track.stops[to_stop] - position)
         plant = Plant(segment, truth)
-        nodes, handle = phases(distance, rng)
+        nodes, handle = driver(distance, rng)
         brake = -rng.uniform(0.5, 0.8)
         start = brake_point(plant, nodes, handle, brake, distance)
         for i in range(2):  # move the braking start by the stop's miss; the last drive is the run
