@@ -30,6 +30,7 @@ a dead channel; :func:`check_traction_sign`, beyond what the track's gradient gi
 import csv
 import difflib
 import io
+import re
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -137,6 +138,18 @@ def split_header(text: str, path: Where) -> tuple[dict[str, Any], str]:
 # (tracks 0.91, power_sampling_mode 0.85, start_position_km 0.97, speed_sigma 0.85; vehicle,
 # train_id 0.77, source_file 0.71 are not)
 NEAR_MISS = 0.8
+# words of a header field's name that say how the columns read (speed_unit, units, time_offset_s, force_sign,
+# power_scale): left out, the columns would be read otherwise than the file means
+DECLARES = {"unit", "units", "scale", "scaling", "factor", "multiplier", "offset", "datum", "sign", "convention",
+            "inverted"}
+
+
+def declares_columns(name: str, value: Any) -> bool:
+    """A header field that says how the columns read: a word of :data:`DECLARES` in its name, or a
+    mapping whose keys name a column or a quantity (``channels: {speed: km/h}``)."""
+    words = set(re.split(r"[^a-z0-9]+", name.lower()))
+    keys = {str(k) for k in value} if isinstance(value, dict) else set()
+    return bool(words & DECLARES or keys & (set(COLUMNS) | QUANTITIES))
 
 
 def known_header(fields: Mapping[Any, Any], path: Where) -> dict[str, Any]:
@@ -144,17 +157,26 @@ def known_header(fields: Mapping[Any, Any], path: Where) -> dict[str, Any]:
     naming it and the file, unless it is a near miss (:data:`NEAR_MISS`) of a known field the header
     does not give: that one is refused naming the field(s) it may be, as every known field changes
     what is computed (a misspelt ``power_sampling: instant`` left out would integrate the powers as
-    interval means). A field without a name (empty, or YAML's null) is refused."""
+    interval means). A field that says how the columns read (:func:`declares_columns`: a unit, a
+    scale, an offset, a sign) is refused too: the units are in the column names and traction is
+    positive, and left out it would leave the columns read otherwise than the file means. A field
+    without a name (empty, or YAML's null) is refused."""
     known = list(LogHeader.model_fields)
     lines, ignored = [], []
     for key, value in fields.items():
         if key is None or not str(key).strip():  # '': x, null: x: nothing to name in a warning
             lines.append(problem(f"{path}: header", "", f"a field without a name (value {value!r}): name it or "
                                  "remove it"))
-    for name in (str(key) for key in fields if key is not None and str(key).strip() and str(key) not in known):
+    for name, value in ((str(key), value) for key, value in fields.items()
+                        if key is not None and str(key).strip() and str(key) not in known):
         near = [k for k in difflib.get_close_matches(name, known, n=3, cutoff=NEAR_MISS) if k not in fields]
         if near:
             lines.append(problem(f"{path}: header", name, f"unknown field; did you mean {' or '.join(near)}?"))
+        elif declares_columns(name, value):
+            lines.append(problem(f"{path}: header", name, "says how the columns read (a unit, scale, offset or "
+                                 "sign), which ecostudy does not apply: the unit is part of each column's name "
+                                 "(speed_kmh, position_km, force_kN) and traction is positive; convert or rename "
+                                 "the columns and remove this field"))
         else:
             ignored.append(name)
     if lines:
