@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from ecostudy.calibration.estimate import calibrate_logs
 from ecostudy.calibration.fit import DEFAULT_FIT, priors
-from ecostudy.calibration.generate import LogNoise, follow_work, generate_log, true_train
+from ecostudy.calibration.generate import LogNoise, follow_work, generate_log, level_track, steady_log, true_train
 from ecostudy.calibration.replay import prepare
 from ecostudy.calibration.validate import validate_log
 from ecostudy.cli import app
@@ -120,10 +120,7 @@ def test_a_parameter_the_logs_do_not_excite_is_held(inputs, truth, logged):
     assert table.loc["efficiency", "estimate"] == train.traction_efficiency  # held, not fitted
     assert table.loc["mass", "identifiable"]
 
-    flat = track_from_dict({"name": "flat", "source": "test", "length_m": track.length,
-                            "stops": [{"name": k, "position_m": float(v)} for k, v in track.stops.items()],
-                            "gradients": [{"position_m": 0, "gradient_permille": 0}],
-                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
+    flat = level_track(track)
     frame, _ = generate_log(flat, truth, THERE, truth, seed=4)
     result = calibrate_logs([as_log(frame)], flat, train, ("mass", "rotating_mass_factor", "davis_a"), draws=0)
     held = result.table.set_index("name")["identifiable"]
@@ -132,35 +129,13 @@ def test_a_parameter_the_logs_do_not_excite_is_held(inputs, truth, logged):
     assert "moves with" in result.reason
 
 
-def steady_log(train, seed, level=25.0, hold=400.0, rate=0.8):
-    """A log of ``train`` on level track at a constant speed: from rest at ``rate`` m/s^2 to ``level``
-    m/s, ``hold`` seconds there, braking at ``rate`` to a stand; the wheel power the interval's energy
-    balance (kinetic energy plus the Davis work over 10 sub-steps), 10 Hz, speed noise 0.05 m/s, 1 %."""
-    rise = level / rate
-    t = np.arange(0.0, 2 * rise + hold + 20.0, 0.1)
-    fine = np.linspace(0.0, t[-1], 10 * (len(t) - 1) + 1)
-    v = np.clip(np.minimum(rate * fine, level) - np.maximum(rate * (fine - rise - hold), 0.0), 0.0, None)
-    resist = (train.davis[0] + train.davis[1] * v + train.davis[2] * v * v) * np.where(v > 0, v, 0.0)
-    davis = np.add.reduceat(0.5 * (resist[1:] + resist[:-1]) * np.diff(fine), np.arange(0, len(fine) - 1, 10))
-    vs = v[::10]
-    work = 0.5 * train.mass * np.diff(vs ** 2) + davis
-    x = 300.0 + np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(fine))])[::10]
-    rng = np.random.default_rng(seed)
-    return pd.DataFrame({"time_s": t, "position_m": x, "speed_mps": vs + rng.normal(0.0, 0.05, len(t)),
-                         "power_wheel_kW": np.append(work / 0.1, 0.0) * (1 + rng.normal(0.0, 0.01, len(t))) / 1e3})
-
-
 def steady_calibration(inputs, draws):
     """Two level-track constant-speed logs of a train whose Davis split differs from its file's (A 30 %
-    higher, B half, C 10 % higher), calibrated for mass and A, B, C: (result table, true values)."""
+    higher, B half, C 10 % higher), calibrated for mass and A, B, C: (result, true values)."""
     track, train = inputs
-    flat = track_from_dict({"name": "flat", "source": "test", "length_m": track.length,
-                            "stops": [{"name": k, "position_m": float(v)} for k, v in track.stops.items()],
-                            "gradients": [{"position_m": 0, "gradient_permille": 0}],
-                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
     truth = true_train(train, davis=(1.3, 0.5, 1.1))
     logs = [as_log(steady_log(truth, seed), f"steady{seed}") for seed in (1, 2)]
-    result = calibrate_logs(logs, flat, train, ("mass", "davis_a", "davis_b", "davis_c"), draws=draws)
+    result = calibrate_logs(logs, level_track(track), train, ("mass", "davis_a", "davis_b", "davis_c"), draws=draws)
     true = {"mass": truth.static_mass, "davis_a": truth.davis[0], "davis_b": truth.davis[1], "davis_c": truth.davis[2]}
     return result, true
 
