@@ -295,7 +295,7 @@ def check_traction_sign(log: "LoggedRun", track: Track) -> None:
     negative: a sign flipped at the logger, or a dead channel reading zero). The gradient's share,
     g times the height lost per metre run along the logged positions over the same
     :data:`PULLING_TIME`, counted as if all the mass weighed: on a steep descent a coasting or
-    lightly braked train gains that much (0.39 m/s^2 at 40 per mille, 0.59 at 60) without traction."""
+    lightly braked train gains up to that (0.39 m/s^2 at 40 per mille, 0.59 at 60) without traction."""
     if log.v is None:
         return
     t, speed = log.t, np.abs(log.v)
