@@ -4,6 +4,7 @@ flat track, and the energy difference `validate` reports against an independent 
     .venv/bin/python bench/bench_calibration.py --logs 200            # coverage (a few minutes)
     .venv/bin/python bench/bench_calibration.py --logs 0 --validate   # identifiability and the validate check
     .venv/bin/python bench/bench_calibration.py --example out/logs    # two example logs for docs/calibration.md
+    .venv/bin/python bench/bench_calibration.py --logs 0 --held 30    # both intervals where a parameter is held
 
 Each log: the regional train of Farooqi 2018 §6.3 with true parameters drawn around
 the train file (mass +-5 %, Davis A, B, C +-15 %, traction efficiency +-3 %), driven by the plant
@@ -22,10 +23,11 @@ sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
 from ecostudy.calibration.fit import DEFAULT_FIT, priors  # noqa: E402
-from ecostudy.calibration.generate import follow_work, generate_log, true_train  # noqa: E402
+from ecostudy.calibration.generate import (  # noqa: E402
+    follow_work, generate_log, level_track, steady_log, true_train)
 from ecostudy.calibration.validate import validate_log  # noqa: E402
 from ecostudy.calibration.estimate import calibrate_logs  # noqa: E402
-from ecostudy.io.loaders import load_track, load_train, track_from_dict  # noqa: E402
+from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.io.logfile import parse_log, write_log  # noqa: E402
 
 TRAIN, TRACK = ROOT / "trains" / "regional_alstom.yaml", ROOT / "tracks" / "calibration_line.yaml"
@@ -95,16 +97,8 @@ def coverage(count, workers):
           f"flagged {flagged} of {count}; residual drift median {np.median(drift):.2f}, max {np.max(drift):.2f}")
 
 
-def flat_track(track):
-    """The calibration line without gradients: static mass and rotating mass cannot be told apart."""
-    return track_from_dict({"name": "flat calibration line", "source": "bench", "length_m": track.length,
-                            "stops": [{"name": k, "position_m": float(v)} for k, v in track.stops.items()],
-                            "gradients": [{"position_m": 0, "gradient_permille": 0}],
-                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
-
-
 def identifiability(track, train):
-    flat = flat_track(track)
+    flat = level_track(track)
     truth = drawn_truth(train, 0)
     frame, _ = generate_log(flat, truth, STOPS, truth, seed=0)
     result = calibrate_logs([as_log(frame, "flat")], flat, train, ("mass", "rotating_mass_factor", "davis_a"))
@@ -144,6 +138,29 @@ def validate_check(count, track, train):
           f"over {len(gaps)} runs (mean {np.mean(gaps):+.3f})")
 
 
+def held_coverage(pairs, track, train, draws=200):
+    """Both intervals where a parameter is held: pairs of level constant-speed logs (25 m/s for 400 s,
+    log seeds 2k + 1 and 2k + 2) of the train with A 30 % higher, B half and C 10 % higher than its
+    file, calibrated for mass, A, B, C with ``draws`` bootstrap draws; how often each interval holds
+    the truth of the parameters reported identifiable."""
+    truth = true_train(train, davis=(1.3, 0.5, 1.1))
+    true = priors(truth)
+    level, hits, held = level_track(track), {}, 0
+    for k in range(pairs):
+        logs = [as_log(steady_log(truth, seed), f"steady{seed}") for seed in (2 * k + 1, 2 * k + 2)]
+        result = calibrate_logs(logs, level, train, ("mass", "davis_a", "davis_b", "davis_c"), draws)
+        held += not result.table["identifiable"].all()
+        for row in result.table[result.table["identifiable"]].itertuples():
+            h = hits.setdefault(row.name, [0, 0, 0])
+            h[0] += row.low <= true[row.name] <= row.high
+            h[1] += row.boot_low <= true[row.name] <= row.boot_high
+            h[2] += 1
+    print(f"{pairs} pairs of level constant-speed logs, {draws} bootstrap draws; a parameter held in {held}")
+    print("parameter  identified  95 % interval holds truth  bootstrap interval holds truth")
+    for name, (gauss, boot, count) in hits.items():
+        print(f"{name:10s} {count:10d} {gauss:25d} {boot:31d}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--logs", type=int, default=200)
@@ -151,6 +168,7 @@ def main():
     parser.add_argument("--validate-logs", type=int, default=10, help="logs of the validate check")
     parser.add_argument("--workers", type=int, default=1, help="processes for the coverage logs")
     parser.add_argument("--example", type=Path, help="write example logs into this folder and stop")
+    parser.add_argument("--held", type=int, default=0, help="pairs of the held-parameter coverage (e.g. 30)")
     args = parser.parse_args()
     track, train = load_track(TRACK), load_train(TRAIN)
     if args.example:
@@ -159,6 +177,9 @@ def main():
     if args.logs:
         _, _, wall = harness.timed(lambda: coverage(args.logs, args.workers))
         print(f"coverage wall time {wall:.0f} s with {args.workers} worker(s)")
+    if args.held:
+        _, cpu, wall = harness.timed(lambda: held_coverage(args.held, track, train))
+        print(f"held-parameter coverage: {wall:.0f} s wall, {cpu:.0f} s CPU")
     identifiability(track, train)
     if args.validate:
         validate_check(args.validate_logs, track, train)

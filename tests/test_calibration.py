@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from ecostudy.calibration.estimate import calibrate_logs
 from ecostudy.calibration.fit import DEFAULT_FIT, priors
-from ecostudy.calibration.generate import LogNoise, follow_work, generate_log, true_train
+from ecostudy.calibration.generate import LogNoise, follow_work, generate_log, level_track, steady_log, true_train
 from ecostudy.calibration.replay import prepare
 from ecostudy.calibration.validate import validate_log
 from ecostudy.cli import app
@@ -19,7 +19,7 @@ from ecostudy.core.errors import EcostudyWarning, InputError
 from ecostudy.core.physics import Envelope
 from ecostudy.core.status import STOP_TOLERANCE_M
 from ecostudy.io.loaders import load_track, load_train, track_from_dict
-from ecostudy.io.logfile import load_log, parse_log, write_log
+from ecostudy.io.logfile import check_traction_sign, load_log, parse_log, write_log
 
 from .conftest import TRACKS, TRAINS
 
@@ -120,10 +120,7 @@ def test_a_parameter_the_logs_do_not_excite_is_held(inputs, truth, logged):
     assert table.loc["efficiency", "estimate"] == train.traction_efficiency  # held, not fitted
     assert table.loc["mass", "identifiable"]
 
-    flat = track_from_dict({"name": "flat", "source": "test", "length_m": track.length,
-                            "stops": [{"name": k, "position_m": float(v)} for k, v in track.stops.items()],
-                            "gradients": [{"position_m": 0, "gradient_permille": 0}],
-                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
+    flat = level_track(track)
     frame, _ = generate_log(flat, truth, THERE, truth, seed=4)
     result = calibrate_logs([as_log(frame)], flat, train, ("mass", "rotating_mass_factor", "davis_a"), draws=0)
     held = result.table.set_index("name")["identifiable"]
@@ -132,42 +129,42 @@ def test_a_parameter_the_logs_do_not_excite_is_held(inputs, truth, logged):
     assert "moves with" in result.reason
 
 
-def steady_log(train, seed, level=25.0, hold=400.0, rate=0.8):
-    """A log of ``train`` on level track at a constant speed: from rest at ``rate`` m/s^2 to ``level``
-    m/s, ``hold`` seconds there, braking at ``rate`` to a stand; the wheel power the interval's energy
-    balance (kinetic energy plus the Davis work over 10 sub-steps), 10 Hz, speed noise 0.05 m/s, 1 %."""
-    rise = level / rate
-    t = np.arange(0.0, 2 * rise + hold + 20.0, 0.1)
-    fine = np.linspace(0.0, t[-1], 10 * (len(t) - 1) + 1)
-    v = np.clip(np.minimum(rate * fine, level) - np.maximum(rate * (fine - rise - hold), 0.0), 0.0, None)
-    resist = (train.davis[0] + train.davis[1] * v + train.davis[2] * v * v) * np.where(v > 0, v, 0.0)
-    davis = np.add.reduceat(0.5 * (resist[1:] + resist[:-1]) * np.diff(fine), np.arange(0, len(fine) - 1, 10))
-    vs = v[::10]
-    work = 0.5 * train.mass * np.diff(vs ** 2) + davis
-    x = 300.0 + np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(fine))])[::10]
-    rng = np.random.default_rng(seed)
-    return pd.DataFrame({"time_s": t, "position_m": x, "speed_mps": vs + rng.normal(0.0, 0.05, len(t)),
-                         "power_wheel_kW": np.append(work / 0.1, 0.0) * (1 + rng.normal(0.0, 0.01, len(t))) / 1e3})
+def steady_calibration(inputs, draws):
+    """Two level-track constant-speed logs of a train whose Davis split differs from its file's (A 30 %
+    higher, B half, C 10 % higher), calibrated for mass and A, B, C: (result, true values)."""
+    track, train = inputs
+    truth = true_train(train, davis=(1.3, 0.5, 1.1))
+    logs = [as_log(steady_log(truth, seed), f"steady{seed}") for seed in (1, 2)]
+    result = calibrate_logs(logs, level_track(track), train, ("mass", "davis_a", "davis_b", "davis_c"), draws=draws)
+    true = {"mass": truth.static_mass, "davis_a": truth.davis[0], "davis_b": truth.davis[1], "davis_c": truth.davis[2]}
+    return result, true
 
 
 def test_a_davis_split_that_constant_speed_does_not_show_is_not_reported_with_narrow_intervals(inputs):
-    """Level track at one constant speed: A + B v + C v^2 is seen at one v only. The train's split
-    differs from its file's (A 30 % higher, B half, C 10 % higher); a term not identifiable is held at
-    the file's value, and the terms still reported identifiable have intervals that hold the truth
-    (the intervals of a refit with B held at the file's value alone are 4 and 9 times narrower and miss it)."""
-    track, train = inputs
-    flat = track_from_dict({"name": "flat", "source": "test", "length_m": track.length,
-                            "stops": [{"name": k, "position_m": float(v)} for k, v in track.stops.items()],
-                            "gradients": [{"position_m": 0, "gradient_permille": 0}],
-                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
-    truth = true_train(train, davis=(1.3, 0.5, 1.1))
-    logs = [as_log(steady_log(truth, seed), f"steady{seed}") for seed in (1, 2)]
-    result = calibrate_logs(logs, flat, train, ("mass", "davis_a", "davis_b", "davis_c"), draws=0)
+    """Level track at one constant speed: A + B v + C v^2 is seen at one v only. A term not
+    identifiable is held at the file's value, and the terms still reported identifiable have
+    intervals that hold the truth (the intervals of a refit with B held at the file's value alone
+    are 4 and 9 times narrower and miss it)."""
+    result, true = steady_calibration(inputs, draws=0)
     table = result.table.set_index("name")
     assert result.status == "flagged" and not table.loc["davis_b", "identifiable"]
-    true = {"mass": truth.static_mass, "davis_a": truth.davis[0], "davis_b": truth.davis[1], "davis_c": truth.davis[2]}
     for name, row in table[table["identifiable"]].iterrows():
         assert row["low"] <= true[name] <= row["high"], (name, true[name], row.to_dict())
+
+
+def test_the_bootstrap_carries_the_uncertainty_of_a_held_parameter(inputs):
+    """The same logs, bootstrapped: each draw also draws the held B about its held value with the
+    spread it had while free, so A's and C's bootstrap intervals hold the truth (refitted with B
+    held at the file's value in every draw they were 4307 to 4472 N and 5.61 to 5.87, missing
+    A 4677 N and C 7.667), about as wide as the Gauss-Newton intervals, around the estimate."""
+    result, true = steady_calibration(inputs, draws=40)
+    table = result.table.set_index("name")
+    assert not table.loc["davis_b", "identifiable"] and np.isnan(table.loc["davis_b", "boot_low"])
+    for name in ("davis_a", "davis_c"):
+        row = table.loc[name]
+        assert row["boot_low"] <= true[name] <= row["boot_high"], (name, true[name], row.to_dict())
+        assert row["boot_low"] < row["estimate"] < row["boot_high"]
+        assert 0.5 < (row["boot_high"] - row["boot_low"]) / (row["high"] - row["low"]) < 1.5, row.to_dict()
 
 
 def test_speed_residuals_of_a_noisy_speed_sensor_say_so(inputs, truth):
@@ -331,6 +328,12 @@ def without_column(text, index):
     (good().replace("\n---\ntime_s", "\nstart_position_km: 0.3\n---\ntime_s"),
      ["header: start_position_km: unknown field; did you mean start_position_m?"]),
     (good().replace("train:", "'': instant\ntrain:"), ["header: a field without a name (value 'instant')"]),
+    (good().replace("train:", "speed_unit: km/h\ntrain:"),
+     ["header: speed_unit: says how the columns read", "the unit is part of each column's name"]),
+    (good().replace("train:", "units: {speed: kmh, force: kN}\ntrain:"), ["header: units: says how the columns read"]),
+    (good().replace("train:", "channels: {speed_mps: 2}\ntrain:"), ["header: channels: says how the columns read"]),
+    (good().replace("train:", "force_sign: braking positive\ntrain:"), ["header: force_sign: says how the columns"]),
+    (good().replace("train:", "time_offset_s: 3600\ntrain:"), ["header: time_offset_s: says how the columns read"]),
     (good().replace("train:", "null: instant\ntrain:"), ["header: a field without a name (value 'instant')"]),
     (good().replace("speed_mps", "speed_mph"), ["speed_mph", "unknown column", "unit is part of the name"]),
     (good().replace("force_kN", "speed_kmh"), ["columns", "two columns give the speed"]),
@@ -364,6 +367,40 @@ def test_bad_logs_are_one_line(tmp_path, text, fragments):
     for fragment in fragments:
         assert fragment in lines[0], lines[0]
     assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def steep_line(permille):
+    """A line of two descents of ``permille`` (2.1 km each) between three stops on level track."""
+    return track_from_dict({"name": f"steep {permille}", "source": "test", "length_m": 6300,
+                            "stops": [{"name": "Top", "position_m": 300}, {"name": "Mid", "position_m": 3000},
+                                      {"name": "Bottom", "position_m": 5700}],
+                            "gradients": [{"position_m": 0, "gradient_permille": 0},
+                                          {"position_m": 600, "gradient_permille": -permille},
+                                          {"position_m": 2700, "gradient_permille": 0},
+                                          {"position_m": 3300, "gradient_permille": -permille},
+                                          {"position_m": 5400, "gradient_permille": 0}],
+                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
+
+
+@pytest.mark.parametrize("permille", [40, 60])
+def test_the_traction_sign_check_on_steep_grades(inputs, permille):
+    """Mountain and rack lines have 40 to 60 per mille. Down them a train that takes traction for the
+    first 4 % of the run and then coasts gains 0.3 m/s^2 and more with no force at the wheel
+    (g times the grade is 0.39 and 0.59 m/s^2): its log is read, the speed gained beyond what the
+    gradient gives is what shows traction. Up them a train under full traction for 75 % of the run,
+    logged the same. Each log with the sign of its force and wheel power flipped is refused."""
+    track, train = steep_line(permille), inputs[1]
+    coast = generate_log(track, train, ["Top", "Mid", "Bottom"], train, seed=1,
+                         driver=lambda distance, rng: (np.array([0.0, 0.04]) * distance, [1.0, 0.0]))[0]
+    climb = generate_log(track, train, ["Bottom", "Mid", "Top"], train, seed=2,
+                         driver=lambda distance, rng: (np.array([0.0, 0.75]) * distance, [1.0, 0.0]))[0]
+    for frame in (coast, climb):
+        check_traction_sign(as_log(frame), track)
+        flipped = frame.assign(force_kN=-frame["force_kN"], power_wheel_kW=-frame["power_wheel_kW"])
+        with pytest.raises(InputError, match="force_kN: not positive in .* beyond what the gradient gives"):
+            check_traction_sign(as_log(flipped), track)
+        with pytest.raises(InputError, match="power_wheel_kW: not positive in"):
+            check_traction_sign(as_log(flipped.drop(columns="force_kN")), track)
 
 
 def test_a_column_ecostudy_does_not_model_is_warned_by_name_and_ignored():

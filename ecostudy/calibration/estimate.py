@@ -68,10 +68,10 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     starting from and regularised by nothing but the ``train``'s values (the prior)."""
     stage("least-squares fit, identifiability")
     problem = Problem.from_logs(logs, track, train)
-    free, p, cov, held = identify(problem, list(names))
+    free, p, cov, held, spread = identify(problem, list(names))
     theta = problem.theta(free, p)
     s = scales(problem.prior)
-    boot = bootstrap(problem, free, p, draws, seed) if len(logs) > 1 and free and draws > 0 else None
+    boot = bootstrap(problem, free, p, draws, seed, spread) if len(logs) > 1 and free and draws > 0 else None
     rows = []
     for name in names:
         row = {"name": name, "unit": PARAMETERS[name][0], "prior": problem.prior[name], "estimate": theta[name],

@@ -109,16 +109,20 @@ class Problem:
         self.gains = [run.whitened(run.gains(mass, self.sigma["speed"], self.sigma["power"]), self.sigma["speed"])
                       for run in self.runs]
 
-    def theta(self, names, p):
+    def theta(self, names, p, fixed=None):
+        """Every parameter's value [SI]: ``names`` at the relative values ``p``, those in ``fixed``
+        (a dict, SI) at theirs, the rest at the prior."""
         s = scales(self.prior)
         out = dict(self.prior)
+        out.update(fixed or {})
         out.update({n: self.prior[n] + s[n] * (float(x) - 1.0) for n, x in zip(names, p)})
         return out
 
-    def blocks(self, names, p, logs=None):
+    def blocks(self, names, p, logs=None, fixed=None):
         """Unweighted residuals per block (speed [m/s], traction and regeneration log-ratios [-])
-        over the logs named in ``logs`` (a list, repeats allowed; None: all)."""
-        th = self.theta(names, p)
+        over the logs named in ``logs`` (a list, repeats allowed; None: all), parameters not in
+        ``names`` at ``fixed`` or the prior (:meth:`theta`)."""
+        th = self.theta(names, p, fixed)
         mass, davis = th["mass"] * (1.0 + th["rotating_mass_factor"]), (th["davis_a"], th["davis_b"], th["davis_c"])
         chosen = logs if logs is not None else list(self.traction)
         weights = coefficients(mass, th["mass"], davis)
@@ -135,8 +139,8 @@ class Problem:
             by_log.setdefault(run.log, []).append((run, gains))
         return [run for n in (logs if logs is not None else list(self.traction)) for run in by_log[n]]
 
-    def residuals(self, names, p, logs=None):
-        b = self.blocks(names, p, logs)
+    def residuals(self, names, p, logs=None, fixed=None):
+        b = self.blocks(names, p, logs, fixed)
         return np.concatenate([b["speed"], b["traction"] / self.sigma["traction"],
                                b["regeneration"] / self.sigma["regeneration"]])
 
@@ -150,14 +154,15 @@ class Problem:
         return np.column_stack(cols) if cols else np.zeros((len(self.residuals(names, p)), 0))
 
 
-def solve(problem, names, start=None, logs=None):
-    """Least squares over ``names`` (relative values p, each theta >= 0); returns p."""
+def solve(problem, names, start=None, logs=None, fixed=None):
+    """Least squares over ``names`` (relative values p, each theta >= 0), the others at ``fixed``
+    or the prior; returns p."""
     if not names:
         return np.zeros(0)
     s = scales(problem.prior)
     lower = [1.0 - problem.prior[n] / s[n] for n in names]
     x0 = np.ones(len(names)) if start is None else np.clip(start, np.array(lower) + 1e-6, None)
-    result = least_squares(lambda p: problem.residuals(names, p, logs), x0, method="trf",
+    result = least_squares(lambda p: problem.residuals(names, p, logs, fixed), x0, method="trf",
                            bounds=(lower, np.inf), x_scale=1.0, xtol=1e-10, ftol=1e-10)
     return result.x
 
@@ -214,8 +219,10 @@ def widened(cov, free, widest):
 def identify(problem, requested):
     """Fit ``requested`` parameters, holding those the logs do not identify at their prior.
 
-    Returns (free names, p, covariance, held: {name: reason})."""
-    free, held, widest = list(requested), {}, {}
+    Returns (free names, p, covariance, held: {name: reason}, spread: {held name: its standard
+    deviation in relative units in the fit where it was held, the largest it had while free (inf
+    along a null direction: the prior fixes it by convention)})."""
+    free, held, widest, spread = list(requested), {}, {}, {}
     while True:
         p = solve(problem, free)
         estimate_noise(problem, free, p)
@@ -224,14 +231,14 @@ def identify(problem, requested):
         p = solve(problem, free, p)
         cov, sv, weakest = covariance(problem, free, p)
         if not free:
-            return free, p, cov, held
+            return free, p, cov, held, spread
         cov = widened(cov, free, widest)
         s = scales(problem.prior)
         width = np.array([Z95 * np.sqrt(cov[j, j]) * s[n] / max(abs(problem.prior[n]), 1e-300)
                           for j, n in enumerate(free)])
         worst = int(np.argmax(width))
         if width[worst] <= MAX_RELATIVE_WIDTH:
-            return free, p, cov, held
+            return free, p, cov, held, spread
         partners = [n for j, n in enumerate(free) if j != worst and abs(weakest[j]) > 0.3]
         ratio = sv[-1] / sv[0] if sv[0] > 0 else 0.0
         reason = (f"95 % half-width {'unbounded' if not np.isfinite(width[worst]) else f'{100 * width[worst]:.0f} %'}"
@@ -239,19 +246,33 @@ def identify(problem, requested):
         if partners:
             reason += f"; moves with {', '.join(partners)} (singular value ratio {ratio:.1e})"
         held[free[worst]] = reason
+        spread[free[worst]] = float(np.sqrt(cov[worst, worst]))
         free.pop(worst)
 
 
-def bootstrap(problem, names, p, draws, seed=0):
-    """Estimates of ``names`` refitted on ``draws`` resamples of the logs (with replacement) [SI]."""
+def bootstrap(problem, names, p, draws, seed=0, spread=None):
+    """Estimates of ``names`` refitted on ``draws`` resamples of the logs (with replacement) [SI].
+
+    A parameter held at its prior (``spread``: {name: standard deviation, relative}, as
+    :func:`identify` gives it) is not known as well as holding it pretends: each draw also draws
+    it, normal about the value it is held at with the largest spread it had while free (cut at
+    theta >= 0; not drawn along a null direction, infinite spread, where the prior fixes it by
+    convention), and refits the others with it there. Resampling the logs alone would carry no
+    uncertainty of a held parameter (its value is the same in every draw), and two logs give
+    three distinct resamples. A parametric bootstrap for the held parameters (Efron & Tibshirani,
+    "An Introduction to the Bootstrap", the parametric bootstrap) inside the one over logs; the
+    held parameters are drawn independently of each other."""
     logs = list(problem.traction)
     rng = np.random.default_rng(seed)
+    s = scales(problem.prior)
+    drawn = {n: sd for n, sd in (spread or {}).items() if np.isfinite(sd) and sd > 0}
     out = []
     stage("bootstrap over logs", total=draws, unit="draws")
     for draw in range(draws):
         pick = [logs[i] for i in rng.integers(0, len(logs), len(logs))]
-        q = solve(problem, names, p, pick)
-        th = problem.theta(names, q)
+        fixed = {n: max(problem.prior[n] + s[n] * sd * rng.standard_normal(), 0.0) for n, sd in drawn.items()}
+        q = solve(problem, names, p, pick, fixed)
+        th = problem.theta(names, q, fixed)
         out.append([th[n] for n in names])
         step(draw + 1)
     return np.array(out)

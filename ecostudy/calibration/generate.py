@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.core.grid import Profile, intervals_of, make_segment
+from ecostudy.io.loaders import track_from_dict
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import davis_resistance, gradient_force
 from ecostudy.core.plant import Plant
@@ -101,9 +102,10 @@ def sample_run(plant, run, times):
     return out
 
 
-def generate_log(track, train, stops, truth, seed=0, noise=LogNoise(), dwell=20.0):
+def generate_log(track, train, stops, truth, seed=0, noise=LogNoise(), dwell=20.0, driver=phases):
     """A logged run of ``truth`` (a train, see :func:`true_train`) over the track's ``stops`` (names,
-    in travel order): a table with the columns of a log file (:mod:`ecostudy.io.logfile`) and the
+    in travel order), each run driven by ``driver(distance, rng)`` (node positions, handles; as
+    :func:`phases`) and braked into the stop: a table with the columns of a log file (:mod:`ecostudy.io.logfile`) and the
     noise-free record (a dict of arrays: t, x, v, force, power_wheel, power_line, SI)."""
     rng = np.random.default_rng(seed)
     dt = 1.0 / noise.rate
@@ -115,7 +117,7 @@ def generate_log(track, train, stops, truth, seed=0, noise=LogNoise(), dwell=20.
                                "_from", "_far")
         distance = abs(track.stops[to_stop] - position)
         plant = Plant(segment, truth)
-        nodes, handle = phases(distance, rng)
+        nodes, handle = driver(distance, rng)
         brake = -rng.uniform(0.5, 0.8)
         start = brake_point(plant, nodes, handle, brake, distance)
         for i in range(2):  # move the braking start by the stop's miss; the last drive is the run
@@ -167,3 +169,29 @@ def follow_work(record, track, truth, model):
         out.append((float(np.sum(0.5 * (power[s:e] + power[s + 1:e + 1]) * dt[s:e])),
                     float(np.sum(np.maximum(work[s:e], 0.0)))))
     return out
+
+
+def level_track(track):
+    """``track`` (its stops and length) without gradients, limited to 140 km/h."""
+    return track_from_dict({"name": f"{track.name}, level", "source": "generated", "length_m": track.length,
+                            "stops": [{"name": k, "position_m": float(v)} for k, v in track.stops.items()],
+                            "gradients": [{"position_m": 0, "gradient_permille": 0}],
+                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
+
+
+def steady_log(train, seed, level=25.0, hold=400.0, rate=0.8):
+    """A log of ``train`` on level track at a constant speed: from rest at ``rate`` m/s^2 to ``level``
+    m/s, ``hold`` seconds there, braking at ``rate`` to a stand; the wheel power the interval's energy
+    balance (kinetic energy plus the Davis work over 10 sub-steps), 10 Hz, speed noise 0.05 m/s, 1 %."""
+    rise = level / rate
+    t = np.arange(0.0, 2 * rise + hold + 20.0, 0.1)
+    fine = np.linspace(0.0, t[-1], 10 * (len(t) - 1) + 1)
+    v = np.clip(np.minimum(rate * fine, level) - np.maximum(rate * (fine - rise - hold), 0.0), 0.0, None)
+    resist = (train.davis[0] + train.davis[1] * v + train.davis[2] * v * v) * np.where(v > 0, v, 0.0)
+    davis = np.add.reduceat(0.5 * (resist[1:] + resist[:-1]) * np.diff(fine), np.arange(0, len(fine) - 1, 10))
+    vs = v[::10]
+    work = 0.5 * train.mass * np.diff(vs ** 2) + davis
+    x = 300.0 + np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(fine))])[::10]
+    rng = np.random.default_rng(seed)
+    return pd.DataFrame({"time_s": t, "position_m": x, "speed_mps": vs + rng.normal(0.0, 0.05, len(t)),
+                         "power_wheel_kW": np.append(work / 0.1, 0.0) * (1 + rng.normal(0.0, 0.01, len(t))) / 1e3})

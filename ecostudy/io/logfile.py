@@ -23,12 +23,14 @@ with a warning naming them; a header field that is a near miss of a known one no
 (:func:`known_header`) is refused.
 Every problem is one line ``file: field: what is wrong`` (exit status 2): a missing header,
 unknown units of a known quantity, values that are not finite numbers, time not increasing, gaps, speeds
-that do not fit the positions (a unit mix-up), positions that jump (GPS), a force or wheel power not positive where the
-train pulls (a sign flipped, a dead channel), positions off the track (:func:`check_on_track`).
+that do not fit the positions (a unit mix-up), positions that jump (GPS); once the track is known, positions off
+the track (:func:`check_on_track`) and a force or wheel power not positive where the train pulls (a sign flipped,
+a dead channel; :func:`check_traction_sign`, beyond what the track's gradient gives).
 """
 import csv
 import difflib
 import io
+import re
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,6 +43,8 @@ from pydantic import Field
 
 from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.grid import Profile
+from ecostudy.core.physics import gradient_force
 from ecostudy.core.types import Track
 from ecostudy.core.units import FloatArray
 from ecostudy.io.documents import named_file, not_a_file, validate
@@ -71,8 +75,8 @@ SPEED_DISTANCE = (0.8, 1.25)  # speeds integrated over the positions' travel, ou
 TRAVEL_STEP = 10.0     # [s] the positions' travel is summed over steps of this length
 JUMP = 10.0            # [m] a position step this much (plus half the speeds' distance) off the speeds' is a jump
 JUMP_SHARE = 0.1       # jumps in more than this share of the steps: not jumps but a unit mix-up
-PULLING = 0.3          # [m/s^2] speed gained faster than this over PULLING_TIME: in traction (no gradient of a
-PULLING_TIME = 2.0     # [s]  railway gives it while braking); the work at the wheel must be positive there
+PULLING = 0.3          # [m/s^2] speed gained faster than this over PULLING_TIME beyond what the gradient gives:
+PULLING_TIME = 2.0     # [s]  in traction; the work at the wheel must be positive there
 
 
 class LogHeader(Strict):
@@ -102,7 +106,7 @@ class LoggedRun:
     power_wheel: np.ndarray | None = None  # [W]
     power_line: np.ndarray | None = None   # drawn from the line > 0, fed back < 0 [W]
     path: Path | None = None
-    columns: tuple[str, ...] = field(default=())  # (position column, speed column) as the file names them
+    columns: tuple[str, ...] = field(default=())  # (position, speed, force, wheel power column) as the file names them
 
     def named(self, field: str) -> Path:
         """The header's ``track`` or ``train`` file, relative to the log's folder; one that is not there
@@ -134,6 +138,18 @@ def split_header(text: str, path: Where) -> tuple[dict[str, Any], str]:
 # (tracks 0.91, power_sampling_mode 0.85, start_position_km 0.97, speed_sigma 0.85; vehicle,
 # train_id 0.77, source_file 0.71 are not)
 NEAR_MISS = 0.8
+# words of a header field's name that say how the columns read (speed_unit, units, time_offset_s, force_sign,
+# power_scale): left out, the columns would be read otherwise than the file means
+DECLARES = {"unit", "units", "scale", "scaling", "factor", "multiplier", "offset", "datum", "sign", "convention",
+            "inverted"}
+
+
+def declares_columns(name: str, value: Any) -> bool:
+    """A header field that says how the columns read: a word of :data:`DECLARES` in its name, or a
+    mapping whose keys name a column or a quantity (``channels: {speed: km/h}``)."""
+    words = set(re.split(r"[^a-z0-9]+", name.lower()))
+    keys = {str(k) for k in value} if isinstance(value, dict) else set()
+    return bool(words & DECLARES or keys & (set(COLUMNS) | QUANTITIES))
 
 
 def known_header(fields: Mapping[Any, Any], path: Where) -> dict[str, Any]:
@@ -141,17 +157,26 @@ def known_header(fields: Mapping[Any, Any], path: Where) -> dict[str, Any]:
     naming it and the file, unless it is a near miss (:data:`NEAR_MISS`) of a known field the header
     does not give: that one is refused naming the field(s) it may be, as every known field changes
     what is computed (a misspelt ``power_sampling: instant`` left out would integrate the powers as
-    interval means). A field without a name (empty, or YAML's null) is refused."""
+    interval means). A field that says how the columns read (:func:`declares_columns`: a unit, a
+    scale, an offset, a sign) is refused too: the units are in the column names and traction is
+    positive, and left out it would leave the columns read otherwise than the file means. A field
+    without a name (empty, or YAML's null) is refused."""
     known = list(LogHeader.model_fields)
     lines, ignored = [], []
     for key, value in fields.items():
         if key is None or not str(key).strip():  # '': x, null: x: nothing to name in a warning
             lines.append(problem(f"{path}: header", "", f"a field without a name (value {value!r}): name it or "
                                  "remove it"))
-    for name in (str(key) for key in fields if key is not None and str(key).strip() and str(key) not in known):
+    for name, value in ((str(key), value) for key, value in fields.items()
+                        if key is not None and str(key).strip() and str(key) not in known):
         near = [k for k in difflib.get_close_matches(name, known, n=3, cutoff=NEAR_MISS) if k not in fields]
         if near:
             lines.append(problem(f"{path}: header", name, f"unknown field; did you mean {' or '.join(near)}?"))
+        elif declares_columns(name, value):
+            lines.append(problem(f"{path}: header", name, "says how the columns read (a unit, scale, offset or "
+                                 "sign), which ecostudy does not apply: the unit is part of each column's name "
+                                 "(speed_kmh, position_km, force_kN) and traction is positive; convert or rename "
+                                 "the columns and remove this field"))
         else:
             ignored.append(name)
     if lines:
@@ -264,21 +289,28 @@ def check_jumps(log: "LoggedRun", path: Where) -> None:
                                  f"({jumps.size} such step{'s' if jumps.size > 1 else ''}; a GPS jump?)"))
 
 
-def check_traction_sign(t: FloatArray, v: FloatArray, columns: Mapping[str, tuple[str, FloatArray]],
-                        path: Where) -> None:
+def check_traction_sign(log: "LoggedRun", track: Track) -> None:
     """Refuse a force or wheel power that is not positive in most rows where the train gains speed
-    faster than :data:`PULLING` (traction is positive, braking negative: a sign flipped at the
-    logger, or a dead channel reading zero)."""
+    faster than :data:`PULLING` beyond what the gradient gives (traction is positive, braking
+    negative: a sign flipped at the logger, or a dead channel reading zero). The gradient's share,
+    g times the height lost per metre run along the logged positions over the same
+    :data:`PULLING_TIME`, counted as if all the mass weighed: on a steep descent a coasting or
+    lightly braked train gains up to that (0.39 m/s^2 at 40 per mille, 0.59 at 60) without traction."""
+    if log.v is None:
+        return
+    t, speed = log.t, np.abs(log.v)
     k = max(int(round(PULLING_TIME / float(np.median(np.diff(t))))), 1)
-    speed = np.abs(v)
-    rows = np.nonzero((speed[k:] - speed[:-k]) / (t[k:] - t[:-k]) > PULLING)[0] + k // 2
-    for quantity in ("force", "power_wheel"):
-        if quantity in columns and rows.size >= 5:
-            name, values = columns[quantity]
+    height = Profile(track.gradient_positions, track.gradients).integral(log.x)
+    grade = (height[k:] - height[:-k]) / np.maximum(np.abs(log.x[k:] - log.x[:-k]), 1e-9)  # along the travel
+    gained = (speed[k:] - speed[:-k]) / (t[k:] - t[:-k]) + gradient_force(1.0, grade)
+    rows = np.nonzero(gained > PULLING)[0] + k // 2
+    for name, values in zip(log.columns[2:], (log.force, log.power_wheel)):
+        if values is not None and rows.size >= 5:
             negative = int(np.sum(values[rows] <= 0))
             if negative > rows.size / 2:
-                raise InputError(problem(path, name, f"not positive in {negative} of {rows.size} rows where the train "
-                                         f"gains more than {PULLING:g} m/s^2: traction is positive, braking negative"))
+                raise InputError(problem(log.path or log.name, name, f"not positive in {negative} of {rows.size} "
+                                         f"rows where the train gains more than {PULLING:g} m/s^2 beyond what the "
+                                         "gradient gives: traction is positive, braking negative"))
 
 
 def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
@@ -308,10 +340,9 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
         return column[q][1] if q in column else None
 
     log = LoggedRun(name or Path(path).stem, header, t, x, v, get("force"), get("power_wheel"), line, Path(path),
-                    (column.get("position", (INTEGRATED,))[0], column.get("speed", ("",))[0]))
+                    (column.get("position", (INTEGRATED,))[0], *(column.get(q, ("",))[0]
+                                                                  for q in ("speed", "force", "power_wheel"))))
     check_series(log, path)
-    if v is not None:
-        check_traction_sign(t, v, column, path)
     return log
 
 

@@ -22,7 +22,7 @@ from ecostudy.calibration.savings import savings
 from ecostudy.calibration.validate import validate_log
 from ecostudy.core.errors import InputError, problem
 from ecostudy.io.loaders import load_track, load_train
-from ecostudy.io.logfile import check_on_track, load_log
+from ecostudy.io.logfile import check_on_track, check_traction_sign, load_log
 from ecostudy.io.trainout import calibrated_document, write_train
 from ecostudy.core.status import Status
 from ecostudy.io.folder import write_summary
@@ -44,7 +44,8 @@ def parse_fit(text):
 
 def load_inputs(log_paths, train_path, track_path):
     """(logs, track, train, track path, train path): the logs read and checked, the track and train
-    given, or else the ones the first log's header names; every log's positions on the track."""
+    given, or else the ones the first log's header names; every log's positions on the track and the
+    sign of its traction (beyond what the track's gradients give)."""
     logs = [load_log(p) for p in log_paths]
     names = [log.name for log in logs]
     if len(set(names)) != len(names):
@@ -55,6 +56,7 @@ def load_inputs(log_paths, train_path, track_path):
     track, train = load_track(track_path), load_train(train_path)
     for log in logs:
         check_on_track(log, track)
+        check_traction_sign(log, track)
     return logs, track, train, track_path, train_path
 
 
