@@ -90,6 +90,8 @@ def test_minlp_reports_status_bound_and_beats_round(tmp_path):
     rnd = das_run(ato, "round")[0]
     # MindtPy's own termination, or the deadline that killed its child (a loaded machine) said as such
     assert mi["method"] == "minlp" and ("MindtPy" in mi["status"] or "time limit" in mi["status"])
+    if "time limit" in mi["status"]:  # the reason says which advice stands and what to change
+        assert f"the advice is the {mi['solver'].removesuffix(' re-simulated')}; --das-time-limit" in mi["status"]
     assert mi["bound_kWh"] is None or mi["bound_kWh"] <= mi["traction_energy_kWh"] * (1 + 1e-6)
     assert mi["bound_note"]
     # the phases solution is its starting pattern, so it never does worse

@@ -204,7 +204,7 @@ def test_the_speed_limit_has_one_colour_in_every_plot(rokin, regional_compare, s
     for fig in figures:
         lines = limit_lines(fig.axes[0])
         assert len(lines) == 1 and to_hex(lines[0].get_color()) == SPEED_LIMIT
-    gradient = plots.speed_plot(rokin, None).axes[1].get_lines()[0]
+    gradient = plots.speed_plot(rokin).axes[1].get_lines()[0]
     assert to_hex(gradient.get_color()) == style.LIMIT["gradient"]
 
 
@@ -220,7 +220,7 @@ def test_energy_flow_adds_up_to_the_traction_energy(rokin):
     assert flow.drawn > flow.traction and 0 < flow.regenerated < flow.braking
     assert flow.resistance > 0 and abs(flow.kinetic) < 1e-6 * flow.traction  # stop to stop
 
-    ax = plots.energy_plot(rokin, None).axes[0]
+    ax = plots.energy_plot(rokin).axes[0]
     bars = {c.get_label(): (c.patches[0].get_y(), c.patches[0].get_height()) for c in ax.containers}
     assert list(bars) == ["drawn from the line", "losses in traction", "traction at the wheel", "resistance",
                           "potential energy", "kinetic energy", "regeneration returned", "braking dissipated",

@@ -68,13 +68,16 @@ def test_check_command_passes_an_optimum_and_rejects_a_poor_profile(tmp_path):
     assert json.loads((tmp_path / "opt" / "check.json").read_text())["agreement_pct"] >= 95
     assert runner.invoke(app, ["solve", *args, "--objective", "time", "--out", str(tmp_path / "ao")]).exit_code == 0
     own = runner.invoke(app, ["check", str(tmp_path / "ao")])  # the all-out run IS optimal for its own time
-    assert own.exit_code == 0, own.output
+    assert own.exit_code == 0 and own.output.rstrip().endswith("check: ok"), own.output
     t_ao = json.loads((tmp_path / "ao" / "summary.json").read_text())["running_time_s"]
     poor = runner.invoke(app, ["check", str(tmp_path / "ao"), "--time", f"{1.1 * t_ao:.2f}"])
     assert poor.exit_code == 1, poor.output
     report = json.loads((tmp_path / "ao" / "check.json").read_text())
     assert report["agreement_pct"] < 50
     assert report["disagreements"] and "inconsistent: MA at 0-" in poor.output
+    # the last line says why it exits 1, though the run checked is itself ok
+    assert "the run checked: ok" in poor.output and poor.output.rstrip().splitlines()[-1].startswith(
+        "check: flagged: ") and "below 95 %: not the energy-optimal" in poor.output, poor.output
 
 
 def _regenerative(train, eta_t=0.9, eta_r=0.8, force_kN=400):
@@ -150,3 +153,4 @@ def test_check_of_a_flagged_run_says_so(tmp_path):
     assert report["agreement_pct"] >= 95
     assert report["run_status"].startswith("flagged: re-simulation outside tolerance"), report["run_status"]
     assert r.exit_code == 1 and "the run checked: flagged: re-simulation" in r.output, r.output
+    assert r.output.rstrip().endswith("check: flagged: the run checked is not ok"), r.output

@@ -119,7 +119,8 @@ def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, w
     ran = run_expanded("network", expanded, study, workers, dask, retry_failed, progress=progress,
                        draw=network_files(plot, figures))
     for name, row in ran.table.set_index("strategy").iterrows():
-        note(f"{name:12s} " + (f"substation {row['substation_kWh']:.3f} kWh, {row['wall_s']:.1f} s"
+        note(f"{name:12s} " + (f"substation {row['substation_kWh']:.3f} kWh, "
+                               f"scored {row['wall_s']:.1f} s after its start"
                                if str(row["status"]).split(":")[0] != "failed" else str(row["status"]).upper()))
     write_html(ran.output)
     return reported(ran.output, [shown(ran.table, NETWORK_COLUMNS), counts_line(ran.counts, "strategies"),

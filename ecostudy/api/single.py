@@ -145,9 +145,13 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
              f"residual {report['stationarity_residual']:.1e}"]
     lines += [f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m "
               f"(lambda/v from {d['psi_min']:.2f} to {d['psi_max']:.2f})" for d in report["disagreements"]]
-    lines += [f"the run checked: {report['run_status']}", f"written {result_dir}/check.json"]
     run_ok = Status.parse(report["run_status"]).ok
-    return Note(report["agreement_pct"] >= 95.0 and run_ok, "\n".join(lines), report)
+    agrees = report["agreement_pct"] >= 95.0
+    reasons = ([] if agrees else [f"{report['agreement_pct']:.1f} % of the distance agrees, below 95 %: not the "
+                                  f"{report['checked_as']}"]) + ([] if run_ok else ["the run checked is not ok"])
+    lines += [f"the run checked: {report['run_status']}", f"written {result_dir}/check.json",
+              "check: " + ("ok" if not reasons else "flagged: " + "; ".join(reasons))]
+    return Note(agrees and run_ok, "\n".join(lines), report)
 
 
 def export_folder(result_dir: Path, every: str = "1s") -> Note:

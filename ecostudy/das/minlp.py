@@ -59,7 +59,8 @@ def _status(found, name, time_limit):
     if found.limited:
         how = "was stopped at" if found.stopped else "reached"
         pattern = "the best pattern it had found" if found.found else "no pattern found by then"
-        return f"{name} re-simulated", (f"the MINLP search {how} its {time_limit:g} s time limit ({pattern})",)
+        return f"{name} re-simulated", (f"the MINLP search {how} its {time_limit:g} s time limit ({pattern}; "
+                                        f"the advice is the {name}; --das-time-limit gives it longer)",)
     if found.termination.startswith("failed"):
         return f"{name} re-simulated", (f"the MINLP search {found.termination}",)
     return f"MindtPy {found.termination}; {name} re-simulated", ()

@@ -10,7 +10,7 @@ from ecostudy.report import style
 from ecostudy.report.plots import figure
 
 
-def network_plot(fleet, outcome, path, title="", fmt=None, dpi=None):
+def network_plot(fleet, outcome, path=None, title="", fmt=None, dpi=None):
     """Speeds and pantograph powers against time of every train (independent and joint, if
     run), and the substation power of every strategy: trains and strategies each in a colour no
     other curve of the figure has, the strategies' line styles cycled."""
@@ -45,7 +45,7 @@ def network_plot(fleet, outcome, path, title="", fmt=None, dpi=None):
     return style.save(fig, path, fmt, dpi)
 
 
-def supply_plot(fleet, outcome, path, title="", fmt=None, dpi=None):
+def supply_plot(fleet, outcome, path=None, title="", fmt=None, dpi=None):
     """Substation bus voltage [V] and current [A] against time of every strategy, from the
     circuit of eq. 7.8 (``network.circuit.solve_steps``) on each strategy's runs, with the
     nominal and highest voltage of the supply."""

@@ -56,7 +56,7 @@ def _advice_regime(row):
     return "traction" if row.handle > 0 else "braking"
 
 
-def speed_plot(result, path, fmt=None, dpi=None):
+def speed_plot(result, path=None, fmt=None, dpi=None):
     """Speed against distance of a run with its speed limit, the gradient and the handle beneath
     (and the driver advice, re-simulated, when the run has one)."""
     seg, prof, s = result.segment, result.profile, result.summary
@@ -101,7 +101,7 @@ def front_limits(times, margin=0.03):
     return lo - pad, hi + pad
 
 
-def pareto_plot(table, path, title="", weighted=None, fmt=None, dpi=None):
+def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None):
     """Traction and net energy against running time, with the marginal saving beneath;
     ``weighted`` (optional table) adds the weighted-sum points. The time axis spans the front's
     running times: weighted points beyond them are counted in the legend, not drawn."""
@@ -138,7 +138,7 @@ def pareto_plot(table, path, title="", weighted=None, fmt=None, dpi=None):
     return _save(fig, path, fmt, dpi)
 
 
-def profiles_plot(results, path, title="", fmt=None, dpi=None):
+def profiles_plot(results, path=None, title="", fmt=None, dpi=None):
     """Speed against distance for a few points of a front, with the speed limit."""
     fig, ax = figure(figsize=(9, 4.5))
     fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
@@ -151,7 +151,7 @@ def profiles_plot(results, path, title="", fmt=None, dpi=None):
     return _save(fig, path, fmt, dpi)
 
 
-def compare_plot(outcomes, segment, path, title="", fmt=None, dpi=None):
+def compare_plot(outcomes, segment, path=None, title="", fmt=None, dpi=None):
     """Simulated speed against distance of each strategy, with the speed limit; each strategy in
     its own colour (``style.STRATEGY``) and the line styles cycled, so overlapping runs show."""
     fig, ax = figure(figsize=(9, 4.5))
@@ -165,7 +165,7 @@ def compare_plot(outcomes, segment, path, title="", fmt=None, dpi=None):
     return _save(fig, path, fmt, dpi)
 
 
-def journey_plot(results, path, title="", passing=(), fmt=None, dpi=None):
+def journey_plot(results, path=None, title="", passing=(), fmt=None, dpi=None):
     """Speed against distance along the line for each distribution of the running time, every
     distribution in its own colour, with each segment's speed limit; ``passing``: (journey distance [m], highest speed [km/h] or
     None) of timing points, marked."""
@@ -195,7 +195,7 @@ def journey_plot(results, path, title="", passing=(), fmt=None, dpi=None):
     return _save(fig, path, fmt, dpi)
 
 
-def energy_plot(result, path, fmt=None, dpi=None):
+def energy_plot(result, path=None, fmt=None, dpi=None):
     """A run's energy flow as a waterfall [kWh] (``analysis.energyflow``): drawn from the line,
     the losses in traction, the traction at the wheel, then what it becomes (resistance,
     potential and kinetic energy, regeneration returned, braking dissipated), and the net energy

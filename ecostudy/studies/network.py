@@ -60,8 +60,9 @@ def expand_network(path, workers=1, pool=None, note=None, out=None):
     except InfeasibleError as exc:  # a running time below a segment's all-out time: the study's field, by name
         raise InfeasibleError([problem(path, "running_times_s", p) for p in exc.problems]) from None
     if note:
-        note(f"{len(st.names)} trains, {len(st.stops) - 1} segments ({', '.join(f'{t:.1f}' for t in fl.asked_times)} s "
-             f"before rounding to {st.dt} s steps), {fl.steps} steps")
+        segments, asked = len(st.stops) - 1, ", ".join(f"{t:.1f}" for t in fl.asked_times)
+        note(f"{len(st.names)} trains, {segments} segment{'s' * (segments != 1)} ({asked} s before rounding to "
+             f"{st.dt} s steps), {fl.steps} clock steps")
     inputs = {"fields": s.model_dump(mode="json", exclude={"output", "strategies"}),
               "train": st.documents[0], "track": st.documents[1]}
     base = case_key(inputs)
