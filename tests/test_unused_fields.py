@@ -74,5 +74,5 @@ def test_pareto_names_the_study_s_timing_it_does_not_use(tmp_path, field):
                                       "--workers", "1", "--no-plot", "--out", str(tmp_path / "front")])
     assert result.exit_code == 0, result.output
     lines = [line for line in result.stderr.splitlines() if "not used by" in line]
-    assert lines == [f"warning: {path}: {field}: read but not used by `ecostudy pareto`, which runs "
-                     "the study's base case with its own options; `ecostudy run` uses them"], result.stderr
+    assert lines == [f"warning: {path}: {field}: read but not used by `ecostudy pareto` (or `run --kind "
+                     "pareto`), which runs the study's base case with its own options; `ecostudy run` of its cases uses them"], result.stderr

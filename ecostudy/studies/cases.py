@@ -172,6 +172,8 @@ UNUSED = {"solve": ("das", "das_time_limit_s", "scenarios", "sweep"),
           "compare": ("objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep"),
           "pareto": ("running_time_s", "supplement_percent", "timetable",  # its own times: all-out to +supplement_max
                      "objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep")}
+WHO = {"solve": "`ecostudy solve`", "compare": "`ecostudy compare` (or `run --kind compare`)",
+       "pareto": "`ecostudy pareto` (or `run --kind pareto`)"}
 
 
 def load_checked_study(path, command=None):
@@ -187,7 +189,7 @@ def load_checked_study(path, command=None):
         unused = [name for name in UNUSED[command]  # given, and not the value the command uses anyway
                   if getattr(s, name) != fields[name].get_default(call_default_factory=True)]
         if unused:
-            warnings.warn(problem(path, ", ".join(unused), f"read but not used by `ecostudy {command}`, which runs the "
-                                  "study's base case with its own options; `ecostudy run` uses them"),
+            warnings.warn(problem(path, ", ".join(unused), f"read but not used by {WHO[command]}, which runs the "
+                                  "study's base case with its own options; `ecostudy run` of its cases uses them"),
                           EcostudyWarning, stacklevel=2)
     return study
