@@ -88,7 +88,7 @@ def test_each_missed_limit_is_a_reason():
     assert reasons({**good, **grip, "adhesion_use_max": 1.0099}, 100, 0) == []  # within the 1 % of the inputs' digits
     back = {**good, "arrived": False, "ended": "rolling back", "rolling_back": True, "speed_at_end_kmh": -0.26, "stop_error_m": -1329.52}
     assert reasons(back, 100, 0) == ["rolling back at 0.26 km/h 1329.5 m before the stop when the run ended (the loop "
-                                     "ends a run under 1 km/h on the reference's final approach)"]
+                                     "ends a run on the reference's final approach when the train stands or rolls back)"]
     stall = {**good, "arrived": False, "ended": "stalled short of the stop", "stop_error_m": -1323.14, "reference_at_end_kmh": 36.1, "resistance_at_end_kN": 478.9,
              "traction_utmost_at_end_kN": 407.9}
     assert reasons(stall, 100, 0) == ["stopped 1323.1 m short of the stop (tolerance 1 m) with the reference at 36.1 "
