@@ -25,7 +25,7 @@ import pandas as pd
 from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KMH, KN, KWH
-from ecostudy.heavyhaul.airbrake import application_time
+from ecostudy.heavyhaul.airbrake import application_time, brake_lag
 from ecostudy.heavyhaul.checks import reference_problems, ruling_grade, samples_to_start, starting_coupler_force
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
 from ecostudy.heavyhaul.linear import fence
@@ -61,7 +61,7 @@ def _reference(s, path, consist, track, from_stop, to_stop):
     lead = r.limit_lead_samples * s.sample_time_s + (application_time(consist) if s.air_brake else 0.0)  # the pipe's lateness
     try:
         return optimal_reference(consist, track, from_stop, to_stop, r.running_time_s, supplement, r.points,
-                                 r.service_deceleration_mps2, lead)[0]
+                                 r.service_deceleration_mps2, lead, brake_lag(consist) if s.air_brake else 0.0)[0]
     except InfeasibleError as exc:  # the single mass cannot run so fast: the study's field, by name
         field = "reference.running_time_s" if r.running_time_s is not None else "reference.supplement_percent"
         raise InfeasibleError([problem(path, field, f"infeasible: {p.removeprefix('infeasible: ')}") for p in exc.problems])
