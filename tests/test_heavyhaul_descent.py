@@ -36,3 +36,19 @@ def test_a_limit_is_lowered_by_the_speed_gained_while_the_brakes_lag_where_the_g
     assert back.limits == pytest.approx([22.0, 22.0 - (GRAVITY * 0.005 - resisted) * 13.0, 18.0], rel=1e-12)
     assert back.limit_positions.tolist() == [0, 6000, 8000]
     assert descent_margins(track, train, 0.0) is track
+
+
+def test_a_descent_of_several_pieces_keeps_its_largest_margin_throughout():
+    """-10 then -6 per mille under one 22 m/s limit, then level, then -10 per mille again under 18 m/s:
+    the first descent is lowered by the -10 piece's margin over both its pieces (the reference does not
+    speed up between them), the second by its own, under its own limit."""
+    train = single_mass(consist(), 0.3)
+    zero = np.zeros(1)
+    track = Track("t", 12000.0, {}, np.array([0.0, 2000, 4000, 6000, 8000]), np.array([0.0, -0.010, -0.006, 0.0, -0.010]),
+                  zero, zero, np.array([0.0, 7000]), np.array([22.0, 18.0]))
+    a, b, c = train.davis
+    margin = [(GRAVITY * 0.010 - (a + b * v + c * v ** 2) / train.mass) * 13.0 for v in (22.0, 18.0)]
+    assert GRAVITY * 0.006 > (a + b * 22.0 + c * 22.0 ** 2) / train.mass  # the -6 piece needs braking too
+    lowered = descent_margins(track, train, 13.0)
+    assert lowered.limit_positions.tolist() == [0, 2000, 6000, 7000, 8000]
+    assert lowered.limits == pytest.approx([22.0, 22.0 - margin[0], 22.0, 18.0, 18.0 - margin[1]], rel=1e-12)

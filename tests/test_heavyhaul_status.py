@@ -275,7 +275,7 @@ def test_a_sag_into_the_stop_with_air_brakes_pulls_through_their_release(tmp_pat
     the pipe's signal reaches them), so coasting stands the train short though the grade alone would
     not. The stopping rule's one-mass prediction runs the pipe's release, and where even coasting
     stands the train short the locomotives pull the share of their traction that stands it at the
-    stop: ok, within 0.01 m (0.0012 m measured). A rule that pulled only for the grade (v^2 / 2d on
+    stop: ok, within 0.01 m (0.00002 m measured). A rule that pulled only for the grade (v^2 / 2d on
     instant brakes) stood it 2.6 m short."""
     path = climb_study(tmp_path, -12, 20, gradients=[(2800, 15)], limit_kmh=80, max_samples=60, adhesion=True,
                        air_brake=True, reference={"supplement_percent": 10, "points": 150})

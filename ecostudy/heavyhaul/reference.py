@@ -138,7 +138,12 @@ def descent_margins(track, train, lag, forward=True):
     its brakes lag ``lag`` [s] behind (:func:`~ecostudy.heavyhaul.airbrake.brake_lag`): (g s -
     R(v_lim) / m) lag, s the descent [-] and R the Davis resistance at the limit (curves left out:
     the larger margin). A controller whose model has instant brakes (eq. 2) riding a limit down a
-    descent asks for the brakes it needs as it needs them, and an air brake delivers them that late."""
+    descent asks for the brakes it needs as it needs them, and an air brake delivers them that late.
+    A descent of several pieces under one limit keeps its largest margin throughout: the reference
+    does not speed up and slow down again with every change of the spread grade (each a new braking
+    the pipe would deliver late), and the single-mass NLP is not given steps of tenths of a km/h
+    every tenth of a train (on Vasteras - Kolback its all-out solve then stopped at Ipopt's
+    iteration limit)."""
     if lag <= 0:
         return track
     grades = Profile(np.asarray(track.gradient_positions, float), np.asarray(track.gradients, float))
@@ -149,6 +154,10 @@ def descent_margins(track, train, lag, forward=True):
     a, b, c = train.davis
     need = np.maximum(GRAVITY * descent - (a + b * limit + c * limit ** 2) / train.mass, 0.0)
     values = limit - need * lag
+    lowered = need > 0
+    change = np.concatenate([[True], (lowered[1:] != lowered[:-1]) | (limit[1:] != limit[:-1])])
+    runs = np.cumsum(change) - 1  # the run of pieces alike lowered (or not) under one limit each is in
+    values = np.where(lowered, np.minimum.reduceat(values, np.flatnonzero(change))[runs], values)
     keep = np.concatenate([[True], np.diff(values) != 0])
     return replace(track, limit_positions=starts[keep], limits=values[keep])
 
