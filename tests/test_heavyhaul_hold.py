@@ -23,8 +23,8 @@ def climb_plant(tmp_path, air_brake=True):
 def test_the_hold_applies_the_brake_that_holds_the_grade(tmp_path):
     """One locomotive and 40 wagons (2766 t) standing on 15 per mille with the air brake on: the hold
     sets every wagon the same share of its brake, the share whose force at the plant's friction
-    (rounded over 1 cm/s) balances the 410 kN the grade pulls back at the standing threshold's creep
-    (0.02 m/s: 1.118 x 410 kN), far below the wagons' whole brake. Held on it for 60 s (the command
+    (rounded over 1 cm/s) balances the 407 kN the grade pulls back at the standing threshold's creep
+    (0.02 m/s: 1.118 x 407 kN = 455 kN), far below the wagons' whole 7200 kN. Held on it for 60 s (the command
     kept) the train creeps back no faster than that; on 0.9 of it, faster."""
     plant, _ = climb_plant(tmp_path)
     state = plant.initial(head=100.0)
