@@ -88,7 +88,7 @@ def test_each_missed_limit_is_a_reason():
     assert reasons({**good, **grip, "adhesion_use_max": 1.0099}, 100, 0) == []  # within the 1 % of the inputs' digits
     back = {**good, "arrived": False, "ended": "rolling back", "rolling_back": True, "speed_at_end_kmh": -0.26, "stop_error_m": -1329.52}
     assert reasons(back, 100, 0) == ["rolling back at 0.26 km/h 1329.5 m before the stop when the run ended (the loop "
-                                     "ends a run under 1 km/h on the reference's final approach)"]
+                                     "ends a run on the reference's final approach when the train stands or rolls back)"]
     stall = {**good, "arrived": False, "ended": "stalled short of the stop", "stop_error_m": -1323.14, "reference_at_end_kmh": 36.1, "resistance_at_end_kN": 478.9,
              "traction_utmost_at_end_kN": 407.9}
     assert reasons(stall, 100, 0) == ["stopped 1323.1 m short of the stop (tolerance 1 m) with the reference at 36.1 "
@@ -275,7 +275,7 @@ def test_a_sag_into_the_stop_with_air_brakes_pulls_through_their_release(tmp_pat
     the pipe's signal reaches them), so coasting stands the train short though the grade alone would
     not. The stopping rule's one-mass prediction runs the pipe's release, and where even coasting
     stands the train short the locomotives pull the share of their traction that stands it at the
-    stop: ok, within 0.01 m (0.0012 m measured). A rule that pulled only for the grade (v^2 / 2d on
+    stop: ok, within 0.01 m (0.00002 m measured). A rule that pulled only for the grade (v^2 / 2d on
     instant brakes) stood it 2.6 m short."""
     path = climb_study(tmp_path, -12, 20, gradients=[(2800, 15)], limit_kmh=80, max_samples=60, adhesion=True,
                        air_brake=True, reference={"supplement_percent": 10, "points": 150})

@@ -63,3 +63,16 @@ def application_time(consist):
     wagons = np.array([kind != "locomotive" for kind in consist.kinds])
     return float(signal_delays(consist, consist.air_brake.signal_speed)[wagons].max(initial=0.0)
                  + consist.air_brake.build_up)
+
+
+def brake_lag(consist):
+    """[s] how late the wagons' total brake force follows a command that grows steadily: the signal's
+    mean delay over the wagons (weighted by their brake force) plus the build-up time constant (a
+    first-order lag tau behind a delay d follows a ramp d + tau late; 4.9 + 8 s on the ore train).
+    A train braked more and more as it runs onto a descent gains speed for that long."""
+    wagons = np.array([kind != "locomotive" for kind in consist.kinds])
+    weights = np.asarray(consist.pneumatic_brake, float)[wagons]
+    if not wagons.any() or weights.sum() <= 0:
+        return 0.0
+    delays = signal_delays(consist, consist.air_brake.signal_speed)[wagons]
+    return float(np.dot(delays, weights) / weights.sum() + consist.air_brake.build_up)

@@ -8,7 +8,8 @@ locomotives' measured speeds. Efforts are per virtual car, shared back to its ca
 to mass, clipped by the plant to every car's envelope. A solve that takes longer than Ts is not
 applied: the previous input is held, as the paper does (counted in ``overruns``).
 A standing train on a climb is held on its brakes while the traction asked of its locomotives is below the grade
-and resistance it feels (:func:`held`: a driver's hill start; the held time counts in the run).
+and resistance it feels (:func:`held`: a driver's hill start; the held time counts in the run). A train held
+twice running with the same plan stands held for good (:func:`repeats`): the run ends there.
 
 The terminal approach: past the reference's stop v_r continues its final deceleration below zero
 (a held last move then brakes into the stop at the reference's rate instead of stopping within a
@@ -40,6 +41,7 @@ class LoopRecord(NamedTuple):
     dynamic_limits: np.ndarray  # (samples, locomotive virtual cars) their dynamic brakes' limits [N, > 0]
     terms: np.ndarray          # (samples, 4) eq. 4's terms at each sample's optimum (rhc.TERMS; nan if unknown)
     adhesion: np.ndarray       # (samples, 5) the largest adhesion use within each sample (CascadePlant.adhesion_use)
+    held: np.ndarray           # True for a sample the train stood held on its brakes (:func:`held`)
     traction_work: float       # [J]
     dynamic_brake_work: float
     wagon_brake_work: float
@@ -49,6 +51,7 @@ class LoopRecord(NamedTuple):
     stored_change: float = 0.0  # kinetic plus coupler elastic energy at the end minus at the start [J]
     rolling_back: bool = False  # the run ended on the final approach with the train rolling back (not stood)
     end_forces: tuple = (0.0, 0.0)  # where the run ended: (grade and resistance the train feels, its locomotives' utmost traction) [N]
+    held_for_good: bool = False  # the run ended held on its brakes with the plan of the sample before (:func:`repeats`)
 
 
 def reduced_state(plant, reduction, state):
@@ -85,17 +88,18 @@ def horizon(plant, reduction, reference, state, speeds, np_):
     return offsets, reference.speed_in(ts * np.arange(np_ + 1), head)
 
 
-STOPPED = 0.3  # [m/s]: a train crawling slower on its final approach has stopped (1 km/h)
+STOPPED = 0.3  # [m/s]: a plan that slows the train below this on its final approach stops it (1 km/h)
 
 
 def finished(plant, reference, state):
-    """Stopped (mean speed below :data:`STOPPED`) on the reference's final approach (where it stopped:
-    the stop error, reported and checked)."""
-    return mean_speed(plant, state) < STOPPED and head_position(plant, state) > reference.final_approach
+    """Standing (mean speed below :data:`STANDING`) or rolling back on the reference's final approach
+    (where it stood: the stop error, reported and checked). A train still crawling forward there runs
+    on: the next sample's plan stops it (:func:`stopping`), short of the stop or beyond it."""
+    return mean_speed(plant, state) < STANDING and head_position(plant, state) > reference.final_approach
 
 
 PIECE = 1.0  # [s]: the stopping sample is stepped in pieces this long (at most)
-STANDING = 0.02  # [m/s]: the stopping sample ends when the train's mean speed is below
+STANDING = 0.02  # [m/s]: a train slower stands (the stopping sample ends, a run ends, a held train creeps no faster)
 
 
 def mean_speed(plant, state):
@@ -155,6 +159,20 @@ def held(plant, reduction, state, planned):
     return float(np.maximum(efforts[plant.loco], 0.0).sum()) < float(plant.resistance(state.positions, state.speeds).sum())
 
 
+REPEATED = 1e-3  # [N]: a plan within this of the one before, every virtual car, is the same plan
+
+
+def repeats(held_now, held_before, plan, before, estimate=None, estimated=None):
+    """True when a sample held the train (``held_now``) as the one before did (``held_before``) with
+    the same ``plan`` as that one's (``before``, N per virtual car, within :data:`REPEATED`) and the same
+    observer ``estimate`` (None: no observer): the train stands where it stood, with the same brakes, so
+    the controller is asked the same again and the train stays held to the sample cap."""
+    same = before is not None and np.allclose(plan, before, rtol=0.0, atol=REPEATED)
+    if estimate is not None:
+        same = same and np.allclose(estimate, estimated, rtol=0.0, atol=1e-12)
+    return bool(held_now and held_before and same)
+
+
 def anticipated(plant, reduction, reference, state, ts):
     """With air brakes: the final application is due now (:func:`~ecostudy.heavyhaul.approach.braking_point`
     at the reference's final deceleration); from then on every sample is a stopping sample."""
@@ -183,6 +201,7 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     nv, locos = len(reduction.members), reduction.locomotives
     u = np.zeros(nv) if applied is None else np.asarray(applied, float)
     rows, works, overruns, stood, braking, rolling_back = [], np.zeros(3), 0, False, False, False
+    held_before, before, estimated, for_good = False, None, None, False
     losses, stored = np.zeros(len(LOSSES)), plant.stored_energy(state)
     for _ in range(samples):
         measured = reduced_state(plant, reduction, state)
@@ -207,8 +226,9 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         if braking or (head_position(plant, state) > reference.final_approach
                        and (getattr(controller, "values", None) or {}).get("planned", [np.inf])[0] < STOPPED):
             step, u = stopping(plant, reduction, reference, state, u, ts)  # the plan stops within this sample
-        if step is None and held(plant, reduction, state, u):
-            step = plant.hold(state, ts)
+        holding = step is None and held(plant, reduction, state, u)
+        if holding:
+            step = plant.hold(state, ts, STANDING)
         step = step or plant.step(state, reduction.share(u, c.mass), ts)
         state = step.state
         works += [step.traction_work, step.dynamic_brake_work, step.wagon_brake_work]
@@ -217,14 +237,20 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         values = getattr(controller, "values", None) or {}
         rows.append((state.time, head, np.dot(c.mass, state.speeds) / c.mass.sum(), reference.speed(head),
                      step.largest_coupler_force, step.coupler_forces, u, seconds, step.speed_excess,
-                     -low[locos], [values.get(t, np.nan) for t in TERMS], step.adhesion))
+                     -low[locos], [values.get(t, np.nan) for t in TERMS], step.adhesion, holding))
+        estimate = None if observer is None else observer.x.copy()
+        if repeats(holding, held_before, u, before, estimate, estimated):
+            for_good = True
+            break
+        held_before, before, estimated = holding, u.copy(), estimate
         if finished(plant, reference, state):
             rolling_back = mean_speed(plant, state) <= -STANDING  # it does not stand
             stood = not rolling_back
             break
     columns = (np.array(v) for v in zip(*rows))
     return state, LoopRecord(*columns, *map(float, works), overruns, stood, tuple(map(float, losses)),
-                             plant.stored_energy(state) - stored, rolling_back, end_forces(plant, reduction, state))
+                             plant.stored_energy(state) - stored, rolling_back, end_forces(plant, reduction, state),
+                             for_good)
 
 
 def end_forces(plant, reduction, state):

@@ -2,7 +2,8 @@
 (:class:`~ecostudy.heavyhaul.loop.LoopRecord`) and the reasons that flag it.
 
 A run is ``flagged`` (never ``ok``) when the train stalled and rolled back (more than the stop
-tolerance, at the sample ends), when it did not arrive (the sample cap came first), when
+tolerance, at the sample ends), when it did not arrive (the sample cap came first, or it stood held on
+its brakes for good: the same plan twice running, less traction than the grade pulls back), when
 it stopped farther from the stop than the tolerance (short or beyond; short where the grade and
 resistance exceed the locomotives' utmost traction, a stall, it says so), when it arrived later than the
 reference's running time by more than the tolerance (a share of it or seconds, the larger), when a car ran faster than the
@@ -60,6 +61,8 @@ def ended(record, stop_error, stop_tolerance):
     ``stop_error`` the head's end minus the stop [m] (positive beyond), ``stop_tolerance`` [m]."""
     if record.rolling_back:
         return "rolling back"
+    if record.held_for_good:
+        return "held on its brakes"
     if not record.stood:
         return "sample cap"
     if abs(stop_error) <= stop_tolerance:
@@ -71,7 +74,7 @@ def ended(record, stop_error, stop_tolerance):
 
 # how a run ended (runs.csv ``ended``); ``arrived`` is True for the first alone
 ENDS = ("at the stop", "short of the stop", "stalled short of the stop", "beyond the stop", "rolling back",
-        "sample cap")
+        "held on its brakes", "sample cap")
 STOOD = ENDS[:4]  # the train stood on the reference's final approach (its arrival time is a time it stood)
 
 
@@ -101,6 +104,7 @@ def run_metrics(record, reference, locomotives, force_limit, stop_tolerance=Tole
         "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
         "speed_at_end_kmh": float(record.mean_speed[-1] / KMH), "rolling_back": bool(record.rolling_back),
         "resistance_at_end_kN": record.end_forces[0] / KN, "traction_utmost_at_end_kN": record.end_forces[1] / KN,
+        **held_time(record, locomotives),
         "force_max_kN": float(record.largest_coupler.max() / KN),
         "force_max_braking_kN": float(record.largest_coupler[braking].max() / KN) if braking.any() else 0.0,
         "force_limit_kN": force_limit / KN, "braking_samples": int(braking.sum()),
@@ -114,6 +118,16 @@ def run_metrics(record, reference, locomotives, force_limit, stop_tolerance=Tole
         **{f"J_{name}": float(value) for name, value in zip(TERMS, terms)},
         **energy_balance(record),
     }
+
+
+def held_time(record, locomotives):
+    """How long the train stood held on its brakes (a hill start, ``held_s``), whether it was still
+    held when the run ended (``held_at_end``), and the traction its locomotives were asked for in the
+    last sample (``traction_asked_at_end_kN``, their planned efforts above 0)."""
+    held = np.asarray(record.held, bool)
+    asked = np.maximum(record.efforts[-1, locomotives], 0.0).sum()
+    return {"held_s": float(np.sum(np.diff(record.times, prepend=0.0)[held])), "held_at_end": bool(held[-1]),
+            "traction_asked_at_end_kN": float(asked / KN)}
 
 
 def adhesion_use(samples):
@@ -199,16 +213,24 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     if metrics["stop_error_m"] < 0 and held > utmost:  # it cannot go on
         asked += (f", stalled: the grade and resistance there ({held:.0f} kN) exceed the locomotives' utmost "
                   f"traction ({utmost:.0f} kN)")
+    if metrics.get("held_at_end"):  # it never moved off, or stood held again, to the run's end
+        where = ("at the start" if metrics["held_s"] >= metrics["arrival_s"] - 1e-6
+                 else f"{-metrics['stop_error_m']:.0f} m before the stop")
+        good = (" (the same plan twice running from the same standing train: it would stay held to the sample cap)"
+                if metrics["ended"] == "held on its brakes" else "")
+        out.append(f"held on its brakes {where} for {metrics['held_s']:.0f} s until the run ended{good}: the controller "
+                   f"never asked more traction ({metrics['traction_asked_at_end_kN']:.0f} kN) than the grade, curve "
+                   f"and resistance pull back ({metrics['resistance_at_end_kN']:.0f} kN)")
     if metrics["ended"] == "rolling back":  # the loop ended the run on the final approach: the train did not stand
         error = metrics["stop_error_m"]
         where = f"{-error:.1f} m before the stop" if error <= 0 else f"{error:.1f} m beyond the stop"
         out.append(f"rolling back at {-metrics['speed_at_end_kmh']:.2f} km/h {where} when the run ended (the loop "
-                   f"ends a run under 1 km/h on the reference's final approach){asked}")
+                   f"ends a run on the reference's final approach when the train stands or rolls back){asked}")
     elif metrics["ended"] == "sample cap":
         where = (f"{-metrics['stop_error_m']:.0f} m before the stop" if metrics["stop_error_m"] <= 0
                  else f"with the train {metrics['stop_error_m']:.0f} m beyond the stop, not stopped")
         out.append(f"the sample cap ({samples}) came {where}")
-    elif abs(metrics["stop_error_m"]) > tolerances.stop_m:
+    elif metrics["ended"] in STOOD and abs(metrics["stop_error_m"]) > tolerances.stop_m:
         where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
         out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m){asked}")
     late, share = metrics["arrival_late_s"], metrics["arrival_late_percent"]

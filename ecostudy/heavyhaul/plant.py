@@ -53,6 +53,12 @@ SLACK_RTOL = 1e-4
 # through 0) chatter on the jump and the integrator stalls (a 20 s step from rest did not finish
 # in 300 s); the rounding is below 1 % of c0 above 0.07 m/s
 STANDSTILL_SPEED = 0.01
+
+
+def friction(speeds):
+    """sign(v) rounded over :data:`STANDSTILL_SPEED`: the share of a friction force (c0, a brake) that
+    acts on a car at ``speeds`` [m/s] (0 standing, -1 to 1)."""
+    return speeds / np.sqrt(speeds * speeds + STANDSTILL_SPEED ** 2)
 ENVELOPE_SPEED = 1e-9  # [m/s]: the envelopes read a standing or reversing car at this speed (no power / 0)
 QUADRATURES = 8  # works of traction, dynamic brakes, wagon brakes, then the five LOSSES
 
@@ -153,8 +159,7 @@ class CascadePlant:
         """Running resistance [N] of every car, opposing the motion."""
         c = self.consist
         c0, c1, c2 = c.resistance.T
-        direction = speeds / np.sqrt(speeds * speeds + STANDSTILL_SPEED ** 2)  # sign(v), smooth through 0
-        return c.mass * (c0 * direction + c1 * speeds + c2 * speeds * np.abs(speeds))
+        return c.mass * (c0 * friction(speeds) + c1 * speeds + c2 * speeds * np.abs(speeds))
 
     def resistance(self, positions, speeds):
         """f_a,i [N]: running resistance (opposing the motion) and the grade at each car's own position."""
@@ -248,7 +253,7 @@ class CascadePlant:
         p, v = y[:n], y[n:2 * n]
         u = self.efforts(requested, v, levels)
         if brakes is not None:  # a friction brake opposes the motion: never drives a train stopping under lagged brakes
-            u = np.where(self.loco, u, brakes * v / np.sqrt(v * v + STANDSTILL_SPEED ** 2))
+            u = np.where(self.loco, u, brakes * friction(v))
         elastic, hysteresis, damping = self.coupler_parts(p, v)
         fin = elastic + hysteresis + damping
         running = self.running(v)
@@ -302,12 +307,25 @@ class CascadePlant:
                            *map(float, works[:3]), excess, tuple(map(float, works[3:])),
                            self.adhesion_use(sol.t, sol.y[:n], sol.y[n:2 * n], requested, levels), levels)
 
-    def hold(self, state, dt):
+    def holding_brakes(self, positions, creep):
+        """The wagons' brake forces [N, <= 0; 0 for a locomotive] that hold the train standing at
+        ``positions`` (a driver's hill start applies what holds, not the full brake): every wagon the
+        same share of its envelope, the share whose brakes, acting as :func:`friction` rounds them,
+        balance the grade, curve and running resistance pulling the train back at a creep of ``creep``
+        [m/s] (the least brake under which it creeps no faster; more holds it slower); the whole
+        brake if that is not enough, none where nothing pulls it back."""
+        standing = np.zeros(self.n)
+        pull = float(self.resistance(positions, standing).sum())
+        lowest = np.where(self.loco, 0.0, self.envelopes(standing)[0])
+        return lowest * float(np.clip(pull / (friction(creep) * max(-lowest.sum(), 1.0)), 0.0, 1.0))
+
+    def hold(self, state, dt, creep):
         """A standing train held on its brakes for ``dt`` [s] (a driver's hill start): every car stands
-        where it is; with ``air_brake`` on the wagons' brakes are full on (their lowest efforts, seen by
-        every wagon), so the next :meth:`step` releases them through the pipe (delay and tau_r)."""
+        where it is; with ``air_brake`` on the wagons' brakes are what holds it at a creep under
+        ``creep`` [m/s] (:meth:`holding_brakes`, seen by every wagon), so the next :meth:`step`
+        releases them through the pipe (delay and tau_r)."""
         forces = self.coupler_forces(state.positions, np.zeros(self.n))
-        brakes = None if self.air_brake is None else np.where(self.loco, 0.0, self.envelopes(np.zeros(self.n))[0])
+        brakes = None if self.air_brake is None else self.holding_brakes(state.positions, creep)
         self.history.append((np.array([state.time, state.time + dt]), np.array([forces, forces], np.float32)))
         standing = CascadeState(state.positions, np.zeros(self.n), state.time + dt, brakes, brakes)
         return CascadeStep(standing, forces, float(np.abs(forces).max(initial=0.0)), 0.0, 0.0, 0.0,

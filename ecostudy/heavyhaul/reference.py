@@ -19,7 +19,7 @@ import numpy as np
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.grid import Profile
-from ecostudy.core.physics import Envelope
+from ecostudy.core.physics import GRAVITY, Envelope
 from ecostudy.core.types import Timing, Train
 from ecostudy.core.units import KMH
 
@@ -132,16 +132,48 @@ def advanced_limits(track, seconds, forward=True):
     return replace(track, limit_positions=starts[keep], limits=values[keep])
 
 
+def descent_margins(track, train, lag, forward=True):
+    """The track with each speed limit lowered where the grade (spread over the train, as
+    :func:`spread_grades` leaves it) needs braking at that limit, by the speed the train gains while
+    its brakes lag ``lag`` [s] behind (:func:`~ecostudy.heavyhaul.airbrake.brake_lag`): (g s -
+    R(v_lim) / m) lag, s the descent [-] and R the Davis resistance at the limit (curves left out:
+    the larger margin). A controller whose model has instant brakes (eq. 2) riding a limit down a
+    descent asks for the brakes it needs as it needs them, and an air brake delivers them that late.
+    A descent of several pieces under one limit keeps its largest margin throughout: the reference
+    does not speed up and slow down again with every change of the spread grade (each a new braking
+    the pipe would deliver late), and the single-mass NLP is not given steps of tenths of a km/h
+    every tenth of a train (on Vasteras - Kolback its all-out solve then stopped at Ipopt's
+    iteration limit)."""
+    if lag <= 0:
+        return track
+    grades = Profile(np.asarray(track.gradient_positions, float), np.asarray(track.gradients, float))
+    limits = Profile(np.asarray(track.limit_positions, float), np.asarray(track.limits, float))
+    starts = np.unique(np.concatenate([grades.starts, limits.starts]))
+    starts = starts[(starts >= limits.starts[0]) & (starts < track.length)]
+    limit, descent = limits(starts), -grades(starts) * (1.0 if forward else -1.0)
+    a, b, c = train.davis
+    need = np.maximum(GRAVITY * descent - (a + b * limit + c * limit ** 2) / train.mass, 0.0)
+    values = limit - need * lag
+    lowered = need > 0
+    change = np.concatenate([[True], (lowered[1:] != lowered[:-1]) | (limit[1:] != limit[:-1])])
+    runs = np.cumsum(change) - 1  # the run of pieces alike lowered (or not) under one limit each is in
+    values = np.where(lowered, np.minimum.reduceat(values, np.flatnonzero(change))[runs], values)
+    keep = np.concatenate([[True], np.diff(values) != 0])
+    return replace(track, limit_positions=starts[keep], limits=values[keep])
+
+
 def optimal_reference(consist, track, from_stop, to_stop, running_time=None, supplement=None, points=500,
-                      service_deceleration=0.3, limit_lead=0.0):
+                      service_deceleration=0.3, limit_lead=0.0, brake_lag=0.0):
     """The energy-optimal single-mass run for ``running_time`` [s] (or a ``supplement`` [-] over the
     all-out time), on the grades spread over the train (:func:`spread_grades`) and below the limits
     with each drop moved ``limit_lead`` [s] of running at the lower limit ahead
-    (:func:`advanced_limits`), verified by simulation; returns a :class:`Reference` and the
+    (:func:`advanced_limits`) and, with a ``brake_lag`` [s], lowered on descents
+    (:func:`descent_margins`), verified by simulation; returns a :class:`Reference` and the
     :class:`RunResult`."""
     train = single_mass(consist, service_deceleration)
     forward = track.stops[to_stop] >= track.stops[from_stop]
     track = advanced_limits(spread_grades(track, train.length, forward), limit_lead, forward)
+    track = descent_margins(track, train, brake_lag, forward)
     timing = Timing(running_time=running_time) if running_time is not None else Timing(supplement=supplement)
     run = solve_run(track, train, from_stop, to_stop, timing, points=points)
     t = run.trajectory

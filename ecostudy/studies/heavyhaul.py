@@ -25,7 +25,7 @@ import pandas as pd
 from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KMH, KN, KWH
-from ecostudy.heavyhaul.airbrake import application_time
+from ecostudy.heavyhaul.airbrake import application_time, brake_lag
 from ecostudy.heavyhaul.checks import reference_problems, ruling_grade, samples_to_start, starting_coupler_force
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
 from ecostudy.heavyhaul.linear import fence
@@ -61,7 +61,7 @@ def _reference(s, path, consist, track, from_stop, to_stop):
     lead = r.limit_lead_samples * s.sample_time_s + (application_time(consist) if s.air_brake else 0.0)  # the pipe's lateness
     try:
         return optimal_reference(consist, track, from_stop, to_stop, r.running_time_s, supplement, r.points,
-                                 r.service_deceleration_mps2, lead)[0]
+                                 r.service_deceleration_mps2, lead, brake_lag(consist) if s.air_brake else 0.0)[0]
     except InfeasibleError as exc:  # the single mass cannot run so fast: the study's field, by name
         field = "reference.running_time_s" if r.running_time_s is not None else "reference.supplement_percent"
         raise InfeasibleError([problem(path, field, f"infeasible: {p.removeprefix('infeasible: ')}") for p in exc.problems])
@@ -159,8 +159,8 @@ QP_FORMS = {  # a study's qp_solver: the same QP four ways (docs/heavyhaul.md)
 MAGNITUDE_FORMS = ("daqp", "condensed")  # the forms with eq. 11's magnitudes and brake_penalty_on: all (heavyhaul.magnitude)
 
 
-def drive(case):
-    """One closed-loop run of a case: (consist, controller, record, reference)."""
+def case_plant(case):
+    """(consist, the cascade plant with the case's switches, the reference) of a case."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", EcostudyWarning)  # shown once when the study was expanded
         consist = consist_from_document(case["consist"], "consist")
@@ -170,6 +170,12 @@ def drive(case):
     plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]),
                          adhesion=case["adhesion"], air_brake=case["air_brake"],
                          draft_gear=case["draft_gear"], notches=case.get("notches", False))
+    return consist, plant, reference
+
+
+def drive(case):
+    """One closed-loop run of a case: (consist, controller, record, reference, plant)."""
+    consist, plant, reference = case_plant(case)
     labels, w, ts = case["labels"], case["weights"], case["sample_time"]
     reduction = fence(consist, labels["f"], ts, case["fence_coupling"], case["fence_sharing"])
     scales = None
@@ -241,7 +247,8 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
            "stretch_braking_kWh",
            "speed_excess_kmh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "coupler_damping_kWh", "draft_gear_kWh", "stored_change_kWh",
            "balance_residual_kWh", "arrived", "ended", "arrival_s", "arrival_late_s", "arrival_late_percent", "reference_time_s", "reference_kWh", "stop_error_m", "rollback_m", "stalled_before_stop_m", "stalled_after_start_m", "reference_at_end_kmh",
-           "speed_at_end_kmh", "rolling_back", "resistance_at_end_kN", "traction_utmost_at_end_kN", "samples", "virtual_cars",
+           "speed_at_end_kmh", "rolling_back", "resistance_at_end_kN", "traction_utmost_at_end_kN", "held_s", "held_at_end",
+           "traction_asked_at_end_kN", "samples", "virtual_cars",
            "qp_inputs", "qp_states", "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts",
            "peak_memory_MB", *IN_TRAIN)
 
