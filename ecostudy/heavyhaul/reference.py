@@ -19,7 +19,7 @@ import numpy as np
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.grid import Profile
-from ecostudy.core.physics import GRAVITY, Envelope
+from ecostudy.core.physics import Envelope, davis_resistance, gradient_force
 from ecostudy.core.types import Timing, Train
 from ecostudy.core.units import KMH
 
@@ -151,8 +151,8 @@ def descent_margins(track, train, lag, forward=True):
     starts = np.unique(np.concatenate([grades.starts, limits.starts]))
     starts = starts[(starts >= limits.starts[0]) & (starts < track.length)]
     limit, descent = limits(starts), -grades(starts) * (1.0 if forward else -1.0)
-    a, b, c = train.davis
-    need = np.maximum(GRAVITY * descent - (a + b * limit + c * limit ** 2) / train.mass, 0.0)
+    pull = gradient_force(train.static_mass, descent) - davis_resistance(limit, *train.davis)
+    need = np.maximum(pull / train.mass, 0.0)
     values = limit - need * lag
     lowered = need > 0
     change = np.concatenate([[True], (lowered[1:] != lowered[:-1]) | (limit[1:] != limit[:-1])])
