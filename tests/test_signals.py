@@ -88,6 +88,7 @@ def assert_stopped_cleanly(proc, err, kids, before, folder, sig, total, noun):
     if proc.returncode in (0, 1):
         pytest.fail("the study finished before it could be interrupted")
     assert proc.returncode == 128 + sig, err
+    assert "Traceback" not in err, err
     line = re.search(rf"warning: interrupted by {signal.Signals(sig).name}: (\d+) of {total} {noun} stored "
                      r"\((\d+) of them computed now\); run the same command again to continue", err)
     assert line, err

@@ -32,6 +32,19 @@ def _free_port():
         return s.getsockname()[1]
 
 
+def _listening(address, seconds=120):
+    host, port = address.removeprefix("tcp://").rsplit(":", 1)
+    deadline = time.time() + seconds
+    while True:
+        try:
+            socket.create_connection((host, int(port)), timeout=1).close()
+            return
+        except OSError:
+            if time.time() > deadline:
+                raise
+            time.sleep(0.2)
+
+
 @pytest.fixture(scope="module")
 def scheduler():
     """The address of a Dask scheduler with two single-threaded workers that import this checkout."""
@@ -43,7 +56,7 @@ def scheduler():
              "start_new_session": True}
     started = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
                                  "--no-dashboard"], **quiet)]
-    time.sleep(3)
+    _listening(address)
     started.append(subprocess.Popen([dask, "worker", address, "--nworkers", "2", "--nthreads", "1",
                                      "--no-dashboard"], **quiet))
     try:
