@@ -15,7 +15,8 @@ from contextlib import closing
 import pytest
 
 from ecostudy.io.store import Store
-from ecostudy.studies.batch import execute
+from ecostudy.studies.batch import execute, run_case
+from ecostudy.studies.workers import worker_pool
 from ecostudy.studies.cases import expand
 
 from .conftest import ROOT, TRACKS, TRAINS, write_yaml
@@ -87,12 +88,14 @@ def assert_stopped_cleanly(proc, err, kids, before, folder, sig, total, noun):
     if proc.returncode in (0, 1):
         pytest.fail("the study finished before it could be interrupted")
     assert proc.returncode == 128 + sig, err
+    assert "Traceback" not in err, err
     line = re.search(rf"warning: interrupted by {signal.Signals(sig).name}: (\d+) of {total} {noun} stored "
                      r"\((\d+) of them computed now\); run the same command again to continue", err)
     assert line, err
     assert [k for k in kids if running(k)] == [], "a worker outlived the command"
     names = sorted(p.name for p in folder.iterdir())
-    assert "results.sqlite.lock" not in names and not [n for n in names if n.endswith(".tmp")], names
+    assert not {"results.sqlite.lock", "results.sqlite-wal"} & set(names), names
+    assert not [n for n in names if n.endswith(".tmp")], names
     with closing(sqlite3.connect(folder / "results.sqlite")) as conn:
         kept = conn.execute("SELECT count(*) FROM cases").fetchone()[0]
     assert int(line.group(1)) == int(line.group(2)) == kept  # the line says what the store holds
@@ -153,3 +156,17 @@ def test_results_that_reached_the_main_process_while_it_stored_a_case_are_stored
         assert stop.value.counts == {"total": 3, "stored_before": 0, "computed": 3, "failed": 0}
     finally:
         store.close()
+
+
+def test_workers_left_by_an_interrupt_are_killed_not_waited_for(tmp_path):
+    """The cases the workers compute when an interrupt leaves the pool are lost: the workers are
+    killed, not waited for (waited for, both cases would end with their results)."""
+    _, _, cases = expand(study(tmp_path, 2, points=1000))
+    with pytest.raises(KeyboardInterrupt):
+        with worker_pool(2) as pool:
+            futures = [pool.submit(run_case, case) for case in cases]
+            while not all(f.running() for f in futures):
+                time.sleep(0.01)
+            raise KeyboardInterrupt
+    assert [f.done() and not f.cancelled() and f.exception() is None for f in futures] == [False, False]
+    assert [pid for pid in pool.seen if running(pid)] == []

@@ -2,6 +2,7 @@
 import multiprocessing
 import os
 import signal
+import struct
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 
@@ -17,6 +18,33 @@ def every_core(workers):
     return workers if workers is not None else len(os.sched_getaffinity(0))
 
 
+class WorkerPool(ProcessPoolExecutor):
+    """A forked process pool whose workers tell it their process IDs as they start (through a pipe,
+    each ID one atomic write, no lock a killed worker could hold), so that :func:`stop_workers` can
+    kill them without reading the pool's private state."""
+
+    def __init__(self, workers):
+        self.pids, write = os.pipe()  # read here; every worker writes its ID to ``write``
+        os.set_blocking(self.pids, False)
+        self.stopping = multiprocessing.RawValue("b", 0)  # set: a worker starting now ends at once
+        super().__init__(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
+                         initializer=_worker_start, initargs=(write, self.stopping))
+        self.write, self.seen = write, set()
+
+    def started(self):
+        """The IDs of the workers started so far (read from the pipe, kept in ``seen``)."""
+        while True:
+            try:
+                chunk = os.read(self.pids, 4096)
+            except BlockingIOError:
+                return self.seen
+            self.seen.update(p for (p,) in struct.iter_unpack("i", chunk))
+
+    def close_pipe(self):
+        os.close(self.pids)
+        os.close(self.write)
+
+
 @contextmanager
 def worker_pool(workers):
     """A forked process pool (workers inherit the loaded modules) whose workers die with the parent
@@ -25,8 +53,7 @@ def worker_pool(workers):
     systemd or a batch scheduler; the parent stores what reached it, then stops them). Left by an
     exception (an interrupt, or a generator closed before its end) the workers are stopped at once
     (:func:`stop_workers`), not waited for."""
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
-                               initializer=_worker_start)
+    pool = WorkerPool(workers)
     try:
         yield pool
     except BaseException:
@@ -34,18 +61,31 @@ def worker_pool(workers):
         raise
     finally:
         pool.shutdown()
+        pool.close_pipe()
 
 
 def stop_workers(pool):
-    """Stop a pool's worker processes now (SIGKILL: they ignore SIGTERM), whatever they compute: the
-    tasks they run are lost, the others cancelled; every worker has ended when this returns. (The
-    pool's ``_processes``, as Python 3.14's ``ProcessPoolExecutor.kill_workers`` reads it.)"""
-    processes = list((pool._processes or {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for process in processes:
-        process.kill()
-    for process in processes:
-        process.join()
+    """Stop a :class:`WorkerPool`'s worker processes now (SIGKILL: they ignore SIGTERM), whatever they
+    compute: the tasks they run are lost, the others cancelled or failed; every worker has ended when this
+    returns. A worker forked but not yet registered sees ``stopping`` set after it registered and
+    ends itself; one already gone (its pool broken) is not signalled (its ID may be another's now)."""
+    pool.stopping.value = 1
+    for pid in pool.started():
+        if _our_child(pid):
+            os.kill(pid, signal.SIGKILL)
+    pool.shutdown(wait=True, cancel_futures=True)  # the pool sees its workers die and collects them
+
+
+def _our_child(pid):
+    """Whether ``pid`` is a child of this process not yet collected (where ``os.waitid`` exists;
+    elsewhere assumed)."""
+    if not hasattr(os, "waitid"):
+        return True
+    try:
+        os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT)
+    except ChildProcessError:
+        return False
+    return True
 
 
 @contextmanager
@@ -61,10 +101,13 @@ def arriving(futures, arrived):
         raise
 
 
-def _worker_start():
+def _worker_start(pids, stopping):
     die_with_parent(signal.SIGKILL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    os.write(pids, struct.pack("i", os.getpid()))  # atomic (a pipe, under PIPE_BUF bytes)
+    if stopping.value:  # the pool was stopping when this worker registered: it may have been missed
+        os._exit(1)
     release_inherited()
 
 
