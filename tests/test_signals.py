@@ -149,12 +149,14 @@ def test_results_that_reached_the_main_process_while_it_stored_a_case_are_stored
         if done == 1:
             time.sleep(10)  # the two other cases finish meanwhile (0.1 s each at K = 30)
             os.kill(os.getpid(), signal.SIGINT)
+    inherited = signal.signal(signal.SIGINT, signal.default_int_handler)  # a runner started in the background ignores it
     try:
         with pytest.raises(KeyboardInterrupt) as stop:
             execute(cases, store, workers=2, progress=progress)
         assert store.finished_keys() == {c["key"] for c in cases}
         assert stop.value.counts == {"total": 3, "stored_before": 0, "computed": 3, "failed": 0}
     finally:
+        signal.signal(signal.SIGINT, inherited)
         store.close()
 
 

@@ -108,10 +108,12 @@ def test_results_that_reached_the_client_while_it_stored_a_case_are_stored(sched
         if done == 1:
             time.sleep(20)  # the two other cases finish on the cluster meanwhile (0.1 s each at K = 30)
             os.kill(os.getpid(), signal.SIGINT)
+    inherited = signal.signal(signal.SIGINT, signal.default_int_handler)  # a runner started in the background ignores it
     try:
         with pytest.raises(KeyboardInterrupt) as stop:
             execute(cases, store, dask=scheduler, progress=progress)
         assert store.finished_keys() == {c["key"] for c in cases}
         assert stop.value.counts == {"total": 3, "stored_before": 0, "computed": 3, "failed": 0}
     finally:
+        signal.signal(signal.SIGINT, inherited)
         store.close()
