@@ -11,7 +11,7 @@ from ecostudy import __version__
 from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
-from ecostudy.core.errors import InfeasibleError, InputError, TooFastError, problem
+from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, problem
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status
 from ecostudy.das.methods import das_run
@@ -111,6 +111,8 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         except TooFastError as exc:  # the timing cannot be met: where it was given, by name
             where, field = timing_source(study, st, time, supplement, window)
             raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
+        except FieldError as exc:  # a window on the way no run keeps: the study's, by name
+            raise InfeasibleError([problem(str(study), exc.field, p) for p in exc.problems]) from None
         if das is not None:
             result.das = das_run(result, das, time_limit=das_time_limit)
             result.summary["das"] = result.das.summary

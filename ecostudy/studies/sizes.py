@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ecostudy.core.budget import check_run, check_study
+from ecostudy.core.budget import check_run, check_study, how_many
 from ecostudy.heavyhaul.linear import virtual_car_count
 from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import consist_from_document, validate
@@ -71,7 +71,7 @@ def check_closed_loop_study(path, workers=1, only=None):
     for c in chosen:
         samples = s.window_s[1] / (c.sample_time_s or s.sample_time_s)
         seconds = samples * spec_seconds(c.model_dump(), s.points)
-        check_run(path, "controllers", f"{c.name}: {samples:,.0f} samples of {c.sample_time_s or s.sample_time_s:g} s "
+        check_run(path, "controllers", f"{c.name}: {how_many(samples)} samples of {c.sample_time_s or s.sample_time_s:g} s "
                   f"at K = {s.points}", seconds)
         per_run += [seconds] * s.draws
     check_study(path, what, per_run, workers, s.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")
