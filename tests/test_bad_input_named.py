@@ -140,3 +140,32 @@ def test_a_tiny_sample_time_is_refused_with_a_readable_estimate(tmp_path, sample
     line = refused(run("simulate", study, "--no-plot", "--workers", 1, "--no-progress"), "sample", fragment)
     assert len(line) < 400 and "give --force" in line
     nothing_written(tmp_path)
+
+
+@pytest.mark.parametrize("where, fragment", [
+    # a folder or a missing folder: a rich traceback of IsADirectoryError / FileNotFoundError, exit 1
+    ("", "Is a directory"),
+    ("no/x.log", "No such file or directory"),
+])
+def test_a_log_file_that_cannot_be_written_is_one_line(tmp_path, where, fragment):
+    log = tmp_path / where
+    refused(run("--log-file", log, "solve", *ROKIN, "--train", METRO, "--time", 80, "--out", tmp_path / "out"),
+            f"command line: --log-file: {log}: cannot write the log file ({fragment})")
+    nothing_written(tmp_path)
+
+
+def test_a_minlp_time_limit_past_the_run_budget_is_refused_with_its_estimate(tmp_path):
+    """--das-time-limit 1e308 was accepted: the MINLP search ran on past a 30 s timeout."""
+    refused(run("solve", *ROKIN, "--train", METRO, "--time", 80, "--das", "minlp", "--das-time-limit", 1e308,
+                "--out", tmp_path / "out"), "command line: --das-time-limit: a run at K = 50 with a MINLP search of up "
+            "to 1.2e+303 days: an estimated 1.2e+303 days of computing, above the 2 h one run may take; give --force")
+    nothing_written(tmp_path)
+
+
+@pytest.mark.parametrize("option, value, fragment", [
+    # "error: --dpi: 0 is outside ...": no place named
+    ("--dpi", 0, "command line: --dpi: 0 is outside 10-2400 dots per inch"),
+    ("--format", "bmp", "command line: --format: 'bmp' is not a figure format"),
+])
+def test_a_figure_option_out_of_range_names_the_command_line(tmp_path, option, value, fragment):
+    refused(run("solve", *ROKIN, "--train", METRO, "--time", 80, option, value, "--out", tmp_path / "out"), fragment)

@@ -23,6 +23,7 @@ from ecostudy.report.files import write_fixed_step, write_run
 from ecostudy.report.style import output
 from ecostudy.studies.check import check_result
 from ecostudy.studies.options import case_from, check_options, only_one, output_folder, parse_pair, timing_of
+from ecostudy.studies.sizes import check_solve
 
 
 def run_lines(result: RunResult, out_dir: Path) -> list[str]:
@@ -97,6 +98,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
                                      "(or --objective time for the all-out run)"))
         timing, w, k = timing_of(time, supplement, window), (1.0, 1.0), k or RUN_POINTS
         out_dir = output_folder(out, Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_"))
+    check_solve(k, das, das_time_limit)
     w = parse_pair(weights, "--weights", nonnegative=True) if weights else w
     if weights is not None and obj != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
