@@ -12,7 +12,7 @@ from typing import Annotated, Optional
 import typer
 
 from ecostudy.core.budget import forced
-from ecostudy.core.errors import InputError, printable
+from ecostudy.core.errors import printable
 from ecostudy.core.interrupt import exit_status, stopped_by_signals
 from ecostudy.core.startup import pause
 from ecostudy.report.console import interrupted, leave, logging_to, progress_bar
@@ -42,11 +42,7 @@ def _main(ctx: typer.Context,
     from ecostudy.ocp.solver import configure
 
     quiet[0] = quiet_
-    try:
-        ctx.call_on_close(logging_to(quiet_, verbose, log_file))
-    except InputError as exc:  # no logger yet: the one line straight to stderr
-        typer.echo(f"error: {exc}", err=True)
-        raise typer.Exit(exc.exit_code)
+    ctx.call_on_close(logging_to(quiet_, verbose, log_file))
     log.debug("ecostudy %s", " ".join(sys.argv[1:]))
     configure()  # once, before any command imports the solver chain
 

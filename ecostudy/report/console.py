@@ -37,16 +37,17 @@ def logging_to(quiet: bool = False, verbose: bool = False, log_file: Optional[Pa
     """Send the ``ecostudy`` logger's messages to stderr (``quiet``: errors only; ``verbose``: debug
     ones too, such as each case's progress; else information, warnings and errors) and to
     ``log_file`` (debug ones with ``verbose``). Returns the function that removes these handlers again.
-    A log file that cannot be written (a folder, a missing folder, no permission) is an
-    :class:`InputError` naming it, before any handler is added."""
+    A log file that cannot be written (a folder, a missing folder, no permission) is refused
+    before any handler is added: its one line on stderr, exit status 2 (no logger holds it yet)."""
     handlers: list[logging.Handler] = [Stderr()]
     handlers[0].setLevel(logging.ERROR if quiet else logging.DEBUG if verbose else logging.INFO)
     if log_file is not None:
         try:
             handlers.append(logging.FileHandler(log_file, encoding="utf-8"))
         except OSError as exc:
-            raise InputError(problem("command line", "--log-file", f"{log_file}: cannot write the log "
-                                     f"file ({exc.strerror})")) from None
+            sys.stderr.write("error: " + problem("command line", "--log-file", f"{log_file}: cannot write the log "
+                                                 f"file ({exc.strerror})") + "\n")
+            raise SystemExit(InputError.exit_code) from None
         handlers[1].setLevel(logging.DEBUG if verbose else logging.INFO)
         handlers[1].setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
     log.setLevel(logging.DEBUG)
