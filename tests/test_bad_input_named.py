@@ -169,3 +169,19 @@ def test_a_minlp_time_limit_past_the_run_budget_is_refused_with_its_estimate(tmp
 ])
 def test_a_figure_option_out_of_range_names_the_command_line(tmp_path, option, value, fragment):
     refused(run("solve", *ROKIN, "--train", METRO, "--time", 80, option, value, "--out", tmp_path / "out"), fragment)
+
+
+def test_an_export_step_of_1e_300_s_prints_a_readable_count(tmp_path):
+    """It printed a count of 302 digits ("79,999,999,999,999,994,683,...")."""
+    assert run("solve", *ROKIN, "--train", METRO, "--time", 80, "--out", tmp_path / "s").exit_code == 0
+    line = refused(run("export", tmp_path / "s", "--every", "1e-300s"),
+                   "command line: --every: a step of 1e-300 s over the run's 80 s is 8e+301 rows, above the 1,000,000")
+    assert len(line) < 300
+
+
+def test_an_unknown_only_names_the_option(tmp_path):
+    """It was '<study>: controllers: --only names , not among ...': the study named for the option's value."""
+    study = hostile(tmp_path, "thesis001_closed_loop.yaml")
+    refused(run("simulate", study, "--only", "", "--no-plot", "--no-progress"),
+            "command line: --only: '': not among the controllers of", "(convex_mixed, convex_time, plan_replayed)")
+    nothing_written(tmp_path)

@@ -249,7 +249,8 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
     names = [c.name for c in study.controllers]
     unknown = sorted(set(only or ()) - set(names))
     if unknown:
-        raise InputError(problem(path, "controllers", f"--only names {', '.join(unknown)}, not among {', '.join(names)}"))
+        raise InputError(problem("command line", "--only", f"{', '.join(map(repr, unknown))}: not among the controllers "
+                                 f"of {path} ({', '.join(names)})"))
     compute = [c for c in cases if c["labels"]["controller"] in only] if only else None
     done = []
 
