@@ -184,10 +184,10 @@ def test_values_no_run_can_use_are_refused_before_computing(tmp_path, shipped, c
 
 
 @pytest.mark.parametrize("where, fragment", [
-    ("override", "scenarios[0].train_overrides: scenario 'long': train 'Amsterdam metro (Alstom, Rokin-Centraal case)': "
-                 "length_m: 1e+308 m is longer than track 'Amsterdam metro Rokin - Centraal' (1106 m)"),
+    ("override", "scenarios[0].train_overrides.length_m: scenario 'long': train 'Amsterdam metro (Alstom, Rokin-Centraal case)': "
+                 "length_m: 1e+308 m is longer than the track 'Amsterdam metro Rokin - Centraal' (1106 m)"),
     ("scenario train", "scenarios[0].train: scenario 'long': train 'Amsterdam metro (Alstom, Rokin-Centraal case)': "
-                       "length_m: 5000 m is longer than track"),
+                       "length_m: 5000 m is longer than the track"),
     ("base train", "hostile_default.yaml: train: train 'Amsterdam metro (Alstom, Rokin-Centraal case)': length_m: 5000 m"),
 ])
 def test_a_train_longer_than_its_track_is_refused_before_computing(tmp_path, where, fragment):

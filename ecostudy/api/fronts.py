@@ -8,8 +8,8 @@ from typing import Callable, Optional
 from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
 from ecostudy.core import units
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
-from ecostudy.core.errors import InputError, problem
-from ecostudy.io.loaders import check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
+from ecostudy.core.errors import FieldError, InfeasibleError, InputError, problem
+from ecostudy.io.loaders import check_fits, check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
 from ecostudy.io.timetable import journey_plan, name_stops
 from ecostudy.io.store import check_one_study
 from ecostudy.io.writers import check_output_dir
@@ -55,7 +55,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
                   das_time_limit=das_time_limit)
     trk, trn, f, t, k, st, (train_doc, track_doc) = case_from(study, track, train, from_stop, to_stop, points,
                                                               "pareto")
-    no_windows(st, "pareto")
+    no_windows(st, "pareto", study)
     cases = front_cases(train_doc, track_doc, f, t, count, supplement_max * units.PERCENT, k or FRONT_POINTS,
                         study_name(st, "pareto", track, train, f, t), das, das_time_limit)
     out_dir = output_folder(out, beside(st, "_pareto", "pareto"))
@@ -94,7 +94,7 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
     check_options(time=time, supplement=supplement, points=points, workers=workers)
     only_one(time=time, supplement=supplement)
     _, _, f, t, k, st, (train_doc, track_doc) = case_from(study, track, train, from_stop, to_stop, points, "compare")
-    no_windows(st, "compare")
+    no_windows(st, "compare", study)
     if time is not None or supplement is not None:
         timing = timing_of(time, supplement)
     elif st is not None:
@@ -135,6 +135,7 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
     check_options(time=time, supplement=supplement, dwell=dwell, points=points, workers=workers)
     tt = load_timetable(timetable) if timetable is not None else None
     trk, trn = load_track(track if track is not None else associated_track(tt, timetable)), load_train(train)
+    check_fits(train, trn, trk)
     scheduled, plan = None, None
     if tt is not None and timetable is not None:
         if stops or time is not None or supplement is not None or not tt.stops:
@@ -157,10 +158,13 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
                   splits=4 + (scheduled is not None) + (plan is not None), whole=1 + (plan is not None))
     out_dir = check_output_dir(output_folder(out, Path("out") / "journey"),
                                ("journey.csv", "journey_totals.csv", "journey.png"), "journey")
-    table, totals, results, _ = journey(trk, trn, names, total_time=time,
-                                        supplement=None if supplement is None else supplement * units.PERCENT,
-                                        points=points, workers=workers, scheduled=scheduled, plan=plan,
-                                        progress=progress)
+    try:
+        table, totals, results, _ = journey(trk, trn, names, total_time=time,
+                                            supplement=None if supplement is None else supplement * units.PERCENT,
+                                            points=points, workers=workers, scheduled=scheduled, plan=plan,
+                                            progress=progress)
+    except FieldError as exc:  # a timetable's times no run keeps: the timetable's fields, by name
+        raise InfeasibleError([problem(str(timetable), exc.field, p) for p in exc.problems]) from None
     passing = []
     if plan is not None:  # timing points along the journey (segment lengths from the first split)
         start = 0.0

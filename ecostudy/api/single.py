@@ -11,7 +11,7 @@ from ecostudy import __version__
 from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
-from ecostudy.core.errors import InfeasibleError, InputError, TooFastError, problem
+from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, problem
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status
 from ecostudy.das.methods import das_run
@@ -23,6 +23,7 @@ from ecostudy.report.files import write_fixed_step, write_run
 from ecostudy.report.style import output
 from ecostudy.studies.check import check_result
 from ecostudy.studies.options import case_from, check_options, only_one, output_folder, parse_pair, timing_of
+from ecostudy.studies.sizes import check_solve
 
 
 def run_lines(result: RunResult, out_dir: Path) -> list[str]:
@@ -97,6 +98,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
                                      "(or --objective time for the all-out run)"))
         timing, w, k = timing_of(time, supplement, window), (1.0, 1.0), k or RUN_POINTS
         out_dir = output_folder(out, Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_"))
+    check_solve(k, das, das_time_limit)
     w = parse_pair(weights, "--weights", nonnegative=True) if weights else w
     if weights is not None and obj != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
@@ -111,6 +113,8 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         except TooFastError as exc:  # the timing cannot be met: where it was given, by name
             where, field = timing_source(study, st, time, supplement, window)
             raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
+        except FieldError as exc:  # a window on the way no run keeps: the study's, by name
+            raise InfeasibleError([problem(str(study), exc.field, p) for p in exc.problems]) from None
         if das is not None:
             result.das = das_run(result, das, time_limit=das_time_limit)
             result.summary["das"] = result.das.summary

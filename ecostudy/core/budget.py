@@ -3,6 +3,7 @@ user says ``--force``. The commands set :data:`FORCE` around their work (:func:`
 anywhere below read it, so a loader refuses a 10^6-point curve as a study refuses a run that
 would be simulated to its time cap."""
 import contextvars
+import math
 import os
 from contextlib import contextmanager
 from os import PathLike
@@ -48,7 +49,12 @@ def refuse_unless_forced(where: str | PathLike[str], field: str, message: str) -
 
 
 def duration(seconds: float) -> str:
-    """A duration as people say it: 40 s, 12 min, 3.5 h, 9 days."""
+    """A duration as people say it: 40 s, 12 min, 3.5 h, 9 days, 2.3e+301 days (past a million days:
+    three digits and the power of ten, never a number of 300 digits)."""
+    if not math.isfinite(seconds):  # past the largest float (1.8e308 s)
+        return "more than 1e+303 days"
+    if seconds >= 1e6 * 86400:
+        return f"{seconds / 86400:.2g} days"
     if seconds < 120:
         return f"{seconds:.0f} s"
     if seconds < 7200:
@@ -56,6 +62,14 @@ def duration(seconds: float) -> str:
     if seconds < 3 * 86400:
         return f"{seconds / 3600:.1f}".removesuffix(".0") + " h"
     return f"{seconds / 86400:.0f} days"
+
+
+def how_many(n: float) -> str:
+    """A count as people read it: 864,000 (in full up to a billion), 2e+303 (three digits and the
+    power of ten beyond), and one past the largest float (a step of 1e-320 s) as more than 1e+308."""
+    if not math.isfinite(n):
+        return "more than 1e+308"
+    return f"{n:,.0f}" if n < 1e9 else f"{n:.3g}"
 
 
 def size(nbytes: float) -> str:

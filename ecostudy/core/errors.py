@@ -30,6 +30,16 @@ class TooFastError(InfeasibleError):
     crawl): the timing's fault, not the train's or the line's (those raise :class:`InfeasibleError`)."""
 
 
+class FieldError(InfeasibleError):
+    """An infeasible request found where its field is known but not its file (a timing window on the
+    way, a timetable's times): the caller that read the file names it, with ``field`` (as the file
+    writes it)."""
+
+    def __init__(self, problems: Union[str, Iterable[str]], field: str) -> None:
+        super().__init__(problems)
+        self.field = field
+
+
 class SolverError(EcostudyError):
     """Ipopt did not return a usable point."""
 

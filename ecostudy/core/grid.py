@@ -176,10 +176,11 @@ def warn_unpaired(track: Track, train: Train) -> None:
 
 
 def too_long(train: Train, track: Track) -> str | None:
-    """Why the train cannot run on the track (its ``length_m`` is longer than the track), else None:
-    the one check of it, for every case a study expands and for every segment cut."""
+    """Why the train cannot run on the track (its length is longer than the track), else None: the
+    one check of it, for every file read (:func:`ecostudy.io.loaders.check_fits` names the file and
+    its field), every case a study expands and every segment cut."""
     if train.length > track.length:
-        return f"train '{train.name}': length_m: {train.length:g} m is longer than track '{track.name}' ({track.length:g} m)"
+        return f"{train.length:g} m is longer than the track '{track.name}' ({track.length:g} m)"
     return None
 
 
@@ -189,7 +190,7 @@ def make_segment(track: Track, train: Train, from_stop: str, to_stop: str) -> Se
     start, end = track.stops[from_stop], track.stops[to_stop]
     why = too_long(train, track)
     if why is not None:
-        raise InputError(why)
+        raise InputError(f"train '{train.name}': length_m: {why}")
     sign = 1.0 if end >= start else -1.0
     gradient = _directed(track.gradient_positions, track.gradients, start, end)
     gradient = Profile(gradient.starts, sign * gradient.values)

@@ -14,10 +14,12 @@ from ecostudy.core import units
 from ecostudy.core.adhesion import TOP_SPEED, Adhesion, capped_envelopes
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.grid import too_long
 from ecostudy.core.physics import EfficiencyMap, Envelope, force_power_fit, table_width
 from ecostudy.core.types import Consist, Supply, Timing, Track, Train, Window
 from ecostudy.io import schemas
 from ecostudy.io.consistschema import ConsistFile
+from ecostudy.io.davis import check_davis_bound, check_davis_plausible, davis_si
 from ecostudy.io.intrain import in_train_physics
 from ecostudy.io.formats import timetable_document_to_schema, track_document_to_schema, train_document_to_schema
 from ecostudy.io.timetable import name_stops, off_clock, turning_back, windows_from_schema
@@ -69,44 +71,13 @@ def _efficiency_map(table: schemas.EfficiencyTable | None) -> EfficiencyMap | No
                          tuple(tuple(row) for row in table.efficiency))
 
 
-def _davis(d: schemas.Davis, static_mass: float) -> tuple[tuple[float, float, float], tuple[str, str, str]]:
-    """Davis triple in N, N s/m, N s^2/m^2 from whichever unit system the file used, and its fields."""
-    if d.a_N is not None:
-        return (d.a_N, given(d.b_N_per_mps), given(d.c_N_per_mps2)), d.TRIPLES[0]
-    if d.a_kN is not None:
-        return (d.a_kN * units.KN, given(d.b_kN_per_kmh) * units.KN / units.KMH,
-                given(d.c_kN_per_kmh2) * units.KN / units.KMH**2), d.TRIPLES[1]
-    return (given(d.a_N_per_kg) * static_mass, given(d.b_N_per_kg_per_mps) * static_mass,
-            given(d.c_N_per_kg_per_mps2) * static_mass), d.TRIPLES[2]
-
-
-# plausible Davis coefficients per unit static mass: A [N/kg], B [N s/(m kg)], C [N s^2/(m^2 kg)]
-DAVIS_PER_KG = {"a": (2e-4, 0.15), "b": (0.0, 5e-3), "c": (1e-7, 2e-3)}
-
-
-def check_davis_plausible(davis: Sequence[float], static_mass: float, fields: Sequence[str], path: Where) -> None:
-    """Warn when a Davis coefficient is of an implausible size for the mass (mixed-up units).
-
-    ``fields`` names the file's fields for (A, B, C), so the warning points at what to fix.
-    """
-    if not any(davis):
-        warnings.warn(problem(path, "/".join(fields), "every Davis coefficient is 0: the train rolls without "
-                              "resistance"), EcostudyWarning, stacklevel=2)
-    for (key, (low, high)), value, name in zip(DAVIS_PER_KG.items(), davis, fields):
-        per_kg = value / static_mass
-        if per_kg and not low <= per_kg <= high:
-            warnings.warn(problem(path, name,
-                                  f"Davis {key.upper()} = {per_kg:.3g} per kg is implausible for a "
-                                  f"{static_mass / units.TONNE:.0f} t train (expected {low:g} to {high:g} "
-                                  "in N, m/s units per kg); check the units"), EcostudyWarning, stacklevel=2)
-
-
 def train_from_schema(t: schemas.TrainFile, path: Where, aliases: Mapping[str, str] | None = None) -> Train:
     static = t.mass_t * units.TONNE
     mass = (t.effective_mass_t * units.TONNE if t.effective_mass_t is not None
             else static * (1 + given(t.rotating_mass_factor)))
-    davis, fields = _davis(t.davis, static)
+    davis, fields = davis_si(t.davis, static)
     aliases = aliases or {}
+    check_davis_bound(t.davis, davis, static, fields, [aliases.get(f"davis.{f}", f"davis.{f}") for f in fields], path)
     check_davis_plausible(davis, static, [aliases.get(f"davis.{f}", f"davis.{f}") for f in fields], path)
     regen, eta_r = None, 0.0
     if t.regenerative_braking is not None:
@@ -189,6 +160,15 @@ def read_track(path: Where) -> tuple[dict[str, Any], Track]:
         warnings.warn(problem(path, "speed_limits", f"every limit is below 25 km/h on a {track.length / 1000:.1f} km "
                               "line: check the unit (m/s given as km/h?)"), EcostudyWarning, stacklevel=2)
     return data, track
+
+
+def check_fits(path: Where, train: Train, track: Track, field: str | None = None) -> None:
+    """Refuse a train longer than its track, naming the train's file and its length field (``field``:
+    the length's own where a file gives it otherwise, ``length`` in TTOBench and OSRD files)."""
+    why = too_long(train, track)
+    if why is not None:
+        file = split_selector(path)[0]
+        raise InputError(problem(file, field or ("length" if Path(file).suffix.lower() == ".json" else "length_m"), why))
 
 
 def load_train(path: Where) -> Train:
@@ -344,6 +324,7 @@ def load_network_study(study_path: Where) -> NetworkStudy:
               + [("dwell_s", s.dwell_s)])
     (track_doc, track), (train_doc, train) = (read_track(named_file(path, "track", s.track)),
                                               read_train(named_file(path, "train", s.train)))
+    check_fits(named_file(path, "train", s.train), train, track)
     stops = list(track.stops) if s.stops is None else s.stops
     check_stop_list(track, stops, path, "stops")
     if s.running_times_s is not None and len(s.running_times_s) != len(stops) - 1:

@@ -174,8 +174,8 @@ class SimulateFile(Strict):
             if (c.sample_time_s or self.sample_time_s) >= self.window_s[1]:
                 raise ValueError(f"{'sample_time_s' if c.sample_time_s is None else f'controllers[{i}].sample_time_s'}: "
                                  "must be shorter than the latest arrival window_s[1]")
-            samples = math.ceil(self.window_s[1] / (c.sample_time_s or self.sample_time_s))
-            if "block" in c.model_fields_set and c.block > samples:
-                raise ValueError(f"controllers[{i}].block: {c.block} samples a move is more than the run's {samples} "
-                                 "(window_s[1] / sample_time_s)")
+            samples = self.window_s[1] / (c.sample_time_s or self.sample_time_s)  # inf past 1e308 (a 1e-320 s step)
+            if "block" in c.model_fields_set and math.isfinite(samples) and c.block > math.ceil(samples):
+                raise ValueError(f"controllers[{i}].block: {c.block} samples a move is more than the run's "
+                                 f"{math.ceil(samples)} (window_s[1] / sample_time_s)")
         return self

@@ -12,7 +12,7 @@ import numpy as np
 
 from ecostudy.core import kinematics
 from ecostudy.core.defaults import SLOWEST
-from ecostudy.core.errors import InfeasibleError, SolverError, TooFastError
+from ecostudy.core.errors import FieldError, InfeasibleError, SolverError, TooFastError
 from ecostudy.core.grid import Segment, drop_idle_power, make_grid, make_segment, node_limits
 from ecostudy.core.types import Track, Train, Trajectory, Window
 from ecostudy.core.units import FloatArray, to_kmh
@@ -176,14 +176,15 @@ def check_windows(case: Case, margin: float = 0.02) -> None:
             limits[k] = min(limits[k], w.max_speed)
     fastest = kinematics.envelope_speeds(case.segment, case.train, case.nodes, limits)
     passing = kinematics.clock(fastest, case.nodes)
-    for k, w in zip(index, case.windows):
+    for i, (k, w) in enumerate(zip(index, case.windows)):
         if w.latest is not None and w.latest < (1 - margin) * passing[k]:
-            raise InfeasibleError(f"infeasible: the fastest run passes {w.distance:.0f} m from "
-                                  f"{case.segment.from_stop} at {passing[k]:.1f} s (window: by {w.latest:.1f} s)")
+            raise FieldError(f"infeasible: the fastest run passes {w.distance:.0f} m from "
+                             f"{case.segment.from_stop} at {passing[k]:.1f} s (window: by {w.latest:.1f} s)",
+                             f"windows[{i}].latest_s")
         if w.min_speed is not None and w.min_speed > (1 + margin) * fastest[k]:
-            raise InfeasibleError(f"infeasible: at {w.distance:.0f} m from {case.segment.from_stop} the train "
-                                  f"reaches at most {to_kmh(fastest[k]):.1f} km/h (window: at least "
-                                  f"{to_kmh(w.min_speed):.1f} km/h)")
+            raise FieldError(f"infeasible: at {w.distance:.0f} m from {case.segment.from_stop} the train "
+                             f"reaches at most {to_kmh(fastest[k]):.1f} km/h (window: at least "
+                             f"{to_kmh(w.min_speed):.1f} km/h)", f"windows[{i}].min_speed_kmh")
 
 
 def slowest_time(case: Case) -> float:

@@ -18,6 +18,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, ProgressColumn, TextColumn
 from rich.text import Text
 
+from ecostudy.core.errors import InputError, problem
 from ecostudy.core.interrupt import Interrupted, signal_name
 
 log = logging.getLogger("ecostudy")
@@ -35,11 +36,18 @@ class Stderr(logging.StreamHandler):
 def logging_to(quiet: bool = False, verbose: bool = False, log_file: Optional[Path] = None) -> Callable[[], None]:
     """Send the ``ecostudy`` logger's messages to stderr (``quiet``: errors only; ``verbose``: debug
     ones too, such as each case's progress; else information, warnings and errors) and to
-    ``log_file`` (debug ones with ``verbose``). Returns the function that removes these handlers again."""
+    ``log_file`` (debug ones with ``verbose``). Returns the function that removes these handlers again.
+    A log file that cannot be written (a folder, a missing folder, no permission) is refused
+    before any handler is added: its one line on stderr, exit status 2 (no logger holds it yet)."""
     handlers: list[logging.Handler] = [Stderr()]
     handlers[0].setLevel(logging.ERROR if quiet else logging.DEBUG if verbose else logging.INFO)
     if log_file is not None:
-        handlers.append(logging.FileHandler(log_file, encoding="utf-8"))
+        try:
+            handlers.append(logging.FileHandler(log_file, encoding="utf-8"))
+        except OSError as exc:
+            sys.stderr.write("error: " + problem("command line", "--log-file", f"{log_file}: cannot write the log "
+                                                 f"file ({exc.strerror})") + "\n")
+            raise SystemExit(InputError.exit_code) from None
         handlers[1].setLevel(logging.DEBUG if verbose else logging.INFO)
         handlers[1].setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
     log.setLevel(logging.DEBUG)

@@ -4,6 +4,7 @@ from functools import partial
 from pathlib import Path
 
 from ecostudy.analysis.export import fixed_step
+from ecostudy.core.budget import how_many
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.status import Status
 from ecostudy.io.folder import write_summary
@@ -113,7 +114,7 @@ def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
     rows = float(span) / (time_step_s if time_step_s is not None else distance_step_m) + 2
     if rows > MAX_EXPORT_ROWS:
         raise InputError(problem("command line", "--every", f"a step of {time_step_s or distance_step_m:g} {unit} over "
-                                 f"the run's {span:.0f} {unit} is {rows:,.0f} rows, above the {MAX_EXPORT_ROWS:,} "
+                                 f"the run's {span:.0f} {unit} is {how_many(rows)} rows, above the {MAX_EXPORT_ROWS:,} "
                                  f"exported (a step of at least {float(span) / MAX_EXPORT_ROWS:.2g} {unit})"))
     table = fixed_step(saved.trajectory, saved.handle, time_step_s, distance_step_m, saved.advice)
     step = f"{time_step_s:g}s" if time_step_s is not None else f"{distance_step_m:g}m"

@@ -11,7 +11,7 @@ import colorsys
 from pathlib import Path
 from typing import NamedTuple
 
-from ecostudy.core.errors import InputError
+from ecostudy.core.errors import InputError, problem
 from ecostudy.io.writers import atomic_write
 
 # Limits and references drawn behind the series.
@@ -223,10 +223,11 @@ def output(fmt="png", dpi=None, option="--format"):
     ``InputError`` naming the option (``--format``, ``--dpi``) and the allowed values."""
     fmt = str(fmt).lower().lstrip(".")
     if fmt not in FORMATS:
-        raise InputError(f"{option}: {fmt!r} is not a figure format; use one of {', '.join(FORMATS)}")
+        raise InputError(problem("command line", option, f"{fmt!r} is not a figure format; use one of "
+                                 f"{', '.join(FORMATS)}"))
     dpi = DPI if dpi is None else dpi
     if not 10 <= float(dpi) <= 2400:
-        raise InputError(f"--dpi: {dpi:g} is outside 10-2400 dots per inch")
+        raise InputError(problem("command line", "--dpi", f"{dpi:g} is outside 10-2400 dots per inch"))
     return Output(fmt, float(dpi))
 
 

@@ -102,18 +102,23 @@ def _scenario_units(s, path, read):
             train = _overridden(train_doc, where, read.said[train_file])
         too = too_long(train, track)  # refused here, before any case of the study is computed
         if too is not None:
-            given = "train_overrides" if "length_m" in (sc.train_overrides or {}) else "train"
-            raise InputError(problem(path, field + given, (f"scenario '{sc.name}': " if i else "") + too))
+            given = "train_overrides.length_m" if "length_m" in (sc.train_overrides or {}) else "train"
+            raise InputError(problem(path, field + given, (f"scenario '{sc.name}': " if i else "")
+                                     + f"train '{train.name}': length_m: {too}"))
         from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
         yield sc.name, {"scenario": sc.name}, train_doc, track_doc, from_stop, to_stop, sc
 
 
-def expand(path, skipped=None, read=None):
+def expand(path, skipped=None, read=None, windows=False):
     """(study schema, output folder, cases) for a study file; inputs are validated here, once.
     A library study's pairs left out are appended to ``skipped`` (track, train, reason); ``read``:
-    the :class:`Files` of the study, when its base case was read before."""
+    the :class:`Files` of the study, when its base case was read before; ``windows``: whether the
+    command keeps the timing windows on the way (``solve``), else they are refused (``run``)."""
     path = Path(path)
     s = validate(schemas.StudyFile, read_document(path), path)
+    if s.windows and not windows:
+        raise InputError(problem(path, "windows", "`ecostudy run` does not keep timing windows on the way yet; use "
+                                 "`ecostudy solve` (or remove the windows)"))
     base = path.parent
     sweep = s.sweep.model_dump(exclude_none=True) if s.sweep else {}
     if s.library is not None:
@@ -183,7 +188,7 @@ def load_checked_study(path, command=None):
     warning names the fields the file gives (other than their defaults) that the command does not use."""
     read = Files()  # each file read once, for the base case and the study's cases
     study = load_study(path, read)
-    s = expand(path, read=read)[0]  # the file as validated there
+    s = expand(path, read=read, windows=True)[0]  # the file as validated there
     if command is not None:
         fields = schemas.StudyFile.model_fields
         unused = [name for name in UNUSED[command]  # given, and not the value the command uses anyway

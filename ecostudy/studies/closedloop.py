@@ -23,7 +23,7 @@ from ecostudy.core.plant import Noise, Plant, Truth
 from ecostudy.core.status import driven_run, flagged, worst
 from ecostudy.core.types import State
 from ecostudy.io import schemas
-from ecostudy.io.loaders import (chosen_stops, read_document, track_document, track_from_schema,
+from ecostudy.io.loaders import (check_fits, chosen_stops, read_document, track_document, track_from_schema,
                                  train_document, train_from_schema, validate)
 from ecostudy.io.documents import named_file
 from ecostudy.io.loopfile import Controller, SimulateFile
@@ -61,6 +61,7 @@ def expand(path):
     track_doc = track_document(named_file(path, "track", s.track))
     train = train_from_schema(validate(schemas.TrainFile, train_doc, f"{path} train"), train_file)  # warnings: its file
     track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{path} track"))
+    check_fits(train_file, train, track)
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     segment = make_segment(track, train, from_stop, to_stop)
     prepare(track, train, from_stop, to_stop, s.points)  # a train that cannot climb: refused, saying where
@@ -248,7 +249,8 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
     names = [c.name for c in study.controllers]
     unknown = sorted(set(only or ()) - set(names))
     if unknown:
-        raise InputError(problem(path, "controllers", f"--only names {', '.join(unknown)}, not among {', '.join(names)}"))
+        raise InputError(problem("command line", "--only", f"{', '.join(map(repr, unknown))}: not among the controllers "
+                                 f"of {path} ({', '.join(names)})"))
     compute = [c for c in cases if c["labels"]["controller"] in only] if only else None
     done = []
 

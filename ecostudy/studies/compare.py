@@ -61,7 +61,7 @@ def expand_compare(path):
     """A study file's base case as a comparison (``ecostudy run FILE --kind compare``): its timing,
     its grid; written beside its output (``<output>_compare``)."""
     st = load_checked_study(path, "compare")
-    no_windows(st, "compare")
+    no_windows(st, "compare", path)
     train_doc, track_doc = st.documents
     cases = compare_cases(train_doc, track_doc, st.from_stop, st.to_stop, st.timing, st.points or RUN_POINTS, st.name)
     return Expanded(st.output.parent / (st.output.name + "_compare"), cases)

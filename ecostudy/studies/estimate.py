@@ -32,7 +32,7 @@ import numpy as np
 from ecostudy.core import kinematics
 from ecostudy.core.adhesion import TOP_SPEED, capped
 from ecostudy.core.plant import Truth
-from ecostudy.core.budget import check_run, duration, refuse_unless_forced
+from ecostudy.core.budget import check_run, duration, how_many, refuse_unless_forced
 from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, TooFastError, problem
 from ecostudy.core.grid import make_grid, make_segment, node_limits
 from ecostudy.io.loaders import track_from_schema, train_from_schema, validate
@@ -130,7 +130,7 @@ def check_closed_loop(cases, path):
         per_sample = spec_seconds(case["controller"], case["points"])
         span = max(fastest, case["window"][1])
         samples = span / case["sample_time"]
-        check_run(path, "controllers", f"{label}: {samples:,.0f} samples of {case['sample_time']:g} s", samples * per_sample)
+        check_run(path, "controllers", f"{label}: {how_many(samples)} samples of {case['sample_time']:g} s", samples * per_sample)
         runs.append(samples * per_sample)
     return runs
 

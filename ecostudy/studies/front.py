@@ -52,7 +52,7 @@ def expand_front(path):
     """A study file's base case as a front (``ecostudy run FILE --kind pareto``): 20 points to +40 %
     on its grid, written beside its output (``<output>_pareto``)."""
     st = load_checked_study(path, "pareto")
-    no_windows(st, "pareto")
+    no_windows(st, "pareto", path)
     train_doc, track_doc = st.documents
     cases = front_cases(train_doc, track_doc, st.from_stop, st.to_stop, points=st.points or FRONT_POINTS, study=st.name)
     return Expanded(st.output.parent / (st.output.name + "_pareto"), cases)

@@ -22,7 +22,7 @@ from scipy.interpolate import PchipInterpolator
 
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.defaults import FRONT_POINTS, SLOWEST
-from ecostudy.core.errors import InfeasibleError, SolverError
+from ecostudy.core.errors import FieldError, InfeasibleError, SolverError
 from ecostudy.core import kinematics
 from ecostudy.core.kinematics import running_time
 from ecostudy.core.simulate import window_checks
@@ -190,30 +190,43 @@ def check_reachable(plan, cases):
     """Refuse, in one line, timing points no run can keep: for two points, the latest time of the
     later one minus the earliest of the earlier one must leave the fastest run between them (on
     the fastest-speed envelope, which no run exceeds) plus the least dwells in between."""
-    events = []  # (where, earliest, latest, fastest clock since the start, dwells since the start)
+    events = []  # (where, earliest, latest, fastest clock since the start, dwells since the start, fields)
     fastest, dwells, start = 0.0, 0.0, 0.0
     for n, case in enumerate(cases):
         clock = kinematics.clock(case.envelope, case.nodes)
         dwells += plan.dwell[n]
         lo, hi = plan.departure[n] or (None, None)
-        events.append((f"the departure from {plan.stops[n]}", lo, hi, fastest, dwells))
+        events.append((f"the departure from {plan.stops[n]}", lo, hi, fastest, dwells,
+                       _fields(n, lo, hi, departure=True)))
         for w in plan.windows[n]:
             at = fastest + float(np.interp(w.distance, case.nodes, clock))
-            events.append((f"the timing point at {start + w.distance:g} m", w.earliest, w.latest, at, dwells))
+            events.append((f"the timing point at {start + w.distance:g} m", w.earliest, w.latest, at, dwells,
+                           ("windows", "windows")))
         fastest += float(clock[-1])
         start += case.segment.distance
-        events.append((f"the arrival at {plan.stops[n + 1]}", *plan.arrival[n], fastest, dwells))
+        events.append((f"the arrival at {plan.stops[n + 1]}", *plan.arrival[n], fastest, dwells,
+                       _fields(n + 1, *plan.arrival[n])))
     worst = None
-    for i, (a, lo, _, t_a, d_a) in enumerate(events):
-        for b, _, hi, t_b, d_b in events[i + 1:]:
+    for i, (a, lo, _, t_a, d_a, (field_a, _)) in enumerate(events):
+        for b, _, hi, t_b, d_b, (_, field_b) in events[i + 1:]:
             if lo is not None and hi is not None:
                 short = (t_b - t_a) + (d_b - d_a) - (hi - lo)
                 if short > 1e-6 and (worst is None or short > worst[0]):
-                    worst = (short, a, lo, b, hi, t_b - t_a)
+                    worst = (short, a, lo, b, hi, t_b - t_a, dict.fromkeys((field_a, field_b)))
     if worst is not None:
-        short, a, lo, b, hi, need = worst
-        raise InfeasibleError(f"infeasible: {a} (not before {lo:g} s) and {b} (not after {hi:g} s) leave "
-                              f"{hi - lo:g} s; the fastest run between them takes {need:.0f} s")
+        short, a, lo, b, hi, need, fields = worst
+        raise FieldError(f"infeasible: {a} (not before {lo:g} s) and {b} (not after {hi:g} s) leave "
+                         f"{hi - lo:g} s; the fastest run between them takes {need:.0f} s", ", ".join(fields))
+
+
+def _fields(n, lo, hi, departure=False):
+    """(field of the earliest time, of the latest) of timetable stop ``n``'s departure or arrival:
+    one fixed time, or a window's two bounds."""
+    fixed, early, late = (("departure_s", "departure_earliest_s", "departure_latest_s") if departure
+                          else ("arrival_s", "earliest_s", "latest_s"))
+    if lo is not None and lo == hi:
+        early = late = fixed
+    return f"stops[{n}].{early}", f"stops[{n}].{late}"
 
 
 def _relative(t, departure):

@@ -12,7 +12,7 @@ from ecostudy.core import units
 from ecostudy.core.defaults import MAX_SUPPLEMENT_PERCENT
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.types import Timing, Track, Train
-from ecostudy.io.loaders import chosen_stops, read_track, read_train
+from ecostudy.io.loaders import check_fits, chosen_stops, read_track, read_train
 from ecostudy.studies.cases import load_checked_study
 
 # the ranges of numeric options: the same as the study schema's where a field exists (io/schemas.py);
@@ -67,10 +67,11 @@ def only_one(**options: Any) -> None:
         raise InputError(problem("command line", "/".join(given), "give only one: each sets the running time"))
 
 
-def no_windows(st: Any, command: str) -> None:
-    """Refuse a study's timing windows where ``command`` would ignore them."""
+def no_windows(st: Any, command: str, path: Any) -> None:
+    """Refuse a study's (file ``path``) timing windows where ``command`` would ignore them."""
     if st is not None and (st.windows or st.timing.window is not None):
-        raise InputError(problem(str(st.name), "windows/window_s", f"{command} does not keep timing windows yet; "
+        field = ", ".join(name for name, given in (("windows", st.windows), ("window_s", st.timing.window)) if given)
+        raise InputError(problem(path, field, f"{command} does not keep timing windows yet; "
                                  "use `ecostudy solve` (or remove the windows)"))
 
 
@@ -109,6 +110,7 @@ def case_from(study: Optional[Path], track: Optional[Path], train: Optional[Path
     if not (track and train):
         raise InputError(problem("command line", "--track/--train", "give a study file, or both --track and --train"))
     (trk_doc, trk), (trn_doc, trn) = read_track(track), read_train(train)  # each file once
+    check_fits(train, trn, trk)
     f, t = chosen_stops(trk, from_stop, to_stop, "command line")
     return Case(trk, trn, f, t, points, None, (trn_doc, trk_doc))
 

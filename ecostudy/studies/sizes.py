@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ecostudy.core.budget import check_run, check_study
+from ecostudy.core.budget import check_run, check_study, duration, how_many
 from ecostudy.heavyhaul.linear import virtual_car_count
 from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import consist_from_document, validate
@@ -53,6 +53,14 @@ def check_run_study(path, workers=1):
     kind.size(Path(path), kind.expand(Path(path)).cases, workers)
 
 
+def check_solve(points, das=None, das_time_limit=60.0):
+    """Refuse (unless forced) one solve estimated above one run's budget: its MINLP search may take
+    its whole time limit (``--das-time-limit 1e308`` searched on past any timeout)."""
+    if das == "minlp":
+        check_run("command line", "--das-time-limit", f"a run at K = {points} with a MINLP search of up to "
+                  f"{duration(das_time_limit)}", run_seconds(points, das, das_time_limit))
+
+
 def check_front(where, count, points, workers=1, das=None, das_time_limit=60.0):
     """Refuse a Pareto front of ``count`` runs of ``points`` nodes estimated above the budget."""
     check_study(where, f"a front of {count} points at K = {points}",
@@ -71,7 +79,7 @@ def check_closed_loop_study(path, workers=1, only=None):
     for c in chosen:
         samples = s.window_s[1] / (c.sample_time_s or s.sample_time_s)
         seconds = samples * spec_seconds(c.model_dump(), s.points)
-        check_run(path, "controllers", f"{c.name}: {samples:,.0f} samples of {c.sample_time_s or s.sample_time_s:g} s "
+        check_run(path, "controllers", f"{c.name}: {how_many(samples)} samples of {c.sample_time_s or s.sample_time_s:g} s "
                   f"at K = {s.points}", seconds)
         per_run += [seconds] * s.draws
     check_study(path, what, per_run, workers, s.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")

@@ -1,0 +1,187 @@
+"""Refusals that named a train by its name, a window by nothing, or printed an overflow: each now one
+line naming the file and the field (exit status 2, no traceback), through the command line."""
+import pytest
+
+from .conftest import STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
+from .test_bad_input_studies import hostile, nothing_written, refused, run
+
+METRO, AMS, LINE4 = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml", TRACKS / "metro_line_4stops.yaml"
+ROKIN = ["--track", AMS, "--points", 50, "--no-plot"]
+
+
+def long_train(tmp_path, metres=5000):
+    """The Amsterdam metro at ``metres`` long (its track is 1106 m, the 4-stop line 3000 m)."""
+    path = tmp_path / "long.yaml"
+    path.write_text(METRO.read_text().replace("length_m: 90", f"length_m: {metres}", 1))
+    return path
+
+
+@pytest.mark.parametrize("command", [
+    ["solve", *ROKIN, "--time", 80],
+    ["pareto", *ROKIN, "--count", 4],  # an internal error (exit 3): a front of failed points
+    ["compare", *ROKIN, "--time", 80],  # computed, every strategy failed (exit 1)
+    ["journey", "--track", LINE4, "--points", 50, "--no-plot", "--supplement", 10],
+])
+def test_a_train_longer_than_its_track_names_the_train_file(tmp_path, command):
+    """It named the train ("train 'Amsterdam metro ...': length_m: ...") and not its file."""
+    train = long_train(tmp_path)
+    refused(run(*command, "--train", train, "--out", tmp_path / "out"), f"{train}: length_m: 5000 m is longer than "
+            "the track")
+    nothing_written(tmp_path)
+
+
+def test_a_study_train_longer_than_its_track_names_the_train_file(tmp_path):
+    train = long_train(tmp_path)
+    network = hostile(tmp_path, "network_metro_2trains.yaml", train=str(train), strategies=["independent"], points=50)
+    refused(run("network", network, "--no-plot", "--workers", 1), f"{train}: length_m: 5000 m is longer than the track")
+    loop = hostile(tmp_path, "metro_monte_carlo.yaml", train=str(train), draws=1,
+                   controllers=[{"name": "convex", "kind": "convex"}])
+    refused(run("simulate", loop, "--no-plot", "--workers", 1, "--no-progress"), f"{train}: length_m: 5000 m")
+    nothing_written(tmp_path)
+
+
+def test_a_consist_longer_than_its_track_names_its_vehicles(tmp_path):
+    consist = load_yaml(TRAINS / "heavyhaul_paper002.yaml")
+    consist["vehicles"] = [{"type": "locomotive", "count": 2}] + [{"type": "wagon", "count": 1000}] * 4
+    path = write_yaml(tmp_path / "c.yaml", consist)  # 4000 wagons of 12.07 m: 48 km on a 45 km line
+    study = hostile(tmp_path, "heavyhaul_brake_penalty.yaml", consist=str(path))
+    refused(run("heavyhaul", study, "--no-plot", "--workers", 1, "--no-progress"),
+            f"{path}: vehicles: 48320.9 m is longer than the track 'Heavy-haul line")
+    nothing_written(tmp_path)
+
+
+def test_a_scenario_train_longer_than_its_track_names_the_field(tmp_path):
+    doc = load_yaml(STUDIES / "default.yaml")
+    doc.update(track=str(AMS), train=str(METRO), points=50, output=str(tmp_path / "out"),
+               scenarios=[{"name": "long", "train_overrides": {"length_m": 5000}}])
+    refused(run("run", write_yaml(tmp_path / "s.yaml", doc), "--workers", 1),
+            "s.yaml: scenarios[0].train_overrides.length_m: scenario 'long': train 'Amsterdam metro (Alstom, Rokin-Centraal "
+            "case)': length_m: 5000 m is longer than the track")
+
+
+def window_study(tmp_path, **window):
+    doc = load_yaml(STUDIES / "default.yaml")
+    doc.update(track=str(AMS), train=str(METRO), points=50, output=str(tmp_path / "out"), running_time_s=80,
+               windows=[{"position_m": 600, **window}])
+    return write_yaml(tmp_path / "s.yaml", doc)
+
+
+@pytest.mark.parametrize("window, fragment", [
+    ({"latest_s": 10}, "s.yaml: windows[0].latest_s: infeasible: the fastest run passes 600 m from Rokin at"),
+    ({"min_speed_kmh": 200}, "s.yaml: windows[0].min_speed_kmh: infeasible: at 600 m from Rokin the train reaches"),
+])
+def test_a_window_no_run_keeps_names_the_study_field(tmp_path, window, fragment):
+    """It was "infeasible: the fastest run passes 600 m ..." with neither file nor field."""
+    refused(run("solve", window_study(tmp_path, **window), "--no-plot"), fragment)
+    nothing_written(tmp_path)
+
+
+def test_windows_a_command_does_not_keep_are_refused_naming_the_file(tmp_path):
+    """``pareto`` and ``compare`` named the study's name ('s: windows/window_s'); ``run`` ignored its windows."""
+    study = window_study(tmp_path, latest_s=10)
+    for command in ("pareto", "compare"):
+        refused(run(command, study, "--no-plot"), f"{study}: windows: {command} does not keep timing windows")
+    refused(run("run", study, "--workers", 1), f"{study}: windows: `ecostudy run` does not keep timing windows")
+    nothing_written(tmp_path)
+
+
+@pytest.mark.parametrize("stops, windows, fragment", [
+    ("{stop: Station, earliest_s: 20, latest_s: 30, dwell_s: 25}", "",
+     "tt.yaml: stops[0].departure_s, stops[1].latest_s: infeasible: the departure from Noord (not before 0 s) and "
+     "the arrival at Station (not after 30 s) leave 30 s"),
+    ("{stop: Station, arrival_s: 58, dwell_s: 25}", "windows:\n  - {position_m: 500, latest_s: 5}\n",
+     "tt.yaml: stops[0].departure_s, windows: infeasible: the departure from Noord (not before 0 s) and the timing "
+     "point at 500 m (not after 5 s)"),
+])
+def test_a_timetable_window_no_run_keeps_names_its_fields(tmp_path, stops, windows, fragment):
+    """It was "infeasible: the departure from Noord ... and the arrival at Station ..." with neither file nor field."""
+    path = tmp_path / "tt.yaml"
+    path.write_text(f"name: tt\nstops:\n  - {{stop: Noord, departure_s: 0}}\n  - {stops}\n"
+                    "  - {stop: Centrum, arrival_s: 181, dwell_s: 30}\n  - {stop: Zuid, arrival_s: 276}\n" + windows)
+    refused(run("journey", "--track", LINE4, "--train", METRO, "--timetable", path, "--points", 50, "--no-plot",
+                "--out", tmp_path / "out"), fragment)
+    nothing_written(tmp_path)
+
+
+@pytest.mark.parametrize("old, new, fragment", [
+    # 1e308 kN overflowed: "... against inf kN of running resistance", naming neither file nor field
+    ("  a_N: 3975.9\n  b_N_per_mps: 24.36\n  c_N_per_mps2: 4.38", "  a_kN: 1.0e+308\n  b_kN_per_kmh: 0.0068\n"
+     "  c_kN_per_kmh2: 0.00034", "t.yaml: davis.a_kN: 1e+308 gives a resistance of more than any number holds (an overflow)"),
+    ("c_N_per_mps2: 4.38", "c_N_per_mps2: 1.0e+308", "t.yaml: davis.c_N_per_mps2: 1e+308 gives a resistance"),
+    ("c_N_per_mps2: 4.38", "c_N_per_mps2: 2000", "t.yaml: davis.c_N_per_mps2: 2000 gives a resistance of 1.54e+03 kN "
+     "at 100 km/h, above the train's weight (1289 kN"),
+])
+def test_a_davis_term_above_the_weight_is_refused_at_the_file(tmp_path, old, new, fragment):
+    path = tmp_path / "t.yaml"
+    text = METRO.read_text()
+    assert old in text
+    path.write_text(text.replace(old, new, 1))
+    line = refused(run("solve", *ROKIN, "--train", path, "--time", 80, "--out", tmp_path / "out"), fragment)
+    assert "inf" not in line
+    nothing_written(tmp_path)
+
+
+def test_a_davis_term_within_the_bound_is_solved(tmp_path):
+    """Five times the metro's C (a 13 per mille term at 100 km/h) is a train, if a draggy one."""
+    path = tmp_path / "t.yaml"
+    path.write_text(METRO.read_text().replace("c_N_per_mps2: 4.38", "c_N_per_mps2: 21.9", 1))
+    assert run("solve", *ROKIN, "--train", path, "--time", 80, "--out", tmp_path / "out").exit_code == 0
+
+
+@pytest.mark.parametrize("sample_time, fragment", [
+    # 1e-300 s printed "199,999,999,999,999,977,191,...": a count of 303 digits
+    (1e-300, "convex: 7.6e+301 samples of 1e-300 s at K = 100: an estimated 7.5e+294 days of computing"),
+    # 1e-320 s (a subnormal): "OverflowError: cannot convert float infinity to integer", exit 3
+    (1e-320, "convex: more than 1e+308 samples of"),
+])
+def test_a_tiny_sample_time_is_refused_with_a_readable_estimate(tmp_path, sample_time, fragment):
+    study = hostile(tmp_path, "metro_monte_carlo.yaml", sample_time_s=sample_time, draws=1,
+                    controllers=[{"name": "convex", "kind": "convex"}])
+    line = refused(run("simulate", study, "--no-plot", "--workers", 1, "--no-progress"), "sample", fragment)
+    assert len(line) < 400 and "give --force" in line
+    nothing_written(tmp_path)
+
+
+@pytest.mark.parametrize("where, fragment", [
+    # a folder or a missing folder: a rich traceback of IsADirectoryError / FileNotFoundError, exit 1
+    ("", "Is a directory"),
+    ("no/x.log", "No such file or directory"),
+])
+def test_a_log_file_that_cannot_be_written_is_one_line(tmp_path, where, fragment):
+    log = tmp_path / where
+    refused(run("--log-file", log, "solve", *ROKIN, "--train", METRO, "--time", 80, "--out", tmp_path / "out"),
+            f"command line: --log-file: {log}: cannot write the log file ({fragment})")
+    nothing_written(tmp_path)
+
+
+def test_a_minlp_time_limit_past_the_run_budget_is_refused_with_its_estimate(tmp_path):
+    """--das-time-limit 1e308 was accepted: the MINLP search ran on past a 30 s timeout."""
+    refused(run("solve", *ROKIN, "--train", METRO, "--time", 80, "--das", "minlp", "--das-time-limit", 1e308,
+                "--out", tmp_path / "out"), "command line: --das-time-limit: a run at K = 50 with a MINLP search of up "
+            "to 1.2e+303 days: an estimated 1.2e+303 days of computing, above the 2 h one run may take; give --force")
+    nothing_written(tmp_path)
+
+
+@pytest.mark.parametrize("option, value, fragment", [
+    # "error: --dpi: 0 is outside ...": no place named
+    ("--dpi", 0, "command line: --dpi: 0 is outside 10-2400 dots per inch"),
+    ("--format", "bmp", "command line: --format: 'bmp' is not a figure format"),
+])
+def test_a_figure_option_out_of_range_names_the_command_line(tmp_path, option, value, fragment):
+    refused(run("solve", *ROKIN, "--train", METRO, "--time", 80, option, value, "--out", tmp_path / "out"), fragment)
+
+
+def test_an_export_step_of_1e_300_s_prints_a_readable_count(tmp_path):
+    """It printed a count of 302 digits ("79,999,999,999,999,994,683,...")."""
+    assert run("solve", *ROKIN, "--train", METRO, "--time", 80, "--out", tmp_path / "s").exit_code == 0
+    line = refused(run("export", tmp_path / "s", "--every", "1e-300s"),
+                   "command line: --every: a step of 1e-300 s over the run's 80 s is 8e+301 rows, above the 1,000,000")
+    assert len(line) < 300
+
+
+def test_an_unknown_only_names_the_option(tmp_path):
+    """It was '<study>: controllers: --only names , not among ...': the study named for the option's value."""
+    study = hostile(tmp_path, "thesis001_closed_loop.yaml")
+    refused(run("simulate", study, "--only", "", "--no-plot", "--no-progress"),
+            "command line: --only: '': not among the controllers of", "(convex_mixed, convex_time, plan_replayed)")
+    nothing_written(tmp_path)
