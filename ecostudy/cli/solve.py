@@ -17,8 +17,7 @@ def solve(
     window: Optional[str] = typer.Option(None, help="Arrival window 'earliest,latest' [s]."),
     from_stop: o.From = None, to_stop: o.To = None,
     objective: Optional[o.Objective] = typer.Option(None, help="energy | net_energy | time | mixed."),
-    weights: Optional[str] = typer.Option(None, help="Mixed objective weights 'w_t,w_e': minimise w_t T [s] + w_e E/Ms [J/kg] "
-                                           "(traction work per static mass; Yazhemsky 2017, eq. 4.1)."),
+    weights: Optional[str] = typer.Option(None, help="Mixed weights 'w_t,w_e': minimise w_t T [s] + w_e E/Ms [J/kg] (Yazhemsky 2017, eq. 4.1)."),
     points: o.Points = None, out: o.SolveOut = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
     das: Optional[o.DasMethod] = typer.Option(
         None, help="Also driver advice: round (nearest handle level), phases (optimal phase lengths, "

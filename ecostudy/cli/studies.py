@@ -17,8 +17,7 @@ def pareto(
     count: int = typer.Option(20, help="Points on the front, the all-out run included."),
     supplement_max: float = typer.Option(40.0, help="Largest running-time supplement over all-out [%]."),
     points: o.Points = None, workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False,
-    weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T [s] + w_e E/Ms [J/kg], "
-                                              "Yazhemsky 2017, eq. 4.1a)."),
+    weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T [s] + w_e E/Ms [J/kg], Yazhemsky 2017, eq. 4.1a)."),
     das: Optional[o.DasMethod] = typer.Option(None, help="Also the DAS front: round | phases | minlp at every point."),
     das_time_limit: o.DasTimeLimit = 60.0, out: o.ParetoOut = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png",
     dpi: o.Dpi = 110.0, force: o.Force = False, debug: o.Debug = False,
