@@ -23,7 +23,7 @@ from ecostudy.report.files import write_fixed_step, write_run
 from ecostudy.report.style import output
 from ecostudy.studies.check import check_result
 from ecostudy.studies.options import case_from, check_options, only_one, output_folder, parse_pair, timing_of
-from ecostudy.studies.sizes import check_solve
+from ecostudy.studies.estimate import check_solve
 
 
 def run_lines(result: RunResult, out_dir: Path) -> list[str]:

@@ -58,6 +58,14 @@ def run_seconds(points, das=None, das_time_limit=60.0):
     return seconds + (das_time_limit if das == "minlp" else 0.0)
 
 
+def check_solve(points, das=None, das_time_limit=60.0):
+    """Refuse (unless forced) one solve estimated above one run's budget: its MINLP search may take
+    its whole time limit (``--das-time-limit 1e308`` searched on past any timeout)."""
+    if das == "minlp":
+        check_run("command line", "--das-time-limit", f"a run at K = {points} with a MINLP search of up to "
+                  f"{duration(das_time_limit)}", run_seconds(points, das, das_time_limit))
+
+
 def sample_seconds(kind, points, variant="nominal", transcription="simultaneous"):
     """Estimated computing of one closed-loop sample of a controller ``kind`` (its ``variant`` and
     ``transcription`` where it has them) at ``points`` nodes, its set-up spread over its samples [s]."""

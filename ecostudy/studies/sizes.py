@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ecostudy.core.budget import check_run, check_study, duration, how_many
+from ecostudy.core.budget import check_run, check_study, how_many
 from ecostudy.heavyhaul.linear import virtual_car_count
 from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import consist_from_document, validate
@@ -51,14 +51,6 @@ def check_run_study(path, workers=1):
     ``size`` (:func:`ecostudy.studies.batch.run_study_size`) on its cases."""
     kind = STUDY_KINDS.get("run")
     kind.size(Path(path), kind.expand(Path(path)).cases, workers)
-
-
-def check_solve(points, das=None, das_time_limit=60.0):
-    """Refuse (unless forced) one solve estimated above one run's budget: its MINLP search may take
-    its whole time limit (``--das-time-limit 1e308`` searched on past any timeout)."""
-    if das == "minlp":
-        check_run("command line", "--das-time-limit", f"a run at K = {points} with a MINLP search of up to "
-                  f"{duration(das_time_limit)}", run_seconds(points, das, das_time_limit))
 
 
 def check_front(where, count, points, workers=1, das=None, das_time_limit=60.0):
