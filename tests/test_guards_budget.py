@@ -47,6 +47,7 @@ def test_the_estimate_shares_the_work_and_counts_every_worker():
     ([3600.0] * 3, 1, ["3 runs, an estimated 3 h of computing (3 h with 1 worker)", "above the 2 h"]),
     ([600.0] * 100, 4, ["100 runs", "16.7 h of computing (4.2 h with 4 workers)"]),
     ([1.0] * 1000, 1000, ["with 1000 workers an estimated 400.0 GB of memory", "use fewer --workers"]),
+    ([10800.0], 1, ["cases: 1 run, an estimated 3 h of computing"]),
 ])
 def test_a_study_too_big_for_one_command_is_refused_with_its_estimate(runs, workers, fragments):
     with pytest.raises(InputError) as refused:

@@ -55,3 +55,12 @@ def test_a_folder_counts_its_cases_and_names_those_not_ok(tmp_path):
     assert report.problems() == ["flagged: b: late", "failed: c: infeasible: too short"]
     with pytest.raises(InputError, match="not one run's"):
         folder.run()
+
+
+def test_a_stored_infeasible_case_says_infeasible_once():
+    """A case whose solve raised InfeasibleError is stored as ``infeasible`` with the error's own text
+    (which begins ``infeasible:``): read back, the reason says it once."""
+    stored = Status.parse("infeasible", "infeasible: the fastest possible run takes 71.7 s (asked for 20.0 s)")
+    assert str(stored) == "failed: infeasible: the fastest possible run takes 71.7 s (asked for 20.0 s)"
+    assert str(Status.parse("infeasible", "below the all-out time")) == "failed: infeasible: below the all-out time"
+    assert str(Status.parse("infeasible")) == "failed: infeasible"

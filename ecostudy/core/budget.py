@@ -116,7 +116,8 @@ def check_study(where: str | PathLike[str], what: str, runs: Sequence[float], wo
     memory. ``part_hint``: how to run a part of it (``--only NAME``), added to the refusal."""
     total, wall, nbytes = study_estimate(runs, workers, run_bytes, serial)
     memory = machine_memory()
-    how = f"{len(runs) + len(serial)} runs, an estimated {duration(total)} of computing"
+    count = len(runs) + len(serial)
+    how = f"{count} run{'s' * (count != 1)}, an estimated {duration(total)} of computing"
     if wall > MAX_STUDY_SECONDS:
         hint = f"; run a part of it ({part_hint}) and the rest later" if part_hint else ""
         refuse_unless_forced(where, "study", f"{what}: {how} ({duration(wall)} with {workers} worker"

@@ -67,8 +67,8 @@ class Status:
             raise ValueError(f"not a status: {text!r}")
         kind = _WORDS[word]
         detail = rest.strip() or (reason or "").strip()
-        if word in ("infeasible", "missing"):
-            detail = f"{word}: {detail}" if detail else word
+        if word in ("infeasible", "missing"):  # a reason that says it already (an InfeasibleError's) is not said twice
+            detail = word if not detail else detail if detail.startswith(f"{word}:") else f"{word}: {detail}"
         return cls(kind, "" if kind == "ok" else detail or "no reason recorded")
 
 

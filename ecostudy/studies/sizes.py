@@ -91,8 +91,9 @@ def network_runs(study, path):
 def check_network_study(study, path, workers=1):
     """Refuse a network study (loaded: :func:`ecostudy.io.loaders.load_network_study`) too big for one
     run (its legs) or for the command (every strategy)."""
-    check_study(path, f"{len(study.strategies)} strategies x {len(study.names)} trains", network_runs(study, path),
-                workers)
+    strategies, trains = len(study.strategies), len(study.names)
+    check_study(path, f"{strategies} strateg{'ies' if strategies != 1 else 'y'} x {trains} train{'s' * (trains != 1)}",
+                network_runs(study, path), workers)
 
 
 def heavyhaul_runs(study, reference, cases, path=None):
