@@ -369,6 +369,19 @@ def test_bad_logs_are_one_line(tmp_path, text, fragments):
     assert not (tmp_path / "o" / "summary.json").exists()
 
 
+@pytest.mark.parametrize("command", ["validate", "calibrate"])
+def test_a_train_longer_than_the_track_is_refused_naming_its_file(tmp_path, command):
+    long = tmp_path / "long.yaml"
+    long.write_text(TRAIN.read_text().replace("length_m: 100", "length_m: 20000"))
+    log = tmp_path / "log.csv"
+    log.write_text(good().replace(f"train: {TRAIN}", f"train: {long}"))
+    result = run(command, log, "--out", tmp_path / "o", "--no-plot")
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert len(lines) == 1 and "Traceback" not in result.output, result.output
+    assert f"{long}: length_m: 20000 m is longer than the track" in lines[0], lines[0]
+
+
 def steep_line(permille):
     """A line of two descents of ``permille`` (2.1 km each) between three stops on level track."""
     return track_from_dict({"name": f"steep {permille}", "source": "test", "length_m": 6300,

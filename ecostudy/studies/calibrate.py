@@ -21,7 +21,7 @@ from ecostudy.calibration.fit import DEFAULT_FIT, PARAMETERS
 from ecostudy.calibration.savings import savings
 from ecostudy.calibration.validate import validate_log
 from ecostudy.core.errors import InputError, problem
-from ecostudy.io.loaders import load_track, load_train
+from ecostudy.io.loaders import check_fits, load_track, load_train
 from ecostudy.io.logfile import check_on_track, check_traction_sign, load_log
 from ecostudy.io.trainout import calibrated_document, write_train
 from ecostudy.core.status import Status
@@ -54,6 +54,7 @@ def load_inputs(log_paths, train_path, track_path):
     track_path = Path(track_path) if track_path else logs[0].named("track")
     train_path = Path(train_path) if train_path else logs[0].named("train")
     track, train = load_track(track_path), load_train(train_path)
+    check_fits(train_path, train, track)
     for log in logs:
         check_on_track(log, track)
         check_traction_sign(log, track)
