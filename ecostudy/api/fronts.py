@@ -8,7 +8,7 @@ from typing import Callable, Optional
 from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
 from ecostudy.core import units
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
-from ecostudy.core.errors import FieldError, InfeasibleError, InputError, problem
+from ecostudy.core.errors import FieldError, InputError, problem
 from ecostudy.io.loaders import check_fits, check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
 from ecostudy.io.timetable import journey_plan, name_stops
 from ecostudy.io.store import check_one_study
@@ -164,7 +164,7 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
                                             points=points, workers=workers, scheduled=scheduled, plan=plan,
                                             progress=progress)
     except FieldError as exc:  # a timetable's times no run keeps: the timetable's fields, by name
-        raise InfeasibleError([problem(str(timetable), exc.field, p) for p in exc.problems]) from None
+        raise exc.in_file(timetable) from None
     passing = []
     if plan is not None:  # timing points along the journey (segment lengths from the first split)
         start = 0.0

@@ -114,7 +114,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
             where, field = timing_source(study, st, time, supplement, window)
             raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
         except FieldError as exc:  # a window on the way no run keeps: the study's, by name
-            raise InfeasibleError([problem(str(study), exc.field, p) for p in exc.problems]) from None
+            raise exc.in_file(study) from None
         if das is not None:
             result.das = das_run(result, das, time_limit=das_time_limit)
             result.summary["das"] = result.das.summary

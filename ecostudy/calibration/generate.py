@@ -187,7 +187,7 @@ def steady_log(train, seed, level=25.0, hold=400.0, rate=0.8):
     t = np.arange(0.0, 2 * rise + hold + 20.0, 0.1)
     fine = np.linspace(0.0, t[-1], 10 * (len(t) - 1) + 1)
     v = np.clip(np.minimum(rate * fine, level) - np.maximum(rate * (fine - rise - hold), 0.0), 0.0, None)
-    resist = (train.davis[0] + train.davis[1] * v + train.davis[2] * v * v) * np.where(v > 0, v, 0.0)
+    resist = davis_resistance(v, *train.davis) * np.where(v > 0, v, 0.0)
     davis = np.add.reduceat(0.5 * (resist[1:] + resist[:-1]) * np.diff(fine), np.arange(0, len(fine) - 1, 10))
     vs = v[::10]
     work = 0.5 * train.mass * np.diff(vs ** 2) + davis

@@ -39,6 +39,10 @@ class FieldError(InfeasibleError):
         super().__init__(problems)
         self.field = field
 
+    def in_file(self, path: object) -> InfeasibleError:
+        """The same problems as ``file: field: what``, for the caller that knows the file."""
+        return InfeasibleError([problem(str(path), self.field, p) for p in self.problems])
+
 
 class SolverError(EcostudyError):
     """Ipopt did not return a usable point."""

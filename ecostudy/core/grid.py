@@ -184,13 +184,19 @@ def too_long(train: Train, track: Track) -> str | None:
     return None
 
 
+def too_long_named(train: Train, track: Track) -> str | None:
+    """:func:`too_long` naming the train and its field, where its file is not known here."""
+    why = too_long(train, track)
+    return None if why is None else f"train '{train.name}': length_m: {why}"
+
+
 def make_segment(track: Track, train: Train, from_stop: str, to_stop: str) -> Segment:
     """Cut the track between two stops into travel-direction profiles."""
     warn_unpaired(track, train)
     start, end = track.stops[from_stop], track.stops[to_stop]
-    why = too_long(train, track)
+    why = too_long_named(train, track)
     if why is not None:
-        raise InputError(f"train '{train.name}': length_m: {why}")
+        raise InputError(why)
     sign = 1.0 if end >= start else -1.0
     gradient = _directed(track.gradient_positions, track.gradients, start, end)
     gradient = Profile(gradient.starts, sign * gradient.values)

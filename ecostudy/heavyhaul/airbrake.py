@@ -57,12 +57,17 @@ class BrakePipe:
         return _lag(force, seen, elapsed - since, self.brake)
 
 
+def _wagons(consist):
+    """(the wagons' mask, the brake signal's delay to every car [s])."""
+    wagons = np.array([kind != "locomotive" for kind in consist.kinds])
+    return wagons, signal_delays(consist, consist.air_brake.signal_speed)
+
+
 def application_time(consist):
     """[s] the brake signal's run to the last wagon plus the build-up time constant: how much later
     than an instant brake a train braked from its head has its brakes (9.8 + 8 s on the ore train)."""
-    wagons = np.array([kind != "locomotive" for kind in consist.kinds])
-    return float(signal_delays(consist, consist.air_brake.signal_speed)[wagons].max(initial=0.0)
-                 + consist.air_brake.build_up)
+    wagons, delays = _wagons(consist)
+    return float(delays[wagons].max(initial=0.0) + consist.air_brake.build_up)
 
 
 def brake_lag(consist):
@@ -70,9 +75,8 @@ def brake_lag(consist):
     mean delay over the wagons (weighted by their brake force) plus the build-up time constant (a
     first-order lag tau behind a delay d follows a ramp d + tau late; 4.9 + 8 s on the ore train).
     A train braked more and more as it runs onto a descent gains speed for that long."""
-    wagons = np.array([kind != "locomotive" for kind in consist.kinds])
+    wagons, delays = _wagons(consist)
     weights = np.asarray(consist.pneumatic_brake, float)[wagons]
     if not wagons.any() or weights.sum() <= 0:
         return 0.0
-    delays = signal_delays(consist, consist.air_brake.signal_speed)[wagons]
-    return float(np.dot(delays, weights) / weights.sum() + consist.air_brake.build_up)
+    return float(np.dot(delays[wagons], weights) / weights.sum() + consist.air_brake.build_up)

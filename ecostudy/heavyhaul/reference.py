@@ -127,9 +127,7 @@ def advanced_limits(track, seconds, forward=True):
         seen = (p[None, :] <= starts[:, None] + lead[None, :]) & (ends[None, :] > starts[:, None])
     else:
         seen = (p[None, :] <= starts[:, None]) & (ends[None, :] + lead[None, :] > starts[:, None])
-    values = np.where(seen, limit[None, :], np.inf).min(axis=1)
-    keep = np.concatenate([[True], np.diff(values) != 0])  # no repeated pieces
-    return replace(track, limit_positions=starts[keep], limits=values[keep])
+    return _with_limits(track, starts, np.where(seen, limit[None, :], np.inf).min(axis=1))
 
 
 def descent_margins(track, train, lag, forward=True):
@@ -157,7 +155,11 @@ def descent_margins(track, train, lag, forward=True):
     lowered = need > 0
     change = np.concatenate([[True], (lowered[1:] != lowered[:-1]) | (limit[1:] != limit[:-1])])
     runs = np.cumsum(change) - 1  # the run of pieces alike lowered (or not) under one limit each is in
-    values = np.where(lowered, np.minimum.reduceat(values, np.flatnonzero(change))[runs], values)
+    return _with_limits(track, starts, np.where(lowered, np.minimum.reduceat(values, np.flatnonzero(change))[runs], values))
+
+
+def _with_limits(track, starts, values):
+    """``track`` with the speed limit ``values`` from ``starts`` on, repeated pieces merged."""
     keep = np.concatenate([[True], np.diff(values) != 0])
     return replace(track, limit_positions=starts[keep], limits=values[keep])
 

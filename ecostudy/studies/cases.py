@@ -14,7 +14,7 @@ from pathlib import Path
 
 from ecostudy import __version__
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
-from ecostudy.core.grid import too_long
+from ecostudy.core.grid import too_long_named
 from ecostudy.io import schemas
 from ecostudy.io.documents import named_file, split_selector
 from ecostudy.io.loaders import (
@@ -100,11 +100,10 @@ def _scenario_units(s, path, read):
         if sc.train_overrides:
             train_doc = {**train_doc, **sc.train_overrides}
             train = _overridden(train_doc, where, read.said[train_file])
-        too = too_long(train, track)  # refused here, before any case of the study is computed
+        too = too_long_named(train, track)  # refused here, before any case of the study is computed
         if too is not None:
             given = "train_overrides.length_m" if "length_m" in (sc.train_overrides or {}) else "train"
-            raise InputError(problem(path, field + given, (f"scenario '{sc.name}': " if i else "")
-                                     + f"train '{train.name}': length_m: {too}"))
+            raise InputError(problem(path, field + given, (f"scenario '{sc.name}': " if i else "") + too))
         from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
         yield sc.name, {"scenario": sc.name}, train_doc, track_doc, from_stop, to_stop, sc
 
@@ -116,9 +115,8 @@ def expand(path, skipped=None, read=None, windows=False):
     command keeps the timing windows on the way (``solve``), else they are refused (``run``)."""
     path = Path(path)
     s = validate(schemas.StudyFile, read_document(path), path)
-    if s.windows and not windows:
-        raise InputError(problem(path, "windows", "`ecostudy run` does not keep timing windows on the way yet; use "
-                                 "`ecostudy solve` (or remove the windows)"))
+    if not windows:
+        refuse_windows(path, {"windows": s.windows}, "`ecostudy run`")
     base = path.parent
     sweep = s.sweep.model_dump(exclude_none=True) if s.sweep else {}
     if s.library is not None:
@@ -179,6 +177,15 @@ UNUSED = {"solve": ("das", "das_time_limit_s", "scenarios", "sweep"),
                      "objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep")}
 WHO = {"solve": "`ecostudy solve`", "compare": "`ecostudy compare` (or `run --kind compare`)",
        "pareto": "`ecostudy pareto` (or `run --kind pareto`)"}
+
+
+def refuse_windows(path, given, who):
+    """Refuse a study's (file ``path``) timing windows where ``who`` would ignore them (``given``:
+    {field: its value}; the fields given are named)."""
+    fields = [name for name, value in given.items() if value]
+    if fields:
+        raise InputError(problem(path, ", ".join(fields), f"{who} does not keep timing windows yet; use "
+                                 "`ecostudy solve` (or remove the windows)"))
 
 
 def load_checked_study(path, command=None):

@@ -13,7 +13,7 @@ from ecostudy.core.defaults import MAX_SUPPLEMENT_PERCENT
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.types import Timing, Track, Train
 from ecostudy.io.loaders import check_fits, chosen_stops, read_track, read_train
-from ecostudy.studies.cases import load_checked_study
+from ecostudy.studies.cases import load_checked_study, refuse_windows
 
 # the ranges of numeric options: the same as the study schema's where a field exists (io/schemas.py);
 # (lowest, highest, lowest allowed itself)
@@ -69,10 +69,8 @@ def only_one(**options: Any) -> None:
 
 def no_windows(st: Any, command: str, path: Any) -> None:
     """Refuse a study's (file ``path``) timing windows where ``command`` would ignore them."""
-    if st is not None and (st.windows or st.timing.window is not None):
-        field = ", ".join(name for name, given in (("windows", st.windows), ("window_s", st.timing.window)) if given)
-        raise InputError(problem(path, field, f"{command} does not keep timing windows yet; "
-                                 "use `ecostudy solve` (or remove the windows)"))
+    if st is not None:
+        refuse_windows(path, {"windows": st.windows, "window_s": st.timing.window}, command)
 
 
 class Case(NamedTuple):
