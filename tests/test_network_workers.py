@@ -2,6 +2,7 @@
 (``studies.legpool``): the same results, bit for bit, as one process; a resumed study with one
 strategy left still spreads its legs."""
 import json
+import multiprocessing
 import sqlite3
 
 import pandas as pd
@@ -81,7 +82,10 @@ def test_the_pool_workers_outlive_the_case_threads():
 
     def task(case, pool):
         result = pool.submit(pow, case, 2).result()
-        workers.extend(pool._processes.values())  # the pool's worker processes, to read their exit codes
+        # the pool's workers by the IDs it exposes (WorkerPool.started), as this process's children (the
+        # multiprocessing.Process objects whose exit codes are read once the pool has ended)
+        pids = pool.started()
+        workers.extend(p for p in multiprocessing.active_children() if p.pid in pids)
         return result
 
     assert sorted(shared_pool([1, 2, 3], 2, task)) == [(1, 1), (2, 4), (3, 9)]
