@@ -14,7 +14,9 @@ from typing import Callable, Optional, Sequence
 from ecostudy.api.blas import limit_blas_threads
 from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
+from ecostudy.core.units import number
 from ecostudy.report import calplots, heavyplots, loopplots
+from ecostudy.report.console import counted
 from ecostudy.report.studyfiles import network_files
 from ecostudy.report.html import write_html
 from ecostudy.report.style import output
@@ -54,7 +56,7 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
     check_options(workers=workers)  # a study too big for the command: refused by its kind's size (unless --force)
     table, counts, folder = run_kind(kind, study, workers, dask, retry_failed, Path(out) if out else None, progress)
     write_html(folder)
-    return reported(folder, [f"{counts['total']} cases: {counts['stored_before']} already stored, {counts['computed']} "
+    return reported(folder, [f"{counted(counts['total'], 'cases')}: {counts['stored_before']} already stored, {counts['computed']} "
                              f"computed now ({counts['failed']} of them failed or infeasible); not ok in the table: "
                              f"{counts['not_ok']}" + not_reused(counts), "outputs " + listed(folder, ("results.csv", "results.sqlite",
                                                                                   "report.html"))])
@@ -148,7 +150,8 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
              f"{q['rms_speed_mps']:.3f} m/s RMS; innovations {q['structure']:.2f} times white noise over 5 s"]
     lines += [f"{row['log']} run {row['run']}: optimum for {row['running_time_s']:.1f} s uses "
               f"{row['optimal_traction_kWh']:.2f} kWh against {row['logged_traction_kWh']:.2f} kWh logged: saving "
-              f"{row['saving_pct']:.1f} % (band {row['saving_low_pct']:.1f} to {row['saving_high_pct']:.1f} % over "
+              f"{number(row['saving_pct'], '.1f')} % (band {number(row['saving_low_pct'], '.1f')} to "
+              f"{number(row['saving_high_pct'], '.1f')} % over "
               f"{row['draws']} parameter draws)" + ("" if row["verified"] else " (optimum not verified)")
               if row["saving_pct"] == row["saving_pct"] else f"{row['log']} run {row['run']}: {row['status']}"
               for row in summary.get("savings", [])]  # (a NaN saving: no optimum, its status says why)
@@ -172,7 +175,7 @@ def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optiona
     return reported(out, [shown(table[VALIDATION_COLUMNS], places=".4g"),
                           f"traction energy: logged {summary['logged_traction_kWh']:.2f} kWh, model "
                           f"{summary['model_traction_kWh']:.2f} kWh ("
-                          + (f"{summary['traction_difference_pct']:+.2f} %)" if summary["traction_difference_pct"]
+                          + (f"{number(summary['traction_difference_pct'], '+.2f')} %)" if summary["traction_difference_pct"]
                              is not None else "none logged)"),
                           f"{summary['status']}" + (f": {summary['reason']}" if summary["reason"] else ""),
                           "outputs " + listed(out)])

@@ -71,10 +71,12 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     lines = [shown(table, FRONT_COLUMNS + (DAS_COLUMNS if das is not None else []))]
     if das is not None:
         d = meta["das"]
+        low, high = (units.number(d[f"{end}_gap_on_time_pct"], ".2f") for end in ("min", "max"))
         lines.append(f"DAS {d['method']}: {d['solved']} of {d['points']} points; gap to ATO on time "
-                     f"{d['min_gap_on_time_pct']:.2f} to {d['max_gap_on_time_pct']:.2f} %; monotone: {d['monotone']}")
-    lines.append(f"all-out {meta['all_out_time_s']:.2f} s; +5 % saves {meta['saving_at_5_pct_supplement_pct']:.1f} %, "
-                 f"+10 % saves {meta['saving_at_10_pct_supplement_pct']:.1f} % of the all-out traction energy")
+                     f"{low} to {high} %; monotone: {d['monotone']}")
+    five, ten = (units.number(meta[f"saving_at_{p}_pct_supplement_pct"], ".1f") for p in (5, 10))
+    lines.append(f"all-out {meta['all_out_time_s']:.2f} s; +5 % saves {five} %, +10 % saves {ten} % of the all-out "
+                 "traction energy")
     lines.append(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
                  f"{meta['all_verified']}; {perf_counter() - started:.1f} s")
     return reported(out_dir, lines + [counts_line(ran.counts, "points"), "outputs " + listed(out_dir)])

@@ -10,7 +10,9 @@ from typing import Any, Iterable, Sequence
 import pandas as pd
 
 from ecostudy.core.errors import EcostudyError
+from ecostudy.core.units import number
 from ecostudy.io.folder import StudyResult, load
+from ecostudy.report.console import counted
 
 
 @dataclass
@@ -45,10 +47,11 @@ def reported(folder: Path | str, lines: Iterable[str]) -> Report:
 
 
 def shown(frame: pd.DataFrame, columns: Sequence[str] | None = None, places: str = ".3f") -> str:
-    """``frame``'s ``columns`` (those it has; all without ``columns``) as a plain text table."""
+    """``frame``'s ``columns`` (those it has; all without ``columns``) as a plain text table, each
+    number by ``places`` (:func:`~ecostudy.core.units.number`: no '-0.000')."""
     if columns is not None:
         frame = frame[[c for c in columns if c in frame]]
-    return frame.to_string(index=False, float_format=lambda x: f"{x:{places}}")
+    return frame.to_string(index=False, float_format=lambda x: number(x, places))
 
 
 def listed(out_dir: Path | str, names: Sequence[str] = ()) -> str:
@@ -65,7 +68,7 @@ def listed(out_dir: Path | str, names: Sequence[str] = ()) -> str:
 
 def counts_line(counts: dict[str, int], noun: str) -> str:
     """The one-line summary of a resumable study's counts (``studies.batch.execute``)."""
-    return (f"{counts['total']} {noun}: {counts['stored_before']} already stored, {counts['computed']} computed now "
+    return (f"{counted(counts['total'], noun)}: {counts['stored_before']} already stored, {counts['computed']} computed now "
             f"({counts['failed']} failed); not ok: {counts['not_ok']}" + not_reused(counts))
 
 

@@ -14,6 +14,7 @@ from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, problem
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status
+from ecostudy.core.units import number
 from ecostudy.das.methods import das_run
 from ecostudy.io.results import file_digest
 from ecostudy.io.writers import check_output_dir, write_json
@@ -33,7 +34,8 @@ def run_lines(result: RunResult, out_dir: Path) -> list[str]:
     lines = [f"{s.train}: {s.from_stop} -> {s.to_stop} ({s.distance_m:.0f} m), objective {s.objective}, K = {s.points}",
              f"  running time      {s.running_time_s:9.2f} s",
              f"  traction energy   {s.traction_energy_kWh:9.3f} kWh  ({s.traction_energy_J_per_kg:.2f} J/kg)",
-             f"  net energy        {s.net_energy_kWh:9.3f} kWh  (regenerated {s.regenerated_energy_kWh:.3f} kWh)",
+             f"  net energy        {number(s.net_energy_kWh, '9.3f')} kWh  (regenerated "
+             f"{number(s.regenerated_energy_kWh)} kWh)",
              f"  solver            {s.solver.status}, {s.solver.iterations} iterations, {s.solver.seconds:.2f} s",
              f"  regimes           {s.regime_sequence}"]
     if s.pontryagin is not None:
@@ -46,15 +48,15 @@ def run_lines(result: RunResult, out_dir: Path) -> list[str]:
         lines.append(f"  verification      {flag}: {ver.errors}")
     if s.das is not None:
         d = s.das
-        gap = "n/a" if d.gap_to_ato_pct is None else f"{d.gap_to_ato_pct:+.2f}"
+        gap = "n/a" if d.gap_to_ato_pct is None else number(d.gap_to_ato_pct, "+.2f")
         lines.append(f"  driver advice     {d.method}: {d.traction_energy_kWh:.3f} kWh ({gap} "
-                     f"% against ATO), {d.mode_changes} mode changes, arrival {d.arrival_error_s:+.2f} s, "
-                     f"stop {d.stop_error_m:+.2f} m (advice.csv)")
+                     f"% against ATO), {d.mode_changes} mode changes, arrival {number(d.arrival_error_s, '+.2f')} s, "
+                     f"stop {number(d.stop_error_m, '+.2f')} m (advice.csv)")
         if d.gap_to_ato_on_time_pct is not None and s.marginal_energy_kWh_per_s is not None:
-            lines.append(f"                    {d.gap_to_ato_on_time_pct:+.3f} % against ATO with lateness charged "
+            lines.append(f"                    {number(d.gap_to_ato_on_time_pct, '+.3f')} % against ATO with lateness charged "
                          f"at {abs(s.marginal_energy_kWh_per_s):.4f} kWh/s; {d.status}")
         if d.method == "minlp":
-            bound = "no bound" if d.bound_kWh is None else f"bound {d.bound_kWh:.3f} kWh (gap {d.gap_pct:.2f} %)"
+            bound = "no bound" if d.bound_kWh is None else f"bound {d.bound_kWh:.3f} kWh (gap {number(d.gap_pct, '.2f')} %)"
             lines.append(f"                    MINLP search {d.search_s:.1f} s, {d.oa_iterations} OA iterations, "
                          f"{bound}")
     lines.append(f"  outputs           {listed(out_dir)}")
@@ -148,7 +150,7 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
              f"Pontryagin: {report['agreement_pct']:.1f} % of the distance agrees; stationarity "
              f"residual {report['stationarity_residual']:.1e}"]
     lines += [f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m "
-              f"(lambda/v from {d['psi_min']:.2f} to {d['psi_max']:.2f})" for d in report["disagreements"]]
+              f"(lambda/v from {number(d['psi_min'], '.2f')} to {number(d['psi_max'], '.2f')})" for d in report["disagreements"]]
     run_ok = Status.parse(report["run_status"]).ok
     agrees = report["agreement_pct"] >= 95.0
     reasons = ([] if agrees else [f"{report['agreement_pct']:.1f} % of the distance agrees, below 95 %: not the "

@@ -3,6 +3,8 @@
 Files name their units in field names (``speed_kmh``, ``force_kN``, ``mass_t``); loaders multiply
 by the factors below, here and nowhere else.
 """
+import math
+import re
 from typing import Any, TypeAlias
 
 import numpy as np
@@ -31,6 +33,17 @@ def to_kmh(speed: Numeric) -> Numeric:
 def to_kwh(energy: Numeric) -> Numeric:
     """Energy [J] -> [kWh]."""
     return energy / KWH
+
+
+def number(value: Any, spec: str = ".3f") -> str:
+    """``value`` formatted by ``spec`` as every printed table and report line shows it: a value that
+    rounds to zero prints as zero with its digits ('0.000', '+0.00'), never '-0.000' (the files keep
+    the full value)."""
+    text = format(value, spec)
+    if isinstance(value, (int, float, np.floating)) and math.isfinite(value) and "-" in text \
+            and not re.search(r"[1-9]", re.split(r"[eE]", text)[0]):
+        return format(0.0, spec)
+    return text
 
 
 # Units as the published formats spell them (TTOBench, OSRD), by dimension: [SI] per [unit].

@@ -134,8 +134,17 @@ def interrupted(exc: BaseException, bar: Optional[tuple]) -> str:
         c = exc.counts
         return (f"{line}: {c['stored_before'] + c['computed']} of {c['total']} {bar[0]} stored ({c['computed']} "
                 "of them computed now); run the same command again to continue")
-    one = bar[0][:-3] + "y" if bar[0].endswith("ies") else bar[0][:-1]
-    return f"{line}: every finished {one} is stored; run the same command again to continue"
+    return f"{line}: every finished {singular(bar[0])} is stored; run the same command again to continue"
+
+
+def singular(noun: str) -> str:
+    """The singular of a plural ``noun`` ending in -s or -ies: 'strategy' of 'strategies'."""
+    return noun[:-3] + "y" if noun.endswith("ies") else noun[:-1]
+
+
+def counted(n: int, noun: str) -> str:
+    """'1 strategy', '7 strategies': ``n`` and the plural ``noun``, singular for one."""
+    return f"{n} {noun if n != 1 else singular(noun)}"
 
 
 def leave(code: object) -> None:

@@ -5,7 +5,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ecostudy.analysis.energyflow import run_energy_flow
-from ecostudy.core.units import PERMILLE, to_kmh, to_kwh
+from ecostudy.core.units import PERMILLE, number, to_kmh, to_kwh
 from ecostudy.report import style
 
 SPEED_LIMIT = "speed limit (train length)"
@@ -213,13 +213,13 @@ def energy_plot(result, path=None, fmt=None, dpi=None):
     for i, (name, bottom, value) in enumerate(bars):
         kwh, base = to_kwh(value), to_kwh(bottom)
         ax.bar(i, abs(kwh), bottom=min(base, base + kwh), color=style.ENERGY[name], width=0.7, label=name)
-        ax.annotate(f"{kwh:.2f}", (i, max(base, base + kwh)), ha="center", va="bottom", fontsize=7,
+        ax.annotate(number(kwh, ".2f"), (i, max(base, base + kwh)), ha="center", va="bottom", fontsize=7,
                     xytext=(0, 2), textcoords="offset points")
     ax.axhline(0, color=style.LIMIT["stop"], lw=0.5)
     ax.set_xticks(range(len(bars)), [b[0] for b in bars], rotation=30, ha="right", fontsize=8)
     ax.set_ylabel("energy [kWh]")
     ax.grid(alpha=0.3, axis="y")
     ax.set_title(f"{s['train']} - {s['from']} to {s['to']}: energy flow\nbalance residual "
-                 f"{to_kwh(flow.residual):+.4f} kWh ({100 * flow.residual / max(flow.traction, 1e-9):+.3f} % of "
+                 f"{number(to_kwh(flow.residual), '+.4f')} kWh ({number(100 * flow.residual / max(flow.traction, 1e-9), '+.3f')} % of "
                  "the traction at the wheel)", fontsize=9)
     return _save(fig, path, fmt, dpi)

@@ -1,0 +1,93 @@
+"""What a user reads in the terminal: a number that rounds to zero prints as zero ('0.000', never
+'-0.000') in every printed table and report line, while the files keep the value."""
+import json
+import re
+from dataclasses import replace
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.api import validate_folder
+from ecostudy.api.outcome import shown
+from ecostudy.api.single import run_lines
+from ecostudy.calibration.generate import LogNoise, generate_log
+from ecostudy.cli import app
+from ecostudy.core.units import number
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.io.logfile import write_log
+
+from .conftest import TRACKS, TRAINS, write_yaml
+
+NEGATIVE_ZERO = re.compile(r"(?<![\w/.-])-0(\.0+)?(?![0-9.])")  # '-0', '-0.000'; not '-0.001', 'pytest-0/'
+
+
+def test_a_value_that_rounds_to_zero_prints_as_zero_with_its_digits():
+    assert [number(-1e-9, s) for s in (".3f", "9.3f", "+.2f", ".1%")] == ["0.000", "    0.000", "+0.00", "0.0%"]
+    assert number(-0.0, ".4g") == "0" and number(-0.0004) == "0.000"
+    # what does not round to zero keeps its sign; not a number stays as it is
+    assert [number(-0.0006), number(-1e-9, ".4g"), number(float("-inf")), number(-3, "d")] == \
+        ["-0.001", "-1e-09", "-inf", "-3"]
+
+
+@pytest.mark.parametrize("places, values", [(".3f", [-7.85444e-17, -1.5e-14, -0.0004, -0.0]),
+                                             (".4g", [-0.0, 0.0]), (".5g", [-0.0, 1.0])])
+def test_every_printed_table_shows_a_rounded_zero_as_zero(places, values):
+    """Every command's table is printed by ``api.outcome.shown`` (pareto, compare, journey, network at
+    .3f; simulate, heavyhaul, validate at .4g; calibrate at .5g, where only -0 itself rounds to zero)."""
+    text = shown(pd.DataFrame({"unserved_kWh": values, "saving_pct": [4.002] * len(values)}), places=places)
+    assert not NEGATIVE_ZERO.search(text), text
+
+
+def test_a_network_table_prints_a_balance_that_rounds_to_zero_as_zero(tmp_path):
+    """Two metro trains on one substation, the independent runs: the energy balance closes to
+    about 1e-14 % (measured -1.5e-14, printed '-0.000' before), the substation's file keeps it."""
+    study = write_yaml(tmp_path / "net.yaml", {
+        "name": "tiny", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
+        "stops": ["Noord", "Station"], "running_times_s": [56.0], "time_step_s": 1.0,
+        "trains": [{"name": "A", "offset_s": 0}, {"name": "B", "offset_s": 45}],
+        "substation": {"position_m": 300}, "strategies": ["independent"], "points": 300,
+        "output": str(tmp_path / "out")})
+    r = CliRunner().invoke(app, ["network", str(study), "--workers", "1", "--no-plot"])
+    assert r.exit_code == 0, r.output
+    table = r.stdout.split("\n1 strategy")[0]
+    assert "balance_error_pct" in table and not NEGATIVE_ZERO.search(table), table
+    stored = json.loads((tmp_path / "out" / "network.json").read_text())
+    kept = [v for v in _values(stored, "balance_error_pct")]
+    assert kept and all(abs(v) < 1e-9 for v in kept)  # the file keeps the value, printed as 0.000
+
+
+def _values(tree, key):
+    if isinstance(tree, dict):
+        for k, v in tree.items():
+            yield from ([v] if k == key else _values(v, key))
+    elif isinstance(tree, list):
+        for v in tree:
+            yield from _values(v, key)
+
+
+def test_a_solve_report_prints_energies_that_round_to_zero_as_zero(amsterdam_76s, tmp_path):
+    """solve's report (``api.single.run_lines``) of a real run whose net and regenerated energy are
+    set to -1e-9 kWh (a run without regeneration sums its braking power to about that), and its
+    re-simulated energy error to -1e-9 % (the verification line, `io.runsummary.Verification.errors`)."""
+    s = amsterdam_76s.summary
+    run = replace(amsterdam_76s, summary={**s, "net_energy_kWh": -1e-9, "regenerated_energy_kWh": -1e-9,
+                                          "verification": {**s["verification"], "energy_error_pct": -1e-9}})
+    text = "\n".join(run_lines(run, tmp_path))
+    assert "net energy            0.000 kWh  (regenerated 0.000 kWh)" in text, text
+    assert "energy +0.000 %" in text and not NEGATIVE_ZERO.search(text), text
+
+
+def test_a_validated_log_that_the_model_replays_prints_its_difference_as_zero(tmp_path):
+    """A noise-free log of the train file's own model: validate's traction difference is -0.00015 %,
+    printed in its line as '+0.00 %' ('-0.00 %' before; the table shows it to 4 digits)."""
+    track_file, train_file = TRACKS / "calibration_line.yaml", TRAINS / "regional_alstom.yaml"
+    train = load_train(train_file)
+    frame, _ = generate_log(load_track(track_file), train, ["West", "Middle"], train, seed=0,
+                            noise=LogNoise(speed=0.0, power=0.0))
+    write_log(tmp_path / "log.csv", {"track": str(track_file), "train": str(train_file)}, frame)
+    report = validate_folder(tmp_path / "log.csv", out=tmp_path / "val", plot=False)
+    stored = pd.read_csv(tmp_path / "val" / "validate.csv")["traction_difference_pct"]
+    assert abs(stored.iloc[0]) < 0.01  # the file keeps the value
+    line = next(x for x in report.text.splitlines() if x.startswith("traction energy:"))
+    assert line.endswith("(+0.00 %)") and not NEGATIVE_ZERO.search(report.text), report.text
