@@ -91,8 +91,9 @@ def _command_options(inputs, tmp_path_factory, call):
         r = CliRunner().invoke(app, words)
     assert r.exit_code in (0, 1, 2), f"{words}: exit {r.exit_code}\n{r.output}"
     assert "Traceback" not in r.output, f"{words}\n{r.output}"
-    if r.exit_code == 2 and "Usage:" not in r.output:  # Click's own refusals (a type) come as a usage box
+    if r.exit_code == 2:  # Click's own refusals (a type, a range) too: one line, no usage box
         errors = [x for x in r.output.splitlines() if x.startswith("error:")]
+        assert "Usage:" not in r.output, f"{words}\n{r.output}"
         # one line per problem (all problems of the input are reported together), each naming its place
         assert errors and all(x.count(":") >= 2 for x in errors), f"{words}\n{r.output}"
 

@@ -1,8 +1,13 @@
 """What a user reads in the terminal: a number that rounds to zero prints as zero ('0.000', never
-'-0.000') in every printed table and report line, while the files keep the value."""
+'-0.000') in every printed table and report line, while the files keep the value; and what Click
+checks itself (an option's type or range, an unknown option or command, a missing argument) is
+refused as ecostudy refuses a bad option: one line naming the option, exit status 2, no usage box."""
 import json
 import re
+import subprocess
+import sys
 from dataclasses import replace
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -17,7 +22,7 @@ from ecostudy.core.units import number
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.io.logfile import write_log
 
-from .conftest import TRACKS, TRAINS, write_yaml
+from .conftest import ROOT, TRACKS, TRAINS, write_yaml
 
 NEGATIVE_ZERO = re.compile(r"(?<![\w/.-])-0(\.0+)?(?![0-9.])")  # '-0', '-0.000'; not '-0.001', 'pytest-0/'
 
@@ -91,3 +96,48 @@ def test_a_validated_log_that_the_model_replays_prints_its_difference_as_zero(tm
     assert abs(stored.iloc[0]) < 0.01  # the file keeps the value
     line = next(x for x in report.text.splitlines() if x.startswith("traction energy:"))
     assert line.endswith("(+0.00 %)") and not NEGATIVE_ZERO.search(report.text), report.text
+
+
+# ------------------------------------------------------------------- Click's own refusals, as one line
+@pytest.mark.parametrize("args, fragment", [
+    (["solve", "--points", "abc"], "command line: --points: input should be a valid integer"),
+    (["check", "out", "--time", "x"], "command line: --time: input should be a valid number"),
+    (["pareto", "--count", "x"], "command line: --count: input should be a valid integer"),
+    (["solve", "--objective", "fast"], "command line: --objective: 'fast' is not one of 'energy'"),
+    (["heavyhaul", "h.yaml", "--blas-threads", "0"], "command line: --blas-threads: input should be greater than or "
+                                                     "equal to 1"),
+    (["calibrate", "x.csv", "--bootstrap", "-1"], "command line: --bootstrap: input should be greater than or equal to 0"),
+    (["validate", "x.csv", "--energy-tolerance", "-1"], "command line: --energy-tolerance: input should be greater"),
+    (["network", "n.yaml", "--workers", "two"], "command line: --workers: input should be a valid integer"),
+    (["journey", "--supplement", "10"], "command line: --train: missing"),
+    (["run"], "command line: STUDY: missing"),
+    (["solve", "--bogus"], "command line: no such option: --bogus"),
+    (["solve", "--das"], "command line: option '--das' requires an argument"),
+    (["simulate"], "command line: STUDY: missing"),
+    (["ecostudy-solve"], "command line: no such command 'ecostudy-solve'"),
+])
+def test_clicks_own_refusals_read_as_ecostudys(args, fragment):
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 2 and r.stdout == "", r.output
+    assert r.stderr.splitlines() == [f"error: {r.stderr.split('error: ', 1)[1].strip()}"], r.stderr
+    assert fragment in r.stderr and "Usage:" not in r.output and "Traceback" not in r.output, r.stderr
+
+
+def test_ecostudys_own_refusal_reads_the_same(tmp_path):
+    """The same shape as ecostudy's own range check of an option (``studies.options.check_options``)."""
+    r = CliRunner().invoke(app, ["network", str(ROOT / "studies" / "network_metro_2trains.yaml"), "--workers", "0",
+                                 "--out", str(tmp_path / "o")])
+    assert r.exit_code == 2 and r.stderr == "error: command line: --workers: must be at least 1 and at most 256, not 0\n"
+
+
+def test_the_installed_command_refuses_in_one_line_and_still_helps(tmp_path):
+    """The ``ecostudy`` executable (``cli.app.main``): one line and exit 2; no arguments: the help (exit
+    2, as Click's no_args_is_help); --help: the help, exit 0."""
+    exe = str(Path(sys.executable).parent / "ecostudy")
+    bad = subprocess.run([exe, "solve", "--points", "1.5"], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert (bad.returncode, bad.stdout) == (2, "") and bad.stderr.startswith("error: command line: --points: "), bad
+    assert len(bad.stderr.splitlines()) == 1, bad.stderr
+    bare = subprocess.run([exe], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert bare.returncode == 2 and "Commands:" in bare.stdout + bare.stderr and "error:" not in bare.stderr
+    helped = subprocess.run([exe, "solve", "--help"], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert helped.returncode == 0 and "--points" in helped.stdout

@@ -15,9 +15,9 @@ from ecostudy.core.budget import forced
 from ecostudy.core.errors import printable
 from ecostudy.core.interrupt import exit_status, stopped_by_signals
 from ecostudy.core.startup import pause
-from ecostudy.report.console import interrupted, leave, logging_to, progress_bar
+from ecostudy.report.console import OneLineErrors, interrupted, leave, logging_to, progress_bar
 
-app = typer.Typer(add_completion=False, no_args_is_help=True, rich_markup_mode=None,  # "[s]" is a unit, not markup
+app = typer.Typer(cls=OneLineErrors, add_completion=False, no_args_is_help=True, rich_markup_mode=None,  # "[s]": a unit
                   help="Energy-efficient train control studies (Pyomo + Ipopt).")
 log = logging.getLogger("ecostudy")
 quiet = [False]  # --quiet of this invocation: no progress

@@ -1,5 +1,6 @@
 """What a long command shows while it runs, for the command line and for scripts: the ``ecostudy``
-logger's handlers (stderr, a log file) and a progress bar over a study's cases on stderr.
+logger's handlers (stderr, a log file), a progress bar over a study's cases on stderr, and the
+command line's own refusals (Typer's checks of an option's type or range) as one line.
 
 Progress and messages never go to stdout, where the results are printed (``ecostudy ... | cat``
 stays clean); the bar is drawn only when stderr is a terminal.
@@ -11,15 +12,23 @@ import os
 import sys
 import threading
 from contextlib import contextmanager
+from functools import partial
 from pathlib import Path
-from typing import Callable, Iterator, Optional
+from typing import Any, Callable, Iterator, Optional, Sequence
 
+import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, ProgressColumn, TextColumn
 from rich.text import Text
+from typer.core import TyperGroup
 
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.interrupt import Interrupted, signal_name
+
+try:  # Typer 0.26 on carries its own Click, whose exceptions derive from TyperException
+    from typer import TyperException as ClickError
+except ImportError:  # an older Typer: Click's
+    from click import ClickException as ClickError  # type: ignore[assignment]
 
 log = logging.getLogger("ecostudy")
 
@@ -164,3 +173,49 @@ def leave(code: object) -> None:
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code or 0)
+
+
+class OneLineErrors(TyperGroup):
+    """The ``ecostudy`` command group (``typer.Typer(cls=...)``): what Click checks itself (an
+    option's type or range, an unknown option or command, a missing argument) is refused as ecostudy
+    refuses a bad option, 'error: command line: --points: ...' on one line, exit status 2, instead of
+    Click's usage box. Click's standalone mode otherwise as it is (``standalone_mode=False`` inside)."""
+
+    def main(self, args: Optional[Sequence[str]] = None, prog_name: Optional[str] = None,
+             complete_var: Optional[str] = None, standalone_mode: bool = True, windows_expand_args: bool = True,
+             **extra: Any) -> Any:
+        run = partial(super().main, args, prog_name, complete_var, False, windows_expand_args, **extra)
+        if not standalone_mode:
+            return run()
+        try:
+            code = run()
+        except ClickError as exc:
+            ctx = getattr(exc, "ctx", None)
+            if ctx is not None and exc.format_message() == ctx.get_help():  # no arguments at all: the help
+                sys.stderr.write(exc.format_message() + "\n")
+            else:
+                sys.stderr.write("error: " + usage_line(exc) + "\n")
+            sys.exit(exc.exit_code)
+        except typer.Abort:
+            sys.stderr.write("Aborted!\n")
+            sys.exit(1)
+        sys.exit(code if isinstance(code, int) else 0)
+
+
+def usage_line(exc: Exception) -> str:
+    """One line for Click's refusal ``exc``: 'command line: OPTION: what is wrong' (an argument by its
+    name in capitals), or 'command line: what is wrong' where Click names no parameter."""
+    param = getattr(exc, "param", None)
+    if param is None:
+        return problem("command line", "", _sentence(exc.format_message()))  # type: ignore[attr-defined]
+    if param.param_type_name == "option":
+        name = next((o for o in param.opts if o.startswith("--")), param.opts[0])
+    else:
+        name = param.name.upper()
+    return problem("command line", name, _sentence(getattr(exc, "message", "") or "missing"))
+
+
+def _sentence(text: str) -> str:
+    """Click's message as ecostudy words its own: lower case first, no full stop."""
+    text = text.strip().removeprefix("Value error, ").removesuffix(".")  # pydantic's prefix of a ValueError
+    return text[:1].lower() + text[1:] if text[1:2].islower() or text[1:2] == " " else text
