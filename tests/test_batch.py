@@ -103,6 +103,9 @@ def test_failures_are_recorded_and_do_not_stop_the_study(tmp_path):
     assert r.exit_code == 1, r.output
     line = next(x for x in r.output.splitlines() if x.startswith("failed: "))
     assert "scenario=too_fast" in line and "infeasible" in line and "fastest possible run takes" in line
+    # the reason once, on its case's line; the status line last, the kind of status only
+    assert r.stderr.count("fastest possible run takes") == 1, r.stderr
+    assert r.stderr.rstrip().splitlines()[-1] == f"run: failed, written to {(tmp_path / 'out').resolve()}", r.stderr
     folder = assert_folder(tmp_path / "out", "run", ["results"], status="failed")
     assert folder.cases.failed == 1 and folder.cases.ok == len(table) - 1
 

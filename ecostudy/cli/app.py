@@ -79,11 +79,11 @@ def call(debug, name, *args, force=False, bar=None):
 
 def finish(result):
     """Print a command's report; exit status 1 when its folder has cases that are not ok, each
-    named on stderr (:meth:`ecostudy.api.Report.problems`)."""
+    named on stderr (:meth:`ecostudy.api.Report.problems`) once, then the status line, last."""
     typer.echo(result.text)
     for line in result.problems():
         typer.secho(line, fg=typer.colors.YELLOW, err=True)
-    log.info(f"{result.kind}: {result.status}, written to {result.folder.resolve()}")  # on stderr, last
+    log.info(f"{result.kind}: {result.status.kind if result.not_ok else result.status}, written to {result.folder.resolve()}")
     if result.not_ok:
         raise typer.Exit(1)
 
