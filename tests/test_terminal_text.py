@@ -44,6 +44,17 @@ def test_every_printed_table_shows_a_rounded_zero_as_zero(places, values):
     assert not NEGATIVE_ZERO.search(text), text
 
 
+def test_a_table_prints_each_column_to_its_own_digits():
+    """simulate's, heavy-haul's and validate's tables give each number column its format: no
+    '-2.789e-06' m of a stop error beside '0.5812', no '84' beside '84.06' s."""
+    frame = pd.DataFrame({"controller": ["a", "b"], "arrival_s_mean": [84.0, 84.06],
+                          "stop_error_m_min": [-2.789e-06, 0.5812], "solve_p95_ms_max": [294.0, 284.8]})
+    text = shown(frame, {"controller": None, "arrival_s_mean": ".2f", "stop_error_m_min": ".3f",
+                         "solve_p95_ms_max": None}, ".4g")
+    assert [line.split() for line in text.splitlines()[1:]] == [["a", "84.00", "0.000", "294"],
+                                                                 ["b", "84.06", "0.581", "284.8"]], text
+
+
 def test_a_network_table_prints_a_balance_that_rounds_to_zero_as_zero(tmp_path):
     """Two metro trains on one substation, the independent runs: the energy balance closes to
     about 1e-14 % (measured -1.5e-14, printed '-0.000' before), the substation's file keeps it."""
@@ -85,7 +96,7 @@ def test_a_solve_report_prints_energies_that_round_to_zero_as_zero(amsterdam_76s
 
 def test_a_validated_log_that_the_model_replays_prints_its_difference_as_zero(tmp_path):
     """A noise-free log of the train file's own model: validate's traction difference is -0.00015 %,
-    printed in its line as '+0.00 %' ('-0.00 %' before; the table shows it to 4 digits)."""
+    printed in its line as '+0.00 %' and in its table as '0.00' ('-0.00 %' and '-0.0001541' before)."""
     track_file, train_file = TRACKS / "calibration_line.yaml", TRAINS / "regional_alstom.yaml"
     train = load_train(train_file)
     frame, _ = generate_log(load_track(track_file), train, ["West", "Middle"], train, seed=0,
@@ -96,6 +107,8 @@ def test_a_validated_log_that_the_model_replays_prints_its_difference_as_zero(tm
     assert abs(stored.iloc[0]) < 0.01  # the file keeps the value
     line = next(x for x in report.text.splitlines() if x.startswith("traction energy:"))
     assert line.endswith("(+0.00 %)") and not NEGATIVE_ZERO.search(report.text), report.text
+    header, row = report.text.splitlines()[:2]
+    assert dict(zip(header.split(), row.split()))["traction_difference_pct"] == "0.00", report.text
 
 
 # ------------------------------------------------------------------- Click's own refusals, as one line

@@ -33,18 +33,23 @@ from ecostudy.studies.sizes import check_closed_loop_study
 Progress = Optional[Callable[[int, int, int, int], None]]
 log = logging.getLogger("ecostudy")
 
-LOOP_COLUMNS = ["controller", "runs", "ok", "energy_J_per_kg_mean", "energy_J_per_kg_std", "arrival_s_mean",
-                "arrival_s_max", "stop_error_m_min", "stop_error_m_max", "max_overspeed_kmh_max", "solve_mean_ms_mean",
-                "solve_p95_ms_max", "over_budget_sum", "softened_sum"]
-HEAVY_COLUMNS = ["K_b", "f", "Np", "Nc", "status", "tracking_mean_mps", "tracking_std_mps", "force_max_kN",
-                 "force_max_braking_kN", "force_mean_kN", "force_std_kN", "wagon_brake_kWh", "energy_total_kWh",
-                 "qp_inputs", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts", "stop_error_m"]
+# each printed table's columns, with the format of each number column whose digits .4g would vary
+# (84 beside 84.06, -2.789e-06 m): None, the table's own
+LOOP_COLUMNS = {"controller": None, "runs": None, "ok": None, "energy_J_per_kg_mean": ".1f", "energy_J_per_kg_std": ".1f",
+                "arrival_s_mean": ".2f", "arrival_s_max": ".2f", "stop_error_m_min": ".3f", "stop_error_m_max": ".3f",
+                "max_overspeed_kmh_max": ".2f", "solve_mean_ms_mean": ".1f", "solve_p95_ms_max": ".1f",
+                "over_budget_sum": None, "softened_sum": None}
+HEAVY_COLUMNS = {"K_b": None, "f": None, "Np": None, "Nc": None, "status": None, "tracking_mean_mps": ".3f",
+                 "tracking_std_mps": ".3f", "force_max_kN": ".1f", "force_max_braking_kN": ".1f", "force_mean_kN": ".1f",
+                 "force_std_kN": ".1f", "wagon_brake_kWh": ".0f", "energy_total_kWh": ".0f", "qp_inputs": None,
+                 "solve_mean_s": ".4f", "solve_p95_s": ".4f", "solve_max_s": ".4f", "over_ts": None, "stop_error_m": ".3f"}
 NETWORK_COLUMNS = ["strategy", "status", "substation_kWh", "saving_vs_independent_pct", "traction_input_kWh",
                    "regen_used_kWh", "regen_lost_kWh", "line_losses_kWh", "unserved_kWh", "balance_error_pct",
                    "min_separation_m", "all_verified"]
 CALIBRATION_COLUMNS = ["name", "unit", "prior", "estimate", "low", "high", "boot_low", "boot_high", "identifiable"]
-VALIDATION_COLUMNS = ["run", "from_m", "to_m", "logged_time_s", "model_time_s", "time_difference_pct",
-                      "logged_traction_kWh", "model_traction_kWh", "traction_difference_pct", "status"]
+VALIDATION_COLUMNS = {"run": None, "from_m": ".0f", "to_m": ".0f", "logged_time_s": ".1f", "model_time_s": ".1f",
+                      "time_difference_pct": ".2f", "logged_traction_kWh": ".2f", "model_traction_kWh": ".2f",
+                      "traction_difference_pct": ".2f", "status": None}
 
 
 def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
@@ -172,7 +177,7 @@ def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optiona
     if plot:
         calplots.validation(table, Path(out) / "validate.png", f"{Path(log_file).stem}: logged and model")
     write_html(out)
-    return reported(out, [shown(table[VALIDATION_COLUMNS], places=".4g"),
+    return reported(out, [shown(table, VALIDATION_COLUMNS, ".4g"),
                           f"traction energy: logged {summary['logged_traction_kWh']:.2f} kWh, model "
                           f"{summary['model_traction_kWh']:.2f} kWh ("
                           + (f"{number(summary['traction_difference_pct'], '+.2f')} %)" if summary["traction_difference_pct"]

@@ -5,7 +5,8 @@ that turn tables into that report.
 import json
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from functools import partial
+from typing import Any, Iterable, Mapping, Sequence
 
 import pandas as pd
 
@@ -46,12 +47,16 @@ def reported(folder: Path | str, lines: Iterable[str]) -> Report:
     return Report(**{f.name: getattr(result, f.name) for f in fields(StudyResult)}, text="\n".join(lines))
 
 
-def shown(frame: pd.DataFrame, columns: Sequence[str] | None = None, places: str = ".3f") -> str:
+def shown(frame: pd.DataFrame, columns: Sequence[str] | Mapping[str, str | None] | None = None,
+          places: str = ".3f") -> str:
     """``frame``'s ``columns`` (those it has; all without ``columns``) as a plain text table, each
-    number by ``places`` (:func:`~ecostudy.core.units.number`: no '-0.000')."""
+    number by ``places`` or, ``columns`` given as {name: format}, by its column's format (None:
+    ``places``); :func:`~ecostudy.core.units.number`: no '-0.000'."""
+    specs = {c: s for c, s in columns.items() if s} if isinstance(columns, Mapping) else {}
     if columns is not None:
         frame = frame[[c for c in columns if c in frame]]
-    return frame.to_string(index=False, float_format=lambda x: number(x, places))
+    return frame.to_string(index=False, float_format=lambda x: number(x, places),
+                           formatters={c: partial(number, spec=s) for c, s in specs.items() if c in frame})
 
 
 def listed(out_dir: Path | str, names: Sequence[str] = ()) -> str:
