@@ -25,7 +25,7 @@ def test_run_kind_simulate_and_the_simulate_command_share_one_store(tmp_path):
 def test_run_kind_heavyhaul_and_the_heavyhaul_command_share_one_store(tmp_path):
     path, out = heavyhaul_study(tmp_path, brake_penalty=[60]), tmp_path / "out"
     first = api.run_folder(path, workers=1, out=out, kind="heavyhaul")
-    assert "1 cases: 0 already stored, 1 computed now" in first.text
+    assert "1 case: 0 already stored, 1 computed now" in first.text
     folder = assert_folder(out, "heavyhaul", ["runs"], rows=1, status="flagged")  # adhesion: the paper's plant
     again = api.heavyhaul_folder(path, workers=1, out=out, plot=False)
     assert "1 already stored, 0 computed now" in again.text
