@@ -124,8 +124,8 @@ def test_a_validated_log_that_the_model_replays_prints_its_difference_as_zero(tm
     (["network", "n.yaml", "--workers", "two"], "command line: --workers: input should be a valid integer"),
     (["journey", "--supplement", "10"], "command line: --train: missing"),
     (["run"], "command line: STUDY: missing"),
-    (["solve", "--bogus"], "command line: no such option: --bogus"),
-    (["solve", "--das"], "command line: option '--das' requires an argument"),
+    (["solve", "--bogus"], "command line: --bogus: no such option"),
+    (["solve", "--das"], "command line: --das: requires an argument"),
     (["simulate"], "command line: STUDY: missing"),
     (["ecostudy-solve"], "command line: no such command 'ecostudy-solve'"),
 ])

@@ -204,10 +204,13 @@ class OneLineErrors(TyperGroup):
 
 def usage_line(exc: Exception) -> str:
     """One line for Click's refusal ``exc``: 'command line: OPTION: what is wrong' (an argument by its
-    name in capitals), or 'command line: what is wrong' where Click names no parameter."""
-    param = getattr(exc, "param", None)
+    name in capitals), or 'command line: what is wrong' where Click names neither."""
+    param, option = getattr(exc, "param", None), getattr(exc, "option_name", None)
     if param is None:
-        return problem("command line", "", _sentence(exc.format_message()))  # type: ignore[attr-defined]
+        text = exc.format_message()  # type: ignore[attr-defined]
+        if option:  # an unknown option, or one without its value: named first, as a parameter is
+            text = text.replace(f"Option {option!r} ", "").replace(f"No such option: {option}", "no such option")
+        return problem("command line", option or "", _sentence(text))
     if param.param_type_name == "option":
         name = next((o for o in param.opts if o.startswith("--")), param.opts[0])
     else:
