@@ -1,27 +1,55 @@
 """The Python API's own objects: :func:`solve`, :func:`pareto` and :func:`replanner`, and their
-results :class:`Solution` and :class:`Front` (re-exported by :mod:`ecostudy.api`)."""
+results :class:`Solution` and :class:`Front` (re-exported by :mod:`ecostudy.api`).
+
+A bad argument is refused before anything is solved with one :class:`~ecostudy.core.errors.InputError`
+(``api.InputError``) whose lines name it: ``arguments: running_time: must be more than 0.0, not -5``.
+"""
 from dataclasses import dataclass
+from typing import get_args
 
 import pandas as pd
 
 from ecostudy.analysis.single import RunResult, solve_run
+from ecostudy.api.outcome import shown
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
-from ecostudy.core.errors import InputError
+from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, problem
+from ecostudy.core.status import Judged, Status, worst
 from ecostudy.core.types import Timing
 from ecostudy.core.units import PERCENT
 from ecostudy.io.loaders import chosen_stops
 from ecostudy.io.runsummary import RunSummary
-from ecostudy.ocp.problem import prepare
+from ecostudy.io.schemas import StudyFile
+from ecostudy.ocp.problem import all_out, check_feasible, check_not_crawling, prepare
 from ecostudy.ocp.restart import Replanner
 from ecostudy.report.files import write_run
+from ecostudy.report.html import fragment
+from ecostudy.studies.options import check_options, checked_pair
 from ecostudy.studies.pareto import sweep
 
+WHERE = "arguments"  # what a refusal names instead of a file: ``arguments: points: ...``
+ARGUMENTS = {"time": "running_time", "supplement": "supplement_percent", "supplement_max": "supplement_max_percent"}
+OBJECTIVES = get_args(StudyFile.model_fields["objective"].annotation)
+FRONT_SHOWN = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "status"]
 
-@dataclass
-class Solution:
+
+@dataclass(repr=False)
+class Solution(Judged):
     """One solved and verified run."""
 
     run: RunResult
+
+    def __repr__(self) -> str:
+        return f"Solution({self.run.line()})"
+
+    def _repr_html_(self) -> str:  # a notebook cell: the line, the status, the summary's values
+        values = {k: v for k, v in self.summary.items() if not isinstance(v, (dict, list))}
+        return fragment(repr(self), str(self.status), self.status.kind, values=values)
+
+    @property
+    def status(self) -> Status:
+        """``ok``, or ``flagged`` with the reason (Ipopt not optimal, the re-simulation outside its
+        tolerance, the driver advice off): :attr:`RunResult.status`."""
+        return self.run.status
 
     @property
     def profile(self):
@@ -65,12 +93,28 @@ class Solution:
         return write_run(self.run, out_dir, plot)
 
 
-@dataclass
-class Front:
-    """Energy against running time: one row per point, and the runs themselves."""
+@dataclass(repr=False)
+class Front(Judged):
+    """Energy against running time: one row per point (its ``status`` with the reason), and the
+    runs themselves (each a :class:`Solution`)."""
 
     table: pd.DataFrame
     runs: list
+
+    def __repr__(self) -> str:
+        head = (f"Front({len(self.table)} points, {self.runs[0].facts.from_stop} -> {self.runs[0].facts.to_stop}"
+                if self.runs else f"Front({len(self.table)} points")
+        words = self.table.assign(status=[Status.parse(str(s)).kind for s in self.table["status"]])  # reasons: above
+        return f"{head}; {self.status})\n{shown(words, FRONT_SHOWN)}"
+
+    def _repr_html_(self) -> str:  # a notebook cell: the line, the status, the points with their reasons
+        return fragment(repr(self).partition("\n")[0], str(self.status), self.status.kind,
+                        frame=self.table[[c for c in FRONT_SHOWN if c in self.table]])
+
+    @property
+    def status(self) -> Status:
+        """The worst of the points' statuses, with their reasons."""
+        return worst(Status.parse(str(s)) for s in self.table["status"])
 
     def plot(self, path=None):
         from ecostudy.report.plots import pareto_plot
@@ -80,9 +124,31 @@ class Front:
 def _timing(running_time, supplement_percent, window):
     given = [x is not None for x in (running_time, supplement_percent, window)]
     if sum(given) > 1:
-        raise InputError("arguments: give one of running_time, supplement_percent, window")
+        raise InputError(problem(WHERE, "running_time/supplement_percent/window", "give one of them"))
+    check_options(where=WHERE, spelled=ARGUMENTS, time=running_time, supplement=supplement_percent)
+    if window is not None:
+        try:
+            earliest, latest = window
+        except (TypeError, ValueError):
+            raise InputError(problem(WHERE, "window", f"expected (earliest, latest) [s], not {window!r}"))
+        window = checked_pair(earliest, latest, "window", ordered=True, where=WHERE)
     return Timing(running_time=running_time, window=window,
                   supplement=None if supplement_percent is None else supplement_percent * PERCENT)
+
+
+def _check(objective, **values):
+    """Refuse ``objective`` and the numeric ``values`` (:data:`~ecostudy.studies.options.OPTION_RANGES`'
+    names) that are out of range, naming the arguments."""
+    if objective not in OBJECTIVES:
+        raise InputError(problem(WHERE, "objective", f"expected one of {', '.join(OBJECTIVES)}, not {objective!r}"))
+    check_options(where=WHERE, spelled=ARGUMENTS, **values)
+
+
+def _named(exc, timing):
+    """A timing no run meets (:class:`TooFastError`), named by the argument that set it."""
+    field = ("running_time" if timing.running_time is not None else "supplement_percent"
+             if timing.supplement is not None else "window")
+    return InfeasibleError([problem(WHERE, field, p) for p in exc.problems])
 
 
 def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplement_percent=None, window=None,
@@ -90,23 +156,43 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
     """The energy-optimal run (``objective`` ``energy``, ``net_energy``, ``time`` or ``mixed``)
     between two stops (default: the first and the last), for a running time [s], a supplement
     over the all-out time [%] or an arrival window (earliest, latest) [s]; verified by simulation."""
-    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
-    return Solution(solve_run(track, train, from_stop, to_stop, _timing(running_time, supplement_percent, window),
-                              objective=objective, points=points, windows=windows))
+    timing = _timing(running_time, supplement_percent, window)
+    _check(objective, points=points)
+    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, WHERE)
+    try:
+        return Solution(solve_run(track, train, from_stop, to_stop, timing, objective=objective, points=points,
+                                  windows=windows))
+    except TooFastError as exc:
+        raise _named(exc, timing) from None
+    except FieldError as exc:  # a window on the way no run keeps
+        raise exc.in_file(WHERE) from None
 
 
 def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_percent=40.0, points=FRONT_POINTS,
            objective="energy", workers=1):
     """Energy against running time from the all-out run to ``supplement_max_percent`` over it."""
-    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
+    _check(objective, count=count, supplement_max=supplement_max_percent, points=points, workers=workers)
+    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, WHERE)
     table, runs = sweep(track, train, from_stop, to_stop, count=count, supplement_max=supplement_max_percent * PERCENT,
                         points=points, objective=objective, workers=workers)
-    return Front(table, runs)
+    return Front(table, [Solution(r) for r in runs])
 
 
 def replanner(track, train, from_stop=None, to_stop=None, running_time=None, window=None, points=FRONT_POINTS,
               objective="energy"):
-    """A :class:`~ecostudy.ocp.restart.Replanner`: one model re-solved from any :class:`State`."""
-    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
-    return Replanner(prepare(track, train, from_stop, to_stop, points), running_time=running_time, window=window,
-                     objective=objective)
+    """A :class:`~ecostudy.ocp.restart.Replanner`: one model re-solved from any :class:`State`; a
+    running time (or window) no run from the departure meets is refused first, as :func:`solve` refuses it."""
+    timing = _timing(running_time, None, window)
+    _check(objective, points=points)
+    if running_time is None and window is None:
+        raise InputError(problem(WHERE, "running_time", "a re-planner needs a running time or an arrival window"))
+    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, WHERE)
+    case = prepare(track, train, from_stop, to_stop, points)
+    latest = running_time if running_time is not None else timing.window[1]
+    try:
+        check_not_crawling(latest, case)
+        if latest < 0.97 * case.estimate:  # as solve_run: below the envelope's time, the all-out run decides
+            check_feasible(latest, all_out(case, {})[0])
+    except TooFastError as exc:
+        raise _named(exc, timing) from None
+    return Replanner(case, running_time=running_time, window=timing.window, objective=objective)

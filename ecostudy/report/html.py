@@ -175,6 +175,21 @@ def render(result: StudyResult) -> str:
             "<body><main>\n" + "\n".join(parts) + f"\n</main><script>{JS}</script></body></html>\n")
 
 
+def fragment(line: str, status: str, kind: str, values: dict | None = None, frame: pd.DataFrame | None = None,
+             rows: int = 20) -> str:
+    """A result in a notebook cell (its ``_repr_html_``): its ``line``, its status, and its ``values``
+    as a key-value table or the first ``rows`` rows of ``frame``, as this page shows them (no style
+    sheet: the notebook's own)."""
+    parts = [f"<p><code>{esc(line)}</code></p>", status_box(status, kind)]
+    if values:
+        parts.append(kv_table(values))
+    if frame is not None:
+        parts.append(data_table(frame.head(rows)))
+        if len(frame) > rows:
+            parts.append(f'<p class="note">The first {rows} of {len(frame)} rows.</p>')
+    return "<div>" + "".join(parts) + "</div>"
+
+
 def page_title(result: StudyResult) -> str:
     """The command, then the study, track and train names and the stops where the summary has them."""
     s = result.summary
