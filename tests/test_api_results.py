@@ -25,8 +25,8 @@ def test_a_run_is_one_line_with_its_status(case, tmp_path):
     assert repr(run.run) == f"RunResult({text[len('Solution('):]}"  # the run inside says the same
     run.save(tmp_path / "run", plot=False)
     folder = api.load(tmp_path / "run")
-    assert repr(folder) == (f"Report(solve folder {tmp_path / 'run'}: ok; 1 case: 1 ok, 0 flagged, 0 failed; "
-                            "tables: profile (40 rows))")
+    assert repr(folder) == (f"Report(solve folder {tmp_path / 'run'}, tables: profile (40 rows); "
+                            "1 case: 1 ok, 0 flagged, 0 failed; ok)")
     assert folder.reason == "" and str(folder.cases) == "1 case: 1 ok, 0 flagged, 0 failed"
     api.solve_folder(track=ROOT / "tracks/amsterdam_rokin_centraal.yaml", train=ROOT / "trains/amsterdam_metro.yaml",
                      time=80.0, points=40, out=tmp_path / "solved", plot=False)
@@ -42,9 +42,9 @@ def test_a_flagged_run_says_so_and_why(case, tmp_path):
     run.save(tmp_path / "coarse", plot=False)
     folder = api.load(tmp_path / "coarse")
     assert folder.reason == run.reason
-    assert f": flagged: {run.reason}; 1 case: 0 ok, 1 flagged, 0 failed; tables: profile (10 rows))" in repr(folder)
+    assert repr(folder).endswith(f", tables: profile (10 rows); 1 case: 0 ok, 1 flagged, 0 failed; flagged: {run.reason})")
     for shown in (run._repr_html_(), folder._repr_html_()):  # a notebook cell: the status and its reason
-        assert '<div class="status st-flagged" id="status"><b>flagged</b>re-simulation outside tolerance' in shown
+        assert f"<b>flagged</b>: {html.escape(run.reason)}</p>" in shown
     assert "<th>traction_<wbr>energy_<wbr>kWh</th>" in run._repr_html_()  # the summary's values
     assert "<td>Rokin-Centraal</td><td class=\"s-flagged long\">flagged: re-simulation" in folder._repr_html_()
 
@@ -63,7 +63,7 @@ def test_a_front_is_a_short_table_with_its_status(case):
                                                    if str(s).startswith(front.status.kind)))
     assert all(isinstance(r, api.Solution) and "\n" not in repr(r) for r in front.runs)
     shown = front._repr_html_()
-    assert shown.startswith(f"<div><p><code>{html.escape(lines[0])}</code></p>") and shown.count("<tr>") == 1 + len(front.table)
+    assert shown.startswith(f"<div><p><code>Front({html.escape(front.head())})</code>: <b>{front.status.kind}</b>") and shown.count("<tr>") == 1 + len(front.table)
 
 
 BAD = [  # (arguments of api.solve, what the one line says)

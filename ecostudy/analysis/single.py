@@ -73,14 +73,14 @@ class RunResult(Judged):
         return worst([from_checks(checks), part(f"driver advice {self.das.summary['method']}", advice)])
 
     def line(self) -> str:
-        """The run on one line: stops, distance, K, objective, running time, energies and status."""
+        """The run in a few words: stops, distance, K, objective, running time and energies (its
+        repr adds the status)."""
         s = self.facts
         return (f"{s.from_stop} -> {s.to_stop}, {s.distance_m:.0f} m, K = {s.points}, {s.objective}: "
-                f"{s.running_time_s:.2f} s, traction {s.traction_energy_kWh:.3f} kWh, net {s.net_energy_kWh:.3f} kWh; "
-                f"{self.status}")
+                f"{s.running_time_s:.2f} s, traction {s.traction_energy_kWh:.3f} kWh, net {s.net_energy_kWh:.3f} kWh")
 
     def __repr__(self) -> str:
-        return f"RunResult({self.line()})"
+        return f"RunResult({self.line()}; {self.status})"
 
 
 def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="energy", points=RUN_POINTS,

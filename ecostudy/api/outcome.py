@@ -24,7 +24,7 @@ class Report(StudyResult):
 
     def _repr_html_(self) -> str:  # a notebook cell: the line, the status, the cases not ok or the main table
         bad = pd.DataFrame([{"case": c.case, "status": str(c.status)} for c in self.not_ok])
-        return fragment(repr(self), str(self.status), self.status.kind,
+        return fragment(f"{type(self).__name__}({self.head()}; {self.cases})", str(self.status),
                         frame=bad if len(bad) else self.table if self.tables else None)
 
     def problems(self, shown: int = 20) -> list[str]:

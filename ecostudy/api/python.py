@@ -39,11 +39,11 @@ class Solution(Judged):
     run: RunResult
 
     def __repr__(self) -> str:
-        return f"Solution({self.run.line()})"
+        return f"Solution({self.run.line()}; {self.status})"
 
     def _repr_html_(self) -> str:  # a notebook cell: the line, the status, the summary's values
         values = {k: v for k, v in self.summary.items() if not isinstance(v, (dict, list))}
-        return fragment(repr(self), str(self.status), self.status.kind, values=values)
+        return fragment(f"Solution({self.run.line()})", str(self.status), values=values)
 
     @property
     def status(self) -> Status:
@@ -101,14 +101,16 @@ class Front(Judged):
     table: pd.DataFrame
     runs: list
 
+    def head(self) -> str:
+        s = self.runs[0].facts if self.runs else None
+        return f"{len(self.table)} points" + (f", {s.from_stop} -> {s.to_stop}" if s else "")
+
     def __repr__(self) -> str:
-        head = (f"Front({len(self.table)} points, {self.runs[0].facts.from_stop} -> {self.runs[0].facts.to_stop}"
-                if self.runs else f"Front({len(self.table)} points")
         words = self.table.assign(status=[Status.parse(str(s)).kind for s in self.table["status"]])  # reasons: above
-        return f"{head}; {self.status})\n{shown(words, FRONT_SHOWN)}"
+        return f"Front({self.head()}; {self.status})\n{shown(words, FRONT_SHOWN)}"
 
     def _repr_html_(self) -> str:  # a notebook cell: the line, the status, the points with their reasons
-        return fragment(repr(self).partition("\n")[0], str(self.status), self.status.kind,
+        return fragment(f"Front({self.head()})", str(self.status),
                         frame=self.table[[c for c in FRONT_SHOWN if c in self.table]])
 
     @property

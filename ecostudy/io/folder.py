@@ -86,9 +86,13 @@ class StudyResult:
         """Why the folder is not ok: the reasons of its worst cases ('' when it is ok)."""
         return self.status.reason
 
-    def __repr__(self) -> str:  # a line, not the tables and the whole summary
+    def head(self) -> str:
+        """The folder in a few words: the command, where, its tables (its repr adds the status and the cases)."""
         tables = ", ".join(f"{name} ({len(frame)} rows)" for name, frame in self.tables.items()) or "none"
-        return f"{type(self).__name__}({self.kind} folder {self.folder}: {self.status}; {self.cases}; tables: {tables})"
+        return f"{self.kind} folder {self.folder}, tables: {tables}"
+
+    def __repr__(self) -> str:  # a line, not the tables and the whole summary
+        return f"{type(self).__name__}({self.head()}; {self.cases}; {self.status})"
 
     @property
     def table(self) -> pd.DataFrame:

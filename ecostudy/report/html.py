@@ -175,12 +175,14 @@ def render(result: StudyResult) -> str:
             "<body><main>\n" + "\n".join(parts) + f"\n</main><script>{JS}</script></body></html>\n")
 
 
-def fragment(line: str, status: str, kind: str, values: dict | None = None, frame: pd.DataFrame | None = None,
+def fragment(title: str, status: str, values: dict | None = None, frame: pd.DataFrame | None = None,
              rows: int = 20) -> str:
-    """A result in a notebook cell (its ``_repr_html_``): its ``line``, its status, and its ``values``
-    as a key-value table or the first ``rows`` rows of ``frame``, as this page shows them (no style
-    sheet: the notebook's own)."""
-    parts = [f"<p><code>{esc(line)}</code></p>", status_box(status, kind)]
+    """A result in a notebook cell (its ``_repr_html_``): its ``title``, its status (``ok``,
+    ``flagged: reason``) and its ``values`` as a key-value table or the first ``rows`` rows of
+    ``frame``, in this page's cells (no style sheet: the notebook's own)."""
+    word, _, reason = status.partition(":")
+    parts = [f"<p><code>{esc(title)}</code>: <b>{esc(word)}</b>" + (f": {esc(reason.strip())}" if reason else "")
+             + "</p>"]
     if values:
         parts.append(kv_table(values))
     if frame is not None:
