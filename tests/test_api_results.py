@@ -1,6 +1,7 @@
 """The Python API from a notebook: results that say what they are in a line and whether they can be
 trusted (``status``, ``reason``), and bad arguments refused by name before anything is solved."""
 import html
+import re
 from pathlib import Path
 
 import pytest
@@ -32,6 +33,15 @@ def test_a_run_is_one_line_with_its_status(case, tmp_path):
                      time=80.0, points=40, out=tmp_path / "solved", plot=False)
     note = api.export_folder(tmp_path / "solved", "1s")  # its data is the whole table: the repr is what it printed
     assert repr(note) == f"Note(ok=True)\n{note.text}" and note.text.endswith("the run exported: ok")
+    table = run.every(time_step_s=1.0)  # the same table without a folder
+    assert list(table) == list(note.data) and len(table) == len(note.data) == 81
+    assert table.drop(columns="handle").to_numpy() == pytest.approx(note.data.drop(columns="handle").to_numpy(), rel=1e-5, abs=1e-3)
+    assert run.every(distance_step_m=100.0)["position_m"].tolist()[-2:] == [1100.0, 1106.0]
+    for bad, line in (({}, "time_step_s/distance_step_m: give one of them"),
+                      ({"time_step_s": 0}, "time_step_s: must be a number of at least 8e-05 (at most 1,000,000 rows), "
+                                           "not 0")):
+        with pytest.raises(api.InputError, match=f"^arguments: {re.escape(line)}$"):
+            run.every(**bad)
 
 
 @pytest.mark.flagged_on_purpose

@@ -4,11 +4,13 @@ results :class:`Solution` and :class:`Front` (re-exported by :mod:`ecostudy.api`
 A bad argument is refused before anything is solved with one :class:`~ecostudy.core.errors.InputError`
 (``api.InputError``) whose lines name it: ``arguments: running_time: must be more than 0.0, not -5``.
 """
+import numbers
 from dataclasses import dataclass
 from typing import get_args
 
 import pandas as pd
 
+from ecostudy.analysis.export import fixed_step
 from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.outcome import shown
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
@@ -21,7 +23,7 @@ from ecostudy.io.runsummary import RunSummary
 from ecostudy.io.schemas import StudyFile
 from ecostudy.ocp.problem import all_out, check_feasible, check_not_crawling, prepare
 from ecostudy.ocp.restart import Replanner
-from ecostudy.report.files import write_run
+from ecostudy.report.files import MAX_EXPORT_ROWS, write_run
 from ecostudy.report.html import fragment
 from ecostudy.studies.options import check_options, checked_pair
 from ecostudy.studies.pareto import sweep
@@ -82,6 +84,19 @@ class Solution(Judged):
     def trajectory(self):
         """The run in SI arrays (:class:`~ecostudy.core.types.Trajectory`)."""
         return self.run.trajectory
+
+    def every(self, time_step_s=None, distance_step_m=None) -> pd.DataFrame:
+        """The run every ``time_step_s`` seconds or every ``distance_step_m`` metres, the arrival the
+        last row: ``ecostudy export``'s table (``analysis.export.fixed_step``) without a folder."""
+        given = {n: v for n, v in (("time_step_s", time_step_s), ("distance_step_m", distance_step_m)) if v is not None}
+        if len(given) != 1:
+            raise InputError(problem(WHERE, "time_step_s/distance_step_m", "give one of them"))
+        (name, step), = given.items()
+        span = float(self.trajectory.time[-1] if time_step_s is not None else self.trajectory.nodes[-1])
+        if not (isinstance(step, numbers.Real) and float(step) > 0 and span / float(step) <= MAX_EXPORT_ROWS):
+            raise InputError(problem(WHERE, name, f"must be a number of at least {span / MAX_EXPORT_ROWS:.2g} (at "
+                                     f"most {MAX_EXPORT_ROWS:,} rows), not {step!r}"))
+        return fixed_step(self.trajectory, self.run.handle, time_step_s, distance_step_m)
 
     def plot(self, path=None):
         """Speed, gradient and handle against distance: a figure, or a PNG written to ``path``."""
