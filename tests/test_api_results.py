@@ -88,6 +88,10 @@ BAD = [  # (arguments of api.solve, what the one line says)
      "arguments: objective: expected one of energy, net_energy, time, mixed, not 'fast'"),
     ({"running_time": 80.0, "supplement_percent": 5.0},
      "arguments: running_time/supplement_percent/window: give one of them"),
+    ({}, "arguments: running_time: give running_time, supplement_percent or window (or objective='time' for the "
+         "all-out run)"),
+    ({"objective": "time", "running_time": 80.0},
+     "arguments: objective: 'time' finds the fastest run: it takes no running_time, supplement_percent or window"),
 ]
 
 

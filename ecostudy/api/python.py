@@ -172,9 +172,17 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
           objective="energy", points=RUN_POINTS, windows=()):
     """The energy-optimal run (``objective`` ``energy``, ``net_energy``, ``time`` or ``mixed``)
     between two stops (default: the first and the last), for a running time [s], a supplement
-    over the all-out time [%] or an arrival window (earliest, latest) [s]; verified by simulation."""
+    over the all-out time [%] or an arrival window (earliest, latest) [s]; verified by simulation.
+    ``objective="time"`` is the all-out run (no timing); ``mixed`` weighs time against energy."""
     timing = _timing(running_time, supplement_percent, window)
     _check(objective, points=points)
+    timed = any(x is not None for x in (running_time, supplement_percent, window))
+    if objective == "time" and timed:  # it would be ignored
+        raise InputError(problem(WHERE, "objective", "'time' finds the fastest run: it takes no running_time, "
+                                 "supplement_percent or window"))
+    if objective in ("energy", "net_energy") and not timed:  # the optimum would crawl for days
+        raise InputError(problem(WHERE, "running_time", "give running_time, supplement_percent or window (or "
+                                 "objective='time' for the all-out run)"))
     from_stop, to_stop = chosen_stops(track, from_stop, to_stop, WHERE)
     try:
         return Solution(solve_run(track, train, from_stop, to_stop, timing, objective=objective, points=points,
