@@ -39,8 +39,16 @@ train = api.load_train(ROOT / "trains" / "amsterdam_metro.yaml")
 
 # %%
 run = api.solve(track, train, "Rokin", "Centraal", running_time=76.0, points=300)
-s = run.facts  # the summary typed, units in the names (run.summary: the dict of summary.json)
-print(f"status {run.run.status}; traction energy {s.traction_energy_kWh:.3f} kWh, "
+run  # one line: the stops, the grid, the running time, the energies and the status
+
+# %% [markdown]
+# `run.status` is `ok` when Ipopt proved optimality and an independent re-simulation agrees; else
+# `flagged` with the reason (`run.reason`). `run.facts` is the summary typed, units in the names
+# (`run.summary`: the dict of summary.json).
+
+# %%
+s = run.facts
+print(f"status {run.status}; traction energy {s.traction_energy_kWh:.3f} kWh, "
       f"net of regeneration {s.net_energy_kWh:.3f} kWh, running time {s.running_time_s:.1f} s")
 print("verified by re-simulation:", s.verification.passed)
 

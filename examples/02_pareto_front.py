@@ -30,8 +30,14 @@ train = api.load_train(ROOT / "trains" / "amsterdam_metro.yaml")
 front = api.pareto(track, train, "Noord", "Station", count=6, supplement_max_percent=30.0, points=200)
 
 # %% [markdown]
-# One row per point: running time, traction and net energy in kWh, the marginal saving of one
-# more second, and each point's status.
+# The front shows itself as its points with their status (the worst point's, with its reasons, on top):
+
+# %%
+front
+
+# %% [markdown]
+# `front.table` has more per point: the saving against the all-out run and the marginal saving of
+# one more second.
 
 # %%
 columns = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "saving_vs_all_out_pct",
@@ -49,6 +55,6 @@ front.plot()
 # The runs themselves are kept: the slowest point's speed profile, for instance.
 
 # %%
-slowest = front.runs[-1]
-print(f"{slowest.summary['running_time_s']:.1f} s, top speed {slowest.summary['top_speed_kmh']:.1f} km/h, "
-      f"{slowest.summary['traction_energy_kWh']:.3f} kWh")
+slowest = front.runs[-1]  # an api.Solution, as api.solve returns
+print(slowest)
+slowest.plot()

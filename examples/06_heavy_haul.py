@@ -42,6 +42,7 @@ study = {
     "brake_penalty": [1, 80],
     "fence": [10],
     "horizons": [{"np": 4, "nc": 2}],
+    "adhesion": True,  # the locomotives' traction and dynamic braking capped at mu(v) m g in the plant
 }
 (OUT / "heavyhaul.yaml").write_text(yaml.safe_dump(study))
 result = api.heavyhaul_folder(OUT / "heavyhaul.yaml", out=OUT / "hh")
@@ -51,10 +52,12 @@ print("\n".join(result.problems()))  # each run not ok, with its reason
 # %% [markdown]
 # One row per K_b: status, the largest in-train force over the run and while braking, the energies
 # and where the train stopped. Both runs stop at the stop (a few centimetres either side of the
-# mark) and are `ok`; a run that stopped off the mark would be `flagged` with the distance. The
-# larger K_b moves braking from the wagons' brakes to the locomotives' dynamic brake, and the
-# largest in-train force while braking falls with it; the largest force over the run is reached
-# outside braking and does not change.
+# mark) and are `ok`; a run that stopped off the mark would be `flagged` with the distance. Without
+# `adhesion: true` the plant would not limit the locomotives and both runs would be `flagged`: a
+# locomotive asks about 1.5 times its adhesion 100 s into the run. The larger K_b moves braking from
+# the wagons' brakes to the locomotives' dynamic brake, and the largest in-train force while braking
+# falls to about a quarter; the largest force over the run is reached outside braking and changes
+# little.
 
 # %%
 result.tables["runs"][["K_b", "status", "reason", "force_max_kN", "force_max_braking_kN", "traction_kWh",

@@ -40,7 +40,7 @@ def test_inputs_built_in_code_are_checked_like_files():
         api.track_from_dict({"name": "x", "length_m": -5, "stops": [], "gradients": [], "speed_limits": []})
     train = api.load_train(ROOT / "trains/amsterdam_metro.yaml")
     track = api.load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml")
-    with pytest.raises(InputError, match="one of running_time"):
+    with pytest.raises(InputError, match="running_time/supplement_percent/window: give one of them"):
         api.solve(track, train, running_time=80.0, supplement_percent=5.0)
     with pytest.raises(InputError, match="unknown stop"):
         api.solve(track, train, "Nowhere", running_time=80.0)

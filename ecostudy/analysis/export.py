@@ -43,6 +43,13 @@ def at_positions(traj: Trajectory, positions: np.ndarray) -> tuple[np.ndarray, n
     return t[k] + np.minimum(tau, traj.dt[k]), v, k
 
 
+def _steps(start: float, end: float, step: float) -> np.ndarray:
+    """``start``, ``start + step``, ... before ``end``, then ``end``; a step within a millionth of a step
+    of ``end`` is ``end`` itself (a run of 80.00000001 s every second ends 79, 80, not 80, 80.00000001)."""
+    grid = np.arange(start, end, step)
+    return np.append(grid[grid < end - 1e-6 * step], end)
+
+
 def fixed_step(traj: Trajectory, handle: np.ndarray, time_step_s: Optional[float] = None,
                distance_step_m: Optional[float] = None, advice: Optional[pd.DataFrame] = None) -> pd.DataFrame:
     """The run every ``time_step_s`` seconds or every ``distance_step_m`` metres (one of them),
@@ -54,11 +61,12 @@ def fixed_step(traj: Trajectory, handle: np.ndarray, time_step_s: Optional[float
         raise ValueError("give one of time_step_s and distance_step_m")
     if time_step_s is not None:
         end = float(traj.time[-1])
-        times = np.append(np.arange(0.0, end, time_step_s), end)
+        times = _steps(0.0, end, time_step_s)
         position, speed, k = at_times(traj, times)
     else:
+        assert distance_step_m is not None  # one of the two, as checked above
         end = float(traj.nodes[-1])
-        position = np.append(np.arange(traj.nodes[0], end, distance_step_m), end)
+        position = _steps(float(traj.nodes[0]), end, distance_step_m)
         times, speed, k = at_positions(traj, position)
     # the last row is the arrival itself (a saved profile's rounding must not move it)
     times[-1], position[-1], speed[-1] = traj.time[-1], traj.nodes[-1], traj.v[-1]

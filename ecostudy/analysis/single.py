@@ -13,7 +13,7 @@ from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import verify
-from ecostudy.core.status import Status, from_checks, part, worst
+from ecostudy.core.status import Judged, Status, from_checks, part, worst
 from ecostudy.core.types import Timing, Trajectory
 from ecostudy.core.units import KWH
 from ecostudy.io.runsummary import RunSummary, SolverRun, Verification
@@ -31,8 +31,8 @@ from ecostudy.ocp.problem import (
 )
 
 
-@dataclass
-class RunResult:
+@dataclass(repr=False)  # the repr is one line (:meth:`line`), not the profile's thousand rows
+class RunResult(Judged):
     """A solved, analysed and verified run: the profile table (display units), the summary
     (``summary.json``), the grid, the handle per interval, the re-simulated trace and the SI
     :class:`Trajectory`."""
@@ -72,9 +72,15 @@ class RunResult:
         advice = Status.parse(self.das.summary["status"])  # the driver advice as driven: a run of this command too
         return worst([from_checks(checks), part(f"driver advice {self.das.summary['method']}", advice)])
 
-    @property
-    def ok(self) -> bool:
-        return self.status.ok
+    def line(self) -> str:
+        """The run in a few words: stops, distance, K, objective, running time and energies (its
+        repr adds the status)."""
+        s = self.facts
+        return (f"{s.from_stop} -> {s.to_stop}, {s.distance_m:.0f} m, K = {s.points}, {s.objective}: "
+                f"{s.running_time_s:.2f} s, traction {s.traction_energy_kWh:.3f} kWh, net {s.net_energy_kWh:.3f} kWh")
+
+    def __repr__(self) -> str:
+        return f"RunResult({self.line()}; {self.status})"
 
 
 def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="energy", points=RUN_POINTS,

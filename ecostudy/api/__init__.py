@@ -12,6 +12,12 @@ Every command of the command line is a function here too, with the same options 
 folder and returns it read back (:class:`Report`, a :class:`StudyResult` with the printed report).
 
 Everything is SI inside; the arguments here say their unit in their name where it is not SI.
+
+Every result says whether it can be trusted: ``status`` (a :class:`Status`: ``ok``, ``flagged`` or
+``failed``, with its ``reason``) on a run, a front and an output folder. A bad argument, a bad
+field of an input (a file or a dict) or a request no run can meet raises :class:`InputError` (an
+:class:`EcostudyError`) before anything is solved, one line per problem naming the file (or
+``arguments``), the field and what is wrong.
 """
 import importlib
 from typing import TYPE_CHECKING, Any
@@ -24,7 +30,7 @@ configure()  # the API is an entry point: set the process up once, before pandas
 # Each name is imported from its module when first used (PEP 562): a command loads only what it runs
 # (``ecostudy solve`` neither matplotlib without plots nor the closed-loop, heavy-haul or network code).
 WHERE = {
-    "load": "ecostudy.io.folder", "StudyResult": "ecostudy.io.folder",
+    "load": "ecostudy.api.outcome", "StudyResult": "ecostudy.io.folder",
     "load_train": "ecostudy.io.loaders", "load_track": "ecostudy.io.loaders",
     "train_from_dict": "ecostudy.io.loaders", "track_from_dict": "ecostudy.io.loaders",
     "Train": "ecostudy.core.types", "Track": "ecostudy.core.types", "State": "ecostudy.core.types",
@@ -32,6 +38,7 @@ WHERE = {
     "solve": "ecostudy.api.python", "pareto": "ecostudy.api.python", "replanner": "ecostudy.api.python",
     "Solution": "ecostudy.api.python", "Front": "ecostudy.api.python",
     "RunSummary": "ecostudy.io.runsummary", "Verification": "ecostudy.io.runsummary",
+    "InputError": "ecostudy.core.errors", "EcostudyError": "ecostudy.core.errors", "Status": "ecostudy.core.status",
     "Report": "ecostudy.api.outcome", "Note": "ecostudy.api.outcome", "one_line": "ecostudy.api.outcome",
     "solve_folder": "ecostudy.api.single", "check_folder": "ecostudy.api.single",
     "export_folder": "ecostudy.api.single", "doctor": "ecostudy.api.single",
@@ -42,7 +49,8 @@ WHERE = {
     "calibrate_folder": "ecostudy.api.cases", "validate_folder": "ecostudy.api.cases",
 }
 __all__ = ["load", "StudyResult", "load_train", "load_track", "train_from_dict", "track_from_dict", "Train", "Track",
-           "State", "Window", "solve", "pareto", "replanner", "Solution", "Front", "RunSummary", "Verification", "Report", "Note", "one_line",
+           "State", "Window", "solve", "pareto", "replanner", "Solution", "Front", "RunSummary", "Verification", "InputError",
+           "EcostudyError", "Status", "Report", "Note", "one_line",
            "solve_folder", "check_folder", "export_folder", "doctor", "pareto_folder", "compare_folder",
            "journey_folder", "run_folder", "simulate_folder", "heavyhaul_folder", "network_folder",
            "calibrate_folder", "validate_folder"]  # = WHERE's names, written out for the reference's static reader
@@ -65,10 +73,12 @@ if TYPE_CHECKING:  # what type checkers and editors see
     from ecostudy.api.cases import (calibrate_folder, heavyhaul_folder, network_folder, run_folder,  # noqa: F401
                                     simulate_folder, validate_folder)
     from ecostudy.api.fronts import compare_folder, journey_folder, pareto_folder  # noqa: F401
-    from ecostudy.api.outcome import Note, Report, one_line  # noqa: F401
+    from ecostudy.api.outcome import Note, Report, load, one_line  # noqa: F401
     from ecostudy.api.python import Front, Solution, pareto, replanner, solve  # noqa: F401
     from ecostudy.api.single import check_folder, doctor, export_folder, solve_folder  # noqa: F401
+    from ecostudy.core.errors import EcostudyError, InputError  # noqa: F401
+    from ecostudy.core.status import Status  # noqa: F401
     from ecostudy.core.types import State, Track, Train, Window  # noqa: F401
-    from ecostudy.io.folder import StudyResult, load  # noqa: F401
+    from ecostudy.io.folder import StudyResult  # noqa: F401
     from ecostudy.io.loaders import load_track, load_train, track_from_dict, train_from_dict  # noqa: F401
     from ecostudy.io.runsummary import RunSummary, Verification  # noqa: F401

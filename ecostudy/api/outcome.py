@@ -4,24 +4,31 @@ that turn tables into that report.
 """
 import json
 from dataclasses import dataclass, fields
-from pathlib import Path
 from functools import partial
+from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence
 
 import pandas as pd
 
 from ecostudy.core.errors import EcostudyError
 from ecostudy.core.units import number
-from ecostudy.io.folder import StudyResult, load
+from ecostudy.io.folder import StudyResult
+from ecostudy.io.folder import load as load_result
 from ecostudy.report.console import counted
+from ecostudy.report.html import fragment
 
 
-@dataclass
+@dataclass(repr=False)  # StudyResult's line, not the printed text
 class Report(StudyResult):
     """An output folder a command wrote (every field of :class:`StudyResult`) and ``text``: the
     lines the command line prints, ending with the folder and its files."""
 
     text: str = ""
+
+    def _repr_html_(self) -> str:  # a notebook cell: the line, the status, the cases not ok or the main table
+        bad = pd.DataFrame([{"case": c.case, "status": str(c.status)} for c in self.not_ok])
+        return fragment(f"{type(self).__name__}({self.head()}; {self.cases})", str(self.status),
+                        frame=bad if len(bad) else self.table if self.tables else None)
 
     def problems(self, shown: int = 20) -> list[str]:
         """'status: case: reason' of each case not ok (the first ``shown``, then how many more)."""
@@ -31,7 +38,7 @@ class Report(StudyResult):
                         if len(bad) > shown else [])
 
 
-@dataclass
+@dataclass(repr=False)
 class Note:
     """What a command that writes beside an existing folder returns (``check``, ``export``,
     ``doctor``): ``ok``, the ``text`` printed, and the command's data."""
@@ -40,10 +47,19 @@ class Note:
     text: str
     data: Any = None
 
+    def __repr__(self) -> str:  # what the command prints, not its data (a whole table for export)
+        return f"Note(ok={self.ok})\n{self.text}"
+
+
+def load(folder: Path | str) -> Report:
+    """Any output folder of ecostudy read back (:func:`ecostudy.io.folder.load`): a :class:`Report`
+    whose ``text`` is empty (no command printed it here)."""
+    return reported(folder, ())
+
 
 def reported(folder: Path | str, lines: Iterable[str]) -> Report:
     """``folder`` read back (:func:`~ecostudy.io.folder.load`) with the printed ``lines``."""
-    result = load(folder)
+    result = load_result(folder)
     return Report(**{f.name: getattr(result, f.name) for f in fields(StudyResult)}, text="\n".join(lines))
 
 

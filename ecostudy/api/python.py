@@ -1,27 +1,57 @@
 """The Python API's own objects: :func:`solve`, :func:`pareto` and :func:`replanner`, and their
-results :class:`Solution` and :class:`Front` (re-exported by :mod:`ecostudy.api`)."""
+results :class:`Solution` and :class:`Front` (re-exported by :mod:`ecostudy.api`).
+
+A bad argument is refused before anything is solved with one :class:`~ecostudy.core.errors.InputError`
+(``api.InputError``) whose lines name it: ``arguments: running_time: must be more than 0.0, not -5``.
+"""
+import numbers
 from dataclasses import dataclass
+from typing import get_args
 
 import pandas as pd
 
+from ecostudy.analysis.export import fixed_step
 from ecostudy.analysis.single import RunResult, solve_run
+from ecostudy.api.outcome import shown
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
-from ecostudy.core.errors import InputError
+from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, problem
+from ecostudy.core.status import Judged, Status, worst
 from ecostudy.core.types import Timing
 from ecostudy.core.units import PERCENT
 from ecostudy.io.loaders import chosen_stops
 from ecostudy.io.runsummary import RunSummary
-from ecostudy.ocp.problem import prepare
+from ecostudy.io.schemas import StudyFile
+from ecostudy.ocp.problem import all_out, check_feasible, check_not_crawling, prepare
 from ecostudy.ocp.restart import Replanner
-from ecostudy.report.files import write_run
+from ecostudy.report.files import MAX_EXPORT_ROWS, write_run
+from ecostudy.report.html import fragment
+from ecostudy.studies.options import check_options, checked_pair
 from ecostudy.studies.pareto import sweep
 
+WHERE = "arguments"  # what a refusal names instead of a file: ``arguments: points: ...``
+ARGUMENTS = {"time": "running_time", "supplement": "supplement_percent", "supplement_max": "supplement_max_percent"}
+OBJECTIVES = get_args(StudyFile.model_fields["objective"].annotation)
+FRONT_SHOWN = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "status"]
 
-@dataclass
-class Solution:
+
+@dataclass(repr=False)
+class Solution(Judged):
     """One solved and verified run."""
 
     run: RunResult
+
+    def __repr__(self) -> str:
+        return f"Solution({self.run.line()}; {self.status})"
+
+    def _repr_html_(self) -> str:  # a notebook cell: the line, the status, the summary's values
+        values = {k: v for k, v in self.summary.items() if not isinstance(v, (dict, list))}
+        return fragment(f"Solution({self.run.line()})", str(self.status), values=values)
+
+    @property
+    def status(self) -> Status:
+        """``ok``, or ``flagged`` with the reason (Ipopt not optimal, the re-simulation outside its
+        tolerance, the driver advice off): :attr:`RunResult.status`."""
+        return self.run.status
 
     @property
     def profile(self):
@@ -55,6 +85,19 @@ class Solution:
         """The run in SI arrays (:class:`~ecostudy.core.types.Trajectory`)."""
         return self.run.trajectory
 
+    def every(self, time_step_s=None, distance_step_m=None) -> pd.DataFrame:
+        """The run every ``time_step_s`` seconds or every ``distance_step_m`` metres, the arrival the
+        last row: ``ecostudy export``'s table (``analysis.export.fixed_step``) without a folder."""
+        given = {n: v for n, v in (("time_step_s", time_step_s), ("distance_step_m", distance_step_m)) if v is not None}
+        if len(given) != 1:
+            raise InputError(problem(WHERE, "time_step_s/distance_step_m", "give one of them"))
+        (name, step), = given.items()
+        span = float(self.trajectory.time[-1] if time_step_s is not None else self.trajectory.nodes[-1])
+        if not (isinstance(step, numbers.Real) and float(step) > 0 and span / float(step) <= MAX_EXPORT_ROWS):
+            raise InputError(problem(WHERE, name, f"must be a number of at least {span / MAX_EXPORT_ROWS:.2g} (at "
+                                     f"most {MAX_EXPORT_ROWS:,} rows), not {step!r}"))
+        return fixed_step(self.trajectory, self.run.handle, time_step_s, distance_step_m)
+
     def plot(self, path=None):
         """Speed, gradient and handle against distance: a figure, or a PNG written to ``path``."""
         from ecostudy.report.plots import speed_plot
@@ -65,12 +108,30 @@ class Solution:
         return write_run(self.run, out_dir, plot)
 
 
-@dataclass
-class Front:
-    """Energy against running time: one row per point, and the runs themselves."""
+@dataclass(repr=False)
+class Front(Judged):
+    """Energy against running time: one row per point (its ``status`` with the reason), and the
+    runs themselves (each a :class:`Solution`)."""
 
     table: pd.DataFrame
     runs: list
+
+    def head(self) -> str:
+        s = self.runs[0].facts if self.runs else None
+        return f"{len(self.table)} points" + (f", {s.from_stop} -> {s.to_stop}" if s else "")
+
+    def __repr__(self) -> str:
+        words = self.table.assign(status=[Status.parse(str(s)).kind for s in self.table["status"]])  # reasons: above
+        return f"Front({self.head()}; {self.status})\n{shown(words, FRONT_SHOWN)}"
+
+    def _repr_html_(self) -> str:  # a notebook cell: the line, the status, the points with their reasons
+        return fragment(f"Front({self.head()})", str(self.status),
+                        frame=self.table[[c for c in FRONT_SHOWN if c in self.table]])
+
+    @property
+    def status(self) -> Status:
+        """The worst of the points' statuses, with their reasons."""
+        return worst(Status.parse(str(s)) for s in self.table["status"])
 
     def plot(self, path=None):
         from ecostudy.report.plots import pareto_plot
@@ -80,33 +141,83 @@ class Front:
 def _timing(running_time, supplement_percent, window):
     given = [x is not None for x in (running_time, supplement_percent, window)]
     if sum(given) > 1:
-        raise InputError("arguments: give one of running_time, supplement_percent, window")
+        raise InputError(problem(WHERE, "running_time/supplement_percent/window", "give one of them"))
+    check_options(where=WHERE, spelled=ARGUMENTS, time=running_time, supplement=supplement_percent)
+    if window is not None:
+        try:
+            earliest, latest = window
+        except (TypeError, ValueError):
+            raise InputError(problem(WHERE, "window", f"expected (earliest, latest) [s], not {window!r}"))
+        window = checked_pair(earliest, latest, "window", ordered=True, where=WHERE)
     return Timing(running_time=running_time, window=window,
                   supplement=None if supplement_percent is None else supplement_percent * PERCENT)
+
+
+def _check(objective, **values):
+    """Refuse ``objective`` and the numeric ``values`` (:data:`~ecostudy.studies.options.OPTION_RANGES`'
+    names) that are out of range, naming the arguments."""
+    if objective not in OBJECTIVES:
+        raise InputError(problem(WHERE, "objective", f"expected one of {', '.join(OBJECTIVES)}, not {objective!r}"))
+    check_options(where=WHERE, spelled=ARGUMENTS, **values)
+
+
+def _named(exc, timing):
+    """A timing no run meets (:class:`TooFastError`), named by the argument that set it."""
+    field = ("running_time" if timing.running_time is not None else "supplement_percent"
+             if timing.supplement is not None else "window")
+    return InfeasibleError([problem(WHERE, field, p) for p in exc.problems])
 
 
 def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplement_percent=None, window=None,
           objective="energy", points=RUN_POINTS, windows=()):
     """The energy-optimal run (``objective`` ``energy``, ``net_energy``, ``time`` or ``mixed``)
     between two stops (default: the first and the last), for a running time [s], a supplement
-    over the all-out time [%] or an arrival window (earliest, latest) [s]; verified by simulation."""
-    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
-    return Solution(solve_run(track, train, from_stop, to_stop, _timing(running_time, supplement_percent, window),
-                              objective=objective, points=points, windows=windows))
+    over the all-out time [%] or an arrival window (earliest, latest) [s]; verified by simulation.
+    ``objective="time"`` is the all-out run (no timing); ``mixed`` weighs time against energy."""
+    timing = _timing(running_time, supplement_percent, window)
+    _check(objective, points=points)
+    timed = any(x is not None for x in (running_time, supplement_percent, window))
+    if objective == "time" and timed:  # it would be ignored
+        raise InputError(problem(WHERE, "objective", "'time' finds the fastest run: it takes no running_time, "
+                                 "supplement_percent or window"))
+    if objective in ("energy", "net_energy") and not timed:  # the optimum would crawl for days
+        raise InputError(problem(WHERE, "running_time", "give running_time, supplement_percent or window (or "
+                                 "objective='time' for the all-out run)"))
+    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, WHERE)
+    try:
+        return Solution(solve_run(track, train, from_stop, to_stop, timing, objective=objective, points=points,
+                                  windows=windows))
+    except TooFastError as exc:
+        raise _named(exc, timing) from None
+    except FieldError as exc:  # a window on the way no run keeps
+        raise exc.in_file(WHERE) from None
 
 
 def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_percent=40.0, points=FRONT_POINTS,
            objective="energy", workers=1):
     """Energy against running time from the all-out run to ``supplement_max_percent`` over it."""
-    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
+    _check(objective, count=count, supplement_max=supplement_max_percent, points=points, workers=workers)
+    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, WHERE)
     table, runs = sweep(track, train, from_stop, to_stop, count=count, supplement_max=supplement_max_percent * PERCENT,
                         points=points, objective=objective, workers=workers)
-    return Front(table, runs)
+    return Front(table, [Solution(r) for r in runs])
 
 
 def replanner(track, train, from_stop=None, to_stop=None, running_time=None, window=None, points=FRONT_POINTS,
               objective="energy"):
-    """A :class:`~ecostudy.ocp.restart.Replanner`: one model re-solved from any :class:`State`."""
-    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, "arguments")
-    return Replanner(prepare(track, train, from_stop, to_stop, points), running_time=running_time, window=window,
-                     objective=objective)
+    """A :class:`~ecostudy.ocp.restart.Replanner`: one model re-solved from any :class:`State`; a
+    running time (or window) no run from the departure meets is refused first, as :func:`solve` refuses it."""
+    timing = _timing(running_time, None, window)
+    _check(objective, points=points)
+    if running_time is None and window is None:
+        raise InputError(problem(WHERE, "running_time", "a re-planner needs a running time or an arrival window"))
+    from_stop, to_stop = chosen_stops(track, from_stop, to_stop, WHERE)
+    case = prepare(track, train, from_stop, to_stop, points)
+    latest = running_time if running_time is not None else timing.window[1]
+    try:
+        check_not_crawling(latest, case)
+        if latest < 0.97 * case.estimate:  # as solve_run: below the envelope's time, the all-out run decides
+            check_feasible(latest, all_out(case, {})[0])
+    except TooFastError as exc:
+        raise _named(exc, timing) from None
+    return Replanner(case, running_time=running_time, window=timing.window, objective=objective)

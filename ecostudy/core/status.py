@@ -74,6 +74,23 @@ class Status:
 
 OK = Status("ok")
 
+
+class Judged:
+    """A result judged in this vocabulary: its ``status``, and the ``reason`` and ``ok`` that follow."""
+
+    @property
+    def status(self) -> Status:
+        raise NotImplementedError
+
+    @property
+    def reason(self) -> str:
+        """Why the result is not ok ('' when it is)."""
+        return self.status.reason
+
+    @property
+    def ok(self) -> bool:
+        return self.status.ok
+
 # What a driven run may miss and still be ok (a simulated or closed-loop run, a strategy's run):
 STOP_TOLERANCE_M = 1.0        # |stopping position - stop| [m]
 LATE_TOLERANCE_S = 1.0        # arrival after the asked time or window [s]

@@ -40,6 +40,9 @@ class Counts:
     def not_ok(self) -> int:
         return self.flagged + self.failed
 
+    def __str__(self) -> str:
+        return f"{self.total} case{'s' * (self.total != 1)}: {self.ok} ok, {self.flagged} flagged, {self.failed} failed"
+
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Counts":
         return cls(**{k: int(data.get(k, 0)) for k in ("total", "ok", "flagged", "failed")})
@@ -77,6 +80,19 @@ class StudyResult:
     @property
     def ok(self) -> bool:
         return self.status.ok
+
+    @property
+    def reason(self) -> str:
+        """Why the folder is not ok: the reasons of its worst cases ('' when it is ok)."""
+        return self.status.reason
+
+    def head(self) -> str:
+        """The folder in a few words: the command, where, its tables (its repr adds the status and the cases)."""
+        tables = ", ".join(f"{name} ({len(frame)} rows)" for name, frame in self.tables.items()) or "none"
+        return f"{self.kind} folder {self.folder}, tables: {tables}"
+
+    def __repr__(self) -> str:  # a line, not the tables and the whole summary
+        return f"{type(self).__name__}({self.head()}; {self.cases}; {self.status})"
 
     @property
     def table(self) -> pd.DataFrame:

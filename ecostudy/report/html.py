@@ -175,6 +175,23 @@ def render(result: StudyResult) -> str:
             "<body><main>\n" + "\n".join(parts) + f"\n</main><script>{JS}</script></body></html>\n")
 
 
+def fragment(title: str, status: str, values: dict | None = None, frame: pd.DataFrame | None = None,
+             rows: int = 20) -> str:
+    """A result in a notebook cell (its ``_repr_html_``): its ``title``, its status (``ok``,
+    ``flagged: reason``) and its ``values`` as a key-value table or the first ``rows`` rows of
+    ``frame``, in this page's cells (no style sheet: the notebook's own)."""
+    word, _, reason = status.partition(":")
+    parts = [f"<p><code>{esc(title)}</code>: <b>{esc(word)}</b>" + (f": {esc(reason.strip())}" if reason else "")
+             + "</p>"]
+    if values:
+        parts.append(kv_table(values))
+    if frame is not None:
+        parts.append(data_table(frame.head(rows)))
+        if len(frame) > rows:
+            parts.append(f'<p class="note">The first {rows} of {len(frame)} rows.</p>')
+    return "<div>" + "".join(parts) + "</div>"
+
+
 def page_title(result: StudyResult) -> str:
     """The command, then the study, track and train names and the stops where the summary has them."""
     s = result.summary

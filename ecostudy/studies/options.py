@@ -5,8 +5,9 @@ Every refusal is one line naming ``command line`` and the option (exit status 2,
 an input file); the functions of :mod:`ecostudy.api` call them first.
 """
 import math
+import numbers
 from pathlib import Path
-from typing import Any, NamedTuple, Optional
+from typing import Any, Mapping, NamedTuple, Optional
 
 from ecostudy.core import units
 from ecostudy.core.defaults import MAX_SUPPLEMENT_PERCENT
@@ -25,20 +26,26 @@ OPTION_RANGES = {
 }
 
 
-def check_options(**values: Any) -> None:
-    """Refuse numeric options that are not finite or out of their range (:data:`OPTION_RANGES`):
-    one line each, naming the option, before anything is computed (exit status 2)."""
+def check_options(*, where: str = "command line", spelled: Optional[Mapping[str, str]] = None, **values: Any) -> None:
+    """Refuse numeric options that are not numbers, not finite or out of their range
+    (:data:`OPTION_RANGES`): one line each, naming the option, before anything is computed (exit
+    status 2). ``where`` and ``spelled`` (range name -> the name a caller gives it) name them as the
+    Python API does (``arguments: running_time: ...``)."""
     lines = []
     for name, value in values.items():
         if value is None:
             continue
-        option = "--" + name.replace("_", "-")
+        option = spelled.get(name, name) if spelled is not None else "--" + name.replace("_", "-")
         low, high, closed = OPTION_RANGES[name]
-        if isinstance(value, float) and not math.isfinite(value):
-            lines.append(problem("command line", option, f"must be a finite number, not {value}"))
-        elif value < low or (value == low and not closed) or (high is not None and value > high):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            lines.append(problem(where, option, f"must be a number, not {value!r}"))
+        elif isinstance(value, float) and not math.isfinite(value):
+            lines.append(problem(where, option, f"must be a finite number, not {value}"))
+        elif isinstance(low, int) and not isinstance(value, numbers.Integral):
+            lines.append(problem(where, option, f"must be a whole number, not {value}"))
+        elif (x := float(value)) < low or (x == low and not closed) or (high is not None and x > high):
             bound = f"at least {low}" if closed else f"more than {low}"
-            lines.append(problem("command line", option, f"must be {bound}" + (f" and at most {high}" if high else "")
+            lines.append(problem(where, option, f"must be {bound}" + (f" and at most {high}" if high else "")
                                  + f", not {value}"))
     if lines:
         raise InputError(lines)
@@ -50,14 +57,21 @@ def parse_pair(text: str, option: str, ordered: bool = False, nonnegative: bool 
         a, b = (float(x) for x in text.split(","))
     except ValueError:
         raise InputError(problem("command line", option, f"expected two numbers 'a,b', got {text!r}"))
-    if not (math.isfinite(a) and math.isfinite(b)):
-        raise InputError(problem("command line", option, f"must be finite numbers, not '{text}'"))
+    return checked_pair(a, b, option, ordered, nonnegative)
+
+
+def checked_pair(a: float, b: float, option: str, ordered: bool = False, nonnegative: bool = False,
+                 where: str = "command line") -> tuple[float, float]:
+    """``(a, b)`` refused as :func:`parse_pair` refuses it, named ``where: option``."""
+    text = f"{a},{b}"
+    if not (isinstance(a, numbers.Real) and isinstance(b, numbers.Real) and math.isfinite(a) and math.isfinite(b)):
+        raise InputError(problem(where, option, f"must be finite numbers, not '{text}'"))
     if ordered and not 0 <= a <= b:
-        raise InputError(problem("command line", option, f"must be 'earliest,latest' with 0 <= earliest <= latest, "
+        raise InputError(problem(where, option, f"must be 'earliest,latest' with 0 <= earliest <= latest, "
                                  f"not '{text}'"))
     if nonnegative and (a < 0 or b < 0 or a == b == 0):
-        raise InputError(problem("command line", option, f"must be two weights >= 0, not both 0, not '{text}'"))
-    return a, b
+        raise InputError(problem(where, option, f"must be two weights >= 0, not both 0, not '{text}'"))
+    return float(a), float(b)
 
 
 def only_one(**options: Any) -> None:

@@ -1,0 +1,133 @@
+"""The Python API from a notebook: results that say what they are in a line and whether they can be
+trusted (``status``, ``reason``), and bad arguments refused by name before anything is solved."""
+import html
+import re
+from pathlib import Path
+
+import pytest
+
+from ecostudy import api
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def case():
+    return (api.load_track(ROOT / "tracks/amsterdam_rokin_centraal.yaml"),
+            api.load_train(ROOT / "trains/amsterdam_metro.yaml"))
+
+
+def test_a_run_is_one_line_with_its_status(case, tmp_path):
+    run = api.solve(*case, running_time=80.0, points=40)
+    text = repr(run)
+    assert "\n" not in text and len(text) < 300, text
+    assert text.startswith("Solution(Rokin -> Centraal, 1106 m, K = 40, energy: 80.00 s, traction ")
+    assert text.endswith("; ok)") and run.status.ok and run.ok and run.reason == ""
+    assert repr(run.run) == f"RunResult({text[len('Solution('):]}"  # the run inside says the same
+    run.save(tmp_path / "run", plot=False)
+    folder = api.load(tmp_path / "run")
+    assert repr(folder) == (f"Report(solve folder {tmp_path / 'run'}, tables: profile (40 rows); "
+                            "1 case: 1 ok, 0 flagged, 0 failed; ok)")
+    assert folder.reason == "" and str(folder.cases) == "1 case: 1 ok, 0 flagged, 0 failed"
+    api.solve_folder(track=ROOT / "tracks/amsterdam_rokin_centraal.yaml", train=ROOT / "trains/amsterdam_metro.yaml",
+                     time=80.0, points=40, out=tmp_path / "solved", plot=False)
+    note = api.export_folder(tmp_path / "solved", "1s")  # its data is the whole table: the repr is what it printed
+    assert repr(note) == f"Note(ok=True)\n{note.text}" and note.text.endswith("the run exported: ok")
+    table = run.every(time_step_s=1.0)  # the same table without a folder
+    assert list(table) == list(note.data) and len(table) == len(note.data) == 81
+    assert table.drop(columns="handle").to_numpy() == pytest.approx(note.data.drop(columns="handle").to_numpy(), rel=1e-5, abs=1e-3)
+    assert run.every(distance_step_m=100.0)["position_m"].tolist()[-2:] == [1100.0, 1106.0]
+    for bad, line in (({}, "time_step_s/distance_step_m: give one of them"),
+                      ({"time_step_s": 0}, "time_step_s: must be a number of at least 8e-05 (at most 1,000,000 rows), "
+                                           "not 0")):
+        with pytest.raises(api.InputError, match=f"^arguments: {re.escape(line)}$"):
+            run.every(**bad)
+
+
+@pytest.mark.flagged_on_purpose
+def test_a_flagged_run_says_so_and_why(case, tmp_path):
+    run = api.solve(*case, running_time=80.0, points=10)  # too coarse a grid: the re-simulation disagrees
+    assert run.status.kind == "flagged" and run.reason.startswith("re-simulation outside tolerance (arrival ")
+    assert repr(run).endswith(f"; flagged: {run.reason})") and not run.ok
+    run.save(tmp_path / "coarse", plot=False)
+    folder = api.load(tmp_path / "coarse")
+    assert folder.reason == run.reason
+    assert repr(folder).endswith(f", tables: profile (10 rows); 1 case: 0 ok, 1 flagged, 0 failed; flagged: {run.reason})")
+    for shown in (run._repr_html_(), folder._repr_html_()):  # a notebook cell: the status and its reason
+        assert f"<b>flagged</b>: {html.escape(run.reason)}</p>" in shown
+    assert "<th>traction_<wbr>energy_<wbr>kWh</th>" in run._repr_html_()  # the summary's values
+    assert "<td>Rokin-Centraal</td><td class=\"s-flagged long\">flagged: re-simulation" in folder._repr_html_()
+
+
+@pytest.mark.flagged_on_purpose  # the 20 % point of this coarse front is flagged
+def test_a_front_is_a_short_table_with_its_status(case):
+    front = api.pareto(*case, count=3, supplement_max_percent=20, points=40)
+    lines = repr(front).splitlines()
+    assert len(lines) == 5, lines  # the head, the column names, three points
+    assert lines[0].startswith("Front(3 points, Rokin -> Centraal; ") and lines[0].endswith(f"{front.status})")
+    assert lines[1].split() == ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "status"]
+    assert [line.split()[-1] for line in lines[2:]] == [str(s).split(":")[0] for s in front.table["status"]]
+    kinds = {str(s).split(":")[0] for s in front.table["status"]}
+    assert front.status.kind == ("failed" if "failed" in kinds else "flagged" if "flagged" in kinds else "ok")
+    assert front.reason == "; ".join(dict.fromkeys(str(s).split(": ", 1)[1] for s in front.table["status"]
+                                                   if str(s).startswith(front.status.kind)))
+    assert all(isinstance(r, api.Solution) and "\n" not in repr(r) for r in front.runs)
+    shown = front._repr_html_()
+    assert shown.startswith(f"<div><p><code>Front({html.escape(front.head())})</code>: <b>{front.status.kind}</b>") and shown.count("<tr>") == 1 + len(front.table)
+
+
+BAD = [  # (arguments of api.solve, what the one line says)
+    ({"running_time": -5.0}, "arguments: running_time: must be more than 0.0, not -5.0"),
+    ({"running_time": float("nan")}, "arguments: running_time: must be a finite number, not nan"),
+    ({"running_time": "80"}, "arguments: running_time: must be a number, not '80'"),
+    ({"supplement_percent": -5}, "arguments: supplement_percent: must be at least 0.0 and at most 200.0, not -5"),
+    ({"running_time": 80.0, "points": 0}, "arguments: points: must be at least 10 and at most 100000, not 0"),
+    ({"running_time": 80.0, "points": 80.5}, "arguments: points: must be a whole number, not 80.5"),
+    ({"window": (90, 80)}, "arguments: window: must be 'earliest,latest' with 0 <= earliest <= latest, not '90,80'"),
+    ({"running_time": 80.0, "objective": "fast"},
+     "arguments: objective: expected one of energy, net_energy, time, mixed, not 'fast'"),
+    ({"running_time": 80.0, "supplement_percent": 5.0},
+     "arguments: running_time/supplement_percent/window: give one of them"),
+    ({}, "arguments: running_time: give running_time, supplement_percent or window (or objective='time' for the "
+         "all-out run)"),
+    ({"objective": "time", "running_time": 80.0},
+     "arguments: objective: 'time' finds the fastest run: it takes no running_time, supplement_percent or window"),
+]
+
+
+@pytest.mark.parametrize("kwargs, line", BAD, ids=[str(k) for k, _ in BAD])
+def test_a_bad_argument_is_one_line_naming_it(case, kwargs, line):
+    with pytest.raises(api.InputError) as caught:
+        api.solve(*case, **kwargs)
+    assert str(caught.value) == line
+
+
+def test_front_and_replanner_arguments_are_refused_by_name(case):
+    with pytest.raises(api.InputError, match=r"^arguments: count: must be at least 2 and at most 10000, not 1$"):
+        api.pareto(*case, count=1, points=40)
+    with pytest.raises(api.InputError, match=r"^arguments: supplement_max_percent: must be more than 0.0"):
+        api.pareto(*case, count=3, supplement_max_percent=-10, points=40)
+    with pytest.raises(api.InputError, match=r"^arguments: points: must be at least 10"):
+        api.replanner(*case, running_time=80.0, points=0)
+    with pytest.raises(api.InputError, match=r"^arguments: running_time: must be more than 0.0, not -80$"):
+        api.replanner(*case, running_time=-80)
+
+
+def test_a_running_time_below_the_fastest_run_names_the_argument(case):
+    for make in (lambda: api.solve(*case, running_time=50.0, points=40),
+                 lambda: api.replanner(*case, running_time=50.0, points=40)):
+        with pytest.raises(api.InputError, match=r"^arguments: running_time: infeasible: the fastest possible run "
+                                                 r"takes 7\d\.\d s \(asked for 50\.0 s\)$"):
+            make()
+
+
+def test_bad_inputs_are_the_same_exception_naming_file_and_field(tmp_path):
+    with pytest.raises(api.InputError, match=r"^.*nope\.yaml: file not found$"):
+        api.load_train(tmp_path / "nope.yaml")
+    with pytest.raises(api.InputError, match=r"track \(in code\): speed_limits\[0\]\.speed_mps: unknown field"):
+        api.track_from_dict({"name": "f", "source": "a test", "length_m": 1000,
+                             "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 1000}],
+                             "gradients": [{"position_m": 0, "gradient_permille": 0}],
+                             "speed_limits": [{"position_m": 0, "speed_mps": 20}]})
+    with pytest.raises(api.InputError, match=r"summary\.json: not an ecostudy output folder"):
+        api.load(tmp_path)
