@@ -21,6 +21,7 @@ from ecostudy.cli import app
 from ecostudy.core.units import number
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.io.logfile import write_log
+from ecostudy.report.html import numeric_cell
 
 from .conftest import ROOT, TRACKS, TRAINS, write_yaml
 
@@ -42,6 +43,12 @@ def test_every_printed_table_shows_a_rounded_zero_as_zero(places, values):
     .3f; simulate, heavyhaul, validate at .4g; calibrate at .5g, where only -0 itself rounds to zero)."""
     text = shown(pd.DataFrame({"unserved_kWh": values, "saving_pct": [4.002] * len(values)}), places=places)
     assert not NEGATIVE_ZERO.search(text), text
+
+
+def test_report_html_shows_a_rounded_zero_as_zero_by_the_same_formatter():
+    assert [numeric_cell(x, 3) for x in (-1e-9, -0.0006)] == ['<td class="n" data-v="-1e-09">0.000</td>',
+                                                             '<td class="n" data-v="-0.0006">-0.001</td>']
+    assert numeric_cell(-12345.678, 2) == '<td class="n" data-v="-12345.678">-12\u2009345.68</td>'
 
 
 def test_a_table_prints_each_column_to_its_own_digits():

@@ -20,6 +20,7 @@ from urllib.parse import quote
 
 import pandas as pd
 
+from ecostudy.core.units import number
 from ecostudy.io.folder import SUMMARY, Counts, StudyResult, load
 from ecostudy.io.writers import atomic_write
 
@@ -306,9 +307,7 @@ def numeric_cell(value: Any, places: int) -> str:
     if is_missing(value):
         return "<td></td>"
     x = float(value)
-    text = f"{x:,.{places}f}".replace(",", "\u2009")  # thin space between thousands
-    if float(f"{x:.{places}f}") == 0:
-        text = text.lstrip("-")
+    text = number(x, f",.{places}f").replace(",", "\u2009")  # thin space between thousands; no '-0.00'
     return f'<td class="n" data-v="{x!r}">{text}</td>'
 
 
