@@ -99,6 +99,7 @@ def test_a_solve_report_prints_energies_that_round_to_zero_as_zero(amsterdam_76s
     text = "\n".join(run_lines(run, tmp_path))
     assert "net energy            0.000 kWh  (regenerated 0.000 kWh)" in text, text
     assert "energy +0.000 %" in text and not NEGATIVE_ZERO.search(text), text
+    assert repr(run).split("; ")[0].endswith("net 0.000 kWh"), repr(run)  # its line in Python
 
 
 def test_a_validated_log_that_the_model_replays_prints_its_difference_as_zero(tmp_path):

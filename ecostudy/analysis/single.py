@@ -15,7 +15,7 @@ from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import verify
 from ecostudy.core.status import Judged, Status, from_checks, part, worst
 from ecostudy.core.types import Timing, Trajectory
-from ecostudy.core.units import KWH
+from ecostudy.core.units import KWH, number
 from ecostudy.io.runsummary import RunSummary, SolverRun, Verification
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import (
@@ -77,7 +77,7 @@ class RunResult(Judged):
         repr adds the status)."""
         s = self.facts
         return (f"{s.from_stop} -> {s.to_stop}, {s.distance_m:.0f} m, K = {s.points}, {s.objective}: "
-                f"{s.running_time_s:.2f} s, traction {s.traction_energy_kWh:.3f} kWh, net {s.net_energy_kWh:.3f} kWh")
+                f"{s.running_time_s:.2f} s, traction {s.traction_energy_kWh:.3f} kWh, net {number(s.net_energy_kWh)} kWh")
 
     def __repr__(self) -> str:
         return f"RunResult({self.line()}; {self.status})"
