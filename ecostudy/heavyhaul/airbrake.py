@@ -80,11 +80,3 @@ def brake_lag(consist):
     if not wagons.any() or weights.sum() <= 0:
         return 0.0
     return float(np.dot(delays[wagons], weights) / weights.sum() + consist.air_brake.build_up)
-
-
-def virtual_delays(consist, members):
-    """[s] the brake signal's delay to each (virtual) car of ``members`` (lists of car indices): its
-    cars' delays weighted by their brake force (0 for a car without)."""
-    _, delays = _wagons(consist)
-    weights = np.asarray(consist.pneumatic_brake, float)
-    return np.array([np.dot(delays[c], weights[c]) / weights[c].sum() if weights[c].sum() > 0 else 0.0 for c in members])

@@ -99,7 +99,7 @@ class CondensedHorizon:
 
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
                  force_limit_kN=2000.0, represented=None, scales=None, solver=DaqpSolver, effort="squared",
-                 brake_on="wagons", pipe=None):
+                 brake_on="wagons"):
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
         n = self.n = len(self.kinds)
         ns, nu = 2 * n - 1, nc * n
@@ -108,24 +108,16 @@ class CondensedHorizon:
         self.terms = terms = objective_terms(model, self.kinds, weights, represented, scales, effort, brake_on)
         self.wagons = np.array([kind != "locomotive" for kind in self.kinds])
         self.values = None  # eq. 4's terms at the last optimum (objective_values)
-        self.pipe = pipe  # a linear.PipeModel: the brake pipe in the prediction (``design_pipe``), None: eq. 2
-        A, B = (model.A, model.B * KN) if pipe is None else (pipe.A, pipe.B0)
-        self.powers = [np.eye(len(A))]
+        A, B = model.A, model.B * KN
+        self.powers = [np.eye(ns)]
         for _ in range(np_):
             self.powers.append(A @ self.powers[-1])
         self.AB = [p @ B for p in self.powers]  # A^j B
-        G = np.zeros((np_, len(A), nu))  # x(k) = G[k-1] U + d(k) (with the pipe, of z = [x; b])
+        self.G = np.zeros((np_, ns, nu))  # x(k) = G[k-1] U + d(k)
         for k in range(1, np_ + 1):
             for j in range(k):
                 move = min(j, nc - 1)
-                G[k - 1][:, move * n:(move + 1) * n] += self.AB[k - 1 - j]
-                if pipe is not None and j > 0:  # u(j - 1) still reaching the rear wagons in sample j
-                    before = min(j - 1, nc - 1)
-                    G[k - 1][:, before * n:(before + 1) * n] += self.powers[k - 1 - j] @ pipe.B1
-        self.G = G[:, :ns]
-        self.shift = self.AB[0] if pipe is None else pipe.Bo  # B o(j): the offsets act at once
-        self.brakes = np.zeros(0 if pipe is None else len(pipe.wagons))  # b(0) [kN] (:meth:`seen`)
-        self.commanded = np.zeros(n)  # u(-1) [kN]: the wagons' command sent before the first sample
+                self.G[k - 1][:, move * n:(move + 1) * n] += self.AB[k - 1 - j]
         self.q = np.concatenate([terms.kv, terms.kf * terms.stiff ** 2 / 1e4])
         self.scale = model.ts / np_
         held = np.bincount([min(k, nc - 1) for k in range(np_)], minlength=nc)  # samples each move is held
@@ -156,25 +148,6 @@ class CondensedHorizon:
         force rows found binding so far (two-sided)."""
         return {"inputs": self.nc * self.n + self.magnitude.extra, "states": 0, "constraints": len(self.rows)}
 
-    def seen(self, brakes_kN, commanded_kN):
-        """With the pipe in the prediction: the (virtual) cars' brake forces now and the command they
-        follow until the next one reaches them [kN per (virtual) car], as measured."""
-        self.brakes = np.asarray(brakes_kN, float)[self.pipe.wagons]
-        self.commanded = np.asarray(commanded_kN, float)
-
-    def free(self, state, offsets_kN):
-        """d(k), k = 1..Np: the predicted states with every move zero (x(k) = G[k-1] U + d(k)), from
-        ``state`` under the input ``offsets_kN`` per sample (and with the pipe, :meth:`seen`'s brakes
-        and the command still reaching the rear wagons in the first sample)."""
-        shifts = [self.shift @ offsets_kN[j] for j in range(self.np_)]  # B o(j)
-        z = np.asarray(state, float) if self.pipe is None else np.concatenate([state, self.brakes])
-        d = np.array([self.powers[k] @ z - sum(self.powers[k - 1 - j] @ shifts[j] for j in range(k))
-                      for k in range(1, self.np_ + 1)])
-        if self.pipe is None:
-            return d
-        carried = self.pipe.B1 @ self.commanded
-        return (d + np.array([self.powers[k - 1] @ carried for k in range(1, self.np_ + 1)]))[:, :2 * self.n - 1]
-
     def _force_row(self, k, j):
         return self.magnitude.pad(self.terms.stiff[j] * self.G[k][self.n + j])
 
@@ -183,7 +156,9 @@ class CondensedHorizon:
         t0 = time.perf_counter()
         n, np_, nc = self.n, self.np_, self.nc
         offsets_kN, vr, previous = sample_inputs(self, offsets_kN, low_kN, high_kN, reference)
-        d = self.free(state, offsets_kN)
+        shifts = [self.AB[0] @ offsets_kN[j] for j in range(np_)]  # B o(j)
+        d = np.array([self.powers[k] @ np.asarray(state, float)
+                      - sum(self.powers[k - 1 - j] @ shifts[j] for j in range(k)) for k in range(1, np_ + 1)])
         target = np.zeros_like(d)
         target[:, :n] = vr[1:, None]
         g = 2 * self.scale * sum(self.G[k].T @ (self.q * (d[k] - target[k])) for k in range(np_))

@@ -67,49 +67,6 @@ def design_model(mass, c1, stiffness, ts):
     return DesignModel(A, B, Ac, Bc, ts, np.asarray(mass, float), np.asarray(stiffness, float))
 
 
-class PipeModel(NamedTuple):
-    """The design model with the brake pipe (``design_pipe``, not Zhang & Zhuan's): the state
-    z = [x; b], b the wagon (virtual) cars' brake forces, and per sample
-
-        z(k+1) = A z(k) + B0 u(k) + B1 u(k-1) - Bo o(k)
-
-    a wagon car's command reaching its brake ``delays[i]`` into the sample (u(k-1) before it) and
-    the brake following it as a first-order lag ``tau`` (the build-up); locomotives and the offsets
-    o act at once. Forces in ``unit`` [N] (the QP's kN)."""
-
-    A: np.ndarray
-    B0: np.ndarray
-    B1: np.ndarray
-    Bo: np.ndarray
-    wagons: np.ndarray  # the (virtual) cars whose brakes are states, in the order of b
-
-
-def pipe_model(model, wagons, delays, tau, unit=1.0):
-    """:class:`PipeModel` of ``model`` (a :class:`DesignModel`): ``wagons`` a mask of the cars whose
-    effort is an air brake, ``delays`` [s] each car's signal delay (each under Ts), ``tau`` [s] the build-up."""
-    wagons, delays = np.asarray(wagons, bool), np.asarray(delays, float)
-    if np.any(delays[wagons] >= model.ts) or np.any(delays < 0) or tau <= 0:
-        raise ValueError(f"design_pipe: every wagon's delay within 0..Ts ({model.ts:g} s) and a build-up > 0 "
-                         f"(got up to {delays[wagons].max(initial=0.0):.3g} s, {tau:g} s)")
-    ns, n = model.Bc.shape
-    braked = np.flatnonzero(wagons)
-    nz = ns + len(braked)
-    Ac, inputs, offsets = np.zeros((nz, nz)), np.zeros((nz, n)), np.zeros((nz, n))
-    Ac[:ns, :ns] = model.Ac
-    Ac[:ns, ns:] = model.Bc[:, braked] * unit
-    Ac[ns:, ns:] = -np.eye(len(braked)) / tau
-    inputs[:ns, ~wagons] = model.Bc[:, ~wagons] * unit
-    inputs[ns + np.arange(len(braked)), braked] = 1.0 / tau
-    offsets[:ns] = model.Bc * unit
-    A, Bo = discretise(Ac, offsets, model.ts)
-    B0, B1 = np.zeros((nz, n)), np.zeros((nz, n))
-    for i in range(n):
-        late = delays[i] if wagons[i] else 0.0
-        after, B0[:, [i]] = discretise(Ac, inputs[:, [i]], model.ts - late)
-        B1[:, [i]] = after @ discretise(Ac, inputs[:, [i]], late)[1]
-    return PipeModel(A, B0, B1, Bo, braked)
-
-
 class Represented(NamedTuple):
     """What each term of a (virtual) model's objective stands for in the real train: per (virtual)
     car the cars whose speed it carries and the weight of its effort's square (the sum of its cars'

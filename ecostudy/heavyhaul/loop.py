@@ -208,9 +208,6 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         x0 = measured if observer is None else observer.x.copy()  # eq. 10's x^(k|k-1)
         low, high = limits(plant, reduction, state)
         offsets, vr = horizon(plant, reduction, reference, state, x0[:nv], controller.np_)
-        if getattr(controller, "pipe", None) is not None:  # the brake pipe in the prediction (design_pipe)
-            controller.seen(*(reduction.reduce(np.zeros(c.cars) if f is None else f) / KN
-                              for f in (state.brakes, state.commanded)))
         try:
             planned = controller.solve(x0, offsets / KN, low / KN, high / KN, vr) * KN
         except SolverError as exc:  # where the train was, in the reason

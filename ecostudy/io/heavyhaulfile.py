@@ -96,10 +96,6 @@ class HeavyhaulFile(Strict):
                            "capped envelopes).")
     air_brake: bool = Field(False, description="The plant's wagon brakes delayed along the train and lagged "
                             "(the consist's air_brake data; docs/heavyhaul.md, In-train physics).")
-    design_pipe: bool = Field(False, description="With air_brake: the controller's prediction has the brake pipe "
-                              "(each wagon group's command reaching it its signal delay into a sample, its brake "
-                              "building up as a first-order lag) instead of Zhang & Zhuan's instant brakes, and the "
-                              "reference no descent margins; qp_solver daqp or condensed (docs/heavyhaul.md).")
     draft_gear: bool = Field(False, description="The plant's couplers with slack and loading/unloading stiffness "
                              "(the consist's draft_gear data); the controller keeps the linear couplers.")
     notches: bool = Field(False, description="The plant's locomotives apply traction and dynamic braking in the "

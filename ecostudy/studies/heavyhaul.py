@@ -25,10 +25,10 @@ import pandas as pd
 from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KMH, KN, KWH
-from ecostudy.heavyhaul.airbrake import application_time, brake_lag, virtual_delays
+from ecostudy.heavyhaul.airbrake import application_time, brake_lag
 from ecostudy.heavyhaul.checks import reference_problems, ruling_grade, samples_to_start, starting_coupler_force
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
-from ecostudy.heavyhaul.linear import fence, pipe_model
+from ecostudy.heavyhaul.linear import fence
 from ecostudy.heavyhaul.loop import reduced_state, run
 from ecostudy.heavyhaul.metrics import Tolerances, in_train_metrics, reasons, run_metrics
 from ecostudy.heavyhaul.observer import KalmanObserver
@@ -61,8 +61,7 @@ def _reference(s, path, consist, track, from_stop, to_stop):
     lead = r.limit_lead_samples * s.sample_time_s + (application_time(consist) if s.air_brake else 0.0)  # the pipe's lateness
     try:
         return optimal_reference(consist, track, from_stop, to_stop, r.running_time_s, supplement, r.points,
-                                 r.service_deceleration_mps2, lead,
-                                 brake_lag(consist) if s.air_brake and not s.design_pipe else 0.0)[0]
+                                 r.service_deceleration_mps2, lead, brake_lag(consist) if s.air_brake else 0.0)[0]
     except InfeasibleError as exc:  # the single mass cannot run so fast: the study's field, by name
         field = "reference.running_time_s" if r.running_time_s is not None else "reference.supplement_percent"
         raise InfeasibleError([problem(path, field, f"infeasible: {p.removeprefix('infeasible: ')}") for p in exc.problems])
@@ -101,9 +100,6 @@ def expand(path):
     if s.brake_penalty_on == "all" and (s.qp_solver not in MAGNITUDE_FORMS or s.effort_penalty != "squared"):
         problems.append(problem(path, "brake_penalty_on", f"all is solved with effort_penalty squared by qp_solver "
                                 f"{' or '.join(MAGNITUDE_FORMS)} (the condensed QP), not {s.effort_penalty} by {s.qp_solver}"))
-    if s.design_pipe and (not s.air_brake or s.qp_solver not in MAGNITUDE_FORMS):
-        problems.append(problem(path, "design_pipe", f"needs air_brake: true and qp_solver {' or '.join(MAGNITUDE_FORMS)} "
-                                f"(the condensed QP's prediction), not air_brake: {str(s.air_brake).lower()}, {s.qp_solver}"))
     if s.brake_penalty_on == "all" and min(s.brake_penalty) < 1:
         problems.append(problem(path, "brake_penalty_on", f"all needs every brake_penalty >= 1 (a braking locomotive's "
                                 f"term K_b u^2 is u^2 plus (K_b - 1) u^2; got {min(s.brake_penalty):g})"))
@@ -133,7 +129,6 @@ def expand(path):
               "objective_scale": s.objective_scale, "effort_penalty": s.effort_penalty, "adhesion": s.adhesion, "air_brake": s.air_brake, "draft_gear": s.draft_gear,
               **({"notches": True} if s.notches else {}),  # absent when off: the cases' keys as without the switch
               **({"brake_penalty_on": "all"} if s.brake_penalty_on == "all" else {}),  # likewise
-              **({"design_pipe": True} if s.design_pipe else {}),  # likewise
               "max_samples": s.max_samples,
               "stop_tolerance_m": s.stop_tolerance_m, "speed_tolerance_kmh": s.speed_tolerance_kmh,
               "arrival_tolerance_percent": s.arrival_tolerance_percent, "arrival_tolerance_s": s.arrival_tolerance_s}
@@ -193,10 +188,7 @@ def drive(case):
                       weights=(w["force"], w["speed"], w["energy"], labels["K_b"]), rate_kN=case["rate_kN"],
                       force_limit_kN=consist.force_limit / KN, scales=scales,
                       represented=reduction.represented(consist.mass, case["fence_weights"]),
-                      effort=case["effort_penalty"], brake_on=case.get("brake_penalty_on", "wagons"),
-                      **({"pipe": pipe_model(reduction.model, [k != "locomotive" for k in reduction.kinds],
-                                             virtual_delays(consist, reduction.members), consist.air_brake.build_up, KN)}
-                         if case.get("design_pipe") else {}))
+                      effort=case["effort_penalty"], brake_on=case.get("brake_penalty_on", "wagons"))
     state = plant.initial(head=-0.5 * consist.length[0], speed=0.0)
     observer = (KalmanObserver(reduction.model, reduction.kinds, q=case["observer_q"], r=case["observer_r"],
                                estimate=reduced_state(plant, reduction, state)) if case["observer"] else None)
