@@ -1,13 +1,14 @@
 """`ecostudy heavyhaul` says when a run missed: every failure class is flagged (exit 1) or refused
 in one line before computing (exit 2), each by a real run or a real expansion on a 5 km line."""
+import numpy as np
 import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
 from ecostudy.core.units import KMH
-from ecostudy.heavyhaul.loop import STANDING
-from ecostudy.heavyhaul.metrics import Tolerances, reasons
+from ecostudy.heavyhaul.loop import STANDING, LoopRecord
+from ecostudy.heavyhaul.metrics import STOOD, Tolerances, ended, reasons
 
 from .conftest import load_yaml, write_yaml
 from .test_heavyhaul_study import PAPER, study
@@ -63,6 +64,21 @@ def test_a_coupler_over_its_limit_and_a_stop_off_the_mark_are_flagged(tmp_path):
     run = pd.read_csv(tmp_path / "exact" / "runs.csv").iloc[0]
     assert "the stop (tolerance 1e-06 m)" in run["reason"]  # it stood, but not at the stop: not arrived
     assert not run["arrived"] and run["ended"] in ("short of the stop", "beyond the stop")
+
+
+def test_how_a_run_ended_is_read_from_its_record():
+    """metrics.ended on a loop's record: a run the loop ended with the train rolling back reads
+    'rolling back' and is not arrived, even within the stop's tolerance (when the loop ends a run:
+    loop.finished, tests/test_heavyhaul_hold.py); standing, it reads 'at the stop' within the
+    tolerance, 'beyond the stop' or 'short of the stop' outside it, 'stalled short of the stop'
+    where the pull back exceeds the locomotives' utmost traction; not standing, 'sample cap'."""
+    columns = [np.zeros(1)] * 13
+    back = LoopRecord(*columns, 0.0, 0.0, 0.0, stood=False, rolling_back=True)
+    assert ended(back, -0.5, 1.0) == "rolling back" and "rolling back" not in STOOD
+    stood = back._replace(stood=True, rolling_back=False, end_forces=(400e3, 500e3))
+    assert [ended(stood, error, 1.0) for error in (-0.5, 2.7, -2.7)] == ["at the stop", "beyond the stop", "short of the stop"]
+    assert ended(stood._replace(end_forces=(500e3, 400e3)), -2.7, 1.0) == "stalled short of the stop"
+    assert ended(stood._replace(stood=False), -2.7, 1.0) == "sample cap"
 
 
 def test_each_missed_limit_is_a_reason():
