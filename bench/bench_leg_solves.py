@@ -9,7 +9,9 @@ every Ipopt solve. Per strategy: substation energy [kWh], the process's CPU seco
 sensitive than wall time to other work on a shared machine), solves, Ipopt iterations, cold solves
 (the warm-against-cold check and relaxed-first pairs) with their iterations and CPU seconds, and
 the largest leg's variables and rows. ``--leg-options``: Ipopt options added to the legs' own
-(``ocp.solver.IPOPT["leg"]``) for this run, the independent runs included. ``--warm-relaxed B``:
+(``ocp.solver.IPOPT["leg"]``) for this run, the independent runs included; ``--warm-options``: added to
+the options of the solves that start near a feasible run (``legs.NEAR_START``: the warm legs and the
+second solve of a cold leg relaxed first). ``--warm-relaxed B``:
 warm legs that hold the one-handle rows are solved first with those rows relaxed to B kN^2, then at
 their own bound from there, as cold legs are (``legs._relaxed_first``; measured, not adopted).
 ``--solves FILE``: every solve (variables, rows, iterations, CPU s, warm) per strategy as JSON, and
@@ -88,10 +90,12 @@ def main():
     p.add_argument("study")
     p.add_argument("strategies", nargs="+")
     p.add_argument("--leg-options", default="{}", help="JSON: Ipopt options added to the legs' own")
+    p.add_argument("--warm-options", default="{}", help="JSON: Ipopt options added to the warm legs' own (legs.NEAR_START)")
     p.add_argument("--warm-relaxed", type=float, help="warm legs' one-handle rows relaxed to this [kN^2] first")
     p.add_argument("--solves", help="JSON file: every solve of every strategy")
     a = p.parse_args()
     legs.KKT.update(json.loads(a.leg_options))
+    legs.NEAR_START.update(json.loads(a.warm_options))
     if a.warm_relaxed is not None:
         legs._solve = warm_relaxed(a.warm_relaxed)
     noted_solves = {}
