@@ -427,8 +427,8 @@ def test_validate_passes_the_model_own_train_down_steep_grades_and_flags_a_heavi
     curve counts the grade; the brake handle adds what holds the train on the steepest descent), and
     validate passes every run, the handle replayed from the midpoints between samples, its stop
     tolerance the shift of a handle replayed one sample late against one sample early (down a
-    grade a late brake moves the stop by more than the sample's travel), a coast and the braking
-    after it two phases of the energy balance. The train 5 % heavier than the log's is flagged in
+    grade a late brake moves the stop by more than the sample's travel), the end speeds of a coast
+    and the braking after it not from one line through both. The train 5 % heavier than the log's is flagged in
     every run by where it stops (tens of metres past)."""
     track, train = steep_track(permille), inputs[1]
     frame, clean = generate_log(track, train, ["Top", "Mid", "Bottom"], train, seed=1)

@@ -3,11 +3,11 @@
 Two replays, each answering one question:
 
 - **speed as reference** (energy at equal running): the model follows the logged speed. Over each
-  phase of the log (runs of intervals with traction, with braking, or coasting), its work at the wheel is the
+  phase of the log (runs of intervals with traction, or without), its work at the wheel is the
   energy balance of :mod:`ecostudy.calibration.replay` with the model's parameters,
   1/2 M (v_e^2 - v_s^2) + int R_v(v) v dt + Ms w_fixed, the end speeds from straight lines fitted
-  to the phase's own samples (:data:`END_FIT` seconds at each end; the speed noise averages out, a
-  change of handle between phases does not bend the line; a traction phase takes its end speeds
+  to the phase's own samples (:data:`END_FIT` seconds at each end, of its first and last handle
+  only; the speed noise averages out, a change of handle does not bend the line; a traction phase takes its end speeds
   from its neighbours' lines, because the handle changes inside its edge intervals). The model's
   traction energy is the sum of the work of the traction phases and of the phases without
   traction where the model needs traction beyond twice the work's standard error from the end
@@ -55,13 +55,11 @@ def end_speed(t, v, at_start, span=END_FIT):
     return float(max(level, 0.0)), float(error)
 
 
-def phase_bounds(work, share=TRACTION_SHARE):
-    """(start, end) sample indices of runs of intervals with traction, with braking and with
-    neither (coasting): a coast and the braking after it are two phases, so that the line through a
-    phase's end samples does not bend at the brake's application (down a steep grade the train gains
-    speed while coasting and loses it braking)."""
+def phase_bounds(work, share=TRACTION_SHARE, handle=False):
+    """(start, end) sample indices of runs of intervals with traction and without; with ``handle``,
+    of runs with traction, with braking and with neither (coasting)."""
     scale = share * np.max(np.abs(work)) if work.size else 0.0
-    kind = (work > scale).astype(int) - (work < -scale).astype(int) if scale > 0 else np.zeros(0, int)
+    kind = (work > scale).astype(int) - handle * (work < -scale).astype(int) if scale > 0 else np.zeros(0, int)
     edges = np.concatenate([[0], np.nonzero(np.diff(kind))[0] + 1, [len(work)]])
     return list(zip(edges[:-1], edges[1:]))
 
@@ -71,8 +69,16 @@ def speed_reference(run, train, work):
     intervals have the logged work ``work``)."""
     weights = coefficients(train.mass, train.static_mass, train.davis) * train.mass
     bounds = phase_bounds(work)
-    ends = [[end_speed(run.t[s:e + 1], run.v[s:e + 1], True) if s > 0 else (0.0, 0.0),
-             end_speed(run.t[s:e + 1], run.v[s:e + 1], False)] for s, e in bounds]
+    # a phase's end speeds from the samples of its first and last handle only: a coast and the braking
+    # after it are one phase, but a line through both bends where the brake is applied (down a steep
+    # grade the train gains speed coasting and loses it braking)
+    cuts = np.array([a for a, _ in phase_bounds(work, handle=True)] + [len(work)])
+
+    def speeds_at(s, e):
+        first, last = min(e, cuts[cuts > s][0]), max(s, cuts[cuts < e][-1])
+        return [end_speed(run.t[s:first + 1], run.v[s:first + 1], True) if s > 0 else (0.0, 0.0),
+                end_speed(run.t[last:e + 1], run.v[last:e + 1], False)]
+    ends = [speeds_at(s, e) for s, e in bounds]
     total = 0.0
     for i, (s, e) in enumerate(bounds):
         pulling = work[s] > 0
