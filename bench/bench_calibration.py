@@ -5,6 +5,7 @@ flat track, and the energy difference `validate` reports against an independent 
     .venv/bin/python bench/bench_calibration.py --logs 0 --validate   # identifiability and the validate check
     .venv/bin/python bench/bench_calibration.py --example out/logs    # two example logs for docs/calibration.md
     .venv/bin/python bench/bench_calibration.py --logs 0 --held 30    # both intervals where a parameter is held
+    .venv/bin/python bench/bench_calibration.py --logs 0 --steep 5    # validate down 40 and 60 per mille
 
 Each log: the regional train of Farooqi 2018 §6.3 with true parameters drawn around
 the train file (mass +-5 %, Davis A, B, C +-15 %, traction efficiency +-3 %), driven by the plant
@@ -24,7 +25,7 @@ sys.path.insert(0, str(ROOT))
 from bench import harness  # noqa: E402
 from ecostudy.calibration.fit import DEFAULT_FIT, priors  # noqa: E402
 from ecostudy.calibration.generate import (  # noqa: E402
-    follow_work, generate_log, level_track, steady_log, true_train)
+    follow_work, generate_log, level_track, steady_log, steep_track, true_train)
 from ecostudy.calibration.validate import validate_log  # noqa: E402
 from ecostudy.calibration.estimate import calibrate_logs  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
@@ -138,6 +139,23 @@ def validate_check(count, track, train):
           f"over {len(gaps)} runs (mean {np.mean(gaps):+.3f})")
 
 
+def steep_check(count, train):
+    """validate down 40 and 60 per mille (:func:`steep_track`, Top to Bottom, log seeds 1 to ``count``):
+    logs of the train file's own train, replayed on it and on the train 5 % heavier."""
+    heavier = true_train(train, mass=1.05)
+    print("permille seed run  model    stop error m  tolerance m  time %  energy %  status")
+    for permille in (40, 60):
+        track = steep_track(permille)
+        for seed in range(1, count + 1):
+            frame, _ = generate_log(track, train, ["Top", "Mid", "Bottom"], train, seed=seed)
+            log = as_log(frame, f"steep{permille}_{seed}")
+            for name, model in (("same", train), ("heavier", heavier)):
+                for row in validate_log(log, track, model).itertuples():
+                    print(f"{permille:8d} {seed:4d} {row.run:3d}  {name:8s} {row.model_stop_error_m:12.1f} "
+                          f"{row.stop_tolerance_m:12.1f} {row.time_difference_pct:7.2f} "
+                          f"{row.traction_difference_pct:9.2f}  {row.status}")
+
+
 def held_coverage(pairs, track, train, draws=200):
     """Both intervals where a parameter is held: pairs of level constant-speed logs (25 m/s for 400 s,
     log seeds 2k + 1 and 2k + 2) of the train with A 30 % higher, B half and C 10 % higher than its
@@ -169,6 +187,7 @@ def main():
     parser.add_argument("--workers", type=int, default=1, help="processes for the coverage logs")
     parser.add_argument("--example", type=Path, help="write example logs into this folder and stop")
     parser.add_argument("--held", type=int, default=0, help="pairs of the held-parameter coverage (e.g. 30)")
+    parser.add_argument("--steep", type=int, default=0, help="log seeds of the validate check down steep grades")
     args = parser.parse_args()
     track, train = load_track(TRACK), load_train(TRAIN)
     if args.example:
@@ -180,6 +199,9 @@ def main():
     if args.held:
         _, cpu, wall = harness.timed(lambda: held_coverage(args.held, track, train))
         print(f"held-parameter coverage: {wall:.0f} s wall, {cpu:.0f} s CPU")
+    if args.steep:
+        _, cpu, wall = harness.timed(lambda: steep_check(args.steep, train))
+        print(f"steep-grade check: {wall:.0f} s wall, {cpu:.0f} s CPU")
     identifiability(track, train)
     if args.validate:
         validate_check(args.validate_logs, track, train)

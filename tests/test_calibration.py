@@ -11,7 +11,8 @@ from typer.testing import CliRunner
 
 from ecostudy.calibration.estimate import calibrate_logs
 from ecostudy.calibration.fit import DEFAULT_FIT, priors
-from ecostudy.calibration.generate import LogNoise, follow_work, generate_log, level_track, steady_log, true_train
+from ecostudy.calibration.generate import (LogNoise, follow_work, generate_log, level_track, steady_log,
+                                          steep_track, true_train)
 from ecostudy.calibration.replay import prepare
 from ecostudy.calibration.validate import validate_log
 from ecostudy.cli import app
@@ -103,7 +104,10 @@ def test_intervals_hold_the_true_parameters(calibrated, truth):
         row = table.loc[name]
         assert row.identifiable
         assert row.low <= true[name] <= row.high, (name, row.low, true[name], row.high)
-        assert row.boot_low < row.estimate < row.boot_high
+        # two logs have three distinct resamples, one of them the pair itself: the estimate can be an end
+        # (refitted there to the solver's tolerance, 3e-8 kg off in a mass of 265 t, measured)
+        slack = 1e-6 * row["std"]
+        assert row.boot_low - slack <= row.estimate <= row.boot_high + slack, (name, row.boot_low, row.estimate)
     assert (table.loc["mass", "high"] - table.loc["mass", "low"]) / 2 < 0.02 * true["mass"]
     assert calibrated.quality["structure"] < 1.5  # the filter's innovations are white
 
@@ -243,6 +247,8 @@ def test_positions_with_gps_noise_replay_the_handle_as_clean_ones(inputs, truth,
     noisy, clean = (validate_log(as_log(f), track, truth) for f in (gps(frame), frame))
     for a, b in zip(noisy.itertuples(), clean.itertuples()):
         assert abs(a.model_time_s - b.model_time_s) < 2.0, (a, b)
+    # the logged stop is two noisy positions apart: the stop tolerance counts their noise (12 m short, 14 m allowed)
+    assert list(noisy["status"]) == ["ok", "ok"], noisy.to_string()
 
 
 def test_a_log_that_ends_while_the_train_moves_flags_that_run_saying_so(inputs, truth, logged):
@@ -313,6 +319,14 @@ def shifted(text, row, by):
     return "---\n" + head + "---\n" + "\n".join(rows[:1 + row] + moved) + "\n"
 
 
+def clock(text, start):
+    """``text`` with its times read off a clock in seconds from midnight that shows ``start`` at the first row."""
+    _, head, body = text.split("---\n", 2)
+    rows = body.splitlines()
+    timed = [",".join([f"{(start + float(c[0])) % 86400:.1f}", *c[1:]]) for c in (r.split(",") for r in rows[1:])]
+    return "---\n" + head + "---\n" + "\n".join(rows[:1] + timed) + "\n"
+
+
 def without_column(text, index):
     _, head, body = text.split("---\n", 2)
     rows = [",".join(c for j, c in enumerate(r.split(",")) if j != index) for r in body.splitlines()]
@@ -346,6 +360,9 @@ def without_column(text, index):
     (good().replace("speed_mps", "speed_kmh"), ["speed_kmh", "integrate to", "check the units"]),
     (good().replace(",325.000,", ",405.000,"), ["position_m", "row 51", "jumps by +81 m in 0.1 s", "2 such steps"]),
     (shifted(good(), 50, 400.0), ["position_m", "row 51", "jumps by +401 m in 0.1 s", "1 such step"]),
+    (shifted(good(), 50, -325.0), ["position_m", "row 51", "jumps by -324 m", "a distance that restarts"]),
+    (clock(good(), 86395.0), ["time_s", "row 51", "time 0 s does not increase (previous 86399.9 s); a clock that "
+                                                   "passes midnight: add 86400 s to the rows after it"]),
     (good(x0=10850.0), ["position_m", "row 72", "off track"]),
     (good().replace("force_kN\n", "force_kN,power_line_kW\n"), ["row 1", "4 values for 5 columns"]),
     (without_column(good(), 1), ["header", "start_position_m is needed"]),
@@ -382,19 +399,6 @@ def test_a_train_longer_than_the_track_is_refused_naming_its_file(tmp_path, comm
     assert f"{long}: length_m: 20000 m is longer than the track" in lines[0], lines[0]
 
 
-def steep_line(permille):
-    """A line of two descents of ``permille`` (2.1 km each) between three stops on level track."""
-    return track_from_dict({"name": f"steep {permille}", "source": "test", "length_m": 6300,
-                            "stops": [{"name": "Top", "position_m": 300}, {"name": "Mid", "position_m": 3000},
-                                      {"name": "Bottom", "position_m": 5700}],
-                            "gradients": [{"position_m": 0, "gradient_permille": 0},
-                                          {"position_m": 600, "gradient_permille": -permille},
-                                          {"position_m": 2700, "gradient_permille": 0},
-                                          {"position_m": 3300, "gradient_permille": -permille},
-                                          {"position_m": 5400, "gradient_permille": 0}],
-                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
-
-
 @pytest.mark.parametrize("permille", [40, 60])
 def test_the_traction_sign_check_on_steep_grades(inputs, permille):
     """Mountain and rack lines have 40 to 60 per mille. Down them a train that takes traction for the
@@ -402,7 +406,7 @@ def test_the_traction_sign_check_on_steep_grades(inputs, permille):
     (g times the grade is 0.39 and 0.59 m/s^2): its log is read, the speed gained beyond what the
     gradient gives is what shows traction. Up them a train under full traction for 75 % of the run,
     logged the same. Each log with the sign of its force and wheel power flipped is refused."""
-    track, train = steep_line(permille), inputs[1]
+    track, train = steep_track(permille), inputs[1]
     coast = generate_log(track, train, ["Top", "Mid", "Bottom"], train, seed=1,
                          driver=lambda distance, rng: (np.array([0.0, 0.04]) * distance, [1.0, 0.0]))[0]
     climb = generate_log(track, train, ["Bottom", "Mid", "Top"], train, seed=2,
@@ -414,6 +418,47 @@ def test_the_traction_sign_check_on_steep_grades(inputs, permille):
             check_traction_sign(as_log(flipped), track)
         with pytest.raises(InputError, match="power_wheel_kW: not positive in"):
             check_traction_sign(as_log(flipped.drop(columns="force_kN")), track)
+
+
+@pytest.mark.parametrize("permille", [40, 60])
+def test_validate_passes_the_model_own_train_down_steep_grades_and_flags_a_heavier_one(inputs, permille):
+    """Logs of the model's own train down 40 and 60 per mille (g times the grade is 0.39 and 0.59
+    m/s^2 against its 1 m/s^2 of service braking): the generator brakes into each stop (its braking
+    curve counts the grade; the brake handle adds what holds the train on the steepest descent), and
+    validate passes every run, the handle replayed from the midpoints between samples, its stop
+    tolerance the shift of a handle replayed one sample late against one sample early (down a
+    grade a late brake moves the stop by more than the sample's travel), the end speeds of a coast
+    and the braking after it not from one line through both. The train 5 % heavier than the log's is flagged in
+    every run by where it stops (tens of metres past)."""
+    track, train = steep_track(permille), inputs[1]
+    frame, clean = generate_log(track, train, ["Top", "Mid", "Bottom"], train, seed=1)
+    stands = np.nonzero(np.diff((clean["v"] > 0).astype(int)) == -1)[0] + 1
+    assert np.allclose(clean["x"][stands], [track.stops["Mid"], track.stops["Bottom"]], atol=STOP_TOLERANCE_M)
+    log = as_log(frame)
+    same, heavier = validate_log(log, track, train), validate_log(log, track, true_train(train, mass=1.05))
+    assert list(same["status"]) == ["ok", "ok"], same.to_string()
+    assert (same["traction_difference_pct"].abs() < 1.0).all(), same.to_string()  # 0.4 % at most, measured
+    assert list(heavier["status"]) == ["flagged", "flagged"], heavier.to_string()
+    assert (heavier["model_stop_error_m"] > 3 * heavier["stop_tolerance_m"]).all(), heavier.to_string()
+
+
+def test_what_loggers_write_reads_as_the_generated_log(inputs, logged):
+    """A logger's clock in seconds from midnight (07:12:00 at the first row) and its speeds in km/h
+    read as the log itself (the same runs, durations and speeds); a missing row (a step of twice
+    the log's) is read across with a warning naming time_s and the row, and validate passes the
+    logged train as before."""
+    track, truth = inputs[0], true_train(inputs[1], mass=1.04, davis=(1.1, 0.9, 1.05), efficiency=0.98)
+    frame = logged[0][0]
+    base = prepare(as_log(frame), track, truth)
+    kmh = frame.rename(columns={"speed_mps": "speed_kmh"}).assign(speed_kmh=3.6 * frame["speed_mps"])
+    for other in (frame.assign(time_s=frame["time_s"] + 25920.0), kmh):
+        runs = prepare(as_log(other), track, truth)
+        assert [r.t[-1] - r.t[0] for r in runs] == pytest.approx([r.t[-1] - r.t[0] for r in base], abs=1e-6)
+        assert all(np.allclose(r.v, b.v, atol=1e-6) for r, b in zip(runs, base))
+    with pytest.warns(EcostudyWarning, match=r"log.csv: time_s: 1 step longer than the log's 0.1 s \(at row 501: "
+                                             r"0.2 s\): missing row, read across"):
+        missing = as_log(frame.drop(index=500))
+    assert list(validate_log(missing, track, truth)["status"]) == ["ok", "ok"]
 
 
 def test_a_column_ecostudy_does_not_model_is_warned_by_name_and_ignored():
@@ -525,8 +570,8 @@ def test_line_power_from_voltage_and_current_and_work_from_force(inputs, truth):
     assert np.allclose(log.power_line, clean["power_line"], rtol=1e-6, atol=1.0)
     for r in prepare(log, track, truth):
         model = r.speed(truth.mass, truth.static_mass, truth.davis)
-        assert np.max(np.abs(model ** 2 - r.v ** 2)) < 0.005 * np.max(r.v) ** 2  # measured: 0.14 %
-        assert np.max(np.abs(model - r.v)[r.v > 10]) < 0.15                    # measured: 0.10 m/s
+        assert np.max(np.abs(model ** 2 - r.v ** 2)) < 0.005 * np.max(r.v) ** 2  # measured: 0.17 %
+        assert np.max(np.abs(model - r.v)[r.v > 10]) < 0.15                    # measured: 0.12 m/s
 
 
 @pytest.mark.parametrize("command, field", [("calibrate", "train"), ("validate", "track")])
@@ -569,7 +614,7 @@ def test_a_model_that_stops_short_of_the_logged_stop_is_flagged_saying_so(inputs
     assert (same["stop_tolerance_m"] >= STOP_TOLERANCE_M).all() and (same["stop_tolerance_m"] < 10.0).all(), same
     assert list(short["status"]) == ["flagged", "flagged"], short
     for row in short.itertuples():
-        assert row.model_stop_error_m < -3 * row.stop_tolerance_m, row  # 47.6 and 56.8 m short, measured
+        assert row.model_stop_error_m < -3 * row.stop_tolerance_m, row  # 40.7 and 47.4 m short, measured
         assert abs(row.time_difference_pct) < 5 and abs(row.traction_difference_pct) < 5, row
         assert row.reason == (f"under the logged handle the model stops {-row.model_stop_error_m:.1f} m short of the "
                               f"logged stop (tolerance {row.stop_tolerance_m:.1f} m): its running time is not the "

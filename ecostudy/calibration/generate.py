@@ -2,8 +2,11 @@
 between stops, a recorder samples it at 10 Hz and adds sensor noise.
 
 The driver's handle is set by position (:meth:`Plant.drive`): full traction, coasting, part
-traction, coasting, braking from the point where a constant deceleration would stop the train at
-the next stop (within metres, not exactly), with phase lengths and levels drawn from the seed.
+traction, coasting, braking into the next stop, with phase lengths and levels drawn from the seed.
+The brake handle is a share drawn for level track plus the share that holds the train on the run's
+steepest descent (:func:`brake_share`); braking starts where the speed meets that handle's braking
+curve (:func:`ecostudy.core.kinematics.braking_curve`: braking force, running resistance, gradients
+and curves of :mod:`ecostudy.core.physics`), and the plant's stop then moves the start by its miss.
 The recorder writes speed and position at each sample, the force at the wheel at each sample,
 and the powers at the wheel and at the pantograph as means over the sample interval (the plant's
 work counters differenced, so the energy of the log is exact before noise). Noise: a normal
@@ -15,9 +18,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pandas as pd
 
+from ecostudy.core.errors import InfeasibleError
 from ecostudy.core.grid import Profile, intervals_of, make_segment
 from ecostudy.io.loaders import track_from_dict
-from ecostudy.core.kinematics import point_resistance
+from ecostudy.core.kinematics import braking_curve, interval_grade_force, point_resistance
 from ecostudy.core.physics import davis_resistance, gradient_force
 from ecostudy.core.plant import Plant
 
@@ -53,18 +57,35 @@ def phases(distance, rng):
     return nodes, [1.0, 0.0, rng.uniform(0.4, 0.8), 0.0]
 
 
+def braking_grid(segment, distance, step=1.0):
+    """Nodes every ``step`` metres from the departure to the stop at ``distance`` [m], with every
+    gradient and curve change of the segment on the way."""
+    edges = segment.breakpoints()
+    return np.union1d(np.linspace(0.0, distance, int(np.ceil(distance / step)) + 1), edges[edges < distance])
+
+
+def brake_share(segment, train, distance, drawn):
+    """The brake handle's share (0 to 1) of a run to ``distance``: ``drawn``, the share a driver
+    takes on level track, plus the share that holds the train on the run's steepest descent (its
+    gradient and curve pull over the braking force at standstill), at most 1."""
+    pull = -float(np.min(interval_grade_force(segment, train, braking_grid(segment, distance))))
+    return min(drawn + max(pull, 0.0) / float(train.braking.force(0.0)), 1.0)
+
+
 def brake_point(plant, nodes, handle, brake, distance):
-    """Where to start braking at ``brake`` (a handle < 0) to stop near ``distance``: the first place
-    on the run without braking where x + v^2 / (2 d) reaches it, d the braking deceleration."""
+    """Where to start braking at ``brake`` (a handle < 0) to stop at ``distance``: the first place
+    on the run without braking where the speed reaches the braking curve of that handle (the train's
+    braking envelope scaled by it; gradients, curves and resistance counted)."""
+    grid = braking_grid(plant.segment, distance)
+    braked = replace(plant.train, braking=plant.train.braking.scaled(-brake))
+    curve = braking_curve(plant.segment, braked, grid, np.full_like(grid, np.inf))
     _, _, (y, _, solutions) = drive(plant, np.append(nodes, distance + 50.0), handle)
-    train = plant.train
     for sol in solutions:
         tt = np.linspace(sol.t[0], sol.t[-1], 200)
         x, v = sol.sol(tt)[:2]
-        rate = -brake * train.braking.force(np.maximum(v, 0.1)) / train.mass
-        reach = x + v * v / (2.0 * np.minimum(rate, train.max_deceleration))
-        if np.any(reach >= distance):
-            return float(x[np.argmax(reach >= distance)])
+        reach = (x >= distance) | (v >= np.interp(x, grid, curve))
+        if np.any(reach):
+            return float(x[np.argmax(reach)])
     return float(y[0])  # stopped while coasting: no braking needed
 
 
@@ -118,12 +139,15 @@ def generate_log(track, train, stops, truth, seed=0, noise=LogNoise(), dwell=20.
         distance = abs(track.stops[to_stop] - position)
         plant = Plant(segment, truth)
         nodes, handle = driver(distance, rng)
-        brake = -rng.uniform(0.5, 0.8)
+        brake = -brake_share(segment, truth, distance, rng.uniform(0.5, 0.8))
         start = brake_point(plant, nodes, handle, brake, distance)
         for i in range(2):  # move the braking start by the stop's miss; the last drive is the run
             steps = np.append(nodes[nodes < start], [start, segment.distance])
             run = drive(plant, steps, handle[:len(steps) - 2] + [brake])
-            start = float(np.clip(start + distance - float(run[2][0][0]), nodes[1], distance))
+            start = float(np.clip(start + distance - float(run[2][0][0]), 0.0, distance))
+        if not run[2][2][-1].t_events[0].size:  # ran off the segment: a log must not show a moving train standing
+            raise InfeasibleError(f"the generated run to {to_stop} does not stop: it leaves the track "
+                                  f"{run[2][0][0] - distance:.0f} m past the stop at {run[2][0][1]:.1f} m/s")
         times = np.arange(0.0, run[2][1] + dwell, dt)
         samples = sample_run(plant, run, times)
         rows.append(np.column_stack([clock + times, position + sign * samples[:, 0], samples[:, 1:3],
@@ -176,6 +200,20 @@ def level_track(track):
     return track_from_dict({"name": f"{track.name}, level", "source": "generated", "length_m": track.length,
                             "stops": [{"name": k, "position_m": float(v)} for k, v in track.stops.items()],
                             "gradients": [{"position_m": 0, "gradient_permille": 0}],
+                            "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
+
+
+def steep_track(permille):
+    """A line of two descents of ``permille`` (2.1 km each) between three stops, Top, Mid and Bottom,
+    on level track, limited to 140 km/h: the grades of a mountain or rack line (40 to 60 per mille)."""
+    return track_from_dict({"name": f"steep {permille}", "source": "generated", "length_m": 6300,
+                            "stops": [{"name": "Top", "position_m": 300}, {"name": "Mid", "position_m": 3000},
+                                      {"name": "Bottom", "position_m": 5700}],
+                            "gradients": [{"position_m": 0, "gradient_permille": 0},
+                                          {"position_m": 600, "gradient_permille": -permille},
+                                          {"position_m": 2700, "gradient_permille": 0},
+                                          {"position_m": 3300, "gradient_permille": -permille},
+                                          {"position_m": 5400, "gradient_permille": 0}],
                             "speed_limits": [{"position_m": 0, "speed_kmh": 140}]})
 
 

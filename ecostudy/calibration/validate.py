@@ -6,17 +6,18 @@ Two replays, each answering one question:
   phase of the log (runs of intervals with traction, or without), its work at the wheel is the
   energy balance of :mod:`ecostudy.calibration.replay` with the model's parameters,
   1/2 M (v_e^2 - v_s^2) + int R_v(v) v dt + Ms w_fixed, the end speeds from straight lines fitted
-  to the phase's own samples (:data:`END_FIT` seconds at each end; the speed noise averages out, a
-  change of handle between phases does not bend the line; a traction phase takes its end speeds
+  to the phase's own samples (:data:`END_FIT` seconds at each end, of its first and last handle
+  only; the speed noise averages out, a change of handle does not bend the line; a traction phase takes its end speeds
   from its neighbours' lines, because the handle changes inside its edge intervals). The model's
   traction energy is the sum of the work of the traction phases and of the phases without
   traction where the model needs traction beyond twice the work's standard error from the end
   speeds (so that speed noise on a coast the model would also coast is not counted as traction).
   Its time is the logged time.
 - **handle as input** (time at equal driving): the logged force divided by the model's traction
-  or braking envelope at the logged speed is the driver's handle; :meth:`Plant.drive` drives it
-  by position from the departure until the model stops, which gives the model's running time,
-  where it stops and its traction energy.
+  or braking envelope at the logged speed is the driver's handle (within the envelope on average
+  over a second); :meth:`Plant.drive` drives it by position from the departure, each sample's
+  handle from the midpoint with the previous sample, until the model stops, which gives the
+  model's running time, where it stops and its traction energy.
 
 A run is ``flagged`` when its traction energy differs from the log's by more than
 ``energy_tolerance`` or its running time by more than ``time_tolerance`` (shares), or when the
@@ -29,7 +30,7 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from ecostudy.calibration.replay import coefficients, line_power, prepare, wheel_work
+from ecostudy.calibration.replay import coefficients, line_power, prepare, smoothed, wheel_work
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Plant
 from ecostudy.core.progress import stage, step
@@ -37,7 +38,7 @@ from ecostudy.core.status import STOP_TOLERANCE_M
 from ecostudy.core.units import to_kwh
 
 END_FIT = 3.0          # [s] of samples at each end of a phase for its end speeds
-TRACTION_SHARE = 0.01  # an interval draws traction above this share of the log's largest power
+TRACTION_SHARE = 0.01  # an interval draws traction (brakes) above (below minus) this share of the log's largest power
 HANDLE_STEP = 0.01     # the replayed handle is rounded to this
 
 
@@ -54,10 +55,12 @@ def end_speed(t, v, at_start, span=END_FIT):
     return float(max(level, 0.0)), float(error)
 
 
-def phase_bounds(work, share=TRACTION_SHARE):
-    """(start, end) sample indices of runs of intervals with traction and without."""
-    pulling = work > share * np.max(np.abs(work)) if work.size and np.max(np.abs(work)) > 0 else np.zeros(0, bool)
-    edges = np.concatenate([[0], np.nonzero(np.diff(pulling.astype(int)))[0] + 1, [len(work)]])
+def phase_bounds(work, share=TRACTION_SHARE, handle=False):
+    """(start, end) sample indices of runs of intervals with traction and without; with ``handle``,
+    of runs with traction, with braking and with neither (coasting)."""
+    scale = share * np.max(np.abs(work)) if work.size else 0.0
+    kind = (work > scale).astype(int) - handle * (work < -scale).astype(int) if scale > 0 else np.zeros(0, int)
+    edges = np.concatenate([[0], np.nonzero(np.diff(kind))[0] + 1, [len(work)]])
     return list(zip(edges[:-1], edges[1:]))
 
 
@@ -66,8 +69,16 @@ def speed_reference(run, train, work):
     intervals have the logged work ``work``)."""
     weights = coefficients(train.mass, train.static_mass, train.davis) * train.mass
     bounds = phase_bounds(work)
-    ends = [[end_speed(run.t[s:e + 1], run.v[s:e + 1], True) if s > 0 else (0.0, 0.0),
-             end_speed(run.t[s:e + 1], run.v[s:e + 1], False)] for s, e in bounds]
+    # a phase's end speeds from the samples of its first and last handle only: a coast and the braking
+    # after it are one phase, but a line through both bends where the brake is applied (down a steep
+    # grade the train gains speed coasting and loses it braking)
+    cuts = np.array([a for a, _ in phase_bounds(work, handle=True)] + [len(work)])
+
+    def speeds_at(s, e):
+        first, last = min(e, cuts[cuts > s][0]), max(s, cuts[cuts < e][-1])
+        return [end_speed(run.t[s:first + 1], run.v[s:first + 1], True) if s > 0 else (0.0, 0.0),
+                end_speed(run.t[last:e + 1], run.v[last:e + 1], False)]
+    ends = [speeds_at(s, e) for s, e in bounds]
     total = 0.0
     for i, (s, e) in enumerate(bounds):
         pulling = work[s] > 0
@@ -85,10 +96,13 @@ def speed_reference(run, train, work):
     return total
 
 
-def handle_replay(run, track, train, log, rounded=True):
+def handle_replay(run, track, train, log, rounded=True, lead=0.5):
     """(running time [s], stop position from the departure [m], traction work [J]) of the model
     driven by the logged handle, by position; the handle rounded to :data:`HANDLE_STEP` unless
-    ``rounded`` is False."""
+    ``rounded`` is False. A handle is known at the samples only: each sample's holds from ``lead``
+    of the way back to the previous sample (0: from the sample itself, a change logged between two
+    samples replayed up to one sample late; 1: up to one sample early; 0.5, the midpoint: up to half
+    a sample either way)."""
     sign = 1.0 if run.x[-1] >= run.x[0] else -1.0
     far = float(np.clip(run.x[-1] + sign * 500.0, 0.0, track.length))
     segment = make_segment(replace(track, stops=dict(track.stops, _a=float(run.x[0]), _b=far)), train, "_a", "_b")
@@ -100,7 +114,9 @@ def handle_replay(run, track, train, log, rounded=True):
         force = np.append(np.diff(run.work) / np.diff(run.t), 0.0) / np.maximum(run.v, 1.0)
     v = np.maximum(run.v, 0.0)
     handle = np.where(force > 0, force / train.traction.force(v), force / train.braking.force(v))
-    handle = np.clip(handle, -1.0, 1.0)
+    # within the envelope on average over SMOOTHING, not sample by sample: clipping each noisy sample
+    # at full braking would take off the noise above the envelope only and replay the brake weaker
+    handle = handle / np.maximum(np.abs(smoothed(run.t, handle)), 1.0)
     handle = np.round(handle / HANDLE_STEP) * HANDLE_STEP if rounded else handle
     keep = np.append(np.diff(travel) > 1e-3, True)  # the last sample at each furthest position: the one that moves on
     handle = handle[keep]
@@ -112,19 +128,35 @@ def handle_replay(run, track, train, log, rounded=True):
         handle[:pulling[0]] = handle[pulling[0]]
     nodes, handle = travel[keep], handle[:-1]
     nodes[-1] = max(nodes[-1], nodes[-2] + 1e-3)
+    nodes[1:-1] -= lead * np.diff(nodes)[:-1]
     y, t_stop, _ = Plant(segment, train).drive(nodes, handle, max_time=4 * (run.t[-1] - run.t[0]) + 600)
     return float(t_stop), float(y[0]), float(y[2])
 
 
-def stop_tolerance(run, stop, exact_stop):
-    """How far [m] the model's stop under the logged handle (``stop``, from the departure) may lie
-    from the logged stop: ``STOP_TOLERANCE_M``, plus the most the logged train ran between two
-    samples (a handle is known at the samples only: a change between two is replayed up to that far
-    late), plus what rounding the handle moved the stop by (``exact_stop``: the stop under the
-    handle unrounded). Measured on two noise-free logs of the model's own train (``calibration.generate``,
-    10 Hz, seeds 1 and 5): stops 1.0 to 3.0 m off under the unrounded handle, up to 7.5 m under the
-    rounded one."""
-    return STOP_TOLERANCE_M + float(np.max(np.abs(np.diff(run.x)))) + abs(stop - exact_stop)
+def stop_tolerance(run, track, train, log, stop):
+    """How far [m] the model's stop under the logged handle (``stop``, from the departure, each
+    sample's handle from the midpoint with the previous sample) may lie from the logged stop:
+    ``STOP_TOLERANCE_M``, plus what replaying every handle change one sample late instead of one
+    sample early moves the stop by, plus what rounding the handle moved it by (the stop replayed under
+    the handle unrounded), plus the logged positions' noise (:func:`position_noise`). A change
+    logged between two samples is replayed up to half a sample late or
+    early, so the midpoint replay lies within half that shift of an exactly timed one; the other half
+    is left for the logged force's noise, which moves a stop the same way. The shift is measured, not
+    taken as a sample's travel: on a descent a brake applied late lets the train gain speed first,
+    and it stops further on by more than the travel."""
+    late, early, exact = (handle_replay(run, track, train, log, **kind)[1] for kind in
+                          ({"lead": 0.0}, {"lead": 1.0}, {"rounded": False}))
+    return STOP_TOLERANCE_M + abs(late - early) + abs(stop - exact) + 3.0 * np.sqrt(2.0) * position_noise(run)
+
+
+def position_noise(run):
+    """The logged positions' own noise [m] (GPS; none where they are the speeds integrated): a robust
+    standard deviation (1.4826 median absolute deviations) of each step's travel less the speeds'
+    distance, over sqrt 2, each step being the difference of two noisy positions. The logged stop is
+    the difference of two positions: :func:`stop_tolerance` takes three standard deviations of it."""
+    ahead = np.diff(run.x) * (1.0 if run.x[-1] >= run.x[0] else -1.0)  # along the travel, noise not folded
+    off = ahead - 0.5 * (run.v[1:] + run.v[:-1]) * np.diff(run.t)
+    return 1.4826 * float(np.median(np.abs(off - np.median(off)))) / np.sqrt(2.0)
 
 
 def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
@@ -165,7 +197,7 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
         elif abs(row["time_difference_pct"]) > 100 * time_tolerance:
             reasons.append(f"running time {row['time_difference_pct']:+.1f} % off the log under the logged handle")
         if run.stands:  # the log's last position is a stop: where the model stops is compared
-            row["stop_tolerance_m"] = stop_tolerance(run, stop, handle_replay(run, track, train, log, rounded=False)[1])
+            row["stop_tolerance_m"] = stop_tolerance(run, track, train, log, stop)
             if abs(row["model_stop_error_m"]) > row["stop_tolerance_m"]:
                 where = "short of" if row["model_stop_error_m"] < 0 else "past"
                 reasons.append(f"under the logged handle the model stops {abs(row['model_stop_error_m']):.1f} m {where} "

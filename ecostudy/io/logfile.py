@@ -69,6 +69,8 @@ QUANTITIES = {name.rsplit("_", 1)[0] for name in COLUMNS}  # time, position, spe
 MIN_ROWS = 10
 INTEGRATED = "(start_position_m)"  # the position column's name where there is none: the speeds integrated
 GAP_FACTOR = 5.0       # a time step this many times the median step is a gap
+MISSING_FACTOR = 1.5   # a time step this many times the median step (up to a gap) is a missing row: warned
+DAY = 86400.0          # [s] a clock in seconds from midnight restarts by this
 MIN_SPEED = -1.0       # [m/s] below this a negative speed is not sensor noise
 MAX_SPEED = 150.0      # [m/s] (540 km/h)
 SPEED_DISTANCE = (0.8, 1.25)  # speeds integrated over the positions' travel, outside: a unit mix-up
@@ -239,15 +241,24 @@ def check_series(log: "LoggedRun", path: Where) -> None:
     if len(t) < MIN_ROWS:
         raise InputError(problem(path, "time_s", f"{len(t)} rows; a log needs at least {MIN_ROWS}"))
     dt = np.diff(t)
+    step = float(np.median(dt))
     if np.any(dt <= 0):
         i = int(np.argmax(dt <= 0)) + 1
+        midnight = 0 < t[i] - t[i - 1] + DAY <= GAP_FACTOR * step  # a clock in seconds from midnight passing it
         raise InputError(problem(path, "time_s", f"row {i + 1}: time {t[i]:g} s does not increase "
-                                 f"(previous {t[i - 1]:g} s)"))
-    step = float(np.median(dt))
+                                 f"(previous {t[i - 1]:g} s)" + ("; a clock that passes midnight: add 86400 s "
+                                                                 "to the rows after it" if midnight else "")))
     if np.any(dt > GAP_FACTOR * step):
         i = int(np.argmax(dt > GAP_FACTOR * step))
         raise InputError(problem(path, "time_s", f"row {i + 2}: gap of {dt[i]:g} s after {t[i]:g} s (the log "
                                  f"samples every {step:g} s); split the log there"))
+    long = np.nonzero((dt > MISSING_FACTOR * step) & (dt <= GAP_FACTOR * step))[0]
+    if long.size:
+        many = long.size > 1
+        warnings.warn(problem(path, "time_s", f"{long.size} step{'s' if many else ''} longer than the log's {step:g} s "
+                              f"({'the first ' if many else ''}at row {long[0] + 2}: {dt[long[0]]:g} s): missing "
+                              f"row{'s' if many else ''}, read across (a power the mean over its row's whole step)"),
+                      EcostudyWarning, stacklevel=2)
     if log.v is not None:
         if log.v.min() < MIN_SPEED or log.v.max() > MAX_SPEED:
             i = int(np.argmax((log.v < MIN_SPEED) | (log.v > MAX_SPEED)))
@@ -286,7 +297,8 @@ def check_jumps(log: "LoggedRun", path: Where) -> None:
         i = int(jumps[0])
         raise InputError(problem(path, log.columns[0], f"row {i + 2}: the position jumps by {log.x[i + 1] - log.x[i]:+.0f} m "
                                  f"in {log.t[i + 1] - log.t[i]:g} s, the speeds give {by_speed[i]:.1f} m "
-                                 f"({jumps.size} such step{'s' if jumps.size > 1 else ''}; a GPS jump?)"))
+                                 f"({jumps.size} such step{'s' if jumps.size > 1 else ''}; a GPS jump, or a distance that "
+                                 "restarts: positions are track positions, the track file's)"))
 
 
 def check_traction_sign(log: "LoggedRun", track: Track) -> None:
