@@ -131,3 +131,25 @@ def test_bad_inputs_are_the_same_exception_naming_file_and_field(tmp_path):
                              "speed_limits": [{"position_m": 0, "speed_mps": 20}]})
     with pytest.raises(api.InputError, match=r"summary\.json: not an ecostudy output folder"):
         api.load(tmp_path)
+
+
+def test_a_replanner_and_its_plans_are_one_line_with_their_status(case):
+    from IPython.lib.pretty import pretty  # what a notebook cell shows of an object without _repr_html_
+
+    planner = api.replanner(*case, running_time=80.0, points=40)
+    assert repr(planner) == "Replanner(Rokin -> Centraal, 1106 m, K = 40, energy, arrival at 80.00 s; no plan yet)"
+    plan = planner.solve(api.State(position=400.0, speed=15.0, time=30.0))
+    text = repr(plan)
+    assert pretty(plan) == text and "\n" not in text and len(text) < 200, text
+    assert re.fullmatch(r"Plan\(Rokin -> Centraal, from 400\.0 m at 15\.00 m/s, clock 30\.00 s: arrival at 1106 m, "
+                        r"0\.00 m/s, clock 80\.00 s, traction still to do (\d\.\d{3}) kWh; ok\)", text), text
+    assert plan.start == api.State(400.0, 15.0, 30.0) and plan.ok and plan.reason == ""
+    assert f"{plan.traction_energy / 3.6e6:.3f} kWh" in text
+    late = planner.solve(api.State(position=400.0, speed=15.0, time=30.0), arrival=35.0, options={"max_iter": 5})
+    assert late.status.kind == "flagged" and late.reason == "Ipopt ended max_iterations, not optimal"
+    assert repr(late).endswith("; flagged: Ipopt ended max_iterations, not optimal)") and not late.ok
+    assert repr(planner) == ("Replanner(Rokin -> Centraal, 1106 m, K = 40, energy, arrival at 80.00 s; 2 plans, the "
+                             "last flagged: Ipopt ended max_iterations, not optimal)")
+    assert repr(api.replanner(*case, window=(70.0, 90.0), points=40)).startswith(
+        "Replanner(Rokin -> Centraal, 1106 m, K = 40, energy, arrival in [70.00, 90.00] s; ")
+

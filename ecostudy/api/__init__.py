@@ -14,7 +14,7 @@ folder and returns it read back (:class:`Report`, a :class:`StudyResult` with th
 Everything is SI inside; the arguments here say their unit in their name where it is not SI.
 
 Every result says whether it can be trusted: ``status`` (a :class:`Status`: ``ok``, ``flagged`` or
-``failed``, with its ``reason``) on a run, a front and an output folder. A bad argument, a bad
+``failed``, with its ``reason``) on a run, a front, a re-plan and an output folder. A bad argument, a bad
 field of an input (a file or a dict) or a request no run can meet raises :class:`InputError` (an
 :class:`EcostudyError`) before anything is solved, one line per problem naming the file (or
 ``arguments``), the field and what is wrong.
