@@ -1,6 +1,7 @@
 """The Python API from a notebook: results that say what they are in a line and whether they can be
 trusted (``status``, ``reason``), and bad arguments refused by name before anything is solved."""
 import html
+import inspect
 import re
 from pathlib import Path
 
@@ -131,3 +132,88 @@ def test_bad_inputs_are_the_same_exception_naming_file_and_field(tmp_path):
                              "speed_limits": [{"position_m": 0, "speed_mps": 20}]})
     with pytest.raises(api.InputError, match=r"summary\.json: not an ecostudy output folder"):
         api.load(tmp_path)
+
+
+def test_a_replanner_and_its_plans_are_one_line_with_their_status(case):
+    from IPython.lib.pretty import pretty  # what a notebook cell shows of an object without _repr_html_
+
+    planner = api.replanner(*case, running_time=80.0, points=40)
+    assert repr(planner) == "Replanner(Rokin -> Centraal, 1106 m, K = 40, energy, arrival at 80.00 s; no plan yet)"
+    plan = planner.solve(api.State(position=400.0, speed=15.0, time=30.0))
+    text = repr(plan)
+    assert pretty(plan) == text and "\n" not in text and len(text) < 200, text
+    assert re.fullmatch(r"Plan\(Rokin -> Centraal, from 400\.0 m at 15\.00 m/s, clock 30\.00 s: arrival at 1106 m, "
+                        r"0\.00 m/s, clock 80\.00 s, traction still to do (\d\.\d{3}) kWh; ok\)", text), text
+    assert plan.start == api.State(400.0, 15.0, 30.0) and plan.ok and plan.reason == ""
+    assert f"{plan.traction_energy / 3.6e6:.3f} kWh" in text
+    late = planner.solve(api.State(position=400.0, speed=15.0, time=30.0), arrival=35.0, options={"max_iter": 5})
+    assert late.status.kind == "flagged" and late.reason == "Ipopt ended max_iterations, not optimal"
+    assert repr(late).endswith("; flagged: Ipopt ended max_iterations, not optimal)") and not late.ok
+    assert repr(planner) == ("Replanner(Rokin -> Centraal, 1106 m, K = 40, energy, arrival at 80.00 s; 2 plans, the "
+                             "last flagged: Ipopt ended max_iterations, not optimal)")
+    assert repr(api.replanner(*case, window=(70.0, 90.0), points=40)).startswith(
+        "Replanner(Rokin -> Centraal, 1106 m, K = 40, energy, arrival in [70.00, 90.00] s; ")
+
+
+TRACK, TRAIN = ROOT / "tracks/amsterdam_rokin_centraal.yaml", ROOT / "trains/amsterdam_metro.yaml"
+FOLDER_BAD = [  # (a command function, its arguments, what it says called from Python, from the command line)
+    (api.solve_folder, {"time": -5}, "arguments: time: must be more than 0.0, not -5",
+     "command line: --time: must be more than 0.0, not -5"),
+    (api.solve_folder, {"track": TRACK, "train": TRAIN, "time": 80.0, "supplement": 5.0},
+     "arguments: time/supplement: give only one: each sets the running time",
+     "command line: --time/--supplement: give only one: each sets the running time"),
+    (api.solve_folder, {"track": TRACK, "train": TRAIN},
+     "arguments: time: give time, supplement or window (or objective time for the all-out run)",
+     "command line: --time: give --time, --supplement or --window (or --objective time for the all-out run)"),
+    (api.solve_folder, {"track": TRACK, "train": TRAIN, "objective": "time", "time": 80.0},
+     "arguments: objective='time': finds the fastest run: it takes no time, supplement or window",
+     "command line: --objective time: finds the fastest run: it takes no --time, --supplement or --window"),
+    (api.solve_folder, {"track": TRACK, "train": TRAIN, "time": 80.0, "to_stop": "Nowhere"},
+     "arguments: to_stop: unknown stop 'Nowhere' (track 'Amsterdam metro Rokin - Centraal' has: Rokin, Centraal)",
+     "command line: to: unknown stop 'Nowhere' (track 'Amsterdam metro Rokin - Centraal' has: Rokin, Centraal)"),
+    (api.solve_folder, {"track": TRACK, "train": TRAIN, "time": 80.0, "fig_format": "gif"},
+     "arguments: fig_format: 'gif' is not a figure format; use one of png, svg, pdf",
+     "command line: --format: 'gif' is not a figure format; use one of png, svg, pdf"),
+    (api.solve_folder, {"train": TRAIN, "time": 80.0}, "arguments: track/train: give a study file, or both track "
+     "and train", "command line: --track/--train: give a study file, or both --track and --train"),
+    (api.pareto_folder, {"count": 1}, "arguments: count: must be at least 2 and at most 10000, not 1",
+     "command line: --count: must be at least 2 and at most 10000, not 1"),
+    (api.pareto_folder, {"track": TRACK, "train": TRAIN, "dask": "nope"},
+     "arguments: dask: expected a scheduler address tcp://host:port, got 'nope'",
+     "command line: --dask: expected a scheduler address tcp://host:port, got 'nope'"),
+    (api.compare_folder, {"supplement": -5}, "arguments: supplement: must be at least 0.0 and at most 200.0, not -5",
+     "command line: --supplement: must be at least 0.0 and at most 200.0, not -5"),
+    (api.journey_folder, {"train": TRAIN, "track": TRACK, "time": 80.0, "stops": "Rokin,Nope"},
+     "arguments: stops[1]: unknown stop 'Nope' (track 'Amsterdam metro Rokin - Centraal' has: Rokin, Centraal)",
+     "command line: --stops[1]: unknown stop 'Nope' (track 'Amsterdam metro Rokin - Centraal' has: Rokin, Centraal)"),
+    (api.check_folder, {"result_dir": "nowhere", "time": -1}, "arguments: time: must be more than 0.0, not -1",
+     "command line: --time: must be more than 0.0, not -1"),
+    (api.export_folder, {"result_dir": "nowhere", "every": "2x"},
+     "arguments: every: expected a step such as '1s' (seconds) or '10m' (metres), not '2x'",
+     "command line: --every: expected a step such as '1s' (seconds) or '10m' (metres), not '2x'"),
+    (api.run_folder, {"study": ROOT / "studies/default.yaml", "workers": 0},
+     "arguments: workers: must be at least 1 and at most 256, not 0",
+     "command line: --workers: must be at least 1 and at most 256, not 0"),
+]
+
+
+@pytest.mark.parametrize("function, kwargs, python, command_line", FOLDER_BAD,
+                         ids=[f"{f.__name__}-{'-'.join(k)}" for f, k, _, _ in FOLDER_BAD])
+def test_a_command_function_names_the_argument_as_python_spells_it(function, kwargs, python, command_line, tmp_path):
+    if "out" in inspect.signature(function).parameters:  # a folder made before a refusal is made here
+        kwargs = {**kwargs, "out": tmp_path / "out"}
+    with pytest.raises(api.InputError) as caught:
+        function(**kwargs)
+    assert str(caught.value) == python
+    with api.command_line(), pytest.raises(api.InputError) as caught:  # as ecostudy calls it: its options
+        function(**kwargs)
+    assert str(caught.value) == command_line
+
+
+def test_the_stops_are_named_as_the_arguments(case):
+    for make in (lambda: api.solve(*case, running_time=80.0, to_stop="Nowhere"),
+                 lambda: api.pareto(*case, from_stop="Nowhere", count=3),
+                 lambda: api.replanner(*case, running_time=80.0, from_stop="Nowhere")):
+        with pytest.raises(api.InputError, match=r"^arguments: (from|to)_stop: unknown stop 'Nowhere' \(track "):
+            make()
+    assert api.solve_folder.__name__ == "solve_folder" and "time" in inspect.signature(api.solve_folder).parameters

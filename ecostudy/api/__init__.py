@@ -14,10 +14,12 @@ folder and returns it read back (:class:`Report`, a :class:`StudyResult` with th
 Everything is SI inside; the arguments here say their unit in their name where it is not SI.
 
 Every result says whether it can be trusted: ``status`` (a :class:`Status`: ``ok``, ``flagged`` or
-``failed``, with its ``reason``) on a run, a front and an output folder. A bad argument, a bad
+``failed``, with its ``reason``) on a run, a front, a re-plan and an output folder. A bad argument, a bad
 field of an input (a file or a dict) or a request no run can meet raises :class:`InputError` (an
 :class:`EcostudyError`) before anything is solved, one line per problem naming the file (or
-``arguments``), the field and what is wrong.
+``arguments``), the field (the argument, as it is spelled here: ``time`` of ``solve_folder``,
+``to_stop``) and what is wrong; within :func:`command_line` the command functions name the command
+line's options instead (``command line: --time``), as ``ecostudy`` prints them.
 """
 import importlib
 from typing import TYPE_CHECKING, Any
@@ -47,13 +49,14 @@ WHERE = {
     "run_folder": "ecostudy.api.cases", "simulate_folder": "ecostudy.api.cases",
     "heavyhaul_folder": "ecostudy.api.cases", "network_folder": "ecostudy.api.cases",
     "calibrate_folder": "ecostudy.api.cases", "validate_folder": "ecostudy.api.cases",
+    "command_line": "ecostudy.api.arguments",
 }
 __all__ = ["load", "StudyResult", "load_train", "load_track", "train_from_dict", "track_from_dict", "Train", "Track",
            "State", "Window", "solve", "pareto", "replanner", "Solution", "Front", "RunSummary", "Verification", "InputError",
            "EcostudyError", "Status", "Report", "Note", "one_line",
            "solve_folder", "check_folder", "export_folder", "doctor", "pareto_folder", "compare_folder",
            "journey_folder", "run_folder", "simulate_folder", "heavyhaul_folder", "network_folder",
-           "calibrate_folder", "validate_folder"]  # = WHERE's names, written out for the reference's static reader
+           "calibrate_folder", "validate_folder", "command_line"]  # = WHERE's names, written out for the reference's static reader
 
 
 def __getattr__(name: str) -> Any:
@@ -70,6 +73,7 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # what type checkers and editors see
+    from ecostudy.api.arguments import command_line  # noqa: F401
     from ecostudy.api.cases import (calibrate_folder, heavyhaul_folder, network_folder, run_folder,  # noqa: F401
                                     simulate_folder, validate_folder)
     from ecostudy.api.fronts import compare_folder, journey_folder, pareto_folder  # noqa: F401

@@ -11,6 +11,7 @@ from contextlib import nullcontext
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
+from ecostudy.api.arguments import spelled
 from ecostudy.api.blas import limit_blas_threads
 from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
@@ -52,6 +53,7 @@ VALIDATION_COLUMNS = {"run": None, "from_m": ".0f", "to_m": ".0f", "logged_time_
                       "traction_difference_pct": ".2f", "status": None}
 
 
+@spelled
 def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
                out: Optional[Path] = None, kind: str = "run", *, progress: Progress = None) -> Report:
     """``ecostudy run``: every case of a study file not stored yet, through the one study engine
@@ -67,6 +69,7 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
                                                                                   "report.html"))])
 
 
+@spelled
 def simulate_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
                     out: Optional[Path] = None, plot: bool = True, only: Optional[Sequence[str]] = None, *,
                     progress: Progress = None) -> Report:
@@ -93,6 +96,7 @@ def loop_figures(outcome) -> list:
     return [n for n in ("bands.png", "solve_times.png", "mass_estimates.png") if (outcome.output / n).is_file()]
 
 
+@spelled
 def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
                      out: Optional[Path] = None, plot: bool = True, blas_threads: int = 1, *,
                      progress: Progress = None) -> Report:
@@ -111,6 +115,7 @@ def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[
                              f"{', ...' if len(plots) > 3 else ''})"])
 
 
+@spelled
 def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, workers: Optional[int] = None,
                    fig_format: str = "png", dpi: Optional[float] = None,
                    dask: Optional[str] = None, retry_failed: bool = False, note: Callable[[str], None] = log.info, *,
@@ -134,6 +139,7 @@ def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, w
                                  "outputs " + listed(ran.output)])
 
 
+@spelled
 def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: Optional[Path] = None,
                      fit: Optional[str] = None, out: Path = Path("out/calibration"), bootstrap: int = 200,
                      savings: Optional[int] = None, plot: bool = True, *, progress: Optional[Watcher] = None) -> Report:
@@ -164,6 +170,7 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
     return reported(out, lines)
 
 
+@spelled
 def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optional[Path] = None,
                     out: Path = Path("out/validate"), energy_tolerance: float = 5.0, time_tolerance: float = 5.0,
                     plot: bool = True, *, progress: Optional[Watcher] = None) -> Report:

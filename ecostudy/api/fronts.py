@@ -5,6 +5,7 @@ from pathlib import Path
 from time import perf_counter
 from typing import Callable, Optional
 
+from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
 from ecostudy.core import units
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
@@ -38,6 +39,7 @@ def beside(st, suffix: str, default: str) -> Path:
     return st.output.parent / (st.output.name + suffix) if st is not None else Path("out") / default
 
 
+@spelled
 def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
                   from_stop: Optional[str] = None, to_stop: Optional[str] = None, count: int = 20,
                   supplement_max: float = 40.0, points: Optional[int] = None, workers: Optional[int] = None,
@@ -82,6 +84,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     return reported(out_dir, lines + [counts_line(ran.counts, "points"), "outputs " + listed(out_dir)])
 
 
+@spelled
 def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
                    from_stop: Optional[str] = None, to_stop: Optional[str] = None, time: Optional[float] = None,
                    supplement: Optional[float] = None, points: Optional[int] = None, out: Optional[Path] = None,
@@ -126,6 +129,7 @@ def associated_track(tt, path: Optional[Path]) -> Path:
                              "timetable or in ../tracks/; give --track"))
 
 
+@spelled
 def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[str] = None,
                    time: Optional[float] = None, supplement: Optional[float] = None,
                    timetable: Optional[Path] = None, dwell: float = 0.0, points: int = FRONT_POINTS, workers: int = 1,

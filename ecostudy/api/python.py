@@ -12,6 +12,7 @@ import pandas as pd
 
 from ecostudy.analysis.export import fixed_step
 from ecostudy.analysis.single import RunResult, solve_run
+from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import shown
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, problem
@@ -168,6 +169,7 @@ def _named(exc, timing):
     return InfeasibleError([problem(WHERE, field, p) for p in exc.problems])
 
 
+@spelled
 def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplement_percent=None, window=None,
           objective="energy", points=RUN_POINTS, windows=()):
     """The energy-optimal run (``objective`` ``energy``, ``net_energy``, ``time`` or ``mixed``)
@@ -193,6 +195,7 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
         raise exc.in_file(WHERE) from None
 
 
+@spelled
 def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_percent=40.0, points=FRONT_POINTS,
            objective="energy", workers=1):
     """Energy against running time from the all-out run to ``supplement_max_percent`` over it."""
@@ -203,6 +206,7 @@ def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_
     return Front(table, [Solution(r) for r in runs])
 
 
+@spelled
 def replanner(track, train, from_stop=None, to_stop=None, running_time=None, window=None, points=FRONT_POINTS,
               objective="energy"):
     """A :class:`~ecostudy.ocp.restart.Replanner`: one model re-solved from any :class:`State`; a

@@ -9,6 +9,7 @@ import pyomo.core as pyo  # not pyomo.environ: see ocp.solver.prepare
 
 from ecostudy import __version__
 from ecostudy.analysis.single import RunResult, solve_run
+from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, problem
@@ -63,6 +64,7 @@ def run_lines(result: RunResult, out_dir: Path) -> list[str]:
     return lines
 
 
+@spelled
 def solve_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
                  time: Optional[float] = None, supplement: Optional[float] = None, window: Optional[str] = None,
                  from_stop: Optional[str] = None, to_stop: Optional[str] = None, objective: Optional[str] = None,
@@ -137,6 +139,7 @@ def timing_source(study, st, time, supplement, window) -> tuple[str, str]:
     return str(study), st.timing_field
 
 
+@spelled
 def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
     """``ecostudy check``: the Pontryagin regime check of a solve folder (Farooqi 2018, eq. 2.17;
     eq. 7.4 for net-energy runs), written to its check.json with the run's own status; ``ok`` at 95 %
@@ -160,6 +163,7 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
     return Note(agrees and run_ok, "\n".join(lines), report)
 
 
+@spelled
 def export_folder(result_dir: Path, every: str = "1s") -> Note:
     """``ecostudy export``: a solve folder's run at fixed steps ('1s': seconds, '10m': metres) as
     profile_every_<step>.csv and .json in the folder; ``ok`` when the run exported is (its status is

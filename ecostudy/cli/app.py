@@ -53,7 +53,7 @@ def call(debug, name, *args, force=False, bar=None):
     nothing). Errors: one line and an exit code; warnings: log lines; SIGINT or SIGTERM: exit status 130 or 143."""
     from ecostudy import api
 
-    with warnings.catch_warnings(record=True) as caught, forced(force), stopped_by_signals():
+    with warnings.catch_warnings(record=True) as caught, forced(force), stopped_by_signals(), api.command_line():
         warnings.simplefilter("always")
         try:
             if bar is None:

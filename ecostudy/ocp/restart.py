@@ -21,8 +21,9 @@ import numpy as np
 
 from ecostudy.core.errors import InputError
 from ecostudy.core.grid import interval_of
+from ecostudy.core.status import Judged, Status, from_checks
 from ecostudy.core.types import State, Train
-from ecostudy.core.units import FloatArray
+from ecostudy.core.units import FloatArray, to_kwh
 from ecostudy.ocp import space
 from ecostudy.ocp.phases import Layout
 from ecostudy.ocp.problem import Case, Stages, build, capped_guess
@@ -139,8 +140,9 @@ def set_mass(session: Session, m: Model, scale: float) -> None:
     session.set_bounds(m.mass_scale, scale, scale)
 
 
-class Plan(NamedTuple):
-    """A re-plan on the whole grid: node speeds, interval times, forces [N] and shares still to run."""
+class PlanArrays(NamedTuple):
+    """A re-plan on the whole grid: node speeds, interval times, forces [N] and shares still to run;
+    ``segment``: 'from -> to' of the case planned."""
 
     nodes: np.ndarray
     v: np.ndarray
@@ -150,6 +152,13 @@ class Plan(NamedTuple):
     shares: np.ndarray
     start_time: float
     outcome: Outcome
+    segment: str = ""
+
+
+class Plan(PlanArrays, Judged):
+    """A re-plan (:class:`PlanArrays`) that says in a line where it starts, where it ends, the
+    traction still to do and its status: ``ok`` when Ipopt proved it optimal, else ``flagged`` (a
+    plan is not re-simulated: a run is, :attr:`ecostudy.analysis.single.RunResult.status`)."""
 
     @property
     def time(self) -> FloatArray:
@@ -161,12 +170,33 @@ class Plan(NamedTuple):
         """Traction work still to do [J]: sum F_T w ds over the intervals ahead."""
         return float(np.sum(self.ft * self.shares * np.diff(self.nodes)))
 
+    @property
+    def start(self) -> State:
+        """The state it planned from: the position the shares still to run give, the speed at node 0, the clock."""
+        k = int(np.argmax(self.shares > 0.0))
+        position = self.nodes[k + 1] - self.shares[k] * (self.nodes[k + 1] - self.nodes[k])
+        return State(float(position), float(self.v[0]), float(self.start_time))
+
+    @property
+    def status(self) -> Status:
+        return from_checks({f"Ipopt ended {self.outcome.status}, not optimal": self.outcome.optimal})
+
+    def line(self) -> str:
+        """The plan in a few words (its repr adds the status)."""
+        s = self.start
+        return (f"{self.segment + ', ' if self.segment else ''}from {s.position:.1f} m at {s.speed:.2f} m/s, clock "
+                f"{s.time:.2f} s: arrival at {self.nodes[-1]:.0f} m, {self.v[-1]:.2f} m/s, clock {self.time[-1]:.2f} s, "
+                f"traction still to do {to_kwh(self.traction_energy):.3f} kWh")
+
+    def __repr__(self) -> str:  # a line, not the arrays
+        return f"Plan({self.line()}; {self.status})"
+
 
 class Replanner:
     """One prepared case (``ocp.problem.prepare``) as a movable model, written once.
 
     ``solve(state, end_speed, arrival)`` re-plans from ``state`` (default: standstill at the
-    departure, clock 0) by bounds alone, warm-started from the previous plan.
+    departure, clock 0) by bounds alone, warm-started from the previous plan (``last``).
     """
 
     def __init__(self, case: Case, running_time: float | None = None, window: tuple[float, float] | None = None,
@@ -180,6 +210,15 @@ class Replanner:
         self.model = build(case, guess, objective, self.stages, movable=True, **timing)
         self.session = Session(self.model)
         self.stages["nl_write"] = self.stages.get("nl_write", 0.0) + self.session.nl_seconds
+        self.arrival = f"at {latest:.2f} s" if window is None else f"in [{window[0]:.2f}, {window[1]:.2f}] s"
+        self.objective, self.plans = objective, 0
+        self.last: Plan | None = None
+
+    def __repr__(self) -> str:  # what it plans for and its last plan's status, not the model
+        seg, n = self.case.segment, self.plans
+        return (f"Replanner({seg.from_stop} -> {seg.to_stop}, {seg.distance:.0f} m, K = {len(self.case.nodes)}, "
+                f"{self.objective}, arrival {self.arrival}; "
+                + (f"{n} plan{'s' if n != 1 else ''}, the last {self.last.status})" if self.last else "no plan yet)"))
 
     def solve(self, state: State = State(), end_speed: tuple[float, float] = (0.0, 0.0),
               arrival: float | Sequence[float] | None = None, options: Options | None = None,
@@ -192,4 +231,7 @@ class Replanner:
         outcome = self.session.solve({**(self.options or {}), **(options or {})})
         v, dt, ft, fb, _ = space.solution_arrays(m)
         shares = np.array([m.w[k].value for k in m.I])
-        return Plan(nodes, v, dt, ft, fb, shares, float(m.t0.value), outcome)
+        seg = self.case.segment
+        self.plans, self.last = self.plans + 1, Plan(nodes, v, dt, ft, fb, shares, float(m.t0.value), outcome,
+                                                     f"{seg.from_stop} -> {seg.to_stop}")
+        return self.last

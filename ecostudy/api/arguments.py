@@ -1,0 +1,71 @@
+"""What a refusal of a function of :mod:`ecostudy.api` names: the argument as a Python caller spells
+it (``arguments: time: must be more than 0.0, not -5``), or, when the command line called it
+(:func:`command_line`), its option (``command line: --time: ...``).
+
+The checks shared with the command line (``studies.options``, the study engine, the figure
+options) name the command line's options; :func:`spelled` turns their lines into the arguments of
+the function that raised them: ``command line`` becomes ``arguments`` and each option, in the field
+and in the text, the argument that sets it (``--from`` -> ``from_stop``, ``--format`` ->
+``fig_format``, ``--das-time-limit`` -> ``das_time_limit``); an option the function has no argument
+for (``--force``) is left as it is.
+"""
+import contextvars
+import functools
+import inspect
+import re
+from contextlib import contextmanager
+from typing import Any, Callable, Iterator, TypeVar
+
+from ecostudy.core.errors import InputError
+
+F = TypeVar("F", bound=Callable[..., Any])
+CALLER: contextvars.ContextVar[str] = contextvars.ContextVar("ecostudy_caller", default="arguments")
+# the options not spelled as their argument ('-' -> '_'); a size guard's field 'study' is the whole work, no argument
+ARGUMENT = {"from": "from_stop", "to": "to_stop", "format": "fig_format", "no-plot": "plot=False", "study": ""}
+OPTION = re.compile(r"(?<![\w-])--([a-z][a-z0-9-]*)")
+FIELD = re.compile(r"^(command line|arguments): ([^:]+): ")
+
+
+@contextmanager
+def command_line() -> Iterator[None]:
+    """Within this block the functions of :mod:`ecostudy.api` name the command line's options in
+    their refusals (``command line: --time``), as ``ecostudy`` prints them."""
+    token = CALLER.set("command line")
+    try:
+        yield
+    finally:
+        CALLER.reset(token)
+
+
+def spelled(function: F) -> F:
+    """``function`` whose :class:`~ecostudy.core.errors.InputError` lines name its arguments, not
+    the command line's options (outside :func:`command_line`)."""
+    names = set(inspect.signature(function).parameters)
+
+    def argument(option: str) -> str | None:  # the argument that sets an option (or a field), if the function has it
+        name = ARGUMENT.get(option, option.replace("-", "_"))
+        return name if name and name.split("=")[0] in names else None
+
+    def field(match: re.Match) -> str:  # 'a/b', '--objective time' (a value), 'stops[1]' (an item)
+        parts = [re.fullmatch(r"(?:--)?([a-z][a-z0-9_-]*)( .*)?(\[.*)?", p) for p in match.group(2).split("/")]
+        args = [argument(p[1]) if p else None for p in parts]
+        if not all(args):  # not the command line's field, or not this function's argument: as it is
+            return match.group(0)
+        shown = [f"{a}={p[2].strip()!r}" if p[2] else f"{a}{p[3] or ''}" for a, p in zip(args, parts) if p]
+        return f"arguments: {'/'.join(shown)}: "
+
+    def line(text: str) -> str:
+        text = FIELD.sub(field, text, count=1)
+        return OPTION.sub(lambda m: argument(m.group(1)) or m.group(0), text)
+
+    @functools.wraps(function)
+    def named(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return function(*args, **kwargs)
+        except InputError as exc:
+            if CALLER.get() == "arguments":
+                exc.problems = [line(p) for p in exc.problems]
+                exc.args = ("\n".join(exc.problems),)
+            raise
+
+    return named  # type: ignore[return-value]
