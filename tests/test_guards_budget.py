@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from ecostudy.core.budget import check_study, forced, study_estimate
+from ecostudy.core.budget import check_study, forced, machine_memory, study_estimate
 from ecostudy.core.errors import InputError
 from ecostudy.io.loaders import load_network_study
 from ecostudy.io.yamlsafe import load_yaml
@@ -107,6 +107,54 @@ def test_a_network_study_too_big_for_the_command_is_refused(tmp_path):
     doc["strategies"] = ["independent", "receptivity", "triggering", "voltage", "dissension", "joint"]
     r = run("network", write_yaml(tmp_path / "net.yaml", doc), "--no-plot")
     one_line(r, "net.yaml: study: 6 strategies x 8 trains", "above the 2 h", "--force")
+
+
+def network_variant(tmp_path, name, file="net.yaml", **fields):
+    """A shipped network study with ``fields`` changed (``points``: the space grid of every
+    segment's first runs)."""
+    doc = load_yaml((STUDIES / f"{name}.yaml").read_text())
+    for key in ("track", "train"):
+        doc[key] = str((STUDIES / doc[key]).resolve())
+    doc.update(output=str(tmp_path / "out"), **fields)
+    return write_yaml(tmp_path / file, doc)
+
+
+def test_a_network_study_counts_its_first_runs(tmp_path):
+    """The segments' first runs (all-out and net-energy, at K = points) are counted: 38 of them on
+    the 20-stop line at K = 100 000 are over the 2 h with one worker (the strategies' legs alone,
+    all that was counted, were 11 min), and two workers each holding one at K = 100 000 are over
+    half the memory of any machine of up to 30 GB."""
+    path = network_variant(tmp_path, "network_regional_20stops", points=100000)
+    with pytest.raises(InputError) as refused:
+        sizes.check_network_study(load_network_study(path), path, 1)
+    text = str(refused.value)
+    for fragment in ["net.yaml: study: 3 strategies x 3 trains after 38 first runs at K = 100,000", "above the 2 h",
+                     "--force"]:
+        assert fragment in text, text
+
+
+def test_network_refuses_first_runs_too_big_before_computing(tmp_path):
+    """The 2-train study at K = 100 000 (estimated at 2 min, it grew to 5.7 GB in its first runs before it
+    was stopped past 900 s): two workers each holding its first runs (14.5 GB) are over half the
+    memory of any machine of up to 59 GB."""
+    if (machine_memory() or 0) > 59e9:
+        pytest.skip("more memory than two such workers take")
+    r = run("network", network_variant(tmp_path, "network_metro_2trains", points=100000), "--workers", 2, "--no-plot")
+    one_line(r, "net.yaml: study: 7 strategies x 2 trains after 6 first runs at K = 100,000", "memory",
+             "use fewer --workers", "--force")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_network_study_with_slow_legs_is_estimated_dearer_per_step(tmp_path):
+    """The 2-train study took 3.2 times the CPU at a 100 % supplement (188 against 58 s, one worker)
+    over 1.8 times the clock steps, and about twice at half the step (0.25 s, the same running times):
+    a step costs more the slower its leg is run, not the more steps it has (docs/guards.md)."""
+    def estimate(**fields):
+        path = network_variant(tmp_path, "network_metro_2trains", f"{len(fields)}{sorted(fields)}.yaml", **fields)
+        return sum(sizes.network_runs(load_network_study(path), path))
+    shipped = estimate()
+    assert estimate(supplement_percent=100) >= 3.0 * shipped
+    assert 1.9 * shipped <= estimate(time_step_s=0.25) <= 2.1 * shipped
 
 
 @pytest.mark.parametrize("path", LIGHT, ids=[p.stem for p in LIGHT])

@@ -37,9 +37,14 @@ from ecostudy.io.loopfile import SimulateFile
 from ecostudy.studies import closedloop
 from ecostudy.studies.batch import STUDY_KINDS
 from ecostudy.studies.journey import FRONT_COUNT
-from ecostudy.studies.estimate import RUN_BYTES_PER_POINT, check_closed_loop, check_network, run_seconds, spec_seconds
+from ecostudy.studies.estimate import (RUN_BYTES_PER_POINT, check_closed_loop, check_network, first_runs, run_seconds,
+                                       spec_seconds)
 
 NETWORK_SECONDS_PER_STEP = 0.02
+# [bytes] a network command's process per grid point of its first runs: it keeps every segment's run
+# (the legs' guesses) as it solves the next: 490 MB, 917 MB and 1.64 GB at K = 2 000, 5 000 and 10 000
+# against 265 MB at K = 500 (the 2-train study, one worker; a lone space run grows 75 kB a point)
+NETWORK_BYTES_PER_POINT = 145e3
 HEAVYHAUL_SECONDS_PER_SAMPLE = {1: 0.5}  # f = 1: one locomotive group per car, the largest QP
 HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED = 0.15
 HEAVYHAUL_MEASURED_INPUTS = {1: 1224}  # the QP inputs of those measurements: 204 cars x Nc = 6 (f = 1)
@@ -82,18 +87,23 @@ def check_closed_loop_study(path, workers=1, only=None):
 
 
 def network_runs(study, path):
-    """Seconds of each strategy of a network study (every train over every leg)."""
+    """Seconds of each run of a network study: the segments' first runs
+    (:func:`~ecostudy.studies.estimate.first_runs`, shared among the workers), then each strategy
+    (every train over every leg, its steps weighted by
+    :func:`~ecostudy.studies.estimate.leg_slowness`)."""
     legs = check_network(study, path)
     per_strategy = sum(legs) * len(study.names) * NETWORK_SECONDS_PER_STEP
-    return [per_strategy] * len(study.strategies)
+    return first_runs(study) + [per_strategy] * len(study.strategies)
 
 
 def check_network_study(study, path, workers=1):
     """Refuse a network study (loaded: :func:`ecostudy.io.loaders.load_network_study`) too big for one
-    run (its legs) or for the command (every strategy)."""
-    strategies, trains = len(study.strategies), len(study.names)
-    check_study(path, f"{strategies} strateg{'ies' if strategies != 1 else 'y'} x {trains} train{'s' * (trains != 1)}",
-                network_runs(study, path), workers)
+    run (a first run, a leg) or for the command (the first runs and every strategy; each worker
+    holds a first run's model)."""
+    strategies, trains, firsts = len(study.strategies), len(study.names), len(first_runs(study))
+    check_study(path, f"{strategies} strateg{'ies' if strategies != 1 else 'y'} x {trains} train{'s' * (trains != 1)} "
+                f"after {firsts} first run{'s' * (firsts != 1)} at K = {study.points:,}", network_runs(study, path),
+                workers, study.points * NETWORK_BYTES_PER_POINT)
 
 
 def heavyhaul_runs(study, reference, cases, path=None):
