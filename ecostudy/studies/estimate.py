@@ -106,7 +106,7 @@ def leg_slowness(seconds, fastest):
     were measured on, run 10 % over their all-out time ``fastest`` (:data:`LEG_MEASURED_SLOWNESS`):
     in proportion to the running time beyond that (the 2-train study at a 100 % supplement took
     3.2 times the CPU of its 10 % over 1.8 times the steps; at half the step, the same running times,
-    2 times; docs/guards.md), never below 1."""
+    2.6 times over twice the steps, which count linearly; docs/guards.md), never below 1."""
     return max(1.0, seconds / fastest / LEG_MEASURED_SLOWNESS)
 
 

@@ -12,12 +12,15 @@ The constants are measured on this project's shared 2-core machine (pessimistic)
   took 78.0 CPU s over 6 146 steps with one worker (12.7 ms a step; ``python bench/bench_sizes.py
   --kinds network``, busy machine); as a user starts them on a quiet machine with one worker, the
   2-train, 3-train and 20-stop studies took 52, 149 and 579 s (8.5, 16.2 and 17.0 ms a step): taken
-  as 20 ms (:data:`NETWORK_SECONDS_PER_STEP`);
+  as 20 ms (:data:`NETWORK_SECONDS_PER_STEP`) a step weighted by its leg's slowness
+  (:func:`~ecostudy.studies.estimate.leg_slowness`), after the segments' first runs
+  (:func:`~ecostudy.studies.estimate.first_runs`, :data:`NETWORK_BYTES_PER_POINT`);
 - a heavy-haul run: the first 30 samples of ``studies/heavyhaul_fence.yaml`` (``python
   bench/bench_sizes.py --kinds heavyhaul``, busy machine) took 0.11 CPU s a sample at f = 10 (the
   plant's integration, the observer and the QP) and 0.42 s at f = 1 (every car a locomotive group,
-  the largest QP): 0.15 and 0.5 s a sample (:data:`HEAVYHAUL_SECONDS_PER_SAMPLE`), over 1.5 times
-  the reference's samples;
+  the largest QP): 0.15 s a sample and the QP's share of the 0.5 s at f = 1 scaled as the cube of
+  its inputs (:data:`HEAVYHAUL_SECONDS_PER_SAMPLE`, :func:`heavyhaul_runs`), over 1.5 times the
+  reference's samples;
 - a comparison (``compare``): the all-out run, the ATO optimum with its DAS phases (two NLPs more)
   and the heuristics (taken as one run more), one after the other (:func:`check_compare`);
 - a journey (``journey``): each segment's front (:data:`~ecostudy.studies.journey.FRONT_COUNT` runs, shared among the workers), then the
@@ -48,7 +51,6 @@ NETWORK_BYTES_PER_POINT = 145e3
 HEAVYHAUL_SECONDS_PER_SAMPLE = {1: 0.5}  # f = 1: one locomotive group per car, the largest QP
 HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED = 0.15
 HEAVYHAUL_MEASURED_INPUTS = {1: 1224}  # the QP inputs of those measurements: 204 cars x Nc = 6 (f = 1)
-HEAVYHAUL_MEASURED_INPUTS_GROUPED = 132  # 22 virtual cars x Nc = 6 (f = 10)
 
 
 def check_run_study(path, workers=1):
@@ -108,19 +110,19 @@ def check_network_study(study, path, workers=1):
 
 def heavyhaul_runs(study, reference, cases, path=None):
     """Seconds of each run of a heavy-haul study (its samples, up to ``max_samples``):
-    :func:`ecostudy.studies.heavyhaul.expand`'s study, reference and cases. A QP of more inputs
-    (virtual cars x Nc) than measured costs the cube of the ratio more a sample (a dense QP); with
-    ``path``, a run estimated above one run's budget is refused (unless forced)."""
+    :func:`ecostudy.studies.heavyhaul.expand`'s study, reference and cases. A sample costs the grouped
+    constant (the plant, the observer, a small QP) and a dense QP's cube of its inputs (virtual cars x
+    Nc), scaled to the f = 1 measurement: 132 inputs 0.15 s, 1 224 inputs 0.5 s, 528 inputs (f = 10,
+    Nc = 24) 0.18 s (0.10 s measured; the cube of the inputs alone put it at 9.6 s); with ``path``, a
+    run estimated above one run's budget is refused (unless forced)."""
     samples = min(study.max_samples, int(np.ceil(1.5 * reference.running_time / study.sample_time_s)))
     kinds = consist_from_document(cases[0]["consist"], "consist").kinds if cases else ()
     lengths = [len(list(run)) for _, run in groupby(kinds)]
     out = []
     for c in cases:
-        f, nc = c["labels"]["f"], c["labels"]["Nc"]
-        inputs = virtual_car_count(lengths, f) * nc
-        measured = HEAVYHAUL_MEASURED_INPUTS.get(f, HEAVYHAUL_MEASURED_INPUTS_GROUPED)
-        seconds = samples * HEAVYHAUL_SECONDS_PER_SAMPLE.get(f, HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED) * max(
-            1.0, inputs / measured) ** 3
+        inputs = virtual_car_count(lengths, c["labels"]["f"]) * c["labels"]["Nc"]
+        qp = HEAVYHAUL_SECONDS_PER_SAMPLE[1] - HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED  # the QP's share at f = 1
+        seconds = samples * (HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED + qp * (inputs / HEAVYHAUL_MEASURED_INPUTS[1]) ** 3)
         if path is not None:
             check_run(path, "horizons", f"{c['scenario']}: {inputs:,} QP inputs (virtual cars x Nc) a sample, "
                       f"{samples} samples", seconds, 8.0 * inputs ** 2)
