@@ -4,9 +4,10 @@ the machine's memory, with the estimate and how to run a part, unless ``--force`
 study passes."""
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from ecostudy.core.budget import check_study, forced, study_estimate
+from ecostudy.core.budget import check_study, forced, machine_memory, study_estimate
 from ecostudy.core.errors import InputError
 from ecostudy.io.loaders import load_network_study
 from ecostudy.io.yamlsafe import load_yaml
@@ -60,6 +61,13 @@ def test_a_study_too_big_for_one_command_is_refused_with_its_estimate(runs, work
         check_study("s.yaml", "the study's cases", runs, workers)
 
 
+def test_one_worker_over_the_memory_is_not_told_to_use_fewer():
+    with pytest.raises(InputError) as refused:
+        check_study("s.yaml", "a study", [1.0], 1, run_bytes=1e15)
+    text = str(refused.value)
+    assert "with 1 worker an estimated" in text and "fewer" not in text, text
+
+
 def sweep_study(tmp_path, n, points=1000, das=None):
     doc = {"name": "big", "track": str(AMS), "train": str(METRO), "points": points, "objective": "energy",
            "sweep": {"supplement_percent": [1 + 0.01 * i for i in range(n)]}, "output": str(tmp_path / "out")}
@@ -109,6 +117,54 @@ def test_a_network_study_too_big_for_the_command_is_refused(tmp_path):
     one_line(r, "net.yaml: study: 6 strategies x 8 trains", "above the 2 h", "--force")
 
 
+def network_variant(tmp_path, name, file="net.yaml", **fields):
+    """A shipped network study with ``fields`` changed (``points``: the space grid of every
+    segment's first runs)."""
+    doc = load_yaml((STUDIES / f"{name}.yaml").read_text())
+    for key in ("track", "train"):
+        doc[key] = str((STUDIES / doc[key]).resolve())
+    doc.update(output=str(tmp_path / "out"), **fields)
+    return write_yaml(tmp_path / file, doc)
+
+
+def test_a_network_study_counts_its_first_runs(tmp_path):
+    """The segments' first runs (all-out and net-energy, at K = points) are counted: 38 of them on
+    the 20-stop line at K = 100 000 are over the 2 h with one worker (the strategies' legs alone,
+    all that was counted, were 11 min), and two workers each holding one at K = 100 000 are over
+    half the memory of any machine of up to 30 GB."""
+    path = network_variant(tmp_path, "network_regional_20stops", points=100000)
+    with pytest.raises(InputError) as refused:
+        sizes.check_network_study(load_network_study(path), path, 1)
+    text = str(refused.value)
+    for fragment in ["net.yaml: study: 3 strategies x 3 trains after 38 first runs at K = 100,000", "above the 2 h",
+                     "--force"]:
+        assert fragment in text, text
+
+
+def test_network_refuses_first_runs_too_big_before_computing(tmp_path):
+    """The 2-train study at K = 100 000 (estimated at 2 min, it grew to 5.7 GB in its first runs before it
+    was stopped past 900 s): two workers each holding its first runs (14.5 GB) are over half the
+    memory of any machine of up to 59 GB."""
+    if (machine_memory() or 0) > 59e9:
+        pytest.skip("more memory than two such workers take")
+    r = run("network", network_variant(tmp_path, "network_metro_2trains", points=100000), "--workers", 2, "--no-plot")
+    one_line(r, "net.yaml: study: 7 strategies x 2 trains after 6 first runs at K = 100,000", "memory",
+             "use fewer --workers", "--force")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_network_study_with_slow_legs_is_estimated_dearer_per_step(tmp_path):
+    """The 2-train study took 3.2 times the CPU at a 100 % supplement (188 against 58 s, one worker)
+    over 1.8 times the clock steps, and 2.6 times at half the step (0.25 s, the same running times)
+    over twice the steps: a step costs more the slower its leg is run (docs/guards.md)."""
+    def estimate(**fields):
+        path = network_variant(tmp_path, "network_metro_2trains", f"{len(fields)}{sorted(fields)}.yaml", **fields)
+        return sum(sizes.network_runs(load_network_study(path), path))
+    shipped = estimate()
+    assert estimate(supplement_percent=100) >= 3.0 * shipped
+    assert 1.9 * shipped <= estimate(time_step_s=0.25) <= 2.1 * shipped
+
+
 @pytest.mark.parametrize("path", LIGHT, ids=[p.stem for p in LIGHT])
 def test_every_shipped_study_passes_its_estimate(path):
     """Each shipped study at its default workers (every core) and with one worker (metro_monte_carlo,
@@ -122,6 +178,24 @@ def test_every_shipped_study_passes_its_estimate(path):
 def test_every_shipped_heavyhaul_study_passes_its_estimate(path):
     check_file(path, every_core(None))
     check_file(path, 1)
+
+
+@pytest.mark.slow  # solves the study's reference run first
+def test_a_heavyhaul_estimate_grows_with_its_qp_from_the_measured_constant(tmp_path):
+    """f = 10 at Nc = 24 (528 QP inputs) took 0.10 CPU s a sample (its first 20 samples, busy
+    machine; 0.11 s at Nc = 6): estimated at 0.18 s, where the cube of the inputs over the measured
+    132 put it at 9.6 s. f = 1 at Nc = 6 (1 224 inputs) stays at its measured 0.5 s."""
+    from ecostudy.studies.heavyhaul import expand
+    doc = load_yaml((STUDIES / "heavyhaul_fence.yaml").read_text())
+    for key in ("consist", "track"):
+        doc[key] = str((STUDIES / doc[key]).resolve())
+    doc.update(output=str(tmp_path / "out"), horizons=[{"np": 30, "nc": 24}, {"np": 8, "nc": 6}])
+    study, _, reference, cases = expand(write_yaml(tmp_path / "hh.yaml", doc))
+    samples = min(study.max_samples, int(np.ceil(1.5 * reference.running_time / study.sample_time_s)))
+    per_sample = {(c["labels"]["f"], c["labels"]["Nc"]): r / samples
+                  for c, r in zip(cases, sizes.heavyhaul_runs(study, reference, cases))}
+    assert 0.15 < per_sample[(10, 24)] < 0.3
+    assert per_sample[(1, 6)] == pytest.approx(0.5)
 
 
 @pytest.mark.parametrize("points, sample_time, fragments", [

@@ -124,5 +124,6 @@ def check_study(where: str | PathLike[str], what: str, runs: Sequence[float], wo
                              f"{'s' if workers > 1 else ''}), above the {duration(MAX_STUDY_SECONDS)} one command "
                              f"may take{hint}")
     if memory and nbytes > memory / 2:
-        refuse_unless_forced(where, "study", f"{what}: {how}, with {workers} workers an estimated {size(nbytes)} of "
-                             f"memory, above half of this machine's {size(memory)}; use fewer --workers")
+        fewer = "; use fewer --workers" if workers > 1 else ""  # one worker: nothing fewer to use
+        refuse_unless_forced(where, "study", f"{what}: {how}, with {workers} worker{'s' * (workers > 1)} an estimated "
+                             f"{size(nbytes)} of memory, above half of this machine's {size(memory)}{fewer}")

@@ -22,7 +22,11 @@ The constants are measured on this project's shared 2-core machine (so they are 
   12``, busy machine) took 0.52-2.25 CPU s, 1.86 ms a grid point on average (the first case of a
   scenario 3.9-4.5 ms: it solves the all-out run and writes the NLP the others re-use):
   :data:`RUN_SECONDS_PER_POINT`; a DAS ``phases`` advice adds two NLPs of the same size and ``minlp``
-  its time limit (:func:`run_seconds`).
+  its time limit (:func:`run_seconds`). Its time grows about linearly with K and its process's memory
+  75 kB a grid point (:data:`RUN_BYTES_PER_POINT`): a network study's first runs (the all-out and
+  net-energy runs of the metro line's first segment, fresh process) took 2.3, 5.2, 14.9, 30.2 and
+  61.9 CPU s and peaked at 253, 325, 546, 923 and 1 676 MB at K = 1 000, 2 000, 5 000, 10 000 and
+  20 000 (busy machine, docs/guards.md); a network study's first runs are :func:`first_runs`.
 """
 import warnings
 from dataclasses import replace
@@ -41,6 +45,7 @@ from ecostudy.ocp.problem import check_not_crawling, prepare
 
 LEG_SECONDS_PER_STEP = 0.12
 LEG_BYTES_PER_STEP = 72e3
+LEG_MEASURED_SLOWNESS = 1.1  # the legs measured ran 10 % over their all-out time (:func:`leg_slowness`)
 SAMPLE_SECONDS = {  # [s] a sample, by (kind, variant[, transcription]) or kind
     ("sbpc", "nominal"): 0.55, ("sbpc", "two_step"): 0.39, ("sbpc", "multi"): 0.09,
     ("sbpc", "multi", "condensed"): 0.022, ("sppc", "nominal"): 0.06, ("sppc", "two_step"): 0.15, "rspc": 0.006,
@@ -49,13 +54,18 @@ REPLAY_SECONDS = 0.0012
 CONVEX_GROWTH = 1.5   # a convex sample's time grows as K^1.5
 RUN_SECONDS_PER_POINT = 2.0e-3
 DAS_EXTRA_POINT_RUNS = {"round": 0.0, "phases": 2.0, "minlp": 3.0}
-RUN_BYTES_PER_POINT = 20e3        # the space NLP of K points (Ipopt's factor and the model): 20 MB at K = 1000
+RUN_BYTES_PER_POINT = 75e3  # a space run's process grows 75 kB a point (the model, its NL file, Ipopt's factor)
 
 
 def run_seconds(points, das=None, das_time_limit=60.0):
     """One space-domain run of ``points`` grid nodes, with its DAS advice [s]."""
     seconds = points * RUN_SECONDS_PER_POINT * (1 + DAS_EXTRA_POINT_RUNS.get(das or "round", 0.0))
     return seconds + (das_time_limit if das == "minlp" else 0.0)
+
+
+def run_bytes(points):
+    """Memory of one space-domain run of ``points`` grid nodes [bytes]: its process's growth."""
+    return points * RUN_BYTES_PER_POINT
 
 
 def check_solve(points, das=None, das_time_limit=60.0):
@@ -83,9 +93,29 @@ def spec_seconds(spec, points):
                           spec.get("transcription", "simultaneous"))
 
 
+def first_runs(study):
+    """Seconds of each space-domain run that starts a network study's legs (``network.fleet.plan``):
+    every segment's net-energy run at K = ``study.points``, after its all-out run where the study
+    gives a supplement (not running times)."""
+    per_segment = 1 if study.running_times is not None else 2
+    return [run_seconds(study.points)] * (per_segment * (len(study.stops) - 1))
+
+
+def leg_slowness(seconds, fastest):
+    """How much dearer a clock step of a leg run in ``seconds`` is than one of the legs the constants
+    were measured on, run 10 % over their all-out time ``fastest`` (:data:`LEG_MEASURED_SLOWNESS`):
+    in proportion to the running time beyond that (the 2-train study at a 100 % supplement took
+    3.2 times the CPU of its 10 % over 1.8 times the steps; at half the step, the same running times,
+    2.6 times over twice the steps, which count linearly; docs/guards.md), never below 1."""
+    return max(1.0, seconds / fastest / LEG_MEASURED_SLOWNESS)
+
+
 def check_network(study, path):
-    """Refuse a network study whose time-domain legs are estimated above one run's budget; returns
-    every leg's clock steps."""
+    """Refuse a network study whose first runs (:func:`first_runs`) or time-domain legs are estimated
+    above one run's budget; returns every leg's clock steps weighted by its :func:`leg_slowness` (the
+    steps of a measured leg it costs)."""
+    check_run(path, "points", f"a segment's first run at K = {study.points:,}", run_seconds(study.points),
+              run_bytes(study.points))
     legs = []
     for i, (a, b) in enumerate(zip(study.stops[:-1], study.stops[1:])):
         case = prepare(study.track, study.train, a, b, study.points)
@@ -98,9 +128,10 @@ def check_network(study, path):
         else:
             seconds, field = case.estimate * (1 + study.supplement), "supplement_percent"
         steps = int(np.ceil(seconds / study.dt))
+        weighted = steps * leg_slowness(seconds, case.estimate)
         check_run(path, field, f"the leg {a} - {b} of {seconds:g} s is {steps:,} clock steps of {study.dt:g} s "
-                  "for each train and strategy", steps * LEG_SECONDS_PER_STEP, steps * LEG_BYTES_PER_STEP)
-        legs.append(steps)
+                  "for each train and strategy", weighted * LEG_SECONDS_PER_STEP, steps * LEG_BYTES_PER_STEP)
+        legs.append(weighted)
     return legs
 
 

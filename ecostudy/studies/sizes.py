@@ -12,12 +12,15 @@ The constants are measured on this project's shared 2-core machine (pessimistic)
   took 78.0 CPU s over 6 146 steps with one worker (12.7 ms a step; ``python bench/bench_sizes.py
   --kinds network``, busy machine); as a user starts them on a quiet machine with one worker, the
   2-train, 3-train and 20-stop studies took 52, 149 and 579 s (8.5, 16.2 and 17.0 ms a step): taken
-  as 20 ms (:data:`NETWORK_SECONDS_PER_STEP`);
+  as 20 ms (:data:`NETWORK_SECONDS_PER_STEP`) a step weighted by its leg's slowness
+  (:func:`~ecostudy.studies.estimate.leg_slowness`), after the segments' first runs
+  (:func:`~ecostudy.studies.estimate.first_runs`, :data:`NETWORK_BYTES_PER_POINT`);
 - a heavy-haul run: the first 30 samples of ``studies/heavyhaul_fence.yaml`` (``python
   bench/bench_sizes.py --kinds heavyhaul``, busy machine) took 0.11 CPU s a sample at f = 10 (the
   plant's integration, the observer and the QP) and 0.42 s at f = 1 (every car a locomotive group,
-  the largest QP): 0.15 and 0.5 s a sample (:data:`HEAVYHAUL_SECONDS_PER_SAMPLE`), over 1.5 times
-  the reference's samples;
+  the largest QP): 0.15 s a sample and the QP's share of the 0.5 s at f = 1 scaled as the cube of
+  its inputs (:data:`HEAVYHAUL_SECONDS_PER_SAMPLE`, :func:`heavyhaul_runs`), over 1.5 times the
+  reference's samples;
 - a comparison (``compare``): the all-out run, the ATO optimum with its DAS phases (two NLPs more)
   and the heuristics (taken as one run more), one after the other (:func:`check_compare`);
 - a journey (``journey``): each segment's front (:data:`~ecostudy.studies.journey.FRONT_COUNT` runs, shared among the workers), then the
@@ -37,13 +40,17 @@ from ecostudy.io.loopfile import SimulateFile
 from ecostudy.studies import closedloop
 from ecostudy.studies.batch import STUDY_KINDS
 from ecostudy.studies.journey import FRONT_COUNT
-from ecostudy.studies.estimate import RUN_BYTES_PER_POINT, check_closed_loop, check_network, run_seconds, spec_seconds
+from ecostudy.studies.estimate import (RUN_BYTES_PER_POINT, check_closed_loop, check_network, first_runs, run_seconds,
+                                       spec_seconds)
 
 NETWORK_SECONDS_PER_STEP = 0.02
+# [bytes] a network command's process per grid point of its first runs: it keeps every segment's run
+# (the legs' guesses) as it solves the next: 490 MB, 917 MB and 1.64 GB at K = 2 000, 5 000 and 10 000
+# against 265 MB at K = 500 (the 2-train study, one worker; a lone space run grows 75 kB a point)
+NETWORK_BYTES_PER_POINT = 145e3
 HEAVYHAUL_SECONDS_PER_SAMPLE = {1: 0.5}  # f = 1: one locomotive group per car, the largest QP
 HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED = 0.15
 HEAVYHAUL_MEASURED_INPUTS = {1: 1224}  # the QP inputs of those measurements: 204 cars x Nc = 6 (f = 1)
-HEAVYHAUL_MEASURED_INPUTS_GROUPED = 132  # 22 virtual cars x Nc = 6 (f = 10)
 
 
 def check_run_study(path, workers=1):
@@ -82,35 +89,40 @@ def check_closed_loop_study(path, workers=1, only=None):
 
 
 def network_runs(study, path):
-    """Seconds of each strategy of a network study (every train over every leg)."""
+    """Seconds of each run of a network study: the segments' first runs
+    (:func:`~ecostudy.studies.estimate.first_runs`, shared among the workers), then each strategy
+    (every train over every leg, its steps weighted by
+    :func:`~ecostudy.studies.estimate.leg_slowness`)."""
     legs = check_network(study, path)
     per_strategy = sum(legs) * len(study.names) * NETWORK_SECONDS_PER_STEP
-    return [per_strategy] * len(study.strategies)
+    return first_runs(study) + [per_strategy] * len(study.strategies)
 
 
 def check_network_study(study, path, workers=1):
     """Refuse a network study (loaded: :func:`ecostudy.io.loaders.load_network_study`) too big for one
-    run (its legs) or for the command (every strategy)."""
-    strategies, trains = len(study.strategies), len(study.names)
-    check_study(path, f"{strategies} strateg{'ies' if strategies != 1 else 'y'} x {trains} train{'s' * (trains != 1)}",
-                network_runs(study, path), workers)
+    run (a first run, a leg) or for the command (the first runs and every strategy; each worker
+    holds a first run's model)."""
+    strategies, trains, firsts = len(study.strategies), len(study.names), len(first_runs(study))
+    check_study(path, f"{strategies} strateg{'ies' if strategies != 1 else 'y'} x {trains} train{'s' * (trains != 1)} "
+                f"after {firsts} first run{'s' * (firsts != 1)} at K = {study.points:,}", network_runs(study, path),
+                workers, study.points * NETWORK_BYTES_PER_POINT)
 
 
 def heavyhaul_runs(study, reference, cases, path=None):
     """Seconds of each run of a heavy-haul study (its samples, up to ``max_samples``):
-    :func:`ecostudy.studies.heavyhaul.expand`'s study, reference and cases. A QP of more inputs
-    (virtual cars x Nc) than measured costs the cube of the ratio more a sample (a dense QP); with
-    ``path``, a run estimated above one run's budget is refused (unless forced)."""
+    :func:`ecostudy.studies.heavyhaul.expand`'s study, reference and cases. A sample costs the grouped
+    constant (the plant, the observer, a small QP) and a dense QP's cube of its inputs (virtual cars x
+    Nc), scaled to the f = 1 measurement: 132 inputs 0.15 s, 1 224 inputs 0.5 s, 528 inputs (f = 10,
+    Nc = 24) 0.18 s (0.10 s measured; the cube of the inputs alone put it at 9.6 s); with ``path``, a
+    run estimated above one run's budget is refused (unless forced)."""
     samples = min(study.max_samples, int(np.ceil(1.5 * reference.running_time / study.sample_time_s)))
     kinds = consist_from_document(cases[0]["consist"], "consist").kinds if cases else ()
     lengths = [len(list(run)) for _, run in groupby(kinds)]
     out = []
     for c in cases:
-        f, nc = c["labels"]["f"], c["labels"]["Nc"]
-        inputs = virtual_car_count(lengths, f) * nc
-        measured = HEAVYHAUL_MEASURED_INPUTS.get(f, HEAVYHAUL_MEASURED_INPUTS_GROUPED)
-        seconds = samples * HEAVYHAUL_SECONDS_PER_SAMPLE.get(f, HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED) * max(
-            1.0, inputs / measured) ** 3
+        inputs = virtual_car_count(lengths, c["labels"]["f"]) * c["labels"]["Nc"]
+        qp = HEAVYHAUL_SECONDS_PER_SAMPLE[1] - HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED  # the QP's share at f = 1
+        seconds = samples * (HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED + qp * (inputs / HEAVYHAUL_MEASURED_INPUTS[1]) ** 3)
         if path is not None:
             check_run(path, "horizons", f"{c['scenario']}: {inputs:,} QP inputs (virtual cars x Nc) a sample, "
                       f"{samples} samples", seconds, 8.0 * inputs ** 2)
