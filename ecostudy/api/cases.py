@@ -60,7 +60,7 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
     (:func:`~ecostudy.studies.batch.run_kind`); ``kind``: a registered study kind
     (:data:`~ecostudy.studies.batch.STUDY_KINDS`; ``run``: scenarios x sweep, or a library)."""
     workers = every_core(workers)
-    check_options(workers=workers)  # a study too big for the command: refused by its kind's size (unless --force)
+    check_options(workers=workers, dask=dask)  # a study too big for the command: refused by its kind's size (unless --force)
     table, counts, folder = run_kind(kind, study, workers, dask, retry_failed, Path(out) if out else None, progress)
     write_html(folder)
     return reported(folder, [f"{counted(counts['total'], 'cases')}: {counts['stored_before']} already stored, {counts['computed']} "
@@ -77,7 +77,7 @@ def simulate_folder(study: Path, workers: Optional[int] = None, dask: Optional[s
     plant's deviations and noise (``only``: these controllers' runs computed now); ``workers``: every
     core by default (the per-step solve times are then measured with every core busy)."""
     workers = every_core(workers)
-    check_options(workers=workers)
+    check_options(workers=workers, dask=dask)
     check_closed_loop_study(study, workers, only)  # runs that cannot end, or too big: refused (unless --force)
     outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress, only,
                              loop_figures if plot else None)
@@ -104,7 +104,7 @@ def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[
     coupled-mass train, every K_b, fence and horizon of the study (OpenBLAS set to ``blas_threads``);
     ``workers``: every core by default (the per-step solve times are then measured with every core busy)."""
     workers = every_core(workers)
-    check_options(workers=workers)
+    check_options(workers=workers, dask=dask)
     limit_blas_threads(blas_threads)  # before the workers fork: they inherit it
     outcome = heavyhaul_study(study, workers, dask, retry_failed, Path(out) if out else None, progress,
                               heavyplots.draw if plot else None)
@@ -125,7 +125,7 @@ def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, w
     strategy a case of the study kind ``network`` (:mod:`ecostudy.studies.network`), stored in
     ``results.sqlite`` and resumed, over ``workers`` processes (every core by default) or Dask."""
     figures, workers = output(fig_format, dpi), every_core(workers)
-    check_options(workers=workers)
+    check_options(workers=workers, dask=dask)
     with worker_pool(workers) if workers > 1 else nullcontext() as pool:  # the fleet's first runs
         expanded = expand_network(study, workers, pool, note, out)  # too big: refused first (unless --force)
     ran = run_expanded("network", expanded, study, workers, dask, retry_failed, progress=progress,

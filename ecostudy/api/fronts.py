@@ -54,7 +54,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     resumed, over ``workers`` processes (every core by default) or a Dask scheduler."""
     figures, workers, started = output(fig_format, dpi), every_core(workers), perf_counter()
     check_options(count=count, supplement_max=supplement_max, points=points, workers=workers, weighted=weighted,
-                  das_time_limit=das_time_limit)
+                  das_time_limit=das_time_limit, dask=dask)
     trk, trn, f, t, k, st, (train_doc, track_doc) = case_from(study, track, train, from_stop, to_stop, points,
                                                               "pareto")
     no_windows(st, "pareto", study)
@@ -96,7 +96,7 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
     ``compare`` (:mod:`ecostudy.studies.compare`), stored in ``results.sqlite`` and resumed, over
     ``workers`` processes (every core by default) or a Dask scheduler."""
     figures, workers = output(fig_format, dpi), every_core(workers)
-    check_options(time=time, supplement=supplement, points=points, workers=workers)
+    check_options(time=time, supplement=supplement, points=points, workers=workers, dask=dask)
     only_one(time=time, supplement=supplement)
     _, _, f, t, k, st, (train_doc, track_doc) = case_from(study, track, train, from_stop, to_stop, points, "compare")
     no_windows(st, "compare", study)

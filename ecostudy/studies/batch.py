@@ -4,7 +4,6 @@ Cases already in the store are skipped; the others run as pure tasks (:func:`run
 their results are stored by this process as they arrive. Failures are results too: an
 infeasible or failed case is stored with its reason and the study goes on.
 """
-import re
 import time
 import warnings
 from concurrent.futures import as_completed
@@ -29,6 +28,7 @@ from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.ocp.problem import Written
 from ecostudy.studies.cases import case_key, expand
+from ecostudy.studies.options import check_options
 from ecostudy.studies.estimate import RUN_BYTES_PER_POINT, run_seconds
 from ecostudy.studies.workers import arriving, worker_pool
 
@@ -113,9 +113,7 @@ def _dask(todo, address, task, arrived):
         from distributed import as_completed as dask_completed
     except ImportError:
         raise EcostudyError("--dask needs Dask: pip install 'ecostudy[dask]'") from None
-    if not re.fullmatch(r"(tcp|tls|ucx)://[^\s:/]+:\d{1,5}", address or ""):
-        raise InputError(problem("command line", "--dask", f"expected a scheduler address tcp://host:port, got "
-                                 f"{address!r}"))
+    check_options(dask=address)
     try:
         client = Client(address, timeout=15)
     except (OSError, TimeoutError) as exc:

@@ -6,6 +6,7 @@ an input file); the functions of :mod:`ecostudy.api` call them first.
 """
 import math
 import numbers
+import re
 from pathlib import Path
 from typing import Any, Mapping, NamedTuple, Optional
 
@@ -26,12 +27,20 @@ OPTION_RANGES = {
 }
 
 
-def check_options(*, where: str = "command line", spelled: Optional[Mapping[str, str]] = None, **values: Any) -> None:
+DASK_ADDRESS = re.compile(r"(tcp|tls|ucx)://[^\s:/]+:\d{1,5}")  # a Dask scheduler's address
+
+
+def check_options(*, where: str = "command line", spelled: Optional[Mapping[str, str]] = None,
+                  dask: Optional[str] = None, **values: Any) -> None:
     """Refuse numeric options that are not numbers, not finite or out of their range
-    (:data:`OPTION_RANGES`): one line each, naming the option, before anything is computed (exit
-    status 2). ``where`` and ``spelled`` (range name -> the name a caller gives it) name them as the
-    Python API does (``arguments: running_time: ...``)."""
+    (:data:`OPTION_RANGES`), and a ``dask`` that is not a scheduler address (:data:`DASK_ADDRESS`):
+    one line each, naming the option, before anything is computed or written (exit status 2).
+    ``where`` and ``spelled`` (range name -> the name a caller gives it) name them as the Python API
+    does (``arguments: running_time: ...``)."""
     lines = []
+    if dask is not None and not (isinstance(dask, str) and DASK_ADDRESS.fullmatch(dask)):
+        option = spelled.get("dask", "dask") if spelled is not None else "--dask"
+        lines.append(problem(where, option, f"expected a scheduler address tcp://host:port, got {dask!r}"))
     for name, value in values.items():
         if value is None:
             continue
