@@ -270,6 +270,10 @@ def test_calibrate_command(tmp_path, log_files, truth):
     assert result.exit_code == 0, result.output
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "ok" and summary["fitted"] == list(DEFAULT_FIT)
+    lines = result.output.splitlines()  # what it judged, not a bare 'ok'; the mass in one notation
+    assert "ok" not in lines and any(line.startswith("calibration ok: every parameter fitted identifiable")
+                                     for line in lines), result.output
+    assert "e+0" not in result.output and lines[-1].startswith("calibrate: ok, written to ")
     for name in ("parameters.csv", "residuals.csv", "residuals.png", "regional_alstom_calibrated.yaml"):
         assert (out / name).is_file(), name
     from .conftest import assert_folder
@@ -302,6 +306,13 @@ def test_validate_command(tmp_path, log_files):
     assert_folder(out, "validate", ["validate"], status=summary["status"].split(":")[0])
     strict = run("validate", log_files[0], "--energy-tolerance", 1, "--out", tmp_path / "v2", "--no-plot")
     assert strict.exit_code == 1 and "traction energy" in strict.output
+    # what it judged in a line, each run's reason once (stderr), the last line as every command's
+    flagged = json.loads((tmp_path / "v2" / "summary.json").read_text())["not_ok"]
+    assert flagged and all(strict.output.count(c["status"].split(": ", 1)[1]) == 1 for c in flagged), strict.output
+    lines = strict.output.splitlines()
+    assert f"validate flagged: {len(flagged)} of 2 runs not within 1 % traction energy, 5 % running time " \
+           "and the stop tolerance of the log (each below)" in lines and "ok" not in lines and "flagged" not in lines
+    assert lines[-1].startswith("validate: flagged, written to ")
 
 
 # ------------------------------------------------------------------------- bad logs: one line, exit 2

@@ -13,6 +13,7 @@ from typing import Callable, Optional, Sequence
 
 from ecostudy.api.arguments import spelled
 from ecostudy.api.blas import limit_blas_threads
+from ecostudy.calibration.estimate import CHECKED
 from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.units import number
@@ -47,7 +48,8 @@ HEAVY_COLUMNS = {"K_b": None, "f": None, "Np": None, "Nc": None, "status": None,
 NETWORK_COLUMNS = ["strategy", "status", "substation_kWh", "saving_vs_independent_pct", "traction_input_kWh",
                    "regen_used_kWh", "regen_lost_kWh", "line_losses_kWh", "unserved_kWh", "balance_error_pct",
                    "min_separation_m", "all_verified"]
-CALIBRATION_COLUMNS = ["name", "unit", "prior", "estimate", "low", "high", "boot_low", "boot_high", "identifiable"]
+CALIBRATION_COLUMNS = {"name": None, "unit": None, **dict.fromkeys(["prior", "estimate", "low", "high", "boot_low",
+                                                                     "boot_high"], "~5"), "identifiable": None}
 VALIDATION_COLUMNS = {"run": None, "from_m": ".0f", "to_m": ".0f", "logged_time_s": ".1f", "model_time_s": ".1f",
                       "time_difference_pct": ".2f", "logged_traction_kWh": ".2f", "model_traction_kWh": ".2f",
                       "traction_difference_pct": ".2f", "status": None}
@@ -155,8 +157,7 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
         calplots.residuals(result.residuals, Path(out) / "residuals.png", "calibration from logged runs")
     write_html(out)
     q = result.quality
-    lines = [shown(result.table[[c for c in CALIBRATION_COLUMNS if c in result.table]].dropna(axis=1, how="all"),
-                   places=".5g"),
+    lines = [shown(result.table.dropna(axis=1, how="all"), CALIBRATION_COLUMNS),
              f"{q['runs']} runs, {q['speed_samples']} speed samples: replayed speed off the logged by "
              f"{q['rms_speed_mps']:.3f} m/s RMS; innovations {q['structure']:.2f} times white noise over 5 s"]
     lines += [f"{row['log']} run {row['run']}: optimum for {row['running_time_s']:.1f} s uses "
@@ -166,7 +167,8 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
               f"{row['draws']} parameter draws)" + ("" if row["verified"] else " (optimum not verified)")
               if row["saving_pct"] == row["saving_pct"] else f"{row['log']} run {row['run']}: {row['status']}"
               for row in summary.get("savings", [])]  # (a NaN saving: no optimum, its status says why)
-    lines += [f"{result.status}" + (f": {result.reason}" if result.reason else ""), "outputs " + listed(out)]
+    lines += [f"calibration ok: {CHECKED}" if result.status == "ok" else f"calibration flagged: not all of {CHECKED} "
+              "(each reason below)", "outputs " + listed(out)]
     return reported(out, lines)
 
 
@@ -189,5 +191,14 @@ def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optiona
                           f"{summary['model_traction_kWh']:.2f} kWh ("
                           + (f"{number(summary['traction_difference_pct'], '+.2f')} %)" if summary["traction_difference_pct"]
                              is not None else "none logged)"),
-                          f"{summary['status']}" + (f": {summary['reason']}" if summary["reason"] else ""),
+                          validation_line(table, summary["tolerances_pct"]),
                           "outputs " + listed(out)])
+
+
+def validation_line(table, tolerances: dict) -> str:
+    """What validate judged and how many runs passed (the reasons of those that did not: the problems)."""
+    bad, bounds = int((table["status"] != "ok").sum()), (f"{tolerances['energy']:g} % traction energy, "
+                                                         f"{tolerances['time']:g} % running time")
+    if not bad:
+        return f"validate ok: every run of {len(table)} within {bounds} and the stop tolerance of the log"
+    return f"validate flagged: {bad} of {len(table)} runs not within {bounds} and the stop tolerance of the log (each below)"

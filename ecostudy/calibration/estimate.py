@@ -21,6 +21,9 @@ from ecostudy.calibration.fit import (
 MAX_RMS_SPEED = 0.3    # [m/s]
 MAX_STRUCTURE = 2.0    # moving-average innovations over white-noise expectation (1.3 at most on 200 generated logs)
 WINDOW = 5.0           # [s]
+# what an ok calibration passed (its status line says so)
+CHECKED = (f"every parameter fitted identifiable, replayed speed within {MAX_RMS_SPEED:g} m/s RMS, innovations "
+           f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s")
 BOOTSTRAP_DRAWS = 200
 
 

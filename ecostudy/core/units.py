@@ -38,7 +38,13 @@ def to_kwh(energy: Numeric) -> Numeric:
 def number(value: Any, spec: str = ".3f") -> str:
     """``value`` formatted by ``spec`` as every printed table and report line shows it: a value that
     rounds to zero prints as zero with its digits ('0.000', '+0.00'), never '-0.000' (the files keep
-    the full value)."""
+    the full value). ``spec`` '~N': N significant digits in fixed point, never an exponent (255200
+    and 265310.4 as '255200' and '265310', 0.851234 as '0.85123'), for a column whose rows differ
+    in magnitude."""
+    if spec.startswith("~"):  # (not finite or not a number: as it is)
+        finite = isinstance(value, (int, float, np.floating)) and math.isfinite(value)
+        digits = int(spec[1:]) - 1 - (math.floor(math.log10(abs(value))) if finite and value else 0)
+        spec = f".{max(0, digits)}f" if finite else ""
     text = format(value, spec)
     if isinstance(value, (int, float, np.floating)) and math.isfinite(value) and "-" in text \
             and not re.search(r"[1-9]", re.split(r"[eE]", text)[0]):
