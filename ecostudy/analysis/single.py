@@ -13,7 +13,7 @@ from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import verify
-from ecostudy.core.status import Judged, Status, from_checks, part, worst
+from ecostudy.core.status import Judged, Status, from_checks, part, solver_check, worst
 from ecostudy.core.types import Timing, Trajectory
 from ecostudy.core.units import KWH, number
 from ecostudy.io.runsummary import RunSummary, SolverRun, Verification
@@ -62,7 +62,7 @@ class RunResult(Judged):
         block = self.summary["verification"]  # these two blocks only: a study may put a table row under "das"
         solver = SolverRun.from_dict(self.summary["solver"]).status
         ver = None if block is None else Verification.from_dict(block)
-        checks = {f"Ipopt ended {solver}, not optimal": solver == "optimal"}
+        checks = solver_check(solver)
         if ver is None:
             checks["not re-simulated"] = False
         else:

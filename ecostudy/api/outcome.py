@@ -31,11 +31,28 @@ class Report(StudyResult):
                         frame=bad if len(bad) else self.table if self.tables else None)
 
     def problems(self, shown: int = 20) -> list[str]:
-        """'status: case: reason' of each case not ok (the first ``shown``, then how many more)."""
-        bad = self.not_ok
-        lines = [f"{c.status.kind}: {c.case}: {c.status.reason}" for c in bad[:shown]]
-        return lines + ([f"... and {len(bad) - shown} more cases not ok (summary.json, report.html)"]
-                        if len(bad) > shown else [])
+        """'status: cases: reason' of the cases not ok, each status and reason once with the cases it
+        applies to (:func:`together`; the first ``shown`` lines, then how many more cases)."""
+        groups: dict[tuple[str, str], list[str]] = {}
+        for c in self.not_ok:
+            groups.setdefault((c.status.kind, c.status.reason), []).append(c.case)
+        items = list(groups.items())
+        left = sum(len(cases) for _, cases in items[shown:])
+        return ([f"{kind}: {together(cases)}: {reason}" for (kind, reason), cases in items[:shown]]
+                + ([f"... and {left} more cases not ok (summary.json, report.html)"] if left else []))
+
+
+def together(cases: Sequence[str]) -> str:
+    """Case names as one: names 'a=1, b=2' that differ in one 'key=value' only as
+    'a=1, 5, 9 (b=2)', else joined by '; '."""
+    split = [c.split(", ") for c in cases]
+    if len(cases) > 1 and len({len(s) for s in split}) == 1:
+        differ = [i for i in range(len(split[0])) if len({s[i] for s in split}) > 1]
+        pairs = [s[differ[0]].partition("=") for s in split] if len(differ) == 1 else []
+        if pairs and all(p[1] for p in pairs) and len({p[0] for p in pairs}) == 1:
+            rest = ", ".join(f for j, f in enumerate(split[0]) if j != differ[0])
+            return f"{pairs[0][0]}={', '.join(p[2] for p in pairs)}" + (f" ({rest})" if rest else "")
+    return "; ".join(cases)
 
 
 @dataclass(repr=False)

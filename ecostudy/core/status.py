@@ -119,6 +119,12 @@ def from_checks(checks: dict[str, bool]) -> Status:
     return OK if not missed else flagged("; ".join(missed))
 
 
+def solver_check(ended: str) -> dict[str, bool]:
+    """The check that Ipopt proved optimality, for :func:`from_checks`: named by how it ``ended``
+    ('Ipopt ended maxIterations, not optimal'), passed when that is ``optimal``."""
+    return {f"Ipopt ended {ended}, not optimal": ended == "optimal"}
+
+
 def part(name: str, status: Status) -> Status:
     """``status`` of a part named ``name`` as the whole it belongs to reports it: ``ok``, or ``flagged``
     naming the part (a failed part too: the whole still stands, e.g. a run whose driver advice failed)."""

@@ -21,7 +21,7 @@ import numpy as np
 
 from ecostudy.core.errors import InputError
 from ecostudy.core.grid import interval_of
-from ecostudy.core.status import Judged, Status, from_checks
+from ecostudy.core.status import Judged, Status, from_checks, solver_check
 from ecostudy.core.types import State, Train
 from ecostudy.core.units import FloatArray, to_kwh
 from ecostudy.ocp import space
@@ -179,7 +179,7 @@ class Plan(PlanArrays, Judged):
 
     @property
     def status(self) -> Status:
-        return from_checks({f"Ipopt ended {self.outcome.status}, not optimal": self.outcome.optimal})
+        return from_checks(solver_check(self.outcome.status))
 
     def line(self) -> str:
         """The plan in a few words (its repr adds the status)."""

@@ -1,0 +1,45 @@
+"""What the terminal says after a study: each reason once with the cases it applies to, the
+calibration table's numbers in one notation per row, and the one wording of a solve Ipopt did not
+prove optimal."""
+import pandas as pd
+
+from ecostudy import api
+from ecostudy.api.cases import CALIBRATION_COLUMNS
+from ecostudy.api.outcome import shown
+from ecostudy.core.status import Status, from_checks, solver_check
+from ecostudy.core.units import number
+from ecostudy.io.folder import write_summary
+
+from .conftest import TRACKS
+
+ADHESION = "a locomotive asked 1.04 of mu(v) m g"
+
+
+def test_a_reason_shared_by_runs_is_printed_once_naming_them(tmp_path):
+    runs = {f"K_b={k}, f=10, Np=4, Nc=2": Status("flagged", ADHESION) for k in ("1.0", "40.0", "60.0", "80.0")}
+    runs["K_b=100.0, f=10, Np=4, Nc=2"] = Status("failed", "Ipopt ended infeasible")
+    write_summary(tmp_path, "heavyhaul", runs)
+    assert api.load(tmp_path).problems() == [
+        f"flagged: K_b=1.0, 40.0, 60.0, 80.0 (f=10, Np=4, Nc=2): {ADHESION}",
+        "failed: K_b=100.0, f=10, Np=4, Nc=2: Ipopt ended infeasible"]
+    write_summary(tmp_path, "validate", {"run 0": Status("flagged", "late"), "run 1": Status("flagged", "early")})
+    assert api.load(tmp_path).problems() == ["flagged: run 0: late", "flagged: run 1: early"]
+
+
+def test_the_calibration_table_keeps_one_notation_in_a_row():
+    """A prior of 255200 kg beside an estimate of 265310.4 kg (printed '2.552e+05' beside '2.6531e+05'
+    with '.5g'): five significant digits in fixed point, the efficiency beside them alike."""
+    table = pd.DataFrame({"name": ["mass", "efficiency"], "unit": ["kg", "-"], "prior": [255200.0, 0.9],
+                          "estimate": [265310.4, 0.851234], "low": [263000.1, 0.84], "high": [267620.5, 0.862],
+                          "identifiable": [True, True]})
+    lines = shown(table, CALIBRATION_COLUMNS).splitlines()
+    assert lines[1].split() == ["mass", "kg", "255200", "265310", "263000", "267620", "True"]
+    assert lines[2].split() == ["efficiency", "-", "0.90000", "0.85123", "0.84000", "0.86200", "True"]
+    assert [number(x, "~5") for x in (-0.0000001, float("nan"), 2.6531e6)] == ["-0.00000010000", "nan", "2653100"]
+
+
+def test_a_solve_ipopt_did_not_prove_optimal_is_worded_in_one_place():
+    assert from_checks(solver_check("max_iterations")).reason == "Ipopt ended max_iterations, not optimal"
+    assert from_checks(solver_check("optimal")).ok
+    written = [p.name for p in (TRACKS.parent / "ecostudy").rglob("*.py") if "Ipopt ended {" in p.read_text()]
+    assert written == ["status.py"]
