@@ -22,8 +22,11 @@ def test_a_reason_shared_by_runs_is_printed_once_naming_them(tmp_path):
     assert api.load(tmp_path).problems() == [
         f"flagged: K_b=1.0, 40.0, 60.0, 80.0 (f=10, Np=4, Nc=2): {ADHESION}",
         "failed: K_b=100.0, f=10, Np=4, Nc=2: Ipopt ended infeasible"]
-    write_summary(tmp_path, "validate", {"run 0": Status("flagged", "late"), "run 1": Status("flagged", "early")})
-    assert api.load(tmp_path).problems() == ["flagged: run 0: late", "flagged: run 1: early"]
+    write_summary(tmp_path, "validate", {"run 0": Status("flagged", "late"), "run 1": Status("flagged", "early"),
+                                         "run 2": Status("flagged", "late")})
+    assert api.load(tmp_path).problems() == ["flagged: run 0, 2: late", "flagged: run 1: early"]
+    write_summary(tmp_path, "run", {"metro 80 s": Status("flagged", "late"), "regional": Status("flagged", "late")})
+    assert api.load(tmp_path).problems() == ["flagged: metro 80 s; regional: late"]
 
 
 def test_the_calibration_table_keeps_one_notation_in_a_row():

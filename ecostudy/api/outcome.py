@@ -43,15 +43,17 @@ class Report(StudyResult):
 
 
 def together(cases: Sequence[str]) -> str:
-    """Case names as one: names 'a=1, b=2' that differ in one 'key=value' only as
-    'a=1, 5, 9 (b=2)', else joined by '; '."""
+    """Case names as one: names 'a=1, b=2' that differ in one 'key=value' (or 'key value') only as
+    'a=1, 5, 9 (b=2)' ('run 0, 1'), else joined by '; '."""
     split = [c.split(", ") for c in cases]
     if len(cases) > 1 and len({len(s) for s in split}) == 1:
         differ = [i for i in range(len(split[0])) if len({s[i] for s in split}) > 1]
-        pairs = [s[differ[0]].partition("=") for s in split] if len(differ) == 1 else []
-        if pairs and all(p[1] for p in pairs) and len({p[0] for p in pairs}) == 1:
+        fields = [s[differ[0]] for s in split] if len(differ) == 1 else []
+        sep = "=" if all("=" in f for f in fields) else " "
+        pairs = [f.partition("=") if sep == "=" else f.rpartition(" ") for f in fields]
+        if pairs and all(p[0] and p[1] for p in pairs) and len({p[0] for p in pairs}) == 1:
             rest = ", ".join(f for j, f in enumerate(split[0]) if j != differ[0])
-            return f"{pairs[0][0]}={', '.join(p[2] for p in pairs)}" + (f" ({rest})" if rest else "")
+            return f"{pairs[0][0]}{sep}{', '.join(p[2] for p in pairs)}" + (f" ({rest})" if rest else "")
     return "; ".join(cases)
 
 
