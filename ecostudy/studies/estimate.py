@@ -15,8 +15,9 @@ The constants are measured on this project's shared 2-core machine (so they are 
   convex 8.4 ms at K = 100; a replay (open loop, ATO) 0.8-1.1 ms: :data:`SAMPLE_SECONDS`, to two
   digits. SBPC and SPPC plan over the samples left, so their grid matters less than their variant.
   Those SBPC constants are with ``metro_terminal.yaml``'s DAS levels, reserves and terminal approach:
-  SBPC nominal with its defaults took 72 ms a sample at K = 400 (busy machine, docs/guards.md), taken
-  as 0.1 s (:data:`SBPC_PLAIN_SECONDS`, :func:`spec_seconds`). The convex SOCP grows faster than K:
+  SBPC nominal with its defaults took 95 and 72 ms a sample at K = 200 and 400, with DAS levels alone
+  117 ms at K = 200 (busy machine, docs/guards.md), taken as 0.13 s (:data:`SBPC_PLAIN_SECONDS`,
+  :func:`spec_seconds`). The convex SOCP grows faster than K:
   the all-out SOCP of the Amsterdam case took 0.17, 0.69, 3.3 and 9.4 s at K = 200, 1000, 2000 and
   5000 and over 100 s at 20 000 (busy machine); a sample (200 of 0.38 s, fresh process, docs/guards.md)
   took 10, 60 and 352 ms at K = 200, 1 000 and 3 000, so a sample is taken as
@@ -55,8 +56,8 @@ SAMPLE_SECONDS = {  # [s] a sample, by (kind, variant[, transcription]) or kind
     ("sbpc", "nominal"): 0.55, ("sbpc", "two_step"): 0.39, ("sbpc", "multi"): 0.09,
     ("sbpc", "multi", "condensed"): 0.022, ("sppc", "nominal"): 0.06, ("sppc", "two_step"): 0.15, "rspc": 0.006}
 REPLAY_SECONDS = 0.0012
-SBPC_PLAIN_SECONDS = 0.1  # [s] an SBPC nominal sample with none of SBPC_HANDLES (SAMPLE_SECONDS' are with them)
-SBPC_HANDLES = ("das_levels", "brake_reserve", "terminal_reserve")
+SBPC_PLAIN_SECONDS = 0.13  # [s] an SBPC nominal sample with none of SBPC_HANDLES (SAMPLE_SECONDS' are with them)
+SBPC_HANDLES = ("brake_reserve", "terminal_reserve")
 CONVEX_SECONDS = 0.008         # [s] a convex sample's part that does not grow with K (the loop, the estimator)
 CONVEX_SECONDS_AT_200 = 0.0045  # [s] its SOCP's part at K = 200, growing as K^CONVEX_GROWTH
 CONVEX_GROWTH = 1.7
@@ -97,9 +98,9 @@ def sample_seconds(kind, points, variant="nominal", transcription="simultaneous"
 
 def spec_seconds(spec, points):
     """:func:`sample_seconds` of a controller spec (a dict as a study file writes it, defaults left
-    out, or every field): SBPC nominal with its defaults (blocks of 20 or longer, no DAS levels,
-    reserves or terminal approach) at :data:`SBPC_PLAIN_SECONDS`, its other constants being measured
-    with all of those (``metro_terminal.yaml``)."""
+    out, or every field): SBPC nominal with blocks of 20 or longer and no reserves or terminal
+    approach at :data:`SBPC_PLAIN_SECONDS`, its other constants being measured with those and DAS
+    levels (``metro_terminal.yaml``)."""
     kind, variant = spec.get("kind", "convex"), spec.get("variant", "nominal")
     if (kind, variant) == ("sbpc", "nominal") and spec.get("block", 20) >= 20 and not any(
             spec.get(handle) for handle in SBPC_HANDLES):
