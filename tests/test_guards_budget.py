@@ -222,14 +222,15 @@ def test_a_convex_sample_is_estimated_between_its_measured_cpu_and_twice_it():
 def test_sbpc_with_its_defaults_is_estimated_from_its_own_measurement():
     """SBPC nominal with its defaults took 95 and 72 CPU ms a sample at K = 200 and 400, with DAS levels
     alone 117 ms at K = 200 (200 samples of 0.38 s, fresh process); with metro_terminal.yaml's DAS
-    levels, reserves and terminal approach, 548 ms at K = 200."""
+    levels, reserves and terminal approach, 548 ms at K = 200 (its study's draw 0) and 683 ms without
+    deviations or noise."""
     from ecostudy.studies.estimate import spec_seconds
     for spec, points, measured in [({"kind": "sbpc", "variant": "nominal"}, 200, 0.095), ({"kind": "sbpc"}, 400, 0.072),
                                    ({"kind": "sbpc", "das_levels": True}, 200, 0.117)]:
         assert measured <= spec_seconds(spec, points) <= 2 * measured, spec
     terminal = next(c for c in load_yaml((STUDIES / "metro_terminal.yaml").read_text())["controllers"]
                     if c["name"] == "sbpc_nominal")
-    assert 0.548 <= spec_seconds(terminal, 200) <= 2 * 0.548
+    assert 0.683 <= spec_seconds(terminal, 200) <= 2 * 0.548
     assert spec_seconds({**terminal, "das_levels": False, "brake_reserve": None, "terminal_reserve": None,
                          "terminal_fit": False}, 200) == spec_seconds({"kind": "sbpc"}, 200)
 

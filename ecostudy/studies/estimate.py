@@ -15,7 +15,8 @@ The constants are measured on this project's shared 2-core machine (so they are 
   convex 8.4 ms at K = 100; a replay (open loop, ATO) 0.8-1.1 ms: :data:`SAMPLE_SECONDS`, to two
   digits. SBPC and SPPC plan over the samples left, so their grid matters less than their variant.
   Those SBPC constants are with ``metro_terminal.yaml``'s DAS levels, reserves and terminal approach:
-  SBPC nominal with its defaults took 95 and 72 ms a sample at K = 200 and 400, with DAS levels alone
+  SBPC nominal with those options took 683 ms a sample at K = 200 without deviations or noise (taken as
+  0.8 s), with its defaults 95 and 72 ms a sample at K = 200 and 400, with DAS levels alone
   117 ms at K = 200 (busy machine, docs/guards.md), taken as 0.13 s (:data:`SBPC_PLAIN_SECONDS`,
   :func:`spec_seconds`). The convex SOCP grows faster than K:
   the all-out SOCP of the Amsterdam case took 0.17, 0.69, 3.3 and 9.4 s at K = 200, 1000, 2000 and
@@ -53,7 +54,7 @@ LEG_SECONDS_PER_STEP = 0.12
 LEG_BYTES_PER_STEP = 72e3
 LEG_MEASURED_SLOWNESS = 1.1  # the legs measured ran 10 % over their all-out time (:func:`leg_slowness`)
 SAMPLE_SECONDS = {  # [s] a sample, by (kind, variant[, transcription]) or kind
-    ("sbpc", "nominal"): 0.55, ("sbpc", "two_step"): 0.39, ("sbpc", "multi"): 0.09,
+    ("sbpc", "nominal"): 0.8, ("sbpc", "two_step"): 0.39, ("sbpc", "multi"): 0.09,
     ("sbpc", "multi", "condensed"): 0.022, ("sppc", "nominal"): 0.06, ("sppc", "two_step"): 0.15, "rspc": 0.006}
 REPLAY_SECONDS = 0.0012
 SBPC_PLAIN_SECONDS = 0.13  # [s] an SBPC nominal sample with none of SBPC_HANDLES (SAMPLE_SECONDS' are with them)
