@@ -199,8 +199,8 @@ def test_a_heavyhaul_estimate_grows_with_its_qp_from_the_measured_constant(tmp_p
 
 
 @pytest.mark.parametrize("points, sample_time, fragments", [
-    (20000, 0.1, ["convex: 760 samples of 0.1 s at K = 20000", "5.1 h", "one run"]),
-    (10000, 0.05, ["convex: 1,520 samples of 0.05 s at K = 10000", "one run"]),
+    (20000, 0.1, ["convex: 760 samples of 0.1 s at K = 20000", "2.4 h", "one run"]),
+    (10000, 0.02, ["convex: 3,800 samples of 0.02 s at K = 10000", "3.7 h", "one run"]),
 ])
 def test_a_convex_controller_on_a_huge_grid_is_refused_from_the_file_alone(tmp_path, points, sample_time, fragments):
     """Refused before the study's set-up solves its all-out SOCP (over 100 s at K = 20 000)."""
@@ -209,3 +209,35 @@ def test_a_convex_controller_on_a_huge_grid_is_refused_from_the_file_alone(tmp_p
            "output": str(tmp_path / "out")}
     r = run("simulate", write_yaml(tmp_path / "k.yaml", doc), "--no-progress", "--no-plot")
     one_line(r, "k.yaml: controllers:", "--force", *fragments)
+
+
+def test_a_convex_sample_is_estimated_between_its_measured_cpu_and_twice_it():
+    """200 samples of 0.38 s on the Amsterdam case, each K in a fresh process (docs/guards.md, busy
+    machine): 10, 60 and 352 CPU ms a sample at K = 200, 1 000 and 3 000, set-up included."""
+    from ecostudy.studies.estimate import sample_seconds
+    for points, measured in [(200, 0.010), (1000, 0.060), (3000, 0.352)]:
+        assert measured <= sample_seconds("convex", points) <= 2 * measured, points
+
+
+def test_sbpc_with_its_defaults_is_estimated_from_its_own_measurement():
+    """SBPC nominal with its defaults took 95 and 72 CPU ms a sample at K = 200 and 400, with DAS levels
+    alone 117 ms at K = 200 (200 samples of 0.38 s, fresh process); with metro_terminal.yaml's DAS
+    levels, reserves and terminal approach, 548 ms at K = 200 (its study's draw 0) and 683 ms without
+    deviations or noise."""
+    from ecostudy.studies.estimate import spec_seconds
+    for spec, points, measured in [({"kind": "sbpc", "variant": "nominal"}, 200, 0.095), ({"kind": "sbpc"}, 400, 0.072),
+                                   ({"kind": "sbpc", "das_levels": True}, 200, 0.117)]:
+        assert measured <= spec_seconds(spec, points) <= 2 * measured, spec
+    terminal = next(c for c in load_yaml((STUDIES / "metro_terminal.yaml").read_text())["controllers"]
+                    if c["name"] == "sbpc_nominal")
+    assert 0.683 <= spec_seconds(terminal, 200) <= 2 * 0.548
+    assert spec_seconds({**terminal, "das_levels": False, "brake_reserve": None, "terminal_reserve": None,
+                         "terminal_fit": False}, 200) == spec_seconds({"kind": "sbpc"}, 200)
+
+
+@pytest.mark.parametrize("nc, peak", [(24, 1.115e9), (12, 0.588e9)])
+def test_a_heavyhaul_run_memory_is_estimated_from_its_qp_matrices(nc, peak):
+    """f = 1 (204 virtual cars), Np = 30: the process of its first samples peaked at ``peak`` bytes
+    (docs/guards.md); the estimate is a worker and its QP's matrices, between that and twice it."""
+    from ecostudy.core.budget import WORKER_BYTES
+    assert peak <= WORKER_BYTES + sizes.heavyhaul_bytes(204, nc, 30) <= 2 * peak

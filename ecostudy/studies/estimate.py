@@ -13,10 +13,16 @@ The constants are measured on this project's shared 2-core machine (so they are 
   52 ms (condensed, K = 100; 17-21 ms since each process runs one OpenBLAS thread, draws 0-2 with
   ``python bench/bench_monte_carlo.py``, docs/closed_loop.md); SPPC nominal 59 ms (K = 200), two-step 147 ms (K = 100); RSPC 5.7 ms;
   convex 8.4 ms at K = 100; a replay (open loop, ATO) 0.8-1.1 ms: :data:`SAMPLE_SECONDS`, to two
-  digits. SBPC and SPPC plan over the samples left, so their grid matters less than their variant. The
-  convex SOCP grows faster than K: the all-out SOCP of the Amsterdam case took 0.17, 0.69, 3.3 and
-  9.4 s at K = 200, 1000, 2000 and 5000 and over 100 s at 20 000 (busy machine), so a sample is
-  taken as 24 ms x (K / 200)^1.5 (:func:`sample_seconds`);
+  digits. SBPC and SPPC plan over the samples left, so their grid matters less than their variant.
+  Those SBPC constants are with ``metro_terminal.yaml``'s DAS levels, reserves and terminal approach:
+  SBPC nominal with those options took 683 ms a sample at K = 200 without deviations or noise (taken as
+  0.8 s), with its defaults 95 and 72 ms a sample at K = 200 and 400, with DAS levels alone
+  117 ms at K = 200 (busy machine, docs/guards.md), taken as 0.13 s (:data:`SBPC_PLAIN_SECONDS`,
+  :func:`spec_seconds`). The convex SOCP grows faster than K:
+  the all-out SOCP of the Amsterdam case took 0.17, 0.69, 3.3 and 9.4 s at K = 200, 1000, 2000 and
+  5000 and over 100 s at 20 000 (busy machine); a sample (200 of 0.38 s, fresh process, docs/guards.md)
+  took 10, 60 and 352 ms at K = 200, 1 000 and 3 000, so a sample is taken as
+  8 ms + 4.5 ms x (K / 200)^1.7 (:func:`sample_seconds`);
 - one space-domain run (build, NL write, Ipopt, verification): the first 12 cases of
   ``studies/metro_supplements.yaml`` (K = 500, ``python bench/bench_sizes.py --kinds run --cases
   12``, busy machine) took 0.52-2.25 CPU s, 1.86 ms a grid point on average (the first case of a
@@ -30,6 +36,7 @@ The constants are measured on this project's shared 2-core machine (so they are 
 """
 import warnings
 from dataclasses import replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -47,11 +54,14 @@ LEG_SECONDS_PER_STEP = 0.12
 LEG_BYTES_PER_STEP = 72e3
 LEG_MEASURED_SLOWNESS = 1.1  # the legs measured ran 10 % over their all-out time (:func:`leg_slowness`)
 SAMPLE_SECONDS = {  # [s] a sample, by (kind, variant[, transcription]) or kind
-    ("sbpc", "nominal"): 0.55, ("sbpc", "two_step"): 0.39, ("sbpc", "multi"): 0.09,
-    ("sbpc", "multi", "condensed"): 0.022, ("sppc", "nominal"): 0.06, ("sppc", "two_step"): 0.15, "rspc": 0.006,
-    "convex": 0.024}  # convex: at K = 200
+    ("sbpc", "nominal"): 0.8, ("sbpc", "two_step"): 0.39, ("sbpc", "multi"): 0.09,
+    ("sbpc", "multi", "condensed"): 0.022, ("sppc", "nominal"): 0.06, ("sppc", "two_step"): 0.15, "rspc": 0.006}
 REPLAY_SECONDS = 0.0012
-CONVEX_GROWTH = 1.5   # a convex sample's time grows as K^1.5
+SBPC_PLAIN_SECONDS = 0.13  # [s] an SBPC nominal sample with none of SBPC_HANDLES (SAMPLE_SECONDS' are with them)
+SBPC_HANDLES = ("brake_reserve", "terminal_reserve")
+CONVEX_SECONDS = 0.008         # [s] a convex sample's part that does not grow with K (the loop, the estimator)
+CONVEX_SECONDS_AT_200 = 0.0045  # [s] its SOCP's part at K = 200, growing as K^CONVEX_GROWTH
+CONVEX_GROWTH = 1.7
 RUN_SECONDS_PER_POINT = 2.0e-3
 DAS_EXTRA_POINT_RUNS = {"round": 0.0, "phases": 2.0, "minlp": 3.0}
 RUN_BYTES_PER_POINT = 75e3  # a space run's process grows 75 kB a point (the model, its NL file, Ipopt's factor)
@@ -80,7 +90,7 @@ def sample_seconds(kind, points, variant="nominal", transcription="simultaneous"
     """Estimated computing of one closed-loop sample of a controller ``kind`` (its ``variant`` and
     ``transcription`` where it has them) at ``points`` nodes, its set-up spread over its samples [s]."""
     if kind == "convex":
-        return SAMPLE_SECONDS["convex"] * (points / 200) ** CONVEX_GROWTH
+        return CONVEX_SECONDS + CONVEX_SECONDS_AT_200 * (points / 200) ** CONVEX_GROWTH
     for key in ((kind, variant, transcription), (kind, variant), kind):
         if key in SAMPLE_SECONDS:
             return SAMPLE_SECONDS[key]
@@ -88,9 +98,15 @@ def sample_seconds(kind, points, variant="nominal", transcription="simultaneous"
 
 
 def spec_seconds(spec, points):
-    """:func:`sample_seconds` of a controller spec (a dict as a study file writes it, defaults left out)."""
-    return sample_seconds(spec.get("kind", "convex"), points, spec.get("variant", "nominal"),
-                          spec.get("transcription", "simultaneous"))
+    """:func:`sample_seconds` of a controller spec (a dict as a study file writes it, defaults left
+    out, or every field): SBPC nominal with blocks of 20 or longer and no reserves or terminal
+    approach at :data:`SBPC_PLAIN_SECONDS`, its other constants being measured with those and DAS
+    levels (``metro_terminal.yaml``)."""
+    kind, variant = spec.get("kind", "convex"), spec.get("variant", "nominal")
+    if (kind, variant) == ("sbpc", "nominal") and spec.get("block", 20) >= 20 and not any(
+            spec.get(handle) for handle in SBPC_HANDLES):
+        return SBPC_PLAIN_SECONDS
+    return sample_seconds(kind, points, variant, spec.get("transcription", "simultaneous"))
 
 
 def first_runs(study):
@@ -110,10 +126,21 @@ def leg_slowness(seconds, fastest):
     return max(1.0, seconds / fastest / LEG_MEASURED_SLOWNESS)
 
 
+class Leg(NamedTuple):
+    """A network leg's size: its clock steps and their :func:`leg_slowness` (a step's cost over a
+    measured leg's step)."""
+    steps: int
+    slowness: float
+
+    @property
+    def weighted(self) -> float:
+        """The steps of a measured leg it costs."""
+        return self.steps * self.slowness
+
+
 def check_network(study, path):
     """Refuse a network study whose first runs (:func:`first_runs`) or time-domain legs are estimated
-    above one run's budget; returns every leg's clock steps weighted by its :func:`leg_slowness` (the
-    steps of a measured leg it costs)."""
+    above one run's budget; returns every leg's :class:`Leg` (one train, one strategy)."""
     check_run(path, "points", f"a segment's first run at K = {study.points:,}", run_seconds(study.points),
               run_bytes(study.points))
     legs = []
@@ -127,11 +154,10 @@ def check_network(study, path):
                 raise InputError(problem(path, field, str(exc))) from None
         else:
             seconds, field = case.estimate * (1 + study.supplement), "supplement_percent"
-        steps = int(np.ceil(seconds / study.dt))
-        weighted = steps * leg_slowness(seconds, case.estimate)
-        check_run(path, field, f"the leg {a} - {b} of {seconds:g} s is {steps:,} clock steps of {study.dt:g} s "
-                  "for each train and strategy", weighted * LEG_SECONDS_PER_STEP, steps * LEG_BYTES_PER_STEP)
-        legs.append(weighted)
+        leg = Leg(int(np.ceil(seconds / study.dt)), leg_slowness(seconds, case.estimate))
+        check_run(path, field, f"the leg {a} - {b} of {seconds:g} s is {leg.steps:,} clock steps of {study.dt:g} s "
+                  "for each train and strategy", leg.weighted * LEG_SECONDS_PER_STEP, leg.steps * LEG_BYTES_PER_STEP)
+        legs.append(leg)
     return legs
 
 

@@ -20,7 +20,8 @@ The constants are measured on this project's shared 2-core machine (pessimistic)
   plant's integration, the observer and the QP) and 0.42 s at f = 1 (every car a locomotive group,
   the largest QP): 0.15 s a sample and the QP's share of the 0.5 s at f = 1 scaled as the cube of
   its inputs (:data:`HEAVYHAUL_SECONDS_PER_SAMPLE`, :func:`heavyhaul_runs`), over 1.5 times the
-  reference's samples;
+  reference's samples; its memory a worker's and its condensed QP's matrices (:func:`heavyhaul_bytes`:
+  f = 1, Np = 30, Nc = 24 peaked at 1.12 GB, docs/guards.md);
 - a comparison (``compare``): the all-out run, the ATO optimum with its DAS phases (two NLPs more)
   and the heuristics (taken as one run more), one after the other (:func:`check_compare`);
 - a journey (``journey``): each segment's front (:data:`~ecostudy.studies.journey.FRONT_COUNT` runs, shared among the workers), then the
@@ -32,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ecostudy.core.budget import check_run, check_study, how_many
+from ecostudy.core.budget import WORKER_BYTES, check_run, check_study, how_many
 from ecostudy.heavyhaul.linear import virtual_car_count
 from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import consist_from_document, validate
@@ -51,6 +52,7 @@ NETWORK_BYTES_PER_POINT = 145e3
 HEAVYHAUL_SECONDS_PER_SAMPLE = {1: 0.5}  # f = 1: one locomotive group per car, the largest QP
 HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED = 0.15
 HEAVYHAUL_MEASURED_INPUTS = {1: 1224}  # the QP inputs of those measurements: 204 cars x Nc = 6 (f = 1)
+HEAVYHAUL_SQUARES = 2.5  # dense inputs x inputs matrices a run holds at its peak (:func:`heavyhaul_bytes`)
 
 
 def check_run_study(path, workers=1):
@@ -94,7 +96,7 @@ def network_runs(study, path):
     (every train over every leg, its steps weighted by
     :func:`~ecostudy.studies.estimate.leg_slowness`)."""
     legs = check_network(study, path)
-    per_strategy = sum(legs) * len(study.names) * NETWORK_SECONDS_PER_STEP
+    per_strategy = sum(leg.weighted for leg in legs) * len(study.names) * NETWORK_SECONDS_PER_STEP
     return first_runs(study) + [per_strategy] * len(study.strategies)
 
 
@@ -108,32 +110,50 @@ def check_network_study(study, path, workers=1):
                 workers, study.points * NETWORK_BYTES_PER_POINT)
 
 
+def heavyhaul_bytes(cars, nc, np_):
+    """Memory of a heavy-haul run's condensed QP (``heavyhaul.condensed.CondensedHorizon``) of
+    ``cars`` virtual cars over Nc = ``nc`` moves and Np = ``np_`` samples [bytes]: its prediction
+    matrices (Np x (2 cars - 1) states x cars Nc inputs doubles) and :data:`HEAVYHAUL_SQUARES` dense
+    matrices of the inputs squared (the Hessian, its products, the solver's copy)."""
+    inputs = cars * nc
+    return 8.0 * (np_ * (2 * cars - 1) * inputs + HEAVYHAUL_SQUARES * inputs ** 2)
+
+
+def _heavyhaul_sizes(cases):
+    """(case, virtual cars) of each heavy-haul case."""
+    kinds = consist_from_document(cases[0]["consist"], "consist").kinds if cases else ()
+    lengths = [len(list(run)) for _, run in groupby(kinds)]
+    return [(c, virtual_car_count(lengths, c["labels"]["f"])) for c in cases]
+
+
 def heavyhaul_runs(study, reference, cases, path=None):
     """Seconds of each run of a heavy-haul study (its samples, up to ``max_samples``):
     :func:`ecostudy.studies.heavyhaul.expand`'s study, reference and cases. A sample costs the grouped
     constant (the plant, the observer, a small QP) and a dense QP's cube of its inputs (virtual cars x
     Nc), scaled to the f = 1 measurement: 132 inputs 0.15 s, 1 224 inputs 0.5 s, 528 inputs (f = 10,
     Nc = 24) 0.18 s (0.10 s measured; the cube of the inputs alone put it at 9.6 s); with ``path``, a
-    run estimated above one run's budget is refused (unless forced)."""
+    run estimated above one run's budget (its time, or its process's memory: a worker and its QP,
+    :func:`heavyhaul_bytes`) is refused (unless forced)."""
     samples = min(study.max_samples, int(np.ceil(1.5 * reference.running_time / study.sample_time_s)))
-    kinds = consist_from_document(cases[0]["consist"], "consist").kinds if cases else ()
-    lengths = [len(list(run)) for _, run in groupby(kinds)]
     out = []
-    for c in cases:
-        inputs = virtual_car_count(lengths, c["labels"]["f"]) * c["labels"]["Nc"]
+    for c, cars in _heavyhaul_sizes(cases):
+        inputs = cars * c["labels"]["Nc"]
         qp = HEAVYHAUL_SECONDS_PER_SAMPLE[1] - HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED  # the QP's share at f = 1
         seconds = samples * (HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED + qp * (inputs / HEAVYHAUL_MEASURED_INPUTS[1]) ** 3)
         if path is not None:
             check_run(path, "horizons", f"{c['scenario']}: {inputs:,} QP inputs (virtual cars x Nc) a sample, "
-                      f"{samples} samples", seconds, 8.0 * inputs ** 2)
+                      f"{samples} samples", seconds, WORKER_BYTES + heavyhaul_bytes(cars, c["labels"]["Nc"],
+                                                                                    c["labels"]["Np"]))
         out.append(seconds)
     return out
 
 
 def check_heavyhaul_study(path, study, reference, cases, workers=1):
     """Refuse a heavy-haul study with a run estimated above one run's budget, or the study above the
-    command's (unless forced)."""
-    check_study(path, "the study's runs", heavyhaul_runs(study, reference, cases, path), workers)
+    command's (unless forced): each worker holds the largest run's QP."""
+    largest = max((heavyhaul_bytes(cars, c["labels"]["Nc"], c["labels"]["Np"]) for c, cars in _heavyhaul_sizes(cases)),
+                  default=0.0)
+    check_study(path, "the study's runs", heavyhaul_runs(study, reference, cases, path), workers, largest)
 
 
 def check_compare(where, points):
