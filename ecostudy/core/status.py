@@ -24,6 +24,7 @@ Adhesion, what "kept" means:
 - a heavy-haul run is flagged when a locomotive asks more than 1 % above its mu(v) m g
   (:mod:`ecostudy.heavyhaul.metrics`), capped by its plant with ``adhesion: true``.
 """
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Iterable, Literal
 
@@ -75,12 +76,14 @@ class Status:
 OK = Status("ok")
 
 
-class Judged:
-    """A result judged in this vocabulary: its ``status``, and the ``reason`` and ``ok`` that follow."""
+class Judged(ABC):
+    """A result judged in this vocabulary: its ``status`` (each kind of result judges itself), and
+    the ``reason`` and ``ok`` that follow."""
 
     @property
+    @abstractmethod
     def status(self) -> Status:
-        raise NotImplementedError
+        """The result's status."""
 
     @property
     def reason(self) -> str:
