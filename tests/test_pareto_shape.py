@@ -5,7 +5,6 @@ cold stays within 0.1 % of the warm-started chain of ``studies.pareto.sweep``.""
 import pytest
 
 from ecostudy import api
-from ecostudy.core.errors import EcostudyWarning
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.studies import batch
 from ecostudy.studies.pareto import sweep
@@ -93,13 +92,13 @@ def test_a_killed_front_resumes_and_workers_agree(fronted, tmp_path):
 
 
 def test_a_study_file_runs_as_a_front(tmp_path):
-    """`ecostudy run STUDY --kind pareto`: the study's base case as a front on the same store."""
+    """`ecostudy run STUDY --kind pareto`: the study's base case as a front on the same store, its
+    own 80 s one more point."""
     from .conftest import write_yaml
     study = write_yaml(tmp_path / "s.yaml", {"name": "s", "track": str(METRO["track"]), "train": str(METRO["train"]),
                                              "from": "Rokin", "to": "Centraal", "running_time_s": 80, "points": 60,
                                              "output": str(tmp_path / "out")})
-    with pytest.warns(EcostudyWarning, match="running_time_s: read but not used by `ecostudy pareto`"):
-        report = api.run_folder(study, workers=1, kind="pareto")
-    assert "20 cases: 0 already stored, 20 computed now" in report.text
-    folder = assert_folder(tmp_path / "out_pareto", "pareto", ["pareto"], rows=20, status=report.status.kind)
+    report = api.run_folder(study, workers=1, kind="pareto")
+    assert "21 cases: 0 already stored, 21 computed now" in report.text
+    folder = assert_folder(tmp_path / "out_pareto", "pareto", ["pareto"], rows=21, status=report.status.kind)
     assert folder.summary["monotone"]

@@ -6,10 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
 from ecostudy import __version__
-from ecostudy.core.errors import EcostudyWarning
 from ecostudy.studies.batch import run_study
 from ecostudy.studies.cases import code_version, expand, source_fingerprint
 from ecostudy.studies.kinds import STUDY_KINDS
@@ -62,9 +59,8 @@ def test_every_case_key_holds_the_code(tmp_path):
         (code / ".pyomo").symlink_to(ROOT / ".pyomo")
     with open(other / "ecostudy" / "core" / "status.py", "a") as f:
         f.write("# other code\n")
-    with pytest.warns(EcostudyWarning, match="supplement_percent: read but not used by `ecostudy pareto`"):
-        here = {"run": [c["key"] for c in expand(study)[2]],
-                **{k: [c["key"] for c in STUDY_KINDS.get(k).expand(study).cases] for k in ("compare", "pareto")}}
+    here = {"run": [c["key"] for c in expand(study)[2]],
+            **{k: [c["key"] for c in STUDY_KINDS.get(k).expand(study).cases] for k in ("compare", "pareto")}}
     assert keys_of(same, study) == here
     there = keys_of(other, study)
     assert {k: len(v) for k, v in there.items()} == {"run": 1, "compare": 6, "pareto": 20}

@@ -59,20 +59,3 @@ def test_pareto_names_the_study_s_advice_and_a_plain_study_nothing(tmp_path):
     plain = study(tmp_path, objective="energy")  # without das; the objective compare and the front use anyway
     assert unused_warnings(refused(api.compare_folder, plain, tmp_path)) == []
     assert unused_warnings(lambda: api.solve_folder(plain, plot=False, out=tmp_path / "plain")) == []
-
-
-@pytest.mark.parametrize("field", ["running_time_s", "supplement_percent", "timetable"])
-def test_pareto_names_the_study_s_timing_it_does_not_use(tmp_path, field):
-    """The front runs its own running times (all-out to +--supplement-max): the study's running time,
-    supplement or timetable is named, with the file, in one warning line of the command (a front of
-    two points on a coarse grid: the warning goes to stderr after the command's work)."""
-    timetable = write_yaml(tmp_path / "tt.yaml", {"name": "tt", "stops": [{"stop": "Rokin", "departure_s": 0},
-                                                                         {"stop": "Centraal", "arrival_s": 80}]})
-    value = {"running_time_s": 76, "supplement_percent": 12, "timetable": str(timetable)}[field]
-    path = study(tmp_path, **{"running_time_s": None, field: value})
-    result = CliRunner().invoke(app, ["pareto", str(path), "--count", "2", "--supplement-max", "10", "--points", "30",
-                                      "--workers", "1", "--no-plot", "--out", str(tmp_path / "front")])
-    assert result.exit_code == 0, result.output
-    lines = [line for line in result.stderr.splitlines() if "not used by" in line]
-    assert lines == [f"warning: {path}: {field}: read but not used by `ecostudy pareto` (or `run --kind "
-                     "pareto`), which runs the study's base case with its own options; `ecostudy run` of its cases uses them"], result.stderr

@@ -36,9 +36,7 @@ def test_a_study_train_warns_once_naming_its_file(tmp_path, command):
     """The adhesion train caps its traction envelope and its electric brake: two warnings, each once."""
     path = study(tmp_path)
     lines = warnings_of([command, str(path), "--out", str(tmp_path / "o"), *SMALL[command]])
-    unused = [f"warning: {path}: supplement_percent: read but not used by `ecostudy pareto` (or `run --kind "
-              "pareto`), which runs the study's base case with its own options; `ecostudy run` of its cases uses them"] if command == "pareto" else []
-    assert lines == [f"warning: {ADHESION}: adhesion: {cap}" for cap in CAPS] + unused
+    assert lines == [f"warning: {ADHESION}: adhesion: {cap}" for cap in CAPS]
 
 
 @pytest.mark.parametrize("command", ["solve", "pareto", "compare"])

@@ -48,7 +48,8 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
                   dask: Optional[str] = None, retry_failed: bool = False, *,
                   progress: Optional[Progress] = None) -> Report:
     """``ecostudy pareto``: energy against running time, ``count`` points from the all-out run to
-    ``supplement_max`` [%] over it (epsilon constraint), optionally ``weighted`` weighted-sum points
+    ``supplement_max`` [%] over it (epsilon constraint) and a study file's own running time,
+    optionally ``weighted`` weighted-sum points
     (Yazhemsky 2017, eq. 4.1a) and the driver-advice front ``das`` at every point; each point a case
     of the study kind ``pareto`` (:mod:`ecostudy.studies.front`), stored in ``results.sqlite`` and
     resumed, over ``workers`` processes (every core by default) or a Dask scheduler."""
@@ -59,18 +60,20 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
                                                               "pareto")
     no_windows(st, "pareto", study)
     cases = front_cases(train_doc, track_doc, f, t, count, supplement_max * units.PERCENT, k or FRONT_POINTS,
-                        study_name(st, "pareto", track, train, f, t), das, das_time_limit)
+                        study_name(st, "pareto", track, train, f, t), das, das_time_limit,
+                        timing=st.timing if st is not None else None)
     out_dir = output_folder(out, beside(st, "_pareto", "pareto"))
     check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png", "results.sqlite"), "pareto")
     check_one_study(out_dir, cases[0]["study"])  # before the weighted points are solved
-    check_front("command line", count, k or FRONT_POINTS, workers, das, das_time_limit)  # refused (unless --force)
+    check_front("command line", len(cases), k or FRONT_POINTS, workers, das, das_time_limit)  # refused (unless --force)
     extra = weighted_points(trk, trn, f, t, count=weighted, points=k or FRONT_POINTS) if weighted else None
     ran = run_expanded("pareto", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,
                        progress=progress, draw=front_files(plot, figures, extra, workers, started),
                        more=weighted_statuses(extra) if extra is not None else None)
     write_html(out_dir)
     table, meta = ran.table, ran.table.attrs
-    lines = [shown(table, FRONT_COLUMNS + (DAS_COLUMNS if das is not None else []))]
+    study_col = ["is_study_time"] if table["is_study_time"].any() else []
+    lines = [shown(table, FRONT_COLUMNS + study_col + (DAS_COLUMNS if das is not None else []))]
     if das is not None:
         d = meta["das"]
         low, high = (units.number(d[f"{end}_gap_on_time_pct"], ".2f") for end in ("min", "max"))
@@ -79,9 +82,20 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     five, ten = (units.number(meta[f"saving_at_{p}_pct_supplement_pct"], ".1f") for p in (5, 10))
     lines.append(f"all-out {meta['all_out_time_s']:.2f} s; +5 % saves {five} %, +10 % saves {ten} % of the all-out "
                  "traction energy")
+    if "study_running_time_s" in meta:
+        lines.append(study_time_line(meta))
     lines.append(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
                  f"{meta['all_verified']}; {perf_counter() - started:.1f} s")
     return reported(out_dir, lines + [counts_line(ran.counts, "points"), "outputs " + listed(out_dir)])
+
+
+def study_time_line(meta: dict) -> str:
+    """The study's own running time on its front, as the printed summary says it."""
+    if meta["study_traction_energy_kWh"] is None:
+        return f"the study's running time: {meta['study_status']}"
+    return (f"the study's running time {meta['study_running_time_s']:.2f} s: "
+            f"{meta['study_traction_energy_kWh']:.3f} kWh traction, saves "
+            f"{units.number(meta['study_saving_vs_all_out_pct'], '.1f')} % of the all-out traction energy")
 
 
 @spelled

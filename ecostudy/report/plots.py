@@ -103,8 +103,9 @@ def front_limits(times, margin=0.03):
 
 def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None):
     """Traction and net energy against running time, with the marginal saving beneath;
-    ``weighted`` (optional table) adds the weighted-sum points. The time axis spans the front's
-    running times: weighted points beyond them are counted in the legend, not drawn."""
+    ``weighted`` (optional table) adds the weighted-sum points; the study's own running time
+    (``is_study_time``) is a star. The time axis spans the front's running times: weighted points
+    beyond them are counted in the legend, not drawn."""
     fig, (ax, axm) = figure(2, 1, figsize=(8, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
     fig.subplots_adjust(left=0.13, right=0.97, top=0.85, bottom=0.09, hspace=0.1)
     fig.suptitle(title, fontsize=10)
@@ -112,6 +113,13 @@ def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None):
     ax.plot(t, table["traction_energy_kWh"], "o-", color=style.colour("traction"), label="traction (at the wheel)")
     ax.plot(t, table["net_energy_kWh"], "s--", color=style.colour("net energy"),
             label="net electrical (regeneration credited)")
+    study = table[table["is_study_time"].eq(True) & table["running_time_s"].notna()] if "is_study_time" in table else []
+    for _, row in (study.iterrows() if len(study) else ()):
+        ax.plot(row["running_time_s"], row["traction_energy_kWh"], "*", ms=16, color=style.colour("study time"),
+                zorder=5, label=f"the study's running time: {row['running_time_s']:.1f} s, "
+                f"{row['traction_energy_kWh']:.2f} kWh")
+        ax.annotate(f"study {row['running_time_s']:.1f} s", (row["running_time_s"], row["traction_energy_kWh"]),
+                    xytext=(10, 8), textcoords="offset points", fontsize=8)
     lo, hi = front_limits(t)
     if "das_traction_energy_kWh" in table and table["das_traction_energy_kWh"].notna().any():
         ax.plot(table["das_running_time_s"], table["das_traction_energy_kWh"], "^:", color=style.colour("DAS advice"),

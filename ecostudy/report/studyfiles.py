@@ -5,7 +5,6 @@ the stored rows and the table; it writes its files atomically and returns (file 
 import time
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from ecostudy.io.writers import write_csv, write_json
@@ -53,7 +52,7 @@ def front_files(plot=True, out=style.Output(), weighted=None, workers=1, started
     """The study engine's ``draw`` (:func:`ecostudy.studies.batch.run_expanded`) of a Pareto front:
     ``pareto.json`` (the table's facts, ``workers`` and the wall seconds since ``started``),
     ``pareto_weighted.csv`` (the ``weighted`` points, if any), ``pareto.png`` and
-    ``pareto_profiles.png`` (five stored points' speed profiles)."""
+    ``pareto_profiles.png`` (five stored points' speed profiles, and the study's own running time's)."""
     started = time.perf_counter() if started is None else started
 
     def draw(out_dir, cases, rows, table):
@@ -64,9 +63,9 @@ def front_files(plot=True, out=style.Output(), weighted=None, workers=1, started
         write_json(out_dir / "pareto.json", meta)
         stale(out_dir, weighted=weighted is None, names={"weighted": ["pareto_weighted.csv"]})
         title = f"{meta['train']} - {meta['from']} to {meta['to']} (K = {meta['points']})"
-        picks = sorted(set(np.linspace(0, len(cases) - 1, min(5, len(cases))).round().astype(int)))
         drawn = figures(out_dir, plot, {
             "pareto": later("pareto_plot", table, title=title, weighted=weighted),
-            "pareto_profiles": later("profiles_plot", front.front_points(cases, rows, picks), title=title)}, out)
+            "pareto_profiles": later("profiles_plot", front.front_points(cases, rows, front.profile_picks(cases)),
+                                     title=title)}, out)
         return ["pareto.json", *drawn], {"weighted": "pareto_weighted.csv"} if weighted is not None else {}
     return draw

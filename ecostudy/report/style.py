@@ -63,6 +63,7 @@ KIND = {
     "net energy": "#2ca02c",      # net electrical energy, regeneration credited
     "DAS advice": "#ff7f0e",      # driver advice re-simulated
     "weighted sum": "#9467bd",    # points of the weighted-sum objective
+    "study time": "#c51b7d",      # the study's own running time on its front
     "marginal saving": "#17becf",
     "handle": "#bcbd22",          # the handle u beneath a run
     "reference": "#000000",       # a reference a controller tracks (heavy haul's single-mass optimum)

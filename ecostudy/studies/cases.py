@@ -173,8 +173,7 @@ def expand(path, skipped=None, read=None, windows=False):
 # the fields of a study file each base-case command reads but does not use (``run`` uses them all)
 UNUSED = {"solve": ("das", "das_time_limit_s", "scenarios", "sweep"),
           "compare": ("objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep"),
-          "pareto": ("running_time_s", "supplement_percent", "timetable",  # its own times: all-out to +supplement_max
-                     "objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep")}
+          "pareto": ("objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep")}  # its timing: a point
 WHO = {"solve": "`ecostudy solve`", "compare": "`ecostudy compare` (or `run --kind compare`)",
        "pareto": "`ecostudy pareto` (or `run --kind pareto`)"}
 

@@ -30,11 +30,14 @@ DEFAULT_COUNT, DEFAULT_SUPPLEMENT_MAX = 20, 0.40  # a study file's front: points
 
 
 def front_cases(train_doc, track_doc, from_stop, to_stop, count=DEFAULT_COUNT, supplement_max=DEFAULT_SUPPLEMENT_MAX,
-                points=FRONT_POINTS, study="pareto", das=None, das_time_limit=60.0):
+                points=FRONT_POINTS, study="pareto", das=None, das_time_limit=60.0, timing=None):
     """One case per point of a front (:func:`~ecostudy.studies.pareto.front_supplements`): the
     all-out run, then the energy optimum at each supplement [-] over its time; the train and track
     documents (schema-shaped), the stops, the grid and the driver-advice method ``das`` of every
-    point; each keyed by a hash of all of them and its supplement."""
+    point; each keyed by a hash of all of them and its supplement. A study's own ``timing`` (its
+    running time [s] or supplement [-]; :class:`~ecostudy.core.types.Timing`) is one more point,
+    solved like the others and labelled ``study_time`` (a supplement already on the front is that
+    point, labelled)."""
     base = {"study": study, "train": train_doc, "track": track_doc, "from": from_stop, "to": to_stop,
             "running_time_s": None, "window_s": None, "weights": [1.0, 1.0], "points": points,
             "profile": True, "das": das, "das_time_limit_s": das_time_limit}
@@ -45,16 +48,41 @@ def front_cases(train_doc, track_doc, from_stop, to_stop, count=DEFAULT_COUNT, s
                 "scenario": name, "name": name, "labels": {"supplement": name}}
         case["key"] = case_key(case)
         cases.append(case)
+    if timing is not None and timing.supplement is not None:
+        same = [c for c in cases if c["supplement_percent"] is not None
+                and abs(c["supplement_percent"] - 100 * timing.supplement) < 1e-9]
+        if same:
+            same[0]["labels"]["study_time"] = True  # labels are not in the key: the point stays the one stored
+        else:
+            cases.append(study_point(base, supplement_percent=100 * timing.supplement,
+                                     name=f"study +{100 * timing.supplement:.4g} %"))
+    elif timing is not None and timing.running_time is not None:
+        cases.append(study_point(base, running_time_s=timing.running_time,
+                                 name=f"study {timing.running_time:.6g} s"))
     return cases
+
+
+def study_point(base, name, running_time_s=None, supplement_percent=None):
+    """The case of a study's own running time [s] or supplement [%], energy-optimal like the front's."""
+    case = {**base, "objective": "energy", "running_time_s": running_time_s, "supplement_percent": supplement_percent,
+            "scenario": name, "name": name, "labels": {"supplement": name, "study_time": True}}
+    case["key"] = case_key(case)
+    return case
+
+
+def is_study_time(case):
+    """Whether a front's case is the study's own running time (:func:`front_cases`)."""
+    return bool(case["labels"].get("study_time"))
 
 
 def expand_front(path):
     """A study file's base case as a front (``ecostudy run FILE --kind pareto``): 20 points to +40 %
-    on its grid, written beside its output (``<output>_pareto``)."""
+    on its grid and the study's own running time, written beside its output (``<output>_pareto``)."""
     st = load_checked_study(path, "pareto")
     no_windows(st, "pareto", path)
     train_doc, track_doc = st.documents
-    cases = front_cases(train_doc, track_doc, st.from_stop, st.to_stop, points=st.points or FRONT_POINTS, study=st.name)
+    cases = front_cases(train_doc, track_doc, st.from_stop, st.to_stop, points=st.points or FRONT_POINTS, study=st.name,
+                        timing=st.timing)
     return Expanded(st.output.parent / (st.output.name + "_pareto"), cases)
 
 
@@ -68,13 +96,35 @@ def points_of(cases, rows):
     return out
 
 
+def in_time_order(cases, points):
+    """The indices of a front's cases by running time [s]: the all-out run first, each solved point
+    at its time, a point not solved at the time it was asked (when known), else last."""
+    first = points[0][0]
+    t_allout = facts_of(first).running_time_s if first else np.nan
+
+    def time_of(i):
+        summary, case = points[i][0], cases[i]
+        if summary:
+            return facts_of(summary).running_time_s
+        if case["running_time_s"] is not None:
+            return case["running_time_s"]
+        return t_allout * (1 + case["supplement_percent"] / 100)  # nan when the all-out run failed
+
+    asked = [(0.0 if i == 0 else time_of(i), i) for i in range(len(cases))]
+    return [i for _, i in sorted(asked, key=lambda a: (not np.isfinite(a[0]), a[0] if np.isfinite(a[0]) else 0, a[1]))]
+
+
 def pareto_table(cases, rows):
-    """One row per point (``pareto.csv``, :func:`~ecostudy.studies.pareto.front_table`), with the
-    ``das_`` columns when the points carry driver advice; its attrs (``summary.json``): what a
-    reader asks first (the savings at +5 % and +10 %, monotone, all verified, all optimal)."""
+    """One row per point (``pareto.csv``, :func:`~ecostudy.studies.pareto.front_table`) in order of
+    running time, the study's own running time marked (``is_study_time``), with the ``das_``
+    columns when the points carry driver advice; its attrs (``summary.json``): what a reader asks
+    first (the savings at +5 % and +10 %, the study time's energy, monotone, all verified, all optimal)."""
     points = points_of(cases, rows)
+    order = in_time_order(cases, points)
+    cases, points = [cases[i] for i in order], [points[i] for i in order]
     first = points[0][0]
     table = front_table(points, facts_of(first).running_time_s if first else np.nan)
+    table["is_study_time"] = [is_study_time(c) for c in cases]
     case = cases[0]
     if case["das"] is not None:
         das = pd.DataFrame([(s or {}).get("das") or {} for s, _ in points], index=table.index)
@@ -91,8 +141,22 @@ def pareto_table(cases, rows):
              "all_optimal": bool((table["solver_status"] == "optimal").all())}
     if case["das"] is not None:
         facts["das"] = das_meta(table)
+    facts.update(study_time_facts(table))
     table.attrs.update(facts)
     return table
+
+
+def study_time_facts(table):
+    """The study's own running time on the front (``summary.json``; none when it gives none)."""
+    rows = table[table["is_study_time"]]
+    if not len(rows):
+        return {}
+    row = rows.iloc[0]
+
+    def value(column):
+        return None if pd.isna(row[column]) else float(row[column])
+    return {"study_running_time_s": value("running_time_s"), "study_traction_energy_kWh": value("traction_energy_kWh"),
+            "study_saving_vs_all_out_pct": value("saving_vs_all_out_pct"), "study_status": str(row["status"])}
 
 
 def front_verdict(table):
@@ -109,8 +173,17 @@ class FrontPoint(NamedTuple):
     segment: object
 
 
+def profile_picks(cases, most=5):
+    """Indices of the cases whose speed profiles a figure draws: up to ``most`` spread over the
+    front, and the study's own running time."""
+    front = [i for i, c in enumerate(cases) if not is_study_time(c)]
+    spread = {front[j] for j in np.linspace(0, len(front) - 1, min(most, len(front))).round().astype(int)}
+    return sorted(spread | {i for i, c in enumerate(cases) if is_study_time(c)})
+
+
 def front_points(cases, rows, picks):
-    """The stored points at the indices ``picks`` (those solved) as :class:`FrontPoint`."""
+    """The stored points at the indices ``picks`` (those solved) as :class:`FrontPoint`, in order of
+    running time."""
     points, segment = points_of(cases, rows), None
     out = []
     for i in picks:
@@ -119,7 +192,7 @@ def front_points(cases, rows, picks):
             segment = segment or segment_of(cases[0])
             out.append(FrontPoint({k: np.asarray(v) for k, v in summary["profile"].items()},
                                   facts_of(summary), segment))
-    return out
+    return sorted(out, key=lambda p: p.facts.running_time_s)
 
 
 def front_size(where, cases, workers=1):

@@ -1,0 +1,85 @@
+"""A study's own running time is a point of its front: `ecostudy pareto STUDY` (and `ecostudy run
+STUDY --kind pareto`) solve it like the front's other points, mark it (``is_study_time``) in
+pareto.csv, the printed table and pareto.json, keep the table in order of running time and warn of
+nothing; a front without a study time is as before. Real solves (Pyomo, Ipopt)."""
+import json
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+
+from .conftest import STUDIES, TRACKS, TRAINS, write_yaml
+
+SMALL = ["--count", "2", "--supplement-max", "10", "--workers", "1", "--no-plot"]
+
+
+def invoke(args):
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    return result
+
+
+def study(tmp_path, **fields):
+    return write_yaml(tmp_path / "study.yaml", {
+        "name": "own time", "track": str(TRACKS / "amsterdam_rokin_centraal.yaml"),
+        "train": str(TRAINS / "amsterdam_metro.yaml"), "points": 60, "output": str(tmp_path / "out"), **fields})
+
+
+def test_the_default_study_s_front_holds_its_76_s_as_solve_solves_it(tmp_path):
+    """The shipped study (K = 1000): its 76 s on the front with the traction energy of `ecostudy
+    solve` to 1e-6, between the all-out run and +10 %, no warning."""
+    front = invoke(["pareto", str(STUDIES / "default.yaml"), "--out", str(tmp_path / "front"), *SMALL])
+    invoke(["solve", str(STUDIES / "default.yaml"), "--out", str(tmp_path / "solve"), "--no-plot"])
+    assert "warning" not in front.stderr, front.stderr
+    table = pd.read_csv(tmp_path / "front" / "pareto.csv")
+    assert table["is_study_time"].tolist() == [False, True, False]
+    assert table["running_time_s"].is_monotonic_increasing
+    own = table[table["is_study_time"]].iloc[0]
+    solved = json.loads((tmp_path / "solve" / "summary.json").read_text())
+    assert own["running_time_s"] == pytest.approx(76.0, rel=1e-9)
+    assert own["traction_energy_kWh"] == pytest.approx(solved["traction_energy_kWh"], rel=1e-6)
+    assert own["status"] == "ok"
+    meta = json.loads((tmp_path / "front" / "pareto.json").read_text())
+    assert meta["study_traction_energy_kWh"] == pytest.approx(solved["traction_energy_kWh"], rel=1e-6)
+    assert "the study's running time 76.00 s:" in front.stdout and "is_study_time" in front.stdout
+
+
+@pytest.mark.parametrize("field", ["supplement_percent", "timetable"])
+def test_a_study_s_supplement_or_timetable_is_its_point(tmp_path, field):
+    """A supplement already on the front marks that point (no second row); a timetable's 80 s is a
+    point of its own; neither warns."""
+    timetable = write_yaml(tmp_path / "tt.yaml", {"name": "tt", "stops": [{"stop": "Rokin", "departure_s": 0},
+                                                                         {"stop": "Centraal", "arrival_s": 80}]})
+    path = study(tmp_path, **{field: {"supplement_percent": 10, "timetable": str(timetable)}[field]})
+    result = invoke(["pareto", str(path), "--out", str(tmp_path / "front"), *SMALL])
+    assert "warning" not in result.stderr, result.stderr
+    table = pd.read_csv(tmp_path / "front" / "pareto.csv")
+    assert table["running_time_s"].is_monotonic_increasing
+    own = table[table["is_study_time"]]
+    if field == "supplement_percent":
+        assert len(table) == 2 and own["supplement_pct"].tolist() == pytest.approx([10.0])
+    else:
+        assert len(table) == 3 and own["running_time_s"].tolist() == pytest.approx([80.0])
+
+
+def test_a_front_without_a_study_time_is_as_before(tmp_path):
+    """--track and --train: the front's own points only, none marked, no line of a study time."""
+    result = invoke(["pareto", "--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train",
+                     str(TRAINS / "amsterdam_metro.yaml"), "--points", "60", "--out", str(tmp_path / "front"), *SMALL])
+    table = pd.read_csv(tmp_path / "front" / "pareto.csv")
+    assert len(table) == 2 and not table["is_study_time"].any()
+    assert "is_study_time" not in result.stdout and "running time " not in result.stdout
+    assert not any(k.startswith("study_") for k in json.loads((tmp_path / "front" / "pareto.json").read_text()))
+
+
+def test_run_kind_pareto_holds_the_study_time(tmp_path):
+    """`ecostudy run STUDY --kind pareto`: the 20 points to +40 % and the study's 85 s, in order."""
+    path = study(tmp_path, running_time_s=85, points=30)
+    result = CliRunner().invoke(app, ["run", str(path), "--kind", "pareto", "--workers", "1", "--no-progress"])
+    assert result.exit_code == 0, result.output
+    assert "warning" not in result.stderr, result.stderr
+    table = pd.read_csv(tmp_path / "out_pareto" / "pareto.csv")
+    assert len(table) == 21 and table["running_time_s"].is_monotonic_increasing
+    assert table.loc[table["is_study_time"], "running_time_s"].tolist() == pytest.approx([85.0])
