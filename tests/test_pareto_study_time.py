@@ -83,3 +83,17 @@ def test_run_kind_pareto_holds_the_study_time(tmp_path):
     table = pd.read_csv(tmp_path / "out_pareto" / "pareto.csv")
     assert len(table) == 21 and table["running_time_s"].is_monotonic_increasing
     assert table.loc[table["is_study_time"], "running_time_s"].tolist() == pytest.approx([85.0])
+
+
+def test_a_study_time_below_all_out_fails_alone_and_is_named(tmp_path):
+    """60 s on the metro (all-out 71.8 s at K = 60): that point failed, named with its reason (exit
+    1); the front's other points solved, their marginal savings numbers."""
+    path = study(tmp_path, running_time_s=60)
+    result = CliRunner().invoke(app, ["pareto", str(path), "--out", str(tmp_path / "front"), "--count", "3",
+                                      "--supplement-max", "10", "--workers", "1", "--no-plot"])
+    assert result.exit_code == 1, result.output
+    assert "failed: study 60 s: infeasible: the fastest possible run takes 71.8 s" in result.stderr, result.stderr
+    table = pd.read_csv(tmp_path / "front" / "pareto.csv")
+    own, front = table[table["is_study_time"]], table[~table["is_study_time"]]
+    assert own["status"].str.startswith("failed").all() and (front["status"] == "ok").all()
+    assert front["marginal_saving_kWh_per_s"].notna().all() and len(front) == 3

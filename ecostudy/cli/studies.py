@@ -14,7 +14,7 @@ from ecostudy.cli.app import app, call, finish
 @app.command(short_help="Energy against running time: the Pareto front.")
 def pareto(
     study: o.Study = None, track: o.Track = None, train: o.Train = None, from_stop: o.From = None, to_stop: o.To = None,
-    count: int = typer.Option(20, help="Points on the front, the all-out run included."),
+    count: int = typer.Option(20, help="Points on the front, the all-out run included; a study file's own running time is one more."),
     supplement_max: float = typer.Option(40.0, help="Largest running-time supplement over all-out [%]."),
     points: o.Points = None, workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False,
     weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T [s] + w_e E/Ms [J/kg], Yazhemsky 2017, eq. 4.1a)."),
@@ -22,7 +22,7 @@ def pareto(
     das_time_limit: o.DasTimeLimit = 60.0, out: o.ParetoOut = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png",
     dpi: o.Dpi = 110.0, force: o.Force = False, debug: o.Debug = False,
 ):
-    """Energy against running time (epsilon-constraint sweep from the all-out time), ATO and optionally DAS; every point stored, resumable. Example: ecostudy pareto studies/default.yaml --count 9"""
+    """Energy against running time (epsilon-constraint sweep from the all-out time, and a study file's own running time), ATO and optionally DAS; every point stored, resumable. Example: ecostudy pareto studies/default.yaml --count 9"""
     finish(call(debug, "pareto_folder", study, track, train, from_stop, to_stop, count, supplement_max, points,
                 workers, out, not no_plot, weighted, das and das.value, das_time_limit, fig_format, dpi, dask,
                 retry_failed, force=force, bar=("points", False)))

@@ -290,7 +290,9 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     write_csv(output / spec.table_file, table)
     drawn, tables = draw(output, expanded.cases, rows, table) if draw is not None else ([], {})
     results = [compute is None or k in rows for k in (c["key"] for c in expanded.cases)]  # left out: not results
-    statuses = {**case_statuses([c for c, r in zip(expanded.cases, results) if r], table[results]),
+    # a kind's table may list its cases in another order (a front's by running time), its index their order
+    in_order = table.sort_index() if sorted(table.index) == list(range(len(table))) else table
+    statuses = {**case_statuses([c for c, r in zip(expanded.cases, results) if r], in_order[results]),
                 **(spec.verdict(table) if spec.verdict else {}), **(more or {})}
     write_summary(output, kind, statuses, {spec.table_name: spec.table_file, **tables, **{
                   Path(name).stem: name for name in expanded.inputs}}, ["results.sqlite", *drawn], study=str(where),

@@ -116,7 +116,8 @@ def in_time_order(cases, points):
 
 def pareto_table(cases, rows):
     """One row per point (``pareto.csv``, :func:`~ecostudy.studies.pareto.front_table`) in order of
-    running time, the study's own running time marked (``is_study_time``), with the ``das_``
+    running time (the index: each row's place in ``cases``), the study's own running time marked
+    (``is_study_time``), with the ``das_``
     columns when the points carry driver advice; its attrs (``summary.json``): what a reader asks
     first (the savings at +5 % and +10 %, the study time's energy, monotone, all verified, all optimal)."""
     points = points_of(cases, rows)
@@ -143,6 +144,7 @@ def pareto_table(cases, rows):
         facts["das"] = das_meta(table)
     facts.update(study_time_facts(table))
     table.attrs.update(facts)
+    table.index = pd.Index(order)  # each row's case in the front's order (the study engine's statuses)
     return table
 
 
