@@ -116,7 +116,7 @@ def test_case_equals_a_direct_solve(reference):
     from ecostudy.io.loaders import load_track, load_train
     from ecostudy.analysis.single import solve_run
     table = reference[0]
-    row = table[(table["scenario"] == "base") & (table["supplement_percent"] == 6)].iloc[0]
+    row = table[(table["scenario"] == "base") & (table["supplement_pct"] == 6)].iloc[0]
     direct = solve_run(load_track(TRACKS / "amsterdam_rokin_centraal.yaml"), load_train(TRAINS / "amsterdam_metro.yaml"),
                        "Rokin", "Centraal", Timing(supplement=0.06), points=200)
     assert row["traction_energy_kWh"] == pytest.approx(direct.summary["traction_energy_kWh"], rel=1e-9)
