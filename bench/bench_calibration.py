@@ -61,7 +61,7 @@ def calibrate_one(state):
     """One calibration of a generated log (four runs, 10 Hz, noisy) from the train file's values."""
     track, train, _, log = state
     result = calibrate_logs([log], track, train, DEFAULT_FIT)
-    return {"status": str(result.status), "drift": result.quality["structure"],
+    return {"status": str(result.status), "drift": result.quality["structure_ratio"],
             "identifiable": int(result.table["identifiable"].sum())}
 
 

@@ -40,7 +40,7 @@ from ecostudy.io.loaders import load_consist  # noqa: E402
 
 COLUMNS = ["K_b", "f", "Np", "Nc", "tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN",
            "force_mean_kN", "force_std_kN", "wagon_brake_kWh", "energy_total_kWh", "stop_error_m", "qp_inputs",
-           "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts", "seconds"]
+           "qp_constraints", "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget_count", "wall_s"]
 
 
 def rss_mb():
@@ -102,8 +102,8 @@ TERMS = ["K_b", "status", "tracking_mean_mps", "force_max_kN", "force_max_brakin
          "J_energy", "J_braking", "dynamic_brake_use_max", "dynamic_brake_use_mean", "stop_error_m"]
 
 STOPS = ["K_b", "f", "Np", "Nc", "status", "arrived", "ended", "stop_error_m", "arrival_s", "reference_time_s", "arrival_late_s",
-         "arrival_late_percent", "force_max_kN",
-         "force_limit_kN", "speed_excess_kmh", "over_ts", "reason"]
+         "arrival_late_pct", "force_max_kN",
+         "force_limit_kN", "speed_excess_kmh", "over_budget_count", "reason"]
 
 
 def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesion=False, effort=None, notches=False,

@@ -28,8 +28,8 @@ STUDY = "heavyhaul_brake_penalty"
 PLANTS = {"none": {}, "air_brake": {"air_brake": True}, "draft_gear": {"draft_gear": True},
           "adhesion": {"adhesion": True}, "all": {"air_brake": True, "draft_gear": True, "adhesion": True},
           "notches": {"notches": True}}
-FORCES = ["status", "tracking_mean_mps", "draft_max_kN", "draft_coupler", "buff_max_kN", "buff_coupler", "run_ins",
-          "fatigue_damage", "fatigue_damage_max", "rainflow_cycles_100kN", "force_max_braking_kN"]
+FORCES = ["status", "tracking_mean_mps", "draft_max_kN", "draft_coupler", "buff_max_kN", "buff_coupler", "run_ins_count",
+          "fatigue_damage", "fatigue_damage_max", "rainflow_cycles_over_100kN_count", "force_max_braking_kN"]
 ENERGY = ["traction_kWh", "dynamic_brake_kWh", "wagon_brake_kWh", "running_resistance_kWh", "curve_resistance_kWh",
           "grade_kWh", "coupler_damping_kWh", "draft_gear_kWh", "stored_change_kWh", "balance_residual_kWh"]
 

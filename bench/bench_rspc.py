@@ -41,7 +41,7 @@ def drive_rspc(case, arrival, sample, n, truth):
     result = run_loop(Plant(case.segment, case.train, truth), controller, sample, plant_step=sample)
     ms = 1e3 * np.array([s for s in controller.solve_seconds if s > 0])
     return {"energy_kWh": result.traction_work / 3.6e6, "arrival_s": result.arrival_time_s,
-            "stop_error_m": result.stop_error_m, "overspeed_kmh": result.max_overspeed_kmh, "solve_mean_ms": ms.mean(),
+            "stop_error_m": result.stop_error_m, "overspeed_kmh": result.overspeed_max_kmh, "solve_mean_ms": ms.mean(),
             "solve_p95_ms": np.percentile(ms, 95), "solve_max_ms": ms.max(),
             "mode_changes": sum(a != b for a, b in zip(controller.chosen, controller.chosen[1:])),
             "failures": controller.failures,

@@ -121,7 +121,7 @@ def loop_report(case, train, controller, driven, truth, sample):
     result = run_loop(Plant(case.segment, train, truth), driven, sample, plant_step=sample)
     s = np.array([x for x in controller.solve_seconds if x > 0])
     return {"energy_kWh": result.traction_work / 3.6e6, "arrival_s": result.arrival_time_s,
-            "stop_error_m": result.stop_error_m, "overspeed_kmh": result.max_overspeed_kmh, "solve_mean_s": s.mean(),
+            "stop_error_m": result.stop_error_m, "overspeed_kmh": result.overspeed_max_kmh, "solve_mean_s": s.mean(),
             "solve_max_s": s.max(), "iterations": float(np.mean(controller.iterations)), "softened": controller.softened}
 
 
@@ -149,7 +149,7 @@ def draws_table(study, draws, workers, only, skip=0, model=True):
                 s = row["summary"] or {}
                 print(f"  {name} draw {case['labels']['draw']}: {row['status']} stop "
                       f"{s.get('stop_error_m', float('nan')):+.3f} m, arrival {s.get('arrival_s', float('nan')):.2f} s, "
-                      f"{wall:.0f} s wall, overspeed {s.get('max_overspeed_kmh', float('nan')):.2f} km/h, "
+                      f"{wall:.0f} s wall, overspeed {s.get('overspeed_max_kmh', float('nan')):.2f} km/h, "
                       f"{s.get('energy_J_per_kg', float('nan')):.1f} J/kg, lateness: plan part "
                       f"{s.get('parts', (np.nan,) * 2)[0]:+.2f} s, approach part {s.get('parts', (np.nan,) * 2)[1]:+.2f} s",
                       file=sys.stderr, flush=True)
@@ -165,7 +165,7 @@ def draws_row(name, model, runs, arrival):
     statuses = {k: sum(r["status"] == k for r, _ in runs) for k in ("ok", "flagged", "failed")}
     return (f"| {name} | {len(s)} of {len(runs)} | {np.max(np.abs(e)):.3f} / {np.median(e):+.3f} | "
             f"{int(np.sum(np.abs(e) <= 1.0))} | {np.median(late):+.2f} / {np.max(late):+.2f} | "
-            f"{max(x['max_overspeed_kmh'] for x in s):.2f} | {ratio.mean():.3f} ({ratio.min():.3f}-{ratio.max():.3f}) | "
+            f"{max(x['overspeed_max_kmh'] for x in s):.2f} | {ratio.mean():.3f} ({ratio.min():.3f}-{ratio.max():.3f}) | "
             f"{' '.join(f'{k} {n}' for k, n in statuses.items() if n)} | {np.mean([w for _, w in runs]):.0f} |")
 
 

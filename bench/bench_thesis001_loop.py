@@ -54,7 +54,7 @@ def row(name, result, controller, train, mass=1.0):
     gaps = np.array(controller.gaps)
     f = controller.fallbacks
     return (f"| {name} | {result.arrival_time_s:.2f} | {result.traction_work / (train.mass * mass):.2f} | "
-            f"{result.stop_error_m:+.3f} | {result.max_overspeed_kmh:.2f} | {gaps.max():.1e} | "
+            f"{result.stop_error_m:+.3f} | {result.overspeed_max_kmh:.2f} | {gaps.max():.1e} | "
             f"{np.mean(gaps > 1e-6):.0%} | {controller.softened} | {f['shifted_plan']} / {f['reserve']} / "
             f"{f['full_brake']} | {s.mean():.0f} / {np.percentile(s, 95):.0f} / {s.max():.0f}")
 

@@ -29,7 +29,7 @@ def study_file(folder, output, extra_scenarios=()):
 
 
 def comparable(table):
-    return table[["scenario", "supplement_percent", "key", "status"] + NUMERIC].reset_index(drop=True)
+    return table[["scenario", "supplement_pct", "key", "status"] + NUMERIC].reset_index(drop=True)
 
 
 def same_results(table, other):
@@ -37,7 +37,7 @@ def same_results(table, other):
     the NLP written for an earlier case of the same scenario (``ocp.problem.Written``), whose time
     scale came from that case's start, and which cases share a worker depends on the pool."""
     a, b = comparable(table), comparable(other)
-    keys = ["scenario", "supplement_percent", "key", "status"]
+    keys = ["scenario", "supplement_pct", "key", "status"]
     return a[keys].equals(b[keys]) and np.allclose(a[NUMERIC].to_numpy(float), b[NUMERIC].to_numpy(float),
                                                    rtol=1e-9, atol=0.0)
 
@@ -116,7 +116,7 @@ def test_case_equals_a_direct_solve(reference):
     from ecostudy.io.loaders import load_track, load_train
     from ecostudy.analysis.single import solve_run
     table = reference[0]
-    row = table[(table["scenario"] == "base") & (table["supplement_percent"] == 6)].iloc[0]
+    row = table[(table["scenario"] == "base") & (table["supplement_pct"] == 6)].iloc[0]
     direct = solve_run(load_track(TRACKS / "amsterdam_rokin_centraal.yaml"), load_train(TRAINS / "amsterdam_metro.yaml"),
                        "Rokin", "Centraal", Timing(supplement=0.06), points=200)
     assert row["traction_energy_kWh"] == pytest.approx(direct.summary["traction_energy_kWh"], rel=1e-9)

@@ -109,7 +109,7 @@ def test_intervals_hold_the_true_parameters(calibrated, truth):
         slack = 1e-6 * row["std"]
         assert row.boot_low - slack <= row.estimate <= row.boot_high + slack, (name, row.boot_low, row.estimate)
     assert (table.loc["mass", "high"] - table.loc["mass", "low"]) / 2 < 0.02 * true["mass"]
-    assert calibrated.quality["structure"] < 1.5  # the filter's innovations are white
+    assert calibrated.quality["structure_ratio"] < 1.5  # the filter's innovations are white
 
 
 def test_a_parameter_the_logs_do_not_excite_is_held(inputs, truth, logged):

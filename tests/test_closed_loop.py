@@ -47,7 +47,7 @@ def test_published_closed_loop_trips(trips, commuter, case):
     assert result.arrival_time_s == pytest.approx(case["published_time_s"], rel=0.04)
     assert result.traction_work / commuter.mass == pytest.approx(case["published_energy_J_per_kg"], rel=0.08)
     assert abs(result.stop_error_m) <= 0.5
-    assert result.max_overspeed_kmh == 0.0
+    assert result.overspeed_max_kmh == 0.0
     assert result.arrival_time_s <= case["latest_s"] + TS + 1e-9
     assert controller.failures == 0
 
@@ -78,7 +78,7 @@ def test_a_follower_never_comes_within_the_separation(trips, commuter):
     moving = [s for s in follower.states if s.position > 0.0 and s.time <= t_lead[-1]]  # it waits at A first
     gaps = [np.interp(s.time, t_lead, x_lead) - s.position for s in moving]
     assert moving and min(gaps) >= 100.0 - 0.5  # within half a metre: one sample of plant-model mismatch
-    assert abs(follower.stop_error_m) <= 0.5 and follower.max_overspeed_kmh == 0.0
+    assert abs(follower.stop_error_m) <= 0.5 and follower.overspeed_max_kmh == 0.0
     assert follower.arrival_time_s > leader.arrival_time_s  # held back by the leader (thesis: 101.53 s)
 
 
@@ -90,7 +90,7 @@ def test_noise_keeps_the_stop_and_the_limits(commuter):
     """Ch. 10.1 noise (sigma_a 0.05 m/s^2 held 1 s, sigma_V 0.01 m/s, sigma_X 0.01 m): no
     overspeed, stop within 0.5 m."""
     result, _ = drive(commuter, *CH10, noise=NOISE, points=300)
-    assert result.max_overspeed_kmh == 0.0 and abs(result.stop_error_m) < 0.5
+    assert result.overspeed_max_kmh == 0.0 and abs(result.stop_error_m) < 0.5
 
 
 def test_a_heavier_train_overruns_without_the_estimator_and_stops_with_it(commuter):
@@ -102,7 +102,7 @@ def test_a_heavier_train_overruns_without_the_estimator_and_stops_with_it(commut
     estimator = MassEstimator()
     seeing, _ = drive(commuter, *CH10, truth=heavy, estimator=estimator, points=300)
     assert blind.stop_error_m > 5.0
-    assert abs(seeing.stop_error_m) < 0.5 and seeing.max_overspeed_kmh == 0.0
+    assert abs(seeing.stop_error_m) < 0.5 and seeing.overspeed_max_kmh == 0.0
     off = [x for x, m in estimator.history if x is not None and abs(m - 1.2) > 0.012]
     assert max(off, default=0.0) < 2000.0
     assert estimator.estimate == pytest.approx(1.2, rel=0.01)

@@ -83,6 +83,6 @@ def test_a_strategy_that_overspeeds_is_flagged(tmp_path):
     rows = folder.table.set_index("strategy")
     das = rows.loc["DAS round (nearest level)"]
     assert abs(das["stop_error_m"]) < 1.0 and das["arrival_error_s"] < 1.0
-    assert das["max_overspeed_kmh"] > 0.5
+    assert das["overspeed_max_kmh"] > 0.5
     assert das["status"].startswith("flagged: overspeed"), das["status"]
-    assert rows.loc["ATO optimum", "status"] == "ok" and rows.loc["ATO optimum", "max_overspeed_kmh"] < 0.5
+    assert rows.loc["ATO optimum", "status"] == "ok" and rows.loc["ATO optimum", "overspeed_max_kmh"] < 0.5

@@ -34,7 +34,7 @@ def test_the_guide_s_new_kind_runs_in_a_study(tmp_path, guide_kind):
     assert list(runs["controller"]) == ["rule", "rule"]
     assert runs["status"].isin(["ok", "flagged"]).all() and (runs["traction_energy_kWh"] > 0).all()
     assert (runs["stop_error_m"].abs() < 10).all()  # it brakes for the stop (a rule of thumb, not to 1 m)
-    assert (runs["max_overspeed_kmh"] < 0.5).all()
+    assert (runs["overspeed_max_kmh"] < 0.5).all()
     assert (r.exit_code == 0) == (runs["status"] == "ok").all()
 
 

@@ -151,7 +151,7 @@ def test_the_convex_controller_closes_the_loop_on_a_coarse_grid(commuter, advanc
     program = ConvexProgram(segment, commuter, trapezoid_grid(segment, 120), ConvexWeights())
     controller = Convex(program, (0.0, 200.0), hold=0.5)
     result = run_loop(Plant(segment, commuter), controller, 0.5, plant_step=0.5)
-    assert abs(result.stop_error_m) < 0.5 and result.max_overspeed_kmh == 0.0
+    assert abs(result.stop_error_m) < 0.5 and result.overspeed_max_kmh == 0.0
     assert controller.failures == 0 and max(controller.gaps) < 1e-3
 
 

@@ -76,4 +76,4 @@ def test_a_study_runs_the_state_estimator_by_name(tmp_path):
                                       "--no-plot"])
     runs = pd.read_csv(tmp_path / "out" / "runs.csv")
     assert result.exit_code in (0, 1) and runs.loc[0, "status"] != "failed", result.output
-    assert abs(runs.loc[0, "mass_estimate"] / runs.loc[0, "true_mass"] - 1) < 0.03
+    assert abs(runs.loc[0, "mass_estimate"] / runs.loc[0, "true_mass_factor"] - 1) < 0.03

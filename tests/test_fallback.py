@@ -59,9 +59,9 @@ def test_an_unusable_solve_mid_trip_applies_the_shifted_plan_and_steps_csv_says_
     assert steps.loc[capped[1:], "speed_mps"].min() > 5.0  # mid-trip indeed
     counts = step_counts(controller)
     assert all((steps["fallback"] == kind).sum() == counts[f"fallback_{kind}"] for kind in KINDS)
-    assert counts["fallback_full_brake"] == 1  # at the stand only (a braking plan leaning on the
+    assert counts["fallback_full_brake_count"] == 1  # at the stand only (a braking plan leaning on the
     # relaxation near the stop of this coarse grid goes to the eq. 6.8 reserve, not a full brake)
-    assert abs(result.stop_error_m) < 0.5 and result.max_overspeed_kmh == 0.0
+    assert abs(result.stop_error_m) < 0.5 and result.overspeed_max_kmh == 0.0
 
 
 def test_the_pointwise_power_test():
@@ -103,7 +103,7 @@ def test_the_computation_delay_holds_the_previous_control_and_is_repeatable(comm
     now, late, again = trip(0), trip(1), trip(1)
     assert now.handles[0] == pytest.approx(1.0, abs=1e-6) and late.handles[0] == 0.0  # none planned yet: coast
     assert late.handles == again.handles and late.arrival_time_s == again.arrival_time_s
-    assert abs(late.stop_error_m) < 0.5 and late.max_overspeed_kmh == 0.0
+    assert abs(late.stop_error_m) < 0.5 and late.overspeed_max_kmh == 0.0
     assert abs(late.arrival_time_s - now.arrival_time_s) < 2.0
 
 
@@ -140,8 +140,8 @@ def test_a_study_writes_steps_per_run_and_counts_fallbacks(tmp_path):
     assert {"sample", "position_m", "speed_mps", "handle", "status", "solve_ms", "gap", "fallback", "softened",
             "mass_estimate"} <= set(steps.columns)
     runs = pd.read_csv(out / "runs.csv")
-    assert len(steps) > 100 and runs.loc[0, "compute_delay"] == 1 and steps["sample"].is_monotonic_increasing
-    assert runs.loc[0, "fallback_full_brake"] == (steps["fallback"] == "full_brake").sum()
+    assert len(steps) > 100 and runs.loc[0, "compute_delay_samples"] == 1 and steps["sample"].is_monotonic_increasing
+    assert runs.loc[0, "fallback_full_brake_count"] == (steps["fallback"] == "full_brake").sum()
     assert steps.loc[0, "handle"] == 0.0  # one sample of computation delay: the train waits a sample
 
 

@@ -217,8 +217,8 @@ def test_run_ins_draft_and_buff_read_from_a_history():
     m = in_train_metrics([(np.arange(6.0), forces)], c)
     assert (m["draft_max_kN"], m["draft_coupler"], m["draft_time_s"]) == (100.0, 2, 1.0)
     assert (m["buff_max_kN"], m["buff_coupler"], m["buff_time_s"]) == (300.0, 2, 4.0)
-    assert m["buff_position_m"] == pytest.approx(2 * 20.47) and m["run_ins"] == 2
-    assert m["fatigue_damage_coupler"] == 2 and m["rainflow_cycles_100kN"] == 2.5
+    assert m["buff_position_m"] == pytest.approx(2 * 20.47) and m["run_ins_count"] == 2
+    assert m["fatigue_damage_coupler"] == 2 and m["rainflow_cycles_over_100kN_count"] == 2.5
 
 
 def test_an_effect_without_its_data_is_refused_in_one_line(tmp_path):

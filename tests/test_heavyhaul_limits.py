@@ -70,7 +70,7 @@ def test_a_limit_drop_is_crossed_at_the_lower_limit(tmp_path):
     assert row["status"] == "ok" and row["speed_excess_kmh"] < 1.0 and abs(row["stop_error_m"]) < 1.0
     assert row["adhesion_use_max"] <= 1.01
     assert 0 < row["arrival_late_s"] < 60 and row["arrival_late_s"] == pytest.approx(row["arrival_s"] - row["reference_time_s"], abs=0.01)
-    assert row["arrival_late_percent"] == pytest.approx(100 * row["arrival_late_s"] / row["reference_time_s"], abs=0.01)
+    assert row["arrival_late_pct"] == pytest.approx(100 * row["arrival_late_s"] / row["reference_time_s"], abs=0.01)
 
 
 @pytest.mark.slow  # about 15 s on a loaded machine
@@ -82,7 +82,7 @@ def test_a_reference_that_drops_at_the_limit_is_overrun_and_a_late_arrival_flagg
     result, row = run(tmp_path, study, "at_drop")
     assert result.exit_code == 1, result.output
     assert row["status"] == "flagged" and row["speed_excess_kmh"] > 2.0, row["reason"]
-    late, share = row["arrival_late_s"], row["arrival_late_percent"]
+    late, share = row["arrival_late_s"], row["arrival_late_pct"]
     assert late > 0 and row["reason"] == (
         f"arrived {late:.0f} s ({share:.1f} %) after the reference's running time (tolerance 0 % or 0 s, the larger); "
         f"a car ran {row['speed_excess_kmh']:.1f} km/h over the line's limit (tolerance 1 km/h)")

@@ -87,7 +87,7 @@ def test_each_missed_limit_is_a_reason():
     within every tolerance is ok."""
     good = {"arrived": True, "ended": "at the stop", "stop_error_m": 0.4, "force_max_kN": 900.0, "force_limit_kN": 2000.0,
             "speed_excess_kmh": 0.5, "arrival_late_s": 134.0,
-            "arrival_late_percent": 4.9}
+            "arrival_late_pct": 4.9}
     assert reasons(good, 100, 0) == []
     assert reasons({**good, "stop_error_m": 2.7}, 100, 0) == ["stopped 2.7 m beyond the stop (tolerance 1 m)"]
     assert reasons({**good, "speed_excess_kmh": 3.0}, 100, 0) == [
@@ -117,12 +117,12 @@ def test_each_missed_limit_is_a_reason():
     assert reasons({**good, "arrived": False, "ended": "sample cap", "stop_error_m": 50.0}, 100, 0) == [
         "the sample cap (100) came with the train 50 m beyond the stop, not stopped"]
     assert reasons({**good, "stop_error_m": 2.7}, 100, 0, Tolerances(5.0, 2 * KMH)) == []
-    late = {**good, "arrival_late_s": 201.0, "arrival_late_percent": 7.8}
+    late = {**good, "arrival_late_s": 201.0, "arrival_late_pct": 7.8}
     assert reasons(late, 100, 0) == [
         "arrived 201 s (7.8 %) after the reference's running time (tolerance 5 % or 60 s, the larger)"]
     assert reasons(late, 100, 0, Tolerances(arrival=0.10)) == []
     assert reasons(late, 100, 0, Tolerances(arrival_s=300.0)) == []  # a short trip: 7.8 % but under the seconds
-    assert reasons({**good, "arrival_late_s": -90.0, "arrival_late_percent": -3.0}, 100, 0,
+    assert reasons({**good, "arrival_late_s": -90.0, "arrival_late_pct": -3.0}, 100, 0,
                    Tolerances(arrival=0.0, arrival_s=0.0)) == []  # early is on time
     assert reasons({**late, "arrived": False, "ended": "sample cap", "stop_error_m": -50.0}, 100, 0) == [
         "the sample cap (100) came 50 m before the stop"]  # not arrived: the cap says it, not a late arrival

@@ -305,7 +305,7 @@ def test_the_brake_penalty_on_the_shipped_line(tmp_path):
     assert high.energy_total_kWh < low.energy_total_kWh
     assert high.force_max_braking_kN < 0.5 * low.force_max_braking_kN
     assert abs(high.tracking_mean_mps - low.tracking_mean_mps) < 0.25
-    assert max(low.force_max_kN, high.force_max_kN) < 1000 and high.over_ts == 0
+    assert max(low.force_max_kN, high.force_max_kN) < 1000 and high.over_budget_count == 0
     # the dynamic brakes stay far from their limit at K_b 60 (0.22 of it at most); at K_b 1, with the
     # reference's limit lead, one sample or more reaches it (dynamic_brake_use_max 1.0)
     assert high.J_braking < 0.05 * high.J_force and high.dynamic_brake_use_max < 0.3

@@ -36,4 +36,4 @@ def test_every_runs_csv_column_is_documented():
     from ecostudy.studies.heavyhaul import COLUMNS
     text = (Path(__file__).resolve().parent.parent / "docs" / "heavyhaul.md").read_text()
     table = text[text.index("**runs.csv, column by column**"):text.index("## Bad input")]
-    assert [c for c in (*COLUMNS, "K_b", "f", "Np", "Nc", "status", "reason", "seconds") if f"`{c}`" not in table] == []
+    assert [c for c in (*COLUMNS, "K_b", "f", "Np", "Nc", "status", "reason", "wall_s") if f"`{c}`" not in table] == []

@@ -27,6 +27,6 @@ def test_a_run_driven_by_its_fallback_is_flagged(tmp_path):
                                  "--no-progress", "--no-plot"])
     assert r.exit_code == 1, r.output
     run = pd.read_csv(tmp_path / "o" / "runs.csv").iloc[0]
-    assert run["failures"] > 0 and run["status"] == "flagged", run.to_dict()
-    assert f"{run['failures']} solves in " in run["reason"] and "gave no usable plan" in run["reason"], run["reason"]
+    assert run["failures_count"] > 0 and run["status"] == "flagged", run.to_dict()
+    assert f"{run['failures_count']} solves in " in run["reason"] and "gave no usable plan" in run["reason"], run["reason"]
     assert abs(run["stop_error_m"]) < 1.0 and run["late_s"] < 1.0  # it stopped, on time: only the solves flag it

@@ -18,7 +18,7 @@ def test_run_kind_simulate_and_the_simulate_command_share_one_store(tmp_path):
     again = api.simulate_folder(path, workers=1, out=out, plot=False)
     assert "4 already stored, 0 computed now" in again.text
     assert list(api.load(out).tables) == ["runs", "aggregate"] and api.load(out).summary["missing_runs"] == 0
-    assert again.table.drop(columns=["seconds"]).equals(folder.table.drop(columns=["seconds"]))
+    assert again.table.drop(columns=["wall_s"]).equals(folder.table.drop(columns=["wall_s"]))
 
 
 @pytest.mark.slow  # a 5 km heavy-haul run (~20 s)
@@ -29,4 +29,4 @@ def test_run_kind_heavyhaul_and_the_heavyhaul_command_share_one_store(tmp_path):
     folder = assert_folder(out, "heavyhaul", ["runs"], rows=1, status="flagged")  # adhesion: the paper's plant
     again = api.heavyhaul_folder(path, workers=1, out=out, plot=False)
     assert "1 already stored, 0 computed now" in again.text
-    assert again.table.drop(columns=["seconds"]).equals(folder.table.drop(columns=["seconds"]))
+    assert again.table.drop(columns=["wall_s"]).equals(folder.table.drop(columns=["wall_s"]))

@@ -209,7 +209,7 @@ def test_trains_that_overlap_on_the_line_are_flagged():
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
     f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0, 4.0], ["T1", "T2"], 1.0, SUPPLY, points=300)
     totals = strategies.run_strategies(f, ["independent"], progress=None)["independent"]["totals"]
-    assert totals["min_separation_m"] < 0 and "trains overlap" in totals["status"]
+    assert totals["separation_min_m"] < 0 and "trains overlap" in totals["status"]
 
 
 @pytest.fixture(scope="module")
@@ -230,7 +230,7 @@ def test_every_strategy_balances_keeps_time_and_is_verified(two_trains):
         assert abs(tot["balance_error_pct"]) < 0.1, name
         assert tot["all_verified"], (name, res["trains"])
         for rec in res["trains"].values():
-            assert rec["worst_arrival_error_s"] < 0.5 and rec["worst_stop_error_m"] < 1.0
+            assert rec["arrival_error_worst_s"] < 0.5 and rec["stop_error_worst_m"] < 1.0
             # the electric brake feeds at most eta_R of the braking work at the wheel
             assert 0 < rec["braking_regen_offered_kWh"] <= rec["braking_kWh"]
 
@@ -266,8 +266,8 @@ def test_the_pinned_bus_costs_what_the_circuit_says_and_no_more_than_the_floatin
 def test_following_train_keeps_its_buffer(two_trains):
     f, out = two_trains
     for name in ("following", "triggering", "voltage", "dissension"):  # the rules keep it too
-        assert out[name]["totals"]["min_separation_m"] >= 360.0 - 0.5, name
-    assert out["independent"]["totals"]["min_separation_m"] < 360.0  # the buffer binds here
+        assert out[name]["totals"]["separation_min_m"] >= 360.0 - 0.5, name
+    assert out["independent"]["totals"]["separation_min_m"] < 360.0  # the buffer binds here
 
 
 @pytest.mark.slow

@@ -28,7 +28,7 @@ def test_independent_runs_closer_than_the_buffer_are_flagged_with_the_closest_ap
     """Each train alone ignores the other: T2's head comes within about 115 m of T1's tail, closer
     than buffer_m 150 m but no overlap; the result is flagged and says which trains, when, where."""
     out = strategies.run_strategies(_fleet(), ["independent"], progress=None)["independent"]
-    gap = out["totals"]["min_separation_m"]
+    gap = out["totals"]["separation_min_m"]
     assert 0.0 < gap < BUFFER - 10.0
     status = out["totals"]["status"]
     assert status.startswith("flagged") and "buffer_m 150 m" in status, status
@@ -48,14 +48,14 @@ def test_the_rules_keep_the_buffer_and_never_return_the_independent_start_that_b
     rounds = buffered["receptivity"]["info"]["rounds_substation_kWh"]
     assert rounds[0] < min(rounds[1:])  # the independent start is the cheapest of the history
     totals = buffered["receptivity"]["totals"]
-    assert totals["min_separation_m"] >= BUFFER - SLACK and totals["status"] == "ok", totals
+    assert totals["separation_min_m"] >= BUFFER - SLACK and totals["status"] == "ok", totals
     assert totals["substation_kWh"] == pytest.approx(min(rounds[1:]), rel=1e-9)
 
 
 @pytest.mark.slow
 def test_the_joint_optimum_keeps_the_buffer_and_bounds_the_strategies_that_keep_it(buffered):
     joint = buffered["joint"]["totals"]
-    assert joint["min_separation_m"] >= BUFFER - SLACK and joint["status"] == "ok", joint
+    assert joint["separation_min_m"] >= BUFFER - SLACK and joint["status"] == "ok", joint
     for name in ("receptivity", "following"):
         assert buffered[name]["totals"]["status"] == "ok", (name, buffered[name]["totals"]["status"])
         assert joint["substation_kWh"] <= buffered[name]["totals"]["substation_kWh"] * (1 + 1e-4), name

@@ -59,8 +59,8 @@ def test_a_warm_leg_dearer_than_its_cold_solve_is_replaced(one_leg):
     assert outcome.usable and run.notes["replaced_by_cold"] and run.notes["warm_vs_cold_pct"] > 5.0
     assert run.p.sum() == pytest.approx(cold.p.sum(), rel=1e-6)
     counts = guard_counts([[run, warm]])
-    assert counts["legs_checked_cold"] == 1 and counts["legs_replaced_by_cold"] == 1
-    assert counts["worst_warm_vs_cold_pct"] == pytest.approx(run.notes["warm_vs_cold_pct"])
+    assert counts["legs_checked_cold_count"] == 1 and counts["legs_replaced_by_cold_count"] == 1
+    assert counts["warm_vs_cold_worst_pct"] == pytest.approx(run.notes["warm_vs_cold_pct"])
 
 
 def test_a_checked_warm_leg_stopped_at_its_cap_gives_way_to_its_cold_solve(one_leg, monkeypatch):
@@ -75,7 +75,7 @@ def test_a_checked_warm_leg_stopped_at_its_cap_gives_way_to_its_cold_solve(one_l
     assert outcome.optimal and scoring.verify_leg(leg, run)["passed"]
     assert run.p.sum() == pytest.approx(cold.p.sum(), rel=1e-6)  # the cold solve's optimum
     counts = guard_counts([[run]])
-    assert counts["legs_checked_cold"] == 1 and counts["legs_warm_capped"] == 1 and counts["legs_replaced_by_cold"] == 1
+    assert counts["legs_checked_cold_count"] == 1 and counts["legs_warm_capped_count"] == 1 and counts["legs_replaced_by_cold_count"] == 1
 
 
 def test_a_cold_leg_keeps_the_cheaper_of_its_two_starts(one_leg):
@@ -98,7 +98,7 @@ def test_a_cold_leg_keeps_the_cheaper_of_its_two_starts(one_leg):
     own, trapezoid = legs._solve(nlp)[2], legs._solve(nlp, cold=True)[2]
     assert own > trapezoid * (1 + legs.TIE)
     assert run.notes["independent_vs_trapezoid_pct"] == pytest.approx(100 * (own - trapezoid) / abs(trapezoid))
-    assert guard_counts([[run, cold]])["legs_replaced_by_trapezoid"] == 1
+    assert guard_counts([[run, cold]])["legs_replaced_by_trapezoid_count"] == 1
 
 
 def test_a_run_that_stands_before_its_stop_fails_verification(one_leg):
@@ -181,7 +181,7 @@ def test_the_supervisor_rounds_check_warm_legs_against_cold_in_their_first_round
     assert first == [("train T1, leg 1", legs.CHECKED), ("train T2, leg 1", True)]
     assert len(history) == 3 and len(warmth) > 2 and all(flag is True for _, flag in warmth[2:])
     assert "warm_vs_cold_pct" in runs[0][0].notes  # the first round's check, reported on the final run
-    assert guard_counts(runs)["legs_checked_cold"] == 1
+    assert guard_counts(runs)["legs_checked_cold_count"] == 1
     # solve_train's own switch: the sampled leg solved warm only, no cold check noted
     run = fleet.solve_train(f, 0, guesses=start[0], check=False)[0][0]
     assert run.notes is None

@@ -176,4 +176,4 @@ def test_a_conflict_while_both_trains_run_names_the_trains_the_least_gap_and_whe
                           "T1's tail there, where buffer_m 150 m is asked"), why
     assert "(joint optimum with buffer_m's rows: Ipopt infeasible after" in why, why
     # the independent runs ignore the buffer: they come no further apart than the most any runs keep
-    assert out["independent"]["totals"]["min_separation_m"] <= found["gap_m"] + 1e-3, out["independent"]["totals"]
+    assert out["independent"]["totals"]["separation_min_m"] <= found["gap_m"] + 1e-3, out["independent"]["totals"]

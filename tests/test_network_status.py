@@ -17,7 +17,7 @@ def test_a_pantograph_voltage_below_min_voltage_is_flagged():
     f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 1.0,
                    Supply(position=650.0, min_voltage=700.0), points=200)
     totals = strategies.run_strategies(f, ["independent"], progress=None)["independent"]["totals"]
-    assert totals["min_voltage_V"] < 700.0
+    assert totals["voltage_min_V"] < 700.0
     assert totals["status"].startswith("flagged") and "min_voltage_V" in totals["status"], totals["status"]
 
 

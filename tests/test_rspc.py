@@ -81,7 +81,7 @@ def test_the_loop_applies_only_das_modes_arrives_on_time_and_costs_between_coast
         assert all(u in levels for u, m in zip(result.handles, c.chosen) if m != "cruise")
         assert result.arrival_time_s <= arrival
         assert abs(result.stop_error_m) < 0.5
-        assert result.max_overspeed_kmh < 0.5
+        assert result.overspeed_max_kmh < 0.5
         if truth == Truth():
             assert coasting < result.traction_work < all_out
             assert c.failures == 0

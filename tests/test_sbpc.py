@@ -73,7 +73,7 @@ def test_the_nominal_loop_ends_at_the_stop_and_quantised_handles_stay_within_met
     case, speeds = amsterdam_case
     nominal = Sbpc(case, 76.0, TS, 1, speeds)
     result = run_loop(Plant(case.segment, metro), nominal, TS, plant_step=TS)
-    assert abs(result.stop_error_m) < 0.1 and result.max_overspeed_kmh == 0.0
+    assert abs(result.stop_error_m) < 0.1 and result.overspeed_max_kmh == 0.0
     assert result.arrival_time_s == pytest.approx(76.0, abs=2 * TS)
     relaxed = Sbpc(case, 76.0, TS, 4, speeds, "two_step")
     quantised = run_loop(Plant(case.segment, metro), Quantised(relaxed, metro.das_levels), TS, plant_step=TS)

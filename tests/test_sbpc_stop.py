@@ -122,7 +122,7 @@ def test_the_limit_guard_coasts_or_brakes_where_a_held_handle_would_overspeed(re
     guard = TerminalApproach(Constant(1.0), case, TS, 0.2)
     guarded = run_loop(plant, Quantised(guard, metro.das_levels), TS, plant_step=TS / 4, max_time=12.0, delay=1)
     assert guarded.states[-1].position < 120.0  # still in the 50 km/h zone
-    assert bare.max_overspeed_kmh > 5.0 and guarded.max_overspeed_kmh <= 0.5 and guard.capped > 0
+    assert bare.overspeed_max_kmh > 5.0 and guarded.overspeed_max_kmh <= 0.5 and guard.capped > 0
     assert guard.below_limit(State(30.0, 8.0, 0.0), 1.0) == 1.0  # far below the limit: as asked
     assert guard.below_limit(State(30.0, 8.0, 0.0), -1.0) == -1.0
 

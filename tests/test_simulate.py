@@ -37,7 +37,7 @@ def test_a_monte_carlo_study_runs_resumes_and_says_what_feedback_buys(tmp_path):
     assert (convex["stop_error_m"].abs() < 1.0).all() and (convex["status"] == "ok").all()  # K = 80, 2 Hz
     assert (replayed["stop_error_m"] > 1.0).all() and (replayed["status"] == "flagged").all()
     assert first.exit_code == 1 and "stopped +" in first.output  # flagged runs are named, exit 1
-    assert convex["mass_estimate"].sub(convex["true_mass"]).abs().max() < 0.02
+    assert convex["mass_estimate"].sub(convex["true_mass_factor"]).abs().max() < 0.02
     aggregate = pd.read_csv(out / "aggregate.csv")
     assert list(aggregate["controller"]) == ["convex", "replayed"] and list(aggregate["runs"]) == [2, 2]
     assert (out / "bands.png").stat().st_size > 0 and (out / "mass_estimates.png").exists()

@@ -42,7 +42,7 @@ def test_the_nominal_loop_stops_on_the_mark_with_das_modes_and_costs_at_least_th
     controller = Sppc(ato, 76.0)
     result = run_loop(Plant(ato.segment, metro), controller, TS, plant_step=TS)
     assert abs(result.stop_error_m) < 0.5 and result.arrival_time_s <= 76.0 + TS + 1e-6
-    assert result.max_overspeed_kmh < 0.5
+    assert result.overspeed_max_kmh < 0.5
     assert set(controller.modes) <= MODES
     # DAS modes cost at least the free handle's optimum (22.6 MJ; the loop 24.6 MJ). SBPC with blocks
     # of L = 20 is no bound (25.8 MJ): SPPC cost more only while a sample without a plan braked in

@@ -83,7 +83,7 @@ def test_a_killed_comparison_resumes_and_workers_agree(compared, tmp_path):
 
 
 NETWORK_NUMBERS = ["substation_kWh", "saving_vs_independent_pct", "traction_input_kWh", "regen_used_kWh",
-                   "regen_lost_kWh", "line_losses_kWh", "unserved_kWh", "balance_error_pct", "min_separation_m"]
+                   "regen_lost_kWh", "line_losses_kWh", "unserved_kWh", "balance_error_pct", "separation_min_m"]
 
 
 def network_table(report):

@@ -54,10 +54,10 @@ def test_report_html_shows_a_rounded_zero_as_zero_by_the_same_formatter():
 def test_a_table_prints_each_column_to_its_own_digits():
     """simulate's, heavy-haul's and validate's tables give each number column its format: no
     '-2.789e-06' m of a stop error beside '0.5812', no '84' beside '84.06' s."""
-    frame = pd.DataFrame({"controller": ["a", "b"], "arrival_s_mean": [84.0, 84.06],
-                          "stop_error_m_min": [-2.789e-06, 0.5812], "solve_p95_ms_max": [294.0, 284.8]})
-    text = shown(frame, {"controller": None, "arrival_s_mean": ".2f", "stop_error_m_min": ".3f",
-                         "solve_p95_ms_max": None}, ".4g")
+    frame = pd.DataFrame({"controller": ["a", "b"], "arrival_mean_s": [84.0, 84.06],
+                          "stop_error_min_m": [-2.789e-06, 0.5812], "solve_p95_max_ms": [294.0, 284.8]})
+    text = shown(frame, {"controller": None, "arrival_mean_s": ".2f", "stop_error_min_m": ".3f",
+                         "solve_p95_max_ms": None}, ".4g")
     assert [line.split() for line in text.splitlines()[1:]] == [["a", "84.00", "0.000", "294"],
                                                                  ["b", "84.06", "0.581", "284.8"]], text
 

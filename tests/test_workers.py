@@ -12,7 +12,7 @@ from ecostudy.studies.workers import every_core
 from .conftest import TRACKS, TRAINS, write_yaml
 
 runner = CliRunner()
-TIMED = ["seconds"]  # wall times: the only columns that may differ from run to run
+TIMED = ["wall_s"]  # wall times: the only columns that may differ from run to run
 
 
 def small_study(folder):
@@ -40,7 +40,7 @@ def stored(out):
     for key, text in rows.items():
         summary = json.loads(text)
         summary.pop("stages_s")
-        summary["solver"].pop("seconds")
+        summary["solver"].pop("wall_s")
         out[key] = summary
     return out
 

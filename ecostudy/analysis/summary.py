@@ -18,7 +18,7 @@ def run_summary(case, totals, objective, t_allout, marginal, labels, regime_runs
                     "runs": [{"regime": r, "start_m": a, "end_m": b} for r, a, b in regime_runs]},
         "pontryagin": costate,
         "solver": {"status": outcome.status, "iterations": outcome.iterations,
-                   "seconds": stages.get("solve", 0.0), "max_constraint_violation": outcome.max_violation},
+                   "wall_s": stages.get("solve", 0.0), "constraint_violation_max": outcome.max_violation},
         "verification": verification,
         "stages_s": {k: round(v_, 4) for k, v_ in stages.items() if k != "iterations"},
     }

@@ -37,17 +37,17 @@ log = logging.getLogger("ecostudy")
 
 # each printed table's columns, with the format of each number column whose digits .4g would vary
 # (84 beside 84.06, -2.789e-06 m): None, the table's own
-LOOP_COLUMNS = {"controller": None, "runs": None, "ok": None, "energy_J_per_kg_mean": ".1f", "energy_J_per_kg_std": ".1f",
-                "arrival_s_mean": ".2f", "arrival_s_max": ".2f", "stop_error_m_min": ".3f", "stop_error_m_max": ".3f",
-                "max_overspeed_kmh_max": ".2f", "solve_mean_ms_mean": ".1f", "solve_p95_ms_max": ".1f",
-                "over_budget_sum": None, "softened_sum": None}
+LOOP_COLUMNS = {"controller": None, "runs": None, "ok": None, "energy_mean_J_per_kg": ".1f", "energy_std_J_per_kg": ".1f",
+                "arrival_mean_s": ".2f", "arrival_max_s": ".2f", "stop_error_min_m": ".3f", "stop_error_max_m": ".3f",
+                "overspeed_max_max_kmh": ".2f", "solve_mean_mean_ms": ".1f", "solve_p95_max_ms": ".1f",
+                "over_budget_count_sum": None, "softened_count_sum": None}
 HEAVY_COLUMNS = {"K_b": None, "f": None, "Np": None, "Nc": None, "status": None, "tracking_mean_mps": ".3f",
                  "tracking_std_mps": ".3f", "force_max_kN": ".1f", "force_max_braking_kN": ".1f", "force_mean_kN": ".1f",
                  "force_std_kN": ".1f", "wagon_brake_kWh": ".0f", "energy_total_kWh": ".0f", "qp_inputs": None,
-                 "solve_mean_s": ".4f", "solve_p95_s": ".4f", "solve_max_s": ".4f", "over_ts": None, "stop_error_m": ".3f"}
+                 "solve_mean_ms": ".1f", "solve_p95_ms": ".1f", "solve_max_ms": ".1f", "over_budget_count": None, "stop_error_m": ".3f"}
 NETWORK_COLUMNS = ["strategy", "status", "substation_kWh", "saving_vs_independent_pct", "traction_input_kWh",
                    "regen_used_kWh", "regen_lost_kWh", "line_losses_kWh", "unserved_kWh", "balance_error_pct",
-                   "min_separation_m", "all_verified"]
+                   "separation_min_m", "all_verified"]
 CALIBRATION_COLUMNS = {"name": None, "unit": None, **dict.fromkeys(["prior", "estimate", "low", "high", "boot_low",
                                                                      "boot_high"], "~5"), "identifiable": None}
 VALIDATION_COLUMNS = {"run": None, "from_m": ".0f", "to_m": ".0f", "logged_time_s": ".1f", "model_time_s": ".1f",
@@ -159,7 +159,7 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
     q = result.quality
     lines = [shown(result.table.dropna(axis=1, how="all"), CALIBRATION_COLUMNS),
              f"{q['runs']} runs, {q['speed_samples']} speed samples: replayed speed off the logged by "
-             f"{q['rms_speed_mps']:.3f} m/s RMS; innovations {q['structure']:.2f} times white noise over 5 s"]
+             f"{q['rms_speed_mps']:.3f} m/s RMS; innovations {q['structure_ratio']:.2f} times white noise over 5 s"]
     lines += [f"{row['log']} run {row['run']}: optimum for {row['running_time_s']:.1f} s uses "
               f"{row['optimal_traction_kWh']:.2f} kWh against {row['logged_traction_kWh']:.2f} kWh logged: saving "
               f"{number(row['saving_pct'], '.1f')} % (band {number(row['saving_low_pct'], '.1f')} to "

@@ -37,7 +37,7 @@ def run_lines(result: RunResult, out_dir: Path) -> list[str]:
              f"  traction energy   {s.traction_energy_kWh:9.3f} kWh  ({s.traction_energy_J_per_kg:.2f} J/kg)",
              f"  net energy        {number(s.net_energy_kWh, '9.3f')} kWh  (regenerated "
              f"{number(s.regenerated_energy_kWh)} kWh)",
-             f"  solver            {s.solver.status}, {s.solver.iterations} iterations, {s.solver.seconds:.2f} s",
+             f"  solver            {s.solver.status}, {s.solver.iterations} iterations, {s.solver.wall_s:.2f} s",
              f"  regimes           {s.regime_sequence}"]
     if s.pontryagin is not None:
         pm = s.pontryagin

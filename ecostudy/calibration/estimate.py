@@ -96,16 +96,16 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
               for run, whitened in problem.ordered_runs()]
     blocks = problem.blocks(free, p)
     quality = {"rms_speed_mps": float(np.sqrt(np.mean(used["residual_mps"] ** 2))),
-               "structure": float(max(drifts)) if drifts else 1.0,
+               "structure_ratio": float(max(drifts)) if drifts else 1.0,
                "speed_samples": int(blocks["speed"].size), "traction_samples": int(blocks["traction"].size),
                "regeneration_samples": int(blocks["regeneration"].size), "runs": len(problem.runs),
-               "noise": dict(problem.sigma)}
+               "noise": {"speed_mps": problem.sigma["speed"], **{f"{k}_share": v for k, v in problem.sigma.items() if k != "speed"}}}
     reasons = [f"{n} not identifiable from these logs, held at its prior: {why}" for n, why in held.items()]
     if quality["rms_speed_mps"] > MAX_RMS_SPEED:
         reasons.append(f"speed residuals of {quality['rms_speed_mps']:.3g} m/s RMS (more than {MAX_RMS_SPEED} m/s; "
                        f"the logged speed's own noise is {problem.sigma['speed']:.2g} m/s)")
-    if quality["structure"] > MAX_STRUCTURE:
-        reasons.append(f"residuals drift ({quality['structure']:.1f} times white noise over {WINDOW:g} s, "
+    if quality["structure_ratio"] > MAX_STRUCTURE:
+        reasons.append(f"residuals drift ({quality['structure_ratio']:.1f} times white noise over {WINDOW:g} s, "
                        f"more than {MAX_STRUCTURE:g}): the model misses something the logs show")
     scale = np.array([s[n] for n in free])
     return Calibration(table, "flagged" if reasons else "ok", "; ".join(reasons), residuals, quality, theta,

@@ -46,7 +46,7 @@ class LoopResult(NamedTuple):
     solve_seconds: list
     stop_error_m: float
     arrival_time_s: float
-    max_overspeed_kmh: float
+    overspeed_max_kmh: float
     mass_estimates: list
     readings: list = []
     adhesion_use_max: float | None = None

@@ -20,7 +20,7 @@ from ecostudy.core.types import Train, Window
 from ecostudy.core.units import FloatArray, to_kmh, to_kwh
 
 TOLERANCES = {"arrival_time_error_s": 0.5, "stop_error_m": 1.0, "energy_error_pct": 1.0,
-              "net_energy_error_pct": 1.0, "max_overspeed_kmh": 0.5}
+              "net_energy_error_pct": 1.0, "overspeed_max_kmh": 0.5}
 
 
 @dataclass
@@ -125,7 +125,7 @@ def verify(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[f
         "stop_error_m": trace.stop_position - segment.distance,
         "energy_error_pct": percent * (trace.traction_energy - traction_energy),
         **({} if net_energy is None else {"net_energy_error_pct": percent * (trace.net_energy - net_energy)}),
-        "max_overspeed_kmh": to_kmh(max(overspeed, 0.0)),
+        "overspeed_max_kmh": to_kmh(max(overspeed, 0.0)),
         "simulated_running_time_s": trace.arrival_time,
         "simulated_traction_energy_kWh": to_kwh(trace.traction_energy),
         "simulated_net_energy_kWh": to_kwh(trace.net_energy),

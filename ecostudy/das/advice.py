@@ -142,7 +142,7 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     return {"method": method, **energies, "gap_to_ato_pct": _gap(energies, result),
             "gap_to_ato_on_time_pct": _gap_on_time(energies, result, row["running_time_s"]),
             "mode_changes": len(advice) - 1, "bound_kWh": None, "status": str(status), "solver": solver,
-            "arrival_error_s": arrival_error, "stop_error_m": row["stop_error_m"], "max_overspeed_kmh": overspeed,
+            "arrival_error_s": arrival_error, "stop_error_m": row["stop_error_m"], "overspeed_max_kmh": overspeed,
             "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v))), **grip, **extra}
 
 

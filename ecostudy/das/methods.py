@@ -6,7 +6,7 @@ from ecostudy.das.advice import das_phases, das_round
 from ecostudy.das.minlp import das_minlp
 
 DAS_COLUMNS = ("method", "traction_energy_kWh", "net_energy_kWh", "gap_to_ato_pct", "gap_to_ato_on_time_pct",
-               "mode_changes", "arrival_error_s", "stop_error_m", "max_overspeed_kmh", "status", "solver")
+               "mode_changes", "arrival_error_s", "stop_error_m", "overspeed_max_kmh", "status", "solver")
 
 
 def das_columns(result, method, points=None, time_limit=60.0):

@@ -98,7 +98,7 @@ def run_metrics(record, reference, locomotives, force_limit, stop_tolerance=Tole
     return {
         "arrived": end == ENDS[0], "ended": end, "arrival_s": float(record.times[-1]),
         "arrival_late_s": float(record.times[-1] - reference.running_time),
-        "arrival_late_percent": float(100 * (record.times[-1] / reference.running_time - 1)),
+        "arrival_late_pct": float(100 * (record.times[-1] / reference.running_time - 1)),
         "stop_error_m": error,
         **rollback(record.head, reference.distance[0], reference.distance[-1]),
         "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
@@ -193,13 +193,13 @@ def in_train_metrics(history, consist):
     ins, outs = run_ins(forces)
     cycles = [rainflow(column.astype(float)) for column in forces.T]
     damages = np.array([damage(c) for c in cycles])
-    return {**out, "run_ins": int(ins.sum()), "run_outs": int(outs.sum()),
+    return {**out, "run_ins_count": int(ins.sum()), "run_outs_count": int(outs.sum()),
             "fatigue_damage": float(damages.sum()), "fatigue_damage_max": float(damages.max()),
             "fatigue_damage_coupler": int(np.argmax(damages)) + 1,
-            "rainflow_cycles_100kN": float(sum(n for c in cycles for r, _, n in c if r >= 100 * KN))}
+            "rainflow_cycles_over_100kN_count": float(sum(n for c in cycles for r, _, n in c if r >= 100 * KN))}
 
 
-def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
+def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
     """Why a run is not ok (empty: ok); ``samples`` the cap it ran under."""
     out = []
     if metrics.get("rollback_m", 0.0) > tolerances.stop_m and metrics.get("stalled_after_start_m", np.inf) <= tolerances.stop_m:
@@ -233,7 +233,7 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
     elif metrics["ended"] in STOOD and abs(metrics["stop_error_m"]) > tolerances.stop_m:
         where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
         out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m){asked}")
-    late, share = metrics["arrival_late_s"], metrics["arrival_late_percent"]
+    late, share = metrics["arrival_late_s"], metrics["arrival_late_pct"]
     if metrics["ended"] in STOOD and share > 100 * tolerances.arrival and late > tolerances.arrival_s:
         out.append(f"arrived {late:.0f} s ({share:.1f} %) after the reference's running time "
                    f"(tolerance {100 * tolerances.arrival:g} % or {tolerances.arrival_s:g} s, the larger)")
@@ -250,6 +250,6 @@ def reasons(metrics, samples, over_ts, tolerances=Tolerances()):
                    f"{metrics['adhesion_use_kmh']:.1f} km/h, {metrics['adhesion_use_time_s']:.0f} s, head at "
                    f"{metrics['adhesion_use_head_m']:.0f} m, which the plant does not limit (adhesion: false): "
                    "set adhesion: true or lower the locomotives' envelopes")  # no ';': it parts the reasons
-    if over_ts:
-        out.append(f"{over_ts} solves over Ts (the previous input was held)")
+    if over_budget_count:
+        out.append(f"{over_budget_count} solves over Ts (the previous input was held)")
     return out

@@ -12,8 +12,19 @@ from typing import Any, Mapping, Optional
 from ecostudy.core.units import number
 
 
+# Keys as ecostudy before the one naming rule (ecostudy.core.columns) wrote them: a folder written
+# then is still read.
+PREVIOUS = {"overspeed_max_kmh": "max_overspeed_kmh", "wall_s": "seconds",
+            "constraint_violation_max": "max_constraint_violation"}
+
+
+def _get(data: Mapping[str, Any], key: str) -> Any:
+    """``data[key]``, or the value under its previous name (:data:`PREVIOUS`)."""
+    return data[key] if key in data or key not in PREVIOUS else data[PREVIOUS[key]]
+
+
 def _opt(data: Mapping[str, Any], key: str) -> Optional[float]:
-    value = data.get(key)
+    value = data.get(key, data.get(PREVIOUS.get(key, key)))
     return None if value is None else float(value)
 
 
@@ -23,13 +34,13 @@ class SolverRun:
 
     status: str                       # "optimal", or the termination Ipopt reported
     iterations: int
-    seconds: float                    # the solve stage's wall time [s]
-    max_constraint_violation: Optional[float]
+    wall_s: float                     # the solve stage's wall time [s]
+    constraint_violation_max: Optional[float]
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "SolverRun":
-        return cls(status=str(data["status"]), iterations=int(data["iterations"]), seconds=float(data["seconds"]),
-                   max_constraint_violation=_opt(data, "max_constraint_violation"))
+        return cls(status=str(data["status"]), iterations=int(data["iterations"]), wall_s=float(_get(data, "wall_s")),
+                   constraint_violation_max=_opt(data, "constraint_violation_max"))
 
 
 @dataclass(frozen=True)
@@ -42,7 +53,7 @@ class Verification:
     arrival_time_error_s: float
     stop_error_m: float
     energy_error_pct: float
-    max_overspeed_kmh: float
+    overspeed_max_kmh: float
     simulated_running_time_s: float
     simulated_traction_energy_kWh: float
     simulated_net_energy_kWh: float
@@ -57,13 +68,13 @@ class Verification:
         net = "" if self.net_energy_error_pct is None else f", net energy {number(self.net_energy_error_pct, '+.3f')} % of traction"
         grip = "" if self.adhesion_use_max is None else f", adhesion use {self.adhesion_use_max:.3f} of mu(v) m_adh g"
         return (f"arrival {number(self.arrival_time_error_s, '+.3f')} s, stop {number(self.stop_error_m, '+.3f')} m, "
-                f"energy {number(self.energy_error_pct, '+.3f')} %{net}, overspeed {number(self.max_overspeed_kmh)} km/h{grip}")
+                f"energy {number(self.energy_error_pct, '+.3f')} %{net}, overspeed {number(self.overspeed_max_kmh)} km/h{grip}")
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Verification":
         return cls(passed=bool(data["passed"]), arrival_time_error_s=float(data["arrival_time_error_s"]),
                    stop_error_m=float(data["stop_error_m"]), energy_error_pct=float(data["energy_error_pct"]),
-                   max_overspeed_kmh=float(data["max_overspeed_kmh"]),
+                   overspeed_max_kmh=float(_get(data, "overspeed_max_kmh")),
                    simulated_running_time_s=float(data["simulated_running_time_s"]),
                    simulated_traction_energy_kWh=float(data["simulated_traction_energy_kWh"]),
                    simulated_net_energy_kWh=float(data["simulated_net_energy_kWh"]),
@@ -116,7 +127,7 @@ class DasSummary:
     stop_error_m: float
     status: str                        # as a driven run: ok, or flagged with the reasons
     solver: Optional[str] = None       # how the advice was made, e.g. "optimal, re-simulated"
-    max_overspeed_kmh: Optional[float] = None
+    overspeed_max_kmh: Optional[float] = None
     bound_kWh: Optional[float] = None
     gap_pct: Optional[float] = None
     search_s: Optional[float] = None
@@ -131,7 +142,7 @@ class DasSummary:
                    mode_changes=int(data["mode_changes"]), arrival_error_s=float(data["arrival_error_s"]),
                    stop_error_m=float(data["stop_error_m"]), status=str(data["status"]),
                    solver=None if data.get("solver") is None else str(data["solver"]),
-                   max_overspeed_kmh=_opt(data, "max_overspeed_kmh"),
+                   overspeed_max_kmh=_opt(data, "overspeed_max_kmh"),
                    bound_kWh=_opt(data, "bound_kWh"), gap_pct=_opt(data, "gap_pct"), search_s=_opt(data, "search_s"),
                    oa_iterations=None if oa is None else int(oa))
 

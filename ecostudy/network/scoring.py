@@ -36,7 +36,7 @@ def evaluate(fleet, runs_by_train):
                           "traction_input_kW": flows["traction_input_W"] / 1e3, "regen_used_kW": flows["regen_used_W"] / 1e3,
                           "regen_lost_kW": flows["regen_lost_W"] / 1e3, "line_loss_kW": flows["line_loss_W"] / 1e3,
                           "unserved_kW": flows["unserved_W"] / 1e3,
-                          "min_voltage_V": np.where(running, low, np.nan), "max_voltage_V": np.where(running, high, np.nan),
+                          "voltage_min_V": np.where(running, low, np.nan), "voltage_max_V": np.where(running, high, np.nan),
                           **{f"voltage_{name}_V": volts[:, i] for i, name in enumerate(fleet.names)}})
     e = {k: float(steps[k].sum() * dt / 3600) for k in ("substation_kW", "traction_input_kW", "regen_used_kW",
                                                           "regen_lost_kW", "line_loss_kW", "unserved_kW")}
@@ -45,7 +45,7 @@ def evaluate(fleet, runs_by_train):
               "regen_used_kWh": e["regen_used_kW"], "regen_lost_kWh": e["regen_lost_kW"],
               "line_losses_kWh": e["line_loss_kW"], "unserved_kWh": e["unserved_kW"],
               "balance_error_pct": 100 * (lhs - rhs) / max(rhs, 1e-9),
-              "min_voltage_V": float(steps["min_voltage_V"].min()), "max_voltage_V": float(steps["max_voltage_V"].max())}
+              "voltage_min_V": float(steps["voltage_min_V"].min()), "voltage_max_V": float(steps["voltage_max_V"].max())}
     return steps, per_train, totals
 
 

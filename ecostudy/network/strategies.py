@@ -165,15 +165,15 @@ def _scored(fleet, runs, info, wall, mapper=map):
         ver = checks[i]
         last = fleet.legs[i][-1]
         trains[n].update(arrival_s=(last.start + last.steps) * fleet.dt,
-                         worst_arrival_error_s=max(abs(v["arrival_time_error_s"]) for v in ver),
-                         worst_stop_error_m=max(abs(v["stop_error_m"]) for v in ver),
-                         worst_energy_error_pct=max(abs(v["energy_error_pct"]) for v in ver),
-                         worst_overspeed_kmh=max(v["max_overspeed_kmh"] for v in ver),
-                         verified=all(v["passed"] for v in ver), min_separation_m=gaps[n],
-                         **({"worst_adhesion_use": max(v["adhesion_use_max"] for v in ver)}  # a train with the limit
+                         arrival_error_worst_s=max(abs(v["arrival_time_error_s"]) for v in ver),
+                         stop_error_worst_m=max(abs(v["stop_error_m"]) for v in ver),
+                         energy_error_worst_pct=max(abs(v["energy_error_pct"]) for v in ver),
+                         overspeed_max_kmh=max(v["overspeed_max_kmh"] for v in ver),
+                         verified=all(v["passed"] for v in ver), separation_min_m=gaps[n],
+                         **({"adhesion_use_max": max(v["adhesion_use_max"] for v in ver)}  # a train with the limit
                             if "adhesion_use_max" in ver[0] else {}))
     totals.update(wall_s=wall, all_verified=all(t["verified"] for t in trains.values()),
-                  min_separation_m=min([g for g in gaps.values() if g is not None], default=None),
+                  separation_min_m=min([g for g in gaps.values() if g is not None], default=None),
                   **guard_counts(runs))
     # only the joint optimum sees the circuit: another strategy's runs may ask for traction the
     # line cannot carry or a current limit forbids; it is not served and the result is flagged
@@ -182,8 +182,8 @@ def _scored(fleet, runs, info, wall, mapper=map):
     if not totals["all_verified"]:
         flags.append("a train's run failed its re-simulation (network_trains.csv)")
     floor = fleet.supply.min_voltage  # the lowest pantograph voltage of the line (V_min)
-    if totals["min_voltage_V"] < floor - 0.5:  # 0.5 V: the circuit's bisection is exact to far less
-        flags.append(f"a pantograph voltage fell to {totals['min_voltage_V']:.1f} V, below min_voltage_V "
+    if totals["voltage_min_V"] < floor - 0.5:  # 0.5 V: the circuit's bisection is exact to far less
+        flags.append(f"a pantograph voltage fell to {totals['voltage_min_V']:.1f} V, below min_voltage_V "
                      f"{floor:.0f} V (network_steps_*.csv)")
     # every train runs the same segment times (the first train's legs stand for all)
     late = max((leg.running_time - asked for leg, asked in zip(fleet.legs[0], fleet.asked_times or [])), default=0.0)
@@ -199,7 +199,7 @@ def _scored(fleet, runs, info, wall, mapper=map):
     if missed is not None and missed["gap_m"] >= 0.0:  # nearer than buffer_m, no overlap (flagged above)
         flags.append(f"train {missed['train']}'s head came within {missed['gap_m']:.1f} m of the tail of train "
                      f"{missed['ahead']} at {missed['time_s']:g} s, {missed['position_m']:.0f} m along the line: "
-                     f"closer than buffer_m {fleet.buffer:g} m (network_trains.csv min_separation_m)")
+                     f"closer than buffer_m {fleet.buffer:g} m (network_trains.csv separation_min_m)")
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
     return {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
 
@@ -213,11 +213,11 @@ def guard_counts(runs):
     notes = [run.notes for train in runs for run in train if run.notes]
     checked = [n for n in notes if "warm_vs_cold_pct" in n]
     finished = [n["warm_vs_cold_pct"] for n in checked if "warm_capped_at" not in n]
-    return {"legs_checked_cold": len(checked), "worst_warm_vs_cold_pct": max(finished, default=None),
-            "legs_warm_capped": sum("warm_capped_at" in n for n in notes),
-            "legs_replaced_by_cold": sum(bool(n.get("replaced_by_cold")) for n in notes),
-            "legs_replaced_by_trapezoid": sum(bool(n.get("replaced_by_trapezoid")) for n in notes),
-            "legs_restarted_standing": sum(bool(n.get("restarted")) for n in notes)}
+    return {"legs_checked_cold_count": len(checked), "warm_vs_cold_worst_pct": max(finished, default=None),
+            "legs_warm_capped_count": sum("warm_capped_at" in n for n in notes),
+            "legs_replaced_by_cold_count": sum(bool(n.get("replaced_by_cold")) for n in notes),
+            "legs_replaced_by_trapezoid_count": sum(bool(n.get("replaced_by_trapezoid")) for n in notes),
+            "legs_restarted_standing_count": sum(bool(n.get("restarted")) for n in notes)}
 
 
 def _verified(pair):

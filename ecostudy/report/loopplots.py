@@ -76,7 +76,7 @@ def mass_estimates(runs, path, title=""):
                 continue
             x, e = np.asarray(s["estimates"]).T
             ax.plot(x, e, color=palette(name), lw=0.8, alpha=0.6, label=name if i == 0 else None)
-            ax.plot([x[0], x[-1]], [s["true_mass"]] * 2, color=palette(name), lw=0.5, ls=":")
+            ax.plot([x[0], x[-1]], [s["true_mass_factor"]] * 2, color=palette(name), lw=0.5, ls=":")
     ax.set_xlabel("distance from departure [m]")
     ax.set_ylabel("mass / model mass")
     ax.grid(alpha=0.3)

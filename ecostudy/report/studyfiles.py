@@ -39,7 +39,7 @@ def network_files(plot=True, out=style.Output()):
         # with its header also when every strategy failed: an empty file is no table to read back
         write_csv(out_dir / "network_trains.csv", pd.DataFrame(trains, columns=None if trains else ["strategy", "train"]))
         write_json(out_dir / "network.json", {
-            "study": study, "segment_times_s": [leg.running_time for leg in fl.legs[0]], "steps": fl.steps,
+            "study": study, "segment_times_s": [leg.running_time for leg in fl.legs[0]], "steps_count": fl.steps,
             "dt_s": fl.dt, "strategies": {n: {**r["totals"], **r["info"]} if n in done else
                                           {"status": f"failed: {r['failed']}"} for n, r in outcome.items()}})
         drawn = figures(out_dir, plot, {"network": later("network_plot", fl, done, title=study),

@@ -322,7 +322,8 @@ def case_statuses(cases, table):
     return parsed(names, table["status"], table["reason"] if "reason" in table else [None] * len(table))
 
 
-RESULT_COLUMNS = {"running_time_s", "points", "status", "key", "reason", "seconds", "verified"}  # never labels
+RESULT_COLUMNS = {"running_time_s", "points", "status", "key", "reason", "wall_s", "verified"}  # never labels
+OUTPUT_NAMES = {"supplement_percent": "supplement_pct"}  # a swept field as the tables name it (core.columns)
 
 
 def study_table(cases, rows):
@@ -333,7 +334,7 @@ def study_table(cases, rows):
         row = rows.get(case["key"])
         s = (row or {}).get("summary") or {}
         ver = s.get("verification") or {}
-        labels = {f"swept_{k}" if k in RESULT_COLUMNS else k: v for k, v in case["labels"].items()}
+        labels = {f"swept_{k}" if k in RESULT_COLUMNS else OUTPUT_NAMES.get(k, k): v for k, v in case["labels"].items()}
         out.append({**labels, "key": case["key"], "status": row["status"] if row else "missing",
                     "reason": (row or {}).get("error"),
                     "running_time_s": s.get("running_time_s"), "all_out_time_s": s.get("all_out_time_s"),
@@ -341,7 +342,7 @@ def study_table(cases, rows):
                     "regenerated_energy_kWh": s.get("regenerated_energy_kWh"), "top_speed_kmh": s.get("top_speed_kmh"),
                     "regime_sequence": (s.get("regimes") or {}).get("sequence"), "points": s.get("points"),
                     "solver_status": (s.get("solver") or {}).get("status"), "verified": ver.get("passed"),
-                    "stop_error_m": ver.get("stop_error_m"), "seconds": (row or {}).get("seconds")})
+                    "stop_error_m": ver.get("stop_error_m"), "wall_s": (row or {}).get("seconds")})
         if any(c.get("das") for c in cases):
             out[-1].update(s.get("das") or {})
     return pd.DataFrame(out)

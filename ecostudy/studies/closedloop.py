@@ -17,6 +17,7 @@ from ecostudy.control.controllers import Quantised
 from ecostudy.control.estimators import make_estimator
 from ecostudy.control.loop import run_loop
 from ecostudy.control.terminal import TerminalApproach
+from ecostudy.core.columns import with_statistic
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
@@ -135,17 +136,17 @@ def summarise(case, result, controller, train, estimator):
         "energy_J_per_kg": result.traction_work / mass, "traction_energy_kWh": result.traction_work / 3.6e6,
         "braking_energy_kWh": result.braking_work / 3.6e6, "arrival_s": result.arrival_time_s,
         "late_s": max(result.arrival_time_s - t_max, 0.0), "early_s": max(t_min - result.arrival_time_s, 0.0),
-        "stop_error_m": result.stop_error_m, "max_overspeed_kmh": result.max_overspeed_kmh,
+        "stop_error_m": result.stop_error_m, "overspeed_max_kmh": result.overspeed_max_kmh,
         "solve_mean_ms": 1e3 * float(solved.mean()), "solve_p95_ms": 1e3 * float(np.percentile(solved, 95)),
-        "solve_max_ms": 1e3 * float(solved.max()), "over_budget": int(np.sum(seconds > sample)),
-        "samples": len(seconds), "softened": counts["softened_steps"], **counts,
-        "power_limit_dropped": _dropped(controller), "compute_delay": case_delay(case),
-        "failures": getattr(controller, "failures", 0), "max_gap": max(gaps) if gaps else None,
+        "solve_max_ms": 1e3 * float(solved.max()), "over_budget_count": int(np.sum(seconds > sample)),
+        "samples": len(seconds), "softened_count": counts["softened_steps"], **counts,
+        "power_limit_dropped": _dropped(controller), "compute_delay_samples": case_delay(case),
+        "failures_count": getattr(controller, "failures", 0), "gap_max": max(gaps) if gaps else None,
         "terminal_gamma_m": controller.gammas[-1] if getattr(controller, "gammas", None) else None,
         "mode_changes": _mode_changes(np.array(result.handles)),
         "mass_estimate": estimator.estimate if estimator is not None else None,
         **({} if result.adhesion_use_max is None else {"adhesion_use_max": result.adhesion_use_max}),
-        **{f"true_{name}": case["truth"][name] for name in PARAMETERS},
+        **{f"true_{name}_factor": case["truth"][name] for name in PARAMETERS},
         "profile": {"x": x, "v": v}, "solve_ms": [round(1e3 * s, 2) for s in seconds],
         "estimates": [(round(p, 2), round(e, 5)) for p, e in result.mass_estimates[::10] if p is not None],
         "steps": step_columns(result, controller),
@@ -182,21 +183,21 @@ def _trip(case):
                       estimator=estimator, delay=case_delay(case))
     summary = summarise(case, result, planner, train, estimator)
     # "late" is after the window's latest arrival: the window is the timetable of a closed-loop study
-    status = driven_run(summary["stop_error_m"], summary["late_s"], summary["max_overspeed_kmh"],
+    status = driven_run(summary["stop_error_m"], summary["late_s"], summary["overspeed_max_kmh"],
                         summary.get("adhesion_use_max"))
-    if summary["failures"]:  # solves that did not converge: the fallback drove those samples, not the controller
-        status = worst([status, flagged(f"{summary['failures']} solves in {summary['samples']} samples gave no "
+    if summary["failures_count"]:  # solves that did not converge: the fallback drove those samples, not the controller
+        status = worst([status, flagged(f"{summary['failures_count']} solves in {summary['samples']} samples gave no "
                                         "usable plan (the fallback drove them)")])
     status, error = (status.kind, status.reason or None)
     return status, error, summary
 
 
 GRIP = "adhesion_use_max"  # a column of a train with an adhesion limit only (core.simulate.adhesion_use)
-COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "stop_error_m", "max_overspeed_kmh",
-           "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget", "softened", "failures", "max_gap",
-           "fallback_shifted_plan", "fallback_reserve", "fallback_full_brake", "full_brake_before_final",
-           "inexact_solves", "power_limit_dropped", "compute_delay",
-           "terminal_gamma_m", "mode_changes", "mass_estimate", *(f"true_{name}" for name in PARAMETERS))
+COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "stop_error_m", "overspeed_max_kmh",
+           "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget_count", "softened_count", "failures_count",
+           "gap_max", "fallback_shifted_plan_count", "fallback_reserve_count", "fallback_full_brake_count",
+           "full_brake_before_final_count", "inexact_solves_count", "power_limit_dropped", "compute_delay_samples",
+           "terminal_gamma_m", "mode_changes", "mass_estimate", *(f"true_{name}_factor" for name in PARAMETERS))
 
 
 def runs_table(cases, rows):
@@ -207,7 +208,7 @@ def runs_table(cases, rows):
     for case, s in zip(cases, stored):
         row = rows.get(case["key"]) or {}
         out.append({**case["labels"], "key": case["key"], "status": row.get("status", "missing"),
-                    "reason": row.get("error"), **{c: s.get(c) for c in columns}, "seconds": row.get("seconds")})
+                    "reason": row.get("error"), **{c: s.get(c) for c in columns}, "wall_s": row.get("seconds")})
     return pd.DataFrame(out)
 
 
@@ -226,14 +227,15 @@ def aggregate(runs):
         row = {"controller": name, "runs": len(group), "ok": int((group["status"] == "ok").sum())}
         for column in ("energy_J_per_kg", "arrival_s", "stop_error_m"):
             values = pd.to_numeric(group[column], errors="coerce")
-            row.update({f"{column}_mean": values.mean(), f"{column}_std": values.std(ddof=0),
-                        f"{column}_min": values.min(), f"{column}_max": values.max()})
-        for column, how in (("max_overspeed_kmh", "max"), ("late_s", "max"), ("solve_mean_ms", "mean"),
-                            ("solve_p95_ms", "max"), ("solve_max_ms", "max"), ("over_budget", "sum"),
-                            ("softened", "sum"), ("max_gap", "max"), ("fallback_shifted_plan", "sum"),
-                            ("fallback_reserve", "sum"), ("fallback_full_brake", "sum"), ("inexact_solves", "sum"),
+            row.update({with_statistic(column, how): getattr(values, how)(**({"ddof": 0} if how == "std" else {}))
+                        for how in ("mean", "std", "min", "max")})
+        for column, how in (("overspeed_max_kmh", "max"), ("late_s", "max"), ("solve_mean_ms", "mean"),
+                            ("solve_p95_ms", "max"), ("solve_max_ms", "max"), ("over_budget_count", "sum"),
+                            ("softened_count", "sum"), ("gap_max", "max"), ("fallback_shifted_plan_count", "sum"),
+                            ("fallback_reserve_count", "sum"), ("fallback_full_brake_count", "sum"),
+                            ("inexact_solves_count", "sum"),
                             *([(GRIP, "max")] if GRIP in runs else [])):
-            row[f"{column}_{how}"] = getattr(pd.to_numeric(group[column], errors="coerce"), how)()
+            row[with_statistic(column, how)] = getattr(pd.to_numeric(group[column], errors="coerce"), how)()
         rows.append(row)
     return pd.DataFrame(rows)
 

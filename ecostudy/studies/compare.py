@@ -36,7 +36,7 @@ from ecostudy.studies.workers import kept
 
 HEURISTICS = {"eco-drive coasting": ecodrive.eco_coasting, "MARECO-style": ecodrive.mareco}
 STRATEGIES = ("all-out", "ATO optimum", *HEURISTICS, "DAS round (nearest level)", "DAS phases")
-ROW = ("strategy", "running_time_s", "traction_energy_kWh", "net_energy_kWh", "stop_error_m", "max_overspeed_kmh",
+ROW = ("strategy", "running_time_s", "traction_energy_kWh", "net_energy_kWh", "stop_error_m", "overspeed_max_kmh",
        "handle_changes")
 GRIP = ("adhesion_use_max",)  # a column of a train with an adhesion limit only (core.simulate.adhesion_use)
 _SCENARIO = ("train", "track", "from", "to", "running_time_s", "supplement", "points")
@@ -109,7 +109,7 @@ def _strategy(case):
     status = driven_run(row["stop_error_m"], row["running_time_s"] - target, overspeed, row.get("adhesion_use_max"))
     if name == "DAS phases":  # the same checks, and how its NLP ended
         status = worst([status, Status.parse(block["status"])])
-    return _stored(driven, train, prepared.segment, status, target_s=target, max_overspeed_kmh=overspeed, **extra)
+    return _stored(driven, train, prepared.segment, status, target_s=target, overspeed_max_kmh=overspeed, **extra)
 
 
 def verified(run):
@@ -124,13 +124,13 @@ def overspeed_kmh(segment, driven):
 
 def _stored(driven, train, segment, status, **fields):
     """(status, reason, summary) of a strategy's run: its table row (with its largest speed over the
-    limits, ``max_overspeed_kmh``, measured here unless ``fields`` gives it) and its simulated trace."""
+    limits, ``overspeed_max_kmh``, measured here unless ``fields`` gives it) and its simulated trace."""
     t = driven.trace
     trace = {"t_s": t.t.tolist(), "x_m": t.x.tolist(), "v_mps": t.v.tolist(),
              **{k: float(getattr(t, k)) for k in ("traction_energy", "braking_energy", "regenerated_energy",
                                                   "stop_position", "arrival_time", "net_energy")}}
-    if "max_overspeed_kmh" not in fields:
-        fields["max_overspeed_kmh"] = overspeed_kmh(segment, driven)
+    if "overspeed_max_kmh" not in fields:
+        fields["overspeed_max_kmh"] = overspeed_kmh(segment, driven)
     summary = {**driven.row(train, segment.distance), **fields,
                "handle": np.asarray(driven.handle).tolist(), "trace": trace}
     return status.kind, status.reason or None, summary

@@ -213,8 +213,9 @@ def summarise(consist, controller, record, reference, locomotives=(), stop_toler
         "wagon_brake_kWh": wagons / KWH, "reference_kWh": reference.energy / KWH,
         "reference_time_s": reference.running_time, "samples": len(record.times),
         "virtual_cars": controller.n, "qp_inputs": size["inputs"], "qp_states": size["states"],
-        "qp_constraints": size["constraints"], "solve_mean_s": float(record.solve_seconds.mean()),
-        "solve_p95_s": float(np.percentile(record.solve_seconds, 95)), "solve_max_s": float(record.solve_seconds.max()), "over_ts": record.overruns,
+        "qp_constraints": size["constraints"], "solve_mean_ms": 1e3 * float(record.solve_seconds.mean()),
+        "solve_p95_ms": 1e3 * float(np.percentile(record.solve_seconds, 95)),
+        "solve_max_ms": 1e3 * float(record.solve_seconds.max()), "over_budget_count": record.overruns,
         "peak_memory_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "profile": {"head_m": np.round(record.head, 1).tolist(), "speed_mps": np.round(record.mean_speed, 3).tolist(),
                     "reference_mps": np.round(record.reference, 3).tolist()},
@@ -231,15 +232,15 @@ def _run(case):
     consist, controller, record, reference, plant = drive(case)
     summary = {**summarise(consist, controller, record, reference, controller.locos, case["stop_tolerance_m"]),
                **in_train_metrics(plant.history, consist)}
-    why = reasons(summary, case["max_samples"], summary["over_ts"],
+    why = reasons(summary, case["max_samples"], summary["over_budget_count"],
                   Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH,
                              case["arrival_tolerance_percent"] / 100, case["arrival_tolerance_s"]))
     return ("flagged", "; ".join(why), summary) if why else ("ok", None, summary)
 
 
 IN_TRAIN = ("draft_max_kN", "draft_coupler", "draft_position_m", "draft_time_s", "buff_max_kN", "buff_coupler",
-            "buff_position_m", "buff_time_s", "run_ins", "run_outs", "fatigue_damage", "fatigue_damage_max",
-            "fatigue_damage_coupler", "rainflow_cycles_100kN")  # metrics.in_train_metrics
+            "buff_position_m", "buff_time_s", "run_ins_count", "run_outs_count", "fatigue_damage", "fatigue_damage_max",
+            "fatigue_damage_coupler", "rainflow_cycles_over_100kN_count")  # metrics.in_train_metrics
 COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN", "force_limit_kN",
            "force_mean_kN", "force_std_kN", "energy_total_kWh", "traction_kWh", "dynamic_brake_kWh",
            "wagon_brake_kWh", "J_force", "J_tracking", "J_energy", "J_braking", "dynamic_brake_use_max",
@@ -247,10 +248,10 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
            "adhesion_use_kmh", "adhesion_use_effort_kN", "braking_samples", "stretch_braking_samples",
            "stretch_braking_kWh",
            "speed_excess_kmh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "coupler_damping_kWh", "draft_gear_kWh", "stored_change_kWh",
-           "balance_residual_kWh", "arrived", "ended", "arrival_s", "arrival_late_s", "arrival_late_percent", "reference_time_s", "reference_kWh", "stop_error_m", "rollback_m", "stalled_before_stop_m", "stalled_after_start_m", "reference_at_end_kmh",
+           "balance_residual_kWh", "arrived", "ended", "arrival_s", "arrival_late_s", "arrival_late_pct", "reference_time_s", "reference_kWh", "stop_error_m", "rollback_m", "stalled_before_stop_m", "stalled_after_start_m", "reference_at_end_kmh",
            "speed_at_end_kmh", "rolling_back", "resistance_at_end_kN", "traction_utmost_at_end_kN", "held_s", "held_at_end",
            "traction_asked_at_end_kN", "samples", "virtual_cars",
-           "qp_inputs", "qp_states", "qp_constraints", "solve_mean_s", "solve_p95_s", "solve_max_s", "over_ts",
+           "qp_inputs", "qp_states", "qp_constraints", "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget_count",
            "peak_memory_MB", *IN_TRAIN)
 
 
@@ -267,13 +268,13 @@ def heavyhaul_size(where, cases, workers=1):
 
 
 def heavyhaul_table(cases, rows):
-    """One row per run (``runs.csv``): its labels, status and reason, :data:`COLUMNS`, seconds."""
+    """One row per run (``runs.csv``): its labels, status and reason, :data:`COLUMNS`, its wall time."""
     table = []
     for case in cases:
         row = rows.get(case["key"]) or {}
         s = row.get("summary") or {}
         table.append({**case["labels"], "status": row.get("status", "missing"), "reason": row.get("error"),
-                      **{c: s.get(c) for c in COLUMNS}, "seconds": row.get("seconds")})
+                      **{c: s.get(c) for c in COLUMNS}, "wall_s": row.get("seconds")})
     return pd.DataFrame(table)
 
 

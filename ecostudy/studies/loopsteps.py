@@ -50,10 +50,10 @@ def step_counts(planner):
     steps = list(getattr(planner, "step_log", []))
     kinds = [s.fallback for s in steps]
     gaps = np.array([s.gap for s in steps if s.gap is not None])
-    return {**{f"fallback_{k}": kinds.count(k) for k in KINDS},
+    return {**{f"fallback_{k}_count": kinds.count(k) for k in KINDS},
             "softened_steps": sum(1 for s in steps if s.softened),
-            "inexact_solves": int(np.sum(gaps > 1e-6)) if gaps.size else 0,
-            "full_brake_before_final": sum(1 for k in kinds if k in ("full_brake", "reserve"))}
+            "inexact_solves_count": int(np.sum(gaps > 1e-6)) if gaps.size else 0,
+            "full_brake_before_final_count": sum(1 for k in kinds if k in ("full_brake", "reserve"))}
 
 
 def steps_frame(columns):

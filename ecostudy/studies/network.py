@@ -146,7 +146,7 @@ def network_table(cases, rows):
                       "saving_vs_independent_pct": None if base is None else 100 * (1 - tot["substation_kWh"] / base)})
     fl = cases[0]["fleet"]
     table = pd.DataFrame(table)
-    table.attrs.update(steps=fl.steps, dt_s=fl.dt)
+    table.attrs.update(steps_count=fl.steps, dt_s=fl.dt)
     return table
 
 
