@@ -32,7 +32,7 @@ from ecostudy.ocp import solver  # noqa: E402
 
 solver.configure()
 
-from ecostudy.network import fleet as fleets, legs, rules, shared  # noqa: E402
+from ecostudy.network import fleet as fleets, legs, rules  # noqa: E402
 from ecostudy.network.strategies import one_strategy, solve_independent  # noqa: E402
 from ecostudy.ocp import session  # noqa: E402
 from ecostudy.studies.network import expand_network  # noqa: E402
@@ -99,7 +99,7 @@ def main():
     p.add_argument("--terms", help="JSON file: per supervised leg task, whether its NLP's data changed")
     a = p.parse_args()
     session.Session.solve = noted_session(session.Session.solve)
-    shared.solve_leg = noted_leg(shared.solve_leg)
+    fleets.solve_leg = noted_leg(fleets.solve_leg)
     rules.solve_train = noted_train(fleets.solve_train, collections.Counter(), {})
     with tempfile.TemporaryDirectory() as out:
         fleet = expand_network(a.study, out=out).cases[0]["fleet"]

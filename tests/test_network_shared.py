@@ -8,7 +8,7 @@ import pytest
 
 from ecostudy.core.types import Supply
 from ecostudy.io.loaders import load_track, load_train
-from ecostudy.network import fleet, rules
+from ecostudy.network import fleet, legs, rules
 from ecostudy.network.shared import LegRuns, task_key
 
 from .conftest import TRACKS, TRAINS
@@ -59,7 +59,7 @@ def test_two_threads_posing_one_task_solve_it_once(two_trains):
     task = (leg, "train T1, leg 1", f.dt, f.buffer, ind[0][0][:5], True, None, None, None, None)
     key = task_key(task, fleet._own_terms(leg, None, None, None, None))
     shared, calls, outs = LegRuns(), [], []
-    threads = [threading.Thread(target=lambda: outs.append(shared.map(_counting(calls), [task], [key])))
+    threads = [threading.Thread(target=lambda: outs.append(shared.map(_counting(calls), legs.solve_leg, [task], [key])))
                for _ in range(2)]
     for t in threads:
         t.start()
@@ -80,6 +80,6 @@ def test_a_task_whose_solve_raised_is_solved_again_when_posed_again(two_trains):
         raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        shared.map(failing, [task], [key])
-    (run, outcome), = shared.map(_counting(calls), [task], [key])
+        shared.map(failing, legs.solve_leg, [task], [key])
+    (run, outcome), = shared.map(_counting(calls), legs.solve_leg, [task], [key])
     assert calls == ["train T1, leg 1"] and outcome.usable and shared.hits == 0

@@ -17,7 +17,7 @@ from ecostudy.core.errors import SolverError
 from ecostudy.core.types import Timing
 from ecostudy.core.types import Supply
 from ecostudy.io.timetable import clock_steps
-from ecostudy.network.legs import leg_energy_ref, warmth
+from ecostudy.network.legs import leg_energy_ref, solve_leg, warmth
 from ecostudy.network.shared import LegRuns, task_key
 from ecostudy.ocp import session
 from ecostudy.ocp import timedomain
@@ -201,7 +201,7 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
     terms = [_own_terms(leg, weights, allowance, credit, ahead) for leg in fleet.legs[i]]
     again = [k for k, old in enumerate(known) if old is None or guesses is None or old[1] is not guesses[k]
              or not _same(old[0], terms[k])]
-    solved = dict(zip(again, fleet.solved.map(mapper, [tasks[k] for k in again],
+    solved = dict(zip(again, fleet.solved.map(mapper, solve_leg, [tasks[k] for k in again],
                                               [task_key(tasks[k], terms[k]) for k in again])))
     for k, (run, outcome) in solved.items():
         memo[(i, k)] = (terms[k], run, outcome)

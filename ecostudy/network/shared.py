@@ -14,8 +14,6 @@ from concurrent.futures import Future
 
 import numpy as np
 
-from ecostudy.network.legs import solve_leg
-
 
 def task_key(task, terms):
     """A digest of what a leg task's run depends on: the leg (its label names train and leg), the
@@ -49,16 +47,17 @@ class LegRuns:
     def __setstate__(self, state):
         self.__init__()
 
-    def map(self, mapper, tasks, keys):
-        """[(run, outcome)] of ``solve_leg`` over ``tasks`` (``mapper``: ``map`` or a pool's), each
-        task not known yet solved here, the others taken (a copy) from the strategy that solved them."""
+    def map(self, mapper, solve, tasks, keys):
+        """[(run, outcome)] of ``solve`` (``legs.solve_leg``) over ``tasks`` (``mapper``: ``map`` or a
+        pool's), each task not known yet solved here, the others taken (a copy) from the strategy that
+        solved them."""
         with self._lock:
             mine = [n for n, key in enumerate(keys) if key not in self._runs]
             for n in mine:
                 self._runs[keys[n]] = Future()
             futures = [self._runs[key] for key in keys]
         try:
-            for n, out in zip(mine, mapper(solve_leg, [tasks[n] for n in mine])):
+            for n, out in zip(mine, mapper(solve, [tasks[n] for n in mine])):
                 futures[n].set_result(out)
         except BaseException:
             self._forget([(keys[n], futures[n]) for n in mine])
@@ -66,7 +65,7 @@ class LegRuns:
         outs = [future.result() for future in futures]
         failed = [n for n, out in enumerate(outs) if out is None]  # another's solve raised: solved here
         if failed:
-            for n, out in zip(failed, self.map(mapper, [tasks[n] for n in failed], [keys[n] for n in failed])):
+            for n, out in zip(failed, self.map(mapper, solve, [tasks[n] for n in failed], [keys[n] for n in failed])):
                 outs[n] = out
         mine_set = set(mine) | set(failed)
         with self._lock:
