@@ -18,6 +18,7 @@ from ecostudy.core.types import Timing
 from ecostudy.core.types import Supply
 from ecostudy.io.timetable import clock_steps
 from ecostudy.network.legs import leg_energy_ref, solve_leg, warmth
+from ecostudy.network.shared import LegRuns, task_key
 from ecostudy.ocp import session
 from ecostudy.ocp import timedomain
 from ecostudy.ocp.problem import prepare
@@ -36,6 +37,8 @@ class Fleet:
     results: dict = field(default_factory=dict)  # space-domain net-energy runs per segment (guesses)
     dwell_steps: int = 0
     asked_times: Optional[list] = None  # running time per segment before rounding to whole steps [s]
+    # the leg tasks solved in this process, shared by the strategies that pose the same (:mod:`.shared`)
+    solved: LegRuns = field(default_factory=LegRuns, compare=False, repr=False)
 
 
 def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, points=FRONT_POINTS, buffer=None,
@@ -198,7 +201,8 @@ def solve_train(fleet, i, weights=None, guesses=None, ahead=None, allowance=None
     terms = [_own_terms(leg, weights, allowance, credit, ahead) for leg in fleet.legs[i]]
     again = [k for k, old in enumerate(known) if old is None or guesses is None or old[1] is not guesses[k]
              or not _same(old[0], terms[k])]
-    solved = dict(zip(again, mapper(solve_leg, [tasks[k] for k in again])))
+    solved = dict(zip(again, fleet.solved.map(mapper, solve_leg, [tasks[k] for k in again],
+                                              [task_key(tasks[k], terms[k]) for k in again])))
     for k, (run, outcome) in solved.items():
         memo[(i, k)] = (terms[k], run, outcome)
     out = [solved[k] if k in solved else known[k][1:] for k in range(len(tasks))]
