@@ -2,7 +2,9 @@
 between stops, a recorder samples it at 10 Hz and adds sensor noise.
 
 The driver's handle is set by position (:meth:`Plant.drive`): full traction, coasting, part
-traction, coasting, braking into the next stop, with phase lengths and levels drawn from the seed.
+traction, coasting, braking into the next stop, with phase lengths and levels drawn from the seed,
+the handle held at most at the line's limit (a driver keeps to it: down a grade the brake takes
+what the grade adds there; :class:`~ecostudy.core.plant.Cruise` with a handle).
 The brake handle is a share drawn for level track plus the share that holds the train on the run's
 steepest descent (:func:`brake_share`); braking starts where the speed meets that handle's braking
 curve (:func:`ecostudy.core.kinematics.braking_curve`: braking force, running resistance, gradients
