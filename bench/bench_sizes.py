@@ -4,7 +4,7 @@ process and its finished children, the Ipopt processes: on a busy machine the wa
 the load, the CPU time the work), beside what the estimate says for the same runs.
 
     .venv/bin/python bench/bench_sizes.py [--kinds run simulate network heavyhaul] [--draws 1]
-        [--cases 4] [--samples 30] [--loop-study STUDY] [--shipped] [--no-heavy]
+        [--cases 4] [--samples 30] [--fences F ...] [--horizon NP NC] [--loop-study STUDY] [--shipped] [--no-heavy]
 
 - ``run``: the first ``--cases`` cases of ``studies/metro_supplements.yaml`` (K = 1000): CPU per
   case against ``estimate.run_seconds``, and the CPU per grid point (``RUN_SECONDS_PER_POINT``);
@@ -15,8 +15,11 @@ the load, the CPU time the work), beside what the estimate says for the same run
   ``sizes.network_runs``: its clock steps, the same weighted by their legs' slowness
   (``estimate.leg_slowness``), and the CPU a weighted step once the first runs' estimate is taken
   off the CPU (``NETWORK_SECONDS_PER_STEP``);
-- ``heavyhaul``: the first ``--samples`` samples of each fence of ``studies/heavyhaul_fence.yaml``
-  (f = 10 and f = 1) against ``HEAVYHAUL_SECONDS_PER_SAMPLE``;
+- ``heavyhaul``: each run of ``studies/heavyhaul_fence.yaml`` (f = 10 and f = 1, or ``--fences``;
+  Np = 8, Nc = 6, or ``--horizon``): its set-up alone (the plant and the controller, the condensed QP
+  built) against ``sizes.heavyhaul_setup_seconds``, then its first ``--samples`` samples, set-up
+  included, against the estimate of the same work (the set-up and ``sizes.heavyhaul_sample_seconds``
+  a sample);
 - ``--shipped``: the estimate of every study in ``studies/`` with one worker and with every core
   (``--no-heavy``: without the heavy-haul ones, which solve their reference first).
 """
@@ -26,6 +29,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
@@ -139,20 +143,51 @@ def bench_network():
                         f"{1e3 * sizes.NETWORK_SECONDS_PER_STEP:.2f}")
 
 
-def bench_heavyhaul(samples):
-    path = STUDIES / "heavyhaul_fence.yaml"
-    study, _, reference, cases = heavyhaul.expand(path)
+@harness.case("sizes.heavyhaul_setup", setup=nth_heavyhaul,
+              params={"study": str(STUDIES / "heavyhaul_fence.yaml"), "case": 0, "samples": 0})
+def heavyhaul_setup(case):
+    """One heavy-haul run's set-up alone: its plant and its controller (the condensed QP built)."""
+    consist, plant, _ = heavyhaul.case_plant(case)
+    reduction, _ = heavyhaul.case_controller(case, consist, plant)
+    return {"cars": len(reduction.members)}
+
+
+def mutated(path, fences, horizon, folder):
+    """``path`` as a study of these ``fences`` and ``horizon`` (Np, Nc), written in ``folder``."""
+    doc = load_yaml(path.read_text())
+    doc.update({k: str((path.parent / doc[k]).resolve()) for k in ("consist", "track")})
+    if fences:
+        doc["fence"] = list(fences)
+    if horizon:
+        doc["horizons"] = [{"np": horizon[0], "nc": horizon[1]}]
+    out = Path(folder) / path.name
+    out.write_text(yaml.safe_dump(doc))
+    return out
+
+
+def bench_heavyhaul(samples, fences=None, horizon=None):
+    source = STUDIES / "heavyhaul_fence.yaml"
+    with tempfile.TemporaryDirectory() as folder:
+        path = mutated(source, fences, horizon, folder)
+        study, _, reference, cases = heavyhaul.expand(path)
     full = sizes.heavyhaul_runs(study, reference, cases)
-    print(f"\n### heavyhaul: the first {samples} samples of each run of {path.name}\n")
-    table = harness.Table(["f", "status", "samples", "CPU s", "wall s", "CPU s a sample", "constant s",
+    print(f"\n### heavyhaul: each run's set-up, then its first {samples} samples (set-up included), of {source.name}"
+          f"{f' with fences {fences}' if fences else ''}{f', Np, Nc = {horizon}' if horizon else ''}\n")
+    table = harness.Table(["f", "Np", "Nc", "QP inputs", "set-up CPU s", "set-up estimate s", "status", "samples",
+                           "CPU s", "wall s", "CPU s a sample", "estimate s", "estimate / CPU",
                            "estimate of the whole run s"])
-    for case, estimate in zip(cases, full):
+    for case, whole in zip(cases, full):
         case = {**case, "max_samples": samples}
+        labels = case["labels"]
+        setup = harness.sample(heavyhaul_setup, case)
+        cars = setup["cars"]
+        setup_estimate = sizes.heavyhaul_setup_seconds(cars, labels["Nc"], labels["Np"])
         r = harness.sample(one_heavyhaul, case)
-        f = case["labels"]["f"]
-        constant = sizes.HEAVYHAUL_SECONDS_PER_SAMPLE.get(f, sizes.HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED)
-        table.add(f, r["status"], r["samples"], f"{r['cpu_s']:.1f}", f"{r['wall_s']:.1f}",
-                  f"{r['cpu_s'] / max(r['samples'], 1):.3f}", constant, f"{estimate:.0f}")
+        estimate = setup_estimate + r["samples"] * sizes.heavyhaul_sample_seconds(cars * labels["Nc"])
+        table.add(labels["f"], labels["Np"], labels["Nc"], cars * labels["Nc"], f"{setup['cpu_s']:.3f}",
+                  f"{setup_estimate:.3f}", r["status"], r["samples"], f"{r['cpu_s']:.1f}", f"{r['wall_s']:.1f}",
+                  f"{r['cpu_s'] / max(r['samples'], 1):.3f}", f"{estimate:.1f}", f"{estimate / r['cpu_s']:.2f}",
+                  f"{whole:.0f}")
 
 
 def shipped_runs(path):
@@ -188,6 +223,8 @@ def main():
     p.add_argument("--cases", type=int, default=4)
     p.add_argument("--draws", type=int, default=1)
     p.add_argument("--samples", type=int, default=30)
+    p.add_argument("--fences", type=int, nargs="*", help="heavyhaul: these fences (default: the study's, 10 and 1)")
+    p.add_argument("--horizon", type=int, nargs=2, metavar=("NP", "NC"), help="heavyhaul: this Np and Nc (default 8, 6)")
     p.add_argument("--loop-study", type=Path, default=STUDIES / "metro_monte_carlo.yaml")
     p.add_argument("--shipped", action="store_true")
     p.add_argument("--no-heavy", action="store_true")
@@ -196,7 +233,7 @@ def main():
     configure()
     for kind in args.kinds:
         {"run": lambda: bench_run(args.cases), "simulate": lambda: bench_simulate(args.draws, args.loop_study),
-         "network": bench_network, "heavyhaul": lambda: bench_heavyhaul(args.samples)}[kind]()
+         "network": bench_network, "heavyhaul": lambda: bench_heavyhaul(args.samples, args.fences, args.horizon)}[kind]()
     if args.shipped:
         bench_shipped(not args.no_heavy)
 

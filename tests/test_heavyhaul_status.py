@@ -314,3 +314,24 @@ def test_a_train_starting_on_a_climb_is_held_on_its_brakes_until_the_traction_is
     run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
     assert run["rollback_m"] < 0.05 and run["stalled_after_start_m"] == 0, run["reason"]
     assert "rolled back" not in run["reason"] and run["arrived"] and run["ended"] == "at the stop", run["reason"]
+
+
+def test_a_train_that_stalls_on_the_final_approach_and_rolls_back_ends_the_run_rolling_back(tmp_path):
+    """One locomotive (adhesion on: 410 kN of grip at rest) and 40 wagons told by a reference table to
+    slow from 30 km/h at 300 m to the stop at 3000 m, all of it up 40 per mille (874 kN of grade and
+    resistance): the reference's final approach begins at 300 m, the train stalls on it about 2.3 km
+    before the stop and is rolling back (0.42 km/h measured, more than the 0.07 km/h of a standing
+    train) when the loop ends the run there (loop.finished), in 8 samples. The loop says it did not
+    stand: flagged, exit 1, ended "rolling back" with the speed and where in the reason. Without the
+    loop's check of the speed at the end the same run reads as a stall that stood."""
+    path = climb_study(tmp_path, 40, max_samples=40, adhesion=True,
+                       reference=reference_table(tmp_path, [(0, 0), (100, 30), (300, 30), (3000, 0)]))
+    result = invoke(path, tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert run["status"] == "flagged" and not run["arrived"] and run["samples"] < 40
+    assert run["ended"] == "rolling back" and run["rolling_back"] and run["speed_at_end_kmh"] < -STANDING / KMH
+    assert run["stop_error_m"] < -2000 and run["resistance_at_end_kN"] > run["traction_utmost_at_end_kN"]
+    assert run["reason"].startswith(f"rolling back at {-run['speed_at_end_kmh']:.2f} km/h "
+                                    f"{-run['stop_error_m']:.1f} m before the stop when the run ended"), run["reason"]
+    assert "rolling back at" in result.output

@@ -14,6 +14,7 @@ from typing import Callable, Optional, Sequence
 from ecostudy.api.arguments import spelled
 from ecostudy.api.blas import limit_blas_threads
 from ecostudy.calibration.estimate import CHECKED
+from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH
 from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.units import number
@@ -199,6 +200,7 @@ def validation_line(table, tolerances: dict) -> str:
     """What validate judged and how many runs passed (the reasons of those that did not: the problems)."""
     bad, bounds = int((table["status"] != "ok").sum()), (f"{tolerances['energy']:g} % traction energy, "
                                                          f"{tolerances['time']:g} % running time")
+    bounds += f", the stop tolerance of the log and {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits"
     if not bad:
-        return f"validate ok: every run of {len(table)} within {bounds} and the stop tolerance of the log"
-    return f"validate flagged: {bad} of {len(table)} runs not within {bounds} and the stop tolerance of the log (each below)"
+        return f"validate ok: every run of {len(table)} within {bounds}"
+    return f"validate flagged: {bad} of {len(table)} runs not within {bounds} (each below)"

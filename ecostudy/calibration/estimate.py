@@ -5,14 +5,16 @@ Status: ``ok``; ``flagged`` when a requested parameter is not identifiable from 
 its prior) or the residuals are bad: the replayed speed off the logged one by more than
 :data:`MAX_RMS_SPEED` RMS, or the filter's innovations not white (their moving average over
 :data:`WINDOW` seconds :data:`MAX_STRUCTURE` times larger than white noise leaves: the model misses
-something the logs show).
+something the logs show), or a logged run broke the line's speed limit
+(:func:`~ecostudy.calibration.replay.over_limit`: a driver keeps to it, so the log is not a driven run
+of this line as the track file gives it).
 """
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from ecostudy.calibration.replay import coefficients
+from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, coefficients, over_limit
 from ecostudy.core.progress import stage
 from ecostudy.calibration.fit import (
     PARAMETERS, Z95, Problem, bootstrap, identify, scales, train_with,
@@ -23,7 +25,7 @@ MAX_STRUCTURE = 2.0    # moving-average innovations over white-noise expectation
 WINDOW = 5.0           # [s]
 # what an ok calibration passed (its status line says so)
 CHECKED = (f"every parameter fitted identifiable, replayed speed within {MAX_RMS_SPEED:g} m/s RMS, innovations "
-           f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s")
+           f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s, logged speeds within {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits")
 BOOTSTRAP_DRAWS = 200
 
 
@@ -107,6 +109,8 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     if quality["structure_ratio"] > MAX_STRUCTURE:
         reasons.append(f"residuals drift ({quality['structure_ratio']:.1f} times white noise over {WINDOW:g} s, "
                        f"more than {MAX_STRUCTURE:g}): the model misses something the logs show")
+    reasons += [f"{run.log} run {run.index}: {why}" for run in problem.runs
+                if (why := over_limit(run.t, run.x, run.v, track))]
     scale = np.array([s[n] for n in free])
     return Calibration(table, "flagged" if reasons else "ok", "; ".join(reasons), residuals, quality, theta,
                        train_with(train, theta), free, cov * np.outer(scale, scale))

@@ -2,7 +2,9 @@
 between stops, a recorder samples it at 10 Hz and adds sensor noise.
 
 The driver's handle is set by position (:meth:`Plant.drive`): full traction, coasting, part
-traction, coasting, braking into the next stop, with phase lengths and levels drawn from the seed.
+traction, coasting, braking into the next stop, with phase lengths and levels drawn from the seed,
+the handle held at most at the line's limit (a driver keeps to it: down a grade the brake takes
+what the grade adds there; :class:`~ecostudy.core.plant.Cruise` with a handle).
 The brake handle is a share drawn for level track plus the share that holds the train on the run's
 steepest descent (:func:`brake_share`); braking starts where the speed meets that handle's braking
 curve (:func:`ecostudy.core.kinematics.braking_curve`: braking force, running resistance, gradients
@@ -23,7 +25,7 @@ from ecostudy.core.grid import Profile, intervals_of, make_segment
 from ecostudy.io.loaders import track_from_dict
 from ecostudy.core.kinematics import braking_curve, interval_grade_force, point_resistance
 from ecostudy.core.physics import davis_resistance, gradient_force
-from ecostudy.core.plant import Plant
+from ecostudy.core.plant import Plant, controls_of
 
 
 @dataclass(frozen=True)
@@ -90,19 +92,22 @@ def brake_point(plant, nodes, handle, brake, distance):
 
 
 def drive(plant, nodes, handle):
-    """:meth:`Plant.drive` on ``nodes`` refined by every gradient and curve change of the segment
-    (the plant holds the profile of each piece constant, so a change must start a piece)."""
+    """:meth:`Plant.drive` on ``nodes`` refined by every gradient, curve and limit change of the
+    segment (the plant holds the profile of each piece constant, so a change must start a piece),
+    the handle held at most at the line's limit (a driver keeps to it: brakes down a grade there,
+    eases off the traction): (nodes, the control of each interval, the drive)."""
     fine = np.union1d(nodes, plant.segment.breakpoints())
     fine = fine[fine <= nodes[-1]]
     index = intervals_of(nodes, fine[:-1])
     steps = [handle[i] for i in index]
-    return fine, steps, plant.drive(fine, steps)
+    limits = plant.segment.limit(0.5 * (fine[:-1] + fine[1:]))
+    return fine, controls_of(steps, limits, ceiling=True), plant.drive(fine, steps, limits, ceiling=True)
 
 
 def sample_run(plant, run, times):
     """A drive (:func:`drive`'s result) sampled at ``times`` [s since departure]: position, speed,
     force at the wheel, wheel work and net line energy (counters) [m, m/s, N, J, J]."""
-    nodes, handle, (_, t_stop, solutions) = run
+    nodes, controls, (_, t_stop, solutions) = run
     starts = np.array([s.t[0] for s in solutions])
     out = np.zeros((len(times), 5))
     node_list = nodes.tolist()
@@ -116,9 +121,9 @@ def sample_run(plant, run, times):
     resists = davis_resistance(states[1], *plant.davis) + point_resistance(plant.segment, plant.train, states[0])
     for k, t in enumerate(clipped):
         x, v, wt, wb, _, line = states[:, k]
-        u = handle[min(max(bisect_right(node_list, x) - 1, 0), len(handle) - 1)]
+        control = controls[min(max(bisect_right(node_list, x) - 1, 0), len(controls) - 1)]
         resist = float(resists[k])
-        ft, fb = plant.forces(v, u, resist) if t < t_stop else (0.0, 0.0)
+        ft, fb = plant.forces(v, control, resist) if t < t_stop else (0.0, 0.0)
         out[k] = x, v, ft - fb, wt - wb, line
     return out
 

@@ -28,12 +28,14 @@ import numpy as np
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import Profile
 from ecostudy.core.physics import davis_resistance, running_resistance
+from ecostudy.core.units import KMH
 
 STANDING_SPEED = 0.25   # [m/s] below this, without traction, a train stands (speed noise allowed)
 STANDING_TIME = 1.0     # [s] a stand lasts at least this long
 MIN_SPEED = 2.0         # [m/s] residuals only above this speed (of the speed smoothed over SMOOTHING)
 SMOOTHING = 1.0         # [s]
 TRACTION_SHARE = 0.05   # efficiency samples: power above this share of the log's largest
+LIMIT_TOLERANCE_KMH = 1.0  # a logged speed (smoothed over SMOOTHING) over the line's limit by more is flagged
 
 
 @dataclass
@@ -156,6 +158,19 @@ def smoothed(t, v, span=SMOOTHING):
     w = max(int(round(span / float(np.median(np.diff(t))))) | 1, 1) if len(t) > 1 else 1
     padded = np.pad(v, w // 2, mode="edge")
     return np.convolve(padded, np.ones(w) / w, mode="valid")
+
+
+def over_limit(t, x, v, track, tolerance_kmh=LIMIT_TOLERANCE_KMH):
+    """Why a logged run broke the line's speed limit ("" if it kept it): its speed smoothed over
+    :data:`SMOOTHING` (the sensor's noise averaged out) above the track's limit at the logged
+    position by more than ``tolerance_kmh``, the largest excess, where and when."""
+    speed, limit = smoothed(t, v), Profile(track.limit_positions, track.limits)(x)
+    i = int(np.argmax(speed - limit))
+    excess = float(speed[i] - limit[i]) / KMH
+    if excess <= tolerance_kmh:
+        return ""
+    return (f"logged speed {speed[i] / KMH:.1f} km/h at {x[i]:.0f} m ({t[i]:.0f} s), {excess:.1f} km/h over the "
+            f"line's {limit[i] / KMH:.0f} km/h limit (tolerance {tolerance_kmh:g} km/h)")
 
 
 def cumulative(values):

@@ -23,14 +23,16 @@ A run is ``flagged`` when its traction energy differs from the log's by more tha
 ``energy_tolerance`` or its running time by more than ``time_tolerance`` (shares), or when the
 model under the logged handle stops further from the logged stop than a driven run may
 (``core.status.STOP_TOLERANCE_M``) plus what the replay itself moves the stop by
-(:func:`stop_tolerance`): its time and energy are then not those of the logged run.
+(:func:`stop_tolerance`): its time and energy are then not those of the logged run; and when the
+logged speed broke the line's limit (:func:`~ecostudy.calibration.replay.over_limit`): a driver keeps
+to it, so the log is not a driven run of this line as the track file gives it.
 """
 from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
-from ecostudy.calibration.replay import coefficients, line_power, prepare, smoothed, wheel_work
+from ecostudy.calibration.replay import coefficients, line_power, over_limit, prepare, smoothed, wheel_work
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Plant
 from ecostudy.core.progress import stage, step
@@ -196,6 +198,9 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
                            "no running time to compare")
         elif abs(row["time_difference_pct"]) > 100 * time_tolerance:
             reasons.append(f"running time {row['time_difference_pct']:+.1f} % off the log under the logged handle")
+        overspeed = over_limit(run.t, run.x, run.v, track)
+        if overspeed:
+            reasons.append(overspeed)
         if run.stands:  # the log's last position is a stop: where the model stops is compared
             row["stop_tolerance_m"] = stop_tolerance(run, track, train, log, stop)
             if abs(row["model_stop_error_m"]) > row["stop_tolerance_m"]:

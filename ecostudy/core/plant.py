@@ -69,10 +69,13 @@ class Truth:
 
 @dataclass(frozen=True)
 class Cruise:
-    """Hold ``target`` [m/s]: F = F_R(x, v) + M gain (target - v), clipped to the envelopes."""
+    """Hold ``target`` [m/s]: F = F_R(x, v) + M gain (target - v), clipped to the envelopes. With a
+    ``handle``, ``target`` is a ceiling: that handle's forces, or the hold's where its net force is
+    the smaller (a driver who keeps to the limit: brakes down a grade there, eases off the traction)."""
 
     target: float
     gain: float = 1.0
+    handle: float | None = None
 
 
 class Step(NamedTuple):
@@ -115,12 +118,12 @@ class Noise:
 
 
 def controls_of(handle: Sequence[float] | FloatArray, targets: Sequence[float] | FloatArray | None = None,
-                gain: float = 1.0) -> list["float | Cruise"]:
+                gain: float = 1.0, ceiling: bool = False) -> list["float | Cruise"]:
     """The control of each interval: its handle, or :class:`Cruise` at its target speed where
-    ``targets`` (one per interval) is not nan."""
+    ``targets`` (one per interval) is not nan (with ``ceiling``, the handle held at most at it)."""
     handles = [float(u) for u in handle]
     target = [float(x) for x in targets] if targets is not None else [float("nan")] * len(handles)
-    return [Cruise(x, gain) if x == x else u for u, x in zip(handles, target)]
+    return [Cruise(x, gain, u if ceiling else None) if x == x else u for u, x in zip(handles, target)]
 
 
 def pieces(nodes: FloatArray, handle: Sequence[float] | FloatArray, segment: Segment, jump: float = 1e-3,
@@ -181,6 +184,10 @@ class Plant:
         train = self.train
         if isinstance(control, Cruise):
             net = resist + self.mass * control.gain * (control.target - v)
+            if control.handle is not None:  # the handle, unless holding the ceiling takes less
+                ft, fb = self.forces(v, control.handle, resist)
+                if ft - fb <= net:
+                    return ft, fb
             return ((min(net, self.traction(v)), 0.0) if net >= 0
                     else (0.0, min(-net, self.truth.braking * train.braking.force(v))))
         ft = control * self.traction(v) if control > 0 else 0.0
@@ -266,15 +273,15 @@ class Plant:
     # ------------------------------------------------------------------ a whole trip
     def drive(self, nodes: FloatArray, handle: Sequence[float] | FloatArray,
               targets: Sequence[float] | FloatArray | None = None, gain: float = 1.0, max_time: float | None = None,
-              initial_speed: float = 0.0) -> tuple[list[float], float, list[Any]]:
+              initial_speed: float = 0.0, ceiling: bool = False) -> tuple[list[float], float, list[Any]]:
         """Drive ``handle`` (one value per interval of ``nodes``, switching by position) from
         standstill (or ``initial_speed`` [m/s]) until the train stops; ``targets`` (one per interval, nan elsewhere) asks for
-        cruise control at that speed there. Returns (position, speed, three works, stop time)
+        cruise control at that speed there (with ``ceiling``: the handle, held at most at that speed). Returns (position, speed, three works, stop time)
         and the integrator's pieces, restarted at every control, gradient or curve change."""
         segment = self.segment
         a, b, c = self.davis
         handles = [float(u) for u in handle]
-        controls = controls_of(handles, targets, gain)
+        controls = controls_of(handles, targets, gain, ceiling)
         last = len(handles) - 1
         max_time = max_time or 20 * segment.distance + 600
         node_list = nodes.tolist()

@@ -177,6 +177,17 @@ def case_plant(case):
 def drive(case):
     """One closed-loop run of a case: (consist, controller, record, reference, plant)."""
     consist, plant, reference = case_plant(case)
+    reduction, controller = case_controller(case, consist, plant)
+    state = plant.initial(head=-0.5 * consist.length[0], speed=0.0)
+    observer = (KalmanObserver(reduction.model, reduction.kinds, q=case["observer_q"], r=case["observer_r"],
+                               estimate=reduced_state(plant, reduction, state)) if case["observer"] else None)
+    state, record = run(plant, reduction, controller, state, reference, case["max_samples"], observer=observer)
+    return consist, controller, record, reference, plant
+
+
+def case_controller(case, consist, plant):
+    """(the fence reduction, the receding-horizon controller) of a case: the run's set-up (the
+    condensed QP's prediction matrices and Hessian are built here, ``sizes.heavyhaul_setup_seconds``)."""
     labels, w, ts = case["labels"], case["weights"], case["sample_time"]
     reduction = fence(consist, labels["f"], ts, case["fence_coupling"], case["fence_sharing"])
     scales = None
@@ -189,11 +200,7 @@ def drive(case):
                       force_limit_kN=consist.force_limit / KN, scales=scales,
                       represented=reduction.represented(consist.mass, case["fence_weights"]),
                       effort=case["effort_penalty"], brake_on=case.get("brake_penalty_on", "wagons"))
-    state = plant.initial(head=-0.5 * consist.length[0], speed=0.0)
-    observer = (KalmanObserver(reduction.model, reduction.kinds, q=case["observer_q"], r=case["observer_r"],
-                               estimate=reduced_state(plant, reduction, state)) if case["observer"] else None)
-    state, record = run(plant, reduction, controller, state, reference, case["max_samples"], observer=observer)
-    return consist, controller, record, reference, plant
+    return reduction, controller
 
 
 def summarise(consist, controller, record, reference, locomotives=(), stop_tolerance=Tolerances().stop_m):

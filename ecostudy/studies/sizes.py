@@ -20,7 +20,8 @@ The constants are measured on this project's shared 2-core machine (pessimistic)
   plant's integration, the observer and the QP) and 0.42 s at f = 1 (every car a locomotive group,
   the largest QP): 0.15 s a sample and the QP's share of the 0.5 s at f = 1 scaled as the cube of
   its inputs (:data:`HEAVYHAUL_SECONDS_PER_SAMPLE`, :func:`heavyhaul_runs`), over 1.5 times the
-  reference's samples; its memory a worker's and its condensed QP's matrices (:func:`heavyhaul_bytes`:
+  reference's samples, after its set-up (the condensed QP built: :func:`heavyhaul_setup_seconds`,
+  1.1 CPU s at f = 1, Np = 8, Nc = 6 and 130 s at Np = 30, Nc = 24, docs/guards.md); its memory a worker's and its condensed QP's matrices (:func:`heavyhaul_bytes`:
   f = 1, Np = 30, Nc = 24 peaked at 1.12 GB, docs/guards.md);
 - a comparison (``compare``): the all-out run, the ATO optimum with its DAS phases (two NLPs more)
   and the heuristics (taken as one run more), one after the other (:func:`check_compare`);
@@ -52,6 +53,7 @@ NETWORK_BYTES_PER_POINT = 145e3
 HEAVYHAUL_SECONDS_PER_SAMPLE = {1: 0.5}  # f = 1: one locomotive group per car, the largest QP
 HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED = 0.15
 HEAVYHAUL_MEASURED_INPUTS = {1: 1224}  # the QP inputs of those measurements: 204 cars x Nc = 6 (f = 1)
+HEAVYHAUL_SETUP_SECONDS = 3.5e-10  # [s] a product of the set-up (:func:`heavyhaul_setup_seconds`): 1.6e-10 to 3.2e-10 measured
 HEAVYHAUL_SQUARES = 2.5  # dense inputs x inputs matrices a run holds at its peak (:func:`heavyhaul_bytes`)
 
 
@@ -126,20 +128,36 @@ def _heavyhaul_sizes(cases):
     return [(c, virtual_car_count(lengths, c["labels"]["f"])) for c in cases]
 
 
+def heavyhaul_sample_seconds(inputs):
+    """CPU seconds of one heavy-haul sample with a QP of ``inputs`` (virtual cars x Nc): the grouped
+    constant (the plant, the observer, a small QP) and a dense QP's cube of its inputs, scaled to
+    the f = 1 measurement: 132 inputs 0.15 s, 1 224 inputs 0.5 s, 528 inputs (f = 10, Nc = 24) 0.18 s
+    (0.10 s measured; the cube of the inputs alone put it at 9.6 s)."""
+    qp = HEAVYHAUL_SECONDS_PER_SAMPLE[1] - HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED  # the QP's share at f = 1
+    return HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED + qp * (inputs / HEAVYHAUL_MEASURED_INPUTS[1]) ** 3
+
+
+def heavyhaul_setup_seconds(cars, nc, np_):
+    """CPU seconds of a heavy-haul run's set-up (``studies.heavyhaul.case_controller``) for ``cars``
+    virtual cars, Nc = ``nc``, Np = ``np_``: the condensed QP's Hessian, Np products of the (2 cars -
+    1) states by the inputs squared, and its factor, the inputs cubed:
+    :data:`HEAVYHAUL_SETUP_SECONDS` a product of (Np (2 cars - 1) + inputs) x inputs^2."""
+    inputs = cars * nc
+    return HEAVYHAUL_SETUP_SECONDS * (np_ * (2 * cars - 1) + inputs) * inputs ** 2
+
+
 def heavyhaul_runs(study, reference, cases, path=None):
     """Seconds of each run of a heavy-haul study (its samples, up to ``max_samples``):
-    :func:`ecostudy.studies.heavyhaul.expand`'s study, reference and cases. A sample costs the grouped
-    constant (the plant, the observer, a small QP) and a dense QP's cube of its inputs (virtual cars x
-    Nc), scaled to the f = 1 measurement: 132 inputs 0.15 s, 1 224 inputs 0.5 s, 528 inputs (f = 10,
-    Nc = 24) 0.18 s (0.10 s measured; the cube of the inputs alone put it at 9.6 s); with ``path``, a
-    run estimated above one run's budget (its time, or its process's memory: a worker and its QP,
-    :func:`heavyhaul_bytes`) is refused (unless forced)."""
+    :func:`ecostudy.studies.heavyhaul.expand`'s study, reference and cases: its set-up
+    (:func:`heavyhaul_setup_seconds`) and its samples (:func:`heavyhaul_sample_seconds`); with
+    ``path``, a run estimated above one run's budget (its time, or its process's memory: a worker and
+    its QP, :func:`heavyhaul_bytes`) is refused (unless forced)."""
     samples = min(study.max_samples, int(np.ceil(1.5 * reference.running_time / study.sample_time_s)))
     out = []
     for c, cars in _heavyhaul_sizes(cases):
         inputs = cars * c["labels"]["Nc"]
-        qp = HEAVYHAUL_SECONDS_PER_SAMPLE[1] - HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED  # the QP's share at f = 1
-        seconds = samples * (HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED + qp * (inputs / HEAVYHAUL_MEASURED_INPUTS[1]) ** 3)
+        seconds = (heavyhaul_setup_seconds(cars, c["labels"]["Nc"], c["labels"]["Np"])
+                   + samples * heavyhaul_sample_seconds(inputs))
         if path is not None:
             check_run(path, "horizons", f"{c['scenario']}: {inputs:,} QP inputs (virtual cars x Nc) a sample, "
                       f"{samples} samples", seconds, WORKER_BYTES + heavyhaul_bytes(cars, c["labels"]["Nc"],
