@@ -52,3 +52,41 @@ def test_same_formula_builds_pyomo_expressions():
 def test_envelope_force_power():
     env = physics.Envelope("force_power", max_force=200e3, max_power=2e6)
     assert_allclose(env.force(np.array([5.0, 10.0, 20.0])), [200e3, 200e3, 100e3])
+
+
+def test_step_integral_against_quadrature():
+    # a grade force in kN with steps at 100 m, 130 m and 400 m, rounded over 0.5 m
+    cuts, values, w = [0.0, 100.0, 130.0, 400.0, 900.0], [-25.0, 12.0, 3.0, 40.0], 0.5
+    coef = physics.step_integral(cuts, values, w)
+
+    def smoothed(x):
+        return physics.smooth_table_slope(x, coef, w)
+    x = np.linspace(0.0, 900.0, 900_001)
+    f = smoothed(x)
+    quad = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(x))])  # trapezoid, 1 mm
+    phi = physics.smooth_table(x, coef, w)
+    assert_allclose(phi, quad, atol=1e-5)  # Phi is the smoothed step function's integral
+    exact = np.interp(x, cuts, np.concatenate([[0.0], np.cumsum(np.multiply(values, np.diff(cuts)))]))
+    jumps = np.abs(np.diff(values))
+    assert np.max(np.abs(phi - exact)) <= 0.5 * w * jumps.sum()  # and the step function's within w/2 a step
+    # away from the steps the smoothed function is the step function's value
+    assert_allclose(smoothed(np.array([50.0, 115.0, 250.0, 650.0])), values, rtol=2e-3)
+    # an 8 m interval over the step at 100 m: its mean is the step function's (1.5 m at -25, 6.5 m at 12)
+    a, b = 98.5, 106.5
+    mean = physics.interval_mean(physics.smooth_table(a, coef, w), physics.smooth_table(b, coef, w), b - a,
+                                 smoothed(0.5 * (a + b)))
+    assert_allclose(mean, (1.5 * -25.0 + 6.5 * 12.0) / 8.0, atol=0.5 * w * 37.0 / 8.0)  # within a step's w/2
+    assert abs(smoothed(0.5 * (a + b)) - mean) > 5.0  # where the middle's value is far from it
+
+
+def test_interval_mean_stands_still_and_takes_pyomo():
+    coef = physics.step_integral([0.0, 10.0, 20.0], [1.0, 3.0], 0.5)
+    phi = physics.smooth_table(10.0, coef, 0.5)
+    middle = physics.smooth_table_slope(10.0, coef, 0.5)
+    assert_allclose(middle, 2.0)
+    assert_allclose(physics.interval_mean(phi, phi, 0.0, middle), 2.0)  # no length: the point's value
+    m = pyo.ConcreteModel()
+    m.a, m.b = pyo.Var(initialize=9.0), pyo.Var(initialize=11.0)
+    expr = physics.interval_mean(physics.smooth_table(m.a, coef, 0.5), physics.smooth_table(m.b, coef, 0.5),
+                                 m.b - m.a, physics.smooth_table_slope(0.5 * (m.a + m.b), coef, 0.5))
+    assert_allclose(pyo.value(expr), 2.0, atol=1e-3)

@@ -53,7 +53,9 @@ def verify_leg(leg, run):
     """Re-simulate a leg's controls with the independent simulator (``simulate.verify``).
 
     The step forces become handles on the space intervals the steps cover (steps at standstill
-    cover none), so the simulator drives them by position as it drives every other run.
+    cover none), so the simulator drives them by position as it drives every other run; an interval
+    is cut at each track change inside it (gradient, curve, limit, tunnel), each part under the
+    interval's handle, so the simulator integrates the track's own piecewise force over it.
     """
     s, v, ft, fb = run.s, run.v, run.ft, run.fb
     # a step that covers less than 0.1 mm stands still: the solver's tolerance once left 2e-6 m
@@ -63,12 +65,27 @@ def verify_leg(leg, run):
     nodes = np.concatenate([[s[0]], s[1:][moving]])
     speeds = np.concatenate([[v[0]], v[1:][moving]])
     u = handles(leg.case.train, speeds, ft[moving], fb[moving])
+    nodes, u = split_at(nodes, u, leg.case.segment.breakpoints())
     energy = float(np.sum(ft * np.diff(s)))
     out = verify(leg.case.segment, leg.case.train, nodes, u, leg.running_time, energy)[0]
     # a run that arrives early and stands passes the re-simulation, but is not a run to drive
     out["stood_before_stop_s"] = standing_s(run, leg)
     out["passed"] = bool(out["passed"] and out["stood_before_stop_s"] <= STAND_TIME_S)
     return out
+
+
+def split_at(nodes, values, points):
+    """Intervals of ``nodes`` cut at each of ``points`` strictly inside one (more than 1 mm from its
+    ends): (the new nodes, each part's value = its interval's value of ``values``)."""
+    nodes, values, points = np.asarray(nodes, float), np.asarray(values, float), np.asarray(points, float)
+    k = np.searchsorted(nodes, points, side="right") - 1  # the interval each point falls in
+    inside = (k >= 0) & (k < len(values))
+    k, points = k[inside], points[inside]
+    clear = (points - nodes[k] > 1e-3) & (nodes[k + 1] - points > 1e-3)
+    all_nodes = np.concatenate([nodes, points[clear]])
+    order = np.argsort(all_nodes, kind="stable")
+    owner = np.concatenate([np.arange(len(nodes)), k[clear]])[order]  # the interval each new node starts
+    return all_nodes[order], values[np.minimum(owner, len(values) - 1)][:-1]
 
 
 def _gaps(fleet, runs_by_train):

@@ -5,12 +5,15 @@ written on one clock with a fixed step dt. On steps j = 0..n of one segment (n d
 segment's running time, departure and arrival fixed by the timetable):
 
     s_{j+1} - s_j = dt (v_j + v_{j+1}) / 2                                  (position, trapezoid)
-    (v_{j+1} - v_j) / dt = (F_T,j - F_B,j - R_D(v_j, v_{j+1}) - G(s_mid)) / M  (speed, eq. 8.1)
+    (v_{j+1} - v_j) / dt = (F_T,j - F_B,j - R_D(v_j, v_{j+1}) - G_j) / M       (speed, eq. 8.1)
 
-with R_D the trapezoidal mean of the Davis resistance and G(s) the gradient and curve force of
-the segment, smoothed over ``width`` metres at each change (the only way a position-dependent
-force enters a smooth NLP). Speed limits become a continuous piecewise-linear bound L(s) that is
-never above the train-length limit of the space grid: it ramps down over ``ramp`` metres before a
+with R_D the trapezoidal mean of the Davis resistance and G_j the gradient and curve force of the
+segment averaged over the step, (Phi(s_{j+1}) - Phi(s_j)) / (s_{j+1} - s_j) with Phi the integral of
+the force over s, its steps smoothed over about ``width`` metres (the only way a position-dependent
+force enters a smooth NLP; ``physics.step_integral``, ``physics.interval_mean``: a step stood on
+takes the force at its point). The mean, not the force at the step's middle: a step whose middle
+lies near a gradient change would otherwise feel one side's force over the whole step. Speed limits
+become a continuous piecewise-linear bound L(s) that is never above the train-length limit of the space grid: it ramps down over ``ramp`` metres before a
 restriction and up over ``ramp`` metres after it ends. Envelopes hold as in ``ocp/space.py``
 (at both step ends; of its lean cuts, a power limit left out where it never binds and the regenerative
 force taken as the braking force where the regenerative envelope covers the braking one; else
@@ -27,7 +30,8 @@ import pyomo.environ as pyo
 
 from ecostudy.core.grid import warn_unmodelled
 from ecostudy.core.kinematics import point_resistance
-from ecostudy.core.physics import interval_resistance, smooth_table, table_coefficients
+from ecostudy.core.physics import (interval_mean, interval_resistance, smooth_table, smooth_table_slope, step_integral,
+                                   table_coefficients)
 from ecostudy.core.units import FloatArray, Numeric
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import Case, Solved
@@ -55,23 +59,14 @@ class Leg:
         return self.steps * self.dt
 
 
-def force_profile(case: Case, width: float) -> tuple[FloatArray, FloatArray]:
-    """(positions, values) of the gradient + curve force [N] as a smooth step function of s."""
+def grade_steps(case: Case) -> tuple[FloatArray, FloatArray]:
+    """(cuts, values): the gradient + curve force [N] of the segment as a step function of s, one value
+    per piece between consecutive cuts (0, every gradient or curve change, the distance)."""
     seg = case.segment
     warn_unmodelled(seg, "the time-domain legs", case.train)
     cuts = np.unique(np.concatenate([[0.0], seg.breakpoints(), [seg.distance]]))
-    mids = 0.5 * (cuts[:-1] + cuts[1:])
-    force = point_resistance(seg, case.train, mids)
-    # a step at each cut is the limit of a ramp of width -> 0; use ramps of ``width`` centred on it
-    xs: list[float] = [0.0]
-    fs: list[float] = [force[0]]
-    for c, f0, f1 in zip(cuts[1:-1], force[:-1], force[1:]):
-        if f0 != f1:
-            xs += [c - 0.5 * width, c + 0.5 * width]
-            fs += [f0, f1]
-    xs.append(seg.distance)
-    fs.append(force[-1])
-    return np.array(xs), np.array(fs)
+    force = np.asarray(point_resistance(seg, case.train, 0.5 * (cuts[:-1] + cuts[1:])), float)
+    return cuts, force
 
 
 def limit_profile(case: Case, ramp: float, dt: float = 0.0) -> tuple[FloatArray, FloatArray]:
@@ -146,8 +141,8 @@ def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | Flo
     b.fr = pyo.Reference(b.fb) if one_brake else fr
     set_start(b, leg, guess)
     mass = train.mass
-    gx, gf = force_profile(case, width)
-    g_coef = table_coefficients(gx, gf / FORCE_SCALE, 0.25 * width)
+    changes, grade_force = grade_steps(case)
+    g_coef = step_integral(changes, grade_force / FORCE_SCALE, 0.25 * width)  # its integral over s
     lx, lv = limit_profile(case, ramp, dt)
     l_coef = table_coefficients(lx, lv, 0.25 * width)
 
@@ -156,7 +151,8 @@ def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | Flo
 
     def dynamics(b: Model, j: int) -> Any:
         davis = interval_resistance(b.v[j], b.v[j + 1], train.davis, 0.0) / FORCE_SCALE
-        grade = smooth_table(0.5 * (b.s[j] + b.s[j + 1]), g_coef, 0.25 * width)
+        grade = interval_mean(b.grade_integral[j], b.grade_integral[j + 1], b.s[j + 1] - b.s[j],
+                              smooth_table_slope(0.5 * (b.s[j] + b.s[j + 1]), g_coef, 0.25 * width))
         return (b.v[j + 1] - b.v[j]) * (mass / FORCE_SCALE) / dt == b.ft[j] - b.fb[j] - davis - grade
 
     def limit(b: Model, j: int) -> Any:
@@ -168,6 +164,7 @@ def add_leg(m: Model, name: str, leg: Leg, guess: Sequence[Sequence[float] | Flo
     held = np.broadcast_to(np.asarray(one_handle, bool), (n,))
     if held.any():
         b.one_handle = pyo.Constraint([j for j in range(n) if held[j]], rule=lambda b, j: b.ft[j] * b.fb[j] <= ONE_HANDLE)
+    b.grade_integral = pyo.Expression(b.K, rule=lambda b, k: smooth_table(b.s[k], g_coef, 0.25 * width))
     b.kinematics = pyo.Constraint(b.I, rule=kinematics)
     b.dynamics = pyo.Constraint(b.I, rule=dynamics)
     b.limit = pyo.Constraint(pyo.RangeSet(1, n - 1), rule=limit)
