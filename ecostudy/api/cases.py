@@ -17,7 +17,7 @@ from ecostudy.calibration.estimate import CHECKED
 from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH
 from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
-from ecostudy.core.units import number
+from ecostudy.core.units import number, signed
 from ecostudy.report import calplots, heavyplots, loopplots
 from ecostudy.report.console import counted
 from ecostudy.report.studyfiles import network_files
@@ -190,7 +190,7 @@ def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optiona
     return reported(out, [shown(table, VALIDATION_COLUMNS, ".4g"),
                           f"traction energy: logged {summary['logged_traction_kWh']:.2f} kWh, model "
                           f"{summary['model_traction_kWh']:.2f} kWh ("
-                          + (f"{number(summary['traction_difference_pct'], '+.2f')} %)" if summary["traction_difference_pct"]
+                          + (f"{signed(summary['traction_difference_pct'], 2)} %)" if summary["traction_difference_pct"]
                              is not None else "none logged)"),
                           validation_line(table, summary["tolerances_pct"]),
                           "outputs " + listed(out)])
