@@ -97,3 +97,18 @@ def test_a_study_time_below_all_out_fails_alone_and_is_named(tmp_path):
     own, front = table[table["is_study_time"]], table[~table["is_study_time"]]
     assert own["status"].str.startswith("failed").all() and (front["status"] == "ok").all()
     assert front["marginal_saving_kWh_per_s"].notna().all() and len(front) == 3
+
+
+def test_run_kind_pareto_writes_the_files_of_pareto_and_leaves_none_of_an_earlier_run(tmp_path):
+    """`ecostudy pareto` (two points and the study's 85 s: 3 rows), then `ecostudy run --kind pareto` into the
+    same folder (21 points): every file in the folder is one of this run's, as its summary.json
+    lists them, pareto.json and the figures included (the 3-point ones were left beside the
+    21-point pareto.csv before)."""
+    path, folder = study(tmp_path, running_time_s=85, points=30), tmp_path / "front"
+    invoke(["pareto", str(path), "--out", str(folder), "--count", "2", "--supplement-max", "10", "--workers", "1"])
+    assert json.loads((folder / "pareto.json").read_text())["count"] == 3
+    invoke(["run", str(path), "--kind", "pareto", "--out", str(folder), "--workers", "1", "--no-progress"])
+    listed = set(json.loads((folder / "summary.json").read_text())["files"])
+    assert {p.name for p in folder.iterdir()} == listed, listed
+    assert {"pareto.json", "pareto.png", "pareto_profiles.png"} <= listed
+    assert json.loads((folder / "pareto.json").read_text())["count"] == 21 == len(pd.read_csv(folder / "pareto.csv"))

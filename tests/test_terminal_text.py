@@ -18,7 +18,7 @@ from ecostudy.api.outcome import shown
 from ecostudy.api.single import run_lines
 from ecostudy.calibration.generate import LogNoise, generate_log
 from ecostudy.cli import app
-from ecostudy.core.units import number
+from ecostudy.core.units import number, signed
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.io.logfile import write_log
 from ecostudy.report.html import numeric_cell
@@ -117,6 +117,42 @@ def test_a_validated_log_that_the_model_replays_prints_its_difference_as_zero(tm
     assert line.endswith("(+0.00 %)") and not NEGATIVE_ZERO.search(report.text), report.text
     header, row = report.text.splitlines()[:2]
     assert dict(zip(header.split(), row.split()))["traction_difference_pct"] == "0.00", report.text
+
+
+def test_a_signed_number_shows_its_sign_and_a_rounded_zero_as_plus_zero():
+    assert [signed(-1e-9), signed(-0.0), signed(0.0), signed(-0.0006), signed(0.12, 2), signed(-0.3, 0)] == \
+        ["+0.000", "+0.000", "+0.000", "-0.001", "+0.12", "+0"]
+
+
+def _validated_noise_free(tmp_path, **tolerances):
+    track_file, train_file = TRACKS / "calibration_line.yaml", TRAINS / "regional_alstom.yaml"
+    train = load_train(train_file)
+    frame, _ = generate_log(load_track(track_file), train, ["West", "Middle"], train, seed=0,
+                            noise=LogNoise(speed=0.0, power=0.0))
+    write_log(tmp_path / "log.csv", {"track": str(track_file), "train": str(train_file)}, frame)
+    return validate_folder(tmp_path / "log.csv", out=tmp_path / "val", plot=False, **tolerances)
+
+
+def test_a_flag_reason_prints_a_signed_difference_that_rounds_to_zero_as_plus_zero(tmp_path):
+    """Validate's reason for a run flagged at zero tolerance: the traction difference -0.00015 % is
+    '+0.0 % off the log' ('-0.0 %' before, an f-string's own '+.1f' beside the formatter)."""
+    report = _validated_noise_free(tmp_path, energy_tolerance=0.0)
+    printed = "\n".join(report.problems())  # what the command line prints below its table
+    assert "traction energy +0.0 % off the log" in printed and not NEGATIVE_ZERO.search(printed), printed
+
+
+def test_a_refused_log_prints_a_position_step_that_rounds_to_zero_as_plus_zero(tmp_path):
+    """A 1 Hz log at 25 m/s whose position stands still for one row (it steps back 0.3 m, the
+    speeds give 25 m): the refusal names a jump of '+0 m' ('-0 m' before)."""
+    x = [300.0 + 25.0 * i for i in range(40)]
+    x[20:] = [p - 25.3 for p in x[20:]]
+    rows = "".join(f"{i:.1f},{x[i]:.3f},25.00,10\n" for i in range(40))
+    path = tmp_path / "frozen.csv"
+    path.write_text(f"---\ntrack: {TRACKS / 'calibration_line.yaml'}\ntrain: {TRAINS / 'regional_alstom.yaml'}\n---\n"
+                    "time_s,position_m,speed_mps,force_kN\n" + rows)
+    r = CliRunner().invoke(app, ["validate", str(path), "--out", str(tmp_path / "o"), "--no-plot"])
+    assert r.exit_code == 2 and "row 21: the position jumps by +0 m in 1 s" in r.output, r.output
+    assert not NEGATIVE_ZERO.search(r.output), r.output
 
 
 # ------------------------------------------------------------------- Click's own refusals, as one line

@@ -17,10 +17,10 @@ from ecostudy.calibration.estimate import CHECKED
 from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH
 from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
-from ecostudy.core.units import number
+from ecostudy.core.units import number, signed
 from ecostudy.report import calplots, heavyplots, loopplots
 from ecostudy.report.console import counted
-from ecostudy.report.studyfiles import network_files
+from ecostudy.report.studyfiles import compare_figures, front_files, network_files
 from ecostudy.report.html import write_html
 from ecostudy.report.style import output
 from ecostudy.studies.batch import run_expanded, run_kind
@@ -64,12 +64,24 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
     (:data:`~ecostudy.studies.batch.STUDY_KINDS`; ``run``: scenarios x sweep, or a library)."""
     workers = every_core(workers)
     check_options(workers=workers, dask=dask)  # a study too big for the command: refused by its kind's size (unless --force)
-    table, counts, folder = run_kind(kind, study, workers, dask, retry_failed, Path(out) if out else None, progress)
+    table, counts, folder = run_kind(kind, study, workers, dask, retry_failed, Path(out) if out else None, progress,
+                                     own_files(kind, workers))
     write_html(folder)
     return reported(folder, [f"{counted(counts['total'], 'cases')}: {counts['stored_before']} already stored, {counts['computed']} "
                              f"computed now ({counts['failed']} of them failed or infeasible); not ok in the table: "
                              f"{counts['not_ok']}" + not_reused(counts), "outputs " + listed(folder, ("results.csv", "results.sqlite",
                                                                                   "report.html"))])
+
+
+def own_files(kind: str, workers: int):
+    """The files the command of a study ``kind`` writes beside its table, with its default options
+    (``pareto``: pareto.json and its two figures; ``compare``: compare.png), so that ``run --kind``
+    writes the same set and never leaves an earlier run's beside its own; None for the others."""
+    if kind == "pareto":
+        return front_files(workers=workers)
+    if kind == "compare":
+        return compare_figures()
+    return None
 
 
 @spelled
@@ -190,7 +202,7 @@ def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optiona
     return reported(out, [shown(table, VALIDATION_COLUMNS, ".4g"),
                           f"traction energy: logged {summary['logged_traction_kWh']:.2f} kWh, model "
                           f"{summary['model_traction_kWh']:.2f} kWh ("
-                          + (f"{number(summary['traction_difference_pct'], '+.2f')} %)" if summary["traction_difference_pct"]
+                          + (f"{signed(summary['traction_difference_pct'], 2)} %)" if summary["traction_difference_pct"]
                              is not None else "none logged)"),
                           validation_line(table, summary["tolerances_pct"]),
                           "outputs " + listed(out)])

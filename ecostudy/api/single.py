@@ -15,7 +15,7 @@ from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, problem
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status
-from ecostudy.core.units import number
+from ecostudy.core.units import number, signed
 from ecostudy.das.methods import das_run
 from ecostudy.io.results import file_digest
 from ecostudy.io.writers import check_output_dir, write_json
@@ -49,12 +49,12 @@ def run_lines(result: RunResult, out_dir: Path) -> list[str]:
         lines.append(f"  verification      {flag}: {ver.errors}")
     if s.das is not None:
         d = s.das
-        gap = "n/a" if d.gap_to_ato_pct is None else number(d.gap_to_ato_pct, "+.2f")
+        gap = "n/a" if d.gap_to_ato_pct is None else signed(d.gap_to_ato_pct, 2)
         lines.append(f"  driver advice     {d.method}: {d.traction_energy_kWh:.3f} kWh ({gap} "
-                     f"% against ATO), {d.mode_changes} mode changes, arrival {number(d.arrival_error_s, '+.2f')} s, "
-                     f"stop {number(d.stop_error_m, '+.2f')} m (advice.csv)")
+                     f"% against ATO), {d.mode_changes} mode changes, arrival {signed(d.arrival_error_s, 2)} s, "
+                     f"stop {signed(d.stop_error_m, 2)} m (advice.csv)")
         if d.gap_to_ato_on_time_pct is not None and s.marginal_energy_kWh_per_s is not None:
-            lines.append(f"                    {number(d.gap_to_ato_on_time_pct, '+.3f')} % against ATO with lateness charged "
+            lines.append(f"                    {signed(d.gap_to_ato_on_time_pct, 3)} % against ATO with lateness charged "
                          f"at {abs(s.marginal_energy_kWh_per_s):.4f} kWh/s; {d.status}")
         if d.method == "minlp":
             bound = "no bound" if d.bound_kWh is None else f"bound {d.bound_kWh:.3f} kWh (gap {number(d.gap_pct, '.2f')} %)"

@@ -37,7 +37,7 @@ from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Plant
 from ecostudy.core.progress import stage, step
 from ecostudy.core.status import STOP_TOLERANCE_M
-from ecostudy.core.units import to_kwh
+from ecostudy.core.units import signed, to_kwh
 
 END_FIT = 3.0          # [s] of samples at each end of a phase for its end speeds
 TRACTION_SHARE = 0.01  # an interval draws traction (brakes) above (below minus) this share of the log's largest power
@@ -191,13 +191,13 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
         if not logged > 0:  # a NaN difference would pass every tolerance
             reasons.append("no traction logged in this run: no energy to compare")
         elif abs(row["traction_difference_pct"]) > 100 * energy_tolerance:
-            reasons.append(f"traction energy {row['traction_difference_pct']:+.1f} % off the log")
+            reasons.append(f"traction energy {signed(row['traction_difference_pct'], 1)} % off the log")
         if not run.stands:  # no logged running time: the time is not compared
             row["time_difference_pct"] = np.nan
             reasons.append(f"the log ends while the train moves (at {run.x[-1]:.0f} m, {run.v[-1]:.1f} m/s): "
                            "no running time to compare")
         elif abs(row["time_difference_pct"]) > 100 * time_tolerance:
-            reasons.append(f"running time {row['time_difference_pct']:+.1f} % off the log under the logged handle")
+            reasons.append(f"running time {signed(row['time_difference_pct'], 1)} % off the log under the logged handle")
         overspeed = over_limit(run.t, run.x, run.v, track)
         if overspeed:
             reasons.append(overspeed)

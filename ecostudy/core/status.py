@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from typing import Iterable, Literal
 
 from ecostudy.core.adhesion import TOLERANCE
+from ecostudy.core.units import signed
 
 Kind = Literal["ok", "flagged", "failed"]
 ORDER = {"ok": 0, "flagged": 1, "failed": 2}
@@ -156,7 +157,7 @@ def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
     :data:`ADHESION_USE` of its adhesion limit (``core.simulate.adhesion_use``)."""
     reasons = []
     if stop_error_m is not None and not abs(stop_error_m) <= STOP_TOLERANCE_M:
-        reasons.append(f"stopped {stop_error_m:+.2f} m from the stop")
+        reasons.append(f"stopped {signed(stop_error_m, 2)} m from the stop")
     if late_s is not None and not late_s <= LATE_TOLERANCE_S:
         reasons.append(f"arrived {late_s:.2f} s late")
     if overspeed_kmh is not None and not overspeed_kmh <= OVERSPEED_TOLERANCE_KMH:

@@ -52,6 +52,12 @@ def number(value: Any, spec: str = ".3f") -> str:
     return text
 
 
+def signed(value: Any, places: int = 3) -> str:
+    """``value`` with its sign always shown, ``places`` decimals, by :func:`number`: a difference
+    or an error ('+0.120', '-1.500'); one that rounds to zero prints as '+0.000', never '-0.000'."""
+    return number(value, f"+.{places}f")
+
+
 # Units as the published formats spell them (TTOBench, OSRD), by dimension: [SI] per [unit].
 BY_DIMENSION = {
     "mass": {"kg": 1.0, "t": TONNE},

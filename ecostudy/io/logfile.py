@@ -295,7 +295,7 @@ def check_jumps(log: "LoggedRun", path: Where) -> None:
     jumps = np.nonzero(off > max(JUMP, noise) + 0.5 * by_speed)[0]
     if 0 < jumps.size <= JUMP_SHARE * off.size:
         i = int(jumps[0])
-        raise InputError(problem(path, log.columns[0], f"row {i + 2}: the position jumps by {log.x[i + 1] - log.x[i]:+.0f} m "
+        raise InputError(problem(path, log.columns[0], f"row {i + 2}: the position jumps by {units.signed(log.x[i + 1] - log.x[i], 0)} m "
                                  f"in {log.t[i + 1] - log.t[i]:g} s, the speeds give {by_speed[i]:.1f} m "
                                  f"({jumps.size} such step{'s' if jumps.size > 1 else ''}; a GPS jump, or a distance that "
                                  "restarts: positions are track positions, the track file's)"))

@@ -9,7 +9,7 @@ a misspelt attribute is an error mypy and the interpreter name, a misspelt key i
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional
 
-from ecostudy.core.units import number
+from ecostudy.core.units import number, signed
 
 
 # Keys as ecostudy before the one naming rule (ecostudy.core.columns) wrote them: a folder written
@@ -65,10 +65,10 @@ class Verification:
     def errors(self) -> str:
         """The re-simulation's errors as the run's status and the screen print them (the net energy's
         where it was measured)."""
-        net = "" if self.net_energy_error_pct is None else f", net energy {number(self.net_energy_error_pct, '+.3f')} % of traction"
+        net = "" if self.net_energy_error_pct is None else f", net energy {signed(self.net_energy_error_pct, 3)} % of traction"
         grip = "" if self.adhesion_use_max is None else f", adhesion use {self.adhesion_use_max:.3f} of mu(v) m_adh g"
-        return (f"arrival {number(self.arrival_time_error_s, '+.3f')} s, stop {number(self.stop_error_m, '+.3f')} m, "
-                f"energy {number(self.energy_error_pct, '+.3f')} %{net}, overspeed {number(self.overspeed_max_kmh)} km/h{grip}")
+        return (f"arrival {signed(self.arrival_time_error_s, 3)} s, stop {signed(self.stop_error_m, 3)} m, "
+                f"energy {signed(self.energy_error_pct, 3)} %{net}, overspeed {number(self.overspeed_max_kmh)} km/h{grip}")
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Verification":

@@ -5,7 +5,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ecostudy.analysis.energyflow import run_energy_flow
-from ecostudy.core.units import PERMILLE, number, to_kmh, to_kwh
+from ecostudy.core.units import PERMILLE, number, signed, to_kmh, to_kwh
 from ecostudy.report import style
 
 SPEED_LIMIT = "speed limit (train length)"
@@ -228,6 +228,6 @@ def energy_plot(result, path=None, fmt=None, dpi=None):
     ax.set_ylabel("energy [kWh]")
     ax.grid(alpha=0.3, axis="y")
     ax.set_title(f"{s['train']} - {s['from']} to {s['to']}: energy flow\nbalance residual "
-                 f"{number(to_kwh(flow.residual), '+.4f')} kWh ({number(100 * flow.residual / max(flow.traction, 1e-9), '+.3f')} % of "
+                 f"{signed(to_kwh(flow.residual), 4)} kWh ({signed(100 * flow.residual / max(flow.traction, 1e-9), 3)} % of "
                  "the traction at the wheel)", fontsize=9)
     return _save(fig, path, fmt, dpi)

@@ -247,11 +247,11 @@ class StudyRun(NamedTuple):
     rows: dict
 
 
-def run_kind(kind, path, workers=1, dask=None, retry_failed=False, out=None, progress=None):
+def run_kind(kind, path, workers=1, dask=None, retry_failed=False, out=None, progress=None, draw=None):
     """The one study engine: a study file of ``kind`` expanded into cases, then
-    :func:`run_expanded`. Returns (table, counts, output folder)."""
+    :func:`run_expanded` (``draw``: its files beside the table). Returns (table, counts, output folder)."""
     expanded = kind_named(kind).expand(Path(path))
-    return run_expanded(kind, expanded, path, workers, dask, retry_failed, out, progress)[:3]
+    return run_expanded(kind, expanded, path, workers, dask, retry_failed, out, progress, draw)[:3]
 
 
 def kind_named(kind):
