@@ -58,7 +58,7 @@ def test_an_unusable_solve_mid_trip_applies_the_shifted_plan_and_steps_csv_says_
     assert (steps.loc[capped[1:], "handle"] > -1.0).all()  # no full braking mid-trip
     assert steps.loc[capped[1:], "speed_mps"].min() > 5.0  # mid-trip indeed
     counts = step_counts(controller)
-    assert all((steps["fallback"] == kind).sum() == counts[f"fallback_{kind}"] for kind in KINDS)
+    assert all((steps["fallback"] == kind).sum() == counts[f"fallback_{kind}_count"] for kind in KINDS)
     assert counts["fallback_full_brake_count"] == 1  # at the stand only (a braking plan leaning on the
     # relaxation near the stop of this coarse grid goes to the eq. 6.8 reserve, not a full brake)
     assert abs(result.stop_error_m) < 0.5 and result.overspeed_max_kmh == 0.0
