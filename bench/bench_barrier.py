@@ -20,7 +20,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
-from ecostudy.core.units import to_kwh  # noqa: E402
+from ecostudy.core.units import signed, to_kwh  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp import problem, session, solver  # noqa: E402
 
@@ -78,7 +78,7 @@ def main():
             iterations, _, energy, status = rows[-1]
             cpu = statistics.median(r[1] for r in rows)
             table.add(name, points, key, f"{iterations} ({status})", f"{cpu:.3f}", f"{cpu / base:.2f}",
-                      f"{energy:.6f}", f"{100 * (energy / e0 - 1):+.5f}")
+                      f"{energy:.6f}", signed(100 * (energy / e0 - 1), 5))
 
 
 if __name__ == "__main__":

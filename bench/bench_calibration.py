@@ -28,6 +28,7 @@ from ecostudy.calibration.generate import (  # noqa: E402
     follow_work, generate_log, level_track, steady_log, steep_track, true_train)
 from ecostudy.calibration.validate import validate_log  # noqa: E402
 from ecostudy.calibration.estimate import calibrate_logs  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.io.logfile import parse_log, write_log  # noqa: E402
 
@@ -134,9 +135,9 @@ def validate_check(count, track, train):
         for row, (model, true) in zip(table.itertuples(), follow_work(clean, track, truth, train)):
             independent = 100 * (model - true) / true
             gaps.append(row.traction_difference_pct - independent)
-            print(f"{seed:3d} {row.run:3d} {row.traction_difference_pct:11.3f} {independent:14.3f} {gaps[-1]:+12.3f}")
+            print(f"{seed:3d} {row.run:3d} {row.traction_difference_pct:11.3f} {independent:14.3f} {signed(gaps[-1], 3):>12}")
     print(f"validate against the independent computation: largest gap {np.max(np.abs(gaps)):.3f} percentage points "
-          f"over {len(gaps)} runs (mean {np.mean(gaps):+.3f})")
+          f"over {len(gaps)} runs (mean {signed(np.mean(gaps), 3)})")
 
 
 def steep_check(count, train):

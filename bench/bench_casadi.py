@@ -32,7 +32,7 @@ sys.path.insert(0, str(ROOT))
 from bench import harness  # noqa: E402
 from ecostudy.core.kinematics import interval_davis, interval_grade_force  # noqa: E402
 from ecostudy.core.physics import interval_resistance, line_energy, smooth_table  # noqa: E402
-from ecostudy.core.units import to_kwh  # noqa: E402
+from ecostudy.core.units import signed, to_kwh  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp import problem, session, space  # noqa: E402
 
@@ -183,7 +183,7 @@ def main():
                       f"{te:.2f}", f"{e['iterations']} ({e['ipopt']})", f"{tc:.2f}", f"{c['iterations']} ({c['ipopt']})",
                       f"{te / tc:.2f}", f"{eco.median('ipopt_s'):.2f} / {cas.median('ipopt_s'):.2f}",
                       f"{e['energy_kWh']:.4f}", f"{c['energy_kWh']:.4f}",
-                      f"{100 * (e['energy_kWh'] - c['energy_kWh']) / abs(c['energy_kWh']):+.4f}")
+                      signed(100 * (e['energy_kWh'] - c['energy_kWh']) / abs(c['energy_kWh']), 4))
     print()
     growth = harness.Table(["case", "K", "ecostudy growth", "CasADi growth"])
     for name, rows in base.items():

@@ -23,6 +23,7 @@ from ecostudy.control.estimator import MassEstimator  # noqa: E402
 from ecostudy.control.loop import run_loop  # noqa: E402
 from ecostudy.core.plant import Plant, Truth  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp.problem import prepare  # noqa: E402
 
@@ -75,7 +76,7 @@ def main():
             else:
                 controller = Replanning(prepare(track, train, "Rokin", "Centraal", args.points), 76.0, estimator=estimator)
             r = harness.sample(lambda c: drive(plant, c, params, estimator), controller)
-            table.add(f"{scale:.1f}", name, f"{r['stop_error_m']:+.2f}", f"{r['arrival_s']:.2f}", f"{r['traction_kWh']:.3f}",
+            table.add(f"{scale:.1f}", name, signed(r['stop_error_m'], 2), f"{r['arrival_s']:.2f}", f"{r['traction_kWh']:.3f}",
                       f"{r['overspeed_kmh']:.2f}", f"{r['solve_mean_s']:.3f}", f"{r['solve_p95_s']:.3f}",
                       f"{r['solve_max_s']:.3f}", r["failures"], r["mass_estimate"], f"{r['wall_s']:.1f}")
 

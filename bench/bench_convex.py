@@ -32,6 +32,7 @@ from ecostudy.control.loop import run_loop  # noqa: E402
 from ecostudy.core.grid import make_segment  # noqa: E402
 from ecostudy.core.plant import Plant  # noqa: E402
 from ecostudy.core.types import State  # noqa: E402
+from ecostudy.core.units import number, signed  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp.convex import ConvexProgram, ConvexWeights, trapezoid_grid  # noqa: E402
 
@@ -166,7 +167,7 @@ def main():
     for key, (name, _) in SOLVERS.items():
         r = runs[f"convex.{key}"]
         table.add(name, f"{1e3 * r.median('wall_s'):.1f}", r.last("iterations"), f"{r.last('arrival_s'):.3f}",
-                  f"{r.last('gap'):.1e}", f"{r.last('objective') - reference:+.1e}")
+                  f"{r.last('gap'):.1e}", number(r.last('objective') - reference, '+.1e'))
     print()
     table = harness.Table(["K", "steps", "solve mean [ms]", "p95 [ms]", "max [ms]", "steps over 100 ms", "arrival [s]",
                            "energy [J/kg]", "stop error [m]"])
@@ -175,7 +176,7 @@ def main():
         result = run_loop(Plant(segment, train), controller, 0.1, plant_step=0.1)
         s = 1e3 * np.array([x for x in controller.solve_seconds if x > 0])
         table.add(k, s.size, f"{s.mean():.1f}", f"{np.percentile(s, 95):.1f}", f"{s.max():.1f}", int(np.sum(s > 100)),
-                  f"{result.arrival_time_s:.2f}", f"{result.traction_work / train.mass:.2f}", f"{result.stop_error_m:+.3f}")
+                  f"{result.arrival_time_s:.2f}", f"{result.traction_work / train.mass:.2f}", signed(result.stop_error_m, 3))
 
 
 if __name__ == "__main__":

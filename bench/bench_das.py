@@ -14,6 +14,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.das.methods import das_run  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
@@ -65,9 +66,9 @@ def main():
         for method in ("round", "phases", "minlp"):
             d, _, wall = harness.timed(lambda: das_run(ato, method, time_limit=args.time_limit)[0])
             vs_fine = 100 * (d["traction_energy_kWh"] / fine.summary["traction_energy_kWh"] - 1)
-            table.add(method, f"{d['traction_energy_kWh']:.4f}", f"{d['gap_to_ato_pct']:+.3f}",
-                      f"{d['gap_to_ato_on_time_pct']:+.3f}", f"{vs_fine:+.3f}", f"{d['arrival_error_s']:+.3f}",
-                      f"{d['stop_error_m']:+.3f}", d["mode_changes"], f"{wall:.1f}", d["status"])
+            table.add(method, f"{d['traction_energy_kWh']:.4f}", signed(d['gap_to_ato_pct'], 3),
+                      signed(d['gap_to_ato_on_time_pct'], 3), signed(vs_fine, 3), signed(d['arrival_error_s'], 3),
+                      signed(d['stop_error_m'], 3), d["mode_changes"], f"{wall:.1f}", d["status"])
             if method == "minlp":
                 minlp_rows.append((name, d))
         print()

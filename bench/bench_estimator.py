@@ -21,6 +21,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.ocp.solver import configure  # noqa: E402
 from ecostudy.studies.estimator_trips import estimator_trip  # noqa: E402
 
@@ -59,8 +60,8 @@ def main():
             trips = []
             for trip in pool.imap(run, range(args.first, args.first + args.seeds)):
                 trips.append(trip)
-                cells = [f"{100 * trip.errors[m]:+.3f}" if m in trip.errors else "-" for m in MARKS]
-                table.add(trip.seed, *cells, "-" if trip.stop_error_m is None else f"{trip.stop_error_m:+.3f}")
+                cells = [signed(100 * trip.errors[m], 3) if m in trip.errors else "-" for m in MARKS]
+                table.add(trip.seed, *cells, "-" if trip.stop_error_m is None else signed(trip.stop_error_m, 3))
             return trips
 
     trips, _, wall = harness.timed(all_trips)

@@ -24,7 +24,7 @@ from bench import harness  # noqa: E402
 from ecostudy.analysis.tables import handles  # noqa: E402
 from ecostudy.core.plant import Plant  # noqa: E402
 from ecostudy.core.types import State  # noqa: E402
-from ecostudy.core.units import to_kwh  # noqa: E402
+from ecostudy.core.units import signed, to_kwh  # noqa: E402
 from ecostudy.io.loaders import load_track, train_from_dict  # noqa: E402
 from ecostudy.ocp.problem import prepare  # noqa: E402
 from ecostudy.ocp.restart import Replanner  # noqa: E402
@@ -89,8 +89,8 @@ def main():
     for k in args.points:
         r = run(track, train, k)
         table.add(k, r["ipopt"], r["iterations"], f"{r['seconds']:.1f}", f"{r['model_kWh']:.3f}",
-                  f"{100 * (r['model_kWh'] / GPOPS_KWH - 1):+.3f} %", f"{r['simulated_kWh']:.3f}",
-                  f"{100 * (r['simulated_kWh'] / GPOPS_KWH - 1):+.3f} %", f"{r['simulated_time_s']:.2f}",
+                  f"{signed(100 * (r['model_kWh'] / GPOPS_KWH - 1), 3)} %", f"{r['simulated_kWh']:.3f}",
+                  f"{signed(100 * (r['simulated_kWh'] / GPOPS_KWH - 1), 3)} %", f"{r['simulated_time_s']:.2f}",
                   f"{r['simulated_end_speed']:.3f}")
 
 

@@ -14,6 +14,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.heuristics import ecodrive  # noqa: E402
 from ecostudy.core.errors import InfeasibleError  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
@@ -65,7 +66,7 @@ def main():
                     table.add(trk, f"{t:.2f}", f"{e_opt:.4f}", heuristic.__name__, exc, "", "", "")
                     continue
                 table.add(trk, f"{t:.2f}", f"{e_opt:.4f}", row["strategy"], f"{row['traction_energy_kWh']:.4f}",
-                          f"{100 * (row['traction_energy_kWh'] / e_opt - 1):+.2f}", f"{row['running_time_s'] - t:+.3f}",
+                          signed(100 * (row['traction_energy_kWh'] / e_opt - 1), 2), signed(row['running_time_s'] - t, 3),
                           f"{wall:.2f}")
 
 

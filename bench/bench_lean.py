@@ -44,7 +44,7 @@ from bench import harness  # noqa: E402
 from bench.bench_casadi import objective_expr  # noqa: E402
 from ecostudy.core.kinematics import interval_davis, interval_grade_force  # noqa: E402
 from ecostudy.core.physics import interval_resistance, smooth_table  # noqa: E402
-from ecostudy.core.units import to_kwh  # noqa: E402
+from ecostudy.core.units import signed, to_kwh  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp import problem, session, solver, space  # noqa: E402
 from pyomo.contrib.pynumero.interfaces.ampl_nlp import AslNLP  # noqa: E402
@@ -233,7 +233,7 @@ def main():
                       f"{te:.2f}", f"{e['iterations']} ({e['ipopt']})", f"{tl:.2f}", f"{c['iterations']} ({c['ipopt']})",
                       f"{te / tl:.2f}", f"{ce:.2f} / {cl:.2f}", f"{ce / cl:.2f}",
                       f"{eco.median('ipopt_s'):.2f} / {lean.median('ipopt_s'):.2f}", f"{e['energy_kWh']:.4f}",
-                      f"{c['energy_kWh']:.4f}", f"{100 * (e['energy_kWh'] - c['energy_kWh']) / abs(c['energy_kWh']):+.4f}")
+                      f"{c['energy_kWh']:.4f}", signed(100 * (e['energy_kWh'] - c['energy_kWh']) / abs(c['energy_kWh']), 4))
     print()
     growth = harness.Table(["case", "K", "ecostudy growth (wall / CPU)", "lean growth (wall / CPU)"])
     for name, rows in grown.items():

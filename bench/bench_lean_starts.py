@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
 from ecostudy.core.types import Trajectory  # noqa: E402
-from ecostudy.core.units import to_kwh  # noqa: E402
+from ecostudy.core.units import signed, to_kwh  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp import problem, session, solver, space  # noqa: E402
 
@@ -93,7 +93,7 @@ def main():
         first = kwh if first is None else first
         table.add(name, f"{statistics.median(r[0] for r in runs):.2f}", f"{outcome.iterations} ({outcome.status})",
                   f"{timers.get('PDSystemSolverTotal', float('nan')):.2f}",
-                  f"{timers.get('Function Evaluations', float('nan')):.2f}", f"{kwh:.6f}", f"{100 * (kwh - first) / first:+.5f}")
+                  f"{timers.get('Function Evaluations', float('nan')):.2f}", f"{kwh:.6f}", signed(100 * (kwh - first) / first, 5))
 
 
 if __name__ == "__main__":

@@ -28,6 +28,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.ocp import solver  # noqa: E402
 
 solver.configure()
@@ -212,7 +213,7 @@ def replay(a):
         else:
             rel = (costs - base_costs) / np.maximum(np.abs(base_costs), 1e-9)
             line += (f" costs lower/equal/higher (0.1 %) {np.sum(rel < -1e-3)}/{np.sum(np.abs(rel) <= 1e-3)}/"
-                     f"{np.sum(rel > 1e-3)} largest rise {100 * np.nanmax(rel):+.2f} % sum cost {np.nansum(costs):.5f} "
+                     f"{np.sum(rel > 1e-3)} largest rise {signed(100 * np.nanmax(rel), 2)} % sum cost {np.nansum(costs):.5f} "
                      f"vs {np.nansum(base_costs):.5f}")
         print(line, flush=True)
         if a.per_task:

@@ -21,6 +21,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.ocp.solver import configure  # noqa: E402
 from ecostudy.studies.closedloop import _trip, expand  # noqa: E402
 
@@ -61,7 +62,7 @@ def main():
             r = harness.sample(trip, case)
             cpu.append(r["cpu_s"])
             table.add(spec.name, case["labels"]["draw"], r["status"], r["samples"], f"{r['cpu_s']:.1f}",
-                      f"{r['wall_s']:.1f}", f"{r['solve_mean_ms']:.1f}", f"{r['stop_error_m']:+.3f}",
+                      f"{r['wall_s']:.1f}", f"{r['solve_mean_ms']:.1f}", signed(r['stop_error_m'], 3),
                       f"{r['energy_J_per_kg']:.1f}")
         projected = study.draws * float(np.mean(cpu))
         total += projected

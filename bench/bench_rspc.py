@@ -25,6 +25,7 @@ from bench.bench_das import TRIPS  # noqa: E402  (the two cases of Farooqi 2018 
 from ecostudy.control.loop import run_loop  # noqa: E402
 from ecostudy.control.rspc import Rspc  # noqa: E402
 from ecostudy.core.plant import Plant, Truth  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.heuristics.ecodrive import drive, eco_coasting  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp.problem import prepare  # noqa: E402
@@ -77,7 +78,7 @@ def main():
 
     def row(name, n, label, truth):
         r = harness.sample(lambda c: drive_rspc(*c, args.sample, n, truth), cases[name])
-        table.add(name, n, label, f"{r['energy_kWh']:.3f}", f"{r['arrival_s']:.2f}", f"{r['stop_error_m']:+.3f}",
+        table.add(name, n, label, f"{r['energy_kWh']:.3f}", f"{r['arrival_s']:.2f}", signed(r['stop_error_m'], 3),
                   f"{r['overspeed_kmh']:.2f}", f"{r['solve_mean_ms']:.1f} / {r['solve_p95_ms']:.1f} / {r['solve_max_ms']:.1f}",
                   r["mode_changes"], r["failures"], f"{r['wall_s']:.1f}", r["modes"])
 

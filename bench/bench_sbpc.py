@@ -41,6 +41,7 @@ from ecostudy.control.sbpc import TRANSCRIPTIONS, VARIANTS, Sbpc  # noqa: E402
 from ecostudy.control.sppc import Sppc  # noqa: E402
 from ecostudy.core.plant import Plant, Truth  # noqa: E402
 from ecostudy.core.types import State, Timing  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp.problem import prepare  # noqa: E402
 from ecostudy.ocp.solver import configure  # noqa: E402
@@ -148,10 +149,10 @@ def draws_table(study, draws, workers, only, skip=0, model=True):
                 runs.append((row, wall))
                 s = row["summary"] or {}
                 print(f"  {name} draw {case['labels']['draw']}: {row['status']} stop "
-                      f"{s.get('stop_error_m', float('nan')):+.3f} m, arrival {s.get('arrival_s', float('nan')):.2f} s, "
+                      f"{signed(s.get('stop_error_m', float('nan')), 3)} m, arrival {s.get('arrival_s', float('nan')):.2f} s, "
                       f"{wall:.0f} s wall, overspeed {s.get('overspeed_max_kmh', float('nan')):.2f} km/h, "
                       f"{s.get('energy_J_per_kg', float('nan')):.1f} J/kg, lateness: plan part "
-                      f"{s.get('parts', (np.nan,) * 2)[0]:+.2f} s, approach part {s.get('parts', (np.nan,) * 2)[1]:+.2f} s",
+                      f"{signed(s.get('parts', (np.nan,) * 2)[0], 2)} s, approach part {signed(s.get('parts', (np.nan,) * 2)[1], 2)} s",
                       file=sys.stderr, flush=True)
             print(draws_row(name, runs[0][0] if model else None, runs[model:], mine[0]["window"][1]), flush=True)
 
@@ -163,8 +164,8 @@ def draws_row(name, model, runs, arrival):
     late = np.array([x["arrival_s"] for x in s]) - arrival
     ratio = np.array([x["energy_J_per_kg"] for x in s]) / (model["summary"]["energy_J_per_kg"] if model else np.nan)
     statuses = {k: sum(r["status"] == k for r, _ in runs) for k in ("ok", "flagged", "failed")}
-    return (f"| {name} | {len(s)} of {len(runs)} | {np.max(np.abs(e)):.3f} / {np.median(e):+.3f} | "
-            f"{int(np.sum(np.abs(e) <= 1.0))} | {np.median(late):+.2f} / {np.max(late):+.2f} | "
+    return (f"| {name} | {len(s)} of {len(runs)} | {np.max(np.abs(e)):.3f} / {signed(np.median(e), 3)} | "
+            f"{int(np.sum(np.abs(e) <= 1.0))} | {signed(np.median(late), 2)} / {signed(np.max(late), 2)} | "
             f"{max(x['overspeed_max_kmh'] for x in s):.2f} | {ratio.mean():.3f} ({ratio.min():.3f}-{ratio.max():.3f}) | "
             f"{' '.join(f'{k} {n}' for k, n in statuses.items() if n)} | {np.mean([w for _, w in runs]):.0f} |")
 
@@ -203,7 +204,7 @@ def main():
     def drive(name, block, label, controller, driven, truth):
         """Run the loop and print one table row."""
         r = harness.sample(lambda _: loop_report(case, train, controller, driven, truth, args.sample), None)
-        table.add(name, block, label, f"{r['energy_kWh']:.3f}", f"{r['arrival_s']:.2f}", f"{r['stop_error_m']:+.3f}",
+        table.add(name, block, label, f"{r['energy_kWh']:.3f}", f"{r['arrival_s']:.2f}", signed(r['stop_error_m'], 3),
                   f"{r['overspeed_kmh']:.2f}", f"{r['solve_mean_s']:.2f} / {r['solve_max_s']:.2f}",
                   f"{r['iterations']:.1f}", r["softened"], f"{r['wall_s']:.0f}", f"{r['cpu_s']:.1f}")
 

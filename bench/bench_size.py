@@ -33,7 +33,7 @@ sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
 from ecostudy.core.physics import Envelope  # noqa: E402
-from ecostudy.core.units import to_kwh  # noqa: E402
+from ecostudy.core.units import signed, to_kwh  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.network import legs  # noqa: E402
 from ecostudy.ocp import problem, session, solver, space, timedomain  # noqa: E402
@@ -117,7 +117,7 @@ def main():
             flag = "" if r["status"] == "optimal" else f" ({r['status']})"
             table.add(name, " + ".join(cuts) or "none", r["variables"], r["constraints"], r["kkt"],
                       f"{r['iterations']}{flag}", f"{r['ms']:.1f}", f"{r['seconds']:.2f}", f"{r['energy']:.4f}",
-                      f"{100 * (r['energy'] - full) / full:+.3f} %")
+                      f"{signed(100 * (r['energy'] - full) / full, 3)} %")
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.report.files import write_run  # noqa: E402
 from ecostudy.analysis.single import solve_run  # noqa: E402
@@ -86,7 +87,7 @@ def main():
     for k in args.points:
         e = 100 * (energies[("energy", k)][0] / energies[("energy", kmax)][0] - 1)
         t = 100 * (energies[("time", k)][1] / energies[("time", kmax)][1] - 1)
-        accuracy.add(k, f"{e:+.4f}", f"{t:+.4f}")
+        accuracy.add(k, signed(e, 4), signed(t, 4))
     lines.append(accuracy.text())
     if args.cli_points:
         lines += ["", "### whole command: `ecostudy solve --track T --train R --time S --points K --out DIR` "

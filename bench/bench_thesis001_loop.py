@@ -31,6 +31,7 @@ from ecostudy.control.loop import run_loop  # noqa: E402
 from ecostudy.core.grid import make_segment  # noqa: E402
 from ecostudy.core.physics import Envelope  # noqa: E402
 from ecostudy.core.plant import Noise, Plant, Truth  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.ocp.convex import ConvexProgram, ConvexWeights, trapezoid_grid  # noqa: E402
 
@@ -54,7 +55,7 @@ def row(name, result, controller, train, mass=1.0):
     gaps = np.array(controller.gaps)
     f = controller.fallbacks
     return (f"| {name} | {result.arrival_time_s:.2f} | {result.traction_work / (train.mass * mass):.2f} | "
-            f"{result.stop_error_m:+.3f} | {result.overspeed_max_kmh:.2f} | {gaps.max():.1e} | "
+            f"{signed(result.stop_error_m, 3)} | {result.overspeed_max_kmh:.2f} | {gaps.max():.1e} | "
             f"{np.mean(gaps > 1e-6):.0%} | {controller.softened} | {f['shifted_plan']} / {f['reserve']} / "
             f"{f['full_brake']} | {s.mean():.0f} / {np.percentile(s, 95):.0f} / {s.max():.0f}")
 
@@ -104,7 +105,7 @@ def main():
         runs[c["figure"]] = result
         print(row(f"Fig. {c['figure']} ({c['time_weight']:g}/{c['energy_weight']:g}, T_max {c['latest_s']:g} s)",
                   result, controller, train)
-              + f" | {c['published_time_s']}, {c['published_energy_J_per_kg']}, {c['published_stop_m'] - 1000:+.2f} |")
+              + f" | {c['published_time_s']}, {c['published_energy_J_per_kg']}, {signed(c['published_stop_m'] - 1000, 2)} |")
     if args.table1:
         return
     leader = runs["9.4"]

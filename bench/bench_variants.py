@@ -25,6 +25,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 import ecostudy.ocp.space as model  # noqa: E402
 import ecostudy.analysis.single as single  # noqa: E402
 import ecostudy.ocp.problem as run  # noqa: E402
@@ -116,8 +117,8 @@ def main():
                 table.add(name, k, "-", "-", r.status[:70], "-", "-", "-", "-")
             else:
                 table.add(name, k, f"{r.median('solve_s'):.3f}", r.last("iterations"), r.last("ipopt"),
-                          f"{100 * (r.last('energy_kWh') / ref - 1):+.4f}", r.last("verified"),
-                          f"{r.last('stop_error_m'):+.3f}", f"{r.last('overspeed_kmh'):.3f}")
+                          signed(100 * (r.last('energy_kWh') / ref - 1), 4), r.last("verified"),
+                          signed(r.last('stop_error_m'), 3), f"{r.last('overspeed_kmh'):.3f}")
     text = "\n".join(lines) + "\n" + table.text() + "\n"
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -38,6 +38,7 @@ import pyomo.environ as pyo
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.ocp import solver  # noqa: E402
 
 solver.configure()
@@ -160,7 +161,7 @@ def replay(tasks, variants, partial=False):
         if not fits:  # primal only: (b) is (a)
             for v in variants:
                 rows[v].append(rows["a"][-1])
-        print(f"  {task[1]:22s} fits {fits!s:5s} " + " ".join(f"{v} {rows[v][-1][0]:4d} it {rows[v][-1][2]:+.5f}"
+        print(f"  {task[1]:22s} fits {fits!s:5s} " + " ".join(f"{v} {rows[v][-1][0]:4d} it {signed(rows[v][-1][2], 5)}"
                                                            for v in rows), flush=True)
     return rows
 
@@ -178,9 +179,9 @@ def table(strategy, rows):
         lower = sum(x < -1e-3 for x in rel)
         higher = sum(x > 1e-3 for x in rel)
         name = "(a) primal start" if v == "a" else f"(b) mu_init {v.split(':')[0]}, push {v.split(':')[1]}"
-        print(f"| {name} | {it} | {100 * (it / it0 - 1):+.1f} % | {sum(r[1] for r in rs):.1f} | "
+        print(f"| {name} | {it} | {signed(100 * (it / it0 - 1), 1)} % | {sum(r[1] for r in rs):.1f} | "
               f"{sum(not r[3] for r in rs)} | {lower} / {len(rs) - lower - higher} / {higher} | "
-              f"{100 * max(rel, default=0.0):+.3f} % |", flush=True)
+              f"{signed(100 * max(rel, default=0.0), 3)} % |", flush=True)
 
 
 def main():

@@ -16,6 +16,7 @@ sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
 from ecostudy.core.types import Timing  # noqa: E402
+from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.analysis.single import solve_run  # noqa: E402
 
@@ -33,7 +34,7 @@ def main():
         e = r.summary["traction_energy_J_per_kg"]
         pub = case["published_energy_J_per_kg"]
         table.add(case["track"], case["figure"], case["running_time_s"], f"{pub:.2f}", f"{e:.2f}",
-                  f"{100 * (e / pub - 1):+.1f}", r.summary["solver"]["status"], r.summary["verification"]["passed"])
+                  signed(100 * (e / pub - 1), 1), r.summary["solver"]["status"], r.summary["verification"]["passed"])
     print(f"`python bench/compare_published.py --points {args.points}`\n")
     print(table.text())
 
