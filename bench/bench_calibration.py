@@ -70,7 +70,7 @@ def one_log(seed):
     """(true parameters, the calibration's table as records, its status, innovation drift, fit seconds)."""
     track, train, truth, log = drawn_log(seed)
     result, _, seconds = harness.timed(lambda: calibrate_logs([log], track, train, DEFAULT_FIT))
-    return priors(truth), result.table.to_dict("records"), result.status, result.quality["structure"], seconds
+    return priors(truth), result.table.to_dict("records"), result.status, result.quality["structure_ratio"], seconds
 
 
 def coverage(count, workers):

@@ -34,12 +34,14 @@ from ecostudy.core.types import Timing  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 
 
-def uniform(segment, points):
+def uniform(segment, points, extra=()):
+    """``points`` equal intervals (``extra``, make_grid's window positions: none on this trip)."""
     return np.linspace(0.0, segment.distance, points)
 
 
-def trapezoidal(segment, points, ramp=0.15, ratio=5.0):
-    """Node density low-to-high over the first ``ramp`` share of the run, mirrored at the end."""
+def trapezoidal(segment, points, extra=(), ramp=0.15, ratio=5.0):
+    """Node density low-to-high over the first ``ramp`` share of the run, mirrored at the end
+    (``extra``, make_grid's window positions: none on this trip)."""
     u = np.linspace(0.0, 1.0, 20001)
     density = np.clip(np.minimum(u, 1 - u) / ramp, 0, 1) * (ratio - 1) + 1  # spacing grows ratio-fold
     spacing = density / density.sum()
