@@ -268,7 +268,7 @@ TIE = 1e-6             # [-] a cold leg's trapezoidal run replaces its guess's r
 CHECK_EVERY = 3        # one warm leg in this many is also solved cold (:func:`warmth`)
 # Ipopt iterations a warm solve may take (:func:`_solve`): a checked warm leg that stops there gives
 # way to its cold solve, any other is solved again with Ipopt's defaults. On the shipped studies the
-# warm solves that finish take at most 317 (20-stop); the outliers are a checked one at 1156 (3-train,
+# warm solves that finish take at most 323 (20-stop); the outliers are a checked one at 1156 (3-train,
 # dissension) to an optimum 6.35 % dearer than its cold one (147), and warm solves that end at Ipopt's
 # own cap of 3000 without a usable point (3-train, rule 7.7: 3000 iterations, 20.7 CPU s, then 366
 # with the defaults)
