@@ -7,7 +7,7 @@ import pytest
 
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.network import fleet, legs, scoring
-from ecostudy.network.strategies import guard_counts
+from ecostudy.network.strategies import guard_counts, not_optimal
 from ecostudy.ocp import session, timedomain
 from pyomo.environ import value as pyo_value
 
@@ -74,13 +74,50 @@ def test_a_checked_warm_leg_stopped_at_its_cap_gives_way_to_its_cold_solve(one_l
     task = (leg, "T1 leg 1", f.dt, None, guess, legs.CHECKED, None, None, None, None)
     free, _ = legs.solve_leg(task)
     assert "warm_capped_at" not in free.notes  # the shipped cap leaves this leg's warm solve alone
-    monkeypatch.setattr(legs, "CHECKED_MAX_ITER", 3)  # a cap the warm solve cannot finish within
+    monkeypatch.setattr(legs, "WARM_MAX_ITER", 3)  # a cap the warm solve cannot finish within
     run, outcome = legs.solve_leg(task)
     assert run.notes["warm_capped_at"] == 3 and run.notes["replaced_by_cold"]
     assert outcome.optimal and scoring.verify_leg(leg, run)["passed"]
     assert run.p.sum() == pytest.approx(cold.p.sum(), rel=1e-6)  # the cold solve's optimum
     counts = guard_counts([[run]])
     assert counts["legs_checked_cold_count"] == 1 and counts["legs_warm_capped_count"] == 1 and counts["legs_replaced_by_cold_count"] == 1
+
+
+def pumping_start(f, leg):
+    """A feasible run of the leg that is far from its optimum: its optimum under a traction weight of
+    0.3 (traction and regeneration pumped, about 3x the plain cost), every force given."""
+    weights = np.full(f.steps, 0.3)
+    run, outcome = legs.solve_leg((leg, "pumping", f.dt, None, fleet._guess(f, leg), False, weights, None, None, None))
+    assert outcome.optimal
+    return run.s, run.v, run.ft, run.fb, run.fr
+
+
+def test_a_warm_leg_stopped_at_its_cap_is_solved_again_never_kept_unproven(one_leg, monkeypatch):
+    f, leg, cold = one_leg
+    task = (leg, "T1 leg 2", f.dt, None, pumping_start(f, leg), True, None, None, None, None)
+    free, _ = legs.solve_leg(task)
+    monkeypatch.setattr(legs, "WARM_MAX_ITER", 0)  # the warm solve stops at its (feasible) start
+    nlp = legs.LegNLP(task)
+    capped = nlp.solve({**legs.NEAR_START, **legs.KKT, "max_iter": 0}, nlp.start(False))
+    assert capped.usable and capped.status == "max_iterations"  # a point the old rule would have kept
+    run, outcome = legs.solve_leg(task)  # solved again with Ipopt's defaults, to the optimum
+    assert outcome.optimal and run.notes is None
+    assert run.p.sum() == pytest.approx(free.p.sum(), rel=1e-6)
+    assert run.p.sum() == pytest.approx(cold.p.sum(), rel=1e-4)
+
+
+def test_a_leg_kept_at_a_point_ipopt_did_not_prove_optimal_flags_its_strategy(one_leg, monkeypatch):
+    f, leg, cold = one_leg
+    task = (leg, "T1 leg 1", f.dt, None, pumping_start(f, leg), True, None, None, None, None)
+    monkeypatch.setattr(legs, "WARM_MAX_ITER", 0)
+    monkeypatch.setattr(legs, "KKT", {**legs.KKT, "max_iter": 0})  # the second try stops at once, unusable
+    run, outcome = legs.solve_leg(task)  # the capped warm point is kept: usable, not optimal
+    assert outcome.status == "max_iterations" and run.notes == {"solver_status": "max_iterations"}
+    assert guard_counts([[run]])["legs_not_optimal_count"] == 1
+    assert not_optimal(f, [[run]], {}) == ["Ipopt ended T1 leg 1 max_iterations, not optimal"]
+    assert not_optimal(f, [[cold]], {"solver_status": "acceptable"}) == [
+        "Ipopt ended the joint NLP acceptable, not optimal"]
+    assert not_optimal(f, [[cold]], {"solver_status": "optimal"}) == []
 
 
 def test_a_cold_leg_keeps_the_cheaper_of_its_two_starts():

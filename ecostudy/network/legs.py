@@ -139,7 +139,7 @@ def solve_leg(task):
     nlp = LegNLP(task)
     checked = task[5] == CHECKED
     try:
-        run, outcome, cost = _solve(nlp, max_iter=CHECKED_MAX_ITER if checked else None)
+        run, outcome, cost = _solve(nlp, retry=not checked)
     except SolverError as exc:
         raise SolverError(_why_not_kept(task, exc)) from None
     notes = {}
@@ -163,6 +163,8 @@ def solve_leg(task):
         if standing_s(restart[0], task[0]) <= STAND_TIME_S:
             run, outcome, cost = restart
             notes["restarted"] = True
+    if not outcome.optimal:  # a usable point Ipopt did not prove optimal: the strategy is flagged
+        notes["solver_status"] = outcome.status
     return run._replace(notes=notes or None), outcome
 
 
@@ -264,10 +266,13 @@ STAND_TIME_S = 1.0     # [s] standing longer than this before the last metre: ar
 DEARER = 0.01          # [-] a warm leg dearer than its cold solve by more than this is replaced
 TIE = 1e-6             # [-] a cold leg's trapezoidal run replaces its guess's run only where cheaper by more
 CHECK_EVERY = 3        # one warm leg in this many is also solved cold (:func:`warmth`)
-# Ipopt iterations a checked warm leg may take: its cold solve follows, and replaces it where it
-# stops there. On the shipped studies the other checked warm legs take at most 317 (20-stop), the
-# one outlier 1156 (3-train, dissension) to an optimum 6.35 % dearer than its cold one (147)
-CHECKED_MAX_ITER = 500
+# Ipopt iterations a warm solve may take (:func:`_solve`): a checked warm leg that stops there gives
+# way to its cold solve, any other is solved again with Ipopt's defaults. On the shipped studies the
+# warm solves that finish take at most 323 (20-stop); the outliers are a checked one at 1156 (3-train,
+# dissension) to an optimum 6.35 % dearer than its cold one (147), and warm solves that end at Ipopt's
+# own cap of 3000 without a usable point (3-train, rule 7.7: 3000 iterations, 20.7 CPU s, then 366
+# with the defaults)
+WARM_MAX_ITER = 500
 CHECKED = "checked"    # a task's ``warm``: warm, and in the sample solved cold too
 # per task ``warm``, the notes of its solve from the trapezoidal start (the cost difference [%],
 # replaced) and the relative margin by which that solve must be cheaper to replace the first
@@ -354,21 +359,32 @@ def _relaxed_first(nlp, x0):
     return nlp.solve(KKT, x0)
 
 
-def _solve(nlp, cold=False, max_iter=None):
-    """(LegRun, outcome, cost) of one solve of a task's NLP: warm from its own start, near it; else
-    cold (:func:`_relaxed_first`) from its own start or, ``cold``, the trapezoidal one. A warm
-    solve that fails is tried again with Ipopt's defaults, unless ``max_iter`` caps it (a checked
-    warm leg, whose cold solve follows: then (None, outcome, inf) where it has no usable point)."""
+def _solve(nlp, cold=False, retry=True):
+    """(LegRun, outcome, cost) of one solve of a task's NLP: warm from its own start, near it, for at
+    most :data:`WARM_MAX_ITER` iterations; else cold (:func:`_relaxed_first`) from its own start or,
+    ``cold``, the trapezoidal one. A warm solve that fails or stops at the cap is tried again with
+    Ipopt's defaults where ``retry`` (a usable capped point kept only where that fails too); else
+    (a checked warm leg, whose cold solve follows) the capped outcome, (None, outcome, inf) where it
+    has no usable point."""
     label, warm = nlp.task[1], nlp.task[5] and not cold
-    tries = ({**NEAR_START, **KKT}, KKT) if warm else (KKT,)
-    if warm and max_iter is not None:
-        tries = ({**NEAR_START, **KKT, "max_iter": max_iter},)
-    for n, options in enumerate(tries, 1):
-        x0 = nlp.start(cold)
-        outcome = nlp.solve(options, x0) if warm else _relaxed_first(nlp, x0)
-        if outcome.usable:
-            return timedomain.leg_arrays(nlp.block), outcome, float(pyo.value(nlp.model.objective))
-        if max_iter is not None:
-            return None, outcome, float("inf")
-        if n == len(tries):
+    x0 = nlp.start(cold)
+    if not warm:
+        outcome = _relaxed_first(nlp, x0)
+        if not outcome.usable:
             raise SolverError(f"{label}: Ipopt {outcome.status} after {outcome.iterations} iterations")
+        return _kept(nlp, outcome)
+    outcome = nlp.solve({**NEAR_START, **KKT, "max_iter": WARM_MAX_ITER}, x0)
+    first = _kept(nlp, outcome) if outcome.usable else (None, outcome, float("inf"))
+    if not retry or (outcome.usable and outcome.status != "max_iterations"):
+        return first
+    again = nlp.solve(KKT, x0)
+    if again.usable:
+        return _kept(nlp, again)
+    if first[0] is not None:
+        return first
+    raise SolverError(f"{label}: Ipopt {again.status} after {again.iterations} iterations")
+
+
+def _kept(nlp, outcome):
+    """(LegRun, outcome, cost) of the point the last solve of ``nlp`` left in its model."""
+    return timedomain.leg_arrays(nlp.block), outcome, float(pyo.value(nlp.model.objective))

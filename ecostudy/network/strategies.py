@@ -200,16 +200,30 @@ def _scored(fleet, runs, info, wall, mapper=map):
         flags.append(f"train {missed['train']}'s head came within {missed['gap_m']:.1f} m of the tail of train "
                      f"{missed['ahead']} at {missed['time_s']:g} s, {missed['position_m']:.0f} m along the line: "
                      f"closer than buffer_m {fleet.buffer:g} m (network_trains.csv separation_min_m)")
+    flags += not_optimal(fleet, runs, info)
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
     return {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
+
+
+def not_optimal(fleet, runs, info):
+    """The flags of a strategy whose runs rest on a point Ipopt did not prove optimal (a usable
+    point kept: ``legs.solve_leg``'s ``solver_status`` note, the joint NLP's ``solver_status``),
+    each naming the leg or NLP and how Ipopt ended."""
+    ended = [f"{fleet.names[i]} leg {k + 1} {run.notes['solver_status']}" for i, train in enumerate(runs)
+             for k, run in enumerate(train) if run.notes and "solver_status" in run.notes]
+    flags = [f"Ipopt ended {', '.join(ended)}, not optimal"] if ended else []
+    joint_status = info.get("solver_status")
+    if joint_status not in (None, "optimal"):
+        flags.append(f"Ipopt ended the joint NLP {joint_status}, not optimal")
+    return flags
 
 
 def guard_counts(runs):
     """What the local-optimum guards of ``legs.solve_leg`` did on a strategy's final runs: warm legs
     also solved cold, the largest warm-over-cold cost difference among them [%] (of the warm solves
-    that ended before ``legs.CHECKED_MAX_ITER``), warm legs stopped there, warm legs replaced by
-    their cold solve, cold legs replaced by their solve from the trapezoidal start, and
-    runs that stood before their stop and were solved again."""
+    that ended before ``legs.WARM_MAX_ITER``), warm legs stopped there, warm legs replaced by
+    their cold solve, cold legs replaced by their solve from the trapezoidal start,
+    runs that stood before their stop and were solved again, and runs Ipopt did not prove optimal."""
     notes = [run.notes for train in runs for run in train if run.notes]
     checked = [n for n in notes if "warm_vs_cold_pct" in n]
     finished = [n["warm_vs_cold_pct"] for n in checked if "warm_capped_at" not in n]
@@ -217,7 +231,8 @@ def guard_counts(runs):
             "legs_warm_capped_count": sum("warm_capped_at" in n for n in notes),
             "legs_replaced_by_cold_count": sum(bool(n.get("replaced_by_cold")) for n in notes),
             "legs_replaced_by_trapezoid_count": sum(bool(n.get("replaced_by_trapezoid")) for n in notes),
-            "legs_restarted_standing_count": sum(bool(n.get("restarted")) for n in notes)}
+            "legs_restarted_standing_count": sum(bool(n.get("restarted")) for n in notes),
+            "legs_not_optimal_count": sum("solver_status" in n for n in notes)}
 
 
 def _verified(pair):
