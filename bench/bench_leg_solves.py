@@ -59,16 +59,16 @@ def warm_relaxed(bound):
     """``legs._solve`` with each warm leg that holds one-handle rows solved relaxed to ``bound`` first."""
     plain = legs._solve
 
-    def solve(nlp, cold=False):
+    def solve(nlp, cold=False, retry=True):
         if not nlp.task[5] or cold or not nlp.relax(bound):
-            return plain(nlp, cold)
+            return plain(nlp, cold, retry)
         first = nlp.solve({**legs.NEAR_START, **legs.KKT}, nlp.start(False))
         nlp.relax(timedomain.ONE_HANDLE)
         if first.usable:
             outcome = nlp.solve({**legs.NEAR_START, **legs.KKT})
             if outcome.usable:
                 return timedomain.leg_arrays(nlp.block), outcome, float(pyo.value(nlp.model.objective))
-        return plain(nlp, cold)
+        return plain(nlp, cold, retry)
     return solve
 
 

@@ -88,7 +88,7 @@ def noting(solve_one, carry=None):
     """``legs._solve`` noting the multipliers behind each run; ``carry`` (MU:PUSH): a warm solve
     whose previous run's multipliers fit is made from them first (:func:`options`), and where that
     fails as the legs are (primal start, then Ipopt's defaults)."""
-    def wrapper(nlp, cold=False, max_iter=None):
+    def wrapper(nlp, cold=False, retry=True):
         known = DUALS.get(run_key(nlp.task[4])) if carry and nlp.task[5] and not cold else None
         duals = fitted(known, nlp) if known is not None else None
         out = None
@@ -99,7 +99,7 @@ def noting(solve_one, carry=None):
                 out = timedomain.leg_arrays(nlp.block), outcome, float(pyo.value(nlp.model.objective))
             PLAYED["carried"] += 1
             PLAYED["failed"] += not outcome.usable
-        out = out or solve_one(nlp, cold, max_iter=max_iter)
+        out = out or solve_one(nlp, cold, retry=retry)
         DUALS[run_key(out[0])] = (names(nlp), tuple(np.array(a, float) for a in nlp.session.multipliers))
         return out
     return wrapper
