@@ -255,3 +255,20 @@ def test_a_case_whose_advice_misses_the_stop_is_flagged(tmp_path):
     assert row["status"] == "flagged", row
     assert str(row["reason"]).startswith("driver advice round: stopped"), row["reason"]
     assert counts["not_ok"] == 1
+
+
+def test_a_supplement_over_an_all_out_run_not_proven_optimal_is_flagged(tmp_path, monkeypatch):
+    """A case's running time is a supplement over its scenario's all-out run, solved once per
+    process. Solved with a tolerance Ipopt cannot reach (tol 1e-20 on every space NLP) it ends
+    ``acceptable``: the case says so beside its own NLP's end."""
+    from ecostudy.ocp.problem import Written
+    from ecostudy.ocp.solver import IPOPT
+    from ecostudy.studies import batch
+    case = expand(study_file(tmp_path, tmp_path / "out"))[2][0]
+    monkeypatch.setattr(batch, "_ALL_OUT", {})  # solved here, as a fresh worker does, and forgotten after
+    monkeypatch.setattr(batch, "_WRITTEN", Written())
+    monkeypatch.setitem(IPOPT["space"], "tol", 1e-20)
+    row = batch.run_case(case)
+    assert row["status"] == "flagged", row
+    assert row["error"] == "Ipopt ended acceptable, not optimal; the all-out run: Ipopt ended acceptable, not optimal"
+    assert row["summary"]["all_out_solver_status"] == "acceptable"

@@ -681,3 +681,19 @@ def test_a_model_that_stops_short_of_the_logged_stop_is_flagged_saying_so(inputs
         assert row.reason == (f"under the logged handle the model stops {-row.model_stop_error_m:.1f} m short of the "
                               f"logged stop (tolerance {row.stop_tolerance_m:.1f} m): its running time is not the "
                               "logged run's"), row.reason
+
+
+def test_a_fit_least_squares_did_not_converge_is_flagged_saying_so(inputs, logged, monkeypatch):
+    """least_squares capped at 2 evaluations (its ``max_nfev``, :data:`~ecostudy.calibration.fit.MAX_EVALUATIONS`)
+    ends before it converges: the estimates are written, and the calibration is flagged with
+    least_squares' own words; at its own cap the same fit converges and says nothing of it."""
+    from ecostudy.calibration import fit
+    track, train = inputs
+    logs = [as_log(logged[0][0])]
+    converged = calibrate_logs(logs, track, train, ("mass", "davis_a"), draws=0)
+    assert "least-squares" not in converged.reason, converged.reason
+    monkeypatch.setattr(fit, "MAX_EVALUATIONS", 2)
+    capped = calibrate_logs(logs, track, train, ("mass", "davis_a"), draws=0)
+    assert capped.status == "flagged"
+    assert capped.reason.startswith("the least-squares fit did not converge: The maximum number of function "
+                                    "evaluations is exceeded."), capped.reason

@@ -98,3 +98,19 @@ def test_minlp_reports_status_bound_and_beats_round(tmp_path):
     assert mi["traction_energy_kWh"] <= ph["traction_energy_kWh"] * (1 + 1e-9)
     assert mi["gap_to_ato_on_time_pct"] < rnd["gap_to_ato_on_time_pct"]
     assert abs(mi["arrival_error_s"]) < 1.0 and abs(mi["stop_error_m"]) < 2.0
+
+
+def test_advice_on_an_nlp_ipopt_did_not_prove_optimal_is_flagged_saying_which():
+    """Ipopt asked for a tolerance it cannot reach (tol 1e-20) ends the phases NLP ``acceptable``:
+    the advice is made, re-simulated and kept, and flagged naming the NLP and how Ipopt ended, by
+    ``phases`` and by ``minlp`` (whose advice here is its phases start: the search is stopped at 2 s)."""
+    from ecostudy.das.advice import das_phases
+    from ecostudy.das.minlp import das_minlp
+    trn = load_train(TRAINS / "amsterdam_metro.yaml")
+    trk = load_track(TRACKS / "amsterdam_rokin_centraal.yaml")
+    ato = solve_run(trk, trn, "Rokin", "Centraal", Timing(running_time=76.0), points=200)
+    assert ato.ok and das_phases(ato).summary["status"] == "ok"
+    phases = das_phases(ato, options={"tol": 1e-20}).summary
+    assert phases["status"] == "flagged: the DAS phases NLP: Ipopt ended acceptable, not optimal"
+    minlp = das_minlp(ato, time_limit=2.0, options={"tol": 1e-20}).summary
+    assert minlp["status"].endswith("; the DAS phases start NLP: Ipopt ended acceptable, not optimal"), minlp["status"]

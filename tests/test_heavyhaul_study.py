@@ -326,3 +326,20 @@ def test_the_observers_noises_are_the_studys(tmp_path):
         runs[tag] = pd.read_csv(out / "runs.csv").iloc[0]
     assert runs["default"]["tracking_mean_mps"] != runs["paper"]["tracking_mean_mps"]
     assert runs["default"]["energy_total_kWh"] != runs["paper"]["energy_total_kWh"]
+
+
+def test_runs_on_a_reference_ipopt_did_not_prove_optimal_are_flagged_saying_so(tmp_path, monkeypatch):
+    """The reference is the single mass's energy-optimal run; solved with a tolerance Ipopt cannot
+    reach (tol 1e-20 on every space NLP while the study is expanded) it ends ``acceptable``: every
+    run tracks it and is flagged naming it. The run itself is solved with the usual options."""
+    from ecostudy.ocp.solver import IPOPT
+    from ecostudy.studies.heavyhaul import expand, run_heavyhaul_case
+    path = study(tmp_path, brake_penalty=[1])
+    assert all("reference_status" not in case for case in expand(path)[3])  # optimal and verified: nothing said
+    with monkeypatch.context() as patched:
+        patched.setitem(IPOPT["space"], "tol", 1e-20)
+        cases = expand(path)[3]
+    (reason,) = [case["reference_status"] for case in cases]  # its all-out run (the +10 %'s base) as it ended too
+    assert reason.startswith("the reference run: Ipopt ended acceptable, not optimal; the all-out run: Ipopt ended ")
+    row = run_heavyhaul_case(cases[0])
+    assert row["status"] == "flagged" and row["error"].endswith(reason), row["error"]

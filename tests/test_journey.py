@@ -180,8 +180,9 @@ def test_departure_windows_in_the_journey_nlp_and_unreachable_points_refused(tmp
     path.write_text(json.dumps(doc))
     tt, trk = name_stops(load_timetable(path), track, path)
     plan = journey_plan(tt, trk, path)
-    times, departures = windowed_journey(trk, train, plan, 120)
+    times, departures, status = windowed_journey(trk, train, plan, 120)
     tol = 1e-4  # Ipopt's tolerance on the scaled clock constraints
+    assert status.ok, status
     assert 95 - tol <= departures[1] <= 100 + tol and departures[1] >= times[0] - tol
     assert 50 - tol <= times[0] <= 70 + tol and 190 - tol <= departures[1] + times[1] <= 215 + tol
     rows[-1] = [2100, 100, 120, 0, 0]  # 1450 m in at most 25 s after leaving at 95 s: impossible
@@ -212,3 +213,18 @@ def test_a_large_supplement_s_fronts_end_at_the_longest_run_solved():
     assert (table["status"] == "ok").all(), table[["distribution", "from", "status"]]
     assert totals["running_time_s"].to_numpy() == pytest.approx(2.7 * sum(f["running_time_s"].iloc[0] for f in fronts),
                                                                 rel=1e-6)
+
+
+def test_a_journey_nlp_ipopt_did_not_prove_optimal_flags_its_distribution():
+    """Ipopt asked for a tolerance it cannot reach (tol 1e-20) ends the whole-journey NLP
+    ``acceptable``: a feasible split, kept, but not proven optimal. Every row of that distribution
+    is flagged saying so, the other distributions' rows are not (K = 60: seconds)."""
+    from ecostudy.io.loaders import load_track, load_train
+    from ecostudy.studies.journey import journey
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    table, _, _, _ = journey(track, train, list(track.stops), supplement=0.1, points=60,
+                             nlp_options={"tol": 1e-20})
+    whole = table["distribution"] == "whole-journey NLP"
+    reason = "flagged: the whole-journey NLP: Ipopt ended acceptable, not optimal"
+    assert (table.loc[whole, "status"] == reason).all(), table.loc[whole, "status"].tolist()
+    assert not table.loc[~whole, "status"].str.contains("journey NLP").any()

@@ -133,3 +133,24 @@ def test_the_metro_monte_carlo_study_has_every_controller_at_its_own_sample_time
     assert times["convex"] == 0.1 and times["sbpc_multi"] == times["sppc"] == times["rspc"] == 0.38
     draw = [c["truth"] for c in cases if c["labels"]["draw"] == 7]
     assert all(t == draw[0] for t in draw)  # every controller meets the same plant
+
+
+def test_a_replay_of_an_ato_run_ipopt_did_not_prove_optimal_is_flagged_saying_so(tmp_path, monkeypatch):
+    """The ``ato`` controller replays the energy-optimal run; solved with a tolerance Ipopt cannot
+    reach (tol 1e-20 on every space NLP) that run ends ``acceptable``, and the replay's run is
+    flagged naming it, whatever it stops and arrives like. Solved as usual it is not."""
+    from ecostudy.ocp.solver import IPOPT
+    from ecostudy.studies import controllers
+    from ecostudy.studies.closedloop import run_loop_case
+    path = study(tmp_path, track=str(TRACKS / "amsterdam_rokin_centraal.yaml"), train=str(TRAINS / "amsterdam_metro.yaml"),
+                 window_s=[0, 76], points=100, sample_time_s=1.0, draws=1, deviations={}, noise={},
+                 controllers=[{"name": "replayed", "kind": "ato"}])
+    (case,) = expand(path)[2]
+    reason = "the ATO run: Ipopt ended acceptable, not optimal"
+    monkeypatch.setattr(controllers, "_ATO_RUNS", {})  # solved here, and forgotten after
+    usual = run_loop_case(case)
+    assert reason not in (usual["error"] or ""), usual["error"]
+    monkeypatch.setattr(controllers, "_ATO_RUNS", {})
+    monkeypatch.setitem(IPOPT["space"], "tol", 1e-20)
+    replay = run_loop_case(case)
+    assert replay["status"] == "flagged" and replay["error"].endswith(reason), replay

@@ -225,3 +225,14 @@ def test_rotating_mass_slows_acceleration_but_not_gravity(tmp_path):
         p = r.profile
         v1, ds = p["speed_kmh"].iloc[1] / 3.6, p["position_m"].iloc[1]
         assert v1**2 / (2 * ds) == pytest.approx((150e3 - 2000.0) / (100e3 * (1 + factor)), rel=1e-4)
+
+
+def test_a_supplement_over_an_all_out_run_not_proven_optimal_is_flagged(amsterdam, metro):
+    """+10 % over the all-out time, Ipopt asked for a tolerance it cannot reach (tol 1e-20): both
+    NLPs end ``acceptable``. The running time is taken from the all-out run, so the run is flagged
+    for it too, naming it; a run whose all-out run is optimal does not say it (K = 200)."""
+    r = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(supplement=0.1), points=200, options={"tol": 1e-20})
+    assert r.summary["solver"]["status"] == "acceptable" and r.summary["all_out_solver_status"] == "acceptable"
+    assert r.reason == "Ipopt ended acceptable, not optimal; the all-out run: Ipopt ended acceptable, not optimal"
+    ok = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(supplement=0.1), points=200)
+    assert ok.ok and "all_out_solver_status" not in ok.summary

@@ -31,6 +31,11 @@ from ecostudy.ocp.problem import (
 )
 
 
+# summary.json: how Ipopt ended the all-out run a run's time was taken from (a supplement over it),
+# written only when that was not optimal
+ALL_OUT_SOLVER = "all_out_solver_status"
+
+
 @dataclass(repr=False)  # the repr is one line (:meth:`line`), not the profile's thousand rows
 class RunResult(Judged):
     """A solved, analysed and verified run: the profile table (display units), the summary
@@ -56,9 +61,10 @@ class RunResult(Judged):
 
     @property
     def status(self) -> Status:
-        """``ok`` when Ipopt proved optimality, the independent re-simulation agrees and the driver
-        advice (when asked for) keeps the stop, the time and the limits as driven; else ``flagged``
-        with what did not pass."""
+        """``ok`` when Ipopt proved optimality (of the all-out run too, where the running time is a
+        supplement over it: :data:`ALL_OUT_SOLVER`), the independent re-simulation agrees and the
+        driver advice (when asked for) keeps the stop, the time and the limits as driven; else
+        ``flagged`` with what did not pass."""
         block = self.summary["verification"]  # these two blocks only: a study may put a table row under "das"
         solver = SolverRun.from_dict(self.summary["solver"]).status
         ver = None if block is None else Verification.from_dict(block)
@@ -67,10 +73,13 @@ class RunResult(Judged):
             checks["not re-simulated"] = False
         else:
             checks[f"re-simulation outside tolerance ({ver.errors})"] = ver.passed
-        if self.das is None:
-            return from_checks(checks)
-        advice = Status.parse(self.das.summary["status"])  # the driver advice as driven: a run of this command too
-        return worst([from_checks(checks), part(f"driver advice {self.das.summary['method']}", advice)])
+        statuses = [from_checks(checks)]
+        if ALL_OUT_SOLVER in self.summary:  # the all-out run its running time was taken from
+            statuses.append(part("the all-out run", from_checks(solver_check(self.summary[ALL_OUT_SOLVER]))))
+        if self.das is not None:
+            advice = Status.parse(self.das.summary["status"])  # the driver advice as driven: a run of this command too
+            statuses.append(part(f"driver advice {self.das.summary['method']}", advice))
+        return worst(statuses)
 
     def line(self) -> str:
         """The run in a few words: stops, distance, K, objective, running time and energies (its
@@ -101,11 +110,12 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     stages = {}
     case = prepare(track, train, from_stop, to_stop, points, stages, windows)
     check_windows(case)
-    target, window, t_allout = timing.running_time, timing.window, None
+    target, window, t_allout, fastest = timing.running_time, timing.window, None, None
     latest = target if target is not None else (window[1] if window else None)
     check_not_crawling(latest, case)
     if objective == "time" or timing.supplement is not None or (latest is not None and latest < 0.97 * case.estimate):
-        t_allout, m, outcome = all_out(case, stages, options)
+        t_allout, m, fastest = all_out(case, stages, options)
+        outcome = fastest
         if timing.supplement is not None:
             target = t_allout * (1 + timing.supplement)
         check_feasible(latest, t_allout)
@@ -123,7 +133,10 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
                 check_feasible(latest, t_allout)
             raise SolverError(f"Ipopt failed ({outcome.status}) after {outcome.iterations} iterations; "
                               "try more --points or a longer running time")
-    return finish(case, m, outcome, stages, objective, t_allout, verify_result)
+    result = finish(case, m, outcome, stages, objective, t_allout, verify_result)
+    if fastest is not None and outcome is not fastest and not fastest.optimal:
+        result.summary[ALL_OUT_SOLVER] = fastest.status
+    return result
 
 
 def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=True):

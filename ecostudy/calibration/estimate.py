@@ -73,10 +73,11 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     starting from and regularised by nothing but the ``train``'s values (the prior)."""
     stage("least-squares fit, identifiability")
     problem = Problem.from_logs(logs, track, train)
-    free, p, cov, held, spread = identify(problem, list(names))
+    free, p, cov, held, spread, unconverged = identify(problem, list(names))
     theta = problem.theta(free, p)
     s = scales(problem.prior)
-    boot = bootstrap(problem, free, p, draws, seed, spread) if len(logs) > 1 and free and draws > 0 else None
+    boot, boot_unconverged = (bootstrap(problem, free, p, draws, seed, spread) if len(logs) > 1 and free and draws > 0
+                              else (None, 0))
     rows = []
     for name in names:
         row = {"name": name, "unit": PARAMETERS[name][0], "prior": problem.prior[name], "estimate": theta[name],
@@ -102,7 +103,10 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                "speed_samples": int(blocks["speed"].size), "traction_samples": int(blocks["traction"].size),
                "regeneration_samples": int(blocks["regeneration"].size), "runs": len(problem.runs),
                "noise": {"speed_mps": problem.sigma["speed"], **{f"{k}_share": v for k, v in problem.sigma.items() if k != "speed"}}}
-    reasons = [f"{n} not identifiable from these logs, held at its prior: {why}" for n, why in held.items()]
+    reasons = [unconverged] if unconverged else []
+    if boot_unconverged:
+        reasons.append(f"{boot_unconverged} of {draws} bootstrap fits did not converge")
+    reasons += [f"{n} not identifiable from these logs, held at its prior: {why}" for n, why in held.items()]
     if quality["rms_speed_mps"] > MAX_RMS_SPEED:
         reasons.append(f"speed residuals of {quality['rms_speed_mps']:.3g} m/s RMS (more than {MAX_RMS_SPEED} m/s; "
                        f"the logged speed's own noise is {problem.sigma['speed']:.2g} m/s)")

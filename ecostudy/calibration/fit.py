@@ -39,6 +39,7 @@ PARAMETERS = {
 }
 DEFAULT_FIT = ("mass", "davis_a", "davis_b", "davis_c", "efficiency")
 MAX_RELATIVE_WIDTH = 0.5   # 95 % half-width above this share of the prior: not identifiable
+MAX_EVALUATIONS = None     # least_squares' max_nfev (None: its own cap, 100 evaluations a parameter)
 NULL_SINGULAR = 1e-9       # singular value of the column-scaled J below this share of the largest: a null direction
 Z95 = 1.959964
 
@@ -156,15 +157,15 @@ class Problem:
 
 def solve(problem, names, start=None, logs=None, fixed=None):
     """Least squares over ``names`` (relative values p, each theta >= 0), the others at ``fixed``
-    or the prior; returns p."""
+    or the prior; returns (p, '' or why it is not converged: least_squares' own message)."""
     if not names:
-        return np.zeros(0)
+        return np.zeros(0), ""
     s = scales(problem.prior)
     lower = [1.0 - problem.prior[n] / s[n] for n in names]
     x0 = np.ones(len(names)) if start is None else np.clip(start, np.array(lower) + 1e-6, None)
     result = least_squares(lambda p: problem.residuals(names, p, logs, fixed), x0, method="trf",
-                           bounds=(lower, np.inf), x_scale=1.0, xtol=1e-10, ftol=1e-10)
-    return result.x
+                           bounds=(lower, np.inf), x_scale=1.0, xtol=1e-10, ftol=1e-10, max_nfev=MAX_EVALUATIONS)
+    return result.x, "" if result.success else f"the least-squares fit did not converge: {result.message}"
 
 
 def covariance(problem, names, p):
@@ -221,24 +222,25 @@ def identify(problem, requested):
 
     Returns (free names, p, covariance, held: {name: reason}, spread: {held name: its standard
     deviation in relative units in the fit where it was held, the largest it had while free (inf
-    along a null direction: the prior fixes it by convention)})."""
+    along a null direction: the prior fixes it by convention)}, '' or why the last fit, the one
+    returned, is not converged)."""
     free, held, widest, spread = list(requested), {}, {}, {}
     while True:
-        p = solve(problem, free)
+        p, _ = solve(problem, free)
         estimate_noise(problem, free, p)
         th = problem.theta(free, p)
         problem.refilter(th["mass"] * (1.0 + th["rotating_mass_factor"]))  # weights at the fitted mass
-        p = solve(problem, free, p)
+        p, unconverged = solve(problem, free, p)
         cov, sv, weakest = covariance(problem, free, p)
         if not free:
-            return free, p, cov, held, spread
+            return free, p, cov, held, spread, unconverged
         cov = widened(cov, free, widest)
         s = scales(problem.prior)
         width = np.array([Z95 * np.sqrt(cov[j, j]) * s[n] / max(abs(problem.prior[n]), 1e-300)
                           for j, n in enumerate(free)])
         worst = int(np.argmax(width))
         if width[worst] <= MAX_RELATIVE_WIDTH:
-            return free, p, cov, held, spread
+            return free, p, cov, held, spread, unconverged
         partners = [n for j, n in enumerate(free) if j != worst and abs(weakest[j]) > 0.3]
         ratio = sv[-1] / sv[0] if sv[0] > 0 else 0.0
         reason = (f"95 % half-width {'unbounded' if not np.isfinite(width[worst]) else f'{100 * width[worst]:.0f} %'}"
@@ -251,7 +253,8 @@ def identify(problem, requested):
 
 
 def bootstrap(problem, names, p, draws, seed=0, spread=None):
-    """Estimates of ``names`` refitted on ``draws`` resamples of the logs (with replacement) [SI].
+    """(estimates of ``names`` refitted on ``draws`` resamples of the logs (with replacement) [SI],
+    how many of those fits are not converged).
 
     A parameter held at its prior (``spread``: {name: standard deviation, relative}, as
     :func:`identify` gives it) is not known as well as holding it pretends: each draw also draws
@@ -266,13 +269,14 @@ def bootstrap(problem, names, p, draws, seed=0, spread=None):
     rng = np.random.default_rng(seed)
     s = scales(problem.prior)
     drawn = {n: sd for n, sd in (spread or {}).items() if np.isfinite(sd) and sd > 0}
-    out = []
+    out, unconverged = [], 0
     stage("bootstrap over logs", total=draws, unit="draws")
     for draw in range(draws):
         pick = [logs[i] for i in rng.integers(0, len(logs), len(logs))]
         fixed = {n: max(problem.prior[n] + s[n] * sd * rng.standard_normal(), 0.0) for n, sd in drawn.items()}
-        q = solve(problem, names, p, pick, fixed)
+        q, why = solve(problem, names, p, pick, fixed)
+        unconverged += bool(why)
         th = problem.theta(names, q, fixed)
         out.append([th[n] for n in names])
         step(draw + 1)
-    return np.array(out)
+    return np.array(out), unconverged

@@ -42,6 +42,7 @@ class Fallback:
     solves nothing, :meth:`settle` after a step's solves)."""
 
     shift_samples = SHIFT_SAMPLES
+    plans_from = None  # the solved run (a RunResult) it replays or plans from, if any: part of a run's status
 
     def _start_records(self):
         self.step_log, self.last_plan, self.shifts = [], None, 0

@@ -24,7 +24,7 @@ from ecostudy.analysis.regimes import guess_from_result
 from ecostudy.core.errors import SolverError
 from ecostudy.core.progress import stage
 from ecostudy.core.simulate import Driven, simulate, worst_overspeed
-from ecostudy.core.status import driven_run, flagged, worst
+from ecostudy.core.status import driven_run, flagged, from_checks, part, solver_check, worst
 from ecostudy.core.units import KMH, to_kmh, to_kwh
 from ecostudy.ocp import phases, session
 
@@ -213,10 +213,18 @@ def advice_outcome(name, result, layout, m):
     return advice, Driven(name, handle, trace), plan_kwh
 
 
-def das_phases(result, points=None):
-    m, layout, outcome = solve_phases(result, points)
+def nlp_flags(name, outcome):
+    """The reasons to flag advice made on ``outcome`` of the NLP ``name``: none when Ipopt proved it
+    optimal, else how Ipopt ended (:func:`~ecostudy.core.status.solver_check`)."""
+    status = part(name, from_checks(solver_check(outcome.status)))
+    return () if status.ok else (status.reason,)
+
+
+def das_phases(result, points=None, options=None):
+    """The :class:`DasRun` of the phases NLP (Ipopt ``options``), flagged when Ipopt did not prove it optimal."""
+    m, layout, outcome = solve_phases(result, points, options)
     advice, sim, plan_kwh = advice_outcome("DAS phases", result, layout, m)
-    flags = () if outcome.status == "optimal" else (f"the DAS phases NLP ended {outcome.status}, not optimal",)
+    flags = nlp_flags("the DAS phases NLP", outcome)
     block = summary_block("phases", result, sim, advice, f"{outcome.status}, re-simulated", flags,
                    planned_traction_energy_kWh=plan_kwh, phases=len(layout.phases),
                    intervals=layout.intervals, solve_s=outcome.seconds + outcome.nl_seconds,

@@ -6,43 +6,45 @@ import pyomo.core as pyo
 
 from ecostudy.core.progress import stage
 from ecostudy.core.units import to_kwh
-from ecostudy.das.advice import DasRun, advice_outcome, objective_of, refine, solve_phases, summary_block
+from ecostudy.das.advice import DasRun, advice_outcome, nlp_flags, objective_of, refine, solve_phases, summary_block
 from ecostudy.ocp import phases
 from ecostudy.ocp.modechoice import search
 
 
-def das_minlp(result, points=None, time_limit=60.0):
+def das_minlp(result, points=None, time_limit=60.0, options=None):
     """The :class:`DasRun` of the better of ``phases`` and the MINLP's pattern. The search stops at
     ``time_limit`` [s] (:func:`ecostudy.ocp.modechoice.search`); a search stopped there gives the best
-    pattern it found by then, and the status says it was stopped (``flagged``)."""
+    pattern it found by then, and the status says it was stopped (``flagged``). The advice's NLP
+    (Ipopt ``options``; the search's own are MindtPy's) not proven optimal is flagged too."""
     points = points or len(result.nodes)
     objective = objective_of(result)
     # stage 1 of `phases` (the full sequence of every sector) is the MINLP's starting pattern
-    m_ph, lay_ph, _ = solve_phases(result, points, stages=1)
+    m_ph, lay_ph, _ = solve_phases(result, points, options, stages=1)
     found = search(result, m_ph, lay_ph, objective, time_limit, max(points // 4, 150))
     stage("DAS phases NLP (modes driven)")
-    m_ph, lay_ph, _ = refine(result, m_ph, lay_ph, [md for _, md in lay_ph.phases], points)
-    candidates = [("phases start", m_ph, lay_ph)]
+    m_ph, lay_ph, out_ph = refine(result, m_ph, lay_ph, [md for _, md in lay_ph.phases], points, options)
+    candidates = [("phases start", m_ph, lay_ph, out_ph)]
     if found.found:  # the pattern found, solved again at the full resolution on the phases it drives
         m_mi, modes = found.model, phases.all_modes(result.train)
         stage("DAS minlp pattern at full resolution")
         chosen = [modes[max(m_mi.J, key=lambda j: pyo.value(m_mi.z[q, j]))] for q in m_mi.Q]
-        m_fine, fine, out_fine = refine(result, m_mi, found.layout, chosen, points)
+        m_fine, fine, out_fine = refine(result, m_mi, found.layout, chosen, points, options)
         if out_fine.usable:
-            candidates.append(("MINLP pattern", m_fine, fine))
+            candidates.append(("MINLP pattern", m_fine, fine, out_fine))
     scored = []
-    for name, mod, lay in candidates:
+    for name, mod, lay, out in candidates:
         advice, sim, plan = advice_outcome("DAS minlp", result, lay, mod)
         row = sim.row(result.train, result.segment.distance)
         scored.append((row["net_energy_kWh" if objective == "net_energy" else "traction_energy_kWh"],
-                       name, advice, sim, plan))
-    best_kwh, name, advice, sim, plan = min(scored, key=lambda r: r[0])
+                       name, advice, sim, plan, out))
+    best_kwh, name, advice, sim, plan, out = min(scored, key=lambda r: r[0])
     e_ref = found.model.energy_ref
     oa_bound = to_kwh(found.lower * e_ref) if np.isfinite(found.lower) else None
     # a nonconvex OA master can cut off the incumbent itself; such a "bound" is no bound at all, and
     # neither is the 0 a search stopped before its first master problem reports
     valid = oa_bound is not None and 0 < oa_bound <= best_kwh * (1 + 1e-6) and found.iterations > 0
     solver, flags = _status(found, name, time_limit)
+    flags += nlp_flags(f"the DAS {name} NLP", out)
     block = summary_block("minlp", result, sim, advice, solver, flags,
                           planned_traction_energy_kWh=plan, search_s=found.seconds,
                           search_objective_kWh=to_kwh(found.upper * e_ref) if np.isfinite(found.upper) else None,

@@ -64,6 +64,13 @@ def _ato(b):
     return _ATO_RUNS[key]
 
 
+def _from_ato(controller, b):
+    """``controller`` with the ATO run it replays or plans from (``plans_from``), whose status is a
+    part of each of its runs' (``studies.closedloop``)."""
+    controller.plans_from = _ato(b)
+    return controller
+
+
 def convex(b):
     """Yazhemsky 2017's SOCP 6.10 re-solved every sample from the measured state."""
     return Convex(convex_program(b.segment, b.train, b.points, b.spec), b.window, b.estimator, hold=b.sample_time,
@@ -80,7 +87,7 @@ def open_loop(b):
 
 def ato(b):
     """The energy-optimal ATO run at the latest arrival, replayed by position."""
-    return OpenLoop(_ato(b))
+    return _from_ato(OpenLoop(_ato(b)), b)
 
 
 def sbpc(b):
@@ -89,13 +96,13 @@ def sbpc(b):
     reference = _ato(b).trajectory
     speeds = np.interp(prepared.nodes, reference.nodes, reference.v)
     s = b.spec
-    return Sbpc(prepared, b.window[1], b.sample_time, s["block"], speeds, s["variant"], s["omega"],
-                transcription=s["transcription"], **b.reserve)
+    return _from_ato(Sbpc(prepared, b.window[1], b.sample_time, s["block"], speeds, s["variant"], s["omega"],
+                          transcription=s["transcription"], **b.reserve), b)
 
 
 def sppc(b):
     """Farooqi 2018's shrinking-horizon parametrised controller (Ch. 5), DAS modes by construction."""
-    return Sppc(_ato(b), b.window[1], b.points, b.spec["variant"], **b.reserve)
+    return _from_ato(Sppc(_ato(b), b.window[1], b.points, b.spec["variant"], **b.reserve), b)
 
 
 def rspc(b):

@@ -25,6 +25,7 @@ import pandas as pd
 from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KMH, KN, KWH
+from ecostudy.core.status import OK, part
 from ecostudy.heavyhaul.airbrake import application_time, brake_lag
 from ecostudy.heavyhaul.checks import reference_problems, ruling_grade, samples_to_start, starting_coupler_force
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
@@ -48,6 +49,8 @@ from ecostudy.studies.sizes import check_heavyhaul_study
 
 
 def _reference(s, path, consist, track, from_stop, to_stop):
+    """(the study's reference, its status): a user's table is ``ok``; the single-mass optimum is its
+    run's (Ipopt proved it optimal, its re-simulation agrees), named ``the reference run``."""
     r = s.reference
     if r.table is not None:
         where = named_file(path, "reference.table", r.table)
@@ -56,15 +59,16 @@ def _reference(s, path, consist, track, from_stop, to_stop):
         if extra:
             warnings.warn(problem(where, ", ".join(map(str, extra)), "not read: a reference table is distance_m and "
                                   "speed_kmh"), EcostudyWarning, stacklevel=2)
-        return table_reference(table["distance_m"], table["speed_kmh"], where)  # a bad row: one line naming it
+        return table_reference(table["distance_m"], table["speed_kmh"], where), OK  # a bad row: one line naming it
     supplement = None if r.supplement_percent is None else r.supplement_percent / 100
     lead = r.limit_lead_samples * s.sample_time_s + (application_time(consist) if s.air_brake else 0.0)  # the pipe's lateness
     try:
-        return optimal_reference(consist, track, from_stop, to_stop, r.running_time_s, supplement, r.points,
-                                 r.service_deceleration_mps2, lead, brake_lag(consist) if s.air_brake else 0.0)[0]
+        reference, run = optimal_reference(consist, track, from_stop, to_stop, r.running_time_s, supplement, r.points,
+                                           r.service_deceleration_mps2, lead, brake_lag(consist) if s.air_brake else 0.0)
     except InfeasibleError as exc:  # the single mass cannot run so fast: the study's field, by name
         field = "reference.running_time_s" if r.running_time_s is not None else "reference.supplement_percent"
         raise InfeasibleError([problem(path, field, f"infeasible: {p.removeprefix('infeasible: ')}") for p in exc.problems])
+    return reference, part("the reference run", run.status)
 
 
 def expand(path):
@@ -89,7 +93,7 @@ def expand(path):
         raise InputError(problem(consist_path, "couplers.force_limit_kN", f"{consist.force_limit / KN:g} kN "
                                  f"is below the {force / KN:.0f} kN a coupler carries when the train starts on the "
                                  f"ruling grade ({1e3 * grade:.1f} per mille) of '{track.name}'"))
-    reference = _reference(s, path, consist, track, from_stop, to_stop)
+    reference, trusted = _reference(s, path, consist, track, from_stop, to_stop)
     field = "reference.table" if s.reference.table else "reference"
     problems = [problem(path, field, p) for p in reference_problems(reference, segment, s.speed_tolerance_kmh * KMH)]
     problems += [problem(path, "fence", f"{f} is not within 1..{consist.cars} (the consist's cars)")
@@ -129,6 +133,7 @@ def expand(path):
               "objective_scale": s.objective_scale, "effort_penalty": s.effort_penalty, "adhesion": s.adhesion, "air_brake": s.air_brake, "draft_gear": s.draft_gear,
               **({"notches": True} if s.notches else {}),  # absent when off: the cases' keys as without the switch
               **({"brake_penalty_on": "all"} if s.brake_penalty_on == "all" else {}),  # likewise
+              **({} if trusted.ok else {"reference_status": trusted.reason}),  # likewise: each run is flagged for it
               "max_samples": s.max_samples,
               "stop_tolerance_m": s.stop_tolerance_m, "speed_tolerance_kmh": s.speed_tolerance_kmh,
               "arrival_tolerance_percent": s.arrival_tolerance_percent, "arrival_tolerance_s": s.arrival_tolerance_s}
@@ -242,6 +247,8 @@ def _run(case):
     why = reasons(summary, case["max_samples"], summary["over_budget_count"],
                   Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH,
                              case["arrival_tolerance_percent"] / 100, case["arrival_tolerance_s"]))
+    if "reference_status" in case:  # the speeds it tracked are not a proven, verified optimum
+        why.append(case["reference_status"])
     return ("flagged", "; ".join(why), summary) if why else ("ok", None, summary)
 
 

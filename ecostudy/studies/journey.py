@@ -26,7 +26,7 @@ from ecostudy.core.errors import FieldError, InfeasibleError, SolverError
 from ecostudy.core import kinematics
 from ecostudy.core.kinematics import running_time
 from ecostudy.core.simulate import window_checks
-from ecostudy.core.status import OK, flagged, worst
+from ecostudy.core.status import OK, flagged, from_checks, part, solver_check, worst
 from ecostudy.core.types import Timing, Window
 from ecostudy.core.units import to_kmh
 from ecostudy.heuristics import mareco
@@ -120,28 +120,29 @@ def _segments_model(cases, start_times):
     return m, parts
 
 
-def _solve_times(m, parts, what):
-    """Solve the journey model; its running times [s]."""
+def _solve_times(m, parts, what, options=None):
+    """Solve the journey model (Ipopt ``options``): its running times [s] and their status, ``ok``
+    when Ipopt proved them optimal, else ``flagged`` naming ``what`` and how Ipopt ended."""
 
-    outcome = session.solve(m)
+    outcome = session.solve(m, options)
     if outcome.status in ("infeasible", "restoration_failed"):
         raise InfeasibleError(f"infeasible: no run of {what} ({outcome.status})")
     if not outcome.usable:
         raise SolverError(f"{what}: Ipopt {outcome.status} after {outcome.iterations} iterations")
-    return [float(pyo.value(p.T)) for p in parts]
+    return [float(pyo.value(p.T)) for p in parts], part(what, from_checks(solver_check(outcome.status)))
 
 
-def whole_journey(track, train, pairs, total_time, start_times, points):
-    """Running times [s] from one NLP over all segments (:func:`_segments_model`), the running
-    times summing to ``total_time``. The exact optimum the equal-marginal split approximates on
-    interpolated fronts. Started from ``start_times`` (e.g. that split)."""
+def whole_journey(track, train, pairs, total_time, start_times, points, options=None):
+    """(running times [s], their status) from one NLP over all segments (:func:`_segments_model`),
+    the running times summing to ``total_time``. The exact optimum the equal-marginal split
+    approximates on interpolated fronts. Started from ``start_times`` (e.g. that split)."""
 
     m, parts = _segments_model([prepare(track, train, a, b, points) for a, b in pairs], start_times)
     m.total = pyo.Constraint(expr=sum(p.T for p in parts) / total_time == 1.0)
-    return _solve_times(m, parts, "the whole-journey NLP")
+    return _solve_times(m, parts, "the whole-journey NLP", options)
 
 
-def windowed_journey(track, train, plan, points, start_times=None):
+def windowed_journey(track, train, plan, points, start_times=None, options=None):
     """Running times [s] from one NLP over all segments that keeps a timetable's windows.
 
     The segments' blocks as in :func:`whole_journey`; the journey clock ties them: segment n
@@ -149,7 +150,8 @@ def windowed_journey(track, train, plan, points, start_times=None):
     plus the dwell, never before that arrival plus the (least) dwell; its arrival keeps the stop's
     (earliest, latest) window and every passing point's node time keeps its window (speed bounds
     sit on the node, ``model.define_windows``; Yazhemsky 2017 eq. 4.1g on a whole journey, the
-    TTOBench journey format). Returns the running times and the departures [s].
+    TTOBench journey format). Returns the running times and the departures [s], and their status
+    (:func:`_solve_times`).
     """
 
     pairs = list(zip(plan.stops, plan.stops[1:]))
@@ -182,8 +184,8 @@ def windowed_journey(track, train, plan, points, start_times=None):
                 m.clock.add(when / ref >= lo / ref)
             if hi is not None:
                 m.clock.add(when / ref <= hi / ref)
-    times = _solve_times(m, parts, "the journey that keeps its timing windows")
-    return times, [float(pyo.value(d)) for d in departures]
+    times, status = _solve_times(m, parts, "the journey that keeps its timing windows", options)
+    return times, [float(pyo.value(d)) for d in departures], status
 
 
 def check_reachable(plan, cases):
@@ -270,7 +272,7 @@ def timing_columns(plan, n, departure, arrival, run):
 
 
 def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_POINTS, front_count=FRONT_COUNT, workers=1,
-            scheduled=None, plan=None, progress=None):
+            scheduled=None, plan=None, progress=None, nlp_options=None):
     """Per-segment table for each distribution of one total running time, and the totals.
 
     Give ``total_time`` [s], ``supplement`` [-] over the sum of the segments' all-out times,
@@ -279,10 +281,13 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
     (timetable.JourneyPlan) with windows: the windowed journey NLP decides the running times and
     the other distributions spread its total; every row says whether it keeps the windows.
     ``progress(done, failed, remaining, total)``: each segment's front, then each run solved.
+    ``nlp_options``: Ipopt options of the journey NLPs (whole-journey, timing windows); a
+    distribution they did not prove optimal has every row flagged saying how Ipopt ended.
     """
-    windowed = None
+    windowed, proven = None, {}
     if plan is not None:
-        windowed, windowed_departures = windowed_journey(track, train, plan, points)
+        windowed, windowed_departures, proven["timing windows NLP"] = windowed_journey(track, train, plan, points,
+                                                                                       options=nlp_options)
         total_time = float(sum(windowed))
     if scheduled is not None:
         total_time = float(sum(scheduled))
@@ -311,8 +316,8 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
     if total_time is None:
         total_time = all_out * (1 + supplement)
     marginal = equal_marginal(fronts, total_time)
-    plans = {"whole-journey NLP": whole_journey(track, train, pairs, total_time, marginal, points),
-             "equal marginal saving": marginal, "same percentage": uniform(fronts, total_time),
+    whole, proven["whole-journey NLP"] = whole_journey(track, train, pairs, total_time, marginal, points, nlp_options)
+    plans = {"whole-journey NLP": whole, "equal marginal saving": marginal, "same percentage": uniform(fronts, total_time),
              "MARECO-style": mareco_split(track, train, pairs, total_time, points)}
     if scheduled is not None:
         plans["as timetabled"] = list(scheduled)
@@ -335,7 +340,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
             t0 = float(f["running_time_s"].iloc[0])
             facts = r.facts
             clock, broken = timing_columns(plan, n, departures[n], arrivals[n], r) if plan is not None else ({}, "")
-            status = worst([r.status, flagged(f"breaks the timetable: {broken}") if broken else OK])
+            status = worst([r.status, proven.get(name, OK), flagged(f"breaks the timetable: {broken}") if broken else OK])
             rows.append({"distribution": name, "from": a, "to": b, "distance_m": facts.distance_m,
                          "all_out_time_s": t0, "running_time_s": facts.running_time_s,
                          "supplement_pct": 100 * (t / t0 - 1), "traction_energy_kWh": facts.traction_energy_kWh,
