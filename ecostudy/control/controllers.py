@@ -177,7 +177,7 @@ class Convex(Fallback):
             self.inexact += int(plan.gap > EXACT)
             if self.budget is not None and plan.seconds > self.budget:
                 status = "over_budget"
-        else:
+        if status == "over_budget" or not plan.usable:  # no plan to drive (in time): the fallback drives
             self.failures += 1
         # the plan brakes and needs the relaxation (rho s > 1: braking impulse no train has): it
         # cannot stop in time with the service brake it assumed
