@@ -14,7 +14,7 @@ def test_run_kind_simulate_and_the_simulate_command_share_one_store(tmp_path):
     path, out = loop_study(tmp_path), tmp_path / "out"
     first = api.run_folder(path, workers=1, out=out, kind="simulate")
     assert "4 cases: 0 already stored, 4 computed now" in first.text
-    folder = assert_folder(out, "simulate", ["runs"], rows=4, status="flagged")  # the replayed plan overruns
+    folder = assert_folder(out, "simulate", ["runs", "aggregate"], rows=4, status="flagged")  # the replayed plan overruns
     again = api.simulate_folder(path, workers=1, out=out, plot=False)
     assert "4 already stored, 0 computed now" in again.text
     assert list(api.load(out).tables) == ["runs", "aggregate"] and api.load(out).summary["missing_runs"] == 0

@@ -26,8 +26,8 @@ from ecostudy.report.style import output
 from ecostudy.studies.batch import run_expanded, run_kind
 from ecostudy.studies.kinds import STUDY_KINDS  # noqa: F401  (every built-in kind registered)
 from ecostudy.studies.calibrate import calibrate_study, validate_study
-from ecostudy.studies.closedloop import simulate_study
-from ecostudy.studies.heavyhaul import heavyhaul_study
+from ecostudy.studies.closedloop import loop_files, simulate_study
+from ecostudy.studies.heavyhaul import heavyhaul_files, heavyhaul_study
 from ecostudy.studies.network import expand_network
 from ecostudy.studies.options import check_options
 from ecostudy.studies.workers import every_core, worker_pool
@@ -75,13 +75,14 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
 
 def own_files(kind: str, workers: int):
     """The files the command of a study ``kind`` writes beside its table, with its default options
-    (``pareto``: pareto.json and its two figures; ``compare``: compare.png), so that ``run --kind``
-    writes the same set and never leaves an earlier run's beside its own; None for the others."""
-    if kind == "pareto":
-        return front_files(workers=workers)
-    if kind == "compare":
-        return compare_figures()
-    return None
+    (``pareto``: pareto.json and its two figures; ``compare``: compare.png; ``simulate``:
+    aggregate.csv, steps/ and the figures of ``report.loopplots``; ``heavyhaul``: the figures of
+    ``report.heavyplots``; ``network``: the trains' and steps' tables, network.json and two figures),
+    so that ``run --kind`` writes the same set through the same writers; None for the others."""
+    draws = {"pareto": lambda: front_files(workers=workers), "compare": compare_figures,
+             "simulate": lambda: loop_files(loop_figures), "heavyhaul": lambda: heavyhaul_files(heavyplots.draw),
+             "network": network_files}
+    return draws[kind]() if kind in draws else None
 
 
 @spelled

@@ -133,6 +133,27 @@ def write_summary(out_dir: Path | str, kind: str, statuses: Mapping[str, Status]
     return path
 
 
+def files_listed(out_dir: Path | str) -> set[str]:
+    """The files the folder's ``summary.json`` lists (none without one, or when it cannot be read)."""
+    try:
+        data = json.loads((Path(out_dir) / SUMMARY).read_text())
+    except (OSError, ValueError):
+        return set()
+    files = data.get("files") if isinstance(data, dict) else None
+    return {f for f in files if isinstance(f, str)} if isinstance(files, list) else set()
+
+
+def remove_unlisted(out_dir: Path | str, earlier: Iterable[str]) -> list[str]:
+    """Remove the files of ``earlier`` (what the folder's ``summary.json`` listed before this run
+    wrote its own, :func:`files_listed`) that it does not list now: an earlier run's files this
+    run did not write, so a folder never mixes the files of two runs. Returns their names."""
+    out_dir, now = Path(out_dir), files_listed(out_dir)
+    gone = sorted(name for name in set(earlier) - now if Path(name).name == name and (out_dir / name).is_file())
+    for name in gone:
+        (out_dir / name).unlink(missing_ok=True)
+    return gone
+
+
 def load(folder: Path | str) -> StudyResult:
     """Any output folder of ecostudy as a :class:`StudyResult`; a folder that is not one is one
     clear line naming it (exit status 2)."""

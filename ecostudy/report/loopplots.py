@@ -87,7 +87,7 @@ def mass_estimates(runs, path, title=""):
 
 def draw(outcome):
     """The plots of a closed-loop study (``studies.closedloop.LoopStudy``) into its output folder."""
-    runs, name, out = outcome.by_controller, outcome.study.name, outcome.output
+    runs, name, out = outcome.by_controller, outcome.name, outcome.output
     if not runs:
         return
     bands(runs, outcome.segment, out / "bands.png", title=name)

@@ -24,7 +24,7 @@ from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.io.store import Store, check_one_study
 from ecostudy.core.status import parsed, worst
-from ecostudy.io.folder import write_summary
+from ecostudy.io.folder import files_listed, remove_unlisted, write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.ocp.problem import Written
 from ecostudy.studies.cases import case_key, expand
@@ -271,7 +271,8 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     names it): the cases not stored yet run (serially, in ``workers`` processes or on ``dask``,
     :func:`execute`), each stored as it arrives; the table of every stored case; the table's file
     and summary.json written, with the files and tables ``draw(output, cases, rows, table)`` writes
-    and returns as (file names, {table name: file name}) (figures, a kind's other files).
+    and returns as (file names, {table name: file name}) (figures, a kind's other files); the files an
+    earlier ``summary.json`` of the folder listed that this run did not write removed.
     ``progress(done, failed, remaining, total)`` after each case; ``compute``: only these cases
     computed now (the others' stored results still in the table; a case neither stored nor computed
     is ``missing`` there, and no result in ``summary.json``); ``spec``: the :class:`StudyKind` itself
@@ -297,9 +298,11 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     in_order = table.sort_index() if sorted(table.index) == list(range(len(table))) else table
     statuses = {**case_statuses([c for c, r in zip(expanded.cases, results) if r], in_order[results]),
                 **(spec.verdict(table) if spec.verdict else {}), **(more or {})}
+    earlier = files_listed(output)  # an earlier run's (this command's or `run --kind`'s): removed below if not this one's
     write_summary(output, kind, statuses, {spec.table_name: spec.table_file, **tables, **{
                   Path(name).stem: name for name in expanded.inputs}}, ["results.sqlite", *drawn], study=str(where),
                   computed_now=counts["computed"], stored_before=counts["stored_before"], **table.attrs)
+    remove_unlisted(output, earlier)
     counts["not_ok"] = sum(not s.ok for s in statuses.values())
     return StudyRun(table, counts, output, expanded.cases, rows)
 

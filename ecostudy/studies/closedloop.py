@@ -258,31 +258,46 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
                                  f"of {path} ({', '.join(names)})"))
     compute = [c for c in cases if c["labels"]["controller"] in only] if only else None
     done = []
-
-    def files(out_dir, cases, rows, table):
-        done.append(loop_study(study, cases, rows, table, Path(out_dir)))
-        return (draw(done[0]) if draw is not None else []), {"aggregate": "aggregate.csv"}
-    ran = run_expanded("simulate", Expanded(output, cases), path, workers, dask, retry_failed, out, progress, files,
-                       compute, SIMULATE)
+    ran = run_expanded("simulate", Expanded(output, cases), path, workers, dask, retry_failed, out, progress,
+                       loop_files(draw, done), compute, SIMULATE)
     counts = {**ran.counts, "missing": int((ran.table["status"] == "missing").sum())}  # left out by ``only``
     return done[0]._replace(counts=counts)
 
 
-def loop_study(study, cases, rows, runs, output):
+def loop_files(draw=None, done=None):
+    """The study engine's ``draw`` (:func:`~ecostudy.studies.batch.run_expanded`) of a closed-loop
+    study, the same for ``ecostudy simulate`` and ``ecostudy run --kind simulate``: aggregate.csv and
+    every run's steps/<controller>_draw<i>.csv (:func:`loop_study`), and the figures ``draw(study)``
+    writes of the :class:`LoopStudy` and returns (``report.loopplots``; None: none); the
+    :class:`LoopStudy` appended to ``done`` when given."""
+    def files(out_dir, cases, rows, table):
+        study = loop_study(cases, rows, table, Path(out_dir))
+        if done is not None:
+            done.append(study)
+        return (draw(study) if draw is not None else []), {"aggregate": "aggregate.csv"}
+    return files
+
+
+def loop_study(cases, rows, runs, output):
     """The :class:`LoopStudy` of the stored ``rows`` (``runs``: their table), its aggregate.csv and
-    every run's steps/<controller>_draw<i>.csv written into ``output``."""
+    every run's steps/<controller>_draw<i>.csv written into ``output`` (an earlier run's step file of
+    a run not stored now removed)."""
     summary = aggregate(runs)
     write_csv(output / "aggregate.csv", summary)
-    by_controller, budgets = {}, {}
+    by_controller, budgets, steps = {}, {}, set()
     for case in cases:
         s = (rows.get(case["key"]) or {}).get("summary")
         if s and s.get("steps"):
             labels = case["labels"]
+            steps.add(f"{labels['controller']}_draw{labels['draw']}.csv")
             write_csv(output / "steps" / f"{labels['controller']}_draw{labels['draw']}.csv", steps_frame(s["steps"]))
         if s:
             by_controller.setdefault(case["labels"]["controller"], []).append(s)
             budgets[case["labels"]["controller"]] = case["sample_time"]
-    return LoopStudy(study, runs, summary, {}, output, by_controller, _inputs(cases[0])[2], budgets)
+    for earlier in (output / "steps").glob("*_draw*.csv"):
+        if earlier.name not in steps:
+            earlier.unlink()
+    return LoopStudy(cases[0]["study"], runs, summary, {}, output, by_controller, _inputs(cases[0])[2], budgets)
 
 
 def expand_simulate(path):
@@ -299,10 +314,10 @@ def loop_table(cases, rows):
 
 
 class LoopStudy(NamedTuple):
-    """A closed-loop study's outcome: the study file, the runs and aggregate tables, the counts,
+    """A closed-loop study's outcome: the study's name, the runs and aggregate tables, the counts,
     the output folder, every stored run's summary per controller, and the segment."""
 
-    study: object
+    name: str
     runs: pd.DataFrame
     aggregate: pd.DataFrame
     counts: dict

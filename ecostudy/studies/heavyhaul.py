@@ -298,14 +298,25 @@ def heavyhaul_study(path, workers=1, dask=None, retry_failed=False, out=None, pr
     returns a :class:`HeavyhaulStudy`."""
     study, output, reference, cases = expand(path)
     drawn = []  # the figures of the draw
-
-    def files(out_dir, cases, rows, table):
-        if draw is not None:
-            drawn.extend(draw(HeavyhaulStudy(study, table, {}, Path(out_dir), reference, cases, summaries_of(cases, rows))))
-        return drawn, {}
-    ran = run_expanded("heavyhaul", Expanded(output, cases), path, workers, dask, retry_failed, out, progress, files)
+    ran = run_expanded("heavyhaul", Expanded(output, cases), path, workers, dask, retry_failed, out, progress,
+                       heavyhaul_files(draw, drawn))
     return HeavyhaulStudy(study, ran.table, ran.counts, ran.output, reference, cases, summaries_of(cases, ran.rows),
                           tuple(drawn))
+
+
+def heavyhaul_files(draw=None, drawn=None):
+    """The study engine's ``draw`` (:func:`~ecostudy.studies.batch.run_expanded`) of a heavy-haul
+    study, the same for ``ecostudy heavyhaul`` and ``ecostudy run --kind heavyhaul``: the figures
+    ``draw(study)`` writes of the :class:`HeavyhaulStudy` and returns (``report.heavyplots``; None:
+    none), their names also appended to ``drawn`` when given."""
+    def files(out_dir, cases, rows, table):
+        study, reference = cases[0]["plan"]  # the study file and the reference solved at expansion
+        names = draw(HeavyhaulStudy(study, table, {}, Path(out_dir), reference, cases,
+                                    summaries_of(cases, rows))) if draw is not None else []
+        if drawn is not None:
+            drawn.extend(names)
+        return names, {}
+    return files
 
 
 def summaries_of(cases, rows):

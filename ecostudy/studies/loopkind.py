@@ -1,6 +1,6 @@
 """The closed-loop study as a registered study kind (``simulate``): every controller x every Monte
 Carlo draw a case (:mod:`ecostudy.studies.closedloop`), so that ``ecostudy run FILE --kind
-simulate`` runs it like ``ecostudy simulate FILE`` (without the figures), into the same store."""
+simulate`` runs it like ``ecostudy simulate FILE``, into the same store and with the same files."""
 from dataclasses import replace
 
 from ecostudy.studies.batch import STUDY_KINDS

@@ -1,0 +1,75 @@
+"""`ecostudy run --kind simulate|heavyhaul|network` writes the files of the kind's own command
+(through the same writers), so that one command after the other into one folder leaves only the
+last one's files there, each listed in its summary.json (and report.html); the own command's
+--no-plot after a run that drew removes the figures. Each on the smallest study of its tests, the
+second command re-using the stored runs."""
+import json
+
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+
+from .test_heavyhaul_study import study as heavyhaul_study
+from .test_network import tiny_network_study
+from .test_simulate import study as loop_study
+
+runner = CliRunner()
+
+
+def invoke(*args):
+    result = runner.invoke(app, [str(a) for a in args])
+    assert result.exit_code in (0, 1) and "Traceback" not in result.output, result.output
+    return result
+
+
+def listed_exactly(folder):
+    """The files in ``folder`` (steps/ aside) are those its summary.json and report.html list; returns them."""
+    files = set(json.loads((folder / "summary.json").read_text())["files"])
+    assert {p.name for p in folder.iterdir() if p.is_file()} == files, files
+    html = (folder / "report.html").read_text()
+    assert all(f'href="./{name}"' in html for name in files - {"report.html"}), files
+    return files
+
+
+def test_run_kind_simulate_writes_the_files_of_simulate(tmp_path):
+    """simulate (one controller, one draw), run --kind simulate (aggregate.csv, steps/ and the
+    figures rewritten from the stored run, listed), simulate --no-plot (the figures removed)."""
+    path, out = loop_study(tmp_path, draws=1, controllers=[{"name": "convex", "kind": "convex", "estimator": True,
+                                                             "compute_delay": 0}]), tmp_path / "out"
+    invoke("simulate", path, "--out", out, "--workers", 1, "--no-progress")
+    figures = {"bands.png", "solve_times.png", "mass_estimates.png"}
+    assert figures | {"aggregate.csv"} <= listed_exactly(out)
+    invoke("run", path, "--kind", "simulate", "--out", out, "--workers", 1, "--no-progress")
+    assert figures | {"aggregate.csv"} <= listed_exactly(out)
+    assert [p.name for p in (out / "steps").iterdir()] == ["convex_draw0.csv"]
+    invoke("simulate", path, "--out", out, "--workers", 1, "--no-progress", "--no-plot")
+    assert not figures & listed_exactly(out) and "aggregate.csv" in listed_exactly(out)
+
+
+def test_run_kind_heavyhaul_writes_the_files_of_heavyhaul(tmp_path):
+    """heavyhaul (one K_b, capped at 24 samples), run --kind heavyhaul (its two figures redrawn and
+    listed), heavyhaul --no-plot (removed)."""
+    path, out = heavyhaul_study(tmp_path, brake_penalty=[1], max_samples=24), tmp_path / "out"
+    figures = {"tracking.png", "forces_K_b1_f10_Np4_Nc2.png"}
+    invoke("heavyhaul", path, "--out", out, "--workers", 1, "--no-progress")
+    assert figures <= listed_exactly(out)
+    invoke("run", path, "--kind", "heavyhaul", "--out", out, "--workers", 1, "--no-progress")
+    assert figures <= listed_exactly(out)
+    invoke("heavyhaul", path, "--out", out, "--workers", 1, "--no-progress", "--no-plot")
+    assert not figures & listed_exactly(out)
+
+
+def test_run_kind_network_writes_the_files_of_network(tmp_path):
+    """run --kind network (the independent strategy of two trains), then network into the same
+    folder, then run --kind network again: each time the trains' and steps' tables, network.json
+    and both figures, listed."""
+    path, out = tiny_network_study(tmp_path, ["independent"]), tmp_path / "out"
+    own = {"network_substation.csv", "network_trains.csv", "network_steps_independent.csv", "network.json",
+           "network.png", "network_supply.png"}
+    invoke("run", path, "--kind", "network", "--out", out, "--workers", 1, "--no-progress")
+    assert own <= listed_exactly(out)
+    invoke("network", path, "--out", out, "--workers", 1, "--no-plot")
+    assert own - {"network.png", "network_supply.png"} == listed_exactly(out) - {"summary.json", "report.html",
+                                                                                 "results.sqlite"}
+    invoke("run", path, "--kind", "network", "--out", out, "--workers", 1, "--no-progress")
+    assert own <= listed_exactly(out)
