@@ -26,7 +26,7 @@ from ecostudy.core.errors import FieldError, InfeasibleError, SolverError
 from ecostudy.core import kinematics
 from ecostudy.core.kinematics import running_time
 from ecostudy.core.simulate import window_checks
-from ecostudy.core.status import OK, flagged, from_checks, part, solver_check, worst
+from ecostudy.core.status import OK, flagged, solver_part, worst
 from ecostudy.core.types import Timing, Window
 from ecostudy.core.units import to_kmh
 from ecostudy.heuristics import mareco
@@ -129,7 +129,7 @@ def _solve_times(m, parts, what, options=None):
         raise InfeasibleError(f"infeasible: no run of {what} ({outcome.status})")
     if not outcome.usable:
         raise SolverError(f"{what}: Ipopt {outcome.status} after {outcome.iterations} iterations")
-    return [float(pyo.value(p.T)) for p in parts], part(what, from_checks(solver_check(outcome.status)))
+    return [float(pyo.value(p.T)) for p in parts], solver_part(what, outcome.status)
 
 
 def whole_journey(track, train, pairs, total_time, start_times, points, options=None):
