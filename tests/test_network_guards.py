@@ -114,9 +114,9 @@ def test_a_leg_kept_at_a_point_ipopt_did_not_prove_optimal_flags_its_strategy(on
     run, outcome = legs.solve_leg(task)  # the capped warm point is kept: usable, not optimal
     assert outcome.status == "max_iterations" and run.notes == {"solver_status": "max_iterations"}
     assert guard_counts([[run]])["legs_not_optimal_count"] == 1
-    assert not_optimal(f, [[run]], {}) == ["Ipopt ended T1 leg 1 max_iterations, not optimal"]
+    assert not_optimal(f, [[run]], {}) == ["T1 leg 1: Ipopt ended max_iterations, not optimal"]
     assert not_optimal(f, [[cold]], {"solver_status": "acceptable"}) == [
-        "Ipopt ended the joint NLP acceptable, not optimal"]
+        "the joint NLP: Ipopt ended acceptable, not optimal"]
     assert not_optimal(f, [[cold]], {"solver_status": "optimal"}) == []
 
 
