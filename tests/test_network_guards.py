@@ -99,7 +99,7 @@ def test_a_warm_leg_stopped_at_its_cap_is_solved_again_never_kept_unproven(one_l
     monkeypatch.setattr(legs, "WARM_MAX_ITER", 0)  # the warm solve stops at its (feasible) start
     nlp = legs.LegNLP(task)
     capped = nlp.solve({**legs.NEAR_START, **legs.KKT, "max_iter": 0}, nlp.start(False))
-    assert capped.usable and capped.status == "max_iterations"  # a point the old rule would have kept
+    assert capped.usable and capped.status == "max_iterations"  # usable, not proven optimal: not to be kept here
     run, outcome = legs.solve_leg(task)  # solved again with Ipopt's defaults, to the optimum
     assert outcome.optimal and run.notes is None
     assert run.p.sum() == pytest.approx(free.p.sum(), rel=1e-6)
