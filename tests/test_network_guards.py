@@ -254,3 +254,17 @@ def test_a_leg_s_nlp_written_once_solves_as_one_written_for_each_solve(one_leg):
     assert again[1].iterations == first.iterations + second.iterations
     for mine, theirs in zip(again[0][:6], fresh[:6]):
         np.testing.assert_array_equal(mine, theirs)
+
+
+def test_running_times_over_an_all_out_run_ipopt_did_not_prove_optimal_flag_every_strategy(monkeypatch):
+    """A leg's running time is a supplement over its segment's all-out run; solved with a tolerance
+    Ipopt cannot reach (tol 1e-20 on every space NLP, Ipopt stopping at the first point within its
+    acceptable tolerance) that run ends ``acceptable``, and every strategy on that timetable says so."""
+    from ecostudy.ocp.solver import IPOPT
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    monkeypatch.setitem(IPOPT["space"], "tol", 1e-20)
+    monkeypatch.setitem(IPOPT["space"], "acceptable_iter", 1)
+    f = fleet.plan(track, train, ["Noord", "Station"], None, 10.0, [0.0], ["T1"], 1.0, SUPPLY, points=100,
+                   supplement=0.1)
+    assert f.all_out_solver == {("Noord", "Station"): "acceptable"}
+    assert not_optimal(f, [], {}) == ["the all-out run from Noord to Station: Ipopt ended acceptable, not optimal"]

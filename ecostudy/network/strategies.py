@@ -208,13 +208,15 @@ def _scored(fleet, runs, info, wall, mapper=map):
 
 def not_optimal(fleet, runs, info):
     """The flags of a strategy whose runs rest on a point Ipopt did not prove optimal (a usable
-    point kept: ``legs.solve_leg``'s ``solver_status`` note, the joint NLP's ``solver_status``),
+    point kept: ``legs.solve_leg``'s ``solver_status`` note, the joint NLP's ``solver_status``) or
+    whose running times are a supplement over an all-out run Ipopt did not prove optimal,
     each naming the leg or NLP and how Ipopt ended (:func:`~ecostudy.core.status.solver_part`:
     'T1 leg 2: Ipopt ended max_iterations, not optimal')."""
     parts = [solver_part(f"{fleet.names[i]} leg {k + 1}", run.notes["solver_status"]) for i, train in enumerate(runs)
              for k, run in enumerate(train) if run.notes and "solver_status" in run.notes]
     if info.get("solver_status") is not None:
         parts.append(solver_part("the joint NLP", info["solver_status"]))
+    parts += [solver_part(f"the all-out run from {a} to {b}", ended) for (a, b), ended in fleet.all_out_solver.items()]
     return [s.reason for s in parts if not s.ok]
 
 
