@@ -166,3 +166,23 @@ def test_the_computation_delay_is_samples_or_measured():
     for bad in (-1, 0.5, True, "later"):
         with pytest.raises(ValueError, match="number of samples >= 0 or 'measured'"):
             check_delay(bad)
+
+
+class WithoutTimeLimit(ConvexProgram):
+    """The convex program with no time limit on Clarabel (a real solver setting, Clarabel's default):
+    every solve runs to its end, so that a plan can finish usable yet later than the controller's budget."""
+
+    def limit(self, max_iter=None, seconds=None):
+        super().limit(max_iter, None)
+
+
+def test_a_convex_plan_over_its_time_budget_is_not_driven_and_counts_as_a_failure(commuter, advanced):
+    """A plan that finished usable but after ``time_budget_s`` (here 1 ns) is refused: the fallback
+    drives the sample and ``failures`` counts it, as it counts an unusable solve."""
+    _, segment = advanced
+    controller = Convex(WithoutTimeLimit(segment, commuter, trapezoid_grid(segment, 120), ConvexWeights()),
+                        (0.0, 200.0), hold=0.5, budget=1e-9)
+    handle = controller.plan(State())
+    assert controller.step_log[-1].status == "over_budget", controller.step_log[-1]
+    assert controller.gaps and controller.failures == 1  # the plan was usable, and not driven
+    assert handle == -1.0  # at the stand, with no earlier plan: the fallback brakes in full

@@ -228,3 +228,20 @@ def test_a_journey_nlp_ipopt_did_not_prove_optimal_flags_its_distribution():
     reason = "flagged: the whole-journey NLP: Ipopt ended acceptable, not optimal"
     assert (table.loc[whole, "status"] == reason).all(), table.loc[whole, "status"].tolist()
     assert not table.loc[~whole, "status"].str.contains("journey NLP").any()
+
+
+def test_a_total_time_over_all_out_runs_ipopt_did_not_prove_optimal_flags_every_row(monkeypatch):
+    """The total is a supplement over the segments' all-out runs (each front's first point); solved
+    with a tolerance Ipopt cannot reach (tol 1e-20 on every space NLP, and Ipopt stopping at the first
+    point within its acceptable tolerance) they end ``acceptable``, and every row of every
+    distribution says so, naming the segment (K = 60: seconds)."""
+    from ecostudy.io.loaders import load_track, load_train
+    from ecostudy.ocp.solver import IPOPT
+    from ecostudy.studies.journey import journey
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    stops = list(track.stops)
+    monkeypatch.setitem(IPOPT["space"], "tol", 1e-20)
+    monkeypatch.setitem(IPOPT["space"], "acceptable_iter", 1)
+    table, _, _, _ = journey(track, train, stops, supplement=0.1, points=60)
+    first = f"the all-out run from {stops[0]} to {stops[1]}: Ipopt ended acceptable, not optimal"
+    assert table["status"].str.contains(first, regex=False).all(), table["status"].tolist()

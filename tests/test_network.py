@@ -315,7 +315,9 @@ def test_a_plan_from_all_out_times_over_a_pool_is_the_plan_of_one_process():
     for key, run in serial.results.items():
         assert np.array_equal(pooled.results[key].trajectory.v, run.trajectory.v), key
     leg = serial.legs[0][1]
-    all_out = fleet._all_out_time((track, train, "Station", "Centrum", 300))
+    all_out, ended = fleet._all_out_time((track, train, "Station", "Centrum", 300))
+    assert ended == "optimal" and serial.all_out_solver == {("Noord", "Station"): "optimal", ("Station", "Centrum"): "optimal",
+                                                            ("Centrum", "Zuid"): "optimal"}
     assert serial.asked_times[1] == pytest.approx(1.1 * all_out, rel=1e-12) and leg.steps == int(np.ceil(1.1 * all_out))
 
 

@@ -99,7 +99,7 @@ def test_a_warm_leg_stopped_at_its_cap_is_solved_again_never_kept_unproven(one_l
     monkeypatch.setattr(legs, "WARM_MAX_ITER", 0)  # the warm solve stops at its (feasible) start
     nlp = legs.LegNLP(task)
     capped = nlp.solve({**legs.NEAR_START, **legs.KKT, "max_iter": 0}, nlp.start(False))
-    assert capped.usable and capped.status == "max_iterations"  # a point the old rule would have kept
+    assert capped.usable and capped.status == "max_iterations"  # usable, not proven optimal: not to be kept here
     run, outcome = legs.solve_leg(task)  # solved again with Ipopt's defaults, to the optimum
     assert outcome.optimal and run.notes is None
     assert run.p.sum() == pytest.approx(free.p.sum(), rel=1e-6)
@@ -114,9 +114,9 @@ def test_a_leg_kept_at_a_point_ipopt_did_not_prove_optimal_flags_its_strategy(on
     run, outcome = legs.solve_leg(task)  # the capped warm point is kept: usable, not optimal
     assert outcome.status == "max_iterations" and run.notes == {"solver_status": "max_iterations"}
     assert guard_counts([[run]])["legs_not_optimal_count"] == 1
-    assert not_optimal(f, [[run]], {}) == ["Ipopt ended T1 leg 1 max_iterations, not optimal"]
+    assert not_optimal(f, [[run]], {}) == ["T1 leg 1: Ipopt ended max_iterations, not optimal"]
     assert not_optimal(f, [[cold]], {"solver_status": "acceptable"}) == [
-        "Ipopt ended the joint NLP acceptable, not optimal"]
+        "the joint NLP: Ipopt ended acceptable, not optimal"]
     assert not_optimal(f, [[cold]], {"solver_status": "optimal"}) == []
 
 
@@ -254,3 +254,17 @@ def test_a_leg_s_nlp_written_once_solves_as_one_written_for_each_solve(one_leg):
     assert again[1].iterations == first.iterations + second.iterations
     for mine, theirs in zip(again[0][:6], fresh[:6]):
         np.testing.assert_array_equal(mine, theirs)
+
+
+def test_running_times_over_an_all_out_run_ipopt_did_not_prove_optimal_flag_every_strategy(monkeypatch):
+    """A leg's running time is a supplement over its segment's all-out run; solved with a tolerance
+    Ipopt cannot reach (tol 1e-20 on every space NLP, Ipopt stopping at the first point within its
+    acceptable tolerance) that run ends ``acceptable``, and every strategy on that timetable says so."""
+    from ecostudy.ocp.solver import IPOPT
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    monkeypatch.setitem(IPOPT["space"], "tol", 1e-20)
+    monkeypatch.setitem(IPOPT["space"], "acceptable_iter", 1)
+    f = fleet.plan(track, train, ["Noord", "Station"], None, 10.0, [0.0], ["T1"], 1.0, SUPPLY, points=100,
+                   supplement=0.1)
+    assert f.all_out_solver == {("Noord", "Station"): "acceptable"}
+    assert not_optimal(f, [], {}) == ["the all-out run from Noord to Station: Ipopt ended acceptable, not optimal"]

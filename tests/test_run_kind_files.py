@@ -73,3 +73,15 @@ def test_run_kind_network_writes_the_files_of_network(tmp_path):
                                                                                  "results.sqlite"}
     invoke("run", path, "--kind", "network", "--out", out, "--workers", 1, "--no-progress")
     assert own <= listed_exactly(out)
+
+
+def test_a_figure_the_study_no_longer_draws_is_not_kept_from_an_earlier_run(tmp_path):
+    """The study's controller loses its estimator between two runs of simulate into one folder: the
+    second run draws no mass_estimates.png, so the first run's is removed, not listed as drawn."""
+    controller = {"name": "convex", "kind": "convex", "estimator": True, "compute_delay": 0}
+    path, out = loop_study(tmp_path, draws=1, controllers=[controller]), tmp_path / "out"
+    invoke("simulate", path, "--out", out, "--workers", 1, "--no-progress")
+    assert "mass_estimates.png" in listed_exactly(out)
+    loop_study(tmp_path, draws=1, controllers=[{**controller, "estimator": False}])  # the same file, rewritten
+    invoke("simulate", path, "--out", out, "--workers", 1, "--no-progress")
+    assert {"bands.png", "solve_times.png"} <= listed_exactly(out) and not (out / "mass_estimates.png").exists()

@@ -13,7 +13,7 @@ from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import verify
-from ecostudy.core.status import Judged, Status, from_checks, part, solver_check, worst
+from ecostudy.core.status import Judged, Status, from_checks, part, solver_check, solver_part, worst
 from ecostudy.core.types import Timing, Trajectory
 from ecostudy.core.units import KWH, number
 from ecostudy.io.runsummary import RunSummary, SolverRun, Verification
@@ -75,7 +75,7 @@ class RunResult(Judged):
             checks[f"re-simulation outside tolerance ({ver.errors})"] = ver.passed
         statuses = [from_checks(checks)]
         if ALL_OUT_SOLVER in self.summary:  # the all-out run its running time was taken from
-            statuses.append(part("the all-out run", from_checks(solver_check(self.summary[ALL_OUT_SOLVER]))))
+            statuses.append(solver_part("the all-out run", self.summary[ALL_OUT_SOLVER]))
         if self.das is not None:
             advice = Status.parse(self.das.summary["status"])  # the driver advice as driven: a run of this command too
             statuses.append(part(f"driver advice {self.das.summary['method']}", advice))

@@ -107,9 +107,9 @@ def simulate_folder(study: Path, workers: Optional[int] = None, dask: Optional[s
 
 
 def loop_figures(outcome) -> list:
-    """The figures of a closed-loop study (``report.loopplots``), drawn; their file names."""
-    loopplots.draw(outcome)
-    return [n for n in ("bands.png", "solve_times.png", "mass_estimates.png") if (outcome.output / n).is_file()]
+    """The figures of a closed-loop study (``report.loopplots``), drawn; their file names (of this
+    drawing only: an earlier run's figure it does not draw again is not this run's)."""
+    return loopplots.draw(outcome)
 
 
 @spelled

@@ -137,6 +137,12 @@ def part(name: str, status: Status) -> Status:
     return flagged(f"{name}: {status.reason}" if status.kind == "flagged" else f"{name} failed: {status.reason}")
 
 
+def solver_part(name: str, ended: str) -> Status:
+    """The status of a part, the NLP ``name`` that Ipopt ``ended`` as a whole's result rests on:
+    ``ok`` when optimal, else ``flagged`` ('NAME: Ipopt ended acceptable, not optimal')."""
+    return part(name, from_checks(solver_check(ended)))
+
+
 def worst(statuses: Iterable[Status]) -> Status:
     """The status of a whole: the worst kind, with the reasons of every result of that kind."""
     statuses = list(statuses)

@@ -24,7 +24,7 @@ from ecostudy.analysis.regimes import guess_from_result
 from ecostudy.core.errors import SolverError
 from ecostudy.core.progress import stage
 from ecostudy.core.simulate import Driven, simulate, worst_overspeed
-from ecostudy.core.status import driven_run, flagged, from_checks, part, solver_check, worst
+from ecostudy.core.status import driven_run, flagged, solver_part, worst
 from ecostudy.core.units import KMH, to_kmh, to_kwh
 from ecostudy.ocp import phases, session
 
@@ -215,8 +215,8 @@ def advice_outcome(name, result, layout, m):
 
 def nlp_flags(name, outcome):
     """The reasons to flag advice made on ``outcome`` of the NLP ``name``: none when Ipopt proved it
-    optimal, else how Ipopt ended (:func:`~ecostudy.core.status.solver_check`)."""
-    status = part(name, from_checks(solver_check(outcome.status)))
+    optimal, else how Ipopt ended (:func:`~ecostudy.core.status.solver_part`)."""
+    status = solver_part(name, outcome.status)
     return () if status.ok else (status.reason,)
 
 

@@ -37,6 +37,8 @@ class Fleet:
     results: dict = field(default_factory=dict)  # space-domain net-energy runs per segment (guesses)
     dwell_steps: int = 0
     asked_times: Optional[list] = None  # running time per segment before rounding to whole steps [s]
+    # how Ipopt ended each segment's all-out run a running time was taken from (a supplement over it)
+    all_out_solver: dict = field(default_factory=dict)
     # the leg tasks solved in this process, shared by the strategies that pose the same (:mod:`.shared`)
     solved: LegRuns = field(default_factory=LegRuns, compare=False, repr=False)
 
@@ -56,11 +58,12 @@ def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, 
     cases = [prepare(track, train, a, b, points) for a, b in zip(stops[:-1], stops[1:])]
     if check is not None and running_times is not None:
         check(_timetable(track, stops, cases, running_times, dwell, offsets, names, dt, supply, buffer))
-    asked, firsts = _first_runs(track, train, cases, running_times, supplement, dt, points, pool)
+    asked, firsts, ended = _first_runs(track, train, cases, running_times, supplement, dt, points, pool)
     out = _timetable(track, stops, cases, asked, dwell, offsets, names, dt, supply, buffer)
     if check is not None and running_times is None:
         check(out)
     out.results = {(c.segment.from_stop, c.segment.to_stop): r for c, r in zip(cases, firsts)}
+    out.all_out_solver = {pair: status for pair, status in zip(out.results, ended) if status is not None}
     return out
 
 
@@ -97,7 +100,8 @@ def _steps(seconds, dt):
 
 
 def _first_runs(track, train, cases, running_times, supplement, dt, points, pool):
-    """(running time asked [s], net-energy run at it rounded up to whole steps) per segment."""
+    """(running time asked [s], net-energy run at it rounded up to whole steps, how Ipopt ended the
+    all-out run the time is a supplement over (None: a time given)) per segment."""
     pairs = [(c.segment.from_stop, c.segment.to_stop) for c in cases]
 
     def first(k, seconds):
@@ -108,7 +112,7 @@ def _first_runs(track, train, cases, running_times, supplement, dt, points, pool
 
     submit = pool.submit if pool is not None else _done
     asked = list(running_times) if running_times is not None else [None] * len(pairs)
-    runs = [None] * len(pairs)
+    runs, ended = [None] * len(pairs), [None] * len(pairs)
     jobs = {(submit(_all_out_time, all_out(k)) if t is None else submit(_net_energy_run, first(k, t))):
             (t is None, k) for k, t in enumerate(asked)}
     pending = set(jobs)
@@ -117,13 +121,14 @@ def _first_runs(track, train, cases, running_times, supplement, dt, points, pool
         for job in done:
             timing, k = jobs[job]
             if timing:
-                asked[k] = job.result() * (1 + supplement)
+                fastest, ended[k] = job.result()
+                asked[k] = fastest * (1 + supplement)
                 follow = submit(_net_energy_run, first(k, asked[k]))
                 jobs[follow] = (False, k)
                 pending.add(follow)
             else:
                 runs[k] = job.result()
-    return asked, runs
+    return asked, runs, ended
 
 
 def _done(fn, *args):
@@ -143,13 +148,14 @@ def _net_energy_run(task):
 def all_out_times(track, train, stops, points, mapper=map):
     """Minimum running time [s] of each segment between consecutive ``stops`` (``mapper``: how
     the segments are mapped over, ``map`` or a process pool's)."""
-    return list(mapper(_all_out_time, [(track, train, a, b, points) for a, b in zip(stops[:-1], stops[1:])]))
+    return [t for t, _ in mapper(_all_out_time, [(track, train, a, b, points) for a, b in zip(stops[:-1], stops[1:])])]
 
 
 def _all_out_time(task):
+    """(track, train, from, to, K) -> (the all-out time [s], how Ipopt ended its run)."""
     track, train, a, b, points = task
-    return solve_run(track, train, a, b, Timing(), objective="time", points=points,
-                     verify_result=False).summary["running_time_s"]
+    r = solve_run(track, train, a, b, Timing(), objective="time", points=points, verify_result=False)
+    return r.summary["running_time_s"], r.facts.solver.status
 
 
 def _guess(fleet, leg):

@@ -117,8 +117,9 @@ def solve_leg(task):
 
     A warm solve (from a previous run, the rounds) stays near its start (``NEAR_START``: measured
     2-3x fewer iterations on the regional study's hardest legs, 1130 -> 333 and 823 -> 441, and
-    lower costs); where that fails (one leg of the 20-stop study reached 3000 iterations) the leg
-    is solved again with Ipopt's defaults before the failure is raised. (Starting from the last
+    lower costs) for at most :data:`WARM_MAX_ITER` iterations; where that fails or stops there the
+    leg is solved again with Ipopt's defaults (:func:`_solve`) before the failure is raised, and a
+    point kept that Ipopt did not prove optimal is noted (``solver_status``). (Starting from the last
     solve's multipliers too, with a small barrier, took a third of the iterations on the 2-train
     study's rounds but stopped the 3-train study's rounds at worse local optima: receptivity
     52.123 against 51.789 kWh, rule 7.11 50.497 against 49.764.)

@@ -35,6 +35,7 @@ from concurrent.futures import as_completed
 
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import TOLERANCES
+from ecostudy.core.status import solver_part
 from ecostudy.core.registry import Registry
 from ecostudy.network.joint import joint
 from ecostudy.network.rules import following, independent, supervised
@@ -207,15 +208,16 @@ def _scored(fleet, runs, info, wall, mapper=map):
 
 def not_optimal(fleet, runs, info):
     """The flags of a strategy whose runs rest on a point Ipopt did not prove optimal (a usable
-    point kept: ``legs.solve_leg``'s ``solver_status`` note, the joint NLP's ``solver_status``),
-    each naming the leg or NLP and how Ipopt ended."""
-    ended = [f"{fleet.names[i]} leg {k + 1} {run.notes['solver_status']}" for i, train in enumerate(runs)
+    point kept: ``legs.solve_leg``'s ``solver_status`` note, the joint NLP's ``solver_status``) or
+    whose running times are a supplement over an all-out run Ipopt did not prove optimal,
+    each naming the leg or NLP and how Ipopt ended (:func:`~ecostudy.core.status.solver_part`:
+    'T1 leg 2: Ipopt ended max_iterations, not optimal')."""
+    parts = [solver_part(f"{fleet.names[i]} leg {k + 1}", run.notes["solver_status"]) for i, train in enumerate(runs)
              for k, run in enumerate(train) if run.notes and "solver_status" in run.notes]
-    flags = [f"Ipopt ended {', '.join(ended)}, not optimal"] if ended else []
-    joint_status = info.get("solver_status")
-    if joint_status not in (None, "optimal"):
-        flags.append(f"Ipopt ended the joint NLP {joint_status}, not optimal")
-    return flags
+    if info.get("solver_status") is not None:
+        parts.append(solver_part("the joint NLP", info["solver_status"]))
+    parts += [solver_part(f"the all-out run from {a} to {b}", ended) for (a, b), ended in fleet.all_out_solver.items()]
+    return [s.reason for s in parts if not s.ok]
 
 
 def guard_counts(runs):

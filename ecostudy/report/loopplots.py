@@ -86,11 +86,14 @@ def mass_estimates(runs, path, title=""):
 
 
 def draw(outcome):
-    """The plots of a closed-loop study (``studies.closedloop.LoopStudy``) into its output folder."""
+    """The plots of a closed-loop study (``studies.closedloop.LoopStudy``) into its output folder;
+    returns the file names written."""
     runs, name, out = outcome.by_controller, outcome.name, outcome.output
     if not runs:
-        return
+        return []
     bands(runs, outcome.segment, out / "bands.png", title=name)
     solve_times(runs, outcome.budgets, out / "solve_times.png", title=name)
-    if any(s.get("estimates") for group in runs.values() for s in group):
-        mass_estimates(runs, out / "mass_estimates.png", title=name)
+    if not any(s.get("estimates") for group in runs.values() for s in group):
+        return ["bands.png", "solve_times.png"]
+    mass_estimates(runs, out / "mass_estimates.png", title=name)
+    return ["bands.png", "solve_times.png", "mass_estimates.png"]

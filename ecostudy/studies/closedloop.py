@@ -21,7 +21,7 @@ from ecostudy.core.columns import with_statistic
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
-from ecostudy.core.status import driven_run, flagged, from_checks, part, solver_check, worst
+from ecostudy.core.status import driven_run, flagged, solver_part, worst
 from ecostudy.core.types import State
 from ecostudy.io import schemas
 from ecostudy.io.loaders import (check_fits, chosen_stops, read_document, track_document, track_from_schema,
@@ -190,7 +190,7 @@ def _trip(case):
                                         "usable plan (the fallback drove them)")])
     if getattr(planner, "plans_from", None) is not None:  # the ATO run it replays or plans from
         ended = planner.plans_from.facts.solver.status
-        status = worst([status, part("the ATO run", from_checks(solver_check(ended)))])
+        status = worst([status, solver_part("the ATO run", ended)])
     status, error = (status.kind, status.reason or None)
     return status, error, summary
 

@@ -26,7 +26,7 @@ from ecostudy.core.errors import FieldError, InfeasibleError, SolverError
 from ecostudy.core import kinematics
 from ecostudy.core.kinematics import running_time
 from ecostudy.core.simulate import window_checks
-from ecostudy.core.status import OK, flagged, from_checks, part, solver_check, worst
+from ecostudy.core.status import OK, flagged, solver_part, worst
 from ecostudy.core.types import Timing, Window
 from ecostudy.core.units import to_kmh
 from ecostudy.heuristics import mareco
@@ -129,7 +129,7 @@ def _solve_times(m, parts, what, options=None):
         raise InfeasibleError(f"infeasible: no run of {what} ({outcome.status})")
     if not outcome.usable:
         raise SolverError(f"{what}: Ipopt {outcome.status} after {outcome.iterations} iterations")
-    return [float(pyo.value(p.T)) for p in parts], part(what, from_checks(solver_check(outcome.status)))
+    return [float(pyo.value(p.T)) for p in parts], solver_part(what, outcome.status)
 
 
 def whole_journey(track, train, pairs, total_time, start_times, points, options=None):
@@ -313,8 +313,10 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
                             workers=workers, verify_result=False, within_slowest=True)[0])
         tick()
     all_out = sum(float(f["running_time_s"].iloc[0]) for f in fronts)
-    if total_time is None:
+    if total_time is None:  # a supplement over the segments' all-out runs: each one not proven optimal flags every row
         total_time = all_out * (1 + supplement)
+        proven["all"] = worst([solver_part(f"the all-out run from {a} to {b}", str(f["solver_status"].iloc[0]))
+                               for (a, b), f in zip(pairs, fronts)])
     marginal = equal_marginal(fronts, total_time)
     whole, proven["whole-journey NLP"] = whole_journey(track, train, pairs, total_time, marginal, points, nlp_options)
     plans = {"whole-journey NLP": whole, "equal marginal saving": marginal, "same percentage": uniform(fronts, total_time),
@@ -340,7 +342,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
             t0 = float(f["running_time_s"].iloc[0])
             facts = r.facts
             clock, broken = timing_columns(plan, n, departures[n], arrivals[n], r) if plan is not None else ({}, "")
-            status = worst([r.status, proven.get(name, OK), flagged(f"breaks the timetable: {broken}") if broken else OK])
+            status = worst([r.status, proven.get(name, OK), proven.get("all", OK), flagged(f"breaks the timetable: {broken}") if broken else OK])
             rows.append({"distribution": name, "from": a, "to": b, "distance_m": facts.distance_m,
                          "all_out_time_s": t0, "running_time_s": facts.running_time_s,
                          "supplement_pct": 100 * (t / t0 - 1), "traction_energy_kWh": facts.traction_energy_kWh,
