@@ -118,6 +118,9 @@ def test_a_leg_kept_at_a_point_ipopt_did_not_prove_optimal_flags_its_strategy(on
     assert not_optimal(f, [[cold]], {"solver_status": "acceptable"}) == [
         "the joint NLP: Ipopt ended acceptable, not optimal"]
     assert not_optimal(f, [[cold]], {"solver_status": "optimal"}) == []
+    many = not_optimal(f, [[run] * 5], {})  # a long line of legs: the first three and how many more
+    assert many[:3] == [f"T1 leg {k}: Ipopt ended max_iterations, not optimal" for k in (1, 2, 3)]
+    assert many[3:] == ["and 2 more legs or NLPs not proven optimal (legs_not_optimal_count)"]
 
 
 def test_a_cold_leg_keeps_the_cheaper_of_its_two_starts():

@@ -85,3 +85,17 @@ def test_a_figure_the_study_no_longer_draws_is_not_kept_from_an_earlier_run(tmp_
     loop_study(tmp_path, draws=1, controllers=[{**controller, "estimator": False}])  # the same file, rewritten
     invoke("simulate", path, "--out", out, "--workers", 1, "--no-progress")
     assert {"bands.png", "solve_times.png"} <= listed_exactly(out) and not (out / "mass_estimates.png").exists()
+
+
+def test_only_files_of_the_kinds_ecostudy_writes_are_removed(tmp_path):
+    """A hand-edited summary.json that listed a user's own notes (or a path out of the folder) never
+    gets them removed: only an earlier run's csv, png, json, html or sqlite file it no longer lists."""
+    from ecostudy.io.folder import remove_unlisted
+    (tmp_path / "summary.json").write_text(json.dumps({"files": ["kept.csv"]}))
+    for name in ("kept.csv", "old.csv", "old.png", "notes.txt", "notes"):
+        (tmp_path / name).write_text("x")
+    (tmp_path.parent / "outside.csv").write_text("x")
+    gone = remove_unlisted(tmp_path, ["kept.csv", "old.csv", "old.png", "notes.txt", "notes", "../outside.csv"])
+    assert gone == ["old.csv", "old.png"]
+    assert {p.name for p in tmp_path.iterdir()} == {"summary.json", "kept.csv", "notes.txt", "notes"}
+    assert (tmp_path.parent / "outside.csv").is_file()

@@ -134,7 +134,7 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
             raise SolverError(f"Ipopt failed ({outcome.status}) after {outcome.iterations} iterations; "
                               "try more --points or a longer running time")
     result = finish(case, m, outcome, stages, objective, t_allout, verify_result)
-    if fastest is not None and outcome is not fastest and not fastest.optimal:
+    if timing.supplement is not None and outcome is not fastest and not fastest.optimal:  # its time is a supplement over it
         result.summary[ALL_OUT_SOLVER] = fastest.status
     return result
 

@@ -143,12 +143,18 @@ def files_listed(out_dir: Path | str) -> set[str]:
     return {f for f in files if isinstance(f, str)} if isinstance(files, list) else set()
 
 
+# the kinds of file ecostudy writes into an output folder: only such a file an earlier summary.json
+# listed is removed (a user's own file named in a hand-edited summary.json stays)
+WRITTEN_SUFFIXES = (".csv", ".png", ".json", ".html", ".sqlite")
+
+
 def remove_unlisted(out_dir: Path | str, earlier: Iterable[str]) -> list[str]:
     """Remove the files of ``earlier`` (what the folder's ``summary.json`` listed before this run
     wrote its own, :func:`files_listed`) that it does not list now: an earlier run's files this
     run did not write, so a folder never mixes the files of two runs. Returns their names."""
     out_dir, now = Path(out_dir), files_listed(out_dir)
-    gone = sorted(name for name in set(earlier) - now if Path(name).name == name and (out_dir / name).is_file())
+    gone = sorted(name for name in set(earlier) - now if Path(name).name == name and Path(name).suffix in WRITTEN_SUFFIXES
+                  and (out_dir / name).is_file())
     for name in gone:
         (out_dir / name).unlink(missing_ok=True)
     return gone

@@ -206,6 +206,9 @@ def _scored(fleet, runs, info, wall, mapper=map):
     return {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
 
 
+SHOWN_PARTS = 3  # a strategy's reason names at most this many legs or NLPs Ipopt did not prove optimal
+
+
 def not_optimal(fleet, runs, info):
     """The flags of a strategy whose runs rest on a point Ipopt did not prove optimal (a usable
     point kept: ``legs.solve_leg``'s ``solver_status`` note, the joint NLP's ``solver_status``) or
@@ -217,7 +220,11 @@ def not_optimal(fleet, runs, info):
     if info.get("solver_status") is not None:
         parts.append(solver_part("the joint NLP", info["solver_status"]))
     parts += [solver_part(f"the all-out run from {a} to {b}", ended) for (a, b), ended in fleet.all_out_solver.items()]
-    return [s.reason for s in parts if not s.ok]
+    reasons = [s.reason for s in parts if not s.ok]
+    if len(reasons) > SHOWN_PARTS:  # a long line of legs: the first ones and how many more
+        reasons = reasons[:SHOWN_PARTS] + [f"and {len(reasons) - SHOWN_PARTS} more legs or NLPs not proven optimal "
+                                           "(legs_not_optimal_count)"]
+    return reasons
 
 
 def guard_counts(runs):

@@ -187,7 +187,7 @@ def _trip(case):
                         summary.get("adhesion_use_max"))
     if summary["failures_count"]:  # solves that did not converge: the fallback drove those samples, not the controller
         status = worst([status, flagged(f"{summary['failures_count']} solves in {summary['samples']} samples gave no "
-                                        "usable plan (the fallback drove them)")])
+                                        "usable plan in time (the fallback drove them)")])
     if getattr(planner, "plans_from", None) is not None:  # the ATO run it replays or plans from
         ended = planner.plans_from.facts.solver.status
         status = worst([status, solver_part("the ATO run", ended)])
