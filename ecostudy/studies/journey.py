@@ -289,6 +289,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
         windowed, windowed_departures, proven["timing windows NLP"] = windowed_journey(track, train, plan, points,
                                                                                        options=nlp_options)
         total_time = float(sum(windowed))
+        proven["all"] = proven["timing windows NLP"]  # every distribution spreads its total: not proven, every row flagged
     if scheduled is not None:
         total_time = float(sum(scheduled))
     pairs = list(zip(stops[:-1], stops[1:]))
