@@ -228,3 +228,19 @@ def test_a_journey_nlp_ipopt_did_not_prove_optimal_flags_its_distribution():
     reason = "flagged: the whole-journey NLP: Ipopt ended acceptable, not optimal"
     assert (table.loc[whole, "status"] == reason).all(), table.loc[whole, "status"].tolist()
     assert not table.loc[~whole, "status"].str.contains("journey NLP").any()
+
+
+def test_rows_whose_all_out_run_ipopt_did_not_prove_optimal_are_flagged_naming_it(monkeypatch):
+    """Each front's all-out run gives its segment's ``all_out_time_s`` and ``supplement_pct`` (and,
+    with a supplement, the total time of every distribution): ended ``acceptable`` (Ipopt's ``tol`` at
+    1e-20 on the all-out runs), every row says so (K = 60)."""
+    from ecostudy.io.loaders import load_track, load_train
+    from ecostudy.studies import pareto
+    from ecostudy.studies.journey import journey
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    real = pareto.all_out
+    monkeypatch.setattr(pareto, "all_out", lambda case, stages, options=None: real(case, stages,
+                                                                                   {**(options or {}), "tol": 1e-20}))
+    table, _, _, fronts = journey(track, train, list(track.stops), supplement=0.1, points=60)
+    assert all(f["solver_status"].iloc[0] == "acceptable" for f in fronts)
+    assert table["status"].str.contains("the all-out run: Ipopt ended acceptable, not optimal").all(), table["status"]
