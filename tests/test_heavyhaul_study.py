@@ -356,5 +356,5 @@ def test_runs_that_drove_qps_clarabel_did_not_prove_optimal_are_flagged_with_the
     row = run_heavyhaul_case(case)
     n = row["summary"]["unproven_solves_count"]
     assert n > 0 and row["summary"]["unproven_solver_status"] == "AlmostSolved", row["summary"]
-    assert row["status"] == "flagged" and f"{n} solves in " in row["error"], row["error"]
+    assert row["status"] == "flagged" and f"{n} solve{'s' if n != 1 else ''} in " in row["error"], row["error"]
     assert "ended AlmostSolved (driven, not proven optimal)" in row["error"]

@@ -38,7 +38,7 @@ def test_a_run_driven_on_almost_solved_plans_is_flagged_with_their_count(tmp_pat
     assert r.exit_code == 1, r.output
     n = run["unproven_solves_count"]
     assert n > 0 and run["unproven_solver_status"] == "AlmostSolved" and run["failures_count"] == 0, run.to_dict()
-    assert f"{n} solves in " in run["reason"] and "ended AlmostSolved (driven, not proven optimal)" in run["reason"]
+    assert f"{n} solve{'s' if n != 1 else ''} in " in run["reason"] and "ended AlmostSolved (driven, not proven optimal)" in run["reason"]
     steps = pd.read_csv(tmp_path / "o" / "steps" / "c_draw0.csv")
     assert (steps["status"] == "AlmostSolved").sum() == n  # steps.csv says which samples
 

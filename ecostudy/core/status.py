@@ -140,7 +140,8 @@ def unproven_solves(count: int, samples: int, ends: str) -> Status:
     ``count`` among the run's ``samples`` and how the solver ``ended`` them; ``ok`` for none."""
     if not count:
         return OK
-    return flagged(f"{count} solves in {samples} samples ended {ends} (driven, not proven optimal)")
+    return flagged(f"{count} solve{'s' if count != 1 else ''} in {samples} samples ended {ends} (driven, not proven "
+                   "optimal)")
 
 
 def part(name: str, status: Status) -> Status:
