@@ -343,3 +343,18 @@ def test_runs_on_a_reference_ipopt_did_not_prove_optimal_are_flagged_saying_so(t
     assert reason.startswith("the reference run: Ipopt ended acceptable, not optimal; the all-out run: Ipopt ended ")
     row = run_heavyhaul_case(cases[0])
     assert row["status"] == "flagged" and row["error"].endswith(reason), row["error"]
+
+
+def test_runs_that_drove_qps_clarabel_did_not_prove_optimal_are_flagged_with_their_count(tmp_path, monkeypatch):
+    """The QP in Clarabel's form with a feasibility tolerance it cannot reach (1e-20): it stops at its
+    reduced accuracy, ``AlmostSolved``; the run drives those plans and is flagged with their count."""
+    from ecostudy.heavyhaul import qp
+    from ecostudy.studies.heavyhaul import expand, run_heavyhaul_case
+    real = qp.clarabel_settings
+    monkeypatch.setattr(qp, "clarabel_settings", lambda **chosen: real(**{**chosen, "tol_feas": 1e-20}))
+    (case,) = expand(study(tmp_path, brake_penalty=[1], qp_solver="clarabel"))[3]
+    row = run_heavyhaul_case(case)
+    n = row["summary"]["unproven_solves_count"]
+    assert n > 0 and row["summary"]["unproven_solver_status"] == "AlmostSolved", row["summary"]
+    assert row["status"] == "flagged" and f"{n} solve{'s' if n != 1 else ''} in " in row["error"], row["error"]
+    assert "ended AlmostSolved (driven, not proven optimal)" in row["error"]

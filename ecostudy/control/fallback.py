@@ -15,6 +15,9 @@ import time
 from typing import NamedTuple, Optional
 
 KINDS = ("shifted_plan", "reserve", "full_brake")
+# the statuses of steps that drove no solver's plan (a rule's step, or a step the fallback drove)
+SOLVELESS = ("final", "replay", "wait", "none", "terminal_brake", "terminal_coast", "ok", "stopping_curve",
+             "no_sequence", "no_plan", "over_budget")
 SHIFT_SAMPLES = 10  # a plan older than this many samples is not driven any more
 
 
@@ -43,6 +46,7 @@ class Fallback:
 
     shift_samples = SHIFT_SAMPLES
     plans_from = None  # the solved run (a RunResult) it replays or plans from, if any: part of a run's status
+    plan_ended = None  # how Clarabel ended the one convex plan it replays (``open_loop``), if any: likewise
 
     def _start_records(self):
         self.step_log, self.last_plan, self.shifts = [], None, 0

@@ -123,10 +123,25 @@ def from_checks(checks: dict[str, bool]) -> Status:
     return OK if not missed else flagged("; ".join(missed))
 
 
-def solver_check(ended: str) -> dict[str, bool]:
-    """The check that Ipopt proved optimality, for :func:`from_checks`: named by how it ``ended``
-    ('Ipopt ended maxIterations, not optimal'), passed when that is ``optimal``."""
-    return {f"Ipopt ended {ended}, not optimal": ended == "optimal"}
+def solver_check(ended: str, solver: str = "Ipopt", proven: str = "optimal") -> dict[str, bool]:
+    """The check that a ``solver`` proved optimality, for :func:`from_checks`: named by how it
+    ``ended`` ('Ipopt ended maxIterations, not optimal'), passed when that is its ``proven`` end
+    (Clarabel's: ``Solved``)."""
+    return {f"{solver} ended {ended}, not optimal": ended == proven}
+
+
+# the ends by which a solver proves its optimum: Ipopt's, Clarabel's, SciPy's SLSQP's (its message)
+PROVEN = ("optimal", "Solved", "Optimization terminated successfully")
+
+
+def unproven_solves(count: int, samples: int, ends: str) -> Status:
+    """A driven run some of whose samples drove a plan the solver did not prove optimal (usable: within
+    the constraints, e.g. Ipopt ``acceptable``, Clarabel ``AlmostSolved``): ``flagged`` with their
+    ``count`` among the run's ``samples`` and how the solver ``ended`` them; ``ok`` for none."""
+    if not count:
+        return OK
+    return flagged(f"{count} solve{'s' if count != 1 else ''} in {samples} samples ended {ends} (driven, not proven "
+                   "optimal)")
 
 
 def part(name: str, status: Status) -> Status:
@@ -137,10 +152,11 @@ def part(name: str, status: Status) -> Status:
     return flagged(f"{name}: {status.reason}" if status.kind == "flagged" else f"{name} failed: {status.reason}")
 
 
-def solver_part(name: str, ended: str) -> Status:
-    """The status of a part, the NLP ``name`` that Ipopt ``ended`` as a whole's result rests on:
-    ``ok`` when optimal, else ``flagged`` ('NAME: Ipopt ended acceptable, not optimal')."""
-    return part(name, from_checks(solver_check(ended)))
+def solver_part(name: str, ended: str, solver: str = "Ipopt", proven: str = "optimal") -> Status:
+    """The status of a part, the program ``name`` that a ``solver`` ``ended`` as a whole's result
+    rests on: ``ok`` when that is its ``proven`` end, else ``flagged`` ('NAME: Ipopt ended
+    acceptable, not optimal')."""
+    return part(name, from_checks(solver_check(ended, solver, proven)))
 
 
 def worst(statuses: Iterable[Status]) -> Status:

@@ -22,6 +22,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core.errors import SolverError
+from ecostudy.core.status import PROVEN
 from ecostudy.core.units import KMH, KN
 from ecostudy.heavyhaul.approach import braking_point, stopping_share
 from ecostudy.heavyhaul.plant import LOSSES, CascadeStep
@@ -52,6 +53,7 @@ class LoopRecord(NamedTuple):
     rolling_back: bool = False  # the run ended on the final approach with the train rolling back (not stood)
     end_forces: tuple = (0.0, 0.0)  # where the run ended: (grade and resistance the train feels, its locomotives' utmost traction) [N]
     held_for_good: bool = False  # the run ended held on its brakes with the plan of the sample before (:func:`repeats`)
+    unproven: tuple = ()  # how the solver ended each driven solve it did not prove optimal (e.g. AlmostSolved)
 
 
 def reduced_state(plant, reduction, state):
@@ -201,7 +203,7 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     nv, locos = len(reduction.members), reduction.locomotives
     u = np.zeros(nv) if applied is None else np.asarray(applied, float)
     rows, works, overruns, stood, braking, rolling_back = [], np.zeros(3), 0, False, False, False
-    held_before, before, estimated, for_good = False, None, None, False
+    held_before, before, estimated, for_good, unproven = False, None, None, False, []
     losses, stored = np.zeros(len(LOSSES)), plant.stored_energy(state)
     for _ in range(samples):
         measured = reduced_state(plant, reduction, state)
@@ -217,6 +219,8 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
         seconds = controller.last.seconds
         if seconds <= ts:
             u = planned
+            if controller.last.status not in PROVEN:  # usable, not proven optimal: driven, and counted
+                unproven.append(controller.last.status)
         else:
             overruns += 1
         if observer is not None:  # only the locomotives' speeds are measured (eq. 3)
@@ -250,7 +254,7 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
     columns = (np.array(v) for v in zip(*rows))
     return state, LoopRecord(*columns, *map(float, works), overruns, stood, tuple(map(float, losses)),
                              plant.stored_energy(state) - stored, rolling_back, end_forces(plant, reduction, state),
-                             for_good)
+                             for_good, tuple(unproven))
 
 
 def end_forces(plant, reduction, state):

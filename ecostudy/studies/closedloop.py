@@ -21,7 +21,7 @@ from ecostudy.core.columns import with_statistic
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
-from ecostudy.core.status import driven_run, flagged, solver_part, worst
+from ecostudy.core.status import driven_run, flagged, solver_part, unproven_solves, worst
 from ecostudy.core.types import State
 from ecostudy.io import schemas
 from ecostudy.io.loaders import (check_fits, chosen_stops, read_document, track_document, track_from_schema,
@@ -188,6 +188,10 @@ def _trip(case):
     if summary["failures_count"]:  # solves that did not converge: the fallback drove those samples, not the controller
         status = worst([status, flagged(f"{summary['failures_count']} solves in {summary['samples']} samples gave no "
                                         "usable plan in time (the fallback drove them)")])
+    status = worst([status, unproven_solves(summary["unproven_solves_count"], summary["samples"],
+                                            summary["unproven_solver_status"])])
+    if getattr(planner, "plan_ended", None) is not None:  # the convex plan it replays
+        status = worst([status, solver_part("the open-loop plan", planner.plan_ended, "Clarabel", "Solved")])
     if getattr(planner, "plans_from", None) is not None:  # the ATO run it replays or plans from
         ended = planner.plans_from.facts.solver.status
         status = worst([status, solver_part("the ATO run", ended)])
@@ -199,7 +203,8 @@ GRIP = "adhesion_use_max"  # a column of a train with an adhesion limit only (co
 COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "stop_error_m", "overspeed_max_kmh",
            "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget_count", "softened_count", "failures_count",
            "gap_max", "fallback_shifted_plan_count", "fallback_reserve_count", "fallback_full_brake_count",
-           "full_brake_before_final_count", "inexact_solves_count", "power_limit_dropped", "compute_delay_samples",
+           "full_brake_before_final_count", "inexact_solves_count", "unproven_solves_count", "unproven_solver_status",
+           "power_limit_dropped", "compute_delay_samples",
            "terminal_gamma_m", "mode_changes", "mass_estimate", *(f"true_{name}_factor" for name in PARAMETERS))
 
 
@@ -236,7 +241,7 @@ def aggregate(runs):
                             ("solve_p95_ms", "max"), ("solve_max_ms", "max"), ("over_budget_count", "sum"),
                             ("softened_count", "sum"), ("gap_max", "max"), ("fallback_shifted_plan_count", "sum"),
                             ("fallback_reserve_count", "sum"), ("fallback_full_brake_count", "sum"),
-                            ("inexact_solves_count", "sum"),
+                            ("inexact_solves_count", "sum"), ("unproven_solves_count", "sum"),
                             *([(GRIP, "max")] if GRIP in runs else [])):
             row[with_statistic(column, how)] = getattr(pd.to_numeric(group[column], errors="coerce"), how)()
         rows.append(row)

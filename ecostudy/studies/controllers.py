@@ -82,7 +82,9 @@ def open_loop(b):
     plan = convex_program(b.segment, b.train, b.points, b.spec).solve(State(), b.window)
     if not plan.usable:
         raise InputError(f"no open-loop plan in the window {b.window}")
-    return ForceReplay(b.train, plan.nodes, plan.force)
+    replay = ForceReplay(b.train, plan.nodes, plan.force)
+    replay.plan_ended = plan.status  # AlmostSolved: usable, not proven optimal (part of each run's status)
+    return replay
 
 
 def ato(b):

@@ -25,7 +25,7 @@ import pandas as pd
 from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KMH, KN, KWH
-from ecostudy.core.status import OK, part
+from ecostudy.core.status import OK, part, unproven_solves
 from ecostudy.heavyhaul.airbrake import application_time, brake_lag
 from ecostudy.heavyhaul.checks import reference_problems, ruling_grade, samples_to_start, starting_coupler_force
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
@@ -228,6 +228,7 @@ def summarise(consist, controller, record, reference, locomotives=(), stop_toler
         "qp_constraints": size["constraints"], "solve_mean_ms": 1e3 * float(record.solve_seconds.mean()),
         "solve_p95_ms": 1e3 * float(np.percentile(record.solve_seconds, 95)),
         "solve_max_ms": 1e3 * float(record.solve_seconds.max()), "over_budget_count": record.overruns,
+        "unproven_solves_count": len(record.unproven), "unproven_solver_status": ", ".join(sorted(set(record.unproven))) or None,
         "peak_memory_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "profile": {"head_m": np.round(record.head, 1).tolist(), "speed_mps": np.round(record.mean_speed, 3).tolist(),
                     "reference_mps": np.round(record.reference, 3).tolist()},
@@ -247,6 +248,9 @@ def _run(case):
     why = reasons(summary, case["max_samples"], summary["over_budget_count"],
                   Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH,
                              case["arrival_tolerance_percent"] / 100, case["arrival_tolerance_s"]))
+    unproven = unproven_solves(summary["unproven_solves_count"], summary["samples"], summary["unproven_solver_status"])
+    if not unproven.ok:  # the QP's plans it drove were usable, not proven optimal
+        why.append(unproven.reason)
     if "reference_status" in case:  # the speeds it tracked are not a proven, verified optimum
         why.append(case["reference_status"])
     return ("flagged", "; ".join(why), summary) if why else ("ok", None, summary)
@@ -266,7 +270,7 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
            "speed_at_end_kmh", "rolling_back", "resistance_at_end_kN", "traction_utmost_at_end_kN", "held_s", "held_at_end",
            "traction_asked_at_end_kN", "samples", "virtual_cars",
            "qp_inputs", "qp_states", "qp_constraints", "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget_count",
-           "peak_memory_MB", *IN_TRAIN)
+           "unproven_solves_count", "unproven_solver_status", "peak_memory_MB", *IN_TRAIN)
 
 
 def expand_heavyhaul(path):

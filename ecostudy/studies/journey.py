@@ -314,10 +314,12 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
                             workers=workers, verify_result=False, within_slowest=True)[0])
         tick()
     all_out = sum(float(f["running_time_s"].iloc[0]) for f in fronts)
+    # each front's all-out run (its first row): the segment's all_out_time_s and supplement_pct
+    fastest_proven = [solver_part(f"the all-out run from {a} to {b}", str(f["solver_status"].iloc[0]))
+                      for (a, b), f in zip(pairs, fronts)]
     if total_time is None:  # a supplement over the segments' all-out runs: each one not proven optimal flags every row
         total_time = all_out * (1 + supplement)
-        proven["all"] = worst([solver_part(f"the all-out run from {a} to {b}", str(f["solver_status"].iloc[0]))
-                               for (a, b), f in zip(pairs, fronts)])
+        proven["all"] = worst(fastest_proven)
     marginal = equal_marginal(fronts, total_time)
     whole, proven["whole-journey NLP"] = whole_journey(track, train, pairs, total_time, marginal, points, nlp_options)
     plans = {"whole-journey NLP": whole, "equal marginal saving": marginal, "same percentage": uniform(fronts, total_time),
@@ -343,7 +345,8 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
             t0 = float(f["running_time_s"].iloc[0])
             facts = r.facts
             clock, broken = timing_columns(plan, n, departures[n], arrivals[n], r) if plan is not None else ({}, "")
-            status = worst([r.status, proven.get(name, OK), proven.get("all", OK), flagged(f"breaks the timetable: {broken}") if broken else OK])
+            status = worst([r.status, proven.get(name, OK), proven.get("all", OK), fastest_proven[n],
+                            flagged(f"breaks the timetable: {broken}") if broken else OK])
             rows.append({"distribution": name, "from": a, "to": b, "distance_m": facts.distance_m,
                          "all_out_time_s": t0, "running_time_s": facts.running_time_s,
                          "supplement_pct": 100 * (t / t0 - 1), "traction_energy_kWh": facts.traction_energy_kWh,

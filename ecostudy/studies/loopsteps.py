@@ -9,7 +9,8 @@ sample that planned nothing has an empty controller part.
 import numpy as np
 import pandas as pd
 
-from ecostudy.control.fallback import KINDS
+from ecostudy.control.fallback import KINDS, SOLVELESS
+from ecostudy.core.status import PROVEN
 
 COLUMNS = ("sample", "time_s", "position_m", "speed_mps", "measured_position_m", "measured_speed_mps", "handle",
            "status", "solve_ms", "gap", "fallback", "softened", "mass_estimate")
@@ -46,13 +47,16 @@ def step_columns(result, planner):
 def step_counts(planner):
     """Per run: the fallbacks by kind, the steps with a softened row (steps, not solver retries),
     the convex solves above the exactness bound, and full braking before the final approach
-    (a ``full_brake`` or ``reserve`` fallback)."""
+    (a ``full_brake`` or ``reserve`` fallback), and the steps that drove a plan its solver did not
+    prove optimal (``unproven_solves_count``; ``unproven_solver_status``: how the solver ended them)."""
     steps = list(getattr(planner, "step_log", []))
+    unproven = [s.status for s in steps if s.fallback is None and s.status not in SOLVELESS + PROVEN]
     kinds = [s.fallback for s in steps]
     gaps = np.array([s.gap for s in steps if s.gap is not None])
     return {**{f"fallback_{k}_count": kinds.count(k) for k in KINDS},
             "softened_steps": sum(1 for s in steps if s.softened),
             "inexact_solves_count": int(np.sum(gaps > 1e-6)) if gaps.size else 0,
+            "unproven_solves_count": len(unproven), "unproven_solver_status": ", ".join(sorted(set(unproven))) or None,
             "full_brake_before_final_count": sum(1 for k in kinds if k in ("full_brake", "reserve"))}
 
 
