@@ -134,6 +134,12 @@ def solver_check(ended: str, solver: str = "Ipopt", proven: str = "optimal") -> 
 PROVEN = ("optimal", "Solved", "Optimization terminated successfully")
 
 
+def unproven_columns(ends: list[str]) -> dict[str, object]:
+    """A run's columns of the driven solves its solver did not prove optimal, from how each ``ends``:
+    ``unproven_solves_count`` and ``unproven_solver_status`` (the distinct ends, None for none)."""
+    return {"unproven_solves_count": len(ends), "unproven_solver_status": ", ".join(sorted(set(ends))) or None}
+
+
 def unproven_solves(count: int, samples: int, ends: str) -> Status:
     """A driven run some of whose samples drove a plan the solver did not prove optimal (usable: within
     the constraints, e.g. Ipopt ``acceptable``, Clarabel ``AlmostSolved``): ``flagged`` with their

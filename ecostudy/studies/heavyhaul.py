@@ -25,7 +25,7 @@ import pandas as pd
 from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KMH, KN, KWH
-from ecostudy.core.status import OK, part, unproven_solves
+from ecostudy.core.status import OK, part, unproven_columns, unproven_solves
 from ecostudy.heavyhaul.airbrake import application_time, brake_lag
 from ecostudy.heavyhaul.checks import reference_problems, ruling_grade, samples_to_start, starting_coupler_force
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
@@ -228,7 +228,7 @@ def summarise(consist, controller, record, reference, locomotives=(), stop_toler
         "qp_constraints": size["constraints"], "solve_mean_ms": 1e3 * float(record.solve_seconds.mean()),
         "solve_p95_ms": 1e3 * float(np.percentile(record.solve_seconds, 95)),
         "solve_max_ms": 1e3 * float(record.solve_seconds.max()), "over_budget_count": record.overruns,
-        "unproven_solves_count": len(record.unproven), "unproven_solver_status": ", ".join(sorted(set(record.unproven))) or None,
+        **unproven_columns(list(record.unproven)),
         "peak_memory_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "profile": {"head_m": np.round(record.head, 1).tolist(), "speed_mps": np.round(record.mean_speed, 3).tolist(),
                     "reference_mps": np.round(record.reference, 3).tolist()},

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.control.fallback import KINDS, SOLVELESS
-from ecostudy.core.status import PROVEN
+from ecostudy.core.status import PROVEN, unproven_columns
 
 COLUMNS = ("sample", "time_s", "position_m", "speed_mps", "measured_position_m", "measured_speed_mps", "handle",
            "status", "solve_ms", "gap", "fallback", "softened", "mass_estimate")
@@ -56,7 +56,7 @@ def step_counts(planner):
     return {**{f"fallback_{k}_count": kinds.count(k) for k in KINDS},
             "softened_steps": sum(1 for s in steps if s.softened),
             "inexact_solves_count": int(np.sum(gaps > 1e-6)) if gaps.size else 0,
-            "unproven_solves_count": len(unproven), "unproven_solver_status": ", ".join(sorted(set(unproven))) or None,
+            **unproven_columns(unproven),
             "full_brake_before_final_count": sum(1 for k in kinds if k in ("full_brake", "reserve"))}
 
 
