@@ -697,3 +697,20 @@ def test_a_fit_least_squares_did_not_converge_is_flagged_saying_so(inputs, logge
     assert capped.status == "flagged"
     assert capped.reason.startswith("the least-squares fit did not converge: The maximum number of function "
                                     "evaluations is exceeded."), capped.reason
+
+
+def test_a_parameter_held_on_a_fit_that_did_not_converge_says_so(inputs, logged, monkeypatch):
+    """Which parameters the logs identify is read at a fit's covariance; when least_squares stopped
+    short of converging there (capped at 2 evaluations), the held parameter's reason says so, as the
+    converged fit's does not."""
+    from ecostudy.calibration import fit
+    track, train = inputs
+    logs = [as_log(logged[0][0].drop(columns=["power_line_kW"]))]
+    converged = calibrate_logs(logs, track, train, ("mass", "davis_a", "efficiency"), draws=0)
+    held = converged.table.set_index("name").loc["efficiency", "note"]
+    assert held and "did not converge" not in held, held
+    monkeypatch.setattr(fit, "MAX_EVALUATIONS", 2)
+    capped = calibrate_logs(logs, track, train, ("mass", "davis_a", "efficiency"), draws=0)
+    note = capped.table.set_index("name").loc["efficiency", "note"]
+    assert note.endswith("; judged at a fit that did not converge"), note
+    assert "efficiency not identifiable" in capped.reason and "judged at a fit that did not converge" in capped.reason

@@ -247,6 +247,8 @@ def identify(problem, requested):
                   f" of the prior (limit {100 * MAX_RELATIVE_WIDTH:.0f} %)")
         if partners:
             reason += f"; moves with {', '.join(partners)} (singular value ratio {ratio:.1e})"
+        if unconverged:  # the width was read at a point least_squares did not converge to
+            reason += "; judged at a fit that did not converge"
         held[free[worst]] = reason
         spread[free[worst]] = float(np.sqrt(cov[worst, worst]))
         free.pop(worst)
