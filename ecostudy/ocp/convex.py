@@ -301,9 +301,9 @@ class ConvexProgram:
         reference = (np.interp(mid, *self.previous) if self.previous is not None
                      else np.minimum(limits, np.concatenate([[limits[0]], limits[:-1]])))
         for sign, pieces in ((1.0, self.traction), (-1.0, self.brake)):
-            for a, slope, c in pieces(reference):      # +-g M <= a rho + slope + c s
-                rows.le([(ig, sign * mass), (ir, -np.asarray(a, float))]
-                        + [(col, -np.asarray(c, float) * share) for col, share in s_cols], slope * np.ones(n))
+            for a, slope, c in pieces(reference):      # +-g <= (a rho + slope + c s) / M: per unit mass
+                rows.le([(ig, sign), (ir, -np.asarray(a, float) / mass)]
+                        + [(col, -np.asarray(c, float) / mass * share) for col, share in s_cols], slope / mass * np.ones(n))
         rows.le([(igp, -1.0)], np.zeros(n))
         rows.le([(ig, 1.0), (igp, -1.0)], np.zeros(n))
         limit_here = np.concatenate([[float(self.segment.limit(state.position)) - self.margin], limits[:-1]])
