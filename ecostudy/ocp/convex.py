@@ -18,21 +18,21 @@ part g+, the overspeed slack b and the over-braking slack h:
     t_i >= T_buff,i (a leading train's clock at x_i + X_sep)                      (6.9)
 
 a0 = (A + grade and curve force) / M, a1 = B / M, a2 = C / M (Davis A + B v + C v^2, the signs of
-ecostudy: resistances positive).
-
-Every row is written in physical units of about one: the speed recursion in m/s, the clock in s,
-the force limits per unit mass (g <= (a_j rho + b_j) / M, in 1/s, as eq. 6.10's gamma / m), the
-cones scaled by the reference speed (below). Rows in newtons (g M <= a_j rho + b_j, coefficients
-up to 1e6 against 1 elsewhere) are beyond what Clarabel's equilibration (scalings within 1e-4 to
-1e4) evens out: its dual residual then stalls at 1e-8 to 1e-7, above its 1e-8 tolerance, and a
-quarter to two thirds of the plans of the shipped closed-loop studies end ``AlmostSolved``
-(``bench/bench_convex_ends.py``, ``docs/closed_loop.md``). The speed s_i of an interval is ``scheme``-dependent:
+ecostudy: resistances positive). The speed s_i of an interval is ``scheme``-dependent:
 
 - ``"left"``: s_i = v_i, as printed (forward Euler). It needs v >= epsilon (eq. 3.6), and the
   first interval from a stand then takes dx / epsilon;
 - ``"midpoint"`` (default): s_i = (v_i + v_i+1) / 2. Still linear, so the program stays a SOCP;
   rho_i dx_i is then the exact time of an interval run at constant acceleration, and a train at a
   stand needs no epsilon.
+
+Every row is written in physical units of about one: the speed recursion in m/s, the clock in s,
+the force limits per unit mass (g <= (a_j rho + b_j) / M, in 1/s, as eq. 6.10's gamma / m), the
+cones scaled by the reference speed (below). Rows in newtons (g M <= a_j rho + b_j, coefficients
+up to 1e6 against 1 elsewhere) are beyond what Clarabel's equilibration (scalings within 1e-4 to
+1e4) evens out: its dual residual then stalls at 1e-8 to 1e-7, above its 1e-8 tolerance, and up to
+two thirds of the plans of the shipped closed-loop studies end ``AlmostSolved``
+(``bench/bench_convex_ends.py``, ``docs/closed_loop.md``).
 
 Envelopes enter as pieces a + b v + c v^2, linear in the variables (v rho = 1, v^2 rho = s): thesis
 001's F_max and R(v) exactly, other concave tables as their chords; a power limit P / v (convex
