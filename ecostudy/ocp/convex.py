@@ -26,19 +26,12 @@ ecostudy: resistances positive). The speed s_i of an interval is ``scheme``-depe
   rho_i dx_i is then the exact time of an interval run at constant acceleration, and a train at a
   stand needs no epsilon.
 
-Every row is written in physical units of about one: the speed recursion in m/s, the clock in s,
-the force limits per unit mass (g <= (a_j rho + b_j) / M, in 1/s, as eq. 6.10's gamma / m), the
-cones scaled by the reference speed (below). Rows in newtons (g M <= a_j rho + b_j, coefficients
-up to 1e6 against 1 elsewhere) are beyond what Clarabel's equilibration (scalings within 1e-4 to
-1e4) evens out: its dual residual then stalls at 1e-8 to 1e-7, above its 1e-8 tolerance, and up to
-two thirds of the plans of the shipped closed-loop studies end ``AlmostSolved``
-(``bench/bench_convex_ends.py``, ``docs/closed_loop.md``).
-
 Envelopes enter as pieces a + b v + c v^2, linear in the variables (v rho = 1, v^2 rho = s): thesis
 001's F_max and R(v) exactly, other concave tables as their chords; a power limit P / v (convex
 in v) as its tangent at the previous plan's speed in each interval: below it, tight where the
-train runs (a sequential convex step). Solved by Clarabel (an interior-point
-conic solver); ``docs/closed_loop.md`` compares it with Ipopt on the same program.
+train runs (a sequential convex step). Solved by Clarabel (interior point; against Ipopt: ``docs/closed_loop.md``) on
+rows of about one: m/s, s, scaled cones (below), force limits per unit mass g <= (a_j rho + b_j) / M in 1/s (6.10's
+gamma / m); in newtons (coefficients to 1e6) its dual residual stalls above 1e-8, plans end ``AlmostSolved``.
 """
 import time
 from dataclasses import dataclass
@@ -341,9 +334,7 @@ class ConvexProgram:
         rows.soc([s_terms + [(ir, -c)], [], s_terms + [(ir, c)]], [np.zeros(n), 2 * np.ones(n), np.zeros(n)])
         q = np.zeros(start)
         q[it[n]] = w.time
-        q[igp] = dx * w.energy
-        q[ih] = dx * w.braking
-        q[ib] = dx * w.overspeed
+        q[igp], q[ih], q[ib] = dx * w.energy, dx * w.braking, dx * w.overspeed
         A, b, cones = rows.matrices()
         return A, b, q, cones, index
 
