@@ -41,6 +41,7 @@ def test_a_run_driven_on_almost_solved_plans_is_flagged_with_their_count(tmp_pat
     assert f"{n} solve{'s' if n != 1 else ''} in " in run["reason"] and "ended AlmostSolved (driven, not proven optimal)" in run["reason"]
     steps = pd.read_csv(tmp_path / "o" / "steps" / "c_draw0.csv")
     assert (steps["status"] == "AlmostSolved").sum() == n  # steps.csv says which samples
+    assert pd.read_csv(tmp_path / "o" / "aggregate.csv")["unproven_solves_count_sum"].iloc[0] == n
 
 
 def test_an_open_loop_replay_of_an_almost_solved_plan_is_flagged(tmp_path, unreachable_tolerance):

@@ -29,8 +29,9 @@ ecostudy: resistances positive). The speed s_i of an interval is ``scheme``-depe
 Envelopes enter as pieces a + b v + c v^2, linear in the variables (v rho = 1, v^2 rho = s): thesis
 001's F_max and R(v) exactly, other concave tables as their chords; a power limit P / v (convex
 in v) as its tangent at the previous plan's speed in each interval: below it, tight where the
-train runs (a sequential convex step). Solved by Clarabel (an interior-point
-conic solver); ``docs/closed_loop.md`` compares it with Ipopt on the same program.
+train runs (a sequential convex step). Solved by Clarabel (interior point; against Ipopt: ``docs/closed_loop.md``) on
+rows of about one: m/s, s, scaled cones (below), force limits per unit mass g <= (a_j rho + b_j) / M in 1/s (6.10's
+gamma / m); in newtons (coefficients to 1e6) its dual residual stalls above 1e-8, plans end ``AlmostSolved``.
 """
 import time
 from dataclasses import dataclass
@@ -301,9 +302,9 @@ class ConvexProgram:
         reference = (np.interp(mid, *self.previous) if self.previous is not None
                      else np.minimum(limits, np.concatenate([[limits[0]], limits[:-1]])))
         for sign, pieces in ((1.0, self.traction), (-1.0, self.brake)):
-            for a, slope, c in pieces(reference):      # +-g M <= a rho + slope + c s
-                rows.le([(ig, sign * mass), (ir, -np.asarray(a, float))]
-                        + [(col, -np.asarray(c, float) * share) for col, share in s_cols], slope * np.ones(n))
+            for a, slope, c in pieces(reference):      # +-g <= (a rho + slope + c s) / M: per unit mass
+                rows.le([(ig, sign), (ir, -np.asarray(a, float) / mass)]
+                        + [(col, -np.asarray(c, float) / mass * share) for col, share in s_cols], slope / mass * np.ones(n))
         rows.le([(igp, -1.0)], np.zeros(n))
         rows.le([(ig, 1.0), (igp, -1.0)], np.zeros(n))
         limit_here = np.concatenate([[float(self.segment.limit(state.position)) - self.margin], limits[:-1]])
@@ -333,9 +334,7 @@ class ConvexProgram:
         rows.soc([s_terms + [(ir, -c)], [], s_terms + [(ir, c)]], [np.zeros(n), 2 * np.ones(n), np.zeros(n)])
         q = np.zeros(start)
         q[it[n]] = w.time
-        q[igp] = dx * w.energy
-        q[ih] = dx * w.braking
-        q[ib] = dx * w.overspeed
+        q[igp], q[ih], q[ib] = dx * w.energy, dx * w.braking, dx * w.overspeed
         A, b, cones = rows.matrices()
         return A, b, q, cones, index
 
