@@ -170,6 +170,20 @@ def test_check_on_a_folder_that_is_not_a_result(tmp_path):
     assert_one_line_error(run("check", tmp_path), str(tmp_path), "not a result folder")
 
 
+def test_check_and_export_of_a_file_or_a_missing_folder_say_so_in_words(tmp_path):
+    """A file, a folder that is not there, a folder without inputs.json: the line says which, in
+    words, without Python's errno text ('[Errno 20] Not a directory: ...')."""
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    for command, extra in (("check", ()), ("export", ("--every", "1s"))):
+        for where, words in ((afile, "a file, not a result folder of `ecostudy solve`"),
+                             (tmp_path / "missing", "no such folder"),
+                             (tmp_path, "not a result folder of `ecostudy solve`: it has no inputs.json")):
+            r = run(command, where, *extra)
+            assert_one_line_error(r, str(where), words)
+            assert "Errno" not in r.output, r.output
+
+
 def window_study(tmp_path, window):
     return write_yaml(tmp_path / "study.yaml", {
         "name": "window", "track": str(AMS), "train": str(METRO), "running_time_s": 80, "points": 400,
