@@ -230,3 +230,13 @@ def test_numeric_options_out_of_range_are_refused_before_any_work(args, option, 
     """Before, --points 0 became 1000, --workers 0 and NaN or negative times
     reached the solver or ended in an internal error (exit 3)."""
     assert_one_line_error(run(*args), f"command line: {option}", fragment)
+
+
+def test_a_track_or_train_option_naming_no_file_names_the_option(tmp_path):
+    """`solve`, `pareto` and `compare --track nope.yaml` name the option as a study file names its
+    field ('s.yaml: track: 'missing.yaml': file not found'): 'command line: --track: nope.yaml: file not found'."""
+    for command in ("solve", "pareto", "compare"):
+        r = run(command, "--track", tmp_path / "nope.yaml", "--train", METRO, "--out", tmp_path / command)
+        assert_one_line_error(r, f"command line: --track: {tmp_path / 'nope.yaml'}: file not found")
+    r = run("solve", "--track", AMS, "--train", tmp_path, "--out", tmp_path / "t")
+    assert_one_line_error(r, f"command line: --train: {tmp_path}: a folder, not a file")
