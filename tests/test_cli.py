@@ -240,3 +240,17 @@ def test_a_track_or_train_option_naming_no_file_names_the_option(tmp_path):
         assert_one_line_error(r, f"command line: --track: {tmp_path / 'nope.yaml'}: file not found")
     r = run("solve", "--track", AMS, "--train", tmp_path, "--out", tmp_path / "t")
     assert_one_line_error(r, f"command line: --train: {tmp_path}: a folder, not a file")
+
+
+def test_a_misspelt_study_field_is_named_with_the_field_it_is_near(tmp_path):
+    """'runing_time_s: unknown field' left the user to find the spelling; a near miss of a field the
+    file does not give is named, as a log header's is."""
+    study = write_yaml(tmp_path / "s.yaml", {"name": "s", "track": str(AMS), "train": str(METRO),
+                                             "runing_time_s": 76, "points": 50})
+    assert_one_line_error(run("solve", study, "--out", tmp_path / "o"),
+                          f"{study}: runing_time_s: unknown field; did you mean running_time_s?")
+    far = write_yaml(tmp_path / "far.yaml", {"name": "s", "track": str(AMS), "train": str(METRO),
+                                             "running_time_s": 76, "colour": "red"})
+    r = run("solve", far, "--out", tmp_path / "o")
+    assert_one_line_error(r, f"{far}: colour: unknown field")
+    assert "did you mean" not in r.output
