@@ -170,6 +170,20 @@ def test_check_on_a_folder_that_is_not_a_result(tmp_path):
     assert_one_line_error(run("check", tmp_path), str(tmp_path), "not a result folder")
 
 
+def test_check_and_export_of_a_file_or_a_missing_folder_say_so_in_words(tmp_path):
+    """A file, a folder that is not there, a folder without inputs.json: the line says which, in
+    words, without Python's errno text ('[Errno 20] Not a directory: ...')."""
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    for command, extra in (("check", ()), ("export", ("--every", "1s"))):
+        for where, words in ((afile, "a file, not a result folder of `ecostudy solve`"),
+                             (tmp_path / "missing", "no such folder"),
+                             (tmp_path, "not a result folder of `ecostudy solve`: it has no inputs.json")):
+            r = run(command, where, *extra)
+            assert_one_line_error(r, str(where), words)
+            assert "Errno" not in r.output, r.output
+
+
 def window_study(tmp_path, window):
     return write_yaml(tmp_path / "study.yaml", {
         "name": "window", "track": str(AMS), "train": str(METRO), "running_time_s": 80, "points": 400,
@@ -216,3 +230,27 @@ def test_numeric_options_out_of_range_are_refused_before_any_work(args, option, 
     """Before, --points 0 became 1000, --workers 0 and NaN or negative times
     reached the solver or ended in an internal error (exit 3)."""
     assert_one_line_error(run(*args), f"command line: {option}", fragment)
+
+
+def test_a_track_or_train_option_naming_no_file_names_the_option(tmp_path):
+    """`solve`, `pareto` and `compare --track nope.yaml` name the option as a study file names its
+    field ('s.yaml: track: 'missing.yaml': file not found'): 'command line: --track: nope.yaml: file not found'."""
+    for command in ("solve", "pareto", "compare"):
+        r = run(command, "--track", tmp_path / "nope.yaml", "--train", METRO, "--out", tmp_path / command)
+        assert_one_line_error(r, f"command line: --track: {tmp_path / 'nope.yaml'}: file not found")
+    r = run("solve", "--track", AMS, "--train", tmp_path, "--out", tmp_path / "t")
+    assert_one_line_error(r, f"command line: --train: {tmp_path}: a folder, not a file")
+
+
+def test_a_misspelt_study_field_is_named_with_the_field_it_is_near(tmp_path):
+    """'runing_time_s: unknown field' left the user to find the spelling; a near miss of a field the
+    file does not give is named, as a log header's is."""
+    study = write_yaml(tmp_path / "s.yaml", {"name": "s", "track": str(AMS), "train": str(METRO),
+                                             "runing_time_s": 76, "points": 50})
+    assert_one_line_error(run("solve", study, "--out", tmp_path / "o"),
+                          f"{study}: runing_time_s: unknown field; did you mean running_time_s?")
+    far = write_yaml(tmp_path / "far.yaml", {"name": "s", "track": str(AMS), "train": str(METRO),
+                                             "running_time_s": 76, "colour": "red"})
+    r = run("solve", far, "--out", tmp_path / "o")
+    assert_one_line_error(r, f"{far}: colour: unknown field")
+    assert "did you mean" not in r.output

@@ -51,7 +51,7 @@ def test_compare_command(tmp_path):
     status = folder.table.set_index("strategy")["status"]
     assert status["ATO optimum"] == status["all-out"] == status["DAS phases"] == "ok"
     for name in ("eco-drive coasting", "MARECO-style"):
-        assert status[name].startswith("flagged: stopped -1.")
+        assert status[name].startswith("flagged: stopped 1.")
         assert f"flagged: {name}: stopped" in r.output
 
 

@@ -245,3 +245,21 @@ def test_a_total_time_over_all_out_runs_ipopt_did_not_prove_optimal_flags_every_
     table, _, _, _ = journey(track, train, stops, supplement=0.1, points=60)
     first = f"the all-out run from {stops[0]} to {stops[1]}: Ipopt ended acceptable, not optimal"
     assert table["status"].str.contains(first, regex=False).all(), table["status"].tolist()
+
+
+def test_a_broken_window_names_only_the_bounds_it_has():
+    """A timing point with a time window and no speed bounds is reported by its times alone: the
+    reason reads "window [1, 2] s", not "window [1, 2] s and [, ] km/h"."""
+    from types import SimpleNamespace
+    from ecostudy.analysis.single import solve_run
+    from ecostudy.core.types import Timing, Window
+    from ecostudy.io.loaders import load_track, load_train
+    from ecostudy.studies.journey import timing_columns
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    run = solve_run(track, train, "Noord", "Station", Timing(running_time=56.0), points=50)
+    plan = SimpleNamespace(stops=["Noord", "Station"], arrival=[(None, None)], departure=[None],
+                           windows=[(Window(300.0, earliest=1.0, latest=2.0),)])
+    columns, broken = timing_columns(plan, 0, 0.0, 56.0, run)
+    assert not columns["windows_kept"]
+    assert broken.startswith("passes 300 m after Noord at ") and broken.endswith("window [1, 2] s"), broken
+    assert "km/h]" not in broken and "[, ]" not in broken

@@ -6,7 +6,7 @@ import pandas as pd
 from ecostudy import api
 from ecostudy.api.cases import CALIBRATION_COLUMNS
 from ecostudy.api.outcome import shown
-from ecostudy.core.status import Status, from_checks, solver_check
+from ecostudy.core.status import Status, driven_run, from_checks, solver_check
 from ecostudy.core.units import number
 from ecostudy.io.folder import write_summary
 
@@ -46,3 +46,11 @@ def test_a_solve_ipopt_did_not_prove_optimal_is_worded_in_one_place():
     assert from_checks(solver_check("optimal")).ok
     written = [p.name for p in (TRACKS.parent / "ecostudy").rglob("*.py") if "ended {" in p.read_text()]
     assert written == ["status.py"]
+
+
+def test_a_driven_run_off_its_stop_says_short_of_or_beyond_it():
+    """'stopped -1.36 m from the stop' left the sign to be guessed; a driven run (a strategy, driver
+    advice, a closed-loop run) says it as a heavy-haul run does: short of, or beyond, with the tolerance."""
+    assert driven_run(stop_error_m=-1.36).reason == "stopped 1.36 m short of the stop (tolerance 1 m)"
+    assert driven_run(stop_error_m=2.5).reason == "stopped 2.50 m beyond the stop (tolerance 1 m)"
+    assert driven_run(stop_error_m=0.99).kind == "ok"

@@ -43,7 +43,7 @@ def test_a_monte_carlo_study_runs_resumes_and_says_what_feedback_buys(tmp_path):
     assert (convex["status"] == "ok").all(), convex["reason"].tolist()
     assert (convex["unproven_solves_count"] == 0).all() and (aggregate_of(out)["unproven_solves_count_sum"] == 0).all()
     assert (replayed["stop_error_m"] > 1.0).all() and (replayed["status"] == "flagged").all()
-    assert first.exit_code == 1 and "stopped +" in first.output  # flagged runs are named, exit 1
+    assert first.exit_code == 1 and "m beyond the stop (tolerance 1 m)" in first.output  # flagged runs are named, exit 1
     assert convex["mass_estimate"].sub(convex["true_mass_factor"]).abs().max() < 0.02
     aggregate = pd.read_csv(out / "aggregate.csv")
     assert list(aggregate["controller"]) == ["convex", "replayed"] and list(aggregate["runs"]) == [2, 2]

@@ -185,7 +185,8 @@ def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
     :data:`ADHESION_USE` of its adhesion limit (``core.simulate.adhesion_use``)."""
     reasons = []
     if stop_error_m is not None and not abs(stop_error_m) <= STOP_TOLERANCE_M:
-        reasons.append(f"stopped {signed(stop_error_m, 2)} m from the stop")
+        side = "short of" if stop_error_m < 0 else "beyond"  # as a heavy-haul run says it
+        reasons.append(f"stopped {abs(stop_error_m):.2f} m {side} the stop (tolerance {STOP_TOLERANCE_M:g} m)")
     if late_s is not None and not late_s <= LATE_TOLERANCE_S:
         reasons.append(f"arrived {late_s:.2f} s late")
     if overspeed_kmh is not None and not overspeed_kmh <= OVERSPEED_TOLERANCE_KMH:

@@ -1,5 +1,6 @@
 """Reading a file into Python data and validating it against a schema: every problem one line
 ``file: field: what is wrong`` (:class:`ecostudy.core.errors.InputError`)."""
+import difflib
 import json
 from os import PathLike
 from pathlib import Path
@@ -105,6 +106,22 @@ def _field_path(loc: Sequence[int | str]) -> str:
     return out
 
 
+# difflib's similarity at or above which an unknown field is taken for a known one misspelt
+# (tracks 0.91, power_sampling_mode 0.85, start_position_km 0.97, speed_sigma 0.85; vehicle,
+# train_id 0.77, source_file 0.71 are not)
+NEAR_MISS = 0.8
+
+
+def _near_miss(schema: type[BaseModel], loc: Sequence[object], data: object) -> str:
+    """'; did you mean X?' when the unknown top-level field at ``loc`` is a near miss
+    (:data:`NEAR_MISS`) of a field of ``schema`` the document does not give; else ''."""
+    if len(loc) != 1 or not isinstance(data, Mapping):
+        return ""
+    near = [k for k in difflib.get_close_matches(str(loc[0]), sorted(_names(schema)), n=3, cutoff=NEAR_MISS)
+            if k not in data]
+    return f"; did you mean {' or '.join(near)}?" if near else ""
+
+
 def _names(schema: type[BaseModel]) -> set[str]:
     """The top-level field names of ``schema`` as a file spells them (aliases too)."""
     names = set(schema.model_fields)
@@ -126,7 +143,7 @@ def validate(schema: type[Model], data: object, path: str | PathLike[str],
             loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]
             msg = err["msg"].removeprefix("Value error, ")
             if err["type"] == "extra_forbidden":
-                msg = "unknown field"
+                msg = "unknown field" + _near_miss(schema, loc, data)
             elif err["type"] == "missing":
                 msg = "missing field"
             field = _field_path(loc) or "(top level)"

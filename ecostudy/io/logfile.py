@@ -47,7 +47,7 @@ from ecostudy.core.grid import Profile
 from ecostudy.core.physics import gradient_force
 from ecostudy.core.types import Track
 from ecostudy.core.units import FloatArray
-from ecostudy.io.documents import named_file, not_a_file, validate
+from ecostudy.io.documents import NEAR_MISS, named_file, not_a_file, validate
 from ecostudy.io.schemabase import Strict
 from ecostudy.io.writers import atomic_write
 from ecostudy.io.yamlsafe import MAX_FILE_BYTES, DocumentError, load_yaml
@@ -136,10 +136,6 @@ def split_header(text: str, path: Where) -> tuple[dict[str, Any], str]:
     return header, "".join(lines[end + 1:])
 
 
-# difflib's similarity at or above which an unknown header field is taken for a known one misspelt
-# (tracks 0.91, power_sampling_mode 0.85, start_position_km 0.97, speed_sigma 0.85; vehicle,
-# train_id 0.77, source_file 0.71 are not)
-NEAR_MISS = 0.8
 # words of a header field's name that say how the columns read (speed_unit, units, time_offset_s, force_sign,
 # power_scale): left out, the columns would be read otherwise than the file means
 DECLARES = {"unit", "units", "scale", "scaling", "factor", "multiplier", "offset", "datum", "sign", "convention",

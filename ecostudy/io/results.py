@@ -57,6 +57,12 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     """The :class:`SavedRun` of a result folder; a folder that is not one, or whose profile is cut
     short or holds anything but finite numbers, is one clear line."""
     result_dir = Path(result_dir)
+    if not result_dir.is_dir():
+        raise InputError(problem(result_dir, "", "a file, not a result folder of `ecostudy solve`"
+                                 if result_dir.exists() else "no such folder"))
+    for name in ("inputs.json", "summary.json"):
+        if not (result_dir / name).is_file():
+            raise InputError(problem(result_dir, "", f"not a result folder of `ecostudy solve`: it has no {name}"))
     try:
         inputs = json.loads((result_dir / "inputs.json").read_text())
         summary = json.loads((result_dir / "summary.json").read_text())

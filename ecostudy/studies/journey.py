@@ -258,10 +258,11 @@ def timing_columns(plan, n, departure, arrival, run):
         broken.append(f"departs {plan.stops[n]} at {departure:.1f} s, window {_span(d_lo, d_hi, 's')}")
     for w, check in zip(plan.windows[n], checks):  # on the journey clock, as the plan gives them
         if not check["kept"]:
-            speeds = _span(*(None if v is None else to_kmh(v) for v in (w.min_speed, w.max_speed)), "km/h")
+            speeds = tuple(None if v is None else to_kmh(v) for v in (w.min_speed, w.max_speed))
+            bounds = " and ".join(_span(a, b, unit) for a, b, unit in ((w.earliest, w.latest, "s"), (*speeds, "km/h"))
+                                  if (a, b) != (None, None))  # only the bounds the point has
             broken.append(f"passes {w.distance:g} m after {plan.stops[n]} at {departure + check['simulated_time_s']:.1f} s "
-                          f"and {check['simulated_speed_kmh']:.1f} km/h, window {_span(w.earliest, w.latest, 's')} "
-                          f"and {speeds}")
+                          f"and {check['simulated_speed_kmh']:.1f} km/h, window {bounds}")
     if not checks[-1]["kept"]:
         broken.append(f"arrives at {plan.stops[n + 1]} at {departure + checks[-1]['simulated_time_s']:.1f} s, "
                       f"window {_span(lo, hi, 's')}")

@@ -14,6 +14,7 @@ from ecostudy.core import units
 from ecostudy.core.defaults import MAX_SUPPLEMENT_PERCENT
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.types import Timing, Track, Train
+from ecostudy.io.documents import not_a_file, split_selector
 from ecostudy.io.loaders import check_fits, chosen_stops, read_track, read_train
 from ecostudy.studies.cases import load_checked_study, refuse_windows
 
@@ -130,6 +131,10 @@ def case_from(study: Optional[Path], track: Optional[Path], train: Optional[Path
         return Case(st.track, st.train, st.from_stop, st.to_stop, points or st.points, st, st.documents)
     if not (track and train):
         raise InputError(problem("command line", "--track/--train", "give a study file, or both --track and --train"))
+    for option, path in (("--track", track), ("--train", train)):  # the option that names a file not there
+        file = split_selector(path)[0]
+        if not file.is_file():
+            raise InputError(problem("command line", option, f"{path}: {not_a_file(file)}"))
     (trk_doc, trk), (trn_doc, trn) = read_track(track), read_train(train)  # each file once
     check_fits(train, trn, trk)
     f, t = chosen_stops(trk, from_stop, to_stop, "command line")
