@@ -254,3 +254,12 @@ def test_a_misspelt_study_field_is_named_with_the_field_it_is_near(tmp_path):
     r = run("solve", far, "--out", tmp_path / "o")
     assert_one_line_error(r, f"{far}: colour: unknown field")
     assert "did you mean" not in r.output
+
+
+def test_a_csv_given_as_a_track_says_the_file_is_read_as_yaml_or_json(tmp_path):
+    """A track file is YAML or TTOBench JSON: a CSV given as --track (parsed as YAML, one string)
+    says so, where 'expected a mapping of fields at the top level' left the user to guess why."""
+    track = tmp_path / "track.csv"
+    track.write_text("position_m,gradient_permille\n0,0\n500,2\n")
+    r = run("solve", "--track", track, "--train", METRO, "--time", 80, "--out", tmp_path / "o")
+    assert_one_line_error(r, "expected a mapping of fields at the top level (this file is read as YAML or JSON, not .csv)")

@@ -92,7 +92,9 @@ def read_document(path: str | PathLike[str]) -> dict[str, Any]:
         where = f" at line {mark.line + 1} column {mark.column + 1}" if mark else ""
         raise InputError(problem(path, "", f"malformed YAML{where}: {getattr(exc, 'problem', exc)}"))
     if not isinstance(data, dict):
-        raise InputError(problem(path, "", "expected a mapping of fields at the top level"))
+        kind = path.suffix.lower()
+        hint = "" if kind in (".yaml", ".yml", ".json") else f" (this file is read as YAML or JSON, not {kind or 'text'})"
+        raise InputError(problem(path, "", f"expected a mapping of fields at the top level{hint}"))
     return data
 
 
