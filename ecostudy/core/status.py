@@ -29,7 +29,6 @@ from dataclasses import dataclass
 from typing import Iterable, Literal
 
 from ecostudy.core.adhesion import TOLERANCE
-from ecostudy.core.units import signed
 
 Kind = Literal["ok", "flagged", "failed"]
 ORDER = {"ok": 0, "flagged": 1, "failed": 2}
