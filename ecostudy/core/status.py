@@ -176,6 +176,13 @@ def worst(statuses: Iterable[Status]) -> Status:
     return Status(kind, "; ".join(reasons))
 
 
+def off_stop(error_m: float, tolerance_m: float, digits: int = 2) -> str:
+    """The reason of a run that stood ``error_m`` [m] off its stop (negative: short of it), beyond
+    ``tolerance_m``: 'stopped 1.36 m short of the stop (tolerance 1 m)' (or 'beyond the stop')."""
+    side = "short of" if error_m < 0 else "beyond"
+    return f"stopped {abs(error_m):.{digits}f} m {side} the stop (tolerance {tolerance_m:g} m)"
+
+
 def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
                overspeed_kmh: float | None = None, adhesion_use: float | None = None) -> Status:
     """The status of a driven run from what it missed (``None``: not measured): ``flagged`` when
@@ -184,8 +191,7 @@ def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
     :data:`ADHESION_USE` of its adhesion limit (``core.simulate.adhesion_use``)."""
     reasons = []
     if stop_error_m is not None and not abs(stop_error_m) <= STOP_TOLERANCE_M:
-        side = "short of" if stop_error_m < 0 else "beyond"  # as a heavy-haul run says it
-        reasons.append(f"stopped {abs(stop_error_m):.2f} m {side} the stop (tolerance {STOP_TOLERANCE_M:g} m)")
+        reasons.append(off_stop(stop_error_m, STOP_TOLERANCE_M))
     if late_s is not None and not late_s <= LATE_TOLERANCE_S:
         reasons.append(f"arrived {late_s:.2f} s late")
     if overspeed_kmh is not None and not overspeed_kmh <= OVERSPEED_TOLERANCE_KMH:

@@ -25,6 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core import adhesion
+from ecostudy.core.status import off_stop
 from ecostudy.core.units import KMH, KN, KWH
 from ecostudy.heavyhaul.fatigue import damage, rainflow
 from ecostudy.heavyhaul.plant import LOSSES
@@ -231,8 +232,7 @@ def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
                  else f"with the train {metrics['stop_error_m']:.0f} m beyond the stop, not stopped")
         out.append(f"the sample cap ({samples}) came {where}")
     elif metrics["ended"] in STOOD and abs(metrics["stop_error_m"]) > tolerances.stop_m:
-        where = "beyond" if metrics["stop_error_m"] > 0 else "short of"
-        out.append(f"stopped {abs(metrics['stop_error_m']):.1f} m {where} the stop (tolerance {tolerances.stop_m:g} m){asked}")
+        out.append(off_stop(metrics["stop_error_m"], tolerances.stop_m, 1) + asked)
     late, share = metrics["arrival_late_s"], metrics["arrival_late_pct"]
     if metrics["ended"] in STOOD and share > 100 * tolerances.arrival and late > tolerances.arrival_s:
         out.append(f"arrived {late:.0f} s ({share:.1f} %) after the reference's running time "
