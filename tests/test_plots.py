@@ -109,6 +109,25 @@ def test_a_palette_never_repeats_a_colour_and_keeps_named_and_repeated_keys():
     assert style.colour("ATO optimum").lower() not in {c.lower() for c in given}
 
 
+def _lab(colour):
+    """CIE L*a*b* (D65) of a #rrggbb colour."""
+    rgb = [int(colour[i:i + 2], 16) / 255 for i in (1, 3, 5)]
+    r, g, b = [((c + 0.055) / 1.055) ** 2.4 if c > 0.04045 else c / 12.92 for c in rgb]
+    xyz = ((0.4124 * r + 0.3576 * g + 0.1805 * b) / 0.95047, 0.2126 * r + 0.7152 * g + 0.0722 * b,
+           (0.0193 * r + 0.1192 * g + 0.9505 * b) / 1.08883)
+    fx, fy, fz = [u ** (1 / 3) if u > 0.008856 else 7.787 * u + 16 / 116 for u in xyz]
+    return np.array([116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz)])
+
+
+def test_the_trains_of_a_network_figure_are_told_apart_after_its_seven_strategies():
+    """The trains get the colours handed out after the strategies': thin lines in one panel, so
+    each pair at least 50 apart in CIE L*a*b* (cyan against teal, 35, read as one colour)."""
+    strategies = ["independent", "receptivity", "triggering", "voltage", "dissension", "joint", "following"]
+    palette = style.Palette(strategies + ["T1", "T2", "T3"])
+    trains = [_lab(palette(name)) for name in ("T1", "T2", "T3")]
+    assert min(np.linalg.norm(a - b) for i, a in enumerate(trains) for b in trains[i + 1:]) >= 50.0
+
+
 @pytest.mark.parametrize("module", [plots, netplots, loopplots, heavyplots], ids=lambda m: m.__name__)
 def test_plots_take_every_colour_from_the_style_module(module):
     source = (Path(module.__file__)).read_text()

@@ -110,9 +110,11 @@ GROUPS = {"limit": LIMIT, "strategy": STRATEGY, "distribution": DISTRIBUTION, "n
 _ORDER = (LIMIT, STRATEGY, DISTRIBUTION, NETWORK, KIND, CONTROLLER, REGIME, ENERGY)
 
 # Colours for unnamed series, in the order handed out: matplotlib's tab10 without the limits'
-# red, brown and grey, then Dark2 and the light tab20 shades; beyond these, generated hues.
-_FRESH = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#e377c2", "#bcbd22", "#17becf", "#1b9e77",
-          "#d95f02", "#7570b3", "#66a61e", "#e6ab02", "#a6761d", "#aec7e8", "#ffbb78", "#98df8a",
+# red, brown and grey, then Dark2 (ordered so that colours handed out one after the other are far
+# apart: the trains of a network figure after its seven strategies) and the light tab20 shades;
+# beyond these, generated hues.
+_FRESH = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#e377c2", "#bcbd22", "#17becf", "#d95f02",
+          "#7570b3", "#1b9e77", "#e6ab02", "#66a61e", "#a6761d", "#aec7e8", "#ffbb78", "#98df8a",
           "#c5b0d5", "#f7b6d2", "#dbdb8d", "#9edae5")
 
 DIVERGING = "RdBu_r"  # colour map of a signed field (in-train forces: compression blue, tension red)
