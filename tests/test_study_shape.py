@@ -1,10 +1,12 @@
 """Commands on the one study shape (``studies.batch.run_expanded``): each case stored in
 ``results.sqlite`` as it finishes, a rerun computes only what is not stored, the same table serially,
 in worker processes and after a kill -9; ``summary.json`` read back by ``api.load``."""
+import json
 import sqlite3
 from contextlib import closing
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from ecostudy import api
@@ -120,6 +122,20 @@ def test_a_network_study_stores_each_strategy_and_resumes(networked, tmp_path):
 
 
 @pytest.mark.slow
+def test_a_network_summary_names_the_strategy_of_least_substation_energy(networked):
+    """summary.json (and the report's results) say which verified strategy drew least from the
+    substation, how much, and its saving against independent driving, as the table has them."""
+    _, _, out = networked
+    summary = json.loads((out / "summary.json").read_text())
+    table = pd.read_csv(out / "network_substation.csv")
+    least = table.loc[table["substation_kWh"].idxmin()]
+    assert summary["least_substation_strategy"] == least["strategy"]
+    assert summary["least_substation_kWh"] == pytest.approx(least["substation_kWh"], rel=1e-5)
+    assert summary["least_saving_vs_independent_pct"] == pytest.approx(least["saving_vs_independent_pct"], abs=1e-3)
+    base = table.loc[table["strategy"] == "independent", "substation_kWh"].iloc[0]
+    assert summary["independent_substation_kWh"] == pytest.approx(base, rel=1e-5)
+
+
 def test_a_killed_network_study_resumes_and_workers_agree(networked, tmp_path):
     report, _, _ = networked
     study = network_study(tmp_path, ["independent", "following", "triggering"])
