@@ -80,6 +80,26 @@ def test_a_network_table_prints_a_balance_that_rounds_to_zero_as_zero(tmp_path):
     assert kept and all(abs(v) < 1e-9 for v in kept)  # the file keeps the value, printed as 0.000
 
 
+def test_a_case_not_ok_shows_its_status_kind_in_the_table_and_its_reason_once_under_it(tmp_path):
+    """Two trains 45 s apart, 500 m of buffer: independent driving comes within 195 m (flagged) and
+    following cannot depart (failed). The printed table's status column holds the kind alone, so a
+    long reason does not widen every row; each reason is printed once, under the table."""
+    study = write_yaml(tmp_path / "net.yaml", {
+        "name": "tiny", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
+        "stops": ["Noord", "Station"], "running_times_s": [56.0], "time_step_s": 1.0,
+        "trains": [{"name": "A", "offset_s": 0}, {"name": "B", "offset_s": 45}], "buffer_m": 500,
+        "substation": {"position_m": 300}, "strategies": ["independent", "following"], "points": 300,
+        "output": str(tmp_path / "out")})
+    r = CliRunner().invoke(app, ["network", str(study), "--workers", "1", "--no-plot"])
+    assert r.exit_code == 1, r.output
+    rows = {line.split()[0]: line.split()[1] for line in r.stdout.split("\n2 strategies")[0].splitlines()[1:]}
+    assert rows == {"independent": "flagged", "following": "failed"}, r.stdout
+    assert "buffer_m" not in r.stdout
+    assert r.stderr.count("cannot keep buffer_m 500 m") == 1 and r.stderr.count("closer than buffer_m 500 m") == 1, r.stderr
+    stored = pd.read_csv(tmp_path / "out" / "network_substation.csv").set_index("strategy")["status"]
+    assert stored["following"].startswith("failed: train B, leg 1: cannot keep buffer_m 500 m")  # the file keeps it
+
+
 def _values(tree, key):
     if isinstance(tree, dict):
         for k, v in tree.items():

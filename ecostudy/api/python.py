@@ -123,7 +123,7 @@ class Front(Judged):
 
     def __repr__(self) -> str:
         words = self.table.assign(status=[Status.parse(str(s)).kind for s in self.table["status"]])  # reasons: above
-        return f"Front({self.head()}; {self.status})\n{shown(words, FRONT_SHOWN)}"
+        return f"Front({self.head()}; {self.status})\n{shown(words, FRONT_SHOWN, reasons=True)}"
 
     def _repr_html_(self) -> str:  # a notebook cell: the line, the status, the points with their reasons
         return fragment(f"Front({self.head()})", str(self.status),
