@@ -10,6 +10,7 @@ QP's solve time per step and memory for f = 1 and f = 10.
     python bench/bench_heavyhaul.py --terms --notches heavyhaul_brake_penalty   # Table IV with the locomotives' notches
     python bench/bench_heavyhaul.py --terms --brake-on all heavyhaul_brake_penalty   # K_b on the dynamic brakes too
     python bench/bench_heavyhaul.py --terms --notch-count 2 heavyhaul_brake_penalty   # the same with 2 notches each way
+    python bench/bench_heavyhaul.py --terms --unit-kn 30 heavyhaul_brake_penalty   # eq. 4 in units of 30 kN (not a shipped scale)
     python bench/bench_heavyhaul.py --balance [--adhesion] heavyhaul_brake_penalty   # the energy balance, an effect on
     python bench/bench_heavyhaul.py --stops heavyhaul_brake_penalty heavyhaul_brake_penalty_descents   # where each run stopped
     python bench/bench_heavyhaul.py --qp 1 [--solver daqp|condensed|clarabel|ipopt] [--blas-threads 2]   # one QP size: build + 20 solves
@@ -118,7 +119,7 @@ def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesio
     from ecostudy.studies.heavyhaul import heavyhaul_study
     for name in names or ("heavyhaul_brake_penalty", "heavyhaul_brake_penalty_limits", "heavyhaul_horizons",
                           "heavyhaul_fence"):
-        path, out = ROOT / "studies" / f"{name}.yaml", ROOT / "out" / f"bench_{name}"
+        path, out = ROOT / "studies" / f"{name}.yaml", ROOT / "out" / f"bench_{name}{UNIT_TAG[0]}"
         changes = {k: v for k, v in (("fence_weights", weights), ("objective_scale", scale), ("adhesion", adhesion),
                                      ("effort_penalty", effort), ("notches", notches), ("brake_penalty_on", brake_on),
                                      ("observer", bool(observer)),
@@ -145,6 +146,24 @@ def studies(names, weights=None, scale=None, columns=COLUMNS, workers=2, adhesio
         print(harness.markdown(outcome.runs[list(columns)].to_dict("records"), columns))
 
 
+UNIT_TAG = [""]  # the output folders' suffix under ``--unit-kn`` (a store never mixes its runs with the scale's own)
+
+
+def uniform_unit(kn):
+    """Eq. 4 with every in-train force and every effort in units of ``kn`` kN and speed errors in
+    m/s, whatever the studies' ``objective_scale`` (not a shipped scale: the paper states no units;
+    100 kN is its ``paper`` reading). Patches the controllers' ``objective_terms`` in this process
+    (the study's workers are forked from it)."""
+    from ecostudy.heavyhaul import condensed, qp as qp_form, rhc
+    plain = rhc.objective_terms
+
+    def terms(model, kinds, weights, represented=None, scales=None, *rest, **kw):
+        return plain(model, kinds, weights, represented, rhc.Scales(kn, np.full(len(kinds), kn), 1.0), *rest, **kw)
+    for module in (rhc, condensed, qp_form):
+        module.objective_terms = terms
+    UNIT_TAG[0] = f"_unit_{kn:g}kN"
+
+
 if __name__ == "__main__":
     warnings.simplefilter("ignore", EcostudyWarning)
     parser = argparse.ArgumentParser()
@@ -159,6 +178,7 @@ if __name__ == "__main__":
     parser.add_argument("--notch-count", type=int, help="the locomotives' notches on, this many each way (a consist copy)")
     parser.add_argument("--observer", nargs=2, type=float, metavar=("Q", "R"),
                         help="the Kalman observer on, with Q = q I and R = r I (observer: true, observer_q, observer_r)")
+    parser.add_argument("--unit-kn", type=float, help="eq. 4's forces and efforts in units of this many kN, speeds in m/s")
     parser.add_argument("--terms", action="store_true", help="print the brake-penalty columns (eq. 4's terms at the optimum)")
     parser.add_argument("--balance", action="store_true", help="print the energy balance columns")
     parser.add_argument("--stops", action="store_true", help="print the status columns (where each run stopped)")
@@ -167,6 +187,8 @@ if __name__ == "__main__":
     parser.add_argument("studies", nargs="*", help="study names (default: all four)")
     args = parser.parse_args()
     limit_blas_threads(args.blas_threads)
+    if args.unit_kn:
+        uniform_unit(args.unit_kn)
     if args.qp:
         qp(args.qp, args.solver, threads=args.blas_threads)
     else:
