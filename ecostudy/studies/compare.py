@@ -11,6 +11,7 @@ did not solve it solves it again from the same inputs, which gives the same opti
 deterministic for one NL file).
 """
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -43,13 +44,13 @@ _ATO: dict = {}  # the ATO optimum of a scenario, per process: the base of the s
 
 
 def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_POINTS, study="compare"):
-    """One case per strategy (:data:`STRATEGIES`) of a scenario: the train and track documents
+    """One case per strategy (:data:`COMPARED`) of a scenario: the train and track documents
     (schema-shaped), the stops, the timing (a running time [s] or a supplement, a fraction over the
     all-out time) and the grid; each keyed by a hash of all of them and the strategy."""
     scenario = {"study": study, "train": train_doc, "track": track_doc, "from": from_stop, "to": to_stop,
                 "running_time_s": timing.running_time, "supplement": timing.supplement, "points": points}
     cases = []
-    for name in STRATEGIES:
+    for name in COMPARED.names():
         case = {**scenario, "strategy": name, "scenario": name, "name": name, "labels": {"strategy": name}}
         case["key"] = case_key(case)
         cases.append(case)
@@ -105,6 +106,7 @@ def _after_ato(drive):
         target = ato.facts.running_time_s
         prepared = prepare(track, train, case["from"], case["to"], case["points"])
         driven, extra, own = drive(case, train, prepared, ato)
+        driven = replace(driven, name=case["strategy"])  # its row named as registered
         row, overspeed = driven.row(train, prepared.segment.distance), overspeed_kmh(prepared.segment, driven)
         status = driven_run(row["stop_error_m"], row["running_time_s"] - target, overspeed, row.get("adhesion_use_max"))
         if own is not None:  # the same checks, and how its own NLP ended
@@ -113,7 +115,9 @@ def _after_ato(drive):
     return strategy
 
 
-def _heuristic(rule):
+def heuristic_strategy(rule):
+    """A rule of thumb as a strategy: ``rule(prepared case, running time [s]) -> Driven``
+    (``heuristics.ecodrive``), driven to the ATO optimum's running time."""
     return _after_ato(lambda case, train, prepared, ato: (rule(prepared, ato.facts.running_time_s), {}, None))
 
 
@@ -130,11 +134,10 @@ def _das_phases(case, train, prepared, ato):
 COMPARED: Registry = Registry("compared strategy")
 COMPARED.register("all-out", _all_out, doc="the fastest run")
 COMPARED.register("ATO optimum", _ato_optimum, doc="the energy-optimal run")
-COMPARED.register("eco-drive coasting", _heuristic(ecodrive.eco_coasting), doc="eco-drive coasting to the time")
-COMPARED.register("MARECO-style", _heuristic(ecodrive.mareco), doc="MARECO-style cruise and coast to the time")
+COMPARED.register("eco-drive coasting", heuristic_strategy(ecodrive.eco_coasting), doc="coasting to the time")
+COMPARED.register("MARECO-style", heuristic_strategy(ecodrive.mareco), doc="cruise and coast to the time")
 COMPARED.register("DAS round (nearest level)", _after_ato(_nearest_levels), doc="the optimum on the nearest DAS level")
 COMPARED.register("DAS phases", _after_ato(_das_phases), doc="the DAS phases NLP from the optimum")
-STRATEGIES = tuple(COMPARED.names())
 
 
 def verified(run):
