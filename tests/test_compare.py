@@ -86,3 +86,28 @@ def test_a_strategy_that_overspeeds_is_flagged(tmp_path):
     assert das["overspeed_max_kmh"] > 0.5
     assert das["status"].startswith("flagged: overspeed"), das["status"]
     assert rows.loc["ATO optimum", "status"] == "ok" and rows.loc["ATO optimum", "overspeed_max_kmh"] < 0.5
+
+
+def test_each_strategy_is_looked_up_by_name_and_an_unknown_one_fails_its_case():
+    """The strategies are registered (``studies.compare.COMPARED``), in the table's order; a case
+    naming one that is not fails with the known ones rather than running another's rule, and a
+    rule registered under a name of its own is driven and its row named so."""
+    import yaml
+
+    from ecostudy.core.types import Timing
+    from ecostudy.heuristics import ecodrive
+    from ecostudy.studies.compare import COMPARED, compare_cases, heuristic_strategy, run_strategy
+    assert COMPARED.names() == ["all-out", "ATO optimum", "eco-drive coasting", "MARECO-style",
+                                "DAS round (nearest level)", "DAS phases"]
+    docs = [yaml.safe_load(p.read_text()) for p in (TRAINS / "amsterdam_metro.yaml",
+                                                    TRACKS / "amsterdam_rokin_centraal.yaml")]
+    case = {**compare_cases(*docs, "Rokin", "Centraal", Timing(running_time=80.0), points=20)[-2], "strategy": "nope"}
+    result = run_strategy(case)
+    assert result["status"] == "failed" and "unknown compared strategy 'nope'; known: all-out, ATO optimum" \
+        in result["error"], result
+    COMPARED.register("coasting again", heuristic_strategy(ecodrive.eco_coasting))  # a rule under a name of its own
+    try:
+        again = run_strategy({**case, "strategy": "coasting again"})
+    finally:
+        COMPARED._specs.pop("coasting again", None)
+    assert again["status"] in ("ok", "flagged") and again["summary"]["strategy"] == "coasting again", again["error"]

@@ -45,3 +45,31 @@ def test_unknown_kinds_and_foreign_options_are_refused(tmp_path, guide_kind):
                                      "--out", str(tmp_path / "o"), "--no-progress"])
         lines = [line for line in r.output.splitlines() if line.startswith("error:")]
         assert r.exit_code == 2 and len(lines) == 1 and all(w in lines[0] for w in words), r.output
+
+
+class _Doubled:
+    """A controller with a bug: twice the full handle until the last 300 m, then full braking."""
+
+    def __init__(self, segment):
+        self.distance, self.solve_seconds = segment.distance, []
+
+    def plan(self, state):
+        self.solve_seconds.append(0.0)
+        return 2.0 if state.position < self.distance - 300 else -1.0
+
+
+def test_a_handle_outside_minus_one_to_one_fails_the_run_naming_it(tmp_path):
+    """A controller's handle is in [-1, 1]: one of 2 would drive twice the traction envelope, so the
+    run fails with the handle, where it was planned and the controller, rather than drive it."""
+    CONTROLLER_KINDS.register("doubled", lambda build: _Doubled(build.segment))
+    try:
+        path = study(tmp_path, controllers=[{"name": "bug", "kind": "doubled", "compute_delay": 0}], deviations={},
+                     draws=1)
+        r = CliRunner().invoke(app, ["simulate", str(path), "--out", str(tmp_path / "out"), "--no-progress",
+                                     "--no-plot", "--workers", "1"])
+    finally:
+        CONTROLLER_KINDS._specs.pop("doubled", None)
+    runs = pd.read_csv(tmp_path / "out" / "runs.csv")
+    assert r.exit_code == 1 and list(runs["status"]) == ["failed"], r.output
+    assert "_Doubled.plan gave the handle 2.0 at 0.0 m, 0.00 m/s, clock 0.0 s: a handle is a number in [-1, 1]" \
+        in runs["reason"].iloc[0]

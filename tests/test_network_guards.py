@@ -169,6 +169,20 @@ def test_every_strategy_a_study_file_may_name_is_registered():
         STRATEGIES.get("nope")
 
 
+def test_a_supervisor_rule_is_looked_up_by_name_and_an_unknown_one_is_refused(one_leg):
+    """Every supervisor rule of ``rules.RULES`` is a strategy; a rule name it does not hold is refused
+    naming the known ones (it never falls through to another rule's weights)."""
+    from ecostudy.network import rules
+    from ecostudy.network.strategies import STRATEGIES
+    f, _, _ = one_leg
+    assert set(rules.RULES.names()) == {"receptivity", "triggering", "voltage", "dissension"} <= set(STRATEGIES.names())
+    runs = rules.independent(f)
+    weights, allowance = rules.rule_terms(f, "receptivity", runs, 0)
+    assert (weights == 1.0).all() and (allowance == 0.0).all()
+    with pytest.raises(KeyError, match="unknown supervisor rule 'mild'; known: receptivity, triggering, voltage"):
+        rules.rule_terms(f, "mild", runs, 0)
+
+
 def test_the_guide_s_new_strategy_runs_with_one_registration_line(one_leg):
     """docs/results.md, "Registered kinds": its example, run as written, adds a strategy that the
     study machinery solves and scores like the others."""

@@ -76,4 +76,5 @@ def test_the_command_line_and_the_api_run_a_registered_kind(study, tmp_path):
     unknown = CliRunner().invoke(app, ["run", str(study), "--kind", "nope"])
     known = unknown.output.split("unknown study kind 'nope'; known: ")[-1].strip().split(", ")
     assert unknown.exit_code == 2, unknown.output
-    assert sorted(known) == ["compare", "heavyhaul", "network", "pareto", "resistance", "run", "simulate"], unknown.output
+    # every built-in kind and this one are named (a kind added to studies/kinds.py later is named too)
+    assert {"compare", "heavyhaul", "network", "pareto", "resistance", "run", "simulate"} <= set(known), unknown.output

@@ -25,12 +25,30 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ecostudy.core.errors import EcostudyError
 from ecostudy.core.plant import Noise, Plant, Truth
 from ecostudy.core.simulate import adhesion_use
 from ecostudy.core.types import State
 from ecostudy.core.units import to_kmh
 
 MEASURED = "measured"
+HANDLE_TOLERANCE = 1e-6  # a handle this far outside [-1, 1] is a solver's rounding, not a controller's error
+
+
+def planned_handle(controller, state):
+    """``controller.plan(state)`` as a number in [-1, 1]; anything else (2: twice the traction
+    envelope, a percentage, None, NaN) is refused naming the controller and where it was planned,
+    so that the plant never drives a force its envelopes do not give."""
+    u = controller.plan(state)
+    try:
+        handle = float(u)
+    except (TypeError, ValueError):
+        handle = float("nan")
+    if not abs(handle) <= 1.0 + HANDLE_TOLERANCE:  # NaN too
+        at = round(state.position, 1) + 0.0  # never "-0.0 m" for a measured stand
+        raise EcostudyError(f"{type(controller).__name__}.plan gave the handle {u!r} at {at:.1f} m, "
+                            f"{state.speed:.2f} m/s, clock {state.time:.1f} s: a handle is a number in [-1, 1]")
+    return handle
 
 
 class LoopResult(NamedTuple):
@@ -140,11 +158,11 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
             pieces, held, lag, busy_until, pending = pieces
         elif delay:
             ahead = predict(ahead_model, measured, [(sample_time, u) for u in planned])
-            planned.append(float(controller.plan(ahead)))
+            planned.append(planned_handle(controller, ahead))
             held = planned.pop(0)
             pieces = [(sample_time, held)]
         else:
-            held = float(controller.plan(measured))
+            held = planned_handle(controller, measured)
             pieces = [(sample_time, held)]
         handles.append(pieces[0][1])
         last, acted = (pieces[0][1], max(measured.speed, 0.0), measured, state), list(pieces)
@@ -165,7 +183,7 @@ def _measured_cycle(controller, nominal, measured, sample_time, held, lag, busy_
     t = measured.time
     if pending is None and busy_until <= t + 1e-9:  # free: start a solve from the state predicted by the last lag
         ahead = predict(nominal, measured, [(lag, held)])
-        u = float(controller.plan(ahead))
+        u = planned_handle(controller, ahead)
         lag = float(controller.solve_seconds[-1]) if controller.solve_seconds else 0.0
         busy_until, pending = t + lag, u
     if pending is not None and busy_until < t + sample_time:  # it acts within this sample

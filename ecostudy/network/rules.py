@@ -5,6 +5,7 @@ import copy
 import numpy as np
 
 from ecostudy.core.errors import SolverError
+from ecostudy.core.registry import Registry
 from ecostudy.network import circuit
 from ecostudy.network.fleet import departure_order, line_positions, solve_train, step_arrays
 from ecostudy.network.scoring import buffer_missed, evaluate
@@ -123,30 +124,57 @@ def sensed(fleet, runs_by_train):
     return circuit.sensed_voltages(fleet.supply, x, p).T
 
 
-def rule_terms(fleet, rule, runs_by_train, i):
-    """(traction weight, allowance [kW]) per clock step of train ``i`` under ``rule``, from the
-    runs as they are now: 7.7 discounts by (1 - gamma2) / (1 - gamma1) while another train brakes,
-    dissension by gamma_i / gamma0 (:func:`dissension_weights`), both up to the power the others
-    offer; 7.11 (between consecutive trains, as the thesis' text applies it) weighs 0 while the
-    voltage of the train ahead is above one's own (:func:`sensed`), up to what the line can
-    deliver of that train's offer (:func:`deliverable`)."""
-    if rule == "receptivity":  # no rule: the rounds' receptivity credit alone
-        return np.ones(fleet.steps), np.zeros(fleet.steps)
+def _offered_by_others(fleet, runs_by_train, i):
     power = offered(fleet, runs_by_train)
-    others = power.sum(axis=0) - power[i]
-    if rule == "triggering":
-        flags = _braking_steps(fleet, runs_by_train)
-        return np.where(_others(flags, i), (1 - GAMMA[1]) / (1 - GAMMA[0]), 1.0), others
-    if rule == "dissension":
-        return dissension_weights(fleet, _braking_steps(fleet, runs_by_train))[i], others
+    return power.sum(axis=0) - power[i]
+
+
+def _no_rule(fleet, runs_by_train, i):
+    """supervisor rounds, regeneration credited up to what the line takes"""
+    return np.ones(fleet.steps), np.zeros(fleet.steps)
+
+
+def _triggering(fleet, runs_by_train, i):
+    """rule 7.7: traction discounted while another train brakes"""
+    flags = _braking_steps(fleet, runs_by_train)
+    return np.where(_others(flags, i), (1 - GAMMA[1]) / (1 - GAMMA[0]), 1.0), _offered_by_others(fleet, runs_by_train, i)
+
+
+def _voltage(fleet, runs_by_train, i):
+    """rule 7.11: traction free while the train ahead's voltage is above one's own"""
     order = departure_order(fleet)
     rank = order.index(i)
     if rank == 0:
         return np.ones(fleet.steps), np.zeros(fleet.steps)
-    ahead = order[rank - 1]
+    ahead, power = order[rank - 1], offered(fleet, runs_by_train)
     volts = sensed(fleet, runs_by_train)
     higher = (volts[ahead] > volts[i] + 1.0) & (power[ahead] > 0)  # NaN (not running) compares False
     return np.where(higher, 0.0, 1.0), deliverable(fleet, runs_by_train, i, np.where(higher, power[ahead], 0.0))
+
+
+def _dissension(fleet, runs_by_train, i):
+    """eqs. 8.14-8.17: weights that fall with the number of braking neighbours"""
+    return dissension_weights(fleet, _braking_steps(fleet, runs_by_train))[i], _offered_by_others(fleet, runs_by_train, i)
+
+
+# the supervisor rules by name, each ``terms(fleet, runs_by_train, i)``: every one is a network
+# strategy of supervisor rounds (``strategies.STRATEGIES``); the study file's names: ``io.schemas.Strategy``
+RULES: Registry = Registry("supervisor rule")
+RULES.register("receptivity", _no_rule)
+RULES.register("triggering", _triggering)
+RULES.register("voltage", _voltage)
+RULES.register("dissension", _dissension)
+
+
+def rule_terms(fleet, rule, runs_by_train, i):
+    """(traction weight, allowance [kW]) per clock step of train ``i`` under ``rule`` (a name of
+    :data:`RULES`; another is refused naming them), from the runs as they are now: 7.7 discounts by
+    (1 - gamma2) / (1 - gamma1) while another train brakes, dissension by gamma_i / gamma0
+    (:func:`dissension_weights`), both up to the power the others offer; 7.11 (between consecutive
+    trains, as the thesis' text applies it) weighs 0 while the voltage of the train ahead is above
+    one's own (:func:`sensed`), up to what the line can deliver of that train's offer
+    (:func:`deliverable`); ``receptivity``, no rule: the rounds' receptivity credit alone."""
+    return RULES.get(rule)(fleet, runs_by_train, i)
 
 
 def supervised(fleet, rule, start, rounds=3, mapper=map):

@@ -38,7 +38,7 @@ from ecostudy.core.simulate import TOLERANCES
 from ecostudy.core.status import solver_part
 from ecostudy.core.registry import Registry
 from ecostudy.network.joint import joint
-from ecostudy.network.rules import following, independent, supervised
+from ecostudy.network.rules import RULES, following, independent, supervised
 from ecostudy.network.scoring import buffer_missed, closest_approach, evaluate, separations, verify_leg
 
 
@@ -132,11 +132,8 @@ def _supervised(rule):
 # the strategies after independent driving (which every study solves first), by name: each entry
 # takes (fleet, independent runs, mapper) and returns (runs, info)
 STRATEGIES: Registry = Registry("network strategy")
-for _rule, _doc in (("receptivity", "supervisor rounds, regeneration credited up to what the line takes"),
-                    ("triggering", "rule 7.7: traction discounted while another train brakes"),
-                    ("voltage", "rule 7.11: traction free while the train ahead's voltage is above one's own"),
-                    ("dissension", "eqs. 8.14-8.17: weights that fall with the number of braking neighbours")):
-    STRATEGIES.register(_rule, _supervised(_rule), doc=_doc)
+for _rule in RULES:  # a supervisor rule is a strategy of supervisor rounds
+    STRATEGIES.register(_rule.name, _supervised(_rule.name), doc=_rule.doc)
 STRATEGIES.register("joint", lambda fleet, ind, mapper: joint(fleet, ind),
                     doc="one NLP over all trains and the circuit: the bound no rule beats")
 STRATEGIES.register("following", lambda fleet, ind, mapper: (following(fleet, ind, mapper), {}),

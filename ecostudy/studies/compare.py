@@ -11,6 +11,7 @@ did not solve it solves it again from the same inputs, which gives the same opti
 deterministic for one NL file).
 """
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -18,6 +19,7 @@ import pandas as pd
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import EcostudyWarning
+from ecostudy.core.registry import Registry
 from ecostudy.core.grid import make_segment
 from ecostudy.core.simulate import Driven, Trace, worst_overspeed
 from ecostudy.core.status import Status, driven_run, failed, worst
@@ -34,8 +36,6 @@ from ecostudy.studies.options import no_windows
 from ecostudy.studies.sizes import check_compare
 from ecostudy.studies.workers import kept
 
-HEURISTICS = {"eco-drive coasting": ecodrive.eco_coasting, "MARECO-style": ecodrive.mareco}
-STRATEGIES = ("all-out", "ATO optimum", *HEURISTICS, "DAS round (nearest level)", "DAS phases")
 ROW = ("strategy", "running_time_s", "traction_energy_kWh", "net_energy_kWh", "stop_error_m", "overspeed_max_kmh",
        "handle_changes")
 GRIP = ("adhesion_use_max",)  # a column of a train with an adhesion limit only (core.simulate.adhesion_use)
@@ -44,13 +44,13 @@ _ATO: dict = {}  # the ATO optimum of a scenario, per process: the base of the s
 
 
 def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_POINTS, study="compare"):
-    """One case per strategy (:data:`STRATEGIES`) of a scenario: the train and track documents
+    """One case per strategy (:data:`COMPARED`) of a scenario: the train and track documents
     (schema-shaped), the stops, the timing (a running time [s] or a supplement, a fraction over the
     all-out time) and the grid; each keyed by a hash of all of them and the strategy."""
     scenario = {"study": study, "train": train_doc, "track": track_doc, "from": from_stop, "to": to_stop,
                 "running_time_s": timing.running_time, "supplement": timing.supplement, "points": points}
     cases = []
-    for name in STRATEGIES:
+    for name in COMPARED.names():
         case = {**scenario, "strategy": name, "scenario": name, "name": name, "labels": {"strategy": name}}
         case["key"] = case_key(case)
         cases.append(case)
@@ -83,33 +83,61 @@ def _ato(case, track, train):
 
 def run_strategy(case):
     """One strategy of :func:`compare_cases`, driven by the simulator; never raises."""
-    return outcome(case, lambda: _strategy(case))
+    return outcome(case, lambda: COMPARED.get(case["strategy"])(case, *_inputs(case)))
 
 
-def _strategy(case):
-    track, train = _inputs(case)
-    name, extra = case["strategy"], {}
-    if name == "all-out":
-        run = solve_run(track, train, case["from"], case["to"], Timing(), objective="time", points=case["points"])
-        return _stored(Driven(name, run.handle, run.trace), train, run.segment, run.status, verified=verified(run))
+def _all_out(case, track, train):
+    run = solve_run(track, train, case["from"], case["to"], Timing(), objective="time", points=case["points"])
+    return _stored(Driven("all-out", run.handle, run.trace), train, run.segment, run.status, verified=verified(run))
+
+
+def _ato_optimum(case, track, train):
     ato = _ato(case, track, train)
-    target = ato.facts.running_time_s
-    if name == "ATO optimum":
-        return _stored(Driven(name, ato.handle, ato.trace), train, ato.segment, ato.status, target_s=target,
-                       verified=verified(ato))
-    prepared = prepare(track, train, case["from"], case["to"], case["points"])
-    if name in HEURISTICS:
-        driven = HEURISTICS[name](prepared, target)
-    elif name == "DAS phases":
-        block, _, driven = das_phases(ato, case["points"])
-        extra["handle_changes"] = block["mode_changes"]  # the advice rows minus one
-    else:
-        driven = nearest_levels(prepared.segment, train, prepared.nodes, ato.handle)
-    row, overspeed = driven.row(train, prepared.segment.distance), overspeed_kmh(prepared.segment, driven)
-    status = driven_run(row["stop_error_m"], row["running_time_s"] - target, overspeed, row.get("adhesion_use_max"))
-    if name == "DAS phases":  # the same checks, and how its NLP ended
-        status = worst([status, Status.parse(block["status"])])
-    return _stored(driven, train, prepared.segment, status, target_s=target, overspeed_max_kmh=overspeed, **extra)
+    return _stored(Driven("ATO optimum", ato.handle, ato.trace), train, ato.segment, ato.status,
+                   target_s=ato.facts.running_time_s, verified=verified(ato))
+
+
+def _after_ato(drive):
+    """A strategy driven from the ATO optimum: ``drive(case, train, prepared, ato)`` -> (its driven
+    run, columns of its own, a status of its own or None), scored by the simulator against the
+    optimum's running time."""
+    def strategy(case, track, train):
+        ato = _ato(case, track, train)
+        target = ato.facts.running_time_s
+        prepared = prepare(track, train, case["from"], case["to"], case["points"])
+        driven, extra, own = drive(case, train, prepared, ato)
+        driven = replace(driven, name=case["strategy"])  # its row named as registered
+        row, overspeed = driven.row(train, prepared.segment.distance), overspeed_kmh(prepared.segment, driven)
+        status = driven_run(row["stop_error_m"], row["running_time_s"] - target, overspeed, row.get("adhesion_use_max"))
+        if own is not None:  # the same checks, and how its own NLP ended
+            status = worst([status, own])
+        return _stored(driven, train, prepared.segment, status, target_s=target, overspeed_max_kmh=overspeed, **extra)
+    return strategy
+
+
+def heuristic_strategy(rule):
+    """A rule of thumb as a strategy: ``rule(prepared case, running time [s]) -> Driven``
+    (``heuristics.ecodrive``), driven to the ATO optimum's running time."""
+    return _after_ato(lambda case, train, prepared, ato: (rule(prepared, ato.facts.running_time_s), {}, None))
+
+
+def _nearest_levels(case, train, prepared, ato):
+    return nearest_levels(prepared.segment, train, prepared.nodes, ato.handle), {}, None
+
+
+def _das_phases(case, train, prepared, ato):
+    block, _, driven = das_phases(ato, case["points"])
+    return driven, {"handle_changes": block["mode_changes"]}, Status.parse(block["status"])  # the advice rows minus one
+
+
+# the strategies side by side, in the table's order: each ``strategy(case, track, train)`` -> (status, reason, summary)
+COMPARED: Registry = Registry("compared strategy")
+COMPARED.register("all-out", _all_out, doc="the fastest run")
+COMPARED.register("ATO optimum", _ato_optimum, doc="the energy-optimal run")
+COMPARED.register("eco-drive coasting", heuristic_strategy(ecodrive.eco_coasting), doc="coasting to the time")
+COMPARED.register("MARECO-style", heuristic_strategy(ecodrive.mareco), doc="cruise and coast to the time")
+COMPARED.register("DAS round (nearest level)", _after_ato(_nearest_levels), doc="the optimum on the nearest DAS level")
+COMPARED.register("DAS phases", _after_ato(_das_phases), doc="the DAS phases NLP from the optimum")
 
 
 def verified(run):

@@ -3,7 +3,9 @@
 Each kind is a builder ``build(b: Build) -> controller`` (anything with ``plan(state) -> handle``
 that ``control.loop.run_loop`` drives) and the controller options it reads besides the common
 ones (``uses``); the study file's loader refuses any other option given to that kind. A new kind
-is a module with its builder and one ``CONTROLLER_KINDS.register`` line, imported below
+is a module with its controller, its builder and one ``CONTROLLER_KINDS.register`` line, imported
+here (``from ecostudy.control import NAME  # noqa: F401``) so that a study file may name it; an
+option of its own is a field of ``io.loopfile.Controller`` named in its ``uses``
 (docs/closed_loop.md, "Adding a controller kind").
 """
 import json
