@@ -141,3 +141,18 @@ def test_calibrate_shows_its_draws_on_a_terminal(tmp_path, log_files):
 @pytest.mark.slow  # three validations in fresh processes: 150 s at load 14
 def test_validate_shows_its_runs_on_a_terminal(tmp_path, log_files):
     bar_only_on_a_terminal(["validate", log_files[0], "--no-plot"], tmp_path, ["validate: replaying there", "2/2 runs"])
+
+
+@pytest.mark.parametrize("command", ["solve", "pareto", "compare", "journey", "run", "network", "simulate", "heavyhaul",
+                                     "calibrate", "validate"])
+def test_every_command_with_a_progress_bar_takes_no_progress(command):
+    code, out, _ = piped([command, "--help"], ".")
+    assert code == 0 and "--no-progress" in out, out
+
+
+def test_no_progress_keeps_the_bar_off_a_terminal(tmp_path, log_files):
+    """validate's bar shows its runs on a terminal (above); with --no-progress it does not, and the
+    command's own lines still do."""
+    code, out, err = on_a_terminal(["validate", log_files[0], "--no-plot", "--no-progress", "--out", "a"], tmp_path)
+    assert code in (0, 1) and "━" not in err and "2/2 runs" not in err and "written to" in err, err
+    assert "outputs" in out

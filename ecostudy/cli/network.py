@@ -15,8 +15,8 @@ def network(
     study: Path = typer.Argument(..., help="Network study file (YAML)."),
     out: o.Out = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
     workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False,
-    force: o.Force = False, debug: o.Debug = False,
+    force: o.Force = False, no_progress: o.NoProgress = False, debug: o.Debug = False,
 ):
     """Trains sharing one DC substation (Farooqi 2018): independent, rules 7.7 / 7.11, dissension, joint optimum, following; resumable. Example: ecostudy network studies/network_metro_2trains.yaml"""
     finish(call(debug, "network_folder", study, out, not no_plot, workers, fig_format, dpi, dask, retry_failed,
-                force=force, bar=("strategies", False)))
+                force=force, bar=("strategies", no_progress)))

@@ -22,12 +22,12 @@ def solve(
     das: Optional[o.DasMethod] = typer.Option(
         None, help="Also driver advice: round (nearest handle level), phases (optimal phase lengths, "
                    "Farooqi 2018, Ch. 5) or minlp (mode per phase chosen by binaries)."),
-    das_time_limit: o.DasTimeLimit = 60.0, force: o.Force = False, debug: o.Debug = False,
+    das_time_limit: o.DasTimeLimit = 60.0, force: o.Force = False, no_progress: o.NoProgress = False, debug: o.Debug = False,
 ):
     """Energy-optimal (or all-out) run between two stops, verified by re-simulation. Example: ecostudy solve studies/default.yaml"""
     finish(call(debug, "solve_folder", study, track, train, time, supplement, window, from_stop, to_stop,
                 objective and objective.value, weights, points, out, not no_plot, das and das.value, das_time_limit,
-                fig_format, dpi, force=force, bar=("solve", False, False)))
+                fig_format, dpi, force=force, bar=("solve", no_progress, False)))
 
 
 @app.command(short_help="Pontryagin regime check of a solved profile.")

@@ -20,12 +20,12 @@ def pareto(
     weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T [s] + w_e E/Ms [J/kg], Yazhemsky 2017, eq. 4.1a)."),
     das: Optional[o.DasMethod] = typer.Option(None, help="Also the DAS front: round | phases | minlp at every point."),
     das_time_limit: o.DasTimeLimit = 60.0, out: o.ParetoOut = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png",
-    dpi: o.Dpi = 110.0, force: o.Force = False, debug: o.Debug = False,
+    dpi: o.Dpi = 110.0, force: o.Force = False, no_progress: o.NoProgress = False, debug: o.Debug = False,
 ):
     """Energy against running time (epsilon-constraint sweep from the all-out time, and a study file's own running time), ATO and optionally DAS; every point stored, resumable. Example: ecostudy pareto studies/default.yaml --count 9"""
     finish(call(debug, "pareto_folder", study, track, train, from_stop, to_stop, count, supplement_max, points,
                 workers, out, not no_plot, weighted, das and das.value, das_time_limit, fig_format, dpi, dask,
-                retry_failed, force=force, bar=("points", False)))
+                retry_failed, force=force, bar=("points", no_progress)))
 
 
 @app.command(name="compare", short_help="Strategies side by side, each re-simulated by one simulator.")
@@ -34,6 +34,7 @@ def compare_command(
     time: o.Time = None, supplement: o.Supplement = None, points: o.Points = None, out: o.CompareOut = None,
     no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0, force: o.Force = False,
     debug: o.Debug = False, workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False,
+    no_progress: o.NoProgress = False,
 ):
     """Strategies side by side, every one scored by the same independent simulator: all-out, ATO optimum,
     eco-drive coasting, MARECO-style (after OSRD's MARECO), DAS round and DAS phases; resumable.
@@ -41,7 +42,7 @@ def compare_command(
     Example: ecostudy compare studies/default.yaml --out out/compare
     """
     finish(call(debug, "compare_folder", study, track, train, from_stop, to_stop, time, supplement, points, out,
-                not no_plot, fig_format, dpi, workers, dask, retry_failed, force=force, bar=("strategies", False)))
+                not no_plot, fig_format, dpi, workers, dask, retry_failed, force=force, bar=("strategies", no_progress)))
 
 
 @app.command(name="journey", short_help="Spread a journey's running time over its segments.")
@@ -59,11 +60,11 @@ def journey_command(
     points: int = typer.Option(o.FRONT_POINTS, "--points", "-K", help="Grid nodes per segment."),
     workers: int = typer.Option(1, help="Processes for the segments' fronts."),
     out: o.JourneyOut = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
-    force: o.Force = False, debug: o.Debug = False,
+    force: o.Force = False, no_progress: o.NoProgress = False, debug: o.Debug = False,
 ):
     """Spread a journey's running time over its segments: equal marginal saving vs same percentage. Example: ecostudy journey --train trains/amsterdam_metro.yaml --track tracks/metro_line_4stops.yaml --supplement 10"""
     finish(call(debug, "journey_folder", train, track, stops, time, supplement, timetable, dwell, points, workers,
-                out, not no_plot, fig_format, dpi, force=force, bar=("runs", False, False)))
+                out, not no_plot, fig_format, dpi, force=force, bar=("runs", no_progress, False)))
 
 
 @app.command(short_help="Every case of a study file; resumable, in parallel.")
