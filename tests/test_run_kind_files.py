@@ -75,6 +75,17 @@ def test_run_kind_network_writes_the_files_of_network(tmp_path):
     assert own <= listed_exactly(out)
 
 
+def test_run_kind_no_plot_writes_the_files_of_the_command_without_its_figures(tmp_path):
+    """run --kind network --no-plot: the tables and network.json of `network --no-plot`, no figure;
+    run --kind network then draws them."""
+    path, out = tiny_network_study(tmp_path, ["independent"]), tmp_path / "out"
+    tables = {"network_substation.csv", "network_trains.csv", "network_steps_independent.csv", "network.json"}
+    invoke("run", path, "--kind", "network", "--out", out, "--workers", 1, "--no-progress", "--no-plot")
+    assert listed_exactly(out) - {"summary.json", "report.html", "results.sqlite"} == tables
+    invoke("run", path, "--kind", "network", "--out", out, "--workers", 1, "--no-progress")
+    assert tables | {"network.png", "network_supply.png"} <= listed_exactly(out)
+
+
 def test_a_figure_the_study_no_longer_draws_is_not_kept_from_an_earlier_run(tmp_path):
     """The study's controller loses its estimator between two runs of simulate into one folder: the
     second run draws no mass_estimates.png, so the first run's is removed, not listed as drawn."""

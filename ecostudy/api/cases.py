@@ -58,14 +58,15 @@ VALIDATION_COLUMNS = {"run": None, "from_m": ".0f", "to_m": ".0f", "logged_time_
 
 @spelled
 def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
-               out: Optional[Path] = None, kind: str = "run", *, progress: Progress = None) -> Report:
+               out: Optional[Path] = None, kind: str = "run", plot: bool = True, *, progress: Progress = None) -> Report:
     """``ecostudy run``: every case of a study file not stored yet, through the one study engine
     (:func:`~ecostudy.studies.batch.run_kind`); ``kind``: a registered study kind
-    (:data:`~ecostudy.studies.batch.STUDY_KINDS`; ``run``: scenarios x sweep, or a library)."""
+    (:data:`~ecostudy.studies.batch.STUDY_KINDS`; ``run``: scenarios x sweep, or a library);
+    ``plot`` False: the kind's files without its figures."""
     workers = every_core(workers)
     check_options(workers=workers, dask=dask)  # a study too big for the command: refused by its kind's size (unless --force)
     table, counts, folder = run_kind(kind, study, workers, dask, retry_failed, Path(out) if out else None, progress,
-                                     own_files(kind, workers))
+                                     own_files(kind, workers, plot))
     write_html(folder)
     return reported(folder, [f"{counted(counts['total'], 'cases')}: {counts['stored_before']} already stored, {counts['computed']} "
                              f"computed now ({counts['failed']} of them failed or infeasible); not ok in the table: "
@@ -73,15 +74,17 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
                                                                                   "report.html"))])
 
 
-def own_files(kind: str, workers: int):
+def own_files(kind: str, workers: int, plot: bool = True):
     """The files the command of a study ``kind`` writes beside its table, with its default options
     (``pareto``: pareto.json and its two figures; ``compare``: compare.png; ``simulate``:
     aggregate.csv, steps/ and the figures of ``report.loopplots``; ``heavyhaul``: the figures of
-    ``report.heavyplots``; ``network``: the trains' and steps' tables, network.json and two figures),
-    so that ``run --kind`` writes the same set through the same writers; None for the others."""
-    draws = {"pareto": lambda: front_files(workers=workers), "compare": compare_figures,
-             "simulate": lambda: loop_files(loop_figures), "heavyhaul": lambda: heavyhaul_files(heavyplots.draw),
-             "network": network_files}
+    ``report.heavyplots``; ``network``: the trains' and steps' tables, network.json and two figures;
+    the figures left out where ``plot`` is False, as the command's ``--no-plot`` does), so that
+    ``run --kind`` writes the same set through the same writers; None for the others."""
+    draws = {"pareto": lambda: front_files(plot, workers=workers), "compare": lambda: compare_figures(plot),
+             "simulate": lambda: loop_files(loop_figures if plot else None),
+             "heavyhaul": lambda: heavyhaul_files(heavyplots.draw if plot else None),
+             "network": lambda: network_files(plot)}
     return draws[kind]() if kind in draws else None
 
 
