@@ -156,3 +156,11 @@ def test_no_progress_keeps_the_bar_off_a_terminal(tmp_path, log_files):
     code, out, err = on_a_terminal(["validate", log_files[0], "--no-plot", "--no-progress", "--out", "a"], tmp_path)
     assert code in (0, 1) and "━" not in err and "2/2 runs" not in err and "written to" in err, err
     assert "outputs" in out
+
+
+def test_validate_and_calibrate_write_their_figure_in_the_format_asked(tmp_path, log_files):
+    api.validate_folder(log_files[0], out=tmp_path / "v", fig_format="svg", dpi=50)
+    assert (tmp_path / "v" / "validate.svg").read_bytes().startswith(b"<?xml")
+    assert "validate.svg" in api.load(tmp_path / "v").summary["files"]
+    api.calibrate_folder(list(log_files), out=tmp_path / "c", bootstrap=0, fig_format="pdf")
+    assert (tmp_path / "c" / "residuals.pdf").read_bytes().startswith(b"%PDF")

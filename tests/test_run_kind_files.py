@@ -110,3 +110,24 @@ def test_only_files_of_the_kinds_ecostudy_writes_are_removed(tmp_path):
     assert gone == ["old.csv", "old.png"]
     assert {p.name for p in tmp_path.iterdir()} == {"summary.json", "kept.csv", "notes.txt", "notes"}
     assert (tmp_path.parent / "outside.csv").is_file()
+
+
+def test_simulate_and_heavyhaul_write_their_figures_in_the_format_asked(tmp_path):
+    """--format svg / pdf (and --dpi) reach every command's figures, not only the single-run ones:
+    simulate and heavyhaul (and run --kind), their earlier png figures removed, the new ones listed;
+    a format no writer knows is refused naming the option, before any run."""
+    path, out = loop_study(tmp_path, draws=1, controllers=[{"name": "convex", "kind": "convex", "compute_delay": 0}]), \
+        tmp_path / "loop"
+    invoke("simulate", path, "--out", out, "--workers", 1, "--no-progress")
+    invoke("simulate", path, "--out", out, "--workers", 1, "--no-progress", "--format", "svg")
+    files = listed_exactly(out)
+    assert {"bands.svg", "solve_times.svg"} <= files and not any(name.endswith(".png") for name in files), files
+    assert (out / "bands.svg").read_bytes().startswith(b"<?xml")
+    invoke("run", path, "--kind", "simulate", "--out", out, "--workers", 1, "--no-progress", "--format", "pdf")
+    assert (out / "bands.pdf").read_bytes().startswith(b"%PDF") and "bands.pdf" in listed_exactly(out)
+    hh, hh_out = heavyhaul_study(tmp_path, brake_penalty=[1], max_samples=24), tmp_path / "hh"
+    invoke("heavyhaul", hh, "--out", hh_out, "--workers", 1, "--no-progress", "--format", "pdf", "--dpi", 50)
+    assert {"tracking.pdf", "forces_K_b1_f10_Np4_Nc2.pdf"} <= listed_exactly(hh_out)
+    refused = runner.invoke(app, ["simulate", str(path), "--out", str(tmp_path / "x"), "--format", "jpeg"])
+    assert refused.exit_code == 2 and "--format: 'jpeg' is not a figure format" in refused.output
+    assert not (tmp_path / "x").exists()

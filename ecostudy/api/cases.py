@@ -8,6 +8,7 @@ functions (the command line only parses and prints).
 """
 import logging
 from contextlib import nullcontext
+from functools import partial
 from pathlib import Path
 from typing import Callable, Optional, Sequence
 
@@ -22,7 +23,7 @@ from ecostudy.report import calplots, heavyplots, loopplots
 from ecostudy.report.console import counted
 from ecostudy.report.studyfiles import compare_figures, front_files, network_files
 from ecostudy.report.html import write_html
-from ecostudy.report.style import output
+from ecostudy.report.style import Output, output
 from ecostudy.studies.batch import run_expanded, run_kind
 from ecostudy.studies.kinds import STUDY_KINDS  # noqa: F401  (every built-in kind registered)
 from ecostudy.studies.calibrate import calibrate_study, validate_study
@@ -58,15 +59,16 @@ VALIDATION_COLUMNS = {"run": None, "from_m": ".0f", "to_m": ".0f", "logged_time_
 
 @spelled
 def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
-               out: Optional[Path] = None, kind: str = "run", plot: bool = True, *, progress: Progress = None) -> Report:
+               out: Optional[Path] = None, kind: str = "run", plot: bool = True, fig_format: str = "png",
+               dpi: Optional[float] = None, *, progress: Progress = None) -> Report:
     """``ecostudy run``: every case of a study file not stored yet, through the one study engine
     (:func:`~ecostudy.studies.batch.run_kind`); ``kind``: a registered study kind
     (:data:`~ecostudy.studies.batch.STUDY_KINDS`; ``run``: scenarios x sweep, or a library);
-    ``plot`` False: the kind's files without its figures."""
+    ``plot`` False: the kind's files without its figures (else in ``fig_format`` at ``dpi``)."""
     workers = every_core(workers)
     check_options(workers=workers, dask=dask)  # a study too big for the command: refused by its kind's size (unless --force)
     table, counts, folder = run_kind(kind, study, workers, dask, retry_failed, Path(out) if out else None, progress,
-                                     own_files(kind, workers, plot))
+                                     own_files(kind, workers, plot, output(fig_format, dpi)))
     write_html(folder)
     return reported(folder, [f"{counted(counts['total'], 'cases')}: {counts['stored_before']} already stored, {counts['computed']} "
                              f"computed now ({counts['failed']} of them failed or infeasible); not ok in the table: "
@@ -74,32 +76,34 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
                                                                                   "report.html"))])
 
 
-def own_files(kind: str, workers: int, plot: bool = True):
+def own_files(kind: str, workers: int, plot: bool = True, figures: Output = Output()):
     """The files the command of a study ``kind`` writes beside its table, with its default options
     (``pareto``: pareto.json and its two figures; ``compare``: compare.png; ``simulate``:
     aggregate.csv, steps/ and the figures of ``report.loopplots``; ``heavyhaul``: the figures of
     ``report.heavyplots``; ``network``: the trains' and steps' tables, network.json and two figures;
-    the figures left out where ``plot`` is False, as the command's ``--no-plot`` does), so that
+    the figures left out where ``plot`` is False, as the command's ``--no-plot`` does, else written as
+    ``figures`` says), so that
     ``run --kind`` writes the same set through the same writers; None for the others."""
-    draws = {"pareto": lambda: front_files(plot, workers=workers), "compare": lambda: compare_figures(plot),
-             "simulate": lambda: loop_files(loop_figures if plot else None),
-             "heavyhaul": lambda: heavyhaul_files(heavyplots.draw if plot else None),
-             "network": lambda: network_files(plot)}
+    draws = {"pareto": lambda: front_files(plot, figures, workers=workers), "compare": lambda: compare_figures(plot, figures),
+             "simulate": lambda: loop_files(partial(loop_figures, out=figures) if plot else None),
+             "heavyhaul": lambda: heavyhaul_files(partial(heavyplots.draw, out=figures) if plot else None),
+             "network": lambda: network_files(plot, figures)}
     return draws[kind]() if kind in draws else None
 
 
 @spelled
 def simulate_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
-                    out: Optional[Path] = None, plot: bool = True, only: Optional[Sequence[str]] = None, *,
-                    progress: Progress = None) -> Report:
+                    out: Optional[Path] = None, plot: bool = True, only: Optional[Sequence[str]] = None,
+                    fig_format: str = "png", dpi: Optional[float] = None, *, progress: Progress = None) -> Report:
     """``ecostudy simulate``: every controller of a closed-loop study drives every draw of the
     plant's deviations and noise (``only``: these controllers' runs computed now); ``workers``: every
     core by default (the per-step solve times are then measured with every core busy)."""
     workers = every_core(workers)
     check_options(workers=workers, dask=dask)
+    figures = output(fig_format, dpi)
     check_closed_loop_study(study, workers, only)  # runs that cannot end, or too big: refused (unless --force)
     outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress, only,
-                             loop_figures if plot else None)
+                             partial(loop_figures, out=figures) if plot else None)
     runs, counts, folder = outcome.runs, outcome.counts, outcome.output
     write_html(folder)
     lines = [shown(outcome.aggregate, LOOP_COLUMNS, ".4g"), counts_line(counts, "runs"), "outputs " + listed(folder)]
@@ -109,24 +113,25 @@ def simulate_folder(study: Path, workers: Optional[int] = None, dask: Optional[s
     return reported(folder, lines)
 
 
-def loop_figures(outcome) -> list:
-    """The figures of a closed-loop study (``report.loopplots``), drawn; their file names (of this
-    drawing only: an earlier run's figure it does not draw again is not this run's)."""
-    return loopplots.draw(outcome)
+def loop_figures(outcome, out: Output = Output()) -> list:
+    """The figures of a closed-loop study (``report.loopplots``), drawn as ``out`` says; their file
+    names (of this drawing only: an earlier run's figure it does not draw again is not this run's)."""
+    return loopplots.draw(outcome, out)
 
 
 @spelled
 def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
-                     out: Optional[Path] = None, plot: bool = True, blas_threads: int = 1, *,
-                     progress: Progress = None) -> Report:
+                     out: Optional[Path] = None, plot: bool = True, blas_threads: int = 1, fig_format: str = "png",
+                     dpi: Optional[float] = None, *, progress: Progress = None) -> Report:
     """``ecostudy heavyhaul``: Zhang & Zhuan's braking-penalised receding-horizon controller on the
     coupled-mass train, every K_b, fence and horizon of the study (OpenBLAS set to ``blas_threads``);
     ``workers``: every core by default (the per-step solve times are then measured with every core busy)."""
     workers = every_core(workers)
     check_options(workers=workers, dask=dask)
+    figures = output(fig_format, dpi)
     limit_blas_threads(blas_threads)  # before the workers fork: they inherit it
     outcome = heavyhaul_study(study, workers, dask, retry_failed, Path(out) if out else None, progress,
-                              heavyplots.draw if plot else None)
+                              partial(heavyplots.draw, out=figures) if plot else None)
     runs, folder, plots = outcome.runs, outcome.output, list(outcome.files)
     write_html(folder)
     return reported(folder, [shown(runs, HEAVY_COLUMNS, ".4g"), counts_line(outcome.counts, "runs"),
@@ -161,17 +166,20 @@ def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, w
 @spelled
 def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: Optional[Path] = None,
                      fit: Optional[str] = None, out: Path = Path("out/calibration"), bootstrap: int = 200,
-                     savings: Optional[int] = None, plot: bool = True, *, progress: Optional[Watcher] = None) -> Report:
+                     savings: Optional[int] = None, plot: bool = True, fig_format: str = "png",
+                     dpi: Optional[float] = None, *, progress: Optional[Watcher] = None) -> Report:
     """``ecostudy calibrate``: train parameters fitted to logged runs (least squares on the replayed
     dynamics), 95 % intervals, ``bootstrap`` draws, and optionally the savings against the logs.
     ``progress`` watches the fit, each bootstrap draw and each optimal run of the savings
     (:mod:`ecostudy.core.progress`)."""
+    figures = output(fig_format, dpi)
     with watched(progress):
         result, summary = calibrate_study(logs, train, track, fit, out, bootstrap, savings,
-                                          ("residuals.png",) if plot else ())
+                                          (figures.filename("residuals"),) if plot else ())
         stage("figures and report")
     if plot:
-        calplots.residuals(result.residuals, Path(out) / "residuals.png", "calibration from logged runs")
+        calplots.residuals(result.residuals, Path(out) / figures.filename("residuals"), "calibration from logged runs",
+                           dpi=figures.dpi)
     write_html(out)
     q = result.quality
     lines = [shown(result.table.dropna(axis=1, how="all"), CALIBRATION_COLUMNS),
@@ -192,16 +200,19 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
 @spelled
 def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optional[Path] = None,
                     out: Path = Path("out/validate"), energy_tolerance: float = 5.0, time_tolerance: float = 5.0,
-                    plot: bool = True, *, progress: Optional[Watcher] = None) -> Report:
+                    plot: bool = True, fig_format: str = "png", dpi: Optional[float] = None, *,
+                    progress: Optional[Watcher] = None) -> Report:
     """``ecostudy validate``: a logged run replayed on the train file's model, per run between stops;
     a run whose traction energy or running time differs by more than the tolerances [%] is flagged.
     ``progress`` watches the runs replayed (:mod:`ecostudy.core.progress`)."""
+    figures = output(fig_format, dpi)
     with watched(progress):
         table, summary = validate_study(log_file, train, track, out, energy_tolerance / 100, time_tolerance / 100,
-                                        ("validate.png",) if plot else ())
+                                        (figures.filename("validate"),) if plot else ())
         stage("figures and report")
     if plot:
-        calplots.validation(table, Path(out) / "validate.png", f"{Path(log_file).stem}: logged and model")
+        calplots.validation(table, Path(out) / figures.filename("validate"), f"{Path(log_file).stem}: logged and model",
+                            dpi=figures.dpi)
     write_html(out)
     return reported(out, [shown(table, VALIDATION_COLUMNS, ".4g"),
                           f"traction energy: logged {summary['logged_traction_kWh']:.2f} kWh, model "

@@ -14,8 +14,8 @@ def heavyhaul(
     out: o.Out = None, no_progress: o.NoProgress = False, no_plot: o.NoPlot = False,
     blas_threads: int = typer.Option(1, min=1, max=256, help="OpenBLAS threads per process (1: the small QPs run "
                                      "fastest single-threaded, docs/heavyhaul.md)."),
-    force: o.Force = False, debug: o.Debug = False,
+    fig_format: o.Format = "png", dpi: o.Dpi = 110.0, force: o.Force = False, debug: o.Debug = False,
 ):
     """Heavy haul: Zhang & Zhuan's braking-penalised receding-horizon controller on the coupled-mass train (resumable). Every core by default; the step times are then measured with every core busy (--workers 1: quiet-machine step times). Example: ecostudy heavyhaul studies/heavyhaul_brake_penalty.yaml"""
-    finish(call(debug, "heavyhaul_folder", study, workers, dask, retry_failed, out, not no_plot, blas_threads,
+    finish(call(debug, "heavyhaul_folder", study, workers, dask, retry_failed, out, not no_plot, blas_threads, fig_format, dpi,
                 force=force, bar=("runs", no_progress)))

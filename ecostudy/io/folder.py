@@ -143,9 +143,10 @@ def files_listed(out_dir: Path | str) -> set[str]:
     return {f for f in files if isinstance(f, str)} if isinstance(files, list) else set()
 
 
-# the kinds of file ecostudy writes into an output folder: only such a file an earlier summary.json
-# listed is removed (a user's own file named in a hand-edited summary.json stays)
-WRITTEN_SUFFIXES = (".csv", ".png", ".json", ".html", ".sqlite")
+# the kinds of file ecostudy writes into an output folder (figures in each format of ``--format``, a
+# calibrated train file): only such a file an earlier summary.json listed is removed (a user's own
+# file named in a hand-edited summary.json stays)
+WRITTEN_SUFFIXES = (".csv", ".png", ".svg", ".pdf", ".json", ".html", ".sqlite", ".yaml")
 
 
 def remove_unlisted(out_dir: Path | str, earlier: Iterable[str]) -> list[str]:

@@ -11,7 +11,7 @@ def _label(case):
     return case["scenario"]
 
 
-def tracking(outcome, path):
+def tracking(outcome, path, dpi=None):
     """Mean speed of every run and the reference speed against the head's position."""
     fig, ax = figure(figsize=(10, 4.5))
     ref = outcome.reference
@@ -29,10 +29,10 @@ def tracking(outcome, path):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     ax.set_title(f"{outcome.study.name}: speed tracking", fontsize=10)
-    return _save(fig, path)
+    return _save(fig, path, dpi=dpi)
 
 
-def forces(case, summary, path):
+def forces(case, summary, path, dpi=None):
     """In-train force of the couplers (rows: along the train) at every sample (columns: the head's
     position), tension positive."""
     f = np.asarray(summary["forces_kN"], float).T
@@ -46,10 +46,10 @@ def forces(case, summary, path):
     ax.set_ylabel("coupler (1: behind the head car)")
     ax.invert_yaxis()
     ax.set_title(f"{_label(case)}: largest |f_in| {summary['force_max_kN']:.0f} kN", fontsize=10)
-    return _save(fig, path)
+    return _save(fig, path, dpi=dpi)
 
 
-def trade_off(runs, path, title=""):
+def trade_off(runs, path, title="", dpi=None):
     """Largest in-train force (whole run, and while a car brakes) and energy (total, wagons) against
     K_b, one line per (f, Np, Nc)."""
     fig, (a, b) = figure(1, 2, figsize=(10, 4))
@@ -72,24 +72,25 @@ def trade_off(runs, path, title=""):
         ax.legend(fontsize=7)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    return _save(fig, path)
+    return _save(fig, path, dpi=dpi)
 
 
-def draw(outcome):
-    """The plots of a heavy-haul study (``studies.heavyhaul.HeavyhaulStudy``) into its output folder;
-    returns the file names written."""
+def draw(outcome, out=style.Output()):
+    """The plots of a heavy-haul study (``studies.heavyhaul.HeavyhaulStudy``) into its output folder,
+    in the format and resolution of ``out`` (:class:`~ecostudy.report.style.Output`); returns the
+    file names written."""
     written = []
     if not any(outcome.summaries.values()):
         return written
-    tracking(outcome, outcome.output / "tracking.png")
-    written.append("tracking.png")
+    written.append(out.filename("tracking"))
+    tracking(outcome, outcome.output / written[-1], dpi=out.dpi)
     for case in outcome.cases:
         summary = outcome.summaries[case["key"]]
         if summary:
-            name = "forces_" + "_".join(f"{k}{v:g}" for k, v in case["labels"].items()).replace(".", "p") + ".png"
-            forces(case, summary, outcome.output / name)
+            name = out.filename("forces_" + "_".join(f"{k}{v:g}" for k, v in case["labels"].items()).replace(".", "p"))
+            forces(case, summary, outcome.output / name, dpi=out.dpi)
             written.append(name)
     if outcome.runs["K_b"].nunique() > 1:
-        trade_off(outcome.runs, outcome.output / "brake_penalty.png", outcome.study.name)
-        written.append("brake_penalty.png")
+        written.append(out.filename("brake_penalty"))
+        trade_off(outcome.runs, outcome.output / written[-1], outcome.study.name, dpi=out.dpi)
     return written

@@ -21,7 +21,7 @@ def _increasing(x, v):
     return x[keep], v[keep]
 
 
-def bands(runs, segment, path, title=""):
+def bands(runs, segment, path, title="", dpi=None):
     """Speed against distance per controller, one panel each, with the speed limit: the 5-95 %
     band of the runs and their median (a single run: its profile)."""
     fig, axes = figure(len(runs), 1, figsize=(9, 2.6 * len(runs) + 0.6), sharex=True, squeeze=False)
@@ -43,10 +43,10 @@ def bands(runs, segment, path, title=""):
     axes[-1, 0].set_xlabel("distance from departure [m]")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    return _save(fig, path)
+    return _save(fig, path, dpi=dpi)
 
 
-def solve_times(runs, budgets, path, title=""):
+def solve_times(runs, budgets, path, title="", dpi=None):
     """Solve time of every control step [ms] of every run, per controller, against its budget
     (``budgets``: controller name -> sample time [s])."""
     fig, ax = figure(figsize=(9, 4))
@@ -63,10 +63,10 @@ def solve_times(runs, budgets, path, title=""):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, markerscale=6)
     ax.set_title(title, fontsize=10)
-    return _save(fig, path)
+    return _save(fig, path, dpi=dpi)
 
 
-def mass_estimates(runs, path, title=""):
+def mass_estimates(runs, path, title="", dpi=None):
     """The Kalman mass estimate over distance of every run with an estimator, and its true mass."""
     fig, ax = figure(figsize=(9, 4))
     palette = style.Palette(list(runs))
@@ -82,18 +82,20 @@ def mass_estimates(runs, path, title=""):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     ax.set_title(title + " (dotted: true mass)", fontsize=10)
-    return _save(fig, path)
+    return _save(fig, path, dpi=dpi)
 
 
-def draw(outcome):
-    """The plots of a closed-loop study (``studies.closedloop.LoopStudy``) into its output folder;
-    returns the file names written."""
-    runs, name, out = outcome.by_controller, outcome.name, outcome.output
+def draw(outcome, out=style.Output()):
+    """The plots of a closed-loop study (``studies.closedloop.LoopStudy``) into its output folder,
+    in the format and resolution of ``out`` (:class:`~ecostudy.report.style.Output`); returns the
+    file names written."""
+    runs, name, folder = outcome.by_controller, outcome.name, outcome.output
     if not runs:
         return []
-    bands(runs, outcome.segment, out / "bands.png", title=name)
-    solve_times(runs, outcome.budgets, out / "solve_times.png", title=name)
+    names = [out.filename(stem) for stem in ("bands", "solve_times", "mass_estimates")]
+    bands(runs, outcome.segment, folder / names[0], title=name, dpi=out.dpi)
+    solve_times(runs, outcome.budgets, folder / names[1], title=name, dpi=out.dpi)
     if not any(s.get("estimates") for group in runs.values() for s in group):
-        return ["bands.png", "solve_times.png"]
-    mass_estimates(runs, out / "mass_estimates.png", title=name)
-    return ["bands.png", "solve_times.png", "mass_estimates.png"]
+        return names[:2]
+    mass_estimates(runs, folder / names[2], title=name, dpi=out.dpi)
+    return names
