@@ -21,8 +21,7 @@ def calibrate(
     savings: Optional[int] = typer.Option(None, min=0, max=100, help="Also the savings against the logged driving: "
                                           "the optimum for each logged running time, and its band over this many "
                                           "parameter draws from the fit (e.g. 8)."),
-    no_plot: bool = typer.Option(False, "--no-plot", help="Skip the residual plot."),
-    fig_format: o.Format = "png", dpi: o.Dpi = 110.0, no_progress: o.NoProgress = False, debug: o.Debug = False,
+    no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0, no_progress: o.NoProgress = False, debug: o.Debug = False,
 ):
     """Fit train parameters to logged runs: least squares on the replayed dynamics, 95 % intervals,
     identifiability (parameters the logs do not excite are held at the train file's value, exit 1). Example: ecostudy calibrate LOG.csv --train TRAIN.yaml --track TRACK.yaml --out out/cal"""
@@ -38,8 +37,7 @@ def validate(
     out: Path = typer.Option(Path("out/validate"), help="Output folder (relative: to the working directory)."),
     energy_tolerance: float = typer.Option(5.0, min=0.0, help="Flag a run whose traction energy differs by more [%]."),
     time_tolerance: float = typer.Option(5.0, min=0.0, help="Flag a run whose running time differs by more [%]."),
-    no_plot: bool = typer.Option(False, "--no-plot", help="Skip the plot."),
-    fig_format: o.Format = "png", dpi: o.Dpi = 110.0, no_progress: o.NoProgress = False, debug: o.Debug = False,
+    no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0, no_progress: o.NoProgress = False, debug: o.Debug = False,
 ):
     """Replay a logged run on the train file's model: traction energy following the logged speed, and
     running time driven by the logged handle, per run between stops. Example: ecostudy validate LOG.csv --train TRAIN.yaml --track TRACK.yaml --out out/val"""

@@ -73,8 +73,7 @@ def run(
     workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False, out: o.RunOut = None,
     no_progress: o.NoProgress = False, force: o.Force = False, debug: o.Debug = False,
     kind: str = typer.Option("run", help="Study kind: run (scenarios x sweep, or a library), or one registered."),
-    no_plot: bool = typer.Option(False, "--no-plot", help="Skip the figures of the kind's own command."),
-    fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
+    no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
 ):
     """Run every case of a study; finished cases are stored and never computed twice. Example: ecostudy run studies/metro_supplements.yaml"""
     finish(call(debug, "run_folder", study, workers, dask, retry_failed, out, kind, not no_plot, fig_format, dpi, force=force,
