@@ -151,6 +151,19 @@ def test_a_flagged_strategy_is_never_the_network_headline(tmp_path):
     assert not {k for k in summary if k.startswith("least_")}, summary
 
 
+def test_a_network_study_whose_every_strategy_failed_writes_its_tables_and_no_figure(tmp_path):
+    """Following cannot keep 500 m behind a train 45 s ahead: the study's only strategy fails, and
+    the folder says so (tables, summary.json, exit status 1) with no figure of no run, rather than
+    the figure's drawing raising."""
+    from .test_network import tiny_network_study
+    path = tiny_network_study(tmp_path, ["following"])
+    write_yaml(path, {**load_yaml(path), "buffer_m": 500.0})
+    report = api.network_folder(path, workers=1, note=lambda line: None)
+    assert report.status.kind == "failed" and "cannot keep buffer_m 500 m" in report.status.reason
+    files = api.load(tmp_path / "out").files
+    assert "network_trains.csv" in files and not any(name.endswith(".png") for name in files), files
+
+
 @pytest.mark.slow
 def test_a_killed_network_study_resumes_and_workers_agree(networked, tmp_path):
     report, _, _ = networked
