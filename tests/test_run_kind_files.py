@@ -124,9 +124,11 @@ def test_simulate_and_heavyhaul_write_their_figures_in_the_format_asked(tmp_path
     invoke("simulate", path, "--out", out, "--workers", 1, "--no-progress", "--format", "svg")
     files = listed_exactly(out)
     assert {"bands.svg", "solve_times.svg"} <= files and not any(name.endswith(".png") for name in files), files
+    assert not list(out.glob("*.png")), list(out.glob("*.png"))  # removed from the folder, not only from the list
     assert (out / "bands.svg").read_bytes().startswith(b"<?xml")
     invoke("run", path, "--kind", "simulate", "--out", out, "--workers", 1, "--no-progress", "--format", "pdf")
     assert (out / "bands.pdf").read_bytes().startswith(b"%PDF") and "bands.pdf" in listed_exactly(out)
+    assert not list(out.glob("*.svg")), list(out.glob("*.svg"))
     hh, hh_out = heavyhaul_study(tmp_path, brake_penalty=[1], max_samples=24), tmp_path / "hh"
     invoke("heavyhaul", hh, "--out", hh_out, "--workers", 1, "--no-progress", "--format", "pdf", "--dpi", 50)
     assert {"tracking.pdf", "forces_K_b1_f10_Np4_Nc2.pdf"} <= listed_exactly(hh_out)
