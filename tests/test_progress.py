@@ -162,5 +162,7 @@ def test_validate_and_calibrate_write_their_figure_in_the_format_asked(tmp_path,
     api.validate_folder(log_files[0], out=tmp_path / "v", fig_format="svg", dpi=50)
     assert (tmp_path / "v" / "validate.svg").read_bytes().startswith(b"<?xml")
     assert "validate.svg" in api.load(tmp_path / "v").summary["files"]
+    api.validate_folder(log_files[0], out=tmp_path / "v", dpi=50)  # again as png: the svg is the earlier run's
+    assert (tmp_path / "v" / "validate.png").is_file() and not (tmp_path / "v" / "validate.svg").exists()
     api.calibrate_folder(list(log_files), out=tmp_path / "c", bootstrap=0, fig_format="pdf")
     assert (tmp_path / "c" / "residuals.pdf").read_bytes().startswith(b"%PDF")

@@ -99,16 +99,18 @@ def test_a_figure_the_study_no_longer_draws_is_not_kept_from_an_earlier_run(tmp_
 
 
 def test_only_files_of_the_kinds_ecostudy_writes_are_removed(tmp_path):
-    """A hand-edited summary.json that listed a user's own notes (or a path out of the folder) never
-    gets them removed: only an earlier run's csv, png, json, html or sqlite file it no longer lists."""
+    """A hand-edited summary.json that listed a user's own notes, study or train file (or a path out
+    of the folder) never gets them removed: only an earlier run's csv, figure, json, html or sqlite
+    file it no longer lists (no study kind writes a YAML file)."""
     from ecostudy.io.folder import remove_unlisted
     (tmp_path / "summary.json").write_text(json.dumps({"files": ["kept.csv"]}))
-    for name in ("kept.csv", "old.csv", "old.png", "notes.txt", "notes"):
+    mine = ("notes.txt", "notes", "study.yaml", "train.yaml")
+    for name in ("kept.csv", "old.csv", "old.png", "old.svg", *mine):
         (tmp_path / name).write_text("x")
     (tmp_path.parent / "outside.csv").write_text("x")
-    gone = remove_unlisted(tmp_path, ["kept.csv", "old.csv", "old.png", "notes.txt", "notes", "../outside.csv"])
-    assert gone == ["old.csv", "old.png"]
-    assert {p.name for p in tmp_path.iterdir()} == {"summary.json", "kept.csv", "notes.txt", "notes"}
+    gone = remove_unlisted(tmp_path, ["kept.csv", "old.csv", "old.png", "old.svg", *mine, "../outside.csv"])
+    assert gone == ["old.csv", "old.png", "old.svg"]
+    assert {p.name for p in tmp_path.iterdir()} == {"summary.json", "kept.csv", *mine}
     assert (tmp_path.parent / "outside.csv").is_file()
 
 
@@ -122,9 +124,11 @@ def test_simulate_and_heavyhaul_write_their_figures_in_the_format_asked(tmp_path
     invoke("simulate", path, "--out", out, "--workers", 1, "--no-progress", "--format", "svg")
     files = listed_exactly(out)
     assert {"bands.svg", "solve_times.svg"} <= files and not any(name.endswith(".png") for name in files), files
+    assert not list(out.glob("*.png")), list(out.glob("*.png"))  # removed from the folder, not only from the list
     assert (out / "bands.svg").read_bytes().startswith(b"<?xml")
     invoke("run", path, "--kind", "simulate", "--out", out, "--workers", 1, "--no-progress", "--format", "pdf")
     assert (out / "bands.pdf").read_bytes().startswith(b"%PDF") and "bands.pdf" in listed_exactly(out)
+    assert not list(out.glob("*.svg")), list(out.glob("*.svg"))
     hh, hh_out = heavyhaul_study(tmp_path, brake_penalty=[1], max_samples=24), tmp_path / "hh"
     invoke("heavyhaul", hh, "--out", hh_out, "--workers", 1, "--no-progress", "--format", "pdf", "--dpi", 50)
     assert {"tracking.pdf", "forces_K_b1_f10_Np4_Nc2.pdf"} <= listed_exactly(hh_out)

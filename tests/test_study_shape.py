@@ -128,7 +128,8 @@ def test_a_network_summary_names_the_strategy_of_least_substation_energy(network
     _, _, out = networked
     summary = json.loads((out / "summary.json").read_text())
     table = pd.read_csv(out / "network_substation.csv")
-    least = table.loc[table["substation_kWh"].idxmin()]
+    ok = table[table["status"] == "ok"]  # a flagged strategy is no headline
+    least = ok.loc[ok["substation_kWh"].idxmin()]
     assert summary["least_substation_strategy"] == least["strategy"]
     assert summary["least_substation_kWh"] == pytest.approx(least["substation_kWh"], rel=1e-5)
     assert summary["least_saving_vs_independent_pct"] == pytest.approx(least["saving_vs_independent_pct"], abs=1e-3)
@@ -136,6 +137,34 @@ def test_a_network_summary_names_the_strategy_of_least_substation_energy(network
     assert summary["independent_substation_kWh"] == pytest.approx(base, rel=1e-5)
 
 
+def test_a_flagged_strategy_is_never_the_network_headline(tmp_path):
+    """Two trains 45 s apart with 500 m of buffer: independent driving verifies but comes within
+    195 m (flagged), following cannot depart (failed). No strategy is ok, so summary.json names
+    none as the one of least substation energy (a run that breaks the buffer is no saving)."""
+    from .test_network import tiny_network_study
+    path = tiny_network_study(tmp_path, ["independent", "following"])
+    write_yaml(path, {**load_yaml(path), "buffer_m": 500.0})
+    report = api.network_folder(path, plot=False, workers=1, note=lambda line: None)
+    table = report.table.set_index("strategy")
+    assert table.loc["independent", "all_verified"] and table.loc["independent", "status"].startswith("flagged")
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert not {k for k in summary if k.startswith("least_")}, summary
+
+
+def test_a_network_study_whose_every_strategy_failed_writes_its_tables_and_no_figure(tmp_path):
+    """Following cannot keep 500 m behind a train 45 s ahead: the study's only strategy fails, and
+    the folder says so (tables, summary.json, exit status 1) with no figure of no run, rather than
+    the figure's drawing raising."""
+    from .test_network import tiny_network_study
+    path = tiny_network_study(tmp_path, ["following"])
+    write_yaml(path, {**load_yaml(path), "buffer_m": 500.0})
+    report = api.network_folder(path, workers=1, note=lambda line: None)
+    assert report.status.kind == "failed" and "cannot keep buffer_m 500 m" in report.status.reason
+    files = api.load(tmp_path / "out").files
+    assert "network_trains.csv" in files and not any(name.endswith(".png") for name in files), files
+
+
+@pytest.mark.slow
 def test_a_killed_network_study_resumes_and_workers_agree(networked, tmp_path):
     report, _, _ = networked
     study = network_study(tmp_path, ["independent", "following", "triggering"])

@@ -21,6 +21,7 @@ from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.units import number, signed
 from ecostudy.report import calplots, heavyplots, loopplots
 from ecostudy.report.console import counted
+from ecostudy.report.files import figures as figure_files
 from ecostudy.report.studyfiles import compare_figures, front_files, network_files
 from ecostudy.report.html import write_html
 from ecostudy.report.style import Output, output
@@ -177,9 +178,9 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
         result, summary = calibrate_study(logs, train, track, fit, out, bootstrap, savings,
                                           (figures.filename("residuals"),) if plot else ())
         stage("figures and report")
-    if plot:
-        calplots.residuals(result.residuals, Path(out) / figures.filename("residuals"), "calibration from logged runs",
-                           dpi=figures.dpi)
+    # residuals.<format> (an earlier run's in another format, or with --no-plot any, removed)
+    figure_files(out, plot, {"residuals": partial(calplots.residuals, result.residuals,
+                                                  title="calibration from logged runs")}, figures)
     write_html(out)
     q = result.quality
     lines = [shown(result.table.dropna(axis=1, how="all"), CALIBRATION_COLUMNS),
@@ -210,9 +211,8 @@ def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optiona
         table, summary = validate_study(log_file, train, track, out, energy_tolerance / 100, time_tolerance / 100,
                                         (figures.filename("validate"),) if plot else ())
         stage("figures and report")
-    if plot:
-        calplots.validation(table, Path(out) / figures.filename("validate"), f"{Path(log_file).stem}: logged and model",
-                            dpi=figures.dpi)
+    figure_files(out, plot, {"validate": partial(calplots.validation, table,
+                                                 title=f"{Path(log_file).stem}: logged and model")}, figures)
     write_html(out)
     return reported(out, [shown(table, VALIDATION_COLUMNS, ".4g"),
                           f"traction energy: logged {summary['logged_traction_kWh']:.2f} kWh, model "

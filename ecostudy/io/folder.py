@@ -143,10 +143,11 @@ def files_listed(out_dir: Path | str) -> set[str]:
     return {f for f in files if isinstance(f, str)} if isinstance(files, list) else set()
 
 
-# the kinds of file ecostudy writes into an output folder (figures in each format of ``--format``, a
-# calibrated train file): only such a file an earlier summary.json listed is removed (a user's own
-# file named in a hand-edited summary.json stays)
-WRITTEN_SUFFIXES = (".csv", ".png", ".svg", ".pdf", ".json", ".html", ".sqlite", ".yaml")
+# the kinds of file a study kind writes into an output folder (figures in each format of
+# ``--format``): only such a file an earlier summary.json listed is removed (a user's own file named
+# in a hand-edited summary.json stays; no study kind writes YAML, so a study or train file the user
+# keeps in the folder is never one)
+WRITTEN_SUFFIXES = (".csv", ".png", ".svg", ".pdf", ".json", ".html", ".sqlite")
 
 
 def remove_unlisted(out_dir: Path | str, earlier: Iterable[str]) -> list[str]:

@@ -6,7 +6,7 @@ from ecostudy.core.units import to_kmh
 from ecostudy.report.plots import _save, figure
 
 
-def residuals(table, path, title="", dpi=None):
+def residuals(table, path, title="", fmt=None, dpi=None):
     """Per run: logged and replayed speed over time, and the residual (replayed minus logged)."""
     groups = list(table.groupby(["log", "run"], sort=False))
     fig, axes = figure(2, len(groups), figsize=(3.6 * len(groups) + 1.0, 5.2), squeeze=False, sharey="row")
@@ -27,10 +27,10 @@ def residuals(table, path, title="", dpi=None):
     axes[0, 0].legend(fontsize=7)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    return _save(fig, path, dpi=dpi)
+    return _save(fig, path, fmt, dpi)
 
 
-def validation(table, path, title="", dpi=None):
+def validation(table, path, title="", fmt=None, dpi=None):
     """Logged and model traction energy, and logged and model running time, per run."""
     fig, (left, right) = figure(1, 2, figsize=(9, 3.4))
     x = np.arange(len(table))
@@ -47,4 +47,4 @@ def validation(table, path, title="", dpi=None):
     right.set_title("driven by the logged handle", fontsize=8)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    return _save(fig, path, dpi=dpi)
+    return _save(fig, path, fmt, dpi)

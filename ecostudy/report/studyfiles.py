@@ -27,7 +27,8 @@ def compare_figures(plot=True, out=style.Output()):
 def network_files(plot=True, out=style.Output()):
     """The study engine's ``draw`` (:func:`ecostudy.studies.batch.run_expanded`) of a network study:
     ``network_trains.csv``, ``network_steps_<strategy>.csv``, ``network.json``, ``network.png`` and
-    ``network_supply.png`` from the stored strategies (``studies.network.outcomes``)."""
+    ``network_supply.png`` from the stored strategies (``studies.network.outcomes``; no figure when
+    every strategy failed)."""
     def draw(out_dir, cases, rows, table):
         out_dir, fl, study = Path(out_dir), cases[0]["fleet"], cases[0]["study"]
         outcome = network.outcomes(cases, rows)
@@ -42,7 +43,8 @@ def network_files(plot=True, out=style.Output()):
             "study": study, "segment_times_s": [leg.running_time for leg in fl.legs[0]], "steps_count": fl.steps,
             "dt_s": fl.dt, "strategies": {n: {**r["totals"], **r["info"]} if n in done else
                                           {"status": f"failed: {r['failed']}"} for n, r in outcome.items()}})
-        drawn = figures(out_dir, plot, {"network": later("network_plot", fl, done, title=study),
+        # no strategy to draw when every one failed: no figures (an earlier run's removed)
+        drawn = figures(out_dir, plot and bool(done), {"network": later("network_plot", fl, done, title=study),
                                         "network_supply": later("supply_plot", fl, done, title=study)}, out)
         return [f"network_steps_{name}.csv" for name in done] + ["network.json"] + drawn, {"trains": "network_trains.csv"}
     return draw
