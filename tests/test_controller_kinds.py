@@ -9,8 +9,15 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
+from ecostudy.control.controllers import Quantised
+from ecostudy.control.loop import run_loop
+from ecostudy.core.errors import EcostudyError
+from ecostudy.core.grid import make_segment
+from ecostudy.core.plant import Plant
+from ecostudy.io.loaders import load_track, load_train
 from ecostudy.io.loopfile import CONTROLLER_KINDS
 
+from .conftest import TRACKS, TRAINS
 from .test_simulate import study
 
 GUIDE = Path(__file__).resolve().parent.parent / "docs" / "closed_loop.md"
@@ -71,5 +78,15 @@ def test_a_handle_outside_minus_one_to_one_fails_the_run_naming_it(tmp_path):
         CONTROLLER_KINDS._specs.pop("doubled", None)
     runs = pd.read_csv(tmp_path / "out" / "runs.csv")
     assert r.exit_code == 1 and list(runs["status"]) == ["failed"], r.output
-    assert "_Doubled.plan gave the handle 2.0 at 0.0 m, 0.00 m/s, clock 0.0 s: a handle is a number in [-1, 1]" \
+    assert "_Doubled.plan gave the handle 2 at 0.0 m, 0.00 m/s, clock 0.0 s: a handle is a number in [-1, 1]" \
         in runs["reason"].iloc[0]
+
+
+def test_a_driver_advisory_loop_refuses_its_inner_controllers_handle_outside_minus_one_to_one():
+    """Quantised (a DAS loop) snaps a handle to the nearest level: a bug's handle of 2 would be
+    driven as full traction; it is refused as the loop refuses any controller's."""
+    train = load_train(TRAINS / "thesis001_commuter.yaml")
+    segment = make_segment(load_track(TRACKS / "thesis001_advanced_1km.yaml"), train, "A", "B")
+    loop = Quantised(_Doubled(segment), [-1.0, 0.0, 0.5, 0.75, 1.0])
+    with pytest.raises(EcostudyError, match="_Doubled.plan gave the handle 2 at 0.0 m"):
+        run_loop(Plant(segment, train), loop, 0.5)

@@ -158,7 +158,7 @@ def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, w
     for name, row in ran.table.set_index("strategy").iterrows():
         note(f"{name:12s} " + (f"substation {row['substation_kWh']:.3f} kWh, "
                                f"scored {row['wall_s']:.1f} s after its start"
-                               if str(row["status"]).split(":")[0] != "failed" else "FAILED (why: under the table)"))
+                               if str(row["status"]).split(":")[0] != "failed" else "FAILED (its status says why)"))
     write_html(ran.output)
     return reported(ran.output, [shown(ran.table, NETWORK_COLUMNS), counts_line(ran.counts, "strategies"),
                                  "outputs " + listed(ran.output)])

@@ -19,6 +19,7 @@ import numpy as np
 from ecostudy.analysis.tables import handles
 from ecostudy.core.grid import interval_of
 from ecostudy.control.fallback import Fallback
+from ecostudy.control.loop import planned_handle
 from ecostudy.core.types import State
 from ecostudy.ocp.convex import EXACT
 from ecostudy.ocp.restart import Replanner
@@ -230,7 +231,7 @@ class Quantised:
         return self.controller.solve_seconds
 
     def plan(self, measured):
-        u = float(self.controller.plan(measured))
+        u = planned_handle(self.controller, measured)  # a handle outside [-1, 1] is refused, not snapped to a level
         self.pending.append(float(self.levels[np.argmin(np.abs(self.levels - u))]))
         return self.pending[-1 - self.delay] if len(self.pending) > self.delay else 0.0
 

@@ -46,9 +46,10 @@ def planned_handle(controller, state):
         handle = float("nan")
     if not abs(handle) <= 1.0 + HANDLE_TOLERANCE:  # NaN too
         at = round(state.position, 1) + 0.0  # never "-0.0 m" for a measured stand
-        raise EcostudyError(f"{type(controller).__name__}.plan gave the handle {u!r} at {at:.1f} m, "
+        shown = f"{handle:g}" if handle == handle else repr(u)  # 2, not np.float64(2.0)
+        raise EcostudyError(f"{type(controller).__name__}.plan gave the handle {shown} at {at:.1f} m, "
                             f"{state.speed:.2f} m/s, clock {state.time:.1f} s: a handle is a number in [-1, 1]")
-    return handle
+    return min(max(handle, -1.0), 1.0)  # a solver's rounding past the bound, within the tolerance
 
 
 class LoopResult(NamedTuple):
