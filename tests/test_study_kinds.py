@@ -78,3 +78,11 @@ def test_the_command_line_and_the_api_run_a_registered_kind(study, tmp_path):
     assert unknown.exit_code == 2, unknown.output
     # every built-in kind and this one are named (a kind added to studies/kinds.py later is named too)
     assert {"compare", "heavyhaul", "network", "pareto", "resistance", "run", "simulate"} <= set(known), unknown.output
+
+
+def test_a_base_case_read_for_a_command_with_no_unused_entry_says_which_table_to_extend():
+    """A new kind that reads a study file's base case for itself (``load_checked_study(path, NAME)``)
+    learns where its unused fields go, rather than from a bare KeyError."""
+    from ecostudy.studies.cases import load_checked_study
+    with pytest.raises(ValueError, match="'mass' has no entry in studies.cases.UNUSED"):
+        load_checked_study(Path(__file__).resolve().parent.parent / "studies" / "default.yaml", "mass")

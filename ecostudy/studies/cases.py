@@ -196,6 +196,9 @@ def load_checked_study(path, command=None):
     study = load_study(path, read)
     s = expand(path, read=read, windows=True)[0]  # the file as validated there
     if command is not None:
+        if command not in UNUSED:  # a new command or study kind that reads a base case: its author's step
+            raise ValueError(f"load_checked_study: {command!r} has no entry in studies.cases.UNUSED (the study fields "
+                             f"it does not use) and WHO (how a warning names it); add both (docs/architecture.md)")
         fields = schemas.StudyFile.model_fields
         unused = [name for name in UNUSED[command]  # given, and not the value the command uses anyway
                   if getattr(s, name) != fields[name].get_default(call_default_factory=True)]
