@@ -18,6 +18,7 @@ from ecostudy.calibration.estimate import CHECKED
 from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH
 from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
+from ecostudy.core.status import status_word
 from ecostudy.core.units import number, signed
 from ecostudy.report import calplots, heavyplots, loopplots
 from ecostudy.report.console import counted
@@ -158,7 +159,7 @@ def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, w
     for name, row in ran.table.set_index("strategy").iterrows():
         note(f"{name:12s} " + (f"substation {row['substation_kWh']:.3f} kWh, "
                                f"scored {row['wall_s']:.1f} s after its start"
-                               if str(row["status"]).split(":")[0] != "failed" else "FAILED (its status says why)"))
+                               if status_word(row["status"]) != "failed" else "FAILED (its status says why)"))
     write_html(ran.output)
     return reported(ran.output, [shown(ran.table, NETWORK_COLUMNS), counts_line(ran.counts, "strategies"),
                                  "outputs " + listed(ran.output)])

@@ -11,6 +11,7 @@ from typing import Any, Iterable, Mapping, Sequence
 import pandas as pd
 
 from ecostudy.core.errors import EcostudyError
+from ecostudy.core.status import status_word
 from ecostudy.core.units import number
 from ecostudy.io.folder import StudyResult
 from ecostudy.io.folder import load as load_result
@@ -93,7 +94,7 @@ def shown(frame: pd.DataFrame, columns: Sequence[str] | Mapping[str, str | None]
     if columns is not None:
         frame = frame[[c for c in columns if c in frame]]
     if not reasons and "status" in frame:
-        frame = frame.assign(status=frame["status"].map(lambda s: s.partition(":")[0] if isinstance(s, str) else s))
+        frame = frame.assign(status=frame["status"].map(lambda s: status_word(s) if isinstance(s, str) else s))
     return frame.to_string(index=False, float_format=lambda x: number(x, places),
                            formatters={c: partial(number, spec=s) for c, s in specs.items() if c in frame})
 

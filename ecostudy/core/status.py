@@ -38,6 +38,12 @@ ORDER = {"ok": 0, "flagged": 1, "failed": 2}
 _WORDS: dict[str, Kind] = {"ok": "ok", "flagged": "flagged", "failed": "failed", "infeasible": "failed", "missing": "failed"}
 
 
+def status_word(text: object) -> str:
+    """The word a status text starts with (``"flagged: late"`` -> ``flagged``; ``infeasible``,
+    ``missing`` as they are): what a printed table or a report's cell colour shows of it."""
+    return str(text).partition(":")[0].strip()
+
+
 @dataclass(frozen=True)
 class Status:
     """A result's status: ``kind`` is ok, flagged or failed; ``reason`` says why it is not ok."""
@@ -62,8 +68,7 @@ class Status:
     def parse(cls, text: str, reason: str = "") -> "Status":
         """A status from its text (``"flagged: late"``) or from a table's word and reason column
         (``"infeasible"``, ``"below the all-out time"``)."""
-        word, _, rest = str(text).partition(":")
-        word = word.strip()
+        word, rest = status_word(text), str(text).partition(":")[2]
         if word not in _WORDS:
             raise ValueError(f"not a status: {text!r}")
         kind = _WORDS[word]

@@ -20,6 +20,7 @@ from urllib.parse import quote
 
 import pandas as pd
 
+from ecostudy.core.status import status_word
 from ecostudy.core.units import number
 from ecostudy.io.folder import SUMMARY, Counts, StudyResult, load
 from ecostudy.io.writers import atomic_write
@@ -360,7 +361,7 @@ def status_class(column: str, value: Any) -> str:
     """Colour a status cell by its word (ok, flagged, failed) where the column is a status."""
     if "status" not in str(column) or not isinstance(value, str):
         return ""
-    word = value.partition(":")[0].strip()
+    word = status_word(value)
     kind = {"infeasible": "failed", "missing": "failed"}.get(word, word)
     return f"s-{kind}" if kind in ("ok", "flagged", "failed") else ""
 
