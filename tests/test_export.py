@@ -88,3 +88,12 @@ def test_export_of_a_flagged_run_carries_its_status(tmp_path):
     r = runner.invoke(app, ["export", str(fine), "--every", "10m"])
     assert r.exit_code == 0, r.output
     assert json.loads((fine / "profile_every_10m.json").read_text())["run"]["status"] == "ok"
+
+
+@pytest.mark.parametrize("steps", [{"time_s": 1e9}, {"distance_m": 1e9}])
+def test_a_step_longer_than_the_run_keeps_the_departure_and_the_arrival(steps):
+    traj = uniform_acceleration()  # 20 s and 100 m: a step a million times longer still starts at rest
+    table = fixed_step(traj, np.ones(len(traj.dt)), time_step_s=steps.get("time_s"),
+                       distance_step_m=steps.get("distance_m"))
+    assert table["time_s"].tolist() == [0.0, pytest.approx(traj.time[-1])]
+    assert table["position_m"].tolist() == [0.0, 100.0]

@@ -45,9 +45,10 @@ def at_positions(traj: Trajectory, positions: np.ndarray) -> tuple[np.ndarray, n
 
 def _steps(start: float, end: float, step: float) -> np.ndarray:
     """``start``, ``start + step``, ... before ``end``, then ``end``; a step within a millionth of a step
-    of ``end`` is ``end`` itself (a run of 80.00000001 s every second ends 79, 80, not 80, 80.00000001)."""
+    (or of the run, when the step is longer) of ``end`` is ``end`` itself (a run of 80.00000001 s every
+    second ends 79, 80, not 80, 80.00000001; every 1e9 s it is 0, 80)."""
     grid = np.arange(start, end, step)
-    return np.append(grid[grid < end - 1e-6 * step], end)
+    return np.append(grid[grid < end - 1e-6 * min(step, end - start)], end)
 
 
 def fixed_step(traj: Trajectory, handle: np.ndarray, time_step_s: Optional[float] = None,
