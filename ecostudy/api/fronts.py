@@ -79,9 +79,9 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
         low, high = (units.number(d[f"{end}_gap_on_time_pct"], ".2f") for end in ("min", "max"))
         lines.append(f"DAS {d['method']}: {d['solved']} of {d['points']} points; gap to ATO on time "
                      f"{low} to {high} %; monotone: {d['monotone']}")
-    five, ten = (units.number(meta[f"saving_at_{p}_pct_supplement_pct"], ".1f") for p in (5, 10))
-    lines.append(f"all-out {meta['all_out_time_s']:.2f} s; +5 % saves {five} %, +10 % saves {ten} % of the all-out "
-                 "traction energy")
+    five, ten = (f"saves {units.number(v, '.1f')} %" if v is not None else "not on the front"
+                 for v in (meta[f"saving_at_{p}_pct_supplement_pct"] for p in (5, 10)))
+    lines.append(f"all-out {meta['all_out_time_s']:.2f} s; +5 % {five}, +10 % {ten} (of the all-out traction energy)")
     if "study_running_time_s" in meta:
         lines.append(study_time_line(meta))
     lines.append(f"monotone: {meta['monotone']}, all optimal: {meta['all_optimal']}, all verified: "
