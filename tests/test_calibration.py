@@ -381,6 +381,14 @@ def shifted(text, row, by):
     return "---\n" + head + "---\n" + "\n".join(rows[:1 + row] + moved) + "\n"
 
 
+def kilometres(text):
+    """``text`` with its positions in km under the header ``position_m`` (98 m run, 0.098 of travel)."""
+    _, head, body = text.split("---\n", 2)
+    rows = body.splitlines()
+    moved = [",".join([c[0], f"{float(c[1]) / 1000:.6f}", *c[2:]]) for c in (r.split(",") for r in rows[1:])]
+    return "---\n" + head + "---\n" + "\n".join(rows[:1] + moved) + "\n"
+
+
 def clock(text, start):
     """``text`` with its times read off a clock in seconds from midnight that shows ``start`` at the first row."""
     _, head, body = text.split("---\n", 2)
@@ -420,6 +428,7 @@ def without_column(text, index):
     ("\n".join(good().splitlines()[:14]) + "\n", ["time_s", "at least 10"]),
     (good().replace(",19.80,", ",390.00,"), ["speed_mps", "row 100", "not plausible"]),
     (good().replace("speed_mps", "speed_kmh"), ["speed_kmh", "integrate to", "check the units"]),
+    (kilometres(good()), ["speed_mps", "integrate to 98 m but the positions advance 0 m", "check the units"]),
     (good().replace(",325.000,", ",405.000,"), ["position_m", "row 51", "jumps by +81 m in 0.1 s", "2 such steps"]),
     (shifted(good(), 50, 400.0), ["position_m", "row 51", "jumps by +401 m in 0.1 s", "1 such step"]),
     (shifted(good(), 50, -325.0), ["position_m", "row 51", "jumps by -324 m", "a distance that restarts"]),

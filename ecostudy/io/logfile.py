@@ -266,7 +266,7 @@ def check_series(log: "LoggedRun", path: Where) -> None:
             travel = float(np.sum(np.abs(np.diff(log.x[np.unique(np.append(np.arange(0, len(t), k), len(t) - 1))]))))
             driven = float(np.sum(speed_steps(log)))
             low, high = SPEED_DISTANCE
-            if travel > 50.0 and not low <= driven / travel <= high:
+            if max(travel, driven) > 50.0 and not low * travel <= driven <= high * travel:  # km as m: travel ~ 0
                 lines.append(problem(path, log.columns[1], f"the speeds integrate to {driven:.0f} m but the "
                                      f"positions advance {travel:.0f} m: check the units"))
     if lines:
