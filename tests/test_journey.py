@@ -263,3 +263,19 @@ def test_a_broken_window_names_only_the_bounds_it_has():
     assert not columns["windows_kept"]
     assert broken.startswith("passes 300 m after Noord at ") and broken.endswith("window [1, 2] s"), broken
     assert "km/h]" not in broken and "[, ]" not in broken
+
+
+def test_a_timetabled_segment_faster_than_any_run_is_refused_naming_its_arrival(tmp_path):
+    """Station timetabled 40 s after Noord, where the fastest run takes 50.4 s: refused in one line
+    naming the timetable and the arrival, before any segment's front is solved (none written)."""
+    from .conftest import STUDIES
+    path = tmp_path / "tight.yaml"
+    path.write_text((STUDIES / "timetables" / "metro_line.yaml").read_text().replace("arrival_s: 58", "arrival_s: 40"))
+    r = CliRunner().invoke(app, ["journey", "--track", str(TRACKS / "metro_line_4stops.yaml"), "--train",
+                                 str(TRAINS / "amsterdam_metro.yaml"), "--timetable", str(path), "--points", "100",
+                                 "--out", str(tmp_path / "out"), "--no-plot"])
+    lines = [line for line in r.output.splitlines() if line.startswith("error:")]
+    assert r.exit_code == 2 and len(lines) == 1 and "Traceback" not in r.output, r.output
+    assert lines[0] == (f"error: {path}: stops[1].arrival_s: infeasible: 40.0 s from Noord to Station, below the "
+                        "fastest possible run's 50.4 s (kinematic envelope)")
+    assert not (tmp_path / "out" / "journey.csv").exists()

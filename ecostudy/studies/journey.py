@@ -300,7 +300,12 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
     # front ends at its segment's longest running time solved (SLOWEST): no run of it can take longer
     mean = supplement or 0.0
     if total_time is not None:
-        fastest = sum(prepare(track, train, a, b, points).estimate for a, b in pairs)
+        estimates = [prepare(track, train, a, b, points).estimate for a, b in pairs]
+        for n, ((a, b), t, fast) in enumerate(zip(pairs, scheduled or (), estimates)):
+            if t < 0.99 * fast:  # a timetabled segment no run can keep: refused before any front is solved
+                raise FieldError(f"infeasible: {t:.1f} s from {a} to {b}, below the fastest possible run's "
+                                 f"{fast:.1f} s (kinematic envelope)", f"stops[{n + 1}].arrival_s")
+        fastest = sum(estimates)
         if total_time < 0.99 * fastest:  # the kinematic all-out times: refused before any front is solved
             too_short(total_time, fastest, " (kinematic envelope)")
         if total_time > SLOWEST * fastest:
