@@ -236,3 +236,16 @@ def test_a_supplement_over_an_all_out_run_not_proven_optimal_is_flagged(amsterda
     assert r.reason == "Ipopt ended acceptable, not optimal; the all-out run: Ipopt ended acceptable, not optimal"
     ok = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(supplement=0.1), points=200)
     assert ok.ok and "all_out_solver_status" not in ok.summary
+
+
+def test_a_time_a_hair_under_the_all_out_run_s_is_refused_with_the_digits_that_tell_them_apart(
+        amsterdam, metro, amsterdam_allout):
+    """10 ms under the all-out run (as a journey's split can ask): not 'takes 71.7 s (asked for 71.7 s)'."""
+    import re
+
+    from ecostudy.core.errors import TooFastError
+    t_ao = amsterdam_allout.summary["running_time_s"]
+    with pytest.raises(TooFastError) as refused:
+        solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=t_ao - 0.01), points=1000)
+    taken, asked = re.search(r"takes ([\d.]+) s \(asked for ([\d.]+) s\)$", str(refused.value)).groups()
+    assert taken != asked and float(taken) - float(asked) == pytest.approx(0.01, abs=0.006), str(refused.value)
