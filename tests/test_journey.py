@@ -279,3 +279,13 @@ def test_a_timetabled_segment_faster_than_any_run_is_refused_naming_its_arrival(
     assert lines[0] == (f"error: {path}: stops[1].arrival_s: infeasible: 40.0 s from Noord to Station, below the "
                         "fastest possible run's 50.4 s (kinematic envelope)")
     assert not (tmp_path / "out" / "journey.csv").exists()
+
+
+def test_a_total_a_hair_under_the_all_out_runs_is_refused_with_the_digits_that_tell_them_apart(tmp_path):
+    """--time 199.5 s against all-out runs summing to 199.53 s: not 'is below ... 199.5 s'."""
+    r = CliRunner().invoke(app, ["journey", "--track", str(TRACKS / "metro_line_4stops.yaml"), "--train",
+                                 str(TRAINS / "amsterdam_metro.yaml"), "--time", "199.5", "--points", "100",
+                                 "--out", str(tmp_path), "--no-plot"])
+    lines = [line for line in r.output.splitlines() if line.startswith("error:")]
+    assert r.exit_code == 2 and len(lines) == 1, r.output
+    assert lines[0] == "error: infeasible: the total time 199.50 s is below the sum of the all-out times 199.53 s"

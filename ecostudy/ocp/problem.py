@@ -15,7 +15,7 @@ from ecostudy.core.defaults import SLOWEST
 from ecostudy.core.errors import FieldError, InfeasibleError, SolverError, TooFastError
 from ecostudy.core.grid import Segment, drop_idle_power, make_grid, make_segment, node_limits
 from ecostudy.core.types import Track, Train, Trajectory, Window
-from ecostudy.core.units import FloatArray, to_kmh
+from ecostudy.core.units import FloatArray, apart, to_kmh
 from ecostudy.ocp import session
 from ecostudy.ocp import space
 from ecostudy.ocp.solver import Model
@@ -201,11 +201,9 @@ def check_not_crawling(latest: float | None, case: Case) -> None:
 
 
 def check_feasible(latest: float | None, t_allout: float) -> None:
-    """Refuse a running time below the all-out run's, both shown with the digits that tell them apart
-    (a journey's split 50.480 s against 50.488 s, not 50.5 against 50.5)."""
+    """Refuse a running time below the all-out run's, both shown with the digits that tell them apart."""
     if latest is not None and latest < t_allout - 1e-6 * t_allout:
-        places = next(p for p in range(1, 7) if p == 6 or f"{latest:.{p}f}" != f"{t_allout:.{p}f}")
-        raise TooFastError(f"infeasible: the fastest possible run takes {t_allout:.{places}f} s "
-                           f"(asked for {latest:.{places}f} s)")
+        fastest, asked = apart(t_allout, latest)
+        raise TooFastError(f"infeasible: the fastest possible run takes {fastest} s (asked for {asked} s)")
 
 

@@ -28,7 +28,7 @@ from ecostudy.core.kinematics import running_time
 from ecostudy.core.simulate import window_checks
 from ecostudy.core.status import OK, flagged, solver_part, worst
 from ecostudy.core.types import Timing, Window
-from ecostudy.core.units import to_kmh
+from ecostudy.core.units import apart, to_kmh
 from ecostudy.heuristics import mareco
 from ecostudy.io.timetable import schedule
 from ecostudy.ocp import session
@@ -42,8 +42,9 @@ FRONT_COUNT = 15  # points of each segment's front
 
 def too_short(total_time, fastest, basis=""):
     """Refuse a journey whose total time is below the sum of the segments' all-out times."""
-    raise InfeasibleError(f"infeasible: the total time {total_time:.1f} s is below the sum of the all-out "
-                          f"times {fastest:.1f} s{basis}")
+    total, least = apart(total_time, fastest)
+    raise InfeasibleError(f"infeasible: the total time {total} s is below the sum of the all-out times "
+                          f"{least} s{basis}")
 
 
 def equal_marginal(fronts, total_time, step=0.05):
