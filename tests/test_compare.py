@@ -111,3 +111,18 @@ def test_each_strategy_is_looked_up_by_name_and_an_unknown_one_fails_its_case():
     finally:
         COMPARED._specs.pop("coasting again", None)
     assert again["status"] in ("ok", "flagged") and again["summary"]["strategy"] == "coasting again", again["error"]
+
+
+@pytest.mark.flagged_on_purpose
+def test_no_saving_or_gap_against_a_reference_that_is_not_ok(tmp_path):
+    """On a 10-node grid the all-out run and the ATO optimum fail their re-simulation (stop 2-3 m
+    off): a saving against the one or a gap to the other would read like a result (DAS phases'
+    'gap' was -14 %), so both columns stay empty while each row keeps its own status."""
+    folder = api.compare_folder(track=TRACKS / "amsterdam_rokin_centraal.yaml", train=TRAINS / "amsterdam_metro.yaml",
+                                time=80.0, points=10, plot=False, workers=1, out=tmp_path)
+    rows = folder.table.set_index("strategy")
+    assert rows.loc["ATO optimum", "status"].startswith("flagged")
+    assert rows.loc["all-out", "status"].startswith("flagged")
+    assert rows.loc["DAS phases", "status"] == "ok"
+    assert rows["gap_to_optimum_pct"].isna().all() and rows["saving_vs_all_out_pct"].isna().all()
+    assert rows["traction_energy_kWh"].notna().all()

@@ -22,7 +22,7 @@ from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.registry import Registry
 from ecostudy.core.grid import make_segment
 from ecostudy.core.simulate import Driven, Trace, worst_overspeed
-from ecostudy.core.status import Status, driven_run, failed, worst
+from ecostudy.core.status import Status, driven_run, failed, status_word, worst
 from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kmh
 from ecostudy.das.advice import das_phases, nearest_levels
@@ -204,8 +204,11 @@ def compare_table(cases, rows):
             table.append({"strategy": case["strategy"], "note": row.get("error")})
             statuses.append(str(failed(row.get("error") or row["status"])))
     table = pd.DataFrame(table, columns=[*columns, *(["note"] if any("note" in r for r in table) else [])])
-    e_allout = by_name["all-out"].get("traction_energy_kWh", np.nan)
-    e_opt = by_name["ATO optimum"].get("traction_energy_kWh", np.nan)
+    # a saving or a gap is measured against a reference run only where that run is ok: against a
+    # flagged one (an optimum that failed its re-simulation) it would read like a result
+    trusted = {c["strategy"]: status_word(st) == "ok" for c, st in zip(cases, statuses)}
+    e_allout, e_opt = (by_name[name].get("traction_energy_kWh", np.nan) if trusted[name] else np.nan
+                       for name in ("all-out", "ATO optimum"))
     target = next((s["target_s"] for s in by_name.values() if "target_s" in s), np.nan)
     table.insert(4, "saving_vs_all_out_pct", 100 * (1 - table["traction_energy_kWh"] / e_allout))
     table.insert(5, "gap_to_optimum_pct", 100 * (table["traction_energy_kWh"] / e_opt - 1))
