@@ -102,6 +102,10 @@ class Judged(ABC):
 # What a driven run may miss and still be ok (a simulated or closed-loop run, a strategy's run):
 STOP_TOLERANCE_M = 1.0        # |stopping position - stop| [m]
 LATE_TOLERANCE_S = 1.0        # arrival after the asked time or window [s]
+# arrival before the asked time [s], for a run driven to a running time (a strategy, DAS advice): a
+# run that cannot use the time it was given is not comparable at that time (eco-drive coasting at a
+# running time of 300 s on a 72 s stretch arrived 178 s early)
+EARLY_TOLERANCE_S = 1.0
 OVERSPEED_TOLERANCE_KMH = 0.5  # largest excess over the speed limit [km/h]
 ADHESION_USE = 1.0 + TOLERANCE  # a train with an adhesion limit: the largest share of it any run may ask
 
@@ -189,16 +193,20 @@ def off_stop(error_m: float, tolerance_m: float, digits: int = 2) -> str:
 
 
 def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
-               overspeed_kmh: float | None = None, adhesion_use: float | None = None) -> Status:
+               overspeed_kmh: float | None = None, adhesion_use: float | None = None,
+               early_s: float | None = None) -> Status:
     """The status of a driven run from what it missed (``None``: not measured): ``flagged`` when
     it stops more than :data:`STOP_TOLERANCE_M` off, arrives more than :data:`LATE_TOLERANCE_S`
-    late, overspeeds by more than :data:`OVERSPEED_TOLERANCE_KMH` or asks more than
-    :data:`ADHESION_USE` of its adhesion limit (``core.simulate.adhesion_use``)."""
+    late (or, given ``early_s``, more than :data:`EARLY_TOLERANCE_S` early), overspeeds by more than
+    :data:`OVERSPEED_TOLERANCE_KMH` or asks more than :data:`ADHESION_USE` of its adhesion limit
+    (``core.simulate.adhesion_use``)."""
     reasons = []
     if stop_error_m is not None and not abs(stop_error_m) <= STOP_TOLERANCE_M:
         reasons.append(off_stop(stop_error_m, STOP_TOLERANCE_M))
     if late_s is not None and not late_s <= LATE_TOLERANCE_S:
         reasons.append(f"arrived {late_s:.2f} s late")
+    if early_s is not None and not early_s <= EARLY_TOLERANCE_S:
+        reasons.append(f"arrived {early_s:.2f} s early (tolerance {EARLY_TOLERANCE_S:g} s)")
     if overspeed_kmh is not None and not overspeed_kmh <= OVERSPEED_TOLERANCE_KMH:
         reasons.append(f"overspeed {overspeed_kmh:.2f} km/h")
     if adhesion_use is not None and not adhesion_use <= ADHESION_USE:

@@ -137,7 +137,8 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     arrival_error = row["running_time_s"] - result.summary["running_time_s"]
     overspeed = to_kmh(worst_overspeed(result.segment, outcome.trace))
     grip = {} if "adhesion_use_max" not in row else {"adhesion_use_max": row["adhesion_use_max"]}
-    status = worst([driven_run(row["stop_error_m"], arrival_error, overspeed, row.get("adhesion_use_max")),
+    status = worst([driven_run(row["stop_error_m"], arrival_error, overspeed, row.get("adhesion_use_max"),
+                               early_s=-arrival_error),
                     *(flagged(f) for f in flags)])
     return {"method": method, **energies, "gap_to_ato_pct": _gap(energies, result),
             "gap_to_ato_on_time_pct": _gap_on_time(energies, result, row["running_time_s"]),

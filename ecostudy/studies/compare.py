@@ -108,7 +108,8 @@ def _after_ato(drive):
         driven, extra, own = drive(case, train, prepared, ato)
         driven = replace(driven, name=case["strategy"])  # its row named as registered
         row, overspeed = driven.row(train, prepared.segment.distance), overspeed_kmh(prepared.segment, driven)
-        status = driven_run(row["stop_error_m"], row["running_time_s"] - target, overspeed, row.get("adhesion_use_max"))
+        status = driven_run(row["stop_error_m"], row["running_time_s"] - target, overspeed, row.get("adhesion_use_max"),
+                            early_s=target - row["running_time_s"])
         if own is not None:  # the same checks, and how its own NLP ended
             status = worst([status, own])
         return _stored(driven, train, prepared.segment, status, target_s=target, overspeed_max_kmh=overspeed, **extra)
