@@ -50,11 +50,14 @@ def network_files(plot=True, out=style.Output()):
     return draw
 
 
+FRONT_FIGURES = ("pareto", "pareto_profiles")  # the figures of front_files, by stem
+
+
 def front_files(plot=True, out=style.Output(), weighted=None, workers=1, started=None):
     """The study engine's ``draw`` (:func:`ecostudy.studies.batch.run_expanded`) of a Pareto front:
     ``pareto.json`` (the table's facts, ``workers`` and the wall seconds since ``started``),
-    ``pareto_weighted.csv`` (the ``weighted`` points, if any), ``pareto.png`` and
-    ``pareto_profiles.png`` (five stored points' speed profiles, and the study's own running time's)."""
+    ``pareto_weighted.csv`` (the ``weighted`` points, if any), ``pareto.<format>`` and
+    ``pareto_profiles.<format>`` (five stored points' speed profiles, and the study's own running time's)."""
     started = time.perf_counter() if started is None else started
 
     def draw(out_dir, cases, rows, table):
@@ -65,9 +68,8 @@ def front_files(plot=True, out=style.Output(), weighted=None, workers=1, started
         write_json(out_dir / "pareto.json", meta)
         stale(out_dir, weighted=weighted is None, names={"weighted": ["pareto_weighted.csv"]})
         title = f"{meta['train']} - {meta['from']} to {meta['to']} (K = {meta['points']})"
-        drawn = figures(out_dir, plot, {
-            "pareto": later("pareto_plot", table, title=title, weighted=weighted),
-            "pareto_profiles": later("profiles_plot", front.front_points(cases, rows, front.profile_picks(cases)),
-                                     title=title)}, out)
+        drawn = figures(out_dir, plot, dict(zip(FRONT_FIGURES, (
+            later("pareto_plot", table, title=title, weighted=weighted),
+            later("profiles_plot", front.front_points(cases, rows, front.profile_picks(cases)), title=title)))), out)
         return ["pareto.json", *drawn], {"weighted": "pareto_weighted.csv"} if weighted is not None else {}
     return draw
