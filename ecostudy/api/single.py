@@ -106,8 +106,9 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
     w = parse_pair(weights, "--weights", nonnegative=True) if weights else w
     if weights is not None and obj != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
-    check_output_dir(out_dir, ("profile.csv", "summary.json", "inputs.json", *figures.filenames(RUN_FIGURES, plot)),
-                     "solve")
+    advice = ("advice.csv",) if das is not None else ()
+    check_output_dir(out_dir, ("profile.csv", "inputs.json", *advice,
+                               *figures.filenames(RUN_FIGURES, plot)), "solve")
     if das is not None and windows and das != "round":
         raise InputError(problem(str(study), "windows", f"--das {das} does not handle timing "
                                  "windows on the way yet; use --das round"))
