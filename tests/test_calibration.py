@@ -457,6 +457,21 @@ def test_bad_logs_are_one_line(tmp_path, text, fragments):
     assert not (tmp_path / "o" / "summary.json").exists()
 
 
+@pytest.mark.parametrize("fmt", ["svg", "pdf"])
+@pytest.mark.parametrize("command, figure", [("calibrate", "residuals"), ("validate", "validate")])
+def test_a_folder_where_the_figure_of_the_format_goes_is_refused_before_computing(tmp_path, log_files, command,
+                                                                                   figure, fmt):
+    """``--format svg``: a folder in the place of ``residuals.svg`` (``validate.svg``) is one line,
+    exit 2, before any fit or replay (nothing written)."""
+    where = tmp_path / "o" / f"{figure}.{fmt}"
+    where.mkdir(parents=True)
+    result = run(command, log_files[0], "--format", fmt, "--out", tmp_path / "o")
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert lines == [f"error: {where}: is a folder where an output file goes"], result.output
+    assert [p.name for p in (tmp_path / "o").iterdir()] == [where.name]
+
+
 @pytest.mark.parametrize("command", ["validate", "calibrate"])
 def test_a_train_longer_than_the_track_is_refused_naming_its_file(tmp_path, command):
     long = tmp_path / "long.yaml"

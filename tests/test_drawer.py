@@ -6,8 +6,6 @@ import json
 import multiprocessing
 import operator
 import os
-import subprocess
-import sys
 
 import pytest
 
@@ -42,13 +40,28 @@ def test_the_figures_are_the_same_drawn_in_the_child_or_here(tmp_path, monkeypat
         assert (tmp_path / "child" / name).read_bytes() == (tmp_path / "here" / name).read_bytes(), name
 
 
-def test_a_figure_the_child_cannot_write_fails_the_command_with_exit_status_3(tmp_path):
-    (tmp_path / "s" / "energy.png").mkdir(parents=True)  # a folder where the figure goes
-    done = subprocess.run([sys.executable, "-m", "ecostudy", "solve", str(DEFAULT), "--points", "150", "--out", "s"],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=900)
-    assert done.returncode == 3, done.stderr
-    assert "internal error: IsADirectoryError" in done.stderr
-    assert not (tmp_path / "s" / "summary.json").exists()  # nothing claims the folder is complete
+class Blocking:
+    """A watcher of the solve that puts a folder where ``energy.png`` goes once the run is solved:
+    after the output folder was checked, before the figure is written."""
+
+    def __init__(self, out):
+        self.out = out
+
+    def stage(self, name, total=None, unit=""):
+        if name == "figures and files":
+            (self.out / "energy.png").mkdir(parents=True)
+
+    def step(self, done, note=""):
+        pass
+
+
+def test_a_figure_the_child_cannot_write_fails_the_solve_with_the_childs_error(tmp_path):
+    out = tmp_path / "s"
+    with pytest.raises(IsADirectoryError) as raised:  # the command line: exit status 3, internal error
+        api.solve_folder(DEFAULT, points=150, out=out, progress=Blocking(out))
+    assert "in the figure process" in "\n".join(raised.value.__notes__)
+    assert not (out / "summary.json").exists()  # nothing claims the folder is complete
+    assert multiprocessing.active_children() == []
 
 
 def test_the_childs_error_is_raised_here_with_its_type_and_traceback():

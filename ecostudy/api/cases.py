@@ -87,8 +87,8 @@ def own_files(kind: str, workers: int, plot: bool = True, figures: Output = Outp
     ``figures`` says), so that
     ``run --kind`` writes the same set through the same writers; None for the others."""
     draws = {"pareto": lambda: front_files(plot, figures, workers=workers), "compare": lambda: compare_figures(plot, figures),
-             "simulate": lambda: loop_files(partial(loop_figures, out=figures) if plot else None),
-             "heavyhaul": lambda: heavyhaul_files(partial(heavyplots.draw, out=figures) if plot else None),
+             "simulate": lambda: loop_files(*loop_drawing(plot, figures)),
+             "heavyhaul": lambda: heavyhaul_files(*heavyhaul_drawing(plot, figures)),
              "network": lambda: network_files(plot, figures)}
     return draws[kind]() if kind in draws else None
 
@@ -104,8 +104,9 @@ def simulate_folder(study: Path, workers: Optional[int] = None, dask: Optional[s
     check_options(workers=workers, dask=dask)
     figures = output(fig_format, dpi)
     check_closed_loop_study(study, workers, only)  # runs that cannot end, or too big: refused (unless --force)
-    outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress, only,
-                             partial(loop_figures, out=figures) if plot else None)
+    draw, names = loop_drawing(plot, figures)
+    outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress, only, draw,
+                             names)
     runs, counts, folder = outcome.runs, outcome.counts, outcome.output
     write_html(folder)
     lines = [shown(outcome.aggregate, LOOP_COLUMNS, ".4g"), counts_line(counts, "runs"), "outputs " + listed(folder)]
@@ -121,6 +122,18 @@ def loop_figures(outcome, out: Output = Output()) -> list:
     return loopplots.draw(outcome, out)
 
 
+def loop_drawing(plot: bool, figures: Output):
+    """(draw, the file names it may write) of a closed-loop study's figures; (None, ()) without ``plot``."""
+    return partial(loop_figures, out=figures) if plot else None, figures.filenames(loopplots.FIGURES, plot)
+
+
+def heavyhaul_drawing(plot: bool, figures: Output):
+    """(draw, names(cases): the file names it may write) of a heavy-haul study's figures; (None, None)
+    without ``plot``."""
+    return ((partial(heavyplots.draw, out=figures), partial(heavyplots.names, out=figures)) if plot
+            else (None, None))
+
+
 @spelled
 def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
                      out: Optional[Path] = None, plot: bool = True, blas_threads: int = 1, fig_format: str = "png",
@@ -133,7 +146,7 @@ def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[
     figures = output(fig_format, dpi)
     limit_blas_threads(blas_threads)  # before the workers fork: they inherit it
     outcome = heavyhaul_study(study, workers, dask, retry_failed, Path(out) if out else None, progress,
-                              partial(heavyplots.draw, out=figures) if plot else None)
+                              *heavyhaul_drawing(plot, figures))
     runs, folder, plots = outcome.runs, outcome.output, list(outcome.files)
     write_html(folder)
     return reported(folder, [shown(runs, HEAVY_COLUMNS, ".4g"), counts_line(outcome.counts, "runs"),
@@ -150,12 +163,12 @@ def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, w
     (independent, rules 7.7 / 7.11, dissension, joint optimum, following; Farooqi 2018, Ch. 7); each
     strategy a case of the study kind ``network`` (:mod:`ecostudy.studies.network`), stored in
     ``results.sqlite`` and resumed, over ``workers`` processes (every core by default) or Dask."""
-    figures, workers = output(fig_format, dpi), every_core(workers)
+    draw, workers = network_files(plot, output(fig_format, dpi)), every_core(workers)
     check_options(workers=workers, dask=dask)
     with worker_pool(workers) if workers > 1 else nullcontext() as pool:  # the fleet's first runs
-        expanded = expand_network(study, workers, pool, note, out)  # too big: refused first (unless --force)
-    ran = run_expanded("network", expanded, study, workers, dask, retry_failed, progress=progress,
-                       draw=network_files(plot, figures))
+        # too big: refused first (unless --force); the folder checked for the files beside the table (by strategy: later)
+        expanded = expand_network(study, workers, pool, note, out, draw.names([]))
+    ran = run_expanded("network", expanded, study, workers, dask, retry_failed, progress=progress, draw=draw)
     for name, row in ran.table.set_index("strategy").iterrows():
         note(f"{name:12s} " + (f"substation {row['substation_kWh']:.3f} kWh, "
                                f"scored {row['wall_s']:.1f} s after its start"

@@ -14,9 +14,9 @@ from ecostudy.io.loaders import check_fits, check_stop_list, load_timetable, loa
 from ecostudy.io.timetable import journey_plan, name_stops
 from ecostudy.io.store import check_one_study
 from ecostudy.io.writers import check_output_dir
-from ecostudy.report.files import write_journey
+from ecostudy.report.files import JOURNEY_FIGURE, write_journey
 from ecostudy.report.html import write_html
-from ecostudy.report.studyfiles import compare_figures, front_files
+from ecostudy.report.studyfiles import FRONT_FIGURES, compare_figures, front_files
 from ecostudy.report.style import output
 from ecostudy.studies.batch import Expanded, run_expanded
 from ecostudy.studies.compare import compare_cases
@@ -63,7 +63,9 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
                         study_name(st, "pareto", track, train, f, t), das, das_time_limit,
                         timing=st.timing if st is not None else None)
     out_dir = output_folder(out, beside(st, "_pareto", "pareto"))
-    check_output_dir(out_dir, ("pareto.csv", "pareto.json", "pareto.png", "results.sqlite"), "pareto")
+    asked = ("pareto_weighted.csv",) if weighted else ()
+    check_output_dir(out_dir, ("pareto.csv", "pareto.json", "results.sqlite", *asked,
+                               *figures.filenames(FRONT_FIGURES, plot)), "pareto")
     check_one_study(out_dir, cases[0]["study"])  # before the weighted points are solved
     check_front("command line", len(cases), k or FRONT_POINTS, workers, das, das_time_limit)  # refused (unless --force)
     extra = weighted_points(trk, trn, f, t, count=weighted, points=k or FRONT_POINTS) if weighted else None
@@ -177,7 +179,8 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
     check_journey(timetable or "command line", len(names) - 1, points, workers,  # too big: refused (unless --force)
                   splits=4 + (scheduled is not None) + (plan is not None), whole=1 + (plan is not None))
     out_dir = check_output_dir(output_folder(out, Path("out") / "journey"),
-                               ("journey.csv", "journey_totals.csv", "journey.png"), "journey")
+                               ("journey.csv", "journey_totals.csv", *figures.filenames([JOURNEY_FIGURE], plot)),
+                               "journey")
     try:
         table, totals, results, _ = journey(trk, trn, names, total_time=time,
                                             supplement=None if supplement is None else supplement * units.PERCENT,

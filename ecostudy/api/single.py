@@ -21,7 +21,7 @@ from ecostudy.io.results import file_digest
 from ecostudy.io.writers import check_output_dir, write_json
 from ecostudy.ocp import session
 from ecostudy.report.drawer import drawing
-from ecostudy.report.files import write_fixed_step, write_run
+from ecostudy.report.files import RUN_FIGURES, write_fixed_step, write_run
 from ecostudy.report.style import output
 from ecostudy.studies.check import check_result
 from ecostudy.studies.options import case_from, check_options, only_one, output_folder, parse_pair, timing_of
@@ -106,7 +106,9 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
     w = parse_pair(weights, "--weights", nonnegative=True) if weights else w
     if weights is not None and obj != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
-    check_output_dir(out_dir, ("profile.csv", "summary.json", "speed.png", "inputs.json"), "solve")
+    advice = ("advice.csv",) if das is not None else ()
+    check_output_dir(out_dir, ("profile.csv", "inputs.json", *advice,
+                               *figures.filenames(RUN_FIGURES, plot)), "solve")
     if das is not None and windows and das != "round":
         raise InputError(problem(str(study), "windows", f"--das {das} does not handle timing "
                                  "windows on the way yet; use --das round"))

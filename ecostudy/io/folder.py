@@ -17,10 +17,7 @@ from ecostudy import __version__
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.status import Status, worst
 from ecostudy.io.runsummary import RunSummary
-from ecostudy.io.writers import write_json
-
-SUMMARY = "summary.json"
-REPORT = "report.html"  # written beside it by ``report.html.write_html``
+from ecostudy.io.writers import REPORT, SUMMARY, write_json
 LAYOUT = 1  # the version of summary.json's common fields; a reader refuses a newer one
 
 # the fields write_summary owns; a command's own fields may not reuse them

@@ -20,10 +20,14 @@ def _umask() -> int:
 FILE_MODE = 0o666 & ~_umask()  # what open() would give: the user's umask, not mkstemp's 0600
 
 
+SUMMARY = "summary.json"  # every output folder's (:mod:`ecostudy.io.folder`)
+REPORT = "report.html"  # written beside it by ``report.html.write_html``
+
+
 def _kind_of(folder: Path) -> str | None:
     """The ``kind`` in a folder's summary.json, None where there is none or it cannot be read."""
     try:
-        data = json.loads((folder / "summary.json").read_text())
+        data = json.loads((folder / SUMMARY).read_text())
     except (OSError, ValueError):
         return None
     kind = data.get("kind") if isinstance(data, dict) else None
@@ -32,7 +36,8 @@ def _kind_of(folder: Path) -> str | None:
 
 def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: str | None = None) -> Path:
     """Refuse, before any computation, an output folder that is a file, cannot be created or
-    written, or holds a folder where one of ``files`` goes, or (``kind`` given) holds the results
+    written, or holds a folder where one of ``files`` (or :data:`SUMMARY`, :data:`REPORT`) goes, or
+    (``kind`` given) holds the results
     of another kind of command (its ``summary.json``'s ``kind``: this command's tables and
     summary would be written beside the other's, and read as one): one line naming it (exit 2). The
     folders this check creates to try are removed again: a command refused later (an infeasible
@@ -41,7 +46,7 @@ def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: st
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise InputError(problem(path, "", "the output folder is a file"))
-    for name in files:
+    for name in (*files, SUMMARY, REPORT):
         if (path / name).is_dir():
             raise InputError(problem(path / name, "", "is a folder where an output file goes"))
     other = _kind_of(path)

@@ -1,4 +1,4 @@
-"""The files of a run (``profile.csv``, ``summary.json``, ``speed.png``, ``advice.csv``) and of a
+"""The files of a run (``profile.csv``, ``summary.json``, ``speed.<format>``, ``advice.csv``) and of a
 journey, each written atomically (a front's: :func:`ecostudy.report.studyfiles.front_files`)."""
 from functools import partial
 from pathlib import Path
@@ -21,8 +21,7 @@ def figures(out_dir, plot, drawings, out=style.Output()):
     folder never mixes the files of two runs. Returns the file names written."""
     if not plot:
         for stem in drawings:
-            for name in style.names(stem):
-                (Path(out_dir) / name).unlink(missing_ok=True)
+            style.remove(out_dir, stem)
         return []
     return [style.write(out_dir, stem, draw, out) for stem, draw in drawings.items()]
 
@@ -53,13 +52,17 @@ def _draw(name, args, kwargs, path, **more):
     return getattr(module, name)(*args, path, **kwargs, **more)
 
 
+RUN_FIGURES = ("speed", "energy")  # the figures of write_run, by stem
+JOURNEY_FIGURE = "journey"  # of write_journey
+
+
 def write_run(result, out_dir, plot=True, out=style.Output(), drawer=None, files=()):
-    """``profile.csv``, ``summary.json``, ``speed.png``, ``energy.png`` (the energy flow; figures in
+    """``profile.csv``, ``summary.json``, ``speed.<format>``, ``energy.<format>`` (the energy flow; figures in
     the format of ``out``, drawn by ``drawer`` while the tables are written when one is given) and
     ``advice.csv`` of one run into ``out_dir``; ``files``: others the caller wrote there, listed too."""
     out_dir = Path(out_dir)
-    drawn = figures_meanwhile(drawer, out_dir, plot, {"speed": later("speed_plot", result),
-                                                      "energy": later("energy_plot", result)}, out)
+    drawn = figures_meanwhile(drawer, out_dir, plot, dict(zip(RUN_FIGURES, (later("speed_plot", result),
+                                                                            later("energy_plot", result)))), out)
     write_csv(out_dir / "profile.csv", result.profile)
     tables = {"profile": "profile.csv"}
     if result.das is not None:
@@ -83,13 +86,14 @@ def stale(out_dir, names, **drop):
 
 
 def write_journey(table, totals, results, out_dir, title, passing=(), plot=True, out=style.Output()):
-    """``journey.csv``, ``journey_totals.csv``, ``summary.json`` and ``journey.png`` of a journey's
+    """``journey.csv``, ``journey_totals.csv``, ``summary.json`` and ``journey.<format>`` of a journey's
     distributions (every segment's run re-simulated: ``verified``; its ``status`` the run's own: Ipopt's
     end and the re-simulation)."""
     out_dir = Path(out_dir)
     write_csv(out_dir / "journey.csv", table)
     write_csv(out_dir / "journey_totals.csv", totals)
-    drawn = figures(out_dir, plot, {"journey": later("journey_plot", results, title=title, passing=passing)}, out)
+    drawn = figures(out_dir, plot, {JOURNEY_FIGURE: later("journey_plot", results, title=title, passing=passing)},
+                    out)
     statuses = {f"{r['distribution']} {r['from']}-{r['to']}": Status.parse(r["status"]) for _, r in table.iterrows()}
     write_summary(out_dir, "journey", statuses, {"segments": "journey.csv", "totals": "journey_totals.csv"},
                   drawn, title=title)

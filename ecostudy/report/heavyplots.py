@@ -75,6 +75,18 @@ def trade_off(runs, path, title="", dpi=None):
     return _save(fig, path, dpi=dpi)
 
 
+def forces_stem(case):
+    """The stem of a run's in-train force figure (``forces_K_b0p5_f1_Np20_Nc5``)."""
+    return "forces_" + "_".join(f"{k}{v:g}" for k, v in case["labels"].items()).replace(".", "p")
+
+
+def names(cases, out=style.Output()):
+    """The figures :func:`draw` may write for ``cases`` in the format of ``out`` (a run's forces if
+    it ran, the trade-off where K_b varies), known before any run: the output folder's check."""
+    trade_off = ["brake_penalty"] if len({c["labels"]["K_b"] for c in cases}) > 1 else []
+    return out.filenames(["tracking", *map(forces_stem, cases), *trade_off])
+
+
 def draw(outcome, out=style.Output()):
     """The plots of a heavy-haul study (``studies.heavyhaul.HeavyhaulStudy``) into its output folder,
     in the format and resolution of ``out`` (:class:`~ecostudy.report.style.Output`); returns the
@@ -87,7 +99,7 @@ def draw(outcome, out=style.Output()):
     for case in outcome.cases:
         summary = outcome.summaries[case["key"]]
         if summary:
-            name = out.filename("forces_" + "_".join(f"{k}{v:g}" for k, v in case["labels"].items()).replace(".", "p"))
+            name = out.filename(forces_stem(case))
             forces(case, summary, outcome.output / name, dpi=out.dpi)
             written.append(name)
     if outcome.runs["K_b"].nunique() > 1:

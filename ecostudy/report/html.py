@@ -22,10 +22,9 @@ import pandas as pd
 
 from ecostudy.core.status import status_word
 from ecostudy.core.units import number
-from ecostudy.io.folder import SUMMARY, Counts, StudyResult, load
-from ecostudy.io.writers import atomic_write
+from ecostudy.io.folder import Counts, StudyResult, load
+from ecostudy.io.writers import REPORT, SUMMARY, atomic_write
 
-REPORT = "report.html"
 MAX_ROWS = 5000  # rows of a table shown on the page; the CSV beside it holds them all
 IMAGES = {".png": "image/png", ".svg": "image/svg+xml"}
 # summary fields that say what the command was asked (shown as inputs, in this order); the rest

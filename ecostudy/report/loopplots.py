@@ -85,6 +85,9 @@ def mass_estimates(runs, path, title="", dpi=None):
     return _save(fig, path, dpi=dpi)
 
 
+FIGURES = ("bands", "solve_times", "mass_estimates")  # the figures of draw, by stem (the last where a mass is estimated)
+
+
 def draw(outcome, out=style.Output()):
     """The plots of a closed-loop study (``studies.closedloop.LoopStudy``) into its output folder,
     in the format and resolution of ``out`` (:class:`~ecostudy.report.style.Output`); returns the
@@ -92,7 +95,7 @@ def draw(outcome, out=style.Output()):
     runs, name, folder = outcome.by_controller, outcome.name, outcome.output
     if not runs:
         return []
-    names = [out.filename(stem) for stem in ("bands", "solve_times", "mass_estimates")]
+    names = list(out.filenames(FIGURES))
     bands(runs, outcome.segment, folder / names[0], title=name, dpi=out.dpi)
     solve_times(runs, outcome.budgets, folder / names[1], title=name, dpi=out.dpi)
     if not any(s.get("estimates") for group in runs.values() for s in group):

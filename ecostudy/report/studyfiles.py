@@ -1,7 +1,8 @@
 """The files of a study kind beyond its table and ``summary.json``: each a ``draw`` of the study
-engine (:func:`ecostudy.studies.batch.run_expanded`), called with the output folder, the cases,
-the stored rows and the table; it writes its files atomically and returns (file names,
-{table name: file name})."""
+engine (:func:`ecostudy.studies.batch.run_expanded`, a :class:`~ecostudy.studies.batch.Draw`),
+called with the output folder, the cases, the stored rows and the table; it writes its files
+atomically and returns (file names, {table name: file name}); its ``names(cases)`` are the files it
+will write, figures in the format asked, checked in the output folder before any case is computed."""
 import time
 from pathlib import Path
 
@@ -11,23 +12,28 @@ from ecostudy.io.writers import write_csv, write_json
 from ecostudy.report import style
 from ecostudy.report.files import figures, later, stale
 from ecostudy.studies import compare, front, network
+from ecostudy.studies.batch import Draw
+
+COMPARE_FIGURE = "compare"  # the figure of compare_figures
+NETWORK_FIGURES = ("network", "network_supply")  # of network_files, by stem
+FRONT_FIGURES = ("pareto", "pareto_profiles")  # of front_files, by stem
 
 
 def compare_figures(plot=True, out=style.Output()):
     """The study engine's ``draw`` (:func:`ecostudy.studies.batch.run_expanded`) of a comparison:
-    ``compare.png``, every stored strategy's simulated speed (none with ``plot`` False: an
+    ``compare.<format>``, every stored strategy's simulated speed (none with ``plot`` False: an
     earlier figure is removed)."""
     def draw(out_dir, cases, rows, table):
-        drawings = {"compare": later("compare_plot", compare.outcomes(cases, rows), compare.segment_of(cases[0]),
-                                     title=table.attrs["title"]) if plot else None}
+        drawings = {COMPARE_FIGURE: later("compare_plot", compare.outcomes(cases, rows), compare.segment_of(cases[0]),
+                                         title=table.attrs["title"]) if plot else None}
         return figures(out_dir, plot, drawings, out), {}
-    return draw
+    return Draw(draw, lambda cases: out.filenames([COMPARE_FIGURE], plot))
 
 
 def network_files(plot=True, out=style.Output()):
     """The study engine's ``draw`` (:func:`ecostudy.studies.batch.run_expanded`) of a network study:
-    ``network_trains.csv``, ``network_steps_<strategy>.csv``, ``network.json``, ``network.png`` and
-    ``network_supply.png`` from the stored strategies (``studies.network.outcomes``; no figure when
+    ``network_trains.csv``, ``network_steps_<strategy>.csv``, ``network.json``, ``network.<format>`` and
+    ``network_supply.<format>`` from the stored strategies (``studies.network.outcomes``; no figure when
     every strategy failed)."""
     def draw(out_dir, cases, rows, table):
         out_dir, fl, study = Path(out_dir), cases[0]["fleet"], cases[0]["study"]
@@ -44,17 +50,21 @@ def network_files(plot=True, out=style.Output()):
             "dt_s": fl.dt, "strategies": {n: {**r["totals"], **r["info"]} if n in done else
                                           {"status": f"failed: {r['failed']}"} for n, r in outcome.items()}})
         # no strategy to draw when every one failed: no figures (an earlier run's removed)
-        drawn = figures(out_dir, plot and bool(done), {"network": later("network_plot", fl, done, title=study),
-                                        "network_supply": later("supply_plot", fl, done, title=study)}, out)
+        drawn = figures(out_dir, plot and bool(done), dict(zip(NETWORK_FIGURES, (
+            later("network_plot", fl, done, title=study), later("supply_plot", fl, done, title=study)))), out)
         return [f"network_steps_{name}.csv" for name in done] + ["network.json"] + drawn, {"trains": "network_trains.csv"}
-    return draw
+
+    def names(cases):
+        return ("network_trains.csv", "network.json", *(f"network_steps_{c['strategy']}.csv" for c in cases),
+                *out.filenames(NETWORK_FIGURES, plot))
+    return Draw(draw, names)
 
 
 def front_files(plot=True, out=style.Output(), weighted=None, workers=1, started=None):
     """The study engine's ``draw`` (:func:`ecostudy.studies.batch.run_expanded`) of a Pareto front:
     ``pareto.json`` (the table's facts, ``workers`` and the wall seconds since ``started``),
-    ``pareto_weighted.csv`` (the ``weighted`` points, if any), ``pareto.png`` and
-    ``pareto_profiles.png`` (five stored points' speed profiles, and the study's own running time's)."""
+    ``pareto_weighted.csv`` (the ``weighted`` points, if any), ``pareto.<format>`` and
+    ``pareto_profiles.<format>`` (five stored points' speed profiles, and the study's own running time's)."""
     started = time.perf_counter() if started is None else started
 
     def draw(out_dir, cases, rows, table):
@@ -65,9 +75,9 @@ def front_files(plot=True, out=style.Output(), weighted=None, workers=1, started
         write_json(out_dir / "pareto.json", meta)
         stale(out_dir, weighted=weighted is None, names={"weighted": ["pareto_weighted.csv"]})
         title = f"{meta['train']} - {meta['from']} to {meta['to']} (K = {meta['points']})"
-        drawn = figures(out_dir, plot, {
-            "pareto": later("pareto_plot", table, title=title, weighted=weighted),
-            "pareto_profiles": later("profiles_plot", front.front_points(cases, rows, front.profile_picks(cases)),
-                                     title=title)}, out)
+        drawn = figures(out_dir, plot, dict(zip(FRONT_FIGURES, (
+            later("pareto_plot", table, title=title, weighted=weighted),
+            later("profiles_plot", front.front_points(cases, rows, front.profile_picks(cases)), title=title)))), out)
         return ["pareto.json", *drawn], {"weighted": "pareto_weighted.csv"} if weighted is not None else {}
-    return draw
+    return Draw(draw, lambda cases: ("pareto.json", *(["pareto_weighted.csv"] if weighted is not None else []),
+                                     *out.filenames(FRONT_FIGURES, plot)))

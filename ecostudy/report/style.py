@@ -220,6 +220,12 @@ class Output(NamedTuple):
         """The file name of a figure: ``stem`` with this format's suffix (``speed`` -> ``speed.svg``)."""
         return f"{stem}.{self.fmt}"
 
+    def filenames(self, stems, plot=True):
+        """The file names of the figures ``stems`` (:meth:`filename`; none where ``plot`` is False:
+        none is drawn), as a command names them to check its output folder before computing
+        (:func:`ecostudy.io.writers.check_output_dir`)."""
+        return tuple(self.filename(stem) for stem in stems) if plot else ()
+
 
 def output(fmt="png", dpi=None, option="--format"):
     """A checked :class:`Output`: an unknown format or a resolution outside 10-2400 dpi is an
@@ -257,12 +263,19 @@ def names(stem):
 def write(out_dir, stem, draw, out=Output()):
     """Write the figure that ``draw(path, fmt=..., dpi=...)`` saves (any plot function with its
     data bound, e.g. ``functools.partial(plots.speed_plot, result)``) as ``stem.<fmt>`` in
-    ``out_dir``, atomically, and remove the same figure in the other formats; returns the file
-    name written."""
+    ``out_dir``, atomically, and remove the same figure in the other formats (:func:`remove`);
+    returns the file name written."""
     out_dir = Path(out_dir)
     name = out.filename(stem)
     atomic_write(out_dir / name, lambda tmp: draw(tmp, fmt=out.fmt, dpi=out.dpi))
-    for other in names(stem):
-        if other != name:
-            (out_dir / other).unlink(missing_ok=True)
+    remove(out_dir, stem, keep=name)
     return name
+
+
+def remove(out_dir, stem, keep=None):
+    """Remove the figure ``stem`` of ``out_dir`` in every format but the file ``keep`` (an earlier
+    run's); a folder of such a name is no figure and stays."""
+    for name in names(stem):
+        path = Path(out_dir) / name
+        if name != keep and not path.is_dir():
+            path.unlink(missing_ok=True)

@@ -9,7 +9,7 @@ import warnings
 from concurrent.futures import as_completed
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, NamedTuple, Optional
+from typing import Callable, Iterable, NamedTuple, Optional
 
 import pandas as pd
 
@@ -239,6 +239,20 @@ class StudyKind:
 STUDY_KINDS: Registry[StudyKind] = Registry("study kind")
 
 
+def _none(cases):
+    return ()
+
+
+class Draw(NamedTuple):
+    """A kind's files beside its table (:func:`run_expanded`): ``write(output, cases, rows, table)``
+    writes them and returns (file names, {table name: file name}); ``names(cases)``: the files it
+    will write as far as they are known before any case is computed (its figures in the format
+    asked), checked in the output folder with the table's."""
+
+    write: Callable
+    names: Callable[[list], Iterable[str]] = _none
+
+
 class StudyRun(NamedTuple):
     """A study run by :func:`run_expanded`: its table, counts (``total``, ``stored_before``,
     ``computed``, ``failed``, ``not_ok``), output folder, cases and stored rows by case key."""
@@ -270,8 +284,8 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     """A study of ``kind`` already expanded (from a study file, or from a command's options: ``where``
     names it): the cases not stored yet run (serially, in ``workers`` processes or on ``dask``,
     :func:`execute`), each stored as it arrives; the table of every stored case; the table's file
-    and summary.json written, with the files and tables ``draw(output, cases, rows, table)`` writes
-    and returns as (file names, {table name: file name}) (figures, a kind's other files); the files an
+    and summary.json written, with the files and tables ``draw`` (a :class:`Draw`) writes and returns
+    as (file names, {table name: file name}) (figures, a kind's other files); the files an
     earlier ``summary.json`` of the folder listed that this run did not write removed.
     ``progress(done, failed, remaining, total)`` after each case; ``compute``: only these cases
     computed now (the others' stored results still in the table; a case neither stored nor computed
@@ -282,8 +296,8 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     if spec.size is not None and compute is None:  # too big: refused with its estimate (unless --force); a part
         # computed now (``compute``) is checked by its caller
         spec.size(Path(where), expanded.cases, workers)
-    output = check_output_dir(out or expanded.output, (spec.table_file, "results.sqlite", *expanded.inputs),
-                              kind)
+    output = check_output_dir(out or expanded.output, (spec.table_file, "results.sqlite", *expanded.inputs,
+                                                       *(draw.names(expanded.cases) if draw is not None else ())), kind)
     if expanded.cases:  # a folder holds one study's results: its tables and summary.json are the study's own
         check_one_study(output, expanded.cases[0]["study"])
     for name, frame in expanded.inputs.items():
@@ -292,7 +306,7 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
                                progress, compute, spec.spread)
     table = spec.table(expanded.cases, rows)
     write_csv(output / spec.table_file, table)
-    drawn, tables = draw(output, expanded.cases, rows, table) if draw is not None else ([], {})
+    drawn, tables = draw.write(output, expanded.cases, rows, table) if draw is not None else ([], {})
     results = [compute is None or k in rows for k in (c["key"] for c in expanded.cases)]  # left out: not results
     # a kind's table may list its cases in another order (a front's by running time), its index their order
     in_order = table.sort_index() if sorted(table.index) == list(range(len(table))) else table

@@ -6,8 +6,8 @@ identifiability report, residual statistics), ``parameters.csv``, ``residuals.cs
 ``<train>_calibrated.yaml`` (the train file with the identified parameters
 replaced, its source naming the logs and the fit) and, when asked, ``savings.csv`` (the optimum for
 each logged running time against the logged energy, with the calibration's band). validate writes ``validate.csv`` and
-``summary.json``. The command line draws ``residuals.png`` and ``validate.png``
-(:mod:`ecostudy.report.calplots`).
+``summary.json``. The command line draws ``residuals.<format>`` and ``validate.<format>``
+(:mod:`ecostudy.report.calplots`), whose names each is given (``figures``) to check and list them.
 """
 from datetime import datetime, timezone
 from pathlib import Path
@@ -28,8 +28,9 @@ from ecostudy.core.status import Status
 from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 
-CALIBRATE_FILES = ("summary.json", "parameters.csv", "residuals.csv", "residuals.png")
-VALIDATE_FILES = ("summary.json", "validate.csv", "validate.png")
+# the files each writes beside its figures (``figures``: their names in the format of ``--format``)
+CALIBRATE_FILES = ("summary.json", "parameters.csv", "residuals.csv")
+VALIDATE_FILES = ("summary.json", "validate.csv")
 
 
 def parse_fit(text):
@@ -66,7 +67,9 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
     ``saving_draws`` (a count) also the savings against the logged driving (``savings.csv``)."""
     names = parse_fit(fit)
     logs, track, train, track_path, train_path = load_inputs(log_paths, train_path, track_path)
-    out = check_output_dir(out, CALIBRATE_FILES, "calibrate")
+    calibrated = Path(out) / f"{train_path.stem}_calibrated.yaml"
+    asked = ("savings.csv",) if saving_draws is not None else ()
+    out = check_output_dir(out, (*CALIBRATE_FILES, calibrated.name, *asked, *figures), "calibrate")
     result = calibrate_logs(logs, track, train, names, draws)
     identified = [n for n in names if n not in set(result.table.loc[~result.table["identifiable"], "name"])]
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d")
@@ -76,7 +79,6 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
                   f"({', '.join(log.name for log in logs)}) on track '{track.name}': {estimates} "
                   f"(95 % intervals); held at this file's values: "
                   f"{', '.join(n for n in names if n not in identified) or 'none'}.")
-    calibrated = out / f"{train_path.stem}_calibrated.yaml"
     write_train(calibrated, calibrated_document(train_path, result.train, identified, provenance))
     write_csv(out / "parameters.csv", result.table)
     write_csv(out / "residuals.csv", result.residuals)
@@ -86,7 +88,7 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
                          "Kalman filter; 95 % intervals from the Jacobian; bootstrap over logs when several",
                "parameters": result.table.replace({np.nan: None}).to_dict("records"),
                "quality": result.quality, "calibrated_train": str(calibrated),
-               "outputs": [*CALIBRATE_FILES[:3], calibrated.name]}
+               "outputs": [*CALIBRATE_FILES, calibrated.name]}
     if saving_draws is not None:
         table = pd.concat([savings(log, track, result, saving_draws) for log in logs], ignore_index=True)
         write_csv(out / "savings.csv", table)
@@ -108,7 +110,7 @@ def savings_statuses(table):
 def validate_study(log_path, train_path, track_path, out, energy_tolerance=0.05, time_tolerance=0.05, figures=()):
     """Replay one log on the train file's model and write the differences per run to ``out``."""
     logs, track, train, track_path, train_path = load_inputs([log_path], train_path, track_path)
-    out = check_output_dir(out, VALIDATE_FILES, "validate")
+    out = check_output_dir(out, (*VALIDATE_FILES, *figures), "validate")
     table = validate_log(logs[0], track, train, energy_tolerance, time_tolerance)
     write_csv(out / "validate.csv", table)
     flagged = table[table["status"] != "ok"]

@@ -31,7 +31,7 @@ from ecostudy.io.loopfile import Controller, SimulateFile
 from ecostudy.ocp.convex import FASTEST, ConvexProgram, trapezoid_grid
 from ecostudy.ocp.problem import prepare
 from ecostudy.io.writers import write_csv
-from ecostudy.studies.batch import Expanded, StudyKind, outcome, run_expanded
+from ecostudy.studies.batch import Draw, Expanded, StudyKind, outcome, run_expanded
 from ecostudy.studies.cases import case_key
 from ecostudy.studies.controllers import CONTROLLER_KINDS, Build
 from ecostudy.studies.loopsteps import step_columns, step_counts, steps_frame
@@ -248,11 +248,13 @@ def aggregate(runs):
     return pd.DataFrame(rows)
 
 
-def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None, only=None, draw=None):
+def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None, only=None, draw=None,
+                   drawn_names=()):
     """Run the runs of a closed-loop study not stored yet (``only``: of these controllers) through
     the study engine (kind ``simulate``): runs.csv and aggregate.csv of every stored run (a
     controller not run yet counts as missing), each run's steps/<controller>_draw<i>.csv
-    (``studies.loopsteps``), ``summary.json`` and the figures ``draw(study)`` writes and returns.
+    (``studies.loopsteps``), ``summary.json`` and the figures ``draw(study)`` writes and returns
+    (``drawn_names``: their file names, checked in the output folder before any run).
 
     Returns a :class:`LoopStudy` (the plots are drawn from it by ``report.loopplots``)."""
     study, output, cases = expand(path)
@@ -264,23 +266,23 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
     compute = [c for c in cases if c["labels"]["controller"] in only] if only else None
     done = []
     ran = run_expanded("simulate", Expanded(output, cases), path, workers, dask, retry_failed, out, progress,
-                       loop_files(draw, done), compute, SIMULATE)
+                       loop_files(draw, drawn_names, done), compute, SIMULATE)
     counts = {**ran.counts, "missing": int((ran.table["status"] == "missing").sum())}  # left out by ``only``
     return done[0]._replace(counts=counts)
 
 
-def loop_files(draw=None, done=None):
+def loop_files(draw=None, names=(), done=None):
     """The study engine's ``draw`` (:func:`~ecostudy.studies.batch.run_expanded`) of a closed-loop
     study, the same for ``ecostudy simulate`` and ``ecostudy run --kind simulate``: aggregate.csv and
     every run's steps/<controller>_draw<i>.csv (:func:`loop_study`), and the figures ``draw(study)``
-    writes of the :class:`LoopStudy` and returns (``report.loopplots``; None: none); the
-    :class:`LoopStudy` appended to ``done`` when given."""
+    writes of the :class:`LoopStudy` and returns (``report.loopplots``; None: none; ``names``: the
+    file names it may write); the :class:`LoopStudy` appended to ``done`` when given."""
     def files(out_dir, cases, rows, table):
         study = loop_study(cases, rows, table, Path(out_dir))
         if done is not None:
             done.append(study)
         return (draw(study) if draw is not None else []), {"aggregate": "aggregate.csv"}
-    return files
+    return Draw(files, lambda cases: ("aggregate.csv", *names))
 
 
 def loop_study(cases, rows, runs, output):

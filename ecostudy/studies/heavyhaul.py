@@ -43,7 +43,7 @@ from ecostudy.io.heavyhaulfile import HeavyhaulFile
 from ecostudy.io.loaders import (check_fits, chosen_stops, consist_from_document, read_document, track_document,
                                  track_from_schema, validate)
 from ecostudy.io.tables import number_columns
-from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome, run_expanded
+from ecostudy.studies.batch import STUDY_KINDS, Draw, Expanded, StudyKind, outcome, run_expanded
 from ecostudy.studies.cases import case_key
 from ecostudy.studies.sizes import check_heavyhaul_study
 
@@ -296,31 +296,33 @@ def heavyhaul_table(cases, rows):
     return pd.DataFrame(table)
 
 
-def heavyhaul_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None, draw=None):
+def heavyhaul_study(path, workers=1, dask=None, retry_failed=False, out=None, progress=None, draw=None, names=None):
     """Run the cases not stored yet through the study engine (kind ``heavyhaul``: ``runs.csv``,
-    ``summary.json``, and the files ``draw(study)`` writes of the :class:`HeavyhaulStudy` and returns);
-    returns a :class:`HeavyhaulStudy`."""
+    ``summary.json``, and the files ``draw(study)`` writes of the :class:`HeavyhaulStudy` and returns;
+    ``names(cases)``: their file names, checked in the output folder before any run); returns a
+    :class:`HeavyhaulStudy`."""
     study, output, reference, cases = expand(path)
     drawn = []  # the figures of the draw
     ran = run_expanded("heavyhaul", Expanded(output, cases), path, workers, dask, retry_failed, out, progress,
-                       heavyhaul_files(draw, drawn))
+                       heavyhaul_files(draw, names, drawn))
     return HeavyhaulStudy(study, ran.table, ran.counts, ran.output, reference, cases, summaries_of(cases, ran.rows),
                           tuple(drawn))
 
 
-def heavyhaul_files(draw=None, drawn=None):
+def heavyhaul_files(draw=None, names=None, drawn=None):
     """The study engine's ``draw`` (:func:`~ecostudy.studies.batch.run_expanded`) of a heavy-haul
     study, the same for ``ecostudy heavyhaul`` and ``ecostudy run --kind heavyhaul``: the figures
     ``draw(study)`` writes of the :class:`HeavyhaulStudy` and returns (``report.heavyplots``; None:
-    none), their names also appended to ``drawn`` when given."""
+    none; ``names(cases)``: the file names it may write), their names also appended to ``drawn``
+    when given."""
     def files(out_dir, cases, rows, table):
         study, reference = cases[0]["plan"]  # the study file and the reference solved at expansion
-        names = draw(HeavyhaulStudy(study, table, {}, Path(out_dir), reference, cases,
-                                    summaries_of(cases, rows))) if draw is not None else []
+        written = draw(HeavyhaulStudy(study, table, {}, Path(out_dir), reference, cases,
+                                      summaries_of(cases, rows))) if draw is not None else []
         if drawn is not None:
-            drawn.extend(names)
-        return names, {}
-    return files
+            drawn.extend(written)
+        return written, {}
+    return Draw(files, names or (lambda cases: ()))
 
 
 def summaries_of(cases, rows):

@@ -39,18 +39,19 @@ _INDEPENDENT: dict = {}  # the independent runs of a study and their wall time, 
 _SOLVING = threading.Lock()  # held while a thread reads or solves them
 
 
-def expand_network(path, workers=1, pool=None, note=None, out=None):
+def expand_network(path, workers=1, pool=None, note=None, out=None, files=()):
     """A network study file's strategies as cases, each carrying the planned fleet (``pool``: a
     process pool for the segments' first runs; ``note(line)``: the plan in a line), into ``out``
     (default: the study's output). Before anything is solved, a study too big for a run or for the
-    command is refused (unless forced) and the output folder checked."""
+    command is refused (unless forced) and the output folder checked (for ``files`` too: the
+    command's figures)."""
     path = Path(path)
     st = load_network_study(path)
     if st.buffer is not None and st.buffer >= st.track.length:
         raise InputError(problem(path, "buffer_m", f"{st.buffer:g} m is not shorter than the line ({st.track.length:g} m): "
                                  "no train could follow another"))
     check_network_study(st, path, workers)
-    output = check_output_dir(Path(out) if out else st.output, ("network_substation.csv", "results.sqlite"),
+    output = check_output_dir(Path(out) if out else st.output, ("network_substation.csv", "results.sqlite", *files),
                               "network")
     check_one_study(output, st.name)  # before the fleet's first runs are solved
     s = validate(NetworkStudyFile, read_document(path), path)
