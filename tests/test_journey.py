@@ -327,3 +327,21 @@ def test_a_segment_faster_than_any_run_is_a_failed_row_and_the_other_runs_are_so
     totals = pd.read_csv(tmp_path / "out" / "journey_totals.csv").set_index("distribution")
     assert totals.loc["as timetabled", ["running_time_s", "traction_energy_kWh", "net_energy_kWh"]].isna().all()
     assert totals.drop("as timetabled")["traction_energy_kWh"].notna().all()
+
+
+def test_a_whole_journey_nlp_that_ends_without_a_split_fails_its_rows_and_the_others_are_driven():
+    """Ipopt allowed no iteration (max_iter 0) ends the whole-journey NLP without a feasible point:
+    its three rows are ``failed`` saying how Ipopt ended, its totals NaN and it is not drawn; the
+    other distributions are solved and ok (K = 60: seconds)."""
+    import math
+    from ecostudy.io.loaders import load_track, load_train
+    from ecostudy.studies.journey import journey
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    table, totals, results, _ = journey(track, train, list(track.stops), supplement=0.1, points=60,
+                                        nlp_options={"max_iter": 0})
+    whole = table["distribution"] == "whole-journey NLP"
+    assert (table.loc[whole, "status"] == "failed: the whole-journey NLP: Ipopt max_iterations after 0 iterations").all()
+    assert (table.loc[~whole, "status"] == "ok").all(), table.loc[~whole, "status"].tolist()
+    totals = totals.set_index("distribution")
+    assert math.isnan(totals.loc["whole-journey NLP", "traction_energy_kWh"]) and "whole-journey NLP" not in results
+    assert totals.drop("whole-journey NLP")["traction_energy_kWh"].notna().all()

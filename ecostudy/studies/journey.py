@@ -338,7 +338,11 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
         total_time = all_out * (1 + supplement)
         proven["all"] = worst(fastest_proven)
     marginal = equal_marginal(fronts, total_time)
-    whole, proven["whole-journey NLP"] = whole_journey(track, train, pairs, total_time, marginal, points, nlp_options)
+    unsolved = {}  # a distribution with no running times: every row failed, the others still driven
+    try:
+        whole, proven["whole-journey NLP"] = whole_journey(track, train, pairs, total_time, marginal, points, nlp_options)
+    except (InfeasibleError, SolverError) as exc:
+        whole, unsolved["whole-journey NLP"] = [math.nan] * len(pairs), exc
     plans = {"whole-journey NLP": whole, "equal marginal saving": marginal, "same percentage": uniform(fronts, total_time),
              "MARECO-style": mareco_split(track, train, pairs, total_time, points)}
     if scheduled is not None:
@@ -361,6 +365,8 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
                    "running_time_s": math.nan, "supplement_pct": 100 * (solved_at / t0 - 1),
                    "traction_energy_kWh": math.nan, "net_energy_kWh": math.nan}
             try:  # a segment no run can drive at its time is a failed row; the others are still solved
+                if name in unsolved:
+                    raise unsolved[name]
                 r = solve_run(track, train, a, b, Timing(running_time=solved_at), points=points, windows=keep,
                               written=written, structure=None if keep else (n, a, b))
             except (InfeasibleError, SolverError) as exc:
