@@ -738,3 +738,45 @@ def test_a_parameter_held_on_a_fit_that_did_not_converge_says_so(inputs, logged,
     note = capped.table.set_index("name").loc["efficiency", "note"]
     assert note.endswith("; judged at a fit that did not converge"), note
     assert "efficiency not identifiable" in capped.reason and "judged at a fit that did not converge" in capped.reason
+
+
+def test_a_force_in_another_unit_than_its_wheel_power_is_refused_before_fitting(tmp_path, log_files):
+    """The force logged in daN under ``force_kN`` (100 times too large) with the right wheel power:
+    each column alone is plausible, and calibrate fitted the wheel power ``ok``. Where the train
+    pulls the wheel power is the force times the speed; their median ratio, 0.01, is refused in one
+    line naming the file, both columns and the ratio, exit 2, before anything is fitted. The same log
+    as generated reads."""
+    there, back = log_files
+    load_log(there)
+    head, body = there.read_text().split("---\n")[1:]
+    rows = body.splitlines()
+    j = rows[0].split(",").index("force_kN")
+    scaled = [",".join(f"{float(c) * 100:.6f}" if i == j else c for i, c in enumerate(r.split(","))) for r in rows[1:]]
+    dan = tmp_path / "dan.csv"
+    dan.write_text("---\n" + head + "---\n" + "\n".join(rows[:1] + scaled) + "\n")
+    result = run("calibrate", dan, back, "--bootstrap", "0", "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert len(lines) == 1 and "Traceback" not in result.output, result.output
+    assert lines[0].startswith(f"error: {dan}: force_kN, power_wheel_kW: the wheel power is 0.01 times the force "
+                               "times the speed (median over "), lines[0]
+    assert not (tmp_path / "o" / "summary.json").exists()
+
+
+@pytest.mark.parametrize("train, track, rate", [
+    ("regional_alstom", "calibration_line", 1.0), ("amsterdam_metro_adhesion", "metro_line_4stops", 1.0),
+    ("thesis001_commuter", "thesis001_5km_representative", 1.0), ("thesis001_highspeed", "thesis001_5km_representative", 10.0)])
+def test_generated_logs_keep_their_wheel_power_the_force_times_the_speed(train, track, rate):
+    """The band the force and wheel power check allows (0.8-1.25) against generated logs: at 1 Hz the
+    interval-mean power and the sampled force part most where the speed rises (the metro train with
+    its adhesion limit: 1.037, the largest of 43 logs measured); each is read."""
+    import warnings
+    from ecostudy.io.logforce import FORCE_POWER, force_power_ratio
+    with warnings.catch_warnings():  # the adhesion train's envelope capped by its adhesion: warned, as meant
+        warnings.simplefilter("ignore", EcostudyWarning)
+        trn = load_train(TRAINS / f"{train}.yaml")
+    trk = load_track(TRACKS / f"{track}.yaml")
+    frame, _ = generate_log(trk, trn, list(trk.stops)[:4], trn, seed=3, noise=LogNoise(rate=rate))
+    log = as_log(frame)
+    ratio, rows = force_power_ratio(log.v, log.force, log.power_wheel)
+    assert rows >= 20 and FORCE_POWER[0] < 0.95 < ratio < 1.05 < FORCE_POWER[1], (ratio, rows)

@@ -289,3 +289,59 @@ def test_a_total_a_hair_under_the_all_out_runs_is_refused_with_the_digits_that_t
     lines = [line for line in r.output.splitlines() if line.startswith("error:")]
     assert r.exit_code == 2 and len(lines) == 1, r.output
     assert lines[0] == "error: infeasible: the total time 199.50 s is below the sum of the all-out times 199.53 s"
+
+
+def test_at_supplement_0_every_distribution_is_the_all_out_run_of_each_segment():
+    """--supplement 0: there is no time to spread. The MARECO-style split, computed on the kinematic
+    envelope, gives Noord-Station 50.480 s, a hair under its all-out NLP's 50.488 s (K = 100): that
+    segment is run all-out, not refused, and every distribution's every segment is solved and ok."""
+    from ecostudy.io.loaders import load_track, load_train
+    from ecostudy.studies.journey import journey
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    table, totals, results, _ = journey(track, train, list(track.stops), supplement=0.0, points=100)
+    assert (table["status"] == "ok").all(), table[["distribution", "from", "status"]]
+    assert (table["running_time_s"] >= table["all_out_time_s"] * (1 - 1e-6)).all()
+    assert set(table["distribution"]) == set(results) and "MARECO-style" in results
+    assert totals["traction_energy_kWh"].notna().all()
+
+
+def test_a_segment_faster_than_any_run_is_a_failed_row_and_the_other_runs_are_solved(tmp_path):
+    """A timetable giving Noord-Station 50.2 s, under both its kinematic envelope (50.42 s) and its
+    all-out NLP (50.49 s, K = 100), yet within the 1 % the refusal before the fronts leaves to the
+    NLP: that row of the timetabled distribution is ``failed`` with the solve's reason, every other
+    row is solved, the distribution's totals are NaN (not a partial sum) and the command exits 1."""
+    import pandas as pd
+    from .conftest import STUDIES
+    path = tmp_path / "tight.yaml"
+    path.write_text((STUDIES / "timetables" / "metro_line.yaml").read_text().replace("arrival_s: 58", "arrival_s: 50.2"))
+    r = CliRunner().invoke(app, ["journey", "--track", str(TRACKS / "metro_line_4stops.yaml"), "--train",
+                                 str(TRAINS / "amsterdam_metro.yaml"), "--timetable", str(path), "--points", "100",
+                                 "--out", str(tmp_path / "out"), "--no-plot"])
+    assert r.exit_code == 1, r.output
+    table = pd.read_csv(tmp_path / "out" / "journey.csv")
+    bad = (table["distribution"] == "as timetabled") & (table["from"] == "Noord")
+    assert table.loc[bad, "status"].tolist() == [
+        "failed: infeasible: the fastest possible run takes 50.5 s (asked for 50.2 s)"]
+    assert table.loc[bad, "traction_energy_kWh"].isna().all() and not table.loc[bad, "verified"].any()
+    assert (table.loc[~bad, "status"] == "ok").all(), table.loc[~bad, ["distribution", "from", "status"]]
+    totals = pd.read_csv(tmp_path / "out" / "journey_totals.csv").set_index("distribution")
+    assert totals.loc["as timetabled", ["running_time_s", "traction_energy_kWh", "net_energy_kWh"]].isna().all()
+    assert totals.drop("as timetabled")["traction_energy_kWh"].notna().all()
+
+
+def test_a_whole_journey_nlp_that_ends_without_a_split_fails_its_rows_and_the_others_are_driven():
+    """Ipopt allowed no iteration (max_iter 0) ends the whole-journey NLP without a feasible point:
+    its three rows are ``failed`` saying how Ipopt ended, its totals NaN and it is not drawn; the
+    other distributions are solved and ok (K = 60: seconds)."""
+    import math
+    from ecostudy.io.loaders import load_track, load_train
+    from ecostudy.studies.journey import journey
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    table, totals, results, _ = journey(track, train, list(track.stops), supplement=0.1, points=60,
+                                        nlp_options={"max_iter": 0})
+    whole = table["distribution"] == "whole-journey NLP"
+    assert (table.loc[whole, "status"] == "failed: the whole-journey NLP: Ipopt max_iterations after 0 iterations").all()
+    assert (table.loc[~whole, "status"] == "ok").all(), table.loc[~whole, "status"].tolist()
+    totals = totals.set_index("distribution")
+    assert math.isnan(totals.loc["whole-journey NLP", "traction_energy_kWh"]) and "whole-journey NLP" not in results
+    assert totals.drop("whole-journey NLP")["traction_energy_kWh"].notna().all()

@@ -191,7 +191,7 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
     passing = []
     if plan is not None:  # timing points along the journey (segment lengths from the first split)
         start = 0.0
-        for windows, run in zip(plan.windows, next(iter(results.values()))):
+        for windows, run in zip(plan.windows, next(iter(results.values()), [])):
             passing += [(start + w.distance, None if w.max_speed is None else units.to_kmh(w.max_speed))
                         for w in windows]
             start += run.facts.distance_m

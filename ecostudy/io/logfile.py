@@ -23,7 +23,8 @@ with a warning naming them; a header field that is a near miss of a known one no
 (:func:`known_header`) is refused.
 Every problem is one line ``file: field: what is wrong`` (exit status 2): a missing header,
 unknown units of a known quantity, values that are not finite numbers, time not increasing, gaps, speeds
-that do not fit the positions (a unit mix-up), positions that jump (GPS); once the track is known, positions off
+that do not fit the positions (a unit mix-up), positions that jump (GPS), a wheel power that is not the force times
+the speed (:mod:`ecostudy.io.logforce`); once the track is known, positions off
 the track (:func:`check_on_track`) and a force or wheel power not positive where the train pulls (a sign flipped,
 a dead channel; :func:`check_traction_sign`, beyond what the track's gradient gives).
 """
@@ -48,6 +49,7 @@ from ecostudy.core.physics import gradient_force
 from ecostudy.core.types import Track
 from ecostudy.core.units import FloatArray
 from ecostudy.io.documents import NEAR_MISS, named_file, not_a_file, validate
+from ecostudy.io.logforce import check_force_power
 from ecostudy.io.schemabase import Strict
 from ecostudy.io.writers import atomic_write
 from ecostudy.io.yamlsafe import MAX_FILE_BYTES, DocumentError, load_yaml
@@ -351,6 +353,7 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
                     (column.get("position", (INTEGRATED,))[0], *(column.get(q, ("",))[0]
                                                                   for q in ("speed", "force", "power_wheel"))))
     check_series(log, path)
+    check_force_power(path, log.columns[1:], v, log.force, log.power_wheel)
     return log
 
 

@@ -26,7 +26,7 @@ from ecostudy.core.errors import FieldError, InfeasibleError, SolverError
 from ecostudy.core import kinematics
 from ecostudy.core.kinematics import running_time
 from ecostudy.core.simulate import window_checks
-from ecostudy.core.status import OK, flagged, solver_part, worst
+from ecostudy.core.status import OK, failed, flagged, solver_part, worst
 from ecostudy.core.types import Timing, Window
 from ecostudy.core.units import apart, to_kmh
 from ecostudy.heuristics import mareco
@@ -45,6 +45,16 @@ def too_short(total_time, fastest, basis=""):
     total, least = apart(total_time, fastest)
     raise InfeasibleError(f"infeasible: the total time {total} s is below the sum of the all-out times "
                           f"{least} s{basis}")
+
+
+def segment_time(t, all_out, envelope):
+    """The running time [s] a segment is solved at for a split's ``t``: ``t``, or the all-out NLP's
+    time ``all_out`` where ``t`` lies between that and the kinematic envelope's time ``envelope``
+    on the same grid (``prepare(...).estimate``), less 1 ppm (``check_feasible``'s own margin).
+    Both are the segment's fastest run, discretised two ways; they differ by the grid's accuracy
+    (metro line, K = 100: 0.14-0.32 %; K = 1000: 0.014-0.032 %), and a split computed on the envelope
+    (MARECO-style at supplement 0) can fall between them. Below both: no run, refused by the solve."""
+    return all_out if min(all_out, envelope) * (1 - 1e-6) <= t < all_out else t
 
 
 def equal_marginal(fronts, total_time, step=0.05):
@@ -300,8 +310,8 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
     # 150 % reach put the equal-marginal split 4.6 % above the whole-journey NLP at +15 %); each
     # front ends at its segment's longest running time solved (SLOWEST): no run of it can take longer
     mean = supplement or 0.0
+    estimates = [prepare(track, train, a, b, points).estimate for a, b in pairs]
     if total_time is not None:
-        estimates = [prepare(track, train, a, b, points).estimate for a, b in pairs]
         for n, ((a, b), t, fast) in enumerate(zip(pairs, scheduled or (), estimates)):
             if t < 0.99 * fast:  # a timetabled segment no run can keep: refused before any front is solved
                 raise FieldError(f"infeasible: {t:.1f} s from {a} to {b}, below the fastest possible run's "
@@ -328,7 +338,11 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
         total_time = all_out * (1 + supplement)
         proven["all"] = worst(fastest_proven)
     marginal = equal_marginal(fronts, total_time)
-    whole, proven["whole-journey NLP"] = whole_journey(track, train, pairs, total_time, marginal, points, nlp_options)
+    unsolved = {}  # a distribution with no running times: every row failed, the others still driven
+    try:
+        whole, proven["whole-journey NLP"] = whole_journey(track, train, pairs, total_time, marginal, points, nlp_options)
+    except (InfeasibleError, SolverError) as exc:
+        whole, unsolved["whole-journey NLP"] = [math.nan] * len(pairs), exc
     plans = {"whole-journey NLP": whole, "equal marginal saving": marginal, "same percentage": uniform(fronts, total_time),
              "MARECO-style": mareco_split(track, train, pairs, total_time, points)}
     if scheduled is not None:
@@ -345,22 +359,36 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
             arrivals = [d + t for d, t in zip(departures, times)]
         for n, ((a, b), t, f) in enumerate(zip(pairs, times, fronts)):
             keep = _segment_windows(plan, n, departures[n]) if name == "timing windows NLP" else ()
-            r = solve_run(track, train, a, b, Timing(running_time=t), points=points, windows=keep,
-                          written=written, structure=None if keep else (n, a, b))
+            t0 = float(f["running_time_s"].iloc[0])
+            solved_at = segment_time(t, t0, estimates[n])
+            row = {"distribution": name, "from": a, "to": b, "distance_m": math.nan, "all_out_time_s": t0,
+                   "running_time_s": math.nan, "supplement_pct": 100 * (solved_at / t0 - 1),
+                   "traction_energy_kWh": math.nan, "net_energy_kWh": math.nan}
+            try:  # a segment no run can drive at its time is a failed row; the others are still solved
+                if name in unsolved:
+                    raise unsolved[name]
+                r = solve_run(track, train, a, b, Timing(running_time=solved_at), points=points, windows=keep,
+                              written=written, structure=None if keep else (n, a, b))
+            except (InfeasibleError, SolverError) as exc:
+                clock = {"departure_s": departures[n], "arrival_s": arrivals[n], "windows_kept": False} if plan else {}
+                rows.append({**row, **clock, "verified": False, "status": str(failed(str(exc)))})
+                tick()
+                continue
             results[name].append(r)
             tick()
-            t0 = float(f["running_time_s"].iloc[0])
             facts = r.facts
             clock, broken = timing_columns(plan, n, departures[n], arrivals[n], r) if plan is not None else ({}, "")
             status = worst([r.status, proven.get(name, OK), proven.get("all", OK), fastest_proven[n],
                             flagged(f"breaks the timetable: {broken}") if broken else OK])
-            rows.append({"distribution": name, "from": a, "to": b, "distance_m": facts.distance_m,
-                         "all_out_time_s": t0, "running_time_s": facts.running_time_s,
-                         "supplement_pct": 100 * (t / t0 - 1), "traction_energy_kWh": facts.traction_energy_kWh,
-                         "net_energy_kWh": facts.net_energy_kWh, **clock,
-                         "verified": bool(facts.verification and facts.verification.passed), "status": str(status)})
+            rows.append({**row, "distance_m": facts.distance_m, "running_time_s": facts.running_time_s,
+                         "traction_energy_kWh": facts.traction_energy_kWh, "net_energy_kWh": facts.net_energy_kWh,
+                         **clock, "verified": bool(facts.verification and facts.verification.passed),
+                         "status": str(status)})
+        if len(results[name]) < len(pairs):  # drawn only when every segment ran
+            del results[name]
     table = pd.DataFrame(rows)
-    totals = table.groupby("distribution", sort=False)[["running_time_s", "traction_energy_kWh", "net_energy_kWh"]].sum()
+    totals = table.groupby("distribution", sort=False)[["running_time_s", "traction_energy_kWh", "net_energy_kWh"]].sum(
+        min_count=len(pairs))  # a distribution with a failed segment has no total (NaN, not a partial sum)
     if plan is not None:
         totals["windows_kept"] = table.groupby("distribution", sort=False)["windows_kept"].all().to_numpy()
     return table, totals.reset_index(), results, fronts

@@ -1,0 +1,48 @@
+"""A logged run's force at the wheel against its wheel power: where the train pulls, P = F v.
+
+Both columns are read in the units their names give (``force_kN``, ``power_wheel_kW``); a channel
+written in another unit than its name says (a force in daN under ``force_kN``: a hundred times too
+large) is not caught by either column alone. Calibration fits the wheel power; validation and the
+replay read the force where there is no power: the two must be the same traction.
+"""
+import numpy as np
+
+from ecostudy.core.errors import InputError, problem
+from ecostudy.core.units import FloatArray
+from ecostudy.io.documents import Where
+
+# median of P / (F v) over the rows where the train pulls: outside, one channel is in another unit.
+# 43 generated logs (calibration.generate: the point-mass trains on the calibration, metro, regional,
+# thesis and 40/60 per mille test lines, 10 and 1 Hz, 1 % noise) lie within 0.992-1.037 (the powers
+# interval means, the force sampled: at 1 Hz they part while the speed rises); a unit slip is a factor
+# 3.6 or more off (daN under force_kN: 0.01; W under power_wheel_kW: 1000; km/h under speed_mps: 0.28)
+FORCE_POWER = (0.8, 1.25)
+PULLING_SPEED = 3.0   # [m/s] rows above this only: near standstill F v is small and its noise is not
+PULLING_ROWS = 10     # fewer rows where the train pulls than this: too few to judge, not checked
+
+
+def force_power_ratio(v: FloatArray, force: FloatArray, power: FloatArray) -> tuple[float, int]:
+    """(median of P / (F |v|), rows) over the rows where force and wheel power are both positive and
+    the speed is above :data:`PULLING_SPEED` (NaN and 0 rows when there are none)."""
+    rows = (force > 0) & (power > 0) & (np.abs(v) > PULLING_SPEED)
+    if not rows.any():
+        return float("nan"), 0
+    return float(np.median(power[rows] / (force[rows] * np.abs(v[rows])))), int(rows.sum())
+
+
+def check_force_power(path: Where, columns: tuple[str, ...], v: FloatArray | None, force: FloatArray | None,
+                      power: FloatArray | None) -> None:
+    """Refuse, in one line naming ``path``, the force and wheel power columns and the median ratio
+    (``columns``: the speed's, the force's, the wheel power's names), a log whose wheel power is not its force times its speed where the train pulls (median
+    of P / (F v) outside :data:`FORCE_POWER`). Not checked without all three, or with fewer than
+    :data:`PULLING_ROWS` such rows."""
+    if v is None or force is None or power is None:
+        return
+    ratio, rows = force_power_ratio(v, force, power)
+    lo, hi = FORCE_POWER
+    if rows >= PULLING_ROWS and not lo <= ratio <= hi:
+        speed, force_name, power_name = columns[:3]
+        raise InputError(problem(path, f"{force_name}, {power_name}",
+                                 f"the wheel power is {ratio:.3g} times the force times the speed (median over "
+                                 f"{rows} rows where the train pulls above {PULLING_SPEED:g} m/s; it must be "
+                                 f"{lo:g}-{hi:g}): one of them (or {speed}) is in another unit than its name says"))
