@@ -1,4 +1,4 @@
-"""DAS methods against ATO on the shipped metro and regional cases (issue: driver advice).
+"""DAS methods against ATO on the shipped metro and regional cases (docs/benchmarks.md "Driver advice (DAS)").
 
     .venv/bin/python bench/bench_das.py [--points 1000] [--time-limit 60]
 
