@@ -323,6 +323,7 @@ def test_a_segment_faster_than_any_run_is_a_failed_row_and_the_other_runs_are_so
     assert table.loc[bad, "status"].tolist() == [
         "failed: infeasible: the fastest possible run takes 50.5 s (asked for 50.2 s)"]
     assert table.loc[bad, "traction_energy_kWh"].isna().all() and not table.loc[bad, "verified"].any()
+    assert table.loc[bad, "distance_m"].tolist() == [650.0]  # the segment's length, from the stops
     assert (table.loc[~bad, "status"] == "ok").all(), table.loc[~bad, ["distribution", "from", "status"]]
     totals = pd.read_csv(tmp_path / "out" / "journey_totals.csv").set_index("distribution")
     assert totals.loc["as timetabled", ["running_time_s", "traction_energy_kWh", "net_energy_kWh"]].isna().all()

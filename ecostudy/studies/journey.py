@@ -361,7 +361,8 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
             keep = _segment_windows(plan, n, departures[n]) if name == "timing windows NLP" else ()
             t0 = float(f["running_time_s"].iloc[0])
             solved_at = segment_time(t, t0, estimates[n])
-            row = {"distribution": name, "from": a, "to": b, "distance_m": math.nan, "all_out_time_s": t0,
+            row = {"distribution": name, "from": a, "to": b, "distance_m": abs(track.stops[b] - track.stops[a]),
+                   "all_out_time_s": t0,
                    "running_time_s": math.nan, "supplement_pct": 100 * (solved_at / t0 - 1),
                    "traction_energy_kWh": math.nan, "net_energy_kWh": math.nan}
             try:  # a segment no run can drive at its time is a failed row; the others are still solved
