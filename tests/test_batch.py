@@ -83,6 +83,26 @@ def test_killed_study_resumes_with_the_remaining_cases(reference, tmp_path):
     assert same_results(table, reference[0])
 
 
+def test_an_interrupted_run_leaves_no_earlier_summary_saying_ok(tmp_path):
+    """A finished study, then its sweep extended and the run stopped after one new case: the
+    folder's summary.json was the finished run's (ok, 2 cases) for a study of 4 not finished."""
+    path = study_file(tmp_path, tmp_path / "out")
+    data = load_yaml(path)
+    write_yaml(path, {**data, "sweep": {"supplement_percent": [6]}})
+    run_study(path)
+    assert (tmp_path / "out" / "summary.json").is_file()
+    write_yaml(path, {**data, "sweep": {"supplement_percent": [6, 12]}})
+
+    def stop(*counts):
+        raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        run_study(path, progress=stop)
+    assert not (tmp_path / "out" / "summary.json").exists()
+    table, counts, _ = run_study(path)
+    assert counts["stored_before"] == 3 and (table["status"] == "ok").all()
+    assert (tmp_path / "out" / "summary.json").is_file()
+
+
 def test_failures_are_recorded_and_do_not_stop_the_study(tmp_path):
     path = study_file(tmp_path, tmp_path / "out", [{"name": "too_fast", "running_time_s": 50.0}])
     # the sweep overrides the scenario's timing; keep this scenario's 50 s by sweeping points instead

@@ -619,6 +619,16 @@ def test_calibrate_refuses_unknown_parameters_and_logs_without_wheel_work(tmp_pa
     assert result.exit_code == 2 and "nowork.csv: columns: the replay needs the work at the wheel" in result.output
 
 
+def test_calibrate_refuses_one_log_given_twice(tmp_path, log_files):
+    """A copy of a log under another name is the same run: fitted as two, its intervals would be
+    sqrt(2) narrower (Davis A: 3656-4258 N for the copy and the log, 3531-4383 N for the log alone)."""
+    copy = tmp_path / "copy.csv"
+    copy.write_bytes(log_files[0].read_bytes())
+    result = run("calibrate", log_files[0], copy, "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 2 and "copy.csv: the same samples as" in result.output, result.output
+    assert "Traceback" not in result.output and not (tmp_path / "o").exists()
+
+
 def test_savings_against_the_logged_driving(inputs, calibrated, logged):
     """The optimum for each logged running time (verified by the plant) uses less traction energy
     than the logged driving; the band over parameter draws holds the central saving."""

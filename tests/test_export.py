@@ -97,3 +97,19 @@ def test_a_step_longer_than_the_run_keeps_the_departure_and_the_arrival(steps):
                        distance_step_m=steps.get("distance_m"))
     assert table["time_s"].tolist() == [0.0, pytest.approx(traj.time[-1])]
     assert table["position_m"].tolist() == [0.0, 100.0]
+
+
+@pytest.mark.parametrize("edit", [{"status": "weird"}, {"verification": {"passed": False}}])
+def test_an_edited_summary_is_refused_in_one_line(tmp_path, edit):
+    """A summary.json whose status is not a status, or says ok over a failed re-simulation (which
+    the solve flags), is one line naming the file and the field, exit 2, not an export that says ok."""
+    runner = CliRunner()
+    out = tmp_path / "run"
+    assert runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "200", "--no-plot",
+                               "--out", str(out)]).exit_code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    summary.update({k: {**summary[k], **v} if isinstance(v, dict) else v for k, v in edit.items()})
+    (out / "summary.json").write_text(json.dumps(summary))
+    for command in ("export", "check"):
+        r = runner.invoke(app, [command, str(out)])
+        assert r.exit_code == 2 and "summary.json: status" in r.output and "Traceback" not in r.output, r.output

@@ -75,6 +75,14 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     if not isinstance(summary, dict):
         raise InputError(problem(result_dir / "summary.json", "", "not a result folder of `ecostudy solve` "
                                  "(expected a mapping of fields)"))
+    try:  # a status outside the vocabulary, or ok over a re-simulation that failed: an edited summary
+        status = Status.parse(str(summary.get("status") or "failed: no status recorded"))
+    except ValueError as exc:
+        raise InputError(problem(result_dir / "summary.json", "status", f"{exc} (ok, flagged: <reason> or failed: <reason>)"))
+    verification = summary.get("verification")
+    if status.ok and isinstance(verification, dict) and verification.get("passed") is False:
+        raise InputError(problem(result_dir / "summary.json", "status", "ok, but verification.passed is false "
+                                 "(a failed re-simulation is flagged): an edited file?"))
     p = number_columns(result_dir / "profile.csv", PROFILE_COLUMNS, rows=points,
                        open_last=("traction_force_kN", "braking_force_kN", "handle"))
     for column, strictly in (("position_m", True), ("time_s", False)):  # rows out of order: a run read backwards

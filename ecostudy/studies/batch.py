@@ -302,8 +302,12 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
         check_one_study(output, expanded.cases[0]["study"])
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
-    counts, rows = stored_rows(expanded.cases, output / "results.sqlite", spec.task, workers, dask, retry_failed,
-                               progress, compute, spec.spread)
+    try:
+        counts, rows = stored_rows(expanded.cases, output / "results.sqlite", spec.task, workers, dask, retry_failed,
+                                   progress, compute, spec.spread)
+    except Interrupted:  # an earlier run's summary.json (ok, N cases) would speak for a study not finished
+        (output / "summary.json").unlink(missing_ok=True)
+        raise
     table = spec.table(expanded.cases, rows)
     write_csv(output / spec.table_file, table)
     drawn, tables = draw.write(output, expanded.cases, rows, table) if draw is not None else ([], {})

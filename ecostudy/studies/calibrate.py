@@ -52,6 +52,13 @@ def load_inputs(log_paths, train_path, track_path):
     if len(set(names)) != len(names):
         raise InputError(problem("command line", "LOG", "two logs with the same file name: "
                                  + ", ".join(sorted({n for n in names if names.count(n) > 1}))))
+    seen: dict[bytes, str] = {}
+    for log in logs:  # one run given twice (a copy under another name) narrows every interval by sqrt(2)
+        samples = b"".join(np.ascontiguousarray(a).tobytes() for a in (log.t, log.x, log.v) if a is not None)
+        if samples in seen:
+            raise InputError(problem(log.path or log.name, "", f"the same samples as {seen[samples]}: one logged "
+                                     "run given twice would narrow every interval as if it were two"))
+        seen[samples] = str(log.path or log.name)
     track_path = Path(track_path) if track_path else logs[0].named("track")
     train_path = Path(train_path) if train_path else logs[0].named("train")
     track, train = load_track(track_path), load_train(train_path)
