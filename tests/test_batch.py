@@ -1,4 +1,5 @@
 """Batch studies: identical results serial / processes / Dask, resumable after kill -9, failures kept."""
+import json
 import os
 import signal
 import sqlite3
@@ -85,7 +86,8 @@ def test_killed_study_resumes_with_the_remaining_cases(reference, tmp_path):
 
 def test_an_interrupted_run_leaves_no_earlier_summary_saying_ok(tmp_path):
     """A finished study, then its sweep extended and the run stopped after one new case: the
-    folder's summary.json was the finished run's (ok, 2 cases) for a study of 4 not finished."""
+    folder's summary.json was the finished run's (ok, 2 cases) for a study of 4 not finished. It
+    now says failed (stopped), keeps listing the earlier run's files, and report.html is gone."""
     path = study_file(tmp_path, tmp_path / "out")
     data = load_yaml(path)
     write_yaml(path, {**data, "sweep": {"supplement_percent": [6]}})
@@ -97,7 +99,9 @@ def test_an_interrupted_run_leaves_no_earlier_summary_saying_ok(tmp_path):
         raise KeyboardInterrupt
     with pytest.raises(KeyboardInterrupt):
         run_study(path, progress=stop)
-    assert not (tmp_path / "out" / "summary.json").exists()
+    stopped = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert stopped["status"].startswith("failed: stopped before every case was computed"), stopped["status"]
+    assert "results.csv" in stopped["files"] and not (tmp_path / "out" / "report.html").exists()
     table, counts, _ = run_study(path)
     assert counts["stored_before"] == 3 and (table["status"] == "ok").all()
     assert (tmp_path / "out" / "summary.json").is_file()

@@ -140,6 +140,22 @@ def files_listed(out_dir: Path | str) -> set[str]:
     return {f for f in files if isinstance(f, str)} if isinstance(files, list) else set()
 
 
+def mark_stopped(out_dir: Path | str, reason: str) -> None:
+    """An earlier run's ``summary.json`` in ``out_dir`` rewritten (atomically) to say ``failed:
+    <reason>`` for a run of the study that stopped before it ended: it spoke for a finished study,
+    and its ``files`` stay listed, so the next run that ends still removes what it does not write.
+    The earlier ``report.html`` (the same status) is removed. Nothing where there is no readable one."""
+    path = Path(out_dir) / SUMMARY
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return
+    if not isinstance(data, dict):
+        return
+    write_json(path, {**data, "status": f"failed: {reason}"})
+    (Path(out_dir) / REPORT).unlink(missing_ok=True)
+
+
 # the kinds of file a study kind writes into an output folder (figures in each format of
 # ``--format``): only such a file an earlier summary.json listed is removed (a user's own file named
 # in a hand-edited summary.json stays; no study kind writes YAML, so a study or train file the user
