@@ -33,9 +33,9 @@ def force_power_ratio(v: FloatArray, force: FloatArray, power: FloatArray) -> tu
 def check_force_power(path: Where, columns: tuple[str, ...], v: FloatArray | None, force: FloatArray | None,
                       power: FloatArray | None) -> None:
     """Refuse, in one line naming ``path``, the force and wheel power columns and the median ratio
-    (``columns``: the speed's, the force's, the wheel power's names), a log whose wheel power is not its force times its speed where the train pulls (median
-    of P / (F v) outside :data:`FORCE_POWER`). Not checked without all three, or with fewer than
-    :data:`PULLING_ROWS` such rows."""
+    (``columns``: the speed's, the force's, the wheel power's names), a log whose wheel power is not
+    its force times its speed where the train pulls (median of P / (F v) outside :data:`FORCE_POWER`).
+    Not checked without all three, or with fewer than :data:`PULLING_ROWS` such rows."""
     if v is None or force is None or power is None:
         return
     ratio, rows = force_power_ratio(v, force, power)
