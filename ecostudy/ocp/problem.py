@@ -200,9 +200,13 @@ def check_not_crawling(latest: float | None, case: Case) -> None:
                            f"{case.estimate:.1f} s: the train would crawl")
 
 
+ALL_OUT_MARGIN = 1e-6  # a running time this much (relative) under the all-out run's is the all-out run's
+
+
 def check_feasible(latest: float | None, t_allout: float) -> None:
-    """Refuse a running time below the all-out run's, both shown with the digits that tell them apart."""
-    if latest is not None and latest < t_allout - 1e-6 * t_allout:
+    """Refuse a running time below the all-out run's (by more than :data:`ALL_OUT_MARGIN`), both shown
+    with the digits that tell them apart."""
+    if latest is not None and latest < t_allout * (1 - ALL_OUT_MARGIN):
         fastest, asked = apart(t_allout, latest)
         raise TooFastError(f"infeasible: the fastest possible run takes {fastest} s (asked for {asked} s)")
 

@@ -32,7 +32,7 @@ from ecostudy.core.units import apart, to_kmh
 from ecostudy.heuristics import mareco
 from ecostudy.io.timetable import schedule
 from ecostudy.ocp import session
-from ecostudy.ocp.problem import Written, build, capped_guess, prepare
+from ecostudy.ocp.problem import ALL_OUT_MARGIN, Written, build, capped_guess, prepare
 from ecostudy.ocp.space import passing_time
 from ecostudy.studies.pareto import sweep
 from ecostudy.studies.workers import ticker
@@ -50,11 +50,11 @@ def too_short(total_time, fastest, basis=""):
 def segment_time(t, all_out, envelope):
     """The running time [s] a segment is solved at for a split's ``t``: ``t``, or the all-out NLP's
     time ``all_out`` where ``t`` lies between that and the kinematic envelope's time ``envelope``
-    on the same grid (``prepare(...).estimate``), less 1 ppm (``check_feasible``'s own margin).
+    on the same grid (``prepare(...).estimate``), less ``check_feasible``'s own margin.
     Both are the segment's fastest run, discretised two ways; they differ by the grid's accuracy
     (metro line, K = 100: 0.14-0.32 %; K = 1000: 0.014-0.032 %), and a split computed on the envelope
     (MARECO-style at supplement 0) can fall between them. Below both: no run, refused by the solve."""
-    return all_out if min(all_out, envelope) * (1 - 1e-6) <= t < all_out else t
+    return all_out if min(all_out, envelope) * (1 - ALL_OUT_MARGIN) <= t < all_out else t
 
 
 def equal_marginal(fronts, total_time, step=0.05):
