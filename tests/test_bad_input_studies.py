@@ -64,6 +64,11 @@ def named_cell(lines, row, column, value):
     return lines[:row] + [",".join(cells)] + lines[row + 1:]
 
 
+def scaled_cell(lines, row, column, factor):
+    value = float(lines[row].split(",")[lines[0].split(",").index(column)])
+    return named_cell(lines, row, column, f"{value * factor:.6g}")
+
+
 def first_cell(lines, row, value):
     return lines[:row] + [",".join([value] + lines[row].split(",")[1:])] + lines[row + 1:]
 
@@ -302,6 +307,10 @@ def test_export_refuses_a_step_too_small_with_its_row_count(saved, every, fragme
     ("profile.csv", lambda ls: named_cell(ls, 5, "speed_kmh", "-5"), ["profile.csv: speed_kmh, row 6", "-5 is below 0"]),
     ("profile.csv", lambda ls: named_cell(ls, 3, "braking_force_kN", "-20"), ["braking_force_kN, row 4", "below 0"]),
     ("summary.json", lambda ls: ["[1, 2]"], ["summary.json: not a result folder", "expected a mapping"]),
+    # a speed or a time edited after the solve was exported under the saved run's status
+    ("profile.csv", lambda ls: scaled_cell(ls, 15, "speed_kmh", 1.05), ["profile.csv: position_m, time_s, speed_kmh, rows 15-16",
+                                                                        "an edited profile"]),
+    ("profile.csv", lambda ls: scaled_cell(ls, 15, "time_s", 1.001), ["profile.csv: position_m, time_s, speed_kmh, rows 15-16"]),
 ])
 def test_export_refuses_a_damaged_folder_in_one_line(saved, tmp_path, name, edit, fragments):
     folder = damaged(saved, tmp_path, name, edit)

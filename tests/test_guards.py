@@ -335,7 +335,7 @@ def cell(lines, row, column, value):
     (lambda ls: cell(ls, 5, "speed_kmh", "nan"), ["speed_kmh, row 6: 'nan' is not a finite number"]),
     (lambda ls: cell(ls, 9, "time_s", "abc"), ["time_s, row 10: 'abc' is not a finite number"]),
     (lambda ls: cell(ls, 3, "traction_force_kN", "inf"), ["traction_force_kN, row 4: 'inf'"]),
-    (lambda ls: cell(ls, 3, "position_m", "12.5"), ["position_m", "differ from the grid", "an edited profile"]),
+    (lambda ls: cell(ls, 3, "position_m", "12.5"), ["position_m", "rows 3-4", "an edited profile"]),
     (lambda ls: [ls[0].replace("speed_kmh", "v")] + ls[1:], ["speed_kmh: missing column"]),
     (lambda ls: [], ["profile.csv: not a readable CSV table"]),
 ])

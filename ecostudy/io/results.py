@@ -11,6 +11,7 @@ import pandas as pd
 
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.status import Status
+from ecostudy.core.kinematics import interval_time
 from ecostudy.core.types import Trajectory
 from ecostudy.core.units import KMH, KN
 from ecostudy.io.tables import number_columns
@@ -96,6 +97,7 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
         if below.size:
             raise InputError(problem(result_dir / "profile.csv", f"{column}, row {below[0] + 2}",
                                      f"{p[column][below[0]]:g} is below 0 (a speed and each force are >= 0)"))
+    _check_clock(p, result_dir / "profile.csv")
     trajectory = Trajectory(p["position_m"], p["speed_kmh"] * KMH, np.diff(p["time_s"]),
                             p["traction_force_kN"][:-1] * KN, p["braking_force_kN"][:-1] * KN)
     advice: pd.DataFrame | None = None
@@ -114,6 +116,31 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
                                      "the row's before"))
         advice = advice.assign(start_position_m=starts)
     return SavedRun(inputs, summary, trajectory, p["handle"][:-1], advice)
+
+
+def _half_digit(x: np.ndarray) -> np.ndarray:
+    """Half a unit of the 6th significant digit of each value: the rounding of ``%.6g``, as the profile is written."""
+    magnitude = np.floor(np.log10(np.maximum(np.abs(x), 1e-300)))
+    return np.where(x == 0.0, 0.0, 0.5 * 10.0 ** (magnitude - 5))
+
+
+def _check_clock(p: dict[str, np.ndarray], where: Path) -> None:
+    """Refuse a profile whose clock does not follow from its positions and speeds: a solved run takes
+    2 ds / (v0 + v1) over each interval (Farooqi 2018, eq. 2.16; ``kinematics.interval_time``),
+    so a speed or a time edited after the solve shows, beyond the rounding of the digits written."""
+    x, t, v = p["position_m"], p["time_s"], p["speed_kmh"] * KMH
+    pair = np.maximum(v[:-1] + v[1:], 0.0)
+    moving = pair > 0.0
+    took = np.where(moving, interval_time(0.0, np.where(moving, pair, 1.0), np.diff(x)), np.inf)
+    hx, ht, hv = _half_digit(x), _half_digit(t), _half_digit(p["speed_kmh"]) * KMH
+    rounding = (ht[:-1] + ht[1:] + 2.0 * (hx[:-1] + hx[1:]) / np.where(moving, pair, 1.0)
+                + took * (hv[:-1] + hv[1:]) / np.where(moving, pair, 1.0))
+    off = np.flatnonzero(~(np.abs(np.diff(t) - took) <= 2.0 * rounding + 1e-9))
+    if off.size:
+        k = off[0]
+        raise InputError(problem(where, f"position_m, time_s, speed_kmh, rows {k + 2}-{k + 3}", f"{np.diff(x)[k]:g} m at "
+                                 f"{p['speed_kmh'][k]:g} -> {p['speed_kmh'][k + 1]:g} km/h takes {took[k]:.6g} s, not "
+                                 f"the {np.diff(t)[k]:.6g} s written: an edited profile? solve again"))
 
 
 NOISE = 1e-3  # [km/h, kN] below -NOISE a saved speed or force is an edit, not the solver's rounding
