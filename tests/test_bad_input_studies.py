@@ -337,3 +337,27 @@ def test_export_reads_a_step_in_exponent_notation(saved):
     assert r.exit_code == exported_exit(saved) and (saved / "profile_every_25m.csv").is_file(), r.output
     rows = yaml.safe_load((saved / "profile_every_25m.json").read_text())["rows"]
     assert len(rows) > 10 and abs(rows[1]["position_m"] - rows[0]["position_m"] - 25.0) < 1e-9
+
+
+# ----------------------------------------------------------------------------------- the output folder, first
+def _never(*args, **kwargs):
+    raise AssertionError("computed before the output folder was checked")
+
+
+@pytest.mark.parametrize("command, shipped, long_step", [
+    (["heavyhaul"], "heavyhaul_brake_penalty.yaml", ("ecostudy.studies.heavyhaul", "_reference")),
+    (["run", "--kind", "heavyhaul"], "heavyhaul_brake_penalty.yaml", ("ecostudy.studies.heavyhaul", "_reference")),
+    (["simulate"], "thesis001_closed_loop.yaml", ("ecostudy.studies.closedloop", "all_out_time")),
+    (["run", "--kind", "simulate"], "thesis001_closed_loop.yaml", ("ecostudy.studies.closedloop", "all_out_time")),
+    (["network"], "network_metro_2trains.yaml", ("ecostudy.network.fleet", "plan")),
+    (["run", "--kind", "network"], "network_metro_2trains.yaml", ("ecostudy.network.fleet", "plan")),
+])
+def test_an_output_folder_that_is_a_file_is_refused_before_the_study_computes(tmp_path, monkeypatch, command, shipped,
+                                                                              long_step):
+    """The reference run, the all-out run or the fleet's first runs (seconds to minutes) were solved
+    before a --out that is a file was refused; the long step here raises if it is reached."""
+    import importlib
+    monkeypatch.setattr(importlib.import_module(long_step[0]), long_step[1], _never)
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    refused(run(*command, STUDIES / shipped, "--out", afile, "--workers", 1), "afile", "the output folder is a file")

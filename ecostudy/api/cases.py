@@ -103,7 +103,7 @@ def simulate_folder(study: Path, workers: Optional[int] = None, dask: Optional[s
     workers = every_core(workers)
     check_options(workers=workers, dask=dask)
     figures = output(fig_format, dpi)
-    check_closed_loop_study(study, workers, only)  # runs that cannot end, or too big: refused (unless --force)
+    check_closed_loop_study(study, workers, only, Path(out) if out else None)  # runs that cannot end, or too big: refused (unless --force)
     draw, names = loop_drawing(plot, figures)
     outcome = simulate_study(study, workers, dask, retry_failed, Path(out) if out else None, progress, only, draw,
                              names)

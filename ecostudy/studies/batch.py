@@ -217,7 +217,10 @@ class StudyKind:
     from the stored ``rows`` by case key (its ``attrs``, if any, go into ``summary.json``),
     optionally ``size`` (below), the table's file and its name in ``summary.json``."""
 
-    expand: Callable[[Path], Expanded]
+    expand: Callable[[Path, Optional[Path]], Expanded]
+    """``expand(path, out)``: ``out`` the output folder the command was given (None: the study's own),
+    checked (:func:`~ecostudy.io.writers.check_output_dir`) before anything long is computed; the
+    study engine checks it again with every file name before any case runs."""
     task: Callable[[dict], dict]
     table: Callable[[list, dict], pd.DataFrame]
     size: Optional[Callable[[Path, list, int], None]] = None
@@ -267,7 +270,7 @@ class StudyRun(NamedTuple):
 def run_kind(kind, path, workers=1, dask=None, retry_failed=False, out=None, progress=None, draw=None):
     """The one study engine: a study file of ``kind`` expanded into cases, then
     :func:`run_expanded` (``draw``: its files beside the table). Returns (table, counts, output folder)."""
-    expanded = kind_named(kind).expand(Path(path))
+    expanded = kind_named(kind).expand(Path(path), out)
     return run_expanded(kind, expanded, path, workers, dask, retry_failed, out, progress, draw)[:3]
 
 
@@ -331,7 +334,7 @@ def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress
     return run_kind("run", path, workers, dask, retry_failed, out, progress)
 
 
-def expand_study(path):
+def expand_study(path, out=None):  # out: checked by the study engine (nothing long here)
     """A study file's cases (:func:`~ecostudy.studies.cases.expand`), a library's pairs left out
     beside them as ``skipped.csv``."""
     skipped = []

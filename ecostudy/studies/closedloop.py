@@ -30,7 +30,7 @@ from ecostudy.io.documents import named_file
 from ecostudy.io.loopfile import Controller, SimulateFile
 from ecostudy.ocp.convex import FASTEST, ConvexProgram, trapezoid_grid
 from ecostudy.ocp.problem import prepare
-from ecostudy.io.writers import write_csv
+from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.studies.batch import Draw, Expanded, StudyKind, outcome, run_expanded
 from ecostudy.studies.cases import case_key
 from ecostudy.studies.controllers import CONTROLLER_KINDS, Build
@@ -53,10 +53,13 @@ def all_out_time(segment, train, points):
     return float(fastest.t[-1]) if fastest.usable else None
 
 
-def expand(path):
-    """(study, output folder, cases); the inputs are validated here, once."""
+def expand(path, out=None):
+    """(study, output folder, cases); the inputs are validated here, once, the output folder
+    (``out``, else the study's own) checked before the all-out run is solved."""
     path = Path(path)
     s = validate(SimulateFile, read_document(path), path)
+    output = Path(s.output) if s.output else Path("out") / s.name  # relative: to the working directory
+    check_output_dir(out or output, ("runs.csv", "results.sqlite"), "simulate")
     train_file = named_file(path, "train", s.train)
     train_doc = train_document(train_file)[0]
     track_doc = track_document(named_file(path, "track", s.track))
@@ -92,7 +95,6 @@ def expand(path):
                     "noise": {**noise, "seed": seed}}
             case["key"] = case_key(case)
             cases.append(case)
-    output = Path(s.output) if s.output else Path("out") / s.name  # relative: to the working directory
     return s, output, cases
 
 
@@ -257,7 +259,7 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
     (``drawn_names``: their file names, checked in the output folder before any run).
 
     Returns a :class:`LoopStudy` (the plots are drawn from it by ``report.loopplots``)."""
-    study, output, cases = expand(path)
+    study, output, cases = expand(path, out)
     names = [c.name for c in study.controllers]
     unknown = sorted(set(only or ()) - set(names))
     if unknown:
@@ -307,9 +309,9 @@ def loop_study(cases, rows, runs, output):
     return LoopStudy(cases[0]["study"], runs, summary, {}, output, by_controller, _inputs(cases[0])[2], budgets)
 
 
-def expand_simulate(path):
+def expand_simulate(path, out=None):
     """A closed-loop study file as the study engine's cases (:func:`expand`), into its output."""
-    _, output, cases = expand(path)
+    _, output, cases = expand(path, out)
     return Expanded(output, cases)
 
 

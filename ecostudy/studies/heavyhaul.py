@@ -43,6 +43,7 @@ from ecostudy.io.heavyhaulfile import HeavyhaulFile
 from ecostudy.io.loaders import (check_fits, chosen_stops, consist_from_document, read_document, track_document,
                                  track_from_schema, validate)
 from ecostudy.io.tables import number_columns
+from ecostudy.io.writers import check_output_dir
 from ecostudy.studies.batch import STUDY_KINDS, Draw, Expanded, StudyKind, outcome, run_expanded
 from ecostudy.studies.cases import case_key
 from ecostudy.studies.sizes import check_heavyhaul_study
@@ -71,10 +72,13 @@ def _reference(s, path, consist, track, from_stop, to_stop):
     return reference, part("the reference run", run.status)
 
 
-def expand(path):
-    """(study, output folder, reference, cases); inputs and the bad-input checks run here, once."""
+def expand(path, out=None):
+    """(study, output folder, reference, cases); inputs and the bad-input checks run here, once, the
+    output folder (``out``, else the study's own) checked before the reference run is solved."""
     path = Path(path)
     s = validate(HeavyhaulFile, read_document(path), path)
+    output = Path(s.output) if s.output else Path("out") / s.name  # relative: to the working directory
+    check_output_dir(out or output, ("runs.csv", "results.sqlite"), "heavyhaul")
     consist_path = named_file(path, "consist", s.consist)
     consist_doc = read_document(consist_path)
     consist = consist_from_document(consist_doc, consist_path)
@@ -144,7 +148,6 @@ def expand(path):
         case["key"] = case_key(case)
         case["plan"] = Plan(s, reference)  # after the key: both follow from the inputs the key hashes
         cases.append(case)
-    output = Path(s.output) if s.output else Path("out") / s.name  # relative: to the working directory
     return s, output, reference, cases
 
 
@@ -273,9 +276,9 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
            "unproven_solves_count", "unproven_solver_status", "peak_memory_MB", *IN_TRAIN)
 
 
-def expand_heavyhaul(path):
+def expand_heavyhaul(path, out=None):
     """A heavy-haul study file as the study engine's cases (:func:`expand`), into its output."""
-    _, output, _, cases = expand(path)
+    _, output, _, cases = expand(path, out)
     return Expanded(output, cases)
 
 
@@ -301,7 +304,7 @@ def heavyhaul_study(path, workers=1, dask=None, retry_failed=False, out=None, pr
     ``summary.json``, and the files ``draw(study)`` writes of the :class:`HeavyhaulStudy` and returns;
     ``names(cases)``: their file names, checked in the output folder before any run); returns a
     :class:`HeavyhaulStudy`."""
-    study, output, reference, cases = expand(path)
+    study, output, reference, cases = expand(path, out)
     drawn = []  # the figures of the draw
     ran = run_expanded("heavyhaul", Expanded(output, cases), path, workers, dask, retry_failed, out, progress,
                        heavyhaul_files(draw, names, drawn))

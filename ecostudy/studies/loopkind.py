@@ -9,12 +9,12 @@ from ecostudy.studies.sizes import check_closed_loop_study
 from ecostudy.studies.workers import every_core
 
 
-def expand_loop(path):
+def expand_loop(path, out=None):
     """A closed-loop study file's cases, refused first (unless forced) when a run cannot end or the
     study is too big for every core (:func:`~ecostudy.studies.sizes.check_closed_loop_study`: the
     file's own numbers before the expansion solves anything)."""
-    check_closed_loop_study(path, every_core(None))
-    return expand_simulate(path)
+    check_closed_loop_study(path, every_core(None), out=out)
+    return expand_simulate(path, out)
 
 
 STUDY_KINDS.register("simulate", replace(SIMULATE, expand=expand_loop),

@@ -61,7 +61,7 @@ def check_run_study(path, workers=1):
     """Refuse a ``run`` study estimated above the command's budget (unless forced): its kind's
     ``size`` (:func:`ecostudy.studies.batch.run_study_size`) on its cases."""
     kind = STUDY_KINDS.get("run")
-    kind.size(Path(path), kind.expand(Path(path)).cases, workers)
+    kind.size(Path(path), kind.expand(Path(path), None).cases, workers)
 
 
 def check_front(where, count, points, workers=1, das=None, das_time_limit=60.0):
@@ -70,11 +70,12 @@ def check_front(where, count, points, workers=1, das=None, das_time_limit=60.0):
                 [run_seconds(points, das, das_time_limit)] * count, workers, points * RUN_BYTES_PER_POINT)
 
 
-def check_closed_loop_study(path, workers=1, only=None):
+def check_closed_loop_study(path, workers=1, only=None, out=None):
     """Refuse a closed-loop study too big for the command or a run, or that cannot end: first from
     the file alone (controllers x draws x samples to the latest arrival), before the study's own
     set-up solves anything (its all-out SOCP took minutes at K = 20 000); then with every draw's
-    true train (:func:`check_closed_loop`). ``only``: the controllers run (all when None)."""
+    true train (:func:`check_closed_loop`). ``only``: the controllers run (all when None); ``out``: the
+    output folder, checked before the expansion solves anything (None: the study's own)."""
     s = validate(SimulateFile, read_document(path), path)
     chosen = [c for c in s.controllers if not only or c.name in only]
     what = f"{len(chosen)} controllers x {s.draws} draws"
@@ -86,7 +87,7 @@ def check_closed_loop_study(path, workers=1, only=None):
                   f"at K = {s.points}", seconds)
         per_run += [seconds] * s.draws
     check_study(path, what, per_run, workers, s.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")
-    study, _, cases = closedloop.expand(path)
+    study, _, cases = closedloop.expand(path, out)
     runs = check_closed_loop(cases, path)
     check_study(path, what, [r for r, c in zip(runs, cases) if not only or c["labels"]["controller"] in only],
                 workers, study.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")
