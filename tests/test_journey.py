@@ -4,7 +4,9 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
-from ecostudy.studies.journey import equal_marginal, uniform
+from ecostudy.core.errors import InfeasibleError
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.studies.journey import equal_marginal, mareco_split, uniform
 
 from .conftest import assert_folder, TRACKS, TRAINS
 
@@ -17,6 +19,16 @@ def test_equal_marginal_allocation_on_synthetic_fronts():
     assert sum(times) == pytest.approx(22.0)
     assert times[0] > 11.5 and times[1] < 10.5  # the steep front gets the time
     assert uniform([steep, flat], 22.0) == pytest.approx([11.0, 11.0])
+
+
+def test_a_total_below_the_mareco_runs_fastest_is_an_infeasible_split_not_a_crash():
+    """journey() fails the MARECO-style rows on it (an InfeasibleError, as the whole-journey NLP's)
+    where a ValueError stopped the journey."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    pairs = [("Noord", "Station"), ("Station", "Centrum")]
+    assert sum(mareco_split(track, train, pairs, 300.0, 60)) == pytest.approx(300.0)  # a split it can make
+    with pytest.raises(InfeasibleError, match="below the MARECO-style runs' fastest"):
+        mareco_split(track, train, pairs, 100.0, 60)  # the two segments' all-out runs take about 140 s
 
 
 @pytest.mark.slow
