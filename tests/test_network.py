@@ -167,22 +167,22 @@ def test_traction_and_braking_are_held_apart_only_where_doing_both_could_pay():
 def test_a_legs_cost_is_weighted_traction_up_to_the_allowance_less_credited_regeneration():
     """legs.cost_coefficients + legs.leg_cost against the cost written out per step: w P, traction
     above the allowance a in full (w P + (1 - w) max(P - a, 0)), all of it where nothing is offered
-    (a <= 0), less the regeneration credited up to c (none below the hinge width), each max smooth."""
-    from ecostudy.core.physics import hinge
+    (a <= 0), less the regeneration credited up to c (none below CREDIT_FLOOR_KW), each max exact
+    (its variable started at the max), plus TIE_BREAK (P - R)."""
     track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
     f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 2.0, SUPPLY, points=300)
     leg = f.legs[0][0]
     rng = np.random.default_rng(15)
     s, v = fleet._guess(f, leg)
     forces = [rng.uniform(0, 150e3, leg.steps) for _ in range(3)]
-    m = pyo.ConcreteModel()
-    b = timedomain.add_leg(m, "leg", leg, (s, v, *forces), one_handle=False)
     w = rng.choice([0.0, 0.5, 1.0, 1.2], f.steps)
     a = rng.choice([0.0, -5.0, 300.0, 2000.0], f.steps)
     c = rng.choice([0.0, 5.0, 50.0, 800.0], f.steps)
-    P = np.array([pyo.value(b.traction_kw[j]) for j in b.I])
-    R = np.array([pyo.value(b.regen_kw[j]) for j in b.I])
     for weights, allowance, credit in ((None, None, None), (w, None, None), (w, a, c), (None, a, c)):
+        m = pyo.ConcreteModel()  # a block each: the cost adds its maxima to it
+        b = timedomain.add_leg(m, "leg", leg, (s, v, *forces), one_handle=False)
+        P = np.array([pyo.value(b.traction_kw[j]) for j in b.I])
+        R = np.array([pyo.value(b.regen_kw[j]) for j in b.I])
         wt = np.ones(leg.steps) if weights is None else weights[:leg.steps]
         expected = 0.0
         for j in range(leg.steps):
@@ -191,9 +191,10 @@ def test_a_legs_cost_is_weighted_traction_up_to_the_allowance_less_credited_rege
             elif allowance is None or wt[j] >= 1:
                 traction = wt[j] * P[j]
             else:
-                traction = wt[j] * P[j] + (1 - wt[j]) * hinge(P[j] - allowance[j], legs.HINGE_KW)
-            credited = R[j] if credit is None else 0.0 if credit[j] < legs.HINGE_KW else R[j] - hinge(R[j] - credit[j], legs.HINGE_KW)
-            expected += traction - credited
+                traction = wt[j] * P[j] + (1 - wt[j]) * max(P[j] - allowance[j], 0.0)
+            credited = (R[j] if credit is None else 0.0 if credit[j] < legs.CREDIT_FLOOR_KW
+                        else R[j] - max(R[j] - credit[j], 0.0))
+            expected += traction - credited + legs.TIE_BREAK * (P[j] - R[j])
         got = pyo.value(legs.leg_cost(b, legs.cost_coefficients(leg, weights, allowance, credit)))
         assert got == pytest.approx(expected, rel=1e-12)
 

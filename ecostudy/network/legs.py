@@ -13,11 +13,11 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.errors import SolverError
-from ecostudy.core.physics import hinge
 from ecostudy.ocp import session, space, timedomain
 from ecostudy.ocp.solver import IPOPT
 
-HINGE_KW = 10.0  # [kW] width of the smooth min/max in a leg's cost (allowance, credit)
+CREDIT_FLOOR_KW = 10.0  # [kW] a regeneration credit below this is none (the line takes next to nothing then)
+TIE_BREAK = 0.05  # [-] the share of a leg's own net energy added to its cost (:func:`leg_cost`)
 
 # a solve from a feasible run kept near it, and a leg's MUMPS options: measured where they are set
 # (``ocp.solver.IPOPT``, with every problem family's options)
@@ -33,28 +33,29 @@ def leg_energy_ref(leg):
 def pumping_pays(train, weights=None, allowance=None, credit=None):
     """Per step, whether traction and braking together can lower a cost of w traction (traction
     above ``allowance`` [kW] in full) less regeneration credited up to ``credit`` [kW] (no credit
-    below ``HINGE_KW``, the credit hinge's width): adding dF to both forces costs at least
-    w dF v / eta_T and earns at most eta_R dF v, so only where w < eta_T eta_R, some traction is
-    discounted and some regeneration credited (the cost of :func:`cost_coefficients`). Arrays per
-    step (None: w = 1, no cap)."""
+    below ``CREDIT_FLOOR_KW``), with the tie-break of :func:`leg_cost`: adding dF to both forces
+    costs at least (w + TIE_BREAK) dF v / eta_T and earns at most (1 + TIE_BREAK) eta_R dF v, so only
+    where w + TIE_BREAK < (1 + TIE_BREAK) eta_T eta_R, some traction is discounted and some
+    regeneration credited (the cost of :func:`cost_coefficients`). Arrays per step (None: w = 1, no cap)."""
     if weights is None:
         return False
-    pays = np.asarray(weights, float) < train.traction_efficiency * train.regeneration_efficiency
+    cycle = train.traction_efficiency * train.regeneration_efficiency
+    pays = np.asarray(weights, float) + TIE_BREAK < (1.0 + TIE_BREAK) * cycle
     if allowance is not None:
         pays &= np.asarray(allowance, float) > 0.0
     if credit is not None:
-        pays &= np.asarray(credit, float) >= HINGE_KW
+        pays &= np.asarray(credit, float) >= CREDIT_FLOOR_KW
     return pays
 
 
 def cost_coefficients(leg, weights=None, allowance=None, credit=None):
     """Per step of the leg, the rows (omega, alpha, a, rho, eta, c) of its cost [kW]
-    omega P + alpha hinge(P - a) - rho R + eta hinge(R - c), traction P and regeneration R.
+    omega P + alpha max(P - a, 0) - rho R + eta max(R - c, 0), traction P and regeneration R.
 
     ``weights``, ``allowance`` [kW], ``credit`` [kW]: per clock step (None: w = 1, no cap, all
     regeneration credited). Traction costs w min(P, a) + max(P - a, 0) = w P + (1 - w) max(P - a, 0),
     in full where nothing is offered (a <= 0); regeneration is credited up to c, min(R, c) =
-    R - max(R - c, 0), and not at all below ``HINGE_KW``; each max smoothed over ``HINGE_KW``."""
+    R - max(R - c, 0), and not at all below ``CREDIT_FLOOR_KW``."""
     span = slice(leg.start, leg.start + leg.steps)
     n = leg.steps
     w = np.ones(n) if weights is None else np.asarray(weights, float)[span]
@@ -67,27 +68,48 @@ def cost_coefficients(leg, weights=None, allowance=None, credit=None):
     rho, eta, c = np.ones(n), np.zeros(n), np.zeros(n)
     if credit is not None:
         cap = np.asarray(credit, float)[span]
-        capped = cap >= HINGE_KW
+        capped = cap >= CREDIT_FLOOR_KW
         rho[~capped] = 0.0
         eta[capped], c[capped] = 1.0, cap[capped]
     return np.array([omega, alpha, a, rho, eta, c])
 
 
 def leg_cost(b, coefficients):
-    """Sum over a leg block's steps of the cost of :func:`cost_coefficients` [kW] (a hinge with
-    coefficient 0 left out)."""
+    """Sum over a leg block's steps of the cost of :func:`cost_coefficients` [kW] plus
+    :data:`TIE_BREAK` times the leg's own net power P - R.
+
+    Each max(x, 0) is exact: a variable e >= 0 of the block held by a row e >= x (its coefficient
+    is positive and the cost minimised, so e is the max at an optimum), started at its value at the
+    block's point (:func:`start_maxima`). Smoothed over 10 kW instead, the maxima's curvature on
+    the dozens of steps where dissension's optimum puts the traction at the allowance took 2-3x
+    the Ipopt iterations. The tie-break: with a traction weight near eta_T eta_R (dissension,
+    voltage) the cost is nearly flat between driving harder on discounted traction and
+    regenerating the difference back; among such runs the leg takes the one that draws the least
+    itself, where exact maxima alone settled the rounds up to 0.9 % dearer (docs/speed.md,
+    "Dissension's legs")."""
     omega, alpha, a, rho, eta, c = np.asarray(coefficients, float).tolist()  # Python floats for Pyomo
+    out = sum((omega[j] + TIE_BREAK) * b.traction_kw[j] - (rho[j] + TIE_BREAK) * b.regen_kw[j] for j in b.I)
+    for name, coefficient, cap, power in (("over_allowance", alpha, a, b.traction_kw), ("over_credit", eta, c, b.regen_kw)):
+        steps = [j for j in b.I if coefficient[j] != 0.0]
+        if steps:
+            excess = pyo.Expression(steps, rule=lambda b, j, p=power, c=cap: p[j] - c[j])
+            e = pyo.Var(steps, bounds=(0.0, None))
+            b.add_component(name + "_x", excess)
+            b.add_component(name, e)
+            b.add_component(name + "_row", pyo.Constraint(steps, rule=lambda b, j, e=e, x=excess: e[j] >= x[j]))
+            out = out + sum(coefficient[j] * e[j] for j in steps)
+    start_maxima(b)
+    return out
 
-    def step(j):
-        traction, regen = b.traction_kw[j], b.regen_kw[j]
-        out = omega[j] * traction - rho[j] * regen
-        if alpha[j] != 0.0:
-            out = out + alpha[j] * hinge(traction - a[j], HINGE_KW)
-        if eta[j] != 0.0:
-            out = out + eta[j] * hinge(regen - c[j], HINGE_KW)
-        return out
 
-    return sum(step(j) for j in b.I)
+def start_maxima(b):
+    """Set the exact maxima of a leg block's cost (:func:`leg_cost`) to their value at its point."""
+    for name in ("over_allowance", "over_credit"):
+        e = getattr(b, name, None)
+        if e is not None:
+            x = getattr(b, name + "_x")
+            for j in e:
+                e[j].set_value(max(float(pyo.value(x[j])), 0.0))
 
 
 @space.gc_paused
@@ -319,6 +341,7 @@ class LegNLP:
             return self.own
         if self.cold is None:  # the block's values are those of the last solve, read out already
             timedomain.set_start(self.block, self.task[0])
+            start_maxima(self.block)
             self.cold = np.array([var.value for var in self.session.variables], dtype=float)
         return self.cold
 

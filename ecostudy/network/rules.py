@@ -192,10 +192,11 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     (runs, rounds' substation kWh, None or why a round stopped); the runs are those of the best
     round, the start included where it keeps the buffer (the independent runs ignore it: on two metro
     trains 30 s apart with buffer_m 150, tests/test_network_buffer.py, the start was the cheapest
-    and 35 m too near). A round after the first that cannot be completed (a train that
-    cannot keep its buffer behind the new run ahead: the 3-train metro study's rule 7.7 once, its
-    path moved by last-bit differences of the start) ends the rounds; every complete round is
-    consistent (each train planned behind the run ahead as it stayed).
+    and 35 m too near). Where a train cannot keep its buffer behind the new run ahead, that new run is
+    not taken (the train ahead keeps its run of the round before) and the train is planned behind
+    it (the 3-train metro study's rule 7.7, each round: its train T3 behind T2); a round whose runs
+    then miss the buffer somewhere is not kept. A round after the first that still cannot be
+    completed ends the rounds.
 
     The warm-against-cold check of ``legs.solve_leg`` is made in the first round only: there each
     leg starts from a run of another problem (independent driving); a later round starts it from
@@ -213,13 +214,17 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     memo = {}  # legs whose terms did not change since their last solve are not solved again
     checked = {}  # the first round's cold checks (:func:`_checks`)
     for number in range(1, rounds + 1):
+        before = list(runs)  # the runs of the round before (the start before the first)
         try:
             for rank, i in enumerate(order):
-                weights, allowance = rule_terms(fleet, rule, runs, i)
-                ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]]) if rank and fleet.buffer else None
-                runs[i] = solve_train(fleet, i, weights, guesses=runs[i], allowance=allowance,
-                                      credit=receptivity(fleet, runs, i), ahead=ahead, mapper=mapper, memo=memo,
-                                      check=number == 1)[0]
+                try:
+                    runs[i] = _replan(fleet, rule, runs, order, rank, memo, mapper, number == 1)
+                except SolverError:
+                    j = order[rank - 1] if rank and fleet.buffer else None
+                    if j is None or runs[j] is before[j]:
+                        raise
+                    runs[j] = before[j]  # the new run ahead leaves this train no run behind it: not taken
+                    runs[i] = _replan(fleet, rule, runs, order, rank, memo, mapper, number == 1)
         except SolverError as exc:
             if number == 1:
                 raise
@@ -228,9 +233,19 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
             checked = _checks(runs)
         _, _, totals = evaluate(fleet, runs)
         history.append(totals["substation_kWh"])
-        if history[-1] < best[0]:
+        if history[-1] < best[0] and buffer_missed(fleet, runs) is None:
             best = (history[-1], list(runs))
     return _with_checks(best[1], checked), history, None
+
+
+def _replan(fleet, rule, runs, order, rank, memo, mapper, check):
+    """The new run of train ``order[rank]`` under ``rule`` against the others' ``runs``, behind the
+    run of the train ahead (:func:`supervised`)."""
+    i = order[rank]
+    weights, allowance = rule_terms(fleet, rule, runs, i)
+    ahead = line_positions(fleet, order[rank - 1], runs[order[rank - 1]]) if rank and fleet.buffer else None
+    return solve_train(fleet, i, weights, guesses=runs[i], allowance=allowance, credit=receptivity(fleet, runs, i),
+                       ahead=ahead, mapper=mapper, memo=memo, check=check)[0]
 
 
 CHECK_NOTES = ("warm_vs_cold_pct", "replaced_by_cold", "warm_capped_at")  # what ``legs.solve_leg``'s cold check notes
