@@ -12,10 +12,10 @@ one-handle steps, the allowance and credit hinges and how many of them the kept 
 kW of, the start's cost above the kept run's) and their correlation with the iterations.
 Variants: ``penalty:K`` (the one-handle rows replaced by K [kW per kN^2] x F_T F_B in the cost),
 ``warmpen:K`` (that penalty added, the rows lifted in warm solves only), ``floor:F`` (the rows
-F x 1e-3 <= F_T F_B <= 1e-3, the start lifted onto the curve), ``hinge:KW`` (the cost's maxima
-smoothed over KW kW instead of ``legs.HINGE_KW`` in the solves), ``exact`` (each max(x, 0) of the
-cost a variable e >= 0 held by a row e >= x, the exact max, in the solves and in every evaluated
-cost).
+F x 1e-3 <= F_T F_B <= 1e-3, the start lifted onto the curve), ``smooth:KW`` (the cost's maxima
+smoothed over KW kW instead of exact, with no tie-break: the legs' cost before ``legs.leg_cost``
+kept them exact, at KW = 10), ``tie:E`` (``legs.TIE_BREAK`` = E; 0: the exact maxima alone). A
+variant's cost is the one its solves minimise and every cost it evaluates.
 
 ``record``: plays the independent runs and the named strategies as ``ecostudy network --workers 1``
 does in one process and keeps every leg task it solves (``legs.solve_leg``'s argument: the leg, its
@@ -60,11 +60,7 @@ NOW = {"strategy": "independent", "round": 1}
 
 def cost_of(task, run):
     """The task's objective (as ``legs.leg_model`` writes it) at ``run``."""
-    EVALUATING[0] = True
-    try:
-        m, b = PLAIN_LEG_MODEL(task)
-    finally:
-        EVALUATING[0] = False
+    m, b = PLAIN_LEG_MODEL(task)
     for var, vals in ((b.s, run.s), (b.v, run.v)):
         for j in b.K:
             if not var[j].fixed:
@@ -73,8 +69,7 @@ def cost_of(task, run):
     for var, vals in forces:
         for j in b.I:
             var[j].set_value(float(vals[j]) / 1e3)
-    if EXACT[0]:
-        start_maxima(b)  # the cost's maxima at the run
+    legs.start_maxima(b)  # the cost's exact maxima at the run (none under ``smooth``)
     return float(pyo.value(m.objective))
 
 
@@ -269,76 +264,22 @@ def one_handle_floor(fraction):
     legs.LegNLP.start = start
 
 
-EVALUATING = [False]  # while ``cost_of`` builds the NLP as written
-
-
-def hinge_width(kw):
-    """Variant ``hinge:KW``: the cost's maxima smoothed over KW kW instead of ``legs.HINGE_KW`` in
-    the solves (the credit's cut-off and every evaluated cost keep the study's own)."""
-    plain = legs.hinge
-    legs.hinge = lambda x, width: plain(x, width if EVALUATING[0] else kw)
-
-
-# the cost's two maxima (:func:`exact_maxima`): block component, coefficient row and cap row of
-# ``legs.cost_coefficients``, the power [kW] they cap
-OVER = (("over_allowance", 1, 2, "traction_kw"), ("over_credit", 4, 5, "regen_kw"))
-
-
-def start_maxima(b):
-    """Set the exact maxima of a leg block's cost (:func:`exact_maxima`) to their value at its point."""
-    for name, *_ in OVER:
-        e = getattr(b, name, None)
-        if e is not None:
-            x = getattr(b, name + "_x")
-            for j in e:
-                e[j].set_value(max(float(pyo.value(x[j])), 0.0))
-
-
-def exact_leg_cost(b, coefficients):
-    """``legs.leg_cost`` with each max(x, 0) a variable e >= 0 of the block held by a row e >= x (the
-    coefficients are positive and the cost minimised: e is the exact max at an optimum), started at
-    its value."""
-    rows = np.asarray(coefficients, float)
-    omega, rho = rows[0].tolist(), rows[3].tolist()
-    out = sum(omega[j] * b.traction_kw[j] - rho[j] * b.regen_kw[j] for j in b.I)
-    for name, k, cap, power in OVER:
-        coef, top = rows[k].tolist(), rows[cap].tolist()
-        steps = [j for j in b.I if coef[j] != 0.0]
-        if not steps:
-            continue
-        excess = pyo.Expression(steps, rule=lambda b, j, top=top, power=getattr(b, power): power[j] - top[j])
-        e = pyo.Var(steps, bounds=(0.0, None))
-        b.add_component(name + "_x", excess)
-        b.add_component(name, e)
-        b.add_component(name + "_row", pyo.Constraint(steps, rule=lambda b, j, e=e, x=excess: e[j] >= x[j]))
-        out = out + sum(coef[j] * e[j] for j in steps)
-    start_maxima(b)
-    return out
-
-
-def exact_maxima():
-    """Variant ``exact``: the cost's maxima exact (:func:`exact_leg_cost`) in the solves and in every
-    evaluated cost; a cold start sets them at its point."""
-    legs.leg_cost = exact_leg_cost
-    EXACT[0] = True
-    plain_start = legs.LegNLP.start
-
-    def start(self, cold):
-        if cold and self.cold is None:
-            timedomain.set_start(self.block, self.task[0])
-            start_maxima(self.block)
-            self.cold = np.array([var.value for var in self.session.variables], dtype=float)
-        return plain_start(self, cold)
-    legs.LegNLP.start = start
-
-
-EXACT = [False]  # whether costs are evaluated with exact maxima (variant ``exact``)
+def smoothed_cost(kw):
+    """Variant ``smooth:KW``: the leg's cost with each max smoothed over KW kW (``physics.hinge``)
+    and no tie-break, in the solves and in every evaluated cost."""
+    def leg_cost(b, coefficients):
+        omega, alpha, a, rho, eta, c = np.asarray(coefficients, float).tolist()
+        out = sum(omega[j] * b.traction_kw[j] - rho[j] * b.regen_kw[j] for j in b.I)
+        out = out + sum(alpha[j] * hinge(b.traction_kw[j] - a[j], kw) for j in b.I if alpha[j] != 0.0)
+        return out + sum(eta[j] * hinge(b.regen_kw[j] - c[j], kw) for j in b.I if eta[j] != 0.0)
+    legs.leg_cost = leg_cost
+    legs.TIE_BREAK = 0.0  # the one-handle rows where they paid without it (``legs.pumping_pays``)
 
 
 VARIANTS = {  # name -> function(arg) that patches the leg solve
     "penalty": lambda arg: setattr(legs, "leg_model", one_handle_penalty(float(arg))),
-    "hinge": lambda arg: hinge_width(float(arg)),
-    "exact": lambda arg: exact_maxima(),
+    "smooth": lambda arg: smoothed_cost(float(arg)),
+    "tie": lambda arg: setattr(legs, "TIE_BREAK", float(arg)),
     "warmpen": lambda arg: warm_penalty(float(arg)),
     "floor": lambda arg: one_handle_floor(float(arg)),
 }

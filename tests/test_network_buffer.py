@@ -4,6 +4,7 @@ overlapping) is flagged with its closest approach, and the strategies that keep 
 independent runs break by some 35 m)."""
 import json
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -79,3 +80,27 @@ def test_the_command_exits_1_and_network_json_carries_each_strategys_own_status(
     assert saved["independent"]["status"].startswith("flagged") and "buffer_m 150 m" in saved["independent"]["status"]
     assert saved["joint"]["status"] == "ok", saved["joint"]["status"]
     assert summary["status"] != "ok" and summary["cases"]["flagged"] == 1, summary["cases"]
+
+
+@pytest.mark.slow
+def test_a_new_run_ahead_that_leaves_the_train_behind_no_run_is_not_taken():
+    """The 3-train study's rule 7.7: T2's first new run leaves T3 no run 60 m behind it (each leg
+    of T3 planned behind it alone is infeasible); T2 keeps its run of the start and every round
+    completes, keeping the buffer, where the strategy failed in its first round."""
+    from ecostudy.core.errors import SolverError
+    from ecostudy.network import rules
+    from ecostudy.network.scoring import buffer_missed
+    from ecostudy.studies.network import expand_network
+    from .conftest import STUDIES
+    f = expand_network(STUDIES / "network_metro_3trains.yaml").cases[0]["fleet"]
+    start = rules.independent(f)
+    order = fleet.departure_order(f)
+    runs = list(start)
+    runs[order[0]] = rules._replan(f, "triggering", runs, order, 0, {}, map, True)
+    runs[order[1]] = rules._replan(f, "triggering", runs, order, 1, {}, map, True)
+    with pytest.raises(SolverError, match="cannot keep buffer_m 60"):
+        rules._replan(f, "triggering", runs, order, 2, {}, map, True)
+    kept, history, stopped = rules.supervised(f, "triggering", start)
+    assert stopped is None and len(history) == 4 and min(history[1:]) < history[0]
+    assert buffer_missed(f, kept) is None
+    assert all(np.array_equal(a.s, b.s) for a, b in zip(kept[order[1]], start[order[1]]))  # T2 as it started

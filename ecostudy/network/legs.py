@@ -2,12 +2,9 @@
 traction weight and allowance, the regeneration credit) and a train ahead (:func:`solve_leg`).
 
 Each task builds and writes its own NLP once (:class:`LegNLP`): the guards' cold solves, the relaxed
-first solve and a warm retry solve the same NLP from another start or with other row bounds.
-(Tried and not kept: one NLP written per
-leg and re-solved with the cost's coefficients as variables held by bounds and the one-handle
-constraint at every step with its bound lifted where it cannot pay: no build or NL write after
-the first, but the always-present terms and rows made each solve dearer, 24-31 against 18-24 s
-per rule on the 2-train study, with no energy gained.)
+first solve and a warm retry solve the same NLP from another start or with other row bounds (one
+NLP re-solved with the cost's coefficients as variables was dearer: docs/benchmarks.md, "Tried and
+not kept").
 """
 import numpy as np
 import pyomo.environ as pyo
@@ -31,12 +28,11 @@ def leg_energy_ref(leg):
 
 
 def pumping_pays(train, weights=None, allowance=None, credit=None):
-    """Per step, whether traction and braking together can lower a cost of w traction (traction
-    above ``allowance`` [kW] in full) less regeneration credited up to ``credit`` [kW] (no credit
-    below ``CREDIT_FLOOR_KW``), with the tie-break of :func:`leg_cost`: adding dF to both forces
-    costs at least (w + TIE_BREAK) dF v / eta_T and earns at most (1 + TIE_BREAK) eta_R dF v, so only
-    where w + TIE_BREAK < (1 + TIE_BREAK) eta_T eta_R, some traction is discounted and some
-    regeneration credited (the cost of :func:`cost_coefficients`). Arrays per step (None: w = 1, no cap)."""
+    """Per step, whether traction and braking together can lower :func:`leg_cost`: adding dF to both
+    forces costs at least (w + TIE_BREAK) dF v / eta_T and earns at most (1 + TIE_BREAK) eta_R dF v,
+    so only where w + TIE_BREAK < (1 + TIE_BREAK) eta_T eta_R, some traction is discounted (an
+    ``allowance`` [kW] > 0) and some regeneration credited (``credit`` >= ``CREDIT_FLOOR_KW``).
+    Arrays per step (None: w = 1, no cap)."""
     if weights is None:
         return False
     cycle = train.traction_efficiency * train.regeneration_efficiency
@@ -78,15 +74,11 @@ def leg_cost(b, coefficients):
     """Sum over a leg block's steps of the cost of :func:`cost_coefficients` [kW] plus
     :data:`TIE_BREAK` times the leg's own net power P - R.
 
-    Each max(x, 0) is exact: a variable e >= 0 of the block held by a row e >= x (its coefficient
-    is positive and the cost minimised, so e is the max at an optimum), started at its value at the
-    block's point (:func:`start_maxima`). Smoothed over 10 kW instead, the maxima's curvature on
-    the dozens of steps where dissension's optimum puts the traction at the allowance took 2-3x
-    the Ipopt iterations. The tie-break: with a traction weight near eta_T eta_R (dissension,
-    voltage) the cost is nearly flat between driving harder on discounted traction and
-    regenerating the difference back; among such runs the leg takes the one that draws the least
-    itself, where exact maxima alone settled the rounds up to 0.9 % dearer (docs/speed.md,
-    "Dissension's legs")."""
+    Each max(x, 0) is exact: a variable e >= 0 held by a row e >= x (its coefficient positive, the
+    cost minimised), started at its value (:func:`start_maxima`); smoothed, they took 2-3x the
+    iterations. The tie-break: with a weight near eta_T eta_R the cost is nearly flat between
+    discounted traction and regenerating it back; the leg takes the run that draws the least itself
+    (exact maxima alone ended rounds up to 0.9 % dearer: docs/speed.md, "Dissension's legs")."""
     omega, alpha, a, rho, eta, c = np.asarray(coefficients, float).tolist()  # Python floats for Pyomo
     out = sum((omega[j] + TIE_BREAK) * b.traction_kw[j] - (rho[j] + TIE_BREAK) * b.regen_kw[j] for j in b.I)
     for name, coefficient, cap, power in (("over_allowance", alpha, a, b.traction_kw), ("over_credit", eta, c, b.regen_kw)):
@@ -141,10 +133,8 @@ def solve_leg(task):
     2-3x fewer iterations on the regional study's hardest legs, 1130 -> 333 and 823 -> 441, and
     lower costs) for at most :data:`WARM_MAX_ITER` iterations; where that fails or stops there the
     leg is solved again with Ipopt's defaults (:func:`_solve`) before the failure is raised, and a
-    point kept that Ipopt did not prove optimal is noted (``solver_status``). (Starting from the last
-    solve's multipliers too, with a small barrier, took a third of the iterations on the 2-train
-    study's rounds but stopped the 3-train study's rounds at worse local optima: receptivity
-    52.123 against 51.789 kWh, rule 7.11 50.497 against 49.764.)
+    point kept that Ipopt did not prove optimal is noted (``solver_status``; warm starts from the last
+    solve's multipliers too: docs/benchmarks.md, "Tried and not kept").
 
     Three guards against local optima that pass the re-simulation but are not what the user wants
     (the run's ``notes`` say what they did):
@@ -290,11 +280,7 @@ DEARER = 0.01          # [-] a warm leg dearer than its cold solve by more than 
 TIE = 1e-6             # [-] a cold leg's trapezoidal run replaces its guess's run only where cheaper by more
 CHECK_EVERY = 3        # one warm leg in this many is also solved cold (:func:`warmth`)
 # Ipopt iterations a warm solve may take (:func:`_solve`): a checked warm leg that stops there gives
-# way to its cold solve, any other is solved again with Ipopt's defaults. On the shipped studies the
-# warm solves that finish take at most 323 (20-stop); the outliers are a checked one at 1156 (3-train,
-# dissension) to an optimum 6.35 % dearer than its cold one (147), and warm solves that end at Ipopt's
-# own cap of 3000 without a usable point (3-train, rule 7.7: 3000 iterations, 20.7 CPU s, then 366
-# with the defaults)
+# way to its cold solve, any other is solved again with Ipopt's defaults (measured: docs/network.md)
 WARM_MAX_ITER = 500
 CHECKED = "checked"    # a task's ``warm``: warm, and in the sample solved cold too
 # per task ``warm``, the notes of its solve from the trapezoidal start (the cost difference [%],

@@ -194,8 +194,9 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     trains 30 s apart with buffer_m 150, tests/test_network_buffer.py, the start was the cheapest
     and 35 m too near). Where a train cannot keep its buffer behind the new run ahead, that new run is
     not taken (the train ahead keeps its run of the round before) and the train is planned behind
-    it (the 3-train metro study's rule 7.7, each round: its train T3 behind T2); a round whose runs
-    then miss the buffer somewhere is not kept. A round after the first that still cannot be
+    it, the train ahead keeping that run in the later rounds (the 3-train metro study's rule 7.7:
+    its T2's first new run leaves T3 no run 60 m behind it); a round whose runs then miss the buffer
+    somewhere is not kept. A round after the first that still cannot be
     completed ends the rounds.
 
     The warm-against-cold check of ``legs.solve_leg`` is made in the first round only: there each
@@ -213,10 +214,13 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     order = departure_order(fleet)
     memo = {}  # legs whose terms did not change since their last solve are not solved again
     checked = {}  # the first round's cold checks (:func:`_checks`)
+    held = set()  # trains whose new run left the train behind no run: they keep their run from then on
     for number in range(1, rounds + 1):
         before = list(runs)  # the runs of the round before (the start before the first)
         try:
             for rank, i in enumerate(order):
+                if i in held:
+                    continue
                 try:
                     runs[i] = _replan(fleet, rule, runs, order, rank, memo, mapper, number == 1)
                 except SolverError:
@@ -224,6 +228,7 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
                     if j is None or runs[j] is before[j]:
                         raise
                     runs[j] = before[j]  # the new run ahead leaves this train no run behind it: not taken
+                    held.add(j)
                     runs[i] = _replan(fleet, rule, runs, order, rank, memo, mapper, number == 1)
         except SolverError as exc:
             if number == 1:
