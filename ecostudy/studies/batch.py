@@ -217,10 +217,7 @@ class StudyKind:
     from the stored ``rows`` by case key (its ``attrs``, if any, go into ``summary.json``),
     optionally ``size`` (below), the table's file and its name in ``summary.json``."""
 
-    expand: Callable[[Path, Optional[Path]], Expanded]
-    """``expand(path, out)``: ``out`` the output folder the command was given (None: the study's own),
-    checked (:func:`~ecostudy.io.writers.check_output_dir`) before anything long is computed; the
-    study engine checks it again with every file name before any case runs."""
+    expand: Callable[[Path], Expanded]
     task: Callable[[dict], dict]
     table: Callable[[list, dict], pd.DataFrame]
     size: Optional[Callable[[Path, list, int], None]] = None
@@ -234,6 +231,11 @@ class StudyKind:
     """``spread(todo, workers, task, arrived)`` -> (case, result) pairs: how local worker processes run the
     cases instead of one case per process (a network study's strategies share one pool for their
     legs: :mod:`ecostudy.studies.legpool`); Dask still runs one case per task."""
+    expand_into: Optional[Callable[[Path, Optional[Path]], Expanded]] = None
+    """``expand_into(path, out)``, for a kind whose expansion computes something long (a reference
+    or all-out run, a fleet's first runs): ``expand`` with ``out``, the output folder the command
+    was given (None: the study's own), checked first (:func:`~ecostudy.io.writers.check_output_dir`);
+    :func:`run_kind` calls it instead of ``expand``."""
     verdict: Optional[Callable[[pd.DataFrame], dict]] = None
     """``verdict(table)``: statuses of the study as a whole beside its cases' ({name: Status}; a
     front whose energy does not fall as the running time grows is flagged)."""
@@ -270,7 +272,8 @@ class StudyRun(NamedTuple):
 def run_kind(kind, path, workers=1, dask=None, retry_failed=False, out=None, progress=None, draw=None):
     """The one study engine: a study file of ``kind`` expanded into cases, then
     :func:`run_expanded` (``draw``: its files beside the table). Returns (table, counts, output folder)."""
-    expanded = kind_named(kind).expand(Path(path), out)
+    spec = kind_named(kind)
+    expanded = spec.expand(Path(path)) if spec.expand_into is None else spec.expand_into(Path(path), out)
     return run_expanded(kind, expanded, path, workers, dask, retry_failed, out, progress, draw)[:3]
 
 
@@ -334,7 +337,7 @@ def run_study(path, workers=1, dask=None, retry_failed=False, out=None, progress
     return run_kind("run", path, workers, dask, retry_failed, out, progress)
 
 
-def expand_study(path, out=None):  # out: checked by the study engine (nothing long here)
+def expand_study(path):
     """A study file's cases (:func:`~ecostudy.studies.cases.expand`), a library's pairs left out
     beside them as ``skipped.csv``."""
     skipped = []

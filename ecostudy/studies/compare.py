@@ -57,7 +57,7 @@ def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_P
     return cases
 
 
-def expand_compare(path, out=None):  # out: checked by the study engine (nothing long here)
+def expand_compare(path):
     """A study file's base case as a comparison (``ecostudy run FILE --kind compare``): its timing,
     its grid; written beside its output (``<output>_compare``)."""
     st = load_checked_study(path, "compare")

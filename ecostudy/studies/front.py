@@ -75,7 +75,7 @@ def is_study_time(case):
     return bool(case["labels"].get("study_time"))
 
 
-def expand_front(path, out=None):  # out: checked by the study engine (nothing long here)
+def expand_front(path):
     """A study file's base case as a front (``ecostudy run FILE --kind pareto``): 20 points to +40 %
     on its grid and the study's own running time, written beside its output (``<output>_pareto``)."""
     st = load_checked_study(path, "pareto")

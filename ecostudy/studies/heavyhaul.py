@@ -348,5 +348,5 @@ class HeavyhaulStudy(NamedTuple):
 
 
 STUDY_KINDS.register("heavyhaul", StudyKind(expand_heavyhaul, run_heavyhaul_case, heavyhaul_table, heavyhaul_size,
-                                            table_file="runs.csv", table_name="runs"),
+                                            table_file="runs.csv", table_name="runs", expand_into=expand_heavyhaul),
                      doc="Zhang & Zhuan's braking-penalised receding-horizon control, one run per (K_b, f, Np, Nc)")

@@ -17,5 +17,5 @@ def expand_loop(path, out=None):
     return expand_simulate(path, out)
 
 
-STUDY_KINDS.register("simulate", replace(SIMULATE, expand=expand_loop),
+STUDY_KINDS.register("simulate", replace(SIMULATE, expand=expand_loop, expand_into=expand_loop),
                      doc="controllers in the loop x Monte Carlo draws of the plant (Yazhemsky 2017; Farooqi 2018)")

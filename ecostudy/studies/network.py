@@ -165,11 +165,11 @@ def _dearest_first(case):
 
 
 def expand_network_kind(path, out=None):
-    """:func:`expand_network` as the study kind's ``expand`` (``ecostudy run --kind network``)."""
+    """:func:`expand_network` into ``out`` (the study kind's ``expand_into``: ``ecostudy run --kind network``)."""
     return expand_network(path, out=out)
 
 
-STUDY_KINDS.register("network", StudyKind(expand_network_kind, run_network_strategy, network_table,
-                                          table_file="network_substation.csv", table_name="substation",
+STUDY_KINDS.register("network", StudyKind(expand_network, run_network_strategy, network_table,
+                                          expand_into=expand_network_kind, table_file="network_substation.csv", table_name="substation",
                                           spread=partial(shared_pool, first=_dearest_first)),
                      doc="trains sharing a DC substation, each strategy a case (Farooqi 2018, Ch. 7)")

@@ -61,7 +61,7 @@ def check_run_study(path, workers=1):
     """Refuse a ``run`` study estimated above the command's budget (unless forced): its kind's
     ``size`` (:func:`ecostudy.studies.batch.run_study_size`) on its cases."""
     kind = STUDY_KINDS.get("run")
-    kind.size(Path(path), kind.expand(Path(path), None).cases, workers)
+    kind.size(Path(path), kind.expand(Path(path)).cases, workers)
 
 
 def check_front(where, count, points, workers=1, das=None, das_time_limit=60.0):
