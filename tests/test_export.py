@@ -10,7 +10,7 @@ from ecostudy.analysis.export import at_positions, at_times, fixed_step
 from ecostudy.cli import app
 from ecostudy.core.types import Trajectory
 
-from .conftest import STUDIES
+from .conftest import STUDIES, TRACKS, TRAINS, write_yaml
 
 
 def uniform_acceleration(a=0.5, length=100.0, nodes=7):
@@ -113,3 +113,66 @@ def test_an_edited_summary_is_refused_in_one_line(tmp_path, edit):
     for command in ("export", "check"):
         r = runner.invoke(app, [command, str(out)])
         assert r.exit_code == 2 and "summary.json: status" in r.output and "Traceback" not in r.output, r.output
+
+
+@pytest.mark.flagged_on_purpose
+def test_a_summary_edited_to_ok_over_a_run_short_of_its_stop_is_judged_again(tmp_path):
+    """K = 10: the run stops 3 m short of Centraal (flagged). Its summary.json rewritten to say ok,
+    with a passed re-simulation and consistent with itself, is not taken on its word: export and
+    check re-simulate the saved profile against the unchanged track and train, flag the run with
+    what the re-simulation misses and exit 1."""
+    runner = CliRunner()
+    out = tmp_path / "coarse"
+    assert runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "10", "--no-plot",
+                               "--out", str(out)]).exit_code == 1
+    summary = json.loads((out / "summary.json").read_text())
+    summary.update(status="ok", not_ok=0, verification={**summary["verification"], "passed": True,
+                                                         "stop_error_m": 0.0, "arrival_time_error_s": 0.0})
+    (out / "summary.json").write_text(json.dumps(summary))
+    for command in ("export", "check"):
+        r = runner.invoke(app, [command, str(out)])
+        assert r.exit_code == 1, r.output
+        assert "flagged: re-simulated from the saved profile, outside tolerance (arrival +0.40" in r.output, r.output
+        assert "stop -3.3" in r.output, r.output
+    assert json.loads((out / "profile_every_1s.json").read_text())["run"]["status"].startswith("flagged: re-simulated")
+    assert json.loads((out / "check.json").read_text())["resimulated"]["stop_error_m"] == pytest.approx(-3.35, abs=0.01)
+
+
+@pytest.mark.parametrize("name, factor", [("traction_energy_kWh", 0.95), ("running_time_s", 0.99),
+                                          ("net_energy_kWh", 1.1)])
+def test_a_summary_whose_totals_are_not_its_profile_s_is_refused(tmp_path, name, factor):
+    """A recorded total that the profile's own run does not give (an energy edited down, a time
+    edited to the timetable's) is one line naming summary.json and the field, exit 2."""
+    runner = CliRunner()
+    out = tmp_path / "run"
+    assert runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "200", "--no-plot",
+                               "--out", str(out)]).exit_code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    summary[name] *= factor
+    (out / "summary.json").write_text(json.dumps(summary))
+    for command in ("export", "check"):
+        r = runner.invoke(app, [command, str(out)])
+        assert r.exit_code == 2 and f"summary.json: {name}: " in r.output and "edited" in r.output, r.output
+        assert "Traceback" not in r.output
+
+
+def test_a_run_s_timing_windows_are_recorded_and_kept_when_judged_again(tmp_path):
+    """The timing windows a run was solved for are in inputs.json and checked again: kept, the
+    run exports ok; a window asked tighter than the run passes it (latest 30 s at 600 m, passed
+    near 42 s) is a missed timing point, flagged."""
+    study = write_yaml(tmp_path / "study.yaml", {"name": "w", "track": str(TRACKS / "amsterdam_rokin_centraal.yaml"),
+                                                 "train": str(TRAINS / "amsterdam_metro.yaml"),
+                                                 "running_time_s": 80, "points": 200,
+                                                 "windows": [{"position_m": 600, "latest_s": 42, "max_speed_kmh": 72}]})
+    runner = CliRunner()
+    out = tmp_path / "o"
+    assert runner.invoke(app, ["solve", str(study), "--no-plot", "--out", str(out)]).exit_code == 0
+    inputs = json.loads((out / "inputs.json").read_text())
+    assert inputs["windows"] == [{"distance_m": 600.0, "earliest_s": None, "latest_s": 42.0, "min_speed_kmh": None,
+                                  "max_speed_kmh": pytest.approx(72.0)}]
+    r = runner.invoke(app, ["export", str(out)])
+    assert r.exit_code == 0 and "the run exported: ok" in r.output, r.output
+    inputs["windows"][0]["latest_s"] = 30.0
+    (out / "inputs.json").write_text(json.dumps(inputs))
+    r = runner.invoke(app, ["export", str(out)])
+    assert r.exit_code == 1 and "the timing point at 600 m is missed" in r.output, r.output

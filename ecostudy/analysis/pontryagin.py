@@ -31,7 +31,7 @@ import pyomo.core as pyo  # not pyomo.environ: see ocp.solver.prepare
 from scipy.sparse import hstack, identity
 
 from ecostudy.analysis import regimes
-from ecostudy.core.errors import InputError, problem
+from ecostudy.io.results import on_grid
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import build, prepare
 from ecostudy.ocp.session import Session, solve
@@ -163,11 +163,8 @@ def check_profile(track, train, inputs, trajectory, running_time=None, tolerance
     ``where`` names the profile in the refusal of positions off the grid.
     """
     case = prepare(track, train, inputs["from"], inputs["to"], inputs["points"])
+    on_grid(trajectory, case.nodes, inputs, where)
     x, v, dt, ft, fb = trajectory
-    if len(x) != len(case.nodes) or not np.allclose(x, case.nodes, atol=1e-3):
-        raise InputError(problem(where, "position_m", f"{len(x)} positions that differ from the grid of "
-                                 f"inputs.json ({len(case.nodes)} nodes from '{inputs['from']}' to '{inputs['to']}'): "
-                                 "an edited profile"))
     own = float(dt.sum())
     timing = {"running_time": own} if running_time is None else {"window": (0.0, float(running_time))}
     m = build(case, (v, dt, ft, fb), objective, {}, **timing)

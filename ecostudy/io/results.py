@@ -143,5 +143,14 @@ def _check_clock(p: dict[str, np.ndarray], where: Path) -> None:
                                  f"the {np.diff(t)[k]:.6g} s written: an edited profile? solve again"))
 
 
+def on_grid(trajectory: Trajectory, nodes: np.ndarray, inputs: dict[str, Any], where: str | PathLike[str]) -> None:
+    """Refuse a profile whose positions are not the grid ``inputs.json`` names."""
+    x = trajectory.nodes
+    if len(x) != len(nodes) or not np.allclose(x, nodes, atol=1e-3):
+        raise InputError(problem(where, "position_m", f"{len(x)} positions that differ from the grid of "
+                                 f"inputs.json ({len(nodes)} nodes from '{inputs['from']}' to '{inputs['to']}'): "
+                                 "an edited profile"))
+
+
 NOISE = 1e-3  # [km/h, kN] below -NOISE a saved speed or force is an edit, not the solver's rounding
 PROFILE_COLUMNS = ("position_m", "time_s", "speed_kmh", "traction_force_kN", "braking_force_kN", "handle")

@@ -4,6 +4,7 @@ from functools import partial
 from pathlib import Path
 
 from ecostudy.analysis.export import fixed_step
+from ecostudy.analysis.saved import rejudged
 from ecostudy.core.budget import how_many
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.status import Status
@@ -120,13 +121,14 @@ def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
         raise InputError(problem("command line", "--every", f"a step of {time_step_s or distance_step_m:g} {unit} over "
                                  f"the run's {span:.0f} {unit} is {how_many(rows)} rows, above the {MAX_EXPORT_ROWS:,} "
                                  f"exported (a step of at least {float(span) / MAX_EXPORT_ROWS:.2g} {unit})"))
+    judged = rejudged(saved, result_dir)  # the run's status judged again, not taken from its summary
     table = fixed_step(saved.trajectory, saved.handle, time_step_s, distance_step_m, saved.advice)
     step = f"{time_step_s:g}s" if time_step_s is not None else f"{distance_step_m:g}m"
     csv, js = (Path(result_dir) / f"profile_every_{step}.{ext}" for ext in ("csv", "json"))
     write_csv(csv, table)
-    run = {**{k: saved.summary.get(k) for k in ("track", "train", "from", "to", "running_time_s")}, "status": str(saved.status)}
+    run = {**{k: saved.summary.get(k) for k in ("track", "train", "from", "to", "running_time_s")}, "status": str(judged.status)}
     write_json(js, {"run": run,
                     "step": {"time_s": time_step_s} if time_step_s is not None else {"distance_m": distance_step_m},
                     "units": {c: u for c, u in EXPORT_UNITS.items() if c in table},
                     "rows": table.to_dict("records")})
-    return table, csv, js, saved.status
+    return table, csv, js, judged.status

@@ -2,25 +2,26 @@
 from pathlib import Path
 
 from ecostudy.analysis.pontryagin import check_profile
-from ecostudy.io.loaders import load_track, load_train
+from ecostudy.analysis.saved import rejudged
 from ecostudy.core.errors import InputError, problem
-from ecostudy.io.results import check_unchanged, load_result
+from ecostudy.io.results import load_result
 
 
 def check_result(result_dir, running_time=None):
     """:func:`check_profile` of an `ecostudy solve` output folder (inputs.json, summary.json, profile.csv),
-    with ``run_status``: the saved run's own status (solver, re-simulation, driver advice).
+    with ``run_status``: the saved run's status judged again (``analysis.saved.rejudged``: its own
+    status, and its profile re-simulated against its unchanged track and train) and that
+    re-simulation's block, ``resimulated``.
 
     A net-energy run is checked against eq. 7.4; energy and all-out runs against eq. 2.17.
     """
     saved = load_result(result_dir)
-    inputs = saved.inputs
-    check_unchanged(inputs, result_dir)
     took = float(saved.trajectory.dt.sum())
     if running_time is not None and running_time < took - 1e-6:
         raise InputError(problem("command line", "--time", f"the saved run takes {took:.2f} s: it cannot be the "
                                  f"optimum for arriving by {running_time:g} s"))
+    judged = rejudged(saved, result_dir)
     objective = "net_energy" if saved.summary.get("objective") == "net_energy" else "energy"
-    report = check_profile(load_track(inputs["track"]), load_train(inputs["train"]), inputs, saved.trajectory,
+    report = check_profile(judged.track, judged.train, saved.inputs, saved.trajectory,
                            running_time, objective=objective, where=Path(result_dir) / "profile.csv")[0]
-    return {**report, "run_status": str(saved.status)}
+    return {**report, "run_status": str(judged.status), "resimulated": judged.verification}

@@ -1,0 +1,86 @@
+"""A saved run judged again, not taken on its word: the folder of `ecostudy solve` re-simulated from
+its profile against its track and train, as the solve verified it (``core.simulate.verify``).
+
+``ecostudy check`` and ``ecostudy export`` report this status, so a ``summary.json`` that says ok
+over a run that does not reach its stop, or a profile edited after the solve, is not passed on as
+ok: a run is verified by the independent integrator on the same physics functions, here as at the
+solve.
+"""
+from pathlib import Path
+from typing import Any, NamedTuple, Sequence
+
+import numpy as np
+
+from ecostudy.analysis.tables import handles, tabulate
+from ecostudy.core.errors import InputError, problem
+from ecostudy.core.simulate import verify
+from ecostudy.core.status import Status, flagged, worst
+from ecostudy.core.types import Window
+from ecostudy.core.units import KMH, KWH
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.io.results import SavedRun, check_unchanged, on_grid
+from ecostudy.io.runsummary import Verification
+from ecostudy.ocp.problem import prepare
+
+# the totals summary.json records, which the profile's own must give (the profile's %.6g digits
+# sum to within about 1e-6 of the solve's; an edit shows far above)
+RECORDED = ("running_time_s", "traction_energy_kWh", "net_energy_kWh")
+AGREE = 1e-4  # relative, of the larger total (at least 1 s or 1 kWh)
+
+
+class Rejudged(NamedTuple):
+    status: Status                 # the saved status and the re-simulation's, the worse
+    verification: dict[str, Any]   # the re-simulation's block, as ``summary.json`` records the solve's
+    track: Any
+    train: Any
+
+
+def windows_record(windows: Sequence[Window]) -> list[dict[str, Any]]:
+    """Timing windows as ``inputs.json`` keeps them (display units), so the run can be judged again."""
+    return [{"distance_m": w.distance, "earliest_s": w.earliest, "latest_s": w.latest,
+             "min_speed_kmh": None if w.min_speed is None else w.min_speed / KMH,
+             "max_speed_kmh": None if w.max_speed is None else w.max_speed / KMH} for w in windows]
+
+
+def _windows(inputs: dict[str, Any], where: Path) -> list[Window]:
+    try:
+        return [Window(float(w["distance_m"]), w["earliest_s"], w["latest_s"],
+                       None if w["min_speed_kmh"] is None else float(w["min_speed_kmh"]) * KMH,
+                       None if w["max_speed_kmh"] is None else float(w["max_speed_kmh"]) * KMH)
+                for w in inputs.get("windows") or ()]
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(problem(where, "windows", f"not the timing windows a solve records ({exc!r})"))
+
+
+def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
+    """``saved`` (``io.results.load_result``) re-simulated from its profile's handles against its
+    track and train, unchanged since the solve (refused otherwise): its totals must be those
+    ``summary.json`` records (refused otherwise: an edited file), and the re-simulation must keep
+    the stop, the time, the energy, the speed limit, the adhesion limit and the timing windows within
+    the solve's tolerances, else the run is flagged whatever its summary says."""
+    result_dir = Path(result_dir)
+    inputs = saved.inputs
+    check_unchanged(inputs, result_dir)
+    track, train = load_track(inputs["track"]), load_train(inputs["train"])
+    case = prepare(track, train, inputs["from"], inputs["to"], inputs["points"],
+                   windows=_windows(inputs, result_dir / "inputs.json"))
+    on_grid(saved.trajectory, case.nodes, inputs, result_dir / "profile.csv")
+    _, v, dt, ft, fb = saved.trajectory
+    _, totals = tabulate(train, case.nodes, v, dt, ft, fb)
+    for name in RECORDED:
+        said = saved.summary.get(name)
+        if said is None and name == "net_energy_kWh":
+            continue
+        if not isinstance(said, (int, float)) or not abs(said - totals[name]) <= AGREE * max(abs(said), abs(totals[name]), 1.0):
+            raise InputError(problem(result_dir / "summary.json", name, f"{said!r}, but the profile's run gives "
+                                     f"{totals[name]:.6g}: an edited file? solve again"))
+    block, _ = verify(case.segment, train, case.nodes, handles(train, v, ft, fb), totals["running_time_s"],
+                      totals["traction_energy_kWh"] * KWH, case.windows, net_energy=totals["net_energy_kWh"] * KWH)
+    within = all(abs(block[k]) <= tol for k, tol in block["tolerances"].items() if k in block)
+    reasons = [] if within else [f"re-simulated from the saved profile, outside tolerance "
+                                 f"({Verification.from_dict(block).errors})"]
+    reasons += [f"re-simulated from the saved profile, the timing point at {w['distance_m']:g} m is missed "
+                f"({w['simulated_time_s']:.1f} s, {w['simulated_speed_kmh']:.1f} km/h)"
+                for w in block["windows"] if not w["kept"]]
+    status = worst([saved.status, flagged("; ".join(reasons)) if reasons else saved.status])
+    return Rejudged(status, block, track, train)
