@@ -33,7 +33,7 @@ def everywhere(train, weights=None, allowance=None, credit=None):
 def supervised(state):
     """A supervisor rule's rounds (Farooqi 2018 Ch. 7) from the independent runs: rounds, substation energy."""
     fl, p = state
-    _, history, _ = rules.supervised(fl, p["rule"], rules.independent(fl))
+    _, history, _, _ = rules.supervised(fl, p["rule"], rules.independent(fl))
     return {"rounds": len(history), "substation_kWh": history[-1]}
 
 
@@ -60,7 +60,7 @@ def main():
         for variant in args.variants:
             legs.pumping_pays = PAYS if variant == "pays" else everywhere
             counts.clear()
-            (_, history, _), _, wall = harness.timed(lambda: rules.supervised(fl, rule, start))
+            (_, history, _, _), _, wall = harness.timed(lambda: rules.supervised(fl, rule, start))
             table.add(rule, variant, f"{wall:.1f}", sum(counts), len(counts), ", ".join(f"{h:.3f}" for h in history))
     legs.pumping_pays = PAYS
 

@@ -100,7 +100,9 @@ def test_a_new_run_ahead_that_leaves_the_train_behind_no_run_is_not_taken():
     runs[order[1]] = rules._replan(f, "triggering", runs, order, 1, {}, map, True)
     with pytest.raises(SolverError, match="cannot keep buffer_m 60"):
         rules._replan(f, "triggering", runs, order, 2, {}, map, True)
-    kept, history, stopped = rules.supervised(f, "triggering", start)
+    kept, history, stopped, held = rules.supervised(f, "triggering", start)
     assert stopped is None and len(history) == 4 and min(history[1:]) < history[0]
+    t2, t3 = (f.names[order[k]] for k in (1, 2))
+    assert held == {t2: f"from round 1 on: its new run left {t3} no run buffer_m 60 m behind it"}
     assert buffer_missed(f, kept) is None
     assert all(np.array_equal(a.s, b.s) for a, b in zip(kept[order[1]], start[order[1]]))  # T2 as it started

@@ -237,7 +237,7 @@ def test_the_supervisor_rounds_check_warm_legs_against_cold_in_their_first_round
         return solve(task)
 
     monkeypatch.setattr(fleet, "solve_leg", noted)
-    runs, history, _ = rules.supervised(f, "triggering", start, rounds=2)
+    runs, history, _, _ = rules.supervised(f, "triggering", start, rounds=2)
     first = warmth[:2]  # both trains' one leg in the first round, T1's in the sample
     assert first == [("train T1, leg 1", legs.CHECKED), ("train T2, leg 1", True)]
     assert len(history) == 3 and len(warmth) > 2 and all(flag is True for _, flag in warmth[2:])

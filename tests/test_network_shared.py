@@ -39,8 +39,8 @@ def test_a_leg_task_another_strategy_solved_is_not_solved_again_and_the_runs_are
     alone.solved = LegRuns()
     rules.supervised(f, "receptivity", ind)
     before = f.solved.hits
-    shared, shared_history, _ = rules.supervised(f, "voltage", ind)
-    own, own_history, _ = rules.supervised(alone, "voltage", ind)
+    shared, shared_history, _, _ = rules.supervised(f, "voltage", ind)
+    own, own_history, _, _ = rules.supervised(alone, "voltage", ind)
     assert f.solved.hits > before and alone.solved.hits == 0
     assert shared_history == own_history and _same(shared, own)
 

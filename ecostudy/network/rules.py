@@ -1,6 +1,7 @@
 """Supervisor rules (Farooqi 2018 Ch. 7-8): triggering 7.7, voltage 7.11, dissension 8.14-8.17, the
 receptivity credit, and following a train ahead (Yazhemsky 2017 eq. 6.9). See :mod:`.strategies`."""
 import copy
+from typing import NamedTuple
 
 import numpy as np
 
@@ -177,6 +178,14 @@ def rule_terms(fleet, rule, runs_by_train, i):
     return RULES.get(rule)(fleet, runs_by_train, i)
 
 
+class Rounds(NamedTuple):
+    """What :func:`supervised` returns."""
+    runs: list            # the best round's runs, per train
+    history: list         # the substation kWh of the start and of each round
+    stopped: str | None   # why a round stopped, None when every round completed
+    held: dict            # {train name: why it kept an earlier run from some round on}
+
+
 def supervised(fleet, rule, start, rounds=3, mapper=map):
     """Rules (b), (c) and (d): supervisor rounds; in each, the trains in departure order are
     re-optimised one by one against the others' latest runs (Gauss-Seidel: a train never plans
@@ -189,7 +198,8 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     credited up to what the line could take from it then (:func:`receptivity`; crediting all of it,
     as independent driving does, let a discounted train accelerate and brake harder and lose the
     extra braking: measured +1 % substation energy for rule 7.11 on the 2-train study). Returns
-    (runs, rounds' substation kWh, None or why a round stopped); the runs are those of the best
+    :class:`Rounds`: the runs, the rounds' substation kWh, None or why a round stopped, and the trains
+    held at an earlier run with why; the runs are those of the best
     round, the start included where it keeps the buffer (the independent runs ignore it: on two metro
     trains 30 s apart with buffer_m 150, tests/test_network_buffer.py, the start was the cheapest
     and 35 m too near). Where a train cannot keep its buffer behind the new run ahead, that new run is
@@ -214,7 +224,7 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
     order = departure_order(fleet)
     memo = {}  # legs whose terms did not change since their last solve are not solved again
     checked = {}  # the first round's cold checks (:func:`_checks`)
-    held = set()  # trains whose new run left the train behind no run: they keep their run from then on
+    held = {}  # trains whose new run left the train behind no run: they keep their run from then on
     for number in range(1, rounds + 1):
         before = list(runs)  # the runs of the round before (the start before the first)
         try:
@@ -228,19 +238,25 @@ def supervised(fleet, rule, start, rounds=3, mapper=map):
                     if j is None or runs[j] is before[j]:
                         raise
                     runs[j] = before[j]  # the new run ahead leaves this train no run behind it: not taken
-                    held.add(j)
+                    held[j] = (f"from round {number} on: its new run left {fleet.names[i]} no run buffer_m "
+                               f"{fleet.buffer:g} m behind it")
                     runs[i] = _replan(fleet, rule, runs, order, rank, memo, mapper, number == 1)
         except SolverError as exc:
             if number == 1:
                 raise
-            return _with_checks(best[1], checked), history, f"round {number} stopped: {exc}"
+            return Rounds(_with_checks(best[1], checked), history, f"round {number} stopped: {exc}", _named(fleet, held))
         if number == 1:
             checked = _checks(runs)
         _, _, totals = evaluate(fleet, runs)
         history.append(totals["substation_kWh"])
         if history[-1] < best[0] and buffer_missed(fleet, runs) is None:
             best = (history[-1], list(runs))
-    return _with_checks(best[1], checked), history, None
+    return Rounds(_with_checks(best[1], checked), history, None, _named(fleet, held))
+
+
+def _named(fleet, held):
+    """{train name: why} of the trains ``held`` by index, in departure order."""
+    return {fleet.names[j]: why for j, why in sorted(held.items())}
 
 
 def _replan(fleet, rule, runs, order, rank, memo, mapper, check):

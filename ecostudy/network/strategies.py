@@ -79,7 +79,8 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1, tick
         elif progress:
             info = result["info"]
             progress(f"{name:12s} substation {result['totals']['substation_kWh']:.3f} kWh, {result['totals']['wall_s']:.1f} s"
-                     + (f" ({info['rounds_stopped']})" if info.get("rounds_stopped") else ""))
+                     + (f" ({info['rounds_stopped']})" if info.get("rounds_stopped") else "")
+                     + "".join(f"; {name} kept its earlier run {why}" for name, why in info.get("rounds_held", {}).items()))
 
     if "independent" in strategies:
         report("independent", _scored(fleet, ind, {}, time.perf_counter() - t0, pooled))
@@ -124,8 +125,9 @@ def one_strategy(fleet, name, ind, wall=0.0, pool=None):
 
 def _supervised(rule):
     def run(fleet, ind, mapper):
-        runs, history, stopped = supervised(fleet, rule, ind, mapper=mapper)
-        return runs, {"rounds_substation_kWh": history, **({"rounds_stopped": stopped} if stopped else {})}
+        runs, history, stopped, held = supervised(fleet, rule, ind, mapper=mapper)
+        return runs, {"rounds_substation_kWh": history, **({"rounds_stopped": stopped} if stopped else {}),
+                      **({"rounds_held": held} if held else {})}
     return run
 
 
