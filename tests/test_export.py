@@ -176,3 +176,23 @@ def test_a_run_s_timing_windows_are_recorded_and_kept_when_judged_again(tmp_path
     (out / "inputs.json").write_text(json.dumps(inputs))
     r = runner.invoke(app, ["export", str(out)])
     assert r.exit_code == 1 and "the timing point at 600 m is missed" in r.output, r.output
+
+
+def test_a_run_solved_again_into_its_folder_leaves_no_check_or_export_of_the_run_before(tmp_path):
+    """check.json and profile_every_* belong to the run they read: solving into the folder again
+    (80 s, then 78 s) removes them with that run's other files, so no 80 s export sits beside a 78 s
+    profile; checked and exported again, they are the new run's."""
+    runner = CliRunner()
+    out = tmp_path / "run"
+    base = ["solve", "--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train",
+            str(TRAINS / "amsterdam_metro.yaml"), "--points", "200", "--no-plot", "--out", str(out)]
+    assert runner.invoke(app, [*base, "--time", "80"]).exit_code == 0
+    for command in (["export", str(out), "--every", "1s"], ["export", str(out), "--every", "10m"], ["check", str(out)]):
+        assert runner.invoke(app, command).exit_code == 0
+    assert {p.name for p in out.iterdir()} >= {"check.json", "profile_every_1s.csv", "profile_every_10m.json"}
+    assert runner.invoke(app, [*base, "--time", "78"]).exit_code == 0
+    left = {p.name for p in out.iterdir()}
+    assert not left & {"check.json", "profile_every_1s.csv", "profile_every_1s.json", "profile_every_10m.csv",
+                       "profile_every_10m.json"}, left
+    assert runner.invoke(app, ["check", str(out)]).exit_code == 0
+    assert json.loads((out / "check.json").read_text())["profile_running_time_s"] == pytest.approx(78.0, abs=1e-4)
