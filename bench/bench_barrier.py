@@ -8,7 +8,7 @@ adaptive default (``ocp.solver.IPOPT["space"]``) compare. Iterations and energie
 the machine; CPU seconds do (medians of ``--repeat``). Cases: ``metro`` (studies/default.yaml's
 Rokin-Centraal in 76 s, traction energy), ``long`` (the 22.4 km regional line S01-S20 run through
 in 1.15 times its envelope time, net energy, as bench/bench_lean.py), ``regional808``
-(studies/regional_80s.yaml, net energy) and ``thesis001`` (studies/thesis001_advanced.yaml).
+(studies/regional_80s.yaml, net energy) and ``yazhemsky2017`` (studies/yazhemsky2017_advanced.yaml).
 """
 import argparse
 import statistics
@@ -28,7 +28,7 @@ CASES = {  # track, train, from, to (None: the first and last stops), running ti
     "metro": ("amsterdam_rokin_centraal", "amsterdam_metro", "Rokin", "Centraal", lambda c: 76.0, "energy"),
     "long": ("regional_line_20stops", "regional_alstom", "S01", "S20", lambda c: round(1.15 * c.estimate), "net_energy"),
     "regional808": ("regional_808m", "regional_alstom", None, None, lambda c: 80.0, "net_energy"),
-    "thesis001": ("thesis001_advanced_1km", "thesis001_commuter", None, None, lambda c: 84.92, "energy"),
+    "yazhemsky2017": ("yazhemsky2017_advanced_1km", "yazhemsky2017_commuter", None, None, lambda c: 84.92, "energy"),
 }
 STRATEGIES = {
     "adaptive (quality function), the default": {},
@@ -56,7 +56,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--case", nargs="+", default=["metro:1000", "metro:5000", "long:1000", "long:5000",
-                                                    "regional808:1000", "thesis001:500"])
+                                                    "regional808:1000", "yazhemsky2017:500"])
     args = p.parse_args()
     solver.configure()
     print(harness.command(__file__) + "\n")

@@ -114,8 +114,8 @@ class IpoptSocp:
 @functools.lru_cache(maxsize=1)
 def program():
     """The Fig. 9.2 SOCP from a stand at K = 500, assembled once: (segment, train, weights, nodes, A, b, q, cones, index)."""
-    train = load_train(ROOT / "trains/thesis001_commuter.yaml")
-    segment = make_segment(load_track(ROOT / "tracks/thesis001_advanced_1km.yaml"), train, "A", "B")
+    train = load_train(ROOT / "trains/yazhemsky2017_commuter.yaml")
+    segment = make_segment(load_track(ROOT / "tracks/yazhemsky2017_advanced_1km.yaml"), train, "A", "B")
     weights = ConvexWeights(time=10.0, energy=1.0)
     prog = ConvexProgram(segment, train, trapezoid_grid(segment, 500), weights)
     x = prog.grid_from(0.0, 0.05)

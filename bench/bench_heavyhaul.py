@@ -57,7 +57,7 @@ def qp_case(p):
     manoeuvre on a 10 per-mille climb (the plant stepping the full train between them)."""
     from ecostudy.core.grid import Profile, Segment
     limit_blas_threads(p["threads"])
-    consist = load_consist(ROOT / "trains/heavyhaul_paper002.yaml")
+    consist = load_consist(ROOT / "trains/heavyhaul_zhang_zhuan.yaml")
     segment = Segment(60000.0, Profile(np.zeros(1), np.array([0.010])), Profile(np.zeros(1), np.zeros(1)),
                       Profile(np.zeros(1), np.array([30.0])))
     plant = CascadePlant(consist, segment)

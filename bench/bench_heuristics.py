@@ -24,8 +24,8 @@ from ecostudy.ocp.problem import prepare  # noqa: E402
 
 TRIPS = [("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal", (76.0, 80.0, 85.0, 90.0)),
          ("regional_alstom", "regional_808m", "Origin", "Destination", (80.0, 90.0)),
-         ("thesis001_commuter", "thesis001_flat_1km", "A", "B", (77.99, 95.0)),
-         ("thesis001_commuter", "thesis001_advanced_1km", "A", "B", (84.92, 100.87))]
+         ("yazhemsky2017_commuter", "yazhemsky2017_flat_1km", "A", "B", (77.99, 95.0)),
+         ("yazhemsky2017_commuter", "yazhemsky2017_advanced_1km", "A", "B", (84.92, 100.87))]
 
 
 def metro(p):

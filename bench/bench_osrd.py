@@ -28,7 +28,7 @@ from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--folder", required=True, help="OSRD's realistic rolling-stock folder.")
-    ap.add_argument("--track", default=str(ROOT / "tracks" / "thesis001_5km_representative.yaml"))
+    ap.add_argument("--track", default=str(ROOT / "tracks" / "yazhemsky2017_5km_representative.yaml"))
     ap.add_argument("--modes", action="store_true", help="Every power mode, not only the default.")
     ap.add_argument("--points", type=int, default=500)
     args = ap.parse_args()

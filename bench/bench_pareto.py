@@ -27,7 +27,7 @@ from ecostudy.studies.pareto import front_supplements, is_monotone, saving_at, s
 
 TRIPS = {"Amsterdam metro": ("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal"),
          "regional": ("regional_alstom", "regional_808m", "Origin", "Destination"),
-         "Yazhemsky 2017 advanced": ("thesis001_commuter", "thesis001_advanced_1km", "A", "B")}
+         "Yazhemsky 2017 advanced": ("yazhemsky2017_commuter", "yazhemsky2017_advanced_1km", "A", "B")}
 PARAMS = {"count": 20, "points": 500, "workers": 1}
 
 

@@ -2,7 +2,7 @@
 
     .venv/bin/python bench/compare_published.py [--points 1000]
 
-Prints a markdown table: published arrival time and energy (tests/data/thesis001_published.csv)
+Prints a markdown table: published arrival time and energy (tests/data/yazhemsky2017_published.csv)
 beside ecostudy's energy-optimal run at the same time, with solver status and verification.
 """
 import argparse
@@ -25,10 +25,10 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--points", type=int, default=1000)
     args = p.parse_args()
-    train = load_train(ROOT / "trains/thesis001_commuter.yaml")
+    train = load_train(ROOT / "trains/yazhemsky2017_commuter.yaml")
     table = harness.Table(["trip", "figure", "time s", "published J/kg", "ecostudy J/kg", "difference %", "status",
                            "verified"], show=False)
-    for case in pd.read_csv(ROOT / "tests/data/thesis001_published.csv").to_dict("records"):
+    for case in pd.read_csv(ROOT / "tests/data/yazhemsky2017_published.csv").to_dict("records"):
         track = load_track(ROOT / f"tracks/{case['track']}.yaml")
         r = solve_run(track, train, "A", "B", Timing(running_time=case["running_time_s"]), points=args.points)
         e = r.summary["traction_energy_J_per_kg"]

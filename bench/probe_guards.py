@@ -77,7 +77,7 @@ def loop_study(tmp, name, **fields):
 
 
 def weak_train(tmp, share):
-    text = (TRAINS / "thesis001_commuter.yaml").read_text()
+    text = (TRAINS / "yazhemsky2017_commuter.yaml").read_text()
     table = re.search(r"force_kN: \[([^\]]*)\]", text)
     forces = ", ".join(f"{float(x) * share:g}" for x in table.group(1).split(","))
     path = tmp / f"weak{share:g}.yaml"
@@ -86,7 +86,7 @@ def weak_train(tmp, share):
 
 
 def hill(tmp):
-    text = (TRACKS / "thesis001_advanced_1km.yaml").read_text()
+    text = (TRACKS / "yazhemsky2017_advanced_1km.yaml").read_text()
     text = text.replace("{position_m: 200, gradient_permille: -20.3943}", "{position_m: 200, gradient_permille: 0}")
     path = tmp / "hill.yaml"
     path.write_text(text)

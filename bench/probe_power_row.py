@@ -27,8 +27,8 @@ from ecostudy.ocp import convex  # noqa: E402
 
 def main():
     warnings.simplefilter("ignore")  # the dropped limit's warning, once per program
-    train = load_train(ROOT / "trains/thesis001_commuter.yaml")
-    segment = make_segment(load_track(ROOT / "tracks/thesis001_advanced_1km.yaml"), train, "A", "B")
+    train = load_train(ROOT / "trains/yazhemsky2017_commuter.yaml")
+    segment = make_segment(load_track(ROOT / "tracks/yazhemsky2017_advanced_1km.yaml"), train, "A", "B")
     nodes = convex.trapezoid_grid(segment, 100)
     polish = convex.MORE_POLISH
     print("| power limit [kW] | limit | polishing | status | max abs(rho s - 1) | program rows | solve s |")

@@ -35,7 +35,7 @@ ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents, Path(api.__file__).pare
 OUT = Path(tempfile.mkdtemp(prefix="ecostudy-gallery-"))
 study = {
     "name": "gallery_heavy_haul",
-    "consist": str(ROOT / "trains" / "heavyhaul_paper002.yaml"),
+    "consist": str(ROOT / "trains" / "heavyhaul_zhang_zhuan.yaml"),
     "track": str(ROOT / "tracks" / "heavyhaul_representative_45km.yaml"),
     "reference": {"supplement_percent": 10},
     "sample_time_s": 20,

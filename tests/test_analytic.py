@@ -89,7 +89,7 @@ def test_constant_resistance_optimum_has_no_cruise(flat):
 def test_flat_track_with_davis_resistance_is_ma_cr_co_mb(T):
     """Yazhemsky 2017 §9.1 flat trip, one speed limit, quadratic resistance (Yazhemsky 2017 Fig. 9.1)."""
     from .conftest import TRACKS, TRAINS
-    r = solve_run(load_track(TRACKS / "thesis001_flat_1km.yaml"), load_train(TRAINS / "thesis001_commuter.yaml"),
+    r = solve_run(load_track(TRACKS / "yazhemsky2017_flat_1km.yaml"), load_train(TRAINS / "yazhemsky2017_commuter.yaml"),
                   "A", "B", Timing(running_time=T), points=500)
     assert r.summary["regimes"]["sequence"] == "MA-CR-CO-MB"
     shares = r.summary["regimes"]["distance_shares"]

@@ -204,7 +204,7 @@ def test_journey_and_dask_mistakes_are_input_errors(tmp_path):
 
 
 def test_speed_limits_that_look_like_metres_per_second_are_warned(tmp_path):
-    track = load_yaml(TRACKS / "thesis001_5km_representative.yaml")
+    track = load_yaml(TRACKS / "yazhemsky2017_5km_representative.yaml")
     track["speed_limits"] = [{"position_m": 0, "speed_kmh": 16.0}]  # 16 m/s written as km/h
     path = write_yaml(tmp_path / "k.yaml", track)
     from ecostudy.io.loaders import load_track

@@ -41,7 +41,7 @@ def test_a_study_train_longer_than_its_track_names_the_train_file(tmp_path):
 
 
 def test_a_consist_longer_than_its_track_names_its_vehicles(tmp_path):
-    consist = load_yaml(TRAINS / "heavyhaul_paper002.yaml")
+    consist = load_yaml(TRAINS / "heavyhaul_zhang_zhuan.yaml")
     consist["vehicles"] = [{"type": "locomotive", "count": 2}] + [{"type": "wagon", "count": 1000}] * 4
     path = write_yaml(tmp_path / "c.yaml", consist)  # 4000 wagons of 12.07 m: 48 km on a 45 km line
     study = hostile(tmp_path, "heavyhaul_brake_penalty.yaml", consist=str(path))
@@ -181,7 +181,7 @@ def test_an_export_step_of_1e_300_s_prints_a_readable_count(tmp_path):
 
 def test_an_unknown_only_names_the_option(tmp_path):
     """It was '<study>: controllers: --only names , not among ...': the study named for the option's value."""
-    study = hostile(tmp_path, "thesis001_closed_loop.yaml")
+    study = hostile(tmp_path, "yazhemsky2017_closed_loop.yaml")
     refused(run("simulate", study, "--only", "", "--no-plot", "--no-progress"),
             "command line: --only: '': not among the controllers of", "(convex_mixed, convex_time, plan_replayed)")
     nothing_written(tmp_path)

@@ -347,8 +347,8 @@ def _never(*args, **kwargs):
 @pytest.mark.parametrize("command, shipped, long_step", [
     (["heavyhaul"], "heavyhaul_brake_penalty.yaml", ("ecostudy.studies.heavyhaul", "_reference")),
     (["run", "--kind", "heavyhaul"], "heavyhaul_brake_penalty.yaml", ("ecostudy.studies.heavyhaul", "_reference")),
-    (["simulate"], "thesis001_closed_loop.yaml", ("ecostudy.studies.closedloop", "all_out_time")),
-    (["run", "--kind", "simulate"], "thesis001_closed_loop.yaml", ("ecostudy.studies.closedloop", "all_out_time")),
+    (["simulate"], "yazhemsky2017_closed_loop.yaml", ("ecostudy.studies.closedloop", "all_out_time")),
+    (["run", "--kind", "simulate"], "yazhemsky2017_closed_loop.yaml", ("ecostudy.studies.closedloop", "all_out_time")),
     (["network"], "network_metro_2trains.yaml", ("ecostudy.network.fleet", "plan")),
     (["run", "--kind", "network"], "network_metro_2trains.yaml", ("ecostudy.network.fleet", "plan")),
 ])

@@ -775,7 +775,7 @@ def test_a_force_in_another_unit_than_its_wheel_power_is_refused_before_fitting(
 
 @pytest.mark.parametrize("train, track, rate", [
     ("regional_alstom", "calibration_line", 1.0), ("amsterdam_metro_adhesion", "metro_line_4stops", 1.0),
-    ("thesis001_commuter", "thesis001_5km_representative", 1.0), ("thesis001_highspeed", "thesis001_5km_representative", 10.0)])
+    ("yazhemsky2017_commuter", "yazhemsky2017_5km_representative", 1.0), ("yazhemsky2017_highspeed", "yazhemsky2017_5km_representative", 10.0)])
 def test_generated_logs_keep_their_wheel_power_the_force_times_the_speed(train, track, rate):
     """The band the force and wheel power check allows (0.8-1.25) against generated logs: at 1 Hz the
     interval-mean power and the sampled force part most where the speed rises (the metro train with

@@ -31,7 +31,7 @@ def assert_one_line_error(result, *fragments):
 
 def test_solve_study_writes_outputs(tmp_path):
     out = tmp_path / "run"
-    r = run("solve", STUDIES / "thesis001_advanced.yaml", "--out", out)
+    r = run("solve", STUDIES / "yazhemsky2017_advanced.yaml", "--out", out)
     assert r.exit_code == 0, r.output
     summary = json.loads((out / "summary.json").read_text())
     assert summary["verification"]["passed"]

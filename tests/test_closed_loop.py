@@ -1,6 +1,6 @@
 """Yazhemsky 2017 Chs. 9-10 in closed loop: the convex controller (SOCP 6.10, Clarabel) re-solved at
 10 Hz on a plant integrated by DOP853, against the published trips (tests/data/
-thesis001_closed_loop_published.csv), a following train, and the uncertainty trends of Ch. 10."""
+yazhemsky2017_closed_loop_published.csv), a following train, and the uncertainty trends of Ch. 10."""
 import numpy as np
 import pandas as pd
 import pytest
@@ -16,13 +16,13 @@ from ecostudy.ocp.convex import ConvexProgram, ConvexWeights, trapezoid_grid
 from .conftest import DATA, TRACKS, TRAINS
 
 pytestmark = pytest.mark.slow
-PUBLISHED = pd.read_csv(DATA / "thesis001_closed_loop_published.csv", dtype={"figure": str}).to_dict("records")
+PUBLISHED = pd.read_csv(DATA / "yazhemsky2017_closed_loop_published.csv", dtype={"figure": str}).to_dict("records")
 TS = 0.1  # Yazhemsky 2017 Ch.9: measured and re-solved every 100 ms
 
 
 @pytest.fixture(scope="module")
 def commuter():
-    return load_train(TRAINS / "thesis001_commuter.yaml")
+    return load_train(TRAINS / "yazhemsky2017_commuter.yaml")
 
 
 def drive(train, track_name, weights, latest, truth=Truth(), noise=Noise(), estimator=None, lead=None, points=500):
@@ -71,7 +71,7 @@ def test_a_follower_never_comes_within_the_separation(trips, commuter):
     """Fig. 9.5: a time-efficient follower (10/1) behind the Fig. 9.4 leader, 100 m apart."""
     leader, _ = trips["9.4"]
     lead = leader_clock(leader.states, 100.0)
-    follower, controller = drive(commuter, "thesis001_advanced_1km", ConvexWeights(time=10.0, energy=1.0), 300.0,
+    follower, controller = drive(commuter, "yazhemsky2017_advanced_1km", ConvexWeights(time=10.0, energy=1.0), 300.0,
                                  lead=lead)
     x_lead = np.array([s.position for s in leader.states])
     t_lead = np.array([s.time for s in leader.states])
@@ -82,7 +82,7 @@ def test_a_follower_never_comes_within_the_separation(trips, commuter):
     assert follower.arrival_time_s > leader.arrival_time_s  # held back by the leader (thesis: 101.53 s)
 
 
-CH10 = ("thesis001_5km_representative", ConvexWeights(time=1.0, energy=0.1), 360.0)
+CH10 = ("yazhemsky2017_5km_representative", ConvexWeights(time=1.0, energy=0.1), 360.0)
 NOISE = Noise(acceleration=0.05, position=0.01, speed=0.01, seed=3, period=1.0, accelerometer=0.01)
 
 

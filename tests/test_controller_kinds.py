@@ -85,8 +85,8 @@ def test_a_handle_outside_minus_one_to_one_fails_the_run_naming_it(tmp_path):
 def test_a_driver_advisory_loop_refuses_its_inner_controllers_handle_outside_minus_one_to_one():
     """Quantised (a DAS loop) snaps a handle to the nearest level: a bug's handle of 2 would be
     driven as full traction; it is refused as the loop refuses any controller's."""
-    train = load_train(TRAINS / "thesis001_commuter.yaml")
-    segment = make_segment(load_track(TRACKS / "thesis001_advanced_1km.yaml"), train, "A", "B")
+    train = load_train(TRAINS / "yazhemsky2017_commuter.yaml")
+    segment = make_segment(load_track(TRACKS / "yazhemsky2017_advanced_1km.yaml"), train, "A", "B")
     loop = Quantised(_Doubled(segment), [-1.0, 0.0, 0.5, 0.75, 1.0])
     with pytest.raises(EcostudyError, match="_Doubled.plan gave the handle 2 at 0.0 m"):
         run_loop(Plant(segment, train), loop, 0.5)

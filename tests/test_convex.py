@@ -23,12 +23,12 @@ from .conftest import TRACKS, TRAINS
 
 @pytest.fixture(scope="module")
 def commuter():
-    return load_train(TRAINS / "thesis001_commuter.yaml")
+    return load_train(TRAINS / "yazhemsky2017_commuter.yaml")
 
 
 @pytest.fixture(scope="module")
 def advanced(commuter):
-    track = load_track(TRACKS / "thesis001_advanced_1km.yaml")
+    track = load_track(TRACKS / "yazhemsky2017_advanced_1km.yaml")
     return track, make_segment(track, commuter, "A", "B")
 
 
@@ -93,7 +93,7 @@ def _upper(pieces, v):
 
 
 def test_the_thesis_envelope_is_its_two_pieces_and_convex_envelopes_are_touched_below():
-    train = load_train(TRAINS / "thesis001_commuter.yaml")
+    train = load_train(TRAINS / "yazhemsky2017_commuter.yaml")
     v = np.linspace(0.0, 23.0, 200)
     pieces = envelope_pieces(train.traction)(v)
     assert len(pieces) == 2  # F_max and the quadratic R(v) (eqs. 6.1h, 6.1j)
@@ -157,7 +157,7 @@ def test_the_convex_controller_closes_the_loop_on_a_coarse_grid(commuter, advanc
 
 def _study(tmp_path, **changes):
     import yaml
-    doc = {"name": "t", "track": str(TRACKS / "thesis001_flat_1km.yaml"), "train": str(TRAINS / "thesis001_commuter.yaml"),
+    doc = {"name": "t", "track": str(TRACKS / "yazhemsky2017_flat_1km.yaml"), "train": str(TRAINS / "yazhemsky2017_commuter.yaml"),
            "window_s": [0, 200], "points": 60, "sample_time_s": 0.5,
            "controllers": [{"name": "c", "kind": "convex"}], **changes}
     path = tmp_path / "s.yaml"

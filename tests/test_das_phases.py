@@ -68,8 +68,8 @@ def test_cruise_advice_is_held_by_the_driver_controller(metro, amsterdam):
 
 
 def test_follow_replays_modes_in_order():
-    trk = load_track(TRACKS / "thesis001_flat_1km.yaml")
-    trn = load_train(TRAINS / "thesis001_commuter.yaml")
+    trk = load_track(TRACKS / "yazhemsky2017_flat_1km.yaml")
+    trn = load_train(TRAINS / "yazhemsky2017_commuter.yaml")
     from ecostudy.core.grid import make_segment
     names = list(trk.stops)
     seg = make_segment(trk, trn, names[0], names[-1])

@@ -14,7 +14,7 @@ COMMANDS = {"run": [ROOT / "studies/default.yaml"], "pareto": ["--track", AMS, "
             "compare": ["--track", AMS, "--train", METRO, "--time", 80],
             "network": [ROOT / "studies/network_metro_2trains.yaml"],
             "heavyhaul": [ROOT / "studies/heavyhaul_brake_penalty.yaml"],
-            "simulate": [ROOT / "studies/thesis001_closed_loop.yaml"]}
+            "simulate": [ROOT / "studies/yazhemsky2017_closed_loop.yaml"]}
 
 
 @pytest.mark.parametrize("command", COMMANDS)

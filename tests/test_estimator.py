@@ -65,8 +65,8 @@ def test_over_20_noise_seeds_the_ekf_is_within_2_percent_at_2_km():
 def test_a_study_runs_the_state_estimator_by_name(tmp_path):
     """``estimator: state`` in a study file: the run's mass estimate is the EKF's, near the draw's mass."""
     path = tmp_path / "ekf.yaml"
-    write_yaml(path, {"name": "ekf", "track": str(TRACKS / "thesis001_advanced_1km.yaml"),
-                      "train": str(TRAINS / "thesis001_commuter.yaml"), "window_s": [0, 200], "points": 60,
+    write_yaml(path, {"name": "ekf", "track": str(TRACKS / "yazhemsky2017_advanced_1km.yaml"),
+                      "train": str(TRAINS / "yazhemsky2017_commuter.yaml"), "window_s": [0, 200], "points": 60,
                       "sample_time_s": 0.2, "draws": 1, "seed": 5,
                       "controllers": [{"name": "ekf", "kind": "convex", "estimator": "state"}],
                       "deviations": {"mass": {"low": 1.1, "high": 1.1}},

@@ -109,8 +109,8 @@ def test_the_computation_delay_holds_the_previous_control_and_is_repeatable(comm
 
 def _study(tmp_path, controller):
     path = tmp_path / "s.yaml"
-    write_yaml(path, {"name": "s", "track": str(TRACKS / "thesis001_advanced_1km.yaml"),
-                      "train": str(TRAINS / "thesis001_commuter.yaml"), "window_s": [0, 200], "points": 60,
+    write_yaml(path, {"name": "s", "track": str(TRACKS / "yazhemsky2017_advanced_1km.yaml"),
+                      "train": str(TRAINS / "yazhemsky2017_commuter.yaml"), "window_s": [0, 200], "points": 60,
                       "sample_time_s": 0.5, "controllers": [controller]})
     return path
 

@@ -227,7 +227,7 @@ test_cli_option_checks, test_cli_option_checks_deep = fuzz(st.dictionaries(st.sa
 # ------------------------------------------------------------------- study kinds, timetables, journeys
 LOOP = load_yaml(STUDIES / "metro_monte_carlo.yaml")
 HEAVY = load_yaml(STUDIES / "heavyhaul_fence.yaml")
-CONSIST = load_yaml(TRAINS / "heavyhaul_paper002.yaml")
+CONSIST = load_yaml(TRAINS / "heavyhaul_zhang_zhuan.yaml")
 TIMETABLE = load_yaml(STUDIES / "timetables" / "metro_line.yaml")
 LINE4 = loaders.load_track(TRACKS / "metro_line_4stops.yaml")
 BOUND_S = 120  # no input may keep a check busy longer: a hang fails the test

@@ -19,7 +19,7 @@ LINE4 = TRACKS / "metro_line_4stops.yaml"
 # ----------------------------------------------------------------------------------- unclear messages
 def weak_train(tmp_path, share):
     """The Yazhemsky 2017 commuter train with ``share`` of its traction force table."""
-    text = (TRAINS / "thesis001_commuter.yaml").read_text()
+    text = (TRAINS / "yazhemsky2017_commuter.yaml").read_text()
     table = re.search(r"force_kN: \[([^\]]*)\]", text)
     forces = ", ".join(f"{float(x) * share:g}" for x in table.group(1).split(","))
     path = tmp_path / f"weak{share:g}.yaml"
@@ -28,7 +28,7 @@ def weak_train(tmp_path, share):
 
 
 def hill(tmp_path, permille):
-    text = (TRACKS / "thesis001_advanced_1km.yaml").read_text()
+    text = (TRACKS / "yazhemsky2017_advanced_1km.yaml").read_text()
     text = text.replace("{position_m: 200, gradient_permille: -20.3943}", "{position_m: 200, gradient_permille: 0}")
     text = text.replace("{position_m: 400, gradient_permille: 20.3943}", f"{{position_m: 400, gradient_permille: {permille}}}")
     path = tmp_path / "hill.yaml"
@@ -51,7 +51,7 @@ def test_a_train_that_cannot_climb_is_told_where(tmp_path, share, permille, frag
 def weak_brakes(tmp_path, share):
     """The Yazhemsky 2017 commuter train with ``share`` of its braking force (its braking envelope and
     service deceleration scaled)."""
-    doc = load_yaml((TRAINS / "thesis001_commuter.yaml").read_text())
+    doc = load_yaml((TRAINS / "yazhemsky2017_commuter.yaml").read_text())
     braking = doc["braking"]
     for key in ("max_force_kN", "max_power_kW"):
         if key in braking:
@@ -86,8 +86,8 @@ def test_a_train_whose_brakes_cannot_hold_it_is_told_where(tmp_path, track, frag
 
 
 def test_a_closed_loop_study_of_a_train_that_cannot_run_says_why(tmp_path):
-    doc = load_yaml((STUDIES / "thesis001_closed_loop.yaml").read_text())
-    doc.update(track=str(TRACKS / "thesis001_advanced_1km.yaml"), train=str(weak_train(tmp_path, 0.01)),
+    doc = load_yaml((STUDIES / "yazhemsky2017_closed_loop.yaml").read_text())
+    doc.update(track=str(TRACKS / "yazhemsky2017_advanced_1km.yaml"), train=str(weak_train(tmp_path, 0.01)),
                output=str(tmp_path / "out"))
     r = run("simulate", write_yaml(tmp_path / "loop.yaml", doc), "--no-progress")
     one_line(r, "the train cannot overcome its running resistance")
@@ -220,7 +220,7 @@ def test_every_shipped_study_passes_the_estimates():
     for name in ("network_metro_2trains", "network_metro_3trains", "network_regional_20stops"):
         path = STUDIES / f"{name}.yaml"
         check_network(load_network_study(path), path)
-    for name in ("metro_monte_carlo", "thesis001_closed_loop", "thesis001_monte_carlo"):
+    for name in ("metro_monte_carlo", "yazhemsky2017_closed_loop", "yazhemsky2017_monte_carlo"):
         path = STUDIES / f"{name}.yaml"
         check_closed_loop(expand(path)[2], path)
 

@@ -67,7 +67,7 @@ def test_the_ore_train_in_steady_pull_keeps_the_static_in_train_forces():
     state: it holds its speed for a minute and every coupler keeps carrying the sum of (effort -
     resistance) of the cars ahead (within 1 N): tension behind the head locomotives, compression
     ahead of the tail ones, none in the middle; far below the 2000 kN limit."""
-    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    consist = load_consist(TRAINS / "heavyhaul_zhang_zhuan.yaml")
     assert consist.cars == 204 and consist.mass.sum() == pytest.approx(13_704e3)
     plant = CascadePlant(consist, flat())
     resist = plant.resistance(plant.initial(3000.0, 15.0).positions, np.full(consist.cars, 15.0))
@@ -89,7 +89,7 @@ def test_a_train_started_unstretched_swings_slowly_about_the_static_forces():
     minute: the slowest longitudinal mode of a 2.5 km chain (about 33 s for a wave there and back
     at sqrt(k/m) 12 m = 151 m/s) is barely damped by the couplers; the centre of mass still keeps
     its speed exactly (the efforts equal the resistance)."""
-    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    consist = load_consist(TRAINS / "heavyhaul_zhang_zhuan.yaml")
     plant = CascadePlant(consist, flat())
     state = plant.initial(3000.0, 15.0)
     u = np.zeros(consist.cars)
@@ -109,7 +109,7 @@ def test_the_design_model_predicts_the_plant_over_one_sample():
     within 3 %; the coupler-force changes behind the head within 6 %. With c1 = 0 the model keeps
     momentum exactly: sum m dv = Ts sum du."""
     from ecostudy.heavyhaul.linear import design_model
-    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    consist = load_consist(TRAINS / "heavyhaul_zhang_zhuan.yaml")
     plant = CascadePlant(consist, flat())
     n = consist.cars
     resist = plant.resistance(plant.initial(3000.0, 15.0).positions, np.full(n, 15.0))
@@ -137,7 +137,7 @@ def test_the_fence_method_keeps_the_slow_mode_and_the_momentum():
     keeps its period (32.94 s full, 32.97 s reduced) and a step of efforts moves the mean speed
     alike; efforts shared back to the cars in proportion to mass sum to the virtual car's."""
     from ecostudy.heavyhaul.linear import design_model, fence, virtual_car_count
-    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    consist = load_consist(TRAINS / "heavyhaul_zhang_zhuan.yaml")
     n = consist.cars
     reduced = fence(consist, 10, 20.0)
     assert len(reduced.members) == virtual_car_count([2, 200, 2], 10) == 22
@@ -177,7 +177,7 @@ def test_the_receding_horizon_controller_tracks_a_new_reference_within_the_limit
     from ecostudy.heavyhaul.linear import fence
     from ecostudy.heavyhaul.loop import run
     from ecostudy.heavyhaul.rhc import RecedingHorizon
-    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    consist = load_consist(TRAINS / "heavyhaul_zhang_zhuan.yaml")
     plant = CascadePlant(consist, flat(60000.0))
     reduction = fence(consist, 10, 20.0)
     kinds = reduction.kinds
@@ -207,7 +207,7 @@ def test_the_kalman_observer_recovers_speeds_and_extensions_from_the_locomotives
     from ecostudy.heavyhaul.loop import reduced_state
     from ecostudy.heavyhaul.observer import KalmanObserver
     from ecostudy.heavyhaul.rhc import input_offsets
-    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    consist = load_consist(TRAINS / "heavyhaul_zhang_zhuan.yaml")
     plant = CascadePlant(consist, flat(60000.0))
     reduction = fence(consist, 10, 20.0)
     kinds = reduction.kinds
@@ -246,7 +246,7 @@ def test_the_loop_with_the_observer_tracks_like_the_loop_with_the_true_state():
     from ecostudy.heavyhaul.loop import reduced_state, run
     from ecostudy.heavyhaul.observer import KalmanObserver
     from ecostudy.heavyhaul.rhc import RecedingHorizon
-    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    consist = load_consist(TRAINS / "heavyhaul_zhang_zhuan.yaml")
     plant = CascadePlant(consist, flat(60000.0))
     reduction = fence(consist, 10, 20.0)
     kinds = reduction.kinds
@@ -278,7 +278,7 @@ def test_cars_in_a_curve_pay_roeckls_resistance_and_the_route_loads():
                              "length_m": 0, "davis": {"a_N": 1000, "b_N_per_mps": 0, "c_N_per_mps2": 5},
                              "traction": {"max_force_kN": 500}, "braking": {"max_force_kN": 500},
                              "curve_resistance": "roeckl"})
-    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    consist = load_consist(TRAINS / "heavyhaul_zhang_zhuan.yaml")
     plant = CascadePlant(consist, make_segment(track, point, "Loading", "Port"))
     flat_plant = CascadePlant(consist, make_segment(track, point, "Loading", "Port"), curves=False)
     positions = np.full(consist.cars, 20500.0)
@@ -294,7 +294,7 @@ def test_the_fenced_objective_weighs_what_each_virtual_car_stands_for():
     'virtual' weigh every term as one."""
     from ecostudy.heavyhaul.linear import Represented, fence
     from ecostudy.heavyhaul.rhc import objective_terms
-    consist = load_consist(TRAINS / "heavyhaul_paper002.yaml")
+    consist = load_consist(TRAINS / "heavyhaul_zhang_zhuan.yaml")
     full = fence(consist, 1, 20.0)
     assert all(np.allclose(a, b) for a, b in zip(full.represented(consist.mass), Represented.each(204)))
     reduced = fence(consist, 10, 20.0)

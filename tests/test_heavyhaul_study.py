@@ -21,7 +21,7 @@ from ecostudy.io.loaders import load_consist
 from .conftest import TRAINS, write_yaml
 
 runner = CliRunner()
-PAPER = TRAINS / "heavyhaul_paper002.yaml"
+PAPER = TRAINS / "heavyhaul_zhang_zhuan.yaml"
 
 
 def level(grade=0.0):

@@ -20,7 +20,7 @@ def test_a_run_driven_by_its_fallback_is_flagged(tmp_path):
         "gradients": [{"position_m": 0, "gradient_permille": 0}],
         "speed_limits": [{"position_m": 0, "speed_kmh": 64.8}, {"position_m": 850, "speed_kmh": 20}]})
     study = write_yaml(tmp_path / "loop.yaml", {
-        "name": "restriction_loop", "track": str(track), "train": str(TRAINS / "thesis001_commuter.yaml"),
+        "name": "restriction_loop", "track": str(track), "train": str(TRAINS / "yazhemsky2017_commuter.yaml"),
         "window_s": [0, 115], "points": 100, "sample_time_s": 0.5, "draws": 1,
         "controllers": [{"name": "sppc_term", "kind": "sppc", "terminal_reserve": 0.2}]})
     r = CliRunner().invoke(app, ["simulate", str(study), "--out", str(tmp_path / "o"), "--workers", "1",

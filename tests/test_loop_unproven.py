@@ -25,8 +25,8 @@ def unreachable_tolerance(monkeypatch):
 
 def _runs(tmp_path, kind):
     study = write_yaml(tmp_path / "loop.yaml", {
-        "name": "unproven", "track": str(TRACKS / "thesis001_flat_1km.yaml"),
-        "train": str(TRAINS / "thesis001_commuter.yaml"), "window_s": [0, 200], "points": 60,
+        "name": "unproven", "track": str(TRACKS / "yazhemsky2017_flat_1km.yaml"),
+        "train": str(TRAINS / "yazhemsky2017_commuter.yaml"), "window_s": [0, 200], "points": 60,
         "sample_time_s": 0.5, "draws": 1, "controllers": [{"name": "c", "kind": kind}]})
     r = CliRunner().invoke(app, ["simulate", str(study), "--out", str(tmp_path / "o"), "--workers", "1",
                                  "--no-progress", "--no-plot"])

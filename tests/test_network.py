@@ -82,7 +82,7 @@ def test_rule_7_11_sees_regeneration_on_eq_7_8_as_written():
 @pytest.mark.slow
 def test_time_domain_leg_matches_the_space_domain_optimum_on_flat_track():
     """Same physics on a common clock: the Yazhemsky 2017 flat trip within 0.05 % at dt = 0.25 s."""
-    track, train = load_track(TRACKS / "thesis001_flat_1km.yaml"), load_train(TRAINS / "thesis001_commuter.yaml")
+    track, train = load_track(TRACKS / "yazhemsky2017_flat_1km.yaml"), load_train(TRAINS / "yazhemsky2017_commuter.yaml")
     space = solve_run(track, train, "A", "B", Timing(running_time=95.0), points=1000)
     case = prepare(track, train, "A", "B", 1000)
     leg = timedomain.Leg(case, 0, 380, 0.25, 0.0, 1.0)

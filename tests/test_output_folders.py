@@ -19,7 +19,7 @@ READERS = {
     "default.yaml": lambda p: load_checked_study(p).output,  # solve, pareto, compare
     "metro_supplements.yaml": lambda p: cases.expand(p)[1],  # run
     "network_metro_2trains.yaml": lambda p: load_network_study(p).output,  # network
-    "thesis001_closed_loop.yaml": lambda p: closedloop.expand(p)[1],  # simulate
+    "yazhemsky2017_closed_loop.yaml": lambda p: closedloop.expand(p)[1],  # simulate
     "heavyhaul_fence.yaml": lambda p: heavyhaul.expand(p)[1],  # heavyhaul
 }
 

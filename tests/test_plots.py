@@ -280,7 +280,7 @@ def loop_study(tmp_path_factory):
     estimator and by its plan replayed open loop, two draws of a plant 10 % off in mass."""
     folder = tmp_path_factory.mktemp("loop")
     write_yaml(folder / "loop.yaml", {
-        "name": "loop", "track": str(TRACKS / "thesis001_flat_1km.yaml"), "train": str(TRAINS / "thesis001_commuter.yaml"),
+        "name": "loop", "track": str(TRACKS / "yazhemsky2017_flat_1km.yaml"), "train": str(TRAINS / "yazhemsky2017_commuter.yaml"),
         "window_s": [0, 100], "points": 100, "sample_time_s": 0.5, "draws": 2, "seed": 3,
         "deviations": {"mass": {"low": 0.9, "high": 1.1}},
         "controllers": [{"name": "convex", "kind": "convex"}, {"name": "with estimator", "kind": "convex", "estimator": True},

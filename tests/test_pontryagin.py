@@ -10,8 +10,8 @@ from .conftest import STUDIES, TRACKS, TRAINS
 
 CASES = [("amsterdam_metro", "amsterdam_rokin_centraal", "Rokin", "Centraal", 76.0),
          ("regional_alstom", "regional_808m", "Origin", "Destination", 80.0),
-         ("thesis001_commuter", "thesis001_flat_1km", "A", "B", 77.99),
-         ("thesis001_commuter", "thesis001_advanced_1km", "A", "B", 84.92)]
+         ("yazhemsky2017_commuter", "yazhemsky2017_flat_1km", "A", "B", 77.99),
+         ("yazhemsky2017_commuter", "yazhemsky2017_advanced_1km", "A", "B", 84.92)]
 
 
 @pytest.mark.parametrize("objective", ["energy", "net_energy"])
@@ -26,7 +26,7 @@ def test_optimal_runs_obey_the_switching_conditions(train, track, a, b, time, ob
 
 def test_costate_ratio_per_regime_on_the_flat_trip():
     """MA where psi > 1, CR where psi = 1, CO in (0, 1), MB where psi < 0 (lambda / v of eq. 2.17)."""
-    r = solve_run(load_track(TRACKS / "thesis001_flat_1km.yaml"), load_train(TRAINS / "thesis001_commuter.yaml"),
+    r = solve_run(load_track(TRACKS / "yazhemsky2017_flat_1km.yaml"), load_train(TRAINS / "yazhemsky2017_commuter.yaml"),
                   "A", "B", Timing(running_time=95.0), points=300)
     assert r.summary["regimes"]["sequence"] == "MA-CR-CO-MB"
     psi = r.profile["costate_ratio"].to_numpy()[:-1]
@@ -92,8 +92,8 @@ def _regenerative(train, eta_t=0.9, eta_r=0.8, force_kN=400):
 def test_net_energy_runs_obey_eq_7_4_with_regenerative_braking():
     """Flat track, one limit, regeneration credited: MA-CR-CO-RB(-MB); CO where eta < psi < 1 and
     RB where psi = eta = eta_T eta_R (Farooqi 2018 eq. 7.4); >= 95 % agreement."""
-    train = _regenerative(load_train(TRAINS / "thesis001_commuter.yaml"))
-    r = solve_run(load_track(TRACKS / "thesis001_flat_1km.yaml"), train, "A", "B", Timing(running_time=95.0),
+    train = _regenerative(load_train(TRAINS / "yazhemsky2017_commuter.yaml"))
+    r = solve_run(load_track(TRACKS / "yazhemsky2017_flat_1km.yaml"), train, "A", "B", Timing(running_time=95.0),
                   objective="net_energy", points=300)
     check = r.summary["pontryagin"]
     assert check["conditions"].startswith("eq. 7.4")

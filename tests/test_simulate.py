@@ -13,8 +13,8 @@ runner = CliRunner()
 
 
 def study(tmp_path, **changes):
-    doc = {"name": "mc", "track": str(TRACKS / "thesis001_advanced_1km.yaml"),
-           "train": str(TRAINS / "thesis001_commuter.yaml"), "window_s": [0, 200], "points": 80,
+    doc = {"name": "mc", "track": str(TRACKS / "yazhemsky2017_advanced_1km.yaml"),
+           "train": str(TRAINS / "yazhemsky2017_commuter.yaml"), "window_s": [0, 200], "points": 80,
            "sample_time_s": 0.5, "draws": 2, "seed": 7,
            # solving taken as instantaneous: at 2 Hz one sample of delay (0.5 s, the default) costs up
            # to 1.2 m at the stop on these draws; the delayed loop: tests/test_fallback.py
@@ -64,7 +64,7 @@ def test_bad_closed_loop_studies_get_one_line(tmp_path):
 
 
 def test_the_shipped_closed_loop_study_is_valid():
-    assert load_yaml(STUDIES / "thesis001_closed_loop.yaml")["controllers"]
+    assert load_yaml(STUDIES / "yazhemsky2017_closed_loop.yaml")["controllers"]
 
 
 @pytest.mark.slow

@@ -42,7 +42,7 @@ def test_all_out_is_faster_and_costs_more(amsterdam_allout, amsterdam_76s):
 
 @pytest.mark.parametrize("train_file, track_file, stops, time", [
     ("amsterdam_metro.yaml", "amsterdam_rokin_centraal.yaml", ("Rokin", "Centraal"), 73.0),
-    ("thesis001_commuter.yaml", "thesis001_advanced_1km.yaml", ("A", "B"), 79.31)])
+    ("yazhemsky2017_commuter.yaml", "yazhemsky2017_advanced_1km.yaml", ("A", "B"), 79.31)])
 def test_speed_force_tables_honoured_within_one_percent(train_file, track_file, stops, time):
     """The solution against the tables as written in the train file (km/h, kN), at both ends of
     every interval, whatever the internal representation (smoothed table or force + power)."""
@@ -199,8 +199,8 @@ def test_simulator_agrees_with_a_fine_step_reference(amsterdam, metro, monkeypat
 
 def test_net_energy_without_regenerative_braking():
     """Regression: the net objective referred to regenerative forces a train without them lacks."""
-    train = load_train(TRAINS / "thesis001_commuter.yaml")
-    track = load_track(TRACKS / "thesis001_flat_1km.yaml")
+    train = load_train(TRAINS / "yazhemsky2017_commuter.yaml")
+    track = load_track(TRACKS / "yazhemsky2017_flat_1km.yaml")
     net = solve_run(track, train, "A", "B", Timing(running_time=90.0), objective="net_energy", points=300)
     mech = solve_run(track, train, "A", "B", Timing(running_time=90.0), objective="energy", points=300)
     assert_verified(net)

@@ -29,8 +29,8 @@ def _stored(path):
 @pytest.mark.slow
 def test_a_study_killed_mid_way_keeps_every_finished_draw_and_the_rerun_computes_the_rest(tmp_path):
     study = tmp_path / "kill.yaml"
-    write_yaml(study, {"name": "kill", "track": str(TRACKS / "thesis001_advanced_1km.yaml"),
-                       "train": str(TRAINS / "thesis001_commuter.yaml"), "window_s": [0, 200], "points": 40,
+    write_yaml(study, {"name": "kill", "track": str(TRACKS / "yazhemsky2017_advanced_1km.yaml"),
+                       "train": str(TRAINS / "yazhemsky2017_commuter.yaml"), "window_s": [0, 200], "points": 40,
                        "sample_time_s": 0.5, "draws": DRAWS, "seed": 3,
                        "controllers": [{"name": "convex", "kind": "convex"}],
                        "deviations": {"mass": {"low": 0.95, "high": 1.05}}})

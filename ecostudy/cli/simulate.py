@@ -17,6 +17,6 @@ def simulate(
                                              "the tables show every stored run."),
     fig_format: o.Format = "png", dpi: o.Dpi = 110.0, force: o.Force = False, debug: o.Debug = False,
 ):
-    """Closed loop: every controller drives every draw of the plant's deviations and noise (resumable). Every core by default; the step times are then measured with every core busy (--workers 1: quiet-machine step times). Example: ecostudy simulate studies/thesis001_closed_loop.yaml"""
+    """Closed loop: every controller drives every draw of the plant's deviations and noise (resumable). Every core by default; the step times are then measured with every core busy (--workers 1: quiet-machine step times). Example: ecostudy simulate studies/yazhemsky2017_closed_loop.yaml"""
     finish(call(debug, "simulate_folder", study, workers, dask, retry_failed, out, not no_plot, only, fig_format, dpi, force=force,
                 bar=("runs", no_progress)))

@@ -47,7 +47,7 @@ def check_davis_plausible(davis: Sequence[float], static_mass: float, fields: Se
 
 # each Davis term (A, B v, C v^2) at this speed may not exceed the train's weight: a resistance of 1000
 # per mille, as much as a vertical climb; the shipped trains' largest term is 39 per mille
-# (thesis001_commuter's C v^2), their others 1 to 8. More is a wrong unit or an overflow (1e308 kN: inf)
+# (yazhemsky2017_commuter's C v^2), their others 1 to 8. More is a wrong unit or an overflow (1e308 kN: inf)
 DAVIS_BOUND_SPEED = 100 * units.KMH
 
 

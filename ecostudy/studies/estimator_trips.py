@@ -44,8 +44,8 @@ def estimate_at(history, mark):
 def estimator_trip(root, seed, choice="state", points=300, marks=(2000.0, 5000.0), until=None, mass=1.2, delay=1):
     """One Ch. 10 trip (``root``: the project folder with tracks/ and trains/) with estimator
     ``choice`` (``control.estimators``); ``until`` [m]: stop there (the marks beyond are not reached)."""
-    train = load_train(root / "trains" / "thesis001_commuter.yaml")
-    segment = make_segment(load_track(root / "tracks" / "thesis001_5km_representative.yaml"), train, "A", "B")
+    train = load_train(root / "trains" / "yazhemsky2017_commuter.yaml")
+    segment = make_segment(load_track(root / "tracks" / "yazhemsky2017_5km_representative.yaml"), train, "A", "B")
     noise = ch10_noise(seed)
     estimator = make_estimator(choice, noise)
     controller = Convex(ConvexProgram(segment, train, trapezoid_grid(segment, points), ConvexWeights(time=1.0, energy=0.1)),

@@ -2,7 +2,7 @@
 
 The published controller keeps a 1 m/s speed buffer and a 20 % braking reserve, so the true
 optimum of the same model can only use less energy than the published figure.
-Published numbers: tests/data/thesis001_published.csv (Yazhemsky 2017 Figs. 9.1-9.4).
+Published numbers: tests/data/yazhemsky2017_published.csv (Yazhemsky 2017 Figs. 9.1-9.4).
 """
 import pandas as pd
 import pytest
@@ -14,12 +14,12 @@ from ecostudy.analysis.single import solve_run
 
 from .conftest import DATA, TRACKS, TRAINS
 
-CASES = pd.read_csv(DATA / "thesis001_published.csv").to_dict("records")
+CASES = pd.read_csv(DATA / "yazhemsky2017_published.csv").to_dict("records")
 
 
 @pytest.mark.parametrize("case", CASES, ids=lambda c: f"{c['track']}-{c['running_time_s']}")
 def test_energy_at_most_published(case):
-    train = load_train(TRAINS / "thesis001_commuter.yaml")
+    train = load_train(TRAINS / "yazhemsky2017_commuter.yaml")
     track = load_track(TRACKS / f"{case['track']}.yaml")
     r = solve_run(track, train, "A", "B", Timing(running_time=case["running_time_s"]), points=1000)
     assert r.summary["verification"]["passed"], r.summary["verification"]

@@ -1,6 +1,6 @@
 """Yazhemsky 2017 Chs. 9-10 in closed loop, side by side with the published numbers.
 
-    .venv/bin/python bench/bench_thesis001_loop.py [--points 500] [--delay 0|1|measured] [--power-kw P] [--table1]
+    .venv/bin/python bench/bench_yazhemsky2017_loop.py [--points 500] [--delay 0|1|measured] [--power-kw P] [--table1]
 
 ``--delay``: the computation delay (control/loop.py); ``--power-kw``: the trips on the commuter
 with a constant traction force limit of 1e6 N and a power limit of P kW instead of the traction
@@ -9,7 +9,7 @@ loss table (a TTOBench-style train; P = 1e6 kW never binds and is dropped from t
 
 The convex controller (SOCP 6.10 by Clarabel, re-solved every 100 ms from the measured state on
 the grid ahead) drives the plant (DOP853 between samples). Table 1: Figs. 9.1, 9.4, 9.2, 9.7
-(published from tests/data/thesis001_closed_loop_published.csv) and Fig. 9.5's follower. Table 2:
+(published from tests/data/yazhemsky2017_closed_loop_published.csv) and Fig. 9.5's follower. Table 2:
 the Ch. 10 trends on the representative 5 km track (noise, a 20 % heavier train with and
 without the Kalman mass estimator).
 """
@@ -60,11 +60,11 @@ def row(name, result, controller, train, mass=1.0):
             f"{f['full_brake']} | {s.mean():.0f} / {np.percentile(s, 95):.0f} / {s.max():.0f}")
 
 
-@harness.case("thesis001_loop.convex", params={"track": "thesis001_advanced_1km", "time_weight": 10.0,
+@harness.case("yazhemsky2017_loop.convex", params={"track": "yazhemsky2017_advanced_1km", "time_weight": 10.0,
                                               "energy_weight": 1.0, "latest": 200.0, "points": 500})
 def convex_trip(p):
     """Yazhemsky 2017's convex controller at 10 Hz on a trip (Fig. 9.2 by default): arrival, energy, stop, solve ms."""
-    train = load_train(ROOT / "trains/thesis001_commuter.yaml")
+    train = load_train(ROOT / "trains/yazhemsky2017_commuter.yaml")
     result, controller = drive(train, p["track"], ConvexWeights(time=p["time_weight"], energy=p["energy_weight"]),
                                p["latest"], p["points"])
     s = 1e3 * np.array([x for x in controller.solve_seconds if x > 0])
@@ -88,10 +88,10 @@ def main():
     global DELAY
     DELAY = args.delay if args.delay == "measured" else int(args.delay)
     print(harness.command(__file__) + "\n")
-    train = load_train(ROOT / "trains/thesis001_commuter.yaml")
+    train = load_train(ROOT / "trains/yazhemsky2017_commuter.yaml")
     if args.power_kw is not None:
         train = power_limited(train, args.power_kw)
-    published = pd.read_csv(ROOT / "tests/data/thesis001_closed_loop_published.csv", dtype={"figure": str})
+    published = pd.read_csv(ROOT / "tests/data/yazhemsky2017_closed_loop_published.csv", dtype={"figure": str})
     head = ("| trip | arrival [s] | energy [J/kg] | stop error [m] | overspeed [km/h] | max abs(rho s - 1) | "
             "solves with gap > 1e-6 | windows dropped | fallbacks shifted / reserve / full | solve mean / p95 / max [ms] | "
             "published: arrival, energy, stop |")
@@ -109,7 +109,7 @@ def main():
     if args.table1:
         return
     leader = runs["9.4"]
-    follower, controller = drive(train, "thesis001_advanced_1km", ConvexWeights(time=10.0, energy=1.0), 300.0,
+    follower, controller = drive(train, "yazhemsky2017_advanced_1km", ConvexWeights(time=10.0, energy=1.0), 300.0,
                                  args.points, lead=leader_clock(leader.states, 100.0))
     x_lead = np.array([s.position for s in leader.states])
     t_lead = np.array([s.time for s in leader.states])
@@ -128,7 +128,7 @@ def main():
              ("20 % heavier, noise, estimator", Truth(mass=1.2), noise, True)]
     for name, truth, n, with_estimator in cases:
         estimator = MassEstimator() if with_estimator else None
-        result, controller = drive(train, "thesis001_5km_representative", ConvexWeights(time=1.0, energy=0.1), 360.0,
+        result, controller = drive(train, "yazhemsky2017_5km_representative", ConvexWeights(time=1.0, energy=0.1), 360.0,
                                    300, truth, n, estimator)
         note = ""
         if estimator is not None:
