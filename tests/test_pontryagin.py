@@ -96,7 +96,7 @@ def test_net_energy_runs_obey_eq_7_4_with_regenerative_braking():
     r = solve_run(load_track(TRACKS / "yazhemsky2017_flat_1km.yaml"), train, "A", "B", Timing(running_time=95.0),
                   objective="net_energy", points=300)
     check = r.summary["pontryagin"]
-    assert check["conditions"].startswith("eq. 7.4")
+    assert check["conditions"].startswith("Farooqi 2018, eq. 7.4")
     assert check["agreement_pct"] >= 95.0, check["disagreements"]
     assert r.summary["regimes"]["sequence"].startswith("MA-CR-CO-RB"), r.summary["regimes"]["sequence"]
     eta = 0.9 * 0.8

@@ -177,7 +177,8 @@ def check_profile(track, train, inputs, trajectory, running_time=None, tolerance
     labels = regimes.classify(train, v, ft, fb, regeneration=net)
     out = check(case.nodes, labels, psi, tolerance=0.02,
                 bounds=regime_bounds(train, v, ft, fb, labels, objective))
-    kind = "net-energy-optimal (eq. 7.4)" if objective == "net_energy" else "energy-optimal (eq. 2.17)"
+    kind = ("net-energy-optimal (Farooqi 2018, eq. 7.4)" if objective == "net_energy"
+            else "energy-optimal (Farooqi 2018, eq. 2.17)")
     out.update(method="multipliers fitted at the profile (sign-constrained least squares)",
                stationarity_residual=residual, profile_running_time_s=own,
                checked_as=f"{kind} run for " + (f"{own:.2f} s (its own time)" if running_time is None

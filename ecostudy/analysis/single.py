@@ -154,7 +154,7 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
             psi = pontryagin.ipopt_psi(m, nodes, train, objective)
             bounds = pontryagin.regime_bounds(train, v, ft, fb, labels, objective)
             costate = {"method": "Ipopt multipliers of the speed recursion",
-                       "conditions": "eq. 7.4 (regeneration credited)" if net else "eq. 2.17",
+                       "conditions": "Farooqi 2018, eq. 7.4 (regeneration credited)" if net else "Farooqi 2018, eq. 2.17",
                        **pontryagin.check(nodes, labels, psi, bounds=bounds)}
             profile["costate_ratio"] = np.append(psi, np.nan)
         marginal = space.marginal_energy(m) if objective in ("energy", "net_energy") else None

@@ -54,7 +54,7 @@ class ConicHorizon:
     def __init__(self, model, kinds, np_=8, nc=4, weights=(10.0, 60.0, 10.0, 40.0), rate_kN=200.0,
                  force_limit_kN=2000.0, represented=None, scales=None, effort="squared", brake_on="wagons"):
         if effort != "squared" or brake_on != "wagons":  # the condensed forms add the variables these need
-            raise ValueError(f"effort penalty '{effort}' on '{brake_on}': this QP form has eq. 4 and 5 as printed only")
+            raise ValueError(f"effort penalty '{effort}' on '{brake_on}': this QP form has Zhang & Zhuan's eq. 4 and 5 as printed only")
         self.model, self.kinds, self.np_, self.nc = model, list(kinds), np_, nc
         n = self.n = len(self.kinds)
         self.locos = [i for i, kind in enumerate(self.kinds) if kind == "locomotive"]

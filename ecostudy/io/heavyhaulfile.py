@@ -76,18 +76,18 @@ class HeavyhaulFile(Strict):
                                                     "cars in proportion to mass, or equally.")
     fence_weights: Literal["per_car", "virtual"] = Field(
         "per_car", description="A virtual car's terms in the objective: weighted by the cars and couplers it "
-        "stands for (the full train's objective, as nearly as virtual cars allow), or each as one car (eq. 11 "
+        "stands for (the full train's objective, as nearly as virtual cars allow), or each as one car (Zhang & Zhuan's eq. 11 "
         "read literally: grouped wagons' braking then costs about f times more).")
     objective_scale: Literal["paper", "limits"] = Field(
-        "paper", description="The units of eq. 4's terms: the paper's (forces and efforts in 100 kN, speeds in m/s) "
+        "paper", description="The units of Zhang & Zhuan's eq. 4 terms: the paper's (forces and efforts in 100 kN, speeds in m/s) "
         "or each by its physical limit (in-train forces by the coupler limit, each car's effort by its largest, "
         "speed errors by the route's highest speed).")
     effort_penalty: Literal["squared", "magnitude"] = Field(
-        "squared", description="Eq. 4's effort term, K_e (sum u^2 over the locomotives + K_b sum u^2 over the "
+        "squared", description="Zhang & Zhuan's eq. 4 effort term, K_e (sum u^2 over the locomotives + K_b sum u^2 over the "
         "wagons), or eq. 11's as Zhang & Zhuan print it, with each effort's magnitude |u| in its unit (solved by "
         "qp_solver daqp or condensed).")
     brake_penalty_on: Literal["wagons", "all"] = Field(
-        "wagons", description="Where K_b applies: the wagons' braking (eq. 5's R, as Zhang & Zhuan) or every "
+        "wagons", description="Where K_b applies: the wagons' braking (Zhang & Zhuan's eq. 5, R) or every "
         "brake, the locomotives' dynamic braking too (K_b u^2 for a braking locomotive; a departure from eq. 5: "
         "otherwise the penalty moves the braking to the dynamic brakes for free). 'all' needs effort_penalty "
         "squared, every K_b >= 1 and qp_solver daqp or condensed.")
@@ -107,7 +107,7 @@ class HeavyhaulFile(Strict):
         "daqp", description="The same QP four ways: condensed to the inputs (force rows as they bind) and solved "
         "by DAQP warm-started from the last sample (fastest) or by Clarabel, with the states kept (Clarabel), "
         "or Ipopt on its Pyomo model.")
-    observer: bool = Field(False, description="Feed the controller the Kalman observer's estimate (eq. 10).")
+    observer: bool = Field(False, description="Feed the controller the Kalman observer's estimate (Zhang & Zhuan, eq. 10).")
     observer_q: float = Field(OBSERVER_Q, gt=0, description="The observer's process noise, Q = q I (SI: m/s and m; "
                               "Zhang & Zhuan give 50, units unstated).")
     observer_r: float = Field(OBSERVER_R, gt=0, description="The observer's measurement noise, R = r I [(m/s)^2] "

@@ -36,7 +36,7 @@ class RspcSettings(Strict):
 
     horizon: int = Field(3, ge=1, le=6, description="N, prediction steps (6^N mode sequences per sample).")
     distance_m: float = Field(25.0, gt=0, description="D, the nominal prediction step [m] (Alg. 6).")
-    gamma: float = Field(0.995, ge=0, le=1, description="gamma_S of eq. 6.7: the weight of the horizon time.")
+    gamma: float = Field(0.995, ge=0, le=1, description="gamma_S of Farooqi 2018 eq. 6.7: the weight of the horizon time.")
     margin_s: float = Field(1.5, ge=0, description="Aim this much before the latest arrival [s].")
 
 

@@ -108,7 +108,7 @@ class PontryaginCheck:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "PontryaginCheck":
-        return cls(agreement_pct=float(data["agreement_pct"]), conditions=str(data.get("conditions", "eq. 2.17")),
+        return cls(agreement_pct=float(data["agreement_pct"]), conditions=str(data.get("conditions", "Farooqi 2018, eq. 2.17")),
                    disagreements=tuple(RegimeRun.from_dict(d) for d in data.get("disagreements") or ()))
 
 
