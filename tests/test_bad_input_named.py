@@ -92,6 +92,10 @@ def test_windows_a_command_does_not_keep_are_refused_naming_the_file(tmp_path):
     ("{stop: Station, arrival_s: 58, dwell_s: 25}", "windows:\n  - {position_m: 500, latest_s: 5}\n",
      "tt.yaml: stops[0].departure_s, windows: infeasible: the departure from Noord (not before 0 s) and the timing "
      "point at 500 m (not after 5 s)"),
+    # a dwell between the two times: 98 s of running leave 110 s, 20 s of dwell do not; it said "takes 98 s" alone
+    ("{stop: Station, latest_s: 56, dwell_s: 20}", "windows:\n  - {position_m: 1400, earliest_s: 90, latest_s: 110}\n",
+     "tt.yaml: stops[0].departure_s, windows: infeasible: the departure from Noord (not before 0 s) and the timing "
+     "point at 1400 m (not after 110 s) leave 110 s; the fastest run between them takes 98 s and the dwells 20 s"),
 ])
 def test_a_timetable_window_no_run_keeps_names_its_fields(tmp_path, stops, windows, fragment):
     """It was "infeasible: the departure from Noord ... and the arrival at Station ..." with neither file nor field."""
@@ -184,4 +188,18 @@ def test_an_unknown_only_names_the_option(tmp_path):
     study = hostile(tmp_path, "yazhemsky2017_closed_loop.yaml")
     refused(run("simulate", study, "--only", "", "--no-plot", "--no-progress"),
             "command line: --only: '': not among the controllers of", "(convex_mixed, convex_time, plan_replayed)")
+    nothing_written(tmp_path)
+
+
+def test_a_timetable_whose_times_leave_no_run_together_names_the_file(tmp_path):
+    """Each pair of its times leaves the fastest run (the passing point at 1400 m by 118 s after a
+    20 s dwell at Station), but no run keeps them all: the windowed journey NLP is infeasible, said
+    as the timetable's, not as "infeasible: no run of the journey ..." naming no file."""
+    path = tmp_path / "tt.yaml"
+    path.write_text("name: tt\nstops:\n  - {stop: Noord, departure_s: 0}\n  - {stop: Station, latest_s: 56, dwell_s: 20}\n"
+                    "  - {stop: Centrum, latest_s: 185, dwell_s: 20}\n  - {stop: Zuid, latest_s: 270}\n"
+                    "windows:\n  - {position_m: 1400, earliest_s: 90, latest_s: 118, max_speed_kmh: 40}\n")
+    refused(run("journey", "--track", LINE4, "--train", METRO, "--timetable", path, "--points", 100, "--no-plot",
+                "--out", tmp_path / "out"), "tt.yaml: stops, windows: infeasible: no run of the journey that keeps "
+            "its timing windows")
     nothing_written(tmp_path)

@@ -292,10 +292,17 @@ class CascadePlant:
                                np.full(QUADRATURES, ATOL_WORK)])
         pipe, levels = self.brake_pipe(state, requested, dt), self.levels(requested, state.speeds)
         t0 = state.time
-        sol = solve_ivp(lambda t, y: self.derivatives(y, requested, None if pipe is None else pipe.at(t - t0), levels),
-                        (t0, t0 + dt), y0, method="BDF", rtol=self.rtol, atol=atol, jac_sparsity=self.jac_sparsity)
-        if not sol.success:
-            raise RuntimeError(f"cascade plant: integration failed ({sol.message})")
+        # scipy's finite-difference Jacobian grows its step tenfold each time a column's difference
+        # is too small to trust, without bound: a coupler in its slack (draft_gear: a flat force)
+        # overflows it after a few hundred Jacobians, and numpy warns ("overflow / invalid value
+        # encountered in multiply", 170 times on a 5 km run). The trial is discarded there, and the
+        # step's accuracy is the integrator's error control; a state that is not finite is refused below
+        with np.errstate(over="ignore", invalid="ignore"):
+            sol = solve_ivp(lambda t, y: self.derivatives(y, requested, None if pipe is None else pipe.at(t - t0),
+                                                          levels),
+                            (t0, t0 + dt), y0, method="BDF", rtol=self.rtol, atol=atol, jac_sparsity=self.jac_sparsity)
+        if not sol.success or not np.all(np.isfinite(sol.y)):
+            raise RuntimeError(f"cascade plant: integration failed ({sol.message if not sol.success else 'a state not finite'})")
         p, v, works = sol.y[:n, -1], sol.y[n:2 * n, -1], sol.y[2 * n:, -1]
         forces = np.array([self.coupler_forces(sol.y[:n, k], sol.y[n:2 * n, k]) for k in range(sol.y.shape[1])])
         self.history.append((sol.t, forces.astype(np.float32)))

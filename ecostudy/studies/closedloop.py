@@ -21,7 +21,7 @@ from ecostudy.core.columns import with_statistic
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
-from ecostudy.core.status import driven_run, flagged, solver_part, unproven_solves, worst
+from ecostudy.core.status import STOP_TOLERANCE_M, driven_run, flagged, solver_part, unproven_solves, worst
 from ecostudy.core.types import State
 from ecostudy.io import schemas
 from ecostudy.io.loaders import (check_fits, chosen_stops, read_document, track_document, track_from_schema,
@@ -134,10 +134,13 @@ def summarise(case, result, controller, train, estimator):
     v = [round(s.speed, 4) for s in result.states]
     gaps = getattr(controller, "gaps", [])
     counts = step_counts(controller)
+    # a train that stood short of its stop, beyond the tolerance, did not arrive: no arrival time
+    arrived = result.stop_error_m >= -STOP_TOLERANCE_M
+    at = result.arrival_time_s if arrived else np.nan
     return {
         "energy_J_per_kg": result.traction_work / mass, "traction_energy_kWh": result.traction_work / 3.6e6,
-        "braking_energy_kWh": result.braking_work / 3.6e6, "arrival_s": result.arrival_time_s,
-        "late_s": max(result.arrival_time_s - t_max, 0.0), "early_s": max(t_min - result.arrival_time_s, 0.0),
+        "braking_energy_kWh": result.braking_work / 3.6e6, "arrival_s": at,
+        "late_s": max(at - t_max, 0.0) if arrived else np.nan, "early_s": max(t_min - at, 0.0) if arrived else np.nan,
         "stop_error_m": result.stop_error_m, "overspeed_max_kmh": result.overspeed_max_kmh,
         "solve_mean_ms": 1e3 * float(solved.mean()), "solve_p95_ms": 1e3 * float(np.percentile(solved, 95)),
         "solve_max_ms": 1e3 * float(solved.max()), "over_budget_count": int(np.sum(seconds > sample)),
@@ -182,11 +185,12 @@ def _trip(case):
     controller, planner = build_controller(case, track, segment, train, estimator)
     plant = Plant(segment, train, Truth(**case["truth"]))
     result = run_loop(plant, controller, case["sample_time"], noise, plant_step=case["sample_time"],
-                      estimator=estimator, delay=case_delay(case))
+                      estimator=estimator, delay=case_delay(case), max_time=trip_limit(case["window"][1]))
     summary = summarise(case, result, planner, train, estimator)
-    # "late" is after the window's latest arrival: the window is the timetable of a closed-loop study
-    status = driven_run(summary["stop_error_m"], summary["late_s"], summary["overspeed_max_kmh"],
-                        summary.get("adhesion_use_max"))
+    # "late" is after the window's latest arrival, "early" before its earliest: the window is the
+    # timetable of a closed-loop study (a run that did not arrive has neither: its stop flags it)
+    status = driven_run(summary["stop_error_m"], _number(summary["late_s"]), summary["overspeed_max_kmh"],
+                        summary.get("adhesion_use_max"), early_s=_number(summary["early_s"]))
     if summary["failures_count"]:  # solves that did not converge: the fallback drove those samples, not the controller
         status = worst([status, flagged(f"{summary['failures_count']} solves in {summary['samples']} samples gave no "
                                         "usable plan in time (the fallback drove them)")])
@@ -201,8 +205,21 @@ def _trip(case):
     return status, error, summary
 
 
+def trip_limit(latest):
+    """The clock [s] at which a closed-loop trip that has not stood at its stop is ended: twice the
+    window's latest arrival and five minutes more. A train that never moves off (every solve unusable,
+    the fallback holding it) or crawls is ended there, flagged short of its stop, instead of running
+    the loop's own limit (20 s per metre of track and ten minutes: 206 000 samples of 0.1 s on 1 km)."""
+    return 2.0 * latest + 300.0
+
+
+def _number(x):
+    """``x``, or None where it is NaN (not measured: a run that did not arrive has no lateness)."""
+    return None if x is None or np.isnan(x) else x
+
+
 GRIP = "adhesion_use_max"  # a column of a train with an adhesion limit only (core.simulate.adhesion_use)
-COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "stop_error_m", "overspeed_max_kmh",
+COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "early_s", "stop_error_m", "overspeed_max_kmh",
            "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget_count", "softened_count", "failures_count",
            "gap_max", "fallback_shifted_plan_count", "fallback_reserve_count", "fallback_full_brake_count",
            "full_brake_before_final_count", "inexact_solves_count", "unproven_solves_count", "unproven_solver_status",

@@ -23,7 +23,6 @@ from scipy.interpolate import PchipInterpolator
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.defaults import FRONT_POINTS, SLOWEST
 from ecostudy.core.errors import FieldError, InfeasibleError, SolverError
-from ecostudy.core import kinematics
 from ecostudy.core.kinematics import running_time
 from ecostudy.core.simulate import window_checks
 from ecostudy.core.status import OK, failed, flagged, solver_part, worst
@@ -35,6 +34,7 @@ from ecostudy.ocp import session
 from ecostudy.ocp.problem import ALL_OUT_MARGIN, Written, build, capped_guess, prepare
 from ecostudy.ocp.space import passing_time
 from ecostudy.studies.pareto import sweep
+from ecostudy.studies.reachable import check_reachable
 from ecostudy.studies.workers import ticker
 
 FRONT_COUNT = 15  # points of each segment's front
@@ -196,51 +196,11 @@ def windowed_journey(track, train, plan, points, start_times=None, options=None)
                 m.clock.add(when / ref >= lo / ref)
             if hi is not None:
                 m.clock.add(when / ref <= hi / ref)
-    times, status = _solve_times(m, parts, "the journey that keeps its timing windows", options)
+    try:
+        times, status = _solve_times(m, parts, "the journey that keeps its timing windows", options)
+    except InfeasibleError as exc:  # each pair of times passed check_reachable: together they do not
+        raise FieldError(f"{exc}: the stop times, dwells and passing windows together leave none", "stops, windows") from None
     return times, [float(pyo.value(d)) for d in departures], status
-
-
-def check_reachable(plan, cases):
-    """Refuse, in one line, timing points no run can keep: for two points, the latest time of the
-    later one minus the earliest of the earlier one must leave the fastest run between them (on
-    the fastest-speed envelope, which no run exceeds) plus the least dwells in between."""
-    events = []  # (where, earliest, latest, fastest clock since the start, dwells since the start, fields)
-    fastest, dwells, start = 0.0, 0.0, 0.0
-    for n, case in enumerate(cases):
-        clock = kinematics.clock(case.envelope, case.nodes)
-        dwells += plan.dwell[n]
-        lo, hi = plan.departure[n] or (None, None)
-        events.append((f"the departure from {plan.stops[n]}", lo, hi, fastest, dwells,
-                       _fields(n, lo, hi, departure=True)))
-        for w in plan.windows[n]:
-            at = fastest + float(np.interp(w.distance, case.nodes, clock))
-            events.append((f"the timing point at {start + w.distance:g} m", w.earliest, w.latest, at, dwells,
-                           ("windows", "windows")))
-        fastest += float(clock[-1])
-        start += case.segment.distance
-        events.append((f"the arrival at {plan.stops[n + 1]}", *plan.arrival[n], fastest, dwells,
-                       _fields(n + 1, *plan.arrival[n])))
-    worst = None
-    for i, (a, lo, _, t_a, d_a, (field_a, _)) in enumerate(events):
-        for b, _, hi, t_b, d_b, (_, field_b) in events[i + 1:]:
-            if lo is not None and hi is not None:
-                short = (t_b - t_a) + (d_b - d_a) - (hi - lo)
-                if short > 1e-6 and (worst is None or short > worst[0]):
-                    worst = (short, a, lo, b, hi, t_b - t_a, dict.fromkeys((field_a, field_b)))
-    if worst is not None:
-        short, a, lo, b, hi, need, fields = worst
-        raise FieldError(f"infeasible: {a} (not before {lo:g} s) and {b} (not after {hi:g} s) leave "
-                         f"{hi - lo:g} s; the fastest run between them takes {need:.0f} s", ", ".join(fields))
-
-
-def _fields(n, lo, hi, departure=False):
-    """(field of the earliest time, of the latest) of timetable stop ``n``'s departure or arrival:
-    one fixed time, or a window's two bounds."""
-    fixed, early, late = (("departure_s", "departure_earliest_s", "departure_latest_s") if departure
-                          else ("arrival_s", "earliest_s", "latest_s"))
-    if lo is not None and lo == hi:
-        early = late = fixed
-    return f"stops[{n}].{early}", f"stops[{n}].{late}"
 
 
 def _relative(t, departure):
