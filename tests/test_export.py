@@ -196,3 +196,67 @@ def test_a_run_solved_again_into_its_folder_leaves_no_check_or_export_of_the_run
                        "profile_every_10m.json"}, left
     assert runner.invoke(app, ["check", str(out)]).exit_code == 0
     assert json.loads((out / "check.json").read_text())["profile_running_time_s"] == pytest.approx(78.0, abs=1e-4)
+
+
+def _solved(tmp_path, *extra):
+    out = tmp_path / "run"
+    assert CliRunner().invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "200", "--no-plot",
+                                    "--out", str(out), *extra]).exit_code == 0
+    return out
+
+
+def _edit_profile(out, row, column, value):
+    profile = pd.read_csv(out / "profile.csv")
+    profile.loc[row, column] = value
+    if column == "speed_kmh":  # the clock kept consistent with the edited speeds, as a careful edit would
+        v, x = profile["speed_kmh"].to_numpy() / 3.6, profile["position_m"].to_numpy()
+        profile["time_s"] = np.concatenate([[0.0], np.cumsum(2 * np.diff(x) / (v[:-1] + v[1:]))])
+    profile.to_csv(out / "profile.csv", index=False, float_format="%.6g")
+
+
+@pytest.mark.parametrize("edit, fragment", [
+    (("handle", 7.0), "profile.csv: handle, row 12: 7, but the row's forces give"),
+    (("inputs", {"from": "Nowhere"}), "inputs.json: from: 'Nowhere' is not a stop of"),
+    (("inputs", {"to": "Rokin"}), "inputs.json: to: 'Rokin' is the stop the run departs from"),
+    (("folder", "check.json"), "check.json: is a folder where an output file goes"),
+])
+def test_a_saved_run_edited_by_hand_is_refused_by_check_and_export(tmp_path, edit, fragment):
+    out = _solved(tmp_path)
+    kind, what = edit
+    if kind == "handle":
+        _edit_profile(out, 10, "handle", what)
+    elif kind == "inputs":
+        inputs = json.loads((out / "inputs.json").read_text())
+        (out / "inputs.json").write_text(json.dumps({**inputs, **what}))
+    else:
+        (out / what).mkdir()
+    commands = (["check", str(out)],) if kind == "folder" else (["check", str(out)], ["export", str(out)])
+    for command in commands:
+        r = CliRunner().invoke(app, command)
+        assert r.exit_code == 2 and fragment in r.output and "Traceback" not in r.output, r.output
+
+
+def test_a_speed_edited_with_its_clock_and_summary_is_flagged_by_the_re_simulation(tmp_path):
+    """A speed of 100 km/h written at 553 m (its clock and the summary's top speed made to agree)
+    is not what the forces give: check and export flag the run with where and by how much."""
+    out = _solved(tmp_path)
+    _edit_profile(out, 100, "speed_kmh", 100.0)
+    summary = json.loads((out / "summary.json").read_text())
+    profile = pd.read_csv(out / "profile.csv")
+    summary.update(top_speed_kmh=100.0, running_time_s=float(profile["time_s"].iloc[-1]))
+    (out / "summary.json").write_text(json.dumps(summary))
+    for command in ("check", "export"):
+        r = CliRunner().invoke(app, [command, str(out)])
+        assert r.exit_code == 1 and "over the speed limit at" in r.output and "from what its forces give" in r.output, r.output
+
+
+def test_a_run_with_timing_windows_is_checked_on_its_own_grid(tmp_path):
+    """The grid of a run with a timing point has a node there: check prepares the run with its
+    windows (it refused the unedited folder as "positions that differ from the grid")."""
+    study = write_yaml(tmp_path / "study.yaml", {"name": "w", "track": str(TRACKS / "amsterdam_rokin_centraal.yaml"),
+                                                 "train": str(TRAINS / "amsterdam_metro.yaml"), "running_time_s": 80,
+                                                 "points": 200, "windows": [{"position_m": 600, "latest_s": 42}]})
+    out = tmp_path / "o"
+    assert CliRunner().invoke(app, ["solve", str(study), "--no-plot", "--out", str(out)]).exit_code == 0
+    r = CliRunner().invoke(app, ["check", str(out)])
+    assert r.exit_code == 0 and "check: ok" in r.output, r.output

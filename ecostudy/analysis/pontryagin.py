@@ -153,16 +153,17 @@ def estimated_psi(m, nodes, train, tolerance=1e-2):
 
 
 def check_profile(track, train, inputs, trajectory, running_time=None, tolerance=1e-2, objective="energy",
-                  where="profile.csv"):
+                  where="profile.csv", case=None):
     """Regime check of a result's :class:`~ecostudy.core.types.Trajectory` as the energy-optimal run
     for ``running_time``; ``inputs`` names the stops and the grid size (``inputs.json``).
 
     ``running_time`` None: the profile's own time, fixed. Given: arrive by then (a window), so a
     profile that arrives earlier than it needs to is tested as what it is offered as.
     ``objective``: ``energy`` (eq. 2.17) or ``net_energy`` (eq. 7.4, regeneration credited).
-    ``where`` names the profile in the refusal of positions off the grid.
+    ``where`` names the profile in the refusal of positions off the grid; ``case``: the run's prepared
+    case (with its timing windows, whose nodes are on its grid), else prepared from ``inputs``.
     """
-    case = prepare(track, train, inputs["from"], inputs["to"], inputs["points"])
+    case = case if case is not None else prepare(track, train, inputs["from"], inputs["to"], inputs["points"])
     on_grid(trajectory, case.nodes, inputs, where)
     x, v, dt, ft, fb = trajectory
     own = float(dt.sum())

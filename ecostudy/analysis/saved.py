@@ -14,7 +14,7 @@ import numpy as np
 from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.simulate import verify
-from ecostudy.core.status import Status, flagged, worst
+from ecostudy.core.status import OVERSPEED_TOLERANCE_KMH, Status, flagged, worst
 from ecostudy.core.types import Window
 from ecostudy.core.units import KMH, KWH
 from ecostudy.io.loaders import load_track, load_train
@@ -24,7 +24,10 @@ from ecostudy.ocp.problem import prepare
 
 # the totals summary.json records, which the profile's own must give (the profile's %.6g digits
 # sum to within about 1e-6 of the solve's; an edit shows far above)
-RECORDED = ("running_time_s", "traction_energy_kWh", "net_energy_kWh")
+RECORDED = ("running_time_s", "traction_energy_kWh", "braking_energy_kWh", "regenerated_energy_kWh", "net_energy_kWh",
+            "traction_energy_J_per_kg", "top_speed_kmh")
+PROFILE_SPEED_KMH = 2.0  # a saved speed this far from its forces' re-simulation is not theirs (K = 10: 1.2 km/h; K >= 200: 0.01)
+HANDLE = 1e-3  # the handle column against the forces' handle (the digits written: about 5e-6 apart)
 AGREE = 1e-4  # relative, of the larger total (at least 1 s or 1 kWh)
 
 
@@ -33,6 +36,7 @@ class Rejudged(NamedTuple):
     verification: dict[str, Any]   # the re-simulation's block, as ``summary.json`` records the solve's
     track: Any
     train: Any
+    case: Any                      # the run's prepared case (``ocp.problem.prepare``): its grid, limits and windows
 
 
 def windows_record(windows: Sequence[Window]) -> list[dict[str, Any]]:
@@ -42,14 +46,31 @@ def windows_record(windows: Sequence[Window]) -> list[dict[str, Any]]:
              "max_speed_kmh": None if w.max_speed is None else w.max_speed / KMH} for w in windows]
 
 
+def _number(x: Any) -> float | None:
+    return None if x is None else float(x)
+
+
 def _windows(inputs: dict[str, Any], where: Path) -> list[Window]:
     try:
-        return [Window(float(w["distance_m"]), w["earliest_s"], w["latest_s"],
+        return [Window(float(w["distance_m"]), _number(w["earliest_s"]), _number(w["latest_s"]),
                        None if w["min_speed_kmh"] is None else float(w["min_speed_kmh"]) * KMH,
                        None if w["max_speed_kmh"] is None else float(w["max_speed_kmh"]) * KMH)
                 for w in inputs.get("windows") or ()]
     except (KeyError, TypeError, ValueError) as exc:
         raise InputError(problem(where, "windows", f"not the timing windows a solve records ({exc!r})"))
+
+
+def saved_case(track: Any, train: Any, inputs: dict[str, Any], where: Path) -> Any:
+    """The prepared case of a saved run (its stops, grid and timing windows from ``inputs.json``,
+    ``where``); a field that names no case of the track and train is one line naming it."""
+    stops = getattr(track, "stops", {})
+    for name in ("from", "to"):
+        if not isinstance(inputs.get(name), str) or inputs[name] not in stops:
+            raise InputError(problem(where, name, f"{inputs.get(name)!r} is not a stop of {inputs['track']}: an edited "
+                                     "file? solve again"))
+    if inputs["from"] == inputs["to"]:
+        raise InputError(problem(where, "to", f"'{inputs['to']}' is the stop the run departs from: an edited file? solve again"))
+    return prepare(track, train, inputs["from"], inputs["to"], inputs["points"], windows=_windows(inputs, where))
 
 
 def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
@@ -60,21 +81,26 @@ def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
     the solve's tolerances, else the run is flagged whatever its summary says."""
     result_dir = Path(result_dir)
     inputs = saved.inputs
+    for name in ("track", "train", "from", "to"):
+        if name not in inputs:
+            raise InputError(problem(result_dir / "inputs.json", name, "missing: an edited file? solve again"))
     check_unchanged(inputs, result_dir)
     track, train = load_track(inputs["track"]), load_train(inputs["train"])
-    case = prepare(track, train, inputs["from"], inputs["to"], inputs["points"],
-                   windows=_windows(inputs, result_dir / "inputs.json"))
+    case = saved_case(track, train, inputs, result_dir / "inputs.json")
     on_grid(saved.trajectory, case.nodes, inputs, result_dir / "profile.csv")
-    _, v, dt, ft, fb = saved.trajectory
+    x, v, dt, ft, fb = saved.trajectory
     _, totals = tabulate(train, case.nodes, v, dt, ft, fb)
+    u = handles(train, v, ft, fb)
+    off = np.flatnonzero(~(np.abs(u - saved.handle) <= HANDLE))
+    if off.size:
+        raise InputError(problem(result_dir / "profile.csv", f"handle, row {off[0] + 2}", f"{saved.handle[off[0]]:g}, but "
+                                 f"the row's forces give {u[off[0]]:.6g}: an edited profile? solve again"))
     for name in RECORDED:
         said = saved.summary.get(name)
-        if said is None and name == "net_energy_kWh":
-            continue
         if not isinstance(said, (int, float)) or not abs(said - totals[name]) <= AGREE * max(abs(said), abs(totals[name]), 1.0):
             raise InputError(problem(result_dir / "summary.json", name, f"{said!r}, but the profile's run gives "
                                      f"{totals[name]:.6g}: an edited file? solve again"))
-    block, _ = verify(case.segment, train, case.nodes, handles(train, v, ft, fb), totals["running_time_s"],
+    block, trace = verify(case.segment, train, case.nodes, u, totals["running_time_s"],
                       totals["traction_energy_kWh"] * KWH, case.windows, net_energy=totals["net_energy_kWh"] * KWH)
     within = all(abs(block[k]) <= tol for k, tol in block["tolerances"].items() if k in block)
     reasons = [] if within else [f"re-simulated from the saved profile, outside tolerance "
@@ -82,5 +108,14 @@ def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
     reasons += [f"re-simulated from the saved profile, the timing point at {w['distance_m']:g} m is missed "
                 f"({w['simulated_time_s']:.1f} s, {w['simulated_speed_kmh']:.1f} km/h)"
                 for w in block["windows"] if not w["kept"]]
+    over = (v - case.limits) / KMH
+    if np.max(over) > OVERSPEED_TOLERANCE_KMH:
+        k = int(np.argmax(over))
+        reasons.append(f"the saved profile runs {over[k]:.2f} km/h over the speed limit at {x[k]:.0f} m")
+    gap = np.abs(np.interp(x, np.maximum.accumulate(trace.x), trace.v) - v) / KMH
+    if np.max(gap) > PROFILE_SPEED_KMH:
+        k = int(np.argmax(gap))
+        reasons.append(f"the saved profile's speed at {x[k]:.0f} m is {gap[k]:.1f} km/h from what its forces give when "
+                       "re-simulated")
     status = worst([saved.status, flagged("; ".join(reasons)) if reasons else saved.status])
-    return Rejudged(status, block, track, train)
+    return Rejudged(status, block, track, train, case)

@@ -150,6 +150,8 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
     agreement or more for a run that is ok."""
     check_options(time=time)
     result_dir = Path(result_dir)
+    if result_dir.is_dir():
+        check_output_dir(result_dir, ("check.json",))
     report = check_result(result_dir, time)
     write_json(result_dir / "check.json", report)
     lines = [f"checked as the {report['checked_as']}",
@@ -173,7 +175,7 @@ def export_folder(result_dir: Path, every: str = "1s") -> Note:
     profile_every_<step>.csv and .json in the folder; ``ok`` when the run exported is (its status is
     in the JSON and the text)."""
     match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|m)\s*", every or "")
-    if not match or float(match.group(1)) <= 0:
+    if not match or not 0 < float(match.group(1)) < float("inf"):
         raise InputError(problem("command line", "--every", f"expected a step such as '1s' (seconds) or '10m' "
                                  f"(metres), not '{every}'"))
     step = float(match.group(1))

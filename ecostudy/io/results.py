@@ -106,8 +106,17 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
             advice = pd.read_csv(result_dir / "advice.csv")
         except (OSError, ValueError) as exc:
             raise InputError(problem(result_dir / "advice.csv", "", f"cannot be read ({exc})"))
-        if "start_position_m" not in advice or "mode" not in advice:
-            raise InputError(problem(result_dir / "advice.csv", "start_position_m/mode", "missing"))
+        missing = [c for c in ("start_position_m", "mode", "handle", "target_speed_kmh") if c not in advice]
+        if missing:
+            raise InputError(problem(result_dir / "advice.csv", ", ".join(missing), "missing"))
+        handle = pd.to_numeric(advice["handle"], errors="coerce").to_numpy(float)
+        target = pd.to_numeric(advice["target_speed_kmh"], errors="coerce").to_numpy(float)
+        bad = np.flatnonzero(~(np.abs(handle) <= 1.0 + NOISE)
+                             | (advice["target_speed_kmh"].notna().to_numpy() & ~(target >= 0.0)))
+        if bad.size:
+            raise InputError(problem(result_dir / "advice.csv", f"handle, target_speed_kmh, row {bad[0] + 2}",
+                                     f"'{advice['handle'].iloc[bad[0]]}', '{advice['target_speed_kmh'].iloc[bad[0]]}': "
+                                     "a handle is a number from -1 to 1 and a target speed a number >= 0"))
         starts = pd.to_numeric(advice["start_position_m"], errors="coerce").to_numpy(float)
         bad = np.flatnonzero(~np.isfinite(starts) | (np.diff(starts, prepend=-np.inf) < 0))
         if bad.size:

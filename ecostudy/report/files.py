@@ -10,7 +10,7 @@ from ecostudy.core.errors import InputError, problem
 from ecostudy.core.status import Status
 from ecostudy.io.folder import write_summary
 from ecostudy.io.results import load_result
-from ecostudy.io.writers import write_csv, write_json
+from ecostudy.io.writers import check_output_dir, write_csv, write_json
 from ecostudy.report import style
 from ecostudy.report.drawer import apart
 from ecostudy.report.html import write_html
@@ -121,6 +121,9 @@ def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
     as ``profile_every_<step>.csv`` and ``.json`` beside it (the JSON: the run with its status, units,
     step, rows). Returns (table, csv path, json path, the run's :class:`~ecostudy.core.status.Status`)."""
     saved = load_result(result_dir)
+    step = f"{time_step_s:g}s" if time_step_s is not None else f"{distance_step_m:g}m"
+    csv, js = (Path(result_dir) / f"profile_every_{step}.{ext}" for ext in ("csv", "json"))
+    check_output_dir(result_dir, (csv.name, js.name))
     span, unit = (saved.trajectory.time[-1], "s") if time_step_s is not None else (saved.trajectory.nodes[-1], "m")
     rows = float(span) / (time_step_s if time_step_s is not None else distance_step_m) + 2
     if rows > MAX_EXPORT_ROWS:
@@ -129,8 +132,6 @@ def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
                                  f"exported (a step of at least {float(span) / MAX_EXPORT_ROWS:.2g} {unit})"))
     judged = rejudged(saved, result_dir)  # the run's status judged again, not taken from its summary
     table = fixed_step(saved.trajectory, saved.handle, time_step_s, distance_step_m, saved.advice)
-    step = f"{time_step_s:g}s" if time_step_s is not None else f"{distance_step_m:g}m"
-    csv, js = (Path(result_dir) / f"profile_every_{step}.{ext}" for ext in ("csv", "json"))
     write_csv(csv, table)
     run = {**{k: saved.summary.get(k) for k in ("track", "train", "from", "to", "running_time_s")}, "status": str(judged.status)}
     write_json(js, {"run": run,

@@ -23,5 +23,5 @@ def check_result(result_dir, running_time=None):
     judged = rejudged(saved, result_dir)
     objective = "net_energy" if saved.summary.get("objective") == "net_energy" else "energy"
     report = check_profile(judged.track, judged.train, saved.inputs, saved.trajectory,
-                           running_time, objective=objective, where=Path(result_dir) / "profile.csv")[0]
+                           running_time, objective=objective, where=Path(result_dir) / "profile.csv", case=judged.case)[0]
     return {**report, "run_status": str(judged.status), "resimulated": judged.verification}
