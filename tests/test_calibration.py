@@ -790,3 +790,16 @@ def test_generated_logs_keep_their_wheel_power_the_force_times_the_speed(train, 
     log = as_log(frame)
     ratio, rows = force_power_ratio(log.v, log.force, log.power_wheel)
     assert rows >= 20 and FORCE_POWER[0] < 0.95 < ratio < 1.05 < FORCE_POWER[1], (ratio, rows)
+
+
+def test_a_log_with_power_in_megawatts_under_kilowatt_names_is_not_an_ok_calibration(tmp_path, logged):
+    """Power written in MW under the kW columns and no force column: the fit makes the regional train
+    about a thousandth of its mass and said `calibration ok` (the train file it wrote was then refused
+    by validate: mass_t >= 1); flagged now, naming the ratio and the likely slip."""
+    frame = logged[0][0].drop(columns=["force_kN"])
+    for column in ("power_wheel_kW", "power_line_kW"):
+        frame[column] = frame[column] / 1000.0
+    write_log(tmp_path / "mw.csv", {"track": str(TRACK), "train": str(TRAIN), "source": "generated"}, frame)
+    result = run("calibrate", tmp_path / "mw.csv", "--out", tmp_path / "o", "--no-plot")
+    assert result.exit_code == 1, result.output
+    assert "times the train file's" in result.output and "a unit slip in the log" in result.output, result.output

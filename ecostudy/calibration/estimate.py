@@ -23,6 +23,10 @@ from ecostudy.calibration.fit import (
 MAX_RMS_SPEED = 0.3    # [m/s]
 MAX_STRUCTURE = 2.0    # moving-average innovations over white-noise expectation (1.3 at most on 200 generated logs)
 WINDOW = 5.0           # [s]
+# a fitted mass this many times the train file's, or less than its share, is a unit slip in the log
+# rather than a train (power in MW or W under kW names: 1000 x; force in daN under kN: 10 x); a
+# loaded freight train against its empty file is at most about 3-4 x, a passenger train within 1.5 x
+MASS_RATIO = 3.0
 # what an ok calibration passed (its status line says so)
 CHECKED = (f"every parameter fitted identifiable, replayed speed within {MAX_RMS_SPEED:g} m/s RMS, innovations "
            f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s, logged speeds within {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits")
@@ -115,6 +119,11 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                        f"more than {MAX_STRUCTURE:g}): the model misses something the logs show")
     reasons += [f"{run.log} run {run.index}: {why}" for run in problem.runs
                 if (why := over_limit(run.t, run.x, run.v, track))]
+    ratio = theta["mass"] / problem.prior["mass"]
+    if "mass" in free and not 1.0 / MASS_RATIO <= ratio <= MASS_RATIO:
+        reasons.append(f"mass {theta['mass'] / 1e3:.4g} t is {ratio:.3g} times the train file's "
+                       f"{problem.prior['mass'] / 1e3:.4g} t (beyond 1/{MASS_RATIO:g} to {MASS_RATIO:g}): a unit slip "
+                       "in the log (power in MW or W under kW names, force in daN under kN)?")
     scale = np.array([s[n] for n in free])
     return Calibration(table, "flagged" if reasons else "ok", "; ".join(reasons), residuals, quality, theta,
                        train_with(train, theta), free, cov * np.outer(scale, scale))
