@@ -803,3 +803,8 @@ def test_a_log_with_power_in_megawatts_under_kilowatt_names_is_not_an_ok_calibra
     result = run("calibrate", tmp_path / "mw.csv", "--out", tmp_path / "o", "--no-plot")
     assert result.exit_code == 1, result.output
     assert "times the train file's" in result.output and "a unit slip in the log" in result.output, result.output
+
+
+def test_an_infinite_validate_tolerance_is_refused(tmp_path, log_files):
+    result = run("validate", log_files[0], "--energy-tolerance", "inf", "--out", tmp_path / "v", "--no-plot")
+    assert result.exit_code == 2 and "--energy-tolerance: must be a finite number" in result.output, result.output

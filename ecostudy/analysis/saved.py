@@ -70,7 +70,12 @@ def saved_case(track: Any, train: Any, inputs: dict[str, Any], where: Path) -> A
                                      "file? solve again"))
     if inputs["from"] == inputs["to"]:
         raise InputError(problem(where, "to", f"'{inputs['to']}' is the stop the run departs from: an edited file? solve again"))
-    return prepare(track, train, inputs["from"], inputs["to"], inputs["points"], windows=_windows(inputs, where))
+    windows, length = _windows(inputs, where), abs(stops[inputs["to"]] - stops[inputs["from"]])
+    for n, w in enumerate(windows):
+        if not 0.0 < w.distance < length:
+            raise InputError(problem(where, f"windows[{n}].distance_m", f"{w.distance:g} m is not between the stops "
+                                     f"({length:g} m apart): an edited file? solve again"))
+    return prepare(track, train, inputs["from"], inputs["to"], inputs["points"], windows=windows)
 
 
 def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:

@@ -220,6 +220,7 @@ def validate_folder(log_file: Path, train: Optional[Path] = None, track: Optiona
     """``ecostudy validate``: a logged run replayed on the train file's model, per run between stops;
     a run whose traction energy or running time differs by more than the tolerances [%] is flagged.
     ``progress`` watches the runs replayed (:mod:`ecostudy.core.progress`)."""
+    check_options(energy_tolerance=energy_tolerance, time_tolerance=time_tolerance)
     figures = output(fig_format, dpi)
     with watched(progress):
         table, summary = validate_study(log_file, train, track, out, energy_tolerance / 100, time_tolerance / 100,

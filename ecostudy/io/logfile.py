@@ -93,8 +93,8 @@ class LogHeader(Strict):
                                               "when there is no position column.")
     power_sampling: Literal["interval_mean", "instant"] = Field(
         "interval_mean", description="Powers as means over the interval to the next row, or instantaneous.")
-    speed_sigma_mps: Optional[float] = Field(None, gt=0, description="Speed sensor noise, if known [m/s].")
-    power_sigma_percent: Optional[float] = Field(None, gt=0, description="Power noise, if known [%].")
+    speed_sigma_mps: Optional[float] = Field(None, gt=0, le=10, description="Speed sensor noise, if known [m/s].")
+    power_sigma_percent: Optional[float] = Field(None, gt=0, le=100, description="Power noise, if known [%].")
 
 
 @dataclass

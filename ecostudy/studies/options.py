@@ -25,6 +25,7 @@ OPTION_RANGES = {
     "weighted": (0, 1000, True), "time": (0.0, None, False), "supplement": (0.0, MAX_SUPPLEMENT_PERCENT, True),
     "supplement_max": (0.0, MAX_SUPPLEMENT_PERCENT, False), "dwell": (0.0, 86400.0, True),
     "das_time_limit": (0.0, None, False),
+    "energy_tolerance": (0.0, 1000.0, True), "time_tolerance": (0.0, 1000.0, True),  # validate's [%]
 }
 
 
