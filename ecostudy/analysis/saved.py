@@ -13,7 +13,7 @@ import numpy as np
 
 from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.errors import InputError, problem
-from ecostudy.core.simulate import verify
+from ecostudy.core.simulate import verify, within_tolerances
 from ecostudy.core.status import OVERSPEED_TOLERANCE_KMH, Status, flagged, worst
 from ecostudy.core.types import Window
 from ecostudy.core.units import KMH, KWH
@@ -107,8 +107,7 @@ def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
                                      f"{totals[name]:.6g}: an edited file? solve again"))
     block, trace = verify(case.segment, train, case.nodes, u, totals["running_time_s"],
                       totals["traction_energy_kWh"] * KWH, case.windows, net_energy=totals["net_energy_kWh"] * KWH)
-    within = all(abs(block[k]) <= tol for k, tol in block["tolerances"].items() if k in block)
-    reasons = [] if within else [f"re-simulated from the saved profile, outside tolerance "
+    reasons = [] if within_tolerances(block) else [f"re-simulated from the saved profile, outside tolerance "
                                  f"({Verification.from_dict(block).errors})"]
     reasons += [f"re-simulated from the saved profile, the timing point at {w['distance_m']:g} m is missed "
                 f"({w['simulated_time_s']:.1f} s, {w['simulated_speed_kmh']:.1f} km/h)"

@@ -80,7 +80,7 @@ def run_strategies(fleet, strategies, progress=print, pool=None, workers=1, tick
             info = result["info"]
             progress(f"{name:12s} substation {result['totals']['substation_kWh']:.3f} kWh, {result['totals']['wall_s']:.1f} s"
                      + (f" ({info['rounds_stopped']})" if info.get("rounds_stopped") else "")
-                     + "".join(f"; {name} kept its earlier run {why}" for name, why in info.get("rounds_held", {}).items()))
+                     + "".join(f"; {train} kept its earlier run {why}" for train, why in info.get("rounds_held", {}).items()))
 
     if "independent" in strategies:
         report("independent", _scored(fleet, ind, {}, time.perf_counter() - t0, pooled))
