@@ -203,3 +203,24 @@ def test_a_timetable_whose_times_leave_no_run_together_names_the_file(tmp_path):
                 "--out", tmp_path / "out"), "tt.yaml: stops, windows: infeasible: no run of the journey that keeps "
             "its timing windows")
     nothing_written(tmp_path)
+
+
+@pytest.mark.parametrize("flag, given, kind, fragment", [
+    ("--train", AMS, "a track file", "not a train file"),
+    ("--track", METRO, "a train file", "not a track file"),
+])
+def test_a_file_of_another_kind_is_one_line_naming_its_kind(tmp_path, flag, given, kind, fragment):
+    """A track file given as the train printed seven lines (four fields missing, three unknown)."""
+    other = ["--track", AMS] if flag == "--train" else ["--train", METRO]
+    line = refused(run("solve", flag, given, *other, "--points", 50, "--no-plot", "--time", 80,
+                       "--out", tmp_path / "out"), f"{given}: {kind} (", fragment)
+    assert "missing field" not in line and "unknown field" not in line
+    nothing_written(tmp_path)
+
+
+def test_a_misspelt_field_is_not_taken_for_a_file_of_another_kind(tmp_path):
+    """One unknown field beside the train's own stays one line naming that field."""
+    train = tmp_path / "t.yaml"
+    train.write_text(METRO.read_text() + "stops: []\n")
+    refused(run("solve", "--train", train, "--track", AMS, "--points", 50, "--no-plot", "--time", 80,
+                "--out", tmp_path / "out"), f"{train}: stops: unknown field")

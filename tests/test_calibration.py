@@ -473,6 +473,18 @@ def test_a_folder_where_the_figure_of_the_format_goes_is_refused_before_computin
 
 
 @pytest.mark.parametrize("command", ["validate", "calibrate"])
+def test_a_header_naming_a_track_as_its_train_is_one_line_naming_the_header_field(tmp_path, command):
+    """Seven lines (the train's fields missing, the track's unknown) named neither the log nor its header."""
+    log = tmp_path / "log.csv"
+    log.write_text(good().replace(f"train: {TRAIN}", f"train: {TRACK}"))
+    result = run(command, log, "--out", tmp_path / "o", "--no-plot")
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert lines == [f"error: {log}: header.train: {TRACK}: a track file (gradients, speed_limits, stops), "
+                     "not a train file"], result.output
+
+
+@pytest.mark.parametrize("command", ["validate", "calibrate"])
 def test_a_train_longer_than_the_track_is_refused_naming_its_file(tmp_path, command):
     long = tmp_path / "long.yaml"
     long.write_text(TRAIN.read_text().replace("length_m: 100", "length_m: 20000"))

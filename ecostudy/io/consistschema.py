@@ -1,6 +1,6 @@
 """The consist file's schema: a long train as an ordered list of vehicles joined by couplers
 (Zhang & Zhuan eq. 1, Tables I-II); units in the field names."""
-from typing import Literal, Optional, Self
+from typing import ClassVar, Literal, Optional, Self
 
 from pydantic import Field, model_validator
 
@@ -96,6 +96,7 @@ class Notches(Strict):
 
 
 class ConsistFile(Strict):
+    file_kind: ClassVar[str | None] = "consist"
     name: str
     source: str
     types: dict[str, VehicleType] = Field(min_length=1)

@@ -10,6 +10,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from ecostudy.core.errors import InputError, problem
+from ecostudy.io.schemabase import Strict
 from ecostudy.io.yamlsafe import MAX_DEPTH, MAX_FILE_BYTES, DocumentError, check_depth, load_yaml, unique_keys
 
 Model = TypeVar("Model", bound=BaseModel)
@@ -133,6 +134,39 @@ def _names(schema: type[BaseModel]) -> set[str]:
     return names
 
 
+def _file_kinds() -> dict[str, type[BaseModel]]:
+    """Every whole-file schema imported, by its ``file_kind`` (``io.schemabase.Strict``)."""
+    kinds: dict[str, type[BaseModel]] = {}
+    todo: list[type] = list(Strict.__subclasses__())
+    while todo:
+        cls = todo.pop()
+        todo.extend(cls.__subclasses__())
+        if getattr(cls, "file_kind", None):
+            kinds[cls.file_kind] = cls
+    return kinds
+
+
+def _other_kind(schema: type[BaseModel], data: object, exc: ValidationError) -> str:
+    """'a track file (stops, gradients), not a train file' when ``data`` misses fields ``schema``
+    requires and every field it gives that ``schema`` does not know is a field of one other kind of
+    file (a track file named where a train file is meant); else ''."""
+    own = getattr(schema, "file_kind", None)
+    if not own or not isinstance(data, Mapping) or not any(e["type"] == "missing" for e in exc.errors()):
+        return ""
+    keys = {str(k) for k in data}
+    foreign = sorted(keys - _names(schema))
+    if not foreign:
+        return ""
+    kinds = [kind for kind, cls in _file_kinds().items() if cls is not schema and keys <= _names(cls)]
+    if len(kinds) != 1:
+        return ""
+    return f"{_article(kinds[0])} {kinds[0]} file ({', '.join(foreign)}), not {_article(own)} {own} file"
+
+
+def _article(word: str) -> str:
+    return "an" if word[0] in "aeiou" else "a"
+
+
 def validate(schema: type[Model], data: object, path: str | PathLike[str],
              aliases: Mapping[str, str] | None = None) -> Model:
     """Validate ``data`` against a schema; every pydantic error becomes one problem line.
@@ -140,6 +174,9 @@ def validate(schema: type[Model], data: object, path: str | PathLike[str],
     try:
         return schema.model_validate(data)
     except ValidationError as exc:
+        other = _other_kind(schema, data, exc)
+        if other:  # a whole file of another kind: one line, not one per field
+            raise InputError(problem(path, "", other)) from None
         lines: list[str] = []
         for err in exc.errors():
             loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]

@@ -2,7 +2,7 @@
 controller on a consist's cascade plant, swept over the brake penalty K_b, the fence factor f and
 the horizons (Np, Nc). Units are in the field names; defaults are Zhang & Zhuan's (Ts = 20 s, K_f = 10,
 K_v = 60, K_e = 10)."""
-from typing import Annotated, Any, Literal, Optional, Self
+from typing import Annotated, Any, ClassVar, Literal, Optional, Self
 
 from pydantic import Field, field_validator, model_validator
 
@@ -58,6 +58,7 @@ class Weights(Strict):
 
 
 class HeavyhaulFile(Strict):
+    file_kind: ClassVar[str | None] = "heavy-haul study"
     name: Name
     consist: Name
     track: Name

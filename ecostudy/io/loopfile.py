@@ -4,7 +4,7 @@ Units are in the field names, as in :mod:`ecostudy.io.schemas`. Defaults are Yaz
 (controller) and Ch.10 (noise) values.
 """
 import math
-from typing import Annotated, Any, Literal, Optional, Self, Union
+from typing import Annotated, Any, ClassVar, Literal, Optional, Self, Union
 
 from pydantic import Field, model_validator
 
@@ -149,6 +149,7 @@ class NoiseSettings(Strict):
 
 
 class SimulateFile(Strict):
+    file_kind: ClassVar[str | None] = "closed-loop study"
     name: Name
     track: Name
     train: Name

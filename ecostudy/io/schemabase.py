@@ -1,7 +1,7 @@
 """The base of every file schema: frozen pydantic models that refuse unknown keys, NaN and
 infinity (unless a field says otherwise) and true/false where a number is meant."""
 import typing
-from typing import Any, Sequence, TypeVar
+from typing import Any, ClassVar, Sequence, TypeVar
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationInfo, field_validator
 
@@ -10,6 +10,9 @@ Values = TypeVar("Values", bound=Sequence[Any])
 
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True, allow_inf_nan=False)
+    # what a whole file of this schema is, in messages ("a track file"); None for a file's parts.
+    # ``io.documents.validate`` names the kind a file given in the wrong place is (a track as a train)
+    file_kind: ClassVar[str | None] = None
 
     @field_validator("*", mode="before")
     @classmethod

@@ -5,7 +5,7 @@ Cross-field rules that concern one file live here as validators; rules that need
 functions in :mod:`ecostudy.io.loaders`.
 """
 import math
-from typing import Annotated, Literal, Optional, Self, get_args
+from typing import Annotated, ClassVar, Literal, Optional, Self, get_args
 
 from pydantic import Field, model_validator
 
@@ -66,6 +66,7 @@ MAX_ROWS = 20_000  # sections of one profile: a 2000 km line at 100 m; more is a
 
 
 class TrackFile(Strict):
+    file_kind: ClassVar[str | None] = "track"
     name: Name
     source: str
     length_m: float = Field(gt=0, le=2_000_000, description="Track length [m], at most 2000 km.")
@@ -158,6 +159,7 @@ class TimetableFile(Strict):
 
     Windows here are passing points between the stops with times since the journey's start
     (the TTOBench journey format, imported by ``ecostudy.imports``)."""
+    file_kind: ClassVar[str | None] = "timetable"
 
     name: Name
     source: str = ""
@@ -237,6 +239,7 @@ class Library(Strict):
 
 
 class StudyFile(Strict):
+    file_kind: ClassVar[str | None] = "study"
     name: Name
     track: Optional[str] = None
     train: Optional[str] = None
@@ -314,6 +317,7 @@ STRATEGIES = get_args(Strategy)
 
 class NetworkStudyFile(Strict):
     """Several trains on one line and one substation: `ecostudy network STUDY.yaml`."""
+    file_kind: ClassVar[str | None] = "network study"
 
     name: Name
     track: Name

@@ -161,6 +161,7 @@ class AdhesionLimit(Strict):
 
 
 class TrainFile(Strict):
+    file_kind: ClassVar[str | None] = "train"
     name: Name
     source: str = Field(description="Where the numbers come from.")
     mass_t: float = Field(ge=1, le=100000, description="Static mass Ms [t] (1 t to 100 000 t).")

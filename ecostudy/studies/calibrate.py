@@ -43,11 +43,23 @@ def parse_fit(text):
     return names
 
 
+def _loaded(load, path, log, field):
+    """``load(path)``; a problem with a file the log's header named (``log``, else None) is said as
+    the header's: ``LOG: header: train: FILE: what is wrong``."""
+    try:
+        return load(path)
+    except InputError as exc:
+        if log is None:
+            raise
+        raise InputError([problem(log.path or log.name, f"header.{field}", line) for line in exc.problems]) from None
+
+
 def load_inputs(log_paths, train_path, track_path):
     """(logs, track, train, track path, train path): the logs read and checked, the track and train
     given, or else the ones the first log's header names; every log's positions on the track and the
     sign of its traction (beyond what the track's gradients give)."""
     logs = [load_log(p) for p in log_paths]
+    given_track, given_train = bool(track_path), bool(train_path)
     names = [log.name for log in logs]
     if len(set(names)) != len(names):
         raise InputError(problem("command line", "LOG", "two logs with the same file name: "
@@ -61,7 +73,8 @@ def load_inputs(log_paths, train_path, track_path):
         seen[samples] = str(log.path or log.name)
     track_path = Path(track_path) if track_path else logs[0].named("track")
     train_path = Path(train_path) if train_path else logs[0].named("train")
-    track, train = load_track(track_path), load_train(train_path)
+    track = _loaded(load_track, track_path, None if given_track else logs[0], "track")
+    train = _loaded(load_train, train_path, None if given_train else logs[0], "train")
     check_fits(train_path, train, track)
     for log in logs:
         check_on_track(log, track)
