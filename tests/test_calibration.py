@@ -423,6 +423,11 @@ def without_column(text, index):
     (good().replace("force_kN", "speed_kmh"), ["columns", "two columns give the speed"]),
     (good().replace("\n1.0,", "\n1.0x,", 1), ["time_s", "row 11", "'1.0x' is not a number"]),
     (good().replace(",100\n", ",nan\n", 1), ["force_kN", "row 1", "not a finite number"]),
+    # 1e308 read as an infinite traction energy, a NaN difference and an ok run
+    (good().replace(",100\n", ",1e308\n", 1), ["force_kN", "row 1: 1e+308 kN is not plausible", "10000 kN"]),
+    (good().replace("force_kN", "force_N").replace(",100\n", ",2e7\n"),
+     ["force_N", "row 1: 2e+07 N is not plausible", "up to 1e+07 N; 100 such rows"]),
+    (good().replace("force_kN", "power_wheel_kW").replace(",100\n", ",2e5\n"), ["power_wheel_kW", "100000 kW"]),
     (good().replace("\n1.0,", "\n0.5,", 1), ["time_s", "row 11", "does not increase"]),
     (good().replace("\n9.9,", "\n19.9,", 1), ["time_s", "row 100", "gap of 10.1 s"]),
     ("\n".join(good().splitlines()[:14]) + "\n", ["time_s", "at least 10"]),
@@ -820,3 +825,17 @@ def test_a_log_with_power_in_megawatts_under_kilowatt_names_is_not_an_ok_calibra
 def test_an_infinite_validate_tolerance_is_refused(tmp_path, log_files):
     result = run("validate", log_files[0], "--energy-tolerance", "inf", "--out", tmp_path / "v", "--no-plot")
     assert result.exit_code == 2 and "--energy-tolerance: must be a finite number" in result.output, result.output
+
+
+def test_an_infinite_logged_traction_is_flagged_not_ok(inputs):
+    """An infinite wheel power in a run (a logger's overflow, from the API: the CSV reader refuses it)
+    made its logged traction infinite and its difference NaN, which passed every tolerance: ok."""
+    track, train = inputs
+    frame, _ = generate_log(track, train, THERE, train, seed=5)
+    log = as_log(frame)
+    channel = "power_wheel" if log.power_wheel is not None else "force"
+    values = getattr(log, channel).copy()
+    values[20] = np.inf
+    table = validate_log(replace(log, **{channel: values}), track, train)
+    assert table.loc[0, "status"] == "flagged" and "off the log" in table.loc[0, "reason"], table.to_string()
+    assert table.loc[1, "status"] == "ok", table.to_string()

@@ -190,13 +190,13 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
         reasons = []
         if not logged > 0:  # a NaN difference would pass every tolerance
             reasons.append("no traction logged in this run: no energy to compare")
-        elif abs(row["traction_difference_pct"]) > 100 * energy_tolerance:
+        elif not abs(row["traction_difference_pct"]) <= 100 * energy_tolerance:  # NaN too (an infinite log)
             reasons.append(f"traction energy {signed(row['traction_difference_pct'], 1)} % off the log")
         if not run.stands:  # no logged running time: the time is not compared
             row["time_difference_pct"] = np.nan
             reasons.append(f"the log ends while the train moves (at {run.x[-1]:.0f} m, {run.v[-1]:.1f} m/s): "
                            "no running time to compare")
-        elif abs(row["time_difference_pct"]) > 100 * time_tolerance:
+        elif not abs(row["time_difference_pct"]) <= 100 * time_tolerance:
             reasons.append(f"running time {signed(row['time_difference_pct'], 1)} % off the log under the logged handle")
         overspeed = over_limit(run.t, run.x, run.v, track)
         if overspeed:

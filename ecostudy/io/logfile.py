@@ -49,7 +49,7 @@ from ecostudy.core.physics import gradient_force
 from ecostudy.core.types import Track
 from ecostudy.core.units import FloatArray
 from ecostudy.io.documents import NEAR_MISS, named_file, not_a_file, validate
-from ecostudy.io.logforce import check_force_power
+from ecostudy.io.logforce import check_force_power, check_plausible
 from ecostudy.io.schemabase import Strict
 from ecostudy.io.writers import atomic_write
 from ecostudy.io.yamlsafe import MAX_FILE_BYTES, DocumentError, load_yaml
@@ -328,6 +328,7 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
     fields, table = split_header(text, path)
     header = validate(LogHeader, known_header(fields, path), f"{path}: header")
     names, data = read_table(table, path)
+    check_plausible(path, names, data, COLUMNS)
     column = {COLUMNS[n][0]: (n, data[:, j] * COLUMNS[n][1]) for j, n in enumerate(names)}
     if "time" not in column:
         raise InputError(problem(path, "columns", "no time column (time_s)"))

@@ -19,6 +19,26 @@ from ecostudy.io.documents import Where
 FORCE_POWER = (0.8, 1.25)
 PULLING_SPEED = 3.0   # [m/s] rows above this only: near standstill F v is small and its noise is not
 PULLING_ROWS = 10     # fewer rows where the train pulls than this: too few to judge, not checked
+# [SI] the largest magnitude a logged train's channel can plausibly read: a heavy-haul train's several
+# locomotives exert about 3-4 MN and draw about 20 MW, a 25 kV line's train some 1000 A; a value past
+# these is a unit slip or a logger's overflow (1e308 read as an infinite energy and a NaN difference)
+PLAUSIBLE = {"force": 1e7, "power_wheel": 1e8, "power_line": 1e8, "voltage": 1e5, "current": 1e5}
+
+
+def check_plausible(path: Where, names: list[str], data: FloatArray, units: dict[str, tuple[str, float]]) -> None:
+    """Refuse, in one line naming ``path``, the column and the first row, a force, power, voltage or
+    current beyond :data:`PLAUSIBLE`, read in the column's own unit before any conversion (``data``:
+    the rows, a column per name; ``units``: column name -> (quantity, SI per the column's unit))."""
+    for j, name in enumerate(names):
+        quantity, factor = units[name]
+        if quantity in PLAUSIBLE:
+            top = PLAUSIBLE[quantity] / factor
+            over = np.nonzero(np.abs(data[:, j]) > top)[0]
+            if over.size:
+                i, unit = int(over[0]), name.rsplit("_", 1)[1]
+                raise InputError(problem(path, name, f"row {i + 1}: {data[i, j]:g} {unit} is not plausible for "
+                                         f"a train (up to {top:g} {unit}; {over.size} such "
+                                         f"row{'s' if over.size > 1 else ''})"))
 
 
 def force_power_ratio(v: FloatArray, force: FloatArray, power: FloatArray) -> tuple[float, int]:
