@@ -303,6 +303,10 @@ def test_export_refuses_a_step_too_small_with_its_row_count(saved, every, fragme
     ("profile.csv", lambda ls: swapped(ls, 4, 11), ["profile.csv: position_m, row 6", "the rows must increase"]),
     ("advice.csv", lambda ls: first_cell(ls, 1, "here"), ["advice.csv: start_position_m, row 2", "'here'"]),
     ("advice.csv", lambda ls: first_cell(ls, 2, "nan"), ["advice.csv: start_position_m, row 3", "'nan'"]),
+    # the advised mode went to on-board systems as written, whatever its handle said
+    ("advice.csv", lambda ls: named_cell(ls, 1, "mode", "full service braking"),
+     ["advice.csv: mode, row 2", "'full service braking' is not the mode of handle 1 ('full traction')"]),
+    ("advice.csv", lambda ls: named_cell(ls, 2, "mode", "traction 80 %"), ["advice.csv: mode, row 3", "handle 0.5"]),
     # a negative speed was exported; a summary that is no mapping was blamed on inputs.json
     ("profile.csv", lambda ls: named_cell(ls, 5, "speed_kmh", "-5"), ["profile.csv: speed_kmh, row 6", "-5 is below 0"]),
     ("profile.csv", lambda ls: named_cell(ls, 3, "braking_force_kN", "-20"), ["braking_force_kN, row 4", "below 0"]),

@@ -53,3 +53,13 @@ def test_advice_that_misses_the_stop_is_flagged(tmp_path):
     assert das["status"].startswith("flagged: stopped") and das["solver"] == "re-simulated"
     assert summary["status"].startswith("flagged: driver advice round: stopped"), summary["status"]
     assert r.exit_code == 1, r.output
+
+
+def test_a_mode_read_back_is_the_handle_s_on_the_rounding_edges():
+    """A saved advice table is checked against its handles (``io.results``): six written digits give
+    the same words back, a level or target speed on a rounding edge reads either way."""
+    from ecostudy.core.modes import names_mode
+    assert names_mode("traction 75 %", 0.745) and names_mode("traction 74 %", 0.745)
+    assert names_mode("cruise at 54.3 km/h", 0.2, 54.25) and not names_mode("cruise at 55.3 km/h", 0.2, 54.25)
+    assert not names_mode("braking 75 %", 0.75) and not names_mode("coast", 0.01)
+    assert names_mode("coast", 0.0) and not names_mode("traction 90 %", 0.75)

@@ -22,6 +22,7 @@ import pandas as pd
 
 from ecostudy.analysis.regimes import guess_from_result
 from ecostudy.core.errors import SolverError
+from ecostudy.core.modes import mode_name
 from ecostudy.core.progress import stage
 from ecostudy.core.simulate import Driven, simulate, worst_overspeed
 from ecostudy.core.status import driven_run, flagged, solver_part, worst
@@ -36,21 +37,6 @@ class DasRun(NamedTuple):
     summary: dict
     advice: pd.DataFrame
     driven: Driven
-
-
-def mode_name(level, target=None):
-    """Driver-readable mode of a handle level (or of a cruise target speed [m/s])."""
-    if target is not None and np.isfinite(target):
-        return f"cruise at {to_kmh(target):.1f} km/h"
-    if level >= 1 - 1e-9:
-        return "full traction"
-    if level > 1e-9:
-        return f"traction {100 * level:.0f} %"
-    if level <= -1 + 1e-9:
-        return "full service braking"
-    if level < -1e-9:
-        return f"braking {-100 * level:.0f} %"
-    return "coast"
 
 
 def advice_table(nodes, handle, trace, targets=None):

@@ -12,6 +12,7 @@ import pandas as pd
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.status import Status
 from ecostudy.core.kinematics import interval_time
+from ecostudy.core.modes import mode_name, names_mode
 from ecostudy.core.types import Trajectory
 from ecostudy.core.units import KMH, KN
 from ecostudy.io.tables import number_columns
@@ -117,6 +118,13 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
             raise InputError(problem(result_dir / "advice.csv", f"handle, target_speed_kmh, row {bad[0] + 2}",
                                      f"'{advice['handle'].iloc[bad[0]]}', '{advice['target_speed_kmh'].iloc[bad[0]]}': "
                                      "a handle is a number from -1 to 1 and a target speed a number >= 0"))
+        wrong = [i for i, (text, h, v) in enumerate(zip(advice["mode"], handle, target)) if not names_mode(text, h, v)]
+        if wrong:  # export hands the mode to on-board systems: it must be the handle's
+            i = wrong[0]
+            raise InputError(problem(result_dir / "advice.csv", f"mode, row {i + 2}",
+                                     f"'{advice['mode'].iloc[i]}' is not the mode of handle {handle[i]:g}"
+                                     + (f" and target {target[i]:g} km/h" if np.isfinite(target[i]) else "")
+                                     + f" ('{mode_name(handle[i], target[i] * KMH)}')"))
         starts = pd.to_numeric(advice["start_position_m"], errors="coerce").to_numpy(float)
         bad = np.flatnonzero(~np.isfinite(starts) | (np.diff(starts, prepend=-np.inf) < 0))
         if bad.size:
