@@ -137,11 +137,11 @@ def _names(schema: type[BaseModel]) -> set[str]:
 def _file_kinds() -> dict[str, type[BaseModel]]:
     """Every whole-file schema imported, by its ``file_kind`` (``io.schemabase.Strict``)."""
     kinds: dict[str, type[BaseModel]] = {}
-    todo: list[type] = list(Strict.__subclasses__())
+    todo: list[type[Strict]] = list(Strict.__subclasses__())
     while todo:
         cls = todo.pop()
         todo.extend(cls.__subclasses__())
-        if getattr(cls, "file_kind", None):
+        if cls.file_kind:
             kinds[cls.file_kind] = cls
     return kinds
 
