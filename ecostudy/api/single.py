@@ -2,6 +2,7 @@
 ``check``, ``export`` and ``doctor`` as functions (the command line only parses and prints).
 """
 import re
+import warnings
 from pathlib import Path
 from typing import Any, Optional
 
@@ -13,9 +14,10 @@ from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
-from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, problem
+from ecostudy.core.errors import EcostudyWarning, FieldError, InfeasibleError, InputError, TooFastError, problem
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status
+from ecostudy.core.types import Timing
 from ecostudy.core.units import number, signed
 from ecostudy.das.methods import das_run
 from ecostudy.io.results import file_digest
@@ -95,6 +97,10 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
     if st is not None:
         paths, windows, obj = (st.track_path, st.train_path), st.windows, objective or st.objective
         timing, w = (timing_of(time, supplement, window) if timed else st.timing), st.weights
+        if obj == "time" and timing != Timing():  # --objective time on a study with a running time
+            warnings.warn(problem(str(study), st.timing_field, "does not apply to --objective time (the fastest "
+                                  "run): left out"), EcostudyWarning, stacklevel=2)
+            timing = Timing()
         out_dir = output_folder(out, st.output)
     else:
         paths, windows, obj = (Path(track), Path(train)), (), objective or "energy"

@@ -277,6 +277,9 @@ class StudyFile(Strict):
                              "supplement_percent, window_s, timetable")
         if self.window_s is not None and not 0 <= self.window_s[0] <= self.window_s[1]:
             raise ValueError("window_s: must be [earliest, latest] with 0 <= earliest <= latest")
+        if self.objective == "time" and given:  # the fastest run: a running time it would not keep read as kept
+            raise ValueError(f"{given[0]}: objective 'time' finds the fastest run, which takes no {given[0]}: "
+                             "remove it, or choose objective energy, net_energy or mixed")
         return self
 
 

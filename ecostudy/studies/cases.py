@@ -133,7 +133,7 @@ def expand(path, skipped=None, read=None, windows=False):
             skipped.extend(left_out)
     else:
         units = _scenario_units(s, path, read or Files())
-    cases = []
+    cases, keys, fastest = [], set(), {}
     for name, labels, train_doc, track_doc, from_stop, to_stop, sc in units:
         timing = {"running_time_s": s.running_time_s, "supplement_percent": s.supplement_percent,
                   "window_s": list(s.window_s) if s.window_s else None}
@@ -156,6 +156,11 @@ def expand(path, skipped=None, read=None, windows=False):
                 if n in ("running_time_s", "supplement_percent"):
                     case.update(running_time_s=None, supplement_percent=None, window_s=None)
                 case[n] = v
+            timed = [k for k in ("running_time_s", "supplement_percent", "window_s") if case[k] is not None]
+            if case["objective"] == "time" and timed:  # the fastest run keeps no running time: not read as kept
+                fastest.setdefault(f"scenario '{name}': objective 'time' finds the fastest run: its "
+                                   f"{', '.join(timed)} does not apply (left out)", None)
+                case.update(running_time_s=None, supplement_percent=None, window_s=None)
             if case["objective"] not in ("time", "mixed") and not any(
                     case[k] is not None for k in ("running_time_s", "supplement_percent", "window_s")):
                 raise InputError(problem(path, "running_time_s", f"scenario '{name}' has no running time, "
@@ -163,9 +168,14 @@ def expand(path, skipped=None, read=None, windows=False):
             das = sc.das or s.das
             if das is not None and case["objective"] in ("energy", "net_energy"):
                 case.update(das=das, das_time_limit_s=s.das_time_limit_s)  # only then: other keys unchanged
-            case["labels"] = {**labels, **dict(zip(names, values))}
+            case["labels"] = {**labels, **{n: (None if case[n] is None and n in timed else v)
+                                           for n, v in zip(names, values)}}
             case["key"] = case_key(case)
-            cases.append(case)
+            if case["key"] not in keys:  # the fastest run once, whatever running times are swept beside it
+                keys.add(case["key"])
+                cases.append(case)
+    for line in fastest:
+        warnings.warn(problem(path, "objective", line), EcostudyWarning, stacklevel=2)
     output = Path(s.output) if s.output else Path("out") / s.name
     return s, output, cases
 
