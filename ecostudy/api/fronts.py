@@ -7,6 +7,7 @@ from typing import Callable, Optional
 
 from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
+from ecostudy.api.single import timing_source
 from ecostudy.core import units
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.core.errors import FieldError, InputError, problem
@@ -19,7 +20,7 @@ from ecostudy.report.html import write_html
 from ecostudy.report.studyfiles import FRONT_FIGURES, compare_figures, front_files
 from ecostudy.report.style import output
 from ecostudy.studies.batch import Expanded, run_expanded
-from ecostudy.studies.compare import compare_cases
+from ecostudy.studies.compare import check_timing, compare_cases
 from ecostudy.studies.journey import journey
 from ecostudy.studies.options import (case_from, check_options, no_windows, only_one, output_folder, study_name,
                                       timing_of)
@@ -124,6 +125,7 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
         raise InputError(problem("command line", "--time", "give --time or --supplement"))
     cases = compare_cases(train_doc, track_doc, f, t, timing, k or RUN_POINTS,
                           study_name(st, "compare", track, train, f, t))
+    check_timing(cases[0], *timing_source(study, st, time, supplement, None))
     out_dir = output_folder(out, beside(st, "_compare", "compare"))
     ran = run_expanded("compare", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,
                        progress=progress, draw=compare_figures(plot, figures))

@@ -203,6 +203,8 @@ def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
     reasons = []
     if stop_error_m is not None and not abs(stop_error_m) <= STOP_TOLERANCE_M:
         reasons.append(off_stop(stop_error_m, STOP_TOLERANCE_M))
+    if stop_error_m is not None and stop_error_m < -STOP_TOLERANCE_M:  # stood short: it never arrived,
+        late_s = early_s = None                                          # early or late
     if late_s is not None and not late_s <= LATE_TOLERANCE_S:
         reasons.append(f"arrived {late_s:.2f} s late")
     if early_s is not None and not early_s <= EARLY_TOLERANCE_S:

@@ -105,6 +105,20 @@ class StudyResult:
         return RunSummary.from_dict(self.summary)
 
 
+HEADLINE = 5  # the cases named in a folder's status; summary.json's not_ok lists every one
+
+
+def headline(named: Mapping[str, Status]) -> Status:
+    """The status of a folder of named cases: the worst, each reason after the name of its case when
+    there are several ('flagged: convex, draw 3: stopped 3.05 m beyond ...; rspc, draw 7: ...')."""
+    whole = worst(named.values())
+    if len(named) < 2 or whole.ok:
+        return whole
+    reasons = [f"{name}: {s.reason}" if s.reason else name for name, s in named.items() if s.kind == whole.kind]
+    more = f"; and {len(reasons) - HEADLINE} more (not_ok lists each)" if len(reasons) > HEADLINE else ""
+    return Status(whole.kind, "; ".join(reasons[:HEADLINE]) + more)
+
+
 def write_summary(out_dir: Path | str, kind: str, statuses: Mapping[str, Status] | Iterable[Status],
                   tables: Mapping[str, str] | None = None, files: Iterable[str] = (),
                   **fields: Any) -> Path:
@@ -121,7 +135,8 @@ def write_summary(out_dir: Path | str, kind: str, statuses: Mapping[str, Status]
     for s in named.values():
         counts[s.kind] += 1
     data = {"kind": kind, "ecostudy_version": __version__, "summary_layout": LAYOUT,
-            "status": str(worst(named.values())), "cases": counts,
+            "status": str(headline(named) if isinstance(statuses, Mapping) else worst(named.values())),
+            "cases": counts,
             "not_ok": [{"case": name, "status": str(s)} for name, s in named.items() if not s.ok],
             "tables": dict(tables or {}), "files": sorted(set(files) | {SUMMARY, REPORT} | set((tables or {}).values())),
             **fields}

@@ -18,11 +18,11 @@ import pandas as pd
 
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.defaults import RUN_POINTS
-from ecostudy.core.errors import EcostudyWarning
+from ecostudy.core.errors import EcostudyWarning, InfeasibleError, problem
 from ecostudy.core.registry import Registry
 from ecostudy.core.grid import make_segment
 from ecostudy.core.simulate import Driven, Trace, worst_overspeed
-from ecostudy.core.status import Status, driven_run, failed, status_word, worst
+from ecostudy.core.status import STOP_TOLERANCE_M, Status, driven_run, failed, status_word, worst
 from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kmh
 from ecostudy.das.advice import das_phases, nearest_levels
@@ -57,6 +57,24 @@ def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_P
     return cases
 
 
+# a running time this far under the fastest envelope's (the grid's fastest speeds, no NLP) is refused
+# before any strategy is computed; nearer, the strategies say it (the all-out NLP may run slightly faster)
+ENVELOPE_MARGIN = 0.01
+
+
+def check_timing(case, where, field):
+    """Refuse, before any strategy is computed, a running time no strategy can keep: under the fastest
+    envelope's by more than :data:`ENVELOPE_MARGIN` (one line naming ``where`` and ``field``)."""
+    asked = case["running_time_s"]
+    if asked is None:
+        return
+    track, train = _inputs(case)
+    fastest = prepare(track, train, case["from"], case["to"], case["points"]).estimate
+    if asked < (1 - ENVELOPE_MARGIN) * fastest:
+        raise InfeasibleError(problem(where, field, f"infeasible: the fastest possible run takes about "
+                                      f"{fastest:.1f} s (asked for {asked:g} s)"))
+
+
 def expand_compare(path):
     """A study file's base case as a comparison (``ecostudy run FILE --kind compare``): its timing,
     its grid; written beside its output (``<output>_compare``)."""
@@ -64,6 +82,7 @@ def expand_compare(path):
     no_windows(st, "compare", path)
     train_doc, track_doc = st.documents
     cases = compare_cases(train_doc, track_doc, st.from_stop, st.to_stop, st.timing, st.points or RUN_POINTS, st.name)
+    check_timing(cases[0], path, st.timing_field)
     return Expanded(st.output.parent / (st.output.name + "_compare"), cases)
 
 
@@ -214,6 +233,9 @@ def compare_table(cases, rows):
     table.insert(4, "saving_vs_all_out_pct", 100 * (1 - table["traction_energy_kWh"] / e_allout))
     table.insert(5, "gap_to_optimum_pct", 100 * (table["traction_energy_kWh"] / e_opt - 1))
     table.insert(2, "arrival_error_s", table["running_time_s"] - target)
+    # a strategy that stood short of the stop did another run: no arrival, saving or gap read as a result
+    short = table["stop_error_m"].astype(float) < -STOP_TOLERANCE_M
+    table.loc[short, ["arrival_error_s", "saving_vs_all_out_pct", "gap_to_optimum_pct"]] = np.nan
     table["status"] = statuses
     case = cases[0]
     train_name = case["train"].get("name", "train")
