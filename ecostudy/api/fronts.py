@@ -79,9 +79,12 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     lines = [shown(table, FRONT_COLUMNS + study_col + (DAS_COLUMNS if das is not None else []))]
     if das is not None:
         d = meta["das"]
-        low, high = (units.number(d[f"{end}_gap_on_time_pct"], ".2f") for end in ("min", "max"))
-        lines.append(f"DAS {d['method']}: {d['solved']} of {d['points']} points; gap to ATO on time "
-                     f"{low} to {high} %; monotone: {d['monotone']}")
+        gaps = "no gap read off a run not ok"
+        if d["ok"]:
+            low, high = (units.number(d[f"{end}_gap_on_time_pct"], ".2f") for end in ("min", "max"))
+            gaps = f"gap to ATO on time of the ok ones {low} to {high} %"
+        lines.append(f"DAS {d['method']}: {d['solved']} of {d['points']} points solved, {d['ok']} ok; {gaps}; "
+                     f"monotone: {d['monotone']}")
     five, ten = (f"saves {units.number(v, '.1f')} %" if v is not None else "not on the front"
                  for v in (meta[f"saving_at_{p}_pct_supplement_pct"] for p in (5, 10)))
     lines.append(f"all-out {meta['all_out_time_s']:.2f} s; +5 % {five}, +10 % {ten} (of the all-out traction energy)")

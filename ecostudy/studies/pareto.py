@@ -238,9 +238,12 @@ def das_front(table, results, method="phases", points=None, workers=1, time_limi
 def das_meta(table):
     """What a reader asks of a DAS front: how many points solved, the gap range, monotonicity."""
     ok = table["das_traction_energy_kWh"].notna() if "das_traction_energy_kWh" in table else table.index < 0
-    gaps = table.loc[ok, "das_gap_to_ato_on_time_pct"] if ok.any() else pd.Series(dtype=float)
+    # the gap range over the advice runs that are ok only: a run short of its stop saves what it did not drive
+    trusted = ok & table["das_status"].astype(str).eq("ok") if "das_status" in table else ok
+    gaps = table.loc[trusted, "das_gap_to_ato_on_time_pct"] if trusted.any() else pd.Series(dtype=float)
     energy = table.loc[ok, "das_traction_energy_kWh"].to_numpy() if ok.any() else np.zeros(0)
     return {"method": table.attrs.get("das_method"), "points": int(len(table)), "solved": int(ok.sum()),
+            "ok": int(trusted.sum()),
             "min_gap_on_time_pct": float(gaps.min()) if len(gaps) else None,
             "max_gap_on_time_pct": float(gaps.max()) if len(gaps) else None,
             "monotone": bool(np.all(np.diff(energy) <= 1e-6 * energy[:-1])) if len(energy) > 1 else None}
