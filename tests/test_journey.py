@@ -300,7 +300,8 @@ def test_a_total_a_hair_under_the_all_out_runs_is_refused_with_the_digits_that_t
                                  "--out", str(tmp_path), "--no-plot"])
     lines = [line for line in r.output.splitlines() if line.startswith("error:")]
     assert r.exit_code == 2 and len(lines) == 1, r.output
-    assert lines[0] == "error: infeasible: the total time 199.50 s is below the sum of the all-out times 199.53 s"
+    assert lines[0] == ("error: command line: --time: infeasible: the total time 199.50 s is below the sum of the "
+                        "all-out times 199.53 s")
 
 
 def test_at_supplement_0_every_distribution_is_the_all_out_run_of_each_segment():

@@ -10,7 +10,7 @@ from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
 from ecostudy.api.single import timing_source
 from ecostudy.core import units
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
-from ecostudy.core.errors import FieldError, InputError, problem
+from ecostudy.core.errors import FieldError, InfeasibleError, InputError, problem
 from ecostudy.io.loaders import check_fits, check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
 from ecostudy.io.timetable import journey_plan, name_stops
 from ecostudy.io.store import check_one_study
@@ -164,8 +164,13 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
     trk, trn = load_track(track if track is not None else associated_track(tt, timetable)), load_train(train)
     check_fits(train, trn, trk)
     scheduled, plan = None, None
+    if tt is not None and not tt.stops:  # a timetable of one supplement: the journey's --supplement
+        if time is not None or supplement is not None:
+            raise InputError(problem("command line", "--timetable", f"{timetable} gives the supplement "
+                                     f"({tt.supplement_percent:g} %): no --time or --supplement beside it"))
+        supplement, tt = tt.supplement_percent, None
     if tt is not None and timetable is not None:
-        if stops or time is not None or supplement is not None or not tt.stops:
+        if stops or time is not None or supplement is not None:
             raise InputError(problem("command line", "--timetable", "a timetable with stop times replaces --stops, "
                                      "--time and --supplement"))
         tt, trk = name_stops(tt, trk, timetable)
@@ -193,6 +198,10 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
                                             progress=progress)
     except FieldError as exc:  # a timetable's times no run keeps: the timetable's fields, by name
         raise exc.in_file(timetable) from None
+    except InfeasibleError as exc:  # a total time no journey keeps: the option, by name
+        if time is None:
+            raise
+        raise InfeasibleError([problem("command line", "--time", p) for p in exc.problems]) from None
     passing = []
     if plan is not None:  # timing points along the journey (segment lengths from the first split)
         start = 0.0

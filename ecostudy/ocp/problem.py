@@ -156,8 +156,10 @@ def all_out(case: Case, stages: Stages, options: session.Options | None = None) 
     m, outcome = solve_once(case, guess_from_speeds(case, case.envelope), "time", stages, options)
     if not outcome.usable and case.windows and outcome.status in ("infeasible", "restoration_failed"):
         points = ", ".join(f"{w.distance:.0f} m" for w in case.windows)
-        raise InfeasibleError(f"infeasible: no run keeps the timing windows at {points} from "
-                              f"{case.segment.from_stop} ({outcome.status})")
+        # the windows passed the fastest envelope's check (``check_windows``): the grid may be too coarse
+        raise FieldError(f"infeasible on this grid of {len(case.nodes)} nodes: no run on it keeps the timing "
+                         f"windows at {points} from {case.segment.from_stop} (Ipopt: {outcome.status}), though "
+                         "the fastest envelope does: try more points", "windows")
     if not outcome.usable:
         raise SolverError(f"Ipopt could not find the all-out run ({outcome.status})")
     return float(np.sum(space.solution_arrays(m)[1])), m, outcome
