@@ -328,8 +328,8 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
     fields, table = split_header(text, path)
     header = validate(LogHeader, known_header(fields, path), f"{path}: header")
     names, data = read_table(table, path)
-    check_plausible(path, names, data, COLUMNS)
-    column = {COLUMNS[n][0]: (n, data[:, j] * COLUMNS[n][1]) for j, n in enumerate(names)}
+    with np.errstate(over="ignore"):  # a cell past a float in SI: refused below, after the checks that name a unit
+        column = {COLUMNS[n][0]: (n, data[:, j] * COLUMNS[n][1]) for j, n in enumerate(names)}
     if "time" not in column:
         raise InputError(problem(path, "columns", "no time column (time_s)"))
     if "position" not in column and "speed" not in column:
@@ -355,6 +355,7 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
                                                                   for q in ("speed", "force", "power_wheel"))))
     check_series(log, path)
     check_force_power(path, log.columns[1:], v, log.force, log.power_wheel)
+    check_plausible(path, names, data, COLUMNS)
     return log
 
 
