@@ -91,6 +91,9 @@ def test_a_folder_given_as_the_study_file_is_named_a_folder(tmp_path, command):
     ("network_metro_2trains.yaml", {"buffer_m": None}, "buffer_m: the following strategy needs it"),
     ("heavyhaul_fence.yaml", {"brake_penalty": [40, -1]}, "brake_penalty[1]: Input should be greater than or equal to 0"),
     ("heavyhaul_fence.yaml", {"fence": [10, 0]}, "fence[1]: Input should be greater than or equal to 1"),
+    # a tolerance of 1e9 m switched the stop check off
+    ("heavyhaul_fence.yaml", {"stop_tolerance_m": 1e9}, "stop_tolerance_m: Input should be less than or equal to 100"),
+    ("heavyhaul_fence.yaml", {"speed_tolerance_kmh": 1e9}, "speed_tolerance_kmh: Input should be less than or equal to 50"),
     ("heavyhaul_fence.yaml", {"reference": {"running_time_s": 1}},
      "reference.running_time_s: infeasible: the fastest possible run takes"),
     ("network_metro_2trains.yaml", {"supplement_percent": None, "running_times_s": [10, 90, 90]},

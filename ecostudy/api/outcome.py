@@ -114,7 +114,13 @@ def listed(out_dir: Path | str, names: Sequence[str] = ()) -> str:
 def counts_line(counts: dict[str, int], noun: str) -> str:
     """The one-line summary of a resumable study's counts (``studies.batch.execute``)."""
     return (f"{counted(counts['total'], noun)}: {counts['stored_before']} already stored, {counts['computed']} computed now "
-            f"({counts['failed']} failed); not ok: {counts['not_ok']}" + not_reused(counts))
+            f"({counts['failed']} failed); not ok: {counts['not_ok']}" + beside(counts) + not_reused(counts))
+
+
+def beside(counts: dict[str, int]) -> str:
+    """``; beside them N runs, M not ok`` for the runs a command made beside its cases (``more``)."""
+    n = counts.get("beside", 0)
+    return f"; beside them {n} run{'s' if n != 1 else ''}, {counts['beside_not_ok']} not ok" if n else ""
 
 
 def not_reused(counts: dict[str, int]) -> str:

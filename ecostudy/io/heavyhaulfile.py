@@ -115,10 +115,11 @@ class HeavyhaulFile(Strict):
                               "(Zhang & Zhuan give 0.01).")
     max_samples: int = Field(1000, ge=1, le=100000, description="Stop a run after this many samples (a run "
                              "that has not arrived by then is flagged).")
-    stop_tolerance_m: float = Field(1.0, gt=0, description="A run that stops farther from the stop (short or "
-                                    "beyond) is flagged.")
-    speed_tolerance_kmh: float = Field(1.0, ge=0, description="A run in which a car runs faster than the line's "
-                                       "limit by more is flagged.")
+    stop_tolerance_m: float = Field(1.0, gt=0, le=100, description="A run that stops farther from the stop (short "
+                                    "or beyond) is flagged; at most 100 m (a larger one would call a train that "
+                                    "never reached its stop arrived).")
+    speed_tolerance_kmh: float = Field(1.0, ge=0, le=50, description="A run in which a car runs faster than the "
+                                       "line's limit by more is flagged; at most 50 km/h.")
     arrival_tolerance_percent: float = Field(5.0, ge=0, le=1000, description="A run that arrives later than the "
                                              "reference's running time by more than this share of it and by more "
                                              "than arrival_tolerance_s is flagged.")

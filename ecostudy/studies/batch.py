@@ -327,7 +327,9 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
                   Path(name).stem: name for name in expanded.inputs}}, ["results.sqlite", *drawn], study=str(where),
                   computed_now=counts["computed"], stored_before=counts["stored_before"], **table.attrs)
     remove_unlisted(output, earlier)
-    counts["not_ok"] = sum(not s.ok for s in statuses.values())
+    beside = more or {}  # runs the command made beside the cases (a front's weighted points): counted apart
+    counts["not_ok"] = sum(not s.ok for k, s in statuses.items() if k not in beside)
+    counts.update(beside=len(beside), beside_not_ok=sum(not s.ok for s in beside.values()))
     return StudyRun(table, counts, output, expanded.cases, rows)
 
 

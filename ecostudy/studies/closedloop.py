@@ -252,7 +252,7 @@ def aggregate(runs):
         if (group["status"] == "missing").all():  # not run (``--only``): no row of NaNs
             continue
         row = {"controller": name, "runs": len(group), "ok": int((group["status"] == "ok").sum())}
-        for column in ("energy_J_per_kg", "arrival_s", "stop_error_m"):
+        for column in ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "stop_error_m"):
             values = pd.to_numeric(group[column], errors="coerce")
             row.update({with_statistic(column, how): getattr(values, how)(**({"ddof": 0} if how == "std" else {}))
                         for how in ("mean", "std", "min", "max")})
