@@ -1,6 +1,7 @@
 """Pareto fronts: monotone, verified, equal to individual solves, the same serial and in parallel."""
 import json
 
+import numpy as np
 import pandas as pd
 import pytest
 from typer.testing import CliRunner
@@ -33,7 +34,8 @@ def test_front_is_monotone_optimal_and_verified(front):
     assert (table["solver_status"] == "optimal").all()
     assert table["verified"].all()
     assert table["supplement_pct"].iloc[-1] == pytest.approx(40.0)
-    assert (table["marginal_saving_kWh_per_s"] > 0).all()
+    # each point's own dE/dT (its NLP's multiplier); the all-out run, first, has none
+    assert np.isnan(table["marginal_saving_kWh_per_s"].iloc[0]) and (table["marginal_saving_kWh_per_s"].iloc[1:] > 0).all()
     assert 0 < saving_at(table, 10.0) < 100
 
 
