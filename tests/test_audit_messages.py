@@ -60,3 +60,24 @@ def test_a_compared_strategy_short_of_its_stop_reads_no_arrival_saving_or_gap(tm
     status = json.loads((tmp_path / "out" / "summary.json").read_text())["status"]
     for name in short["strategy"]:
         assert f"{name}: stopped" in status, status
+
+
+def test_a_time_a_hair_under_coasting_s_fastest_reads_with_the_digits_that_tell_them_apart():
+    """'eco-drive coasting cannot meet 71.8 s' for 71.75 s asked, while the run without coasting is faster."""
+    import pytest
+
+    from ecostudy.core import kinematics
+    from ecostudy.core.errors import InfeasibleError
+    from ecostudy.core.units import apart
+    from ecostudy.heuristics.ecodrive import drive, eco_coasting
+    from ecostudy.io.loaders import load_track, load_train
+    from ecostudy.ocp.problem import prepare
+    case = prepare(load_track(AMS), load_train(METRO), "Rokin", "Centraal", 100)
+    last = len(case.nodes) - 1
+    fastest = drive(case, kinematics.coasting_profile(case.segment, case.train, case.nodes, case.limits,
+                                                      case.envelope, last))[1].arrival_time
+    asked = fastest - 0.04
+    with pytest.raises(InfeasibleError) as caught:
+        eco_coasting(case, asked)
+    message, (a, b) = str(caught.value), apart(asked, fastest)
+    assert a != b and f"cannot meet {a} s: without coasting it arrives at {b} s" in message, message

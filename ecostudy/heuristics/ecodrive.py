@@ -15,6 +15,7 @@ from ecostudy.analysis.tables import handles
 from ecostudy.core import kinematics
 from ecostudy.core.errors import InfeasibleError
 from ecostudy.core.simulate import Driven, simulate
+from ecostudy.core.units import apart
 from ecostudy.heuristics.mareco import mareco as heuristic
 
 
@@ -34,8 +35,10 @@ def eco_coasting(case, running_time):
         return drive(case, profile(c))[1].arrival_time
 
     last = len(case.nodes) - 1
-    if arrival(last) > running_time:
-        raise InfeasibleError(f"eco-drive coasting cannot meet {running_time:.1f} s")
+    fastest = arrival(last)
+    if fastest > running_time:  # the digits that tell them apart: not "cannot meet 71.8 s" for 71.75 s
+        asked, itself = apart(running_time, fastest)
+        raise InfeasibleError(f"eco-drive coasting cannot meet {asked} s: without coasting it arrives at {itself} s")
     c = kinematics.earliest_coasting_point(lambda k: arrival(k) <= running_time, last)
     u, trace = drive(case, profile(c))
     return Driven("eco-drive coasting", u, trace)

@@ -201,7 +201,7 @@ def mareco(case, running_time_s, drive, rounds=3):
     for _ in range(rounds):
         v1 = cap_for(case, target)
         if v1 is None:
-            raise InfeasibleError(f"the MARECO-style heuristic cannot meet {running_time_s:.1f} s")
+            raise InfeasibleError(f"the MARECO-style heuristic cannot meet {running_time_s:.6g} s")
         v = profile(case, v1)
         u, trace = drive(case, v)
         best = (v1, u, trace)
