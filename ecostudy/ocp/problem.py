@@ -202,6 +202,16 @@ def check_not_crawling(latest: float | None, case: Case) -> None:
                            f"{case.estimate:.1f} s: the train would crawl")
 
 
+# a running time this far under the fastest envelope's (the grid's fastest speeds, no NLP) no run keeps:
+# refused before any NLP is solved; nearer, the NLPs say it (an all-out NLP may run slightly faster)
+ENVELOPE_MARGIN = 0.01
+
+
+def under_envelope(asked: float, fastest: float) -> bool:
+    """Whether ``asked`` [s] is under the fastest envelope's ``fastest`` [s] by more than :data:`ENVELOPE_MARGIN`."""
+    return asked < (1 - ENVELOPE_MARGIN) * fastest
+
+
 ALL_OUT_MARGIN = 1e-6  # a running time this much (relative) under the all-out run's is the all-out run's
 
 

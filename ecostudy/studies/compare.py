@@ -29,7 +29,7 @@ from ecostudy.das.advice import das_phases, nearest_levels
 from ecostudy.heuristics import ecodrive
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
-from ecostudy.ocp.problem import prepare
+from ecostudy.ocp.problem import prepare, under_envelope
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
 from ecostudy.studies.cases import case_key, load_checked_study
 from ecostudy.studies.options import no_windows
@@ -57,20 +57,15 @@ def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_P
     return cases
 
 
-# a running time this far under the fastest envelope's (the grid's fastest speeds, no NLP) is refused
-# before any strategy is computed; nearer, the strategies say it (the all-out NLP may run slightly faster)
-ENVELOPE_MARGIN = 0.01
-
-
 def check_timing(case, where, field):
     """Refuse, before any strategy is computed, a running time no strategy can keep: under the fastest
-    envelope's by more than :data:`ENVELOPE_MARGIN` (one line naming ``where`` and ``field``)."""
+    envelope's by more than ``ocp.problem.ENVELOPE_MARGIN`` (one line naming ``where`` and ``field``)."""
     asked = case["running_time_s"]
     if asked is None:
         return
     track, train = _inputs(case)
     fastest = prepare(track, train, case["from"], case["to"], case["points"]).estimate
-    if asked < (1 - ENVELOPE_MARGIN) * fastest:
+    if under_envelope(asked, fastest):
         raise InfeasibleError(problem(where, field, f"infeasible: the fastest possible run takes about "
                                       f"{fastest:.1f} s (asked for {asked:g} s)"))
 

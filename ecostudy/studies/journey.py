@@ -31,7 +31,7 @@ from ecostudy.core.units import apart, to_kmh
 from ecostudy.heuristics import mareco
 from ecostudy.io.timetable import schedule
 from ecostudy.ocp import session
-from ecostudy.ocp.problem import ALL_OUT_MARGIN, Written, build, capped_guess, prepare
+from ecostudy.ocp.problem import ALL_OUT_MARGIN, Written, build, capped_guess, prepare, under_envelope
 from ecostudy.ocp.space import passing_time
 from ecostudy.studies.pareto import sweep
 from ecostudy.studies.reachable import check_reachable
@@ -278,7 +278,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
                 raise FieldError(f"infeasible: {t:.1f} s from {a} to {b}, below the fastest possible run's "
                                  f"{fast:.1f} s (kinematic envelope)", f"stops[{n + 1}].arrival_s")
         fastest = sum(estimates)
-        if total_time < 0.99 * fastest:  # the kinematic all-out times: refused before any front is solved
+        if under_envelope(total_time, fastest):  # the kinematic all-out times: refused before any front is solved
             too_short(total_time, fastest, " (kinematic envelope)")
         if total_time > SLOWEST * fastest:
             raise InfeasibleError(f"the total time {total_time:.6g} s is over {SLOWEST:g} times the sum of the fastest "
