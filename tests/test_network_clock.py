@@ -10,7 +10,8 @@ from ecostudy.cli import app
 from ecostudy.core.types import Supply
 from ecostudy.io.loaders import load_network_study, load_track, load_train
 from ecostudy.io.timetable import clock_steps
-from ecostudy.network import fleet
+from ecostudy.core.errors import SolverError
+from ecostudy.network import fleet, strategies
 
 from .conftest import STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
 
@@ -73,3 +74,20 @@ def test_the_timetable_of_the_python_api_is_not_moved_either():
     fl = seen.value.args[0]
     assert [legs[0].start for legs in fl.legs] == [0, 3] and fl.dwell_steps == 21
     assert fl.legs[1][1].start == 3 + 112 + 21
+
+
+def _one_leg(stops, seconds, step):
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    return fleet.plan(track, train, stops, [seconds], 0.0, [0.0], ["T1"], step, Supply(position=650.0), points=200)
+
+
+def test_a_clock_too_coarse_for_the_run_says_so():
+    """A clock the schema allows (up to 5 s) can be too coarse for a leg: at 3 s steps Noord ->
+    Station (56 s) re-simulates 1.3 % off in traction energy, at 5 s Centrum -> Zuid (65 s, 13 steps)
+    has no run; the flag names the leg, what it missed and the clock, the failure the leg's steps
+    and the clock (both said only "re-simulation" or "Ipopt infeasible")."""
+    out = strategies.run_strategies(_one_leg(["Noord", "Station"], 56.0, 3.0), ["independent"], progress=None)
+    status = out["independent"]["totals"]["status"]
+    assert status.startswith("flagged") and "T1 leg 1: energy_error_pct" in status and "on the 3 s clock" in status, status
+    with pytest.raises(SolverError, match=r"leg 1: Ipopt infeasible after \d+ iterations \(13 steps of 5 s: time_step_s\)"):
+        strategies.run_strategies(_one_leg(["Centrum", "Zuid"], 65.0, 5.0), ["independent"], progress=None)

@@ -143,8 +143,15 @@ def verify(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[f
 def within_tolerances(block: dict[str, Any], tolerances: dict[str, float] | None = None) -> bool:
     """Whether a ``verification`` block's errors are each within ``tolerances`` (default: the
     block's own; its timing windows apart: ``passed`` needs those kept too)."""
+    return not outside(block, tolerances)
+
+
+def outside(block: dict[str, Any], tolerances: dict[str, float] | None = None) -> list[str]:
+    """A ``verification`` block's errors beyond ``tolerances`` (default: the block's own), each as
+    ``energy_error_pct 1.32 (tolerance 1)``; a NaN error is beyond any tolerance."""
     tolerances = block["tolerances"] if tolerances is None else tolerances
-    return bool(all(abs(block[k]) <= tol for k, tol in tolerances.items() if k in block))
+    return [f"{k} {block[k]:.3g} (tolerance {tol:g})" for k, tol in tolerances.items()
+            if k in block and not abs(block[k]) <= tol]
 
 
 @dataclass

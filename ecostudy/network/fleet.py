@@ -13,7 +13,6 @@ import numpy as np
 
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.defaults import FRONT_POINTS
-from ecostudy.core.errors import SolverError
 from ecostudy.core.types import Timing
 from ecostudy.core.types import Supply
 from ecostudy.io.timetable import clock_steps
@@ -169,7 +168,7 @@ REGULARISATION = 1e-3  # [-] weight of rheostat power and bus-voltage offset in 
 def solve_model(m, what, options=None):
     out = session.solve(m, options)
     if not out.usable:
-        raise SolverError(f"{what}: Ipopt {out.status} after {out.iterations} iterations")
+        raise out.failure(what)
     return out
 
 

@@ -1,10 +1,9 @@
 """One train's leg between two stops, solved against a cost per clock step (the supervisor rules'
 traction weight and allowance, the regeneration credit) and a train ahead (:func:`solve_leg`).
 
-Each task builds and writes its own NLP once (:class:`LegNLP`): the guards' cold solves, the relaxed
-first solve and a warm retry solve the same NLP from another start or with other row bounds (one
-NLP re-solved with the cost's coefficients as variables was dearer: docs/benchmarks.md, "Tried and
-not kept").
+Each task builds and writes its own NLP once (:class:`LegNLP`): the guards' cold solves, the relaxed first
+solve and a warm retry solve the same NLP from another start or with other row bounds (one NLP re-solved
+with the cost's coefficients as variables was dearer: docs/benchmarks.md, "Tried and not kept").
 """
 import numpy as np
 import pyomo.environ as pyo
@@ -376,12 +375,13 @@ def _solve(nlp, cold=False, retry=True):
     Ipopt's defaults where ``retry`` (a usable capped point kept only where that fails too); else
     (a checked warm leg, whose cold solve follows) the capped outcome, (None, outcome, inf) where it
     has no usable point."""
-    label, warm = nlp.task[1], nlp.task[5] and not cold
+    (leg, label, dt), warm = nlp.task[:3], nlp.task[5] and not cold
+    clock = f"{leg.steps} steps of {dt:g} s: time_step_s"
     x0 = nlp.start(cold)
     if not warm:
         outcome = _relaxed_first(nlp, x0)
         if not outcome.usable:
-            raise SolverError(f"{label}: Ipopt {outcome.status} after {outcome.iterations} iterations")
+            raise outcome.failure(label, clock)
         return _kept(nlp, outcome)
     outcome = nlp.solve({**NEAR_START, **KKT, "max_iter": WARM_MAX_ITER}, x0)
     first = _kept(nlp, outcome) if outcome.usable else (None, outcome, float("inf"))
@@ -392,7 +392,7 @@ def _solve(nlp, cold=False, retry=True):
         return _kept(nlp, again)
     if first[0] is not None:
         return first
-    raise SolverError(f"{label}: Ipopt {again.status} after {again.iterations} iterations")
+    raise again.failure(label, clock)
 
 
 def _kept(nlp, outcome):

@@ -34,7 +34,7 @@ import time
 from concurrent.futures import as_completed
 
 from ecostudy.core.errors import SolverError
-from ecostudy.core.simulate import TOLERANCES
+from ecostudy.core.simulate import TOLERANCES, outside
 from ecostudy.core.status import solver_part
 from ecostudy.core.registry import Registry
 from ecostudy.network.joint import joint
@@ -180,7 +180,7 @@ def _scored(fleet, runs, info, wall, mapper=map):
     flags = [f"{totals['unserved_kWh']:.3f} kWh of traction not served (current limit or line)"] \
         if totals["unserved_kWh"] > 1e-3 else []
     if not totals["all_verified"]:
-        flags.append("a train's run failed its re-simulation (network_trains.csv)")
+        flags.append(resimulation_missed(fleet, checks))
     floor = fleet.supply.min_voltage  # the lowest pantograph voltage of the line (V_min)
     if totals["voltage_min_V"] < floor - 0.5:  # 0.5 V: the circuit's bisection is exact to far less
         flags.append(f"a pantograph voltage fell to {totals['voltage_min_V']:.1f} V, below min_voltage_V "
@@ -241,6 +241,16 @@ def guard_counts(runs):
             "legs_replaced_by_trapezoid_count": sum(bool(n.get("replaced_by_trapezoid")) for n in notes),
             "legs_restarted_standing_count": sum(bool(n.get("restarted")) for n in notes),
             "legs_not_optimal_count": sum("solver_status" in n for n in notes)}
+
+
+def resimulation_missed(fleet, checks):
+    """What the legs that failed their re-simulation missed (``checks``: per train, per leg, the
+    :func:`~ecostudy.network.scoring.verify_leg` blocks; a leg within every tolerance failed by
+    standing before its stop), on the study's clock: the legs' error grows with ``time_step_s``."""
+    missed = [f"{fleet.names[i]} leg {k + 1}: " + (", ".join(outside(v)) or f"stood {v['stood_before_stop_s']:.1f} s before its stop")
+              for i, legs in enumerate(checks) for k, v in enumerate(legs) if not v["passed"]]
+    shown = "; ".join(missed[:3]) + (f"; and {len(missed) - 3} more legs" if len(missed) > 3 else "")
+    return f"re-simulation outside tolerance ({shown}) on the {fleet.dt:g} s clock (time_step_s; network_trains.csv)"
 
 
 def _verified(pair):

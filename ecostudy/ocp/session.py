@@ -56,6 +56,11 @@ class Outcome:
         """A point that satisfies the constraints, even if not proven optimal (then flagged)."""
         return self.status in ("optimal", "acceptable") or self.max_violation < 1e-6
 
+    def failure(self, what: str, why: str = "") -> SolverError:
+        """The error of a solve of ``what`` that left no usable point: how Ipopt ended it, and
+        ``why`` in brackets (e.g. the clock of a time-domain leg)."""
+        return SolverError(f"{what}: Ipopt {self.status} after {self.iterations} iterations" + (f" ({why})" if why else ""))
+
 
 def repeatable() -> None:
     """Every solve repeats bit for bit: the solver chain set up (``ocp.solver.prepare``) and

@@ -140,7 +140,7 @@ def _solve_times(m, parts, what, options=None):
     if outcome.status in ("infeasible", "restoration_failed"):
         raise InfeasibleError(f"infeasible: no run of {what} ({outcome.status})")
     if not outcome.usable:
-        raise SolverError(f"{what}: Ipopt {outcome.status} after {outcome.iterations} iterations")
+        raise outcome.failure(what)
     return [float(pyo.value(p.T)) for p in parts], solver_part(what, outcome.status)
 
 
