@@ -141,7 +141,8 @@ def steady_calibration(inputs, draws):
     track, train = inputs
     truth = true_train(train, davis=(1.3, 0.5, 1.1))
     logs = [as_log(steady_log(truth, seed), f"steady{seed}") for seed in (1, 2)]
-    result = calibrate_logs(logs, level_track(track), train, ("mass", "davis_a", "davis_b", "davis_c"), draws=draws)
+    with pytest.warns(EcostudyWarning, match=r"mass fitted as Ms \(1 \+ f\) with rotating_mass_factor held"):
+        result = calibrate_logs(logs, level_track(track), train, ("mass", "davis_a", "davis_b", "davis_c"), draws=draws)
     true = {"mass": truth.static_mass, "davis_a": truth.davis[0], "davis_b": truth.davis[1], "davis_c": truth.davis[2]}
     return result, true
 
@@ -310,7 +311,8 @@ def test_a_log_over_the_line_limit_is_flagged_saying_where(tmp_path, inputs, log
     raised = frame[frame["speed_mps"] > limit]  # where and when the speed was raised
     assert raised["position_m"].min() - 1 <= float(said[2]) <= raised["position_m"].max() + 1, reason
     assert raised["time_s"].min() - 1 <= float(said[3]) <= raised["time_s"].max() + 1, reason
-    calibration = calibrate_logs([as_log(frame, "fast")], track, inputs[1], ("mass", "davis_a"), draws=0)
+    with pytest.warns(EcostudyWarning, match="these logs tell f only to"):  # one log of the line: f weakly seen
+        calibration = calibrate_logs([as_log(frame, "fast")], track, inputs[1], ("mass", "davis_a"), draws=0)
     assert calibration.status == "flagged" and f"fast run {flagged['run'].iloc[0]}: {said[0]}" in calibration.reason
 
 

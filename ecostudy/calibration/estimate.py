@@ -7,17 +7,20 @@ its prior) or the residuals are bad: the replayed speed off the logged one by mo
 :data:`WINDOW` seconds :data:`MAX_STRUCTURE` times larger than white noise leaves: the model misses
 something the logs show), or a logged run broke the line's speed limit
 (:func:`~ecostudy.calibration.replay.over_limit`: a driver keeps to it, so the log is not a driven run
-of this line as the track file gives it).
+of this line as the track file gives it), or a log pulled beyond the train file's traction envelope
+(:func:`~ecostudy.calibration.replay.over_envelope`), or a fitted efficiency is above 1.
 """
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, coefficients, over_limit
+from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, coefficients, over_envelope, over_limit
+from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.progress import stage
 from ecostudy.calibration.fit import (
-    PARAMETERS, Z95, Problem, bootstrap, identify, scales, train_with,
+    MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, identify, scales, train_with, width_if_fitted,
 )
 
 MAX_RMS_SPEED = 0.3    # [m/s]
@@ -29,7 +32,8 @@ WINDOW = 5.0           # [s]
 MASS_RATIO = 3.0
 # what an ok calibration passed (its status line says so)
 CHECKED = (f"every parameter fitted identifiable, replayed speed within {MAX_RMS_SPEED:g} m/s RMS, innovations "
-           f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s, logged speeds within {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits")
+           f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s, logged speeds within {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits, "
+           "logged traction within the train file's envelope")
 BOOTSTRAP_DRAWS = 200
 
 
@@ -95,6 +99,16 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                 row["boot_low"], row["boot_high"] = np.percentile(boot[:, j], [2.5, 97.5])
         rows.append(row)
     table = pd.DataFrame(rows)
+    if "mass" in free and "rotating_mass_factor" not in names:  # only Ms (1 + f) is seen where gradients are small
+        width = width_if_fitted(problem, free, p, "rotating_mass_factor")
+        if not width <= MAX_RELATIVE_WIDTH:
+            note = (f"fitted as Ms (1 + f) with rotating_mass_factor held at the train file's "
+                    f"{problem.prior['rotating_mass_factor']:.4g}: these logs "
+                    + ("cannot tell Ms from f" if not np.isfinite(width) else
+                       f"tell f only to +-{100 * width:.0f} % (limit {100 * MAX_RELATIVE_WIDTH:.0f} %)")
+                    + " (too little gradient work), so its interval holds only if f does")
+            table.loc[table["name"] == "mass", "note"] = note
+            warnings.warn(f"calibration: mass {note}", EcostudyWarning, stacklevel=2)
     residuals = residual_table(problem, theta)
     used = residuals[residuals["used"]]
     mass = theta["mass"] * (1.0 + theta["rotating_mass_factor"])
@@ -119,6 +133,9 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                        f"more than {MAX_STRUCTURE:g}): the model misses something the logs show")
     reasons += [f"{run.log} run {run.index}: {why}" for run in problem.runs
                 if (why := over_limit(run.t, run.x, run.v, track))]
+    reasons += [f"{log.name}: {why}" for log in logs if (why := over_envelope(log, train))]
+    reasons += [f"{n} {theta[n]:.4g} above 1: the wheel work is more than the line energy logged (a line power, "
+                "voltage or current scale off?)" for n in ("efficiency", "regeneration_efficiency") if n in free and theta[n] > 1]
     ratio = theta["mass"] / problem.prior["mass"]
     if "mass" in free and not 1.0 / MASS_RATIO <= ratio <= MASS_RATIO:
         reasons.append(f"mass {theta['mass'] / 1e3:.4g} t is {ratio:.3g} times the train file's "

@@ -90,11 +90,15 @@ class Problem:
         return problem
 
     def measure_noise(self, logs):
-        """Speed noise from the logged speeds' second differences (robust spread / sqrt 6: a smooth
-        motion leaves nothing there); power noise from the header, else from the traction
-        log-ratios (two independent readings: spread / sqrt 2), else 1 %; then the filter gains."""
+        """Speed noise from the headers (``speed_sigma_mps``, their mean), else from the logged speeds'
+        second differences (robust spread / sqrt 6: a smooth motion leaves nothing there); power
+        noise from the headers, else from the traction log-ratios (two independent readings:
+        spread / sqrt 2), else 1 %; then the filter gains."""
         second = np.concatenate([np.diff(run.v[run.used], 2) for run in self.runs])
-        if second.size > 10:
+        speeds = [log.header.speed_sigma_mps for log in logs if log.header.speed_sigma_mps]
+        if speeds:
+            self.sigma["speed"] = float(np.mean(speeds))
+        elif second.size > 10:
             self.sigma["speed"] = max(1.4826 * float(np.median(np.abs(second - np.median(second)))) / np.sqrt(6), 1e-4)
         declared = [log.header.power_sigma_percent for log in logs if log.header.power_sigma_percent]
         ratios = np.concatenate(list(self.traction.values()))
@@ -187,6 +191,13 @@ def covariance(problem, names, p):
     cov[lost, :] = np.inf
     cov[:, lost] = np.inf
     return cov, sv, (vt[-1] if sv.size else np.zeros(0))
+
+
+def width_if_fitted(problem, free, p, name):
+    """The 95 % half-width, relative to its prior, that ``name`` (held) would have if fitted beside
+    ``free`` at ``p`` (inf along a null direction: the logs see only a combination)."""
+    cov = covariance(problem, [*free, name], np.append(p, 1.0))[0]
+    return float(Z95 * np.sqrt(cov[-1, -1]) * scales(problem.prior)[name] / max(abs(problem.prior[name]), 1e-300))
 
 
 def estimate_noise(problem, names, p):

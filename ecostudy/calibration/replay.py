@@ -35,6 +35,8 @@ STANDING_TIME = 1.0     # [s] a stand lasts at least this long
 MIN_SPEED = 2.0         # [m/s] residuals only above this speed (of the speed smoothed over SMOOTHING)
 SMOOTHING = 1.0         # [s]
 TRACTION_SHARE = 0.05   # efficiency samples: power above this share of the log's largest
+ENVELOPE_TOLERANCE = 0.1  # a logged force more than this share above the train file's envelope ...
+ENVELOPE_ROWS = 10         # ... in at least this many rows is flagged (noise and a sampled force allowed)
 LIMIT_TOLERANCE_KMH = 1.0  # a logged speed (smoothed over SMOOTHING) over the line's limit by more is flagged
 
 
@@ -173,6 +175,27 @@ def over_limit(t, x, v, track, tolerance_kmh=LIMIT_TOLERANCE_KMH):
             f"line's {limit[i] / KMH:.0f} km/h limit (tolerance {tolerance_kmh:g} km/h)")
 
 
+def over_envelope(log, train):
+    """Why a log's traction exceeds the train file's envelope ("" if it does not): its force at the
+    wheel (the force column, else the wheel power over the speed above :data:`MIN_SPEED`) above
+    the envelope at the logged speed by more than :data:`ENVELOPE_TOLERANCE` in at least
+    :data:`ENVELOPE_ROWS` rows, the largest excess and where. The replay reads the logged work, so
+    the fit does not see it; an optimum of the calibrated train cannot drive what was logged."""
+    if log.v is None or (log.force is None and log.power_wheel is None):
+        return ""
+    speed = np.abs(log.v)
+    moving = speed > MIN_SPEED
+    force = log.force if log.force is not None else np.where(moving, log.power_wheel / np.maximum(speed, MIN_SPEED), 0.0)
+    top = np.asarray(train.traction.force(np.maximum(speed, 1e-3)), float)
+    over = np.nonzero(force > (1.0 + ENVELOPE_TOLERANCE) * top)[0]
+    if over.size < ENVELOPE_ROWS:
+        return ""
+    i = int(over[np.argmax(force[over] / top[over])])
+    return (f"logged traction {force[i] / 1e3:.0f} kN at {speed[i] / KMH:.0f} km/h ({log.x[i]:.0f} m, {log.t[i]:.0f} s) is "
+            f"{force[i] / top[i]:.2f} times the train file's envelope ({top[i] / 1e3:.0f} kN), beyond "
+            f"{1 + ENVELOPE_TOLERANCE:g} in {over.size} rows: its traction envelope is not this train's")
+
+
 def cumulative(values):
     return np.concatenate([[0.0], np.cumsum(values)])
 
@@ -198,6 +221,12 @@ def prepare(log, track, train):
     trapezoid = np.array([0.5 * (b[1:] + b[:-1]) * dt for b in basis])
     runs, index = [], 0
     departures = np.nonzero(stand[:-1] & ~stand[1:])[0]
+    if departures.size and not stand[0]:  # the rows before the first stand: no departure to replay from
+        first = int(np.argmax(stand))
+        warnings.warn(problem(log.path or log.name, "speed", f"the log starts moving ({v[0]:.1f} m/s at "
+                              f"{log.x[0]:.0f} m): its first {log.t[first] - log.t[0]:.0f} s and "
+                              f"{abs(log.x[first] - log.x[0]):.0f} m, before the first stand, are not replayed"),
+                      EcostudyWarning, stacklevel=2)
     for d in departures:
         following = np.nonzero(stand[d + 1:])[0]
         end = d + 1 + (following[0] if following.size else len(stand) - d - 2)

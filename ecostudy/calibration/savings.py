@@ -14,7 +14,8 @@ from ecostudy.calibration.fit import train_with
 from ecostudy.calibration.replay import prepare, wheel_work
 from ecostudy.core.progress import stage, step
 from ecostudy.core.defaults import FRONT_POINTS
-from ecostudy.core.status import flagged, worst
+from ecostudy.core.errors import InfeasibleError, SolverError
+from ecostudy.core.status import failed, flagged, worst
 from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kwh
 
@@ -43,27 +44,41 @@ def savings(log, track, calibration, draws=8, points=FRONT_POINTS, seed=0):
         logged = float(np.sum(np.maximum(work[first:first + len(run.t) - 1], 0.0)))
         timing = Timing(running_time=float(run.t[-1] - run.t[0]))
         if not run.stands:  # no logged running time to the next stop: nothing to optimise for
-            rows.append({"log": log.name, "run": run.index, "from_m": float(run.x[0]), "to_m": float(run.x[-1]),
-                         "running_time_s": timing.running_time, "logged_traction_kWh": to_kwh(logged),
-                         "optimal_traction_kWh": np.nan, "saving_pct": np.nan, "saving_low_pct": np.nan,
-                         "saving_high_pct": np.nan, "draws": 0, "verified": False,
-                         "status": str(flagged(f"the log ends while the train moves (at {run.x[-1]:.0f} m, "
-                                               f"{run.v[-1]:.1f} m/s): no running time to optimise for"))})
+            rows.append(_no_optimum(log, run, timing, logged, flagged(
+                f"the log ends while the train moves (at {run.x[-1]:.0f} m, {run.v[-1]:.1f} m/s): no running time "
+                "to optimise for")))
             continue
         here = replace(track, stops=dict(track.stops, _departure=float(run.x[0]), _arrival=float(run.x[-1])))
-        best = solve_run(here, calibration.train, "_departure", "_arrival", timing, points=points)
+        try:
+            best = solve_run(here, calibration.train, "_departure", "_arrival", timing, points=points)
+        except (InfeasibleError, SolverError) as exc:  # one run without an optimum does not stop the others
+            rows.append(_no_optimum(log, run, timing, logged,
+                                    failed(f"{exc}: the calibrated train cannot drive the logged time")))
+            continue
         energies, statuses = [best.summary["traction_energy_kWh"]], [best.status]
         step(i * (1 + len(trains)) + 1, f"run {run.index}")
         for n, train in enumerate(trains):
-            drawn = solve_run(here, train, "_departure", "_arrival", timing, points=points, warm_start=best)
+            try:
+                drawn = solve_run(here, train, "_departure", "_arrival", timing, points=points, warm_start=best)
+            except (InfeasibleError, SolverError) as exc:
+                statuses.append(flagged(f"parameter draw {n + 1}: {exc}"))
+                continue
             energies.append(drawn.summary["traction_energy_kWh"])
             statuses.append(drawn.status if drawn.ok else flagged(f"parameter draw {n + 1}: {drawn.status.reason}"))
-            step(i * (1 + len(trains)) + len(energies), f"run {run.index}")
+            step(i * (1 + len(trains)) + len(statuses), f"run {run.index}")
         saving = [100 * (to_kwh(logged) - e) / to_kwh(logged) for e in energies]
         verified = best.summary["verification"] or {}
         rows.append({"log": log.name, "run": run.index, "from_m": float(run.x[0]), "to_m": float(run.x[-1]),
                      "running_time_s": timing.running_time, "logged_traction_kWh": to_kwh(logged),
                      "optimal_traction_kWh": energies[0], "saving_pct": saving[0],
-                     "saving_low_pct": min(saving), "saving_high_pct": max(saving), "draws": len(trains),
+                     "saving_low_pct": min(saving), "saving_high_pct": max(saving), "draws": len(energies) - 1,
                      "verified": bool(verified.get("passed", False)), "status": str(worst(statuses))})
     return pd.DataFrame(rows)
+
+
+def _no_optimum(log, run, timing, logged, status):
+    """A savings row of a run without an optimum: its logged time and energy, and why."""
+    return {"log": log.name, "run": run.index, "from_m": float(run.x[0]), "to_m": float(run.x[-1]),
+            "running_time_s": timing.running_time, "logged_traction_kWh": to_kwh(logged),
+            "optimal_traction_kWh": np.nan, "saving_pct": np.nan, "saving_low_pct": np.nan,
+            "saving_high_pct": np.nan, "draws": 0, "verified": False, "status": str(status)}

@@ -20,7 +20,7 @@ says ``power_sampling: instant``; speed, position and force are instantaneous.
 
 A column of a quantity ecostudy does not model, and a header field it does not know, are left out
 with a warning naming them; a header field that is a near miss of a known one not given
-(:func:`known_header`) is refused.
+(:func:`~ecostudy.io.logheader.known_header`) is refused.
 Every problem is one line ``file: field: what is wrong`` (exit status 2): a missing header,
 unknown units of a known quantity, values that are not finite numbers, time not increasing, gaps, speeds
 that do not fit the positions (a unit mix-up), positions that jump (GPS), a wheel power that is not the force times
@@ -29,18 +29,14 @@ the track (:func:`check_on_track`) and a force or wheel power not positive where
 a dead channel; :func:`check_traction_sign`, beyond what the track's gradient gives).
 """
 import csv
-import difflib
 import io
-import re
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from os import PathLike
-from typing import Any, Literal, Mapping, Optional, TypeAlias
+from typing import Any, Mapping
 
 import numpy as np
 import yaml
-from pydantic import Field
 
 from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
@@ -48,27 +44,14 @@ from ecostudy.core.grid import Profile
 from ecostudy.core.physics import gradient_force
 from ecostudy.core.types import Track
 from ecostudy.core.units import FloatArray
-from ecostudy.io.documents import NEAR_MISS, named_file, not_a_file, validate
-from ecostudy.io.logforce import check_force_power, check_plausible
-from ecostudy.io.schemabase import Strict
+from ecostudy.io.documents import Where, named_file, not_a_file, validate
+from ecostudy.io.logforce import check_force_power, check_line_power, check_plausible
+from ecostudy.io.logheader import COLUMNS, QUANTITIES, LogHeader, known_header, split_header
 from ecostudy.io.writers import atomic_write
-from ecostudy.io.yamlsafe import MAX_FILE_BYTES, DocumentError, load_yaml
+from ecostudy.io.yamlsafe import MAX_FILE_BYTES
 
-Where: TypeAlias = str | PathLike[str]
-
-# column name -> (quantity, [SI] per [unit])
-COLUMNS = {
-    "time_s": ("time", 1.0),
-    "position_m": ("position", 1.0), "position_km": ("position", 1000.0),
-    "speed_mps": ("speed", 1.0), "speed_kmh": ("speed", units.KMH),
-    "force_N": ("force", 1.0), "force_kN": ("force", units.KN),
-    "power_wheel_W": ("power_wheel", 1.0), "power_wheel_kW": ("power_wheel", units.KW),
-    "power_line_W": ("power_line", 1.0), "power_line_kW": ("power_line", units.KW),
-    "line_voltage_V": ("voltage", 1.0), "line_voltage_kV": ("voltage", 1000.0),
-    "line_current_A": ("current", 1.0),
-}
-QUANTITIES = {name.rsplit("_", 1)[0] for name in COLUMNS}  # time, position, speed, ... (a known one in another unit: refused)
 MIN_ROWS = 10
+START_AGREES_M = 10.0  # [m] start_position_m given beside a position column: at most this from its first row
 INTEGRATED = "(start_position_m)"  # the position column's name where there is none: the speeds integrated
 GAP_FACTOR = 5.0       # a time step this many times the median step is a gap
 MISSING_FACTOR = 1.5   # a time step this many times the median step (up to a gap) is a missing row: warned
@@ -81,20 +64,6 @@ JUMP = 10.0            # [m] a position step this much (plus half the speeds' di
 JUMP_SHARE = 0.1       # jumps in more than this share of the steps: not jumps but a unit mix-up
 PULLING = 0.3          # [m/s^2] speed gained faster than this over PULLING_TIME beyond what the gradient gives:
 PULLING_TIME = 2.0     # [s]  in traction; the work at the wheel must be positive there
-
-
-class LogHeader(Strict):
-    """The YAML header of a logged run."""
-
-    track: str = Field(description="Track file the run was logged on, relative to the log.")
-    train: str = Field(description="Train file of the vehicle, relative to the log.")
-    source: str = Field("", description="Where the log comes from.")
-    start_position_m: Optional[float] = Field(None, description="Track position at the first row; needed "
-                                              "when there is no position column.")
-    power_sampling: Literal["interval_mean", "instant"] = Field(
-        "interval_mean", description="Powers as means over the interval to the next row, or instantaneous.")
-    speed_sigma_mps: Optional[float] = Field(None, gt=0, le=10, description="Speed sensor noise, if known [m/s].")
-    power_sigma_percent: Optional[float] = Field(None, gt=0, le=100, description="Power noise, if known [%].")
 
 
 @dataclass
@@ -113,78 +82,12 @@ class LoggedRun:
     columns: tuple[str, ...] = field(default=())  # (position, speed, force, wheel power column) as the file names them
 
     def named(self, field: str) -> Path:
-        """The header's ``track`` or ``train`` file, relative to the log's folder; one that is not there
-        is refused naming the log and the header field."""
+        """The header's ``track`` or ``train`` file, relative to the log's folder; one not given or not
+        there is refused naming the log and the header field."""
+        if getattr(self.header, field) is None:
+            raise InputError(problem(self.path or self.name, f"header.{field}", f"missing: name the {field} file "
+                                     f"the run was logged with, or give --{field}"))
         return named_file(self.path or Path("log"), f"header.{field}", getattr(self.header, field))
-
-
-def split_header(text: str, path: Where) -> tuple[dict[str, Any], str]:
-    """(header mapping, CSV text) of a log: the header between two '---' lines at the top."""
-    lines = text.splitlines(keepends=True)
-    if not lines or lines[0].strip() != "---":
-        raise InputError(problem(path, "header", "expected a YAML header between two '---' lines before the CSV"))
-    try:
-        end = next(i for i in range(1, len(lines)) if lines[i].strip() == "---")
-    except StopIteration:
-        raise InputError(problem(path, "header", "the YAML header has no closing '---' line"))
-    try:
-        header = load_yaml("".join(lines[1:end]))
-    except DocumentError as exc:
-        raise InputError(problem(path, "header", str(exc)))
-    except Exception as exc:  # a YAML parse error: one line with its reason
-        raise InputError(problem(path, "header", f"malformed YAML: {getattr(exc, 'problem', exc)}"))
-    if not isinstance(header, dict):
-        raise InputError(problem(path, "header", "expected a mapping of fields"))
-    return header, "".join(lines[end + 1:])
-
-
-# words of a header field's name that say how the columns read (speed_unit, units, time_offset_s, force_sign,
-# power_scale): left out, the columns would be read otherwise than the file means
-DECLARES = {"unit", "units", "scale", "scaling", "factor", "multiplier", "offset", "datum", "sign", "convention",
-            "inverted"}
-
-
-def declares_columns(name: str, value: Any) -> bool:
-    """A header field that says how the columns read: a word of :data:`DECLARES` in its name, or a
-    mapping whose keys name a column or a quantity (``channels: {speed: km/h}``)."""
-    words = set(re.split(r"[^a-z0-9]+", name.lower()))
-    keys = {str(k) for k in value} if isinstance(value, dict) else set()
-    return bool(words & DECLARES or keys & (set(COLUMNS) | QUANTITIES))
-
-
-def known_header(fields: Mapping[Any, Any], path: Where) -> dict[str, Any]:
-    """The header's fields that :class:`LogHeader` knows. Any other is left out with one warning
-    naming it and the file, unless it is a near miss (:data:`NEAR_MISS`) of a known field the header
-    does not give: that one is refused naming the field(s) it may be, as every known field changes
-    what is computed (a misspelt ``power_sampling: instant`` left out would integrate the powers as
-    interval means). A field that says how the columns read (:func:`declares_columns`: a unit, a
-    scale, an offset, a sign) is refused too: the units are in the column names and traction is
-    positive, and left out it would leave the columns read otherwise than the file means. A field
-    without a name (empty, or YAML's null) is refused."""
-    known = list(LogHeader.model_fields)
-    lines, ignored = [], []
-    for key, value in fields.items():
-        if key is None or not str(key).strip():  # '': x, null: x: nothing to name in a warning
-            lines.append(problem(f"{path}: header", "", f"a field without a name (value {value!r}): name it or "
-                                 "remove it"))
-    for name, value in ((str(key), value) for key, value in fields.items()
-                        if key is not None and str(key).strip() and str(key) not in known):
-        near = [k for k in difflib.get_close_matches(name, known, n=3, cutoff=NEAR_MISS) if k not in fields]
-        if near:
-            lines.append(problem(f"{path}: header", name, f"unknown field; did you mean {' or '.join(near)}?"))
-        elif declares_columns(name, value):
-            lines.append(problem(f"{path}: header", name, "says how the columns read (a unit, scale, offset or "
-                                 "sign), which ecostudy does not apply: the unit is part of each column's name "
-                                 "(speed_kmh, position_km, force_kN) and traction is positive; convert or rename "
-                                 "the columns and remove this field"))
-        else:
-            ignored.append(name)
-    if lines:
-        raise InputError(lines)
-    if ignored:
-        warnings.warn(problem(path, "header", f"{', '.join(ignored)} not modelled by ecostudy: left out"),
-                      EcostudyWarning, stacklevel=2)
-    return {str(key): value for key, value in fields.items() if str(key) in known}
 
 
 def read_table(text: str, path: Where) -> tuple[list[str], FloatArray]:
@@ -339,6 +242,9 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
     v = column["speed"][1] if "speed" in column else None
     if "position" in column:
         x = column["position"][1]
+        if header.start_position_m is not None and x.size and not abs(header.start_position_m - x[0]) <= START_AGREES_M:
+            raise InputError(problem(path, "header.start_position_m", f"{header.start_position_m:g} m, but "
+                                     f"{column['position'][0]} starts at {x[0]:g} m: give one (the column) or make them agree"))
     elif header.start_position_m is None or v is None:
         raise InputError(problem(path, "header", "start_position_m is needed when there is no position column"))
     else:
@@ -355,6 +261,8 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
                                                                   for q in ("speed", "force", "power_wheel"))))
     check_series(log, path)
     check_force_power(path, log.columns[1:], v, log.force, log.power_wheel)
+    check_line_power(path, column["power_line"][0] if "power_line" in column else "line_voltage, line_current", v,
+                     log.force, log.power_wheel, line)
     check_plausible(path, names, data, COLUMNS)
     return log
 

@@ -17,6 +17,10 @@ from ecostudy.io.documents import Where
 # interval means, the force sampled: at 1 Hz they part while the speed rises); a unit slip is a factor
 # 3.6 or more off (daN under force_kN: 0.01; W under power_wheel_kW: 1000; km/h under speed_mps: 0.28)
 FORCE_POWER = (0.8, 1.25)
+# median of the wheel power over the line power where the train pulls (the traction chain's efficiency,
+# auxiliaries drawn from the line lowering it): above 1 the wheel gets more than the line gives; a unit
+# slip is a factor 1000 off (W or MW under power_line_kW, kV under line_voltage_V)
+LINE_WHEEL = (0.3, 1.05)
 PULLING_SPEED = 3.0   # [m/s] rows above this only: near standstill F v is small and its noise is not
 PULLING_ROWS = 10     # fewer rows where the train pulls than this: too few to judge, not checked
 # [SI] the largest magnitude a logged train's channel can plausibly read: a heavy-haul train's several
@@ -66,3 +70,24 @@ def check_force_power(path: Where, columns: tuple[str, ...], v: FloatArray | Non
                                  f"the wheel power is {ratio:.3g} times the force times the speed (median over "
                                  f"{rows} rows where the train pulls above {PULLING_SPEED:g} m/s; it must be "
                                  f"{lo:g}-{hi:g}): one of them (or {speed}) is in another unit than its name says"))
+
+
+def check_line_power(path: Where, line_name: str, v: FloatArray | None, force: FloatArray | None,
+                     wheel: FloatArray | None, line: FloatArray | None) -> None:
+    """Refuse, in one line naming ``path``, the line power's column(s) (``line_name``) and the median
+    ratio, a log whose wheel power (else force times speed) is not :data:`LINE_WHEEL` of its line
+    power where the train pulls: more at the wheel than the line gives cannot be, and less than
+    0.3 is no traction chain (a power in W under a kW name, a voltage in kV under a V name).
+    Not checked without a line power and a wheel power or force, or on fewer than
+    :data:`PULLING_ROWS` such rows."""
+    if line is None or v is None or (wheel is None and force is None):
+        return
+    at_wheel = wheel if wheel is not None else force * np.abs(v)
+    rows = (at_wheel > 0) & (line > 0) & (np.abs(v) > PULLING_SPEED)
+    lo, hi = LINE_WHEEL
+    ratio = float(np.median(at_wheel[rows] / line[rows])) if rows.any() else float("nan")
+    if rows.sum() >= PULLING_ROWS and not lo <= ratio <= hi:
+        raise InputError(problem(path, line_name, f"the wheel power is {ratio:.3g} times the line power (median over "
+                                 f"{int(rows.sum())} rows where the train pulls above {PULLING_SPEED:g} m/s; a traction "
+                                 f"chain gives {lo:g}-{hi:g}): the line power, voltage or current is in another "
+                                 "unit or scale than its name says"))

@@ -9,6 +9,7 @@ each logged running time against the logged energy, with the calibration's band)
 ``summary.json``. The command line draws ``residuals.<format>`` and ``validate.<format>``
 (:mod:`ecostudy.report.calplots`), whose names each is given (``figures``) to check and list them.
 """
+import warnings
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -20,11 +21,12 @@ from ecostudy.calibration.estimate import calibrate_logs
 from ecostudy.calibration.fit import DEFAULT_FIT, PARAMETERS
 from ecostudy.calibration.savings import savings
 from ecostudy.calibration.validate import validate_log
-from ecostudy.core.errors import InputError, problem
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.io.documents import split_selector
 from ecostudy.io.loaders import check_fits, load_track, load_train
 from ecostudy.io.logfile import check_on_track, check_traction_sign, load_log
 from ecostudy.io.trainout import calibrated_document, write_train
-from ecostudy.core.status import Status
+from ecostudy.core.status import Status, flagged
 from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 
@@ -54,6 +56,29 @@ def _loaded(load, path, log, field):
         raise InputError([problem(log.path or log.name, f"header.{field}", line) for line in exc.problems]) from None
 
 
+def _header_file(log, field):
+    """The file a log's header names in ``field`` (resolved, relative to the log), or None."""
+    name = getattr(log.header, field)
+    return None if name is None else split_selector(Path(log.path or ".").parent / name)[0].resolve()
+
+
+def check_header_file(logs, field, path, given):
+    """Logs whose headers name another ``field`` file than ``path`` (the one used): refused when the
+    file is the first log's (runs of other trains or lines pooled into one fit, or replayed on
+    the first's line); with the file ``given`` on the command line, each such log warned of."""
+    used = split_selector(Path(path))[0].resolve()
+    for log in logs:
+        named = _header_file(log, field)
+        if named is None or named == used:
+            continue
+        if not given:
+            raise InputError(problem(log.path or log.name, f"header.{field}", f"names {named}, but the first log's "
+                                     f"names {used}: one calibration is one train on one line (give --{field} to "
+                                     "replay every log on one)"))
+        warnings.warn(problem(log.path or log.name, f"header.{field}", f"names {named}; replayed on --{field} "
+                              f"{used} as asked"), EcostudyWarning, stacklevel=2)
+
+
 def load_inputs(log_paths, train_path, track_path):
     """(logs, track, train, track path, train path): the logs read and checked, the track and train
     given, or else the ones the first log's header names; every log's positions on the track and the
@@ -73,6 +98,8 @@ def load_inputs(log_paths, train_path, track_path):
         seen[samples] = str(log.path or log.name)
     track_path = Path(track_path) if track_path else logs[0].named("track")
     train_path = Path(train_path) if train_path else logs[0].named("train")
+    for field, path, given in (("track", track_path, given_track), ("train", train_path, given_train)):
+        check_header_file(logs, field, path, given)
     track = _loaded(load_track, track_path, None if given_track else logs[0], "track")
     train = _loaded(load_train, train_path, None if given_train else logs[0], "train")
     check_fits(train_path, train, track)
@@ -95,11 +122,18 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d")
     estimates = ", ".join(f"{r.name} {r.estimate:.5g} +- {r.high - r.estimate:.2g} {r.unit}"
                           for r in result.table.itertuples() if r.identifiable)
-    provenance = (f"Calibrated by ecostudy {__version__} calibrate on {stamp} from {len(logs)} logged run(s) "
+    provenance = ("" if result.status == "ok" else f"NOT OK, calibration flagged: {result.reason}. ") + (
+                  f"Calibrated by ecostudy {__version__} calibrate on {stamp} from {len(logs)} logged run(s) "
                   f"({', '.join(log.name for log in logs)}) on track '{track.name}': {estimates} "
                   f"(95 % intervals); held at this file's values: "
                   f"{', '.join(n for n in names if n not in identified) or 'none'}.")
     write_train(calibrated, calibrated_document(train_path, result.train, identified, provenance))
+    try:  # a train file the tool would refuse (a fitted value past its field's bounds) is not left behind
+        load_train(calibrated)
+        written = [calibrated.name]
+    except InputError as exc:
+        calibrated.unlink()
+        written, refused = [], f"{calibrated.name} not written: {exc.problems[0]}"
     write_csv(out / "parameters.csv", result.table)
     write_csv(out / "residuals.csv", result.residuals)
     summary = {"command": "calibrate", "logs": [str(p) for p in log_paths], "train": str(train_path),
@@ -107,8 +141,8 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
                "method": "least squares (scipy least_squares) on the replayed energy balance, whitened by a scalar "
                          "Kalman filter; 95 % intervals from the Jacobian; bootstrap over logs when several",
                "parameters": result.table.replace({np.nan: None}).to_dict("records"),
-               "quality": result.quality, "calibrated_train": str(calibrated),
-               "outputs": [*CALIBRATE_FILES, calibrated.name]}
+               "quality": result.quality, "calibrated_train": str(calibrated) if written else None,
+               "outputs": [*CALIBRATE_FILES, *written]}
     if saving_draws is not None:
         table = pd.concat([savings(log, track, result, saving_draws) for log in logs], ignore_index=True)
         write_csv(out / "savings.csv", table)
@@ -117,8 +151,9 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
     tables = {"parameters": "parameters.csv", "residuals": "residuals.csv",
               **({"savings": "savings.csv"} if saving_draws is not None else {})}
     statuses = {"calibration": Status.parse(result.status, result.reason or ""),
+                **({} if written else {"calibrated train": flagged(refused)}),
                 **(savings_statuses(table) if saving_draws is not None else {})}
-    write_summary(out, "calibrate", statuses, tables, [calibrated.name, *figures], **summary)
+    write_summary(out, "calibrate", statuses, tables, [*written, *figures], **summary)
     return result, summary
 
 

@@ -1,0 +1,136 @@
+"""What calibration and validation make of logs that do not say what they seem to: a line power in
+another unit, logs of other lines pooled, header fields that contradict the columns or are needed
+only without the command line's files, a log that starts moving, a logged train stronger than its
+file, a fit that cannot tell the static mass from the rotating-mass allowance. Each is refused in
+one line, warned of by name or flagged with the reason, never an `ok` calibration (real fits on
+generated logs of the regional train)."""
+import json
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from ecostudy.calibration.estimate import calibrate_logs
+from ecostudy.calibration.generate import generate_log
+from ecostudy.calibration.replay import prepare
+from ecostudy.cli import app
+from ecostudy.core.errors import EcostudyWarning, InputError
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.io.logfile import parse_log, write_log
+
+from .conftest import TRACKS, TRAINS
+
+TRAIN, TRACK = TRAINS / "regional_alstom.yaml", TRACKS / "calibration_line.yaml"
+OTHER_TRACK = TRACKS / "metro_line_4stops.yaml"
+
+
+def run(*args):
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def text_of(frame, header="---\ntrack: t.yaml\ntrain: r.yaml\n---\n"):
+    return header + frame.to_csv(index=False, float_format="%.6f")
+
+
+@pytest.fixture(scope="module")
+def inputs():
+    return load_track(TRACK), load_train(TRAIN)
+
+
+@pytest.fixture(scope="module")
+def there(inputs):
+    """A log of the train as its file gives it, West -> Middle -> East (10 Hz, 1 % power noise)."""
+    return generate_log(inputs[0], inputs[1], ["West", "Middle", "East"], inputs[1], seed=1)[0]
+
+
+@pytest.mark.parametrize("scale, low, high", [(1e-3, 500, 2000), (0.8, 1.05, 1.2)])
+def test_a_line_power_in_another_unit_or_scale_is_refused(there, scale, low, high):
+    """kW written under a W name reads 1000 times too small; a line power 0.8 times the truth (a
+    voltage scale off) gives the wheel more than the line gives: each fitted an efficiency of 854
+    or 1.07 and said `ok` (`validate`: ok beside a 1000-times line energy). Now one line."""
+    frame = there.assign(power_line_kW=there["power_line_kW"] * scale)
+    with pytest.raises(InputError, match=r"log.csv: power_line_kW: the wheel power is [0-9.]+ times the line "
+                                         "power .* in another unit or scale than its name says") as refused:
+        parse_log(text_of(frame), "log.csv")
+    assert low < float(str(refused.value).split("the wheel power is ")[1].split()[0]) < high
+
+
+def test_a_start_position_that_contradicts_the_positions_is_refused(there):
+    header = "---\ntrack: t.yaml\ntrain: r.yaml\nstart_position_m: 5000\n---\n"
+    with pytest.raises(InputError, match=r"header.start_position_m: 5000 m, but position_m starts at 300 m"):
+        parse_log(text_of(there, header), "log.csv")
+
+
+def test_logs_of_other_lines_are_not_pooled(tmp_path, there):
+    """The second log's header names another line: refused before fitting (it was pooled with the
+    first, `calibration ok`); given --track, each log is replayed on it and the other header named."""
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there)
+    write_log(tmp_path / "b.csv", {"track": str(OTHER_TRACK), "train": str(TRAIN)}, there.iloc[::-1].assign(
+        time_s=there["time_s"].to_numpy()))
+    refused = run("calibrate", tmp_path / "a.csv", tmp_path / "b.csv", "--no-plot", "--out", tmp_path / "o")
+    assert refused.exit_code == 2 and not (tmp_path / "o").exists(), refused.output
+    assert f"b.csv: header.track: names {OTHER_TRACK.resolve()}, but the first log's names {TRACK.resolve()}" \
+        in refused.output, refused.output
+    given = run("calibrate", tmp_path / "a.csv", tmp_path / "b.csv", "--track", TRACK, "--bootstrap", 0, "--no-plot",
+                "--out", tmp_path / "o2")
+    assert f"b.csv: header.track: names {OTHER_TRACK.resolve()}; replayed on --track" in given.output, given.output
+
+
+def test_a_header_without_its_train_reads_with_the_train_given(tmp_path, there):
+    write_log(tmp_path / "a.csv", {"track": str(TRACK)}, there)
+    missing = run("validate", tmp_path / "a.csv", "--no-plot", "--out", tmp_path / "o")
+    assert missing.exit_code == 2 and "a.csv: header.train: missing: name the train file" in missing.output
+    given = run("validate", tmp_path / "a.csv", "--train", TRAIN, "--no-plot", "--out", tmp_path / "o2")
+    assert given.exit_code == 0 and "validate ok" in given.output, given.output
+
+
+def test_a_log_that_starts_moving_says_what_is_not_replayed(inputs, there):
+    moving = there[(there["position_m"] > 2000) & (there["time_s"] < 400)].reset_index(drop=True)
+    with pytest.warns(EcostudyWarning, match=r"log.csv: speed: the log starts moving \(.* m/s at 20.. m\): its first "
+                                             r"\d+ s and \d+ m, before the first stand, are not replayed"):
+        runs = prepare(parse_log(text_of(moving), "log.csv"), *inputs)
+    assert runs[0].x[0] > 5000
+
+
+def test_a_declared_speed_noise_is_used(inputs, there):
+    header = "---\ntrack: t.yaml\ntrain: r.yaml\nspeed_sigma_mps: 0.2\n---\n"
+    result = calibrate_logs([parse_log(text_of(there, header), "log.csv")], *inputs, ("mass", "davis_a"), draws=0)
+    assert result.quality["noise"]["speed_mps"] == 0.2
+
+
+def test_traction_beyond_the_train_files_envelope_is_flagged(inputs, there):
+    """The log's train pulls 300 kN; the file it is calibrated against has 60 % of that. The replay
+    reads the logged work, so the fit was `ok`; the calibrated file could not drive the log."""
+    track, train = inputs
+    weak = train.__class__(**{**train.__dict__, "traction": train.traction.scaled(0.6)})
+    result = calibrate_logs([parse_log(text_of(there), "log.csv")], track, weak, ("mass", "davis_a"), draws=0)
+    assert result.status == "flagged" and "log: logged traction" in result.reason and \
+        "times the train file's envelope" in result.reason, result.reason
+
+
+def test_a_flagged_calibration_writes_a_train_file_that_says_so(tmp_path, there):
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there.drop(columns=["power_line_kW"]))
+    result = run("calibrate", tmp_path / "a.csv", "--fit", "mass,efficiency", "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 1 and "calibration flagged (each reason below)" in result.output, result.output
+    assert "not all of" not in result.output  # the line named every check as if each had failed
+    source = yaml.safe_load((tmp_path / "o" / "regional_alstom_calibrated.yaml").read_text())["source"]
+    assert "NOT OK, calibration flagged: efficiency not identifiable" in source, source
+
+
+def test_savings_of_a_run_the_file_cannot_drive_name_it_and_go_on(tmp_path, there):
+    """Against a train file with 60 % of the logged traction each run's logged time is below the
+    file's fastest (199.7 s for 197.3 s, 195.8 s for 195.4 s): each savings row fails saying so,
+    the second run is tried after the first failed, the folder is whole and the command exits 1
+    (it stopped at the first with exit 2, no run named, no summary)."""
+    doc = yaml.safe_load(TRAIN.read_text())
+    doc["traction"]["table"]["force_kN"] = [0.6 * f for f in doc["traction"]["table"]["force_kN"]]
+    (tmp_path / "weak.yaml").write_text(yaml.safe_dump(doc))
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(tmp_path / "weak.yaml")}, there)
+    result = run("calibrate", tmp_path / "a.csv", "--savings", 0, "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 1, result.output
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert [r["run"] for r in summary["savings"]] == [0, 1]
+    for row in summary["savings"]:
+        assert row["status"].startswith("failed: infeasible: the fastest possible run takes") and \
+            "the calibrated train cannot drive the logged time" in row["status"], row
+    assert "a run 0: failed: infeasible" in result.output and "times the train file's envelope" in result.output
