@@ -102,6 +102,9 @@ def test_an_interrupted_run_leaves_no_earlier_summary_saying_ok(tmp_path):
     stopped = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert stopped["status"].startswith("failed: stopped before every case was computed"), stopped["status"]
     assert "results.csv" in stopped["files"] and not (tmp_path / "out" / "report.html").exists()
+    assert "report.html" not in stopped["files"]  # removed, not listed
+    # the stopped study's cases, by what is stored (3 of 4): the finished run's "2 cases: 2 ok" is gone
+    assert stopped["cases"] == {"total": 4, "ok": 3, "flagged": 0, "failed": 0} and stopped["not_ok"] == []
     table, counts, _ = run_study(path)
     assert counts["stored_before"] == 3 and (table["status"] == "ok").all()
     assert (tmp_path / "out" / "summary.json").is_file()

@@ -2,6 +2,7 @@
 :class:`~ecostudy.io.folder.StudyResult`, with the report the command line prints; and the helpers
 that turn tables into that report.
 """
+import errno
 import json
 from dataclasses import dataclass, fields
 from functools import partial
@@ -131,10 +132,18 @@ def not_reused(counts: dict[str, int]) -> str:
             "code)") if n else ""
 
 
+# the operating system's refusals while writing: no space, quota, read-only, permission, input/output
+SYSTEM_ERRORS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EIO, errno.EFBIG}
+
+
 def one_line(exc: Exception, debug: bool = False) -> tuple[str, int]:
     """What a user reads of a failure and the exit status: an ecostudy error's own lines and its
     ``exit_code``, else 'internal error: ...' and 3."""
     if isinstance(exc, EcostudyError):
         return str(exc), exc.exit_code
+    if isinstance(exc, OSError) and exc.errno in SYSTEM_ERRORS:  # the machine's, not the code's: said as such
+        where = f"{exc.filename}: " if exc.filename else ""
+        return (f"{where}cannot write: {exc.strerror} (the output folder may hold part of this run's files: run "
+                "the command again when it can be written)"), 3
     return (f"internal error: {type(exc).__name__}: {exc}" + ("" if debug else " (rerun with --debug for the "
                                                                 "traceback)"), 3)

@@ -14,7 +14,8 @@ from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
-from ecostudy.core.errors import EcostudyWarning, FieldError, InfeasibleError, InputError, TooFastError, problem
+from ecostudy.core.errors import (EcostudyWarning, FieldError, InfeasibleError, InputError, LineError, TooFastError,
+                                  problem)
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status
 from ecostudy.core.types import Timing
@@ -113,6 +114,10 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
     w = parse_pair(weights, "--weights", nonnegative=True) if weights else w
     if weights is not None and obj != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
+    if obj == "mixed" and w[0] == 0 and timing == Timing():  # energy alone, no running time: the run crawls
+        raise InputError(problem("command line" if weights is not None else str(study), "--weights" if weights is not
+                                 None else "weights.time", "a time weight of 0 with no running time leaves the least "
+                                 "energy run free to crawl (days): give a positive time weight, or a running time"))
     advice = ("advice.csv",) if das is not None else ()
     check_output_dir(out_dir, ("profile.csv", "inputs.json", *advice,
                                *figures.filenames(RUN_FIGURES, plot)), "solve")
@@ -126,8 +131,11 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         except TooFastError as exc:  # the timing cannot be met: where it was given, by name
             where, field = timing_source(study, st, time, supplement, window)
             raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
-        except FieldError as exc:  # a window on the way no run keeps: the study's, by name
-            raise exc.in_file(study) from None
+        except LineError as exc:  # a climb or descent of the line the train's envelopes cannot make: the track's
+            raise InfeasibleError([problem(paths[0], "gradients", p) for p in exc.problems]) from None
+        except FieldError as exc:  # a window on the way no run keeps: the study's or its timetable's, by name
+            where, field = st.window_origin(exc.field, study)
+            raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
         if das is not None:
             result.das = das_run(result, das, time_limit=das_time_limit)
             result.summary["das"] = result.das.summary
@@ -146,6 +154,8 @@ def timing_source(study, st, time, supplement, window) -> tuple[str, str]:
              if value is not None]
     if given or st is None:
         return "command line", given[0] if given else "--time"
+    if st.timetable_path is not None:  # the timetable's times: its file
+        return str(st.timetable_path), "stops"
     return str(study), st.timing_field
 
 

@@ -30,6 +30,12 @@ class TooFastError(InfeasibleError):
     crawl): the timing's fault, not the train's or the line's (those raise :class:`InfeasibleError`)."""
 
 
+class LineError(InfeasibleError):
+    """The line makes the run impossible at the train's envelopes: a climb (or its running
+    resistance) it cannot make at full traction, a descent it cannot hold at full braking; the
+    caller that read the track file names it (its ``gradients``)."""
+
+
 class FieldError(InfeasibleError):
     """An infeasible request found where its field is known but not its file (a timing window on the
     way, a timetable's times): the caller that read the file names it, with ``field`` (as the file

@@ -190,6 +190,20 @@ def too_long_named(train: Train, track: Track) -> str | None:
     return None if why is None else f"train '{train.name}': length_m: {why}"
 
 
+def head_limit(track: Track, train: Train, start: float, end: float) -> Profile:
+    """The head's speed limit from ``start`` to ``end`` [m]: :func:`train_length_limit` of the line's
+    limits, capped by the train's top speed, seen from as far behind the start as the train is
+    long (where the track goes on there): standing at an intermediate stop its body lies over the
+    track behind, and a restriction there holds until its tail has left it."""
+    sign = 1.0 if end >= start else -1.0
+    behind = min(train.length, start if sign > 0 else track.length - start)
+    line = _directed(track.limit_positions, track.limits, start - sign * behind, end)
+    line = Profile(line.starts, np.minimum(line.values, train.max_speed))  # the train's top speed caps the line's
+    whole = train_length_limit(line, train.length)
+    first = int(np.searchsorted(whole.starts, behind, side="right")) - 1  # the piece the start lies in
+    return Profile(np.concatenate([[0.0], whole.starts[first + 1:] - behind]), whole.values[first:])
+
+
 def make_segment(track: Track, train: Train, from_stop: str, to_stop: str) -> Segment:
     """Cut the track between two stops into travel-direction profiles."""
     warn_unpaired(track, train)
@@ -201,9 +215,7 @@ def make_segment(track: Track, train: Train, from_stop: str, to_stop: str) -> Se
     gradient = _directed(track.gradient_positions, track.gradients, start, end)
     gradient = Profile(gradient.starts, sign * gradient.values)
     curvature = _directed(track.curve_positions, track.curvatures, start, end, track.curvature_slopes)
-    line = _directed(track.limit_positions, track.limits, start, end)
-    line = Profile(line.starts, np.minimum(line.values, train.max_speed))  # the train's top speed caps the line's
-    limit = train_length_limit(line, train.length)
+    limit = head_limit(track, train, start, end)
     return Segment(abs(end - start), gradient, curvature, limit, from_stop, to_stop,
                    tunnel_profile(track, train, start, end))
 

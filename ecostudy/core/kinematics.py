@@ -6,7 +6,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ecostudy.core.errors import InfeasibleError
+from ecostudy.core.errors import LineError
 from ecostudy.core.grid import Segment
 from ecostudy.core.physics import davis_resistance, interval_resistance, running_resistance
 from ecostudy.core.types import Train
@@ -53,7 +53,7 @@ def braking_curve(segment: Segment, train: Train, nodes: FloatArray, limits: Flo
         # from standing it would leave faster than it may; where they can, at least 1e-3 m/s^2
         v2 = v * v + 2 * ds[k] * (dec if dec <= 0 else max(dec, 1e-3))
         if v2 < 0 or (v2 == 0 and k > 0):
-            raise InfeasibleError(runaway_message(segment, nodes[k], train.braking.force(v), held, *target))
+            raise LineError(runaway_message(segment, nodes[k], train.braking.force(v), held, *target))
         reach = np.sqrt(v2)
         bwd[k] = min(reach, limits[k])
         if limits[k] < reach:  # a limit binds: what a runaway upstream would miss
@@ -117,7 +117,7 @@ def earliest_coasting_point(meets: Callable[[int], bool], last: int, first: int 
 def envelope_speeds(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray) -> FloatArray:
     """Fastest speeds: max traction forward from the start, max braking back from the stop.
 
-    Raises :class:`InfeasibleError` when maximum traction cannot keep the train moving.
+    Raises :class:`~ecostudy.core.errors.LineError` when maximum traction cannot keep the train moving.
     """
     ds = np.diff(nodes)
     fixed = interval_grade_force(segment, train, nodes)
@@ -129,7 +129,7 @@ def envelope_speeds(segment: Segment, train: Train, nodes: FloatArray, limits: F
                   train.max_acceleration)
         v2 = v * v + 2 * ds[k] * acc
         if v2 <= 0 and k < len(ds) - 1:
-            raise InfeasibleError(stall_message(segment, nodes[k], train.traction.force(v),
+            raise LineError(stall_message(segment, nodes[k], train.traction.force(v),
                                                 davis_resistance(v, a[k], b[k], c[k]), fixed[k], v))
         fwd[k + 1] = min(np.sqrt(max(v2, 0.0)), limits[k + 1])
     out = np.minimum(fwd, braking_curve(segment, train, nodes, limits))

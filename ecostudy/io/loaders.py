@@ -22,7 +22,7 @@ from ecostudy.io.consistschema import ConsistFile
 from ecostudy.io.davis import check_davis_bound, check_davis_plausible, davis_si
 from ecostudy.io.intrain import in_train_physics
 from ecostudy.io.formats import timetable_document_to_schema, track_document_to_schema, train_document_to_schema
-from ecostudy.io.timetable import name_stops, off_clock, turning_back, windows_from_schema
+from ecostudy.io.timetable import name_stops, off_clock, segment_timing, turning_back, windows_from_schema
 from ecostudy.io.documents import (Where, given, named_file, read_document as read_document,  # re-exported
                                    split_selector, validate as validate)
 
@@ -44,6 +44,17 @@ class Study:
     windows: tuple[Window, ...] = ()
     timing_field: str = "running_time_s"  # the study file's field the timing came from (for errors)
     documents: tuple[Mapping[str, Any], ...] = ()  # (train, track) as their files give them
+    timetable_path: Path | None = None  # the timetable's file, when the timing came from one
+    timetable_windows: int = 0  # how many of ``windows`` (the last) are the timetable's
+
+    def window_origin(self, field: str, study: Where) -> tuple[Where, str]:
+        """(file, field) of ``windows[i]...`` as its file writes it: the study file ``study``'s, or the
+        timetable's for one of the timetable's windows (after the study file's own)."""
+        own = len(self.windows) - self.timetable_windows
+        i = int(field.split("[", 1)[1].split("]", 1)[0]) if field.startswith("windows[") else -1
+        if self.timetable_path is None or i < own:
+            return study, field
+        return self.timetable_path, field.replace(f"windows[{i}]", f"windows[{i - own}]", 1)
 
 
 # --------------------------------------------------------------------------- conversions
@@ -245,24 +256,9 @@ def chosen_stops(track: Track, from_stop: str | None, to_stop: str | None, where
 
 
 def timing_from_timetable(tt: schemas.TimetableFile, from_stop: str, to_stop: str, path: Where) -> Timing:
-    """Running time between two stops of a timetable: arrival at ``to`` minus departure at ``from``."""
-    if tt.supplement_percent is not None:
-        return Timing(supplement=tt.supplement_percent * units.PERCENT)
-    rows = {r.stop: r for r in tt.stops}
-    lines = [problem(path, "stops", f"stop '{s}' is not in the timetable") for s in (from_stop, to_stop)
-             if s not in rows]
-    if lines:
-        raise InputError(lines)
-    start = rows[from_stop]
-    dep = start.departure_s
-    if dep is None and start.arrival_s is not None:
-        dep = start.arrival_s + (start.dwell_s or 0.0)
-    arr = rows[to_stop].arrival_s
-    if dep is None or arr is None:
-        raise InputError(problem(path, "stops", f"need a departure at '{from_stop}' and an arrival at '{to_stop}'"))
-    if arr <= dep:
-        raise InputError(problem(path, "stops", f"arrival at '{to_stop}' ({arr} s) is not after departure ({dep} s)"))
-    return Timing(running_time=arr - dep)
+    """The timing of one run between two stops of a timetable (:func:`~ecostudy.io.timetable.segment_timing`),
+    for callers that give it no timing windows (adjacent stops of a timetable without windows)."""
+    return segment_timing(tt, from_stop, to_stop, path)[0]
 
 
 def load_study(study_path: Where, read: Callable[..., Any] = lambda file, reader: reader(file)) -> "Study":
@@ -278,8 +274,10 @@ def load_study(study_path: Where, read: Callable[..., Any] = lambda file, reader
     if s.timetable is not None:
         timetable = named_file(path, "timetable", s.timetable)
         tt, _ = name_stops(load_timetable(timetable), track, timetable)
-        timing = timing_from_timetable(tt, from_stop, to_stop, timetable)
+        timing, passing = segment_timing(tt, from_stop, to_stop, timetable)
+        timed = windows_from_schema(passing, track, from_stop, to_stop, timetable)
     else:
+        timed, timetable = (), None
         timing = Timing(running_time=s.running_time_s,
                         supplement=None if s.supplement_percent is None else s.supplement_percent * units.PERCENT,
                         window=s.window_s)
@@ -290,8 +288,8 @@ def load_study(study_path: Where, read: Callable[..., Any] = lambda file, reader
     return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop,
                  timing=timing, objective=s.objective, weights=(s.weights.time, s.weights.energy),
                  points=s.points, output=output, track_path=track_file, train_path=train_file,
-                 windows=windows_from_schema(s.windows, track, from_stop, to_stop, path), timing_field=timing_field,
-                 documents=(train_doc, track_doc))
+                 windows=windows_from_schema(s.windows, track, from_stop, to_stop, path) + timed, timing_field=timing_field,
+                 documents=(train_doc, track_doc), timetable_path=timetable, timetable_windows=len(timed))
 
 
 @dataclass

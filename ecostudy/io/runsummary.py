@@ -65,7 +65,7 @@ class Verification:
     def errors(self) -> str:
         """The re-simulation's errors as the run's status and the screen print them (the net energy's
         where it was measured)."""
-        net = "" if self.net_energy_error_pct is None else f", net energy {signed(self.net_energy_error_pct, 3)} % of traction"
+        net = "" if self.net_energy_error_pct is None else f", net energy {signed(self.net_energy_error_pct, 3)} %"
         grip = "" if self.adhesion_use_max is None else f", adhesion use {self.adhesion_use_max:.3f} of mu(v) m_adh g"
         return (f"arrival {signed(self.arrival_time_error_s, 3)} s, stop {signed(self.stop_error_m, 3)} m, "
                 f"energy {signed(self.energy_error_pct, 3)} %{net}, overspeed {number(self.overspeed_max_kmh)} km/h{grip}")

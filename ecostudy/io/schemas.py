@@ -227,6 +227,20 @@ class Sweep(Strict):
         return self
 
 
+def _swept_over(scenario: Scenario, sweep: Optional[Sweep]) -> tuple[str, str] | None:
+    """(the scenario's field, the sweep's) where a swept value would replace a scenario's own: a
+    timing beside a swept timing, its points or objective beside swept ones; else None."""
+    if sweep is None:
+        return None
+    timings = ("running_time_s", "supplement_percent")
+    swept_timing = next((n for n in timings if getattr(sweep, n) is not None), None)
+    for name in (*timings, "points", "objective"):
+        by = swept_timing if name in timings else (name if getattr(sweep, name) is not None else None)
+        if getattr(scenario, name) is not None and by is not None:
+            return name, by
+    return None
+
+
 class Library(Strict):
     """Every stop-to-stop segment of a TTOBench checkout's tracks, run by each of its trains."""
 
@@ -264,6 +278,14 @@ class StudyFile(Strict):
     @model_validator(mode="after")
     def _timing(self) -> Self:
         _unique("scenarios", [sc.name for sc in self.scenarios])
+        for i, sc in enumerate(self.scenarios):
+            if sc.name == "base":  # the study's own case: two rows of one name, one summarised
+                raise ValueError(f"scenarios[{i}].name: 'base' is the study's own case (the fields above): name "
+                                 "this scenario otherwise")
+            swept = _swept_over(sc, self.sweep)
+            if swept:
+                raise ValueError(f"scenarios[{i}].{swept[0]}: the sweep's {swept[1]} replaces it in every case of "
+                                 f"scenario '{sc.name}': give it in one place")
         if self.library is None and (self.track is None or self.train is None):
             raise ValueError(f"{'track' if self.track is None else 'train'}: give 'track' and 'train', or a 'library'")
         if self.library is not None and (self.track or self.train or self.from_stop or self.to_stop

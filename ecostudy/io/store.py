@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import IO, Any, Iterable, Mapping
 
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.status import Status
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS cases (
@@ -158,3 +159,13 @@ def check_one_study(folder: str | PathLike[str], name: str) -> None:
         raise InputError(problem(folder, "--out", f"holds the results of another study ({', '.join(map(repr, others))}), "
                                  f"not of '{name}': give another --out"))
 
+
+def stored_counts(path: str | Path, keys: list[str]) -> dict[str, int]:
+    """{total: how many ``keys`` (a study's cases), ok, flagged, failed: those stored at ``path`` in
+    each} (a case not stored counts in the total only)."""
+    store = Store(path)
+    try:
+        kinds = [Status.parse(str(row["status"])).kind for row in store.get(keys).values()]
+    finally:
+        store.close()
+    return {"total": len(keys), **{k: kinds.count(k) for k in ("ok", "flagged", "failed")}}

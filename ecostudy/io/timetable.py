@@ -13,7 +13,7 @@ from typing import Sequence, TypeAlias
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.grid import travel_distance
-from ecostudy.core.types import Track, Window
+from ecostudy.core.types import Timing, Track, Window
 from ecostudy.io import schemas
 
 Where: TypeAlias = str | PathLike[str]
@@ -201,3 +201,45 @@ def off_clock(path: Where, dt: float, times: Sequence[tuple[str, float]]) -> Non
                                  f"give {below} or {above}"))
     if lines:
         raise InputError(lines)
+
+
+def segment_timing(tt: schemas.TimetableFile, from_stop: str, to_stop: str,
+                   path: Where) -> tuple[Timing, list[schemas.Window]]:
+    """(the timing of one run from ``from_stop`` to ``to_stop`` of a timetable, its passing windows
+    with times since that run's departure). The running time is the arrival at ``to`` less the
+    departure at ``from`` (arrival plus dwell); an arrival window (``earliest_s`` and ``latest_s``)
+    is the run's window. Refused in one line each: a stop of the timetable between the two (one run
+    does not stop on the way), a departure window (one run departs at a fixed time)."""
+    if tt.supplement_percent is not None:
+        return Timing(supplement=tt.supplement_percent * units.PERCENT), []
+    index = {r.stop: i for i, r in enumerate(tt.stops)}
+    lines = [problem(path, "stops", f"stop '{s}' is not in the timetable") for s in (from_stop, to_stop) if s not in index]
+    if lines:
+        raise InputError(lines)
+    i, j = index[from_stop], index[to_stop]
+    start, end = tt.stops[i], tt.stops[j]
+    if j > i + 1:
+        raise InputError(problem(path, f"stops[{i + 1}]", f"'{tt.stops[i + 1].stop}' is a stop between '{from_stop}' "
+                                 f"and '{to_stop}' ({j - i - 1} in all): one run does not stop on the way; "
+                                 "`ecostudy journey --timetable` runs each segment"))
+    if start.departure_earliest_s is not None or start.departure_latest_s is not None:
+        raise InputError(problem(path, f"stops[{i}]", f"a departure window at '{from_stop}': one run departs at a "
+                                 "fixed time (departure_s); `ecostudy journey --timetable` plans departure windows"))
+    dep = start.departure_s
+    if dep is None and start.arrival_s is not None:
+        dep = start.arrival_s + (start.dwell_s or 0.0)
+    need = problem(path, "stops", f"need a departure at '{from_stop}' and an arrival at '{to_stop}' (arrival_s, or "
+                   "the window earliest_s and latest_s)")
+    if dep is None:
+        raise InputError(need)
+    if end.arrival_s is not None:
+        timing, arr = Timing(running_time=end.arrival_s - dep), end.arrival_s
+    elif end.earliest_s is not None and end.latest_s is not None:
+        timing, arr = Timing(window=(end.earliest_s - dep, end.latest_s - dep)), end.earliest_s
+    else:
+        raise InputError(need)
+    if arr <= dep:
+        raise InputError(problem(path, "stops", f"arrival at '{to_stop}' ({arr} s) is not after departure ({dep} s)"))
+    since = [w.model_copy(update={k: getattr(w, k) - dep for k in ("earliest_s", "latest_s") if getattr(w, k) is not None})
+             for w in tt.windows]
+    return timing, since

@@ -24,6 +24,9 @@ SUMMARY = "summary.json"  # every output folder's (:mod:`ecostudy.io.folder`)
 REPORT = "report.html"  # written beside it by ``report.html.write_html``
 
 
+STORE = "results.sqlite"  # a study's store: a folder holding one is a study's, resumable before its summary
+
+
 def _kind_of(folder: Path) -> str | None:
     """The ``kind`` in a folder's summary.json, None where there is none or it cannot be read."""
     try:
@@ -53,6 +56,11 @@ def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: st
     if kind is not None and other is not None and other != kind:
         raise InputError(problem(path, "--out", f"holds the results of `ecostudy {other}` (its summary.json), "
                                  f"not of `ecostudy {kind}`: give another --out, or remove the folder"))
+    theirs = sorted({n for n in (*files, SUMMARY, REPORT) if (path / n).is_file()})
+    if kind is not None and other is None and theirs and not (path / STORE).is_file():  # no ecostudy folder
+        raise InputError(problem(path, "--out", f"holds {', '.join(theirs)} that no ecostudy command wrote (no "
+                                 "summary.json naming one): this command would replace them; give another --out, "
+                                 "or remove them"))
     created = [p for p in (path, *path.parents) if not p.exists()]  # deepest first
     try:
         path.mkdir(parents=True, exist_ok=True)

@@ -22,7 +22,7 @@ from ecostudy.core.types import Timing
 from ecostudy.das.methods import advice_status, das_columns
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
-from ecostudy.io.store import Store, check_one_study
+from ecostudy.io.store import Store, check_one_study, stored_counts
 from ecostudy.core.status import parsed, worst
 from ecostudy.io.folder import files_listed, mark_stopped, remove_unlisted, write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
@@ -312,7 +312,8 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
         counts, rows = stored_rows(expanded.cases, output / "results.sqlite", spec.task, workers, dask, retry_failed,
                                    progress, compute, spec.spread)
     except Interrupted:  # an earlier run's summary.json (ok, N cases) would speak for a study not finished
-        mark_stopped(output, "stopped before every case was computed; run the command again to finish")
+        mark_stopped(output, "stopped before every case was computed; run the command again to finish",
+                     stored_counts(output / "results.sqlite", [c["key"] for c in expanded.cases]))
         raise
     table = spec.table(expanded.cases, rows)
     write_csv(output / spec.table_file, table)

@@ -17,6 +17,7 @@ from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import too_long_named
 from ecostudy.io import schemas
 from ecostudy.io.documents import named_file, split_selector
+from ecostudy.io.timetable import segment_timing
 from ecostudy.io.loaders import (
     chosen_stops,
     load_timetable,
@@ -24,7 +25,6 @@ from ecostudy.io.loaders import (
     read_document,
     read_track,
     read_train,
-    timing_from_timetable,
     train_from_schema,
     validate,
 )
@@ -108,7 +108,7 @@ def _scenario_units(s, path, read):
         yield sc.name, {"scenario": sc.name}, train_doc, track_doc, from_stop, to_stop, sc
 
 
-def expand(path, skipped=None, read=None, windows=False):
+def expand(path, skipped=None, read=None, windows=False, warn=True):
     """(study schema, output folder, cases) for a study file; inputs are validated here, once.
     A library study's pairs left out are appended to ``skipped`` (track, train, reason); ``read``:
     the :class:`Files` of the study, when its base case was read before; ``windows``: whether the
@@ -139,9 +139,11 @@ def expand(path, skipped=None, read=None, windows=False):
                   "window_s": list(s.window_s) if s.window_s else None}
         if s.timetable is not None:
             timetable = named_file(path, "timetable", s.timetable)
-            t = timing_from_timetable(load_timetable(timetable), from_stop, to_stop, timetable)
-            timing = {"running_time_s": t.running_time,
-                      "supplement_percent": None if t.supplement is None else 100 * t.supplement, "window_s": None}
+            t, passing = segment_timing(load_timetable(timetable), from_stop, to_stop, timetable)
+            if not windows:
+                refuse_windows(timetable, {"windows": passing}, "`ecostudy run`")
+            timing = {"running_time_s": t.running_time, "window_s": list(t.window) if t.window else None,
+                      "supplement_percent": None if t.supplement is None else 100 * t.supplement}
         for field in ("running_time_s", "supplement_percent"):
             if getattr(sc, field) is not None:
                 timing = {"running_time_s": None, "supplement_percent": None, "window_s": None,
@@ -174,8 +176,15 @@ def expand(path, skipped=None, read=None, windows=False):
             if case["key"] not in keys:  # the fastest run once, whatever running times are swept beside it
                 keys.add(case["key"])
                 cases.append(case)
-    for line in fastest:
-        warnings.warn(problem(path, "objective", line), EcostudyWarning, stacklevel=2)
+    defaults = schemas.StudyFile.model_fields
+    idle = [name for name, used in (("weights", any(c["objective"] == "mixed" for c in cases)),
+                                     ("das_time_limit_s", any(c.get("das") == "minlp" for c in cases)))
+            if not used and getattr(s, name) != defaults[name].get_default(call_default_factory=True)]
+    notes = [("objective", line) for line in fastest] + [
+        (name, "read but not used: no case " + ("has objective mixed" if name == "weights" else "has das: minlp"))
+        for name in idle]
+    for field, line in notes if warn else ():
+        warnings.warn(problem(path, field, line), EcostudyWarning, stacklevel=2)
     output = Path(s.output) if s.output else Path("out") / s.name
     return s, output, cases
 
@@ -204,7 +213,7 @@ def load_checked_study(path, command=None):
     warning names the fields the file gives (other than their defaults) that the command does not use."""
     read = Files()  # each file read once, for the base case and the study's cases
     study = load_study(path, read)
-    s = expand(path, read=read, windows=True)[0]  # the file as validated there
+    s = expand(path, read=read, windows=True, warn=False)[0]  # the file as validated there (its cases' warnings are run's)
     if command is not None:
         if command not in UNUSED:  # a new command or study kind that reads a base case: its author's step
             raise ValueError(f"load_checked_study: {command!r} has no entry in studies.cases.UNUSED (the study fields "
