@@ -110,11 +110,16 @@ def adhesion_use(plant: Plant, positions: Sequence[float] | FloatArray, speeds: 
     return float(np.max(np.maximum(adhesion.use(limit, v, traction), adhesion.use(limit, v, electric)), initial=0.0))
 
 
+KINETIC_FLOOR = 0.1  # share of the top speed's kinetic energy below which a run's traction is no energy scale
+
+
 def energy_scale(train: Train, trace: Trace, traction_energy: float) -> float:
-    """The energy [J] the re-simulation's energy errors are a share of: the run's traction work, or
-    the kinetic energy at its top speed where that is larger (a run down a grade that needs little
-    or no traction: a share of its near-zero traction read 100 % and 5517 % off for 1.5e-5 kWh)."""
-    return max(traction_energy, 0.5 * train.mass * float(np.max(trace.v, initial=0.0)) ** 2, 1.0)
+    """The energy [J] the re-simulation's energy errors are a share of: the run's traction work, but
+    not less than :data:`KINETIC_FLOOR` of the kinetic energy at its top speed (a run down a grade
+    that needs little or no traction: a share of its near-zero traction read 100 % and 5517 % off
+    for 1.5e-5 kWh). A run that pulls itself to its top speed has at least that kinetic energy in
+    traction, so the floor moves no run that needs traction to speak of."""
+    return max(traction_energy, KINETIC_FLOOR * 0.5 * train.mass * float(np.max(trace.v, initial=0.0)) ** 2, 1.0)
 
 
 def verify(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[float] | FloatArray, running_time: float,
