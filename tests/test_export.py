@@ -65,6 +65,23 @@ def test_export_command_on_a_solved_run_with_driver_advice(tmp_path):
         assert len(data["rows"]) == len(table) and data["units"]["speed_kmh"] == "km/h"
     bad = runner.invoke(app, ["export", str(out), "--every", "fast"])
     assert bad.exit_code == 2 and "--every" in bad.output and "Traceback" not in bad.output
+    # a step that skips a phase of the run (the braking into the stop, a short traction) says so: an
+    # on-board system reading it never sees that phase (it said `ok`)
+    phases = json.loads((out / "summary.json").read_text())["regimes"]["runs"]
+    coarse = runner.invoke(app, ["export", str(out), "--every", "400m"])
+    rows = pd.read_csv(out / "profile_every_400m.csv")["position_m"]
+    missed = [r for r in phases if not ((rows >= r["start_m"]) & (rows < r["end_m"])).any()]
+    assert missed and coarse.exit_code == 0, coarse.output  # the run is ok; the export warns
+    assert f"warning: the export every 400m has no row in {len(missed)} of the run's {len(phases)} phases " \
+        f"({missed[0]['regime']} " in coarse.output and "a finer step shows them" in coarse.output, coarse.output
+    data = json.loads((out / "profile_every_400m.json").read_text())
+    assert data["units"]["position_m"].startswith("m from the departure stop") and len(data["phases_without_a_row"]) \
+        == len(missed)
+    # a summary saying ok over a solve Ipopt did not prove optimal is an edited file (check said ok)
+    summary = json.loads((out / "summary.json").read_text())
+    (out / "summary.json").write_text(json.dumps({**summary, "solver": {**summary["solver"], "status": "maxIterations"}}))
+    edited = runner.invoke(app, ["check", str(out)])
+    assert edited.exit_code == 2 and "status: ok, but solver.status is 'maxIterations'" in edited.output, edited.output
 
 
 @pytest.mark.flagged_on_purpose

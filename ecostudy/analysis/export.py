@@ -82,3 +82,13 @@ def fixed_step(traj: Trajectory, handle: np.ndarray, time_step_s: Optional[float
         out["advice_handle"] = advice["handle"].to_numpy()[row]
         out["advice_target_speed_kmh"] = advice["target_speed_kmh"].to_numpy()[row]
     return out
+
+
+def missed_phases(runs: list[dict], positions: np.ndarray) -> list[str]:
+    """The phases of a run (its summary's ``regimes.runs``: regime, start_m, end_m) in which no row of
+    an export at ``positions`` [m from the departure] falls, as ``MA 210-267 m``: an on-board system
+    reading the export never sees them (a traction phase between two samples, a cruise shorter than
+    a step)."""
+    x = np.asarray(positions, float)
+    return [f"{r['regime']} {r['start_m']:.0f}-{r['end_m']:.0f} m" for r in runs
+            if not np.any((x >= r["start_m"]) & (x < r["end_m"]))]

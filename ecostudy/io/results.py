@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.core.errors import InputError, problem
-from ecostudy.core.status import Status
+from ecostudy.core.status import PROVEN, Status
 from ecostudy.core.kinematics import interval_time
 from ecostudy.core.modes import mode_name, names_mode
 from ecostudy.core.types import Trajectory
@@ -85,6 +85,10 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     if status.ok and isinstance(verification, dict) and verification.get("passed") is False:
         raise InputError(problem(result_dir / "summary.json", "status", "ok, but verification.passed is false "
                                  "(a failed re-simulation is flagged): an edited file?"))
+    ended = summary["solver"].get("status") if isinstance(summary.get("solver"), dict) else None
+    if status.ok and ended is not None and ended not in PROVEN:
+        raise InputError(problem(result_dir / "summary.json", "status", f"ok, but solver.status is {ended!r} (a solve "
+                                 "the solver did not prove optimal is flagged): an edited file?"))
     p = number_columns(result_dir / "profile.csv", PROFILE_COLUMNS, rows=points,
                        open_last=("traction_force_kN", "braking_force_kN", "handle"))
     for column, strictly in (("position_m", True), ("time_s", False)):  # rows out of order: a run read backwards

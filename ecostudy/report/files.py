@@ -1,12 +1,13 @@
 """The files of a run (``profile.csv``, ``summary.json``, ``speed.<format>``, ``advice.csv``) and of a
 journey, each written atomically (a front's: :func:`ecostudy.report.studyfiles.front_files`)."""
+import warnings
 from functools import partial
 from pathlib import Path
 
-from ecostudy.analysis.export import fixed_step
+from ecostudy.analysis.export import fixed_step, missed_phases
 from ecostudy.analysis.saved import rejudged
 from ecostudy.core.budget import how_many
-from ecostudy.core.errors import InputError, problem
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.status import Status
 from ecostudy.io.folder import write_summary
 from ecostudy.io.results import load_result
@@ -108,7 +109,7 @@ def write_journey(table, totals, results, out_dir, title, passing=(), plot=True,
     return out_dir
 
 
-EXPORT_UNITS = {"time_s": "s", "position_m": "m", "speed_kmh": "km/h", "speed_mps": "m/s",
+EXPORT_UNITS = {"time_s": "s", "position_m": "m from the departure stop along the run (not the track's kilometrage)", "speed_kmh": "km/h", "speed_mps": "m/s",
                 "handle": "-1 (full braking) to 1 (full traction)", "advice_mode": "",
                 "advice_handle": "-1 to 1", "advice_target_speed_kmh": "km/h (cruise modes)"}
 
@@ -132,10 +133,17 @@ def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
                                  f"exported (a step of at least {float(span) / MAX_EXPORT_ROWS:.2g} {unit})"))
     judged = rejudged(saved, result_dir)  # the run's status judged again, not taken from its summary
     table = fixed_step(saved.trajectory, saved.handle, time_step_s, distance_step_m, saved.advice)
+    phases = (saved.summary.get("regimes") or {}).get("runs") or []
+    missed = missed_phases(phases, table["position_m"].to_numpy())
+    if missed:  # the samples are right; an on-board system reading them never sees these phases
+        warnings.warn(f"the export every {step} has no row in {len(missed)} of the run's {len(phases)} phases "
+                      f"({', '.join(missed[:3])}" + (f" and {len(missed) - 3} more" if len(missed) > 3 else "")
+                      + "): a finer step shows them", EcostudyWarning, stacklevel=2)
+    status = judged.status
     write_csv(csv, table)
-    run = {**{k: saved.summary.get(k) for k in ("track", "train", "from", "to", "running_time_s")}, "status": str(judged.status)}
+    run = {**{k: saved.summary.get(k) for k in ("track", "train", "from", "to", "running_time_s")}, "status": str(status)}
     write_json(js, {"run": run,
                     "step": {"time_s": time_step_s} if time_step_s is not None else {"distance_m": distance_step_m},
-                    "units": {c: u for c, u in EXPORT_UNITS.items() if c in table},
+                    "units": {c: u for c, u in EXPORT_UNITS.items() if c in table}, "phases_without_a_row": missed,
                     "rows": table.to_dict("records")})
-    return table, csv, js, judged.status
+    return table, csv, js, status
