@@ -14,9 +14,10 @@ from ecostudy.io.writers import atomic_write
 
 
 def calibrated_document(path: str | PathLike[str], train: Train, fitted: Collection[str],
-                        provenance: str) -> dict[str, Any]:
+                        provenance: str, warning: str = "") -> dict[str, Any]:
     """The train file at ``path`` (YAML, or TTOBench / OSRD JSON as ecostudy reads it) with the
-    parameters named in ``fitted`` taken from ``train`` (SI) and ``provenance`` added to its source."""
+    parameters named in ``fitted`` taken from ``train`` (SI), ``provenance`` added to its source and
+    ``warning`` (a calibration not ok) put before it, where a reader of the file starts."""
     data: dict[str, Any] = copy.deepcopy(train_document(path)[0])
     if {"mass", "rotating_mass_factor"} & set(fitted):
         data["mass_t"] = round(train.static_mass / units.TONNE, 6)
@@ -31,7 +32,7 @@ def calibrated_document(path: str | PathLike[str], train: Train, fitted: Collect
         data["traction_efficiency"] = round(float(train.traction_efficiency), 6)
     if "regeneration_efficiency" in fitted and data.get("regenerative_braking"):
         data["regenerative_braking"]["efficiency"] = round(float(train.regeneration_efficiency), 6)
-    data["source"] = f"{data.get('source', '').strip()} {provenance}".strip()
+    data["source"] = f"{warning} {data.get('source', '').strip()} {provenance}".strip()
     return data
 
 

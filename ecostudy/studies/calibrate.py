@@ -122,12 +122,12 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d")
     estimates = ", ".join(f"{r.name} {r.estimate:.5g} +- {r.high - r.estimate:.2g} {r.unit}"
                           for r in result.table.itertuples() if r.identifiable)
-    provenance = ("" if result.status == "ok" else f"NOT OK, calibration flagged: {result.reason}. ") + (
-                  f"Calibrated by ecostudy {__version__} calibrate on {stamp} from {len(logs)} logged run(s) "
+    warning = "" if result.status == "ok" else f"NOT OK, calibration flagged: {result.reason}."
+    provenance = (f"Calibrated by ecostudy {__version__} calibrate on {stamp} from {len(logs)} logged run(s) "
                   f"({', '.join(log.name for log in logs)}) on track '{track.name}': {estimates} "
                   f"(95 % intervals); held at this file's values: "
                   f"{', '.join(n for n in names if n not in identified) or 'none'}.")
-    write_train(calibrated, calibrated_document(train_path, result.train, identified, provenance))
+    write_train(calibrated, calibrated_document(train_path, result.train, identified, provenance, warning))
     try:  # a train file the tool would refuse (a fitted value past its field's bounds) is not left behind
         load_train(calibrated)
         written = [calibrated.name]
