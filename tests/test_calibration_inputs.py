@@ -11,7 +11,8 @@ import yaml
 from typer.testing import CliRunner
 
 from ecostudy.calibration.estimate import calibrate_logs
-from ecostudy.calibration.generate import generate_log
+from ecostudy.calibration.fit import DEFAULT_FIT
+from ecostudy.calibration.generate import generate_log, true_train
 from ecostudy.calibration.replay import prepare
 from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning, InputError
@@ -134,3 +135,16 @@ def test_savings_of_a_run_the_file_cannot_drive_name_it_and_go_on(tmp_path, ther
         assert row["status"].startswith("failed: infeasible: the fastest possible run takes") and \
             "the calibrated train cannot drive the logged time" in row["status"], row
     assert "a run 0: failed: infeasible" in result.output and "times the train file's envelope" in result.output
+
+
+def test_a_parameter_fitted_at_its_bound_is_flagged(inputs):
+    """Logs of a train whose rotating-mass allowance is twice its file's, fitted with f held: Davis
+    B goes to its bound 0 with an interval of +-27.5 N s/m about it, reported identifiable (the
+    calibration was flagged for the residuals' drift alone). Now the bound is a reason of its own."""
+    track, train = inputs
+    truth = true_train(train, rotating=2.0)
+    logs = [parse_log(text_of(generate_log(track, truth, stops, truth, seed=seed)[0]), f"l{seed}.csv")
+            for seed, stops in ((1, ["West", "Middle", "East"]), (2, ["East", "Middle", "West"]))]
+    result = calibrate_logs(logs, track, train, DEFAULT_FIT, draws=0)
+    assert result.status == "flagged" and "davis_b fitted at its bound 0 (the logs would have it below)" in \
+        result.reason, result.reason

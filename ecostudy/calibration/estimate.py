@@ -134,6 +134,8 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     reasons += [f"{run.log} run {run.index}: {why}" for run in problem.runs
                 if (why := over_limit(run.t, run.x, run.v, track))]
     reasons += [f"{log.name}: {why}" for log in logs if (why := over_envelope(log, train))]
+    reasons += [f"{n} fitted at its bound 0 (the logs would have it below): its interval is not a fit's, and the "
+                "other parameters absorb what the model misses" for n in free if theta[n] <= 1e-9 * abs(problem.prior[n])]
     reasons += [f"{n} {theta[n]:.4g} above 1: the wheel work is more than the line energy logged (a line power, "
                 "voltage or current scale off?)" for n in ("efficiency", "regeneration_efficiency") if n in free and theta[n] > 1]
     ratio = theta["mass"] / problem.prior["mass"]
