@@ -11,7 +11,7 @@ from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.status import Status
 from ecostudy.io.folder import write_summary
 from ecostudy.io.results import load_result
-from ecostudy.io.writers import check_output_dir, write_csv, write_json
+from ecostudy.io.writers import REPORT, check_output_dir, write_csv, write_json
 from ecostudy.report import style
 from ecostudy.report.drawer import apart
 from ecostudy.report.html import write_html
@@ -57,7 +57,10 @@ def _draw(name, args, kwargs, path, **more):
 RUN_FIGURES = ("speed", "energy")  # the figures of write_run, by stem
 # what `ecostudy check` and `ecostudy export` add to a solve folder, of the run they read: a run
 # written into the folder again removes them (a check.json of an 80 s run beside a 78 s profile)
-DERIVED = ("check.json", "profile_every_*.csv", "profile_every_*.json")
+# of the run a new one replaces, gone before its profile is written: what was read off it (its check,
+# its exports) and its report, which would show the earlier run beside a part of the new one's files
+# if a write fails midway (a full disk)
+DERIVED = ("check.json", "profile_every_*.csv", "profile_every_*.json", REPORT)
 JOURNEY_FIGURE = "journey"  # of write_journey
 
 
