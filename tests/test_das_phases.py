@@ -41,7 +41,11 @@ def test_phases_meets_the_das_acceptance(case):
     # has exact modes inside each phase, so it can undercut a coarser ATO grid; docs/benchmarks.md)
     assert ph["traction_energy_kWh"] >= fine.summary["traction_energy_kWh"] * (1 - 2e-4)
     # beats rounding once lateness is charged at the marginal energy (late must not count as a saving)
-    assert ph["gap_to_ato_on_time_pct"] < das["round"]["gap_to_ato_on_time_pct"]
+    rounded = das["round"]
+    if rounded["gap_to_ato_on_time_pct"] is None:  # rounding missed the stop by more than 1 m: no gap, said so
+        assert rounded["no_gap"].startswith("the advice stopped") and not rounded["status"].startswith("ok")
+    else:
+        assert ph["gap_to_ato_on_time_pct"] < rounded["gap_to_ato_on_time_pct"]
 
 
 @pytest.mark.slow
@@ -96,7 +100,10 @@ def test_minlp_reports_status_bound_and_beats_round(tmp_path):
     assert mi["bound_note"]
     # the phases solution is its starting pattern, so it never does worse
     assert mi["traction_energy_kWh"] <= ph["traction_energy_kWh"] * (1 + 1e-9)
-    assert mi["gap_to_ato_on_time_pct"] < rnd["gap_to_ato_on_time_pct"]
+    if rnd["gap_to_ato_on_time_pct"] is None:  # rounding missed the stop by more than 1 m: no gap to beat, said so
+        assert rnd["no_gap"].startswith("the advice stopped") and not rnd["status"].startswith("ok"), rnd
+    else:
+        assert mi["gap_to_ato_on_time_pct"] < rnd["gap_to_ato_on_time_pct"]
     assert abs(mi["arrival_error_s"]) < 1.0 and abs(mi["stop_error_m"]) < 2.0
 
 

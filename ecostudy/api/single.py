@@ -53,13 +53,16 @@ def run_lines(result: RunResult, out_dir: Path) -> list[str]:
         lines.append(f"  verification      {flag}: {ver.errors}")
     if s.das is not None:
         d = s.das
-        gap = "n/a" if d.gap_to_ato_pct is None else signed(d.gap_to_ato_pct, 2)
-        lines.append(f"  driver advice     {d.method}: {d.traction_energy_kWh:.3f} kWh ({gap} "
-                     f"% against ATO), {d.mode_changes} mode changes, arrival {signed(d.arrival_error_s, 2)} s, "
+        net = s.objective == "net_energy"  # the gap is on the quantity the ATO run minimised: shown beside it
+        gap = f"no gap: {d.no_gap}" if d.gap_to_ato_pct is None else f"{signed(d.gap_to_ato_pct, 2)} % against ATO"
+        arrival = "no arrival" if d.arrival_error_s is None else f"arrival {signed(d.arrival_error_s, 2)} s"
+        lines.append(f"  driver advice     {d.method}: {d.net_energy_kWh if net else d.traction_energy_kWh:.3f} kWh"
+                     f"{' net' if net else ''} ({gap}), {d.mode_changes} mode changes, {arrival}, "
                      f"stop {signed(d.stop_error_m, 2)} m (advice.csv)")
-        if d.gap_to_ato_on_time_pct is not None and s.marginal_energy_kWh_per_s is not None:
-            lines.append(f"                    {signed(d.gap_to_ato_on_time_pct, 3)} % against ATO with lateness charged "
-                         f"at {abs(s.marginal_energy_kWh_per_s):.4f} kWh/s; {d.status}")
+        charged = (f"{signed(d.gap_to_ato_on_time_pct, 3)} % against ATO with lateness charged at "
+                   f"{abs(s.marginal_energy_kWh_per_s):.4f} kWh/s; " if d.gap_to_ato_on_time_pct is not None
+                   and s.marginal_energy_kWh_per_s is not None else "")
+        lines.append(f"                    {charged}{d.status}")
         if d.method == "minlp":
             bound = "no bound" if d.bound_kWh is None else f"bound {d.bound_kWh:.3f} kWh (gap {number(d.gap_pct, '.2f')} %)"
             lines.append(f"                    MINLP search {d.search_s:.1f} s, {d.oa_iterations} OA iterations, "

@@ -25,7 +25,7 @@ from ecostudy.core.errors import SolverError
 from ecostudy.core.modes import mode_name
 from ecostudy.core.progress import stage
 from ecostudy.core.simulate import Driven, simulate, worst_overspeed
-from ecostudy.core.status import driven_run, flagged, solver_part, worst
+from ecostudy.core.status import STOP_TOLERANCE_M, driven_run, flagged, solver_part, worst
 from ecostudy.core.units import KMH, to_kmh, to_kwh
 from ecostudy.ocp import phases, session
 
@@ -113,6 +113,16 @@ def _gap_on_time(energies, result, arrival):
     return 100 * ((energies[key] + abs(marginal) * late) / ato - 1)
 
 
+def no_gap(result, arrived):
+    """Why the advice has no gap to the ATO run ('' where it has one): a gap is read off an ATO run
+    that is ok and minimised energy (not the all-out run's time), and advice that stopped at its stop."""
+    if result.summary["objective"] not in ("energy", "net_energy"):
+        return f"the ATO run minimised {result.summary['objective']}, not energy"
+    if not result.status.ok:
+        return "the ATO run is not ok"
+    return "" if arrived else f"the advice stopped more than {STOP_TOLERANCE_M:g} m off its stop"
+
+
 def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     """The ``das`` block of a DAS method's run: energies and gaps, and its ``status`` as a driven run
     (:func:`~ecostudy.core.status.driven_run`: stop, arrival against the ATO run's time, overspeed
@@ -126,10 +136,14 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     status = worst([driven_run(row["stop_error_m"], arrival_error, overspeed, row.get("adhesion_use_max"),
                                early_s=-arrival_error),
                     *(flagged(f) for f in flags)])
-    return {"method": method, **energies, "gap_to_ato_pct": _gap(energies, result),
-            "gap_to_ato_on_time_pct": _gap_on_time(energies, result, row["running_time_s"]),
+    arrived = abs(row["stop_error_m"]) <= STOP_TOLERANCE_M  # a run short of (or past) its stop has no time or gap
+    why = no_gap(result, arrived)
+    return {"method": method, **energies, "gap_to_ato_pct": None if why else _gap(energies, result),
+            "gap_to_ato_on_time_pct": None if why else _gap_on_time(energies, result, row["running_time_s"]),
+            "no_gap": why,
             "mode_changes": len(advice) - 1, "bound_kWh": None, "status": str(status), "solver": solver,
-            "arrival_error_s": arrival_error, "stop_error_m": row["stop_error_m"], "overspeed_max_kmh": overspeed,
+            "arrival_error_s": arrival_error if row["stop_error_m"] >= -STOP_TOLERANCE_M else None,
+            "stop_error_m": row["stop_error_m"], "overspeed_max_kmh": overspeed,
             "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v))), **grip, **extra}
 
 

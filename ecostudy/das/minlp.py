@@ -44,6 +44,10 @@ def das_minlp(result, points=None, time_limit=60.0, options=None):
     # neither is the 0 a search stopped before its first master problem reports
     valid = oa_bound is not None and 0 < oa_bound <= best_kwh * (1 + 1e-6) and found.iterations > 0
     solver, flags = _status(found, name, time_limit)
+    if not valid and oa_bound is not None and found.iterations > 0 and not found.limited:  # its "optimal" rests on it
+        flags += (f"the MINLP search ended {found.termination} on an OA bound ({oa_bound:.3f} kWh) above the best "
+                  f"advice ({best_kwh:.3f} kWh): the nonconvex master cut off the incumbent, so its pattern is not "
+                  "proven",)
     flags += nlp_flags(f"the DAS {name} NLP", out)
     block = summary_block("minlp", result, sim, advice, solver, flags,
                           planned_traction_energy_kWh=plan, search_s=found.seconds,
@@ -62,7 +66,7 @@ def _status(found, name, time_limit):
         how = "was stopped at" if found.stopped else "reached"
         pattern = "the best pattern it had found" if found.found else "no pattern found by then"
         return f"{name} re-simulated", (f"the MINLP search {how} its {time_limit:g} s time limit ({pattern}; "
-                                        f"the advice is the {name}; --das-time-limit gives it longer)",)
+                                        f"the advice is the {name}; --das-time-limit, or das_time_limit_s in a study, gives it longer)",)
     if found.termination.startswith("failed"):
         return f"{name} re-simulated", (f"the MINLP search {found.termination}",)
     return f"MindtPy {found.termination}; {name} re-simulated", ()

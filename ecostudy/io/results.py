@@ -116,12 +116,14 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
             raise InputError(problem(result_dir / "advice.csv", ", ".join(missing), "missing"))
         handle = pd.to_numeric(advice["handle"], errors="coerce").to_numpy(float)
         target = pd.to_numeric(advice["target_speed_kmh"], errors="coerce").to_numpy(float)
-        bad = np.flatnonzero(~(np.abs(handle) <= 1.0 + NOISE)
+        cruise = advice["handle"].isna().to_numpy() & (target >= 0.0)  # a cruise row: a target, no handle
+        bad = np.flatnonzero(~(np.abs(handle) <= 1.0 + NOISE) & ~cruise
                              | (advice["target_speed_kmh"].notna().to_numpy() & ~(target >= 0.0)))
         if bad.size:
             raise InputError(problem(result_dir / "advice.csv", f"handle, target_speed_kmh, row {bad[0] + 2}",
                                      f"'{advice['handle'].iloc[bad[0]]}', '{advice['target_speed_kmh'].iloc[bad[0]]}': "
-                                     "a handle is a number from -1 to 1 and a target speed a number >= 0"))
+                                     "a handle is a number from -1 to 1 and a target speed a number >= 0 (a cruise "
+                                     "row: a target speed and no handle)"))
         wrong = [i for i, (text, h, v) in enumerate(zip(advice["mode"], handle, target)) if not names_mode(text, h, v)]
         if wrong:  # export hands the mode to on-board systems: it must be the handle's
             i = wrong[0]

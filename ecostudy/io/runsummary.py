@@ -123,7 +123,7 @@ class DasSummary:
     gap_to_ato_pct: Optional[float]    # on the quantity the ATO run minimised
     gap_to_ato_on_time_pct: Optional[float]  # with a late arrival charged at the marginal energy
     mode_changes: int
-    arrival_error_s: float
+    arrival_error_s: Optional[float]   # None: the advice stopped short of its stop
     stop_error_m: float
     status: str                        # as a driven run: ok, or flagged with the reasons
     solver: Optional[str] = None       # how the advice was made, e.g. "optimal, re-simulated"
@@ -132,6 +132,7 @@ class DasSummary:
     gap_pct: Optional[float] = None
     search_s: Optional[float] = None
     oa_iterations: Optional[int] = None
+    no_gap: str = ""                   # why there is no gap to ATO ('' where there is one)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "DasSummary":
@@ -139,12 +140,12 @@ class DasSummary:
         return cls(method=str(data["method"]), traction_energy_kWh=float(data["traction_energy_kWh"]),
                    net_energy_kWh=float(data["net_energy_kWh"]), gap_to_ato_pct=_opt(data, "gap_to_ato_pct"),
                    gap_to_ato_on_time_pct=_opt(data, "gap_to_ato_on_time_pct"),
-                   mode_changes=int(data["mode_changes"]), arrival_error_s=float(data["arrival_error_s"]),
+                   mode_changes=int(data["mode_changes"]), arrival_error_s=_opt(data, "arrival_error_s"),
                    stop_error_m=float(data["stop_error_m"]), status=str(data["status"]),
                    solver=None if data.get("solver") is None else str(data["solver"]),
                    overspeed_max_kmh=_opt(data, "overspeed_max_kmh"),
                    bound_kWh=_opt(data, "bound_kWh"), gap_pct=_opt(data, "gap_pct"), search_s=_opt(data, "search_s"),
-                   oa_iterations=None if oa is None else int(oa))
+                   oa_iterations=None if oa is None else int(oa), no_gap=str(data.get("no_gap") or ""))
 
 
 @dataclass(frozen=True)

@@ -50,10 +50,12 @@ class Mode:
 
 
 def all_modes(train: Train) -> list["Mode"]:
-    """Every distinct DAS mode, traction levels highest first: the choices of one MINLP phase."""
+    """Every distinct DAS mode, traction levels highest first, then cruise, coast and the strongest
+    braking level the train's ``das_handle_levels`` give (full service braking by default): the
+    choices of one MINLP phase."""
     levels = sorted((lv for lv in train.das_levels if lv > 0), reverse=True)
-    return [Mode("traction", lv) for lv in levels] + [Mode("cruise", float("nan")),
-                                                        Mode("coast", 0.0), Mode("brake", -1.0)]
+    return [Mode("traction", lv) for lv in levels] + [Mode("cruise", float("nan")), Mode("coast", 0.0),
+                                                        Mode("brake", min(train.das_levels))]
 
 
 def sequence(train: Train) -> list["Mode"]:
@@ -206,9 +208,9 @@ def _fixed_modes(m: Model, layout: Layout) -> None:
         elif mode.kind == "coast":
             m.ft[i].fix(0.0)
             m.fb[i].fix(0.0)
-        elif mode.kind == "brake":
+        elif mode.kind == "brake":  # at its level of the braking envelope (-1: full service braking)
             m.ft[i].fix(0.0)
-            m.mode.add(m.fb[i] == m.mean_b[i])
+            m.mode.add(m.fb[i] == -mode.level * m.mean_b[i])
         else:
             m.speed[i].deactivate()
             m.mode.add(m.v[i + 1] == m.v[i])
