@@ -45,7 +45,7 @@ def das_minlp(result, points=None, time_limit=60.0, options=None):
     valid = oa_bound is not None and 0 < oa_bound <= best_kwh * (1 + 1e-6) and found.iterations > 0
     solver, flags = _status(found, name, time_limit)
     if not valid and oa_bound is not None and found.iterations > 0 and not found.limited:  # its "optimal" rests on it
-        flags += (f"the MINLP search ended {found.termination} on an OA bound ({oa_bound:.3f} kWh) above the best "
+        flags += (f"the MINLP search's '{found.termination}' rests on an OA bound ({oa_bound:.3f} kWh) above the best "
                   f"advice ({best_kwh:.3f} kWh): the nonconvex master cut off the incumbent, so its pattern is not "
                   "proven",)
     flags += nlp_flags(f"the DAS {name} NLP", out)
