@@ -45,13 +45,19 @@ def check_plausible(path: Where, names: list[str], data: FloatArray, units: dict
                                          f"row{'s' if over.size > 1 else ''})"))
 
 
-def force_power_ratio(v: FloatArray, force: FloatArray, power: FloatArray) -> tuple[float, int]:
-    """(median of P / (F |v|), rows) over the rows where force and wheel power are both positive and
-    the speed is above :data:`PULLING_SPEED` (NaN and 0 rows when there are none)."""
-    rows = (force > 0) & (power > 0) & (np.abs(v) > PULLING_SPEED)
+def pulling_ratio(v: FloatArray, top: FloatArray, bottom: FloatArray) -> tuple[float, int]:
+    """(median of ``top`` / ``bottom``, rows) over the rows where both are positive and the speed is
+    above :data:`PULLING_SPEED`, the train pulling (NaN and 0 rows when there are none): the one
+    comparison of two of a log's traction channels."""
+    rows = (top > 0) & (bottom > 0) & (np.abs(v) > PULLING_SPEED)
     if not rows.any():
         return float("nan"), 0
-    return float(np.median(power[rows] / (force[rows] * np.abs(v[rows])))), int(rows.sum())
+    return float(np.median(top[rows] / bottom[rows])), int(rows.sum())
+
+
+def force_power_ratio(v: FloatArray, force: FloatArray, power: FloatArray) -> tuple[float, int]:
+    """(median of P / (F |v|), rows) where the train pulls (:func:`pulling_ratio`)."""
+    return pulling_ratio(v, power, force * np.abs(v))
 
 
 def check_force_power(path: Where, columns: tuple[str, ...], v: FloatArray | None, force: FloatArray | None,
@@ -82,12 +88,10 @@ def check_line_power(path: Where, line_name: str, v: FloatArray | None, force: F
     :data:`PULLING_ROWS` such rows."""
     if line is None or v is None or (wheel is None and force is None):
         return
-    at_wheel = wheel if wheel is not None else force * np.abs(v)
-    rows = (at_wheel > 0) & (line > 0) & (np.abs(v) > PULLING_SPEED)
+    ratio, rows = pulling_ratio(v, wheel if wheel is not None else force * np.abs(v), line)
     lo, hi = LINE_WHEEL
-    ratio = float(np.median(at_wheel[rows] / line[rows])) if rows.any() else float("nan")
-    if rows.sum() >= PULLING_ROWS and not lo <= ratio <= hi:
+    if rows >= PULLING_ROWS and not lo <= ratio <= hi:
         raise InputError(problem(path, line_name, f"the wheel power is {ratio:.3g} times the line power (median over "
-                                 f"{int(rows.sum())} rows where the train pulls above {PULLING_SPEED:g} m/s; a traction "
+                                 f"{rows} rows where the train pulls above {PULLING_SPEED:g} m/s; a traction "
                                  f"chain gives {lo:g}-{hi:g}): the line power, voltage or current is in another "
                                  "unit or scale than its name says"))
