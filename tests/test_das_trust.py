@@ -1,15 +1,25 @@
 """Driver advice read as it is: a cruise row of the tool's own advice.csv read back, no gap to an
 ATO run that is not ok (or that minimised time, or beside advice that missed its stop), the energy
-beside a net-energy gap the net energy, the advice's status always printed, and a train's own
-braking level the phases' braking mode (real solves)."""
+beside a net-energy gap the net energy, the advice's status always printed, a train's own
+braking levels the phases' and the MINLP's braking modes, and a net-energy gap its braking levels
+make said so (real solves)."""
+import json
+
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
 from ecostudy.io.loaders import load_train
+import pyomo.core as pyo
+
+from ecostudy.core.grid import make_segment
+from ecostudy.io.loaders import load_track
+from ecostudy.ocp import phases
+from ecostudy.ocp.modechoice import define_mode_choice
 from ecostudy.ocp.phases import all_modes
 
-from .conftest import STUDIES, TRAINS, load_yaml, write_yaml
+from .conftest import STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
 
 
 def run(*args):
@@ -40,8 +50,11 @@ def test_a_net_energy_gap_stands_beside_the_net_energy(tmp_path):
     """The net-energy study printed the advice's traction kWh (4 % below the ATO's) beside its net
     gap (+20.8 %); the status line was printed only where a marginal energy exists."""
     result = run("solve", STUDIES / "regional_80s.yaml", "--das", "phases", "--no-plot", "--out", tmp_path / "o")
-    line = next(x for x in result.output.splitlines() if "driver advice" in x)
-    assert "kWh net (" in line and "% against ATO)" in line, line
+    lines = result.output.splitlines()
+    i = next(k for k, x in enumerate(lines) if "driver advice" in x)
+    assert "kWh net (" in lines[i] and "% against ATO)" in lines[i], lines[i]
+    # +20.8 %: full service braking is the only braking level, beyond what the regenerative brake takes
+    assert "braking at the train's levels (-1) asks more than the regenerative brake takes" in lines[i + 2], lines[i:]
     window = run("solve", STUDIES / "default.yaml", "--window", "74,80", "--points", 300, "--das", "round", "--no-plot",
                  "--out", tmp_path / "w")
     lines = window.output.splitlines()
@@ -64,3 +77,46 @@ def test_no_gap_against_the_all_out_run(tmp_path, objective):
     result = run("solve", STUDIES / "default.yaml", "--objective", objective, "--points", 300, "--das", "phases",
                  "--no-plot", "--out", tmp_path / "o")
     assert "(no gap: the ATO run minimised time, not energy)" in result.output, result.output
+
+
+def test_a_gentler_braking_level_lets_net_energy_advice_regenerate(tmp_path):
+    """A braking level of -0.5 beside -1: the phases brake gently first (the net optimum's RB arc,
+    Farooqi 2018 eq. 7.4) and the gap to the ATO run falls from +20.6 % to +4.3 % (K = 300); all
+    negative levels were read as one (the strongest)."""
+    doc = {**load_yaml(TRAINS / "regional_alstom.yaml"), "das_handle_levels": [-1, -0.5, 0, 0.5, 0.75, 1]}
+    train = write_yaml(tmp_path / "gentle.yaml", doc)
+    assert [m.level for m in all_modes(load_train(train)) if m.kind == "brake"] == [-0.5, -1.0]
+    result = run("solve", "--track", TRACKS / "regional_808m.yaml", "--train", train, "--time", 80, "--objective",
+                 "net_energy", "--points", 300, "--das", "phases", "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 0, result.output
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())["das"]
+    assert 0 < summary["gap_to_ato_pct"] < 10 and summary["note"] == "", summary
+    assert -0.5 in set(pd.read_csv(tmp_path / "o" / "advice.csv")["handle"]), "no gentle braking advised"
+
+
+def test_the_minlp_brakes_at_each_level_it_chooses(tmp_path):
+    """The mode-choice rows: a phase choosing braking at -0.5 brakes at half the envelope, not at
+    it (the rows forced full service braking for any braking choice)."""
+    doc = {**load_yaml(TRAINS / "regional_alstom.yaml"), "das_handle_levels": [-1, -0.5, 0, 0.5, 1]}
+    train = load_train(write_yaml(tmp_path / "gentle.yaml", doc))
+    segment = make_segment(load_track(TRACKS / "regional_808m.yaml"), train, "Origin", "Destination")
+    layout = phases.Layout.make(phases.sectors(segment, train), phases.sequence(train), 2)
+    guess = ([layout.sectors[s].length / len(phases.sequence(train)) for s, _ in layout.phases],
+             [10.0] * (layout.intervals + 1))
+    m = phases.build(segment, train, layout, guess, running_time=80.0, extend=define_mode_choice)
+    modes = all_modes(train)
+    half = next(j for j, md in enumerate(modes) if md.kind == "brake" and md.level == -0.5)
+    q = len(layout.phases) - 1
+    for j in m.J:
+        m.z[q, j].set_value(1.0 if j == half else 0.0)
+    i = q * layout.substeps
+    envelope = pyo.value(m.mean_b[i])
+
+    def violated():  # the rows of interval i's braking force that its value breaks
+        mine = [c for c in m.choice.values() if any(v is m.fb[i] for v in pyo.expr.identify_variables(c.body))]
+        return [c for c in mine if pyo.value(c.body) > pyo.value(c.upper) + 1e-9]
+
+    m.fb[i].set_value(0.5 * envelope)
+    assert not violated()
+    m.fb[i].set_value(envelope)
+    assert violated()

@@ -63,6 +63,8 @@ def run_lines(result: RunResult, out_dir: Path) -> list[str]:
                    f"{abs(s.marginal_energy_kWh_per_s):.4f} kWh/s; " if d.gap_to_ato_on_time_pct is not None
                    and s.marginal_energy_kWh_per_s is not None else "")
         lines.append(f"                    {charged}{d.status}")
+        if d.note:
+            lines.append(f"                    {d.note}")
         if d.method == "minlp":
             bound = "no bound" if d.bound_kWh is None else f"bound {d.bound_kWh:.3f} kWh (gap {number(d.gap_pct, '.2f')} %)"
             lines.append(f"                    MINLP search {d.search_s:.1f} s, {d.oa_iterations} OA iterations, "

@@ -61,7 +61,8 @@ class Rspc(Fallback):
         train, segment, nodes = case.train, case.segment, case.nodes
         self.model = Plant(segment, train)
         self.modes = all_modes(train)
-        self.coast, self.brake = (next(m for m in self.modes if m.kind == kind) for kind in ("coast", "brake"))
+        self.coast = next(m for m in self.modes if m.kind == "coast")
+        self.brake = min((m for m in self.modes if m.kind == "brake"), key=lambda m: m.level)  # the strongest
         self.f_max = train.traction.peak
         self.edges = np.concatenate([segment.breakpoints(), [segment.distance]])
         reserved = train.with_brake_reserve(brake_reserve)

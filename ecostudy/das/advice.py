@@ -1,7 +1,7 @@
 """Driver advice (Farooqi 2018 §3.1.2): a few modes instead of a continuous handle.
 
 A driver can be told a handle level of the train's ``das_handle_levels`` (traction levels,
-coast 0, full service braking -1) or "hold this speed" (cruise). The advice is the sequence of
+coast 0, braking levels: full service braking -1 by default) or "hold this speed" (cruise). The advice is the sequence of
 modes with where and when each starts. Methods:
 
 ``round``   nearest level to the ATO optimum's handle in every interval (Farooqi 2018 §4.4),
@@ -123,6 +123,25 @@ def no_gap(result, arrived):
     return "" if arrived else f"the advice stopped more than {STOP_TOLERANCE_M:g} m off its stop"
 
 
+REGEN_SHORTFALL = 0.05  # the advice's electric brake taking this share less than the ATO run's: said why
+
+
+def braking_note(result, outcome, gap):
+    """Why advice on a net-energy run is dearer than its ATO run, where the reason is its braking
+    levels ('' otherwise): the net optimum brakes where the regenerative brake takes the whole
+    braking force (the RB arc of Farooqi 2018, eq. 7.4); braking at a level beyond that, the advice
+    loses the difference to the friction brake."""
+    if result.summary["objective"] != "net_energy" or gap is None or gap <= 1.0 or result.trace is None:
+        return ""
+    ato, mine = result.trace.regenerated_energy, outcome.trace.regenerated_energy
+    if ato <= 0 or mine >= (1 - REGEN_SHORTFALL) * ato:
+        return ""
+    levels = ", ".join(f"{lv:g}" for lv in result.train.das_levels if lv < 0)
+    return (f"its electric brake takes {to_kwh(mine):.3f} kWh against the ATO run's {to_kwh(ato):.3f} kWh: "
+            f"braking at the train's levels ({levels}) asks more than the regenerative brake takes; a gentler "
+            "braking level in the train's das_handle_levels lets advice regenerate more")
+
+
 def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     """The ``das`` block of a DAS method's run: energies and gaps, and its ``status`` as a driven run
     (:func:`~ecostudy.core.status.driven_run`: stop, arrival against the ATO run's time, overspeed
@@ -138,9 +157,10 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
                     *(flagged(f) for f in flags)])
     arrived = abs(row["stop_error_m"]) <= STOP_TOLERANCE_M  # a run short of (or past) its stop has no time or gap
     why = no_gap(result, arrived)
-    return {"method": method, **energies, "gap_to_ato_pct": None if why else _gap(energies, result),
+    gap = None if why else _gap(energies, result)
+    return {"method": method, **energies, "gap_to_ato_pct": gap,
             "gap_to_ato_on_time_pct": None if why else _gap_on_time(energies, result, row["running_time_s"]),
-            "no_gap": why,
+            "no_gap": why, "note": braking_note(result, outcome, gap),
             "mode_changes": len(advice) - 1, "bound_kWh": None, "status": str(status), "solver": solver,
             "arrival_error_s": arrival_error if row["stop_error_m"] >= -STOP_TOLERANCE_M else None,
             "stop_error_m": row["stop_error_m"], "overspeed_max_kmh": overspeed,

@@ -133,6 +133,7 @@ class DasSummary:
     search_s: Optional[float] = None
     oa_iterations: Optional[int] = None
     no_gap: str = ""                   # why there is no gap to ATO ('' where there is one)
+    note: str = ""                     # why the advice is dearer than ATO, where its braking levels are why
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "DasSummary":
@@ -145,7 +146,8 @@ class DasSummary:
                    solver=None if data.get("solver") is None else str(data["solver"]),
                    overspeed_max_kmh=_opt(data, "overspeed_max_kmh"),
                    bound_kWh=_opt(data, "bound_kWh"), gap_pct=_opt(data, "gap_pct"), search_s=_opt(data, "search_s"),
-                   oa_iterations=None if oa is None else int(oa), no_gap=str(data.get("no_gap") or ""))
+                   oa_iterations=None if oa is None else int(oa), no_gap=str(data.get("no_gap") or ""),
+                   note=str(data.get("note") or ""))
 
 
 @dataclass(frozen=True)

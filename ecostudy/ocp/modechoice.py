@@ -1,12 +1,13 @@
 """DAS run as a MINLP: binaries choose the mode of every phase (move blocking, Farooqi 2018 §4.2).
 
 The phases of ``ocp/phases.py`` are blocks of variable length; here the mode of each block is a
-choice among all DAS modes (traction levels, cruise, coast, full braking) by binaries z[q, j]
+choice among all DAS modes (traction levels, cruise, coast, braking levels) by binaries z[q, j]
 with sum_j z[q, j] = 1, enforced by big-M constraints on the forces of the block's intervals:
 
-    F_T <= F_T,max sum(z traction, z cruise),   F_B <= F_B,max (z brake + z cruise)
+    F_T <= F_T,max sum(z traction, z cruise),   F_B <= F_B,max sum(z brake, z cruise)
     |F_T - l_j F_T,max(v)| <= F_T,max (1 - z[q, j])            (traction at level l_j)
-    F_B >= F_B,max(v) - F_B,max (1 - z brake)                     (full service braking)
+    |F_B + l_j F_B,max(v)| <= F_B,max (1 - z[q, j])            (braking at level l_j < 0; at
+                                                                  l_j = -1 F_B <= F_B,max(v) holds already)
     |v_{k+1} - v_k| <= v_max (1 - z cruise)                       (cruise: speed held)
 
 Feasible by construction: block lengths stay continuous (a block may shrink to zero), so the
@@ -51,7 +52,7 @@ def define_mode_choice(m: Model, layout: phases.Layout, train: Train) -> None:
     v_max = float(max(s.limit for s in layout.sectors))
     trac = [j for j, md in enumerate(modes) if md.kind == "traction"]
     cruise = next(j for j, md in enumerate(modes) if md.kind == "cruise")
-    brake = next(j for j, md in enumerate(modes) if md.kind == "brake")
+    brakes = [j for j, md in enumerate(modes) if md.kind == "brake"]
     m.choice = pyo.ConstraintList()
     for i in range(layout.intervals):
         q = i // layout.substeps
@@ -59,11 +60,14 @@ def define_mode_choice(m: Model, layout: phases.Layout, train: Train) -> None:
         m.choice.add(m.ft[i] <= m.mean_t[i])
         m.choice.add(m.fb[i] <= m.mean_b[i])
         m.choice.add(m.ft[i] <= t_max * (sum(z[j] for j in trac) + z[cruise]))
-        m.choice.add(m.fb[i] <= b_max * (z[brake] + z[cruise]))
+        m.choice.add(m.fb[i] <= b_max * (sum(z[j] for j in brakes) + z[cruise]))
         for j in trac:
             m.choice.add(m.ft[i] - modes[j].level * m.mean_t[i] <= t_max * (1 - z[j]))
             m.choice.add(modes[j].level * m.mean_t[i] - m.ft[i] <= t_max * (1 - z[j]))
-        m.choice.add(m.mean_b[i] - m.fb[i] <= b_max * (1 - z[brake]))
+        for j in brakes:
+            m.choice.add(-modes[j].level * m.mean_b[i] - m.fb[i] <= b_max * (1 - z[j]))
+            if modes[j].level > -1.0:
+                m.choice.add(m.fb[i] + modes[j].level * m.mean_b[i] <= b_max * (1 - z[j]))
         m.choice.add(m.v[i + 1] - m.v[i] <= v_max * (1 - z[cruise]))
         m.choice.add(m.v[i] - m.v[i + 1] <= v_max * (1 - z[cruise]))
 

@@ -4,7 +4,9 @@ The segment is cut into sectors at every gradient, curve and (train-length) spee
 so that the track is constant inside a sector. Every sector gets the same fixed sequence of
 phases, each with one DAS mode (Farooqi 2018 §3.1.2):
 
-    coast, traction at each DAS level (1, 0.75, 0.5), cruise, coast, full service braking
+    coast, traction at each DAS level (1, 0.75, 0.5), cruise, coast, braking at each level
+
+(full service braking alone by default; gentler braking levels first, the strongest last).
 
 The leading coast lets a sector begin by coasting and then accelerate (or cruise once gravity
 has brought the train to speed). The phase lengths L_{s,p} >= 0 are the decision variables
@@ -50,12 +52,15 @@ class Mode:
 
 
 def all_modes(train: Train) -> list["Mode"]:
-    """Every distinct DAS mode, traction levels highest first, then cruise, coast and the strongest
-    braking level the train's ``das_handle_levels`` give (full service braking by default): the
-    choices of one MINLP phase."""
+    """Every distinct DAS mode, traction levels highest first, then cruise, coast and each braking
+    level of the train's ``das_handle_levels``, gentlest first and the strongest last (full service
+    braking alone by default): the choices of one MINLP phase. A gentler braking level lets advice
+    brake where the regenerative envelope takes the whole braking force (the RB arc of Farooqi 2018,
+    eq. 7.4), which full service braking cannot."""
     levels = sorted((lv for lv in train.das_levels if lv > 0), reverse=True)
-    return [Mode("traction", lv) for lv in levels] + [Mode("cruise", float("nan")), Mode("coast", 0.0),
-                                                        Mode("brake", min(train.das_levels))]
+    brakes = sorted((lv for lv in train.das_levels if lv < 0), reverse=True)
+    return ([Mode("traction", lv) for lv in levels] + [Mode("cruise", float("nan")), Mode("coast", 0.0)]
+            + [Mode("brake", lv) for lv in brakes])
 
 
 def sequence(train: Train) -> list["Mode"]:
