@@ -2,7 +2,7 @@
 than written: a scenario named like the study's own case, a scenario's timing a sweep replaced, a
 timetable's intermediate stops and windows, a restriction behind a train leaving an intermediate
 stop, a run down a grade that needs no traction, a folder of someone else's files, a crawl asked
-for, fields no case uses. Each is refused in one line naming the file and field, warned of by
+for, fields no case uses, an option no search reads. Each is refused in one line naming the file and field, warned of by
 name, or computed as written (real loads and solves)."""
 import errno
 
@@ -11,6 +11,7 @@ from typer.testing import CliRunner
 
 from ecostudy.api.outcome import one_line
 from ecostudy.cli import app
+from ecostudy.core.defaults import DAS_TIME_LIMIT_S
 from ecostudy.core.errors import EcostudyWarning, InputError
 from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KMH
@@ -18,6 +19,7 @@ from ecostudy.io import schemas
 from ecostudy.io.loaders import load_train, track_from_dict
 from ecostudy.io.timetable import segment_timing
 from ecostudy.studies.cases import expand
+from ecostudy.studies.options import das_limit
 
 from .conftest import STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
 
@@ -162,3 +164,15 @@ def test_a_climb_the_train_cannot_make_names_the_track(tmp_path):
     result = run("solve", "--track", track, "--train", heavy, "--supplement", 10, "--no-plot", "--out", tmp_path / "o")
     assert result.exit_code == 2 and f"{track}: gradients: infeasible: the train cannot climb" in result.output, \
         result.output
+
+
+def test_a_das_time_limit_no_search_reads_is_named(tmp_path):
+    """`--das-time-limit` bounds the MINLP search only; given with `--das phases` (or no advice) it
+    was dropped without a word (the command line's default could not tell it was given)."""
+    with pytest.warns(EcostudyWarning, match="--das-time-limit: bounds the minlp search only: unused with --das phases"):
+        assert das_limit("phases", 5) == 5.0
+    assert das_limit("minlp", None) == DAS_TIME_LIMIT_S and das_limit(None, None) == DAS_TIME_LIMIT_S
+    result = run("solve", STUDIES / "default.yaml", "--das-time-limit", 5, "--points", 100, "--no-plot",
+                 "--out", tmp_path / "o")
+    assert "warning: command line: --das-time-limit: bounds the minlp search only: unused with no --das" \
+        in result.output, result.output

@@ -22,7 +22,7 @@ from ecostudy.report.style import output
 from ecostudy.studies.batch import Expanded, run_expanded
 from ecostudy.studies.compare import check_timing, compare_cases
 from ecostudy.studies.journey import journey
-from ecostudy.studies.options import (case_from, check_options, no_windows, only_one, output_folder, study_name,
+from ecostudy.studies.options import (case_from, check_options, das_limit, no_windows, only_one, output_folder, study_name,
                                       timing_of)
 from ecostudy.studies.front import front_cases
 from ecostudy.studies.pareto import weighted_points, weighted_statuses
@@ -45,7 +45,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
                   from_stop: Optional[str] = None, to_stop: Optional[str] = None, count: int = 20,
                   supplement_max: float = 40.0, points: Optional[int] = None, workers: Optional[int] = None,
                   out: Optional[Path] = None, plot: bool = True, weighted: int = 0, das: Optional[str] = None,
-                  das_time_limit: float = 60.0, fig_format: str = "png", dpi: Optional[float] = None,
+                  das_time_limit: Optional[float] = None, fig_format: str = "png", dpi: Optional[float] = None,
                   dask: Optional[str] = None, retry_failed: bool = False, *,
                   progress: Optional[Progress] = None) -> Report:
     """``ecostudy pareto``: energy against running time, ``count`` points from the all-out run to
@@ -60,6 +60,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     trk, trn, f, t, k, st, (train_doc, track_doc) = case_from(study, track, train, from_stop, to_stop, points,
                                                               "pareto")
     no_windows(st, "pareto", study)
+    das_time_limit = das_limit(das, das_time_limit)
     cases = front_cases(train_doc, track_doc, f, t, count, supplement_max * units.PERCENT, k or FRONT_POINTS,
                         study_name(st, "pareto", track, train, f, t), das, das_time_limit,
                         timing=st.timing if st is not None else None)

@@ -28,7 +28,7 @@ from ecostudy.report.drawer import drawing
 from ecostudy.report.files import RUN_FIGURES, write_fixed_step, write_run
 from ecostudy.report.style import output
 from ecostudy.studies.check import check_result
-from ecostudy.studies.options import case_from, check_options, only_one, output_folder, parse_pair, timing_of
+from ecostudy.studies.options import case_from, check_options, das_limit, only_one, output_folder, parse_pair, timing_of
 from ecostudy.studies.estimate import check_solve
 
 
@@ -78,7 +78,7 @@ def solve_folder(study: Optional[Path] = None, track: Optional[Path] = None, tra
                  time: Optional[float] = None, supplement: Optional[float] = None, window: Optional[str] = None,
                  from_stop: Optional[str] = None, to_stop: Optional[str] = None, objective: Optional[str] = None,
                  weights: Optional[str] = None, points: Optional[int] = None, out: Optional[Path] = None,
-                 plot: bool = True, das: Optional[str] = None, das_time_limit: float = 60.0, fig_format: str = "png",
+                 plot: bool = True, das: Optional[str] = None, das_time_limit: Optional[float] = None, fig_format: str = "png",
                  dpi: Optional[float] = None, *, progress: Optional[Watcher] = None) -> Report:
     """``ecostudy solve``: the energy-optimal (or all-out) run of a study file, or of a track and a
     train file, verified and written to ``out`` (profile.csv, summary.json, the figures, inputs.json);
@@ -115,6 +115,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
                                      "(or --objective time for the all-out run)"))
         timing, w, k = timing_of(time, supplement, window), (1.0, 1.0), k or RUN_POINTS
         out_dir = output_folder(out, Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_"))
+    das_time_limit = das_limit(das, das_time_limit)
     check_solve(k, das, das_time_limit)
     w = parse_pair(weights, "--weights", nonnegative=True) if weights else w
     if weights is not None and obj != "mixed":

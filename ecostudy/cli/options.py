@@ -35,6 +35,7 @@ NoProgress = Annotated[bool, typer.Option("--no-progress", help="No progress bar
 NoPlot = Annotated[bool, typer.Option("--no-plot", help="Skip the figures.")]
 Format = Annotated[str, typer.Option("--format", help="Figure format: png, svg or pdf.")]
 Dpi = Annotated[float, typer.Option(help="Figure resolution [dots per inch] (raster images).")]
-DasTimeLimit = Annotated[float, typer.Option(help="Time limit of each MINLP search [s] (--das minlp).")]
+DasTimeLimit = Annotated[Optional[float], typer.Option(help="Time limit of each MINLP search [s] (--das minlp; "
+                                                        "default 60).", show_default=False)]
 Force = Annotated[bool, typer.Option("--force", help="Run work estimated too big (over 2 h for one run, half the memory, a 10^6-point table) anyway.")]
 Debug = Annotated[bool, typer.Option(help="Show tracebacks.")]

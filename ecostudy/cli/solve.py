@@ -22,7 +22,7 @@ def solve(
     das: Optional[o.DasMethod] = typer.Option(
         None, help="Also driver advice: round (nearest handle level), phases (optimal phase lengths, "
                    "Farooqi 2018, Ch. 5) or minlp (mode per phase chosen by binaries)."),
-    das_time_limit: o.DasTimeLimit = 60.0, force: o.Force = False, no_progress: o.NoProgress = False, debug: o.Debug = False,
+    das_time_limit: o.DasTimeLimit = None, force: o.Force = False, no_progress: o.NoProgress = False, debug: o.Debug = False,
 ):
     """Energy-optimal (or all-out) run between two stops, verified by re-simulation. Example: ecostudy solve studies/default.yaml"""
     finish(call(debug, "solve_folder", study, track, train, time, supplement, window, from_stop, to_stop,

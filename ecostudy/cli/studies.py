@@ -19,7 +19,7 @@ def pareto(
     points: o.Points = None, workers: o.EveryCore = None, dask: o.Dask = None, retry_failed: o.RetryFailed = False,
     weighted: int = typer.Option(0, help="Also N weighted-sum points (w_t T [s] + w_e E/Ms [J/kg], Yazhemsky 2017, eq. 4.1a)."),
     das: Optional[o.DasMethod] = typer.Option(None, help="Also the DAS front: round | phases | minlp at every point."),
-    das_time_limit: o.DasTimeLimit = 60.0, out: o.ParetoOut = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png",
+    das_time_limit: o.DasTimeLimit = None, out: o.ParetoOut = None, no_plot: o.NoPlot = False, fig_format: o.Format = "png",
     dpi: o.Dpi = 110.0, force: o.Force = False, no_progress: o.NoProgress = False, debug: o.Debug = False,
 ):
     """Energy against running time (epsilon-constraint sweep from the all-out time, and a study file's own running time), ATO and optionally DAS; every point stored, resumable. Example: ecostudy pareto studies/default.yaml --count 9"""

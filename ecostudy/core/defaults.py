@@ -23,6 +23,10 @@ fastest envelope takes 71.6 s, 350 s passed the re-simulation, 450 s missed its 
 and 550 s stopped 1 km short of its stop (``ecostudy solve --track tracks/amsterdam_rokin_centraal.yaml
 --train trains/amsterdam_metro.yaml --time 550 --points 100``)."""
 
+DAS_TIME_LIMIT_S = 60.0
+"""The time limit of each driver-advice MINLP search (``--das minlp``, a study's ``das_time_limit_s``)
+[s]: on the default study the search finds the phases' pattern and stops at it (docs/das.md)."""
+
 MAX_SUPPLEMENT_PERCENT = 200.0
 """The largest running-time supplement over the all-out time a file or an option may give [%]
 (a Pareto front's reach too); no timetable asks for more."""

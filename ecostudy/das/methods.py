@@ -1,4 +1,5 @@
 """The DAS methods by name (``round``, ``phases``, ``minlp``) and their table columns."""
+from ecostudy.core.defaults import DAS_TIME_LIMIT_S
 from ecostudy.core.errors import EcostudyError
 from ecostudy.core.registry import Registry
 from ecostudy.core.status import Status, part
@@ -9,7 +10,7 @@ DAS_COLUMNS = ("method", "traction_energy_kWh", "net_energy_kWh", "gap_to_ato_pc
                "mode_changes", "arrival_error_s", "stop_error_m", "overspeed_max_kmh", "status", "solver")
 
 
-def das_columns(result, method, points=None, time_limit=60.0):
+def das_columns(result, method, points=None, time_limit=DAS_TIME_LIMIT_S):
     """``das_`` columns of a table row for a DAS run of ``result``; a failed run is recorded, not raised."""
     try:
         block = das_run(result, method, points, time_limit).summary
@@ -35,7 +36,7 @@ DAS_METHODS.register("phases", lambda result, points, time_limit: das_phases(res
 DAS_METHODS.register("minlp", das_minlp, doc="the mode of every phase chosen by binaries (outer approximation)")
 
 
-def das_run(result, method="round", points=None, time_limit=60.0):
+def das_run(result, method="round", points=None, time_limit=DAS_TIME_LIMIT_S):
     """The :class:`~ecostudy.das.advice.DasRun` of a registered method (:data:`DAS_METHODS`:
     ``round``, ``phases``, ``minlp``) for an ATO ``result``."""
     try:

@@ -4,6 +4,7 @@ the two, re-simulated as a driver follows it, is the advice."""
 import numpy as np
 import pyomo.core as pyo
 
+from ecostudy.core.defaults import DAS_TIME_LIMIT_S
 from ecostudy.core.progress import stage
 from ecostudy.core.units import to_kwh
 from ecostudy.das.advice import DasRun, advice_outcome, nlp_flags, objective_of, refine, solve_phases, summary_block
@@ -11,7 +12,7 @@ from ecostudy.ocp import phases
 from ecostudy.ocp.modechoice import search
 
 
-def das_minlp(result, points=None, time_limit=60.0, options=None):
+def das_minlp(result, points=None, time_limit=DAS_TIME_LIMIT_S, options=None):
     """The :class:`DasRun` of the better of ``phases`` and the MINLP's pattern. The search stops at
     ``time_limit`` [s] (:func:`ecostudy.ocp.modechoice.search`); a search stopped there gives the best
     pattern it found by then, and the status says it was stopped (``flagged``). The advice's NLP

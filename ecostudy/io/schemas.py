@@ -9,7 +9,7 @@ from typing import Annotated, ClassVar, Literal, Optional, Self, get_args
 
 from pydantic import Field, model_validator
 
-from ecostudy.core.defaults import FRONT_POINTS, MAX_SUPPLEMENT_PERCENT, RUN_POINTS
+from ecostudy.core.defaults import DAS_TIME_LIMIT_S, FRONT_POINTS, MAX_SUPPLEMENT_PERCENT, RUN_POINTS
 from ecostudy.io.schemabase import Name as Name, Strict as Strict, unique as _unique
 from ecostudy.io.trainschema import (  # re-exported (X as X): schemas is the one place to look
     Braking as Braking, Davis as Davis, EfficiencyTable as EfficiencyTable, ForceTable as ForceTable,
@@ -269,7 +269,7 @@ class StudyFile(Strict):
     points: int = Field(RUN_POINTS, ge=10, le=100000)
     das: Optional[Literal["round", "phases", "minlp"]] = Field(
         None, description="Also a DAS run of every energy-optimal case: das_ columns in results.csv.")
-    das_time_limit_s: float = Field(60.0, gt=0, description="Time limit of each MINLP search (das: minlp).")
+    das_time_limit_s: float = Field(DAS_TIME_LIMIT_S, gt=0, description="Time limit of each MINLP search (das: minlp).")
     output: Optional[str] = None
     windows: list[Window] = Field(default_factory=list, description="Timing points between the stops.")
     scenarios: list[Scenario] = Field(default_factory=list, description="Variants run by `ecostudy run`.")

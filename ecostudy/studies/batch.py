@@ -13,6 +13,7 @@ from typing import Callable, Iterable, NamedTuple, Optional
 
 import pandas as pd
 
+from ecostudy.core.defaults import DAS_TIME_LIMIT_S
 from ecostudy.analysis.single import ALL_OUT_SOLVER, solve_run
 from ecostudy.core.budget import check_study
 from ecostudy.core.registry import Registry
@@ -88,7 +89,7 @@ def _solve_case(case):
     if case["objective"] == "time" and not case["window_s"]:  # the scenario's all-out time: kept for its supplements
         _ALL_OUT[case_key({k: case[k] for k in _SCENARIO})] = (r.facts.running_time_s, r.facts.solver.status)
     if case.get("das"):
-        summary["das"] = das_columns(r, case["das"], case["points"], case.get("das_time_limit_s", 60.0))
+        summary["das"] = das_columns(r, case["das"], case["points"], case.get("das_time_limit_s", DAS_TIME_LIMIT_S))
         status = worst([status, advice_status(summary["das"])])
     if t_allout is not None:
         summary["all_out_time_s"] = t_allout
@@ -384,7 +385,7 @@ def study_table(cases, rows):
 def run_study_size(path, cases, workers=1):
     """Refuse a ``run`` study whose cases (:func:`~ecostudy.studies.estimate.run_seconds` each),
     shared among ``workers``, are estimated above the command's budget (unless forced)."""
-    runs = [run_seconds(c["points"], c.get("das"), c.get("das_time_limit_s", 60.0)) for c in cases]
+    runs = [run_seconds(c["points"], c.get("das"), c.get("das_time_limit_s", DAS_TIME_LIMIT_S)) for c in cases]
     check_study(path, "the study's cases", runs, workers, max((c["points"] for c in cases), default=0)
                 * RUN_BYTES_PER_POINT)
 

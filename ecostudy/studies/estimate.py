@@ -40,6 +40,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ecostudy.core.defaults import DAS_TIME_LIMIT_S
 from ecostudy.core import kinematics
 from ecostudy.core.adhesion import TOP_SPEED, capped
 from ecostudy.core.plant import Truth
@@ -67,7 +68,7 @@ DAS_EXTRA_POINT_RUNS = {"round": 0.0, "phases": 2.0, "minlp": 3.0}
 RUN_BYTES_PER_POINT = 75e3  # a space run's process grows 75 kB a point (the model, its NL file, Ipopt's factor)
 
 
-def run_seconds(points, das=None, das_time_limit=60.0):
+def run_seconds(points, das=None, das_time_limit=DAS_TIME_LIMIT_S):
     """One space-domain run of ``points`` grid nodes, with its DAS advice [s]."""
     seconds = points * RUN_SECONDS_PER_POINT * (1 + DAS_EXTRA_POINT_RUNS.get(das or "round", 0.0))
     return seconds + (das_time_limit if das == "minlp" else 0.0)
@@ -78,7 +79,7 @@ def run_bytes(points):
     return points * RUN_BYTES_PER_POINT
 
 
-def check_solve(points, das=None, das_time_limit=60.0):
+def check_solve(points, das=None, das_time_limit=DAS_TIME_LIMIT_S):
     """Refuse (unless forced) one solve estimated above one run's budget: its MINLP search may take
     its whole time limit (``--das-time-limit 1e308`` searched on past any timeout)."""
     if das == "minlp":

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from ecostudy.core.defaults import FRONT_POINTS
+from ecostudy.core.defaults import DAS_TIME_LIMIT_S, FRONT_POINTS
 from ecostudy.core.status import Status, flagged
 from ecostudy.io.runsummary import RunSummary
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, run_case
@@ -30,7 +30,7 @@ DEFAULT_COUNT, DEFAULT_SUPPLEMENT_MAX = 20, 0.40  # a study file's front: points
 
 
 def front_cases(train_doc, track_doc, from_stop, to_stop, count=DEFAULT_COUNT, supplement_max=DEFAULT_SUPPLEMENT_MAX,
-                points=FRONT_POINTS, study="pareto", das=None, das_time_limit=60.0, timing=None):
+                points=FRONT_POINTS, study="pareto", das=None, das_time_limit=DAS_TIME_LIMIT_S, timing=None):
     """One case per point of a front (:func:`~ecostudy.studies.pareto.front_supplements`): the
     all-out run, then the energy optimum at each supplement [-] over its time; the train and track
     documents (schema-shaped), the stops, the grid and the driver-advice method ``das`` of every

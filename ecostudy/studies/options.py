@@ -7,12 +7,13 @@ an input file); the functions of :mod:`ecostudy.api` call them first.
 import math
 import numbers
 import re
+import warnings
 from pathlib import Path
 from typing import Any, Mapping, NamedTuple, Optional
 
 from ecostudy.core import units
-from ecostudy.core.defaults import MAX_SUPPLEMENT_PERCENT
-from ecostudy.core.errors import InputError, problem
+from ecostudy.core.defaults import DAS_TIME_LIMIT_S, MAX_SUPPLEMENT_PERCENT
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.types import Timing, Track, Train
 from ecostudy.io.documents import not_a_file, split_selector
 from ecostudy.io.loaders import check_fits, chosen_stops, read_track, read_train
@@ -27,6 +28,17 @@ OPTION_RANGES = {
     "das_time_limit": (0.0, None, False),
     "energy_tolerance": (0.0, 1000.0, True), "time_tolerance": (0.0, 1000.0, True),  # validate's [%]
 }
+
+
+def das_limit(das: Optional[str], das_time_limit: Optional[float]) -> float:
+    """The MINLP search's time limit [s]: ``--das-time-limit`` or :data:`DAS_TIME_LIMIT_S`; given for
+    advice other than ``minlp`` (or none), warned of as unused."""
+    if das_time_limit is None:
+        return DAS_TIME_LIMIT_S
+    if das != "minlp":
+        warnings.warn(problem("command line", "--das-time-limit", "bounds the minlp search only: unused with "
+                              + (f"--das {das}" if das else "no --das: give it with --das minlp")), EcostudyWarning, stacklevel=3)
+    return float(das_time_limit)
 
 
 DASK_ADDRESS = re.compile(r"(tcp|tls|ucx)://[^\s:/]+:\d{1,5}")  # a Dask scheduler's address

@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ecostudy.core.defaults import DAS_TIME_LIMIT_S
 from ecostudy.core.budget import WORKER_BYTES, check_run, check_study, how_many
 from ecostudy.heavyhaul.linear import virtual_car_count
 from ecostudy.io.documents import read_document
@@ -64,7 +65,7 @@ def check_run_study(path, workers=1):
     kind.size(Path(path), kind.expand(Path(path)).cases, workers)
 
 
-def check_front(where, count, points, workers=1, das=None, das_time_limit=60.0):
+def check_front(where, count, points, workers=1, das=None, das_time_limit=DAS_TIME_LIMIT_S):
     """Refuse a Pareto front of ``count`` runs of ``points`` nodes estimated above the budget."""
     check_study(where, f"a front of {count} points at K = {points}",
                 [run_seconds(points, das, das_time_limit)] * count, workers, points * RUN_BYTES_PER_POINT)
