@@ -1,6 +1,7 @@
 """Studies over one segment or one journey into an output folder: the commands ``pareto``,
 ``compare`` and ``journey`` as functions (the command line only parses and prints).
 """
+import warnings
 from pathlib import Path
 from time import perf_counter
 from typing import Callable, Optional
@@ -10,7 +11,7 @@ from ecostudy.api.outcome import Report, counts_line, listed, reported, shown
 from ecostudy.api.single import timing_source
 from ecostudy.core import units
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
-from ecostudy.core.errors import FieldError, InfeasibleError, InputError, problem
+from ecostudy.core.errors import EcostudyWarning, FieldError, InfeasibleError, InputError, problem
 from ecostudy.io.loaders import check_fits, check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
 from ecostudy.io.timetable import journey_plan, name_stops
 from ecostudy.io.store import check_one_study
@@ -138,17 +139,18 @@ def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, t
 
 
 def associated_track(tt, path: Optional[Path]) -> Path:
-    """The track file a timetable names (TTOBench 'associated track'), looked for beside it and in a
-    sibling ``tracks/`` folder (the library's layout)."""
+    """The track file a timetable names (TTOBench 'associated track'), JSON or YAML, looked for beside
+    it, in a sibling ``tracks/`` folder (TTOBench's layout) and in ``../../tracks/`` (this
+    repository's: ``studies/timetables/`` beside ``tracks/``)."""
     if tt is None or tt.track is None or path is None:
         raise InputError(problem("command line", "--track", "missing (the timetable names no track)"))
     here = Path(path).resolve().parent
-    for candidate in (here / f"{tt.track}.json", here.parent / "tracks" / f"{tt.track}.json",
-                      here / f"{tt.track}.yaml"):
-        if candidate.is_file():
-            return candidate
+    for folder in (here, here.parent / "tracks", here.parent.parent / "tracks"):
+        for candidate in (folder / f"{tt.track}.json", folder / f"{tt.track}.yaml"):
+            if candidate.is_file():
+                return candidate
     raise InputError(problem(path, "metadata.associated track", f"track '{tt.track}' not found beside the "
-                             "timetable or in ../tracks/; give --track"))
+                             "timetable, in ../tracks/ or ../../tracks/; give --track"))
 
 
 @spelled
@@ -179,9 +181,13 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
         if tt.windowed:
             plan = journey_plan(tt, trk, timetable, dwell)
         else:
-            scheduled = [timing_from_timetable(tt, a, b, timetable).running_time for a, b in zip(names, names[1:])]
+            scheduled = [timing_from_timetable(tt, a, b, timetable, dwell).running_time
+                         for a, b in zip(names, names[1:])]
         time, supplement = None, None
     else:
+        if dwell:  # the journey's clock is its running times alone
+            warnings.warn(problem("command line", "--dwell", "applies at the stops of a --timetable that give no "
+                                  "dwell: unused without one"), EcostudyWarning, stacklevel=2)
         names = list(trk.stops) if stops is None else [n.strip() for n in stops.split(",")]
     check_stop_list(trk, names, "command line", "--stops")
     if scheduled is None and plan is None and (time is None) == (supplement is None):

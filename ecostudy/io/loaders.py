@@ -255,10 +255,12 @@ def chosen_stops(track: Track, from_stop: str | None, to_stop: str | None, where
     return first, last
 
 
-def timing_from_timetable(tt: schemas.TimetableFile, from_stop: str, to_stop: str, path: Where) -> Timing:
-    """The timing of one run between two stops of a timetable (:func:`~ecostudy.io.timetable.segment_timing`),
-    for callers that give it no timing windows (adjacent stops of a timetable without windows)."""
-    return segment_timing(tt, from_stop, to_stop, path)[0]
+def timing_from_timetable(tt: schemas.TimetableFile, from_stop: str, to_stop: str, path: Where,
+                          dwell: float = 0.0) -> Timing:
+    """The timing of one run between two stops of a timetable (:func:`~ecostudy.io.timetable.segment_timing`;
+    ``dwell`` [s] at an intermediate stop that gives none), for callers that give it no timing
+    windows (adjacent stops of a timetable without windows)."""
+    return segment_timing(tt, from_stop, to_stop, path, dwell)[0]
 
 
 def load_study(study_path: Where, read: Callable[..., Any] = lambda file, reader: reader(file)) -> "Study":

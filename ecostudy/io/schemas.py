@@ -142,6 +142,10 @@ class TimetableStop(Strict):
         if self.arrival_s is not None and self.departure_s is not None and self.departure_s < self.arrival_s:
             raise ValueError(f"departure_s: {self.departure_s:g} s is before this stop's arrival_s "
                              f"({self.arrival_s:g} s)")
+        if (self.arrival_s is not None and self.departure_s is not None and self.dwell_s is not None
+                and self.departure_s < self.arrival_s + self.dwell_s):
+            raise ValueError(f"departure_s: {self.departure_s:g} s leaves {self.departure_s - self.arrival_s:g} s "
+                             f"after arrival_s ({self.arrival_s:g} s), less than dwell_s ({self.dwell_s:g} s)")
         lo, hi = self.departure_earliest_s, self.departure_latest_s
         if self.departure_s is not None and (lo is not None or hi is not None):
             raise ValueError("give either 'departure_s' or a departure window (departure_earliest_s/_latest_s)")

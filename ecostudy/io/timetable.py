@@ -103,7 +103,8 @@ def journey_plan(tt: schemas.TimetableFile, track: Track, path: Where, dwell: fl
     if lines:
         raise InputError(lines)
     first = tt.stops[0]
-    departure: list[Bounds | None] = [_departure(first) or (first.arrival_s or 0.0, first.arrival_s or 0.0)]
+    ready = (first.arrival_s or 0.0) + (first.dwell_s or 0.0)  # as segment_timing reads the first stop
+    departure: list[Bounds | None] = [_departure(first) or (ready, ready)]
     dwells: list[float] = [0.0]
     arrival: list[Bounds] = []
     for row in tt.stops[1:]:
@@ -204,10 +205,11 @@ def off_clock(path: Where, dt: float, times: Sequence[tuple[str, float]]) -> Non
 
 
 def segment_timing(tt: schemas.TimetableFile, from_stop: str, to_stop: str,
-                   path: Where) -> tuple[Timing, list[schemas.Window]]:
+                   path: Where, dwell: float = 0.0) -> tuple[Timing, list[schemas.Window]]:
     """(the timing of one run from ``from_stop`` to ``to_stop`` of a timetable, its passing windows
     with times since that run's departure). The running time is the arrival at ``to`` less the
-    departure at ``from`` (arrival plus dwell); an arrival window (``earliest_s`` and ``latest_s``)
+    departure at ``from`` (arrival plus dwell; ``dwell`` [s] at a stop after the first that gives
+    none, as :func:`journey_plan` reads it); an arrival window (``earliest_s`` and ``latest_s``)
     is the run's window. Refused in one line each: a stop of the timetable between the two (one run
     does not stop on the way), a departure window (one run departs at a fixed time)."""
     if tt.supplement_percent is not None:
@@ -227,7 +229,7 @@ def segment_timing(tt: schemas.TimetableFile, from_stop: str, to_stop: str,
                                  "fixed time (departure_s); `ecostudy journey --timetable` plans departure windows"))
     dep = start.departure_s
     if dep is None and start.arrival_s is not None:
-        dep = start.arrival_s + (start.dwell_s or 0.0)
+        dep = start.arrival_s + (start.dwell_s if start.dwell_s is not None else dwell if i > 0 else 0.0)
     need = problem(path, "stops", f"need a departure at '{from_stop}' and an arrival at '{to_stop}' (arrival_s, or "
                    "the window earliest_s and latest_s)")
     if dep is None:

@@ -18,7 +18,7 @@ import pandas as pd
 
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.defaults import RUN_POINTS
-from ecostudy.core.errors import EcostudyWarning, InfeasibleError, problem
+from ecostudy.core.errors import EcostudyWarning, InfeasibleError, TooFastError, problem
 from ecostudy.core.registry import Registry
 from ecostudy.core.grid import make_segment
 from ecostudy.core.simulate import Driven, Trace, worst_overspeed
@@ -29,7 +29,7 @@ from ecostudy.das.advice import das_phases, nearest_levels
 from ecostudy.heuristics import ecodrive
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
-from ecostudy.ocp.problem import prepare, under_envelope
+from ecostudy.ocp.problem import check_not_crawling, prepare, under_envelope
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
 from ecostudy.studies.cases import case_key, load_checked_study
 from ecostudy.studies.options import no_windows
@@ -59,15 +59,20 @@ def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_P
 
 def check_timing(case, where, field):
     """Refuse, before any strategy is computed, a running time no strategy can keep: under the fastest
-    envelope's by more than ``ocp.problem.ENVELOPE_MARGIN`` (one line naming ``where`` and ``field``)."""
+    envelope's by more than ``ocp.problem.ENVELOPE_MARGIN``, or over ``core.defaults.SLOWEST`` times
+    it (a crawl, refused by ``solve`` too) (one line naming ``where`` and ``field``)."""
     asked = case["running_time_s"]
     if asked is None:
         return
     track, train = _inputs(case)
-    fastest = prepare(track, train, case["from"], case["to"], case["points"]).estimate
-    if under_envelope(asked, fastest):
+    prepared = prepare(track, train, case["from"], case["to"], case["points"])
+    if under_envelope(asked, prepared.estimate):
         raise InfeasibleError(problem(where, field, f"infeasible: the fastest possible run takes about "
-                                      f"{fastest:.1f} s (asked for {asked:g} s)"))
+                                      f"{prepared.estimate:.1f} s (asked for {asked:g} s)"))
+    try:
+        check_not_crawling(asked, prepared)
+    except TooFastError as exc:
+        raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
 
 
 def expand_compare(path):

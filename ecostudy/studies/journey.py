@@ -31,7 +31,7 @@ from ecostudy.core.units import apart, to_kmh
 from ecostudy.heuristics import mareco
 from ecostudy.io.timetable import schedule
 from ecostudy.ocp import session
-from ecostudy.ocp.problem import ALL_OUT_MARGIN, Written, build, capped_guess, prepare, under_envelope
+from ecostudy.ocp.problem import ALL_OUT_MARGIN, Written, build, capped_guess, check_windows, prepare, under_envelope
 from ecostudy.ocp.space import passing_time
 from ecostudy.studies.pareto import sweep
 from ecostudy.studies.reachable import check_reachable
@@ -169,6 +169,11 @@ def windowed_journey(track, train, plan, points, start_times=None, options=None)
     pairs = list(zip(plan.stops, plan.stops[1:]))
     cases = [prepare(track, train, a, b, points, windows=[Window(w.distance, None, None, w.min_speed, w.max_speed)
                                                           for w in ws]) for (a, b), ws in zip(pairs, plan.windows)]
+    for case in cases:  # a speed window above what the train reaches there (the times: check_reachable)
+        try:
+            check_windows(case)
+        except FieldError as exc:  # its index is the segment's: the timetable's list is named whole
+            raise FieldError(exc.problems, "windows") from None
     check_reachable(plan, cases)
     if start_times is None:
         start_times = [1.1 * c.estimate for c in cases]
