@@ -142,6 +142,21 @@ def braking_note(result, outcome, gap):
             "braking level in the train's das_handle_levels lets advice regenerate more")
 
 
+GRID_GAP_PCT = -1.0  # advice this far below its ATO optimum [%]: the optimum's grid is too coarse there, said so
+
+
+def grid_note(gap, points, marginal=None, what="the advice"):
+    """Why a run is cheaper than the ATO optimum ('' unless by more than :data:`GRID_GAP_PCT`
+    [%]): the optimum is exact on its ``points`` intervals, the run driven by the integrator between
+    them; near the all-out time, where each second costs most (``marginal`` [kWh/s]), a grid's
+    hundredth of a second is worth percents."""
+    if gap is None or not np.isfinite(gap) or gap >= GRID_GAP_PCT:
+        return ""
+    worth = "" if marginal is None else f" (here the energy changes by {abs(marginal):.3g} kWh per second of running time)"
+    return (f"{what} is {abs(gap):.2f} % below the ATO optimum: the optimum's grid (K = {points}) is "
+            f"too coarse to rank them{worth}; solve with more --points")
+
+
 def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     """The ``das`` block of a DAS method's run: energies and gaps, and its ``status`` as a driven run
     (:func:`~ecostudy.core.status.driven_run`: stop, arrival against the ATO run's time, overspeed
@@ -160,7 +175,8 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     gap = None if why else _gap(energies, result)
     return {"method": method, **energies, "gap_to_ato_pct": gap,
             "gap_to_ato_on_time_pct": None if why else _gap_on_time(energies, result, row["running_time_s"]),
-            "no_gap": why, "note": braking_note(result, outcome, gap),
+            "no_gap": why, "note": braking_note(result, outcome, gap)
+            or grid_note(gap, len(result.nodes), result.summary.get("marginal_energy_kWh_per_s")),
             "mode_changes": len(advice) - 1, "bound_kWh": None, "status": str(status), "solver": solver,
             "arrival_error_s": arrival_error if row["stop_error_m"] >= -STOP_TOLERANCE_M else None,
             "stop_error_m": row["stop_error_m"], "overspeed_max_kmh": overspeed,

@@ -25,7 +25,7 @@ from ecostudy.core.simulate import Driven, Trace, worst_overspeed
 from ecostudy.core.status import STOP_TOLERANCE_M, Status, driven_run, failed, status_word, worst
 from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kmh
-from ecostudy.das.advice import das_phases, nearest_levels
+from ecostudy.das.advice import das_phases, grid_note, nearest_levels
 from ecostudy.heuristics import ecodrive
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
@@ -236,6 +236,11 @@ def compare_table(cases, rows):
     # a strategy that stood short of the stop did another run: no arrival, saving or gap read as a result
     short = table["stop_error_m"].astype(float) < -STOP_TOLERANCE_M
     table.loc[short, ["arrival_error_s", "saving_vs_all_out_pct", "gap_to_optimum_pct"]] = np.nan
+    below = [grid_note(g, cases[0]["points"], what="this run") if status_word(st) == "ok" else ""
+             for g, st in zip(table["gap_to_optimum_pct"], statuses)]
+    if any(below):  # an ok run cheaper than the optimum by more than its grid's error: said, not read as better
+        notes = table["note"] if "note" in table else pd.Series([None] * len(table))
+        table["note"] = [b or n for b, n in zip(below, notes)]
     table["status"] = statuses
     case = cases[0]
     train_name = case["train"].get("name", "train")
