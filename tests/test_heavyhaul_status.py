@@ -6,6 +6,9 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
+from ecostudy.core.errors import EcostudyWarning, InputError
+from ecostudy.core.status import off_stop
+from ecostudy.io.loaders import load_consist
 from ecostudy.core.units import KMH
 from ecostudy.heavyhaul.loop import STANDING, LoopRecord
 from ecostudy.heavyhaul.metrics import STOOD, Tolerances, ended, reasons
@@ -152,6 +155,10 @@ def test_bad_sweeps_are_refused_in_one_line(tmp_path, changes, words):
     ([(0, 0), (100, 30), (4000, 30), (4600, 0)], ["reference.table", "ends at 4600 m", "5000 m"]),
     ([(0, 0), (100, 300), (4900, 300), (5000, 0)], ["reference.table", "300 km/h", "cannot be followed"]),
     ([(0, 0), (100, "fast"), (5000, 0)], ["ref.csv", "speed_kmh, row 3", "'fast' is not a finite number"]),
+    # the sample cap came with the train 176 km beyond a 5 km line's stop, its energies those of the fiction
+    ([(0, 0), (100, 20), (200, 30), (5000, 30)], ["reference.table", "ends at 30 km/h at 5000 m", "run past the stop"]),
+    ([(0, 0), (100, 30), (2000, 0), (2100, 30), (5000, 0)], ["reference.table", "0 km/h at 2000 m", "stand there"]),
+    ([(0, 30), (4900, 30), (5000, 0)], ["reference.table", "starts at 30 km/h", "from rest"]),
 ])
 def test_unfollowable_reference_tables_are_refused_in_one_line(tmp_path, rows, words):
     refused(invoke(study(tmp_path, reference=reference_table(tmp_path, rows)), tmp_path / "out"), *words)
@@ -335,3 +342,23 @@ def test_a_train_that_stalls_on_the_final_approach_and_rolls_back_ends_the_run_r
     assert run["reason"].startswith(f"rolling back at {-run['speed_at_end_kmh']:.2f} km/h "
                                     f"{-run['stop_error_m']:.1f} m before the stop when the run ended"), run["reason"]
     assert "rolling back at" in result.output
+
+
+def test_a_locomotives_pneumatic_brake_and_a_type_no_group_uses_are_named(tmp_path):
+    """A locomotive's pneumatic_brake_kN was added to its dynamic brake beyond the adhesion cap, the
+    reason then asking for `adhesion: true`, already set; an unused type was silent."""
+    consist = load_yaml(PAPER)
+    consist["types"]["locomotive"]["pneumatic_brake_kN"] = 300
+    path = write_yaml(tmp_path / "c.yaml", consist)
+    with pytest.raises(InputError, match="types.locomotive: pneumatic_brake_kN: a locomotive brakes with its dynamic_brake"):
+        load_consist(path)
+    consist = load_yaml(PAPER)
+    consist["types"]["tank"] = consist["types"]["wagon"]
+    with pytest.warns(EcostudyWarning, match="types.tank: no vehicle group is of this type"):
+        load_consist(write_yaml(tmp_path / "t.yaml", consist))
+
+
+def test_a_stop_error_is_not_rounded_into_the_tolerance():
+    """1.047 m beyond read 'stopped 1.0 m beyond the stop (tolerance 1 m)'."""
+    assert off_stop(1.04684, 1.0, 1) == "stopped 1.05 m beyond the stop (tolerance 1 m)"
+    assert off_stop(-2.0, 1.0, 1) == "stopped 2.0 m short of the stop (tolerance 1 m)"

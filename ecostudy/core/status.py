@@ -187,8 +187,12 @@ def worst(statuses: Iterable[Status]) -> Status:
 
 def off_stop(error_m: float, tolerance_m: float, digits: int = 2) -> str:
     """The reason of a run that stood ``error_m`` [m] off its stop (negative: short of it), beyond
-    ``tolerance_m``: 'stopped 1.36 m short of the stop (tolerance 1 m)' (or 'beyond the stop')."""
+    ``tolerance_m``: 'stopped 1.36 m short of the stop (tolerance 1 m)' (or 'beyond the stop'), with
+    as many more ``digits`` (up to 4) as it takes not to read as within the tolerance (1.047 m is
+    '1.05', not '1.0')."""
     side = "short of" if error_m < 0 else "beyond"
+    while digits < 4 and round(abs(error_m), digits) <= tolerance_m < abs(error_m):
+        digits += 1
     return f"stopped {abs(error_m):.{digits}f} m {side} the stop (tolerance {tolerance_m:g} m)"
 
 

@@ -26,12 +26,23 @@ def starting_coupler_force(consist, grade):
 
 def reference_problems(reference, segment, tolerance):
     """What makes a reference (:class:`~ecostudy.heavyhaul.reference.Reference`) unfollowable on
-    ``segment``: it ends before (or beyond) the stop by more than a metre, or asks for more than the
-    train's limit at the head by more than ``tolerance`` [m/s]. A list of messages (empty: fine)."""
+    ``segment``: it ends before (or beyond) the stop by more than a metre, does not start from rest
+    or stop at the stop (by more than ``tolerance`` [m/s]), stands on the way, or asks for more than
+    the train's limit at the head by more than ``tolerance``. A list of messages (empty: fine)."""
     out = []
     end = float(reference.distance[-1])
     if abs(end - segment.distance) > 1.0:
         out.append(f"ends at {end:.0f} m but the stop is at {segment.distance:.0f} m (the table must cover the route)")
+    v = np.asarray(reference.speeds, float)
+    if v[0] > tolerance:
+        out.append(f"starts at {3.6 * v[0]:.0f} km/h: the train starts from rest (0 at {reference.distance[0]:.0f} m)")
+    if v[-1] > tolerance:
+        out.append(f"ends at {3.6 * v[-1]:.0f} km/h at {end:.0f} m: a run to a stop ends at 0 there (the train "
+                   "would run past the stop)")
+    standing = np.flatnonzero(v[1:-1] <= 0.0)
+    if standing.size:
+        out.append(f"0 km/h at {reference.distance[standing[0] + 1]:.0f} m: the train would stand there, short of "
+                   "its stop (a run stops only at its end)")
     # the reference is linear between its points and the limit constant between its changes: the
     # largest excess is at a point of either (a change read on both sides)
     changes = segment.limit.starts[(segment.limit.starts > 0) & (segment.limit.starts < end)]

@@ -35,6 +35,9 @@ class VehicleType(Strict):
             raise ValueError("a locomotive needs 'traction'")
         if self.kind == "wagon" and (self.traction is not None or self.dynamic_brake is not None):
             raise ValueError("a wagon has no traction or dynamic brake: give pneumatic_brake_kN")
+        if self.kind == "locomotive" and self.pneumatic_brake_kN > 0:  # the plant would add it beyond the grip cap
+            raise ValueError("pneumatic_brake_kN: a locomotive brakes with its dynamic_brake here (Zhang & Zhuan's "
+                             "model); the pneumatic brake is the wagons'")
         return self
 
 

@@ -351,13 +351,17 @@ __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "loa
 
 def load_consist(path: Where) -> Consist:
     """Read a consist file (YAML: vehicle types, groups in train order, couplers) into a :class:`Consist`."""
-    return consist_from_document(read_document(path), path)
+    return consist_from_document(read_document(path), Path(path))
 
 
 def consist_from_document(document: Mapping[str, Any], where: Where) -> Consist:
     """A :class:`Consist` (SI) from a consist file's document, validated; ``where`` names it in errors."""
     c = validate(ConsistFile, document, where)
     cars = [c.types[g.type] for g in c.vehicles for _ in range(g.count)]
+    if isinstance(where, Path):  # read from its file (not a stored case's copy): said once
+        for name in sorted(set(c.types) - {g.type for g in c.vehicles}):  # a typo in a group's type reads like this
+            warnings.warn(problem(where, f"types.{name}", "no vehicle group is of this type: it is not in the "
+                                  "train"), EcostudyWarning, stacklevel=2)
 
     def envelope(spec: Any) -> Envelope | None:
         if spec is None:
