@@ -224,3 +224,12 @@ def test_a_misspelt_field_is_not_taken_for_a_file_of_another_kind(tmp_path):
     train.write_text(METRO.read_text() + "stops: []\n")
     refused(run("solve", "--train", train, "--track", AMS, "--points", 50, "--no-plot", "--time", 80,
                 "--out", tmp_path / "out"), f"{train}: stops: unknown field")
+
+
+def test_a_closed_loop_studys_train_field_names_the_train_file(tmp_path):
+    """`STUDY train: brake_cylinders: unknown field`: the study named for its train file's field."""
+    train = write_yaml(tmp_path / "extra.yaml", {**load_yaml(TRAINS / "amsterdam_metro.yaml"), "brake_cylinders": 4})
+    loop = hostile(tmp_path, "metro_monte_carlo.yaml", train=str(train), draws=1,
+                   controllers=[{"name": "convex", "kind": "convex"}])
+    refused(run("simulate", loop, "--no-plot", "--workers", 1, "--no-progress"), f"{train}: brake_cylinders")
+    nothing_written(tmp_path)

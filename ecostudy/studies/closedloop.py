@@ -60,11 +60,10 @@ def expand(path, out=None):
     s = validate(SimulateFile, read_document(path), path)
     output = Path(s.output) if s.output else Path("out") / s.name  # relative: to the working directory
     check_output_dir(out or output, ("runs.csv", "results.sqlite"), "simulate")
-    train_file = named_file(path, "train", s.train)
-    train_doc = train_document(train_file)[0]
-    track_doc = track_document(named_file(path, "track", s.track))
-    train = train_from_schema(validate(schemas.TrainFile, train_doc, f"{path} train"), train_file)  # warnings: its file
-    track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{path} track"))
+    train_file, track_file = named_file(path, "train", s.train), named_file(path, "track", s.track)
+    train_doc, track_doc = train_document(train_file)[0], track_document(track_file)
+    train = train_from_schema(validate(schemas.TrainFile, train_doc, train_file), train_file)  # a bad field: its file
+    track = track_from_schema(validate(schemas.TrackFile, track_doc, track_file))
     check_fits(train_file, train, track)
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     segment = make_segment(track, train, from_stop, to_stop)
