@@ -23,9 +23,13 @@ def invoke(*args):
 
 
 def listed_exactly(folder):
-    """The files in ``folder`` (steps/ aside) are those its summary.json and report.html list; returns them."""
+    """The files in ``folder`` are those its summary.json and report.html list (a closed-loop study's
+    steps/ files too: they were written and not listed); returns them."""
     files = set(json.loads((folder / "summary.json").read_text())["files"])
-    assert {p.name for p in folder.iterdir() if p.is_file()} == files, files
+    top = {f for f in files if "/" not in f}
+    assert {p.name for p in folder.iterdir() if p.is_file()} == top, files
+    inside = {f"{d.name}/{p.name}" for d in folder.iterdir() if d.is_dir() for p in d.iterdir()}
+    assert inside == files - top, (inside, files)
     html = (folder / "report.html").read_text()
     assert all(f'href="./{name}"' in html for name in files - {"report.html"}), files
     return files
@@ -42,6 +46,7 @@ def test_run_kind_simulate_writes_the_files_of_simulate(tmp_path):
     invoke("run", path, "--kind", "simulate", "--out", out, "--workers", 1, "--no-progress")
     assert figures | {"aggregate.csv"} <= listed_exactly(out)
     assert [p.name for p in (out / "steps").iterdir()] == ["convex_draw0.csv"]
+    assert "steps/convex_draw0.csv" in listed_exactly(out)
     invoke("simulate", path, "--out", out, "--workers", 1, "--no-progress", "--no-plot")
     assert not figures & listed_exactly(out) and "aggregate.csv" in listed_exactly(out)
 

@@ -299,7 +299,8 @@ def loop_files(draw=None, names=(), done=None):
         study = loop_study(cases, rows, table, Path(out_dir))
         if done is not None:
             done.append(study)
-        return (draw(study) if draw is not None else []), {"aggregate": "aggregate.csv"}
+        steps = sorted(f"steps/{p.name}" for p in (Path(out_dir) / "steps").glob("*_draw*.csv"))  # this run's alone
+        return [*(draw(study) if draw is not None else []), *steps], {"aggregate": "aggregate.csv"}
     return Draw(files, lambda cases: ("aggregate.csv", *names))
 
 
