@@ -68,6 +68,10 @@ def test_export_command_on_a_solved_run_with_driver_advice(tmp_path):
     # a step that skips a phase of the run (the braking into the stop, a short traction) says so: an
     # on-board system reading it never sees that phase (it said `ok`)
     phases = json.loads((out / "summary.json").read_text())["regimes"]["runs"]
+    advice = pd.read_csv(out / "advice.csv")  # the advised modes are phases a driver sees too
+    ends = [*advice["start_position_m"].iloc[1:], pd.read_csv(out / "profile.csv")["position_m"].iloc[-1]]
+    phases += [{"regime": f"advice {m}", "start_m": a, "end_m": b}
+               for m, a, b in zip(advice["mode"], advice["start_position_m"], ends) if b > a]
     coarse = runner.invoke(app, ["export", str(out), "--every", "400m"])
     rows = pd.read_csv(out / "profile_every_400m.csv")["position_m"]
     missed = [r for r in phases if not ((rows >= r["start_m"]) & (rows < r["end_m"])).any()]
@@ -77,6 +81,7 @@ def test_export_command_on_a_solved_run_with_driver_advice(tmp_path):
     data = json.loads((out / "profile_every_400m.json").read_text())
     assert data["units"]["position_m"].startswith("m from the departure stop") and len(data["phases_without_a_row"]) \
         == len(missed)
+    assert any(m["regime"].startswith("advice ") for m in missed), missed  # an advised mode between two rows
     # a summary saying ok over a solve Ipopt did not prove optimal is an edited file (check said ok)
     summary = json.loads((out / "summary.json").read_text())
     (out / "summary.json").write_text(json.dumps({**summary, "solver": {**summary["solver"], "status": "maxIterations"}}))

@@ -92,3 +92,14 @@ def missed_phases(runs: list[dict], positions: np.ndarray) -> list[str]:
     x = np.asarray(positions, float)
     return [f"{r['regime']} {r['start_m']:.0f}-{r['end_m']:.0f} m" for r in runs
             if not np.any((x >= r["start_m"]) & (x < r["end_m"]))]
+
+
+def advice_phases(advice: pd.DataFrame, end_m: float) -> list[dict]:
+    """The advised modes of an ``advice`` table (``advice.csv``) as phases (``advice <mode>``,
+    ``start_m``, ``end_m``: each to the next one's start, the last to ``end_m`` [m]), for
+    :func:`missed_phases`: a driver's cruise or gentle brake a step jumps over is lost as much."""
+    starts = advice["start_position_m"].to_numpy(float)
+    ends = np.append(starts[1:], end_m)
+    return [{"regime": f"advice {mode}", "start_m": float(a), "end_m": float(b)}
+            for mode, a, b in zip(advice["mode"], starts, ends) if b > a]
+

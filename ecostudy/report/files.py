@@ -4,7 +4,7 @@ import warnings
 from functools import partial
 from pathlib import Path
 
-from ecostudy.analysis.export import fixed_step, missed_phases
+from ecostudy.analysis.export import advice_phases, fixed_step, missed_phases
 from ecostudy.analysis.saved import rejudged
 from ecostudy.core.budget import how_many
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
@@ -137,6 +137,8 @@ def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
     judged = rejudged(saved, result_dir)  # the run's status judged again, not taken from its summary
     table = fixed_step(saved.trajectory, saved.handle, time_step_s, distance_step_m, saved.advice)
     phases = (saved.summary.get("regimes") or {}).get("runs") or []
+    if saved.advice is not None and len(saved.advice):  # the advised modes too: what a DAS shows the driver
+        phases = [*phases, *advice_phases(saved.advice, float(saved.trajectory.nodes[-1]))]
     missed = missed_phases(phases, table["position_m"].to_numpy())
     if missed:  # the samples are right; an on-board system reading them never sees these phases
         warnings.warn(f"the export every {step} has no row in {len(missed)} of the run's {len(phases)} phases "
