@@ -136,3 +136,22 @@ def test_advice_below_the_optimum_by_more_than_its_grid_allows_is_said_so(tmp_pa
     table = pd.read_csv(tmp_path / "c" / "compare.csv").set_index("strategy")
     assert "too coarse to rank them" in table.loc["DAS phases", "note"], compared.output
     assert table.loc["DAS phases", "status"] == "ok" and table.loc["DAS phases", "gap_to_optimum_pct"] < -1
+
+
+
+def test_advice_no_method_makes_fails_alone_and_the_ato_run_is_written(tmp_path):
+    """Braking at -0.5 at most, 76 s (the metro's all-out time at half its braking: 78.6 s): the
+    phases NLP is infeasible. The command wrote nothing and
+    said `error: the DAS phases NLP failed (infeasible, 206 iterations)`, exit 3, the ATO run lost."""
+    doc = {**load_yaml(TRAINS / "amsterdam_metro.yaml"), "das_handle_levels": [-0.5, 0, 0.5, 1]}
+    train = write_yaml(tmp_path / "half.yaml", doc)
+    out = tmp_path / "o"
+    result = run("solve", "--track", TRACKS / "amsterdam_rokin_centraal.yaml", "--train", train, "--time", 76,
+                 "--points", 300, "--das", "phases", "--no-plot", "--out", out)
+    assert result.exit_code == 1, result.output
+    assert "driver advice     phases: failed: the DAS phases NLP failed (infeasible" in result.output, result.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["das"]["status"].startswith("failed: ") and summary["solver"]["status"] == "optimal"
+    assert (out / "profile.csv").is_file() and not (out / "advice.csv").exists()
+    checked = run("check", out)
+    assert "driver advice phases failed" in checked.output and "Traceback" not in checked.output, checked.output

@@ -14,12 +14,14 @@ from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
-from ecostudy.core.errors import (EcostudyWarning, FieldError, InfeasibleError, InputError, LineError, TooFastError,
+from ecostudy.core.errors import (EcostudyWarning, FieldError, InfeasibleError, InputError, LineError, SolverError,
+                                  TooFastError,
                                   problem)
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status
 from ecostudy.core.types import Timing
 from ecostudy.core.units import number, signed
+from ecostudy.das.advice import failed_advice
 from ecostudy.das.methods import das_run
 from ecostudy.io.results import file_digest
 from ecostudy.io.writers import check_output_dir, write_json
@@ -51,7 +53,9 @@ def run_lines(result: RunResult, out_dir: Path) -> list[str]:
     if ver is not None:
         flag = "passed" if ver.passed else "FAILED"
         lines.append(f"  verification      {flag}: {ver.errors}")
-    if s.das is not None:
+    if s.das is not None and s.das.traction_energy_kWh is None:  # no advice made: why
+        lines.append(f"  driver advice     {s.das.method}: {s.das.status}")
+    elif s.das is not None:
         d = s.das
         net = s.objective == "net_energy"  # the gap is on the quantity the ATO run minimised: shown beside it
         gap = f"no gap: {d.no_gap}" if d.gap_to_ato_pct is None else f"{signed(d.gap_to_ato_pct, 2)} % against ATO"
@@ -143,7 +147,10 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
             where, field = st.window_origin(exc.field, study)
             raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
         if das is not None:
-            result.das = das_run(result, das, time_limit=das_time_limit)
+            try:  # advice no method makes fails on its own: the ATO run is written, the status says why
+                result.das = das_run(result, das, time_limit=das_time_limit)
+            except (InfeasibleError, SolverError) as exc:
+                result.das = failed_advice(das, str(exc))
             result.summary["das"] = result.das.summary
         stage("figures and files")
         write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),

@@ -32,11 +32,21 @@ from ecostudy.ocp import phases, session
 
 class DasRun(NamedTuple):
     """A DAS method's result: its ``das`` summary block, the advice table and the advice as a driver
-    follows it (re-simulated)."""
+    follows it (re-simulated); both None for advice that failed (:func:`failed_advice`)."""
 
     summary: dict
-    advice: pd.DataFrame
-    driven: Driven
+    advice: pd.DataFrame | None
+    driven: Driven | None
+
+
+def failed_advice(method, reason):
+    """The :class:`DasRun` of advice no method made (its NLP infeasible, its search stopped without a
+    pattern): status ``failed`` with the reason, no energies, no advice; the ATO run it was drawn
+    from stands on its own."""
+    return DasRun({"method": method, "traction_energy_kWh": None, "net_energy_kWh": None, "gap_to_ato_pct": None,
+                   "gap_to_ato_on_time_pct": None, "no_gap": "no advice", "note": "", "mode_changes": None,
+                   "bound_kWh": None, "status": f"failed: {reason}", "solver": None, "arrival_error_s": None,
+                   "stop_error_m": None, "overspeed_max_kmh": None}, None, None)
 
 
 def advice_table(nodes, handle, trace, targets=None):

@@ -118,13 +118,13 @@ class DasSummary:
     optimum; ``bound_kWh``, ``gap_pct``, ``search_s`` and ``oa_iterations`` of the MINLP only."""
 
     method: str                        # round, phases or minlp
-    traction_energy_kWh: float
-    net_energy_kWh: float
+    traction_energy_kWh: Optional[float]  # None: the advice failed (``status``)
+    net_energy_kWh: Optional[float]
     gap_to_ato_pct: Optional[float]    # on the quantity the ATO run minimised
     gap_to_ato_on_time_pct: Optional[float]  # with a late arrival charged at the marginal energy
-    mode_changes: int
+    mode_changes: Optional[int]
     arrival_error_s: Optional[float]   # None: the advice stopped short of its stop
-    stop_error_m: float
+    stop_error_m: Optional[float]
     status: str                        # as a driven run: ok, or flagged with the reasons
     solver: Optional[str] = None       # how the advice was made, e.g. "optimal, re-simulated"
     overspeed_max_kmh: Optional[float] = None
@@ -138,11 +138,12 @@ class DasSummary:
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "DasSummary":
         oa = data.get("oa_iterations")
-        return cls(method=str(data["method"]), traction_energy_kWh=float(data["traction_energy_kWh"]),
-                   net_energy_kWh=float(data["net_energy_kWh"]), gap_to_ato_pct=_opt(data, "gap_to_ato_pct"),
+        changes = data.get("mode_changes")
+        return cls(method=str(data["method"]), traction_energy_kWh=_opt(data, "traction_energy_kWh"),
+                   net_energy_kWh=_opt(data, "net_energy_kWh"), gap_to_ato_pct=_opt(data, "gap_to_ato_pct"),
                    gap_to_ato_on_time_pct=_opt(data, "gap_to_ato_on_time_pct"),
-                   mode_changes=int(data["mode_changes"]), arrival_error_s=_opt(data, "arrival_error_s"),
-                   stop_error_m=float(data["stop_error_m"]), status=str(data["status"]),
+                   mode_changes=None if changes is None else int(changes), arrival_error_s=_opt(data, "arrival_error_s"),
+                   stop_error_m=_opt(data, "stop_error_m"), status=str(data["status"]),
                    solver=None if data.get("solver") is None else str(data["solver"]),
                    overspeed_max_kmh=_opt(data, "overspeed_max_kmh"),
                    bound_kWh=_opt(data, "bound_kWh"), gap_pct=_opt(data, "gap_pct"), search_s=_opt(data, "search_s"),

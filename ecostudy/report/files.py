@@ -76,13 +76,14 @@ def write_run(result, out_dir, plot=True, out=style.Output(), drawer=None, files
                                                                             later("energy_plot", result)))), out)
     write_csv(out_dir / "profile.csv", result.profile)
     tables = {"profile": "profile.csv"}
-    if result.das is not None:
+    advised = result.das is not None and result.das.advice is not None  # advice that failed has no table
+    if advised:
         write_csv(out_dir / "advice.csv", result.das.advice)
         tables["advice"] = "advice.csv"
     facts = result.facts
     write_summary(out_dir, "solve", {f"{facts.from_stop}-{facts.to_stop}": result.status}, tables,
                   [*drawn(), *files], **result.summary)
-    stale(out_dir, advice=result.das is None, names={"advice": ["advice.csv"]})
+    stale(out_dir, advice=not advised, names={"advice": ["advice.csv"]})
     write_html(out_dir)
     return out_dir
 

@@ -68,7 +68,7 @@ def speed_plot(result, path=None, fmt=None, dpi=None):
     if result.trace is not None:
         ax.plot(result.trace.x, to_kmh(result.trace.v), color=style.colour("re-simulated"), lw=0.8, ls="--",
                 label="re-simulated")
-    if result.das is not None:
+    if result.das is not None and result.das.driven is not None:  # advice that failed: none drawn
         advice, outcome = result.das.advice, result.das.driven
         ax.plot(outcome.trace.x, to_kmh(outcome.trace.v), color=style.colour("DAS advice"), lw=1.1,
                 label=f"driver advice ({s['das']['method']}), simulated")
