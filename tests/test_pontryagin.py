@@ -152,5 +152,6 @@ def test_check_of_a_flagged_run_says_so(tmp_path):
     report = json.loads((out / "check.json").read_text())
     assert report["agreement_pct"] >= 95
     assert report["run_status"].startswith("flagged: re-simulation outside tolerance"), report["run_status"]
+    assert report["status"] == "flagged: the run checked is not ok", report  # the check's own verdict, in the file
     assert r.exit_code == 1 and "the run checked: flagged: re-simulation" in r.output, r.output
     assert r.output.rstrip().endswith("check: flagged: the run checked is not ok"), r.output

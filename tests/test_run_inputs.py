@@ -176,3 +176,13 @@ def test_a_das_time_limit_no_search_reads_is_named(tmp_path):
                  "--out", tmp_path / "o")
     assert "warning: command line: --das-time-limit: bounds the minlp search only: unused with no --das" \
         in result.output, result.output
+
+
+def test_a_default_output_folder_stays_one_folder_under_out():
+    """A stop named '/../../../escaped' wrote outside out/; a '/' in a name made nested folders."""
+    from ecostudy.io.writers import default_output
+
+    assert default_output("/../../../escaped_Centraal") == default_output("escaped_Centraal")
+    for name in ("/../../../escaped_Centraal", "track_<b>Rökin</b>_&_Co", "..", "a b/c"):
+        folder = default_output(name)
+        assert folder.parent.name == "out" and len(folder.parts) == 2 and folder.name not in ("", ".", ".."), folder

@@ -15,7 +15,7 @@ from ecostudy.core.errors import EcostudyWarning, FieldError, InfeasibleError, I
 from ecostudy.io.loaders import check_fits, check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
 from ecostudy.io.timetable import journey_plan, name_stops
 from ecostudy.io.store import check_one_study
-from ecostudy.io.writers import check_output_dir
+from ecostudy.io.writers import check_output_dir, default_output
 from ecostudy.report.files import JOURNEY_FIGURE, write_journey
 from ecostudy.report.html import write_html
 from ecostudy.report.studyfiles import FRONT_FIGURES, compare_figures, front_files
@@ -38,7 +38,7 @@ DAS_COLUMNS = ["das_traction_energy_kWh", "das_gap_to_ato_on_time_pct", "das_mod
 
 def beside(st, suffix: str, default: str) -> Path:
     """The default folder of a study's second command: the study's output with ``suffix``."""
-    return st.output.parent / (st.output.name + suffix) if st is not None else Path("out") / default
+    return st.output.parent / (st.output.name + suffix) if st is not None else default_output(default)
 
 
 @spelled
@@ -195,7 +195,7 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
                                  "give one total running time or supplement, or --timetable"))
     check_journey(timetable or "command line", len(names) - 1, points, workers,  # too big: refused (unless --force)
                   splits=4 + (scheduled is not None) + (plan is not None), whole=1 + (plan is not None))
-    out_dir = check_output_dir(output_folder(out, Path("out") / "journey"),
+    out_dir = check_output_dir(output_folder(out, default_output("journey")),
                                ("journey.csv", "journey_totals.csv", *figures.filenames([JOURNEY_FIGURE], plot)),
                                "journey")
     try:

@@ -24,7 +24,7 @@ from ecostudy.core.units import number, signed
 from ecostudy.das.advice import failed_advice
 from ecostudy.das.methods import das_run
 from ecostudy.io.results import file_digest
-from ecostudy.io.writers import check_output_dir, write_json
+from ecostudy.io.writers import check_output_dir, default_output, write_json
 from ecostudy.ocp import session
 from ecostudy.report.drawer import drawing
 from ecostudy.report.files import RUN_FIGURES, write_fixed_step, write_run
@@ -118,7 +118,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
             raise InputError(problem("command line", "--time", "give --time, --supplement or --window "
                                      "(or --objective time for the all-out run)"))
         timing, w, k = timing_of(time, supplement, window), (1.0, 1.0), k or RUN_POINTS
-        out_dir = output_folder(out, Path("out") / f"{Path(track).stem}_{f}_{t}".replace(" ", "_"))
+        out_dir = output_folder(out, default_output(f"{Path(track).stem}_{f}_{t}"))
     das_time_limit = das_limit(das, das_time_limit)
     check_solve(k, das, das_time_limit)
     w = parse_pair(weights, "--weights", nonnegative=True) if weights else w
@@ -182,6 +182,12 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
     if result_dir.is_dir():
         check_output_dir(result_dir, ("check.json",))
     report = check_result(result_dir, time)
+    run_ok = Status.parse(report["run_status"]).ok
+    agrees = report["agreement_pct"] >= 95.0
+    reasons = ([] if agrees else [f"{report['agreement_pct']:.1f} % of the distance agrees, below 95 %: not the "
+                                  f"{report['checked_as']}"]) + ([] if run_ok else ["the run checked is not ok"])
+    verdict = "ok" if not reasons else "flagged: " + "; ".join(reasons)
+    report = {"status": verdict, **report}  # the check's own verdict first: run_status is the run's
     write_json(result_dir / "check.json", report)
     lines = [f"checked as the {report['checked_as']}",
              "regimes: " + ", ".join(f"{r['regime']} {r['start_m']:.0f}-{r['end_m']:.0f} m" for r in report["sequence"]),
@@ -189,12 +195,7 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
              f"residual {report['stationarity_residual']:.1e}"]
     lines += [f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m "
               f"(lambda/v from {number(d['psi_min'], '.2f')} to {number(d['psi_max'], '.2f')})" for d in report["disagreements"]]
-    run_ok = Status.parse(report["run_status"]).ok
-    agrees = report["agreement_pct"] >= 95.0
-    reasons = ([] if agrees else [f"{report['agreement_pct']:.1f} % of the distance agrees, below 95 %: not the "
-                                  f"{report['checked_as']}"]) + ([] if run_ok else ["the run checked is not ok"])
-    lines += [f"the run checked: {report['run_status']}", f"written {result_dir}/check.json",
-              "check: " + ("ok" if not reasons else "flagged: " + "; ".join(reasons))]
+    lines += [f"the run checked: {report['run_status']}", f"written {result_dir}/check.json", f"check: {verdict}"]
     return Note(agrees and run_ok, "\n".join(lines), report)
 
 

@@ -23,6 +23,7 @@ from ecostudy.io.davis import check_davis_bound, check_davis_plausible, davis_si
 from ecostudy.io.intrain import in_train_physics
 from ecostudy.io.formats import timetable_document_to_schema, track_document_to_schema, train_document_to_schema
 from ecostudy.io.timetable import name_stops, off_clock, segment_timing, turning_back, windows_from_schema
+from ecostudy.io.writers import default_output
 from ecostudy.io.documents import (Where, given, named_file, read_document as read_document,  # re-exported
                                    split_selector, validate as validate)
 
@@ -286,7 +287,7 @@ def load_study(study_path: Where, read: Callable[..., Any] = lambda file, reader
     timing_field = "timetable" if s.timetable is not None else next(
         (name for name in ("running_time_s", "supplement_percent", "window_s") if getattr(s, name) is not None),
         "running_time_s")
-    output = Path(s.output) if s.output else Path("out") / s.name
+    output = Path(s.output) if s.output else default_output(s.name)
     return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop,
                  timing=timing, objective=s.objective, weights=(s.weights.time, s.weights.energy),
                  points=s.points, output=output, track_path=track_file, train_path=train_file,
@@ -342,7 +343,7 @@ def load_network_study(study_path: Where) -> NetworkStudy:
                         None if s.supplement_percent is None else s.supplement_percent * units.PERCENT,
                         s.dwell_s, s.time_step_s, [t.name for t in s.trains], [t.offset_s for t in s.trains],
                         supply, list(s.strategies), s.buffer_m, s.points,
-                        Path(s.output) if s.output else Path("out") / s.name, (train_doc, track_doc))
+                        Path(s.output) if s.output else default_output(s.name), (train_doc, track_doc))
 
 
 __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study", "read_train", "read_track",

@@ -2,6 +2,7 @@
 import json
 import math
 import os
+import re
 import tempfile
 from pathlib import Path
 from typing import Any, Callable, Iterable, Union
@@ -35,6 +36,15 @@ def _kind_of(folder: Path) -> str | None:
         return None
     kind = data.get("kind") if isinstance(data, dict) else None
     return kind if isinstance(kind, str) else None
+
+
+def default_output(name: str) -> Path:
+    """``out/<name>``, the folder a command writes to when neither ``--out`` nor the study file's
+    ``output`` says where: ``name`` (a study's name, or track and stop names) made a single folder
+    name of letters, digits, '.', '_' and '-' (a stop named '/../../x' wrote outside ``out/``, a
+    '/' in a name made nested folders)."""
+    safe = re.sub(r"[^\w.-]+", "_", str(name)).strip("._") or "run"
+    return Path("out") / safe
 
 
 def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: str | None = None) -> Path:

@@ -1,6 +1,7 @@
 """Plots: speed against distance with limits, the gradient profile and the handle beneath; fronts,
 comparisons, journeys and a run's energy flow (networks: :mod:`ecostudy.report.netplots`). Every colour comes from
 :mod:`ecostudy.report.style`; every plot takes ``fmt`` (png, svg, pdf) and ``dpi``."""
+import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -9,6 +10,31 @@ from ecostudy.core.units import PERMILLE, number, signed, to_kmh, to_kwh
 from ecostudy.report import style
 
 SPEED_LIMIT = "speed limit (train length)"
+# names are text: a '$' in a train, track or stop name is a dollar, not the start of maths (a name
+# with one failed every figure after the solve; one with two was drawn in italics)
+matplotlib.rcParams["text.parse_math"] = False
+
+
+def titled(ax, title, status="ok", below="", width=110, fontsize=10):
+    """``title`` wrapped at ``width`` characters (a long name clipped the numbers), then ``below``,
+    and for a run that is not ``ok`` a line saying so with its reason, in red: a figure copied out
+    of its folder still says it is not a result to quote. The axes move down to make room."""
+    import textwrap
+
+    lines = (textwrap.wrap(title, width) or [""]) + ([below] if below else [])
+    status = str(status)
+    if status != "ok":
+        lines += textwrap.wrap(status.upper()[:7] + status[7:], width)[:2]
+    ax.set_title("\n".join(lines), fontsize=fontsize, color=style.LIMIT["title" if status == "ok" else "not ok"])
+    fig = ax.figure
+    room = (len(lines) * 1.3 * fontsize / 72 + 0.15) / fig.get_figheight()  # [share of the height]
+    if fig.subplotpars.top > 1 - room:
+        fig.subplots_adjust(top=1 - room)
+
+
+def word(status):
+    """ok, flagged or failed: the first word of a status line."""
+    return str(status).split(":", 1)[0].strip()
 
 
 def figure(nrows=1, ncols=1, figsize=None, **kwargs):
@@ -79,8 +105,8 @@ def speed_plot(result, path=None, fmt=None, dpi=None):
     ax.set_ylabel("speed [km/h]")
     ax.set_ylim(bottom=0)
     ax.legend(loc="lower center", fontsize=8)
-    ax.set_title(f"{s['train']} - {s['from']} to {s['to']}: {s['running_time_s']:.1f} s, "
-                 f"{s['traction_energy_kWh']:.2f} kWh traction ({s['objective']})", fontsize=10)
+    titled(ax, f"{s['train']} - {s['from']} to {s['to']}: {s['running_time_s']:.1f} s, "
+           f"{s['traction_energy_kWh']:.2f} kWh traction ({s['objective']})", result.status)
     x, y = _steps(seg.gradient, seg.distance)
     axg.step(x, y / PERMILLE, where="post", color=style.LIMIT["gradient"])
     axg.axhline(0, color=style.LIMIT["stop"], lw=0.5)
@@ -132,6 +158,11 @@ def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None):
         ax.plot(wt[inside], weighted["traction_energy_kWh"][inside], "x", color=style.colour("weighted sum"),
                 ms=8, mew=2, label="weighted sum w_t T + w_e E/m (traction)"
                 + (f"; {beyond} point{'s' * (beyond > 1)} beyond the front's times not shown" if beyond else ""))
+    if "status" in table:  # the points not ok ringed: a front of flagged points is no front to quote
+        bad = table["status"].astype(str).map(word) != "ok"
+        if bad.any():
+            ax.plot(t[bad], table["traction_energy_kWh"][bad], "o", ms=12, mfc="none", mec=style.LIMIT["not ok"], mew=1.5,
+                    label=f"not ok ({int(bad.sum())} of {len(table)} points: see pareto.csv's status)")
     ax.set_xlim(lo, hi)
     ax.set_ylabel("energy [kWh]")
     ax.set_ylim(bottom=0)
@@ -159,16 +190,20 @@ def profiles_plot(results, path=None, title="", fmt=None, dpi=None):
     return _save(fig, path, fmt, dpi)
 
 
-def compare_plot(outcomes, segment, path=None, title="", fmt=None, dpi=None):
+def compare_plot(outcomes, segment, path=None, title="", fmt=None, dpi=None, statuses=None):
     """Simulated speed against distance of each strategy, with the speed limit; each strategy in
-    its own colour (``style.STRATEGY``) and the line styles cycled, so overlapping runs show."""
+    its own colour (``style.STRATEGY``) and the line styles cycled, so overlapping runs show; a
+    strategy whose status (``statuses``, by name) is not ok says so in the legend, and a run that
+    did not arrive gives the time it stood, not an arrival."""
     fig, ax = figure(figsize=(9, 4.5))
     fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
     _speed_limit(ax, segment)
     palette = style.Palette([o.name for o in outcomes])
     for i, o in enumerate(outcomes):
+        kind = word((statuses or {}).get(o.name, "ok"))
         ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.4, color=palette(o.name), ls=style.DASHES[i % len(style.DASHES)],
-                label=f"{o.name}: {o.trace.arrival_time:.1f} s, {to_kwh(o.trace.traction_energy):.2f} kWh")
+                label=f"{o.name}: {o.trace.arrival_time:.1f} s, {to_kwh(o.trace.traction_energy):.2f} kWh"
+                + ("" if kind == "ok" else f" ({kind.upper()})"))
     _finish_speed_axes(ax, title)
     return _save(fig, path, fmt, dpi)
 
@@ -227,7 +262,7 @@ def energy_plot(result, path=None, fmt=None, dpi=None):
     ax.set_xticks(range(len(bars)), [b[0] for b in bars], rotation=30, ha="right", fontsize=8)
     ax.set_ylabel("energy [kWh]")
     ax.grid(alpha=0.3, axis="y")
-    ax.set_title(f"{s['train']} - {s['from']} to {s['to']}: energy flow\nbalance residual "
-                 f"{signed(to_kwh(flow.residual), 4)} kWh ({signed(100 * flow.residual / max(flow.traction, 1e-9), 3)} % of "
-                 "the traction at the wheel)", fontsize=9)
+    titled(ax, f"{s['train']} - {s['from']} to {s['to']}: energy flow", result.status, fontsize=9,
+           below=f"balance residual {signed(to_kwh(flow.residual), 4)} kWh "
+           f"({signed(100 * flow.residual / max(flow.traction, 1e-9), 3)} % of the traction at the wheel)")
     return _save(fig, path, fmt, dpi)

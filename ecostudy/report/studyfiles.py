@@ -25,7 +25,8 @@ def compare_figures(plot=True, out=style.Output()):
     earlier figure is removed)."""
     def draw(out_dir, cases, rows, table):
         drawings = {COMPARE_FIGURE: later("compare_plot", compare.outcomes(cases, rows), compare.segment_of(cases[0]),
-                                         title=table.attrs["title"]) if plot else None}
+                                         title=table.attrs["title"],
+                                         statuses=dict(zip(table["strategy"], table["status"]))) if plot else None}
         return figures(out_dir, plot, drawings, out), {}
     return Draw(draw, lambda cases: out.filenames([COMPARE_FIGURE], plot))
 

@@ -22,6 +22,8 @@ LIMIT = {
     "stop": "#7f7f7f",            # grey: stops, segment ends, zero lines
     "budget": "#a50f15",          # dark red: the real-time budget of a controller
     "voltage limit": "#636363",   # dark grey: nominal and highest line voltage
+    "not ok": "#99000d",          # darkest red: a title or a mark of a run that is not ok
+    "title": "#1a1a1a",           # near black: a title of a run that is ok
 }
 
 # Strategies side by side (``compare``) and the runs of one solve.

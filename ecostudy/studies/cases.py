@@ -12,6 +12,7 @@ import json
 import warnings
 from pathlib import Path
 
+from ecostudy.io.writers import default_output
 from ecostudy import __version__
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import too_long_named
@@ -185,7 +186,7 @@ def expand(path, skipped=None, read=None, windows=False, warn=True):
         for name in idle]
     for field, line in notes if warn else ():
         warnings.warn(problem(path, field, line), EcostudyWarning, stacklevel=2)
-    output = Path(s.output) if s.output else Path("out") / s.name
+    output = Path(s.output) if s.output else default_output(s.name)
     return s, output, cases
 
 

@@ -30,7 +30,7 @@ from ecostudy.io.documents import named_file
 from ecostudy.io.loopfile import Controller, SimulateFile
 from ecostudy.ocp.convex import FASTEST, ConvexProgram, trapezoid_grid
 from ecostudy.ocp.problem import prepare
-from ecostudy.io.writers import check_output_dir, write_csv
+from ecostudy.io.writers import check_output_dir, default_output, write_csv
 from ecostudy.studies.batch import Draw, Expanded, StudyKind, outcome, run_expanded
 from ecostudy.studies.cases import case_key
 from ecostudy.studies.controllers import CONTROLLER_KINDS, Build
@@ -58,7 +58,7 @@ def expand(path, out=None):
     (``out``, else the study's own) checked before the all-out run is solved."""
     path = Path(path)
     s = validate(SimulateFile, read_document(path), path)
-    output = Path(s.output) if s.output else Path("out") / s.name  # relative: to the working directory
+    output = Path(s.output) if s.output else default_output(s.name)  # relative: to the working directory
     check_output_dir(out or output, ("runs.csv", "results.sqlite"), "simulate")
     train_file, track_file = named_file(path, "train", s.train), named_file(path, "track", s.track)
     train_doc, track_doc = train_document(train_file)[0], track_document(track_file)

@@ -43,7 +43,7 @@ from ecostudy.io.heavyhaulfile import HeavyhaulFile
 from ecostudy.io.loaders import (check_fits, chosen_stops, consist_from_document, read_document, track_document,
                                  track_from_schema, validate)
 from ecostudy.io.tables import number_columns
-from ecostudy.io.writers import check_output_dir
+from ecostudy.io.writers import check_output_dir, default_output
 from ecostudy.studies.batch import STUDY_KINDS, Draw, Expanded, StudyKind, outcome, run_expanded
 from ecostudy.studies.cases import case_key
 from ecostudy.studies.sizes import check_heavyhaul_study
@@ -77,7 +77,7 @@ def expand(path, out=None):
     output folder (``out``, else the study's own) checked before the reference run is solved."""
     path = Path(path)
     s = validate(HeavyhaulFile, read_document(path), path)
-    output = Path(s.output) if s.output else Path("out") / s.name  # relative: to the working directory
+    output = Path(s.output) if s.output else default_output(s.name)  # relative: to the working directory
     check_output_dir(out or output, ("runs.csv", "results.sqlite"), "heavyhaul")
     consist_path = named_file(path, "consist", s.consist)
     consist_doc = read_document(consist_path)
