@@ -13,10 +13,11 @@ import contextvars
 import functools
 import inspect
 import re
+import warnings
 from contextlib import contextmanager
 from typing import Any, Callable, Iterator, TypeVar
 
-from ecostudy.core.errors import InputError
+from ecostudy.core.errors import EcostudyWarning, InputError
 
 F = TypeVar("F", bound=Callable[..., Any])
 CALLER: contextvars.ContextVar[str] = contextvars.ContextVar("ecostudy_caller", default="arguments")
@@ -38,8 +39,8 @@ def command_line() -> Iterator[None]:
 
 
 def spelled(function: F) -> F:
-    """``function`` whose :class:`~ecostudy.core.errors.InputError` lines name its arguments, not
-    the command line's options (outside :func:`command_line`)."""
+    """``function`` whose :class:`~ecostudy.core.errors.InputError` lines and warnings name its
+    arguments, not the command line's options (outside :func:`command_line`)."""
     names = set(inspect.signature(function).parameters)
 
     def argument(option: str) -> str | None:  # the argument that sets an option (or a field), if the function has it
@@ -60,12 +61,20 @@ def spelled(function: F) -> F:
 
     @functools.wraps(function)
     def named(*args: Any, **kwargs: Any) -> Any:
-        try:
+        if CALLER.get() != "arguments":  # the command line's own words
             return function(*args, **kwargs)
+        caught: list[warnings.WarningMessage] = []
+        try:
+            with warnings.catch_warnings(record=True) as caught:  # its warnings named alike, given on below
+                warnings.simplefilter("always")
+                return function(*args, **kwargs)
         except InputError as exc:
-            if CALLER.get() == "arguments":
-                exc.problems = [line(p) for p in exc.problems]
-                exc.args = ("\n".join(exc.problems),)
+            exc.problems = [line(p) for p in exc.problems]
+            exc.args = ("\n".join(exc.problems),)
             raise
+        finally:
+            for w in caught:
+                ours = issubclass(w.category, EcostudyWarning)
+                warnings.warn(line(str(w.message)) if ours else w.message, w.category, stacklevel=2)
 
     return named  # type: ignore[return-value]

@@ -4,9 +4,9 @@ results :class:`Solution` and :class:`Front` (re-exported by :mod:`ecostudy.api`
 A bad argument is refused before anything is solved with one :class:`~ecostudy.core.errors.InputError`
 (``api.InputError``) whose lines name it: ``arguments: running_time: must be more than 0.0, not -5``.
 """
+import math
 import numbers
 from dataclasses import dataclass
-from typing import get_args
 
 import pandas as pd
 
@@ -17,21 +17,20 @@ from ecostudy.api.outcome import shown
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, problem
 from ecostudy.core.status import Judged, Status, worst
-from ecostudy.core.types import Timing
+from ecostudy.core.types import Timing, Track, Train, Window
 from ecostudy.core.units import PERCENT
 from ecostudy.io.loaders import chosen_stops
 from ecostudy.io.runsummary import RunSummary
-from ecostudy.io.schemas import StudyFile
 from ecostudy.ocp.problem import all_out, check_feasible, check_not_crawling, prepare
 from ecostudy.ocp.restart import Replanner
 from ecostudy.report.files import MAX_EXPORT_ROWS, write_run
 from ecostudy.report.html import fragment
-from ecostudy.studies.options import check_options, checked_pair
+from ecostudy.studies.options import OBJECTIVES, check_options, checked_pair
 from ecostudy.studies.pareto import sweep
 
 WHERE = "arguments"  # what a refusal names instead of a file: ``arguments: points: ...``
 ARGUMENTS = {"time": "running_time", "supplement": "supplement_percent", "supplement_max": "supplement_max_percent"}
-OBJECTIVES = get_args(StudyFile.model_fields["objective"].annotation)
+ENERGIES = ("energy", "net_energy")  # what the points of a front minimise
 FRONT_SHOWN = ["running_time_s", "supplement_pct", "traction_energy_kWh", "net_energy_kWh", "status"]
 
 
@@ -154,12 +153,44 @@ def _timing(running_time, supplement_percent, window):
                   supplement=None if supplement_percent is None else supplement_percent * PERCENT)
 
 
-def _check(objective, **values):
-    """Refuse ``objective`` and the numeric ``values`` (:data:`~ecostudy.studies.options.OPTION_RANGES`'
-    names) that are out of range, naming the arguments."""
-    if objective not in OBJECTIVES:
-        raise InputError(problem(WHERE, "objective", f"expected one of {', '.join(OBJECTIVES)}, not {objective!r}"))
+def _check(objective, track=None, train=None, objectives=OBJECTIVES, **values):
+    """Refuse a ``track`` or ``train`` that is not one (a path, a dict: load it first), an
+    ``objective`` not among ``objectives`` and the numeric ``values``
+    (:data:`~ecostudy.studies.options.OPTION_RANGES`' names) that are out of range, naming the arguments."""
+    lines = [problem(WHERE, name, f"a {kind.__name__} (api.load_{name}(path), or api.{name}_from_dict), not "
+                                  f"{type(given).__name__} {given!r:.60}")
+             for name, kind, given in (("track", Track, track), ("train", Train, train))
+             if given is not None and not isinstance(given, kind)]
+    if objective not in objectives:
+        lines.append(problem(WHERE, "objective", f"expected one of {', '.join(objectives)}, not {objective!r}"))
+    if lines:
+        raise InputError(lines)
     check_options(where=WHERE, spelled=ARGUMENTS, **values)
+
+
+def _check_windows(windows, distance):
+    """Refuse timing ``windows`` that are not :class:`Window` s of finite numbers strictly between the
+    stops ``distance`` [m] apart, earliest <= latest and min_speed <= max_speed, at least 0 (the
+    NLP raised Pyomo's errors on them), naming the window."""
+    if isinstance(windows, Window) or not isinstance(windows, (list, tuple)):
+        raise InputError(problem(WHERE, "windows", f"a list of Window, not {type(windows).__name__}"))
+    lines = []
+    for i, w in enumerate(windows):
+        if not isinstance(w, Window):
+            lines.append(problem(WHERE, f"windows[{i}]", f"a Window(distance, earliest, latest, min_speed, max_speed) "
+                                 f"in m, s and m/s, not {type(w).__name__}"))
+            continue
+        values = [w.distance, w.earliest, w.latest, w.min_speed, w.max_speed]
+        if not all(v is None or (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0) for v in values):
+            lines.append(problem(WHERE, f"windows[{i}]", f"finite numbers at least 0, not {w}"))
+        elif not 0 < w.distance < distance:
+            lines.append(problem(WHERE, f"windows[{i}].distance", f"{w.distance:g} m is not strictly between the "
+                                 f"stops (0 to {distance:g} m)"))
+        elif (w.earliest is not None and w.latest is not None and w.earliest > w.latest) or (
+                w.min_speed is not None and w.max_speed is not None and w.min_speed > w.max_speed):
+            lines.append(problem(WHERE, f"windows[{i}]", f"earliest after latest or min_speed above max_speed: {w}"))
+    if lines:
+        raise InputError(lines)
 
 
 def _named(exc, timing):
@@ -177,7 +208,7 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
     over the all-out time [%] or an arrival window (earliest, latest) [s]; verified by simulation.
     ``objective="time"`` is the all-out run (no timing); ``mixed`` weighs time against energy."""
     timing = _timing(running_time, supplement_percent, window)
-    _check(objective, points=points)
+    _check(objective, track, train, points=points)
     timed = any(x is not None for x in (running_time, supplement_percent, window))
     if objective == "time" and timed:  # it would be ignored
         raise InputError(problem(WHERE, "objective", "'time' finds the fastest run: it takes no running_time, "
@@ -186,6 +217,7 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
         raise InputError(problem(WHERE, "running_time", "give running_time, supplement_percent or window (or "
                                  "objective='time' for the all-out run)"))
     from_stop, to_stop = chosen_stops(track, from_stop, to_stop, WHERE)
+    _check_windows(windows, abs(track.stops[to_stop] - track.stops[from_stop]))
     try:
         return Solution(solve_run(track, train, from_stop, to_stop, timing, objective=objective, points=points,
                                   windows=windows))
@@ -199,7 +231,8 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
 def pareto(track, train, from_stop=None, to_stop=None, count=20, supplement_max_percent=40.0, points=FRONT_POINTS,
            objective="energy", workers=1):
     """Energy against running time from the all-out run to ``supplement_max_percent`` over it."""
-    _check(objective, count=count, supplement_max=supplement_max_percent, points=points, workers=workers)
+    _check(objective, track, train, ENERGIES, count=count, supplement_max=supplement_max_percent, points=points,
+           workers=workers)
     from_stop, to_stop = chosen_stops(track, from_stop, to_stop, WHERE)
     table, runs = sweep(track, train, from_stop, to_stop, count=count, supplement_max=supplement_max_percent * PERCENT,
                         points=points, objective=objective, workers=workers)
@@ -212,9 +245,12 @@ def replanner(track, train, from_stop=None, to_stop=None, running_time=None, win
     """A :class:`~ecostudy.ocp.restart.Replanner`: one model re-solved from any :class:`State`; a
     running time (or window) no run from the departure meets is refused first, as :func:`solve` refuses it."""
     timing = _timing(running_time, None, window)
-    _check(objective, points=points)
+    _check(objective, track, train, points=points)
     if running_time is None and window is None:
         raise InputError(problem(WHERE, "running_time", "a re-planner needs a running time or an arrival window"))
+    if objective == "time" and running_time is not None:  # the running time fixes the arrival: nothing to minimise
+        raise InputError(problem(WHERE, "objective", "'time' plans the earliest arrival in a window: it takes no "
+                                 "running_time"))
     from_stop, to_stop = chosen_stops(track, from_stop, to_stop, WHERE)
     case = prepare(track, train, from_stop, to_stop, points)
     latest = running_time if running_time is not None else timing.window[1]

@@ -22,7 +22,7 @@ from ecostudy.core.status import Status
 from ecostudy.core.types import Timing
 from ecostudy.core.units import number, signed
 from ecostudy.das.advice import failed_advice
-from ecostudy.das.methods import das_run
+from ecostudy.das.methods import DAS_METHODS, das_run
 from ecostudy.io.results import file_digest
 from ecostudy.io.writers import check_output_dir, default_output, write_json
 from ecostudy.ocp import session
@@ -30,7 +30,8 @@ from ecostudy.report.drawer import drawing
 from ecostudy.report.files import RUN_FIGURES, write_fixed_step, write_run
 from ecostudy.report.style import output
 from ecostudy.studies.check import check_result
-from ecostudy.studies.options import case_from, check_options, das_limit, only_one, output_folder, parse_pair, timing_of
+from ecostudy.studies.options import (OBJECTIVES, case_from, check_choices, check_options, das_limit, only_one,
+                                      output_folder, parse_pair, timing_of)
 from ecostudy.studies.estimate import check_solve
 
 
@@ -98,6 +99,8 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
                   out, plot, das, das_time_limit, fig_format, dpi):
     figures = output(fig_format, dpi)
     check_options(time=time, supplement=supplement, points=points, das_time_limit=das_time_limit)
+    check_choices(objective=(objective, OBJECTIVES), das=(das, DAS_METHODS.names()),
+                  files={"study": study, "track": track, "train": train})
     only_one(time=time, supplement=supplement, window=window)
     timed = any(x is not None for x in (time, supplement, window))  # the options override a study's timing
     if objective == "time" and timed:
@@ -204,7 +207,7 @@ def export_folder(result_dir: Path, every: str = "1s") -> Note:
     """``ecostudy export``: a solve folder's run at fixed steps ('1s': seconds, '10m': metres) as
     profile_every_<step>.csv and .json in the folder; ``ok`` when the run exported is (its status is
     in the JSON and the text)."""
-    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|m)\s*", every or "")
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|m)\s*", every if isinstance(every, str) else "")
     if not match or not 0 < float(match.group(1)) < float("inf"):
         raise InputError(problem("command line", "--every", f"expected a step such as '1s' (seconds) or '10m' "
                                  f"(metres), not '{every}'"))

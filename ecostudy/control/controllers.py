@@ -102,7 +102,8 @@ class Replanning(Fallback):
                                         mass_scale=scale)
             if not plan.outcome.usable:  # late: arrive as soon as it can, within a minute more
                 self.late += 1
-                plan = self.replanner.solve(measured, arrival=(0.0, max(self.arrival, measured.time) + 60.0))
+                plan = self.replanner.solve(measured, arrival=(0.0, max(self.arrival, measured.time) + 60.0),
+                                            mass_scale=scale)
         finally:
             self.solve_seconds.append(time.perf_counter() - t0)
         self.iterations.append(plan.outcome.iterations)

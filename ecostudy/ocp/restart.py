@@ -19,7 +19,7 @@ from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
-from ecostudy.core.errors import InputError
+from ecostudy.core.errors import InputError, problem
 from ecostudy.core.grid import interval_of
 from ecostudy.core.status import Judged, Status, from_checks, solver_check
 from ecostudy.core.types import State, Train
@@ -192,6 +192,39 @@ class Plan(PlanArrays, Judged):
         return f"Plan({self.line()}; {self.status})"
 
 
+def _number(value: Any) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) \
+        and bool(np.isfinite(value))
+
+
+def check_plan_request(state: Any, end_speed: Any, arrival: Any, mass_scale: Any) -> None:
+    """Refuse a re-plan's arguments that no plan answers, one line each naming the argument: a
+    state that is not a :class:`State` of finite numbers (speed and clock at least 0), an end speed
+    that is not a (lowest, highest) pair of speeds [m/s], an arrival that is not a time or an
+    (earliest, latest) pair [s] after the state's clock, a mass scale that is not a positive number."""
+    where, lines = "arguments", []
+    if not isinstance(state, State):
+        lines.append(problem(where, "state", f"a State(position, speed, time) in m, m/s and s, not {state!r}"))
+    elif not all(_number(x) for x in (state.position, state.speed, state.time)) or state.speed < 0 or state.time < 0:
+        lines.append(problem(where, "state", f"finite numbers, the speed and clock at least 0, not {state}"))
+    pair = isinstance(end_speed, (tuple, list)) and len(end_speed) == 2 and all(_number(x) for x in end_speed)
+    if not pair or not 0 <= end_speed[0] <= end_speed[1]:
+        lines.append(problem(where, "end_speed", f"a (lowest, highest) pair of speeds [m/s], 0 <= lowest <= "
+                             f"highest, not {end_speed!r}"))
+    times = [arrival] if _number(arrival) else list(arrival) if isinstance(arrival, (tuple, list)) else None
+    if times is None or len(times) not in (1, 2) or not all(_number(x) for x in times) or times[0] > times[-1] \
+            or times[0] < 0:
+        lines.append(problem(where, "arrival", f"a time or an (earliest, latest) pair [s], at least 0, not {arrival!r}"))
+    elif isinstance(state, State) and _number(state.time) and times[-1] <= state.time:
+        lines.append(problem(where, "arrival", f"the latest arrival {times[-1]:g} s is not after the state's clock "
+                             f"{state.time:g} s"))
+    if not _number(mass_scale) or mass_scale <= 0:
+        lines.append(problem(where, "mass_scale", f"the train's mass over the model's, a number above 0, not "
+                             f"{mass_scale!r}"))
+    if lines:
+        raise InputError(lines)
+
+
 class Replanner:
     """One prepared case (``ocp.problem.prepare``) as a movable model, written once.
 
@@ -211,6 +244,7 @@ class Replanner:
         self.session = Session(self.model)
         self.stages["nl_write"] = self.stages.get("nl_write", 0.0) + self.session.nl_seconds
         self.arrival = f"at {latest:.2f} s" if window is None else f"in [{window[0]:.2f}, {window[1]:.2f}] s"
+        self.timing = (latest, latest) if running_time is not None else (float(window[0]), float(window[1]))  # type: ignore[index]
         self.objective, self.plans = objective, 0
         self.last: Plan | None = None
 
@@ -223,9 +257,16 @@ class Replanner:
     def solve(self, state: State = State(), end_speed: tuple[float, float] = (0.0, 0.0),
               arrival: float | Sequence[float] | None = None, options: Options | None = None,
               mass_scale: float | None = None) -> Plan:
+        """A plan from ``state`` (:class:`State`, SI) to the stop, arriving at ``arrival`` (a time or
+        (earliest, latest) [s] on the state's clock; None: the re-planner's own running time or window)
+        with a speed in ``end_speed`` [m/s] there, for a train of ``mass_scale`` times the model's mass
+        (None: the model's). Nothing is kept from one call to the next but the warm start: the same
+        call gives the same plan. A bad argument is one line naming it (``InputError``)."""
+        arrival = self.timing if arrival is None else arrival
+        mass_scale = 1.0 if mass_scale is None else mass_scale
+        check_plan_request(state, end_speed, arrival, mass_scale)
         m, nodes = self.model, self.case.nodes
-        if mass_scale is not None:
-            set_mass(self.session, m, mass_scale)
+        set_mass(self.session, m, float(mass_scale))
         set_start(self.session, m, nodes, state, self.case.train)
         set_end(self.session, m, end_speed, arrival)
         outcome = self.session.solve({**(self.options or {}), **(options or {})})

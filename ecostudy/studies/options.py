@@ -6,10 +6,11 @@ an input file); the functions of :mod:`ecostudy.api` call them first.
 """
 import math
 import numbers
+import os
 import re
 import warnings
 from pathlib import Path
-from typing import Any, Mapping, NamedTuple, Optional
+from typing import Any, Mapping, NamedTuple, Optional, Sequence, get_args
 
 from ecostudy.core import units
 from ecostudy.core.defaults import DAS_TIME_LIMIT_S, MAX_SUPPLEMENT_PERCENT
@@ -17,6 +18,7 @@ from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.types import Timing, Track, Train
 from ecostudy.io.documents import not_a_file, split_selector
 from ecostudy.io.loaders import check_fits, chosen_stops, read_track, read_train
+from ecostudy.io.schemas import StudyFile
 from ecostudy.studies.cases import load_checked_study, refuse_windows
 
 # the ranges of numeric options: the same as the study schema's where a field exists (io/schemas.py);
@@ -30,6 +32,20 @@ OPTION_RANGES = {
 }
 
 
+def check_choices(files: Mapping[str, Any] | None = None, **choices: tuple[Any, Sequence[str]]) -> None:
+    """Refuse, before anything is read or solved, a choice ``name=(value, allowed)`` that is not one
+    of its ``allowed`` words (None: not given) and a file option (``files``: name -> value) that is
+    not a path (a loaded Train where its file belongs, say): one line each, naming the option as the
+    command line spells it (the Python API renames them to its arguments)."""
+    lines = [problem("command line", f"--{name.replace('_', '-')}", f"expected one of {', '.join(allowed)}, not "
+                     f"{value!r}") for name, (value, allowed) in choices.items() if value is not None and value not in allowed]
+    lines += [problem("command line", f"--{name}", f"a path to a {name} file, not {type(value).__name__} {value!r:.60}"
+                      + (" (api.solve takes loaded ones)" if name != "study" else ""))
+              for name, value in (files or {}).items() if value is not None and not isinstance(value, (str, os.PathLike))]
+    if lines:
+        raise InputError(lines)
+
+
 def das_limit(das: Optional[str], das_time_limit: Optional[float]) -> float:
     """The MINLP search's time limit [s]: ``--das-time-limit`` or :data:`DAS_TIME_LIMIT_S`; given for
     advice other than ``minlp`` (or none), warned of as unused."""
@@ -39,6 +55,9 @@ def das_limit(das: Optional[str], das_time_limit: Optional[float]) -> float:
         warnings.warn(problem("command line", "--das-time-limit", "bounds the minlp search only: unused with "
                               + (f"--das {das}" if das else "no --das: give it with --das minlp")), EcostudyWarning, stacklevel=3)
     return float(das_time_limit)
+
+
+OBJECTIVES = get_args(StudyFile.model_fields["objective"].annotation)  # energy, net_energy, time, mixed
 
 
 DASK_ADDRESS = re.compile(r"(tcp|tls|ucx)://[^\s:/]+:\d{1,5}")  # a Dask scheduler's address

@@ -1,0 +1,48 @@
+"""The Python API refuses what no run answers in one line naming the argument, before solving, and
+its warnings name arguments, not options: a path where a loaded train belongs (and the reverse),
+timing windows that are not Windows of finite numbers between the stops (Pyomo's errors), a front
+or a re-planner asked to minimise time (an energy front labelled time-optimal), a solve folder's
+objective or advice method misspelt (a ValueError after the solve), an export step given as a
+number (a TypeError)."""
+import warnings
+
+import pytest
+
+from ecostudy import api
+from ecostudy.core.errors import EcostudyWarning, InputError
+
+from .conftest import TRACKS, TRAINS
+
+ROKIN, METRO = TRACKS / "amsterdam_rokin_centraal.yaml", TRAINS / "amsterdam_metro.yaml"
+TRACK, TRAIN = api.load_track(ROKIN), api.load_train(METRO)
+W = api.Window
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda: api.solve(TRACK, str(METRO), running_time=80), "arguments: train: a Train (api.load_train(path)"),
+    (lambda: api.solve(TRAIN, TRACK, running_time=80), "arguments: track: a Track"),
+    (lambda: api.solve(TRACK, TRAIN, running_time=80, windows=[W(-10.0, 30.0, 45.0)]), "arguments: windows[0]: finite"),
+    (lambda: api.solve(TRACK, TRAIN, running_time=80, windows=[W(2000.0)]), "windows[0].distance: 2000 m is not"),
+    (lambda: api.solve(TRACK, TRAIN, running_time=80, windows=W(500.0, 30.0, 45.0)), "arguments: windows: a list"),
+    (lambda: api.solve(TRACK, TRAIN, running_time=80, windows=[{"distance": 5}]), "windows[0]: a Window(distance"),
+    (lambda: api.solve(TRACK, TRAIN, running_time=80, windows=[W(500.0, 50.0, 40.0)]), "earliest after latest"),
+    (lambda: api.pareto(TRACK, TRAIN, count=3, objective="time"), "arguments: objective: expected one of energy, net_energy"),
+    (lambda: api.replanner(TRACK, TRAIN, running_time=80, objective="time"), "'time' plans the earliest arrival"),
+    (lambda: api.solve_folder(track=ROKIN, train=TRAIN, time=80), "arguments: train: a path to a train file, not Train"),
+    (lambda: api.solve_folder(track=ROKIN, train=METRO, time=80, objective="energi"), "arguments: objective: expected"),
+    (lambda: api.solve_folder(track=ROKIN, train=METRO, time=80, das="nope"), "arguments: das: expected one of round"),
+    (lambda: api.export_folder(TRACKS, every=1.0), "arguments: every: expected a step such as '1s'"),
+])
+def test_an_argument_no_run_answers_is_one_line_naming_it(call, words):
+    with pytest.raises(InputError) as refused:
+        call()
+    assert words in str(refused.value), str(refused.value)
+
+
+def test_a_warning_names_the_argument_not_the_option(tmp_path):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        api.solve_folder(track=ROKIN, train=METRO, time=80, das="round", das_time_limit=5, points=100,
+                         out=tmp_path / "o", plot=False)
+    said = [str(w.message) for w in caught if issubclass(w.category, EcostudyWarning)]
+    assert any(s.startswith("arguments: das_time_limit: bounds the minlp search only") for s in said), said
