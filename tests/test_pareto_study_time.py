@@ -114,3 +114,13 @@ def test_run_kind_pareto_writes_the_files_of_pareto_and_leaves_none_of_an_earlie
     assert {p.name for p in folder.iterdir()} == listed, listed
     assert {"pareto.json", "pareto.png", "pareto_profiles.png"} <= listed
     assert json.loads((folder / "pareto.json").read_text())["count"] == 21 == len(pd.read_csv(folder / "pareto.csv"))
+
+
+@pytest.mark.flagged_on_purpose  # K = 10: every point fails its re-simulation
+def test_a_fronts_savings_from_points_not_ok_say_so(tmp_path):
+    """Every point flagged, and the headline read `+5 % saves 30.6 %` as a result."""
+    result = CliRunner().invoke(app, ["pareto", str(STUDIES / "default.yaml"), "--count", "3", "-K", "10", "--workers",
+                                      "1", "--no-plot", "--out", str(tmp_path / "front")])
+    assert result.exit_code == 1, result.output
+    line = next(x for x in result.output.splitlines() if x.startswith("all-out "))
+    assert line.endswith("(of the all-out traction energy: points not ok among them, read their status)"), line
