@@ -147,6 +147,8 @@ def test_a_summary_edited_to_ok_over_a_run_short_of_its_stop_is_judged_again(tmp
     out = tmp_path / "coarse"
     assert runner.invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "10", "--no-plot",
                                "--out", str(out)]).exit_code == 1
+    said = runner.invoke(app, ["export", str(out)]).output  # flagged for its re-simulation: said once, not twice
+    assert said.count("outside tolerance (arrival +0.40") == 1, said
     summary = json.loads((out / "summary.json").read_text())
     summary.update(status="ok", not_ok=0, verification={**summary["verification"], "passed": True,
                                                          "stop_error_m": 0.0, "arrival_time_error_s": 0.0})

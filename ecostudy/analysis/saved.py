@@ -107,8 +107,9 @@ def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
                                      f"{totals[name]:.6g}: an edited file? solve again"))
     block, trace = verify(case.segment, train, case.nodes, u, totals["running_time_s"],
                       totals["traction_energy_kWh"] * KWH, case.windows, net_energy=totals["net_energy_kWh"] * KWH)
-    reasons = [] if within_tolerances(block) else [f"re-simulated from the saved profile, outside tolerance "
-                                 f"({Verification.from_dict(block).errors})"]
+    errors = Verification.from_dict(block).errors  # the saved status saying these very numbers: not said twice
+    reasons = [] if within_tolerances(block) or f"({errors})" in (saved.status.reason or "") else [
+        f"re-simulated from the saved profile, outside tolerance ({errors})"]
     reasons += [f"re-simulated from the saved profile, the timing point at {w['distance_m']:g} m is missed "
                 f"({w['simulated_time_s']:.1f} s, {w['simulated_speed_kmh']:.1f} km/h)"
                 for w in block["windows"] if not w["kept"]]
