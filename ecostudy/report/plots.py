@@ -1,6 +1,8 @@
 """Plots: speed against distance with limits, the gradient profile and the handle beneath; fronts,
 comparisons, journeys and a run's energy flow (networks: :mod:`ecostudy.report.netplots`). Every colour comes from
 :mod:`ecostudy.report.style`; every plot takes ``fmt`` (png, svg, pdf) and ``dpi``."""
+import textwrap
+
 import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
@@ -19,8 +21,6 @@ def titled(ax, title, status="ok", below="", width=110, fontsize=10):
     """``title`` wrapped at ``width`` characters (a long name clipped the numbers), then ``below``,
     and for a run that is not ``ok`` a line saying so with its reason, in red: a figure copied out
     of its folder still says it is not a result to quote. The axes move down to make room."""
-    import textwrap
-
     lines = (textwrap.wrap(title, width) or [""]) + ([below] if below else [])
     status = str(status)
     if status != "ok":
