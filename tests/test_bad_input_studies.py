@@ -97,7 +97,7 @@ def test_a_folder_given_as_the_study_file_is_named_a_folder(tmp_path, command):
     ("heavyhaul_fence.yaml", {"reference": {"running_time_s": 1}},
      "reference.running_time_s: infeasible: the fastest possible run takes"),
     ("network_metro_2trains.yaml", {"supplement_percent": None, "running_times_s": [10, 90, 90]},
-     "running_times_s: infeasible: the fastest possible run takes"),
+     "running_times_s: [0] Noord -> Station: infeasible: the fastest possible run takes"),
     ("network_metro_2trains.yaml", {"strategies": ["independent", "joint", "independent"]},
      "strategies: names must be unique ('independent' given twice)"),
     ("metro_monte_carlo.yaml", {"controllers": [{"name": "s", "kind": "sbpc", "delay_samples": 3}]},
@@ -368,3 +368,14 @@ def test_an_output_folder_that_is_a_file_is_refused_before_the_study_computes(tm
     afile = tmp_path / "afile"
     afile.write_text("x")
     refused(run(*command, STUDIES / shipped, "--out", afile, "--workers", 1), "afile", "the output folder is a file")
+
+
+def test_every_network_segment_no_run_keeps_is_named(tmp_path):
+    """Three segments too fast: only the first was named, without its index (fix, run, fix...)."""
+    result = run("network", hostile(tmp_path, "network_metro_2trains.yaml", supplement_percent=None,
+                                    running_times_s=[30, 60, 40]), "--workers", 1, "--no-plot")
+    lines = [x for x in result.output.splitlines() if x.startswith("error:")]
+    assert result.exit_code == 2 and len(lines) == 3, result.output
+    for k, pair in enumerate(("Noord -> Station", "Station -> Centrum", "Centrum -> Zuid")):
+        assert f"running_times_s: [{k}] {pair}: infeasible: the fastest possible run takes" in lines[k], lines
+    nothing_written(tmp_path)

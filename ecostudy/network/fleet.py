@@ -13,6 +13,7 @@ import numpy as np
 
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.defaults import FRONT_POINTS
+from ecostudy.core.errors import InfeasibleError
 from ecostudy.core.types import Timing
 from ecostudy.core.types import Supply
 from ecostudy.io.timetable import clock_steps
@@ -114,26 +115,37 @@ def _first_runs(track, train, cases, running_times, supplement, dt, points, pool
     runs, ended = [None] * len(pairs), [None] * len(pairs)
     jobs = {(submit(_all_out_time, all_out(k)) if t is None else submit(_net_energy_run, first(k, t))):
             (t is None, k) for k, t in enumerate(asked)}
-    pending = set(jobs)
+    pending, infeasible = set(jobs), {}
     while pending:
         done, pending = wait(pending, return_when=FIRST_COMPLETED)
         for job in done:
             timing, k = jobs[job]
+            try:
+                result = job.result()
+            except InfeasibleError as exc:  # every segment's, each named: not one fix and run at a time
+                infeasible[k] = [f"[{k}] {pairs[k][0]} -> {pairs[k][1]}: {p}" for p in exc.problems]
+                continue
             if timing:
-                fastest, ended[k] = job.result()
+                fastest, ended[k] = result
                 asked[k] = fastest * (1 + supplement)
                 follow = submit(_net_energy_run, first(k, asked[k]))
                 jobs[follow] = (False, k)
                 pending.add(follow)
             else:
-                runs[k] = job.result()
+                runs[k] = result
+    if infeasible:
+        raise InfeasibleError([p for k in sorted(infeasible) for p in infeasible[k]])
     return asked, runs, ended
 
 
 def _done(fn, *args):
-    """``fn(*args)`` run now, as a finished future (the one-process stand-in for ``pool.submit``)."""
+    """``fn(*args)`` run now, as a finished future (the one-process stand-in for ``pool.submit``; its
+    error raised by ``result()``, as a pool's)."""
     job = Future()
-    job.set_result(fn(*args))
+    try:
+        job.set_result(fn(*args))
+    except Exception as exc:  # noqa: BLE001 - handed over as a pool hands it
+        job.set_exception(exc)
     return job
 
 
