@@ -181,7 +181,8 @@ def _check_windows(windows, distance):
                                  f"in m, s and m/s, not {type(w).__name__}"))
             continue
         values = [w.distance, w.earliest, w.latest, w.min_speed, w.max_speed]
-        if not all(v is None or (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0) for v in values):
+        if not all(v is None or (isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and v >= 0)
+                   for v in values):
             lines.append(problem(WHERE, f"windows[{i}]", f"finite numbers at least 0, not {w}"))
         elif not 0 < w.distance < distance:
             lines.append(problem(WHERE, f"windows[{i}].distance", f"{w.distance:g} m is not strictly between the "
