@@ -4,7 +4,6 @@ results :class:`Solution` and :class:`Front` (re-exported by :mod:`ecostudy.api`
 A bad argument is refused before anything is solved with one :class:`~ecostudy.core.errors.InputError`
 (``api.InputError``) whose lines name it: ``arguments: running_time: must be more than 0.0, not -5``.
 """
-import math
 import numbers
 from dataclasses import dataclass
 
@@ -15,7 +14,7 @@ from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import shown
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
-from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, problem
+from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, finite_number, problem
 from ecostudy.core.status import Judged, Status, worst
 from ecostudy.core.types import Timing, Track, Train, Window
 from ecostudy.core.units import PERCENT
@@ -181,7 +180,7 @@ def _check_windows(windows, distance):
                                  f"in m, s and m/s, not {type(w).__name__}"))
             continue
         values = [w.distance, w.earliest, w.latest, w.min_speed, w.max_speed]
-        if not all(v is None or (isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) and v >= 0)
+        if not all(v is None or (finite_number(v) and v >= 0)
                    for v in values):
             lines.append(problem(WHERE, f"windows[{i}]", f"finite numbers at least 0, not {w}"))
         elif not 0 < w.distance < distance:

@@ -1,6 +1,8 @@
 """Domain errors: each carries the one-line message a user sees (exit status 2 for input)."""
+import math
+import numbers
 from os import PathLike
-from typing import Iterable, Union
+from typing import Iterable, TypeGuard, Union
 
 
 class EcostudyError(Exception):
@@ -64,6 +66,12 @@ def printable(line: str) -> str:
     """``line`` with every character a terminal would not print as itself (a control character, a
     line or paragraph separator) written as its escape, so one problem stays one line."""
     return "".join(c if c.isprintable() else repr(c)[1:-1] for c in line)
+
+
+def finite_number(value: object) -> TypeGuard[float]:
+    """Whether ``value`` is a finite real number (numpy's included), not a bool: the one test every
+    number a user gives passes before its range is checked."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def problem(file: Union[str, PathLike[str]], field: str, message: str) -> str:

@@ -10,12 +10,11 @@
 
 The result is a dict in the YAML schema, validated afterwards like any YAML file.
 """
-import math
 from os import PathLike
 from typing import Any, Mapping, TypeAlias
 
 from ecostudy.core import units
-from ecostudy.core.errors import InputError, problem
+from ecostudy.core.errors import InputError, finite_number, problem
 from ecostudy.io.osrd import osrd_train
 from ecostudy.io.ttobench import metadata, ttobench_track, ttobench_train
 
@@ -60,7 +59,7 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
         if not isinstance(row, list) or len(row) != 5:
             lines.append(problem(path, where, "expected [position, lower time, upper time, lower speed, upper speed]"))
             continue
-        if any(x is not None and (isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x))
+        if any(x is not None and not finite_number(x)
                for x in row) or row[0] is None:
             lines.append(problem(path, where, f"expected finite numbers or null, got {row!r}"))
             continue

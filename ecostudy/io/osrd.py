@@ -24,7 +24,7 @@ from typing import Any, Mapping, TypeAlias
 import numpy as np
 
 from ecostudy.core import units
-from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.errors import EcostudyWarning, InputError, finite_number, problem
 from ecostudy.core.units import FloatArray
 
 Where: TypeAlias = str | PathLike[str]
@@ -37,7 +37,7 @@ DESCRIPTIVE = {"name", "railjson_version", "metadata", "version", "locked", "sup
 
 def _number(doc: Mapping[str, Any], key: str, path: Where, positive: bool = True) -> float:
     value = doc.get(key)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or (
+    if not finite_number(value) or (
             positive and value <= 0):
         raise InputError(problem(path, key, f"expected a {'positive ' if positive else ''}number, got {value!r}"))
     return float(value)

@@ -28,7 +28,7 @@ from typing import Any, Collection, Mapping, Sequence, TypeAlias
 import numpy as np
 
 from ecostudy.core import units
-from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.errors import EcostudyWarning, InputError, finite_number, problem
 
 Where: TypeAlias = str | PathLike[str]
 
@@ -54,7 +54,7 @@ def _convert(value: object, unit: object, dimension: str, path: Where, key: str)
     if factor is None:
         known = ", ".join(units.BY_DIMENSION[dimension])
         raise InputError(problem(path, key, f"unknown unit {unit!r} for a {dimension} (known: {known})"))
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if not finite_number(value):
         raise InputError(problem(path, key, f"expected a finite number, got {value!r}"))
     return float(value) * factor
 

@@ -19,7 +19,7 @@ from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
-from ecostudy.core.errors import InputError, problem
+from ecostudy.core.errors import InputError, finite_number, problem
 from ecostudy.core.grid import interval_of
 from ecostudy.core.status import Judged, Status, from_checks, solver_check
 from ecostudy.core.types import State, Train
@@ -192,11 +192,6 @@ class Plan(PlanArrays, Judged):
         return f"Plan({self.line()}; {self.status})"
 
 
-def _number(value: Any) -> bool:
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) \
-        and bool(np.isfinite(value))
-
-
 def check_plan_request(state: Any, end_speed: Any, arrival: Any, mass_scale: Any) -> None:
     """Refuse a re-plan's arguments that no plan answers, one line each naming the argument: a
     state that is not a :class:`State` of finite numbers (speed and clock at least 0), an end speed
@@ -205,20 +200,20 @@ def check_plan_request(state: Any, end_speed: Any, arrival: Any, mass_scale: Any
     where, lines = "arguments", []
     if not isinstance(state, State):
         lines.append(problem(where, "state", f"a State(position, speed, time) in m, m/s and s, not {state!r}"))
-    elif not all(_number(x) for x in (state.position, state.speed, state.time)) or state.speed < 0 or state.time < 0:
+    elif not all(finite_number(x) for x in (state.position, state.speed, state.time)) or state.speed < 0 or state.time < 0:
         lines.append(problem(where, "state", f"finite numbers, the speed and clock at least 0, not {state}"))
-    pair = isinstance(end_speed, (tuple, list)) and len(end_speed) == 2 and all(_number(x) for x in end_speed)
+    pair = isinstance(end_speed, (tuple, list)) and len(end_speed) == 2 and all(finite_number(x) for x in end_speed)
     if not pair or not 0 <= end_speed[0] <= end_speed[1]:
         lines.append(problem(where, "end_speed", f"a (lowest, highest) pair of speeds [m/s], 0 <= lowest <= "
                              f"highest, not {end_speed!r}"))
-    times = [arrival] if _number(arrival) else list(arrival) if isinstance(arrival, (tuple, list)) else None
-    if times is None or len(times) not in (1, 2) or not all(_number(x) for x in times) or times[0] > times[-1] \
+    times = [arrival] if finite_number(arrival) else list(arrival) if isinstance(arrival, (tuple, list)) else None
+    if times is None or len(times) not in (1, 2) or not all(finite_number(x) for x in times) or times[0] > times[-1] \
             or times[0] < 0:
         lines.append(problem(where, "arrival", f"a time or an (earliest, latest) pair [s], at least 0, not {arrival!r}"))
-    elif isinstance(state, State) and _number(state.time) and times[-1] <= state.time:
+    elif isinstance(state, State) and finite_number(state.time) and times[-1] <= state.time:
         lines.append(problem(where, "arrival", f"the latest arrival {times[-1]:g} s is not after the state's clock "
                              f"{state.time:g} s"))
-    if not _number(mass_scale) or mass_scale <= 0:
+    if not finite_number(mass_scale) or mass_scale <= 0:
         lines.append(problem(where, "mass_scale", f"the train's mass over the model's, a number above 0, not "
                              f"{mass_scale!r}"))
     if lines:
