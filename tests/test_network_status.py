@@ -5,7 +5,8 @@ from typer.testing import CliRunner
 from ecostudy.cli import app
 from ecostudy.core.types import Supply
 from ecostudy.io.loaders import load_track, load_train
-from ecostudy.network import fleet, strategies
+from ecostudy.core.errors import SolverError
+from ecostudy.network import fleet, joint, strategies
 
 from .conftest import TRACKS, TRAINS, write_yaml
 
@@ -58,3 +59,24 @@ def test_a_running_time_rounded_up_past_the_arrival_tolerance_is_flagged():
     assert out["trains"]["T1"]["arrival_s"] == 56.0 and out["trains"]["T1"]["verified"]
     assert out["totals"]["status"].startswith("flagged") and "time_step_s" in out["totals"]["status"], \
         out["totals"]["status"]
+
+
+def test_a_joint_optimum_a_current_limit_makes_infeasible_names_the_limit():
+    """600 A at 750 V lets the metro train draw 450 kW, 382 kW at its wheels (traction efficiency
+    0.85): its fastest run from Noord to Station then takes about 60 s, more than the 56 s asked.
+    The joint NLP has no point, and its reason says why with the numbers, not Ipopt's word alone;
+    the independent run's unserved traction names the limit too. With 2000 A the limit does not
+    explain a failure and is not named."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 1.0,
+                   Supply(position=650.0, max_current=600.0), points=200)
+    out = strategies.run_strategies(f, ["independent", "joint"], progress=None)
+    why = out["joint"]["failed"]
+    assert "max_train_current_A 600 A" in why and "450 kW" in why and "382 kW at its wheels" in why, why
+    slowest = float(why.split("then takes ")[1].split(" s")[0])
+    assert 56.0 < slowest < 70.0, why
+    assert "max_train_current_A 600 A or the line" in out["independent"]["totals"]["status"]
+    roomy = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 1.0,
+                       Supply(position=650.0, max_current=2000.0), points=200)
+    assert joint.why_not_powered(roomy, SolverError("joint optimum: Ipopt infeasible")) == \
+        "joint optimum: Ipopt infeasible"

@@ -114,22 +114,25 @@ def earliest_coasting_point(meets: Callable[[int], bool], last: int, first: int 
     return hi
 
 
-def envelope_speeds(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray) -> FloatArray:
+def envelope_speeds(segment: Segment, train: Train, nodes: FloatArray, limits: FloatArray,
+                    traction: Callable[[float], float] | None = None) -> FloatArray:
     """Fastest speeds: max traction forward from the start, max braking back from the stop.
+    ``traction``: the largest traction force [N] at a speed [m/s] if not the train's envelope (a
+    supply that caps it).
 
     Raises :class:`~ecostudy.core.errors.LineError` when maximum traction cannot keep the train moving.
     """
+    pull = traction if traction is not None else train.traction.force
     ds = np.diff(nodes)
     fixed = interval_grade_force(segment, train, nodes)
     a, b, c = interval_davis(segment, train, nodes)
     fwd = np.zeros_like(nodes)
     for k in range(len(ds)):
         v = fwd[k]
-        acc = min((train.traction.force(v) - davis_resistance(v, a[k], b[k], c[k]) - fixed[k]) / train.mass,
-                  train.max_acceleration)
+        acc = min((pull(v) - davis_resistance(v, a[k], b[k], c[k]) - fixed[k]) / train.mass, train.max_acceleration)
         v2 = v * v + 2 * ds[k] * acc
         if v2 <= 0 and k < len(ds) - 1:
-            raise LineError(stall_message(segment, nodes[k], train.traction.force(v),
+            raise LineError(stall_message(segment, nodes[k], pull(v),
                                                 davis_resistance(v, a[k], b[k], c[k]), fixed[k], v))
         fwd[k + 1] = min(np.sqrt(max(v2, 0.0)), limits[k + 1])
     out = np.minimum(fwd, braking_curve(segment, train, nodes, limits))

@@ -6,6 +6,7 @@ import time
 import numpy as np
 import pyomo.environ as pyo
 
+from ecostudy.core import kinematics
 from ecostudy.core.errors import SolverError
 from ecostudy.network import circuit, headway
 from ecostudy.network.fleet import REGULARISATION, energy_ref, following_legs, solve_model
@@ -35,7 +36,10 @@ def joint(fleet, start, one_handle=False, floating=False):
     iterations and another local optimum, 44.345 -> 44.292 kWh, its trains 61.1 and 63.6 m apart
     at the closest with buffer_m 60).
     """
-    runs, info = _solve(fleet, start, one_handle, floating, separated=False)
+    try:
+        runs, info = _solve(fleet, start, one_handle, floating, separated=False)
+    except SolverError as exc:
+        raise SolverError(why_not_powered(fleet, exc)) from None
     missed = buffer_missed(fleet, runs)
     if missed:  # the buffer binds: solved again with its rows
         try:
@@ -44,6 +48,31 @@ def joint(fleet, start, one_handle=False, floating=False):
             raise SolverError(why_not_separated(fleet, exc, missed)) from None
         info = {**again, **{k: info[k] + again[k] for k in ("build_s", "solve_s", "iterations")}}
     return runs, info
+
+
+def why_not_powered(fleet, exc):
+    """The reason the joint NLP has no usable point (``exc``: Ipopt's word), where the substation's
+    ``max_train_current_A`` explains it: a train draws at most V_s I_max at its pantograph (the bus
+    is at V_s at the most while it draws, eq. 7.8), eta_T V_s I_max at its wheels, and a segment
+    whose fastest run under that power (``kinematics.envelope_speeds``) takes longer than its running
+    time has no run at all. Else ``exc`` as it is."""
+    supply = fleet.supply
+    if not np.isfinite(supply.max_current):
+        return str(exc)
+    for leg in fleet.legs[0]:  # every train runs the same segment times
+        case = leg.case
+        train, cap = case.train, case.train.traction_efficiency * supply.voltage * supply.max_current
+        slowest = kinematics.running_time(kinematics.envelope_speeds(
+            case.segment, train, case.nodes, case.limits,
+            traction=lambda v: min(train.traction.force(v), cap / max(v, 1e-9))), case.nodes)
+        if slowest > leg.running_time:
+            seg = case.segment
+            return (f"{exc}: max_train_current_A {supply.max_current:g} A lets a train draw at most "
+                    f"{supply.voltage * supply.max_current / 1e3:.0f} kW at the substation's {supply.voltage:g} V, "
+                    f"{cap / 1e3:.0f} kW at its wheels (traction efficiency {train.traction_efficiency:g}): its fastest run "
+                    f"from {seg.from_stop} to {seg.to_stop} then takes {slowest:.1f} s, more than the segment's "
+                    f"{leg.running_time:g} s running time (max_train_current_A; supplement_percent or running_times_s)")
+    return str(exc)
 
 
 def why_not_separated(fleet, exc, missed):

@@ -30,6 +30,7 @@ few supervisor rounds, keeping the timetable; their regeneration is credited onl
 line could take then (:func:`supervised`). Every strategy is scored by the same network solve
 (``circuit.solve_steps``).
 """
+import math
 import time
 from concurrent.futures import as_completed
 
@@ -177,7 +178,9 @@ def _scored(fleet, runs, info, wall, mapper=map):
                   **guard_counts(runs))
     # only the joint optimum sees the circuit: another strategy's runs may ask for traction the
     # line cannot carry or a current limit forbids; it is not served and the result is flagged
-    flags = [f"{totals['unserved_kWh']:.3f} kWh of traction not served (current limit or line)"] \
+    limit = (f"max_train_current_A {fleet.supply.max_current:g} A or the line" if math.isfinite(fleet.supply.max_current)
+             else "the line: no pantograph voltage serves it")
+    flags = [f"{totals['unserved_kWh']:.3f} kWh of traction not served ({limit})"] \
         if totals["unserved_kWh"] > 1e-3 else []
     if not totals["all_verified"]:
         flags.append(resimulation_missed(fleet, checks))
