@@ -38,6 +38,7 @@ from ecostudy.studies.reachable import check_reachable
 from ecostudy.studies.workers import ticker
 
 FRONT_COUNT = 15  # points of each segment's front
+NEAR_BELOW, NEAR_SPLIT = 0.10, (0.5, 1.0, 1.5, 2.0)  # a mean supplement below NEAR_BELOW: front points at these multiples
 
 
 def too_short(total_time, fastest, basis=""):
@@ -290,11 +291,15 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
                                   f"runs' {fastest:.1f} s (kinematic envelope): the train would crawl")
         mean = max(total_time / fastest - 1.0, 0.0)
     reach = max(0.6, 2.5 * mean)
+    # a small supplement falls where the front bends most, below its evenly spaced points: points
+    # around it (measured on the metro line at +1 %: without them the equal-marginal split was 3.0 %
+    # above the whole-journey NLP and above the same percentage's 0.8 %)
+    near = tuple(f * mean for f in NEAR_SPLIT) if 0 < mean < NEAR_BELOW else ()
     tick = ticker(progress, len(pairs) * (5 + (scheduled is not None) + (plan is not None)))  # fronts, 4+ splits
     fronts = []
     for a, b in pairs:
         fronts.append(sweep(track, train, a, b, count=front_count, supplement_max=reach, points=points,
-                            workers=workers, verify_result=False, within_slowest=True)[0])
+                            workers=workers, verify_result=False, within_slowest=True, near=near)[0])
         tick()
     all_out = sum(float(f["running_time_s"].iloc[0]) for f in fronts)
     # each front's all-out run (its first row): the segment's all_out_time_s and supplement_pct

@@ -91,7 +91,7 @@ def _split(items, parts):
 
 def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, points=FRONT_POINTS,
           objective="energy", workers=1, warm=True, options=None, verify_result=True, progress=None,
-          within_slowest=False):
+          within_slowest=False, near=()):
     """The front as (table, results); results[0] is the all-out run itself.
 
     Parameters
@@ -104,6 +104,7 @@ def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, point
         chain at a time with ``workers`` > 1), as :func:`ecostudy.studies.batch.execute` calls it.
     within_slowest : bool  End the front at the longest running time solved
         (:func:`~ecostudy.ocp.problem.slowest_time`) where ``supplement_max`` would pass it.
+    near : sequence of float  Supplements [-] to solve besides (a journey's: where its split will fall).
     """
     stages = {}
     t0 = time.perf_counter()
@@ -112,7 +113,7 @@ def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, point
     allout = finish(case, m, outcome, stages, "time", t_allout, verify_result)
     if within_slowest:  # a hair inside (1 ppm): the solved times differ from the asked ones by about 1e-9
         supplement_max = min(supplement_max, slowest_time(case) * (1 - 1e-6) / t_allout - 1.0)
-    supplements = front_supplements(count, supplement_max)[1:]
+    supplements = front_supplements(count, supplement_max, near)[1:]
     times = t_allout * (1 + supplements)
     tick = ticker(progress, len(times) + 1)
     tick(1)  # the all-out run
@@ -134,15 +135,17 @@ def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, point
 REPORTED_SUPPLEMENTS = (0.05, 0.10)  # operators ask what +5 % and +10 % buy: always solved
 
 
-def front_supplements(count, supplement_max):
-    """Exactly ``count`` supplements from 0 to ``supplement_max``, +5 % and +10 % among them.
+def front_supplements(count, supplement_max, near=()):
+    """Exactly ``count`` supplements from 0 to ``supplement_max``, +5 % and +10 % among them, and
+    the supplements ``near`` (within the reach) before the evenly spaced ones.
 
     The front is strongly convex near the all-out time, so the reported savings are solved
     points, never interpolated between distant ones: the evenly spaced points are thinned until
     +5 % and +10 % fit in ``count`` (the largest gaps split if a point is still missing). With
     fewer than four points only the reported supplements that fit are kept.
     """
-    extra = [x for x in REPORTED_SUPPLEMENTS if x <= supplement_max + 1e-12][:max(0, count - 2)]
+    wanted = [x for x in near if 0 < x <= supplement_max + 1e-12] + list(REPORTED_SUPPLEMENTS)
+    extra = [x for x in wanted if x <= supplement_max + 1e-12][:max(0, count - 2)]
     for n in range(count, 1, -1):
         points = np.unique(np.round(np.concatenate([np.linspace(0.0, supplement_max, n), extra]), 12))
         if len(points) <= count:
