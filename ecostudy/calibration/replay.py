@@ -134,23 +134,29 @@ def speeds(log):
     return log.v if log.v is not None else np.abs(np.gradient(log.x, log.t))
 
 
+def _stretches(mask):
+    """(first, end) sample indices of each run of True in ``mask`` (end exclusive)."""
+    change = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
+    return zip(np.flatnonzero(change == 1), np.flatnonzero(change == -1))
+
+
 def standing(log, work):
-    """Samples at which the train stands: slow and without traction, for at least STANDING_TIME."""
-    v = speeds(log)
-    slow = (v < STANDING_SPEED) & (np.append(work, 0.0) <= 0.0) & (np.append(0.0, work) <= 0.0)
+    """Samples at which the train stands: slow and without traction, for at least STANDING_TIME. A
+    stand's samples that a noisy sensor reads above STANDING_SPEED, for less than STANDING_TIME
+    between slow ones and slow by the speed smoothed over SMOOTHING, are the stand's too (0.15 m/s
+    of noise reads above it in one sample of ten: the stand split into phantom runs of 1-5 s)."""
+    v, t = speeds(log), log.t
+    idle = (np.append(work, 0.0) <= 0.0) & (np.append(0.0, work) <= 0.0)
+    slow = (v < STANDING_SPEED) & idle
+    quiet = (smoothed(t, v) < STANDING_SPEED) & idle
+    for i, j in list(_stretches(~slow)):
+        if 0 < i and j < len(slow) and t[j - 1] - t[i] < STANDING_TIME and quiet[i:j].all():
+            slow[i:j] = True
     slow[0] |= v[0] < STANDING_SPEED  # at rest when the log starts, even if it departs at once
     out = np.zeros_like(slow)
-    i, n = 0, len(slow)
-    while i < n:
-        if slow[i]:
-            j = i
-            while j < n and slow[j]:
-                j += 1
-            if log.t[j - 1] - log.t[i] >= STANDING_TIME or i == 0:
-                out[i:j] = True
-            i = j
-        else:
-            i += 1
+    for i, j in _stretches(slow):
+        if t[j - 1] - t[i] >= STANDING_TIME or i == 0:
+            out[i:j] = True
     return out
 
 

@@ -70,20 +70,19 @@ def speed_reference(run, train, work):
     """The model's traction work at the wheel [J] following the logged speed of ``run`` (whose
     intervals have the logged work ``work``)."""
     weights = coefficients(train.mass, train.static_mass, train.davis) * train.mass
-    bounds = phase_bounds(work)
-    # a phase's end speeds from the samples of its first and last handle only: a coast and the braking
-    # after it are one phase, but a line through both bends where the brake is applied (down a steep
-    # grade the train gains speed coasting and loses it braking)
-    cuts = np.array([a for a, _ in phase_bounds(work, handle=True)] + [len(work)])
+    # a coast and the braking after it are phases of their own: over both at once the traction a
+    # heavier-running model needs while coasting was netted against the braking it then needs less
+    # of (a model with twice the Davis resistance: +10.0 % where it needs +20.9 %)
+    bounds = phase_bounds(work, handle=True)
+    scale = TRACTION_SHARE * np.max(np.abs(work)) if work.size else 0.0
 
     def speeds_at(s, e):
-        first, last = min(e, cuts[cuts > s][0]), max(s, cuts[cuts < e][-1])
-        return [end_speed(run.t[s:first + 1], run.v[s:first + 1], True) if s > 0 else (0.0, 0.0),
-                end_speed(run.t[last:e + 1], run.v[last:e + 1], False)]
+        return [end_speed(run.t[s:e + 1], run.v[s:e + 1], True) if s > 0 else (0.0, 0.0),
+                end_speed(run.t[s:e + 1], run.v[s:e + 1], False)]
     ends = [speeds_at(s, e) for s, e in bounds]
     total = 0.0
     for i, (s, e) in enumerate(bounds):
-        pulling = work[s] > 0
+        pulling = work[s] > scale
         # the handle changes inside a traction phase's edge interval: at the shared sample the
         # neighbouring phase's line is on the right side of the kink
         (v0, e0) = ends[i - 1][1] if pulling and i > 0 else ends[i][0]
