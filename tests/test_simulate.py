@@ -1,5 +1,7 @@
 """`ecostudy simulate`: controllers x Monte Carlo draws of the plant's deviations, resumable, one
 table per run and one per controller, plots; bad study input in one line."""
+import json
+
 import pandas as pd
 import pytest
 from typer.testing import CliRunner
@@ -81,8 +83,9 @@ def test_sbpc_with_a_driver_on_das_levels_runs_in_a_study(tmp_path):
 
 def test_rspc_runs_at_its_own_sample_time_and_only_runs_what_it_is_asked(tmp_path):
     """A controller's sample_time_s overrides the study's (Farooqi 2018's controllers at 0.38 s beside
-    a 10 Hz one in one study); --only computes one controller's runs and the rest stay 'missing'
-    without failing the command; the next run without --only computes them."""
+    a 10 Hz one in one study); --only computes one controller's runs and the rest stay 'missing': the
+    folder is not the study's whole answer, so its summary is flagged naming them (exit 1; it said
+    'ok' before); the next run without --only computes them."""
     path = study(tmp_path, track=str(TRACKS / "amsterdam_rokin_centraal.yaml"), train=str(TRAINS / "amsterdam_metro.yaml"),
                  window_s=[0, 76], points=200, sample_time_s=0.2, draws=2,
                  deviations={"mass": {"low": 0.95, "high": 1.05}, "braking": {"low": 0.95, "high": 1.05}},
@@ -90,8 +93,12 @@ def test_rspc_runs_at_its_own_sample_time_and_only_runs_what_it_is_asked(tmp_pat
                               {"name": "replayed", "kind": "ato"}])
     out = tmp_path / "o"
     first = runner.invoke(app, ["simulate", str(path), "--out", str(out), "--no-progress", "--only", "rspc"])
-    assert first.exit_code == 0, first.output
+    assert first.exit_code == 1, first.output
     assert "not run yet: 2 runs of replayed" in first.output
+    left = json.loads((out / "summary.json").read_text())
+    assert left["status"].startswith("flagged") and "not computed yet" in left["status"], left["status"]
+    assert left["cases"] == {"total": 4, "ok": 2, "flagged": 2, "failed": 0}, left["cases"]
+    assert "every case computed" not in (out / "report.html").read_text()
     runs = pd.read_csv(out / "runs.csv")
     rspc = runs[runs.controller == "rspc"]
     assert list(runs[runs.controller == "replayed"]["status"]) == ["missing", "missing"]

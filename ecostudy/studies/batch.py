@@ -24,7 +24,7 @@ from ecostudy.das.methods import advice_status, das_columns
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.io.store import Store, check_one_study, stored_counts
-from ecostudy.core.status import parsed, worst
+from ecostudy.core.status import flagged, parsed, worst
 from ecostudy.io.folder import files_listed, mark_stopped, remove_unlisted, write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.ocp.problem import Written
@@ -322,7 +322,9 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
     results = [compute is None or k in rows for k in (c["key"] for c in expanded.cases)]  # left out: not results
     # a kind's table may list its cases in another order (a front's by running time), its index their order
     in_order = table.sort_index() if sorted(table.index) == list(range(len(table))) else table
+    left = case_names([c for c, r in zip(expanded.cases, results) if not r])  # no result: the folder is not whole
     statuses = {**case_statuses([c for c, r in zip(expanded.cases, results) if r], in_order[results]),
+                **{name: flagged(NOT_COMPUTED) for name in left},
                 **(spec.verdict(table) if spec.verdict else {}), **(more or {})}
     earlier = files_listed(output)  # an earlier run's (this command's or `run --kind`'s): removed below if not this one's
     write_summary(output, kind, statuses, {spec.table_name: spec.table_file, **tables, **{
@@ -350,12 +352,16 @@ def expand_study(path):
 
 
 def case_statuses(cases, table):
-    """Every case's :class:`~ecostudy.core.status.Status`, named by its ``name`` or labels, from a study table's
-    ``status`` and ``reason`` columns."""
-    names = [c.get("name") or ", ".join(f"{k}={v}" for k, v in c["labels"].items()) or c["key"] for c in cases]
-    return parsed(names, table["status"], table["reason"] if "reason" in table else [None] * len(table))
+    """Every case's :class:`~ecostudy.core.status.Status`, by :func:`case_names`, from a study table's columns."""
+    return parsed(case_names(cases), table["status"], table["reason"] if "reason" in table else [None] * len(table))
 
 
+def case_names(cases):
+    """Each case's name in a folder's summary: its ``name``, else its labels, else its key."""
+    return [c.get("name") or ", ".join(f"{k}={v}" for k, v in c["labels"].items()) or c["key"] for c in cases]
+
+
+NOT_COMPUTED = "not computed yet: left out of this run (--only); run the command without it to compute it"
 RESULT_COLUMNS = {"running_time_s", "points", "status", "key", "reason", "wall_s", "verified"}  # never labels
 OUTPUT_NAMES = {"supplement_percent": "supplement_pct"}  # a swept field as the tables name it (core.columns)
 
