@@ -84,6 +84,28 @@ def test_killed_study_resumes_with_the_remaining_cases(reference, tmp_path):
     assert same_results(table, reference[0])
 
 
+def test_a_run_stopped_while_writing_its_files_leaves_no_earlier_summary_saying_ok(tmp_path):
+    """The cases all computed, the run stops while its table is written (a folder in the way of
+    results.csv: the writer fails as a full disk or a signal would stop it): summary.json is not the
+    earlier run's 'ok' beside a table it did not describe; it says the run stopped while writing."""
+    path = study_file(tmp_path, tmp_path / "out")
+    data = load_yaml(path)
+    write_yaml(path, {**data, "sweep": {"supplement_percent": [6]}})
+    run_study(path)
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["status"] == "ok"
+    write_yaml(path, {**data, "sweep": {"supplement_percent": [6, 12]}})
+
+    def in_the_way(done, failed, remaining, total):  # after the last case: the table cannot be written
+        if remaining == 0:
+            (tmp_path / "out" / "results.csv").unlink()
+            (tmp_path / "out" / "results.csv").mkdir()
+    with pytest.raises(OSError):
+        run_study(path, progress=in_the_way)
+    stopped = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert stopped["status"].startswith("failed: stopped while its files were written"), stopped["status"]
+    assert not (tmp_path / "out" / "report.html").exists()
+
+
 def test_an_interrupted_run_leaves_no_earlier_summary_saying_ok(tmp_path):
     """A finished study, then its sweep extended and the run stopped after one new case: the
     folder's summary.json was the finished run's (ok, 2 cases) for a study of 4 not finished. It

@@ -24,12 +24,13 @@ from ecostudy.das.methods import advice_status, das_columns
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
 from ecostudy.io.store import Store, check_one_study, stored_counts
-from ecostudy.core.status import flagged, parsed, worst
+from ecostudy.core.status import flagged, worst
 from ecostudy.io.folder import files_listed, mark_stopped, remove_unlisted, write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 from ecostudy.ocp.problem import Written
 from ecostudy.studies.cases import case_key, expand
 from ecostudy.studies.options import check_options
+from ecostudy.studies.studytable import NOT_COMPUTED, case_names, case_statuses, study_table
 from ecostudy.studies.estimate import RUN_BYTES_PER_POINT, run_seconds
 from ecostudy.studies.workers import arriving, worker_pool
 
@@ -309,14 +310,17 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
         check_one_study(output, expanded.cases[0]["study"])
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
+    def stopped(when):  # an earlier run's summary.json (ok, N cases) would speak for a study not finished
+        mark_stopped(output, f"stopped {when}; run the command again to finish",
+                     stored_counts(output / "results.sqlite", [c["key"] for c in expanded.cases]))
     try:
         counts, rows = stored_rows(expanded.cases, output / "results.sqlite", spec.task, workers, dask, retry_failed,
                                    progress, compute, spec.spread)
-    except Interrupted:  # an earlier run's summary.json (ok, N cases) would speak for a study not finished
-        mark_stopped(output, "stopped before every case was computed; run the command again to finish",
-                     stored_counts(output / "results.sqlite", [c["key"] for c in expanded.cases]))
+    except Interrupted:
+        stopped("before every case was computed")
         raise
     table = spec.table(expanded.cases, rows)
+    stopped("while its files were written")  # until this run's summary.json is: the tables are half rewritten
     write_csv(output / spec.table_file, table)
     drawn, tables = draw.write(output, expanded.cases, rows, table) if draw is not None else ([], {})
     results = [compute is None or k in rows for k in (c["key"] for c in expanded.cases)]  # left out: not results
@@ -349,43 +353,6 @@ def expand_study(path):
     skipped = []
     _, output, cases = expand(path, skipped)
     return Expanded(output, cases, {"skipped.csv": pd.DataFrame(skipped)} if skipped else {})
-
-
-def case_statuses(cases, table):
-    """Every case's :class:`~ecostudy.core.status.Status`, by :func:`case_names`, from a study table's columns."""
-    return parsed(case_names(cases), table["status"], table["reason"] if "reason" in table else [None] * len(table))
-
-
-def case_names(cases):
-    """Each case's name in a folder's summary: its ``name``, else its labels, else its key."""
-    return [c.get("name") or ", ".join(f"{k}={v}" for k, v in c["labels"].items()) or c["key"] for c in cases]
-
-
-NOT_COMPUTED = "not computed yet: left out of this run (--only); run the command without it to compute it"
-RESULT_COLUMNS = {"running_time_s", "points", "status", "key", "reason", "wall_s", "verified"}  # never labels
-OUTPUT_NAMES = {"supplement_percent": "supplement_pct"}  # a swept field as the tables name it (core.columns)
-
-
-def study_table(cases, rows):
-    """One row per case of the study, in study order: labels, status, reason and key results
-    (``rows``: the stored results by case key)."""
-    out = []
-    for case in cases:
-        row = rows.get(case["key"])
-        s = (row or {}).get("summary") or {}
-        ver = s.get("verification") or {}
-        labels = {f"swept_{k}" if k in RESULT_COLUMNS else OUTPUT_NAMES.get(k, k): v for k, v in case["labels"].items()}
-        out.append({**labels, "key": case["key"], "status": row["status"] if row else "missing",
-                    "reason": (row or {}).get("error"),
-                    "running_time_s": s.get("running_time_s"), "all_out_time_s": s.get("all_out_time_s"),
-                    "traction_energy_kWh": s.get("traction_energy_kWh"), "net_energy_kWh": s.get("net_energy_kWh"),
-                    "regenerated_energy_kWh": s.get("regenerated_energy_kWh"), "top_speed_kmh": s.get("top_speed_kmh"),
-                    "regime_sequence": (s.get("regimes") or {}).get("sequence"), "points": s.get("points"),
-                    "solver_status": (s.get("solver") or {}).get("status"), "verified": ver.get("passed"),
-                    "stop_error_m": ver.get("stop_error_m"), "wall_s": (row or {}).get("seconds")})
-        if any(c.get("das") for c in cases):
-            out[-1].update(s.get("das") or {})
-    return pd.DataFrame(out)
 
 
 def run_study_size(path, cases, workers=1):
