@@ -11,7 +11,8 @@ from contextlib import closing
 import numpy as np
 import pytest
 
-from ecostudy.studies.batch import run_study
+from ecostudy.io.store import Store
+from ecostudy.studies.batch import execute, run_study
 from ecostudy.studies.cases import expand
 
 from .conftest import assert_folder, killed_part_way, ROOT, TRACKS, TRAINS, load_yaml, write_yaml
@@ -321,3 +322,26 @@ def test_a_supplement_over_an_all_out_run_not_proven_optimal_is_flagged(tmp_path
     assert row["status"] == "flagged", row
     assert row["error"] == "Ipopt ended acceptable, not optimal; the all-out run: Ipopt ended acceptable, not optimal"
     assert row["summary"]["all_out_solver_status"] == "acceptable"
+
+
+def _dies_on_x(case):
+    """A case task whose worker process dies (SIGKILL, as the kernel's out-of-memory killer sends) on
+    the case 'x'; the others take 0.2 s each."""
+    if case["key"] == "x":
+        os.kill(os.getpid(), signal.SIGKILL)
+    time.sleep(0.2)
+    return {"key": case["key"], "status": "ok", "error": None, "summary": {"pid": os.getpid()}, "seconds": 0.2}
+
+
+def test_a_worker_process_that_dies_fails_its_own_case_and_the_study_goes_on(tmp_path):
+    """A worker killed in a case broke the whole pool: the command ended with an internal error
+    (BrokenProcessPool, exit 3), nothing written. Now the cases not finished run again in a new pool,
+    then each alone; the one that kills its own worker is stored failed with the reason, every other
+    case is stored ok."""
+    cases = [{"key": k, "study": "deaths", "scenario": "base", "labels": {"case": k}} for k in "abxcde"]
+    with closing(Store(tmp_path / "results.sqlite")) as store:
+        counts = execute(cases, store, task=_dies_on_x, workers=2)
+        rows = store.get([c["key"] for c in cases])
+    assert counts["computed"] == 6 and counts["failed"] == 1, counts
+    assert rows["x"]["status"] == "failed" and "worker process died" in rows["x"]["error"], rows["x"]
+    assert all(rows[k]["status"] == "ok" for k in "abcde"), rows

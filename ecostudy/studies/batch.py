@@ -7,6 +7,7 @@ infeasible or failed case is stored with its reason and the study goes on.
 import time
 import warnings
 from concurrent.futures import as_completed
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable, NamedTuple, Optional
@@ -105,11 +106,43 @@ def _serial(todo, task, arrived):
 
 
 def _processes(todo, workers, task, arrived):
-    with worker_pool(workers) as pool:  # interrupted: the workers stopped at once, their running cases lost
-        futures = {pool.submit(task, case): case for case in todo}
+    """The cases in ``workers`` processes (interrupted: the workers stopped at once, their running
+    cases lost). A worker that dies (killed for memory, a crash in a library) breaks its pool: the
+    cases not finished run again in a new pool, and after a second break each alone, one after
+    another, so that a case that kills its own worker is a failed result and the study goes on."""
+    left = list(todo)
+    for _ in range(2):
+        if left:
+            left = yield from _pooled(left, workers, task, arrived)
+    for case in left:
+        if (yield from _pooled([case], 1, task, arrived)):
+            yield case, died(case)
+
+
+def _pooled(cases, workers, task, arrived):
+    """(case, result) of ``cases`` run in a pool of ``workers`` as they finish; returns the cases
+    not finished when a worker died and broke the pool (none: every case finished)."""
+    finished = set()
+    with worker_pool(workers) as pool:
+        futures = {pool.submit(task, case): case for case in cases}
         with arriving(futures, arrived):
-            for future in as_completed(futures):
-                yield futures[future], future.result()
+            try:
+                for future in as_completed(futures):
+                    result = future.result()
+                    finished.add(future)
+                    yield futures[future], result
+            except BrokenProcessPool:  # every case not finished by then failed with it
+                for future in [f for f in futures if f not in finished and f.done() and f.exception() is None]:
+                    finished.add(future)
+                    yield futures[future], future.result()
+    return [case for future, case in futures.items() if future not in finished]
+
+
+def died(case):
+    """The result of a case whose worker process died while it alone ran in it."""
+    return {"key": case["key"], "status": "failed", "summary": None, "seconds": 0.0,
+            "error": "its worker process died (killed by the system, e.g. out of memory, or a crash in a library): "
+                     "computed alone after two broken pools, it killed its own worker too"}
 
 
 def _dask(todo, address, task, arrived):
