@@ -128,7 +128,7 @@ def summarise(case, result, controller, train, estimator):
     sample, (t_min, t_max) = case["sample_time"], case["window"]
     seconds = np.array(controller.solve_seconds)
     solved = seconds[seconds > 0] if np.any(seconds > 0) else np.zeros(1)
-    mass = train.mass * case["truth"]["mass"]
+    mass = train.static_mass * case["truth"]["mass"]  # J/kg per static mass Ms, as `solve` (Yazhemsky 2017 eq. 4.1a)
     x = [round(s.position, 3) for s in result.states]
     v = [round(s.speed, 4) for s in result.states]
     gaps = getattr(controller, "gaps", [])
