@@ -22,7 +22,7 @@ from ecostudy.core.physics import Envelope
 from ecostudy.core.status import STOP_TOLERANCE_M
 from ecostudy.core.units import KMH
 from ecostudy.io.loaders import load_track, load_train, track_from_dict
-from ecostudy.io.logfile import check_traction_sign, load_log, parse_log, write_log
+from ecostudy.io.logfile import check_traction_sign, load_log, parse_log, speed_scale, write_log
 
 from .conftest import TRACKS, TRAINS
 
@@ -112,6 +112,20 @@ def test_intervals_hold_the_true_parameters(calibrated, truth):
         assert row.boot_low - slack <= row.estimate <= row.boot_high + slack, (name, row.boot_low, row.estimate)
     assert (table.loc["mass", "high"] - table.loc["mass", "low"]) / 2 < 0.02 * true["mass"]
     assert calibrated.quality["structure_ratio"] < 1.5  # the filter's innovations are white
+
+
+def test_a_speed_sensor_off_in_scale_is_flagged_not_fitted_into_the_mass(inputs, logged):
+    """Speeds 0.5 % high (a worn wheel's diameter) and positions right: the fit alone ends ok with the
+    mass 1 % off and an interval of 0.03 % (60 standard deviations from the truth). The speeds give
+    1.005 times the positions' travel while the train runs: flagged, naming the log and the ratio.
+    The log as generated gives 1 within 0.01 %."""
+    track, train = inputs
+    frame = logged[0][0]
+    assert abs(speed_scale(as_log(frame)) - 1.0) < 1e-4
+    worn = frame.assign(speed_mps=frame["speed_mps"] * 1.005)
+    assert speed_scale(as_log(worn)) == pytest.approx(1.005, abs=2e-4)
+    result = calibrate_logs([as_log(worn, "worn")], track, train, ("mass", "davis_a", "efficiency"), draws=0)
+    assert result.status == "flagged" and "worn: its speeds give 1.005" in result.reason, result.reason
 
 
 def test_a_parameter_the_logs_do_not_excite_is_held(inputs, truth, logged):
