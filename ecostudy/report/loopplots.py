@@ -21,9 +21,10 @@ def _increasing(x, v):
     return x[keep], v[keep]
 
 
-def bands(runs, segment, path, title="", dpi=None):
+def bands(runs, segment, path, title="", dpi=None, ok=None):
     """Speed against distance per controller, one panel each, with the speed limit: the 5-95 %
-    band of the runs and their median (a single run: its profile)."""
+    band of the runs and their median (a single run: its profile). ``ok``: the runs ok per
+    controller, in each panel's title (red where some are not: the band is not of trusted runs)."""
     fig, axes = figure(len(runs), 1, figsize=(9, 2.6 * len(runs) + 0.6), sharex=True, squeeze=False)
     x_lim, v_lim = _steps(segment.limit, segment.distance)
     positions = np.linspace(0.0, segment.distance, 600)
@@ -36,7 +37,9 @@ def bands(runs, segment, path, title="", dpi=None):
             ax.fill_between(positions, low, high, color=colour, alpha=0.25, lw=0, label="5-95 % of the runs")
         ax.plot(positions, median, color=colour, lw=1.0, label="median" if len(group) > 1 else "run")
         ax.set_ylabel("speed [km/h]")
-        ax.set_title(f"{name}: {len(group)} runs", fontsize=9)
+        good = (ok or {}).get(name)
+        ax.set_title(f"{name}: {len(group)} runs" + ("" if good is None else f", {good} ok (runs.csv's status)"),
+                     fontsize=9, color=style.LIMIT["title" if good is None or good == len(group) else "not ok"])
         ax.set_ylim(bottom=0)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="lower center")
@@ -96,7 +99,8 @@ def draw(outcome, out=style.Output()):
     if not runs:
         return []
     names = list(out.filenames(FIGURES))
-    bands(runs, outcome.segment, folder / names[0], title=name, dpi=out.dpi)
+    ok = {c: int((g["status"] == "ok").sum()) for c, g in outcome.runs.groupby("controller")}
+    bands(runs, outcome.segment, folder / names[0], title=name, dpi=out.dpi, ok=ok)
     solve_times(runs, outcome.budgets, folder / names[1], title=name, dpi=out.dpi)
     if not any(s.get("estimates") for group in runs.values() for s in group):
         return names[:2]
