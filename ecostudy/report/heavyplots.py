@@ -15,8 +15,9 @@ def tracking(outcome, path, dpi=None):
     """Mean speed of every run and the reference speed against the head's position."""
     fig, ax = figure(figsize=(10, 4.5))
     ref = outcome.reference
+    given = outcome.study.reference.table is not None  # a user's speed-distance table, or the single-mass optimum
     ax.plot(ref.distance, to_kmh(ref.speeds), color=style.colour("reference"), lw=1.2,
-            label="reference (single-mass optimum)")
+            label="reference (the study's table)" if given else "reference (single-mass optimum)")
     palette = style.Palette()  # a colour per run, none the reference's black
     for i, case in enumerate(outcome.cases):
         p = outcome.summaries[case["key"]].get("profile")
