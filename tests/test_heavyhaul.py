@@ -321,3 +321,35 @@ def test_a_car_entering_a_curve_below_300_m_feels_roeckls_force_grow_without_a_j
     full = 60e3 * GRAVITY * 0.65 / (250 - 55)
     assert force[0] == 0.0 and force[-1] == pytest.approx(full)
     assert np.all(np.diff(force) >= -1e-9 * full) and np.max(np.diff(force)) < 1.01 * full * 0.001 / 12.0
+
+
+def test_brakes_oppose_the_motion_of_a_train_rolling_back_and_the_balance_closes():
+    """The two cars rolling back at 2 m/s on flat track, the locomotive's dynamic brake asked 50 kN
+    and the wagon's pneumatic brake its 100 kN (the paper's plant: no air-brake pipe): the brakes
+    slow the train at 150 kN / 160 t = 0.94 m/s^2 (to -1.06 m/s after 1 s, not -2.94) and it stands
+    after 2.1 s; the brakes' work is the kinetic energy it had, less what the couplers damp and store."""
+    plant = CascadePlant(two_cars(), flat())
+    start = plant.initial(head=100.0, speed=-2.0)
+    brake = np.array([-50e3, -100e3])
+    first = plant.step(start, brake, 1.0)
+    mean = float(np.dot(plant.consist.mass, first.state.speeds) / plant.consist.mass.sum())
+    assert mean == pytest.approx(-2.0 + 150e3 / 160e3, abs=1e-3)
+    last = plant.step(first.state, brake, 9.0)
+    assert np.abs(last.state.speeds).max() < 1e-3  # it stands, held by its brakes
+    assert last.state.positions[0] == pytest.approx(100.0 - 2.0 ** 2 / (2 * 150e3 / 160e3), abs=0.01)
+    braked = sum(s.dynamic_brake_work + s.wagon_brake_work for s in (first, last))
+    damped = sum(s.losses[3] for s in (first, last))
+    assert first.traction_work == last.traction_work == 0.0
+    assert braked == pytest.approx(plant.stored_energy(start) - plant.stored_energy(last.state) - damped, rel=1e-4)
+
+
+def test_brakes_hold_a_standing_train_against_a_grade_smaller_than_they_are():
+    """The two cars standing on a 5 per-mille fall (the grade pulls them on with 160 t g 0.005 =
+    7.8 kN) with the wagon's 100 kN brake on: they stand (a creep under 1 mm/s), where a brake
+    applied as a fixed force pushed them back up at 0.6 m/s^2; with the brake released they roll."""
+    plant = CascadePlant(two_cars(), flat(grade=(np.array([0.0]), np.array([-0.005]))))
+    state = plant.initial(head=100.0)
+    held = plant.step(state, np.array([0.0, -100e3]), 20.0).state
+    assert np.abs(held.speeds).max() < 1e-3 and abs(held.positions[0] - 100.0) < 0.02
+    rolled = plant.step(state, np.zeros(2), 20.0).state
+    assert rolled.speeds.min() > 0.9  # 20 s at g 0.005 = 0.049 m/s^2

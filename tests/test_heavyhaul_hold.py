@@ -67,7 +67,8 @@ def test_a_train_held_at_the_start_for_the_whole_run_says_so(tmp_path):
     run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
     assert result.exit_code == 1 and run["status"] == "flagged" and not run["arrived"]
     assert run["ended"] == "held on its brakes" and run["held_at_end"] and run["samples"] < 10
-    assert run["held_s"] == run["arrival_s"] == 20 * run["samples"]  # held from the first sample
+    assert run["held_s"] == run["ended_s"] == 20 * run["samples"]  # held from the first sample
+    assert np.isnan(run["arrival_s"]) and np.isnan(run["arrival_late_pct"])  # it never stood on the final approach
     assert run["traction_asked_at_end_kN"] < run["resistance_at_end_kN"]  # 1208 against 1451 kN measured
     assert run["reason"].startswith(f"held on its brakes at the start for {run['held_s']:.0f} s until the run ended "
                                     "(the same plan twice running from the same standing train")

@@ -12,6 +12,7 @@ from ecostudy.io.loaders import load_consist
 from ecostudy.core.units import KMH
 from ecostudy.heavyhaul.loop import STANDING, LoopRecord
 from ecostudy.heavyhaul.metrics import STOOD, Tolerances, ended, reasons
+from ecostudy.studies.heavyhaul import expand
 
 from .conftest import load_yaml, write_yaml
 from .test_heavyhaul_study import PAPER, study
@@ -43,6 +44,8 @@ def test_a_sample_cap_short_of_the_stop_is_flagged(tmp_path):
     assert run["status"] == "flagged" and not run["arrived"] and run["ended"] == "sample cap" and run["samples"] == 24
     assert "sample cap (24)" in run["reason"] and "before the stop" in run["reason"]
     assert run["stop_error_m"] < -1.0
+    assert run["ended_s"] == 20 * 24 and np.isnan(run["arrival_s"])  # it never arrived: no arrival time, no lateness
+    assert np.isnan(run["arrival_late_s"]) and np.isnan(run["arrival_late_pct"]) and "after the reference" not in run["reason"]
 
 
 def test_a_coupler_over_its_limit_and_a_stop_off_the_mark_are_flagged(tmp_path):
@@ -67,6 +70,19 @@ def test_a_coupler_over_its_limit_and_a_stop_off_the_mark_are_flagged(tmp_path):
     run = pd.read_csv(tmp_path / "exact" / "runs.csv").iloc[0]
     assert "the stop (tolerance 1e-06 m)" in run["reason"]  # it stood, but not at the stop: not arrived
     assert not run["arrived"] and run["ended"] in ("short of the stop", "beyond the stop")
+
+
+def test_an_energy_balance_that_does_not_close_is_a_reason():
+    """A residual beyond 0.1 % of the traction's work flags the run, naming the residual; the
+    integrator's usual error (1.6e-4 of traction at most on the shipped lines) does not."""
+    good = {"arrived": True, "ended": "at the stop", "stop_error_m": 0.1, "force_max_kN": 900.0, "force_limit_kN": 2000.0,
+            "speed_excess_kmh": 0.0, "arrival_late_s": 10.0, "arrival_late_pct": 1.0, "traction_kWh": 23011.5}
+    assert reasons({**good, "balance_residual_kWh": 3.6}, 100, 0) == []
+    assert reasons({**good, "balance_residual_kWh": -20315.9}, 100, 0) == [
+        "the energy balance does not close: residual -20315.90 kWh, 88 % of the 23012 kWh of traction (tolerance "
+        "0.1 % of traction): the plant's integration is not to be trusted"]
+    assert reasons({**good, "balance_residual_kWh": 3.6}, 100, 0, Tolerances(balance=1e-4))[0].startswith(
+        "the energy balance does not close: residual 3.60 kWh, 0.016 % of the 23012 kWh")
 
 
 def test_how_a_run_ended_is_read_from_its_record():
@@ -159,9 +175,24 @@ def test_bad_sweeps_are_refused_in_one_line(tmp_path, changes, words):
     ([(0, 0), (100, 20), (200, 30), (5000, 30)], ["reference.table", "ends at 30 km/h at 5000 m", "run past the stop"]),
     ([(0, 0), (100, 30), (2000, 0), (2100, 30), (5000, 0)], ["reference.table", "0 km/h at 2000 m", "stand there"]),
     ([(0, 30), (4900, 30), (5000, 0)], ["reference.table", "starts at 30 km/h", "from rest"]),
+    # 30 km/h to 0 in 10 m: (8.33 m/s)^2 / 20 m, beyond the ore train's 37 600 kN of brakes over 13 704 t
+    ([(0, 0), (100, 30), (4990, 30), (5000, 0)], ["ref.csv: 4990-5000 m (30 to 0 km/h)", "asks 3.47 m/s^2 of braking",
+                                                  "more than the 2.74 m/s^2", "cannot be followed"]),
 ])
 def test_unfollowable_reference_tables_are_refused_in_one_line(tmp_path, rows, words):
     refused(invoke(study(tmp_path, reference=reference_table(tmp_path, rows)), tmp_path / "out"), *words)
+
+
+def test_a_reference_table_braking_beyond_the_service_rate_is_followed_with_a_warning(tmp_path):
+    """30 km/h to 0 over the last 50 m asks 0.69 m/s^2: within the ore train's brakes (2.74 m/s^2),
+    beyond its 0.3 m/s^2 service rate: one line naming the table and the piece, and the study runs."""
+    path = study(tmp_path, reference=reference_table(tmp_path, [(0, 0), (100, 30), (4950, 30), (5000, 0)]))
+    with pytest.warns(EcostudyWarning) as caught:
+        expand(path, tmp_path / "out")
+    assert [str(w.message) for w in caught] == [
+        f"{tmp_path / 'ref.csv'}: 4950-5000 m (30 to 0 km/h): asks 0.69 m/s^2 of braking, within the 2.74 m/s^2 the "
+        "train's brakes give at the most (every brake at full force), beyond the 0.3 m/s^2 it brakes at in service "
+        "(reference.service_deceleration_mps2)"]
 
 
 def climb_study(tmp_path, permille, wagons=40, motors_kN=None, gradients=(), limit_kmh=60, start_permille=0, **changes):

@@ -56,6 +56,25 @@ def reference_problems(reference, segment, tolerance):
     return out
 
 
+def braking_asked(reference, utmost, service):
+    """What a reference (:class:`~ecostudy.heavyhaul.reference.Reference`) asks of the train's brakes
+    on its hardest braking piece, or None within ``service`` [m/s^2] (the service deceleration): (where,
+    what, refused), refused when it asks more than ``utmost`` [m/s^2] (every brake at its full force
+    over the train's mass, no grade or resistance counted): the train cannot follow it."""
+    rates = reference.decelerations
+    i = int(np.argmax(rates))
+    if rates[i] <= service:
+        return None
+    where = (f"{reference.distance[i]:.0f}-{reference.distance[i + 1]:.0f} m ({3.6 * reference.speeds[i]:.0f} to "
+             f"{3.6 * reference.speeds[i + 1]:.0f} km/h)")
+    refused = bool(rates[i] > utmost)
+    what = (f"asks {rates[i]:.2f} m/s^2 of braking, " + ("more than" if refused else "within")
+            + f" the {utmost:.2f} m/s^2 the train's brakes give at the most (every brake at full force)"
+            + (": it cannot be followed" if refused else f", beyond the {service:g} m/s^2 it brakes at in service "
+               "(reference.service_deceleration_mps2)"))
+    return where, what, refused
+
+
 def samples_to_start(needed, rate, groups):
     """Samples the locomotives need to ramp from 0 to the traction ``needed`` [N] at ``rate`` [N per
     sample per locomotive (virtual) car], ``groups`` of them ramping together."""

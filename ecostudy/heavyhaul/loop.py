@@ -120,10 +120,8 @@ def stopping(plant, reduction, reference, state, planned, ts):
     build-up and release are anticipated instead (:func:`~ecostudy.heavyhaul.approach.stopping_share`:
     the share of every brake, or where even coasting stands the train short, of the traction, that
     stands the head at the stop in the one-mass prediction); and the sample ends when the
-    train stands (brakes hold a
-    standing train, mean speed under :data:`STANDING`; the cascade plant's efforts are forces, so a
-    brake held on for the rest of Ts would push the train back: a piece lasts at most the time the
-    train needs to stop). One :class:`~ecostudy.heavyhaul.plant.CascadeStep` for the sample."""
+    train stands (mean speed under :data:`STANDING`; its brakes hold it, as friction; a piece lasts
+    at most the time the train needs to stop). One :class:`~ecostudy.heavyhaul.plant.CascadeStep` for the sample."""
     c, steps, u, now = plant.consist, [], planned, state
     end = state.time + ts
     while end - now.time > 1e-6 and mean_speed(plant, now) >= STANDING and len(steps) < 10 * ts / PIECE:

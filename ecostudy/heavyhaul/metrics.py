@@ -39,6 +39,9 @@ AT_LIMIT = 0.99  # dynamic braking at this share of its limit or more is "at the
 # Kniffler's 0.161, 7.5, 44; a consist's 126 t, 560 kN), so within 1 % a run is not shown to exceed dry
 # rail's grip; the plant's own arithmetic is exact (with adhesion on it clips the effort to the grip)
 ADHESION = adhesion.TOLERANCE
+# the plant's energy balance closes within 1.6e-4 of traction on every plant and shipped line (the
+# integrator's error, docs/heavyhaul.md): a residual beyond 0.1 % means the run is not to be trusted
+BALANCE = 1e-3
 
 
 class Tolerances(NamedTuple):
@@ -49,6 +52,7 @@ class Tolerances(NamedTuple):
     arrival: float = 0.05      # later than the reference's running time by this share of it [-] ...
     arrival_s: float = 60.0    # ... and by more than this [s]
     adhesion: float = ADHESION  # a locomotive's effort over mu(v) m g by more than this share [-]
+    balance: float = BALANCE   # the energy balance's residual beyond this share of the traction's work [-]
 
 
 def braking_samples(efforts, locomotives):
@@ -96,10 +100,10 @@ def run_metrics(record, reference, locomotives, force_limit, stop_tolerance=Tole
     terms = np.nansum(record.terms, axis=0)
     error = float(record.head[-1] - reference.distance[-1])
     end = ended(record, error, stop_tolerance)
+    at = float(record.times[-1]) if end in STOOD else np.nan  # a train that never stood has no arrival
     return {
-        "arrived": end == ENDS[0], "ended": end, "arrival_s": float(record.times[-1]),
-        "arrival_late_s": float(record.times[-1] - reference.running_time),
-        "arrival_late_pct": float(100 * (record.times[-1] / reference.running_time - 1)),
+        "arrived": end == ENDS[0], "ended": end, "ended_s": float(record.times[-1]), "arrival_s": at,
+        "arrival_late_s": at - reference.running_time, "arrival_late_pct": 100 * (at / reference.running_time - 1),
         "stop_error_m": error,
         **rollback(record.head, reference.distance[0], reference.distance[-1]),
         "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
@@ -215,7 +219,7 @@ def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
         asked += (f", stalled: the grade and resistance there ({held:.0f} kN) exceed the locomotives' utmost "
                   f"traction ({utmost:.0f} kN)")
     if metrics.get("held_at_end"):  # it never moved off, or stood held again, to the run's end
-        where = ("at the start" if metrics["held_s"] >= metrics["arrival_s"] - 1e-6
+        where = ("at the start" if metrics["held_s"] >= metrics["ended_s"] - 1e-6
                  else f"{-metrics['stop_error_m']:.0f} m before the stop")
         good = (" (the same plan twice running from the same standing train: it would stay held to the sample cap)"
                 if metrics["ended"] == "held on its brakes" else "")
@@ -250,6 +254,11 @@ def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
                    f"{metrics['adhesion_use_kmh']:.1f} km/h, {metrics['adhesion_use_time_s']:.0f} s, head at "
                    f"{metrics['adhesion_use_head_m']:.0f} m, which the plant does not limit (adhesion: false): "
                    "set adhesion: true or lower the locomotives' envelopes")  # no ';': it parts the reasons
+    residual, traction = metrics.get("balance_residual_kWh", 0.0), metrics.get("traction_kWh", 0.0)
+    if abs(residual) > tolerances.balance * traction:
+        share = f"{100 * abs(residual) / traction:.2g} % of the {traction:.0f} kWh of traction" if traction else "no traction"
+        out.append(f"the energy balance does not close: residual {residual:.2f} kWh, {share} (tolerance "
+                   f"{100 * tolerances.balance:g} % of traction): the plant's integration is not to be trusted")
     if over_budget_count:
         out.append(f"{over_budget_count} solves over Ts (the previous input was held)")
     return out

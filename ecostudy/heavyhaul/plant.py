@@ -12,10 +12,10 @@ a jump the stiff integrator must step through, 7 s per 20 s step on the shipped 
 radius the plant averages the curve force, not the curvature: a car entering a 250 m curve felt that
 jump half-way in (a 7 km line with a 250 m curve: 51.7 CPU s against 1.8 s for its 27 samples);
 on clothoids it reads the formula at the car's mean curvature. p_i is the travel position of car i's centre (the
-head car first), u_i its effort: traction or
-dynamic braking for a locomotive, pneumatic braking (<= 0) for a wagon, clipped at every instant to
-the car's envelope at its own speed. The couplers make the system stiff (k/m about 160 1/s^2, d/m
-about 23 1/s for the ore train), so the step uses scipy's BDF with the banded Jacobian sparsity.
+head car first), u_i its effort: traction or dynamic braking for a locomotive, pneumatic braking
+(<= 0) for a wagon, clipped at every instant to the car's envelope at its own speed; every brake acts
+as friction (:meth:`CascadePlant.applied`). The couplers make the system stiff (k/m about 160 1/s^2,
+d/m about 23 1/s for the ore train), so the step uses scipy's BDF with the banded Jacobian sparsity.
 Recorded: in-train forces (at the end and the largest over the step) and the works of the
 locomotives (traction, dynamic brake) and of the wagons' brakes, apart.
 
@@ -135,7 +135,7 @@ class CascadePlant:
         state = self.initial(head, speed, time)
         c = self.consist
         for _ in range(sweeps):
-            net = self.efforts(np.asarray(requested, float), state.speeds) - self.resistance(state.positions, state.speeds)
+            net = self.applied(np.asarray(requested, float), state.speeds) - self.resistance(state.positions, state.speeds)
             force = np.cumsum(net - c.mass * net.sum() / c.mass.sum())[:-1]
             stretch = force / c.stiffness if self.gear is None else draftgear.extension(force, self.gear)
             positions = head - np.concatenate([[0.0], np.cumsum(self.spacing + stretch)])
@@ -230,7 +230,7 @@ class CascadePlant:
         if not self.loco.any():
             return (0.0,) * 5
         v = speeds.T
-        u = self.efforts(requested, v, levels)[:, self.loco]
+        u = self.applied(requested, v, levels)[:, self.loco]
         use = np.abs(u) / np.maximum(self.grip(np.maximum(v, ENVELOPE_SPEED))[:, self.loco], 1.0)  # as envelopes
         k, j = np.unravel_index(np.argmax(use), use.shape)
         head = positions[0, k] + 0.5 * self.consist.length[0]
@@ -246,14 +246,23 @@ class CascadePlant:
         dynamic, upper = self.motor_envelopes(speeds)
         return np.where(self.loco, np.where(levels >= 0, levels * upper, levels * dynamic), u)
 
+    def applied(self, requested, speeds, levels=None, brakes=None):
+        """The efforts u_i [N] as they act on cars at ``speeds`` [m/s]: :meth:`efforts`, the wagons'
+        air-brake forces ``brakes`` in place of theirs when given; every brake (an effort below 0: a
+        locomotive's dynamic brake, a wagon's pneumatic brake) is a friction force, :func:`friction`
+        times its size: it opposes the motion, never drives a car (a train rolling back is braked, not
+        pushed back), and holds a standing car against up to its size."""
+        u = self.efforts(requested, speeds, levels)
+        if brakes is not None:
+            u = np.where(self.loco, u, brakes)
+        return np.where(u < 0, u * friction(speeds), u)
+
     def derivatives(self, y, requested, brakes=None, levels=None):
         """d/dt of (positions, speeds, works); ``brakes`` the wagons' air-brake forces now [N];
         ``levels`` the locomotives' notches (:meth:`levels`)."""
         n, c = self.n, self.consist
         p, v = y[:n], y[n:2 * n]
-        u = self.efforts(requested, v, levels)
-        if brakes is not None:  # a friction brake opposes the motion: never drives a train stopping under lagged brakes
-            u = np.where(self.loco, u, brakes * friction(v))
+        u = self.applied(requested, v, levels, brakes)
         elastic, hysteresis, damping = self.coupler_parts(p, v)
         fin = elastic + hysteresis + damping
         running = self.running(v)

@@ -46,15 +46,24 @@ class Reference(NamedTuple):
         return float(self.distance[i])
 
     @property
+    def decelerations(self):
+        """The deceleration of every piece between two points [m/s^2, > 0 braking]: the speed lost
+        over the piece's time (its mean speed, :func:`clock`)."""
+        return (self.speeds[:-1] - self.speeds[1:]) / np.diff(self.times)
+
+    @property
     def final_deceleration(self):
         """The deceleration of the reference's last piece into the stop [m/s^2, > 0]."""
-        return float((self.speeds[-2] - self.speeds[-1]) / (self.times[-1] - self.times[-2]))
+        return float(self.decelerations[-1])
 
     def speed_in(self, seconds, head):
         """v_r [m/s] ``seconds`` after the reference passes ``head`` [m] (its clock): beyond the stop the
         final deceleration continued, below zero, the speed a braking effort held past the stop gives
         the controller's linear model (eq. 2). A held last move (Nc < Np) then brakes into the stop at
-        the reference's rate rather than stopping within one sample to stand still for the rest."""
+        the reference's rate rather than stopping within one sample to stand still for the rest (held
+        at 0 the shipped runs stop short and crawl, 25 % late: docs/heavyhaul.md). The horizon's
+        target only: the reference itself (:meth:`speed`) is 0 at the stop, and the plant's brakes,
+        friction, never drive the train backwards."""
         times = self.time_at(head) + np.asarray(seconds, float)
         past = np.maximum(times - self.running_time, 0.0)
         return self.speed(self.position_at(times)) - self.final_deceleration * past

@@ -27,7 +27,8 @@ from ecostudy.core.grid import make_segment
 from ecostudy.core.units import KMH, KN, KWH
 from ecostudy.core.status import OK, part, unproven_columns, unproven_solves
 from ecostudy.heavyhaul.airbrake import application_time, brake_lag
-from ecostudy.heavyhaul.checks import reference_problems, ruling_grade, samples_to_start, starting_coupler_force
+from ecostudy.heavyhaul.checks import (braking_asked, reference_problems, ruling_grade, samples_to_start,
+                                       starting_coupler_force)
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
 from ecostudy.heavyhaul.linear import fence
 from ecostudy.heavyhaul.loop import reduced_state, run
@@ -72,6 +73,12 @@ def _reference(s, path, consist, track, from_stop, to_stop):
     return reference, part("the reference run", run.status)
 
 
+def _utmost_braking(consist):
+    """The deceleration of every brake at its full force (dynamic and pneumatic) over the train's mass [m/s^2]."""
+    train = single_mass(consist, 1.0)
+    return train.braking.max_force / train.mass
+
+
 def expand(path, out=None):
     """(study, output folder, reference, cases); inputs and the bad-input checks run here, once, the
     output folder (``out``, else the study's own) checked before the reference run is solved."""
@@ -100,6 +107,11 @@ def expand(path, out=None):
     reference, trusted = _reference(s, path, consist, track, from_stop, to_stop)
     field = "reference.table" if s.reference.table else "reference"
     problems = [problem(path, field, p) for p in reference_problems(reference, segment, s.speed_tolerance_kmh * KMH)]
+    braking = s.reference.table and not problems and braking_asked(  # of a table followable otherwise
+        reference, _utmost_braking(consist), s.reference.service_deceleration_mps2)
+    hard = problem(named_file(path, "reference.table", s.reference.table), *braking[:2]) if braking else None
+    if braking and braking[2]:  # beyond the brakes: refused (beyond the service rate: followed, said below)
+        problems.append(hard)
     problems += [problem(path, "fence", f"{f} is not within 1..{consist.cars} (the consist's cars)")
                  for f in s.fence if f > consist.cars]
     if s.effort_penalty == "magnitude" and s.qp_solver not in MAGNITUDE_FORMS:
@@ -123,6 +135,8 @@ def expand(path, out=None):
                                 f"{reference.running_time:.0f} s trip ends"))
     if problems:
         raise InputError(problems)
+    if hard:
+        warnings.warn(hard, EcostudyWarning, stacklevel=2)
     longest = max(h.np for h in s.horizons) * s.sample_time_s
     if longest > reference.running_time:
         raise InputError(problem(path, "horizons", f"a horizon of {longest:g} s (np x sample_time_s) is longer than "
@@ -269,7 +283,7 @@ COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_b
            "adhesion_use_kmh", "adhesion_use_effort_kN", "braking_samples", "stretch_braking_samples",
            "stretch_braking_kWh",
            "speed_excess_kmh", "running_resistance_kWh", "curve_resistance_kWh", "grade_kWh", "coupler_damping_kWh", "draft_gear_kWh", "stored_change_kWh",
-           "balance_residual_kWh", "arrived", "ended", "arrival_s", "arrival_late_s", "arrival_late_pct", "reference_time_s", "reference_kWh", "stop_error_m", "rollback_m", "stalled_before_stop_m", "stalled_after_start_m", "reference_at_end_kmh",
+           "balance_residual_kWh", "arrived", "ended", "ended_s", "arrival_s", "arrival_late_s", "arrival_late_pct", "reference_time_s", "reference_kWh", "stop_error_m", "rollback_m", "stalled_before_stop_m", "stalled_after_start_m", "reference_at_end_kmh",
            "speed_at_end_kmh", "rolling_back", "resistance_at_end_kN", "traction_utmost_at_end_kN", "held_s", "held_at_end",
            "traction_asked_at_end_kN", "samples", "virtual_cars",
            "qp_inputs", "qp_states", "qp_constraints", "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget_count",
