@@ -648,6 +648,21 @@ def test_calibrate_refuses_one_log_given_twice(tmp_path, log_files):
     assert "Traceback" not in result.output and not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("change", ["clock", "unit"])
+def test_calibrate_refuses_one_log_given_twice_under_another_clock_or_unit(tmp_path, logged, log_files, change):
+    """The same samples with a clock from midnight (time_s + 25920) or the speed in km/h were fitted
+    as two logs: every interval sqrt(2) narrower (Davis A 4013-4598 N, missing the true 3957 N) and
+    the bootstrap over logs one point. Compared in SI, each clock from its own start: refused."""
+    frame = logged[0][0]
+    copy = (frame.assign(time_s=frame["time_s"] + 25920.0) if change == "clock" else
+            frame.assign(speed_kmh=frame["speed_mps"] / KMH).drop(columns="speed_mps"))
+    write_log(tmp_path / "copy.csv", {"track": str(TRACK), "train": str(TRAIN)}, copy)
+    result = run("calibrate", log_files[0], tmp_path / "copy.csv", "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 2 and f"copy.csv: the same samples as {log_files[0]}" in result.output, result.output
+    assert ("its clock 25920 s later" in result.output) == (change == "clock"), result.output
+    assert not (tmp_path / "o").exists()
+
+
 def test_savings_against_the_logged_driving(inputs, calibrated, logged):
     """The optimum for each logged running time (verified by the plant) uses less traction energy
     than the logged driving; the band over parameter draws holds the central saving."""
