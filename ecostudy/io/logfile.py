@@ -78,7 +78,7 @@ class LoggedRun:
     v: np.ndarray | None = None         # [m/s]
     force: np.ndarray | None = None     # at the wheel, traction > 0, braking < 0 [N]
     power_wheel: np.ndarray | None = None  # [W]
-    power_line: np.ndarray | None = None   # drawn from the line > 0, fed back < 0 [W]
+    power_line: np.ndarray | None = None   # drawn from the line > 0, fed back < 0 [W]; NaN: left out (check_line_power)
     path: Path | None = None
     columns: tuple[str, ...] = field(default=())  # (position, speed, force, wheel power column) as the file names them
     resolution: dict[str, float] = field(default_factory=dict)  # quantity -> its column's last digit [SI] (last_digit)
@@ -295,8 +295,8 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
                     {COLUMNS[n][0]: last_digit(data[:, j]) * COLUMNS[n][1] for j, n in enumerate(names)})
     check_series(log, path)
     check_force_power(path, log.columns[1:], v, log.force, log.power_wheel)
-    check_line_power(path, column["power_line"][0] if "power_line" in column else "line_voltage, line_current", v,
-                     log.force, log.power_wheel, line)
+    log.power_line = check_line_power(path, column["power_line"][0] if "power_line" in column else
+                                      "line_voltage, line_current", v, log.force, log.power_wheel, line)
     check_plausible(path, names, data, COLUMNS)
     return log
 
