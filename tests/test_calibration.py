@@ -14,7 +14,7 @@ from ecostudy.calibration.estimate import calibrate_logs
 from ecostudy.calibration.fit import DEFAULT_FIT, priors
 from ecostudy.calibration.generate import (LogNoise, follow_work, generate_log, level_track, steady_log,
                                           steep_track, true_train)
-from ecostudy.calibration.replay import over_limit, prepare
+from ecostudy.calibration.replay import efficiency_samples, over_limit, prepare
 from ecostudy.calibration.validate import validate_log
 from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning, InputError
@@ -145,6 +145,22 @@ def steady_calibration(inputs, draws):
         result = calibrate_logs(logs, level_track(track), train, ("mass", "davis_a", "davis_b", "davis_c"), draws=draws)
     true = {"mass": truth.static_mass, "davis_a": truth.davis[0], "davis_b": truth.davis[1], "davis_c": truth.davis[2]}
     return result, true
+
+
+def test_a_parameter_only_one_log_informs_has_no_bootstrap_interval(tmp_path, inputs, log_files):
+    """The back log has no electric braking with a line power: only there shows the regeneration
+    efficiency, and every resample of the two logs gave it the same value, a bootstrap interval of
+    zero width (0.80083 to 0.80083 on the worked example's logs). Now NaN, saying why."""
+    assert efficiency_samples(load_log(log_files[1]), inputs[1])[1].size == 0
+    result = run("calibrate", *log_files, "--fit", "mass,davis_a,davis_b,davis_c,regeneration_efficiency", "--bootstrap", 10,
+                 "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 0, result.output
+    table = pd.read_csv(tmp_path / "o" / "parameters.csv").set_index("name")
+    assert table.loc["regeneration_efficiency", ["boot_low", "boot_high"]].isna().all(), table
+    assert table.loc["mass", "boot_low"] < table.loc["mass", "boot_high"], table
+    note = table.loc["regeneration_efficiency", "note"]
+    assert note.startswith("boot_low, boot_high NaN: only 1 of the 2 logs (there) informs it"), note
+    assert f"regeneration_efficiency: {note}" in result.output, result.output
 
 
 def test_a_davis_split_that_constant_speed_does_not_show_is_not_reported_with_narrow_intervals(inputs):

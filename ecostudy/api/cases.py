@@ -198,7 +198,7 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
                                                   title="calibration from logged runs")}, figures)
     write_html(out)
     q = result.quality
-    lines = [shown(result.table.dropna(axis=1, how="all"), CALIBRATION_COLUMNS),
+    lines = [shown(result.table.dropna(axis=1, how="all"), CALIBRATION_COLUMNS), *result.footnotes,
              f"{q['runs']} runs, {q['speed_samples']} speed samples: replayed speed off the logged by "
              f"{q['rms_speed_mps']:.3f} m/s RMS; innovations {q['structure_ratio']:.2f} times white noise over 5 s"]
     lines += [f"{row['log']} run {row['run']}: optimum for {row['running_time_s']:.1f} s uses "

@@ -11,7 +11,7 @@ of this line as the track file gives it), or a log pulled beyond the train file'
 (:func:`~ecostudy.calibration.replay.over_envelope`), or a fitted efficiency is above 1.
 """
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -20,7 +20,7 @@ from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, coefficients, over_
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.progress import stage
 from ecostudy.calibration.fit import (
-    MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, identify, scales, train_with, width_if_fitted,
+    MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, identify, informing, scales, train_with, width_if_fitted,
 )
 
 MAX_RMS_SPEED = 0.3    # [m/s]
@@ -50,6 +50,7 @@ class Calibration:
     train: object            # the calibrated :class:`~ecostudy.core.types.Train`
     free: list               # the parameters fitted (identified)
     covariance: np.ndarray   # of ``free`` (SI)
+    footnotes: list = field(default_factory=list)  # lines for under the printed table (name: what its row leaves out)
 
 
 def structure(residual, t):
@@ -86,7 +87,8 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     s = scales(problem.prior)
     boot, boot_unconverged = (bootstrap(problem, free, p, draws, seed, spread) if len(logs) > 1 and free and draws > 0
                               else (None, 0))
-    rows = []
+    seen = informing(problem, free, p) if boot is not None else {}
+    rows, footnotes = [], []
     for name in names:
         row = {"name": name, "unit": PARAMETERS[name][0], "prior": problem.prior[name], "estimate": theta[name],
                "std": np.nan, "low": np.nan, "high": np.nan, "boot_low": np.nan, "boot_high": np.nan,
@@ -95,8 +97,13 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
             j = free.index(name)
             row["std"] = float(np.sqrt(cov[j, j])) * s[name]
             row["low"], row["high"] = theta[name] - Z95 * row["std"], theta[name] + Z95 * row["std"]
-            if boot is not None:
+            if boot is not None and len(seen[name]) > 1:
                 row["boot_low"], row["boot_high"] = np.percentile(boot[:, j], [2.5, 97.5])
+            elif boot is not None:  # every resample of the logs gives it the same value: a point, not an interval
+                row["note"] = (f"boot_low, boot_high NaN: only {len(seen[name])} of the {len(logs)} logs "
+                               f"({', '.join(seen[name]) or 'none'}) informs it, so every resample of the logs gives it "
+                               "the same value; its 95 % interval is low to high")
+                footnotes.append(f"{name}: {row['note']}")
         rows.append(row)
     table = pd.DataFrame(rows)
     if "mass" in free and "rotating_mass_factor" not in names:  # only Ms (1 + f) is seen where gradients are small
@@ -145,4 +152,4 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                        "in the log (power in MW or W under kW names, force in daN under kN)?")
     scale = np.array([s[n] for n in free])
     return Calibration(table, "flagged" if reasons else "ok", "; ".join(reasons), residuals, quality, theta,
-                       train_with(train, theta), free, cov * np.outer(scale, scale))
+                       train_with(train, theta), free, cov * np.outer(scale, scale), footnotes)
