@@ -10,8 +10,8 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from ecostudy.calibration.estimate import calibrate_logs
-from ecostudy.calibration.fit import DEFAULT_FIT, priors
+from ecostudy.calibration.estimate import MAX_STRUCTURE, calibrate_logs, fitted_drifts
+from ecostudy.calibration.fit import DEFAULT_FIT, Problem, priors
 from ecostudy.calibration.generate import (LogNoise, follow_work, generate_log, level_track, steady_log,
                                           steep_track, true_train)
 from ecostudy.calibration.replay import efficiency_samples, over_limit, prepare
@@ -220,6 +220,23 @@ def test_validate_energy_difference_matches_an_independent_computation(inputs):
         assert abs(row.model_stop_error_m) < 100
 
 
+def test_validate_flags_positions_off_the_track_as_calibrate_does(inputs, truth, logged):
+    """The log's positions 250 m on along the line: validate passed its first run (`ok` at -1.65 % on
+    the worked example's log, -5.44 % on its true positions) where calibrate flagged the same log
+    (its residuals drift 7.65 times white noise). validate now fits the train to the log as
+    calibrate does and flags each run whose residuals drift, saying so."""
+    track, frame = inputs[0], logged[0][0]
+    assert max(fitted_drifts(Problem.from_logs([as_log(frame)], track, truth))) < MAX_STRUCTURE
+    shifted = as_log(frame.assign(position_m=frame["position_m"] + 250.0))
+    table = validate_log(shifted, track, truth)
+    for row in table.itertuples():
+        assert row.status == "flagged" and row.residual_drift_ratio > MAX_STRUCTURE, row
+        assert (f"residuals drift ({row.residual_drift_ratio:.1f} times white noise over 5 s, more than 2) at the train "
+                "fitted to this log") in row.reason, row.reason
+    calibrated = calibrate_logs([shifted], track, truth, DEFAULT_FIT, draws=0)
+    assert calibrated.quality["structure_ratio"] == pytest.approx(table["residual_drift_ratio"].max(), rel=1e-3)
+
+
 def test_a_log_whose_force_reads_zero_at_the_stand_replays_the_same(inputs, truth, logged):
     """A data logger samples the force an instant before the driver applies traction: zero at the
     departure row, the last at the stand's position. Under the logged handle the model leaves the
@@ -380,7 +397,8 @@ def test_validate_command(tmp_path, log_files):
     assert flagged and all(strict.output.count(c["status"].split(": ", 1)[1]) == 1 for c in flagged), strict.output
     lines = strict.output.splitlines()
     assert f"validate flagged: {len(flagged)} of 2 runs not within 1 % traction energy, 5 % running time, " \
-           "the stop tolerance of the log and 1 km/h of the line's limits (each below)" in lines and "ok" not in lines and "flagged" not in lines
+           "the stop tolerance of the log, 1 km/h of the line's limits and residuals within 2 times white noise over " \
+           "5 s at the train fitted to the log (each below)" in lines and "ok" not in lines and "flagged" not in lines
     assert lines[-1].startswith("validate: flagged, written to ")
 
 
@@ -534,7 +552,8 @@ def test_the_traction_sign_check_on_steep_grades(inputs, permille):
                          driver=lambda distance, rng: (np.array([0.0, 0.75]) * distance, [1.0, 0.0]))[0]
     for frame in (coast, climb):
         check_traction_sign(as_log(frame), track)
-        flipped = frame.assign(force_kN=-frame["force_kN"], power_wheel_kW=-frame["power_wheel_kW"])
+        flipped = frame.assign(force_kN=-frame["force_kN"], power_wheel_kW=-frame["power_wheel_kW"]).drop(
+            columns="power_line_kW")  # (against the line's sign, a wheel power's flipped is warned of as the line's)
         with pytest.raises(InputError, match="force_kN: not positive in .* beyond what the gradient gives"):
             check_traction_sign(as_log(flipped), track)
         with pytest.raises(InputError, match="power_wheel_kW: not positive in"):
