@@ -10,11 +10,11 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from ecostudy.calibration.estimate import calibrate_logs
-from ecostudy.calibration.fit import DEFAULT_FIT, priors
+from ecostudy.calibration.estimate import MAX_STRUCTURE, calibrate_logs, fitted_drifts
+from ecostudy.calibration.fit import DEFAULT_FIT, Problem, priors
 from ecostudy.calibration.generate import (LogNoise, follow_work, generate_log, level_track, steady_log,
                                           steep_track, true_train)
-from ecostudy.calibration.replay import over_limit, prepare
+from ecostudy.calibration.replay import efficiency_samples, over_limit, prepare
 from ecostudy.calibration.validate import validate_log
 from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning, InputError
@@ -161,6 +161,22 @@ def steady_calibration(inputs, draws):
     return result, true
 
 
+def test_a_parameter_only_one_log_informs_has_no_bootstrap_interval(tmp_path, inputs, log_files):
+    """The back log has no electric braking with a line power: only there shows the regeneration
+    efficiency, and every resample of the two logs gave it the same value, a bootstrap interval of
+    zero width (0.80083 to 0.80083 on the worked example's logs). Now NaN, saying why."""
+    assert efficiency_samples(load_log(log_files[1]), inputs[1])[1].size == 0
+    result = run("calibrate", *log_files, "--fit", "mass,davis_a,davis_b,davis_c,regeneration_efficiency", "--bootstrap", 10,
+                 "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 0, result.output
+    table = pd.read_csv(tmp_path / "o" / "parameters.csv").set_index("name")
+    assert table.loc["regeneration_efficiency", ["boot_low", "boot_high"]].isna().all(), table
+    assert table.loc["mass", "boot_low"] < table.loc["mass", "boot_high"], table
+    note = table.loc["regeneration_efficiency", "note"]
+    assert note.startswith("boot_low, boot_high NaN: only 1 of the 2 logs (there) informs it"), note
+    assert f"regeneration_efficiency: {note}" in result.output, result.output
+
+
 def test_a_davis_split_that_constant_speed_does_not_show_is_not_reported_with_narrow_intervals(inputs):
     """Level track at one constant speed: A + B v + C v^2 is seen at one v only. A term not
     identifiable is held at the file's value, and the terms still reported identifiable have
@@ -247,6 +263,23 @@ def test_a_noisy_speed_sensor_does_not_split_a_stand_into_runs(inputs):
     assert len(runs) == len(table) == 2
     for run, row in zip(runs, table.itertuples()):
         assert abs(row.logged_time_s - (run.t[-1] - run.t[0])) <= 1.0, (row.logged_time_s, run.t[-1] - run.t[0])
+
+
+def test_validate_flags_positions_off_the_track_as_calibrate_does(inputs, truth, logged):
+    """The log's positions 250 m on along the line: validate passed its first run (`ok` at -1.65 % on
+    the worked example's log, -5.44 % on its true positions) where calibrate flagged the same log
+    (its residuals drift 7.65 times white noise). validate now fits the train to the log as
+    calibrate does and flags each run whose residuals drift, saying so."""
+    track, frame = inputs[0], logged[0][0]
+    assert max(fitted_drifts(Problem.from_logs([as_log(frame)], track, truth))) < MAX_STRUCTURE
+    shifted = as_log(frame.assign(position_m=frame["position_m"] + 250.0))
+    table = validate_log(shifted, track, truth)
+    for row in table.itertuples():
+        assert row.status == "flagged" and row.residual_drift_ratio > MAX_STRUCTURE, row
+        assert (f"residuals drift ({row.residual_drift_ratio:.1f} times white noise over 5 s, more than 2) at the train "
+                "fitted to this log") in row.reason, row.reason
+    calibrated = calibrate_logs([shifted], track, truth, DEFAULT_FIT, draws=0)
+    assert calibrated.quality["structure_ratio"] == pytest.approx(table["residual_drift_ratio"].max(), rel=1e-3)
 
 
 def test_a_log_whose_force_reads_zero_at_the_stand_replays_the_same(inputs, truth, logged):
@@ -409,7 +442,8 @@ def test_validate_command(tmp_path, log_files):
     assert flagged and all(strict.output.count(c["status"].split(": ", 1)[1]) == 1 for c in flagged), strict.output
     lines = strict.output.splitlines()
     assert f"validate flagged: {len(flagged)} of 2 runs not within 1 % traction energy, 5 % running time, " \
-           "the stop tolerance of the log and 1 km/h of the line's limits (each below)" in lines and "ok" not in lines and "flagged" not in lines
+           "the stop tolerance of the log, 1 km/h of the line's limits and residuals within 2 times white noise over " \
+           "5 s at the train fitted to the log (each below)" in lines and "ok" not in lines and "flagged" not in lines
     assert lines[-1].startswith("validate: flagged, written to ")
 
 
@@ -563,7 +597,8 @@ def test_the_traction_sign_check_on_steep_grades(inputs, permille):
                          driver=lambda distance, rng: (np.array([0.0, 0.75]) * distance, [1.0, 0.0]))[0]
     for frame in (coast, climb):
         check_traction_sign(as_log(frame), track)
-        flipped = frame.assign(force_kN=-frame["force_kN"], power_wheel_kW=-frame["power_wheel_kW"])
+        flipped = frame.assign(force_kN=-frame["force_kN"], power_wheel_kW=-frame["power_wheel_kW"]).drop(
+            columns="power_line_kW")  # (against the line's sign, a wheel power's flipped is warned of as the line's)
         with pytest.raises(InputError, match="force_kN: not positive in .* beyond what the gradient gives"):
             check_traction_sign(as_log(flipped), track)
         with pytest.raises(InputError, match="power_wheel_kW: not positive in"):
@@ -691,6 +726,21 @@ def test_calibrate_refuses_one_log_given_twice(tmp_path, log_files):
     result = run("calibrate", log_files[0], copy, "--no-plot", "--out", tmp_path / "o")
     assert result.exit_code == 2 and "copy.csv: the same samples as" in result.output, result.output
     assert "Traceback" not in result.output and not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("change", ["clock", "unit"])
+def test_calibrate_refuses_one_log_given_twice_under_another_clock_or_unit(tmp_path, logged, log_files, change):
+    """The same samples with a clock from midnight (time_s + 25920) or the speed in km/h were fitted
+    as two logs: every interval sqrt(2) narrower (Davis A 4013-4598 N, missing the true 3957 N) and
+    the bootstrap over logs one point. Compared in SI, each clock from its own start: refused."""
+    frame = logged[0][0]
+    copy = (frame.assign(time_s=frame["time_s"] + 25920.0) if change == "clock" else
+            frame.assign(speed_kmh=frame["speed_mps"] / KMH).drop(columns="speed_mps"))
+    write_log(tmp_path / "copy.csv", {"track": str(TRACK), "train": str(TRAIN)}, copy)
+    result = run("calibrate", log_files[0], tmp_path / "copy.csv", "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 2 and f"copy.csv: the same samples as {log_files[0]}" in result.output, result.output
+    assert ("its clock 25920 s later" in result.output) == (change == "clock"), result.output
+    assert not (tmp_path / "o").exists()
 
 
 def test_savings_against_the_logged_driving(inputs, calibrated, logged):

@@ -14,6 +14,7 @@ from ecostudy.calibration.estimate import calibrate_logs
 from ecostudy.calibration.fit import DEFAULT_FIT
 from ecostudy.calibration.generate import generate_log, true_train
 from ecostudy.calibration.replay import prepare
+from ecostudy.calibration.validate import validate_log
 from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning, InputError
 from ecostudy.io.loaders import load_track, load_train
@@ -148,3 +149,20 @@ def test_a_parameter_fitted_at_its_bound_is_flagged(inputs):
     result = calibrate_logs(logs, track, train, DEFAULT_FIT, draws=0)
     assert result.status == "flagged" and "davis_b fitted at its bound 0 (the logs would have it below)" in \
         result.reason, result.reason
+
+
+@pytest.mark.parametrize("broken", ["flipped", "dead"])
+def test_a_line_power_with_its_sign_flipped_or_dead_is_warned_and_left_out(inputs, there, broken):
+    """validate wrote a logged line traction of 17.71 kWh (the flipped channel's braking) or 0 against
+    the true 71.46, with nothing said: the line/wheel ratio check needs 10 rows where both are
+    positive and was skipped. Now warned naming the column, and left out of the efficiency fit and
+    of validate's logged line energy (NaN)."""
+    frame = there.assign(power_line_kW=-there["power_line_kW"] if broken == "flipped" else 0.0)
+    with pytest.warns(EcostudyWarning, match=r"log.csv: power_line_kW: positive in 0 of the \d+ rows where the wheel "
+                                             r"power is positive above 3 m/s .* a sign flipped \(drawn is positive\) or "
+                                             r"a dead channel: left out"):
+        log = parse_log(text_of(frame), "log.csv")
+    table = validate_log(log, *inputs)
+    assert table["logged_line_traction_kWh"].isna().all() and (table["model_line_traction_kWh"] > 50).all(), table
+    result = calibrate_logs([log], *inputs, ("mass", "efficiency"), draws=0)
+    assert result.reason.startswith("efficiency not identifiable from these logs"), result.reason

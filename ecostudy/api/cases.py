@@ -14,7 +14,7 @@ from typing import Callable, Optional, Sequence
 
 from ecostudy.api.arguments import spelled
 from ecostudy.api.blas import limit_blas_threads
-from ecostudy.calibration.estimate import CHECKED
+from ecostudy.calibration.estimate import CHECKED, MAX_STRUCTURE, WINDOW
 from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH
 from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
@@ -198,7 +198,7 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
                                                   title="calibration from logged runs")}, figures)
     write_html(out)
     q = result.quality
-    lines = [shown(result.table.dropna(axis=1, how="all"), CALIBRATION_COLUMNS),
+    lines = [shown(result.table.dropna(axis=1, how="all"), CALIBRATION_COLUMNS), *result.footnotes,
              f"{q['runs']} runs, {q['speed_samples']} speed samples: replayed speed off the logged by "
              f"{q['rms_speed_mps']:.3f} m/s RMS; innovations {q['structure_ratio']:.2f} times white noise over 5 s"]
     lines += [f"{row['log']} run {row['run']}: optimum for {row['running_time_s']:.1f} s uses "
@@ -243,7 +243,8 @@ def validation_line(table, tolerances: dict) -> str:
     """What validate judged and how many runs passed (the reasons of those that did not: the problems)."""
     bad, bounds = int((table["status"] != "ok").sum()), (f"{tolerances['energy']:g} % traction energy, "
                                                          f"{tolerances['time']:g} % running time")
-    bounds += f", the stop tolerance of the log and {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits"
+    bounds += (f", the stop tolerance of the log, {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits and residuals "
+               f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s at the train fitted to the log")
     if not bad:
         return f"validate ok: every run of {len(table)} within {bounds}"
     return f"validate flagged: {bad} of {len(table)} runs not within {bounds} (each below)"

@@ -11,7 +11,7 @@ of this line as the track file gives it), or a log pulled beyond the train file'
 (:func:`~ecostudy.calibration.replay.over_envelope`), or a fitted efficiency is above 1.
 """
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -21,7 +21,7 @@ from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.progress import stage
 from ecostudy.io.logfile import scale_problem
 from ecostudy.calibration.fit import (
-    MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, identify, scales, train_with, width_if_fitted,
+    MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, identify, informing, scales, train_with, width_if_fitted,
 )
 
 MAX_RMS_SPEED = 0.3    # [m/s]
@@ -36,6 +36,7 @@ CHECKED = (f"every parameter fitted identifiable, replayed speed within {MAX_RMS
            f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s, logged speeds within {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits, "
            "logged traction within the train file's envelope")
 BOOTSTRAP_DRAWS = 200
+MOTION = ("mass", "davis_a", "davis_b", "davis_c")  # the parameters the replayed speed follows (the efficiencies do not move it)
 
 
 @dataclass
@@ -51,6 +52,7 @@ class Calibration:
     train: object            # the calibrated :class:`~ecostudy.core.types.Train`
     free: list               # the parameters fitted (identified)
     covariance: np.ndarray   # of ``free`` (SI)
+    footnotes: list = field(default_factory=list)  # lines for under the printed table (name: what its row leaves out)
 
 
 def structure(residual, t):
@@ -64,12 +66,43 @@ def structure(residual, t):
     return float(np.sqrt(np.mean(mean ** 2)) * np.sqrt(w) / np.std(residual))
 
 
+def drifts(problem, theta):
+    """The :func:`structure` of each run's standardised innovations at the parameters ``theta`` (SI), in
+    the order of ``problem.ordered_runs()``."""
+    weights = coefficients(*motion(theta))
+    return [structure(whitened @ weights, run.t[run.used]) for run, whitened in problem.ordered_runs()]
+
+
+def fitted_drifts(problem, names=MOTION):
+    """:func:`drifts` at the fit of ``names`` to ``problem``'s logs (:func:`~ecostudy.calibration.fit.identify`,
+    as calibrate fits them): above :data:`MAX_STRUCTURE`, no train of the model replays the logged
+    speed from the logged work along the logged positions. A run whose replay is not finite (an
+    infinite logged work, from the API) is left out of the fit, its drift NaN."""
+    finite = [bool(np.all(np.isfinite(whitened))) for whitened in problem.gains]
+    kept = replace(problem, runs=[r for r, f in zip(problem.runs, finite) if f],
+                   gains=[g for g, f in zip(problem.gains, finite) if f])
+    if not kept.runs:
+        return [np.nan] * len(finite)
+    free, p, *_ = identify(kept, list(names))
+    values = iter(drifts(kept, kept.theta(free, p)))
+    return [next(values) if f else np.nan for f in finite]
+
+
+def drift_reason(ratio):
+    """What a drift ``ratio`` above :data:`MAX_STRUCTURE` says, for a status reason."""
+    return f"residuals drift ({ratio:.1f} times white noise over {WINDOW:g} s, more than {MAX_STRUCTURE:g})"
+
+
+def motion(theta):
+    """(effective mass, static mass [kg], (A, B, C)) of the parameters ``theta`` (SI)."""
+    return (theta["mass"] * (1.0 + theta["rotating_mass_factor"]), theta["mass"],
+            (theta["davis_a"], theta["davis_b"], theta["davis_c"]))
+
+
 def residual_table(problem, theta):
-    mass = theta["mass"] * (1.0 + theta["rotating_mass_factor"])
-    davis = (theta["davis_a"], theta["davis_b"], theta["davis_c"])
     frames = []
     for run in problem.runs:
-        model = run.speed(mass, theta["mass"], davis)
+        model = run.speed(*motion(theta))
         frames.append(pd.DataFrame({"log": run.log, "run": run.index, "time_s": run.t, "position_m": run.x,
                                     "speed_mps": run.v, "model_speed_mps": model, "used": run.used}))
     out = pd.concat(frames, ignore_index=True)
@@ -87,7 +120,8 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     s = scales(problem.prior)
     boot, boot_unconverged = (bootstrap(problem, free, p, draws, seed, spread) if len(logs) > 1 and free and draws > 0
                               else (None, 0))
-    rows = []
+    seen = informing(problem, free, p) if boot is not None else {}
+    rows, footnotes = [], []
     for name in names:
         row = {"name": name, "unit": PARAMETERS[name][0], "prior": problem.prior[name], "estimate": theta[name],
                "std": np.nan, "low": np.nan, "high": np.nan, "boot_low": np.nan, "boot_high": np.nan,
@@ -96,8 +130,13 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
             j = free.index(name)
             row["std"] = float(np.sqrt(cov[j, j])) * s[name]
             row["low"], row["high"] = theta[name] - Z95 * row["std"], theta[name] + Z95 * row["std"]
-            if boot is not None:
+            if boot is not None and len(seen[name]) > 1:
                 row["boot_low"], row["boot_high"] = np.percentile(boot[:, j], [2.5, 97.5])
+            elif boot is not None:  # every resample of the logs gives it the same value: a point, not an interval
+                row["note"] = (f"boot_low, boot_high NaN: only {len(seen[name])} of the {len(logs)} logs "
+                               f"({', '.join(seen[name]) or 'none'}) informs it, so every resample of the logs gives it "
+                               "the same value; its 95 % interval is low to high")
+                footnotes.append(f"{name}: {row['note']}")
         rows.append(row)
     table = pd.DataFrame(rows)
     if "mass" in free and "rotating_mass_factor" not in names:  # only Ms (1 + f) is seen where gradients are small
@@ -112,13 +151,10 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
             warnings.warn(f"calibration: mass {note}", EcostudyWarning, stacklevel=2)
     residuals = residual_table(problem, theta)
     used = residuals[residuals["used"]]
-    mass = theta["mass"] * (1.0 + theta["rotating_mass_factor"])
-    davis = (theta["davis_a"], theta["davis_b"], theta["davis_c"])
-    drifts = [structure(whitened @ coefficients(mass, theta["mass"], davis), run.t[run.used])
-              for run, whitened in problem.ordered_runs()]
+    drift = drifts(problem, theta)
     blocks = problem.blocks(free, p)
     quality = {"rms_speed_mps": float(np.sqrt(np.mean(used["residual_mps"] ** 2))),
-               "structure_ratio": float(max(drifts)) if drifts else 1.0,
+               "structure_ratio": float(max(drift)) if drift else 1.0,
                "speed_samples": int(blocks["speed"].size), "traction_samples": int(blocks["traction"].size),
                "regeneration_samples": int(blocks["regeneration"].size), "runs": len(problem.runs),
                "noise": {"speed_mps": problem.sigma["speed"], **{f"{k}_share": v for k, v in problem.sigma.items() if k != "speed"}}}
@@ -130,8 +166,7 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
         reasons.append(f"speed residuals of {quality['rms_speed_mps']:.3g} m/s RMS (more than {MAX_RMS_SPEED} m/s; "
                        f"the logged speed's own noise is {problem.sigma['speed']:.2g} m/s)")
     if quality["structure_ratio"] > MAX_STRUCTURE:
-        reasons.append(f"residuals drift ({quality['structure_ratio']:.1f} times white noise over {WINDOW:g} s, "
-                       f"more than {MAX_STRUCTURE:g}): the model misses something the logs show")
+        reasons.append(f"{drift_reason(quality['structure_ratio'])}: the model misses something the logs show")
     reasons += [f"{run.log} run {run.index}: {why}" for run in problem.runs
                 if (why := over_limit(run.t, run.x, run.v, track))]
     reasons += [f"{log.name}: {why}" for log in logs for why in (over_envelope(log, train), scale_problem(log)) if why]
@@ -146,4 +181,4 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                        "in the log (power in MW or W under kW names, force in daN under kN)?")
     scale = np.array([s[n] for n in free])
     return Calibration(table, "flagged" if reasons else "ok", "; ".join(reasons), residuals, quality, theta,
-                       train_with(train, theta), free, cov * np.outer(scale, scale))
+                       train_with(train, theta), free, cov * np.outer(scale, scale), footnotes)

@@ -149,14 +149,15 @@ class Problem:
         return np.concatenate([b["speed"], b["traction"] / self.sigma["traction"],
                                b["regeneration"] / self.sigma["regeneration"]])
 
-    def jacobian(self, names, p, step=1e-5):
+    def jacobian(self, names, p, step=1e-5, logs=None):
+        """d residuals / d p by central differences, over the logs named in ``logs`` (None: all)."""
         cols = []
         for j in range(len(names)):
             hi, lo = np.array(p, float), np.array(p, float)
             hi[j] += step
             lo[j] -= step
-            cols.append((self.residuals(names, hi) - self.residuals(names, lo)) / (2 * step))
-        return np.column_stack(cols) if cols else np.zeros((len(self.residuals(names, p)), 0))
+            cols.append((self.residuals(names, hi, logs) - self.residuals(names, lo, logs)) / (2 * step))
+        return np.column_stack(cols) if cols else np.zeros((len(self.residuals(names, p, logs)), 0))
 
 
 def solve(problem, names, start=None, logs=None, fixed=None):
@@ -198,6 +199,17 @@ def width_if_fitted(problem, free, p, name):
     ``free`` at ``p`` (inf along a null direction: the logs see only a combination)."""
     cov = covariance(problem, [*free, name], np.append(p, 1.0))[0]
     return float(Z95 * np.sqrt(cov[-1, -1]) * scales(problem.prior)[name] / max(abs(problem.prior[name]), 1e-300))
+
+
+def informing(problem, names, p):
+    """{name: the logs whose residuals move with it at ``p``}: its column of the log's own Jacobian
+    above :data:`NULL_SINGULAR` of the largest log's (a regeneration efficiency moves only the
+    residuals of logs with electric braking and a line power). A parameter only one log informs has
+    the same value in every resample of a bootstrap over logs."""
+    logs = list(problem.traction)
+    norms = np.array([np.linalg.norm(problem.jacobian(names, p, logs=[log]), axis=0) for log in logs])
+    return {n: [log for log, size in zip(logs, norms[:, j]) if size > NULL_SINGULAR * norms[:, j].max()]
+            for j, n in enumerate(names)}
 
 
 def estimate_noise(problem, names, p):

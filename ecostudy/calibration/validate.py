@@ -25,14 +25,19 @@ model under the logged handle stops further from the logged stop than a driven r
 (``core.status.STOP_TOLERANCE_M``) plus what the replay itself moves the stop by
 (:func:`stop_tolerance`): its time and energy are then not those of the logged run; and when the
 logged speed broke the line's limit (:func:`~ecostudy.calibration.replay.over_limit`): a driver keeps
-to it, so the log is not a driven run of this line as the track file gives it.
+to it, so the log is not a driven run of this line as the track file gives it; and when the run's
+residuals drift at the train fitted to the log (:func:`~ecostudy.calibration.estimate.fitted_drifts`,
+calibrate's check): no train of the model replays the logged speed along the logged positions
+(positions offset from the track's, another line).
 """
 from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
-from ecostudy.calibration.replay import coefficients, line_power, over_limit, prepare, smoothed, wheel_work
+from ecostudy.calibration.estimate import MAX_STRUCTURE, drift_reason, fitted_drifts
+from ecostudy.calibration.fit import Problem
+from ecostudy.calibration.replay import coefficients, line_power, over_limit, smoothed, wheel_work
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Plant
 from ecostudy.core.progress import stage, step
@@ -165,7 +170,9 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
     differences, where the model stops, and the status."""
     rows, work_all = [], wheel_work(log)
     line = line_power(log)
-    runs = prepare(log, track, train)
+    with np.errstate(invalid="ignore", over="ignore"):  # a non-finite logged work (API): its run's drift is NaN
+        problem = Problem.from_logs([log], track, train)
+    runs, drift = problem.runs, fitted_drifts(problem)  # the runs' drift at the train fitted to the log, as calibrate's
     stage(f"replaying {log.name}", total=len(runs), unit="runs")
     for i, run in enumerate(runs):
         step(i, f"run {run.index}")
@@ -181,7 +188,7 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
                "model_stop_error_m": stop - run.distance,
                "logged_traction_kWh": to_kwh(logged), "model_traction_kWh": to_kwh(model),
                "traction_difference_pct": 100 * (model - logged) / logged if logged > 0 else np.nan,
-               "model_traction_at_logged_handle_kWh": to_kwh(handle_work)}
+               "model_traction_at_logged_handle_kWh": to_kwh(handle_work), "residual_drift_ratio": drift[i]}
         if line is not None:
             drawn = line[first:first + len(run.t) - 1]
             row["logged_line_traction_kWh"] = to_kwh(float(np.sum(np.maximum(drawn, 0.0) * np.diff(run.t))))
@@ -201,6 +208,10 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
                      f"running time is known to within about {2 * sampled:g} s, {200 * sampled / logged_time:.1f} %)" if 2 * sampled > 0.5 * time_tolerance * logged_time else "")
             reasons.append(f"running time {signed(row['time_difference_pct'], 1)} % off the log under the logged handle"
                            + known)
+        if drift[i] > MAX_STRUCTURE:
+            reasons.append(f"{drift_reason(drift[i])} at the train fitted to this log: no mass and running resistance "
+                           "replay the logged speed from the logged work along the logged positions (positions "
+                           "offset from the track's, or another line?)")
         overspeed = over_limit(run.t, run.x, run.v, track)
         if overspeed:
             reasons.append(overspeed)

@@ -66,6 +66,7 @@ JUMP = 10.0            # [m] a position step this much (plus half the speeds' di
 JUMP_SHARE = 0.1       # jumps in more than this share of the steps: not jumps but a unit mix-up
 PULLING = 0.3          # [m/s^2] speed gained faster than this over PULLING_TIME beyond what the gradient gives:
 PULLING_TIME = 2.0     # [s]  in traction; the work at the wheel must be positive there
+DIGITS = 9             # a column's last written digit is looked for down to 10^-DIGITS of its unit
 
 
 @dataclass
@@ -79,9 +80,10 @@ class LoggedRun:
     v: np.ndarray | None = None         # [m/s]
     force: np.ndarray | None = None     # at the wheel, traction > 0, braking < 0 [N]
     power_wheel: np.ndarray | None = None  # [W]
-    power_line: np.ndarray | None = None   # drawn from the line > 0, fed back < 0 [W]
+    power_line: np.ndarray | None = None   # drawn from the line > 0, fed back < 0 [W]; NaN: left out (check_line_power)
     path: Path | None = None
     columns: tuple[str, ...] = field(default=())  # (position, speed, force, wheel power column) as the file names them
+    resolution: dict[str, float] = field(default_factory=dict)  # quantity -> its column's last digit [SI] (last_digit)
 
     def named(self, field: str) -> Path:
         """The header's ``track`` or ``train`` file, relative to the log's folder; one not given or not
@@ -134,6 +136,37 @@ def read_table(text: str, path: Where) -> tuple[list[str], FloatArray]:
 def quantity_of(name: str) -> str:
     """The quantity a column name gives: its name without the unit (``speed_mph`` -> ``speed``; ``speed`` itself)."""
     return name if name in QUANTITIES else name.rsplit("_", 1)[0]
+
+
+def last_digit(values: FloatArray) -> float:
+    """The step of the last digit a column writes, in its own unit: 10^-d for the fewest decimals d
+    that write every value (to a thousandth of that digit: a float's own spacing allowed), else
+    10^-:data:`DIGITS`."""
+    for d in range(DIGITS + 1):
+        scaled = values * 10.0 ** d
+        if np.all(np.abs(scaled - np.round(scaled)) <= 1e-3):
+            return float(10.0 ** -d)
+    return float(10.0 ** -DIGITS)
+
+
+def repeats(log: "LoggedRun", other: "LoggedRun") -> float | None:
+    """The clock offset [s] by which ``log`` repeats ``other``, or None when it does not: as many rows,
+    and the time from each log's own start, the positions (where both have a position column) and
+    the speeds (where both have a speed column) in SI equal within the last digits the two files
+    write (:func:`last_digit`), whatever units their columns are in (``speed_kmh`` against
+    ``speed_mps``)."""
+    if len(log.t) != len(other.t):
+        return None
+    pairs = [("time", log.t - log.t[0], other.t - other.t[0])]
+    if INTEGRATED not in (log.columns[0], other.columns[0]):
+        pairs.append(("position", log.x, other.x))
+    if log.v is not None and other.v is not None:
+        pairs.append(("speed", log.v, other.v))
+    for quantity, a, b in pairs:
+        within = log.resolution.get(quantity, 0.0) + other.resolution.get(quantity, 0.0) + 1e-9 * float(np.max(np.abs(a)))
+        if np.any(np.abs(a - b) > within):
+            return None
+    return float(log.t[0] - other.t[0]) if len(pairs) > 1 else None
 
 
 def check_series(log: "LoggedRun", path: Where) -> None:
@@ -296,11 +329,12 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
 
     log = LoggedRun(name or Path(path).stem, header, t, x, v, get("force"), get("power_wheel"), line, Path(path),
                     (column.get("position", (INTEGRATED,))[0], *(column.get(q, ("",))[0]
-                                                                  for q in ("speed", "force", "power_wheel"))))
+                                                                  for q in ("speed", "force", "power_wheel"))),
+                    {COLUMNS[n][0]: last_digit(data[:, j]) * COLUMNS[n][1] for j, n in enumerate(names)})
     check_series(log, path)
     check_force_power(path, log.columns[1:], v, log.force, log.power_wheel)
-    check_line_power(path, column["power_line"][0] if "power_line" in column else "line_voltage, line_current", v,
-                     log.force, log.power_wheel, line)
+    log.power_line = check_line_power(path, column["power_line"][0] if "power_line" in column else
+                                      "line_voltage, line_current", v, log.force, log.power_wheel, line)
     check_plausible(path, names, data, COLUMNS)
     return log
 

@@ -5,9 +5,12 @@ written in another unit than its name says (a force in daN under ``force_kN``: a
 large) is not caught by either column alone. Calibration fits the wheel power; validation and the
 replay read the force where there is no power: the two must be the same traction.
 """
+import warnings
+from typing import Any
+
 import numpy as np
 
-from ecostudy.core.errors import InputError, problem
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.units import FloatArray
 from ecostudy.io.documents import Where
 
@@ -45,11 +48,16 @@ def check_plausible(path: Where, names: list[str], data: FloatArray, units: dict
                                          f"row{'s' if over.size > 1 else ''})"))
 
 
+def pulling(v: FloatArray, power: FloatArray) -> "np.ndarray[Any, np.dtype[np.bool_]]":
+    """The rows where ``power`` is positive and the speed above :data:`PULLING_SPEED`: the train pulls."""
+    return (power > 0) & (np.abs(v) > PULLING_SPEED)
+
+
 def pulling_ratio(v: FloatArray, top: FloatArray, bottom: FloatArray) -> tuple[float, int]:
     """(median of ``top`` / ``bottom``, rows) over the rows where both are positive and the speed is
     above :data:`PULLING_SPEED`, the train pulling (NaN and 0 rows when there are none): the one
     comparison of two of a log's traction channels."""
-    rows = (top > 0) & (bottom > 0) & (np.abs(v) > PULLING_SPEED)
+    rows = pulling(v, top) & (bottom > 0)
     if not rows.any():
         return float("nan"), 0
     return float(np.median(top[rows] / bottom[rows])), int(rows.sum())
@@ -79,19 +87,31 @@ def check_force_power(path: Where, columns: tuple[str, ...], v: FloatArray | Non
 
 
 def check_line_power(path: Where, line_name: str, v: FloatArray | None, force: FloatArray | None,
-                     wheel: FloatArray | None, line: FloatArray | None) -> None:
-    """Refuse, in one line naming ``path``, the line power's column(s) (``line_name``) and the median
-    ratio, a log whose wheel power (else force times speed) is not :data:`LINE_WHEEL` of its line
-    power where the train pulls: more at the wheel than the line gives cannot be, and less than
-    0.3 is no traction chain (a power in W under a kW name, a voltage in kV under a V name).
-    Not checked without a line power and a wheel power or force, or on fewer than
-    :data:`PULLING_ROWS` such rows."""
+                     wheel: FloatArray | None, line: FloatArray | None) -> FloatArray | None:
+    """The line power to use (``line``, or NaN where it is left out). Refused, in one line naming
+    ``path``, the line power's column(s) (``line_name``) and the median ratio, a log whose wheel power
+    (else force times speed) is not :data:`LINE_WHEEL` of its line power where the train pulls: more
+    at the wheel than the line gives cannot be, and less than 0.3 is no traction chain (a power in W
+    under a kW name, a voltage in kV under a V name). Where the wheel pulls in :data:`PULLING_ROWS`
+    rows or more but the line power is positive in fewer of them (a sign flipped, a dead channel
+    reading zero), the ratio cannot be judged and the line power would be a wrong number: it is left
+    out (NaN: no efficiency fitted from it, no logged line energy), warned in one line. Not checked
+    without a line power and a wheel power or force, or on fewer than :data:`PULLING_ROWS` such rows."""
     if line is None or v is None or (wheel is None and force is None):
-        return
-    ratio, rows = pulling_ratio(v, wheel if wheel is not None else force * np.abs(v), line)
+        return line
+    power = wheel if wheel is not None else force * np.abs(v)
+    traction = int(pulling(v, power).sum())
+    ratio, rows = pulling_ratio(v, power, line)
+    if traction >= PULLING_ROWS and rows < PULLING_ROWS:
+        warnings.warn(problem(path, line_name, f"positive in {rows} of the {traction} rows where the wheel power is positive "
+                              f"above {PULLING_SPEED:g} m/s (the train pulls; {PULLING_ROWS} needed): a sign flipped "
+                              "(drawn is positive) or a dead channel: left out (no efficiency fitted from it, no "
+                              "logged line energy)"), EcostudyWarning, stacklevel=2)
+        return np.full_like(line, np.nan)
     lo, hi = LINE_WHEEL
     if rows >= PULLING_ROWS and not lo <= ratio <= hi:
         raise InputError(problem(path, line_name, f"the wheel power is {ratio:.3g} times the line power (median over "
                                  f"{rows} rows where the train pulls above {PULLING_SPEED:g} m/s; a traction "
                                  f"chain gives {lo:g}-{hi:g}): the line power, voltage or current is in another "
                                  "unit or scale than its name says"))
+    return line

@@ -24,7 +24,7 @@ from ecostudy.calibration.validate import validate_log
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.io.documents import split_selector
 from ecostudy.io.loaders import check_fits, load_track, load_train
-from ecostudy.io.logfile import check_on_track, check_traction_sign, load_log
+from ecostudy.io.logfile import check_on_track, check_traction_sign, load_log, repeats
 from ecostudy.io.trainout import calibrated_document, write_train
 from ecostudy.core.status import Status, flagged
 from ecostudy.io.folder import write_summary
@@ -89,13 +89,15 @@ def load_inputs(log_paths, train_path, track_path):
     if len(set(names)) != len(names):
         raise InputError(problem("command line", "LOG", "two logs with the same file name: "
                                  + ", ".join(sorted({n for n in names if names.count(n) > 1}))))
-    seen: dict[bytes, str] = {}
-    for log in logs:  # one run given twice (a copy under another name) narrows every interval by sqrt(2)
-        samples = b"".join(np.ascontiguousarray(a).tobytes() for a in (log.t, log.x, log.v) if a is not None)
-        if samples in seen:
-            raise InputError(problem(log.path or log.name, "", f"the same samples as {seen[samples]}: one logged "
-                                     "run given twice would narrow every interval as if it were two"))
-        seen[samples] = str(log.path or log.name)
+    for i, log in enumerate(logs):  # one run given twice (a copy, its clock shifted or its units other) narrows every interval by sqrt(2)
+        for other in logs[:i]:
+            offset = repeats(log, other)
+            if offset is not None:
+                raise InputError(problem(log.path or log.name, "", f"the same samples as {other.path or other.name}"
+                                         + (f", its clock {abs(offset):g} s {'later' if offset > 0 else 'earlier'}" if offset else "") + " (time from each "
+                                         "log's start, positions and speeds in SI, within the last digits the files "
+                                         "write): one logged run given twice would narrow every interval as if it "
+                                         "were two"))
     track_path = Path(track_path) if track_path else logs[0].named("track")
     train_path = Path(train_path) if train_path else logs[0].named("train")
     for field, path, given in (("track", track_path, given_track), ("train", train_path, given_train)):
