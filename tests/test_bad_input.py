@@ -48,6 +48,8 @@ def solve_train(tmp_path, text, name="t.yaml"):
     (lambda t: t.replace("traction_efficiency: 0.85", "traction_efficiency: 0.007"), ["traction_efficiency"]),
     (lambda t: t + "\ndas_handle_levels: [0.5]\n", ["das_handle_levels", "braking level"]),
     (lambda t: t + "\ndas_handle_levels: [-1, .nan, 1]\n", ["das_handle_levels[1]", "finite number"]),
+    (lambda t: t + "\ndas_handle_levels: [-1, true, 1]\n", ["t.yaml: das_handle_levels[1]: expected a number or "
+                                                           "text, not true/false"]),
 ])
 def test_bad_train_files_are_one_line(tmp_path, edit, fragments):
     one_line(solve_train(tmp_path, edit(METRO.read_text())), *fragments)
@@ -134,6 +136,19 @@ def test_sweeps_refuse_repeated_values_and_keep_labels_apart(tmp_path):
     import pandas as pd
     table = pd.read_csv(tmp_path / "out" / "results.csv")
     assert list(table["swept_running_time_s"]) == [80, 85.5] and "running_time_s" in table
+
+
+@pytest.mark.parametrize("sweep, field", [
+    ({"supplement_percent": [True, 10]}, "sweep.supplement_percent[0]"),
+    ({"running_time_s": [80, False]}, "sweep.running_time_s[1]"),
+    ({"points": [100, True]}, "sweep.points[1]"),
+])
+def test_a_sweep_refuses_true_false_where_a_number_is_meant(tmp_path, sweep, field):
+    """As at the top level: ``supplement_percent: [true, 10]`` ran a case labelled supplement_pct=1
+    and ``running_time_s: [true, 80]`` a 1 s case, exit status 0."""
+    path = study(tmp_path, sweep=sweep)
+    one_line(run("run", path, "--no-progress"), f"{path}: {field}: expected a number or text, not true/false")
+    assert not (tmp_path / "out").exists()
 
 
 def test_a_damaged_store_keeps_its_readable_cases_and_a_foreign_one_is_named(tmp_path):

@@ -8,6 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from matplotlib.artist import Artist
 from matplotlib.colors import to_hex
 
 from ecostudy.analysis.energyflow import run_energy_flow
@@ -155,6 +156,33 @@ def test_figures_written_in_each_format_at_the_resolution_asked(rokin, tmp_path)
         style.output("jpeg")
     with pytest.raises(InputError, match="--dpi"):
         style.output("png", 5)
+
+
+class Failing(Artist):
+    """An artist whose drawing fails: the figure's file is open (SVG, PDF) when it is reached."""
+
+    def draw(self, renderer):
+        raise RuntimeError("drawing failed")
+
+
+@pytest.mark.parametrize("fmt", style.FORMATS)
+def test_a_figure_whose_drawing_fails_leaves_neither_part_of_it_nor_a_temporary_file(tmp_path, fmt):
+    """Every figure goes to a hidden temporary name and is renamed into place: a drawing stopped
+    halfway (an error here; SIGTERM in a command) leaves the earlier figure under the name, whole,
+    and no other file (matplotlib wrote the SVG and PDF straight to the name: 0 or a few bytes)."""
+    fig, ax = plots.figure()
+    ax.plot([0, 1], [0, 1])
+    fig.add_artist(Failing())
+    with pytest.raises(RuntimeError, match="drawing failed"):
+        style.save(fig, tmp_path / f"bands.{fmt}")
+    assert list(tmp_path.iterdir()) == []
+    earlier, _ = plots.figure()
+    style.save(earlier, tmp_path / f"bands.{fmt}")
+    whole = (tmp_path / f"bands.{fmt}").read_bytes()
+    with pytest.raises(RuntimeError, match="drawing failed"):
+        style.save(fig, tmp_path / f"bands.{fmt}")
+    assert [p.name for p in tmp_path.iterdir()] == [f"bands.{fmt}"]
+    assert (tmp_path / f"bands.{fmt}").read_bytes() == whole
 
 
 # --- the defects ------------------------------------------------------------------------------

@@ -1,5 +1,5 @@
-"""A study stopped by SIGTERM or SIGINT sent to its main process alone (`kill PID`) or to its process
-group (`timeout`, systemd, a batch scheduler): exit status 128 + the signal, one line saying what was kept, every
+"""A study stopped by SIGTERM, SIGHUP or SIGINT sent to its main process alone (`kill PID`) or to its process
+group (`timeout`, systemd, a batch scheduler; a closed terminal or SSH session): exit status 128 + the signal, one line saying what was kept, every
 case that reached the main process stored, no worker left running, no temporary file, no lock
 file; the same command again computes only the other cases."""
 import glob
@@ -112,12 +112,14 @@ def study(tmp_path, count, points=1000):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
 @pytest.mark.parametrize("group", [False, True], ids=["main process", "process group"])
-def test_sigterm_keeps_every_finished_case_and_stops_the_workers(tmp_path, group):
+def test_sigterm_keeps_every_finished_case_and_stops_the_workers(tmp_path, group, sig):
+    """SIGHUP (the terminal or SSH session closed) as SIGTERM: exit status 129 against 143."""
     out = tmp_path / "out"
     args = ["run", study(tmp_path, 10), "--workers", 2, "--no-progress"]
-    proc, _, err, kids, before = signalled(args, out / "results.sqlite", signal.SIGTERM, group=group)
-    kept = assert_stopped_cleanly(proc, err, kids, before, out, signal.SIGTERM, 10, "cases")
+    proc, _, err, kids, before = signalled(args, out / "results.sqlite", sig, group=group)
+    kept = assert_stopped_cleanly(proc, err, kids, before, out, sig, 10, "cases")
     assert not (out / "summary.json").exists()  # no table or summary of a part of the study
     again = ecostudy(args)
     stdout, err = again.communicate(timeout=600)
@@ -136,6 +138,30 @@ def test_sigint_to_the_main_process_of_a_front_keeps_every_finished_point(tmp_pa
     stdout, err = again.communicate(timeout=600)
     assert again.returncode == 0, err
     assert f"10 points: {kept} already stored, {10 - kept} computed now (0 failed)" in stdout
+
+
+HUNG_UP = """
+import signal, sys, time
+from ecostudy.core.interrupt import exit_status, stopped_by_signals
+with stopped_by_signals():
+    try:
+        signal.raise_signal(signal.SIGHUP)
+        time.sleep(0.5)
+    except KeyboardInterrupt:
+        sys.exit(exit_status())
+print("kept on")
+"""
+
+
+@pytest.mark.parametrize("nohup", [False, True], ids=["terminal", "nohup"])
+def test_sighup_stops_a_command_unless_it_was_started_with_nohup(nohup):
+    """SIGHUP raises KeyboardInterrupt as SIGTERM does, exit status 129; a command started with
+    ``nohup`` (SIGHUP inherited ignored) keeps it ignored and goes on."""
+    def start():
+        signal.signal(signal.SIGHUP, signal.SIG_IGN if nohup else signal.SIG_DFL)
+    r = subprocess.run([sys.executable, "-c", HUNG_UP], cwd=ROOT, capture_output=True, text=True, timeout=60,
+                       preexec_fn=start)
+    assert (r.returncode, r.stdout) == ((0, "kept on\n") if nohup else (128 + signal.SIGHUP, "")), r.stderr
 
 
 def test_results_that_reached_the_main_process_while_it_stored_a_case_are_stored(tmp_path):

@@ -1,7 +1,7 @@
 """The Typer application and what every command shares: messages through the ``ecostudy`` logger
 (``--quiet``, ``--verbose``, ``--log-file``), one-line errors (``--debug``: tracebacks), exit status:
 0 ok, 1 written but not ok (flagged or failed cases), 2 bad input or infeasible request, 3 solver
-failure or internal error, 130 interrupted (SIGINT), 143 terminated (SIGTERM)."""
+failure or internal error, 130 interrupted (SIGINT), 143 terminated (SIGTERM), 129 hung up (SIGHUP)."""
 import logging
 import sys
 import traceback
@@ -50,7 +50,7 @@ def _main(ctx: typer.Context,
 def call(debug, name, *args, force=False, bar=None):
     """``ecostudy.api.<name>(*args)``, the size guards lifted when ``force`` (:mod:`ecostudy.core.budget`);
     ``bar``: (label, off[, stored]) of a progress bar passed as ``progress`` (stored False: Ctrl-C keeps
-    nothing). Errors: one line and an exit code; warnings: log lines; SIGINT or SIGTERM: exit status 130 or 143."""
+    nothing). Errors: one line and an exit code; warnings: log lines; SIGINT, SIGTERM or SIGHUP: exit status 130, 143 or 129."""
     from ecostudy import api
 
     with warnings.catch_warnings(record=True) as caught, forced(force), stopped_by_signals(), api.command_line():

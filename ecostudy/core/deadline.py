@@ -17,6 +17,8 @@ from multiprocessing.connection import Connection
 from multiprocessing.process import BaseProcess
 from typing import Any, Callable
 
+from ecostudy.core.interrupt import TERMINATE
+
 Work = Callable[..., Any]  # work(post, *args): post(message) sends a message to the parent
 
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
@@ -24,10 +26,13 @@ PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 def die_with_parent(sig: int = signal.SIGTERM) -> None:
     """Ask Linux to send ``sig`` to this process when its parent dies (a killed command must not
-    leave children computing; elsewhere nothing is sent), and let SIGTERM end it at once: a forked
-    child inherits the command's own handler, which turns SIGTERM into KeyboardInterrupt
-    (:mod:`ecostudy.core.interrupt`) for the command to handle, not its children."""
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    leave children computing; elsewhere nothing is sent), and let SIGTERM and SIGHUP end it at once:
+    a forked child inherits the command's own handler, which turns them into KeyboardInterrupt
+    (:mod:`ecostudy.core.interrupt`) for the command to handle, not its children. One the command
+    ignores (SIGHUP under ``nohup``) stays ignored."""
+    for stop in TERMINATE:
+        if signal.getsignal(stop) is not signal.SIG_IGN:
+            signal.signal(stop, signal.SIG_DFL)
     try:
         ctypes.CDLL("libc.so.6", use_errno=True).prctl(PR_SET_PDEATHSIG, sig)
     except (OSError, AttributeError):

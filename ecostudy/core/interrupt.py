@@ -1,9 +1,10 @@
-"""A command stopped by a signal: SIGINT (Ctrl-C, ``kill -INT``) and SIGTERM (``kill``, ``timeout``,
-a batch scheduler, systemd) both raise ``KeyboardInterrupt`` in the main thread, so one path
-handles both (a study's results that reached the command stored, its workers stopped, its store
-closed and unlocked, no temporary file left); the exit status tells them apart (128 + the signal:
-130 for SIGINT, 143 for SIGTERM). A SIGINT that the command inherited as ignored (a job started
-with ``&`` by a shell without job control) stays ignored, as POSIX has it.
+"""A command stopped by a signal: SIGINT (Ctrl-C, ``kill -INT``), SIGTERM (``kill``, ``timeout``,
+a batch scheduler, systemd) and SIGHUP (the terminal or SSH session closed, ``kill -HUP``) all raise
+``KeyboardInterrupt`` in the main thread, so one path handles them (a study's results that reached
+the command stored, its workers stopped, its store closed and unlocked, no temporary file left); the
+exit status tells them apart (128 + the signal: 130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP). A
+SIGINT that the command inherited as ignored (a job started with ``&`` by a shell without job
+control) stays ignored, as POSIX has it, and so does a SIGHUP (a command started with ``nohup``).
 """
 import signal
 import threading
@@ -11,7 +12,9 @@ from contextlib import contextmanager
 from types import FrameType
 from typing import Iterator, Optional
 
-STOPS = (signal.SIGINT, signal.SIGTERM)
+TERMINATE = (signal.SIGTERM, signal.SIGHUP)  # the stop signals beside Ctrl-C's: they end a child at once
+STOPS = (signal.SIGINT, *TERMINATE)
+KEPT_IGNORED = (signal.SIGINT, signal.SIGHUP)  # inherited as ignored, they stay so (``&``, ``nohup``)
 RECEIVED: list[int] = []  # the stop signals this process received while a handler of this module was set
 
 
@@ -36,14 +39,14 @@ def _ours(handler: object) -> bool:
 
 @contextmanager
 def stopped_by_signals() -> Iterator[None]:
-    """While inside (a command's work), SIGTERM raises KeyboardInterrupt as SIGINT does, and either
-    is noted for :func:`exit_status`; only in the main thread (elsewhere nothing changes)."""
+    """While inside (a command's work), SIGTERM and SIGHUP raise KeyboardInterrupt as SIGINT does,
+    and each is noted for :func:`exit_status`; only in the main thread (elsewhere nothing changes)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     old = {s: signal.getsignal(s) for s in STOPS}
     for s in STOPS:
-        if not (s == signal.SIGINT and old[s] == signal.SIG_IGN):
+        if not (s in KEPT_IGNORED and old[s] == signal.SIG_IGN):
             signal.signal(s, _raise)
     try:
         yield

@@ -1,9 +1,10 @@
 """The base of every file schema: frozen pydantic models that refuse unknown keys, NaN and
-infinity (unless a field says otherwise) and true/false where a number is meant."""
+infinity (unless a field says otherwise) and true/false where a number is meant, in a list too."""
 import typing
 from typing import Any, ClassVar, Sequence, TypeVar
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationInfo, field_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError, ValidationInfo, field_validator
+from pydantic_core import InitErrorDetails, PydanticCustomError
 
 Values = TypeVar("Values", bound=Sequence[Any])
 
@@ -17,12 +18,51 @@ class Strict(BaseModel):
     @field_validator("*", mode="before")
     @classmethod
     def _no_boolean_numbers(cls, value: Any, info: ValidationInfo) -> Any:
-        """YAML's ``true`` is 1 to pydantic: refuse it for any field that is not a boolean."""
-        if isinstance(value, bool) and info.field_name in cls.model_fields:
-            annotation = cls.model_fields[info.field_name].annotation
-            if annotation is not bool and bool not in typing.get_args(annotation):
-                raise ValueError("expected a number or text, not true/false")
+        """YAML's ``true`` is 1 to pydantic: refuse it for any field that is not a boolean, and in a
+        list of numbers (``sweep: {supplement_percent: [true, 10]}`` ran a 1 % case), named by its
+        place (``sweep.supplement_percent[0]``)."""
+        if info.field_name not in cls.model_fields:
+            return value
+        annotation = cls.model_fields[info.field_name].annotation
+        if isinstance(value, bool) and annotation is not bool and bool not in typing.get_args(annotation):
+            raise ValueError(BOOLEAN)
+        place = _boolean_item(value, annotation)
+        if place is not None:
+            error = PydanticCustomError("bool_not_number", BOOLEAN)
+            raise ValidationError.from_exception_data(cls.__name__, [InitErrorDetails(type=error, loc=place,
+                                                                                      input=True)])
         return value
+
+
+BOOLEAN = "expected a number or text, not true/false"
+
+
+def _boolean_item(value: Any, annotation: Any) -> tuple[int, ...] | None:
+    """The place (indices) of the first true/false in ``value``, a list (of lists) whose items
+    ``annotation`` (a field's: ``Optional[list[float]]``) says are numbers; None where there is none."""
+    if not isinstance(value, (list, tuple)):
+        return None
+    items = next((typing.get_args(a) for a in (annotation, *typing.get_args(annotation))
+                  if typing.get_origin(a) in (list, tuple)), None)
+    if not items:
+        return None
+    for i, item in enumerate(value):
+        kind = items[min(i, len(items) - 1)] if items[-1] is not Ellipsis else items[0]
+        if isinstance(item, bool) and _number(kind) and not _admits(kind, bool):
+            return (i,)
+        inner = _boolean_item(item, kind)
+        if inner is not None:
+            return (i, *inner)
+    return None
+
+
+def _admits(annotation: Any, kind: type) -> bool:
+    """Whether a type (``Annotated``, ``Optional``, a union) admits ``kind``."""
+    return annotation is kind or annotation is Any or any(_admits(a, kind) for a in typing.get_args(annotation))
+
+
+def _number(annotation: Any) -> bool:
+    return _admits(annotation, float) or _admits(annotation, int)
 
 
 def unique(field: str, names: Sequence[str]) -> None:

@@ -17,6 +17,7 @@ from typing import IO, Any, Iterable, Mapping
 
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.status import Status
+from ecostudy.io.writers import remove_temporary
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS cases (
@@ -49,6 +50,7 @@ class Store:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.lock_path = self.path.with_name(self.path.name + ".lock")
         self.lock = _locked(self.lock_path, self.path)
+        remove_temporary(self.path.parent)  # what a run killed in this folder left: this one alone writes it now
         try:
             self.conn = sqlite3.connect(self.path)
             self.conn.execute("PRAGMA journal_mode=WAL")

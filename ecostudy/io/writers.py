@@ -10,6 +10,7 @@ from typing import Any, Callable, Iterable, Union
 import pandas as pd
 
 from ecostudy.core.errors import InputError, problem
+from ecostudy.core.interrupt import held
 
 
 def _umask() -> int:
@@ -26,6 +27,13 @@ REPORT = "report.html"  # written beside it by ``report.html.write_html``
 
 
 STORE = "results.sqlite"  # a study's store: a folder holding one is a study's, resumable before its summary
+LOCK = STORE + ".lock"  # beside it while a study writes the folder (``io.store``)
+
+# the hidden temporary files of :func:`atomic_write` (``.NAME`` + tempfile's 8 random characters + ``.tmp``)
+# and of :func:`check_output_dir`'s probe: one that a command killed (SIGKILL, a power cut) left is removed
+# by the next command that writes the folder (:func:`remove_temporary`)
+TEMPORARY = re.compile(r"\.(?:write-test|.+\.[A-Za-z0-9]+)[a-z0-9_]{8}\.tmp")
+SUBFOLDERS = ("steps",)  # the folders commands write inside an output folder (a closed-loop study's steps/)
 
 
 def _kind_of(folder: Path) -> str | None:
@@ -55,7 +63,9 @@ def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: st
     summary would be written beside the other's, and read as one): one line naming it (exit 2). The
     folders this check creates to try are removed again: a command refused later (an infeasible
     running time) leaves nothing behind; the first file written creates the folder
-    (:func:`atomic_write`, the store)."""
+    (:func:`atomic_write`, the store). A folder accepted loses the temporary files a killed command
+    left (:func:`remove_temporary`), unless the command keeps a store there (``files`` names
+    :data:`STORE`: the store removes them once it holds the folder's lock) or a study holds it now."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise InputError(problem(path, "", "the output folder is a file"))
@@ -74,7 +84,7 @@ def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: st
     created = [p for p in (path, *path.parents) if not p.exists()]  # deepest first
     try:
         path.mkdir(parents=True, exist_ok=True)
-        fd, probe = tempfile.mkstemp(prefix=".write-test", dir=path)
+        fd, probe = tempfile.mkstemp(prefix=".write-test", suffix=".tmp", dir=path)
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
@@ -85,22 +95,47 @@ def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: st
                 level.rmdir()
             except OSError:  # not made here after all, or something came into it meanwhile
                 break
+    if STORE not in files and not (path / LOCK).exists():
+        remove_temporary(path)
     return path
 
 
+def remove_temporary(folder: Union[str, Path]) -> None:
+    """Remove the hidden temporary files (:data:`TEMPORARY`) that a command killed while writing
+    left in ``folder`` and its :data:`SUBFOLDERS`; every other file stays. Called as a command
+    starts writing the folder, when no other ecostudy command writes it."""
+    for where in (Path(folder), *(Path(folder) / name for name in SUBFOLDERS)):
+        try:
+            entries = list(os.scandir(where))
+        except OSError:  # no such folder (yet)
+            continue
+        for entry in entries:
+            if TEMPORARY.fullmatch(entry.name) and entry.is_file(follow_symlinks=False):
+                Path(entry.path).unlink(missing_ok=True)
+
+
 def atomic_write(path: Union[str, Path], write: Callable[[str], Any]) -> None:
-    """Call ``write(tmp_path)`` then rename onto ``path``: readers never see half a file."""
+    """Call ``write(tmp_path)`` then rename onto ``path``: readers never see half a file. The
+    temporary file (``.NAME<random>.tmp`` beside ``path``) is gone however the write ends, stopped
+    by SIGINT or SIGTERM too: a signal while it is created is raised once its name is known
+    (:func:`~ecostudy.core.interrupt.held`), and its removal comes before any call of Python code,
+    where a signal that came meanwhile is raised."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix="." + path.name, suffix=".tmp", dir=path.parent)
-    os.close(fd)
+    tmp = ""
     try:
+        with held([]):
+            fd, tmp = tempfile.mkstemp(prefix="." + path.name, suffix=".tmp", dir=path.parent)
+            os.close(fd)
         write(tmp)
         os.chmod(tmp, FILE_MODE)
         os.replace(tmp, path)
     finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        if tmp:
+            try:
+                os.unlink(tmp)
+            except FileNotFoundError:  # renamed into place
+                pass
 
 
 def _clean(obj: Any) -> Any:

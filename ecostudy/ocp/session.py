@@ -163,7 +163,7 @@ class Session:
         """Solve from ``x0`` (default: the last solution); loads the point into the model."""
         iterations = [0]
 
-        # a Ctrl-C or SIGTERM that arrived during the solve is held (raised inside one of cyipopt's
+        # a Ctrl-C, SIGTERM or SIGHUP that arrived during the solve is held (raised inside one of cyipopt's
         # callbacks it was swallowed there and the solve went on: a K = 1000 Amsterdam solve sent
         # SIGINT 1.5 s in returned its optimum); Ipopt stops at its next iteration, then it is raised
         held: list[bool] = []

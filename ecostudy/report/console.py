@@ -133,7 +133,7 @@ def progress_bar(label: str, disabled: bool = False) -> Iterator[Bar]:
 
 
 def interrupted(exc: BaseException, bar: Optional[tuple]) -> str:
-    """The line of a command stopped by SIGINT or SIGTERM (:mod:`ecostudy.core.interrupt`): what it
+    """The line of a command stopped by SIGINT, SIGTERM or SIGHUP (:mod:`ecostudy.core.interrupt`): what it
     kept and how to continue. ``bar``: the command's progress bar (label, off[, stored]); stored
     False, or no bar: a command that stores nothing before its end."""
     line = f"interrupted by {signal_name()}"

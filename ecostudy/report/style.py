@@ -244,8 +244,9 @@ def output(fmt="png", dpi=None, option="--format"):
 
 def save(fig, path, fmt=None, dpi=None):
     """Write ``fig`` to ``path`` as ``fmt`` (png, svg or pdf; None: the path's suffix if it is
-    one of these, else png) at ``dpi`` (None: :data:`DPI`) and return None; with no ``path``
-    return the figure (a notebook shows it)."""
+    one of these, else png) at ``dpi`` (None: :data:`DPI`), atomically (:func:`atomic_write`: a
+    drawing stopped by a signal or an error leaves neither part of a figure under ``path`` nor a
+    temporary file), and return None; with no ``path`` return the figure (a notebook shows it)."""
     if path is None:
         return fig
     if fmt is None:
@@ -253,7 +254,7 @@ def save(fig, path, fmt=None, dpi=None):
         fmt = suffix if suffix in FORMATS else "png"
     out = output(fmt, dpi)
     metadata = {"png": {"Software": None}, "svg": {"Date": None}, "pdf": {"CreationDate": None}}[out.fmt]
-    fig.savefig(path, dpi=out.dpi, format=out.fmt, metadata=metadata)
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=out.dpi, format=out.fmt, metadata=metadata))
     return None
 
 
@@ -265,11 +266,11 @@ def names(stem):
 def write(out_dir, stem, draw, out=Output()):
     """Write the figure that ``draw(path, fmt=..., dpi=...)`` saves (any plot function with its
     data bound, e.g. ``functools.partial(plots.speed_plot, result)``) as ``stem.<fmt>`` in
-    ``out_dir``, atomically, and remove the same figure in the other formats (:func:`remove`);
+    ``out_dir``, atomically (:func:`save`), and remove the same figure in the other formats (:func:`remove`);
     returns the file name written."""
     out_dir = Path(out_dir)
     name = out.filename(stem)
-    atomic_write(out_dir / name, lambda tmp: draw(tmp, fmt=out.fmt, dpi=out.dpi))
+    draw(out_dir / name, fmt=out.fmt, dpi=out.dpi)
     remove(out_dir, stem, keep=name)
     return name
 

@@ -7,6 +7,7 @@ from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 
 from ecostudy.core.deadline import die_with_parent
+from ecostudy.core.interrupt import STOPS
 from ecostudy.io.store import release_inherited
 
 
@@ -48,9 +49,10 @@ class WorkerPool(ProcessPoolExecutor):
 @contextmanager
 def worker_pool(workers):
     """A forked process pool (workers inherit the loaded modules) whose workers die with the parent
-    (SIGKILL when it dies), hold none of its store locks and leave a stop signal to it: SIGINT and
-    SIGTERM are ignored (Ctrl-C reaches the whole process group, as SIGTERM does from ``timeout``,
-    systemd or a batch scheduler; the parent stores what reached it, then stops them). Left by an
+    (SIGKILL when it dies), hold none of its store locks and leave a stop signal to it: SIGINT,
+    SIGTERM and SIGHUP are ignored (Ctrl-C reaches the whole process group, as SIGTERM does from
+    ``timeout``, systemd or a batch scheduler and SIGHUP from a closed terminal; the parent stores
+    what reached it, then stops them). Left by an
     exception (an interrupt, or a generator closed before its end) the workers are stopped at once
     (:func:`stop_workers`), not waited for."""
     pool = WorkerPool(workers)
@@ -103,8 +105,8 @@ def arriving(futures, arrived):
 
 def _worker_start(pids, stopping):
     die_with_parent(signal.SIGKILL)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    for stop in STOPS:
+        signal.signal(stop, signal.SIG_IGN)
     os.write(pids, struct.pack("i", os.getpid()))  # atomic (a pipe, under PIPE_BUF bytes)
     if stopping.value:  # the pool was stopping when this worker registered: it may have been missed
         os._exit(1)
