@@ -147,6 +147,12 @@ def test_a_parameter_the_logs_do_not_excite_is_held(inputs, truth, logged):
     assert result.status == "flagged"
     assert held.sum() == 2 and not (held["mass"] and held["rotating_mass_factor"])
     assert "moves with" in result.reason
+    # the one of the pair fitted is fitted at the other's file value: its note says so (it read as
+    # known to +-0.4 % where only Ms (1 + f) is seen)
+    partner, other = ("rotating_mass_factor", "mass") if not held["mass"] else ("mass", "rotating_mass_factor")
+    note = result.table.set_index("name").loc[partner, "note"]
+    assert f"fitted with {other} held at the train file's value" in note, note
+    assert any(line.startswith(f"{partner}: fitted with {other}") for line in result.footnotes)
 
 
 def steady_calibration(inputs, draws):

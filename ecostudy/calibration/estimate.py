@@ -115,7 +115,7 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     starting from and regularised by nothing but the ``train``'s values (the prior)."""
     stage("least-squares fit, identifiability")
     problem = Problem.from_logs(logs, track, train)
-    free, p, cov, held, spread, unconverged = identify(problem, list(names))
+    free, p, cov, held, spread, unconverged, partnered = identify(problem, list(names))
     theta = problem.theta(free, p)
     s = scales(problem.prior)
     boot, boot_unconverged = (bootstrap(problem, free, p, draws, seed, spread) if len(logs) > 1 and free and draws > 0
@@ -137,6 +137,12 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                                f"({', '.join(seen[name]) or 'none'}) informs it, so every resample of the logs gives it "
                                "the same value; its 95 % interval is low to high")
                 footnotes.append(f"{name}: {row['note']}")
+            along = [h for h, partners in partnered.items() if name in partners]
+            if along:  # the logs see it only together with a parameter held at its prior: it carries that one's error
+                why = (f"fitted with {', '.join(along)} held at the train file's value, which these logs see only together "
+                       "with it: its value and interval hold only if that value does")
+                row["note"] = f"{row['note']}; {why}" if row["note"] else why
+                footnotes.append(f"{name}: {why}")
         rows.append(row)
     table = pd.DataFrame(rows)
     if "mass" in free and "rotating_mass_factor" not in names:  # only Ms (1 + f) is seen where gradients are small

@@ -246,8 +246,8 @@ def identify(problem, requested):
     Returns (free names, p, covariance, held: {name: reason}, spread: {held name: its standard
     deviation in relative units in the fit where it was held, the largest it had while free (inf
     along a null direction: the prior fixes it by convention)}, '' or why the last fit, the one
-    returned, is not converged)."""
-    free, held, widest, spread = list(requested), {}, {}, {}
+    returned, is not converged, partners: {held name: the free names it moved with})."""
+    free, held, widest, spread, partnered = list(requested), {}, {}, {}, {}
     while True:
         p, _ = solve(problem, free)
         estimate_noise(problem, free, p)
@@ -256,14 +256,14 @@ def identify(problem, requested):
         p, unconverged = solve(problem, free, p)
         cov, sv, weakest = covariance(problem, free, p)
         if not free:
-            return free, p, cov, held, spread, unconverged
+            return free, p, cov, held, spread, unconverged, partnered
         cov = widened(cov, free, widest)
         s = scales(problem.prior)
         width = np.array([Z95 * np.sqrt(cov[j, j]) * s[n] / max(abs(problem.prior[n]), 1e-300)
                           for j, n in enumerate(free)])
         worst = int(np.argmax(width))
         if width[worst] <= MAX_RELATIVE_WIDTH:
-            return free, p, cov, held, spread, unconverged
+            return free, p, cov, held, spread, unconverged, partnered
         partners = [n for j, n in enumerate(free) if j != worst and abs(weakest[j]) > 0.3]
         ratio = sv[-1] / sv[0] if sv[0] > 0 else 0.0
         reason = (f"95 % half-width {'unbounded' if not np.isfinite(width[worst]) else f'{100 * width[worst]:.0f} %'}"
@@ -272,7 +272,7 @@ def identify(problem, requested):
             reason += f"; moves with {', '.join(partners)} (singular value ratio {ratio:.1e})"
         if unconverged:  # the width was read at a point least_squares did not converge to
             reason += "; judged at a fit that did not converge"
-        held[free[worst]] = reason
+        held[free[worst]], partnered[free[worst]] = reason, partners
         spread[free[worst]] = float(np.sqrt(cov[worst, worst]))
         free.pop(worst)
 
