@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Installs what is missing, quickly when nothing is: Debian packages (Ipopt, ASL, MUMPS, BLAS/LAPACK,
-# cmake, pkg-config, compiler, headless Chromium for the report test), the virtual environment .venv
+# cmake, pkg-config, compiler, headless Chromium for the report test, strace for the test of a signal
+# during a rename), the virtual environment .venv
 # with ecostudy editable, and PyNumero's ASL library built against Debian's libamplsolver into .pyomo/
 # (PYOMO_CONFIG_DIR). See DEVELOPERS.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-DEB_PKGS="coinor-libipopt-dev libamplsolver-dev liblapack-dev libblas-dev libmumps-seq-dev cmake pkg-config build-essential chromium"
+DEB_PKGS="coinor-libipopt-dev libamplsolver-dev liblapack-dev libblas-dev libmumps-seq-dev cmake pkg-config build-essential chromium strace"
 SUDO=""
 [ "$(id -u)" -eq 0 ] || SUDO="sudo"
 
