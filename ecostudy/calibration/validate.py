@@ -62,13 +62,15 @@ def end_speed(t, v, at_start, span=END_FIT):
     return float(max(level, 0.0)), float(error)
 
 
-def phase_bounds(work, share=TRACTION_SHARE, handle=False):
-    """(start, end) sample indices of runs of intervals with traction and without; with ``handle``,
-    of runs with traction, with braking and with neither (coasting)."""
-    scale = share * np.max(np.abs(work)) if work.size else 0.0
-    kind = (work > scale).astype(int) - handle * (work < -scale).astype(int) if scale > 0 else np.zeros(0, int)
+def phase_bounds(work, share=TRACTION_SHARE):
+    """(start, end, traction) of each run of intervals with traction, with braking and with neither
+    (coasting): sample indices, and whether the run is one of traction."""
+    if not work.size:
+        return []
+    scale = share * np.max(np.abs(work))
+    kind = (work > scale).astype(int) - (work < -scale).astype(int) if scale > 0 else np.zeros(len(work), int)
     edges = np.concatenate([[0], np.nonzero(np.diff(kind))[0] + 1, [len(work)]])
-    return list(zip(edges[:-1], edges[1:]))
+    return [(s, e, bool(kind[s] > 0)) for s, e in zip(edges[:-1], edges[1:])]
 
 
 def speed_reference(run, train, work):
@@ -78,16 +80,14 @@ def speed_reference(run, train, work):
     # a coast and the braking after it are phases of their own: over both at once the traction a
     # heavier-running model needs while coasting was netted against the braking it then needs less
     # of (a model with twice the Davis resistance: +10.0 % where it needs +20.9 %)
-    bounds = phase_bounds(work, handle=True)
-    scale = TRACTION_SHARE * np.max(np.abs(work)) if work.size else 0.0
+    bounds = phase_bounds(work)
 
     def speeds_at(s, e):
         return [end_speed(run.t[s:e + 1], run.v[s:e + 1], True) if s > 0 else (0.0, 0.0),
                 end_speed(run.t[s:e + 1], run.v[s:e + 1], False)]
-    ends = [speeds_at(s, e) for s, e in bounds]
+    ends = [speeds_at(s, e) for s, e, _ in bounds]
     total = 0.0
-    for i, (s, e) in enumerate(bounds):
-        pulling = work[s] > scale
+    for i, (s, e, pulling) in enumerate(bounds):
         # the handle changes inside a traction phase's edge interval: at the shared sample the
         # neighbouring phase's line is on the right side of the kink
         (v0, e0) = ends[i - 1][1] if pulling and i > 0 else ends[i][0]

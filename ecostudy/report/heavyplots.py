@@ -66,9 +66,8 @@ def trade_off(runs, path, title="", dpi=None):
     bad = ok[ok["status"] != "ok"]  # flagged runs ringed: a trade-off of runs not ok is no result to quote
     for ax, column in ((a, "force_max_kN"), (a, "force_max_braking_kN"), (b, "energy_total_kWh"), (b, "wagon_brake_kWh")):
         if len(bad):
-            ax.plot(bad["K_b"], bad[column], "o", ms=11, mfc="none", mec=style.LIMIT["not ok"], mew=1.5,
-                    label=None if column in ("force_max_braking_kN", "wagon_brake_kWh")
-                    else f"flagged ({len(bad)} of {len(runs)} runs: see runs.csv's status)")
+            style.ring(ax, bad["K_b"], bad[column], None if column in ("force_max_braking_kN", "wagon_brake_kWh")
+                       else f"flagged ({len(bad)} of {len(runs)} runs: see runs.csv's status)")
     a.set_ylabel("largest |in-train force| [kN]")
     b.set_ylabel("energy int |u v| dt [kWh]")
     for ax in (a, b):

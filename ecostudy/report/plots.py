@@ -161,8 +161,8 @@ def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None):
     if "status" in table:  # the points not ok ringed: a front of flagged points is no front to quote
         bad = table["status"].astype(str).map(word) != "ok"
         if bad.any():
-            ax.plot(t[bad], table["traction_energy_kWh"][bad], "o", ms=12, mfc="none", mec=style.LIMIT["not ok"], mew=1.5,
-                    label=f"not ok ({int(bad.sum())} of {len(table)} points: see pareto.csv's status)")
+            style.ring(ax, t[bad], table["traction_energy_kWh"][bad],
+                       f"not ok ({int(bad.sum())} of {len(table)} points: see pareto.csv's status)")
     ax.set_xlim(lo, hi)
     ax.set_ylabel("energy [kWh]")
     ax.set_ylim(bottom=0)

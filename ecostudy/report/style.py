@@ -242,6 +242,12 @@ def output(fmt="png", dpi=None, option="--format"):
     return Output(fmt, float(dpi))
 
 
+def ring(ax, x, y, label=None):
+    """Ring the points (``x``, ``y``) of runs that are not ok on ``ax``, in the colour of a run not ok
+    (a front or a trade-off of such points is no result to quote)."""
+    ax.plot(x, y, "o", ms=12, mfc="none", mec=LIMIT["not ok"], mew=1.5, label=label)
+
+
 def save(fig, path, fmt=None, dpi=None):
     """Write ``fig`` to ``path`` as ``fmt`` (png, svg or pdf; None: the path's suffix if it is
     one of these, else png) at ``dpi`` (None: :data:`DPI`), atomically (:func:`atomic_write`: a

@@ -140,9 +140,9 @@ def _pooled(cases, workers, task, arrived):
 
 def died(case):
     """The result of a case whose worker process died while it alone ran in it."""
-    return {"key": case["key"], "status": "failed", "summary": None, "seconds": 0.0,
-            "error": "its worker process died (killed by the system, e.g. out of memory, or a crash in a library): "
-                     "computed alone after two broken pools, it killed its own worker too"}
+    return outcome(case, lambda: ("failed", "its worker process died (killed by the system, e.g. out of memory, or a "
+                                  "crash in a library): computed alone after two broken pools, it killed its own "
+                                  "worker too", None))
 
 
 def _dask(todo, address, task, arrived):
