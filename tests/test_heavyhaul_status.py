@@ -10,7 +10,7 @@ from ecostudy.core.errors import EcostudyWarning, InputError
 from ecostudy.core.status import off_stop
 from ecostudy.io.loaders import load_consist
 from ecostudy.core.units import KMH
-from ecostudy.heavyhaul.loop import STANDING, LoopRecord
+from ecostudy.heavyhaul.loop import STANDING, LoopRecord, target_words
 from ecostudy.heavyhaul.metrics import STOOD, Tolerances, ended, reasons
 from ecostudy.studies.heavyhaul import expand
 
@@ -393,3 +393,12 @@ def test_a_stop_error_is_not_rounded_into_the_tolerance():
     """1.047 m beyond read 'stopped 1.0 m beyond the stop (tolerance 1 m)'."""
     assert off_stop(1.04684, 1.0, 1) == "stopped 1.05 m beyond the stop (tolerance 1 m)"
     assert off_stop(-2.0, 1.0, 1) == "stopped 2.0 m short of the stop (tolerance 1 m)"
+
+
+def test_a_failed_solve_past_the_stop_never_states_a_negative_reference_speed():
+    """Past the reference's stop the horizon's target continues the final deceleration below zero (the
+    controller's internal target); a failed solve's reason states the reference as the user reads it,
+    0 km/h past the stop, never a negative speed."""
+    assert target_words(-37.1 * KMH) == "v_r 0 km/h at the sample's end (past the reference's stop)"
+    assert target_words(0.0) == "v_r 0 km/h at the sample's end (past the reference's stop)"
+    assert target_words(40 * KMH) == "v_r 40.0 km/h at the sample's end"

@@ -90,6 +90,14 @@ def horizon(plant, reduction, reference, state, speeds, np_):
     return offsets, reference.speed_in(ts * np.arange(np_ + 1), head)
 
 
+def target_words(vr_end):
+    """The horizon's target at the sample's end [m/s] as a failed solve's reason states it: past the
+    reference's stop the target continues below zero (:func:`horizon`), the reference itself is 0."""
+    if vr_end > 0:
+        return f"v_r {vr_end / KMH:.1f} km/h at the sample's end"
+    return "v_r 0 km/h at the sample's end (past the reference's stop)"
+
+
 STOPPED = 0.3  # [m/s]: a plan that slows the train below this on its final approach stops it (1 km/h)
 
 
@@ -212,8 +220,8 @@ def run(plant, reduction, controller, state, reference, samples, observer=None, 
             planned = controller.solve(x0, offsets / KN, low / KN, high / KN, vr) * KN
         except SolverError as exc:  # where the train was, in the reason
             raise SolverError(f"{exc} at {state.time:.0f} s, head at {head_position(plant, state):.0f} m, "
-                              f"mean speed {mean_speed(plant, state) / KMH:.1f} km/h against v_r "
-                              f"{vr[1] / KMH:.1f} km/h at the sample's end") from exc
+                              f"mean speed {mean_speed(plant, state) / KMH:.1f} km/h against "
+                              f"{target_words(vr[1])}") from exc
         seconds = controller.last.seconds
         if seconds <= ts:
             u = planned
