@@ -371,3 +371,42 @@ def test_a_small_supplement_s_equal_marginal_split_comes_near_the_whole_journey_
     energy = totals.set_index("distribution")["traction_energy_kWh"]
     assert energy["equal marginal saving"] <= 1.002 * energy["whole-journey NLP"], energy
     assert energy["equal marginal saving"] < energy["same percentage"], energy
+
+
+HOSTILE = {"name": "short and steep", "source": "test", "length_m": 2400,
+           "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 250}, {"name": "C", "position_m": 1350},
+                     {"name": "D", "position_m": 2400}],
+           "gradients": [{"position_m": 0, "gradient_permille": 0}, {"position_m": 300, "gradient_permille": -40},
+                         {"position_m": 800, "gradient_permille": 35}, {"position_m": 1300, "gradient_permille": 0},
+                         {"position_m": 1500, "gradient_permille": -35}, {"position_m": 2300, "gradient_permille": 0}],
+           "speed_limits": [{"position_m": 0, "speed_kmh": 50}, {"position_m": 300, "speed_kmh": 80},
+                            {"position_m": 2370, "speed_kmh": 15}]}
+
+
+def test_every_distribution_takes_the_journeys_total_and_says_its_status(tmp_path):
+    """A 250 m segment, +-40 per mille and 15 km/h before the last stop, the metro without its electric
+    brake, +0.1 %: the MARECO-style time of C - D (on the envelope, integrated exactly) fell under the
+    segment's fastest run on the grid, which it was solved at; its runs took 168.374 s against the
+    journey's 168.207 and 'beat' the whole-journey NLP (23.800 against 24.236 kWh), every row ok. Now
+    the split counts such a segment at its fastest run and every distribution takes the total; the
+    totals carry their status, and a distribution whose runs do not take the total is flagged."""
+    from .conftest import load_yaml, write_yaml
+    train = load_yaml(TRAINS / "amsterdam_metro.yaml")
+    del train["regenerative_braking"]
+    r = CliRunner().invoke(app, ["journey", "--track", str(write_yaml(tmp_path / "line.yaml", HOSTILE)), "--train",
+                                 str(write_yaml(tmp_path / "train.yaml", train)), "--supplement", "0.1", "-K", "100",
+                                 "--no-plot", "--out", str(tmp_path / "j")])
+    assert r.exit_code == 0, r.output
+    import pandas as pd
+    totals = pd.read_csv(tmp_path / "j" / "journey_totals.csv").set_index("distribution")
+    assert (totals["status"] == "ok").all(), totals
+    target = totals.loc["whole-journey NLP", "running_time_s"]
+    assert (abs(totals["running_time_s"] - target) < 2e-3).all(), totals  # as written, to 3 decimals
+    assert (totals["traction_energy_kWh"] >= totals.loc["whole-journey NLP", "traction_energy_kWh"] - 1e-3).all(), totals
+    from ecostudy.studies.journey import off_total
+    table = pd.read_csv(tmp_path / "j" / "journey.csv")
+    longer = off_total(table.assign(running_time_s=table["running_time_s"] + (table["distribution"] == "MARECO-style")),
+                       target, 3)
+    mareco = longer[longer["distribution"] == "MARECO-style"]["status"]
+    assert mareco.str.startswith("flagged: the distribution's runs take 171.207 s together, not the journey's").all()
+    assert (longer[longer["distribution"] != "MARECO-style"]["status"] == "ok").all()

@@ -92,3 +92,15 @@ def test_the_shipped_journey_finds_its_track():
     """The shipped TTOBench journey names `metro_line_4stops`: `track not found` without --track."""
     path = STUDIES / "timetables" / "metro_line_4stops_Journey_01.json"
     assert associated_track(load_timetable(path), path) == LINE.resolve()
+
+
+def test_a_timetabled_crawl_is_refused_by_journey_before_any_front(tmp_path):
+    """Noord - Station timetabled at 400 s, over 5 times its fastest possible run: every front and
+    split was solved before that row failed; refused in one line naming the arrival, as `solve` does."""
+    doc = {**FIXED, "stops": [FIXED["stops"][0], {"stop": "Station", "arrival_s": 400}, {"stop": "Centrum", "arrival_s": 523}]}
+    result = run("journey", "--train", METRO, "--track", LINE, "--timetable", write_yaml(tmp_path / "crawl.yaml", doc),
+                 "-K", 60, "--no-plot", "--out", tmp_path / "j")
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert result.exit_code == 2 and len(lines) == 1, result.output
+    assert "stops[1].arrival_s: 400.0 s from Noord to Station is over 5 times the fastest possible run's" in lines[0]
+    assert not (tmp_path / "j" / "journey.csv").exists()

@@ -25,7 +25,7 @@ from ecostudy.core.defaults import FRONT_POINTS, SLOWEST
 from ecostudy.core.errors import FieldError, InfeasibleError, SolverError
 from ecostudy.core.kinematics import running_time
 from ecostudy.core.simulate import window_checks
-from ecostudy.core.status import OK, failed, flagged, solver_part, worst
+from ecostudy.core.status import OK, Status, failed, flagged, solver_part, worst
 from ecostudy.core.types import Timing, Window
 from ecostudy.core.units import apart, to_kmh
 from ecostudy.heuristics import mareco
@@ -96,13 +96,17 @@ def uniform(fronts, total_time):
     return list(base * total_time / base.sum())
 
 
-def mareco_split(track, train, pairs, total_time, points):
+def mareco_split(track, train, pairs, total_time, points, floors=None):
     """Running time per segment [s]: each segment's MARECO-style time for the one cap v1 that
-    makes the total ``total_time`` (bisection; the total falls as v1 rises)."""
+    makes the total ``total_time`` (bisection; the total falls as v1 rises). ``floors``: the
+    segments' fastest runs on the grid [s] (the all-out NLP's): a MARECO time below its floor (the
+    envelope integrated exactly runs faster than the grid allows) counts as the floor, so the
+    times the segments are solved at still sum to ``total_time``."""
     cases = [prepare(track, train, a, b, points) for a, b in pairs]
+    floors = [0.0] * len(cases) if floors is None else floors
 
     def times(v1):
-        return [running_time(mareco.profile(c, v1), c.nodes) for c in cases]
+        return [max(running_time(mareco.profile(c, v1), c.nodes), low) for c, low in zip(cases, floors)]
 
     lo, hi = 0.5, max(mareco.cap_ceiling(c) for c in cases)
     if sum(times(hi)) > total_time:
@@ -283,6 +287,9 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
             if t < 0.99 * fast:  # a timetabled segment no run can keep: refused before any front is solved
                 raise FieldError(f"infeasible: {t:.1f} s from {a} to {b}, below the fastest possible run's "
                                  f"{fast:.1f} s (kinematic envelope)", f"stops[{n + 1}].arrival_s")
+            if t > SLOWEST * fast:  # as solve refuses it
+                raise FieldError(f"{t:.1f} s from {a} to {b} is over {SLOWEST:g} times the fastest possible run's "
+                                 f"{fast:.1f} s (kinematic envelope): the train would crawl", f"stops[{n + 1}].arrival_s")
         fastest = sum(estimates)
         if under_envelope(total_time, fastest):  # the kinematic all-out times: refused before any front is solved
             too_short(total_time, fastest, " (kinematic envelope)")
@@ -315,7 +322,8 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
     except (InfeasibleError, SolverError) as exc:
         whole, unsolved["whole-journey NLP"] = [math.nan] * len(pairs), exc
     try:  # the envelope's fastest runs, integrated exactly, may be slower than the NLP's all-out runs
-        mareco_times = mareco_split(track, train, pairs, total_time, points)
+        mareco_times = mareco_split(track, train, pairs, total_time, points,
+                                    [float(f["running_time_s"].iloc[0]) for f in fronts])
     except InfeasibleError as exc:
         mareco_times, unsolved["MARECO-style"] = [math.nan] * len(pairs), exc
     plans = {"whole-journey NLP": whole, "equal marginal saving": marginal, "same percentage": uniform(fronts, total_time),
@@ -362,9 +370,27 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
                          "status": str(status)})
         if len(results[name]) < len(pairs):  # drawn only when every segment ran
             del results[name]
-    table = pd.DataFrame(rows)
+    table = off_total(pd.DataFrame(rows), total_time, len(pairs))
     totals = table.groupby("distribution", sort=False)[["running_time_s", "traction_energy_kWh", "net_energy_kWh"]].sum(
         min_count=len(pairs))  # a distribution with a failed segment has no total (NaN, not a partial sum)
     if plan is not None:
         totals["windows_kept"] = table.groupby("distribution", sort=False)["windows_kept"].all().to_numpy()
+    totals["status"] = table.groupby("distribution", sort=False)["status"].agg(
+        lambda column: str(worst([Status.parse(s) for s in column]))).to_numpy()
     return table, totals.reset_index(), results, fronts
+
+
+TOTAL_TOLERANCE = 1e-3  # [s], besides 1e-6 of the total: a distribution's runs that take longer together are flagged
+
+
+def off_total(table, total_time, segments):
+    """``table`` with every row of a distribution whose solved runs do not sum to ``total_time``
+    flagged, the difference said (a segment solved at its fastest run where its share was faster
+    still: :func:`segment_time`); a distribution with a failed segment is failed already."""
+    sums = table.groupby("distribution", sort=False)["running_time_s"].sum(min_count=segments)
+    for name, took in sums.items():
+        if np.isfinite(took) and abs(took - total_time) > TOTAL_TOLERANCE + 1e-6 * total_time:
+            off = flagged(f"the distribution's runs take {took:.3f} s together, not the journey's {total_time:.3f} s")
+            rows = table["distribution"] == name
+            table.loc[rows, "status"] = [str(worst([Status.parse(s), off])) for s in table.loc[rows, "status"]]
+    return table
