@@ -218,3 +218,17 @@ def test_the_installed_command_refuses_in_one_line_and_still_helps(tmp_path):
     assert bare.returncode == 2 and "Commands:" in bare.stdout + bare.stderr and "error:" not in bare.stderr
     helped = subprocess.run([exe, "solve", "--help"], capture_output=True, text=True, cwd=tmp_path, timeout=120)
     assert helped.returncode == 0 and "--points" in helped.stdout
+
+
+def test_report_html_keeps_four_digits_of_each_parameter_in_a_column_of_mixed_units():
+    """calibrate's parameter table holds a mass [kg] beside an efficiency in one column: one precision
+    for the column (from its median) showed the fitted efficiency 0.8537 as 0.9, its prior 0.88 as
+    0.9 and its standard error 0.000213 as 0.00. Each value keeps four significant digits (solver
+    noise, below a millionth and a millionth of the column's largest, still rounds to the column's places)."""
+    from ecostudy.report.html import data_table
+    frame = pd.DataFrame({"parameter": ["mass_kg", "efficiency", "davis_c", "noise"],
+                          "estimate": [255200.0, 0.8537, 6.97, 1e-9], "std": [312.5, 0.000213, 0.2446, 0.0]})
+    html = data_table(frame)
+    for text in (">255\u2009200.000<", ">0.8537<", ">6.970<", ">0.000213<", ">0.2446<", ">312.5<"):
+        assert text in html, (text, html)
+    assert 'data-v="1e-09">0.000<' in html, html

@@ -15,13 +15,14 @@ import json
 import math
 from numbers import Number
 from pathlib import Path
-from typing import Any
+from typing import Any, Optional
 from urllib.parse import quote
 
 import pandas as pd
 
 from ecostudy.core.status import status_word
 from ecostudy.core.units import number
+from ecostudy.report.cells import decimals, fmt_scalar, is_missing, numeric_cell
 from ecostudy.io.folder import Counts, StudyResult, load
 from ecostudy.io.writers import REPORT, SUMMARY, atomic_write
 
@@ -282,8 +283,9 @@ def data_table(frame: pd.DataFrame, scroll: bool = False) -> str:
         if pd.api.types.is_bool_dtype(col) or not pd.api.types.is_numeric_dtype(col):
             cols.append([cell(name, v) for v in col])
         else:
-            places = decimals(col)
-            cols.append([numeric_cell(v, places) for v in col])
+            places, values = decimals(col), col.dropna().astype(float).abs()
+            largest = float(values[values.map(math.isfinite)].max()) if len(values) else 0.0
+            cols.append([numeric_cell(v, places, largest) for v in col])
     head = "".join(f"<th>{wrap(c)}</th>" for c in shown.columns)
     body = "".join("<tr>" + "".join(row) + "</tr>" for row in zip(*cols)) if cols else ""
     table = f'<table class="data"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
@@ -303,57 +305,8 @@ def cell(column: str, value: Any) -> str:
     return f'<td class="{classes}">{esc(text)}</td>' if classes else f"<td>{esc(text)}</td>"
 
 
-def numeric_cell(value: Any, places: int) -> str:
-    if is_missing(value):
-        return "<td></td>"
-    x = float(value)
-    text = number(x, f",.{places}f").replace(",", "\u2009")  # thin space between thousands; no '-0.00'
-    return f'<td class="n" data-v="{x!r}">{text}</td>'
-
-
-def decimals(col: pd.Series) -> int:
-    """Decimal places for a numeric column: four significant digits of its typical value (the
-    median size of its values, leaving out zeros and solver noise below a millionth of its
-    largest), 0 to 6; none for a column of whole numbers."""
-    size = col.dropna().astype(float).abs()
-    size = size[size.map(math.isfinite)]
-    if size.empty or (size == size.round()).all():
-        return 0
-    size = size[size > 1e-6 * size.max()]
-    return int(min(6, max(0, 3 - math.floor(math.log10(size.median()))))) if not size.empty else 0
-
-
-def fmt_scalar(v: Any) -> str:
-    """One value as a reader wants it: four significant digits, no exponent between 1e-3 and 1e9."""
-    if is_missing(v):
-        return "\u2014"
-    if isinstance(v, bool):
-        return "yes" if v else "no"
-    if isinstance(v, Number) and not isinstance(v, bool):
-        x = float(v)  # type: ignore[arg-type]
-        if x == round(x) and abs(x) < 1e15:
-            return f"{int(round(x)):,}".replace(",", "\u2009")
-        if abs(x) < 1e-3 or abs(x) >= 1e9:
-            return f"{x:.3e}"
-        places = min(6, max(0, 3 - math.floor(math.log10(abs(x)))))
-        text = f"{x:,.{places}f}"
-        if len(repr(x)) < len(text) and "e" not in repr(x):
-            text = f"{x:,}"  # a short exact value as given (a tolerance of 0.5, not 0.5000)
-        return text.replace(",", "\u2009")
-    return str(v)
-
-
 def is_number(v: Any) -> bool:
     return isinstance(v, Number) and not isinstance(v, bool) and not is_missing(v)
-
-
-def is_missing(v: Any) -> bool:
-    if v is None:
-        return True
-    try:
-        return bool(pd.isna(v))
-    except (TypeError, ValueError):
-        return False
 
 
 def status_class(column: str, value: Any) -> str:
