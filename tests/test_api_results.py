@@ -115,9 +115,10 @@ def test_front_and_replanner_arguments_are_refused_by_name(case):
 
 
 def test_a_running_time_below_the_fastest_run_names_the_argument(case):
+    """An InfeasibleError (api.InfeasibleError, an InputError: docs/api.md catches it by that name)."""
     for make in (lambda: api.solve(*case, running_time=50.0, points=40),
                  lambda: api.replanner(*case, running_time=50.0, points=40)):
-        with pytest.raises(api.InputError, match=r"^arguments: running_time: infeasible: the fastest possible run "
+        with pytest.raises(api.InfeasibleError, match=r"^arguments: running_time: infeasible: the fastest possible run "
                                                  r"takes 7\d\.\d s \(asked for 50\.0 s\)$"):
             make()
 

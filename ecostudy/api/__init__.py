@@ -41,6 +41,7 @@ WHERE = {
     "Solution": "ecostudy.api.python", "Front": "ecostudy.api.python",
     "RunSummary": "ecostudy.io.runsummary", "Verification": "ecostudy.io.runsummary",
     "InputError": "ecostudy.core.errors", "EcostudyError": "ecostudy.core.errors", "Status": "ecostudy.core.status",
+    "InfeasibleError": "ecostudy.core.errors", "SolverError": "ecostudy.core.errors",
     "Report": "ecostudy.api.outcome", "Note": "ecostudy.api.outcome", "one_line": "ecostudy.api.outcome",
     "solve_folder": "ecostudy.api.single", "check_folder": "ecostudy.api.single",
     "export_folder": "ecostudy.api.single", "doctor": "ecostudy.api.single",
@@ -53,7 +54,7 @@ WHERE = {
 }
 __all__ = ["load", "StudyResult", "load_train", "load_track", "train_from_dict", "track_from_dict", "Train", "Track",
            "State", "Window", "solve", "pareto", "replanner", "Solution", "Front", "RunSummary", "Verification", "InputError",
-           "EcostudyError", "Status", "Report", "Note", "one_line",
+           "EcostudyError", "InfeasibleError", "SolverError", "Status", "Report", "Note", "one_line",
            "solve_folder", "check_folder", "export_folder", "doctor", "pareto_folder", "compare_folder",
            "journey_folder", "run_folder", "simulate_folder", "heavyhaul_folder", "network_folder",
            "calibrate_folder", "validate_folder", "command_line"]  # = WHERE's names, written out for the reference's static reader
@@ -80,7 +81,7 @@ if TYPE_CHECKING:  # what type checkers and editors see
     from ecostudy.api.outcome import Note, Report, load, one_line  # noqa: F401
     from ecostudy.api.python import Front, Solution, pareto, replanner, solve  # noqa: F401
     from ecostudy.api.single import check_folder, doctor, export_folder, solve_folder  # noqa: F401
-    from ecostudy.core.errors import EcostudyError, InputError  # noqa: F401
+    from ecostudy.core.errors import EcostudyError, InfeasibleError, InputError, SolverError  # noqa: F401
     from ecostudy.core.status import Status  # noqa: F401
     from ecostudy.core.types import State, Track, Train, Window  # noqa: F401
     from ecostudy.io.folder import StudyResult  # noqa: F401
