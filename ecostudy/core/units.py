@@ -80,7 +80,7 @@ BY_DIMENSION = {
     "area": {"m^2": 1.0},
     "force per speed": {"N/(m/s)": 1.0, "kN/(m/s)": KN, "N/(km/h)": 1.0 / KMH, "kN/(km/h)": KN / KMH},
     "force per speed^2": {"N/(m/s)^2": 1.0, "kN/(m/s)^2": KN, "N/(km/h)^2": 1.0 / KMH**2,
-                          "kN/(km/h)^2": KN / KMH**2},
+                          "kN/(km/h)^2": KN / KMH**2, "kg/m": 1.0},  # N/(m/s)^2 = kg/m (TTOBench's tunnels)
 }
 
 

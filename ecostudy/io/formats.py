@@ -10,13 +10,14 @@
 
 The result is a dict in the YAML schema, validated afterwards like any YAML file.
 """
+import math
 from os import PathLike
 from typing import Any, Mapping, TypeAlias
 
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, finite_number, problem
 from ecostudy.io.osrd import osrd_train
-from ecostudy.io.ttobench import metadata, ttobench_track, ttobench_train
+from ecostudy.io.ttobench import DESCRIPTIVE, metadata, ttobench_track, ttobench_train, unmodelled
 
 Where: TypeAlias = str | PathLike[str]
 
@@ -44,6 +45,13 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
         raise InputError(problem(path, "timing points.units.position", f"expected m or km, got {pos_unit!r}"))
     if speed_unit not in _SPEED_KMH or given.get("upper speed constraint", speed_unit) != speed_unit:
         raise InputError(problem(path, "timing points.units", "speed constraints need one unit, km/h or m/s"))
+    for key in ("lower time constraint", "upper time constraint"):  # TTOBench's validate_journeys.py: seconds
+        if given.get(key, "s") != "s":
+            raise InputError(problem(path, f"timing points.units.{key}", f"expected s, got {given[key]!r}"))
+    unmodelled(doc, {"metadata", "timing points", *DESCRIPTIVE}, path, "journey")
+    unmodelled(points, {"units", "values"}, path, "'timing points'", "timing points")
+    unmodelled(given, {"position", "lower time constraint", "upper time constraint", "lower speed constraint",
+                       "upper speed constraint"}, path, "'timing points' unit", "timing points.units")
     rows = points["values"]
     if not isinstance(rows, list) or len(rows) < 2:
         raise InputError(problem(path, "timing points.values", "need at least two timing points"))
@@ -54,6 +62,7 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
     def scaled(x: float | None, factor: float) -> float | None:
         return None if x is None else float(x) * factor
 
+    last = -math.inf  # the position of the point above [m]
     for i, row in enumerate(rows):
         where = f"timing points.values[{i}]"
         if not isinstance(row, list) or len(row) != 5:
@@ -64,6 +73,11 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
             lines.append(problem(path, where, f"expected finite numbers or null, got {row!r}"))
             continue
         pos = float(row[0]) * _POSITION[pos_unit]
+        if pos < last:
+            lines.append(problem(path, where, f"position {row[0]:g} {pos_unit} before the point above it: the "
+                                 "timing points go along the line"))
+            continue
+        last = pos
         lo, hi = scaled(row[1], 1.0), scaled(row[2], 1.0)
         vlo, vhi = scaled(row[3], _SPEED_KMH[speed_unit]), scaled(row[4], _SPEED_KMH[speed_unit])
         if i == 0 or i == len(rows) - 1 or (vlo == 0 and vhi == 0):  # a stopping point

@@ -82,8 +82,38 @@ def _curve(doc: Mapping[str, Any], path: Where, selector: str | None) -> tuple[s
         warnings.warn(problem(path, f"effort_curves.modes.{mode}", f"{others} curve(s) for electrical profile "
                               "levels or power restrictions not modelled: the plain curve is used everywhere"),
                       EcostudyWarning, stacklevel=3)
-    keep = np.concatenate([[True], np.diff(speeds) > 0])  # OSRD curves may repeat a speed
-    return mode, comfort, speeds[keep], efforts[keep]
+    extra = sorted(set(chosen) - {"speeds", "max_efforts"}) if isinstance(chosen, dict) else []
+    if extra:
+        warnings.warn(problem(path, f"effort_curves.modes.{mode}", f"curve fields ecostudy does not model: "
+                              f"{', '.join(extra)} (ignored)"), EcostudyWarning, stacklevel=3)
+    return mode, comfort, *_steps(speeds, efforts, path, f"effort_curves.modes.{mode}")
+
+
+STEP = 0.01  # [m/s]: a repeated speed (a step of the effort) is read as a change over this much speed
+
+
+def _steps(speeds: FloatArray, efforts: FloatArray, path: Where, where: str) -> tuple[FloatArray, FloatArray]:
+    """The curve with speeds that never fall (refused: OSRD's parser asserts them increasing), a point
+    given twice once, and each repeated speed with two efforts, a step, read as OSRD's interpolation
+    reads it (the first point's effort up to the speed, the last point's from it on): the first point
+    moved :data:`STEP` lower, said."""
+    gaps = np.diff(speeds)
+    if np.any(gaps < 0):
+        n = int(np.argmax(gaps < 0)) + 1
+        raise InputError(problem(path, f"{where}.speeds[{n}]", f"{speeds[n]:g} m/s after {speeds[n - 1]:g}: the "
+                                 "speeds must increase"))
+    same = np.concatenate([[False], (gaps == 0) & (np.diff(efforts) == 0)])  # a point given twice: once
+    speeds, efforts, gaps = speeds[~same], efforts[~same], np.diff(speeds[~same])
+    speeds = speeds.copy()
+    for n in np.flatnonzero(gaps == 0):
+        low = speeds[n - 1] if n > 0 else -np.inf
+        speeds[n] = max(speeds[n + 1] - STEP, 0.5 * (low + speeds[n + 1]))
+        warnings.warn(problem(path, f"{where}.speeds[{n + 1}]", f"a step of the effort at {speeds[n + 1]:g} m/s "
+                              f"({efforts[n] / units.KN:g} -> {efforts[n + 1] / units.KN:g} kN), read as a change "
+                              f"over the {speeds[n + 1] - speeds[n]:g} m/s below it"), EcostudyWarning, stacklevel=4)
+    if np.any(np.diff(speeds) <= 0):
+        raise InputError(problem(path, f"{where}.speeds", "a speed repeated more than twice: one step per speed"))
+    return speeds, efforts
 
 
 def _braking(doc: Mapping[str, Any], path: Where, mass: float) -> tuple[dict[str, float], float | None]:
@@ -118,6 +148,10 @@ def osrd_train(doc: Mapping[str, Any], path: Where,
     rr = doc.get("rolling_resistance")
     if not isinstance(rr, dict) or rr.get("type", "davis") != "davis":
         raise InputError(problem(path, "rolling_resistance", "expected {'type': 'davis', 'A', 'B', 'C'}"))
+    extra = sorted(set(rr) - {"type", "A", "B", "C"})
+    if extra:
+        warnings.warn(problem(path, "rolling_resistance", f"fields ecostudy does not model: {', '.join(extra)} "
+                              "(ignored)"), EcostudyWarning, stacklevel=3)
     braking, deceleration = _braking(doc, path, mass * inertia)
     bounds: dict[str, float] = {"max_deceleration_mps2": deceleration} if deceleration else {}
     if "comfort_acceleration" in doc:

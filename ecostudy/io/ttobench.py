@@ -41,6 +41,13 @@ TRACK_FIELDS = {"stops", "speed limits", "gradients", "curvatures", "tunnels", "
 ETCS_TRAIN = {"A_brake_emergency": None, "A_brake_service": None, "K_dry_rst": "share", "K_wet_rst": "share",
               "T_traction": "time", "T_be": "time", "T_bs": "time", "v_uncertainty": "share"}
 ETCS_TRACK = {"M_NVAVADH": "share", "Kt_int": "share"}
+REQUIRED = {"mass", "max speed", "max traction power", "max reg braking power", "max traction force",
+            "max reg braking force", "rolling resistance r0", "rolling resistance r1", "rolling resistance r2"}
+DIMENSIONS = {"mass": "mass", "max speed": "speed", "max traction force": "force", "max traction power": "power",
+              "max reg braking force": "force", "max reg braking power": "power", "max pn braking force": "force",
+              "rolling resistance r0": "force", "rolling resistance r1": "force per speed",
+              "rolling resistance r2": "force per speed^2"}
+POSITIVE = {"mass", "max speed", "max traction force", "max traction power"}
 
 
 def metadata(doc: Mapping[str, Any]) -> dict[str, str]:
@@ -68,6 +75,7 @@ def quantity(doc: Mapping[str, Any], key: str, path: Where, dimension: str, defa
     item = doc[key]
     if not isinstance(item, dict) or "value" not in item or "unit" not in item:
         raise InputError(problem(path, key, "expected {\"unit\": ..., \"value\": ...}"))
+    unmodelled(item, {"unit", "value"}, path, f"{key!r}", key)
     return _convert(item["value"], item["unit"], dimension, path, key)
 
 
@@ -78,6 +86,8 @@ def table(doc: Mapping[str, Any], key: str, path: Where, columns: Sequence[tuple
     if not isinstance(item, dict) or not isinstance(item.get("values"), list) or not isinstance(item.get("units"), dict):
         raise InputError(problem(path, key, "expected {\"units\": {...}, \"values\": [[...], ...]}"))
     given = item["units"]
+    unmodelled(item, {"units", "values"}, path, f"{key!r}", key)
+    unmodelled(given, {name for name, _ in columns}, path, f"{key!r} unit", f"{key}.units")
     rows: list[list[float]] = []
     for i, row in enumerate(item["values"]):
         where = f"{key}.values[{i}]"
@@ -96,11 +106,13 @@ def table(doc: Mapping[str, Any], key: str, path: Where, columns: Sequence[tuple
     return rows
 
 
-def _unmodelled(doc: Mapping[str, Any], known: Collection[str], path: Where, what: str) -> None:
+def unmodelled(doc: Mapping[str, Any], known: Collection[str], path: Where, what: str, within: str = "") -> None:
+    """Warn of each key of ``doc`` (a document, or the mapping of its field ``within``) that is not
+    ``known``: a field ecostudy does not read."""
     for key in doc:
-        if key not in known and key not in DESCRIPTIVE:
-            warnings.warn(problem(path, key, f"a {what} field ecostudy does not model: ignored"),
-                          EcostudyWarning, stacklevel=3)
+        if key not in known and (within or key not in DESCRIPTIVE):
+            warnings.warn(problem(path, f"{within}.{key}" if within else key,
+                                  f"a {what} field ecostudy does not model: ignored"), EcostudyWarning, stacklevel=3)
 
 
 def _etcs(doc: Mapping[str, Any], path: Where, fields: Mapping[str, str | None], what: str,
@@ -139,7 +151,7 @@ def ttobench_track(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
     """A TTOBench track as a track-schema dict (SI converted to the schema's field units)."""
     meta = metadata(doc)
     name = meta.get("id") or str(path)
-    _unmodelled(doc, TRACK_FIELDS, path, "track")
+    unmodelled(doc, TRACK_FIELDS, path, "track")
     stops = doc.get("stops")
     if not isinstance(stops, dict) or "unit" not in stops or not isinstance(stops.get("values"), list):
         raise InputError(problem(path, "stops", "expected {\"unit\": ..., \"values\": [...]}"))
@@ -200,18 +212,40 @@ def ttobench_train(doc: Mapping[str, Any], path: Where,
         raise InputError(problem(path, "ETCS braking data", "missing: '#etcs' brakes on its service-brake curve"))
     meta = metadata(doc)
     name = meta.get("id") or str(path)
-    _unmodelled(doc, TRAIN_FIELDS, path, "train")
-    top = quantity(doc, "max speed", path, "speed")
-    f_t, p_t = quantity(doc, "max traction force", path, "force"), quantity(doc, "max traction power", path, "power")
-    f_reg = quantity(doc, "max reg braking force", path, "force", 0.0)
-    p_reg = quantity(doc, "max reg braking power", path, "power", math.inf) if f_reg > 0 else math.inf
-    f_pn = quantity(doc, "max pn braking force", path, "force", 0.0)
+    unmodelled(doc, TRAIN_FIELDS, path, "train")
+    missing = sorted(REQUIRED - set(doc))  # TTOBench's validate_trains.py: no reading of ours fills them
+    if missing:
+        raise InputError(problem(path, missing[0], "missing field (TTOBench requires "
+                                 + ", ".join(f"'{m}'" for m in missing) + ")"))
+    value = {key: quantity(doc, key, path, dimension, 0.0) for key, dimension in DIMENSIONS.items()}
+    for key, x in value.items():  # ms-eetc's checks (train.py checkFields); a brake is given as its size
+        if x < 0 or (x == 0 and key in POSITIVE):
+            raise InputError(problem(path, key, f"must be {'above 0' if key in POSITIVE else '0 or more'}, not {x:g}"))
+    top, f_t, p_t = value["max speed"], value["max traction force"], value["max traction power"]
+    f_reg, p_reg, f_pn = value["max reg braking force"], value["max reg braking power"], value["max pn braking force"]
+    if f_reg > 0 and p_reg == 0:
+        raise InputError(problem(path, "max reg braking power", f"0 beside a regenerative force of {f_reg / units.KN:g} "
+                                 "kN: both above 0, or the force 0 for no electric brake"))
     rho = quantity(doc, "rho", path, "share", 0.0)
     factor = rho if rho < 1 else rho - 1  # ms-eetc: 6 % -> 1.06, a factor 1.06 kept
+    if not 0 <= factor <= 0.5:  # ms-eetc's own check: 1 <= rho <= 1.5
+        raise InputError(problem(path, "rho", f"the rotating-mass factor {1 + factor:g} is outside 1-1.5 (a value "
+                                 "below 1 is read as a share, as ms-eetc reads it: 0.06 -> 1.06)"))
     bounds = {}
     for key, field in (("max acceleration", "max_acceleration_mps2"), ("max deceleration", "max_deceleration_mps2")):
         if key in doc:
-            bounds[field] = abs(quantity(doc, key, path, "acceleration"))
+            bound = quantity(doc, key, path, "acceleration")
+            if bound == 0 or (key == "max acceleration" and bound < 0):  # ms-eetc: a deceleration of either sign
+                raise InputError(problem(path, key, f"must be above 0, not {bound:g} m/s^2"))
+            bounds[field] = abs(bound)
+    given = [key for key in ("efficiency traction", "efficiency reg brake") if key in doc]
+    if len(given) == 1:  # TTOBench and ms-eetc: both or neither
+        other = ({"efficiency traction", "efficiency reg brake"} - set(given)).pop()
+        raise InputError(problem(path, other, f"missing: give both efficiencies or neither ({given[0]!r} is given)"))
+    if not given:
+        warnings.warn(problem(path, "efficiency traction", "no efficiencies given: traction and regenerative braking "
+                              "counted at 100 % (ms-eetc's mechanical energy); the net energy is at the wheel"),
+                      EcostudyWarning, stacklevel=2)
     regen = None
     if f_reg > 0:
         regen = {"max_force_kN": f_reg / units.KN,
@@ -224,7 +258,7 @@ def ttobench_train(doc: Mapping[str, Any], path: Where,
         tunnels = [{"cross_section_m2": a, "c_kN_per_kmh2": c * units.KMH**2 / units.KN} for a, c in rows]
     service = _etcs(doc, path, ETCS_TRAIN, "train", used=selector == "etcs") if "ETCS braking data" in doc else None
     length = quantity(doc, "length", path, "length", 0.0)
-    mass = quantity(doc, "mass", path, "mass")
+    mass = value["mass"]
     braking = _braking(doc, path, top, f_reg, p_reg, f_pn)
     if selector == "etcs":  # the deceleration curve of the whole train: force = M a, M with the rotating allowance
         if service is None:
@@ -239,9 +273,8 @@ def ttobench_train(doc: Mapping[str, Any], path: Where,
         "mass_t": mass / units.TONNE,
         "rotating_mass_factor": factor,
         "length_m": length,
-        "davis": {"a_N": quantity(doc, "rolling resistance r0", path, "force"),
-                  "b_N_per_mps": quantity(doc, "rolling resistance r1", path, "force per speed", 0.0),
-                  "c_N_per_mps2": quantity(doc, "rolling resistance r2", path, "force per speed^2", 0.0)},
+        "davis": {"a_N": value["rolling resistance r0"], "b_N_per_mps": value["rolling resistance r1"],
+                  "c_N_per_mps2": value["rolling resistance r2"]},
         "traction": {"max_force_kN": f_t / units.KN, "max_power_kW": p_t / units.KW},
         "braking": braking,
         "traction_efficiency": quantity(doc, "efficiency traction", path, "share", 1.0),
