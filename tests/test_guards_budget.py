@@ -257,3 +257,40 @@ def test_a_heavyhaul_run_memory_is_estimated_from_its_qp_matrices(nc, peak):
     (docs/guards.md); the estimate is a worker and its QP's matrices, between that and twice it."""
     from ecostudy.core.budget import WORKER_BYTES
     assert peak <= WORKER_BYTES + sizes.heavyhaul_bytes(204, nc, 30) <= 2 * peak
+
+
+def test_solve_refuses_a_run_too_big_for_the_memory_with_its_estimate(tmp_path):
+    """`solve` had no size check but for a MINLP search: a K = 60 000 run of a train whose braking is an
+    82-point table (a TTOBench train with pneumatic brakes; every node's rows carry the table) was
+    accepted, 22.7 GB estimated on a 25.3 GB machine. Refused with its estimate, before computing."""
+    import json
+    from .conftest import DATA
+    doc = json.loads((DATA / "ttobench_subway_train.json").read_text())
+    doc["max pn braking force"] = {"unit": "kN", "value": 100.0}
+    train = tmp_path / "CN_Beijing_Subway.json"
+    train.write_text(json.dumps(doc))
+    from ecostudy.io.loaders import load_train
+    from ecostudy.studies.estimate import run_bytes, table_points
+    tables = table_points(load_train(train))
+    assert tables == 82  # 81 speeds and the regenerative corner speed
+    if run_bytes(100000, tables) < machine_memory() / 2:
+        pytest.skip("a machine with more memory than a K = 100 000 run of this train needs twice over")
+    result = run("solve", "--track", DATA / "ttobench_track.json", "--train", train, "--supplement", 10, "-K", 100000,
+                 "--no-plot", "--out", tmp_path / "o")
+    one_line(result, "command line: --points: a run at K = 100000: an estimated", "of memory, above half of this "
+             "machine's", "give --force to run it anyway")
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_grid_larger_than_asked_is_said(tmp_path):
+    """A track with 300 gradient changes between its stops: each is a grid node, so K = 100 asked ran at
+    K = 301 without a word (a TTOBench track of 20 000 rows ran at K = 20 001, 7 GB and rising)."""
+    track = {"name": "many grades", "source": "test", "length_m": 3000,
+             "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 3000}],
+             "gradients": [{"position_m": 10 * n, "gradient_permille": (-1) ** n} for n in range(300)],
+             "speed_limits": [{"position_m": 0, "speed_kmh": 80}]}
+    result = run("solve", "--track", write_yaml(tmp_path / "t.yaml", track), "--train", METRO, "--supplement", 10,
+                 "-K", 100, "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 0, result.output
+    assert ("warning: command line: --points: the track's profile changes between A and B are each a grid node: "
+            "K = 301, not the 100 asked") in result.output, result.output

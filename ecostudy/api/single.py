@@ -32,7 +32,7 @@ from ecostudy.report.style import output
 from ecostudy.studies.check import check_result
 from ecostudy.studies.options import (OBJECTIVES, case_from, check_choices, check_options, das_limit, only_one,
                                       output_folder, parse_pair, timing_of)
-from ecostudy.studies.estimate import check_solve
+from ecostudy.studies.estimate import check_solve, grid_nodes, table_points
 
 
 def run_lines(result: RunResult, out_dir: Path) -> list[str]:
@@ -123,7 +123,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         timing, w, k = timing_of(time, supplement, window), (1.0, 1.0), k or RUN_POINTS
         out_dir = output_folder(out, default_output(f"{Path(track).stem}_{f}_{t}"))
     das_time_limit = das_limit(das, das_time_limit)
-    check_solve(k, das, das_time_limit)
+    check_solve(grid_nodes(trk, trn, f, t, k), das, das_time_limit, table_points(trn))
     w = parse_pair(weights, "--weights", nonnegative=True) if weights else w
     if weights is not None and obj != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))

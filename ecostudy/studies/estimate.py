@@ -32,7 +32,12 @@ The constants are measured on this project's shared 2-core machine (so they are 
   75 kB a grid point (:data:`RUN_BYTES_PER_POINT`): a network study's first runs (the all-out and
   net-energy runs of the metro line's first segment, fresh process) took 2.3, 5.2, 14.9, 30.2 and
   61.9 CPU s and peaked at 253, 325, 546, 923 and 1 676 MB at K = 1 000, 2 000, 5 000, 10 000 and
-  20 000 (busy machine, docs/guards.md); a network study's first runs are :func:`first_runs`.
+  20 000 (busy machine, docs/guards.md); a network study's first runs are :func:`first_runs`. Each
+  node's rows carry the train's envelope tables: a TTOBench train with pneumatic brakes (its braking
+  an 81-point table, ``io.ttobench``) ran 48.5 km at K = 2001 in 24 s and 880 MB, the metro (a 4-point
+  table) at K = 2001 in 3.3 s and 228 MB (busy machine): 3.6 kB more a table point and node
+  (:data:`TABLE_BYTES_PER_POINT_NODE`), and ``io.trainschema.SECONDS_PER_POINT_NODE`` of time
+  (:func:`run_seconds`, :func:`run_bytes`).
 """
 import warnings
 from dataclasses import replace
@@ -49,6 +54,7 @@ from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, T
 from ecostudy.core.grid import make_grid, make_segment, node_limits
 from ecostudy.io.loaders import track_from_schema, train_from_schema, validate
 from ecostudy.io import schemas
+from ecostudy.io.trainschema import SECONDS_PER_POINT_NODE
 from ecostudy.ocp.problem import check_not_crawling, prepare
 
 LEG_SECONDS_PER_STEP = 0.12
@@ -66,25 +72,45 @@ CONVEX_GROWTH = 1.7
 RUN_SECONDS_PER_POINT = 2.0e-3
 DAS_EXTRA_POINT_RUNS = {"round": 0.0, "phases": 2.0, "minlp": 3.0}
 RUN_BYTES_PER_POINT = 75e3  # a space run's process grows 75 kB a point (the model, its NL file, Ipopt's factor)
+TABLE_BYTES_PER_POINT_NODE = 4e3  # [bytes] an envelope table's point, each node's rows carrying the table
 
 
-def run_seconds(points, das=None, das_time_limit=DAS_TIME_LIMIT_S):
-    """One space-domain run of ``points`` grid nodes, with its DAS advice [s]."""
-    seconds = points * RUN_SECONDS_PER_POINT * (1 + DAS_EXTRA_POINT_RUNS.get(das or "round", 0.0))
+def run_seconds(points, das=None, das_time_limit=DAS_TIME_LIMIT_S, table_points=0):
+    """One space-domain run of ``points`` grid nodes, with its DAS advice [s]; ``table_points``: the
+    points of the train's envelope tables (:func:`table_points`), each row of a node carrying them."""
+    seconds = (points * (RUN_SECONDS_PER_POINT + SECONDS_PER_POINT_NODE * table_points)
+               * (1 + DAS_EXTRA_POINT_RUNS.get(das or "round", 0.0)))
     return seconds + (das_time_limit if das == "minlp" else 0.0)
 
 
-def run_bytes(points):
+def run_bytes(points, table_points=0):
     """Memory of one space-domain run of ``points`` grid nodes [bytes]: its process's growth."""
-    return points * RUN_BYTES_PER_POINT
+    return points * (RUN_BYTES_PER_POINT + TABLE_BYTES_PER_POINT_NODE * table_points)
 
 
-def check_solve(points, das=None, das_time_limit=DAS_TIME_LIMIT_S):
-    """Refuse (unless forced) one solve estimated above one run's budget: its MINLP search may take
-    its whole time limit (``--das-time-limit 1e308`` searched on past any timeout)."""
-    if das == "minlp":
-        check_run("command line", "--das-time-limit", f"a run at K = {points} with a MINLP search of up to "
-                  f"{duration(das_time_limit)}", run_seconds(points, das, das_time_limit))
+def table_points(train):
+    """The points of a train's traction and braking tables (0 for force-and-power envelopes)."""
+    return sum(len(e.speeds or ()) for e in (train.traction, train.braking) if e.kind == "table")
+
+
+def grid_nodes(track, train, from_stop, to_stop, points):
+    """The grid's node count for ``points`` asked (``ocp.problem.prepare``'s grid): more where the
+    segment has more profile changes than that, each a node; said in a warning then."""
+    nodes = len(make_grid(make_segment(track, train, from_stop, to_stop), points))
+    if nodes > points:
+        warnings.warn(problem("command line", "--points", f"the track's profile changes between {from_stop} and "
+                              f"{to_stop} are each a grid node: K = {nodes}, not the {points} asked (a run that much "
+                              f"larger)"), EcostudyWarning, stacklevel=2)
+    return nodes
+
+
+def check_solve(points, das=None, das_time_limit=DAS_TIME_LIMIT_S, tables=0):
+    """Refuse (unless forced) one solve of ``points`` nodes estimated above one run's budget in time
+    or memory (``tables``: :func:`table_points`); its MINLP search may take its whole time limit
+    (``--das-time-limit 1e308`` searched on past any timeout)."""
+    field, what = (("--das-time-limit", f"a run at K = {points} with a MINLP search of up to "
+                    f"{duration(das_time_limit)}") if das == "minlp" else ("--points", f"a run at K = {points}"))
+    check_run("command line", field, what, run_seconds(points, das, das_time_limit, tables), run_bytes(points, tables))
 
 
 def sample_seconds(kind, points, variant="nominal", transcription="simultaneous"):
