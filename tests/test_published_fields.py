@@ -46,9 +46,12 @@ def edited(tmp_path, change):
      "max reg braking power: 0 beside a regenerative force of 260 kN"),
 ])
 def test_a_field_ttobench_requires_or_ms_eetc_refuses_is_one_line(tmp_path, edit, line):
-    path = edited(tmp_path, edit)
+    refused(load_train, edited(tmp_path, edit), line)
+
+
+def refused(load, path, line):
     with pytest.raises(InputError) as caught:
-        load_train(path)
+        load(path)
     assert str(caught.value).startswith(f"{path}: {line}"), str(caught.value)
 
 
@@ -104,10 +107,7 @@ def journey(tmp_path, change):
      "timing points.values[3]: position 1300 m before the point above it"),
 ])
 def test_a_journey_is_read_in_seconds_along_the_line(tmp_path, edit, line):
-    path = journey(tmp_path, edit)
-    with pytest.raises(InputError) as caught:
-        load_timetable(path)
-    assert str(caught.value).startswith(f"{path}: {line}"), str(caught.value)
+    refused(load_timetable, journey(tmp_path, edit), line)
 
 
 def test_a_journey_field_ecostudy_does_not_read_is_warned(tmp_path):
