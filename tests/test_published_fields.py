@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning, InputError
-from ecostudy.io.loaders import load_timetable, load_train
+from ecostudy.io.loaders import load_timetable, load_track, load_train
 
 from .conftest import DATA, STUDIES
 
@@ -149,3 +149,12 @@ def test_an_osrd_step_is_read_as_osrd_interpolates_it(tmp_path):
         train = load_train(path)
     force = dict(zip(train.traction.speeds, train.traction.forces))
     assert force[10.0] == 110e3 and force[9.99] == 200e3 and force[20.0] == 100e3
+
+
+def test_a_ttobench_tracks_bad_row_is_named_as_the_file_names_it(tmp_path):
+    """A speed limit of 0 was 'speed_limits[1].speed_kmh', a name of ecostudy's schema, not the file's."""
+    doc = json.loads((DATA / "ttobench_track.json").read_text())
+    doc["speed limits"]["values"][1][1] = 0
+    path = tmp_path / "track.json"
+    path.write_text(json.dumps(doc))
+    refused(load_track, path, "speed limits.values[1].velocity: Input should be greater than 0")

@@ -2,6 +2,7 @@
 ``file: field: what is wrong`` (:class:`ecostudy.core.errors.InputError`)."""
 import difflib
 import json
+import re
 from os import PathLike
 from pathlib import Path
 from typing import Any, Mapping, Sequence, TypeAlias, TypeVar
@@ -189,5 +190,20 @@ def validate(schema: type[Model], data: object, path: str | PathLike[str],
             head, _, rest = msg.partition(": ")
             if not loc and rest and head.split("[")[0].split(".")[0] in _names(schema):  # a check across fields naming its field
                 field, msg = head, rest
-            lines.append(problem(path, (aliases or {}).get(field, field), msg))
+            lines.append(problem(path, aliased(field, aliases or {}), msg))
         raise InputError(lines)
+
+
+def aliased(field: str, aliases: Mapping[str, str]) -> str:
+    """``field`` (a schema path, ``speed_limits[1].speed_kmh``) as the file names it: ``aliases`` maps a
+    schema path, or one with its indices left out (``speed_limits[].speed_kmh``: ``speed limits.values[].velocity``,
+    the indices put back in order), to the file's name; else the field itself."""
+    if field in aliases:
+        return aliases[field]
+    key = re.sub(r"\[\d+\]", "[]", field)
+    if key not in aliases:
+        return field
+    name = aliases[key]
+    for index in re.findall(r"\[\d+\]", field):
+        name = name.replace("[]", index, 1)
+    return name

@@ -23,6 +23,7 @@ from ecostudy.io.davis import check_davis_bound, check_davis_plausible, davis_si
 from ecostudy.io.intrain import in_train_physics
 from ecostudy.io.formats import timetable_document_to_schema, track_document_to_schema, train_document_to_schema
 from ecostudy.io.timetable import name_stops, off_clock, segment_timing, turning_back, windows_from_schema
+from ecostudy.io.ttobench import TRACK_ALIASES
 from ecostudy.io.writers import default_output
 from ecostudy.io.documents import (Where, given, named_file, read_document as read_document,  # re-exported
                                    split_selector, validate as validate)
@@ -167,7 +168,8 @@ def read_track(path: Where) -> tuple[dict[str, Any], Track]:
     """(document, :class:`Track`) of a track file (YAML, or TTOBench JSON); a line whose every limit is
     below 25 km/h is warned about (m/s given as km/h?)."""
     data = track_document(path)
-    track = track_from_schema(validate(schemas.TrackFile, data, path))
+    track = track_from_schema(validate(schemas.TrackFile, data, path,
+                                       TRACK_ALIASES if Path(path).suffix.lower() == ".json" else None))
     if track.limits.max() < 25 * units.KMH and track.length > 2000:
         warnings.warn(problem(path, "speed_limits", f"every limit is below 25 km/h on a {track.length / 1000:.1f} km "
                               "line: check the unit (m/s given as km/h?)"), EcostudyWarning, stacklevel=2)

@@ -41,6 +41,17 @@ TRACK_FIELDS = {"stops", "speed limits", "gradients", "curvatures", "tunnels", "
 ETCS_TRAIN = {"A_brake_emergency": None, "A_brake_service": None, "K_dry_rst": "share", "K_wet_rst": "share",
               "T_traction": "time", "T_be": "time", "T_bs": "time", "v_uncertainty": "share"}
 ETCS_TRACK = {"M_NVAVADH": "share", "Kt_int": "share"}
+TRACK_ALIASES = {  # the track schema's fields as a TTOBench track names them (its tables' rows and columns)
+    **{f"speed_limits[].{k}": f"speed limits.values[].{v}" for k, v in (("position_m", "position"), ("speed_kmh", "velocity"))},
+    **{f"gradients[].{k}": f"gradients.values[].{v}" for k, v in (("position_m", "position"), ("gradient_permille", "slope"))},
+    **{f"curves[].{k}": f"curvatures.values[].{v}" for k, v in (("position_m", "position"), ("radius_m", "radius at start"),
+                                                                  ("end_radius_m", "radius at end"))},
+    **{f"tunnels[].{k}": f"tunnels.values[].{v}" for k, v in (("position_m", "position"), ("length_m", "length"),
+                                                               ("cross_section_m2", "cross section"))},
+    "stops[].position_m": "stops.values[]", "length_m": "stops (the last one's position)",
+    "speed_limits": "speed limits", "speed_limits[]": "speed limits.values[]", "gradients[]": "gradients.values[]",
+    "curves": "curvatures", "curves[]": "curvatures.values[]", "tunnels[]": "tunnels.values[]", "stops[]": "stops.values[]",
+}
 REQUIRED = {"mass", "max speed", "max traction power", "max reg braking power", "max traction force",
             "max reg braking force", "rolling resistance r0", "rolling resistance r1", "rolling resistance r2"}
 DIMENSIONS = {"mass": "mass", "max speed": "speed", "max traction force": "force", "max traction power": "power",
