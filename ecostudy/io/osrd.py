@@ -105,12 +105,12 @@ def _steps(speeds: FloatArray, efforts: FloatArray, path: Where, where: str) -> 
     same = np.concatenate([[False], (gaps == 0) & (np.diff(efforts) == 0)])  # a point given twice: once
     speeds, efforts, gaps = speeds[~same], efforts[~same], np.diff(speeds[~same])
     speeds = speeds.copy()
-    for n in np.flatnonzero(gaps == 0):
-        low = speeds[n - 1] if n > 0 else -np.inf
-        speeds[n] = max(speeds[n + 1] - STEP, 0.5 * (low + speeds[n + 1]))
-        warnings.warn(problem(path, f"{where}.speeds[{n + 1}]", f"a step of the effort at {speeds[n + 1]:g} m/s "
-                              f"({efforts[n] / units.KN:g} -> {efforts[n + 1] / units.KN:g} kN), read as a change "
-                              f"over the {speeds[n + 1] - speeds[n]:g} m/s below it"), EcostudyWarning, stacklevel=4)
+    for k in np.flatnonzero(gaps == 0).tolist():
+        low = speeds[k - 1] if k > 0 else -np.inf
+        speeds[k] = max(speeds[k + 1] - STEP, 0.5 * (low + speeds[k + 1]))
+        warnings.warn(problem(path, f"{where}.speeds[{k + 1}]", f"a step of the effort at {speeds[k + 1]:g} m/s "
+                              f"({efforts[k] / units.KN:g} -> {efforts[k + 1] / units.KN:g} kN), read as a change "
+                              f"over the {speeds[k + 1] - speeds[k]:g} m/s below it"), EcostudyWarning, stacklevel=4)
     if np.any(np.diff(speeds) <= 0):
         raise InputError(problem(path, f"{where}.speeds", "a speed repeated more than twice: one step per speed"))
     return speeds, efforts
