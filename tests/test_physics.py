@@ -90,3 +90,22 @@ def test_interval_mean_stands_still_and_takes_pyomo():
     expr = physics.interval_mean(physics.smooth_table(m.a, coef, 0.5), physics.smooth_table(m.b, coef, 0.5),
                                  m.b - m.a, physics.smooth_table_slope(0.5 * (m.a + m.b), coef, 0.5))
     assert_allclose(pyo.value(expr), 2.0, atol=1e-3)
+
+
+def test_a_table_is_taken_for_a_force_and_power_limit_only_where_it_is_never_stronger():
+    """A table whose points lie on min(F, P / v) was replaced by that curve even where its corner falls
+    between two points: braking [0, 100] km/h -> [120, 80] kN became min(120 kN, 2222 kW / v), 120 kN
+    at 50 km/h where the table says 100, and an all-out run on a flat 3 km line braked 387 m before the
+    stop instead of the table's 437 m (an independent integration), verified ok. Now such a table stays
+    a table; the shipped tables, sampled hyperbolas with the corner on a point, are still fitted."""
+    from ecostudy.core.physics import force_power_fit
+    from ecostudy.io.loaders import load_train
+
+    from .conftest import TRAINS
+    kmh = 1 / 3.6
+    assert force_power_fit([0.0, 100 * kmh], [120e3, 80e3]) is None
+    assert force_power_fit([0.0, 50 * kmh], [150e3, 100e3]) is None
+    # corner on a point, the hyperbola 11 % below the chord at 54 km/h: the table says more
+    assert force_power_fit([0, 36 * kmh, 72 * kmh, 108 * kmh], [150e3, 150e3, 75e3, 50e3]) is None
+    for name in ("amsterdam_metro.yaml", "regional_alstom.yaml"):  # within CHORD_TOLERANCE below the chords
+        assert load_train(TRAINS / name).traction.kind == "force_power", name

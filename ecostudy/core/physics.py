@@ -272,13 +272,20 @@ def power_never_binds(force: Numeric, power: float, speeds: Numeric) -> bool:
     return bool(np.all(power >= np.asarray(force, float) * np.maximum(np.asarray(speeds, float), 0.0)))
 
 
+CHORD_TOLERANCE = 0.05  # [-] a force-and-power fit may lie this far below a table's chords (a hyperbola sampled every 20 km/h)
+
+
 def force_power_fit(speeds: Samples, forces: Samples,
                     tolerance: float = 0.005) -> tuple[float, float] | None:
-    """(F_max, P_max) if every table point lies on min(F_max, P_max / v) within ``tolerance``.
+    """(F_max, P_max) if every table point lies on min(F_max, P_max / v) within ``tolerance`` and,
+    between the points, the curve is never above the table's linear interpolation by more than
+    ``tolerance`` nor below it by more than :data:`CHORD_TOLERANCE` (a power hyperbola sampled at
+    its corner and beyond lies a little below its chords; a corner between two points would put it
+    above them: a train stronger than its table).
 
     Such a table is then modelled exactly by F <= F_max and F v <= P_max: cheaper than the
-    smoothed interpolant, and never above the table's linear interpolation (the hyperbola lies
-    below its chords). Returns None for any other shape.
+    smoothed interpolant. Beyond the table's last speed the fit goes on along the power limit, where a
+    table is held constant. Returns None for any other shape.
     """
     v, f = np.asarray(speeds, float), np.asarray(forces, float)
     f_max = float(f[0])
@@ -287,7 +294,12 @@ def force_power_fit(speeds: Samples, forces: Samples,
     weak = (v > 0) & (f < f_max * (1 - tolerance))
     power = float(np.median(f[weak] * v[weak])) if np.any(weak) else float("inf")
     model = np.minimum(f_max, power / np.maximum(v, 1e-9))
-    return (f_max, power) if np.all(np.abs(model - f) <= tolerance * f) else None
+    if not np.all(np.abs(model - f) <= tolerance * f):
+        return None
+    fine = np.linspace(v[0], v[-1], 2000)
+    chords, curve = np.interp(fine, v, f), np.minimum(f_max, power / np.maximum(fine, 1e-9))
+    inside = np.all(curve <= chords * (1 + tolerance)) and np.all(curve >= chords * (1 - CHORD_TOLERANCE))
+    return (f_max, power) if inside else None
 
 
 def table_width(speeds: Samples, forces: Samples, tolerance: float = 0.002) -> float:
