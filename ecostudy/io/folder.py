@@ -217,6 +217,21 @@ def load(folder: Path | str) -> StudyResult:
         except (OSError, ValueError) as exc:
             raise InputError(problem(folder / file, "", f"the {name} table of this folder cannot be read ({exc})"))
     not_ok = tuple(NotOk(str(c["case"]), Status.parse(c["status"])) for c in data.get("not_ok") or ())
-    return StudyResult(kind=str(data["kind"]), status=Status.parse(data["status"]),
-                       cases=Counts.from_dict(data.get("cases") or {}), tables=tables, summary=data, folder=folder,
+    status, cases = Status.parse(data["status"]), Counts.from_dict(data.get("cases") or {})
+    judged = _rejudged(folder) if data["kind"] == "solve" and status.ok else None
+    if judged is not None:  # `ecostudy check` re-simulated the run since and found it not ok
+        status, not_ok = judged, (*not_ok, NotOk("the run, re-judged by check.json", judged))
+        cases = Counts(cases.total, cases.ok - 1, cases.flagged + (judged.kind == "flagged"),
+                       cases.failed + (judged.kind != "flagged"))
+    return StudyResult(kind=str(data["kind"]), status=status, cases=cases, tables=tables, summary=data, folder=folder,
                        files=list(data.get("files", [])), not_ok=not_ok)
+
+
+def _rejudged(folder: Path) -> Status | None:
+    """The run's status as the folder's check.json judged it (``run_status``: its profile re-simulated
+    against its track and train) where that is not ok, else None (no check, or an unreadable one)."""
+    try:
+        run = Status.parse(str(json.loads((folder / "check.json").read_text())["run_status"]))
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return None if run.ok else run
