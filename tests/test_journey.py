@@ -131,10 +131,15 @@ def test_ttobench_journey_becomes_a_plan_in_si(tmp_path):
     other.write_text(json.dumps(station))
     plan = journey_plan(*name_stops(load_timetable(other), track, other), other)
     assert plan.departure[1] == (90.0, 100.0) and len(plan.stops) == 4
-    # not on the track at all; a departure that is not at standstill
+    # a point before the one above it; the last stop not on the track at all; a departure that is not at standstill
     doc["timing points"]["values"][1][0] = 9.0
     other.write_text(json.dumps(doc))
-    with pytest.raises(InputError, match=r"stops\[1\]\.position_m: 9000 m is not on track"):
+    with pytest.raises(InputError, match=r"timing points\.values\[2\]: position 1\.4 km before the point above it"):
+        load_timetable(other)
+    doc["timing points"]["values"][1][0] = 0.7
+    doc["timing points"]["values"][-1][0] = 9.0
+    other.write_text(json.dumps(doc))
+    with pytest.raises(InputError, match=r"stops\[3\]\.position_m: 9000 m is not on track"):
         name_stops(load_timetable(other), track, other)
     doc["timing points"]["values"][0][4] = 5
     other.write_text(json.dumps(doc))
