@@ -163,7 +163,7 @@ def test_a_summary_edited_to_ok_over_a_run_short_of_its_stop_is_judged_again(tmp
 
 
 @pytest.mark.parametrize("name, factor", [("traction_energy_kWh", 0.95), ("running_time_s", 0.99),
-                                          ("net_energy_kWh", 1.1)])
+                                          ("net_energy_kWh", 1.1), ("distance_m", 1.5)])
 def test_a_summary_whose_totals_are_not_its_profile_s_is_refused(tmp_path, name, factor):
     """A recorded total that the profile's own run does not give (an energy edited down, a time
     edited to the timetable's) is one line naming summary.json and the field, exit 2."""

@@ -105,6 +105,10 @@ def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
         if not isinstance(said, (int, float)) or not abs(said - totals[name]) <= AGREE * max(abs(said), abs(totals[name]), 1.0):
             raise InputError(problem(result_dir / "summary.json", name, f"{said!r}, but the profile's run gives "
                                      f"{totals[name]:.6g}: an edited file? solve again"))
+    said = saved.summary.get("distance_m")
+    if not isinstance(said, (int, float)) or not abs(said - case.segment.distance) <= AGREE * max(said, 1.0):
+        raise InputError(problem(result_dir / "summary.json", "distance_m", f"{said!r}, but its stops are "
+                                 f"{case.segment.distance:.6g} m apart: an edited file? solve again"))
     block, trace = verify(case.segment, train, case.nodes, u, totals["running_time_s"],
                       totals["traction_energy_kWh"] * KWH, case.windows, net_energy=totals["net_energy_kWh"] * KWH)
     errors = Verification.from_dict(block).errors  # the saved status saying these very numbers: not said twice
