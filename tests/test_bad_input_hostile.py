@@ -172,6 +172,12 @@ def test_a_journey_time_without_physical_sense_is_refused(tmp_path, options, fra
     ({"substation": {"position_m": 1500, "voltage_V": 1e-6}}, ["n.yaml: substation.voltage_V", "100"]),
     ({"substation": {"position_m": 1500, "internal_resistance_ohm": 1e308}},
      ["n.yaml: substation.internal_resistance_ohm", "10"]),
+    # no line resistance: the floating bus's bisection ended at max_voltage_V unbalanced, 6.3 kWh of
+    # regeneration "used" by no train, a 65 % balance error, status ok; a cut-off at 1e12 V the same
+    ({"substation": {"position_m": 1500, "line_resistance_ohm_per_km": 0}},
+     ["n.yaml: substation.line_resistance_ohm_per_km", "greater than 0"]),
+    ({"substation": {"position_m": 1500, "max_voltage_V": 1e12}},
+     ["n.yaml: substation", "max_voltage_V: 1e+12 V is over 1.5 times voltage_V (750 V)"]),
     # stops out of track order: a network of trains turning back
     ({"stops": ["Noord", "Centrum", "Station"]}, ["n.yaml: stops", "'Station' lies back toward 'Noord'"]),
 ])

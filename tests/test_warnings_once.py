@@ -60,3 +60,24 @@ def test_a_scenario_warns_only_of_what_its_train_overrides_change(tmp_path):
     assert lines[:2] == [f"warning: {ADHESION}: adhesion: {cap}" for cap in CAPS]
     grip = f"warning: {path}: scenarios[2] (less grip): adhesion: "
     assert [line.startswith(grip) and "(Curtius & Kniffler, 40 t adhesive)" in line for line in lines[2:]] == [True] * 2, lines
+
+
+def test_a_network_study_says_what_its_legs_leave_out_with_every_worker_count(tmp_path):
+    """The legs' warning that they use the constant efficiencies, not the train's efficiency map, was
+    raised where a leg was built: in a worker process with more than one worker, so the default command
+    said nothing (9.903 kWh, the constant-efficiency number, as if the map counted). Said once, where
+    the study is read."""
+    from .conftest import load_yaml
+    train = load_yaml(TRAINS / "amsterdam_metro.yaml")
+    train["traction_efficiency_map"] = {"speed_kmh": [0, 40, 80], "force_kN": [0, 100, 200],
+                                        "efficiency": [[0.5] * 3] * 3}
+    doc = {"name": "net", "track": str(TRACKS / "metro_line_4stops.yaml"),
+           "train": str(write_yaml(tmp_path / "train.yaml", train)), "stops": ["Noord", "Station"],
+           "supplement_percent": 10, "dwell_s": 20, "time_step_s": 1.0, "points": 100,
+           "trains": [{"name": "T1", "offset_s": 0}, {"name": "T2", "offset_s": 120}],
+           "substation": {"position_m": 300}, "strategies": ["independent"], "buffer_m": 100}
+    study = write_yaml(tmp_path / "net.yaml", doc)
+    said = "the time-domain legs does not model efficiency maps: it uses the constant efficiencies (0.85, 0.8)"
+    for workers in ("1", "2"):
+        lines = warnings_of(["network", str(study), "--no-plot", "--workers", workers, "--out", str(tmp_path / workers)])
+        assert [line for line in lines if said in line] == [f"warning: {said}"], (workers, lines)

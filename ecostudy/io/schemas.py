@@ -316,9 +316,11 @@ class Substation(Strict):
     voltage_V: float = Field(750.0, ge=100, le=30000, description="Source voltage V_s, 100 V to 30 kV (DC lines: "
                              "600 V to 3 kV).")
     internal_resistance_ohm: float = Field(0.01, gt=0, le=10, description="R_s, at most 10 Ohm.")
-    line_resistance_ohm_per_km: float = Field(0.025, ge=0, le=10, description="Farooqi 2018: 25 mOhm/km; at most "
-                                              "10 Ohm/km.")
-    max_voltage_V: Optional[float] = Field(None, gt=0, description="Regeneration cut-off; default V_s 685/600.")
+    line_resistance_ohm_per_km: float = Field(0.025, gt=0, le=10, description="Farooqi 2018: 25 mOhm/km; above 0 "
+                                              "(a line without resistance has no voltage to share regeneration by), "
+                                              "at most 10 Ohm/km.")
+    max_voltage_V: Optional[float] = Field(None, gt=0, description="Regeneration cut-off; default V_s 685/600, at most "
+                                           "1.5 V_s (EN 50163 allows 1.33 V_s for minutes).")
     min_voltage_V: Optional[float] = Field(None, gt=0, description="Lowest pantograph voltage; default 2/3 V_s.")
     max_train_current_A: Optional[float] = Field(None, gt=0, description="Largest current a train draws "
                                                  "(Farooqi 2018 Fig. 7.7); default none.")
@@ -331,6 +333,9 @@ class Substation(Strict):
         lo = self.min_voltage_V if self.min_voltage_V is not None else self.voltage_V * 2 / 3
         if not lo < self.voltage_V < hi:
             raise ValueError("need min_voltage_V < voltage_V < max_voltage_V")
+        if hi > 1.5 * self.voltage_V:
+            raise ValueError(f"max_voltage_V: {hi:g} V is over 1.5 times voltage_V ({self.voltage_V:g} V): a "
+                             "regeneration cut-off of a DC line lies near 1.14-1.33 V_s (EN 50163)")
         return self
 
 

@@ -107,6 +107,7 @@ def solve_independent(fleet, mapper=map):
 # strategies that solve no legs one by one (one NLP of everything): given a pool, :func:`one_strategy`
 # runs them whole in one of its workers, not in the calling process
 WHOLE = ("joint",)
+BALANCE_PCT = 0.1  # [%] the circuit's energy balance a strategy may miss by (its bisection is exact to far less)
 
 
 def one_strategy(fleet, name, ind, wall=0.0, pool=None):
@@ -203,6 +204,9 @@ def _scored(fleet, runs, info, wall, mapper=map):
         flags.append(f"train {missed['train']}'s head came within {missed['gap_m']:.1f} m of the tail of train "
                      f"{missed['ahead']} at {missed['time_s']:g} s, {missed['position_m']:.0f} m along the line: "
                      f"closer than buffer_m {fleet.buffer:g} m (network_trains.csv separation_min_m)")
+    if abs(totals["balance_error_pct"]) > BALANCE_PCT:  # the circuit's solution did not balance its powers
+        flags.append(f"the line's energy balance misses by {totals['balance_error_pct']:+.3f} % (substation plus "
+                     "regeneration used against traction input plus line losses): the circuit did not balance")
     flags += not_optimal(fleet, runs, info)
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
     return {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}

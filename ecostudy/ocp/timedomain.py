@@ -28,7 +28,6 @@ from typing import Any, NamedTuple, Optional, Sequence
 import numpy as np
 import pyomo.environ as pyo
 
-from ecostudy.core.grid import warn_unmodelled
 from ecostudy.core.kinematics import point_resistance
 from ecostudy.core.physics import (interval_mean, interval_resistance, smooth_table, smooth_table_slope, step_integral,
                                    table_coefficients)
@@ -62,8 +61,7 @@ class Leg:
 def grade_steps(case: Case) -> tuple[FloatArray, FloatArray]:
     """(cuts, values): the gradient + curve force [N] of the segment as a step function of s, one value
     per piece between consecutive cuts (0, every gradient or curve change, the distance)."""
-    seg = case.segment
-    warn_unmodelled(seg, "the time-domain legs", case.train)
+    seg = case.segment  # what the legs leave out is said where the study is read (studies.network.expand_network)
     cuts = np.unique(np.concatenate([[0.0], seg.breakpoints(), [seg.distance]]))
     force = np.asarray(point_resistance(seg, case.train, 0.5 * (cuts[:-1] + cuts[1:])), float)
     return cuts, force

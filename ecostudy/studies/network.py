@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.core.errors import InfeasibleError, InputError, problem
+from ecostudy.core.grid import warn_unmodelled
 from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import load_network_study, validate
 from ecostudy.io.schemas import NetworkStudyFile
@@ -60,6 +61,8 @@ def expand_network(path, workers=1, pool=None, note=None, out=None, files=()):
                          st.supply, st.points, st.buffer, pool, st.supplement, check=partial(_timetable_kept, path))
     except InfeasibleError as exc:  # a running time below a segment's all-out time: the study's field, by name
         raise InfeasibleError([problem(path, "running_times_s", p) for p in exc.problems]) from None
+    for leg in fl.legs[0]:  # said here, once: the legs are solved in worker processes, whose warnings never show
+        warn_unmodelled(leg.case.segment, "the time-domain legs", leg.case.train)
     if note:
         segments, asked = len(st.stops) - 1, ", ".join(f"{t:.1f}" for t in fl.asked_times)
         note(f"{len(st.names)} trains, {segments} segment{'s' * (segments != 1)} ({asked} s before rounding to "
