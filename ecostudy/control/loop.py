@@ -102,7 +102,6 @@ class _Trip:
 
     def run(self, pieces):
         """Run the plant under ``pieces`` [(duration [s], handle)], in steps of at most plant_step."""
-        segment = self.plant.segment
         for duration, u in pieces:
             steps = max(int(round(duration / self.plant_step)), 1) if duration > 0.0 else 0
             for _ in range(steps):
@@ -117,8 +116,7 @@ class _Trip:
                     self.grip = max(self.grip, use or 0.0)
                 self.work_t += step.traction_work
                 self.work_b += step.braking_work
-                limit = float(segment.limit(np.clip(self.state.position, 0.0, segment.distance)))
-                self.over = max(self.over, self.state.speed - limit)
+                self.over = max(self.over, step.overspeed)  # at every limit edge the step crossed, and its end
                 self.moved = self.moved or self.state.speed > 0.5
                 if self.stood:
                     self.arrival = step.stood if step.stood is not None else self.state.time  # not the step's end

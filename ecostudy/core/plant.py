@@ -86,6 +86,7 @@ class Step(NamedTuple):
     braking_work: float
     regenerated_work: float   # taken by the electric brake, before its efficiency
     stood: float | None = None  # the clock at which the train came to a stand within the step [s]
+    overspeed: float = -np.inf  # the largest speed over the limit within the step [m/s] (:meth:`Plant.step`)
 
 
 @dataclass(frozen=True)
@@ -240,6 +241,7 @@ class Plant:
         y = [float(state.position), max(float(state.speed), 0.0), 0.0, 0.0, 0.0, 0.0]
         t, t_end = float(state.time), float(state.time) + dt
         stood: float | None = None
+        over = -np.inf  # under a held control the speed is monotone within a piece: its largest excess is at an end
         while t < t_end - 1e-12:
             i = bisect_right(self.edges, y[0] + 1e-9)
             edge = self.edges[i] if i < len(self.edges) else np.inf
@@ -268,7 +270,14 @@ class Plant:
                 y[1] = 0.0
                 if rhs(t, y)[1] <= 0.0:  # at a stand and nothing moves it: it stands out the step
                     stood, t = t, t_end
-        return Step(State(y[0], max(y[1], 0.0), t_end), y[2], y[3], y[4], stood)
+            over = max(over, self.over_limit(y[0], y[1]))
+        return Step(State(y[0], max(y[1], 0.0), t_end), y[2], y[3], y[4], stood, over)
+
+    def over_limit(self, position: float, speed: float) -> float:
+        """``speed`` less the limit at ``position`` [m/s], the lower of its two sides at a limit's edge
+        (``grid.node_limits``' reading): a train that reaches a lower limit's start faster is over it."""
+        x = np.clip([position - 1e-9, position + 1e-9], 0.0, self.segment.distance)
+        return float(speed - np.min(self.segment.limit(x)))
 
     # ------------------------------------------------------------------ a whole trip
     def drive(self, nodes: FloatArray, handle: Sequence[float] | FloatArray,
