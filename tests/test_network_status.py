@@ -61,6 +61,23 @@ def test_a_running_time_rounded_up_past_the_arrival_tolerance_is_flagged():
         out["totals"]["status"]
 
 
+def test_roundings_that_add_up_over_segments_past_the_arrival_tolerance_are_flagged():
+    """At 1 s steps 55.5 s and 98.5 s become 56 s and 99 s: each segment within the 0.5 s arrival
+    tolerance, but every train reaches Centrum 1 s after its timetable (55.5 + 20 + 98.5 = 174 s
+    after departure, the legs 175 s). The sum is flagged, naming the stop; the same roundings from
+    a supplement (the timetable is then each segment's time rounded up) are not."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    f = fleet.plan(track, train, ["Noord", "Station", "Centrum"], [55.5, 98.5], 20.0, [0.0], ["T1"], 1.0,
+                   Supply(position=300.0), points=200)
+    assert fleet.late_at_stops(f) == [("Station", 0.5), ("Centrum", 1.0)]
+    out = strategies.run_strategies(f, ["independent"], progress=None)["independent"]
+    assert out["trains"]["T1"]["arrival_s"] == 175.0 and out["trains"]["T1"]["verified"]
+    status = out["totals"]["status"]
+    assert status.startswith("flagged") and "reaches Centrum 1.0 s after its timetable" in status, status
+    f.timetabled = False  # the same legs as a supplement's timetable: each rounding within the tolerance
+    assert strategies.timetable_rounding(f) == []
+
+
 def test_a_joint_optimum_a_current_limit_makes_infeasible_names_the_limit():
     """600 A at 750 V lets the metro train draw 450 kW, 382 kW at its wheels (traction efficiency
     0.85): its fastest run from Noord to Station then takes about 60 s, more than the 56 s asked.

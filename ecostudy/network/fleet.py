@@ -37,6 +37,7 @@ class Fleet:
     results: dict = field(default_factory=dict)  # space-domain net-energy runs per segment (guesses)
     dwell_steps: int = 0
     asked_times: Optional[list] = None  # running time per segment before rounding to whole steps [s]
+    timetabled: bool = False  # the running times are the study's own (running_times_s), not a supplement's
     # how Ipopt ended each segment's all-out run a running time was taken from (a supplement over it)
     all_out_solver: dict = field(default_factory=dict)
     # the leg tasks solved in this process, shared by the strategies that pose the same (:mod:`.shared`)
@@ -62,6 +63,7 @@ def plan(track, train, stops, running_times, dwell, offsets, names, dt, supply, 
     out = _timetable(track, stops, cases, asked, dwell, offsets, names, dt, supply, buffer)
     if check is not None and running_times is None:
         check(out)
+    out.timetabled = running_times is not None
     out.results = {(c.segment.from_stop, c.segment.to_stop): r for c, r in zip(cases, firsts)}
     out.all_out_solver = {pair: status for pair, status in zip(out.results, ended) if status is not None}
     return out
@@ -82,6 +84,15 @@ def _timetable(track, stops, cases, asked, dwell, offsets, names, dt, supply, bu
         legs.append(mine)
     total = max(leg.start + leg.steps for mine in legs for leg in mine)
     return Fleet(list(names), legs, dt, total, supply, buffer, {}, pause, list(asked))
+
+
+def late_at_stops(fleet):
+    """(stop, seconds [s] after the timetable) per stop after the first: each leg runs whole clock
+    steps, its asked running time rounded up, and the dwells stay whole steps, so a train's lateness
+    at a stop is the sum of its legs' roundings so far (every train runs the same segment times: the
+    first train's legs stand for all)."""
+    over = np.cumsum([leg.running_time - asked for leg, asked in zip(fleet.legs[0], fleet.asked_times or [])])
+    return [(leg.case.segment.to_stop, float(late)) for leg, late in zip(fleet.legs[0], over)]
 
 
 def _on_clock(dwell, offsets, dt):

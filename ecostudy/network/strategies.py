@@ -34,10 +34,13 @@ import math
 import time
 from concurrent.futures import as_completed
 
+import numpy as np
+
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import TOLERANCES, outside
 from ecostudy.core.status import solver_part
 from ecostudy.core.registry import Registry
+from ecostudy.network.fleet import late_at_stops
 from ecostudy.network.joint import joint
 from ecostudy.network.rules import RULES, following, independent, supervised
 from ecostudy.network.scoring import buffer_missed, closest_approach, evaluate, separations, verify_leg
@@ -189,11 +192,7 @@ def _scored(fleet, runs, info, wall, mapper=map):
     if totals["voltage_min_V"] < floor - 0.5:  # 0.5 V: the circuit's bisection is exact to far less
         flags.append(f"a pantograph voltage fell to {totals['voltage_min_V']:.1f} V, below min_voltage_V "
                      f"{floor:.0f} V (network_steps_*.csv)")
-    # every train runs the same segment times (the first train's legs stand for all)
-    late = max((leg.running_time - asked for leg, asked in zip(fleet.legs[0], fleet.asked_times or [])), default=0.0)
-    if late > TOLERANCES["arrival_time_error_s"]:  # each leg runs whole clock steps, its asked time rounded up
-        flags.append(f"a segment runs {late:.1f} s over its timetabled running time, rounded up to whole "
-                     f"{fleet.dt:g} s steps (time_step_s)")
+    flags += timetable_rounding(fleet)
     closest = closest_approach(fleet, runs)
     if closest is not None and closest["gap_m"] < 0.0:  # head past the tail ahead
         flags.append(f"trains overlap on the line: train {closest['train']}'s head came {-closest['gap_m']:.1f} m past "
@@ -210,6 +209,27 @@ def _scored(fleet, runs, info, wall, mapper=map):
     flags += not_optimal(fleet, runs, info)
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
     return {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
+
+
+def timetable_rounding(fleet):
+    """The flag (a list of at most one reason) of a timetable the clock does not keep: with
+    ``running_times_s`` a train that reaches a stop more than the arrival tolerance after its
+    timetable, its legs' running times rounded up to whole steps added up (``fleet.late_at_stops``);
+    with a supplement, where the timetable is each segment's time rounded up, a segment whose
+    rounding alone exceeds the tolerance."""
+    tolerance = TOLERANCES["arrival_time_error_s"]
+    late = late_at_stops(fleet)
+    if fleet.timetabled:
+        stop, worst = max(late, key=lambda pair: pair[1], default=(None, 0.0))
+        if worst > tolerance:
+            return [f"every train reaches {stop} {worst:.1f} s after its timetable: the running times, each rounded "
+                    f"up to whole {fleet.dt:g} s steps (time_step_s), add up over the segments (running_times_s)"]
+        return []
+    rounding = np.diff([0.0] + [over for _, over in late])
+    if rounding.size and rounding.max() > tolerance:
+        return [f"a segment runs {rounding.max():.1f} s over its running time, rounded up to whole "
+                f"{fleet.dt:g} s steps (time_step_s)"]
+    return []
 
 
 SHOWN_PARTS = 3  # a strategy's reason names at most this many legs or NLPs Ipopt did not prove optimal
