@@ -6,6 +6,7 @@ import pandas as pd
 from ecostudy import api
 from ecostudy.api.cases import CALIBRATION_COLUMNS
 from ecostudy.api.outcome import shown
+from ecostudy.core.simulate import outside
 from ecostudy.core.status import Status, driven_run, from_checks, solver_check
 from ecostudy.core.units import number
 from ecostudy.io.folder import write_summary
@@ -54,3 +55,14 @@ def test_a_driven_run_off_its_stop_says_short_of_or_beyond_it():
     assert driven_run(stop_error_m=-1.36).reason == "stopped 1.36 m short of the stop (tolerance 1 m)"
     assert driven_run(stop_error_m=2.5).reason == "stopped 2.50 m beyond the stop (tolerance 1 m)"
     assert driven_run(stop_error_m=0.99).kind == "ok"
+
+
+def test_a_value_past_its_tolerance_never_reads_as_within_it():
+    """A re-simulation 1.0014 m short of its stop (tolerance 1 m) read `stop_error_m -1 (tolerance
+    1)`; an adhesion use of 1.0104 (tolerance 1.01) read 1.010: each now keeps the digits that show it
+    is beyond, and no more than three where three show it."""
+    block = {"stop_error_m": -1.0014, "energy_error_pct": 1.32, "tolerances": {"stop_error_m": 1.0, "energy_error_pct": 1.0}}
+    assert outside(block) == ["stop_error_m -1.001 (tolerance 1)", "energy_error_pct 1.32 (tolerance 1)"]
+    assert "adhesion use 1.01 of" not in driven_run(adhesion_use=1.0104).reason
+    assert "adhesion use 1.0104 of mu(v) m_adh g" in driven_run(adhesion_use=1.0104).reason
+    assert "arrived 1.002 s early" in driven_run(early_s=1.0021).reason

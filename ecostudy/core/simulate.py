@@ -15,7 +15,7 @@ import numpy as np
 from ecostudy.core import adhesion
 from ecostudy.core.grid import Segment, intervals_of
 from ecostudy.core.plant import Cruise, Plant, Truth, controls_of
-from ecostudy.core.status import ADHESION_USE
+from ecostudy.core.status import ADHESION_USE, past
 from ecostudy.core.types import Train, Window
 from ecostudy.core.units import FloatArray, to_kmh, to_kwh
 
@@ -163,8 +163,9 @@ def outside(block: dict[str, Any], tolerances: dict[str, float] | None = None) -
     """A ``verification`` block's errors beyond ``tolerances`` (default: the block's own), each as
     ``energy_error_pct 1.32 (tolerance 1)``; a NaN error is beyond any tolerance."""
     tolerances = block["tolerances"] if tolerances is None else tolerances
-    return [f"{k} {block[k]:.3g} (tolerance {tol:g})" for k, tol in tolerances.items()
+    return [f"{k} {past(block[k], tol)} (tolerance {tol:g})" for k, tol in tolerances.items()
             if k in block and not abs(block[k]) <= tol]
+
 
 
 @dataclass

@@ -185,6 +185,17 @@ def worst(statuses: Iterable[Status]) -> Status:
     return Status(kind, "; ".join(reasons))
 
 
+def past(value: float, tolerance: float, digits: int = 3, kind: str = "g") -> str:
+    """``value`` beyond ``tolerance`` formatted with ``digits`` (significant digits for ``kind``
+    "g", decimals for "f"), or as many more as it takes to read beyond it (-1.0014 against 1 is
+    ``-1.001``, not ``-1``)."""
+    for more in range(digits, 16):
+        text = f"{value:.{more}{kind}}"
+        if not abs(float(text)) <= tolerance:
+            return text
+    return repr(value)
+
+
 def off_stop(error_m: float, tolerance_m: float, digits: int = 2) -> str:
     """The reason of a run that stood ``error_m`` [m] off its stop (negative: short of it), beyond
     ``tolerance_m``: 'stopped 1.36 m short of the stop (tolerance 1 m)' (or 'beyond the stop'), with
@@ -212,9 +223,9 @@ def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
     if late_s is not None and not late_s <= LATE_TOLERANCE_S:
         reasons.append(f"arrived {late_s:.2f} s late")
     if early_s is not None and not early_s <= EARLY_TOLERANCE_S:
-        reasons.append(f"arrived {early_s:.2f} s early (tolerance {EARLY_TOLERANCE_S:g} s)")
+        reasons.append(f"arrived {past(early_s, EARLY_TOLERANCE_S)} s early (tolerance {EARLY_TOLERANCE_S:g} s)")
     if overspeed_kmh is not None and not overspeed_kmh <= OVERSPEED_TOLERANCE_KMH:
         reasons.append(f"overspeed {overspeed_kmh:.2f} km/h")
     if adhesion_use is not None and not adhesion_use <= ADHESION_USE:
-        reasons.append(f"adhesion use {adhesion_use:.3f} of mu(v) m_adh g (tolerance {ADHESION_USE:g})")
+        reasons.append(f"adhesion use {past(adhesion_use, ADHESION_USE)} of mu(v) m_adh g (tolerance {ADHESION_USE:g})")
     return OK if not reasons else flagged("; ".join(reasons))

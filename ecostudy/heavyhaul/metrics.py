@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core import adhesion
-from ecostudy.core.status import off_stop
+from ecostudy.core.status import off_stop, past
 from ecostudy.core.units import KMH, KN, KWH
 from ecostudy.heavyhaul.fatigue import damage, rainflow
 from ecostudy.heavyhaul.plant import LOSSES
@@ -242,14 +242,14 @@ def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
         out.append(f"arrived {late:.0f} s ({share:.1f} %) after the reference's running time "
                    f"(tolerance {100 * tolerances.arrival:g} % or {tolerances.arrival_s:g} s, the larger)")
     if metrics["force_max_kN"] > metrics["force_limit_kN"]:
-        out.append(f"largest coupler force {metrics['force_max_kN']:.1f} kN above the consist's "
+        out.append(f"largest coupler force {past(metrics['force_max_kN'], metrics['force_limit_kN'], 1, 'f')} kN above the consist's "
                    f"{metrics['force_limit_kN']:g} kN limit")
     if metrics["speed_excess_kmh"] * KMH > tolerances.speed_mps:
-        out.append(f"a car ran {metrics['speed_excess_kmh']:.1f} km/h over the line's limit "
+        out.append(f"a car ran {past(metrics['speed_excess_kmh'], tolerances.speed_mps / KMH, 1, 'f')} km/h over the line's limit "
                    f"(tolerance {tolerances.speed_mps / KMH:g} km/h)")
     if metrics.get("adhesion_use_max", 0.0) > 1.0 + tolerances.adhesion:
         effort = metrics["adhesion_use_effort_kN"]
-        out.append(f"a locomotive asked {metrics['adhesion_use_max']:.2f} of its adhesion (mu(v) m g, Curtius & Kniffler, "
+        out.append(f"a locomotive asked {past(metrics['adhesion_use_max'], 1.0 + tolerances.adhesion, 2, 'f')} of its adhesion (mu(v) m g, Curtius & Kniffler, "
                    f"tolerance {100 * tolerances.adhesion:g} %), {'pulling' if effort > 0 else 'braking'} {abs(effort):.0f} kN at "
                    f"{metrics['adhesion_use_kmh']:.1f} km/h, {metrics['adhesion_use_time_s']:.0f} s, head at "
                    f"{metrics['adhesion_use_head_m']:.0f} m, which the plant does not limit (adhesion: false): "
