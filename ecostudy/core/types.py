@@ -133,6 +133,15 @@ class Supply:
         """R(x) [Ohm] between the bus and a train at line position ``x`` [m]."""
         return self.line_resistance * np.abs(np.asarray(x, float) - self.position)
 
+    def most_power(self, nearest: float) -> float:
+        """The most power [W] a lone train ``nearest`` [m] from the substation can draw at its
+        pantograph: P = V (V_s - V) / (R_s + R(x)) at the pantograph voltage V no lower than
+        ``min_voltage`` (the most at V = V_s / 2), and V_s I_max at most under a current limit."""
+        v = max(self.min_voltage, 0.5 * self.voltage)
+        resistance = self.resistance + self.line_resistance * abs(nearest)
+        line = v * (self.voltage - v) / resistance if resistance > 0 else float("inf")
+        return min(line, self.voltage * self.max_current)
+
 
 @dataclass(frozen=True)
 class State:

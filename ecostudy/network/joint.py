@@ -51,27 +51,39 @@ def joint(fleet, start, one_handle=False, floating=False):
 
 
 def why_not_powered(fleet, exc):
-    """The reason the joint NLP has no usable point (``exc``: Ipopt's word), where the substation's
-    ``max_train_current_A`` explains it: a train draws at most V_s I_max at its pantograph (the bus
-    is at V_s at the most while it draws, eq. 7.8), eta_T V_s I_max at its wheels, and a segment
-    whose fastest run under that power (``kinematics.envelope_speeds``) takes longer than its running
-    time has no run at all. Else ``exc`` as it is."""
+    """The reason the joint NLP has no usable point (``exc``: Ipopt's word), where the supply
+    explains it: a lone train draws at most ``Supply.most_power`` at its pantograph (the substation's
+    ``max_train_current_A``, or the line's voltage drop with the pantograph held at ``min_voltage_V``),
+    at most eta_T times that at its wheels, and a segment whose fastest run under that power where
+    the line gives most (``kinematics.envelope_speeds``) takes longer than its running time has no
+    run at all. Else ``exc`` as it is."""
     supply = fleet.supply
-    if not np.isfinite(supply.max_current):
-        return str(exc)
     for leg in fleet.legs[0]:  # every train runs the same segment times
-        case = leg.case
-        train, cap = case.train, case.train.traction_efficiency * supply.voltage * supply.max_current
+        case, seg = leg.case, leg.case.segment
+        ends = sorted((leg.line_start, leg.line_start + leg.direction * seg.distance))
+        nearest = max(ends[0] - supply.position, supply.position - ends[1], 0.0)
+        drawn = supply.most_power(nearest)
+        if not np.isfinite(drawn):
+            continue
+        train = case.train
+        cap = train.traction_efficiency * drawn
         slowest = kinematics.running_time(kinematics.envelope_speeds(
-            case.segment, train, case.nodes, case.limits,
+            seg, train, case.nodes, case.limits,
             traction=lambda v: min(train.traction.force(v), cap / max(v, 1e-9))), case.nodes)
         if slowest > leg.running_time:
-            seg = case.segment
-            return (f"{exc}: max_train_current_A {supply.max_current:g} A lets a train draw at most "
-                    f"{supply.voltage * supply.max_current / 1e3:.0f} kW at the substation's {supply.voltage:g} V, "
-                    f"{cap / 1e3:.0f} kW at its wheels (traction efficiency {train.traction_efficiency:g}): its fastest run "
-                    f"from {seg.from_stop} to {seg.to_stop} then takes {slowest:.1f} s, more than the segment's "
-                    f"{leg.running_time:g} s running time (max_train_current_A; supplement_percent or running_times_s)")
+            if drawn >= supply.voltage * supply.max_current:
+                why = (f"max_train_current_A {supply.max_current:g} A lets a train draw at most {drawn / 1e3:.0f} kW "
+                       f"at the substation's {supply.voltage:g} V")
+                fields = "max_train_current_A"
+            else:
+                why = (f"the line lets a train draw at most {drawn / 1e3:.0f} kW at its pantograph between "
+                       f"{seg.from_stop} and {seg.to_stop} (voltage_V {supply.voltage:g} V, pantograph at least "
+                       f"min_voltage_V {supply.min_voltage:.0f} V, internal_resistance_ohm {supply.resistance:g}, "
+                       f"{nearest:.0f} m of line at the nearest)")
+                fields = "voltage_V, min_voltage_V or the resistances"
+            return (f"{exc}: {why}, {cap / 1e3:.0f} kW at its wheels (traction efficiency {train.traction_efficiency:g}): "
+                    f"its fastest run from {seg.from_stop} to {seg.to_stop} then takes {slowest:.1f} s, more than the "
+                    f"segment's {leg.running_time:g} s running time ({fields}; supplement_percent or running_times_s)")
     return str(exc)
 
 
@@ -163,7 +175,7 @@ def _initialise_network(m, fleet, steps, floating):
     vmin, vmax = fleet.supply.min_voltage / 1e3, fleet.supply.max_voltage / 1e3
     bus, i_s = flows["bus_voltage_V"] / 1e3, flows["substation_current_A"] / 1e3
     for t, running in enumerate(steps):
-        m.Is[t].set_value(float(i_s[t]))
+        m.Is[t].set_value(float(np.clip(i_s[t], m.Is[t].lb, m.Is[t].ub if m.Is[t].ub is not None else np.inf)))
         if floating:
             m.V0[t].set_value(float(np.clip(bus[t], vmin, vmax)))
             m.float_up[t].set_value(max(float(bus[t] - fleet.supply.voltage / 1e3 + fleet.supply.resistance * i_s[t]), 0.0))
