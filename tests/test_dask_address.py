@@ -32,3 +32,18 @@ def test_pareto_folder_refuses_the_address_before_its_store(tmp_path):
     with pytest.raises(api.InputError, match="arguments: dask: expected a scheduler address"):
         api.pareto_folder(track=AMS, train=METRO, dask="nope", out=tmp_path / "out", plot=False)
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_an_address_nothing_answers_at_is_refused_before_anything_is_computed(command, tmp_path):
+    """A well-formed address with no scheduler behind it: refused in one line before the command
+    computes anything (the network study solved its fleet's first runs before Dask's client found
+    the address dead)."""
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, [command, *map(str, COMMANDS[command]), "--dask", "tcp://127.0.0.1:1", "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    errors = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert len(errors) == 1 and errors[0].startswith(
+        "error: command line: --dask: cannot reach the Dask scheduler at tcp://127.0.0.1:1"), result.output
+    assert not out.exists()
+

@@ -8,6 +8,7 @@ import math
 import numbers
 import os
 import re
+import socket
 import warnings
 from pathlib import Path
 from typing import Any, Mapping, NamedTuple, Optional, Sequence, get_args
@@ -63,6 +64,21 @@ OBJECTIVES = get_args(StudyFile.model_fields["objective"].annotation)  # energy,
 DASK_ADDRESS = re.compile(r"(tcp|tls|ucx)://[^\s:/]+:\d{1,5}")  # a Dask scheduler's address
 
 
+DASK_CONNECT_S = 5.0  # how long a scheduler's address is tried before the command computes anything
+
+
+def unreachable(address: str) -> Optional[str]:
+    """Why nothing answers at the Dask scheduler ``address`` (tcp://host:port), or None: a TCP
+    connection tried once, before a study computes anything (a network study's first runs took
+    minutes before Dask's own client found the address dead)."""
+    host, port = address.split("://", 1)[1].rsplit(":", 1)
+    try:
+        socket.create_connection((host, int(port)), timeout=DASK_CONNECT_S).close()
+    except OSError as exc:
+        return f"cannot reach the Dask scheduler at {address} ({exc})"
+    return None
+
+
 def check_options(*, where: str = "command line", spelled: Optional[Mapping[str, str]] = None,
                   dask: Optional[str] = None, **values: Any) -> None:
     """Refuse numeric options that are not numbers, not finite or out of their range
@@ -74,6 +90,8 @@ def check_options(*, where: str = "command line", spelled: Optional[Mapping[str,
     if dask is not None and not (isinstance(dask, str) and DASK_ADDRESS.fullmatch(dask)):
         option = spelled.get("dask", "dask") if spelled is not None else "--dask"
         lines.append(problem(where, option, f"expected a scheduler address tcp://host:port, got {dask!r}"))
+    elif dask is not None and (trouble := unreachable(dask)) is not None:
+        lines.append(problem(where, spelled.get("dask", "dask") if spelled is not None else "--dask", trouble))
     for name, value in values.items():
         if value is None:
             continue
