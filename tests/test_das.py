@@ -8,7 +8,7 @@ from typer.testing import CliRunner
 from ecostudy.cli import app
 from ecostudy.das.advice import mode_name
 
-from .conftest import TRACKS, TRAINS
+from .conftest import TRACKS, TRAINS, write_yaml
 
 
 def test_mode_names():
@@ -53,6 +53,27 @@ def test_advice_that_misses_the_stop_is_flagged(tmp_path):
     assert das["status"].startswith("flagged: stopped") and das["solver"] == "re-simulated"
     assert summary["status"].startswith("flagged: driver advice round: stopped"), summary["status"]
     assert r.exit_code == 1, r.output
+
+
+def test_advice_that_runs_past_the_stop_has_no_arrival(tmp_path):
+    """Rounded advice on a 30 / -35 permille hump runs 100 m past its stop: it kept an arrival
+    (-19.65 s) and was flagged `arrived 19.65 s early` as if it stood at the stop; a run more than
+    1 m off its stop, short or past, has no arrival time."""
+    track = write_yaml(tmp_path / "hump.yaml", {
+        "name": "Hump", "source": "test", "length_m": 1500,
+        "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 1500}],
+        "gradients": [{"position_m": 0, "gradient_permille": 0}, {"position_m": 300, "gradient_permille": 30},
+                      {"position_m": 600, "gradient_permille": -35}, {"position_m": 1200, "gradient_permille": 0}],
+        "speed_limits": [{"position_m": 0, "speed_kmh": 60}, {"position_m": 1250, "speed_kmh": 40}]})
+    r = CliRunner().invoke(app, ["solve", "--track", str(track), "--train", str(TRAINS / "regional_alstom.yaml"),
+                                 "--supplement", "0", "--points", "300", "--das", "round", "--no-plot",
+                                 "--out", str(tmp_path / "o")])
+    das = json.loads((tmp_path / "o" / "summary.json").read_text())["das"]
+    assert das["stop_error_m"] > 1.0, das  # past the stop
+    assert das["arrival_error_s"] is None and das["gap_to_ato_pct"] is None, das
+    assert das["status"].startswith("flagged: stopped") and "beyond the stop" in das["status"], das["status"]
+    assert "early" not in das["status"] and "late" not in das["status"], das["status"]
+    assert "no arrival" in r.output and r.exit_code == 1, r.output
 
 
 def test_a_mode_read_back_is_the_handle_s_on_the_rounding_edges():

@@ -72,6 +72,25 @@ def test_the_phases_brake_at_the_trains_own_strongest_level(tmp_path):
     assert [m.level for m in all_modes(load_train(TRAINS / "amsterdam_metro.yaml")) if m.kind == "brake"] == [-1.0]
 
 
+def test_the_phases_advise_no_coast_to_a_train_without_a_coast_level(tmp_path):
+    """A train whose das_handle_levels are [-1, 1]: `phases` advised `coast, 0` from 78 to 749 m
+    (its fixed sequence coasted whatever the levels). It plans on the modes the train has (full
+    traction, cruise, full service braking), re-simulated: dearer than the ATO run, which coasts,
+    and ok only because it keeps the stop and the time."""
+    doc = {**load_yaml(TRAINS / "regional_alstom.yaml"), "das_handle_levels": [-1, 1]}
+    train = write_yaml(tmp_path / "nocoast.yaml", doc)
+    result = run("solve", "--track", TRACKS / "regional_808m.yaml", "--train", train, "--time", 80, "--points", 200,
+                 "--das", "phases", "--no-plot", "--out", tmp_path / "o")
+    advice = pd.read_csv(tmp_path / "o" / "advice.csv")
+    assert "coast" not in set(advice["mode"]), advice
+    assert set(advice["handle"].dropna()) <= {-1.0, 1.0}, advice
+    das = json.loads((tmp_path / "o" / "summary.json").read_text())["das"]
+    assert das["status"] == "ok" and abs(das["stop_error_m"]) <= 1 and abs(das["arrival_error_s"]) <= 1, das
+    assert das["gap_to_ato_pct"] > 5, das  # without coasting the advice cannot drive the ATO run's coast
+    assert result.exit_code == 0, result.output
+    assert [m.kind for m in phases.sequence(load_train(train))] == ["traction", "cruise", "brake"]
+
+
 @pytest.mark.parametrize("objective", ["time"])
 def test_no_gap_against_the_all_out_run(tmp_path, objective):
     result = run("solve", STUDIES / "default.yaml", "--objective", objective, "--points", 300, "--das", "phases",

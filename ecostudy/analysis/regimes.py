@@ -93,7 +93,8 @@ def guess_from_result(result, layout):
     sector by sector): the start of the DAS phases NLP and of SPPC.
 
     MA intervals go to full traction, CR/CR2 to cruise, MB to braking, coasting to the leading
-    coast before the sector's first traction and to the trailing coast after it.
+    coast before the sector's first traction and to the trailing coast after it (to cruise in a
+    layout without coast phases).
     """
     x, v, ft, fb = result.nodes, result.trajectory.v, result.trajectory.ft, result.trajectory.fb
     labels = classify(result.train, v, ft, fb)
@@ -109,7 +110,8 @@ def guess_from_result(result, layout):
         coasts = [q for q, md in zip(mine, kinds) if md.kind == "coast"]
         driven = False
         for i in np.nonzero((mid >= sec.start) & (mid < sec.end))[0]:
-            q = slot.get(labels[i], coasts[-1] if driven or len(coasts) == 1 else coasts[0])
+            q = slot.get(labels[i], slot["CR"] if not coasts  # no coast mode (das_handle_levels without 0)
+                         else coasts[-1] if driven or len(coasts) == 1 else coasts[0])
             driven = driven or labels[i] in ("MA", "CR")
             lengths[q] += x[i + 1] - x[i]
         lengths[mine] *= sec.length / max(lengths[mine].sum(), 1e-9)

@@ -60,7 +60,7 @@ class Rspc(Fallback):
         self.gamma, self.margin, self.final_m = float(gamma), float(margin), float(final_m)
         train, segment, nodes = case.train, case.segment, case.nodes
         self.model = Plant(segment, train)
-        self.modes = all_modes(train)
+        self.modes = all_modes(train, coast=True)  # Remark 6.1.1's six modes; row 3 coasts between its checks
         self.coast = next(m for m in self.modes if m.kind == "coast")
         self.brake = min((m for m in self.modes if m.kind == "brake"), key=lambda m: m.level)  # the strongest
         self.f_max = train.traction.peak

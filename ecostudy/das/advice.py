@@ -174,13 +174,13 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     reason in ``flags``; ``solver`` says how the advice was made (e.g. ``optimal, re-simulated``)."""
     row = outcome.row(result.train, result.segment.distance)
     energies = {k: row[k] for k in ("traction_energy_kWh", "net_energy_kWh")}
-    arrival_error = row["running_time_s"] - result.summary["running_time_s"]
+    arrived = abs(row["stop_error_m"]) <= STOP_TOLERANCE_M  # a run short of (or past) its stop has no time or gap
+    arrival_error = row["running_time_s"] - result.summary["running_time_s"] if arrived else None
     overspeed = to_kmh(worst_overspeed(result.segment, outcome.trace))
     grip = {} if "adhesion_use_max" not in row else {"adhesion_use_max": row["adhesion_use_max"]}
     status = worst([driven_run(row["stop_error_m"], arrival_error, overspeed, row.get("adhesion_use_max"),
-                               early_s=-arrival_error),
+                               early_s=None if arrival_error is None else -arrival_error),
                     *(flagged(f) for f in flags)])
-    arrived = abs(row["stop_error_m"]) <= STOP_TOLERANCE_M  # a run short of (or past) its stop has no time or gap
     why = no_gap(result, arrived)
     gap = None if why else _gap(energies, result)
     return {"method": method, **energies, "gap_to_ato_pct": gap,
@@ -188,7 +188,7 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
             "no_gap": why, "note": braking_note(result, outcome, gap)
             or grid_note(gap, len(result.nodes), result.summary.get("marginal_energy_kWh_per_s")),
             "mode_changes": len(advice) - 1, "bound_kWh": None, "status": str(status), "solver": solver,
-            "arrival_error_s": arrival_error if row["stop_error_m"] >= -STOP_TOLERANCE_M else None,
+            "arrival_error_s": arrival_error,
             "stop_error_m": row["stop_error_m"], "overspeed_max_kmh": overspeed,
             "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v))), **grip, **extra}
 

@@ -123,7 +123,7 @@ class DasSummary:
     gap_to_ato_pct: Optional[float]    # on the quantity the ATO run minimised
     gap_to_ato_on_time_pct: Optional[float]  # with a late arrival charged at the marginal energy
     mode_changes: Optional[int]
-    arrival_error_s: Optional[float]   # None: the advice stopped short of its stop
+    arrival_error_s: Optional[float]   # None: the advice stood more than the tolerance off its stop
     stop_error_m: Optional[float]
     status: str                        # as a driven run: ok, or flagged with the reasons
     solver: Optional[str] = None       # how the advice was made, e.g. "optimal, re-simulated"

@@ -6,7 +6,8 @@ phases, each with one DAS mode (Farooqi 2018 §3.1.2):
 
     coast, traction at each DAS level (1, 0.75, 0.5), cruise, coast, braking at each level
 
-(full service braking alone by default; gentler braking levels first, the strongest last).
+(full service braking alone by default; gentler braking levels first, the strongest last; no
+coast phases for a train whose ``das_handle_levels`` have no 0).
 
 The leading coast lets a sector begin by coasting and then accelerate (or cruise once gravity
 has brought the train to speed). The phase lengths L_{s,p} >= 0 are the decision variables
@@ -51,21 +52,24 @@ class Mode:
     level: float   # handle: traction share, 0 coasting, -1 braking; nan for cruise
 
 
-def all_modes(train: Train) -> list["Mode"]:
+def all_modes(train: Train, coast: bool | None = None) -> list["Mode"]:
     """Every distinct DAS mode, traction levels highest first, then cruise, coast and each braking
     level of the train's ``das_handle_levels``, gentlest first and the strongest last (full service
     braking alone by default): the choices of one MINLP phase. A gentler braking level lets advice
     brake where the regenerative envelope takes the whole braking force (the RB arc of Farooqi 2018,
-    eq. 7.4), which full service braking cannot."""
+    eq. 7.4), which full service braking cannot. Coast is a mode when the levels have 0 (``coast``
+    None) or when ``coast`` says so; cruise always is (it is not a handle level)."""
     levels = sorted((lv for lv in train.das_levels if lv > 0), reverse=True)
     brakes = sorted((lv for lv in train.das_levels if lv < 0), reverse=True)
-    return ([Mode("traction", lv) for lv in levels] + [Mode("cruise", float("nan")), Mode("coast", 0.0)]
-            + [Mode("brake", lv) for lv in brakes])
+    coasts = coast if coast is not None else 0.0 in train.das_levels
+    return ([Mode("traction", lv) for lv in levels] + [Mode("cruise", float("nan"))]
+            + [Mode("coast", 0.0)] * coasts + [Mode("brake", lv) for lv in brakes])
 
 
 def sequence(train: Train) -> list["Mode"]:
-    """The phase sequence of every sector (module docstring): a leading coast, then all modes."""
-    return [Mode("coast", 0.0)] + all_modes(train)
+    """The phase sequence of every sector (module docstring): a leading coast, then all modes; a
+    train whose ``das_handle_levels`` have no 0 has no coast phase at all."""
+    return [md for md in all_modes(train) if md.kind == "coast"] + all_modes(train)
 
 
 @dataclass(frozen=True)
@@ -96,7 +100,8 @@ def sectors(segment: Segment, train: Train) -> list[Sector]:
 class Layout:
     """The phases in travel order: ``phases[q]`` = (sector index, mode); interval i is sub-step
     i % n of phase i // n. The first sector has no leading coast: at standstill it would leave
-    only degenerate constraints (v = 0 on both sides of every step)."""
+    only degenerate constraints (v = 0 on both sides of every step). ``modes`` is a sector's
+    sequence (:func:`sequence`)."""
 
     sectors: list[Sector]
     phases: list[tuple[int, Mode]]
@@ -104,7 +109,8 @@ class Layout:
 
     @classmethod
     def make(cls, sectors: list[Sector], modes: Sequence[Mode], substeps: int) -> "Layout":
-        phases = [(s, mode) for s in range(len(sectors)) for p, mode in enumerate(modes) if s > 0 or p > 0]
+        phases = [(s, mode) for s in range(len(sectors)) for p, mode in enumerate(modes)
+                  if s > 0 or p > 0 or mode.kind != "coast"]
         return cls(sectors, phases, substeps)
 
     @property
