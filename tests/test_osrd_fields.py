@@ -75,6 +75,10 @@ def refused_line(tmp_path, path):
     (lambda d: curve(d).pop("speeds"), f"{CURVE}.speeds: missing field"),
     (lambda d: curve(d)["max_efforts"].__setitem__(3, 1e12),
      f"{CURVE}.max_efforts: forces must lie in [0, 100000] kN"),
+    # an integer too large for a float: was "internal error: OverflowError", exit 3
+    (lambda d: curve(d)["max_efforts"].__setitem__(5, 10 ** 400),
+     f"{CURVE}.max_efforts[5]: expected a number, got 1000"),
+    (lambda d: d.update({"mass": 10 ** 400}), "mass: expected a positive number, got 1000"),
     # was "mass: expected a positive number, got None"
     (lambda d: d.pop("mass"), "mass: missing field"),
     # was "mass: Input should be less than or equal to 100000" (tonnes, of a mass in kg)

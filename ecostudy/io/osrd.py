@@ -5,7 +5,11 @@
   ``#MODE/COMFORT``, default comfort STANDARD); the curve whose condition is that comfort with no
   electrical profile level and no power restriction, else the mode's ``default_curve``. Speeds
   m/s, efforts N. The train never runs faster than its table's last speed (``max_speed`` is lowered
-  to it, with a warning when the table stops short of ``max_speed``).
+  to it, with a warning when the table stops short of ``max_speed``). Every curve of every mode is
+  checked as OSRD checks it (equal lengths, 2 points or more, nothing negative), used or not.
+- Every problem names the field as the file does (``effort_curves.modes.M.default_curve.speeds[2]``,
+  ``rolling_resistance.A``); the second return value of :func:`osrd_train` maps the train schema's
+  field paths to these names for the schema's own messages.
 - ``max_speed`` m/s caps every limit; ``comfort_acceleration`` m/s^2 bounds the net acceleration.
 - ``mass`` kg, ``inertia_coefficient`` (M = mass x coefficient), ``length`` m.
 - ``rolling_resistance`` of type ``davis``: A N, B N/(m/s), C N/(m/s)^2.
@@ -54,10 +58,14 @@ def _values(curve: Mapping[str, Any], key: str, path: Where, where: str) -> Floa
     values = curve[key]
     if not isinstance(values, list):
         raise InputError(problem(path, f"{where}.{key}", f"expected a list of numbers, got {values!r:.40}"))
-    if not all(type(x) is float or type(x) is int for x in values) or not all(map(math.isfinite, values)):
+    try:  # the fast test, then the one that names the first entry that fails it
+        array = np.asarray(values, np.float64) if set(map(type, values)) <= {int, float} else None
+    except OverflowError:  # an integer too large for a float
+        array = None
+    if array is None or not np.all(np.isfinite(array)):
         i = next(i for i, x in enumerate(values) if not finite_number(x))
-        raise InputError(problem(path, f"{where}.{key}[{i}]", f"expected a number, got {values[i]!r}"))
-    return np.asarray(values, dtype=np.float64)
+        raise InputError(problem(path, f"{where}.{key}[{i}]", f"expected a number, got {values[i]!r:.40}"))
+    return array
 
 
 def _points(curve: Any, path: Where, where: str) -> tuple[FloatArray, FloatArray]:
