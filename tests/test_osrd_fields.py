@@ -11,10 +11,11 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
-from ecostudy.core.errors import EcostudyWarning
+from ecostudy import api
+from ecostudy.core.errors import EcostudyWarning, InputError
 from ecostudy.io.loaders import load_train
 
-from .conftest import DATA, TRACKS
+from .conftest import DATA, STUDIES, TRACKS, TRAINS
 from .test_published_fields import edited
 
 OSRD = json.loads((DATA / "osrd_rolling_stock.json").read_text())
@@ -114,3 +115,51 @@ def test_a_step_is_named_by_its_index_in_the_file(tmp_path):
     assert steps == [f"{path}: {CURVE}.speeds[4]: a step of the effort at 10 m/s (200 -> 110 kN), read as a change "
                      "over the 0.01 m/s below it"]
     assert list(train.traction.speeds) == [0, 5, 9.99, 10, 20, 30, 40]
+
+
+def test_the_closed_loop_study_names_an_osrd_field_as_the_file_does(tmp_path):
+    """``simulate`` read its train without the file's names: ``davis: a_N must be >= 0``,
+    ``max_acceleration_mps2: ...``."""
+    path = stock(tmp_path, lambda d: d["rolling_resistance"].update({"A": -3.0}))
+    study = tmp_path / "loop.yaml"
+    study.write_text(STUDY.format(track=TRACKS / "amsterdam_rokin_centraal.yaml", train=path))
+    result = CliRunner().invoke(app, ["simulate", str(study), "--out", str(tmp_path / "o")])
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert result.exit_code == 2 and lines == [f"error: {path}: rolling_resistance.A: Input should be greater than or "
+                                               "equal to 0"], result.output
+
+
+def test_the_heavyhaul_study_names_a_track_field_in_the_track_file(tmp_path):
+    """``heavyhaul`` named the study (``study.yaml track: speed_limits[1].speed_kmh``), not the track file
+    and its field (a TTOBench track's ``speed limits.values[1].velocity``)."""
+    doc = json.loads((DATA / "ttobench_track.json").read_text())
+    doc["speed limits"]["values"][1][1] = 0
+    track = tmp_path / "track.json"
+    track.write_text(json.dumps(doc))
+    study = tmp_path / "hh.yaml"
+    study.write_text((STUDIES / "heavyhaul_brake_penalty.yaml").read_text()
+                     .replace("../trains/", f"{TRAINS}/").replace("../tracks/heavyhaul_representative_45km.yaml",
+                                                                   str(track)))
+    result = CliRunner().invoke(app, ["heavyhaul", str(study), "--out", str(tmp_path / "o")])
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert result.exit_code == 2 and lines == [f"error: {track}: speed limits.values[1].velocity: Input should be "
+                                               "greater than 0"], result.output
+
+
+def test_the_library_names_an_osrd_field_as_the_file_does(tmp_path):
+    path = stock(tmp_path, lambda d: d.update({"comfort_acceleration": 50}))
+    with pytest.raises(InputError) as caught:
+        api.load_train(path)
+    assert str(caught.value) == f"{path}: comfort_acceleration: Input should be less than or equal to 10"
+
+
+STUDY = """name: loop
+track: {track}
+train: {train}
+window_s: [0, 120]
+points: 100
+sample_time_s: 0.5
+controllers:
+  - {{name: plan, kind: open_loop, settings: {{time: 1, energy: 1}}}}
+draws: 1
+"""
