@@ -18,10 +18,11 @@ from .conftest import DATA, STUDIES
 TRAIN = json.loads((DATA / "ttobench_subway_train.json").read_text())
 
 
-def edited(tmp_path, change):
-    doc = json.loads(json.dumps(TRAIN))
+def edited(tmp_path, change, base=TRAIN, name="CN_Beijing_Subway.json"):
+    """``base`` (a published document) changed by ``change``, written to ``tmp_path / name``."""
+    doc = json.loads(json.dumps(base))
     change(doc)
-    path = tmp_path / "CN_Beijing_Subway.json"
+    path = tmp_path / name
     path.write_text(json.dumps(doc))
     return path
 
@@ -136,8 +137,8 @@ def osrd(tmp_path, speeds, efforts_kN):
 def test_an_osrd_curve_whose_speeds_fall_is_refused(tmp_path):
     """[0, 20, 10, 30, 40] m/s loaded as [0, 20, 30, 40], the point at 10 m/s dropped, no word."""
     path, mode = osrd(tmp_path, [0, 20, 10, 30, 40], [200, 100, 150, 75, 56])
-    with pytest.raises(InputError, match=rf"effort_curves\.modes\.{mode}\.speeds\[2\]: 10 m/s after 20: the speeds "
-                                         "must increase"):
+    with pytest.raises(InputError, match=rf"effort_curves\.modes\.{mode}\.default_curve\.speeds\[2\]: 10 m/s after 20: "
+                                         "the speeds must increase"):
         load_train(path)
 
 

@@ -70,8 +70,14 @@ def printable(line: str) -> str:
 
 def finite_number(value: object) -> TypeGuard[float]:
     """Whether ``value`` is a finite real number (numpy's included), not a bool: the one test every
-    number a user gives passes before its range is checked."""
-    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
+    number a user gives passes before its range is checked. An integer too large for a float (a JSON
+    literal of 400 digits) is not one."""
+    if not isinstance(value, numbers.Real) or isinstance(value, bool):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
 
 
 def problem(file: Union[str, PathLike[str]], field: str, message: str) -> str:

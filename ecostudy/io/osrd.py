@@ -5,7 +5,11 @@
   ``#MODE/COMFORT``, default comfort STANDARD); the curve whose condition is that comfort with no
   electrical profile level and no power restriction, else the mode's ``default_curve``. Speeds
   m/s, efforts N. The train never runs faster than its table's last speed (``max_speed`` is lowered
-  to it, with a warning when the table stops short of ``max_speed``).
+  to it, with a warning when the table stops short of ``max_speed``). Every curve of every mode is
+  checked as OSRD checks it (equal lengths, 2 points or more, nothing negative), used or not.
+- Every problem names the field as the file does (``effort_curves.modes.M.default_curve.speeds[2]``,
+  ``rolling_resistance.A``); the second return value of :func:`osrd_train` maps the train schema's
+  field paths to these names for the schema's own messages.
 - ``max_speed`` m/s caps every limit; ``comfort_acceleration`` m/s^2 bounds the net acceleration.
 - ``mass`` kg, ``inertia_coefficient`` (M = mass x coefficient), ``length`` m.
 - ``rolling_resistance`` of type ``davis``: A N, B N/(m/s), C N/(m/s)^2.
@@ -26,6 +30,7 @@ import numpy as np
 from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, finite_number, problem
 from ecostudy.core.units import FloatArray
+from ecostudy.io.trainschema import MASS_RANGE_T, MAX_ROTATING_SHARE
 
 Where: TypeAlias = str | PathLike[str]
 
@@ -35,16 +40,82 @@ DESCRIPTIVE = {"name", "railjson_version", "metadata", "version", "locked", "sup
                "primary_category", "other_categories", "liveries", "id"}
 
 
-def _number(doc: Mapping[str, Any], key: str, path: Where, positive: bool = True) -> float:
-    value = doc.get(key)
-    if not finite_number(value) or (
-            positive and value <= 0):
-        raise InputError(problem(path, key, f"expected a {'positive ' if positive else ''}number, got {value!r}"))
+def _number(doc: Mapping[str, Any], key: str, path: Where, positive: bool = True, at: str = "") -> float:
+    """``doc[key]`` as a number (above 0 when ``positive``); ``at`` is the field path down to ``doc``."""
+    if key not in doc:
+        raise InputError(problem(path, f"{at}{key}", "missing field"))
+    value = doc[key]
+    if not finite_number(value) or (positive and value <= 0):
+        raise InputError(problem(path, f"{at}{key}", f"expected a {'positive ' if positive else ''}number, "
+                                 f"got {value!r}"))
     return float(value)
 
 
-def _curve(doc: Mapping[str, Any], path: Where, selector: str | None) -> tuple[str, str, FloatArray, FloatArray]:
-    """(mode, comfort, speeds [m/s], efforts [N]) of the chosen mode and comfort."""
+def _values(curve: Mapping[str, Any], key: str, path: Where, where: str) -> FloatArray:
+    """``curve[key]``: a list of finite numbers (a string, a bool or a null refused, naming its index)."""
+    if key not in curve:
+        raise InputError(problem(path, f"{where}.{key}", "missing field"))
+    values = curve[key]
+    if not isinstance(values, list):
+        raise InputError(problem(path, f"{where}.{key}", f"expected a list of numbers, got {values!r:.40}"))
+    try:  # the fast test, then the one that names the first entry that fails it
+        array = np.asarray(values, np.float64) if set(map(type, values)) <= {int, float} else None
+    except OverflowError:  # an integer too large for a float
+        array = None
+    if array is None or not np.all(np.isfinite(array)):
+        i = next(i for i, x in enumerate(values) if not finite_number(x))
+        raise InputError(problem(path, f"{where}.{key}[{i}]", f"expected a number, got {values[i]!r:.40}"))
+    return array
+
+
+def _points(curve: Any, path: Where, where: str) -> tuple[FloatArray, FloatArray]:
+    """(speeds [m/s], efforts [N]) of one effort curve at ``where``, with OSRD's checks and its words
+    (editoast ``EffortCurve``'s deserialisation, core ``RJSRollingStockParser.parseEffortCurve``): equal
+    lengths, two points or more, no negative effort or speed, speeds that never fall. OSRD checks
+    every curve of every mode, so a file with one bad curve is refused, used or not."""
+    if not isinstance(curve, dict):
+        raise InputError(problem(path, where, "expected {'speeds': [...], 'max_efforts': [...]}"))
+    speeds, efforts = _values(curve, "speeds", path, where), _values(curve, "max_efforts", path, where)
+    if speeds.size != efforts.size:
+        raise InputError(problem(path, where, "effort curve invalid, max_efforts and speeds arrays should have the "
+                                 f"same length ({speeds.size} speeds, {efforts.size} max_efforts)"))
+    if speeds.size < 2:
+        raise InputError(problem(path, where, "effort curve should have at least 2 points."))
+    for key, values in (("max_efforts", efforts), ("speeds", speeds)):
+        if np.any(values < 0):
+            i = int(np.argmax(values < 0))
+            raise InputError(problem(path, f"{where}.{key}[{i}]", f"{key} values must be equal or greater than 0., "
+                                     f"got {values[i]:g}"))
+    gaps = np.diff(speeds)
+    if np.any(gaps < 0):
+        n = int(np.argmax(gaps < 0)) + 1
+        raise InputError(problem(path, f"{where}.speeds[{n}]", f"{speeds[n]:g} m/s after {speeds[n - 1]:g}: the "
+                                 "speeds must increase"))
+    return speeds, efforts
+
+
+def _curves(modes: Mapping[str, Any], path: Where) -> dict[str, FloatArray | tuple[FloatArray, FloatArray]]:
+    """Every curve of every mode by its field path, checked (:func:`_points`) as OSRD checks them."""
+    out: dict[str, Any] = {}
+    for mode, entry in modes.items():
+        at = f"effort_curves.modes.{mode}"
+        if not isinstance(entry, dict):
+            raise InputError(problem(path, at, "expected a mode with 'curves' and 'default_curve'"))
+        listed = entry.get("curves") or []
+        if not isinstance(listed, list):
+            raise InputError(problem(path, f"{at}.curves", "expected a list of {'cond', 'curve'}"))
+        for i, item in enumerate(listed):
+            if not isinstance(item, dict) or not isinstance(item.get("cond") or {}, dict):
+                raise InputError(problem(path, f"{at}.curves[{i}]", "expected {'cond': {...}, 'curve': {...}}"))
+            out[f"{at}.curves[{i}].curve"] = _points(item.get("curve"), path, f"{at}.curves[{i}].curve")
+        if "default_curve" not in entry:
+            raise InputError(problem(path, f"{at}.default_curve", "missing field"))
+        out[f"{at}.default_curve"] = _points(entry["default_curve"], path, f"{at}.default_curve")
+    return out
+
+
+def _curve(doc: Mapping[str, Any], path: Where, selector: str | None) -> tuple[str, str, str, FloatArray, FloatArray]:
+    """(mode, comfort, the curve's field path, speeds [m/s], efforts [N]) of the chosen mode and comfort."""
     curves = doc.get("effort_curves")
     if not isinstance(curves, dict) or not isinstance(curves.get("modes"), dict) or not curves["modes"]:
         raise InputError(problem(path, "effort_curves", "expected {'modes': {...}, 'default_mode': ...}"))
@@ -52,63 +123,45 @@ def _curve(doc: Mapping[str, Any], path: Where, selector: str | None) -> tuple[s
     mode, comfort = asked or curves.get("default_mode"), comfort or "STANDARD"
     if not isinstance(mode, str) or mode not in curves["modes"]:
         raise InputError(problem(path, "effort_curves.modes", f"no mode {mode!r} (modes: {', '.join(curves['modes'])})"))
+    checked = _curves(curves["modes"], path)
     entry = curves["modes"][mode]
-    if not isinstance(entry, dict):
-        raise InputError(problem(path, f"effort_curves.modes.{mode}", "expected a mode with 'curves' and 'default_curve'"))
-    chosen: Any = None
-    others = 0
     listed = entry.get("curves") or []
-    if not isinstance(listed, list) or not all(isinstance(x, dict) and isinstance(x.get("cond") or {}, dict)
-                                               for x in listed):
-        raise InputError(problem(path, f"effort_curves.modes.{mode}.curves", "expected a list of {'cond', 'curve'}"))
-    for item in listed:
-        cond = item.get("cond") or {}
-        plain = cond.get("electrical_profile_level") is None and cond.get("power_restriction_code") is None
-        if plain and cond.get("comfort") == comfort and chosen is None:
-            chosen = item.get("curve")
-        others += not plain
-    if chosen is None:
-        if selector and "/" in selector:
-            raise InputError(problem(path, f"effort_curves.modes.{mode}", f"no curve for comfort {comfort!r}"))
-        chosen = entry.get("default_curve")
-    try:
-        speeds = np.asarray(chosen["speeds"], dtype=np.float64)
-        efforts = np.asarray(chosen["max_efforts"], dtype=np.float64)
-    except (KeyError, TypeError, ValueError):
-        raise InputError(problem(path, f"effort_curves.modes.{mode}", "expected a curve with 'speeds' and 'max_efforts'"))
-    if speeds.size < 2 or speeds.size != efforts.size or not np.all(np.isfinite(speeds) & np.isfinite(efforts)):
-        raise InputError(problem(path, f"effort_curves.modes.{mode}", "speeds and max_efforts need equal lengths >= 2"))
+    conds = [item.get("cond") or {} for item in listed]
+    plain = [i for i, cond in enumerate(conds)
+             if cond.get("electrical_profile_level") is None and cond.get("power_restriction_code") is None]
+    picked = next(((listed[i]["curve"], f"effort_curves.modes.{mode}.curves[{i}].curve") for i in plain
+                   if conds[i].get("comfort") == comfort), None)
+    if picked is None and selector and "/" in selector:
+        raise InputError(problem(path, f"effort_curves.modes.{mode}", f"no curve for comfort {comfort!r}"))
+    chosen, where = picked or (entry["default_curve"], f"effort_curves.modes.{mode}.default_curve")
+    others = len(listed) - len(plain)
     if others:
         warnings.warn(problem(path, f"effort_curves.modes.{mode}", f"{others} curve(s) for electrical profile "
                               "levels or power restrictions not modelled: the plain curve is used everywhere"),
                       EcostudyWarning, stacklevel=3)
-    extra = sorted(set(chosen) - {"speeds", "max_efforts"}) if isinstance(chosen, dict) else []
+    extra = sorted(set(chosen) - {"speeds", "max_efforts"})
     if extra:
-        warnings.warn(problem(path, f"effort_curves.modes.{mode}", f"curve fields ecostudy does not model: "
-                              f"{', '.join(extra)} (ignored)"), EcostudyWarning, stacklevel=3)
-    return mode, comfort, *_steps(speeds, efforts, path, f"effort_curves.modes.{mode}")
+        warnings.warn(problem(path, where, f"curve fields ecostudy does not model: {', '.join(extra)} (ignored)"),
+                      EcostudyWarning, stacklevel=3)
+    speeds, efforts = checked[where]
+    return mode, comfort, where, *_steps(speeds, efforts, path, where)
 
 
 STEP = 0.01  # [m/s]: a repeated speed (a step of the effort) is read as a change over this much speed
 
 
 def _steps(speeds: FloatArray, efforts: FloatArray, path: Where, where: str) -> tuple[FloatArray, FloatArray]:
-    """The curve with speeds that never fall (refused: OSRD's parser asserts them increasing), a point
-    given twice once, and each repeated speed with two efforts, a step, read as OSRD's interpolation
-    reads it (the first point's effort up to the speed, the last point's from it on): the first point
-    moved :data:`STEP` lower, said."""
-    gaps = np.diff(speeds)
-    if np.any(gaps < 0):
-        n = int(np.argmax(gaps < 0)) + 1
-        raise InputError(problem(path, f"{where}.speeds[{n}]", f"{speeds[n]:g} m/s after {speeds[n - 1]:g}: the "
-                                 "speeds must increase"))
-    same = np.concatenate([[False], (gaps == 0) & (np.diff(efforts) == 0)])  # a point given twice: once
-    speeds, efforts, gaps = speeds[~same], efforts[~same], np.diff(speeds[~same])
-    speeds = speeds.copy()
-    for k in np.flatnonzero(gaps == 0).tolist():
+    """The curve (speeds that never fall, :func:`_points`) with a point given twice once, and each
+    repeated speed with two efforts, a step, read as OSRD's interpolation reads it (the first point's
+    effort up to the speed, the last point's from it on): the first point moved :data:`STEP` lower,
+    said, naming the second point by its index in the file."""
+    same = np.concatenate([[False], (np.diff(speeds) == 0) & (np.diff(efforts) == 0)])  # a point given twice: once
+    index = np.flatnonzero(~same)  # each kept point's index in the file
+    speeds, efforts = speeds[~same].copy(), efforts[~same]
+    for k in np.flatnonzero(np.diff(speeds) == 0).tolist():
         low = speeds[k - 1] if k > 0 else -np.inf
         speeds[k] = max(speeds[k + 1] - STEP, 0.5 * (low + speeds[k + 1]))
-        warnings.warn(problem(path, f"{where}.speeds[{k + 1}]", f"a step of the effort at {speeds[k + 1]:g} m/s "
+        warnings.warn(problem(path, f"{where}.speeds[{index[k + 1]}]", f"a step of the effort at {speeds[k + 1]:g} m/s "
                               f"({efforts[k] / units.KN:g} -> {efforts[k + 1] / units.KN:g} kN), read as a change "
                               f"over the {speeds[k + 1] - speeds[k]:g} m/s below it"), EcostudyWarning, stacklevel=4)
     if np.any(np.diff(speeds) <= 0):
@@ -116,34 +169,43 @@ def _steps(speeds: FloatArray, efforts: FloatArray, path: Where, where: str) -> 
     return speeds, efforts
 
 
-def _braking(doc: Mapping[str, Any], path: Where, mass: float) -> tuple[dict[str, float], float | None]:
-    """(braking schema, net-deceleration bound or None) from const_gamma or gamma {type, value}."""
+def _braking(doc: Mapping[str, Any], path: Where, mass: float) -> tuple[dict[str, float], float | None, str]:
+    """(braking schema, net-deceleration bound or None, the field giving it) from const_gamma or gamma
+    {type, value}."""
     gamma = doc.get("gamma")
     if isinstance(gamma, dict):
-        kind, value = str(gamma.get("type", "CONST")).upper(), _number(gamma, "value", f"{path}: gamma")
+        kind, value, field = str(gamma.get("type", "CONST")).upper(), _number(gamma, "value", path, at="gamma."), \
+            "gamma.value"
         if kind not in ("CONST", "MAX"):
             raise InputError(problem(path, "gamma.type", f"expected CONST or MAX, got {gamma.get('type')!r}"))
     elif "const_gamma" in doc:
-        kind, value = "CONST", _number(doc, "const_gamma", path)
+        kind, value, field = "CONST", _number(doc, "const_gamma", path), "const_gamma"
     else:
-        raise InputError(problem(path, "const_gamma", "missing braking deceleration (const_gamma or gamma)"))
-    return {"max_force_kN": mass * value / units.KN}, (value if kind == "CONST" else None)
+        raise InputError(problem(path, "gamma", "missing braking deceleration (gamma {type, value} or const_gamma)"))
+    return {"max_force_kN": mass * value / units.KN}, (value if kind == "CONST" else None), field
 
 
 def osrd_train(doc: Mapping[str, Any], path: Where,
                selector: str | None = None) -> tuple[dict[str, Any], dict[str, str]]:
-    """An OSRD rolling stock as a train-schema dict, and the field names for messages."""
+    """An OSRD rolling stock as a train-schema dict, and the field names for messages (the schema's
+    field paths as the OSRD file names them)."""
     ignored = [k for k in doc if k not in MODELLED | DESCRIPTIVE and doc[k] not in (None, {}, [], "")]
     if ignored:
         warnings.warn(problem(path, ", ".join(ignored), "OSRD fields ecostudy does not model: ignored"),
                       EcostudyWarning, stacklevel=3)
-    mode, comfort, speeds, efforts = _curve(doc, path, selector)
+    mode, comfort, where, speeds, efforts = _curve(doc, path, selector)
     mass = _number(doc, "mass", path)
+    low, high = (m * units.TONNE for m in MASS_RANGE_T)
+    if not low <= mass <= high:
+        raise InputError(problem(path, "mass", f"expected {low:g} to {high:g} kg, got {mass:g}"))
     inertia = _number(doc, "inertia_coefficient", path) if "inertia_coefficient" in doc else 1.0
+    if not 1 <= inertia <= 1 + MAX_ROTATING_SHARE:
+        raise InputError(problem(path, "inertia_coefficient", f"expected 1 to {1 + MAX_ROTATING_SHARE:g} (M = mass x "
+                                 f"coefficient: the rotating masses add a share of the mass), got {inertia:g}"))
     top = min(_number(doc, "max_speed", path), float(speeds[-1])) if "max_speed" in doc else float(speeds[-1])
     if "max_speed" in doc and speeds[-1] < doc["max_speed"] - 1e-6:
-        warnings.warn(problem(path, f"effort_curves.modes.{mode}", f"the curve ends at {speeds[-1] / units.KMH:.0f} "
-                              f"km/h, below max_speed {doc['max_speed'] / units.KMH:.0f} km/h: the train runs at most "
+        warnings.warn(problem(path, where, f"the curve ends at {speeds[-1] / units.KMH:.0f} km/h, below max_speed "
+                              f"{doc['max_speed'] / units.KMH:.0f} km/h: the train runs at most "
                               f"{speeds[-1] / units.KMH:.0f} km/h in this mode"), EcostudyWarning, stacklevel=3)
     rr = doc.get("rolling_resistance")
     if not isinstance(rr, dict) or rr.get("type", "davis") != "davis":
@@ -152,7 +214,7 @@ def osrd_train(doc: Mapping[str, Any], path: Where,
     if extra:
         warnings.warn(problem(path, "rolling_resistance", f"fields ecostudy does not model: {', '.join(extra)} "
                               "(ignored)"), EcostudyWarning, stacklevel=3)
-    braking, deceleration = _braking(doc, path, mass * inertia)
+    braking, deceleration, gamma = _braking(doc, path, mass * inertia)
     bounds: dict[str, float] = {"max_deceleration_mps2": deceleration} if deceleration else {}
     if "comfort_acceleration" in doc:
         bounds["max_acceleration_mps2"] = _number(doc, "comfort_acceleration", path)
@@ -163,12 +225,16 @@ def osrd_train(doc: Mapping[str, Any], path: Where,
         "mass_t": mass / units.TONNE,
         "rotating_mass_factor": inertia - 1.0,
         "length_m": _number(doc, "length", path, positive=False) if "length" in doc else 0.0,
-        "davis": {"a_N": _number(rr, "A", path, False), "b_N_per_mps": _number(rr, "B", path, False),
-                  "c_N_per_mps2": _number(rr, "C", path, False)},
+        "davis": {key: _number(rr, name, path, False, at="rolling_resistance.") for key, name in DAVIS.items()},
         "traction": {"table": {"speed_kmh": (speeds / units.KMH).tolist(), "force_kN": (efforts / units.KN).tolist()}},
         "braking": braking,
         "max_speed_kmh": top / units.KMH,
         **bounds,
-    }, {"davis.a_N": "rolling_resistance.A", "davis.b_N_per_mps": "rolling_resistance.B",
-        "davis.c_N_per_mps2": "rolling_resistance.C", "traction.table.speed_kmh": f"effort_curves.modes.{mode}",
-        "traction.table.force_kN": f"effort_curves.modes.{mode}", "mass_t": "mass", "length_m": "length"}
+    }, {**{f"davis.{key}": f"rolling_resistance.{name}" for key, name in DAVIS.items()},
+        "traction.table.speed_kmh": f"{where}.speeds", "traction.table.force_kN": f"{where}.max_efforts",
+        "mass_t": "mass", "length_m": "length", "name": "name", "rotating_mass_factor": "inertia_coefficient",
+        "max_speed_kmh": "max_speed", "max_acceleration_mps2": "comfort_acceleration",
+        "max_deceleration_mps2": gamma, "braking.max_force_kN": gamma}
+
+
+DAVIS = {"a_N": "A", "b_N_per_mps": "B", "c_N_per_mps2": "C"}  # the schema's Davis fields: OSRD's names

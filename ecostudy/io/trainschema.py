@@ -12,6 +12,8 @@ MAX_TABLE_POINTS = 5000
 SECONDS_PER_POINT_NODE = 6e-5
 MAX_ACCELERATION = 10.0  # [m/s^2] about 1 g: wheels on rails transmit a third of it; more is a unit slip
 MIN_DECELERATION = 0.1  # [m/s^2] a net bound below it leaves a train that cannot stop, not one that brakes gently
+MASS_RANGE_T = (1.0, 100000.0)  # [t] a static mass outside it is a unit slip (kg given as t, or t as kg)
+MAX_ROTATING_SHARE = 1.0  # [-] the rotating masses add at most the static mass (M <= 2 Ms)
 MAX_CURVE_COEFFICIENT = 100.0  # [m^2/s^2] lambda_t: 600 m g / 1000 (the usual 600 / r in N/kN) is 5.9
 
 
@@ -110,15 +112,15 @@ class Regeneration(Strict):
 class Davis(Strict):
     """Davis coefficients A + B v + C v^2: exactly one complete triple of one unit system."""
 
-    a_N: Optional[float] = None
-    b_N_per_mps: Optional[float] = None
-    c_N_per_mps2: Optional[float] = None
-    a_kN: Optional[float] = None
-    b_kN_per_kmh: Optional[float] = None
-    c_kN_per_kmh2: Optional[float] = None
-    a_N_per_kg: Optional[float] = None
-    b_N_per_kg_per_mps: Optional[float] = None
-    c_N_per_kg_per_mps2: Optional[float] = None
+    a_N: Optional[float] = Field(None, ge=0)
+    b_N_per_mps: Optional[float] = Field(None, ge=0)
+    c_N_per_mps2: Optional[float] = Field(None, ge=0)
+    a_kN: Optional[float] = Field(None, ge=0)
+    b_kN_per_kmh: Optional[float] = Field(None, ge=0)
+    c_kN_per_kmh2: Optional[float] = Field(None, ge=0)
+    a_N_per_kg: Optional[float] = Field(None, ge=0)
+    b_N_per_kg_per_mps: Optional[float] = Field(None, ge=0)
+    c_N_per_kg_per_mps2: Optional[float] = Field(None, ge=0)
 
     TRIPLES: ClassVar[tuple[tuple[str, str, str], ...]] = (("a_N", "b_N_per_mps", "c_N_per_mps2"),
                ("a_kN", "b_kN_per_kmh", "c_kN_per_kmh2"),
@@ -129,9 +131,6 @@ class Davis(Strict):
         given = [t for t in self.TRIPLES if any(getattr(self, f) is not None for f in t)]
         if len(given) != 1 or any(getattr(self, f) is None for f in given[0]):
             raise ValueError("give one complete triple: " + " | ".join("/".join(t) for t in self.TRIPLES))
-        for f in given[0]:
-            if getattr(self, f) < 0:
-                raise ValueError(f"{f} must be >= 0")
         return self
 
 
@@ -164,9 +163,9 @@ class TrainFile(Strict):
     file_kind: ClassVar[str | None] = "train"
     name: Name
     source: str = Field(description="Where the numbers come from.")
-    mass_t: float = Field(ge=1, le=100000, description="Static mass Ms [t] (1 t to 100 000 t).")
-    rotating_mass_factor: Optional[float] = Field(None, ge=0, le=1, description="M = Ms (1 + factor), at most 1 "
-                                                  "(a share: 0.06, not 1.06 or per cent).")
+    mass_t: float = Field(ge=MASS_RANGE_T[0], le=MASS_RANGE_T[1], description="Static mass Ms [t] (1 t to 100 000 t).")
+    rotating_mass_factor: Optional[float] = Field(None, ge=0, le=MAX_ROTATING_SHARE, description="M = Ms (1 + "
+                                                  "factor), at most 1 (a share: 0.06, not 1.06 or per cent).")
     effective_mass_t: Optional[float] = Field(None, gt=0, description="Effective mass M [t], mass_t to twice it.")
     length_m: float = Field(ge=0, description="Train length [m]; 0 for a point mass.")
     davis: Davis

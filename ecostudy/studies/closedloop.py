@@ -24,8 +24,8 @@ from ecostudy.core.plant import Noise, Plant, Truth
 from ecostudy.core.status import STOP_TOLERANCE_M, driven_run, flagged, solver_part, unproven_solves, worst
 from ecostudy.core.types import State
 from ecostudy.io import schemas
-from ecostudy.io.loaders import (check_fits, chosen_stops, read_document, track_document, track_from_schema,
-                                 train_document, train_from_schema, validate)
+from ecostudy.io.loaders import (check_fits, chosen_stops, read_document, read_track, read_train, track_from_schema,
+                                 train_from_schema, validate)
 from ecostudy.io.documents import named_file
 from ecostudy.io.loopfile import Controller, SimulateFile
 from ecostudy.ocp.convex import FASTEST, ConvexProgram, trapezoid_grid
@@ -61,9 +61,8 @@ def expand(path, out=None):
     output = Path(s.output) if s.output else default_output(s.name)  # relative: to the working directory
     check_output_dir(out or output, ("runs.csv", "results.sqlite"), "simulate")
     train_file, track_file = named_file(path, "train", s.train), named_file(path, "track", s.track)
-    train_doc, track_doc = train_document(train_file)[0], track_document(track_file)
-    train = train_from_schema(validate(schemas.TrainFile, train_doc, train_file), train_file)  # a bad field: its file
-    track = track_from_schema(validate(schemas.TrackFile, track_doc, track_file))
+    (train_doc, train), (track_doc, track) = read_train(train_file), read_track(track_file)  # a bad field: as its
+    # file names it (an OSRD or TTOBench file's own field, not the schema's)
     check_fits(train_file, train, track)
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     segment = make_segment(track, train, from_stop, to_stop)

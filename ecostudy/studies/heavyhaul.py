@@ -41,7 +41,7 @@ from ecostudy.heavyhaul.rhc import RecedingHorizon, Scales
 from ecostudy.io import schemas
 from ecostudy.io.documents import named_file
 from ecostudy.io.heavyhaulfile import HeavyhaulFile
-from ecostudy.io.loaders import (check_fits, chosen_stops, consist_from_document, read_document, track_document,
+from ecostudy.io.loaders import (check_fits, chosen_stops, consist_from_document, read_document, read_track,
                                  track_from_schema, validate)
 from ecostudy.io.tables import number_columns
 from ecostudy.io.writers import check_output_dir, default_output
@@ -93,8 +93,7 @@ def expand(path, out=None):
                if getattr(s, name) and getattr(consist, name) is None]
     if missing:
         raise InputError(missing)
-    track_doc = track_document(named_file(path, "track", s.track))
-    track = track_from_schema(validate(schemas.TrackFile, track_doc, f"{path} track"))
+    track_doc, track = read_track(named_file(path, "track", s.track))  # a bad field: in its file, as it names it
     check_fits(consist_path, single_mass(consist, 1.0), track, "vehicles")
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     segment = make_segment(track, single_mass(consist, 1.0), from_stop, to_stop)

@@ -8,8 +8,7 @@ is reported with its reason (``skipped``), never dropped silently.
 from pathlib import Path
 
 from ecostudy.core.errors import InputError, problem
-from ecostudy.io import schemas
-from ecostudy.io.loaders import track_document, track_from_schema, train_document, train_from_schema, validate
+from ecostudy.io.loaders import read_track, read_train
 
 
 def _files(folder, ids, path, what):
@@ -30,12 +29,10 @@ def library_units(lib, base, path):
     tracks = _files(root / "tracks", lib.tracks, path, "tracks")
     trains = []
     for train_id, train_path in _files(root / "trains", lib.trains, path, "trains"):
-        doc, aliases = train_document(train_path)
-        trains.append((train_id, doc, train_from_schema(validate(schemas.TrainFile, doc, train_path, aliases), train_path, aliases)))
+        trains.append((train_id, *read_train(train_path)))
     units, skipped = [], []
     for track_id, track_path in tracks:
-        doc = track_document(track_path)
-        track = track_from_schema(validate(schemas.TrackFile, doc, track_path))
+        doc, track = read_track(track_path)
         top = float(track.limits.max())
         stops = list(track.stops)
         for train_id, train_doc, train in trains:

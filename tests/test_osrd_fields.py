@@ -1,0 +1,165 @@
+"""An OSRD rolling stock's problems named as the file names them (``effort_curves.modes.1500V.
+default_curve.max_efforts[3]``, ``rolling_resistance.A``, ``gamma.value``), never by ecostudy's schema
+(``traction.table.force_kN``, ``davis.a_N``, ``rotating_mass_factor``); every effort curve checked as
+OSRD checks it (editoast ``editoast_schemas/src/rolling_stock/effort_curves.rs``, core
+``RJSRollingStockParser.parseEffortCurve``): OSRD's own example of invalid effort curves
+(``editoast/src/tests/example_rolling_stock_3.json``: 17 speeds, no efforts) refused as OSRD refuses it.
+Edits of tests/data/osrd_rolling_stock.json; each refusal comes before any computing."""
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+from ecostudy import api
+from ecostudy.core.errors import EcostudyWarning, InputError
+from ecostudy.io.loaders import load_train
+
+from .conftest import DATA, STUDIES, TRACKS, TRAINS
+from .test_published_fields import edited
+
+OSRD = json.loads((DATA / "osrd_rolling_stock.json").read_text())
+CURVE = "effort_curves.modes.1500V.default_curve"
+
+
+def stock(tmp_path, change):
+    return edited(tmp_path, change, OSRD, "stock.json")
+
+
+def curve(doc):
+    return doc["effort_curves"]["modes"]["1500V"]["default_curve"]
+
+
+def plain_curve(doc):
+    """The mode's curves get one for comfort STANDARD with no electrical condition: OSRD uses it,
+    not the default curve."""
+    doc["effort_curves"]["modes"]["1500V"]["curves"] = [
+        {"cond": {"comfort": "STANDARD", "electrical_profile_level": None, "power_restriction_code": None},
+         "curve": {"speeds": [0, 10, 20, 30, 40], "max_efforts": [2e5, 2e5, 1.1e5, 7.5e4, 5.6e4]}}]
+    return doc["effort_curves"]["modes"]["1500V"]["curves"][0]["curve"]
+
+
+def refused_line(tmp_path, path):
+    """The one error line of ``ecostudy solve`` with this train (exit 2, no traceback)."""
+    result = CliRunner().invoke(app, ["solve", "--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"),
+                                      "--train", str(path), "--supplement", "10", "--no-plot",
+                                      "--out", str(tmp_path / "o")])
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert result.exit_code == 2 and len(lines) == 1 and "Traceback" not in result.output, result.output
+    return lines[0]
+
+
+@pytest.mark.parametrize("change, line", [
+    # OSRD's example_rolling_stock_3.json: was "effort_curves.modes.25000V: speeds and max_efforts need equal lengths"
+    (lambda d: curve(d).update({"max_efforts": []}),
+     f"{CURVE}: effort curve invalid, max_efforts and speeds arrays should have the same length (6 speeds, "
+     "0 max_efforts)"),
+    # a curve ecostudy does not use: OSRD refuses the file all the same (it was read)
+    (lambda d: d["effort_curves"]["modes"].update({"25000V": {"is_electric": True, "curves": [], "default_curve": {
+        "speeds": [0, 10], "max_efforts": [1e5]}}}),
+     "effort_curves.modes.25000V.default_curve: effort curve invalid, max_efforts and speeds arrays should have "
+     "the same length (2 speeds, 1 max_efforts)"),
+    (lambda d: curve(d).update({"speeds": [0], "max_efforts": [1e5]}),
+     f"{CURVE}: effort curve should have at least 2 points."),
+    # was "effort_curves.modes.1500V: forces must lie in [0, 100000] kN"
+    (lambda d: curve(d)["max_efforts"].__setitem__(3, -5.0),
+     f"{CURVE}.max_efforts[3]: max_efforts values must be equal or greater than 0., got -5"),
+    (lambda d: plain_curve(d)["max_efforts"].__setitem__(3, -5.0),
+     "effort_curves.modes.1500V.curves[0].curve.max_efforts[3]: max_efforts values must be equal or greater than "
+     "0., got -5"),
+    (lambda d: curve(d)["speeds"].__setitem__(0, -1.0),
+     f"{CURVE}.speeds[0]: speeds values must be equal or greater than 0., got -1"),
+    # was read as 10 m/s, no word (a curve with conditions), or "expected a curve with 'speeds' and 'max_efforts'"
+    (lambda d: plain_curve(d)["speeds"].__setitem__(2, "20"),
+     "effort_curves.modes.1500V.curves[0].curve.speeds[2]: expected a number, got '20'"),
+    (lambda d: curve(d)["max_efforts"].__setitem__(1, None), f"{CURVE}.max_efforts[1]: expected a number, got None"),
+    (lambda d: curve(d).pop("speeds"), f"{CURVE}.speeds: missing field"),
+    (lambda d: curve(d)["max_efforts"].__setitem__(3, 1e12),
+     f"{CURVE}.max_efforts: forces must lie in [0, 100000] kN"),
+    # an integer too large for a float: was "internal error: OverflowError", exit 3
+    (lambda d: curve(d)["max_efforts"].__setitem__(5, 10 ** 400),
+     f"{CURVE}.max_efforts[5]: expected a number, got 1000"),
+    (lambda d: d.update({"mass": 10 ** 400}), "mass: expected a positive number, got 1000"),
+    # was "mass: expected a positive number, got None"
+    (lambda d: d.pop("mass"), "mass: missing field"),
+    # was "mass: Input should be less than or equal to 100000" (tonnes, of a mass in kg)
+    (lambda d: d.update({"mass": 2e9}), "mass: expected 1000 to 1e+08 kg, got 2e+09"),
+    # was "davis: a_N must be >= 0"
+    (lambda d: d["rolling_resistance"].update({"A": -3.0}),
+     "rolling_resistance.A: Input should be greater than or equal to 0"),
+    # was "rotating_mass_factor: Input should be greater than or equal to 0"
+    (lambda d: d.update({"inertia_coefficient": 0.5}), "inertia_coefficient: expected 1 to 2"),
+    # was "gamma: value: expected a positive number, got -0.5"
+    (lambda d: d.update({"gamma": {"type": "CONST", "value": -0.5}}),
+     "gamma.value: expected a positive number, got -0.5"),
+    # was "max_deceleration_mps2: Input should be greater than or equal to 0.1"
+    (lambda d: d.update({"const_gamma": 0.01}), "const_gamma: Input should be greater than or equal to 0.1"),
+    # was "max_acceleration_mps2: Input should be less than or equal to 10"
+    (lambda d: d.update({"comfort_acceleration": 50}),
+     "comfort_acceleration: Input should be less than or equal to 10"),
+])
+def test_a_bad_osrd_field_is_named_as_the_file_names_it(tmp_path, change, line):
+    path = stock(tmp_path, change)
+    said = refused_line(tmp_path, path)
+    assert said.startswith(f"error: {path}: {line}"), said
+
+
+def test_a_step_is_named_by_its_index_in_the_file(tmp_path):
+    """A point given twice at 5 m/s (read once), then a step at 10 m/s: the step's second point is
+    speeds[4] in the file; the warning said speeds[3], the index after the repeated point was dropped."""
+    path = stock(tmp_path, lambda d: curve(d).update({"speeds": [0, 5, 5, 10, 10, 20, 30, 40],
+                                                      "max_efforts": [2e5, 2e5, 2e5, 2e5, 1.1e5, 1e5, 7.5e4, 5.6e4]}))
+    with pytest.warns(EcostudyWarning) as seen:
+        train = load_train(path)
+    steps = [str(w.message) for w in seen if "a step of the effort" in str(w.message)]
+    assert steps == [f"{path}: {CURVE}.speeds[4]: a step of the effort at 10 m/s (200 -> 110 kN), read as a change "
+                     "over the 0.01 m/s below it"]
+    assert list(train.traction.speeds) == [0, 5, 9.99, 10, 20, 30, 40]
+
+
+def test_the_closed_loop_study_names_an_osrd_field_as_the_file_does(tmp_path):
+    """``simulate`` read its train without the file's names: ``davis: a_N must be >= 0``,
+    ``max_acceleration_mps2: ...``."""
+    path = stock(tmp_path, lambda d: d["rolling_resistance"].update({"A": -3.0}))
+    study = tmp_path / "loop.yaml"
+    study.write_text(STUDY.format(track=TRACKS / "amsterdam_rokin_centraal.yaml", train=path))
+    result = CliRunner().invoke(app, ["simulate", str(study), "--out", str(tmp_path / "o")])
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert result.exit_code == 2 and lines == [f"error: {path}: rolling_resistance.A: Input should be greater than or "
+                                               "equal to 0"], result.output
+
+
+def test_the_heavyhaul_study_names_a_track_field_in_the_track_file(tmp_path):
+    """``heavyhaul`` named the study (``study.yaml track: speed_limits[1].speed_kmh``), not the track file
+    and its field (a TTOBench track's ``speed limits.values[1].velocity``)."""
+    doc = json.loads((DATA / "ttobench_track.json").read_text())
+    doc["speed limits"]["values"][1][1] = 0
+    track = tmp_path / "track.json"
+    track.write_text(json.dumps(doc))
+    study = tmp_path / "hh.yaml"
+    study.write_text((STUDIES / "heavyhaul_brake_penalty.yaml").read_text()
+                     .replace("../trains/", f"{TRAINS}/").replace("../tracks/heavyhaul_representative_45km.yaml",
+                                                                   str(track)))
+    result = CliRunner().invoke(app, ["heavyhaul", str(study), "--out", str(tmp_path / "o")])
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert result.exit_code == 2 and lines == [f"error: {track}: speed limits.values[1].velocity: Input should be "
+                                               "greater than 0"], result.output
+
+
+def test_the_library_names_an_osrd_field_as_the_file_does(tmp_path):
+    path = stock(tmp_path, lambda d: d.update({"comfort_acceleration": 50}))
+    with pytest.raises(InputError) as caught:
+        api.load_train(path)
+    assert str(caught.value) == f"{path}: comfort_acceleration: Input should be less than or equal to 10"
+
+
+STUDY = """name: loop
+track: {track}
+train: {train}
+window_s: [0, 120]
+points: 100
+sample_time_s: 0.5
+controllers:
+  - {{name: plan, kind: open_loop, settings: {{time: 1, energy: 1}}}}
+draws: 1
+"""
