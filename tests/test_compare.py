@@ -43,17 +43,16 @@ def test_compare_command(tmp_path):
     r = CliRunner().invoke(app, ["compare", "--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train",
                                  str(TRAINS / "amsterdam_metro.yaml"), "--time", "78", "--points", "300",
                                  "--out", str(tmp_path)])
-    # on this coarse grid (300 nodes) the two heuristics' simulated runs stop 1.3 m short of the
-    # stop: flagged (more than 1 m off), named on stderr, exit status 1; the optimum and DAS are ok
-    assert r.exit_code == 1, r.output
+    # on this coarse grid (300 nodes) the two heuristics' braking, as handles, stood 1.3 m short of the
+    # stop (flagged); they brake to the platform now, and every strategy is ok
+    assert r.exit_code == 0, r.output
     assert (tmp_path / "compare.csv").read_text().startswith("strategy,running_time_s,arrival_error_s")
     assert (tmp_path / "compare.png").stat().st_size > 10_000
-    folder = assert_folder(tmp_path, "compare", ["compare"], rows=6, status="flagged")
-    status = folder.table.set_index("strategy")["status"]
-    assert status["ATO optimum"] == status["all-out"] == status["DAS phases"] == "ok"
+    folder = assert_folder(tmp_path, "compare", ["compare"], rows=6, status="ok")
+    rows = folder.table.set_index("strategy")
+    assert (rows["status"] == "ok").all(), rows["status"]
     for name in ("eco-drive coasting", "MARECO-style"):
-        assert status[name].startswith("flagged: stopped 1.")
-        assert f"flagged: {name}: stopped" in r.output
+        assert abs(rows.loc[name, "stop_error_m"]) <= 0.01
 
 
 def test_mareco_profile_coasts_before_braking_and_downhill():
