@@ -127,8 +127,9 @@ def _after_ato(drive):
         driven, extra, own = drive(case, train, prepared, ato)
         driven = replace(driven, name=case["strategy"])  # its row named as registered
         row, overspeed = driven.row(train, prepared.segment.distance), overspeed_kmh(prepared.segment, driven)
-        status = driven_run(row["stop_error_m"], row["running_time_s"] - target, overspeed, row.get("adhesion_use_max"),
-                            early_s=target - row["running_time_s"])
+        late = row["running_time_s"] - target if abs(row["stop_error_m"]) <= STOP_TOLERANCE_M else None  # off its stop: no arrival
+        status = driven_run(row["stop_error_m"], late, overspeed, row.get("adhesion_use_max"),
+                            early_s=None if late is None else -late)
         if own is not None:  # the same checks, and how its own NLP ended
             status = worst([status, own])
         return _stored(driven, train, prepared.segment, status, target_s=target, overspeed_max_kmh=overspeed, **extra)
@@ -233,9 +234,9 @@ def compare_table(cases, rows):
     table.insert(4, "saving_vs_all_out_pct", 100 * (1 - table["traction_energy_kWh"] / e_allout))
     table.insert(5, "gap_to_optimum_pct", 100 * (table["traction_energy_kWh"] / e_opt - 1))
     table.insert(2, "arrival_error_s", table["running_time_s"] - target)
-    # a strategy that stood short of the stop did another run: no arrival, saving or gap read as a result
-    short = table["stop_error_m"].astype(float) < -STOP_TOLERANCE_M
-    table.loc[short, ["arrival_error_s", "saving_vs_all_out_pct", "gap_to_optimum_pct"]] = np.nan
+    # a strategy that stood short of the stop or past it did another run: no arrival, saving or gap read as a result
+    off = table["stop_error_m"].astype(float).abs() > STOP_TOLERANCE_M
+    table.loc[off, ["arrival_error_s", "saving_vs_all_out_pct", "gap_to_optimum_pct"]] = np.nan
     below = [grid_note(g, cases[0]["points"], what="this run") if status_word(st) == "ok" else ""
              for g, st in zip(table["gap_to_optimum_pct"], statuses)]
     if any(below):  # an ok run cheaper than the optimum by more than its grid's error: said, not read as better
