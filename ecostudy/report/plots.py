@@ -37,6 +37,26 @@ def word(status):
     return str(status).split(":", 1)[0].strip()
 
 
+def overall(statuses, noun="runs", shown=3):
+    """One status line for a figure that draws several runs (``statuses``: name -> status line, of
+    every run the figure is about, those it cannot draw included): ``ok`` when every one is, else
+    the worst word and which are not, e.g. ``flagged: 2 of 4 runs not ok: T1 (flagged), joint
+    (failed, not drawn); see summary.json``, for :func:`titled`: a figure copied out of its folder
+    still says which of its runs are no result to quote. ``not drawn``: names the figure leaves out."""
+    bad = [(name, word(s)) for name, s in statuses.items() if word(s) != "ok"]
+    if not bad:
+        return "ok"
+    worst = "failed" if any(w == "failed" for _, w in bad) else "flagged"
+    names = ", ".join(f"{name} ({w})" for name, w in bad[:shown]) + (f" and {len(bad) - shown} more" if len(bad) > shown else "")
+    return f"{worst}: {len(bad)} of {len(statuses)} {noun} not ok: {names}; see summary.json"
+
+
+def marked(label, status):
+    """A legend ``label`` with the run's status word in capitals where it is not ok."""
+    kind = word(status)
+    return label if kind == "ok" else f"{label} ({kind.upper()})"
+
+
 def figure(nrows=1, ncols=1, figsize=None, **kwargs):
     """A figure and its axes, as ``pyplot.subplots`` gives them, without pyplot: no backend and no
     global figure registry (pyplot and pylab cost about a second of start-up)."""
@@ -200,10 +220,9 @@ def compare_plot(outcomes, segment, path=None, title="", fmt=None, dpi=None, sta
     _speed_limit(ax, segment)
     palette = style.Palette([o.name for o in outcomes])
     for i, o in enumerate(outcomes):
-        kind = word((statuses or {}).get(o.name, "ok"))
         ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.4, color=palette(o.name), ls=style.DASHES[i % len(style.DASHES)],
-                label=f"{o.name}: {o.trace.arrival_time:.1f} s, {to_kwh(o.trace.traction_energy):.2f} kWh"
-                + ("" if kind == "ok" else f" ({kind.upper()})"))
+                label=marked(f"{o.name}: {o.trace.arrival_time:.1f} s, {to_kwh(o.trace.traction_energy):.2f} kWh",
+                             (statuses or {}).get(o.name, "ok")))
     _finish_speed_axes(ax, title)
     return _save(fig, path, fmt, dpi)
 
