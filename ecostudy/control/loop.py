@@ -27,7 +27,6 @@ import numpy as np
 
 from ecostudy.core.errors import EcostudyError
 from ecostudy.core.plant import Noise, Plant, Truth
-from ecostudy.core.simulate import adhesion_use
 from ecostudy.core.types import State
 from ecostudy.core.units import to_kmh
 
@@ -56,7 +55,8 @@ class LoopResult(NamedTuple):
     """A closed-loop trip: the true states at every sample, the handles applied, the work at the
     wheel [J], the solve time of every cycle [s], the summary numbers, per sample the measured
     state (``readings``), and for a train with an adhesion limit the largest share of the true
-    train's limit asked (``core.simulate.adhesion_use`` at every plant step's start and end)."""
+    train's limit asked (``core.plant.adhesion_use`` at every plant step's start and at every piece end
+    within it, ``core.plant.Step.adhesion``: the force jumps at a gradient edge the step crosses)."""
 
     states: list
     handles: list
@@ -108,12 +108,10 @@ class _Trip:
                 slot = int(self.state.time // self.noise.period) if self.noise.period else None
                 if slot is None or slot != self.drawn[0]:  # a new draw each step, or each noise period
                     self.drawn = (slot, self.noise.disturbance(self.rng))
-                before, step = self.state, self.plant.step(self.state, u, duration / steps, self.drawn[1])
+                step = self.plant.step(self.state, u, duration / steps, self.drawn[1])
                 self.state = step.state
-                if self.grip is not None:
-                    ends = (before, step.state)
-                    use = adhesion_use(self.plant, [s.position for s in ends], [s.speed for s in ends], [u, u])
-                    self.grip = max(self.grip, use or 0.0)
+                if self.grip is not None:  # at the step's start and every piece end: each edge it crossed
+                    self.grip = max(self.grip, step.adhesion or 0.0)
                 self.work_t += step.traction_work
                 self.work_b += step.braking_work
                 self.over = max(self.over, step.overspeed)  # at every limit edge the step crossed, and its end
