@@ -164,3 +164,14 @@ def test_the_closed_loop_takes_the_adhesion_use_where_a_step_crosses_an_edge():
     on_hump = adhesion_use(plant, [105.0], [10.0], [1.0])
     assert at_ends == pytest.approx(105e3 / (0.3 * 200e3 * 9.81), rel=1e-3) and on_hump > at_ends + 0.09
     assert loop.adhesion_use_max == pytest.approx(on_hump, rel=1e-3)  # the hump's speeds, 10.0-10.4 m/s
+
+
+@pytest.mark.parametrize("sample_time, plant_step, named", [(0.0, 0.1, "sample time"), (-1.0, 0.1, "sample time"),
+                                                            (float("nan"), 0.1, "sample time"), (0.1, 0.0, "plant step")])
+def test_a_loop_without_a_clock_is_refused(sample_time, plant_step, named):
+    """A sample of 0 s never advanced the clock (the loop ran for ever); a plant step of 0 s divided by
+    zero. A sample shorter than the plant step is one step of the sample."""
+    with pytest.raises(ValueError, match=f"the {named} is a number of seconds > 0"):
+        run_loop(hump_plant(), FullTraction(), sample_time, plant_step=plant_step)
+    short = run_loop(hump_plant(traction=300e3, max_acceleration=0.5), FullTraction(), 0.5, plant_step=2.0, until=1.0)
+    assert [round(s.time, 9) for s in short.states[:3]] == [0.0, 0.5, 1.0]

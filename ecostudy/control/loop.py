@@ -78,6 +78,15 @@ def check_delay(delay):
     raise ValueError(f"the computation delay is a number of samples >= 0 or 'measured', not {delay!r}")
 
 
+def check_times(sample_time, plant_step):
+    """ValueError unless ``sample_time`` and ``plant_step`` [s] are finite and positive: a sample of
+    0 s never advances the clock (the loop would not end), a plant step of 0 s divides by zero. A sample
+    shorter than the plant step is one step of the sample."""
+    for name, value in (("sample time", sample_time), ("plant step", plant_step)):
+        if not (isinstance(value, (int, float, np.integer, np.floating)) and np.isfinite(value) and value > 0):
+            raise ValueError(f"the {name} is a number of seconds > 0, not {value!r}")
+
+
 def predict(model, state, pieces):
     """The state ``model`` (a Plant: the controller's train) reaches from ``state`` under ``pieces``
     [(duration [s], handle)], without disturbance."""
@@ -128,6 +137,7 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
     trip at the first sample at or past this position instead (a partial trip: for studies of the
     estimator's convergence)."""
     delay = check_delay(delay)
+    check_times(sample_time, plant_step)
     segment, model = plant.segment, plant.train
     nominal = Plant(segment, model)  # the controller's model of the train: estimator and prediction
     trip = _Trip(plant, noise, plant_step)
