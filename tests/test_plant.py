@@ -1,11 +1,16 @@
 """The stepping plant (core/plant.py): step by step it reproduces the verification trace; a train
-that is not the model stops where a hand calculation says; noise is seeded and recorded."""
+that is not the model stops where a hand calculation says; noise is seeded and recorded; a step's
+adhesion use is taken at every edge it crosses."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
+from ecostudy.control.loop import run_loop
+from ecostudy.core.adhesion import Adhesion
 from ecostudy.core.grid import Profile, Segment
 from ecostudy.core.physics import Envelope
-from ecostudy.core.plant import Noise, Plant, Truth
+from ecostudy.core.plant import Cruise, Noise, Plant, Truth, adhesion_use
 from ecostudy.core.types import State, Train
 
 
@@ -105,3 +110,68 @@ def test_noise_is_seeded_and_disturbs():
     assert seen_calm[-1] == calm  # no noise: the sensor reads the state
     # coasting 5 s from 10 m/s against 2 kN on 100 t: 0.02 m/s^2, v = 9.9 m/s, x = 49.75 m
     assert calm.speed == pytest.approx(9.9, abs=1e-9) and calm.position == pytest.approx(49.75, abs=1e-8)
+
+
+def hump_plant(traction=150e3, max_acceleration=float("inf")):
+    """200 t on level track with a 3 % hump from ``HUMP[0]`` to ``HUMP[1]`` m, held by mu = 0.3 on
+    its 200 t (588 kN): the resistance, and so a force that follows it, jumps at the hump's edges."""
+    M = 200e3
+    train = Train("hump", M, M, 0.0, (5e3, 0.0, 0.0), Envelope("force_power", max_force=traction),
+                  Envelope("force_power", max_force=150e3), max_acceleration=max_acceleration,
+                  adhesion=Adhesion(M, "constant", 0.3))
+    flat = Profile(np.array([0.0]), np.array([0.0]))
+    grade = Profile(np.array([0.0, HUMP[0], HUMP[1]]), np.array([0.0, 0.03, 0.0]))
+    return Plant(Segment(2000.0, grade, flat, Profile(np.array([0.0]), np.array([40.0]))), train)
+
+
+HUMP = (102.0, 110.0)
+
+
+def test_a_step_takes_the_adhesion_use_at_the_edges_it_crosses():
+    """Cruise control holds 10 m/s with F = F_R(x, v): 5 kN on the level, 64 kN on the hump (0.11
+    of the grip). A 2 s step from 95 m to 115 m crosses the whole hump: its two ends (what the closed
+    loop read) ask 0.0085 of the grip, the step's piece ends the hump's 0.11."""
+    plant, hold = hump_plant(), Cruise(10.0)
+    step = plant.step(State(95.0, 10.0, 0.0), hold, 2.0)
+    assert step.state.position == pytest.approx(115.0, abs=1e-6)  # F = F_R: the speed held throughout
+    ends = adhesion_use(plant, [95.0, step.state.position], [10.0, step.state.speed], [hold, hold])
+    on_hump = adhesion_use(plant, [105.0], [10.0], [hold])
+    assert ends == pytest.approx(5e3 / (0.3 * 200e3 * 9.81), rel=1e-3)
+    assert on_hump > 10 * ends and step.adhesion == pytest.approx(on_hump, rel=1e-9)
+    # a train without an adhesion limit: nothing computed, the same step
+    free = Plant(plant.segment, replace(plant.train, adhesion=None))
+    bare = free.step(State(95.0, 10.0, 0.0), hold, 2.0)
+    assert bare.adhesion is None and bare[:6] == step[:6]
+
+
+class FullTraction:
+    solve_seconds: list = []
+
+    def plan(self, measured):
+        return 1.0
+
+
+def test_the_closed_loop_takes_the_adhesion_use_where_a_step_crosses_an_edge():
+    """Full traction capped at 0.5 m/s^2 (F_T = M a + F_R): 105 kN on the level, 164 kN on the hump
+    (0.18 and 0.28 of the grip). In 2 s samples (plant steps) from a stand the train is at 100 m
+    after 20 s and at 121 m after 22 s: no step ends on the hump, and the use at the steps' ends,
+    all the loop read, is the level's."""
+    plant = hump_plant(traction=300e3, max_acceleration=0.5)
+    loop = run_loop(plant, FullTraction(), 2.0, plant_step=2.0, until=130.0)
+    positions = [s.position for s in loop.states]
+    assert not any(HUMP[0] <= x <= HUMP[1] for x in positions) and positions[-1] > HUMP[1]
+    at_ends = adhesion_use(plant, positions, [s.speed for s in loop.states], [1.0] * len(positions))
+    on_hump = adhesion_use(plant, [105.0], [10.0], [1.0])
+    assert at_ends == pytest.approx(105e3 / (0.3 * 200e3 * 9.81), rel=1e-3) and on_hump > at_ends + 0.09
+    assert loop.adhesion_use_max == pytest.approx(on_hump, rel=1e-3)  # the hump's speeds, 10.0-10.4 m/s
+
+
+@pytest.mark.parametrize("sample_time, plant_step, named", [(0.0, 0.1, "sample time"), (-1.0, 0.1, "sample time"),
+                                                            (float("nan"), 0.1, "sample time"), (0.1, 0.0, "plant step")])
+def test_a_loop_without_a_clock_is_refused(sample_time, plant_step, named):
+    """A sample of 0 s never advanced the clock (the loop ran for ever); a plant step of 0 s divided by
+    zero. A sample shorter than the plant step is one step of the sample."""
+    with pytest.raises(ValueError, match=f"the {named} is a number of seconds > 0"):
+        run_loop(hump_plant(), FullTraction(), sample_time, plant_step=plant_step)
+    short = run_loop(hump_plant(traction=300e3, max_acceleration=0.5), FullTraction(), 0.5, plant_step=2.0, until=1.0)
+    assert [round(s.time, 9) for s in short.states[:3]] == [0.0, 0.5, 1.0]

@@ -27,7 +27,6 @@ import numpy as np
 
 from ecostudy.core.errors import EcostudyError
 from ecostudy.core.plant import Noise, Plant, Truth
-from ecostudy.core.simulate import adhesion_use
 from ecostudy.core.types import State
 from ecostudy.core.units import to_kmh
 
@@ -56,7 +55,8 @@ class LoopResult(NamedTuple):
     """A closed-loop trip: the true states at every sample, the handles applied, the work at the
     wheel [J], the solve time of every cycle [s], the summary numbers, per sample the measured
     state (``readings``), and for a train with an adhesion limit the largest share of the true
-    train's limit asked (``core.simulate.adhesion_use`` at every plant step's start and end)."""
+    train's limit asked (``core.plant.adhesion_use`` at every plant step's start and at every piece end
+    within it, ``core.plant.Step.adhesion``: the force jumps at a gradient edge the step crosses)."""
 
     states: list
     handles: list
@@ -76,6 +76,15 @@ def check_delay(delay):
     if delay == MEASURED or (isinstance(delay, (int, np.integer)) and not isinstance(delay, bool) and delay >= 0):
         return delay
     raise ValueError(f"the computation delay is a number of samples >= 0 or 'measured', not {delay!r}")
+
+
+def check_times(sample_time, plant_step):
+    """ValueError unless ``sample_time`` and ``plant_step`` [s] are finite and positive: a sample of
+    0 s never advances the clock (the loop would not end), a plant step of 0 s divides by zero. A sample
+    shorter than the plant step is one step of the sample."""
+    for name, value in (("sample time", sample_time), ("plant step", plant_step)):
+        if not (isinstance(value, (int, float, np.integer, np.floating)) and np.isfinite(value) and value > 0):
+            raise ValueError(f"the {name} is a number of seconds > 0, not {value!r}")
 
 
 def predict(model, state, pieces):
@@ -108,12 +117,10 @@ class _Trip:
                 slot = int(self.state.time // self.noise.period) if self.noise.period else None
                 if slot is None or slot != self.drawn[0]:  # a new draw each step, or each noise period
                     self.drawn = (slot, self.noise.disturbance(self.rng))
-                before, step = self.state, self.plant.step(self.state, u, duration / steps, self.drawn[1])
+                step = self.plant.step(self.state, u, duration / steps, self.drawn[1])
                 self.state = step.state
-                if self.grip is not None:
-                    ends = (before, step.state)
-                    use = adhesion_use(self.plant, [s.position for s in ends], [s.speed for s in ends], [u, u])
-                    self.grip = max(self.grip, use or 0.0)
+                if self.grip is not None:  # at the step's start and every piece end: each edge it crossed
+                    self.grip = max(self.grip, step.adhesion or 0.0)
                 self.work_t += step.traction_work
                 self.work_b += step.braking_work
                 self.over = max(self.over, step.overspeed)  # at every limit edge the step crossed, and its end
@@ -130,6 +137,7 @@ def run_loop(plant, controller, sample_time, noise=Noise(), plant_step=0.01, max
     trip at the first sample at or past this position instead (a partial trip: for studies of the
     estimator's convergence)."""
     delay = check_delay(delay)
+    check_times(sample_time, plant_step)
     segment, model = plant.segment, plant.train
     nominal = Plant(segment, model)  # the controller's model of the train: estimator and prediction
     trip = _Trip(plant, noise, plant_step)

@@ -21,6 +21,7 @@ from typing import Any, Callable, NamedTuple, Sequence, TypeAlias
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from ecostudy.core import adhesion
 from ecostudy.core.adhesion import Adhesion
 from ecostudy.core.grid import Profile, Segment
 from ecostudy.core.kinematics import point_resistance
@@ -87,6 +88,7 @@ class Step(NamedTuple):
     regenerated_work: float   # taken by the electric brake, before its efficiency
     stood: float | None = None  # the clock at which the train came to a stand within the step [s]
     overspeed: float = -np.inf  # the largest speed over the limit within the step [m/s] (:meth:`Plant.step`)
+    adhesion: float | None = None  # the largest adhesion use at its start and piece ends (:func:`adhesion_use`); None: no limit
 
 
 @dataclass(frozen=True)
@@ -242,6 +244,7 @@ class Plant:
         t, t_end = float(state.time), float(state.time) + dt
         stood: float | None = None
         over = -np.inf  # under a held control the speed is monotone within a piece: its largest excess is at an end
+        ends = [(y[0], y[1])]  # the start and every piece end: the force jumps at an edge (Cruise, the acceleration cap)
         while t < t_end - 1e-12:
             i = bisect_right(self.edges, y[0] + 1e-9)
             edge = self.edges[i] if i < len(self.edges) else np.inf
@@ -271,7 +274,18 @@ class Plant:
                 if rhs(t, y)[1] <= 0.0:  # at a stand and nothing moves it: it stands out the step
                     stood, t = t, t_end
             over = max(over, self.over_limit(y[0], y[1]))
-        return Step(State(y[0], max(y[1], 0.0), t_end), y[2], y[3], y[4], stood, over)
+            ends.append((y[0], y[1]))
+        return Step(State(y[0], max(y[1], 0.0), t_end), y[2], y[3], y[4], stood, over, self.ends_use(ends, control))
+
+    def ends_use(self, ends: Sequence[tuple[float, float]], control: "float | Cruise") -> float | None:
+        """The largest :func:`adhesion_use` under ``control`` at ``ends`` [(position [m], speed [m/s])],
+        each read on both sides of its position (at an edge, the piece it ends and the next); None for a
+        train without an adhesion limit (nothing computed)."""
+        if self.train.adhesion is None:
+            return None
+        x = np.clip([p + side for p, _ in ends for side in (-1e-9, 1e-9)], 0.0, self.segment.distance)
+        v = [s for _, s in ends for _ in (0, 1)]
+        return adhesion_use(self, x, v, [control] * len(v))
 
     def over_limit(self, position: float, speed: float) -> float:
         """``speed`` less the limit at ``position`` [m/s], the lower of its two sides at a limit's edge
@@ -325,3 +339,19 @@ class Plant:
                 break
             y[0] = x_end  # land exactly on the boundary (event location is accurate to rounding)
         return y, float(t_start), solutions
+
+
+def adhesion_use(plant: Plant, positions: Sequence[float] | FloatArray, speeds: Sequence[float] | FloatArray,
+                 controls: Sequence["float | Cruise"]) -> float | None:
+    """The largest share of the true train's adhesion limit mu(v) m_adh g (:meth:`Truth.adhesion`,
+    :mod:`ecostudy.core.adhesion`) that the plant's traction or electric brake asked for at the
+    samples: the forces it applies (:meth:`Plant.applied`, :meth:`Plant.electric`) at each position
+    [m] and speed [m/s] under the control there (a handle or :class:`Cruise`). The one check of every
+    run, re-simulated, driven or stepped (:attr:`Step.adhesion`); None for a train without an adhesion limit."""
+    limit = plant.truth.adhesion(plant.train)
+    if limit is None:
+        return None
+    v = np.maximum(np.asarray(speeds, float), 0.0)
+    traction, braking = plant.applied(np.asarray(positions, float), v, controls)
+    electric = [plant.electric(fb, s) if fb > 0 else 0.0 for fb, s in zip(braking, v)]
+    return float(np.max(np.maximum(adhesion.use(limit, v, traction), adhesion.use(limit, v, electric)), initial=0.0))

@@ -12,9 +12,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ecostudy.core import adhesion
 from ecostudy.core.grid import Segment, intervals_of
-from ecostudy.core.plant import Cruise, Plant, Truth, controls_of
+from ecostudy.core.plant import Plant, Truth, adhesion_use, controls_of  # adhesion_use: the check of every run, here too
 from ecostudy.core.status import ADHESION_USE, past
 from ecostudy.core.types import Train, Window
 from ecostudy.core.units import FloatArray, to_kmh, to_kwh
@@ -92,22 +91,6 @@ def window_checks(trace: Trace, windows: Sequence[Window], time_tolerance: float
               and (w.max_speed is None or v <= w.max_speed + speed_tolerance))
         out.append({"distance_m": w.distance, "simulated_time_s": t, "simulated_speed_kmh": to_kmh(v), "kept": ok})
     return out
-
-
-def adhesion_use(plant: Plant, positions: Sequence[float] | FloatArray, speeds: Sequence[float] | FloatArray,
-                 controls: Sequence["float | Cruise"]) -> float | None:
-    """The largest share of the true train's adhesion limit mu(v) m_adh g (:meth:`Truth.adhesion`,
-    :mod:`ecostudy.core.adhesion`) that the plant's traction or electric brake asked for at the
-    samples: the forces it applies (:meth:`Plant.applied`, :meth:`Plant.electric`) at each position
-    [m] and speed [m/s] under the control there (a handle or :class:`Cruise`). The one check of every
-    run, re-simulated or driven; None for a train without an adhesion limit."""
-    limit = plant.truth.adhesion(plant.train)
-    if limit is None:
-        return None
-    v = np.maximum(np.asarray(speeds, float), 0.0)
-    traction, braking = plant.applied(np.asarray(positions, float), v, controls)
-    electric = [plant.electric(fb, s) if fb > 0 else 0.0 for fb, s in zip(braking, v)]
-    return float(np.max(np.maximum(adhesion.use(limit, v, traction), adhesion.use(limit, v, electric)), initial=0.0))
 
 
 KINETIC_FLOOR = 0.1  # share of the top speed's kinetic energy below which a run's traction is no energy scale
