@@ -78,7 +78,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     write_html(out_dir)
     table, meta = ran.table, ran.table.attrs
     study_col = ["is_study_time"] if table["is_study_time"].any() else []
-    lines = [shown(table, FRONT_COLUMNS + study_col + (DAS_COLUMNS if das is not None else []))]
+    lines = [shown(table, FRONT_COLUMNS + study_col + (DAS_COLUMNS if das is not None else []) + ["status"])]
     if das is not None:
         d = meta["das"]
         gaps = "no gap read off a run not ok"

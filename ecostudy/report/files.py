@@ -104,7 +104,8 @@ def write_journey(table, totals, results, out_dir, title, passing=(), plot=True,
     out_dir = Path(out_dir)
     write_csv(out_dir / "journey.csv", table)
     write_csv(out_dir / "journey_totals.csv", totals)
-    drawn = figures(out_dir, plot, {JOURNEY_FIGURE: later("journey_plot", results, title=title, passing=passing)},
+    drawn = figures(out_dir, plot, {JOURNEY_FIGURE: later("journey_plot", results, title=title, passing=passing,
+                                                          statuses=dict(zip(totals["distribution"], totals["status"])))},
                     out)
     statuses = {f"{r['distribution']} {r['from']}-{r['to']}": Status.parse(r["status"]) for _, r in table.iterrows()}
     write_summary(out_dir, "journey", statuses, {"segments": "journey.csv", "totals": "journey_totals.csv"},

@@ -83,14 +83,15 @@ def _speed_limit(ax, segment):
     ax.step(x, to_kmh(y), where="post", color=style.LIMIT["speed limit"], lw=1.2, label=SPEED_LIMIT)
 
 
-def _finish_speed_axes(ax, title, xlabel="distance from departure [m]", legend_size=7):
-    """Labels, grid, legend and title of a speed-against-distance axis."""
+def _finish_speed_axes(ax, title, xlabel="distance from departure [m]", legend_size=7, status="ok"):
+    """Labels, grid, legend and title of a speed-against-distance axis (the title with ``status``
+    where it is not ok: :func:`titled`)."""
     ax.set_xlabel(xlabel)
     ax.set_ylabel("speed [km/h]")
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=legend_size, loc="lower center", ncol=2 if len(ax.get_legend_handles_labels()[1]) > 5 else 1)
-    ax.set_title(title, fontsize=10)
+    titled(ax, title, status)
 
 
 def _advice_regime(row):
@@ -147,11 +148,14 @@ def front_limits(times, margin=0.03):
     return lo - pad, hi + pad
 
 
-def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None):
+def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None, runs_ok=None):
     """Traction and net energy against running time, with the marginal saving beneath;
     ``weighted`` (optional table) adds the weighted-sum points; the study's own running time
     (``is_study_time``) is a star. The time axis spans the front's running times: weighted points
-    beyond them are counted in the legend, not drawn."""
+    beyond them are counted in the legend, not drawn. Points not ok are ringed: the ATO runs where
+    ``runs_ok`` (per row; default: the row's ``status``) is False, the driver advice where
+    ``das_status`` is not ok; an advice that has no running time (it stood off its stop) is counted
+    in the legend, not drawn."""
     fig, (ax, axm) = figure(2, 1, figsize=(8, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
     fig.subplots_adjust(left=0.13, right=0.97, top=0.85, bottom=0.09, hspace=0.1)
     fig.suptitle(title, fontsize=10)
@@ -168,9 +172,17 @@ def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None):
                     xytext=(10, 8), textcoords="offset points", fontsize=8)
     lo, hi = front_limits(t)
     if "das_traction_energy_kWh" in table and table["das_traction_energy_kWh"].notna().any():
+        unplaced = int((table["das_traction_energy_kWh"].notna() & table["das_running_time_s"].isna()).sum())
         ax.plot(table["das_running_time_s"], table["das_traction_energy_kWh"], "^:", color=style.colour("DAS advice"),
-                label=f"DAS {table.attrs.get('das_method', '')} (advice re-simulated, traction)")
+                label=f"DAS {table.attrs.get('das_method', '')} (advice re-simulated, traction)"
+                + (f"; {unplaced} of {len(table)} not drawn: stood off the stop, no running time "
+                   "(pareto.csv das_status)" if unplaced else ""))
         lo, hi = front_limits(np.concatenate([t, table["das_running_time_s"].dropna()]))
+        advice_bad = (table["das_status"].astype(str).map(word) != "ok").to_numpy() if "das_status" in table \
+            else np.zeros(len(table), bool)
+        if advice_bad.any():
+            style.ring(ax, table["das_running_time_s"][advice_bad], table["das_traction_energy_kWh"][advice_bad],
+                       f"advice not ok ({int(advice_bad.sum())} of {len(table)}: see pareto.csv's das_status)")
     if weighted is not None and len(weighted):
         wt = weighted["running_time_s"]
         inside = (wt >= lo) & (wt <= hi)
@@ -179,7 +191,7 @@ def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None):
                 ms=8, mew=2, label="weighted sum w_t T + w_e E/m (traction)"
                 + (f"; {beyond} point{'s' * (beyond > 1)} beyond the front's times not shown" if beyond else ""))
     if "status" in table:  # the points not ok ringed: a front of flagged points is no front to quote
-        bad = table["status"].astype(str).map(word) != "ok"
+        bad = (table["status"].astype(str).map(word) != "ok") if runs_ok is None else ~np.asarray(runs_ok, bool)
         if bad.any():
             style.ring(ax, t[bad], table["traction_energy_kWh"][bad],
                        f"not ok ({int(bad.sum())} of {len(table)} points: see pareto.csv's status)")
@@ -198,15 +210,19 @@ def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None):
 
 
 def profiles_plot(results, path=None, title="", fmt=None, dpi=None):
-    """Speed against distance for a few points of a front, with the speed limit."""
+    """Speed against distance for a few points of a front (``studies.front.FrontPoint``), with the
+    speed limit; the study's own running time named, each point not ok marked in the legend and
+    counted in the title."""
     fig, ax = figure(figsize=(9, 4.5))
     fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
     _speed_limit(ax, results[0].segment)
     for r, colour in zip(results, style.sequence(len(results))):
-        p = r.profile
-        ax.plot(p["position_m"], p["speed_kmh"], color=colour, lw=1.3,
-                label=f"{r.facts.running_time_s:.1f} s, {r.facts.traction_energy_kWh:.2f} kWh")
-    _finish_speed_axes(ax, title)
+        p, study = r.profile, getattr(r, "study_time", False)  # a FrontPoint, or a RunResult of the library
+        ax.plot(p["position_m"], p["speed_kmh"], color=colour, lw=2.0 if study else 1.3,
+                label=marked(("the study's running time: " if study else "")
+                             + f"{r.facts.running_time_s:.1f} s, {r.facts.traction_energy_kWh:.2f} kWh", str(r.status)))
+    _finish_speed_axes(ax, title, status=overall({f"{r.facts.running_time_s:.1f} s": str(r.status) for r in results},
+                                                 "points drawn"))
     return _save(fig, path, fmt, dpi)
 
 
@@ -219,18 +235,21 @@ def compare_plot(outcomes, segment, path=None, title="", fmt=None, dpi=None, sta
     fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
     _speed_limit(ax, segment)
     palette = style.Palette([o.name for o in outcomes])
+    drawn = {o.name for o in outcomes}
     for i, o in enumerate(outcomes):
         ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.4, color=palette(o.name), ls=style.DASHES[i % len(style.DASHES)],
                 label=marked(f"{o.name}: {o.trace.arrival_time:.1f} s, {to_kwh(o.trace.traction_energy):.2f} kWh",
                              (statuses or {}).get(o.name, "ok")))
-    _finish_speed_axes(ax, title)
+    _finish_speed_axes(ax, title, status=overall({name if name in drawn else f"{name}, not drawn": st
+                                                  for name, st in (statuses or {}).items()}, "strategies"))
     return _save(fig, path, fmt, dpi)
 
 
-def journey_plot(results, path=None, title="", passing=(), fmt=None, dpi=None):
+def journey_plot(results, path=None, title="", passing=(), fmt=None, dpi=None, statuses=None):
     """Speed against distance along the line for each distribution of the running time, every
     distribution in its own colour, with each segment's speed limit; ``passing``: (journey distance [m], highest speed [km/h] or
-    None) of timing points, marked."""
+    None) of timing points, marked; ``statuses``: each distribution's (failed ones too, which have no
+    runs to draw), marked in the legend and counted in the title."""
     fig, ax = figure(figsize=(10, 4.5))
     fig.subplots_adjust(left=0.07, right=0.98, top=0.92, bottom=0.12)
     for x, cap in passing:
@@ -240,7 +259,7 @@ def journey_plot(results, path=None, title="", passing=(), fmt=None, dpi=None):
     palette = style.Palette(list(results))
     for n, (name, runs) in enumerate(results.items()):
         offset, colour = 0.0, palette(name)
-        label = f"{name}: {sum(r.facts.traction_energy_kWh for r in runs):.2f} kWh"
+        label = marked(f"{name}: {sum(r.facts.traction_energy_kWh for r in runs):.2f} kWh", (statuses or {}).get(name, "ok"))
         for i, r in enumerate(runs):
             p = r.profile
             ax.plot(offset + p["position_m"], p["speed_kmh"], color=colour, lw=1.2,
@@ -253,7 +272,9 @@ def journey_plot(results, path=None, title="", passing=(), fmt=None, dpi=None):
                 label=SPEED_LIMIT if i == 0 else None)
         start += r.facts.distance_m
         ax.axvline(start, color=style.LIMIT["stop"], lw=0.5)
-    _finish_speed_axes(ax, title, xlabel="distance along the journey [m]", legend_size=8)
+    _finish_speed_axes(ax, title, xlabel="distance along the journey [m]", legend_size=8,
+                       status=overall({name if name in results else f"{name}, not drawn": st
+                                       for name, st in (statuses or {}).items()}, "distributions"))
     return _save(fig, path, fmt, dpi)
 
 
@@ -278,6 +299,8 @@ def energy_plot(result, path=None, fmt=None, dpi=None):
         ax.annotate(number(kwh, ".2f"), (i, max(base, base + kwh)), ha="center", va="bottom", fontsize=7,
                     xytext=(0, 2), textcoords="offset points")
     ax.axhline(0, color=style.LIMIT["stop"], lw=0.5)
+    low, high = ax.get_ylim()
+    ax.set_ylim(low, high + 0.08 * (high - low))  # room for the labels of the tallest bars, below the title
     ax.set_xticks(range(len(bars)), [b[0] for b in bars], rotation=30, ha="right", fontsize=8)
     ax.set_ylabel("energy [kWh]")
     ax.grid(alpha=0.3, axis="y")

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from ecostudy.core.status import Status
 from ecostudy.io.writers import write_csv, write_json
 from ecostudy.report import style
 from ecostudy.report.files import figures, later, stale
@@ -51,8 +52,10 @@ def network_files(plot=True, out=style.Output()):
             "dt_s": fl.dt, "strategies": {n: {**r["totals"], **r["info"]} if n in done else
                                           {"status": f"failed: {r['failed']}"} for n, r in outcome.items()}})
         # no strategy to draw when every one failed: no figures (an earlier run's removed)
+        statuses = {n: r["totals"]["status"] if n in done else f"failed: {r['failed']}" for n, r in outcome.items()}
         drawn = figures(out_dir, plot and bool(done), dict(zip(NETWORK_FIGURES, (
-            later("network_plot", fl, done, title=study), later("supply_plot", fl, done, title=study)))), out)
+            later("network_plot", fl, done, title=study, statuses=statuses),
+            later("supply_plot", fl, done, title=study, statuses=statuses)))), out)
         return [f"network_steps_{name}.csv" for name in done] + ["network.json"] + drawn, {"trains": "network_trains.csv"}
 
     def names(cases):
@@ -77,8 +80,16 @@ def front_files(plot=True, out=style.Output(), weighted=None, workers=1, started
         stale(out_dir, weighted=weighted is None, names={"weighted": ["pareto_weighted.csv"]})
         title = f"{meta['train']} - {meta['from']} to {meta['to']} (K = {meta['points']})"
         drawn = figures(out_dir, plot, dict(zip(FRONT_FIGURES, (
-            later("pareto_plot", table, title=title, weighted=weighted),
+            later("pareto_plot", table, title=title, weighted=weighted, runs_ok=runs_ok(table)),
             later("profiles_plot", front.front_points(cases, rows, front.profile_picks(cases)), title=title)))), out)
         return ["pareto.json", *drawn], {"weighted": "pareto_weighted.csv"} if weighted is not None else {}
     return Draw(draw, lambda cases: ("pareto.json", *(["pareto_weighted.csv"] if weighted is not None else []),
                                      *out.filenames(FRONT_FIGURES, plot)))
+
+
+def runs_ok(table):
+    """Per row of a front's table, whether its ATO run is ok (``studies.front.own_status``: not ok
+    only by its driver advice, the figure rings the advice, not the run)."""
+    das = "das_method" in table
+    return [front.own_status(Status.parse(str(row["status"])), row if das and pd.notna(row["das_method"]) else None).ok
+            for _, row in table.iterrows()]

@@ -17,7 +17,8 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.core.defaults import DAS_TIME_LIMIT_S, FRONT_POINTS
-from ecostudy.core.status import Status, flagged
+from ecostudy.core.status import OK, Status, flagged
+from ecostudy.das.methods import advice_status
 from ecostudy.io.runsummary import RunSummary
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, run_case
 from ecostudy.studies.cases import case_key, load_checked_study
@@ -173,6 +174,8 @@ class FrontPoint(NamedTuple):
     profile: dict
     facts: RunSummary
     segment: object
+    status: str = "ok"     # the point's status line (pareto.csv's)
+    study_time: bool = False  # the study's own running time, not a point of the front
 
 
 def profile_picks(cases, most=5):
@@ -183,17 +186,25 @@ def profile_picks(cases, most=5):
     return sorted(spread | {i for i, c in enumerate(cases) if is_study_time(c)})
 
 
+def own_status(status, das=None):
+    """A point's ATO run's own status: ``status`` (a :class:`Status`) less what its driver advice
+    (``das``: the point's ``das_`` columns, or None) adds to it (``das.methods.advice_status``): a
+    point flagged for its advice alone has an ok run."""
+    return OK if das is not None and str(status) == str(advice_status(das)) else status
+
+
 def front_points(cases, rows, picks):
     """The stored points at the indices ``picks`` (those solved) as :class:`FrontPoint`, in order of
     running time."""
     points, segment = points_of(cases, rows), None
     out = []
     for i in picks:
-        summary = points[i][0]
+        summary, status = points[i]
         if summary and "profile" in summary:
             segment = segment or segment_of(cases[0])
             out.append(FrontPoint({k: np.asarray(v) for k, v in summary["profile"].items()},
-                                  facts_of(summary), segment))
+                                  facts_of(summary), segment, str(own_status(status, summary.get("das"))),
+                                  is_study_time(cases[i])))
     return sorted(out, key=lambda p: p.facts.running_time_s)
 
 

@@ -1,0 +1,83 @@
+"""Figures of several runs say which are not ok: a journey's distributions, a network's
+strategies (failed ones, which have no runs to draw, named), a comparison's failed strategies, a
+front's driver advice (ringed apart from the runs) and its speed profiles; and pareto's terminal
+table has a status column. Real solves, figures drawn by the tool's own plot functions."""
+import pandas as pd
+import pytest
+
+from ecostudy import api
+from ecostudy.analysis.single import solve_run
+from ecostudy.core.simulate import Driven
+from ecostudy.core.types import Supply, Timing
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.network import fleet, strategies
+from ecostudy.report import netplots, plots, style
+from ecostudy.report.studyfiles import runs_ok
+
+from .conftest import TRACKS, TRAINS
+
+ROKIN, METRO = TRACKS / "amsterdam_rokin_centraal.yaml", TRAINS / "amsterdam_metro.yaml"
+
+
+def test_overall_names_the_runs_not_ok_and_those_not_drawn():
+    assert plots.overall({"a": "ok", "b": "ok"}) == "ok"
+    line = plots.overall({"a": "ok", "b": "flagged: x", "c, not drawn": "failed: y"}, "strategies")
+    assert line == "failed: 2 of 3 strategies not ok: b (flagged), c, not drawn (failed); see summary.json", line
+
+
+def test_a_journeys_flagged_and_failed_distributions_are_marked():
+    """The journey figure's legend read 'whole-journey NLP: 12.81 kWh' beside the one distribution
+    that kept the timetable, with no word that the cheaper ones broke it; a failed distribution
+    vanished. Each now carries its word, and the title counts them."""
+    run = solve_run(load_track(ROKIN), load_train(METRO), "Rokin", "Centraal", Timing(running_time=80.0), points=100)
+    figure = plots.journey_plot({"whole-journey NLP": [run], "timing windows NLP": [run]}, title="j",
+                                statuses={"whole-journey NLP": "flagged: breaks the timetable", "timing windows NLP": "ok",
+                                          "as timetabled": "failed: infeasible"})
+    labels = figure.axes[0].get_legend_handles_labels()[1]
+    assert any(label.startswith("whole-journey NLP: ") and label.endswith("(FLAGGED)") for label in labels), labels
+    assert any(label.startswith("timing windows NLP: ") and "(" not in label for label in labels), labels
+    title = figure.axes[0].get_title()
+    assert "FAILED: 2 of 3 distributions not ok" in title and "as timetabled, not drawn (failed)" in title, title
+
+
+def test_a_comparisons_failed_strategy_is_named_in_the_title():
+    run = solve_run(load_track(ROKIN), load_train(METRO), "Rokin", "Centraal", Timing(running_time=80.0), points=100)
+    figure = plots.compare_plot([Driven("ATO optimum", run.handle, run.trace)], run.segment,
+                                statuses={"ATO optimum": "ok", "MARECO-style": "failed: cannot meet 71.8 s"})
+    title = figure.axes[0].get_title()
+    assert "FAILED: 1 of 2 strategies not ok: MARECO-style, not drawn (failed)" in title, title
+
+
+def test_a_network_figure_says_which_strategies_are_not_ok():
+    """network.png and network_supply.png carried the study's name alone: a failed study read like a
+    result. Each strategy's word is in the legend, the failed ones named in the title."""
+    track, train = load_track(TRACKS / "metro_line_4stops.yaml"), load_train(METRO)
+    f = fleet.plan(track, train, ["Noord", "Station"], [56.0], 10.0, [0.0], ["T1"], 1.0, Supply(position=650.0),
+                   points=200)
+    outcome = strategies.run_strategies(f, ["independent"], progress=None)
+    statuses = {"independent": "flagged: a pantograph voltage fell", "joint": "failed: Ipopt infeasible"}
+    for draw in (netplots.network_plot, netplots.supply_plot):
+        figure = draw(f, outcome, title="net", statuses=statuses)
+        title = figure.axes[0].get_title()
+        assert "FAILED: 2 of 2 strategies not ok" in title and "joint, not drawn (failed)" in title, title
+        labels = [label for ax in figure.axes for label in ax.get_legend_handles_labels()[1]]
+        assert any(label.startswith("independent") and label.endswith("(FLAGGED)") for label in labels), labels
+
+
+@pytest.mark.slow
+def test_a_fronts_advice_not_ok_is_ringed_apart_from_its_runs(tmp_path):
+    """K = 200 with the nearest-level advice: three advices stand past the stop (flagged, no running
+    time) while every ATO run is ok. The figure ringed the ATO points and dropped the advice without
+    a word; now the runs are not ringed, the advice not drawn is counted, the profiles figure has no
+    flag, and the terminal table shows each point's status."""
+    folder = api.pareto_folder(track=ROKIN, train=METRO, points=200, count=4, das="round", workers=1,
+                               out=tmp_path, plot=False)
+    table = folder.table
+    advice_bad = table["das_status"].astype(str).str.startswith("flagged")
+    assert advice_bad.sum() >= 2 and table["das_running_time_s"][advice_bad].isna().all()
+    assert all(runs_ok(table)), table["status"].tolist()
+    figure = plots.pareto_plot(table, title="front", runs_ok=runs_ok(table))
+    labels = figure.axes[0].get_legend_handles_labels()[1]
+    assert any(f"{int(advice_bad.sum())} of 4 not drawn: stood off the stop" in label for label in labels), labels
+    assert not any(label.startswith("not ok (") for label in labels), labels
+    assert folder.text.splitlines()[0].split()[-1] == "status", folder.text
