@@ -223,9 +223,9 @@ def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
     if late_s is not None and not late_s <= LATE_TOLERANCE_S:
         reasons.append(f"arrived {late_s:.2f} s late")
     if early_s is not None and not early_s <= EARLY_TOLERANCE_S:
-        reasons.append(f"arrived {past(early_s, EARLY_TOLERANCE_S)} s early (tolerance {EARLY_TOLERANCE_S:g} s)")
+        reasons.append(f"arrived {past(early_s, EARLY_TOLERANCE_S, 2, 'f')} s early (tolerance {EARLY_TOLERANCE_S:g} s)")
     if overspeed_kmh is not None and not overspeed_kmh <= OVERSPEED_TOLERANCE_KMH:
         reasons.append(f"overspeed {overspeed_kmh:.2f} km/h")
     if adhesion_use is not None and not adhesion_use <= ADHESION_USE:
-        reasons.append(f"adhesion use {past(adhesion_use, ADHESION_USE)} of mu(v) m_adh g (tolerance {ADHESION_USE:g})")
+        reasons.append(f"adhesion use {past(adhesion_use, ADHESION_USE, 3, 'f')} of mu(v) m_adh g (tolerance {ADHESION_USE:g})")
     return OK if not reasons else flagged("; ".join(reasons))
