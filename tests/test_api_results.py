@@ -220,35 +220,22 @@ def test_the_stops_are_named_as_the_arguments(case):
     assert api.solve_folder.__name__ == "solve_folder" and "time" in inspect.signature(api.solve_folder).parameters
 
 
+@pytest.mark.flagged_on_purpose  # K = 10: the run misses its stop when re-simulated
 def test_a_solve_folder_that_check_found_not_ok_loads_as_not_ok(tmp_path):
-    """`api.load` read summary.json alone: a profile whose traction was cut 3 % in its full-traction rows
-    (energies made to agree, as an edit by hand would) loaded as ok beside the check.json whose
-    re-simulation flags it (arrival +0.5 s, 2.8 m short). The folder's check now counts."""
-    import csv
+    """`api.load` read summary.json alone: a K = 10 run 3 m short of its stop whose summary.json was
+    rewritten to ok (its verification too, as an edit by hand would) loaded as ok beside the
+    check.json whose re-simulation flags it. The folder's check now counts."""
     import json
 
     folder = tmp_path / "run"
     from .conftest import STUDIES
-    report = api.solve_folder(STUDIES / "default.yaml", points=200, plot=False, out=folder)
-    assert report.status.ok
-    rows = list(csv.DictReader(open(folder / "profile.csv")))
-    work = 0.0
-    for row, after in zip(rows, rows[1:] + [None]):
-        row["cumulative_energy_kWh"] = f"{work / 3.6e6:.6g}"
-        if after is not None:
-            if float(row["handle"]) > 0.5:
-                for column in ("traction_force_kN", "handle", "power_kW"):
-                    row[column] = f"{float(row[column]) * 0.97:.6g}"
-            work += float(row["traction_force_kN"]) * 1e3 * (float(after["position_m"]) - float(row["position_m"]))
-    with open(folder / "profile.csv", "w", newline="") as file:
-        writer = csv.DictWriter(file, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    report = api.solve_folder(STUDIES / "default.yaml", points=10, plot=False, out=folder)
+    assert not report.status.ok
     summary = json.loads((folder / "summary.json").read_text())
-    summary["net_energy_kWh"] += (work / 3.6e6 - summary["traction_energy_kWh"]) / 0.85
-    summary["traction_energy_kWh"], summary["traction_energy_J_per_kg"] = work / 3.6e6, work / 131403
-    (folder / "summary.json").write_text(json.dumps(summary))
-    assert api.load(folder).status.ok  # nothing has judged the edited profile yet
+    summary.update(status="ok", not_ok=[], verification={**summary["verification"], "passed": True,
+                                                          "stop_error_m": 0.0, "arrival_time_error_s": 0.0})
+    (folder / "summary.json").write_text(json.dumps(summary))  # its counts left saying 1 flagged, as a hasty edit would
+    assert api.load(folder).status.ok  # nothing has judged the edited summary yet
     checked = api.check_folder(folder)
     assert not checked.ok and json.loads((folder / "check.json").read_text())["run_status"].startswith("flagged")
     loaded = api.load(folder)

@@ -1,5 +1,6 @@
 """A solved run at fixed steps of time or distance (`ecostudy export`), for on-board systems."""
 import json
+import re
 
 import numpy as np
 import pandas as pd
@@ -7,8 +8,12 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.analysis.export import at_positions, at_times, fixed_step
+from ecostudy.analysis.saved import RECORDED
+from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.cli import app
 from ecostudy.core.types import Trajectory
+from ecostudy.io.loaders import load_train
+from ecostudy.io.results import load_result
 
 from .conftest import STUDIES, TRACKS, TRAINS, write_yaml
 
@@ -260,9 +265,9 @@ def test_a_saved_run_edited_by_hand_is_refused_by_check_and_export(tmp_path, edi
         assert r.exit_code == 2 and fragment in r.output and "Traceback" not in r.output, r.output
 
 
-def test_a_speed_edited_with_its_clock_and_summary_is_flagged_by_the_re_simulation(tmp_path):
-    """A speed of 100 km/h written at 553 m (its clock and the summary's top speed made to agree)
-    is not what the forces give: check and export flag the run with where and by how much."""
+def test_a_speed_edited_with_its_clock_and_summary_is_refused_by_the_equation_of_motion(tmp_path):
+    """A speed of 100 km/h written at 553 m (its clock and the summary's top speed made to agree):
+    the forces either side cannot take the train there on the grid's equation of motion."""
     out = _solved(tmp_path)
     _edit_profile(out, 100, "speed_kmh", 100.0)
     summary = json.loads((out / "summary.json").read_text())
@@ -271,7 +276,32 @@ def test_a_speed_edited_with_its_clock_and_summary_is_flagged_by_the_re_simulati
     (out / "summary.json").write_text(json.dumps(summary))
     for command in ("check", "export"):
         r = CliRunner().invoke(app, [command, str(out)])
-        assert r.exit_code == 1 and "over the speed limit at" in r.output and "from what its forces give" in r.output, r.output
+        assert r.exit_code == 2 and re.search(r"profile.csv: speed_kmh, rows 10[12]-10[23]: the run's equation of "
+                                              "motion misses by", r.output), r.output
+
+
+def test_every_speed_edited_by_two_percent_with_a_consistent_clock_and_summary_is_refused(tmp_path):
+    """Every speed 2 % higher, the clock and every total of summary.json recomputed from the edited
+    profile as the tool computes them: the re-simulation of the forces stays inside its 2 km/h and
+    0.5 s (the edit passed `check` as ok); the equation of motion misses by thousands of newtons
+    where its digits allow tens."""
+    out = _solved(tmp_path)
+    profile = pd.read_csv(out / "profile.csv")
+    profile["speed_kmh"] *= 1.02
+    v, x = profile["speed_kmh"].to_numpy() / 3.6, profile["position_m"].to_numpy()
+    profile["time_s"] = np.concatenate([[0.0], np.cumsum(2 * np.diff(x) / (v[:-1] + v[1:]))])
+    profile.to_csv(out / "profile.csv", index=False, float_format="%.6g")
+    saved = load_result(out)
+    train = load_train(saved.inputs["train"])
+    _, v, dt, ft, fb = saved.trajectory
+    profile.loc[:len(ft) - 1, "handle"] = handles(train, v, ft, fb)  # the handles of the edited speeds
+    profile.to_csv(out / "profile.csv", index=False, float_format="%.6g")
+    _, totals = tabulate(train, saved.trajectory.nodes, v, dt, ft, fb)
+    summary = json.loads((out / "summary.json").read_text())
+    summary.update({k: float(totals[k]) for k in RECORDED})
+    (out / "summary.json").write_text(json.dumps(summary))
+    r = CliRunner().invoke(app, ["check", str(out)])
+    assert r.exit_code == 2 and "the run's equation of motion misses by" in r.output, r.output
 
 
 def test_a_run_with_timing_windows_is_checked_on_its_own_grid(tmp_path):

@@ -13,6 +13,7 @@ import numpy as np
 
 from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.errors import InputError, problem
+from ecostudy.core.kinematics import net_force_needed
 from ecostudy.core.simulate import verify, within_tolerances
 from ecostudy.core.status import OVERSPEED_TOLERANCE_KMH, Status, flagged, worst
 from ecostudy.core.types import Window
@@ -29,6 +30,8 @@ RECORDED = ("running_time_s", "traction_energy_kWh", "braking_energy_kWh", "rege
 PROFILE_SPEED_KMH = 2.0  # a saved speed this far from its forces' re-simulation is not theirs (K = 10: 1.2 km/h; K >= 200: 0.01)
 HANDLE = 1e-3  # the handle column against the forces' handle (the digits written: about 5e-6 apart)
 AGREE = 1e-4  # relative, of the larger total (at least 1 s or 1 kWh)
+WRITTEN = 5e-6  # relative: half a unit in the sixth significant digit, the precision of profile.csv's numbers
+MOTION_SLACK = 10.0  # the profile's equation of motion may miss by this many times what its digits allow
 
 
 class Rejudged(NamedTuple):
@@ -100,6 +103,7 @@ def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
     if off.size:
         raise InputError(problem(result_dir / "profile.csv", f"handle, row {off[0] + 2}", f"{saved.handle[off[0]]:g}, but "
                                  f"the row's forces give {u[off[0]]:.6g}: an edited profile? solve again"))
+    motion(train, case, v, ft, fb, result_dir / "profile.csv")
     for name in RECORDED:
         said = saved.summary.get(name)
         if not isinstance(said, (int, float)) or not abs(said - totals[name]) <= AGREE * max(abs(said), abs(totals[name]), 1.0):
@@ -128,3 +132,22 @@ def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
                        "re-simulated")
     status = worst([saved.status, flagged("; ".join(reasons)) if reasons else saved.status])
     return Rejudged(status, block, track, train, case)
+
+
+
+def motion(train: Any, case: Any, v: Any, ft: Any, fb: Any, where: Path) -> None:
+    """Refuse a profile whose speeds and forces do not keep the space NLP's equation of motion on
+    its grid (``kinematics.net_force_needed``: M (v1^2 - v0^2) / (2 ds) + R(v0, v1) = F_T - F_B per
+    interval) to within what its six digits allow (:data:`WRITTEN`, times :data:`MOTION_SLACK`): a
+    solved run misses by less than that bound (at most 0.8 of it on the shipped studies and published
+    trains), a speed column edited by 0.1 % by 100 times it. The re-simulation alone passed a 2 %
+    edit with its clock made to agree (inside its 2 km/h)."""
+    ds = np.diff(case.nodes)
+    missed = np.abs(net_force_needed(v, case.segment, train, case.nodes) - (ft - fb))
+    allowed = (train.mass * 2 * WRITTEN * (v[:-1] ** 2 + v[1:] ** 2) / (2 * ds)
+               + WRITTEN * (np.abs(ft) + np.abs(fb)) + 1e-6 * train.traction.peak)
+    k = int(np.argmax(missed / allowed))
+    if missed[k] > MOTION_SLACK * allowed[k]:
+        raise InputError(problem(where, f"speed_kmh, rows {k + 2}-{k + 3}", f"the run's equation of motion misses by "
+                                 f"{missed[k]:.3g} N between these rows (their digits allow {allowed[k]:.3g} N): an "
+                                 "edited profile? solve again"))

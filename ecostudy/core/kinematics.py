@@ -190,12 +190,20 @@ def capped_speeds(envelope: FloatArray, nodes: FloatArray, target: float) -> Flo
     return np.minimum(envelope, hi)
 
 
-def forces_for(speeds: FloatArray, segment: Segment, train: Train, nodes: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Traction and braking forces per interval [N] that realise ``speeds`` (clipped to the envelopes)."""
+def net_force_needed(speeds: FloatArray, segment: Segment, train: Train, nodes: FloatArray) -> FloatArray:
+    """F_T - F_B per interval [N] that takes the train from each node's speed to the next on the
+    grid's speed recursion (the space NLP's equation of motion, Farooqi 2018 eq. 2.1 with the
+    interval resistance of eq. 2.2): M (v1^2 - v0^2) / (2 ds) + R(v0, v1)."""
     ds = np.diff(nodes)
     v0, v1 = speeds[:-1], speeds[1:]
     resist = interval_resistance(v0, v1, interval_davis(segment, train, nodes), interval_grade_force(segment, train, nodes))
-    need = train.mass * (v1**2 - v0**2) / (2 * ds) + resist
+    return train.mass * (v1**2 - v0**2) / (2 * ds) + resist
+
+
+def forces_for(speeds: FloatArray, segment: Segment, train: Train, nodes: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Traction and braking forces per interval [N] that realise ``speeds`` (clipped to the envelopes)."""
+    v0, v1 = speeds[:-1], speeds[1:]
+    need = net_force_needed(speeds, segment, train, nodes)
     ft = np.clip(need, 0.0, np.minimum(train.traction.force(v0), train.traction.force(v1)))
     fb = np.clip(-need, 0.0, np.minimum(train.braking.force(v0), train.braking.force(v1)))
     return ft, fb

@@ -221,8 +221,8 @@ def load(folder: Path | str) -> StudyResult:
     judged = _rejudged(folder) if data["kind"] == "solve" and status.ok else None
     if judged is not None:  # `ecostudy check` re-simulated the run since and found it not ok
         status, not_ok = judged, (*not_ok, NotOk("the run, re-judged by check.json", judged))
-        cases = Counts(cases.total, cases.ok - 1, cases.flagged + (judged.kind == "flagged"),
-                       cases.failed + (judged.kind != "flagged"))
+        cases = Counts(1, 0, int(judged.kind == "flagged"), int(judged.kind != "flagged"))  # a solve: one run
+        # (not the summary's counts less one: a summary edited to ok may still count its run flagged)
     return StudyResult(kind=str(data["kind"]), status=status, cases=cases, tables=tables, summary=data, folder=folder,
                        files=list(data.get("files", [])), not_ok=not_ok)
 
