@@ -197,7 +197,7 @@ def net_force_needed(speeds: FloatArray, segment: Segment, train: Train, nodes: 
     ds = np.diff(nodes)
     v0, v1 = speeds[:-1], speeds[1:]
     resist = interval_resistance(v0, v1, interval_davis(segment, train, nodes), interval_grade_force(segment, train, nodes))
-    return train.mass * (v1**2 - v0**2) / (2 * ds) + resist
+    return np.asarray(train.mass * (v1**2 - v0**2) / (2 * ds) + resist, float)
 
 
 def forces_for(speeds: FloatArray, segment: Segment, train: Train, nodes: FloatArray) -> tuple[FloatArray, FloatArray]:
