@@ -6,11 +6,14 @@ import json
 import multiprocessing
 import operator
 import os
+import signal
+import time
 
 import pytest
 
 from ecostudy import api
 from ecostudy.core.deadline import can_fork
+from ecostudy.io.writers import atomic_write
 from ecostudy.report import drawer as drawer_module
 from ecostudy.report.drawer import Drawer, FigureError, apart, drawing
 
@@ -106,3 +109,33 @@ def test_the_figure_process_runs_each_job_in_a_fork_and_raises_the_forks_error_w
 
 def test_outside_the_figure_process_the_jobs_run_here_one_after_the_other():
     assert apart(os.getpid, [(), ()]) == [os.getpid(), os.getpid()]
+
+
+def _slow_write(path):
+    """A figure written as every figure is (``atomic_write``), slowly: its temporary file stands
+    beside its name until the process is stopped."""
+    def write(tmp):
+        with open(tmp, "wb") as file:
+            file.write(b"\x89PNG half a figure")
+        time.sleep(60)
+    atomic_write(path, write)
+
+
+def test_a_figure_process_stopped_by_sigterm_leaves_no_temporary_file(tmp_path):
+    """A `kill` of the command's process group reached the figure process while it wrote: it ended at
+    once (SIGTERM's default) and left `.speed.png<random>.tmp` in the output folder. It now ends
+    through Python, and the write's clean-up removes the file."""
+    figure = tmp_path / "speed.png"
+    drawer = Drawer()
+    try:
+        drawer.submit(_slow_write, figure)
+        deadline = time.time() + 30
+        while not list(tmp_path.glob(".speed.png*.tmp")) and time.time() < deadline:
+            time.sleep(0.02)
+        assert list(tmp_path.glob(".speed.png*.tmp")), "the slow write never started"
+        os.kill(drawer.process.pid, signal.SIGTERM)
+        drawer.process.join(10)
+        assert drawer.process.exitcode == 128 + signal.SIGTERM
+        assert list(tmp_path.iterdir()) == []
+    finally:
+        drawer.close()

@@ -28,6 +28,7 @@ from typing import Any, Callable, Iterator, Optional
 
 from ecostudy.core.deadline import can_fork, die_with_parent
 from ecostudy.core.errors import EcostudyError
+from ecostudy.core.interrupt import TERMINATE
 
 
 class FigureError(EcostudyError):
@@ -38,6 +39,20 @@ class FigureError(EcostudyError):
 _serving = [False]  # True in the figure process
 
 
+def _end_through_python() -> None:
+    """In a figure process (after ``die_with_parent``, which ends it at once on SIGTERM or SIGHUP):
+    end it through Python instead, so a figure being written leaves no temporary file beside its
+    name (``io.writers.atomic_write`` removes it as the exit passes). A ``kill`` of the command's
+    process group left ``.speed.png<random>.tmp`` in the output folder in 4 of 12 tries."""
+    for stop in TERMINATE:
+        if signal.getsignal(stop) is not signal.SIG_IGN:
+            signal.signal(stop, _exit)
+
+
+def _exit(signum: int, _frame: Any) -> None:
+    raise SystemExit(128 + signum)
+
+
 def _serve(conn, other) -> None:
     """The child: import the plotting code at once, then run each job ``(work, args)`` sent and
     answer ``("ok", value)`` or ``("error", exception or its text, traceback)``; ``None`` or a closed
@@ -45,6 +60,7 @@ def _serve(conn, other) -> None:
     _serving[0] = True
     other.close()  # the parent's end: when the parent goes, this side reads end-of-file
     die_with_parent()
+    _end_through_python()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle; it stops this child
     failed: Optional[BaseException] = None
     try:
@@ -92,6 +108,7 @@ def apart(work: Callable[..., Any], jobs: list[tuple]) -> list[Any]:
             try:
                 os.close(read)
                 die_with_parent()
+                _end_through_python()
                 try:
                     answer: tuple = ("ok", work(*args))
                 except BaseException as exc:  # noqa: BLE001 - sent back and raised there
