@@ -330,14 +330,15 @@ def test_closed_loop_plots_give_each_controller_one_colour_in_every_plot(loop_st
     assert len(set(medians.values())) == 3 and medians["convex"] == style.CONTROLLER["convex"]
     assert not set(medians.values()) & {c.lower() for c in style.LIMIT.values()}
     times = loopplots.solve_times(runs, loop_study.budgets, None).axes[0]
-    assert {line.get_label(): to_hex(line.get_color()) for line in labelled(times) if line.get_label() in runs} == medians
+    named = {line.get_label().removesuffix(" (FLAGGED)"): line for line in labelled(times)}  # a controller not ok: marked
+    assert {name: to_hex(line.get_color()) for name, line in named.items() if name in runs} == medians
     budgets = [line for line in labelled(times) if line.get_label().startswith("budget")]
     assert len(budgets) == 2 and set(hexes(budgets)) == {style.LIMIT["budget"]}
     assert len({line.get_linestyle() for line in budgets}) == 2
-    masses = loopplots.mass_estimates(runs, None).axes[0]
+    masses = loopplots.mass_estimates(runs, None).axes[0]  # each draw in a colour of its own (tests/test_plots_status.py)
     estimated = labelled(masses)
-    assert [line.get_label() for line in estimated] == ["with estimator"]
-    assert hexes(estimated) == [medians["with estimator"]]
+    assert [line.get_label().split(":")[0] for line in estimated] == ["with estimator, draw 0", "with estimator, draw 1"]
+    assert len(set(hexes(estimated))) == 2 and not set(hexes(estimated)) & {c.lower() for c in style.LIMIT.values()}
 
 
 @pytest.mark.slow  # the two heavy-haul runs take about 20 s
@@ -351,6 +352,6 @@ def test_heavy_haul_curves_each_in_a_colour_of_their_own(tmp_path):
     assert len(curves) == 2 * 2 * 2  # (f, Np, Nc) groups x two quantities x two panels
     assert len(set(hexes(curves))) == len(curves)
     assert all(len(line.get_xdata()) == 2 for line in curves)  # one point per K_b
-    tracking = labelled(heavyplots.tracking(outcome, None).axes[0])
-    assert hexes(tracking[:1]) == [style.colour("reference")] and len(tracking) == 1 + 4
+    tracking = labelled(heavyplots.tracking(outcome, None).axes[0])  # the line's limit, the reference, the runs
+    assert hexes(tracking[:2]) == [SPEED_LIMIT, style.colour("reference")] and len(tracking) == 2 + 4
     assert len(set(hexes(tracking))) == len(tracking)

@@ -18,7 +18,7 @@ from ecostudy.calibration.estimate import CHECKED, MAX_STRUCTURE, WINDOW
 from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH
 from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
-from ecostudy.core.status import status_word
+from ecostudy.core.status import Status, status_word
 from ecostudy.core.units import number, signed
 from ecostudy.report import calplots, heavyplots, loopplots
 from ecostudy.report.console import counted
@@ -194,8 +194,8 @@ def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: 
                                           (figures.filename("residuals"),) if plot else ())
         stage("figures and report")
     # residuals.<format> (an earlier run's in another format, or with --no-plot any, removed)
-    figure_files(out, plot, {"residuals": partial(calplots.residuals, result.residuals,
-                                                  title="calibration from logged runs")}, figures)
+    figure_files(out, plot, {"residuals": partial(calplots.residuals, result.residuals, title="calibration from logged runs",
+                                                  status=Status.parse(result.status, result.reason or ""))}, figures)
     write_html(out)
     q = result.quality
     lines = [shown(result.table.dropna(axis=1, how="all"), CALIBRATION_COLUMNS), *result.footnotes,

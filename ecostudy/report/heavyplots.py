@@ -1,20 +1,32 @@
 """Plots of a heavy-haul study: speed tracking against the reference, the in-train forces along the
-train over distance (a heat map per run), and the K_b trade-off (largest in-train force and energy)."""
+train over distance (a heat map per run), and the K_b trade-off (largest in-train force and energy).
+Each says what runs.csv says of the runs it draws: a run's status in its forces' title, the runs not
+ok in the tracking figure's title and legend, ringed in the trade-off."""
 import numpy as np
 
+from ecostudy.core.status import parsed
 from ecostudy.core.units import to_kmh
 from ecostudy.report import style
-from ecostudy.report.plots import _save, figure
+from ecostudy.report.plots import _save, _speed_limit, figure, marked, overall, titled
 
 
 def _label(case):
     return case["scenario"]
 
 
+def statuses(outcome):
+    """Every run's status line by its label (``Kb=1 f=10 Np=4 Nc=2``), from runs.csv's status and
+    reason: a failed run's too, which no figure draws."""
+    return parsed(map(_label, outcome.cases), outcome.runs["status"], outcome.runs["reason"])
+
+
 def tracking(outcome, path, dpi=None):
-    """Mean speed of every run and the reference speed against the head's position."""
+    """Mean speed of every run, the reference speed and the line's limit for the train's length
+    (what the fastest car is held to, at the head's position) against the head's position; the runs
+    not ok named in the title (:func:`~ecostudy.report.plots.overall`) and marked in the legend."""
     fig, ax = figure(figsize=(10, 4.5))
-    ref = outcome.reference
+    ref, status = outcome.reference, statuses(outcome)
+    _speed_limit(ax, outcome.cases[0]["plan"].segment)
     given = outcome.study.reference.table is not None  # a user's speed-distance table, or the single-mass optimum
     ax.plot(ref.distance, to_kmh(ref.speeds), color=style.colour("reference"), lw=1.2,
             label="reference (the study's table)" if given else "reference (single-mass optimum)")
@@ -23,19 +35,19 @@ def tracking(outcome, path, dpi=None):
         p = outcome.summaries[case["key"]].get("profile")
         if p:
             ax.plot(p["head_m"], to_kmh(np.asarray(p["speed_mps"])), lw=0.8, color=palette(_label(case)),
-                    ls=style.DASHES[i % len(style.DASHES)], label=_label(case))
+                    ls=style.DASHES[i % len(style.DASHES)], label=marked(_label(case), status[_label(case)]))
     ax.set_xlabel("head position from departure [m]")
     ax.set_ylabel("mean speed of the cars [km/h]")
     ax.set_ylim(bottom=0)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    ax.set_title(f"{outcome.study.name}: speed tracking", fontsize=10)
+    titled(ax, f"{outcome.study.name}: speed tracking", overall(status))
     return _save(fig, path, dpi=dpi)
 
 
-def forces(case, summary, path, dpi=None):
+def forces(case, summary, path, dpi=None, status="ok"):
     """In-train force of the couplers (rows: along the train) at every sample (columns: the head's
-    position), tension positive."""
+    position), tension positive; the run's ``status`` in the title where it is not ok."""
     f = np.asarray(summary["forces_kN"], float).T
     head = np.asarray(summary["profile"]["head_m"])
     limit = max(np.abs(f).max(), 1.0)
@@ -46,7 +58,7 @@ def forces(case, summary, path, dpi=None):
     ax.set_xlabel("head position from departure [m]")
     ax.set_ylabel("coupler (1: behind the head car)")
     ax.invert_yaxis()
-    ax.set_title(f"{_label(case)}: largest |f_in| {summary['force_max_kN']:.0f} kN", fontsize=10)
+    titled(ax, f"{_label(case)}: largest |f_in| {summary['force_max_kN']:.0f} kN", status)
     return _save(fig, path, dpi=dpi)
 
 
@@ -102,11 +114,12 @@ def draw(outcome, out=style.Output()):
         return written
     written.append(out.filename("tracking"))
     tracking(outcome, outcome.output / written[-1], dpi=out.dpi)
+    status = statuses(outcome)
     for case in outcome.cases:
         summary = outcome.summaries[case["key"]]
         if summary:
             name = out.filename(forces_stem(case))
-            forces(case, summary, outcome.output / name, dpi=out.dpi)
+            forces(case, summary, outcome.output / name, dpi=out.dpi, status=status[_label(case)])
             written.append(name)
     if outcome.runs["K_b"].nunique() > 1:
         written.append(out.filename("brake_penalty"))

@@ -1,10 +1,34 @@
 """Plots of a closed-loop study: the speed band (5-95 %, median) of the runs per controller, the solve time of every
-step against the real-time budget, and the mass estimates over distance."""
+step against the real-time budget, and the mass estimates over distance. Each says what runs.csv says of
+the runs it draws: how many are ok in each band's title, the runs not ok in the title of the others
+(:func:`~ecostudy.report.plots.overall`) and marked in their legends."""
 import numpy as np
 
+from ecostudy.core.status import parsed
 from ecostudy.core.units import to_kmh
 from ecostudy.report import style
-from ecostudy.report.plots import _save, figure, _steps
+from ecostudy.report.plots import _save, _steps, figure, marked, overall, titled
+
+LABELLED = 10  # draws named in the mass estimates' legend (the rest counted)
+
+
+def run_statuses(table, controllers):
+    """The status line of every run of ``controllers`` in ``table`` (runs.csv: status, reason) by
+    ``<controller> draw <i>``: a failed run's too, which no figure draws; a run not computed yet
+    (``--only``) left out."""
+    table = table[table["controller"].isin(list(controllers)) & (table["status"] != "missing")]
+    return parsed([f"{r.controller} draw {r.draw}" for r in table.itertuples()], table["status"], table["reason"])
+
+
+def _drawn(runs):
+    """The status lines of the runs drawn (their summaries' ``status``; ok where none is given)."""
+    return {f"{name} draw {s.get('draw', i)}": s.get("status", "ok")
+            for name, group in runs.items() for i, s in enumerate(group)}
+
+
+def _of(statuses, name):
+    """The statuses of controller ``name``'s runs."""
+    return {k: v for k, v in statuses.items() if k.startswith(f"{name} draw ")}
 
 
 def speed_percentiles(group, positions, levels=(5, 50, 95)):
@@ -49,15 +73,19 @@ def bands(runs, segment, path, title="", dpi=None, ok=None):
     return _save(fig, path, dpi=dpi)
 
 
-def solve_times(runs, budgets, path, title="", dpi=None):
+def solve_times(runs, budgets, path, title="", dpi=None, statuses=None):
     """Solve time of every control step [ms] of every run, per controller, against its budget
-    (``budgets``: controller name -> sample time [s])."""
+    (``budgets``: controller name -> sample time [s]); ``statuses`` (:func:`run_statuses`; by
+    default those of the runs drawn): the runs not ok named in the title, a controller with any
+    marked in the legend."""
+    statuses = _drawn(runs) if statuses is None else statuses
     fig, ax = figure(figsize=(9, 4))
     palette = style.Palette(list(runs))
     for name, group in runs.items():
         for i, s in enumerate(group):
             ms = np.asarray(s["solve_ms"])
-            ax.plot(np.arange(ms.size), ms, ".", ms=1.5, color=palette(name), alpha=0.5, label=name if i == 0 else None)
+            ax.plot(np.arange(ms.size), ms, ".", ms=1.5, color=palette(name), alpha=0.5,
+                    label=marked(name, overall(_of(statuses, name))) if i == 0 else None)
     for j, budget in enumerate(sorted(set(budgets.values()), reverse=True)):
         ax.axhline(1e3 * budget, color=style.LIMIT["budget"], lw=1, ls=style.DASHES[j % len(style.DASHES)],
                    label=f"budget {1e3 * budget:g} ms ({', '.join(n for n, b in budgets.items() if b == budget)})")
@@ -65,26 +93,39 @@ def solve_times(runs, budgets, path, title="", dpi=None):
     ax.set_ylabel("solve time [ms]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, markerscale=6)
-    ax.set_title(title, fontsize=10)
+    titled(ax, title, overall(statuses))
     return _save(fig, path, dpi=dpi)
 
 
-def mass_estimates(runs, path, title="", dpi=None):
-    """The Kalman mass estimate over distance of every run with an estimator, and its true mass."""
-    fig, ax = figure(figsize=(9, 4))
-    palette = style.Palette(list(runs))
-    for name, group in runs.items():
-        for i, s in enumerate(group):
+def mass_estimates(runs, path, title="", dpi=None, statuses=None):
+    """The Kalman mass estimate over distance of every run with an estimator (solid) and its true
+    mass (dotted), each draw in a colour of its own (a controller in a line style of its own), so
+    that an estimate is read against its own truth; the first :data:`LABELLED` named in the legend
+    (a run not ok marked). ``statuses`` (:func:`run_statuses`; by default those of the runs drawn):
+    those of the estimating controllers' runs, the runs not ok named in the title."""
+    estimating = [name for name, group in runs.items() if any(s.get("estimates") for s in group)]
+    statuses = _drawn(runs) if statuses is None else statuses
+    fig, ax = figure(figsize=(9, 4.5))
+    palette, shown = style.Palette(), 0
+    for k, name in enumerate(estimating):
+        for i, s in enumerate(runs[name]):
             if not s.get("estimates"):
                 continue
             x, e = np.asarray(s["estimates"]).T
-            ax.plot(x, e, color=palette(name), lw=0.8, alpha=0.6, label=name if i == 0 else None)
-            ax.plot([x[0], x[-1]], [s["true_mass_factor"]] * 2, color=palette(name), lw=0.5, ls=":")
+            draw = s.get("draw", i)
+            colour = palette(f"draw {draw}")  # a draw is one plant, its colour the same in every controller
+            label = marked(f"{name}, draw {draw}: true {s['true_mass_factor']:.3f}", s.get("status", "ok"))
+            ax.plot(x, e, color=colour, lw=0.9, ls=style.DASHES[k % 3], label=label if shown < LABELLED else None)
+            ax.plot([x[0], x[-1]], [s["true_mass_factor"]] * 2, color=colour, lw=0.8, ls=":")
+            shown += 1
+    if shown > LABELLED:
+        ax.plot([], [], " ", label=f"and {shown - LABELLED} more runs")
     ax.set_xlabel("distance from departure [m]")
     ax.set_ylabel("mass / model mass")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    ax.set_title(title + " (dotted: true mass)", fontsize=10)
+    ax.legend(fontsize=7, ncol=2 if shown > 5 else 1)
+    titled(ax, (f"{title}: " if title else "") + "estimate (solid) and true mass (dotted), each draw in its own colour",
+           overall({k: v for name in estimating for k, v in _of(statuses, name).items()}))
     return _save(fig, path, dpi=dpi)
 
 
@@ -100,9 +141,10 @@ def draw(outcome, out=style.Output()):
         return []
     names = list(out.filenames(FIGURES))
     ok = {c: int((g["status"] == "ok").sum()) for c, g in outcome.runs.groupby("controller")}
+    statuses = run_statuses(outcome.runs, runs)
     bands(runs, outcome.segment, folder / names[0], title=name, dpi=out.dpi, ok=ok)
-    solve_times(runs, outcome.budgets, folder / names[1], title=name, dpi=out.dpi)
+    solve_times(runs, outcome.budgets, folder / names[1], title=name, dpi=out.dpi, statuses=statuses)
     if not any(s.get("estimates") for group in runs.values() for s in group):
         return names[:2]
-    mass_estimates(runs, folder / names[2], title=name, dpi=out.dpi)
+    mass_estimates(runs, folder / names[2], title=name, dpi=out.dpi, statuses=statuses)
     return names

@@ -21,7 +21,7 @@ from ecostudy.core.columns import with_statistic
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
-from ecostudy.core.status import STOP_TOLERANCE_M, driven_run, flagged, solver_part, unproven_solves, worst
+from ecostudy.core.status import STOP_TOLERANCE_M, Status, driven_run, flagged, solver_part, unproven_solves, worst
 from ecostudy.core.types import State
 from ecostudy.io import schemas
 from ecostudy.io.loaders import (check_fits, chosen_stops, read_document, read_track, read_train, track_from_schema,
@@ -316,8 +316,10 @@ def loop_study(cases, rows, runs, output):
             labels = case["labels"]
             steps.add(f"{labels['controller']}_draw{labels['draw']}.csv")
             write_csv(output / "steps" / f"{labels['controller']}_draw{labels['draw']}.csv", steps_frame(s["steps"]))
-        if s:
-            by_controller.setdefault(case["labels"]["controller"], []).append(s)
+        if s:  # with its draw and status line: the figures say which of their runs are not ok
+            row = rows[case["key"]]
+            by_controller.setdefault(case["labels"]["controller"], []).append(
+                {**s, "draw": case["labels"]["draw"], "status": str(Status.parse(row["status"], row.get("error") or ""))})
             budgets[case["labels"]["controller"]] = case["sample_time"]
     for earlier in (output / "steps").glob("*_draw*.csv"):
         if earlier.name not in steps:
@@ -340,7 +342,8 @@ def loop_table(cases, rows):
 
 class LoopStudy(NamedTuple):
     """A closed-loop study's outcome: the study's name, the runs and aggregate tables, the counts,
-    the output folder, every stored run's summary per controller, and the segment."""
+    the output folder, every stored run's summary per controller (with its ``draw`` and its
+    ``status`` line), and the segment."""
 
     name: str
     runs: pd.DataFrame

@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, problem
-from ecostudy.core.grid import make_segment
+from ecostudy.core.grid import Segment, make_segment
 from ecostudy.core.units import KMH, KN, KWH
 from ecostudy.core.status import OK, part, unproven_columns, unproven_solves
 from ecostudy.heavyhaul.airbrake import application_time, brake_lag
@@ -159,17 +159,19 @@ def expand(path, out=None):
         case = {**shared, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",
                 "labels": {"K_b": kb, "f": f, "Np": h.np, "Nc": h.nc}}
         case["key"] = case_key(case)
-        case["plan"] = Plan(s, reference)  # after the key: both follow from the inputs the key hashes
+        case["plan"] = Plan(s, reference, segment)  # after the key: all follow from the inputs the key hashes
         cases.append(case)
     return s, output, reference, cases
 
 
 class Plan(NamedTuple):
-    """What a heavy-haul case carries beside its key: the study file and the reference solved once
-    at expansion (for the study's size and its plots)."""
+    """What a heavy-haul case carries beside its key: the study file, the reference solved once at
+    expansion and the line between the stops, its limits for the train's length at the head (for
+    the study's size and its plots)."""
 
     study: HeavyhaulFile
     reference: Reference
+    segment: Segment
 
 
 QP_FORMS = {  # a study's qp_solver: the same QP four ways (docs/heavyhaul.md)
@@ -297,7 +299,7 @@ def expand_heavyhaul(path, out=None):
 
 def heavyhaul_size(where, cases, workers=1):
     """Refuse a heavy-haul study estimated above the command's budget (unless forced)."""
-    study, reference = cases[0]["plan"]
+    study, reference = cases[0]["plan"].study, cases[0]["plan"].reference
     check_heavyhaul_study(where, study, reference, cases, workers)
 
 
@@ -332,7 +334,7 @@ def heavyhaul_files(draw=None, names=None, drawn=None):
     none; ``names(cases)``: the file names it may write), their names also appended to ``drawn``
     when given."""
     def files(out_dir, cases, rows, table):
-        study, reference = cases[0]["plan"]  # the study file and the reference solved at expansion
+        study, reference = cases[0]["plan"].study, cases[0]["plan"].reference  # solved at expansion
         written = draw(HeavyhaulStudy(study, table, {}, Path(out_dir), reference, cases,
                                       summaries_of(cases, rows))) if draw is not None else []
         if drawn is not None:
