@@ -7,7 +7,7 @@ from ecostudy import api
 from ecostudy.cli import app
 from ecostudy.io.loaders import load_track, load_train
 
-from .conftest import assert_folder, TRACKS, TRAINS
+from .conftest import assert_folder, TRACKS, TRAINS, write_yaml
 
 
 @pytest.fixture(scope="module")
@@ -146,3 +146,23 @@ def test_rules_of_thumb_brake_to_the_stop_and_a_run_past_it_has_no_arrival(tmp_p
     past = rows.loc["DAS round (nearest level)"]
     assert past["stop_error_m"] > 1.0 and np.isnan(past["arrival_error_s"]), past
     assert "beyond the stop" in past["status"] and "arrived" not in past["status"], past["status"]
+
+
+@pytest.mark.slow
+def test_landing_scales_only_the_braking_to_the_stop_and_the_heuristics_keep_their_time(tmp_path):
+    """A 10 km/h limit over the last 300 m of a -30 permille descent: the rules of thumb hold it by
+    braking. Landing scaled that holding braking too and the crawl ran 9.96 km/h instead of 8.3
+    (eco-drive coasting 18.4 s early); and the time search ran on the runs before landing, so the
+    landed runs missed their time (MARECO-style 1.27 s late at K = 40 on the metro). Only the
+    braking over which the planned speed falls to the stop is scaled, and the search keeps the time
+    on the landed runs."""
+    track = write_yaml(tmp_path / "low.yaml", {
+        "name": "low last limit", "source": "test", "length_m": 1200,
+        "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 1200}],
+        "gradients": [{"position_m": 0, "gradient_permille": 0}, {"position_m": 700, "gradient_permille": -30}],
+        "speed_limits": [{"position_m": 0, "speed_kmh": 80}, {"position_m": 900, "speed_kmh": 10}]})
+    folder = api.compare_folder(track=track, train=TRAINS / "amsterdam_metro.yaml", time=200.0, points=400,
+                                plot=False, workers=1, out=tmp_path / "o")
+    eco = folder.table.set_index("strategy").loc["eco-drive coasting"]
+    assert eco["status"] == "ok" and abs(eco["arrival_error_s"]) < 1.0 and abs(eco["stop_error_m"]) <= 0.01, eco
+

@@ -71,7 +71,8 @@ def test_advice_that_runs_past_the_stop_has_no_arrival(tmp_path):
     das = json.loads((tmp_path / "o" / "summary.json").read_text())["das"]
     assert das["stop_error_m"] > 1.0, das  # past the stop
     assert das["arrival_error_s"] is None and das["gap_to_ato_pct"] is None, das
-    assert das["status"].startswith("flagged: stopped") and "beyond the stop" in das["status"], das["status"]
+    assert das["status"].startswith("flagged: ran past the stop without stopping: ") and \
+        "100 m beyond it, where the simulation ends" in das["status"], das["status"]  # not "stopped 100.00 m beyond"
     assert "early" not in das["status"] and "late" not in das["status"], das["status"]
     assert "no arrival" in r.output and r.exit_code == 1, r.output
 

@@ -47,3 +47,9 @@ def test_an_address_nothing_answers_at_is_refused_before_anything_is_computed(co
         "error: command line: --dask: cannot reach the Dask scheduler at tcp://127.0.0.1:1"), result.output
     assert not out.exists()
 
+
+def test_a_port_past_65535_is_no_address():
+    """tcp://host:99999 matched the address pattern and was tried on another port (99999 - 65536)."""
+    with pytest.raises(api.InputError, match="expected a scheduler address tcp://host:port, got 'tcp://127.0.0.1:99999'"):
+        api.pareto_folder(track=AMS, train=METRO, dask="tcp://127.0.0.1:99999", plot=False)
+

@@ -10,6 +10,7 @@ from ecostudy.core.simulate import outside
 from ecostudy.core.status import Status, driven_run, from_checks, solver_check
 from ecostudy.core.units import number
 from ecostudy.io.folder import write_summary
+from ecostudy.io.runsummary import Verification
 
 from .conftest import TRACKS
 
@@ -66,3 +67,11 @@ def test_a_value_past_its_tolerance_never_reads_as_within_it():
     assert "adhesion use 1.01 of" not in driven_run(adhesion_use=1.0104).reason
     assert "adhesion use 1.0104 of mu(v) m_adh g" in driven_run(adhesion_use=1.0104).reason
     assert "arrived 1.002 s early" in driven_run(early_s=1.0021).reason
+    assert driven_run(0.0, 1.004, 0.504).reason == "arrived 1.004 s late; overspeed 0.504 km/h"
+    assert driven_run(100.0, moving_kmh=40.9).reason.startswith("ran past the stop without stopping: 40.9 km/h 100 m")
+    errors = Verification(passed=False, arrival_time_error_s=0.5004, stop_error_m=-1.0004, energy_error_pct=0.2,
+                          overspeed_max_kmh=0.5004, simulated_running_time_s=80.0, simulated_traction_energy_kWh=5.0,
+                          simulated_net_energy_kWh=3.0, adhesion_use_max=1.0104).errors
+    assert errors == "arrival +0.5004 s, stop -1.0004 m, energy +0.200 %, overspeed 0.5004 km/h, adhesion use 1.0104 " \
+        "of mu(v) m_adh g", errors
+

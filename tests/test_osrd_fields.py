@@ -117,6 +117,28 @@ def test_a_step_is_named_by_its_index_in_the_file(tmp_path):
     assert list(train.traction.speeds) == [0, 5, 9.99, 10, 20, 30, 40]
 
 
+def test_a_step_at_the_curves_first_speed_reads_its_second_effort_from_there(tmp_path):
+    """Efforts 250 and 200 kN both at 0 m/s: the step's first point was moved 0.01 m/s below 0 and
+    the file refused for `speeds must lie in [0, 1000] km/h`, a range its speeds keep. The second
+    effort holds from 0 m/s (OSRD's interpolation gives the first at 0 m/s exactly), said in a warning."""
+    path = stock(tmp_path, lambda d: curve(d).update({"speeds": [0, 0, 10, 20, 30, 40],
+                                                      "max_efforts": [2.5e5, 2e5, 2e5, 1.1e5, 7.5e4, 5.6e4]}))
+    with pytest.warns(EcostudyWarning) as seen:
+        train = load_train(path)
+    assert any(f"{CURVE}.speeds[1]: a step of the effort at 0 m/s (250 -> 200 kN) at the curve's first speed"
+               in str(w.message) for w in seen), [str(w.message) for w in seen]
+    assert list(train.traction.speeds) == [0, 10, 20, 30, 40] and train.traction.forces[0] == 2e5
+
+
+def test_a_curve_of_no_effort_is_refused_naming_its_efforts(tmp_path):
+    """Every effort 0 (nothing negative: OSRD reads it): the command went on to solve and blamed the
+    track (`gradients: infeasible: the train cannot overcome its running resistance`), after 40
+    numpy warnings. A table that gives no force at any speed is refused where the file gives it."""
+    path = stock(tmp_path, lambda d: curve(d).update({"max_efforts": [0.0] * 6}))
+    said = refused_line(tmp_path, path)
+    assert said == f"error: {path}: {CURVE}.max_efforts: every force is 0 kN: a table that gives no force at any speed", said
+
+
 def test_the_closed_loop_study_names_an_osrd_field_as_the_file_does(tmp_path):
     """``simulate`` read its train without the file's names: ``davis: a_N must be >= 0``,
     ``max_acceleration_mps2: ...``."""

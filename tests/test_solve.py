@@ -5,7 +5,7 @@ import pytest
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.analysis.single import solve_run
-from ecostudy.core.simulate import TOLERANCES
+from ecostudy.core.status import TOLERANCES
 from ecostudy.ocp.problem import Written
 
 from .conftest import TRACKS, TRAINS, load_yaml

@@ -41,6 +41,9 @@ def terminal(event: Event, direction: int) -> Event:
     return event
 
 
+RUNAWAY_M = 100.0  # a driven run that has not stopped this far past its stop is ended there (:meth:`Plant.drive`)
+
+
 @dataclass(frozen=True)
 class Truth:
     """The plant's true parameters as multiples of the model's (1: the model itself).
@@ -321,7 +324,7 @@ class Plant:
             return y[1] if t > t_start else 1.0
 
         starts = pieces(nodes, handles, segment, targets=targets)
-        bounds = list(nodes[starts[1:]]) + [segment.distance + 100.0]  # past the stop: runaway guard
+        bounds = list(nodes[starts[1:]]) + [segment.distance + RUNAWAY_M]  # past the stop: the runaway guard
         y, t_start = [0.0, max(initial_speed, 1e-9), 0.0, 0.0, 0.0, 0.0], 0.0
         solutions: list[Any] = []  # scipy's OdeResult per piece
         for first, following, x_end in zip(starts, list(starts[1:]) + [last + 1], bounds):

@@ -14,12 +14,10 @@ import numpy as np
 
 from ecostudy.core.grid import Segment, intervals_of
 from ecostudy.core.plant import Plant, Truth, adhesion_use, controls_of  # adhesion_use: the check of every run, here too
-from ecostudy.core.status import ADHESION_USE, past
+from ecostudy.core.status import ADHESION_USE, TOLERANCES, past
 from ecostudy.core.types import Train, Window
 from ecostudy.core.units import FloatArray, to_kmh, to_kwh
 
-TOLERANCES = {"arrival_time_error_s": 0.5, "stop_error_m": 1.0, "energy_error_pct": 1.0,
-              "net_energy_error_pct": 1.0, "overspeed_max_kmh": 0.5}
 
 
 @dataclass

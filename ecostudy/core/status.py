@@ -107,6 +107,9 @@ LATE_TOLERANCE_S = 1.0        # arrival after the asked time or window [s]
 # running time of 300 s on a 72 s stretch arrived 178 s early)
 EARLY_TOLERANCE_S = 1.0
 OVERSPEED_TOLERANCE_KMH = 0.5  # largest excess over the speed limit [km/h]
+TOLERANCES = {"arrival_time_error_s": 0.5, "stop_error_m": 1.0, "energy_error_pct": 1.0,
+              "net_energy_error_pct": 1.0, "overspeed_max_kmh": 0.5}  # the re-simulation's (core.simulate.verify)
+STOOD_KMH = 0.1  # a simulated run this slow where its simulation ended stood there (its stop event leaves ~0)
 ADHESION_USE = 1.0 + TOLERANCE  # a train with an adhesion limit: the largest share of it any run may ask
 
 
@@ -209,23 +212,28 @@ def off_stop(error_m: float, tolerance_m: float, digits: int = 2) -> str:
 
 def driven_run(stop_error_m: float | None = None, late_s: float | None = None,
                overspeed_kmh: float | None = None, adhesion_use: float | None = None,
-               early_s: float | None = None) -> Status:
+               early_s: float | None = None, moving_kmh: float = 0.0) -> Status:
     """The status of a driven run from what it missed (``None``: not measured): ``flagged`` when
     it stops more than :data:`STOP_TOLERANCE_M` off, arrives more than :data:`LATE_TOLERANCE_S`
     late (or, given ``early_s``, more than :data:`EARLY_TOLERANCE_S` early), overspeeds by more than
     :data:`OVERSPEED_TOLERANCE_KMH` or asks more than :data:`ADHESION_USE` of its adhesion limit
-    (``core.simulate.adhesion_use``)."""
+    (``core.simulate.adhesion_use``). ``moving_kmh``: the speed a simulated run still had where its
+    simulation ended past the stop (``core.plant.RUNAWAY_M``; at most :data:`STOOD_KMH`: it stood), said as such, not as a
+    place it stood at."""
     reasons = []
-    if stop_error_m is not None and not abs(stop_error_m) <= STOP_TOLERANCE_M:
+    if stop_error_m is not None and moving_kmh > STOOD_KMH and stop_error_m > STOP_TOLERANCE_M:
+        reasons.append(f"ran past the stop without stopping: {moving_kmh:.1f} km/h {stop_error_m:.0f} m beyond it, "
+                       f"where the simulation ends (tolerance {STOP_TOLERANCE_M:g} m)")
+    elif stop_error_m is not None and not abs(stop_error_m) <= STOP_TOLERANCE_M:
         reasons.append(off_stop(stop_error_m, STOP_TOLERANCE_M))
     if stop_error_m is not None and stop_error_m < -STOP_TOLERANCE_M:  # stood short: it never arrived,
         late_s = early_s = None                                          # early or late
     if late_s is not None and not late_s <= LATE_TOLERANCE_S:
-        reasons.append(f"arrived {late_s:.2f} s late")
+        reasons.append(f"arrived {past(late_s, LATE_TOLERANCE_S, 2, 'f')} s late")
     if early_s is not None and not early_s <= EARLY_TOLERANCE_S:
         reasons.append(f"arrived {past(early_s, EARLY_TOLERANCE_S, 2, 'f')} s early (tolerance {EARLY_TOLERANCE_S:g} s)")
     if overspeed_kmh is not None and not overspeed_kmh <= OVERSPEED_TOLERANCE_KMH:
-        reasons.append(f"overspeed {overspeed_kmh:.2f} km/h")
+        reasons.append(f"overspeed {past(overspeed_kmh, OVERSPEED_TOLERANCE_KMH, 2, 'f')} km/h")
     if adhesion_use is not None and not adhesion_use <= ADHESION_USE:
         reasons.append(f"adhesion use {past(adhesion_use, ADHESION_USE, 3, 'f')} of mu(v) m_adh g (tolerance {ADHESION_USE:g})")
     return OK if not reasons else flagged("; ".join(reasons))

@@ -179,7 +179,8 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     overspeed = to_kmh(worst_overspeed(result.segment, outcome.trace))
     grip = {} if "adhesion_use_max" not in row else {"adhesion_use_max": row["adhesion_use_max"]}
     status = worst([driven_run(row["stop_error_m"], arrival_error, overspeed, row.get("adhesion_use_max"),
-                               early_s=None if arrival_error is None else -arrival_error),
+                               early_s=None if arrival_error is None else -arrival_error,
+                               moving_kmh=to_kmh(float(outcome.trace.v[-1]))),
                     *(flagged(f) for f in flags)])
     why = no_gap(result, arrived)
     gap = None if why else _gap(energies, result)

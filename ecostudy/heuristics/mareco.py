@@ -194,19 +194,21 @@ def mareco(case, running_time_s, drive, rounds=3):
 
     ``drive(case, speeds)`` turns speeds into handles and their simulation (strategies.drive).
     The grid time of a profile differs slightly from the simulated one, so the grid target is
-    corrected by the simulated error a few times.
+    corrected by the simulated error a few times; the round whose simulated arrival is nearest the
+    time is the run (a corrected target no cap meets ends the rounds).
     """
     target = running_time_s
-    best = None
+    runs = []
     for _ in range(rounds):
         v1 = cap_for(case, target)
+        if v1 is None and runs:
+            break
         if v1 is None:
             raise InfeasibleError(f"the MARECO-style heuristic cannot meet {running_time_s:.6g} s")
-        v = profile(case, v1)
-        u, trace = drive(case, v)
-        best = (v1, u, trace)
+        u, trace = drive(case, profile(case, v1))
+        runs.append((v1, u, trace))
         error = trace.arrival_time - running_time_s
         if abs(error) <= 0.01:
             break
         target -= error
-    return best
+    return min(runs, key=lambda run: abs(run[2].arrival_time - running_time_s))

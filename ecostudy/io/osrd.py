@@ -158,6 +158,11 @@ def _steps(speeds: FloatArray, efforts: FloatArray, path: Where, where: str) -> 
     same = np.concatenate([[False], (np.diff(speeds) == 0) & (np.diff(efforts) == 0)])  # a point given twice: once
     index = np.flatnonzero(~same)  # each kept point's index in the file
     speeds, efforts = speeds[~same].copy(), efforts[~same]
+    if len(speeds) > 2 and speeds[0] == speeds[1]:  # a step at the first speed: its first effort holds at that
+        warnings.warn(problem(path, f"{where}.speeds[{index[1]}]", f"a step of the effort at {speeds[1]:g} m/s "
+                              f"({efforts[0] / units.KN:g} -> {efforts[1] / units.KN:g} kN) at the curve's first "
+                              "speed: the second effort is read from that speed on"), EcostudyWarning, stacklevel=4)
+        speeds, efforts, index = speeds[1:], efforts[1:], index[1:]
     for k in np.flatnonzero(np.diff(speeds) == 0).tolist():
         low = speeds[k - 1] if k > 0 else -np.inf
         speeds[k] = max(speeds[k + 1] - STEP, 0.5 * (low + speeds[k + 1]))

@@ -9,6 +9,7 @@ a misspelt attribute is an error mypy and the interpreter name, a misspelt key i
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional
 
+from ecostudy.core.status import ADHESION_USE, TOLERANCES, past
 from ecostudy.core.units import number, signed
 
 
@@ -65,10 +66,14 @@ class Verification:
     def errors(self) -> str:
         """The re-simulation's errors as the run's status and the screen print them (the net energy's
         where it was measured)."""
-        net = "" if self.net_energy_error_pct is None else f", net energy {signed(self.net_energy_error_pct, 3)} %"
-        grip = "" if self.adhesion_use_max is None else f", adhesion use {self.adhesion_use_max:.3f} of mu(v) m_adh g"
-        return (f"arrival {signed(self.arrival_time_error_s, 3)} s, stop {signed(self.stop_error_m, 3)} m, "
-                f"energy {signed(self.energy_error_pct, 3)} %{net}, overspeed {number(self.overspeed_max_kmh)} km/h{grip}")
+        net = "" if self.net_energy_error_pct is None else \
+            f", net energy {_error(self.net_energy_error_pct, 'net_energy_error_pct')} %"
+        grip = "" if self.adhesion_use_max is None else \
+            f", adhesion use {_beyond(self.adhesion_use_max, ADHESION_USE, f'{self.adhesion_use_max:.3f}')} of mu(v) m_adh g"
+        return (f"arrival {_error(self.arrival_time_error_s, 'arrival_time_error_s')} s, stop "
+                f"{_error(self.stop_error_m, 'stop_error_m')} m, energy {_error(self.energy_error_pct, 'energy_error_pct')} %"
+                f"{net}, overspeed {_beyond(self.overspeed_max_kmh, TOLERANCES['overspeed_max_kmh'], number(self.overspeed_max_kmh))} km/h"
+                f"{grip}")
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Verification":
@@ -203,3 +208,16 @@ class RunSummary:
                    verification=None if ver is None else Verification.from_dict(ver),
                    das=None if not das else DasSummary.from_dict(das),
                    distance_shares={str(k): float(v) for k, v in (regimes.get("distance_shares") or {}).items()})
+
+
+def _error(value: float, name: str) -> str:
+    """A re-simulation error with its sign, three decimals, or as many more as show it beyond its
+    tolerance (:data:`core.status.TOLERANCES`): a stop 1.0004 m off reads -1.0004, not -1.000."""
+    text = _beyond(value, TOLERANCES[name], signed(value, 3))
+    return text if text.startswith(("-", "+")) else "+" + text
+
+
+def _beyond(value: float, tolerance: float, within: str) -> str:
+    """``within`` (the value as written where it is within ``tolerance``), or the value with as many
+    decimals as show it beyond (:func:`core.status.past`, from three)."""
+    return within if abs(value) <= tolerance else past(value, tolerance, 3, "f")

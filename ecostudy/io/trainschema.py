@@ -39,6 +39,8 @@ class ForceTable(Strict):
     def _forces(cls, v: list[float]) -> list[float]:
         if min(v) < 0 or max(v) > 100000:
             raise ValueError("forces must lie in [0, 100000] kN")
+        if max(v) <= 0:  # a table of no force: no train moves (or stops) on it
+            raise ValueError("every force is 0 kN: a table that gives no force at any speed")
         return v
 
     @model_validator(mode="after")

@@ -37,8 +37,8 @@ from concurrent.futures import as_completed
 import numpy as np
 
 from ecostudy.core.errors import SolverError
-from ecostudy.core.simulate import TOLERANCES, outside
-from ecostudy.core.status import solver_part
+from ecostudy.core.simulate import outside
+from ecostudy.core.status import TOLERANCES, solver_part
 from ecostudy.core.registry import Registry
 from ecostudy.network.fleet import late_at_stops
 from ecostudy.network.joint import joint

@@ -129,7 +129,7 @@ def _after_ato(drive):
         row, overspeed = driven.row(train, prepared.segment.distance), overspeed_kmh(prepared.segment, driven)
         late = row["running_time_s"] - target if abs(row["stop_error_m"]) <= STOP_TOLERANCE_M else None  # off its stop: no arrival
         status = driven_run(row["stop_error_m"], late, overspeed, row.get("adhesion_use_max"),
-                            early_s=None if late is None else -late)
+                            early_s=None if late is None else -late, moving_kmh=to_kmh(float(driven.trace.v[-1])))
         if own is not None:  # the same checks, and how its own NLP ended
             status = worst([status, own])
         return _stored(driven, train, prepared.segment, status, target_s=target, overspeed_max_kmh=overspeed, **extra)

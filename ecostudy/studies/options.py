@@ -87,7 +87,8 @@ def check_options(*, where: str = "command line", spelled: Optional[Mapping[str,
     ``where`` and ``spelled`` (range name -> the name a caller gives it) name them as the Python API
     does (``arguments: running_time: ...``)."""
     lines = []
-    if dask is not None and not (isinstance(dask, str) and DASK_ADDRESS.fullmatch(dask)):
+    if dask is not None and not (isinstance(dask, str) and DASK_ADDRESS.fullmatch(dask)
+                                 and int(dask.rsplit(":", 1)[1]) <= 65535):
         option = spelled.get("dask", "dask") if spelled is not None else "--dask"
         lines.append(problem(where, option, f"expected a scheduler address tcp://host:port, got {dask!r}"))
     elif dask is not None and (trouble := unreachable(dask)) is not None:
