@@ -4,8 +4,10 @@
     .venv/bin/python bench/bench_gpops.py --ttobench PATH [--points 500 1000 2000]
 
 The case, as ``trainMain.m`` sets it: TTOBench track ``00_var_speed_limit_100`` (48 531 m, flat,
-140 / 100 / 140 km/h), the VIRM6 of TTOBench with its pneumatic brake removed and the regenerative
-brake as strong as the traction (213.9 kN, 3129.277 kW both ways), efficiencies 0.73 both ways,
+140 / 100 / 140 km/h), and ms-eetc's GPOPS-II train as ``trainMain.m`` writes it (not TTOBench's
+``NL_Intercity_VIRM6.json``, which has 2157 kW of traction, a 142.5 kN / 3616 kW regenerative brake,
+efficiencies 87.5 / 70 % and a 140 km/h top speed): no pneumatic brake, the regenerative brake as
+strong as the traction (213.9 kN, 3129.277 kW both ways), efficiencies 0.73 both ways,
 1 m/s at both ends, T = 1541 s, the net energy (traction / eta_T - eta_R x regenerated) minimised.
 The optimum is re-driven by the plant (DOP853) from 1 m/s to the end of the line; the table
 gives both energies and their difference from GPOPS-II.
