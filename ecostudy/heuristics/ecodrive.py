@@ -24,12 +24,16 @@ from ecostudy.heuristics.mareco import mareco as heuristic
 LAND_M = 0.01  # a rule of thumb's run stands this near its stop [m] (:func:`landed`)
 
 
-def drive(case, speeds):
-    """Handles realising a speed profile on the grid, and their simulation, the run's final braking
-    landed on the stop (:func:`landed`)."""
+def planned(case, speeds):
+    """Handles realising a speed profile on the grid, and their simulation, as planned (unlanded)."""
     ft, fb = kinematics.forces_for(speeds, case.segment, case.train, case.nodes)
     u = handles(case.train, speeds, ft, fb)
-    return landed(case, speeds, u, simulate(case.segment, case.train, case.nodes, u)[0])
+    return u, simulate(case.segment, case.train, case.nodes, u)[0]
+
+
+def drive(case, speeds):
+    """:func:`planned`, the run's final braking landed on the stop (:func:`landed`)."""
+    return landed(case, speeds, *planned(case, speeds))
 
 
 def eco_coasting(case, running_time, steps=10):
@@ -39,17 +43,13 @@ def eco_coasting(case, running_time, steps=10):
     def profile(c):
         return kinematics.coasting_profile(case.segment, case.train, case.nodes, case.limits, case.envelope, c)
 
-    def first_run(c):
-        speeds = profile(c)
-        ft, fb = kinematics.forces_for(speeds, case.segment, case.train, case.nodes)
-        return simulate(case.segment, case.train, case.nodes, handles(case.train, speeds, ft, fb))[0]
 
     last = len(case.nodes) - 1
     fastest = drive(case, profile(last))[1].arrival_time
     if fastest > running_time:  # the digits that tell them apart: not "cannot meet 71.8 s" for 71.75 s
         asked, itself = apart(running_time, fastest)
         raise InfeasibleError(f"eco-drive coasting cannot meet {asked} s: without coasting it arrives at {itself} s")
-    c = kinematics.earliest_coasting_point(lambda k: first_run(k).arrival_time <= running_time, last)
+    c = kinematics.earliest_coasting_point(lambda k: planned(case, profile(k))[1].arrival_time <= running_time, last)
     runs = {c: drive(case, profile(c))}
     for _ in range(steps):  # landed late: coast later
         if runs[c][1].arrival_time <= running_time or c >= last:
