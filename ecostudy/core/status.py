@@ -26,7 +26,7 @@ Adhesion, what "kept" means:
 """
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Iterable, Literal
+from typing import Any, Iterable, Literal
 
 from ecostudy.core.adhesion import TOLERANCE
 
@@ -208,6 +208,12 @@ def off_stop(error_m: float, tolerance_m: float, digits: int = 2) -> str:
     while digits < 4 and round(abs(error_m), digits) <= tolerance_m < abs(error_m):
         digits += 1
     return f"stopped {abs(error_m):.{digits}f} m {side} the stop (tolerance {tolerance_m:g} m)"
+
+
+def at_stop(stop_error_m: Any) -> Any:
+    """Whether a driven run stood within :data:`STOP_TOLERANCE_M` of its stop (numbers or arrays): only
+    then has it an arrival time, a saving or a gap; short of its stop or past it, it did another run."""
+    return abs(stop_error_m) <= STOP_TOLERANCE_M
 
 
 def driven_run(stop_error_m: float | None = None, late_s: float | None = None,

@@ -25,7 +25,7 @@ from ecostudy.core.errors import SolverError
 from ecostudy.core.modes import mode_name
 from ecostudy.core.progress import stage
 from ecostudy.core.simulate import Driven, simulate, worst_overspeed
-from ecostudy.core.status import STOP_TOLERANCE_M, driven_run, flagged, solver_part, worst
+from ecostudy.core.status import STOP_TOLERANCE_M, at_stop, driven_run, flagged, solver_part, worst
 from ecostudy.core.units import KMH, to_kmh, to_kwh
 from ecostudy.ocp import phases, session
 
@@ -174,7 +174,7 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     reason in ``flags``; ``solver`` says how the advice was made (e.g. ``optimal, re-simulated``)."""
     row = outcome.row(result.train, result.segment.distance)
     energies = {k: row[k] for k in ("traction_energy_kWh", "net_energy_kWh")}
-    arrived = abs(row["stop_error_m"]) <= STOP_TOLERANCE_M  # a run short of (or past) its stop has no time or gap
+    arrived = at_stop(row["stop_error_m"])  # a run short of (or past) its stop has no time or gap
     arrival_error = row["running_time_s"] - result.summary["running_time_s"] if arrived else None
     overspeed = to_kmh(worst_overspeed(result.segment, outcome.trace))
     grip = {} if "adhesion_use_max" not in row else {"adhesion_use_max": row["adhesion_use_max"]}

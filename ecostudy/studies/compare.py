@@ -22,7 +22,7 @@ from ecostudy.core.errors import EcostudyWarning, InfeasibleError, TooFastError,
 from ecostudy.core.registry import Registry
 from ecostudy.core.grid import make_segment
 from ecostudy.core.simulate import Driven, Trace, worst_overspeed
-from ecostudy.core.status import STOP_TOLERANCE_M, Status, driven_run, failed, status_word, worst
+from ecostudy.core.status import Status, at_stop, driven_run, failed, status_word, worst
 from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kmh
 from ecostudy.das.advice import das_phases, grid_note, nearest_levels
@@ -127,7 +127,7 @@ def _after_ato(drive):
         driven, extra, own = drive(case, train, prepared, ato)
         driven = replace(driven, name=case["strategy"])  # its row named as registered
         row, overspeed = driven.row(train, prepared.segment.distance), overspeed_kmh(prepared.segment, driven)
-        late = row["running_time_s"] - target if abs(row["stop_error_m"]) <= STOP_TOLERANCE_M else None  # off its stop: no arrival
+        late = row["running_time_s"] - target if at_stop(row["stop_error_m"]) else None  # off its stop: no arrival
         status = driven_run(row["stop_error_m"], late, overspeed, row.get("adhesion_use_max"),
                             early_s=None if late is None else -late, moving_kmh=to_kmh(float(driven.trace.v[-1])))
         if own is not None:  # the same checks, and how its own NLP ended
@@ -235,7 +235,7 @@ def compare_table(cases, rows):
     table.insert(5, "gap_to_optimum_pct", 100 * (table["traction_energy_kWh"] / e_opt - 1))
     table.insert(2, "arrival_error_s", table["running_time_s"] - target)
     # a strategy that stood short of the stop or past it did another run: no arrival, saving or gap read as a result
-    off = table["stop_error_m"].astype(float).abs() > STOP_TOLERANCE_M
+    off = ~at_stop(table["stop_error_m"].astype(float))
     table.loc[off, ["arrival_error_s", "saving_vs_all_out_pct", "gap_to_optimum_pct"]] = np.nan
     below = [grid_note(g, cases[0]["points"], what="this run") if status_word(st) == "ok" else ""
              for g, st in zip(table["gap_to_optimum_pct"], statuses)]
