@@ -314,3 +314,24 @@ def test_a_run_with_timing_windows_is_checked_on_its_own_grid(tmp_path):
     assert CliRunner().invoke(app, ["solve", str(study), "--no-plot", "--out", str(out)]).exit_code == 0
     r = CliRunner().invoke(app, ["check", str(out)])
     assert r.exit_code == 0 and "check: ok" in r.output, r.output
+
+
+@pytest.mark.parametrize("given, recorded, asked, said", [
+    (["--window", "100,110"], {"running_time_s": None, "supplement_percent": None, "window_s": [100.0, 110.0]},
+     {"window_s": [90, 105]}, "arrives 5.00 s after the window 90-105 s asked"),
+    (["--time", "110"], {"running_time_s": 110.0, "supplement_percent": None, "window_s": None},
+     {"running_time_s": 120}, "arrives 10.00 s before 120 s asked")])
+def test_the_timing_asked_is_kept_and_judged_again(tmp_path, given, recorded, asked, said):
+    """inputs.json keeps what the run was asked (objective, running time, supplement or window), so a
+    folder says what it answers; check judges the saved run's time against it: a record saying
+    another time than the profile's run keeps is flagged, exit 1."""
+    out = tmp_path / "o"
+    assert CliRunner().invoke(app, ["solve", str(STUDIES / "default.yaml"), "--points", "200", "--no-plot",
+                                    "--out", str(out), *given]).exit_code == 0
+    inputs = json.loads((out / "inputs.json").read_text())
+    assert inputs["timing"] == recorded and inputs["objective"] == "energy", inputs
+    assert inputs["study"] == str((STUDIES / "default.yaml").resolve()), inputs
+    assert CliRunner().invoke(app, ["check", str(out)]).exit_code == 0
+    (out / "inputs.json").write_text(json.dumps({**inputs, "timing": {**recorded, **asked}}))
+    r = CliRunner().invoke(app, ["check", str(out)])
+    assert r.exit_code == 1 and said in r.output, r.output

@@ -15,9 +15,10 @@ from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.kinematics import net_force_needed
 from ecostudy.core.simulate import verify, within_tolerances
-from ecostudy.core.status import OVERSPEED_TOLERANCE_KMH, Status, flagged, worst
-from ecostudy.core.types import Window
-from ecostudy.core.units import KMH, KWH
+from ecostudy.core.status import (EARLY_TOLERANCE_S, LATE_TOLERANCE_S, OVERSPEED_TOLERANCE_KMH, Status, flagged,
+                                   past, worst)
+from ecostudy.core.types import Timing, Window
+from ecostudy.core.units import KMH, KWH, PERCENT
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.io.results import SavedRun, check_unchanged, on_grid
 from ecostudy.io.runsummary import Verification
@@ -47,6 +48,46 @@ def windows_record(windows: Sequence[Window]) -> list[dict[str, Any]]:
     return [{"distance_m": w.distance, "earliest_s": w.earliest, "latest_s": w.latest,
              "min_speed_kmh": None if w.min_speed is None else w.min_speed / KMH,
              "max_speed_kmh": None if w.max_speed is None else w.max_speed / KMH} for w in windows]
+
+
+def timing_record(timing: Timing) -> dict[str, Any]:
+    """A run's timing as ``inputs.json`` keeps it (display units): the running time, supplement or
+    window asked, each null when not given (all null: the all-out run)."""
+    return {"running_time_s": timing.running_time,
+            "supplement_percent": None if timing.supplement is None else timing.supplement / PERCENT,
+            "window_s": None if timing.window is None else list(timing.window)}
+
+
+def asked_times(inputs: dict[str, Any], all_out_s: float | None, where: Path) -> tuple[float, float] | None:
+    """(earliest, latest) [s] the saved run was asked to arrive in (``inputs.json``'s ``timing``, a
+    supplement over the summary's all-out time ``all_out_s``), or None when it records none."""
+    record = inputs.get("timing")
+    if record is None:
+        return None
+    try:
+        if record.get("running_time_s") is not None:
+            return (float(record["running_time_s"]),) * 2
+        if record.get("window_s") is not None:
+            earliest, latest = map(float, record["window_s"])
+            return earliest, latest
+        if record.get("supplement_percent") is not None and all_out_s is not None:
+            return (float(all_out_s) * (1 + float(record["supplement_percent"]) * PERCENT),) * 2
+    except (AttributeError, TypeError, ValueError) as exc:
+        raise InputError(problem(where, "timing", f"not the timing a solve records ({exc!r})"))
+    return None
+
+
+def _missed_time(running_s: float, asked: tuple[float, float] | None) -> list[str]:
+    """The reason of a saved run arriving outside what it was asked (:func:`asked_times`)."""
+    if asked is None:
+        return []
+    late, early = running_s - asked[1], asked[0] - running_s
+    said = f"{asked[0]:g} s" if asked[0] == asked[1] else f"the window {asked[0]:g}-{asked[1]:g} s"
+    if late > LATE_TOLERANCE_S:
+        return [f"the saved run arrives {past(late, LATE_TOLERANCE_S, 2, 'f')} s after {said} asked (inputs.json timing)"]
+    if early > EARLY_TOLERANCE_S:
+        return [f"the saved run arrives {past(early, EARLY_TOLERANCE_S, 2, 'f')} s before {said} asked (inputs.json timing)"]
+    return []
 
 
 def _number(x: Any) -> float | None:
@@ -121,6 +162,8 @@ def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
     reasons += [f"re-simulated from the saved profile, the timing point at {w['distance_m']:g} m is missed "
                 f"({w['simulated_time_s']:.1f} s, {w['simulated_speed_kmh']:.1f} km/h)"
                 for w in block["windows"] if not w["kept"]]
+    reasons += _missed_time(totals["running_time_s"], asked_times(inputs, saved.summary.get("all_out_time_s"),
+                                                                   result_dir / "inputs.json"))
     over = (v - case.limits) / KMH
     if np.max(over) > OVERSPEED_TOLERANCE_KMH:
         k = int(np.argmax(over))

@@ -9,7 +9,7 @@ from typing import Any, Optional
 import pyomo.core as pyo  # not pyomo.environ: see ocp.solver.prepare
 
 from ecostudy import __version__
-from ecostudy.analysis.saved import windows_record
+from ecostudy.analysis.saved import timing_record, windows_record
 from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import Note, Report, listed, reported
@@ -159,7 +159,10 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
                                              "track_sha256": file_digest(paths[0]),
                                              "train_sha256": file_digest(paths[1]), "from": f, "to": t, "points": k,
-                                             "windows": windows_record(windows)})
+                                             "windows": windows_record(windows),
+                                             "study": None if study is None else str(Path(study).resolve()),
+                                             "objective": obj, "timing": timing_record(timing),
+                                             "weights": list(w) if obj == "mixed" else None, "das": das})
         write_run(result, out_dir, plot=plot, out=figures, drawer=drawer, files=("inputs.json",))
     return reported(out_dir, run_lines(result, out_dir))
 
