@@ -14,6 +14,11 @@ The constants are measured on this project's shared 2-core machine (so they are 
   ``python bench/bench_monte_carlo.py``, docs/closed_loop.md); SPPC nominal 59 ms (K = 200), two-step 147 ms (K = 100); RSPC 5.7 ms;
   convex 8.4 ms at K = 100; a replay (open loop, ATO) 0.8-1.1 ms: :data:`SAMPLE_SECONDS`, to two
   digits. SBPC and SPPC plan over the samples left, so their grid matters less than their variant.
+  SBPC's plan has a state on every sample to the arrival (k_f of them): at T_s = 0.38, 0.19 and
+  0.095 s (k_f = 200, 400, 800; whole trips, defaults) a sample took 117, 83 and 194 ms, multi
+  condensed 18, 22 and 142 ms (docs/guards.md, "SBPC at short samples"): its constants are at
+  k_f = 200 and scaled by (k_f / 200)^0.5, condensed ^1.5 (:func:`sbpc_scale`); SPPC's NLP is on
+  the space grid, its samples as dear at 0.095 s as at 0.38 s (47 and 68 ms).
   Those SBPC constants are with ``metro_terminal.yaml``'s DAS levels, reserves and terminal approach:
   SBPC nominal with those options took 683 ms a sample at K = 200 without deviations or noise (taken as
   0.8 s), with its defaults 95 and 72 ms a sample at K = 200 and 400, with DAS levels alone
