@@ -41,7 +41,7 @@ from ecostudy.io.yamlsafe import load_yaml  # noqa: E402
 from ecostudy.ocp.solver import configure  # noqa: E402
 from ecostudy.studies import batch, cases as run_cases, closedloop, heavyhaul, sizes  # noqa: E402
 from ecostudy.studies.estimate import (RUN_SECONDS_PER_POINT, check_closed_loop, check_network, first_runs,  # noqa: E402
-                                       run_seconds, spec_seconds)
+                                       horizon_samples, run_seconds, spec_seconds)
 from ecostudy.studies.network import expand_network  # noqa: E402
 from ecostudy.studies.workers import every_core  # noqa: E402
 
@@ -118,11 +118,12 @@ def bench_simulate(draws, path):
     by_kind = {}
     for case, estimate in zip(chosen, estimates):
         kind = closedloop.controller_spec(case)["kind"]
+        horizon = horizon_samples(case["window"][1], case["sample_time"])
         r = harness.sample(one_loop, case)
         by_kind.setdefault(kind, []).append(r["cpu_s"] / max(r["samples"], 1))
         table.add(case["labels"]["controller"], kind, case["labels"]["draw"], r["status"], r["samples"],
                   f"{r['cpu_s']:.2f}", f"{r['wall_s']:.2f}", f"{estimate:.2f}", f"{1e3 * by_kind[kind][-1]:.2f}",
-                  f"{1e3 * spec_seconds(case['controller'], case['points']):.2f}")
+                  f"{1e3 * spec_seconds(case['controller'], case['points'], horizon):.2f}")
     print("\nmean CPU a sample by kind (set-up included): " + ", ".join(
         f"{kind} {1e3 * np.mean(v):.2f} ms" for kind, v in by_kind.items()))
 

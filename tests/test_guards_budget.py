@@ -251,6 +251,44 @@ def test_sbpc_with_its_defaults_is_estimated_from_its_own_measurement():
                          "terminal_fit": False}, 200) == spec_seconds({"kind": "sbpc"}, 200)
 
 
+# CPU s a sample of one whole trip (draw 0, the Amsterdam case's 76 s window, fresh process, docs/guards.md)
+# at T_s = 0.38, 0.19 and 0.095 s: k_f = 200, 400 and 800 samples in SBPC's plan
+@pytest.mark.parametrize("spec, measured, times", [
+    ({"kind": "sbpc", "variant": "nominal", "block": 20}, {0.38: 0.117, 0.19: 0.083, 0.095: 0.194}, 2),
+    ({"kind": "sbpc", "variant": "multi", "block": 20, "transcription": "condensed"},
+     {0.38: 0.018, 0.19: 0.022, 0.095: 0.142}, 6),
+])
+def test_an_sbpc_sample_is_estimated_dearer_as_its_sample_time_shrinks(spec, measured, times):
+    """SBPC plans over every sample to the arrival: at a quarter of the sample time its NLP is four times
+    larger and a sample cost 1.7 (simultaneous) and 7.9 (condensed) times the CPU. The estimate was
+    the constant at any sample time (130 and 22 ms against 194 and 142 measured at 0.095 s); it stays
+    at 0.38 s and follows the plan's size below."""
+    from ecostudy.studies.estimate import SAMPLE_SECONDS, SBPC_PLAIN_SECONDS, horizon_samples, spec_seconds
+    estimate = {ts: spec_seconds(spec, 100, horizon_samples(76, ts)) for ts in measured}
+    assert estimate[0.38] == (SBPC_PLAIN_SECONDS if spec["variant"] == "nominal"
+                              else SAMPLE_SECONDS[("sbpc", "multi", "condensed")])
+    assert estimate[0.095] >= times * estimate[0.38]
+    assert measured[0.095] <= estimate[0.095] <= 2 * measured[0.095]
+    assert estimate[0.19] >= measured[0.19]
+
+
+@pytest.mark.parametrize("controller, sample_time, fragments", [
+    ({"kind": "sbpc", "variant": "multi", "block": 20, "transcription": "condensed"}, 0.01,
+     ["sbpc: 7,600 samples of 0.01 s at K = 100", "10.9 h", "one run"]),
+    ({"kind": "sbpc", "variant": "nominal", "block": 20}, 0.005,
+     ["sbpc: 15,200 samples of 0.005 s at K = 100", "4.8 h", "one run"]),
+])
+def test_an_sbpc_study_at_short_samples_is_refused_with_its_estimate(tmp_path, controller, sample_time, fragments):
+    """Estimated at the 0.38 s constant, these were accepted (2.8 min and 33 min) and would have run for
+    hours: each sample's NLP covers every sample to the arrival. Refused from the file alone, exit 2."""
+    doc = {"name": "k", "track": str(AMS), "train": str(METRO), "window_s": [0, 76], "points": 100,
+           "sample_time_s": sample_time, "controllers": [{"name": "sbpc", **controller}], "draws": 1,
+           "output": str(tmp_path / "out")}
+    r = run("simulate", write_yaml(tmp_path / "k.yaml", doc), "--no-progress", "--no-plot")
+    one_line(r, "k.yaml: controllers:", "give --force to run it anyway", *fragments)
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("nc, peak", [(24, 1.115e9), (12, 0.588e9)])
 def test_a_heavyhaul_run_memory_is_estimated_from_its_qp_matrices(nc, peak):
     """f = 1 (204 virtual cars), Np = 30: the process of its first samples peaked at ``peak`` bytes
@@ -298,7 +336,7 @@ def test_a_grid_larger_than_asked_is_said(tmp_path):
 
 @pytest.mark.parametrize("study, workers, fragments", [
     ("yazhemsky2017_closed_loop", 1, ["study: 3 controllers x 1 draws: 3 runs, an estimated 3.3 h of computing"]),
-    ("metro_terminal", 2, ["controllers: sbpc_nominal: 76,000 samples of 0.001 s at K = 200", "16.9 h", "one run"]),
+    ("metro_terminal", 2, ["controllers: sbpc_nominal: 76,000 samples of 0.001 s at K = 200", "14 days", "one run"]),
 ])
 def test_a_shipped_closed_loop_study_at_1_ms_samples_is_refused_with_its_estimate(tmp_path, study, workers, fragments):
     """Every controller of a shipped closed-loop study at 1 ms samples (200 000 on the 1 km trip's

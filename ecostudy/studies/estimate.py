@@ -14,6 +14,11 @@ The constants are measured on this project's shared 2-core machine (so they are 
   ``python bench/bench_monte_carlo.py``, docs/closed_loop.md); SPPC nominal 59 ms (K = 200), two-step 147 ms (K = 100); RSPC 5.7 ms;
   convex 8.4 ms at K = 100; a replay (open loop, ATO) 0.8-1.1 ms: :data:`SAMPLE_SECONDS`, to two
   digits. SBPC and SPPC plan over the samples left, so their grid matters less than their variant.
+  SBPC's plan has a state on every sample to the arrival (k_f of them): at T_s = 0.38, 0.19 and
+  0.095 s (k_f = 200, 400, 800; whole trips, defaults) a sample took 117, 83 and 194 ms, multi
+  condensed 18, 22 and 142 ms (docs/guards.md, "SBPC at short samples"): its constants are at
+  k_f = 200 and scaled by (k_f / 200)^0.5, condensed ^1.5 (:func:`sbpc_scale`); SPPC's NLP is on
+  the space grid, its samples as dear at 0.095 s as at 0.38 s (47 and 68 ms).
   Those SBPC constants are with ``metro_terminal.yaml``'s DAS levels, reserves and terminal approach:
   SBPC nominal with those options took 683 ms a sample at K = 200 without deviations or noise (taken as
   0.8 s), with its defaults 95 and 72 ms a sample at K = 200 and 400, with DAS levels alone
@@ -55,6 +60,7 @@ from ecostudy.core.grid import make_grid, make_segment, node_limits
 from ecostudy.io.loaders import track_from_schema, train_from_schema, validate
 from ecostudy.io import schemas
 from ecostudy.io.trainschema import SECONDS_PER_POINT_NODE
+from ecostudy.ocp.blocked import samples
 from ecostudy.ocp.problem import check_not_crawling, prepare
 
 LEG_SECONDS_PER_STEP = 0.12
@@ -66,6 +72,12 @@ SAMPLE_SECONDS = {  # [s] a sample, by (kind, variant[, transcription]) or kind
 REPLAY_SECONDS = 0.0012
 SBPC_PLAIN_SECONDS = 0.13  # [s] an SBPC nominal sample with none of SBPC_HANDLES (SAMPLE_SECONDS' are with them)
 SBPC_HANDLES = ("brake_reserve", "terminal_reserve")
+# SBPC's FHOCP runs over the k_f samples to the latest arrival (``ocp.blocked``: states on every
+# sample, a handle per block of L samples): its constants are at k_f = 200 (76 s at 0.38 s), and a
+# sample grows as (k_f / 200)^SBPC_GROWTH (never below the constant), by its transcription (the
+# sparse NLP by Ipopt, the dense block handles by SLSQP; :func:`sbpc_scale`)
+SBPC_MEASURED_HORIZON = 200
+SBPC_GROWTH = {"simultaneous": 0.5, "condensed": 1.5}
 CONVEX_SECONDS = 0.008         # [s] a convex sample's part that does not grow with K (the loop, the estimator)
 CONVEX_SECONDS_AT_200 = 0.0045  # [s] its SOCP's part at K = 200, growing as K^CONVEX_GROWTH
 CONVEX_GROWTH = 1.7
@@ -113,27 +125,42 @@ def check_solve(points, das=None, das_time_limit=DAS_TIME_LIMIT_S, tables=0):
     check_run("command line", field, what, run_seconds(points, das, das_time_limit, tables), run_bytes(points, tables))
 
 
-def sample_seconds(kind, points, variant="nominal", transcription="simultaneous"):
+def sbpc_scale(horizon, transcription="simultaneous"):
+    """How much dearer an SBPC sample is with a plan of ``horizon`` samples (k_f: the latest arrival
+    over the sample time, :func:`horizon_samples`) than with the k_f = 200 its constants were measured
+    at: (k_f / 200)^SBPC_GROWTH of its transcription, never below 1."""
+    return max(1.0, horizon / SBPC_MEASURED_HORIZON) ** SBPC_GROWTH[transcription]
+
+
+def horizon_samples(latest, sample_time):
+    """SBPC's k_f: the samples of ``sample_time`` to the ``latest`` arrival (``ocp.blocked.samples``)."""
+    return samples(latest, sample_time)
+
+
+def sample_seconds(kind, points, variant="nominal", transcription="simultaneous", horizon=SBPC_MEASURED_HORIZON):
     """Estimated computing of one closed-loop sample of a controller ``kind`` (its ``variant`` and
-    ``transcription`` where it has them) at ``points`` nodes, its set-up spread over its samples [s]."""
+    ``transcription`` where it has them) at ``points`` nodes, its set-up spread over its samples [s];
+    an SBPC sample scaled to its plan of ``horizon`` samples (:func:`sbpc_scale`)."""
     if kind == "convex":
         return CONVEX_SECONDS + CONVEX_SECONDS_AT_200 * (points / 200) ** CONVEX_GROWTH
+    scale = sbpc_scale(horizon, transcription) if kind == "sbpc" else 1.0
     for key in ((kind, variant, transcription), (kind, variant), kind):
         if key in SAMPLE_SECONDS:
-            return SAMPLE_SECONDS[key]
+            return SAMPLE_SECONDS[key] * scale
     return REPLAY_SECONDS
 
 
-def spec_seconds(spec, points):
+def spec_seconds(spec, points, horizon=SBPC_MEASURED_HORIZON):
     """:func:`sample_seconds` of a controller spec (a dict as a study file writes it, defaults left
-    out, or every field): SBPC nominal with blocks of 20 or longer and no reserves or terminal
-    approach at :data:`SBPC_PLAIN_SECONDS`, its other constants being measured with those and DAS
-    levels (``metro_terminal.yaml``)."""
+    out, or every field) with a plan of ``horizon`` samples (:func:`horizon_samples`): SBPC nominal
+    with blocks of 20 or longer and no reserves or terminal approach at :data:`SBPC_PLAIN_SECONDS`,
+    its other constants being measured with those and DAS levels (``metro_terminal.yaml``)."""
     kind, variant = spec.get("kind", "convex"), spec.get("variant", "nominal")
+    transcription = spec.get("transcription") or "simultaneous"
     if (kind, variant) == ("sbpc", "nominal") and spec.get("block", 20) >= 20 and not any(
             spec.get(handle) for handle in SBPC_HANDLES):
-        return SBPC_PLAIN_SECONDS
-    return sample_seconds(kind, points, variant, spec.get("transcription", "simultaneous"))
+        return SBPC_PLAIN_SECONDS * sbpc_scale(horizon, transcription)
+    return sample_seconds(kind, points, variant, transcription, horizon)
 
 
 def first_runs(study):
@@ -219,7 +246,8 @@ def check_closed_loop(cases, path):
             refuse_unless_forced(path, "deviations", f"{label}: the true train (mass x{truth['mass']:.3g}, resistance "
                                  f"x{truth['resistance']:.3g}, traction x{truth['traction']:.3g}) cannot reach the stop "
                                  f"({why}): the run would be simulated to the loop's cap of {cap:,.0f} s ({duration(cap)})")
-        per_sample = spec_seconds(case["controller"], case["points"])
+        per_sample = spec_seconds(case["controller"], case["points"],
+                                  horizon_samples(case["window"][1], case["sample_time"]))
         span = max(fastest, case["window"][1])
         samples = span / case["sample_time"]
         check_run(path, "controllers", f"{label}: {how_many(samples)} samples of {case['sample_time']:g} s", samples * per_sample)

@@ -43,8 +43,8 @@ from ecostudy.io.loopfile import SimulateFile
 from ecostudy.studies import closedloop
 from ecostudy.studies.batch import STUDY_KINDS
 from ecostudy.studies.journey import FRONT_COUNT
-from ecostudy.studies.estimate import (RUN_BYTES_PER_POINT, check_closed_loop, check_network, first_runs, run_seconds,
-                                       spec_seconds)
+from ecostudy.studies.estimate import (RUN_BYTES_PER_POINT, check_closed_loop, check_network, first_runs,
+                                       horizon_samples, run_seconds, spec_seconds)
 
 NETWORK_SECONDS_PER_STEP = 0.02
 # [bytes] a network command's process per grid point of its first runs: it keeps every segment's run
@@ -82,8 +82,9 @@ def check_closed_loop_study(path, workers=1, only=None, out=None):
     what = f"{len(chosen)} controllers x {s.draws} draws"
     per_run = []
     for c in chosen:
-        samples = s.window_s[1] / (c.sample_time_s or s.sample_time_s)
-        seconds = samples * spec_seconds(c.model_dump(), s.points)
+        sample_time = c.sample_time_s or s.sample_time_s
+        samples = s.window_s[1] / sample_time
+        seconds = samples * spec_seconds(c.model_dump(), s.points, horizon_samples(s.window_s[1], sample_time))
         check_run(path, "controllers", f"{c.name}: {how_many(samples)} samples of {c.sample_time_s or s.sample_time_s:g} s "
                   f"at K = {s.points}", seconds)
         per_run += [seconds] * s.draws
