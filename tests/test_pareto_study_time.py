@@ -124,3 +124,15 @@ def test_a_fronts_savings_from_points_not_ok_say_so(tmp_path):
     assert result.exit_code == 1, result.output
     line = next(x for x in result.output.splitlines() if x.startswith("all-out "))
     assert line.endswith("(of the all-out traction energy: points not ok among them, read their status)"), line
+
+
+def test_a_study_time_at_the_all_out_time_has_no_marginal_saving(tmp_path):
+    """`supplement_percent: 0` is the all-out run again: its arrival multiplier is a degenerate
+    problem's (it read 118 kWh per second on a 10.95 kWh run), so, as the all-out row, no marginal
+    saving; a point 1 % over it has one of a sane size."""
+    invoke(["pareto", str(study(tmp_path, supplement_percent=0, points=300)), "--out", str(tmp_path / "f"), *SMALL])
+    table = pd.read_csv(tmp_path / "f" / "pareto.csv")
+    own = table[table["is_study_time"]].iloc[0]
+    assert own["supplement_pct"] == pytest.approx(0.0, abs=1e-6) and np.isnan(own["marginal_saving_kWh_per_s"]), table
+    assert np.isnan(table["marginal_saving_kWh_per_s"].iloc[0])
+    assert table["marginal_saving_kWh_per_s"].iloc[-1] == pytest.approx(0.48, abs=0.3), table

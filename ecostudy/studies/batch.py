@@ -15,7 +15,7 @@ from typing import Callable, Iterable, NamedTuple, Optional
 import pandas as pd
 
 from ecostudy.core.defaults import DAS_TIME_LIMIT_S
-from ecostudy.analysis.single import ALL_OUT_SOLVER, solve_run
+from ecostudy.analysis.single import ALL_OUT_SOLVER, solve_run, with_all_out
 from ecostudy.core.budget import check_study
 from ecostudy.core.registry import Registry
 from ecostudy.core.interrupt import Interrupted, held
@@ -93,8 +93,7 @@ def _solve_case(case):
     if case.get("das"):
         summary["das"] = das_columns(r, case["das"], case["points"], case.get("das_time_limit_s", DAS_TIME_LIMIT_S))
         status = worst([status, advice_status(summary["das"])])
-    if t_allout is not None:
-        summary["all_out_time_s"] = t_allout
+    with_all_out(summary, t_allout)
     if case.get("profile"):  # the speed profile, for a figure drawn from the store (a front's)
         summary["profile"] = {k: r.profile[k].tolist() for k in ("position_m", "speed_kmh")}
     return status.kind, status.reason or None, summary

@@ -30,9 +30,10 @@ from ecostudy.studies.workers import ticker, worker_pool
 WARM_START = IPOPT["pareto_warm"]
 
 
-def _chain(case, times, objective, options, verify_result, warm, tick=None):
+def _chain(case, times, objective, options, verify_result, warm, tick=None, t_allout=None):
     """Energy-optimal results at ``times`` [s], one model and NL file for the whole chain
-    (``tick(n)``: n more points solved, in this process)."""
+    (``tick(n)``: n more points solved, in this process; ``t_allout``: the all-out time [s], which a
+    point at it is, with no marginal energy: ``analysis.single.AT_ALL_OUT``)."""
     tick = tick or (lambda n: None)
     if not warm:  # every point on its own, exactly as `ecostudy solve --time T` would
         results = []
@@ -55,8 +56,8 @@ def _chain(case, times, objective, options, verify_result, warm, tick=None):
             if i == 0:  # a cold start failed: nothing better to try
                 raise SolverError(f"Ipopt failed at running time {t:.2f} s ({outcome.status})")
             # a warm start that fails is retried cold: a fresh chain from this point on
-            return results + _chain(case, times[i:], objective, options, verify_result, warm, tick)
-        results.append(finish(case, m, outcome, point_stages, objective, None, verify_result))
+            return results + _chain(case, times[i:], objective, options, verify_result, warm, tick, t_allout)
+        results.append(finish(case, m, outcome, point_stages, objective, t_allout, verify_result))
         tick(1)
     return results
 
@@ -120,12 +121,13 @@ def sweep(track, train, from_stop, to_stop, count=20, supplement_max=0.40, point
     chunks = _split(times, max(1, min(workers, len(times))))
     if len(chunks) > 1:
         with worker_pool(len(chunks)) as pool:
-            futures = {pool.submit(_chain, case, c, objective, options, verify_result, warm): len(c) for c in chunks}
+            futures = {pool.submit(_chain, case, c, objective, options, verify_result, warm, None, t_allout): len(c)
+                       for c in chunks}
             for future in as_completed(futures):
                 tick(futures[future])
             parts = [future.result() for future in futures]
     else:
-        parts = [_chain(case, chunks[0], objective, options, verify_result, warm, tick)] if chunks else []
+        parts = [_chain(case, chunks[0], objective, options, verify_result, warm, tick, t_allout)] if chunks else []
     results = [allout] + [r for part in parts for r in part]
     table = front_table([(r.summary, r.status) for r in results], t_allout)
     table.attrs["wall_s"] = time.perf_counter() - t0
