@@ -84,7 +84,8 @@ def test_the_energy_statistics_are_over_the_runs_that_arrived(tmp_path):
         for how in ("mean", "min", "max"):
             name = with_statistic(column, how)
             assert row[name] == pytest.approx(getattr(came[column], how)(), rel=1e-4), name
-        assert row[with_statistic(column, "std")] == pytest.approx(came[column].std(ddof=0), rel=1e-4)  # runs.csv: 6 digits
+        # runs.csv keeps 6 digits
+        assert row[with_statistic(column, "std")] == pytest.approx(came[column].std(ddof=0), rel=1e-4)
         assert row[with_statistic(column, "mean")] > replayed[column].mean() * 1.05  # the short trip left out
         assert stuck[[with_statistic(column, how) for how in ("mean", "std", "min", "max")]].isna().all(), stuck
     assert row["stop_error_min_m"] == pytest.approx(replayed["stop_error_m"].min())  # every run's
