@@ -8,7 +8,7 @@ With ``--draws N``: the stop over N random draws (``studies/metro_terminal.yaml`
 to N: mass, resistance, traction and braking uniform within +-10 %, DAS levels, Yazhemsky 2017
 Ch. 10 noise, one sample of computation delay), per controller of the study: the stop error (max
 |e|, median), the arrival against the timetable (median, max), the energy per kg against the same
-controller on the model train without noise (mean ratio), the statuses and the wall time of a
+controller on the model train without noise (mean ratio, over the runs that arrived), the statuses and the wall time of a
 run; per run (stderr) the lateness split in two: the plan part (the earliest stand on the mark
 from the true state where the terminal approach's first handle acts, coasting then braking in
 full on the draw's own brake, against the timetable) and the approach part (the run's stand
@@ -161,8 +161,10 @@ def draws_row(name, model, runs, arrival):
     """One table row: ``model`` the run on the model train (None: no energy ratio), ``runs`` [(row, wall)] the draws."""
     s = [r["summary"] for r, _ in runs if r["summary"]]
     e = np.array([x["stop_error_m"] for x in s])
-    late = np.array([x["arrival_s"] for x in s]) - arrival
-    ratio = np.array([x["energy_J_per_kg"] for x in s]) / (model["summary"]["energy_J_per_kg"] if model else np.nan)
+    late = np.array([x["arrival_s"] for x in s], float) - arrival
+    # the energy of the runs that arrived, as aggregate.csv's (a run short of its stop made no trip)
+    ratio = (np.array([x["energy_J_per_kg"] for x in s]) / (model["summary"]["energy_J_per_kg"] if model else np.nan))[
+        ~np.isnan(late)]
     statuses = {k: sum(r["status"] == k for r, _ in runs) for k in ("ok", "flagged", "failed")}
     return (f"| {name} | {len(s)} of {len(runs)} | {np.max(np.abs(e)):.3f} / {signed(np.median(e), 3)} | "
             f"{int(np.sum(np.abs(e) <= 1.0))} | {signed(np.median(late), 2)} / {signed(np.max(late), 2)} | "

@@ -41,7 +41,7 @@ log = logging.getLogger("ecostudy")
 
 # each printed table's columns, with the format of each number column whose digits .4g would vary
 # (84 beside 84.06, -2.789e-06 m): None, the table's own
-LOOP_COLUMNS = {"controller": None, "runs": None, "ok": None, "traction_energy_mean_kWh": ".3f",
+LOOP_COLUMNS = {"controller": None, "runs": None, "ok": None, "arrived": None, "traction_energy_mean_kWh": ".3f",
                 "traction_energy_std_kWh": ".3f",
                 "arrival_mean_s": ".2f", "arrival_max_s": ".2f", "stop_error_min_m": ".3f", "stop_error_max_m": ".3f",
                 "overspeed_max_max_kmh": ".2f", "solve_mean_mean_ms": ".1f", "solve_p95_max_ms": ".1f",

@@ -242,16 +242,30 @@ def not_ok(runs):
     return ~runs["status"].isin(["ok", "missing"])
 
 
+ARRIVED_ONLY = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s")  # statistics over the runs that arrived
+
+
+def arrived_rows(group):
+    """The rows of the runs that arrived: those with an arrival time (:func:`summarise`: a train that
+    stood short of its stop, never left it or was not computed has none)."""
+    return pd.to_numeric(group["arrival_s"], errors="coerce").notna()
+
+
 def aggregate(runs):
-    """Per controller: the number of runs and of runs ok, and mean, spread and worst case of the
-    energy, arrival, stop error, overspeed and solve times."""
+    """Per controller: the number of runs, of runs ok and of runs that arrived, the mean, spread and
+    extremes of the energy and the arrival over the runs that arrived (a trip not made has no energy
+    of a trip: NaN where none arrived), of the stop error over every run, and the worst overspeed,
+    lateness and solve times."""
     rows = []
     for name, group in runs.groupby("controller", sort=False):
         if (group["status"] == "missing").all():  # not run (``--only``): no row of NaNs
             continue
-        row = {"controller": name, "runs": len(group), "ok": int((group["status"] == "ok").sum())}
-        for column in ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "stop_error_m"):
+        came = arrived_rows(group)
+        row = {"controller": name, "runs": len(group), "ok": int((group["status"] == "ok").sum()),
+               "arrived": int(came.sum())}
+        for column in (*ARRIVED_ONLY, "stop_error_m"):
             values = pd.to_numeric(group[column], errors="coerce")
+            values = values[came] if column in ARRIVED_ONLY else values
             row.update({with_statistic(column, how): getattr(values, how)(**({"ddof": 0} if how == "std" else {}))
                         for how in ("mean", "std", "min", "max")})
         for column, how in (("overspeed_max_kmh", "max"), ("late_s", "max"), ("solve_mean_ms", "mean"),
