@@ -97,6 +97,7 @@ def test_rspc_runs_at_its_own_sample_time_and_only_runs_what_it_is_asked(tmp_pat
     first = runner.invoke(app, ["simulate", str(path), "--out", str(out), "--no-progress", "--only", "rspc"])
     assert first.exit_code == 1, first.output
     assert "not run yet: 2 runs of replayed" in first.output
+    assert "2 runs: 0 already stored, 2 computed now (0 failed); not ok: 0" in first.output, first.output  # the 2 not run said apart
     left = json.loads((out / "summary.json").read_text())
     assert left["status"].startswith("flagged") and "not computed yet" in left["status"], left["status"]
     assert left["cases"] == {"total": 4, "ok": 2, "flagged": 2, "failed": 0}, left["cases"]

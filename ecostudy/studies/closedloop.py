@@ -298,7 +298,8 @@ def simulate_study(path, workers=1, dask=None, retry_failed=False, out=None, pro
     done = []
     ran = run_expanded("simulate", Expanded(output, cases), path, workers, dask, retry_failed, out, progress,
                        loop_files(draw, drawn_names, done), compute, SIMULATE)
-    counts = {**ran.counts, "missing": int((ran.table["status"] == "missing").sum())}  # left out by ``only``
+    missing = int((ran.table["status"] == "missing").sum())  # left out by ``only``: flagged as not computed,
+    counts = {**ran.counts, "missing": missing, "not_ok": ran.counts["not_ok"] - missing}  # said on a line of their own
     return done[0]._replace(counts=counts)
 
 
