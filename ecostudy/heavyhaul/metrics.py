@@ -40,8 +40,12 @@ AT_LIMIT = 0.99  # dynamic braking at this share of its limit or more is "at the
 # rail's grip; the plant's own arithmetic is exact (with adhesion on it clips the effort to the grip)
 ADHESION = adhesion.TOLERANCE
 # the plant's energy balance closes within 1.6e-4 of traction on every plant and shipped line (the
-# integrator's error, docs/heavyhaul.md): a residual beyond 0.1 % means the run is not to be trusted
+# integrator's error, docs/heavyhaul.md): a residual beyond 0.1 % of the balance's largest term
+# (:func:`balance_scale`) means the run is not to be trusted
 BALANCE = 1e-3
+# ... the scale at least this [kWh]: a train that barely moves has terms of 1e-23 kWh, and the integrator
+# keeps each work only to an absolute plant.ATOL_WORK = 1 J per step (a few kJ over a run of 1000 samples)
+BALANCE_FLOOR_KWH = 1.0
 
 
 class Tolerances(NamedTuple):
@@ -52,7 +56,7 @@ class Tolerances(NamedTuple):
     arrival: float = 0.05      # later than the reference's running time by this share of it [-] ...
     arrival_s: float = 60.0    # ... and by more than this [s]
     adhesion: float = ADHESION  # a locomotive's effort over mu(v) m g by more than this share [-]
-    balance: float = BALANCE   # the energy balance's residual beyond this share of the traction's work [-]
+    balance: float = BALANCE   # the energy balance's residual beyond this share of its scale (balance_scale) [-]
 
 
 def braking_samples(efforts, locomotives):
@@ -170,6 +174,17 @@ def energy_balance(record):
     return out
 
 
+BALANCE_TERMS = ("traction", "dynamic_brake", "wagon_brake", *LOSSES, "stored_change")  # each a ``NAME_kWh`` metric
+
+
+def balance_scale(metrics):
+    """(name, size [kWh]) of the energy balance's largest term (:data:`BALANCE_TERMS`, by magnitude),
+    at least :data:`BALANCE_FLOOR_KWH` ("at least" then): what its residual is measured against."""
+    sizes = {name.replace("_", " "): abs(metrics.get(f"{name}_kWh", 0.0)) for name in BALANCE_TERMS}
+    name = max(sizes, key=sizes.__getitem__)
+    return (name, sizes[name]) if sizes[name] >= BALANCE_FLOOR_KWH else ("the floor, every term being smaller", BALANCE_FLOOR_KWH)
+
+
 def run_ins(forces, threshold=RUN_IN):
     """(run-ins, run-outs) of every coupler: its force going from draft (>= ``threshold``) to buff
     (<= -``threshold``) and back, over a history ``forces`` (points, couplers) [N]."""
@@ -254,11 +269,11 @@ def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
                    f"{metrics['adhesion_use_kmh']:.1f} km/h, {metrics['adhesion_use_time_s']:.0f} s, head at "
                    f"{metrics['adhesion_use_head_m']:.0f} m, which the plant does not limit (adhesion: false): "
                    "set adhesion: true or lower the locomotives' envelopes")  # no ';': it parts the reasons
-    residual, traction = metrics.get("balance_residual_kWh", 0.0), metrics.get("traction_kWh", 0.0)
-    if abs(residual) > tolerances.balance * traction:
-        share = f"{100 * abs(residual) / traction:.2g} % of the {traction:.0f} kWh of traction" if traction else "no traction"
-        out.append(f"the energy balance does not close: residual {residual:.2f} kWh, {share} (tolerance "
-                   f"{100 * tolerances.balance:g} % of traction): the plant's integration is not to be trusted")
+    residual, (name, scale) = metrics.get("balance_residual_kWh", 0.0), balance_scale(metrics)
+    if abs(residual) > tolerances.balance * scale:
+        out.append(f"the energy balance does not close: residual {residual:.2f} kWh, {100 * abs(residual) / scale:.2g} % "
+                   f"of the {scale:.0f} kWh of {name} (tolerance {100 * tolerances.balance:g} % of the balance's "
+                   f"largest term, at least {BALANCE_FLOOR_KWH:g} kWh): the plant's integration is not to be trusted")
     if over_budget_count:
         out.append(f"{over_budget_count} solves over Ts (the previous input was held)")
     return out
