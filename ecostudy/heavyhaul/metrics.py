@@ -219,6 +219,15 @@ def in_train_metrics(history, consist):
             "rainflow_cycles_over_100kN_count": float(sum(n for c in cycles for r, _, n in c if r >= 100 * KN))}
 
 
+def closing_metrics(closest, consist):
+    """The most compressed coupling of a run (the plant's ``closest``, a
+    :class:`~ecostudy.heavyhaul.plant.Closing`): its compression [m], which coupler (1: behind the
+    head car), how far behind the head's front [m], when [s], and its coupled spacing [m]."""
+    return {"compression_max_m": closest.compression, "compression_coupler": closest.coupler + 1,
+            "compression_position_m": float(np.cumsum(consist.length)[closest.coupler]),  # its cars' ends meet there
+            "compression_time_s": closest.time, "compression_spacing_m": closest.spacing}
+
+
 def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
     """Why a run is not ok (empty: ok); ``samples`` the cap it ran under."""
     out = []
@@ -259,6 +268,11 @@ def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
     if metrics["force_max_kN"] > metrics["force_limit_kN"]:
         out.append(f"largest coupler force {past(metrics['force_max_kN'], metrics['force_limit_kN'], 1, 'f')} kN above the consist's "
                    f"{metrics['force_limit_kN']:g} kN limit")
+    if metrics.get("compression_max_m", 0.0) >= metrics.get("compression_spacing_m", np.inf):
+        out.append(f"coupler {metrics['compression_coupler']} ({metrics['compression_position_m']:.0f} m behind the head) "
+                   f"closed {metrics['compression_max_m']:.2f} m at {metrics['compression_time_s']:.0f} s, its cars' "
+                   f"{metrics['compression_spacing_m']:.2f} m spacing or more: the cars would pass through each other "
+                   "(the couplers are far too soft for the forces)")
     if metrics["speed_excess_kmh"] * KMH > tolerances.speed_mps:
         out.append(f"a car ran {past(metrics['speed_excess_kmh'], tolerances.speed_mps / KMH, 1, 'f')} km/h over the line's limit "
                    f"(tolerance {tolerances.speed_mps / KMH:g} km/h)")
