@@ -80,7 +80,7 @@ def test_an_energy_balance_that_does_not_close_is_a_reason():
     assert reasons({**good, "balance_residual_kWh": 3.6}, 100, 0) == []
     assert reasons({**good, "balance_residual_kWh": -20315.9}, 100, 0) == [
         "the energy balance does not close: residual -20315.90 kWh, 88 % of the 23012 kWh of traction (tolerance "
-        "0.1 % of traction): the plant's integration is not to be trusted"]
+        "0.1 % of the balance's largest term, at least 1 kWh): the plant's integration is not to be trusted"]
     assert reasons({**good, "balance_residual_kWh": 3.6}, 100, 0, Tolerances(balance=1e-4))[0].startswith(
         "the energy balance does not close: residual 3.60 kWh, 0.016 % of the 23012 kWh")
 

@@ -3,6 +3,7 @@ without breaking a coupler, and does the horizon fit the trip."""
 import numpy as np
 
 from ecostudy.core.physics import GRAVITY
+from ecostudy.heavyhaul.loop import STANDING
 
 
 def ruling_grade(segment, train_length, step=50.0):
@@ -27,18 +28,20 @@ def starting_coupler_force(consist, grade):
 def reference_problems(reference, segment, tolerance):
     """What makes a reference (:class:`~ecostudy.heavyhaul.reference.Reference`) unfollowable on
     ``segment``: it ends before (or beyond) the stop by more than a metre, does not start from rest
-    or stop at the stop (by more than ``tolerance`` [m/s]), stands on the way, or asks for more than
-    the train's limit at the head by more than ``tolerance``. A list of messages (empty: fine)."""
+    or stop at the stop (faster than :data:`~ecostudy.heavyhaul.loop.STANDING`, the speed under which
+    a train stands, whatever the overspeed tolerance), stands on the way, or asks for more than the
+    train's limit at the head by more than ``tolerance`` [m/s]. A list of messages (empty: fine)."""
     out = []
     end = float(reference.distance[-1])
     if abs(end - segment.distance) > 1.0:
         out.append(f"ends at {end:.0f} m but the stop is at {segment.distance:.0f} m (the table must cover the route)")
     v = np.asarray(reference.speeds, float)
-    if v[0] > tolerance:
-        out.append(f"starts at {3.6 * v[0]:.0f} km/h: the train starts from rest (0 at {reference.distance[0]:.0f} m)")
-    if v[-1] > tolerance:
-        out.append(f"ends at {3.6 * v[-1]:.0f} km/h at {end:.0f} m: a run to a stop ends at 0 there (the train "
-                   "would run past the stop)")
+    if v[0] >= STANDING:
+        out.append(f"starts at {3.6 * v[0]:.3g} km/h: the train starts from rest (0 at {reference.distance[0]:.0f} m; "
+                   f"standing is under {3.6 * STANDING:g} km/h)")
+    if v[-1] >= STANDING:
+        out.append(f"ends at {3.6 * v[-1]:.3g} km/h at {end:.0f} m: a run to a stop ends at 0 there (standing is under "
+                   f"{3.6 * STANDING:g} km/h; the train would run past the stop)")
     standing = np.flatnonzero(v[1:-1] <= 0.0)
     if standing.size:
         out.append(f"0 km/h at {reference.distance[standing[0] + 1]:.0f} m: the train would stand there, short of "

@@ -40,8 +40,12 @@ AT_LIMIT = 0.99  # dynamic braking at this share of its limit or more is "at the
 # rail's grip; the plant's own arithmetic is exact (with adhesion on it clips the effort to the grip)
 ADHESION = adhesion.TOLERANCE
 # the plant's energy balance closes within 1.6e-4 of traction on every plant and shipped line (the
-# integrator's error, docs/heavyhaul.md): a residual beyond 0.1 % means the run is not to be trusted
+# integrator's error, docs/heavyhaul.md): a residual beyond 0.1 % of the balance's largest term
+# (:func:`balance_scale`) means the run is not to be trusted
 BALANCE = 1e-3
+# ... the scale at least this [kWh]: a train that barely moves has terms of 1e-23 kWh, and the integrator
+# keeps each work only to an absolute plant.ATOL_WORK = 1 J per step (a few kJ over a run of 1000 samples)
+BALANCE_FLOOR_KWH = 1.0
 
 
 class Tolerances(NamedTuple):
@@ -52,7 +56,7 @@ class Tolerances(NamedTuple):
     arrival: float = 0.05      # later than the reference's running time by this share of it [-] ...
     arrival_s: float = 60.0    # ... and by more than this [s]
     adhesion: float = ADHESION  # a locomotive's effort over mu(v) m g by more than this share [-]
-    balance: float = BALANCE   # the energy balance's residual beyond this share of the traction's work [-]
+    balance: float = BALANCE   # the energy balance's residual beyond this share of its scale (balance_scale) [-]
 
 
 def braking_samples(efforts, locomotives):
@@ -170,6 +174,17 @@ def energy_balance(record):
     return out
 
 
+BALANCE_TERMS = ("traction", "dynamic_brake", "wagon_brake", *LOSSES, "stored_change")  # each a ``NAME_kWh`` metric
+
+
+def balance_scale(metrics):
+    """(name, size [kWh]) of the energy balance's largest term (:data:`BALANCE_TERMS`, by magnitude),
+    at least :data:`BALANCE_FLOOR_KWH` ("at least" then): what its residual is measured against."""
+    sizes = {name.replace("_", " "): abs(metrics.get(f"{name}_kWh", 0.0)) for name in BALANCE_TERMS}
+    name = max(sizes, key=sizes.__getitem__)
+    return (name, sizes[name]) if sizes[name] >= BALANCE_FLOOR_KWH else ("the floor, every term being smaller", BALANCE_FLOOR_KWH)
+
+
 def run_ins(forces, threshold=RUN_IN):
     """(run-ins, run-outs) of every coupler: its force going from draft (>= ``threshold``) to buff
     (<= -``threshold``) and back, over a history ``forces`` (points, couplers) [N]."""
@@ -202,6 +217,15 @@ def in_train_metrics(history, consist):
             "fatigue_damage": float(damages.sum()), "fatigue_damage_max": float(damages.max()),
             "fatigue_damage_coupler": int(np.argmax(damages)) + 1,
             "rainflow_cycles_over_100kN_count": float(sum(n for c in cycles for r, _, n in c if r >= 100 * KN))}
+
+
+def closing_metrics(closest, consist):
+    """The most compressed coupling of a run (the plant's ``closest``, a
+    :class:`~ecostudy.heavyhaul.plant.Closing`): its compression [m], which coupler (1: behind the
+    head car), how far behind the head's front [m], when [s], and its coupled spacing [m]."""
+    return {"compression_max_m": closest.compression, "compression_coupler": closest.coupler + 1,
+            "compression_position_m": float(np.cumsum(consist.length)[closest.coupler]),  # its cars' ends meet there
+            "compression_time_s": closest.time, "compression_spacing_m": closest.spacing}
 
 
 def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
@@ -244,6 +268,11 @@ def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
     if metrics["force_max_kN"] > metrics["force_limit_kN"]:
         out.append(f"largest coupler force {past(metrics['force_max_kN'], metrics['force_limit_kN'], 1, 'f')} kN above the consist's "
                    f"{metrics['force_limit_kN']:g} kN limit")
+    if metrics.get("compression_max_m", 0.0) >= metrics.get("compression_spacing_m", np.inf):
+        out.append(f"coupler {metrics['compression_coupler']} ({metrics['compression_position_m']:.0f} m behind the head) "
+                   f"closed {metrics['compression_max_m']:.2f} m at {metrics['compression_time_s']:.0f} s, its cars' "
+                   f"{metrics['compression_spacing_m']:.2f} m spacing or more: the cars would pass through each other "
+                   "(the couplers are far too soft for the forces)")
     if metrics["speed_excess_kmh"] * KMH > tolerances.speed_mps:
         out.append(f"a car ran {past(metrics['speed_excess_kmh'], tolerances.speed_mps / KMH, 1, 'f')} km/h over the line's limit "
                    f"(tolerance {tolerances.speed_mps / KMH:g} km/h)")
@@ -254,11 +283,11 @@ def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
                    f"{metrics['adhesion_use_kmh']:.1f} km/h, {metrics['adhesion_use_time_s']:.0f} s, head at "
                    f"{metrics['adhesion_use_head_m']:.0f} m, which the plant does not limit (adhesion: false): "
                    "set adhesion: true or lower the locomotives' envelopes")  # no ';': it parts the reasons
-    residual, traction = metrics.get("balance_residual_kWh", 0.0), metrics.get("traction_kWh", 0.0)
-    if abs(residual) > tolerances.balance * traction:
-        share = f"{100 * abs(residual) / traction:.2g} % of the {traction:.0f} kWh of traction" if traction else "no traction"
-        out.append(f"the energy balance does not close: residual {residual:.2f} kWh, {share} (tolerance "
-                   f"{100 * tolerances.balance:g} % of traction): the plant's integration is not to be trusted")
+    residual, (name, scale) = metrics.get("balance_residual_kWh", 0.0), balance_scale(metrics)
+    if abs(residual) > tolerances.balance * scale:
+        out.append(f"the energy balance does not close: residual {residual:.2f} kWh, {100 * abs(residual) / scale:.2g} % "
+                   f"of the {scale:.0f} kWh of {name} (tolerance {100 * tolerances.balance:g} % of the balance's "
+                   f"largest term, at least {BALANCE_FLOOR_KWH:g} kWh): the plant's integration is not to be trusted")
     if over_budget_count:
         out.append(f"{over_budget_count} solves over Ts (the previous input was held)")
     return out

@@ -88,6 +88,15 @@ class CascadeStep(NamedTuple):
 LOSSES = ("running_resistance", "curve_resistance", "grade", "coupler_damping", "draft_gear")  # CascadeStep.losses
 
 
+class Closing(NamedTuple):
+    """The most compressed coupling so far, by its compression over its coupled spacing l_i."""
+
+    compression: float = 0.0  # how much shorter than l_i the two cars' centres came [m] (> 0 compressed)
+    coupler: int = 0          # which (0: behind the head car)
+    time: float = 0.0         # when [s]
+    spacing: float = np.inf   # its l_i [m]: compressed more, the cars' centres pass each other
+
+
 class CascadePlant:
     """One consist (:class:`ecostudy.core.types.Consist`) on one segment (its gradient profile)."""
 
@@ -106,6 +115,7 @@ class CascadePlant:
         self.history = []  # per step: (times [s], coupler forces [N] (points, couplers)) at the integrator's points
         self.n = consist.cars
         self.spacing = 0.5 * (consist.length[:-1] + consist.length[1:])
+        self.closest = Closing(spacing=float(self.spacing[0]) if self.n > 1 else np.inf)  # most compressed (:meth:`closing`)
         self.loco = np.array([k == "locomotive" for k in consist.kinds])
         self.traction_limits = self._limits(consist.traction)
         self.dynamic_limits = self._limits(consist.dynamic_brake)
@@ -315,6 +325,7 @@ class CascadePlant:
         p, v, works = sol.y[:n, -1], sol.y[n:2 * n, -1], sol.y[2 * n:, -1]
         forces = np.array([self.coupler_forces(sol.y[:n, k], sol.y[n:2 * n, k]) for k in range(sol.y.shape[1])])
         self.history.append((sol.t, forces.astype(np.float32)))
+        self.closing(sol.t, sol.y[:n])
         heads = sol.y[0] + 0.5 * self.consist.length[0]
         excess = float(np.max(np.max(sol.y[n:2 * n], axis=0) - self.segment.limit(heads)))
         brakes, commanded, sent = (None, None, ()) if pipe is None else (pipe.at(dt), pipe.current,
@@ -322,6 +333,16 @@ class CascadePlant:
         return CascadeStep(CascadeState(p, v, t0 + dt, brakes, commanded, sent), forces[-1], float(np.abs(forces).max()),
                            *map(float, works[:3]), excess, tuple(map(float, works[3:])),
                            self.adhesion_use(sol.t, sol.y[:n], sol.y[n:2 * n], requested, levels), levels)
+
+    def closing(self, times, positions):
+        """Keep in :attr:`closest` the most compressed coupling at ``times`` [s] (``positions``
+        (cars, points) [m]) if more so, relative to its spacing, than the one kept."""
+        if self.n < 2:
+            return
+        share = 1.0 - (positions[:-1] - positions[1:]) / self.spacing[:, None]
+        j, k = np.unravel_index(np.argmax(share), share.shape)
+        if share[j, k] > self.closest.compression / self.closest.spacing:  # 0 / inf: none kept yet
+            self.closest = Closing(float(share[j, k] * self.spacing[j]), int(j), float(times[k]), float(self.spacing[j]))
 
     def holding_brakes(self, positions, creep):
         """The wagons' brake forces [N, <= 0; 0 for a locomotive] that hold the train standing at

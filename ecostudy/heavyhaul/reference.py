@@ -193,12 +193,15 @@ def optimal_reference(consist, track, from_stop, to_stop, running_time=None, sup
 
 def _bad_row(distance_m, speed_kmh):
     """The first bad row of a speed-distance table as (row, column, what), rows numbered as a spreadsheet
-    shows them (the header is row 1), or None: the distances increase, no value is below 0, the speed is
-    0 only at single points (a train that stands never arrives)."""
+    shows them (the header is row 1), or None: the distances start at 0 (the start stop: they are
+    measured from it, and the run's clock and roll-back start there) and increase, no value is below
+    0, the speed is 0 only at single points (a train that stands never arrives)."""
     columns = {"distance_m": np.asarray(distance_m, float), "speed_kmh": np.asarray(speed_kmh, float)}
     distance, speed = columns["distance_m"], columns["speed_kmh"]
-    found = [(i + 1, "distance_m", f"{distance[i + 1]:g} after {distance[i]:g}: the distances must increase")
-             for i in np.flatnonzero(np.diff(distance) <= 0)[:1]]
+    found = [(0, "distance_m", f"{distance[0]:g}: the first distance must be 0 (the start stop; the distances "
+              "are measured from it)")] if distance.size and distance[0] > 0 else []
+    found += [(i + 1, "distance_m", f"{distance[i + 1]:g} after {distance[i]:g}: the distances must increase")
+              for i in np.flatnonzero(np.diff(distance) <= 0)[:1]]
     found += [(i, column, f"{values[i]:g} is below 0") for column, values in columns.items()
               for i in np.flatnonzero(values < 0)[:1]]
     found += [(i + 1, "speed_kmh", "0 after 0: the speed may be 0 only at single points (a train that stands "

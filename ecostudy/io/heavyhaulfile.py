@@ -56,6 +56,16 @@ class Weights(Strict):
     speed: float = Field(60.0, ge=0, le=WEIGHT_MAX, description="K_v, on speed tracking [per (m/s)^2].")
     energy: float = Field(10.0, ge=0, le=WEIGHT_MAX, description="K_e, on efforts [per kN^2 / 1e4].")
 
+    @model_validator(mode="after")
+    def _objective(self) -> Self:
+        if self.force == self.speed == self.energy == 0:  # K_b multiplies K_e's wagon term: it adds nothing
+            raise ValueError("force, speed and energy are all 0: eq. 4's objective is identically 0 whatever "
+                             "brake_penalty is (every input optimal)")
+        if self.speed == 0:
+            raise ValueError("speed is 0: K_v's tracking term is the only one that moves the train (the others "
+                             "cost forces and efforts), so every run would stand to the sample cap")
+        return self
+
 
 class HeavyhaulFile(Strict):
     file_kind: ClassVar[str | None] = "heavy-haul study"

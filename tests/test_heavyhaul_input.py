@@ -1,0 +1,78 @@
+"""What a heavy-haul study refuses before computing, and the checks on a run's physics that its
+inputs alone cannot settle: a reference table off the start stop or not standing at its ends
+(whatever the overspeed tolerance), weights that cannot drive a run, a coupling closed by its
+cars' spacing, and the energy balance's scale."""
+import pandas as pd
+import pytest
+
+from ecostudy.heavyhaul.metrics import reasons
+
+from .conftest import load_yaml, write_yaml
+from .test_heavyhaul_status import invoke, reference_table, refused
+from .test_heavyhaul_study import PAPER, study
+
+
+def test_a_reference_table_not_starting_at_the_start_stop_is_refused(tmp_path):
+    """A table from 500 m was run against a clock with no time for its first 500 m and flagged
+    with a roll back of 486 m that never happened: refused, the row named."""
+    rows = [(500, 0), (700, 20), (1100, 40), (4500, 40), (4800, 20), (5000, 0)]
+    refused(invoke(study(tmp_path, reference=reference_table(tmp_path, rows)), tmp_path / "out"),
+            "ref.csv", "distance_m, row 2", "500: the first distance must be 0")
+
+
+@pytest.mark.parametrize("rows, words", [
+    ([(0, 0), (200, 45), (4800, 45), (5000, 40)], ["reference.table", "ends at 40 km/h at 5000 m", "run past the stop"]),
+    ([(0, 40), (200, 45), (4800, 45), (5000, 0)], ["reference.table", "starts at 40 km/h", "from rest"]),
+    ([(0, 0), (200, 45), (4800, 45), (5000, 0.1)], ["reference.table", "ends at 0.1 km/h", "under 0.072 km/h"]),
+])
+def test_a_reference_not_standing_at_its_ends_is_refused_whatever_the_overspeed_tolerance(tmp_path, rows, words):
+    """speed_tolerance_kmh is how far a car may run over the limit; a table ending at 40 km/h under a
+    45 km/h one ran to the sample cap past the stop. Standing is the loop's (under 0.02 m/s)."""
+    path = study(tmp_path, reference=reference_table(tmp_path, rows), speed_tolerance_kmh=45)
+    refused(invoke(path, tmp_path / "out"), *words)
+
+
+@pytest.mark.parametrize("changes, words", [
+    ({"weights": {"force": 0, "speed": 0, "energy": 0}, "brake_penalty": [0]},
+     ["weights", "force, speed and energy are all 0", "identically 0"]),
+    ({"weights": {"force": 10, "speed": 0, "energy": 10}}, ["weights", "speed is 0", "sample cap"]),
+])
+def test_weights_that_cannot_drive_a_run_are_refused(tmp_path, changes, words):
+    refused(invoke(study(tmp_path, **changes), tmp_path / "out"), *words)
+
+
+def test_a_coupling_closed_by_its_cars_spacing_flags_the_run(tmp_path):
+    """2 + 20 + 2 cars with couplers of 1 N/m on the 5 km line: the cars' centres pass each other
+    (a coupling 37 m shorter than its 12.07 m spacing); flagged, where and how much said. The
+    consist's own couplers (10 488 kN/m) close centimetres."""
+    consist = load_yaml(PAPER)
+    consist["vehicles"] = [{"type": "locomotive", "count": 2}, {"type": "wagon", "count": 20},
+                           {"type": "locomotive", "count": 2}]
+    consist["couplers"]["stiffness_kN_per_m"] = 0.001
+    write_yaml(tmp_path / "soft.yaml", consist)
+    result = invoke(study(tmp_path, consist=str(tmp_path / "soft.yaml"), brake_penalty=[1]), tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    assert run["status"] == "flagged" and run["compression_spacing_m"] == pytest.approx(12.07)
+    assert run["compression_max_m"] > run["compression_spacing_m"]
+    assert (f"coupler {run['compression_coupler']} ({run['compression_position_m']:.0f} m behind the head) closed "
+            f"{run['compression_max_m']:.2f} m") in run["reason"]
+    assert "12.07 m spacing or more: the cars would pass through each other" in run["reason"]
+
+
+def test_the_energy_balance_is_measured_against_its_largest_term_at_least_a_floor():
+    """A train that never moved (every term about 1e-23 kWh, no traction) is not flagged for a
+    residual of the same size; a residual is measured against the largest term (here the grade)
+    and, below the floor, against the floor."""
+    good = {"arrived": True, "ended": "at the stop", "stop_error_m": 0.1, "force_max_kN": 900.0, "force_limit_kN": 2000.0,
+            "speed_excess_kmh": 0.0, "arrival_late_s": 10.0, "arrival_late_pct": 1.0}
+    still = {**good, "traction_kWh": 0.0, "coupler_damping_kWh": 4.7e-23, "balance_residual_kWh": -4.8e-23}
+    assert reasons(still, 100, 0) == []
+    assert reasons({**still, "balance_residual_kWh": -0.5}, 100, 0) == [
+        "the energy balance does not close: residual -0.50 kWh, 50 % of the 1 kWh of the floor, "
+        "every term being smaller (tolerance 0.1 % of the balance's largest term, at least 1 kWh): the plant's "
+        "integration is not to be trusted"]
+    falling = {**good, "traction_kWh": 100.0, "grade_kWh": -3000.0}
+    assert reasons({**falling, "balance_residual_kWh": 2.0}, 100, 0) == []  # 0.07 % of the grade's 3000 kWh
+    assert reasons({**falling, "balance_residual_kWh": 4.0}, 100, 0)[0].startswith(
+        "the energy balance does not close: residual 4.00 kWh, 0.13 % of the 3000 kWh of grade")
