@@ -207,3 +207,8 @@ def forces_for(speeds: FloatArray, segment: Segment, train: Train, nodes: FloatA
     ft = np.clip(need, 0.0, np.minimum(train.traction.force(v0), train.traction.force(v1)))
     fb = np.clip(-need, 0.0, np.minimum(train.braking.force(v0), train.braking.force(v1)))
     return ft, fb
+
+
+def samples(running_time: float, sample_time: float) -> int:
+    """k_f = floor(t_f / T_s) (Farooqi 2018 §4.1)."""
+    return int(np.floor(running_time / sample_time + 1e-9))

@@ -32,7 +32,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.grid import warn_unmodelled
-from ecostudy.core.kinematics import clock, point_resistance
+from ecostudy.core.kinematics import clock, point_resistance, samples  # noqa: F401 (samples: k_f, here too)
 from ecostudy.core.physics import Envelope, davis_resistance, interval_resistance, moving_share
 from ecostudy.core.types import State
 from ecostudy.core.units import FloatArray
@@ -41,11 +41,6 @@ from ecostudy.ocp.session import Options, Outcome, Session
 from ecostudy.ocp.solver import Model, Var
 from ecostudy.ocp.space import gc_paused
 from ecostudy.ocp.timedomain import FORCE_SCALE
-
-
-def samples(running_time: float, sample_time: float) -> int:
-    """k_f = floor(t_f / T_s) (Farooqi 2018 §4.1)."""
-    return int(np.floor(running_time / sample_time + 1e-9))
 
 
 def time_guess(case: Case, speeds_on_nodes: FloatArray, kf: int, ts: float) -> tuple[FloatArray, FloatArray]:

@@ -60,7 +60,6 @@ from ecostudy.core.grid import make_grid, make_segment, node_limits
 from ecostudy.io.loaders import track_from_schema, train_from_schema, validate
 from ecostudy.io import schemas
 from ecostudy.io.trainschema import SECONDS_PER_POINT_NODE
-from ecostudy.ocp.blocked import samples
 from ecostudy.ocp.problem import check_not_crawling, prepare
 
 LEG_SECONDS_PER_STEP = 0.12
@@ -133,8 +132,9 @@ def sbpc_scale(horizon, transcription="simultaneous"):
 
 
 def horizon_samples(latest, sample_time):
-    """SBPC's k_f: the samples of ``sample_time`` to the ``latest`` arrival (``ocp.blocked.samples``)."""
-    return samples(latest, sample_time)
+    """SBPC's k_f: the samples of ``sample_time`` to the ``latest`` arrival (``core.kinematics.samples``;
+    inf where a sample time too small makes their number overflow)."""
+    return kinematics.samples(latest, sample_time) if np.isfinite(latest / sample_time) else np.inf
 
 
 def sample_seconds(kind, points, variant="nominal", transcription="simultaneous", horizon=SBPC_MEASURED_HORIZON):
