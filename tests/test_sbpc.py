@@ -9,7 +9,8 @@ from ecostudy.control.sbpc import Sbpc
 from ecostudy.core.physics import moving_share
 from ecostudy.core.plant import Plant
 from ecostudy.core.types import State, Timing
-from ecostudy.ocp.blocked import handle_at, samples, set_blocked_start, set_objective
+from ecostudy.core.kinematics import samples
+from ecostudy.ocp.blocked import handle_at, set_blocked_start, set_objective
 from ecostudy.ocp.problem import prepare
 
 TS = 1.52  # four of the thesis's samples: k_f = 50 keeps the loop short

@@ -21,7 +21,8 @@ import time
 
 from ecostudy.control.fallback import Fallback
 from ecostudy.core.types import State
-from ecostudy.ocp.blocked import Blocked, samples, time_guess
+from ecostudy.core.kinematics import samples
+from ecostudy.ocp.blocked import Blocked, time_guess
 from ecostudy.ocp.condensed import Condensed
 from ecostudy.ocp.session import WARM_START
 from ecostudy.ocp.solver import IPOPT

@@ -32,7 +32,7 @@ import numpy as np
 import pyomo.environ as pyo
 
 from ecostudy.core.grid import warn_unmodelled
-from ecostudy.core.kinematics import clock, point_resistance, samples  # noqa: F401 (samples: k_f, here too)
+from ecostudy.core.kinematics import clock, point_resistance
 from ecostudy.core.physics import Envelope, davis_resistance, interval_resistance, moving_share
 from ecostudy.core.types import State
 from ecostudy.core.units import FloatArray
