@@ -166,3 +166,27 @@ def test_a_line_power_with_its_sign_flipped_or_dead_is_warned_and_left_out(input
     assert table["logged_line_traction_kWh"].isna().all() and (table["model_line_traction_kWh"] > 50).all(), table
     result = calibrate_logs([log], *inputs, ("mass", "efficiency"), draws=0)
     assert result.reason.startswith("efficiency not identifiable from these logs"), result.reason
+
+
+def map_train(tmp_path):
+    """The regional train's file with a flat traction efficiency map beside its constant."""
+    data = yaml.safe_load(TRAIN.read_text())
+    data["traction_efficiency_map"] = {"speed_kmh": [0, 70, 140], "force_kN": [0, 150, 300],
+                                       "efficiency": [[0.88] * 3] * 3}
+    path = tmp_path / "mapped.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def test_a_fitted_efficiency_replaces_the_train_file_map_saying_so(tmp_path, there):
+    """The fit compares a constant efficiency with the logged line power; the calibrated file kept
+    the map beside the fitted constant, and the net energy uses the map (5 % low on the audit's
+    logs). Now the map is left out, with a warning naming it."""
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there)
+    result = run("calibrate", tmp_path / "a.csv", "--train", map_train(tmp_path), "--fit", "mass,efficiency",
+                 "--bootstrap", 0, "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 0, result.output
+    assert "mapped.yaml: traction_efficiency_map: left out of the calibrated train" in result.output, result.output
+    calibrated = load_train(tmp_path / "o" / "mapped_calibrated.yaml")
+    assert calibrated.traction_efficiency_map is None and calibrated.eta_traction == calibrated.traction_efficiency
+    assert abs(calibrated.traction_efficiency - load_train(TRAIN).traction_efficiency) < 0.01
