@@ -190,3 +190,17 @@ def test_a_fitted_efficiency_replaces_the_train_file_map_saying_so(tmp_path, the
     calibrated = load_train(tmp_path / "o" / "mapped_calibrated.yaml")
     assert calibrated.traction_efficiency_map is None and calibrated.eta_traction == calibrated.traction_efficiency
     assert abs(calibrated.traction_efficiency - load_train(TRAIN).traction_efficiency) < 0.01
+
+
+def test_a_regeneration_efficiency_of_a_train_without_regenerative_braking_is_refused(tmp_path, there):
+    """Its prior is 0: the fit ran, its reason printed a 310-digit percentage. Now one line, exit 2,
+    before computing."""
+    data = yaml.safe_load(TRAIN.read_text())
+    del data["regenerative_braking"]
+    (tmp_path / "noregen.yaml").write_text(yaml.safe_dump(data))
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there)
+    result = run("calibrate", tmp_path / "a.csv", "--train", tmp_path / "noregen.yaml", "--fit",
+                 "mass,regeneration_efficiency", "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 2 and not (tmp_path / "o").exists(), result.output
+    assert "error: command line: --fit: regeneration_efficiency: the train file " in result.output
+    assert "has no regenerative_braking" in result.output and "Traceback" not in result.output

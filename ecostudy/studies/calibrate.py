@@ -45,6 +45,16 @@ def parse_fit(text):
     return names
 
 
+def check_fit_train(names, train, train_path):
+    """A parameter in ``names`` that the train file does not have refused in one line: a regeneration
+    efficiency without ``regenerative_braking`` (nothing in the logs could inform it, and its prior 0
+    leaves no scale to report it against)."""
+    if "regeneration_efficiency" in names and train.regeneration is None:
+        raise InputError(problem("command line", "--fit", f"regeneration_efficiency: the train file {train_path} has "
+                                 "no regenerative_braking, so there is no regeneration efficiency to fit (leave it "
+                                 "out of --fit, or add regenerative_braking to the train file)"))
+
+
 def _loaded(load, path, log, field):
     """``load(path)``; a problem with a file the log's header named (``log``, else None) is said as
     the header's: ``LOG: header: train: FILE: what is wrong``."""
@@ -116,6 +126,7 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
     ``saving_draws`` (a count) also the savings against the logged driving (``savings.csv``)."""
     names = parse_fit(fit)
     logs, track, train, track_path, train_path = load_inputs(log_paths, train_path, track_path)
+    check_fit_train(names, train, train_path)
     calibrated = Path(out) / f"{train_path.stem}_calibrated.yaml"
     asked = ("savings.csv",) if saving_draws is not None else ()
     out = check_output_dir(out, (*CALIBRATE_FILES, calibrated.name, *asked, *figures), "calibrate")
