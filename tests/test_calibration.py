@@ -664,6 +664,20 @@ def test_a_column_ecostudy_does_not_model_is_warned_by_name_and_ignored():
         parse_log(good().replace("force_kN", "speed_mph"), "mph.csv")
 
 
+@pytest.mark.parametrize("extra, values, named, why", [
+    ("line_voltage_V", ",1500.0", "line_voltage_V", "no line_current_A column"),
+    ("line_current_A", ",200.0", "line_current_A", "no line_voltage_V or line_voltage_kV column"),
+    ("power_line_kW,line_voltage_V,line_current_A", ",1500.0,1500.0,1000.0", "line_voltage_V, line_current_A",
+     "the line power column power_line_kW is used")])
+def test_a_line_voltage_or_current_the_line_power_is_not_made_of_is_warned_by_name(extra, values, named, why):
+    """A voltage without a current was read and silently unused (no line power, no efficiency)."""
+    text = good().replace("force_kN\n", f"force_kN,{extra}\n").replace(",100\n", f",100{values}\n")
+    with pytest.warns(EcostudyWarning, match=f"volts.csv: {named}: left out") as caught:
+        log = parse_log(text, "volts.csv")
+    assert len(caught) == 1 and why in str(caught[0].message)
+    assert (log.power_line is None) == ("power_line_kW" not in extra)
+
+
 def test_header_fields_ecostudy_does_not_know_are_warned_by_name_and_left_out():
     """A data logger's header says more than the format models (the vehicle, the recorder): each
     such field is named in one warning with the file and left out; the log reads as without them.

@@ -45,7 +45,7 @@ from ecostudy.core.physics import gradient_force
 from ecostudy.core.types import Track
 from ecostudy.core.units import FloatArray
 from ecostudy.io.documents import Where, named_file, not_a_file, validate
-from ecostudy.io.logforce import check_force_power, check_line_power, check_plausible
+from ecostudy.io.logforce import check_force_power, check_line_power, check_plausible, warn_unused_electric
 from ecostudy.io.logheader import COLUMNS, QUANTITIES, LogHeader, known_header, split_header
 from ecostudy.io.writers import atomic_write
 from ecostudy.io.yamlsafe import MAX_FILE_BYTES
@@ -323,6 +323,8 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
     line = column["power_line"][1] if "power_line" in column else None
     if line is None and "voltage" in column and "current" in column:
         line = column["voltage"][1] * column["current"][1]
+    elif "voltage" in column or "current" in column:
+        warn_unused_electric(path, column)
 
     def get(q: str) -> FloatArray | None:
         return column[q][1] if q in column else None

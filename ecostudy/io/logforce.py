@@ -115,3 +115,14 @@ def check_line_power(path: Where, line_name: str, v: FloatArray | None, force: F
                                  f"chain gives {lo:g}-{hi:g}): the line power, voltage or current is in another "
                                  "unit or scale than its name says"))
     return line
+
+
+def warn_unused_electric(path: Where, column: dict[str, tuple[str, FloatArray]]) -> None:
+    """Warn of a line voltage or current the line power is not made of: one without the other, or
+    both beside a line power column (which is used)."""
+    given = [column[q][0] for q in ("voltage", "current") if q in column]
+    why = (f"left out: the line power column {column['power_line'][0]} is used" if "power_line" in column else
+           f"left out: the line power needs both a line voltage and a line current "
+           f"(no {'line_current_A' if 'voltage' in column else 'line_voltage_V or line_voltage_kV'} column), "
+           "so this log has no line power")
+    warnings.warn(problem(path, ", ".join(given), why), EcostudyWarning, stacklevel=3)
