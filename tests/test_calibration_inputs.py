@@ -204,3 +204,15 @@ def test_a_regeneration_efficiency_of_a_train_without_regenerative_braking_is_re
     assert result.exit_code == 2 and not (tmp_path / "o").exists(), result.output
     assert "error: command line: --fit: regeneration_efficiency: the train file " in result.output
     assert "has no regenerative_braking" in result.output and "Traceback" not in result.output
+
+
+def test_auxiliary_power_in_the_line_power_is_flagged_with_what_it_draws(inputs, there):
+    """200 kW of auxiliaries in the line power pulled the fitted efficiency from 0.8536 to 0.798, its
+    interval 0.797-0.799 and `ok`. The line draws it while the wheels draw nothing: now flagged."""
+    track, train = inputs
+    clean = calibrate_logs([parse_log(text_of(there), "clean.csv")], track, train, ["efficiency"], draws=0)
+    assert "wheels draw none" not in clean.reason
+    frame = there.assign(power_line_kW=there["power_line_kW"] + 200.0)
+    flagged = calibrate_logs([parse_log(text_of(frame), "aux.csv")], track, train, ["efficiency"], draws=0)
+    assert flagged.status == "flagged" and "aux: power_line_kW draws 200 kW (median over" in flagged.reason, flagged.reason
+    assert "while the wheels draw none (standing, coasting)" in flagged.reason

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, coefficients, over_envelope, over_limit
+from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, auxiliary_power, coefficients, over_envelope, over_limit
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.progress import stage
 from ecostudy.io.logfile import scale_problem
@@ -176,6 +176,8 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     reasons += [f"{run.log} run {run.index}: {why}" for run in problem.runs
                 if (why := over_limit(run.t, run.x, run.v, track))]
     reasons += [f"{log.name}: {why}" for log in logs for why in (over_envelope(log, train), scale_problem(log)) if why]
+    if {"efficiency", "regeneration_efficiency"} & set(free):
+        reasons += [f"{log.name}: {why}" for log in logs if (why := auxiliary_power(log))]
     reasons += [f"{n} fitted at its bound 0 (the logs would have it below): its interval is not a fit's, and the "
                 "other parameters absorb what the model misses" for n in free if theta[n] <= 1e-9 * abs(problem.prior[n])]
     reasons += [f"{n} {theta[n]:.4g} above 1: the wheel work is more than the line energy logged (a line power, "

@@ -84,6 +84,7 @@ class LoggedRun:
     path: Path | None = None
     columns: tuple[str, ...] = field(default=())  # (position, speed, force, wheel power column) as the file names them
     resolution: dict[str, float] = field(default_factory=dict)  # quantity -> its column's last digit [SI] (last_digit)
+    line_column: str = ""  # the line power's column(s) as the file names them
 
     def named(self, field: str) -> Path:
         """The header's ``track`` or ``train`` file, relative to the log's folder; one not given or not
@@ -335,8 +336,10 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
                     {COLUMNS[n][0]: last_digit(data[:, j]) * COLUMNS[n][1] for j, n in enumerate(names)})
     check_series(log, path)
     check_force_power(path, log.columns[1:], v, log.force, log.power_wheel)
-    log.power_line = check_line_power(path, column["power_line"][0] if "power_line" in column else
-                                      "line_voltage, line_current", v, log.force, log.power_wheel, line)
+    log.line_column = (column["power_line"][0] if "power_line" in column else
+                       f"{column['voltage'][0]} x {column['current'][0]}" if line is not None else "")
+    log.power_line = check_line_power(path, log.line_column or "line_voltage, line_current", v, log.force,
+                                      log.power_wheel, line)
     check_plausible(path, names, data, COLUMNS)
     return log
 
