@@ -8,7 +8,8 @@ its prior) or the residuals are bad: the replayed speed off the logged one by mo
 something the logs show), or a logged run broke the line's speed limit
 (:func:`~ecostudy.calibration.replay.over_limit`: a driver keeps to it, so the log is not a driven run
 of this line as the track file gives it), or a log pulled beyond the train file's traction envelope
-(:func:`~ecostudy.calibration.replay.over_envelope`), or a fitted efficiency is above 1.
+(:func:`~ecostudy.calibration.replay.over_envelope`), or a fitted efficiency is above 1, or a fitted
+efficiency absorbs auxiliary power (:func:`~ecostudy.calibration.replay.auxiliary_power`).
 """
 import warnings
 from dataclasses import dataclass, field, replace
