@@ -216,3 +216,16 @@ def test_auxiliary_power_in_the_line_power_is_flagged_with_what_it_draws(inputs,
     flagged = calibrate_logs([parse_log(text_of(frame), "aux.csv")], track, train, ["efficiency"], draws=0)
     assert flagged.status == "flagged" and "aux: power_line_kW draws 200 kW (median over" in flagged.reason, flagged.reason
     assert "while the wheels draw none (standing, coasting)" in flagged.reason
+
+
+def test_a_wheel_power_off_in_scale_from_the_force_is_flagged_naming_both(inputs, there):
+    """A wheel power 10 % above force times speed (1.10, within the unit check's 0.8-1.25) was fitted
+    `ok`, the mass taking it up (+10 %). Now flagged naming both columns; the generated log is not."""
+    track, train = inputs
+    clean = calibrate_logs([parse_log(text_of(there), "clean.csv")], track, train, list(DEFAULT_FIT), draws=0)
+    assert "power_wheel_kW is" not in clean.reason, clean.reason
+    frame = there.assign(power_wheel_kW=there["power_wheel_kW"] * 1.1,
+                         power_line_kW=there["power_line_kW"] * 1.1)
+    flagged = calibrate_logs([parse_log(text_of(frame), "w10.csv")], track, train, list(DEFAULT_FIT), draws=0)
+    assert flagged.status == "flagged", flagged.reason
+    assert "w10: power_wheel_kW is 1.101 times force_kN times speed_mps" in flagged.reason, flagged.reason

@@ -21,6 +21,7 @@ from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, auxiliary_power, co
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.progress import stage
 from ecostudy.io.logfile import scale_problem
+from ecostudy.io.logforce import force_power_problem
 from ecostudy.calibration.fit import (
     MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, identify, informing, scales, train_with, width_if_fitted,
 )
@@ -176,7 +177,8 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
         reasons.append(f"{drift_reason(quality['structure_ratio'])}: the model misses something the logs show")
     reasons += [f"{run.log} run {run.index}: {why}" for run in problem.runs
                 if (why := over_limit(run.t, run.x, run.v, track))]
-    reasons += [f"{log.name}: {why}" for log in logs for why in (over_envelope(log, train), scale_problem(log)) if why]
+    reasons += [f"{log.name}: {why}" for log in logs for why in (over_envelope(log, train), scale_problem(log), force_power_problem(log))
+                if why]
     if {"efficiency", "regeneration_efficiency"} & set(free):
         reasons += [f"{log.name}: {why}" for log in logs if (why := auxiliary_power(log))]
     reasons += [f"{n} fitted at its bound 0 (the logs would have it below): its interval is not a fit's, and the "
