@@ -229,3 +229,16 @@ def test_a_wheel_power_off_in_scale_from_the_force_is_flagged_naming_both(inputs
     flagged = calibrate_logs([parse_log(text_of(frame), "w10.csv")], track, train, list(DEFAULT_FIT), draws=0)
     assert flagged.status == "flagged", flagged.reason
     assert "w10: power_wheel_kW is 1.101 times force_kN times speed_mps" in flagged.reason, flagged.reason
+
+
+def test_one_log_exported_twice_with_rows_trimmed_is_refused(tmp_path, there):
+    """The same run with 25 rows cut at its start and 10 at its end (another export) was fitted as a
+    second run (the same-samples check needs the same row count). Now refused naming both."""
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there)
+    write_log(tmp_path / "b.csv", {"track": str(TRACK), "train": str(TRAIN)}, there.iloc[25:-10])
+    result = run("calibrate", tmp_path / "a.csv", tmp_path / "b.csv", "--bootstrap", 0, "--no-plot",
+                 "--out", tmp_path / "o")
+    assert result.exit_code == 2 and not (tmp_path / "o").exists(), result.output
+    rows = len(there) - 35
+    assert f"b.csv: its rows 1-{rows} are the samples of {tmp_path / 'a.csv'}'s rows 26-{rows + 25} (one logged run" \
+        in result.output, result.output

@@ -25,6 +25,7 @@ from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.io.documents import split_selector
 from ecostudy.io.loaders import check_fits, load_track, load_train
 from ecostudy.io.logfile import check_on_track, check_traction_sign, load_log, repeats
+from ecostudy.io.logoverlap import overlap
 from ecostudy.io.trainout import calibrated_document, write_train
 from ecostudy.core.status import Status, flagged
 from ecostudy.io.folder import write_summary
@@ -108,6 +109,14 @@ def load_inputs(log_paths, train_path, track_path):
                                          "log's start, positions and speeds in SI, within the last digits the files "
                                          "write): one logged run given twice would narrow every interval as if it "
                                          "were two"))
+            shared = overlap(log, other)
+            if shared is not None:
+                raise InputError(problem(log.path or log.name, "", f"its rows {shared.first + 1}-{shared.first + shared.rows} "
+                                         f"are the samples of {other.path or other.name}'s rows {shared.other_first + 1}-"
+                                         f"{shared.other_first + shared.rows}" + (f", its clock {abs(shared.offset):g} s "
+                                         f"{'later' if shared.offset > 0 else 'earlier'}" if shared.offset else "")
+                                         + " (one logged run exported twice, trimmed): fitted as two, the shared "
+                                         "samples would narrow every interval as if they were two runs"))
     track_path = Path(track_path) if track_path else logs[0].named("track")
     train_path = Path(train_path) if train_path else logs[0].named("train")
     for field, path, given in (("track", track_path, given_track), ("train", train_path, given_train)):
