@@ -190,10 +190,10 @@ def calibrate_folder(logs: Sequence[Path] | Path | str, train: Optional[Path] = 
     ``progress`` watches the fit, each bootstrap draw and each optimal run of the savings
     (:mod:`ecostudy.core.progress`). ``logs`` is one path or a sequence of them."""
     check_options(bootstrap=bootstrap, savings=savings)
-    logs = [logs] if isinstance(logs, (str, PathLike)) else logs
+    paths: Sequence[Path | str] = [logs] if isinstance(logs, (str, PathLike)) else logs
     figures = output(fig_format, dpi)
     with watched(progress):
-        result, summary = calibrate_study(logs, train, track, fit, out, bootstrap, savings,
+        result, summary = calibrate_study(paths, train, track, fit, out, bootstrap, savings,
                                           (figures.filename("residuals"),) if plot else ())
         stage("figures and report")
     # residuals.<format> (an earlier run's in another format, or with --no-plot any, removed)

@@ -44,10 +44,10 @@ def overlap(log: LoggedRun, other: LoggedRun) -> Overlap | None:
     """The samples ``log`` shares with ``other`` (one's first row somewhere in the other, and at
     least :data:`MIN_SHARED` rows, or all of the shorter, equal from there on), or None."""
     for a, b, swapped in ((log, other, False), (other, log, True)):
-        quantity, key = (("speed", lambda r: r.v) if a.v is not None and b.v is not None else
-                         ("position", lambda r: r.x))
+        quantity, ours, theirs = (("speed", a.v, b.v) if a.v is not None and b.v is not None else
+                                  ("position", a.x, b.x))
         tol = a.resolution.get(quantity, 0.0) + b.resolution.get(quantity, 0.0) + 1e-12
-        for j in np.nonzero(np.abs(key(b) - key(a)[0]) <= tol)[0][:MAX_CANDIDATES]:
+        for j in np.nonzero(np.abs(theirs - ours[0]) <= tol)[0][:MAX_CANDIDATES]:
             n = min(len(a.t), len(b.t) - int(j))
             if n >= min(MIN_SHARED, len(a.t)) and _same(a, b, 0, int(j), n):
                 offset = float(a.t[0] - b.t[j])
