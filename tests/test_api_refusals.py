@@ -32,6 +32,9 @@ W = api.Window
     (lambda: api.solve_folder(track=ROKIN, train=METRO, time=80, objective="energi"), "arguments: objective: expected"),
     (lambda: api.solve_folder(track=ROKIN, train=METRO, time=80, das="nope"), "arguments: das: expected one of round"),
     (lambda: api.export_folder(TRACKS, every=1.0), "arguments: every: expected a step such as '1s'"),
+    (lambda: api.calibrate_folder(["no.csv"], bootstrap=-5), "arguments: bootstrap: must be at least 0"),
+    (lambda: api.calibrate_folder(["no.csv"], savings=-1), "arguments: savings: must be at least 0"),
+    (lambda: api.calibrate_folder("no_such_log.csv"), "no_such_log.csv: file not found"),
 ])
 def test_an_argument_no_run_answers_is_one_line_naming_it(call, words):
     with pytest.raises(InputError) as refused:

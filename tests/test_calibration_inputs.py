@@ -166,3 +166,79 @@ def test_a_line_power_with_its_sign_flipped_or_dead_is_warned_and_left_out(input
     assert table["logged_line_traction_kWh"].isna().all() and (table["model_line_traction_kWh"] > 50).all(), table
     result = calibrate_logs([log], *inputs, ("mass", "efficiency"), draws=0)
     assert result.reason.startswith("efficiency not identifiable from these logs"), result.reason
+
+
+def map_train(tmp_path):
+    """The regional train's file with a flat traction efficiency map beside its constant."""
+    data = yaml.safe_load(TRAIN.read_text())
+    data["traction_efficiency_map"] = {"speed_kmh": [0, 70, 140], "force_kN": [0, 150, 300],
+                                       "efficiency": [[0.88] * 3] * 3}
+    path = tmp_path / "mapped.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def test_a_fitted_efficiency_replaces_the_train_file_map_saying_so(tmp_path, there):
+    """The fit compares a constant efficiency with the logged line power; the calibrated file kept
+    the map beside the fitted constant, and the net energy uses the map (5 % low on the audit's
+    logs). Now the map is left out, with a warning naming it."""
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there)
+    result = run("calibrate", tmp_path / "a.csv", "--train", map_train(tmp_path), "--fit", "mass,efficiency",
+                 "--bootstrap", 0, "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 0, result.output
+    assert "mapped.yaml: traction_efficiency_map: left out of the calibrated train" in result.output, result.output
+    calibrated = load_train(tmp_path / "o" / "mapped_calibrated.yaml")
+    assert calibrated.traction_efficiency_map is None and calibrated.eta_traction == calibrated.traction_efficiency
+    assert abs(calibrated.traction_efficiency - load_train(TRAIN).traction_efficiency) < 0.01
+
+
+def test_a_regeneration_efficiency_of_a_train_without_regenerative_braking_is_refused(tmp_path, there):
+    """Its prior is 0: the fit ran, its reason printed a 310-digit percentage. Now one line, exit 2,
+    before computing."""
+    data = yaml.safe_load(TRAIN.read_text())
+    del data["regenerative_braking"]
+    (tmp_path / "noregen.yaml").write_text(yaml.safe_dump(data))
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there)
+    result = run("calibrate", tmp_path / "a.csv", "--train", tmp_path / "noregen.yaml", "--fit",
+                 "mass,regeneration_efficiency", "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 2 and not (tmp_path / "o").exists(), result.output
+    assert "error: command line: --fit: regeneration_efficiency: the train file " in result.output
+    assert "has no regenerative_braking" in result.output and "Traceback" not in result.output
+
+
+def test_auxiliary_power_in_the_line_power_is_flagged_with_what_it_draws(inputs, there):
+    """200 kW of auxiliaries in the line power pulled the fitted efficiency from 0.8536 to 0.798, its
+    interval 0.797-0.799 and `ok`. The line draws it while the wheels draw nothing: now flagged."""
+    track, train = inputs
+    clean = calibrate_logs([parse_log(text_of(there), "clean.csv")], track, train, ["efficiency"], draws=0)
+    assert "wheels draw none" not in clean.reason
+    frame = there.assign(power_line_kW=there["power_line_kW"] + 200.0)
+    flagged = calibrate_logs([parse_log(text_of(frame), "aux.csv")], track, train, ["efficiency"], draws=0)
+    assert flagged.status == "flagged" and "aux: power_line_kW draws 200 kW (median over" in flagged.reason, flagged.reason
+    assert "while the wheels draw none (standing, coasting)" in flagged.reason
+
+
+def test_a_wheel_power_off_in_scale_from_the_force_is_flagged_naming_both(inputs, there):
+    """A wheel power 10 % above force times speed (1.10, within the unit check's 0.8-1.25) was fitted
+    `ok`, the mass taking it up (+10 %). Now flagged naming both columns; the generated log is not."""
+    track, train = inputs
+    clean = calibrate_logs([parse_log(text_of(there), "clean.csv")], track, train, list(DEFAULT_FIT), draws=0)
+    assert "power_wheel_kW is" not in clean.reason, clean.reason
+    frame = there.assign(power_wheel_kW=there["power_wheel_kW"] * 1.1,
+                         power_line_kW=there["power_line_kW"] * 1.1)
+    flagged = calibrate_logs([parse_log(text_of(frame), "w10.csv")], track, train, list(DEFAULT_FIT), draws=0)
+    assert flagged.status == "flagged", flagged.reason
+    assert "w10: power_wheel_kW is 1.101 times force_kN times speed_mps" in flagged.reason, flagged.reason
+
+
+def test_one_log_exported_twice_with_rows_trimmed_is_refused(tmp_path, there):
+    """The same run with 25 rows cut at its start and 10 at its end (another export) was fitted as a
+    second run (the same-samples check needs the same row count). Now refused naming both."""
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there)
+    write_log(tmp_path / "b.csv", {"track": str(TRACK), "train": str(TRAIN)}, there.iloc[25:-10])
+    result = run("calibrate", tmp_path / "a.csv", tmp_path / "b.csv", "--bootstrap", 0, "--no-plot",
+                 "--out", tmp_path / "o")
+    assert result.exit_code == 2 and not (tmp_path / "o").exists(), result.output
+    rows = len(there) - 35
+    assert f"b.csv: its rows 1-{rows} are the samples of {tmp_path / 'a.csv'}'s rows 26-{rows + 25} (one logged run" \
+        in result.output, result.output

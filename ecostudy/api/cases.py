@@ -8,6 +8,7 @@ functions (the command line only parses and prints).
 """
 import logging
 from contextlib import nullcontext
+from os import PathLike
 from functools import partial
 from pathlib import Path
 from typing import Callable, Optional, Sequence
@@ -180,17 +181,19 @@ def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, w
 
 
 @spelled
-def calibrate_folder(logs: Sequence[Path], train: Optional[Path] = None, track: Optional[Path] = None,
+def calibrate_folder(logs: Sequence[Path] | Path | str, train: Optional[Path] = None, track: Optional[Path] = None,
                      fit: Optional[str] = None, out: Path = Path("out/calibration"), bootstrap: int = 200,
                      savings: Optional[int] = None, plot: bool = True, fig_format: str = "png",
                      dpi: Optional[float] = None, *, progress: Optional[Watcher] = None) -> Report:
     """``ecostudy calibrate``: train parameters fitted to logged runs (least squares on the replayed
     dynamics), 95 % intervals, ``bootstrap`` draws, and optionally the savings against the logs.
     ``progress`` watches the fit, each bootstrap draw and each optimal run of the savings
-    (:mod:`ecostudy.core.progress`)."""
+    (:mod:`ecostudy.core.progress`). ``logs`` is one path or a sequence of them."""
+    check_options(bootstrap=bootstrap, savings=savings)
+    paths: Sequence[Path | str] = [logs] if isinstance(logs, (str, PathLike)) else logs
     figures = output(fig_format, dpi)
     with watched(progress):
-        result, summary = calibrate_study(logs, train, track, fit, out, bootstrap, savings,
+        result, summary = calibrate_study(paths, train, track, fit, out, bootstrap, savings,
                                           (figures.filename("residuals"),) if plot else ())
         stage("figures and report")
     # residuals.<format> (an earlier run's in another format, or with --no-plot any, removed)

@@ -8,7 +8,8 @@ its prior) or the residuals are bad: the replayed speed off the logged one by mo
 something the logs show), or a logged run broke the line's speed limit
 (:func:`~ecostudy.calibration.replay.over_limit`: a driver keeps to it, so the log is not a driven run
 of this line as the track file gives it), or a log pulled beyond the train file's traction envelope
-(:func:`~ecostudy.calibration.replay.over_envelope`), or a fitted efficiency is above 1.
+(:func:`~ecostudy.calibration.replay.over_envelope`), or a fitted efficiency is above 1, or a fitted
+efficiency absorbs auxiliary power (:func:`~ecostudy.calibration.replay.auxiliary_power`).
 """
 import warnings
 from dataclasses import dataclass, field, replace
@@ -16,10 +17,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, coefficients, over_envelope, over_limit
+from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, auxiliary_power, coefficients, over_envelope, over_limit
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.progress import stage
 from ecostudy.io.logfile import scale_problem
+from ecostudy.io.logforce import force_power_problem
 from ecostudy.calibration.fit import (
     MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, identify, informing, scales, train_with, width_if_fitted,
 )
@@ -175,7 +177,10 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
         reasons.append(f"{drift_reason(quality['structure_ratio'])}: the model misses something the logs show")
     reasons += [f"{run.log} run {run.index}: {why}" for run in problem.runs
                 if (why := over_limit(run.t, run.x, run.v, track))]
-    reasons += [f"{log.name}: {why}" for log in logs for why in (over_envelope(log, train), scale_problem(log)) if why]
+    reasons += [f"{log.name}: {why}" for log in logs for why in (over_envelope(log, train), scale_problem(log), force_power_problem(log))
+                if why]
+    if {"efficiency", "regeneration_efficiency"} & set(free):
+        reasons += [f"{log.name}: {why}" for log in logs if (why := auxiliary_power(log))]
     reasons += [f"{n} fitted at its bound 0 (the logs would have it below): its interval is not a fit's, and the "
                 "other parameters absorb what the model misses" for n in free if theta[n] <= 1e-9 * abs(problem.prior[n])]
     reasons += [f"{n} {theta[n]:.4g} above 1: the wheel work is more than the line energy logged (a line power, "

@@ -37,6 +37,9 @@ SMOOTHING = 1.0         # [s]
 TRACTION_SHARE = 0.05   # efficiency samples: power above this share of the log's largest
 ENVELOPE_TOLERANCE = 0.1  # a logged force more than this share above the train file's envelope ...
 ENVELOPE_ROWS = 10         # ... in at least this many rows is flagged (noise and a sampled force allowed)
+IDLE_SHARE = 0.01       # auxiliary power: intervals whose wheel power is below this share of the log's largest ...
+AUX_SHARE = 0.001       # ... drawing a median line power above this share of the largest line power ...
+AUX_ERRORS = 5.0        # ... and this many standard errors of that median above 0 are flagged
 LIMIT_TOLERANCE_KMH = 1.0  # a logged speed (smoothed over SMOOTHING) over the line's limit by more is flagged
 
 
@@ -269,3 +272,26 @@ def efficiency_samples(log, train):
         brake &= -wheel / np.maximum(v, 1.0) < 0.95 * train.regeneration.force(np.maximum(v, 0.1))
     brake &= inner & np.roll(brake, 1) & np.roll(brake, -1)
     return np.log(line[pull] / wheel[pull]), np.log(line[brake] / wheel[brake])
+
+
+def auxiliary_power(log):
+    """What the log's line power draws while the wheels draw none (standing, coasting: wheel power
+    below :data:`IDLE_SHARE` of the log's largest): a reason when its median is above
+    :data:`AUX_SHARE` of the largest line power and :data:`AUX_ERRORS` standard errors above 0, else
+    ''. The fitted efficiency is wheel work per line energy with no auxiliary term, so such a draw
+    (heating, air conditioning, compressors) pulls it low by the draw over the traction power."""
+    line = line_power(log)
+    if line is None:
+        return ""
+    wheel = wheel_work(log) / np.diff(log.t)
+    idle = (np.abs(wheel) < IDLE_SHARE * np.max(np.abs(wheel))) & np.isfinite(line)
+    if idle.sum() < 20:
+        return ""
+    drawn = line[idle]
+    median = float(np.median(drawn))
+    error = 1.2533 * 1.4826 * float(np.median(np.abs(drawn - median))) / np.sqrt(drawn.size)
+    if median <= AUX_SHARE * np.nanmax(np.abs(line)) or median <= AUX_ERRORS * error:
+        return ""
+    return (f"{log.line_column or 'the line power'} draws {median / 1e3:.3g} kW (median over {drawn.size} intervals) "
+            "while the wheels draw none (standing, coasting): auxiliary power in the line power, which the "
+            "efficiency (wheel work per line energy, no auxiliary term) absorbs, fitted too low")

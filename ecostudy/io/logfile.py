@@ -45,7 +45,7 @@ from ecostudy.core.physics import gradient_force
 from ecostudy.core.types import Track
 from ecostudy.core.units import FloatArray
 from ecostudy.io.documents import Where, named_file, not_a_file, validate
-from ecostudy.io.logforce import check_force_power, check_line_power, check_plausible
+from ecostudy.io.logforce import check_force_power, check_line_power, check_plausible, warn_unused_electric
 from ecostudy.io.logheader import COLUMNS, QUANTITIES, LogHeader, known_header, split_header
 from ecostudy.io.writers import atomic_write
 from ecostudy.io.yamlsafe import MAX_FILE_BYTES
@@ -84,6 +84,7 @@ class LoggedRun:
     path: Path | None = None
     columns: tuple[str, ...] = field(default=())  # (position, speed, force, wheel power column) as the file names them
     resolution: dict[str, float] = field(default_factory=dict)  # quantity -> its column's last digit [SI] (last_digit)
+    line_column: str = ""  # the line power's column(s) as the file names them
 
     def named(self, field: str) -> Path:
         """The header's ``track`` or ``train`` file, relative to the log's folder; one not given or not
@@ -323,6 +324,8 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
     line = column["power_line"][1] if "power_line" in column else None
     if line is None and "voltage" in column and "current" in column:
         line = column["voltage"][1] * column["current"][1]
+    elif "voltage" in column or "current" in column:
+        warn_unused_electric(path, column)
 
     def get(q: str) -> FloatArray | None:
         return column[q][1] if q in column else None
@@ -333,8 +336,10 @@ def parse_log(text: str, path: Where, name: str | None = None) -> "LoggedRun":
                     {COLUMNS[n][0]: last_digit(data[:, j]) * COLUMNS[n][1] for j, n in enumerate(names)})
     check_series(log, path)
     check_force_power(path, log.columns[1:], v, log.force, log.power_wheel)
-    log.power_line = check_line_power(path, column["power_line"][0] if "power_line" in column else
-                                      "line_voltage, line_current", v, log.force, log.power_wheel, line)
+    log.line_column = (column["power_line"][0] if "power_line" in column else
+                       f"{column['voltage'][0]} x {column['current'][0]}" if line is not None else "")
+    log.power_line = check_line_power(path, log.line_column or "line_voltage, line_current", v, log.force,
+                                      log.power_wheel, line)
     check_plausible(path, names, data, COLUMNS)
     return log
 

@@ -20,6 +20,9 @@ from ecostudy.io.documents import Where
 # interval means, the force sampled: at 1 Hz they part while the speed rises); a unit slip is a factor
 # 3.6 or more off (daN under force_kN: 0.01; W under power_wheel_kW: 1000; km/h under speed_mps: 0.28)
 FORCE_POWER = (0.8, 1.25)
+# within the units, a channel off in scale: outside this band (around 0.992-1.037 with margin) the fit
+# takes the wheel power, and the mass and resistance absorb the difference (10 % high: the mass 10 % high)
+FORCE_POWER_AGREE = (0.95, 1.06)
 # median of the wheel power over the line power where the train pulls (the traction chain's efficiency,
 # auxiliaries drawn from the line lowering it): above 1 the wheel gets more than the line gives; a unit
 # slip is a factor 1000 off (W or MW under power_line_kW, kV under line_voltage_V)
@@ -86,6 +89,23 @@ def check_force_power(path: Where, columns: tuple[str, ...], v: FloatArray | Non
                                  f"{lo:g}-{hi:g}): one of them (or {speed}) is in another unit than its name says"))
 
 
+def force_power_problem(log: Any) -> str:
+    """Why a log's wheel power and force times speed disagree beyond what sampling leaves (their
+    median ratio where the train pulls outside :data:`FORCE_POWER_AGREE`, within the units
+    :func:`check_force_power` allows), "" where they agree or cannot be compared (``log``: a
+    :class:`~ecostudy.io.logfile.LoggedRun`)."""
+    if log.v is None or log.force is None or log.power_wheel is None:
+        return ""
+    ratio, rows = force_power_ratio(log.v, log.force, log.power_wheel)
+    lo, hi = FORCE_POWER_AGREE
+    if rows < PULLING_ROWS or lo <= ratio <= hi:
+        return ""
+    speed, force_name, power_name = log.columns[1:4]
+    return (f"{power_name} is {ratio:.4g} times {force_name} times {speed} (median over {rows} rows where the train "
+            f"pulls above {PULLING_SPEED:g} m/s; sampling leaves {lo:g}-{hi:g}): one channel is off in scale, and the "
+            "fit, which takes the wheel power, puts the difference into the mass and resistance")
+
+
 def check_line_power(path: Where, line_name: str, v: FloatArray | None, force: FloatArray | None,
                      wheel: FloatArray | None, line: FloatArray | None) -> FloatArray | None:
     """The line power to use (``line``, or NaN where it is left out). Refused, in one line naming
@@ -115,3 +135,14 @@ def check_line_power(path: Where, line_name: str, v: FloatArray | None, force: F
                                  f"chain gives {lo:g}-{hi:g}): the line power, voltage or current is in another "
                                  "unit or scale than its name says"))
     return line
+
+
+def warn_unused_electric(path: Where, column: dict[str, tuple[str, FloatArray]]) -> None:
+    """Warn of a line voltage or current the line power is not made of: one without the other, or
+    both beside a line power column (which is used)."""
+    given = [column[q][0] for q in ("voltage", "current") if q in column]
+    why = (f"left out: the line power column {column['power_line'][0]} is used" if "power_line" in column else
+           f"left out: the line power needs both a line voltage and a line current "
+           f"(no {'line_current_A' if 'voltage' in column else 'line_voltage_V or line_voltage_kV'} column), "
+           "so this log has no line power")
+    warnings.warn(problem(path, ", ".join(given), why), EcostudyWarning, stacklevel=3)

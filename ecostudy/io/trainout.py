@@ -5,9 +5,12 @@ from pathlib import Path
 from os import PathLike
 from typing import Any, Collection
 
+import warnings
+
 import yaml
 
 from ecostudy.core import units
+from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.types import Train
 from ecostudy.io.loaders import train_document
 from ecostudy.io.writers import atomic_write
@@ -17,7 +20,12 @@ def calibrated_document(path: str | PathLike[str], train: Train, fitted: Collect
                         provenance: str, warning: str = "") -> dict[str, Any]:
     """The train file at ``path`` (YAML, or TTOBench / OSRD JSON as ecostudy reads it) with the
     parameters named in ``fitted`` taken from ``train`` (SI), ``provenance`` added to its source and
-    ``warning`` (a calibration not ok) put before it, where a reader of the file starts."""
+    ``warning`` (a calibration not ok) put before it, where a reader of the file starts.
+
+    A fitted efficiency is a constant (the calibration compares it with the logged line power at
+    every traction or braking sample, whatever the train file's efficiency map says): the map,
+    which the net energy would use instead of the constant, is left out of the file, with a warning
+    naming it."""
     data: dict[str, Any] = copy.deepcopy(train_document(path)[0])
     if {"mass", "rotating_mass_factor"} & set(fitted):
         data["mass_t"] = round(train.static_mass / units.TONNE, 6)
@@ -30,10 +38,21 @@ def calibrated_document(path: str | PathLike[str], train: Train, fitted: Collect
         data["davis"] = {"a_N": round(a, 4), "b_N_per_mps": round(b, 6), "c_N_per_mps2": round(c, 6)}
     if "efficiency" in fitted:
         data["traction_efficiency"] = round(float(train.traction_efficiency), 6)
+        _drop_map(data, "traction_efficiency_map", "traction_efficiency", path)
     if "regeneration_efficiency" in fitted and data.get("regenerative_braking"):
         data["regenerative_braking"]["efficiency"] = round(float(train.regeneration_efficiency), 6)
+        _drop_map(data["regenerative_braking"], "efficiency_map", "regenerative_braking.efficiency", path,
+                  "regenerative_braking.")
     data["source"] = f"{warning} {data.get('source', '').strip()} {provenance}".strip()
     return data
+
+
+def _drop_map(block: dict[str, Any], key: str, constant: str, path: str | PathLike[str], prefix: str = "") -> None:
+    """Remove the efficiency map ``key`` from ``block``, warning by name: the fitted constant replaces it."""
+    if block.pop(key, None) is not None:
+        warnings.warn(f"{Path(path).name}: {prefix}{key}: left out of the calibrated train: the fit measured the "
+                      f"constant {constant} (the map was not used by the fit), which the net energy would ignore "
+                      "beside a map", EcostudyWarning, stacklevel=3)
 
 
 def write_train(path: str | Path, data: dict[str, Any]) -> None:

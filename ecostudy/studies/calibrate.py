@@ -25,6 +25,7 @@ from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.io.documents import split_selector
 from ecostudy.io.loaders import check_fits, load_track, load_train
 from ecostudy.io.logfile import check_on_track, check_traction_sign, load_log, repeats
+from ecostudy.io.logoverlap import overlap
 from ecostudy.io.trainout import calibrated_document, write_train
 from ecostudy.core.status import Status, flagged
 from ecostudy.io.folder import write_summary
@@ -43,6 +44,16 @@ def parse_fit(text):
         what = f"unknown parameter '{unknown[0]}'" if unknown else "give each parameter once"
         raise InputError(problem("command line", "--fit", f"{what} (known: {', '.join(PARAMETERS)})"))
     return names
+
+
+def check_fit_train(names, train, train_path):
+    """A parameter in ``names`` that the train file does not have refused in one line: a regeneration
+    efficiency without ``regenerative_braking`` (nothing in the logs could inform it, and its prior 0
+    leaves no scale to report it against)."""
+    if "regeneration_efficiency" in names and train.regeneration is None:
+        raise InputError(problem("command line", "--fit", f"regeneration_efficiency: the train file {train_path} has "
+                                 "no regenerative_braking, so there is no regeneration efficiency to fit (leave it "
+                                 "out of --fit, or add regenerative_braking to the train file)"))
 
 
 def _loaded(load, path, log, field):
@@ -98,6 +109,14 @@ def load_inputs(log_paths, train_path, track_path):
                                          "log's start, positions and speeds in SI, within the last digits the files "
                                          "write): one logged run given twice would narrow every interval as if it "
                                          "were two"))
+            shared = overlap(log, other)
+            if shared is not None:
+                raise InputError(problem(log.path or log.name, "", f"its rows {shared.first + 1}-{shared.first + shared.rows} "
+                                         f"are the samples of {other.path or other.name}'s rows {shared.other_first + 1}-"
+                                         f"{shared.other_first + shared.rows}" + (f", its clock {abs(shared.offset):g} s "
+                                         f"{'later' if shared.offset > 0 else 'earlier'}" if shared.offset else "")
+                                         + " (one logged run exported twice, trimmed): fitted as two, the shared "
+                                         "samples would narrow every interval as if they were two runs"))
     track_path = Path(track_path) if track_path else logs[0].named("track")
     train_path = Path(train_path) if train_path else logs[0].named("train")
     for field, path, given in (("track", track_path, given_track), ("train", train_path, given_train)):
@@ -116,6 +135,7 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
     ``saving_draws`` (a count) also the savings against the logged driving (``savings.csv``)."""
     names = parse_fit(fit)
     logs, track, train, track_path, train_path = load_inputs(log_paths, train_path, track_path)
+    check_fit_train(names, train, train_path)
     calibrated = Path(out) / f"{train_path.stem}_calibrated.yaml"
     asked = ("savings.csv",) if saving_draws is not None else ()
     out = check_output_dir(out, (*CALIBRATE_FILES, calibrated.name, *asked, *figures), "calibrate")

@@ -30,6 +30,7 @@ OPTION_RANGES = {
     "supplement_max": (0.0, MAX_SUPPLEMENT_PERCENT, False), "dwell": (0.0, 86400.0, True),
     "das_time_limit": (0.0, None, False),
     "energy_tolerance": (0.0, 1000.0, True), "time_tolerance": (0.0, 1000.0, True),  # validate's [%]
+    "bootstrap": (0, 10000, True), "savings": (0, 100, True),  # calibrate's draws
 }
 
 
