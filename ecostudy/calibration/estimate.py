@@ -12,6 +12,7 @@ of this line as the track file gives it), or a log pulled beyond the train file'
 efficiency absorbs auxiliary power (:func:`~ecostudy.calibration.replay.auxiliary_power`).
 """
 import warnings
+from math import comb
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -38,6 +39,12 @@ CHECKED = (f"every parameter fitted identifiable, replayed speed within {MAX_RMS
            f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s, logged speeds within {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits, "
            "logged traction within the train file's envelope")
 BOOTSTRAP_DRAWS = 200
+# logs (the bootstrap's resampling unit: a log is drawn whole, its runs with it) a bootstrap over logs
+# needs, in all and informing a parameter: n logs have C(2n - 1, n) distinct resamples (2: 3, 3: 10,
+# 4: 35, 5: 126), and the draws of resamples of at most two distinct logs are 100 % of them with 2 logs,
+# 78 % with 3, 34 % with 4 and 10 % with 5; with 2 logs the 2.5 and 97.5 percentiles are the fits on
+# each log alone, not an interval. Fewer: boot_low and boot_high are left NaN, the note says why
+MIN_BOOTSTRAP_LOGS = 5
 MOTION = ("mass", "davis_a", "davis_b", "davis_c")  # the parameters the replayed speed follows (the efficiencies do not move it)
 
 
@@ -101,6 +108,33 @@ def motion(theta):
             (theta["davis_a"], theta["davis_b"], theta["davis_c"]))
 
 
+def resamples(units):
+    """The distinct resamples with replacement of ``units`` resampling units: C(2n - 1, n)."""
+    return comb(2 * units - 1, units) if units > 0 else 0
+
+
+def too_few_logs(logs):
+    """Why a bootstrap over ``logs`` (a count) gives no interval ('' from :data:`MIN_BOOTSTRAP_LOGS` on)."""
+    if logs >= MIN_BOOTSTRAP_LOGS:
+        return ""
+    return (f"boot_low, boot_high NaN: {logs} log{'s' if logs != 1 else ''} give{'' if logs != 1 else 's'} a bootstrap "
+            f"over logs only {resamples(logs)} distinct resample{'s' if resamples(logs) != 1 else ''}; it needs at least "
+            f"{MIN_BOOTSTRAP_LOGS} logs ({resamples(MIN_BOOTSTRAP_LOGS)} resamples): give "
+            f"{MIN_BOOTSTRAP_LOGS - logs} more; the 95 % interval is low to high")
+
+
+def too_few_informing(seen, logs):
+    """Why a parameter only the logs ``seen`` (names) inform, of ``logs`` (a count), has no bootstrap
+    interval ('' when :data:`MIN_BOOTSTRAP_LOGS` or more inform it)."""
+    if len(seen) >= MIN_BOOTSTRAP_LOGS:
+        return ""
+    k = len(seen)
+    return (f"boot_low, boot_high NaN: only {k} of the {logs} logs ({', '.join(seen) or 'none'}) "
+            f"inform{'s' if k == 1 else ''} it, so the resamples of the logs give it only {resamples(k)} distinct "
+            f"value{'s' if resamples(k) != 1 else ''}; a bootstrap over logs needs at least {MIN_BOOTSTRAP_LOGS} that "
+            "inform it; its 95 % interval is low to high")
+
+
 def residual_table(problem, theta):
     frames = []
     for run in problem.runs:
@@ -120,10 +154,11 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     free, p, cov, held, spread, unconverged, partnered = identify(problem, list(names))
     theta = problem.theta(free, p)
     s = scales(problem.prior)
-    boot, boot_unconverged = (bootstrap(problem, free, p, draws, seed, spread) if len(logs) > 1 and free and draws > 0
+    few = too_few_logs(len(logs)) if free and draws > 0 else ""
+    boot, boot_unconverged = (bootstrap(problem, free, p, draws, seed, spread) if not few and free and draws > 0
                               else (None, 0))
     seen = informing(problem, free, p) if boot is not None else {}
-    rows, footnotes = [], []
+    rows, footnotes = [], [few.replace("NaN:", "NaN for every parameter:", 1)] if few else []
     for name in names:
         row = {"name": name, "unit": PARAMETERS[name][0], "prior": problem.prior[name], "estimate": theta[name],
                "std": np.nan, "low": np.nan, "high": np.nan, "boot_low": np.nan, "boot_high": np.nan,
@@ -132,13 +167,13 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
             j = free.index(name)
             row["std"] = float(np.sqrt(cov[j, j])) * s[name]
             row["low"], row["high"] = theta[name] - Z95 * row["std"], theta[name] + Z95 * row["std"]
-            if boot is not None and len(seen[name]) > 1:
+            lacking = too_few_informing(seen[name], len(logs)) if boot is not None else few
+            if boot is not None and not lacking:
                 row["boot_low"], row["boot_high"] = np.percentile(boot[:, j], [2.5, 97.5])
-            elif boot is not None:  # every resample of the logs gives it the same value: a point, not an interval
-                row["note"] = (f"boot_low, boot_high NaN: only {len(seen[name])} of the {len(logs)} logs "
-                               f"({', '.join(seen[name]) or 'none'}) informs it, so every resample of the logs gives it "
-                               "the same value; its 95 % interval is low to high")
-                footnotes.append(f"{name}: {row['note']}")
+            elif lacking:  # a few resamples of the logs give it a few values: their spread, not an interval
+                row["note"] = lacking
+                if boot is not None:
+                    footnotes.append(f"{name}: {row['note']}")
             along = [h for h, partners in partnered.items() if name in partners]
             if along:  # the logs see it only together with a parameter held at its prior: it carries that one's error
                 why = (f"fitted with {', '.join(along)} held at the train file's value, which these logs see only together "
@@ -155,7 +190,8 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                     + ("cannot tell Ms from f" if not np.isfinite(width) else
                        f"tell f only to +-{100 * width:.0f} % (limit {100 * MAX_RELATIVE_WIDTH:.0f} %)")
                     + " (too little gradient work), so its interval holds only if f does")
-            table.loc[table["name"] == "mass", "note"] = note
+            before = table.loc[table["name"] == "mass", "note"].iloc[0]
+            table.loc[table["name"] == "mass", "note"] = f"{before}; {note}" if before else note
             warnings.warn(f"calibration: mass {note}", EcostudyWarning, stacklevel=2)
     residuals = residual_table(problem, theta)
     used = residuals[residuals["used"]]

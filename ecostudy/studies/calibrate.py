@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 
 from ecostudy import __version__
-from ecostudy.calibration.estimate import calibrate_logs
+from ecostudy.calibration.estimate import MIN_BOOTSTRAP_LOGS, calibrate_logs
 from ecostudy.calibration.fit import DEFAULT_FIT, PARAMETERS
 from ecostudy.calibration.savings import savings
 from ecostudy.calibration.validate import validate_log
@@ -161,7 +161,8 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
     summary = {"command": "calibrate", "logs": [str(p) for p in log_paths], "train": str(train_path),
                "track": str(track_path), "fitted": names,
                "method": "least squares (scipy least_squares) on the replayed energy balance, whitened by a scalar "
-                         "Kalman filter; 95 % intervals from the Jacobian; bootstrap over logs when several",
+                         "Kalman filter; 95 % intervals from the Jacobian; bootstrap over logs from "
+                         f"{MIN_BOOTSTRAP_LOGS} logs on",
                "parameters": result.table.replace({np.nan: None}).to_dict("records"),
                "quality": result.quality, "calibrated_train": str(calibrated) if written else None,
                "outputs": [*CALIBRATE_FILES, *written]}
