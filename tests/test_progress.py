@@ -76,12 +76,32 @@ def test_the_minlp_search_counts_the_seconds_of_its_time_limit(tmp_path):
     assert seen.stages()[-2:] == ["DAS minlp advice re-simulated", "figures and files"]
 
 
-def test_calibrate_tells_each_bootstrap_draw(tmp_path, log_files):
+@pytest.fixture(scope="module")
+def five_log_files(tmp_path_factory, log_files):
+    """The two logs and three more of the same train: the fewest a bootstrap over logs runs on."""
+    folder = log_files[0].parent
+    track, train = load_track(TRACK), load_train(TRAIN)
+    truth = true_train(train, mass=1.03, davis=(1.1, 0.9, 1.05), efficiency=0.98)
+    header = {"track": str(TRACK), "train": str(TRAIN), "source": "generated"}
+    for seed, name, stops in ((3, "there3", ["West", "Middle", "East"]), (4, "back4", ["East", "Middle", "West"]),
+                              (5, "there5", ["West", "Middle", "East"])):
+        write_log(folder / f"{name}.csv", header, generate_log(track, truth, stops, truth, seed=seed)[0])
+    return [*log_files, folder / "there3.csv", folder / "back4.csv", folder / "there5.csv"]
+
+
+def test_calibrate_tells_each_bootstrap_draw(tmp_path, five_log_files):
     seen = Recorder()
-    api.calibrate_folder(list(log_files), out=tmp_path, bootstrap=4, plot=False, progress=seen)
+    api.calibrate_folder(five_log_files, out=tmp_path, bootstrap=4, plot=False, progress=seen)
     assert seen.stages() == ["least-squares fit, identifiability", "bootstrap over logs", "figures and report"]
     assert ("stage", "bootstrap over logs", 4, "draws") in seen.events
     assert seen.steps("bootstrap over logs") == [(n, "") for n in (1, 2, 3, 4)]
+
+
+def test_calibrate_on_two_logs_runs_no_bootstrap(tmp_path, log_files):
+    """Two logs give no bootstrap interval (MIN_BOOTSTRAP_LOGS): the draws are not run, not shown."""
+    seen = Recorder()
+    api.calibrate_folder(list(log_files), out=tmp_path, bootstrap=4, plot=False, progress=seen)
+    assert seen.stages() == ["least-squares fit, identifiability", "figures and report"]
 
 
 @pytest.mark.slow  # eight optimal runs of 500 points
@@ -133,8 +153,8 @@ def test_the_minlp_search_shows_its_time_limit_on_a_terminal(tmp_path):
 
 
 @pytest.mark.slow  # three calibrations in fresh processes: 124 s at load 14
-def test_calibrate_shows_its_draws_on_a_terminal(tmp_path, log_files):
-    bar_only_on_a_terminal(["calibrate", *log_files, "--bootstrap", "5", "--no-plot"], tmp_path,
+def test_calibrate_shows_its_draws_on_a_terminal(tmp_path, five_log_files):
+    bar_only_on_a_terminal(["calibrate", *five_log_files, "--bootstrap", "5", "--no-plot"], tmp_path,
                            ["calibrate: bootstrap over logs", "5/5 draws"])
 
 
