@@ -27,7 +27,7 @@ from ecostudy.calibration.fit import DEFAULT_FIT, priors  # noqa: E402
 from ecostudy.calibration.generate import (  # noqa: E402
     follow_work, generate_log, level_track, steady_log, steep_track, true_train)
 from ecostudy.calibration.validate import validate_log  # noqa: E402
-from ecostudy.calibration.estimate import calibrate_logs  # noqa: E402
+from ecostudy.calibration.estimate import MIN_BOOTSTRAP_LOGS, calibrate_logs  # noqa: E402
 from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.io.logfile import parse_log, write_log  # noqa: E402
@@ -157,16 +157,17 @@ def steep_check(count, train):
                           f"{row.traction_difference_pct:9.2f}  {row.status}")
 
 
-def held_coverage(pairs, track, train, draws=200):
-    """Both intervals where a parameter is held: pairs of level constant-speed logs (25 m/s for 400 s,
-    log seeds 2k + 1 and 2k + 2) of the train with A 30 % higher, B half and C 10 % higher than its
-    file, calibrated for mass, A, B, C with ``draws`` bootstrap draws; how often each interval holds
-    the truth of the parameters reported identifiable."""
+def held_coverage(sets, track, train, draws=200, size=MIN_BOOTSTRAP_LOGS):
+    """Both intervals where a parameter is held: sets of ``size`` level constant-speed logs (25 m/s
+    for 400 s, log seeds size k + 1 to size k + size; the fewest a bootstrap over logs gives an
+    interval from) of the train with A 30 % higher, B half and C 10 % higher than its file,
+    calibrated for mass, A, B, C with ``draws`` bootstrap draws; how often each interval holds the
+    truth of the parameters reported identifiable."""
     truth = true_train(train, davis=(1.3, 0.5, 1.1))
     true = priors(truth)
     level, hits, held = level_track(track), {}, 0
-    for k in range(pairs):
-        logs = [as_log(steady_log(truth, seed), f"steady{seed}") for seed in (2 * k + 1, 2 * k + 2)]
+    for k in range(sets):
+        logs = [as_log(steady_log(truth, seed), f"steady{seed}") for seed in range(size * k + 1, size * k + size + 1)]
         result = calibrate_logs(logs, level, train, ("mass", "davis_a", "davis_b", "davis_c"), draws)
         held += not result.table["identifiable"].all()
         for row in result.table[result.table["identifiable"]].itertuples():
@@ -174,7 +175,7 @@ def held_coverage(pairs, track, train, draws=200):
             h[0] += row.low <= true[row.name] <= row.high
             h[1] += row.boot_low <= true[row.name] <= row.boot_high
             h[2] += 1
-    print(f"{pairs} pairs of level constant-speed logs, {draws} bootstrap draws; a parameter held in {held}")
+    print(f"{sets} sets of {size} level constant-speed logs, {draws} bootstrap draws; a parameter held in {held}")
     print("parameter  identified  95 % interval holds truth  bootstrap interval holds truth")
     for name, (gauss, boot, count) in hits.items():
         print(f"{name:10s} {count:10d} {gauss:25d} {boot:31d}")
@@ -187,7 +188,7 @@ def main():
     parser.add_argument("--validate-logs", type=int, default=10, help="logs of the validate check")
     parser.add_argument("--workers", type=int, default=1, help="processes for the coverage logs")
     parser.add_argument("--example", type=Path, help="write example logs into this folder and stop")
-    parser.add_argument("--held", type=int, default=0, help="pairs of the held-parameter coverage (e.g. 30)")
+    parser.add_argument("--held", type=int, default=0, help="sets of five logs of the held-parameter coverage (e.g. 30)")
     parser.add_argument("--steep", type=int, default=0, help="log seeds of the validate check down steep grades")
     args = parser.parse_args()
     track, train = load_track(TRACK), load_train(TRAIN)
