@@ -168,6 +168,9 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
             row["std"] = float(np.sqrt(cov[j, j])) * s[name]
             row["low"], row["high"] = theta[name] - Z95 * row["std"], theta[name] + Z95 * row["std"]
             lacking = too_few_informing(seen[name], len(logs)) if boot is not None else few
+            if boot is not None and not lacking and np.ptp(np.percentile(boot[:, j], [2.5, 97.5])) == 0:
+                lacking = (f"boot_low, boot_high NaN: 95 % or more of the {draws} bootstrap draws gave it one value, "
+                           f"{np.median(boot[:, j]):.5g}; its 95 % interval is low to high")
             if boot is not None and not lacking:
                 row["boot_low"], row["boot_high"] = np.percentile(boot[:, j], [2.5, 97.5])
             elif lacking:  # a few resamples of the logs give it a few values: their spread, not an interval
