@@ -150,26 +150,6 @@ def last_digit(values: FloatArray) -> float:
     return float(10.0 ** -DIGITS)
 
 
-def repeats(log: "LoggedRun", other: "LoggedRun") -> float | None:
-    """The clock offset [s] by which ``log`` repeats ``other``, or None when it does not: as many rows,
-    and the time from each log's own start, the positions (where both have a position column) and
-    the speeds (where both have a speed column) in SI equal within the last digits the two files
-    write (:func:`last_digit`), whatever units their columns are in (``speed_kmh`` against
-    ``speed_mps``)."""
-    if len(log.t) != len(other.t):
-        return None
-    pairs = [("time", log.t - log.t[0], other.t - other.t[0])]
-    if INTEGRATED not in (log.columns[0], other.columns[0]):
-        pairs.append(("position", log.x, other.x))
-    if log.v is not None and other.v is not None:
-        pairs.append(("speed", log.v, other.v))
-    for quantity, a, b in pairs:
-        within = log.resolution.get(quantity, 0.0) + other.resolution.get(quantity, 0.0) + 1e-9 * float(np.max(np.abs(a)))
-        if np.any(np.abs(a - b) > within):
-            return None
-    return float(log.t[0] - other.t[0]) if len(pairs) > 1 else None
-
-
 def check_series(log: "LoggedRun", path: Where) -> None:
     """Refuse time that does not increase, gaps, implausible speeds and speeds that do not fit the
     positions (a unit mix-up): one line each."""

@@ -1,6 +1,6 @@
-"""Two logs that share samples: one logged run exported twice with rows trimmed (a different start
-or end), which :func:`~ecostudy.io.logfile.repeats` (the same row count) does not see. Fitted as
-two, the shared samples would narrow every interval as if they were two runs."""
+"""Two logs that share samples: one logged run given twice, whole (a copy, its clock shifted or its
+units other) or exported with rows trimmed (a different start or end). Fitted as two, the shared
+samples would narrow every interval as if they were two runs."""
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,6 +20,7 @@ class Overlap:
     other_first: int
     rows: int
     offset: float
+    whole: bool  # both logs are these rows: one run given twice whole
 
 
 def _same(log: LoggedRun, other: LoggedRun, i: int, j: int, n: int) -> bool:
@@ -42,7 +43,10 @@ def _same(log: LoggedRun, other: LoggedRun, i: int, j: int, n: int) -> bool:
 
 def overlap(log: LoggedRun, other: LoggedRun) -> Overlap | None:
     """The samples ``log`` shares with ``other`` (one's first row somewhere in the other, and at
-    least :data:`MIN_SHARED` rows, or all of the shorter, equal from there on), or None."""
+    least :data:`MIN_SHARED` rows, or all of the shorter, equal from there on), or None: the time
+    from those rows, the positions (where both have a position column) and the speeds in SI equal
+    within the last digits both files write, whatever units their columns are in (``speed_kmh``
+    against ``speed_mps``)."""
     for a, b, swapped in ((log, other, False), (other, log, True)):
         quantity, ours, theirs = (("speed", a.v, b.v) if a.v is not None and b.v is not None else
                                   ("position", a.x, b.x))
@@ -51,5 +55,6 @@ def overlap(log: LoggedRun, other: LoggedRun) -> Overlap | None:
             n = min(len(a.t), len(b.t) - int(j))
             if n >= min(MIN_SHARED, len(a.t)) and _same(a, b, 0, int(j), n):
                 offset = float(a.t[0] - b.t[j])
-                return Overlap(int(j), 0, n, -offset) if swapped else Overlap(0, int(j), n, offset)
+                whole = j == 0 and n == len(a.t) == len(b.t)
+                return Overlap(int(j), 0, n, -offset, whole) if swapped else Overlap(0, int(j), n, offset, whole)
     return None

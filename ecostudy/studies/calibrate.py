@@ -24,7 +24,7 @@ from ecostudy.calibration.validate import validate_log
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.io.documents import split_selector
 from ecostudy.io.loaders import check_fits, load_track, load_train
-from ecostudy.io.logfile import check_on_track, check_traction_sign, load_log, repeats
+from ecostudy.io.logfile import check_on_track, check_traction_sign, load_log
 from ecostudy.io.logoverlap import overlap
 from ecostudy.io.trainout import calibrated_document, write_train
 from ecostudy.core.status import Status, flagged
@@ -90,6 +90,20 @@ def check_header_file(logs, field, path, given):
                               f"{used} as asked"), EcostudyWarning, stacklevel=2)
 
 
+def _given_twice(shared, other):
+    """The line refusing a log that shares ``shared``'s samples with the log ``other``."""
+    clock = (f", its clock {abs(shared.offset):g} s {'later' if shared.offset > 0 else 'earlier'}"
+             if shared.offset else "")
+    if shared.whole:
+        return (f"the same samples as {other}{clock} (time from each log's start, positions and speeds in SI, "
+                "within the last digits the files write): one logged run given twice would narrow every "
+                "interval as if it were two")
+    return (f"its rows {shared.first + 1}-{shared.first + shared.rows} are the samples of {other}'s rows "
+            f"{shared.other_first + 1}-{shared.other_first + shared.rows}{clock} (one logged run exported "
+            "twice, trimmed): fitted as two, the shared samples would narrow every interval as if they were "
+            "two runs")
+
+
 def load_inputs(log_paths, train_path, track_path):
     """(logs, track, train, track path, train path): the logs read and checked, the track and train
     given, or else the ones the first log's header names; every log's positions on the track and the
@@ -100,23 +114,11 @@ def load_inputs(log_paths, train_path, track_path):
     if len(set(names)) != len(names):
         raise InputError(problem("command line", "LOG", "two logs with the same file name: "
                                  + ", ".join(sorted({n for n in names if names.count(n) > 1}))))
-    for i, log in enumerate(logs):  # one run given twice (a copy, its clock shifted or its units other) narrows every interval by sqrt(2)
+    for i, log in enumerate(logs):  # one run given twice narrows every interval as if it were two
         for other in logs[:i]:
-            offset = repeats(log, other)
-            if offset is not None:
-                raise InputError(problem(log.path or log.name, "", f"the same samples as {other.path or other.name}"
-                                         + (f", its clock {abs(offset):g} s {'later' if offset > 0 else 'earlier'}" if offset else "") + " (time from each "
-                                         "log's start, positions and speeds in SI, within the last digits the files "
-                                         "write): one logged run given twice would narrow every interval as if it "
-                                         "were two"))
             shared = overlap(log, other)
             if shared is not None:
-                raise InputError(problem(log.path or log.name, "", f"its rows {shared.first + 1}-{shared.first + shared.rows} "
-                                         f"are the samples of {other.path or other.name}'s rows {shared.other_first + 1}-"
-                                         f"{shared.other_first + shared.rows}" + (f", its clock {abs(shared.offset):g} s "
-                                         f"{'later' if shared.offset > 0 else 'earlier'}" if shared.offset else "")
-                                         + " (one logged run exported twice, trimmed): fitted as two, the shared "
-                                         "samples would narrow every interval as if they were two runs"))
+                raise InputError(problem(log.path or log.name, "", _given_twice(shared, other.path or other.name)))
     track_path = Path(track_path) if track_path else logs[0].named("track")
     train_path = Path(train_path) if train_path else logs[0].named("train")
     for field, path, given in (("track", track_path, given_track), ("train", train_path, given_train)):
