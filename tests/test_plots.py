@@ -7,6 +7,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+import matplotlib.pyplot as plt
 import pytest
 from matplotlib.artist import Artist
 from matplotlib.colors import to_hex
@@ -355,3 +356,19 @@ def test_heavy_haul_curves_each_in_a_colour_of_their_own(tmp_path):
     tracking = labelled(heavyplots.tracking(outcome, None).axes[0])  # the line's limit, the reference, the runs
     assert hexes(tracking[:2]) == [SPEED_LIMIT, style.colour("reference")] and len(tracking) == 2 + 4
     assert len(set(hexes(tracking))) == len(tracking)
+
+
+def test_a_long_reason_in_a_title_says_it_is_clipped():
+    """A figure's status line keeps at most two lines of a not-ok run's reason, and a clipped
+    reason says so and where the whole one is, so a cut reason never reads as the whole."""
+    reason = "flagged: " + "; ".join(f"car {i} over its coupler limit by {i}.5 kN at {100 * i} m" for i in range(1, 12))
+    fig, ax = plt.subplots()
+    plots.titled(ax, "a run", reason, width=60)
+    lines = ax.get_title().split("\n")
+    plt.close(fig)
+    assert lines[1].startswith("FLAGGED: car 1") and len(lines) == 3
+    assert lines[-1].endswith("... (whole reason: summary.json)") and len(lines[-1]) <= 60
+    fig, ax = plt.subplots()
+    plots.titled(ax, "a run", "flagged: 5.0 m short of the stop", width=60)
+    assert ax.get_title().split("\n")[1:] == ["FLAGGED: 5.0 m short of the stop"]
+    plt.close(fig)

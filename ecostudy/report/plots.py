@@ -19,12 +19,17 @@ matplotlib.rcParams["text.parse_math"] = False
 
 def titled(ax, title, status="ok", below="", width=110, fontsize=10):
     """``title`` wrapped at ``width`` characters (a long name clipped the numbers), then ``below``,
-    and for a run that is not ``ok`` a line saying so with its reason, in red: a figure copied out
-    of its folder still says it is not a result to quote. The axes move down to make room."""
+    and for a run that is not ``ok`` a line saying so with its reason, in red, at most two lines (a
+    longer reason ends in "... (whole reason: summary.json)"): a figure copied out of its folder
+    still says it is not a result to quote. The axes move down to make room."""
     lines = (textwrap.wrap(title, width) or [""]) + ([below] if below else [])
     status = str(status)
     if status != "ok":
-        lines += textwrap.wrap(status.upper()[:7] + status[7:], width)[:2]
+        reason = textwrap.wrap(status.upper()[:7] + status[7:], width)
+        if len(reason) > 2:  # clipped, and saying so: the whole reason is in the run's files
+            reason = reason[:1] + textwrap.wrap(" ".join(reason[1:]), width, max_lines=1,
+                                                 placeholder=" ... (whole reason: summary.json)")
+        lines += reason
     ax.set_title("\n".join(lines), fontsize=fontsize, color=style.LIMIT["title" if status == "ok" else "not ok"])
     fig = ax.figure
     room = (len(lines) * 1.3 * fontsize / 72 + 0.15) / fig.get_figheight()  # [share of the height]
