@@ -372,3 +372,17 @@ def test_a_long_reason_in_a_title_says_it_is_clipped():
     plots.titled(ax, "a run", "flagged: 5.0 m short of the stop", width=60)
     assert ax.get_title().split("\n")[1:] == ["FLAGGED: 5.0 m short of the stop"]
     plt.close(fig)
+
+
+def test_a_front_whose_every_point_failed_draws_a_figure_that_says_so(metro):
+    """Every point of a front failed (no running time, no profile): the figures say so instead of
+    the command stopping with an internal error on NaN axis limits."""
+    track, train = metro
+    table, _ = sweep(track, train, "Noord", "Station", count=2, supplement_max=0.3, points=100)
+    failed = table.assign(running_time_s=np.nan, traction_energy_kWh=np.nan, net_energy_kWh=np.nan,
+                          marginal_saving_kWh_per_s=np.nan, status="failed: the solver stopped")
+    fig = plots.pareto_plot(failed, None, "front")
+    words = " ".join(t.get_text() for a in fig.axes for t in a.texts) + fig.axes[0].get_title()
+    assert f"all {len(table)} failed" in words and "FAILED" in fig.axes[0].get_title()
+    fig = plots.profiles_plot([], None, "front")
+    assert "no point of the front was solved" in " ".join(t.get_text() for t in fig.axes[0].texts)

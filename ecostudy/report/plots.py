@@ -82,6 +82,17 @@ def _save(fig, path, fmt=None, dpi=None):
     return style.save(fig, path, fmt, dpi)
 
 
+def _empty(fig, ax, title, message, path, fmt, dpi):
+    """A figure with nothing to draw (every run of it failed): ``title`` and ``message`` saying so, in
+    red, so the figure a user opens says why it is empty instead of the command stopping on it."""
+    for a in np.ravel(ax):
+        a.set_axis_off()
+    titled(np.ravel(ax)[0], title or "", "failed")
+    np.ravel(ax)[0].text(0.5, 0.5, message, ha="center", va="center", wrap=True, color=style.LIMIT["not ok"],
+                         transform=np.ravel(ax)[0].transAxes)
+    return _save(fig, path, fmt, dpi)
+
+
 def _speed_limit(ax, segment):
     """The speed limit of ``segment`` as steps, in the limit colour of every plot."""
     x, y = _steps(segment.limit, segment.distance)
@@ -165,6 +176,9 @@ def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None, r
     fig.subplots_adjust(left=0.13, right=0.97, top=0.85, bottom=0.09, hspace=0.1)
     fig.suptitle(title, fontsize=10)
     t = table["running_time_s"]
+    if not t.notna().any():
+        return _empty(fig, (ax, axm), "", f"no point of the front has a running time: all {len(table)} failed "
+                      "(pareto.csv's status)", path, fmt, dpi)
     ax.plot(t, table["traction_energy_kWh"], "o-", color=style.colour("traction"), label="traction (at the wheel)")
     ax.plot(t, table["net_energy_kWh"], "s--", color=style.colour("net energy"),
             label="net electrical (regeneration credited)")
@@ -220,6 +234,9 @@ def profiles_plot(results, path=None, title="", fmt=None, dpi=None):
     counted in the title."""
     fig, ax = figure(figsize=(9, 4.5))
     fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
+    if not results:
+        return _empty(fig, ax, title, "no point of the front was solved: no speed profile to draw (pareto.csv's "
+                      "status)", path, fmt, dpi)
     _speed_limit(ax, results[0].segment)
     for r, colour in zip(results, style.sequence(len(results))):
         p, study = r.profile, getattr(r, "study_time", False)  # a FrontPoint, or a RunResult of the library
