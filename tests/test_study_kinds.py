@@ -5,6 +5,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+import typer
 import yaml
 from typer.testing import CliRunner
 
@@ -14,6 +15,7 @@ from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.physics import davis_resistance
 from ecostudy.io.folder import Counts
+from ecostudy.io.writers import COMMANDS
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome, run_kind
 from ecostudy.studies.cases import case_key
 
@@ -86,3 +88,14 @@ def test_a_base_case_read_for_a_command_with_no_unused_entry_says_which_table_to
     from ecostudy.studies.cases import load_checked_study
     with pytest.raises(ValueError, match="'mass' has no entry in studies.cases.UNUSED"):
         load_checked_study(Path(__file__).resolve().parent.parent / "studies" / "default.yaml", "mass")
+
+
+def test_a_folder_of_another_kind_names_how_each_kind_is_run(study, tmp_path):
+    """A registered kind has no command of its own: a refusal names it as `ecostudy run --kind X`,
+    the built-in commands by their own names, and those names are the CLI's."""
+    assert COMMANDS <= set(typer.main.get_command(app).commands)
+    assert {s.name for s in STUDY_KINDS} - {"resistance"} <= COMMANDS
+    api.run_folder(study, kind="resistance", out=tmp_path / "res", plot=False)
+    r = CliRunner().invoke(app, ["pareto", "studies/default.yaml", "--out", str(tmp_path / "res")])
+    assert r.exit_code == 2 and ("holds the results of `ecostudy run --kind resistance` (its summary.json), not of "
+                                 "`ecostudy pareto`") in r.output, r.output

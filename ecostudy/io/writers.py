@@ -36,6 +36,17 @@ TEMPORARY = re.compile(r"\.(?:write-test|.+\.[A-Za-z0-9]+)[a-z0-9_]{8}\.tmp")
 SUBFOLDERS = ("steps",)  # the folders commands write inside an output folder (a closed-loop study's steps/)
 
 
+# the commands that write an output folder, by the kind their summary.json gives; a study kind registered
+# beyond them runs as ``ecostudy run --kind KIND`` (tests/test_study_kinds.py checks these against the CLI)
+COMMANDS = frozenset({"solve", "pareto", "compare", "journey", "network", "simulate", "heavyhaul", "calibrate",
+                      "validate", "run"})
+
+
+def command_of(kind: str) -> str:
+    """How a user runs the command or study kind ``kind``: ``ecostudy pareto``, ``ecostudy run --kind X``."""
+    return f"ecostudy {kind}" if kind in COMMANDS else f"ecostudy run --kind {kind}"
+
+
 def _kind_of(folder: Path) -> str | None:
     """The ``kind`` in a folder's summary.json, None where there is none or it cannot be read."""
     try:
@@ -74,8 +85,8 @@ def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: st
             raise InputError(problem(path / name, "", "is a folder where an output file goes"))
     other = _kind_of(path)
     if kind is not None and other is not None and other != kind:
-        raise InputError(problem(path, "--out", f"holds the results of `ecostudy {other}` (its summary.json), "
-                                 f"not of `ecostudy {kind}`: give another --out, or remove the folder"))
+        raise InputError(problem(path, "--out", f"holds the results of `{command_of(other)}` (its summary.json), "
+                                 f"not of `{command_of(kind)}`: give another --out, or remove the folder"))
     theirs = sorted({n for n in (*files, SUMMARY, REPORT) if (path / n).is_file()})
     if kind is not None and other is None and theirs and not (path / STORE).is_file():  # no ecostudy folder
         raise InputError(problem(path, "--out", f"holds {', '.join(theirs)} that no ecostudy command wrote (no "
