@@ -272,6 +272,59 @@ def test_an_sbpc_sample_is_estimated_dearer_as_its_sample_time_shrinks(spec, mea
     assert estimate[0.19] >= measured[0.19]
 
 
+def test_an_rspc_sample_is_estimated_dearer_by_the_sequences_its_horizon_enumerates():
+    """RSPC enumerates modes^N switching sequences a sample (six modes with the default DAS levels); its
+    constant is at N = 3. The estimate was that constant at any N (and a 4-level horizon of 8 modes
+    estimated like 6); it grows with the sequences, never below the constant."""
+    from ecostudy.studies.estimate import SAMPLE_SECONDS, spec_seconds
+    rspc = {"kind": "rspc"}
+    assert spec_seconds(rspc, 100) == spec_seconds({**rspc, "rspc": {"horizon": 3}}, 100) == SAMPLE_SECONDS["rspc"]
+    assert spec_seconds({**rspc, "rspc": {"horizon": 5}}, 100) == pytest.approx(36 * SAMPLE_SECONDS["rspc"])
+    assert spec_seconds({**rspc, "rspc": {"horizon": 6}}, 100) == pytest.approx(216 * SAMPLE_SECONDS["rspc"])
+    assert spec_seconds({**rspc, "rspc": {"horizon": 4}}, 100, modes=8) == pytest.approx(8 ** 4 / 6 ** 3
+                                                                                         * SAMPLE_SECONDS["rspc"])
+    assert spec_seconds({**rspc, "rspc": {"horizon": 1}}, 100) == SAMPLE_SECONDS["rspc"]
+
+
+def rspc_study(tmp_path, horizon, draws, levels=None):
+    """metro_monte_carlo.yaml's RSPC controller alone with the horizon N (and the train's DAS levels)."""
+    train = METRO
+    if levels is not None:
+        doc = load_yaml(METRO.read_text())
+        train = write_yaml(tmp_path / f"metro_{len(levels)}.yaml", {**doc, "das_handle_levels": levels})
+    doc = load_yaml((STUDIES / "metro_monte_carlo.yaml").read_text())
+    doc.update(track=str(AMS), train=str(train), output=str(tmp_path / "out"), draws=draws,
+               controllers=[{"name": "rspc", "kind": "rspc", "sample_time_s": 0.38, "rspc": {"horizon": horizon}}])
+    return write_yaml(tmp_path / f"rspc{horizon}_{len(levels or ())}.yaml", doc)
+
+
+def test_a_closed_loop_study_of_rspc_over_six_steps_is_refused_with_its_estimate(tmp_path):
+    """100 draws of RSPC at N = 6 were estimated at 2 min (6 ms a sample, as at N = 3); a whole run at
+    N = 6 took 636 CPU ms a sample, 114 times N = 3's 5.6 ms (draw 0, docs/guards.md): refused with its
+    estimate (1.3 s a sample, 216 times), and the same study at N = 3 passes."""
+    sizes.check_closed_loop_study(rspc_study(tmp_path, 3, 100), 2)
+    with pytest.raises(InputError) as refused:
+        sizes.check_closed_loop_study(rspc_study(tmp_path, 6, 100), 2)
+    text = str(refused.value)
+    for fragment in ("rspc6_0.yaml: study: 1 controllers x 100 draws: 100 runs", "7.2 h of computing",
+                     "3.6 h with 2 workers", "--force"):
+        assert fragment in text, text
+
+
+def test_an_rspc_run_is_estimated_over_its_trains_modes(tmp_path):
+    """A train with four traction and two braking levels gives RSPC eight modes: 8^3 sequences a sample
+    at N = 3 against the default levels' 6^3, in the check of every draw and in the file's."""
+    from ecostudy.studies.closedloop import expand
+    from ecostudy.studies.estimate import check_closed_loop
+    levels = [-1.0, -0.5, 0.0, 0.25, 0.5, 0.75, 1.0]
+    six, eight = (check_closed_loop(expand(path)[2], path) for path in (rspc_study(tmp_path, 3, 1),
+                                                                         rspc_study(tmp_path, 3, 1, levels)))
+    assert eight[0] == pytest.approx(8 ** 3 / 6 ** 3 * six[0])
+    sizes.check_closed_loop_study(rspc_study(tmp_path, 5, 100), 2)  # 100 x 200 samples x 0.22 s: 1.2 h, 0.6 h on 2
+    with pytest.raises(InputError, match=r"100 runs, an estimated 5.1 h of computing \(2.5 h with 2 workers\)"):
+        sizes.check_closed_loop_study(rspc_study(tmp_path, 5, 100, levels), 2)
+
+
 @pytest.mark.parametrize("controller, sample_time, fragments", [
     ({"kind": "sbpc", "variant": "multi", "block": 20, "transcription": "condensed"}, 0.01,
      ["sbpc: 7,600 samples of 0.01 s at K = 100", "10.9 h", "one run"]),

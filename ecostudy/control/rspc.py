@@ -5,8 +5,8 @@ over the six DAS modes of Remark 6.1.1 (traction at each DAS level, cruise, coas
 braking), predicts each with the space-domain model (6.2)-(6.3), drops those that leave the
 admissible set X (6.4: below the limits, here below the limits' braking curve so that a limit drop
 beyond the horizon can still be met; the train may not stop short) and applies the first mode of
-the cheapest (6.11-6.12). No solver: 6^N predictions per sample, pruned as they become
-infeasible, which is why the thesis keeps N short. Cost (6.7)-(6.8):
+the cheapest (6.11-6.12). No solver: 6^N sequences per sample (:func:`sequences`), pruned as they
+become infeasible, which is why the thesis keeps N short. Cost (6.7)-(6.8):
 
     J = sum_j (D_j / D) (1 - gamma_S) ((F_T - F_R) / F_Tmax)^2
         + gamma_S ((x1(0|k) + T_horizon - x1(N|k)) / T_horizon)^2
@@ -45,6 +45,22 @@ from ecostudy.core.plant import Cruise, Plant
 from ecostudy.ocp.phases import all_modes
 
 
+def rspc_modes(train):
+    """The modes RSPC switches among (Remark 6.1.1): each DAS traction level of ``train``, cruise,
+    coast (always: row 3 coasts between its checks) and each braking level; six with the default
+    levels (1, 0.75, 0.5, 0, -1)."""
+    return all_modes(train, coast=True)
+
+
+def sequences(modes, horizon):
+    """The switching sequences a sample enumerates over ``modes`` modes and a horizon of N steps,
+    before pruning: modes^N (the first sample's handle held over its pieces, then a mode a step).
+    Each is predicted step by step, a prefix shared by the sequences that extend it, so a sample
+    makes m + m^2 + ... + m^N predictions (about 1.2 m^N for six modes); a prefix that leaves X
+    drops every sequence that extends it (no bound on the cost prunes one)."""
+    return modes ** horizon
+
+
 class Rspc(Fallback):
     """``case``: a prepared case (``ocp.problem.prepare``: segment, nominal train, grid, limits);
     ``arrival``: the timetabled arrival [s] on the trip's clock; ``sample_time``: the loop's T_s
@@ -60,7 +76,7 @@ class Rspc(Fallback):
         self.gamma, self.margin, self.final_m = float(gamma), float(margin), float(final_m)
         train, segment, nodes = case.train, case.segment, case.nodes
         self.model = Plant(segment, train)
-        self.modes = all_modes(train, coast=True)  # Remark 6.1.1's six modes; row 3 coasts between its checks
+        self.modes = rspc_modes(train)
         self.coast = next(m for m in self.modes if m.kind == "coast")
         self.brake = min((m for m in self.modes if m.kind == "brake"), key=lambda m: m.level)  # the strongest
         self.f_max = train.traction.peak

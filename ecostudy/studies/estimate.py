@@ -11,7 +11,9 @@ The constants are measured on this project's shared 2-core machine (so they are 
   --kinds simulate [--loop-study studies/metro_terminal.yaml]``, busy machine, draw 0 of each
   controller): SBPC nominal 548 ms, two-step 384 ms, multi-objective 88 ms (simultaneous, K = 200) and
   52 ms (condensed, K = 100; 17-21 ms since each process runs one OpenBLAS thread, draws 0-2 with
-  ``python bench/bench_monte_carlo.py``, docs/closed_loop.md); SPPC nominal 59 ms (K = 200), two-step 147 ms (K = 100); RSPC 5.7 ms;
+  ``python bench/bench_monte_carlo.py``, docs/closed_loop.md); SPPC nominal 59 ms (K = 200), two-step 147 ms (K = 100); RSPC 5.7 ms
+  at its default horizon N = 3 with the six default DAS modes, scaled by the sequences it enumerates,
+  modes^N (:func:`rspc_scale`; ``python bench/bench_rspc.py --step-costs``);
   convex 8.4 ms at K = 100; a replay (open loop, ATO) 0.8-1.1 ms: :data:`SAMPLE_SECONDS`, to two
   digits. SBPC and SPPC plan over the samples left, so their grid matters less than their variant.
   SBPC's plan has a state on every sample to the arrival (k_f of them): at T_s = 0.38, 0.19 and
@@ -50,6 +52,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ecostudy.control.rspc import rspc_modes, sequences
 from ecostudy.core.defaults import DAS_TIME_LIMIT_S
 from ecostudy.core import kinematics
 from ecostudy.core.adhesion import TOP_SPEED, capped
@@ -59,6 +62,7 @@ from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, T
 from ecostudy.core.grid import make_grid, make_segment, node_limits
 from ecostudy.io.loaders import track_from_schema, train_from_schema, validate
 from ecostudy.io import schemas
+from ecostudy.io.loopfile import RspcSettings
 from ecostudy.io.trainschema import SECONDS_PER_POINT_NODE
 from ecostudy.ocp.problem import check_not_crawling, prepare
 
@@ -77,6 +81,8 @@ SBPC_HANDLES = ("brake_reserve", "terminal_reserve")
 # sparse NLP by Ipopt, the dense block handles by SLSQP; :func:`sbpc_scale`)
 SBPC_MEASURED_HORIZON = 200
 SBPC_GROWTH = {"simultaneous": 0.5, "condensed": 1.5}
+RSPC_MEASURED_HORIZON = 3  # RSPC's constant is at its default N = 3 with the six default DAS modes
+RSPC_MEASURED_MODES = 6
 CONVEX_SECONDS = 0.008         # [s] a convex sample's part that does not grow with K (the loop, the estimator)
 CONVEX_SECONDS_AT_200 = 0.0045  # [s] its SOCP's part at K = 200, growing as K^CONVEX_GROWTH
 CONVEX_GROWTH = 1.7
@@ -131,6 +137,16 @@ def sbpc_scale(horizon, transcription="simultaneous"):
     return max(1.0, horizon / SBPC_MEASURED_HORIZON) ** SBPC_GROWTH[transcription]
 
 
+def rspc_scale(horizon, modes=RSPC_MEASURED_MODES):
+    """How much dearer an RSPC sample is with a horizon of N = ``horizon`` steps over ``modes`` modes
+    (``control.rspc.rspc_modes``) than at the N = 3 and six modes its constant was measured with: the
+    ratio of the sequences it enumerates (``control.rspc.sequences``: modes^N, before the pruning,
+    which kept a whole run's sample at 4.1, 19 and 114 times N = 3's for N = 4, 5 and 6 against 6, 36
+    and 216, docs/guards.md), never below 1 (a sample's loop, plant and braking do not shrink with N:
+    0.20 and 0.43 times at N = 1 and 2)."""
+    return max(1.0, sequences(modes, horizon) / sequences(RSPC_MEASURED_MODES, RSPC_MEASURED_HORIZON))
+
+
 def horizon_samples(latest, sample_time):
     """SBPC's k_f: the samples of ``sample_time`` to the ``latest`` arrival (``core.kinematics.samples``;
     inf where a sample time too small makes their number overflow)."""
@@ -150,16 +166,19 @@ def sample_seconds(kind, points, variant="nominal", transcription="simultaneous"
     return REPLAY_SECONDS
 
 
-def spec_seconds(spec, points, horizon=SBPC_MEASURED_HORIZON):
+def spec_seconds(spec, points, horizon=SBPC_MEASURED_HORIZON, modes=RSPC_MEASURED_MODES):
     """:func:`sample_seconds` of a controller spec (a dict as a study file writes it, defaults left
     out, or every field) with a plan of ``horizon`` samples (:func:`horizon_samples`): SBPC nominal
     with blocks of 20 or longer and no reserves or terminal approach at :data:`SBPC_PLAIN_SECONDS`,
-    its other constants being measured with those and DAS levels (``metro_terminal.yaml``)."""
+    its other constants being measured with those and DAS levels (``metro_terminal.yaml``); RSPC
+    scaled to its horizon N over the train's ``modes`` (:func:`rspc_scale`)."""
     kind, variant = spec.get("kind", "convex"), spec.get("variant", "nominal")
     transcription = spec.get("transcription") or "simultaneous"
     if (kind, variant) == ("sbpc", "nominal") and spec.get("block", 20) >= 20 and not any(
             spec.get(handle) for handle in SBPC_HANDLES):
         return SBPC_PLAIN_SECONDS * sbpc_scale(horizon, transcription)
+    if kind == "rspc":
+        return SAMPLE_SECONDS["rspc"] * rspc_scale(RspcSettings(**spec.get("rspc") or {}).horizon, modes)
     return sample_seconds(kind, points, variant, transcription, horizon)
 
 
@@ -239,7 +258,7 @@ def check_closed_loop(cases, path):
         key = (tuple(sorted(truth.items())), case["from"], case["to"])
         if key not in seen:
             seen[key] = _true_all_out(case, truth)
-        fastest, cap, message = seen[key]
+        fastest, cap, message, modes = seen[key]
         label = f"{case['labels']['controller']} draw {case['labels']['draw']}"
         if message is not None or fastest > cap:
             why = message or f"its all-out time is {fastest:.0f} s"
@@ -247,7 +266,7 @@ def check_closed_loop(cases, path):
                                  f"x{truth['resistance']:.3g}, traction x{truth['traction']:.3g}) cannot reach the stop "
                                  f"({why}): the run would be simulated to the loop's cap of {cap:,.0f} s ({duration(cap)})")
         per_sample = spec_seconds(case["controller"], case["points"],
-                                  horizon_samples(case["window"][1], case["sample_time"]))
+                                  horizon_samples(case["window"][1], case["sample_time"]), modes)
         span = max(fastest, case["window"][1])
         samples = span / case["sample_time"]
         check_run(path, "controllers", f"{label}: {how_many(samples)} samples of {case['sample_time']:g} s", samples * per_sample)
@@ -256,16 +275,17 @@ def check_closed_loop(cases, path):
 
 
 def _true_all_out(case, truth):
-    """(all-out time of the draw's true train [s], the loop's time cap [s], why it cannot run or None)."""
+    """(all-out time of the draw's true train [s], the loop's time cap [s], why it cannot run or None,
+    the modes RSPC would switch among: the train's DAS levels, which the draw does not change)."""
     track = track_from_schema(validate(schemas.TrackFile, case["track"], "track"))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", EcostudyWarning)  # shown once when the study was expanded
         train = true_train(train_from_schema(validate(schemas.TrainFile, case["train"], "train"), "train"), truth)
-    segment = make_segment(track, train, case["from"], case["to"])
+    segment, modes = make_segment(track, train, case["from"], case["to"]), len(rspc_modes(train))
     cap = 20 * segment.distance + 600  # control.loop.run_loop's max_time
     nodes = make_grid(segment, case["points"])
     try:
         speeds = kinematics.envelope_speeds(segment, train, nodes, node_limits(segment, nodes))
     except InfeasibleError as exc:
-        return np.inf, cap, str(exc).removeprefix("infeasible: ")
-    return kinematics.running_time(speeds, nodes), cap, None
+        return np.inf, cap, str(exc).removeprefix("infeasible: "), modes
+    return kinematics.running_time(speeds, nodes), cap, None, modes

@@ -29,22 +29,25 @@ The constants are measured on this project's shared 2-core machine (pessimistic)
   whole-journey NLP (every segment at once) and every split's runs, one after the other
   (:func:`check_journey`).
 """
+import warnings
 from itertools import groupby
 from pathlib import Path
 
 import numpy as np
 
 from ecostudy.core.defaults import DAS_TIME_LIMIT_S
+from ecostudy.control.rspc import rspc_modes
 from ecostudy.core.budget import WORKER_BYTES, check_run, check_study, how_many
+from ecostudy.core.errors import EcostudyWarning
 from ecostudy.heavyhaul.linear import virtual_car_count
-from ecostudy.io.documents import read_document
-from ecostudy.io.loaders import consist_from_document, validate
+from ecostudy.io.documents import named_file, read_document
+from ecostudy.io.loaders import consist_from_document, read_train, validate
 from ecostudy.io.loopfile import SimulateFile
 from ecostudy.studies import closedloop
 from ecostudy.studies.batch import STUDY_KINDS
 from ecostudy.studies.journey import FRONT_COUNT
-from ecostudy.studies.estimate import (RUN_BYTES_PER_POINT, check_closed_loop, check_network, first_runs,
-                                       horizon_samples, run_seconds, spec_seconds)
+from ecostudy.studies.estimate import (RSPC_MEASURED_MODES, RUN_BYTES_PER_POINT, check_closed_loop, check_network,
+                                       first_runs, horizon_samples, run_seconds, spec_seconds)
 
 NETWORK_SECONDS_PER_STEP = 0.02
 # [bytes] a network command's process per grid point of its first runs: it keeps every segment's run
@@ -80,11 +83,12 @@ def check_closed_loop_study(path, workers=1, only=None, out=None):
     s = validate(SimulateFile, read_document(path), path)
     chosen = [c for c in s.controllers if not only or c.name in only]
     what = f"{len(chosen)} controllers x {s.draws} draws"
+    modes = train_modes(path, s.train) if any(c.kind == "rspc" for c in chosen) else RSPC_MEASURED_MODES
     per_run = []
     for c in chosen:
         sample_time = c.sample_time_s or s.sample_time_s
         samples = s.window_s[1] / sample_time
-        seconds = samples * spec_seconds(c.model_dump(), s.points, horizon_samples(s.window_s[1], sample_time))
+        seconds = samples * spec_seconds(c.model_dump(), s.points, horizon_samples(s.window_s[1], sample_time), modes)
         check_run(path, "controllers", f"{c.name}: {how_many(samples)} samples of {c.sample_time_s or s.sample_time_s:g} s "
                   f"at K = {s.points}", seconds)
         per_run += [seconds] * s.draws
@@ -93,6 +97,14 @@ def check_closed_loop_study(path, workers=1, only=None, out=None):
     runs = check_closed_loop(cases, path)
     check_study(path, what, [r for r, c in zip(runs, cases) if not only or c["labels"]["controller"] in only],
                 workers, study.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")
+
+
+def train_modes(path, train):
+    """The modes RSPC would switch among with the study ``path``'s train (its file ``train``, read
+    quietly: the study's expansion shows its warnings)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EcostudyWarning)
+        return len(rspc_modes(read_train(named_file(path, "train", train))[1]))
 
 
 def network_runs(study, path):
