@@ -39,11 +39,12 @@ sys.path.insert(0, str(ROOT))
 from bench import harness  # noqa: E402
 from bench.bench_das import TRIPS  # noqa: E402  (the two cases of Farooqi 2018 Tables 4.1 and 6.1)
 from ecostudy.control.loop import run_loop  # noqa: E402
-from ecostudy.control.rspc import Rspc, sequences  # noqa: E402
+from ecostudy.control.rspc import Rspc  # noqa: E402
 from ecostudy.core.plant import Plant, Truth  # noqa: E402
 from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.heuristics.ecodrive import drive, eco_coasting  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
+from ecostudy.ocp.phases import sequences  # noqa: E402
 from ecostudy.ocp.problem import prepare  # noqa: E402
 from ecostudy.studies.closedloop import _inputs, build_controller, controller_spec, expand, run_loop_case  # noqa: E402
 from ecostudy.studies.estimate import check_closed_loop, rspc_scale  # noqa: E402

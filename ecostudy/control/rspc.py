@@ -5,7 +5,7 @@ over the six DAS modes of Remark 6.1.1 (traction at each DAS level, cruise, coas
 braking), predicts each with the space-domain model (6.2)-(6.3), drops those that leave the
 admissible set X (6.4: below the limits, here below the limits' braking curve so that a limit drop
 beyond the horizon can still be met; the train may not stop short) and applies the first mode of
-the cheapest (6.11-6.12). No solver: 6^N sequences per sample (:func:`sequences`), pruned as they
+the cheapest (6.11-6.12). No solver: 6^N sequences per sample (``ocp.phases.sequences``), pruned as they
 become infeasible, which is why the thesis keeps N short. Cost (6.7)-(6.8):
 
     J = sum_j (D_j / D) (1 - gamma_S) ((F_T - F_R) / F_Tmax)^2
@@ -42,23 +42,7 @@ from ecostudy.control.fallback import Fallback
 from ecostudy.core import kinematics
 from ecostudy.core.physics import acceleration, davis_resistance
 from ecostudy.core.plant import Cruise, Plant
-from ecostudy.ocp.phases import all_modes
-
-
-def rspc_modes(train):
-    """The modes RSPC switches among (Remark 6.1.1): each DAS traction level of ``train``, cruise,
-    coast (always: row 3 coasts between its checks) and each braking level; six with the default
-    levels (1, 0.75, 0.5, 0, -1)."""
-    return all_modes(train, coast=True)
-
-
-def sequences(modes, horizon):
-    """The switching sequences a sample enumerates over ``modes`` modes and a horizon of N steps,
-    before pruning: modes^N (the first sample's handle held over its pieces, then a mode a step).
-    Each is predicted step by step, a prefix shared by the sequences that extend it, so a sample
-    makes m + m^2 + ... + m^N predictions (about 1.2 m^N for six modes); a prefix that leaves X
-    drops every sequence that extends it (no bound on the cost prunes one)."""
-    return modes ** horizon
+from ecostudy.ocp.phases import rspc_modes
 
 
 class Rspc(Fallback):

@@ -66,6 +66,22 @@ def all_modes(train: Train, coast: bool | None = None) -> list["Mode"]:
             + [Mode("coast", 0.0)] * coasts + [Mode("brake", lv) for lv in brakes])
 
 
+def rspc_modes(train: Train) -> list["Mode"]:
+    """The modes RSPC switches among (Remark 6.1.1): each DAS traction level of ``train``, cruise,
+    coast (always: row 3 coasts between its checks) and each braking level; six with the default
+    levels (1, 0.75, 0.5, 0, -1)."""
+    return all_modes(train, coast=True)
+
+
+def sequences(modes: int, horizon: int) -> int:
+    """The switching sequences a sample enumerates over ``modes`` modes and a horizon of N steps,
+    before pruning: modes^N (the first sample's handle held over its pieces, then a mode a step).
+    Each is predicted step by step, a prefix shared by the sequences that extend it, so a sample
+    makes m + m^2 + ... + m^N predictions (about 1.2 m^N for six modes); a prefix that leaves X
+    drops every sequence that extends it (no bound on the cost prunes one)."""
+    return int(modes ** horizon)
+
+
 def sequence(train: Train) -> list["Mode"]:
     """The phase sequence of every sector (module docstring): a leading coast, then all modes; a
     train whose ``das_handle_levels`` have no 0 has no coast phase at all."""

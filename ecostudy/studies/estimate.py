@@ -52,7 +52,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ecostudy.control.rspc import rspc_modes, sequences
+from ecostudy.ocp.phases import rspc_modes, sequences
 from ecostudy.core.defaults import DAS_TIME_LIMIT_S
 from ecostudy.core import kinematics
 from ecostudy.core.adhesion import TOP_SPEED, capped
@@ -139,8 +139,8 @@ def sbpc_scale(horizon, transcription="simultaneous"):
 
 def rspc_scale(horizon, modes=RSPC_MEASURED_MODES):
     """How much dearer an RSPC sample is with a horizon of N = ``horizon`` steps over ``modes`` modes
-    (``control.rspc.rspc_modes``) than at the N = 3 and six modes its constant was measured with: the
-    ratio of the sequences it enumerates (``control.rspc.sequences``: modes^N, before the pruning,
+    (``ocp.phases.rspc_modes``) than at the N = 3 and six modes its constant was measured with: the
+    ratio of the sequences it enumerates (``ocp.phases.sequences``: modes^N, before the pruning,
     which kept a whole run's sample at 4.1, 19 and 114 times N = 3's for N = 4, 5 and 6 against 6, 36
     and 216, docs/guards.md), never below 1 (a sample's loop, plant and braking do not shrink with N:
     0.20 and 0.43 times at N = 1 and 2)."""

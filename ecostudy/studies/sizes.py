@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ecostudy.core.defaults import DAS_TIME_LIMIT_S
-from ecostudy.control.rspc import rspc_modes
+from ecostudy.ocp.phases import rspc_modes
 from ecostudy.core.budget import WORKER_BYTES, check_run, check_study, how_many
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.heavyhaul.linear import virtual_car_count
