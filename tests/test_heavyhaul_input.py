@@ -5,11 +5,13 @@ cars' spacing, and the energy balance's scale."""
 import pandas as pd
 import pytest
 
+from ecostudy.core.errors import EcostudyWarning
 from ecostudy.heavyhaul.metrics import reasons
+from ecostudy.studies.heavyhaul import expand
 
 from .conftest import load_yaml, write_yaml
 from .test_heavyhaul_status import invoke, reference_table, refused
-from .test_heavyhaul_study import PAPER, study
+from .test_heavyhaul_study import PAPER, short_line, study
 
 
 def test_a_reference_table_not_starting_at_the_start_stop_is_refused(tmp_path):
@@ -76,3 +78,19 @@ def test_the_energy_balance_is_measured_against_its_largest_term_at_least_a_floo
     assert reasons({**falling, "balance_residual_kWh": 2.0}, 100, 0) == []  # 0.07 % of the grade's 3000 kWh
     assert reasons({**falling, "balance_residual_kWh": 4.0}, 100, 0)[0].startswith(
         "the energy balance does not close: residual 4.00 kWh, 0.13 % of the 3000 kWh of grade")
+
+
+def test_tunnels_on_a_heavy_haul_run_are_said_to_be_unmodelled_not_a_missing_consist_field(tmp_path):
+    """A consist file has no tunnel_resistance (a train file's field): the one warning names the
+    track file's tunnels between the stops and says the heavy-haul plant does not model them; a
+    tunnel beyond the stop is not named."""
+    track = load_yaml(short_line(tmp_path))
+    track["tunnels"] = [{"position_m": 2500, "length_m": 600, "cross_section_m2": 40},
+                        {"position_m": 5200, "length_m": 300, "cross_section_m2": 60}]  # beyond B (5000 m)
+    write_yaml(tmp_path / "tunnels.yaml", track)
+    with pytest.warns(EcostudyWarning) as caught:
+        expand(study(tmp_path, track=str(tmp_path / "tunnels.yaml")), tmp_path / "out")
+    assert [str(w.message) for w in caught] == [
+        f"{tmp_path / 'tunnels.yaml'}: tunnels: the heavy-haul plant does not model tunnel resistance (nor does its "
+        "single-mass reference; a consist file has no field for it): every tunnel between 'A' and 'B' (2500-3100 m, "
+        "40 m^2) costs nothing in these runs"]
