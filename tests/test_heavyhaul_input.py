@@ -7,6 +7,7 @@ import pytest
 
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.heavyhaul.metrics import reasons
+from ecostudy.io.loaders import load_consist
 from ecostudy.studies.heavyhaul import expand
 
 from .conftest import load_yaml, write_yaml
@@ -94,3 +95,25 @@ def test_tunnels_on_a_heavy_haul_run_are_said_to_be_unmodelled_not_a_missing_con
         f"{tmp_path / 'tunnels.yaml'}: tunnels: the heavy-haul plant does not model tunnel resistance (nor does its "
         "single-mass reference; a consist file has no field for it): every tunnel between 'A' and 'B' (2500-3100 m, "
         "40 m^2) costs nothing in these runs"]
+
+
+def test_a_stiffness_outside_the_range_of_freight_draft_gear_is_warned_of_naming_file_field_range_and_sources(tmp_path):
+    """The published linear equivalents of a coupling of two freight draft gears run from 10 488 kN/m
+    (Zhang & Zhuan) to 23 851 kN/m (two Miner TF-880 gears at their maximum capacity); outside
+    5000-50 000 kN/m the couplers' and the draft gear's loading stiffness are warned of, one line
+    each; the shipped consist (10 488, 13 984 and 6992 kN/m) loads without a warning."""
+    load_consist(PAPER)  # EcostudyWarning is an error in the tests
+    consist = load_yaml(PAPER)
+    consist["couplers"]["stiffness_kN_per_m"] = 2000
+    consist["draft_gear"]["loading_stiffness_kN_per_m"] = 2e5
+    write_yaml(tmp_path / "odd.yaml", consist)
+    with pytest.warns(EcostudyWarning) as caught:
+        load_consist(tmp_path / "odd.yaml")
+    sources = ("the range plausible for freight draft gear (published linear equivalents of a coupling of two freight "
+               "draft gears run from 10488 kN/m (Zhang & Zhuan 2013, Table II) to 23851 kN/m (two Miner TF-880 AAR "
+               "M-901E gears in series at their maximum capacity); the range is half the lowest to twice the highest, "
+               "docs/heavyhaul.md 'Consist files')")
+    assert [str(w.message) for w in caught] == [
+        f"{tmp_path / 'odd.yaml'}: couplers.stiffness_kN_per_m: 2000 kN/m is outside 5000-50000 kN/m, {sources}",
+        f"{tmp_path / 'odd.yaml'}: draft_gear.loading_stiffness_kN_per_m: 200000 kN/m is outside 5000-50000 kN/m, "
+        f"{sources}"]

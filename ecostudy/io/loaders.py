@@ -365,6 +365,8 @@ def consist_from_document(document: Mapping[str, Any], where: Where) -> Consist:
         for name in sorted(set(c.types) - {g.type for g in c.vehicles}):  # a typo in a group's type reads like this
             warnings.warn(problem(where, f"types.{name}", "no vehicle group is of this type: it is not in the "
                                   "train"), EcostudyWarning, stacklevel=2)
+        for field, what in c.implausible():
+            warnings.warn(problem(where, field, what), EcostudyWarning, stacklevel=2)
 
     def envelope(spec: Any) -> Envelope | None:
         if spec is None:
