@@ -4,6 +4,7 @@ from typing import ClassVar, Literal, Optional, Self
 
 from pydantic import Field, model_validator
 
+from ecostudy.core.defaults import DRAFT_GEAR_TRAVEL_M
 from ecostudy.io.schemabase import Strict
 
 
@@ -64,6 +65,9 @@ class Couplers(Strict):
     stiffness_kN_per_m: float = Field(gt=0, le=1e6)
     damping_kNs_per_m: float = Field(ge=0, le=1e5)
     force_limit_kN: float = Field(gt=0, le=1e5, description="Largest allowed |in-train force|.")
+    draft_gear_travel_m: float = Field(DRAFT_GEAR_TRAVEL_M, gt=0, le=1, description="How far a coupling closes "
+                                       "beyond its slack before its two draft gears go solid (default: 2 x 3.25 in, "
+                                       "AAR M-901E Group J); a run closing one further is flagged.")
 
 
 class AirBrake(Strict):

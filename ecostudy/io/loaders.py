@@ -382,4 +382,5 @@ def consist_from_document(document: Mapping[str, Any], where: Where) -> Consist:
                    dynamic_brake=tuple(envelope(v.dynamic_brake) for v in cars),
                    pneumatic_brake=np.array([v.pneumatic_brake_kN * units.KN for v in cars]),
                    stiffness=c.couplers.stiffness_kN_per_m * units.KN, damping=c.couplers.damping_kNs_per_m * units.KN,
-                   force_limit=c.couplers.force_limit_kN * units.KN, **in_train_physics(c))
+                   force_limit=c.couplers.force_limit_kN * units.KN, draft_gear_travel=c.couplers.draft_gear_travel_m,
+                   **in_train_physics(c))

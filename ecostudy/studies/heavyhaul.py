@@ -270,7 +270,7 @@ def run_heavyhaul_case(case):
 def _run(case):
     consist, controller, record, reference, plant = drive(case)
     summary = {**summarise(consist, controller, record, reference, controller.locos, case["stop_tolerance_m"]),
-               **in_train_metrics(plant.history, consist), **closing_metrics(plant.closest, consist)}
+               **in_train_metrics(plant.history, consist), **closing_metrics(plant.closest, consist, plant.travel)}
     why = reasons(summary, case["max_samples"], summary["over_budget_count"],
                   Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH,
                              case["arrival_tolerance_percent"] / 100, case["arrival_tolerance_s"]))
@@ -286,7 +286,7 @@ IN_TRAIN = ("draft_max_kN", "draft_coupler", "draft_position_m", "draft_time_s",
             "buff_position_m", "buff_time_s", "run_ins_count", "run_outs_count", "fatigue_damage", "fatigue_damage_max",
             "fatigue_damage_coupler", "rainflow_cycles_over_100kN_count",  # metrics.in_train_metrics
             "compression_max_m", "compression_coupler", "compression_position_m", "compression_time_s",
-            "compression_spacing_m")  # metrics.closing_metrics
+            "compression_spacing_m", "compression_limit_m")  # metrics.closing_metrics
 COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN", "force_limit_kN",
            "force_mean_kN", "force_std_kN", "energy_total_kWh", "traction_kWh", "dynamic_brake_kWh",
            "wagon_brake_kWh", "J_force", "J_tracking", "J_energy", "J_braking", "dynamic_brake_use_max",
