@@ -269,14 +269,17 @@ def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
     if metrics["force_max_kN"] > metrics["force_limit_kN"]:
         out.append(f"largest coupler force {past(metrics['force_max_kN'], metrics['force_limit_kN'], 1, 'f')} kN above the consist's "
                    f"{metrics['force_limit_kN']:g} kN limit")
-    closed, travel, spacing = (metrics.get(f"compression_{k}_m", v) for k, v in (("max", 0.0), ("limit", np.inf),
-                                                                                    ("spacing", np.inf)))
-    past_limits = [f"its draft gears' travel of {travel:.3f} m or more (couplers.draft_gear_travel_m; with draft_gear "
-                   "on, plus half the slack): draft gear bottomed out, the cars overlap"] * (closed >= travel) + [
-        f"its cars' {spacing:.2f} m spacing or more: the cars would pass through each other"] * (closed >= spacing)
-    if past_limits:
+    closed = metrics.get("compression_max_m", 0.0)
+    travel, spacing = metrics.get("compression_limit_m", np.inf), metrics.get("compression_spacing_m", np.inf)
+    beyond = []
+    if closed >= travel:  # the gears are solid: the plant's couplers have no end stop
+        beyond.append(f"its draft gears' travel of {travel:.3f} m or more (couplers.draft_gear_travel_m; with "
+                      "draft_gear on, plus half the slack): draft gear bottomed out, the cars overlap")
+    if closed >= spacing:
+        beyond.append(f"its cars' {spacing:.2f} m spacing or more: the cars would pass through each other")
+    if beyond:
         out.append(f"coupler {metrics['compression_coupler']} ({metrics['compression_position_m']:.0f} m behind the head) "
-                   f"closed {closed:.3f} m at {metrics['compression_time_s']:.0f} s, {', and '.join(past_limits)} (the "
+                   f"closed {closed:.3f} m at {metrics['compression_time_s']:.0f} s, {', and '.join(beyond)} (the "
                    "plant's couplers have no end stop: they are too soft for the forces)")
     if metrics["speed_excess_kmh"] * KMH > tolerances.speed_mps:
         out.append(f"a car ran {past(metrics['speed_excess_kmh'], tolerances.speed_mps / KMH, 1, 'f')} km/h over the line's limit "
