@@ -27,6 +27,13 @@ DAS_TIME_LIMIT_S = 60.0
 """The time limit of each driver-advice MINLP search (``--das minlp``, a study's ``das_time_limit_s``)
 [s]: on the default study the search finds the phases' pattern and stops at it (docs/das.md)."""
 
+DRAFT_GEAR_TRAVEL_M = 2 * 3.25 * 0.0254
+"""How far a freight coupling closes beyond its free slack before its draft gears go solid [m]: two
+gears in series, one at each car's end, each with the 3.25 in of travel of AAR M-901E Group J (Railway
+Age, "For Miner, a 'Milestone'"), 0.1651 m. The default of a consist file's
+``couplers.draft_gear_travel_m``; a heavy-haul run that closes a coupling further is flagged
+(docs/heavyhaul.md, "Run status")."""
+
 MAX_SUPPLEMENT_PERCENT = 200.0
 """The largest running-time supplement over the all-out time a file or an option may give [%]
 (a Pareto front's reach too); no timetable asks for more."""

@@ -9,6 +9,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ecostudy.core.adhesion import Adhesion
+from ecostudy.core.defaults import DRAFT_GEAR_TRAVEL_M
 from ecostudy.core.physics import EfficiencyMap, Envelope
 from ecostudy.core.units import FloatArray, Numeric
 
@@ -215,6 +216,7 @@ class Consist:
     air_brake: AirBrake | None = None    # the plant's air-brake propagation, where the file gives it
     draft_gear: DraftGear | None = None  # the plant's draft gears, where the file gives them
     notches: Notches | None = None        # the locomotives' throttle and dynamic-brake notches, where the file gives them
+    draft_gear_travel: float = DRAFT_GEAR_TRAVEL_M  # [m] a coupling closes beyond its slack before its draft gears go solid
 
     @property
     def cars(self) -> int:

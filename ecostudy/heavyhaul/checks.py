@@ -1,5 +1,7 @@
 """What a heavy-haul study checks before it runs: can the consist start on the route's ruling grade
-without breaking a coupler, and does the horizon fit the trip."""
+without breaking a coupler, does the horizon fit the trip, and what of the line the plant leaves out."""
+from dataclasses import replace
+
 import numpy as np
 
 from ecostudy.core.physics import GRAVITY
@@ -82,3 +84,13 @@ def samples_to_start(needed, rate, groups):
     """Samples the locomotives need to ramp from 0 to the traction ``needed`` [N] at ``rate`` [N per
     sample per locomotive (virtual) car], ``groups`` of them ramping together."""
     return needed / (rate * groups)
+
+
+def unmodelled_tunnels(track, from_stop, to_stop):
+    """(the track without its tunnels, those between the stops as 'start-end m, area m^2; ...' or
+    None): neither the cascade plant nor its single-mass reference models tunnel resistance (a
+    consist file has no field for it, unlike a train file's ``tunnel_resistance``), so a tunnel costs
+    a heavy-haul run nothing; the track is cut without them and the study says so."""
+    low, high = sorted((track.stops[from_stop], track.stops[to_stop]))
+    on_run = [(p, n, a) for p, n, a in sorted(track.tunnels) if p < high and p + n > low]
+    return replace(track, tunnels=()), "; ".join(f"{p:g}-{p + n:g} m, {a:g} m^2" for p, n, a in on_run) or None

@@ -219,13 +219,14 @@ def in_train_metrics(history, consist):
             "rainflow_cycles_over_100kN_count": float(sum(n for c in cycles for r, _, n in c if r >= 100 * KN))}
 
 
-def closing_metrics(closest, consist):
+def closing_metrics(closest, consist, travel):
     """The most compressed coupling of a run (the plant's ``closest``, a
     :class:`~ecostudy.heavyhaul.plant.Closing`): its compression [m], which coupler (1: behind the
-    head car), how far behind the head's front [m], when [s], and its coupled spacing [m]."""
+    head car), how far behind the head's front [m], when [s], its coupled spacing [m], and how far a
+    coupling closes before its draft gears are solid (``travel``, the plant's) [m]."""
     return {"compression_max_m": closest.compression, "compression_coupler": closest.coupler + 1,
             "compression_position_m": float(np.cumsum(consist.length)[closest.coupler]),  # its cars' ends meet there
-            "compression_time_s": closest.time, "compression_spacing_m": closest.spacing}
+            "compression_time_s": closest.time, "compression_spacing_m": closest.spacing, "compression_limit_m": travel}
 
 
 def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
@@ -268,11 +269,18 @@ def reasons(metrics, samples, over_budget_count, tolerances=Tolerances()):
     if metrics["force_max_kN"] > metrics["force_limit_kN"]:
         out.append(f"largest coupler force {past(metrics['force_max_kN'], metrics['force_limit_kN'], 1, 'f')} kN above the consist's "
                    f"{metrics['force_limit_kN']:g} kN limit")
-    if metrics.get("compression_max_m", 0.0) >= metrics.get("compression_spacing_m", np.inf):
+    closed = metrics.get("compression_max_m", 0.0)
+    travel, spacing = metrics.get("compression_limit_m", np.inf), metrics.get("compression_spacing_m", np.inf)
+    beyond = []
+    if closed >= travel:  # the gears are solid: the plant's couplers have no end stop
+        beyond.append(f"its draft gears' travel of {travel:.3f} m or more (couplers.draft_gear_travel_m; with "
+                      "draft_gear on, plus half the slack): draft gear bottomed out, the cars overlap")
+    if closed >= spacing:
+        beyond.append(f"its cars' {spacing:.2f} m spacing or more: the cars would pass through each other")
+    if beyond:
         out.append(f"coupler {metrics['compression_coupler']} ({metrics['compression_position_m']:.0f} m behind the head) "
-                   f"closed {metrics['compression_max_m']:.2f} m at {metrics['compression_time_s']:.0f} s, its cars' "
-                   f"{metrics['compression_spacing_m']:.2f} m spacing or more: the cars would pass through each other "
-                   "(the couplers are far too soft for the forces)")
+                   f"closed {closed:.3f} m at {metrics['compression_time_s']:.0f} s, {', and '.join(beyond)} (the "
+                   "plant's couplers have no end stop: they are too soft for the forces)")
     if metrics["speed_excess_kmh"] * KMH > tolerances.speed_mps:
         out.append(f"a car ran {past(metrics['speed_excess_kmh'], tolerances.speed_mps / KMH, 1, 'f')} km/h over the line's limit "
                    f"(tolerance {tolerances.speed_mps / KMH:g} km/h)")

@@ -89,12 +89,14 @@ LOSSES = ("running_resistance", "curve_resistance", "grade", "coupler_damping", 
 
 
 class Closing(NamedTuple):
-    """The most compressed coupling so far, by its compression over its coupled spacing l_i."""
+    """The most compressed coupling so far, by its compression over its limit: the smaller of its
+    draft gears' travel (:attr:`CascadePlant.travel`) and its coupled spacing l_i."""
 
     compression: float = 0.0  # how much shorter than l_i the two cars' centres came [m] (> 0 compressed)
     coupler: int = 0          # which (0: behind the head car)
     time: float = 0.0         # when [s]
     spacing: float = np.inf   # its l_i [m]: compressed more, the cars' centres pass each other
+    limit: float = np.inf     # min(travel, l_i) [m]: compressed more, the gears are solid (or the cars pass)
 
 
 class CascadePlant:
@@ -115,7 +117,11 @@ class CascadePlant:
         self.history = []  # per step: (times [s], coupler forces [N] (points, couplers)) at the integrator's points
         self.n = consist.cars
         self.spacing = 0.5 * (consist.length[:-1] + consist.length[1:])
-        self.closest = Closing(spacing=float(self.spacing[0]) if self.n > 1 else np.inf)  # most compressed (:meth:`closing`)
+        # a coupling closes this far before its draft gears are solid: their travel (+ half the slack, the draft gear on)
+        self.travel = consist.draft_gear_travel + (0.5 * self.gear.slack if self.gear is not None else 0.0)
+        self.limit = np.minimum(self.travel, self.spacing)
+        self.closest = Closing(spacing=float(self.spacing[0]) if self.n > 1 else np.inf,  # most compressed (:meth:`closing`)
+                               limit=float(self.limit[0]) if self.n > 1 else np.inf)
         self.loco = np.array([k == "locomotive" for k in consist.kinds])
         self.traction_limits = self._limits(consist.traction)
         self.dynamic_limits = self._limits(consist.dynamic_brake)
@@ -336,13 +342,14 @@ class CascadePlant:
 
     def closing(self, times, positions):
         """Keep in :attr:`closest` the most compressed coupling at ``times`` [s] (``positions``
-        (cars, points) [m]) if more so, relative to its spacing, than the one kept."""
+        (cars, points) [m]) if more so, relative to its limit (:class:`Closing`), than the one kept."""
         if self.n < 2:
             return
-        share = 1.0 - (positions[:-1] - positions[1:]) / self.spacing[:, None]
+        share = (self.spacing[:, None] - (positions[:-1] - positions[1:])) / self.limit[:, None]
         j, k = np.unravel_index(np.argmax(share), share.shape)
-        if share[j, k] > self.closest.compression / self.closest.spacing:  # 0 / inf: none kept yet
-            self.closest = Closing(float(share[j, k] * self.spacing[j]), int(j), float(times[k]), float(self.spacing[j]))
+        if share[j, k] > self.closest.compression / self.closest.limit:  # 0 / inf: none kept yet
+            self.closest = Closing(float(share[j, k] * self.limit[j]), int(j), float(times[k]), float(self.spacing[j]),
+                                   float(self.limit[j]))
 
     def holding_brakes(self, positions, creep):
         """The wagons' brake forces [N, <= 0; 0 for a locomotive] that hold the train standing at

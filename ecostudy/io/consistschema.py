@@ -4,6 +4,7 @@ from typing import ClassVar, Literal, Optional, Self
 
 from pydantic import Field, model_validator
 
+from ecostudy.core.defaults import DRAFT_GEAR_TRAVEL_M
 from ecostudy.io.schemabase import Strict
 
 
@@ -48,10 +49,25 @@ class Group(Strict):
     count: int = Field(1, ge=1, le=1000)
 
 
+# A coupling joins two freight draft gears in series (one at each car's end). Published linear
+# equivalents of its stiffness: Zhang & Zhuan's k = 10 488 kN/m (Table II) to 23 851 kN/m, two Miner
+# TF-880 gears (AAR M-901E) at their maximum capacity, 858 000 lbf at 3.15 in (Miner's specification);
+# outside half the lowest to twice the highest (rounded) a value is warned of (docs/heavyhaul.md,
+# "Consist files": the sources, and that the margin is ecostudy's choice, not theirs)
+PLAUSIBLE_STIFFNESS_KN_PER_M = (5e3, 5e4)
+STIFFNESS_SOURCES = ("published linear equivalents of a coupling of two freight draft gears run from 10488 kN/m "
+                     "(Zhang & Zhuan 2013, Table II) to 23851 kN/m (two Miner TF-880 AAR M-901E gears in series at "
+                     "their maximum capacity); the range is half the lowest to twice the highest, docs/heavyhaul.md "
+                     "'Consist files'")
+
+
 class Couplers(Strict):
     stiffness_kN_per_m: float = Field(gt=0, le=1e6)
     damping_kNs_per_m: float = Field(ge=0, le=1e5)
     force_limit_kN: float = Field(gt=0, le=1e5, description="Largest allowed |in-train force|.")
+    draft_gear_travel_m: float = Field(DRAFT_GEAR_TRAVEL_M, gt=0, le=1, description="How far a coupling closes "
+                                       "beyond its slack before its two draft gears go solid (default: 2 x 3.25 in, "
+                                       "AAR M-901E Group J); a run closing one further is flagged.")
 
 
 class AirBrake(Strict):
@@ -119,3 +135,13 @@ class ConsistFile(Strict):
         if not any(self.types[g.type].kind == "locomotive" for g in self.vehicles):
             raise ValueError("vehicles: a consist needs a locomotive")
         return self
+
+    def implausible(self) -> list[tuple[str, str]]:
+        """(field, problem) of each stiffness a coupling's loading follows (the couplers', the draft
+        gear's loading one) outside :data:`PLAUSIBLE_STIFFNESS_KN_PER_M`: a warning, not a refusal."""
+        low, high = PLAUSIBLE_STIFFNESS_KN_PER_M
+        given = [("couplers.stiffness_kN_per_m", self.couplers.stiffness_kN_per_m)]
+        if self.draft_gear is not None:
+            given.append(("draft_gear.loading_stiffness_kN_per_m", self.draft_gear.loading_stiffness_kN_per_m))
+        return [(field, f"{k:g} kN/m is outside {low:g}-{high:g} kN/m, the range plausible for freight draft gear "
+                 f"({STIFFNESS_SOURCES})") for field, k in given if not low <= k <= high]

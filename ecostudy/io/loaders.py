@@ -365,6 +365,8 @@ def consist_from_document(document: Mapping[str, Any], where: Where) -> Consist:
         for name in sorted(set(c.types) - {g.type for g in c.vehicles}):  # a typo in a group's type reads like this
             warnings.warn(problem(where, f"types.{name}", "no vehicle group is of this type: it is not in the "
                                   "train"), EcostudyWarning, stacklevel=2)
+        for field, what in c.implausible():
+            warnings.warn(problem(where, field, what), EcostudyWarning, stacklevel=2)
 
     def envelope(spec: Any) -> Envelope | None:
         if spec is None:
@@ -380,4 +382,5 @@ def consist_from_document(document: Mapping[str, Any], where: Where) -> Consist:
                    dynamic_brake=tuple(envelope(v.dynamic_brake) for v in cars),
                    pneumatic_brake=np.array([v.pneumatic_brake_kN * units.KN for v in cars]),
                    stiffness=c.couplers.stiffness_kN_per_m * units.KN, damping=c.couplers.damping_kNs_per_m * units.KN,
-                   force_limit=c.couplers.force_limit_kN * units.KN, **in_train_physics(c))
+                   force_limit=c.couplers.force_limit_kN * units.KN, draft_gear_travel=c.couplers.draft_gear_travel_m,
+                   **in_train_physics(c))

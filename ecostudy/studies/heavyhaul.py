@@ -28,7 +28,7 @@ from ecostudy.core.units import KMH, KN, KWH
 from ecostudy.core.status import OK, part, unproven_columns, unproven_solves
 from ecostudy.heavyhaul.airbrake import application_time, brake_lag
 from ecostudy.heavyhaul.checks import (braking_asked, reference_problems, ruling_grade, samples_to_start,
-                                       starting_coupler_force)
+                                       starting_coupler_force, unmodelled_tunnels)
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
 from ecostudy.heavyhaul.linear import fence
 from ecostudy.heavyhaul.loop import reduced_state, run
@@ -93,9 +93,16 @@ def expand(path, out=None):
                if getattr(s, name) and getattr(consist, name) is None]
     if missing:
         raise InputError(missing)
-    track_doc, track = read_track(named_file(path, "track", s.track))  # a bad field: in its file, as it names it
+    track_path = named_file(path, "track", s.track)
+    track_doc, track = read_track(track_path)  # a bad field: in its file, as it names it
     check_fits(consist_path, single_mass(consist, 1.0), track, "vehicles")
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
+    track, tunnels = unmodelled_tunnels(track, from_stop, to_stop)  # not a train's missing tunnel_resistance
+    if tunnels:
+        warnings.warn(problem(track_path, "tunnels", f"the heavy-haul plant does not model tunnel resistance (nor does "
+                              f"its single-mass reference; a consist file has no field for it): every tunnel between "
+                              f"'{from_stop}' and '{to_stop}' ({tunnels}) costs nothing in these runs"),
+                      EcostudyWarning, stacklevel=2)
     segment = make_segment(track, single_mass(consist, 1.0), from_stop, to_stop)
     grade = ruling_grade(segment, float(consist.length.sum()))
     force, needed = starting_coupler_force(consist, grade)
@@ -188,7 +195,8 @@ def case_plant(case):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", EcostudyWarning)  # shown once when the study was expanded
         consist = consist_from_document(case["consist"], "consist")
-        track = track_from_schema(schemas.TrackFile.model_validate(case["track"]))
+        track = unmodelled_tunnels(track_from_schema(schemas.TrackFile.model_validate(case["track"])), case["from"],
+                                   case["to"])[0]
     r = case["reference"]
     reference = Reference(*(np.array(r[k]) for k in ("distance", "speeds", "times")), r["energy"])
     plant = CascadePlant(consist, make_segment(track, single_mass(consist, 1.0), case["from"], case["to"]),
@@ -262,7 +270,7 @@ def run_heavyhaul_case(case):
 def _run(case):
     consist, controller, record, reference, plant = drive(case)
     summary = {**summarise(consist, controller, record, reference, controller.locos, case["stop_tolerance_m"]),
-               **in_train_metrics(plant.history, consist), **closing_metrics(plant.closest, consist)}
+               **in_train_metrics(plant.history, consist), **closing_metrics(plant.closest, consist, plant.travel)}
     why = reasons(summary, case["max_samples"], summary["over_budget_count"],
                   Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH,
                              case["arrival_tolerance_percent"] / 100, case["arrival_tolerance_s"]))
@@ -278,7 +286,7 @@ IN_TRAIN = ("draft_max_kN", "draft_coupler", "draft_position_m", "draft_time_s",
             "buff_position_m", "buff_time_s", "run_ins_count", "run_outs_count", "fatigue_damage", "fatigue_damage_max",
             "fatigue_damage_coupler", "rainflow_cycles_over_100kN_count",  # metrics.in_train_metrics
             "compression_max_m", "compression_coupler", "compression_position_m", "compression_time_s",
-            "compression_spacing_m")  # metrics.closing_metrics
+            "compression_spacing_m", "compression_limit_m")  # metrics.closing_metrics
 COLUMNS = ("tracking_mean_mps", "tracking_std_mps", "force_max_kN", "force_max_braking_kN", "force_limit_kN",
            "force_mean_kN", "force_std_kN", "energy_total_kWh", "traction_kWh", "dynamic_brake_kWh",
            "wagon_brake_kWh", "J_force", "J_tracking", "J_energy", "J_braking", "dynamic_brake_use_max",
