@@ -256,6 +256,17 @@ def test_a_misspelt_study_field_is_named_with_the_field_it_is_near(tmp_path):
     assert "did you mean" not in r.output
 
 
+def test_a_field_given_in_another_unit_is_one_line_naming_the_field_and_its_unit(tmp_path):
+    """`mass_kg` for `mass_t` was two lines ('mass_t: missing field', 'mass_kg: unknown field'): one
+    slip is one line, naming the field the file means and the unit it is in."""
+    doc = load_yaml(METRO)
+    doc["mass_kg"] = doc.pop("mass_t") * 1000
+    train = write_yaml(tmp_path / "t.yaml", doc)
+    r = run("solve", "--track", AMS, "--train", train, "--time", 80, "--out", tmp_path / "o")
+    assert_one_line_error(r, f"{train}: mass_kg: unknown field; did you mean mass_t (in t, not kg)?")
+    assert "missing field" not in r.output
+
+
 def test_a_csv_given_as_a_track_says_the_file_is_read_as_yaml_or_json(tmp_path):
     """A track file is YAML or TTOBench JSON: a CSV given as --track (parsed as YAML, one string)
     says so, where 'expected a mapping of fields at the top level' left the user to guess why."""

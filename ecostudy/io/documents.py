@@ -116,14 +116,27 @@ def _field_path(loc: Sequence[int | str]) -> str:
 NEAR_MISS = 0.8
 
 
-def _near_miss(schema: type[BaseModel], loc: Sequence[object], data: object) -> str:
-    """'; did you mean X?' when the unknown top-level field at ``loc`` is a near miss
-    (:data:`NEAR_MISS`) of a field of ``schema`` the document does not give; else ''."""
+def _near(schema: type[BaseModel], loc: Sequence[object], data: object) -> list[str]:
+    """The fields of ``schema`` the document does not give that the unknown top-level field at
+    ``loc`` is taken for: a near miss (:data:`NEAR_MISS`), or the same name in another unit
+    (``mass_kg`` for ``mass_t``: equal but for the part after the last underscore)."""
     if len(loc) != 1 or not isinstance(data, Mapping):
-        return ""
-    near = [k for k in difflib.get_close_matches(str(loc[0]), sorted(_names(schema)), n=3, cutoff=NEAR_MISS)
-            if k not in data]
-    return f"; did you mean {' or '.join(near)}?" if near else ""
+        return []
+    given, names = str(loc[0]), sorted(_names(schema))
+    stem = given.rpartition("_")[0]
+    near = difflib.get_close_matches(given, names, n=3, cutoff=NEAR_MISS)
+    near += [k for k in names if stem and k.rpartition("_")[0] == stem and k not in near]
+    return [k for k in near if k not in data]
+
+
+def _near_miss(schema: type[BaseModel], loc: Sequence[object], data: object) -> str:
+    """'; did you mean X?' for the fields :func:`_near` finds, with the unit X is in where only the
+    unit differs ('; did you mean mass_t (in t, not kg)?'); else ''."""
+    given = str(loc[0]) if loc else ""
+    said = [k + (f" (in {k.rpartition('_')[2]}, not {given.rpartition('_')[2]})"
+                 if given.rpartition("_")[0] and k.rpartition("_")[0] == given.rpartition("_")[0] else "")
+            for k in _near(schema, loc, data)]
+    return f"; did you mean {' or '.join(said)}?" if said else ""
 
 
 def _names(schema: type[BaseModel]) -> set[str]:
@@ -179,8 +192,12 @@ def validate(schema: type[Model], data: object, path: str | PathLike[str],
         if other:  # a whole file of another kind: one line, not one per field
             raise InputError(problem(path, "", other)) from None
         lines: list[str] = []
-        for err in exc.errors():
+        errors = exc.errors()
+        meant = {k for err in errors if err["type"] == "extra_forbidden" for k in _near(schema, err["loc"], data)}
+        for err in errors:
             loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]
+            if err["type"] == "missing" and len(loc) == 1 and loc[0] in meant:
+                continue  # said with the unknown field taken for it: one line for one slip
             msg = err["msg"].removeprefix("Value error, ")
             if err["type"] == "extra_forbidden":
                 msg = "unknown field" + _near_miss(schema, loc, data)
