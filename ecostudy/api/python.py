@@ -18,6 +18,7 @@ from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFas
 from ecostudy.core.status import Judged, Status, worst
 from ecostudy.core.types import Timing, Track, Train, Window
 from ecostudy.core.units import PERCENT
+from ecostudy.io.incode import built_problems
 from ecostudy.io.loaders import chosen_stops
 from ecostudy.io.runsummary import RunSummary
 from ecostudy.ocp.problem import all_out, check_feasible, check_not_crawling, prepare
@@ -153,8 +154,9 @@ def _timing(running_time, supplement_percent, window):
 
 
 def _check(objective, track=None, train=None, objectives=OBJECTIVES, **values):
-    """Refuse a ``track`` or ``train`` that is not one (a path, a dict: load it first), an
-    ``objective`` not among ``objectives`` and the numeric ``values``
+    """Refuse a ``track`` or ``train`` that is not one (a path, a dict: load it first) or whose
+    fields a file would be refused for (built or changed in code: :func:`~ecostudy.io.incode.built_problems`),
+    an ``objective`` not among ``objectives`` and the numeric ``values``
     (:data:`~ecostudy.studies.options.OPTION_RANGES`' names) that are out of range, naming the arguments."""
     lines = [problem(WHERE, name, f"a {kind.__name__} (api.load_{name}(path), or api.{name}_from_dict), not "
                                   f"{type(given).__name__} {given!r:.60}")
@@ -162,6 +164,8 @@ def _check(objective, track=None, train=None, objectives=OBJECTIVES, **values):
              if given is not None and not isinstance(given, kind)]
     if objective not in objectives:
         lines.append(problem(WHERE, "objective", f"expected one of {', '.join(objectives)}, not {objective!r}"))
+    if not lines:
+        lines = built_problems(train, track)
     if lines:
         raise InputError(lines)
     check_options(where=WHERE, spelled=ARGUMENTS, **values)
