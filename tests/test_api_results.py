@@ -33,7 +33,8 @@ def test_a_run_is_one_line_with_its_status(case, tmp_path):
     api.solve_folder(track=ROOT / "tracks/amsterdam_rokin_centraal.yaml", train=ROOT / "trains/amsterdam_metro.yaml",
                      time=80.0, points=40, out=tmp_path / "solved", plot=False)
     note = api.export_folder(tmp_path / "solved", "1s")  # its data is the whole table: the repr is what it printed
-    assert repr(note) == f"Note(ok=True)\n{note.text}" and note.text.endswith("the run exported: ok")
+    assert repr(note) == f"Note(ok)\n{note.text}" and note.text.endswith("the run exported: ok")
+    assert note.status == api.Status("ok") and note.ok and note.reason == ""
     table = run.every(time_step_s=1.0)  # the same table without a folder
     assert list(table) == list(note.data) and len(table) == len(note.data) == 81
     assert table.drop(columns="handle").to_numpy() == pytest.approx(note.data.drop(columns="handle").to_numpy(), rel=1e-5, abs=1e-3)
@@ -70,8 +71,9 @@ def test_a_front_is_a_short_table_with_its_status(case):
     assert [line.split()[-1] for line in lines[2:]] == [str(s).split(":")[0] for s in front.table["status"]]
     kinds = {str(s).split(":")[0] for s in front.table["status"]}
     assert front.status.kind == ("failed" if "failed" in kinds else "flagged" if "flagged" in kinds else "ok")
-    assert front.reason == "; ".join(dict.fromkeys(str(s).split(": ", 1)[1] for s in front.table["status"]
-                                                   if str(s).startswith(front.status.kind)))
+    assert front.reason == "; ".join(f"point {i + 1} ({t:.2f} s): {str(s).split(': ', 1)[1]}" for i, (t, s)  # whose each is
+                                     in enumerate(zip(front.table["running_time_s"], front.table["status"]))
+                                     if str(s).startswith(front.status.kind))
     assert all(isinstance(r, api.Solution) and "\n" not in repr(r) for r in front.runs)
     shown = front._repr_html_()
     assert shown.startswith(f"<div><p><code>Front({html.escape(front.head())})</code>: <b>{front.status.kind}</b>") and shown.count("<tr>") == 1 + len(front.table)

@@ -14,8 +14,10 @@ folder and returns it read back (:class:`Report`, a :class:`StudyResult` with th
 Everything is SI inside; the arguments here say their unit in their name where it is not SI.
 
 Every result says whether it can be trusted: ``status`` (a :class:`Status`: ``ok``, ``flagged`` or
-``failed``, with its ``reason``) on a run, a front, a re-plan and an output folder. A bad argument, a bad
-field of an input (a file or a dict) or a request no run can meet raises :class:`InputError` (an
+``failed``, with its ``reason``) on a run, a front, a re-plan, an output folder and what ``check_folder``,
+``export_folder`` and ``doctor`` return (a :class:`Note`). A bad argument, a bad
+field of an input (a file, a dict, or a Train or Track built in code) or a request no run can meet raises
+:class:`InputError` (an
 :class:`EcostudyError`) before anything is solved, one line per problem naming the file (or
 ``arguments``), the field (the argument, as it is spelled here: ``time`` of ``solve_folder``,
 ``to_stop``) and what is wrong; within :func:`command_line` the command functions name the command

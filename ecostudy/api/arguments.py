@@ -13,11 +13,16 @@ import contextvars
 import functools
 import inspect
 import re
+import typing
 import warnings
+from collections import abc
 from contextlib import contextmanager
+from os import PathLike
+from pathlib import Path
 from typing import Any, Callable, Iterator, TypeVar
 
-from ecostudy.core.errors import EcostudyWarning, InputError
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.io.documents import not_a_path
 
 F = TypeVar("F", bound=Callable[..., Any])
 CALLER: contextvars.ContextVar[str] = contextvars.ContextVar("ecostudy_caller", default="arguments")
@@ -38,10 +43,42 @@ def command_line() -> Iterator[None]:
         CALLER.reset(token)
 
 
+def path_arguments(signature: inspect.Signature) -> dict[str, tuple[bool, bool]]:
+    """The arguments a path is given for (annotated ``Path``, ``Optional[Path]``, ``Sequence[Path] |
+    Path | str``): name -> (None allowed, a list of paths allowed)."""
+    out = {}
+    for name, parameter in signature.parameters.items():
+        kinds = list(typing.get_args(parameter.annotation)) or [parameter.annotation]
+        if Path in kinds:
+            out[name] = (type(None) in kinds, any(typing.get_origin(k) in (list, tuple, abc.Sequence) for k in kinds))
+    return out
+
+
+def check_paths(signature: inspect.Signature, paths: dict[str, tuple[bool, bool]], args: tuple, kwargs: dict) -> None:
+    """Refuse a value given for a path argument that is none (``api.load(None)``, ``out=5``), one line
+    each naming the argument (Path() raised TypeError); a call that does not bind is left to Python."""
+    try:
+        given = signature.bind_partial(*args, **kwargs).arguments
+    except TypeError:
+        return
+    lines = []
+    for name, (optional, listed) in paths.items():
+        value = given.get(name, signature.parameters[name].default)
+        items = value if listed and isinstance(value, (list, tuple)) else [value]
+        if value is inspect.Parameter.empty or (value is None and optional):
+            continue
+        if not items or not all(isinstance(x, (str, PathLike)) for x in items):
+            lines.append(problem("arguments", name, not_a_path(name, value)))
+    if lines:
+        raise InputError(lines)
+
+
 def spelled(function: F) -> F:
     """``function`` whose :class:`~ecostudy.core.errors.InputError` lines and warnings name its
-    arguments, not the command line's options (outside :func:`command_line`)."""
-    names = set(inspect.signature(function).parameters)
+    arguments, not the command line's options (outside :func:`command_line`); a value given for a
+    path argument that is none is refused naming the argument (:func:`check_paths`)."""
+    signature = inspect.signature(function)
+    names, paths = set(signature.parameters), path_arguments(signature)
 
     def argument(option: str) -> str | None:  # the argument that sets an option (or a field), if the function has it
         name = ARGUMENT.get(option, option.replace("-", "_"))
@@ -63,6 +100,7 @@ def spelled(function: F) -> F:
     def named(*args: Any, **kwargs: Any) -> Any:
         if CALLER.get() != "arguments":  # the command line's own words
             return function(*args, **kwargs)
+        check_paths(signature, paths, args, kwargs)
         caught: list[warnings.WarningMessage] = []
         try:
             with warnings.catch_warnings(record=True) as caught:  # its warnings named alike, given on below

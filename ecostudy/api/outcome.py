@@ -11,8 +11,9 @@ from typing import Any, Iterable, Mapping, Sequence
 
 import pandas as pd
 
+from ecostudy.api.arguments import spelled
 from ecostudy.core.errors import EcostudyError
-from ecostudy.core.status import status_word
+from ecostudy.core.status import Judged, Status, status_word
 from ecostudy.core.units import number
 from ecostudy.io.folder import StudyResult
 from ecostudy.io.folder import load as load_result
@@ -60,18 +61,26 @@ def together(cases: Sequence[str]) -> str:
 
 
 @dataclass(repr=False)
-class Note:
+class Note(Judged):
     """What a command that writes beside an existing folder returns (``check``, ``export``,
-    ``doctor``): ``ok``, the ``text`` printed, and the command's data."""
+    ``doctor``): its ``status`` (with ``reason`` and ``ok``, as every result), the ``text``
+    printed, and the command's data."""
 
-    ok: bool
+    verdict: Status
     text: str
     data: Any = None
 
+    @property
+    def status(self) -> Status:
+        """``check``: ok at 95 % agreement or more for a run that is ok, else flagged saying which;
+        ``export``: the status of the run exported; ``doctor``: whether the toy NLP came out right."""
+        return self.verdict
+
     def __repr__(self) -> str:  # what the command prints, not its data (a whole table for export)
-        return f"Note(ok={self.ok})\n{self.text}"
+        return f"Note({self.status})\n{self.text}"
 
 
+@spelled
 def load(folder: Path | str) -> Report:
     """Any output folder of ecostudy read back (:func:`ecostudy.io.folder.load`): a :class:`Report`
     whose ``text`` is empty (no command printed it here)."""

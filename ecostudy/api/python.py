@@ -15,9 +15,11 @@ from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import shown
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.core.errors import FieldError, InfeasibleError, InputError, TooFastError, finite_number, problem
-from ecostudy.core.status import Judged, Status, worst
+from ecostudy.core.status import Judged, Status
 from ecostudy.core.types import Timing, Track, Train, Window
 from ecostudy.core.units import PERCENT
+from ecostudy.io.folder import headline
+from ecostudy.io.incode import built_problems
 from ecostudy.io.loaders import chosen_stops
 from ecostudy.io.runsummary import RunSummary
 from ecostudy.ocp.problem import all_out, check_feasible, check_not_crawling, prepare
@@ -129,8 +131,12 @@ class Front(Judged):
 
     @property
     def status(self) -> Status:
-        """The worst of the points' statuses, with their reasons."""
-        return worst(Status.parse(str(s)) for s in self.table["status"])
+        """The worst of the points' statuses, each reason after the point it belongs to (its row from 1
+        and running time: ``flagged: point 1 (71.67 s): Ipopt ended ...; point 4 (90.12 s): ...``;
+        :func:`~ecostudy.io.folder.headline`)."""
+        return headline({f"point {i + 1}" + (f" ({t:.2f} s)" if finite_number(t) else ""): Status.parse(str(s))
+                         for i, (t, s) in enumerate(zip(self.table["running_time_s"], self.table["status"]))},
+                        "front.table lists each")
 
     def plot(self, path=None):
         from ecostudy.report.plots import pareto_plot
@@ -153,15 +159,21 @@ def _timing(running_time, supplement_percent, window):
 
 
 def _check(objective, track=None, train=None, objectives=OBJECTIVES, **values):
-    """Refuse a ``track`` or ``train`` that is not one (a path, a dict: load it first), an
-    ``objective`` not among ``objectives`` and the numeric ``values``
-    (:data:`~ecostudy.studies.options.OPTION_RANGES`' names) that are out of range, naming the arguments."""
+    """Refuse a ``track`` or ``train`` that is not one (a path, a dict: load it first) or whose
+    fields a file would be refused for (built or changed in code: :func:`~ecostudy.io.incode.built_problems`),
+    an ``objective`` not among ``objectives`` and the numeric ``values``
+    (:data:`~ecostudy.studies.options.OPTION_RANGES`' names, each required) that are None or out of
+    range, naming the arguments."""
     lines = [problem(WHERE, name, f"a {kind.__name__} (api.load_{name}(path), or api.{name}_from_dict), not "
                                   f"{type(given).__name__} {given!r:.60}")
              for name, kind, given in (("track", Track, track), ("train", Train, train))
              if given is not None and not isinstance(given, kind)]
     if objective not in objectives:
         lines.append(problem(WHERE, "objective", f"expected one of {', '.join(objectives)}, not {objective!r}"))
+    lines += [problem(WHERE, ARGUMENTS.get(name, name), "must be a number, not None") for name, value in values.items()
+              if value is None]
+    if not lines:
+        lines = built_problems(train, track)
     if lines:
         raise InputError(lines)
     check_options(where=WHERE, spelled=ARGUMENTS, **values)

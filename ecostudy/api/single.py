@@ -202,7 +202,7 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
     lines += [f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m "
               f"(lambda/v from {number(d['psi_min'], '.2f')} to {number(d['psi_max'], '.2f')})" for d in report["disagreements"]]
     lines += [f"the run checked: {report['run_status']}", f"written {result_dir}/check.json", f"check: {verdict}"]
-    return Note(agrees and run_ok, "\n".join(lines), report)
+    return Note(Status.parse(verdict), "\n".join(lines), report)
 
 
 @spelled
@@ -216,7 +216,7 @@ def export_folder(result_dir: Path, every: str = "1s") -> Note:
                                  f"(metres), not '{every}'"))
     step = float(match.group(1))
     table, csv, js, status = write_fixed_step(result_dir, *((step, None) if match.group(2) == "s" else (None, step)))
-    return Note(status.ok, f"{len(table)} rows every {every.strip()}: {csv} and {js.name}\nthe run exported: {status}",
+    return Note(status, f"{len(table)} rows every {every.strip()}: {csv} and {js.name}\nthe run exported: {status}",
                 table)
 
 
@@ -230,7 +230,8 @@ def doctor() -> Note:
     m.o = pyo.Objective(expr=m.x + 2 * m.y)
     out: Any = session.solve(m)
     ok = out.optimal and abs(pyo.value(m.o) + 5**0.5) < 1e-6
-    lines.append(f"toy NLP    {out.status} in {out.iterations} iterations, objective {pyo.value(m.o):.6f} "
-                 f"(expected {-(5**0.5):.6f}): {'ok' if ok else 'WRONG'}")
-    return Note(bool(ok), "\n".join(lines))
+    toy = (f"toy NLP    {out.status} in {out.iterations} iterations, objective {pyo.value(m.o):.6f} "
+           f"(expected {-(5**0.5):.6f})")
+    lines.append(f"{toy}: {'ok' if ok else 'WRONG'}")
+    return Note(Status("ok") if ok else Status("failed", " ".join(toy.split()) + ": wrong"), "\n".join(lines))
 

@@ -11,6 +11,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from ecostudy.core.errors import InputError, problem
+from ecostudy.core.types import Track, Train
 from ecostudy.io.schemabase import Strict
 from ecostudy.io.yamlsafe import MAX_DEPTH, MAX_FILE_BYTES, DocumentError, check_depth, load_yaml, unique_keys
 
@@ -34,6 +35,18 @@ def split_selector(path: Where) -> tuple[Path, str | None]:
         text, selector = text.rsplit("#", 1)
         return Path(text), selector
     return Path(text), None
+
+
+FILE_ARGUMENTS = ("study", "track", "train", "timetable")  # the arguments that name an input file by its kind
+
+
+def not_a_path(name: str, value: object) -> str:
+    """Why ``value`` given for the path argument ``name`` is none: 'a path to a train file, not Train
+    Train(...)' (a loaded train or track where its file belongs: the functions that take loaded ones
+    said), 'a path, not NoneType None'."""
+    what = f"a path to a {name} file" if name in FILE_ARGUMENTS else "a path (str or pathlib.Path)"
+    loaded = " (api.solve takes loaded ones)" if isinstance(value, (Track, Train)) else ""
+    return f"{what}, not {type(value).__name__} {value!r:.60}{loaded}"
 
 
 def not_a_file(path: Path) -> str:
@@ -60,6 +73,13 @@ def named_file(study: Where, field: str, name: Where) -> Path:
     if not file.is_file():
         raise InputError(problem(study, field, f"'{name}': {not_a_file(file)}" + ("" if Path(name).is_absolute() else f" ({file})")))
     return path
+
+
+def check_path(path: object, kind: str) -> None:
+    """Refuse a ``path`` to a ``kind`` file (``train``) that is no path (``api.load_track(5)``: Path()
+    raised TypeError), naming the argument."""
+    if not isinstance(path, (str, PathLike)):
+        raise InputError(problem("arguments", "path", not_a_path(kind, path)))
 
 
 def read_document(path: str | PathLike[str]) -> dict[str, Any]:

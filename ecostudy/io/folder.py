@@ -16,6 +16,7 @@ import pandas as pd
 from ecostudy import __version__
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.status import Status, worst
+from ecostudy.io.results import load_result
 from ecostudy.io.runsummary import RunSummary
 from ecostudy.io.writers import REPORT, SUMMARY, write_json
 LAYOUT = 1  # the version of summary.json's common fields; a reader refuses a newer one
@@ -108,14 +109,15 @@ class StudyResult:
 HEADLINE = 5  # the cases named in a folder's status; summary.json's not_ok lists every one
 
 
-def headline(named: Mapping[str, Status]) -> Status:
+def headline(named: Mapping[str, Status], listed: str = "not_ok lists each") -> Status:
     """The status of a folder of named cases: the worst, each reason after the name of its case when
-    there are several ('flagged: convex, draw 3: stopped 3.05 m beyond ...; rspc, draw 7: ...')."""
+    there are several ('flagged: convex, draw 3: stopped 3.05 m beyond ...; rspc, draw 7: ...'),
+    the first :data:`HEADLINE` of them, then how many more and where they are ``listed``."""
     whole = worst(named.values())
     if len(named) < 2 or whole.ok:
         return whole
     reasons = [f"{name}: {s.reason}" if s.reason else name for name, s in named.items() if s.kind == whole.kind]
-    more = f"; and {len(reasons) - HEADLINE} more (not_ok lists each)" if len(reasons) > HEADLINE else ""
+    more = f"; and {len(reasons) - HEADLINE} more ({listed})" if len(reasons) > HEADLINE else ""
     return Status(whole.kind, "; ".join(reasons[:HEADLINE]) + more)
 
 
@@ -196,7 +198,9 @@ def remove_unlisted(out_dir: Path | str, earlier: Iterable[str]) -> list[str]:
 
 def load(folder: Path | str) -> StudyResult:
     """Any output folder of ecostudy as a :class:`StudyResult`; a folder that is not one is one
-    clear line naming it (exit status 2)."""
+    clear line naming it (exit status 2). A solve folder's files are read as ``ecostudy check``
+    reads them (:func:`~ecostudy.io.results.load_result`), without its re-simulation: a profile it
+    refuses is refused here too."""
     folder = Path(folder)
     path = folder / SUMMARY
     try:
@@ -210,6 +214,8 @@ def load(folder: Path | str) -> StudyResult:
     if int(data.get("summary_layout", 0)) > LAYOUT:
         raise InputError(problem(path, "summary_layout", f"{data['summary_layout']} is newer than this ecostudy "
                                  f"reads ({LAYOUT}); update ecostudy"))
+    if data["kind"] == "solve" and (folder / "inputs.json").is_file():  # its files read as check reads them
+        load_result(folder)  # (a profile with text in a number column, cut short, edited: refused by name)
     tables = {}
     for name, file in (data.get("tables") or {}).items():
         try:

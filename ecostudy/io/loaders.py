@@ -25,7 +25,7 @@ from ecostudy.io.formats import timetable_document_to_schema, track_document_to_
 from ecostudy.io.timetable import name_stops, off_clock, segment_timing, turning_back, windows_from_schema
 from ecostudy.io.ttobench import TRACK_ALIASES
 from ecostudy.io.writers import default_output
-from ecostudy.io.documents import (Where, given, named_file, read_document as read_document,  # re-exported
+from ecostudy.io.documents import (Where, check_path, given, named_file, read_document as read_document,  # re-exported
                                    split_selector, validate as validate)
 
 
@@ -141,6 +141,7 @@ def track_from_schema(t: schemas.TrackFile) -> Track:
 def train_document(path: Where) -> tuple[dict[str, Any], dict[str, str] | None]:
     """(schema-shaped data, field aliases for messages) of a train file: YAML, or TTOBench/OSRD JSON.
     ``file.json#MODE`` (or ``#MODE/COMFORT``) picks an OSRD rolling stock's power mode."""
+    check_path(path, "train")
     path, selector = split_selector(path)
     data = read_document(path)
     if Path(path).suffix.lower() == ".json":
@@ -152,6 +153,7 @@ def train_document(path: Where) -> tuple[dict[str, Any], dict[str, str] | None]:
 
 def track_document(path: Where) -> dict[str, Any]:
     """Schema-shaped data of a track file: YAML, or TTOBench JSON."""
+    check_path(path, "track")
     data = read_document(path)
     if Path(path).suffix.lower() == ".json":
         return track_document_to_schema(data, path)

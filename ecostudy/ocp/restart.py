@@ -15,15 +15,16 @@ The multiplied-through recursions (``space.define_dynamics``) are what make a ze
 The DAS phases NLP (``ocp.phases.build(movable=True)``) re-plans the same way by sector shares
 (:func:`set_phases_start`).
 """
+import math
 from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
 from ecostudy.core.errors import InputError, finite_number, problem
 from ecostudy.core.grid import interval_of
-from ecostudy.core.status import Judged, Status, from_checks, solver_check
+from ecostudy.core.status import OVERSPEED_TOLERANCE_KMH, Judged, Status, from_checks, solver_check
 from ecostudy.core.types import State, Train
-from ecostudy.core.units import FloatArray, to_kwh
+from ecostudy.core.units import KMH, FloatArray, to_kwh
 from ecostudy.ocp import space
 from ecostudy.ocp.phases import Layout
 from ecostudy.ocp.problem import Case, Stages, build, capped_guess
@@ -31,9 +32,17 @@ from ecostudy.ocp.session import Options, Outcome, Session
 from ecostudy.ocp.solver import Model, Var
 
 
-def _on_segment(position: float, end: float) -> None:
+def off_segment(position: float, end: float) -> str | None:
+    """Why a start ``position`` [m] is not on a segment ``end`` [m] long, else None."""
     if not 0.0 <= position < end:
-        raise InputError(f"start position {position:.1f} m is not on the segment [0, {end:.1f}) m")
+        return f"the position {position:.1f} m is not on the segment [0, {end:.1f}) m"
+    return None
+
+
+def _on_segment(position: float, end: float) -> None:
+    why = off_segment(position, end)
+    if why is not None:
+        raise InputError(problem("arguments", "state", why))
 
 
 def start_interval(nodes: FloatArray, position: float) -> tuple[int, float]:
@@ -71,8 +80,8 @@ def set_start(session: Session, m: Model, nodes: FloatArray, state: State, train
     k, rest = start_interval(nodes, state.position)
     behind = [j for j in getattr(m, "window_nodes", []) if j <= k]
     if behind:
-        raise InputError(f"a timing window at {nodes[behind[0]]:.0f} m lies behind the start at "
-                         f"{state.position:.1f} m: drop the windows already passed")
+        raise InputError(problem("arguments", "state", f"a timing window at {nodes[behind[0]]:.0f} m lies behind the "
+                                 f"start at {state.position:.1f} m: drop the windows already passed"))
     n = len(nodes) - 1
     shares = np.ones(n)
     shares[:k], shares[k] = 0.0, rest
@@ -153,12 +162,15 @@ class PlanArrays(NamedTuple):
     start_time: float
     outcome: Outcome
     segment: str = ""
+    limits: np.ndarray | None = None  # the speed limit at each node [m/s] (None: not judged against them)
+    start_limit: float = math.inf     # the speed limit where it starts [m/s]
 
 
 class Plan(PlanArrays, Judged):
     """A re-plan (:class:`PlanArrays`) that says in a line where it starts, where it ends, the
-    traction still to do and its status: ``ok`` when Ipopt proved it optimal, else ``flagged`` (a
-    plan is not re-simulated: a run is, :attr:`ecostudy.analysis.single.RunResult.status`)."""
+    traction still to do and its status: ``ok`` when Ipopt proved it optimal and it keeps the speed
+    limits, else ``flagged`` with why (Ipopt's end; :func:`overspeeds`). A plan is not re-simulated: a
+    run is, :attr:`ecostudy.analysis.single.RunResult.status`."""
 
     @property
     def time(self) -> FloatArray:
@@ -179,7 +191,7 @@ class Plan(PlanArrays, Judged):
 
     @property
     def status(self) -> Status:
-        return from_checks(solver_check(self.outcome.status))
+        return from_checks({**solver_check(self.outcome.status), **{reason: False for reason in overspeeds(self)}})
 
     def line(self) -> str:
         """The plan in a few words (its repr adds the status)."""
@@ -192,9 +204,45 @@ class Plan(PlanArrays, Judged):
         return f"Plan({self.line()}; {self.status})"
 
 
-def check_plan_request(state: Any, end_speed: Any, arrival: Any, mass_scale: Any) -> None:
+def _kmh(speed: float) -> str:
+    return f"{round(speed / KMH, 1):g}"
+
+
+def overspeeds(plan: Plan) -> list[str]:
+    """Where a plan runs over the speed limit by more than :data:`OVERSPEED_TOLERANCE_KMH`, in words:
+    a start over the limit where it is and how far it brakes to get back under ('starts 64.0 km/h
+    over the 80 km/h limit at 400 m; braking back under it by 980 m'), and each stretch ahead over
+    its limits ('9.9 km/h over the 60 km/h limit at 950-980 m'). A start over the limit is one the train
+    should not be in; from it, and from a start that cannot brake down to a limit ahead in time,
+    the plan follows what full braking reaches (:func:`set_start`): over the limit, so said."""
+    if plan.limits is None:
+        return []
+    start = plan.start
+    k = int(np.argmax(plan.shares > 0.0))  # the interval holding the start: nodes ahead from k + 1
+    nodes, excess = plan.nodes[k + 1:], (plan.v[k + 1:] - plan.limits[k + 1:]) / KMH
+    over = excess > OVERSPEED_TOLERANCE_KMH
+    reasons = []
+    first = (start.speed - plan.start_limit) / KMH
+    if first > OVERSPEED_TOLERANCE_KMH:
+        n = int(np.argmin(over)) if not over.all() else len(over)  # the stretch over the limit from the start on
+        back = f"braking back under it by {nodes[n]:.0f} m" if n < len(over) else "over it to the end"
+        reasons.append(f"starts {first:.1f} km/h over the {_kmh(plan.start_limit)} km/h limit at {start.position:.0f} "
+                       f"m; {back}")
+        over[:n] = False
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], over.astype(int), [0]])))
+    stretches = list(zip(edges[::2], edges[1::2]))
+    worst = [a + int(np.argmax(excess[a:b])) for a, b in stretches]
+    reasons += [f"{excess[w]:.1f} km/h over the {_kmh(plan.limits[k + 1 + w])} km/h limit at {nodes[a]:.0f}-"
+                f"{nodes[b - 1]:.0f} m" for (a, b), w in zip(stretches[:3], worst)]
+    if len(stretches) > 3:
+        reasons.append(f"and over it at {len(stretches) - 3} more stretches")
+    return reasons
+
+
+def check_plan_request(state: Any, end_speed: Any, arrival: Any, mass_scale: Any, distance: float = math.inf) -> None:
     """Refuse a re-plan's arguments that no plan answers, one line each naming the argument: a
-    state that is not a :class:`State` of finite numbers (speed and clock at least 0), an end speed
+    state that is not a :class:`State` of finite numbers (speed and clock at least 0) on the segment
+    ``distance`` [m] long, an end speed
     that is not a (lowest, highest) pair of speeds [m/s], an arrival that is not a time or an
     (earliest, latest) pair [s] after the state's clock, a mass scale that is not a positive number."""
     where, lines = "arguments", []
@@ -202,6 +250,8 @@ def check_plan_request(state: Any, end_speed: Any, arrival: Any, mass_scale: Any
         lines.append(problem(where, "state", f"a State(position, speed, time) in m, m/s and s, not {state!r}"))
     elif not all(finite_number(x) for x in (state.position, state.speed, state.time)) or state.speed < 0 or state.time < 0:
         lines.append(problem(where, "state", f"finite numbers, the speed and clock at least 0, not {state}"))
+    elif (why := off_segment(state.position, distance)) is not None:
+        lines.append(problem(where, "state", why))
     pair = isinstance(end_speed, (tuple, list)) and len(end_speed) == 2 and all(finite_number(x) for x in end_speed)
     if not pair or not 0 <= end_speed[0] <= end_speed[1]:
         lines.append(problem(where, "end_speed", f"a (lowest, highest) pair of speeds [m/s], 0 <= lowest <= "
@@ -259,7 +309,7 @@ class Replanner:
         call gives the same plan. A bad argument is one line naming it (``InputError``)."""
         arrival = self.timing if arrival is None else arrival
         mass_scale = 1.0 if mass_scale is None else mass_scale
-        check_plan_request(state, end_speed, arrival, mass_scale)
+        check_plan_request(state, end_speed, arrival, mass_scale, float(self.case.nodes[-1]))
         m, nodes = self.model, self.case.nodes
         set_mass(self.session, m, float(mass_scale))
         set_start(self.session, m, nodes, state, self.case.train)
@@ -269,5 +319,6 @@ class Replanner:
         shares = np.array([m.w[k].value for k in m.I])
         seg = self.case.segment
         self.plans, self.last = self.plans + 1, Plan(nodes, v, dt, ft, fb, shares, float(m.t0.value), outcome,
-                                                     f"{seg.from_stop} -> {seg.to_stop}")
+                                                     f"{seg.from_stop} -> {seg.to_stop}", self.case.limits,
+                                                     float(seg.limit(state.position)))
         return self.last

@@ -124,8 +124,8 @@ MAX_EXPORT_ROWS = 1_000_000  # a run every 1 ms for 15 min; a step below was a t
 
 def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
     """The run of a solve folder every ``time_step_s`` or ``distance_step_m`` (``analysis.export``),
-    as ``profile_every_<step>.csv`` and ``.json`` beside it (the JSON: the run with its status, units,
-    step, rows). Returns (table, csv path, json path, the run's :class:`~ecostudy.core.status.Status`)."""
+    as ``profile_every_<step>.csv`` and ``.json`` beside it (the CSV: the rows and the run's status in a
+    last column ``status``; the JSON: the run with its status, units, step, rows). Returns (table, csv path, json path, the run's :class:`~ecostudy.core.status.Status`)."""
     saved = load_result(result_dir)
     step = f"{time_step_s:g}s" if time_step_s is not None else f"{distance_step_m:g}m"
     csv, js = (Path(result_dir) / f"profile_every_{step}.{ext}" for ext in ("csv", "json"))
@@ -147,7 +147,7 @@ def write_fixed_step(result_dir, time_step_s=None, distance_step_m=None):
                       f"({', '.join(missed[:3])}" + (f" and {len(missed) - 3} more" if len(missed) > 3 else "")
                       + "): a finer step shows them", EcostudyWarning, stacklevel=2)
     status = judged.status
-    write_csv(csv, table)
+    write_csv(csv, table.assign(status=str(status)))  # the run's status on every row: a reader of the CSV alone sees it
     run = {**{k: saved.summary.get(k) for k in ("track", "train", "from", "to", "running_time_s")}, "status": str(status)}
     write_json(js, {"run": run,
                     "step": {"time_s": time_step_s} if time_step_s is not None else {"distance_m": distance_step_m},

@@ -17,7 +17,7 @@ from ecostudy.core import units
 from ecostudy.core.defaults import DAS_TIME_LIMIT_S, MAX_SUPPLEMENT_PERCENT
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.types import Timing, Track, Train
-from ecostudy.io.documents import not_a_file, split_selector
+from ecostudy.io.documents import not_a_file, not_a_path, split_selector
 from ecostudy.io.loaders import check_fits, chosen_stops, read_track, read_train
 from ecostudy.io.schemas import StudyFile
 from ecostudy.studies.cases import load_checked_study, refuse_windows
@@ -41,8 +41,7 @@ def check_choices(files: Mapping[str, Any] | None = None, **choices: tuple[Any, 
     command line spells it (the Python API renames them to its arguments)."""
     lines = [problem("command line", f"--{name.replace('_', '-')}", f"expected one of {', '.join(allowed)}, not "
                      f"{value!r}") for name, (value, allowed) in choices.items() if value is not None and value not in allowed]
-    lines += [problem("command line", f"--{name}", f"a path to a {name} file, not {type(value).__name__} {value!r:.60}"
-                      + (" (api.solve takes loaded ones)" if name != "study" else ""))
+    lines += [problem("command line", f"--{name}", not_a_path(name, value))
               for name, value in (files or {}).items() if value is not None and not isinstance(value, (str, os.PathLike))]
     if lines:
         raise InputError(lines)
