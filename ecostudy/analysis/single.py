@@ -16,6 +16,7 @@ from ecostudy.core.simulate import verify
 from ecostudy.core.status import Judged, Status, from_checks, part, solver_check, solver_part, worst
 from ecostudy.core.types import Timing, Trajectory
 from ecostudy.core.units import KWH, number
+from ecostudy.io.results import COSTATE_OBJECTIVES
 from ecostudy.io.runsummary import RunSummary, SolverRun, Verification
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import (
@@ -160,25 +161,23 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
         v, dt, ft, fb, _ = space.solution_arrays(m)
         u = handles(train, v, ft, fb)
         profile, totals = tabulate(train, nodes, v, dt, ft, fb)
-        net = objective == "net_energy"
-        labels = regimes.classify(train, v, ft, fb, regeneration=net and train.regeneration is not None)
-        regime_runs = regimes.runs(labels, nodes)
+        labels = regimes.labelled(train, v, ft, fb, objective)
         costate = None
-        if objective in ("energy", "net_energy"):  # psi = lambda / v of eq. 2.17 (7.4) from Ipopt's multipliers
+        if objective in COSTATE_OBJECTIVES:  # psi = lambda / v of eq. 2.17 (7.4) from Ipopt's multipliers
             psi = pontryagin.ipopt_psi(m, nodes, train, objective)
-            bounds = pontryagin.regime_bounds(train, v, ft, fb, labels, objective)
             costate = {"method": "Ipopt multipliers of the speed recursion",
-                       "conditions": "Farooqi 2018, eq. 7.4 (regeneration credited)" if net else "Farooqi 2018, eq. 2.17",
-                       **pontryagin.check(nodes, labels, psi, bounds=bounds)}
+                       "conditions": ("Farooqi 2018, eq. 7.4 (regeneration credited)" if objective == "net_energy"
+                                      else "Farooqi 2018, eq. 2.17"),
+                       **pontryagin.costate_check(train, nodes, v, ft, fb, labels, psi, objective)}
             profile["costate_ratio"] = np.append(psi, np.nan)
-        marginal = space.marginal_energy(m) if objective in ("energy", "net_energy") else None
+        marginal = space.marginal_energy(m) if objective in COSTATE_OBJECTIVES else None
     verification, trace = None, None
     if verify_result:
         with stage(stages, "verify"):
             verification, trace = verify(segment, train, nodes, u, totals["running_time_s"],
                                          totals["traction_energy_kWh"] * KWH, case.windows,
                                          net_energy=totals["net_energy_kWh"] * KWH)
-    summary = with_all_out(run_summary(case, totals, objective, t_allout, marginal, labels, regime_runs, costate,
+    summary = with_all_out(run_summary(case, totals, objective, t_allout, marginal, labels, costate,
                                      outcome, verification, stages), t_allout)
     return RunResult(profile, summary, segment, train, nodes, u, trace, stages,
                      trajectory=Trajectory(nodes, v, dt, ft, fb))
