@@ -65,6 +65,29 @@ def timing_record(timing: Timing) -> dict[str, Any]:
             "window_s": None if timing.window is None else list(timing.window)}
 
 
+def run_inputs(result: Any, study: str | Path | None = None, das: str | None = None) -> dict[str, Any]:
+    """``inputs.json`` of a run of :func:`~ecostudy.analysis.single.solve_run` (``result``): the
+    files of its track and train with their digests as they were read, its stops, grid, timing
+    windows, objective, timing and weights, the ``study`` file and the driver advice ``das`` asked
+    (``ecostudy solve``'s), all that ``ecostudy check`` needs to judge it again. A run whose track
+    or train was built in code names no file to judge it against: refused, naming which."""
+    request, summary = result.request, result.summary
+    if request is None:
+        raise InputError(problem("arguments", "run", "a point a front solved on its shared model, which records no "
+                                 "inputs.json: solve its running time with api.solve and save that run"))
+    missing = [name for name, file in (("track", request.track_file), ("train", request.train_file)) if file is None]
+    if missing:
+        raise InputError([problem("arguments", name, "built in code (or changed with dataclasses.replace), not read "
+                                  "from a file: a saved run names the files ecostudy check re-simulates it against; "
+                                  f"write it to a file and read it with api.load_{name}") for name in missing])
+    (track, track_sha), (train, train_sha) = request.track_file, request.train_file
+    return {"track": track, "train": train, "track_sha256": track_sha, "train_sha256": train_sha,
+            "from": summary["from"], "to": summary["to"], "points": summary["points"],
+            "windows": windows_record(request.windows), "study": None if study is None else str(Path(study).resolve()),
+            "objective": summary["objective"], "timing": timing_record(request.timing),
+            "weights": list(request.weights) if summary["objective"] == "mixed" else None, "das": das}
+
+
 def asked_times(inputs: dict[str, Any], all_out_s: float | None, where: Path) -> tuple[float, float] | None:
     """(earliest, latest) [s] the saved run was asked to arrive in (``inputs.json``'s ``timing``, a
     supplement over the summary's all-out time ``all_out_s``), or None when it records none."""

@@ -2,7 +2,7 @@
 and the re-simulation. ``solve_run`` is the library entry point behind ``ecostudy solve``.
 """
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any, NamedTuple, Optional
 
 import numpy as np
 import pandas as pd
@@ -16,6 +16,7 @@ from ecostudy.core.simulate import verify
 from ecostudy.core.status import Judged, Status, from_checks, part, solver_check, solver_part, worst
 from ecostudy.core.types import Timing, Trajectory
 from ecostudy.core.units import KWH, number
+from ecostudy.io.documents import source_file
 from ecostudy.io.results import COSTATE_OBJECTIVES
 from ecostudy.io.runsummary import RunSummary, SolverRun, Verification
 from ecostudy.ocp import space
@@ -41,6 +42,18 @@ ALL_OUT_SOLVER = "all_out_solver_status"
 AT_ALL_OUT = 1e-6
 
 
+class Request(NamedTuple):
+    """What a run was solved for, as its ``inputs.json`` records it (``analysis.saved.run_inputs``):
+    the files its track and train were read from (``io.documents.source_file``: None for one built
+    in code), the timing, the timing windows on the way and the mixed objective's weights."""
+
+    track_file: Optional[tuple[str, str]]
+    train_file: Optional[tuple[str, str]]
+    timing: Timing
+    windows: tuple
+    weights: tuple
+
+
 @dataclass(repr=False)  # the repr is one line (:meth:`line`), not the profile's thousand rows
 class RunResult(Judged):
     """A solved, analysed and verified run: the profile table (display units), the summary
@@ -57,6 +70,7 @@ class RunResult(Judged):
     stages: dict = field(default_factory=dict)
     das: Any = None  # das.advice.DasRun when a DAS method was asked for
     trajectory: Optional[Trajectory] = None  # the run in SI arrays: read these, not the display table
+    request: Optional[Request] = None  # what :func:`solve_run` was asked (None: a point a front re-solved)
 
     @property
     def facts(self) -> RunSummary:
@@ -141,6 +155,7 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     result = finish(case, m, outcome, stages, objective, t_allout, verify_result)
     if timing.supplement is not None and outcome is not fastest and not fastest.optimal:  # its time is a supplement over it
         result.summary[ALL_OUT_SOLVER] = fastest.status
+    result.request = Request(source_file(track), source_file(train), timing, tuple(windows), tuple(weights))
     return result
 
 

@@ -16,6 +16,7 @@ import pandas as pd
 from ecostudy import __version__
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.status import Status, worst
+from ecostudy.io.results import load_result
 from ecostudy.io.runsummary import RunSummary
 from ecostudy.io.writers import REPORT, SUMMARY, write_json
 LAYOUT = 1  # the version of summary.json's common fields; a reader refuses a newer one
@@ -216,6 +217,8 @@ def load(folder: Path | str) -> StudyResult:
             tables[name] = pd.read_csv(folder / file)
         except (OSError, ValueError) as exc:
             raise InputError(problem(folder / file, "", f"the {name} table of this folder cannot be read ({exc})"))
+    if data["kind"] == "solve":  # its files read as check and export read them: refused where they disagree
+        load_result(folder)
     not_ok = tuple(NotOk(str(c["case"]), Status.parse(c["status"])) for c in data.get("not_ok") or ())
     status, cases = Status.parse(data["status"]), Counts.from_dict(data.get("cases") or {})
     judged = _rejudged(folder) if data["kind"] == "solve" and status.ok else None

@@ -1,6 +1,5 @@
 """Reading back the output folder of `ecostudy solve`: its inputs, its summary and its profile as
 an SI :class:`~ecostudy.core.types.Trajectory` (the display units converted here)."""
-import hashlib
 import json
 from os import PathLike
 from pathlib import Path
@@ -16,15 +15,9 @@ from ecostudy.core.simulate import within_tolerances
 from ecostudy.core.modes import mode_name, names_mode
 from ecostudy.core.types import Trajectory
 from ecostudy.core.units import KMH, KN, KW, KWH
+from ecostudy.io.documents import file_digest as file_digest  # re-exported: inputs.json's digests
 from ecostudy.io.runsummary import current
 from ecostudy.io.tables import number_columns
-
-
-def file_digest(path: str | PathLike[str]) -> str:
-    """SHA-256 of a file's bytes (of ``file#selector``: of the file), to tell whether it changed."""
-    text = str(path)
-    file = Path(text.rsplit("#", 1)[0] if "#" in text and not Path(text).is_file() else text)
-    return hashlib.sha256(file.read_bytes()).hexdigest()
 
 
 def check_unchanged(inputs: dict[str, Any], result_dir: str | PathLike[str]) -> None:
@@ -80,6 +73,9 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     if not isinstance(summary, dict):
         raise InputError(problem(result_dir / "summary.json", "", "not a result folder of `ecostudy solve` "
                                  "(expected a mapping of fields)"))
+    if summary.get(WRITING):  # the marker write_run puts first and replaces last
+        raise InputError(problem(result_dir, "", "not a result folder of `ecostudy solve`: its files were being "
+                                 "written when the write stopped (an interrupted write?): solve again"))
     _check_record(inputs, summary, result_dir)
     try:  # a status outside the vocabulary, or ok over a re-simulation that failed: an edited summary
         status = Status.parse(str(summary.get("status") or "failed: no status recorded"))
@@ -270,3 +266,6 @@ DERIVED_COLUMNS = ("power_kW", "cumulative_energy_kWh")  # checked against the f
 # binds on the way, where the arrival's multiplier is near 0; the shipped runs' are -0.08 to -1.6)
 MARGINAL_NOISE = 1e-4
 COSTATE_OBJECTIVES = ("energy", "net_energy")  # whose profile has costate_ratio (the Pontryagin check's psi)
+# summary.json's field while a run's files are being written (``report.files.write_run`` writes it
+# first, as the folder's status, and replaces the whole summary last): a folder that has it is no result
+WRITING = "writing"
