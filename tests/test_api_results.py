@@ -225,21 +225,25 @@ def test_the_stops_are_named_as_the_arguments(case):
 @pytest.mark.flagged_on_purpose  # K = 10: the run misses its stop when re-simulated
 def test_a_solve_folder_that_check_found_not_ok_loads_as_not_ok(tmp_path):
     """`api.load` read summary.json alone: a K = 10 run 3 m short of its stop whose summary.json was
-    rewritten to ok (its verification too, as an edit by hand would) loaded as ok beside the
-    check.json whose re-simulation flags it. The folder's check now counts."""
+    rewritten to ok (its verification too, consistent with itself, as a careful edit by hand would)
+    loaded as ok beside the check.json whose re-simulation flags it. The folder's check now counts;
+    check itself refuses the edited verification (not its re-simulation's numbers)."""
     import json
 
     folder = tmp_path / "run"
     from .conftest import STUDIES
     report = api.solve_folder(STUDIES / "default.yaml", points=10, plot=False, out=folder)
     assert not report.status.ok
-    summary = json.loads((folder / "summary.json").read_text())
-    summary.update(status="ok", not_ok=[], verification={**summary["verification"], "passed": True,
-                                                          "stop_error_m": 0.0, "arrival_time_error_s": 0.0})
-    (folder / "summary.json").write_text(json.dumps(summary))  # its counts left saying 1 flagged, as a hasty edit would
-    assert api.load(folder).status.ok  # nothing has judged the edited summary yet
     checked = api.check_folder(folder)
     assert not checked.ok and json.loads((folder / "check.json").read_text())["run_status"].startswith("flagged")
+    summary = json.loads((folder / "summary.json").read_text())
+    zero = {k: 0.0 for k in ("arrival_time_error_s", "stop_error_m", "energy_error_pct", "net_energy_error_pct")}
+    summary.update(status="ok", not_ok=[], verification={**summary["verification"], **zero, "passed": True,
+                                                          "simulated_running_time_s": summary["running_time_s"]})
+    (folder / "summary.json").write_text(json.dumps(summary))  # its counts left saying 1 flagged, as a hasty edit would
+    with pytest.raises(api.InputError, match="summary.json: verification.arrival_time_error_s: 0.0, but the saved "
+                                             "profile re-simulated gives 0.4"):
+        api.check_folder(folder)
     loaded = api.load(folder)
     assert loaded.status.kind == "flagged" and str(loaded.cases) == "1 case: 0 ok, 1 flagged, 0 failed", loaded
     assert loaded.not_ok[-1].case == "the run, re-judged by check.json"

@@ -58,13 +58,22 @@ class Blocking:
         pass
 
 
-def test_a_figure_the_child_cannot_write_fails_the_solve_with_the_childs_error(tmp_path):
+def test_a_folder_put_where_a_figure_goes_while_the_run_solves_is_refused_before_any_file(tmp_path):
     out = tmp_path / "s"
-    with pytest.raises(IsADirectoryError) as raised:  # the command line: exit status 3, internal error
-        api.solve_folder(DEFAULT, points=150, out=out, progress=Blocking(out))
-    assert "in the figure process" in "\n".join(raised.value.__notes__)
-    assert not (out / "summary.json").exists()  # nothing claims the folder is complete
+    with pytest.raises(api.InputError, match=f"^{out / 'energy.png'}: is a folder where an output file goes$"):
+        api.solve_folder(DEFAULT, points=150, out=out, progress=Blocking(out))  # the command line: exit status 2
+    assert sorted(p.name for p in out.iterdir()) == ["energy.png"]  # the run's files are checked before any is written
     assert multiprocessing.active_children() == []
+
+
+def test_a_child_whose_parent_stopped_waiting_ends_without_a_traceback(capfd):
+    """A parent whose own write failed closes the figure process before it answers: the child's
+    answer finds the pipe closed, and it ends quietly (a BrokenPipeError traceback was printed)."""
+    with drawing(True) as drawer:
+        assert isinstance(drawer, Drawer)
+        drawer.submit(time.sleep, 0.5)  # its answer is never waited for
+    assert drawer.process.exitcode == 0
+    assert "Traceback" not in capfd.readouterr().err
 
 
 def test_the_childs_error_is_raised_here_with_its_type_and_traceback():

@@ -31,6 +31,7 @@ import pyomo.core as pyo  # not pyomo.environ: see ocp.solver.prepare
 from scipy.sparse import hstack, identity
 
 from ecostudy.analysis import regimes
+from ecostudy.core.units import KWH
 from ecostudy.io.results import on_grid
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import build, prepare
@@ -105,6 +106,13 @@ def check(nodes, labels, psi, tolerance=0.02, bounds=None):
             "disagreements": bad, "tolerance": tolerance}
 
 
+def costate_check(train, nodes, v, ft, fb, labels, psi, objective):
+    """:func:`check` of ``psi`` against the regimes ``labels`` of a run of ``objective`` (the bounds
+    its forces give, :func:`regime_bounds`), as its solve, ``ecostudy check`` and the saved run
+    judged again check it."""
+    return check(nodes, labels, psi, tolerance=0.02, bounds=regime_bounds(train, v, ft, fb, labels, objective))
+
+
 TIMING_TOLERANCE = 1e-5  # [-]: an arrival or passing time this near its bound binds (profile.csv's 6 digits)
 
 
@@ -118,7 +126,8 @@ def estimated_psi(m, nodes, train, tolerance=1e-2):
     A row or bound counts as active within ``tolerance`` of it (relative, at least 1), the arrival
     time's bound and the timing windows' rows within :data:`TIMING_TOLERANCE` only: a run that
     arrives 0.6 s before the time it is checked for has time to spare, and is not the optimum.
-    Returns (psi, relative stationarity residual, residual per speed node).
+    Returns (psi, relative stationarity residual, residual per speed node, dE/dT [J/s]: the fitted
+    multiplier of the arrival row, as ``space.marginal_energy`` reads Ipopt's).
     """
 
     nlp = Session(m).nlp
@@ -159,8 +168,10 @@ def estimated_psi(m, nodes, train, tolerance=1e-2):
     multipliers[rows] = y[:len(rows)]
     speed_rows = nlp.get_constraint_indices([m.speed[k] for k in m.I])
     v_cols = nlp.get_primal_indices([m.v[k] for k in m.K if not m.v[k].fixed])
+    arrival = multipliers[nlp.get_constraint_indices([m.arrival])[0]]
     return (psi_from_multipliers(multipliers[speed_rows], nodes, train, m.energy_ref),
-            float(np.linalg.norm(residual) / norm), np.abs(residual[v_cols]) / norm)
+            float(np.linalg.norm(residual) / norm), np.abs(residual[v_cols]) / norm,
+            space.marginal_energy_of(arrival, m))
 
 
 def check_profile(track, train, inputs, trajectory, running_time=None, tolerance=1e-2, objective="energy",
@@ -183,16 +194,15 @@ def check_profile(track, train, inputs, trajectory, running_time=None, tolerance
     if hasattr(m, "fr"):  # the electric brake takes what it can of the profile's braking
         for k, f in enumerate(np.minimum(fb, regimes.regenerative_limit(train, v))):
             m.fr[k].set_value(float(f) / space.FORCE_SCALE)
-    psi, residual, _ = estimated_psi(m, case.nodes, train, tolerance)
+    psi, residual, _, marginal = estimated_psi(m, case.nodes, train, tolerance)
     psi = psi * (train.traction_efficiency if objective == "net_energy" else 1.0)
-    net = objective == "net_energy" and train.regeneration is not None
-    labels = regimes.classify(train, v, ft, fb, regeneration=net)
-    out = check(case.nodes, labels, psi, tolerance=0.02,
-                bounds=regime_bounds(train, v, ft, fb, labels, objective))
+    labels = regimes.labelled(train, v, ft, fb, objective)
+    out = costate_check(train, case.nodes, v, ft, fb, labels, psi, objective)
     kind = ("net-energy-optimal (Farooqi 2018, eq. 7.4)" if objective == "net_energy"
             else "energy-optimal (Farooqi 2018, eq. 2.17)")
     out.update(method="multipliers fitted at the profile (sign-constrained least squares)",
                stationarity_residual=residual, profile_running_time_s=own,
+               marginal_energy_kWh_per_s=marginal / KWH if running_time is None else None,
                checked_as=f"{kind} run for " + (f"{own:.2f} s (its own time)" if running_time is None
                                                  else f"arrival by {running_time:.2f} s"))
     return out, psi

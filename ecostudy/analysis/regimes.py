@@ -76,6 +76,20 @@ def runs(labels, nodes):
     return [(label, float(nodes[i0]), float(nodes[i1])) for label, i0, i1 in merged]
 
 
+def labelled(train, v, ft, fb, objective):
+    """:func:`classify` as a run of ``objective`` is labelled: RB where a net-energy run's train
+    regenerates (eq. 7.4), else eq. 2.17's regimes. Its solve, ``ecostudy check`` and the saved run
+    judged again label it so."""
+    return classify(train, v, ft, fb, regeneration=objective == "net_energy" and train.regeneration is not None)
+
+
+def block(labels, nodes):
+    """``summary.json``'s ``regimes``: the sequence, the distance shares, the runs."""
+    regime_runs = runs(labels, nodes)
+    return {"sequence": sequence_text(regime_runs), "distance_shares": distance_shares(labels, nodes),
+            "runs": [{"regime": r, "start_m": a, "end_m": b} for r, a, b in regime_runs]}
+
+
 def sequence_text(run_list):
     """'MA-CR-CO-MB' from :func:`runs`."""
     return "-".join(label for label, _, _ in run_list)

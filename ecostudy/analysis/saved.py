@@ -11,6 +11,7 @@ from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
+from ecostudy.analysis import pontryagin, regimes
 from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.kinematics import net_force_needed
@@ -21,7 +22,7 @@ from ecostudy.core.types import Timing, Window
 from ecostudy.core.units import KMH, KWH, PERCENT
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.io.results import SavedRun, check_unchanged, on_grid
-from ecostudy.io.runsummary import Verification
+from ecostudy.io.runsummary import Verification, current
 from ecostudy.ocp.problem import prepare
 
 # the totals summary.json records, which the profile's own must give (the profile's %.6g digits
@@ -33,6 +34,12 @@ HANDLE = 1e-3  # the handle column against the forces' handle (the digits writte
 AGREE = 1e-4  # relative, of the larger total (at least 1 s or 1 kWh)
 WRITTEN = 5e-6  # relative: half a unit in the sixth significant digit, the precision of profile.csv's numbers
 MOTION_SLACK = 10.0  # the profile's equation of motion may miss by this many times what its digits allow
+# the saved verification's errors and the re-simulation's from the profile agree to this share of each
+# error's tolerance (0.01 m of the stop's 1 m); measured at most 4e-4 of it (the profile's six digits,
+# 11 runs of K = 40 and 200 on the shipped tracks and trains)
+SAVED_ERROR = 0.01
+SIMULATED = ("simulated_running_time_s", "simulated_traction_energy_kWh", "simulated_net_energy_kWh")
+REGIME_INTERVALS = 2  # a regime's boundary, share or agreement may move this many intervals (the forces' digits)
 
 
 class Rejudged(NamedTuple):
@@ -56,6 +63,29 @@ def timing_record(timing: Timing) -> dict[str, Any]:
     return {"running_time_s": timing.running_time,
             "supplement_percent": None if timing.supplement is None else timing.supplement / PERCENT,
             "window_s": None if timing.window is None else list(timing.window)}
+
+
+def run_inputs(result: Any, study: str | Path | None = None, das: str | None = None) -> dict[str, Any]:
+    """``inputs.json`` of a run of :func:`~ecostudy.analysis.single.solve_run` (``result``): the
+    files of its track and train with their digests as they were read, its stops, grid, timing
+    windows, objective, timing and weights, the ``study`` file and the driver advice ``das`` asked
+    (``ecostudy solve``'s), all that ``ecostudy check`` needs to judge it again. A run whose track
+    or train was built in code names no file to judge it against: refused, naming which."""
+    request, summary = result.request, result.summary
+    if request is None:
+        raise InputError(problem("arguments", "run", "a point a front solved on its shared model, which records no "
+                                 "inputs.json: solve its running time with api.solve and save that run"))
+    missing = [name for name, file in (("track", request.track_file), ("train", request.train_file)) if file is None]
+    if missing:
+        raise InputError([problem("arguments", name, "built in code (or changed with dataclasses.replace), not read "
+                                  "from a file: a saved run names the files ecostudy check re-simulates it against; "
+                                  f"write it to a file and read it with api.load_{name}") for name in missing])
+    (track, track_sha), (train, train_sha) = request.track_file, request.train_file
+    return {"track": track, "train": train, "track_sha256": track_sha, "train_sha256": train_sha,
+            "from": summary["from"], "to": summary["to"], "points": summary["points"],
+            "windows": windows_record(request.windows), "study": None if study is None else str(Path(study).resolve()),
+            "objective": summary["objective"], "timing": timing_record(request.timing),
+            "weights": list(request.weights) if summary["objective"] == "mixed" else None, "das": das}
 
 
 def asked_times(inputs: dict[str, Any], all_out_s: float | None, where: Path) -> tuple[float, float] | None:
@@ -156,6 +186,8 @@ def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
                                  f"{case.segment.distance:.6g} m apart: an edited file? solve again"))
     block, trace = verify(case.segment, train, case.nodes, u, totals["running_time_s"],
                       totals["traction_energy_kWh"] * KWH, case.windows, net_energy=totals["net_energy_kWh"] * KWH)
+    same_verification(saved.summary.get("verification"), block, result_dir / "summary.json")
+    same_regimes(saved, train, case.nodes, result_dir)
     errors = Verification.from_dict(block).errors  # the saved status saying these very numbers: not said twice
     reasons = [] if within_tolerances(block) or f"({errors})" in (saved.status.reason or "") else [
         f"re-simulated from the saved profile, outside tolerance ({errors})"]
@@ -194,3 +226,80 @@ def motion(train: Any, case: Any, v: Any, ft: Any, fb: Any, where: Path) -> None
         raise InputError(problem(where, f"speed_kmh, rows {k + 2}-{k + 3}", f"the run's equation of motion misses by "
                                  f"{missed[k]:.3g} N between these rows (their digits allow {allowed[k]:.3g} N): an "
                                  "edited profile? solve again"))
+
+
+def same_verification(said: Any, block: dict[str, Any], where: Path) -> None:
+    """Refuse a saved ``verification`` block (``said``; None: the run was not re-simulated) whose
+    numbers are not the re-simulation's ``block`` from the profile: each error within
+    :data:`SAVED_ERROR` of its tolerance, each simulated total within :data:`AGREE` (relative), each
+    timing window's passing time and speed within :data:`SAVED_ERROR` of their 0.5 s and 0.5 km/h
+    (whether it is kept is judged again against inputs.json's window, :func:`rejudged`)."""
+    if said is None:
+        return
+    said = current(said) if isinstance(said, dict) else {}
+    limits = {**{key: SAVED_ERROR * tolerance for key, tolerance in block["tolerances"].items()},
+              **{key: AGREE * max(abs(block[key]), 1.0) for key in SIMULATED}}
+    for key, limit in limits.items():
+        value = said.get(key)
+        if not (isinstance(value, (int, float)) and abs(value - block[key]) <= limit):
+            raise InputError(problem(where, f"verification.{key}", f"{value!r}, but the saved profile re-simulated "
+                                     f"gives {block[key]:.6g}: an edited file? solve again"))
+    windows = said.get("windows")
+    for n, ours in enumerate(block["windows"]):
+        theirs = windows[n] if isinstance(windows, list) and n < len(windows) else None
+        if not (isinstance(theirs, dict) and all(
+                isinstance(theirs.get(k), (int, float)) and abs(theirs[k] - ours[k]) <= SAVED_ERROR * 0.5
+                for k in ("simulated_time_s", "simulated_speed_kmh"))):
+            raise InputError(problem(where, f"verification.windows[{n}]", f"{theirs!r}, but the saved profile "
+                                     f"re-simulated passes at {ours['simulated_time_s']:.6g} s, "
+                                     f"{ours['simulated_speed_kmh']:.6g} km/h: an edited file? solve again"))
+    if isinstance(windows, list) and len(windows) != len(block["windows"]):
+        raise InputError(problem(where, "verification.windows", f"{len(windows)} timing windows where the run has "
+                                 f"{len(block['windows'])}: an edited file? solve again"))
+
+
+def same_regimes(saved: SavedRun, train: Any, nodes: np.ndarray, result_dir: Path) -> None:
+    """Refuse a saved run whose ``regimes`` (sequence, runs, distance shares) are not its forces'
+    (``regimes.labelled``), or whose ``pontryagin`` agreement is not what its profile's
+    ``costate_ratio`` gives against those regimes (``pontryagin.costate_check``): each within
+    :data:`REGIME_INTERVALS` intervals."""
+    x, v, _, ft, fb = saved.trajectory
+    objective = saved.summary.get("objective")
+    labels = regimes.labelled(train, v, ft, fb, objective)
+    ours, said = regimes.block(labels, nodes), saved.summary.get("regimes")
+    step = REGIME_INTERVALS * float(np.max(np.diff(nodes)))
+    distance = float(x[-1] - x[0])
+    wrong = _wrong_regimes(said if isinstance(said, dict) else {}, ours, step, distance)
+    if wrong:
+        raise InputError(problem(result_dir / "summary.json", f"regimes.{wrong}", f"not the regimes of the "
+                                 f"profile's forces ({ours['sequence']}): an edited file? solve again"))
+    recorded = saved.summary.get("pontryagin")
+    if saved.costate is None or recorded is None:
+        return
+    check = pontryagin.costate_check(train, nodes, v, ft, fb, labels, saved.costate, objective)
+    for name, slack in (("agreement_pct", 100.0 * step / distance),
+                        ("intervals_agreeing_pct", 100.0 * REGIME_INTERVALS / len(ft))):
+        value = recorded.get(name) if isinstance(recorded, dict) else None
+        if not (isinstance(value, (int, float)) and abs(value - check[name]) <= slack):
+            raise InputError(problem(result_dir / "profile.csv", "costate_ratio", f"gives {name} {check[name]:.1f} "
+                                     f"against the regimes of the profile's forces, but summary.json's "
+                                     f"pontryagin.{name} is {value!r}: an edited profile or summary? solve again"))
+
+
+def _wrong_regimes(said: dict[str, Any], ours: dict[str, Any], step: float, distance: float) -> str:
+    """The first field of a saved ``regimes`` block that is not ``ours`` (boundaries within ``step``
+    [m], shares within ``step`` of the ``distance``), '' when none."""
+    runs = said.get("runs")
+    if said.get("sequence") != ours["sequence"]:
+        return "sequence"
+    if not isinstance(runs, list) or len(runs) != len(ours["runs"]) or not all(
+            isinstance(a, dict) and a.get("regime") == b["regime"] and all(
+                isinstance(a.get(k), (int, float)) and abs(a[k] - b[k]) <= step for k in ("start_m", "end_m"))
+            for a, b in zip(runs, ours["runs"])):
+        return "runs"
+    shares = said.get("distance_shares")
+    for name, share in ours["distance_shares"].items():
+        value = shares.get(name) if isinstance(shares, dict) else None
+        if not (isinstance(value, (int, float)) and abs(value - share) <= step / distance):
+            return f"distance_shares.{name}"
+    return ""

@@ -2,7 +2,7 @@
 and the re-simulation. ``solve_run`` is the library entry point behind ``ecostudy solve``.
 """
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any, NamedTuple, Optional
 
 import numpy as np
 import pandas as pd
@@ -16,6 +16,8 @@ from ecostudy.core.simulate import verify
 from ecostudy.core.status import Judged, Status, from_checks, part, solver_check, solver_part, worst
 from ecostudy.core.types import Timing, Trajectory
 from ecostudy.core.units import KWH, number
+from ecostudy.io.documents import source_file
+from ecostudy.io.results import COSTATE_OBJECTIVES
 from ecostudy.io.runsummary import RunSummary, SolverRun, Verification
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import (
@@ -40,6 +42,18 @@ ALL_OUT_SOLVER = "all_out_solver_status"
 AT_ALL_OUT = 1e-6
 
 
+class Request(NamedTuple):
+    """What a run was solved for, as its ``inputs.json`` records it (``analysis.saved.run_inputs``):
+    the files its track and train were read from (``io.documents.source_file``: None for one built
+    in code), the timing, the timing windows on the way and the mixed objective's weights."""
+
+    track_file: Optional[tuple[str, str]]
+    train_file: Optional[tuple[str, str]]
+    timing: Timing
+    windows: tuple
+    weights: tuple
+
+
 @dataclass(repr=False)  # the repr is one line (:meth:`line`), not the profile's thousand rows
 class RunResult(Judged):
     """A solved, analysed and verified run: the profile table (display units), the summary
@@ -56,6 +70,7 @@ class RunResult(Judged):
     stages: dict = field(default_factory=dict)
     das: Any = None  # das.advice.DasRun when a DAS method was asked for
     trajectory: Optional[Trajectory] = None  # the run in SI arrays: read these, not the display table
+    request: Optional[Request] = None  # what :func:`solve_run` was asked (None: a point a front re-solved)
 
     @property
     def facts(self) -> RunSummary:
@@ -140,6 +155,7 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     result = finish(case, m, outcome, stages, objective, t_allout, verify_result)
     if timing.supplement is not None and outcome is not fastest and not fastest.optimal:  # its time is a supplement over it
         result.summary[ALL_OUT_SOLVER] = fastest.status
+    result.request = Request(source_file(track), source_file(train), timing, tuple(windows), tuple(weights))
     return result
 
 
@@ -160,25 +176,23 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
         v, dt, ft, fb, _ = space.solution_arrays(m)
         u = handles(train, v, ft, fb)
         profile, totals = tabulate(train, nodes, v, dt, ft, fb)
-        net = objective == "net_energy"
-        labels = regimes.classify(train, v, ft, fb, regeneration=net and train.regeneration is not None)
-        regime_runs = regimes.runs(labels, nodes)
+        labels = regimes.labelled(train, v, ft, fb, objective)
         costate = None
-        if objective in ("energy", "net_energy"):  # psi = lambda / v of eq. 2.17 (7.4) from Ipopt's multipliers
+        if objective in COSTATE_OBJECTIVES:  # psi = lambda / v of eq. 2.17 (7.4) from Ipopt's multipliers
             psi = pontryagin.ipopt_psi(m, nodes, train, objective)
-            bounds = pontryagin.regime_bounds(train, v, ft, fb, labels, objective)
             costate = {"method": "Ipopt multipliers of the speed recursion",
-                       "conditions": "Farooqi 2018, eq. 7.4 (regeneration credited)" if net else "Farooqi 2018, eq. 2.17",
-                       **pontryagin.check(nodes, labels, psi, bounds=bounds)}
+                       "conditions": ("Farooqi 2018, eq. 7.4 (regeneration credited)" if objective == "net_energy"
+                                      else "Farooqi 2018, eq. 2.17"),
+                       **pontryagin.costate_check(train, nodes, v, ft, fb, labels, psi, objective)}
             profile["costate_ratio"] = np.append(psi, np.nan)
-        marginal = space.marginal_energy(m) if objective in ("energy", "net_energy") else None
+        marginal = space.marginal_energy(m) if objective in COSTATE_OBJECTIVES else None
     verification, trace = None, None
     if verify_result:
         with stage(stages, "verify"):
             verification, trace = verify(segment, train, nodes, u, totals["running_time_s"],
                                          totals["traction_energy_kWh"] * KWH, case.windows,
                                          net_energy=totals["net_energy_kWh"] * KWH)
-    summary = with_all_out(run_summary(case, totals, objective, t_allout, marginal, labels, regime_runs, costate,
+    summary = with_all_out(run_summary(case, totals, objective, t_allout, marginal, labels, costate,
                                      outcome, verification, stages), t_allout)
     return RunResult(profile, summary, segment, train, nodes, u, trace, stages,
                      trajectory=Trajectory(nodes, v, dt, ft, fb))

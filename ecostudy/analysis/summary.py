@@ -3,8 +3,7 @@ from ecostudy.analysis import regimes
 from ecostudy.core.units import KWH
 
 
-def run_summary(case, totals, objective, t_allout, marginal, labels, regime_runs, costate, outcome,
-                verification, stages):
+def run_summary(case, totals, objective, t_allout, marginal, labels, costate, outcome, verification, stages):
     """The summary of one run: what was solved, its totals, regimes, Pontryagin check, solver and
     verification blocks, and the stage times."""
     segment, nodes = case.segment, case.nodes
@@ -13,9 +12,7 @@ def run_summary(case, totals, objective, t_allout, marginal, labels, regime_runs
         "distance_m": segment.distance, **totals, "points": len(nodes), "objective": objective,
         "all_out_time_s": t_allout,
         "marginal_energy_kWh_per_s": None if marginal is None else marginal / KWH,
-        "regimes": {"sequence": regimes.sequence_text(regime_runs),
-                    "distance_shares": regimes.distance_shares(labels, nodes),
-                    "runs": [{"regime": r, "start_m": a, "end_m": b} for r, a, b in regime_runs]},
+        "regimes": regimes.block(labels, nodes),
         "pontryagin": costate,
         "solver": {"status": outcome.status, "iterations": outcome.iterations,
                    "wall_s": stages.get("solve", 0.0), "constraint_violation_max": outcome.max_violation},

@@ -3,6 +3,7 @@ table with its totals."""
 import numpy as np
 import pandas as pd
 
+from ecostudy.core.kinematics import cumulative_work, interval_power
 from ecostudy.core.physics import efficiency, line_energy
 from ecostudy.core.units import KN, KW, KWH, to_kmh
 
@@ -35,8 +36,8 @@ def tabulate(train, nodes, v, dt, ft, fb):
         "handle": pad(u),
         "traction_force_kN": pad(ft / KN),
         "braking_force_kN": pad(fb / KN),
-        "power_kW": pad(ft * 0.5 * (v[:-1] + v[1:]) / KW),
-        "cumulative_energy_kWh": np.concatenate([[0.0], np.cumsum(work_t)]) / KWH,
+        "power_kW": pad(interval_power(ft, v) / KW),
+        "cumulative_energy_kWh": cumulative_work(ft, nodes) / KWH,
     })
     vm = 0.5 * (v[:-1] + v[1:])
     regen = float(np.sum(efficiency(train.eta_regeneration, vm, fr) * work_r))

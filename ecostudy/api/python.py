@@ -105,7 +105,10 @@ class Solution(Judged):
         return speed_plot(self.run, path)
 
     def save(self, out_dir, plot=True):
-        """The files of ``ecostudy solve`` (profile.csv, summary.json, speed.png) into ``out_dir``."""
+        """The folder ``ecostudy solve`` writes (inputs.json, profile.csv, summary.json, the figures,
+        report.html) into ``out_dir``, which ``ecostudy check`` and ``export`` read; refused as the
+        command refuses its ``--out`` (``report.files.write_run``), and for a run of a track or train
+        built in code, which names no file to check it against."""
         return write_run(self.run, out_dir, plot)
 
 

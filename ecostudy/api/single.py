@@ -9,7 +9,6 @@ from typing import Any, Optional
 import pyomo.core as pyo  # not pyomo.environ: see ocp.solver.prepare
 
 from ecostudy import __version__
-from ecostudy.analysis.saved import timing_record, windows_record
 from ecostudy.analysis.single import RunResult, solve_run
 from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import Note, Report, listed, reported
@@ -23,11 +22,10 @@ from ecostudy.core.types import Timing
 from ecostudy.core.units import number, signed
 from ecostudy.das.advice import failed_advice
 from ecostudy.das.methods import DAS_METHODS, das_run
-from ecostudy.io.results import file_digest
 from ecostudy.io.writers import check_output_dir, default_output, write_json
 from ecostudy.ocp import session
 from ecostudy.report.drawer import drawing
-from ecostudy.report.files import RUN_FIGURES, write_fixed_step, write_run
+from ecostudy.report.files import run_files, write_fixed_step, write_run
 from ecostudy.report.style import output
 from ecostudy.studies.check import check_result
 from ecostudy.studies.options import (OBJECTIVES, case_from, check_choices, check_options, das_limit, only_one,
@@ -131,9 +129,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         raise InputError(problem("command line" if weights is not None else str(study), "--weights" if weights is not
                                  None else "weights.time", "a time weight of 0 with no running time leaves the least "
                                  "energy run free to crawl (days): give a positive time weight, or a running time"))
-    advice = ("advice.csv",) if das is not None else ()
-    check_output_dir(out_dir, ("profile.csv", "inputs.json", *advice,
-                               *figures.filenames(RUN_FIGURES, plot)), "solve")
+    check_output_dir(out_dir, run_files(das is not None, plot, figures), "solve")
     if das is not None and windows and das != "round":
         raise InputError(problem(str(study), "windows", f"--das {das} does not handle timing "
                                  "windows on the way yet; use --das round"))
@@ -156,14 +152,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
                 result.das = failed_advice(das, str(exc))
             result.summary["das"] = result.das.summary
         stage("figures and files")
-        write_json(out_dir / "inputs.json", {"track": str(paths[0].resolve()), "train": str(paths[1].resolve()),
-                                             "track_sha256": file_digest(paths[0]),
-                                             "train_sha256": file_digest(paths[1]), "from": f, "to": t, "points": k,
-                                             "windows": windows_record(windows),
-                                             "study": None if study is None else str(Path(study).resolve()),
-                                             "objective": obj, "timing": timing_record(timing),
-                                             "weights": list(w) if obj == "mixed" else None, "das": das})
-        write_run(result, out_dir, plot=plot, out=figures, drawer=drawer, files=("inputs.json",))
+        write_run(result, out_dir, plot=plot, out=figures, drawer=drawer, study=study, das=das)
     return reported(out_dir, run_lines(result, out_dir))
 
 

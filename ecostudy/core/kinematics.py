@@ -176,6 +176,19 @@ def running_time(speeds: FloatArray, nodes: FloatArray) -> float:
     return float(np.sum(interval_times(speeds, nodes)))
 
 
+def interval_power(force: FloatArray, speeds: FloatArray) -> FloatArray:
+    """Power of a force per interval [W]: the force [N] times the interval's mean speed [m/s]
+    (``profile.csv``'s ``power_kW``, and what a saved profile's is checked against)."""
+    result: FloatArray = force * 0.5 * (speeds[:-1] + speeds[1:])
+    return result
+
+
+def cumulative_work(force: FloatArray, nodes: FloatArray) -> FloatArray:
+    """Work of a force per interval [N] summed from the first node [J], one value per node
+    (``profile.csv``'s ``cumulative_energy_kWh``, and what a saved profile's is checked against)."""
+    return np.concatenate([[0.0], np.cumsum(force * np.diff(nodes))])
+
+
 def capped_speeds(envelope: FloatArray, nodes: FloatArray, target: float) -> FloatArray:
     """Envelope capped at one cruise speed, the cap chosen so the running time is ``target``."""
     if target <= running_time(envelope, nodes):

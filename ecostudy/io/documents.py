@@ -1,6 +1,7 @@
 """Reading a file into Python data and validating it against a schema: every problem one line
 ``file: field: what is wrong`` (:class:`ecostudy.core.errors.InputError`)."""
 import difflib
+import hashlib
 import json
 import re
 from os import PathLike
@@ -47,6 +48,28 @@ def not_a_path(name: str, value: object) -> str:
     what = f"a path to a {name} file" if name in FILE_ARGUMENTS else "a path (str or pathlib.Path)"
     loaded = " (api.solve takes loaded ones)" if isinstance(value, (Track, Train)) else ""
     return f"{what}, not {type(value).__name__} {value!r:.60}{loaded}"
+
+
+def file_digest(path: Where) -> str:
+    """SHA-256 of a file's bytes (of ``file#selector``: of the file), to tell whether it changed."""
+    return hashlib.sha256(split_selector(path)[0].read_bytes()).hexdigest()
+
+
+SOURCE = "source_file"  # the attribute a track or train read from a file keeps: (file, its SHA-256 then)
+
+
+def read_from(value: Any, path: Where) -> Any:
+    """``value`` (a ``Track`` or ``Train``), remembering the file it was read from,
+    resolved, and that file's digest as it was read (:func:`source_file`). An object built in code,
+    or changed with ``dataclasses.replace``, is a new object that remembers none."""
+    object.__setattr__(value, SOURCE, (str(Path(path).resolve()), file_digest(path)))
+    return value
+
+
+def source_file(value: Any) -> tuple[str, str] | None:
+    """(file, SHA-256 as it was read) of a track or train read from a file, None for one built in code:
+    what a saved run's ``inputs.json`` names, for ``ecostudy check`` to re-simulate it against."""
+    return getattr(value, SOURCE, None)
 
 
 def not_a_file(path: Path) -> str:

@@ -222,6 +222,8 @@ def load(folder: Path | str) -> StudyResult:
             tables[name] = pd.read_csv(folder / file)
         except (OSError, ValueError) as exc:
             raise InputError(problem(folder / file, "", f"the {name} table of this folder cannot be read ({exc})"))
+    if data["kind"] == "solve":  # its files read as check and export read them: refused where they disagree
+        load_result(folder)
     not_ok = tuple(NotOk(str(c["case"]), Status.parse(c["status"])) for c in data.get("not_ok") or ())
     status, cases = Status.parse(data["status"]), Counts.from_dict(data.get("cases") or {})
     judged = _rejudged(folder) if data["kind"] == "solve" and status.ok else None

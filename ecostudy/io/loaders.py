@@ -26,7 +26,7 @@ from ecostudy.io.timetable import name_stops, off_clock, segment_timing, turning
 from ecostudy.io.ttobench import TRACK_ALIASES
 from ecostudy.io.writers import default_output
 from ecostudy.io.documents import (Where, check_path, given, named_file, read_document as read_document,  # re-exported
-                                   split_selector, validate as validate)
+                                   read_from, split_selector, validate as validate)
 
 
 @dataclass(frozen=True)
@@ -163,7 +163,8 @@ def track_document(path: Where) -> dict[str, Any]:
 def read_train(path: Where) -> tuple[dict[str, Any], Train]:
     """(document, :class:`Train`) of a train file (YAML, or TTOBench/OSRD JSON): its warnings, naming it."""
     data, aliases = train_document(path)
-    return data, train_from_schema(validate(schemas.TrainFile, data, path, aliases), split_selector(path)[0], aliases)
+    return data, read_from(train_from_schema(validate(schemas.TrainFile, data, path, aliases), split_selector(path)[0],
+                                              aliases), path)
 
 
 def read_track(path: Where) -> tuple[dict[str, Any], Track]:
@@ -175,7 +176,7 @@ def read_track(path: Where) -> tuple[dict[str, Any], Track]:
     if track.limits.max() < 25 * units.KMH and track.length > 2000:
         warnings.warn(problem(path, "speed_limits", f"every limit is below 25 km/h on a {track.length / 1000:.1f} km "
                               "line: check the unit (m/s given as km/h?)"), EcostudyWarning, stacklevel=2)
-    return data, track
+    return data, read_from(track, path)
 
 
 def check_fits(path: Where, train: Train, track: Track, field: str | None = None) -> None:

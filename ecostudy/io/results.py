@@ -1,6 +1,5 @@
 """Reading back the output folder of `ecostudy solve`: its inputs, its summary and its profile as
 an SI :class:`~ecostudy.core.types.Trajectory` (the display units converted here)."""
-import hashlib
 import json
 from os import PathLike
 from pathlib import Path
@@ -10,19 +9,15 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.core.errors import InputError, problem
-from ecostudy.core.status import PROVEN, Status
-from ecostudy.core.kinematics import interval_time
+from ecostudy.core.status import ADHESION_USE, PROVEN, TOLERANCES, Status
+from ecostudy.core.kinematics import cumulative_work, interval_power, interval_time
+from ecostudy.core.simulate import within_tolerances
 from ecostudy.core.modes import mode_name, names_mode
 from ecostudy.core.types import Trajectory
-from ecostudy.core.units import KMH, KN
+from ecostudy.core.units import KMH, KN, KW, KWH
+from ecostudy.io.documents import file_digest as file_digest  # re-exported: inputs.json's digests
+from ecostudy.io.runsummary import current
 from ecostudy.io.tables import number_columns
-
-
-def file_digest(path: str | PathLike[str]) -> str:
-    """SHA-256 of a file's bytes (of ``file#selector``: of the file), to tell whether it changed."""
-    text = str(path)
-    file = Path(text.rsplit("#", 1)[0] if "#" in text and not Path(text).is_file() else text)
-    return hashlib.sha256(file.read_bytes()).hexdigest()
 
 
 def check_unchanged(inputs: dict[str, Any], result_dir: str | PathLike[str]) -> None:
@@ -48,6 +43,7 @@ class SavedRun(NamedTuple):
     trajectory: Trajectory
     handle: np.ndarray    # the handle per interval (profile.csv's handle on the interval's first row)
     advice: Optional[pd.DataFrame] = None  # advice.csv, when the run has driver advice
+    costate: Optional[np.ndarray] = None  # psi per interval (costate_ratio), of a run of objective energy or net_energy
 
     @property
     def status(self) -> Status:
@@ -77,6 +73,10 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     if not isinstance(summary, dict):
         raise InputError(problem(result_dir / "summary.json", "", "not a result folder of `ecostudy solve` "
                                  "(expected a mapping of fields)"))
+    if summary.get(WRITING):  # the marker write_run puts first and replaces last
+        raise InputError(problem(result_dir, "", "not a result folder of `ecostudy solve`: its files were being "
+                                 "written when the write stopped (an interrupted write?): solve again"))
+    _check_record(inputs, summary, result_dir)
     try:  # a status outside the vocabulary, or ok over a re-simulation that failed: an edited summary
         status = Status.parse(str(summary.get("status") or "failed: no status recorded"))
     except ValueError as exc:
@@ -89,8 +89,9 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     if status.ok and ended is not None and ended not in PROVEN:
         raise InputError(problem(result_dir / "summary.json", "status", f"ok, but solver.status is {ended!r} (a solve "
                                  "the solver did not prove optimal is flagged): an edited file?"))
-    p = number_columns(result_dir / "profile.csv", PROFILE_COLUMNS, rows=points,
-                       open_last=("traction_force_kN", "braking_force_kN", "handle"))
+    costate = ("costate_ratio",) if summary.get("objective") in COSTATE_OBJECTIVES else ()
+    p = number_columns(result_dir / "profile.csv", (*PROFILE_COLUMNS, *DERIVED_COLUMNS, *costate), rows=points,
+                       open_last=("traction_force_kN", "braking_force_kN", "handle", "power_kW", *costate))
     for column, strictly in (("position_m", True), ("time_s", False)):  # rows out of order: a run read backwards
         steps = np.diff(p[column])
         back = np.flatnonzero(steps <= 0 if strictly else steps < 0)
@@ -103,6 +104,9 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
             raise InputError(problem(result_dir / "profile.csv", f"{column}, row {below[0] + 2}",
                                      f"{p[column][below[0]]:g} is below 0 (a speed and each force are >= 0)"))
     _check_clock(p, result_dir / "profile.csv")
+    _check_derived(p, result_dir / "profile.csv")
+    _check_totals(p, summary, result_dir / "summary.json")
+    _check_verification(summary, result_dir / "summary.json")
     trajectory = Trajectory(p["position_m"], p["speed_kmh"] * KMH, np.diff(p["time_s"]),
                             p["traction_force_kN"][:-1] * KN, p["braking_force_kN"][:-1] * KN)
     advice: pd.DataFrame | None = None
@@ -138,7 +142,8 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
                                      f"'{advice['start_position_m'].iloc[bad[0]]}' is not a finite number at least "
                                      "the row's before"))
         advice = advice.assign(start_position_m=starts)
-    return SavedRun(inputs, summary, trajectory, p["handle"][:-1], advice)
+    return SavedRun(inputs, summary, trajectory, p["handle"][:-1], advice,
+                    p["costate_ratio"][:-1] if costate else None)
 
 
 def _half_digit(x: np.ndarray) -> np.ndarray:
@@ -166,6 +171,85 @@ def _check_clock(p: dict[str, np.ndarray], where: Path) -> None:
                                  f"the {np.diff(t)[k]:.6g} s written: an edited profile? solve again"))
 
 
+def _check_record(inputs: dict[str, Any], summary: dict[str, Any], result_dir: Path) -> None:
+    """Refuse a folder whose inputs.json and summary.json say different things of the same run (the
+    stops, the grid size, the objective) or whose summary records a marginal energy of the wrong
+    sign: one of them was edited (a check would judge the run as one and report it as the other)."""
+    for field in ("from", "to", "points", "objective"):
+        if field in inputs and inputs[field] != summary.get(field):
+            raise InputError(problem(result_dir / "inputs.json", field, f"{inputs[field]!r}, but summary.json "
+                                     f"records {summary.get(field)!r}: an edited record? solve again"))
+    marginal = summary.get("marginal_energy_kWh_per_s")
+    if marginal is not None and not (isinstance(marginal, (int, float)) and marginal <= MARGINAL_NOISE):
+        raise InputError(problem(result_dir / "summary.json", "marginal_energy_kWh_per_s", f"{marginal!r}: a "
+                                 "second more saves energy on an energy-optimal run (dE/dT <= 0): an edited file? "
+                                 "solve again"))
+
+
+def _check_derived(p: dict[str, np.ndarray], where: Path) -> None:
+    """Refuse a profile whose power and cumulative energy columns are not what its traction forces,
+    speeds and positions give (``kinematics.interval_power``, ``kinematics.cumulative_work``), beyond
+    twice the rounding of the digits written: a column edited after the solve."""
+    x, v, ft = p["position_m"], p["speed_kmh"] * KMH, p["traction_force_kN"][:-1] * KN
+    hx, hv, hf = _half_digit(x), _half_digit(p["speed_kmh"]) * KMH, _half_digit(ft)
+    power, said = interval_power(ft, v) / KW, p["power_kW"][:-1]
+    rounding = (_half_digit(said) + (hf * 0.5 * (v[:-1] + v[1:]) + np.abs(ft) * 0.5 * (hv[:-1] + hv[1:])) / KW)
+    _refuse_off(said, power, rounding, where, "power_kW", "kW", "the traction force times the interval's mean speed")
+    work, said = cumulative_work(ft, x) / KWH, p["cumulative_energy_kWh"]
+    rounding = _half_digit(said) + cumulative_work(hf, x) / KWH + np.concatenate(
+        [[0.0], np.cumsum(np.abs(ft) * (hx[:-1] + hx[1:]))]) / KWH
+    _refuse_off(said, work, rounding, where, "cumulative_energy_kWh", "kWh", "the traction work summed from the start")
+
+
+def _refuse_off(said: np.ndarray, given: np.ndarray, rounding: np.ndarray, where: Path, column: str, unit: str,
+                what: str) -> None:
+    off = np.flatnonzero(~(np.abs(said - given) <= 2.0 * rounding + 1e-9 * np.max(np.abs(given), initial=1.0)))
+    if off.size:
+        k = off[0]
+        raise InputError(problem(where, f"{column}, row {k + 2}", f"{said[k]:g} {unit}, but the row's forces, speeds "
+                                 f"and positions give {given[k]:.6g} ({what}): an edited profile? solve again"))
+
+
+def _check_totals(p: dict[str, np.ndarray], summary: dict[str, Any], where: Path) -> None:
+    """Refuse a summary whose running time, traction energy, top speed or distance is not what its
+    profile gives (to the profile's six digits): one of them was edited."""
+    for field, value in (("running_time_s", p["time_s"][-1]), ("traction_energy_kWh", p["cumulative_energy_kWh"][-1]),
+                         ("top_speed_kmh", np.max(p["speed_kmh"])),
+                         ("distance_m", p["position_m"][-1] - p["position_m"][0])):
+        said = summary.get(field)
+        if not (isinstance(said, (int, float)) and abs(said - value) <= 2.0 * _half_digit(np.array([value]))[0] + 1e-9):
+            raise InputError(problem(where, field, f"{said!r}, but the profile gives {value:.6g}: an edited file? "
+                                     "solve again"))
+
+
+def _check_verification(summary: dict[str, Any], where: Path) -> None:
+    """Refuse a verification block that contradicts itself: tolerances other than ecostudy's,
+    ``passed`` other than what its own errors and timing windows say, an arrival error other than
+    the simulated arrival less the running time. Whether its numbers are the re-simulation's own,
+    ``ecostudy check`` and ``export`` see (``analysis.saved.rejudged``)."""
+    block = summary.get("verification")
+    if block is None:
+        return
+    try:
+        block = current(block)
+        tolerances = dict(TOLERANCES, **({"adhesion_use_max": ADHESION_USE} if "adhesion_use_max" in block else {}))
+        if block["tolerances"] != tolerances:
+            raise InputError(problem(where, "verification.tolerances", f"{block['tolerances']!r}, not the "
+                                     f"re-simulation's {tolerances!r}: an edited file? solve again"))
+        passed = within_tolerances(block) and all(w["kept"] for w in block["windows"])
+        arrival = float(block["simulated_running_time_s"]) - float(summary["running_time_s"])
+        off = abs(float(block["arrival_time_error_s"]) - arrival) > 1e-6 * max(abs(arrival), 1.0)
+    except (AttributeError, KeyError, TypeError, ValueError) as exc:
+        raise InputError(problem(where, "verification", f"not the block a solve writes ({exc!r}): an edited file? "
+                                 "solve again"))
+    if block["passed"] is not passed:
+        raise InputError(problem(where, "verification.passed", f"{block['passed']!r}, but its errors and timing "
+                                 f"windows say {passed!r}: an edited file? solve again"))
+    if off:
+        raise InputError(problem(where, "verification.arrival_time_error_s", f"{block['arrival_time_error_s']!r}, "
+                                 f"but it arrives {arrival:.6g} s after the running time: an edited file? solve again"))
+
+
 def on_grid(trajectory: Trajectory, nodes: np.ndarray, inputs: dict[str, Any], where: str | PathLike[str]) -> None:
     """Refuse a profile whose positions are not the grid ``inputs.json`` names."""
     x = trajectory.nodes
@@ -177,3 +261,11 @@ def on_grid(trajectory: Trajectory, nodes: np.ndarray, inputs: dict[str, Any], w
 
 NOISE = 1e-3  # [km/h, kN] below -NOISE a saved speed or force is an edit, not the solver's rounding
 PROFILE_COLUMNS = ("position_m", "time_s", "speed_kmh", "traction_force_kN", "braking_force_kN", "handle")
+DERIVED_COLUMNS = ("power_kW", "cumulative_energy_kWh")  # checked against the forces, speeds and positions
+# [kWh/s] above 0, a marginal energy is no solver's noise (3.5e-7 measured on a run whose timing window
+# binds on the way, where the arrival's multiplier is near 0; the shipped runs' are -0.08 to -1.6)
+MARGINAL_NOISE = 1e-4
+COSTATE_OBJECTIVES = ("energy", "net_energy")  # whose profile has costate_ratio (the Pontryagin check's psi)
+# summary.json's field while a run's files are being written (``report.files.write_run`` writes it
+# first, as the folder's status, and replaces the whole summary last): a folder that has it is no result
+WRITING = "writing"

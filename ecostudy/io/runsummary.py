@@ -19,6 +19,13 @@ PREVIOUS = {"overspeed_max_kmh": "max_overspeed_kmh", "wall_s": "seconds",
             "constraint_violation_max": "max_constraint_violation"}
 
 
+def current(data: Mapping[str, Any]) -> dict[str, Any]:
+    """``data`` (a block of ``summary.json``, its tolerances too) with every key under its current
+    name (:data:`PREVIOUS`), as the checks of a saved run compare it."""
+    old = {previous: now for now, previous in PREVIOUS.items()}
+    return {old.get(k, k): current(v) if k == "tolerances" and isinstance(v, Mapping) else v for k, v in data.items()}
+
+
 def _get(data: Mapping[str, Any], key: str) -> Any:
     """``data[key]``, or the value under its previous name (:data:`PREVIOUS`)."""
     return data[key] if key in data or key not in PREVIOUS else data[PREVIOUS[key]]

@@ -376,7 +376,13 @@ def marginal_energy(m: Model) -> float | None:
     lo, hi = m.T.bounds
     if lo is None or hi is None or hi - lo > 1e-9 * max(abs(hi), 1.0) or m.arrival not in m.dual:
         return None
-    return -float(m.dual[m.arrival]) * float(m.energy_ref) / float(m.time_ref)
+    return marginal_energy_of(m.dual[m.arrival], m)
+
+
+def marginal_energy_of(multiplier: float, m: Model) -> float:
+    """dE/dT [J/s] from a multiplier of ``m``'s arrival row, Ipopt's (:func:`marginal_energy`) or
+    one fitted at a saved profile (``analysis.pontryagin.estimated_psi``)."""
+    return -float(multiplier) * float(m.energy_ref) / float(m.time_ref)
 
 
 def solution_arrays(m: Model) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray | None]:

@@ -88,7 +88,10 @@ def _serve(conn, other) -> None:
             answer: tuple = ("ok", work(*args))
         except Exception as exc:  # noqa: BLE001 - sent to the parent, which raises it
             answer = ("error", exc, traceback.format_exc())
-        conn.send_bytes(_pickled(answer))
+        try:
+            conn.send_bytes(_pickled(answer))
+        except OSError:  # the parent stopped waiting (its own write failed) and closed its end: nothing to tell
+            return
 
 
 def apart(work: Callable[..., Any], jobs: list[tuple]) -> list[Any]:

@@ -5,13 +5,13 @@ from functools import partial
 from pathlib import Path
 
 from ecostudy.analysis.export import advice_phases, fixed_step, missed_phases
-from ecostudy.analysis.saved import rejudged
+from ecostudy.analysis.saved import rejudged, run_inputs
 from ecostudy.core.budget import how_many
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.status import Status
 from ecostudy.io.folder import write_summary
-from ecostudy.io.results import load_result
-from ecostudy.io.writers import REPORT, check_output_dir, write_csv, write_json
+from ecostudy.io.results import WRITING, load_result
+from ecostudy.io.writers import REPORT, TEMPORARY, check_output_dir, write_csv, write_json
 from ecostudy.report import style
 from ecostudy.report.drawer import apart
 from ecostudy.report.html import write_html
@@ -56,36 +56,73 @@ def _draw(name, args, kwargs, path, **more):
 
 RUN_FIGURES = ("speed", "energy")  # the figures of write_run, by stem
 # what `ecostudy check` and `ecostudy export` add to a solve folder, of the run they read: a run
-# written into the folder again removes them (a check.json of an 80 s run beside a 78 s profile)
-# of the run a new one replaces, gone before its profile is written: what was read off it (its check,
-# its exports) and its report, which would show the earlier run beside a part of the new one's files
-# if a write fails midway (a full disk)
-DERIVED = ("check.json", "profile_every_*.csv", "profile_every_*.json", REPORT)
+# written into the folder again removes them (a check.json of an 80 s run beside a 78 s profile),
+# and its report, which would show the earlier run
+DERIVED = (REPORT, "check.json", "profile_every_*.csv", "profile_every_*.json")
 JOURNEY_FIGURE = "journey"  # of write_journey
+# the status of a solve folder while its files are written (with io.results.WRITING): what it says
+# where a write stopped midway (a full disk, a signal)
+UNFINISHED = Status("failed", "its files were being written when the write stopped (an interrupted write?): "
+                              "solve again")
 
 
-def write_run(result, out_dir, plot=True, out=style.Output(), drawer=None, files=()):
-    """``profile.csv``, ``summary.json``, ``speed.<format>``, ``energy.<format>`` (the energy flow; figures in
-    the format of ``out``, drawn by ``drawer`` while the tables are written when one is given) and
-    ``advice.csv`` of one run into ``out_dir``; ``files``: others the caller wrote there, listed too."""
+def run_files(advised, plot, out=style.Output()):
+    """The files :func:`write_run` writes besides ``summary.json`` and ``report.html``: what
+    ``check_output_dir`` is to find writable, and not a folder."""
+    return ("profile.csv", "inputs.json", *(("advice.csv",) if advised else ()), *out.filenames(RUN_FIGURES, plot))
+
+
+def write_run(result, out_dir, plot=True, out=style.Output(), drawer=None, study=None, das=None):
+    """A solve folder: ``inputs.json`` (``analysis.saved.run_inputs``: the files, stops, grid and
+    timing, ``study`` and ``das`` as asked), ``profile.csv``, ``summary.json``, ``speed.<format>``,
+    ``energy.<format>`` (the energy flow; figures in the format of ``out``, drawn by ``drawer`` while
+    the tables are written when one is given), ``advice.csv`` and ``report.html`` of one run into
+    ``out_dir``, checked first as ``ecostudy solve`` checks its ``--out`` (``check_output_dir``: not
+    a file, writable, no other command's results there).
+
+    All of the run or none of it: ``summary.json`` is first replaced by one marking the folder
+    :data:`UNFINISHED` (``io.results.WRITING``), and written whole last, so a write that stops
+    midway leaves a folder ``api.load``, ``check`` and ``export`` refuse, never the files of two
+    runs read as one. A file that cannot be written (a full disk, a folder in its place) is one line
+    naming it (exit status 2)."""
     out_dir = Path(out_dir)
-    for pattern in DERIVED:  # of the run this one replaces: gone before its profile is
-        for path in out_dir.glob(pattern):
-            path.unlink(missing_ok=True)
-    drawn = figures_meanwhile(drawer, out_dir, plot, dict(zip(RUN_FIGURES, (later("speed_plot", result),
-                                                                            later("energy_plot", result)))), out)
-    write_csv(out_dir / "profile.csv", result.profile)
-    tables = {"profile": "profile.csv"}
     advised = result.das is not None and result.das.advice is not None  # advice that failed has no table
-    if advised:
-        write_csv(out_dir / "advice.csv", result.das.advice)
-        tables["advice"] = "advice.csv"
-    facts = result.facts
-    write_summary(out_dir, "solve", {f"{facts.from_stop}-{facts.to_stop}": result.status}, tables,
-                  [*drawn(), *files], **result.summary)
-    stale(out_dir, advice=not advised, names={"advice": ["advice.csv"]})
-    write_html(out_dir)
+    inputs = run_inputs(result, study, das)
+    check_output_dir(out_dir, run_files(advised, plot, out), "solve")
+    facts, state = result.facts, "the folder is as it was"
+    case = f"{facts.from_stop}-{facts.to_stop}"
+    try:
+        write_summary(out_dir, "solve", {case: UNFINISHED}, **{WRITING: True})
+        state = "the folder is marked unfinished (api.load, check and export refuse it)"
+        for pattern in DERIVED:  # of the run this one replaces
+            for path in out_dir.glob(pattern):
+                path.unlink(missing_ok=True)
+        drawn = figures_meanwhile(drawer, out_dir, plot, dict(zip(RUN_FIGURES, (later("speed_plot", result),
+                                                                                later("energy_plot", result)))), out)
+        write_json(out_dir / "inputs.json", inputs)
+        write_csv(out_dir / "profile.csv", result.profile)
+        tables = {"profile": "profile.csv"}
+        if advised:
+            write_csv(out_dir / "advice.csv", result.das.advice)
+            tables["advice"] = "advice.csv"
+        write_summary(out_dir, "solve", {case: result.status}, tables, [*drawn(), "inputs.json"], **result.summary)
+        state = "the run's tables and summary are written"
+        stale(out_dir, advice=not advised, names={"advice": ["advice.csv"]})
+        write_html(out_dir)
+    except OSError as exc:
+        raise InputError(problem(written(exc, out_dir), "", f"cannot write or replace it ({exc.strerror or exc}): "
+                                 f"{state}; run again once it can be written")) from exc
     return out_dir
+
+
+def written(exc, out_dir):
+    """The output file an OSError of a write names: the file a temporary one (``.NAME<random>.tmp``,
+    ``io.writers.atomic_write``) was to become, else the one named, else the folder."""
+    name = exc.filename2 or exc.filename
+    if not name:
+        return out_dir
+    path = Path(name)
+    return path.with_name(path.name[1:-12]) if TEMPORARY.fullmatch(path.name) else path  # "." NAME, 8 random, ".tmp"
 
 
 def stale(out_dir, names, **drop):

@@ -7,6 +7,13 @@ from ecostudy.core.errors import InputError, problem
 from ecostudy.io.results import load_result
 
 
+AGREES = 95.0  # [%] of the distance: a profile that obeys the conditions this far is the optimum checked
+# the saved marginal energy against the one fitted at the profile, where it agrees (AGREES): within this
+# share of it and this floor [kWh/s]; measured at most 2.8 % apart (10 runs of K = 40 and 200 on the
+# shipped tracks and trains, energy and net energy)
+MARGINAL_SHARE, MARGINAL_FLOOR = 0.1, 1e-3
+
+
 def check_result(result_dir, running_time=None):
     """:func:`check_profile` of an `ecostudy solve` output folder (inputs.json, summary.json, profile.csv),
     with ``run_status``: the saved run's status judged again (``analysis.saved.rejudged``: its own
@@ -24,4 +31,9 @@ def check_result(result_dir, running_time=None):
     objective = "net_energy" if saved.summary.get("objective") == "net_energy" else "energy"
     report = check_profile(judged.track, judged.train, saved.inputs, saved.trajectory,
                            running_time, objective=objective, where=Path(result_dir) / "profile.csv", case=judged.case)[0]
+    said, fitted = saved.summary.get("marginal_energy_kWh_per_s"), report["marginal_energy_kWh_per_s"]
+    if (said is not None and fitted is not None and report["agreement_pct"] >= AGREES
+            and not abs(said - fitted) <= MARGINAL_SHARE * abs(fitted) + MARGINAL_FLOOR):
+        raise InputError(problem(Path(result_dir) / "summary.json", "marginal_energy_kWh_per_s", f"{said!r}, but the "
+                                 f"multipliers fitted at the profile give {fitted:.4g} kWh/s: an edited file? solve again"))
     return {**report, "run_status": str(judged.status), "resimulated": judged.verification}

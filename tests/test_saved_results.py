@@ -1,0 +1,183 @@
+"""A solve folder is one run or none, and a field of it edited by hand is refused, not passed on as
+ok: what `ecostudy check`, `ecostudy export` and `api.load` accept (docs/results.md, "What check
+verifies"). Every folder is a real K <= 200 solve of the Amsterdam metro, Rokin -> Centraal."""
+import dataclasses
+import json
+import re
+import shutil
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy import api
+from ecostudy.cli import app
+from ecostudy.io.folder import write_summary
+
+from .conftest import TRACKS, TRAINS
+
+TRACK, TRAIN = TRACKS / "amsterdam_rokin_centraal.yaml", TRAINS / "amsterdam_metro.yaml"
+SOLVE = ["solve", "--track", str(TRACK), "--train", str(TRAIN), "--no-plot"]
+
+
+@pytest.fixture(scope="module")
+def solved(tmp_path_factory):
+    """An 80 s run at K = 200 as `ecostudy solve` writes it (copied by each test that edits it)."""
+    out = tmp_path_factory.mktemp("solved") / "run"
+    r = CliRunner().invoke(app, [*SOLVE, "--time", "80", "--points", "200", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    return out
+
+
+def _copy(solved, tmp_path):
+    return shutil.copytree(solved, tmp_path / "run")
+
+
+def _refused_everywhere(out, fragment):
+    """check, export and api.load each refuse the folder in one line containing ``fragment``."""
+    for command in ("check", "export"):
+        r = CliRunner().invoke(app, [command, str(out)])
+        assert r.exit_code == 2 and fragment in r.output and "Traceback" not in r.output, (command, r.output)
+        assert r.output.count("\n") == 1, r.output
+    with pytest.raises(api.InputError, match=re.escape(fragment)):
+        api.load(out)
+
+
+def _edit_column(out, column, edit):
+    profile = pd.read_csv(out / "profile.csv")
+    profile[column] = edit(profile[column])
+    profile.to_csv(out / "profile.csv", index=False, float_format="%.6g")
+
+
+@pytest.mark.parametrize("column, edit, fragment", [
+    ("cumulative_energy_kWh", lambda c: c.where(c.index < len(c) - 1, 3.5),
+     "profile.csv: cumulative_energy_kWh, row 201: 3.5 kWh, but the row's forces, speeds and positions give 4.88"),
+    ("cumulative_energy_kWh", lambda c: c * 0.7, "profile.csv: cumulative_energy_kWh, row 3: "),
+    ("power_kW", lambda c: c * 0.5, "profile.csv: power_kW, row 2: "),
+])
+def test_an_edited_energy_or_power_column_is_refused_by_check_export_and_load(solved, tmp_path, column, edit, fragment):
+    """cumulative_energy_kWh and power_kW are what the traction forces, speeds and positions give,
+    to the six digits written: halved, scaled or a last row edited, the profile is refused (check
+    and export said ok, api.load ok, a report showed 4.886 kWh beside 2.443)."""
+    out = _copy(solved, tmp_path)
+    _edit_column(out, column, edit)
+    _refused_everywhere(out, fragment)
+
+
+def test_a_costate_column_with_its_signs_turned_is_refused_by_check_and_export(solved, tmp_path):
+    """costate_ratio is Ipopt's psi: negated, its agreement with the regimes of the profile's forces
+    falls from the 100 % summary.json records (it passed check as ok)."""
+    out = _copy(solved, tmp_path)
+    _edit_column(out, "costate_ratio", lambda c: -c)
+    for command in ("check", "export"):
+        r = CliRunner().invoke(app, [command, str(out)])
+        assert r.exit_code == 2 and "profile.csv: costate_ratio: gives agreement_pct 1.5 against the regimes of the " \
+            "profile's forces, but summary.json's pontryagin.agreement_pct is 100.0" in r.output, r.output
+
+
+def test_a_saved_run_is_the_folder_solve_writes_and_never_mixes_two_runs(solved, tmp_path):
+    """Solution.save writes inputs.json (what `ecostudy solve` writes for the same run, by the same
+    writer), so check and export read it; saved over an 80 s solve folder it replaces that run
+    whole; a folder of another command, a file, and a run of a train changed in code are refused
+    in one line (save wrote no inputs.json, kept the 80 s inputs.json, replaced a pareto folder's
+    summary, raised NotADirectoryError)."""
+    track, train = api.load_track(TRACK), api.load_train(TRAIN)
+    run = api.solve(track, train, running_time=80.0, points=200)
+    run.save(tmp_path / "saved", plot=False)
+    assert json.loads((tmp_path / "saved" / "inputs.json").read_text()) == json.loads((solved / "inputs.json").read_text())
+    assert api.check_folder(tmp_path / "saved").ok and api.export_folder(tmp_path / "saved", "1s").ok
+    later = api.solve(track, train, running_time=90.0, points=100)
+    over = _copy(solved, tmp_path)
+    later.save(over, plot=False)
+    assert json.loads((over / "inputs.json").read_text())["timing"]["running_time_s"] == 90.0
+    assert str(api.load(over).status) == "ok" and api.check_folder(over).ok
+    write_summary(tmp_path / "front", "pareto", {"a": api.Status("ok")})
+    with pytest.raises(api.InputError, match=r"front: --out: holds the results of `ecostudy pareto` \(its summary"):
+        run.save(tmp_path / "front", plot=False)
+    assert json.loads((tmp_path / "front" / "summary.json").read_text())["kind"] == "pareto"
+    (tmp_path / "afile").write_text("mine")
+    with pytest.raises(api.InputError, match="afile: the output folder is a file$"):
+        run.save(tmp_path / "afile")
+    heavier = api.solve(track, dataclasses.replace(train, mass=train.mass * 1.2), running_time=90.0, points=100)
+    with pytest.raises(api.InputError, match="^arguments: train: built in code .*api.load_train$"):
+        heavier.save(tmp_path / "heavier", plot=False)
+    assert not (tmp_path / "heavier").exists()
+
+
+def test_a_write_that_fails_midway_leaves_a_folder_no_reader_takes_for_a_run(solved, tmp_path):
+    """A folder where an earlier run's export is to be removed stops the write of an 85 s, K = 100
+    run over the 80 s one after it began: one line naming it, exit 2 (an internal error, exit 3,
+    left the new inputs.json beside the old profile and summary, which api.load called ok). The
+    folder is marked unfinished: api.load, check and export refuse it; solved again once the folder
+    is gone, it is the new run whole."""
+    out = _copy(solved, tmp_path)
+    (out / "profile_every_1s.csv").mkdir()
+    r = CliRunner().invoke(app, [*SOLVE, "--time", "85", "--points", "100", "--out", str(out)])
+    assert r.exit_code == 2 and "Traceback" not in r.output, r.output
+    assert r.output.splitlines()[-1] == (f"error: {out / 'profile_every_1s.csv'}: cannot write or replace it (Is a "
+                                         "directory): the folder is marked unfinished (api.load, check and export "
+                                         "refuse it); run again once it can be written"), r.output
+    _refused_everywhere(out, f"{out}: not a result folder of `ecostudy solve`: its files were being written when "
+                             "the write stopped (an interrupted write?): solve again")
+    (out / "profile_every_1s.csv").rmdir()
+    r = CliRunner().invoke(app, [*SOLVE, "--time", "85", "--points", "100", "--out", str(out)])
+    assert r.exit_code == 0 and api.load(out).status.ok, r.output
+    assert json.loads((out / "inputs.json").read_text())["points"] == len(pd.read_csv(out / "profile.csv")) == 100
+
+
+def _edit_summary(out, **edits):
+    summary = json.loads((out / "summary.json").read_text())
+    for path, value in edits.items():
+        *parents, key = path.split("__")
+        block = summary
+        for parent in parents:
+            block = block[parent]
+        block[key] = value
+    (out / "summary.json").write_text(json.dumps(summary))
+
+
+@pytest.mark.parametrize("edits, fragment, load_too", [
+    ({"verification__stop_error_m": 5.0}, "summary.json: verification.passed: True, but its errors and timing windows "
+                                          "say False", True),
+    ({"verification__stop_error_m": 0.5}, "summary.json: verification.stop_error_m: 0.5, but the saved profile "
+                                          "re-simulated gives -0.00", False),
+    ({"verification__tolerances__stop_error_m": 10.0}, "summary.json: verification.tolerances: ", True),
+    ({"points": 1000}, "inputs.json: points: 200, but summary.json records 1000: an edited record?", True),
+    ({"objective": "net_energy"}, "inputs.json: objective: 'energy', but summary.json records 'net_energy'", True),
+    ({"pontryagin__agreement_pct": 50.0}, "summary.json's pontryagin.agreement_pct is 50.0", False),
+    ({"marginal_energy_kWh_per_s": 0.27}, "summary.json: marginal_energy_kWh_per_s: 0.27: a second more saves energy",
+     True),
+    ({"regimes__sequence": "MA-CO-MB"}, "summary.json: regimes.sequence: not the regimes of the profile's forces "
+                                        "(MA-CO-MA-CO-MB)", False),
+    ({"top_speed_kmh": 60.0}, "summary.json: top_speed_kmh: 60.0, but the profile gives 67.79", True),
+])
+def test_an_edited_summary_field_is_refused(solved, tmp_path, edits, fragment, load_too):
+    """Each field of summary.json a user reads is compared with what check computes again or what
+    the files give: the verification's numbers with the re-simulation from the profile (within 1 %
+    of each tolerance), the points with the profile's rows, the objective with inputs.json's, the
+    Pontryagin agreement with the profile's costate_ratio, the marginal energy's sign, the regimes
+    with the forces' (check, export and api.load said ok with stop_error_m 5, agreement 50 %, 1000
+    points). api.load refuses what the files alone show (``load_too``)."""
+    out = _copy(solved, tmp_path)
+    _edit_summary(out, **edits)
+    if load_too:
+        _refused_everywhere(out, fragment)
+        return
+    for command in ("check", "export"):
+        r = CliRunner().invoke(app, [command, str(out)])
+        assert r.exit_code == 2 and fragment in r.output and "Traceback" not in r.output, (command, r.output)
+
+
+def test_an_edited_marginal_energy_is_refused_by_check(solved, tmp_path):
+    """-5 kWh/s in place of the run's -0.273: check fits the multipliers at the profile and finds
+    the arrival's (within 10 %; measured within 2.8 %); an edited inputs.json objective is refused
+    as an edited record."""
+    out = _copy(solved, tmp_path)
+    _edit_summary(out, marginal_energy_kWh_per_s=-5.0)
+    r = CliRunner().invoke(app, ["check", str(out)])
+    assert r.exit_code == 2 and "summary.json: marginal_energy_kWh_per_s: -5.0, but the multipliers fitted at the " \
+        "profile give -0.273" in r.output, r.output
+    assert not (out / "check.json").exists()
+    inputs = json.loads((solved / "inputs.json").read_text())
+    (out / "inputs.json").write_text(json.dumps({**inputs, "objective": "net_energy"}))
+    _refused_everywhere(out, "inputs.json: objective: 'net_energy', but summary.json records 'energy': an edited record?")
