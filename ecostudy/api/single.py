@@ -27,7 +27,7 @@ from ecostudy.ocp import session
 from ecostudy.report.drawer import drawing
 from ecostudy.report.files import run_files, write_fixed_step, write_run
 from ecostudy.report.style import output
-from ecostudy.studies.check import check_result
+from ecostudy.studies.check import AGREES, check_result
 from ecostudy.studies.options import (OBJECTIVES, case_from, check_choices, check_options, das_limit, only_one,
                                       output_folder, parse_pair, timing_of)
 from ecostudy.studies.estimate import check_solve, grid_nodes, table_points
@@ -178,8 +178,8 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
         check_output_dir(result_dir, ("check.json",))
     report = check_result(result_dir, time)
     run_ok = Status.parse(report["run_status"]).ok
-    agrees = report["agreement_pct"] >= 95.0
-    reasons = ([] if agrees else [f"{report['agreement_pct']:.1f} % of the distance agrees, below 95 %: not the "
+    agrees = report["agreement_pct"] >= AGREES
+    reasons = ([] if agrees else [f"{report['agreement_pct']:.1f} % of the distance agrees, below {AGREES:g} %: not the "
                                   f"{report['checked_as']}"]) + ([] if run_ok else ["the run checked is not ok"])
     verdict = "ok" if not reasons else "flagged: " + "; ".join(reasons)
     report = {"status": verdict, **report}  # the check's own verdict first: run_status is the run's
