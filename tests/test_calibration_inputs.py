@@ -242,3 +242,34 @@ def test_one_log_exported_twice_with_rows_trimmed_is_refused(tmp_path, there):
     rows = len(there) - 35
     assert f"b.csv: its rows 1-{rows} are the samples of {tmp_path / 'a.csv'}'s rows 26-{rows + 25} (one logged run" \
         in result.output, result.output
+
+
+def test_a_flagged_calibrations_train_flags_every_run_of_it(tmp_path, there):
+    """The calibrated file of a flagged calibration said NOT OK only in its `source` text: `solve` on it
+    was ok, exit 0. Now its `calibration` block (status and reason) is read by the loader and every run
+    of the train is flagged with the reason (`solve`'s, each of `compare`'s); the same file with `status: ok` solves ok (the block
+    decides, not the source text); a block without its reason is refused in one line."""
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there.drop(columns=["power_line_kW"]))
+    run("calibrate", tmp_path / "a.csv", "--fit", "mass,efficiency", "--no-plot", "--out", tmp_path / "o")
+    path = tmp_path / "o" / "regional_alstom_calibrated.yaml"
+    block = yaml.safe_load(path.read_text())["calibration"]
+    assert block["status"] == "flagged" and block["reason"].startswith("efficiency not identifiable"), block
+    solved = run("solve", "--track", TRACK, "--train", path, "--from", "West", "--to", "Middle", "--time", 240,
+                 "--points", 60, "--no-plot", "--out", tmp_path / "s")
+    assert solved.exit_code == 1, solved.output
+    status = json.loads((tmp_path / "s" / "summary.json").read_text())["status"]
+    assert status.startswith("flagged: train calibrated with status flagged: efficiency not identifiable"), status
+    compared = run("compare", "--track", TRACK, "--train", path, "--from", "West", "--to", "Middle", "--time", 240,
+                   "--points", 60, "--no-plot", "--out", tmp_path / "c")
+    summary = json.loads((tmp_path / "c" / "summary.json").read_text())
+    rows = summary["not_ok"]
+    assert compared.exit_code == 1 and len(rows) == summary["cases"]["total"] and all("train calibrated with status flagged: efficiency not identifiable"
+                                                    in row["status"] for row in rows), rows
+    doc = yaml.safe_load(path.read_text())
+    (tmp_path / "ok.yaml").write_text(yaml.safe_dump({**doc, "calibration": {"status": "ok"}}))
+    ok = run("solve", "--track", TRACK, "--train", tmp_path / "ok.yaml", "--from", "West", "--to", "Middle", "--time",
+             240, "--points", 60, "--no-plot", "--out", tmp_path / "s2")
+    assert ok.exit_code == 0, ok.output
+    (tmp_path / "bad.yaml").write_text(yaml.safe_dump({**doc, "calibration": {"status": "flagged"}}))
+    with pytest.raises(InputError, match=r"bad.yaml: calibration: .*a flagged calibration needs its reason"):
+        load_train(tmp_path / "bad.yaml")

@@ -230,5 +230,7 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                        f"{problem.prior['mass'] / 1e3:.4g} t (beyond 1/{MASS_RATIO:g} to {MASS_RATIO:g}): a unit slip "
                        "in the log (power in MW or W under kW names, force in daN under kN)?")
     scale = np.array([s[n] for n in free])
+    # the calibrated train: this calibration's status is its own (a flagged one's file says so), not the prior file's
+    calibrated = replace(train_with(train, theta), calibration_reason="")
     return Calibration(table, "flagged" if reasons else "ok", "; ".join(reasons), residuals, quality, theta,
-                       train_with(train, theta), free, cov * np.outer(scale, scale), footnotes)
+                       calibrated, free, cov * np.outer(scale, scale), footnotes)

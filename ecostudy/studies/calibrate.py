@@ -151,7 +151,8 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
                   f"({', '.join(log.name for log in logs)}) on track '{track.name}': {estimates} "
                   f"(95 % intervals); held at this file's values: "
                   f"{', '.join(n for n in names if n not in identified) or 'none'}.")
-    write_train(calibrated, calibrated_document(train_path, result.train, identified, provenance, warning))
+    write_train(calibrated, calibrated_document(train_path, result.train, identified, provenance, warning,
+                                                "" if result.status == "ok" else result.reason))
     try:  # a train file the tool would refuse (a fitted value past its field's bounds) is not left behind
         load_train(calibrated)
         written = [calibrated.name]
