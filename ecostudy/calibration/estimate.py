@@ -21,7 +21,7 @@ import pandas as pd
 from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, auxiliary_power, coefficients, over_envelope, over_limit
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.progress import stage
-from ecostudy.io.logfile import scale_problem
+from ecostudy.io.logscale import scale_problem
 from ecostudy.io.logforce import force_power_problem
 from ecostudy.calibration.fit import (
     MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, identify, informing, scales, train_with, width_if_fitted,
@@ -216,8 +216,11 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
         reasons.append(f"{drift_reason(quality['structure_ratio'])}: the model misses something the logs show")
     reasons += [f"{run.log} run {run.index}: {why}" for run in problem.runs
                 if (why := over_limit(run.t, run.x, run.v, track))]
-    reasons += [f"{log.name}: {why}" for log in logs for why in (over_envelope(log, train), scale_problem(log), force_power_problem(log))
-                if why]
+    # a speed scale off biases the mass: judged against the fitted mass's interval (without one, a fixed share)
+    j = free.index("mass") if "mass" in free else None
+    mass = None if j is None else (theta["mass"], Z95 * float(np.sqrt(cov[j, j])) * s["mass"])
+    reasons += [f"{log.name}: {why}" for log in logs
+                for why in (over_envelope(log, train), scale_problem(log, mass), force_power_problem(log)) if why]
     if {"efficiency", "regeneration_efficiency"} & set(free):
         reasons += [f"{log.name}: {why}" for log in logs if (why := auxiliary_power(log))]
     reasons += [f"{n} fitted at its bound 0 (the logs would have it below): its interval is not a fit's, and the "
