@@ -247,7 +247,7 @@ def test_a_parameter_only_one_log_informs_has_no_bootstrap_interval(tmp_path, in
     parameters all five inform have their bootstrap interval."""
     samples = [efficiency_samples(load_log(path), inputs[1])[1].size for path in five_log_files]
     assert samples[0] > 0 and not any(samples[1:]), samples
-    result = run("calibrate", *five_log_files, "--fit", "mass,davis_a,davis_b,davis_c,regeneration_efficiency",
+    result = run("calibrate", *five_log_files, "--fit", "mass,davis_a,davis_b,davis_c,efficiency,regeneration_efficiency",
                  "--bootstrap", 10, "--no-plot", "--out", tmp_path / "o")
     assert result.exit_code == 0, result.output
     table = pd.read_csv(tmp_path / "o" / "parameters.csv").set_index("name")

@@ -5,6 +5,7 @@ file, a fit that cannot tell the static mass from the rotating-mass allowance. E
 one line, warned of by name or flagged with the reason, never an `ok` calibration (real fits on
 generated logs of the regional train)."""
 import json
+import re
 
 import pytest
 import yaml
@@ -273,3 +274,27 @@ def test_a_flagged_calibrations_train_flags_every_run_of_it(tmp_path, there):
     (tmp_path / "bad.yaml").write_text(yaml.safe_dump({**doc, "calibration": {"status": "flagged"}}))
     with pytest.raises(InputError, match=r"bad.yaml: calibration: .*a flagged calibration needs its reason"):
         load_train(tmp_path / "bad.yaml")
+
+
+def test_a_held_parameter_the_logs_exclude_is_flagged(inputs, there):
+    """Logs of a train whose rotating-mass allowance is 1.25 times its file's, fitted with the allowance
+    held at the file's value (the default fit): `ok`, with the mass and Davis intervals missing the
+    truth. The logs identify the allowance: fitted beside the others it comes out 0.060 against the
+    held 0.048, several half-widths of its interval away: now flagged saying so. The file's own
+    train's log is not."""
+    track, train = inputs
+    clean = calibrate_logs([parse_log(text_of(there), "clean.csv")], track, train, DEFAULT_FIT, draws=0)
+    assert "is excluded by the logs" not in clean.reason, clean.reason
+    truth = true_train(train, rotating=1.25)
+    frame = generate_log(track, truth, ["West", "Middle", "East"], truth, seed=1)[0]
+    result = calibrate_logs([parse_log(text_of(frame), "heavy.csv")], track, train, DEFAULT_FIT, draws=0)
+    mass = result.table.set_index("name").loc["mass"]
+    assert not mass.low <= truth.static_mass <= mass.high  # what the check is for
+    assert result.status == "flagged" and re.search(
+        r"held rotating_mass_factor = 0.04806 is excluded by the logs \(they give 0.06\d* \+- 0.00\d+, [\d.]+ "
+        r"half-widths of their 95 % interval away\); fit it \(--fit \.\.\.,rotating_mass_factor\) or check the train "
+        "file", result.reason), result.reason
+    assert set(clean.quality["held_fitted"]) == {"rotating_mass_factor", "regeneration_efficiency"}  # summary.json
+    held = result.quality["held_fitted"]["rotating_mass_factor"]
+    assert held["fitted"] - held["held"] > 2 * held["half_width"]
+    assert abs(held["fitted"] - 1.25 * held["held"]) < 2 * held["half_width"]  # and it finds the truth

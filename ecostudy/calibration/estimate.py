@@ -24,7 +24,8 @@ from ecostudy.core.progress import stage
 from ecostudy.io.logscale import scale_problem
 from ecostudy.io.logforce import force_power_problem
 from ecostudy.calibration.fit import (
-    MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, identify, informing, scales, train_with, width_if_fitted,
+    MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, fitted_free, identify, informing, scales, train_with,
+    width_if_fitted,
 )
 
 MAX_RMS_SPEED = 0.3    # [m/s]
@@ -45,6 +46,9 @@ BOOTSTRAP_DRAWS = 200
 # 78 % with 3, 34 % with 4 and 10 % with 5; with 2 logs the 2.5 and 97.5 percentiles are the fits on
 # each log alone, not an interval. Fewer: boot_low and boot_high are left NaN, the note says why
 MIN_BOOTSTRAP_LOGS = 5
+# a parameter held at the train file's value (not asked for) that the logs identify is fitted beside the
+# others: the held value more than this many 95 % half-widths from the value they give is flagged
+HELD_EXCLUDED = 2.0
 MOTION = ("mass", "davis_a", "davis_b", "davis_c")  # the parameters the replayed speed follows (the efficiencies do not move it)
 
 
@@ -135,6 +139,28 @@ def too_few_informing(seen, logs):
             "inform it; its 95 % interval is low to high")
 
 
+def held_against_logs(problem, names, free, p):
+    """({name: relative 95 % half-width it would have if fitted (:func:`~ecostudy.calibration.fit.width_if_fitted`)},
+    {name: (held value, the value the logs give, its 95 % half-width) [SI]}) of each parameter not in
+    ``names``, held at the train file's value: fitted beside ``free`` from ``p`` where the logs
+    identify it (:func:`~ecostudy.calibration.fit.fitted_free`), so that a held value the logs exclude
+    is not passed over (the other parameters absorb it, their intervals then missing the truth)."""
+    widths = {n: width_if_fitted(problem, free, p, n) for n in PARAMETERS if n not in names}
+    fits = {n: fitted_free(problem, free, p, n) for n, width in widths.items() if width <= MAX_RELATIVE_WIDTH}
+    return widths, {n: (problem.prior[n], *fit) for n, fit in fits.items() if fit is not None}
+
+
+def held_excluded(name, held, value, half):
+    """Why ``name``, held at ``held``, is excluded by the logs, which give ``value`` +- ``half`` [SI]
+    (more than :data:`HELD_EXCLUDED` half-widths apart); '' where it is not."""
+    if abs(value - held) <= HELD_EXCLUDED * half:
+        return ""
+    unit = "" if PARAMETERS[name][0] == "-" else f" {PARAMETERS[name][0]}"
+    return (f"held {name} = {held:.4g}{unit} is excluded by the logs (they give {value:.4g} +- {half:.2g}{unit}, "
+            f"{abs(value - held) / half:.1f} half-widths of their 95 % interval away); fit it (--fit ...,{name}) or "
+            "check the train file")
+
+
 def residual_table(problem, theta):
     frames = []
     for run in problem.runs:
@@ -185,8 +211,9 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                 footnotes.append(f"{name}: {why}")
         rows.append(row)
     table = pd.DataFrame(rows)
+    widths, held_fits = held_against_logs(problem, names, free, p)
     if "mass" in free and "rotating_mass_factor" not in names:  # only Ms (1 + f) is seen where gradients are small
-        width = width_if_fitted(problem, free, p, "rotating_mass_factor")
+        width = widths["rotating_mass_factor"]
         if not width <= MAX_RELATIVE_WIDTH:
             note = (f"fitted as Ms (1 + f) with rotating_mass_factor held at the train file's "
                     f"{problem.prior['rotating_mass_factor']:.4g}: these logs "
@@ -204,7 +231,9 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                "structure_ratio": float(max(drift)) if drift else 1.0,
                "speed_samples": int(blocks["speed"].size), "traction_samples": int(blocks["traction"].size),
                "regeneration_samples": int(blocks["regeneration"].size), "runs": len(problem.runs),
-               "noise": {"speed_mps": problem.sigma["speed"], **{f"{k}_share": v for k, v in problem.sigma.items() if k != "speed"}}}
+               "noise": {"speed_mps": problem.sigma["speed"], **{f"{k}_share": v for k, v in problem.sigma.items() if k != "speed"}},
+               "held_fitted": {n: {"held": held, "fitted": value, "half_width": half}
+                               for n, (held, value, half) in held_fits.items()}}
     reasons = [unconverged] if unconverged else []
     if boot_unconverged:
         reasons.append(f"{boot_unconverged} of {draws} bootstrap fits did not converge")
@@ -223,6 +252,7 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                 for why in (over_envelope(log, train), scale_problem(log, mass), force_power_problem(log)) if why]
     if {"efficiency", "regeneration_efficiency"} & set(free):
         reasons += [f"{log.name}: {why}" for log in logs if (why := auxiliary_power(log))]
+    reasons += [held_excluded(n, *fitted) for n, fitted in held_fits.items() if held_excluded(n, *fitted)]
     reasons += [f"{n} fitted at its bound 0 (the logs would have it below): its interval is not a fit's, and the "
                 "other parameters absorb what the model misses" for n in free if theta[n] <= 1e-9 * abs(problem.prior[n])]
     reasons += [f"{n} {theta[n]:.4g} above 1: the wheel work is more than the line energy logged (a line power, "
