@@ -298,3 +298,25 @@ def test_a_held_parameter_the_logs_exclude_is_flagged(inputs, there):
     held = result.quality["held_fitted"]["rotating_mass_factor"]
     assert held["fitted"] - held["held"] > 2 * held["half_width"]
     assert abs(held["fitted"] - 1.25 * held["held"]) < 2 * held["half_width"]  # and it finds the truth
+
+
+def test_the_ok_line_lists_every_check_it_ran(tmp_path, inputs, there):
+    """The ok line listed five checks; the auxiliary-power, force/power and speed-scale checks (and
+    the fit's convergence, the mass ratio, the efficiencies at most 1) ran unnamed. Now it names every
+    check run, and one that ran on no log (no force column: no force/power check) is not named."""
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there)
+    result = run("calibrate", tmp_path / "a.csv", "--bootstrap", 0, "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 0, result.output
+    line = next(line for line in result.output.splitlines() if line.startswith("calibration ok: "))
+    for check in ("every parameter fitted identifiable and none at its bound 0", "the least-squares fit converged",
+                  "fitted efficiencies at most 1", "the mass within 1/3 to 3 times the train file's",
+                  "replayed speed within 0.3 m/s RMS", "innovations within 2 times white noise over 5 s",
+                  "logged speeds within 1 km/h of the line's limits", "logged traction within the train file's envelope",
+                  "speeds and positions on one scale", "the wheel power 0.95-1.06 times the force times the speed",
+                  "no auxiliary power in the line power while the wheels draw none",
+                  "held rotating_mass_factor, regeneration_efficiency within 2 half-widths"):
+        assert check in line, (check, line)
+    assert json.loads((tmp_path / "o" / "summary.json").read_text())["checks"] == line[len("calibration ok: "):].split("; ")
+    bare = calibrate_logs([parse_log(text_of(there.drop(columns=["force_kN"])), "bare.csv")], *inputs, ("mass", "davis_a"),
+                          draws=0)
+    assert bare.status == "ok" and not any("force" in check or "auxiliary" in check for check in bare.checked), bare.checked

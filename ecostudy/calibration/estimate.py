@@ -9,7 +9,12 @@ something the logs show), or a logged run broke the line's speed limit
 (:func:`~ecostudy.calibration.replay.over_limit`: a driver keeps to it, so the log is not a driven run
 of this line as the track file gives it), or a log pulled beyond the train file's traction envelope
 (:func:`~ecostudy.calibration.replay.over_envelope`), or a fitted efficiency is above 1, or a fitted
-efficiency absorbs auxiliary power (:func:`~ecostudy.calibration.replay.auxiliary_power`).
+efficiency absorbs auxiliary power (:func:`~ecostudy.calibration.replay.auxiliary_power`), or a log's
+speeds and positions disagree in scale by more than the mass's interval allows
+(:func:`~ecostudy.io.logscale.scale_problem`), or its wheel power is off the force times the speed
+(:func:`~ecostudy.io.logforce.force_power_problem`), or a parameter held at the train file's value
+is excluded by the logs (:func:`held_against_logs`). An ok status lists every check run
+(:func:`checks_run`).
 """
 import warnings
 from math import comb
@@ -18,11 +23,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, auxiliary_power, coefficients, over_envelope, over_limit
+from ecostudy.calibration.replay import (LIMIT_TOLERANCE_KMH, auxiliary_power, coefficients, idle_line_power, over_envelope,
+                                         over_limit)
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.progress import stage
-from ecostudy.io.logscale import scale_problem
-from ecostudy.io.logforce import force_power_problem
+from ecostudy.io.logscale import SCALE_TOLERANCE, measured_scale, scale_problem
+from ecostudy.io.logforce import FORCE_POWER_AGREE, force_power_agreement, force_power_problem
 from ecostudy.calibration.fit import (
     MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, fitted_free, identify, informing, scales, train_with,
     width_if_fitted,
@@ -35,10 +41,6 @@ WINDOW = 5.0           # [s]
 # rather than a train (power in MW or W under kW names: 1000 x; force in daN under kN: 10 x); a
 # loaded freight train against its empty file is at most about 3-4 x, a passenger train within 1.5 x
 MASS_RATIO = 3.0
-# what an ok calibration passed (its status line says so)
-CHECKED = (f"every parameter fitted identifiable, replayed speed within {MAX_RMS_SPEED:g} m/s RMS, innovations "
-           f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s, logged speeds within {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits, "
-           "logged traction within the train file's envelope")
 BOOTSTRAP_DRAWS = 200
 # logs (the bootstrap's resampling unit: a log is drawn whole, its runs with it) a bootstrap over logs
 # needs, in all and informing a parameter: n logs have C(2n - 1, n) distinct resamples (2: 3, 3: 10,
@@ -66,6 +68,7 @@ class Calibration:
     free: list               # the parameters fitted (identified)
     covariance: np.ndarray   # of ``free`` (SI)
     footnotes: list = field(default_factory=list)  # lines for under the printed table (name: what its row leaves out)
+    checked: list = field(default_factory=list)    # every check run (:func:`checks_run`): what an ok status passed
 
 
 def structure(residual, t):
@@ -137,6 +140,37 @@ def too_few_informing(seen, logs):
             f"inform{'s' if k == 1 else ''} it, so the resamples of the logs give it only {resamples(k)} distinct "
             f"value{'s' if resamples(k) != 1 else ''}; a bootstrap over logs needs at least {MIN_BOOTSTRAP_LOGS} that "
             "inform it; its 95 % interval is low to high")
+
+
+def checks_run(logs, free, bootstrapped, held):
+    """What the calibration of ``logs`` checked (fitting ``free``; ``bootstrapped``: a bootstrap ran;
+    ``held``: the held parameters checked against the logs), each a phrase: the checks every
+    calibration runs, then those that ran on some logs only (of a log without a position column, or
+    without a force and a wheel power, or with an efficiency not fitted, nothing is judged), with how
+    many logs. An ok status line lists them: each is a reason of a flagged one."""
+    def on(test, what):
+        count = sum(test(log) is not None for log in logs)
+        return [f"{what} ({count} of {len(logs)} logs)" if count < len(logs) else what] if count else []
+    lo, hi = FORCE_POWER_AGREE
+    out = ["every parameter fitted identifiable and none at its bound 0",
+           "the least-squares fit converged" + (" and so did every bootstrap refit" if bootstrapped else "")]
+    if {"efficiency", "regeneration_efficiency"} & set(free):
+        out.append("fitted efficiencies at most 1")
+    if "mass" in free:
+        out.append(f"the mass within 1/{MASS_RATIO:g} to {MASS_RATIO:g} times the train file's")
+    out += [f"replayed speed within {MAX_RMS_SPEED:g} m/s RMS",
+            f"innovations within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s",
+            f"logged speeds within {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits",
+            "logged traction within the train file's envelope"]
+    out += on(measured_scale, "speeds and positions on one scale (the mass bias a mismatch implies within the "
+              "mass's 95 % interval)" if "mass" in free else
+              f"speeds and positions within {100 * SCALE_TOLERANCE:g} % of one scale")
+    out += on(force_power_agreement, f"the wheel power {lo:g}-{hi:g} times the force times the speed")
+    if {"efficiency", "regeneration_efficiency"} & set(free):
+        out += on(idle_line_power, "no auxiliary power in the line power while the wheels draw none")
+    if held:
+        out.append(f"held {', '.join(held)} within {HELD_EXCLUDED:g} half-widths of the values the logs give")
+    return out
 
 
 def held_against_logs(problem, names, free, p):
@@ -266,4 +300,5 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     # the calibrated train: this calibration's status is its own (a flagged one's file says so), not the prior file's
     calibrated = replace(train_with(train, theta), calibration_reason="")
     return Calibration(table, "flagged" if reasons else "ok", "; ".join(reasons), residuals, quality, theta,
-                       calibrated, free, cov * np.outer(scale, scale), footnotes)
+                       calibrated, free, cov * np.outer(scale, scale), footnotes,
+                       checks_run(logs, free, boot is not None, list(held_fits)))

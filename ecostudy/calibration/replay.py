@@ -274,23 +274,30 @@ def efficiency_samples(log, train):
     return np.log(line[pull] / wheel[pull]), np.log(line[brake] / wheel[brake])
 
 
-def auxiliary_power(log):
-    """What the log's line power draws while the wheels draw none (standing, coasting: wheel power
-    below :data:`IDLE_SHARE` of the log's largest): a reason when its median is above
-    :data:`AUX_SHARE` of the largest line power and :data:`AUX_ERRORS` standard errors above 0, else
-    ''. The fitted efficiency is wheel work per line energy with no auxiliary term, so such a draw
-    (heating, air conditioning, compressors) pulls it low by the draw over the traction power."""
+def idle_line_power(log):
+    """The line power [W] of the intervals where the wheels draw none (standing, coasting: wheel power
+    below :data:`IDLE_SHARE` of the log's largest), where the log has a line power and 20 such
+    intervals or more; else None (:func:`auxiliary_power` is not judged)."""
     line = line_power(log)
     if line is None:
-        return ""
+        return None
     wheel = wheel_work(log) / np.diff(log.t)
     idle = (np.abs(wheel) < IDLE_SHARE * np.max(np.abs(wheel))) & np.isfinite(line)
-    if idle.sum() < 20:
+    return line[idle] if idle.sum() >= 20 else None
+
+
+def auxiliary_power(log):
+    """What the log's line power draws while the wheels draw none (:func:`idle_line_power`): a reason
+    when its median is above :data:`AUX_SHARE` of the largest line power and :data:`AUX_ERRORS`
+    standard errors above 0, else ''. The fitted efficiency is wheel work per line energy with no
+    auxiliary term, so such a draw (heating, air conditioning, compressors) pulls it low by the draw
+    over the traction power."""
+    drawn = idle_line_power(log)
+    if drawn is None:
         return ""
-    drawn = line[idle]
     median = float(np.median(drawn))
     error = 1.2533 * 1.4826 * float(np.median(np.abs(drawn - median))) / np.sqrt(drawn.size)
-    if median <= AUX_SHARE * np.nanmax(np.abs(line)) or median <= AUX_ERRORS * error:
+    if median <= AUX_SHARE * np.nanmax(np.abs(line_power(log))) or median <= AUX_ERRORS * error:
         return ""
     return (f"{log.line_column or 'the line power'} draws {median / 1e3:.3g} kW (median over {drawn.size} intervals) "
             "while the wheels draw none (standing, coasting): auxiliary power in the line power, which the "

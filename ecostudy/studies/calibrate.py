@@ -167,7 +167,8 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
                          "Kalman filter; 95 % intervals from the Jacobian; bootstrap over logs from "
                          f"{MIN_BOOTSTRAP_LOGS} logs on",
                "parameters": result.table.replace({np.nan: None}).to_dict("records"),
-               "quality": result.quality, "calibrated_train": str(calibrated) if written else None,
+               "quality": result.quality, "checks": result.checked,
+               "calibrated_train": str(calibrated) if written else None,
                "outputs": [*CALIBRATE_FILES, *written]}
     if saving_draws is not None:
         table = pd.concat([savings(log, track, result, saving_draws) for log in logs], ignore_index=True)
