@@ -6,6 +6,7 @@ one line, warned of by name or flagged with the reason, never an `ok` calibratio
 generated logs of the regional train)."""
 import json
 import re
+import warnings
 
 import pytest
 import yaml
@@ -13,7 +14,7 @@ from typer.testing import CliRunner
 
 from ecostudy.calibration.estimate import calibrate_logs
 from ecostudy.calibration.fit import DEFAULT_FIT
-from ecostudy.calibration.generate import generate_log, true_train
+from ecostudy.calibration.generate import LogNoise, generate_log, true_train
 from ecostudy.calibration.replay import prepare
 from ecostudy.calibration.validate import validate_log
 from ecostudy.cli import app
@@ -93,6 +94,27 @@ def test_a_log_that_starts_moving_says_what_is_not_replayed(inputs, there):
                                              r"\d+ s and \d+ m, before the first stand, are not replayed"):
         runs = prepare(parse_log(text_of(moving), "log.csv"), *inputs)
     assert runs[0].x[0] > 5000
+
+
+def test_a_first_sample_within_the_logs_noise_or_resolution_is_at_rest(inputs):
+    """A generated log with 0.3 m/s of speed noise (seed 2) reads 0.293 m/s in its first sample, the
+    train standing: above 0.25 m/s, the log "started moving" and lost its whole first run (200 s,
+    5100 m) though its header states the noise. Now a first sample within 3 times the stated noise,
+    or within one step of the speed column's last digit (1 km/h read at a stand), is at rest; one
+    beyond both still starts the log moving."""
+    track, train = inputs
+    frame = generate_log(track, train, ["West", "Middle", "East"], train, seed=2, noise=LogNoise(speed=0.3))[0]
+    assert 0.25 < frame["speed_mps"].iloc[0] < 0.3
+    stated = "---\ntrack: t.yaml\ntrain: r.yaml\nspeed_sigma_mps: 0.3\n---\n"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no "the log starts moving"
+        assert len(prepare(parse_log(text_of(frame, stated), "noisy.csv"), track, train)) == 2
+        kmh = frame.assign(speed_mps=(frame["speed_mps"] * 3.6).round()).rename(columns={"speed_mps": "speed_kmh"})
+        kmh.loc[0, "speed_kmh"] = 1.0
+        assert len(prepare(parse_log(text_of(kmh), "kmh.csv"), track, train)) == 2
+    moving = frame.assign(speed_mps=frame["speed_mps"].where(frame.index > 0, 1.0))
+    with pytest.warns(EcostudyWarning, match=r"moving.csv: speed: the log starts moving \(1.0 m/s at 300 m\)"):
+        assert len(prepare(parse_log(text_of(moving, stated), "moving.csv"), track, train)) == 1
 
 
 def test_a_declared_speed_noise_is_used(inputs, there):
