@@ -48,6 +48,10 @@ BOOTSTRAP_DRAWS = 200
 # 78 % with 3, 34 % with 4 and 10 % with 5; with 2 logs the 2.5 and 97.5 percentiles are the fits on
 # each log alone, not an interval. Fewer: boot_low and boot_high are left NaN, the note says why
 MIN_BOOTSTRAP_LOGS = 5
+# under a printed table with bootstrap bounds: what they are, so that nobody reads them as a confidence interval
+BOOTSTRAP_NOTE = ("boot_low, boot_high: the spread of refits over the logs resampled whole, how far the logs disagree "
+                  "with each other; not a confidence interval: the noise within each log is not in it, and it can be "
+                  "far narrower (the mass's a sixth of its 95 % interval on five logs); the 95 % interval is low to high")
 # a parameter held at the train file's value (not asked for) that the logs identify is fitted beside the
 # others: the held value more than this many 95 % half-widths from the value they give is flagged
 HELD_EXCLUDED = 2.0
@@ -245,6 +249,8 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                 footnotes.append(f"{name}: {why}")
         rows.append(row)
     table = pd.DataFrame(rows)
+    if table[["boot_low", "boot_high"]].notna().any(axis=None):  # printed beside low and high: say what they are
+        footnotes.insert(0, BOOTSTRAP_NOTE)
     widths, held_fits = held_against_logs(problem, names, free, p)
     if "mass" in free and "rotating_mass_factor" not in names:  # only Ms (1 + f) is seen where gradients are small
         width = widths["rotating_mass_factor"]

@@ -164,8 +164,9 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
     summary = {"command": "calibrate", "logs": [str(p) for p in log_paths], "train": str(train_path),
                "track": str(track_path), "fitted": names,
                "method": "least squares (scipy least_squares) on the replayed energy balance, whitened by a scalar "
-                         "Kalman filter; 95 % intervals from the Jacobian; bootstrap over logs from "
-                         f"{MIN_BOOTSTRAP_LOGS} logs on",
+                         "Kalman filter; 95 % intervals (low, high) from the Jacobian; boot_low, boot_high from a "
+                         f"bootstrap over logs ({MIN_BOOTSTRAP_LOGS} logs or more): the spread between logs, not a "
+                         "confidence interval",
                "parameters": result.table.replace({np.nan: None}).to_dict("records"),
                "quality": result.quality, "checks": result.checked,
                "calibrated_train": str(calibrated) if written else None,
