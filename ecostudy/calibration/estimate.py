@@ -272,7 +272,7 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                "speed_samples": int(blocks["speed"].size), "traction_samples": int(blocks["traction"].size),
                "regeneration_samples": int(blocks["regeneration"].size), "runs": len(problem.runs),
                "noise": {"speed_mps": problem.sigma["speed"], **{f"{k}_share": v for k, v in problem.sigma.items() if k != "speed"}},
-               "held_fitted": {n: {"held": held, "fitted": value, "half_width": half}
+               "held_fitted": {n: {"unit": PARAMETERS[n][0], "held": held, "fitted": value, "half_width": half}
                                for n, (held, value, half) in held_fits.items()}}
     reasons = [unconverged] if unconverged else []
     if boot_unconverged:
