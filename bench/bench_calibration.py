@@ -250,7 +250,7 @@ def held_check(count, track, train):
         print(f"{name}: checked in {values.size} of {count} logs; held value from the logs' at most {values.max():.2f} "
               f"half-widths, beyond 1 in {int((values > 1).sum())}, beyond {HELD_EXCLUDED:g} in "
               f"{int((values > HELD_EXCLUDED).sum())}")
-    print(f"the check {np.median(check):.2f} s CPU of a calibration's {np.median(whole):.2f} s (medians, draws 0)")
+    print(f"the check {np.median(check):.2f} s of a calibration's {np.median(whole):.2f} s (wall, medians, draws 0)")
 
 
 def main():
