@@ -6,6 +6,8 @@ flat track, and the energy difference `validate` reports against an independent 
     .venv/bin/python bench/bench_calibration.py --example out/logs    # two example logs for docs/calibration.md
     .venv/bin/python bench/bench_calibration.py --logs 0 --held 30    # both intervals where a parameter is held
     .venv/bin/python bench/bench_calibration.py --logs 0 --steep 5    # validate down 40 and 60 per mille
+    .venv/bin/python bench/bench_calibration.py --logs 0 --scale 30   # a speed scale off against the mass interval
+    .venv/bin/python bench/bench_calibration.py --logs 0 --held-check 40  # held parameters against the logs
 
 Each log: the regional train of Farooqi 2018 §6.3 with true parameters drawn around
 the train file (mass +-5 %, Davis A, B, C +-15 %, traction efficiency +-3 %), driven by the plant
@@ -23,14 +25,15 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from bench import harness  # noqa: E402
-from ecostudy.calibration.fit import DEFAULT_FIT, priors  # noqa: E402
+from ecostudy.calibration.fit import DEFAULT_FIT, Problem, identify, priors  # noqa: E402
 from ecostudy.calibration.generate import (  # noqa: E402
-    follow_work, generate_log, level_track, steady_log, steep_track, true_train)
+    LogNoise, follow_work, generate_log, level_track, steady_log, steep_track, true_train)
 from ecostudy.calibration.validate import validate_log  # noqa: E402
-from ecostudy.calibration.estimate import MIN_BOOTSTRAP_LOGS, calibrate_logs  # noqa: E402
+from ecostudy.calibration.estimate import HELD_EXCLUDED, MIN_BOOTSTRAP_LOGS, calibrate_logs, held_against_logs  # noqa: E402
 from ecostudy.core.units import signed  # noqa: E402
 from ecostudy.io.loaders import load_track, load_train  # noqa: E402
 from ecostudy.io.logfile import parse_log, write_log  # noqa: E402
+from ecostudy.io.logscale import SCALE_ERRORS, SCALE_MASS_BIAS, measured_scale, speed_scale  # noqa: E402
 
 TRAIN, TRACK = ROOT / "trains" / "regional_alstom.yaml", ROOT / "tracks" / "calibration_line.yaml"
 STOPS = ["West", "Middle", "East", "Middle", "West"]
@@ -181,6 +184,75 @@ def held_coverage(sets, track, train, draws=200, size=MIN_BOOTSTRAP_LOGS):
         print(f"{name:10s} {count:10d} {gauss:25d} {boot:31d}")
 
 
+def example_logs(track, truth, scale=1.0, noise=LogNoise()):
+    """The worked example's two logs (there and back, seeds 1 and 2) of ``truth``, speeds times ``scale``."""
+    return [as_log(frame.assign(speed_mps=frame["speed_mps"] * scale), name) for name, frame in
+            (("there", generate_log(track, truth, STOPS[:3], truth, seed=1, noise=noise)[0]),
+             ("back", generate_log(track, truth, STOPS[2:], truth, seed=2, noise=noise)[0]))]
+
+
+def scale_check(seeds, track, train):
+    """A speed sensor off in scale against the fitted mass's interval: the worked example's logs with
+    their speeds times 0.998 to 1.005 (the mass's bias, its ratio to the mismatch, its offset in
+    half-widths, the status's scale reason); then one log per seed 1 to ``seeds`` as generated (0.05
+    and 0.3 m/s speed noise): the largest implied bias, 2 |s - 1|, over the mass's half-width."""
+    truth = true_train(train, mass=1.05, davis=(1.1, 1.1, 1.1), efficiency=0.97)
+    print("speeds x  measured  mass off %  off / mismatch  half-width %  half-widths off  scale flagged")
+    for k in (0.998, 1.0, 1.001, 1.002, 1.005):
+        logs = example_logs(track, truth, k)
+        result = calibrate_logs(logs, track, train, DEFAULT_FIT, draws=0)
+        mass = result.table.set_index("name").loc["mass"]
+        off = mass.estimate / truth.static_mass - 1.0
+        print(f"{k:8.3f}  {speed_scale(logs[0]):8.5f}  {100 * off:+10.3f}  "
+              f"{off / (1.0 - k) if k != 1.0 else float('nan'):14.2f}  {100 * (mass.high - mass.estimate) / mass.estimate:12.3f}"
+              f"  {(mass.estimate - truth.static_mass) / (mass.high - mass.estimate):15.1f}  "
+              f"{'times the travel of its positions' in result.reason}")
+    for sigma in (0.05, 0.3):
+        worst, judged, flagged = 0.0, 0.0, 0
+        for seed in range(1, seeds + 1):
+            frame, _ = generate_log(track, truth, STOPS[:3], truth, seed=seed, noise=LogNoise(speed=sigma))
+            log = as_log(frame, f"s{seed}")
+            result = calibrate_logs([log], track, train, DEFAULT_FIT, draws=0)
+            mass = result.table.set_index("name").loc["mass"]
+            (ratio, error), half = measured_scale(log), (mass.high - mass.estimate) / mass.estimate
+            worst = max(worst, SCALE_MASS_BIAS * abs(ratio - 1.0) / half)
+            judged = max(judged, SCALE_MASS_BIAS * max(abs(ratio - 1.0) - SCALE_ERRORS * error, 0.0) / half)
+            flagged += "times the travel of its positions" in result.reason
+        print(f"{seeds} logs as generated, speed noise {sigma:g} m/s: implied mass bias at most {worst:.2f} half-widths, "
+              f"{judged:.2f} less {SCALE_ERRORS:g} standard errors of the scale; scale flagged in {flagged}")
+
+
+def held_check(count, track, train):
+    """Parameters held at the train file's value (not asked for) against the logs: the worked example's
+    logs of the train with its rotating-mass allowance 1.25 times the file's (the status, which
+    intervals miss the truth); then ``count`` coverage logs (:func:`drawn_log`; the allowance and the
+    regeneration efficiency the file's): how far each held value lies from what the logs give, in
+    half-widths of its 95 % interval, and what the check costs against the whole calibration."""
+    truth = true_train(train, mass=1.05, davis=(1.1, 1.1, 1.1), efficiency=0.97, rotating=1.25)
+    result = calibrate_logs(example_logs(track, truth), track, train, DEFAULT_FIT, draws=0)
+    true = priors(truth)
+    missed = [r.name for r in result.table.itertuples() if not r.low <= true[r.name] <= r.high]
+    print(f"allowance 1.25 times the file's: intervals missing the truth: {', '.join(missed) or 'none'}; "
+          f"{result.status}: {result.reason}")
+    apart, check, whole = {}, [], []
+    for seed in range(count):
+        track_, train_, _, log = drawn_log(seed)
+        result, _, seconds = harness.timed(lambda: calibrate_logs([log], track_, train_, DEFAULT_FIT, draws=0))
+        whole.append(seconds)
+        problem = Problem.from_logs([log], track_, train_)
+        free, p, *_ = identify(problem, list(DEFAULT_FIT))
+        _, _, seconds = harness.timed(lambda: held_against_logs(problem, DEFAULT_FIT, free, p))
+        check.append(seconds)
+        for name, fit in result.quality["held_fitted"].items():
+            apart.setdefault(name, []).append(abs(fit["fitted"] - fit["held"]) / fit["half_width"])
+    for name, values in apart.items():
+        values = np.array(values)
+        print(f"{name}: checked in {values.size} of {count} logs; held value from the logs' at most {values.max():.2f} "
+              f"half-widths, beyond 1 in {int((values > 1).sum())}, beyond {HELD_EXCLUDED:g} in "
+              f"{int((values > HELD_EXCLUDED).sum())}")
+    print(f"the check {np.median(check):.2f} s of a calibration's {np.median(whole):.2f} s (wall, medians, draws 0)")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--logs", type=int, default=200)
@@ -190,6 +262,8 @@ def main():
     parser.add_argument("--example", type=Path, help="write example logs into this folder and stop")
     parser.add_argument("--held", type=int, default=0, help="sets of five logs of the held-parameter coverage (e.g. 30)")
     parser.add_argument("--steep", type=int, default=0, help="log seeds of the validate check down steep grades")
+    parser.add_argument("--scale", type=int, default=0, help="log seeds of the speed-scale check (e.g. 10)")
+    parser.add_argument("--held-check", type=int, default=0, help="coverage logs of the held-parameter check (e.g. 40)")
     args = parser.parse_args()
     track, train = load_track(TRACK), load_train(TRAIN)
     if args.example:
@@ -204,6 +278,12 @@ def main():
     if args.steep:
         _, cpu, wall = harness.timed(lambda: steep_check(args.steep, train))
         print(f"steep-grade check: {wall:.0f} s wall, {cpu:.0f} s CPU")
+    if args.scale:
+        _, cpu, wall = harness.timed(lambda: scale_check(args.scale, track, train))
+        print(f"speed-scale check: {wall:.0f} s wall, {cpu:.0f} s CPU")
+    if args.held_check:
+        _, cpu, wall = harness.timed(lambda: held_check(args.held_check, track, train))
+        print(f"held-parameter check: {wall:.0f} s wall, {cpu:.0f} s CPU")
     identifiability(track, train)
     if args.validate:
         validate_check(args.validate_logs, track, train)

@@ -5,6 +5,8 @@ file, a fit that cannot tell the static mass from the rotating-mass allowance. E
 one line, warned of by name or flagged with the reason, never an `ok` calibration (real fits on
 generated logs of the regional train)."""
 import json
+import re
+import warnings
 
 import pytest
 import yaml
@@ -12,7 +14,7 @@ from typer.testing import CliRunner
 
 from ecostudy.calibration.estimate import calibrate_logs
 from ecostudy.calibration.fit import DEFAULT_FIT
-from ecostudy.calibration.generate import generate_log, true_train
+from ecostudy.calibration.generate import LogNoise, generate_log, true_train
 from ecostudy.calibration.replay import prepare
 from ecostudy.calibration.validate import validate_log
 from ecostudy.cli import app
@@ -92,6 +94,27 @@ def test_a_log_that_starts_moving_says_what_is_not_replayed(inputs, there):
                                              r"\d+ s and \d+ m, before the first stand, are not replayed"):
         runs = prepare(parse_log(text_of(moving), "log.csv"), *inputs)
     assert runs[0].x[0] > 5000
+
+
+def test_a_first_sample_within_the_logs_noise_or_resolution_is_at_rest(inputs):
+    """A generated log with 0.3 m/s of speed noise (seed 2) reads 0.293 m/s in its first sample, the
+    train standing: above 0.25 m/s, the log "started moving" and lost its whole first run (200 s,
+    5100 m) though its header states the noise. Now a first sample within 3 times the stated noise,
+    or within one step of the speed column's last digit (1 km/h read at a stand), is at rest; one
+    beyond both still starts the log moving."""
+    track, train = inputs
+    frame = generate_log(track, train, ["West", "Middle", "East"], train, seed=2, noise=LogNoise(speed=0.3))[0]
+    assert 0.25 < frame["speed_mps"].iloc[0] < 0.3
+    stated = "---\ntrack: t.yaml\ntrain: r.yaml\nspeed_sigma_mps: 0.3\n---\n"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no "the log starts moving"
+        assert len(prepare(parse_log(text_of(frame, stated), "noisy.csv"), track, train)) == 2
+        kmh = frame.assign(speed_mps=(frame["speed_mps"] * 3.6).round()).rename(columns={"speed_mps": "speed_kmh"})
+        kmh.loc[0, "speed_kmh"] = 1.0
+        assert len(prepare(parse_log(text_of(kmh), "kmh.csv"), track, train)) == 2
+    moving = frame.assign(speed_mps=frame["speed_mps"].where(frame.index > 0, 1.0))
+    with pytest.warns(EcostudyWarning, match=r"moving.csv: speed: the log starts moving \(1.0 m/s at 300 m\)"):
+        assert len(prepare(parse_log(text_of(moving, stated), "moving.csv"), track, train)) == 1
 
 
 def test_a_declared_speed_noise_is_used(inputs, there):
@@ -242,3 +265,80 @@ def test_one_log_exported_twice_with_rows_trimmed_is_refused(tmp_path, there):
     rows = len(there) - 35
     assert f"b.csv: its rows 1-{rows} are the samples of {tmp_path / 'a.csv'}'s rows 26-{rows + 25} (one logged run" \
         in result.output, result.output
+
+
+def test_a_flagged_calibrations_train_flags_every_run_of_it(tmp_path, there):
+    """The calibrated file of a flagged calibration said NOT OK only in its `source` text: `solve` on it
+    was ok, exit 0. Now its `calibration` block (status and reason) is read by the loader and every run
+    of the train is flagged with the reason (`solve`'s, each of `compare`'s); the same file with `status: ok` solves ok (the block
+    decides, not the source text); a block without its reason is refused in one line."""
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there.drop(columns=["power_line_kW"]))
+    run("calibrate", tmp_path / "a.csv", "--fit", "mass,efficiency", "--no-plot", "--out", tmp_path / "o")
+    path = tmp_path / "o" / "regional_alstom_calibrated.yaml"
+    block = yaml.safe_load(path.read_text())["calibration"]
+    assert block["status"] == "flagged" and block["reason"].startswith("efficiency not identifiable"), block
+    solved = run("solve", "--track", TRACK, "--train", path, "--from", "West", "--to", "Middle", "--time", 240,
+                 "--points", 60, "--no-plot", "--out", tmp_path / "s")
+    assert solved.exit_code == 1, solved.output
+    status = json.loads((tmp_path / "s" / "summary.json").read_text())["status"]
+    assert status.startswith("flagged: train calibrated with status flagged: efficiency not identifiable"), status
+    compared = run("compare", "--track", TRACK, "--train", path, "--from", "West", "--to", "Middle", "--time", 240,
+                   "--points", 60, "--no-plot", "--out", tmp_path / "c")
+    summary = json.loads((tmp_path / "c" / "summary.json").read_text())
+    rows = summary["not_ok"]
+    assert compared.exit_code == 1 and len(rows) == summary["cases"]["total"] and all("train calibrated with status flagged: efficiency not identifiable"
+                                                    in row["status"] for row in rows), rows
+    doc = yaml.safe_load(path.read_text())
+    (tmp_path / "ok.yaml").write_text(yaml.safe_dump({**doc, "calibration": {"status": "ok"}}))
+    ok = run("solve", "--track", TRACK, "--train", tmp_path / "ok.yaml", "--from", "West", "--to", "Middle", "--time",
+             240, "--points", 60, "--no-plot", "--out", tmp_path / "s2")
+    assert ok.exit_code == 0, ok.output
+    (tmp_path / "bad.yaml").write_text(yaml.safe_dump({**doc, "calibration": {"status": "flagged"}}))
+    with pytest.raises(InputError, match=r"bad.yaml: calibration: .*a flagged calibration needs its reason"):
+        load_train(tmp_path / "bad.yaml")
+
+
+def test_a_held_parameter_the_logs_exclude_is_flagged(inputs, there):
+    """Logs of a train whose rotating-mass allowance is 1.25 times its file's, fitted with the allowance
+    held at the file's value (the default fit): `ok`, with the mass and Davis intervals missing the
+    truth. The logs identify the allowance: fitted beside the others it comes out 0.060 against the
+    held 0.048, several half-widths of its interval away: now flagged saying so. The file's own
+    train's log is not."""
+    track, train = inputs
+    clean = calibrate_logs([parse_log(text_of(there), "clean.csv")], track, train, DEFAULT_FIT, draws=0)
+    assert "is excluded by the logs" not in clean.reason, clean.reason
+    truth = true_train(train, rotating=1.25)
+    frame = generate_log(track, truth, ["West", "Middle", "East"], truth, seed=1)[0]
+    result = calibrate_logs([parse_log(text_of(frame), "heavy.csv")], track, train, DEFAULT_FIT, draws=0)
+    mass = result.table.set_index("name").loc["mass"]
+    assert not mass.low <= truth.static_mass <= mass.high  # what the check is for
+    assert result.status == "flagged" and re.search(
+        r"held rotating_mass_factor = 0.04806 is excluded by the logs \(they give 0.06\d* \+- 0.00\d+, [\d.]+ "
+        r"half-widths of their 95 % interval away\); fit it \(--fit \.\.\.,rotating_mass_factor\) or check the train "
+        "file", result.reason), result.reason
+    assert set(clean.quality["held_fitted"]) == {"rotating_mass_factor", "regeneration_efficiency"}  # summary.json
+    held = result.quality["held_fitted"]["rotating_mass_factor"]
+    assert held["fitted"] - held["held"] > 2 * held["half_width"]
+    assert abs(held["fitted"] - 1.25 * held["held"]) < 2 * held["half_width"]  # and it finds the truth
+
+
+def test_the_ok_line_lists_every_check_it_ran(tmp_path, inputs, there):
+    """The ok line listed five checks; the auxiliary-power, force/power and speed-scale checks (and
+    the fit's convergence, the mass ratio, the efficiencies at most 1) ran unnamed. Now it names every
+    check run, and one that ran on no log (no force column: no force/power check) is not named."""
+    write_log(tmp_path / "a.csv", {"track": str(TRACK), "train": str(TRAIN)}, there)
+    result = run("calibrate", tmp_path / "a.csv", "--bootstrap", 0, "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 0, result.output
+    line = next(line for line in result.output.splitlines() if line.startswith("calibration ok: "))
+    for check in ("every parameter fitted identifiable and none at its bound 0", "the least-squares fit converged",
+                  "fitted efficiencies at most 1", "the mass within 1/3 to 3 times the train file's",
+                  "replayed speed within 0.3 m/s RMS", "innovations within 2 times white noise over 5 s",
+                  "logged speeds within 1 km/h of the line's limits", "logged traction within the train file's envelope",
+                  "speeds and positions on one scale", "the wheel power 0.95-1.06 times the force times the speed",
+                  "no auxiliary power in the line power while the wheels draw none",
+                  "held rotating_mass_factor, regeneration_efficiency within 2 half-widths"):
+        assert check in line, (check, line)
+    assert json.loads((tmp_path / "o" / "summary.json").read_text())["checks"] == line[len("calibration ok: "):].split("; ")
+    bare = calibrate_logs([parse_log(text_of(there.drop(columns=["force_kN"])), "bare.csv")], *inputs, ("mass", "davis_a"),
+                          draws=0)
+    assert bare.status == "ok" and not any("force" in check or "auxiliary" in check for check in bare.checked), bare.checked

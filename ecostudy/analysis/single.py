@@ -13,8 +13,8 @@ from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import verify
-from ecostudy.core.status import Judged, Status, from_checks, part, solver_check, solver_part, worst
-from ecostudy.core.types import Timing, Trajectory
+from ecostudy.core.status import Judged, Status, calibrated, from_checks, part, solver_check, solver_part, worst
+from ecostudy.core.types import Timing, Train, Trajectory
 from ecostudy.core.units import KWH, number
 from ecostudy.io.documents import source_file
 from ecostudy.io.results import COSTATE_OBJECTIVES
@@ -63,7 +63,7 @@ class RunResult(Judged):
     profile: pd.DataFrame
     summary: dict
     segment: object
-    train: object
+    train: Train
     nodes: np.ndarray
     handle: np.ndarray
     trace: object = None
@@ -81,9 +81,10 @@ class RunResult(Judged):
     @property
     def status(self) -> Status:
         """``ok`` when Ipopt proved optimality (of the all-out run too, where the running time is a
-        supplement over it: :data:`ALL_OUT_SOLVER`), the independent re-simulation agrees and the
-        driver advice (when asked for) keeps the stop, the time and the limits as driven; else
-        ``flagged`` with what did not pass."""
+        supplement over it: :data:`ALL_OUT_SOLVER`), the independent re-simulation agrees, the
+        driver advice (when asked for) keeps the stop, the time and the limits as driven and the
+        train is not one of a calibration that was flagged (:func:`~ecostudy.core.status.calibrated`);
+        else ``flagged`` with what did not pass."""
         block = self.summary["verification"]  # these two blocks only: a study may put a table row under "das"
         solver = SolverRun.from_dict(self.summary["solver"]).status
         ver = None if block is None else Verification.from_dict(block)
@@ -92,7 +93,7 @@ class RunResult(Judged):
             checks["not re-simulated"] = False
         else:
             checks[f"re-simulation outside tolerance ({ver.errors})"] = ver.passed
-        statuses = [from_checks(checks)]
+        statuses = [from_checks(checks), calibrated(self.train.calibration_reason)]  # a train not borne out by its logs
         if ALL_OUT_SOLVER in self.summary:  # the all-out run its running time was taken from
             statuses.append(solver_part("the all-out run", self.summary[ALL_OUT_SOLVER]))
         if self.das is not None:

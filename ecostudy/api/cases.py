@@ -15,7 +15,7 @@ from typing import Callable, Optional, Sequence
 
 from ecostudy.api.arguments import spelled
 from ecostudy.api.blas import limit_blas_threads
-from ecostudy.calibration.estimate import CHECKED, MAX_STRUCTURE, WINDOW
+from ecostudy.calibration.estimate import MAX_STRUCTURE, WINDOW
 from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH
 from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
@@ -211,7 +211,8 @@ def calibrate_folder(logs: Sequence[Path] | Path | str, train: Optional[Path] = 
               f"{row['draws']} parameter draws)" + ("" if row["verified"] else " (optimum not verified)")
               if row["saving_pct"] == row["saving_pct"] else f"{row['log']} run {row['run']}: {row['status']}"
               for row in summary.get("savings", [])]  # (a NaN saving: no optimum, its status says why)
-    lines += [f"calibration ok: {CHECKED}" if result.status == "ok" else "calibration flagged (each reason below)",
+    lines += [f"calibration ok: {'; '.join(result.checked)}" if result.status == "ok" else
+              "calibration flagged (each reason below)",
               "outputs " + listed(out)]
     return reported(out, lines)
 

@@ -9,7 +9,12 @@ something the logs show), or a logged run broke the line's speed limit
 (:func:`~ecostudy.calibration.replay.over_limit`: a driver keeps to it, so the log is not a driven run
 of this line as the track file gives it), or a log pulled beyond the train file's traction envelope
 (:func:`~ecostudy.calibration.replay.over_envelope`), or a fitted efficiency is above 1, or a fitted
-efficiency absorbs auxiliary power (:func:`~ecostudy.calibration.replay.auxiliary_power`).
+efficiency absorbs auxiliary power (:func:`~ecostudy.calibration.replay.auxiliary_power`), or a log's
+speeds and positions disagree in scale by more than the mass's interval allows
+(:func:`~ecostudy.io.logscale.scale_problem`), or its wheel power is off the force times the speed
+(:func:`~ecostudy.io.logforce.force_power_problem`), or a parameter held at the train file's value
+is excluded by the logs (:func:`held_against_logs`). An ok status lists every check run
+(:func:`checks_run`).
 """
 import warnings
 from math import comb
@@ -18,13 +23,15 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH, auxiliary_power, coefficients, over_envelope, over_limit
+from ecostudy.calibration.replay import (LIMIT_TOLERANCE_KMH, auxiliary_power, coefficients, idle_line_power, over_envelope,
+                                         over_limit)
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.progress import stage
-from ecostudy.io.logfile import scale_problem
-from ecostudy.io.logforce import force_power_problem
+from ecostudy.io.logscale import SCALE_TOLERANCE, measured_scale, scale_problem
+from ecostudy.io.logforce import FORCE_POWER_AGREE, force_power_agreement, force_power_problem
 from ecostudy.calibration.fit import (
-    MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, identify, informing, scales, train_with, width_if_fitted,
+    MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, fitted_free, identify, informing, scales, train_with,
+    width_if_fitted,
 )
 
 MAX_RMS_SPEED = 0.3    # [m/s]
@@ -34,10 +41,6 @@ WINDOW = 5.0           # [s]
 # rather than a train (power in MW or W under kW names: 1000 x; force in daN under kN: 10 x); a
 # loaded freight train against its empty file is at most about 3-4 x, a passenger train within 1.5 x
 MASS_RATIO = 3.0
-# what an ok calibration passed (its status line says so)
-CHECKED = (f"every parameter fitted identifiable, replayed speed within {MAX_RMS_SPEED:g} m/s RMS, innovations "
-           f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s, logged speeds within {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits, "
-           "logged traction within the train file's envelope")
 BOOTSTRAP_DRAWS = 200
 # logs (the bootstrap's resampling unit: a log is drawn whole, its runs with it) a bootstrap over logs
 # needs, in all and informing a parameter: n logs have C(2n - 1, n) distinct resamples (2: 3, 3: 10,
@@ -45,6 +48,13 @@ BOOTSTRAP_DRAWS = 200
 # 78 % with 3, 34 % with 4 and 10 % with 5; with 2 logs the 2.5 and 97.5 percentiles are the fits on
 # each log alone, not an interval. Fewer: boot_low and boot_high are left NaN, the note says why
 MIN_BOOTSTRAP_LOGS = 5
+# under a printed table with bootstrap bounds: what they are, so that nobody reads them as a confidence interval
+BOOTSTRAP_NOTE = ("boot_low, boot_high: the spread of refits over the logs resampled whole, how far the logs disagree "
+                  "with each other; not a confidence interval: the noise within each log is not in it, and it can be "
+                  "far narrower (the mass's a sixth of its 95 % interval on five logs); the 95 % interval is low to high")
+# a parameter held at the train file's value (not asked for) that the logs identify is fitted beside the
+# others: the held value more than this many 95 % half-widths from the value they give is flagged
+HELD_EXCLUDED = 2.0
 MOTION = ("mass", "davis_a", "davis_b", "davis_c")  # the parameters the replayed speed follows (the efficiencies do not move it)
 
 
@@ -62,6 +72,7 @@ class Calibration:
     free: list               # the parameters fitted (identified)
     covariance: np.ndarray   # of ``free`` (SI)
     footnotes: list = field(default_factory=list)  # lines for under the printed table (name: what its row leaves out)
+    checked: list = field(default_factory=list)    # every check run (:func:`checks_run`): what an ok status passed
 
 
 def structure(residual, t):
@@ -135,6 +146,59 @@ def too_few_informing(seen, logs):
             "inform it; its 95 % interval is low to high")
 
 
+def checks_run(logs, free, bootstrapped, held):
+    """What the calibration of ``logs`` checked (fitting ``free``; ``bootstrapped``: a bootstrap ran;
+    ``held``: the held parameters checked against the logs), each a phrase: the checks every
+    calibration runs, then those that ran on some logs only (of a log without a position column, or
+    without a force and a wheel power, or with an efficiency not fitted, nothing is judged), with how
+    many logs. An ok status line lists them: each is a reason of a flagged one."""
+    def on(test, what):
+        count = sum(test(log) is not None for log in logs)
+        return [f"{what} ({count} of {len(logs)} logs)" if count < len(logs) else what] if count else []
+    lo, hi = FORCE_POWER_AGREE
+    out = ["every parameter fitted identifiable and none at its bound 0",
+           "the least-squares fit converged" + (" and so did every bootstrap refit" if bootstrapped else "")]
+    if {"efficiency", "regeneration_efficiency"} & set(free):
+        out.append("fitted efficiencies at most 1")
+    if "mass" in free:
+        out.append(f"the mass within 1/{MASS_RATIO:g} to {MASS_RATIO:g} times the train file's")
+    out += [f"replayed speed within {MAX_RMS_SPEED:g} m/s RMS",
+            f"innovations within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s",
+            f"logged speeds within {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits",
+            "logged traction within the train file's envelope"]
+    out += on(measured_scale, "speeds and positions on one scale (the mass bias a mismatch implies within the "
+              "mass's 95 % interval)" if "mass" in free else
+              f"speeds and positions within {100 * SCALE_TOLERANCE:g} % of one scale")
+    out += on(force_power_agreement, f"the wheel power {lo:g}-{hi:g} times the force times the speed")
+    if {"efficiency", "regeneration_efficiency"} & set(free):
+        out += on(idle_line_power, "no auxiliary power in the line power while the wheels draw none")
+    if held:
+        out.append(f"held {', '.join(held)} within {HELD_EXCLUDED:g} half-widths of the values the logs give")
+    return out
+
+
+def held_against_logs(problem, names, free, p):
+    """({name: relative 95 % half-width it would have if fitted (:func:`~ecostudy.calibration.fit.width_if_fitted`)},
+    {name: (held value, the value the logs give, its 95 % half-width) [SI]}) of each parameter not in
+    ``names``, held at the train file's value: fitted beside ``free`` from ``p`` where the logs
+    identify it (:func:`~ecostudy.calibration.fit.fitted_free`), so that a held value the logs exclude
+    is not passed over (the other parameters absorb it, their intervals then missing the truth)."""
+    widths = {n: width_if_fitted(problem, free, p, n) for n in PARAMETERS if n not in names}
+    fits = {n: fitted_free(problem, free, p, n) for n, width in widths.items() if width <= MAX_RELATIVE_WIDTH}
+    return widths, {n: (problem.prior[n], *fit) for n, fit in fits.items() if fit is not None}
+
+
+def held_excluded(name, held, value, half):
+    """Why ``name``, held at ``held``, is excluded by the logs, which give ``value`` +- ``half`` [SI]
+    (more than :data:`HELD_EXCLUDED` half-widths apart); '' where it is not."""
+    if abs(value - held) <= HELD_EXCLUDED * half:
+        return ""
+    unit = "" if PARAMETERS[name][0] == "-" else f" {PARAMETERS[name][0]}"
+    return (f"held {name} = {held:.4g}{unit} is excluded by the logs (they give {value:.4g} +- {half:.2g}{unit}, "
+            f"{abs(value - held) / half:.1f} half-widths of their 95 % interval away); fit it (--fit ...,{name}) or "
+            "check the train file")
+
+
 def residual_table(problem, theta):
     frames = []
     for run in problem.runs:
@@ -185,8 +249,11 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                 footnotes.append(f"{name}: {why}")
         rows.append(row)
     table = pd.DataFrame(rows)
+    if table[["boot_low", "boot_high"]].notna().any(axis=None):  # printed beside low and high: say what they are
+        footnotes.insert(0, BOOTSTRAP_NOTE)
+    widths, held_fits = held_against_logs(problem, names, free, p)
     if "mass" in free and "rotating_mass_factor" not in names:  # only Ms (1 + f) is seen where gradients are small
-        width = width_if_fitted(problem, free, p, "rotating_mass_factor")
+        width = widths["rotating_mass_factor"]
         if not width <= MAX_RELATIVE_WIDTH:
             note = (f"fitted as Ms (1 + f) with rotating_mass_factor held at the train file's "
                     f"{problem.prior['rotating_mass_factor']:.4g}: these logs "
@@ -204,7 +271,9 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                "structure_ratio": float(max(drift)) if drift else 1.0,
                "speed_samples": int(blocks["speed"].size), "traction_samples": int(blocks["traction"].size),
                "regeneration_samples": int(blocks["regeneration"].size), "runs": len(problem.runs),
-               "noise": {"speed_mps": problem.sigma["speed"], **{f"{k}_share": v for k, v in problem.sigma.items() if k != "speed"}}}
+               "noise": {"speed_mps": problem.sigma["speed"], **{f"{k}_share": v for k, v in problem.sigma.items() if k != "speed"}},
+               "held_fitted": {n: {"unit": PARAMETERS[n][0], "held": held, "fitted": value, "half_width": half}
+                               for n, (held, value, half) in held_fits.items()}}
     reasons = [unconverged] if unconverged else []
     if boot_unconverged:
         reasons.append(f"{boot_unconverged} of {draws} bootstrap fits did not converge")
@@ -216,10 +285,14 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
         reasons.append(f"{drift_reason(quality['structure_ratio'])}: the model misses something the logs show")
     reasons += [f"{run.log} run {run.index}: {why}" for run in problem.runs
                 if (why := over_limit(run.t, run.x, run.v, track))]
-    reasons += [f"{log.name}: {why}" for log in logs for why in (over_envelope(log, train), scale_problem(log), force_power_problem(log))
-                if why]
+    # a speed scale off biases the mass: judged against the fitted mass's interval (without one, a fixed share)
+    j = free.index("mass") if "mass" in free else None
+    mass = None if j is None else (theta["mass"], Z95 * float(np.sqrt(cov[j, j])) * s["mass"])
+    reasons += [f"{log.name}: {why}" for log in logs
+                for why in (over_envelope(log, train), scale_problem(log, mass), force_power_problem(log)) if why]
     if {"efficiency", "regeneration_efficiency"} & set(free):
         reasons += [f"{log.name}: {why}" for log in logs if (why := auxiliary_power(log))]
+    reasons += [held_excluded(n, *fitted) for n, fitted in held_fits.items() if held_excluded(n, *fitted)]
     reasons += [f"{n} fitted at its bound 0 (the logs would have it below): its interval is not a fit's, and the "
                 "other parameters absorb what the model misses" for n in free if theta[n] <= 1e-9 * abs(problem.prior[n])]
     reasons += [f"{n} {theta[n]:.4g} above 1: the wheel work is more than the line energy logged (a line power, "
@@ -230,5 +303,8 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
                        f"{problem.prior['mass'] / 1e3:.4g} t (beyond 1/{MASS_RATIO:g} to {MASS_RATIO:g}): a unit slip "
                        "in the log (power in MW or W under kW names, force in daN under kN)?")
     scale = np.array([s[n] for n in free])
+    # the calibrated train: this calibration's status is its own (a flagged one's file says so), not the prior file's
+    calibrated = replace(train_with(train, theta), calibration_reason="")
     return Calibration(table, "flagged" if reasons else "ok", "; ".join(reasons), residuals, quality, theta,
-                       train_with(train, theta), free, cov * np.outer(scale, scale), footnotes)
+                       calibrated, free, cov * np.outer(scale, scale), footnotes,
+                       checks_run(logs, free, boot is not None, list(held_fits)))

@@ -201,6 +201,18 @@ def width_if_fitted(problem, free, p, name):
     return float(Z95 * np.sqrt(cov[-1, -1]) * scales(problem.prior)[name] / max(abs(problem.prior[name]), 1e-300))
 
 
+def fitted_free(problem, free, p, name):
+    """(value [SI], 95 % half-width [SI]) of ``name``, held at its prior, fitted beside ``free`` from
+    ``p`` (and its prior); None where the logs do not identify it there (half-width above
+    :data:`MAX_RELATIVE_WIDTH` of its prior, a null direction) or the fit does not converge."""
+    names = [*free, name]
+    q, unconverged = solve(problem, names, np.append(p, 1.0))
+    half = Z95 * float(np.sqrt(covariance(problem, names, q)[0][-1, -1])) * scales(problem.prior)[name]
+    if unconverged or not half <= MAX_RELATIVE_WIDTH * abs(problem.prior[name]):
+        return None
+    return problem.theta(names, q)[name], half
+
+
 def informing(problem, names, p):
     """{name: the logs whose residuals move with it at ``p``}: its column of the log's own Jacobian
     above :data:`NULL_SINGULAR` of the largest log's (a regeneration efficiency moves only the

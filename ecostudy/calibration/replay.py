@@ -32,6 +32,7 @@ from ecostudy.core.units import KMH
 
 STANDING_SPEED = 0.25   # [m/s] below this, without traction, a train stands (speed noise allowed)
 STANDING_TIME = 1.0     # [s] a stand lasts at least this long
+REST_SIGMAS = 3.0       # a log's first sample within this many of its stated speed noise is at rest (at_rest)
 MIN_SPEED = 2.0         # [m/s] residuals only above this speed (of the speed smoothed over SMOOTHING)
 SMOOTHING = 1.0         # [s]
 TRACTION_SHARE = 0.05   # efficiency samples: power above this share of the log's largest
@@ -155,12 +156,21 @@ def standing(log, work):
     for i, j in list(_stretches(~slow)):
         if 0 < i and j < len(slow) and t[j - 1] - t[i] < STANDING_TIME and quiet[i:j].all():
             slow[i:j] = True
-    slow[0] |= v[0] < STANDING_SPEED  # at rest when the log starts, even if it departs at once
+    slow[0] |= abs(v[0]) < at_rest(log)  # at rest when the log starts, even if it departs at once
     out = np.zeros_like(slow)
     for i, j in _stretches(slow):
         if t[j - 1] - t[i] >= STANDING_TIME or i == 0:
             out[i:j] = True
     return out
+
+
+def at_rest(log):
+    """Below what speed [m/s] the log's first sample is at rest: :data:`STANDING_SPEED`, or the
+    noise the log states (:data:`REST_SIGMAS` times its header's ``speed_sigma_mps``) or its speed
+    column's last digit (a sensor at rest reads one step of it), whichever is more. A first sample
+    above it starts the log moving, and its first run is not replayed (it has no departure)."""
+    stated = log.header.speed_sigma_mps or 0.0
+    return max(STANDING_SPEED, REST_SIGMAS * stated, log.resolution.get("speed", 0.0) * (1.0 + 1e-9))
 
 
 def smoothed(t, v, span=SMOOTHING):
@@ -274,23 +284,30 @@ def efficiency_samples(log, train):
     return np.log(line[pull] / wheel[pull]), np.log(line[brake] / wheel[brake])
 
 
-def auxiliary_power(log):
-    """What the log's line power draws while the wheels draw none (standing, coasting: wheel power
-    below :data:`IDLE_SHARE` of the log's largest): a reason when its median is above
-    :data:`AUX_SHARE` of the largest line power and :data:`AUX_ERRORS` standard errors above 0, else
-    ''. The fitted efficiency is wheel work per line energy with no auxiliary term, so such a draw
-    (heating, air conditioning, compressors) pulls it low by the draw over the traction power."""
+def idle_line_power(log):
+    """The line power [W] of the intervals where the wheels draw none (standing, coasting: wheel power
+    below :data:`IDLE_SHARE` of the log's largest), where the log has a line power and 20 such
+    intervals or more; else None (:func:`auxiliary_power` is not judged)."""
     line = line_power(log)
     if line is None:
-        return ""
+        return None
     wheel = wheel_work(log) / np.diff(log.t)
     idle = (np.abs(wheel) < IDLE_SHARE * np.max(np.abs(wheel))) & np.isfinite(line)
-    if idle.sum() < 20:
+    return line[idle] if idle.sum() >= 20 else None
+
+
+def auxiliary_power(log):
+    """What the log's line power draws while the wheels draw none (:func:`idle_line_power`): a reason
+    when its median is above :data:`AUX_SHARE` of the largest line power and :data:`AUX_ERRORS`
+    standard errors above 0, else ''. The fitted efficiency is wheel work per line energy with no
+    auxiliary term, so such a draw (heating, air conditioning, compressors) pulls it low by the draw
+    over the traction power."""
+    drawn = idle_line_power(log)
+    if drawn is None:
         return ""
-    drawn = line[idle]
     median = float(np.median(drawn))
     error = 1.2533 * 1.4826 * float(np.median(np.abs(drawn - median))) / np.sqrt(drawn.size)
-    if median <= AUX_SHARE * np.nanmax(np.abs(line)) or median <= AUX_ERRORS * error:
+    if median <= AUX_SHARE * np.nanmax(np.abs(line_power(log))) or median <= AUX_ERRORS * error:
         return ""
     return (f"{log.line_column or 'the line power'} draws {median / 1e3:.3g} kW (median over {drawn.size} intervals) "
             "while the wheels draw none (standing, coasting): auxiliary power in the line power, which the "

@@ -17,7 +17,7 @@ def calibrate(
     fit: Optional[str] = typer.Option(None, help="Parameters to fit, comma-separated: mass, rotating_mass_factor, davis_a, "
                                       "davis_b, davis_c, efficiency, regeneration_efficiency (default: mass,davis_a,davis_b,davis_c,efficiency)."),
     out: Path = typer.Option(Path("out/calibration"), help="Output folder (relative: to the working directory)."),
-    bootstrap: int = typer.Option(200, min=0, max=10000, help="Bootstrap draws over the logs (with five or more logs; fewer leave boot_low, boot_high empty)."),
+    bootstrap: int = typer.Option(200, min=0, max=10000, help="Bootstrap draws over the logs (with five or more logs; fewer leave boot_low, boot_high empty): the spread between logs, not a confidence interval."),
     savings: Optional[int] = typer.Option(None, min=0, max=100, help="Also the savings against the logged driving: "
                                           "the optimum for each logged running time, and its band over this many "
                                           "parameter draws from the fit (e.g. 8)."),

@@ -121,6 +121,14 @@ def failed(reason: str) -> Status:
     return Status("failed", reason)
 
 
+def calibrated(reason: str) -> Status:
+    """The status a train file lends every run of it: ``ok``, or ``flagged`` when ``ecostudy calibrate``
+    wrote the file from a calibration that was not ok (``reason``, the train's ``calibration_reason``:
+    its ``calibration`` block), so that a run of a train whose parameters the logs did not bear out
+    is not ok either."""
+    return OK if not reason else flagged(f"train calibrated with status flagged: {reason}")
+
+
 def parsed(names: Iterable[str], words: Iterable[str], reasons: Iterable[object]) -> dict[str, Status]:
     """Statuses by name from a table's ``status`` words and ``reason`` cells (a reason that is not
     text, e.g. an empty cell read as NaN, is none)."""

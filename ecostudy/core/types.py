@@ -39,6 +39,9 @@ class Train:
     traction_efficiency_map: EfficiencyMap | None = None      # eta_T(v, F) instead of the constant
     regeneration_efficiency_map: EfficiencyMap | None = None  # eta_R(v, F) instead of the constant
     adhesion: Adhesion | None = None  # mu(v) m_adh g: the envelopes are capped at it, runs checked against it
+    # why the calibration that wrote this train's file was not ok (its ``calibration`` block); '' when it
+    # was ok or the file is not a calibration's: every run of the train is flagged with it (core.status.calibrated)
+    calibration_reason: str = ""
 
     @property
     def eta_traction(self) -> EfficiencyMap | float:

@@ -116,7 +116,8 @@ def train_from_schema(t: schemas.TrainFile, path: Where, aliases: Mapping[str, s
                  regeneration_efficiency_map=_efficiency_map(t.regenerative_braking.efficiency_map
                                                              if t.regenerative_braking else None),
                  tunnel_resistance=tuple((x.cross_section_m2, x.c_kN_per_kmh2 * units.KN / units.KMH**2)
-                                         for x in t.tunnel_resistance))
+                                         for x in t.tunnel_resistance),
+                 calibration_reason=t.calibration.reason.strip() if t.calibration is not None else "")
 
 
 def track_from_schema(t: schemas.TrackFile) -> Track:

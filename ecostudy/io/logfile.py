@@ -60,8 +60,6 @@ MIN_SPEED = -1.0       # [m/s] below this a negative speed is not sensor noise
 MAX_SPEED = 150.0      # [m/s] (540 km/h)
 SPEED_DISTANCE = (0.8, 1.25)  # speeds integrated over the positions' travel, outside: a unit mix-up
 TRAVEL_STEP = 10.0     # [s] the positions' travel is summed over steps of this length
-SCALE_SPEED, SCALE_TRAVEL = 2.0, 1000.0  # speed_scale: while the train runs above this [m/s], over at least this [m]
-SCALE_TOLERANCE = 0.003  # speeds and positions more apart than this share: flagged (mass biased about twice it)
 JUMP = 10.0            # [m] a position step this much (plus half the speeds' distance) off the speeds' is a jump
 JUMP_SHARE = 0.1       # jumps in more than this share of the steps: not jumps but a unit mix-up
 PULLING = 0.3          # [m/s^2] speed gained faster than this over PULLING_TIME beyond what the gradient gives:
@@ -192,11 +190,11 @@ def check_series(log: "LoggedRun", path: Where) -> None:
         raise InputError(lines)
 
 
-def travel_and_driven(log: "LoggedRun", moving: float = 0.0) -> tuple[float, float]:
-    """(the positions' travel, the distance the speeds give) [m], over steps of :data:`TRAVEL_STEP`
+def travel_steps(log: "LoggedRun", moving: float = 0.0) -> tuple[FloatArray, FloatArray]:
+    """(the positions' travel, the distance the speeds give) [m] of each step of :data:`TRAVEL_STEP`
     seconds (GPS noise does not add up; while the train moves one way it only counts at the ends of
-    a stretch), only over the steps whose every speed is above ``moving`` [m/s] (a sensor's noise at
-    a stand integrates to travel the positions never make)."""
+    a stretch), only the steps whose every speed is above ``moving`` [m/s] (a sensor's noise at a
+    stand integrates to travel the positions never make)."""
     assert log.v is not None
     k = max(int(round(TRAVEL_STEP / float(np.median(np.diff(log.t))))), 1)
     cuts = np.unique(np.append(np.arange(0, len(log.t), k), len(log.t) - 1))
@@ -205,29 +203,13 @@ def travel_and_driven(log: "LoggedRun", moving: float = 0.0) -> tuple[float, flo
         keep = (np.minimum.reduceat(np.abs(log.v), cuts)[:-1] > moving) & (np.abs(log.v[cuts[1:]]) > moving)
     travel = np.abs(np.diff(log.x[cuts]))
     driven = np.add.reduceat(np.append(speed_steps(log), 0.0), cuts)[:-1]
-    return float(np.sum(travel[keep])), float(np.sum(driven[keep]))
+    return travel[keep], driven[keep]
 
 
-def speed_scale(log: "LoggedRun") -> float | None:
-    """The speeds' distance over the positions' travel while the train runs (at least
-    :data:`SCALE_SPEED`), where a log gives both over at least :data:`SCALE_TRAVEL` m; else None.
-    1 when the two agree; a speed sensor off in scale (a worn wheel) or positions off in scale make
-    it another number, and bias every fitted parameter that the kinetic energy carries."""
-    if log.v is None or "position" not in log.columns[0]:
-        return None
-    travel, driven = travel_and_driven(log, SCALE_SPEED)
-    return driven / travel if travel >= SCALE_TRAVEL else None
-
-
-def scale_problem(log: "LoggedRun") -> str:
-    """Why a log's speeds and positions do not measure the same travel (:func:`speed_scale` more than
-    :data:`SCALE_TOLERANCE` from 1), "" where they do or cannot be compared."""
-    ratio = speed_scale(log)
-    if ratio is None or abs(ratio - 1.0) <= SCALE_TOLERANCE:
-        return ""
-    return (f"its speeds give {ratio:.4f} times the travel of its positions while it runs (more than "
-            f"{100 * SCALE_TOLERANCE:g} % apart): a speed sensor off in scale (a worn wheel's diameter) or positions "
-            "off in scale bias the fitted mass and resistance by about twice that, beyond their intervals")
+def travel_and_driven(log: "LoggedRun", moving: float = 0.0) -> tuple[float, float]:
+    """The sums of :func:`travel_steps`: (the positions' travel, the distance the speeds give) [m]."""
+    travel, driven = travel_steps(log, moving)
+    return float(np.sum(travel)), float(np.sum(driven))
 
 
 def speed_steps(log: "LoggedRun") -> FloatArray:

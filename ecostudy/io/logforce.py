@@ -89,17 +89,26 @@ def check_force_power(path: Where, columns: tuple[str, ...], v: FloatArray | Non
                                  f"{lo:g}-{hi:g}): one of them (or {speed}) is in another unit than its name says"))
 
 
+def force_power_agreement(log: Any) -> tuple[float, int] | None:
+    """(median of P / (F v), rows) where the train pulls (:func:`force_power_ratio`), where a log gives a
+    speed, a force and a wheel power and pulls in :data:`PULLING_ROWS` rows or more; else None (not
+    compared; ``log``: a :class:`~ecostudy.io.logfile.LoggedRun`)."""
+    if log.v is None or log.force is None or log.power_wheel is None:
+        return None
+    ratio, rows = force_power_ratio(log.v, log.force, log.power_wheel)
+    return (ratio, rows) if rows >= PULLING_ROWS else None
+
+
 def force_power_problem(log: Any) -> str:
     """Why a log's wheel power and force times speed disagree beyond what sampling leaves (their
     median ratio where the train pulls outside :data:`FORCE_POWER_AGREE`, within the units
-    :func:`check_force_power` allows), "" where they agree or cannot be compared (``log``: a
-    :class:`~ecostudy.io.logfile.LoggedRun`)."""
-    if log.v is None or log.force is None or log.power_wheel is None:
-        return ""
-    ratio, rows = force_power_ratio(log.v, log.force, log.power_wheel)
+    :func:`check_force_power` allows), "" where they agree or cannot be compared
+    (:func:`force_power_agreement`)."""
+    agreement = force_power_agreement(log)
     lo, hi = FORCE_POWER_AGREE
-    if rows < PULLING_ROWS or lo <= ratio <= hi:
+    if agreement is None or lo <= agreement[0] <= hi:
         return ""
+    ratio, rows = agreement
     speed, force_name, power_name = log.columns[1:4]
     return (f"{power_name} is {ratio:.4g} times {force_name} times {speed} (median over {rows} rows where the train "
             f"pulls above {PULLING_SPEED:g} m/s; sampling leaves {lo:g}-{hi:g}): one channel is off in scale, and the "

@@ -17,10 +17,12 @@ from ecostudy.io.writers import atomic_write
 
 
 def calibrated_document(path: str | PathLike[str], train: Train, fitted: Collection[str],
-                        provenance: str, warning: str = "") -> dict[str, Any]:
+                        provenance: str, warning: str = "", reason: str = "") -> dict[str, Any]:
     """The train file at ``path`` (YAML, or TTOBench / OSRD JSON as ecostudy reads it) with the
     parameters named in ``fitted`` taken from ``train`` (SI), ``provenance`` added to its source and
-    ``warning`` (a calibration not ok) put before it, where a reader of the file starts.
+    ``warning`` (a calibration not ok) put before it, where a reader of the file starts; its
+    ``calibration`` block (the schema's, read by the loader) the calibration's status: ``ok``, or
+    ``flagged`` with ``reason`` when one is given (every run of the train is then flagged with it).
 
     A fitted efficiency is a constant (the calibration compares it with the logged line power at
     every traction or braking sample, whatever the train file's efficiency map says): the map,
@@ -44,6 +46,7 @@ def calibrated_document(path: str | PathLike[str], train: Train, fitted: Collect
         _drop_map(data["regenerative_braking"], "efficiency_map", "regenerative_braking.efficiency", path,
                   "regenerative_braking.")
     data["source"] = f"{warning} {data.get('source', '').strip()} {provenance}".strip()
+    data["calibration"] = {"status": "flagged", "reason": reason} if reason else {"status": "ok"}  # the file's own
     return data
 
 

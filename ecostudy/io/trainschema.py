@@ -161,6 +161,22 @@ class AdhesionLimit(Strict):
         return self
 
 
+class Calibration(Strict):
+    """What ``ecostudy calibrate`` found when it wrote this file: every run of a train whose
+    calibration was not ok is flagged with the reason (:func:`ecostudy.core.status.calibrated`)."""
+
+    status: Literal["ok", "flagged"] = Field(description="The calibration's status: ok or flagged.")
+    reason: str = Field("", description="Why it was flagged (each reason of the calibration); none when ok.")
+
+    @model_validator(mode="after")
+    def _reason(self) -> Self:
+        if self.status == "flagged" and not self.reason.strip():
+            raise ValueError("reason: a flagged calibration needs its reason")
+        if self.status == "ok" and self.reason.strip():
+            raise ValueError("reason: an ok calibration has none (status ok with a reason: which is it?)")
+        return self
+
+
 class TrainFile(Strict):
     file_kind: ClassVar[str | None] = "train"
     name: Name
@@ -194,6 +210,8 @@ class TrainFile(Strict):
     das_handle_levels: list[float] = Field(default_factory=lambda: [-1.0, 0.0, 0.5, 0.75, 1.0])
     adhesion: Optional[AdhesionLimit] = Field(None, description="Caps the traction envelope and the electric "
                                               "brake at mu(v) m_adh g; none: no adhesion limit.")
+    calibration: Optional[Calibration] = Field(None, description="Written by ecostudy calibrate: its status, "
+                                               "and the reason where it was flagged (every run of the train then is).")
 
     @model_validator(mode="after")
     def _adhesive_mass(self) -> Self:

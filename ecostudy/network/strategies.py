@@ -38,7 +38,7 @@ import numpy as np
 
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import outside
-from ecostudy.core.status import TOLERANCES, solver_part
+from ecostudy.core.status import TOLERANCES, calibrated, solver_part
 from ecostudy.core.registry import Registry
 from ecostudy.network.fleet import late_at_stops
 from ecostudy.network.joint import joint
@@ -207,6 +207,8 @@ def _scored(fleet, runs, info, wall, mapper=map):
         flags.append(f"the line's energy balance misses by {totals['balance_error_pct']:+.3f} % (substation plus "
                      "regeneration used against traction input plus line losses): the circuit did not balance")
     flags += not_optimal(fleet, runs, info)
+    flags += [calibrated(reason).reason for reason in  # a train of a flagged calibration: every run of it
+              dict.fromkeys(leg.case.train.calibration_reason for legs in fleet.legs for leg in legs) if reason]
     totals["status"] = "ok" if not flags else "flagged: " + "; ".join(flags)
     return {"runs": runs, "steps": steps, "trains": trains, "totals": totals, "info": info}
 

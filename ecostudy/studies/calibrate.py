@@ -151,7 +151,8 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
                   f"({', '.join(log.name for log in logs)}) on track '{track.name}': {estimates} "
                   f"(95 % intervals); held at this file's values: "
                   f"{', '.join(n for n in names if n not in identified) or 'none'}.")
-    write_train(calibrated, calibrated_document(train_path, result.train, identified, provenance, warning))
+    write_train(calibrated, calibrated_document(train_path, result.train, identified, provenance, warning,
+                                                "" if result.status == "ok" else result.reason))
     try:  # a train file the tool would refuse (a fitted value past its field's bounds) is not left behind
         load_train(calibrated)
         written = [calibrated.name]
@@ -163,10 +164,12 @@ def calibrate_study(log_paths, train_path, track_path, fit, out, draws=200, savi
     summary = {"command": "calibrate", "logs": [str(p) for p in log_paths], "train": str(train_path),
                "track": str(track_path), "fitted": names,
                "method": "least squares (scipy least_squares) on the replayed energy balance, whitened by a scalar "
-                         "Kalman filter; 95 % intervals from the Jacobian; bootstrap over logs from "
-                         f"{MIN_BOOTSTRAP_LOGS} logs on",
+                         "Kalman filter; 95 % intervals (low, high) from the Jacobian; boot_low, boot_high from a "
+                         f"bootstrap over logs ({MIN_BOOTSTRAP_LOGS} logs or more): the spread between logs, not a "
+                         "confidence interval",
                "parameters": result.table.replace({np.nan: None}).to_dict("records"),
-               "quality": result.quality, "calibrated_train": str(calibrated) if written else None,
+               "quality": result.quality, "checks": result.checked,
+               "calibrated_train": str(calibrated) if written else None,
                "outputs": [*CALIBRATE_FILES, *written]}
     if saving_draws is not None:
         table = pd.concat([savings(log, track, result, saving_draws) for log in logs], ignore_index=True)

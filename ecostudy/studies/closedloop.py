@@ -21,7 +21,8 @@ from ecostudy.core.columns import with_statistic
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
-from ecostudy.core.status import STOP_TOLERANCE_M, Status, driven_run, flagged, solver_part, unproven_solves, worst
+from ecostudy.core.status import (STOP_TOLERANCE_M, Status, calibrated, driven_run, flagged, solver_part, unproven_solves,
+                                  worst)
 from ecostudy.core.types import State
 from ecostudy.io import schemas
 from ecostudy.io.loaders import (check_fits, chosen_stops, read_document, read_track, read_train, track_from_schema,
@@ -199,6 +200,7 @@ def _trip(case):
     if getattr(planner, "plans_from", None) is not None:  # the ATO run it replays or plans from
         ended = planner.plans_from.facts.solver.status
         status = worst([status, solver_part("the ATO run", ended)])
+    status = worst([status, calibrated(train.calibration_reason)])  # the model train of a flagged calibration
     status, error = (status.kind, status.reason or None)
     return status, error, summary
 

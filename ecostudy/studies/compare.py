@@ -22,7 +22,7 @@ from ecostudy.core.errors import EcostudyWarning, InfeasibleError, TooFastError,
 from ecostudy.core.registry import Registry
 from ecostudy.core.grid import make_segment
 from ecostudy.core.simulate import Driven, Trace, worst_overspeed
-from ecostudy.core.status import Status, at_stop, driven_run, failed, status_word, worst
+from ecostudy.core.status import Status, at_stop, calibrated, driven_run, failed, status_word, worst
 from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kmh
 from ecostudy.das.advice import das_phases, grid_note, nearest_levels
@@ -182,6 +182,7 @@ def _stored(driven, train, segment, status, **fields):
         fields["overspeed_max_kmh"] = overspeed_kmh(segment, driven)
     summary = {**driven.row(train, segment.distance), **fields,
                "handle": np.asarray(driven.handle).tolist(), "trace": trace}
+    status = worst([status, calibrated(train.calibration_reason)])  # a train of a flagged calibration: every run
     return status.kind, status.reason or None, summary
 
 
