@@ -4,6 +4,7 @@ only without the command line's files, a log that starts moving, a logged train 
 file, a fit that cannot tell the static mass from the rotating-mass allowance. Each is refused in
 one line, warned of by name or flagged with the reason, never an `ok` calibration (real fits on
 generated logs of the regional train)."""
+import dataclasses
 import json
 import re
 import warnings
@@ -127,7 +128,7 @@ def test_traction_beyond_the_train_files_envelope_is_flagged(inputs, there):
     """The log's train pulls 300 kN; the file it is calibrated against has 60 % of that. The replay
     reads the logged work, so the fit was `ok`; the calibrated file could not drive the log."""
     track, train = inputs
-    weak = train.__class__(**{**train.__dict__, "traction": train.traction.scaled(0.6)})
+    weak = dataclasses.replace(train, traction=train.traction.scaled(0.6))
     result = calibrate_logs([parse_log(text_of(there), "log.csv")], track, weak, ("mass", "davis_a"), draws=0)
     assert result.status == "flagged" and "log: logged traction" in result.reason and \
         "times the train file's envelope" in result.reason, result.reason
