@@ -208,12 +208,18 @@ def track_from_dict(data: Mapping[str, Any], where: str = "track (in code)") -> 
     return track_from_schema(validate(schemas.TrackFile, data, where))
 
 
+def read_timetable(path: Where) -> tuple[schemas.TimetableFile, dict[str, str]]:
+    """(a timetable file, YAML or a TTOBench journey JSON; its fields as the file names them, for
+    messages: :func:`~ecostudy.io.documents.aliased`, empty for YAML)."""
+    data, aliases = read_document(path), dict[str, str]()
+    if Path(path).suffix.lower() == ".json":
+        data, aliases = timetable_document_to_schema(data, path)
+    return validate(schemas.TimetableFile, data, path, aliases), aliases
+
+
 def load_timetable(path: Where) -> schemas.TimetableFile:
     """Read a timetable file (YAML, or a TTOBench journey JSON)."""
-    data = read_document(path)
-    if Path(path).suffix.lower() == ".json":
-        data = timetable_document_to_schema(data, path)
-    return validate(schemas.TimetableFile, data, path)
+    return read_timetable(path)[0]
 
 
 # --------------------------------------------------------------------------- cross-file checks
@@ -351,7 +357,7 @@ def load_network_study(study_path: Where) -> NetworkStudy:
 
 
 __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study", "read_train", "read_track",
-           "load_timetable", "check_stops", "check_stop_list"]
+           "load_timetable", "read_timetable", "check_stops", "check_stop_list"]
 
 
 def load_consist(path: Where) -> Consist:
