@@ -95,3 +95,11 @@ def test_compare_refuses_a_study_whose_base_case_has_no_running_time_or_suppleme
             refused(run(*args), f"{study}: running_time_s: compare needs a running time or a supplement for its "
                                 "base case")
     assert not (tmp_path / "out_compare").exists()
+
+
+def test_compare_names_its_stop_options_as_the_command_line_spells_them(tmp_path):
+    """It read 'command line: from: unknown stop' (the study file's field) for the option --from."""
+    refused(run("compare", "--track", AMS, "--train", METRO, "--from", "Foo", "--time", 80, "--out", tmp_path / "o"),
+            "command line: --from: unknown stop 'Foo'")
+    refused(run("compare", "--track", AMS, "--train", METRO, "--to", "Rokin", "--time", 80, "--out", tmp_path / "o"),
+            "command line: --to: must differ from '--from'")

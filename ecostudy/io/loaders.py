@@ -223,15 +223,16 @@ def load_timetable(path: Where) -> schemas.TimetableFile:
 
 
 # --------------------------------------------------------------------------- cross-file checks
-def check_stops(track: Track, from_stop: str, to_stop: str, where: Where) -> None:
-    """Both stops must be on the track and distinct."""
+def check_stops(track: Track, from_stop: str, to_stop: str, where: Where,
+                fields: tuple[str, str] = ("from", "to")) -> None:
+    """Both stops must be on the track and distinct (``fields``: how ``where`` names them, ``--from``...)."""
     lines: list[str] = []
-    for field_name, stop in (("from", from_stop), ("to", to_stop)):
+    for field_name, stop in zip(fields, (from_stop, to_stop)):
         if stop not in track.stops:
             lines.append(problem(where, field_name, f"unknown stop '{stop}' (track '{track.name}' has: "
                                  + ", ".join(track.stops) + ")"))
     if not lines and track.stops[from_stop] == track.stops[to_stop]:
-        lines.append(problem(where, "to", "must differ from 'from'"))
+        lines.append(problem(where, fields[1], f"must differ from '{fields[0]}'"))
     if lines:
         raise InputError(lines)
 
@@ -257,12 +258,13 @@ def check_stop_list(track: Track, names: Sequence[str], where: Where, field: str
         raise InputError(lines)
 
 
-def chosen_stops(track: Track, from_stop: str | None, to_stop: str | None, where: Where) -> tuple[str, str]:
+def chosen_stops(track: Track, from_stop: str | None, to_stop: str | None, where: Where,
+                 fields: tuple[str, str] = ("from", "to")) -> tuple[str, str]:
     """(from, to): the stops asked for, the track's first and last where not, checked (:func:`check_stops`)."""
     names = list(track.stops)
     first = names[0] if from_stop is None else from_stop  # '' is a name given (and refused), not "default"
     last = names[-1] if to_stop is None else to_stop
-    check_stops(track, first, last, where)
+    check_stops(track, first, last, where, fields)
     return first, last
 
 
