@@ -173,7 +173,7 @@ FOLDER_BAD = [  # (a command function, its arguments, what it says called from P
      "command line: --objective time: finds the fastest run: it takes no --time, --supplement or --window"),
     (api.solve_folder, {"track": TRACK, "train": TRAIN, "time": 80.0, "to_stop": "Nowhere"},
      "arguments: to_stop: unknown stop 'Nowhere' (track 'Amsterdam metro Rokin - Centraal' has: Rokin, Centraal)",
-     "command line: to: unknown stop 'Nowhere' (track 'Amsterdam metro Rokin - Centraal' has: Rokin, Centraal)"),
+     "command line: --to: unknown stop 'Nowhere' (track 'Amsterdam metro Rokin - Centraal' has: Rokin, Centraal)"),
     (api.solve_folder, {"track": TRACK, "train": TRAIN, "time": 80.0, "fig_format": "gif"},
      "arguments: fig_format: 'gif' is not a figure format; use one of png, svg, pdf",
      "command line: --format: 'gif' is not a figure format; use one of png, svg, pdf"),

@@ -81,3 +81,25 @@ def test_a_time_a_hair_under_coasting_s_fastest_reads_with_the_digits_that_tell_
         eco_coasting(case, asked)
     message, (a, b) = str(caught.value), apart(asked, fastest)
     assert a != b and f"cannot meet {a} s: without coasting it arrives at {b} s" in message, message
+
+
+def test_compare_refuses_a_study_whose_base_case_has_no_running_time_or_supplement(tmp_path):
+    """objective 'time' (or a sweep of supplements) left the base case without a time: compare drove
+    the strategies to the energy optimum's own 22-million-second crawl and printed the all-out row ok
+    beside an arrival error of -22025546.969 s (exit 1)."""
+    base = {"name": "cb", "track": str(AMS), "train": str(METRO), "from": "Rokin", "to": "Centraal", "points": 150,
+            "output": str(tmp_path / "out")}
+    for name, extra in (("objtime", {"objective": "time"}), ("sweep", {"sweep": {"supplement_percent": [5, 10]}})):
+        study = write_yaml(tmp_path / f"{name}.yaml", {**base, **extra})
+        for args in (("compare", study, "--workers", 1, "--no-plot"), ("run", study, "--kind", "compare", "--no-plot")):
+            refused(run(*args), f"{study}: running_time_s: compare needs a running time or a supplement for its "
+                                "base case")
+    assert not (tmp_path / "out_compare").exists()
+
+
+def test_compare_names_its_stop_options_as_the_command_line_spells_them(tmp_path):
+    """It read 'command line: from: unknown stop' (the study file's field) for the option --from."""
+    refused(run("compare", "--track", AMS, "--train", METRO, "--from", "Foo", "--time", 80, "--out", tmp_path / "o"),
+            "command line: --from: unknown stop 'Foo'")
+    refused(run("compare", "--track", AMS, "--train", METRO, "--to", "Rokin", "--time", 80, "--out", tmp_path / "o"),
+            "command line: --to: must differ from '--from'")

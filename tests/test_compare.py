@@ -166,3 +166,22 @@ def test_landing_scales_only_the_braking_to_the_stop_and_the_heuristics_keep_the
     eco = folder.table.set_index("strategy").loc["eco-drive coasting"]
     assert eco["status"] == "ok" and abs(eco["arrival_error_s"]) < 1.0 and abs(eco["stop_error_m"]) <= 0.01, eco
 
+
+
+def test_no_strategy_is_driven_or_measured_against_a_time_the_optimum_chose_itself():
+    """A case with neither a running time nor a supplement (refused by the commands, built here by
+    hand): its energy optimum crawled 22 million s, and the all-out row read ok beside an arrival
+    error of -22025546.969 s against it. The target is the case's time, never the optimum's own: no
+    optimum is solved without one, and the all-out row has no arrival error without a target."""
+    import yaml
+
+    from ecostudy.core.types import Timing
+    from ecostudy.studies.compare import compare_cases, compare_table, run_strategy
+    docs = [yaml.safe_load(p.read_text()) for p in (TRAINS / "amsterdam_metro.yaml",
+                                                    TRACKS / "amsterdam_rokin_centraal.yaml")]
+    cases = compare_cases(*docs, "Rokin", "Centraal", Timing(), points=150)[:2]  # all-out, ATO optimum
+    rows = {case["key"]: run_strategy(case) for case in cases}
+    table = compare_table(cases, rows).set_index("strategy")
+    assert table.loc["all-out", "status"] == "ok" and np.isnan(table.loc["all-out", "arrival_error_s"]), table
+    assert table.loc["ATO optimum", "status"].startswith("failed"), table
+    assert "compare needs a running time or a supplement" in table.loc["ATO optimum", "note"], table

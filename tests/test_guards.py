@@ -167,8 +167,8 @@ def test_journey_stops_are_names_never_all_stops(tmp_path, stops, fragment):
 
 
 @pytest.mark.parametrize("options, fragment", [
-    (["--from", ""], "from: unknown stop ''"),
-    (["--to", ""], "to: unknown stop ''"),
+    (["--from", ""], "command line: --from: unknown stop ''"),
+    (["--to", ""], "command line: --to: unknown stop ''"),
 ])
 def test_an_empty_stop_option_is_not_the_default_stop(tmp_path, options, fragment):
     one_line(run("solve", "--track", AMS, "--train", METRO, *options, "--time", 80, "--out", tmp_path / "o"), fragment)

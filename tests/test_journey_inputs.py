@@ -104,3 +104,31 @@ def test_a_timetabled_crawl_is_refused_by_journey_before_any_front(tmp_path):
     assert result.exit_code == 2 and len(lines) == 1, result.output
     assert "stops[1].arrival_s: 400.0 s from Noord to Station is over 5 times the fastest possible run's" in lines[0]
     assert not (tmp_path / "j" / "journey.csv").exists()
+
+
+def test_a_timetable_of_one_stop_is_refused_naming_the_timetable_and_its_stops(tmp_path):
+    """It read 'command line: --stops: need two or more stops' though no --stops was given."""
+    from .test_bad_input_studies import refused
+    timetable = write_yaml(tmp_path / "one.yaml", {"name": "t", "stops": [{"stop": "Noord", "departure_s": 0}]})
+    refused(run("journey", "--track", LINE, "--train", METRO, "--timetable", timetable, "-K", 100, "--no-plot",
+                "--out", tmp_path / "out"), f"{timetable}: stops: need two or more stops")
+
+
+def test_a_ttobench_journey_s_refusals_name_its_timing_points_not_the_timetable_schema_s_fields(tmp_path):
+    """A TTOBench journey has no 'stops[1].latest_s': its refusals name the rows of 'timing points.values'
+    that give the times or the position (the first row is the departure, the second Station's arrival)."""
+    import json
+
+    from .test_bad_input_studies import refused
+    doc = json.loads((STUDIES / "timetables" / "metro_line_4stops_Journey_01.json").read_text())
+    doc["timing points"]["values"][1][2] = 40  # Station by 40 s: the fastest run takes 50 s
+    fast = tmp_path / "fast.json"
+    fast.write_text(json.dumps(doc))
+    journey = ("journey", "--track", LINE, "--train", METRO, "-K", 100, "--no-plot", "--out", tmp_path / "out")
+    refused(run(*journey, "--timetable", fast), f"{fast}: timing points.values[0], timing points.values[1]: "
+                                                "infeasible: the departure from Noord (not before 0 s)")
+    doc["timing points"]["values"][1][2] = 56
+    doc["timing points"]["values"].append([3500, None, 400, 0, 0])  # past the line's end
+    beyond = tmp_path / "beyond.json"
+    beyond.write_text(json.dumps(doc))
+    refused(run(*journey, "--timetable", beyond), f"{beyond}: timing points.values[5]: 3500 m is not on track")

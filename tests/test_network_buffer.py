@@ -106,3 +106,45 @@ def test_a_new_run_ahead_that_leaves_the_train_behind_no_run_is_not_taken():
     assert held == {t2: f"from round 1 on: its new run left {t3} no run buffer_m 60 m behind it"}
     assert buffer_missed(f, kept) is None
     assert all(np.array_equal(a.s, b.s) for a, b in zip(kept[order[1]], start[order[1]]))  # T2 as it started
+
+
+def test_no_saving_is_read_against_independent_runs_that_break_the_buffer(tmp_path):
+    """The independent runs break the buffer (flagged): receptivity's 'saving_vs_independent_pct'
+    (-31.5 %) and summary.json's least_saving_vs_independent_pct were measured against them as if
+    they were a result. Now the savings are empty, and the table, the console and summary.json say why."""
+    import pandas as pd
+    study = write_yaml(tmp_path / "s.yaml", {
+        "name": "buffer", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
+        "stops": ["Noord", "Station"], "running_times_s": [56.0], "dwell_s": 10, "time_step_s": 1.0,
+        "trains": [{"name": "T1", "offset_s": 0}, {"name": "T2", "offset_s": 30}],
+        "substation": {"position_m": 300}, "strategies": ["independent", "receptivity"], "buffer_m": BUFFER,
+        "points": 200, "output": str(tmp_path / "out")})
+    r = CliRunner().invoke(app, ["network", str(study), "--workers", "1", "--no-plot"])
+    assert r.exit_code == 1, r.output
+    why = "saving_vs_independent_pct left empty: the independent run it is measured against is flagged"
+    assert why in r.output, r.output
+    table = pd.read_csv(tmp_path / "out" / "network_substation.csv").set_index("strategy")
+    assert table.loc["receptivity", "status"] == "ok", table["status"]
+    assert table["saving_vs_independent_pct"].isna().all(), table["saving_vs_independent_pct"]
+    assert table["note"].str.startswith(why).all(), table["note"]
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["least_substation_strategy"] == "receptivity"
+    assert summary["least_saving_vs_independent_pct"] is None and summary["saving_note"].startswith(why), summary
+
+
+def test_one_train_has_no_separation_and_the_console_says_so_without_none(tmp_path):
+    """One train has no train ahead: its separation_min_m was printed as 'None'; now '-' (empty in the csv)."""
+    import pandas as pd
+    study = write_yaml(tmp_path / "s.yaml", {
+        "name": "one", "track": str(TRACKS / "metro_line_4stops.yaml"), "train": str(TRAINS / "amsterdam_metro.yaml"),
+        "stops": ["Noord", "Station"], "running_times_s": [56.0], "dwell_s": 10, "time_step_s": 1.0,
+        "trains": [{"name": "T1", "offset_s": 0}], "substation": {"position_m": 300}, "strategies": ["independent"],
+        "points": 200, "output": str(tmp_path / "out")})
+    r = CliRunner().invoke(app, ["network", str(study), "--workers", "1", "--no-plot"])
+    assert r.exit_code == 0, r.output
+    assert "None" not in r.output, r.output
+    lines = [line.split() for line in r.output.splitlines()]
+    at = next(i for i, words in enumerate(lines) if words[:1] == ["strategy"])  # the table's header, then its row
+    header, row = lines[at], lines[at + 1]
+    assert row[header.index("separation_min_m")] == "-", r.output
+    assert pd.read_csv(tmp_path / "out" / "network_substation.csv")["separation_min_m"].isna().all()

@@ -176,7 +176,12 @@ def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, w
                                f"scored {row['wall_s']:.1f} s after its start"
                                if status_word(row["status"]) != "failed" else "FAILED (its status says why)"))
     write_html(ran.output)
-    return reported(ran.output, [shown(ran.table, NETWORK_COLUMNS), counts_line(ran.counts, "strategies"),
+    table = ran.table  # no separation (one train, or no two on the line at once): '-', not NaN or None
+    if "separation_min_m" in table:
+        table = table.assign(separation_min_m=[number(x) if x is not None and x == x else "-"
+                                                  for x in table["separation_min_m"]])
+    saving = [ran.table.attrs["saving_note"]] if "saving_note" in ran.table.attrs else []
+    return reported(ran.output, [shown(table, NETWORK_COLUMNS), *saving, counts_line(ran.counts, "strategies"),
                                  "outputs " + listed(ran.output)])
 
 

@@ -12,7 +12,8 @@ from ecostudy.api.single import timing_source
 from ecostudy.core import units
 from ecostudy.core.defaults import FRONT_POINTS, RUN_POINTS
 from ecostudy.core.errors import EcostudyWarning, FieldError, InfeasibleError, InputError, problem
-from ecostudy.io.loaders import check_fits, check_stop_list, load_timetable, load_track, load_train, timing_from_timetable
+from ecostudy.io.documents import aliased
+from ecostudy.io.loaders import check_fits, check_stop_list, load_track, load_train, read_timetable, timing_from_timetable
 from ecostudy.io.timetable import journey_plan, name_stops
 from ecostudy.io.store import check_one_study
 from ecostudy.io.writers import check_output_dir, default_output
@@ -165,10 +166,11 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
     segments (equal marginal saving against the same percentage), or a timetable's times."""
     figures = output(fig_format, dpi)
     check_options(time=time, supplement=supplement, dwell=dwell, points=points, workers=workers)
-    tt = load_timetable(timetable) if timetable is not None else None
+    tt, aliases = read_timetable(timetable) if timetable is not None else (None, {})
     trk, trn = load_track(track if track is not None else associated_track(tt, timetable)), load_train(train)
     check_fits(train, trn, trk)
     scheduled, plan = None, None
+    listed_in: tuple[str | Path, str] = ("command line", "--stops")  # where the stops came from
     if tt is not None and not tt.stops:  # a timetable of one supplement: the journey's --supplement
         if time is not None or supplement is not None:
             raise InputError(problem("command line", "--timetable", f"{timetable} gives the supplement "
@@ -178,10 +180,10 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
         if stops or time is not None or supplement is not None:
             raise InputError(problem("command line", "--timetable", "a timetable with stop times replaces --stops, "
                                      "--time and --supplement"))
-        tt, trk = name_stops(tt, trk, timetable)
-        names = [str(row.stop) for row in tt.stops]  # every stop named by name_stops
+        tt, trk = name_stops(tt, trk, timetable, aliases)
+        names, listed_in = [str(row.stop) for row in tt.stops], (timetable, aliased("stops", aliases))  # named by name_stops
         if tt.windowed:
-            plan = journey_plan(tt, trk, timetable, dwell)
+            plan = journey_plan(tt, trk, timetable, dwell, aliases)
         else:
             scheduled = [timing_from_timetable(tt, a, b, timetable, dwell).running_time
                          for a, b in zip(names, names[1:])]
@@ -191,7 +193,7 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
             warnings.warn(problem("command line", "--dwell", "applies at the stops of a --timetable that give no "
                                   "dwell: unused without one"), EcostudyWarning, stacklevel=2)
         names = list(trk.stops) if stops is None else [n.strip() for n in stops.split(",")]
-    check_stop_list(trk, names, "command line", "--stops")
+    check_stop_list(trk, names, *listed_in)
     if scheduled is None and plan is None and (time is None) == (supplement is None):
         raise InputError(problem("command line", "--time/--supplement",
                                  "give one total running time or supplement, or --timetable"))
@@ -206,7 +208,7 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
                                             points=points, workers=workers, scheduled=scheduled, plan=plan,
                                             progress=progress)
     except FieldError as exc:  # a timetable's times no run keeps: the timetable's fields, by name
-        raise exc.in_file(timetable) from None
+        raise exc.in_file(timetable, aliased(exc.field, aliases)) from None
     except InfeasibleError as exc:  # a total time no journey keeps: the option, by name
         if time is None:
             raise

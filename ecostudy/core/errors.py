@@ -47,9 +47,10 @@ class FieldError(InfeasibleError):
         super().__init__(problems)
         self.field = field
 
-    def in_file(self, path: object) -> InfeasibleError:
-        """The same problems as ``file: field: what``, for the caller that knows the file."""
-        return InfeasibleError([problem(str(path), self.field, p) for p in self.problems])
+    def in_file(self, path: object, field: str | None = None) -> InfeasibleError:
+        """The same problems as ``file: field: what``, for the caller that knows the file (``field``:
+        the field as that file names it, where it names it otherwise)."""
+        return InfeasibleError([problem(str(path), field or self.field, p) for p in self.problems])
 
 
 class SolverError(EcostudyError):

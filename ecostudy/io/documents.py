@@ -257,7 +257,10 @@ def validate(schema: type[Model], data: object, path: str | PathLike[str],
 def aliased(field: str, aliases: Mapping[str, str]) -> str:
     """``field`` (a schema path, ``speed_limits[1].speed_kmh``) as the file names it: ``aliases`` maps a
     schema path, or one with its indices left out (``speed_limits[].speed_kmh``: ``speed limits.values[].velocity``,
-    the indices put back in order), to the file's name; else the field itself."""
+    the indices put back in order), to the file's name; else the field itself. Fields joined by
+    ", " (``stops[0].departure_s, stops[1].latest_s``) are each named so, each name once."""
+    if ", " in field:
+        return ", ".join(dict.fromkeys(aliased(f, aliases) for f in field.split(", ")))
     if field in aliases:
         return aliases[field]
     key = re.sub(r"\[\d+\]", "[]", field)

@@ -32,8 +32,15 @@ _POSITION = {"m": 1.0, "km": 1000.0}          # [m] per unit
 _SPEED_KMH = {"km/h": 1.0, "m/s": 1.0 / units.KMH}  # [km/h] per unit
 
 
-def ttobench_journey(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
-    """A TTOBench journey as a timetable dict (stops by position, arrival windows, windows)."""
+# a timetable stop's fields read off the row of its arrival, and off the row of its departure
+_ARRIVAL = ("", ".position_m", ".arrival_s", ".earliest_s", ".latest_s")
+_DEPARTURE = (".departure_s", ".departure_earliest_s", ".departure_latest_s", ".dwell_s")
+
+
+def ttobench_journey(doc: Mapping[str, Any], path: Where) -> tuple[dict[str, Any], dict[str, str]]:
+    """(a TTOBench journey as a timetable dict: stops by position, arrival windows, windows; the
+    timetable's fields as the journey names them, for messages: ``stops[1].latest_s`` is
+    ``timing points.values[2]``, :func:`ecostudy.io.documents.aliased`)."""
     points = doc.get("timing points")
     if not isinstance(points, dict) or "values" not in points:
         raise InputError(problem(path, "timing points", "expected {'units': ..., 'values': [...]}"))
@@ -58,6 +65,7 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
     stops: list[dict[str, Any]] = []
     windows: list[dict[str, Any]] = []
     lines: list[str] = []
+    aliases = {"stops": "timing points.values", "windows": "timing points.values"}
 
     def scaled(x: float | None, factor: float) -> float | None:
         return None if x is None else float(x) * factor
@@ -87,11 +95,16 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
                 stops.append({"position_m": pos, **_departure(lo, hi)})
             elif stops and stops[-1]["position_m"] == pos and "earliest_s" in stops[-1]:
                 stops[-1].update(_departure(lo, hi))  # the second stopping point of a station: its departure
+                aliases.update({f"stops[{len(stops) - 1}]{f}": where for f in _DEPARTURE})
+                continue
             else:
                 stops.append({"position_m": pos, "earliest_s": lo, "latest_s": hi})
+            aliases.update({f"stops[{len(stops) - 1}]{f}": where for f in _ARRIVAL + _DEPARTURE})
         elif any(x is not None for x in (lo, hi, vlo, vhi)):  # a passing point; all null: no constraint
             windows.append({"position_m": pos, "earliest_s": lo, "latest_s": hi,
                             "min_speed_kmh": vlo or None, "max_speed_kmh": vhi})
+            aliases.update({f"windows[{len(windows) - 1}]{f}": where for f in
+                            ("", ".position_m", ".earliest_s", ".latest_s", ".min_speed_kmh", ".max_speed_kmh")})
     if lines:
         raise InputError(lines)
     meta = metadata(doc)
@@ -99,7 +112,7 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
             "source": f"TTOBench journey {meta.get('id', path)} on track {meta.get('associated track', '?')} "
                       f"({meta.get('library version', 'version not stated')})",
             "stops": stops, "windows": windows,
-            **({"track": str(meta["associated track"])} if meta.get("associated track") else {})}
+            **({"track": str(meta["associated track"])} if meta.get("associated track") else {})}, aliases
 
 
 def _departure(lo: float | None, hi: float | None) -> dict[str, float | None]:
@@ -109,7 +122,8 @@ def _departure(lo: float | None, hi: float | None) -> dict[str, float | None]:
     return {"departure_earliest_s": lo, "departure_latest_s": hi}
 
 
-def timetable_document_to_schema(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
+def timetable_document_to_schema(doc: Mapping[str, Any], path: Where) -> tuple[dict[str, Any], dict[str, str]]:
+    """(schema dict, field-name aliases for messages) from a TTOBench journey (:func:`ttobench_journey`)."""
     if "timing points" in doc:
         return ttobench_journey(doc, path)
     raise InputError(problem(path, "", "not a TTOBench journey (no 'timing points' field)"))

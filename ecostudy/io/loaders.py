@@ -210,24 +210,31 @@ def track_from_dict(data: Mapping[str, Any], where: str = "track (in code)") -> 
     return track_from_schema(validate(schemas.TrackFile, data, where))
 
 
+def read_timetable(path: Where) -> tuple[schemas.TimetableFile, dict[str, str]]:
+    """(a timetable file, YAML or a TTOBench journey JSON; its fields as the file names them, for
+    messages: :func:`~ecostudy.io.documents.aliased`, empty for YAML)."""
+    data, aliases = read_document(path), dict[str, str]()
+    if Path(path).suffix.lower() == ".json":
+        data, aliases = timetable_document_to_schema(data, path)
+    return validate(schemas.TimetableFile, data, path, aliases), aliases
+
+
 def load_timetable(path: Where) -> schemas.TimetableFile:
     """Read a timetable file (YAML, or a TTOBench journey JSON)."""
-    data = read_document(path)
-    if Path(path).suffix.lower() == ".json":
-        data = timetable_document_to_schema(data, path)
-    return validate(schemas.TimetableFile, data, path)
+    return read_timetable(path)[0]
 
 
 # --------------------------------------------------------------------------- cross-file checks
-def check_stops(track: Track, from_stop: str, to_stop: str, where: Where) -> None:
-    """Both stops must be on the track and distinct."""
+def check_stops(track: Track, from_stop: str, to_stop: str, where: Where,
+                fields: tuple[str, str] = ("from", "to")) -> None:
+    """Both stops must be on the track and distinct (``fields``: how ``where`` names them, ``--from``...)."""
     lines: list[str] = []
-    for field_name, stop in (("from", from_stop), ("to", to_stop)):
+    for field_name, stop in zip(fields, (from_stop, to_stop)):
         if stop not in track.stops:
             lines.append(problem(where, field_name, f"unknown stop '{stop}' (track '{track.name}' has: "
                                  + ", ".join(track.stops) + ")"))
     if not lines and track.stops[from_stop] == track.stops[to_stop]:
-        lines.append(problem(where, "to", "must differ from 'from'"))
+        lines.append(problem(where, fields[1], f"must differ from '{fields[0]}'"))
     if lines:
         raise InputError(lines)
 
@@ -253,12 +260,13 @@ def check_stop_list(track: Track, names: Sequence[str], where: Where, field: str
         raise InputError(lines)
 
 
-def chosen_stops(track: Track, from_stop: str | None, to_stop: str | None, where: Where) -> tuple[str, str]:
+def chosen_stops(track: Track, from_stop: str | None, to_stop: str | None, where: Where,
+                 fields: tuple[str, str] = ("from", "to")) -> tuple[str, str]:
     """(from, to): the stops asked for, the track's first and last where not, checked (:func:`check_stops`)."""
     names = list(track.stops)
     first = names[0] if from_stop is None else from_stop  # '' is a name given (and refused), not "default"
     last = names[-1] if to_stop is None else to_stop
-    check_stops(track, first, last, where)
+    check_stops(track, first, last, where, fields)
     return first, last
 
 
@@ -353,7 +361,7 @@ def load_network_study(study_path: Where) -> NetworkStudy:
 
 
 __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study", "read_train", "read_track",
-           "load_timetable", "check_stops", "check_stop_list"]
+           "load_timetable", "read_timetable", "check_stops", "check_stop_list"]
 
 
 def load_consist(path: Where) -> Consist:

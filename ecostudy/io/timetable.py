@@ -8,13 +8,14 @@ lie on. Times are on the journey clock (0 at the first departure), as TTOBench c
 import math
 from dataclasses import dataclass, replace
 from os import PathLike
-from typing import Sequence, TypeAlias
+from typing import Mapping, Sequence, TypeAlias
 
 from ecostudy.core import units
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.grid import travel_distance
 from ecostudy.core.types import Timing, Track, Window
 from ecostudy.io import schemas
+from ecostudy.io.documents import aliased
 
 Where: TypeAlias = str | PathLike[str]
 Bounds: TypeAlias = tuple[float | None, float | None]  # (earliest, latest) [s], None where open
@@ -25,26 +26,30 @@ POSITION_TOLERANCE = 1.0  # [m] a timetable position within this of a track stop
 CLOCK_TOLERANCE = 1e-6
 
 
-def name_stops(tt: schemas.TimetableFile, track: Track, path: Where) -> tuple[schemas.TimetableFile, Track]:
+def name_stops(tt: schemas.TimetableFile, track: Track, path: Where,
+               aliases: Mapping[str, str] | None = None) -> tuple[schemas.TimetableFile, Track]:
     """(``tt`` with every stop given by position named after the track's stop there, the track).
 
     A position that is no stop of the track becomes one (named ``at_<position>m``), so a journey
     may stop anywhere (TTOBench journeys do): the returned track has it among its stops. Stops that
-    turn back (:func:`turning_back`) are refused.
+    turn back (:func:`turning_back`) are refused, each field named as the file names it (``aliases``:
+    :func:`~ecostudy.io.loaders.read_timetable`).
     """
+    aliases = aliases or {}
     rows: list[schemas.TimetableStop] = []
     lines: list[str] = []
     added: dict[str, float] = {}
     for i, row in enumerate(tt.stops):
         if row.stop is not None:
             if row.stop not in track.stops:
-                lines.append(problem(path, f"stops[{i}].stop", f"'{row.stop}' is not a stop of track '{track.name}' "
+                lines.append(problem(path, aliased(f"stops[{i}].stop", aliases),
+                                     f"'{row.stop}' is not a stop of track '{track.name}' "
                                      f"({', '.join(track.stops)})"))
             rows.append(row)
             continue
         position = row.position_m if row.position_m is not None else float("nan")  # not None: the schema says
         if not 0 <= position <= track.length:
-            lines.append(problem(path, f"stops[{i}].position_m", f"{position:g} m is not on track "
+            lines.append(problem(path, aliased(f"stops[{i}].position_m", aliases), f"{position:g} m is not on track "
                                  f"'{track.name}' (0 to {track.length:g} m)"))
             continue
         near = [n for n, x in {**track.stops, **added}.items() if abs(x - position) <= POSITION_TOLERANCE]
@@ -58,7 +63,7 @@ def name_stops(tt: schemas.TimetableFile, track: Track, path: Where) -> tuple[sc
         track = replace(track, stops=stops)
     back = turning_back(track, [str(row.stop) for row in rows])
     if back is not None:
-        raise InputError(problem(path, "stops", back))
+        raise InputError(problem(path, aliased("stops", aliases), back))
     return tt.model_copy(update={"stops": rows}), track
 
 
@@ -91,15 +96,18 @@ class JourneyPlan:
     windows: tuple[tuple[Window, ...], ...]
 
 
-def journey_plan(tt: schemas.TimetableFile, track: Track, path: Where, dwell: float = 0.0) -> JourneyPlan:
-    """The :class:`JourneyPlan` of a named timetable ``tt``; ``dwell`` [s] where a stop gives none."""
+def journey_plan(tt: schemas.TimetableFile, track: Track, path: Where, dwell: float = 0.0,
+                 aliases: Mapping[str, str] | None = None) -> JourneyPlan:
+    """The :class:`JourneyPlan` of a named timetable ``tt``; ``dwell`` [s] where a stop gives none;
+    a refusal names its field as the file does (``aliases``, as :func:`name_stops`)."""
     names = [str(row.stop) for row in tt.stops]
     lines: list[str] = []
+    aliases = aliases or {}
     if len(names) < 2:
-        lines.append(problem(path, "stops", "need at least two stops"))
+        lines.append(problem(path, aliased("stops", aliases), "need at least two stops"))
     for i, (a, b) in enumerate(zip(names, names[1:])):
         if track.stops[a] == track.stops[b]:
-            lines.append(problem(path, f"stops[{i + 1}]", f"'{b}' is where the journey already is"))
+            lines.append(problem(path, aliased(f"stops[{i + 1}]", aliases), f"'{b}' is where the journey already is"))
     if lines:
         raise InputError(lines)
     first = tt.stops[0]
@@ -123,7 +131,8 @@ def journey_plan(tt: schemas.TimetableFile, track: Track, path: Where, dwell: fl
                 windows[n].append(window_si(w, d))
                 break
         else:
-            lines.append(problem(path, f"windows[{i}].position_m", f"{w.position_m:g} m is not strictly between "
+            lines.append(problem(path, aliased(f"windows[{i}].position_m", aliases),
+                                 f"{w.position_m:g} m is not strictly between "
                                  "two consecutive stops of the journey"))
     if lines:
         raise InputError(lines)

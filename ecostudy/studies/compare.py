@@ -18,7 +18,7 @@ import pandas as pd
 
 from ecostudy.analysis.single import solve_run
 from ecostudy.core.defaults import RUN_POINTS
-from ecostudy.core.errors import EcostudyWarning, InfeasibleError, TooFastError, problem
+from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, TooFastError, problem
 from ecostudy.core.registry import Registry
 from ecostudy.core.grid import make_segment
 from ecostudy.core.simulate import Driven, Trace, worst_overspeed
@@ -41,6 +41,10 @@ ROW = ("strategy", "running_time_s", "traction_energy_kWh", "net_energy_kWh", "s
 GRIP = ("adhesion_use_max",)  # a column of a train with an adhesion limit only (core.simulate.adhesion_use)
 _SCENARIO = ("train", "track", "from", "to", "running_time_s", "supplement", "points")
 _ATO: dict = {}  # the ATO optimum of a scenario, per process: the base of the strategies after it
+# without a running time or a supplement the energy optimum chooses its own time (on the metro a
+# crawl of 22 million s) and every strategy after it would be driven and judged against that
+NO_TIME = ("compare needs a running time or a supplement for its base case (the strategies are driven to it and "
+           "judged by it; objective 'time', a sweep or scenarios give the base case none)")
 
 
 def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_POINTS, study="compare"):
@@ -60,9 +64,12 @@ def compare_cases(train_doc, track_doc, from_stop, to_stop, timing, points=RUN_P
 def check_timing(case, where, field):
     """Refuse, before any strategy is computed, a running time no strategy can keep: under the fastest
     envelope's by more than ``ocp.problem.ENVELOPE_MARGIN``, or over ``core.defaults.SLOWEST`` times
-    it (a crawl, refused by ``solve`` too) (one line naming ``where`` and ``field``)."""
+    it (a crawl, refused by ``solve`` too), and a case with neither a running time nor a supplement
+    (:data:`NO_TIME`) (one line naming ``where`` and ``field``)."""
     asked = case["running_time_s"]
     if asked is None:
+        if case["supplement"] is None:
+            raise InputError(problem(where, field, NO_TIME))
         return
     track, train = _inputs(case)
     prepared = prepare(track, train, case["from"], case["to"], case["points"])
@@ -94,10 +101,21 @@ def _inputs(case):
 
 
 def _ato(case, track, train):
+    if case["running_time_s"] is None and case["supplement"] is None:  # refused by check_timing before this
+        raise InputError(problem(case["study"], "running_time_s", NO_TIME))
     return kept(_ATO, case_key({k: case[k] for k in _SCENARIO}),
                 lambda: solve_run(track, train, case["from"], case["to"],
                                   Timing(running_time=case["running_time_s"], supplement=case["supplement"]),
                                   points=case["points"]))
+
+
+def target_time(case, ato):
+    """The running time [s] the strategies are driven to and every arrival is measured against: the
+    case's own, or its supplement over the all-out time the ATO optimum's solve found; never a time
+    the optimum's NLP arrived at by itself."""
+    if case["running_time_s"] is not None:
+        return float(case["running_time_s"])
+    return ato.facts.all_out_time_s * (1 + case["supplement"])
 
 
 def run_strategy(case):
@@ -113,16 +131,16 @@ def _all_out(case, track, train):
 def _ato_optimum(case, track, train):
     ato = _ato(case, track, train)
     return _stored(Driven("ATO optimum", ato.handle, ato.trace), train, ato.segment, ato.status,
-                   target_s=ato.facts.running_time_s, verified=verified(ato))
+                   target_s=target_time(case, ato), verified=verified(ato))
 
 
 def _after_ato(drive):
     """A strategy driven from the ATO optimum: ``drive(case, train, prepared, ato)`` -> (its driven
     run, columns of its own, a status of its own or None), scored by the simulator against the
-    optimum's running time."""
+    target time (:func:`target_time`, the optimum's running time)."""
     def strategy(case, track, train):
         ato = _ato(case, track, train)
-        target = ato.facts.running_time_s
+        target = target_time(case, ato)
         prepared = prepare(track, train, case["from"], case["to"], case["points"])
         driven, extra, own = drive(case, train, prepared, ato)
         driven = replace(driven, name=case["strategy"])  # its row named as registered
@@ -139,7 +157,7 @@ def _after_ato(drive):
 def heuristic_strategy(rule):
     """A rule of thumb as a strategy: ``rule(prepared case, running time [s]) -> Driven``
     (``heuristics.ecodrive``), driven to the ATO optimum's running time."""
-    return _after_ato(lambda case, train, prepared, ato: (rule(prepared, ato.facts.running_time_s), {}, None))
+    return _after_ato(lambda case, train, prepared, ato: (rule(prepared, target_time(case, ato)), {}, None))
 
 
 def _nearest_levels(case, train, prepared, ato):

@@ -21,6 +21,7 @@ import pandas as pd
 
 from ecostudy.core.errors import InfeasibleError, InputError, problem
 from ecostudy.core.grid import warn_unmodelled
+from ecostudy.core.status import status_word
 from ecostudy.io.documents import read_document
 from ecostudy.io.loaders import load_network_study, validate
 from ecostudy.io.schemas import NetworkStudyFile
@@ -134,14 +135,29 @@ def outcomes(cases, rows):
     return out
 
 
+def saving_reference(done):
+    """(the independent runs' substation energy [kWh] the savings are measured against, or None;
+    why there is none, or None): a saving against independent runs that are not ok (traction left
+    unserved, the buffer broken, a failed run) would read like a result, so there is none."""
+    ind = done.get("independent")
+    if ind is None:
+        return None, None  # not among the study's strategies: no saving column to explain
+    status = ind["totals"]["status"] if "totals" in ind else "failed"
+    if status_word(status) != "ok":
+        return None, (f"saving_vs_independent_pct left empty: the independent run it is measured against is "
+                      f"{status_word(status)} (its status says why)")
+    return ind["totals"]["substation_kWh"], None
+
+
 def network_table(cases, rows):
     """One row per strategy (``network_substation.csv``): the substation's energy and every total
-    of the circuit, the saving against independent driving, ``status``; attrs: the clock, and the
-    strategy of least substation energy among those whose status is ok (every run verified, nothing
-    flagged: a strategy that leaves traction unserved or brings trains within buffer_m may draw
-    least because of it), with its saving."""
+    of the circuit, the saving against independent driving (empty, with a ``note`` and the attr
+    ``saving_note``, where the independent run is not ok: :func:`saving_reference`), ``status``;
+    attrs: the clock, and the strategy of least substation energy among those whose status is ok
+    (every run verified, nothing flagged: a strategy that leaves traction unserved or brings trains
+    within buffer_m may draw least because of it), with its saving."""
     done = outcomes(cases, rows)
-    base = done.get("independent", {}).get("totals", {}).get("substation_kWh")
+    base, why = saving_reference(done)
     table = []
     for name, res in done.items():
         if "failed" in res:
@@ -150,12 +166,16 @@ def network_table(cases, rows):
             continue
         tot = res["totals"]
         table.append({"strategy": name, **tot,
-                      "saving_vs_independent_pct": None if base is None else 100 * (1 - tot["substation_kWh"] / base)})
+                      "saving_vs_independent_pct": None if base is None else 100 * (1 - tot["substation_kWh"] / base),
+                      **({"note": why} if why else {})})
     fl = cases[0]["fleet"]
     verified = [row for row in table if row.get("all_verified") and row.get("substation_kWh") is not None
                 and row.get("status") == "ok"]
     table = pd.DataFrame(table)
-    table.attrs.update(steps_count=fl.steps, dt_s=fl.dt)
+    for column in ("saving_vs_independent_pct", "separation_min_m"):  # None (no reference, no two trains on the line): NaN
+        if column in table:
+            table[column] = pd.to_numeric(table[column])
+    table.attrs.update(steps_count=fl.steps, dt_s=fl.dt, **({"saving_note": why} if why else {}))
     if verified:  # the headline: the ok strategy whose re-simulated runs draw least from the substation
         least = min(verified, key=lambda row: row["substation_kWh"])
         table.attrs.update(least_substation_strategy=least["strategy"], least_substation_kWh=least["substation_kWh"],

@@ -188,7 +188,7 @@ def case_from(study: Optional[Path], track: Optional[Path], train: Optional[Path
             raise InputError(problem("command line", option, f"{path}: {not_a_file(file)}"))
     (trk_doc, trk), (trn_doc, trn) = read_track(track), read_train(train)  # each file once
     check_fits(train, trn, trk)
-    f, t = chosen_stops(trk, from_stop, to_stop, "command line")
+    f, t = chosen_stops(trk, from_stop, to_stop, "command line", ("--from", "--to"))
     return Case(trk, trn, f, t, points, None, (trn_doc, trk_doc))
 
 
