@@ -9,7 +9,7 @@ from typing import Annotated, Any, ClassVar, Literal, Optional, Self, Union
 from pydantic import Field, model_validator
 
 from ecostudy.core.registry import Registry
-from ecostudy.io.schemabase import Name
+from ecostudy.io.schemabase import FileName, Name
 from ecostudy.io.schemabase import unique
 from ecostudy.io.schemas import Strict
 
@@ -55,7 +55,7 @@ class Controller(Strict):
     kind does not read (``USES``) is refused, so a misplaced one cannot pass silently.
     """
 
-    name: Name
+    name: FileName = Field(description="Also a file name part (steps/<name>_draw<i>.csv).")
     kind: str = Field(description="A registered controller kind (``studies.controllers``).")
     settings: ConvexSettings = ConvexSettings()
     rspc: RspcSettings = RspcSettings()

@@ -1,0 +1,41 @@
+"""Closed-loop and batch study inputs that are refused before computing, and what the tables of
+a closed-loop study count: small studies (K 100, one draw, open-loop replays) on the 1 km track."""
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.cli import app
+
+from .conftest import TRACKS, TRAINS, write_yaml
+
+
+def run(*args):
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def refused(result, *fragments):
+    """Exit 2, exactly one error line holding every fragment, no traceback."""
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert len(lines) == 1 and "Traceback" not in result.output, result.output
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+    return lines[0]
+
+
+def loop_study(tmp_path, file="study.yaml", **changes):
+    """A closed-loop study on the 1 km track: one open-loop replay, K 100, one draw."""
+    doc = {"name": "small", "track": str(TRACKS / "yazhemsky2017_advanced_1km.yaml"),
+           "train": str(TRAINS / "yazhemsky2017_commuter.yaml"), "window_s": [0, 200], "points": 100,
+           "controllers": [{"name": "replay", "kind": "open_loop"}], "draws": 1, **changes}
+    return write_yaml(tmp_path / file, doc)
+
+
+@pytest.mark.parametrize("name", ["../../../escape", "a/b", "a\\b", "..", ".hidden", "tab\there"])
+def test_a_controller_name_that_is_no_file_name_part_is_refused(tmp_path, name):
+    """A controller's name is part of steps/<name>_draw<i>.csv: '../../../escape' wrote outside --out."""
+    (tmp_path / "in").mkdir()
+    study = loop_study(tmp_path / "in", controllers=[{"name": "fine", "kind": "open_loop"},
+                                                     {"name": name, "kind": "open_loop"}])
+    refused(run("simulate", study, "--workers", 1, "--no-plot", "--out", tmp_path / "in" / "out"),
+            "controllers[1].name:", "file name")
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["in", "study.yaml"]
