@@ -1,5 +1,6 @@
 """Closed-loop and batch study inputs that are refused before computing, and what the tables of
 a closed-loop study count: small studies (K 100, one draw, open-loop replays) on the 1 km track."""
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
@@ -39,3 +40,23 @@ def test_a_controller_name_that_is_no_file_name_part_is_refused(tmp_path, name):
     refused(run("simulate", study, "--workers", 1, "--no-plot", "--out", tmp_path / "in" / "out"),
             "controllers[1].name:", "file name")
     assert sorted(p.name for p in tmp_path.rglob("*")) == ["in", "study.yaml"]
+
+
+def test_aggregate_counts_the_runs_computed_and_the_missing_apart(tmp_path):
+    """One draw of both replays, then two draws of one (``--only b``): a's second run is missing, not
+    a run (aggregate.csv said a: runs 2, arrived 1, as if one of two runs had not arrived)."""
+    controllers = [{"name": "a", "kind": "open_loop"}, {"name": "b", "kind": "open_loop", "settings": {"time": 10}}]
+    out = tmp_path / "o"
+    first = run("simulate", loop_study(tmp_path, "one.yaml", controllers=controllers), "--workers", 1, "--no-plot",
+                "--out", out)
+    assert first.exit_code in (0, 1) and "missing" not in first.output.splitlines()[0], first.output
+    second = run("simulate", loop_study(tmp_path, "two.yaml", controllers=controllers, draws=2), "--only", "b",
+                 "--workers", 1, "--no-plot", "--out", out)
+    assert second.exit_code == 1, second.output
+    aggregate = pd.read_csv(out / "aggregate.csv").set_index("controller")
+    assert list(aggregate.columns[:4]) == ["runs", "missing", "ok", "arrived"], aggregate.columns
+    assert aggregate.loc["a", ["runs", "missing"]].tolist() == [1, 1], aggregate
+    assert aggregate.loc["b", ["runs", "missing"]].tolist() == [2, 0], aggregate
+    assert aggregate.loc["a", "arrived"] <= 1 and aggregate.loc["b", "arrived"] <= 2, aggregate
+    header = next(line for line in second.output.splitlines() if "controller" in line).split()
+    assert header[:5] == ["controller", "runs", "missing", "ok", "arrived"], header

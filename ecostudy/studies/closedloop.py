@@ -254,7 +254,8 @@ def arrived_rows(group):
 
 
 def aggregate(runs):
-    """Per controller: the number of runs, of runs ok and of runs that arrived, the mean, spread and
+    """Per controller: the number of runs computed (``runs``), of runs not computed yet (``missing``:
+    another ``--only``), of runs ok and of runs that arrived, the mean, spread and
     extremes of the energy and the arrival over the runs that arrived (a trip not made has no energy
     of a trip: NaN where none arrived), of the stop error over every run, and the worst overspeed,
     lateness and solve times."""
@@ -262,9 +263,9 @@ def aggregate(runs):
     for name, group in runs.groupby("controller", sort=False):
         if (group["status"] == "missing").all():  # not run (``--only``): no row of NaNs
             continue
-        came = arrived_rows(group)
-        row = {"controller": name, "runs": len(group), "ok": int((group["status"] == "ok").sum()),
-               "arrived": int(came.sum())}
+        came, missing = arrived_rows(group), int((group["status"] == "missing").sum())
+        row = {"controller": name, "runs": len(group) - missing, "missing": missing,
+               "ok": int((group["status"] == "ok").sum()), "arrived": int(came.sum())}
         for column in (*ARRIVED_ONLY, "stop_error_m"):
             values = pd.to_numeric(group[column], errors="coerce")
             values = values[came] if column in ARRIVED_ONLY else values
