@@ -60,3 +60,21 @@ def test_aggregate_counts_the_runs_computed_and_the_missing_apart(tmp_path):
     assert aggregate.loc["a", "arrived"] <= 1 and aggregate.loc["b", "arrived"] <= 2, aggregate
     header = next(line for line in second.output.splitlines() if "controller" in line).split()
     assert header[:5] == ["controller", "runs", "missing", "ok", "arrived"], header
+
+
+def batch_study(tmp_path, **changes):
+    """A batch study (``ecostudy run``) of the metro run at K 100, supplement 10 %."""
+    doc = {"name": "batch", "track": str(TRACKS / "amsterdam_rokin_centraal.yaml"),
+           "train": str(TRAINS / "amsterdam_metro.yaml"), "supplement_percent": 10, "points": 100,
+           "output": str(tmp_path / "out"), **changes}
+    return write_yaml(tmp_path / "batch.yaml", doc)
+
+
+def test_a_scenario_with_two_timings_is_refused_as_the_study_is(tmp_path):
+    """Scenario 'a' ran at 5 % over the all-out time, its 80 s dropped without a word."""
+    study = batch_study(tmp_path, scenarios=[{"name": "ok", "running_time_s": 80},
+                                             {"name": "a", "running_time_s": 80, "supplement_percent": 5}])
+    refused(run("run", study, "--workers", 1), "scenarios[1].supplement_percent: running_time_s given too")
+    assert not (tmp_path / "out").exists()
+    both = batch_study(tmp_path, running_time_s=80)  # the study's own: the same words
+    refused(run("run", both, "--workers", 1), ": supplement_percent: running_time_s given too")
