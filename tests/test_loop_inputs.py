@@ -78,3 +78,17 @@ def test_a_scenario_with_two_timings_is_refused_as_the_study_is(tmp_path):
     assert not (tmp_path / "out").exists()
     both = batch_study(tmp_path, running_time_s=80)  # the study's own: the same words
     refused(run("run", both, "--workers", 1), ": supplement_percent: running_time_s given too")
+
+
+@pytest.mark.parametrize("settings, fragment", [
+    ({"brake_level_mps2": 1e300}, "controllers[0].settings: brake_level_mps2: 1e+300 m/s^2 is above 5, beyond any train"),
+    ({"brake_level_mps2": 5.5}, "brake_level_mps2: 5.5 m/s^2 is above 5"),
+    ({"time": 0, "energy": 0}, "controllers[0].settings: time, energy: both 0"),
+])
+def test_convex_settings_no_train_can_use_are_refused_before_computing(tmp_path, settings, fragment):
+    """A braking level of 1e300 m/s^2 computed 146 s before 7000 solves gave no plan; both weights 0
+    ran 17.5 m beyond the stop."""
+    study = loop_study(tmp_path, controllers=[{"name": "convex", "kind": "convex", "settings": settings}],
+                       sample_time_s=1.0)
+    refused(run("simulate", study, "--workers", 1, "--no-plot", "--out", tmp_path / "out"), fragment)
+    assert not (tmp_path / "out").exists()

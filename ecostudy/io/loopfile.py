@@ -14,6 +14,11 @@ from ecostudy.io.schemabase import unique
 from ecostudy.io.schemas import Strict
 
 
+# service braking of trains is near 1 m/s^2 and emergency braking with magnetic track brakes below
+# 3 m/s^2: a planned level above 5 is beyond any train (1e300 ran 7000 solves without a plan)
+BRAKE_LEVEL_MAX_MPS2 = 5.0
+
+
 class ConvexSettings(Strict):
     """Weights and buffers of Yazhemsky 2017 eq. 6.10 (Ch.9 values)."""
 
@@ -22,7 +27,17 @@ class ConvexSettings(Strict):
     overspeed: float = Field(0.02, ge=0, description="w_os, on the speed inside the buffer.")
     braking: float = Field(1.0, ge=0, description="w_br, on braking beyond brake_level_mps2.")
     buffer_mps: float = Field(1.0, ge=0, description="B_os: the soft buffer below the speed limit [m/s].")
-    brake_level_mps2: float = Field(0.8, gt=0, description="B_brk: planned braking above it is penalised [m/s^2].")
+    brake_level_mps2: float = Field(0.8, gt=0, description="B_brk: planned braking above it is penalised [m/s^2]; "
+                                    "at most 5 (beyond any train's braking).")
+
+    @model_validator(mode="after")
+    def _usable(self) -> Self:
+        if self.brake_level_mps2 > BRAKE_LEVEL_MAX_MPS2:
+            raise ValueError(f"brake_level_mps2: {self.brake_level_mps2:g} m/s^2 is above {BRAKE_LEVEL_MAX_MPS2:g}, "
+                             "beyond any train's braking (service braking near 1 m/s^2, emergency braking below 3)")
+        if self.time == 0 and self.energy == 0:  # the plan would follow the penalties alone (ran 17.5 m long)
+            raise ValueError("time, energy: both 0: the plan has no time or energy to weigh; give one above 0")
+        return self
 
 
 COMMON = {"name", "kind", "sample_time_s", "das_levels", "delay_samples", "compute_delay"}
