@@ -5,6 +5,8 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
+from ecostudy.core.errors import EcostudyWarning
+from ecostudy.studies.cases import expand
 
 from .conftest import TRACKS, TRAINS, write_yaml
 
@@ -92,3 +94,20 @@ def test_convex_settings_no_train_can_use_are_refused_before_computing(tmp_path,
                        sample_time_s=1.0)
     refused(run("simulate", study, "--workers", 1, "--no-plot", "--out", tmp_path / "out"), fragment)
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("sweep", [{}, None, {"points": None}])
+def test_an_empty_sweep_is_refused_as_an_empty_list_is(tmp_path, sweep):
+    """``sweep: {}`` and ``sweep:`` ran the base case alone, exit 0."""
+    refused(run("run", batch_study(tmp_path, sweep=sweep), "--workers", 1), "sweep: empty")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_scenario_das_no_case_uses_is_warned(tmp_path):
+    """A scenario's ``das: phases`` beside its ``objective: time`` was dropped without a word."""
+    study = batch_study(tmp_path, supplement_percent=None, running_time_s=80,
+                        scenarios=[{"name": "fast", "objective": "time", "das": "phases"}])
+    with pytest.warns(EcostudyWarning) as seen:
+        expand(study)
+    said = [str(w.message) for w in seen]
+    assert any("scenarios[0].das: scenario 'fast': read but not used" in line for line in said), said

@@ -291,6 +291,9 @@ class StudyFile(Strict):
     @model_validator(mode="after")
     def _timing(self) -> Self:
         _unique("scenarios", [sc.name for sc in self.scenarios])
+        if "sweep" in self.model_fields_set and (self.sweep is None or not self.sweep.model_dump(exclude_none=True)):
+            raise ValueError("sweep: empty: give a list of running_time_s, supplement_percent, points or objective, "
+                             "or leave sweep out")  # as an empty list is: not a study of the base case alone
         for i, sc in enumerate(self.scenarios):
             if sc.name == "base":  # the study's own case: two rows of one name, one summarised
                 raise ValueError(f"scenarios[{i}].name: 'base' is the study's own case (the fields above): name "
