@@ -191,7 +191,8 @@ def _trip(case):
     status = driven_run(summary["stop_error_m"], _number(summary["late_s"]), summary["overspeed_max_kmh"],
                         summary.get("adhesion_use_max"), early_s=_number(summary["early_s"]))
     if summary["failures_count"]:  # solves that did not converge: the fallback drove those samples, not the controller
-        status = worst([status, flagged(f"{summary['failures_count']} solves in {summary['samples']} samples gave no "
+        status = worst([status, flagged(f"{summary['failures_count']} solve{'s' * (summary['failures_count'] != 1)} in "
+                                        f"{summary['samples']} sample{'s' * (summary['samples'] != 1)} gave no "
                                         "usable plan in time (the fallback drove them)")])
     status = worst([status, unproven_solves(summary["unproven_solves_count"], summary["samples"],
                                             summary["unproven_solver_status"])])
@@ -220,7 +221,8 @@ def _number(x):
 
 GRIP = "adhesion_use_max"  # a column of a train with an adhesion limit only (core.simulate.adhesion_use)
 COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "early_s", "stop_error_m", "overspeed_max_kmh",
-           "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget_count", "softened_count", "failures_count",
+           "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget_count", "over_time_budget_count", "softened_count",
+           "failures_count",
            "gap_max", "fallback_shifted_plan_count", "fallback_reserve_count", "fallback_full_brake_count",
            "full_brake_before_final_count", "inexact_solves_count", "unproven_solves_count", "unproven_solver_status",
            "power_limit_dropped", "compute_delay_samples",
@@ -273,6 +275,7 @@ def aggregate(runs):
                         for how in ("mean", "std", "min", "max")})
         for column, how in (("overspeed_max_kmh", "max"), ("late_s", "max"), ("solve_mean_ms", "mean"),
                             ("solve_p95_ms", "max"), ("solve_max_ms", "max"), ("over_budget_count", "sum"),
+                            ("over_time_budget_count", "sum"),
                             ("softened_count", "sum"), ("gap_max", "max"), ("fallback_shifted_plan_count", "sum"),
                             ("fallback_reserve_count", "sum"), ("fallback_full_brake_count", "sum"),
                             ("inexact_solves_count", "sum"), ("unproven_solves_count", "sum"),
