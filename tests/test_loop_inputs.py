@@ -2,27 +2,12 @@
 a closed-loop study count: small studies (K 100, one draw, open-loop replays) on the 1 km track."""
 import pandas as pd
 import pytest
-from typer.testing import CliRunner
 
-from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.studies.cases import expand
 
 from .conftest import TRACKS, TRAINS, write_yaml
-
-
-def run(*args):
-    return CliRunner().invoke(app, [str(a) for a in args])
-
-
-def refused(result, *fragments):
-    """Exit 2, exactly one error line holding every fragment, no traceback."""
-    assert result.exit_code == 2, result.output
-    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
-    assert len(lines) == 1 and "Traceback" not in result.output, result.output
-    for fragment in fragments:
-        assert fragment in lines[0], lines[0]
-    return lines[0]
+from .test_bad_input_studies import refused, run
 
 
 def loop_study(tmp_path, file="study.yaml", **changes):
