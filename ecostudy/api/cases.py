@@ -111,7 +111,9 @@ def simulate_folder(study: Path, workers: Optional[int] = None, dask: Optional[s
                              names)
     runs, counts, folder = outcome.runs, outcome.counts, outcome.output
     write_html(folder)
-    lines = [shown(outcome.aggregate, LOOP_COLUMNS, ".4g"), counts_line(counts, "runs"), "outputs " + listed(folder)]
+    table = outcome.aggregate  # with the runs not computed yet beside the runs when some are
+    columns = {**dict(list(LOOP_COLUMNS.items())[:2]), "missing": None, **LOOP_COLUMNS} if counts["missing"] else LOOP_COLUMNS
+    lines = [shown(table, columns, ".4g"), counts_line(counts, "runs"), "outputs " + listed(folder)]
     if counts["missing"]:
         left = runs.loc[runs["status"] == "missing", "controller"].unique()
         lines.append(f"not run yet: {counts['missing']} runs of {', '.join(left)} (run without --only to compute them)")

@@ -28,7 +28,7 @@ STATISTICS = ("min", "max", "mean", "std", "p95", "sum", "worst")  # worst: the 
 DIMENSIONLESS = {
     "count": "a count", "samples": "a count of samples", "iterations": "solver iterations",
     "points": "grid points", "changes": "a count of changes", "runs": "a count of runs", "ok": "a count of runs",
-    "arrived": "a count of runs",
+    "arrived": "a count of runs", "missing": "a count of runs not computed yet",
     "share": "a share, 0 to 1", "shares": "shares, 0 to 1", "ratio": "a ratio", "use": "a share of a limit",
     "factor": "a multiple of the model's value", "handle": "a handle level, -1 to 1", "damage": "Miner's damage sum",
     "draw": "a draw's number", "sample": "a sample's number", "run": "a run's number", "coupler": "a coupler's number",

@@ -9,9 +9,14 @@ from typing import Annotated, Any, ClassVar, Literal, Optional, Self, Union
 from pydantic import Field, model_validator
 
 from ecostudy.core.registry import Registry
-from ecostudy.io.schemabase import Name
+from ecostudy.io.schemabase import FileName, Name
 from ecostudy.io.schemabase import unique
 from ecostudy.io.schemas import Strict
+
+
+# service braking of trains is near 1 m/s^2 and emergency braking with magnetic track brakes below
+# 3 m/s^2: a planned level above 5 is beyond any train (1e300 ran 7000 solves without a plan)
+BRAKE_LEVEL_MAX_MPS2 = 5.0
 
 
 class ConvexSettings(Strict):
@@ -22,7 +27,17 @@ class ConvexSettings(Strict):
     overspeed: float = Field(0.02, ge=0, description="w_os, on the speed inside the buffer.")
     braking: float = Field(1.0, ge=0, description="w_br, on braking beyond brake_level_mps2.")
     buffer_mps: float = Field(1.0, ge=0, description="B_os: the soft buffer below the speed limit [m/s].")
-    brake_level_mps2: float = Field(0.8, gt=0, description="B_brk: planned braking above it is penalised [m/s^2].")
+    brake_level_mps2: float = Field(0.8, gt=0, description="B_brk: planned braking above it is penalised [m/s^2]; "
+                                    "at most 5 (beyond any train's braking).")
+
+    @model_validator(mode="after")
+    def _usable(self) -> Self:
+        if self.brake_level_mps2 > BRAKE_LEVEL_MAX_MPS2:
+            raise ValueError(f"brake_level_mps2: {self.brake_level_mps2:g} m/s^2 is above {BRAKE_LEVEL_MAX_MPS2:g}, "
+                             "beyond any train's braking (service braking near 1 m/s^2, emergency braking below 3)")
+        if self.time == 0 and self.energy == 0:  # the plan would follow the penalties alone (ran 17.5 m long)
+            raise ValueError("time, energy: both 0: the plan has no time or energy to weigh; give one above 0")
+        return self
 
 
 COMMON = {"name", "kind", "sample_time_s", "das_levels", "delay_samples", "compute_delay"}
@@ -55,7 +70,7 @@ class Controller(Strict):
     kind does not read (``USES``) is refused, so a misplaced one cannot pass silently.
     """
 
-    name: Name
+    name: FileName = Field(description="Also a file name part (steps/<name>_draw<i>.csv).")
     kind: str = Field(description="A registered controller kind (``studies.controllers``).")
     settings: ConvexSettings = ConvexSettings()
     rspc: RspcSettings = RspcSettings()

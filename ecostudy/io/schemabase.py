@@ -87,3 +87,21 @@ def _not_blank(value: str) -> str:
 
 Name = typing.Annotated[str, AfterValidator(_not_blank)]
 """A name (of a stop, a scenario, a train of a fleet, a file's subject): text that is not empty."""
+
+
+def _file_name_part(value: str) -> str:
+    """Refuse a name that cannot be part of a file name in the output folder as it is: a path
+    separator, '..', a leading dot or a control character (``../../x`` wrote outside ``--out``,
+    ``a/b`` into a folder of its own)."""
+    if "/" in value or "\\" in value:
+        raise ValueError(f"{value!r}: a path separator ('/' or a backslash) in a name that becomes part of a file name")
+    if ".." in value or value.startswith("."):
+        raise ValueError(f"{value!r}: '..' or a leading '.' in a name that becomes part of a file name")
+    if any(ord(c) < 32 or ord(c) == 127 for c in value):
+        raise ValueError(f"{value!r}: a control character in a name that becomes part of a file name")
+    return value
+
+
+FileName = typing.Annotated[str, AfterValidator(_not_blank), AfterValidator(_file_name_part)]
+"""A :data:`Name` that becomes part of an output file's name (a closed-loop controller's:
+``steps/<name>_draw<i>.csv``): no path separator, no '..', no leading dot, no control character."""

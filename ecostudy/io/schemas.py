@@ -231,6 +231,15 @@ class Sweep(Strict):
         return self
 
 
+def _at_most_one(model: Strict, names: tuple[str, ...], place: str = "") -> None:
+    """Refuse two of the timings ``names`` given together (one of them would be dropped), naming the
+    later at ``place`` (``scenarios[0].``): a study's and a scenario's, the same rule."""
+    given = [name for name in names if getattr(model, name) is not None]
+    if len(given) > 1:
+        raise ValueError(f"{place}{given[-1]}: {' and '.join(given[:-1])} given too; give at most one of "
+                         f"{', '.join(names)}")
+
+
 def _swept_over(scenario: Scenario, sweep: Optional[Sweep]) -> tuple[str, str] | None:
     """(the scenario's field, the sweep's) where a swept value would replace a scenario's own: a
     timing beside a swept timing, its points or objective beside swept ones; else None."""
@@ -282,10 +291,14 @@ class StudyFile(Strict):
     @model_validator(mode="after")
     def _timing(self) -> Self:
         _unique("scenarios", [sc.name for sc in self.scenarios])
+        if "sweep" in self.model_fields_set and (self.sweep is None or not self.sweep.model_dump(exclude_none=True)):
+            raise ValueError("sweep: empty: give a list of running_time_s, supplement_percent, points or objective, "
+                             "or leave sweep out")  # as an empty list is: not a study of the base case alone
         for i, sc in enumerate(self.scenarios):
             if sc.name == "base":  # the study's own case: two rows of one name, one summarised
                 raise ValueError(f"scenarios[{i}].name: 'base' is the study's own case (the fields above): name "
                                  "this scenario otherwise")
+            _at_most_one(sc, ("running_time_s", "supplement_percent"), f"scenarios[{i}].")
             swept = _swept_over(sc, self.sweep)
             if swept:
                 raise ValueError(f"scenarios[{i}].{swept[0]}: the sweep's {swept[1]} replaces it in every case of "
@@ -298,9 +311,7 @@ class StudyFile(Strict):
                              "windows")
         given = [name for name in ("running_time_s", "supplement_percent", "window_s", "timetable")
                  if getattr(self, name) is not None]
-        if len(given) > 1:
-            raise ValueError(f"{given[-1]}: {' and '.join(given[:-1])} given too; give at most one of running_time_s, "
-                             "supplement_percent, window_s, timetable")
+        _at_most_one(self, ("running_time_s", "supplement_percent", "window_s", "timetable"))
         if self.window_s is not None and not 0 <= self.window_s[0] <= self.window_s[1]:
             raise ValueError("window_s: must be [earliest, latest] with 0 <= earliest <= latest")
         if self.objective == "time" and given:  # the fastest run: a running time it would not keep read as kept

@@ -181,7 +181,11 @@ def expand(path, skipped=None, read=None, windows=False, warn=True):
     idle = [name for name, used in (("weights", any(c["objective"] == "mixed" for c in cases)),
                                      ("das_time_limit_s", any(c.get("das") == "minlp" for c in cases)))
             if not used and getattr(s, name) != defaults[name].get_default(call_default_factory=True)]
-    notes = [("objective", line) for line in fastest] + [
+    unused_das = [(f"scenarios[{i}].das", f"scenario '{sc.name}': read but not used: das advises energy-optimal runs "
+                   "and no case of this scenario has objective energy or net_energy")
+                  for i, sc in enumerate(s.scenarios) if sc.das is not None
+                  and not any(c.get("das") for c in cases if c["scenario"] == sc.name)]
+    notes = unused_das + [("objective", line) for line in fastest] + [
         (name, "read but not used: no case " + ("has objective mixed" if name == "weights" else "has das: minlp"))
         for name in idle]
     for field, line in notes if warn else ():

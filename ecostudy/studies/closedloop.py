@@ -191,7 +191,8 @@ def _trip(case):
     status = driven_run(summary["stop_error_m"], _number(summary["late_s"]), summary["overspeed_max_kmh"],
                         summary.get("adhesion_use_max"), early_s=_number(summary["early_s"]))
     if summary["failures_count"]:  # solves that did not converge: the fallback drove those samples, not the controller
-        status = worst([status, flagged(f"{summary['failures_count']} solves in {summary['samples']} samples gave no "
+        status = worst([status, flagged(f"{summary['failures_count']} solve{'s' * (summary['failures_count'] != 1)} in "
+                                        f"{summary['samples']} sample{'s' * (summary['samples'] != 1)} gave no "
                                         "usable plan in time (the fallback drove them)")])
     status = worst([status, unproven_solves(summary["unproven_solves_count"], summary["samples"],
                                             summary["unproven_solver_status"])])
@@ -220,7 +221,8 @@ def _number(x):
 
 GRIP = "adhesion_use_max"  # a column of a train with an adhesion limit only (core.simulate.adhesion_use)
 COLUMNS = ("energy_J_per_kg", "traction_energy_kWh", "arrival_s", "late_s", "early_s", "stop_error_m", "overspeed_max_kmh",
-           "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget_count", "softened_count", "failures_count",
+           "solve_mean_ms", "solve_p95_ms", "solve_max_ms", "over_budget_count", "over_time_budget_count", "softened_count",
+           "failures_count",
            "gap_max", "fallback_shifted_plan_count", "fallback_reserve_count", "fallback_full_brake_count",
            "full_brake_before_final_count", "inexact_solves_count", "unproven_solves_count", "unproven_solver_status",
            "power_limit_dropped", "compute_delay_samples",
@@ -254,7 +256,8 @@ def arrived_rows(group):
 
 
 def aggregate(runs):
-    """Per controller: the number of runs, of runs ok and of runs that arrived, the mean, spread and
+    """Per controller: the number of runs computed (``runs``), of runs not computed yet (``missing``:
+    another ``--only``), of runs ok and of runs that arrived, the mean, spread and
     extremes of the energy and the arrival over the runs that arrived (a trip not made has no energy
     of a trip: NaN where none arrived), of the stop error over every run, and the worst overspeed,
     lateness and solve times."""
@@ -262,9 +265,9 @@ def aggregate(runs):
     for name, group in runs.groupby("controller", sort=False):
         if (group["status"] == "missing").all():  # not run (``--only``): no row of NaNs
             continue
-        came = arrived_rows(group)
-        row = {"controller": name, "runs": len(group), "ok": int((group["status"] == "ok").sum()),
-               "arrived": int(came.sum())}
+        came, missing = arrived_rows(group), int((group["status"] == "missing").sum())
+        row = {"controller": name, "runs": len(group) - missing, "missing": missing,
+               "ok": int((group["status"] == "ok").sum()), "arrived": int(came.sum())}
         for column in (*ARRIVED_ONLY, "stop_error_m"):
             values = pd.to_numeric(group[column], errors="coerce")
             values = values[came] if column in ARRIVED_ONLY else values
@@ -272,6 +275,7 @@ def aggregate(runs):
                         for how in ("mean", "std", "min", "max")})
         for column, how in (("overspeed_max_kmh", "max"), ("late_s", "max"), ("solve_mean_ms", "mean"),
                             ("solve_p95_ms", "max"), ("solve_max_ms", "max"), ("over_budget_count", "sum"),
+                            ("over_time_budget_count", "sum"),
                             ("softened_count", "sum"), ("gap_max", "max"), ("fallback_shifted_plan_count", "sum"),
                             ("fallback_reserve_count", "sum"), ("fallback_full_brake_count", "sum"),
                             ("inexact_solves_count", "sum"), ("unproven_solves_count", "sum"),

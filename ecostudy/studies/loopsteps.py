@@ -44,6 +44,9 @@ def step_columns(result, planner):
     }
 
 
+TIME_BUDGET_ENDS = ("over_budget", "MaxTime")  # a convex solve refused for its time_budget_s
+
+
 def step_counts(planner):
     """Per run: the fallbacks by kind, the steps with a softened row (steps, not solver retries),
     the convex solves above the exactness bound, and full braking before the final approach
@@ -55,6 +58,8 @@ def step_counts(planner):
     gaps = np.array([s.gap for s in steps if s.gap is not None])
     return {**{f"fallback_{k}_count": kinds.count(k) for k in KINDS},
             "softened_steps": sum(1 for s in steps if s.softened),
+            # refused for time_budget_s: over it after the solve, or stopped at it by Clarabel
+            "over_time_budget_count": sum(1 for s in steps if s.status in TIME_BUDGET_ENDS),
             "inexact_solves_count": int(np.sum(gaps > 1e-6)) if gaps.size else 0,
             **unproven_columns(unproven),
             "full_brake_before_final_count": sum(1 for k in kinds if k in ("full_brake", "reserve"))}
