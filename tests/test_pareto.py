@@ -10,10 +10,10 @@ from ecostudy import api
 from ecostudy.cli import app
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train
-from ecostudy.studies.pareto import is_monotone, saving_at, sweep
+from ecostudy.studies.pareto import is_monotone, rises, saving_at, sweep
 from ecostudy.analysis.single import solve_run
 
-from .conftest import assert_folder, TRACKS, TRAINS
+from .conftest import assert_folder, TRACKS, TRAINS, write_yaml
 
 
 @pytest.fixture(scope="module")
@@ -158,3 +158,18 @@ def test_a_saving_not_solved_on_the_front_is_not_printed(tmp_path):
     assert summary["saving_at_5_pct_supplement_pct"] == pytest.approx(table["saving_vs_all_out_pct"][1], abs=1e-3)
     assert summary["saving_at_10_pct_supplement_pct"] is None and saving_at(table, 10.0) is None
     assert "+10 % not on the front" in report.text, report.text
+
+
+def test_a_front_that_reaches_zero_energy_on_a_descent_is_monotone(tmp_path):
+    """1500 m at -40 per mille: from about +30 % the train coasts the whole way and its traction is
+    solver noise around 0 kWh (1e-8, up and down); a relative test read that noise as a rise and
+    flagged a right front. A rise is judged against the front's largest energy, and named."""
+    track = write_yaml(tmp_path / "down.yaml", {
+        "name": "descent", "source": "a test line", "length_m": 1500,
+        "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 1500}],
+        "gradients": [{"position_m": 0, "gradient_permille": -40}], "speed_limits": [{"position_m": 0, "speed_kmh": 60}]})
+    table, _ = sweep(load_track(track), load_train(TRAINS / "regional_alstom.yaml"), "A", "B", count=8,
+                     supplement_max=0.8, points=200)
+    coasting = table["traction_energy_kWh"] < 1e-6
+    assert coasting.sum() >= 2 and is_monotone(table), table[["running_time_s", "traction_energy_kWh"]]
+    assert rises(table.assign(traction_energy_kWh=table["traction_energy_kWh"][::-1].to_numpy()))  # the front reversed

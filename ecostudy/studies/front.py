@@ -24,7 +24,8 @@ from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, run_case
 from ecostudy.studies.cases import case_key, load_checked_study
 from ecostudy.studies.compare import segment_of
 from ecostudy.studies.options import no_windows
-from ecostudy.studies.pareto import das_meta, facts_of, front_supplements, front_table, is_monotone, saving_at
+from ecostudy.studies.pareto import (das_meta, facts_of, front_supplements, front_table, is_monotone, rises,
+                                     saving_at)
 from ecostudy.studies.sizes import check_front
 
 DEFAULT_COUNT, DEFAULT_SUPPLEMENT_MAX = 20, 0.40  # a study file's front: points, largest supplement [-]
@@ -139,7 +140,7 @@ def pareto_table(cases, rows):
              "all_out_time_s": float(table["running_time_s"].iloc[0]),
              "saving_at_5_pct_supplement_pct": saving_at(table[solved], 5.0) if solved.any() else None,
              "saving_at_10_pct_supplement_pct": saving_at(table[solved], 10.0) if solved.any() else None,
-             "monotone": is_monotone(table[solved]), "all_verified": bool(table["verified"].eq(True).all()),
+             "monotone": is_monotone(table[solved]), "rises_s": rises(table[solved]), "all_verified": bool(table["verified"].eq(True).all()),
              "all_optimal": bool((table["solver_status"] == "optimal").all())}
     if case["das"] is not None:
         facts["das"] = das_meta(table)
@@ -164,7 +165,9 @@ def study_time_facts(table):
 
 def front_verdict(table):
     """The front as a whole: flagged when its energy does not fall as the running time grows."""
-    return {} if table.attrs["monotone"] else {"front": flagged("energy does not fall as the running time grows")}
+    where = "; ".join(f"{a:.2f} -> {b:.2f} s" for a, b in table.attrs.get("rises_s", []))
+    return {} if table.attrs["monotone"] else {"front": flagged("energy does not fall as the running time grows"
+                                                                + (f" (it rises {where})" if where else ""))}
 
 
 class FrontPoint(NamedTuple):
