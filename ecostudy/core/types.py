@@ -44,6 +44,11 @@ class Train:
     calibration_reason: str = ""
 
     @property
+    def rotating_mass_factor(self) -> float:
+        """The rotating-mass allowance a train file gives: M / Ms - 1 (the loader's inverse)."""
+        return self.mass / self.static_mass - 1.0
+
+    @property
     def eta_traction(self) -> EfficiencyMap | float:
         """The traction efficiency as the net energy uses it: the map, else the constant."""
         return self.traction_efficiency_map or self.traction_efficiency

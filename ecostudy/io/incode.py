@@ -127,7 +127,7 @@ def train_as_document(train: Train) -> tuple[dict[str, Any], dict[str, Any] | No
     it when loaded): it is returned apart, for the table schema alone."""
     static, mass = train.static_mass, train.mass
     known = isinstance(static, numbers.Real) and math.isfinite(static) and static > 0  # else mass_t says it
-    factor = (mass / static - 1.0 if isinstance(mass, numbers.Real) else mass) if known else 0.0
+    factor = (train.rotating_mass_factor if isinstance(mass, numbers.Real) else mass) if known else 0.0
     regen, regen_table, block = train.regeneration, None, None
     if regen is not None:
         block = {"efficiency": train.regeneration_efficiency, "efficiency_map": _map(train.regeneration_efficiency_map)}

@@ -34,7 +34,7 @@ def calibrated_document(path: str | PathLike[str], train: Train, fitted: Collect
         if data.get("effective_mass_t") is not None:
             data["effective_mass_t"] = round(train.mass / units.TONNE, 6)
         else:
-            data["rotating_mass_factor"] = round(train.mass / train.static_mass - 1.0, 6)
+            data["rotating_mass_factor"] = round(train.rotating_mass_factor, 6)
     if {"davis_a", "davis_b", "davis_c"} & set(fitted):
         a, b, c = (float(x) for x in train.davis)
         data["davis"] = {"a_N": round(a, 4), "b_N_per_mps": round(b, 6), "c_N_per_mps2": round(c, 6)}
