@@ -289,11 +289,17 @@ def test_a_flagged_calibrations_train_flags_every_run_of_it(tmp_path, there):
     rows = summary["not_ok"]
     assert compared.exit_code == 1 and len(rows) == summary["cases"]["total"] and all("train calibrated with status flagged: efficiency not identifiable"
                                                     in row["status"] for row in rows), rows
+    validated = run("validate", tmp_path / "a.csv", "--train", path, "--no-plot", "--out", tmp_path / "v")
+    summary = json.loads((tmp_path / "v" / "summary.json").read_text())
+    assert validated.exit_code == 1 and "train: train calibrated with status flagged: efficiency not identifiable" \
+        in summary["status"], (validated.output, summary["status"])
     doc = yaml.safe_load(path.read_text())
     (tmp_path / "ok.yaml").write_text(yaml.safe_dump({**doc, "calibration": {"status": "ok"}}))
     ok = run("solve", "--track", TRACK, "--train", tmp_path / "ok.yaml", "--from", "West", "--to", "Middle", "--time",
              240, "--points", 60, "--no-plot", "--out", tmp_path / "s2")
     assert ok.exit_code == 0, ok.output
+    validated = run("validate", tmp_path / "a.csv", "--train", tmp_path / "ok.yaml", "--no-plot", "--out", tmp_path / "v2")
+    assert "train calibrated" not in json.loads((tmp_path / "v2" / "summary.json").read_text())["status"]
     (tmp_path / "bad.yaml").write_text(yaml.safe_dump({**doc, "calibration": {"status": "flagged"}}))
     with pytest.raises(InputError, match=r"bad.yaml: calibration: .*a flagged calibration needs its reason"):
         load_train(tmp_path / "bad.yaml")

@@ -257,5 +257,5 @@ def validation_line(table, tolerances: dict) -> str:
     bounds += (f", the stop tolerance of the log, {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits and residuals "
                f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s at the train fitted to the log")
     if not bad:
-        return f"validate ok: every run of {len(table)} within {bounds}"
+        return f"runs replayed: every run of {len(table)} within {bounds}"
     return f"validate flagged: {bad} of {len(table)} runs not within {bounds} (each below)"

@@ -27,7 +27,7 @@ from ecostudy.io.loaders import check_fits, load_track, load_train
 from ecostudy.io.logfile import check_on_track, check_traction_sign, load_log
 from ecostudy.io.logoverlap import overlap
 from ecostudy.io.trainout import calibrated_document, write_train
-from ecostudy.core.status import Status, flagged
+from ecostudy.core.status import Status, calibrated, flagged
 from ecostudy.io.folder import write_summary
 from ecostudy.io.writers import check_output_dir, write_csv
 
@@ -206,6 +206,10 @@ def validate_study(log_path, train_path, track_path, out, energy_tolerance=0.05,
                "tolerances_pct": {"energy": 100 * energy_tolerance, "time": 100 * time_tolerance}}
     statuses = {f"run {r.run}": Status.parse(r.status, r.reason if isinstance(r.reason, str) else "")
                 for r in table.itertuples()}
+    lent = calibrated(train.calibration_reason)  # a train of a flagged calibration: its replays are not ok either
+    if not lent.ok:
+        statuses["train"] = lent
+        summary["reason"] = "; ".join(filter(None, [summary["reason"], f"train: {lent.reason}"]))
     write_summary(out, "validate", statuses, {"validate": "validate.csv"}, figures, **summary)
-    summary["status"] = "flagged" if len(flagged) else "ok"
+    summary["status"] = "flagged" if len(flagged) or not lent.ok else "ok"
     return table, summary
