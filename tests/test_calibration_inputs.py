@@ -86,7 +86,7 @@ def test_a_header_without_its_train_reads_with_the_train_given(tmp_path, there):
     missing = run("validate", tmp_path / "a.csv", "--no-plot", "--out", tmp_path / "o")
     assert missing.exit_code == 2 and "a.csv: header.train: missing: name the train file" in missing.output
     given = run("validate", tmp_path / "a.csv", "--train", TRAIN, "--no-plot", "--out", tmp_path / "o2")
-    assert given.exit_code == 0 and "validate ok" in given.output, given.output
+    assert given.exit_code == 0 and "validate: ok" in given.output, given.output
 
 
 def test_a_log_that_starts_moving_says_what_is_not_replayed(inputs, there):
@@ -100,9 +100,10 @@ def test_a_log_that_starts_moving_says_what_is_not_replayed(inputs, there):
 def test_a_first_sample_within_the_logs_noise_or_resolution_is_at_rest(inputs):
     """A generated log with 0.3 m/s of speed noise (seed 2) reads 0.293 m/s in its first sample, the
     train standing: above 0.25 m/s, the log "started moving" and lost its whole first run (200 s,
-    5100 m) though its header states the noise. Now a first sample within 3 times the stated noise,
-    or within one step of the speed column's last digit (1 km/h read at a stand), is at rest; one
-    beyond both still starts the log moving."""
+    5100 m) though its header states the noise. Now a first sample within 3 times the stated noise
+    (unstated: the noise read off the speeds' second differences, 0.306 m/s here), or within one
+    step of the speed column's last digit (1 km/h read at a stand), is at rest; one beyond both
+    still starts the log moving."""
     track, train = inputs
     frame = generate_log(track, train, ["West", "Middle", "East"], train, seed=2, noise=LogNoise(speed=0.3))[0]
     assert 0.25 < frame["speed_mps"].iloc[0] < 0.3
@@ -110,6 +111,7 @@ def test_a_first_sample_within_the_logs_noise_or_resolution_is_at_rest(inputs):
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no "the log starts moving"
         assert len(prepare(parse_log(text_of(frame, stated), "noisy.csv"), track, train)) == 2
+        assert len(prepare(parse_log(text_of(frame), "unstated.csv"), track, train)) == 2  # noise read off the log
         kmh = frame.assign(speed_mps=(frame["speed_mps"] * 3.6).round()).rename(columns={"speed_mps": "speed_kmh"})
         kmh.loc[0, "speed_kmh"] = 1.0
         assert len(prepare(parse_log(text_of(kmh), "kmh.csv"), track, train)) == 2

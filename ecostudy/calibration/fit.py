@@ -24,7 +24,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from ecostudy.calibration.replay import coefficients, efficiency_samples, prepare
+from ecostudy.calibration.replay import coefficients, efficiency_samples, prepare, speed_noise
 from ecostudy.core.progress import stage, step
 
 # name -> (unit, what it is)
@@ -99,7 +99,7 @@ class Problem:
         if speeds:
             self.sigma["speed"] = float(np.mean(speeds))
         elif second.size > 10:
-            self.sigma["speed"] = max(1.4826 * float(np.median(np.abs(second - np.median(second)))) / np.sqrt(6), 1e-4)
+            self.sigma["speed"] = max(speed_noise(second), 1e-4)
         declared = [log.header.power_sigma_percent for log in logs if log.header.power_sigma_percent]
         ratios = np.concatenate(list(self.traction.values()))
         if declared:

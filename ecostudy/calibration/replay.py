@@ -164,13 +164,21 @@ def standing(log, work):
     return out
 
 
+def speed_noise(second):
+    """The speed sensor's noise [m/s] read off the ``second`` differences of speeds sampled along a
+    smooth motion: their robust spread (1.4826 median absolute deviations) over sqrt 6 (a smooth
+    motion leaves next to nothing there, white noise sigma^2 (1 + 4 + 1))."""
+    return 1.4826 * float(np.median(np.abs(second - np.median(second)))) / np.sqrt(6)
+
+
 def at_rest(log):
     """Below what speed [m/s] the log's first sample is at rest: :data:`STANDING_SPEED`, or the
-    noise the log states (:data:`REST_SIGMAS` times its header's ``speed_sigma_mps``) or its speed
-    column's last digit (a sensor at rest reads one step of it), whichever is more. A first sample
-    above it starts the log moving, and its first run is not replayed (it has no departure)."""
-    stated = log.header.speed_sigma_mps or 0.0
-    return max(STANDING_SPEED, REST_SIGMAS * stated, log.resolution.get("speed", 0.0) * (1.0 + 1e-9))
+    speed noise (:data:`REST_SIGMAS` times its header's ``speed_sigma_mps``, else times
+    :func:`speed_noise` of its speed column) or its speed column's last digit (a sensor at rest reads
+    one step of it), whichever is more. A first sample above it starts the log moving, and its first
+    run is not replayed (it has no departure)."""
+    noise = log.header.speed_sigma_mps or (speed_noise(np.diff(log.v, 2)) if log.v is not None and len(log.v) > 12 else 0.0)
+    return max(STANDING_SPEED, REST_SIGMAS * noise, log.resolution.get("speed", 0.0) * (1.0 + 1e-9))
 
 
 def smoothed(t, v, span=SMOOTHING):
