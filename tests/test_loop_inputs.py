@@ -1,10 +1,13 @@
 """Closed-loop and batch study inputs that are refused before computing, and what the tables of
 a closed-loop study count: small studies (K 100, one draw, open-loop replays) on the 1 km track."""
+import warnings
+
 import pandas as pd
 import pytest
 
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.studies.cases import expand
+from ecostudy.studies.closedloop import expand as expand_loop
 
 from .conftest import TRACKS, TRAINS, write_yaml
 from .test_bad_input_studies import refused, run
@@ -109,3 +112,21 @@ def test_solves_refused_for_the_time_budget_are_counted_apart_from_slow_ones(tmp
     assert row["over_time_budget_count"] == row["failures_count"] > 0 and row["over_budget_count"] == 0, row
     aggregate = pd.read_csv(tmp_path / "out" / "aggregate.csv").iloc[0]
     assert aggregate["over_time_budget_count_sum"] == row["over_time_budget_count"], aggregate
+
+
+def test_a_brake_level_the_trains_brakes_never_reach_is_warned_of(tmp_path):
+    """The commuter train brakes at most 1.0 m/s^2 (its braking envelope's peak over its mass): a
+    convex controller's B_brk of 1.5 (or 1.0) never sees braking beyond it, so its braking weight
+    has no effect; it was read without a word. 0.8 is below and is not warned of; neither is a
+    level with the braking weight 0 (nothing to penalise)."""
+    def study(level, braking=1.0):
+        return loop_study(tmp_path, controllers=[{"name": "c", "kind": "convex", "settings": {
+            "brake_level_mps2": level, "braking": braking}}], output=str(tmp_path / "o"))
+    for level in (1.5, 1.0):
+        with pytest.warns(EcostudyWarning, match=rf"study.yaml: controllers\[0\].settings.brake_level_mps2: {level:g} "
+                          r"m/s\^2 is at or above the strongest braking of the train '.*', 1 m/s\^2"):
+            expand_loop(study(level))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        expand_loop(study(0.8))
+        expand_loop(study(1.5, braking=0.0))

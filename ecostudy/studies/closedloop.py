@@ -54,6 +54,21 @@ def all_out_time(segment, train, points):
     return float(fastest.t[-1]) if fastest.usable else None
 
 
+def warn_inert_brake_levels(path, controllers, train):
+    """Warn of a controller whose ``settings.brake_level_mps2`` (B_brk of Yazhemsky 2017 eq. 6.8) is at
+    or above the braking the train's brakes give at most (its braking envelope's peak over its
+    mass): braking never exceeds it, so the braking weight ``settings.braking`` has no effect."""
+    strongest = train.braking.peak / train.mass
+    for i, spec in enumerate(controllers):
+        level = spec.settings.brake_level_mps2
+        if "settings" in CONTROLLER_KINDS.spec(spec.kind).uses and spec.settings.braking > 0 and level >= strongest:
+            warnings.warn(problem(path, f"controllers[{i}].settings.brake_level_mps2",
+                                  f"{level:g} m/s^2 is at or above the strongest braking of the train "
+                                  f"'{train.name}', {strongest:.3g} m/s^2 (its braking envelope's peak over its "
+                                  "mass): braking is never penalised, settings.braking has no effect"),
+                          EcostudyWarning, stacklevel=2)
+
+
 def expand(path, out=None):
     """(study, output folder, cases); the inputs are validated here, once, the output folder
     (``out``, else the study's own) checked before the all-out run is solved."""
@@ -65,6 +80,7 @@ def expand(path, out=None):
     (train_doc, train), (track_doc, track) = read_train(train_file), read_track(track_file)  # a bad field: as its
     # file names it (an OSRD or TTOBench file's own field, not the schema's)
     check_fits(train_file, train, track)
+    warn_inert_brake_levels(path, s.controllers, train)
     from_stop, to_stop = chosen_stops(track, s.from_stop, s.to_stop, path)
     segment = make_segment(track, train, from_stop, to_stop)
     prepare(track, train, from_stop, to_stop, s.points)  # a train that cannot climb: refused, saying where
