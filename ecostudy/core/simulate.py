@@ -91,6 +91,13 @@ def window_checks(trace: Trace, windows: Sequence[Window], time_tolerance: float
     return out
 
 
+def missed_points(checks: Sequence[dict[str, Any]]) -> list[str]:
+    """The reason of each timing point a run missed (its :func:`window_checks`), naming the point by
+    its distance from the departure stop with the simulated passing time and speed."""
+    return [f"the timing point at {w['distance_m']:g} m is missed ({w['simulated_time_s']:.1f} s, "
+            f"{w['simulated_speed_kmh']:.1f} km/h)" for w in checks if not w["kept"]]
+
+
 KINETIC_FLOOR = 0.1  # share of the top speed's kinetic energy below which a run's traction is no energy scale
 
 

@@ -24,7 +24,7 @@ from ecostudy.analysis.regimes import guess_from_result
 from ecostudy.core.errors import SolverError
 from ecostudy.core.modes import mode_name
 from ecostudy.core.progress import stage
-from ecostudy.core.simulate import Driven, simulate, worst_overspeed
+from ecostudy.core.simulate import Driven, missed_points, simulate, window_checks, worst_overspeed
 from ecostudy.core.status import STOP_TOLERANCE_M, at_stop, driven_run, flagged, solver_part, worst
 from ecostudy.core.units import KMH, to_kmh, to_kwh
 from ecostudy.ocp import phases, session
@@ -170,7 +170,9 @@ def grid_note(gap, points, marginal=None, what="the advice"):
 def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     """The ``das`` block of a DAS method's run: energies and gaps, and its ``status`` as a driven run
     (:func:`~ecostudy.core.status.driven_run`: stop, arrival against the ATO run's time, overspeed
-    over the limits, a train with an adhesion limit its ``adhesion_use_max``), flagged too for each
+    over the limits, a train with an adhesion limit its ``adhesion_use_max``; the timing points of
+    the ATO run, ``result.windows``, each passed in its time and speed bounds as the ATO run's are,
+    :func:`~ecostudy.core.simulate.window_checks`, kept as ``windows``), flagged too for each
     reason in ``flags``; ``solver`` says how the advice was made (e.g. ``optimal, re-simulated``)."""
     row = outcome.row(result.train, result.segment.distance)
     energies = {k: row[k] for k in ("traction_energy_kWh", "net_energy_kWh")}
@@ -178,10 +180,11 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     arrival_error = row["running_time_s"] - result.summary["running_time_s"] if arrived else None
     overspeed = to_kmh(worst_overspeed(result.segment, outcome.trace))
     grip = {} if "adhesion_use_max" not in row else {"adhesion_use_max": row["adhesion_use_max"]}
+    points = window_checks(outcome.trace, result.windows)
     status = worst([driven_run(row["stop_error_m"], arrival_error, overspeed, row.get("adhesion_use_max"),
                                early_s=None if arrival_error is None else -arrival_error,
                                moving_kmh=to_kmh(float(outcome.trace.v[-1]))),
-                    *(flagged(f) for f in flags)])
+                    *(flagged(f) for f in (*missed_points(points), *flags))])
     why = no_gap(result, arrived)
     gap = None if why else _gap(energies, result)
     return {"method": method, **energies, "gap_to_ato_pct": gap,
@@ -191,7 +194,7 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
             "mode_changes": len(advice) - 1, "bound_kWh": None, "status": str(status), "solver": solver,
             "arrival_error_s": arrival_error,
             "stop_error_m": row["stop_error_m"], "overspeed_max_kmh": overspeed,
-            "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v))), **grip, **extra}
+            "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v))), "windows": points, **grip, **extra}
 
 
 def das_round(result):

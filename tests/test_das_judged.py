@@ -1,0 +1,64 @@
+"""Driver advice judged as the ATO run is (real solves): its timing points on the way, no gap
+against an ATO energy that is no energy scale, a study's `das:` on every objective as `solve --das`
+advises it, the mixed objective refused where its weights change nothing, and the MINLP giving an
+ok advice before a cheaper one that is not."""
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from ecostudy.analysis.single import solve_run
+from ecostudy.cli import app
+from ecostudy.core.types import Timing, Window
+from ecostudy.core.units import KMH
+from ecostudy.das.methods import das_run
+
+from .conftest import STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
+
+ROKIN, METRO = TRACKS / "amsterdam_rokin_centraal.yaml", TRAINS / "amsterdam_metro.yaml"
+
+
+def run(*args):
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def study(tmp_path, **fields):
+    doc = {**load_yaml(STUDIES / "default.yaml"), "track": str(ROKIN), "train": str(METRO),
+           "output": str(tmp_path / "out"), **fields}
+    return write_yaml(tmp_path / "s.yaml", doc)
+
+
+def test_rounded_advice_that_passes_a_timing_point_too_fast_is_flagged(tmp_path):
+    """The metro study with a timing point at 1000 m, at most 49.7 km/h, K = 290: the ATO run passes
+    it at 49.70 km/h, the rounded advice at 50.3 km/h (over the 0.5 km/h tolerance) and was `ok`."""
+    path = study(tmp_path, windows=[{"position_m": 1000, "max_speed_kmh": 49.7}])
+    result = run("solve", path, "--points", 290, "--das", "round", "--no-plot", "--out", tmp_path / "o")
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert summary["verification"]["passed"], summary["verification"]  # the ATO run keeps the point
+    point = summary["das"]["windows"][0]
+    assert point["distance_m"] == 1000 and not point["kept"] and point["simulated_speed_kmh"] > 49.7 + 0.5, point
+    assert summary["das"]["status"].startswith("flagged: the timing point at 1000 m is missed ("), summary["das"]
+    assert summary["status"].startswith("flagged: driver advice round: the timing point at 1000 m is missed"), summary
+    assert result.exit_code == 1, result.output
+
+
+def test_phases_advice_is_judged_on_the_run_s_timing_points(amsterdam, metro):
+    """Every method's block judges the advice on the ATO run's timing points (``RunResult.windows``):
+    the phases advice, made without them, passes the point at 57.6 km/h and was `ok`."""
+    ato = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=290,
+                    windows=(Window(1000.0, max_speed=49.7 * KMH),))
+    assert ato.windows == (Window(1000.0, max_speed=49.7 * KMH),) and ato.status.ok, ato
+    block = das_run(ato, "phases").summary
+    (point,) = block["windows"]
+    assert point["distance_m"] == 1000.0
+    assert not point["kept"] and point["simulated_speed_kmh"] > 49.7 + 0.5, point
+    assert block["status"].startswith("flagged: the timing point at 1000 m is missed ("), block["status"]
+
+
+def test_minlp_advice_is_judged_on_the_timing_points(amsterdam, metro):
+    """The MINLP's advice (and each candidate it ranks) is judged on the run's timing points too."""
+    ato = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=150,
+                    windows=(Window(1000.0, max_speed=49.7 * KMH),))
+    block = das_run(ato, "minlp", points=150, time_limit=5).summary
+    (point,) = block["windows"]
+    assert ("the timing point at 1000 m is missed" in block["status"]) == (not point["kept"]), block
