@@ -76,6 +76,16 @@ def test_no_percentage_against_an_ato_run_that_needs_no_traction(tmp_path):
         result.output
 
 
+def test_the_minlp_gives_an_ok_advice_before_a_cheaper_one_that_is_not():
+    """The MINLP's two candidates (the phases start, the pattern found) were ranked by energy alone."""
+    from ecostudy.das.minlp import Candidate, preferred  # here: the choice is new
+    ok = Candidate(6.3, True, "phases start", None, None, 6.2, None)
+    cheaper = Candidate(6.1, False, "MINLP pattern", None, None, 6.0, None)
+    assert preferred([ok, cheaper]) is ok and preferred([cheaper, ok]) is ok
+    assert preferred([ok, ok._replace(kwh=6.2, name="MINLP pattern")]).name == "MINLP pattern"
+    assert preferred([cheaper, cheaper._replace(kwh=6.0, name="phases start")]).name == "phases start"
+
+
 def test_minlp_advice_is_judged_on_the_timing_points(amsterdam, metro):
     """The MINLP's advice (and each candidate it ranks) is judged on the run's timing points too."""
     ato = solve_run(amsterdam, metro, "Rokin", "Centraal", Timing(running_time=76.0), points=150,
