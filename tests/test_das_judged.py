@@ -4,6 +4,7 @@ advises it, the mixed objective refused where its weights change nothing, and th
 ok advice before a cheaper one that is not."""
 import json
 
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
@@ -12,6 +13,7 @@ from ecostudy.cli import app
 from ecostudy.core.types import Timing, Window
 from ecostudy.core.units import KMH
 from ecostudy.das.methods import das_run
+from ecostudy.studies.cases import expand
 
 from .conftest import STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
 
@@ -74,6 +76,20 @@ def test_no_percentage_against_an_ato_run_that_needs_no_traction(tmp_path):
         "is below 10 % of the kinetic energy at its top speed" in das["no_gap"], das["no_gap"]
     assert "% against ATO" not in result.output and "no gap: the ATO run's traction energy" in result.output, \
         result.output
+
+
+def test_a_study_s_das_advises_the_all_out_run_as_solve_does(tmp_path):
+    """`objective: time` with `das:`: `ecostudy run` dropped the advice (`das: minlp` with a warning
+    naming das_time_limit_s: `no case has das: minlp`), `solve --das` advised the all-out run."""
+    minlp = study(tmp_path, objective="time", running_time_s=None, das="minlp", das_time_limit_s=20)
+    _, _, cases = expand(minlp)  # a warning would fail here (the suite's warnings are errors)
+    assert [c.get("das") for c in cases] == ["minlp"] and cases[0]["das_time_limit_s"] == 20, cases
+    phases = study(tmp_path, objective="time", running_time_s=None, das="phases", points=150)
+    result = run("run", phases, "--no-plot")
+    assert result.exit_code == 0, result.output
+    row = pd.read_csv(tmp_path / "out" / "results.csv").iloc[0]
+    assert row["das_method"] == "phases" and row["das_status"] == "ok" and row["das_traction_energy_kWh"] > 0, row
+    assert abs(row["das_arrival_error_s"]) <= 1.0, row
 
 
 def test_the_minlp_gives_an_ok_advice_before_a_cheaper_one_that_is_not():

@@ -168,8 +168,8 @@ def expand(path, skipped=None, read=None, windows=False, warn=True):
                     case[k] is not None for k in ("running_time_s", "supplement_percent", "window_s")):
                 raise InputError(problem(path, "running_time_s", f"scenario '{name}' has no running time, "
                                          "supplement, window or timetable"))
-            das = sc.das or s.das
-            if das is not None and case["objective"] in ("energy", "net_energy"):
+            das = sc.das or s.das  # every objective's run is advised, as `ecostudy solve --das` advises it
+            if das is not None:  # the all-out run's advice: the least energy a driver keeps its time with
                 case.update(das=das, das_time_limit_s=s.das_time_limit_s)  # only then: other keys unchanged
             case["labels"] = {**labels, **{n: (None if case[n] is None and n in timed else v)
                                            for n, v in zip(names, values)}}
@@ -181,11 +181,7 @@ def expand(path, skipped=None, read=None, windows=False, warn=True):
     idle = [name for name, used in (("weights", any(c["objective"] == "mixed" for c in cases)),
                                      ("das_time_limit_s", any(c.get("das") == "minlp" for c in cases)))
             if not used and getattr(s, name) != defaults[name].get_default(call_default_factory=True)]
-    unused_das = [(f"scenarios[{i}].das", f"scenario '{sc.name}': read but not used: das advises energy-optimal runs "
-                   "and no case of this scenario has objective energy or net_energy")
-                  for i, sc in enumerate(s.scenarios) if sc.das is not None
-                  and not any(c.get("das") for c in cases if c["scenario"] == sc.name)]
-    notes = unused_das + [("objective", line) for line in fastest] + [
+    notes = [("objective", line) for line in fastest] + [
         (name, "read but not used: no case " + ("has objective mixed" if name == "weights" else "has das: minlp"))
         for name in idle]
     for field, line in notes if warn else ():
