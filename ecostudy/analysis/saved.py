@@ -15,7 +15,7 @@ from ecostudy.analysis import pontryagin, regimes
 from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.kinematics import net_force_needed
-from ecostudy.core.simulate import verify, within_tolerances
+from ecostudy.core.simulate import missed_points, verify, within_tolerances
 from ecostudy.core.status import (EARLY_TOLERANCE_S, LATE_TOLERANCE_S, OVERSPEED_TOLERANCE_KMH, Status, flagged,
                                    past, worst)
 from ecostudy.core.types import Timing, Window
@@ -83,7 +83,7 @@ def run_inputs(result: Any, study: str | Path | None = None, das: str | None = N
     (track, track_sha), (train, train_sha) = request.track_file, request.train_file
     return {"track": track, "train": train, "track_sha256": track_sha, "train_sha256": train_sha,
             "from": summary["from"], "to": summary["to"], "points": summary["points"],
-            "windows": windows_record(request.windows), "study": None if study is None else str(Path(study).resolve()),
+            "windows": windows_record(result.windows), "study": None if study is None else str(Path(study).resolve()),
             "objective": summary["objective"], "timing": timing_record(request.timing),
             "weights": list(request.weights) if summary["objective"] == "mixed" else None, "das": das}
 
@@ -191,9 +191,7 @@ def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
     errors = Verification.from_dict(block).errors  # the saved status saying these very numbers: not said twice
     reasons = [] if within_tolerances(block) or f"({errors})" in (saved.status.reason or "") else [
         f"re-simulated from the saved profile, outside tolerance ({errors})"]
-    reasons += [f"re-simulated from the saved profile, the timing point at {w['distance_m']:g} m is missed "
-                f"({w['simulated_time_s']:.1f} s, {w['simulated_speed_kmh']:.1f} km/h)"
-                for w in block["windows"] if not w["kept"]]
+    reasons += [f"re-simulated from the saved profile, {missed}" for missed in missed_points(block["windows"])]
     reasons += _missed_time(totals["running_time_s"], asked_times(inputs, saved.summary.get("all_out_time_s"),
                                                                    result_dir / "inputs.json"))
     over = (v - case.limits) / KMH

@@ -12,7 +12,7 @@ from ecostudy.analysis.summary import run_summary
 from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import SolverError
-from ecostudy.core.simulate import verify
+from ecostudy.core.simulate import missed_points, verify, within_tolerances
 from ecostudy.core.status import Judged, Status, calibrated, from_checks, part, solver_check, solver_part, worst
 from ecostudy.core.types import Timing, Train, Trajectory
 from ecostudy.core.units import KWH, number
@@ -45,12 +45,11 @@ AT_ALL_OUT = 1e-6
 class Request(NamedTuple):
     """What a run was solved for, as its ``inputs.json`` records it (``analysis.saved.run_inputs``):
     the files its track and train were read from (``io.documents.source_file``: None for one built
-    in code), the timing, the timing windows on the way and the mixed objective's weights."""
+    in code), the timing and the mixed objective's weights (the timing windows: ``RunResult.windows``)."""
 
     track_file: Optional[tuple[str, str]]
     train_file: Optional[tuple[str, str]]
     timing: Timing
-    windows: tuple
     weights: tuple
 
 
@@ -58,7 +57,8 @@ class Request(NamedTuple):
 class RunResult(Judged):
     """A solved, analysed and verified run: the profile table (display units), the summary
     (``summary.json``), the grid, the handle per interval, the re-simulated trace and the SI
-    :class:`Trajectory`."""
+    :class:`Trajectory` and the timing points on the way it was solved for (``windows``: the
+    case's, :class:`~ecostudy.core.types.Window` s)."""
 
     profile: pd.DataFrame
     summary: dict
@@ -71,6 +71,7 @@ class RunResult(Judged):
     das: Any = None  # das.advice.DasRun when a DAS method was asked for
     trajectory: Optional[Trajectory] = None  # the run in SI arrays: read these, not the display table
     request: Optional[Request] = None  # what :func:`solve_run` was asked (None: a point a front re-solved)
+    windows: tuple = ()  # the timing points on the way (the case's): the ATO run and any advice are judged on them
 
     @property
     def facts(self) -> RunSummary:
@@ -91,8 +92,9 @@ class RunResult(Judged):
         checks = solver_check(solver)
         if ver is None:
             checks["not re-simulated"] = False
-        else:
-            checks[f"re-simulation outside tolerance ({ver.errors})"] = ver.passed
+        else:  # its errors, and each timing point missed by name (``passed`` needs both)
+            checks[f"re-simulation outside tolerance ({ver.errors})"] = within_tolerances(block)
+            checks.update({f"re-simulated, {missed}": False for missed in missed_points(block.get("windows") or ())})
         statuses = [from_checks(checks), calibrated(self.train.calibration_reason)]  # a train not borne out by its logs
         if ALL_OUT_SOLVER in self.summary:  # the all-out run its running time was taken from
             statuses.append(solver_part("the all-out run", self.summary[ALL_OUT_SOLVER]))
@@ -156,7 +158,7 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     result = finish(case, m, outcome, stages, objective, t_allout, verify_result)
     if timing.supplement is not None and outcome is not fastest and not fastest.optimal:  # its time is a supplement over it
         result.summary[ALL_OUT_SOLVER] = fastest.status
-    result.request = Request(source_file(track), source_file(train), timing, tuple(windows), tuple(weights))
+    result.request = Request(source_file(track), source_file(train), timing, tuple(weights))
     return result
 
 
@@ -196,4 +198,4 @@ def finish(case, m, outcome, stages, objective, t_allout=None, verify_result=Tru
     summary = with_all_out(run_summary(case, totals, objective, t_allout, marginal, labels, costate,
                                      outcome, verification, stages), t_allout)
     return RunResult(profile, summary, segment, train, nodes, u, trace, stages,
-                     trajectory=Trajectory(nodes, v, dt, ft, fb))
+                     trajectory=Trajectory(nodes, v, dt, ft, fb), windows=tuple(case.windows))

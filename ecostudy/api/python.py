@@ -26,6 +26,7 @@ from ecostudy.ocp.problem import all_out, check_feasible, check_not_crawling, pr
 from ecostudy.ocp.restart import Replanner
 from ecostudy.report.files import MAX_EXPORT_ROWS, write_run
 from ecostudy.report.html import fragment
+from ecostudy.studies.cases import refuse_mixed_fixed
 from ecostudy.studies.options import OBJECTIVES, check_options, checked_pair
 from ecostudy.studies.pareto import sweep
 
@@ -228,6 +229,8 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
     if objective == "time" and timed:  # it would be ignored
         raise InputError(problem(WHERE, "objective", "'time' finds the fastest run: it takes no running_time, "
                                  "supplement_percent or window"))
+    refuse_mixed_fixed(objective, "running_time" if running_time is not None else
+                       "supplement_percent" if supplement_percent is not None else None, WHERE, "objective")
     if objective in ("energy", "net_energy") and not timed:  # the optimum would crawl for days
         raise InputError(problem(WHERE, "running_time", "give running_time, supplement_percent or window (or "
                                  "objective='time' for the all-out run)"))

@@ -27,6 +27,7 @@ from ecostudy.ocp import session
 from ecostudy.report.drawer import drawing
 from ecostudy.report.files import run_files, write_fixed_step, write_run
 from ecostudy.report.style import output
+from ecostudy.studies.cases import refuse_mixed_fixed
 from ecostudy.studies.check import AGREES, check_result
 from ecostudy.studies.options import (OBJECTIVES, case_from, check_choices, check_options, das_limit, only_one,
                                       output_folder, parse_pair, timing_of)
@@ -122,7 +123,11 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         out_dir = output_folder(out, default_output(f"{Path(track).stem}_{f}_{t}"))
     das_time_limit = das_limit(das, das_time_limit)
     check_solve(grid_nodes(trk, trn, f, t, k), das, das_time_limit, table_points(trn))
-    w = parse_pair(weights, "--weights", nonnegative=True) if weights else w
+    w = parse_pair(weights, "--weights", nonnegative=True) if weights is not None else w  # '' too: refused
+    if obj == "mixed" and (timing.running_time is not None or timing.supplement is not None):
+        where, field = timing_source(study, st, time, supplement, window)
+        refuse_mixed_fixed(obj, field if where == "command line" else f"{where}: {field}",
+                           *(("command line", "--objective") if objective else (str(study), "objective")))
     if weights is not None and obj != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
     if obj == "mixed" and w[0] == 0 and timing == Timing():  # energy alone, no running time: the run crawls

@@ -91,6 +91,13 @@ def window_checks(trace: Trace, windows: Sequence[Window], time_tolerance: float
     return out
 
 
+def missed_points(checks: Sequence[dict[str, Any]]) -> list[str]:
+    """The reason of each timing point a run missed (its :func:`window_checks`), naming the point by
+    its distance from the departure stop with the simulated passing time and speed."""
+    return [f"the timing point at {w['distance_m']:g} m is missed ({w['simulated_time_s']:.1f} s, "
+            f"{w['simulated_speed_kmh']:.1f} km/h)" for w in checks if not w["kept"]]
+
+
 KINETIC_FLOOR = 0.1  # share of the top speed's kinetic energy below which a run's traction is no energy scale
 
 
@@ -100,7 +107,13 @@ def energy_scale(train: Train, trace: Trace, traction_energy: float) -> float:
     that needs little or no traction: a share of its near-zero traction read 100 % and 5517 % off
     for 1.5e-5 kWh). A run that pulls itself to its top speed has at least that kinetic energy in
     traction, so the floor moves no run that needs traction to speak of."""
-    return max(traction_energy, KINETIC_FLOOR * 0.5 * train.mass * float(np.max(trace.v, initial=0.0)) ** 2, 1.0)
+    return max(traction_energy, kinetic_floor(train, float(np.max(trace.v, initial=0.0))), 1.0)
+
+
+def kinetic_floor(train: Train, top_speed: float) -> float:
+    """:data:`KINETIC_FLOOR` of the kinetic energy [J] at ``top_speed`` [m/s]: an energy below it is
+    no scale to take a share of (:func:`energy_scale`; a driver advice's gap to its ATO run)."""
+    return KINETIC_FLOOR * 0.5 * train.mass * top_speed ** 2
 
 
 def verify(segment: Segment, train: Train, nodes: FloatArray, handle: Sequence[float] | FloatArray, running_time: float,

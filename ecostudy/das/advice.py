@@ -24,7 +24,8 @@ from ecostudy.analysis.regimes import guess_from_result
 from ecostudy.core.errors import SolverError
 from ecostudy.core.modes import mode_name
 from ecostudy.core.progress import stage
-from ecostudy.core.simulate import Driven, simulate, worst_overspeed
+from ecostudy.core.simulate import (KINETIC_FLOOR, Driven, kinetic_floor, missed_points, simulate, window_checks,
+                                     worst_overspeed)
 from ecostudy.core.status import STOP_TOLERANCE_M, at_stop, driven_run, flagged, solver_part, worst
 from ecostudy.core.units import KMH, to_kmh, to_kwh
 from ecostudy.ocp import phases, session
@@ -103,21 +104,27 @@ def phase_advice(layout, lengths, v):
     return starts, levels, targets
 
 
-def _gap(energies, result):
-    """Gap [%] on the quantity the ATO run minimised (traction or net energy)."""
+def minimised(result):
+    """(key, kWh) of the quantity the ATO run minimised: its net energy on a net-energy run, else its
+    traction energy; a gap to ATO is on it."""
     key = "net_energy_kWh" if result.summary["objective"] == "net_energy" else "traction_energy_kWh"
-    ato = result.summary[key]
-    return 100 * (energies[key] / ato - 1) if ato > 0 else None
+    return key, result.summary[key]
+
+
+def _gap(energies, result):
+    """Gap [%] on the quantity the ATO run minimised (traction or net energy; :func:`no_gap` says
+    when it is no scale for one)."""
+    key, ato = minimised(result)
+    return 100 * (energies[key] / ato - 1)
 
 
 def _gap_on_time(energies, result, arrival):
     """Gap [%] with a late arrival charged at the ATO run's marginal energy |dE/dT| (a late train
     must make the time up elsewhere); an early arrival earns nothing (the timetable asks for the
     time, not less). This compares DAS methods that miss the timetable by different amounts."""
-    key = "net_energy_kWh" if result.summary["objective"] == "net_energy" else "traction_energy_kWh"
+    key, ato = minimised(result)
     marginal = result.summary.get("marginal_energy_kWh_per_s")
-    ato = result.summary[key]
-    if marginal is None or ato <= 0:
+    if marginal is None:
         return None
     late = max(arrival - result.summary["running_time_s"], 0.0)
     return 100 * ((energies[key] + abs(marginal) * late) / ato - 1)
@@ -125,11 +132,19 @@ def _gap_on_time(energies, result, arrival):
 
 def no_gap(result, arrived):
     """Why the advice has no gap to the ATO run ('' where it has one): a gap is read off an ATO run
-    that is ok and minimised energy (not the all-out run's time), and advice that stopped at its stop."""
+    that is ok and minimised energy (not the all-out run's time), whose energy is a scale to take a
+    share of (at least :func:`~ecostudy.core.simulate.kinetic_floor` at its top speed: a run down a
+    grade that needs no traction has none), and advice that stopped at its stop."""
     if result.summary["objective"] not in ("energy", "net_energy"):
         return f"the ATO run minimised {result.summary['objective']}, not energy"
     if not result.status.ok:
         return "the ATO run is not ok"
+    key, ato = minimised(result)
+    floor = to_kwh(kinetic_floor(result.train, result.summary["top_speed_kmh"] * KMH))
+    if not ato >= floor:
+        what = "net energy" if key == "net_energy_kWh" else "traction energy"
+        return (f"the ATO run's {what} ({ato:.3g} kWh) is below {100 * KINETIC_FLOOR:g} % of the kinetic energy at its "
+                f"top speed ({floor:.3g} kWh): no energy to take a percentage of")
     return "" if arrived else f"the advice stopped more than {STOP_TOLERANCE_M:g} m off its stop"
 
 
@@ -170,7 +185,9 @@ def grid_note(gap, points, marginal=None, what="the advice"):
 def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     """The ``das`` block of a DAS method's run: energies and gaps, and its ``status`` as a driven run
     (:func:`~ecostudy.core.status.driven_run`: stop, arrival against the ATO run's time, overspeed
-    over the limits, a train with an adhesion limit its ``adhesion_use_max``), flagged too for each
+    over the limits, a train with an adhesion limit its ``adhesion_use_max``; the timing points of
+    the ATO run, ``result.windows``, each passed in its time and speed bounds as the ATO run's are,
+    :func:`~ecostudy.core.simulate.window_checks`, kept as ``windows``), flagged too for each
     reason in ``flags``; ``solver`` says how the advice was made (e.g. ``optimal, re-simulated``)."""
     row = outcome.row(result.train, result.segment.distance)
     energies = {k: row[k] for k in ("traction_energy_kWh", "net_energy_kWh")}
@@ -178,10 +195,11 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
     arrival_error = row["running_time_s"] - result.summary["running_time_s"] if arrived else None
     overspeed = to_kmh(worst_overspeed(result.segment, outcome.trace))
     grip = {} if "adhesion_use_max" not in row else {"adhesion_use_max": row["adhesion_use_max"]}
+    points = window_checks(outcome.trace, result.windows)
     status = worst([driven_run(row["stop_error_m"], arrival_error, overspeed, row.get("adhesion_use_max"),
                                early_s=None if arrival_error is None else -arrival_error,
                                moving_kmh=to_kmh(float(outcome.trace.v[-1]))),
-                    *(flagged(f) for f in flags)])
+                    *(flagged(f) for f in (*missed_points(points), *flags))])
     why = no_gap(result, arrived)
     gap = None if why else _gap(energies, result)
     return {"method": method, **energies, "gap_to_ato_pct": gap,
@@ -191,7 +209,7 @@ def summary_block(method, result, outcome, advice, solver, flags=(), **extra):
             "mode_changes": len(advice) - 1, "bound_kWh": None, "status": str(status), "solver": solver,
             "arrival_error_s": arrival_error,
             "stop_error_m": row["stop_error_m"], "overspeed_max_kmh": overspeed,
-            "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v))), **grip, **extra}
+            "top_speed_kmh": float(to_kmh(np.max(outcome.trace.v))), "windows": points, **grip, **extra}
 
 
 def das_round(result):

@@ -1,22 +1,28 @@
 """DAS advice by mode choice: the MINLP of :mod:`ecostudy.ocp.modechoice` started from the
 ``phases`` advice; the pattern it finds is solved again at the full resolution and the better of
-the two, re-simulated as a driver follows it, is the advice."""
+the two, re-simulated as a driver follows it (an ok one before one that is not: :func:`preferred`),
+is the advice."""
+from typing import Any, NamedTuple
+
 import numpy as np
 import pyomo.core as pyo
 
 from ecostudy.core.defaults import DAS_TIME_LIMIT_S
 from ecostudy.core.progress import stage
+from ecostudy.core.status import Status
 from ecostudy.core.units import to_kwh
-from ecostudy.das.advice import DasRun, advice_outcome, nlp_flags, objective_of, refine, solve_phases, summary_block
+from ecostudy.das.advice import (DasRun, advice_outcome, minimised, nlp_flags, objective_of, refine, solve_phases,
+                                 summary_block)
 from ecostudy.ocp import phases
 from ecostudy.ocp.modechoice import search
 
 
 def das_minlp(result, points=None, time_limit=DAS_TIME_LIMIT_S, options=None):
-    """The :class:`DasRun` of the better of ``phases`` and the MINLP's pattern. The search stops at
-    ``time_limit`` [s] (:func:`ecostudy.ocp.modechoice.search`); a search stopped there gives the best
-    pattern it found by then, and the status says it was stopped (``flagged``). The advice's NLP
-    (Ipopt ``options``; the search's own are MindtPy's) not proven optimal is flagged too."""
+    """The :class:`DasRun` of the better of ``phases`` and the MINLP's pattern (:func:`preferred`).
+    The search stops at ``time_limit`` [s] (:func:`ecostudy.ocp.modechoice.search`); a search stopped
+    there gives the best pattern it found by then, and the status says it was stopped (``flagged``).
+    The advice's NLP (Ipopt ``options``; the search's own are MindtPy's) not proven optimal is
+    flagged too."""
     points = points or len(result.nodes)
     objective = objective_of(result)
     # stage 1 of `phases` (the full sequence of every sector) is the MINLP's starting pattern
@@ -35,10 +41,10 @@ def das_minlp(result, points=None, time_limit=DAS_TIME_LIMIT_S, options=None):
     scored = []
     for name, mod, lay, out in candidates:
         advice, sim, plan = advice_outcome("DAS minlp", result, lay, mod)
-        row = sim.row(result.train, result.segment.distance)
-        scored.append((row["net_energy_kWh" if objective == "net_energy" else "traction_energy_kWh"],
-                       name, advice, sim, plan, out))
-    best_kwh, name, advice, sim, plan, out = min(scored, key=lambda r: r[0])
+        own = summary_block("minlp", result, sim, advice, "", nlp_flags(f"the DAS {name} NLP", out))
+        scored.append(Candidate(own[minimised(result)[0]], Status.parse(own["status"]).ok, name, advice, sim, plan,
+                                out))
+    best_kwh, _, name, advice, sim, plan, out = preferred(scored)
     e_ref = found.model.energy_ref
     oa_bound = to_kwh(found.lower * e_ref) if np.isfinite(found.lower) else None
     # a nonconvex OA master can cut off the incumbent itself; such a "bound" is no bound at all, and
@@ -58,6 +64,27 @@ def das_minlp(result, points=None, time_limit=DAS_TIME_LIMIT_S, options=None):
     block["bound_kWh"] = oa_bound if valid else None
     block["gap_pct"] = 100 * (best_kwh - oa_bound) / best_kwh if valid else None
     return DasRun(block, advice, sim)
+
+
+class Candidate(NamedTuple):
+    """An advice the MINLP could give: its energy on the quantity the ATO run minimised [kWh], whether
+    it is ok as driven (stop, time, limits, timing points; its own NLP proven optimal), its name, its
+    advice table, driven run, planned energy and the outcome of its NLP."""
+
+    kwh: float
+    ok: bool
+    name: str
+    advice: Any
+    sim: Any
+    plan: float
+    out: Any
+
+
+def preferred(candidates):
+    """The advice given of the ``candidates`` (:class:`Candidate`): an ok one before any that is not
+    (a cheaper advice that misses its stop, its time or a limit saves what it did not drive), the
+    cheapest among those alike."""
+    return min(candidates, key=lambda c: (not c.ok, c.kwh))
 
 
 def _status(found, name, time_limit):

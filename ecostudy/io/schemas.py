@@ -281,7 +281,7 @@ class StudyFile(Strict):
     weights: Weights = Weights()
     points: int = Field(RUN_POINTS, ge=10, le=100000)
     das: Optional[Literal["round", "phases", "minlp"]] = Field(
-        None, description="Also a DAS run of every energy-optimal case: das_ columns in results.csv.")
+        None, description="Also a DAS run of every case, whatever its objective: das_ columns in results.csv.")
     das_time_limit_s: float = Field(DAS_TIME_LIMIT_S, gt=0, description="Time limit of each MINLP search (das: minlp).")
     output: Optional[str] = None
     windows: list[Window] = Field(default_factory=list, description="Timing points between the stops.")

@@ -168,8 +168,12 @@ def expand(path, skipped=None, read=None, windows=False, warn=True):
                     case[k] is not None for k in ("running_time_s", "supplement_percent", "window_s")):
                 raise InputError(problem(path, "running_time_s", f"scenario '{name}' has no running time, "
                                          "supplement, window or timetable"))
-            das = sc.das or s.das
-            if das is not None and case["objective"] in ("energy", "net_energy"):
+            fixed = [k for k in ("running_time_s", "supplement_percent") if case[k] is not None]
+            refuse_mixed_fixed(case["objective"], fixed and f"{fixed[0]} ({case[fixed[0]]:g})", path,
+                               "sweep.objective" if "objective" in names else
+                               f"scenarios[{s.scenarios.index(sc)}].objective" if sc.objective else "objective")
+            das = sc.das or s.das  # every objective's run is advised, as `ecostudy solve --das` advises it
+            if das is not None:  # the all-out run's advice: the least energy a driver keeps its time with
                 case.update(das=das, das_time_limit_s=s.das_time_limit_s)  # only then: other keys unchanged
             case["labels"] = {**labels, **{n: (None if case[n] is None and n in timed else v)
                                            for n, v in zip(names, values)}}
@@ -181,11 +185,7 @@ def expand(path, skipped=None, read=None, windows=False, warn=True):
     idle = [name for name, used in (("weights", any(c["objective"] == "mixed" for c in cases)),
                                      ("das_time_limit_s", any(c.get("das") == "minlp" for c in cases)))
             if not used and getattr(s, name) != defaults[name].get_default(call_default_factory=True)]
-    unused_das = [(f"scenarios[{i}].das", f"scenario '{sc.name}': read but not used: das advises energy-optimal runs "
-                   "and no case of this scenario has objective energy or net_energy")
-                  for i, sc in enumerate(s.scenarios) if sc.das is not None
-                  and not any(c.get("das") for c in cases if c["scenario"] == sc.name)]
-    notes = unused_das + [("objective", line) for line in fastest] + [
+    notes = [("objective", line) for line in fastest] + [
         (name, "read but not used: no case " + ("has objective mixed" if name == "weights" else "has das: minlp"))
         for name in idle]
     for field, line in notes if warn else ():
@@ -200,6 +200,18 @@ UNUSED = {"solve": ("das", "das_time_limit_s", "scenarios", "sweep"),
           "pareto": ("objective", "weights", "das", "das_time_limit_s", "scenarios", "sweep")}  # its timing: a point
 WHO = {"solve": "`ecostudy solve`", "compare": "`ecostudy compare` (or `run --kind compare`)",
        "pareto": "`ecostudy pareto` (or `run --kind pareto`)"}
+
+
+def refuse_mixed_fixed(objective, fixed, where, field):
+    """Refuse the mixed objective w_t T + w_e E / Ms (Yazhemsky 2017 eq. 4.1a) on a run whose running
+    time ``fixed`` (what fixes it: an option or a field; None: nothing) fixes: its time term is then a
+    constant, so its weights change nothing (the energy optimum), or leave no objective at all (an
+    energy weight of 0). An arrival window, or no running time, leaves the time free to weigh."""
+    if objective == "mixed" and fixed:
+        raise InputError(problem(where, field, f"mixed weighs the running time against energy, but {fixed} fixes the "
+                                 "running time: the weights would change nothing (the energy optimum; with an energy "
+                                 "weight of 0, no optimum at all): use objective energy, or an arrival window or no "
+                                 "running time for the weights to act"))
 
 
 def refuse_windows(path, given, who):
