@@ -79,6 +79,23 @@ def test_no_percentage_against_an_ato_run_that_needs_no_traction(tmp_path):
         result.output
 
 
+def test_compare_on_a_descent_gives_no_gap_to_an_optimum_that_needs_no_traction(tmp_path):
+    """The same descent in `compare`: the ATO optimum pulls nothing, and every strategy's
+    gap_to_optimum_pct read inf. Now the gaps are empty, and the optimum's note says why."""
+    track = write_yaml(tmp_path / "descent.yaml", {
+        "name": "Descent", "source": "test", "length_m": 1500,
+        "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 1500}],
+        "gradients": [{"position_m": 0, "gradient_permille": -40}],
+        "speed_limits": [{"position_m": 0, "speed_kmh": 80}]})
+    run("compare", "--track", track, "--train", TRAINS / "regional_alstom.yaml", "--supplement", 30,
+        "--points", 200, "--no-plot", "--out", tmp_path / "c")
+    table = pd.read_csv(tmp_path / "c" / "compare.csv").set_index("strategy")
+    assert table["gap_to_optimum_pct"].isna().all(), table["gap_to_optimum_pct"]
+    assert table.loc["all-out", "traction_energy_kWh"] > 1.0  # a gap there was inf
+    assert table.loc["ATO optimum", "note"].startswith("no gap to the optimum: the ATO optimum's traction energy ("), \
+        table.loc["ATO optimum", "note"]
+
+
 def test_a_study_s_das_advises_the_all_out_run_as_solve_does(tmp_path):
     """`objective: time` with `das:`: `ecostudy run` dropped the advice (`das: minlp` with a warning
     naming das_time_limit_s: `no case has das: minlp`), `solve --das` advised the all-out run."""

@@ -140,12 +140,23 @@ def no_gap(result, arrived):
     if not result.status.ok:
         return "the ATO run is not ok"
     key, ato = minimised(result)
-    floor = to_kwh(kinetic_floor(result.train, result.summary["top_speed_kmh"] * KMH))
-    if not ato >= floor:
-        what = "net energy" if key == "net_energy_kWh" else "traction energy"
-        return (f"the ATO run's {what} ({ato:.3g} kWh) is below {100 * KINETIC_FLOOR:g} % of the kinetic energy at its "
-                f"top speed ({floor:.3g} kWh): no energy to take a percentage of")
+    small = no_scale(ato, result.train, result.summary["top_speed_kmh"] * KMH,
+                     "the ATO run's " + ("net energy" if key == "net_energy_kWh" else "traction energy"))
+    if small:
+        return small
     return "" if arrived else f"the advice stopped more than {STOP_TOLERANCE_M:g} m off its stop"
+
+
+def no_scale(kwh, train, top_speed, what):
+    """Why an energy ``kwh`` [kWh] of a run of ``train`` whose top speed is ``top_speed`` [m/s] is no
+    scale to take a percentage of ('' when it is one): below
+    :func:`~ecostudy.core.simulate.kinetic_floor` (a run down a grade that needs no traction);
+    ``what`` names the energy."""
+    floor = to_kwh(kinetic_floor(train, top_speed))
+    if kwh >= floor:
+        return ""
+    return (f"{what} ({kwh:.3g} kWh) is below {100 * KINETIC_FLOOR:g} % of the kinetic energy at its top speed "
+            f"({floor:.3g} kWh): no energy to take a percentage of")
 
 
 REGEN_SHORTFALL = 0.05  # the advice's electric brake taking this share less than the ATO run's: said why

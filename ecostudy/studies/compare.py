@@ -25,7 +25,7 @@ from ecostudy.core.simulate import Driven, Trace, worst_overspeed
 from ecostudy.core.status import Status, at_stop, calibrated, driven_run, failed, status_word, worst
 from ecostudy.core.types import Timing
 from ecostudy.core.units import to_kmh
-from ecostudy.das.advice import das_phases, grid_note, nearest_levels
+from ecostudy.das.advice import das_phases, grid_note, nearest_levels, no_scale
 from ecostudy.heuristics import ecodrive
 from ecostudy.io.loaders import track_from_schema, train_from_schema
 from ecostudy.io.schemas import TrackFile, TrainFile
@@ -249,6 +249,13 @@ def compare_table(cases, rows):
     trusted = {c["strategy"]: status_word(st) == "ok" for c, st in zip(cases, statuses)}
     e_allout, e_opt = (by_name[name].get("traction_energy_kWh", np.nan) if trusted[name] else np.nan
                        for name in ("all-out", "ATO optimum"))
+    optimum = by_name["ATO optimum"]
+    small = no_scale(e_opt, _inputs(cases[0])[1], float(np.max(optimum["trace"]["v_mps"])),
+                     "the ATO optimum's traction energy") if np.isfinite(e_opt) else ""
+    if small:  # a run down a grade that needs no traction: a gap to it would read in millions of percent
+        e_opt = np.nan
+        table["note"] = [f"no gap to the optimum: {small}" if name == "ATO optimum" else note
+                         for name, note in zip(table["strategy"], table.get("note", [None] * len(table)))]
     target = next((s["target_s"] for s in by_name.values() if "target_s" in s), np.nan)
     table.insert(4, "saving_vs_all_out_pct", 100 * (1 - table["traction_energy_kWh"] / e_allout))
     table.insert(5, "gap_to_optimum_pct", 100 * (table["traction_energy_kWh"] / e_opt - 1))
