@@ -121,6 +121,7 @@ def test_a_journey_field_ecostudy_does_not_read_is_warned(tmp_path):
 
 
 OSRD = json.loads((DATA / "osrd_rolling_stock.json").read_text())
+UNMODELLED = "startup_acceleration, startup_time, loading_gauge: OSRD fields ecostudy does not model"
 
 
 def osrd(tmp_path, speeds, efforts_kN):
@@ -138,7 +139,7 @@ def test_an_osrd_curve_whose_speeds_fall_is_refused(tmp_path):
     """[0, 20, 10, 30, 40] m/s loaded as [0, 20, 30, 40], the point at 10 m/s dropped, no word."""
     path, mode = osrd(tmp_path, [0, 20, 10, 30, 40], [200, 100, 150, 75, 56])
     with pytest.raises(InputError, match=rf"effort_curves\.modes\.{mode}\.default_curve\.speeds\[2\]: 10 m/s after 20: "
-                                         "the speeds must increase"):
+                                         "the speeds must increase"), pytest.warns(EcostudyWarning, match=UNMODELLED):
         load_train(path)
 
 
@@ -146,8 +147,11 @@ def test_an_osrd_step_is_read_as_osrd_interpolates_it(tmp_path):
     """A step at 10 m/s (200 kN below, 110 kN from it on): the 110 kN point was dropped, so 15 m/s
     allowed 150 kN where OSRD's getMaxEffort gives 105 kN. Now the step is there, and said."""
     path, mode = osrd(tmp_path, [0, 10, 10, 20, 30, 40], [200, 200, 110, 100, 75, 56])
-    with pytest.warns(EcostudyWarning, match=r"speeds\[2\]: a step of the effort at 10 m/s \(200 -> 110 kN\)"):
+    with pytest.warns(EcostudyWarning) as seen:
         train = load_train(path)
+    said = [str(w.message).partition(": ")[2] for w in seen]
+    assert said == [f"{UNMODELLED}: ignored", f"effort_curves.modes.{mode}.default_curve.speeds[2]: a step of the effort "
+                    "at 10 m/s (200 -> 110 kN), read as a change over the 0.01 m/s below it"], said
     force = dict(zip(train.traction.speeds, train.traction.forces))
     assert force[10.0] == 110e3 and force[9.99] == 200e3 and force[20.0] == 100e3
 

@@ -3,6 +3,7 @@ from typing import ClassVar, Literal, Optional, Self
 
 from pydantic import Field, field_validator, model_validator
 
+from ecostudy.core import units
 from ecostudy.core.budget import duration, is_forced
 from ecostudy.io.schemabase import Name, Strict, increasing as _increasing
 
@@ -249,3 +250,12 @@ class TrainFile(Strict):
             raise ValueError("need a braking level (< 0) and a traction level (> 0): advice cannot stop or start "
                              "otherwise")
         return sorted(v)
+
+
+def mass_out_of_range(mass_kg: float) -> str | None:
+    """Why a static mass read from a published file (in kg) is outside :data:`MASS_RANGE_T`, said in
+    kg and t (the file's kg against the schema's tonnes), else None."""
+    low, high = MASS_RANGE_T
+    if low * units.TONNE <= mass_kg <= high * units.TONNE:
+        return None
+    return f"expected {low * units.TONNE:g} to {high * units.TONNE:g} kg ({low:g} to {high:g} t), got {mass_kg:g} kg"
