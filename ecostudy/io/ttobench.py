@@ -12,6 +12,7 @@ means (docs/formats.md has the table):
 - ``rho`` is the rotating-mass allowance (ms-eetc: a value below 1 is a share, 6 % -> 1.06);
 - curves cost Roeckl's resistance (ms-eetc ``TrainModel``); a curvature entry whose radii differ
   is a clothoid, curvature linear in distance (ms-eetc ``sampleClothoid``), resolved on the grid;
+  a radius below 150 m is refused, as ms-eetc refuses it;
 - ``tunnels`` [position, length, cross section] add the train's ``tunnel resistance`` coefficient
   for that cross section to the quadratic resistance inside the tunnel;
 - ``length`` makes speed limits hold until the train's tail has passed them;
@@ -29,6 +30,7 @@ import numpy as np
 
 from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, finite_number, problem
+from ecostudy.core.physics import ROECKL_MIN_RADIUS
 
 Where: TypeAlias = str | PathLike[str]
 
@@ -174,8 +176,12 @@ def ttobench_track(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
               if "gradients" in doc else [[0.0, 0.0]])
     curves = []
     if "curvatures" in doc:
-        for pos, r0, r1 in table(doc, "curvatures", path, [("position", "length"), ("radius at start", "length"),
-                                                          ("radius at end", "length")]):
+        for i, (pos, r0, r1) in enumerate(table(doc, "curvatures", path, [("position", "length"), ("radius at start",
+                                                                          "length"), ("radius at end", "length")])):
+            if min(abs(r0), abs(r1)) < ROECKL_MIN_RADIUS:  # ms-eetc track.py: CURVATURE_THRESHOLD = 1/150
+                raise InputError(problem(path, f"curvatures.values[{i}]", f"a radius of {min(abs(r0), abs(r1)):g} m, "
+                                         f"below {ROECKL_MIN_RADIUS:g} m: ms-eetc refuses the track (its curvature "
+                                         "limit), and Roeckl's formula of curve resistance is not used below it"))
             start = None if math.isinf(r0) else r0
             curves.append({"position_m": pos, "radius_m": start, **({} if r1 == r0 else {"end_radius_m": r1})})
     tunnels = []
