@@ -79,6 +79,21 @@ def test_a_field_inside_a_field_is_warned_by_name(tmp_path):
         load_train(path)
 
 
+def test_a_field_inside_etcs_braking_data_is_warned_by_name(tmp_path):
+    """`T_extra` in `ETCS braking data` was ignored under a warning that said the block was "read and
+    checked" (TTOBench's validator refuses it as redundant)."""
+    curve = {"units": {"velocity": "m/s", "deceleration": "m/s^2"}, "values": [[0, 0.55], [20, 0.5], [40, 0.45]]}
+    path = edited(tmp_path, lambda d: d.update({"ETCS braking data": {
+        "A_brake_emergency": curve, "A_brake_service": curve, **{k: {"unit": "-", "value": 0.9} for k in ("K_dry_rst",
+                                                                                                          "K_wet_rst")},
+        **{k: {"unit": "s", "value": 3} for k in ("T_traction", "T_be", "T_bs", "T_extra")},
+        "v_uncertainty": {"unit": "%", "value": 2.98}}}))
+    with pytest.warns(EcostudyWarning) as seen:
+        load_train(path)
+    assert f"{path}: ETCS braking data.T_extra: a 'ETCS braking data' field ecostudy does not model: ignored" in [
+        str(w.message) for w in seen]
+
+
 def test_a_tunnel_coefficient_in_kg_per_m_is_newtons_per_speed_squared(tmp_path):
     """TTOBench's validator allows kg/m for the tunnel coefficient (N/(m/s)^2 = kg/m)."""
     rows = [[10.0, 6.5], [40.0, 3.2]]
@@ -106,6 +121,23 @@ def journey(tmp_path, change):
     # read as a window the train must leave 520 s early
     (lambda d: d["timing points"]["values"].__setitem__(3, [1300, 175, 185, 0, 0]),
      "timing points.values[3]: position 1300 m before the point above it"),
+    # read as m, s and km/h without a word: a journey in km gave "the train would crawl" (TTOBench requires all five)
+    (lambda d: d["timing points"].pop("units"),
+     "timing points.units: missing field (TTOBench requires the unit of each column: 'position', 'lower time "
+     "constraint', 'upper time constraint', 'lower speed constraint', 'upper speed constraint')"),
+    (lambda d: [d["timing points"]["units"].pop(k) for k in ("position", "upper speed constraint")],
+     "timing points.units.position: missing field (TTOBench requires 'position', 'upper speed constraint')"),
+    # the middle stop of three at 650 m dropped, its window gone, no word (TTOBench's validator refuses it)
+    (lambda d: d["timing points"]["values"].__setitem__(slice(2, 2), [[650, 70, 80, 0, 0], [650, 90, 95, 0, 0]]),
+     "timing points.values[3]: at the position of timing points.values[2]: a third timing point at one position "
+     "(one arrival and one departure per stop)"),
+    # two passing points at 1400 m: both kept as windows of one place (TTOBench's validator refuses it)
+    (lambda d: d["timing points"]["values"].insert(3, [1400, 125, 140, None, 50]),
+     "timing points.values[3]: at the position of timing points.values[2]: two timing points at one position are a "
+     "stop's arrival and departure, both with speed bounds 0"),
+    (lambda d: d["timing points"]["values"].insert(1, [0, 5, 10, 0, 0]),
+     "timing points.values[1]: at the position of timing points.values[0]: two timing points at one position are an "
+     "intermediate stop's arrival and departure, not the journey's ends"),
 ])
 def test_a_journey_is_read_in_seconds_along_the_line(tmp_path, edit, line):
     refused(load_timetable, journey(tmp_path, edit), line)

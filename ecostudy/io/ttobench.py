@@ -139,6 +139,7 @@ def _etcs(doc: Mapping[str, Any], path: Where, fields: Mapping[str, str | None],
     missing = sorted(set(fields) - set(data))
     if missing:
         raise InputError(problem(path, "ETCS braking data", "missing " + ", ".join(missing)))
+    unmodelled(data, fields, path, "'ETCS braking data'", "ETCS braking data")  # TTOBench refuses it as redundant
     service: list[tuple[float, float]] | None = None
     for name, dimension in fields.items():
         if dimension is None:  # a deceleration curve: [velocity, deceleration], both > = 0
