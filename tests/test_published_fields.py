@@ -13,7 +13,7 @@ from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning, InputError
 from ecostudy.io.loaders import load_timetable, load_track, load_train
 
-from .conftest import DATA, STUDIES
+from .conftest import DATA, STUDIES, TRACKS, TRAINS
 
 TRAIN = json.loads((DATA / "ttobench_subway_train.json").read_text())
 
@@ -195,3 +195,45 @@ def test_a_ttobench_tracks_bad_row_is_named_as_the_file_names_it(tmp_path):
     path = tmp_path / "track.json"
     path.write_text(json.dumps(doc))
     refused(load_track, path, "speed limits.values[1].velocity: Input should be greater than 0")
+
+
+def test_a_journeys_passing_point_no_run_keeps_is_named_by_its_row(tmp_path):
+    """It was `timing points.values, timing points.values[0]` (the HEAD St. Gallen-Wil journey:
+    `timing points.values, timing points.values[5]` for its point values[4]): every passing point shared one name."""
+    path = journey(tmp_path, lambda d: d["timing points"]["values"].__setitem__(2, [1400, 20, 30, None, 40]))
+    result = CliRunner().invoke(app, ["journey", "--timetable", str(path), "--track", str(TRACKS / "metro_line_4stops.yaml"),
+                                      "--train", str(TRAINS / "amsterdam_metro.yaml"), "-K", "50", "--no-plot",
+                                      "--out", str(tmp_path / "o")])
+    lines = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert result.exit_code == 2 and lines == [
+        f"error: {path}: timing points.values[0], timing points.values[2]: infeasible: the departure from Noord (not "
+        "before 0 s) and the timing point at 1400 m (not after 30 s) leave 30 s; the fastest run between them takes 98 s"]
+
+
+TRACK = json.loads((DATA / "ttobench_track.json").read_text())
+TUNNELS = {"units": {"position": "m", "length": "m", "cross section": "m^2"}, "values": [[800, 500, 40], [100, 200, 40]]}
+TUNNEL_COEFFICIENTS = {"units": {"cross section": "m^2", "coefficient": "kN/(km/h)^2"}}
+
+
+@pytest.mark.parametrize("load, base, edit, line", [
+    # was "mass: Input should be greater than or equal to 1" (the schema's tonnes, no unit)
+    (load_train, TRAIN, lambda d: d.update({"mass": {"unit": "kg", "value": 122}}),
+     "mass: expected 1000 to 1e+08 kg (1 to 100000 t), got 122 kg"),
+    # was "(top level): tunnel_resistance cross sections must be strictly increasing"
+    (load_train, TRAIN, lambda d: d.update({"tunnel resistance": {**TUNNEL_COEFFICIENTS, "values": [[40, 1e-3], [10, 2e-3]]}}),
+     "tunnel resistance.values[1].cross section: 10 m^2 does not follow tunnel resistance.values[0]'s 40 m^2"),
+    # was "tunnel_resistance[0].c_kN_per_kmh2: ..."
+    (load_train, TRAIN, lambda d: d.update({"tunnel resistance": {**TUNNEL_COEFFICIENTS, "values": [[10, -1e-3]]}}),
+     "tunnel resistance.values[0].coefficient: Input should be greater than or equal to 0"),
+    # was "(top level): tunnels[1] starts inside tunnels[0]"
+    (load_track, TRACK, lambda d: d.update({"tunnels": TUNNELS}),
+     "tunnels.values[1].position: 100 m is before tunnels.values[0] (800 to 1300 m)"),
+    # was "... does not follow speed_limits[1]'s 1450 m"
+    (load_track, TRACK, lambda d: d["speed limits"].update({"values": [[0, 60], [1450, 80], [1440, 60]]}),
+     "speed limits.values[2].position: 1440 m does not follow speed limits.values[1]'s 1450 m"),
+    # was "gradients: the first entry must start at position_m 0"
+    (load_track, TRACK, lambda d: d["gradients"]["values"][0].__setitem__(0, 10),
+     "gradients.values[0].position: the first entry must start at 0 m, not at 10 m"),
+])
+def test_a_ttobench_refusal_names_the_files_field_and_unit(tmp_path, load, base, edit, line):
+    refused(load, edited(tmp_path, edit, base, "file.json"), line)

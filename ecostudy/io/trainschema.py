@@ -225,7 +225,11 @@ class TrainFile(Strict):
     def _curves_and_tunnels(self) -> Self:
         if self.curve_resistance == "roeckl" and self.curve_coefficient_m2ps2:
             raise ValueError("curve_coefficient_m2ps2: goes with curve_resistance 'coefficient', not 'roeckl'")
-        _increasing([t.cross_section_m2 for t in self.tunnel_resistance], "tunnel_resistance cross sections")
+        for i, (a, b) in enumerate(zip(self.tunnel_resistance, self.tunnel_resistance[1:]), start=1):
+            if b.cross_section_m2 <= a.cross_section_m2:
+                raise ValueError(f"tunnel_resistance[{i}].cross_section_m2: {b.cross_section_m2:g} m^2 does not follow "
+                                 f"tunnel_resistance[{i - 1}]'s {a.cross_section_m2:g} m^2 (cross sections strictly "
+                                 "increasing)")
         return self
 
     @model_validator(mode="after")

@@ -31,6 +31,7 @@ import numpy as np
 from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, finite_number, problem
 from ecostudy.core.physics import ROECKL_MIN_RADIUS
+from ecostudy.io.trainschema import mass_out_of_range
 
 Where: TypeAlias = str | PathLike[str]
 
@@ -277,6 +278,8 @@ def ttobench_train(doc: Mapping[str, Any], path: Where,
     service = _etcs(doc, path, ETCS_TRAIN, "train", used=selector == "etcs") if "ETCS braking data" in doc else None
     length = quantity(doc, "length", path, "length", 0.0)
     mass = value["mass"]
+    if (wrong := mass_out_of_range(mass)) is not None:  # said in kg and t: the schema's bound is in tonnes
+        raise InputError(problem(path, "mass", wrong))
     braking = _braking(doc, path, top, f_reg, p_reg, f_pn)
     if selector == "etcs":  # the deceleration curve of the whole train: force = M a, M with the rotating allowance
         if service is None:
@@ -306,4 +309,7 @@ def ttobench_train(doc: Mapping[str, Any], path: Where,
         "traction.max_power_kW": "max traction power", "regenerative_braking.max_force_kN": "max reg braking force",
         "regenerative_braking.max_power_kW": "max reg braking power", "mass_t": "mass", "length_m": "length",
         "max_speed_kmh": "max speed", "traction_efficiency": "efficiency traction",
-        "regenerative_braking.efficiency": "efficiency reg brake"}
+        "regenerative_braking.efficiency": "efficiency reg brake", "tunnel_resistance": "tunnel resistance",
+        "tunnel_resistance[]": "tunnel resistance.values[]",
+        "tunnel_resistance[].cross_section_m2": "tunnel resistance.values[].cross section",
+        "tunnel_resistance[].c_kN_per_kmh2": "tunnel resistance.values[].coefficient"}
