@@ -90,12 +90,13 @@ def test_windows_a_command_does_not_keep_are_refused_naming_the_file(tmp_path):
      "tt.yaml: stops[0].departure_s, stops[1].latest_s: infeasible: the departure from Noord (not before 0 s) and "
      "the arrival at Station (not after 30 s) leave 30 s"),
     ("{stop: Station, arrival_s: 58, dwell_s: 25}", "windows:\n  - {position_m: 500, latest_s: 5}\n",
-     "tt.yaml: stops[0].departure_s, windows: infeasible: the departure from Noord (not before 0 s) and the timing "
-     "point at 500 m (not after 5 s)"),
+     "tt.yaml: stops[0].departure_s, windows[0].latest_s: infeasible: the departure from Noord (not before 0 s) and "
+     "the timing point at 500 m (not after 5 s)"),
     # a dwell between the two times: 98 s of running leave 110 s, 20 s of dwell do not; it said "takes 98 s" alone
     ("{stop: Station, latest_s: 56, dwell_s: 20}", "windows:\n  - {position_m: 1400, earliest_s: 90, latest_s: 110}\n",
-     "tt.yaml: stops[0].departure_s, windows: infeasible: the departure from Noord (not before 0 s) and the timing "
-     "point at 1400 m (not after 110 s) leave 110 s; the fastest run between them takes 98 s and the dwells 20 s"),
+     "tt.yaml: stops[0].departure_s, windows[0].latest_s: infeasible: the departure from Noord (not before 0 s) and "
+     "the timing point at 1400 m (not after 110 s) leave 110 s; the fastest run between them takes 98 s and the dwells "
+     "20 s"),
 ])
 def test_a_timetable_window_no_run_keeps_names_its_fields(tmp_path, stops, windows, fragment):
     """It was "infeasible: the departure from Noord ... and the arrival at Station ..." with neither file nor field."""

@@ -4,6 +4,7 @@ import json
 import numpy as np
 import pytest
 
+from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.analysis.single import solve_run
@@ -85,7 +86,8 @@ def test_tunnels_cost_the_trains_tunnel_coefficient(tmp_path):
 
 
 def test_osrd_rolling_stock():
-    t = load_train(DATA / "osrd_rolling_stock.json")
+    with pytest.warns(EcostudyWarning, match="startup_acceleration, startup_time, loading_gauge: OSRD fields"):
+        t = load_train(DATA / "osrd_rolling_stock.json")
     assert t.mass == pytest.approx(160000 * 1.06)
     assert t.length == 75.0
     assert t.braking.force(10.0) == pytest.approx(t.mass * 0.9)
@@ -134,7 +136,8 @@ def test_a_train_never_runs_faster_than_its_top_speed(tmp_path):
     (tmp_path / "t.json").write_text(json.dumps(doc))
     with pytest.raises(InputError, match="max speed: unknown unit .mph."):
         load_train(tmp_path / "t.json")
-    osrd = load_train(DATA / "osrd_rolling_stock.json")
+    with pytest.warns(EcostudyWarning, match="startup_acceleration, startup_time, loading_gauge: OSRD fields"):
+        osrd = load_train(DATA / "osrd_rolling_stock.json")
     assert osrd.max_speed == pytest.approx(38.88)
 
 

@@ -20,6 +20,7 @@ from .test_published_fields import edited
 
 OSRD = json.loads((DATA / "osrd_rolling_stock.json").read_text())
 CURVE = "effort_curves.modes.1500V.default_curve"
+UNMODELLED = "startup_acceleration, startup_time, loading_gauge: OSRD fields ecostudy does not model"
 
 
 def stock(tmp_path, change):
@@ -83,14 +84,14 @@ def refused_line(tmp_path, path):
     # was "mass: expected a positive number, got None"
     (lambda d: d.pop("mass"), "mass: missing field"),
     # was "mass: Input should be less than or equal to 100000" (tonnes, of a mass in kg)
-    (lambda d: d.update({"mass": 2e9}), "mass: expected 1000 to 1e+08 kg, got 2e+09"),
+    (lambda d: d.update({"mass": 2e9}), "mass: expected 1000 to 1e+08 kg (1 to 100000 t), got 2e+09 kg"),
     # was "davis: a_N must be >= 0"
     (lambda d: d["rolling_resistance"].update({"A": -3.0}),
      "rolling_resistance.A: Input should be greater than or equal to 0"),
     # was "rotating_mass_factor: Input should be greater than or equal to 0"
     (lambda d: d.update({"inertia_coefficient": 0.5}), "inertia_coefficient: expected 1 to 2"),
     # was "gamma: value: expected a positive number, got -0.5"
-    (lambda d: d.update({"gamma": {"type": "CONST", "value": -0.5}}),
+    (lambda d: (d.pop("const_gamma"), d.update({"gamma": {"type": "CONST", "value": -0.5}})),
      "gamma.value: expected a positive number, got -0.5"),
     # was "max_deceleration_mps2: Input should be greater than or equal to 0.1"
     (lambda d: d.update({"const_gamma": 0.01}), "const_gamma: Input should be greater than or equal to 0.1"),
@@ -170,7 +171,7 @@ def test_the_heavyhaul_study_names_a_track_field_in_the_track_file(tmp_path):
 
 def test_the_library_names_an_osrd_field_as_the_file_does(tmp_path):
     path = stock(tmp_path, lambda d: d.update({"comfort_acceleration": 50}))
-    with pytest.raises(InputError) as caught:
+    with pytest.raises(InputError) as caught, pytest.warns(EcostudyWarning, match=UNMODELLED):
         api.load_train(path)
     assert str(caught.value) == f"{path}: comfort_acceleration: Input should be less than or equal to 10"
 
@@ -185,3 +186,68 @@ controllers:
   - {{name: plan, kind: open_loop, settings: {{time: 1, energy: 1}}}}
 draws: 1
 """
+
+
+@pytest.mark.parametrize("key", ["comfort_acceleration", "inertia_coefficient", "length", "max_speed", "name",
+                                 "railjson_version", "startup_time", "startup_acceleration", "loading_gauge"])
+@pytest.mark.parametrize("how", ["absent", "null"])
+def test_a_field_osrd_requires_is_refused_when_missing(tmp_path, key, how):
+    """OSRD's parser (core RJSRollingStockParser.parse) refuses a file without any of these. ecostudy
+    filled them in without a word: no acceleration bound (the commuter train's run 4.8x the energy,
+    ok), an inertia coefficient of 1.0, a length of 0 m, the table's last speed, the file's path."""
+    path = stock(tmp_path, lambda d: d.pop(key) if how == "absent" else d.update({key: None}))
+    said = refused_line(tmp_path, path)
+    assert said == f"error: {path}: {key}: missing field (OSRD's rolling-stock parser requires '{key}')", said
+
+
+def test_every_missing_field_osrd_requires_is_listed(tmp_path):
+    path = stock(tmp_path, lambda d: [d.pop(k) for k in ("comfort_acceleration", "length")])
+    assert refused_line(tmp_path, path) == (f"error: {path}: length: missing field (OSRD's rolling-stock parser "
+                                            "requires 'length', 'comfort_acceleration')")
+
+
+@pytest.mark.parametrize("change, line", [
+    # gamma was used and const_gamma dropped, no word (142.73 s against 152.91 s on the commuter train)
+    (lambda d: d.update({"gamma": {"type": "CONST", "value": 0.5}}),
+     "gamma, const_gamma: both given: one braking deceleration, gamma {type, value} (railjson 3.2) or const_gamma (3.3)"),
+    (lambda d: d.pop("const_gamma"),
+     "gamma: missing field: one braking deceleration, gamma {type, value} (railjson 3.2) or const_gamma (3.3)"),
+    # was read as CONST
+    (lambda d: (d.pop("const_gamma"), d.update({"gamma": {"value": 0.5}})), "gamma.type: missing field (CONST or MAX)"),
+    # was read as no mode at all ("no mode None")
+    (lambda d: d["effort_curves"].pop("default_mode"), "effort_curves.default_mode: missing field"),
+    # a mode's key OSRD does not know: was ignored, no word (editoast: deny_unknown_fields)
+    (lambda d: d["effort_curves"]["modes"]["1500V"].update({"electrical_profiles": {}}),
+     "effort_curves.modes.1500V.electrical_profiles: unknown field `electrical_profiles`, expected one of `curves`, "
+     "`default_curve`, `is_electric`"),
+    (lambda d: d["effort_curves"]["modes"]["1500V"].pop("curves"), "effort_curves.modes.1500V.curves: missing field"),
+    (lambda d: plain_curve(d) and d["effort_curves"]["modes"]["1500V"]["curves"][0]["cond"].update({"temperature": 20}),
+     "effort_curves.modes.1500V.curves[0].cond.temperature: unknown field `temperature`, expected one of `comfort`, "
+     "`electrical_profile_level`, `power_restriction_code`"),
+    # was read as a condition that matches everything
+    (lambda d: plain_curve(d) and d["effort_curves"]["modes"]["1500V"]["curves"][0].pop("cond"),
+     "effort_curves.modes.1500V.curves[0].cond: missing field"),
+    # was read as two steps 0.005 m/s apart: the middle effort held over 0.005 m/s, a reading of nothing
+    (lambda d: curve(d).update({"speeds": [0, 10, 10, 10, 20, 30], "max_efforts": [2e5, 2e5, 1.5e5, 1.1e5, 7.5e4, 5.6e4]}),
+     f"{CURVE}.speeds[3]: 10 m/s given a third time with another effort: one step per speed"),
+])
+def test_osrd_braking_modes_and_conditions_are_read_as_osrd_reads_them(tmp_path, change, line):
+    path = stock(tmp_path, change)
+    assert refused_line(tmp_path, path) == f"error: {path}: {line}"
+
+
+def test_a_condition_without_comfort_matches_every_comfort_as_in_osrd(tmp_path):
+    """OSRD (core RollingStock.EffortCurveConditions.match, first match wins): a null comfort matches
+    any comfort. ecostudy skipped the curve and used the next one, STANDARD, without a word."""
+    def two(d):
+        plain_curve(d)["max_efforts"] = [2.2e5, 2.2e5, 1.1e5, 7.5e4, 5.6e4]
+        d["effort_curves"]["modes"]["1500V"]["curves"].insert(0, {
+            "cond": {"comfort": None, "electrical_profile_level": None, "power_restriction_code": None},
+            "curve": {"speeds": [0, 10, 20, 30, 40], "max_efforts": [1e5, 1e5, 1e5, 7.5e4, 5.6e4]}})
+    path = stock(tmp_path, two)
+    with pytest.warns(EcostudyWarning, match=UNMODELLED):
+        train = load_train(path)
+    assert train.traction.forces[0] == 1e5  # the first curve, which OSRD uses (the second gives 220 kN)
+    with pytest.warns(EcostudyWarning, match=UNMODELLED):
+        cooled = load_train(f"{path}#1500V/AIR_CONDITIONING")
+    assert cooled.traction.forces[0] == 1e5

@@ -11,7 +11,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ecostudy.core.errors import EcostudyWarning, InputError
+from ecostudy.core.errors import EcostudyWarning, InputError, problem
+from ecostudy.core.physics import ROECKL_MIN_RADIUS
 from ecostudy.core.types import Track, Train
 from ecostudy.core.units import FloatArray, Numeric
 
@@ -184,6 +185,24 @@ def too_long(train: Train, track: Track) -> str | None:
     return None
 
 
+def roeckl_out_of_range(train: Train, track: Track) -> str | None:
+    """Why the train's curve resistance cannot be had on the track (a Roeckl train, a curve tighter
+    than :data:`~ecostudy.core.physics.ROECKL_MIN_RADIUS`, at either end of a clothoid), else None:
+    checked with :func:`too_long`, named as it is."""
+    if train.curve_resistance != "roeckl":
+        return None
+    ends = np.append(track.curve_positions[1:], track.length) - track.curve_positions
+    last = track.curvatures + (0.0 if track.curvature_slopes is None else track.curvature_slopes * ends)
+    k = np.maximum(np.abs(track.curvatures), np.abs(last))
+    tight = np.flatnonzero(k * ROECKL_MIN_RADIUS > 1 + 1e-9)
+    if not tight.size:
+        return None
+    i = int(tight[0])
+    return (f"the curve at {track.curve_positions[i]:g} m has a radius of {1 / k[i]:g} m, below the "
+            f"{ROECKL_MIN_RADIUS:g} m from which Roeckl's formula (train '{train.name}''s curve resistance, as ms-eetc "
+            "uses it) is used: ms-eetc refuses such a track, and below 55 m the formula has no value")
+
+
 def too_long_named(train: Train, track: Track) -> str | None:
     """:func:`too_long` naming the train and its field, where its file is not known here."""
     why = too_long(train, track)
@@ -211,6 +230,9 @@ def make_segment(track: Track, train: Train, from_stop: str, to_stop: str) -> Se
     why = too_long_named(train, track)
     if why is not None:
         raise InputError(why)
+    why = roeckl_out_of_range(train, track)
+    if why is not None:
+        raise InputError(problem(f"track '{track.name}'", "curves", why))
     sign = 1.0 if end >= start else -1.0
     gradient = _directed(track.gradient_positions, track.gradients, start, end)
     gradient = Profile(gradient.starts, sign * gradient.values)

@@ -59,18 +59,21 @@ def curve_force(static_mass: Numeric, coefficient: Numeric, curvature: Numeric) 
     return static_mass * coefficient * abs(curvature)
 
 
+ROECKL_MIN_RADIUS = 150.0  # [m] the smallest radius Roeckl's formula is used for: ms-eetc's (track.py CURVATURE_THRESHOLD)
+
+
 def roeckl_force(static_mass: Numeric, curvature: Numeric) -> Numeric:
     """Curve resistance by Roeckl's formula, as ms-eetc uses it (``mseetc/train.py``) [N]:
-    Ms g 0.5 / (r - 30) for radii r >= 300 m, Ms g 0.65 / (r - 55) below, written in curvature
-    k = 1 / r so that straight track (k = 0) costs nothing. numpy only (curvature is data).
-
-    Parameters
-    ----------
-    static_mass : float  Ms [kg].
-    curvature : numeric  1 / radius [1/m], signed by direction.
+    Ms g 0.5 / (r - 30) for radii r >= 300 m, Ms g 0.65 / (r - 55) below, in curvature k = 1 / r (numpy
+    only). ms-eetc pairs the fits with radii the other way round from Roeckl's formula as usually
+    published (650 / (r - 55) N/kN from 300 m, 500 / (r - 30) below): kept, so that a TTOBench case
+    costs what its reference computes. Below :data:`ROECKL_MIN_RADIUS` ms-eetc refuses the track
+    and ecostudy too (:func:`ecostudy.core.grid.roeckl_out_of_range`); here it is a ValueError.
     """
     k = np.abs(np.asarray(curvature, float))
-    share = np.where(k <= 1 / 300, 0.5 * k / (1 - 30 * k), 0.65 * k / (1 - 55 * np.minimum(k, 1 / 60)))
+    if np.any(k * ROECKL_MIN_RADIUS > 1 + 1e-9):
+        raise ValueError(f"Roeckl's formula at a radius of {1 / float(np.max(k)):g} m, below {ROECKL_MIN_RADIUS:g} m")
+    share = np.where(k <= 1 / 300, 0.5 * k / (1 - 30 * k), 0.65 * k / (1 - 55 * k))
     return static_mass * GRAVITY * share
 
 

@@ -250,8 +250,12 @@ def validate(schema: type[Model], data: object, path: str | PathLike[str],
             head, _, rest = msg.partition(": ")
             if not loc and rest and head.split("[")[0].split(".")[0] in _names(schema):  # a check across fields naming its field
                 field, msg = head, rest
-            lines.append(problem(path, aliased(field, aliases or {}), msg))
+            lines.append(problem(path, aliased(field, aliases or {}), _INDEXED.sub(
+                lambda m: aliased(m.group(0), aliases or {}), msg)))  # another row it names, named as the file does
         raise InputError(lines)
+
+
+_INDEXED = re.compile(r"\b[a-z_]+(?:\[\d+\])+(?:\.[a-z_0-9A-Z]+)?")  # a schema field with its index: speed_limits[1]
 
 
 def aliased(field: str, aliases: Mapping[str, str]) -> str:

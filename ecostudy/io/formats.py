@@ -34,6 +34,7 @@ _SPEED_KMH = {"km/h": 1.0, "m/s": 1.0 / units.KMH}  # [km/h] per unit
 
 # a timetable stop's fields read off the row of its arrival, and off the row of its departure
 _ARRIVAL = ("", ".position_m", ".arrival_s", ".earliest_s", ".latest_s")
+_UNITS = ("position", "lower time constraint", "upper time constraint", "lower speed constraint", "upper speed constraint")
 _DEPARTURE = (".departure_s", ".departure_earliest_s", ".departure_latest_s", ".dwell_s")
 
 
@@ -44,21 +45,27 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> tuple[dict[str, Any
     points = doc.get("timing points")
     if not isinstance(points, dict) or "values" not in points:
         raise InputError(problem(path, "timing points", "expected {'units': ..., 'values': [...]}"))
-    given = points.get("units", {})
+    if "units" not in points:  # TTOBench's validate_journeys.py: all five, never a default
+        raise InputError(problem(path, "timing points.units", "missing field (TTOBench requires the unit of each "
+                                 "column: " + ", ".join(f"'{u}'" for u in _UNITS) + ")"))
+    given = points["units"]
     if not isinstance(given, dict) or not all(isinstance(u, str) for u in given.values()):
         raise InputError(problem(path, "timing points.units", "expected a mapping of unit names"))
-    pos_unit, speed_unit = given.get("position", "m"), given.get("lower speed constraint", "km/h")
+    missing = [u for u in _UNITS if u not in given]
+    if missing:
+        raise InputError(problem(path, f"timing points.units.{missing[0]}", "missing field (TTOBench requires "
+                                 + ", ".join(f"'{u}'" for u in missing) + ")"))
+    pos_unit, speed_unit = given["position"], given["lower speed constraint"]
     if pos_unit not in _POSITION:
         raise InputError(problem(path, "timing points.units.position", f"expected m or km, got {pos_unit!r}"))
-    if speed_unit not in _SPEED_KMH or given.get("upper speed constraint", speed_unit) != speed_unit:
+    if speed_unit not in _SPEED_KMH or given["upper speed constraint"] != speed_unit:
         raise InputError(problem(path, "timing points.units", "speed constraints need one unit, km/h or m/s"))
     for key in ("lower time constraint", "upper time constraint"):  # TTOBench's validate_journeys.py: seconds
-        if given.get(key, "s") != "s":
+        if given[key] != "s":
             raise InputError(problem(path, f"timing points.units.{key}", f"expected s, got {given[key]!r}"))
     unmodelled(doc, {"metadata", "timing points", *DESCRIPTIVE}, path, "journey")
     unmodelled(points, {"units", "values"}, path, "'timing points'", "timing points")
-    unmodelled(given, {"position", "lower time constraint", "upper time constraint", "lower speed constraint",
-                       "upper speed constraint"}, path, "'timing points' unit", "timing points.units")
+    unmodelled(given, _UNITS, path, "'timing points' unit", "timing points.units")
     rows = points["values"]
     if not isinstance(rows, list) or len(rows) < 2:
         raise InputError(problem(path, "timing points.values", "need at least two timing points"))
@@ -70,7 +77,7 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> tuple[dict[str, Any
     def scaled(x: float | None, factor: float) -> float | None:
         return None if x is None else float(x) * factor
 
-    last = -math.inf  # the position of the point above [m]
+    last, before, was_stop = -math.inf, -math.inf, False  # the position of the point above, of the one above it [m]
     for i, row in enumerate(rows):
         where = f"timing points.values[{i}]"
         if not isinstance(row, list) or len(row) != 5:
@@ -85,10 +92,16 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> tuple[dict[str, Any
             lines.append(problem(path, where, f"position {row[0]:g} {pos_unit} before the point above it: the "
                                  "timing points go along the line"))
             continue
-        last = pos
         lo, hi = scaled(row[1], 1.0), scaled(row[2], 1.0)
         vlo, vhi = scaled(row[3], _SPEED_KMH[speed_unit]), scaled(row[4], _SPEED_KMH[speed_unit])
-        if i == 0 or i == len(rows) - 1 or (vlo == 0 and vhi == 0):  # a stopping point
+        stopping = vlo == 0 and vhi == 0
+        if pos == last:  # TTOBench's validate_journeys.py: only an intermediate stop's arrival and departure
+            shared = _shared(i, len(rows), pos == before, stopping and was_stop)
+            if shared:
+                lines.append(problem(path, where, f"at the position of timing points.values[{i - 1}]: {shared}"))
+                continue
+        last, before, was_stop = pos, last, stopping
+        if i == 0 or i == len(rows) - 1 or stopping:  # a stopping point
             if vlo != 0 or vhi != 0:
                 lines.append(problem(path, where, "the departure and the arrival need both speed bounds 0"))
             if i == 0:
@@ -113,6 +126,19 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> tuple[dict[str, Any
                       f"({meta.get('library version', 'version not stated')})",
             "stops": stops, "windows": windows,
             **({"track": str(meta["associated track"])} if meta.get("associated track") else {})}, aliases
+
+
+def _shared(i: int, rows: int, third: bool, stops: bool) -> str | None:
+    """Why row ``i`` of ``rows`` may not share its position with the row above (``third``: that one
+    shares it with the row above it; ``stops``: both are stopping points), as TTOBench's validator
+    refuses it, else None."""
+    if i == 1 or i == rows - 1:
+        return "two timing points at one position are an intermediate stop's arrival and departure, not the journey's ends"
+    if third:
+        return "a third timing point at one position (one arrival and one departure per stop)"
+    if not stops:
+        return "two timing points at one position are a stop's arrival and departure, both with speed bounds 0"
+    return None
 
 
 def _departure(lo: float | None, hi: float | None) -> dict[str, float | None]:

@@ -14,7 +14,7 @@ from ecostudy.core import units
 from ecostudy.core.adhesion import TOP_SPEED, Adhesion, capped_envelopes
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
-from ecostudy.core.grid import too_long
+from ecostudy.core.grid import roeckl_out_of_range, too_long
 from ecostudy.core.physics import EfficiencyMap, Envelope, force_power_fit, table_width
 from ecostudy.core.types import Consist, Supply, Timing, Track, Train, Window
 from ecostudy.io import schemas
@@ -26,7 +26,7 @@ from ecostudy.io.timetable import name_stops, off_clock, segment_timing, turning
 from ecostudy.io.ttobench import TRACK_ALIASES
 from ecostudy.io.writers import default_output
 from ecostudy.io.documents import (Where, check_path, given, named_file, read_document as read_document,  # re-exported
-                                   read_from, split_selector, validate as validate)
+                                   read_from, source_file, split_selector, validate as validate)
 
 
 @dataclass(frozen=True)
@@ -181,12 +181,14 @@ def read_track(path: Where) -> tuple[dict[str, Any], Track]:
 
 
 def check_fits(path: Where, train: Train, track: Track, field: str | None = None) -> None:
-    """Refuse a train longer than its track, naming the train's file and its length field (``field``:
-    the length's own where a file gives it otherwise, ``length`` in TTOBench and OSRD files)."""
+    """Refuse a train longer than its track, naming the train's file and its length field (``field``: the length's
+    own where a file names it otherwise), and a Roeckl train on too tight a curve, naming the track's file."""
     why = too_long(train, track)
     if why is not None:
         file = split_selector(path)[0]
         raise InputError(problem(file, field or ("length" if Path(file).suffix.lower() == ".json" else "length_m"), why))
+    if (why := roeckl_out_of_range(train, track)) is not None:
+        raise InputError(problem((source_file(track) or (f"track '{track.name}'",))[0], "curves", why))
 
 
 def load_train(path: Where) -> Train:

@@ -1,12 +1,18 @@
 """OSRD rolling stock (railjson, OpenRailAssociation/osrd; the realistic files of its
 ``tests/data/rolling_stocks/realistic/``) read with OSRD's meaning of each field.
 
+- Every field OSRD's parser requires (core ``RJSRollingStockParser.parse``: :data:`REQUIRED`, and a
+  braking deceleration, ``gamma`` of railjson 3.2 or ``const_gamma`` of 3.3) is refused when it is
+  missing or null, naming it: none is filled in. Both braking fields at once are refused.
 - ``effort_curves.modes[mode]``: the default mode, or the one chosen by ``file.json#MODE`` (and
-  ``#MODE/COMFORT``, default comfort STANDARD); the curve whose condition is that comfort with no
-  electrical profile level and no power restriction, else the mode's ``default_curve``. Speeds
-  m/s, efforts N. The train never runs faster than its table's last speed (``max_speed`` is lowered
-  to it, with a warning when the table stops short of ``max_speed``). Every curve of every mode is
-  checked as OSRD checks it (equal lengths, 2 points or more, nothing negative), used or not.
+  ``#MODE/COMFORT``, default comfort STANDARD); OSRD's choice (core ``RollingStock.
+  findTractiveEffortCurve``, ``EffortCurveConditions.match``): the first curve whose condition has no
+  electrical profile level and no power restriction (ecostudy models neither) and whose comfort is
+  that comfort or null (any comfort), else the mode's ``default_curve``. Speeds m/s, efforts N. The
+  train never runs faster than its table's last speed (``max_speed`` is lowered to it, with a
+  warning when the table stops short of ``max_speed``). Every curve of every mode is checked as OSRD
+  checks it (equal lengths, 2 points or more, nothing negative), used or not; a mode or a condition
+  with a key OSRD does not know is refused, as editoast refuses it (``deny_unknown_fields``).
 - Every problem names the field as the file does (``effort_curves.modes.M.default_curve.speeds[2]``,
   ``rolling_resistance.A``); the second return value of :func:`osrd_train` maps the train schema's
   field paths to these names for the schema's own messages.
@@ -30,7 +36,7 @@ import numpy as np
 from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, finite_number, problem
 from ecostudy.core.units import FloatArray
-from ecostudy.io.trainschema import MASS_RANGE_T, MAX_ROTATING_SHARE
+from ecostudy.io.trainschema import MAX_ROTATING_SHARE, mass_out_of_range
 
 Where: TypeAlias = str | PathLike[str]
 
@@ -38,6 +44,12 @@ MODELLED = {"effort_curves", "max_speed", "comfort_acceleration", "mass", "inert
             "rolling_resistance", "const_gamma", "gamma"}
 DESCRIPTIVE = {"name", "railjson_version", "metadata", "version", "locked", "supported_signaling_systems",
                "primary_category", "other_categories", "liveries", "id"}
+# what OSRD's parser refuses a file without (core RJSRollingStockParser.parse, in its order; OSRD 66c30bb)
+REQUIRED = ("railjson_version", "effort_curves", "name", "length", "max_speed", "startup_time", "startup_acceleration",
+            "comfort_acceleration", "inertia_coefficient", "loading_gauge", "mass", "rolling_resistance")
+BRAKING = ("gamma", "const_gamma")  # railjson 3.2's {type, value}, 3.3's number: one of them
+MODE_FIELDS = ("curves", "default_curve", "is_electric")  # editoast ModeEffortCurves (deny_unknown_fields)
+COND_FIELDS = ("comfort", "electrical_profile_level", "power_restriction_code")  # editoast EffortCurveConditions
 
 
 def _number(doc: Mapping[str, Any], key: str, path: Where, positive: bool = True, at: str = "") -> float:
@@ -101,12 +113,20 @@ def _curves(modes: Mapping[str, Any], path: Where) -> dict[str, FloatArray | tup
         at = f"effort_curves.modes.{mode}"
         if not isinstance(entry, dict):
             raise InputError(problem(path, at, "expected a mode with 'curves' and 'default_curve'"))
-        listed = entry.get("curves") or []
+        _known(entry, MODE_FIELDS, path, at)
+        if entry.get("curves") is None:
+            raise InputError(problem(path, f"{at}.curves", "missing field"))
+        listed = entry["curves"]
         if not isinstance(listed, list):
             raise InputError(problem(path, f"{at}.curves", "expected a list of {'cond', 'curve'}"))
         for i, item in enumerate(listed):
-            if not isinstance(item, dict) or not isinstance(item.get("cond") or {}, dict):
+            if not isinstance(item, dict):
                 raise InputError(problem(path, f"{at}.curves[{i}]", "expected {'cond': {...}, 'curve': {...}}"))
+            if item.get("cond") is None:  # OSRD's parser: parseEffortCurveConditions
+                raise InputError(problem(path, f"{at}.curves[{i}].cond", "missing field"))
+            if not isinstance(item["cond"], dict):
+                raise InputError(problem(path, f"{at}.curves[{i}].cond", f"expected {{{', '.join(COND_FIELDS)}}}"))
+            _known(item["cond"], COND_FIELDS, path, f"{at}.curves[{i}].cond")
             out[f"{at}.curves[{i}].curve"] = _points(item.get("curve"), path, f"{at}.curves[{i}].curve")
         if "default_curve" not in entry:
             raise InputError(problem(path, f"{at}.default_curve", "missing field"))
@@ -114,23 +134,39 @@ def _curves(modes: Mapping[str, Any], path: Where) -> dict[str, FloatArray | tup
     return out
 
 
+def _known(doc: Mapping[str, Any], known: tuple[str, ...], path: Where, at: str) -> None:
+    """Refuse a key of ``doc`` (at field path ``at``) that is not ``known``, in editoast's words (its
+    schemas there are ``deny_unknown_fields``: OSRD refuses the file)."""
+    unknown = [key for key in doc if key not in known]
+    if unknown:
+        raise InputError(problem(path, f"{at}.{unknown[0]}", f"unknown field `{unknown[0]}`, expected one of "
+                                 + ", ".join(f"`{k}`" for k in known)))
+
+
 def _curve(doc: Mapping[str, Any], path: Where, selector: str | None) -> tuple[str, str, str, FloatArray, FloatArray]:
     """(mode, comfort, the curve's field path, speeds [m/s], efforts [N]) of the chosen mode and comfort."""
     curves = doc.get("effort_curves")
     if not isinstance(curves, dict) or not isinstance(curves.get("modes"), dict) or not curves["modes"]:
         raise InputError(problem(path, "effort_curves", "expected {'modes': {...}, 'default_mode': ...}"))
+    default = curves.get("default_mode")
+    if default is None:
+        raise InputError(problem(path, "effort_curves.default_mode", "missing field"))
+    if not isinstance(default, str) or default not in curves["modes"]:
+        raise InputError(problem(path, "effort_curves.default_mode", f"no mode {default!r} (modes: "
+                                 f"{', '.join(curves['modes'])})"))
     asked, _, comfort = (selector or "").partition("/")
-    mode, comfort = asked or curves.get("default_mode"), comfort or "STANDARD"
-    if not isinstance(mode, str) or mode not in curves["modes"]:
+    mode, comfort = asked or default, comfort or "STANDARD"
+    if mode not in curves["modes"]:
         raise InputError(problem(path, "effort_curves.modes", f"no mode {mode!r} (modes: {', '.join(curves['modes'])})"))
     checked = _curves(curves["modes"], path)
     entry = curves["modes"][mode]
-    listed = entry.get("curves") or []
-    conds = [item.get("cond") or {} for item in listed]
+    listed = entry["curves"]
+    conds = [item["cond"] for item in listed]
     plain = [i for i, cond in enumerate(conds)
              if cond.get("electrical_profile_level") is None and cond.get("power_restriction_code") is None]
+    # OSRD: the first condition that matches; a null comfort matches every comfort
     picked = next(((listed[i]["curve"], f"effort_curves.modes.{mode}.curves[{i}].curve") for i in plain
-                   if conds[i].get("comfort") == comfort), None)
+                   if conds[i].get("comfort") in (None, comfort)), None)
     if picked is None and selector and "/" in selector:
         raise InputError(problem(path, f"effort_curves.modes.{mode}", f"no curve for comfort {comfort!r}"))
     chosen, where = picked or (entry["default_curve"], f"effort_curves.modes.{mode}.default_curve")
@@ -158,6 +194,11 @@ def _steps(speeds: FloatArray, efforts: FloatArray, path: Where, where: str) -> 
     same = np.concatenate([[False], (np.diff(speeds) == 0) & (np.diff(efforts) == 0)])  # a point given twice: once
     index = np.flatnonzero(~same)  # each kept point's index in the file
     speeds, efforts = speeds[~same].copy(), efforts[~same]
+    flat = np.diff(speeds) == 0
+    if np.any(flat[1:] & flat[:-1]):  # three efforts at one speed: no reading gives the middle one a place
+        k = int(np.argmax(flat[1:] & flat[:-1])) + 2
+        raise InputError(problem(path, f"{where}.speeds[{index[k]}]", f"{speeds[k]:g} m/s given a third time with "
+                                 "another effort: one step per speed"))
     if len(speeds) > 2 and speeds[0] == speeds[1]:  # a step at the first speed: its first effort holds at that
         warnings.warn(problem(path, f"{where}.speeds[{index[1]}]", f"a step of the effort at {speeds[1]:g} m/s "
                               f"({efforts[0] / units.KN:g} -> {efforts[1] / units.KN:g} kN) at the curve's first "
@@ -169,24 +210,28 @@ def _steps(speeds: FloatArray, efforts: FloatArray, path: Where, where: str) -> 
         warnings.warn(problem(path, f"{where}.speeds[{index[k + 1]}]", f"a step of the effort at {speeds[k + 1]:g} m/s "
                               f"({efforts[k] / units.KN:g} -> {efforts[k + 1] / units.KN:g} kN), read as a change "
                               f"over the {speeds[k + 1] - speeds[k]:g} m/s below it"), EcostudyWarning, stacklevel=4)
-    if np.any(np.diff(speeds) <= 0):
-        raise InputError(problem(path, f"{where}.speeds", "a speed repeated more than twice: one step per speed"))
     return speeds, efforts
 
 
 def _braking(doc: Mapping[str, Any], path: Where, mass: float) -> tuple[dict[str, float], float | None, str]:
-    """(braking schema, net-deceleration bound or None, the field giving it) from const_gamma or gamma
-    {type, value}."""
-    gamma = doc.get("gamma")
-    if isinstance(gamma, dict):
-        kind, value, field = str(gamma.get("type", "CONST")).upper(), _number(gamma, "value", path, at="gamma."), \
-            "gamma.value"
-        if kind not in ("CONST", "MAX"):
-            raise InputError(problem(path, "gamma.type", f"expected CONST or MAX, got {gamma.get('type')!r}"))
-    elif "const_gamma" in doc:
+    """(braking schema, net-deceleration bound or None, the field giving it) from ``gamma`` {type,
+    value} (railjson 3.2) or ``const_gamma`` (3.3): exactly one of them."""
+    given = [key for key in BRAKING if doc.get(key) is not None]
+    if len(given) != 1:
+        raise InputError(problem(path, ", ".join(given) or "gamma", ("both given" if given else "missing field")
+                                 + ": one braking deceleration, gamma {type, value} (railjson 3.2) or const_gamma (3.3)"))
+    if given == ["const_gamma"]:
         kind, value, field = "CONST", _number(doc, "const_gamma", path), "const_gamma"
     else:
-        raise InputError(problem(path, "gamma", "missing braking deceleration (gamma {type, value} or const_gamma)"))
+        gamma = doc["gamma"]
+        if not isinstance(gamma, dict):
+            raise InputError(problem(path, "gamma", f"expected {{type, value}}, got {gamma!r:.40}"))
+        _known(gamma, ("type", "value"), path, "gamma")
+        if gamma.get("type") is None:
+            raise InputError(problem(path, "gamma.type", "missing field (CONST or MAX)"))
+        kind, value, field = str(gamma["type"]).upper(), _number(gamma, "value", path, at="gamma."), "gamma.value"
+        if kind not in ("CONST", "MAX"):
+            raise InputError(problem(path, "gamma.type", f"expected CONST or MAX, got {gamma['type']!r}"))
     return {"max_force_kN": mass * value / units.KN}, (value if kind == "CONST" else None), field
 
 
@@ -194,21 +239,25 @@ def osrd_train(doc: Mapping[str, Any], path: Where,
                selector: str | None = None) -> tuple[dict[str, Any], dict[str, str]]:
     """An OSRD rolling stock as a train-schema dict, and the field names for messages (the schema's
     field paths as the OSRD file names them)."""
+    missing = [key for key in REQUIRED if doc.get(key) is None]  # none is filled in: OSRD refuses the file
+    if missing:
+        raise InputError(problem(path, missing[0], "missing field (OSRD's rolling-stock parser requires "
+                                 + ", ".join(f"'{m}'" for m in missing) + ")"))
     ignored = [k for k in doc if k not in MODELLED | DESCRIPTIVE and doc[k] not in (None, {}, [], "")]
     if ignored:
         warnings.warn(problem(path, ", ".join(ignored), "OSRD fields ecostudy does not model: ignored"),
                       EcostudyWarning, stacklevel=3)
     mode, comfort, where, speeds, efforts = _curve(doc, path, selector)
     mass = _number(doc, "mass", path)
-    low, high = (m * units.TONNE for m in MASS_RANGE_T)
-    if not low <= mass <= high:
-        raise InputError(problem(path, "mass", f"expected {low:g} to {high:g} kg, got {mass:g}"))
-    inertia = _number(doc, "inertia_coefficient", path) if "inertia_coefficient" in doc else 1.0
+    wrong = mass_out_of_range(mass)
+    if wrong:
+        raise InputError(problem(path, "mass", wrong))
+    inertia = _number(doc, "inertia_coefficient", path)
     if not 1 <= inertia <= 1 + MAX_ROTATING_SHARE:
         raise InputError(problem(path, "inertia_coefficient", f"expected 1 to {1 + MAX_ROTATING_SHARE:g} (M = mass x "
                                  f"coefficient: the rotating masses add a share of the mass), got {inertia:g}"))
-    top = min(_number(doc, "max_speed", path), float(speeds[-1])) if "max_speed" in doc else float(speeds[-1])
-    if "max_speed" in doc and speeds[-1] < doc["max_speed"] - 1e-6:
+    top = min(_number(doc, "max_speed", path), float(speeds[-1]))
+    if speeds[-1] < doc["max_speed"] - 1e-6:
         warnings.warn(problem(path, where, f"the curve ends at {speeds[-1] / units.KMH:.0f} km/h, below max_speed "
                               f"{doc['max_speed'] / units.KMH:.0f} km/h: the train runs at most "
                               f"{speeds[-1] / units.KMH:.0f} km/h in this mode"), EcostudyWarning, stacklevel=3)
@@ -221,15 +270,13 @@ def osrd_train(doc: Mapping[str, Any], path: Where,
                               "(ignored)"), EcostudyWarning, stacklevel=3)
     braking, deceleration, gamma = _braking(doc, path, mass * inertia)
     bounds: dict[str, float] = {"max_deceleration_mps2": deceleration} if deceleration else {}
-    if "comfort_acceleration" in doc:
-        bounds["max_acceleration_mps2"] = _number(doc, "comfort_acceleration", path)
+    bounds["max_acceleration_mps2"] = _number(doc, "comfort_acceleration", path)
     return {
-        "name": str(doc.get("name", path)),
-        "source": f"OSRD rolling stock {doc.get('name', path)} (railjson {doc.get('railjson_version', '?')}), "
-                  f"mode {mode}, comfort {comfort}",
+        "name": str(doc["name"]),
+        "source": f"OSRD rolling stock {doc['name']} (railjson {doc['railjson_version']}), mode {mode}, comfort {comfort}",
         "mass_t": mass / units.TONNE,
         "rotating_mass_factor": inertia - 1.0,
-        "length_m": _number(doc, "length", path, positive=False) if "length" in doc else 0.0,
+        "length_m": _number(doc, "length", path, positive=False),
         "davis": {key: _number(rr, name, path, False, at="rolling_resistance.") for key, name in DAVIS.items()},
         "traction": {"table": {"speed_kmh": (speeds / units.KMH).tolist(), "force_kN": (efforts / units.KN).tolist()}},
         "braking": braking,

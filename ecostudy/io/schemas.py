@@ -89,10 +89,13 @@ class TrackFile(Strict):
                 raise ValueError(f"{name}: position {items[-1].position_m} m is beyond length_m")
         for name in ("gradients", "speed_limits"):
             if getattr(self, name)[0].position_m != 0:
-                raise ValueError(f"{name}: the first entry must start at position_m 0")
+                raise ValueError(f"{name}[0].position_m: the first entry must start at 0 m, not at "
+                                 f"{getattr(self, name)[0].position_m:g} m")
         for i, (a, b) in enumerate(zip(self.tunnels, self.tunnels[1:])):
             if b.position_m < a.position_m + a.length_m - 1e-9:
-                raise ValueError(f"tunnels[{i + 1}] starts inside tunnels[{i}]")
+                where = "before" if b.position_m < a.position_m else "inside"
+                raise ValueError(f"tunnels[{i + 1}].position_m: {b.position_m:g} m is {where} tunnels[{i}] ({a.position_m:g} "
+                                 f"to {a.position_m + a.length_m:g} m): tunnels go along the line, one after another")
         if self.tunnels and self.tunnels[-1].position_m + self.tunnels[-1].length_m > self.length_m + 1e-6:
             raise ValueError("tunnels: the last tunnel ends beyond length_m")
         _unique("stops", [s.name for s in self.stops])

@@ -86,7 +86,8 @@ class JourneyPlan:
     ``departure[n]``: departure window (earliest, latest) from the start of segment n (equal for a
     fixed time, either None where open), or None: arrival + dwell.
     ``dwell[n]``: (least) dwell before segment n departs (0 for the first).
-    ``windows[n]``: core.types.Window passing points of segment n, distance from its departure stop.
+    ``windows[n]``: core.types.Window passing points of segment n, distance from its departure stop;
+    ``window_rows[n]``: the index of each in the timetable's ``windows`` (its field, for messages).
     """
 
     stops: tuple[str, ...]
@@ -94,6 +95,7 @@ class JourneyPlan:
     dwell: tuple[float, ...]
     arrival: tuple[Bounds, ...]
     windows: tuple[tuple[Window, ...], ...]
+    window_rows: tuple[tuple[int, ...], ...] = ()
 
 
 def journey_plan(tt: schemas.TimetableFile, track: Track, path: Where, dwell: float = 0.0,
@@ -123,12 +125,12 @@ def journey_plan(tt: schemas.TimetableFile, track: Track, path: Where, dwell: fl
     for row in tt.stops[1:-1]:
         departure.append(_departure(row))
         dwells.append(row.dwell_s if row.dwell_s is not None else dwell)
-    windows: list[list[Window]] = [[] for _ in names[1:]]
+    windows: list[list[tuple[Window, int]]] = [[] for _ in names[1:]]
     for i, w in enumerate(tt.windows):
         for n, (a, b) in enumerate(zip(names, names[1:])):
             d = travel_distance(track, a, b, w.position_m)
             if 0 < d < abs(track.stops[b] - track.stops[a]):
-                windows[n].append(window_si(w, d))
+                windows[n].append((window_si(w, d), i))
                 break
         else:
             lines.append(problem(path, aliased(f"windows[{i}].position_m", aliases),
@@ -136,8 +138,9 @@ def journey_plan(tt: schemas.TimetableFile, track: Track, path: Where, dwell: fl
                                  "two consecutive stops of the journey"))
     if lines:
         raise InputError(lines)
+    ordered = [sorted(w, key=lambda x: x[0].distance) for w in windows]
     return JourneyPlan(tuple(names), tuple(departure), tuple(dwells), tuple(arrival),
-                       tuple(tuple(sorted(w, key=lambda x: x.distance)) for w in windows))
+                       tuple(tuple(w for w, _ in ws) for ws in ordered), tuple(tuple(i for _, i in ws) for ws in ordered))
 
 
 def _departure(row: schemas.TimetableStop) -> Bounds | None:

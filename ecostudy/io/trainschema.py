@@ -3,6 +3,7 @@ from typing import ClassVar, Literal, Optional, Self
 
 from pydantic import Field, field_validator, model_validator
 
+from ecostudy.core import units
 from ecostudy.core.budget import duration, is_forced
 from ecostudy.io.schemabase import Name, Strict, increasing as _increasing
 
@@ -224,7 +225,11 @@ class TrainFile(Strict):
     def _curves_and_tunnels(self) -> Self:
         if self.curve_resistance == "roeckl" and self.curve_coefficient_m2ps2:
             raise ValueError("curve_coefficient_m2ps2: goes with curve_resistance 'coefficient', not 'roeckl'")
-        _increasing([t.cross_section_m2 for t in self.tunnel_resistance], "tunnel_resistance cross sections")
+        for i, (a, b) in enumerate(zip(self.tunnel_resistance, self.tunnel_resistance[1:]), start=1):
+            if b.cross_section_m2 <= a.cross_section_m2:
+                raise ValueError(f"tunnel_resistance[{i}].cross_section_m2: {b.cross_section_m2:g} m^2 does not follow "
+                                 f"tunnel_resistance[{i - 1}]'s {a.cross_section_m2:g} m^2 (cross sections strictly "
+                                 "increasing)")
         return self
 
     @model_validator(mode="after")
@@ -249,3 +254,12 @@ class TrainFile(Strict):
             raise ValueError("need a braking level (< 0) and a traction level (> 0): advice cannot stop or start "
                              "otherwise")
         return sorted(v)
+
+
+def mass_out_of_range(mass_kg: float) -> str | None:
+    """Why a static mass read from a published file (in kg) is outside :data:`MASS_RANGE_T`, said in
+    kg and t (the file's kg against the schema's tonnes), else None."""
+    low, high = MASS_RANGE_T
+    if low * units.TONNE <= mass_kg <= high * units.TONNE:
+        return None
+    return f"expected {low * units.TONNE:g} to {high * units.TONNE:g} kg ({low:g} to {high:g} t), got {mass_kg:g} kg"

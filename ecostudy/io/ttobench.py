@@ -12,6 +12,7 @@ means (docs/formats.md has the table):
 - ``rho`` is the rotating-mass allowance (ms-eetc: a value below 1 is a share, 6 % -> 1.06);
 - curves cost Roeckl's resistance (ms-eetc ``TrainModel``); a curvature entry whose radii differ
   is a clothoid, curvature linear in distance (ms-eetc ``sampleClothoid``), resolved on the grid;
+  a radius below 150 m is refused, as ms-eetc refuses it;
 - ``tunnels`` [position, length, cross section] add the train's ``tunnel resistance`` coefficient
   for that cross section to the quadratic resistance inside the tunnel;
 - ``length`` makes speed limits hold until the train's tail has passed them;
@@ -29,6 +30,8 @@ import numpy as np
 
 from ecostudy.core import units
 from ecostudy.core.errors import EcostudyWarning, InputError, finite_number, problem
+from ecostudy.core.physics import ROECKL_MIN_RADIUS
+from ecostudy.io.trainschema import mass_out_of_range
 
 Where: TypeAlias = str | PathLike[str]
 
@@ -137,6 +140,7 @@ def _etcs(doc: Mapping[str, Any], path: Where, fields: Mapping[str, str | None],
     missing = sorted(set(fields) - set(data))
     if missing:
         raise InputError(problem(path, "ETCS braking data", "missing " + ", ".join(missing)))
+    unmodelled(data, fields, path, "'ETCS braking data'", "ETCS braking data")  # TTOBench refuses it as redundant
     service: list[tuple[float, float]] | None = None
     for name, dimension in fields.items():
         if dimension is None:  # a deceleration curve: [velocity, deceleration], both > = 0
@@ -174,8 +178,12 @@ def ttobench_track(doc: Mapping[str, Any], path: Where) -> dict[str, Any]:
               if "gradients" in doc else [[0.0, 0.0]])
     curves = []
     if "curvatures" in doc:
-        for pos, r0, r1 in table(doc, "curvatures", path, [("position", "length"), ("radius at start", "length"),
-                                                          ("radius at end", "length")]):
+        for i, (pos, r0, r1) in enumerate(table(doc, "curvatures", path, [("position", "length"), ("radius at start",
+                                                                          "length"), ("radius at end", "length")])):
+            if min(abs(r0), abs(r1)) < ROECKL_MIN_RADIUS:  # ms-eetc track.py: CURVATURE_THRESHOLD = 1/150
+                raise InputError(problem(path, f"curvatures.values[{i}]", f"a radius of {min(abs(r0), abs(r1)):g} m, "
+                                         f"below {ROECKL_MIN_RADIUS:g} m: ms-eetc refuses the track (its curvature "
+                                         "limit), and Roeckl's formula of curve resistance is not used below it"))
             start = None if math.isinf(r0) else r0
             curves.append({"position_m": pos, "radius_m": start, **({} if r1 == r0 else {"end_radius_m": r1})})
     tunnels = []
@@ -270,6 +278,8 @@ def ttobench_train(doc: Mapping[str, Any], path: Where,
     service = _etcs(doc, path, ETCS_TRAIN, "train", used=selector == "etcs") if "ETCS braking data" in doc else None
     length = quantity(doc, "length", path, "length", 0.0)
     mass = value["mass"]
+    if (wrong := mass_out_of_range(mass)) is not None:  # said in kg and t: the schema's bound is in tonnes
+        raise InputError(problem(path, "mass", wrong))
     braking = _braking(doc, path, top, f_reg, p_reg, f_pn)
     if selector == "etcs":  # the deceleration curve of the whole train: force = M a, M with the rotating allowance
         if service is None:
@@ -299,4 +309,7 @@ def ttobench_train(doc: Mapping[str, Any], path: Where,
         "traction.max_power_kW": "max traction power", "regenerative_braking.max_force_kN": "max reg braking force",
         "regenerative_braking.max_power_kW": "max reg braking power", "mass_t": "mass", "length_m": "length",
         "max_speed_kmh": "max speed", "traction_efficiency": "efficiency traction",
-        "regenerative_braking.efficiency": "efficiency reg brake"}
+        "regenerative_braking.efficiency": "efficiency reg brake", "tunnel_resistance": "tunnel resistance",
+        "tunnel_resistance[]": "tunnel resistance.values[]",
+        "tunnel_resistance[].cross_section_m2": "tunnel resistance.values[].cross section",
+        "tunnel_resistance[].c_kN_per_kmh2": "tunnel resistance.values[].coefficient"}

@@ -18,10 +18,11 @@ def check_reachable(plan, cases):
         lo, hi = plan.departure[n] or (None, None)
         events.append((f"the departure from {plan.stops[n]}", lo, hi, fastest, dwells,
                        _fields(n, lo, hi, departure=True)))
-        for w in plan.windows[n]:
+        for j, w in enumerate(plan.windows[n]):
             at = fastest + float(np.interp(w.distance, case.nodes, clock))
+            row = f"windows[{plan.window_rows[n][j]}]" if plan.window_rows else "windows"
             events.append((f"the timing point at {start + w.distance:g} m", w.earliest, w.latest, at, dwells,
-                           ("windows", "windows")))
+                           (f"{row}.earliest_s", f"{row}.latest_s")))
         fastest += float(clock[-1])
         start += case.segment.distance
         events.append((f"the arrival at {plan.stops[n + 1]}", *plan.arrival[n], fastest, dwells,
