@@ -9,6 +9,7 @@ import pytest
 
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.grid import make_segment
+from ecostudy.heavyhaul.linear import fence, locomotive_groups
 from ecostudy.heavyhaul.metrics import reasons
 from ecostudy.heavyhaul.plant import CascadePlant
 from ecostudy.heavyhaul.reference import single_mass
@@ -157,3 +158,34 @@ def closed(run):
                       r"closed ([0-9.]+) m at", run["reason"])
     assert found, run["reason"]
     return float(found.group(1))
+
+
+def test_a_very_long_consist_at_f_1_is_refused_with_its_estimate_before_any_design_model_is_built(tmp_path):
+    """20 + 5000 + 20 cars (61 km) at f = 1 on the 5 km line: the size estimate refuses it from the
+    consist alone. Counting its locomotive groups through the fence's design model (the zero-order
+    hold of a 15 119 x 15 119 matrix) took most of an hour before the estimate, deaf to Ctrl-C; the
+    refusal comes in a few seconds (a test that hangs here has regressed)."""
+    consist = load_yaml(PAPER)
+    consist["vehicles"] = [{"type": "locomotive", "count": 20}, *[{"type": "wagon", "count": 1000}] * 5,
+                           {"type": "locomotive", "count": 20}]  # a group holds at most 1000
+    consist["couplers"]["force_limit_kN"] = 1e5
+    write_yaml(tmp_path / "long.yaml", consist)
+    line = load_yaml(short_line(tmp_path))
+    line["length_m"] = 70000  # no shorter than the train
+    write_yaml(tmp_path / "long_line.yaml", line)
+    path = study(tmp_path, consist=str(tmp_path / "long.yaml"), track=str(tmp_path / "long_line.yaml"),
+                 brake_penalty=[1], fence=[1])
+    refused(invoke(path, tmp_path / "out"), "horizons", "Kb=1 f=1 Np=4 Nc=2: 10,080 QP inputs",
+            "an estimated", "give --force")
+
+
+@pytest.mark.parametrize("vehicles", [[("locomotive", 2), ("wagon", 200), ("locomotive", 2)],
+                                      [("locomotive", 3), ("wagon", 25), ("locomotive", 1), ("wagon", 7)]])
+@pytest.mark.parametrize("f", [1, 2, 10])
+def test_the_locomotive_groups_counted_from_the_kinds_are_the_fences(tmp_path, vehicles, f):
+    """What the study counts before its size estimate is what the fence's design model has."""
+    doc = load_yaml(PAPER)
+    doc["vehicles"] = [{"type": kind, "count": count} for kind, count in vehicles]
+    consist = load_consist(write_yaml(tmp_path / "consist.yaml", doc))
+    expected = sum(-(-count // f) for kind, count in vehicles if kind == "locomotive")
+    assert locomotive_groups(consist.kinds, f) == len(fence(consist, f, 20.0).locomotives) == expected

@@ -30,7 +30,7 @@ from ecostudy.heavyhaul.airbrake import application_time, brake_lag
 from ecostudy.heavyhaul.checks import (braking_asked, reference_problems, ruling_grade, samples_to_start,
                                        starting_coupler_force, unmodelled_tunnels)
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
-from ecostudy.heavyhaul.linear import fence
+from ecostudy.heavyhaul.linear import fence, locomotive_groups
 from ecostudy.heavyhaul.loop import reduced_state, run
 from ecostudy.heavyhaul.metrics import Tolerances, closing_metrics, in_train_metrics, reasons, run_metrics
 from ecostudy.heavyhaul.observer import KalmanObserver
@@ -129,7 +129,7 @@ def expand(path, out=None):
     if s.brake_penalty_on == "all" and min(s.brake_penalty) < 1:
         problems.append(problem(path, "brake_penalty_on", f"all needs every brake_penalty >= 1 (a braking locomotive's "
                                 f"term K_b u^2 is u^2 plus (K_b - 1) u^2; got {min(s.brake_penalty):g})"))
-    fewest = min([len(fence(consist, f, s.sample_time_s).locomotives) for f in s.fence if f <= consist.cars] or [1])
+    fewest = min([locomotive_groups(consist.kinds, f) for f in s.fence if f <= consist.cars] or [1])  # no model built
     ramp = samples_to_start(needed, s.rate_kN_per_sample * KN, fewest)  # the fewest locomotive groups ramp slowest
     if ramp * s.sample_time_s > reference.running_time:
         problems.append(problem(path, "rate_kN_per_sample", f"{s.rate_kN_per_sample:g} kN per sample takes {ramp:.3g} "
