@@ -189,3 +189,21 @@ def test_the_locomotive_groups_counted_from_the_kinds_are_the_fences(tmp_path, v
     consist = load_consist(write_yaml(tmp_path / "consist.yaml", doc))
     expected = sum(-(-count // f) for kind, count in vehicles if kind == "locomotive")
     assert locomotive_groups(consist.kinds, f) == len(fence(consist, f, 20.0).locomotives) == expected
+
+
+@pytest.mark.parametrize("end", [4999, 5001])
+def test_the_stop_error_is_measured_from_the_stop_not_from_the_reference_tables_end(tmp_path, end):
+    """A table may end up to a metre off the 5000 m stop; the train follows it to its end. With a
+    0.1 m stop tolerance, a train standing at the table's end at 4999 m (or 5001 m) is a metre off
+    the stop: flagged for it, its stop error the head's from 5000 m (it read ``at the stop``, ok,
+    0.03 m when measured from the table's end)."""
+    rows = [(0, 0), (500, 30), (4800, 30), (end, 0)]
+    path = study(tmp_path, reference=reference_table(tmp_path, rows), brake_penalty=[60], adhesion=True,
+                 stop_tolerance_m=0.1)
+    result = invoke(path, tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    side = "short of the stop" if end < 5000 else "beyond the stop"
+    # it stands near the table's end (0.03-0.11 m from it measured), about a metre from the stop
+    assert run["status"] == "flagged" and abs(run["stop_error_m"] - (end - 5000)) < 0.5, run.to_dict()
+    assert run["ended"] == side and not run["arrived"] and side in run["reason"], run["reason"]

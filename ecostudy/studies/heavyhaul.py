@@ -234,9 +234,10 @@ def case_controller(case, consist, plant):
     return reduction, controller
 
 
-def summarise(consist, controller, record, reference, locomotives=(), stop_tolerance=Tolerances().stop_m):
-    """The per-run numbers (SI in, the units in the names out); ``locomotives`` the controller's
-    locomotive (virtual) cars, ``stop_tolerance`` [m] how near the stop a run has arrived."""
+def summarise(consist, controller, record, reference, stop, locomotives=(), stop_tolerance=Tolerances().stop_m):
+    """The per-run numbers (SI in, the units in the names out); ``stop`` the line's stop [m] (the
+    plant's segment's length), ``locomotives`` the controller's locomotive (virtual) cars,
+    ``stop_tolerance`` [m] how near the stop a run has arrived."""
     error = record.mean_speed - record.reference
     forces = np.abs(record.couplers) / KN
     wagons, total = record.wagon_brake_work, record.traction_work + record.dynamic_brake_work + record.wagon_brake_work
@@ -244,7 +245,7 @@ def summarise(consist, controller, record, reference, locomotives=(), stop_toler
     step = max(1, consist.cars // 100)  # the heat map keeps at most about 100 couplers
     return {
         "tracking_mean_mps": float(np.mean(np.abs(error))), "tracking_std_mps": float(np.std(error)),
-        **run_metrics(record, reference, list(locomotives), consist.force_limit, stop_tolerance),
+        **run_metrics(record, reference, list(locomotives), consist.force_limit, stop, stop_tolerance),
         "force_mean_kN": float(forces.mean()),
         "force_std_kN": float(forces.std()), "energy_total_kWh": total / KWH,
         "traction_kWh": record.traction_work / KWH, "dynamic_brake_kWh": record.dynamic_brake_work / KWH,
@@ -269,7 +270,8 @@ def run_heavyhaul_case(case):
 
 def _run(case):
     consist, controller, record, reference, plant = drive(case)
-    summary = {**summarise(consist, controller, record, reference, controller.locos, case["stop_tolerance_m"]),
+    summary = {**summarise(consist, controller, record, reference, plant.segment.distance, controller.locos,
+                           case["stop_tolerance_m"]),
                **in_train_metrics(plant.history, consist), **closing_metrics(plant.closest, consist, plant.travel)}
     why = reasons(summary, case["max_samples"], summary["over_budget_count"],
                   Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH,
