@@ -3,6 +3,7 @@ inputs alone cannot settle: a reference table off the start stop or not standing
 (whatever the overspeed tolerance), weights that cannot drive a run, a coupling closed by its
 cars' spacing, and the energy balance's scale."""
 import re
+import warnings
 
 import pandas as pd
 import pytest
@@ -207,3 +208,25 @@ def test_the_stop_error_is_measured_from_the_stop_not_from_the_reference_tables_
     # it stands near the table's end (0.03-0.11 m from it measured), about a metre from the stop
     assert run["status"] == "flagged" and abs(run["stop_error_m"] - (end - 5000)) < 0.5, run.to_dict()
     assert run["ended"] == side and not run["arrived"] and side in run["reason"], run["reason"]
+
+
+def test_fields_a_study_gives_and_its_runs_do_not_read_are_warned_of(tmp_path):
+    """observer_q and observer_r with the observer off, a reference table's points and
+    limit_lead_samples (the single-mass optimum's): one warning each group, naming the file and the
+    fields; the same fields where they are read, none."""
+    noises = study(tmp_path, observer_q=5, observer_r=7)
+    with pytest.warns(EcostudyWarning) as caught:
+        expand(noises, tmp_path / "out")
+    assert [str(w.message) for w in caught] == [f"{noises}: observer_q, observer_r: not used: the observer is off "
+                                                "(the controller reads the plant's true state)"]
+    table = {**reference_table(tmp_path, [(0, 0), (500, 30), (4800, 30), (5000, 0)]), "points": 2000,
+             "limit_lead_samples": 7}
+    with pytest.warns(EcostudyWarning) as caught:
+        expand(study(tmp_path, reference=table), tmp_path / "out")
+    assert [str(w.message) for w in caught] == [
+        f"{tmp_path / 'hh.yaml'}: reference.points, reference.limit_lead_samples: not used: they shape ecostudy's "
+        "single-mass optimum; a reference table is followed as given"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", EcostudyWarning)
+        expand(study(tmp_path, observer=True, observer_q=5, reference={"supplement_percent": 10, "points": 100,
+                                                                       "limit_lead_samples": 2}), tmp_path / "out")

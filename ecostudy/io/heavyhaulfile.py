@@ -137,6 +137,21 @@ class HeavyhaulFile(Strict):
                                        "of the two is the tolerance).")
     output: Optional[str] = None
 
+    def unused(self) -> list[tuple[list[str], str]]:
+        """The fields the file gives that its runs do not read, as (fields, why) groups: the observer's
+        noises with the observer off; the single-mass optimum's grid and limit lead with a reference
+        table (followed as given)."""
+        out = []
+        noises = [name for name in ("observer_q", "observer_r") if name in self.model_fields_set]
+        if noises and not self.observer:
+            out.append((noises, "not used: the observer is off (the controller reads the plant's true state)"))
+        optimum = [f"reference.{name}" for name in ("points", "limit_lead_samples")
+                   if name in self.reference.model_fields_set]
+        if optimum and self.reference.table is not None:
+            out.append((optimum, "not used: they shape ecostudy's single-mass optimum; a reference table is "
+                                 "followed as given"))
+        return out
+
     @field_validator("brake_penalty", "fence", "horizons")
     @classmethod
     def _once(cls, values: list[Any]) -> list[Any]:

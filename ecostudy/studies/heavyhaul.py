@@ -84,6 +84,8 @@ def expand(path, out=None):
     output folder (``out``, else the study's own) checked before the reference run is solved."""
     path = Path(path)
     s = validate(HeavyhaulFile, read_document(path), path)
+    for fields, why in s.unused():
+        warnings.warn(problem(path, ", ".join(fields), why), EcostudyWarning, stacklevel=2)
     output = Path(s.output) if s.output else default_output(s.name)  # relative: to the working directory
     check_output_dir(out or output, ("runs.csv", "results.sqlite"), "heavyhaul")
     consist_path = named_file(path, "consist", s.consist)
