@@ -230,3 +230,15 @@ def test_fields_a_study_gives_and_its_runs_do_not_read_are_warned_of(tmp_path):
         warnings.simplefilter("error", EcostudyWarning)
         expand(study(tmp_path, observer=True, observer_q=5, reference={"supplement_percent": 10, "points": 100,
                                                                        "limit_lead_samples": 2}), tmp_path / "out")
+
+
+def test_brake_penalties_that_print_alike_are_refused_and_keyed_apart(tmp_path):
+    """A run is named (``Kb=60 f=10 ...``), drawn and was keyed by K_b to 6 significant digits: 60 and
+    60.0000001 in one study stored one row for both runs; refused in one line. In two studies the
+    exact value is in the key, so 60.0000004 does not re-use 60's stored run."""
+    refused(invoke(study(tmp_path, brake_penalty=[60, 60.0000001]), tmp_path / "out"),
+            "brake_penalty", "60.0 and 60.0000001 both read 60", "differ")
+    table = reference_table(tmp_path, [(0, 0), (500, 30), (4800, 30), (5000, 0)])
+    keys = [expand(study(tmp_path, brake_penalty=[kb], reference=table), tmp_path / "out")[3][0]["key"]
+            for kb in (60, 60.0000004, 60)]
+    assert keys[0] != keys[1] and keys[0] == keys[2]

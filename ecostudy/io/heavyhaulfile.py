@@ -156,10 +156,13 @@ class HeavyhaulFile(Strict):
     @classmethod
     def _once(cls, values: list[Any]) -> list[Any]:
         seen: list[Any] = []
-        for v in values:
-            key = (v.np, v.nc) if isinstance(v, Horizon) else v
+        for v in values:  # a K_b by its 6 significant digits: a run's name, its key and its figures' names
+            key = (v.np, v.nc) if isinstance(v, Horizon) else f"{v:g}" if isinstance(v, float) else v
             if key in seen:
-                raise ValueError(f"{key} is listed twice (each value is one run)")
+                first = values[seen.index(key)]
+                raise ValueError(f"{key} is listed twice (each value is one run)" if first == v else
+                                 f"{first!r} and {v!r} both read {key} (a run is named and stored by K_b to 6 "
+                                 f"significant digits): give values that differ there")
             seen.append(key)
         return values
 

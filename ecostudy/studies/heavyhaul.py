@@ -165,7 +165,7 @@ def expand(path, out=None):
               "arrival_tolerance_percent": s.arrival_tolerance_percent, "arrival_tolerance_s": s.arrival_tolerance_s}
     cases = []
     for kb, f, h in product(s.brake_penalty, s.fence, s.horizons):
-        case = {**shared, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",
+        case = {**shared, "K_b": kb, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",  # K_b exact: in the key
                 "labels": {"K_b": kb, "f": f, "Np": h.np, "Nc": h.nc}}
         case["key"] = case_key(case)
         case["plan"] = Plan(s, reference, segment)  # after the key: all follow from the inputs the key hashes
