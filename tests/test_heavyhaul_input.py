@@ -242,3 +242,10 @@ def test_brake_penalties_that_print_alike_are_refused_and_keyed_apart(tmp_path):
     keys = [expand(study(tmp_path, brake_penalty=[kb], reference=table), tmp_path / "out")[3][0]["key"]
             for kb in (60, 60.0000004, 60)]
     assert keys[0] != keys[1] and keys[0] == keys[2]
+
+
+def test_a_run_too_long_for_its_samples_names_sample_time_s(tmp_path):
+    """0.01 s samples on the 5 km line: 70 863 samples, hours at the least a sample costs, whatever the
+    horizons (a 44-input QP): refused naming sample_time_s, which makes it too long, not horizons."""
+    refused(invoke(study(tmp_path, brake_penalty=[1], sample_time_s=0.01, max_samples=100000), tmp_path / "out"),
+            "hh.yaml: sample_time_s: Kb=1 f=10 Np=4 Nc=2: 44 QP inputs", "70,863 samples of 0.01 s", "an estimated")
