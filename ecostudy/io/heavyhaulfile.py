@@ -141,8 +141,8 @@ class HeavyhaulFile(Strict):
         """The fields the file gives that its runs do not read, as (fields, why) groups: the observer's
         noises with the observer off; the single-mass optimum's grid and limit lead with a reference
         table (followed as given)."""
-        out = []
-        noises = [name for name in ("observer_q", "observer_r") if name in self.model_fields_set]
+        out: list[tuple[list[str], str]] = []
+        noises: list[str] = [name for name in ("observer_q", "observer_r") if name in self.model_fields_set]
         if noises and not self.observer:
             out.append((noises, "not used: the observer is off (the controller reads the plant's true state)"))
         optimum = [f"reference.{name}" for name in ("points", "limit_lead_samples")
