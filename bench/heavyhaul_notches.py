@@ -72,7 +72,7 @@ def one(job):
     _, _, _, cases = study.expand(path)
     case = {**next(c for c in cases if c["labels"]["K_b"] == kb), "notches": True}
     consist, controller, record, reference, plant = study.drive(case)
-    s = study.summarise(consist, controller, record, reference, controller.locos)
+    s = study.summarise(consist, controller, record, reference, plant.segment.distance, controller.locos)
     return kb, s, rounding(plant)
 
 

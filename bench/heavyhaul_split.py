@@ -132,7 +132,7 @@ def one(job):
     _, _, _, cases = study.expand(path)
     case = {**next(c for c in cases if c["labels"]["K_b"] == kb), "brake_penalty_on": brake_on}
     consist, controller, record, reference, plant = study.drive(case)
-    s = study.summarise(consist, controller, record, reference, controller.locos)
+    s = study.summarise(consist, controller, record, reference, plant.segment.distance, controller.locos)
     locos = controller.locos
     e = record.efforts / KN
     v = 0.5 * (record.mean_speed + np.concatenate([[0.0], record.mean_speed[:-1]]))

@@ -3,12 +3,14 @@ inputs alone cannot settle: a reference table off the start stop or not standing
 (whatever the overspeed tolerance), weights that cannot drive a run, a coupling closed by its
 cars' spacing, and the energy balance's scale."""
 import re
+import warnings
 
 import pandas as pd
 import pytest
 
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.grid import make_segment
+from ecostudy.heavyhaul.linear import fence, locomotive_groups
 from ecostudy.heavyhaul.metrics import reasons
 from ecostudy.heavyhaul.plant import CascadePlant
 from ecostudy.heavyhaul.reference import single_mass
@@ -157,3 +159,93 @@ def closed(run):
                       r"closed ([0-9.]+) m at", run["reason"])
     assert found, run["reason"]
     return float(found.group(1))
+
+
+def test_a_very_long_consist_at_f_1_is_refused_with_its_estimate_before_any_design_model_is_built(tmp_path):
+    """20 + 5000 + 20 cars (61 km) at f = 1 on the 5 km line: the size estimate refuses it from the
+    consist alone. Counting its locomotive groups through the fence's design model (the zero-order
+    hold of a 15 119 x 15 119 matrix) took most of an hour before the estimate, deaf to Ctrl-C; the
+    refusal comes in a few seconds (a test that hangs here has regressed)."""
+    consist = load_yaml(PAPER)
+    consist["vehicles"] = [{"type": "locomotive", "count": 20}, *[{"type": "wagon", "count": 1000}] * 5,
+                           {"type": "locomotive", "count": 20}]  # a group holds at most 1000
+    consist["couplers"]["force_limit_kN"] = 1e5
+    write_yaml(tmp_path / "long.yaml", consist)
+    line = load_yaml(short_line(tmp_path))
+    line["length_m"] = 70000  # no shorter than the train
+    write_yaml(tmp_path / "long_line.yaml", line)
+    path = study(tmp_path, consist=str(tmp_path / "long.yaml"), track=str(tmp_path / "long_line.yaml"),
+                 brake_penalty=[1], fence=[1])
+    refused(invoke(path, tmp_path / "out"), "horizons", "Kb=1 f=1 Np=4 Nc=2: 10,080 QP inputs",
+            "an estimated", "give --force")
+
+
+@pytest.mark.parametrize("vehicles", [[("locomotive", 2), ("wagon", 200), ("locomotive", 2)],
+                                      [("locomotive", 3), ("wagon", 25), ("locomotive", 1), ("wagon", 7)]])
+@pytest.mark.parametrize("f", [1, 2, 10])
+def test_the_locomotive_groups_counted_from_the_kinds_are_the_fences(tmp_path, vehicles, f):
+    """What the study counts before its size estimate is what the fence's design model has."""
+    doc = load_yaml(PAPER)
+    doc["vehicles"] = [{"type": kind, "count": count} for kind, count in vehicles]
+    consist = load_consist(write_yaml(tmp_path / "consist.yaml", doc))
+    expected = sum(-(-count // f) for kind, count in vehicles if kind == "locomotive")
+    assert locomotive_groups(consist.kinds, f) == len(fence(consist, f, 20.0).locomotives) == expected
+
+
+@pytest.mark.parametrize("end", [4999, 5001])
+def test_the_stop_error_is_measured_from_the_stop_not_from_the_reference_tables_end(tmp_path, end):
+    """A table may end up to a metre off the 5000 m stop; the train follows it to its end. With a
+    0.1 m stop tolerance, a train standing at the table's end at 4999 m (or 5001 m) is a metre off
+    the stop: flagged for it, its stop error the head's from 5000 m (it read ``at the stop``, ok,
+    0.03 m when measured from the table's end)."""
+    rows = [(0, 0), (500, 30), (4800, 30), (end, 0)]
+    path = study(tmp_path, reference=reference_table(tmp_path, rows), brake_penalty=[60], adhesion=True,
+                 stop_tolerance_m=0.1)
+    result = invoke(path, tmp_path / "out")
+    assert result.exit_code == 1, result.output
+    run = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
+    side = "short of the stop" if end < 5000 else "beyond the stop"
+    # it stands near the table's end (0.03-0.11 m from it measured), about a metre from the stop
+    assert run["status"] == "flagged" and abs(run["stop_error_m"] - (end - 5000)) < 0.5, run.to_dict()
+    assert run["ended"] == side and not run["arrived"] and side in run["reason"], run["reason"]
+
+
+def test_fields_a_study_gives_and_its_runs_do_not_read_are_warned_of(tmp_path):
+    """observer_q and observer_r with the observer off, a reference table's points and
+    limit_lead_samples (the single-mass optimum's): one warning each group, naming the file and the
+    fields; the same fields where they are read, none."""
+    noises = study(tmp_path, observer_q=5, observer_r=7)
+    with pytest.warns(EcostudyWarning) as caught:
+        expand(noises, tmp_path / "out")
+    assert [str(w.message) for w in caught] == [f"{noises}: observer_q, observer_r: not used: the observer is off "
+                                                "(the controller reads the plant's true state)"]
+    table = {**reference_table(tmp_path, [(0, 0), (500, 30), (4800, 30), (5000, 0)]), "points": 2000,
+             "limit_lead_samples": 7}
+    with pytest.warns(EcostudyWarning) as caught:
+        expand(study(tmp_path, reference=table), tmp_path / "out")
+    assert [str(w.message) for w in caught] == [
+        f"{tmp_path / 'hh.yaml'}: reference.points, reference.limit_lead_samples: not used: they shape ecostudy's "
+        "single-mass optimum; a reference table is followed as given"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", EcostudyWarning)
+        expand(study(tmp_path, observer=True, observer_q=5, reference={"supplement_percent": 10, "points": 100,
+                                                                       "limit_lead_samples": 2}), tmp_path / "out")
+
+
+def test_brake_penalties_that_print_alike_are_refused_and_keyed_apart(tmp_path):
+    """A run is named (``Kb=60 f=10 ...``), drawn and was keyed by K_b to 6 significant digits: 60 and
+    60.0000001 in one study stored one row for both runs; refused in one line. In two studies the
+    exact value is in the key, so 60.0000004 does not re-use 60's stored run."""
+    refused(invoke(study(tmp_path, brake_penalty=[60, 60.0000001]), tmp_path / "out"),
+            "brake_penalty", "60.0 and 60.0000001 both read 60", "differ")
+    table = reference_table(tmp_path, [(0, 0), (500, 30), (4800, 30), (5000, 0)])
+    keys = [expand(study(tmp_path, brake_penalty=[kb], reference=table), tmp_path / "out")[3][0]["key"]
+            for kb in (60, 60.0000004, 60)]
+    assert keys[0] != keys[1] and keys[0] == keys[2]
+
+
+def test_a_run_too_long_for_its_samples_names_sample_time_s(tmp_path):
+    """0.01 s samples on the 5 km line: 70 863 samples, hours at the least a sample costs, whatever the
+    horizons (a 44-input QP): refused naming sample_time_s, which makes it too long, not horizons."""
+    refused(invoke(study(tmp_path, brake_penalty=[1], sample_time_s=0.01, max_samples=100000), tmp_path / "out"),
+            "hh.yaml: sample_time_s: Kb=1 f=10 Np=4 Nc=2: 44 QP inputs", "70,863 samples of 0.01 s", "an estimated")

@@ -149,15 +149,7 @@ def fence(consist, factor, ts, coupling="series", sharing="mass"):
     k: the reduced train is about f times stiffer). ``sharing``: "mass" or "equal" (:meth:`Fence.share`)."""
     if coupling not in ("series", "single") or sharing not in ("mass", "equal"):
         raise ValueError(f"fence: coupling 'series' or 'single', sharing 'mass' or 'equal' (got {coupling}, {sharing})")
-    members, start = [], 0
-    kinds = list(consist.kinds)
-    while start < len(kinds):  # runs of one kind, cut into pieces of at most ``factor`` cars
-        end = start
-        while end < len(kinds) and kinds[end] == kinds[start]:
-            end += 1
-        for a in range(start, end, factor):
-            members.append(np.arange(a, min(a + factor, end)))
-        start = end
+    members = groups(consist.kinds, factor)
     mass = np.array([consist.mass[c].sum() for c in members])
     resistance = np.array([consist.mass[c] @ consist.resistance[c] / consist.mass[c].sum() for c in members])
     centre = [0.5 * (c[0] + c[-1]) for c in members]  # in car indices: couplers spanned between centres
@@ -165,6 +157,27 @@ def fence(consist, factor, ts, coupling="series", sharing="mass"):
     stiffness = consist.stiffness / (spanned if coupling == "series" else np.ones_like(spanned))
     return Fence(members, design_model(mass, resistance[:, 1], stiffness, ts),
                  tuple(consist.kinds[c[0]] for c in members), resistance, sharing, spanned)
+
+
+def groups(kinds, factor):
+    """The car indices of each virtual car: the runs of consecutive cars of one kind (``kinds``, a
+    consist's), cut into pieces of at most ``factor`` cars. Read from the kinds alone, so a study
+    counts its locomotive groups (:func:`locomotive_groups`) without building the design model."""
+    members, start = [], 0
+    kinds = list(kinds)
+    while start < len(kinds):
+        end = start
+        while end < len(kinds) and kinds[end] == kinds[start]:
+            end += 1
+        members += [np.arange(a, min(a + factor, end)) for a in range(start, end, factor)]
+        start = end
+    return members
+
+
+def locomotive_groups(kinds, factor):
+    """How many locomotive virtual cars the fence method makes of a consist's ``kinds`` at ``factor``
+    (:attr:`Fence.locomotives` of :func:`fence`, without its design model)."""
+    return sum(kinds[cars[0]] == "locomotive" for cars in groups(kinds, factor))
 
 
 def virtual_car_count(runs, factor):

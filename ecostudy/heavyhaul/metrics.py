@@ -87,10 +87,12 @@ ENDS = ("at the stop", "short of the stop", "stalled short of the stop", "beyond
 STOOD = ENDS[:4]  # the train stood on the reference's final approach (its arrival time is a time it stood)
 
 
-def run_metrics(record, reference, locomotives, force_limit, stop_tolerance=Tolerances().stop_m):
+def run_metrics(record, reference, locomotives, force_limit, stop, stop_tolerance=Tolerances().stop_m):
     """The checked numbers of a run (units in the names): ``locomotives`` the indices of the
-    locomotive (virtual) cars, ``force_limit`` the consist's coupler limit [N], ``stop_tolerance``
-    [m] how far from the stop a train that stood has ``arrived``."""
+    locomotive (virtual) cars, ``force_limit`` the consist's coupler limit [N], ``stop`` the line's
+    stop [m] (the segment's length: a reference table may end up to a metre off it, and the stop
+    error is the head's from the stop, not from the table's end), ``stop_tolerance`` [m] how far from
+    the stop a train that stood has ``arrived``."""
     efforts = record.efforts
     loco = efforts[:, locomotives]
     braking = braking_samples(efforts, locomotives)
@@ -102,14 +104,14 @@ def run_metrics(record, reference, locomotives, force_limit, stop_tolerance=Tole
     dynamic = np.maximum(-loco, 0.0).sum(axis=1) / np.maximum(record.dynamic_limits.sum(axis=1), 1.0)
     using = dynamic > 1e-3
     terms = np.nansum(record.terms, axis=0)
-    error = float(record.head[-1] - reference.distance[-1])
+    error = float(record.head[-1] - stop)
     end = ended(record, error, stop_tolerance)
     at = float(record.times[-1]) if end in STOOD else np.nan  # a train that never stood has no arrival
     return {
         "arrived": end == ENDS[0], "ended": end, "ended_s": float(record.times[-1]), "arrival_s": at,
         "arrival_late_s": at - reference.running_time, "arrival_late_pct": 100 * (at / reference.running_time - 1),
         "stop_error_m": error,
-        **rollback(record.head, reference.distance[0], reference.distance[-1]),
+        **rollback(record.head, reference.distance[0], stop),
         "reference_at_end_kmh": float(record.reference[-1] / KMH),  # v_r where the run ended
         "speed_at_end_kmh": float(record.mean_speed[-1] / KMH), "rolling_back": bool(record.rolling_back),
         "resistance_at_end_kN": record.end_forces[0] / KN, "traction_utmost_at_end_kN": record.end_forces[1] / KN,

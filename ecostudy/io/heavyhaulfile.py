@@ -137,14 +137,32 @@ class HeavyhaulFile(Strict):
                                        "of the two is the tolerance).")
     output: Optional[str] = None
 
+    def unused(self) -> list[tuple[list[str], str]]:
+        """The fields the file gives that its runs do not read, as (fields, why) groups: the observer's
+        noises with the observer off; the single-mass optimum's grid and limit lead with a reference
+        table (followed as given)."""
+        out: list[tuple[list[str], str]] = []
+        noises: list[str] = [name for name in ("observer_q", "observer_r") if name in self.model_fields_set]
+        if noises and not self.observer:
+            out.append((noises, "not used: the observer is off (the controller reads the plant's true state)"))
+        optimum = [f"reference.{name}" for name in ("points", "limit_lead_samples")
+                   if name in self.reference.model_fields_set]
+        if optimum and self.reference.table is not None:
+            out.append((optimum, "not used: they shape ecostudy's single-mass optimum; a reference table is "
+                                 "followed as given"))
+        return out
+
     @field_validator("brake_penalty", "fence", "horizons")
     @classmethod
     def _once(cls, values: list[Any]) -> list[Any]:
         seen: list[Any] = []
-        for v in values:
-            key = (v.np, v.nc) if isinstance(v, Horizon) else v
+        for v in values:  # a K_b by its 6 significant digits: a run's name, its key and its figures' names
+            key = (v.np, v.nc) if isinstance(v, Horizon) else f"{v:g}" if isinstance(v, float) else v
             if key in seen:
-                raise ValueError(f"{key} is listed twice (each value is one run)")
+                first = values[seen.index(key)]
+                raise ValueError(f"{key} is listed twice (each value is one run)" if first == v else
+                                 f"{first!r} and {v!r} both read {key} (a run is named and stored by K_b to 6 "
+                                 f"significant digits): give values that differ there")
             seen.append(key)
         return values
 

@@ -30,7 +30,7 @@ from ecostudy.heavyhaul.airbrake import application_time, brake_lag
 from ecostudy.heavyhaul.checks import (braking_asked, reference_problems, ruling_grade, samples_to_start,
                                        starting_coupler_force, unmodelled_tunnels)
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
-from ecostudy.heavyhaul.linear import fence
+from ecostudy.heavyhaul.linear import fence, locomotive_groups
 from ecostudy.heavyhaul.loop import reduced_state, run
 from ecostudy.heavyhaul.metrics import Tolerances, closing_metrics, in_train_metrics, reasons, run_metrics
 from ecostudy.heavyhaul.observer import KalmanObserver
@@ -84,6 +84,8 @@ def expand(path, out=None):
     output folder (``out``, else the study's own) checked before the reference run is solved."""
     path = Path(path)
     s = validate(HeavyhaulFile, read_document(path), path)
+    for fields, why in s.unused():
+        warnings.warn(problem(path, ", ".join(fields), why), EcostudyWarning, stacklevel=2)
     output = Path(s.output) if s.output else default_output(s.name)  # relative: to the working directory
     check_output_dir(out or output, ("runs.csv", "results.sqlite"), "heavyhaul")
     consist_path = named_file(path, "consist", s.consist)
@@ -129,7 +131,7 @@ def expand(path, out=None):
     if s.brake_penalty_on == "all" and min(s.brake_penalty) < 1:
         problems.append(problem(path, "brake_penalty_on", f"all needs every brake_penalty >= 1 (a braking locomotive's "
                                 f"term K_b u^2 is u^2 plus (K_b - 1) u^2; got {min(s.brake_penalty):g})"))
-    fewest = min([len(fence(consist, f, s.sample_time_s).locomotives) for f in s.fence if f <= consist.cars] or [1])
+    fewest = min([locomotive_groups(consist.kinds, f) for f in s.fence if f <= consist.cars] or [1])  # no model built
     ramp = samples_to_start(needed, s.rate_kN_per_sample * KN, fewest)  # the fewest locomotive groups ramp slowest
     if ramp * s.sample_time_s > reference.running_time:
         problems.append(problem(path, "rate_kN_per_sample", f"{s.rate_kN_per_sample:g} kN per sample takes {ramp:.3g} "
@@ -163,7 +165,7 @@ def expand(path, out=None):
               "arrival_tolerance_percent": s.arrival_tolerance_percent, "arrival_tolerance_s": s.arrival_tolerance_s}
     cases = []
     for kb, f, h in product(s.brake_penalty, s.fence, s.horizons):
-        case = {**shared, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",
+        case = {**shared, "K_b": kb, "scenario": f"Kb={kb:g} f={f} Np={h.np} Nc={h.nc}",  # K_b exact: in the key
                 "labels": {"K_b": kb, "f": f, "Np": h.np, "Nc": h.nc}}
         case["key"] = case_key(case)
         case["plan"] = Plan(s, reference, segment)  # after the key: all follow from the inputs the key hashes
@@ -234,9 +236,10 @@ def case_controller(case, consist, plant):
     return reduction, controller
 
 
-def summarise(consist, controller, record, reference, locomotives=(), stop_tolerance=Tolerances().stop_m):
-    """The per-run numbers (SI in, the units in the names out); ``locomotives`` the controller's
-    locomotive (virtual) cars, ``stop_tolerance`` [m] how near the stop a run has arrived."""
+def summarise(consist, controller, record, reference, stop, locomotives=(), stop_tolerance=Tolerances().stop_m):
+    """The per-run numbers (SI in, the units in the names out); ``stop`` the line's stop [m] (the
+    plant's segment's length), ``locomotives`` the controller's locomotive (virtual) cars,
+    ``stop_tolerance`` [m] how near the stop a run has arrived."""
     error = record.mean_speed - record.reference
     forces = np.abs(record.couplers) / KN
     wagons, total = record.wagon_brake_work, record.traction_work + record.dynamic_brake_work + record.wagon_brake_work
@@ -244,7 +247,7 @@ def summarise(consist, controller, record, reference, locomotives=(), stop_toler
     step = max(1, consist.cars // 100)  # the heat map keeps at most about 100 couplers
     return {
         "tracking_mean_mps": float(np.mean(np.abs(error))), "tracking_std_mps": float(np.std(error)),
-        **run_metrics(record, reference, list(locomotives), consist.force_limit, stop_tolerance),
+        **run_metrics(record, reference, list(locomotives), consist.force_limit, stop, stop_tolerance),
         "force_mean_kN": float(forces.mean()),
         "force_std_kN": float(forces.std()), "energy_total_kWh": total / KWH,
         "traction_kWh": record.traction_work / KWH, "dynamic_brake_kWh": record.dynamic_brake_work / KWH,
@@ -269,7 +272,8 @@ def run_heavyhaul_case(case):
 
 def _run(case):
     consist, controller, record, reference, plant = drive(case)
-    summary = {**summarise(consist, controller, record, reference, controller.locos, case["stop_tolerance_m"]),
+    summary = {**summarise(consist, controller, record, reference, plant.segment.distance, controller.locos,
+                           case["stop_tolerance_m"]),
                **in_train_metrics(plant.history, consist), **closing_metrics(plant.closest, consist, plant.travel)}
     why = reasons(summary, case["max_samples"], summary["over_budget_count"],
                   Tolerances(case["stop_tolerance_m"], case["speed_tolerance_kmh"] * KMH,

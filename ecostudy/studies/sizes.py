@@ -37,7 +37,7 @@ import numpy as np
 
 from ecostudy.core.defaults import DAS_TIME_LIMIT_S
 from ecostudy.ocp.phases import rspc_modes
-from ecostudy.core.budget import WORKER_BYTES, check_run, check_study, how_many
+from ecostudy.core.budget import MAX_RUN_SECONDS, WORKER_BYTES, check_run, check_study, how_many
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.heavyhaul.linear import virtual_car_count
 from ecostudy.io.documents import named_file, read_document
@@ -168,15 +168,17 @@ def heavyhaul_runs(study, reference, cases, path=None):
     ``path``, a run estimated above one run's budget (its time, or its process's memory: a worker and
     its QP, :func:`heavyhaul_bytes`) is refused (unless forced)."""
     samples = min(study.max_samples, int(np.ceil(1.5 * reference.running_time / study.sample_time_s)))
+    # too long at the least a sample costs (the plant's, a small QP's): the samples are the cause
+    field = "sample_time_s" if samples * HEAVYHAUL_SECONDS_PER_SAMPLE_GROUPED > MAX_RUN_SECONDS else "horizons"
     out = []
     for c, cars in _heavyhaul_sizes(cases):
         inputs = cars * c["labels"]["Nc"]
         seconds = (heavyhaul_setup_seconds(cars, c["labels"]["Nc"], c["labels"]["Np"])
                    + samples * heavyhaul_sample_seconds(inputs))
         if path is not None:
-            check_run(path, "horizons", f"{c['scenario']}: {inputs:,} QP inputs (virtual cars x Nc) a sample, "
-                      f"{samples} samples", seconds, WORKER_BYTES + heavyhaul_bytes(cars, c["labels"]["Nc"],
-                                                                                    c["labels"]["Np"]))
+            check_run(path, field, f"{c['scenario']}: {inputs:,} QP inputs (virtual cars x Nc) a sample, "
+                      f"{samples:,} samples of {study.sample_time_s:g} s", seconds,
+                      WORKER_BYTES + heavyhaul_bytes(cars, c["labels"]["Nc"], c["labels"]["Np"]))
         out.append(seconds)
     return out
 
