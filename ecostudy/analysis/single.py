@@ -12,13 +12,13 @@ from ecostudy.analysis.summary import run_summary
 from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import SolverError
-from ecostudy.core.simulate import missed_points, verify, within_tolerances
-from ecostudy.core.status import Judged, Status, calibrated, from_checks, part, solver_check, solver_part, worst
+from ecostudy.core.simulate import verify
+from ecostudy.core.status import Judged, Status
 from ecostudy.core.types import Timing, Train, Trajectory
 from ecostudy.core.units import KWH, number
 from ecostudy.io.documents import source_file
 from ecostudy.io.results import COSTATE_OBJECTIVES
-from ecostudy.io.runsummary import RunSummary, SolverRun, Verification
+from ecostudy.io.runsummary import ALL_OUT_SOLVER, RunSummary, run_status
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import (
     all_out,
@@ -33,9 +33,6 @@ from ecostudy.ocp.problem import (
 )
 
 
-# summary.json: how Ipopt ended the all-out run a run's time was taken from (a supplement over it),
-# written only when that was not optimal
-ALL_OUT_SOLVER = "all_out_solver_status"
 # a run this close to the all-out time [relative] is the all-out run: its arrival multiplier is a
 # degenerate problem's (118 kWh/s on the metro's 10.95 kWh run at supplement 0, 5.66 at +0.1 %, K = 300), no
 # trade-off of energy against time, so it has no marginal energy (as the all-out run itself)
@@ -86,22 +83,8 @@ class RunResult(Judged):
         driver advice (when asked for) keeps the stop, the time and the limits as driven and the
         train is not one of a calibration that was flagged (:func:`~ecostudy.core.status.calibrated`);
         else ``flagged`` with what did not pass."""
-        block = self.summary["verification"]  # these two blocks only: a study may put a table row under "das"
-        solver = SolverRun.from_dict(self.summary["solver"]).status
-        ver = None if block is None else Verification.from_dict(block)
-        checks = solver_check(solver)
-        if ver is None:
-            checks["not re-simulated"] = False
-        else:  # its errors, and each timing point missed by name (``passed`` needs both)
-            checks[f"re-simulation outside tolerance ({ver.errors})"] = within_tolerances(block)
-            checks.update({f"re-simulated, {missed}": False for missed in missed_points(block.get("windows") or ())})
-        statuses = [from_checks(checks), calibrated(self.train.calibration_reason)]  # a train not borne out by its logs
-        if ALL_OUT_SOLVER in self.summary:  # the all-out run its running time was taken from
-            statuses.append(solver_part("the all-out run", self.summary[ALL_OUT_SOLVER]))
-        if self.das is not None:
-            advice = Status.parse(self.das.summary["status"])  # the driver advice as driven: a run of this command too
-            statuses.append(part(f"driver advice {self.das.summary['method']}", advice))
-        return worst(statuses)
+        return run_status(self.summary, None if self.das is None else self.das.summary,  # not summary["das"]:
+                          self.train.calibration_reason)  # a study may put a table row there
 
     def line(self) -> str:
         """The run in a few words: stops, distance, K, objective, running time and energies (its

@@ -9,8 +9,46 @@ a misspelt attribute is an error mypy and the interpreter name, a misspelt key i
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional
 
-from ecostudy.core.status import ADHESION_USE, TOLERANCES, past
+from ecostudy.core.simulate import missed_points, within_tolerances
+from ecostudy.core.status import (ADHESION_USE, TOLERANCES, Status, calibrated, from_checks, part, past, solver_check,
+                                  solver_part, worst)
 from ecostudy.core.units import number, signed
+
+
+# summary.json: how Ipopt ended the all-out run a run's time was taken from (a supplement over it),
+# written only when that was not optimal
+ALL_OUT_SOLVER = "all_out_solver_status"
+
+
+def status_parts(summary: Mapping[str, Any], das: Optional[Mapping[str, Any]] = None,
+                 calibration_reason: str = "") -> dict[str, Status]:
+    """The statuses one run's status is made of, by the ``summary.json`` field each is read from:
+    how Ipopt ended (``solver.status``), the re-simulation (``verification``: its errors within
+    their tolerances, each timing point kept), the train's calibration (its file's
+    ``calibration_reason``: :func:`~ecostudy.core.status.calibrated`), the all-out run a supplement's
+    time was taken from (:data:`ALL_OUT_SOLVER`) and the driver advice as driven (``das``: the
+    advice's block, as ``das.status`` records it). :func:`run_status` is their worst: a run's status
+    as ``ecostudy solve`` writes it, and as a saved summary must say it."""
+    block = summary["verification"]
+    checks = {"not re-simulated": False} if block is None else {  # its errors, each timing point missed by name
+        f"re-simulation outside tolerance ({Verification.from_dict(block).errors})": within_tolerances(block),
+        **{f"re-simulated, {missed}": False for missed in missed_points(block.get("windows") or ())}}
+    parts = {"solver.status": from_checks(solver_check(str(summary["solver"]["status"]))),  # joined as one
+             "verification": from_checks(checks), "train calibration": calibrated(calibration_reason)}
+    if ALL_OUT_SOLVER in summary:  # the all-out run its running time was taken from
+        parts[ALL_OUT_SOLVER] = solver_part("the all-out run", str(summary[ALL_OUT_SOLVER]))
+    if das is not None:  # the driver advice as driven: a run of this command too
+        parts["das.status"] = part(f"driver advice {das['method']}", Status.parse(str(das["status"])))
+    return parts
+
+
+def run_status(summary: Mapping[str, Any], das: Optional[Mapping[str, Any]] = None,
+               calibration_reason: str = "") -> Status:
+    """``ok`` when Ipopt proved optimality (of the all-out run too, where the running time is a
+    supplement over it), the independent re-simulation agrees, the driver advice (``das``, when asked
+    for) keeps the stop, the time and the limits as driven, and the train is not one of a
+    calibration that was flagged; else ``flagged`` with what did not pass (:func:`status_parts`)."""
+    return worst(status_parts(summary, das, calibration_reason).values())
 
 
 # Keys as ecostudy before the one naming rule (ecostudy.core.columns) wrote them: a folder written
