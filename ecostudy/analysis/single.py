@@ -18,7 +18,7 @@ from ecostudy.core.types import Timing, Train, Trajectory
 from ecostudy.core.units import KWH, number
 from ecostudy.io.documents import source_file
 from ecostudy.io.results import COSTATE_OBJECTIVES
-from ecostudy.io.runsummary import ALL_OUT_SOLVER, RunSummary, run_status
+from ecostudy.io.runsummary import ALL_OUT_SOLVER, TIME_CAP, RunSummary, run_status
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import (
     all_out,
@@ -27,6 +27,7 @@ from ecostudy.ocp.problem import (
     check_not_crawling,
     check_windows,
     prepare,
+    slowest_time,
     solve_once,
     stage,
     warm_guess,
@@ -118,6 +119,8 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     target, window, t_allout, fastest = timing.running_time, timing.window, None, None
     latest = target if target is not None else (window[1] if window else None)
     check_not_crawling(latest, case)
+    # the time the mixed weights choose: not past the crawl (a time weight of 1e-9 against 1 chose 27 h)
+    cap = slowest_time(case) if objective == "mixed" and latest is None else None
     if objective == "time" or timing.supplement is not None or (latest is not None and latest < 0.97 * case.estimate):
         t_allout, m, fastest = all_out(case, stages, options)
         outcome = fastest
@@ -130,7 +133,8 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
             guess = warm_guess(warm_start, case)
         else:
             guess = capped_guess(case, target or (window[1] if window else case.estimate * 1.1))
-        kw = {"running_time": target} if target is not None else {"window": window} if window else {}
+        kw = ({"running_time": target} if target is not None else {"window": window} if window else
+              {"window": (0.0, cap)} if cap is not None else {})
         m, outcome = solve_once(case, guess, objective, stages, options, written, structure, weights=weights, **kw)
         if not outcome.usable:
             if latest is not None and t_allout is None:
@@ -141,6 +145,8 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     result = finish(case, m, outcome, stages, objective, t_allout, verify_result)
     if timing.supplement is not None and outcome is not fastest and not fastest.optimal:  # its time is a supplement over it
         result.summary[ALL_OUT_SOLVER] = fastest.status
+    if cap is not None:  # a run at it is flagged (io.runsummary.status_parts)
+        result.summary[TIME_CAP] = cap
     result.request = Request(source_file(track), source_file(train), timing, tuple(weights))
     return result
 

@@ -38,7 +38,7 @@ class Study:
     to_stop: str
     timing: Timing
     objective: str = "energy"
-    weights: tuple[float, float] = (1.0, 1.0)
+    weights: tuple[float, float] | None = None  # the mixed objective's (w_t, w_e); None: not given, (1, 1)
     points: int = RUN_POINTS
     output: Path = field(default_factory=lambda: Path("out"))
     track_path: Path | None = None
@@ -305,7 +305,8 @@ def load_study(study_path: Where, read: Callable[..., Any] = lambda file, reader
         "running_time_s")
     output = Path(s.output) if s.output else default_output(s.name)
     return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop,
-                 timing=timing, objective=s.objective, weights=(s.weights.time, s.weights.energy),
+                 timing=timing, objective=s.objective,
+                 weights=(s.weights.time, s.weights.energy) if "weights" in s.model_fields_set else None,
                  points=s.points, output=output, track_path=track_file, train_path=train_file,
                  windows=windows_from_schema(s.windows, track, from_stop, to_stop, path) + timed, timing_field=timing_field,
                  documents=(train_doc, track_doc), timetable_path=timetable, timetable_windows=len(timed))
