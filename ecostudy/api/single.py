@@ -22,7 +22,7 @@ from ecostudy.core.types import Timing
 from ecostudy.core.units import number, signed
 from ecostudy.das.advice import failed_advice
 from ecostudy.das.methods import DAS_METHODS, das_run
-from ecostudy.io.writers import check_output_dir, default_output, write_json
+from ecostudy.io.writers import check_name_length, check_output_dir, default_output, write_json
 from ecostudy.ocp import session
 from ecostudy.report.drawer import drawing
 from ecostudy.report.files import run_files, write_fixed_step, write_run
@@ -180,6 +180,7 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
     agreement or more for a run that is ok."""
     check_options(time=time)
     result_dir = Path(result_dir)
+    check_name_length(result_dir)
     if result_dir.is_dir():
         check_output_dir(result_dir, ("check.json",))
     report = check_result(result_dir, time)

@@ -18,6 +18,7 @@ from ecostudy.core.units import KMH, KN, KW, KWH
 from ecostudy.io.documents import file_digest as file_digest  # re-exported: inputs.json's digests
 from ecostudy.io.runsummary import current, status_parts
 from ecostudy.io.tables import number_columns
+from ecostudy.io.writers import check_name_length
 
 
 def check_unchanged(inputs: dict[str, Any], result_dir: str | PathLike[str]) -> None:
@@ -55,6 +56,7 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     """The :class:`SavedRun` of a result folder; a folder that is not one, or whose profile is cut
     short or holds anything but finite numbers, is one clear line."""
     result_dir = Path(result_dir)
+    check_name_length(result_dir)
     if not result_dir.is_dir():
         raise InputError(problem(result_dir, "", "a file, not a result folder of `ecostudy solve`"
                                  if result_dir.exists() else "no such folder"))
