@@ -227,7 +227,8 @@ def test_a_solve_folder_that_check_found_not_ok_loads_as_not_ok(tmp_path):
     """`api.load` read summary.json alone: a K = 10 run 3 m short of its stop whose summary.json was
     rewritten to ok (its verification too, consistent with itself, as a careful edit by hand would)
     loaded as ok beside the check.json whose re-simulation flags it. The folder's check now counts;
-    check itself refuses the edited verification (not its re-simulation's numbers)."""
+    check itself refuses the edited verification (not its re-simulation's numbers), and api.load a
+    summary whose counts still say the run is flagged."""
     import json
 
     folder = tmp_path / "run"
@@ -241,6 +242,11 @@ def test_a_solve_folder_that_check_found_not_ok_loads_as_not_ok(tmp_path):
     summary.update(status="ok", not_ok=[], verification={**summary["verification"], **zero, "passed": True,
                                                           "simulated_running_time_s": summary["running_time_s"]})
     (folder / "summary.json").write_text(json.dumps(summary))  # its counts left saying 1 flagged, as a hasty edit would
+    with pytest.raises(api.InputError, match=r"summary.json: cases: \{'total': 1, 'ok': 0, 'flagged': 1, 'failed': 0\}, "
+                                             "but the run's status is ok: an edited file"):
+        api.load(folder)  # the counts contradict the status
+    summary["cases"] = {"total": 1, "ok": 1, "flagged": 0, "failed": 0}
+    (folder / "summary.json").write_text(json.dumps(summary))
     with pytest.raises(api.InputError, match="summary.json: verification.arrival_time_error_s: 0.0, but the saved "
                                              "profile re-simulated gives 0.4"):
         api.check_folder(folder)

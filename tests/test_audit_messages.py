@@ -103,3 +103,13 @@ def test_compare_names_its_stop_options_as_the_command_line_spells_them(tmp_path
             "command line: --from: unknown stop 'Foo'")
     refused(run("compare", "--track", AMS, "--train", METRO, "--to", "Rokin", "--time", 80, "--out", tmp_path / "o"),
             "command line: --to: must differ from '--from'")
+
+
+def test_the_crawl_guard_names_the_time_it_is_measured_against(tmp_path):
+    """At K = 100 --time 1e308 said 'the fastest possible run's 71.6 s' and --time 10 'the fastest
+    possible run takes 71.7 s': the kinematic envelope's time (no NLP) and the all-out NLP's. The
+    first is named as the envelope's, in one wording with the journey's (ocp.problem.crawling)."""
+    solve = ("solve", "--track", AMS, "--train", METRO, "-K", 100, "--no-plot", "--out", tmp_path / "o")
+    refused(run(*solve, "--time", 1e308), "command line: --time: 1e+308 s is over 5 times the fastest possible run's "
+            "71.6 s (kinematic envelope): the train would crawl")
+    refused(run(*solve, "--time", 10), "command line: --time: infeasible: the fastest possible run takes 71.7 s")

@@ -76,6 +76,26 @@ def test_a_window_no_run_keeps_names_the_study_field(tmp_path, window, fragment)
     nothing_written(tmp_path)
 
 
+@pytest.mark.parametrize("windows, fragment", [
+    ([{"position_m": 500, "earliest_s": 50}, {"position_m": 600, "latest_s": 45}],
+     "s.yaml: windows[0].earliest_s, windows[1].latest_s: infeasible: the timing point at 500 m (not before 50 s) and "
+     "the timing point at 600 m (not after 45 s) leave -5 s; the fastest run between them takes 4 s"),
+    ([{"position_m": 500, "latest_s": 45}, {"position_m": 500, "earliest_s": 50}],
+     "s.yaml: windows[1].earliest_s, windows[0].latest_s: infeasible: the timing point at 500 m (not before 50 s) and "
+     "the timing point at 500 m (not after 45 s) leave -5 s; one place is passed at one time"),
+])
+def test_windows_no_run_keeps_together_are_refused_naming_both(tmp_path, windows, fragment):
+    """Each window passed the fastest envelope alone; together they were solved (the all-out NLP at
+    K = 100, 300 and 1000) and refused as 'infeasible on this grid ... though the fastest envelope
+    does: try more points', which no grid keeps. The rule is the journey timetable's
+    (ocp.problem.check_times_reachable), before computing."""
+    doc = load_yaml(STUDIES / "default.yaml")
+    doc.update(track=str(AMS), train=str(METRO), points=100, output=str(tmp_path / "out"), running_time_s=80,
+               windows=windows)
+    refused(run("solve", write_yaml(tmp_path / "s.yaml", doc), "--no-plot"), fragment)
+    nothing_written(tmp_path)
+
+
 def test_windows_a_command_does_not_keep_are_refused_naming_the_file(tmp_path):
     """``pareto`` and ``compare`` named the study's name ('s: windows/window_s'); ``run`` ignored its windows."""
     study = window_study(tmp_path, latest_s=10)

@@ -92,7 +92,8 @@ def test_export_command_on_a_solved_run_with_driver_advice(tmp_path):
     summary = json.loads((out / "summary.json").read_text())
     (out / "summary.json").write_text(json.dumps({**summary, "solver": {**summary["solver"], "status": "maxIterations"}}))
     edited = runner.invoke(app, ["check", str(out)])
-    assert edited.exit_code == 2 and "status: ok, but solver.status is 'maxIterations'" in edited.output, edited.output
+    assert edited.exit_code == 2 and "status: ok, but its part solver.status makes it flagged: Ipopt ended " \
+        "maxIterations, not optimal" in edited.output, edited.output
 
 
 @pytest.mark.flagged_on_purpose
@@ -127,8 +128,9 @@ def test_a_step_longer_than_the_run_keeps_the_departure_and_the_arrival(steps):
     assert table["position_m"].tolist() == [0.0, 100.0]
 
 
-@pytest.mark.parametrize("edit", [{"status": "weird"}, {"verification": {"passed": False}}])
-def test_an_edited_summary_is_refused_in_one_line(tmp_path, edit):
+@pytest.mark.parametrize("edit, field", [({"status": "weird"}, "status"),
+                                         ({"verification": {"passed": False}}, "verification.passed")])
+def test_an_edited_summary_is_refused_in_one_line(tmp_path, edit, field):
     """A summary.json whose status is not a status, or says ok over a failed re-simulation (which
     the solve flags), is one line naming the file and the field, exit 2, not an export that says ok."""
     runner = CliRunner()
@@ -140,7 +142,7 @@ def test_an_edited_summary_is_refused_in_one_line(tmp_path, edit):
     (out / "summary.json").write_text(json.dumps(summary))
     for command in ("export", "check"):
         r = runner.invoke(app, [command, str(out)])
-        assert r.exit_code == 2 and "summary.json: status" in r.output and "Traceback" not in r.output, r.output
+        assert r.exit_code == 2 and f"summary.json: {field}: " in r.output and "Traceback" not in r.output, r.output
 
 
 @pytest.mark.flagged_on_purpose
@@ -157,8 +159,9 @@ def test_a_summary_edited_to_ok_over_a_run_short_of_its_stop_is_refused(tmp_path
     assert said.count("outside tolerance (arrival +0.40") == 1, said
     summary = json.loads((out / "summary.json").read_text())
     zero = {k: 0.0 for k in ("arrival_time_error_s", "stop_error_m", "energy_error_pct", "net_energy_error_pct")}
-    summary.update(status="ok", not_ok=[], verification={**summary["verification"], **zero, "passed": True,
-                                                         "simulated_running_time_s": summary["running_time_s"]})
+    summary.update(status="ok", not_ok=[], cases={"total": 1, "ok": 1, "flagged": 0, "failed": 0},
+                   verification={**summary["verification"], **zero, "passed": True,
+                                 "simulated_running_time_s": summary["running_time_s"]})
     (out / "summary.json").write_text(json.dumps(summary))
     for command in ("export", "check"):
         r = runner.invoke(app, [command, str(out)])

@@ -88,3 +88,20 @@ def test_solve_without_a_study_writes_to_out_track_from_to(layout):
                                  "--no-plot"])
     assert r.exit_code == 0, r.output
     assert (layout / "work" / "out" / "amsterdam_rokin_centraal_Rokin_Centraal" / "summary.json").is_file()
+
+
+def test_a_path_with_a_name_too_long_is_one_line_naming_it(tmp_path):
+    """A name of 300 characters (the file system allows 255 bytes) was 'internal error: OSError:
+    [Errno 36] File name too long', exit 3, from solve's --out, from export and check of that
+    folder and from an input file: now one line, exit 2, the path shortened."""
+    long = tmp_path / ("x" * 300)
+    solve = ["solve", "--track", str(ROOT / "tracks/amsterdam_rokin_centraal.yaml"), "--train",
+             str(ROOT / "trains/amsterdam_metro.yaml"), "--time", "80", "--points", "50", "--no-plot"]
+    for args, said in ((solve + ["--out", str(long)], "xxx: --out: File name too long: its longest name is 300 bytes"),
+                       (["export", str(long)], "xxx: File name too long: its longest name is 300 bytes"),
+                       (["check", str(long)], "xxx: File name too long: its longest name is 300 bytes"),
+                       (["solve", f"{long}.yaml"], "xxx.yaml: File name too long: its longest name is 305 bytes")):
+        r = CliRunner().invoke(app, args)
+        assert r.exit_code == 2 and r.output.count("\n") == 1 and said in r.output, (args[0], r.output)
+        assert "..." in r.output and len(r.output) < 300, r.output  # the path shortened
+    assert not list(tmp_path.iterdir())  # nothing written

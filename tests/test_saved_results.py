@@ -181,3 +181,68 @@ def test_an_edited_marginal_energy_is_refused_by_check(solved, tmp_path):
     inputs = json.loads((solved / "inputs.json").read_text())
     (out / "inputs.json").write_text(json.dumps({**inputs, "objective": "net_energy"}))
     _refused_everywhere(out, "inputs.json: objective: 'net_energy', but summary.json records 'energy': an edited record?")
+
+
+def _say_ok(out):
+    """The summary's own status, its counts and its list of cases not ok edited to say ok."""
+    _edit_summary(out, status="ok", cases={"total": 1, "ok": 1, "flagged": 0, "failed": 0}, not_ok=[])
+
+
+def test_a_status_its_parts_contradict_is_refused(solved, tmp_path):
+    """A run is ok only when every part its status is made of is (io.runsummary.status_parts): a
+    driver advice that stopped 2.12 m short (K = 100, 78 s, --das round) edited to ok in status,
+    cases and not_ok alone passed check, export (ok on every advice row) and api.load; so did an
+    all-out run Ipopt ended acceptable, and the advice's status edited to ok under a flagged run."""
+    advised = tmp_path / "advised"
+    r = CliRunner().invoke(app, [*SOLVE, "--time", "78", "--points", "100", "--das", "round", "--out", str(advised)])
+    assert r.exit_code == 1 and "driver advice round: stopped 2.12 m short" in r.output, r.output
+    flagged_copy = shutil.copytree(advised, tmp_path / "flagged")
+    _say_ok(advised)
+    _refused_everywhere(advised, "summary.json: status: ok, but its part das.status makes it flagged: driver advice "
+                                 "round: stopped 2.12 m short of the stop (tolerance 1 m): an edited file?")
+    _edit_summary(flagged_copy, das__status="ok")
+    _refused_everywhere(flagged_copy, "summary.json: status: flagged: driver advice round: stopped 2.12 m short of the "
+                                      "stop (tolerance 1 m), but every part of the run is ok (solver.status, "
+                                      "verification, train calibration, das.status)")
+    unproven = _copy(solved, tmp_path)
+    _edit_summary(unproven, all_out_solver_status="acceptable")
+    _refused_everywhere(unproven, "summary.json: status: ok, but its part all_out_solver_status makes it flagged: the "
+                                  "all-out run: Ipopt ended acceptable, not optimal")
+    counted = _copy(solved, tmp_path / "c")
+    _edit_summary(counted, cases={"total": 1, "ok": 0, "flagged": 1, "failed": 0})
+    _refused_everywhere(counted, "summary.json: cases: {'total': 1, 'ok': 0, 'flagged': 1, 'failed': 0}, but the "
+                                 "run's status is ok")
+
+
+def test_a_train_of_a_flagged_calibration_cannot_be_edited_to_ok(tmp_path):
+    """The train's calibration is a part of its run's status too: check and export read the train
+    file and refuse an ok the calibration does not allow (api.load, which reads no train file, cannot)."""
+    train = tmp_path / "calibrated.yaml"
+    train.write_text(TRAIN.read_text() + "\ncalibration: {status: flagged, reason: drift of the residuals}\n")
+    out = tmp_path / "run"
+    r = CliRunner().invoke(app, ["solve", "--track", str(TRACK), "--train", str(train), "--no-plot", "--time", "80",
+                                 "--points", "100", "--out", str(out)])
+    assert r.exit_code == 1 and "train calibrated with status flagged: drift of the residuals" in r.output, r.output
+    assert CliRunner().invoke(app, ["check", str(out)]).exit_code == 1
+    _say_ok(out)
+    for command in ("check", "export"):
+        r = CliRunner().invoke(app, [command, str(out)])
+        assert r.exit_code == 2 and "summary.json: status: ok, but its part train calibration makes it flagged: train " \
+            "calibrated with status flagged: drift of the residuals" in r.output, (command, r.output)
+
+
+def test_an_energy_run_edited_to_say_all_out_is_refused(solved, tmp_path):
+    """objective time in inputs.json and summary.json, and no timing, made the 80 s energy run pass
+    check and export as the all-out run: an all-out run records its own time as the all-out time,
+    and has no marginal energy and no costate check."""
+    out = _copy(solved, tmp_path)
+    inputs = json.loads((out / "inputs.json").read_text())
+    (out / "inputs.json").write_text(json.dumps({**inputs, "objective": "time", "timing": dict.fromkeys(inputs["timing"])}))
+    _edit_summary(out, objective="time")
+    _refused_everywhere(out, "summary.json: all_out_time_s: None, but the all-out run (objective time) records its "
+                             "own running time (80.0")
+    took = json.loads((out / "summary.json").read_text())["running_time_s"]
+    _edit_summary(out, all_out_time_s=took)
+    _refused_everywhere(out, "summary.json: marginal_energy_kWh_per_s: a marginal energy, but a run of objective 'time' has none")
+    _edit_summary(out, marginal_energy_kWh_per_s=None)
+    _refused_everywhere(out, "summary.json: pontryagin: a costate check, but a run of objective 'time' has none")

@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 from ecostudy import api
 from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning, InputError
+from ecostudy.studies.cases import expand
 
 from .conftest import TRACKS, TRAINS, write_yaml
 
@@ -59,3 +60,16 @@ def test_pareto_names_the_study_s_advice_and_a_plain_study_nothing(tmp_path):
     plain = study(tmp_path, objective="energy")  # without das; the objective compare and the front use anyway
     assert unused_warnings(refused(api.compare_folder, plain, tmp_path)) == []
     assert unused_warnings(lambda: api.solve_folder(plain, plot=False, out=tmp_path / "plain")) == []
+
+
+def test_weights_the_objective_does_not_use_are_named_by_solve_and_run(tmp_path):
+    """A study's weights, given as their defaults, with objective energy: solve and run ignored them
+    without a word (run warned only of weights other than the defaults), as an unused das is named."""
+    path = study(tmp_path, weights={"time": 1, "energy": 1}, points=50)
+    with pytest.warns(EcostudyWarning, match=f"^{path}: weights: read but not used: the objective is energy, not mixed$"):
+        api.solve_folder(path, plot=False, out=tmp_path / "solve")
+    with pytest.warns(EcostudyWarning, match=f"^{path}: weights: read but not used: no case has objective mixed$"):
+        expand(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the objective mixed uses them: no warning
+        api.solve_folder(path, objective="mixed", window="70,100", plot=False, out=tmp_path / "mixed")

@@ -21,7 +21,7 @@ from ecostudy.core.status import (EARLY_TOLERANCE_S, LATE_TOLERANCE_S, OVERSPEED
 from ecostudy.core.types import Timing, Window
 from ecostudy.core.units import KMH, KWH, PERCENT
 from ecostudy.io.loaders import load_track, load_train
-from ecostudy.io.results import SavedRun, check_unchanged, on_grid
+from ecostudy.io.results import SavedRun, check_status, check_unchanged, on_grid
 from ecostudy.io.runsummary import Verification, current
 from ecostudy.ocp.problem import prepare
 
@@ -165,6 +165,7 @@ def rejudged(saved: SavedRun, result_dir: Path | str) -> Rejudged:
             raise InputError(problem(result_dir / "inputs.json", name, "missing: an edited file? solve again"))
     check_unchanged(inputs, result_dir)
     track, train = load_track(inputs["track"]), load_train(inputs["train"])
+    check_status(saved.status, saved.summary, result_dir / "summary.json", train.calibration_reason)  # the train's too
     case = saved_case(track, train, inputs, result_dir / "inputs.json")
     on_grid(saved.trajectory, case.nodes, inputs, result_dir / "profile.csv")
     x, v, dt, ft, fb = saved.trajectory

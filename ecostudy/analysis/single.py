@@ -12,13 +12,13 @@ from ecostudy.analysis.summary import run_summary
 from ecostudy.analysis.tables import handles, tabulate
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import SolverError
-from ecostudy.core.simulate import missed_points, verify, within_tolerances
-from ecostudy.core.status import Judged, Status, calibrated, from_checks, part, solver_check, solver_part, worst
+from ecostudy.core.simulate import verify
+from ecostudy.core.status import Judged, Status
 from ecostudy.core.types import Timing, Train, Trajectory
 from ecostudy.core.units import KWH, number
 from ecostudy.io.documents import source_file
 from ecostudy.io.results import COSTATE_OBJECTIVES
-from ecostudy.io.runsummary import RunSummary, SolverRun, Verification
+from ecostudy.io.runsummary import ALL_OUT_SOLVER, TIME_CAP, RunSummary, run_status
 from ecostudy.ocp import space
 from ecostudy.ocp.problem import (
     all_out,
@@ -27,15 +27,13 @@ from ecostudy.ocp.problem import (
     check_not_crawling,
     check_windows,
     prepare,
+    slowest_time,
     solve_once,
     stage,
     warm_guess,
 )
 
 
-# summary.json: how Ipopt ended the all-out run a run's time was taken from (a supplement over it),
-# written only when that was not optimal
-ALL_OUT_SOLVER = "all_out_solver_status"
 # a run this close to the all-out time [relative] is the all-out run: its arrival multiplier is a
 # degenerate problem's (118 kWh/s on the metro's 10.95 kWh run at supplement 0, 5.66 at +0.1 %, K = 300), no
 # trade-off of energy against time, so it has no marginal energy (as the all-out run itself)
@@ -86,22 +84,8 @@ class RunResult(Judged):
         driver advice (when asked for) keeps the stop, the time and the limits as driven and the
         train is not one of a calibration that was flagged (:func:`~ecostudy.core.status.calibrated`);
         else ``flagged`` with what did not pass."""
-        block = self.summary["verification"]  # these two blocks only: a study may put a table row under "das"
-        solver = SolverRun.from_dict(self.summary["solver"]).status
-        ver = None if block is None else Verification.from_dict(block)
-        checks = solver_check(solver)
-        if ver is None:
-            checks["not re-simulated"] = False
-        else:  # its errors, and each timing point missed by name (``passed`` needs both)
-            checks[f"re-simulation outside tolerance ({ver.errors})"] = within_tolerances(block)
-            checks.update({f"re-simulated, {missed}": False for missed in missed_points(block.get("windows") or ())})
-        statuses = [from_checks(checks), calibrated(self.train.calibration_reason)]  # a train not borne out by its logs
-        if ALL_OUT_SOLVER in self.summary:  # the all-out run its running time was taken from
-            statuses.append(solver_part("the all-out run", self.summary[ALL_OUT_SOLVER]))
-        if self.das is not None:
-            advice = Status.parse(self.das.summary["status"])  # the driver advice as driven: a run of this command too
-            statuses.append(part(f"driver advice {self.das.summary['method']}", advice))
-        return worst(statuses)
+        return run_status(self.summary, None if self.das is None else self.das.summary,  # not summary["das"]:
+                          self.train.calibration_reason)  # a study may put a table row there
 
     def line(self) -> str:
         """The run in a few words: stops, distance, K, objective, running time and energies (its
@@ -135,6 +119,8 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     target, window, t_allout, fastest = timing.running_time, timing.window, None, None
     latest = target if target is not None else (window[1] if window else None)
     check_not_crawling(latest, case)
+    # the time the mixed weights choose: not past the crawl (a time weight of 1e-9 against 1 chose 27 h)
+    cap = slowest_time(case) if objective == "mixed" and latest is None else None
     if objective == "time" or timing.supplement is not None or (latest is not None and latest < 0.97 * case.estimate):
         t_allout, m, fastest = all_out(case, stages, options)
         outcome = fastest
@@ -147,7 +133,8 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
             guess = warm_guess(warm_start, case)
         else:
             guess = capped_guess(case, target or (window[1] if window else case.estimate * 1.1))
-        kw = {"running_time": target} if target is not None else {"window": window} if window else {}
+        kw = ({"running_time": target} if target is not None else {"window": window} if window else
+              {"window": (0.0, cap)} if cap is not None else {})
         m, outcome = solve_once(case, guess, objective, stages, options, written, structure, weights=weights, **kw)
         if not outcome.usable:
             if latest is not None and t_allout is None:
@@ -158,6 +145,8 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     result = finish(case, m, outcome, stages, objective, t_allout, verify_result)
     if timing.supplement is not None and outcome is not fastest and not fastest.optimal:  # its time is a supplement over it
         result.summary[ALL_OUT_SOLVER] = fastest.status
+    if cap is not None:  # a run at it is flagged (io.runsummary.status_parts)
+        result.summary[TIME_CAP] = cap
     result.request = Request(source_file(track), source_file(train), timing, tuple(weights))
     return result
 

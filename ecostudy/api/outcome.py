@@ -4,6 +4,7 @@ that turn tables into that report.
 """
 import errno
 import json
+import os
 from dataclasses import dataclass, fields
 from functools import partial
 from pathlib import Path
@@ -17,6 +18,7 @@ from ecostudy.core.status import Judged, Status, status_word
 from ecostudy.core.units import number
 from ecostudy.io.folder import StudyResult
 from ecostudy.io.folder import load as load_result
+from ecostudy.io.writers import name_too_long
 from ecostudy.report.console import counted
 from ecostudy.report.html import fragment
 
@@ -150,6 +152,8 @@ def one_line(exc: Exception, debug: bool = False) -> tuple[str, int]:
     ``exit_code``, else 'internal error: ...' and 3."""
     if isinstance(exc, EcostudyError):
         return str(exc), exc.exit_code
+    if isinstance(exc, OSError) and exc.errno == errno.ENAMETOOLONG and exc.filename:  # a path given: bad input
+        return name_too_long(os.fsdecode(exc.filename)), 2
     if isinstance(exc, OSError) and exc.errno in SYSTEM_ERRORS:  # the machine's, not the code's: said as such
         where = f"{exc.filename}: " if exc.filename else ""
         return (f"{where}cannot write: {exc.strerror} (the output folder may hold part of this run's files: run "

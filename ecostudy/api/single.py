@@ -22,12 +22,12 @@ from ecostudy.core.types import Timing
 from ecostudy.core.units import number, signed
 from ecostudy.das.advice import failed_advice
 from ecostudy.das.methods import DAS_METHODS, das_run
-from ecostudy.io.writers import check_output_dir, default_output, write_json
+from ecostudy.io.writers import check_name_length, check_output_dir, default_output, write_json
 from ecostudy.ocp import session
 from ecostudy.report.drawer import drawing
 from ecostudy.report.files import run_files, write_fixed_step, write_run
 from ecostudy.report.style import output
-from ecostudy.studies.cases import refuse_mixed_fixed
+from ecostudy.studies.cases import refuse_mixed_fixed, refuse_mixed_weights
 from ecostudy.studies.check import AGREES, check_result
 from ecostudy.studies.options import (OBJECTIVES, case_from, check_choices, check_options, das_limit, only_one,
                                       output_folder, parse_pair, timing_of)
@@ -108,7 +108,10 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
     trk, trn, f, t, k, st, _ = case_from(study, track, train, from_stop, to_stop, points, "solve")
     if st is not None:
         paths, windows, obj = (st.track_path, st.train_path), st.windows, objective or st.objective
-        timing, w = (timing_of(time, supplement, window) if timed else st.timing), st.weights
+        timing, w = (timing_of(time, supplement, window) if timed else st.timing), st.weights or (1.0, 1.0)
+        if st.weights is not None and obj != "mixed" and weights is None:  # as `ecostudy run` warns of it
+            warnings.warn(problem(str(study), "weights", f"read but not used: the objective is {obj}, not mixed"),
+                          EcostudyWarning, stacklevel=2)
         if obj == "time" and timing != Timing():  # --objective time on a study with a running time
             warnings.warn(problem(str(study), st.timing_field, "does not apply to --objective time (the fastest "
                                   "run): left out"), EcostudyWarning, stacklevel=2)
@@ -130,10 +133,8 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
                            *(("command line", "--objective") if objective else (str(study), "objective")))
     if weights is not None and obj != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
-    if obj == "mixed" and w[0] == 0 and timing == Timing():  # energy alone, no running time: the run crawls
-        raise InputError(problem("command line" if weights is not None else str(study), "--weights" if weights is not
-                                 None else "weights.time", "a time weight of 0 with no running time leaves the least "
-                                 "energy run free to crawl (days): give a positive time weight, or a running time"))
+    refuse_mixed_weights(obj, w, timing != Timing(), *(("command line", ("--weights",) * 2) if weights is not None
+                                                       else (str(study), ("weights.time", "weights.energy"))))
     check_output_dir(out_dir, run_files(das is not None, plot, figures), "solve")
     if das is not None and windows and das != "round":
         raise InputError(problem(str(study), "windows", f"--das {das} does not handle timing "
@@ -179,6 +180,7 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
     agreement or more for a run that is ok."""
     check_options(time=time)
     result_dir = Path(result_dir)
+    check_name_length(result_dir)
     if result_dir.is_dir():
         check_output_dir(result_dir, ("check.json",))
     report = check_result(result_dir, time)

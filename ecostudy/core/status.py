@@ -121,12 +121,15 @@ def failed(reason: str) -> Status:
     return Status("failed", reason)
 
 
+CALIBRATED = "train calibrated with status flagged: "  # the reason :func:`calibrated` lends a run
+
+
 def calibrated(reason: str) -> Status:
     """The status a train file lends every run of it: ``ok``, or ``flagged`` when ``ecostudy calibrate``
     wrote the file from a calibration that was not ok (``reason``, the train's ``calibration_reason``:
     its ``calibration`` block), so that a run of a train whose parameters the logs did not bear out
     is not ok either."""
-    return OK if not reason else flagged(f"train calibrated with status flagged: {reason}")
+    return OK if not reason else flagged(f"{CALIBRATED}{reason}")
 
 
 def parsed(names: Iterable[str], words: Iterable[str], reasons: Iterable[object]) -> dict[str, Status]:

@@ -22,7 +22,7 @@ from ecostudy.io.consistschema import ConsistFile
 from ecostudy.io.davis import check_davis_bound, check_davis_plausible, davis_si
 from ecostudy.io.intrain import in_train_physics
 from ecostudy.io.formats import timetable_document_to_schema, track_document_to_schema, train_document_to_schema
-from ecostudy.io.timetable import name_stops, off_clock, segment_timing, turning_back, windows_from_schema
+from ecostudy.io.timetable import name_stops, off_clock, segment_timing, turning_back, window_origin, windows_from_schema
 from ecostudy.io.ttobench import TRACK_ALIASES
 from ecostudy.io.writers import default_output
 from ecostudy.io.documents import (Where, check_path, given, named_file, read_document as read_document,  # re-exported
@@ -38,7 +38,7 @@ class Study:
     to_stop: str
     timing: Timing
     objective: str = "energy"
-    weights: tuple[float, float] = (1.0, 1.0)
+    weights: tuple[float, float] | None = None  # the mixed objective's (w_t, w_e); None: not given, (1, 1)
     points: int = RUN_POINTS
     output: Path = field(default_factory=lambda: Path("out"))
     track_path: Path | None = None
@@ -50,13 +50,8 @@ class Study:
     timetable_windows: int = 0  # how many of ``windows`` (the last) are the timetable's
 
     def window_origin(self, field: str, study: Where) -> tuple[Where, str]:
-        """(file, field) of ``windows[i]...`` as its file writes it: the study file ``study``'s, or the
-        timetable's for one of the timetable's windows (after the study file's own)."""
-        own = len(self.windows) - self.timetable_windows
-        i = int(field.split("[", 1)[1].split("]", 1)[0]) if field.startswith("windows[") else -1
-        if self.timetable_path is None or i < own:
-            return study, field
-        return self.timetable_path, field.replace(f"windows[{i}]", f"windows[{i - own}]", 1)
+        """(file, field) of ``windows[i]...`` as its file writes it (:func:`~ecostudy.io.timetable.window_origin`)."""
+        return window_origin(field, study, self.timetable_path, len(self.windows) - self.timetable_windows)
 
 
 # --------------------------------------------------------------------------- conversions
@@ -304,9 +299,9 @@ def load_study(study_path: Where, read: Callable[..., Any] = lambda file, reader
         (name for name in ("running_time_s", "supplement_percent", "window_s") if getattr(s, name) is not None),
         "running_time_s")
     output = Path(s.output) if s.output else default_output(s.name)
-    return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop,
-                 timing=timing, objective=s.objective, weights=(s.weights.time, s.weights.energy),
-                 points=s.points, output=output, track_path=track_file, train_path=train_file,
+    weights = (s.weights.time, s.weights.energy) if "weights" in s.model_fields_set else None  # None: not given
+    return Study(name=s.name, track=track, train=train, from_stop=from_stop, to_stop=to_stop, timing=timing,
+                 objective=s.objective, weights=weights, points=s.points, output=output, track_path=track_file, train_path=train_file,
                  windows=windows_from_schema(s.windows, track, from_stop, to_stop, path) + timed, timing_field=timing_field,
                  documents=(train_doc, track_doc), timetable_path=timetable, timetable_windows=len(timed))
 

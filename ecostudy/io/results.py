@@ -9,15 +9,16 @@ import numpy as np
 import pandas as pd
 
 from ecostudy.core.errors import InputError, problem
-from ecostudy.core.status import ADHESION_USE, PROVEN, TOLERANCES, Status
+from ecostudy.core.status import ADHESION_USE, CALIBRATED, TOLERANCES, Status
 from ecostudy.core.kinematics import cumulative_work, interval_power, interval_time
 from ecostudy.core.simulate import within_tolerances
 from ecostudy.core.modes import mode_name, names_mode
 from ecostudy.core.types import Trajectory
 from ecostudy.core.units import KMH, KN, KW, KWH
 from ecostudy.io.documents import file_digest as file_digest  # re-exported: inputs.json's digests
-from ecostudy.io.runsummary import current
+from ecostudy.io.runsummary import current, status_parts
 from ecostudy.io.tables import number_columns
+from ecostudy.io.writers import check_name_length
 
 
 def check_unchanged(inputs: dict[str, Any], result_dir: str | PathLike[str]) -> None:
@@ -55,6 +56,7 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     """The :class:`SavedRun` of a result folder; a folder that is not one, or whose profile is cut
     short or holds anything but finite numbers, is one clear line."""
     result_dir = Path(result_dir)
+    check_name_length(result_dir)
     if not result_dir.is_dir():
         raise InputError(problem(result_dir, "", "a file, not a result folder of `ecostudy solve`"
                                  if result_dir.exists() else "no such folder"))
@@ -77,18 +79,10 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
         raise InputError(problem(result_dir, "", "not a result folder of `ecostudy solve`: its files were being "
                                  "written when the write stopped (an interrupted write?): solve again"))
     _check_record(inputs, summary, result_dir)
-    try:  # a status outside the vocabulary, or ok over a re-simulation that failed: an edited summary
+    try:  # a status outside the vocabulary: an edited summary (one its parts contradict: check_status)
         status = Status.parse(str(summary.get("status") or "failed: no status recorded"))
     except ValueError as exc:
         raise InputError(problem(result_dir / "summary.json", "status", f"{exc} (ok, flagged: <reason> or failed: <reason>)"))
-    verification = summary.get("verification")
-    if status.ok and isinstance(verification, dict) and verification.get("passed") is False:
-        raise InputError(problem(result_dir / "summary.json", "status", "ok, but verification.passed is false "
-                                 "(a failed re-simulation is flagged): an edited file?"))
-    ended = summary["solver"].get("status") if isinstance(summary.get("solver"), dict) else None
-    if status.ok and ended is not None and ended not in PROVEN:
-        raise InputError(problem(result_dir / "summary.json", "status", f"ok, but solver.status is {ended!r} (a solve "
-                                 "the solver did not prove optimal is flagged): an edited file?"))
     costate = ("costate_ratio",) if summary.get("objective") in COSTATE_OBJECTIVES else ()
     p = number_columns(result_dir / "profile.csv", (*PROFILE_COLUMNS, *DERIVED_COLUMNS, *costate), rows=points,
                        open_last=("traction_force_kN", "braking_force_kN", "handle", "power_kW", *costate))
@@ -107,6 +101,7 @@ def load_result(result_dir: str | PathLike[str]) -> SavedRun:
     _check_derived(p, result_dir / "profile.csv")
     _check_totals(p, summary, result_dir / "summary.json")
     _check_verification(summary, result_dir / "summary.json")
+    check_status(status, summary, result_dir / "summary.json")
     trajectory = Trajectory(p["position_m"], p["speed_kmh"] * KMH, np.diff(p["time_s"]),
                             p["traction_force_kN"][:-1] * KN, p["braking_force_kN"][:-1] * KN)
     advice: pd.DataFrame | None = None
@@ -173,13 +168,27 @@ def _check_clock(p: dict[str, np.ndarray], where: Path) -> None:
 
 def _check_record(inputs: dict[str, Any], summary: dict[str, Any], result_dir: Path) -> None:
     """Refuse a folder whose inputs.json and summary.json say different things of the same run (the
-    stops, the grid size, the objective) or whose summary records a marginal energy of the wrong
-    sign: one of them was edited (a check would judge the run as one and report it as the other)."""
+    stops, the grid size, the objective), whose summary records a marginal energy of the wrong sign
+    or for a run that has none (objective time or mixed), or an all-out run (objective time) whose
+    all-out time is not its own running time: one of them was edited (a check would judge the run
+    as one and report it as the other)."""
     for field in ("from", "to", "points", "objective"):
         if field in inputs and inputs[field] != summary.get(field):
             raise InputError(problem(result_dir / "inputs.json", field, f"{inputs[field]!r}, but summary.json "
                                      f"records {summary.get(field)!r}: an edited record? solve again"))
-    marginal = summary.get("marginal_energy_kWh_per_s")
+    objective, marginal = summary.get("objective"), summary.get("marginal_energy_kWh_per_s")
+    if objective == "time":  # the all-out run is its own: its time is the all-out time it records
+        said, took = summary.get("all_out_time_s"), summary.get("running_time_s")
+        if not (isinstance(said, (int, float)) and isinstance(took, (int, float))
+                and abs(said - took) <= 1e-9 * max(abs(took), 1.0)):
+            raise InputError(problem(result_dir / "summary.json", "all_out_time_s", f"{said!r}, but the all-out run "
+                                     f"(objective time) records its own running time ({took!r}) there: an edited "
+                                     "record? solve again"))
+    if objective not in COSTATE_OBJECTIVES:  # what an energy optimum alone has: dE/dT and the costate check
+        for field, what in (("marginal_energy_kWh_per_s", "a marginal energy"), ("pontryagin", "a costate check")):
+            if summary.get(field) is not None:
+                raise InputError(problem(result_dir / "summary.json", field, f"{what}, but a run of objective "
+                                         f"{objective!r} has none: an edited record? solve again"))
     if marginal is not None and not (isinstance(marginal, (int, float)) and marginal <= MARGINAL_NOISE):
         raise InputError(problem(result_dir / "summary.json", "marginal_energy_kWh_per_s", f"{marginal!r}: a "
                                  "second more saves energy on an energy-optimal run (dE/dT <= 0): an edited file? "
@@ -248,6 +257,40 @@ def _check_verification(summary: dict[str, Any], where: Path) -> None:
     if off:
         raise InputError(problem(where, "verification.arrival_time_error_s", f"{block['arrival_time_error_s']!r}, "
                                  f"but it arrives {arrival:.6g} s after the running time: an edited file? solve again"))
+
+
+def check_status(status: Status, summary: dict[str, Any], where: Path, calibration_reason: str | None = None) -> None:
+    """Refuse a summary whose ``status`` (already read: ``status``) is not the one the parts it is made
+    of give (:func:`~ecostudy.io.runsummary.status_parts`: ``solver.status``, ``verification``,
+    ``all_out_solver_status``, ``das.status`` and the train's calibration), or whose ``cases`` and
+    ``not_ok`` do not count it: the status alone was edited. ``calibration_reason``: the train's
+    (None: not known here, so a flagged status with every other part ok is taken for a
+    calibration's, :data:`~ecostudy.core.status.CALIBRATED`; ``analysis.saved.rejudged`` knows it)."""
+    das = summary.get("das")
+    try:
+        parts = status_parts(summary, das, calibration_reason or "")
+    except (AttributeError, KeyError, TypeError, ValueError) as exc:
+        raise InputError(problem(where, "solver, verification, das", f"not the blocks a solve writes ({exc!r}): an "
+                                 "edited file? solve again"))
+    made = [(field, part) for field, part in parts.items() if not part.ok]
+    if status.ok and made:
+        field, part = made[0]
+        raise InputError(problem(where, "status", f"ok, but its part {field} makes it {part}: an edited file? solve again"))
+    calibration = (calibration_reason is None and status.kind == "flagged" and status.reason.startswith(CALIBRATED))
+    if not status.ok and not made and not calibration:
+        raise InputError(problem(where, "status", f"{status}, but every part of the run is ok ({', '.join(parts)}): "
+                                 "an edited file? solve again"))
+    if made and status.kind != "flagged":
+        raise InputError(problem(where, "status", f"{status}, but its parts say flagged ({made[0][0]}): an edited "
+                                 "file? solve again"))
+    cases, not_ok = summary.get("cases"), summary.get("not_ok")
+    counted = isinstance(cases, dict) and cases.get("total") == 1 and all(
+        cases.get(kind) == int(kind == status.kind) for kind in ("ok", "flagged", "failed"))
+    listed = isinstance(not_ok, list) and [str(c.get("status")) if isinstance(c, dict) else c
+                                           for c in not_ok] == ([] if status.ok else [str(status)])
+    if not counted or not listed:
+        raise InputError(problem(where, "cases" if not counted else "not_ok", f"{cases if not counted else not_ok!r}, "
+                                 f"but the run's status is {status}: an edited file? solve again"))
 
 
 def on_grid(trajectory: Trajectory, nodes: np.ndarray, inputs: dict[str, Any], where: str | PathLike[str]) -> None:

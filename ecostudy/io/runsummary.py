@@ -9,8 +9,57 @@ a misspelt attribute is an error mypy and the interpreter name, a misspelt key i
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Optional
 
-from ecostudy.core.status import ADHESION_USE, TOLERANCES, past
+from ecostudy.core.simulate import missed_points, within_tolerances
+from ecostudy.core.defaults import SLOWEST
+from ecostudy.core.status import (ADHESION_USE, OK, TOLERANCES, Status, calibrated, flagged, from_checks, part, past,
+                                  solver_check, solver_part, worst)
 from ecostudy.core.units import number, signed
+
+
+# summary.json: how Ipopt ended the all-out run a run's time was taken from (a supplement over it),
+# written only when that was not optimal
+ALL_OUT_SOLVER = "all_out_solver_status"
+# summary.json: the longest running time [s] a mixed objective with no arrival window could choose
+# (``ocp.problem.slowest_time``: the crawl guard of a running time asked), its bound on T; a run at it
+# (within AT_CAP, relative) is flagged: its weights would have it crawl further
+TIME_CAP = "time_cap_s"
+AT_CAP = 1e-6
+
+
+def status_parts(summary: Mapping[str, Any], das: Optional[Mapping[str, Any]] = None,
+                 calibration_reason: str = "") -> dict[str, Status]:
+    """The statuses one run's status is made of, by the ``summary.json`` field each is read from:
+    how Ipopt ended (``solver.status``), the re-simulation (``verification``: its errors within
+    their tolerances, each timing point kept), the train's calibration (its file's
+    ``calibration_reason``: :func:`~ecostudy.core.status.calibrated`), the all-out run a supplement's
+    time was taken from (:data:`ALL_OUT_SOLVER`) and the driver advice as driven (``das``: the
+    advice's block, as ``das.status`` records it). :func:`run_status` is their worst: a run's status
+    as ``ecostudy solve`` writes it, and as a saved summary must say it."""
+    block = summary["verification"]
+    checks = {"not re-simulated": False} if block is None else {  # its errors, each timing point missed by name
+        f"re-simulation outside tolerance ({Verification.from_dict(block).errors})": within_tolerances(block),
+        **{f"re-simulated, {missed}": False for missed in missed_points(block.get("windows") or ())}}
+    parts = {"solver.status": from_checks(solver_check(str(summary["solver"]["status"]))),  # joined as one
+             "verification": from_checks(checks), "train calibration": calibrated(calibration_reason)}
+    if ALL_OUT_SOLVER in summary:  # the all-out run its running time was taken from
+        parts[ALL_OUT_SOLVER] = solver_part("the all-out run", str(summary[ALL_OUT_SOLVER]))
+    cap = summary.get(TIME_CAP)
+    if cap is not None:  # the longest time the mixed objective's weights could choose: there, they would crawl
+        parts[TIME_CAP] = OK if float(summary["running_time_s"]) < (1 - AT_CAP) * float(cap) else flagged(
+            f"the mixed objective's weights take the running time to its cap, {cap:.1f} s ({SLOWEST:g} times the fastest "
+            "possible run's, kinematic envelope): the train would crawl; weigh time more, or give an arrival window")
+    if das is not None:  # the driver advice as driven: a run of this command too
+        parts["das.status"] = part(f"driver advice {das['method']}", Status.parse(str(das["status"])))
+    return parts
+
+
+def run_status(summary: Mapping[str, Any], das: Optional[Mapping[str, Any]] = None,
+               calibration_reason: str = "") -> Status:
+    """``ok`` when Ipopt proved optimality (of the all-out run too, where the running time is a
+    supplement over it), the independent re-simulation agrees, the driver advice (``das``, when asked
+    for) keeps the stop, the time and the limits as driven, and the train is not one of a
+    calibration that was flagged; else ``flagged`` with what did not pass (:func:`status_parts`)."""
+    return worst(status_parts(summary, das, calibration_reason).values())
 
 
 # Keys as ecostudy before the one naming rule (ecostudy.core.columns) wrote them: a folder written
@@ -192,6 +241,7 @@ class RunSummary:
     verification: Optional[Verification]  # None: not re-simulated
     das: Optional[DasSummary] = None
     distance_shares: Mapping[str, float] = field(default_factory=dict)  # regime -> share of the distance [-]
+    time_cap_s: Optional[float] = None  # a mixed run with no arrival window: the longest time it could choose
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "RunSummary":
@@ -214,7 +264,8 @@ class RunSummary:
                    pontryagin=None if not pm else PontryaginCheck.from_dict(pm),
                    verification=None if ver is None else Verification.from_dict(ver),
                    das=None if not das else DasSummary.from_dict(das),
-                   distance_shares={str(k): float(v) for k, v in (regimes.get("distance_shares") or {}).items()})
+                   distance_shares={str(k): float(v) for k, v in (regimes.get("distance_shares") or {}).items()},
+                   time_cap_s=_opt(data, TIME_CAP))
 
 
 def _error(value: float, name: str) -> str:

@@ -257,3 +257,17 @@ def segment_timing(tt: schemas.TimetableFile, from_stop: str, to_stop: str,
     since = [w.model_copy(update={k: getattr(w, k) - dep for k in ("earliest_s", "latest_s") if getattr(w, k) is not None})
              for w in tt.windows]
     return timing, since
+
+
+def window_origin(field: str, study: Where, timetable: Where | None, own: int) -> tuple[Where, str]:
+    """(file, field) of ``windows[i]...`` as its file writes it: the study file ``study``'s (its ``own``
+    windows come first), or the ``timetable``'s for one of its windows; of two windows in two files
+    (``windows[i].x, windows[j].y``), the study's, the other named with its file."""
+    named = []
+    for part in field.split(", "):
+        i = int(part.split("[", 1)[1].split("]", 1)[0]) if part.startswith("windows[") else -1
+        named.append((study, part) if timetable is None or i < own else
+                     (timetable, part.replace(f"windows[{i}]", f"windows[{i - own}]", 1)))
+    one = len({str(file) for file, _ in named}) == 1
+    return (named[0][0] if one else study), ", ".join(part if one or file == study else f"{file}: {part}"
+                                                      for file, part in named)

@@ -1,4 +1,5 @@
 """Writing results: every file goes to a temporary name first and is renamed into place."""
+import errno
 import json
 import math
 import os
@@ -66,6 +67,26 @@ def default_output(name: str) -> Path:
     return Path("out") / safe
 
 
+def check_name_length(path: Union[str, Path], option: str = "") -> None:
+    """Refuse a path the system cannot look up because a name in it, or the whole of it, is longer
+    than the file system allows (ENAMETOOLONG, which ``Path.exists`` and ``is_dir`` raise): one line
+    naming ``option`` (``--out``; :func:`name_too_long`), exit 2."""
+    try:
+        os.stat(path)
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            raise InputError(name_too_long(path, option)) from None
+
+
+def name_too_long(path: Union[str, Path], option: str = "") -> str:
+    """The line of a ``path`` too long to look up: shown shortened, with its longest name's length."""
+    text = str(path)
+    longest = max((len(os.fsencode(name)) for name in Path(text).parts), default=0)
+    return problem(text if len(text) <= 80 else f"{text[:60]}...{text[-12:]}", option, f"File name too long: its "
+                   f"longest name is {longest} bytes (the path {len(os.fsencode(text))}), more than the file system "
+                   "allows; give a shorter one")
+
+
 def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: str | None = None) -> Path:
     """Refuse, before any computation, an output folder that is a file, cannot be created or
     written, or holds a folder where one of ``files`` (or :data:`SUMMARY`, :data:`REPORT`) goes, or
@@ -78,6 +99,7 @@ def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: st
     left (:func:`remove_temporary`), unless the command keeps a store there (``files`` names
     :data:`STORE`: the store removes them once it holds the folder's lock) or a study holds it now."""
     path = Path(path)
+    check_name_length(path, "--out")
     if path.exists() and not path.is_dir():
         raise InputError(problem(path, "", "the output folder is a file"))
     for name in (*files, SUMMARY, REPORT):

@@ -6,7 +6,7 @@ import time
 from collections import OrderedDict
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any, Hashable, Iterator, MutableMapping, Protocol, Sequence
+from typing import Any, Hashable, Iterator, MutableMapping, NamedTuple, Protocol, Sequence
 
 import numpy as np
 
@@ -187,6 +187,48 @@ def check_windows(case: Case, margin: float = 0.02) -> None:
             raise FieldError(f"infeasible: at {w.distance:.0f} m from {case.segment.from_stop} the train "
                              f"reaches at most {to_kmh(fastest[k]):.1f} km/h (window: at least "
                              f"{to_kmh(w.min_speed):.1f} km/h)", f"windows[{i}].min_speed_kmh")
+    order = sorted(range(len(case.windows)), key=lambda i: case.windows[i].distance)  # as the run passes them
+    check_times_reachable([Passing(case.windows[i].distance, f"the timing point at {case.windows[i].distance:g} m",
+                                   case.windows[i].earliest, case.windows[i].latest, float(passing[index[i]]), 0.0,
+                                   (f"windows[{i}].earliest_s", f"windows[{i}].latest_s")) for i in order], margin)
+
+
+class Passing(NamedTuple):
+    """A time a run keeps on its way (a timing point, a departure, an arrival), for
+    :func:`check_times_reachable`: ``place`` (two at one place are passed together), ``what`` it is
+    (as a line names it), ``earliest`` and ``latest`` [s] (None: not bounded), the ``fastest``
+    clock there [s since the start: on the fastest-speed envelope, which no run beats], the least
+    ``dwells`` since the start [s] and the ``fields`` of its earliest and latest time."""
+
+    place: Hashable
+    what: str
+    earliest: float | None
+    latest: float | None
+    fastest: float
+    dwells: float
+    fields: tuple[str, str]
+
+
+def check_times_reachable(passings: Sequence[Passing], margin: float = 0.0) -> None:
+    """Refuse, in one line naming both, two times no run can keep (``passings`` in the order a run
+    passes them): the latest time of the later one less the earliest of the earlier one must leave
+    the fastest run between them (less ``margin`` of it: within that the NLP decides) plus the least
+    dwells in between; two at one place are held to each other both ways. The worst pair is said."""
+    worst: tuple[float, Passing, float, Passing, float, float, float] | None = None
+    for i, a in enumerate(passings):
+        for j, b in enumerate(passings):
+            if a.earliest is None or b.latest is None or not (j > i or (j != i and b.place == a.place)):
+                continue
+            need, dwelt = (1 - margin) * (b.fastest - a.fastest), b.dwells - a.dwells
+            short = need + dwelt - (b.latest - a.earliest)
+            if short > 1e-6 and (worst is None or short > worst[0]):
+                worst = (short, a, a.earliest, b, b.latest, need, dwelt)
+    if worst is not None:
+        _, a, lo, b, hi, need, dwelt = worst
+        between = ("one place is passed at one time" if b.place == a.place else
+                   f"the fastest run between them takes {need:.0f} s" + (f" and the dwells {dwelt:g} s" if dwelt > 0 else ""))
+        raise FieldError(f"infeasible: {a.what} (not before {lo:g} s) and {b.what} (not after {hi:g} s) leave {hi - lo:g} "
+                         f"s; {between}", ", ".join(dict.fromkeys((a.fields[0], b.fields[1]))))
 
 
 def slowest_time(case: Case) -> float:
@@ -198,8 +240,14 @@ def check_not_crawling(latest: float | None, case: Case) -> None:
     """Refuse, before solving, a running time (or a window's latest arrival) over :func:`slowest_time`:
     its energy optimum crawls and fails its re-simulation."""
     if latest is not None and latest > slowest_time(case):
-        raise TooFastError(f"{latest:.6g} s is over {SLOWEST:g} times the fastest possible run's "
-                           f"{case.estimate:.1f} s: the train would crawl")
+        raise TooFastError(crawling(f"{latest:.6g} s", case.estimate))
+
+
+def crawling(asked: str, fastest: float) -> str:
+    """Why a time ``asked`` over :data:`SLOWEST` times the fastest envelope's ``fastest`` [s] is refused:
+    that envelope's time is named as such, not as the all-out NLP's (71.6 s beside its 71.7 s at K = 100)."""
+    return (f"{asked} is over {SLOWEST:g} times the fastest possible run's {fastest:.1f} s (kinematic envelope): the "
+            "train would crawl")
 
 
 # a running time this far under the fastest envelope's (the grid's fastest speeds, no NLP) no run keeps:

@@ -172,6 +172,8 @@ def expand(path, skipped=None, read=None, windows=False, warn=True):
             refuse_mixed_fixed(case["objective"], fixed and f"{fixed[0]} ({case[fixed[0]]:g})", path,
                                "sweep.objective" if "objective" in names else
                                f"scenarios[{s.scenarios.index(sc)}].objective" if sc.objective else "objective")
+            refuse_mixed_weights(case["objective"], case["weights"], case["window_s"] is not None, path,
+                                 ("weights.time", "weights.energy"))
             das = sc.das or s.das  # every objective's run is advised, as `ecostudy solve --das` advises it
             if das is not None:  # the all-out run's advice: the least energy a driver keeps its time with
                 case.update(das=das, das_time_limit_s=s.das_time_limit_s)  # only then: other keys unchanged
@@ -181,10 +183,9 @@ def expand(path, skipped=None, read=None, windows=False, warn=True):
             if case["key"] not in keys:  # the fastest run once, whatever running times are swept beside it
                 keys.add(case["key"])
                 cases.append(case)
-    defaults = schemas.StudyFile.model_fields
     idle = [name for name, used in (("weights", any(c["objective"] == "mixed" for c in cases)),
                                      ("das_time_limit_s", any(c.get("das") == "minlp" for c in cases)))
-            if not used and getattr(s, name) != defaults[name].get_default(call_default_factory=True)]
+            if not used and name in s.model_fields_set]  # given, even as its default
     notes = [("objective", line) for line in fastest] + [
         (name, "read but not used: no case " + ("has objective mixed" if name == "weights" else "has das: minlp"))
         for name in idle]
@@ -212,6 +213,26 @@ def refuse_mixed_fixed(objective, fixed, where, field):
                                  "running time: the weights would change nothing (the energy optimum; with an energy "
                                  "weight of 0, no optimum at all): use objective energy, or an arrival window or no "
                                  "running time for the weights to act"))
+
+
+def refuse_mixed_weights(objective, weights, timed, where, fields):
+    """Refuse, before computing, mixed weights (w_t, w_e) with which no run can be ok: both 0; an energy
+    weight of 0 leaves the running time alone to minimise, without the all-out run's regularisation
+    (``--objective time``: traction and braking at once, flagged at -31 % energy error); a time
+    weight of 0 with no arrival window (``timed``: False) the least energy, a crawl of days.
+    ``fields``: how the time and the energy weight are named in ``where``."""
+    if objective != "mixed":
+        return
+    if weights[0] == weights[1] == 0:  # as the command line refuses --weights 0,0
+        raise InputError(problem(where, fields[0].split(".")[0], "must be two weights >= 0, not both 0 (the objective "
+                                 "would weigh nothing)"))
+    if weights[1] == 0:
+        raise InputError(problem(where, fields[1], "an energy weight of 0 leaves the running time alone to minimise, "
+                                 "without the all-out run's regularisation (traction and braking at once): use objective "
+                                 "time for the fastest run"))
+    if weights[0] == 0 and not timed:
+        raise InputError(problem(where, fields[0], "a time weight of 0 with no running time leaves the least energy "
+                                 "run free to crawl (days): give a positive time weight, or an arrival window"))
 
 
 def refuse_windows(path, given, who):

@@ -31,7 +31,8 @@ from ecostudy.core.units import apart, to_kmh
 from ecostudy.heuristics import mareco
 from ecostudy.io.timetable import schedule
 from ecostudy.ocp import session
-from ecostudy.ocp.problem import ALL_OUT_MARGIN, Written, build, capped_guess, check_windows, prepare, under_envelope
+from ecostudy.ocp.problem import (ALL_OUT_MARGIN, Written, build, capped_guess, check_windows, crawling, prepare,
+                                  under_envelope)
 from ecostudy.ocp.space import passing_time
 from ecostudy.studies.pareto import sweep
 from ecostudy.studies.reachable import check_reachable
@@ -288,8 +289,7 @@ def journey(track, train, stops, total_time=None, supplement=None, points=FRONT_
                 raise FieldError(f"infeasible: {t:.1f} s from {a} to {b}, below the fastest possible run's "
                                  f"{fast:.1f} s (kinematic envelope)", f"stops[{n + 1}].arrival_s")
             if t > SLOWEST * fast:  # as solve refuses it
-                raise FieldError(f"{t:.1f} s from {a} to {b} is over {SLOWEST:g} times the fastest possible run's "
-                                 f"{fast:.1f} s (kinematic envelope): the train would crawl", f"stops[{n + 1}].arrival_s")
+                raise FieldError(crawling(f"{t:.1f} s from {a} to {b}", fast), f"stops[{n + 1}].arrival_s")
         fastest = sum(estimates)
         if under_envelope(total_time, fastest):  # the kinematic all-out times: refused before any front is solved
             too_short(total_time, fastest, " (kinematic envelope)")

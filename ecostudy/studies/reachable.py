@@ -1,44 +1,33 @@
 """A journey's timetable refused, in one line and before any solve, where two of its times leave
-less than the fastest run between them (``studies.journey``)."""
+less than the fastest run between them (``studies.journey``; the rule: ``ocp.problem.check_times_reachable``)."""
 import numpy as np
 
 from ecostudy.core import kinematics
-from ecostudy.core.errors import FieldError
+from ecostudy.ocp.problem import Passing, check_times_reachable
 
 
 def check_reachable(plan, cases):
     """Refuse, in one line, timing points no run can keep: for two points, the latest time of the
     later one minus the earliest of the earlier one must leave the fastest run between them (on
     the fastest-speed envelope, which no run exceeds) plus the least dwells in between."""
-    events = []  # (where, earliest, latest, fastest clock since the start, dwells since the start, fields)
+    passings = []
     fastest, dwells, start = 0.0, 0.0, 0.0
     for n, case in enumerate(cases):
         clock = kinematics.clock(case.envelope, case.nodes)
         dwells += plan.dwell[n]
         lo, hi = plan.departure[n] or (None, None)
-        events.append((f"the departure from {plan.stops[n]}", lo, hi, fastest, dwells,
-                       _fields(n, lo, hi, departure=True)))
+        passings.append(Passing(("departure", n), f"the departure from {plan.stops[n]}", lo, hi, fastest, dwells,
+                                _fields(n, lo, hi, departure=True)))
         for j, w in enumerate(plan.windows[n]):
             at = fastest + float(np.interp(w.distance, case.nodes, clock))
             row = f"windows[{plan.window_rows[n][j]}]" if plan.window_rows else "windows"
-            events.append((f"the timing point at {start + w.distance:g} m", w.earliest, w.latest, at, dwells,
-                           (f"{row}.earliest_s", f"{row}.latest_s")))
+            passings.append(Passing(start + w.distance, f"the timing point at {start + w.distance:g} m", w.earliest,
+                                    w.latest, at, dwells, (f"{row}.earliest_s", f"{row}.latest_s")))
         fastest += float(clock[-1])
         start += case.segment.distance
-        events.append((f"the arrival at {plan.stops[n + 1]}", *plan.arrival[n], fastest, dwells,
-                       _fields(n + 1, *plan.arrival[n])))
-    worst = None
-    for i, (a, lo, _, t_a, d_a, (field_a, _)) in enumerate(events):
-        for b, _, hi, t_b, d_b, (_, field_b) in events[i + 1:]:
-            if lo is not None and hi is not None:
-                short = (t_b - t_a) + (d_b - d_a) - (hi - lo)
-                if short > 1e-6 and (worst is None or short > worst[0]):
-                    worst = (short, a, lo, b, hi, t_b - t_a, d_b - d_a, dict.fromkeys((field_a, field_b)))
-    if worst is not None:
-        short, a, lo, b, hi, need, dwelt, fields = worst
-        raise FieldError(f"infeasible: {a} (not before {lo:g} s) and {b} (not after {hi:g} s) leave {hi - lo:g} s; the "
-                         f"fastest run between them takes {need:.0f} s" + (f" and the dwells {dwelt:g} s" if dwelt > 0 else ""),
-                         ", ".join(fields))
+        passings.append(Passing(("arrival", n + 1), f"the arrival at {plan.stops[n + 1]}", *plan.arrival[n], fastest,
+                                dwells, _fields(n + 1, *plan.arrival[n])))
+    check_times_reachable(passings)
 
 
 def _fields(n, lo, hi, departure=False):
