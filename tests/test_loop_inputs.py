@@ -91,14 +91,16 @@ def test_an_empty_sweep_is_refused_as_an_empty_list_is(tmp_path, sweep):
     assert not (tmp_path / "out").exists()
 
 
-def test_a_scenario_das_no_case_uses_is_warned(tmp_path):
-    """A scenario's ``das: phases`` beside its ``objective: time`` was dropped without a word."""
+def test_a_scenario_das_beside_objective_time_advises_its_all_out_run(tmp_path):
+    """A scenario's ``das: phases`` beside its ``objective: time`` was dropped without a word; it now
+    advises the all-out run, as ``solve --objective time --das phases`` does, and is not warned of."""
     study = batch_study(tmp_path, supplement_percent=None, running_time_s=80,
                         scenarios=[{"name": "fast", "objective": "time", "das": "phases"}])
     with pytest.warns(EcostudyWarning) as seen:
-        expand(study)
+        cases = expand(study)[2]
     said = [str(w.message) for w in seen]
-    assert any("scenarios[0].das: scenario 'fast': read but not used" in line for line in said), said
+    assert not any(".das:" in line or "read but not used" in line for line in said), said
+    assert [c.get("das") for c in cases] == ["phases"], cases
 
 
 def test_solves_refused_for_the_time_budget_are_counted_apart_from_slow_ones(tmp_path):
