@@ -100,7 +100,7 @@ def test_a_scenario_das_beside_objective_time_advises_its_all_out_run(tmp_path):
         cases = expand(study)[2]
     said = [str(w.message) for w in seen]
     assert not any(".das:" in line or "read but not used" in line for line in said), said
-    assert [c.get("das") for c in cases] == ["phases"], cases
+    assert {c["scenario"]: c.get("das") for c in cases} == {"base": None, "fast": "phases"}, cases
 
 
 def test_solves_refused_for_the_time_budget_are_counted_apart_from_slow_ones(tmp_path):
