@@ -28,6 +28,7 @@ from ecostudy.studies.options import (case_from, check_options, das_limit, no_wi
                                       timing_of)
 from ecostudy.studies.front import front_cases
 from ecostudy.studies.pareto import weighted_points, weighted_statuses
+from ecostudy.studies.estimate import grid_nodes, table_points
 from ecostudy.studies.sizes import check_front, check_journey
 from ecostudy.studies.workers import every_core
 
@@ -71,7 +72,8 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     check_output_dir(out_dir, ("pareto.csv", "pareto.json", "results.sqlite", *asked,
                                *figures.filenames(FRONT_FIGURES, plot)), "pareto")
     check_one_study(out_dir, cases[0]["study"])  # before the weighted points are solved
-    check_front("command line", len(cases), k or FRONT_POINTS, workers, das, das_time_limit)  # refused (unless --force)
+    check_front("command line", len(cases), grid_nodes(trk, trn, f, t, k or FRONT_POINTS), workers, das, das_time_limit,
+                table_points(trn))  # refused (unless --force)
     extra = weighted_points(trk, trn, f, t, count=weighted, points=k or FRONT_POINTS) if weighted else None
     ran = run_expanded("pareto", Expanded(out_dir, cases), study or "command line", workers, dask, retry_failed,
                        progress=progress, draw=front_files(plot, figures, extra, workers, started),

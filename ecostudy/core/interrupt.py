@@ -5,10 +5,18 @@ the command stored, its workers stopped, its store closed and unlocked, no tempo
 exit status tells them apart (128 + the signal: 130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP). A
 SIGINT that the command inherited as ignored (a job started with ``&`` by a shell without job
 control) stays ignored, as POSIX has it, and so does a SIGHUP (a command started with ``nohup``).
+Only the first stop signal raises: one that follows while the command stops (a second Ctrl-C,
+``timeout -s INT`` signalling the command and then its process group a few ms later) is noted and
+not raised, so that it cannot cut the stop short anywhere (inside a lock of ``concurrent.futures``,
+which it would leave held, hanging the pool's shutdown); the stop itself is bounded
+(:func:`ecostudy.studies.workers.stop_workers`). A stop that has not ended :data:`LOST_AFTER_S`
+after it began was lost (Python ignores an exception raised in a fork's callbacks or a finalizer):
+the next signal raises again.
 """
 import logging
 import signal
 import threading
+import time
 from contextlib import contextmanager
 from types import FrameType
 from typing import Any, Callable, Iterator, Optional
@@ -17,6 +25,8 @@ TERMINATE = (signal.SIGTERM, signal.SIGHUP)  # the stop signals beside Ctrl-C's:
 STOPS = (signal.SIGINT, *TERMINATE)
 KEPT_IGNORED = (signal.SIGINT, signal.SIGHUP)  # inherited as ignored, they stay so (``&``, ``nohup``)
 RECEIVED: list[int] = []  # the stop signals this process received while a handler of this module was set
+STOPPING: list[float] = []  # when the command's stop began (a stop signal raised), empty before
+LOST_AFTER_S = 5.0  # [s] a stop begun this long ago and still running was lost: the next signal raises again
 
 
 class Interrupted(KeyboardInterrupt):
@@ -31,6 +41,9 @@ class Interrupted(KeyboardInterrupt):
 
 def _raise(signum: int, frame: Optional[FrameType]) -> None:
     RECEIVED.append(signum)
+    if STOPPING and time.monotonic() - STOPPING[0] < LOST_AFTER_S:  # the stop is under way: noted only
+        return
+    STOPPING[:] = [time.monotonic()]
     raise KeyboardInterrupt
 
 
@@ -50,9 +63,11 @@ def stopped_by_signals() -> Iterator[None]:
         if not (s in KEPT_IGNORED and old[s] == signal.SIG_IGN):
             signal.signal(s, _raise)
     hook, threading.excepthook = threading.excepthook, _stopping_hook(threading.excepthook)
+    STOPPING.clear()
     try:
         yield
     finally:
+        STOPPING.clear()
         threading.excepthook = hook
         for s, handler in old.items():
             signal.signal(s, handler)
@@ -97,6 +112,7 @@ def held(flag: list[bool]) -> Iterator[None]:
         return
     old = {s: signal.getsignal(s) for s in STOPS}
     ours = [s for s in STOPS if _ours(old[s])]
+    begun = bool(STOPPING)
 
     def note(signum: int, frame: Optional[FrameType]) -> None:
         RECEIVED.append(signum)
@@ -109,5 +125,6 @@ def held(flag: list[bool]) -> Iterator[None]:
     finally:
         for s in ours:
             signal.signal(s, old[s])
-    if flag:
+    if flag and not begun:  # the stop begins here (one already under way is not raised again)
+        STOPPING[:] = [time.monotonic()]
         raise KeyboardInterrupt

@@ -32,7 +32,7 @@ from ecostudy.ocp.problem import Written
 from ecostudy.studies.cases import case_key, expand
 from ecostudy.studies.options import check_options
 from ecostudy.studies.studytable import NOT_COMPUTED, case_names, case_statuses, study_table
-from ecostudy.studies.estimate import RUN_BYTES_PER_POINT, run_seconds
+from ecostudy.studies.estimate import case_size, run_bytes, run_seconds
 from ecostudy.studies.workers import arriving, worker_pool
 
 _ALL_OUT: dict = {}  # all-out time per (train, track, stops, grid), per process: shared by a scenario's cases
@@ -388,11 +388,12 @@ def expand_study(path):
 
 
 def run_study_size(path, cases, workers=1):
-    """Refuse a ``run`` study whose cases (:func:`~ecostudy.studies.estimate.run_seconds` each),
-    shared among ``workers``, are estimated above the command's budget (unless forced)."""
-    runs = [run_seconds(c["points"], c.get("das"), c.get("das_time_limit_s", DAS_TIME_LIMIT_S)) for c in cases]
-    check_study(path, "the study's cases", runs, workers, max((c["points"] for c in cases), default=0)
-                * RUN_BYTES_PER_POINT)
+    """Refuse (unless forced) a ``run`` study whose cases, shared among ``workers``, are estimated above the
+    command's budget: each as ``solve`` (:func:`~ecostudy.studies.estimate.case_size`: its grid, its train's tables)."""
+    sizes: dict = {}
+    each = [(c, *case_size(c, sizes)) for c in cases]
+    runs = [run_seconds(n, c.get("das"), c.get("das_time_limit_s", DAS_TIME_LIMIT_S), t) for c, n, t in each]
+    check_study(path, "the study's cases", runs, workers, max((run_bytes(n, t) for _, n, t in each), default=0))
 
 
 STUDY_KINDS.register("run", StudyKind(expand_study, run_case, study_table, run_study_size),

@@ -47,6 +47,7 @@ The constants are measured on this project's shared 2-core machine (so they are 
   (:func:`run_seconds`, :func:`run_bytes`).
 """
 import warnings
+import json
 from dataclasses import replace
 from typing import NamedTuple
 
@@ -119,6 +120,21 @@ def grid_nodes(track, train, from_stop, to_stop, points):
                               f"{to_stop} are each a grid node: K = {nodes}, not the {points} asked (a run that much "
                               f"larger)"), EcostudyWarning, stacklevel=2)
     return nodes
+
+
+def case_size(case, sizes):
+    """(grid nodes, the train's table points) of a study case's run (a dict of
+    :func:`ecostudy.studies.cases.expand`), as ``solve`` estimates its own (:func:`grid_nodes`,
+    :func:`table_points`), kept in ``sizes`` per scenario (its cases share them)."""
+    key = json.dumps([case.get(k) for k in ("train", "track", "from", "to", "points", "scenario")], sort_keys=True,
+                     default=str)
+    if key not in sizes:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", EcostudyWarning)  # shown once when the study was expanded
+            train = train_from_schema(schemas.TrainFile.model_validate(case["train"]), case.get("scenario"))
+            track = track_from_schema(schemas.TrackFile.model_validate(case["track"]))
+            sizes[key] = (grid_nodes(track, train, case["from"], case["to"], case["points"]), table_points(train))
+    return sizes[key]
 
 
 def check_solve(points, das=None, das_time_limit=DAS_TIME_LIMIT_S, tables=0):

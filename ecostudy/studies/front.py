@@ -21,6 +21,7 @@ from ecostudy.core.status import OK, Status, flagged
 from ecostudy.das.methods import advice_status
 from ecostudy.io.runsummary import RunSummary
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, run_case
+from ecostudy.studies.estimate import case_size
 from ecostudy.studies.cases import case_key, load_checked_study
 from ecostudy.studies.compare import segment_of
 from ecostudy.studies.options import no_windows
@@ -214,7 +215,8 @@ def front_points(cases, rows, picks):
 def front_size(where, cases, workers=1):
     """Refuse a front estimated above the command's budget (unless forced)."""
     case = cases[0]
-    check_front(where, len(cases), case["points"], workers, case["das"], case["das_time_limit_s"])
+    nodes, tables = case_size(case, {})
+    check_front(where, len(cases), nodes, workers, case["das"], case["das_time_limit_s"], tables)
 
 
 STUDY_KINDS.register("pareto", StudyKind(expand_front, run_case, pareto_table, front_size, table_file="pareto.csv",

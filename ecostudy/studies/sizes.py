@@ -47,7 +47,7 @@ from ecostudy.studies import closedloop
 from ecostudy.studies.batch import STUDY_KINDS
 from ecostudy.studies.journey import FRONT_COUNT
 from ecostudy.studies.estimate import (RSPC_MEASURED_MODES, RUN_BYTES_PER_POINT, check_closed_loop, check_network,
-                                       first_runs, horizon_samples, run_seconds, spec_seconds)
+                                       first_runs, horizon_samples, run_bytes, run_seconds, spec_seconds)
 
 NETWORK_SECONDS_PER_STEP = 0.02
 # [bytes] a network command's process per grid point of its first runs: it keeps every segment's run
@@ -68,10 +68,11 @@ def check_run_study(path, workers=1):
     kind.size(Path(path), kind.expand(Path(path)).cases, workers)
 
 
-def check_front(where, count, points, workers=1, das=None, das_time_limit=DAS_TIME_LIMIT_S):
-    """Refuse a Pareto front of ``count`` runs of ``points`` nodes estimated above the budget."""
+def check_front(where, count, points, workers=1, das=None, das_time_limit=DAS_TIME_LIMIT_S, tables=0):
+    """Refuse a Pareto front of ``count`` runs of ``points`` grid nodes (``tables``: the train's table
+    points, :func:`~ecostudy.studies.estimate.table_points`) estimated above the budget."""
     check_study(where, f"a front of {count} points at K = {points}",
-                [run_seconds(points, das, das_time_limit)] * count, workers, points * RUN_BYTES_PER_POINT)
+                [run_seconds(points, das, das_time_limit, tables)] * count, workers, run_bytes(points, tables))
 
 
 def check_closed_loop_study(path, workers=1, only=None, out=None):

@@ -3,12 +3,15 @@ import multiprocessing
 import os
 import signal
 import struct
+import threading
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 
 from ecostudy.core.deadline import die_with_parent
-from ecostudy.core.interrupt import STOPS
+from ecostudy.core.interrupt import STOPS, held
 from ecostudy.io.store import release_inherited
+
+STOP_WAIT_S = 10.0  # [s] the longest a stop waits for the pool to collect its killed workers (it takes ms)
 
 
 def every_core(workers):
@@ -31,6 +34,13 @@ class WorkerPool(ProcessPoolExecutor):
         super().__init__(max_workers=workers, mp_context=multiprocessing.get_context("fork"),
                          initializer=_worker_start, initargs=(write, self.stopping))
         self.write, self.seen = write, set()
+
+    def submit(self, *args, **kwargs):
+        """As the pool's, a stop signal that arrives inside raised once it returned: the first submit forks
+        the workers, and Python ignores an exception raised in a fork's callbacks (logging's lock
+        released in the parent), which would lose the stop."""
+        with held([]):
+            return super().submit(*args, **kwargs)
 
     def started(self):
         """The IDs of the workers started so far (read from the pipe, kept in ``seen``)."""
@@ -61,21 +71,27 @@ def worker_pool(workers):
     except BaseException:
         stop_workers(pool)
         raise
-    finally:
+    else:
         pool.shutdown()
+    finally:
         pool.close_pipe()
 
 
 def stop_workers(pool):
     """Stop a :class:`WorkerPool`'s worker processes now (SIGKILL: they ignore SIGTERM), whatever they
-    compute: the tasks they run are lost, the others cancelled or failed; every worker has ended when this
-    returns. A worker forked but not yet registered sees ``stopping`` set after it registered and
-    ends itself; one already gone (its pool broken) is not signalled (its ID may be another's now)."""
+    compute: the tasks they run are lost, the others cancelled or failed. A worker forked but not yet
+    registered sees ``stopping`` set after it registered and ends itself; one already gone (its pool
+    broken) is not signalled (its ID may be another's now). The pool's shutdown (it sees its workers
+    die and collects them) is waited for at most :data:`STOP_WAIT_S`, in a thread of its own: a stop
+    never hangs on the pool's thread (which a lock left held by an exception would block forever)."""
     pool.stopping.value = 1
     for pid in pool.started():
         if _our_child(pid):
             os.kill(pid, signal.SIGKILL)
-    pool.shutdown(wait=True, cancel_futures=True)  # the pool sees its workers die and collects them
+    closing = threading.Thread(target=pool.shutdown, kwargs={"wait": True, "cancel_futures": True},
+                               name="ecostudy-stop-workers", daemon=True)
+    closing.start()
+    closing.join(STOP_WAIT_S)
 
 
 def _our_child(pid):
