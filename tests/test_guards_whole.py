@@ -3,7 +3,7 @@
 memory, with the estimate in one line, unless ``--force``."""
 import pytest
 
-from ecostudy.core.budget import forced
+from ecostudy.core.budget import forced, machine_memory
 from ecostudy.core.errors import InputError
 from ecostudy.studies.sizes import check_compare, check_journey
 
@@ -50,6 +50,9 @@ TTO = DATA / "ttobench"
 def test_run_and_pareto_count_the_trains_tables_as_solve_does(tmp_path, command):
     """The VIRM6 train (force tables) on a TTOBench track at K = 60 000: `solve` refused it at 24.2 GB,
     while `run` and `pareto` left the tables out (4.5 GB) and computed. One estimate now: all three refuse."""
+    if (machine_memory() or 0) > 48e9:
+        pytest.skip("this machine has more than 48 GB: a run at K = 60 000 (about 24.2 GB) fits in half of it, so "
+                    "it is not refused here")
     track, train = TTO / "00_var_speed_limit_100.json", TTO / "NL_Intercity_VIRM6.json"
     study = write_yaml(tmp_path / "virm.yaml", {"name": "virm", "track": str(track), "train": str(train),
                                                "supplement_percent": 10, "points": 60000, "output": str(tmp_path / "out")})
