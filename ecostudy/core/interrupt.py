@@ -39,9 +39,14 @@ class Interrupted(KeyboardInterrupt):
         self.signum = RECEIVED[0] if RECEIVED else signal.SIGINT
 
 
+def _under_way() -> bool:
+    """Whether the command's stop began less than :data:`LOST_AFTER_S` ago."""
+    return bool(STOPPING) and time.monotonic() - STOPPING[0] < LOST_AFTER_S
+
+
 def _raise(signum: int, frame: Optional[FrameType]) -> None:
     RECEIVED.append(signum)
-    if STOPPING and time.monotonic() - STOPPING[0] < LOST_AFTER_S:  # the stop is under way: noted only
+    if _under_way():  # the stop is under way: noted only
         return
     STOPPING[:] = [time.monotonic()]
     raise KeyboardInterrupt
@@ -112,7 +117,8 @@ def held(flag: list[bool]) -> Iterator[None]:
         return
     old = {s: signal.getsignal(s) for s in STOPS}
     ours = [s for s in STOPS if _ours(old[s])]
-    begun = bool(STOPPING)
+    managed = any(old[s] is _raise for s in ours)  # inside stopped_by_signals: its stop may be under way
+    begun = managed and _under_way()
 
     def note(signum: int, frame: Optional[FrameType]) -> None:
         RECEIVED.append(signum)
@@ -126,5 +132,6 @@ def held(flag: list[bool]) -> Iterator[None]:
         for s in ours:
             signal.signal(s, old[s])
     if flag and not begun:  # the stop begins here (one already under way is not raised again)
-        STOPPING[:] = [time.monotonic()]
+        if managed:
+            STOPPING[:] = [time.monotonic()]
         raise KeyboardInterrupt
