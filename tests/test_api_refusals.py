@@ -3,7 +3,8 @@ its warnings name arguments, not options: a path where a loaded train belongs (a
 timing windows that are not Windows of finite numbers between the stops (Pyomo's errors), a front
 or a re-planner asked to minimise time (an energy front labelled time-optimal), a solve folder's
 objective or advice method misspelt (a ValueError after the solve), an export step given as a
-number (a TypeError)."""
+number (a TypeError), mixed weights ``ecostudy solve --weights`` refuses (an energy weight of 0, a
+time weight of 0 with no window: computed before)."""
 import warnings
 
 import pytest
@@ -26,6 +27,12 @@ W = api.Window
     (lambda: api.solve(TRACK, TRAIN, running_time=80, windows=W(500.0, 30.0, 45.0)), "arguments: windows: a list"),
     (lambda: api.solve(TRACK, TRAIN, running_time=80, windows=[{"distance": 5}]), "windows[0]: a Window(distance"),
     (lambda: api.solve(TRACK, TRAIN, running_time=80, windows=[W(500.0, 50.0, 40.0)]), "earliest after latest"),
+    (lambda: api.solve(TRACK, TRAIN, window=(70, 90), objective="mixed", weights=(1, 0)),
+     "arguments: weights: an energy weight of 0 leaves the running time alone"),
+    (lambda: api.solve(TRACK, TRAIN, objective="mixed", weights=(0, 1)), "arguments: weights: a time weight of 0"),
+    (lambda: api.solve(TRACK, TRAIN, objective="mixed", weights=(0, 0)), "arguments: weights: must be two weights"),
+    (lambda: api.solve(TRACK, TRAIN, objective="mixed", weights=5), "arguments: weights: expected (time, energy)"),
+    (lambda: api.solve(TRACK, TRAIN, running_time=80, weights=(1, 1)), "arguments: weights: weigh time against"),
     (lambda: api.pareto(TRACK, TRAIN, count=3, objective="time"), "arguments: objective: expected one of energy, net_energy"),
     (lambda: api.replanner(TRACK, TRAIN, running_time=80, objective="time"), "'time' plans the earliest arrival"),
     (lambda: api.solve_folder(track=ROKIN, train=TRAIN, time=80), "arguments: train: a path to a train file, not Train"),
@@ -49,3 +56,12 @@ def test_a_warning_names_the_argument_not_the_option(tmp_path):
                          out=tmp_path / "o", plot=False)
     said = [str(w.message) for w in caught if issubclass(w.category, EcostudyWarning)]
     assert any(s.startswith("arguments: das_time_limit: bounds the minlp search only") for s in said), said
+
+
+def test_the_mixed_weights_given_are_the_ones_solved(tmp_path):
+    """api.solve's weights reach the run: a heavier time weight is a shorter run, the CLI's for the same weights."""
+    runs = [api.solve(TRACK, TRAIN, objective="mixed", weights=(w, 1.0), points=60) for w in (1.0, 4.0)]
+    assert runs[1].facts.running_time_s < runs[0].facts.running_time_s - 1.0, [r.facts.running_time_s for r in runs]
+    folder = api.solve_folder(track=ROKIN, train=METRO, objective="mixed", weights="4,1", points=60,
+                              out=tmp_path / "m", plot=False)
+    assert folder.run().running_time_s == pytest.approx(runs[1].facts.running_time_s, rel=1e-6)

@@ -26,7 +26,7 @@ from ecostudy.ocp.problem import all_out, check_feasible, check_not_crawling, pr
 from ecostudy.ocp.restart import Replanner
 from ecostudy.report.files import MAX_EXPORT_ROWS, write_run
 from ecostudy.report.html import fragment
-from ecostudy.studies.cases import refuse_mixed_fixed
+from ecostudy.studies.cases import refuse_mixed_fixed, refuse_mixed_weights
 from ecostudy.studies.options import OBJECTIVES, check_options, checked_pair
 from ecostudy.studies.pareto import sweep
 
@@ -209,6 +209,20 @@ def _check_windows(windows, distance):
         raise InputError(lines)
 
 
+def _weights(weights, objective):
+    """The mixed objective's (w_t, w_e): ``weights`` (None: (1, 1)) two finite numbers >= 0, not both 0,
+    given for ``objective`` mixed only (as ``ecostudy solve --weights``)."""
+    if weights is None:
+        return 1.0, 1.0
+    if objective != "mixed":
+        raise InputError(problem(WHERE, "weights", "weigh time against energy of objective 'mixed' only"))
+    try:
+        w_t, w_e = weights
+    except (TypeError, ValueError):
+        raise InputError(problem(WHERE, "weights", f"expected (time, energy) weights, not {weights!r}"))
+    return checked_pair(w_t, w_e, "weights", nonnegative=True, where=WHERE)
+
+
 def _named(exc, timing):
     """A timing no run meets (:class:`TooFastError`), named by the argument that set it."""
     field = ("running_time" if timing.running_time is not None else "supplement_percent"
@@ -218,11 +232,12 @@ def _named(exc, timing):
 
 @spelled
 def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplement_percent=None, window=None,
-          objective="energy", points=RUN_POINTS, windows=()):
+          objective="energy", points=RUN_POINTS, windows=(), weights=None):
     """The energy-optimal run (``objective`` ``energy``, ``net_energy``, ``time`` or ``mixed``)
     between two stops (default: the first and the last), for a running time [s], a supplement
     over the all-out time [%] or an arrival window (earliest, latest) [s]; verified by simulation.
-    ``objective="time"`` is the all-out run (no timing); ``mixed`` weighs time against energy."""
+    ``objective="time"`` is the all-out run (no timing); ``mixed`` weighs time against energy with
+    ``weights`` (w_t [1/s], w_e [kg/J]; default (1, 1)), refused as ``ecostudy solve --weights`` is."""
     timing = _timing(running_time, supplement_percent, window)
     _check(objective, track, train, points=points)
     timed = any(x is not None for x in (running_time, supplement_percent, window))
@@ -231,6 +246,8 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
                                  "supplement_percent or window"))
     refuse_mixed_fixed(objective, "running_time" if running_time is not None else
                        "supplement_percent" if supplement_percent is not None else None, WHERE, "objective")
+    weights = _weights(weights, objective)
+    refuse_mixed_weights(objective, weights, timed, WHERE, ("weights", "weights"))
     if objective in ("energy", "net_energy") and not timed:  # the optimum would crawl for days
         raise InputError(problem(WHERE, "running_time", "give running_time, supplement_percent or window (or "
                                  "objective='time' for the all-out run)"))
@@ -238,7 +255,7 @@ def solve(track, train, from_stop=None, to_stop=None, running_time=None, supplem
     _check_windows(windows, abs(track.stops[to_stop] - track.stops[from_stop]))
     try:
         return Solution(solve_run(track, train, from_stop, to_stop, timing, objective=objective, points=points,
-                                  windows=windows))
+                                  windows=windows, weights=weights))
     except TooFastError as exc:
         raise _named(exc, timing) from None
     except FieldError as exc:  # a window on the way no run keeps

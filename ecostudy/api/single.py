@@ -127,10 +127,10 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
     das_time_limit = das_limit(das, das_time_limit)
     check_solve(grid_nodes(trk, trn, f, t, k), das, das_time_limit, table_points(trn))
     w = parse_pair(weights, "--weights", nonnegative=True) if weights is not None else w  # '' too: refused
-    if obj == "mixed" and (timing.running_time is not None or timing.supplement is not None):
-        where, field = timing_source(study, st, time, supplement, window)
-        refuse_mixed_fixed(obj, field if where == "command line" else f"{where}: {field}",
-                           *(("command line", "--objective") if objective else (str(study), "objective")))
+    where, field = timing_source(study, st, time, supplement, window)
+    fixes = timing.running_time is not None or timing.supplement is not None  # a window leaves the time free
+    refuse_mixed_fixed(obj, fixes and (field if where == "command line" else f"{where}: {field}"),
+                       *(("command line", "--objective") if objective else (str(study), "objective")))
     if weights is not None and obj != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
     refuse_mixed_weights(obj, w, timing != Timing(), *(("command line", ("--weights",) * 2) if weights is not None
