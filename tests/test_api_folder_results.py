@@ -2,7 +2,8 @@
 does (``status``, ``reason``; a bare ``Note(ok=False)`` said neither); the export CSV alone carries
 the run's status; a value that is no path is refused naming its argument (``api.load(None)`` raised
 TypeError); ``api.load`` refuses a profile ``check`` refuses (text in a number column read as
-ok). A real K = 10 solve, flagged on purpose."""
+ok); a solve folder loaded carries its inputs.json and reads the track and train it was solved with
+(``api.load`` read no train file), refusing one changed since. A real K = 10 solve, flagged on purpose."""
 import shutil
 
 import pandas as pd
@@ -69,3 +70,21 @@ def test_a_value_of_the_wrong_type_is_refused_naming_the_argument(call, line):
     with pytest.raises(api.InputError) as refused:
         call()
     assert str(refused.value).startswith(line), str(refused.value)
+
+
+@pytest.mark.flagged_on_purpose
+def test_a_loaded_solve_folder_gives_the_files_it_was_solved_with(tmp_path):
+    train_file = tmp_path / "metro.yaml"
+    shutil.copy(TRAIN, train_file)
+    out = tmp_path / "run"
+    api.solve_folder(track=TRACK, train=train_file, time=80.0, points=10, out=out, plot=False)
+    folder = api.load(out)
+    assert folder.inputs["train"] == str(train_file) and folder.inputs["points"] == 10
+    assert folder.inputs["timing"]["running_time_s"] == 80.0
+    train, track = folder.train(), folder.track()
+    assert train.mass == api.load_train(TRAIN).mass and track.stops == api.load_track(TRACK).stops
+    train_file.write_text(train_file.read_text() + "\n# edited\n")
+    with pytest.raises(api.InputError, match=r"metro\.yaml: the train file changed since this result was solved"):
+        folder.train()
+    assert folder.track().stops == track.stops  # the track did not change
+    assert api.load(out).inputs == folder.inputs  # the folder is still read: only the changed file is refused

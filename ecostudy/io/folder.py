@@ -16,7 +16,9 @@ import pandas as pd
 from ecostudy import __version__
 from ecostudy.core.errors import InputError, problem
 from ecostudy.core.status import Status, worst
-from ecostudy.io.results import load_result
+from ecostudy.core.types import Track, Train
+from ecostudy.io.loaders import load_track, load_train
+from ecostudy.io.results import check_unchanged, load_result
 from ecostudy.io.runsummary import RunSummary
 from ecostudy.io.writers import REPORT, SUMMARY, write_json
 LAYOUT = 1  # the version of summary.json's common fields; a reader refuses a newer one
@@ -63,7 +65,9 @@ class StudyResult:
     worst of its cases); ``cases`` the count of cases by status (:class:`Counts`); ``not_ok`` each
     case not ok with its status; ``tables`` every table the folder lists, as DataFrames with the
     CSV's columns (units in the column names); ``summary`` the whole ``summary.json`` (the typed
-    run of a ``solve`` folder: :meth:`run`).
+    run of a ``solve`` folder: :meth:`run`); ``inputs`` a ``solve`` folder's ``inputs.json`` (the
+    track and train files it was solved with and their SHA-256, its stops, grid, timing, objective,
+    weights; ``{}`` for other folders), whose track and train :meth:`track` and :meth:`train` read.
     """
 
     kind: str
@@ -74,6 +78,7 @@ class StudyResult:
     folder: Path
     files: list[str] = field(default_factory=list)
     not_ok: tuple[NotOk, ...] = ()
+    inputs: dict[str, Any] = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -104,6 +109,25 @@ class StudyResult:
         if "traction_energy_kWh" not in self.summary or "solver" not in self.summary:
             raise InputError(problem(self.folder / SUMMARY, "kind", f"a {self.kind} folder, not one run's"))
         return RunSummary.from_dict(self.summary)
+
+    def track(self) -> Track:
+        """The track a ``solve`` folder's run was solved with: the file its ``inputs.json`` names, read
+        as :func:`~ecostudy.io.loaders.load_track` reads it; refused if gone or changed since the solve."""
+        return load_track(self._solved_with("track"))
+
+    def train(self) -> Train:
+        """The train a ``solve`` folder's run was solved with: the file its ``inputs.json`` names, read
+        as :func:`~ecostudy.io.loaders.load_train` reads it; refused if gone or changed since the solve."""
+        return load_train(self._solved_with("train"))
+
+    def _solved_with(self, name: str) -> str:
+        """The ``name`` file (track, train) of ``inputs``, refused as ``ecostudy check`` refuses it
+        (:func:`~ecostudy.io.results.check_unchanged`): gone, or changed since the solve."""
+        if name not in self.inputs:
+            raise InputError(problem(self.folder / SUMMARY, "kind", f"a {self.kind} folder, not one run's: it "
+                                     f"records no {name} file (a solve folder's inputs.json does)"))
+        check_unchanged(self.inputs, self.folder, (name,))
+        return str(self.inputs[name])
 
 
 HEADLINE = 5  # the cases named in a folder's status; summary.json's not_ok lists every one
@@ -214,16 +238,15 @@ def load(folder: Path | str) -> StudyResult:
     if int(data.get("summary_layout", 0)) > LAYOUT:
         raise InputError(problem(path, "summary_layout", f"{data['summary_layout']} is newer than this ecostudy "
                                  f"reads ({LAYOUT}); update ecostudy"))
-    if data["kind"] == "solve" and (folder / "inputs.json").is_file():  # its files read as check reads them
-        load_result(folder)  # (a profile with text in a number column, cut short, edited: refused by name)
+    # a solve folder's files read as check and export read them: refused where they disagree (a profile with
+    # text in a number column, cut short, edited: by name); its inputs.json kept
+    inputs = load_result(folder).inputs if data["kind"] == "solve" else {}
     tables = {}
     for name, file in (data.get("tables") or {}).items():
         try:
             tables[name] = pd.read_csv(folder / file)
         except (OSError, ValueError) as exc:
             raise InputError(problem(folder / file, "", f"the {name} table of this folder cannot be read ({exc})"))
-    if data["kind"] == "solve":  # its files read as check and export read them: refused where they disagree
-        load_result(folder)
     not_ok = tuple(NotOk(str(c["case"]), Status.parse(c["status"])) for c in data.get("not_ok") or ())
     status, cases = Status.parse(data["status"]), Counts.from_dict(data.get("cases") or {})
     judged = _rejudged(folder) if data["kind"] == "solve" and status.ok else None
@@ -232,7 +255,7 @@ def load(folder: Path | str) -> StudyResult:
         cases = Counts(1, 0, int(judged.kind == "flagged"), int(judged.kind != "flagged"))  # a solve: one run
         # (not the summary's counts less one: a summary edited to ok may still count its run flagged)
     return StudyResult(kind=str(data["kind"]), status=status, cases=cases, tables=tables, summary=data, folder=folder,
-                       files=list(data.get("files", [])), not_ok=not_ok)
+                       files=list(data.get("files", [])), not_ok=not_ok, inputs=inputs)
 
 
 def _rejudged(folder: Path) -> Status | None:

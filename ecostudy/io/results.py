@@ -21,10 +21,11 @@ from ecostudy.io.tables import number_columns
 from ecostudy.io.writers import check_name_length
 
 
-def check_unchanged(inputs: dict[str, Any], result_dir: str | PathLike[str]) -> None:
-    """Refuse a saved run whose track or train file changed since it was solved (``inputs.json``
-    keeps their digests): checking it against the edited file would check another problem."""
-    for name in ("track", "train"):
+def check_unchanged(inputs: dict[str, Any], result_dir: str | PathLike[str],
+                    names: tuple[str, ...] = ("track", "train")) -> None:
+    """Refuse a saved run whose track or train file (``names``) changed since it was solved
+    (``inputs.json`` keeps their digests): checking it against the edited file would check another problem."""
+    for name in names:
         digest = inputs.get(f"{name}_sha256")
         if digest is None:
             raise InputError(problem(Path(result_dir) / "inputs.json", f"{name}_sha256", "missing: solved by an older "
