@@ -111,13 +111,14 @@ def test_ttobench_journey_becomes_a_plan_in_si(tmp_path):
                                           "upper speed constraint": "m/s"})
     doc["timing points"]["values"] = [[p / 1000 if p is not None else None, a, b, c, d]
                                       for p, a, b, c, d in doc["timing points"]["values"]]
-    doc["timing points"]["values"][2][4] = 10.0  # m/s
+    doc["timing points"]["values"][3][4] = 10.0  # m/s: the passing point at 1400 m
     other = tmp_path / "journey_km.json"
     other.write_text(json.dumps(doc))
     plan = journey_plan(*name_stops(load_timetable(other), track, other), other)
     assert plan.windows[1][0].distance == pytest.approx(750.0) and plan.windows[1][0].max_speed == pytest.approx(10.0)
     # a stop anywhere on the track (TTOBench journeys stop where they like): the track gets that stop
-    doc["timing points"]["values"][1][0] = 0.7
+    for row in (1, 2):  # Station's arrival and departure points
+        doc["timing points"]["values"][row][0] = 0.7
     other.write_text(json.dumps(doc))
     tt, extended = name_stops(load_timetable(other), track, other)
     assert extended.stops["at_700m"] == 700.0 and tt.stops[1].stop == "at_700m" and "at_700m" not in track.stops
@@ -127,16 +128,18 @@ def test_ttobench_journey_becomes_a_plan_in_si(tmp_path):
     station = json.loads(path.read_text())
     rows = station["timing points"]["values"]
     at = next(i for i, r in enumerate(rows) if i and r[3] == 0 and r[4] == 0)
-    rows.insert(at + 1, [rows[at][0], 90.0, 100.0, 0, 0])
+    rows[at + 1][1:3] = [90.0, 100.0]  # its departure point, open in the file
     other.write_text(json.dumps(station))
     plan = journey_plan(*name_stops(load_timetable(other), track, other), other)
     assert plan.departure[1] == (90.0, 100.0) and len(plan.stops) == 4
     # a point before the one above it; the last stop not on the track at all; a departure that is not at standstill
-    doc["timing points"]["values"][1][0] = 9.0
+    for row in (1, 2):
+        doc["timing points"]["values"][row][0] = 9.0
     other.write_text(json.dumps(doc))
-    with pytest.raises(InputError, match=r"timing points\.values\[2\]: position 1\.4 km before the point above it"):
+    with pytest.raises(InputError, match=r"timing points\.values\[3\]: position 1\.4 km before the point above it"):
         load_timetable(other)
-    doc["timing points"]["values"][1][0] = 0.7
+    for row in (1, 2):
+        doc["timing points"]["values"][row][0] = 0.7
     doc["timing points"]["values"][-1][0] = 9.0
     other.write_text(json.dumps(doc))
     with pytest.raises(InputError, match=r"stops\[3\]\.position_m: 9000 m is not on track"):

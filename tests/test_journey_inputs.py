@@ -128,7 +128,7 @@ def test_a_ttobench_journey_s_refusals_name_its_timing_points_not_the_timetable_
     refused(run(*journey, "--timetable", fast), f"{fast}: timing points.values[0], timing points.values[1]: "
                                                 "infeasible: the departure from Noord (not before 0 s)")
     doc["timing points"]["values"][1][2] = 56
-    doc["timing points"]["values"].append([3500, None, 400, 0, 0])  # past the line's end
+    doc["timing points"]["values"] += [[3000, None, None, 0, 0], [3500, None, 400, 0, 0]]  # past the line's end
     beyond = tmp_path / "beyond.json"
     beyond.write_text(json.dumps(doc))
-    refused(run(*journey, "--timetable", beyond), f"{beyond}: timing points.values[5]: 3500 m is not on track")
+    refused(run(*journey, "--timetable", beyond), f"{beyond}: timing points.values[8]: 3500 m is not on track")

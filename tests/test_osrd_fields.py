@@ -5,6 +5,7 @@ OSRD checks it (editoast ``editoast_schemas/src/rolling_stock/effort_curves.rs``
 ``RJSRollingStockParser.parseEffortCurve``): OSRD's own example of invalid effort curves
 (``editoast/src/tests/example_rolling_stock_3.json``: 17 speeds, no efforts) refused as OSRD refuses it.
 Edits of tests/data/osrd_rolling_stock.json; each refusal comes before any computing."""
+import dataclasses
 import json
 
 import pytest
@@ -13,7 +14,8 @@ from typer.testing import CliRunner
 from ecostudy.cli import app
 from ecostudy import api
 from ecostudy.core.errors import EcostudyWarning, InputError
-from ecostudy.io.loaders import load_train
+from ecostudy.core.grid import make_segment
+from ecostudy.io.loaders import load_track, load_train
 
 from .conftest import DATA, STUDIES, TRACKS, TRAINS
 from .test_published_fields import edited
@@ -251,3 +253,55 @@ def test_a_condition_without_comfort_matches_every_comfort_as_in_osrd(tmp_path):
     with pytest.warns(EcostudyWarning, match=UNMODELLED):
         cooled = load_train(f"{path}#1500V/AIR_CONDITIONING")
     assert cooled.traction.forces[0] == 1e5
+
+
+def test_curves_and_tunnels_without_resistance_named_in_the_train_files_own_fields():
+    """A curved track with a tunnel and a train that gives neither a resistance: the warning named
+    the YAML's curve_coefficient_m2ps2 and tunnel_resistance, fields an OSRD file cannot carry (and
+    a TTOBench file spells 'tunnel resistance')."""
+    with pytest.warns(EcostudyWarning, match="OSRD fields ecostudy does not model"):
+        osrd = load_train(DATA / "osrd_rolling_stock.json")
+    tto = load_train(DATA / "ttobench_subway_train.json")
+    track = dataclasses.replace(load_track(DATA / "ttobench_track.json"), name="curved, with a tunnel",
+                                tunnels=((100.0, 200.0, 40.0),))
+    first, last = list(track.stops)[0], list(track.stops)[-1]
+    said = {}
+    for train in (osrd, dataclasses.replace(tto, tunnel_resistance=())):
+        with pytest.warns(EcostudyWarning) as caught:
+            make_segment(track, train, first, last)
+        said[train.name] = [str(w.message) for w in caught]
+    lines = said[osrd.name]
+    assert any(f"curves cost nothing: the train's file {DATA / 'osrd_rolling_stock.json'} gives curves no resistance: "
+               "its rolling_resistance has no curve term" in line for line in lines), lines
+    assert any("tunnels cost nothing: the train's file" in line and "its rolling_resistance has no tunnel term" in line
+               for line in lines), lines
+    assert not any("curve_coefficient_m2ps2" in line or "tunnel_resistance" in line for line in lines), lines
+    assert any(line.endswith("tunnels cost nothing: the train gives no tunnel resistance")
+               for line in said[tto.name]), said[tto.name]
+
+
+@pytest.mark.parametrize("version, words", [
+    ("4.0", "railjson_version: '4.0': major version 4, but this reader reads OSRD rolling stock of major version 3"),
+    ("2.1", "railjson_version: '2.1': major version 2, but"),
+    (3.3, "railjson_version: expected a string 'MAJOR.MINOR' such as '3.3', got 3.3"),
+])
+def test_a_railjson_major_version_not_read_is_refused(tmp_path, version, words):
+    """OSRD's parser refuses a major version it does not read; ecostudy read any version as 3.x."""
+    path = stock(tmp_path, lambda d: d.update(railjson_version=version))
+    line = refused_line(tmp_path, path)
+    assert line.startswith(f"error: {path}: {words}"), line
+
+
+def test_a_railjson_minor_version_not_followed_is_read_with_a_warning_naming_it(tmp_path):
+    path = stock(tmp_path, lambda d: d.update(railjson_version="3.4"))
+    with pytest.warns(EcostudyWarning) as caught:
+        train = load_train(path)
+    said = [str(w.message) for w in caught]
+    assert any(s.startswith(f"{path}: railjson_version: '3.4' is not a version this reader follows (3.2, 3.3): read "
+                            "as railjson 3.x") for s in said), said
+    assert train.mass == load_train_quietly(DATA / "osrd_rolling_stock.json").mass
+
+
+def load_train_quietly(path):
+    with pytest.warns(EcostudyWarning):
+        return load_train(path)

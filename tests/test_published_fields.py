@@ -119,8 +119,8 @@ def journey(tmp_path, change):
     (lambda d: d["timing points"]["units"].update({"upper time constraint": "min"}),
      "timing points.units.upper time constraint: expected s, got 'min'"),
     # read as a window the train must leave 520 s early
-    (lambda d: d["timing points"]["values"].__setitem__(3, [1300, 175, 185, 0, 0]),
-     "timing points.values[3]: position 1300 m before the point above it"),
+    (lambda d: d["timing points"]["values"].__setitem__(4, [1300, 175, 185, 0, 0]),
+     "timing points.values[4]: position 1300 m before the point above it"),
     # read as m, s and km/h without a word: a journey in km gave "the train would crawl" (TTOBench requires all five)
     (lambda d: d["timing points"].pop("units"),
      "timing points.units: missing field (TTOBench requires the unit of each column: 'position', 'lower time "
@@ -133,11 +133,15 @@ def journey(tmp_path, change):
      "(one arrival and one departure per stop)"),
     # two passing points at 1400 m: both kept as windows of one place (TTOBench's validator refuses it)
     (lambda d: d["timing points"]["values"].insert(3, [1400, 125, 140, None, 50]),
-     "timing points.values[3]: at the position of timing points.values[2]: two timing points at one position are a "
+     "timing points.values[4]: at the position of timing points.values[3]: two timing points at one position are a "
      "stop's arrival and departure, both with speed bounds 0"),
     (lambda d: d["timing points"]["values"].insert(1, [0, 5, 10, 0, 0]),
      "timing points.values[1]: at the position of timing points.values[0]: two timing points at one position are an "
      "intermediate stop's arrival and departure, not the journey's ends"),
+    # Station's arrival without its departure point: read as a stop with --dwell (TTOBench's validator refuses it)
+    (lambda d: d["timing points"]["values"].pop(2),
+     "timing points.values[1]: an intermediate stopping point (both speed constraints 0) with no second at its "
+     "position: an intermediate stop is an arrival and a departure point at one position"),
 ])
 def test_a_journey_is_read_in_seconds_along_the_line(tmp_path, edit, line):
     refused(load_timetable, journey(tmp_path, edit), line)
@@ -200,13 +204,13 @@ def test_a_ttobench_tracks_bad_row_is_named_as_the_file_names_it(tmp_path):
 def test_a_journeys_passing_point_no_run_keeps_is_named_by_its_row(tmp_path):
     """It was `timing points.values, timing points.values[0]` (the HEAD St. Gallen-Wil journey:
     `timing points.values, timing points.values[5]` for its point values[4]): every passing point shared one name."""
-    path = journey(tmp_path, lambda d: d["timing points"]["values"].__setitem__(2, [1400, 20, 30, None, 40]))
+    path = journey(tmp_path, lambda d: d["timing points"]["values"].__setitem__(3, [1400, 20, 30, None, 40]))
     result = CliRunner().invoke(app, ["journey", "--timetable", str(path), "--track", str(TRACKS / "metro_line_4stops.yaml"),
                                       "--train", str(TRAINS / "amsterdam_metro.yaml"), "-K", "50", "--no-plot",
                                       "--out", str(tmp_path / "o")])
     lines = [line for line in result.output.splitlines() if line.startswith("error:")]
     assert result.exit_code == 2 and lines == [
-        f"error: {path}: timing points.values[0], timing points.values[2]: infeasible: the departure from Noord (not "
+        f"error: {path}: timing points.values[0], timing points.values[3]: infeasible: the departure from Noord (not "
         "before 0 s) and the timing point at 1400 m (not after 30 s) leave 30 s; the fastest run between them takes 98 s"]
 
 

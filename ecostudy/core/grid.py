@@ -166,10 +166,9 @@ def warn_unpaired(track: Track, train: Train) -> None:
     """Once per track and train: curves or tunnels on the track that the train gives no resistance for."""
     lines = []
     if np.any(track.curvatures != 0) and train.curve_resistance == "coefficient" and train.curve_coefficient == 0:
-        lines.append("curves cost nothing: the train's curve_coefficient_m2ps2 is 0 (set it, or "
-                     "curve_resistance: roeckl)")
+        lines.append(f"curves cost nothing: {train.unpaired[0]}")
     if track.tunnels and not train.tunnel_resistance:
-        lines.append("tunnels cost nothing: the train gives no tunnel_resistance")
+        lines.append(f"tunnels cost nothing: {train.unpaired[1]}")
     for line in lines:
         if (track.name, train.name, line) not in _WARNED:
             _WARNED.add((track.name, train.name, line))

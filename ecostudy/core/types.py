@@ -42,6 +42,10 @@ class Train:
     # why the calibration that wrote this train's file was not ok (its ``calibration`` block); '' when it
     # was ok or the file is not a calibration's: every run of the train is flagged with it (core.status.calibrated)
     calibration_reason: str = ""
+    # (curves, tunnels): how the train's file would give curves and tunnels a resistance, in that file's own
+    # fields (its reader's words: an OSRD or TTOBench file has not the YAML's), for core.grid.warn_unpaired
+    unpaired: tuple[str, str] = ("the train's curve_coefficient_m2ps2 is 0 (set it, or curve_resistance: roeckl)",
+                                 "the train gives no tunnel_resistance")
 
     @property
     def rotating_mass_factor(self) -> float:

@@ -101,6 +101,11 @@ def ttobench_journey(doc: Mapping[str, Any], path: Where) -> tuple[dict[str, Any
                 lines.append(problem(path, where, f"at the position of timing points.values[{i - 1}]: {shared}"))
                 continue
         last, before, was_stop = pos, last, stopping
+        if stopping and 0 < i < len(rows) - 1 and pos != before and not _at(rows[i + 1], pos, _POSITION[pos_unit]):
+            lines.append(problem(path, where, "an intermediate stopping point (both speed constraints 0) with no second "
+                                 "at its position: an intermediate stop is an arrival and a departure point at one "
+                                 "position (TTOBench's validate_journeys.py)"))
+            continue
         if i == 0 or i == len(rows) - 1 or stopping:  # a stopping point
             if vlo != 0 or vhi != 0:
                 lines.append(problem(path, where, "the departure and the arrival need both speed bounds 0"))
@@ -141,6 +146,11 @@ def _shared(i: int, rows: int, third: bool, stops: bool) -> str | None:
     return None
 
 
+def _at(row: Any, pos: float, factor: float) -> bool:
+    """Whether ``row`` (a timing point, unchecked) is at ``pos`` [m] (its position times ``factor``)."""
+    return isinstance(row, list) and len(row) == 5 and finite_number(row[0]) and float(row[0]) * factor == pos
+
+
 def _departure(lo: float | None, hi: float | None) -> dict[str, float | None]:
     """A stopping point's times as a departure: fixed when both are equal, else a window."""
     if lo is not None and lo == hi:
@@ -153,6 +163,20 @@ def timetable_document_to_schema(doc: Mapping[str, Any], path: Where) -> tuple[d
     if "timing points" in doc:
         return ttobench_journey(doc, path)
     raise InputError(problem(path, "", "not a TTOBench journey (no 'timing points' field)"))
+
+
+def unpaired(aliases: Mapping[str, str], path: Where) -> tuple[str, str]:
+    """(curves, tunnels): how a TTOBench or OSRD train file (``path``; ``aliases``: the train schema's
+    field paths as the file names them) would give curves and tunnels a resistance, in its own fields,
+    for :func:`~ecostudy.core.grid.warn_unpaired` (``Train.unpaired``); a format with no field for one
+    says so (OSRD rolling stock: its ``rolling_resistance`` A, B, C is all it gives)."""
+    davis = aliases.get("davis.a_N", "Davis terms")
+    resistance = davis.rpartition(".")[0] or davis  # OSRD: rolling_resistance.A; TTOBench: rolling resistance r0
+    absent = (f"the train's file {path} gives %s no resistance: its {resistance} has no %s term, and the format no "
+              "field for one")
+    curve, tunnel = aliases.get("curve_coefficient_m2ps2"), aliases.get("tunnel_resistance")
+    return (f"the train's {curve} is 0" if curve else absent % ("curves", "curve"),
+            f"the train gives no {tunnel}" if tunnel else absent % ("tunnels", "tunnel"))
 
 
 def train_document_to_schema(doc: Mapping[str, Any], path: Where,

@@ -1,6 +1,11 @@
 """OSRD rolling stock (railjson, OpenRailAssociation/osrd; the realistic files of its
 ``tests/data/rolling_stocks/realistic/``) read with OSRD's meaning of each field.
 
+- ``railjson_version`` is the format's version, 'MAJOR.MINOR' (``version`` is the stored object's
+  edit count, descriptive), read as OSRD's core reads it (``RJSRollingStockParser.parse``): a major
+  version other than :data:`MAJOR` is refused (OSRD refuses a major version mismatch); a minor one
+  this reader was not written against (:data:`MINORS`) is read, with a warning naming it (OSRD logs
+  a version mismatch and reads it).
 - Every field OSRD's parser requires (core ``RJSRollingStockParser.parse``: :data:`REQUIRED`, and a
   braking deceleration, ``gamma`` of railjson 3.2 or ``const_gamma`` of 3.3) is refused when it is
   missing or null, naming it: none is filled in. Both braking fields at once are refused.
@@ -47,6 +52,7 @@ DESCRIPTIVE = {"name", "railjson_version", "metadata", "version", "locked", "sup
 # what OSRD's parser refuses a file without (core RJSRollingStockParser.parse, in its order; OSRD 66c30bb)
 REQUIRED = ("railjson_version", "effort_curves", "name", "length", "max_speed", "startup_time", "startup_acceleration",
             "comfort_acceleration", "inertia_coefficient", "loading_gauge", "mass", "rolling_resistance")
+MAJOR, MINORS = "3", ("3.2", "3.3")  # railjson_version: the major read, the versions this reader follows
 BRAKING = ("gamma", "const_gamma")  # railjson 3.2's {type, value}, 3.3's number: one of them
 MODE_FIELDS = ("curves", "default_curve", "is_electric")  # editoast ModeEffortCurves (deny_unknown_fields)
 COND_FIELDS = ("comfort", "electrical_profile_level", "power_restriction_code")  # editoast EffortCurveConditions
@@ -235,6 +241,23 @@ def _braking(doc: Mapping[str, Any], path: Where, mass: float) -> tuple[dict[str
     return {"max_force_kN": mass * value / units.KN}, (value if kind == "CONST" else None), field
 
 
+def _version(version: Any, path: Where) -> None:
+    """Refuse a ``railjson_version`` that is not a string or whose major version (before the first
+    '.', as OSRD splits it) is not :data:`MAJOR`; warn of a version of that major not in :data:`MINORS`."""
+    if not isinstance(version, str):
+        raise InputError(problem(path, "railjson_version", f"expected a string 'MAJOR.MINOR' such as '3.3', got "
+                                 f"{version!r:.40}"))
+    major = version.split(".")[0]
+    if major != MAJOR:
+        raise InputError(problem(path, "railjson_version", f"'{version}': major version {major or '(none)'}, but this "
+                                 f"reader reads OSRD rolling stock of major version {MAJOR} ({', '.join(MINORS)}); OSRD "
+                                 "refuses a major version mismatch too"))
+    if version not in MINORS:
+        warnings.warn(problem(path, "railjson_version", f"'{version}' is not a version this reader follows "
+                              f"({', '.join(MINORS)}): read as railjson {MAJOR}.x (OSRD reads a minor version "
+                              "mismatch with a warning)"), EcostudyWarning, stacklevel=4)
+
+
 def osrd_train(doc: Mapping[str, Any], path: Where,
                selector: str | None = None) -> tuple[dict[str, Any], dict[str, str]]:
     """An OSRD rolling stock as a train-schema dict, and the field names for messages (the schema's
@@ -243,6 +266,7 @@ def osrd_train(doc: Mapping[str, Any], path: Where,
     if missing:
         raise InputError(problem(path, missing[0], "missing field (OSRD's rolling-stock parser requires "
                                  + ", ".join(f"'{m}'" for m in missing) + ")"))
+    _version(doc["railjson_version"], path)
     ignored = [k for k in doc if k not in MODELLED | DESCRIPTIVE and doc[k] not in (None, {}, [], "")]
     if ignored:
         warnings.warn(problem(path, ", ".join(ignored), "OSRD fields ecostudy does not model: ignored"),
