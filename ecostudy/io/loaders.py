@@ -1,4 +1,5 @@
-"""Load train, track, timetable and study files into SI objects. All unit conversion is here.
+"""Load train, track, timetable and study files into SI objects. All unit conversion is here (a heavy-haul
+consist file's: :mod:`ecostudy.io.consistfile`).
 
 Every problem becomes one line ``file: field: what is wrong``; all problems of a file are
 reported together (:class:`ecostudy.errors.InputError`).
@@ -16,11 +17,11 @@ from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import roeckl_out_of_range, too_long
 from ecostudy.core.physics import EfficiencyMap, Envelope, force_power_fit, table_width
-from ecostudy.core.types import Consist, Supply, Timing, Track, Train, Window
+from ecostudy.core.types import Supply, Timing, Track, Train, Window
 from ecostudy.io import schemas
-from ecostudy.io.consistschema import ConsistFile
+from ecostudy.io.consistfile import (consist_from_document as consist_from_document,  # re-exported: a consist file
+                                     load_consist as load_consist)
 from ecostudy.io.davis import check_davis_bound, check_davis_plausible, davis_si
-from ecostudy.io.intrain import in_train_physics
 from ecostudy.io.formats import (timetable_document_to_schema, track_document_to_schema, train_document_to_schema,
                                  unpaired)
 from ecostudy.io.timetable import name_stops, off_clock, segment_timing, turning_back, window_origin, windows_from_schema
@@ -361,37 +362,3 @@ def load_network_study(study_path: Where) -> NetworkStudy:
 
 __all__ = ["Train", "Track", "Timing", "Study", "load_train", "load_track", "load_study", "read_train", "read_track",
            "load_timetable", "read_timetable", "check_stops", "check_stop_list"]
-
-
-def load_consist(path: Where) -> Consist:
-    """Read a consist file (YAML: vehicle types, groups in train order, couplers) into a :class:`Consist`."""
-    return consist_from_document(read_document(path), Path(path))
-
-
-def consist_from_document(document: Mapping[str, Any], where: Where) -> Consist:
-    """A :class:`Consist` (SI) from a consist file's document, validated; ``where`` names it in errors."""
-    c = validate(ConsistFile, document, where)
-    cars = [c.types[g.type] for g in c.vehicles for _ in range(g.count)]
-    if isinstance(where, Path):  # read from its file (not a stored case's copy): said once
-        for name in sorted(set(c.types) - {g.type for g in c.vehicles}):  # a typo in a group's type reads like this
-            warnings.warn(problem(where, f"types.{name}", "no vehicle group is of this type: it is not in the "
-                                  "train"), EcostudyWarning, stacklevel=2)
-        for field, what in c.implausible():
-            warnings.warn(problem(where, field, what), EcostudyWarning, stacklevel=2)
-
-    def envelope(spec: Any) -> Envelope | None:
-        if spec is None:
-            return None
-        power = spec.max_power_kW * units.KW if spec.max_power_kW else float("inf")
-        return Envelope("force_power", max_force=spec.max_force_kN * units.KN, max_power=power)
-
-    return Consist(name=c.name, kinds=tuple(v.kind for v in cars),
-                   mass=np.array([v.mass_t * units.TONNE for v in cars]), length=np.array([v.length_m for v in cars]),
-                   resistance=np.array([[v.resistance.c0_mps2, v.resistance.c1_per_s, v.resistance.c2_per_m]
-                                        for v in cars]),
-                   traction=tuple(envelope(v.traction) for v in cars),
-                   dynamic_brake=tuple(envelope(v.dynamic_brake) for v in cars),
-                   pneumatic_brake=np.array([v.pneumatic_brake_kN * units.KN for v in cars]),
-                   stiffness=c.couplers.stiffness_kN_per_m * units.KN, damping=c.couplers.damping_kNs_per_m * units.KN,
-                   force_limit=c.couplers.force_limit_kN * units.KN, draft_gear_travel=c.couplers.draft_gear_travel_m,
-                   **in_train_physics(c))
