@@ -29,6 +29,18 @@ def given(value: Value | None) -> Value:
     return value
 
 
+def overlaid(document: Mapping[str, Any], overrides: Mapping[str, Any]) -> dict[str, Any]:
+    """``document`` with ``overrides`` laid over it: a mapping merged key by key (a scenario's
+    ``regenerative_braking: {efficiency: 0.8}`` changes that field and keeps the block's others),
+    any other value (a number, a list, null) replacing the document's."""
+    merged = dict(document)
+    for key, value in overrides.items():
+        below = merged.get(key)
+        merged[key] = (overlaid(below, value) if isinstance(value, Mapping) and isinstance(below, Mapping)
+                       else value)
+    return merged
+
+
 def split_selector(path: Where) -> tuple[Path, str | None]:
     """(file path, selector or None) of ``file#selector``; a file whose name holds '#' stays whole."""
     text = str(path)

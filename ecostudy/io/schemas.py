@@ -205,7 +205,8 @@ class Scenario(Strict):
     train: Optional[str] = None
     track: Optional[str] = None
     train_overrides: dict[str, object] = Field(default_factory=dict,
-                                               description="Top-level train fields, e.g. mass_t.")
+                                               description="Train fields, e.g. mass_t; a block (regenerative_braking: "
+                                               "{efficiency: 0.8}) merged field by field into the train's.")
     running_time_s: Optional[float] = Field(None, gt=0)
     supplement_percent: Optional[float] = Field(None, ge=0, le=MAX_SUPPLEMENT_PERCENT)
     objective: Optional[Literal["energy", "net_energy", "time", "mixed"]] = None

@@ -17,7 +17,7 @@ from ecostudy import __version__
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import too_long_named
 from ecostudy.io import schemas
-from ecostudy.io.documents import named_file, split_selector
+from ecostudy.io.documents import named_file, overlaid, split_selector
 from ecostudy.io.timetable import segment_timing
 from ecostudy.io.loaders import (
     chosen_stops,
@@ -57,23 +57,24 @@ def case_key(case):
 
 
 class Files:
-    """``read(file, reader)``: each train and track file of a study read once (``reader``:
-    :func:`~ecostudy.io.loaders.read_train` or :func:`~ecostudy.io.loaders.read_track`), its
-    warnings shown then; ``said[file]``: what it warned of (after its name), which a scenario
-    overriding its fields does not repeat."""
+    """``read(file, reader)``: each train and track file of a study read once by each reader
+    (``reader``: :func:`~ecostudy.io.loaders.read_train` or :func:`~ecostudy.io.loaders.read_track`;
+    one path given as both is read as both, and the wrong one refused), its warnings shown then;
+    ``said[file, reader]``: what it warned of (after its name), which a scenario overriding its
+    fields does not repeat."""
 
     def __init__(self):
         self.read, self.said = {}, {}
 
     def __call__(self, file, reader):
-        if file not in self.read:
+        if (file, reader) not in self.read:
             with warnings.catch_warnings(record=True) as seen:
                 warnings.simplefilter("always")
-                self.read[file] = reader(file)
+                self.read[file, reader] = reader(file)
             for w in seen:
                 warnings.warn(w.message, w.category, stacklevel=2)
-            self.said[file] = {str(w.message).removeprefix(f"{split_selector(file)[0]}: ") for w in seen}
-        return self.read[file]
+            self.said[file, reader] = {str(w.message).removeprefix(f"{split_selector(file)[0]}: ") for w in seen}
+        return self.read[file, reader]
 
 
 def _overridden(train_doc, where, said):
@@ -99,8 +100,8 @@ def _scenario_units(s, path, read):
         track_doc, track = read(named_file(path, field + "track" if sc.track else "track", sc.track or s.track),
                                 read_track)
         if sc.train_overrides:
-            train_doc = {**train_doc, **sc.train_overrides}
-            train = _overridden(train_doc, where, read.said[train_file])
+            train_doc = overlaid(train_doc, sc.train_overrides)
+            train = _overridden(train_doc, where, read.said[train_file, read_train])
         too = too_long_named(train, track)  # refused here, before any case of the study is computed
         if too is not None:
             given = "train_overrides.length_m" if "length_m" in (sc.train_overrides or {}) else "train"
@@ -235,13 +236,17 @@ def refuse_mixed_weights(objective, weights, timed, where, fields):
                                  "run free to crawl (days): give a positive time weight, or an arrival window"))
 
 
+WINDOW_KINDS = {"windows": "timing windows on the way", "window_s": "an arrival window"}
+
+
 def refuse_windows(path, given, who):
     """Refuse a study's (file ``path``) timing windows where ``who`` would ignore them (``given``:
     {field: its value}; the fields given are named)."""
     fields = [name for name, value in given.items() if value]
     if fields:
-        raise InputError(problem(path, ", ".join(fields), f"{who} does not keep timing windows yet; use "
-                                 "`ecostudy solve` (or remove the windows)"))
+        what = " or ".join(WINDOW_KINDS.get(name, name) for name in fields)
+        raise InputError(problem(path, ", ".join(fields), f"{who} does not keep {what} yet; use "
+                                 "`ecostudy solve` (or remove them)"))
 
 
 def load_checked_study(path, command=None):
