@@ -130,3 +130,22 @@ def guess_from_result(result, layout):
             lengths[q] += x[i + 1] - x[i]
         lengths[mine] *= sec.length / max(lengths[mine].sum(), 1e-9)
     return lengths, phases.speeds_at(layout, lengths, x, v)
+
+
+def all_out_check(train, nodes, limits, v, ft, fb, tolerance=0.01):
+    """The regimes of a minimum-time run (all-out): every interval at full traction (MA), at full
+    braking (MB), at the net acceleration or deceleration bound of the train, or with a node at its
+    speed limit ``limits`` [m/s] (holding it, or the one interval that reaches or leaves it); each
+    within ``tolerance`` (relative). Agreement as :func:`ecostudy.analysis.pontryagin.check` says it,
+    without a costate (the all-out run's arrival multiplier is unbounded: no energy costate to fit)."""
+    labels = classify(train, v, ft, fb, tolerance)
+    ds = np.diff(nodes)
+    accel = (v[1:] ** 2 - v[:-1] ** 2) / (2 * ds)
+    at_limit = v >= (1 - tolerance) * limits
+    agree = (np.isin(labels, ("MA", "MB")) | at_limit[:-1] | at_limit[1:]
+             | (accel >= (1 - tolerance) * train.max_acceleration) | (-accel >= (1 - tolerance) * train.max_deceleration))
+    bad = [{"regime": label, "start_m": start, "end_m": end} for label, start, end in
+           runs(np.where(agree, "ok", labels), nodes) if label != "ok"]
+    return {"agreement_pct": float(100 * ds[agree].sum() / ds.sum()), "intervals_agreeing_pct": float(100 * agree.mean()),
+            "sequence": [{"regime": r, "start_m": a, "end_m": b} for r, a, b in runs(labels, nodes)],
+            "disagreements": bad, "tolerance": tolerance}

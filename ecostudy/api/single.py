@@ -195,10 +195,12 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
     write_json(result_dir / "check.json", report)
     lines = [f"checked as the {report['checked_as']}",
              "regimes: " + ", ".join(f"{r['regime']} {r['start_m']:.0f}-{r['end_m']:.0f} m" for r in report["sequence"]),
-             f"Pontryagin: {report['agreement_pct']:.1f} % of the distance agrees; stationarity "
-             f"residual {report['stationarity_residual']:.1e}"]
-    lines += [f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m "
-              f"(lambda/v from {number(d['psi_min'], '.2f')} to {number(d['psi_max'], '.2f')})" for d in report["disagreements"]]
+             (f"Pontryagin: {report['agreement_pct']:.1f} % of the distance agrees; stationarity "
+              f"residual {report['stationarity_residual']:.1e}" if report["stationarity_residual"] is not None else
+              f"all-out regimes: {report['agreement_pct']:.1f} % of the distance agrees")]
+    lines += [f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m" + (
+              f" (lambda/v from {number(d['psi_min'], '.2f')} to {number(d['psi_max'], '.2f')})" if "psi_min" in d else "")
+              for d in report["disagreements"]]
     lines += [f"the run checked: {report['run_status']}", f"written {result_dir}/check.json", f"check: {verdict}"]
     return Note(Status.parse(verdict), "\n".join(lines), report)
 

@@ -165,14 +165,20 @@ def all_out(case: Case, stages: Stages, options: session.Options | None = None) 
     return float(np.sum(space.solution_arrays(m)[1])), m, outcome
 
 
+def capped_limits(case: Case) -> FloatArray:
+    """The speed limit at each node [m/s] with every timing window's speed cap (``max_speed``) on its node."""
+    limits = case.limits.copy()
+    for w in case.windows:
+        if w.max_speed is not None:
+            k = space.window_node(case.nodes, w.distance)
+            limits[k] = min(limits[k], w.max_speed)
+    return limits
+
+
 def _fastest_passing(case: Case) -> tuple[list[int], FloatArray, FloatArray]:
     """The windows' nodes, and the fastest envelope (with every window's speed cap) and its clock [s]."""
-    limits = case.limits.copy()
     index = [space.window_node(case.nodes, w.distance) for w in case.windows]
-    for k, w in zip(index, case.windows):
-        if w.max_speed is not None:
-            limits[k] = min(limits[k], w.max_speed)
-    fastest = kinematics.envelope_speeds(case.segment, case.train, case.nodes, limits)
+    fastest = kinematics.envelope_speeds(case.segment, case.train, case.nodes, capped_limits(case))
     return index, fastest, kinematics.clock(fastest, case.nodes)
 
 
