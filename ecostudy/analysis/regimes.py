@@ -108,7 +108,8 @@ def guess_from_result(result, layout):
 
     MA intervals go to full traction, CR/CR2 to cruise, MB to braking, coasting to the leading
     coast before the sector's first traction and to the trailing coast after it (to cruise in a
-    layout without coast phases).
+    layout without coast phases); partial braking that lets the train gather speed before the
+    sector's first traction (a zero-energy run down a grade, one of many) to the leading coast.
     """
     x, v, ft, fb = result.nodes, result.trajectory.v, result.trajectory.ft, result.trajectory.fb
     labels = classify(result.train, v, ft, fb)
@@ -124,7 +125,10 @@ def guess_from_result(result, layout):
         coasts = [q for q, md in zip(mine, kinds) if md.kind == "coast"]
         driven = False
         for i in np.nonzero((mid >= sec.start) & (mid < sec.end))[0]:
-            q = slot.get(labels[i], slot["CR"] if not coasts  # no coast mode (das_handle_levels without 0)
+            label = labels[i]
+            if label == "CR2" and not driven and len(coasts) > 1 and v[i + 1] > (1 + 1e-3) * v[i]:
+                label = "CO"  # braking that does not hold the speed down a grade, before any traction: a coast
+            q = slot.get(label, slot["CR"] if not coasts  # no coast mode (das_handle_levels without 0)
                          else coasts[-1] if driven or len(coasts) == 1 else coasts[0])
             driven = driven or labels[i] in ("MA", "CR")
             lengths[q] += x[i + 1] - x[i]
