@@ -254,3 +254,21 @@ def test_a_closed_loop_studys_train_field_names_the_train_file(tmp_path):
                    controllers=[{"name": "convex", "kind": "convex"}])
     refused(run("simulate", loop, "--no-plot", "--workers", 1, "--no-progress"), f"{train}: brake_cylinders")
     nothing_written(tmp_path)
+
+
+@pytest.mark.parametrize("timing, fragment", [
+    (["--no-plot"], "s.yaml: running_time_s: infeasible: the timing point at 1000 m (not before 72 s) and the arrival "
+                    "at Centraal (not after 80 s) leave 8 s; the fastest run between them takes 13 s"),
+    (["--no-plot", "--window", "70,78"], "command line: --window: infeasible: the timing point at 1000 m (not before "
+                                         "72 s) and the arrival at Centraal (not after 78 s) leave 6 s"),
+])
+def test_a_window_the_arrival_cannot_follow_is_refused_naming_the_timing(tmp_path, timing, fragment):
+    """A window passed 13 s (the fastest run) before the stop, later than the arrival less 13 s, was
+    solved (the energy NLP, then the all-out one with the window) and refused as 'running_time_s:
+    infeasible: the fastest possible run takes 85.1 s': a time no run was asked for, the window not
+    named. The arrival is now one of the passings ocp.problem.check_times_reachable holds together."""
+    doc = load_yaml(STUDIES / "default.yaml")
+    doc.update(track=str(AMS), train=str(METRO), points=100, output=str(tmp_path / "out"), running_time_s=80,
+               windows=[{"position_m": 1000, "earliest_s": 72}])
+    refused(run("solve", write_yaml(tmp_path / "s.yaml", doc), *timing), fragment)
+    nothing_written(tmp_path)

@@ -121,3 +121,25 @@ def test_advice_on_an_nlp_ipopt_did_not_prove_optimal_is_flagged_saying_which():
     assert phases["status"] == "flagged: the DAS phases NLP: Ipopt ended acceptable, not optimal"
     minlp = das_minlp(ato, time_limit=2.0, options={"tol": 1e-20}).summary
     assert minlp["status"].endswith("; the DAS phases start NLP: Ipopt ended acceptable, not optimal"), minlp["status"]
+
+
+def test_phases_coasts_from_rest_down_a_descent_and_says_what_it_cannot_write():
+    """On one sector at -40 per mille the optimum coasts from rest, then holds the limit (CO-CR2); the
+    phases had no coast before traction in the first sector (a coast at rest stays at rest on the
+    flat) and advised full traction, 50 % to 66 m, then cruise at 39.7 km/h: 2.788 kWh against the
+    ATO run's 2e-8. A first sector the train rolls down from rest now has that coast. At +5 % the
+    optimum pulls away, coasts up to the limit, holds it (MA-CO-CR2), an order a sector's phases
+    cannot write: the advice (+259 %) says so."""
+    from ecostudy.io.loaders import track_from_dict
+    track = track_from_dict({"name": "downhill", "source": "test", "length_m": 1500,
+                             "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 1500}],
+                             "gradients": [{"position_m": 0, "gradient_permille": -40}],
+                             "speed_limits": [{"position_m": 0, "speed_kmh": 60}]})
+    train = load_train(TRAINS / "regional_alstom.yaml")
+    ato = solve_run(track, train, "A", "B", Timing(supplement=0.32), points=200)
+    ph = das_run(ato, "phases")
+    assert ato.facts.regime_sequence == "CO-CR2" and ph.summary["status"] == "ok", ph.summary
+    assert ph.summary["traction_energy_kWh"] < 1e-3 and ph.advice["mode"].iloc[0] == "coast", ph.advice
+    ato = solve_run(track, train, "A", "B", Timing(supplement=0.05), points=200)
+    note = das_run(ato, "phases").summary["note"]
+    assert note.startswith("the ATO run coasts between traction and holding a speed (MA-CO-CR2"), note

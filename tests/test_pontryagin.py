@@ -181,3 +181,30 @@ def test_check_flags_a_run_with_time_to_spare_however_little(tmp_path):
         assert held.exit_code == 0 and held.output.rstrip().endswith("check: ok"), held.output
     spare = runner.invoke(app, ["check", str(tmp_path / "e"), "--time", "80.4"])
     assert spare.exit_code == 1 and "not the energy-optimal" in spare.output, spare.output
+
+
+def test_check_of_an_all_out_run_checks_the_all_out_regimes(tmp_path):
+    """`check` of an all-out folder checked it as the energy-optimal run for its own time, a degenerate
+    question (the arrival multiplier is unbounded): on the metro 100 % at K = 100 and 300, flagged at
+    37.9 % at K = 200. It now checks the minimum-time regimes (full traction, the speed limit, full
+    braking) the run should obey, whatever the grid; an energy optimum fails them."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from ecostudy.analysis.regimes import all_out_check
+    from ecostudy.cli import app
+    from ecostudy.ocp.problem import capped_limits, prepare
+    runner = CliRunner()
+    args = ["--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train", str(TRAINS / "amsterdam_metro.yaml"),
+            "--points", "200", "--no-plot"]
+    assert runner.invoke(app, ["solve", *args, "--objective", "time", "--out", str(tmp_path / "ao")]).exit_code == 0
+    own = runner.invoke(app, ["check", str(tmp_path / "ao")])
+    assert own.exit_code == 0 and own.output.rstrip().endswith("check: ok"), own.output
+    assert "checked as the all-out run (full traction, the speed limit or full braking)" in own.output, own.output
+    assert json.loads((tmp_path / "ao" / "check.json").read_text())["agreement_pct"] >= 99
+    track, train = load_track(TRACKS / "amsterdam_rokin_centraal.yaml"), load_train(TRAINS / "amsterdam_metro.yaml")
+    r = solve_run(track, train, "Rokin", "Centraal", Timing(running_time=80.0), points=200)
+    case = prepare(track, train, "Rokin", "Centraal", 200)
+    _, v, _, ft, fb = r.trajectory
+    assert all_out_check(train, case.nodes, capped_limits(case), v, ft, fb)["agreement_pct"] < 50

@@ -176,6 +176,15 @@ def test_mixed_weights_no_run_can_be_ok_with_are_refused_and_a_crawl_is_capped(t
         r = run(command, energy0, "--no-plot")
         assert r.exit_code == 2 and f"{energy0}: weights.energy: an energy weight of 0" in r.output, (command, r.output)
     assert not (tmp_path / "o").exists() and not (tmp_path / "out").exists()
+    # an energy weight the NLP cannot tell from 0 (1e-6: 71.73 s, 12.346 kWh, flagged at -12 % energy
+    # error; 1e-4: the same time, 10.859 kWh, ok): refused before computing, by the train's and line's scale
+    r = run("solve", "--track", ROKIN, "--train", METRO, "--objective", "mixed", "--weights", "1,1e-6", *out)
+    assert r.exit_code == 2 and r.output.startswith("error: command line: --weights: an energy weight 1e-06 times the "
+                                                    "time weight is below the 4.3e-05 that prices energy"), r.output
+    tiny = study(tmp_path, objective="mixed", weights={"time": 1, "energy": 1e-6}, running_time_s=None, window_s=[70, 100])
+    r = run("solve", tiny, "--no-plot")
+    assert r.exit_code == 2 and f"{tiny}: weights.energy: an energy weight 1e-06 times" in r.output, r.output
+    assert not (tmp_path / "o").exists() and not (tmp_path / "out").exists()
     r = run("solve", "--track", ROKIN, "--train", METRO, "--objective", "mixed", "--weights", "1e-9,1", *out)
     assert r.exit_code == 1 and "flagged: Rokin-Centraal: the mixed objective's weights take the running time to its " \
         "cap, 358.1 s (5 times the fastest possible run's, kinematic envelope): the train would crawl" in r.output, r.output

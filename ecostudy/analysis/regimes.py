@@ -108,7 +108,8 @@ def guess_from_result(result, layout):
 
     MA intervals go to full traction, CR/CR2 to cruise, MB to braking, coasting to the leading
     coast before the sector's first traction and to the trailing coast after it (to cruise in a
-    layout without coast phases).
+    layout without coast phases); partial braking that lets the train gather speed before the
+    sector's first traction (a zero-energy run down a grade, one of many) to the leading coast.
     """
     x, v, ft, fb = result.nodes, result.trajectory.v, result.trajectory.ft, result.trajectory.fb
     labels = classify(result.train, v, ft, fb)
@@ -124,9 +125,31 @@ def guess_from_result(result, layout):
         coasts = [q for q, md in zip(mine, kinds) if md.kind == "coast"]
         driven = False
         for i in np.nonzero((mid >= sec.start) & (mid < sec.end))[0]:
-            q = slot.get(labels[i], slot["CR"] if not coasts  # no coast mode (das_handle_levels without 0)
+            label = labels[i]
+            if label == "CR2" and not driven and len(coasts) > 1 and v[i + 1] > (1 + 1e-3) * v[i]:
+                label = "CO"  # braking that does not hold the speed down a grade, before any traction: a coast
+            q = slot.get(label, slot["CR"] if not coasts  # no coast mode (das_handle_levels without 0)
                          else coasts[-1] if driven or len(coasts) == 1 else coasts[0])
             driven = driven or labels[i] in ("MA", "CR")
             lengths[q] += x[i + 1] - x[i]
         lengths[mine] *= sec.length / max(lengths[mine].sum(), 1e-9)
     return lengths, phases.speeds_at(layout, lengths, x, v)
+
+
+def all_out_check(train, nodes, limits, v, ft, fb, tolerance=0.01):
+    """The regimes of a minimum-time run (all-out): every interval at full traction (MA), at full
+    braking (MB), at the net acceleration or deceleration bound of the train, or with a node at its
+    speed limit ``limits`` [m/s] (holding it, or the one interval that reaches or leaves it); each
+    within ``tolerance`` (relative). Agreement as :func:`ecostudy.analysis.pontryagin.check` says it,
+    without a costate (the all-out run's arrival multiplier is unbounded: no energy costate to fit)."""
+    labels = classify(train, v, ft, fb, tolerance)
+    ds = np.diff(nodes)
+    accel = (v[1:] ** 2 - v[:-1] ** 2) / (2 * ds)
+    at_limit = v >= (1 - tolerance) * limits
+    agree = (np.isin(labels, ("MA", "MB")) | at_limit[:-1] | at_limit[1:]
+             | (accel >= (1 - tolerance) * train.max_acceleration) | (-accel >= (1 - tolerance) * train.max_deceleration))
+    bad = [{"regime": label, "start_m": start, "end_m": end} for label, start, end in
+           runs(np.where(agree, "ok", labels), nodes) if label != "ok"]
+    return {"agreement_pct": float(100 * ds[agree].sum() / ds.sum()), "intervals_agreeing_pct": float(100 * agree.mean()),
+            "sequence": [{"regime": r, "start_m": a, "end_m": b} for r, a, b in runs(labels, nodes)],
+            "disagreements": bad, "tolerance": tolerance}

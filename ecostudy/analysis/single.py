@@ -23,6 +23,8 @@ from ecostudy.ocp import space
 from ecostudy.ocp.problem import (
     all_out,
     capped_guess,
+    check_arrival,
+    check_energy_weight,
     check_feasible,
     check_not_crawling,
     check_windows,
@@ -116,9 +118,12 @@ def solve_run(track, train, from_stop, to_stop, timing=Timing(), objective="ener
     stages = {}
     case = prepare(track, train, from_stop, to_stop, points, stages, windows)
     check_windows(case)
+    if objective == "mixed":
+        check_energy_weight(case, weights)
     target, window, t_allout, fastest = timing.running_time, timing.window, None, None
     latest = target if target is not None else (window[1] if window else None)
     check_not_crawling(latest, case)
+    check_arrival(case, target if target is not None else (window[0] if window else None), latest)
     # the time the mixed weights choose: not past the crawl (a time weight of 1e-9 against 1 chose 27 h)
     cap = slowest_time(case) if objective == "mixed" and latest is None else None
     if objective == "time" or timing.supplement is not None or (latest is not None and latest < 0.97 * case.estimate):

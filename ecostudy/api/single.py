@@ -14,7 +14,7 @@ from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import (EcostudyWarning, FieldError, InfeasibleError, InputError, LineError, SolverError,
-                                  TooFastError,
+                                  TooFastError, WeightError,
                                   problem)
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status
@@ -133,8 +133,8 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
                        *(("command line", "--objective") if objective else (str(study), "objective")))
     if weights is not None and obj != "mixed":
         raise InputError(problem("command line", "--weights", "weigh time against energy of --objective mixed only"))
-    refuse_mixed_weights(obj, w, timing != Timing(), *(("command line", ("--weights",) * 2) if weights is not None
-                                                       else (str(study), ("weights.time", "weights.energy"))))
+    weighed = ("command line", ("--weights",) * 2) if weights is not None else (str(study), ("weights.time", "weights.energy"))
+    refuse_mixed_weights(obj, w, timing != Timing(), *weighed)
     check_output_dir(out_dir, run_files(das is not None, plot, figures), "solve")
     if das is not None and windows and das != "round":
         raise InputError(problem(str(study), "windows", f"--das {das} does not handle timing "
@@ -146,6 +146,8 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         except TooFastError as exc:  # the timing cannot be met: where it was given, by name
             where, field = timing_source(study, st, time, supplement, window)
             raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
+        except WeightError as exc:  # mixed weights that price energy at nothing the NLP can tell
+            raise InputError([problem(weighed[0], weighed[1][1], p) for p in exc.problems]) from None
         except LineError as exc:  # a climb or descent of the line the train's envelopes cannot make: the track's
             raise InfeasibleError([problem(paths[0], "gradients", p) for p in exc.problems]) from None
         except FieldError as exc:  # a window on the way no run keeps: the study's or its timetable's, by name
@@ -193,10 +195,12 @@ def check_folder(result_dir: Path, time: Optional[float] = None) -> Note:
     write_json(result_dir / "check.json", report)
     lines = [f"checked as the {report['checked_as']}",
              "regimes: " + ", ".join(f"{r['regime']} {r['start_m']:.0f}-{r['end_m']:.0f} m" for r in report["sequence"]),
-             f"Pontryagin: {report['agreement_pct']:.1f} % of the distance agrees; stationarity "
-             f"residual {report['stationarity_residual']:.1e}"]
-    lines += [f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m "
-              f"(lambda/v from {number(d['psi_min'], '.2f')} to {number(d['psi_max'], '.2f')})" for d in report["disagreements"]]
+             (f"Pontryagin: {report['agreement_pct']:.1f} % of the distance agrees; stationarity "
+              f"residual {report['stationarity_residual']:.1e}" if report["stationarity_residual"] is not None else
+              f"all-out regimes: {report['agreement_pct']:.1f} % of the distance agrees")]
+    lines += [f"  inconsistent: {d['regime']} at {d['start_m']:.0f}-{d['end_m']:.0f} m" + (
+              f" (lambda/v from {number(d['psi_min'], '.2f')} to {number(d['psi_max'], '.2f')})" if "psi_min" in d else "")
+              for d in report["disagreements"]]
     lines += [f"the run checked: {report['run_status']}", f"written {result_dir}/check.json", f"check: {verdict}"]
     return Note(Status.parse(verdict), "\n".join(lines), report)
 

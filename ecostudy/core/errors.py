@@ -32,6 +32,11 @@ class TooFastError(InfeasibleError):
     crawl): the timing's fault, not the train's or the line's (those raise :class:`InfeasibleError`)."""
 
 
+class WeightError(InputError):
+    """Weights of the mixed objective that price energy below what the solver can tell (the run would be
+    the all-out one without its regularisation); the caller that read them names where they were given."""
+
+
 class LineError(InfeasibleError):
     """The line makes the run impossible at the train's envelopes: a climb (or its running
     resistance) it cannot make at full traction, a descent it cannot hold at full braking; the

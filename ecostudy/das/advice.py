@@ -262,7 +262,7 @@ def solve_phases(result, points=None, options=None, stages=2):
     """
     seg, train = result.segment, result.train
     points = points or len(result.nodes)
-    layout = phases.Layout.make(phases.sectors(seg, train), phases.sequence(train), 1)
+    layout = phases.Layout.make(phases.sectors(seg, train), phases.sequence(train), 1, train)
     layout.substeps = phases.substeps_for(points, len(layout.phases))
     stage("DAS phases NLP (every mode)")
     m, outcome = solve_layout(result, layout, guess_from_result(result, layout), options)
@@ -297,6 +297,27 @@ def nlp_flags(name, outcome):
     return () if status.ok else (status.reason,)
 
 
+ORDER_GAP_PCT = 5.0  # phases advice this far above its ATO run [%]: a coast it cannot write is named
+
+
+def order_note(result, gap):
+    """Why phases advice is far dearer than its ATO run ('' unless by more than :data:`ORDER_GAP_PCT`
+    [%] and for this reason): the ATO run coasts between traction and holding a speed inside one sector
+    (on a descent MA-CO-CR2: pull away, coast up to the limit, hold it), an order a sector's phases
+    (coast, traction, cruise, coast, braking) cannot write; the advice holds a lower speed instead."""
+    if gap is None or not np.isfinite(gap) or gap <= ORDER_GAP_PCT or 0.0 not in result.train.das_levels:
+        return ""  # a train without a coast level: no coast phase at all (its gap is that)
+    secs = phases.sectors(result.segment, result.train)
+    runs = result.facts.regimes
+    for before, coast, after in zip(runs, runs[1:], runs[2:]):
+        same = phases.sector_at(secs, coast.start_m) == phases.sector_at(secs, coast.end_m)
+        if before.regime in ("MA", "CR") and coast.regime == "CO" and after.regime in ("CR", "CR2") and same:
+            return (f"the ATO run coasts between traction and holding a speed ({before.regime}-CO-{after.regime}, "
+                    f"coasting at {coast.start_m:.0f}-{coast.end_m:.0f} m), an order the phases of a sector (coast, "
+                    "traction, cruise, coast, braking) cannot write: the advice holds a speed instead")
+    return ""
+
+
 def das_phases(result, points=None, options=None):
     """The :class:`DasRun` of the phases NLP (Ipopt ``options``), flagged when Ipopt did not prove it optimal."""
     m, layout, outcome = solve_phases(result, points, options)
@@ -306,6 +327,7 @@ def das_phases(result, points=None, options=None):
                    planned_traction_energy_kWh=plan_kwh, phases=len(layout.phases),
                    intervals=layout.intervals, solve_s=outcome.seconds + outcome.nl_seconds,
                    build_s=outcome.build_seconds)
+    block["note"] = block["note"] or order_note(result, block["gap_to_ato_pct"])
     return DasRun(block, advice, sim)
 
 

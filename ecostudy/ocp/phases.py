@@ -112,11 +112,24 @@ def sectors(segment: Segment, train: Train) -> list[Sector]:
     return out
 
 
+def sector_at(secs: Sequence[Sector], x: float) -> int:
+    """Index of the sector that holds position ``x`` [m] (the last one for its end)."""
+    return next((s for s, sec in enumerate(secs) if x < sec.end), len(secs) - 1)
+
+
+def rolls_from_rest(sector: Sector, train: Train) -> bool:
+    """Whether the train, coasting from standstill, gathers speed in ``sector``: its descent pulls harder
+    than the resistance at rest (Davis A). There the first sector may begin with a coast (a descent's
+    optimum: coast from rest, then hold the limit); elsewhere a coast at rest stays at rest."""
+    return sector.force + train.davis[0] < 0
+
+
 @dataclass
 class Layout:
     """The phases in travel order: ``phases[q]`` = (sector index, mode); interval i is sub-step
-    i % n of phase i // n. The first sector has no leading coast: at standstill it would leave
-    only degenerate constraints (v = 0 on both sides of every step). ``modes`` is a sector's
+    i % n of phase i // n. The first sector has no leading coast where the train does not roll from
+    rest (:func:`rolls_from_rest`): at standstill it would leave only degenerate constraints (v = 0
+    on both sides of every step). ``modes`` is a sector's
     sequence (:func:`sequence`)."""
 
     sectors: list[Sector]
@@ -124,9 +137,12 @@ class Layout:
     substeps: int
 
     @classmethod
-    def make(cls, sectors: list[Sector], modes: Sequence[Mode], substeps: int) -> "Layout":
+    def make(cls, sectors: list[Sector], modes: Sequence[Mode], substeps: int, train: Train | None = None) -> "Layout":
+        """The ``modes`` in every sector; the first sector's leading coast only where the ``train``
+        (given) rolls from rest there (:func:`rolls_from_rest`)."""
+        first = train is not None and rolls_from_rest(sectors[0], train)
         phases = [(s, mode) for s in range(len(sectors)) for p, mode in enumerate(modes)
-                  if s > 0 or p > 0 or mode.kind != "coast"]
+                  if s > 0 or p > 0 or mode.kind != "coast" or first]
         return cls(sectors, phases, substeps)
 
     @property

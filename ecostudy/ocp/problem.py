@@ -12,7 +12,7 @@ import numpy as np
 
 from ecostudy.core import kinematics
 from ecostudy.core.defaults import SLOWEST
-from ecostudy.core.errors import FieldError, InfeasibleError, SolverError, TooFastError
+from ecostudy.core.errors import FieldError, InfeasibleError, SolverError, TooFastError, WeightError
 from ecostudy.core.grid import Segment, drop_idle_power, make_grid, make_segment, node_limits
 from ecostudy.core.types import Track, Train, Trajectory, Window
 from ecostudy.core.units import FloatArray, apart, to_kmh
@@ -165,19 +165,30 @@ def all_out(case: Case, stages: Stages, options: session.Options | None = None) 
     return float(np.sum(space.solution_arrays(m)[1])), m, outcome
 
 
+def capped_limits(case: Case) -> FloatArray:
+    """The speed limit at each node [m/s] with every timing window's speed cap (``max_speed``) on its node."""
+    limits = case.limits.copy()
+    for w in case.windows:
+        if w.max_speed is not None:
+            k = space.window_node(case.nodes, w.distance)
+            limits[k] = min(limits[k], w.max_speed)
+    return limits
+
+
+def _fastest_passing(case: Case) -> tuple[list[int], FloatArray, FloatArray]:
+    """The windows' nodes, and the fastest envelope (with every window's speed cap) and its clock [s]."""
+    index = [space.window_node(case.nodes, w.distance) for w in case.windows]
+    fastest = kinematics.envelope_speeds(case.segment, case.train, case.nodes, capped_limits(case))
+    return index, fastest, kinematics.clock(fastest, case.nodes)
+
+
 def check_windows(case: Case, margin: float = 0.02) -> None:
     """Refuse at once a timing window no run can keep: passing later than ``latest`` even on the
     fastest envelope (with every window's speed cap), or a minimum speed above that envelope.
     Within ``margin`` of these bounds the NLP decides (the envelope is an explicit estimate)."""
     if not case.windows:
         return
-    limits = case.limits.copy()
-    index = [space.window_node(case.nodes, w.distance) for w in case.windows]
-    for k, w in zip(index, case.windows):
-        if w.max_speed is not None:
-            limits[k] = min(limits[k], w.max_speed)
-    fastest = kinematics.envelope_speeds(case.segment, case.train, case.nodes, limits)
-    passing = kinematics.clock(fastest, case.nodes)
+    index, fastest, passing = _fastest_passing(case)
     for i, (k, w) in enumerate(zip(index, case.windows)):
         if w.latest is not None and w.latest < (1 - margin) * passing[k]:
             raise FieldError(f"infeasible: the fastest run passes {w.distance:.0f} m from "
@@ -191,6 +202,26 @@ def check_windows(case: Case, margin: float = 0.02) -> None:
     check_times_reachable([Passing(case.windows[i].distance, f"the timing point at {case.windows[i].distance:g} m",
                                    case.windows[i].earliest, case.windows[i].latest, float(passing[index[i]]), 0.0,
                                    (f"windows[{i}].earliest_s", f"windows[{i}].latest_s")) for i in order], margin)
+
+
+def check_arrival(case: Case, earliest: float | None, latest: float | None, margin: float = 0.02) -> None:
+    """Refuse, before solving, an arrival (not before ``earliest``, not after ``latest`` [s]; None: not
+    bounded) that a timing window on the way contradicts: a window's earliest passing plus the fastest
+    run from there to the stop (less ``margin`` of it, as :func:`check_windows`) after the latest
+    arrival. A :class:`TooFastError`: the arrival time is refused where it was given, the window named
+    in the line (the windows among themselves: :func:`check_windows`)."""
+    if not case.windows or latest is None:
+        return
+    index, _, passing = _fastest_passing(case)
+    order = sorted(range(len(case.windows)), key=lambda i: case.windows[i].distance)
+    passings = [Passing(case.windows[i].distance, f"the timing point at {case.windows[i].distance:g} m",
+                        case.windows[i].earliest, None, float(passing[index[i]]), 0.0, ("", "")) for i in order]
+    arrival = Passing("arrival", f"the arrival at {case.segment.to_stop}", earliest, latest, float(passing[-1]), 0.0,
+                      ("", ""))
+    try:
+        check_times_reachable([*passings, arrival], margin)
+    except FieldError as exc:
+        raise TooFastError(exc.problems) from None
 
 
 class Passing(NamedTuple):
@@ -229,6 +260,26 @@ def check_times_reachable(passings: Sequence[Passing], margin: float = 0.0) -> N
                    f"the fastest run between them takes {need:.0f} s" + (f" and the dwells {dwelt:g} s" if dwelt > 0 else ""))
         raise FieldError(f"infeasible: {a.what} (not before {lo:g} s) and {b.what} (not after {hi:g} s) leave {hi - lo:g} "
                          f"s; {between}", ", ".join(dict.fromkeys((a.fields[0], b.fields[1]))))
+
+
+def least_energy_weight(case: Case) -> float:
+    """The least ratio w_e / w_t of the mixed objective w_t T + w_e E / Ms [s, J/kg] that prices energy
+    as the all-out run's regularisation does (:data:`space.TIME_REGULARISATION` of the energy scale per
+    running time, the fastest envelope's): below it energy is worth less to the NLP than that run's
+    tie-break, the run is the fastest with traction and braking at once (the metro at K = 100, weights
+    1,1e-6: 71.73 s, 12.346 kWh, re-simulated -12 %)."""
+    return space.TIME_REGULARISATION * case.estimate * case.train.static_mass / space.energy_reference(case.train,
+                                                                                                      case.segment)
+
+
+def check_energy_weight(case: Case, weights: tuple[float, float]) -> None:
+    """Refuse mixed ``weights`` (w_t, w_e) whose ratio is under :func:`least_energy_weight`."""
+    least = least_energy_weight(case)
+    if weights[1] < least * weights[0]:
+        raise WeightError(f"an energy weight {weights[1] / weights[0]:.3g} times the time weight is below the "
+                          f"{least:.2g} that prices energy on this train and line as the all-out run does: the run "
+                          "would be the fastest one, with traction and braking at once; use objective time, or "
+                          "raise the energy weight")
 
 
 def slowest_time(case: Case) -> float:
