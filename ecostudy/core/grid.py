@@ -3,7 +3,7 @@
 Profiles are piecewise constant: a value holds from its start position to the next one.
 Grid nodes sit on every gradient, curve and (train-length) speed-limit change, because a
 change that falls between nodes costs accuracy; the remaining nodes fill the pieces in
-proportion to their length.
+proportion to their length, at least :data:`MIN_INTERVALS` intervals each.
 """
 import warnings
 from dataclasses import dataclass
@@ -15,6 +15,9 @@ from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.physics import ROECKL_MIN_RADIUS
 from ecostudy.core.types import Track, Train
 from ecostudy.core.units import FloatArray, Numeric
+
+
+MIN_INTERVALS = 2  # the fewest intervals a piece between two changes gets (see make_grid)
 
 
 @dataclass(frozen=True)
@@ -245,15 +248,19 @@ def make_segment(track: Track, train: Train, from_stop: str, to_stop: str) -> Se
 def make_grid(segment: Segment, points: int, extra: Sequence[float] | FloatArray = ()) -> FloatArray:
     """``points`` node positions on [0, D], including every profile change and ``extra`` positions.
 
-    The intervals between changes get a share of the nodes proportional to their length
-    (at least one interval each) and are divided uniformly.
+    The intervals between changes get a share of the nodes proportional to their length, at
+    least :data:`MIN_INTERVALS` each (fewer only where ``points`` cannot give every piece as many;
+    the intervals a short piece needs are taken from the longest pieces), and are divided uniformly.
     """
     inner = np.unique(np.concatenate([segment.breakpoints(), np.asarray(extra, dtype=float)]))
     inner = inner[(inner > 0) & (inner < segment.distance)]
     breaks = np.concatenate([[0.0], inner, [segment.distance]])
     lengths = np.diff(breaks)
     intervals = max(points - 1, len(lengths))
-    share = np.maximum(1, np.floor(lengths / segment.distance * intervals).astype(int))
+    least = max(1, min(MIN_INTERVALS, intervals // len(lengths)))
+    share = np.maximum(least, np.floor(lengths / segment.distance * intervals).astype(int))
+    while share.sum() > intervals:  # a short piece's minimum, taken from the longest pieces
+        share[np.argmax(np.where(share > least, lengths, -1.0))] -= 1
     while share.sum() < intervals:  # hand out the remainder to the coarsest pieces
         share[np.argmax(lengths / share)] += 1
     nodes = [np.linspace(a, b, n + 1)[:-1] for a, b, n in zip(breaks[:-1], breaks[1:], share)]
