@@ -8,7 +8,9 @@ from numpy.testing import assert_allclose
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
+from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.grid import MIN_INTERVALS, Profile, make_grid, make_segment, node_limits, train_length_limit
+from ecostudy.io.loaders import load_track, load_train
 
 
 def test_train_length_limit_raises_only_when_tail_clears():
@@ -73,3 +75,26 @@ def test_a_short_piece_before_a_restriction_does_not_slow_the_all_out_run(tmp_pa
     assert r.exit_code == 0, r.output
     running = json.loads((out / "summary.json").read_text())["running_time_s"]
     assert running == pytest.approx(268.69, rel=0.01)
+
+
+def test_a_tunnel_outside_the_trains_listed_cross_sections_is_warned_of(tmp_path):
+    """An 80 m² tunnel on a train that lists 40 m² only is costed at 40 m²: a warning names the track
+    file, the tunnel's position and the train's listed sections; a 40 m² tunnel warns of nothing."""
+    train = tmp_path / "train.yaml"
+    train.write_text("name: tunnelled\nsource: test\nmass_t: 100\nrotating_mass_factor: 0.1\nlength_m: 0\n"
+                     "davis: {a_N: 3000, b_N_per_mps: 0, c_N_per_mps2: 0}\ntraction: {max_force_kN: 200}\n"
+                     "braking: {max_force_kN: 100}\n"
+                     "tunnel_resistance:\n  - {cross_section_m2: 40, c_kN_per_kmh2: 0.0001}\n")
+    for area in (80, 40):
+        track = tmp_path / f"track{area}.yaml"
+        track.write_text(f"name: tunnel {area}\nsource: test\nlength_m: 1000\nstops:\n  - {{name: A, position_m: 0}}\n"
+                         "  - {name: B, position_m: 1000}\nspeed_limits:\n  - {position_m: 0, speed_kmh: 72}\n"
+                         f"tunnels:\n  - {{position_m: 300, length_m: 300, cross_section_m2: {area}}}\n")
+        if area == 40:  # in the list: no warning (pyproject makes one an error)
+            make_segment(load_track(track), load_train(train), "A", "B")
+            continue
+        with pytest.warns(EcostudyWarning) as seen:
+            make_segment(load_track(track), load_train(train), "A", "B")
+        assert [str(w.message) for w in seen] == [
+            f"{track.resolve()}: tunnels: the tunnel at 300 m has a cross section of 80 m², outside the 40 m² train "
+            "'tunnelled' gives a tunnel_resistance for: costed as 40 m²"]

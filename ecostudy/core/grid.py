@@ -13,7 +13,7 @@ import numpy as np
 
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.physics import ROECKL_MIN_RADIUS
-from ecostudy.core.types import Track, Train
+from ecostudy.core.types import Track, Train, source_file
 from ecostudy.core.units import FloatArray, Numeric
 
 
@@ -173,10 +173,26 @@ def warn_unpaired(track: Track, train: Train) -> None:
                      "curve_resistance: roeckl)")
     if track.tunnels and not train.tunnel_resistance:
         lines.append("tunnels cost nothing: the train gives no tunnel_resistance")
+    lines = [f"track '{track.name}' with train '{train.name}': {line}" for line in lines] + tunnels_outside(track, train)
     for line in lines:
         if (track.name, train.name, line) not in _WARNED:
             _WARNED.add((track.name, train.name, line))
-            warnings.warn(f"track '{track.name}' with train '{train.name}': {line}", EcostudyWarning, stacklevel=3)
+            warnings.warn(line, EcostudyWarning, stacklevel=3)
+
+
+def tunnels_outside(track: Track, train: Train) -> list[str]:
+    """One line per tunnel of ``track`` whose cross section lies outside the sections of ``train``'s
+    ``tunnel_resistance`` (:meth:`Train.tunnel_coefficient` holds the nearest end's coefficient there),
+    naming the track's file and the tunnel's position."""
+    if not train.tunnel_resistance:
+        return []
+    areas = [area for area, _ in train.tunnel_resistance]
+    lo, hi = min(areas), max(areas)
+    where = (source_file(track) or (f"track '{track.name}'",))[0]
+    listed = f"{lo:g} m²" if lo == hi else f"{lo:g} to {hi:g} m²"
+    return [problem(where, "tunnels", f"the tunnel at {pos:g} m has a cross section of {area:g} m², outside the "
+                    f"{listed} train '{train.name}' gives a tunnel_resistance for: costed as {lo if area < lo else hi:g} m²")
+            for pos, _, area in track.tunnels if not lo <= area <= hi]
 
 
 def too_long(train: Train, track: Track) -> str | None:
