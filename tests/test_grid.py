@@ -5,12 +5,11 @@ import json
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
-from typer.testing import CliRunner
-
-from ecostudy.cli import app
 from ecostudy.core.errors import EcostudyWarning
 from ecostudy.core.grid import MIN_INTERVALS, Profile, make_grid, make_segment, node_limits, train_length_limit
 from ecostudy.io.loaders import load_track, load_train
+
+from .conftest import solve_written
 
 
 def test_train_length_limit_raises_only_when_tail_clears():
@@ -62,16 +61,14 @@ def test_a_short_piece_before_a_restriction_does_not_slow_the_all_out_run(tmp_pa
     """All-out over a flat 1000 m with 0.5 km/h from 2 m to 30 m (72 km/h elsewhere): a fine-step
     forward/backward integration of the same train gives 268.69 s; with one interval on the first
     2 m the NLP had to crawl it at the mean of 0 and 0.5 km/h (295.09 s at K = 100 and 300)."""
-    train, track = tmp_path / "train.yaml", tmp_path / "track.yaml"
-    train.write_text("name: b\nsource: test\nmass_t: 100\nrotating_mass_factor: 0.1\nlength_m: 0\n"
-                     "davis: {a_N: 3000, b_N_per_mps: 0, c_N_per_mps2: 0}\ntraction: {max_force_kN: 200}\n"
-                     "braking: {max_force_kN: 100}\ntraction_efficiency: 0.8\n")
-    track.write_text("name: zero\nsource: test\nlength_m: 1000\nstops:\n  - {name: A, position_m: 0}\n"
-                     "  - {name: B, position_m: 1000}\nspeed_limits:\n  - {position_m: 0, speed_kmh: 72}\n"
-                     "  - {position_m: 2, speed_kmh: 0.5}\n  - {position_m: 30, speed_kmh: 72}\n")
-    out = tmp_path / "run"
-    r = CliRunner().invoke(app, ["solve", "--track", str(track), "--train", str(train), "--objective", "time",
-                                 "--points", "100", "--no-plot", "--out", str(out)])
+    r, out = solve_written(
+        tmp_path, "name: b\nsource: test\nmass_t: 100\nrotating_mass_factor: 0.1\nlength_m: 0\n"
+        "davis: {a_N: 3000, b_N_per_mps: 0, c_N_per_mps2: 0}\ntraction: {max_force_kN: 200}\n"
+        "braking: {max_force_kN: 100}\ntraction_efficiency: 0.8\n",
+        "name: zero\nsource: test\nlength_m: 1000\nstops:\n  - {name: A, position_m: 0}\n"
+        "  - {name: B, position_m: 1000}\nspeed_limits:\n  - {position_m: 0, speed_kmh: 72}\n"
+        "  - {position_m: 2, speed_kmh: 0.5}\n  - {position_m: 30, speed_kmh: 72}\n",
+        "--objective", "time", "--points", "100")
     assert r.exit_code == 0, r.output
     running = json.loads((out / "summary.json").read_text())["running_time_s"]
     assert running == pytest.approx(268.69, rel=0.01)

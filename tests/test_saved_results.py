@@ -14,7 +14,7 @@ from ecostudy import api
 from ecostudy.cli import app
 from ecostudy.io.folder import write_summary
 
-from .conftest import TRACKS, TRAINS
+from .conftest import TRACKS, TRAINS, solve_written
 
 TRACK, TRAIN = TRACKS / "amsterdam_rokin_centraal.yaml", TRAINS / "amsterdam_metro.yaml"
 SOLVE = ["solve", "--track", str(TRACK), "--train", str(TRAIN), "--no-plot"]
@@ -252,16 +252,13 @@ def test_a_cruise_on_the_one_percent_threshold_is_one_regime_that_check_and_expo
     """A 100 t train with 200 kN of traction cruising against 2 kN of resistance needs just the 1 %
     share that parts CR from CO (analysis/regimes.classify): a tie, which the solve's unrounded
     forces and profile.csv's six digits both label as one cruise, so the fresh folder is accepted."""
-    train, track = tmp_path / "train.yaml", tmp_path / "track.yaml"
-    train.write_text("name: tie\nsource: test\nmass_t: 100\neffective_mass_t: 100\nlength_m: 0\n"
-                     "davis: {a_N: 2000, b_N_per_mps: 0, c_N_per_mps2: 0}\ntraction: {max_force_kN: 200}\n"
-                     "braking: {max_force_kN: 100}\ntraction_efficiency: 0.8\n")
-    track.write_text("name: flat\nsource: test\nlength_m: 1000\nstops:\n  - {name: A, position_m: 0}\n"
-                     "  - {name: B, position_m: 1000}\ngradients:\n  - {position_m: 0, gradient_permille: 0}\n"
-                     "speed_limits:\n  - {position_m: 0, speed_kmh: 72}\n")
-    out = tmp_path / "run"
-    r = CliRunner().invoke(app, ["solve", "--track", str(track), "--train", str(train), "--objective", "time",
-                                 "--points", "300", "--no-plot", "--out", str(out)])
+    r, out = solve_written(
+        tmp_path, "name: tie\nsource: test\nmass_t: 100\neffective_mass_t: 100\nlength_m: 0\n"
+        "davis: {a_N: 2000, b_N_per_mps: 0, c_N_per_mps2: 0}\ntraction: {max_force_kN: 200}\n"
+        "braking: {max_force_kN: 100}\ntraction_efficiency: 0.8\n",
+        "name: flat\nsource: test\nlength_m: 1000\nstops:\n  - {name: A, position_m: 0}\n"
+        "  - {name: B, position_m: 1000}\ngradients:\n  - {position_m: 0, gradient_permille: 0}\n"
+        "speed_limits:\n  - {position_m: 0, speed_kmh: 72}\n", "--objective", "time", "--points", "300")
     assert r.exit_code == 0, r.output
     assert json.loads((out / "summary.json").read_text())["regimes"]["sequence"] == "MA-CR-MB"
     for command in (["check", str(out)], ["export", str(out), "--every", "1s"]):
