@@ -14,11 +14,13 @@ configure()  # the suite is an entry point, as the command line and the API are
 
 import pytest  # noqa: E402
 import yaml
+from typer.testing import CliRunner
 
 import ecostudy.analysis.single as _run
 from ecostudy.core.types import Timing
 from ecostudy.io.loaders import load_track, load_train
 from ecostudy.analysis.single import solve_run
+from ecostudy.cli import app
 
 ROOT = Path(__file__).resolve().parent.parent
 TRAINS, TRACKS, STUDIES, DATA = ROOT / "trains", ROOT / "tracks", ROOT / "studies", ROOT / "tests" / "data"
@@ -77,6 +79,16 @@ def write_yaml(path, data):
 
 def load_yaml(path):
     return yaml.safe_load(Path(path).read_text())
+
+
+def solve_written(tmp_path, train_text, track_text, *options):
+    """Write a train and a track file (YAML text) into ``tmp_path`` and solve them as `ecostudy
+    solve --no-plot OPTIONS` does: (its CliRunner result, the output folder)."""
+    train, track, out = tmp_path / "train.yaml", tmp_path / "track.yaml", tmp_path / "run"
+    train.write_text(train_text)
+    track.write_text(track_text)
+    return CliRunner().invoke(app, ["solve", "--track", str(track), "--train", str(train), *options, "--no-plot",
+                                    "--out", str(out)]), out
 
 
 def assert_folder(out, kind, tables, rows=None, status="ok"):

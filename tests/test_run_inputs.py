@@ -206,6 +206,21 @@ def test_a_climb_the_train_cannot_make_names_the_track(tmp_path):
         result.output
 
 
+def test_a_train_too_weak_to_start_on_a_flat_track_names_the_trains_traction(tmp_path):
+    """2 kN of traction against 3 kN of running resistance on a flat track: the line adds nothing,
+    so the train file's traction is named, not the track's gradients."""
+    track = write_yaml(tmp_path / "flat.yaml", {
+        "name": "flat", "source": "test", "length_m": 1000, "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 1000}],
+        "gradients": [{"position_m": 0, "gradient_permille": 0}], "speed_limits": [{"position_m": 0, "speed_kmh": 72}]})
+    tiny = write_yaml(tmp_path / "tiny.yaml", {
+        "name": "tiny", "source": "test", "mass_t": 100, "rotating_mass_factor": 0.1, "length_m": 0,
+        "davis": {"a_N": 3000, "b_N_per_mps": 0, "c_N_per_mps2": 0}, "traction": {"max_force_kN": 2},
+        "braking": {"max_force_kN": 100}, "traction_efficiency": 0.8})
+    result = run("solve", "--track", track, "--train", tiny, "--objective", "time", "--no-plot", "--out", tmp_path / "o")
+    assert result.exit_code == 2 and result.output.startswith(
+        f"error: {tiny}: traction: infeasible: the train cannot overcome its running resistance"), result.output
+
+
 def test_a_das_time_limit_no_search_reads_is_named(tmp_path):
     """`--das-time-limit` bounds the MINLP search only; given with `--das phases` (or no advice) it
     was dropped without a word (the command line's default could not tell it was given)."""

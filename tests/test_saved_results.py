@@ -14,7 +14,7 @@ from ecostudy import api
 from ecostudy.cli import app
 from ecostudy.io.folder import write_summary
 
-from .conftest import TRACKS, TRAINS
+from .conftest import TRACKS, TRAINS, solve_written
 
 TRACK, TRAIN = TRACKS / "amsterdam_rokin_centraal.yaml", TRAINS / "amsterdam_metro.yaml"
 SOLVE = ["solve", "--track", str(TRACK), "--train", str(TRAIN), "--no-plot"]
@@ -246,3 +246,21 @@ def test_an_energy_run_edited_to_say_all_out_is_refused(solved, tmp_path):
     _refused_everywhere(out, "summary.json: marginal_energy_kWh_per_s: a marginal energy, but a run of objective 'time' has none")
     _edit_summary(out, marginal_energy_kWh_per_s=None)
     _refused_everywhere(out, "summary.json: pontryagin: a costate check, but a run of objective 'time' has none")
+
+
+def test_a_cruise_on_the_one_percent_threshold_is_one_regime_that_check_and_export_accept(tmp_path):
+    """A 100 t train with 200 kN of traction cruising against 2 kN of resistance needs just the 1 %
+    share that parts CR from CO (analysis/regimes.classify): a tie, which the solve's unrounded
+    forces and profile.csv's six digits both label as one cruise, so the fresh folder is accepted."""
+    r, out = solve_written(
+        tmp_path, "name: tie\nsource: test\nmass_t: 100\neffective_mass_t: 100\nlength_m: 0\n"
+        "davis: {a_N: 2000, b_N_per_mps: 0, c_N_per_mps2: 0}\ntraction: {max_force_kN: 200}\n"
+        "braking: {max_force_kN: 100}\ntraction_efficiency: 0.8\n",
+        "name: flat\nsource: test\nlength_m: 1000\nstops:\n  - {name: A, position_m: 0}\n"
+        "  - {name: B, position_m: 1000}\ngradients:\n  - {position_m: 0, gradient_permille: 0}\n"
+        "speed_limits:\n  - {position_m: 0, speed_kmh: 72}\n", "--objective", "time", "--points", "300")
+    assert r.exit_code == 0, r.output
+    assert json.loads((out / "summary.json").read_text())["regimes"]["sequence"] == "MA-CR-MB"
+    for command in (["check", str(out)], ["export", str(out), "--every", "1s"]):
+        r = CliRunner().invoke(app, command)
+        assert r.exit_code == 0, (command, r.output)

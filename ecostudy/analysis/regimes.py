@@ -14,12 +14,17 @@ RB   regenerative braking (only when regeneration is credited): braking below th
 A switch that falls inside an interval shows as one interval of partial force between two
 other regimes, or, where maximum traction meets cruising, as one interval of coasting; such
 single transitional intervals are merged into the run before them.
+
+A share within :data:`TIE` of a threshold is a tie: the interval keeps the side of that threshold
+the interval before it is on (hysteresis), so a cruise that needs just the threshold's share is one
+run whatever its last digits, in the solve's unrounded forces as in profile.csv's six digits.
 """
 import numpy as np
 
 from ecostudy.ocp import phases, space
 
 REGIMES = ("MA", "CR", "CO", "RB", "CR2", "MB")
+TIE = 1e-3  # share of the envelope [-] within which a share sits on its threshold (see the module's doc)
 
 
 def _lower_end(envelope, v0, v1):
@@ -35,6 +40,16 @@ def regenerative_limit(train, v):
     return _lower_end(train.regeneration, v[:-1], v[1:])
 
 
+def above(share, threshold):
+    """Per interval, whether ``share`` is above ``threshold``: a share within :data:`TIE` of it takes
+    the answer of the interval before (the first interval: its plain comparison)."""
+    side = np.where(share > threshold + TIE, 1, np.where(share < threshold - TIE, -1, 0))
+    if len(side):
+        side[0] = side[0] or (1 if share[0] > threshold else -1)
+    last = np.maximum.accumulate(np.where(side != 0, np.arange(len(side)), 0))
+    return side[last] > 0
+
+
 def classify(train, v, ft, fb, tolerance=0.01, regeneration=False):
     """Regime label per interval from speeds at the nodes and forces per interval [N].
 
@@ -45,13 +60,13 @@ def classify(train, v, ft, fb, tolerance=0.01, regeneration=False):
     t_max, b_max = _lower_end(train.traction, v0, v1), _lower_end(train.braking, v0, v1)
     t_share, b_share = (ft - fb).clip(0) / t_max, (fb - ft).clip(0) / b_max
     labels = np.full(len(ft), "CO", dtype=object)
-    labels[t_share > tolerance] = "CR"
-    labels[t_share >= 1 - tolerance] = "MA"
-    labels[b_share > tolerance] = "CR2"
+    labels[above(t_share, tolerance)] = "CR"
+    labels[above(t_share, 1 - tolerance)] = "MA"
+    labels[above(b_share, tolerance)] = "CR2"
     if regeneration:
         friction = (fb - np.minimum(fb, regenerative_limit(train, v))) / b_max
-        labels[(b_share > tolerance) & (friction <= tolerance)] = "RB"
-    labels[b_share >= 1 - tolerance] = "MB"
+        labels[above(b_share, tolerance) & ~above(friction, tolerance)] = "RB"
+    labels[above(b_share, 1 - tolerance)] = "MB"
     return labels
 
 

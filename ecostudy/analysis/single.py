@@ -14,9 +14,8 @@ from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import SolverError
 from ecostudy.core.simulate import verify
 from ecostudy.core.status import Judged, Status
-from ecostudy.core.types import Timing, Train, Trajectory
+from ecostudy.core.types import Timing, Train, Trajectory, source_file
 from ecostudy.core.units import KWH, number
-from ecostudy.io.documents import source_file
 from ecostudy.io.results import COSTATE_OBJECTIVES
 from ecostudy.io.runsummary import ALL_OUT_SOLVER, TIME_CAP, RunSummary, run_status
 from ecostudy.ocp import space

@@ -14,7 +14,7 @@ from ecostudy.api.arguments import spelled
 from ecostudy.api.outcome import Note, Report, listed, reported
 from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import (EcostudyWarning, FieldError, InfeasibleError, InputError, LineError, SolverError,
-                                  TooFastError, WeightError,
+                                  TooFastError, TractionError, WeightError,
                                   problem)
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status
@@ -148,6 +148,8 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
             raise InfeasibleError([problem(where, field, p) for p in exc.problems]) from None
         except WeightError as exc:  # mixed weights that price energy at nothing the NLP can tell
             raise InputError([problem(weighed[0], weighed[1][1], p) for p in exc.problems]) from None
+        except TractionError as exc:  # too weak to move where the line does not hold it back: the train's
+            raise InfeasibleError([problem(paths[1], "traction", p) for p in exc.problems]) from None
         except LineError as exc:  # a climb or descent of the line the train's envelopes cannot make: the track's
             raise InfeasibleError([problem(paths[0], "gradients", p) for p in exc.problems]) from None
         except FieldError as exc:  # a window on the way no run keeps: the study's or its timetable's, by name

@@ -43,6 +43,12 @@ class LineError(InfeasibleError):
     caller that read the track file names it (its ``gradients``)."""
 
 
+class TractionError(LineError):
+    """The train stops at full traction where the line does not pull it back (no climb, or its own
+    running resistance alone above its traction): the train's fault, not the line's; the caller that
+    read the train file names it (its ``traction``)."""
+
+
 class FieldError(InfeasibleError):
     """An infeasible request found where its field is known but not its file (a timing window on the
     way, a timetable's times): the caller that read the file names it, with ``field`` (as the file

@@ -3,7 +3,7 @@
 Profiles are piecewise constant: a value holds from its start position to the next one.
 Grid nodes sit on every gradient, curve and (train-length) speed-limit change, because a
 change that falls between nodes costs accuracy; the remaining nodes fill the pieces in
-proportion to their length.
+proportion to their length, at least :data:`MIN_INTERVALS` intervals each.
 """
 import warnings
 from dataclasses import dataclass
@@ -13,8 +13,11 @@ import numpy as np
 
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.physics import ROECKL_MIN_RADIUS
-from ecostudy.core.types import Track, Train
+from ecostudy.core.types import Track, Train, source_file
 from ecostudy.core.units import FloatArray, Numeric
+
+
+MIN_INTERVALS = 2  # the fewest intervals a piece between two changes gets (see make_grid)
 
 
 @dataclass(frozen=True)
@@ -169,10 +172,26 @@ def warn_unpaired(track: Track, train: Train) -> None:
         lines.append(f"curves cost nothing: {train.unpaired[0]}")
     if track.tunnels and not train.tunnel_resistance:
         lines.append(f"tunnels cost nothing: {train.unpaired[1]}")
+    lines = [f"track '{track.name}' with train '{train.name}': {line}" for line in lines] + tunnels_outside(track, train)
     for line in lines:
         if (track.name, train.name, line) not in _WARNED:
             _WARNED.add((track.name, train.name, line))
-            warnings.warn(f"track '{track.name}' with train '{train.name}': {line}", EcostudyWarning, stacklevel=3)
+            warnings.warn(line, EcostudyWarning, stacklevel=3)
+
+
+def tunnels_outside(track: Track, train: Train) -> list[str]:
+    """One line per tunnel of ``track`` whose cross section lies outside the sections of ``train``'s
+    ``tunnel_resistance`` (:meth:`Train.tunnel_coefficient` holds the nearest end's coefficient there),
+    naming the track's file and the tunnel's position."""
+    if not train.tunnel_resistance:
+        return []
+    areas = [area for area, _ in train.tunnel_resistance]
+    lo, hi = min(areas), max(areas)
+    where = (source_file(track) or (f"track '{track.name}'",))[0]
+    listed = f"{lo:g} m²" if lo == hi else f"{lo:g} to {hi:g} m²"
+    return [problem(where, "tunnels", f"the tunnel at {pos:g} m has a cross section of {area:g} m², outside the "
+                    f"{listed} train '{train.name}' gives a tunnel_resistance for: costed as {lo if area < lo else hi:g} m²")
+            for pos, _, area in track.tunnels if not lo <= area <= hi]
 
 
 def too_long(train: Train, track: Track) -> str | None:
@@ -244,15 +263,19 @@ def make_segment(track: Track, train: Train, from_stop: str, to_stop: str) -> Se
 def make_grid(segment: Segment, points: int, extra: Sequence[float] | FloatArray = ()) -> FloatArray:
     """``points`` node positions on [0, D], including every profile change and ``extra`` positions.
 
-    The intervals between changes get a share of the nodes proportional to their length
-    (at least one interval each) and are divided uniformly.
+    The intervals between changes get a share of the nodes proportional to their length, at
+    least :data:`MIN_INTERVALS` each (fewer only where ``points`` cannot give every piece as many;
+    the intervals a short piece needs are taken from the longest pieces), and are divided uniformly.
     """
     inner = np.unique(np.concatenate([segment.breakpoints(), np.asarray(extra, dtype=float)]))
     inner = inner[(inner > 0) & (inner < segment.distance)]
     breaks = np.concatenate([[0.0], inner, [segment.distance]])
     lengths = np.diff(breaks)
     intervals = max(points - 1, len(lengths))
-    share = np.maximum(1, np.floor(lengths / segment.distance * intervals).astype(int))
+    least = max(1, min(MIN_INTERVALS, intervals // len(lengths)))
+    share = np.maximum(least, np.floor(lengths / segment.distance * intervals).astype(int))
+    while share.sum() > intervals:  # a short piece's minimum, taken from the longest pieces
+        share[np.argmax(np.where(share > least, lengths, -1.0))] -= 1
     while share.sum() < intervals:  # hand out the remainder to the coarsest pieces
         share[np.argmax(lengths / share)] += 1
     nodes = [np.linspace(a, b, n + 1)[:-1] for a, b, n in zip(breaks[:-1], breaks[1:], share)]

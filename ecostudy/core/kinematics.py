@@ -6,7 +6,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ecostudy.core.errors import LineError
+from ecostudy.core.errors import LineError, TractionError
 from ecostudy.core.grid import Segment
 from ecostudy.core.physics import davis_resistance, interval_resistance, running_resistance
 from ecostudy.core.types import Train
@@ -132,8 +132,10 @@ def envelope_speeds(segment: Segment, train: Train, nodes: FloatArray, limits: F
         acc = min((pull(v) - davis_resistance(v, a[k], b[k], c[k]) - fixed[k]) / train.mass, train.max_acceleration)
         v2 = v * v + 2 * ds[k] * acc
         if v2 <= 0 and k < len(ds) - 1:
-            raise LineError(stall_message(segment, nodes[k], pull(v),
-                                                davis_resistance(v, a[k], b[k], c[k]), fixed[k], v))
+            resistance = davis_resistance(v, a[k], b[k], c[k])
+            climb = fixed[k] > 0 and pull(v) > resistance  # the line's grade is what stops it, else the train
+            raise (LineError if climb else TractionError)(stall_message(segment, nodes[k], pull(v), resistance,
+                                                                         fixed[k], v))
         fwd[k + 1] = min(np.sqrt(max(v2, 0.0)), limits[k + 1])
     out = np.minimum(fwd, braking_curve(segment, train, nodes, limits))
     out[0] = out[-1] = 0.0

@@ -13,6 +13,15 @@ from ecostudy.core.defaults import DRAFT_GEAR_TRAVEL_M
 from ecostudy.core.physics import EfficiencyMap, Envelope
 from ecostudy.core.units import FloatArray, Numeric
 
+SOURCE = "source_file"  # the attribute a track or train read from a file keeps: (file, its SHA-256 then)
+
+
+def source_file(value: object) -> tuple[str, str] | None:
+    """(file, SHA-256 as it was read) of a track or train read from a file (``io.documents.read_from``),
+    None for one built in code: what a saved run's ``inputs.json`` names, for ``ecostudy check`` to
+    re-simulate it against, and what a warning about the file names."""
+    return getattr(value, SOURCE, None)
+
 
 @dataclass(frozen=True)
 class Train:

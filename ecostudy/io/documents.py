@@ -12,7 +12,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from ecostudy.core.errors import InputError, problem
-from ecostudy.core.types import Track, Train
+from ecostudy.core.types import SOURCE, Track, Train
 from ecostudy.io.schemabase import Strict
 from ecostudy.io.yamlsafe import MAX_DEPTH, MAX_FILE_BYTES, DocumentError, check_depth, load_yaml, unique_keys
 
@@ -67,21 +67,12 @@ def file_digest(path: Where) -> str:
     return hashlib.sha256(split_selector(path)[0].read_bytes()).hexdigest()
 
 
-SOURCE = "source_file"  # the attribute a track or train read from a file keeps: (file, its SHA-256 then)
-
-
 def read_from(value: Any, path: Where) -> Any:
     """``value`` (a ``Track`` or ``Train``), remembering the file it was read from,
-    resolved, and that file's digest as it was read (:func:`source_file`). An object built in code,
+    resolved, and that file's digest as it was read (:func:`ecostudy.core.types.source_file`). An object built in code,
     or changed with ``dataclasses.replace``, is a new object that remembers none."""
     object.__setattr__(value, SOURCE, (str(Path(path).resolve()), file_digest(path)))
     return value
-
-
-def source_file(value: Any) -> tuple[str, str] | None:
-    """(file, SHA-256 as it was read) of a track or train read from a file, None for one built in code:
-    what a saved run's ``inputs.json`` names, for ``ecostudy check`` to re-simulate it against."""
-    return getattr(value, SOURCE, None)
 
 
 def not_a_file(path: Path) -> str:

@@ -17,7 +17,7 @@ from ecostudy.core.defaults import RUN_POINTS
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import roeckl_out_of_range, too_long
 from ecostudy.core.physics import EfficiencyMap, Envelope, force_power_fit, table_width
-from ecostudy.core.types import Supply, Timing, Track, Train, Window
+from ecostudy.core.types import Supply, Timing, Track, Train, Window, source_file
 from ecostudy.io import schemas
 from ecostudy.io.consistfile import (consist_from_document as consist_from_document,  # re-exported: a consist file
                                      load_consist as load_consist)
@@ -28,7 +28,7 @@ from ecostudy.io.timetable import name_stops, off_clock, segment_timing, turning
 from ecostudy.io.ttobench import TRACK_ALIASES
 from ecostudy.io.writers import default_output
 from ecostudy.io.documents import (Where, check_path, given, named_file, read_document as read_document,  # re-exported
-                                   read_from, source_file, split_selector, validate as validate)
+                                   read_from, split_selector, validate as validate)
 
 
 @dataclass(frozen=True)

@@ -91,7 +91,10 @@ class Traction(Strict):
 class Braking(Traction):
     """Service braking: a table, a maximum force (and power), or a maximum deceleration."""
 
-    max_deceleration_mps2: Optional[float] = Field(None, gt=0, le=MAX_ACCELERATION)
+    max_deceleration_mps2: Optional[float] = Field(
+        None, gt=0, le=MAX_ACCELERATION, description="A braking force of the effective mass times this [N], "
+        "not a deceleration: resistance adds to it, a descent takes from it (the train's own "
+        "max_deceleration_mps2 bounds the net deceleration).")
 
     @model_validator(mode="after")
     def _one_form(self) -> Self:
