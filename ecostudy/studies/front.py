@@ -180,6 +180,7 @@ class FrontPoint(NamedTuple):
     segment: object
     status: str = "ok"     # the point's status line (pareto.csv's)
     study_time: bool = False  # the study's own running time, not a point of the front
+    name: str = ""  # the case's name: all-out, +10 %, study 76 s
 
 
 def profile_picks(cases, most=5):
@@ -208,8 +209,15 @@ def front_points(cases, rows, picks):
             segment = segment or segment_of(cases[0])
             out.append(FrontPoint({k: np.asarray(v) for k, v in summary["profile"].items()},
                                   facts_of(summary), segment, str(own_status(status, summary.get("das"))),
-                                  is_study_time(cases[i])))
+                                  is_study_time(cases[i]), cases[i]["name"]))
     return sorted(out, key=lambda p: p.facts.running_time_s)
+
+
+def pick_statuses(cases, rows, picks):
+    """{name: status line} of the points at the indices ``picks``, those not solved too (a figure of
+    their profiles names them, not drawn): each point's ATO run's own status (:func:`own_status`)."""
+    points = points_of(cases, rows)
+    return {cases[i]["name"]: str(own_status(points[i][1], (points[i][0] or {}).get("das"))) for i in picks}
 
 
 def front_size(where, cases, workers=1):
