@@ -111,6 +111,26 @@ def _finish_speed_axes(ax, title, xlabel="distance from departure [m]", legend_s
     titled(ax, title, status)
 
 
+def _timing_point(ax, x, low=None, high=None, label=None):
+    """A timing point at ``x`` [m] on a speed axis: a dotted line (``label`` in the legend) and its
+    lowest and highest speed [km/h] as short bars."""
+    ax.axvline(x, color=style.LIMIT["timing point"], lw=0.8, ls=":", label=label)
+    for cap in (low, high):
+        if cap is not None:
+            ax.plot([x - 30, x + 30], [cap, cap], color=style.LIMIT["speed limit"], lw=2)
+
+
+def window_text(window, check=None):
+    """What a timing ``window`` asks, and (``check``: its :func:`core.simulate.window_checks` entry)
+    whether the re-simulated run kept it: ``500 m: from 40 s, at most 55 km/h: kept``."""
+    asked = [f"{word} {value:g} {unit}" for word, value, unit in (
+        ("from", window.earliest, "s"), ("by", window.latest, "s"),
+        ("at least", None if window.min_speed is None else to_kmh(window.min_speed), "km/h"),
+        ("at most", None if window.max_speed is None else to_kmh(window.max_speed), "km/h")) if value is not None]
+    kept = "" if check is None else ": kept" if check["kept"] else ": MISSED"
+    return f"{window.distance:g} m: {', '.join(asked)}{kept}"
+
+
 def _advice_regime(row):
     """The regime name of a DAS advice row (its shading beneath the run)."""
     if not np.isfinite(row.handle):
@@ -128,6 +148,10 @@ def speed_plot(result, path=None, fmt=None, dpi=None):
                                        gridspec_kw={"height_ratios": [3, 1, 1], "hspace": 0.12})
     fig.subplots_adjust(left=0.08, right=0.98, top=0.95, bottom=0.07)  # tight_layout costs 40 % of the plot
     _speed_limit(ax, seg)
+    checks = (s.get("verification") or {}).get("windows") or []
+    for k, w in enumerate(result.windows):  # each timing point, what it asks and whether the run kept it
+        _timing_point(ax, w.distance, *(None if v is None else to_kmh(v) for v in (w.min_speed, w.max_speed)),
+                      label="timing point " + window_text(w, checks[k] if k < len(checks) else None))
     ax.plot(prof["position_m"], prof["speed_kmh"], color=style.colour("traction"), lw=1.6, label="optimal speed")
     if result.trace is not None:
         ax.plot(result.trace.x, to_kmh(result.trace.v), color=style.colour("re-simulated"), lw=0.8, ls="--",
@@ -300,9 +324,7 @@ def journey_plot(results, path=None, title="", passing=(), fmt=None, dpi=None, s
     fig, ax = figure(figsize=(10, 4.5))
     fig.subplots_adjust(left=0.07, right=0.98, top=0.92, bottom=0.12)
     for x, cap in passing:
-        ax.axvline(x, color=style.LIMIT["timing point"], lw=0.8, ls=":")
-        if cap is not None:
-            ax.plot([x - 30, x + 30], [cap, cap], color=style.LIMIT["speed limit"], lw=2)
+        _timing_point(ax, x, high=cap)
     palette = style.Palette(list(results))
     for n, (name, runs) in enumerate(results.items()):
         offset, colour = 0.0, palette(name)
