@@ -47,6 +47,14 @@ def test_quiet_prints_the_results_and_nothing_else(tmp_path):
     assert bad.exit_code == 2 and bad.output.startswith("error: command line: --points")  # errors stay
 
 
+def test_the_help_says_quiet_keeps_the_results_on_stdout():
+    """--help said `No progress, errors only.`, but `-q solve` prints its report on stdout (as the
+    README says): the help says what -q quiets."""
+    text = " ".join(CliRunner().invoke(app, ["--help"]).output.split())
+    assert "-q, --quiet Quiet stderr: no progress bar and no messages but errors and the reason a result is not ok; " \
+           "the results still print on stdout." in text, text
+
+
 def test_a_front_reports_its_progress_point_by_point(tmp_path):
     from ecostudy import api
     calls = []
