@@ -17,20 +17,17 @@
 # "Design of collaborative eco-drive control algorithms for train networks", §4.4), solved with the
 # Python API on a small grid, then the same run for a train built in code 20 % heavier.
 #
-# The examples read the tracks and trains shipped in the repository: found from the working
-# directory or, failing that, beside the ecostudy package (an editable install).
+# The examples read the tracks and trains shipped in the repository (`api.shipped`): found from
+# the working directory, a folder above it or the checkout the package is installed from.
 
 # %%
 # %matplotlib inline
-from pathlib import Path
-
 import yaml
 
 from ecostudy import api
 
-ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents, Path(api.__file__).parents[1]) if (p / "tracks").is_dir())
-track = api.load_track(ROOT / "tracks" / "amsterdam_rokin_centraal.yaml")
-train = api.load_train(ROOT / "trains" / "amsterdam_metro.yaml")
+track = api.load_track(api.shipped("tracks/amsterdam_rokin_centraal.yaml"))
+train = api.load_train(api.shipped("trains/amsterdam_metro.yaml"))
 
 # %% [markdown]
 # `api.solve` builds the space-domain NLP on `points` grid nodes, solves it with Ipopt and
@@ -71,7 +68,7 @@ run.plot()
 # them exactly as a file is validated: a misspelt field is refused with its name.
 
 # %%
-fields = yaml.safe_load((ROOT / "trains" / "amsterdam_metro.yaml").read_text())
+fields = yaml.safe_load(api.shipped("trains/amsterdam_metro.yaml").read_text())
 fields.update(mass_t=1.2 * fields["mass_t"], effective_mass_t=1.2 * fields["effective_mass_t"])
 heavier = api.train_from_dict(fields, "heavier metro train")
 run_heavy = api.solve(track, heavier, "Rokin", "Centraal", running_time=76.0, points=300)

@@ -19,13 +19,10 @@
 
 # %%
 # %matplotlib inline
-from pathlib import Path
-
 from ecostudy import api
 
-ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents, Path(api.__file__).parents[1]) if (p / "tracks").is_dir())
-track = api.load_track(ROOT / "tracks" / "metro_line_4stops.yaml")
-train = api.load_train(ROOT / "trains" / "amsterdam_metro.yaml")
+track = api.load_track(api.shipped("tracks/metro_line_4stops.yaml"))
+train = api.load_train(api.shipped("trains/amsterdam_metro.yaml"))
 
 front = api.pareto(track, train, "Noord", "Station", count=6, supplement_max_percent=30.0, points=200)
 

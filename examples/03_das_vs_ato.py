@@ -30,11 +30,10 @@ from matplotlib.figure import Figure
 
 from ecostudy import api
 
-ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents, Path(api.__file__).parents[1]) if (p / "tracks").is_dir())
 OUT = Path(tempfile.mkdtemp(prefix="ecostudy-gallery-"))
 
 # %%
-result = api.compare_folder(track=ROOT / "tracks" / "regional_808m.yaml", train=ROOT / "trains" / "regional_alstom.yaml",
+result = api.compare_folder(track=api.shipped("tracks/regional_808m.yaml"), train=api.shipped("trains/regional_alstom.yaml"),
                             time=80, points=200, out=OUT / "compare")
 print(result.kind, "|", result.status, "|", result.cases)
 print("\n".join(result.problems()))

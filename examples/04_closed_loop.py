@@ -28,9 +28,8 @@ from IPython.display import Image
 
 from ecostudy import api
 
-ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents, Path(api.__file__).parents[1]) if (p / "tracks").is_dir())
-track = api.load_track(ROOT / "tracks" / "yazhemsky2017_flat_1km.yaml")
-train = api.load_train(ROOT / "trains" / "yazhemsky2017_commuter.yaml")
+track = api.load_track(api.shipped("tracks/yazhemsky2017_flat_1km.yaml"))
+train = api.load_train(api.shipped("trains/yazhemsky2017_commuter.yaml"))
 
 planner = api.replanner(track, train, running_time=90.0, points=200)
 plan = planner.solve()  # from standstill at the departure, clock 0
@@ -62,8 +61,8 @@ for late in (0.0, 5.0):
 OUT = Path(tempfile.mkdtemp(prefix="ecostudy-gallery-"))
 study = {
     "name": "gallery_closed_loop",
-    "track": str(ROOT / "tracks" / "yazhemsky2017_flat_1km.yaml"),
-    "train": str(ROOT / "trains" / "yazhemsky2017_commuter.yaml"),
+    "track": str(api.shipped("tracks/yazhemsky2017_flat_1km.yaml")),
+    "train": str(api.shipped("trains/yazhemsky2017_commuter.yaml")),
     "window_s": [0, 100],
     "points": 200,
     "sample_time_s": 0.5,

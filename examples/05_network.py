@@ -30,12 +30,11 @@ from IPython.display import Image
 
 from ecostudy import api
 
-ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents, Path(api.__file__).parents[1]) if (p / "tracks").is_dir())
 OUT = Path(tempfile.mkdtemp(prefix="ecostudy-gallery-"))
 study = {
     "name": "gallery_network",
-    "track": str(ROOT / "tracks" / "metro_line_4stops.yaml"),
-    "train": str(ROOT / "trains" / "amsterdam_metro.yaml"),
+    "track": str(api.shipped("tracks/metro_line_4stops.yaml")),
+    "train": str(api.shipped("trains/amsterdam_metro.yaml")),
     "stops": ["Noord", "Station", "Centrum"],
     "supplement_percent": 10,
     "dwell_s": 20,

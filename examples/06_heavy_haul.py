@@ -31,12 +31,11 @@ from IPython.display import Image
 
 from ecostudy import api
 
-ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents, Path(api.__file__).parents[1]) if (p / "tracks").is_dir())
 OUT = Path(tempfile.mkdtemp(prefix="ecostudy-gallery-"))
 study = {
     "name": "gallery_heavy_haul",
-    "consist": str(ROOT / "trains" / "heavyhaul_zhang_zhuan.yaml"),
-    "track": str(ROOT / "tracks" / "heavyhaul_representative_45km.yaml"),
+    "consist": str(api.shipped("trains/heavyhaul_zhang_zhuan.yaml")),
+    "track": str(api.shipped("tracks/heavyhaul_representative_45km.yaml")),
     "reference": {"supplement_percent": 10},
     "sample_time_s": 20,
     "brake_penalty": [1, 80],

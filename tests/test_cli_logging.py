@@ -47,6 +47,14 @@ def test_quiet_prints_the_results_and_nothing_else(tmp_path):
     assert bad.exit_code == 2 and bad.output.startswith("error: command line: --points")  # errors stay
 
 
+def test_the_help_says_quiet_keeps_the_results_on_stdout():
+    """--help said `No progress, errors only.`, but `-q solve` prints its report on stdout (as the
+    README says): the help says what -q quiets."""
+    text = " ".join(CliRunner().invoke(app, ["--help"]).output.split())
+    assert "-q, --quiet Quiet stderr: no progress bar and no messages but errors and the reason a result is not ok; " \
+           "the results still print on stdout." in text, text
+
+
 def test_a_front_reports_its_progress_point_by_point(tmp_path):
     from ecostudy import api
     calls = []
@@ -125,3 +133,11 @@ def test_a_network_study_reports_each_strategy(tmp_path):
     api.network_folder(study, plot=False, workers=1, note=lines.append, progress=lambda *a: calls.append(a))
     assert calls == [(1, 0, 1, 2), (2, 0, 0, 2)]
     assert [line.split()[0] for line in lines[1:]] == ["independent", "triggering"]
+
+
+def test_the_run_help_says_its_figure_options_draw_nothing_for_the_kind_run():
+    """`run` takes --no-plot, --format and --dpi (for --kind pareto, compare, ...), but the kind run
+    writes no figure: its help now says so."""
+    text = " ".join(CliRunner().invoke(app, ["run", "--help"]).output.split())
+    assert "--no-plot, --format and --dpi apply to the figures of --kind pareto, compare, network, heavyhaul and " \
+           "simulate: the kind run draws none." in text, text

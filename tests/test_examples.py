@@ -6,6 +6,8 @@ Slow: each is converted to a notebook and executed by a Jupyter kernel (nbclient
 render it; a cell that raises fails the test, and every example shows at least one figure.
 """
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 import jupytext
@@ -36,6 +38,26 @@ def test_an_example_is_a_notebook_that_uses_the_python_api_only(script):
     assert ours == {"ecostudy.api"}, sorted(ours)
     shelled = {name for name in imported if name.split(".")[0] in ("subprocess", "os")}
     assert not shelled, f"every command is an api function: no {sorted(shelled)}"
+
+
+def test_the_shipped_files_are_found_from_a_folder_outside_the_repository(tmp_path):
+    """The examples looked for tracks/ in the working directory, the folders above it and
+    ``Path(api.__file__).parents[1]``: the ecostudy package, not the repository, so run from /tmp they
+    stopped on a bare StopIteration. ``api.shipped`` finds the checkout the package is installed
+    from, and names where it looked for a file it cannot find."""
+    code = ("from ecostudy import api\nprint(api.shipped('tracks/amsterdam_rokin_centraal.yaml'))\n"
+            "try:\n    api.shipped('tracks/nowhere.yaml')\nexcept api.InputError as e:\n    print(e)")
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    found, refused = done.stdout.splitlines()
+    assert Path(found) == ROOT / "tracks" / "amsterdam_rokin_centraal.yaml"
+    assert refused.startswith("arguments: name: tracks/nowhere.yaml is not in ") and str(ROOT) in refused, refused
+
+
+@pytest.mark.parametrize("script", EXAMPLES, ids=lambda p: p.stem)
+def test_an_example_finds_its_files_with_the_api(script):
+    text = script.read_text()
+    assert "__file__" not in text and "api.shipped(" in text
 
 
 @pytest.mark.slow

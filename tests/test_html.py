@@ -244,3 +244,19 @@ def test_chromium_renders_tables_images_and_sorts(reports, kind, tmp_path):
     assert shown == sorted(frame[column].dropna(), reverse=True)
     head = next(t["rows"][0] for t in dom.tables if [c["text"] for c in t["rows"][0]] == list(frame.columns))
     assert head[col]["aria-sort"] == "descending"
+
+
+def test_a_runs_inputs_read_as_their_fields_not_as_python_writes_them(tmp_path):
+    """report.html's Inputs showed `timing {'running_time_s': 78.0, 'supplement_percent': None,
+    'window_s': None}` and `windows []`; the pareto --das table printed `None` where the other
+    columns print NaN."""
+    from ecostudy.api.outcome import shown
+    r = CliRunner().invoke(app, ["solve", "--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"), "--train",
+                                 str(TRAINS / "amsterdam_metro.yaml"), "--time", "78", "--points", "60", "--no-plot",
+                                 "--out", str(tmp_path / "s")])
+    assert r.exit_code in (0, 1), r.output
+    page = (tmp_path / "s" / "report.html").read_text()
+    assert "{&#x27;" not in page and "{'" not in page and "[]" not in page, re.findall(r"<td>[^<]*[\[{][^<]*</td>", page)
+    assert "running_time_s 78" in page
+    table = shown(pd.DataFrame({"gap": [None, None], "energy": [1.0, None]}))
+    assert "None" not in table and table.split("\n")[1].split() == ["NaN", "1.000"], table

@@ -2,19 +2,26 @@
 strategies (failed ones, which have no runs to draw, named), a comparison's failed strategies, a
 front's driver advice (ringed apart from the runs) and its speed profiles; and pareto's terminal
 table has a status column. Real solves, figures drawn by the tool's own plot functions."""
+import re
+
+import numpy as np
 import pandas as pd
 import pytest
+from typer.testing import CliRunner
 
 from ecostudy import api
 from ecostudy.analysis.single import solve_run
+from ecostudy.cli import app
 from ecostudy.core.simulate import Driven
-from ecostudy.core.types import Supply, Timing
-from ecostudy.io.loaders import load_track, load_train
+from ecostudy.core.types import Supply, Timing, Window
+from ecostudy.io.loaders import load_track, load_train, track_document, train_document
 from ecostudy.network import fleet, strategies
 from ecostudy.report import netplots, plots, style
-from ecostudy.report.studyfiles import runs_ok
+from ecostudy.report.studyfiles import front_drawings, runs_ok
+from ecostudy.studies.batch import Expanded, run_expanded
+from ecostudy.studies.front import front_cases
 
-from .conftest import TRACKS, TRAINS
+from .conftest import TRACKS, TRAINS, write_yaml
 
 ROKIN, METRO = TRACKS / "amsterdam_rokin_centraal.yaml", TRAINS / "amsterdam_metro.yaml"
 
@@ -81,3 +88,42 @@ def test_a_fronts_advice_not_ok_is_ringed_apart_from_its_runs(tmp_path):
     assert any(f"{int(advice_bad.sum())} of 4 not drawn: stood off the stop" in label for label in labels), labels
     assert not any(label.startswith("not ok (") for label in labels), labels
     assert folder.text.splitlines()[0].split()[-1] == "status", folder.text
+
+
+def test_a_fronts_failed_point_is_named_not_drawn_and_breaks_no_line(tmp_path):
+    """A study time of 60 s on Rokin-Centraal (the fastest run takes 71.7 s) fails. pareto_profiles
+    drew the solved points with no word of it; pareto's lines broke at the failed row (NaN), its ring
+    had no coordinates and its title no status. Both figures, drawn as `ecostudy pareto` draws them,
+    now name the point `not drawn` in their title, and the front's lines join every solved point."""
+    cases = front_cases(train_document(METRO)[0], track_document(ROKIN), "Rokin", "Centraal", count=2,
+                        supplement_max=0.1, points=60, timing=Timing(running_time=60.0))
+    ran = run_expanded("pareto", Expanded(tmp_path, cases), "test")
+    assert ran.table["running_time_s"].isna().sum() == 1
+    drawings = front_drawings(ran.cases, ran.rows, ran.table, "front")
+    for stem in ("pareto", "pareto_profiles"):
+        title = drawings[stem](None).axes[0].get_title()
+        assert "FAILED: 1 of 3 points not ok: study 60 s, not drawn (failed)" in title, (stem, title)
+    lines = drawings["pareto"](None).axes[0].get_lines()
+    front_line = next(line for line in lines if line.get_label() == "traction (at the wheel)")
+    assert len(front_line.get_xdata()) == 2 and not np.isnan(np.asarray(front_line.get_xdata(), float)).any()
+
+
+def test_a_runs_timing_window_is_drawn_and_said_kept_on_screen(tmp_path):
+    """A window at 500 m (from 40 s, at most 55 km/h) braked the run to 55 km/h there: speed.png
+    showed the dip with no mark, and the screen's verification line did not name the window."""
+    window = Window(distance=500.0, earliest=40.0, max_speed=55.0 / 3.6)
+    run = solve_run(load_track(ROKIN), load_train(METRO), "Rokin", "Centraal", Timing(running_time=80.0), points=100,
+                    windows=(window,))
+    ax = plots.speed_plot(run).axes[0]
+    line = next(line for line in ax.get_lines() if line.get_label().startswith("timing point"))
+    assert line.get_label() == "timing point 500 m: from 40 s, at most 55 km/h: kept", line.get_label()
+    assert list(line.get_xdata()) == [500.0, 500.0]
+    assert any(list(bar.get_ydata()) == pytest.approx([55.0, 55.0]) for bar in ax.get_lines())
+    study = write_yaml(tmp_path / "win.yaml", {
+        "name": "win", "track": str(ROKIN), "train": str(METRO), "from": "Rokin", "to": "Centraal",
+        "running_time_s": 80, "points": 100, "output": str(tmp_path / "out"),
+        "windows": [{"position_m": 500, "earliest_s": 40, "max_speed_kmh": 55}]})
+    done = CliRunner().invoke(app, ["solve", str(study), "--no-plot"])
+    assert done.exit_code == 0, done.output
+    said = next(line for line in done.stdout.splitlines() if line.strip().startswith("verification"))
+    assert re.search(r"; timing point at 500 m kept \(4\d\.\d\d s, 5\d\.\d\d km/h\)$", said), said

@@ -52,14 +52,14 @@ WHERE = {
     "run_folder": "ecostudy.api.cases", "simulate_folder": "ecostudy.api.cases",
     "heavyhaul_folder": "ecostudy.api.cases", "network_folder": "ecostudy.api.cases",
     "calibrate_folder": "ecostudy.api.cases", "validate_folder": "ecostudy.api.cases",
-    "command_line": "ecostudy.api.arguments",
+    "command_line": "ecostudy.api.arguments", "shipped": "ecostudy.io.shipped",
 }
 __all__ = ["load", "StudyResult", "load_train", "load_track", "train_from_dict", "track_from_dict", "Train", "Track",
            "State", "Window", "solve", "pareto", "replanner", "Solution", "Front", "RunSummary", "Verification", "InputError",
            "EcostudyError", "InfeasibleError", "SolverError", "Status", "Report", "Note", "one_line",
            "solve_folder", "check_folder", "export_folder", "doctor", "pareto_folder", "compare_folder",
            "journey_folder", "run_folder", "simulate_folder", "heavyhaul_folder", "network_folder",
-           "calibrate_folder", "validate_folder", "command_line"]  # = WHERE's names, written out for the reference's static reader
+           "calibrate_folder", "validate_folder", "command_line", "shipped"]  # = WHERE's names, written out for the reference's static reader
 
 
 def __getattr__(name: str) -> Any:
@@ -89,3 +89,4 @@ if TYPE_CHECKING:  # what type checkers and editors see
     from ecostudy.io.folder import StudyResult  # noqa: F401
     from ecostudy.io.loaders import load_track, load_train, track_from_dict, train_from_dict  # noqa: F401
     from ecostudy.io.runsummary import RunSummary, Verification  # noqa: F401
+    from ecostudy.io.shipped import shipped  # noqa: F401

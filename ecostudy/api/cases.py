@@ -75,7 +75,7 @@ def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] =
                                      own_files(kind, workers, plot, output(fig_format, dpi)))
     write_html(folder)
     return reported(folder, [f"{counted(counts['total'], 'cases')}: {counts['stored_before']} already stored, {counts['computed']} "
-                             f"computed now ({counts['failed']} of them failed or infeasible); not ok in the table: "
+                             f"computed now ({counts['failed']} of them failed); not ok in the table: "
                              f"{counts['not_ok']}" + not_reused(counts), "outputs " + listed(folder, ("results.csv", "results.sqlite",
                                                                                   "report.html"))])
 

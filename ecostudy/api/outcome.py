@@ -20,7 +20,8 @@ from ecostudy.io.folder import StudyResult
 from ecostudy.io.folder import load as load_result
 from ecostudy.io.writers import name_too_long
 from ecostudy.report.console import counted
-from ecostudy.report.html import fragment
+from ecostudy.report.cells import is_missing
+from ecostudy.report.html import fragment, is_number
 
 
 @dataclass(repr=False)  # StudyResult's line, not the printed text
@@ -105,6 +106,8 @@ def shown(frame: pd.DataFrame, columns: Sequence[str] | Mapping[str, str | None]
     specs = {c: s for c, s in columns.items() if s} if isinstance(columns, Mapping) else {}
     if columns is not None:
         frame = frame[[c for c in columns if c in frame]]
+    frame = frame.assign(**{c: pd.to_numeric(frame[c]) for c in frame.columns if frame[c].dtype == object
+                            and frame[c].map(lambda v: is_missing(v) or is_number(v)).all()})  # None printed as NaN, as its column's others
     if not reasons and "status" in frame:
         frame = frame.assign(status=frame["status"].map(lambda s: status_word(s) if isinstance(s, str) else s))
     return frame.to_string(index=False, float_format=lambda x: number(x, places),

@@ -52,7 +52,7 @@ def run_lines(result: RunResult, out_dir: Path) -> list[str]:
                                for d in pm.disagreements[:3]))
     if ver is not None:
         flag = "passed" if ver.passed else "FAILED"
-        lines.append(f"  verification      {flag}: {ver.errors}")
+        lines.append(f"  verification      {flag}: {ver.errors}" + (f"; {ver.windows_said}" if ver.windows else ""))
     if s.das is not None and s.das.traction_energy_kWh is None:  # no advice made: why
         lines.append(f"  driver advice     {s.das.method}: {s.das.status}")
     elif s.das is not None:

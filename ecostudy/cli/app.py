@@ -34,7 +34,7 @@ def _print_version(value: bool) -> None:
 def _main(ctx: typer.Context,
           version: Annotated[bool, typer.Option("--version", callback=_print_version, is_eager=True,
                                                 help="Print the version and exit.")] = False,
-          quiet_: Annotated[bool, typer.Option("--quiet", "-q", help="No progress, errors only.")] = False,
+          quiet_: Annotated[bool, typer.Option("--quiet", "-q", help="Quiet stderr: no progress bar and no messages but errors and the reason a result is not ok; the results still print on stdout.")] = False,
           verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Debug messages too (each case).")] = False,
           log_file: Annotated[Optional[Path], typer.Option(help="Also write the messages to this file.")] = None,
           ) -> None:

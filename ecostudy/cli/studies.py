@@ -74,6 +74,6 @@ def run(
     kind: str = typer.Option("run", help="Study kind: run (scenarios x sweep, or a library), or one registered."),
     no_plot: o.NoPlot = False, fig_format: o.Format = "png", dpi: o.Dpi = 110.0,
 ):
-    """Run every case of a study; finished cases are stored and never computed twice. Example: ecostudy run studies/metro_supplements.yaml"""
+    """Run every case of a study; finished cases are stored and never computed twice. --no-plot, --format and --dpi apply to the figures of --kind pareto, compare, network, heavyhaul and simulate: the kind run draws none. Example: ecostudy run studies/metro_supplements.yaml"""
     finish(call(debug, "run_folder", study, workers, dask, retry_failed, out, kind, not no_plot, fig_format, dpi, force=force,
                 bar=("cases", no_progress)))

@@ -121,6 +121,17 @@ def failed(reason: str) -> Status:
     return Status("failed", reason)
 
 
+def cells(word: object, reason: object) -> tuple[str, object]:
+    """A stored result's ``status`` and ``reason`` cells as every per-case table writes them: its
+    kind, ``ok``, ``flagged`` or ``failed``, and its reason apart (an infeasible request, stored as
+    ``infeasible``, is ``failed`` with the reason ``infeasible: ...``); ``missing``, a case not
+    computed yet (no result), as it is."""
+    if word is None or word == "missing":
+        return "missing", reason
+    status = Status.parse(str(word), reason if isinstance(reason, str) else "")
+    return status.kind, status.reason or None
+
+
 CALIBRATED = "train calibrated with status flagged: "  # the reason :func:`calibrated` lends a run
 
 

@@ -117,6 +117,14 @@ class Verification:
     windows_kept: tuple[bool, ...] = ()
     net_energy_error_pct: float | None = None  # [% of the traction work]; None in runs saved without it
     adhesion_use_max: float | None = None  # largest share of mu(v) m_adh g asked; None: a train without the limit
+    windows: tuple[dict[str, Any], ...] = ()  # each timing point's check (core.simulate.window_checks)
+
+    @property
+    def windows_said(self) -> str:
+        """Each timing point kept or missed with the re-simulated passing time and speed, as the
+        screen prints them beside :attr:`errors`: ``timing point at 500 m kept (40.00 s, 55.00 km/h)``."""
+        return "; ".join(f"timing point at {w['distance_m']:g} m {'kept' if w['kept'] else 'MISSED'} "
+                         f"({w['simulated_time_s']:.2f} s, {w['simulated_speed_kmh']:.2f} km/h)" for w in self.windows)
 
     @property
     def errors(self) -> str:
@@ -140,6 +148,7 @@ class Verification:
                    simulated_traction_energy_kWh=float(data["simulated_traction_energy_kWh"]),
                    simulated_net_energy_kWh=float(data["simulated_net_energy_kWh"]),
                    windows_kept=tuple(bool(w["kept"]) for w in data.get("windows") or ()),
+                   windows=tuple(dict(w) for w in data.get("windows") or ()),
                    net_energy_error_pct=_opt(data, "net_energy_error_pct"),
                    adhesion_use_max=_opt(data, "adhesion_use_max"))
 

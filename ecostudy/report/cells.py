@@ -48,7 +48,13 @@ def numeric_cell(value: Any, places: int, largest: Optional[float] = None) -> st
 
 
 def fmt_scalar(v: Any) -> str:
-    """One value as a reader wants it: four significant digits, no exponent between 1e-3 and 1e9."""
+    """One value as a reader wants it: four significant digits, no exponent between 1e-3 and 1e9; a
+    record as its fields given (``running_time_s 78``: those not given left out, ``none`` when no
+    field is), a list as its items (``none`` when empty), not as Python writes them."""
+    if isinstance(v, dict):
+        return ", ".join(f"{k} {fmt_scalar(x)}" for k, x in v.items() if not is_missing(x)) or "none"
+    if isinstance(v, (list, tuple)):
+        return "; ".join(fmt_scalar(x) for x in v) or "none"
     if is_missing(v):
         return "\u2014"
     if isinstance(v, bool):

@@ -2,12 +2,14 @@
 step against the real-time budget, and the mass estimates over distance. Each says what runs.csv says of
 the runs it draws: how many are ok in each band's title, the runs not ok in the title of the others
 (:func:`~ecostudy.report.plots.overall`) and marked in their legends."""
+import textwrap
+
 import numpy as np
 
 from ecostudy.core.status import parsed
 from ecostudy.core.units import to_kmh
 from ecostudy.report import style
-from ecostudy.report.plots import _save, _steps, figure, marked, overall, titled
+from ecostudy.report.plots import _save, _steps, figure, marked, overall, titled, word
 
 LABELLED = 10  # draws named in the mass estimates' legend (the rest counted)
 
@@ -45,25 +47,40 @@ def _increasing(x, v):
     return x[keep], v[keep]
 
 
-def bands(runs, segment, path, title="", dpi=None, ok=None):
-    """Speed against distance per controller, one panel each, with the speed limit: the 5-95 %
-    band of the runs and their median (a single run: its profile). ``ok``: the runs ok per
-    controller, in each panel's title (red where some are not: the band is not of trusted runs)."""
+def _reasons(statuses, name, width=110):
+    """One or two lines naming the runs of controller ``name`` that are not ok with their reasons
+    (``statuses``: :func:`run_statuses`), e.g. ``draw 0 flagged: stopped 16.66 m beyond the stop``;
+    empty when every one is ok."""
+    bad = [f"{key[len(name) + 1:]} {status}" for key, status in _of(statuses, name).items() if word(status) != "ok"]
+    return "\n".join(textwrap.wrap("; ".join(bad), width, max_lines=2, placeholder=" ... (runs.csv's reason)"))
+
+
+def bands(runs, segment, path, title="", dpi=None, ok=None, statuses=None):
+    """Speed against distance per controller, one panel each, with the speed limit and the stop: the
+    5-95 % band of the runs and their median (a single run: its profile), as far as the furthest run
+    went (a run that overshot its stop shows where it stood). ``ok``: the runs ok per controller, in
+    each panel's title (red where some are not: the band is not of trusted runs); ``statuses``
+    (:func:`run_statuses`): the runs not ok named there with their reasons."""
     fig, axes = figure(len(runs), 1, figsize=(9, 2.6 * len(runs) + 0.6), sharex=True, squeeze=False)
     x_lim, v_lim = _steps(segment.limit, segment.distance)
-    positions = np.linspace(0.0, segment.distance, 600)
+    furthest = max([segment.distance] + [float(np.max(s["profile"]["x"])) for group in runs.values() for s in group
+                                         if len(s["profile"]["x"])])
+    positions = np.linspace(0.0, furthest, 600)
     palette = style.Palette(list(runs))
     for ax, (name, group) in zip(axes[:, 0], runs.items()):
         colour = palette(name)
         ax.step(x_lim, to_kmh(v_lim), where="post", color=style.LIMIT["speed limit"], lw=1, label="speed limit")
+        ax.axvline(segment.distance, color=style.LIMIT["stop"], lw=0.8, ls=":", label="stop")
         low, median, high = to_kmh(speed_percentiles(group, positions))
         if len(group) > 1:
             ax.fill_between(positions, low, high, color=colour, alpha=0.25, lw=0, label="5-95 % of the runs")
         ax.plot(positions, median, color=colour, lw=1.0, label="median" if len(group) > 1 else "run")
         ax.set_ylabel("speed [km/h]")
         good = (ok or {}).get(name)
-        ax.set_title(f"{name}: {len(group)} runs" + ("" if good is None else f", {good} ok (runs.csv's status)"),
-                     fontsize=9, color=style.LIMIT["title" if good is None or good == len(group) else "not ok"])
+        why = _reasons(statuses or {}, name)
+        ax.set_title(f"{name}: {len(group)} runs" + ("" if good is None else f", {good} ok (runs.csv's status)")
+                     + (f"\n{why}" if why else ""), fontsize=9,
+                     color=style.LIMIT["title" if (good is None or good == len(group)) and not why else "not ok"])
         ax.set_ylim(bottom=0)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="lower center")
@@ -142,7 +159,7 @@ def draw(outcome, out=style.Output()):
     names = list(out.filenames(FIGURES))
     ok = {c: int((g["status"] == "ok").sum()) for c, g in outcome.runs.groupby("controller")}
     statuses = run_statuses(outcome.runs, runs)
-    bands(runs, outcome.segment, folder / names[0], title=name, dpi=out.dpi, ok=ok)
+    bands(runs, outcome.segment, folder / names[0], title=name, dpi=out.dpi, ok=ok, statuses=statuses)
     solve_times(runs, outcome.budgets, folder / names[1], title=name, dpi=out.dpi, statuses=statuses)
     if not any(s.get("estimates") for group in runs.values() for s in group):
         return names[:2]

@@ -5,6 +5,7 @@ import textwrap
 
 import matplotlib
 import numpy as np
+import pandas as pd
 from matplotlib.figure import Figure
 
 from ecostudy.analysis.energyflow import run_energy_flow
@@ -110,6 +111,26 @@ def _finish_speed_axes(ax, title, xlabel="distance from departure [m]", legend_s
     titled(ax, title, status)
 
 
+def _timing_point(ax, x, low=None, high=None, label=None):
+    """A timing point at ``x`` [m] on a speed axis: a dotted line (``label`` in the legend) and its
+    lowest and highest speed [km/h] as short bars."""
+    ax.axvline(x, color=style.LIMIT["timing point"], lw=0.8, ls=":", label=label)
+    for cap in (low, high):
+        if cap is not None:
+            ax.plot([x - 30, x + 30], [cap, cap], color=style.LIMIT["speed limit"], lw=2)
+
+
+def window_text(window, check=None):
+    """What a timing ``window`` asks, and (``check``: its :func:`core.simulate.window_checks` entry)
+    whether the re-simulated run kept it: ``500 m: from 40 s, at most 55 km/h: kept``."""
+    asked = [f"{word} {value:g} {unit}" for word, value, unit in (
+        ("from", window.earliest, "s"), ("by", window.latest, "s"),
+        ("at least", None if window.min_speed is None else to_kmh(window.min_speed), "km/h"),
+        ("at most", None if window.max_speed is None else to_kmh(window.max_speed), "km/h")) if value is not None]
+    kept = "" if check is None else ": kept" if check["kept"] else ": MISSED"
+    return f"{window.distance:g} m: {', '.join(asked)}{kept}"
+
+
 def _advice_regime(row):
     """The regime name of a DAS advice row (its shading beneath the run)."""
     if not np.isfinite(row.handle):
@@ -127,6 +148,10 @@ def speed_plot(result, path=None, fmt=None, dpi=None):
                                        gridspec_kw={"height_ratios": [3, 1, 1], "hspace": 0.12})
     fig.subplots_adjust(left=0.08, right=0.98, top=0.95, bottom=0.07)  # tight_layout costs 40 % of the plot
     _speed_limit(ax, seg)
+    checks = (s.get("verification") or {}).get("windows") or []
+    for k, w in enumerate(result.windows):  # each timing point, what it asks and whether the run kept it
+        _timing_point(ax, w.distance, *(None if v is None else to_kmh(v) for v in (w.min_speed, w.max_speed)),
+                      label="timing point " + window_text(w, checks[k] if k < len(checks) else None))
     ax.plot(prof["position_m"], prof["speed_kmh"], color=style.colour("traction"), lw=1.6, label="optimal speed")
     if result.trace is not None:
         ax.plot(result.trace.x, to_kmh(result.trace.v), color=style.colour("re-simulated"), lw=0.8, ls="--",
@@ -164,25 +189,44 @@ def front_limits(times, margin=0.03):
     return lo - pad, hi + pad
 
 
-def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None, runs_ok=None):
-    """Traction and net energy against running time, with the marginal saving beneath;
-    ``weighted`` (optional table) adds the weighted-sum points; the study's own running time
-    (``is_study_time``) is a star. The time axis spans the front's running times: weighted points
-    beyond them are counted in the legend, not drawn. Points not ok are ringed: the ATO runs where
-    ``runs_ok`` (per row; default: the row's ``status``) is False, the driver advice where
-    ``das_status`` is not ok; an advice that has no running time (it stood off its stop) is counted
-    in the legend, not drawn."""
+def _point_names(table):
+    """A name for each row of a front's table: its running time, else its supplement, else ``study
+    time`` or its place in the table."""
+    def name(k, row):
+        if pd.notna(row["running_time_s"]):
+            return f"{row['running_time_s']:.1f} s"
+        if row.get("is_study_time") is True:
+            return "study time"
+        return f"+{row['supplement_pct']:.4g} %" if pd.notna(row.get("supplement_pct")) else f"row {k + 1}"
+    return [name(k, row) for k, (_, row) in enumerate(table.iterrows())]
+
+
+def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None, runs_ok=None, names=None):
+    """Traction and net energy against running time, with the marginal saving beneath, for the rows
+    that have a running time (a failed point has none: named ``not drawn`` in the title, by ``names``,
+    per row, default :func:`_point_names`); ``weighted`` (optional table) adds the weighted-sum points;
+    the study's own running time (``is_study_time``) is a star. The time axis spans the front's
+    running times: weighted points beyond them are counted in the legend, not drawn. Points not ok
+    are ringed and named in the title: the ATO runs where ``runs_ok`` (per row; default: the row's
+    ``status``) is False, the driver advice where ``das_status`` is not ok (ringed apart); an advice
+    that has no running time (it stood off its stop) is counted in the legend, not drawn."""
     fig, (ax, axm) = figure(2, 1, figsize=(8, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
     fig.subplots_adjust(left=0.13, right=0.97, top=0.85, bottom=0.09, hspace=0.1)
-    fig.suptitle(title, fontsize=10)
-    t = table["running_time_s"]
-    if not t.notna().any():
-        return _empty(fig, (ax, axm), "", f"no point of the front has a running time: all {len(table)} failed "
+    if not table["running_time_s"].notna().any():
+        return _empty(fig, (ax, axm), title, f"no point of the front has a running time: all {len(table)} failed "
                       "(pareto.csv's status)", path, fmt, dpi)
+    has_time = table["running_time_s"].notna().to_numpy()
+    bad = np.zeros(len(table), bool) if "status" not in table else \
+        (table["status"].astype(str).map(word) != "ok").to_numpy() if runs_ok is None else ~np.asarray(runs_ok, bool)
+    names = _point_names(table) if names is None else list(names)
+    statuses = {name if has_time[k] else f"{name}, not drawn": str(table["status"].iloc[k]) if bad[k] else "ok"
+                for k, name in enumerate(names)} if "status" in table else {}
+    everything, table = table, table[has_time]  # a row with no running time breaks every line at it
+    t = table["running_time_s"]
     ax.plot(t, table["traction_energy_kWh"], "o-", color=style.colour("traction"), label="traction (at the wheel)")
     ax.plot(t, table["net_energy_kWh"], "s--", color=style.colour("net energy"),
             label="net electrical (regeneration credited)")
-    study = table[table["is_study_time"].eq(True) & table["running_time_s"].notna()] if "is_study_time" in table else []
+    study = table[table["is_study_time"].eq(True)] if "is_study_time" in table else []
     for _, row in (study.iterrows() if len(study) else ()):
         ax.plot(row["running_time_s"], row["traction_energy_kWh"], "*", ms=16, color=style.colour("study time"),
                 zorder=5, label=f"the study's running time: {row['running_time_s']:.1f} s, "
@@ -209,15 +253,17 @@ def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None, r
         ax.plot(wt[inside], weighted["traction_energy_kWh"][inside], "x", color=style.colour("weighted sum"),
                 ms=8, mew=2, label="weighted sum w_t T + w_e E/m (traction)"
                 + (f"; {beyond} point{'s' * (beyond > 1)} beyond the front's times not shown" if beyond else ""))
-    if "status" in table:  # the points not ok ringed: a front of flagged points is no front to quote
-        bad = (table["status"].astype(str).map(word) != "ok") if runs_ok is None else ~np.asarray(runs_ok, bool)
-        if bad.any():
-            style.ring(ax, t[bad], table["traction_energy_kWh"][bad],
-                       f"not ok ({int(bad.sum())} of {len(table)} points: see pareto.csv's status)")
+    if bad.any():  # the points not ok ringed: a front of flagged points is no front to quote
+        ring = bad[has_time]
+        style.ring(ax, t[ring], table["traction_energy_kWh"][ring],
+                   f"not ok ({int(bad.sum())} of {len(everything)} points"
+                   + (f", {int((bad & ~has_time).sum())} not drawn" if (bad & ~has_time).any() else "")
+                   + ": see pareto.csv's status)")
     ax.set_xlim(lo, hi)
     ax.set_ylabel("energy [kWh]")
     ax.set_ylim(bottom=0)
     ax.legend(fontsize=8)
+    titled(ax, title, overall(statuses, "points"))
     top = ax.secondary_xaxis("top", functions=(lambda x: 100 * (x / t.iloc[0] - 1), lambda p: t.iloc[0] * (1 + p / 100)))
     top.set_xlabel("supplement over all-out [%]", fontsize=8)
     axm.plot(t, table["marginal_saving_kWh_per_s"], ".-", color=style.colour("marginal saving"))
@@ -228,23 +274,26 @@ def pareto_plot(table, path=None, title="", weighted=None, fmt=None, dpi=None, r
     return _save(fig, path, fmt, dpi)
 
 
-def profiles_plot(results, path=None, title="", fmt=None, dpi=None):
+def profiles_plot(results, path=None, title="", fmt=None, dpi=None, statuses=None):
     """Speed against distance for a few points of a front (``studies.front.FrontPoint``), with the
     speed limit; the study's own running time named, each point not ok marked in the legend and
-    counted in the title."""
+    named in the title. ``statuses``: {name: status line} of every point the figure is about, those
+    not solved (no profile) too, which the title names ``not drawn`` (default: the points drawn)."""
     fig, ax = figure(figsize=(9, 4.5))
     fig.subplots_adjust(left=0.08, right=0.98, top=0.92, bottom=0.12)
     if not results:
         return _empty(fig, ax, title, "no point of the front was solved: no speed profile to draw (pareto.csv's "
                       "status)", path, fmt, dpi)
     _speed_limit(ax, results[0].segment)
+    drawn = {}
     for r, colour in zip(results, style.sequence(len(results))):
         p, study = r.profile, getattr(r, "study_time", False)  # a FrontPoint, or a RunResult of the library
+        drawn[getattr(r, "name", "") or f"{r.facts.running_time_s:.1f} s"] = str(r.status)
         ax.plot(p["position_m"], p["speed_kmh"], color=colour, lw=2.0 if study else 1.3,
                 label=marked(("the study's running time: " if study else "")
                              + f"{r.facts.running_time_s:.1f} s, {r.facts.traction_energy_kWh:.2f} kWh", str(r.status)))
-    _finish_speed_axes(ax, title, status=overall({f"{r.facts.running_time_s:.1f} s": str(r.status) for r in results},
-                                                 "points drawn"))
+    _finish_speed_axes(ax, title, status=overall({name if name in drawn else f"{name}, not drawn": st
+                                                  for name, st in (statuses or drawn).items()}, "points"))
     return _save(fig, path, fmt, dpi)
 
 
@@ -275,9 +324,7 @@ def journey_plot(results, path=None, title="", passing=(), fmt=None, dpi=None, s
     fig, ax = figure(figsize=(10, 4.5))
     fig.subplots_adjust(left=0.07, right=0.98, top=0.92, bottom=0.12)
     for x, cap in passing:
-        ax.axvline(x, color=style.LIMIT["timing point"], lw=0.8, ls=":")
-        if cap is not None:
-            ax.plot([x - 30, x + 30], [cap, cap], color=style.LIMIT["speed limit"], lw=2)
+        _timing_point(ax, x, high=cap)
     palette = style.Palette(list(results))
     for n, (name, runs) in enumerate(results.items()):
         offset, colour = 0.0, palette(name)

@@ -79,12 +79,22 @@ def front_files(plot=True, out=style.Output(), weighted=None, workers=1, started
         write_json(out_dir / "pareto.json", meta)
         stale(out_dir, weighted=weighted is None, names={"weighted": ["pareto_weighted.csv"]})
         title = f"{meta['train']} - {meta['from']} to {meta['to']} (K = {meta['points']})"
-        drawn = figures(out_dir, plot, dict(zip(FRONT_FIGURES, (
-            later("pareto_plot", table, title=title, weighted=weighted, runs_ok=runs_ok(table)),
-            later("profiles_plot", front.front_points(cases, rows, front.profile_picks(cases)), title=title)))), out)
+        drawn = figures(out_dir, plot, front_drawings(cases, rows, table, title, weighted), out)
         return ["pareto.json", *drawn], {"weighted": "pareto_weighted.csv"} if weighted is not None else {}
     return Draw(draw, lambda cases: ("pareto.json", *(["pareto_weighted.csv"] if weighted is not None else []),
                                      *out.filenames(FRONT_FIGURES, plot)))
+
+
+def front_drawings(cases, rows, table, title, weighted=None):
+    """{stem: draw(path, ...)} of a front's figures (:data:`FRONT_FIGURES`): every point of the
+    table, those not solved named in the title, and the profiles of :func:`studies.front.profile_picks`
+    with the status of each pick, solved or not."""
+    picks = front.profile_picks(cases)
+    return dict(zip(FRONT_FIGURES, (
+        later("pareto_plot", table, title=title, weighted=weighted, runs_ok=runs_ok(table),
+              names=[cases[i]["name"] for i in table.index]),
+        later("profiles_plot", front.front_points(cases, rows, picks), title=title,
+              statuses=front.pick_statuses(cases, rows, picks)))))
 
 
 def runs_ok(table):

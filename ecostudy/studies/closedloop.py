@@ -21,7 +21,7 @@ from ecostudy.core.columns import with_statistic
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.grid import make_segment
 from ecostudy.core.plant import Noise, Plant, Truth
-from ecostudy.core.status import (STOP_TOLERANCE_M, Status, calibrated, driven_run, flagged, solver_part, unproven_solves,
+from ecostudy.core.status import (STOP_TOLERANCE_M, Status, calibrated, cells, driven_run, flagged, solver_part, unproven_solves,
                                   worst)
 from ecostudy.core.types import State
 from ecostudy.io import schemas
@@ -252,8 +252,9 @@ def runs_table(cases, rows):
     columns = (*COLUMNS, GRIP) if any(GRIP in s for s in stored) else COLUMNS  # a train with an adhesion limit
     for case, s in zip(cases, stored):
         row = rows.get(case["key"]) or {}
-        out.append({**case["labels"], "key": case["key"], "status": row.get("status", "missing"),
-                    "reason": row.get("error"), **{c: s.get(c) for c in columns}, "wall_s": row.get("seconds")})
+        status, reason = cells(row.get("status"), row.get("error"))
+        out.append({**case["labels"], "key": case["key"], "status": status, "reason": reason,
+                    **{c: s.get(c) for c in columns}, "wall_s": row.get("seconds")})
     return pd.DataFrame(out)
 
 

@@ -30,6 +30,7 @@ from ecostudy.studies.pareto import (das_meta, facts_of, front_supplements, fron
 from ecostudy.studies.sizes import check_front
 
 DEFAULT_COUNT, DEFAULT_SUPPLEMENT_MAX = 20, 0.40  # a study file's front: points, largest supplement [-]
+STUDY = "study "  # the start of the name of a study's own running time added beside the front (study_point)
 
 
 def front_cases(train_doc, track_doc, from_stop, to_stop, count=DEFAULT_COUNT, supplement_max=DEFAULT_SUPPLEMENT_MAX,
@@ -58,10 +59,10 @@ def front_cases(train_doc, track_doc, from_stop, to_stop, count=DEFAULT_COUNT, s
             same[0]["labels"]["study_time"] = True  # labels are not in the key: the point stays the one stored
         else:
             cases.append(study_point(base, supplement_percent=100 * timing.supplement,
-                                     name=f"study +{100 * timing.supplement:.4g} %"))
+                                     name=f"{STUDY}+{100 * timing.supplement:.4g} %"))
     elif timing is not None and timing.running_time is not None:
         cases.append(study_point(base, running_time_s=timing.running_time,
-                                 name=f"study {timing.running_time:.6g} s"))
+                                 name=f"{STUDY}{timing.running_time:.6g} s"))
     return cases
 
 
@@ -122,7 +123,8 @@ def pareto_table(cases, rows):
     running time (the index: each row's place in ``cases``), the study's own running time marked
     (``is_study_time``), with the ``das_``
     columns when the points carry driver advice; its attrs (``summary.json``): what a reader asks
-    first (the savings at +5 % and +10 %, the study time's energy, monotone, all verified, all optimal)."""
+    first (the savings at +5 % and +10 %, the study time's energy, monotone, all verified, all optimal)
+    and ``count``, the front's points (a study's own running time added beside them not counted)."""
     points = points_of(cases, rows)
     order = in_time_order(cases, points)
     cases, points = [cases[i] for i in order], [points[i] for i in order]
@@ -137,7 +139,7 @@ def pareto_table(cases, rows):
     solved = table["running_time_s"].notna() if "running_time_s" in table else table.index < 0
     names = {"track": case["track"].get("name", "track"), "train": case["train"].get("name", "train"),
              "from": case["from"], "to": case["to"]}
-    facts = {**names, "points": case["points"], "count": len(cases),
+    facts = {**names, "points": case["points"], "count": sum(not c["name"].startswith(STUDY) for c in cases),
              "all_out_time_s": float(table["running_time_s"].iloc[0]),
              "saving_at_5_pct_supplement_pct": saving_at(table[solved], 5.0) if solved.any() else None,
              "saving_at_10_pct_supplement_pct": saving_at(table[solved], 10.0) if solved.any() else None,
@@ -180,6 +182,7 @@ class FrontPoint(NamedTuple):
     segment: object
     status: str = "ok"     # the point's status line (pareto.csv's)
     study_time: bool = False  # the study's own running time, not a point of the front
+    name: str = ""  # the case's name: all-out, +10 %, study 76 s
 
 
 def profile_picks(cases, most=5):
@@ -208,8 +211,15 @@ def front_points(cases, rows, picks):
             segment = segment or segment_of(cases[0])
             out.append(FrontPoint({k: np.asarray(v) for k, v in summary["profile"].items()},
                                   facts_of(summary), segment, str(own_status(status, summary.get("das"))),
-                                  is_study_time(cases[i])))
+                                  is_study_time(cases[i]), cases[i]["name"]))
     return sorted(out, key=lambda p: p.facts.running_time_s)
+
+
+def pick_statuses(cases, rows, picks):
+    """{name: status line} of the points at the indices ``picks``, those not solved too (a figure of
+    their profiles names them, not drawn): each point's ATO run's own status (:func:`own_status`)."""
+    points = points_of(cases, rows)
+    return {cases[i]["name"]: str(own_status(points[i][1], (points[i][0] or {}).get("das"))) for i in picks}
 
 
 def front_size(where, cases, workers=1):

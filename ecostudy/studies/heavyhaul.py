@@ -25,7 +25,7 @@ import pandas as pd
 from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, problem
 from ecostudy.core.grid import Segment, make_segment
 from ecostudy.core.units import KMH, KN, KWH
-from ecostudy.core.status import OK, part, unproven_columns, unproven_solves
+from ecostudy.core.status import OK, cells, part, unproven_columns, unproven_solves
 from ecostudy.heavyhaul.airbrake import application_time, brake_lag
 from ecostudy.heavyhaul.checks import (braking_asked, reference_problems, ruling_grade, samples_to_start,
                                        starting_coupler_force, unmodelled_tunnels)
@@ -323,7 +323,8 @@ def heavyhaul_table(cases, rows):
     for case in cases:
         row = rows.get(case["key"]) or {}
         s = row.get("summary") or {}
-        table.append({**case["labels"], "status": row.get("status", "missing"), "reason": row.get("error"),
+        status, reason = cells(row.get("status"), row.get("error"))
+        table.append({**case["labels"], "status": status, "reason": reason,
                       **{c: s.get(c) for c in COLUMNS}, "wall_s": row.get("seconds")})
     return pd.DataFrame(table)
 

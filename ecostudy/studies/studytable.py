@@ -2,7 +2,7 @@
 results), the names a folder's summary gives its cases."""
 import pandas as pd
 
-from ecostudy.core.status import parsed
+from ecostudy.core.status import cells, parsed
 
 
 def case_statuses(cases, table):
@@ -29,8 +29,8 @@ def study_table(cases, rows):
         s = (row or {}).get("summary") or {}
         ver = s.get("verification") or {}
         labels = {f"swept_{k}" if k in RESULT_COLUMNS else OUTPUT_NAMES.get(k, k): v for k, v in case["labels"].items()}
-        out.append({**labels, "key": case["key"], "status": row["status"] if row else "missing",
-                    "reason": (row or {}).get("error"),
+        status, reason = cells((row or {}).get("status"), (row or {}).get("error"))
+        out.append({**labels, "key": case["key"], "status": status, "reason": reason,
                     "running_time_s": s.get("running_time_s"), "all_out_time_s": s.get("all_out_time_s"),
                     "traction_energy_kWh": s.get("traction_energy_kWh"), "net_energy_kWh": s.get("net_energy_kWh"),
                     "regenerated_energy_kWh": s.get("regenerated_energy_kWh"), "top_speed_kmh": s.get("top_speed_kmh"),
