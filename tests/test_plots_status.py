@@ -157,3 +157,19 @@ def test_a_validations_runs_not_ok_are_named_and_marked(regional_log):
     figure = calplots.validation(table, None, "there")
     assert "FLAGGED: 2 of 2 runs not ok: there run 0 (flagged), there run 1 (flagged)" in figure.texts[0].get_text()
     assert [t.get_text() for t in figure.axes[0].get_xticklabels()] == ["there\nrun 0 (FLAGGED)", "there\nrun 1 (FLAGGED)"]
+
+
+def test_a_compared_run_that_stood_off_its_stop_gives_where_it_stood_not_an_arrival():
+    """compare.png's legend read '77.8 s' for a run that stood short of its stop, as an arrival."""
+    import dataclasses
+
+    from ecostudy.core.simulate import Driven
+
+    run = solve_run(load_track(ROKIN), load_train(METRO), "Rokin", "Centraal", Timing(running_time=76.0), points=100)
+    short = dataclasses.replace(run.trace, stop_position=run.segment.distance - 40.0)
+    figure = plots.compare_plot([Driven("arrived", run.handle, run.trace), Driven("short", run.handle, short)],
+                                run.segment, statuses={"short": "flagged: stopped 40 m short"})
+    labels = figure.axes[0].get_legend_handles_labels()[1]
+    assert any(label.startswith(f"arrived: {run.trace.arrival_time:.1f} s, ") for label in labels), labels
+    assert any(label.startswith(f"short: stood 40.0 m short of the stop at {run.trace.arrival_time:.1f} s")
+               for label in labels), labels

@@ -9,6 +9,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from ecostudy.analysis.energyflow import run_energy_flow
+from ecostudy.core.status import at_stop
 from ecostudy.core.units import PERMILLE, number, signed, to_kmh, to_kwh
 from ecostudy.report import style
 
@@ -308,8 +309,11 @@ def compare_plot(outcomes, segment, path=None, title="", fmt=None, dpi=None, sta
     palette = style.Palette([o.name for o in outcomes])
     drawn = {o.name for o in outcomes}
     for i, o in enumerate(outcomes):
+        error = o.trace.stop_position - segment.distance
+        when = (f"{o.trace.arrival_time:.1f} s" if at_stop(error) else
+                f"stood {abs(error):.1f} m {'short of' if error < 0 else 'past'} the stop at {o.trace.arrival_time:.1f} s")
         ax.plot(o.trace.x, to_kmh(o.trace.v), lw=1.4, color=palette(o.name), ls=style.DASHES[i % len(style.DASHES)],
-                label=marked(f"{o.name}: {o.trace.arrival_time:.1f} s, {to_kwh(o.trace.traction_energy):.2f} kWh",
+                label=marked(f"{o.name}: {when}, {to_kwh(o.trace.traction_energy):.2f} kWh",
                              (statuses or {}).get(o.name, "ok")))
     _finish_speed_axes(ax, title, status=overall({name if name in drawn else f"{name}, not drawn": st
                                                   for name, st in (statuses or {}).items()}, "strategies"))
