@@ -15,7 +15,7 @@ from ecostudy.core.errors import EcostudyWarning, FieldError, InfeasibleError, I
 from ecostudy.io.documents import aliased
 from ecostudy.io.loaders import check_fits, check_stop_list, load_track, load_train, read_timetable, timing_from_timetable
 from ecostudy.io.timetable import journey_plan, name_stops
-from ecostudy.io.store import check_one_study
+from ecostudy.io.store import check_one_study, whole_command
 from ecostudy.io.writers import check_output_dir, default_output
 from ecostudy.report.files import JOURNEY_FIGURE, write_journey
 from ecostudy.report.html import write_html
@@ -44,6 +44,7 @@ def beside(st, suffix: str, default: str) -> Path:
 
 
 @spelled
+@whole_command()
 def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
                   from_stop: Optional[str] = None, to_stop: Optional[str] = None, count: int = 20,
                   supplement_max: float = 40.0, points: Optional[int] = None, workers: Optional[int] = None,
@@ -112,6 +113,7 @@ def study_time_line(meta: dict) -> str:
 
 
 @spelled
+@whole_command()
 def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
                    from_stop: Optional[str] = None, to_stop: Optional[str] = None, time: Optional[float] = None,
                    supplement: Optional[float] = None, points: Optional[int] = None, out: Optional[Path] = None,

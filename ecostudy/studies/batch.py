@@ -100,8 +100,7 @@ def _solve_case(case):
 
 
 def _serial(todo, task, arrived):
-    for case in todo:
-        yield case, task(case)
+    yield from ((case, task(case)) for case in todo)
 
 
 def _processes(todo, workers, task, arrived):
@@ -340,6 +339,7 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
                                                        *(draw.names(expanded.cases) if draw is not None else ())), kind)
     if expanded.cases:  # a folder holds one study's results: its tables and summary.json are the study's own
         check_one_study(output, expanded.cases[0]["study"])
+    Store(output / "results.sqlite").close()  # the folder taken before a file is written (to the end: store.whole_command)
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
     def stopped(when):  # an earlier run's summary.json (ok, N cases) would speak for a study not finished
