@@ -201,8 +201,9 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
     if scheduled is None and plan is None and (time is None) == (supplement is None):
         raise InputError(problem("command line", "--time/--supplement",
                                  "give one total running time or supplement, or --timetable"))
-    check_journey(timetable or "command line", len(names) - 1, points, workers,  # too big: refused (unless --force)
-                  splits=4 + (scheduled is not None) + (plan is not None), whole=1 + (plan is not None))
+    check_journey(timetable or "command line", [grid_nodes(trk, trn, a, b, points) for a, b in zip(names, names[1:])],
+                  workers, splits=4 + (scheduled is not None) + (plan is not None), whole=1 + (plan is not None),
+                  tables=table_points(trn))  # too big: refused (unless --force)
     out_dir = check_output_dir(output_folder(out, default_output("journey")),
                                ("journey.csv", "journey_totals.csv", *figures.filenames([JOURNEY_FIGURE], plot)),
                                "journey")
