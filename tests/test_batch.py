@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from ecostudy.io.folder import COMMON
 from ecostudy.io.store import Store
 from ecostudy.studies.batch import execute, run_study
 from ecostudy.studies.cases import expand
@@ -108,6 +109,18 @@ def test_a_run_stopped_while_writing_its_files_leaves_no_earlier_summary_saying_
     assert not (tmp_path / "out" / "report.html").exists()
 
 
+def stopped_after_one_case(path, folder):
+    """The summary.json of the study ``path`` run into ``folder`` and stopped (KeyboardInterrupt, as
+    SIGINT raises it) after its first case; it says so."""
+    def stop(*counts):
+        raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        run_study(path, progress=stop)
+    stopped = json.loads((folder / "summary.json").read_text())
+    assert stopped["status"].startswith("failed: stopped before every case was computed"), stopped["status"]
+    return stopped
+
+
 def test_an_interrupted_run_leaves_no_earlier_summary_saying_ok(tmp_path):
     """A finished study, then its sweep extended and the run stopped after one new case: the
     folder's summary.json was the finished run's (ok, 2 cases) for a study of 4 not finished. It
@@ -119,12 +132,7 @@ def test_an_interrupted_run_leaves_no_earlier_summary_saying_ok(tmp_path):
     assert (tmp_path / "out" / "summary.json").is_file()
     write_yaml(path, {**data, "sweep": {"supplement_percent": [6, 12]}})
 
-    def stop(*counts):
-        raise KeyboardInterrupt
-    with pytest.raises(KeyboardInterrupt):
-        run_study(path, progress=stop)
-    stopped = json.loads((tmp_path / "out" / "summary.json").read_text())
-    assert stopped["status"].startswith("failed: stopped before every case was computed"), stopped["status"]
+    stopped = stopped_after_one_case(path, tmp_path / "out")
     assert "results.csv" in stopped["files"] and not (tmp_path / "out" / "report.html").exists()
     assert "report.html" not in stopped["files"]  # removed, not listed
     # the stopped study's cases, by what is stored (3 of 4): the finished run's "2 cases: 2 ok" is gone
@@ -132,6 +140,25 @@ def test_an_interrupted_run_leaves_no_earlier_summary_saying_ok(tmp_path):
     table, counts, _ = run_study(path)
     assert counts["stored_before"] == 3 and (table["status"] == "ok").all()
     assert (tmp_path / "out" / "summary.json").is_file()
+
+
+def test_a_stopped_rerun_from_another_study_file_writes_a_summary_of_its_own(tmp_path):
+    """A finished study, then the same study (its name) from another file with one more sweep value,
+    stopped after its first new case: summary.json speaks for the stopped run alone, its study file
+    and counts, none of the finished run's fields."""
+    path = study_file(tmp_path, tmp_path / "out")
+    data = load_yaml(path)
+    write_yaml(path, {**data, "sweep": {"supplement_percent": [6]}})
+    run_study(path)
+    finished = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert finished["study"] == str(path) and finished["computed_now"] == 2
+    other = write_yaml(tmp_path / "extended.yaml", {**data, "sweep": {"supplement_percent": [6, 12]}})
+
+    stopped = stopped_after_one_case(other, tmp_path / "out")
+    assert (stopped["study"], stopped["computed_now"], stopped["stored_before"]) == (str(other), 1, 2)
+    assert stopped["cases"] == {"total": 4, "ok": 3, "flagged": 0, "failed": 0} and stopped["tables"] == {}
+    assert set(stopped) == set(COMMON) | {"study", "computed_now", "stored_before"}
+    assert stopped["kind"] == "run" and "results.csv" in stopped["files"]  # removed by the next run that ends
 
 
 def test_failures_are_recorded_and_do_not_stop_the_study(tmp_path):

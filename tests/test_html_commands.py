@@ -73,3 +73,18 @@ def test_every_commands_report_renders_in_chromium(name, tmp_path):
         assert len(dom.table(frame.columns)) == min(len(frame), MAX_ROWS), table
     assert [i["alt"] for i in dom.images] == pictures
     assert all(i["src"].startswith("data:image/png;base64,") for i in dom.images)
+
+
+def test_a_run_reports_its_track_train_stops_and_k_among_its_inputs(tmp_path):
+    """A run study's report.html listed only its study file under Inputs: its track, train, stops and
+    K are there now, as summary.json records them."""
+    done = CliRunner().invoke(app, command("run", tmp_path))
+    assert done.exit_code == 0, done.output
+    summary = load(tmp_path / "out").summary
+    assert {k: summary.get(k) for k in ("track", "train", "from", "to", "points")} == {
+        "track": "Amsterdam metro Rokin - Centraal", "train": "Amsterdam metro (Alstom, Rokin-Centraal case)",
+        "from": "Rokin", "to": "Centraal", "points": 150}
+    page = (tmp_path / "out" / "report.html").read_text()
+    inputs = page[page.index("<h2>Inputs</h2>"):page.index("<h2>Results</h2>")]
+    for value in ("sweep.yaml", "Amsterdam metro Rokin - Centraal", "Rokin-Centraal case", "Centraal", "150"):
+        assert value in inputs, (value, inputs)

@@ -88,12 +88,19 @@ def test_run_kind_pareto_holds_the_study_time(tmp_path):
 
 def test_a_study_time_below_all_out_fails_alone_and_is_named(tmp_path):
     """60 s on the metro (all-out 71.8 s at K = 60): that point failed, named with its reason (exit
-    1); the front's other points solved, their marginal savings numbers."""
+    1); the front's other points solved, their marginal savings numbers. The printed table leaves the
+    failed row's cells (and the all-out row's marginal saving) empty, as report.html does, not NaN;
+    the +5 % and +10 % savings, from points that are ok, do not say points not ok are among them."""
     path = study(tmp_path, running_time_s=60)
     result = CliRunner().invoke(app, ["pareto", str(path), "--out", str(tmp_path / "front"), "--count", "3",
                                       "--supplement-max", "10", "--workers", "1", "--no-plot"])
     assert result.exit_code == 1, result.output
     assert "failed: study 60 s: infeasible: the fastest possible run takes 71.8 s" in result.stderr, result.stderr
+    assert "NaN" not in result.stdout and "nan" not in result.stdout, result.stdout
+    headline = next(x for x in result.stdout.splitlines() if x.startswith("all-out "))
+    assert "+5 % saves" in headline and headline.endswith("(of the all-out traction energy)"), headline
+    failed_row = next(x for x in result.stdout.splitlines() if x.rstrip().endswith("failed"))
+    assert failed_row.split() == ["True", "failed"], failed_row
     table = pd.read_csv(tmp_path / "front" / "pareto.csv")
     own, front = table[table["is_study_time"]], table[~table["is_study_time"]]
     assert own["status"].str.startswith("failed").all() and (front["status"] == "ok").all()

@@ -263,3 +263,36 @@ def test_two_stop_signals_a_ms_apart_end_a_front_with_its_lock_released(tmp_path
         assert proc.returncode == 130, err
         assert "Traceback" not in err, err
         assert not (out / "results.sqlite.lock").exists()
+
+
+def caught(pid, sig):
+    """Whether process ``pid`` has a handler for ``sig`` (its SigCgt mask in /proc)."""
+    try:
+        mask = next(line for line in open(f"/proc/{pid}/status") if line.startswith("SigCgt:"))
+    except (OSError, StopIteration):
+        return False
+    return bool(int(mask.split()[1], 16) >> (sig - 1) & 1)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_stop_while_the_command_still_loads_is_one_line_not_a_traceback(tmp_path, sig):
+    """A stop signal while the command imports its modules, at several delays from the moment its
+    own handler could be set (Python's SIGINT handler set, and ecostudy's SIGTERM one or 0.15 s more):
+    exit status 128 + the signal and one line, never Python's traceback of the import it cut, nor
+    Typer's silent 130; a later one, while it solves, the same."""
+    for delay in (0.0, 0.05, 0.1, 0.2, 0.3, 0.5):
+        proc = ecostudy(["solve", ROOT / "studies" / "default.yaml", "--points", 150, "--no-plot",
+                         "--out", tmp_path / "out"])
+        started = time.monotonic()
+        while not caught(proc.pid, signal.SIGINT) and time.monotonic() - started < 30:
+            time.sleep(0.001)
+        python = time.monotonic()
+        while not caught(proc.pid, signal.SIGTERM) and time.monotonic() - python < 0.15:
+            time.sleep(0.001)
+        time.sleep(delay)
+        proc.send_signal(sig)
+        out, err = proc.communicate(timeout=120)
+        if proc.returncode == 0:  # done before the signal (a quick machine, the longest delay)
+            continue
+        assert (proc.returncode, err) == (128 + sig, f"warning: interrupted by {signal.Signals(sig).name}\n"), \
+            (delay, proc.returncode, err[-800:])

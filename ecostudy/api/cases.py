@@ -21,6 +21,7 @@ from ecostudy.api.outcome import Report, counts_line, listed, not_reused, report
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status, status_word
 from ecostudy.core.units import number, signed
+from ecostudy.io.store import whole_command
 from ecostudy.report import calplots, heavyplots, loopplots
 from ecostudy.report.console import counted
 from ecostudy.report.files import figures as figure_files
@@ -62,6 +63,7 @@ VALIDATION_COLUMNS = {"run": None, "from_m": ".0f", "to_m": ".0f", "logged_time_
 
 
 @spelled
+@whole_command()
 def run_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
                out: Optional[Path] = None, kind: str = "run", plot: bool = True, fig_format: str = "png",
                dpi: Optional[float] = None, *, progress: Progress = None) -> Report:
@@ -96,6 +98,7 @@ def own_files(kind: str, workers: int, plot: bool = True, figures: Output = Outp
 
 
 @spelled
+@whole_command()
 def simulate_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
                     out: Optional[Path] = None, plot: bool = True, only: Optional[Sequence[str]] = None,
                     fig_format: str = "png", dpi: Optional[float] = None, *, progress: Progress = None) -> Report:
@@ -139,6 +142,7 @@ def heavyhaul_drawing(plot: bool, figures: Output):
 
 
 @spelled
+@whole_command()
 def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[str] = None, retry_failed: bool = False,
                      out: Optional[Path] = None, plot: bool = True, blas_threads: int = 1, fig_format: str = "png",
                      dpi: Optional[float] = None, *, progress: Progress = None) -> Report:
@@ -159,6 +163,7 @@ def heavyhaul_folder(study: Path, workers: Optional[int] = None, dask: Optional[
 
 
 @spelled
+@whole_command()
 def network_folder(study: Path, out: Optional[Path] = None, plot: bool = True, workers: Optional[int] = None,
                    fig_format: str = "png", dpi: Optional[float] = None,
                    dask: Optional[str] = None, retry_failed: bool = False, note: Callable[[str], None] = log.info, *,

@@ -15,7 +15,7 @@ from ecostudy.core.errors import EcostudyWarning, FieldError, InfeasibleError, I
 from ecostudy.io.documents import aliased
 from ecostudy.io.loaders import check_fits, check_stop_list, load_track, load_train, read_timetable, timing_from_timetable
 from ecostudy.io.timetable import journey_plan, name_stops
-from ecostudy.io.store import check_one_study
+from ecostudy.io.store import check_one_study, whole_command
 from ecostudy.io.writers import check_output_dir, default_output
 from ecostudy.report.files import JOURNEY_FIGURE, write_journey
 from ecostudy.report.html import write_html
@@ -44,6 +44,7 @@ def beside(st, suffix: str, default: str) -> Path:
 
 
 @spelled
+@whole_command()
 def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
                   from_stop: Optional[str] = None, to_stop: Optional[str] = None, count: int = 20,
                   supplement_max: float = 40.0, points: Optional[int] = None, workers: Optional[int] = None,
@@ -81,7 +82,7 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
     write_html(out_dir)
     table, meta = ran.table, ran.table.attrs
     study_col = ["is_study_time"] if table["is_study_time"].any() else []
-    lines = [shown(table, FRONT_COLUMNS + study_col + (DAS_COLUMNS if das is not None else []) + ["status"])]
+    lines = [shown(table, FRONT_COLUMNS + study_col + (DAS_COLUMNS if das is not None else []) + ["status"], blank=True)]
     if das is not None:
         d = meta["das"]
         gaps = "no gap read off a run not ok"
@@ -92,7 +93,9 @@ def pareto_folder(study: Optional[Path] = None, track: Optional[Path] = None, tr
                      f"monotone: {d['monotone']}")
     five, ten = (f"saves {units.number(v, '.1f')} %" if v is not None else "not on the front"
                  for v in (meta[f"saving_at_{p}_pct_supplement_pct"] for p in (5, 10)))
-    trusted = "" if meta["all_verified"] and meta["all_optimal"] else ": points not ok among them, read their status"
+    used = table[table["supplement_pct"].round(4).isin([0.0, 5.0, 10.0]) & ~table["is_study_time"]]  # these savings' points
+    trusted = "" if used["verified"].eq(True).all() and (used["solver_status"] == "optimal").all() else \
+        ": points not ok among them, read their status"
     lines.append(f"all-out {meta['all_out_time_s']:.2f} s; +5 % {five}, +10 % {ten} (of the all-out traction energy"
                  f"{trusted})")
     if "study_running_time_s" in meta:
@@ -112,6 +115,7 @@ def study_time_line(meta: dict) -> str:
 
 
 @spelled
+@whole_command()
 def compare_folder(study: Optional[Path] = None, track: Optional[Path] = None, train: Optional[Path] = None,
                    from_stop: Optional[str] = None, to_stop: Optional[str] = None, time: Optional[float] = None,
                    supplement: Optional[float] = None, points: Optional[int] = None, out: Optional[Path] = None,
@@ -199,8 +203,9 @@ def journey_folder(train: Path, track: Optional[Path] = None, stops: Optional[st
     if scheduled is None and plan is None and (time is None) == (supplement is None):
         raise InputError(problem("command line", "--time/--supplement",
                                  "give one total running time or supplement, or --timetable"))
-    check_journey(timetable or "command line", len(names) - 1, points, workers,  # too big: refused (unless --force)
-                  splits=4 + (scheduled is not None) + (plan is not None), whole=1 + (plan is not None))
+    check_journey(timetable or "command line", [grid_nodes(trk, trn, a, b, points) for a, b in zip(names, names[1:])],
+                  workers, splits=4 + (scheduled is not None) + (plan is not None), whole=1 + (plan is not None),
+                  tables=table_points(trn))  # too big: refused (unless --force)
     out_dir = check_output_dir(output_folder(out, default_output("journey")),
                                ("journey.csv", "journey_totals.csv", *figures.filenames([JOURNEY_FIGURE], plot)),
                                "journey")

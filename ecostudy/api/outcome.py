@@ -97,12 +97,13 @@ def reported(folder: Path | str, lines: Iterable[str]) -> Report:
 
 
 def shown(frame: pd.DataFrame, columns: Sequence[str] | Mapping[str, str | None] | None = None,
-          places: str = ".3f", reasons: bool = False) -> str:
+          places: str = ".3f", reasons: bool = False, blank: bool = False) -> str:
     """``frame``'s ``columns`` (those it has; all without ``columns``) as a plain text table, each
     number by ``places`` or, ``columns`` given as {name: format}, by its column's format (None:
     ``places``); :func:`~ecostudy.core.units.number`: no '-0.000'. A ``status`` column shows its
     kind alone (``failed``, not ``failed: <reason>``: one long reason would widen every row), the
-    reasons being printed under the table (:meth:`Report.problems`), unless ``reasons``."""
+    reasons being printed under the table (:meth:`Report.problems`), unless ``reasons``; ``blank``:
+    a missing value (a failed point's) an empty cell, as report.html shows it, not 'NaN'."""
     specs = {c: s for c, s in columns.items() if s} if isinstance(columns, Mapping) else {}
     if columns is not None:
         frame = frame[[c for c in columns if c in frame]]
@@ -110,7 +111,7 @@ def shown(frame: pd.DataFrame, columns: Sequence[str] | Mapping[str, str | None]
                             and frame[c].map(lambda v: is_missing(v) or is_number(v)).all()})  # None printed as NaN, as its column's others
     if not reasons and "status" in frame:
         frame = frame.assign(status=frame["status"].map(lambda s: status_word(s) if isinstance(s, str) else s))
-    return frame.to_string(index=False, float_format=lambda x: number(x, places),
+    return frame.to_string(index=False, float_format=lambda x: number(x, places), na_rep="" if blank else "NaN",
                            formatters={c: partial(number, spec=s) for c, s in specs.items() if c in frame})
 
 

@@ -40,7 +40,6 @@ def _main(ctx: typer.Context,
           ) -> None:
     """Energy-efficient train control studies (Pyomo + Ipopt)."""
     from ecostudy.ocp.solver import configure
-
     quiet[0] = quiet_
     ctx.call_on_close(logging_to(quiet_, verbose, log_file))
     log.debug("ecostudy %s", " ".join(sys.argv[1:]))
@@ -53,7 +52,7 @@ def call(debug, name, *args, force=False, bar=None):
     nothing). Errors: one line and an exit code; warnings: log lines; SIGINT, SIGTERM or SIGHUP: exit status 130, 143 or 129."""
     from ecostudy import api
 
-    with warnings.catch_warnings(record=True) as caught, forced(force), stopped_by_signals(), api.command_line():
+    with warnings.catch_warnings(record=True) as caught, forced(force), api.command_line(), stopped_by_signals():
         warnings.simplefilter("always")
         try:
             if bar is None:

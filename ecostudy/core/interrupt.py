@@ -14,7 +14,9 @@ after it began was lost (Python ignores an exception raised in a fork's callback
 the next signal raises again.
 """
 import logging
+import os
 import signal
+import sys
 import threading
 import time
 from contextlib import contextmanager
@@ -50,6 +52,29 @@ def _raise(signum: int, frame: Optional[FrameType]) -> None:
         return
     STOPPING[:] = [time.monotonic()]
     raise KeyboardInterrupt
+
+
+def quiet_start() -> None:
+    """The ``ecostudy`` command's first step, as ``ecostudy.cli`` begins to load, in the command's
+    own process only (its console script, or ``python -m ecostudy``; a test or a notebook importing
+    it is left as it is): from then on, outside :func:`stopped_by_signals`, SIGINT, SIGTERM and
+    SIGHUP end the command with one line ('warning: interrupted by SIGINT') and exit status 128 +
+    the signal, not a traceback of the import they cut (nothing is written yet), nor Typer's silent
+    130 (``cli.app.call`` loads what it enters before the stop signals raise). With ``--debug``
+    SIGINT raises KeyboardInterrupt, its traceback printed. One inherited as ignored stays so."""
+    top = sys.modules.get("__main__")
+    command = getattr(getattr(top, "__spec__", None), "name", None) == "ecostudy.__main__" or \
+        os.path.basename(getattr(top, "__file__", None) or "") == "ecostudy"
+    for s in STOPS if command else ():
+        if not (s in KEPT_IGNORED and signal.getsignal(s) == signal.SIG_IGN) and not (s == signal.SIGINT and
+                                                                                       "--debug" in sys.argv):
+            signal.signal(s, _leave)
+
+
+def _leave(signum: int, frame: Optional[FrameType]) -> None:
+    RECEIVED.append(signum)
+    sys.stderr.write(f"warning: interrupted by {signal.Signals(signum).name}\n")
+    raise SystemExit(128 + signum)
 
 
 def _ours(handler: object) -> bool:

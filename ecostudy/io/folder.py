@@ -181,14 +181,15 @@ def files_listed(out_dir: Path | str) -> set[str]:
     return {f for f in files if isinstance(f, str)} if isinstance(files, list) else set()
 
 
-def mark_stopped(out_dir: Path | str, reason: str, counts: Mapping[str, int] | None = None) -> None:
-    """An earlier run's ``summary.json`` in ``out_dir`` rewritten (atomically) to say ``failed:
-    <reason>`` for a run of the study that stopped before it ended: it spoke for a finished study,
-    and its ``files`` stay listed (but the report), so the next run that ends still removes what it
-    does not write; its ``cases`` are ``counts`` (the cases of the study stopped, by the status of
-    those stored: the total counts those not computed, in no status), the earlier ones dropped
-    without. The earlier ``report.html`` (the same status) is removed. Nothing where there is no
-    readable one."""
+def mark_stopped(out_dir: Path | str, reason: str, counts: Mapping[str, int] | None = None, **fields: Any) -> None:
+    """An earlier run's ``summary.json`` in ``out_dir`` replaced (atomically) by the stopped run's
+    own, ``failed: <reason>``, for a run of the study that stopped before it ended: the earlier one
+    spoke for a finished study. Of the earlier one only its ``kind`` and ``files`` (but the report)
+    stay, so the next run that ends still removes what it does not write; ``cases`` are ``counts``
+    (the cases of the study stopped, by the status of those stored: the total counts those not
+    computed, in no status), no table is listed, and ``fields`` are the stopped run's own (its
+    ``study``, ``computed_now``, ``stored_before``). The earlier ``report.html`` (the same status)
+    is removed. Nothing where there is no readable one."""
     path = Path(out_dir) / SUMMARY
     try:
         data = json.loads(path.read_text())
@@ -197,7 +198,9 @@ def mark_stopped(out_dir: Path | str, reason: str, counts: Mapping[str, int] | N
     if not isinstance(data, dict):
         return
     files = [f for f in data.get("files") or [] if f != REPORT] if isinstance(data.get("files"), list) else data.get("files")
-    write_json(path, {**data, "status": f"failed: {reason}", "cases": dict(counts or {}), "not_ok": [], "files": files})
+    write_json(path, {"kind": data.get("kind"), "ecostudy_version": __version__, "summary_layout": LAYOUT,
+                      "status": f"failed: {reason}", "cases": dict(counts or {}), "not_ok": [], "tables": {},
+                      "files": files, **fields})
     (Path(out_dir) / REPORT).unlink(missing_ok=True)
 
 

@@ -10,10 +10,10 @@ import os
 import sqlite3
 import time
 import warnings
-from contextlib import closing
+from contextlib import closing, contextmanager
 from os import PathLike
 from pathlib import Path
-from typing import IO, Any, Iterable, Mapping
+from typing import IO, Any, Iterable, Iterator, Mapping
 
 from ecostudy.core.errors import EcostudyWarning, InputError, problem
 from ecostudy.core.status import Status
@@ -31,6 +31,24 @@ CREATE TABLE IF NOT EXISTS cases (
 
 COLUMNS = ["key", "study", "scenario", "labels", "status", "error", "summary", "seconds", "finished"]
 HELD: list[IO[str]] = []  # the lock files this process holds (a forked worker closes its copies: release_inherited)
+KEPT: list[dict[str, IO[str]]] = []  # within whole_command: the stores' locks kept to its end, by lock file
+
+
+@contextmanager
+def whole_command() -> Iterator[None]:
+    """Within this block (a command, from its first file to its report.html; as a decorator, a call)
+    a store once opened stays locked when it is closed, until the block ends: a second command on
+    the same folder is refused (one line, exit status 2) while this one writes its tables and
+    figures, instead of starting and removing this one's temporary files as its store opens."""
+    if KEPT:  # nested: the outermost block lets go
+        yield
+        return
+    KEPT.append({})
+    try:
+        yield
+    finally:
+        for path, lock in KEPT.pop().items():
+            _release(Path(path), lock)
 
 
 def release_inherited() -> None:
@@ -49,8 +67,15 @@ class Store:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.lock_path = self.path.with_name(self.path.name + ".lock")
-        self.lock = _locked(self.lock_path, self.path)
-        remove_temporary(self.path.parent)  # what a run killed in this folder left: this one alone writes it now
+        kept = KEPT[-1] if KEPT else {}
+        key = os.path.abspath(self.lock_path)
+        if key in kept:  # opened before in this command, still locked: its temporary files may be in flight
+            self.lock = kept[key]
+        else:
+            self.lock = _locked(self.lock_path, self.path)
+            remove_temporary(self.path.parent)  # what a run killed in this folder left: this one alone writes it now
+            if KEPT:
+                kept[key] = self.lock
         try:
             self.conn = sqlite3.connect(self.path)
             self.conn.execute("PRAGMA journal_mode=WAL")
@@ -104,19 +129,26 @@ class Store:
 
     def close(self) -> None:
         """Close the database and remove the lock file (while still holding it: a run that opened the
-        old file before the removal sees it gone and takes the new one, :func:`_locked`)."""
+        old file before the removal sees it gone and takes the new one, :func:`_locked`); within
+        :func:`whole_command`, the lock at the block's end."""
         self.conn.close()
         self._unlock()
 
     def _unlock(self) -> None:
-        try:
-            if os.stat(self.lock_path).st_ino == os.fstat(self.lock.fileno()).st_ino:
-                self.lock_path.unlink()
-        except FileNotFoundError:
-            pass
-        if self.lock in HELD:
-            HELD.remove(self.lock)
-        self.lock.close()
+        if not any(self.lock is lock for kept in KEPT for lock in kept.values()):  # else: at the command's end
+            _release(self.lock_path, self.lock)
+
+
+def _release(lock_path: Path, lock: IO[str]) -> None:
+    """Remove the lock file while still holding it, then let go of it."""
+    try:
+        if os.stat(lock_path).st_ino == os.fstat(lock.fileno()).st_ino:
+            lock_path.unlink()
+    except FileNotFoundError:
+        pass
+    if lock in HELD:
+        HELD.remove(lock)
+    lock.close()
 
 
 def _locked(lock_path: Path, store_path: Path, attempts: int = 5) -> IO[str]:

@@ -100,8 +100,7 @@ def _solve_case(case):
 
 
 def _serial(todo, task, arrived):
-    for case in todo:
-        yield case, task(case)
+    yield from ((case, task(case)) for case in todo)
 
 
 def _processes(todo, workers, task, arrived):
@@ -340,19 +339,20 @@ def run_expanded(kind, expanded, where, workers=1, dask=None, retry_failed=False
                                                        *(draw.names(expanded.cases) if draw is not None else ())), kind)
     if expanded.cases:  # a folder holds one study's results: its tables and summary.json are the study's own
         check_one_study(output, expanded.cases[0]["study"])
+    Store(output / "results.sqlite").close()  # the folder taken before a file is written (to the end: store.whole_command)
     for name, frame in expanded.inputs.items():
         write_csv(output / name, frame)
-    def stopped(when):  # an earlier run's summary.json (ok, N cases) would speak for a study not finished
-        mark_stopped(output, f"stopped {when}; run the command again to finish",
-                     stored_counts(output / "results.sqlite", [c["key"] for c in expanded.cases]))
+    def stopped(when, counts):  # an earlier run's summary.json (ok, N cases) would speak for a study not finished
+        mark_stopped(output, f"stopped {when}; run the command again to finish", stored_counts(output / "results.sqlite", [
+            c["key"] for c in expanded.cases]), study=str(where), computed_now=counts["computed"], stored_before=counts["stored_before"])
     try:
         counts, rows = stored_rows(expanded.cases, output / "results.sqlite", spec.task, workers, dask, retry_failed,
                                    progress, compute, spec.spread)
-    except Interrupted:
-        stopped("before every case was computed")
+    except Interrupted as exc:
+        stopped("before every case was computed", exc.counts)
         raise
     table = spec.table(expanded.cases, rows)
-    stopped("while its files were written")  # until this run's summary.json is: the tables are half rewritten
+    stopped("while its files were written", counts)  # until this run's summary.json is: the tables are half rewritten
     write_csv(output / spec.table_file, table)
     drawn, tables = draw.write(output, expanded.cases, rows, table) if draw is not None else ([], {})
     results = [compute is None or k in rows for k in (c["key"] for c in expanded.cases)]  # left out: not results

@@ -33,6 +33,7 @@ from ecostudy.ocp.problem import check_not_crawling, prepare, under_envelope
 from ecostudy.studies.batch import STUDY_KINDS, Expanded, StudyKind, outcome
 from ecostudy.studies.cases import case_key, load_checked_study
 from ecostudy.studies.options import no_windows
+from ecostudy.studies.estimate import case_size
 from ecostudy.studies.sizes import check_compare
 from ecostudy.studies.workers import kept
 
@@ -279,7 +280,7 @@ def compare_table(cases, rows):
 
 def compare_size(where, cases, workers=1):
     """Refuse a comparison estimated above the command's budget (unless forced)."""
-    check_compare(where, cases[0]["points"])
+    check_compare(where, *case_size(cases[0], {}))  # its grid's nodes and the train's table points, as solve's
 
 
 STUDY_KINDS.register("compare", StudyKind(expand_compare, run_strategy, compare_table, compare_size,

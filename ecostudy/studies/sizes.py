@@ -46,8 +46,9 @@ from ecostudy.io.loopfile import SimulateFile
 from ecostudy.studies import closedloop
 from ecostudy.studies.batch import STUDY_KINDS
 from ecostudy.studies.journey import FRONT_COUNT
-from ecostudy.studies.estimate import (RSPC_MEASURED_MODES, RUN_BYTES_PER_POINT, check_closed_loop, check_network,
-                                       first_runs, horizon_samples, run_bytes, run_seconds, spec_seconds)
+from ecostudy.studies.estimate import (RSPC_MEASURED_MODES, case_size, check_closed_loop,
+                                       check_network, first_runs, horizon_samples, run_bytes, run_seconds, spec_seconds,
+                                       table_points)
 
 NETWORK_SECONDS_PER_STEP = 0.02
 # [bytes] a network command's process per grid point of its first runs: it keeps every segment's run
@@ -84,7 +85,8 @@ def check_closed_loop_study(path, workers=1, only=None, out=None):
     s = validate(SimulateFile, read_document(path), path)
     chosen = [c for c in s.controllers if not only or c.name in only]
     what = f"{len(chosen)} controllers x {s.draws} draws"
-    modes = train_modes(path, s.train) if any(c.kind == "rspc" for c in chosen) else RSPC_MEASURED_MODES
+    train = study_train(path, s.train)
+    modes = len(rspc_modes(train)) if any(c.kind == "rspc" for c in chosen) else RSPC_MEASURED_MODES
     per_run = []
     for c in chosen:
         sample_time = c.sample_time_s or s.sample_time_s
@@ -93,19 +95,20 @@ def check_closed_loop_study(path, workers=1, only=None, out=None):
         check_run(path, "controllers", f"{c.name}: {how_many(samples)} samples of {c.sample_time_s or s.sample_time_s:g} s "
                   f"at K = {s.points}", seconds)
         per_run += [seconds] * s.draws
-    check_study(path, what, per_run, workers, s.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")
+    check_study(path, what, per_run, workers, run_bytes(s.points, table_points(train)), part_hint="--only CONTROLLER")
     study, _, cases = closedloop.expand(path, out)
     runs = check_closed_loop(cases, path)
+    sizes: dict = {}  # a run's memory as solve's: its grid's nodes and the train's table points (case_size)
     check_study(path, what, [r for r, c in zip(runs, cases) if not only or c["labels"]["controller"] in only],
-                workers, study.points * RUN_BYTES_PER_POINT, part_hint="--only CONTROLLER")
+                workers, max((run_bytes(*case_size(c, sizes)) for c in cases), default=0), part_hint="--only CONTROLLER")
 
 
-def train_modes(path, train):
-    """The modes RSPC would switch among with the study ``path``'s train (its file ``train``, read
-    quietly: the study's expansion shows its warnings)."""
+def study_train(path, train):
+    """The study ``path``'s train (its file ``train``, read quietly: the study's expansion shows its
+    warnings)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", EcostudyWarning)
-        return len(rspc_modes(read_train(named_file(path, "train", train))[1]))
+        return read_train(named_file(path, "train", train))[1]
 
 
 def network_runs(study, path):
@@ -192,17 +195,20 @@ def check_heavyhaul_study(path, study, reference, cases, workers=1):
     check_study(path, "the study's runs", heavyhaul_runs(study, reference, cases, path), workers, largest)
 
 
-def check_compare(where, points):
-    """Refuse a comparison at K = ``points`` estimated above the command's budget (unless forced)."""
-    runs = [run_seconds(points), run_seconds(points, "phases"), run_seconds(points)]  # all-out, ATO + DAS, heuristics
-    check_study(where, f"a comparison at K = {points}", [], 1, points * RUN_BYTES_PER_POINT, serial=runs)
+def check_compare(where, points, tables=0):
+    """Refuse a comparison of runs of ``points`` grid nodes (``tables``: the train's table points,
+    :func:`~ecostudy.studies.estimate.table_points`) estimated above the command's budget (unless forced)."""
+    runs = [run_seconds(points, None, table_points=tables), run_seconds(points, "phases", table_points=tables),
+            run_seconds(points, None, table_points=tables)]  # all-out, ATO + DAS, heuristics
+    check_study(where, f"a comparison at K = {points}", [], 1, run_bytes(points, tables), serial=runs)
 
 
-def check_journey(where, segments, points, workers=1, splits=4, whole=1):
-    """Refuse a journey of ``segments`` at K = ``points`` estimated above the command's budget (unless
-    forced): the fronts shared among ``workers``, then ``whole`` NLPs of every segment at once and
-    ``splits`` distributions of a run a segment."""
-    fronts = [run_seconds(points)] * (segments * FRONT_COUNT)
-    serial = [run_seconds(points * segments)] * whole + [run_seconds(points)] * (segments * splits)
-    check_study(where, f"a journey of {segments} segments at K = {points}", fronts, workers,
-                points * segments * RUN_BYTES_PER_POINT, serial=serial)
+def check_journey(where, nodes, workers=1, splits=4, whole=1, tables=0):
+    """Refuse a journey whose segments' runs have ``nodes`` grid nodes (one count a segment;
+    ``tables``: the train's table points) estimated above the command's budget (unless forced): the
+    fronts shared among ``workers``, then ``whole`` NLPs of every segment at once and ``splits``
+    distributions of a run a segment."""
+    fronts = [run_seconds(k, table_points=tables) for k in nodes for _ in range(FRONT_COUNT)]
+    serial = [run_seconds(sum(nodes), table_points=tables)] * whole + [run_seconds(k, table_points=tables) for k in nodes] * splits
+    check_study(where, f"a journey of {len(nodes)} segments at K = {max(nodes, default=0)}", fronts, workers,
+                run_bytes(sum(nodes), tables), serial=serial)

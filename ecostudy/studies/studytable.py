@@ -39,4 +39,19 @@ def study_table(cases, rows):
                     "stop_error_m": ver.get("stop_error_m"), "wall_s": (row or {}).get("seconds")})
         if any(c.get("das") for c in cases):
             out[-1].update(s.get("das") or {})
-    return pd.DataFrame(out)
+    table = pd.DataFrame(out)
+    table.attrs.update(study_inputs(cases))
+    return table
+
+
+def study_inputs(cases):
+    """What a run study was asked (``summary.json``, report.html's Inputs beside the study file):
+    its track, train, stops and K, each its cases' one value, or their values in study order,
+    joined (a library's tracks and trains, a sweep of K)."""
+    def one(values):
+        distinct = list(dict.fromkeys(values))
+        return distinct[0] if len(distinct) == 1 else ", ".join(map(str, distinct))
+    return {"track": one(c["track"].get("name", "track") for c in cases),
+            "train": one(c["train"].get("name", "train") for c in cases),
+            "from": one(c["from"] for c in cases), "to": one(c["to"] for c in cases),
+            "points": one(c["points"] for c in cases)} if cases else {}
