@@ -168,7 +168,9 @@ def test_bad_sweeps_are_refused_in_one_line(tmp_path, changes, words):
 
 
 @pytest.mark.parametrize("rows, words", [
-    ([(0, 0), (100, 30), (4000, 30), (4600, 0)], ["reference.table", "ends at 4600 m", "5000 m"]),
+    ([(0, 0), (100, 30), (4000, 30), (4600, 0)], ["ref.csv: distance_m, row 5: 4600", "400 m before the stop at 5000 m"]),
+    # short of the stop and not standing there: one line, the row's (its speed is not a second problem)
+    ([(0, 0), (100, 30), (4000, 30), (4600, 20)], ["ref.csv: distance_m, row 5: 4600", "400 m before the stop at 5000 m"]),
     ([(0, 0), (100, 300), (4900, 300), (5000, 0)], ["reference.table", "300 km/h", "cannot be followed"]),
     ([(0, 0), (100, "fast"), (5000, 0)], ["ref.csv", "speed_kmh, row 3", "'fast' is not a finite number"]),
     # the sample cap came with the train 176 km beyond a 5 km line's stop, its energies those of the fiction

@@ -105,13 +105,14 @@ def test_a_scenario_das_beside_objective_time_advises_its_all_out_run(tmp_path):
 
 def test_solves_refused_for_the_time_budget_are_counted_apart_from_slow_ones(tmp_path):
     """With time_budget_s 1e-6 every solve was refused, yet over_budget_count (solves slower than the
-    sample) read 0 and no column counted them."""
+    sample) read 0 and no column counted them. The reason names the budget they went over."""
     study = loop_study(tmp_path, sample_time_s=1.0,
                        controllers=[{"name": "c", "kind": "convex", "time_budget_s": 1e-6}])
     result = run("simulate", study, "--workers", 1, "--no-plot", "--out", tmp_path / "out")
     assert result.exit_code == 1, result.output
     row = pd.read_csv(tmp_path / "out" / "runs.csv").iloc[0]
     assert row["over_time_budget_count"] == row["failures_count"] > 0 and row["over_budget_count"] == 0, row
+    assert f"{row['failures_count']} solves went over time_budget_s in " in row["reason"], row["reason"]
     aggregate = pd.read_csv(tmp_path / "out" / "aggregate.csv").iloc[0]
     assert aggregate["over_time_budget_count_sum"] == row["over_time_budget_count"], aggregate
 

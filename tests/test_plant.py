@@ -1,17 +1,22 @@
 """The stepping plant (core/plant.py): step by step it reproduces the verification trace; a train
 that is not the model stops where a hand calculation says; noise is seeded and recorded; a step's
 adhesion use is taken at every edge it crosses."""
+import json
 from dataclasses import replace
 
 import numpy as np
 import pytest
+from typer.testing import CliRunner
 
+from ecostudy.cli import app
 from ecostudy.control.loop import run_loop
 from ecostudy.core.adhesion import Adhesion
 from ecostudy.core.grid import Profile, Segment
 from ecostudy.core.physics import Envelope
 from ecostudy.core.plant import Cruise, Noise, Plant, Truth, adhesion_use
 from ecostudy.core.types import State, Train
+
+from .conftest import TRAINS, write_yaml
 
 
 def drive(plant, control_at, dt, limit=300.0):
@@ -175,3 +180,24 @@ def test_a_loop_without_a_clock_is_refused(sample_time, plant_step, named):
         run_loop(hump_plant(), FullTraction(), sample_time, plant_step=plant_step)
     short = run_loop(hump_plant(traction=300e3, max_acceleration=0.5), FullTraction(), 0.5, plant_step=2.0, until=1.0)
     assert [round(s.time, 9) for s in short.states[:3]] == [0.0, 0.5, 1.0]
+
+
+def test_a_train_braked_into_a_slow_limit_on_a_descent_is_replayed_past_its_first_interval(tmp_path):
+    """The commuter's all-out run (K = 200) down 30 per mille brakes in full from 80 to 10 km/h into
+    a 10 km/h limit at 1000 m, then holds 10 km/h on part of its brakes. The replay's integrator
+    took one step from before 1000 m to beyond the train's stop under full braking, by when the
+    brakes had driven it back behind 1000 m: both ends of the step before the interval's end, its
+    crossing was missed, and the replay braked in full to a stand at 1005 m, 495 m short of its
+    stop (verification -494.6 m, -178.9 s). A train its brakes hold stands; the replay reaches the
+    stop (-0.01 m, +0.11 s)."""
+    track = write_yaml(tmp_path / "descent.yaml", {
+        "name": "descent", "source": "test", "length_m": 1500,
+        "stops": [{"name": "A", "position_m": 0}, {"name": "B", "position_m": 1500}],
+        "gradients": [{"position_m": 0, "gradient_permille": -30}],
+        "speed_limits": [{"position_m": 0, "speed_kmh": 80}, {"position_m": 1000, "speed_kmh": 10}]})
+    out = tmp_path / "out"
+    result = CliRunner().invoke(app, ["solve", "--track", str(track), "--train", str(TRAINS / "yazhemsky2017_commuter.yaml"),
+                                      "--objective", "time", "-K", "200", "--no-plot", "--no-progress", "--out", str(out)])
+    check = json.loads((out / "summary.json").read_text())["verification"]
+    assert abs(check["stop_error_m"]) < 1.0 and abs(check["arrival_time_error_s"]) < 0.5, check
+    assert result.exit_code == 0, result.output

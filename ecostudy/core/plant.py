@@ -232,7 +232,11 @@ class Plant:
     def derivatives(self, v: float, ft: float, fb: float, resist: float, disturbance: float = 0.0) -> list[float]:
         """d/dt of (position, speed, traction work, braking work, regenerated work, net line
         energy); the last by :func:`physics.line_energy` per unit distance, times v."""
-        if v <= 0.0 and ft - resist + self.mass * disturbance <= 0.0:  # standing stays standing
+        # standing stays standing: nothing pulls it, or its brakes (friction) hold what does. Friction
+        # never drives a train backwards: a held train that ran on under its brakes past v = 0 (an
+        # integrator's step beyond the stop) would roll back across a piece's end it had passed, and
+        # the step's event, which sees only the step's ends, would miss that crossing
+        if v <= 0.0 and ft - resist + self.mass * disturbance <= fb:
             return [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
         train = self.train
         fr = self.electric(fb, v) if fb > 0 else 0.0

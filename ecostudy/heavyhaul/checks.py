@@ -27,21 +27,20 @@ def starting_coupler_force(consist, grade):
     return float(np.max(np.abs(forces))), needed
 
 
-def reference_problems(reference, segment, tolerance):
+def reference_problems(reference, segment, tolerance, end_speed=True):
     """What makes a reference (:class:`~ecostudy.heavyhaul.reference.Reference`) unfollowable on
-    ``segment``: it ends before (or beyond) the stop by more than a metre, does not start from rest
-    or stop at the stop (faster than :data:`~ecostudy.heavyhaul.loop.STANDING`, the speed under which
-    a train stands, whatever the overspeed tolerance), stands on the way, or asks for more than the
-    train's limit at the head by more than ``tolerance`` [m/s]. A list of messages (empty: fine)."""
+    ``segment``: it does not start from rest or stop at its end (faster than
+    :data:`~ecostudy.heavyhaul.loop.STANDING`, the speed under which a train stands, whatever the
+    overspeed tolerance; the end left out with ``end_speed=False``, where the end is not at the stop:
+    :func:`end_off`), stands on the way, or asks for more than the train's limit at the head by more
+    than ``tolerance`` [m/s]. A list of messages (empty: fine)."""
     out = []
     end = float(reference.distance[-1])
-    if abs(end - segment.distance) > 1.0:
-        out.append(f"ends at {end:.0f} m but the stop is at {segment.distance:.0f} m (the table must cover the route)")
     v = np.asarray(reference.speeds, float)
     if v[0] >= STANDING:
         out.append(f"starts at {3.6 * v[0]:.3g} km/h: the train starts from rest (0 at {reference.distance[0]:.0f} m; "
                    f"standing is under {3.6 * STANDING:g} km/h)")
-    if v[-1] >= STANDING:
+    if end_speed and v[-1] >= STANDING:
         out.append(f"ends at {3.6 * v[-1]:.3g} km/h at {end:.0f} m: a run to a stop ends at 0 there (standing is under "
                    f"{3.6 * STANDING:g} km/h; the train would run past the stop)")
     standing = np.flatnonzero(v[1:-1] <= 0.0)
@@ -59,6 +58,20 @@ def reference_problems(reference, segment, tolerance):
         out.append(f"{3.6 * speeds[worst]:.0f} km/h at {at[worst]:.0f} m is above the "
                    f"train's limit there ({3.6 * segment.limit(at[worst]):.0f} km/h): it cannot be followed")
     return out
+
+
+def end_off(reference, segment, reach):
+    """Why a reference (:class:`~ecostudy.heavyhaul.reference.Reference`) does not end at the stop of
+    ``segment``, or None: its end is farther than ``reach`` [m] from it (a study's stop tolerance). The
+    train follows a reference to its end and stands within about 0.1 m of it, so such a reference
+    leaves every run off its stop, flagged."""
+    end = float(reference.distance[-1])
+    off = end - segment.distance
+    if abs(off) <= reach:
+        return None
+    return (f"{end:g}: the table ends {abs(off):.3g} m {'before' if off < 0 else 'beyond'} the stop at "
+            f"{segment.distance:g} m, farther than stop_tolerance_m ({reach:g} m): a train following it stops "
+            "there, off its stop (the table must end at the stop)")
 
 
 def braking_asked(reference, utmost, service):

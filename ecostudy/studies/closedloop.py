@@ -35,7 +35,7 @@ from ecostudy.io.writers import check_output_dir, default_output, write_csv
 from ecostudy.studies.batch import Draw, Expanded, StudyKind, outcome, run_expanded
 from ecostudy.studies.cases import case_key
 from ecostudy.studies.controllers import CONTROLLER_KINDS, Build
-from ecostudy.studies.loopsteps import step_columns, step_counts, steps_frame
+from ecostudy.studies.loopsteps import failures_reason, step_columns, step_counts, steps_frame
 
 PARAMETERS = ("mass", "resistance", "traction", "braking")
 
@@ -207,9 +207,8 @@ def _trip(case):
     status = driven_run(summary["stop_error_m"], _number(summary["late_s"]), summary["overspeed_max_kmh"],
                         summary.get("adhesion_use_max"), early_s=_number(summary["early_s"]))
     if summary["failures_count"]:  # solves that did not converge: the fallback drove those samples, not the controller
-        status = worst([status, flagged(f"{summary['failures_count']} solve{'s' * (summary['failures_count'] != 1)} in "
-                                        f"{summary['samples']} sample{'s' * (summary['samples'] != 1)} gave no "
-                                        "usable plan in time (the fallback drove them)")])
+        status = worst([status, flagged(failures_reason(summary["failures_count"], summary["over_time_budget_count"],
+                                                        summary["samples"]))])
     status = worst([status, unproven_solves(summary["unproven_solves_count"], summary["samples"],
                                             summary["unproven_solver_status"])])
     if getattr(planner, "plan_ended", None) is not None:  # the convex plan it replays

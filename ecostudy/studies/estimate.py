@@ -13,7 +13,8 @@ The constants are measured on this project's shared 2-core machine (so they are 
   52 ms (condensed, K = 100; 17-21 ms since each process runs one OpenBLAS thread, draws 0-2 with
   ``python bench/bench_monte_carlo.py``, docs/closed_loop.md); SPPC nominal 59 ms (K = 200), two-step 147 ms (K = 100); RSPC 5.7 ms
   at its default horizon N = 3 with the six default DAS modes, scaled by the sequences it enumerates,
-  modes^N (:func:`rspc_scale`; ``python bench/bench_rspc.py --step-costs``);
+  modes^N, each step beyond 3 pruned to 0.8 of its branches (:func:`rspc_scale`; ``python
+  bench/bench_rspc.py --step-costs``);
   convex 8.4 ms at K = 100; a replay (open loop, ATO) 0.8-1.1 ms: :data:`SAMPLE_SECONDS`, to two
   digits. SBPC and SPPC plan over the samples left, so their grid matters less than their variant.
   SBPC's plan has a state on every sample to the arrival (k_f of them): at T_s = 0.38, 0.19 and
@@ -84,6 +85,7 @@ SBPC_MEASURED_HORIZON = 200
 SBPC_GROWTH = {"simultaneous": 0.5, "condensed": 1.5}
 RSPC_MEASURED_HORIZON = 3  # RSPC's constant is at its default N = 3 with the six default DAS modes
 RSPC_MEASURED_MODES = 6
+RSPC_KEPT = 0.8  # of a step's m branches, the share its pruning leaves to enumerate on (:func:`rspc_scale`)
 CONVEX_SECONDS = 0.008         # [s] a convex sample's part that does not grow with K (the loop, the estimator)
 CONVEX_SECONDS_AT_200 = 0.0045  # [s] its SOCP's part at K = 200, growing as K^CONVEX_GROWTH
 CONVEX_GROWTH = 1.7
@@ -156,11 +158,15 @@ def sbpc_scale(horizon, transcription="simultaneous"):
 def rspc_scale(horizon, modes=RSPC_MEASURED_MODES):
     """How much dearer an RSPC sample is with a horizon of N = ``horizon`` steps over ``modes`` modes
     (``ocp.phases.rspc_modes``) than at the N = 3 and six modes its constant was measured with: the
-    ratio of the sequences it enumerates (``ocp.phases.sequences``: modes^N, before the pruning,
-    which kept a whole run's sample at 4.1, 19 and 114 times N = 3's for N = 4, 5 and 6 against 6, 36
-    and 216, docs/guards.md), never below 1 (a sample's loop, plant and braking do not shrink with N:
-    0.20 and 0.43 times at N = 1 and 2)."""
-    return max(1.0, sequences(modes, horizon) / sequences(RSPC_MEASURED_MODES, RSPC_MEASURED_HORIZON))
+    ratio of the sequences it enumerates (``ocp.phases.sequences``: modes^N), each step beyond N = 3
+    pruned to :data:`RSPC_KEPT` of its branches (a prefix that stops short or rises above a braking
+    curve drops every sequence that extends it): m^N / 6^3 x 0.8^(N - 3). Measured, a whole run's
+    sample grew from N = 3 to N = 4, 5 and 6 by 3.9-5.3, 19-28 and 94-114 times against this 4.8, 23
+    and 111 (the plain m^N / 6^3, 6, 36 and 216, was up to twice the CPU above N = 3; docs/guards.md).
+    Never below 1 (a sample's loop, plant and braking do not shrink with N: 0.20 and 0.43 times at N
+    = 1 and 2)."""
+    pruned = RSPC_KEPT ** max(horizon - RSPC_MEASURED_HORIZON, 0)
+    return max(1.0, pruned * sequences(modes, horizon) / sequences(RSPC_MEASURED_MODES, RSPC_MEASURED_HORIZON))
 
 
 def horizon_samples(latest, sample_time):

@@ -27,7 +27,7 @@ from ecostudy.core.grid import Segment, make_segment
 from ecostudy.core.units import KMH, KN, KWH
 from ecostudy.core.status import OK, cells, part, unproven_columns, unproven_solves
 from ecostudy.heavyhaul.airbrake import application_time, brake_lag
-from ecostudy.heavyhaul.checks import (braking_asked, reference_problems, ruling_grade, samples_to_start,
+from ecostudy.heavyhaul.checks import (braking_asked, end_off, reference_problems, ruling_grade, samples_to_start,
                                        starting_coupler_force, unmodelled_tunnels)
 from ecostudy.heavyhaul.condensed import ClarabelSolver, CondensedHorizon
 from ecostudy.heavyhaul.linear import fence, locomotive_groups
@@ -114,7 +114,10 @@ def expand(path, out=None):
                                  f"ruling grade ({1e3 * grade:.1f} per mille) of '{track.name}'"))
     reference, trusted = _reference(s, path, consist, track, from_stop, to_stop)
     field = "reference.table" if s.reference.table else "reference"
-    problems = [problem(path, field, p) for p in reference_problems(reference, segment, s.speed_tolerance_kmh * KMH)]
+    off = s.reference.table and end_off(reference, segment, s.stop_tolerance_m)  # the last row: one line, that row
+    problems = [problem(named_file(path, "reference.table", s.reference.table), f"distance_m, row {reference.distance.size + 1}",
+                        off)] if off else []
+    problems += [problem(path, field, p) for p in reference_problems(reference, segment, s.speed_tolerance_kmh * KMH, not off)]
     braking = s.reference.table and not problems and braking_asked(  # of a table followable otherwise
         reference, _utmost_braking(consist), s.reference.service_deceleration_mps2)
     hard = problem(named_file(path, "reference.table", s.reference.table), *braking[:2]) if braking else None

@@ -65,6 +65,19 @@ def step_counts(planner):
             "full_brake_before_final_count": sum(1 for k in kinds if k in ("full_brake", "reserve"))}
 
 
+def failures_reason(failures, over_time_budget, samples):
+    """Why a run whose controller gave no usable plan on ``failures`` of its ``samples`` (the fallback
+    drove them) is flagged: how many were solves refused for their ``time_budget_s``
+    (``over_time_budget``, :data:`TIME_BUDGET_ENDS`) and how many gave no plan at all (a solver's end
+    without one, RSPC with no admissible mode sequence), so a run with no time budget is not said to
+    have run out of time."""
+    def count(n, what):
+        return f"{n} solve{'s' * (n != 1)} {what}"
+    parts = ([count(failures - over_time_budget, "gave no usable plan")] if failures > over_time_budget else []) + (
+        [count(over_time_budget, "went over time_budget_s")] if over_time_budget else [])
+    return f"{' and '.join(parts)} in {samples} sample{'s' * (samples != 1)} (the fallback drove them)"
+
+
 def steps_frame(columns):
     """``steps.csv`` as a table from :func:`step_columns`."""
     return pd.DataFrame({c: columns.get(c, []) for c in COLUMNS})
