@@ -75,11 +75,11 @@ def test_mareco_profile_coasts_before_braking_and_downhill():
 
 
 def test_a_strategy_that_overspeeds_is_flagged(tmp_path):
-    """K = 20, 80 s: the nearest-level advice (the optimum's handle rounded) runs about 1.6 km/h
+    """K = 22, 80 s: the nearest-level advice (the optimum's handle rounded) runs about 1.6 km/h
     over the limit, 1.2 s early and within 1 m of the stop. Its row says so: flagged for the overspeed,
     the largest excess in its own column."""
     folder = api.compare_folder(track=TRACKS / "amsterdam_rokin_centraal.yaml", train=TRAINS / "amsterdam_metro.yaml",
-                                time=80.0, points=20, plot=False, workers=1, out=tmp_path / "cmp")
+                                time=80.0, points=22, plot=False, workers=1, out=tmp_path / "cmp")
     rows = folder.table.set_index("strategy")
     das = rows.loc["DAS round (nearest level)"]
     assert abs(das["stop_error_m"]) < 1.0 and das["arrival_error_s"] < 1.0
