@@ -54,3 +54,14 @@ def test_identifiability_does_not_depend_on_the_train_files_value(inputs):
     assert (tables[0]["identifiable"] == tables[1]["identifiable"]).all(), tables
     for column in ("estimate", "low", "high"):
         assert np.allclose(tables[0][column], tables[1][column], rtol=1e-5, equal_nan=True), (column, tables)
+
+
+def test_a_one_hertz_log_without_speeds_keeps_its_first_run(inputs):
+    """Speeds from the positions: a first-order difference read 0.53 m/s at the first row of a
+    train starting from rest at 1 Hz, above the rest speed, and the first run was dropped with a
+    warning. A second-order one reads 0 there: both runs are replayed, and no warning."""
+    track, train = inputs
+    frame, _ = generate_log(track, train, THERE, train, seed=3, noise=LogNoise(rate=1.0))
+    runs = prepare(as_log(frame.drop(columns=["speed_mps"]), "nospeed"), track, train)
+    assert len(runs) == 2, [(r.x[0], r.x[-1]) for r in runs]
+    assert abs(runs[0].x[0] - frame["position_m"].iloc[0]) < 1.0

@@ -134,8 +134,11 @@ def line_power(log):
 
 
 def speeds(log):
-    """Measured speed, or the positions differenced where the log has no speed [m/s]."""
-    return log.v if log.v is not None else np.abs(np.gradient(log.x, log.t))
+    """Measured speed, or the positions differenced where the log has no speed [m/s]: central
+    differences inside, second-order one-sided ones at the log's ends (exact for a constant
+    acceleration: a train starting from rest reads 0 at its first row, not the half of a step's
+    speed gain a first-order difference reads, 0.53 m/s at 1 Hz, above the rest speed)."""
+    return log.v if log.v is not None else np.abs(np.gradient(log.x, log.t, edge_order=2 if len(log.x) > 2 else 1))
 
 
 def _stretches(mask):
