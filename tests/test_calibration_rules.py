@@ -65,3 +65,15 @@ def test_a_one_hertz_log_without_speeds_keeps_its_first_run(inputs):
     runs = prepare(as_log(frame.drop(columns=["speed_mps"]), "nospeed"), track, train)
     assert len(runs) == 2, [(r.x[0], r.x[-1]) for r in runs]
     assert abs(runs[0].x[0] - frame["position_m"].iloc[0]) < 1.0
+
+
+def test_a_column_named_like_a_known_one_is_refused_naming_it(inputs):
+    """Speed_MPS was left out with a warning (not modelled) and the speeds then taken from the
+    positions; a near miss of a known column is refused, naming the file, the column and the name
+    meant. A column that is no near miss is still left out with a warning."""
+    frame, _ = generate_log(inputs[0], inputs[1], THERE, inputs[1], seed=3, noise=LogNoise(rate=1.0))
+    with pytest.raises(InputError, match=r"^case.csv: Speed_MPS: unknown column; did you mean speed_mps\?"):
+        as_log(frame.rename(columns={"speed_mps": "Speed_MPS"}), "case")
+    frame["power_aux_kW"] = 1.0
+    with pytest.warns(EcostudyWarning, match="power_aux_kW not modelled by ecostudy: left out"):
+        as_log(frame, "aux")
