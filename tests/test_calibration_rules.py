@@ -77,3 +77,16 @@ def test_a_column_named_like_a_known_one_is_refused_naming_it(inputs):
     frame["power_aux_kW"] = 1.0
     with pytest.warns(EcostudyWarning, match="power_aux_kW not modelled by ecostudy: left out"):
         as_log(frame, "aux")
+
+
+def test_a_run_ending_between_stations_is_flagged_naming_the_nearest_stop(inputs):
+    """A log that stands 20 s at 2500 m, between West (300 m) and Middle (5400 m), at a signal:
+    validate reported both runs ok. The run that ends there is flagged, naming where it ended and
+    the nearest stop; the run from there to Middle is not."""
+    track, train = inputs
+    signalled = replace(track, stops={"West": 300.0, "Signal": 2500.0, "Middle": 5400.0, "East": 10600.0})
+    frame, _ = generate_log(signalled, train, ["West", "Signal", "Middle"], train, seed=5)
+    table = validate_log(as_log(frame, "signal"), track, train)
+    assert list(table["status"]) == ["flagged", "ok"], table.to_string()
+    assert table["reason"].iloc[0].startswith("the run ends at 2500 m, 2200 m from the nearest stop (West at 300 m, "
+                                              "tolerance 100 m)"), table["reason"].iloc[0]
