@@ -90,3 +90,18 @@ def test_a_run_ending_between_stations_is_flagged_naming_the_nearest_stop(inputs
     assert list(table["status"]) == ["flagged", "ok"], table.to_string()
     assert table["reason"].iloc[0].startswith("the run ends at 2500 m, 2200 m from the nearest stop (West at 300 m, "
                                               "tolerance 100 m)"), table["reason"].iloc[0]
+
+
+def test_a_log_ending_at_rest_while_braking_ends_at_a_stand(inputs):
+    """A log whose last row reads the train at rest (speed noise about 0) while the brake still
+    holds: it was flagged as ending while the train moves ("-0.0 m/s") and its running time left out.
+    At rest at its last row without traction, it ends at a stand: the run is compared and ok."""
+    track, train = inputs
+    frame, record = generate_log(track, train, THERE, train, seed=6)
+    moving = np.nonzero(record["v"] > 0)[0]
+    last = moving[-1] + 1  # the first row at rest after the last run's braking
+    cut = frame.iloc[:last + 1].copy()
+    cut.loc[cut.index[-1], "force_kN"] = -200.0  # the brake still applied at the stand
+    table = validate_log(as_log(cut, "braking"), track, train)
+    assert list(table["status"]) == ["ok", "ok"], table.to_string()
+    assert np.isfinite(table["time_difference_pct"]).all(), table.to_string()
