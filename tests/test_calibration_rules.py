@@ -105,3 +105,10 @@ def test_a_log_ending_at_rest_while_braking_ends_at_a_stand(inputs):
     table = validate_log(as_log(cut, "braking"), track, train)
     assert list(table["status"]) == ["ok", "ok"], table.to_string()
     assert np.isfinite(table["time_difference_pct"]).all(), table.to_string()
+
+
+@pytest.mark.parametrize("fit", ["", ",", " , "])
+def test_an_empty_fit_is_refused(tmp_path, fit):
+    """--fit '' ran the default set silently (--fit , was refused): both say no parameter is named."""
+    result = CliRunner().invoke(app, ["calibrate", str(tmp_path / "none.csv"), "--fit", fit, "--out", str(tmp_path / "o")])
+    assert result.exit_code == 2 and "--fit: no parameter named" in result.output, result.output
