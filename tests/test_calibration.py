@@ -534,8 +534,8 @@ def test_validate_command(tmp_path, log_files):
     assert flagged and all(strict.output.count(c["status"].split(": ", 1)[1]) == 1 for c in flagged), strict.output
     lines = strict.output.splitlines()
     assert f"validate flagged: {len(flagged)} of 2 runs not within 1 % traction energy, 5 % running time, " \
-           "the stop tolerance of the log, 1 km/h of the line's limits and residuals within 2 times white noise over " \
-           "5 s at the train fitted to the log (each below)" in lines and "ok" not in lines and "flagged" not in lines
+           "the stop tolerance of the log, 100 m of a stop of the track, 1 km/h of the line's limits and residuals " \
+           "within 2 times white noise over 5 s at the train fitted to the log (each below)" in lines and "ok" not in lines and "flagged" not in lines
     assert lines[-1].startswith("validate: flagged, written to ")
 
 

@@ -167,14 +167,18 @@ def test_savings_of_a_run_the_file_cannot_drive_name_it_and_go_on(tmp_path, ther
 def test_a_parameter_fitted_at_its_bound_is_flagged(inputs):
     """Logs of a train whose rotating-mass allowance is twice its file's, fitted with f held: Davis
     B goes to its bound 0 with an interval of +-27.5 N s/m about it, reported identifiable (the
-    calibration was flagged for the residuals' drift alone). Now the bound is a reason of its own."""
+    calibration was flagged for the residuals' drift alone). An interval reaching below the bound is
+    not identifiable: B is held, the reason saying so."""
     track, train = inputs
     truth = true_train(train, rotating=2.0)
     logs = [parse_log(text_of(generate_log(track, truth, stops, truth, seed=seed)[0]), f"l{seed}.csv")
             for seed, stops in ((1, ["West", "Middle", "East"]), (2, ["East", "Middle", "West"]))]
     result = calibrate_logs(logs, track, train, DEFAULT_FIT, draws=0)
-    assert result.status == "flagged" and "davis_b fitted at its bound 0 (the logs would have it below)" in \
-        result.reason, result.reason
+    assert result.status == "flagged" and re.search(r"davis_b not identifiable from these logs, held at its prior: "
+                                                    r"95 % half-width [0-9.]+ N s/m, [0-9]+ % of the running resistance "
+                                                    r"over the logged speeds \(limit 20 %\); its interval -[0-9.]+ to "
+                                                    r"[0-9.]+ N s/m reaches below the bound 0", result.reason), result.reason
+    assert not result.table.set_index("name").loc["davis_b", "identifiable"]
 
 
 @pytest.mark.parametrize("broken", ["flipped", "dead"])

@@ -17,6 +17,7 @@ from ecostudy.api.arguments import spelled
 from ecostudy.api.blas import limit_blas_threads
 from ecostudy.calibration.estimate import MAX_STRUCTURE, WINDOW
 from ecostudy.calibration.replay import LIMIT_TOLERANCE_KMH
+from ecostudy.calibration.validate import STATION_TOLERANCE_M
 from ecostudy.api.outcome import Report, counts_line, listed, not_reused, reported, shown
 from ecostudy.core.progress import Watcher, stage, watched
 from ecostudy.core.status import Status, status_word
@@ -259,7 +260,8 @@ def validation_line(table, tolerances: dict) -> str:
     """What validate judged and how many runs passed (the reasons of those that did not: the problems)."""
     bad, bounds = int((table["status"] != "ok").sum()), (f"{tolerances['energy']:g} % traction energy, "
                                                          f"{tolerances['time']:g} % running time")
-    bounds += (f", the stop tolerance of the log, {LIMIT_TOLERANCE_KMH:g} km/h of the line's limits and residuals "
+    bounds += (f", the stop tolerance of the log, {STATION_TOLERANCE_M:g} m of a stop of the track, "
+               f"{LIMIT_TOLERANCE_KMH:g} km/h of the line's limits and residuals "
                f"within {MAX_STRUCTURE:g} times white noise over {WINDOW:g} s at the train fitted to the log")
     if not bad:
         return f"runs replayed: every run of {len(table)} within {bounds}"

@@ -30,8 +30,8 @@ from ecostudy.core.progress import stage
 from ecostudy.io.logscale import SCALE_TOLERANCE, measured_scale, scale_problem
 from ecostudy.io.logforce import FORCE_POWER_AGREE, force_power_agreement, force_power_problem
 from ecostudy.calibration.fit import (
-    MAX_RELATIVE_WIDTH, PARAMETERS, Z95, Problem, bootstrap, fitted_free, identify, informing, scales, train_with,
-    width_if_fitted,
+    PARAMETERS, Z95, Problem, badness, bootstrap, fitted_free, half_width_text, identify, informing, scales,
+    train_with,
 )
 
 MAX_RMS_SPEED = 0.3    # [m/s]
@@ -178,14 +178,15 @@ def checks_run(logs, free, bootstrapped, held):
 
 
 def held_against_logs(problem, names, free, p):
-    """({name: relative 95 % half-width it would have if fitted (:func:`~ecostudy.calibration.fit.width_if_fitted`)},
+    """({name: (every parameter's value, its 95 % half-width [SI], '' or why the fit did not converge)
+    with it fitted beside ``free`` from ``p`` (:func:`~ecostudy.calibration.fit.fitted_free`)},
     {name: (held value, the value the logs give, its 95 % half-width) [SI]}) of each parameter not in
-    ``names``, held at the train file's value: fitted beside ``free`` from ``p`` where the logs
-    identify it (:func:`~ecostudy.calibration.fit.fitted_free`), so that a held value the logs exclude
-    is not passed over (the other parameters absorb it, their intervals then missing the truth)."""
-    widths = {n: width_if_fitted(problem, free, p, n) for n in PARAMETERS if n not in names}
-    fits = {n: fitted_free(problem, free, p, n) for n, width in widths.items() if width <= MAX_RELATIVE_WIDTH}
-    return widths, {n: (problem.prior[n], *fit) for n, fit in fits.items() if fit is not None}
+    ``names``, held at the train file's value; the second for those the logs identify (a converged fit,
+    :func:`~ecostudy.calibration.fit.badness` at most 1), so that a held value the logs exclude is not
+    passed over (the other parameters absorb it, their intervals then missing the truth)."""
+    fits = {n: fitted_free(problem, free, p, n) for n in PARAMETERS if n not in names}
+    return fits, {n: (problem.prior[n], theta[n], half) for n, (theta, half, unconverged) in fits.items()
+                  if not unconverged and badness(problem, theta, n, half) <= 1.0}
 
 
 def held_excluded(name, held, value, half):
@@ -251,14 +252,15 @@ def calibrate_logs(logs, track, train, names, draws=BOOTSTRAP_DRAWS, seed=0):
     table = pd.DataFrame(rows)
     if table[["boot_low", "boot_high"]].notna().any(axis=None):  # printed beside low and high: say what they are
         footnotes.insert(0, BOOTSTRAP_NOTE)
-    widths, held_fits = held_against_logs(problem, names, free, p)
+    fits, held_fits = held_against_logs(problem, names, free, p)
     if "mass" in free and "rotating_mass_factor" not in names:  # only Ms (1 + f) is seen where gradients are small
-        width = widths["rotating_mass_factor"]
-        if not width <= MAX_RELATIVE_WIDTH:
+        fitted, half, _ = fits["rotating_mass_factor"]  # converged or not, as the calibration's own fit
+        if not badness(problem, fitted, "rotating_mass_factor", half) <= 1.0:
             note = (f"fitted as Ms (1 + f) with rotating_mass_factor held at the train file's "
                     f"{problem.prior['rotating_mass_factor']:.4g}: these logs "
-                    + ("cannot tell Ms from f" if not np.isfinite(width) else
-                       f"tell f only to +-{100 * width:.0f} % (limit {100 * MAX_RELATIVE_WIDTH:.0f} %)")
+                    + ("cannot tell Ms from f" if not np.isfinite(half) else
+                       f"tell f only to {fitted['rotating_mass_factor']:.3g} +- {half:.2g}: "
+                       + half_width_text(problem, fitted, "rotating_mass_factor", half))
                     + " (too little gradient work), so its interval holds only if f does")
             before = table.loc[table["name"] == "mass", "note"].iloc[0]
             table.loc[table["name"] == "mass", "note"] = f"{before}; {note}" if before else note

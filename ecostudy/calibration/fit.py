@@ -11,9 +11,12 @@ The 95 % interval of a parameter is 1.96 standard deviations of cov = s^2 (J^T J
 optimum (J by central differences, s^2 the residual variance); with several logs a bootstrap over
 logs (logs drawn with replacement, refitted) gives a second interval.
 
-Identifiability: a parameter whose 95 % half-width exceeds :data:`MAX_RELATIVE_WIDTH` of its
-prior value (or that lies in a null direction of J: a singular value below 1e-9 of the largest)
-is not identifiable from these logs. It is held at its prior, not fitted to noise, and the fit
+Identifiability, judged from the logs alone (:func:`badness`; the train file's value plays no part):
+a Davis term whose 95 % half-width moves the running resistance over the logged speeds by more
+than :data:`MAX_RESISTANCE_SHARE` of it, any other parameter whose half-width exceeds
+:data:`MAX_RELATIVE_WIDTH` of its estimate, a parameter whose interval reaches below its bound 0,
+or one that lies in a null direction of J (a singular value below 1e-9 of the largest) is not
+identifiable from these logs. It is held at its prior, not fitted to noise, and the fit
 is repeated without it (the others keep the variance they had while it was free: :func:`widened`); the report says which parameters it moves with (the weakest singular
 direction of J). Examples: the quadratic Davis term C from a slow run, the static mass against
 the rotating-mass allowance on flat track (only M = Ms (1 + f) is seen there), the efficiency of
@@ -38,7 +41,11 @@ PARAMETERS = {
     "regeneration_efficiency": ("-", "regeneration efficiency, line energy per wheel work"),
 }
 DEFAULT_FIT = ("mass", "davis_a", "davis_b", "davis_c", "efficiency")
-MAX_RELATIVE_WIDTH = 0.5   # 95 % half-width above this share of the prior: not identifiable
+MAX_RELATIVE_WIDTH = 0.5   # 95 % half-width above this share of the estimate: not identifiable (mass, f, efficiencies)
+# a Davis term's 95 % half-width times v^k above this share of the running resistance over the logged speeds:
+# not identifiable (badness); the share, not the term's own size, as B or C can be a small part of a known resistance
+MAX_RESISTANCE_SHARE = 0.2
+DAVIS_POWER = {"davis_a": 0, "davis_b": 1, "davis_c": 2}  # the power of v each Davis term multiplies
 MAX_EVALUATIONS = None     # least_squares' max_nfev (None: its own cap, 100 evaluations a parameter)
 NULL_SINGULAR = 1e-9       # singular value of the column-scaled J below this share of the largest: a null direction
 Z95 = 1.959964
@@ -194,23 +201,60 @@ def covariance(problem, names, p):
     return cov, sv, (vt[-1] if sv.size else np.zeros(0))
 
 
-def width_if_fitted(problem, free, p, name):
-    """The 95 % half-width, relative to its prior, that ``name`` (held) would have if fitted beside
-    ``free`` at ``p`` (inf along a null direction: the logs see only a combination)."""
-    cov = covariance(problem, [*free, name], np.append(p, 1.0))[0]
-    return float(Z95 * np.sqrt(cov[-1, -1]) * scales(problem.prior)[name] / max(abs(problem.prior[name]), 1e-300))
+def resistance_share(problem, theta, name, half):
+    """The 95 % half-width ``half`` [SI] of the Davis term ``name`` as a share of the running
+    resistance the logs show: its effect on the force over the logged speeds (RMS of half v^k over
+    the replayed samples, k = 0, 1, 2 for A, B, C) over the resistance at ``theta`` there (RMS of
+    A + B v + C v^2). Speeds and fitted resistance come from the logs: the train file's values play
+    no part (against them, one set of logs held B with the file's 119.5 N s/m and passed it with 1195)."""
+    v = np.abs(np.concatenate([run.v[run.used] for run in problem.runs]))
+    resistance = theta["davis_a"] + theta["davis_b"] * v + theta["davis_c"] * v * v
+    scale = float(np.sqrt(np.mean(resistance ** 2)))
+    effect = half * float(np.sqrt(np.mean(v ** (2 * DAVIS_POWER[name]))))
+    return effect / scale if scale > 0 else np.inf
+
+
+def badness(problem, theta, name, half):
+    """How far ``name`` at ``theta[name]`` +- ``half`` [SI] (its 95 % half-width) is from identified,
+    1 at the limit, judged from the logs alone: the larger of its half-width's share (a Davis term's
+    of the running resistance, :func:`resistance_share`, against :data:`MAX_RESISTANCE_SHARE`; any
+    other's of its estimate, against :data:`MAX_RELATIVE_WIDTH`) over its limit, and the half-width
+    over the estimate (above 1 the interval reaches below the bound 0, which no parameter crosses).
+    inf along a null direction or for an estimate of 0."""
+    value = abs(theta[name])
+    if not np.isfinite(half) or value == 0:
+        return np.inf
+    share = (resistance_share(problem, theta, name, half) / MAX_RESISTANCE_SHARE if name in DAVIS_POWER
+             else half / value / MAX_RELATIVE_WIDTH)
+    return max(share, half / value)
+
+
+def half_width_text(problem, theta, name, half):
+    """Why ``name`` at ``theta[name]`` +- ``half`` [SI] is not identifiable (:func:`badness` above 1)."""
+    value, unit = theta[name], "" if PARAMETERS[name][0] == "-" else f" {PARAMETERS[name][0]}"
+    if not np.isfinite(half):
+        return "95 % half-width unbounded"
+    if name in DAVIS_POWER:
+        share = resistance_share(problem, theta, name, half)
+        text = (f"95 % half-width {half:.3g}{unit}, {100 * share:.0f} % of the running resistance over the logged "
+                f"speeds (limit {100 * MAX_RESISTANCE_SHARE:.0f} %)")
+    else:
+        share = half / abs(value) if value else np.inf
+        text = (f"95 % half-width {half:.3g}{unit}, " + (f"{100 * share:.0f} % of" if share <= 10 else "more than 10 times")
+                + f" the estimate (limit {100 * MAX_RELATIVE_WIDTH:.0f} %)")
+    if value - half < 0:
+        text += f"; its interval {value - half:.3g} to {value + half:.3g}{unit} reaches below the bound 0"
+    return text
 
 
 def fitted_free(problem, free, p, name):
-    """(value [SI], 95 % half-width [SI]) of ``name``, held at its prior, fitted beside ``free`` from
-    ``p`` (and its prior); None where the logs do not identify it there (half-width above
-    :data:`MAX_RELATIVE_WIDTH` of its prior, a null direction) or the fit does not converge."""
+    """(every parameter's value [SI], the 95 % half-width [SI] of ``name``, '' or why the fit did not
+    converge) with ``name``, held at its prior, fitted beside ``free`` from ``p`` (and its prior);
+    the half-width is inf along a null direction (the logs see only a combination)."""
     names = [*free, name]
     q, unconverged = solve(problem, names, np.append(p, 1.0))
     half = Z95 * float(np.sqrt(covariance(problem, names, q)[0][-1, -1])) * scales(problem.prior)[name]
-    if unconverged or not half <= MAX_RELATIVE_WIDTH * abs(problem.prior[name]):
-        return None
-    return problem.theta(names, q)[name], half
+    return problem.theta(names, q), half, unconverged
 
 
 def informing(problem, names, p):
@@ -266,20 +310,20 @@ def identify(problem, requested):
         th = problem.theta(free, p)
         problem.refilter(th["mass"] * (1.0 + th["rotating_mass_factor"]))  # weights at the fitted mass
         p, unconverged = solve(problem, free, p)
+        th = problem.theta(free, p)
         cov, sv, weakest = covariance(problem, free, p)
         if not free:
             return free, p, cov, held, spread, unconverged, partnered
         cov = widened(cov, free, widest)
         s = scales(problem.prior)
-        width = np.array([Z95 * np.sqrt(cov[j, j]) * s[n] / max(abs(problem.prior[n]), 1e-300)
-                          for j, n in enumerate(free)])
+        half = [Z95 * np.sqrt(cov[j, j]) * s[n] for j, n in enumerate(free)]
+        width = np.array([badness(problem, th, n, h) for n, h in zip(free, half)])
         worst = int(np.argmax(width))
-        if width[worst] <= MAX_RELATIVE_WIDTH:
+        if width[worst] <= 1.0:
             return free, p, cov, held, spread, unconverged, partnered
         partners = [n for j, n in enumerate(free) if j != worst and abs(weakest[j]) > 0.3]
         ratio = sv[-1] / sv[0] if sv[0] > 0 else 0.0
-        reason = (f"95 % half-width {'unbounded' if not np.isfinite(width[worst]) else f'{100 * width[worst]:.0f} %'}"
-                  f" of the prior (limit {100 * MAX_RELATIVE_WIDTH:.0f} %)")
+        reason = half_width_text(problem, th, free[worst], half[worst])
         if partners:
             reason += f"; moves with {', '.join(partners)} (singular value ratio {ratio:.1e})"
         if unconverged:  # the width was read at a point least_squares did not converge to

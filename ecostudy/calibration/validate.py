@@ -28,7 +28,8 @@ logged speed broke the line's limit (:func:`~ecostudy.calibration.replay.over_li
 to it, so the log is not a driven run of this line as the track file gives it; and when the run's
 residuals drift at the train fitted to the log (:func:`~ecostudy.calibration.estimate.fitted_drifts`,
 calibrate's check): no train of the model replays the logged speed along the logged positions
-(positions offset from the track's, another line).
+(positions offset from the track's, another line); and when the run ends standing away from every
+stop of the track (:func:`off_station`): a stand at a signal, not a run between the line's stops.
 """
 from dataclasses import replace
 
@@ -47,6 +48,11 @@ from ecostudy.core.units import signed, to_kwh
 END_FIT = 3.0          # [s] of samples at each end of a phase for its end speeds
 TRACTION_SHARE = 0.01  # an interval draws traction (brakes) above (below minus) this share of the log's largest power
 HANDLE_STEP = 0.01     # the replayed handle is rounded to this
+# a run's logged stand this far [m] (plus three standard deviations of its positions' noise) from every
+# stop of the track is not at a station: a track file gives a station as one point, a train stands at
+# its platform's marker for its length and a logger's odometry drifts, but a stand 408 m short of the
+# line's last stop or 2.2 km from any (at a signal) is another run than one between the line's stops
+STATION_TOLERANCE_M = 100.0
 
 
 def end_speed(t, v, at_start, span=END_FIT):
@@ -165,6 +171,18 @@ def position_noise(run):
     return 1.4826 * float(np.median(np.abs(off - np.median(off)))) / np.sqrt(2.0)
 
 
+def off_station(run, track):
+    """Why the stand that ends ``run`` is at no stop of ``track`` ('' where it is within
+    :data:`STATION_TOLERANCE_M` plus three standard deviations of the positions' noise of one)."""
+    name, at = min(track.stops.items(), key=lambda stop: abs(stop[1] - run.x[-1]))
+    tolerance = STATION_TOLERANCE_M + 3.0 * position_noise(run)
+    if abs(run.x[-1] - at) <= tolerance:
+        return ""
+    return (f"the run ends at {run.x[-1]:.0f} m, {abs(run.x[-1] - at):.0f} m from the nearest stop ({name} at "
+            f"{at:.0f} m, tolerance {tolerance:.0f} m): a stand between stations (a signal?) or positions offset from "
+            "the track's, not a run between the line's stops")
+
+
 def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
     """One row per run of ``log``: logged and model running time and traction energy, the
     differences, where the model stops, and the status."""
@@ -215,6 +233,8 @@ def validate_log(log, track, train, energy_tolerance=0.05, time_tolerance=0.05):
         overspeed = over_limit(run.t, run.x, run.v, track)
         if overspeed:
             reasons.append(overspeed)
+        if run.stands and off_station(run, track):
+            reasons.append(off_station(run, track))
         if run.stands:  # the log's last position is a stop: where the model stops is compared
             row["stop_tolerance_m"] = stop_tolerance(run, track, train, log, stop)
             if abs(row["model_stop_error_m"]) > row["stop_tolerance_m"]:

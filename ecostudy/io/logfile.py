@@ -29,6 +29,7 @@ the track (:func:`check_on_track`) and a force or wheel power not positive where
 a dead channel; :func:`check_traction_sign`, beyond what the track's gradient gives).
 """
 import csv
+import difflib
 import io
 import warnings
 from dataclasses import dataclass, field
@@ -51,6 +52,10 @@ from ecostudy.io.writers import atomic_write
 from ecostudy.io.yamlsafe import MAX_FILE_BYTES
 
 MIN_ROWS = 10
+# difflib's similarity (in lower case) at or above which an unknown column is taken for a known one
+# misnamed: Speed_MPS 1.0, speed_mp 0.94 are; power_aux_kW 0.72 (against power_line_kW), brake_pipe_bar,
+# latitude_deg are not (left out with a warning)
+COLUMN_NEAR_MISS = 0.9
 START_AGREES_M = 10.0  # [m] start_position_m given beside a position column: at most this from its first row
 INTEGRATED = "(start_position_m)"  # the position column's name where there is none: the speeds integrated
 GAP_FACTOR = 5.0       # a time step this many times the median step is a gap
@@ -102,6 +107,9 @@ def read_table(text: str, path: Where) -> tuple[list[str], FloatArray]:
     unknown = [name for name in names if name not in COLUMNS]
     lines = [problem(path, name, f"unknown column (known: {', '.join(COLUMNS)}; the unit is part of the name)")
              for name in unknown if quantity_of(name) in QUANTITIES]
+    lines += [problem(path, name, f"unknown column; did you mean {' or '.join(near)}? (names are lower case, the unit "
+                      "part of the name)") for name in unknown if quantity_of(name) not in QUANTITIES
+              and (near := near_columns(name))]
     ignored = [name for name in unknown if quantity_of(name) not in QUANTITIES]
     if ignored and not lines:
         warnings.warn(problem(path, "columns", f"{', '.join(ignored)} not modelled by ecostudy: left out"),
@@ -130,6 +138,14 @@ def read_table(text: str, path: Where) -> tuple[list[str], FloatArray]:
         raise InputError([problem(path, name, f"row {row}: {msg}") for name, (row, msg) in bad.items()])
     kept = [j for j, name in enumerate(names) if name not in ignored]
     return [names[j] for j in kept], data[:, kept]
+
+
+def near_columns(name: str) -> list[str]:
+    """The known columns an unknown column ``name`` is taken for, compared in lower case: a near
+    miss (:data:`COLUMN_NEAR_MISS`; ``Speed_MPS``, ``speed_mp``), refused rather than left out (left
+    out, a speed column misnamed would leave the speeds taken from the positions)."""
+    lower = {c.lower(): c for c in COLUMNS}
+    return [lower[c] for c in difflib.get_close_matches(name.lower(), list(lower), n=3, cutoff=COLUMN_NEAR_MISS)]
 
 
 def quantity_of(name: str) -> str:

@@ -37,11 +37,13 @@ VALIDATE_FILES = ("summary.json", "validate.csv")
 
 
 def parse_fit(text):
-    """The parameter names of ``--fit a,b,c``; unknown names refused in one line."""
-    names = [n.strip() for n in (text or ",".join(DEFAULT_FIT)).split(",") if n.strip()]
+    """The parameter names of ``--fit a,b,c`` (None, the option not given: the default set); unknown
+    names, a name given twice and no name at all (``--fit ''``, ``--fit ,``) refused in one line."""
+    names = [n.strip() for n in (",".join(DEFAULT_FIT) if text is None else text).split(",") if n.strip()]
     unknown = [n for n in names if n not in PARAMETERS]
     if unknown or not names or len(set(names)) != len(names):
-        what = f"unknown parameter '{unknown[0]}'" if unknown else "give each parameter once"
+        what = (f"unknown parameter '{unknown[0]}'" if unknown else "no parameter named: name at least one, or leave "
+                "--fit out for the default set" if not names else "give each parameter once")
         raise InputError(problem("command line", "--fit", f"{what} (known: {', '.join(PARAMETERS)})"))
     return names
 
