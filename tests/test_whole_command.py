@@ -72,3 +72,30 @@ def test_a_second_command_on_a_folder_whose_points_are_all_stored_is_refused_not
         assert not list(out.glob(".*.tmp")) and not list(out.glob("*.lock"))
         refused += ended[1][0] == 2
     assert refused  # the first still wrote its figures when the second's store opened
+
+
+def test_a_command_without_a_store_is_refused_while_a_study_writes_the_folder(tmp_path):
+    """solve and journey keep no store: they took a folder a running study was writing (exit 0), and
+    the study's clean-up removed their files when it finished. The study's lock held by this process
+    (a store open), each is refused in one line before computing; the lock let go, solve writes."""
+    from ecostudy.io.store import Store
+
+    out = tmp_path / "busy"
+    solve = [sys.executable, "-m", "ecostudy", "solve", "--track", str(TRACKS / "amsterdam_rokin_centraal.yaml"),
+             "--train", str(TRAINS / "amsterdam_metro.yaml"), "--supplement", "10", "-K", "60", "--no-plot", "--out",
+             str(out)]
+    journey = [sys.executable, "-m", "ecostudy", "journey", "--track", str(TRACKS / "metro_line_4stops.yaml"),
+               "--train", str(TRAINS / "amsterdam_metro.yaml"), "--supplement", "10", "--points", "60", "--no-plot",
+               "--out", str(out)]
+    store = Store(out / "results.sqlite")
+    try:
+        for args in (solve, journey):
+            ran = subprocess.run(args, cwd=ROOT, capture_output=True, text=True, timeout=300)
+            assert ran.returncode == 2 and ran.stderr.strip() == (f"error: {out}: --out: another ecostudy command is "
+                                                                  "writing this folder: wait for it to finish, or give "
+                                                                  "another --out"), ran.stderr
+            assert not (out / "profile.csv").exists() and not (out / "journey.csv").exists()
+    finally:
+        store.close()
+    ran = subprocess.run(solve, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert ran.returncode == 0 and (out / "profile.csv").is_file(), ran.stderr

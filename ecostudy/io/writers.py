@@ -1,5 +1,6 @@
 """Writing results: every file goes to a temporary name first and is renamed into place."""
 import errno
+import fcntl
 import json
 import math
 import os
@@ -97,7 +98,8 @@ def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: st
     running time) leaves nothing behind; the first file written creates the folder
     (:func:`atomic_write`, the store). A folder accepted loses the temporary files a killed command
     left (:func:`remove_temporary`), unless the command keeps a store there (``files`` names
-    :data:`STORE`: the store removes them once it holds the folder's lock) or a study holds it now."""
+    :data:`STORE`: the store removes them once it holds the folder's lock) or a study holds it now. A
+    command that keeps no store is refused while a study writes the folder (its lock held)."""
     path = Path(path)
     check_name_length(path, "--out")
     if path.exists() and not path.is_dir():
@@ -128,9 +130,26 @@ def check_output_dir(path: Union[str, Path], files: Iterable[str] = (), kind: st
                 level.rmdir()
             except OSError:  # not made here after all, or something came into it meanwhile
                 break
+    if STORE not in files and (path / LOCK).exists() and locked_by_another(path / LOCK):
+        raise InputError(problem(path, "--out", "another ecostudy command is writing this folder: wait for it to "
+                                 "finish, or give another --out"))
     if STORE not in files and not (path / LOCK).exists():
         remove_temporary(path)
     return path
+
+
+def locked_by_another(lock: Path) -> bool:
+    """Whether a study's lock file (:data:`LOCK`, ``io.store``) is held now: by another process, for a
+    command that keeps no store and so holds none itself (a lock left by a killed run is free)."""
+    try:
+        with open(lock, "r") as probe:
+            try:
+                fcntl.flock(probe, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            except BlockingIOError:
+                return True
+            return False  # closing the file lets go of the shared lock at once
+    except OSError:  # removed meanwhile: the run finished
+        return False
 
 
 def remove_temporary(folder: Union[str, Path]) -> None:
