@@ -241,3 +241,15 @@ def test_a_default_output_folder_stays_one_folder_under_out():
     for name in ("/../../../escaped_Centraal", "track_<b>Rökin</b>_&_Co", "..", "a b/c"):
         folder = default_output(name)
         assert folder.parent.name == "out" and len(folder.parts) == 2 and folder.name not in ("", ".", ".."), folder
+
+
+def test_mixed_weights_decide_by_their_ratio_however_small_both_are(tmp_path):
+    """Weights 1e-12,1e-12 weigh as 1,1 do: the objective scaled up with them (it was 1e-12 of O(1):
+    177.99 s, re-simulated energy -87 %, flagged)."""
+    runs = []
+    for w in ("1,1", "1e-12,1e-12"):
+        ran = CliRunner().invoke(app, ["solve", "--track", str(ROKIN), "--train", str(METRO), "-K", "100", "--objective",
+                                       "mixed", "--weights", w, "--no-plot", "--out", str(tmp_path / w)])
+        assert ran.exit_code == 0, ran.output
+        runs.append(json.loads((tmp_path / w / "summary.json").read_text()))
+    assert runs[1]["status"] == "ok" and runs[1]["running_time_s"] == pytest.approx(runs[0]["running_time_s"], rel=1e-6)

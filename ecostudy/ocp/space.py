@@ -302,7 +302,8 @@ def define_objective(m: Model, nodes: FloatArray, train: Train, objective: str, 
     energy      traction work sum F_T,k ds_k (Farooqi 2018 eq. 2.16)
     net_energy  traction work / eta_T - eta_R * regenerated work (Farooqi 2018 eq. 7.3)
     time        running time, plus a small multiple of traction + braking work ("all-out")
-    mixed       w_t T + w_e E / Ms (Yazhemsky 2017 eq. 4.1a, energy per unit mass [J/kg])
+    mixed       w_t T + w_e E / Ms (Yazhemsky 2017 eq. 4.1a, energy per unit mass [J/kg]); weights whose
+                larger is below 1 scaled up to it (their ratio alone decides the run)
     """
     ds = np.diff(nodes).tolist()
     m.traction_work = pyo.Expression(expr=FORCE_SCALE * sum(share(m, k, ds[k] * m.ft[k]) for k in m.I))
@@ -319,7 +320,8 @@ def define_objective(m: Model, nodes: FloatArray, train: Train, objective: str, 
     elif objective == "time":
         expr = m.T / time_ref + TIME_REGULARISATION * (energy + braking)
     elif objective == "mixed":
-        wt, we = weights
+        top = max(weights)  # only their ratio matters: the larger scaled up to 1, so the objective stays O(1)
+        wt, we = (w / top for w in weights) if top < 1.0 else weights  # (1e-12, 1e-12) stopped far off
         expr = (wt * m.T + we * m.traction_work / train.static_mass) / time_ref
     else:
         raise ValueError(f"unknown objective {objective!r}")
