@@ -58,3 +58,20 @@ def test_an_arrival_window_refused_by_name(tmp_path, command):
     ran = CliRunner().invoke(app, [command, str(study(tmp_path, running_time_s=None, window_s=[74, 80])),
                                    "--no-plot", "--out", str(tmp_path / "out")])
     assert ran.exit_code == 2 and "window_s: " + command + " does not keep an arrival window" in ran.output, ran.output
+
+
+def test_a_block_given_another_form_says_how_blocks_merge_and_null_replaces_the_form(tmp_path):
+    """The metro's traction is a table: an override giving max_force_kN and max_power_kW merges into it,
+    both forms, refused with the way to switch; the table set to null, the scenario runs on the new form."""
+    other = {"max_force_kN": 150, "max_power_kW": 1500}
+    ran = CliRunner().invoke(app, ["run", str(study(tmp_path, scenarios=[{"name": "s", "train_overrides": {
+        "traction": other}}])), "--workers", "1", "--out", str(tmp_path / "a")])
+    assert ran.exit_code == 2 and len(ran.output.strip().splitlines()) == 1, ran.output
+    assert "traction: give either 'table' or 'max_force_kN'" in ran.output and "set the file's other fields of it to " \
+        "null, e.g. traction: {table: null, max_force_kN: 150}" in ran.output, ran.output
+    ran = CliRunner().invoke(app, ["run", str(study(tmp_path, scenarios=[{"name": "s", "train_overrides": {
+        "traction": {"table": None, **other}}}])), "--workers", "1", "--out", str(tmp_path / "b")])
+    assert ran.exit_code == 0, ran.output
+    table = pd.read_csv(tmp_path / "b" / "results.csv").set_index("scenario")
+    assert table.loc["s", "status"] == "ok" and table.loc["s", "traction_energy_kWh"] != table.loc["base",
+                                                                                                  "traction_energy_kWh"]
