@@ -22,7 +22,7 @@ from ecostudy.io.timetable import segment_timing
 from ecostudy.studies.cases import expand
 from ecostudy.studies.options import das_limit
 
-from .conftest import STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
+from .conftest import ROOT, STUDIES, TRACKS, TRAINS, load_yaml, write_yaml
 
 METRO, ROKIN = TRAINS / "amsterdam_metro.yaml", TRACKS / "amsterdam_rokin_centraal.yaml"
 LINE = TRACKS / "metro_line_4stops.yaml"
@@ -219,6 +219,19 @@ def test_a_train_too_weak_to_start_on_a_flat_track_names_the_trains_traction(tmp
     result = run("solve", "--track", track, "--train", tiny, "--objective", "time", "--no-plot", "--out", tmp_path / "o")
     assert result.exit_code == 2 and result.output.startswith(
         f"error: {tiny}: traction: infeasible: the train cannot overcome its running resistance"), result.output
+
+
+def test_a_published_train_too_weak_to_start_is_named_by_its_own_field(tmp_path):
+    """TTOBench's Beijing subway train with 1 kN of traction: its file's 'max traction force' is named
+    (the YAML's 'traction' is no field of that file)."""
+    doc = json.loads((ROOT / "tests/data/ttobench_subway_train.json").read_text())
+    doc["max traction force"]["value"] = 1.0
+    weak = tmp_path / "weak.json"
+    weak.write_text(json.dumps(doc))
+    result = run("solve", "--track", ROKIN, "--train", weak, "--supplement", 10, "-K", 60, "--no-plot",
+                 "--out", tmp_path / "o")
+    assert result.exit_code == 2 and result.output.startswith(
+        f"error: {weak}: max traction force: infeasible: the train cannot overcome its running resistance"), result.output
 
 
 def test_a_das_time_limit_no_search_reads_is_named(tmp_path):

@@ -149,7 +149,7 @@ def _solve_folder(study, track, train, time, supplement, window, from_stop, to_s
         except WeightError as exc:  # mixed weights that price energy at nothing the NLP can tell
             raise InputError([problem(weighed[0], weighed[1][1], p) for p in exc.problems]) from None
         except TractionError as exc:  # too weak to move where the line does not hold it back: the train's
-            raise InfeasibleError([problem(paths[1], "traction", p) for p in exc.problems]) from None
+            raise InfeasibleError([problem(paths[1], trn.traction_field, p) for p in exc.problems]) from None
         except LineError as exc:  # a climb or descent of the line the train's envelopes cannot make: the track's
             raise InfeasibleError([problem(paths[0], "gradients", p) for p in exc.problems]) from None
         except FieldError as exc:  # a window on the way no run keeps: the study's or its timetable's, by name

@@ -55,6 +55,7 @@ class Train:
     # fields (its reader's words: an OSRD or TTOBench file has not the YAML's), for core.grid.warn_unpaired
     unpaired: tuple[str, str] = ("the train's curve_coefficient_m2ps2 is 0 (set it, or curve_resistance: roeckl)",
                                  "the train gives no tunnel_resistance")
+    traction_field: str = "traction"  # the field of its file that gives its traction (TTOBench: max traction force)
 
     @property
     def rotating_mass_factor(self) -> float:

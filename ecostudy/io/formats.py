@@ -179,6 +179,12 @@ def unpaired(aliases: Mapping[str, str], path: Where) -> tuple[str, str]:
             f"the train gives no {tunnel}" if tunnel else absent % ("tunnels", "tunnel"))
 
 
+def traction_field(aliases: Mapping[str, str]) -> str:
+    """The field of a TTOBench or OSRD train file (``aliases``: the train schema's field paths as the
+    file names them) that gives its traction, named where a train too weak to move is refused."""
+    return aliases.get("traction.max_force_kN") or aliases.get("traction.table.force_kN") or "traction"
+
+
 def train_document_to_schema(doc: Mapping[str, Any], path: Where,
                              selector: str | None = None) -> tuple[dict[str, Any], dict[str, str]]:
     """(schema dict, field-name aliases for messages) from a TTOBench or OSRD train document;

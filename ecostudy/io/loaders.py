@@ -23,7 +23,7 @@ from ecostudy.io.consistfile import (consist_from_document as consist_from_docum
                                      load_consist as load_consist)
 from ecostudy.io.davis import check_davis_bound, check_davis_plausible, davis_si
 from ecostudy.io.formats import (timetable_document_to_schema, track_document_to_schema, train_document_to_schema,
-                                 unpaired)
+                                 traction_field, unpaired)
 from ecostudy.io.timetable import name_stops, off_clock, segment_timing, turning_back, window_origin, windows_from_schema
 from ecostudy.io.ttobench import TRACK_ALIASES
 from ecostudy.io.writers import default_output
@@ -115,7 +115,8 @@ def train_from_schema(t: schemas.TrainFile, path: Where, aliases: Mapping[str, s
                  tunnel_resistance=tuple((x.cross_section_m2, x.c_kN_per_kmh2 * units.KN / units.KMH**2)
                                          for x in t.tunnel_resistance),
                  calibration_reason=t.calibration.reason.strip() if t.calibration is not None else "",
-                 **({"unpaired": unpaired(aliases, path)} if aliases else {}))  # a TTOBench or OSRD file's fields
+                 **({"unpaired": unpaired(aliases, path), "traction_field": traction_field(aliases)}
+                    if aliases else {}))  # a TTOBench or OSRD file's fields
 
 
 def track_from_schema(t: schemas.TrackFile) -> Track:
