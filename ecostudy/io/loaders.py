@@ -115,8 +115,9 @@ def train_from_schema(t: schemas.TrainFile, path: Where, aliases: Mapping[str, s
                  tunnel_resistance=tuple((x.cross_section_m2, x.c_kN_per_kmh2 * units.KN / units.KMH**2)
                                          for x in t.tunnel_resistance),
                  calibration_reason=t.calibration.reason.strip() if t.calibration is not None else "",
-                 **({"unpaired": unpaired(aliases, path), "traction_field": traction_field(aliases)}
-                    if aliases else {}))  # a TTOBench or OSRD file's fields
+                 # a TTOBench or OSRD file's own fields, in what the train says of itself
+                 unpaired=unpaired(aliases, path) if aliases else Train.unpaired,
+                 traction_field=traction_field(aliases) if aliases else Train.traction_field)
 
 
 def track_from_schema(t: schemas.TrackFile) -> Track:
