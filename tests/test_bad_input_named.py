@@ -272,3 +272,16 @@ def test_a_window_the_arrival_cannot_follow_is_refused_naming_the_timing(tmp_pat
                windows=[{"position_m": 1000, "earliest_s": 72}])
     refused(run("solve", write_yaml(tmp_path / "s.yaml", doc), *timing), fragment)
     nothing_written(tmp_path)
+
+
+def test_an_arrival_that_leaves_the_rest_after_a_window_to_crawl_is_refused(tmp_path):
+    """A window passed by 70 s at 1000 m and an arrival window from 140 s: the last 106 m take at least
+    70 s, over 5 times their fastest 13.1 s; solved, the run was flagged (3 m short, 3 s early)."""
+    doc = load_yaml(STUDIES / "default.yaml")
+    doc.update(track=str(AMS), train=str(METRO), points=100, output=str(tmp_path / "out"), running_time_s=100,
+               windows=[{"position_m": 1000, "latest_s": 70}])
+    refused(run("solve", write_yaml(tmp_path / "s.yaml", doc), "--window", "140,150"),
+            "command line: --window: the timing point at 1000 m (passed by 70 s) and the arrival at Centraal (not "
+            "before 140 s) leave at least 70 s for the last 106 m, over 5 times the fastest run's 13.1 s there: the "
+            "train would crawl")
+    nothing_written(tmp_path)

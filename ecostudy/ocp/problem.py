@@ -208,11 +208,22 @@ def check_arrival(case: Case, earliest: float | None, latest: float | None, marg
     """Refuse, before solving, an arrival (not before ``earliest``, not after ``latest`` [s]; None: not
     bounded) that a timing window on the way contradicts: a window's earliest passing plus the fastest
     run from there to the stop (less ``margin`` of it, as :func:`check_windows`) after the latest
-    arrival. A :class:`TooFastError`: the arrival time is refused where it was given, the window named
-    in the line (the windows among themselves: :func:`check_windows`)."""
-    if not case.windows or latest is None:
+    arrival; or an arrival so long after a window's latest passing that the rest of the run would crawl
+    (over :data:`SLOWEST` times the fastest envelope's time from the window to the stop, as
+    :func:`check_not_crawling` for the whole run). A :class:`TooFastError`: the arrival time is refused
+    where it was given, the window named in the line (the windows among themselves: :func:`check_windows`)."""
+    if not case.windows:
         return
     index, _, passing = _fastest_passing(case)
+    for k, w in zip(index, case.windows):  # from a point passed by its latest time, the rest crawled
+        rest = float(passing[-1] - passing[k])
+        if earliest is not None and w.latest is not None and earliest - w.latest > SLOWEST * rest:
+            raise TooFastError(f"the timing point at {w.distance:g} m (passed by {w.latest:g} s) and the arrival at "
+                               f"{case.segment.to_stop} (not before {earliest:g} s) leave at least "
+                               f"{earliest - w.latest:g} s for the last {case.segment.distance - w.distance:g} m, over "
+                               f"{SLOWEST:g} times the fastest run's {rest:.1f} s there: the train would crawl")
+    if latest is None:
+        return
     order = sorted(range(len(case.windows)), key=lambda i: case.windows[i].distance)
     passings = [Passing(case.windows[i].distance, f"the timing point at {case.windows[i].distance:g} m",
                         case.windows[i].earliest, None, float(passing[index[i]]), 0.0, ("", "")) for i in order]
