@@ -57,20 +57,6 @@ def test_every_piece_between_changes_gets_at_least_two_intervals(metro, amsterda
     assert np.diff(edges).min() == MIN_INTERVALS == 2
 
 
-def test_a_grid_too_small_for_two_intervals_a_piece_is_made_larger(metro, amsterdam):
-    """52 pieces (a gradient change every 20 m and the 2 m piece before a 0.5 km/h restriction) at
-    K = 60 and 104: every piece had one interval once K could not give each two, the 2 m piece among
-    them (the all-out run 10 % slow, verified, ok); the grid is made larger instead, every piece two."""
-    seg = make_segment(amsterdam, metro, "Rokin", "Centraal")
-    many = dataclasses.replace(seg, limit=Profile(np.array([0.0, 2.0, 30.0]), np.array([20.0, 0.5 / 3.6, 20.0])),
-                               gradient=Profile(np.arange(0.0, 1000.0, 20.0), np.zeros(50)))
-    pieces = len(np.unique(many.breakpoints()[(many.breakpoints() > 0) & (many.breakpoints() < many.distance)])) + 1
-    for points in (60, 104, 2 * pieces + 1):
-        nodes = make_grid(many, points)
-        edges = np.searchsorted(nodes, np.concatenate([[0.0], many.breakpoints(), [many.distance]]))
-        assert np.diff(edges)[np.diff(edges) > 0].min() == MIN_INTERVALS and len(nodes) == 2 * pieces + 1
-
-
 def test_a_short_piece_before_a_restriction_does_not_slow_the_all_out_run(tmp_path):
     """All-out over a flat 1000 m with 0.5 km/h from 2 m to 30 m (72 km/h elsewhere): a fine-step
     forward/backward integration of the same train gives 268.69 s; with one interval on the first

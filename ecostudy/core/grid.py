@@ -264,16 +264,15 @@ def make_grid(segment: Segment, points: int, extra: Sequence[float] | FloatArray
     """``points`` node positions on [0, D], including every profile change and ``extra`` positions.
 
     The intervals between changes get a share of the nodes proportional to their length, at
-    least :data:`MIN_INTERVALS` each (the intervals a short piece needs are taken from the longest
-    pieces; where ``points`` cannot give every piece as many, the grid has more nodes than
-    ``points``: :func:`ecostudy.studies.estimate.grid_nodes` says so), and are divided uniformly.
+    least :data:`MIN_INTERVALS` each (fewer only where ``points`` cannot give every piece as many;
+    the intervals a short piece needs are taken from the longest pieces), and are divided uniformly.
     """
     inner = np.unique(np.concatenate([segment.breakpoints(), np.asarray(extra, dtype=float)]))
     inner = inner[(inner > 0) & (inner < segment.distance)]
     breaks = np.concatenate([[0.0], inner, [segment.distance]])
     lengths = np.diff(breaks)
-    intervals = max(points - 1, MIN_INTERVALS * len(lengths))
-    least = MIN_INTERVALS
+    intervals = max(points - 1, len(lengths))
+    least = max(1, min(MIN_INTERVALS, intervals // len(lengths)))
     share = np.maximum(least, np.floor(lengths / segment.distance * intervals).astype(int))
     while share.sum() > intervals:  # a short piece's minimum, taken from the longest pieces
         share[np.argmax(np.where(share > least, lengths, -1.0))] -= 1

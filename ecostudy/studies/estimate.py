@@ -61,7 +61,7 @@ from ecostudy.core.adhesion import TOP_SPEED, capped
 from ecostudy.core.plant import Truth
 from ecostudy.core.budget import check_run, duration, how_many, refuse_unless_forced
 from ecostudy.core.errors import EcostudyWarning, InfeasibleError, InputError, TooFastError, problem
-from ecostudy.core.grid import MIN_INTERVALS, make_grid, make_segment, node_limits
+from ecostudy.core.grid import make_grid, make_segment, node_limits
 from ecostudy.io.loaders import track_from_schema, train_from_schema, validate
 from ecostudy.io import schemas
 from ecostudy.io.loopfile import RspcSettings
@@ -119,8 +119,8 @@ def grid_nodes(track, train, from_stop, to_stop, points):
     nodes = len(make_grid(make_segment(track, train, from_stop, to_stop), points))
     if nodes > points:
         warnings.warn(problem("command line", "--points", f"the track's profile changes between {from_stop} and "
-                              f"{to_stop} are each a grid node, with at least {MIN_INTERVALS} intervals between two: "
-                              f"K = {nodes}, not the {points} asked (a run that much larger)"), EcostudyWarning, stacklevel=2)
+                              f"{to_stop} are each a grid node: K = {nodes}, not the {points} asked (a run that much "
+                              f"larger)"), EcostudyWarning, stacklevel=2)
     return nodes
 
 
