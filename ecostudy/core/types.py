@@ -3,7 +3,7 @@ a state and a run's trajectory.
 
 Built by the loaders (:mod:`ecostudy.io.loaders`) or in code; everything here is SI.
 """
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -53,8 +53,9 @@ class Train:
     calibration_reason: str = ""
     # (curves, tunnels): how the train's file would give curves and tunnels a resistance, in that file's own
     # fields (its reader's words: an OSRD or TTOBench file has not the YAML's), for core.grid.warn_unpaired
-    unpaired: tuple[str, str] = ("the train's curve_coefficient_m2ps2 is 0 (set it, or curve_resistance: roeckl)",
-                                 "the train gives no tunnel_resistance")
+    # (message text naming its file: not in the train's repr, which is its physics)
+    unpaired: tuple[str, str] = field(default=("the train's curve_coefficient_m2ps2 is 0 (set it, or curve_resistance: "
+                                               "roeckl)", "the train gives no tunnel_resistance"), repr=False)
     traction_field: str = "traction"  # the field of its file that gives its traction (TTOBench: max traction force)
 
     @property
