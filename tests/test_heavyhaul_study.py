@@ -2,6 +2,7 @@
 resumable; the fence arithmetic, observability, the plant's energy and statics by hand; bad input
 in one line."""
 import dataclasses
+import re
 
 import numpy as np
 import pandas as pd
@@ -330,7 +331,8 @@ def test_the_observers_noises_are_the_studys(tmp_path):
 
 def test_runs_on_a_reference_ipopt_did_not_prove_optimal_are_flagged_saying_so(tmp_path, monkeypatch):
     """The reference is the single mass's energy-optimal run; solved with a tolerance Ipopt cannot
-    reach (tol 1e-20 on every space NLP while the study is expanded) it ends ``acceptable``: every
+    reach (tol 1e-20 on every space NLP while the study is expanded) it ends ``acceptable`` (or, on
+    another path to it, ``search_direction_too_small``): every
     run tracks it and is flagged naming it. The run itself is solved with the usual options."""
     from ecostudy.ocp.solver import IPOPT
     from ecostudy.studies.heavyhaul import expand, run_heavyhaul_case
@@ -340,7 +342,8 @@ def test_runs_on_a_reference_ipopt_did_not_prove_optimal_are_flagged_saying_so(t
         patched.setitem(IPOPT["space"], "tol", 1e-20)
         cases = expand(path)[3]
     (reason,) = [case["reference_status"] for case in cases]  # its all-out run (the +10 %'s base) as it ended too
-    assert reason.startswith("the reference run: Ipopt ended acceptable, not optimal; the all-out run: Ipopt ended ")
+    assert re.fullmatch(r"the reference run: Ipopt ended (acceptable|search_direction_too_small), not optimal; "
+                        r"the all-out run: Ipopt ended \w+, not optimal", reason), reason
     row = run_heavyhaul_case(cases[0])
     assert row["status"] == "flagged" and row["error"].endswith(reason), row["error"]
 

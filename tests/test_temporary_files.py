@@ -13,6 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from ecostudy.cli import app
+from ecostudy.core.errors import InputError
 from ecostudy.core.interrupt import RECEIVED
 from ecostudy.io.store import Store
 from ecostudy.io.writers import atomic_write, check_output_dir
@@ -107,13 +108,14 @@ def test_a_command_removes_the_temporary_files_a_killed_one_left(tmp_path):
 
 def test_a_study_removes_them_once_it_holds_the_folder(tmp_path):
     """A study's folder is cleaned by the run that takes its store's lock (its steps/ too); while a
-    study holds it, another command's check of the folder removes nothing of the study's."""
+    study holds it, another command's check of the folder refuses it and removes nothing of the study's."""
     leftovers(tmp_path)
     store = Store(tmp_path / "results.sqlite")
     try:
         assert remaining(tmp_path) == sorted([*OTHERS, ".table.csvfolder12.tmp"])
         (tmp_path / LEFT[0]).write_text("being written by the study")
-        check_output_dir(tmp_path, ("profile.csv",))
+        with pytest.raises(InputError, match="another ecostudy command is writing this folder"):
+            check_output_dir(tmp_path, ("profile.csv",))
         assert (tmp_path / LEFT[0]).is_file()
     finally:
         store.close()
