@@ -10,6 +10,7 @@ import hashlib
 import itertools
 import json
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
 
 from ecostudy.io.writers import default_output
@@ -81,18 +82,17 @@ MERGED = ("(train_overrides merge a block into the train file's field by field: 
           "the file's other fields of it to null, e.g. traction: {table: null, max_force_kN: 150})")
 
 
-def _overridden(train_doc, where, said, overrides):
-    """The train of a scenario's train ``overrides`` laid over its file's ``train_doc`` (``where`` names
+def _overridden(train_doc, where, said, blocks):
+    """The train of a scenario's train document, its overrides laid over its file's (``where`` names
     the scenario), warning of what they change: the warnings of its train that its file (``said``) did
-    not give. A train the overrides make invalid is refused; where they give a block, the line says how
-    one is merged."""
+    not give. A train the overrides make invalid is refused; where they give a block (``blocks``), the
+    line says how one is merged."""
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
         try:
-            train = train_from_schema(validate(schemas.TrainFile, overlaid(train_doc, overrides), f"{where} train"),
-                                      where)
+            train = train_from_schema(validate(schemas.TrainFile, train_doc, f"{where} train"), where)
         except InputError as exc:
-            if not any(isinstance(v, dict) for v in overrides.values()):
+            if not blocks:
                 raise
             raise InputError([*exc.problems[:-1], f"{exc.problems[-1]} {MERGED}"]) from None
     for w in seen:
@@ -112,8 +112,9 @@ def _scenario_units(s, path, read):
         track_doc, track = read(named_file(path, field + "track" if sc.track else "track", sc.track or s.track),
                                 read_track)
         if sc.train_overrides:
-            train = _overridden(train_doc, where, read.said[train_file, read_train], sc.train_overrides)
             train_doc = overlaid(train_doc, sc.train_overrides)
+            train = _overridden(train_doc, where, read.said[train_file, read_train],
+                                any(isinstance(v, Mapping) for v in sc.train_overrides.values()))
         too = too_long_named(train, track)  # refused here, before any case of the study is computed
         if too is not None:
             given = "train_overrides.length_m" if "length_m" in (sc.train_overrides or {}) else "train"
